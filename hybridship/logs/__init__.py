@@ -1,0 +1,1 @@
+"""Vessel logs: the project log format (read, write, validate) and conversion to arrays."""

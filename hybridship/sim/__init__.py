@@ -1,0 +1,1 @@
+"""Sea-trial simulator: environment, the "true" vessel, DP control, thrust allocation, scenarios."""
