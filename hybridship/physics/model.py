@@ -1,0 +1,426 @@
+"""The 3-DOF dynamic model: eq. 1 solved for nu_dot, with thrusters (eq. 2) and wind (eq. 3).
+
+.. math::
+
+    (M_{RB} + M_A)\\dot\\nu = \\tau_c + \\tau_{wi} + \\tau_{ext}
+        - C_{RB}(\\nu)\\nu - C_A(\\nu_r)\\nu_r - D\\nu_r - D_n(\\nu_r)\\nu_r + M_A\\dot\\nu_c
+
+    \\dot\\eta = R(\\psi)\\nu
+
+The current is irrotational and constant in NED (speed, direction it flows TO); in the
+rotating body frame ``nu_c = R(psi)^T v_c`` so ``d(nu_c)/dt = [r v_c, -r u_c, 0]``.
+``tau_ext`` is any further body-frame load (the simulator's wave drift) and ``accel_ext``
+an additive acceleration (the hybrid's residual correction).
+
+A vessel file is turned once into :class:`ModelArrays`, a tuple of plain float arrays
+that the compiled kernels read; :class:`DynamicModel` is the thin object around them.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import NamedTuple
+
+import numba
+import numpy as np
+
+from . import hull, wind as wind_curves
+from .propeller import load_wageningen
+from .thrusters import (THR_ALPHA_FIXED, THR_D, THR_IS_AZIMUTH, THR_MAX_RPM, THR_TDED, THR_WAKE,
+                        THR_X, THR_Y, thruster_forces_scalar)
+
+#: Number of samples of the uniform wind-coefficient table over gamma in [-pi, pi].
+WIND_TABLE_SIZE = 721
+
+#: Order of the load components in ``tau_parts``: hull (C, D terms), thrusters, wind, external.
+TAU_PARTS = ("hull", "thrust", "wind", "external")
+
+
+class ModelArrays(NamedTuple):
+    """Packed parameters read by the compiled kernels (SI units, radians).
+
+    Attributes
+    ----------
+    m_inv : (3, 3) inverse of M = M_RB + M_A.
+    m_a : (3, 3) symmetric added-mass matrix M_A.
+    rb : (3,) ``[mass_kg, x_g_m, rho_water_kg_m3]``.
+    d_lin : (3, 3) linear damping D.
+    d_quad : (3,) quadratic damping ``[d_uu, d_vv, d_rr]`` (force ``-d |x| x``).
+    d_lift : (4,) speed-proportional sway/yaw damping per unit |u_r| (see ``hull.clarke1983_lift``).
+    strip_x, strip_w : (n,) cross-flow drag strip positions [m] and weights [kg/m^2].
+    thr : (K, 8) thruster parameters (columns ``THR_*`` of :mod:`.thrusters`).
+    thr_coef : (K, 4, N) four-quadrant Fourier coefficients.
+    wind_p : (4,) ``[rho_air_kg_m3, A_F_m2, A_L_m2, L_oa_m]``.
+    wind_table : (WIND_TABLE_SIZE, 3) C_X, C_Y, C_N on ``linspace(-pi, pi)``.
+    """
+
+    m_inv: np.ndarray
+    m_a: np.ndarray
+    rb: np.ndarray
+    d_lin: np.ndarray
+    d_quad: np.ndarray
+    d_lift: np.ndarray
+    strip_x: np.ndarray
+    strip_w: np.ndarray
+    thr: np.ndarray
+    thr_coef: np.ndarray
+    wind_p: np.ndarray
+    wind_table: np.ndarray
+
+
+# --------------------------------------------------------------------------- building
+
+
+def mass_matrices(vessel, added_mass_scale=(1.0, 1.0, 1.0)):
+    """``(M_RB, M_A)`` for a vessel, with optional per-DOF scaling of the added mass."""
+    p, rb, am = vessel.particulars, vessel.rigid_body, vessel.added_mass
+    M_RB = hull.rigid_body_mass(rb.mass_kg, rb.I_z, rb.x_g_m)
+    if am.method == "clarke1983":
+        c = hull.clarke1983_derivatives(p.L_pp_m, p.B_m, p.T_m, p.C_B, p.rho_water_kg_m3)
+        X_udot = hull.added_mass_surge_soding(rb.mass_kg, p.L_pp_m, p.rho_water_kg_m3)
+        M_A = hull.added_mass_matrix(X_udot, c["Y_vdot_kg"], c["Y_rdot_kg_m"], c["N_vdot_kg_m"],
+                                     c["N_rdot_kg_m2"])
+    else:
+        M_A = hull.added_mass_matrix(am.X_udot_kg, am.Y_vdot_kg, am.Y_rdot_kg_m, am.N_vdot_kg_m,
+                                     am.N_rdot_kg_m2)
+    s = np.sqrt(np.asarray(added_mass_scale, float))
+    return M_RB, M_A * np.outer(s, s)  # keeps M_A symmetric; diagonal scaled by the factors
+
+
+def wind_coefficient_curve(vessel):
+    """The vessel's wind-coefficient function ``gamma_rad -> (C_X, C_Y, C_N)``, or None."""
+    w, p = vessel.wind, vessel.particulars
+    L_oa = w.L_oa_m or p.L_oa_m
+    if w.method == "table":
+        t = w.table
+        return lambda g: wind_curves.tabulated_coefficients(g, angle_deg=t.angle_deg, C_X=t.C_X,
+                                                            C_Y=t.C_Y, C_N=t.C_N)
+    if w.method == "blendermann":
+        b = w.blendermann
+        return lambda g: wind_curves.blendermann_coefficients(g, vessel_type=b.vessel_type, A_F_m2=w.A_F_m2,
+                                                              A_L_m2=w.A_L_m2, L_oa_m=L_oa, s_L_m=b.s_L_m)
+    if w.method == "isherwood":
+        i = w.isherwood
+        return lambda g: wind_curves.isherwood_coefficients(g, L_oa_m=L_oa, B_m=p.B_m, A_L_m2=w.A_L_m2,
+                                                            A_F_m2=w.A_F_m2, A_SS_m2=i.A_SS_m2, S_m=i.S_m,
+                                                            C_m=i.C_m, M=i.M)
+    return None
+
+
+def build_model_arrays(vessel, *, true_vessel: bool = False) -> ModelArrays:
+    """Derive every coefficient of a vessel file and pack them for the kernels.
+
+    Parameters
+    ----------
+    vessel : hybridship.vessel.Vessel
+    true_vessel : bool
+        Apply the file's ``[true_vessel]`` perturbation (the simulator's "real" ship).
+    """
+    pert = vessel.true_vessel
+    ones = (1.0, 1.0, 1.0)
+    am_s = pert.added_mass_scale if true_vessel else ones
+    ld_s = np.asarray(pert.linear_damping_scale if true_vessel else ones)
+    nd_s = np.asarray(pert.nonlinear_damping_scale if true_vessel else ones)
+    wc_s = np.asarray(pert.wind_coefficient_scale if true_vessel else ones)
+    th_s = pert.thrust_scale if true_vessel else 1.0
+
+    p, rb = vessel.particulars, vessel.rigid_body
+    rho = p.rho_water_kg_m3
+    M_RB, M_A = mass_matrices(vessel, am_s)
+    M = M_RB + M_A
+
+    lin = vessel.damping.linear
+    if lin.method == "time_constants":
+        # Time constants refer to the nominal model's inertia so that a perturbed
+        # true vessel's damping differs only by the stated factors.
+        M_nom = sum(mass_matrices(vessel))
+        D = hull.linear_damping_from_time_constants(M_nom, lin.T_surge_s, lin.T_sway_s, lin.T_yaw_s)
+    else:
+        D = np.asarray(lin.D, float)
+    D = D * ld_s[:, None]
+
+    nl = vessel.damping.nonlinear
+    d_quad = np.array([nl.d_uu, nl.d_vv, nl.d_rr], float)
+    strip_x = np.zeros(0)
+    strip_w = np.zeros(0)
+    if nl.method == "crossflow":
+        d_quad[0] += hull.surge_quadratic_resistance(nl.wetted_surface_m2, p.L_pp_m, nl.speed_ref_m_s,
+                                                     nl.form_factor_k, nl.C_R, rho)
+        cd = nl.cd_2d if nl.cd_2d is not None else hull.hoerner_cd(p.B_m, p.T_m)
+        strip_x, strip_w = hull.crossflow_strips(p.L_pp_m, p.T_m, cd, nl.strips, rho)
+    elif nl.method == "none":
+        d_quad[:] = 0.0
+    d_lift = np.zeros(4)
+    if nl.lift == "clarke1983":
+        derivs = hull.clarke1983_derivatives(p.L_pp_m, p.B_m, p.T_m, p.C_B, rho)
+        d_lift = hull.clarke1983_lift(derivs, sum(mass_matrices(vessel)) - M_RB) * nd_s[[1, 1, 2, 2]]
+    # Sway and yaw cross-flow share strips; scale sway via the weights and yaw on top
+    # through d_rr so that both factors act independently to first order.
+    d_quad = d_quad * nd_s
+    strip_w = strip_w * nd_s[1]
+
+    K = len(vessel.thrusters)
+    thr = np.zeros((K, 8))
+    coefs = []
+    for i, t in enumerate(vessel.thrusters):
+        thr[i, THR_X] = t.x_m
+        thr[i, THR_Y] = t.y_m
+        thr[i, THR_D] = t.diameter_m
+        thr[i, THR_WAKE] = t.wake_fraction
+        # thrust_scale acts as a loss/gain on delivered thrust: (1 - t') = s (1 - t)
+        thr[i, THR_TDED] = 1.0 - th_s * (1.0 - t.thrust_deduction)
+        thr[i, THR_ALPHA_FIXED] = t.fixed_angle_rad
+        thr[i, THR_IS_AZIMUTH] = 1.0 if t.type == "azimuth" else 0.0
+        thr[i, THR_MAX_RPM] = t.max_rpm
+        coefs.append(load_wageningen(t.propeller_series, t.pitch_ratio).coef)
+    n_coef = max((c.shape[1] for c in coefs), default=1)
+    thr_coef = np.zeros((K, 4, n_coef))
+    for i, c in enumerate(coefs):
+        thr_coef[i, :, : c.shape[1]] = c
+
+    w = vessel.wind
+    curve = wind_coefficient_curve(vessel)
+    if curve is None:
+        wind_table = np.zeros((WIND_TABLE_SIZE, 3))
+        wind_p = np.array([w.rho_air_kg_m3, 0.0, 0.0, p.L_oa_m])
+    else:
+        _, wind_table = wind_curves.coefficient_table(curve, WIND_TABLE_SIZE)
+        wind_table = wind_table * wc_s[None, :]
+        wind_p = np.array([w.rho_air_kg_m3, w.A_F_m2, w.A_L_m2, w.L_oa_m or p.L_oa_m])
+
+    arrays = ModelArrays(
+        m_inv=np.linalg.inv(M), m_a=M_A, rb=np.array([rb.mass_kg, rb.x_g_m, rho]), d_lin=D,
+        d_quad=d_quad, d_lift=d_lift, strip_x=strip_x, strip_w=strip_w, thr=thr, thr_coef=thr_coef,
+        wind_p=wind_p, wind_table=np.ascontiguousarray(wind_table, dtype=float))
+    return ModelArrays(*(np.ascontiguousarray(a, dtype=float) for a in arrays))
+
+
+# --------------------------------------------------------------------------- kernels
+
+
+@numba.njit(cache=True)
+def wind_force_scalar(u, v, psi, wind_speed, wind_dir_from, wind_p, table, out):
+    """Wind load (eq. 3) on one vessel into ``out[3]`` [N, N, N m].
+
+    Relative wind per Fossen (2021, sec. 10.1): ``(u_rw, v_rw) = (u, v) - wind velocity in
+    body axes``, ``gamma_rw = -atan2(v_rw, u_rw)`` (0 head wind, > 0 from port).
+    """
+    c = math.cos(psi)
+    s = math.sin(psi)
+    wn = -wind_speed * math.cos(wind_dir_from)  # wind velocity (going to), NED
+    we = -wind_speed * math.sin(wind_dir_from)
+    urw = u - (c * wn + s * we)
+    vrw = v - (-s * wn + c * we)
+    vr2 = urw * urw + vrw * vrw
+    if vr2 == 0.0:
+        out[0] = 0.0
+        out[1] = 0.0
+        out[2] = 0.0
+        return
+    gamma = -math.atan2(vrw, urw)
+    n = table.shape[0]
+    pos = (gamma + math.pi) / (2.0 * math.pi) * (n - 1)
+    i0 = int(math.floor(pos))
+    if i0 < 0:
+        i0 = 0
+    if i0 > n - 2:
+        i0 = n - 2
+    f = pos - i0
+    q = 0.5 * wind_p[0] * vr2
+    out[0] = q * wind_p[1] * ((1.0 - f) * table[i0, 0] + f * table[i0 + 1, 0])
+    out[1] = q * wind_p[2] * ((1.0 - f) * table[i0, 1] + f * table[i0 + 1, 1])
+    out[2] = q * wind_p[2] * wind_p[3] * ((1.0 - f) * table[i0, 2] + f * table[i0 + 1, 2])
+
+
+@numba.njit(cache=True)
+def vessel_rhs(psi, u, v, r, rpm, azimuth, wind_speed, wind_dir_from, cur_speed, cur_dir_to,
+               tau_ext, acc_ext, P, nu_dot, parts, thrusts):
+    """nu_dot of one vessel (eq. 1 solved) into ``nu_dot[3]``; loads into ``parts[4, 3]``."""
+    c = math.cos(psi)
+    s = math.sin(psi)
+    vcn = cur_speed * math.cos(cur_dir_to)
+    vce = cur_speed * math.sin(cur_dir_to)
+    uc = c * vcn + s * vce
+    vc = -s * vcn + c * vce
+    ur = u - uc
+    vr = v - vc
+    hull.hull_forces_scalar(u, v, r, ur, vr, P.rb[0], P.rb[1], P.m_a, P.d_lin, P.d_quad,
+                            P.d_lift, P.strip_x, P.strip_w, parts[0])
+    thruster_forces_scalar(ur, vr, r, rpm, azimuth, P.thr, P.thr_coef, P.rb[2], parts[1], thrusts)
+    wind_force_scalar(u, v, psi, wind_speed, wind_dir_from, P.wind_p, P.wind_table, parts[2])
+    parts[3, 0] = tau_ext[0]
+    parts[3, 1] = tau_ext[1]
+    parts[3, 2] = tau_ext[2]
+    # M_A d(nu_c)/dt: the current seen from the rotating body frame changes direction.
+    ncd0 = r * vc
+    ncd1 = -r * uc
+    rhs0 = parts[0, 0] + parts[1, 0] + parts[2, 0] + parts[3, 0] + P.m_a[0, 0] * ncd0 + P.m_a[0, 1] * ncd1
+    rhs1 = parts[0, 1] + parts[1, 1] + parts[2, 1] + parts[3, 1] + P.m_a[1, 0] * ncd0 + P.m_a[1, 1] * ncd1
+    rhs2 = parts[0, 2] + parts[1, 2] + parts[2, 2] + parts[3, 2] + P.m_a[2, 0] * ncd0 + P.m_a[2, 1] * ncd1
+    for i in range(3):
+        nu_dot[i] = P.m_inv[i, 0] * rhs0 + P.m_inv[i, 1] * rhs1 + P.m_inv[i, 2] * rhs2 + acc_ext[i]
+
+
+@numba.njit(cache=True)
+def dynamics_batch(eta, nu, rpm, azimuth, wind, current, tau_ext, acc_ext, P, nu_dot, parts, thrusts):
+    """Batched :func:`vessel_rhs`: all arrays have a leading batch axis B."""
+    for b in range(eta.shape[0]):
+        vessel_rhs(eta[b, 2], nu[b, 0], nu[b, 1], nu[b, 2], rpm[b], azimuth[b], wind[b, 0], wind[b, 1],
+                   current[b, 0], current[b, 1], tau_ext[b], acc_ext[b], P, nu_dot[b], parts[b], thrusts[b])
+
+
+# --------------------------------------------------------------------------- thin class
+
+
+class RolloutResult(NamedTuple):
+    """Integrated trajectories, batch-first.
+
+    Attributes
+    ----------
+    time_s : (S+1,) time since the start [s].
+    eta : (B, S+1, 3) ``[north_m, east_m, psi_rad]`` (heading unwrapped).
+    nu : (B, S+1, 3) ``[u_m_s, v_m_s, r_rad_s]``.
+    nu_dot : (B, S+1, 3) ``[u_dot_m_s2, v_dot_m_s2, r_dot_rad_s2]``.
+    """
+
+    time_s: np.ndarray
+    eta: np.ndarray
+    nu: np.ndarray
+    nu_dot: np.ndarray
+
+
+_INPUT_WIDTH = {"wind": 2, "current": 2, "tau_ext": 3, "accel_ext": 3}
+
+
+def _as_input(name, value, B, S, width, default=0.0):
+    """Normalise one input to ``(B, S_or_1, width)`` float64 with a clear error on bad shape/NaN."""
+    if value is None:
+        return np.full((B, 1, width), default)
+    a = np.asarray(value, dtype=float)
+    if a.ndim == 1:
+        a = a[None, None, :]
+    elif a.ndim == 2:
+        a = a[:, None, :]
+    if a.ndim != 3 or a.shape[-1] != width or a.shape[0] not in (1, B) or (S is not None and a.shape[1] not in (1, S)):
+        steps = f" or (B, {S}, {width})" if S is not None else ""
+        raise ValueError(f"{name}: expected shape ({width},), (B, {width}){steps} with B = {B}, got {np.shape(value)}")
+    if not np.all(np.isfinite(a)):
+        raise ValueError(f"{name}: contains NaN or inf")
+    return np.ascontiguousarray(np.broadcast_to(a, (B,) + a.shape[1:]))
+
+
+class DynamicModel:
+    """Physics-only 3-DOF model of one vessel (eq. 1-3), batched over vessels.
+
+    Parameters
+    ----------
+    vessel : hybridship.vessel.Vessel or str
+        A validated vessel or a packaged vessel name / file path.
+    true_vessel : bool
+        Use the file's ``[true_vessel]`` perturbation (the simulator's "real" ship).
+
+    Notes
+    -----
+    Inputs (keyword arguments of :meth:`acceleration`, :meth:`step`, :meth:`rollout`), each
+    of shape ``(width,)`` (same for every vessel), ``(B, width)`` (held) or, for rollouts,
+    ``(B, n_steps, width)`` (one value per output step):
+
+    * ``rpm``: shaft speed of each thruster [rpm], width K (vessel-file order);
+    * ``azimuth_rad``: thrust direction of each thruster [rad], width K (ignored for
+      fixed-axis thrusters);
+    * ``wind``: ``[speed_m_s, dir_from_rad]`` true wind (direction it comes FROM);
+    * ``current``: ``[speed_m_s, dir_to_rad]`` (direction it flows TO), NED;
+    * ``tau_ext``: extra body-frame load ``[X_N, Y_N, N_Nm]``;
+    * ``accel_ext``: extra acceleration ``[m/s^2, m/s^2, rad/s^2]`` added to nu_dot.
+    """
+
+    def __init__(self, vessel, *, true_vessel: bool = False):
+        from ..vessel import Vessel, load_vessel
+
+        self.vessel = vessel if isinstance(vessel, Vessel) else load_vessel(vessel)
+        self.true_vessel = bool(true_vessel)
+        self.arrays = build_model_arrays(self.vessel, true_vessel=self.true_vessel)
+
+    @property
+    def n_thrusters(self) -> int:
+        return len(self.vessel.thrusters)
+
+    @property
+    def mass_matrix(self) -> np.ndarray:
+        """M = M_RB + M_A (3x3) [kg, kg, kg m^2]."""
+        return np.linalg.inv(self.arrays.m_inv)
+
+    def _state(self, name, x):
+        a = np.asarray(x, dtype=float)
+        if a.ndim == 1:
+            a = a[None, :]
+        if a.ndim != 2 or a.shape[1] != 3:
+            raise ValueError(f"{name}: expected shape (3,) or (B, 3), got {np.shape(x)}")
+        if not np.all(np.isfinite(a)):
+            raise ValueError(f"{name}: contains NaN or inf")
+        return np.ascontiguousarray(a)
+
+    def _inputs(self, B, S, rpm, azimuth_rad, wind, current, tau_ext, accel_ext):
+        K = self.n_thrusters
+        return (_as_input("rpm", rpm, B, S, K), _as_input("azimuth_rad", azimuth_rad, B, S, K),
+                _as_input("wind", wind, B, S, 2), _as_input("current", current, B, S, 2),
+                _as_input("tau_ext", tau_ext, B, S, 3), _as_input("accel_ext", accel_ext, B, S, 3))
+
+    def acceleration(self, eta, nu, *, rpm=None, azimuth_rad=None, wind=None, current=None,
+                     tau_ext=None, accel_ext=None, return_parts: bool = False):
+        """nu_dot (B, 3) for states ``eta``, ``nu`` (each (3,) or (B, 3)).
+
+        With ``return_parts`` also the loads ``(B, 4, 3)`` in the order of ``TAU_PARTS``
+        (hull C and D terms, thrusters, wind, external) and the thrusts ``(B, K)`` [N].
+        """
+        eta = self._state("eta", eta)
+        nu = self._state("nu", nu)
+        B = max(eta.shape[0], nu.shape[0])
+        eta = np.ascontiguousarray(np.broadcast_to(eta, (B, 3)))
+        nu = np.ascontiguousarray(np.broadcast_to(nu, (B, 3)))
+        ins = [a[:, 0] for a in self._inputs(B, None, rpm, azimuth_rad, wind, current, tau_ext, accel_ext)]
+        nu_dot = np.empty((B, 3))
+        parts = np.empty((B, 4, 3))
+        thrusts = np.empty((B, max(self.n_thrusters, 1)))
+        dynamics_batch(eta, nu, *ins, self.arrays, nu_dot, parts, thrusts)
+        if return_parts:
+            return nu_dot, parts, thrusts[:, : self.n_thrusters]
+        return nu_dot
+
+    def step(self, eta, nu, *, dt_s: float = 1.0, substeps: int = 1, rpm=None, azimuth_rad=None,
+             wind=None, current=None, tau_ext=None, accel_ext=None):
+        """Advance (B, 3) states by one step of ``dt_s`` with held inputs; returns ``(eta, nu)``."""
+        from .integrate import step_batch
+
+        eta = self._state("eta", eta)
+        nu = self._state("nu", nu)
+        B = eta.shape[0]
+        ins = [np.ascontiguousarray(a[:, 0]) for a in
+               self._inputs(B, None, rpm, azimuth_rad, wind, current, tau_ext, accel_ext)]
+        eta_next = np.empty((B, 3))
+        nu_next = np.empty((B, 3))
+        step_batch(eta, nu, *ins, self.arrays, float(dt_s), int(substeps), eta_next, nu_next)
+        return eta_next, nu_next
+
+    def rollout(self, eta0, nu0, n_steps: int, *, dt_s: float = 1.0, substeps: int = 1, rpm=None,
+                azimuth_rad=None, wind=None, current=None, tau_ext=None, accel_ext=None) -> RolloutResult:
+        """Integrate ``n_steps`` output steps of ``dt_s`` seconds (RK4, ``substeps`` per step).
+
+        Inputs are held at their values (``(width,)`` or ``(B, width)``) or given per step
+        (``(B, n_steps, width)``). See the class notes for the inputs.
+        """
+        from .integrate import rollout_batch
+
+        if int(n_steps) < 1 or int(substeps) < 1 or not dt_s > 0:
+            raise ValueError(f"n_steps and substeps must be >= 1 and dt_s > 0, got {n_steps}, {substeps}, {dt_s}")
+        eta0 = self._state("eta0", eta0)
+        nu0 = self._state("nu0", nu0)
+        if eta0.shape != nu0.shape:
+            raise ValueError(f"eta0 and nu0 must have the same shape, got {eta0.shape} and {nu0.shape}")
+        B, S = eta0.shape[0], int(n_steps)
+        ins = self._inputs(B, S, rpm, azimuth_rad, wind, current, tau_ext, accel_ext)
+        eta = np.empty((B, S + 1, 3))
+        nu = np.empty((B, S + 1, 3))
+        nu_dot = np.empty((B, S + 1, 3))
+        rollout_batch(eta0, nu0, *ins, self.arrays, float(dt_s), S, int(substeps), eta, nu, nu_dot)
+        return RolloutResult(np.arange(S + 1) * float(dt_s), eta, nu, nu_dot)

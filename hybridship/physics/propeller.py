@@ -1,0 +1,254 @@
+"""Four-quadrant propeller model (Smogeli 2006) with Wageningen B-series Fourier coefficients.
+
+The advance angle and the non-dimensional thrust and torque coefficients are
+
+.. math::
+
+    \\beta = \\operatorname{atan2}(V_a,\\ 0.7 \\pi n D), \\qquad
+    C_T^*(\\beta) = \\sum_{k=0}^{N} A_T(k) \\cos k\\beta + B_T(k) \\sin k\\beta
+
+    T = C_T^*(\\beta)\\ \\tfrac12 \\rho \\left(V_a^2 + (0.7 \\pi n D)^2\\right) \\tfrac{\\pi}{4} D^2, \\qquad
+    Q = C_Q^*(\\beta)\\ \\tfrac12 \\rho \\left(V_a^2 + (0.7 \\pi n D)^2\\right) \\tfrac{\\pi}{4} D^3
+
+with ``n`` the shaft speed [rev/s] and ``V_a`` the advance (inflow) speed [m/s] along the
+propeller's positive-thrust axis. The four quadrants (Smogeli 2006, table 1):
+
+=========  ========  =========  =========================================
+quadrant   n         V_a        beta
+=========  ========  =========  =========================================
+1st        >= 0      >= 0       [0, 90 deg]    normal ahead operation
+2nd        < 0       >= 0       (90, 180 deg]  crash-back while moving ahead
+3rd        < 0       < 0        (-180, -90)    astern
+4th        >= 0      < 0        [-90, 0)       ahead while moving astern
+=========  ========  =========  =========================================
+
+Sign conventions used throughout hybridship: positive rpm gives thrust along the
+thruster's positive axis in open water (forward for a main propeller at azimuth 0,
+starboard for a tunnel thruster); ``V_a`` is the speed of the propeller through the
+water projected on that axis (positive when moving in the direction of positive thrust).
+At ``n = 0`` a propeller moving through the water gives a drag opposing the motion
+(``C_T^*(\\pm 90^\\circ)`` has the opposite sign to ``V_a``), never zero.
+
+The Fourier tables (Roddy, Hess & Faller 2006) are packaged in ``hybridship/data``.
+The coefficient sums use ``A(0)`` as listed (no ``A0/2`` factor).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from functools import lru_cache
+from importlib import resources
+
+import numba
+import numpy as np
+import pandas as pd
+
+_TABLE_FILE = "wageningen_b_series_4q.csv"
+
+
+@dataclass(frozen=True)
+class PropellerCoefficients:
+    """Four-quadrant Fourier coefficients of one propeller.
+
+    Attributes
+    ----------
+    series : str
+        Series name, e.g. ``"B4-70"`` (blades Z = 4, expanded area ratio 0.70).
+    pitch_ratio : float
+        Pitch-diameter ratio P/D [-].
+    coef : ndarray, shape (4, N+1)
+        Rows ``A_T, B_T, A_Q, B_Q`` for k = 0..N (read-only).
+    """
+
+    series: str
+    pitch_ratio: float
+    coef: np.ndarray
+
+    @property
+    def kt0(self) -> float:
+        """Bollard thrust coefficient K_T at J = 0 [-]."""
+        return float(kt_kq(0.0, self)[0])
+
+    @property
+    def kq0(self) -> float:
+        """Bollard torque coefficient K_Q at J = 0 [-]."""
+        return float(kt_kq(0.0, self)[1])
+
+
+@lru_cache(maxsize=1)
+def _table() -> pd.DataFrame:
+    with resources.files("hybridship.data").joinpath(_TABLE_FILE).open("r") as fh:
+        return pd.read_csv(fh)
+
+
+def available_propellers() -> list[tuple[str, float]]:
+    """List the ``(series, pitch_ratio)`` pairs in the packaged four-quadrant table."""
+    t = _table()
+    pairs = t[["series", "pitch_diameter_ratio"]].drop_duplicates()
+    return [(str(s), float(p)) for s, p in pairs.itertuples(index=False)]
+
+
+def load_wageningen(series: str = "B4-70", pitch_ratio: float = 1.0) -> PropellerCoefficients:
+    """Load the Fourier coefficients of one Wageningen B-series propeller.
+
+    Parameters
+    ----------
+    series : str
+        Series name as in the table, e.g. ``"B4-70"``.
+    pitch_ratio : float
+        Pitch-diameter ratio P/D [-]; must match a tabulated value to 1e-6.
+
+    Raises
+    ------
+    ValueError
+        If the pair is not in the table (the message lists the available ones).
+    """
+    t = _table()
+    sel = t[(t["series"] == series) & (np.abs(t["pitch_diameter_ratio"] - float(pitch_ratio)) < 1e-6)]
+    if sel.empty:
+        avail = ", ".join(f"{s} P/D {p:g}" for s, p in available_propellers())
+        raise ValueError(
+            f"propeller: no four-quadrant table for series {series!r} at P/D {pitch_ratio:g}; "
+            f"available: {avail}"
+        )
+    sel = sel.sort_values("k")
+    if not np.array_equal(sel["k"].to_numpy(), np.arange(len(sel))):
+        raise ValueError(f"propeller: table for {series} P/D {pitch_ratio:g} has missing orders k")
+    coef = np.ascontiguousarray(sel[["A_T", "B_T", "A_Q", "B_Q"]].to_numpy(dtype=float).T)
+    coef.setflags(write=False)
+    return PropellerCoefficients(series=series, pitch_ratio=float(pitch_ratio), coef=coef)
+
+
+# --------------------------------------------------------------------------- kernels
+# Scalar numba kernels: the dynamic model's compiled right-hand side calls these
+# directly; the numpy-facing functions below loop over arrays in compiled code.
+
+
+@numba.njit(cache=True)
+def ct_cq_star_scalar(beta_rad, coef):
+    """C_T*(beta), C_Q*(beta) for one angle (cos/sin recurrences instead of 2N trig calls)."""
+    c1 = math.cos(beta_rad)
+    s1 = math.sin(beta_rad)
+    ck = 1.0
+    sk = 0.0
+    ct = 0.0
+    cq = 0.0
+    for k in range(coef.shape[1]):
+        ct += coef[0, k] * ck + coef[1, k] * sk
+        cq += coef[2, k] * ck + coef[3, k] * sk
+        ck, sk = ck * c1 - sk * s1, sk * c1 + ck * s1
+    return ct, cq
+
+
+@numba.njit(cache=True)
+def thrust_torque_scalar(n_rps, va_m_s, diameter_m, rho_kg_m3, coef):
+    """Open-water thrust [N] and torque [N m] for one propeller state (see module docstring)."""
+    vr = 0.7 * math.pi * n_rps * diameter_m
+    v2 = va_m_s * va_m_s + vr * vr
+    if v2 == 0.0:
+        return 0.0, 0.0
+    beta = math.atan2(va_m_s, vr)
+    ct, cq = ct_cq_star_scalar(beta, coef)
+    q = 0.5 * rho_kg_m3 * v2 * 0.25 * math.pi * diameter_m * diameter_m
+    return ct * q, cq * q * diameter_m
+
+
+@numba.njit(cache=True)
+def _ct_cq_star_flat(beta, coef, out):
+    for i in range(beta.shape[0]):
+        out[i, 0], out[i, 1] = ct_cq_star_scalar(beta[i], coef)
+
+
+@numba.njit(cache=True)
+def _thrust_torque_flat(n, va, diameter_m, rho, coef, out):
+    for i in range(n.shape[0]):
+        out[i, 0], out[i, 1] = thrust_torque_scalar(n[i], va[i], diameter_m, rho, coef)
+
+
+# --------------------------------------------------------------------------- numpy API
+
+
+def advance_angle(va_m_s, n_rps, diameter_m):
+    """Advance angle beta = atan2(V_a, 0.7 pi n D) [rad] (broadcasting)."""
+    return np.arctan2(np.asarray(va_m_s, float), 0.7 * np.pi * np.asarray(n_rps, float) * diameter_m)
+
+
+def ct_cq_star(beta_rad, prop: PropellerCoefficients):
+    """Four-quadrant coefficients C_T*(beta), C_Q*(beta) for an array of advance angles [rad]."""
+    b = np.asarray(beta_rad, dtype=float)
+    flat = np.ascontiguousarray(b.ravel())
+    out = np.empty((flat.size, 2))
+    _ct_cq_star_flat(flat, prop.coef, out)
+    return out[:, 0].reshape(b.shape), out[:, 1].reshape(b.shape)
+
+
+def thrust_torque(n_rps, va_m_s, diameter_m: float, prop: PropellerCoefficients, rho_kg_m3: float = 1025.0):
+    """Open-water thrust [N] and torque [N m] for every combination of shaft speed and inflow.
+
+    Parameters
+    ----------
+    n_rps : array_like
+        Shaft speed [rev/s], signed (positive gives positive thrust in open water).
+    va_m_s : array_like
+        Advance speed [m/s] along the positive-thrust axis (broadcast with ``n_rps``).
+    diameter_m : float
+        Propeller diameter D [m], > 0.
+    prop : PropellerCoefficients
+    rho_kg_m3 : float
+        Water density [kg/m^3].
+    """
+    if not diameter_m > 0:
+        raise ValueError(f"diameter_m: must be > 0, got {diameter_m}")
+    n, va = np.broadcast_arrays(np.asarray(n_rps, float), np.asarray(va_m_s, float))
+    out = np.empty((n.size, 2))
+    _thrust_torque_flat(np.ascontiguousarray(n.ravel()), np.ascontiguousarray(va.ravel()),
+                        float(diameter_m), float(rho_kg_m3), prop.coef, out)
+    return out[:, 0].reshape(n.shape), out[:, 1].reshape(n.shape)
+
+
+def kt_kq(J, prop: PropellerCoefficients):
+    """First- and fourth-quadrant open-water K_T(J), K_Q(J) for n > 0.
+
+    Uses K_T = C_T* (pi/8) (J^2 + (0.7 pi)^2) with beta = atan2(J, 0.7 pi), the identity
+    between the four-quadrant and the classical open-water representation.
+    """
+    J = np.asarray(J, dtype=float)
+    beta = np.arctan2(J, 0.7 * np.pi)
+    ct, cq = ct_cq_star(beta, prop)
+    fac = np.pi / 8.0 * (J**2 + (0.7 * np.pi) ** 2)
+    return ct * fac, cq * fac
+
+
+def rpm_for_thrust(thrust_N, va_m_s, diameter_m: float, prop: PropellerCoefficients,
+                   rho_kg_m3: float = 1025.0, max_rpm: float | None = None):
+    """Shaft speed [rpm] that gives a demanded thrust at a given inflow (inverse model).
+
+    Solved by bisection on the monotonic branch of T(n) for fixed V_a (the quadrant with
+    the sign of the demanded thrust), vectorised over the inputs. Demands beyond what
+    ``max_rpm`` can deliver saturate at ``+-max_rpm``.
+
+    Parameters
+    ----------
+    thrust_N, va_m_s : array_like
+        Demanded thrust [N] and inflow speed [m/s] (broadcast together).
+    diameter_m : float
+    prop : PropellerCoefficients
+    rho_kg_m3 : float
+    max_rpm : float, optional
+        Upper bound of |rpm|; default 3000 / D (a generous tip-speed bound).
+    """
+    T, va = np.broadcast_arrays(np.asarray(thrust_N, float), np.asarray(va_m_s, float))
+    rpm_max = float(max_rpm) if max_rpm is not None else 3000.0 / diameter_m
+    sign = np.where(T >= 0.0, 1.0, -1.0)
+    lo = np.zeros(T.shape)
+    hi = np.full(T.shape, rpm_max)
+    # T(n) is increasing in n for the ahead branch; bisection on |rpm| in the direction
+    # of the demanded thrust is robust in every quadrant including negative inflow.
+    for _ in range(50):
+        mid = 0.5 * (lo + hi)
+        t_mid, _q = thrust_torque(sign * mid / 60.0, va, diameter_m, prop, rho_kg_m3)
+        too_small = sign * t_mid < sign * T
+        lo = np.where(too_small, mid, lo)
+        hi = np.where(too_small, hi, mid)
+    return sign * 0.5 * (lo + hi)

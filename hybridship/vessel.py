@@ -1,0 +1,331 @@
+"""Vessel files: schema, loading and validation.
+
+A vessel file (TOML) describes one ship for the 3-DOF model: main particulars, rigid
+body, added mass, damping, thrusters, wind loads and, optionally, the perturbation that
+turns it into the simulator's "true" vessel. Hydrodynamic coefficients are either given
+explicitly or derived by a named method (e.g. ``method = "clarke1983"``), so a reader can
+see where every number comes from. See ``docs/vessel-file.md`` for every field.
+
+Errors raise :class:`VesselFileError` naming the field, e.g.
+``gunnerus.toml: thrusters[1].diameter_m: Input should be greater than 0 (got -1.9)``.
+"""
+
+from __future__ import annotations
+
+import tomllib
+from importlib import resources
+from pathlib import Path
+from typing import Literal, Optional
+
+import numpy as np
+from pydantic import BaseModel, ConfigDict, Field, ValidationError, model_validator
+
+#: Version of the vessel-file format this code reads.
+VESSEL_FORMAT_VERSION = 1
+
+
+class VesselFileError(ValueError):
+    """A vessel file is missing, unreadable or invalid; the message names the field."""
+
+
+class _Strict(BaseModel):
+    model_config = ConfigDict(extra="forbid", frozen=True)
+
+
+class Particulars(_Strict):
+    """Main particulars [m, -, kg/m^3]."""
+
+    L_oa_m: float = Field(gt=0, description="length overall [m]")
+    L_pp_m: float = Field(gt=0, description="length between perpendiculars [m]")
+    B_m: float = Field(gt=0, description="moulded breadth [m]")
+    T_m: float = Field(gt=0, description="draught [m]")
+    C_B: float = Field(gt=0, le=1, description="block coefficient [-]")
+    rho_water_kg_m3: float = Field(1025.0, gt=900, lt=1100, description="water density [kg/m^3]")
+
+
+class RigidBody(_Strict):
+    """Mass and yaw inertia about the body origin (the CG when ``x_g_m = 0``)."""
+
+    mass_kg: float = Field(gt=0)
+    I_z_kg_m2: Optional[float] = Field(None, gt=0, description="yaw inertia [kg m^2]")
+    r_z_m: Optional[float] = Field(None, gt=0, description="yaw radius of gyration [m] (I_z = m r_z^2)")
+    x_g_m: float = Field(0.0, description="CG forward of the body origin [m]")
+
+    @model_validator(mode="after")
+    def _one_inertia(self):
+        if (self.I_z_kg_m2 is None) == (self.r_z_m is None):
+            raise ValueError("give exactly one of I_z_kg_m2 and r_z_m")
+        return self
+
+    @property
+    def I_z(self) -> float:
+        """Yaw inertia about the origin [kg m^2]."""
+        if self.I_z_kg_m2 is not None:
+            return self.I_z_kg_m2
+        return self.mass_kg * (self.r_z_m**2 + self.x_g_m**2)
+
+
+class AddedMass(_Strict):
+    """Added mass: ``method = "clarke1983"`` (sway/yaw, Soding in surge) or ``"explicit"``.
+
+    Explicit values are the (normally negative) derivatives X_udot [kg], Y_vdot [kg],
+    Y_rdot [kg m], N_vdot [kg m], N_rdot [kg m^2].
+    """
+
+    method: Literal["clarke1983", "explicit"]
+    X_udot_kg: Optional[float] = None
+    Y_vdot_kg: Optional[float] = None
+    Y_rdot_kg_m: Optional[float] = None
+    N_vdot_kg_m: Optional[float] = None
+    N_rdot_kg_m2: Optional[float] = None
+
+    @model_validator(mode="after")
+    def _explicit_complete(self):
+        if self.method == "explicit":
+            missing = [k for k in ("X_udot_kg", "Y_vdot_kg", "Y_rdot_kg_m", "N_vdot_kg_m", "N_rdot_kg_m2")
+                       if getattr(self, k) is None]
+            if missing:
+                raise ValueError(f"method 'explicit' needs {', '.join(missing)}")
+        return self
+
+
+class LinearDamping(_Strict):
+    """Linear damping D: ``"time_constants"`` (D_ii = M_ii / T_i) or ``"explicit"`` (3x3 matrix, SI)."""
+
+    method: Literal["time_constants", "explicit"]
+    T_surge_s: Optional[float] = Field(None, gt=0)
+    T_sway_s: Optional[float] = Field(None, gt=0)
+    T_yaw_s: Optional[float] = Field(None, gt=0)
+    D: Optional[list[list[float]]] = None
+
+    @model_validator(mode="after")
+    def _complete(self):
+        if self.method == "time_constants":
+            if None in (self.T_surge_s, self.T_sway_s, self.T_yaw_s):
+                raise ValueError("method 'time_constants' needs T_surge_s, T_sway_s and T_yaw_s")
+        else:
+            if self.D is None or np.shape(self.D) != (3, 3):
+                raise ValueError("method 'explicit' needs D as a 3x3 matrix")
+        return self
+
+
+class NonlinearDamping(_Strict):
+    """Nonlinear damping D_n(nu_r).
+
+    ``"crossflow"``: ITTC-1957 surge resistance ``d_uu = 0.5 rho S ((1+k) C_F + C_R)`` and
+    Hoerner cross-flow drag by strip theory in sway and yaw. ``"quadratic"``: explicit
+    positive ``d_uu`` [kg/m], ``d_vv`` [kg/m], ``d_rr`` [kg m^2] (force ``-d |x| x``).
+    ``"none"``: no nonlinear damping.
+
+    ``lift = "clarke1983"`` adds the manoeuvring (lift) forces that grow with forward speed:
+    Clarke's linear derivatives Y_v, Y_r, N_v, N_r divided by U, less the parts that
+    C_A(nu_r) already represents, times |u_r| (see :func:`hybridship.physics.hull.clarke1983_lift`).
+    """
+
+    method: Literal["crossflow", "quadratic", "none"]
+    wetted_surface_m2: Optional[float] = Field(None, gt=0)
+    form_factor_k: float = Field(0.0, ge=0, le=1)
+    C_R: float = Field(0.0, ge=0, le=0.05, description="residuary resistance coefficient [-]")
+    speed_ref_m_s: float = Field(5.0, gt=0, description="speed at which C_F is frozen [m/s]")
+    cd_2d: Optional[float] = Field(None, gt=0, description="2-D cross-flow drag coefficient; default Hoerner(B, T)")
+    strips: int = Field(20, ge=2, le=200)
+    d_uu: float = Field(0.0, ge=0)
+    d_vv: float = Field(0.0, ge=0)
+    d_rr: float = Field(0.0, ge=0)
+    lift: Literal["clarke1983", "none"] = Field(
+        "none", description="speed-proportional sway/yaw terms |u_r| [v_r, r] from Clarke et al. (1983)")
+
+    @model_validator(mode="after")
+    def _complete(self):
+        if self.method == "crossflow" and self.wetted_surface_m2 is None:
+            raise ValueError("method 'crossflow' needs wetted_surface_m2")
+        return self
+
+
+class Damping(_Strict):
+    linear: LinearDamping
+    nonlinear: NonlinearDamping
+
+
+class Thruster(_Strict):
+    """One thruster or propeller. Sign conventions: see :mod:`hybridship.physics.thrusters`."""
+
+    name: str = Field(pattern=r"^[a-z][a-z0-9_]*$")
+    type: Literal["tunnel", "azimuth", "fixed"]
+    x_m: float
+    y_m: float = 0.0
+    diameter_m: float = Field(gt=0)
+    max_rpm: float = Field(gt=0)
+    angle_deg: Optional[float] = Field(None, description="fixed thrust direction for type 'fixed' [deg]")
+    wake_fraction: float = Field(0.0, ge=0, lt=1)
+    thrust_deduction: float = Field(0.0, ge=0, lt=1)
+    propeller_series: str = "B4-70"
+    pitch_ratio: float = Field(1.0, gt=0)
+    max_azimuth_rate_deg_s: Optional[float] = Field(None, gt=0)
+
+    @model_validator(mode="after")
+    def _angle(self):
+        if self.type == "fixed" and self.angle_deg is None:
+            raise ValueError("type 'fixed' needs angle_deg")
+        return self
+
+    @property
+    def fixed_angle_rad(self) -> float:
+        """Thrust direction of a non-rotatable thruster [rad] (tunnel: +pi/2, to starboard)."""
+        if self.type == "tunnel":
+            return float(np.pi / 2)
+        if self.type == "fixed":
+            return float(np.radians(self.angle_deg))
+        return 0.0
+
+
+class WindTable(_Strict):
+    """Tabulated wind coefficients; 0..180 deg means a port/starboard symmetric vessel."""
+
+    angle_deg: list[float]
+    C_X: list[float]
+    C_Y: list[float]
+    C_N: list[float]
+
+
+class BlendermannParams(_Strict):
+    vessel_type: str
+    s_L_m: float = Field(description="centroid of A_L forward of midships [m]")
+
+
+class IsherwoodParams(_Strict):
+    A_SS_m2: float = Field(ge=0)
+    S_m: float = Field(gt=0)
+    C_m: float = Field(gt=0)
+    M: int = Field(ge=0)
+
+
+class Wind(_Strict):
+    """Wind loads (Skulstad et al. eq. 3)."""
+
+    method: Literal["table", "isherwood", "blendermann", "none"]
+    A_F_m2: float = Field(0.0, ge=0, description="frontal projected area [m^2]")
+    A_L_m2: float = Field(0.0, ge=0, description="lateral projected area [m^2]")
+    L_oa_m: Optional[float] = Field(None, gt=0, description="default: particulars.L_oa_m")
+    rho_air_kg_m3: float = Field(1.225, gt=0.9, lt=1.5)
+    table: Optional[WindTable] = None
+    blendermann: Optional[BlendermannParams] = None
+    isherwood: Optional[IsherwoodParams] = None
+
+    @model_validator(mode="after")
+    def _complete(self):
+        if self.method != "none" and not (self.A_F_m2 > 0 and self.A_L_m2 > 0):
+            raise ValueError(f"method {self.method!r} needs A_F_m2 > 0 and A_L_m2 > 0")
+        if self.method in ("table", "blendermann", "isherwood") and getattr(self, self.method) is None:
+            raise ValueError(f"method {self.method!r} needs a [wind.{self.method}] section")
+        return self
+
+
+class TrueVesselPerturbation(_Strict):
+    """How the simulator's "true" vessel differs from the model (scale factors per DOF)."""
+
+    added_mass_scale: tuple[float, float, float] = (1.0, 1.0, 1.0)
+    linear_damping_scale: tuple[float, float, float] = (1.0, 1.0, 1.0)
+    nonlinear_damping_scale: tuple[float, float, float] = (1.0, 1.0, 1.0)
+    wind_coefficient_scale: tuple[float, float, float] = (1.0, 1.0, 1.0)
+    thrust_scale: float = 1.0
+
+    @model_validator(mode="after")
+    def _positive(self):
+        for k in ("added_mass_scale", "linear_damping_scale", "nonlinear_damping_scale",
+                  "wind_coefficient_scale"):
+            if any(not (0.1 <= s <= 10.0) for s in getattr(self, k)):
+                raise ValueError(f"{k}: every factor must lie in [0.1, 10], got {getattr(self, k)}")
+        if not 0.1 <= self.thrust_scale <= 10.0:
+            raise ValueError(f"thrust_scale must lie in [0.1, 10], got {self.thrust_scale}")
+        return self
+
+
+class Vessel(_Strict):
+    """A validated vessel description (see module docstring)."""
+
+    format_version: int
+    name: str
+    description: str = ""
+    particulars: Particulars
+    rigid_body: RigidBody
+    added_mass: AddedMass
+    damping: Damping
+    thrusters: list[Thruster] = Field(default_factory=list)
+    wind: Wind
+    true_vessel: TrueVesselPerturbation = TrueVesselPerturbation()
+
+    @model_validator(mode="after")
+    def _consistent(self):
+        if self.format_version != VESSEL_FORMAT_VERSION:
+            raise ValueError(f"format_version: this hybridship reads version {VESSEL_FORMAT_VERSION}, "
+                             f"the file says {self.format_version}")
+        names = [t.name for t in self.thrusters]
+        dup = {n for n in names if names.count(n) > 1}
+        if dup:
+            raise ValueError(f"thrusters: duplicate names {sorted(dup)}")
+        # Import here: physics.model imports this module.
+        from .physics.model import mass_matrices
+
+        M_RB, M_A = mass_matrices(self)
+        eig = np.linalg.eigvalsh(0.5 * (M_RB + M_A + (M_RB + M_A).T))
+        if not np.all(eig > 0):
+            raise ValueError("rigid_body/added_mass: M = M_RB + M_A is not positive definite "
+                             f"(eigenvalues {np.array2string(eig, precision=3)})")
+        return self
+
+    @property
+    def thruster_names(self) -> list[str]:
+        return [t.name for t in self.thrusters]
+
+    @property
+    def rotatable(self) -> list[bool]:
+        return [t.type == "azimuth" for t in self.thrusters]
+
+
+def _format_validation_error(err: ValidationError, source: str) -> str:
+    lines = []
+    for e in err.errors():
+        loc = ""
+        for part in e["loc"]:
+            loc += f"[{part}]" if isinstance(part, int) else (f".{part}" if loc else str(part))
+        msg = e["msg"].removeprefix("Value error, ")
+        got = f" (got {e['input']!r})" if e["type"] not in ("missing", "value_error") and not isinstance(e["input"], dict) else ""
+        lines.append(f"{source}: {loc or '<top level>'}: {msg}{got}")
+    return "\n".join(lines)
+
+
+def vessel_from_dict(data: dict, source: str = "vessel") -> Vessel:
+    """Validate a dictionary (e.g. parsed TOML) into a :class:`Vessel`."""
+    try:
+        return Vessel.model_validate(data)
+    except ValidationError as err:
+        raise VesselFileError(_format_validation_error(err, source)) from None
+
+
+def packaged_vessels() -> list[str]:
+    """Names of the vessel files shipped with hybridship (``vessels/*.toml``)."""
+    return sorted(p.name.removesuffix(".toml") for p in resources.files("hybridship.vessels").iterdir()
+                  if p.name.endswith(".toml"))
+
+
+def load_vessel(name_or_path: str | Path) -> Vessel:
+    """Load and validate a vessel by packaged name (``"gunnerus"``) or TOML file path."""
+    p = Path(name_or_path)
+    if p.suffix == ".toml" or p.exists():
+        if not p.is_file():
+            raise VesselFileError(f"{p}: vessel file not found")
+        text = p.read_text(encoding="utf-8")
+        source = p.name
+    else:
+        res = resources.files("hybridship.vessels").joinpath(f"{name_or_path}.toml")
+        if not res.is_file():
+            raise VesselFileError(f"vessel {name_or_path!r} is neither a file nor a packaged vessel "
+                                  f"(packaged: {', '.join(packaged_vessels())})")
+        text = res.read_text(encoding="utf-8")
+        source = f"{name_or_path}.toml"
+    try:
+        data = tomllib.loads(text)
+    except tomllib.TOMLDecodeError as err:
+        raise VesselFileError(f"{source}: not valid TOML: {err}") from None
+    return vessel_from_dict(data, source)
