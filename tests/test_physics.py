@@ -1,0 +1,343 @@
+"""Physical facts of the 3-DOF model: analytic solutions, invariants, signs, published values."""
+
+from __future__ import annotations
+
+import copy
+import tomllib
+from importlib import resources
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from hybridship import frames
+from hybridship.physics import hull
+from hybridship.physics.model import DynamicModel, TAU_PARTS
+from hybridship.physics.propeller import ct_cq_star, kt_kq, load_wageningen, thrust_torque
+from hybridship.physics.thrusters import configuration_matrix
+from hybridship.vessel import VesselFileError, load_vessel, vessel_from_dict
+
+SHARED = Path(__file__).resolve().parents[1].parent / "shared" / "data"
+
+
+def gunnerus_dict() -> dict:
+    return tomllib.loads(resources.files("hybridship.vessels").joinpath("gunnerus.toml").read_text())
+
+
+def model_from(d: dict) -> DynamicModel:
+    return DynamicModel(vessel_from_dict(d, "test"))
+
+
+@pytest.fixture(scope="module")
+def gunnerus():
+    return DynamicModel("gunnerus")
+
+
+# ----------------------------------------------------------------------------- frames
+
+
+@settings(max_examples=200, deadline=None)
+@given(st.lists(st.floats(-1e3, 1e3), min_size=3, max_size=3), st.floats(-20, 20))
+def test_frame_round_trip_and_norm(vec, psi):
+    v = np.array(vec)
+    ned = frames.body_to_ned(v, psi)
+    np.testing.assert_allclose(frames.ned_to_body(ned, psi), v, atol=1e-9)
+    assert np.linalg.norm(ned[:2]) == pytest.approx(np.linalg.norm(v[:2]), rel=1e-12, abs=1e-9)
+    np.testing.assert_allclose(frames.rotation_z(psi) @ v, ned, atol=1e-9)
+
+
+def test_rotation_is_orthonormal_and_heading_convention():
+    R = frames.rotation_z(np.linspace(-7, 7, 11))
+    np.testing.assert_allclose(R @ np.swapaxes(R, -1, -2), np.broadcast_to(np.eye(3), R.shape), atol=1e-12)
+    np.testing.assert_allclose(np.linalg.det(R), 1.0)
+    # heading east (90 deg), surging ahead -> moving east in NED
+    np.testing.assert_allclose(frames.body_to_ned([1.0, 0, 0], np.pi / 2), [0, 1, 0], atol=1e-12)
+
+
+def test_wrap_and_latlon_round_trip():
+    a = np.array([-3 * np.pi, -np.pi, 0, np.pi, 2.5 * np.pi])
+    w = frames.wrap_pi(a)
+    assert np.all((w >= -np.pi) & (w < np.pi))
+    np.testing.assert_allclose(np.cos(w), np.cos(a), atol=1e-12)
+    n, e = frames.latlon_to_north_east(63.44 + 0.01, 10.40 + 0.02, 63.44, 10.40)
+    assert n == pytest.approx(1113.6, rel=2e-3)  # 0.01 deg latitude ~ 1.11 km
+    assert e == pytest.approx(2 * 1113.2 * np.cos(np.radians(63.44)), rel=3e-3)
+    lat, lon = frames.north_east_to_latlon(n, e, 63.44, 10.40)
+    assert lat == pytest.approx(63.45, abs=1e-10) and lon == pytest.approx(10.42, abs=1e-10)
+
+
+# ----------------------------------------------------------------------------- hull
+
+
+def test_coriolis_matrices_are_skew_symmetric():
+    rng = np.random.default_rng(0)
+    nu = rng.normal(size=(50, 3))
+    M_A = DynamicModel("gunnerus").arrays.m_a
+    for C in (hull.coriolis_rigid_body(nu, 5e5, 1.3), hull.coriolis_added_mass(nu, M_A)):
+        np.testing.assert_allclose(C, -np.swapaxes(C, -1, -2), atol=1e-9)
+        # skew symmetry means the Coriolis terms do no work: nu^T C(nu) nu = 0
+        np.testing.assert_allclose(np.einsum("bi,bij,bj->b", nu, C, nu), 0.0, atol=1e-6)
+
+
+def test_surge_decay_matches_analytic_exponential():
+    d = gunnerus_dict()
+    d["damping"]["nonlinear"] = {"method": "none"}
+    d["wind"] = {"method": "none"}
+    d["thrusters"] = []
+    m = model_from(d)
+    res = m.rollout([0, 0, 0], [2.0, 0, 0], 300, dt_s=1.0)
+    M11 = m.mass_matrix[0, 0]
+    D11 = m.arrays.d_lin[0, 0]
+    t = res.time_s
+    np.testing.assert_allclose(res.nu[0, :, 0], 2.0 * np.exp(-D11 / M11 * t), rtol=1e-8)
+    # position is the integral of the velocity
+    np.testing.assert_allclose(res.eta[0, :, 0], 2.0 * M11 / D11 * (1 - np.exp(-D11 / M11 * t)), rtol=1e-7)
+    np.testing.assert_allclose(res.nu[0, :, 1:], 0.0, atol=1e-12)
+
+
+def test_kinetic_energy_conserved_without_damping():
+    d = gunnerus_dict()
+    d["damping"] = {"linear": {"method": "explicit", "D": [[0, 0, 0], [0, 0, 0], [0, 0, 0]]},
+                    "nonlinear": {"method": "none"}}
+    d["wind"] = {"method": "none"}
+    d["thrusters"] = []
+    d["rigid_body"]["x_g_m"] = 1.5  # exercise the off-diagonal rigid-body terms too
+    m = model_from(d)
+    nu0 = np.array([[1.0, 0.4, 0.03], [0.2, -0.8, -0.05]])
+    res = m.rollout(np.zeros((2, 3)), nu0, 2000, dt_s=0.5)
+    M = m.mass_matrix
+    E = 0.5 * np.einsum("bti,ij,btj->bt", res.nu, M, res.nu)
+    np.testing.assert_allclose(E, np.broadcast_to(E[:, :1], E.shape), rtol=1e-6)
+    assert np.ptp(res.nu[0, :, 1]) > 0.1  # the motion is not trivial: energy moves between DOFs
+
+
+def test_current_gives_relative_velocity_drift_to_steady_state(gunnerus):
+    """A ship with no forces but damping drifts with the current (nu_r -> 0)."""
+    d = gunnerus_dict()
+    d["wind"] = {"method": "none"}
+    d["damping"]["linear"]["T_surge_s"] = 100.0  # shorter surge transient, same physics
+    m = model_from(d)
+    res = m.rollout([0, 0, 0.7], [0, 0, 0], 3000, dt_s=1.0, current=[0.5, np.radians(60)])
+    eta_dot = frames.body_to_ned(res.nu[0, -1], res.eta[0, -1, 2])
+    np.testing.assert_allclose(eta_dot[:2], 0.5 * np.array([np.cos(np.radians(60)), np.sin(np.radians(60))]),
+                               atol=2e-3)
+
+
+def test_hull_damping_dissipates(gunnerus):
+    rng = np.random.default_rng(1)
+    nu = rng.normal(scale=[1.0, 0.5, 0.02], size=(200, 3))
+    _, parts, _ = gunnerus.acceleration(np.zeros((200, 3)), nu, return_parts=True)
+    power = np.einsum("bi,bi->b", parts[:, TAU_PARTS.index("hull")], nu)
+    # C terms do no work, damping removes energy (the |u| lift terms are small at these speeds)
+    assert np.all(power < 0)
+
+
+# ----------------------------------------------------------------------------- thrusters
+
+
+def test_configuration_matrix_hand_cases():
+    T = configuration_matrix(np.array([np.pi / 2, 0.0, np.pi / 2]), [15.0, -14.0, -14.0], [0.0, -2.0, 2.0])
+    # tunnel: [0, 1, l_x]; azimuth at 0: [1, 0, -l_y]; azimuth at 90 deg: [0, 1, l_x]
+    np.testing.assert_allclose(T[:, 0], [0, 1, 15.0], atol=1e-12)
+    np.testing.assert_allclose(T[:, 1], [1, 0, 2.0], atol=1e-12)
+    np.testing.assert_allclose(T[:, 2], [0, 1, -14.0], atol=1e-12)
+    a = np.radians(30)
+    np.testing.assert_allclose(configuration_matrix(np.array([a]), [-10.0], [3.0])[:, 0],
+                               [np.cos(a), np.sin(a), -10 * np.sin(a) - 3 * np.cos(a)], atol=1e-12)
+
+
+def test_thruster_load_matches_configuration_matrix(gunnerus):
+    rpm = np.array([200.0, 150.0, -120.0])
+    az = np.array([0.0, np.radians(40), np.radians(-25)])
+    _, parts, thrusts = gunnerus.acceleration([0, 0, 0], [0, 0, 0], rpm=rpm, azimuth_rad=az, return_parts=True)
+    v = gunnerus.vessel
+    alpha = np.array([t.fixed_angle_rad if t.type != "azimuth" else a for t, a in zip(v.thrusters, az)])
+    T = configuration_matrix(alpha, [t.x_m for t in v.thrusters], [t.y_m for t in v.thrusters])
+    np.testing.assert_allclose(parts[0, 1], T @ thrusts[0], rtol=1e-12)
+    # bollard thrust of each unit from K_T0: (1 - t) K_T0 rho n^2 D^4
+    p = load_wageningen()
+    for t, n, f in zip(v.thrusters, rpm, thrusts[0]):
+        if n > 0:
+            assert f == pytest.approx((1 - t.thrust_deduction) * p.kt0 * 1025 * (n / 60) ** 2 * t.diameter_m**4,
+                                      rel=1e-9)
+
+
+# ----------------------------------------------------------------------------- propeller
+
+
+def test_propeller_reproduces_reference_bollard_coefficients():
+    p = load_wageningen("B4-70", 1.0)
+    assert p.kt0 == pytest.approx(0.4499, abs=5e-5)
+    assert p.kq0 == pytest.approx(0.06607, abs=5e-6)
+
+
+def test_propeller_against_shared_check_values():
+    f = SHARED / "reference" / "wageningen_b_series_4q_check_values.csv"
+    if not f.exists():
+        pytest.skip(f"shared reference data not found at {f}")
+    chk = pd.read_csv(f)
+    for (series, pd_ratio), g in chk.groupby(["series", "pitch_diameter_ratio"]):
+        p = load_wageningen(series, pd_ratio)
+        ct, cq = ct_cq_star(np.radians(g["beta_deg"].to_numpy()), p)
+        np.testing.assert_allclose(ct, g["CT_star"], atol=6e-5, err_msg=f"{series} P/D {pd_ratio}")
+        np.testing.assert_allclose(cq, g["CQ_star"], atol=6e-6, err_msg=f"{series} P/D {pd_ratio}")
+
+
+def test_propeller_first_quadrant_close_to_oosterveld_polynomial():
+    p = load_wageningen("B4-70", 1.0)
+    kt, kq = kt_kq(np.array([0.2, 0.4, 0.6, 0.8]), p)
+    np.testing.assert_allclose(kt, [0.392, 0.314, 0.226, 0.130], rtol=0.05)  # reference README table
+    np.testing.assert_allclose(kq, [0.0594, 0.0492, 0.0373, 0.0240], rtol=0.12)
+
+
+@pytest.mark.parametrize("n, va, sign", [(5.0, 0.5, +1), (-5.0, 0.5, -1), (-5.0, -0.5, -1), (5.0, -0.5, +1)])
+def test_quadrant_thrust_signs(n, va, sign):
+    """Low advance ratios in each quadrant: thrust follows the shaft direction."""
+    t, q = thrust_torque(n, va, 1.9, load_wageningen())
+    assert np.sign(t) == sign and np.sign(q) == sign
+
+
+def test_stopped_propeller_gives_drag_opposing_inflow():
+    p = load_wageningen()
+    va = np.array([-2.0, -0.5, 0.5, 2.0])
+    t, _ = thrust_torque(0.0, va, 1.9, p)
+    assert np.all(np.sign(t) == -np.sign(va))
+    # drag grows with V_a^2: C_T*(+-90 deg) 0.5 rho V_a^2 pi/4 D^2
+    ct90, _ = ct_cq_star(np.radians([90.0, -90.0]), p)
+    np.testing.assert_allclose(t[[2, 0]] / va[[2, 0]] ** 2, ct90 * 0.5 * 1025 * np.pi / 4 * 1.9**2, rtol=1e-12)
+
+
+def test_propeller_continuous_across_quadrant_boundaries():
+    p = load_wageningen()
+    for b0 in (-180.0, -90.0, 0.0, 90.0, 180.0):
+        ct, cq = ct_cq_star(np.radians([b0 - 1e-7, b0 + 1e-7]), p)
+        assert abs(ct[1] - ct[0]) < 1e-6 and abs(cq[1] - cq[0]) < 1e-6
+    # and the dimensional thrust is continuous through n = 0 and V_a = 0
+    t, _ = thrust_torque(np.array([-1e-6, 1e-6]), 1.0, 1.9, p)
+    assert abs(t[1] - t[0]) < 1e-5 * abs(t[0])
+    t, _ = thrust_torque(3.0, np.array([-1e-6, 1e-6]), 1.9, p)
+    assert abs(t[1] - t[0]) < 1e-5 * abs(t[0])
+
+
+def test_drifting_ship_with_stopped_thrusters_feels_drag(gunnerus):
+    """A ship drifting astern with rpm 0 gets a forward (opposing) force from its azimuths."""
+    _, parts, thrusts = gunnerus.acceleration([0, 0, 0], [-0.8, 0, 0], rpm=[0, 0, 0], azimuth_rad=[0, 0, 0],
+                                              return_parts=True)
+    assert parts[0, 1, 0] > 0 and np.all(thrusts[0, 1:] > 0)
+
+
+# ----------------------------------------------------------------------------- wind
+
+
+def test_head_wind_gives_aft_force_and_no_sway(gunnerus):
+    _, parts, _ = gunnerus.acceleration([0, 0, np.radians(30)], [0, 0, 0], wind=[10.0, np.radians(30)],
+                                        return_parts=True)
+    w = parts[0, TAU_PARTS.index("wind")]
+    assert w[0] < 0 and abs(w[1]) < 1e-9 and abs(w[2]) < 1e-9
+    q = 0.5 * 1.225 * 100.0
+    assert w[0] == pytest.approx(q * -0.53 * 81.0 * 1.0, rel=1e-9)  # C_X(0) A_F from the vessel table
+
+
+def test_beam_wind_from_port_pushes_to_starboard_symmetrically(gunnerus):
+    psi = 0.0
+    _, p_port, _ = gunnerus.acceleration([0, 0, psi], [0, 0, 0], wind=[12.0, np.radians(270)], return_parts=True)
+    _, p_stbd, _ = gunnerus.acceleration([0, 0, psi], [0, 0, 0], wind=[12.0, np.radians(90)], return_parts=True)
+    wp, ws = p_port[0, 2], p_stbd[0, 2]
+    assert wp[1] > 0 and ws[1] < 0
+    np.testing.assert_allclose(wp, ws * np.array([1, -1, -1]), rtol=1e-12)
+
+
+def test_ship_speed_enters_relative_wind(gunnerus):
+    """Moving at 5 m/s into a 5 m/s tail wind: no relative wind, no load."""
+    _, parts, _ = gunnerus.acceleration([0, 0, 0], [5.0, 0, 0], wind=[5.0, np.pi], return_parts=True)
+    np.testing.assert_allclose(parts[0, 2], 0.0, atol=1e-9)
+
+
+# ----------------------------------------------------------------------------- integrator
+
+
+def test_rollout_batch_equals_single_and_held_equals_per_step(gunnerus):
+    rng = np.random.default_rng(3)
+    B = 7
+    eta0 = rng.normal(size=(B, 3))
+    nu0 = rng.normal(scale=[0.5, 0.2, 0.01], size=(B, 3))
+    rpm = rng.uniform(-100, 200, size=(B, 3))
+    az = rng.uniform(-np.pi, np.pi, size=(B, 3))
+    wind = np.column_stack([rng.uniform(0, 15, B), rng.uniform(0, 2 * np.pi, B)])
+    batch = gunnerus.rollout(eta0, nu0, 60, rpm=rpm, azimuth_rad=az, wind=wind)
+    per_step = gunnerus.rollout(eta0, nu0, 60, rpm=np.repeat(rpm[:, None], 60, 1),
+                                azimuth_rad=np.repeat(az[:, None], 60, 1), wind=np.repeat(wind[:, None], 60, 1))
+    np.testing.assert_array_equal(batch.eta, per_step.eta)
+    one = gunnerus.rollout(eta0[3], nu0[3], 60, rpm=rpm[3], azimuth_rad=az[3], wind=wind[3])
+    np.testing.assert_allclose(one.eta[0], batch.eta[3], rtol=0, atol=1e-12)
+    # step() reproduces rollout()
+    e, n = gunnerus.step(eta0, nu0, rpm=rpm, azimuth_rad=az, wind=wind)
+    np.testing.assert_allclose(e, batch.eta[:, 1], atol=1e-12)
+
+
+def test_rk4_converges_at_fourth_order():
+    # |x|x damping and the piecewise-linear wind table are not smooth enough to show the
+    # order; the smooth part of the model (Coriolis, linear damping, propellers) is.
+    d = gunnerus_dict()
+    d["damping"]["nonlinear"] = {"method": "none"}
+    d["wind"] = {"method": "none"}
+    gunnerus = model_from(d)
+    kw = dict(rpm=[100, 150, 150], azimuth_rad=[0, 0.4, 0.4])
+    ref = gunnerus.rollout([0, 0, 0], [1, 0, 0], 1, dt_s=60.0, substeps=1920, **kw).eta[0, -1]
+    errs = [np.abs(gunnerus.rollout([0, 0, 0], [1, 0, 0], 1, dt_s=60.0, substeps=s, **kw).eta[0, -1] - ref).max()
+            for s in (16, 64)]
+    assert 150 < errs[0] / errs[1] < 450  # 4x smaller steps: 4^4 = 256 for fourth order
+
+
+def test_bad_inputs_are_refused_with_the_field_named(gunnerus):
+    with pytest.raises(ValueError, match="rpm"):
+        gunnerus.rollout([0, 0, 0], [0, 0, 0], 10, rpm=[1, 2])
+    with pytest.raises(ValueError, match="wind: contains NaN"):
+        gunnerus.acceleration([0, 0, 0], [0, 0, 0], wind=[np.nan, 0])
+    with pytest.raises(ValueError, match="nu0"):
+        gunnerus.rollout([0, 0, 0], [0, np.inf, 0], 10)
+
+
+# ----------------------------------------------------------------------------- vessel files
+
+
+def test_gunnerus_coefficients_close_to_published_original_hull():
+    """Derived added mass has the published (original, 15 % shorter hull) magnitudes."""
+    m = DynamicModel("gunnerus")
+    M_A = m.arrays.m_a
+    assert 0.5 < M_A[0, 0] / 79320.6 < 2.0      # X_udot
+    assert 0.7 < M_A[1, 1] / 408192.6 < 1.5     # Y_vdot
+    assert 0.7 < M_A[2, 2] / 12245783.9 < 1.5   # N_rdot
+    # cross-flow drag per |v|v vs published Y_|v|v (original hull), same order
+    assert 0.8 < m.arrays.strip_w.sum() / 21640.7 < 2.5
+
+
+@pytest.mark.parametrize("edit, field", [
+    (lambda d: d["particulars"].pop("B_m"), "particulars.B_m"),
+    (lambda d: d["thrusters"][1].__setitem__("diameter_m", -1.9), r"thrusters\[1\].diameter_m"),
+    (lambda d: d.__setitem__("added_mass", {"method": "explicit", "X_udot_kg": 1e7, "Y_vdot_kg": -1e5,
+                                            "Y_rdot_kg_m": 0, "N_vdot_kg_m": 0, "N_rdot_kg_m2": -1e6}),
+     "not positive definite"),
+    (lambda d: d["damping"]["linear"].pop("T_yaw_s"), "T_yaw_s"),
+    (lambda d: d["thrusters"][0].__setitem__("type", "propeller"), r"thrusters\[0\].type"),
+    (lambda d: d.__setitem__("format_version", 99), "format_version"),
+    (lambda d: d["particulars"].__setitem__("L_pp_m", "long"), "particulars.L_pp_m"),
+    (lambda d: d["thrusters"][2].__setitem__("name", "port"), "duplicate"),
+])
+def test_invalid_vessel_files_name_the_field(edit, field):
+    d = copy.deepcopy(gunnerus_dict())
+    edit(d)
+    with pytest.raises(VesselFileError, match=field):
+        vessel_from_dict(d, "bad.toml")
+
+
+def test_unknown_vessel_and_bad_toml(tmp_path):
+    with pytest.raises(VesselFileError, match="packaged"):
+        load_vessel("no_such_ship")
+    f = tmp_path / "x.toml"
+    f.write_text("name = [")
+    with pytest.raises(VesselFileError, match="not valid TOML"):
+        load_vessel(f)
