@@ -1,0 +1,433 @@
+"""Tests of the vessel log format (hybridship.logs.io) and log preprocessing."""
+
+from __future__ import annotations
+
+import os
+import warnings
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+import pytest
+
+from hybridship import frames
+from hybridship.logs import (
+    LogFormatError,
+    LogFormatWarning,
+    derivative_by_segment,
+    filtered_derivative,
+    log_to_arrays,
+    moving_average_start,
+    read_log,
+    segmentwise,
+    split_segments,
+    validate_log,
+    write_log,
+)
+from hybridship.logs.io import heading_looks_like_radians
+
+THRUSTERS = ["tunnel", "port", "stbd"]
+ROTATABLE = [False, True, True]
+DATA_DIR = Path(__file__).resolve().parents[1].parent / "shared" / "data"
+
+# Circular track: constant body velocity and yaw rate.
+U_M_S, V_M_S, R_DEG_S = 2.0, 0.5, 1.0
+
+
+def circle_log(n: int = 120, dt_s: float = 1.0, *, velocities: bool = True) -> pd.DataFrame:
+    """A synthetic, format-conforming log of a vessel on a circle (analytic positions)."""
+    t = np.arange(n) * dt_s
+    w = np.radians(R_DEG_S)
+    psi = np.radians(340.0) + w * t  # crosses north, so the logged heading wraps
+    north = (U_M_S * np.sin(psi) + V_M_S * np.cos(psi)) / w
+    east = (-U_M_S * np.cos(psi) + V_M_S * np.sin(psi)) / w
+    df = pd.DataFrame(
+        {
+            "time_s": t,
+            "north_m": north,
+            "east_m": east,
+            "heading_deg": np.degrees(frames.wrap_2pi(psi)),
+            "wind_speed_m_s": 8.0 + 0.01 * t,
+            "wind_dir_deg": np.full(n, 45.0),
+            "tunnel_rpm": np.linspace(-100.0, 100.0, n),
+            "port_rpm": np.full(n, 120.0),
+            "port_azimuth_deg": np.full(n, -30.0),
+            "stbd_rpm": np.full(n, 110.0),
+            "stbd_azimuth_deg": np.full(n, 30.0),
+            "dp_active": (t < t[n // 2]).astype(int),
+            "truth_current_speed_mps": np.full(n, 0.2),
+        }
+    )
+    if velocities:
+        df.insert(4, "u_m_s", np.full(n, U_M_S))
+        df.insert(5, "v_m_s", np.full(n, V_M_S))
+        df.insert(6, "r_deg_s", np.full(n, R_DEG_S))
+    return df
+
+
+# --------------------------------------------------------------------------------------
+# Round trip and atomic writes
+# --------------------------------------------------------------------------------------
+
+
+@pytest.mark.parametrize("name", ["log.csv", "log.csv.gz", "log.parquet"])
+def test_round_trip(tmp_path, name):
+    df = circle_log()
+    before = df.copy(deep=True)
+    path = tmp_path / name
+    write_log(df, path, thruster_names=THRUSTERS, rotatable=ROTATABLE)
+    back = read_log(path, thruster_names=THRUSTERS, rotatable=ROTATABLE)
+    pd.testing.assert_frame_equal(back, df, check_exact=True)
+    pd.testing.assert_frame_equal(df, before, check_exact=True)  # input untouched
+    assert sorted(os.listdir(tmp_path)) == [name]  # no temp file left behind
+
+
+def test_csv_gz_is_gzip_and_reproducible(tmp_path):
+    df = circle_log()
+    write_log(df, tmp_path / "a.csv.gz")
+    write_log(df, tmp_path / "b.csv.gz")
+    a, b = (tmp_path / "a.csv.gz").read_bytes(), (tmp_path / "b.csv.gz").read_bytes()
+    assert a[:2] == b"\x1f\x8b" and a == b
+
+
+def test_write_replaces_existing_file_only_on_success(tmp_path, monkeypatch):
+    path = tmp_path / "log.csv"
+    first, second = circle_log(50), circle_log(60)
+    write_log(first, path)
+    write_log(second, path)  # success: replaced
+    pd.testing.assert_frame_equal(read_log(path), second)
+    good_bytes = path.read_bytes()
+
+    bad = second.copy()
+    bad.loc[3, "north_m"] = np.nan
+    with pytest.raises(LogFormatError, match="north_m"):
+        write_log(bad, path)
+    assert path.read_bytes() == good_bytes
+
+    def fail_midway(self, buf, *args, **kwargs):
+        buf.write(b"time_s,north_m\n0.0,")  # partial output, then a crash
+        raise OSError("disk full")
+
+    monkeypatch.setattr(pd.DataFrame, "to_csv", fail_midway)
+    with pytest.raises(OSError, match="disk full"):
+        write_log(second, path)
+    assert path.read_bytes() == good_bytes
+    assert sorted(os.listdir(tmp_path)) == ["log.csv"]
+
+
+def test_unsupported_extension(tmp_path):
+    with pytest.raises(LogFormatError, match="extension"):
+        write_log(circle_log(), tmp_path / "log.txt")
+
+
+# --------------------------------------------------------------------------------------
+# Validation errors name the column
+# --------------------------------------------------------------------------------------
+
+
+def _set(col, row, value):
+    def mutate(df):
+        df[col] = df[col].astype(object if isinstance(value, str) else float)
+        df.loc[row, col] = value
+        return df
+
+    return mutate
+
+
+def _radian_heading(df):
+    df["heading_deg"] = np.radians(df["heading_deg"])
+    return df
+
+
+def _radian_heading_no_rate(df):
+    return _radian_heading(df.drop(columns="r_deg_s"))
+
+
+BAD_CASES = {
+    "missing heading": (lambda df: df.drop(columns="heading_deg"), r"heading_deg: required column missing"),
+    "missing time": (lambda df: df.drop(columns="time_s"), r"time_s: required column missing"),
+    "nan north": (_set("north_m", 7, np.nan), r"north_m: missing or non-finite value \(nan\) at row 7 \(time_s 7\)"),
+    "text east": (_set("east_m", 4, "12,5"), r"east_m: non-numeric value '12,5' at row 4 \(time_s 4\)"),
+    "time repeat": (_set("time_s", 17, 16.0), r"time_s: not strictly increasing at row 17 \(time_s 16 after 16\)"),
+    "time backwards": (_set("time_s", 30, 5.0), r"time_s: not strictly increasing at row 30"),
+    "time nan": (_set("time_s", 9, np.nan), r"time_s: non-finite value nan at row 9"),
+    "heading radians": (_radian_heading, r"heading_deg: values span 0\.\d\d\.\.6\.\d\d, which looks like radians"),
+    "heading radians no r": (_radian_heading_no_rate, r"heading_deg: .*looks like radians.*expects degrees"),
+    "u knots": (_set("u_m_s", 12, 38.0), r"u_m_s: value 38 at row 12 \(time_s 12\).*knots"),
+    "v knots": (_set("v_m_s", 2, -31.0), r"v_m_s: .*knots"),
+    "r rad/s mix-up": (_set("r_deg_s", 5, 70.0), r"r_deg_s: value 70 at row 5.*rad/s"),
+    "wind negative": (_set("wind_speed_m_s", 8, -1.0), r"wind_speed_m_s: value -1 at row 8"),
+    "wind huge": (_set("wind_speed_m_s", 8, 95.0), r"wind_speed_m_s: value 95"),
+    "dp_active 2": (_set("dp_active", 11, 2.0), r"dp_active: value 2 at row 11"),
+    "inf rpm": (_set("port_rpm", 6, np.inf), r"port_rpm: infinite value inf at row 6"),
+    "unknown thruster rpm": (
+        lambda df: df.assign(bow2_rpm=0.0),
+        r"bow2_rpm: names unknown thruster 'bow2'; known thrusters: tunnel, port, stbd",
+    ),
+    "unknown thruster azimuth": (
+        lambda df: df.rename(columns={"stbd_azimuth_deg": "sb_azimuth_deg"}),
+        r"sb_azimuth_deg: names unknown thruster 'sb'",
+    ),
+}
+
+
+@pytest.mark.parametrize("case", list(BAD_CASES))
+def test_bad_input_raises_naming_column(case):
+    mutate, pattern = BAD_CASES[case]
+    df = mutate(circle_log())
+    before = df.copy(deep=True)
+    with pytest.raises(LogFormatError, match=pattern):
+        validate_log(df, thruster_names=THRUSTERS, rotatable=ROTATABLE)
+    pd.testing.assert_frame_equal(df, before)
+
+
+def test_error_attributes_and_file_name(tmp_path):
+    df = circle_log()
+    df.loc[7, "north_m"] = np.nan
+    path = tmp_path / "broken.csv"
+    df.to_csv(path, index=False)  # bypass write_log's validation
+    with pytest.raises(LogFormatError, match=r"north_m: .*broken\.csv") as info:
+        read_log(path)
+    err = info.value
+    assert isinstance(err, ValueError)
+    assert (err.column, err.row, err.time_s) == ("north_m", 7, 7.0)
+
+
+def test_thruster_argument_mismatch():
+    with pytest.raises(ValueError, match="rotatable"):
+        validate_log(circle_log(), thruster_names=THRUSTERS, rotatable=[True])
+
+
+# --------------------------------------------------------------------------------------
+# Heading unit rule
+# --------------------------------------------------------------------------------------
+
+
+def test_small_degree_headings_are_accepted():
+    t = np.arange(600.0)
+    heading = 1.5 + 1.5 * np.sin(2 * np.pi * t / 300.0)  # all within 0..3 deg
+    rate = np.gradient(heading, t)
+    assert not heading_looks_like_radians(t, heading)[0]
+    assert not heading_looks_like_radians(t, heading, rate)[0]
+    df = circle_log(600).assign(heading_deg=heading, r_deg_s=rate)
+    validate_log(df)
+    validate_log(df.drop(columns="r_deg_s"))
+
+
+def test_radian_headings_are_refused():
+    t = np.arange(600.0)
+    # A turn spanning 0..6.28 without wrapping, no rate column: refused by its spread.
+    assert heading_looks_like_radians(t, np.linspace(0.0, 2 * np.pi, t.size))[0]
+    # A DP log in radians barely moving: only the rate column can tell, and does.
+    rng = np.random.default_rng(1)
+    psi_deg = 92.0 + np.cumsum(rng.normal(0.0, 0.05, t.size))
+    r_deg_s = np.gradient(psi_deg, t) + rng.normal(0.0, 0.01, t.size)
+    assert heading_looks_like_radians(t, np.radians(psi_deg), r_deg_s)[0]
+    assert not heading_looks_like_radians(t, psi_deg, r_deg_s)[0]
+
+
+# --------------------------------------------------------------------------------------
+# Unknown columns
+# --------------------------------------------------------------------------------------
+
+
+def test_unknown_columns_warn_once_and_are_kept(tmp_path):
+    df = circle_log().assign(gps_quality=1, pitch_deg=0.0, tunnel_azimuth_deg=0.0)
+    path = tmp_path / "log.csv"
+    df.to_csv(path, index=False)
+    with pytest.warns(LogFormatWarning) as record:
+        back = read_log(path, thruster_names=THRUSTERS, rotatable=ROTATABLE)
+    msgs = [str(w.message) for w in record if issubclass(w.category, LogFormatWarning)]
+    assert len(msgs) == 1
+    assert "gps_quality" in msgs[0] and "pitch_deg" in msgs[0] and "not rotatable" in msgs[0]
+    assert "truth_" not in msgs[0]
+    assert {"gps_quality", "pitch_deg", "truth_current_speed_mps"} <= set(back.columns)
+
+
+def test_format_columns_do_not_warn():
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        validate_log(circle_log(), thruster_names=THRUSTERS, rotatable=ROTATABLE)
+
+
+# --------------------------------------------------------------------------------------
+# Arrays
+# --------------------------------------------------------------------------------------
+
+
+def test_derived_velocities_on_circle_match_analytic():
+    df = circle_log(120, velocities=False)
+    arr = log_to_arrays(df, thruster_names=THRUSTERS, rotatable=ROTATABLE)
+    w = np.radians(R_DEG_S)
+    assert not arr.nu_logged.any()
+    # Heading unwrapped across north: a steady turn.
+    np.testing.assert_allclose(np.diff(arr.eta[:, 2]), w, atol=1e-9)
+    inner = slice(1, -1)  # central differences inside; one-sided at the ends
+    np.testing.assert_allclose(arr.nu[inner, 0], U_M_S, atol=1e-3)
+    np.testing.assert_allclose(arr.nu[inner, 1], V_M_S, atol=1e-3)
+    np.testing.assert_allclose(arr.nu[:, 2], w, atol=1e-9)
+    np.testing.assert_allclose(arr.nu[:, :2], [[U_M_S, V_M_S]] * len(arr), atol=0.05)
+
+
+def test_logged_velocities_are_used_and_converted():
+    df = circle_log(60)
+    df.loc[10, "u_m_s"] = np.nan  # a missing sample is derived instead
+    arr = log_to_arrays(df, thruster_names=THRUSTERS, rotatable=ROTATABLE)
+    np.testing.assert_allclose(arr.nu[:, 2], np.radians(R_DEG_S))
+    assert arr.nu_logged[:, 1:].all() and arr.nu_logged.sum() == 3 * 60 - 1
+    assert not arr.nu_logged[10, 0]
+    np.testing.assert_allclose(arr.nu[10, 0], U_M_S, atol=1e-3)
+
+
+def test_log_to_arrays_commands_wind_and_defaults():
+    df = circle_log(40)
+    df.loc[5:7, "port_rpm"] = np.nan
+    arr = log_to_arrays(df, thruster_names=THRUSTERS, rotatable=ROTATABLE)
+    n = len(df)
+    assert arr.eta.shape == arr.nu.shape == (n, 3)
+    assert arr.rpm.shape == arr.azimuth_rad.shape == (n, 3)
+    np.testing.assert_allclose(arr.rpm[:, 0], df["tunnel_rpm"])
+    np.testing.assert_allclose(arr.rpm[5:8, 1], 120.0)  # held over the missing samples
+    np.testing.assert_allclose(arr.azimuth_rad[:, 0], 0.0)  # tunnel: fixed
+    np.testing.assert_allclose(arr.azimuth_rad[:, 1:], np.radians([[-30.0, 30.0]] * n))
+    assert arr.has_wind
+    np.testing.assert_allclose(arr.wind[:, 1], np.radians(45.0))
+    np.testing.assert_array_equal(arr.dp_active, df["dp_active"])
+    np.testing.assert_array_equal(arr.segment_id, 0)
+    with pytest.raises(ValueError):
+        arr.eta[0, 0] = 1.0  # read-only
+
+    bare = df[["time_s", "north_m", "east_m", "heading_deg"]]
+    arr = log_to_arrays(bare, thruster_names=THRUSTERS, rotatable=ROTATABLE)
+    assert not arr.has_wind and np.all(arr.wind == 0.0)
+    assert np.all(arr.dp_active == 1) and np.all(arr.rpm == 0.0)
+    assert arr.thruster_logged == (False, False, False)
+    assert np.isfinite(arr.nu).all()
+
+
+def test_log_to_arrays_does_not_differentiate_across_gaps():
+    df = circle_log(100, velocities=False)
+    # Remove 20 samples and shift the track after the gap: a naive derivative would spike.
+    df = df.drop(index=range(40, 60)).reset_index(drop=True)
+    df.loc[40:, "north_m"] += 500.0
+    arr = log_to_arrays(df, thruster_names=THRUSTERS, rotatable=ROTATABLE)
+    assert [(s.start, s.stop) for s in arr.segments] == [(0, 40), (40, 80)]
+    np.testing.assert_array_equal(arr.segment_id, np.repeat([0, 1], 40))
+    np.testing.assert_allclose(arr.nu[:, :2], [[U_M_S, V_M_S]] * 80, atol=0.05)
+
+
+# --------------------------------------------------------------------------------------
+# Preprocessing
+# --------------------------------------------------------------------------------------
+
+
+@pytest.mark.parametrize("method", ["savgol", "butter"])
+def test_filtered_derivative_of_sine(method):
+    dt_s, f_hz = 0.5, 0.02
+    t = np.arange(0.0, 200.0, dt_s)
+    x = np.sin(2 * np.pi * f_hz * t)
+    rng = np.random.default_rng(0)
+    dx = filtered_derivative(x + rng.normal(0.0, 1e-4, t.size), dt_s, method=method, window_s=5.0)
+    expected = 2 * np.pi * f_hz * np.cos(2 * np.pi * f_hz * t)
+    inner = slice(40, -40)
+    np.testing.assert_allclose(dx[inner], expected[inner], atol=2e-3 * 2 * np.pi * f_hz * 10)
+
+
+def test_filtered_derivative_axis_and_short_segments():
+    t = np.arange(50.0)
+    x = np.column_stack([t**2, 3.0 * t])
+    np.testing.assert_allclose(filtered_derivative(x, 1.0)[5:-5], np.column_stack([2 * t, np.full(50, 3.0)])[5:-5])
+    np.testing.assert_allclose(filtered_derivative(x.T, 1.0, axis=1).T, filtered_derivative(x, 1.0))
+    short = np.array([0.0, 2.0, 4.0])  # shorter than the 5-sample window: np.gradient
+    np.testing.assert_allclose(filtered_derivative(short, 1.0), 2.0)
+    assert np.isnan(filtered_derivative(np.array([1.0]), 1.0)).all()
+    with pytest.raises(ValueError, match="method"):
+        filtered_derivative(short, 1.0, method="spline")
+
+
+def test_split_segments_and_segmentwise_derivative():
+    t = np.concatenate([np.arange(0.0, 50.0), np.arange(60.0, 100.0), [100.0, 101.4]])
+    segs = split_segments(t)
+    assert [(s.start, s.stop) for s in segs] == [(0, 50), (50, 92)]  # 1.4 s is not a gap
+    assert [(s.start, s.stop) for s in split_segments(t, gap_factor=1.3)] == [(0, 50), (50, 91), (91, 92)]
+    assert [(s.start, s.stop) for s in split_segments(t, nominal_dt_s=10.0)] == [(0, 92)]
+    assert split_segments([]) == [] and split_segments([3.0]) == [slice(0, 1)]
+    with pytest.raises(ValueError, match="strictly increasing"):
+        split_segments([0.0, 1.0, 1.0])
+
+    t = t[:90]  # uniform sampling within each segment, one gap
+    x = t.copy()
+    x[50:] += 1000.0  # a jump hidden in the gap
+    dx = derivative_by_segment(x, t, window_s=5.0)
+    np.testing.assert_allclose(dx, 1.0, atol=1e-9)
+    naive = filtered_derivative(x, 1.0)
+    assert np.abs(naive).max() > 100.0  # what segmentwise prevents
+    segs = split_segments(t)
+
+    out = segmentwise(lambda a: a - a[0], x, segs)
+    assert out[0] == 0.0 and out[50] == 0.0
+    np.testing.assert_array_equal(segmentwise(lambda a: a, x, [slice(0, 10)])[10:], np.nan)
+
+
+def test_moving_average_start():
+    x = np.column_stack([np.arange(10.0), 10.0 * np.arange(10.0)])
+    np.testing.assert_allclose(moving_average_start(x, 5), [4.0, 40.0])
+    np.testing.assert_allclose(moving_average_start(x, 0), [0.0, 0.0])  # shorter window at the start
+    np.testing.assert_allclose(moving_average_start(x, -1, window_samples=4), [7.5, 75.0])
+    seg = np.array([0] * 5 + [1] * 5)
+    np.testing.assert_allclose(moving_average_start(x, 6, segment_id=seg), [5.5, 55.0])  # stops at the gap
+    # Unwrapped heading averages smoothly across north.
+    psi = frames.unwrap_heading(np.radians([358.0, 359.0, 1.0]))
+    np.testing.assert_allclose(np.degrees(moving_average_start(psi, 2)), (358.0 + 359.0 + 361.0) / 3.0)
+    with pytest.raises(IndexError):
+        moving_average_start(x, 10)
+
+
+# --------------------------------------------------------------------------------------
+# The development data set
+# --------------------------------------------------------------------------------------
+
+
+def _dev_logs() -> list[Path]:
+    logs = sorted((DATA_DIR / "truthsim-dev" / "logs").glob("*.csv.gz"))
+    if not logs:
+        pytest.skip(f"development logs not found in {DATA_DIR / 'truthsim-dev' / 'logs'} (shared data checkout absent)")
+    return logs
+
+
+def _increments(x: np.ndarray, lag: int) -> np.ndarray:
+    return x[lag:] - x[:-lag]
+
+
+def test_dev_logs_read_and_velocities_match_heading():
+    from scipy.integrate import cumulative_trapezoid
+
+    lag = 20  # compare 20-s displacements: GNSS noise is small against them
+    for path in _dev_logs():
+        with warnings.catch_warnings():
+            warnings.simplefilter("error", LogFormatWarning)  # only format and truth_* columns
+            df = read_log(path, thruster_names=THRUSTERS, rotatable=ROTATABLE)
+        arr = log_to_arrays(df, thruster_names=THRUSTERS, rotatable=ROTATABLE)
+        assert arr.nu_logged.all() and arr.has_wind and all(arr.thruster_logged), path.name
+        assert set(np.unique(arr.dp_active)) == {0, 1} and len(arr.segments) == 1, path.name
+
+        # Logged (u, v) rotated to NED with the logged heading and integrated, against the
+        # displacement of the track. As complex numbers north + i east, the regression
+        # coefficient's angle is the heading mismatch (a 5 deg offset gives 5 deg).
+        ned_m_s = frames.body_to_ned(arr.nu, arr.eta[:, 2])[:, :2]
+        from_velocity = _increments(cumulative_trapezoid(ned_m_s, arr.time_s, axis=0, initial=0.0), lag)
+        from_track = _increments(arr.eta[:, :2], lag)
+        for j, axis in enumerate(("north", "east")):
+            corr = np.corrcoef(from_velocity[:, j], from_track[:, j])[0, 1]
+            assert corr > 0.9, f"{path.name}: {axis} displacement correlation {corr:.3f}"
+        zv, zt = from_velocity @ [1.0, 1.0j], from_track @ [1.0, 1.0j]
+        coef = np.vdot(zv, zt) / np.vdot(zv, zv)
+        assert abs(np.degrees(np.angle(coef))) < 2.0, f"{path.name}: heading mismatch {np.degrees(np.angle(coef)):.2f} deg"
+        assert 0.95 < abs(coef) < 1.05, f"{path.name}: speed scale {abs(coef):.3f}"
+
+        # Logged yaw rate integrated against the unwrapped heading's change.
+        from_rate = _increments(cumulative_trapezoid(arr.nu[:, 2], arr.time_s, initial=0.0), lag)
+        from_heading = _increments(arr.eta[:, 2], lag)
+        assert np.corrcoef(from_rate, from_heading)[0, 1] > 0.95, path.name
+        slope = np.dot(from_rate, from_heading) / np.dot(from_rate, from_rate)
+        assert 0.95 < slope < 1.05, f"{path.name}: yaw rate scale {slope:.3f}"
