@@ -1,0 +1,421 @@
+"""Physical checks for the simulator's environment: JONSWAP, wave drift, WF motion, wind, current.
+
+Gunnerus: Lpp 33.9 m, B 9.6 m, T 2.5 m. Conventions: wave and wind directions are where
+they come FROM, current where it flows TO, all clockwise from north; beta = wave
+direction - heading (0 head seas, -pi/2 waves from port).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+from scipy.integrate import quad
+
+from hybridship.sim.environment import (
+    GUNNERUS_HULL,
+    HullDimensions,
+    MotionRAOs,
+    SeaState,
+    WaveField,
+    _gauss_markov,
+    beaufort_wave_height,
+    beaufort_wind_speed,
+    current_series,
+    current_velocity_ned,
+    davenport_spectrum,
+    drift_coefficients,
+    gust_wind,
+    harris_spectrum,
+    jonswap_spectrum,
+    make_wave_components,
+    mean_drift_loads,
+    wave_drift_loads,
+    wave_frequency_motion,
+)
+
+GUNNERUS = dict(L_m=33.9, B_m=9.6, T_m=2.5)
+RHO, G = 1025.0, 9.81
+HEAD, FROM_PORT = 0.0, -np.pi / 2
+
+
+# --------------------------------------------------------------------------- JONSWAP
+
+
+@pytest.mark.parametrize("gamma", [1.0, 2.0, 3.3, 5.0, 7.0])
+@pytest.mark.parametrize("hs_m, tp_s", [(1.0, 6.0), (0.5, 4.0), (3.0, 10.0)])
+def test_jonswap_m0_gives_hs_within_2_percent(hs_m, tp_s, gamma):
+    w = np.linspace(1e-3, 40.0, 400_001)
+    m0 = np.trapezoid(jonswap_spectrum(w, hs_m, tp_s, gamma), w)
+    assert 4.0 * math.sqrt(m0) == pytest.approx(hs_m, rel=0.02)
+
+
+@pytest.mark.parametrize("gamma", [1.0, 3.3, 6.0])
+def test_jonswap_peak_at_two_pi_over_tp(gamma):
+    tp = 6.5
+    w = np.linspace(0.2, 5.0, 200_001)
+    s = jonswap_spectrum(w, 1.2, tp, gamma)
+    assert w[np.argmax(s)] == pytest.approx(2.0 * np.pi / tp, abs=2 * (w[1] - w[0]))
+
+
+def test_jonswap_zero_for_nonpositive_frequency_and_scales_with_hs_squared():
+    w = np.array([-1.0, 0.0, 0.8, 1.2])
+    s1 = jonswap_spectrum(w, 1.0, 6.0)
+    assert s1[0] == 0.0 and s1[1] == 0.0
+    np.testing.assert_allclose(jonswap_spectrum(w, 2.0, 6.0), 4.0 * s1)
+
+
+@pytest.mark.parametrize("kwargs, field", [(dict(hs_m=-1.0, tp_s=6.0), "hs_m"), (dict(hs_m=1.0, tp_s=0.0), "tp_s"),
+                                           (dict(hs_m=1.0, tp_s=6.0, gamma=0.5), "gamma")])
+def test_jonswap_validation_names_field(kwargs, field):
+    with pytest.raises(ValueError, match=field):
+        jonswap_spectrum(1.0, **kwargs)
+
+
+# --------------------------------------------------------------------------- wave components
+
+
+def test_components_deterministic_for_seed_and_differ_between_seeds():
+    a = make_wave_components(1.0, 6.0, 0.3, rng=7)
+    b = make_wave_components(1.0, 6.0, 0.3, rng=np.random.default_rng(7))
+    c = make_wave_components(1.0, 6.0, 0.3, rng=8)
+    np.testing.assert_array_equal(a.omega_rad_s, b.omega_rad_s)
+    np.testing.assert_array_equal(a.phase_rad, b.phase_rad)
+    assert not np.allclose(a.phase_rad, c.phase_rad)
+    assert not np.allclose(a.omega_rad_s, c.omega_rad_s)
+
+
+def test_rng_none_is_refused():
+    with pytest.raises(TypeError, match="rng"):
+        make_wave_components(1.0, 6.0, 0.0, rng=None)
+
+
+@pytest.mark.parametrize("method", ["jittered", "equal_energy"])
+def test_components_reproduce_hs_and_are_not_periodic(method):
+    wf = make_wave_components(1.3, 7.0, 1.0, rng=3, n_components=50, method=method)
+    assert wf.n_components == 50
+    assert wf.hs_discrete_m == pytest.approx(1.3, rel=1e-12)
+    if method == "jittered":
+        # A_j = sqrt(2 S(omega_j) d_omega_j) up to one Hs-normalisation factor close to 1.
+        ratio = wf.amplitude_m**2 / (2.0 * jonswap_spectrum(wf.omega_rad_s, 1.3, 7.0) * wf.d_omega_rad_s)
+        np.testing.assert_allclose(ratio, ratio[0], rtol=1e-10)
+        assert ratio[0] == pytest.approx(1.0, abs=0.1)
+    spacing = np.diff(np.sort(wf.omega_rad_s))
+    assert spacing.std() > 0.05 * spacing.mean()      # not a regular grid
+    # Elevation of a 3 h record: 4 * std = Hs.
+    t = np.arange(0.0, 3 * 3600.0, 0.5)
+    assert 4.0 * wf.elevation(t).std() == pytest.approx(1.3, rel=0.05)
+
+
+def test_equal_energy_components_have_equal_amplitudes():
+    wf = make_wave_components(1.0, 6.0, 0.0, rng=1, method="equal_energy")
+    np.testing.assert_allclose(wf.amplitude_m, wf.amplitude_m[0])
+
+
+def test_long_crested_and_spread_directions():
+    lc = make_wave_components(1.0, 6.0, 0.5, rng=2)
+    np.testing.assert_allclose(lc.dir_from_rad, 0.5)
+    sp = make_wave_components(1.0, 6.0, 0.5, rng=2, spreading=2.0)
+    dev = np.angle(np.exp(1j * (sp.dir_from_rad - 0.5)))
+    assert np.all(np.abs(dev) <= np.pi / 2 + 1e-12)
+    assert dev.std() > math.radians(10)
+
+
+def test_waves_propagate_away_from_where_they_come_from():
+    # A single component from the north: a crest observed at the origin reaches a point
+    # 10 m south later (it travels with the phase speed g / omega).
+    w = 1.0
+    wf = WaveField(omega_rad_s=[w], amplitude_m=[1.0], phase_rad=[0.0], dir_from_rad=[0.0])
+    c = G / w
+    t = np.array([10.0 / c])
+    assert wf.elevation(t, position_ne_m=[[-10.0, 0.0]])[0] == pytest.approx(1.0)
+
+
+def test_wavefield_validation_names_field():
+    with pytest.raises(ValueError, match="amplitude_m"):
+        WaveField(omega_rad_s=[1.0], amplitude_m=[-1.0], phase_rad=[0.0], dir_from_rad=[0.0])
+    with pytest.raises(ValueError, match="phase_rad"):
+        WaveField(omega_rad_s=[1.0, 2.0], amplitude_m=[1.0, 1.0], phase_rad=[0.0], dir_from_rad=[0.0, 0.0])
+    with pytest.raises(ValueError, match="omega_rad_s"):
+        WaveField(omega_rad_s=[0.0], amplitude_m=[1.0], phase_rad=[0.0], dir_from_rad=[0.0])
+
+
+# --------------------------------------------------------------------------- wave drift
+
+
+def test_beam_sea_mean_sway_drift_is_kilonewtons_and_pushes_to_starboard():
+    # Hs 1 m, Tp 6 s from the west, heading north: waves from port.
+    wf = make_wave_components(1.0, 6.0, 1.5 * np.pi, rng=11)
+    x, y, n = mean_drift_loads(0.0, wf, GUNNERUS)
+    assert 1e3 < y < 1e4
+    assert abs(x) < 1e-6 * y and abs(n) < 1e-6 * y * 33.9
+    # Time mean of the slowly varying force matches.
+    t = np.arange(0.0, 3 * 3600.0, 1.0)
+    f = wave_drift_loads(t, 0.0, wf, GUNNERUS)
+    assert f[:, 1].mean() == pytest.approx(y, rel=0.1)
+
+
+def test_head_seas_push_aft_and_following_seas_push_forward():
+    wf_head = make_wave_components(1.0, 6.0, 0.7, rng=4)                # from 0.7 rad, heading 0.7
+    x, y, _ = mean_drift_loads(0.7, wf_head, GUNNERUS)
+    assert x < 0.0 and abs(y) < 1e-6 * abs(x)
+    wf_follow = make_wave_components(1.0, 6.0, 0.7 + np.pi, rng=4)
+    assert mean_drift_loads(0.7, wf_follow, GUNNERUS)[0] > 0.0
+
+
+def test_waves_from_starboard_push_to_port():
+    wf = make_wave_components(1.0, 6.0, np.pi / 2, rng=5)               # from the east, heading north
+    assert mean_drift_loads(0.0, wf, GUNNERUS)[1] < 0.0
+
+
+@pytest.mark.parametrize("beta", [np.radians(-45), np.radians(-135), np.radians(45), np.radians(135)])
+def test_drift_yaw_moment_turns_the_ship_beam_on(beta):
+    # A positive moment increases psi, i.e. decreases beta = chi - psi; beam-on is |beta| = pi/2.
+    n = drift_coefficients(1.0, beta, GUNNERUS)[2]
+    dbeta = -np.sign(n)
+    assert abs(abs(beta + 0.01 * dbeta) - np.pi / 2) < abs(abs(beta) - np.pi / 2)
+
+
+def test_drift_coefficient_limits():
+    # Short waves: wall reflection 0.5 rho g L c_y (beam) and 0.5 rho g B c_x (head).
+    h = HullDimensions(**GUNNERUS)
+    d = drift_coefficients(20.0, FROM_PORT, h)
+    assert d[1] == pytest.approx(0.5 * RHO * G * h.side_factor * 33.9, rel=1e-3)
+    d = drift_coefficients(20.0, HEAD, h)
+    assert d[0] == pytest.approx(-0.5 * RHO * G * h.bow_factor * 9.6, rel=1e-3)
+    # Long waves are not reflected.
+    assert np.all(np.abs(drift_coefficients(0.05, np.linspace(-3, 3, 7), h)) < 1e-3 * 0.5 * RHO * G * 33.9)
+
+
+def test_mean_drift_scales_with_hs_squared():
+    a = mean_drift_loads(0.0, make_wave_components(0.5, 6.0, -1.0, rng=1), GUNNERUS)
+    b = mean_drift_loads(0.0, make_wave_components(1.5, 6.0, -1.0, rng=1), GUNNERUS)
+    np.testing.assert_allclose(b, 9.0 * a, rtol=1e-12)
+
+
+@pytest.mark.parametrize("newman", ["geometric", "arithmetic"])
+def test_newman_time_mean_equals_sum_of_mean_drift_exactly(newman):
+    # Frequencies on an exact grid j * d_omega: over one period 2 pi / d_omega all
+    # difference-frequency terms average to zero, leaving sum_j A_j^2 D_j.
+    rng = np.random.default_rng(0)
+    period = 200.0
+    j = np.arange(12, 45)
+    wf = WaveField(omega_rad_s=j * 2 * np.pi / period, amplitude_m=rng.uniform(0.05, 0.2, j.size),
+                   phase_rad=rng.uniform(0, 2 * np.pi, j.size), dir_from_rad=np.full(j.size, 2.0))
+    t = np.linspace(0.0, period, 4000, endpoint=False)
+    f = wave_drift_loads(t, 0.9, wf, GUNNERUS, newman=newman)
+    np.testing.assert_allclose(f.mean(axis=0), mean_drift_loads(0.9, wf, GUNNERUS), rtol=1e-9)
+
+
+def test_geometric_newman_force_is_one_signed_and_slowly_varying_around_mean():
+    wf = make_wave_components(1.0, 6.0, -np.pi / 2, rng=9)
+    t = np.arange(0.0, 3600.0, 0.5)
+    y = wave_drift_loads(t, 0.0, wf, GUNNERUS)[:, 1]
+    assert y.min() >= 0.0
+    # Long-crested Newman drift is exponentially distributed: std ~ mean.
+    assert y.std() == pytest.approx(y.mean(), rel=0.25)
+
+
+def test_drift_loads_heading_per_time_matches_scalar_and_validates():
+    wf = make_wave_components(1.0, 6.0, 1.0, rng=2)
+    t = np.arange(0.0, 300.0, 1.0)
+    np.testing.assert_allclose(wave_drift_loads(t, 0.4, wf, GUNNERUS),
+                               wave_drift_loads(t, np.full(t.size, 0.4), wf, GUNNERUS))
+    with pytest.raises(ValueError, match="psi_rad"):
+        wave_drift_loads(t, np.zeros(3), wf, GUNNERUS)
+    with pytest.raises(ValueError, match="T_m"):
+        wave_drift_loads(t, 0.0, wf, dict(L_m=33.9, B_m=9.6))
+    with pytest.raises(ValueError, match="B_m"):
+        wave_drift_loads(t, 0.0, wf, dict(L_m=33.9, B_m=-9.6, T_m=2.5))
+    with pytest.raises(ValueError, match="unknown"):
+        wave_drift_loads(t, 0.0, wf, dict(L_m=33.9, B_m=9.6, T_m=2.5, draft=3.0))
+
+
+def test_drift_loads_heading_change_rotates_the_force():
+    # Turning the ship from head seas to beam seas moves the drift from -x to +-y.
+    wf = make_wave_components(1.0, 6.0, 0.0, rng=2)
+    psi = np.array([0.0, np.pi / 2])
+    m = mean_drift_loads(psi, wf, GUNNERUS)
+    assert m[0, 0] < 0 and abs(m[0, 1]) < 1e-9
+    assert m[1, 1] > 0 and abs(m[1, 0]) < 1e-9        # heading east, waves from north = from port
+
+
+# --------------------------------------------------------------------------- wave-frequency motion
+
+
+def test_wf_motion_magnitudes_for_hs_1m():
+    wf = make_wave_components(1.0, 6.0, np.radians(45), rng=21)        # bow-quartering from starboard
+    t = np.arange(0.0, 3 * 3600.0, 0.5)
+    off = wave_frequency_motion(t, 0.0, wf, MotionRAOs.from_hull(GUNNERUS))
+    yaw_std_deg = np.degrees(off[:, 2].std())
+    assert 0.05 < yaw_std_deg < 1.0
+    pos_std = off[:, :2].std(axis=0)
+    assert np.all((0.02 < pos_std) & (pos_std < 0.5))                  # decimetres
+    assert np.all(np.abs(off.mean(axis=0)) < 0.05 * off.std(axis=0))   # zero-mean
+
+
+def test_wf_motion_head_seas_only_surge_and_long_waves_follow_particles():
+    wf = make_wave_components(1.0, 6.0, 0.0, rng=1)
+    t = np.arange(0.0, 600.0, 0.5)
+    off = wave_frequency_motion(t, 0.0, wf, GUNNERUS)
+    assert off[:, 0].std() > 0.01
+    np.testing.assert_allclose(off[:, 1:], 0.0, atol=1e-12)
+    rao = MotionRAOs.from_hull(GUNNERUS).amplitudes(1e-3, [HEAD, FROM_PORT, np.radians(30)])
+    np.testing.assert_allclose(rao[:, 0], [-1.0, 0.0, -math.cos(math.radians(30))], atol=1e-4)
+    np.testing.assert_allclose(rao[:, 1], [0.0, 1.0, -0.5], atol=1e-4)
+    np.testing.assert_allclose(rao[:, 2], 0.0, atol=1e-6)
+
+
+def test_wf_rates_are_time_derivatives_of_offsets():
+    wf = make_wave_components(1.0, 6.0, 2.0, rng=1)
+    t = np.arange(0.0, 200.0, 0.01)
+    off, rate = wave_frequency_motion(t, 0.3, wf, dict(L_m=33.9, B_m=9.6, T_m=2.5), return_rates=True)
+    num = np.gradient(off, t, axis=0)
+    for col in range(3):
+        np.testing.assert_allclose(rate[1:-1, col], num[1:-1, col], atol=2e-3 * np.abs(rate[:, col]).max())
+
+
+# --------------------------------------------------------------------------- wind
+
+
+def test_harris_variance_and_davenport_shape():
+    u, kappa = 10.0, 0.0026
+    var, _ = quad(lambda f: harris_spectrum(f, u, kappa), 0.0, np.inf, limit=500)
+    assert var == pytest.approx(6.68 * kappa * u**2, rel=0.01)
+    f = np.geomspace(1e-4, 1.0, 1000)
+    # f S(f) ~ x^2 / (1 + x^2)^(4/3) peaks at x = f L / U = sqrt(3).
+    assert f[np.argmax(f * davenport_spectrum(f, u))] == pytest.approx(math.sqrt(3.0) * u / 1200.0, rel=0.02)
+
+
+@pytest.mark.parametrize("spectrum", ["harris", "davenport"])
+def test_gust_mean_and_intensity_match_request(spectrum):
+    t = np.arange(0.0, 3600.0, 1.0)
+    intensities, means = [], []
+    for seed in range(5):
+        speed, direction = gust_wind(t, 9.0, np.radians(250), seed, intensity=0.12, spectrum=spectrum)
+        assert speed.shape == direction.shape == t.shape
+        assert np.all(speed >= 0) and np.all((direction >= 0) & (direction < 2 * np.pi))
+        means.append(speed.mean())
+        intensities.append(speed.std() / 9.0)
+        wander = np.angle(np.exp(1j * (direction - np.radians(250))))
+        assert 0.1 < np.degrees(wander.std()) < 10.0                   # a few degrees
+    assert np.all(np.abs(np.array(means) / 9.0 - 1.0) < 0.03)
+    assert np.all(np.abs(np.array(intensities) / 0.12 - 1.0) < 0.15)
+    assert np.mean(intensities) == pytest.approx(0.12, rel=0.05)
+
+
+def test_gust_deterministic_and_seed_dependent():
+    t = np.arange(0.0, 600.0, 0.5)
+    a = gust_wind(t, 8.0, 1.0, 42)
+    b = gust_wind(t, 8.0, 1.0, np.random.default_rng(42))
+    c = gust_wind(t, 8.0, 1.0, 43)
+    np.testing.assert_array_equal(a[0], b[0])
+    np.testing.assert_array_equal(a[1], b[1])
+    assert not np.allclose(a[0], c[0])
+
+
+def test_gust_zero_intensity_is_steady_and_validation():
+    t = np.arange(0.0, 100.0, 1.0)
+    speed, _ = gust_wind(t, 6.0, 0.0, 1, intensity=0.0, dir_std_rad=0.0)
+    np.testing.assert_allclose(speed, 6.0)
+    with pytest.raises(ValueError, match="mean_speed_m_s"):
+        gust_wind(t, -1.0, 0.0, 1)
+    with pytest.raises(ValueError, match="intensity"):
+        gust_wind(t, 5.0, 0.0, 1, intensity=-0.1)
+    with pytest.raises(ValueError, match="time_s"):
+        gust_wind(t[::-1], 5.0, 0.0, 1)
+
+
+# --------------------------------------------------------------------------- current
+
+
+def test_current_statistics_and_non_negative_speed():
+    t = np.arange(0.0, 20 * 3600.0, 2.0)
+    speed, direction = current_series(t, 0.3, np.radians(80), 3, speed_var=0.1, dir_var_rad=np.radians(5), tau_s=600)
+    assert speed.mean() == pytest.approx(0.3, rel=0.03)
+    assert speed.std() / 0.3 == pytest.approx(0.1, rel=0.2)
+    assert np.degrees(np.angle(np.exp(1j * (direction - np.radians(80)))).std()) == pytest.approx(5.0, rel=0.2)
+    # Large relative variation: speed is clipped at zero, never negative.
+    s2, _ = current_series(t[:5000], 0.05, 0.0, 4, speed_var=0.9)
+    assert np.all(s2 >= 0.0)
+
+
+def test_current_correlation_time_and_velocity_components():
+    # Lag-tau autocorrelation of a first-order Gauss-Markov process is exp(-1).
+    x = _gauss_markov(np.arange(0.0, 200_000.0, 10.0), 1.0, 600.0, np.random.default_rng(0))
+    lag = 60
+    rho = np.corrcoef(x[:-lag], x[lag:])[0, 1]
+    assert rho == pytest.approx(math.exp(-1.0), abs=0.05)
+    np.testing.assert_allclose(current_velocity_ned(2.0, np.pi / 2), [0.0, 2.0], atol=1e-12)  # flowing east
+
+
+def test_gauss_markov_nonuniform_grid_matches_recursion():
+    rng = np.random.default_rng(5)
+    t = np.cumsum(rng.uniform(0.1, 40.0, 3000))
+    sigma, tau = 0.7, 25.0
+    x = _gauss_markov(t, sigma, tau, np.random.default_rng(1))
+    z = np.random.default_rng(1).standard_normal(t.size)
+    ref = np.empty(t.size)
+    ref[0] = sigma * z[0]
+    for k in range(1, t.size):
+        a = math.exp(-(t[k] - t[k - 1]) / tau)
+        ref[k] = a * ref[k - 1] + sigma * math.sqrt(1 - a * a) * z[k]
+    np.testing.assert_allclose(x, ref, rtol=1e-9, atol=1e-12)
+    tu = np.arange(0.0, 500.0, 0.5)
+    np.testing.assert_allclose(_gauss_markov(tu, sigma, tau, np.random.default_rng(2), method="lfilter"),
+                               _gauss_markov(tu, sigma, tau, np.random.default_rng(2), method="blocks"), atol=1e-12)
+
+
+def test_current_deterministic_and_seed_dependent():
+    t = np.arange(0.0, 3600.0, 1.0)
+    a, b, c = (current_series(t, 0.2, 1.0, s) for s in (1, 1, 2))
+    np.testing.assert_array_equal(a[0], b[0])
+    assert not np.allclose(a[0], c[0])
+
+
+# --------------------------------------------------------------------------- sea state
+
+
+@pytest.mark.parametrize("field, value", [("hs_m", -0.1), ("tp_s", 0.0), ("wind_speed_m_s", -2.0),
+                                          ("gust_intensity", 0.9), ("current_speed_m_s", -0.1),
+                                          ("wave_dir_from_rad", float("nan")), ("gamma", 9.0)])
+def test_sea_state_validation_names_field(field, value):
+    kwargs = dict(hs_m=1.0, tp_s=6.0, wave_dir_from_rad=0.0, wind_speed_m_s=8.0, wind_dir_from_rad=0.0,
+                  gust_intensity=0.1, current_speed_m_s=0.2, current_dir_to_rad=1.0)
+    kwargs[field] = value
+    with pytest.raises(ValueError, match=field):
+        SeaState(**kwargs)
+
+
+def test_sea_state_random_is_consistent_and_deterministic():
+    lo, hi = beaufort_wind_speed(1.5), beaufort_wind_speed(5.5)
+    for seed in range(50):
+        s = SeaState.random(np.random.default_rng(seed), beaufort=(2, 5))
+        assert lo <= s.wind_speed_m_s <= hi
+        assert 0.0 < s.hs_m <= beaufort_wave_height(5.5)
+        assert s.tp_s >= 2.0
+        assert abs(np.angle(np.exp(1j * (s.wave_dir_from_rad - s.wind_dir_from_rad)))) <= np.radians(30) + 1e-12
+        assert 0.05 <= s.current_speed_m_s <= 0.4
+        assert 0.08 <= s.gust_intensity <= 0.15
+    assert SeaState.random(3) == SeaState.random(3)
+    assert SeaState.random(3) != SeaState.random(4)
+    with pytest.raises(ValueError, match="beaufort"):
+        SeaState.random(1, beaufort=(5, 2))
+
+
+def test_sea_state_hs_grows_with_wind():
+    calm = [SeaState.random(s, beaufort=(1, 2)).hs_m for s in range(30)]
+    rough = [SeaState.random(s, beaufort=(5, 6)).hs_m for s in range(30)]
+    assert np.mean(rough) > 3 * np.mean(calm)
+
+
+def test_sea_state_helpers_produce_series():
+    s = SeaState(hs_m=1.0, tp_s=6.0, wave_dir_from_rad=0.2, wind_speed_m_s=8.0, wind_dir_from_rad=0.1,
+                 current_speed_m_s=0.2, current_dir_to_rad=2.0)
+    t = np.arange(0.0, 600.0, 1.0)
+    wf = s.wave_components(1)
+    assert wf.hs_discrete_m == pytest.approx(1.0)
+    assert s.wind(t, 1)[0].shape == t.shape
+    assert s.current(t, 1)[0].shape == t.shape
+    assert GUNNERUS_HULL.L_m == 33.9
