@@ -224,9 +224,9 @@ def coriolis_added_mass(nu_r, M_A: np.ndarray):
 # --------------------------------------------------------------------------- kernels
 
 
-@numba.njit(cache=True)
-def hull_forces_scalar(u, v, r, ur, vr, m, xg, m_a, d_lin, d_quad, d_lift, strip_x, strip_w, out):
-    """Hull forces on the right-hand side of eq. 1 for one vessel, written into ``out[3]``.
+@numba.njit(cache=True, fastmath=True)
+def hull_forces_scalar(u, v, r, ur, vr, m, xg, m_a, d_lin, d_quad, d_lift, strip_x, strip_w):
+    """Hull forces on the right-hand side of eq. 1 for one vessel, returned as a 3-tuple.
 
     ``out = -C_RB(nu) nu - C_A(nu_r) nu_r - D nu_r - D_n(nu_r) nu_r`` [N, N, N m].
     ``d_quad = [d_uu, d_vv, d_rr]`` are positive quadratic coefficients (force
@@ -259,6 +259,4 @@ def hull_forces_scalar(u, v, r, ur, vr, m, xg, m_a, d_lin, d_quad, d_lift, strip
         f = strip_w[i] * abs(vx) * vx
         dn1 += f
         dn2 += strip_x[i] * f
-    out[0] = -crb0 - ca0 - dl0 - dn0
-    out[1] = -crb1 - ca1 - dl1 - dn1
-    out[2] = -crb2 - ca2 - dl2 - dn2
+    return -crb0 - ca0 - dl0 - dn0, -crb1 - ca1 - dl1 - dn1, -crb2 - ca2 - dl2 - dn2

@@ -14,37 +14,43 @@ import math
 import numba
 import numpy as np
 
-from .model import vessel_rhs
+from .model import prepare_inputs, vessel_rhs
 
 
-@numba.njit(cache=True)
-def _deriv(x, rpm, az, wsp, wdir, csp, cdir, tau, acc, P, k, parts, thrusts):
-    vessel_rhs(x[2], x[3], x[4], x[5], rpm, az, wsp, wdir, csp, cdir, tau, acc, P, k[3:], parts, thrusts)
+@numba.njit(cache=True, fastmath=True)
+def _deriv(x, rpm, prep, tau, acc, P, k, thrusts):
     c = math.cos(x[2])
     s = math.sin(x[2])
+    out = vessel_rhs(c, s, x[3], x[4], x[5], rpm, prep, tau, acc, P, thrusts, 0)
+    k[3] = out[0]
+    k[4] = out[1]
+    k[5] = out[2]
     k[0] = c * x[3] - s * x[4]
     k[1] = s * x[3] + c * x[4]
     k[2] = x[5]
 
 
-@numba.njit(cache=True)
-def rk4_step_scalar(x, h, rpm, az, wsp, wdir, csp, cdir, tau, acc, P, k1, k2, k3, k4, xt, parts, thrusts):
-    """One classical RK4 step of length ``h`` [s] for one vessel, updating ``x[6]`` in place."""
-    _deriv(x, rpm, az, wsp, wdir, csp, cdir, tau, acc, P, k1, parts, thrusts)
+@numba.njit(cache=True, fastmath=True)
+def rk4_step_scalar(x, h, rpm, prep, tau, acc, P, k1, k2, k3, k4, xt, thrusts):
+    """One classical RK4 step of length ``h`` [s] for one vessel, updating ``x[6]`` in place.
+
+    ``prep`` holds the prepared held inputs (:func:`hybridship.physics.model.prepare_inputs`).
+    """
+    _deriv(x, rpm, prep, tau, acc, P, k1, thrusts)
     for i in range(6):
         xt[i] = x[i] + 0.5 * h * k1[i]
-    _deriv(xt, rpm, az, wsp, wdir, csp, cdir, tau, acc, P, k2, parts, thrusts)
+    _deriv(xt, rpm, prep, tau, acc, P, k2, thrusts)
     for i in range(6):
         xt[i] = x[i] + 0.5 * h * k2[i]
-    _deriv(xt, rpm, az, wsp, wdir, csp, cdir, tau, acc, P, k3, parts, thrusts)
+    _deriv(xt, rpm, prep, tau, acc, P, k3, thrusts)
     for i in range(6):
         xt[i] = x[i] + h * k3[i]
-    _deriv(xt, rpm, az, wsp, wdir, csp, cdir, tau, acc, P, k4, parts, thrusts)
+    _deriv(xt, rpm, prep, tau, acc, P, k4, thrusts)
     for i in range(6):
         x[i] += h / 6.0 * (k1[i] + 2.0 * k2[i] + 2.0 * k3[i] + k4[i])
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, fastmath=True)
 def rollout_batch(eta0, nu0, rpm, az, wind, current, tau_ext, acc_ext, P, dt, n_steps, substeps,
                   eta_out, nu_out, nu_dot_out):
     """Integrate B vessels for ``n_steps`` output steps of ``dt`` seconds.
@@ -62,8 +68,8 @@ def rollout_batch(eta0, nu0, rpm, az, wind, current, tau_ext, acc_ext, P, dt, n_
     k3 = np.empty(6)
     k4 = np.empty(6)
     xt = np.empty(6)
-    parts = np.empty((4, 3))
-    thrusts = np.empty(max(K, 1))
+    thrusts = np.empty((1, max(K, 1)))
+    prep = np.empty(2 * K + 4)
     for b in range(B):
         for i in range(3):
             x[i] = eta0[b, i]
@@ -79,16 +85,15 @@ def rollout_batch(eta0, nu0, rpm, az, wind, current, tau_ext, acc_ext, P, dt, n_
             for i in range(3):
                 eta_out[b, j, i] = x[i]
                 nu_out[b, j, i] = x[3 + i]
-            _deriv(x, rpm[b, ir], az[b, ia], wind[b, iw, 0], wind[b, iw, 1], current[b, ic, 0],
-                   current[b, ic, 1], tau_ext[b, it], acc_ext[b, ix], P, k1, parts, thrusts)
+            prepare_inputs(az[b, ia], wind[b, iw, 0], wind[b, iw, 1], current[b, ic, 0], current[b, ic, 1], P, prep)
+            _deriv(x, rpm[b, ir], prep, tau_ext[b, it], acc_ext[b, ix], P, k1, thrusts)
             for i in range(3):
                 nu_dot_out[b, j, i] = k1[3 + i]
             if j == n_steps:
                 break
             for _s in range(substeps):
-                rk4_step_scalar(x, h, rpm[b, ir], az[b, ia], wind[b, iw, 0], wind[b, iw, 1],
-                                current[b, ic, 0], current[b, ic, 1], tau_ext[b, it], acc_ext[b, ix],
-                                P, k1, k2, k3, k4, xt, parts, thrusts)
+                rk4_step_scalar(x, h, rpm[b, ir], prep, tau_ext[b, it], acc_ext[b, ix],
+                                P, k1, k2, k3, k4, xt, thrusts)
 
 
 @numba.njit(cache=True)
@@ -102,15 +107,15 @@ def step_batch(eta, nu, rpm, az, wind, current, tau_ext, acc_ext, P, dt, substep
     k3 = np.empty(6)
     k4 = np.empty(6)
     xt = np.empty(6)
-    parts = np.empty((4, 3))
-    thrusts = np.empty(max(K, 1))
+    thrusts = np.empty((1, max(K, 1)))
+    prep = np.empty(2 * K + 4)
     for b in range(eta.shape[0]):
         for i in range(3):
             x[i] = eta[b, i]
             x[3 + i] = nu[b, i]
+        prepare_inputs(az[b], wind[b, 0], wind[b, 1], current[b, 0], current[b, 1], P, prep)
         for _s in range(substeps):
-            rk4_step_scalar(x, h, rpm[b], az[b], wind[b, 0], wind[b, 1], current[b, 0], current[b, 1],
-                            tau_ext[b], acc_ext[b], P, k1, k2, k3, k4, xt, parts, thrusts)
+            rk4_step_scalar(x, h, rpm[b], prep, tau_ext[b], acc_ext[b], P, k1, k2, k3, k4, xt, thrusts)
         for i in range(3):
             eta_next[b, i] = x[i]
             nu_next[b, i] = x[3 + i]

@@ -125,11 +125,9 @@ def load_wageningen(series: str = "B4-70", pitch_ratio: float = 1.0) -> Propelle
 # directly; the numpy-facing functions below loop over arrays in compiled code.
 
 
-@numba.njit(cache=True)
-def ct_cq_star_scalar(beta_rad, coef):
-    """C_T*(beta), C_Q*(beta) for one angle (cos/sin recurrences instead of 2N trig calls)."""
-    c1 = math.cos(beta_rad)
-    s1 = math.sin(beta_rad)
+@numba.njit(cache=True, fastmath=True)
+def ct_cq_star_cs(c1, s1, coef):
+    """C_T*, C_Q* from cos(beta), sin(beta) (cos/sin recurrences instead of 2N trig calls)."""
     ck = 1.0
     sk = 0.0
     ct = 0.0
@@ -141,15 +139,79 @@ def ct_cq_star_scalar(beta_rad, coef):
     return ct, cq
 
 
+@numba.njit(cache=True, fastmath=True)
+def ct_star_cs(c1, s1, coef, i):
+    """C_T* of propeller ``i`` of ``coef (K, 4, N)`` from cos(beta), sin(beta).
+
+    The dynamics need thrust, not torque. Indexing the full coefficient array (no view
+    per call) keeps the hot path free of array-reference bookkeeping.
+
+    Four interleaved recurrences (orders k = 4j + m, each advanced by a rotation of 4 beta)
+    instead of one: the same sum, but four independent dependency chains, which a CPU
+    overlaps; this is the hot loop of every forecast.
+    """
+    c2 = 2.0 * c1 * c1 - 1.0
+    s2 = 2.0 * s1 * c1
+    c3 = c2 * c1 - s2 * s1
+    s3 = s2 * c1 + c2 * s1
+    c4 = 2.0 * c2 * c2 - 1.0
+    s4 = 2.0 * s2 * c2
+    a0, b0 = 1.0, 0.0
+    a1, b1 = c1, s1
+    a2, b2 = c2, s2
+    a3, b3 = c3, s3
+    t0 = 0.0
+    t1 = 0.0
+    t2 = 0.0
+    t3 = 0.0
+    n = coef.shape[2]
+    n4 = n - n % 4
+    for k in range(0, n4, 4):
+        t0 += coef[i, 0, k] * a0 + coef[i, 1, k] * b0
+        t1 += coef[i, 0, k + 1] * a1 + coef[i, 1, k + 1] * b1
+        t2 += coef[i, 0, k + 2] * a2 + coef[i, 1, k + 2] * b2
+        t3 += coef[i, 0, k + 3] * a3 + coef[i, 1, k + 3] * b3
+        a0, b0 = a0 * c4 - b0 * s4, b0 * c4 + a0 * s4
+        a1, b1 = a1 * c4 - b1 * s4, b1 * c4 + a1 * s4
+        a2, b2 = a2 * c4 - b2 * s4, b2 * c4 + a2 * s4
+        a3, b3 = a3 * c4 - b3 * s4, b3 * c4 + a3 * s4
+    # remaining orders (n not a multiple of 4): a0..a3 now hold orders n4..n4+3
+    if n4 < n:
+        t0 += coef[i, 0, n4] * a0 + coef[i, 1, n4] * b0
+    if n4 + 1 < n:
+        t1 += coef[i, 0, n4 + 1] * a1 + coef[i, 1, n4 + 1] * b1
+    if n4 + 2 < n:
+        t2 += coef[i, 0, n4 + 2] * a2 + coef[i, 1, n4 + 2] * b2
+    return (t0 + t1) + (t2 + t3)
+
+
+@numba.njit(cache=True, fastmath=True)
+def thrust_scalar(n_rps, va_m_s, diameter_m, rho_kg_m3, coef, i):
+    """Open-water thrust [N] of propeller ``i`` of ``coef (K, 4, N)`` (model of :func:`thrust_torque_scalar`)."""
+    vr = 0.7 * math.pi * n_rps * diameter_m
+    v2 = va_m_s * va_m_s + vr * vr
+    if v2 == 0.0:
+        return 0.0
+    inv = 1.0 / math.sqrt(v2)
+    return ct_star_cs(vr * inv, va_m_s * inv, coef, i) * 0.5 * rho_kg_m3 * v2 * 0.25 * math.pi * diameter_m * diameter_m
+
+
 @numba.njit(cache=True)
+def ct_cq_star_scalar(beta_rad, coef):
+    """C_T*(beta), C_Q*(beta) for one advance angle [rad]."""
+    return ct_cq_star_cs(math.cos(beta_rad), math.sin(beta_rad), coef)
+
+
+@numba.njit(cache=True, fastmath=True)
 def thrust_torque_scalar(n_rps, va_m_s, diameter_m, rho_kg_m3, coef):
     """Open-water thrust [N] and torque [N m] for one propeller state (see module docstring)."""
     vr = 0.7 * math.pi * n_rps * diameter_m
     v2 = va_m_s * va_m_s + vr * vr
     if v2 == 0.0:
         return 0.0, 0.0
-    beta = math.atan2(va_m_s, vr)
-    ct, cq = ct_cq_star_scalar(beta, coef)
+    # cos and sin of beta = atan2(V_a, 0.7 pi n D) without evaluating the angle itself
+    inv = 1.0 / math.sqrt(v2)
+    ct, cq = ct_cq_star_cs(vr * inv, va_m_s * inv, coef)
     q = 0.5 * rho_kg_m3 * v2 * 0.25 * math.pi * diameter_m * diameter_m
     return ct * q, cq * q * diameter_m
 

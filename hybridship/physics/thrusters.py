@@ -25,7 +25,7 @@ import math
 import numba
 import numpy as np
 
-from .propeller import thrust_torque_scalar
+from .propeller import thrust_scalar
 
 #: Column layout of the packed thruster parameter array ``thr (K, 8)``.
 THR_X, THR_Y, THR_D, THR_WAKE, THR_TDED, THR_ALPHA_FIXED, THR_IS_AZIMUTH, THR_MAX_RPM = range(8)
@@ -54,35 +54,53 @@ def configuration_matrix(alpha_rad, x_m, y_m):
 
 
 @numba.njit(cache=True)
-def thruster_forces_scalar(ur, vr, r, rpm, azimuth_rad, thr, coef, rho, out, thrusts):
-    """Generalised force of all thrusters of one vessel into ``out[3]``; thrusts into ``thrusts[K]``.
+def thrust_directions(azimuth_rad, thr, prep):
+    """cos and sin of each thruster's thrust direction into ``prep[i]``, ``prep[K + i]``.
+
+    ``azimuth_rad`` is used for azimuth thrusters; the others use their fixed angle.
+    Computed once per time step because the commands are held within a step.
+    """
+    for i in range(thr.shape[0]):
+        a = azimuth_rad[i] if thr[i, THR_IS_AZIMUTH] > 0.5 else thr[i, THR_ALPHA_FIXED]
+        prep[i] = math.cos(a)
+        prep[thr.shape[0] + i] = math.sin(a)
+
+
+@numba.njit(cache=True, fastmath=True)
+def thruster_forces_scalar(ur, vr, r, rpm, prep, thr, coef, rho, thrusts, b):
+    """Generalised force ``(X_N, Y_N, N_Nm)`` of all thrusters of one vessel.
 
     Parameters
     ----------
     ur, vr, r : float
         Velocity relative to the water [m/s, m/s, rad/s].
-    rpm, azimuth_rad : ndarray, shape (K,)
-        Commands; ``azimuth_rad`` is ignored for thrusters with a fixed axis.
+    rpm : ndarray, shape (K,)
+        Shaft speed commands [rpm].
+    prep : ndarray
+        Prepared inputs; ``prep[i]``, ``prep[K + i]`` are cos and sin of thruster i's
+        thrust direction (see :func:`thrust_directions`).
     thr : ndarray, shape (K, 8)
         Packed parameters (see ``THR_*`` columns).
     coef : ndarray, shape (K, 4, N)
         Four-quadrant Fourier coefficients per thruster.
     rho : float
         Water density [kg/m^3].
+    thrusts : ndarray, shape (B, K)
+        Delivered thrust of each thruster [N] is written to row ``b``.
     """
-    out[0] = 0.0
-    out[1] = 0.0
-    out[2] = 0.0
-    for i in range(thr.shape[0]):
+    K = thr.shape[0]
+    fx = 0.0
+    fy = 0.0
+    fn = 0.0
+    for i in range(K):
         x = thr[i, THR_X]
         y = thr[i, THR_Y]
-        a = azimuth_rad[i] if thr[i, THR_IS_AZIMUTH] > 0.5 else thr[i, THR_ALPHA_FIXED]
-        ca = math.cos(a)
-        sa = math.sin(a)
+        ca = prep[i]
+        sa = prep[K + i]
         va = (1.0 - thr[i, THR_WAKE]) * ((ur - y * r) * ca + (vr + x * r) * sa)
-        t, _q = thrust_torque_scalar(rpm[i] / 60.0, va, thr[i, THR_D], rho, coef[i])
-        f = (1.0 - thr[i, THR_TDED]) * t
-        thrusts[i] = f
-        out[0] += ca * f
-        out[1] += sa * f
-        out[2] += (x * sa - y * ca) * f
+        f = (1.0 - thr[i, THR_TDED]) * thrust_scalar(rpm[i] / 60.0, va, thr[i, THR_D], rho, coef, i)
+        thrusts[b, i] = f
+        fx += ca * f
+        fy += sa * f
+        fn += (x * sa - y * ca) * f
+    return fx, fy, fn

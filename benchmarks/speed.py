@@ -1,0 +1,108 @@
+"""How fast are one-minute forecasts on one CPU core?
+
+Prints, for the Gunnerus model, how many 60-step (1 Hz, RK4, four-quadrant propellers and
+wind included) physics-only forecasts per second the batched integrator does for
+B = 1, 1 000 and 100 000 start states, and the latency of a single forecast.
+
+Usage::
+
+    python benchmarks/speed.py            # human-readable table
+    python benchmarks/speed.py --json     # one JSON object (keys below) for tracking
+    python benchmarks/speed.py --quick    # smaller batches, for CI smoke tests
+
+JSON keys: ``physics_forecasts_per_s`` (at the largest B), ``physics_single_forecast_ms``,
+``physics_vessel_steps_per_s`` and ``physics_by_batch`` (B -> forecasts/s).
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import sys
+import time
+
+# One core: pin every threaded library before it is imported.
+for _v in ("OMP_NUM_THREADS", "MKL_NUM_THREADS", "OPENBLAS_NUM_THREADS", "NUMBA_NUM_THREADS"):
+    os.environ.setdefault(_v, "1")
+
+import numpy as np  # noqa: E402
+
+from hybridship.physics.model import DynamicModel  # noqa: E402
+
+
+def _states(B: int, rng: np.random.Generator):
+    """Random drift-like start states and held commands for B vessels."""
+    eta0 = np.column_stack([rng.normal(0, 5, B), rng.normal(0, 5, B), rng.uniform(-np.pi, np.pi, B)])
+    nu0 = np.column_stack([rng.normal(0, 0.3, B), rng.normal(0, 0.3, B), rng.normal(0, 0.005, B)])
+    rpm = rng.uniform(-50, 150, (B, 3))
+    az = rng.uniform(-np.pi, np.pi, (B, 3))
+    wind = np.column_stack([rng.uniform(0, 15, B), rng.uniform(0, 2 * np.pi, B)])
+    return eta0, nu0, dict(rpm=rpm, azimuth_rad=az, wind=wind)
+
+
+def _time(fn, min_time_s: float = 1.0, max_repeats: int = 200) -> float:
+    """Best wall time [s] of repeated calls (after one warm-up call)."""
+    fn()
+    best = np.inf
+    total = 0.0
+    n = 0
+    while (total < min_time_s and n < max_repeats) or n < 3:
+        t0 = time.perf_counter()
+        fn()
+        dt = time.perf_counter() - t0
+        best = min(best, dt)
+        total += dt
+        n += 1
+    return best
+
+
+def physics_speed(batches=(1, 1_000, 100_000), seed: int = 0) -> dict:
+    """Measure physics-only forecast throughput and single-forecast latency."""
+    model = DynamicModel("gunnerus")
+    rng = np.random.default_rng(seed)
+    by_batch = {}
+    # compile once on a tiny batch so that large batches are timed in a single run
+    eta0, nu0, kw = _states(2, rng)
+    model.rollout(eta0, nu0, 60, **kw)
+    for B in batches:
+        eta0, nu0, kw = _states(B, rng)
+        if B >= 10_000:
+            t0 = time.perf_counter()
+            model.rollout(eta0, nu0, 60, **kw)
+            t = time.perf_counter() - t0
+        else:
+            t = _time(lambda: model.rollout(eta0, nu0, 60, **kw), min_time_s=1.0)
+        by_batch[B] = B / t
+    eta0, nu0, kw = _states(1, rng)
+    single = _time(lambda: model.rollout(eta0[0], nu0[0], 60, rpm=kw["rpm"][0], azimuth_rad=kw["azimuth_rad"][0],
+                                         wind=kw["wind"][0]), min_time_s=1.0, max_repeats=2000)
+    largest = max(batches)
+    return {
+        "physics_forecasts_per_s": by_batch[largest],
+        "physics_vessel_steps_per_s": by_batch[largest] * 60,
+        "physics_single_forecast_ms": single * 1e3,
+        "physics_by_batch": {str(k): v for k, v in by_batch.items()},
+    }
+
+
+def main(argv=None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("--json", action="store_true", help="print one JSON object")
+    ap.add_argument("--quick", action="store_true", help="small batches (smoke test)")
+    args = ap.parse_args(argv)
+    batches = (1, 100, 1_000) if args.quick else (1, 1_000, 100_000)
+    res = physics_speed(batches)
+    if args.json:
+        print(json.dumps(res, sort_keys=True))
+        return 0
+    print("one-minute (60 x 1 s RK4) physics-only forecasts, Gunnerus, one core")
+    print(f"{'B':>8} {'forecasts/s':>14} {'vessel-steps/s':>16}")
+    for b, f in res["physics_by_batch"].items():
+        print(f"{int(b):>8} {f:>14,.0f} {f * 60:>16,.0f}")
+    print(f"single forecast latency: {res['physics_single_forecast_ms']:.3f} ms")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
