@@ -1,0 +1,243 @@
+"""Thrust allocation and DP control (sea-trial simulator, DP part).
+
+Allocated commands are checked against the physics model's own thruster loads
+(``DynamicModel.acceleration(..., return_parts=True)`` parts[:, 1]), and the DP loop is
+closed around the nominal Gunnerus model in steady wind and current.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from hybridship.frames import ned_to_body, wrap_pi
+from hybridship.physics.model import DynamicModel
+from hybridship.sim.allocation import ThrustAllocator, bollard_thrust_limits, thrust_capacity
+from hybridship.sim.dp import DPController, ReferenceModel, pid_gains
+
+# Body-frame load scale: forces in N, the yaw moment divided by a lever of 10 m.
+LOAD_SCALE = np.array([1.0, 1.0, 10.0])
+
+
+@pytest.fixture(scope="module")
+def model():
+    return DynamicModel("gunnerus")
+
+
+def thruster_load(model, nu, result):
+    """Load the physics model computes for the allocated commands at velocity ``nu`` (no current)."""
+    _, parts, _ = model.acceleration(np.zeros(3), nu, rpm=result.rpm, azimuth_rad=result.azimuth_rad,
+                                     return_parts=True)
+    return parts[0, 1]
+
+
+# --------------------------------------------------------------------------- allocation
+
+
+FEASIBLE = [
+    [20e3, 0.0, 0.0],            # pure surge
+    [-20e3, 0.0, 0.0],
+    [0.0, 15e3, 0.0],            # pure sway
+    [0.0, -15e3, 0.0],
+    [0.0, 0.0, 100e3],           # pure yaw moment
+    [15e3, -10e3, 80e3],         # combinations
+    [-30e3, 12e3, -150e3],
+]
+
+
+@pytest.mark.parametrize("nu", [[0.0, 0.0, 0.0], [1.0, 0.3, 0.01]], ids=["zero_speed", "moving"])
+@pytest.mark.parametrize("tau", FEASIBLE)
+def test_feasible_demand_reproduced_by_physics_model(model, tau, nu):
+    alloc = ThrustAllocator(model.vessel, dt_s=0.5)
+    res = alloc.allocate(tau, nu)
+    assert not res.saturated
+    tau = np.asarray(tau)
+    load = thruster_load(model, nu, res)
+    scale = np.linalg.norm(tau / LOAD_SCALE)
+    assert np.all(np.abs(load - tau) / LOAD_SCALE <= 0.01 * scale), (load, tau)
+    np.testing.assert_allclose(res.tau_achieved, load, rtol=1e-9, atol=1e-6)
+    # the reported thrusts are the model's delivered thrusts
+    _, _, thrusts = model.acceleration(np.zeros(3), nu, rpm=res.rpm, azimuth_rad=res.azimuth_rad,
+                                       return_parts=True)
+    np.testing.assert_allclose(res.thrust_N, thrusts[0], rtol=1e-9, atol=1e-6)
+
+
+@pytest.mark.parametrize("nu", [[0.0, 0.0, 0.0], [1.0, 0.3, 0.01]], ids=["zero_speed", "moving"])
+@pytest.mark.parametrize("direction", [[1, 0, 0], [0, 1, 0], [0, 0, 1], [-1, 0.3, -2], [0.7, 0.7, 0]])
+def test_infeasible_demand_saturates_gracefully(model, direction, nu):
+    alloc = ThrustAllocator(model.vessel, dt_s=0.5)
+    u = np.asarray(direction, float) / np.linalg.norm(direction)
+    tau = 10e6 * u
+    res = alloc.allocate(tau, nu)
+    max_rpm = np.array([t.max_rpm for t in model.vessel.thrusters])
+    assert res.saturated
+    assert np.all(np.isfinite(res.rpm)) and np.all(np.isfinite(res.azimuth_rad))
+    assert np.all(np.abs(res.rpm) <= max_rpm + 1e-9)
+    assert np.any(np.isclose(np.abs(res.rpm), max_rpm))  # at least one thruster at its limit
+    assert 0.0 < res.demand_scale < 0.1
+    load = thruster_load(model, nu, res)
+    np.testing.assert_allclose(res.tau_achieved, load, rtol=1e-9, atol=1e-6)
+    a = load / LOAD_SCALE
+    d = tau / LOAD_SCALE
+    cos = a @ d / (np.linalg.norm(a) * np.linalg.norm(d))
+    # exactly the demanded direction at the bollard; inflow costs a little thrust when moving
+    assert cos > (0.999999 if not any(nu) else 0.99), cos
+
+
+def test_saturated_achieves_the_capacity(model):
+    """Pure demands beyond capacity give the capacity (and exactly the demanded direction)."""
+    cap = thrust_capacity(model.vessel)
+    lim = bollard_thrust_limits(model.vessel)
+    az = np.array([t.type == "azimuth" for t in model.vessel.thrusters])
+    # surge: every azimuth at full thrust ahead (or turned astern); sway needs the bow tunnel
+    assert cap[0] == pytest.approx(lim.forward_N[az].sum(), rel=1e-6)
+    assert 0 < cap[1] < cap[0]
+    alloc = ThrustAllocator(model.vessel, dt_s=1.0)
+    res = alloc.allocate([0.0, 1e7, 0.0], np.zeros(3))
+    np.testing.assert_allclose(res.tau_achieved / LOAD_SCALE, [0.0, res.tau_achieved[1], 0.0], atol=1.0)
+    assert res.tau_achieved[1] >= cap[1] * (1 - 1e-6)
+
+
+def test_azimuth_and_rpm_rate_limits(model):
+    dt = 0.5
+    alloc = ThrustAllocator(model.vessel, dt_s=dt, rpm_rate_limit_rpm_s=20.0)
+    az_rate = np.radians([t.max_azimuth_rate_deg_s or np.inf for t in model.vessel.thrusters])
+    az = np.array([t.type == "azimuth" for t in model.vessel.thrusters])
+    alloc.allocate([30e3, 0.0, 0.0], np.zeros(3))
+    prev = alloc.azimuth_rad, alloc.rpm
+    seen_limit = False
+    # a demand swinging round the compass, including 90 deg jumps
+    for k in range(80):
+        ang = math.radians(90.0 * (k // 10))
+        res = alloc.allocate([30e3 * math.cos(ang), 20e3 * math.sin(ang), 50e3 * (-1) ** k], np.zeros(3))
+        step = np.abs(wrap_pi(res.azimuth_rad - prev[0]))
+        assert np.all(step[az] <= az_rate[az] * dt + 1e-9)
+        assert np.all(np.abs(res.rpm - prev[1]) <= 20.0 * dt + 1e-9)
+        seen_limit |= res.rate_limited
+        prev = res.azimuth_rad, res.rpm
+    assert seen_limit
+
+
+def test_reverses_thrust_instead_of_turning_round(model):
+    alloc = ThrustAllocator(model.vessel, dt_s=1.0)
+    first = alloc.allocate([20e3, 0.0, 0.0], np.zeros(3))
+    for _ in range(30):
+        res = alloc.allocate([-20e3, 0.0, 0.0], np.zeros(3))
+    az = np.array([t.type == "azimuth" for t in model.vessel.thrusters])
+    np.testing.assert_allclose(res.azimuth_rad[az], first.azimuth_rad[az], atol=1e-12)  # no turn
+    assert np.all(res.rpm[az] < 0)
+    np.testing.assert_allclose(thruster_load(model, np.zeros(3), res), [-20e3, 0.0, 0.0], atol=200.0)
+
+
+def test_allocator_validation_names_the_field(model):
+    with pytest.raises(ValueError, match="dt_s"):
+        ThrustAllocator(model.vessel, dt_s=0.0)
+    with pytest.raises(ValueError, match="weights"):
+        ThrustAllocator(model.vessel, dt_s=1.0, weights=[1.0, 2.0])
+    with pytest.raises(ValueError, match="rpm_rate_limit_rpm_s"):
+        ThrustAllocator(model.vessel, dt_s=1.0, rpm_rate_limit_rpm_s=-1.0)
+    alloc = ThrustAllocator(model.vessel, dt_s=1.0)
+    with pytest.raises(ValueError, match="tau_desired_N"):
+        alloc.allocate([1.0, 2.0], np.zeros(3))
+    with pytest.raises(ValueError, match="nu_r"):
+        alloc.allocate(np.zeros(3), [np.nan, 0.0, 0.0])
+    with pytest.raises(ValueError, match="azimuth_rad"):
+        alloc.reset(azimuth_rad=[0.0])
+
+
+# --------------------------------------------------------------------------- DP
+
+
+def test_gains_place_poles_from_mass_matrix(model):
+    g = pid_gains(model.mass_matrix, (0.07, 0.07, 0.09), 0.9)
+    A = np.linalg.solve(model.mass_matrix, g.Kp)
+    np.testing.assert_allclose(A, np.diag([0.07, 0.07, 0.09]) ** 2, atol=1e-12)
+    with pytest.raises(ValueError, match="omega_n_rad_s"):
+        pid_gains(model.mass_matrix, (0.07, -1.0, 0.09), 0.9)
+
+
+def test_reference_model_no_overshoot_and_speed_limit():
+    ref = ReferenceModel(0.05, 1.0, (0.2, 0.2, math.radians(2)))
+    ref.reset([0.0, 0.0, math.radians(170)])
+    xs, vs = [], []
+    for _ in range(2400):
+        ref.step([100.0, 0.0, math.radians(-170)], 0.5)  # heading: 20 deg the short way
+        xs.append(ref.state.eta_d.copy())
+        vs.append(ref.state.eta_dot_d.copy())
+    xs, vs = np.array(xs), np.array(vs)
+    assert xs[:, 0].max() <= 100.0 + 1e-6 and xs[-1, 0] == pytest.approx(100.0, abs=1e-3)
+    assert np.abs(vs[:, 0]).max() <= 0.2 + 1e-12
+    assert np.all(vs[:, 2] >= -1e-12)  # turned to starboard through 180 deg
+    assert math.degrees(wrap_pi(xs[-1, 2] - math.radians(-170))) == pytest.approx(0.0, abs=1e-3)
+
+
+DT_S = 1.0
+WIND = np.array([8.0, math.radians(300.0)])     # from WNW: pushes to starboard and yaws
+CURRENT = np.array([0.3, math.radians(60.0)])   # towards ENE
+STEP_AT_S = 1200.0
+END_S = 1800.0
+
+
+@pytest.fixture(scope="module")
+def dp_run(model):
+    """Station keeping at the origin, then a 10 m step north at STEP_AT_S."""
+    dp = DPController(model.vessel, dt_s=DT_S)
+    alloc = ThrustAllocator(model.vessel, dt_s=DT_S)
+    eta, nu = np.zeros(3), np.zeros(3)
+    dp.reset(np.zeros(3))
+    v_c = np.array([CURRENT[0] * math.cos(CURRENT[1]), CURRENT[0] * math.sin(CURRENT[1]), 0.0])
+    log = []
+    for k in range(int(END_S / DT_S)):
+        if k * DT_S == STEP_AT_S:
+            dp.set_setpoint([10.0, 0.0, 0.0])
+        tau = dp.update(eta, nu, wind=WIND)
+        res = alloc.allocate(tau, nu - ned_to_body(v_c, eta[2]))
+        e, v = model.step(eta, nu, dt_s=DT_S, rpm=res.rpm, azimuth_rad=res.azimuth_rad, wind=WIND,
+                          current=CURRENT)
+        eta, nu = e[0], v[0]
+        log.append(np.r_[(k + 1) * DT_S, eta, float(res.saturated)])
+    return np.array(log)
+
+
+def test_dp_station_keeping_in_wind_and_current(dp_run):
+    t, n, e, psi = dp_run[:, 0], dp_run[:, 1], dp_run[:, 2], dp_run[:, 3]
+    assert np.all(np.isfinite(dp_run))
+    # whole record before the step, transients included
+    before = t <= STEP_AT_S
+    assert np.hypot(n, e)[before].max() < 3.0
+    assert np.degrees(np.abs(psi[before])).max() < 3.0
+    settled = (t > 300.0) & before
+    assert np.hypot(n, e)[settled].max() < 1.0
+    assert np.degrees(np.abs(psi[settled])).max() < 1.0
+
+
+def test_dp_setpoint_change_without_overshoot(dp_run):
+    t, n, e, psi = dp_run[:, 0], dp_run[:, 1], dp_run[:, 2], dp_run[:, 3]
+    after = t > STEP_AT_S
+    assert n[after].max() < 10.0 + 2.0  # overshoot < 20 %
+    assert abs(n[-1] - 10.0) < 0.5 and abs(e[-1]) < 0.5
+    assert np.degrees(np.abs(psi[after])).max() < 3.0
+
+
+def test_dp_validation_names_the_field(model):
+    with pytest.raises(ValueError, match="dt_s"):
+        DPController(model, dt_s=-1.0)
+    dp = DPController(model, dt_s=1.0)
+    with pytest.raises(ValueError, match="setpoint_eta"):
+        dp.reset([0.0, 0.0])
+    with pytest.raises(ValueError, match="eta_measured"):
+        dp.update([0.0, np.inf, 0.0], np.zeros(3))
+    with pytest.raises(ValueError, match="wind"):
+        dp.update(np.zeros(3), np.zeros(3), wind=[1.0, 2.0, 3.0])
+
+
+def test_dp_wind_feedforward_opposes_wind(model):
+    dp = DPController(model, dt_s=1.0, wind_feedforward_gain=1.0)
+    dp.reset(np.zeros(3))
+    tau_wind = dp.update(np.zeros(3), np.zeros(3), wind=WIND)
+    dp.reset(np.zeros(3))
+    tau_calm = dp.update(np.zeros(3), np.zeros(3))
+    _, parts, _ = model.acceleration(np.zeros(3), np.zeros(3), wind=WIND, return_parts=True)
+    np.testing.assert_allclose(tau_wind - tau_calm, -parts[0, 2], rtol=1e-12)
