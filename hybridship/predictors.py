@@ -1,0 +1,448 @@
+"""Forecasters with one interface: dead reckoning, the dynamic model, and the hybrid.
+
+All three have ``fit(logs)`` and ``forecast(log, start_times_s, horizon_s=60)``; the
+forecast is a :class:`ForecastResult` (arrays, batch-first over start times) with a
+``to_frame()`` tidy pandas view. Many start times are integrated as one batch.
+
+The hybrid (Skulstad et al. 2022, sec. 3.2) steps the dynamic model one second, asks the
+ensemble for the acceleration residual from the model-predicted velocities,
+accelerations and the previous residual, adds it, and repeats. Beyond the paper, an
+:class:`~hybridship.residual.guard.EnvelopeGuard` shrinks the correction where the
+inputs leave the training envelope, and the ensemble's spread is propagated to a
+position uncertainty.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import tempfile
+from dataclasses import asdict, dataclass
+from pathlib import Path
+from typing import Iterable, Sequence
+
+import numpy as np
+import pandas as pd
+
+from .frames import wrap_2pi
+from .logs.io import LogArrays, log_to_arrays, read_log
+from .physics.integrate import rollout_batch
+from .physics.model import DynamicModel
+from .residual.ensemble import EnsembleConfig, MLPEnsemble, fit_ensemble
+from .residual.features import ResidualConfig, prepare_log
+from .residual.guard import EnvelopeGuard
+
+#: Version of the model-file format written by :meth:`HybridPredictor.save`.
+MODEL_FORMAT_VERSION = 1
+
+
+class ModelFileError(ValueError):
+    """A model file is unreadable, tampered, truncated, from another version or vessel."""
+
+
+@dataclass
+class ForecastResult:
+    """Forecasts from S start times over H steps (index 0 = the start).
+
+    Attributes
+    ----------
+    start_time_s : (S,) start times [s].
+    lead_s : (H+1,) time since the start [s].
+    eta : (S, H+1, 3) ``[north_m, east_m, psi_rad]`` (ensemble mean for the hybrid).
+    nu : (S, H+1, 3) ``[u_m_s, v_m_s, r_rad_s]``.
+    eta_std : (S, H+1, 3) ensemble standard deviation, or None.
+    guard_weight : (S, H+1) the guard's shrink factor applied at each step, or None.
+    """
+
+    start_time_s: np.ndarray
+    lead_s: np.ndarray
+    eta: np.ndarray
+    nu: np.ndarray
+    eta_std: np.ndarray | None = None
+    guard_weight: np.ndarray | None = None
+
+    def to_frame(self) -> pd.DataFrame:
+        """Tidy table: one row per start time and lead time, degrees at this edge."""
+        S, H1, _ = self.eta.shape
+        cols = {
+            "start_time_s": np.repeat(self.start_time_s, H1),
+            "lead_s": np.tile(self.lead_s, S),
+            "time_s": (self.start_time_s[:, None] + self.lead_s[None, :]).ravel(),
+            "north_m": self.eta[..., 0].ravel(),
+            "east_m": self.eta[..., 1].ravel(),
+            "heading_deg": np.degrees(wrap_2pi(self.eta[..., 2])).ravel(),
+            "u_m_s": self.nu[..., 0].ravel(),
+            "v_m_s": self.nu[..., 1].ravel(),
+            "r_deg_s": np.degrees(self.nu[..., 2]).ravel(),
+        }
+        if self.eta_std is not None:
+            cols["north_std_m"] = self.eta_std[..., 0].ravel()
+            cols["east_std_m"] = self.eta_std[..., 1].ravel()
+            cols["heading_std_deg"] = np.degrees(self.eta_std[..., 2]).ravel()
+        if self.guard_weight is not None:
+            cols["guard_weight"] = self.guard_weight.ravel()
+        return pd.DataFrame(cols)
+
+
+# --------------------------------------------------------------------------- helpers
+
+
+def as_log_arrays(log, vessel) -> LogArrays:
+    """Accept a LogArrays, a DataFrame in the log format, or a path to a log file."""
+    if isinstance(log, LogArrays):
+        return log
+    names, rot = vessel.thruster_names, vessel.rotatable
+    if isinstance(log, (str, Path)):
+        log = read_log(log, thruster_names=names, rotatable=rot)
+    if isinstance(log, pd.DataFrame):
+        return log_to_arrays(log, thruster_names=names, rotatable=rot)
+    raise TypeError(f"log: expected a path, a DataFrame or LogArrays, got {type(log).__name__}")
+
+
+def start_indices(arrays: LogArrays, start_times_s) -> np.ndarray:
+    """Row index of each start time; every start time must be a sample time (within dt/4)."""
+    t = arrays.time_s
+    st = np.atleast_1d(np.asarray(start_times_s, dtype=float))
+    if st.size == 0:
+        raise ValueError("start_times_s: at least one start time is needed")
+    if not np.all(np.isfinite(st)):
+        raise ValueError("start_times_s: contains NaN or inf")
+    idx = np.clip(np.searchsorted(t, st), 0, len(t) - 1)
+    prev = np.clip(idx - 1, 0, len(t) - 1)
+    idx = np.where(np.abs(t[prev] - st) < np.abs(t[idx] - st), prev, idx)
+    dt = float(np.median(np.diff(t))) if len(t) > 1 else 1.0
+    bad = np.abs(t[idx] - st) > 0.25 * dt
+    if bad.any():
+        raise ValueError(f"start_times_s: {st[bad][0]} s is not a sample time of the log "
+                         f"(log spans {t[0]}..{t[-1]} s, dt {dt:g} s)")
+    return idx
+
+
+def _held_inputs(arrays: LogArrays, idx: np.ndarray):
+    """Commands and wind at the start rows, shaped (S, 1, width) for the kernels."""
+    return (np.ascontiguousarray(arrays.rpm[idx][:, None]), np.ascontiguousarray(arrays.azimuth_rad[idx][:, None]),
+            np.ascontiguousarray(arrays.wind[idx][:, None]))
+
+
+class DeadReckoning:
+    """Constant course and speed from the start's 3-s average state (a baseline)."""
+
+    name = "dead_reckoning"
+
+    def __init__(self, vessel="gunnerus", *, start_average_s: float = 3.0):
+        self.model = DynamicModel(vessel)
+        self.config = ResidualConfig(start_average_s=start_average_s)
+
+    def fit(self, logs=(), **_):
+        """Nothing to learn; returns self."""
+        return self
+
+    def forecast(self, log, start_times_s, horizon_s: float = 60.0) -> ForecastResult:
+        arrays = as_log_arrays(log, self.model.vessel)
+        idx = start_indices(arrays, start_times_s)
+        dt = float(np.median(np.diff(arrays.time_s)))
+        H = int(round(horizon_s / dt))
+        lead = np.arange(H + 1) * dt
+        eta0, nu0 = _start_states_simple(arrays, idx, self.config, dt)
+        c, s = np.cos(eta0[:, 2]), np.sin(eta0[:, 2])
+        vn = c * nu0[:, 0] - s * nu0[:, 1]
+        ve = s * nu0[:, 0] + c * nu0[:, 1]
+        eta = np.empty((len(idx), H + 1, 3))
+        eta[..., 0] = eta0[:, :1] + vn[:, None] * lead
+        eta[..., 1] = eta0[:, 1:2] + ve[:, None] * lead
+        eta[..., 2] = eta0[:, 2:3] + nu0[:, 2:3] * lead
+        nu = np.broadcast_to(nu0[:, None, :], eta.shape).copy()
+        return ForecastResult(arrays.time_s[idx], lead, eta, nu)
+
+
+def _start_states_simple(arrays: LogArrays, idx, config: ResidualConfig, dt: float):
+    """Causal start states (position at the start, 3-s mean heading and velocities)."""
+    n_avg = max(1, int(round(config.start_average_s / dt)))
+    eta0 = np.empty((len(idx), 3))
+    nu0 = np.empty((len(idx), 3))
+    seg = arrays.segment_id
+    for k, i in enumerate(idx):
+        lo = max(i - n_avg + 1, 0)
+        lo += int(np.argmax(seg[lo: i + 1] == seg[i]))
+        eta0[k] = arrays.eta[i]
+        eta0[k, 2] = arrays.eta[lo: i + 1, 2].mean()
+        nu0[k] = arrays.nu[lo: i + 1].mean(axis=0)
+    return eta0, nu0
+
+
+class DynamicPredictor:
+    """The dynamic model alone (Skulstad et al. sec. 3.1): commands and wind held at start values."""
+
+    name = "dynamic"
+
+    def __init__(self, vessel="gunnerus", *, residual_config: ResidualConfig = ResidualConfig()):
+        self.model = DynamicModel(vessel)
+        self.residual_config = residual_config
+
+    def fit(self, logs=(), **_):
+        """The physics has nothing to learn from logs here; returns self."""
+        return self
+
+    def forecast(self, log, start_times_s, horizon_s: float = 60.0) -> ForecastResult:
+        arrays = as_log_arrays(log, self.model.vessel)
+        idx = start_indices(arrays, start_times_s)
+        dt = float(np.median(np.diff(arrays.time_s)))
+        H = int(round(horizon_s / dt))
+        eta0, nu0 = _start_states_simple(arrays, idx, self.residual_config, dt)
+        rpm, az, wind = _held_inputs(arrays, idx)
+        res = self.model.rollout(eta0, nu0, H, dt_s=dt, rpm=rpm, azimuth_rad=az, wind=wind)
+        return ForecastResult(arrays.time_s[idx], res.time_s, res.eta, res.nu)
+
+
+class HybridPredictor:
+    """Dynamic model + residual ensemble (+ out-of-envelope guard).
+
+    Parameters
+    ----------
+    vessel : Vessel or str
+    residual_config : ResidualConfig
+        Features, derivative filter and start-state windows.
+    ensemble_config : EnsembleConfig
+        Ensemble size, training settings, seed.
+    guard : bool
+        Apply the out-of-envelope guard by default in :meth:`forecast`.
+    guard_quantile : float
+        Quantile of training Mahalanobis distances where shrinking starts.
+    """
+
+    name = "hybrid"
+
+    def __init__(self, vessel="gunnerus", *, residual_config: ResidualConfig = ResidualConfig(),
+                 ensemble_config: EnsembleConfig = EnsembleConfig(), guard: bool = True,
+                 guard_quantile: float = 0.99):
+        self.model = DynamicModel(vessel)
+        self.residual_config = residual_config
+        self.ensemble_config = ensemble_config
+        self.use_guard = bool(guard)
+        self.guard_quantile = float(guard_quantile)
+        self.ensemble: MLPEnsemble | None = None
+        self.guard: EnvelopeGuard | None = None
+        self.training_info: dict = {}
+
+    # ------------------------------------------------------------------ training
+
+    def training_data(self, logs: Iterable, *, dp_only: bool = True):
+        """Features X, targets Y and a per-log segment label from the given logs."""
+        Xs, Ys, segs = [], [], []
+        for k, log in enumerate(logs):
+            arrays = as_log_arrays(log, self.model.vessel)
+            prep = prepare_log(self.model, arrays, self.residual_config)
+            mask = arrays.dp_active.astype(bool) if dp_only else None
+            rows = prep.trainable_rows(mask)
+            if rows.size == 0:
+                continue
+            Xs.append(prep.features(rows))
+            Ys.append(prep.residual[rows])
+            segs.append(arrays.segment_id[rows] + 10_000 * k)
+        if not Xs:
+            raise ValueError("fit: no usable training rows in the logs (need dp_active == 1 samples "
+                             "in gap-free segments longer than the derivative window)")
+        return np.concatenate(Xs), np.concatenate(Ys), np.concatenate(segs)
+
+    def fit(self, logs: Iterable, *, dp_only: bool = True, progress: bool = False) -> "HybridPredictor":
+        """Learn the acceleration residual from logs (by default only their DP part).
+
+        Parameters
+        ----------
+        logs : iterable of path, DataFrame or LogArrays
+        dp_only : bool
+            Train only on rows with ``dp_active == 1`` (the part before a failure).
+        progress : bool
+            Show a progress bar.
+        """
+        X, Y, seg = self.training_data(logs, dp_only=dp_only)
+        self.ensemble = fit_ensemble(X, Y, self.ensemble_config, segment_id=seg, progress=progress)
+        self.guard = EnvelopeGuard.fit((X - self.ensemble.x_mean) / self.ensemble.x_std,
+                                       quantile=self.guard_quantile)
+        self.training_info = {"n_rows": int(X.shape[0]), "epochs": self.ensemble.history["epochs"],
+                              "best_val_mse": self.ensemble.history["best_val_mse"],
+                              "residual_std": Y.std(0).tolist()}
+        return self
+
+    # ------------------------------------------------------------------ forecasting
+
+    def _check_fitted(self):
+        if self.ensemble is None:
+            raise RuntimeError("HybridPredictor: call fit() or load() before forecast()")
+
+    def forecast(self, log, start_times_s, horizon_s: float = 60.0, *, guard: bool | None = None) -> ForecastResult:
+        """Forecast from every start time (one batch); commands and wind held at start values."""
+        self._check_fitted()
+        arrays = as_log_arrays(log, self.model.vessel)
+        idx = start_indices(arrays, start_times_s)
+        prep = prepare_log(self.model, arrays, self.residual_config)
+        starts = [prep.start_state(int(i)) for i in idx]
+        eta0 = np.array([s[0] for s in starts])
+        nu0 = np.array([s[1] for s in starts])
+        res0 = np.array([s[2] for s in starts])
+        rpm, az, wind = _held_inputs(arrays, idx)
+        H = int(round(horizon_s / prep.dt_s))
+        out = self.rollout(eta0, nu0, res0, rpm, az, wind, H, prep.dt_s,
+                           guard=self.use_guard if guard is None else guard)
+        return ForecastResult(arrays.time_s[idx], np.arange(H + 1) * prep.dt_s, *out)
+
+    def rollout(self, eta0, nu0, res0, rpm, az, wind, n_steps: int, dt_s: float, *, guard: bool = True):
+        """Batched hybrid rollout from states (S, 3), previous residuals (S, 3) and held inputs (S, 1, K|2).
+
+        Every step: the physics advances the ensemble-mean state one step (RK4) and
+        predicts the acceleration there; each member predicts its residual from those and
+        its own previous residual; the (guard-weighted) mean residual corrects the mean
+        state, ``nu += dt r``, ``eta += 0.5 dt^2 R(psi) r`` (a constant residual acceleration
+        over the step); members' deviations from the mean residual are integrated the
+        same way to give the spread. Physics runs once per start time, not per member.
+
+        Returns
+        -------
+        eta (S, H+1, 3), nu (S, H+1, 3), eta_std (S, H+1, 3), guard_weight (S, H+1)
+        """
+        ens, P = self.ensemble, self.model.arrays
+        S = eta0.shape[0]
+        E = ens.n_members
+        fidx = self.residual_config.feature_index
+        zeros3 = np.zeros((S, 1, 3))
+        current = np.zeros((S, 1, 2))
+        eta = np.empty((S, n_steps + 1, 3))
+        nu = np.empty((S, n_steps + 1, 3))
+        std = np.zeros((S, n_steps + 1, 3))
+        wgt = np.ones((S, n_steps + 1))
+        eta[:, 0], nu[:, 0] = eta0, nu0
+        r_prev = np.broadcast_to(res0, (E, S, 3)).copy()
+        d_nu = np.zeros((E, S, 3))        # member velocity deviations from the mean
+        d_eta = np.zeros((E, S, 3))       # member position deviations (NED)
+        e1 = np.empty((S, 2, 3))
+        n1 = np.empty((S, 2, 3))
+        a1 = np.empty((S, 2, 3))
+        feats = np.empty((E, S, 9))
+        for j in range(n_steps):
+            rollout_batch(np.ascontiguousarray(eta[:, j]), np.ascontiguousarray(nu[:, j]), rpm, az, wind, current,
+                          zeros3, zeros3, P, dt_s, 1, 1, e1, n1, a1)
+            feats[:, :, 0:3] = n1[:, 1]
+            feats[:, :, 3:6] = a1[:, 1]
+            feats[:, :, 6:9] = r_prev
+            X = feats[..., fidx]
+            r = ens.predict_members(X)                          # (E, S, 3)
+            if guard:
+                z = (X.mean(axis=0) - ens.x_mean) / ens.x_std
+                w = self.guard.weight(z)                        # (S,)
+                r = r * w[None, :, None]
+                wgt[:, j + 1] = w
+            r_mean = r.mean(axis=0)
+            psi = e1[:, 1, 2]
+            c, s = np.cos(psi), np.sin(psi)
+            nu[:, j + 1] = n1[:, 1] + dt_s * r_mean
+            half = 0.5 * dt_s * dt_s
+            eta[:, j + 1, 0] = e1[:, 1, 0] + half * (c * r_mean[:, 0] - s * r_mean[:, 1])
+            eta[:, j + 1, 1] = e1[:, 1, 1] + half * (s * r_mean[:, 0] + c * r_mean[:, 1])
+            eta[:, j + 1, 2] = e1[:, 1, 2] + half * r_mean[:, 2]
+            dr = r - r_mean
+            v_mid = d_nu + 0.5 * dt_s * dr
+            d_eta[..., 0] += dt_s * (c * v_mid[..., 0] - s * v_mid[..., 1])
+            d_eta[..., 1] += dt_s * (s * v_mid[..., 0] + c * v_mid[..., 1])
+            d_eta[..., 2] += dt_s * v_mid[..., 2]
+            d_nu += dt_s * dr
+            std[:, j + 1] = d_eta.std(axis=0)
+            r_prev = r
+        return eta, nu, std, (wgt if guard else None)
+
+    # ------------------------------------------------------------------ model files
+
+    def _metadata(self) -> dict:
+        v = self.model.vessel
+        return {
+            "format": "hybridship-model", "format_version": MODEL_FORMAT_VERSION,
+            "kind": "HybridPredictor", "vessel": v.name,
+            "vessel_fingerprint": _vessel_fingerprint(v),
+            "features": list(self.residual_config.features),
+            "residual_config": asdict(self.residual_config),
+            "ensemble_config": asdict(self.ensemble_config),
+            "use_guard": self.use_guard, "guard_quantile": self.guard_quantile,
+            "guard": {"d0": self.guard.d0, "scale": self.guard.scale},
+            "training_info": self.training_info,
+        }
+
+    def save(self, path) -> Path:
+        """Write the model as one ``.npz`` (arrays only, no pickle) with JSON metadata, atomically."""
+        self._check_fitted()
+        path = Path(path)
+        e, g = self.ensemble, self.guard
+        arrays = {f"w{i}": w for i, w in enumerate(e.weights)}
+        arrays.update(x_mean=e.x_mean, x_std=e.x_std, y_mean=e.y_mean, y_std=e.y_std,
+                      guard_mean=g.mean, guard_inv_cov=g.inv_cov)
+        meta = json.dumps(self._metadata(), sort_keys=True)
+        arrays["metadata_json"] = np.frombuffer(meta.encode("utf-8"), dtype=np.uint8)
+        path.parent.mkdir(parents=True, exist_ok=True)
+        fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
+        try:
+            with os.fdopen(fd, "wb") as fh:
+                np.savez(fh, **arrays)
+                fh.flush()
+                os.fsync(fh.fileno())
+            os.replace(tmp, path)
+        except BaseException:
+            Path(tmp).unlink(missing_ok=True)
+            raise
+        return path
+
+    @classmethod
+    def load(cls, path, vessel=None) -> "HybridPredictor":
+        """Load a model file written by :meth:`save` (never executes code from the file).
+
+        Raises :class:`ModelFileError` for an unreadable, truncated or tampered file, another
+        format version, or a vessel that differs from the one the model was trained for.
+        """
+        path = Path(path)
+        try:
+            with np.load(path, allow_pickle=False) as z:
+                data = {k: z[k] for k in z.files}
+        except FileNotFoundError:
+            raise ModelFileError(f"{path}: model file not found") from None
+        except Exception as err:  # zip/npy parse errors of a damaged file
+            raise ModelFileError(f"{path}: not a readable hybridship model file ({type(err).__name__}: {err})") from None
+        try:
+            meta = json.loads(bytes(data["metadata_json"]).decode("utf-8"))
+        except Exception:
+            raise ModelFileError(f"{path}: metadata missing or damaged") from None
+        if meta.get("format") != "hybridship-model":
+            raise ModelFileError(f"{path}: not a hybridship model file")
+        if meta.get("format_version") != MODEL_FORMAT_VERSION:
+            raise ModelFileError(f"{path}: model format version {meta.get('format_version')} is not supported "
+                                 f"(this hybridship reads version {MODEL_FORMAT_VERSION})")
+        residual_config = ResidualConfig(**{k: tuple(v) if k == "features" else v
+                                            for k, v in meta["residual_config"].items()})
+        obj = cls(vessel if vessel is not None else meta["vessel"], residual_config=residual_config,
+                  ensemble_config=EnsembleConfig(**meta["ensemble_config"]), guard=meta["use_guard"],
+                  guard_quantile=meta["guard_quantile"])
+        if _vessel_fingerprint(obj.model.vessel) != meta["vessel_fingerprint"]:
+            raise ModelFileError(f"{path}: trained for vessel {meta['vessel']!r} with other parameters; "
+                                 f"refusing to use it with vessel {obj.model.vessel.name!r}")
+        try:
+            weights = [np.asarray(data[f"w{i}"], dtype=float) for i in range(6)]
+            n_in = len(residual_config.features)
+            E, H = weights[0].shape[0], weights[0].shape[2]
+            expected = [(E, n_in, H), (E, 1, H), (E, H, H), (E, 1, H), (E, H, 3), (E, 1, 3)]
+            if [w.shape for w in weights] != expected:
+                raise ValueError(f"weight shapes {[w.shape for w in weights]} do not match {expected}")
+            ens = MLPEnsemble(weights, data["x_mean"], data["x_std"], data["y_mean"], data["y_std"])
+            guard = EnvelopeGuard(data["guard_mean"], data["guard_inv_cov"], float(meta["guard"]["d0"]),
+                                  float(meta["guard"]["scale"]))
+            for name, a in [("weights", np.concatenate([w.ravel() for w in weights])), ("x_std", ens.x_std),
+                            ("y_std", ens.y_std), ("guard_inv_cov", guard.inv_cov)]:
+                if not np.all(np.isfinite(a)):
+                    raise ValueError(f"{name} contains NaN or inf")
+        except (KeyError, ValueError) as err:
+            raise ModelFileError(f"{path}: damaged model contents: {err}") from None
+        obj.ensemble, obj.guard = ens, guard
+        obj.training_info = meta.get("training_info", {})
+        return obj
+
+
+def _vessel_fingerprint(vessel) -> str:
+    """A stable hash of the validated vessel description (so a model is not used on another ship)."""
+    import hashlib
+
+    return hashlib.sha256(json.dumps(vessel.model_dump(mode="json"), sort_keys=True).encode()).hexdigest()[:16]

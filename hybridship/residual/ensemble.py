@@ -1,0 +1,233 @@
+"""An ensemble of small feed-forward networks, trained as one batched model.
+
+Each member is ``n_in -> 20 tanh -> 20 tanh -> n_out linear`` (Skulstad et al. 2022,
+sec. 3.2). All members share one set of batched weight tensors ``(E, fan_in, fan_out)``:
+training is one PyTorch model (``torch.bmm`` over members), inference is plain numpy
+(``np.matmul`` over members), so neither loops over members in Python.
+
+Inputs and outputs are standardised with statistics stored beside the weights.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+
+
+@dataclass(frozen=True)
+class EnsembleConfig:
+    """Training configuration of an :class:`MLPEnsemble` (validated on creation).
+
+    Attributes
+    ----------
+    n_members : number of networks E.
+    hidden : units of each hidden layer (two layers).
+    lr : Adam learning rate.
+    max_epochs : full-batch Adam iterations at most.
+    patience : epochs without validation improvement before a member stops improving.
+    weight_decay : L2 penalty on the weights.
+    val_fraction : last fraction of each time-ordered segment used for validation.
+    bootstrap : train each member on a bootstrap resample of the training rows (bagging),
+        which spreads the members where data are thin and so calibrates the spread.
+    seed : seed of the initial weights and the bootstrap draws.
+    """
+
+    n_members: int = 10
+    hidden: int = 20
+    lr: float = 1e-2
+    max_epochs: int = 1500
+    patience: int = 150
+    weight_decay: float = 1e-5
+    val_fraction: float = 0.2
+    bootstrap: bool = True
+    seed: int = 0
+
+    def __post_init__(self):
+        checks = {
+            "n_members": self.n_members >= 1, "hidden": self.hidden >= 1, "lr": self.lr > 0,
+            "max_epochs": self.max_epochs >= 1, "patience": self.patience >= 1,
+            "weight_decay": self.weight_decay >= 0, "val_fraction": 0.0 < self.val_fraction < 0.9,
+        }
+        bad = [k for k, ok in checks.items() if not ok]
+        if bad:
+            raise ValueError(f"EnsembleConfig: invalid {', '.join(f'{k}={getattr(self, k)!r}' for k in bad)}")
+
+
+@dataclass
+class MLPEnsemble:
+    """Weights and normalisation of a trained ensemble; numpy inference.
+
+    Attributes
+    ----------
+    weights : list of ndarray
+        ``[W1 (E, n_in, H), b1 (E, 1, H), W2 (E, H, H), b2 (E, 1, H), W3 (E, H, n_out), b3 (E, 1, n_out)]``.
+    x_mean, x_std : (n_in,) input standardisation.
+    y_mean, y_std : (n_out,) output standardisation.
+    """
+
+    weights: list
+    x_mean: np.ndarray
+    x_std: np.ndarray
+    y_mean: np.ndarray
+    y_std: np.ndarray
+    history: dict = field(default_factory=dict)
+
+    @property
+    def n_members(self) -> int:
+        return self.weights[0].shape[0]
+
+    @property
+    def n_in(self) -> int:
+        return self.weights[0].shape[1]
+
+    @property
+    def n_out(self) -> int:
+        return self.weights[4].shape[2]
+
+    def predict_members(self, X: np.ndarray) -> np.ndarray:
+        """Outputs of every member.
+
+        Parameters
+        ----------
+        X : ndarray, shape (N, n_in) (same input for all members) or (E, N, n_in).
+
+        Returns
+        -------
+        ndarray, shape (E, N, n_out)
+        """
+        X = np.asarray(X, dtype=float)
+        Z = (X - self.x_mean) / self.x_std
+        if Z.ndim == 2:
+            Z = Z[None]
+        W1, b1, W2, b2, W3, b3 = self.weights
+        h = np.tanh(np.matmul(Z, W1) + b1)
+        h = np.tanh(np.matmul(h, W2) + b2)
+        return (np.matmul(h, W3) + b3) * self.y_std + self.y_mean
+
+    def predict(self, X: np.ndarray):
+        """Ensemble mean and standard deviation over members, each ``(N, n_out)``."""
+        Y = self.predict_members(X)
+        return Y.mean(axis=0), Y.std(axis=0)
+
+
+def _time_ordered_split(segment_id: np.ndarray, val_fraction: float) -> np.ndarray:
+    """Boolean mask of validation rows: the last ``val_fraction`` of every segment."""
+    is_val = np.zeros(segment_id.shape[0], dtype=bool)
+    for s in np.unique(segment_id):
+        idx = np.flatnonzero(segment_id == s)
+        n_val = int(round(val_fraction * idx.size))
+        if n_val > 0 and idx.size - n_val >= 2:
+            is_val[idx[-n_val:]] = True
+    return is_val
+
+
+def fit_ensemble(X: np.ndarray, Y: np.ndarray, config: EnsembleConfig = EnsembleConfig(), *,
+                 segment_id: np.ndarray | None = None, progress: bool = False) -> MLPEnsemble:
+    """Train an ensemble on rows ``X (N, n_in) -> Y (N, n_out)``.
+
+    Full-batch Adam on all members at once; early stopping per member on a time-ordered
+    validation split (the last part of every segment, so validation data lie after the
+    training data in time); each member keeps its weights from its best validation epoch.
+
+    Parameters
+    ----------
+    X, Y : ndarray
+        Finite training rows in time order.
+    config : EnsembleConfig
+    segment_id : ndarray of int, optional
+        Segment (or log) of each row; the split is made within each segment.
+    progress : bool
+        Show a tqdm progress bar.
+    """
+    import torch
+    from tqdm.auto import tqdm
+
+    X = np.asarray(X, dtype=float)
+    Y = np.asarray(Y, dtype=float)
+    if X.ndim != 2 or Y.ndim != 2 or X.shape[0] != Y.shape[0]:
+        raise ValueError(f"fit_ensemble: X and Y must be (N, n_in) and (N, n_out), got {X.shape} and {Y.shape}")
+    if X.shape[0] < 20:
+        raise ValueError(f"fit_ensemble: need at least 20 training rows, got {X.shape[0]}")
+    for name, A in (("X", X), ("Y", Y)):
+        if not np.all(np.isfinite(A)):
+            raise ValueError(f"fit_ensemble: {name} contains NaN or inf (row {np.argwhere(~np.isfinite(A))[0, 0]})")
+    seg = np.zeros(X.shape[0], int) if segment_id is None else np.asarray(segment_id)
+    is_val = _time_ordered_split(seg, config.val_fraction)
+    tr, va = np.flatnonzero(~is_val), np.flatnonzero(is_val)
+    if va.size == 0:
+        va = tr
+
+    x_mean, x_std = X[tr].mean(0), X[tr].std(0)
+    y_mean, y_std = Y[tr].mean(0), Y[tr].std(0)
+    x_std = np.where(x_std > 1e-12, x_std, 1.0)
+    y_std = np.where(y_std > 1e-12, y_std, 1.0)
+    Zx = (X - x_mean) / x_std
+    Zy = (Y - y_mean) / y_std
+
+    E, H, n_in, n_out = config.n_members, config.hidden, X.shape[1], Y.shape[1]
+    rng = np.random.default_rng(config.seed)
+    gen = torch.Generator().manual_seed(int(config.seed))
+    torch_threads = torch.get_num_threads()
+    torch.set_num_threads(1)  # tiny matrices: threads cost more than they give
+    try:
+        # Per-member training rows: bootstrap resamples (bagging) or all rows.
+        if config.bootstrap:
+            idx = rng.integers(0, tr.size, size=(E, tr.size))
+            rows = tr[idx]
+        else:
+            rows = np.broadcast_to(tr, (E, tr.size))
+        Xt = torch.as_tensor(Zx[rows], dtype=torch.float32)          # (E, n, n_in)
+        Yt = torch.as_tensor(Zy[rows], dtype=torch.float32)          # (E, n, n_out)
+        Xv = torch.as_tensor(Zx[va], dtype=torch.float32).expand(E, -1, -1)
+        Yv = torch.as_tensor(Zy[va], dtype=torch.float32).expand(E, -1, -1)
+
+        def init(fan_in, fan_out):
+            # Glorot-uniform, as Keras (the paper's toolkit) uses for dense layers
+            a = math.sqrt(6.0 / (fan_in + fan_out))
+            return (torch.rand(E, fan_in, fan_out, generator=gen) * 2 - 1) * a
+
+        params = [init(n_in, H), torch.zeros(E, 1, H), init(H, H), torch.zeros(E, 1, H),
+                  init(H, n_out), torch.zeros(E, 1, n_out)]
+        for p in params:
+            p.requires_grad_(True)
+        opt = torch.optim.Adam(params, lr=config.lr)
+
+        def forward(Z):
+            h = torch.tanh(torch.baddbmm(params[1], Z, params[0]))
+            h = torch.tanh(torch.baddbmm(params[3], h, params[2]))
+            return torch.baddbmm(params[5], h, params[4])
+
+        best = torch.full((E,), float("inf"))
+        best_params = [p.detach().clone() for p in params]
+        since_best = torch.zeros(E, dtype=torch.long)
+        train_curve, val_curve = [], []
+        bar = tqdm(range(config.max_epochs), desc="training ensemble", disable=not progress, leave=False)
+        for _epoch in bar:
+            opt.zero_grad()
+            mse = ((forward(Xt) - Yt) ** 2).mean(dim=(1, 2))            # per member
+            l2 = sum((params[i] ** 2).sum(dim=(1, 2)) for i in (0, 2, 4))
+            loss = (mse + config.weight_decay * l2).sum()
+            loss.backward()
+            opt.step()
+            with torch.no_grad():
+                v = ((forward(Xv) - Yv) ** 2).mean(dim=(1, 2))
+                improved = v < best
+                best = torch.where(improved, v, best)
+                since_best = torch.where(improved, torch.zeros_like(since_best), since_best + 1)
+                for bp, p in zip(best_params, params):
+                    bp[improved] = p.detach()[improved]
+            train_curve.append(float(mse.detach().mean()))
+            val_curve.append(float(v.mean()))
+            if progress:
+                bar.set_postfix(train=f"{train_curve[-1]:.3f}", val=f"{val_curve[-1]:.3f}")
+            if bool((since_best > config.patience).all()):
+                break
+    finally:
+        torch.set_num_threads(torch_threads)
+
+    weights = [bp.numpy().astype(float) for bp in best_params]
+    history = {"train_mse": train_curve, "val_mse": val_curve, "best_val_mse": best.numpy().tolist(),
+               "epochs": len(train_curve), "n_train": int(tr.size), "n_val": int(va.size)}
+    return MLPEnsemble(weights, x_mean, x_std, y_mean, y_std, history)
