@@ -118,9 +118,19 @@ def start_indices(arrays: LogArrays, start_times_s) -> np.ndarray:
     return idx
 
 
-def _held_inputs(arrays: LogArrays, idx: np.ndarray):
-    """Commands and wind at the start rows, shaped (S, 1, width) for the kernels."""
-    return (np.ascontiguousarray(arrays.rpm[idx][:, None]), np.ascontiguousarray(arrays.azimuth_rad[idx][:, None]),
+def _held_inputs(arrays: LogArrays, idx: np.ndarray, *, stop_after_failure: bool = True):
+    """Commands and wind at the start rows, shaped (S, 1, width) for the kernels.
+
+    With ``stop_after_failure`` the rpm of a start where station keeping is off
+    (``dp_active == 0``) is taken as 0: after a power failure no thrust is commanded, while
+    the logged shaft speed is still running down for a second or two, and holding that
+    value for a minute would push every forecast. Azimuth angles stay as logged (a
+    stopped propeller still gives drag along its axis).
+    """
+    rpm = arrays.rpm[idx].copy()
+    if stop_after_failure:
+        rpm[arrays.dp_active[idx] == 0] = 0.0
+    return (np.ascontiguousarray(rpm[:, None]), np.ascontiguousarray(arrays.azimuth_rad[idx][:, None]),
             np.ascontiguousarray(arrays.wind[idx][:, None]))
 
 
@@ -175,9 +185,11 @@ class DynamicPredictor:
 
     name = "dynamic"
 
-    def __init__(self, vessel="gunnerus", *, residual_config: ResidualConfig = ResidualConfig()):
+    def __init__(self, vessel="gunnerus", *, residual_config: ResidualConfig = ResidualConfig(),
+                 stop_after_failure: bool = True):
         self.model = DynamicModel(vessel)
         self.residual_config = residual_config
+        self.stop_after_failure = bool(stop_after_failure)
 
     def fit(self, logs=(), **_):
         """The physics has nothing to learn from logs here; returns self."""
@@ -189,7 +201,7 @@ class DynamicPredictor:
         dt = float(np.median(np.diff(arrays.time_s)))
         H = int(round(horizon_s / dt))
         eta0, nu0 = _start_states_simple(arrays, idx, self.residual_config, dt)
-        rpm, az, wind = _held_inputs(arrays, idx)
+        rpm, az, wind = _held_inputs(arrays, idx, stop_after_failure=self.stop_after_failure)
         res = self.model.rollout(eta0, nu0, H, dt_s=dt, rpm=rpm, azimuth_rad=az, wind=wind)
         return ForecastResult(arrays.time_s[idx], res.time_s, res.eta, res.nu)
 
@@ -214,8 +226,9 @@ class HybridPredictor:
 
     def __init__(self, vessel="gunnerus", *, residual_config: ResidualConfig = ResidualConfig(),
                  ensemble_config: EnsembleConfig = EnsembleConfig(), guard: bool = True,
-                 guard_quantile: float = 0.99):
+                 guard_quantile: float = 0.99, stop_after_failure: bool = True):
         self.model = DynamicModel(vessel)
+        self.stop_after_failure = bool(stop_after_failure)
         self.residual_config = residual_config
         self.ensemble_config = ensemble_config
         self.use_guard = bool(guard)
@@ -237,7 +250,7 @@ class HybridPredictor:
             if rows.size == 0:
                 continue
             Xs.append(prep.features(rows))
-            Ys.append(prep.residual[rows])
+            Ys.append(prep.deviation(rows))
             segs.append(arrays.segment_id[rows] + 10_000 * k)
         if not Xs:
             raise ValueError("fit: no usable training rows in the logs (need dp_active == 1 samples "
@@ -279,19 +292,22 @@ class HybridPredictor:
         starts = [prep.start_state(int(i)) for i in idx]
         eta0 = np.array([s[0] for s in starts])
         nu0 = np.array([s[1] for s in starts])
-        res0 = np.array([s[2] for s in starts])
-        rpm, az, wind = _held_inputs(arrays, idx)
+        dev0 = np.array([s[2] for s in starts])
+        bias0 = np.array([s[3] for s in starts])
+        rpm, az, wind = _held_inputs(arrays, idx, stop_after_failure=self.stop_after_failure)
         H = int(round(horizon_s / prep.dt_s))
-        out = self.rollout(eta0, nu0, res0, rpm, az, wind, H, prep.dt_s,
+        out = self.rollout(eta0, nu0, dev0, bias0, rpm, az, wind, H, prep.dt_s,
                            guard=self.use_guard if guard is None else guard)
         return ForecastResult(arrays.time_s[idx], np.arange(H + 1) * prep.dt_s, *out)
 
-    def rollout(self, eta0, nu0, res0, rpm, az, wind, n_steps: int, dt_s: float, *, guard: bool = True):
-        """Batched hybrid rollout from states (S, 3), previous residuals (S, 3) and held inputs (S, 1, K|2).
+    def rollout(self, eta0, nu0, dev0, bias0_ned, rpm, az, wind, n_steps: int, dt_s: float, *, guard: bool = True):
+        """Batched hybrid rollout from states (S, 3), previous residual deviations (S, 3),
+        biases (S, 3; surge/sway in NED) and held inputs (S, 1, K|2).
 
         Every step: the physics advances the ensemble-mean state one step (RK4) and
-        predicts the acceleration there; each member predicts its residual from those and
-        its own previous residual; the (guard-weighted) mean residual corrects the mean
+        predicts the acceleration there; each member predicts its residual deviation from
+        those and its own previous deviation; the residual is the bias (rotated into the
+        current heading) plus the guard-weighted mean deviation. It corrects the mean
         state, ``nu += dt r``, ``eta += 0.5 dt^2 R(psi) r`` (a constant residual acceleration
         over the step); members' deviations from the mean residual are integrated the
         same way to give the spread. Physics runs once per start time, not per member.
@@ -311,7 +327,7 @@ class HybridPredictor:
         std = np.zeros((S, n_steps + 1, 3))
         wgt = np.ones((S, n_steps + 1))
         eta[:, 0], nu[:, 0] = eta0, nu0
-        r_prev = np.broadcast_to(res0, (E, S, 3)).copy()
+        r_prev = np.broadcast_to(dev0, (E, S, 3)).copy()
         d_nu = np.zeros((E, S, 3))        # member velocity deviations from the mean
         d_eta = np.zeros((E, S, 3))       # member position deviations (NED)
         e1 = np.empty((S, 2, 3))
@@ -331,9 +347,14 @@ class HybridPredictor:
                 w = self.guard.weight(z)                        # (S,)
                 r = r * w[None, :, None]
                 wgt[:, j + 1] = w
-            r_mean = r.mean(axis=0)
             psi = e1[:, 1, 2]
             c, s = np.cos(psi), np.sin(psi)
+            r_prev = r
+            # total residual = bias in today's heading + learned deviation
+            bias_b = np.column_stack([c * bias0_ned[:, 0] + s * bias0_ned[:, 1],
+                                      -s * bias0_ned[:, 0] + c * bias0_ned[:, 1], bias0_ned[:, 2]])
+            r = r + bias_b[None]
+            r_mean = r.mean(axis=0)
             nu[:, j + 1] = n1[:, 1] + dt_s * r_mean
             half = 0.5 * dt_s * dt_s
             eta[:, j + 1, 0] = e1[:, 1, 0] + half * (c * r_mean[:, 0] - s * r_mean[:, 1])
@@ -346,7 +367,6 @@ class HybridPredictor:
             d_eta[..., 2] += dt_s * v_mid[..., 2]
             d_nu += dt_s * dr
             std[:, j + 1] = d_eta.std(axis=0)
-            r_prev = r
         return eta, nu, std, (wgt if guard else None)
 
     # ------------------------------------------------------------------ model files
@@ -361,6 +381,7 @@ class HybridPredictor:
             "residual_config": asdict(self.residual_config),
             "ensemble_config": asdict(self.ensemble_config),
             "use_guard": self.use_guard, "guard_quantile": self.guard_quantile,
+            "stop_after_failure": self.stop_after_failure,
             "guard": {"d0": self.guard.d0, "scale": self.guard.scale},
             "training_info": self.training_info,
         }
@@ -416,7 +437,7 @@ class HybridPredictor:
                                             for k, v in meta["residual_config"].items()})
         obj = cls(vessel if vessel is not None else meta["vessel"], residual_config=residual_config,
                   ensemble_config=EnsembleConfig(**meta["ensemble_config"]), guard=meta["use_guard"],
-                  guard_quantile=meta["guard_quantile"])
+                  guard_quantile=meta["guard_quantile"], stop_after_failure=meta["stop_after_failure"])
         if _vessel_fingerprint(obj.model.vessel) != meta["vessel_fingerprint"]:
             raise ModelFileError(f"{path}: trained for vessel {meta['vessel']!r} with other parameters; "
                                  f"refusing to use it with vessel {obj.model.vessel.name!r}")

@@ -37,8 +37,8 @@ class EnsembleConfig:
     n_members: int = 10
     hidden: int = 20
     lr: float = 1e-2
-    max_epochs: int = 1500
-    patience: int = 150
+    max_epochs: int = 800
+    patience: int = 100
     weight_decay: float = 1e-5
     val_fraction: float = 0.2
     bootstrap: bool = True

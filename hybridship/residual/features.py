@@ -2,21 +2,35 @@
 
 For each sample ``t`` of a gap-free segment:
 
-* the *measured* acceleration ``nu_dot(t)`` is a Savitzky-Golay derivative of the logged
-  velocities (centred window, ``deriv_window_s``) and the smoothed state ``nu_s(t)`` the
-  matching Savitzky-Golay smoothing;
+* the smoothed velocities ``nu_s(t)`` are a Savitzky-Golay smoothing of the logged ones
+  (centred window ``deriv_window_s``); ``nu_dot(t)`` the matching derivative (kept for
+  inspection);
 * the dynamic model, started from ``(eta(t), nu_s(t))`` with the commands and wind of
   ``t`` held, predicts ``nu_hat(t+1)`` and ``nu_dot_hat(t+1)`` one step ahead;
-* the residual target is ``d_nu_dot(t+1) = nu_dot(t+1) - nu_dot_hat(t+1)``;
+* the residual target is the acceleration discrepancy averaged over the step,
+  ``d_nu_dot(t+1) = (nu_s(t+1) - nu_hat(t+1)) / dt``. The paper differences a measured and a
+  predicted acceleration; filtering a second derivative out of noisy 1 Hz data smears
+  every command change over the filter window, and the networks then learn the filter.
+  The velocity-increment form needs no differentiation, is zero on a log the model
+  produced itself, and is exactly the constant acceleration the integrator must add over
+  the step to land on the measured velocity;
 * the features are chosen from ``nu_hat(t+1)``, ``nu_dot_hat(t+1)`` and the previous residual
   ``d_nu_dot(t)`` (the paper's choice, an ARX form).
+
+Beyond the paper, the residual is split into a slowly varying **bias** ``b(t)``, the causal
+mean of past residuals over ``bias_window_s`` (by default a few minutes: the unknown
+current and mean wave drift), and a **deviation** ``d_nu_dot - b`` that the networks learn.
+Averaging over minutes removes the thruster-model error that a short window of
+station-keeping residuals carries, and the bias stays meaningful when the networks'
+inputs leave their training envelope. ``bias_frame = "ned"`` keeps the surge/sway part of
+the bias fixed in the earth frame (current and waves do not turn with the ship).
 
 Forecasts must use only what is known at their start time. The centred filters above
 look a few seconds ahead, so they are used for training targets only. At a forecast start
 ``t0`` the initial state is the causal 3-sample average of heading and velocities (the
-paper's 3-s moving average) and the "previous residual" is the mean of *causal* residual
-estimates (end-point Savitzky-Golay derivative minus the model's one-step prediction from
-the causally smoothed state) over the last ``start_residual_window_s`` seconds.
+paper's 3-s moving average); the bias and the "previous residual" come from *causal*
+residual estimates (end-point Savitzky-Golay smoothing of the velocities, then the same
+one-step comparison).
 """
 
 from __future__ import annotations
@@ -48,24 +62,37 @@ class ResidualConfig:
     Attributes
     ----------
     features : names from :data:`ALL_FEATURES`.
-    deriv_window_s : Savitzky-Golay window for velocities and accelerations [s].
+    deriv_window_s : Savitzky-Golay window for smoothing the velocities [s]; 0 uses the logged
+        velocities as they are (unbiased under white noise, and exact on a model-made log).
     polyorder : Savitzky-Golay polynomial order.
     start_average_s : causal moving-average window of heading and velocities at a start [s].
-    start_residual_window_s : window of the causal residual average at a start [s].
+    start_residual_window_s : window of the causal residual average that starts the
+        autoregressive input [s]; 0 starts it at zero deviation (the bias already holds the
+        recent mean, and a short window at a failure mixes in the thrusters' run-down).
+    bias_window_s : window of the causal residual mean used as the bias [s]; 0 = no bias
+        (the paper's scheme).
+    bias_frame : ``"ned"`` or ``"body"``: the frame in which the bias is held constant.
     """
 
     features: tuple[str, ...] = PAPER_FEATURES
-    deriv_window_s: float = 11.0
+    deriv_window_s: float = 0.0
     polyorder: int = 2
     start_average_s: float = 3.0
-    start_residual_window_s: float = 10.0
+    start_residual_window_s: float = 0.0
+    bias_window_s: float = 900.0
+    bias_frame: str = "ned"
 
     def __post_init__(self):
+        if self.bias_window_s < 0:
+            raise ValueError(f"ResidualConfig.bias_window_s must be >= 0 (0 = no bias), got {self.bias_window_s}")
+        if self.bias_frame not in ("body", "ned"):
+            raise ValueError(f"ResidualConfig.bias_frame must be 'body' or 'ned', got {self.bias_frame!r}")
         unknown = [f for f in self.features if f not in ALL_FEATURES]
         if unknown or not self.features:
             raise ValueError(f"ResidualConfig.features: unknown {unknown}; choose from {list(ALL_FEATURES)}")
-        if not self.deriv_window_s > 0 or not self.start_average_s > 0 or not self.start_residual_window_s > 0:
-            raise ValueError("ResidualConfig: windows must be > 0 s")
+        if self.deriv_window_s < 0 or not self.start_average_s > 0 or self.start_residual_window_s < 0:
+            raise ValueError("ResidualConfig: start_average_s must be > 0 s, deriv_window_s and "
+                             "start_residual_window_s >= 0 s")
         if self.polyorder < 1:
             raise ValueError(f"ResidualConfig.polyorder must be >= 1, got {self.polyorder}")
 
@@ -123,12 +150,34 @@ class PreparedLog:
     residual: np.ndarray
     nu_c: np.ndarray
     residual_c: np.ndarray
+    bias_ned: np.ndarray
     config: ResidualConfig = field(default_factory=ResidualConfig)
 
-    def features(self, rows: np.ndarray) -> np.ndarray:
-        """Feature matrix (len(rows), n_features) for predicting the residual at ``rows``."""
+    def bias_body(self, rows: np.ndarray, psi_rad=None) -> np.ndarray:
+        """The bias known at ``rows`` (from data up to and including them) in the body frame.
+
+        ``bias_ned`` stores surge/sway in NED (and yaw as is); ``psi_rad`` is the heading to
+        rotate into (default: the logged heading at ``rows``; the body-frame option uses the
+        heading at which each residual was observed).
+        """
         rows = np.asarray(rows)
-        full = np.concatenate([self.nu_hat[rows], self.nu_dot_hat[rows], self.residual[rows - 1]], axis=1)
+        b = self.bias_ned[rows]
+        psi = self.arrays.eta[rows, 2] if psi_rad is None else np.asarray(psi_rad)
+        c, s = np.cos(psi), np.sin(psi)
+        out = b.copy()
+        out[..., 0] = c * b[..., 0] + s * b[..., 1]
+        out[..., 1] = -s * b[..., 0] + c * b[..., 1]
+        return out
+
+    def deviation(self, rows: np.ndarray) -> np.ndarray:
+        """Residual minus the bias known one sample earlier, at ``rows``."""
+        rows = np.asarray(rows)
+        return self.residual[rows] - self.bias_body(rows - 1, self.arrays.eta[rows, 2])
+
+    def features(self, rows: np.ndarray) -> np.ndarray:
+        """Feature matrix (len(rows), n_features) for predicting the residual deviation at ``rows``."""
+        rows = np.asarray(rows)
+        full = np.concatenate([self.nu_hat[rows], self.nu_dot_hat[rows], self.deviation(rows - 1)], axis=1)
         return full[:, self.config.feature_index]
 
     def trainable_rows(self, mask: np.ndarray | None = None) -> np.ndarray:
@@ -136,17 +185,21 @@ class PreparedLog:
         ok = np.isfinite(self.residual).all(1)
         ok[1:] &= ok[:-1]
         ok[0] = False
+        okb = np.isfinite(self.bias_ned).all(1)
+        ok[2:] &= okb[1:-1] & okb[:-2]
+        ok[:2] = False
         if mask is not None:
             ok &= mask
             ok[1:] &= mask[:-1]
         return np.flatnonzero(ok)
 
     def start_state(self, idx: int):
-        """Causal start state at row ``idx``: ``(eta0 (3,), nu0 (3,), residual0 (3,))``.
+        """Causal start state at row ``idx``: ``(eta0 (3,), nu0 (3,), deviation0 (3,), bias_ned0 (3,))``.
 
         Heading and velocities: mean over the last ``start_average_s`` (the paper's 3-s
-        window); position: the sample at ``idx``; residual: mean causal residual over the
-        last ``start_residual_window_s`` (zeros if none is available).
+        window); position: the sample at ``idx``; deviation: mean causal residual over the
+        last ``start_residual_window_s`` minus the bias (zeros if none is available); bias:
+        the causal bias at ``idx`` (surge/sway in NED, yaw as is).
         """
         a = self.arrays
         seg = a.segment_id
@@ -158,10 +211,14 @@ class PreparedLog:
         eta0[2] = a.eta[lo: idx + 1, 2].mean()
         nu0 = a.nu[lo: idx + 1].mean(axis=0)
         lo_r = max(idx - n_res + 1, int(np.flatnonzero(seg == seg[idx])[0]))
-        r = self.residual_c[lo_r: idx + 1]
+        r = self.residual_c[lo_r: idx + 1] if self.config.start_residual_window_s > 0 else np.zeros((0, 3))
         r = r[np.isfinite(r).all(1)]
-        res0 = r.mean(axis=0) if r.size else np.zeros(3)
-        return eta0, nu0, res0
+        bias0 = self.bias_ned[idx] if np.isfinite(self.bias_ned[idx]).all() else np.zeros(3)
+        res0 = r.mean(axis=0) if r.size else None
+        c, s = np.cos(eta0[2]), np.sin(eta0[2])
+        bias_b = np.array([c * bias0[0] + s * bias0[1], -s * bias0[0] + c * bias0[1], bias0[2]])
+        dev0 = res0 - bias_b if res0 is not None else np.zeros(3)
+        return eta0, nu0, dev0, bias0
 
 
 def prepare_log(model, arrays: LogArrays, config: ResidualConfig = ResidualConfig()) -> PreparedLog:
@@ -182,11 +239,18 @@ def prepare_log(model, arrays: LogArrays, config: ResidualConfig = ResidualConfi
     nu_s = np.full((N, 3), np.nan)
     nu_dot = np.full((N, 3), np.nan)
     nu_c = np.full((N, 3), np.nan)
-    nu_dot_c = np.full((N, 3), np.nan)
     for sl in arrays.segments:
         x = arrays.nu[sl]
         n = x.shape[0]
-        w = _window(config.deriv_window_s, dt, config.polyorder)
+        w = _window(max(config.deriv_window_s, 5.0 * dt), dt, config.polyorder)
+        if config.deriv_window_s == 0:
+            nu_s[sl] = x
+            nu_c[sl] = x
+            if n >= w:
+                nu_dot[sl] = savgol_filter(x, w, config.polyorder, deriv=1, delta=dt, axis=0)
+            elif n >= 2:
+                nu_dot[sl] = np.gradient(x, dt, axis=0)
+            continue
         if n >= w:
             nu_s[sl] = savgol_filter(x, w, config.polyorder, axis=0)
             nu_dot[sl] = savgol_filter(x, w, config.polyorder, deriv=1, delta=dt, axis=0)
@@ -194,10 +258,9 @@ def prepare_log(model, arrays: LogArrays, config: ResidualConfig = ResidualConfi
             nu_s[sl] = x
             nu_dot[sl] = np.gradient(x, dt, axis=0)
         nu_c[sl] = _causal_savgol(x, w, config.polyorder, 0, dt)
-        nu_dot_c[sl] = _causal_savgol(x, w, config.polyorder, 1, dt)
 
     # One-step model predictions from every sample (all samples in one batch).
-    def one_step(nu_start):
+    def one_step(nu_start):  # -> predictions for row i made from row i - 1
         res = model.rollout(arrays.eta, np.nan_to_num(nu_start), 1, dt_s=dt, rpm=arrays.rpm,
                             azimuth_rad=arrays.azimuth_rad, wind=arrays.wind)
         nh = np.full((N, 3), np.nan)
@@ -208,7 +271,60 @@ def prepare_log(model, arrays: LogArrays, config: ResidualConfig = ResidualConfi
         return nh, ndh
 
     nu_hat, nu_dot_hat = one_step(nu_s)
-    _, nu_dot_hat_c = one_step(nu_c)
+    nu_hat_c, _ = one_step(nu_c)
+    residual = (nu_s - nu_hat) / dt
+    residual_c = (nu_c - nu_hat_c) / dt
     return PreparedLog(arrays=arrays, dt_s=dt, nu_s=nu_s, nu_dot=nu_dot, nu_hat=nu_hat, nu_dot_hat=nu_dot_hat,
-                       residual=nu_dot - nu_dot_hat, nu_c=nu_c, residual_c=nu_dot_c - nu_dot_hat_c,
-                       config=config)
+                       residual=residual, nu_c=nu_c, residual_c=residual_c,
+                       bias_ned=causal_bias(residual_c, arrays, dt, config), config=config)
+
+
+def causal_bias(residual_c: np.ndarray, arrays: LogArrays, dt_s: float, config: ResidualConfig) -> np.ndarray:
+    """Trailing mean of causal residuals over ``bias_window_s``, per segment (N, 3).
+
+    Surge/sway are averaged in NED when ``bias_frame == "ned"`` (rotated with the heading
+    at which each residual was seen) and in the body frame otherwise; in both cases the
+    result is stored with surge/sway in NED so that it can be rotated into any heading.
+    Rows with no earlier finite residual in their segment are NaN. Only DP rows count
+    when the log has them before (a failure does not change the environment estimate
+    for a while, so the bias is frozen at its last station-keeping value).
+    """
+    N = residual_c.shape[0]
+    out = np.full((N, 3), np.nan)
+    if config.bias_window_s == 0:
+        out[:] = 0.0
+        return out
+    psi = arrays.eta[:, 2]
+    c, s = np.cos(psi), np.sin(psi)
+    r = residual_c
+    if config.bias_frame == "ned":
+        vals = np.column_stack([c * r[:, 0] - s * r[:, 1], s * r[:, 0] + c * r[:, 1], r[:, 2]])
+    else:
+        vals = r.copy()
+    use = np.isfinite(vals).all(1) & arrays.dp_active.astype(bool)
+    w = max(1, int(round(config.bias_window_s / dt_s)))
+    for sl in arrays.segments:
+        v = np.where(use[sl, None], vals[sl], 0.0)
+        n = use[sl].astype(float)
+        cv = np.cumsum(v, axis=0)
+        cn = np.cumsum(n)
+        lo_v = np.zeros_like(cv)
+        lo_n = np.zeros_like(cn)
+        if len(cn) > w:  # subtract the cumulative sums from w rows back: a trailing window
+            lo_v = np.vstack([np.zeros((w, 3)), cv[:-w]])
+            lo_n = np.concatenate([np.zeros(w), cn[:-w]])
+        cnt = cn - lo_n
+        mean = (cv - lo_v) / np.where(cnt > 0, cnt, np.nan)[:, None]
+        # After station keeping ends, keep the last station-keeping estimate.
+        seg_use = use[sl]
+        last = np.maximum.accumulate(np.where(seg_use, np.arange(len(cnt)), -1))
+        held = np.where(last[:, None] >= 0, mean[np.maximum(last, 0)], np.nan)
+        if config.bias_frame == "body":
+            # stored in NED: rotate the body-frame mean with the heading of its row
+            hb = held.copy()
+            cc, ss = c[sl], s[sl]
+            hb[:, 0] = cc * held[:, 0] - ss * held[:, 1]
+            hb[:, 1] = ss * held[:, 0] + cc * held[:, 1]
+            held = hb
+        out[sl] = held
+    return out
