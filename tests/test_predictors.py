@@ -1,0 +1,151 @@
+"""Hybrid, dynamic and dead-reckoning predictors: facts on logs with known physics."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from hybridship.logs.io import LogFormatError
+from hybridship.physics.model import DynamicModel
+from hybridship.predictors import (DeadReckoning, DynamicPredictor, HybridPredictor, ModelFileError,
+                                   as_log_arrays)
+from hybridship.residual.ensemble import EnsembleConfig, fit_ensemble
+from hybridship.residual.features import prepare_log
+from hybridship.residual.guard import EnvelopeGuard
+from hybridship.sim.synthetic import physics_log
+
+SMALL = EnsembleConfig(n_members=4, max_epochs=250, patience=40, seed=1)
+
+
+@pytest.fixture(scope="module")
+def model():
+    return DynamicModel("gunnerus")
+
+
+@pytest.fixture(scope="module")
+def exact_logs(model):
+    """Logs made by the forecast model itself: nothing is unknown."""
+    return [physics_log(model, seed=s) for s in (1, 2, 3)]
+
+
+@pytest.fixture(scope="module")
+def current_logs(model):
+    """Logs of the same ship in a steady 0.3 m/s current the forecast model does not know."""
+    return [physics_log(model, seed=s, current=(0.3, 1.0)) for s in (1, 2, 3)]
+
+
+def _errors_60s(predictor, log, starts, **kw):
+    fc = predictor.forecast(log, starts, 60, **kw)
+    truth = log[["north_m", "east_m"]].to_numpy()
+    return np.abs(fc.eta[:, -1, :2] - truth[starts + 60]).mean(axis=0)
+
+
+def test_residual_is_zero_on_a_log_the_model_made(model, exact_logs):
+    prep = prepare_log(model, as_log_arrays(exact_logs[0], model.vessel))
+    rows = prep.trainable_rows()
+    # the synthetic log integrates with 4 substeps, the forecast model with 1: O(dt^4) apart
+    assert np.abs(prep.residual[rows]).max() < 1e-5
+
+
+def test_hybrid_matches_physics_when_nothing_is_unknown(model, exact_logs):
+    hp = HybridPredictor(model.vessel, ensemble_config=SMALL).fit(exact_logs[:2])
+    starts = np.arange(900, 920)
+    e_h = _errors_60s(hp, exact_logs[2], starts)
+    e_d = _errors_60s(DynamicPredictor(model.vessel), exact_logs[2], starts)
+    assert np.all(e_d < 0.1)                     # physics is (nearly) exact here
+    assert np.all(np.abs(e_h - e_d) < 0.1)       # and the hybrid adds (nearly) nothing
+
+
+def test_hybrid_learns_a_steady_current(model, current_logs):
+    hp = HybridPredictor(model.vessel, ensemble_config=SMALL).fit(current_logs[:2])
+    starts = np.arange(900, 920)
+    e_h = _errors_60s(hp, current_logs[2], starts)
+    e_d = _errors_60s(DynamicPredictor(model.vessel), current_logs[2], starts)
+    assert e_d.sum() > 3.0                       # the current matters over a minute
+    assert e_h.sum() < 0.6 * e_d.sum()           # the hybrid removes much of that error
+
+
+def test_dead_reckoning_is_exact_for_constant_velocity(model):
+    log = physics_log(model, seed=4, t_shutdown_s=None, rpm_scale=0.0, wind=(0.0, 0.0))
+    # no forces at all: the ship stays at rest, and dead reckoning predicts exactly that
+    e = _errors_60s(DeadReckoning(model.vessel), log, np.array([100, 200]))
+    assert np.all(e < 1e-9)
+
+
+def test_save_load_round_trip_gives_identical_forecasts(model, current_logs, tmp_path):
+    hp = HybridPredictor(model.vessel, ensemble_config=SMALL).fit(current_logs[:1])
+    path = hp.save(tmp_path / "m.npz")
+    hp2 = HybridPredictor.load(path)
+    starts = np.array([900, 905])
+    a = hp.forecast(current_logs[2], starts)
+    b = hp2.forecast(current_logs[2], starts)
+    np.testing.assert_array_equal(a.eta, b.eta)
+    np.testing.assert_array_equal(a.eta_std, b.eta_std)
+    assert not list(tmp_path.glob(".*tmp"))      # atomic write left no temporary file
+
+
+def test_damaged_or_foreign_model_files_are_refused(model, current_logs, tmp_path):
+    hp = HybridPredictor(model.vessel, ensemble_config=SMALL).fit(current_logs[:1])
+    path = hp.save(tmp_path / "m.npz")
+    raw = path.read_bytes()
+    (tmp_path / "trunc.npz").write_bytes(raw[: len(raw) // 2])
+    with pytest.raises(ModelFileError, match="not a readable"):
+        HybridPredictor.load(tmp_path / "trunc.npz")
+    d = model.vessel.model_dump()
+    d["rigid_body"]["mass_kg"] *= 1.1
+    from hybridship.vessel import vessel_from_dict
+    other = vessel_from_dict(d)
+    with pytest.raises(ModelFileError, match="refusing"):
+        HybridPredictor.load(path, vessel=other)
+
+
+def test_forecast_outputs_are_tidy_and_batched(model, current_logs):
+    hp = HybridPredictor(model.vessel, ensemble_config=SMALL).fit(current_logs[:1])
+    fc = hp.forecast(current_logs[2], [900, 901, 902], horizon_s=30)
+    assert fc.eta.shape == (3, 31, 3) and fc.eta_std.shape == (3, 31, 3)
+    assert np.all(fc.eta_std[:, 0] == 0) and np.all(fc.eta_std[:, -1, :2] >= 0)
+    df = fc.to_frame()
+    assert len(df) == 93 and {"north_m", "east_m", "heading_deg", "north_std_m", "guard_weight"} <= set(df)
+    assert df["heading_deg"].between(0, 360).all()
+
+
+def test_bad_logs_and_start_times_name_the_problem(model, current_logs):
+    hp = DynamicPredictor(model.vessel)
+    log = current_logs[0]
+    with pytest.raises(LogFormatError, match="north_m"):
+        hp.forecast(log.drop(columns=["north_m"]), [100])
+    bad = log.copy()
+    bad.loc[50, "east_m"] = np.nan
+    with pytest.raises(LogFormatError, match="east_m"):
+        hp.forecast(bad, [100])
+    bad = log.copy()
+    bad.loc[60, "time_s"] = bad.loc[59, "time_s"]
+    with pytest.raises(LogFormatError, match="time_s"):
+        hp.forecast(bad, [100])
+    bad = log.copy()
+    bad["heading_deg"] = np.radians(bad["heading_deg"])
+    with pytest.raises(LogFormatError, match="heading_deg"):
+        hp.forecast(bad, [100])
+    with pytest.raises(ValueError, match="start_times_s"):
+        hp.forecast(log, [100.5])
+    assert log["north_m"].notna().all()          # the caller's frame was not modified
+
+
+def test_ensemble_fits_a_known_function_and_members_disagree_off_data():
+    rng = np.random.default_rng(0)
+    X = rng.uniform(-1, 1, size=(600, 2))
+    Y = np.column_stack([np.sin(2 * X[:, 0]), X[:, 0] * X[:, 1], 0.5 * X[:, 1]])
+    ens = fit_ensemble(X, Y, EnsembleConfig(n_members=5, max_epochs=600, patience=100, seed=3))
+    mean, std = ens.predict(X)
+    assert np.sqrt(np.mean((mean - Y) ** 2)) < 0.05
+    _, std_far = ens.predict(np.array([[6.0, -6.0]]))
+    assert std_far.mean() > 5 * std.mean()       # spread grows outside the data
+
+
+def test_guard_is_one_inside_and_shrinks_outside():
+    rng = np.random.default_rng(1)
+    X = rng.normal(size=(2000, 3))
+    g = EnvelopeGuard.fit(X, quantile=0.99)
+    assert np.mean(g.weight(X) == 1.0) > 0.98
+    w = g.weight(np.array([[0, 0, 0], [10, 0, 0], [30, 0, 0]], float))
+    assert w[0] == 1.0 and 0 < w[2] < w[1] < 1.0
