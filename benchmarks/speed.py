@@ -11,7 +11,10 @@ Usage::
     python benchmarks/speed.py --quick    # smaller batches, for CI smoke tests
 
 JSON keys: ``physics_forecasts_per_s`` (at the largest B), ``physics_single_forecast_ms``,
-``physics_vessel_steps_per_s`` and ``physics_by_batch`` (B -> forecasts/s).
+``physics_vessel_steps_per_s`` and ``physics_by_batch`` (B -> forecasts/s); for the hybrid
+(10-member ensemble, guard on) ``hybrid_forecasts_per_s`` (at the largest hybrid batch),
+``hybrid_single_forecast_ms``, ``hybrid_by_batch`` and ``train_s`` (training on 3 000
+samples of a synthetic log with default settings).
 """
 
 from __future__ import annotations
@@ -86,6 +89,45 @@ def physics_speed(batches=(1, 1_000, 100_000), seed: int = 0) -> dict:
     }
 
 
+def hybrid_speed(batches=(1, 1_000, 10_000), seed: int = 0) -> dict:
+    """Train a default hybrid on 3 000 samples, then time batched 60-step hybrid forecasts."""
+    import torch
+
+    torch.set_num_threads(1)
+    from hybridship.predictors import HybridPredictor
+    from hybridship.sim.synthetic import physics_log
+
+    model = DynamicModel("gunnerus")
+    log = physics_log(model, duration_s=3000.0, t_shutdown_s=None, seed=seed, current=(0.3, 1.0))
+    hp = HybridPredictor(model.vessel)
+    t0 = time.perf_counter()
+    hp.fit([log])
+    train_s = time.perf_counter() - t0
+    rng = np.random.default_rng(seed)
+    by_batch = {}
+
+    def states(B):
+        eta0, nu0, kw = _states(B, rng)
+        dev0 = np.zeros((B, 3))
+        bias0 = rng.normal(0, 0.002, (B, 3))
+        return (eta0, nu0, dev0, bias0, kw["rpm"][:, None].copy(), kw["azimuth_rad"][:, None].copy(),
+                kw["wind"][:, None].copy())
+
+    hp.rollout(*states(2), 60, 1.0)  # warm-up
+    for B in batches:
+        args = states(B)
+        if B >= 10_000:
+            t0 = time.perf_counter()
+            hp.rollout(*args, 60, 1.0)
+            t = time.perf_counter() - t0
+        else:
+            t = _time(lambda: hp.rollout(*args, 60, 1.0), min_time_s=1.0)
+        by_batch[B] = B / t
+    return {"hybrid_forecasts_per_s": by_batch[max(batches)], "hybrid_single_forecast_ms": 1e3 / by_batch[min(batches)],
+            "hybrid_by_batch": {str(k): v for k, v in by_batch.items()}, "train_s": train_s,
+            "train_samples": hp.training_info["n_rows"]}
+
+
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--json", action="store_true", help="print one JSON object")
@@ -93,6 +135,7 @@ def main(argv=None) -> int:
     args = ap.parse_args(argv)
     batches = (1, 100, 1_000) if args.quick else (1, 1_000, 100_000)
     res = physics_speed(batches)
+    res.update(hybrid_speed((1, 100) if args.quick else (1, 1_000, 10_000)))
     if args.json:
         print(json.dumps(res, sort_keys=True))
         return 0
@@ -101,6 +144,13 @@ def main(argv=None) -> int:
     for b, f in res["physics_by_batch"].items():
         print(f"{int(b):>8} {f:>14,.0f} {f * 60:>16,.0f}")
     print(f"single forecast latency: {res['physics_single_forecast_ms']:.3f} ms")
+    print()
+    print("hybrid (physics + 10-member residual ensemble + guard), one core")
+    print(f"{'B':>8} {'forecasts/s':>14}")
+    for b, f in res["hybrid_by_batch"].items():
+        print(f"{int(b):>8} {f:>14,.0f}")
+    print(f"single forecast latency: {res['hybrid_single_forecast_ms']:.3f} ms")
+    print(f"training on {res['train_samples']} samples: {res['train_s']:.1f} s")
     return 0
 
 
