@@ -1,0 +1,940 @@
+"""DP-loss scenarios: a vessel on dynamic positioning loses power and drifts.
+
+Timeline of one scenario (all times from 0 s)::
+
+    0 s ............ t_shutdown_s ............ t_shutdown_s + drift_s
+    DP holds the set-point          | no thrust command: rpm decays (first order),
+    (dp_active = 1)                 | azimuths frozen, the ship drifts (dp_active = 0)
+
+The "real" ship is ``DynamicModel(vessel, true_vessel=True)`` (the vessel file's
+``[true_vessel]`` perturbation), integrated with RK4 in a Python loop of ``sim_dt_s``
+steps. Its inputs:
+
+* gusting wind (:func:`hybridship.sim.environment.gust_wind`) through the ``wind`` input;
+* slowly varying current (:func:`~hybridship.sim.environment.current_series`) through the
+  ``current`` input (relative-velocity damping);
+* second-order wave drift (:func:`~hybridship.sim.environment.wave_drift_loads`, Newman)
+  through ``tau_ext``, at the low-frequency (LF) heading and position (Doppler);
+* thruster rpm (first-order shaft lag) and azimuth angles from the DP system.
+
+The DP system (:class:`~hybridship.sim.dp.DPController` and
+:class:`~hybridship.sim.allocation.ThrustAllocator`) uses the NOMINAL model, as a real
+DP system would, and sees only noisy measurements: GNSS position, gyro heading, speed
+log and wind sensor. Positions and heading include first-order wave-frequency (WF)
+motion (:func:`~hybridship.sim.environment.wave_frequency_motion`) superposed on the LF
+track; a low-pass "wave filter" stands in for the DP observer, and the measured wind
+is smoothed before the wind feed-forward.
+
+The output is a DataFrame in the project log format (``shared/spec/log-format.md``),
+1 row per ``dt_s``, with measured columns and noise-free ``truth_*`` columns named like
+those of the independent truthsim-dev simulator (``shared/data/truthsim-dev``).
+
+All randomness comes from one :class:`numpy.random.Generator` seeded by
+``DPLossConfig.seed``: the same config gives an identical DataFrame.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+import os
+import uuid
+from collections.abc import Iterable, Mapping
+from dataclasses import dataclass, field
+from functools import lru_cache
+from pathlib import Path
+
+import numba
+import numpy as np
+import pandas as pd
+from scipy.signal import lfilter
+
+from hybridship.frames import ned_to_body, wrap_pi
+from hybridship.physics.model import DynamicModel
+from hybridship.physics.propeller import thrust_torque_scalar
+from hybridship.sim import environment as env
+from hybridship.sim.allocation import ThrustAllocator, bollard_thrust_limits
+from hybridship.sim.dp import DPController
+
+__all__ = [
+    "SensorNoise",
+    "DPLossConfig",
+    "ScenarioConditions",
+    "Scenario",
+    "simulate_dp_loss",
+    "drift_statistics",
+    "sweep",
+    "embedded_scenarios",
+    "log_file_name",
+    "LOG_FORMATS",
+]
+
+#: File formats :func:`sweep` writes (the extension of each log).
+LOG_FORMATS = ("csv", "csv.gz", "parquet")
+
+#: Time tolerance for grid alignment checks [s].
+_EPS_S = 1e-9
+
+
+# --------------------------------------------------------------------------- validation helpers
+
+
+def _number(name, value, *, lo=None, hi=None, lo_open=False, allow_none=False):
+    """``value`` as a finite float within bounds, or ValueError naming ``name``."""
+    if value is None and allow_none:
+        return None
+    if isinstance(value, bool):
+        raise TypeError(f"{name}: expected a number, got {value!r}")
+    try:
+        v = float(value)
+    except (TypeError, ValueError):
+        raise TypeError(f"{name}: expected a number, got {value!r}") from None
+    if not math.isfinite(v):
+        raise ValueError(f"{name}: must be finite, got {value!r}")
+    if lo is not None and (v <= lo if lo_open else v < lo):
+        raise ValueError(f"{name}: must be {'>' if lo_open else '>='} {lo:g}, got {value!r}")
+    if hi is not None and v > hi:
+        raise ValueError(f"{name}: must be <= {hi:g}, got {value!r}")
+    return v
+
+
+def _is_multiple(a, b):
+    """Whether ``a`` is a whole multiple of ``b`` (both > 0) within float tolerance."""
+    q = a / b
+    return abs(q - round(q)) < 1e-6 and round(q) >= 1
+
+
+# --------------------------------------------------------------------------- configuration
+
+
+@dataclass(frozen=True)
+class SensorNoise:
+    """Standard deviations of the sensor noise added to the measured log columns.
+
+    Attributes
+    ----------
+    gnss_white_m : float
+        GNSS white noise per axis (north, east) [m].
+    gnss_markov_m, gnss_markov_tau_s : float
+        GNSS first-order Gauss-Markov error per axis [m] and its time constant [s]
+        (multipath / atmosphere: a slowly wandering offset).
+    heading_white_deg : float
+        Gyro compass white noise [deg].
+    uv_white_m_s : float
+        Surge and sway speed white noise [m/s].
+    r_white_deg_s : float
+        Yaw-rate white noise [deg/s].
+    wind_speed_white_m_s, wind_dir_white_deg : float
+        Anemometer white noise [m/s] and wind-vane white noise [deg].
+    """
+
+    gnss_white_m: float = 0.10
+    gnss_markov_m: float = 0.15
+    gnss_markov_tau_s: float = 60.0
+    heading_white_deg: float = 0.05
+    uv_white_m_s: float = 0.02
+    r_white_deg_s: float = 0.03
+    wind_speed_white_m_s: float = 0.3
+    wind_dir_white_deg: float = 3.0
+
+    def __post_init__(self):
+        for f in dataclasses.fields(self):
+            name = f"noise.{f.name}"
+            positive = f.name == "gnss_markov_tau_s"
+            object.__setattr__(self, f.name, _number(name, getattr(self, f.name), lo=0.0, lo_open=positive))
+
+    @classmethod
+    def none(cls) -> "SensorNoise":
+        """No measurement noise at all (measured columns = truth)."""
+        return cls(0.0, 0.0, 60.0, 0.0, 0.0, 0.0, 0.0, 0.0)
+
+    @classmethod
+    def from_any(cls, value) -> "SensorNoise":
+        """Accept a :class:`SensorNoise`, a mapping of its fields, or None (defaults)."""
+        if value is None:
+            return cls()
+        if isinstance(value, cls):
+            return value
+        if isinstance(value, Mapping):
+            allowed = {f.name for f in dataclasses.fields(cls)}
+            unknown = sorted(set(value) - allowed)
+            if unknown:
+                raise ValueError(f"noise: unknown field(s) {unknown}; allowed: {sorted(allowed)}")
+            return cls(**value)
+        raise TypeError(f"noise: expected SensorNoise, a mapping or None, got {type(value).__name__}")
+
+
+@dataclass(frozen=True)
+class DPLossConfig:
+    """Settings of one DP-loss scenario (seconds, degrees where named ``_deg``).
+
+    Attributes
+    ----------
+    seed : int
+        Seed of the single random generator behind everything random (conditions,
+        waves, gusts, current, noise). Non-negative.
+    sea_state : SeaState or None
+        Environmental conditions; None draws them from ``seed`` with
+        :meth:`SeaState.random` within ``beaufort``.
+    beaufort : (float, float)
+        Inclusive Beaufort range of the random sea state (ignored when ``sea_state`` is
+        given). Default (2, 5): light to fresh breeze.
+    t_shutdown_s : float
+        Nominal time of the DP shutdown [s] (default 3000 s = 50 min).
+    t_shutdown_jitter_s : float or None
+        The realised shutdown time is ``t_shutdown_s + U(-jitter, +jitter)`` drawn from
+        the seed, rounded to a multiple of ``dt_s`` [s]. 0 gives exactly ``t_shutdown_s``;
+        None (default) is 4 % of ``t_shutdown_s`` (+-120 s for 50 min, like truthsim-dev).
+    drift_s : float
+        Duration of the drift after the shutdown [s] (default 900 s; the 600 s drift
+        statistics need at least 600 s).
+    dt_s : float
+        Log sampling period [s] (1 Hz, as the log format's nominal rate).
+    sim_dt_s : float
+        Integration step [s] (one RK4 step; inputs such as wave drift and gusts are
+        updated every step). ``dt_s`` and ``control_dt_s`` must be multiples of it.
+    control_dt_s : float
+        DP control and thrust-allocation period [s].
+    heading_mode : {"weather", "random"}
+        Heading set-point: bow to the mean wind direction +- ``heading_offset_max_deg``
+        ("weather", how a DP operator heads a vessel) or uniformly random.
+    heading_offset_max_deg : float
+        Largest offset of a "weather" heading from the wind direction [deg].
+    heading_sp_deg : float or None
+        Explicit heading set-point [deg]; overrides ``heading_mode``.
+    noise : SensorNoise
+        Measurement noise (a mapping of its fields is accepted).
+    rpm_time_constant_s : float
+        First-order time constant of the shaft speed following its command [s]; after the
+        shutdown the rpm decays with it to zero.
+    n_wave_components : int
+        Number of wave components (JONSWAP, random phases).
+    wave_spreading : float or None
+        cos^n directional spreading exponent; None = long-crested waves.
+    wave_filter_time_constant_s : float
+        Time constant of each of the two cascaded first-order low-pass stages through which the
+        DP sees position, heading and velocities (suppresses WF motion and noise) [s].
+    wind_filter_time_constant_s : float
+        Time constant of the first-order smoothing of the measured wind vector used for
+        the DP's wind feed-forward [s].
+    """
+
+    seed: int = 0
+    sea_state: env.SeaState | None = None
+    beaufort: tuple[float, float] = (2.0, 5.0)
+    t_shutdown_s: float = 3000.0
+    t_shutdown_jitter_s: float | None = None
+    drift_s: float = 900.0
+    dt_s: float = 1.0
+    sim_dt_s: float = 0.5
+    control_dt_s: float = 1.0
+    heading_mode: str = "weather"
+    heading_offset_max_deg: float = 20.0
+    heading_sp_deg: float | None = None
+    noise: SensorNoise = field(default_factory=SensorNoise)
+    rpm_time_constant_s: float = 1.5
+    n_wave_components: int = 50
+    wave_spreading: float | None = None
+    wave_filter_time_constant_s: float = 2.0
+    wind_filter_time_constant_s: float = 10.0
+
+    def __post_init__(self):
+        set_ = lambda name, v: object.__setattr__(self, name, v)  # noqa: E731 (frozen dataclass)
+        if isinstance(self.seed, bool) or not isinstance(self.seed, (int, np.integer)) or self.seed < 0:
+            raise ValueError(f"seed: expected a non-negative int, got {self.seed!r}")
+        set_("seed", int(self.seed))
+        if self.sea_state is not None and not isinstance(self.sea_state, env.SeaState):
+            raise TypeError(f"sea_state: expected a SeaState or None, got {type(self.sea_state).__name__}")
+        try:
+            lo, hi = (float(b) for b in self.beaufort)
+        except (TypeError, ValueError):
+            raise ValueError(f"beaufort: expected a (lo, hi) pair, got {self.beaufort!r}") from None
+        if not (0.0 <= lo <= hi <= 12.0):
+            raise ValueError(f"beaufort: must satisfy 0 <= lo <= hi <= 12, got {self.beaufort!r}")
+        set_("beaufort", (lo, hi))
+
+        for name in ("dt_s", "sim_dt_s", "control_dt_s", "rpm_time_constant_s",
+                     "wave_filter_time_constant_s", "wind_filter_time_constant_s"):
+            set_(name, _number(name, getattr(self, name), lo=0.0, lo_open=True))
+        if self.sim_dt_s > 2.0:
+            raise ValueError(f"sim_dt_s: must be <= 2 s to resolve the DP loop and thruster dynamics, "
+                             f"got {self.sim_dt_s!r}")
+        for name in ("dt_s", "control_dt_s"):
+            if not _is_multiple(getattr(self, name), self.sim_dt_s):
+                raise ValueError(f"{name}: must be a whole multiple of sim_dt_s = {self.sim_dt_s:g}, "
+                                 f"got {getattr(self, name)!r}")
+        set_("t_shutdown_s", _number("t_shutdown_s", self.t_shutdown_s, lo=0.0, lo_open=True))
+        if self.t_shutdown_jitter_s is None:
+            set_("t_shutdown_jitter_s", 0.04 * self.t_shutdown_s)
+        set_("t_shutdown_jitter_s", _number("t_shutdown_jitter_s", self.t_shutdown_jitter_s, lo=0.0))
+        if self.t_shutdown_s - self.t_shutdown_jitter_s < 10.0 * self.control_dt_s:
+            raise ValueError(f"t_shutdown_s: t_shutdown_s - t_shutdown_jitter_s must leave at least "
+                             f"{10 * self.control_dt_s:g} s of DP, got {self.t_shutdown_s:g} - "
+                             f"{self.t_shutdown_jitter_s:g}")
+        set_("drift_s", _number("drift_s", self.drift_s, lo=0.0, lo_open=True))
+        if not _is_multiple(self.drift_s, self.dt_s):
+            raise ValueError(f"drift_s: must be a whole multiple of dt_s = {self.dt_s:g}, got {self.drift_s!r}")
+        if self.heading_mode not in ("weather", "random"):
+            raise ValueError(f"heading_mode: expected 'weather' or 'random', got {self.heading_mode!r}")
+        set_("heading_offset_max_deg", _number("heading_offset_max_deg", self.heading_offset_max_deg,
+                                               lo=0.0, hi=180.0))
+        set_("heading_sp_deg", _number("heading_sp_deg", self.heading_sp_deg, allow_none=True))
+        set_("noise", SensorNoise.from_any(self.noise))
+        n = self.n_wave_components
+        if isinstance(n, bool) or not isinstance(n, (int, np.integer)) or n < 1:
+            raise ValueError(f"n_wave_components: expected a positive int, got {n!r}")
+        set_("n_wave_components", int(n))
+        set_("wave_spreading", _number("wave_spreading", self.wave_spreading, lo=0.0, lo_open=True,
+                                       allow_none=True))
+
+    def replace(self, **changes) -> "DPLossConfig":
+        """A copy with some fields changed (validated again)."""
+        return dataclasses.replace(self, **changes)
+
+
+@dataclass(frozen=True)
+class ScenarioConditions:
+    """What one scenario realised from its config and seed.
+
+    Attributes
+    ----------
+    sea_state : SeaState
+    heading_sp_rad : float
+        Heading set-point [rad] in [0, 2 pi).
+    t_shutdown_s, t_end_s : float
+        Realised shutdown time and end of the record [s].
+    """
+
+    sea_state: env.SeaState
+    heading_sp_rad: float
+    t_shutdown_s: float
+    t_end_s: float
+
+    def as_dict(self) -> dict:
+        """Flat summary in the units of ``scenarios.csv`` (degrees, truthsim-like names)."""
+        s = self.sea_state
+        return {
+            "wind_mean_mps": s.wind_speed_m_s,
+            "wind_dir_from_deg": math.degrees(s.wind_dir_from_rad) % 360.0,
+            "gust_intensity": s.gust_intensity,
+            "hs_m": s.hs_m,
+            "tp_s": s.tp_s,
+            "wave_dir_from_deg": math.degrees(s.wave_dir_from_rad) % 360.0,
+            "current_mps": s.current_speed_m_s,
+            "current_dir_to_deg": math.degrees(s.current_dir_to_rad) % 360.0,
+            "heading_sp_deg": math.degrees(self.heading_sp_rad) % 360.0,
+            "t_shutdown_s": self.t_shutdown_s,
+            "t_end_s": self.t_end_s,
+        }
+
+
+def _realise(config: DPLossConfig, rng: np.random.Generator) -> ScenarioConditions:
+    """Draw the random conditions, always in the same order from ``rng``."""
+    sea = config.sea_state if config.sea_state is not None else env.SeaState.random(rng, beaufort=config.beaufort)
+    jitter = rng.uniform(-1.0, 1.0) * config.t_shutdown_jitter_s
+    t_sd = round((config.t_shutdown_s + jitter) / config.dt_s) * config.dt_s
+    offset = math.radians(config.heading_offset_max_deg) * rng.uniform(-1.0, 1.0)
+    random_heading = rng.uniform(0.0, 2.0 * math.pi)
+    if config.heading_sp_deg is not None:
+        psi_sp = math.radians(config.heading_sp_deg)
+    elif config.heading_mode == "weather":
+        psi_sp = sea.wind_dir_from_rad + offset
+    else:
+        psi_sp = random_heading
+    return ScenarioConditions(sea_state=sea, heading_sp_rad=float(psi_sp % (2.0 * math.pi)),
+                              t_shutdown_s=float(t_sd), t_end_s=float(t_sd + config.drift_s))
+
+
+@dataclass(frozen=True, eq=False)
+class Scenario:
+    """One generated scenario: a name, the config it came from and its log."""
+
+    name: str
+    config: DPLossConfig
+    log: pd.DataFrame
+
+
+# --------------------------------------------------------------------------- small signal blocks
+
+
+def _gauss_markov(n: int, dt_s: float, sigma: float, tau_s: float, rng: np.random.Generator) -> np.ndarray:
+    """Stationary first-order Gauss-Markov samples on a uniform grid (exact discretisation)."""
+    z = rng.standard_normal(n)
+    if sigma == 0.0 or n == 0:
+        return np.zeros(n)
+    a = math.exp(-dt_s / tau_s)
+    x0 = sigma * z[0]
+    w = sigma * math.sqrt(1.0 - a * a) * z[1:]
+    return np.concatenate([[x0], lfilter([1.0], [1.0, -a], w, zi=[a * x0])[0]])
+
+
+class _LowPass:
+    """Cascade of ``stages`` identical first-order low-pass filters (exact for held input)."""
+
+    def __init__(self, time_constant_s: float, dt_s: float, stages: int = 2):
+        self.a = 1.0 - math.exp(-dt_s / time_constant_s)
+        self.stages = stages
+        self.y = None
+
+    def __call__(self, x: np.ndarray) -> np.ndarray:
+        x = np.asarray(x, float)
+        if self.y is None:
+            self.y = [x.copy() for _ in range(self.stages)]  # start settled: no start-up transient
+        inp = x
+        for s in range(self.stages):
+            self.y[s] = self.y[s] + self.a * (inp - self.y[s])
+            inp = self.y[s]
+        return inp.copy()
+
+
+# --------------------------------------------------------------------------- allocation speed-up
+
+
+@numba.njit(cache=True)
+def _rpm_for_thrust_kernel(thrust_N, va_m_s, diameter_m, rho_kg_m3, coef, rpm_max, out):
+    """Compiled copy of :func:`hybridship.physics.propeller.rpm_for_thrust` (same bisection).
+
+    Same 50 bisection steps on ``|rpm|`` in ``[0, rpm_max]`` with the same scalar thrust
+    kernel, hence bit-identical results, without 50 numpy round trips per call.
+    """
+    for i in range(thrust_N.shape[0]):
+        sign = 1.0 if thrust_N[i] >= 0.0 else -1.0
+        lo = 0.0
+        hi = rpm_max
+        for _ in range(50):
+            mid = 0.5 * (lo + hi)
+            t_mid, _q = thrust_torque_scalar(sign * mid / 60.0, va_m_s[i], diameter_m, rho_kg_m3, coef)
+            if sign * t_mid < sign * thrust_N[i]:
+                lo = mid
+            else:
+                hi = mid
+        out[i] = sign * 0.5 * (lo + hi)
+
+
+class _CompiledRpmAllocator(ThrustAllocator):
+    """:class:`ThrustAllocator` whose rpm inversion runs compiled.
+
+    The python bisection of ``rpm_for_thrust`` is ~75 % of a DP step; this class only
+    replaces that inner loop (``tests/test_scenario.py`` checks it matches the parent).
+    """
+
+    def _rpm_for(self, force, va):
+        out = np.empty(self.n_thrusters)
+        for idx, D, prop, max_rpm in self._groups:
+            T = np.ascontiguousarray(force[idx] / (1.0 - self.tded[idx]), dtype=float)
+            v = np.ascontiguousarray(np.broadcast_to(np.asarray(va, float)[idx], T.shape))
+            res = np.empty(T.size)
+            _rpm_for_thrust_kernel(T, v, float(D), float(self.rho_kg_m3), prop.coef, float(max_rpm), res)
+            out[idx] = res
+        return out
+
+
+# --------------------------------------------------------------------------- simulation
+
+
+def _column_names(vessel):
+    """Thruster log columns in vessel-file order: ``[(name, rpm_col, azimuth_col or None), ...]``."""
+    out = []
+    for t in vessel.thrusters:
+        out.append((t.name, f"{t.name}_rpm", f"{t.name}_azimuth_deg" if t.type == "azimuth" else None))
+    return out
+
+
+def _acceleration_field(components: env.WaveField) -> env.WaveField:
+    """Components whose WF "motion" is the second time derivative of the original's.
+
+    ``d^2/dt^2 [A sin(theta)] = A w^2 sin(theta + pi)`` (same for cos), so scaling the
+    amplitudes by ``w^2`` and shifting the phases by pi reuses
+    :func:`~hybridship.sim.environment.wave_frequency_motion` for accelerations (with the
+    same frozen-heading assumption as its rates).
+    """
+    return env.WaveField(omega_rad_s=components.omega_rad_s,
+                         amplitude_m=components.amplitude_m * components.omega_rad_s**2,
+                         phase_rad=components.phase_rad + math.pi, dir_from_rad=components.dir_from_rad,
+                         d_omega_rad_s=components.d_omega_rad_s, hs_m=components.hs_m, tp_s=components.tp_s,
+                         gamma=components.gamma, mean_dir_from_rad=components.mean_dir_from_rad,
+                         g_m_s2=components.g_m_s2)
+
+
+def _simulate(config: DPLossConfig, vessel, progress: bool):
+    """The scenario as ``(DataFrame, ScenarioConditions)``; see :func:`simulate_dp_loss`."""
+    true_model = DynamicModel(vessel, true_vessel=True)
+    ves = true_model.vessel
+    nominal = DynamicModel(ves)
+    K = true_model.n_thrusters
+    if K == 0:
+        raise ValueError(f"vessel: {ves.name!r} has no thrusters; a DP scenario needs some")
+    rho = ves.particulars.rho_water_kg_m3
+    p = ves.particulars
+    hull = env.HullDimensions(L_m=p.L_pp_m, B_m=p.B_m, T_m=p.T_m)
+    raos = env.MotionRAOs.from_hull(hull)
+
+    rng = np.random.default_rng(config.seed)
+    cond = _realise(config, rng)
+    sea = cond.sea_state
+
+    # Time grids: integration (sim), control and log are nested uniform grids.
+    h = config.sim_dt_s
+    n_sim = int(round(cond.t_end_s / h))
+    every_log = int(round(config.dt_s / h))
+    every_ctrl = int(round(config.control_dt_s / h))
+    k_shutdown = int(round(cond.t_shutdown_s / h))
+    t_sim = np.arange(n_sim + 1) * h
+
+    # Environment on the integration grid (one draw each, fixed order).
+    components = sea.wave_components(rng, config.n_wave_components, config.wave_spreading)
+    wind_speed, wind_dir = sea.wind(t_sim, rng)
+    cur_speed, cur_dir = sea.current(t_sim, rng)
+
+    # Sensor noise on the integration grid; DP and log sample it.
+    nz = config.noise
+    gnss = (nz.gnss_white_m * rng.standard_normal((n_sim + 1, 2))
+            + np.column_stack([_gauss_markov(n_sim + 1, h, nz.gnss_markov_m, nz.gnss_markov_tau_s, rng)
+                               for _ in range(2)]))
+    n_head = math.radians(nz.heading_white_deg) * rng.standard_normal(n_sim + 1)
+    n_uv = nz.uv_white_m_s * rng.standard_normal((n_sim + 1, 2))
+    n_r = math.radians(nz.r_white_deg_s) * rng.standard_normal(n_sim + 1)
+    n_ws = nz.wind_speed_white_m_s * rng.standard_normal(n_sim + 1)
+    n_wd = math.radians(nz.wind_dir_white_deg) * rng.standard_normal(n_sim + 1)
+
+    # DP system on the nominal model.
+    dp = DPController(nominal, dt_s=config.control_dt_s)
+    alloc = _CompiledRpmAllocator(ves, dt_s=config.control_dt_s)
+    eta = np.array([0.0, 0.0, cond.heading_sp_rad])
+    nu = np.zeros(3)
+    dp.reset(eta.copy())
+    wave_filter = _LowPass(config.wave_filter_time_constant_s, config.control_dt_s)
+    wind_filter = _LowPass(config.wind_filter_time_constant_s, config.control_dt_s, stages=1)
+    psi_meas_prev = None
+
+    rpm_cmd = np.zeros(K)
+    rpm = np.zeros(K)
+    azimuth = np.array([t.fixed_angle_rad for t in ves.thrusters], float)
+    rpm_decay = math.exp(-h / config.rpm_time_constant_s)
+
+    n_log = n_sim // every_log + 1
+    rec_eta = np.empty((n_log, 3))
+    rec_nu = np.empty((n_log, 3))
+    rec_nu_dot = np.empty((n_log, 3))
+    rec_parts = np.empty((n_log, 4, 3))
+    rec_thrust = np.empty((n_log, K))
+    rec_rpm = np.empty((n_log, K))
+    rec_az = np.empty((n_log, K))
+    rec_k = np.empty(n_log, dtype=int)
+
+    one = np.empty(1)
+    bar = None
+    if progress:
+        from tqdm.auto import tqdm
+
+        bar = tqdm(total=n_sim, unit="step", desc=f"dp-loss seed {config.seed}", leave=False)
+    try:
+        for k in range(n_sim + 1):
+            t = k * h
+            one[0] = t
+            wind_k = (wind_speed[k], wind_dir[k])
+            cur_k = (cur_speed[k], cur_dir[k])
+            tau_wave = env.wave_drift_loads(one, eta[2], components, hull, rho, position_ne_m=eta[None, :2])[0]
+
+            if k < k_shutdown:
+                if k % every_ctrl == 0:
+                    # What the sensors give now: LF + WF motion + noise (the log repeats it).
+                    off, rate = env.wave_frequency_motion(one, eta[2], components, raos,
+                                                          position_ne_m=eta[None, :2], return_rates=True)
+                    nu_wf = ned_to_body(rate[0], eta[2])
+                    psi_m = eta[2] + off[0, 2] + n_head[k]
+                    # Filter the heading continuously across the 0/2 pi wrap.
+                    psi_m = psi_m if psi_meas_prev is None else psi_meas_prev + float(wrap_pi(psi_m - psi_meas_prev))
+                    psi_meas_prev = psi_m
+                    meas = np.array([eta[0] + off[0, 0] + gnss[k, 0], eta[1] + off[0, 1] + gnss[k, 1], psi_m,
+                                     nu[0] + nu_wf[0] + n_uv[k, 0], nu[1] + nu_wf[1] + n_uv[k, 1],
+                                     nu[2] + nu_wf[2] + n_r[k]])
+                    est = wave_filter(meas)
+                    ws_m = max(0.0, wind_speed[k] + n_ws[k])
+                    wd_m = wind_dir[k] + n_wd[k]
+                    # Smooth the wind as a vector (direction "from"), then back to speed and direction.
+                    wv = wind_filter(np.array([ws_m * math.cos(wd_m), ws_m * math.sin(wd_m)]))
+                    wind_est = np.array([math.hypot(wv[0], wv[1]), math.atan2(wv[1], wv[0])])
+                    tau_dp = dp.update(est[:3], est[3:], wind=wind_est)
+                    # The DP does not know the current: over-ground velocity stands in for the inflow.
+                    res = alloc.allocate(tau_dp, est[3:])
+                    rpm_cmd = res.rpm
+                    azimuth = res.azimuth_rad
+            else:
+                rpm_cmd = np.zeros(K)  # power lost: no command; azimuths stay where they were
+            rpm = rpm_cmd + (rpm - rpm_cmd) * rpm_decay
+
+            if k % every_log == 0:
+                i = k // every_log
+                nu_dot, parts, thrusts = true_model.acceleration(eta, nu, rpm=rpm, azimuth_rad=azimuth,
+                                                                 wind=wind_k, current=cur_k, tau_ext=tau_wave,
+                                                                 return_parts=True)
+                rec_eta[i], rec_nu[i], rec_nu_dot[i] = eta, nu, nu_dot[0]
+                rec_parts[i], rec_thrust[i] = parts[0], thrusts[0]
+                rec_rpm[i], rec_az[i], rec_k[i] = rpm, azimuth, k
+                if bar is not None and k > 0:
+                    bar.update(every_log)
+            if k == n_sim:
+                break
+            e1, n1 = true_model.step(eta, nu, dt_s=h, substeps=1, rpm=rpm, azimuth_rad=azimuth, wind=wind_k,
+                                     current=cur_k, tau_ext=tau_wave)
+            eta, nu = e1[0], n1[0]
+            if not (np.all(np.isfinite(eta)) and np.all(np.isfinite(nu))):
+                raise FloatingPointError(f"simulation diverged at t = {t + h:g} s (seed {config.seed})")
+    finally:
+        if bar is not None:
+            bar.close()
+
+    df = _assemble_log(config, ves, cond, components, raos, rec_k, h, rec_eta, rec_nu, rec_nu_dot, rec_parts,
+                       rec_thrust, rec_rpm, rec_az, dict(speed=wind_speed, dir=wind_dir, cur=cur_speed,
+                                                         cur_dir=cur_dir),
+                       dict(gnss=gnss, head=n_head, uv=n_uv, r=n_r, ws=n_ws, wd=n_wd))
+    df.attrs["conditions"] = cond.as_dict()
+    df.attrs["seed"] = config.seed
+    df.attrs["vessel"] = ves.name
+    return df, cond
+
+
+# Decimals kept per column group: a logger's resolution for measured values; enough
+# for ground truth not to lose information (e.g. accelerations ~1e-3 m/s^2).
+_DECIMALS = {"pos": 4, "deg": 4, "vel": 5, "acc": 7, "rpm": 3, "load": 2, "frac": 6, "env": 5}
+
+
+def _assemble_log(config, ves, cond, components, raos, rec_k, h, eta, nu, nu_dot, parts, thrust, rpm, az,
+                  envs, noise):
+    """Build the log DataFrame from the recorded LF samples, WF motion and noise."""
+    t = rec_k * h
+    pos = eta[:, :2]
+    # WF motion along the LF track, vectorised (same function as the DP's measurements).
+    off, rate = env.wave_frequency_motion(t, eta[:, 2], components, raos, position_ne_m=pos, return_rates=True)
+    acc = env.wave_frequency_motion(t, eta[:, 2], _acceleration_field(components), raos, position_ne_m=pos)
+    nu_wf = ned_to_body(rate, eta[:, 2])
+    nu_dot_wf = ned_to_body(acc, eta[:, 2])
+    eta_tot = eta + off
+    nu_tot = nu + nu_wf
+    nu_dot_tot = nu_dot + nu_dot_wf
+
+    k = rec_k
+    dp_active = (k < int(round(cond.t_shutdown_s / h))).astype(np.int64)
+    ws_true, wd_true = envs["speed"][k], envs["dir"][k]
+    d = _DECIMALS
+    deg = np.degrees
+    cols: dict[str, np.ndarray] = {}
+    cols["time_s"] = np.round(t, 6)
+    cols["north_m"] = np.round(eta_tot[:, 0] + noise["gnss"][k, 0], 3)
+    cols["east_m"] = np.round(eta_tot[:, 1] + noise["gnss"][k, 1], 3)
+    cols["heading_deg"] = np.round(deg(eta_tot[:, 2] + noise["head"][k]) % 360.0, 3)
+    cols["u_m_s"] = np.round(nu_tot[:, 0] + noise["uv"][k, 0], 4)
+    cols["v_m_s"] = np.round(nu_tot[:, 1] + noise["uv"][k, 1], 4)
+    cols["r_deg_s"] = np.round(deg(nu_tot[:, 2] + noise["r"][k]), 4)
+    cols["wind_speed_m_s"] = np.round(np.maximum(0.0, ws_true + noise["ws"][k]), 3)
+    cols["wind_dir_deg"] = np.round(deg(wd_true + noise["wd"][k]) % 360.0, 2)
+    limits = bollard_thrust_limits(ves).forward_N
+    thr_cols = _column_names(ves)
+    for j, (_, rpm_col, az_col) in enumerate(thr_cols):
+        cols[rpm_col] = np.round(rpm[:, j], 2)
+        if az_col is not None:
+            cols[az_col] = np.round(deg(wrap_pi(az[:, j])), 2)
+    cols["dp_active"] = dp_active
+
+    # Ground truth, named like truthsim-dev's columns.
+    for j, (name, _, _) in enumerate(thr_cols):
+        cols[f"truth_{name}_thrust_frac"] = np.round(thrust[:, j] / limits[j], d["frac"])
+    cols["truth_north_m"] = np.round(eta_tot[:, 0], d["pos"])
+    cols["truth_east_m"] = np.round(eta_tot[:, 1], d["pos"])
+    cols["truth_heading_deg"] = np.round(deg(eta_tot[:, 2]) % 360.0, d["deg"])
+    cols["truth_north_lf_m"] = np.round(eta[:, 0], d["pos"])
+    cols["truth_east_lf_m"] = np.round(eta[:, 1], d["pos"])
+    cols["truth_heading_lf_deg"] = np.round(deg(eta[:, 2]) % 360.0, d["deg"])
+    cols["truth_u_mps"] = np.round(nu_tot[:, 0], d["vel"])
+    cols["truth_v_mps"] = np.round(nu_tot[:, 1], d["vel"])
+    cols["truth_r_degps"] = np.round(deg(nu_tot[:, 2]), d["vel"])
+    cols["truth_u_lf_mps"] = np.round(nu[:, 0], d["vel"])
+    cols["truth_v_lf_mps"] = np.round(nu[:, 1], d["vel"])
+    cols["truth_r_lf_degps"] = np.round(deg(nu[:, 2]), d["vel"])
+    cols["truth_udot_mps2"] = np.round(nu_dot_tot[:, 0], d["acc"])
+    cols["truth_vdot_mps2"] = np.round(nu_dot_tot[:, 1], d["acc"])
+    cols["truth_rdot_degps2"] = np.round(deg(nu_dot_tot[:, 2]), d["acc"])
+    cols["truth_udot_lf_mps2"] = np.round(nu_dot[:, 0], d["acc"])
+    cols["truth_vdot_lf_mps2"] = np.round(nu_dot[:, 1], d["acc"])
+    cols["truth_rdot_lf_degps2"] = np.round(deg(nu_dot[:, 2]), d["acc"])
+    cols["truth_wind_speed_mps"] = np.round(ws_true, d["env"])
+    cols["truth_wind_dir_from_deg"] = np.round(deg(wd_true) % 360.0, d["deg"])
+    cols["truth_current_speed_mps"] = np.round(envs["cur"][k], d["env"])
+    cols["truth_current_dir_to_deg"] = np.round(deg(envs["cur_dir"][k]) % 360.0, d["deg"])
+    s = cond.sea_state
+    n = t.size
+    cols["truth_hs_m"] = np.full(n, round(s.hs_m, 4))
+    cols["truth_tp_s"] = np.full(n, round(s.tp_s, 4))
+    cols["truth_wave_dir_from_deg"] = np.full(n, round(math.degrees(s.wave_dir_from_rad) % 360.0, d["deg"]))
+    for part, label in ((1, "thrust"), (2, "wind"), (3, "wave2"), (0, "hull")):
+        for c, suffix in enumerate(("x_N", "y_N", "n_Nm")):
+            cols[f"truth_tau_{label}_{suffix}"] = np.round(parts[:, part, c], d["load"])
+    cols["truth_heading_sp_deg"] = np.full(n, round(math.degrees(cond.heading_sp_rad) % 360.0, d["deg"]))
+    cols["truth_t_shutdown_s"] = np.full(n, cond.t_shutdown_s)
+    return pd.DataFrame(cols)
+
+
+def simulate_dp_loss(config: DPLossConfig | None = None, vessel="gunnerus", progress: bool = False) -> pd.DataFrame:
+    """Simulate one DP-loss scenario and return its log.
+
+    Parameters
+    ----------
+    config : DPLossConfig, optional
+        Scenario settings; default ``DPLossConfig()`` (seed 0, Beaufort 2-5, 50 min DP,
+        15 min drift).
+    vessel : str, path or hybridship.vessel.Vessel
+        Packaged vessel name, vessel file, or a loaded vessel.
+    progress : bool
+        Show a tqdm progress bar (on stderr).
+
+    Returns
+    -------
+    pandas.DataFrame
+        One row per ``config.dt_s`` from 0 to ``t_shutdown + drift_s`` inclusive, in the
+        project log format:
+
+        * measured: ``time_s``, ``north_m``, ``east_m``, ``heading_deg`` (LF + WF motion +
+          noise; heading in [0, 360)), ``u_m_s``, ``v_m_s``, ``r_deg_s`` (LF + WF + noise),
+          ``wind_speed_m_s``, ``wind_dir_deg`` (true wind + noise), ``<thruster>_rpm``
+          (shaft speed feedback), ``<azimuth>_azimuth_deg`` (in [-180, 180)),
+          ``dp_active`` (1 before the shutdown, 0 from the first sample at or after it);
+        * truth (noise-free): ``truth_{north,east}_m``, ``truth_heading_deg``,
+          ``truth_{u,v}_mps``, ``truth_r_degps`` (LF + WF), the LF-only
+          ``truth_{north,east}_lf_m``, ``truth_heading_lf_deg``,
+          ``truth_{u,v}_lf_mps``, ``truth_r_lf_degps``; body-frame accelerations
+          ``truth_{u,v}dot_mps2``, ``truth_rdot_degps2`` (LF model + WF) and their
+          ``_lf_`` parts (the true model's nu_dot); ``truth_wind_speed_mps``,
+          ``truth_wind_dir_from_deg``, ``truth_current_speed_mps``,
+          ``truth_current_dir_to_deg``, ``truth_hs_m``, ``truth_tp_s``,
+          ``truth_wave_dir_from_deg``; body-frame loads on the LF model
+          ``truth_tau_{thrust,wind,wave2,hull}_{x_N,y_N,n_Nm}``;
+          ``truth_<thruster>_thrust_frac`` (delivered thrust / bollard thrust);
+          ``truth_heading_sp_deg`` and ``truth_t_shutdown_s`` (constants).
+
+        ``DataFrame.attrs["conditions"]`` holds the realised conditions (see
+        :meth:`ScenarioConditions.as_dict`).
+
+    Raises
+    ------
+    ValueError
+        Bad vessel (a :class:`hybridship.vessel.VesselFileError`) or config.
+    """
+    config = DPLossConfig() if config is None else config
+    if not isinstance(config, DPLossConfig):
+        raise TypeError(f"config: expected a DPLossConfig, got {type(config).__name__}")
+    df, _ = _simulate(config, vessel, bool(progress))
+    return df
+
+
+# --------------------------------------------------------------------------- statistics
+
+
+def _shutdown_time(log: pd.DataFrame) -> float:
+    if "truth_t_shutdown_s" in log.columns:
+        return float(log["truth_t_shutdown_s"].iloc[0])
+    if "dp_active" in log.columns:
+        off = np.flatnonzero(log["dp_active"].to_numpy() == 0)
+        if off.size:
+            return float(log["time_s"].iloc[off[0]])
+    raise ValueError("log: cannot find the shutdown (no truth_t_shutdown_s and dp_active never 0)")
+
+
+def drift_statistics(log: pd.DataFrame, *, dp_settle_s: float = 600.0) -> dict:
+    """Drift and station-keeping statistics of one DP-loss log.
+
+    Uses the noise-free low-frequency track (``truth_north_lf_m``, ``truth_east_lf_m``,
+    ``truth_heading_lf_deg``) when present, else the measured columns; works on our logs
+    and truthsim-dev's alike. The shutdown time is ``truth_t_shutdown_s`` or the first
+    sample with ``dp_active == 0``.
+
+    Parameters
+    ----------
+    log : pandas.DataFrame
+    dp_settle_s : float
+        Start-up time excluded from the DP statistics [s] (at most half the DP phase).
+
+    Returns
+    -------
+    dict
+        ``t_shutdown_s``; ``drift_excursion_{60,600}s_m``: distance from the position at the
+        shutdown after 60 and 600 s [m] (NaN if the drift is shorter);
+        ``drift_dheading_{60,600}s_deg``: heading change [deg]; ``drift_mean_sog_mps``:
+        mean speed over ground over the first 600 s of drift (or all of it if shorter);
+        ``drift_net_speed_mps``: straight-line excursion over that window / its duration;
+        ``drift_dir_to_deg``: direction of that net displacement; ``dp_pos_std_m``:
+        ``sqrt(var(north) + var(east))`` on DP after the start-up; ``dp_pos_max_m``:
+        largest distance from the set-point (origin) there; ``dp_heading_std_deg``.
+    """
+    t = log["time_s"].to_numpy(float)
+    lf = "truth_north_lf_m" in log.columns
+    n = log["truth_north_lf_m" if lf else "north_m"].to_numpy(float)
+    e = log["truth_east_lf_m" if lf else "east_m"].to_numpy(float)
+    psi = np.unwrap(np.radians(log["truth_heading_lf_deg" if lf else "heading_deg"].to_numpy(float)))
+    t_sd = _shutdown_time(log)
+    i0 = int(np.searchsorted(t, t_sd - _EPS_S))
+    out = {"t_shutdown_s": t_sd}
+
+    def at(dt):
+        i = int(np.searchsorted(t, t_sd + dt - _EPS_S))
+        return i if i < t.size and abs(t[i] - (t_sd + dt)) < 0.5 else None
+
+    for dt in (60, 600):
+        i = at(dt)
+        out[f"drift_excursion_{dt}s_m"] = float(np.hypot(n[i] - n[i0], e[i] - e[i0])) if i is not None else np.nan
+        out[f"drift_dheading_{dt}s_deg"] = float(np.degrees(psi[i] - psi[i0])) if i is not None else np.nan
+    i_end = at(600)
+    i_end = t.size - 1 if i_end is None else i_end
+    sl = slice(i0, i_end + 1)
+    if i_end > i0:
+        sog = np.hypot(np.gradient(n[sl], t[sl]), np.gradient(e[sl], t[sl]))
+        dur = t[i_end] - t[i0]
+        out["drift_mean_sog_mps"] = float(sog.mean())
+        out["drift_net_speed_mps"] = float(np.hypot(n[i_end] - n[i0], e[i_end] - e[i0]) / dur)
+        out["drift_dir_to_deg"] = float(np.degrees(np.arctan2(e[i_end] - e[i0], n[i_end] - n[i0])) % 360.0)
+    else:
+        out.update(drift_mean_sog_mps=np.nan, drift_net_speed_mps=np.nan, drift_dir_to_deg=np.nan)
+    settle = min(dp_settle_s, 0.5 * (t_sd - t[0]))
+    dp = (t >= t[0] + settle) & (t < t_sd - _EPS_S)
+    if dp.sum() >= 2:
+        out["dp_pos_std_m"] = float(np.sqrt(n[dp].var() + e[dp].var()))
+        out["dp_pos_max_m"] = float(np.hypot(n[dp], e[dp]).max())
+        out["dp_heading_std_deg"] = float(np.degrees(psi[dp].std()))
+    else:
+        out.update(dp_pos_std_m=np.nan, dp_pos_max_m=np.nan, dp_heading_std_deg=np.nan)
+    return out
+
+
+# --------------------------------------------------------------------------- sweeps
+
+
+def log_file_name(seed: int, fmt: str = "csv.gz") -> str:
+    """File name of a sweep's log, e.g. ``sim_dp_loss_seed0001.csv.gz``."""
+    if fmt not in LOG_FORMATS:
+        raise ValueError(f"fmt: expected one of {', '.join(LOG_FORMATS)}, got {fmt!r}")
+    return f"sim_dp_loss_seed{int(seed):04d}.{fmt}"
+
+
+def _write_csv_atomic(df: pd.DataFrame, path: Path) -> None:
+    tmp = path.with_name(f".{path.name}.{uuid.uuid4().hex}.tmp")
+    try:
+        with open(tmp, "x", newline="", encoding="utf-8") as fh:
+            df.to_csv(fh, index=False)
+            fh.flush()
+            os.fsync(fh.fileno())
+        os.replace(tmp, path)
+    except BaseException:
+        tmp.unlink(missing_ok=True)
+        raise
+
+
+def sweep(out_dir, seeds: Iterable[int], *, beaufort=(2, 5), fmt: str = "csv.gz", vessel="gunnerus",
+          progress: bool = False, **config_overrides) -> list[Path]:
+    """Simulate one scenario per seed; write the logs and a ``scenarios.csv`` summary.
+
+    Parameters
+    ----------
+    out_dir : str or path-like
+        Output folder (created if missing).
+    seeds : iterable of int
+        One scenario per seed (distinct, non-negative).
+    beaufort : (float, float)
+        Beaufort range of the random sea states.
+    fmt : {"csv", "csv.gz", "parquet"}
+        Log container (file extension).
+    vessel : str, path or Vessel
+    progress : bool
+        A progress bar over the seeds (on stderr).
+    **config_overrides
+        Further :class:`DPLossConfig` fields (e.g. ``drift_s=600``).
+
+    Returns
+    -------
+    list of Path
+        The log files, in the order of ``seeds``. ``out_dir / "scenarios.csv"`` (written
+        atomically, after all logs) has one row per log: file, seed, the realised
+        conditions (truthsim-dev's column names), and :func:`drift_statistics`.
+    """
+    seeds = [s for s in seeds]
+    if not seeds:
+        raise ValueError("seeds: expected at least one seed")
+    for s in seeds:
+        if isinstance(s, bool) or not isinstance(s, (int, np.integer)) or s < 0:
+            raise ValueError(f"seeds: expected non-negative ints, got {s!r}")
+    if len(set(seeds)) != len(seeds):
+        raise ValueError(f"seeds: duplicates in {seeds}")
+    if fmt not in LOG_FORMATS:
+        raise ValueError(f"fmt: expected one of {', '.join(LOG_FORMATS)}, got {fmt!r}")
+    for bad in ("seed", "beaufort"):
+        if bad in config_overrides:
+            raise ValueError(f"{bad}: pass it as the sweep's own argument, not as a config override")
+    configs = [DPLossConfig(seed=int(s), beaufort=beaufort, **config_overrides) for s in seeds]  # validate first
+    model = DynamicModel(vessel)  # fail early on a bad vessel; reuse the loaded file
+    ves = model.vessel
+    names = [t.name for t in ves.thrusters]
+    rotatable = [t.type == "azimuth" for t in ves.thrusters]
+
+    from hybridship.logs.io import write_log
+
+    out = Path(out_dir)
+    out.mkdir(parents=True, exist_ok=True)
+    paths, rows = [], []
+    it = configs
+    if progress:
+        from tqdm.auto import tqdm
+
+        it = tqdm(configs, unit="scenario", desc="sweep")
+    for cfg in it:
+        df, cond = _simulate(cfg, ves, progress=False)
+        path = out / log_file_name(cfg.seed, fmt)
+        write_log(df, path, thruster_names=names, rotatable=rotatable)
+        paths.append(path)
+        heading_mode = "fixed" if cfg.heading_sp_deg is not None else cfg.heading_mode
+        rows.append({"file": path.name, "seed": cfg.seed, **cond.as_dict(), "heading_mode": heading_mode,
+                     "beaufort_lo": cfg.beaufort[0], "beaufort_hi": cfg.beaufort[1],
+                     **{k: v for k, v in drift_statistics(df).items() if k != "t_shutdown_s"}})
+    summary = pd.DataFrame(rows)
+    _write_csv_atomic(summary.round(4), out / "scenarios.csv")
+    return paths
+
+
+# --------------------------------------------------------------------------- embedded set
+
+#: Settings of the embedded scenarios: 10 min DP (enough to settle), 10 min drift.
+EMBEDDED_OVERRIDES = dict(t_shutdown_s=600.0, t_shutdown_jitter_s=30.0, drift_s=600.0)
+
+
+@lru_cache(maxsize=8)
+def _embedded(n: int, seed: int) -> tuple:
+    out = []
+    for i in range(n):
+        cfg = DPLossConfig(seed=seed + i, **EMBEDDED_OVERRIDES)
+        df, _ = _simulate(cfg, "gunnerus", progress=False)
+        out.append((f"embedded_seed{seed + i:04d}", cfg, df))
+    return tuple(out)
+
+
+def embedded_scenarios(n: int = 3, seed: int = 0) -> list[Scenario]:
+    """A small default set of Gunnerus DP-loss scenarios, generated on the fly.
+
+    Each is ``DPLossConfig(seed=seed + i, t_shutdown_s=600, t_shutdown_jitter_s=30,
+    drift_s=600)`` (Beaufort 2-5, bow to weather): 10 min on DP, then 10 min of
+    drift, about one second of computing each. Results are cached per ``(n, seed)``; each call returns
+    fresh copies of the logs.
+
+    Parameters
+    ----------
+    n : int
+        Number of scenarios (1-20).
+    seed : int
+        Seed of the first scenario; the others follow.
+
+    Returns
+    -------
+    list of Scenario
+    """
+    if isinstance(n, bool) or not isinstance(n, (int, np.integer)) or not 1 <= n <= 20:
+        raise ValueError(f"n: expected an int in 1..20, got {n!r}")
+    if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or seed < 0:
+        raise ValueError(f"seed: expected a non-negative int, got {seed!r}")
+    return [Scenario(name, cfg, df.copy(deep=True)) for name, cfg, df in _embedded(int(n), int(seed))]

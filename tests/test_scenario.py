@@ -1,0 +1,299 @@
+"""DP-loss scenario simulator (hybridship.sim.scenario) and the ``simulate`` CLI.
+
+Scenarios are shortened (10 min DP, 5 min drift) to keep the module at a few seconds.
+"""
+
+from __future__ import annotations
+
+import math
+import warnings
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+import pytest
+
+from hybridship.cli import main, parse_seeds
+from hybridship.logs.io import read_log, validate_log, write_log
+from hybridship.sim.allocation import ThrustAllocator
+from hybridship.sim.environment import SeaState
+from hybridship.sim.scenario import (DPLossConfig, SensorNoise, _CompiledRpmAllocator, drift_statistics,
+                                     embedded_scenarios, simulate_dp_loss, sweep)
+
+THRUSTERS = dict(thruster_names=["tunnel", "port", "stbd"], rotatable=[False, True, True])
+SHORT = dict(t_shutdown_s=600.0, drift_s=300.0)
+TINY = dict(t_shutdown_s=120.0, drift_s=60.0)  # for checks that need no physics
+TRUTHSIM = Path("/work/shared/data/truthsim-dev")
+
+
+@pytest.fixture(scope="module", params=[0, 4], ids=lambda s: f"seed{s}")
+def moderate(request):
+    """A Beaufort 3-4 scenario: 10 +- 0.4 min on DP, then 5 min of drift."""
+    cfg = DPLossConfig(seed=request.param, beaufort=(3, 4), **SHORT)
+    return cfg, simulate_dp_loss(cfg)
+
+
+# --------------------------------------------------------------------------- config
+
+
+@pytest.mark.parametrize("changes, field", [
+    (dict(drift_s=-1.0), "drift_s"),
+    (dict(drift_s=100.5), "drift_s"),
+    (dict(seed=-3), "seed"),
+    (dict(sim_dt_s=0.3), "dt_s"),
+    (dict(control_dt_s=0.75), "control_dt_s"),
+    (dict(heading_mode="downwind"), "heading_mode"),
+    (dict(beaufort=(5, 2)), "beaufort"),
+    (dict(t_shutdown_s=float("nan")), "t_shutdown_s"),
+    (dict(t_shutdown_s=100.0, t_shutdown_jitter_s=95.0), "t_shutdown_s"),
+    (dict(noise={"gnss_white": 0.1}), "noise"),
+    (dict(noise={"uv_white_m_s": -0.1}), "noise.uv_white_m_s"),
+    (dict(rpm_time_constant_s=0.0), "rpm_time_constant_s"),
+    (dict(n_wave_components=0), "n_wave_components"),
+])
+def test_config_validation_names_the_field(changes, field):
+    with pytest.raises((ValueError, TypeError), match=field):
+        DPLossConfig(**changes)
+
+
+def test_config_defaults():
+    cfg = DPLossConfig()
+    assert cfg.t_shutdown_s == 3000.0 and cfg.t_shutdown_jitter_s == pytest.approx(120.0)
+    assert cfg.drift_s >= 600.0 and cfg.dt_s == 1.0
+    assert cfg.noise == SensorNoise()
+    assert DPLossConfig(noise={"gnss_white_m": 0.0}).noise.gnss_white_m == 0.0
+
+
+# --------------------------------------------------------------------------- physics and timeline
+
+
+def test_dp_holds_position_in_moderate_weather(moderate):
+    cfg, df = moderate
+    dp = df[df["dp_active"] == 1]
+    lf = np.hypot(dp["truth_north_lf_m"], dp["truth_east_lf_m"])
+    measured = np.hypot(dp["north_m"], dp["east_m"])
+    assert lf.max() < 3.0, "LF position off the set-point by more than 3 m while on DP"
+    assert measured.max() < 4.0
+    settled = dp["time_s"] > 300.0
+    assert lf[settled].max() < 2.0
+    sp = df["truth_heading_sp_deg"].iloc[0]
+    dpsi = (dp["truth_heading_lf_deg"] - sp + 180.0) % 360.0 - 180.0
+    assert np.abs(dpsi).max() < 10.0
+    assert np.abs(dpsi[settled]).max() < 5.0
+
+
+def test_drift_speed_and_direction_follow_wind_and_current(moderate):
+    cfg, df = moderate
+    c = df.attrs["conditions"]
+    drift = df[df["dp_active"] == 0]
+    dn = drift["truth_north_lf_m"].iloc[-1] - drift["truth_north_lf_m"].iloc[0]
+    de = drift["truth_east_lf_m"].iloc[-1] - drift["truth_east_lf_m"].iloc[0]
+    speed = math.hypot(dn, de) / (drift["time_s"].iloc[-1] - drift["time_s"].iloc[0])
+    assert 0.05 < speed < 1.0
+    # Expected push: current plus a leeway of ~3 % of the wind speed, downwind.
+    w_to = math.radians(c["wind_dir_from_deg"] + 180.0)
+    c_to = math.radians(c["current_dir_to_deg"])
+    push = (c["current_mps"] * np.array([math.cos(c_to), math.sin(c_to)])
+            + 0.03 * c["wind_mean_mps"] * np.array([math.cos(w_to), math.sin(w_to)]))
+    cos_angle = push @ [dn, de] / (np.linalg.norm(push) * math.hypot(dn, de))
+    assert math.degrees(math.acos(np.clip(cos_angle, -1, 1))) < 90.0
+
+
+def test_dp_active_switches_exactly_at_shutdown(moderate):
+    cfg, df = moderate
+    t_sd = df["truth_t_shutdown_s"].iloc[0]
+    assert abs(t_sd - cfg.t_shutdown_s) <= cfg.t_shutdown_jitter_s + 0.5
+    t = df["time_s"].to_numpy()
+    np.testing.assert_array_equal(df["dp_active"].to_numpy(), (t < t_sd).astype(int))
+    assert t[-1] == pytest.approx(t_sd + cfg.drift_s) and np.all(np.diff(t) == 1.0)
+    after = df[t >= t_sd]
+    # Azimuths frozen; rpm decays to (almost) nothing within a few time constants.
+    for col in ("port_azimuth_deg", "stbd_azimuth_deg"):
+        assert after[col].nunique() == 1
+        assert after[col].iloc[0] == df.loc[t == t_sd - 1, col].iloc[0]
+    rpm = after[["tunnel_rpm", "port_rpm", "stbd_rpm"]].abs().to_numpy()
+    assert np.all(rpm[10:] < 0.01 * df[["tunnel_rpm", "port_rpm", "stbd_rpm"]].abs().max().max() + 0.01)
+    # Left: the drag of the windmilling propellers in the drift flow, a few hundred newtons.
+    frac = after[["truth_tunnel_thrust_frac", "truth_port_thrust_frac", "truth_stbd_thrust_frac"]].iloc[30:]
+    assert np.abs(frac.to_numpy()).max() < 0.03
+
+
+def test_measurements_are_truth_plus_configured_noise(moderate):
+    cfg, df = moderate
+    nz = cfg.noise
+
+    def std(measured, truth, wrap=False):
+        d = df[measured] - df[truth]
+        if wrap:
+            d = (d + 180.0) % 360.0 - 180.0
+        return d.std()
+
+    assert std("heading_deg", "truth_heading_deg", wrap=True) == pytest.approx(nz.heading_white_deg, rel=0.15)
+    assert std("u_m_s", "truth_u_mps") == pytest.approx(nz.uv_white_m_s, rel=0.1)
+    assert std("r_deg_s", "truth_r_degps") == pytest.approx(nz.r_white_deg_s, rel=0.1)
+    gnss = math.hypot(nz.gnss_white_m, nz.gnss_markov_m)
+    assert std("north_m", "truth_north_m") == pytest.approx(gnss, rel=0.5)  # GM error: few correlation times
+    assert std("wind_dir_deg", "truth_wind_dir_from_deg", wrap=True) == pytest.approx(nz.wind_dir_white_deg, rel=0.15)
+    # Wave-frequency motion: total minus LF is present and zero-mean (mm to dm: short
+    # waves hardly move a 34 m hull).
+    for axis in ("north", "east"):
+        wf = df[f"truth_{axis}_m"] - df[f"truth_{axis}_lf_m"]
+        assert wf.std() > 1e-3 and abs(wf.mean()) < 0.2 * wf.std() + 1e-3
+
+
+def test_truth_accelerations_match_velocities(moderate):
+    _, df = moderate
+    t = df["time_s"].to_numpy()
+    for vel, acc in (("truth_u_lf_mps", "truth_udot_lf_mps2"), ("truth_v_lf_mps", "truth_vdot_lf_mps2")):
+        fd = np.gradient(df[vel].to_numpy(), t)
+        a = df[acc].to_numpy()
+        assert np.corrcoef(fd, a)[0, 1] > 0.9
+        assert np.median(np.abs(fd - a)) < 0.3 * np.std(a)
+
+
+def test_same_seed_same_log_different_seed_different_log():
+    a = simulate_dp_loss(DPLossConfig(seed=21, **TINY))
+    b = simulate_dp_loss(DPLossConfig(seed=21, **TINY))
+    c = simulate_dp_loss(DPLossConfig(seed=22, **TINY))
+    pd.testing.assert_frame_equal(a, b, check_exact=True)
+    assert a.attrs["conditions"] == b.attrs["conditions"]
+    n = min(len(a), len(c))  # the shutdown jitter may change the length
+    assert not a.iloc[:n].equals(c.iloc[:n])
+    assert not np.allclose(a["north_m"].iloc[:n], c["north_m"].iloc[:n])
+
+
+def test_given_sea_state_and_heading_are_used():
+    sea = SeaState(hs_m=0.8, tp_s=6.0, wave_dir_from_rad=math.radians(90), wind_speed_m_s=8.0,
+                   wind_dir_from_rad=math.radians(80), current_speed_m_s=0.2, current_dir_to_rad=math.radians(200))
+    df = simulate_dp_loss(DPLossConfig(seed=1, sea_state=sea, heading_sp_deg=100.0, t_shutdown_jitter_s=0.0, **TINY))
+    assert df["truth_hs_m"].iloc[0] == pytest.approx(0.8)
+    assert df["truth_tp_s"].iloc[0] == pytest.approx(6.0)
+    assert df["truth_heading_sp_deg"].iloc[0] == pytest.approx(100.0)
+    assert df["truth_t_shutdown_s"].iloc[0] == 120.0
+    assert df["truth_wind_speed_mps"].mean() == pytest.approx(8.0, rel=0.15)
+
+
+# --------------------------------------------------------------------------- log format
+
+
+@pytest.mark.parametrize("ext", ["csv.gz", "parquet"])
+def test_log_validates_and_round_trips(moderate, tmp_path, ext):
+    _, df = moderate
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")  # no unknown-column warnings either
+        validate_log(df, **THRUSTERS)
+        path = tmp_path / f"log.{ext}"
+        write_log(df, path, **THRUSTERS)
+        back = read_log(path, **THRUSTERS)
+    assert list(back.columns) == list(df.columns)
+    pd.testing.assert_frame_equal(back, df, check_exact=False, rtol=1e-12, atol=1e-12)
+    assert set(df.columns) >= {"time_s", "north_m", "east_m", "heading_deg", "u_m_s", "v_m_s", "r_deg_s",
+                               "wind_speed_m_s", "wind_dir_deg", "tunnel_rpm", "port_rpm", "port_azimuth_deg",
+                               "stbd_rpm", "stbd_azimuth_deg", "dp_active"}
+    assert "tunnel_azimuth_deg" not in df.columns
+
+
+def test_drift_statistics_reproduce_truthsim_summary():
+    if not (TRUTHSIM / "scenarios.csv").exists():
+        pytest.skip("truthsim-dev data not available")
+    summary = pd.read_csv(TRUTHSIM / "scenarios.csv").iloc[0]
+    st = drift_statistics(read_log(TRUTHSIM / "logs" / summary["file"]))
+    assert st["t_shutdown_s"] == summary["t_shutdown_s"]
+    for key in ("drift_excursion_60s_m", "drift_excursion_600s_m", "drift_mean_sog_mps", "dp_pos_std_m"):
+        assert st[key] == pytest.approx(summary[key], rel=0.05), key
+
+
+# --------------------------------------------------------------------------- allocation speed-up
+
+
+def test_compiled_allocator_matches_the_allocator():
+    rng = np.random.default_rng(5)
+    ref = ThrustAllocator("gunnerus", dt_s=1.0)
+    fast = _CompiledRpmAllocator("gunnerus", dt_s=1.0)
+    for _ in range(40):
+        tau = rng.normal(0, [3e4, 3e4, 3e5])
+        nu_r = rng.normal(0, [0.5, 0.3, 0.01])
+        a, b = ref.allocate(tau, nu_r), fast.allocate(tau, nu_r)
+        np.testing.assert_array_equal(a.rpm, b.rpm)
+        np.testing.assert_array_equal(a.azimuth_rad, b.azimuth_rad)
+
+
+# --------------------------------------------------------------------------- sweep and embedded set
+
+
+def test_sweep_writes_logs_and_summary(tmp_path):
+    paths = sweep(tmp_path / "out", [3, 5], beaufort=(2, 3), fmt="csv", **TINY)
+    assert [p.name for p in paths] == ["sim_dp_loss_seed0003.csv", "sim_dp_loss_seed0005.csv"]
+    summary = pd.read_csv(tmp_path / "out" / "scenarios.csv")
+    assert summary["seed"].tolist() == [3, 5]
+    assert summary["file"].tolist() == [p.name for p in paths]
+    for col in ("hs_m", "wind_mean_mps", "t_shutdown_s", "drift_excursion_60s_m", "drift_mean_sog_mps",
+                "dp_pos_std_m"):
+        assert summary[col].notna().all(), col
+    assert summary["drift_excursion_600s_m"].isna().all()  # a 60 s drift has no 600 s statistic
+    for p in paths:
+        read_log(p, **THRUSTERS)
+    assert not list((tmp_path / "out").glob(".*tmp"))
+    with pytest.raises(ValueError, match="seeds"):
+        sweep(tmp_path, [1, 1], **TINY)
+    with pytest.raises(ValueError, match="fmt"):
+        sweep(tmp_path, [1], fmt="xlsx", **TINY)
+
+
+def test_embedded_scenarios_are_valid_and_copied():
+    a = embedded_scenarios(n=3, seed=0)
+    assert len(a) == 3 and len({s.name for s in a}) == 3
+    for s in a:
+        validate_log(s.log, **THRUSTERS)
+        assert s.log["dp_active"].iloc[0] == 1 and s.log["dp_active"].iloc[-1] == 0
+    a[0].log.loc[0, "north_m"] = 1e3
+    b = embedded_scenarios(n=3, seed=0)
+    assert b[0].log.loc[0, "north_m"] != 1e3
+    with pytest.raises(ValueError, match="n"):
+        embedded_scenarios(n=0)
+
+
+# --------------------------------------------------------------------------- CLI
+
+
+def test_parse_seeds():
+    assert parse_seeds("1-3,7") == [1, 2, 3, 7]
+    for bad in ("3-1", "a", "1,,2", "1,1"):
+        with pytest.raises(ValueError, match="--seeds"):
+            parse_seeds(bad)
+
+
+def test_cli_simulate_writes_a_readable_log(tmp_path, capsys):
+    out = tmp_path / "sim.csv.gz"
+    rc = main(["simulate", "--vessel", "gunnerus", "--scenario", "dp-loss", "--seed", "5", "--out", str(out),
+               "--t-shutdown-s", "120", "--drift-s", "60", "--no-progress"])
+    assert rc == 0
+    df = read_log(out, **THRUSTERS)
+    assert df["dp_active"].iloc[-1] == 0 and len(df) == df["time_s"].iloc[-1] + 1
+    assert "wrote" in capsys.readouterr().out
+
+
+def test_cli_sweep(tmp_path):
+    rc = main(["simulate", "--sweep", "--seeds", "1-2", "--out-dir", str(tmp_path), "--t-shutdown-s", "120",
+               "--drift-s", "60", "--format", "parquet", "--no-progress"])
+    assert rc == 0
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["scenarios.csv", "sim_dp_loss_seed0001.parquet",
+                                                          "sim_dp_loss_seed0002.parquet"]
+
+
+@pytest.mark.parametrize("argv, needle", [
+    (["simulate", "--vessel", "no_such_ship", "--seed", "1", "--out", "{tmp}/x.csv"], "no_such_ship"),
+    (["simulate", "--seed", "1", "--out", "{tmp}/x.txt"], ".txt"),
+    (["simulate", "--seed", "1"], "--out"),
+    (["simulate", "--seed", "1", "--out", "{tmp}/x.csv", "--drift-s", "-5"], "drift_s"),
+    (["simulate", "--sweep", "--seeds", "5-2", "--out-dir", "{tmp}"], "--seeds"),
+    (["simulate", "--scenario", "capsize", "--seed", "1", "--out", "{tmp}/x.csv"], "capsize"),
+    ([], "command"),
+])
+def test_cli_bad_input_gives_one_line_and_nonzero(tmp_path, capsys, argv, needle):
+    rc = main([a.replace("{tmp}", str(tmp_path)) for a in argv])
+    err = capsys.readouterr().err
+    assert rc != 0
+    assert needle in err and "Traceback" not in err
+    assert len(err.strip().splitlines()) == 1
+    assert not list(tmp_path.iterdir())
