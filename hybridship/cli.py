@@ -13,6 +13,15 @@ simulate
     writes one DP-loss log (CSV, ``.csv.gz`` or Parquet by the extension);
     ``hybridship simulate --sweep --seeds 1-10 --out-dir DIR`` writes one log per seed
     and ``DIR/scenarios.csv``.
+demo
+    ``hybridship demo``: the main job on the embedded default. Simulates Gunnerus DP-loss
+    scenarios, trains the hybrid on their station-keeping parts and prints the paper's
+    15/30/45/60 s drift-error table for the hybrid, the dynamic model and dead reckoning.
+train
+    ``hybridship train --vessel gunnerus --logs DIR --out MODEL.npz`` trains a hybrid on the
+    DP part of every log in DIR.
+forecast
+    ``hybridship forecast --model MODEL.npz --log FILE --start-time T --horizon-s 60 --out forecast.csv``
 """
 
 from __future__ import annotations
@@ -169,12 +178,138 @@ def _cmd_simulate(args) -> int:
 # --------------------------------------------------------------------------- entry point
 
 
+# --------------------------------------------------------------------------- demo / train / forecast
+
+
+def _add_demo(sub) -> None:
+    p = sub.add_parser("demo", help="simulate, train and print the drift-error table (embedded default)",
+                       description="Simulate embedded Gunnerus DP-loss scenarios, train the hybrid on their "
+                                   "DP parts and print the 15/30/45/60 s drift-error table.")
+    p.add_argument("--scenarios", type=int, default=3, help="number of embedded scenarios (default 3)")
+    p.add_argument("--seed", type=int, default=0, help="seed of the first scenario and of training (default 0)")
+    p.add_argument("--members", type=int, default=10, help="ensemble members (default 10)")
+    p.set_defaults(func=_cmd_demo)
+
+
+def _cmd_demo(args) -> int:
+    import time
+
+    import numpy as np
+
+    from . import metrics
+    from .predictors import DeadReckoning, DynamicPredictor, HybridPredictor, as_log_arrays
+    from .residual.ensemble import EnsembleConfig
+    from .sim.scenario import embedded_scenarios
+
+    if args.scenarios < 1 or args.members < 1:
+        raise UsageError(f"{_PROG} demo: error: --scenarios and --members must be >= 1")
+    t0 = time.perf_counter()
+    scen = embedded_scenarios(args.scenarios, args.seed)
+    print(f"simulated {len(scen)} Gunnerus DP-loss scenarios ({time.perf_counter() - t0:.1f} s): "
+          + ", ".join(s.name for s in scen))
+    hybrid = HybridPredictor("gunnerus", ensemble_config=EnsembleConfig(n_members=args.members, seed=args.seed))
+    logs = [as_log_arrays(s.log, hybrid.model.vessel) for s in scen]
+    t0 = time.perf_counter()
+    hybrid.fit(logs)
+    print(f"trained a {args.members}-member hybrid on {hybrid.training_info['n_rows']} DP samples "
+          f"({time.perf_counter() - t0:.1f} s)")
+    predictors = {"hybrid": (hybrid, {"guard": False}), "hybrid_guarded": (hybrid, {"guard": True}),
+                  "dynamic": (DynamicPredictor("gunnerus"), {}), "dead_reckoning": (DeadReckoning("gunnerus"), {})}
+    errors = {name: [metrics.drift_errors(p, a, **kw) for a in logs] for name, (p, kw) in predictors.items()}
+    long = metrics.error_table(errors)
+    print("\nMean absolute error after the DP shutdown, first 5 / first 20 forecasts (m, m, deg):")
+    print(metrics.paper_table(long).to_string())
+    print("\n% error reduction of the guarded hybrid relative to the dynamic model (5/20):")
+    print(metrics.reduction_table(long, "hybrid_guarded").to_string())
+    return 0
+
+
+def _add_train(sub) -> None:
+    p = sub.add_parser("train", help="train a hybrid on the DP part of a folder of logs")
+    p.add_argument("--vessel", default="gunnerus", help="packaged vessel name or vessel TOML file")
+    p.add_argument("--logs", required=True, type=Path, help="folder of logs (*.csv, *.csv.gz, *.parquet)")
+    p.add_argument("--out", required=True, type=Path, help="model file to write (.npz)")
+    p.add_argument("--members", type=int, default=10)
+    p.add_argument("--seed", type=int, default=0)
+    p.add_argument("--all-rows", action="store_true", help="train on every row, not only dp_active == 1")
+    p.set_defaults(func=_cmd_train)
+
+
+def _cmd_train(args) -> int:
+    from .predictors import HybridPredictor
+    from .residual.ensemble import EnsembleConfig
+    from .vessel import VesselFileError, load_vessel
+
+    try:
+        vessel = load_vessel(args.vessel)
+    except VesselFileError as exc:
+        raise UsageError(f"{_PROG} train: error: {_one_line(exc)}") from None
+    if not args.logs.is_dir():
+        raise UsageError(f"{_PROG} train: error: --logs {args.logs}: not a folder")
+    files = sorted(p for p in args.logs.iterdir() if p.name.endswith((".csv", ".csv.gz", ".parquet", ".pq")))
+    files = [f for f in files if f.name != "scenarios.csv"]
+    if not files:
+        raise UsageError(f"{_PROG} train: error: --logs {args.logs}: no log files (*.csv, *.csv.gz, *.parquet)")
+    hp = HybridPredictor(vessel, ensemble_config=EnsembleConfig(n_members=args.members, seed=args.seed))
+    hp.fit(files, dp_only=not args.all_rows, progress=sys.stderr.isatty())
+    hp.save(args.out)
+    print(f"trained on {hp.training_info['n_rows']} samples from {len(files)} logs; wrote {args.out}")
+    return 0
+
+
+def _add_forecast(sub) -> None:
+    p = sub.add_parser("forecast", help="forecast from one or more start times of a log")
+    p.add_argument("--model", required=True, type=Path, help="model file from 'hybridship train'")
+    p.add_argument("--log", required=True, type=Path, help="log file")
+    p.add_argument("--start-time", required=True, type=float, nargs="+", help="start time(s) [s] (sample times)")
+    p.add_argument("--horizon-s", type=float, default=60.0)
+    p.add_argument("--no-guard", action="store_true", help="do not shrink the correction outside the envelope")
+    p.add_argument("--out", required=True, type=Path, help="forecast table to write (.csv)")
+    p.set_defaults(func=_cmd_forecast)
+
+
+def _cmd_forecast(args) -> int:
+    import os
+    import tempfile
+
+    from .predictors import HybridPredictor, ModelFileError
+
+    if not args.horizon_s > 0:
+        raise UsageError(f"{_PROG} forecast: error: --horizon-s must be > 0, got {args.horizon_s}")
+    try:
+        hp = HybridPredictor.load(args.model)
+    except ModelFileError as exc:
+        raise UsageError(f"{_PROG} forecast: error: {_one_line(exc)}") from None
+    if not args.log.is_file():
+        raise UsageError(f"{_PROG} forecast: error: --log {args.log}: file not found")
+    fc = hp.forecast(args.log, args.start_time, args.horizon_s, guard=not args.no_guard)
+    df = fc.to_frame()
+    args.out.parent.mkdir(parents=True, exist_ok=True)
+    fd, tmp = tempfile.mkstemp(prefix=f".{args.out.name}.", suffix=".tmp", dir=args.out.parent)
+    os.close(fd)
+    try:
+        df.to_csv(tmp, index=False)
+        os.replace(tmp, args.out)
+    finally:
+        Path(tmp).unlink(missing_ok=True)
+    last = df[df.lead_s == df.lead_s.max()]
+    for _, row in last.iterrows():
+        print(f"start {row.start_time_s:g} s -> +{row.lead_s:g} s: north {row.north_m:.1f} m, east {row.east_m:.1f} m, "
+              f"heading {row.heading_deg:.1f} deg (1-sigma {row.north_std_m:.1f}/{row.east_std_m:.1f} m, "
+              f"guard weight {row.guard_weight:.2f})" if "guard_weight" in row else "")
+    print(f"wrote {args.out}")
+    return 0
+
+
 def _build_parser() -> argparse.ArgumentParser:
     """The top-level parser with every subcommand registered."""
     parser = _Parser(prog=_PROG, description="Ship drift forecasting with a 3-DOF Fossen model and "
                                                "neural residuals.")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND", parser_class=_Parser)
     _add_simulate(sub)
+    _add_demo(sub)
+    _add_train(sub)
+    _add_forecast(sub)
     return parser
 
 

@@ -1,0 +1,100 @@
+"""Forecast errors after a DP failure, in the layout of Skulstad et al. (2022), Table 2.
+
+Forecasts start at successive samples after the shutdown (one "interval" per start time,
+one second apart at 1 Hz). For each start and horizon the absolute error in north [m],
+east [m] and yaw [deg] against the logged (measured) track is taken; a table cell is the
+mean over the first 5 and the first 20 intervals, written "5/20".
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pandas as pd
+
+from .frames import wrap_pi
+
+#: The paper's horizons [s] and averaging windows [intervals].
+HORIZONS_S = (15, 30, 45, 60)
+WINDOWS = (5, 20)
+STATES = ("north_m", "east_m", "yaw_deg")
+
+
+def shutdown_index(arrays) -> int:
+    """Row of the first ``dp_active == 0`` sample after station keeping (raises if none)."""
+    off = np.flatnonzero(arrays.dp_active == 0)
+    if off.size == 0:
+        raise ValueError("log: no DP shutdown (dp_active never 0); cannot evaluate drift forecasts")
+    return int(off[0])
+
+
+def drift_errors(predictor, arrays, *, n_intervals: int = 20, horizons_s=HORIZONS_S, **forecast_kw) -> np.ndarray:
+    """Absolute forecast errors after the shutdown of one log.
+
+    Parameters
+    ----------
+    predictor : object with ``forecast(log, start_times_s, horizon_s)``
+    arrays : LogArrays
+    n_intervals : int
+        Number of successive start times from the shutdown.
+    horizons_s : sequence of float
+        Lead times at which errors are taken [s].
+
+    Returns
+    -------
+    ndarray, shape (n_intervals, len(horizons_s), 3)
+        ``|north error| [m], |east error| [m], |yaw error| [deg]``.
+    """
+    i0 = shutdown_index(arrays)
+    dt = float(np.median(np.diff(arrays.time_s)))
+    steps = np.array([int(round(h / dt)) for h in horizons_s])
+    H = int(steps.max())
+    n_ok = min(n_intervals, len(arrays.time_s) - H - i0)
+    if n_ok < n_intervals:
+        raise ValueError(f"log: only {max(n_ok, 0)} start times after the shutdown leave {H * dt:g} s of "
+                         f"measurements; {n_intervals} are needed")
+    starts = i0 + np.arange(n_intervals)
+    fc = predictor.forecast(arrays, arrays.time_s[starts], horizon_s=H * dt, **forecast_kw)
+    truth = arrays.eta[starts[:, None] + steps[None, :]]        # (S, nh, 3)
+    pred = fc.eta[:, steps]
+    err = np.abs(pred - truth)
+    err[..., 2] = np.degrees(np.abs(wrap_pi(pred[..., 2] - truth[..., 2])))
+    return err
+
+
+def error_table(errors: dict, *, horizons_s=HORIZONS_S, windows=WINDOWS) -> pd.DataFrame:
+    """Long table ``model, state, window, horizon_s, mae`` from per-log error arrays.
+
+    ``errors`` maps a model name to a list of :func:`drift_errors` arrays (one per log);
+    a cell is the mean over logs and over the first ``window`` intervals.
+    """
+    rows = []
+    for model, per_log in errors.items():
+        E = np.stack(per_log)                                   # (L, S, nh, 3)
+        for w in windows:
+            m = E[:, :w].mean(axis=(0, 1))                      # (nh, 3)
+            for k, state in enumerate(STATES):
+                for j, h in enumerate(horizons_s):
+                    rows.append({"model": model, "state": state, "window": w, "horizon_s": h, "mae": float(m[j, k])})
+    return pd.DataFrame(rows)
+
+
+def paper_table(long: pd.DataFrame, *, windows=WINDOWS) -> pd.DataFrame:
+    """The paper's Table 2 layout: rows model x state, columns horizons, cells "first5/first20"."""
+    lo, hi = windows
+    a = long[long.window == lo].set_index(["model", "state", "horizon_s"])["mae"]
+    b = long[long.window == hi].set_index(["model", "state", "horizon_s"])["mae"]
+    cells = (a.map("{:.2f}".format) + "/" + b.map("{:.2f}".format)).unstack("horizon_s")
+    cells.columns = [f"{c:g} s" for c in cells.columns]
+    order = list(dict.fromkeys(long["model"]))
+    return cells.reindex(pd.MultiIndex.from_product([order, list(STATES)], names=["model", "state"]))
+
+
+def reduction_table(long: pd.DataFrame, model: str, reference: str = "dynamic", *, windows=WINDOWS) -> pd.DataFrame:
+    """The paper's Table 3: % error reduction of ``model`` relative to ``reference``, "5/20"."""
+    def pct(w):
+        s = long[long.window == w].set_index(["model", "state", "horizon_s"])["mae"]
+        return (100.0 * (1.0 - s[model] / s[reference])).round().astype(int)
+    lo, hi = windows
+    cells = (pct(lo).astype(str) + "/" + pct(hi).astype(str)).unstack("horizon_s")
+    cells.columns = [f"{c:g} s" for c in cells.columns]
+    return cells.reindex(list(STATES))
