@@ -194,8 +194,6 @@ def _add_demo(sub) -> None:
 def _cmd_demo(args) -> int:
     import time
 
-    import numpy as np
-
     from . import metrics
     from .predictors import DeadReckoning, DynamicPredictor, HybridPredictor, as_log_arrays
     from .residual.ensemble import EnsembleConfig
@@ -269,9 +267,7 @@ def _add_forecast(sub) -> None:
 
 
 def _cmd_forecast(args) -> int:
-    import os
-    import tempfile
-
+    from .fileio import atomic_write
     from .predictors import HybridPredictor, ModelFileError
 
     if not args.horizon_s > 0:
@@ -284,14 +280,7 @@ def _cmd_forecast(args) -> int:
         raise UsageError(f"{_PROG} forecast: error: --log {args.log}: file not found")
     fc = hp.forecast(args.log, args.start_time, args.horizon_s, guard=not args.no_guard)
     df = fc.to_frame()
-    args.out.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(prefix=f".{args.out.name}.", suffix=".tmp", dir=args.out.parent)
-    os.close(fd)
-    try:
-        df.to_csv(tmp, index=False)
-        os.replace(tmp, args.out)
-    finally:
-        Path(tmp).unlink(missing_ok=True)
+    atomic_write(args.out, lambda fh: fh.write(df.to_csv(index=False).encode("utf-8")))
     last = df[df.lead_s == df.lead_s.max()]
     for _, row in last.iterrows():
         print(f"start {row.start_time_s:g} s -> +{row.lead_s:g} s: north {row.north_m:.1f} m, east {row.east_m:.1f} m, "

@@ -15,15 +15,14 @@ position uncertainty.
 from __future__ import annotations
 
 import json
-import os
-import tempfile
 from dataclasses import asdict, dataclass
 from pathlib import Path
-from typing import Iterable, Sequence
+from typing import Iterable
 
 import numpy as np
 import pandas as pd
 
+from .fileio import atomic_write
 from .frames import wrap_2pi
 from .logs.io import LogArrays, log_to_arrays, read_log
 from .physics.integrate import rollout_batch
@@ -148,12 +147,8 @@ class DeadReckoning:
         return self
 
     def forecast(self, log, start_times_s, horizon_s: float = 60.0) -> ForecastResult:
-        arrays = as_log_arrays(log, self.model.vessel)
-        idx = start_indices(arrays, start_times_s)
-        dt = float(np.median(np.diff(arrays.time_s)))
-        H = int(round(horizon_s / dt))
+        arrays, idx, dt, H, eta0, nu0 = _forecast_setup(self.model, self.config, log, start_times_s, horizon_s)
         lead = np.arange(H + 1) * dt
-        eta0, nu0 = _start_states_simple(arrays, idx, self.config, dt)
         c, s = np.cos(eta0[:, 2]), np.sin(eta0[:, 2])
         vn = c * nu0[:, 0] - s * nu0[:, 1]
         ve = s * nu0[:, 0] + c * nu0[:, 1]
@@ -163,6 +158,18 @@ class DeadReckoning:
         eta[..., 2] = eta0[:, 2:3] + nu0[:, 2:3] * lead
         nu = np.broadcast_to(nu0[:, None, :], eta.shape).copy()
         return ForecastResult(arrays.time_s[idx], lead, eta, nu)
+
+
+def _forecast_setup(model, config: ResidualConfig, log, start_times_s, horizon_s: float):
+    """Validated log arrays, start rows, step [s], number of steps and causal start states."""
+    if not horizon_s > 0:
+        raise ValueError(f"horizon_s: must be > 0, got {horizon_s}")
+    arrays = as_log_arrays(log, model.vessel)
+    idx = start_indices(arrays, start_times_s)
+    dt = float(np.median(np.diff(arrays.time_s)))
+    H = int(round(horizon_s / dt))
+    eta0, nu0 = _start_states_simple(arrays, idx, config, dt)
+    return arrays, idx, dt, H, eta0, nu0
 
 
 def _start_states_simple(arrays: LogArrays, idx, config: ResidualConfig, dt: float):
@@ -196,11 +203,8 @@ class DynamicPredictor:
         return self
 
     def forecast(self, log, start_times_s, horizon_s: float = 60.0) -> ForecastResult:
-        arrays = as_log_arrays(log, self.model.vessel)
-        idx = start_indices(arrays, start_times_s)
-        dt = float(np.median(np.diff(arrays.time_s)))
-        H = int(round(horizon_s / dt))
-        eta0, nu0 = _start_states_simple(arrays, idx, self.residual_config, dt)
+        arrays, idx, dt, H, eta0, nu0 = _forecast_setup(self.model, self.residual_config, log, start_times_s,
+                                                        horizon_s)
         rpm, az, wind = _held_inputs(arrays, idx, stop_after_failure=self.stop_after_failure)
         res = self.model.rollout(eta0, nu0, H, dt_s=dt, rpm=rpm, azimuth_rad=az, wind=wind)
         return ForecastResult(arrays.time_s[idx], res.time_s, res.eta, res.nu)
@@ -396,18 +400,7 @@ class HybridPredictor:
                       guard_mean=g.mean, guard_inv_cov=g.inv_cov)
         meta = json.dumps(self._metadata(), sort_keys=True)
         arrays["metadata_json"] = np.frombuffer(meta.encode("utf-8"), dtype=np.uint8)
-        path.parent.mkdir(parents=True, exist_ok=True)
-        fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
-        try:
-            with os.fdopen(fd, "wb") as fh:
-                np.savez(fh, **arrays)
-                fh.flush()
-                os.fsync(fh.fileno())
-            os.replace(tmp, path)
-        except BaseException:
-            Path(tmp).unlink(missing_ok=True)
-            raise
-        return path
+        return atomic_write(path, lambda fh: np.savez(fh, **arrays))
 
     @classmethod
     def load(cls, path, vessel=None) -> "HybridPredictor":

@@ -303,10 +303,31 @@ def vessel_from_dict(data: dict, source: str = "vessel") -> Vessel:
         raise VesselFileError(_format_validation_error(err, source)) from None
 
 
+def vessels_dir():
+    """Folder of the packaged vessel files.
+
+    Installed, they are the ``hybridship.vessels`` package (mapped from the top-level
+    ``vessels/`` folder); run from a source checkout, ``hybridship`` is the source tree and
+    the files are in ``vessels/`` beside it.
+    """
+    try:
+        return resources.files("hybridship.vessels")
+    except ModuleNotFoundError:
+        return Path(__file__).resolve().parent.parent / "vessels"
+
+
+def packaged_vessel_text(name: str) -> str:
+    """Text of the packaged vessel file ``<name>.toml`` (raises :class:`VesselFileError`)."""
+    res = vessels_dir().joinpath(f"{name}.toml")
+    if not res.is_file():
+        raise VesselFileError(f"vessel {name!r} is neither a file nor a packaged vessel "
+                              f"(packaged: {', '.join(packaged_vessels())})")
+    return res.read_text(encoding="utf-8")
+
+
 def packaged_vessels() -> list[str]:
     """Names of the vessel files shipped with hybridship (``vessels/*.toml``)."""
-    return sorted(p.name.removesuffix(".toml") for p in resources.files("hybridship.vessels").iterdir()
-                  if p.name.endswith(".toml"))
+    return sorted(p.name.removesuffix(".toml") for p in vessels_dir().iterdir() if p.name.endswith(".toml"))
 
 
 def load_vessel(name_or_path: str | Path) -> Vessel:
@@ -318,11 +339,7 @@ def load_vessel(name_or_path: str | Path) -> Vessel:
         text = p.read_text(encoding="utf-8")
         source = p.name
     else:
-        res = resources.files("hybridship.vessels").joinpath(f"{name_or_path}.toml")
-        if not res.is_file():
-            raise VesselFileError(f"vessel {name_or_path!r} is neither a file nor a packaged vessel "
-                                  f"(packaged: {', '.join(packaged_vessels())})")
-        text = res.read_text(encoding="utf-8")
+        text = packaged_vessel_text(str(name_or_path))
         source = f"{name_or_path}.toml"
     try:
         data = tomllib.loads(text)

@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import copy
 import tomllib
-from importlib import resources
 from pathlib import Path
 
 import numpy as np
@@ -18,13 +17,13 @@ from hybridship.physics import hull
 from hybridship.physics.model import DynamicModel, TAU_PARTS
 from hybridship.physics.propeller import ct_cq_star, kt_kq, load_wageningen, thrust_torque
 from hybridship.physics.thrusters import configuration_matrix
-from hybridship.vessel import VesselFileError, load_vessel, vessel_from_dict
+from hybridship.vessel import VesselFileError, load_vessel, packaged_vessel_text, vessel_from_dict
 
 SHARED = Path(__file__).resolve().parents[1].parent / "shared" / "data"
 
 
 def gunnerus_dict() -> dict:
-    return tomllib.loads(resources.files("hybridship.vessels").joinpath("gunnerus.toml").read_text())
+    return tomllib.loads(packaged_vessel_text("gunnerus"))
 
 
 def model_from(d: dict) -> DynamicModel:

@@ -32,7 +32,6 @@ from __future__ import annotations
 import gzip
 import os
 import re
-import uuid
 import warnings
 from collections.abc import Sequence
 from dataclasses import dataclass
@@ -42,6 +41,7 @@ import numpy as np
 import pandas as pd
 
 from hybridship import frames
+from hybridship.fileio import atomic_write
 from hybridship.logs.preprocess import segment_ids, segmentwise, split_segments
 
 __all__ = [
@@ -508,24 +508,18 @@ def write_log(
     path = Path(path)
     kind = _container(path)
     _validate(df, thruster_names, rotatable, str(path), warn_unknown=True)
-    tmp = path.with_name(f".{path.name}.{uuid.uuid4().hex}.tmp")
-    try:
-        with open(tmp, "xb") as fh:  # 'x': never clobber; mode follows the umask
-            if kind == "parquet":
-                df.to_parquet(fh, index=False)
-            elif kind == "csv.gz":
-                # No file name and mtime 0 in the gzip header: the same data give
-                # byte-identical files (and the temp file's name does not leak into it).
-                with gzip.GzipFile(filename="", mode="wb", fileobj=fh, mtime=0) as gz:
-                    df.to_csv(gz, index=False)
-            else:
-                df.to_csv(fh, index=False)
-            fh.flush()
-            os.fsync(fh.fileno())
-        os.replace(tmp, path)
-    except BaseException:
-        tmp.unlink(missing_ok=True)
-        raise
+    def write(fh):
+        if kind == "parquet":
+            df.to_parquet(fh, index=False)
+        elif kind == "csv.gz":
+            # No file name and mtime 0 in the gzip header: the same data give
+            # byte-identical files (and the temp file's name does not leak into it).
+            with gzip.GzipFile(filename="", mode="wb", fileobj=fh, mtime=0) as gz:
+                df.to_csv(gz, index=False)
+        else:
+            df.to_csv(fh, index=False)
+
+    atomic_write(path, write)
 
 
 # --------------------------------------------------------------------------------------

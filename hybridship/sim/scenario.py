@@ -37,8 +37,6 @@ from __future__ import annotations
 
 import dataclasses
 import math
-import os
-import uuid
 from collections.abc import Iterable, Mapping
 from dataclasses import dataclass, field
 from functools import lru_cache
@@ -46,6 +44,8 @@ from pathlib import Path
 
 import numba
 import numpy as np
+
+from ..fileio import atomic_write
 import pandas as pd
 from scipy.signal import lfilter
 
@@ -815,19 +815,6 @@ def log_file_name(seed: int, fmt: str = "csv.gz") -> str:
     return f"sim_dp_loss_seed{int(seed):04d}.{fmt}"
 
 
-def _write_csv_atomic(df: pd.DataFrame, path: Path) -> None:
-    tmp = path.with_name(f".{path.name}.{uuid.uuid4().hex}.tmp")
-    try:
-        with open(tmp, "x", newline="", encoding="utf-8") as fh:
-            df.to_csv(fh, index=False)
-            fh.flush()
-            os.fsync(fh.fileno())
-        os.replace(tmp, path)
-    except BaseException:
-        tmp.unlink(missing_ok=True)
-        raise
-
-
 def sweep(out_dir, seeds: Iterable[int], *, beaufort=(2, 5), fmt: str = "csv.gz", vessel="gunnerus",
           progress: bool = False, **config_overrides) -> list[Path]:
     """Simulate one scenario per seed; write the logs and a ``scenarios.csv`` summary.
@@ -894,7 +881,7 @@ def sweep(out_dir, seeds: Iterable[int], *, beaufort=(2, 5), fmt: str = "csv.gz"
                      "beaufort_lo": cfg.beaufort[0], "beaufort_hi": cfg.beaufort[1],
                      **{k: v for k, v in drift_statistics(df).items() if k != "t_shutdown_s"}})
     summary = pd.DataFrame(rows)
-    _write_csv_atomic(summary.round(4), out / "scenarios.csv")
+    atomic_write(out / "scenarios.csv", lambda fh: fh.write(summary.round(4).to_csv(index=False).encode("utf-8")))
     return paths
 
 

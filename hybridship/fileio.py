@@ -1,0 +1,30 @@
+"""Atomic file writes: a crash never leaves a half-written log, model or table behind."""
+
+from __future__ import annotations
+
+import os
+import uuid
+from pathlib import Path
+from typing import BinaryIO, Callable
+
+
+def atomic_write(path, write: Callable[[BinaryIO], None]) -> Path:
+    """Write ``path`` through ``write(fh)`` into a temporary file beside it, then rename.
+
+    The temporary file is created exclusively in the same directory (so ``os.replace`` is
+    atomic), flushed and fsynced before the rename, and removed if anything fails, in
+    which case an existing file at ``path`` is left untouched.
+    """
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    tmp = path.with_name(f".{path.name}.{uuid.uuid4().hex}.tmp")
+    try:
+        with open(tmp, "xb") as fh:  # 'x': never clobber; mode follows the umask
+            write(fh)
+            fh.flush()
+            os.fsync(fh.fileno())
+        os.replace(tmp, path)
+    except BaseException:
+        tmp.unlink(missing_ok=True)
+        raise
+    return path
