@@ -15,7 +15,7 @@ from hypothesis import strategies as st
 from hybridship import frames
 from hybridship.physics import hull
 from hybridship.physics.model import DynamicModel, TAU_PARTS
-from hybridship.physics.propeller import ct_cq_star, kt_kq, load_wageningen, thrust_torque
+from hybridship.physics.propeller import ct_cq_star, kt_kq, load_wageningen, rpm_for_thrust, thrust_torque
 from hybridship.physics.thrusters import configuration_matrix
 from hybridship.vessel import VesselFileError, load_vessel, packaged_vessel_text, vessel_from_dict
 
@@ -219,6 +219,20 @@ def test_propeller_continuous_across_quadrant_boundaries():
     assert abs(t[1] - t[0]) < 1e-5 * abs(t[0])
     t, _ = thrust_torque(3.0, np.array([-1e-6, 1e-6]), 1.9, p)
     assert abs(t[1] - t[0]) < 1e-5 * abs(t[0])
+
+
+def test_rpm_for_thrust_inverts_the_propeller_model_in_every_quadrant():
+    p = load_wageningen()
+    T = np.array([40e3, -25e3, 5e3, -5e3, 0.0, 30e3])
+    va = np.array([0.5, 0.5, -1.0, -1.0, 0.0, 2.0])
+    rpm = rpm_for_thrust(T, va, 1.9, p, max_rpm=217.0)
+    t_back, _ = thrust_torque(rpm / 60.0, va, 1.9, p)
+    np.testing.assert_allclose(t_back, T, atol=1.0)
+    assert np.all(np.sign(rpm[T != 0]) == np.sign(T[T != 0]))
+    big = rpm_for_thrust([1e7, -1e7], [0.0, 0.0], 1.9, p, max_rpm=217.0)  # infeasible: saturates
+    np.testing.assert_allclose(big, [217.0, -217.0], atol=1e-6)
+    with pytest.raises(ValueError, match="finite"):
+        rpm_for_thrust([np.nan], [0.0], 1.9, p)
 
 
 def test_drifting_ship_with_stopped_thrusters_feels_drag(gunnerus):

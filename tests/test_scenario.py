@@ -15,9 +15,8 @@ import pytest
 
 from hybridship.cli import main, parse_seeds
 from hybridship.logs.io import read_log, validate_log, write_log
-from hybridship.sim.allocation import ThrustAllocator
 from hybridship.sim.environment import SeaState
-from hybridship.sim.scenario import (DPLossConfig, SensorNoise, _CompiledRpmAllocator, drift_statistics,
+from hybridship.sim.scenario import (DPLossConfig, SensorNoise, drift_statistics,
                                      embedded_scenarios, simulate_dp_loss, sweep)
 
 THRUSTERS = dict(thruster_names=["tunnel", "port", "stbd"], rotatable=[False, True, True])
@@ -201,21 +200,6 @@ def test_drift_statistics_reproduce_truthsim_summary():
     assert st["t_shutdown_s"] == summary["t_shutdown_s"]
     for key in ("drift_excursion_60s_m", "drift_excursion_600s_m", "drift_mean_sog_mps", "dp_pos_std_m"):
         assert st[key] == pytest.approx(summary[key], rel=0.05), key
-
-
-# --------------------------------------------------------------------------- allocation speed-up
-
-
-def test_compiled_allocator_matches_the_allocator():
-    rng = np.random.default_rng(5)
-    ref = ThrustAllocator("gunnerus", dt_s=1.0)
-    fast = _CompiledRpmAllocator("gunnerus", dt_s=1.0)
-    for _ in range(40):
-        tau = rng.normal(0, [3e4, 3e4, 3e5])
-        nu_r = rng.normal(0, [0.5, 0.3, 0.01])
-        a, b = ref.allocate(tau, nu_r), fast.allocate(tau, nu_r)
-        np.testing.assert_array_equal(a.rpm, b.rpm)
-        np.testing.assert_array_equal(a.azimuth_rad, b.azimuth_rad)
 
 
 # --------------------------------------------------------------------------- sweep and embedded set

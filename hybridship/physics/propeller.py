@@ -301,16 +301,28 @@ def rpm_for_thrust(thrust_N, va_m_s, diameter_m: float, prop: PropellerCoefficie
         Upper bound of |rpm|; default 3000 / D (a generous tip-speed bound).
     """
     T, va = np.broadcast_arrays(np.asarray(thrust_N, float), np.asarray(va_m_s, float))
+    if not np.all(np.isfinite(T)) or not np.all(np.isfinite(va)):
+        raise ValueError("rpm_for_thrust: thrust_N and va_m_s must be finite")
     rpm_max = float(max_rpm) if max_rpm is not None else 3000.0 / diameter_m
-    sign = np.where(T >= 0.0, 1.0, -1.0)
-    lo = np.zeros(T.shape)
-    hi = np.full(T.shape, rpm_max)
-    # T(n) is increasing in n for the ahead branch; bisection on |rpm| in the direction
-    # of the demanded thrust is robust in every quadrant including negative inflow.
-    for _ in range(50):
-        mid = 0.5 * (lo + hi)
-        t_mid, _q = thrust_torque(sign * mid / 60.0, va, diameter_m, prop, rho_kg_m3)
-        too_small = sign * t_mid < sign * T
-        lo = np.where(too_small, mid, lo)
-        hi = np.where(too_small, hi, mid)
-    return sign * 0.5 * (lo + hi)
+    out = np.empty(T.size)
+    _rpm_for_thrust_flat(np.ascontiguousarray(T.ravel()), np.ascontiguousarray(va.ravel()), float(diameter_m),
+                         float(rho_kg_m3), prop.coef, rpm_max, out)
+    return out.reshape(T.shape)
+
+
+@numba.njit(cache=True)
+def _rpm_for_thrust_flat(thrust_N, va_m_s, diameter_m, rho_kg_m3, coef, rpm_max, out):
+    # T(n) increases with n along the branch in the direction of the demanded thrust, for
+    # any fixed inflow, so bisection on |rpm| is robust in every quadrant.
+    for i in range(thrust_N.shape[0]):
+        sign = 1.0 if thrust_N[i] >= 0.0 else -1.0
+        lo = 0.0
+        hi = rpm_max
+        for _ in range(50):
+            mid = 0.5 * (lo + hi)
+            t_mid, _q = thrust_torque_scalar(sign * mid / 60.0, va_m_s[i], diameter_m, rho_kg_m3, coef)
+            if sign * t_mid < sign * thrust_N[i]:
+                lo = mid
+            else:
+                hi = mid
+        out[i] = sign * 0.5 * (lo + hi)

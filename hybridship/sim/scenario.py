@@ -42,7 +42,6 @@ from dataclasses import dataclass, field
 from functools import lru_cache
 from pathlib import Path
 
-import numba
 import numpy as np
 
 from ..fileio import atomic_write
@@ -51,7 +50,6 @@ from scipy.signal import lfilter
 
 from hybridship.frames import ned_to_body, wrap_pi
 from hybridship.physics.model import DynamicModel
-from hybridship.physics.propeller import thrust_torque_scalar
 from hybridship.sim import environment as env
 from hybridship.sim.allocation import ThrustAllocator, bollard_thrust_limits
 from hybridship.sim.dp import DPController
@@ -387,48 +385,6 @@ class _LowPass:
         return inp.copy()
 
 
-# --------------------------------------------------------------------------- allocation speed-up
-
-
-@numba.njit(cache=True)
-def _rpm_for_thrust_kernel(thrust_N, va_m_s, diameter_m, rho_kg_m3, coef, rpm_max, out):
-    """Compiled copy of :func:`hybridship.physics.propeller.rpm_for_thrust` (same bisection).
-
-    Same 50 bisection steps on ``|rpm|`` in ``[0, rpm_max]`` with the same scalar thrust
-    kernel, hence bit-identical results, without 50 numpy round trips per call.
-    """
-    for i in range(thrust_N.shape[0]):
-        sign = 1.0 if thrust_N[i] >= 0.0 else -1.0
-        lo = 0.0
-        hi = rpm_max
-        for _ in range(50):
-            mid = 0.5 * (lo + hi)
-            t_mid, _q = thrust_torque_scalar(sign * mid / 60.0, va_m_s[i], diameter_m, rho_kg_m3, coef)
-            if sign * t_mid < sign * thrust_N[i]:
-                lo = mid
-            else:
-                hi = mid
-        out[i] = sign * 0.5 * (lo + hi)
-
-
-class _CompiledRpmAllocator(ThrustAllocator):
-    """:class:`ThrustAllocator` whose rpm inversion runs compiled.
-
-    The python bisection of ``rpm_for_thrust`` is ~75 % of a DP step; this class only
-    replaces that inner loop (``tests/test_scenario.py`` checks it matches the parent).
-    """
-
-    def _rpm_for(self, force, va):
-        out = np.empty(self.n_thrusters)
-        for idx, D, prop, max_rpm in self._groups:
-            T = np.ascontiguousarray(force[idx] / (1.0 - self.tded[idx]), dtype=float)
-            v = np.ascontiguousarray(np.broadcast_to(np.asarray(va, float)[idx], T.shape))
-            res = np.empty(T.size)
-            _rpm_for_thrust_kernel(T, v, float(D), float(self.rho_kg_m3), prop.coef, float(max_rpm), res)
-            out[idx] = res
-        return out
-
-
 # --------------------------------------------------------------------------- simulation
 
 
@@ -499,7 +455,7 @@ def _simulate(config: DPLossConfig, vessel, progress: bool):
 
     # DP system on the nominal model.
     dp = DPController(nominal, dt_s=config.control_dt_s)
-    alloc = _CompiledRpmAllocator(ves, dt_s=config.control_dt_s)
+    alloc = ThrustAllocator(ves, dt_s=config.control_dt_s)
     eta = np.array([0.0, 0.0, cond.heading_sp_rad])
     nu = np.zeros(3)
     dp.reset(eta.copy())
