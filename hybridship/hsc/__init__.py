@@ -1,0 +1,1 @@
+"""High-speed (planing) craft: simulator, identified baselines and the residual hybrid."""
