@@ -8,7 +8,8 @@ the logs, for:
 * ``dynamic``: the physics alone (thrusters stopped after the failure);
 * ``paper``: the paper's scheme (no bias; previous residual from the last 10 s);
 * ``bias+nn``: the default hybrid (900-s residual bias + learned deviation), with and
-  without the out-of-envelope guard;
+  without the guard (Mahalanobis envelope of the nets' features times the thrust regime:
+  nets trained on station keeping are switched off once the thrusters stop);
 * ``bias only``: the default hybrid with the learned deviation switched off.
 
 Usage: ``python benchmarks/hybrid_variants.py [--data DIR] [--members 10] [--seed 0]``.

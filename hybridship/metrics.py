@@ -27,6 +27,31 @@ def shutdown_index(arrays) -> int:
     return int(off[0])
 
 
+def drift_forecasts(predictor, arrays, *, n_intervals: int = 20, horizons_s=HORIZONS_S, **forecast_kw):
+    """Forecasts from successive start times after the shutdown of one log, at the horizons.
+
+    Returns
+    -------
+    pred, truth : ndarray, shape (n_intervals, len(horizons_s), 3)
+        Forecast and logged ``[north_m, east_m, psi_rad]``.
+    std : ndarray of the same shape, or None
+        The forecast's ensemble standard deviation (None for point forecasters).
+    """
+    i0 = shutdown_index(arrays)
+    dt = float(np.median(np.diff(arrays.time_s)))
+    steps = np.array([int(round(h / dt)) for h in horizons_s])
+    H = int(steps.max())
+    n_ok = min(n_intervals, len(arrays.time_s) - H - i0)
+    if n_ok < n_intervals:
+        raise ValueError(f"log: only {max(n_ok, 0)} start times after the shutdown leave {H * dt:g} s of "
+                         f"measurements; {n_intervals} are needed")
+    starts = i0 + np.arange(n_intervals)
+    fc = predictor.forecast(arrays, arrays.time_s[starts], horizon_s=H * dt, **forecast_kw)
+    truth = arrays.eta[starts[:, None] + steps[None, :]]        # (S, nh, 3)
+    std = None if fc.eta_std is None else fc.eta_std[:, steps]
+    return fc.eta[:, steps], truth, std
+
+
 def drift_errors(predictor, arrays, *, n_intervals: int = 20, horizons_s=HORIZONS_S, **forecast_kw) -> np.ndarray:
     """Absolute forecast errors after the shutdown of one log.
 
@@ -44,21 +69,37 @@ def drift_errors(predictor, arrays, *, n_intervals: int = 20, horizons_s=HORIZON
     ndarray, shape (n_intervals, len(horizons_s), 3)
         ``|north error| [m], |east error| [m], |yaw error| [deg]``.
     """
-    i0 = shutdown_index(arrays)
-    dt = float(np.median(np.diff(arrays.time_s)))
-    steps = np.array([int(round(h / dt)) for h in horizons_s])
-    H = int(steps.max())
-    n_ok = min(n_intervals, len(arrays.time_s) - H - i0)
-    if n_ok < n_intervals:
-        raise ValueError(f"log: only {max(n_ok, 0)} start times after the shutdown leave {H * dt:g} s of "
-                         f"measurements; {n_intervals} are needed")
-    starts = i0 + np.arange(n_intervals)
-    fc = predictor.forecast(arrays, arrays.time_s[starts], horizon_s=H * dt, **forecast_kw)
-    truth = arrays.eta[starts[:, None] + steps[None, :]]        # (S, nh, 3)
-    pred = fc.eta[:, steps]
+    pred, truth, _ = drift_forecasts(predictor, arrays, n_intervals=n_intervals, horizons_s=horizons_s,
+                                     **forecast_kw)
+    return absolute_errors(pred, truth)
+
+
+def absolute_errors(pred: np.ndarray, truth: np.ndarray) -> np.ndarray:
+    """``|north|, |east| [m]`` and ``|yaw| [deg]`` (heading difference wrapped to +-180 deg)."""
     err = np.abs(pred - truth)
     err[..., 2] = np.degrees(np.abs(wrap_pi(pred[..., 2] - truth[..., 2])))
     return err
+
+
+def coverage(pred: np.ndarray, truth: np.ndarray, std: np.ndarray, sigmas=(1.0, 2.0)) -> np.ndarray:
+    """Fraction of north and east errors within ``k`` standard deviations.
+
+    Parameters
+    ----------
+    pred, truth, std : ndarray, shape (..., n_horizons, 3)
+        Pooled over all leading axes and over north and east (heading is not counted).
+
+    Returns
+    -------
+    ndarray, shape (n_horizons, len(sigmas))
+        Observed coverage; a calibrated Gaussian forecast gives 0.683 and 0.954 for 1 and 2 sigma.
+    """
+    err = np.abs(pred - truth)[..., :2]
+    s = std[..., :2]
+    nh = err.shape[-2]
+    e = np.moveaxis(err, -2, 0).reshape(nh, -1)
+    s = np.moveaxis(s, -2, 0).reshape(nh, -1)
+    return np.stack([(e <= k * s).mean(axis=1) for k in sigmas], axis=1)
 
 
 def error_table(errors: dict, *, horizons_s=HORIZONS_S, windows=WINDOWS) -> pd.DataFrame:

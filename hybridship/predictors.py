@@ -29,10 +29,10 @@ from .physics.integrate import rollout_batch
 from .physics.model import DynamicModel
 from .residual.ensemble import EnsembleConfig, MLPEnsemble, fit_ensemble
 from .residual.features import ResidualConfig, prepare_log
-from .residual.guard import EnvelopeGuard
+from .residual.guard import EnvelopeGuard, ThrustRegime
 
 #: Version of the model-file format written by :meth:`HybridPredictor.save`.
-MODEL_FORMAT_VERSION = 1
+MODEL_FORMAT_VERSION = 2
 
 
 class ModelFileError(ValueError):
@@ -239,13 +239,14 @@ class HybridPredictor:
         self.guard_quantile = float(guard_quantile)
         self.ensemble: MLPEnsemble | None = None
         self.guard: EnvelopeGuard | None = None
+        self.thrust_regime: ThrustRegime | None = None
         self.training_info: dict = {}
 
     # ------------------------------------------------------------------ training
 
     def training_data(self, logs: Iterable, *, dp_only: bool = True):
         """Features X, targets Y and a per-log segment label from the given logs."""
-        Xs, Ys, segs = [], [], []
+        Xs, Ys, segs, thr = [], [], [], []
         for k, log in enumerate(logs):
             arrays = as_log_arrays(log, self.model.vessel)
             prep = prepare_log(self.model, arrays, self.residual_config)
@@ -256,9 +257,11 @@ class HybridPredictor:
             Xs.append(prep.features(rows))
             Ys.append(prep.deviation(rows))
             segs.append(arrays.segment_id[rows] + 10_000 * k)
+            thr.append(prep.thrust_acc[rows])
         if not Xs:
             raise ValueError("fit: no usable training rows in the logs (need dp_active == 1 samples "
                              "in gap-free segments longer than the derivative window)")
+        self._training_thrust_acc = np.concatenate(thr)
         return np.concatenate(Xs), np.concatenate(Ys), np.concatenate(segs)
 
     def fit(self, logs: Iterable, *, dp_only: bool = True, progress: bool = False) -> "HybridPredictor":
@@ -276,6 +279,7 @@ class HybridPredictor:
         self.ensemble = fit_ensemble(X, Y, self.ensemble_config, segment_id=seg, progress=progress)
         self.guard = EnvelopeGuard.fit((X - self.ensemble.x_mean) / self.ensemble.x_std,
                                        quantile=self.guard_quantile)
+        self.thrust_regime = ThrustRegime.fit(self._training_thrust_acc)
         self.training_info = {"n_rows": int(X.shape[0]), "epochs": self.ensemble.history["epochs"],
                               "best_val_mse": self.ensemble.history["best_val_mse"],
                               "residual_std": Y.std(0).tolist()}
@@ -297,7 +301,8 @@ class HybridPredictor:
         eta0 = np.array([s[0] for s in starts])
         nu0 = np.array([s[1] for s in starts])
         dev0 = np.array([s[2] for s in starts])
-        bias0 = np.array([s[3] for s in starts])
+        E = self.ensemble.n_members
+        bias0 = np.stack([prep.bias_members(int(i), E, self.ensemble_config.seed) for i in idx], axis=1)
         rpm, az, wind = _held_inputs(arrays, idx, stop_after_failure=self.stop_after_failure)
         H = int(round(horizon_s / prep.dt_s))
         out = self.rollout(eta0, nu0, dev0, bias0, rpm, az, wind, H, prep.dt_s,
@@ -306,7 +311,7 @@ class HybridPredictor:
 
     def rollout(self, eta0, nu0, dev0, bias0_ned, rpm, az, wind, n_steps: int, dt_s: float, *, guard: bool = True):
         """Batched hybrid rollout from states (S, 3), previous residual deviations (S, 3),
-        biases (S, 3; surge/sway in NED) and held inputs (S, 1, K|2).
+        biases (S, 3) or per member (E, S, 3) (surge/sway in NED) and held inputs (S, 1, K|2).
 
         Every step: the physics advances the ensemble-mean state one step (RK4) and
         predicts the acceleration there; each member predicts its residual deviation from
@@ -331,6 +336,14 @@ class HybridPredictor:
         std = np.zeros((S, n_steps + 1, 3))
         wgt = np.ones((S, n_steps + 1))
         eta[:, 0], nu[:, 0] = eta0, nu0
+        bias0_ned = np.broadcast_to(bias0_ned, (E, S, 3))
+        w_thrust = np.ones(S)
+        if guard and self.thrust_regime is not None:
+            # thrust regime of the held commands at the start (commands do not change)
+            _, parts, _ = self.model.acceleration(eta0, nu0, rpm=rpm[:, 0], azimuth_rad=az[:, 0],
+                                                  wind=wind[:, 0], return_parts=True)
+            w_thrust = self.thrust_regime.weight(parts[:, 1] @ np.linalg.inv(self.model.mass_matrix).T)
+            wgt[:, 0] = w_thrust
         r_prev = np.broadcast_to(dev0, (E, S, 3)).copy()
         d_nu = np.zeros((E, S, 3))        # member velocity deviations from the mean
         d_eta = np.zeros((E, S, 3))       # member position deviations (NED)
@@ -348,16 +361,16 @@ class HybridPredictor:
             r = ens.predict_members(X)                          # (E, S, 3)
             if guard:
                 z = (X.mean(axis=0) - ens.x_mean) / ens.x_std
-                w = self.guard.weight(z)                        # (S,)
+                w = self.guard.weight(z) * w_thrust             # (S,)
                 r = r * w[None, :, None]
                 wgt[:, j + 1] = w
             psi = e1[:, 1, 2]
             c, s = np.cos(psi), np.sin(psi)
             r_prev = r
             # total residual = bias in today's heading + learned deviation
-            bias_b = np.column_stack([c * bias0_ned[:, 0] + s * bias0_ned[:, 1],
-                                      -s * bias0_ned[:, 0] + c * bias0_ned[:, 1], bias0_ned[:, 2]])
-            r = r + bias_b[None]
+            bias_b = np.stack([c * bias0_ned[..., 0] + s * bias0_ned[..., 1],
+                               -s * bias0_ned[..., 0] + c * bias0_ned[..., 1], bias0_ned[..., 2]], axis=-1)
+            r = r + bias_b
             r_mean = r.mean(axis=0)
             nu[:, j + 1] = n1[:, 1] + dt_s * r_mean
             half = 0.5 * dt_s * dt_s
@@ -387,6 +400,7 @@ class HybridPredictor:
             "use_guard": self.use_guard, "guard_quantile": self.guard_quantile,
             "stop_after_failure": self.stop_after_failure,
             "guard": {"d0": self.guard.d0, "scale": self.guard.scale},
+            "thrust_regime": {"lo": self.thrust_regime.lo},
             "training_info": self.training_info,
         }
 
@@ -397,7 +411,7 @@ class HybridPredictor:
         e, g = self.ensemble, self.guard
         arrays = {f"w{i}": w for i, w in enumerate(e.weights)}
         arrays.update(x_mean=e.x_mean, x_std=e.x_std, y_mean=e.y_mean, y_std=e.y_std,
-                      guard_mean=g.mean, guard_inv_cov=g.inv_cov)
+                      guard_mean=g.mean, guard_inv_cov=g.inv_cov, thrust_scale=self.thrust_regime.scale)
         meta = json.dumps(self._metadata(), sort_keys=True)
         arrays["metadata_json"] = np.frombuffer(meta.encode("utf-8"), dtype=np.uint8)
         return atomic_write(path, lambda fh: np.savez(fh, **arrays))
@@ -444,13 +458,16 @@ class HybridPredictor:
             ens = MLPEnsemble(weights, data["x_mean"], data["x_std"], data["y_mean"], data["y_std"])
             guard = EnvelopeGuard(data["guard_mean"], data["guard_inv_cov"], float(meta["guard"]["d0"]),
                                   float(meta["guard"]["scale"]))
+            thrust_regime = ThrustRegime(np.asarray(data["thrust_scale"], dtype=float),
+                                         float(meta["thrust_regime"]["lo"]))
             for name, a in [("weights", np.concatenate([w.ravel() for w in weights])), ("x_std", ens.x_std),
-                            ("y_std", ens.y_std), ("guard_inv_cov", guard.inv_cov)]:
+                            ("y_std", ens.y_std), ("guard_inv_cov", guard.inv_cov),
+                            ("thrust_scale", thrust_regime.scale)]:
                 if not np.all(np.isfinite(a)):
                     raise ValueError(f"{name} contains NaN or inf")
         except (KeyError, ValueError) as err:
             raise ModelFileError(f"{path}: damaged model contents: {err}") from None
-        obj.ensemble, obj.guard = ens, guard
+        obj.ensemble, obj.guard, obj.thrust_regime = ens, guard, thrust_regime
         obj.training_info = meta.get("training_info", {})
         return obj
 

@@ -149,3 +149,44 @@ def test_guard_is_one_inside_and_shrinks_outside():
     assert np.mean(g.weight(X) == 1.0) > 0.98
     w = g.weight(np.array([[0, 0, 0], [10, 0, 0], [30, 0, 0]], float))
     assert w[0] == 1.0 and 0 < w[2] < w[1] < 1.0
+
+
+def test_thrust_regime_switches_the_nets_off_when_thrusters_stop():
+    from hybridship.residual.guard import ThrustRegime
+
+    rng = np.random.default_rng(0)
+    working = rng.normal([0.02, -0.01, 0.0005], [0.01, 0.01, 0.0003], size=(2000, 3))   # station keeping
+    regime = ThrustRegime.fit(working)
+    assert np.all(regime.weight(working[:100]) >= 0.0) and np.median(regime.weight(working)) == 1.0
+    assert regime.weight(np.zeros(3)) == 0.0                   # all thrusters stopped: nets off
+    # trained on drifting rows as well (zero thrust seen): the nets stay on
+    both = ThrustRegime.fit(np.vstack([working, np.zeros((200, 3))]))
+    assert both.weight(np.zeros(3)) == 1.0
+
+
+def test_bias_members_are_centred_on_the_bias_and_reproducible(model, current_logs):
+    prep = prepare_log(model, as_log_arrays(current_logs[0], model.vessel))
+    i = 850                                                    # DP part, 850 s of history
+    m1 = prep.bias_members(i, 10, seed=3)
+    m2 = prep.bias_members(i, 10, seed=3)
+    np.testing.assert_array_equal(m1, m2)
+    np.testing.assert_allclose(m1.mean(axis=0), prep.bias_ned[i], atol=1e-12)
+    assert np.all(m1.std(axis=0)[:2] > 0)                      # a spread from the residual blocks
+
+
+@pytest.mark.slow
+def test_guarded_hybrid_beats_physics_after_a_simulated_dp_loss():
+    """Trained on the DP part only; first 20 forecasts after the failure, 60 s ahead."""
+    from hybridship import metrics
+    from hybridship.sim.scenario import embedded_scenarios
+
+    scen = embedded_scenarios(2, 0)
+    hp = HybridPredictor("gunnerus", ensemble_config=SMALL)
+    logs = [as_log_arrays(s.log, hp.model.vessel) for s in scen]
+    hp.fit(logs)
+    dyn = DynamicPredictor("gunnerus")
+    e_h = np.stack([metrics.drift_errors(hp, a) for a in logs])[:, :, -1, :2].mean(axis=(0, 1))
+    e_d = np.stack([metrics.drift_errors(dyn, a) for a in logs])[:, :, -1, :2].mean(axis=(0, 1))
+    assert np.all(e_h < 0.8 * e_d), (e_h, e_d)
+    fc = hp.forecast(logs[0], logs[0].time_s[[metrics.shutdown_index(logs[0]) + 1]], 60)
+    assert fc.guard_weight[0, 0] == 0.0                        # thrusters stopped: nets off

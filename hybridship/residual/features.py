@@ -72,6 +72,9 @@ class ResidualConfig:
     bias_window_s : window of the causal residual mean used as the bias [s]; 0 = no bias
         (the paper's scheme).
     bias_frame : ``"ned"`` or ``"body"``: the frame in which the bias is held constant.
+    bias_block_s : length of the residual blocks whose means spread the ensemble members'
+        biases [s] (the forecast horizon is a good choice: the spread then reflects how much
+        a one-minute mean of the unknown force varies around the long mean).
     """
 
     features: tuple[str, ...] = PAPER_FEATURES
@@ -81,6 +84,7 @@ class ResidualConfig:
     start_residual_window_s: float = 0.0
     bias_window_s: float = 900.0
     bias_frame: str = "ned"
+    bias_block_s: float = 60.0
 
     def __post_init__(self):
         if self.bias_window_s < 0:
@@ -93,6 +97,8 @@ class ResidualConfig:
         if self.deriv_window_s < 0 or not self.start_average_s > 0 or self.start_residual_window_s < 0:
             raise ValueError("ResidualConfig: start_average_s must be > 0 s, deriv_window_s and "
                              "start_residual_window_s >= 0 s")
+        if not self.bias_block_s > 0:
+            raise ValueError(f"ResidualConfig.bias_block_s must be > 0 s, got {self.bias_block_s}")
         if self.polyorder < 1:
             raise ValueError(f"ResidualConfig.polyorder must be >= 1, got {self.polyorder}")
 
@@ -139,6 +145,9 @@ class PreparedLog:
     model's prediction FOR sample ``i`` made from sample ``i - 1`` (NaN where ``i - 1`` is
     in another segment or does not exist); ``residual[i] = nu_dot[i] - nu_dot_hat[i]``.
     The ``_c`` arrays are the causal counterparts used at forecast starts.
+    ``thrust_acc[i]`` is ``M^-1 tau_thrust`` [m/s^2, m/s^2, rad/s^2] at the state and
+    commands of row ``i - 1`` (the thrusters' share of the model's acceleration; the guard
+    uses it to tell the thruster regime of the training data from that of a forecast).
     """
 
     arrays: LogArrays
@@ -151,6 +160,7 @@ class PreparedLog:
     nu_c: np.ndarray
     residual_c: np.ndarray
     bias_ned: np.ndarray
+    thrust_acc: np.ndarray
     config: ResidualConfig = field(default_factory=ResidualConfig)
 
     def bias_body(self, rows: np.ndarray, psi_rad=None) -> np.ndarray:
@@ -192,6 +202,34 @@ class PreparedLog:
             ok &= mask
             ok[1:] &= mask[:-1]
         return np.flatnonzero(ok)
+
+    def bias_members(self, idx: int, n_members: int, seed: int = 0) -> np.ndarray:
+        """Per-member biases (n_members, 3; surge/sway in NED) at row ``idx``.
+
+        Member ``k`` adds to the bias the difference between the mean residual over one
+        randomly drawn ``bias_block_s`` block of the bias window and the mean over all
+        drawn blocks: the members' spread is the variability of a block-long mean of the
+        unknown force, which the one-minute forecast inherits. Zeros offsets when the
+        window holds less than two blocks. Deterministic for a given ``seed`` and row.
+        """
+        bias = self.bias_ned[idx] if np.isfinite(self.bias_ned[idx]).all() else np.zeros(3)
+        out = np.broadcast_to(bias, (n_members, 3)).copy()
+        if self.config.bias_window_s == 0 or n_members < 2:
+            return out
+        a = self.arrays
+        seg0 = int(np.flatnonzero(a.segment_id == a.segment_id[idx])[0])
+        w = max(1, int(round(self.config.bias_window_s / self.dt_s)))
+        lo = max(seg0, idx - w + 1)
+        vals, use = _residual_ned(self.residual_c, a)
+        v = vals[lo: idx + 1][use[lo: idx + 1]]
+        nb = max(1, int(round(self.config.bias_block_s / self.dt_s)))
+        if v.shape[0] < 2 * nb:
+            return out
+        rng = np.random.default_rng([seed, idx])
+        starts = rng.integers(0, v.shape[0] - nb + 1, size=n_members)
+        cs = np.vstack([np.zeros((1, 3)), np.cumsum(v, axis=0)])
+        means = (cs[starts + nb] - cs[starts]) / nb
+        return out + means - means.mean(axis=0)
 
     def start_state(self, idx: int):
         """Causal start state at row ``idx``: ``(eta0 (3,), nu0 (3,), deviation0 (3,), bias_ned0 (3,))``.
@@ -270,13 +308,32 @@ def prepare_log(model, arrays: LogArrays, config: ResidualConfig = ResidualConfi
         ndh[1:][same] = res.nu_dot[:-1, 1][same]
         return nh, ndh
 
+    # The thrusters' share of the model acceleration, from row i - 1 (stored at row i).
+    _, parts, _ = model.acceleration(arrays.eta, np.nan_to_num(nu_s), rpm=arrays.rpm,
+                                     azimuth_rad=arrays.azimuth_rad, wind=arrays.wind, return_parts=True)
+    a_thr = parts[:, 1] @ np.linalg.inv(model.mass_matrix).T
+    thrust_acc = np.full((N, 3), np.nan)
+    same_seg = arrays.segment_id[1:] == arrays.segment_id[:-1]
+    thrust_acc[1:][same_seg] = a_thr[:-1][same_seg]
+
     nu_hat, nu_dot_hat = one_step(nu_s)
     nu_hat_c, _ = one_step(nu_c)
     residual = (nu_s - nu_hat) / dt
     residual_c = (nu_c - nu_hat_c) / dt
     return PreparedLog(arrays=arrays, dt_s=dt, nu_s=nu_s, nu_dot=nu_dot, nu_hat=nu_hat, nu_dot_hat=nu_dot_hat,
                        residual=residual, nu_c=nu_c, residual_c=residual_c,
-                       bias_ned=causal_bias(residual_c, arrays, dt, config), config=config)
+                       bias_ned=causal_bias(residual_c, arrays, dt, config), thrust_acc=thrust_acc,
+                       config=config)
+
+
+def _residual_ned(residual_c: np.ndarray, arrays: LogArrays):
+    """Causal residuals with surge/sway rotated to NED, and the rows the bias may use."""
+    psi = arrays.eta[:, 2]
+    c, s = np.cos(psi), np.sin(psi)
+    r = residual_c
+    vals = np.column_stack([c * r[:, 0] - s * r[:, 1], s * r[:, 0] + c * r[:, 1], r[:, 2]])
+    use = np.isfinite(vals).all(1) & arrays.dp_active.astype(bool)
+    return vals, use
 
 
 def causal_bias(residual_c: np.ndarray, arrays: LogArrays, dt_s: float, config: ResidualConfig) -> np.ndarray:

@@ -69,3 +69,55 @@ class EnvelopeGuard:
         """Shrink factor in (0, 1] for each row of ``X``: 1 inside the envelope."""
         d = self.distance(X)
         return np.exp(-np.maximum(d - self.d0, 0.0) / self.scale)
+
+
+@dataclass
+class ThrustRegime:
+    """Were the nets trained with the thrusters working the way they work now?
+
+    Station-keeping logs are full of thrust, and the residual the nets learn there is
+    largely the thruster model's error: a function of the commanded thrust that has no
+    meaning once the thrusters stop. The Mahalanobis envelope of the nets' own features
+    does not see this (after a failure the model-predicted accelerations are small, well
+    inside the station-keeping range), so the guard also compares the thrust level,
+
+    .. math::  \\ell = \\lVert (M^{-1} \\tau_{thr}) / s \\rVert,
+
+    with ``s`` the per-axis standard deviation of the training thrust accelerations,
+    against ``lo``, a low quantile of the training levels: the weight ramps from 0 at
+    ``lo / 2`` to 1 at ``lo``. It is 1 whenever the training data held thrust levels as low as
+    the present one (for example when the nets were trained on drifting logs as well),
+    and goes to 0 as the thrusters stop on a model trained on station keeping only.
+
+    Attributes
+    ----------
+    scale : (3,) per-axis scale of ``M^-1 tau_thr`` [m/s^2, m/s^2, rad/s^2].
+    lo : thrust level below which the weight falls (dimensionless).
+    """
+
+    scale: np.ndarray
+    lo: float
+
+    @classmethod
+    def fit(cls, thrust_acc: np.ndarray, *, quantile: float = 0.01) -> "ThrustRegime":
+        """Fit to the training rows' thrust accelerations ``(N, 3)``."""
+        A = np.asarray(thrust_acc, dtype=float)
+        if A.ndim != 2 or A.shape[1] != 3 or not np.all(np.isfinite(A)):
+            raise ValueError("ThrustRegime.fit: thrust_acc must be a finite (N, 3) array")
+        if not 0.0 <= quantile < 0.5:
+            raise ValueError(f"ThrustRegime.fit: quantile must lie in [0, 0.5), got {quantile}")
+        scale = A.std(axis=0)
+        scale = np.where(scale > 1e-12, scale, 1.0)
+        lo = float(np.quantile(np.linalg.norm(A / scale, axis=1), quantile))
+        return cls(scale, lo)
+
+    def level(self, thrust_acc: np.ndarray) -> np.ndarray:
+        """Normalised thrust level of each row of ``thrust_acc (..., 3)``."""
+        return np.linalg.norm(np.asarray(thrust_acc, dtype=float) / self.scale, axis=-1)
+
+    def weight(self, thrust_acc: np.ndarray) -> np.ndarray:
+        """Weight in [0, 1] for each row: 1 where training saw such thrust levels."""
+        lev = self.level(thrust_acc)
+        if self.lo <= 0.0:
+            return np.ones_like(lev)
+        return np.clip(2.0 * lev / self.lo - 1.0, 0.0, 1.0)
