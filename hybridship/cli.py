@@ -290,6 +290,58 @@ def _cmd_forecast(args) -> int:
     return 0
 
 
+def _add_benchmark(sub) -> None:
+    p = sub.add_parser("benchmark", help="reproducible benchmark tables (drift, ...)",
+                       description="Reproducible benchmarks that write Markdown and CSV tables.")
+    bsub = p.add_subparsers(dest="benchmark", metavar="BENCHMARK", parser_class=_Parser)
+    d = bsub.add_parser("drift", help="the paper's 15/30/45/60 s drift-error tables after a DP failure",
+                        description="Train on --train (DP parts), forecast after every failure in --test, and "
+                                    "write errors.csv, coverage.csv, timing.csv, tables.md and figures to --out. "
+                                    "Without --train/--test: the embedded simulated scenarios.")
+    d.add_argument("--train", type=Path, help="folder of training logs")
+    d.add_argument("--test", type=Path, help="folder of test logs (default: the training logs' drifts)")
+    d.add_argument("--out", type=Path, default=Path("drift-benchmark"), help="output folder (default drift-benchmark)")
+    d.add_argument("--vessel", default="gunnerus", help="packaged vessel name or vessel TOML file")
+    d.add_argument("--members", type=int, default=10, help="ensemble members (default 10)")
+    d.add_argument("--seed", type=int, default=0, help="seed of scenarios and training (default 0)")
+    d.add_argument("--intervals", type=int, default=20, help="start times after each failure (default 20)")
+    d.add_argument("--scenarios", type=int, default=3, help="embedded scenarios when no folders are given")
+    d.add_argument("--all-rows", action="store_true", help="train on every row, not only dp_active == 1")
+    d.add_argument("--no-plots", action="store_true", help="skip the figures")
+    d.set_defaults(func=_cmd_benchmark_drift)
+    p.set_defaults(func=_cmd_benchmark_missing)
+
+
+def _cmd_benchmark_missing(args) -> int:
+    raise UsageError(f"{_PROG} benchmark: error: choose a benchmark (try '{_PROG} benchmark --help')")
+
+
+def _cmd_benchmark_drift(args) -> int:
+    from .drift_benchmark import log_files, run_drift_benchmark
+    from .vessel import VesselFileError, load_vessel
+
+    if args.members < 1 or args.intervals < 1 or args.scenarios < 1:
+        raise UsageError(f"{_PROG} benchmark drift: error: --members, --intervals and --scenarios must be >= 1")
+    if args.test is not None and args.train is None:
+        raise UsageError(f"{_PROG} benchmark drift: error: --test needs --train")
+    for opt, folder in (("--train", args.train), ("--test", args.test)):
+        if folder is not None:
+            try:
+                log_files(folder)
+            except ValueError as exc:
+                raise UsageError(f"{_PROG} benchmark drift: error: {opt} {_one_line(exc)}") from None
+    try:
+        vessel = load_vessel(args.vessel)
+    except VesselFileError as exc:
+        raise UsageError(f"{_PROG} benchmark drift: error: {_one_line(exc)}") from None
+    res = run_drift_benchmark(args.train, args.test, args.out, vessel=vessel, members=args.members,
+                              seed=args.seed, n_intervals=args.intervals, dp_only=not args.all_rows,
+                              n_scenarios=args.scenarios, plots=not args.no_plots)
+    print()
+    print(res.outputs["tables.md"].read_text())
+    return 0
+
+
 def _build_parser() -> argparse.ArgumentParser:
     """The top-level parser with every subcommand registered."""
     parser = _Parser(prog=_PROG, description="Ship drift forecasting with a 3-DOF Fossen model and "
@@ -298,6 +350,7 @@ def _build_parser() -> argparse.ArgumentParser:
     _add_simulate(sub)
     _add_demo(sub)
     _add_train(sub)
+    _add_benchmark(sub)
     _add_forecast(sub)
     return parser
 

@@ -1,0 +1,274 @@
+"""The drift benchmark: Skulstad et al. (2022) Tables 2 and 3 on any folder of logs.
+
+Every predictor is trained on the logs of ``train`` (the DP part before the shutdown of
+each, unless ``dp_only=False``) and forecasts, from each of the first ``n_intervals``
+samples after the shutdown of every log in ``test``, ``horizon_s`` ahead. The outputs:
+
+* ``errors.csv``: ``model,state,window,horizon_s,mae`` (``state`` in ``north_m, east_m,
+  yaw_deg``; ``window`` 5 or 20 intervals), one row per cell of the paper's Table 2;
+* ``coverage.csv``: ``model,horizon_s,sigma,coverage`` for the ensemble models: the share
+  of north and east errors within 1 and 2 standard deviations of the ensemble; with two
+  or more test logs also ``<model>_loo_calibrated``: the spread scaled, per horizon, by the
+  factor that gives 68.3 % coverage on the other test logs (leave one log out);
+* ``tables.md``: Table 2 (cells "first-5/first-20"), Table 3 (% error reduction of the
+  hybrids relative to the dynamic model), coverage and wall times;
+* ``timing.csv``: training and forecasting wall time per model;
+* ``error_vs_horizon.png`` and ``trajectories.png`` (the paper's Fig. 6: the first five
+  forecasts after the failure against the measured track).
+
+Models: ``hybrid`` (bias + nets, no guard), ``hybrid_guarded`` (the default hybrid),
+``dynamic``, ``dead_reckoning`` and ``data_only`` (an ensemble of the same size and
+architecture predicting the whole acceleration without physics).
+
+With no folders it runs on the embedded simulated scenarios (train on their DP parts,
+test on their drifts, as the paper did with its one failure).
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+
+from . import metrics
+from .fileio import atomic_write
+from .predictors import DataOnlyPredictor, DeadReckoning, DynamicPredictor, HybridPredictor, as_log_arrays
+from .residual.ensemble import EnsembleConfig
+
+#: File endings read as logs from a folder.
+LOG_SUFFIXES = (".csv", ".csv.gz", ".parquet", ".pq")
+
+#: Models in table order; the ensemble models also get a coverage row.
+MODELS = ("hybrid", "hybrid_guarded", "dynamic", "dead_reckoning", "data_only")
+ENSEMBLE_MODELS = ("hybrid", "hybrid_guarded", "data_only")
+
+#: Skulstad et al. (2022), Table 2 (RV Gunnerus, one DP failure): "first 5/first 20".
+PAPER_TABLE2 = {
+    ("hybrid", "north_m"): ("0.14/0.17", "0.22/0.76", "0.41/1.74", "0.70/2.93"),
+    ("hybrid", "east_m"): ("0.06/0.07", "0.16/0.36", "0.38/1.07", "0.99/2.41"),
+    ("hybrid", "yaw_deg"): ("0.14/0.21", "0.28/0.56", "0.37/0.99", "0.73/1.71"),
+    ("dynamic", "north_m"): ("0.26/0.21", "0.73/0.56", "1.36/1.07", "2.12/1.78"),
+    ("dynamic", "east_m"): ("0.11/0.12", "0.47/0.48", "1.05/1.01", "1.79/1.67"),
+    ("dynamic", "yaw_deg"): ("0.25/0.23", "0.55/0.56", "0.89/0.71", "1.49/0.95"),
+}
+
+
+def log_files(folder: Path) -> list[Path]:
+    """Log files in ``folder`` (sorted), skipping a ``scenarios.csv`` summary."""
+    folder = Path(folder)
+    if not folder.is_dir():
+        raise ValueError(f"{folder}: not a folder")
+    files = sorted(p for p in folder.iterdir() if p.name.endswith(LOG_SUFFIXES) and p.name != "scenarios.csv")
+    if not files:
+        raise ValueError(f"{folder}: no log files ({', '.join('*' + s for s in LOG_SUFFIXES)})")
+    return files
+
+
+@dataclass
+class DriftBenchmarkResult:
+    """Everything the benchmark measured (tables as DataFrames, paths of written files)."""
+
+    errors: pd.DataFrame
+    coverage: pd.DataFrame
+    timing: pd.DataFrame
+    table2: pd.DataFrame
+    table3: dict
+    outputs: dict
+
+
+def run_drift_benchmark(train=None, test=None, out_dir="drift-benchmark", *, vessel="gunnerus",
+                        members: int = 10, seed: int = 0, n_intervals: int = 20, horizon_s: float = 60.0,
+                        dp_only: bool = True, n_scenarios: int = 3, ensemble_config: EnsembleConfig | None = None,
+                        plots: bool = True, progress: bool = True) -> DriftBenchmarkResult:
+    """Train, forecast after every failure, and write the tables and figures.
+
+    Parameters
+    ----------
+    train, test : path of a folder of logs, a list of logs, or None
+        None (both) runs on ``n_scenarios`` embedded simulated scenarios. ``test`` None
+        with a ``train`` folder tests on the training logs' drifts.
+    out_dir : path
+        Folder for the outputs (created).
+    members, seed : ensemble size and seed of every ensemble model.
+    n_intervals : successive start times after each shutdown (the paper's 20).
+    horizon_s : forecast length [s]; the table's horizons are 15, 30, 45, 60 s within it.
+    dp_only : train on the DP part (``dp_active == 1``) only.
+    ensemble_config : overrides ``members``/``seed`` (e.g. fewer epochs in tests).
+    """
+    def say(msg):
+        if progress:
+            print(msg, flush=True)
+
+    if train is None and test is None:
+        from .sim.scenario import embedded_scenarios
+
+        scen = embedded_scenarios(n_scenarios, seed)
+        train_logs = test_logs = [s.log for s in scen]
+        train_names = test_names = [s.name for s in scen]
+        say(f"embedded scenarios: {', '.join(train_names)} (train on DP parts, test on drifts)")
+    else:
+        if train is None:
+            raise ValueError("train: a folder of training logs is needed when test is given")
+        train_logs, train_names = _logs(train)
+        test_logs, test_names = (train_logs, train_names) if test is None else _logs(test)
+    out = Path(out_dir)
+    out.mkdir(parents=True, exist_ok=True)
+    ens_cfg = ensemble_config or EnsembleConfig(n_members=members, seed=seed)
+    horizons = tuple(h for h in metrics.HORIZONS_S if h <= horizon_s + 1e-9)
+
+    hybrid = HybridPredictor(vessel, ensemble_config=ens_cfg)
+    train_arrays = [as_log_arrays(x, hybrid.model.vessel) for x in train_logs]
+    test_arrays = [as_log_arrays(x, hybrid.model.vessel) for x in test_logs]
+    data_only = DataOnlyPredictor(vessel, ensemble_config=ens_cfg)
+    timing = []
+    for name, pred in (("hybrid", hybrid), ("data_only", data_only)):
+        t0 = time.perf_counter()
+        pred.fit(train_arrays, dp_only=dp_only)
+        timing.append({"model": name, "what": "train", "seconds": time.perf_counter() - t0})
+        say(f"trained {name} on {len(train_arrays)} logs ({timing[-1]['seconds']:.1f} s)")
+    predictors = {"hybrid": (hybrid, {"guard": False}), "hybrid_guarded": (hybrid, {"guard": True}),
+                  "dynamic": (DynamicPredictor(vessel), {}), "dead_reckoning": (DeadReckoning(vessel), {}),
+                  "data_only": (data_only, {})}
+
+    dt = float(np.median(np.diff(test_arrays[0].time_s)))
+    all_h = tuple(float(k * dt) for k in range(1, int(round(horizon_s / dt)) + 1))
+    pick = [all_h.index(float(h)) for h in horizons]
+    fc = {}
+    for name, (pred, kw) in predictors.items():
+        t0 = time.perf_counter()
+        fc[name] = [metrics.drift_forecasts(pred, a, n_intervals=n_intervals, horizons_s=all_h, **kw)
+                    for a in test_arrays]
+        sec = time.perf_counter() - t0
+        timing.append({"model": name, "what": f"forecast {len(test_arrays) * n_intervals} x {horizon_s:g} s",
+                       "seconds": sec})
+    timing = pd.DataFrame(timing)
+
+    errors = {name: [metrics.absolute_errors(p[:, pick], t[:, pick]) for p, t, _ in per_log]
+              for name, per_log in fc.items()}
+    windows = tuple(w for w in metrics.WINDOWS if w <= n_intervals) or (n_intervals,)
+    long = metrics.error_table(errors, horizons_s=horizons, windows=windows)
+    cov_rows = []
+    for name in ENSEMBLE_MODELS:
+        P = np.stack([p[:, pick] for p, _, _ in fc[name]])
+        T = np.stack([t[:, pick] for _, t, _ in fc[name]])
+        S = np.stack([s[:, pick] for _, _, s in fc[name]])
+        c = metrics.coverage(P, T, S)
+        for j, h in enumerate(horizons):
+            for k, sig in enumerate((1, 2)):
+                cov_rows.append({"model": name, "horizon_s": h, "sigma": sig, "coverage": float(c[j, k])})
+        if len(test_arrays) >= 2:
+            # Leave-one-log-out spread calibration: scale each log's spread by the factor that
+            # gives 1-sigma coverage on the OTHER logs' drifts (per horizon), then score it.
+            z = np.abs(P - T)[..., :2] / np.maximum(S[..., :2], 1e-12)          # (L, S, nh, 2)
+            Scal = np.empty_like(S)
+            for i in range(len(test_arrays)):
+                others = np.delete(z, i, axis=0)
+                k = np.quantile(np.moveaxis(others, 2, 0).reshape(len(horizons), -1), 0.6827, axis=1)
+                Scal[i] = S[i] * k[None, :, None]
+            c = metrics.coverage(P, T, Scal)
+            for j, h in enumerate(horizons):
+                for k, sig in enumerate((1, 2)):
+                    cov_rows.append({"model": name + "_loo_calibrated", "horizon_s": h, "sigma": sig,
+                                     "coverage": float(c[j, k])})
+    coverage = pd.DataFrame(cov_rows)
+
+    outputs = {}
+    outputs["errors.csv"] = _write_csv(out / "errors.csv", long)
+    outputs["coverage.csv"] = _write_csv(out / "coverage.csv", coverage)
+    outputs["timing.csv"] = _write_csv(out / "timing.csv", timing)
+    table2 = metrics.paper_table(long, windows=windows) if len(windows) == 2 else long
+    table3 = {m: metrics.reduction_table(long, m, windows=windows) for m in ("hybrid", "hybrid_guarded")} \
+        if len(windows) == 2 else {}
+    md = _markdown(table2, table3, coverage, timing, test_names, len(train_arrays), ens_cfg, n_intervals)
+    outputs["tables.md"] = atomic_write(out / "tables.md", lambda fh: fh.write(md.encode("utf-8")))
+    if plots:
+        outputs.update(_plots(out, fc, all_h, test_arrays, test_names))
+    for k, v in outputs.items():
+        say(f"wrote {k}: {v}")
+    return DriftBenchmarkResult(long, coverage, timing, table2, table3, outputs)
+
+
+def _logs(spec):
+    """(logs, names) from a folder path or a list of paths/DataFrames/LogArrays."""
+    if isinstance(spec, (str, Path)):
+        files = log_files(Path(spec))
+        return list(files), [f.name for f in files]
+    items = list(spec)
+    return items, [getattr(x, "name", f"log{i}") for i, x in enumerate(items)]
+
+
+def _write_csv(path: Path, df: pd.DataFrame) -> Path:
+    return atomic_write(path, lambda fh: fh.write(df.to_csv(index=False, float_format="%.6g").encode("utf-8")))
+
+
+def _md_table(df: pd.DataFrame) -> str:
+    df = df.reset_index()
+    head = "| " + " | ".join(str(c) for c in df.columns) + " |"
+    sep = "| " + " | ".join("---" for _ in df.columns) + " |"
+    rows = ["| " + " | ".join(str(v) for v in r) + " |" for r in df.itertuples(index=False)]
+    return "\n".join([head, sep, *rows])
+
+
+def _markdown(table2, table3, coverage, timing, test_names, n_train, ens_cfg, n_intervals) -> str:
+    parts = [f"# Drift benchmark\n\nTest logs: {', '.join(test_names)}; trained on {n_train} logs; "
+             f"{ens_cfg.n_members}-member ensembles, seed {ens_cfg.seed}; {n_intervals} forecasts after each "
+             f"failure.\n",
+             "## Table 2: mean absolute error (first 5 / first 20 intervals)\n\nNorth and east in m, yaw in deg.\n",
+             _md_table(table2)]
+    for m, t in table3.items():
+        parts += [f"\n## Table 3: % error reduction of `{m}` relative to `dynamic` (5/20)\n", _md_table(t)]
+    cov = coverage.pivot_table(index=["model", "sigma"], columns="horizon_s", values="coverage")
+    cov.columns = [f"{c:g} s" for c in cov.columns]
+    parts += ["\n## Coverage of the ensemble spread (north and east pooled)\n\nA calibrated Gaussian forecast "
+              "covers 0.683 (1 sigma) and 0.954 (2 sigma).\n", _md_table(cov.round(2))]
+    parts += ["\n## Wall time [s]\n", _md_table(timing.assign(seconds=timing.seconds.round(2)).set_index("model"))]
+    return "\n".join(parts) + "\n"
+
+
+def _plots(out: Path, fc: dict, all_h, test_arrays, test_names) -> dict:
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    colors = {"hybrid": "tab:orange", "hybrid_guarded": "tab:red", "dynamic": "tab:blue",
+              "dead_reckoning": "tab:gray", "data_only": "tab:green"}
+    lead = np.asarray(all_h)
+    fig, axes = plt.subplots(1, 2, figsize=(11, 4), sharex=True)
+    for name, per_log in fc.items():
+        err = np.concatenate([np.hypot(*(p - t)[..., :2].transpose(2, 0, 1)) for p, t, _ in per_log])  # (starts, H)
+        for row in err:
+            axes[0].plot(lead, row, color=colors[name], alpha=0.08, lw=0.6)
+        axes[0].plot(lead, err.mean(0), color=colors[name], lw=2, label=name)
+        axes[1].plot(lead, np.median(err, 0), color=colors[name], lw=2, label=name)
+    axes[0].set(xlabel="lead time [s]", ylabel="position error [m]", title="every start time (thin) and mean")
+    axes[1].set(xlabel="lead time [s]", ylabel="median position error [m]", title="median over start times")
+    axes[0].legend(fontsize=8)
+    fig.tight_layout()
+    p1 = atomic_write(out / "error_vs_horizon.png", lambda fh: fig.savefig(fh, format="png", dpi=110))
+    plt.close(fig)
+
+    a = test_arrays[0]
+    i0 = metrics.shutdown_index(a)
+    H = len(all_h)
+    fig, ax = plt.subplots(figsize=(6.5, 6))
+    track = a.eta[i0: i0 + H + 5]
+    ax.plot(track[:, 1], track[:, 0], "k-", lw=2, label="measured")
+    for name in ("hybrid_guarded", "dynamic", "data_only"):
+        p, _, s = fc[name][0]
+        for k in range(min(5, p.shape[0])):
+            ax.plot(p[k, :, 1], p[k, :, 0], color=colors[name], lw=1, label=name if k == 0 else None)
+            if s is not None and name == "hybrid_guarded":
+                ax.errorbar(p[k, -1, 1], p[k, -1, 0], xerr=s[k, -1, 1], yerr=s[k, -1, 0], color=colors[name],
+                            capsize=2, lw=0.8)
+    ax.plot(track[0, 1], track[0, 0], "ko")
+    ax.set(xlabel="east [m]", ylabel="north [m]", title=f"first 5 forecasts after the failure: {test_names[0]}")
+    ax.axis("equal")
+    ax.legend(fontsize=8)
+    fig.tight_layout()
+    p2 = atomic_write(out / "trajectories.png", lambda fh: fig.savefig(fh, format="png", dpi=110))
+    plt.close(fig)
+    return {"error_vs_horizon.png": p1, "trajectories.png": p2}
