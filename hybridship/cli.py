@@ -309,7 +309,22 @@ def _add_benchmark(sub) -> None:
     d.add_argument("--all-rows", action="store_true", help="train on every row, not only dp_active == 1")
     d.add_argument("--no-plots", action="store_true", help="skip the figures")
     d.set_defaults(func=_cmd_benchmark_drift)
+    h = bsub.add_parser("hsc", help="high-speed craft: SS, ARX, NARX-ANN and hybrid on simulated sea trials",
+                        description="Simulate Volcano71 sea trials (sea states 1 and 2), identify SS, ARX, "
+                                    "NARX-ANN and hybrid models on the training parts and write table.csv "
+                                    "(model,sea_state,split,mode,output,R,MAE), table.md and figures to --out.")
+    h.add_argument("--out", type=Path, default=Path("hsc-benchmark"), help="output folder (default hsc-benchmark)")
+    h.add_argument("--seed", type=int, default=0, help="seed of the trials and of training (default 0)")
+    h.add_argument("--quick", action="store_true", help="a small, fast configuration (for tests)")
+    h.set_defaults(func=_cmd_benchmark_hsc)
     p.set_defaults(func=_cmd_benchmark_missing)
+
+
+def _cmd_benchmark_hsc(args) -> int:
+    from .hsc.benchmark import run_benchmark
+
+    run_benchmark(args.out, seed=args.seed, quick=args.quick, progress=True)
+    return 0
 
 
 def _cmd_benchmark_missing(args) -> int:

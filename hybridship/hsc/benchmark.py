@@ -1,0 +1,270 @@
+"""The high-speed-craft benchmark: the paper's Tables 1 and 2 for SS, ARX, ANN and the hybrid.
+
+:func:`run_benchmark` simulates the two sea trials, identifies every model on the
+training part, scores it on both parts in both modes and writes, atomically, into
+``out_dir``:
+
+* ``table.csv`` - columns exactly ``model,sea_state,split,mode,output,R,MAE``;
+* ``table.md`` - the paper's Table 1 (R) and Table 2 (MAE) layout, per scoring mode, with
+  the paper's numbers beside ours, plus the grey box alone and the fitted parameters;
+* ``hsc_speed_trim.png``, ``hsc_validation_ss1.png``, ``hsc_validation_ss2.png``.
+
+Scoring: every record (training or validation part) is scored on its own. The first
+:data:`N_INIT` samples of the part give the initial conditions (measured outputs: the
+lags of ARX and NARX, the Kalman filter's burn-in of the state-space model, the grey
+box's starting speed and trim) and are left out of both modes' scores.
+"""
+
+from __future__ import annotations
+
+import io
+import time
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+
+from hybridship.fileio import atomic_write
+from hybridship.residual.ensemble import EnsembleConfig
+
+from .hybrid import GreyBoxTables, HybridModel
+from .identification import ARXModel, NARXConfig, NARXModel, StateSpaceModel
+from .scoring import score
+from .simulator import KNOT_M_S, PlaningCraftModel
+from .trials import generate_trial, paper_trial
+from .vessel import load_planing_craft
+
+__all__ = ["run_benchmark", "models_for", "score_model", "PAPER_R", "PAPER_MAE", "COLUMNS", "N_INIT"]
+
+#: Columns of ``table.csv``.
+COLUMNS = ["model", "sea_state", "split", "mode", "output", "R", "MAE"]
+#: Samples of measured outputs used as initial conditions (not scored).
+N_INIT = 10
+MODELS = ("ss", "arx", "ann", "hybrid")
+OUTPUTS = ("speed_kn", "pitch_deg")
+
+#: The paper's Table 1 (R): (model, sea_state, output, split) -> value.
+PAPER_R = {
+    ("ss", 1, "speed_kn"): (0.93, 0.94), ("ss", 1, "pitch_deg"): (0.68, 0.57),
+    ("ss", 2, "speed_kn"): (0.89, 0.85), ("ss", 2, "pitch_deg"): (0.73, 0.48),
+    ("arx", 1, "speed_kn"): (0.95, 0.97), ("arx", 1, "pitch_deg"): (0.75, 0.68),
+    ("arx", 2, "speed_kn"): (0.92, 0.93), ("arx", 2, "pitch_deg"): (0.88, 0.66),
+    ("ann", 1, "speed_kn"): (0.99, 0.99), ("ann", 1, "pitch_deg"): (0.83, 0.80),
+    ("ann", 2, "speed_kn"): (0.99, 0.96), ("ann", 2, "pitch_deg"): (0.96, 0.87),
+}
+#: The paper's Table 2 (MAE, kn and deg), (training, validation).
+PAPER_MAE = {
+    ("ss", 1, "speed_kn"): (0.94, 0.70), ("ss", 1, "pitch_deg"): (0.88, 0.78),
+    ("ss", 2, "speed_kn"): (1.4, 1.1), ("ss", 2, "pitch_deg"): (1.2, 0.85),
+    ("arx", 1, "speed_kn"): (0.85, 0.51), ("arx", 1, "pitch_deg"): (0.75, 0.67),
+    ("arx", 2, "speed_kn"): (0.96, 0.88), ("arx", 2, "pitch_deg"): (0.83, 0.66),
+    ("ann", 1, "speed_kn"): (0.30, 0.32), ("ann", 1, "pitch_deg"): (0.58, 0.56),
+    ("ann", 2, "speed_kn"): (0.52, 0.56), ("ann", 2, "pitch_deg"): (0.47, 0.45),
+}
+
+
+def models_for(sea_state: int, craft, actuator: str, *, seed: int = 0, quick: bool = False,
+               tables: GreyBoxTables | None = None) -> dict:
+    """The four models with the paper's structures for a sea state (unfitted)."""
+    ens = EnsembleConfig(seed=seed, n_members=4 if quick else 10, max_epochs=150 if quick else 600,
+                         patience=60)
+    narx = NARXConfig(n_out=5, n_in=3, seed=seed) if sea_state == 1 else NARXConfig(n_out=7, n_in=5, seed=seed)
+    if quick:
+        narx = NARXConfig(n_out=narx.n_out, n_in=narx.n_in, seed=seed, max_iter=60, restarts=1)
+    return {
+        "ss": StateSpaceModel(order=4 if sea_state == 1 else 5, block_rows=8 if quick else 10),
+        "arx": ARXModel(3, 2, 1) if sea_state == 1 else ARXModel(5, 3, 1),
+        "ann": NARXModel(narx),
+        "hybrid": HybridModel(craft, actuator, ensemble=ens, tables=tables),
+    }
+
+
+def _to_table_units(Y):
+    return np.column_stack([Y[:, 0] / KNOT_M_S, np.degrees(Y[:, 1])])
+
+
+def score_model(model, U, Y, mode: str, n_init: int = N_INIT):
+    """Predictions (table units) and ``{output: (R, MAE)}`` of one model on one record."""
+    P = model.one_step(U, Y) if mode == "one_step" else model.free_run(U, Y, n_init)
+    Yt, Pt = _to_table_units(Y)[n_init:], _to_table_units(P)[n_init:]
+    return Pt, {o: score(Yt[:, j], Pt[:, j]) for j, o in enumerate(OUTPUTS)}
+
+
+def _fmt(x):
+    return "n/a" if x is None or not np.isfinite(x) else f"{x:.2f}"
+
+
+def _markdown_table(header, rows):
+    lines = ["| " + " | ".join(header) + " |", "|" + "---|" * len(header)]
+    lines += ["| " + " | ".join(r) + " |" for r in rows]
+    return "\n".join(lines)
+
+
+def paper_layout(table: pd.DataFrame, metric: str, mode: str) -> str:
+    """Markdown of the paper's Table 1 (``R``) or 2 (``MAE``) layout, ours beside the paper's."""
+    paper = PAPER_R if metric == "R" else PAPER_MAE
+    header = ["model"] + [f"SS{s} {o.split('_')[0]} {sp}" for s in (1, 2) for o in OUTPUTS for sp in ("train", "val.")]
+    t = table[table["mode"] == mode].set_index(["model", "sea_state", "output", "split"])[metric]
+    rows = []
+    for m in MODELS:
+        cells = []
+        for s in (1, 2):
+            for o in OUTPUTS:
+                for sp in ("train", "validation"):
+                    key = (m, s, o, sp)
+                    cells.append(_fmt(t.get(key)))
+        rows.append([f"{m} (ours)"] + cells)
+        if (m, 1, "speed_kn") in paper:
+            rows.append([f"{m} (paper)"] + [_fmt(paper[(m, s, o)][i]) for s in (1, 2) for o in OUTPUTS for i in (0, 1)])
+    return _markdown_table(header, rows)
+
+
+def _fig_bytes(fig) -> bytes:
+    buf = io.BytesIO()
+    fig.savefig(buf, format="png", dpi=90)
+    return buf.getvalue()
+
+
+def _speed_trim_figure(craft, n_rpm: int = 17):
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    rpms = np.linspace(craft.engines.idle_rpm, craft.engines.max_rpm, n_rpm)
+    fig, ax = plt.subplots(1, 2, figsize=(10, 4))
+    for c, label, ls in ((craft, "nominal file", "-"), (craft.perturbed(), "simulated 'true' boat", "--")):
+        for act, a in (("interceptor", 0.0), ("interceptor", 1.0), ("trim_tab", 1.0)):
+            curve = PlaningCraftModel(c, act).steady_curve(rpms, a)
+            v = [s.speed_kn for s in curve]
+            tag = "devices retracted" if a == 0 else f"{act.replace('_', ' ')} full"
+            ax[0].plot(rpms, v, ls, label=f"{label}, {tag}")
+            ax[1].plot(v, [s.trim_deg for s in curve], ls, label=f"{label}, {tag}")
+    ax[0].set(xlabel="engine speed [rpm]", ylabel="steady speed [kn]", title="Calm-water speed")
+    ax[0].axhline(40, color="grey", lw=0.8)
+    ax[1].add_patch(plt.Rectangle((15, 2), 25, 4, color="green", alpha=0.1, label="credible range"))
+    ax[1].set(xlabel="steady speed [kn]", ylabel="running trim [deg]", title="Running trim")
+    ax[1].legend(fontsize=6)
+    fig.tight_layout()
+    data = _fig_bytes(fig)
+    plt.close(fig)
+    return data
+
+
+def _validation_figure(trial, preds, sea_state):
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    val = trial.validation
+    t = val["time_s"].to_numpy()[N_INIT:]
+    Y = _to_table_units(val[["speed_m_s", "pitch_rad"]].to_numpy())[N_INIT:]
+    fig, ax = plt.subplots(2, 1, figsize=(11, 6), sharex=True)
+    for j, (o, unit) in enumerate((("ship speed", "kn"), ("pitch", "deg"))):
+        ax[j].plot(t, Y[:, j], color="k", lw=0.8, label="measured (GPS re-aligned)" if j == 0 else "measured (IMU)")
+        for m in MODELS:
+            ax[j].plot(t, preds[m][:, j], lw=0.8, label=m)
+        ax[j].set_ylabel(f"{o} [{unit}]")
+    ax[0].legend(fontsize=7, ncol=5)
+    ax[0].set_title(f"Sea state {sea_state}: validation data, free-run simulation from the inputs")
+    ax[1].set_xlabel("time [s]")
+    fig.tight_layout()
+    data = _fig_bytes(fig)
+    plt.close(fig)
+    return data
+
+
+def run_benchmark(out_dir, *, seed: int = 0, quick: bool = False, progress: bool = True) -> pd.DataFrame:
+    """Run the whole high-speed-craft benchmark and write its table and figures.
+
+    Parameters
+    ----------
+    out_dir : path
+        Output folder (created).
+    seed : int
+        Seed of the trials (inputs, waves, sensor noise) and of every model's training.
+    quick : bool
+        A small run (trials 12 % as long, fewer iterations) for tests and smoke checks;
+        its numbers are not the benchmark's.
+    progress : bool
+        Print progress and where each output went.
+
+    Returns
+    -------
+    DataFrame
+        The table (columns :data:`COLUMNS`).
+    """
+    try:
+        import torch
+        torch.set_num_threads(1)
+    except ImportError:  # pragma: no cover
+        pass
+    out = Path(out_dir)
+    out.mkdir(parents=True, exist_ok=True)
+    say = print if progress else (lambda *a, **k: None)
+    t_start = time.perf_counter()
+    craft = load_planing_craft()
+    rows, extra, grey_rows, params, val_preds, trials = [], [], [], {}, {}, {}
+    for sea_state in (1, 2):
+        cfg = paper_trial(sea_state, seed=seed, scale=0.12 if quick else 1.0)
+        trial = generate_trial(cfg, craft, progress=progress)
+        trials[sea_state] = trial
+        tables = GreyBoxTables.from_craft(craft, cfg.actuator, n_rpm=13 if quick else 25)
+        models = models_for(sea_state, craft, cfg.actuator, seed=seed, quick=quick, tables=tables)
+        Ut, Yt = trial.arrays("train")
+        parts = {"train": trial.arrays("train"), "validation": trial.arrays("validation")}
+        val_preds[sea_state] = {}
+        for name, model in models.items():
+            t0 = time.perf_counter()
+            model.fit(Ut, Yt)
+            fit_s = time.perf_counter() - t0
+            for split, (U, Y) in parts.items():
+                for mode in ("one_step", "free_run"):
+                    P, sc = score_model(model, U, Y, mode)
+                    if split == "validation" and mode == "free_run":
+                        val_preds[sea_state][name] = P
+                    for o, (r, mae) in sc.items():
+                        rows.append({"model": name, "sea_state": sea_state, "split": split, "mode": mode,
+                                     "output": o, "R": r, "MAE": mae})
+            say(f"  sea state {sea_state}: {name} identified in {fit_s:.1f} s")
+            if name == "hybrid":
+                params[sea_state] = model.grey.parameters()
+                for split, (U, Y) in parts.items():
+                    P = model.grey_free_run(U, Y, N_INIT)
+                    Yt_, Pt_ = _to_table_units(Y)[N_INIT:], _to_table_units(P)[N_INIT:]
+                    for j, o in enumerate(OUTPUTS):
+                        r, mae = score(Yt_[:, j], Pt_[:, j])
+                        grey_rows.append({"sea_state": sea_state, "split": split, "output": o, "R": r, "MAE": mae})
+            if name == "ss":
+                extra.append(f"SS{sea_state} state-space poles |z|: "
+                             + ", ".join(f"{abs(p):.3f}" for p in model.params.poles))
+    table = pd.DataFrame(rows, columns=COLUMNS)
+    elapsed = time.perf_counter() - t_start
+
+    # ---------------------------------------------------------------- outputs
+    csv_path = atomic_write(out / "table.csv", lambda fh: fh.write(table.to_csv(index=False, float_format="%.4f").encode()))
+    say(f"wrote {csv_path}")
+    md = [f"# High-speed craft (Volcano71): identified models vs the hybrid{' (QUICK RUN)' if quick else ''}", "",
+          f"seed {seed}; sea state 1: {trials[1].config.n_samples} samples ({trials[1].config.n_train} training), "
+          f"sea state 2: {trials[2].config.n_samples} samples ({trials[2].config.n_train} training); "
+          f"run time {elapsed:.0f} s.", ""]
+    for mode, title in (("free_run", "free-run simulation from the inputs"), ("one_step", "one-step-ahead prediction")):
+        md += [f"## Table 1 layout: correlation coefficient R, {title}", "", paper_layout(table, "R", mode), "",
+               f"## Table 2 layout: MAE (speed kn, pitch deg), {title}", "", paper_layout(table, "MAE", mode), ""]
+    g = pd.DataFrame(grey_rows)
+    md += ["## Grey box alone (free run), the hybrid without its residual", "",
+           _markdown_table(["sea state", "split", "output", "R", "MAE"],
+                           [[str(r.sea_state), r.split, r.output, _fmt(r.R), _fmt(r.MAE)] for r in g.itertuples()]), ""]
+    md += ["## Fitted grey-box parameters", ""]
+    for s, p in params.items():
+        md.append(f"- sea state {s}: " + ", ".join(f"{k} = {v:.3g}" for k, v in p.items()))
+    md += [""] + [f"- {e}" for e in extra] + [""]
+    md_path = atomic_write(out / "table.md", lambda fh: fh.write("\n".join(md).encode()))
+    say(f"wrote {md_path}")
+    fig_path = atomic_write(out / "hsc_speed_trim.png", lambda fh: fh.write(_speed_trim_figure(craft, 9 if quick else 17)))
+    say(f"wrote {fig_path}")
+    for s in (1, 2):
+        p = atomic_write(out / f"hsc_validation_ss{s}.png",
+                         lambda fh, s=s: fh.write(_validation_figure(trials[s], val_preds[s], s)))
+        say(f"wrote {p}")
+    say(f"high-speed-craft benchmark done in {time.perf_counter() - t_start:.0f} s")
+    return table

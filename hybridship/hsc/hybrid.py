@@ -1,0 +1,305 @@
+"""The hybrid surge/pitch model: a grey-box physics model plus a residual ensemble.
+
+Grey box
+--------
+Surge is a force balance and pitch a first-order approach to a speed-dependent running
+trim, both built from the *nominal* vessel file's calm-water physics (Savitsky planing
+equilibria of :class:`~hybridship.hsc.simulator.PlaningCraftModel`, tabulated once over
+engine speed and actuator setting):
+
+* ``(m + A11) p_m dV/dt = p_T (c1 n^2 - p_J c2 n V) - [p_R R0(V) + p_aR (R(V, a) - R0(V))]``
+  (propeller thrust falling with speed; calm-water resistance at the running trim;
+  the trim device's change of resistance);
+* ``theta_ss = p_th0 + p_ths theta0(V) + p_ath (theta(V, a) - theta0(V)) + p_thT (T - R) / (m g)``
+  (running trim, the device's trim change, and the extra bow-up trim of the thrust-line
+  moment while accelerating); ``dtheta/dt = (theta_ss - theta) / tau_theta``;
+* ``a`` is the device's stroke/deflection fraction from the PWM input through the vessel
+  file's linear PWM map and actuator rate limit.
+
+The ten parameters ``p`` (1 or 0 nominal) are fitted to the training data by nonlinear
+least squares on the free-run (simulation) error of both outputs, so the grey box learns
+the "true" boat's thrust, resistance, trim and device effectiveness that the nominal file
+gets wrong (see ``[truth_perturbation]`` in ``vessels/volcano71.toml``).
+
+Residual
+--------
+A residual ensemble (:func:`hybridship.residual.ensemble.fit_ensemble`, 10 members of
+2 x 20 tanh) learns what the grey box misses, separately for the two scoring modes:
+
+* free run: ``y[k] - y_gb[k]`` from the grey box's own simulated state and the inputs
+  (lags of engine speed, PWM, heave acceleration); no measured output enters, so the
+  correction never feeds back and cannot make the simulation unstable;
+* one step: ``y[k] - y_gb1[k]``, where ``y_gb1`` is the grey box's one-step prediction from
+  the measured outputs at ``k-1``, from the measured outputs and the inputs up to ``k-1``.
+
+The prediction is the grey box plus the ensemble mean.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from hybridship.residual.ensemble import EnsembleConfig, fit_ensemble
+
+from .simulator import PlaningCraftModel
+from .vessel import PlaningCraft
+
+__all__ = ["GreyBoxTables", "GreyBox", "HybridModel", "PARAM_NAMES"]
+
+#: Grey-box parameters and their nominal values.
+PARAM_NAMES = ("p_T", "p_J", "p_R", "p_aR", "p_m", "p_th0", "p_ths", "p_ath", "p_thT", "tau_theta_s")
+_NOMINAL = np.array([1.0, 1.0, 1.0, 1.0, 1.0, 0.0, 1.0, 1.0, 0.0, 0.5])
+_LOWER = np.array([0.5, 0.0, 0.3, -1.0, 0.3, -0.1, 0.3, -1.0, -1.0, 0.05])
+_UPPER = np.array([2.0, 3.0, 3.0, 4.0, 5.0, 0.1, 2.0, 4.0, 1.0, 5.0])
+
+
+@dataclass(frozen=True)
+class GreyBoxTables:
+    """Calm-water equilibria of the nominal craft on a uniform speed grid.
+
+    Attributes
+    ----------
+    v0_m_s, dv_m_s : first speed and spacing of the grid.
+    act : (na,) actuator fractions of the rows.
+    resistance_n : (na, nv) resistance at the equilibrium (= thrust) [N].
+    trim_rad : (na, nv) running trim [rad].
+    """
+
+    v0_m_s: float
+    dv_m_s: float
+    act: np.ndarray
+    resistance_n: np.ndarray
+    trim_rad: np.ndarray
+
+    @classmethod
+    def from_craft(cls, craft: PlaningCraft, actuator: str, *, n_rpm: int = 25,
+                   act=(0.0, 0.5, 1.0), dv_m_s: float = 0.25) -> "GreyBoxTables":
+        model = PlaningCraftModel(craft, actuator)
+        lo, hi = craft.engines.idle_rpm, craft.engines.max_rpm
+        rpms = np.linspace(lo, hi * 1.05, n_rpm)
+        grid = np.arange(0.0, 26.0 + dv_m_s, dv_m_s)
+        R, TH = [], []
+        for a in act:
+            curve = model.steady_curve(rpms, a)
+            v = np.array([s.speed_m_s for s in curve])
+            r = np.array([s.thrust_n for s in curve])
+            th = np.array([s.trim_rad for s in curve])
+            order = np.argsort(v)
+            v, r, th = v[order], r[order], th[order]
+            # below idle speed: R ~ V^2 and trim ~ V to zero at rest; above the top: linear
+            rr = np.interp(grid, v, r)
+            below = grid < v[0]
+            rr[below] = r[0] * (grid[below] / v[0]) ** 2
+            above = grid > v[-1]
+            rr[above] = r[-1] + (r[-1] - r[-2]) / (v[-1] - v[-2]) * (grid[above] - v[-1])
+            tt = np.interp(grid, v, th)
+            tt[below] = th[0] * grid[below] / v[0]
+            tt[above] = th[-1] + (th[-1] - th[-2]) / (v[-1] - v[-2]) * (grid[above] - v[-1])
+            R.append(rr)
+            TH.append(tt)
+        return cls(float(grid[0]), float(dv_m_s), np.asarray(act, float), np.array(R), np.array(TH))
+
+
+class GreyBox:
+    """The grey-box surge/pitch model of one craft and trim device (see the module docstring)."""
+
+    def __init__(self, craft: PlaningCraft, actuator: str, tables: GreyBoxTables | None = None, dt_s: float = 0.1):
+        self.craft, self.actuator, self.dt = craft, actuator, dt_s
+        self.tables = tables or GreyBoxTables.from_craft(craft, actuator)
+        pm = PlaningCraftModel(craft, actuator)
+        self._pwm_to_frac = pm.pwm_to_fraction
+        self.act_step = pm.act_rate * dt_s
+        self.mass = pm.m + pm.A11
+        self.weight = pm.m * 9.81
+        pr = craft.propellers
+        k = pm.n_eng * pm.rho * pr.diameter_m ** 4 * pr.kt0 * (1 - pr.thrust_deduction)
+        self.c1 = k / (60.0 * pr.gear_ratio) ** 2                    # T = c1 n^2 - c2 n V (n in rpm)
+        self.c2 = k * (1 - pr.wake_fraction) / (60.0 * pr.gear_ratio * pr.diameter_m * pr.j0)
+        self.params = _NOMINAL.copy()
+        t = self.tables
+        self._nv = t.resistance_n.shape[1]
+        self._R = [list(r) for r in t.resistance_n]
+        self._TH = [list(r) for r in t.trim_rad]
+
+    # -------------------------------------------------------------- pieces
+
+    def actuator_fraction(self, pwm_pct):
+        """Stroke/deflection fraction from the PWM record (linear map, rate limit)."""
+        cmd = self._pwm_to_frac(pwm_pct)
+        a = np.empty_like(cmd)
+        x = float(cmd[0])
+        for k, c in enumerate(cmd):
+            a[k] = x                          # the fraction during sample k (set by commands before k)
+            x += min(max(c - x, -self.act_step), self.act_step)
+        return a
+
+    def _lookup(self, table, v, a):
+        t = self.tables
+        f = (v - t.v0_m_s) / t.dv_m_s
+        i = min(max(int(f), 0), self._nv - 2)
+        w = min(max(f - i, 0.0), 1.0) if f < self._nv - 1 else f - i
+        rows = t.act
+        j = 0 if a <= rows[1] else 1
+        wa = min(max((a - rows[j]) / (rows[j + 1] - rows[j]), 0.0), 1.0)
+        r0 = table[j][i] + w * (table[j][i + 1] - table[j][i])
+        r1 = table[j + 1][i] + w * (table[j + 1][i + 1] - table[j + 1][i])
+        base = table[0][i] + w * (table[0][i + 1] - table[0][i])
+        return base, r0 + wa * (r1 - r0)
+
+    def rates(self, v, th, rpm, a, p=None):
+        """``(dV/dt, theta_ss, T - R)`` at a state."""
+        p = self.params if p is None else p
+        v = max(v, 0.0)
+        R0, Ra = self._lookup(self._R, v, a)
+        T0, Ta = self._lookup(self._TH, v, a)
+        thrust = p[0] * (self.c1 * rpm * rpm - p[1] * self.c2 * rpm * v)
+        res = p[2] * R0 + p[3] * (Ra - R0)
+        surplus = thrust - res
+        th_ss = p[5] + p[6] * T0 + p[7] * (Ta - T0) + p[8] * surplus / self.weight
+        return surplus / (self.mass * p[4]), th_ss, surplus
+
+    # -------------------------------------------------------------- runs
+
+    def simulate(self, U, y0, k0: int = 0, p=None):
+        """Free run from ``y0 = (V, theta)`` at sample ``k0``; returns ``(N, 2)`` (held at ``y0`` before ``k0``)."""
+        p = self.params if p is None else p
+        U = np.asarray(U, float)
+        a = self.actuator_fraction(U[:, 1])
+        rpm = U[:, 0]
+        N = U.shape[0]
+        out = np.empty((N, 2))
+        v, th = float(y0[0]), float(y0[1])
+        out[:k0] = (v, th)
+        decay = math.exp(-self.dt / max(p[9], 1e-3))
+        dt = self.dt
+        out[k0] = (v, th)
+        for k in range(k0 + 1, N):
+            dv, th_ss, _ = self.rates(v, th, rpm[k - 1], a[k - 1], p)
+            v = max(v + dt * dv, 0.0)
+            th = th_ss + (th - th_ss) * decay
+            out[k] = (v, th)
+        return out
+
+    def one_step(self, U, Y, p=None):
+        """One-step predictions ``y_hat[k]`` from the measured ``Y[k-1]`` (row 0 is NaN)."""
+        p = self.params if p is None else p
+        U, Y = np.asarray(U, float), np.asarray(Y, float)
+        a = self.actuator_fraction(U[:, 1])
+        decay = math.exp(-self.dt / max(p[9], 1e-3))
+        out = np.full(Y.shape, np.nan)
+        for k in range(1, Y.shape[0]):
+            v, th = Y[k - 1]
+            dv, th_ss, _ = self.rates(v, th, U[k - 1, 0], a[k - 1], p)
+            out[k] = (max(v + self.dt * dv, 0.0), th_ss + (th - th_ss) * decay)
+        return out
+
+    def fit(self, U, Y, k0: int = 0, *, max_nfev: int = 60):
+        """Fit the parameters to minimise the free-run error of both outputs (each over its spread)."""
+        from scipy.optimize import least_squares
+
+        U, Y = np.asarray(U, float), np.asarray(Y, float)
+        scale = Y[k0:].std(0)
+        scale = np.where(scale > 1e-9, scale, 1.0)
+
+        def resid(p):
+            sim = self.simulate(U, Y[k0], k0, p)
+            r = (sim[k0 + 1:] - Y[k0 + 1:]) / scale
+            return np.nan_to_num(r, nan=1e3).ravel()
+
+        sol = least_squares(resid, self.params, bounds=(_LOWER, _UPPER), x_scale="jac",
+                            max_nfev=max_nfev, diff_step=1e-3)
+        self.params = sol.x
+        self.fit_cost = float(sol.cost)
+        return self
+
+    def parameters(self) -> dict:
+        return dict(zip(PARAM_NAMES, map(float, self.params)))
+
+
+def _lags(A, lags):
+    """Columns ``A[k - l]`` for each lag ``l`` (edge-padded at the start)."""
+    A = np.asarray(A, float)
+    if A.ndim == 1:
+        A = A[:, None]
+    pad = max(lags)
+    P = np.vstack([np.repeat(A[:1], pad, 0), A])
+    N = A.shape[0]
+    return np.hstack([P[pad - l:pad - l + N] for l in lags])
+
+
+class HybridModel:
+    """Grey box + residual ensembles (one per scoring mode); same interface as the identified models.
+
+    Parameters
+    ----------
+    craft : PlaningCraft
+        The *nominal* vessel file.
+    actuator : {"interceptor", "trim_tab"}
+    ensemble : EnsembleConfig
+    acc_lags : int
+        Lags of the heave acceleration in the residual features.
+    tables : GreyBoxTables, optional
+        Pre-computed equilibria (they depend only on the craft and device).
+    """
+
+    name = "hybrid"
+
+    def __init__(self, craft: PlaningCraft, actuator: str, *, ensemble: EnsembleConfig = EnsembleConfig(),
+                 acc_lags: int = 4, tables: GreyBoxTables | None = None, dt_s: float = 0.1):
+        self.grey = GreyBox(craft, actuator, tables, dt_s)
+        self.ensemble_config = ensemble
+        self.acc_lags = acc_lags
+        self.n_init = 2
+
+    def _input_features(self, U, a):
+        lags = list(range(1, self.acc_lags + 1))
+        rpm1 = _lags(U[:, 0], [1])
+        d_rpm = rpm1 - _lags(U[:, 0], [11])                 # engine speed change over the last second
+        return np.hstack([rpm1, d_rpm, _lags(U[:, 1], [1]), _lags(a, [0, 5]), _lags(U[:, 2], lags)])
+
+    def _free_features(self, U, sim):
+        a = self.grey.actuator_fraction(U[:, 1])
+        d_v = sim[:, :1] - _lags(sim[:, 0], [10])
+        return np.hstack([sim, d_v, self._input_features(U, a)])
+
+    def _one_features(self, U, Y, phys):
+        a = self.grey.actuator_fraction(U[:, 1])
+        return np.hstack([_lags(Y, [1, 2]), phys, self._input_features(U, a)])
+
+    def fit(self, U, Y, *, progress: bool = False):
+        U, Y = np.asarray(U, float), np.asarray(Y, float)
+        k0 = self.n_init
+        self.grey.fit(U, Y, k0 - 1)
+        sim = self.grey.simulate(U, Y[k0 - 1], k0 - 1)
+        X = self._free_features(U, sim)[k0:]
+        self.free_ens = fit_ensemble(X, (Y - sim)[k0:], self.ensemble_config, progress=progress)
+        phys = self.grey.one_step(U, Y)
+        X1 = self._one_features(U, Y, phys)[k0:]
+        self.one_ens = fit_ensemble(X1, (Y - phys)[k0:], self.ensemble_config, progress=progress)
+        return self
+
+    def one_step(self, U, Y):
+        U, Y = np.asarray(U, float), np.asarray(Y, float)
+        phys = self.grey.one_step(U, Y)
+        out = np.full(Y.shape, np.nan)
+        k0 = self.n_init
+        mean, _ = self.one_ens.predict(self._one_features(U, Y, phys)[k0:])
+        out[k0:] = phys[k0:] + mean
+        return out
+
+    def free_run(self, U, Y_init, n_init: int):
+        U = np.asarray(U, float)
+        sim = self.grey.simulate(U, np.asarray(Y_init, float)[n_init - 1], n_init - 1)
+        out = np.full(sim.shape, np.nan)
+        mean, _ = self.free_ens.predict(self._free_features(U, sim)[n_init:])
+        out[n_init:] = sim[n_init:] + mean
+        return out
+
+    def grey_free_run(self, U, Y_init, n_init: int):
+        """The grey box alone (for the documentation's ablation)."""
+        sim = self.grey.simulate(np.asarray(U, float), np.asarray(Y_init, float)[n_init - 1], n_init - 1)
+        sim[:n_init] = np.nan
+        return sim

@@ -1,0 +1,244 @@
+"""Simulated sea trials of the high-speed craft, laid out like Ertogan et al.'s.
+
+A trial is a straight-course run in head seas with persistently exciting inputs: the
+engine speed command is swept (ramps) and stepped between idle (800 rpm) and full
+(4000 rpm), and the trim device's PWM drive is switched periodically between 10 and
+100 % duty. Two trials as in the paper (sec. 4):
+
+* sea state 1 (WMO code 1, ripples, Hs below 0.1 m), interceptors: 3150 samples, the first
+  2050 for training and the last 1100 for validation;
+* sea state 2 (WMO code 2, wavelets, Hs 0.1-0.5 m), trim tabs: 13580 samples split 8600/4980.
+
+Both splits are contiguous in time (training first).
+
+Sensors as on the boat (0.1 s sampling): GPS speed over ground delayed by 2 s, IMU pitch
+and heave acceleration with noise (and a pitch mounting bias), engine speed with noise,
+and the PWM command as sent. **The GPS delay is handled by re-alignment**, as the paper
+did ("the experimental data was revised taking into account the delay time of the GPS
+receiver"): the logger records ``N + 20`` samples; the speed channel is shifted 20
+samples earlier (``speed[k] = gps[k + 20]``) and the last 20 samples of the other
+channels are dropped, which leaves ``N`` time-aligned samples. Every model is identified
+and scored on the aligned data; :attr:`TrialData.raw` keeps the log as recorded.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+import pandas as pd
+
+from .simulator import KNOT_M_S, PlaningCraftModel, SeaConditions, TrueRecord
+from .vessel import PlaningCraft, load_planing_craft
+
+__all__ = ["TrialConfig", "TrialData", "paper_trial", "generate_trial", "input_schedule",
+           "INPUTS", "OUTPUTS"]
+
+#: Model inputs (aligned data columns), in the paper's order.
+INPUTS = ("rpm", "pwm_pct", "heave_acc_m_s2")
+#: Model outputs (aligned data columns).
+OUTPUTS = ("speed_m_s", "pitch_rad")
+
+
+@dataclass(frozen=True)
+class TrialConfig:
+    """One simulated sea trial (validated on creation).
+
+    Attributes
+    ----------
+    sea_state : WMO sea-state code of the trial (1 or 2); a label.
+    n_samples, n_train : aligned samples in all and in the training part (the rest validate).
+    actuator : trim device driven by the PWM input.
+    sea : head-sea wave conditions.
+    seed : seed of the input schedule, the waves and the sensor noise.
+    rpm_range : engine-speed command range [rpm].
+    pwm_range_pct : PWM duty range [%].
+    hold_s : (min, max) duration of an engine-speed level [s].
+    ramp_rpm_s : (min, max) slew rate of the engine-speed sweeps [rpm/s].
+    pwm_period_s : (min, max) full period of the PWM switching [s].
+    settle_s : simulated time before the logger starts [s].
+    """
+
+    sea_state: int
+    n_samples: int
+    n_train: int
+    actuator: str
+    sea: SeaConditions
+    seed: int = 0
+    rpm_range: tuple = (800.0, 4000.0)
+    pwm_range_pct: tuple = (10.0, 100.0)
+    hold_s: tuple = (8.0, 30.0)
+    ramp_rpm_s: tuple = (60.0, 400.0)
+    pwm_period_s: tuple = (6.0, 24.0)
+    settle_s: float = 30.0
+
+    def __post_init__(self):
+        bad = []
+        if self.sea_state not in (1, 2):
+            bad.append("sea_state")
+        if not (50 <= self.n_train < self.n_samples):
+            bad.append("n_train")
+        if self.actuator not in ("interceptor", "trim_tab"):
+            bad.append("actuator")
+        if not (0 < self.rpm_range[0] < self.rpm_range[1]):
+            bad.append("rpm_range")
+        if not (0 <= self.pwm_range_pct[0] < self.pwm_range_pct[1] <= 100):
+            bad.append("pwm_range_pct")
+        if not (0 < self.hold_s[0] <= self.hold_s[1]) or not (0 < self.ramp_rpm_s[0] <= self.ramp_rpm_s[1]):
+            bad.append("hold_s/ramp_rpm_s")
+        if not (0 < self.pwm_period_s[0] <= self.pwm_period_s[1]) or self.settle_s < 0:
+            bad.append("pwm_period_s/settle_s")
+        if bad:
+            raise ValueError(f"TrialConfig: invalid {', '.join(bad)} in {self!r}")
+
+    @property
+    def n_validation(self) -> int:
+        return self.n_samples - self.n_train
+
+
+def paper_trial(sea_state: int, *, seed: int = 0, scale: float = 1.0) -> TrialConfig:
+    """The paper's trial for sea state 1 or 2; ``scale < 1`` shortens it (quick runs, tests)."""
+    if sea_state == 1:
+        n, n_tr, act, sea = 3150, 2050, "interceptor", SeaConditions(hs_m=0.05, tp_s=1.5)
+    elif sea_state == 2:
+        n, n_tr, act, sea = 13580, 8600, "trim_tab", SeaConditions(hs_m=0.10, tp_s=3.0)
+    else:
+        raise ValueError(f"sea_state must be 1 or 2, got {sea_state!r}")
+    if not 0 < scale <= 1:
+        raise ValueError(f"scale must be in (0, 1], got {scale!r}")
+    n_s, n_t = max(int(round(n * scale)), 200), max(int(round(n_tr * scale)), 130)
+    return TrialConfig(sea_state=sea_state, n_samples=n_s, n_train=n_t, actuator=act, sea=sea,
+                       seed=seed * 100 + sea_state)
+
+
+def input_schedule(config: TrialConfig, n: int, dt_s: float, rng: np.random.Generator):
+    """Engine-speed command [rpm] and PWM duty [%] for ``n`` samples.
+
+    The engine speed alternates between sweeps (ramps at a random slew rate) and holds at
+    random levels spread over the whole range (a new level is at least a quarter of the
+    range away from the last one, so every stretch of the record sees large changes);
+    the PWM duty switches between random high and low levels with a random period.
+    """
+    lo, hi = config.rpm_range
+    rpm = np.empty(n)
+    level = lo + 0.3 * (hi - lo) * rng.random()
+    k = 0
+    while k < n:
+        target = level
+        while abs(target - level) < 0.25 * (hi - lo):
+            target = lo + (hi - lo) * rng.random()
+        rate = rng.uniform(*config.ramp_rpm_s) * (1 if rng.random() < 0.5 else 50.0)  # sweep or step
+        n_ramp = max(int(abs(target - level) / rate / dt_s), 1)
+        n_hold = int(rng.uniform(*config.hold_s) / dt_s)
+        seg = np.concatenate([np.linspace(level, target, n_ramp + 1)[1:], np.full(n_hold, target)])
+        m = min(seg.size, n - k)
+        rpm[k:k + m] = seg[:m]
+        k += m
+        level = target
+    plo, phi = config.pwm_range_pct
+    pwm = np.empty(n)
+    k, high = 0, bool(rng.random() < 0.5)
+    while k < n:
+        half = int(rng.uniform(*config.pwm_period_s) / 2 / dt_s)
+        mid = 0.5 * (plo + phi)
+        val = rng.uniform(mid, phi) if high else rng.uniform(plo, mid)
+        if rng.random() < 0.3:
+            val = phi if high else plo
+        m = min(half, n - k)
+        pwm[k:k + m] = val
+        k += m
+        high = not high
+    return rpm, pwm
+
+
+@dataclass
+class TrialData:
+    """A simulated trial: the raw log, the GPS-aligned data and the split.
+
+    Attributes
+    ----------
+    config : TrialConfig
+    raw : DataFrame
+        As logged (``N + delay`` samples): ``time_s, gps_speed_m_s`` (delayed),
+        ``pitch_rad, heave_acc_m_s2, rpm, pwm_pct``.
+    data : DataFrame
+        Aligned (``N`` samples): ``time_s``, the :data:`OUTPUTS` and the :data:`INPUTS`.
+    truth : TrueRecord
+        Noise-free, undelayed states over the aligned samples.
+    delay_samples : int
+        GPS delay removed by the alignment [samples].
+    """
+
+    config: TrialConfig
+    raw: pd.DataFrame
+    data: pd.DataFrame
+    truth: TrueRecord
+    delay_samples: int
+    dt_s: float = field(default=0.1)
+
+    @property
+    def train(self) -> pd.DataFrame:
+        return self.data.iloc[: self.config.n_train].reset_index(drop=True)
+
+    @property
+    def validation(self) -> pd.DataFrame:
+        return self.data.iloc[self.config.n_train:].reset_index(drop=True)
+
+    def arrays(self, part: str = "all"):
+        """``(U, Y)`` arrays, inputs ``(N, 3)`` and outputs ``(N, 2)`` (SI), of ``all``, ``train`` or ``validation``."""
+        df = {"all": self.data, "train": self.train, "validation": self.validation}[part]
+        return df[list(INPUTS)].to_numpy(float), df[list(OUTPUTS)].to_numpy(float)
+
+
+def generate_trial(config: TrialConfig, craft: PlaningCraft | None = None, *, progress: bool = False) -> TrialData:
+    """Simulate one sea trial on the "true" boat (``craft.perturbed()``) and log it.
+
+    Parameters
+    ----------
+    config : TrialConfig
+    craft : PlaningCraft, optional
+        The nominal vessel file (default: packaged ``volcano71``); the simulator runs its
+        :meth:`~hybridship.hsc.vessel.PlaningCraft.perturbed` version.
+    progress : bool
+        Print a line when done.
+    """
+    craft = load_planing_craft() if craft is None else craft
+    sens = craft.sensors
+    dt = sens.sample_period_s
+    d = int(round(sens.gps_delay_s / dt))
+    rng = np.random.default_rng(config.seed)
+    n_raw = config.n_samples + d
+    # d extra samples before the log starts give the first delayed GPS readings
+    rpm_cmd, pwm = input_schedule(config, n_raw + d, dt, rng)
+    model = PlaningCraftModel(craft.perturbed(), config.actuator)
+    rec = model.simulate(rpm_cmd, pwm, sample_period_s=dt, sea=config.sea, rng=rng, settle_s=config.settle_s)
+    noise = np.random.default_rng(rng.integers(2**32))
+    n_all = rec.time_s.size                              # n_raw + d
+    gps_true = rec.speed_m_s[:n_all - d]                 # what the receiver reports d samples later
+    sl = slice(d, n_all)                                 # the logged window
+    raw = pd.DataFrame({
+        "time_s": np.arange(n_raw) * dt,
+        "gps_speed_m_s": gps_true + sens.gps_speed_noise_m_s * noise.standard_normal(n_raw),
+        "pitch_rad": rec.pitch_rad[sl] + np.radians(sens.imu_pitch_bias_deg
+                                                   + sens.imu_pitch_noise_deg * noise.standard_normal(n_raw)),
+        "heave_acc_m_s2": rec.heave_acc_m_s2[sl] + sens.imu_acc_noise_m_s2 * noise.standard_normal(n_raw),
+        "rpm": np.round(rec.rpm[sl] + sens.rpm_noise * noise.standard_normal(n_raw)),
+        "pwm_pct": rec.pwm_pct[sl],
+    })
+    # re-alignment of the GPS delay: speed[k] = gps[k + d]; the last d samples go
+    N = config.n_samples
+    data = pd.DataFrame({
+        "time_s": raw["time_s"].to_numpy()[:N],
+        "speed_m_s": raw["gps_speed_m_s"].to_numpy()[d:d + N],
+        "pitch_rad": raw["pitch_rad"].to_numpy()[:N],
+        "rpm": raw["rpm"].to_numpy()[:N],
+        "pwm_pct": raw["pwm_pct"].to_numpy()[:N],
+        "heave_acc_m_s2": raw["heave_acc_m_s2"].to_numpy()[:N],
+    })
+    idx = slice(d, d + N)
+    truth = TrueRecord(**{k: (v[idx] if isinstance(v, np.ndarray) else v) for k, v in vars(rec).items()})
+    truth.time_s = data["time_s"].to_numpy()
+    if progress:
+        print(f"  sea state {config.sea_state}: {N} samples simulated, speed "
+              f"{data.speed_m_s.min() / KNOT_M_S:.1f}-{data.speed_m_s.max() / KNOT_M_S:.1f} kn")
+    return TrialData(config=config, raw=raw, data=data, truth=truth, delay_samples=d, dt_s=dt)

@@ -1,0 +1,28 @@
+"""A quick (tiny) run of the high-speed-craft benchmark: table columns, contents and files."""
+
+import numpy as np
+import pandas as pd
+
+from hybridship.hsc.benchmark import COLUMNS, run_benchmark
+
+
+def test_quick_benchmark_writes_the_table(tmp_path):
+    table = run_benchmark(tmp_path, seed=0, quick=True, progress=False)
+    on_disk = pd.read_csv(tmp_path / "table.csv")
+    assert list(on_disk.columns) == COLUMNS == ["model", "sea_state", "split", "mode", "output", "R", "MAE"]
+    assert len(on_disk) == len(table) == 4 * 2 * 2 * 2 * 2
+    assert set(on_disk.model) == {"ss", "arx", "ann", "hybrid"}
+    assert set(on_disk.sea_state) == {1, 2}
+    assert set(on_disk.split) == {"train", "validation"}
+    assert set(on_disk["mode"]) == {"one_step", "free_run"}
+    assert set(on_disk.output) == {"speed_kn", "pitch_deg"}
+    assert not on_disk.duplicated(["model", "sea_state", "split", "mode", "output"]).any()
+    # one-step prediction of the speed is close to the measurement (the quick run's NARX
+    # network is too little trained to be held to that)
+    one = on_disk[(on_disk["mode"] == "one_step") & (on_disk.output == "speed_kn") & (on_disk.model != "ann")]
+    assert np.all(one.MAE < 1.0) and np.all(one.R > 0.95)
+    md = (tmp_path / "table.md").read_text()
+    assert "Table 1 layout" in md and "Table 2 layout" in md and "hybrid (ours)" in md and "ann (paper)" in md
+    for name in ("hsc_speed_trim.png", "hsc_validation_ss1.png", "hsc_validation_ss2.png"):
+        assert (tmp_path / name).read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    assert not list(tmp_path.glob(".*.tmp"))                  # atomic writes left nothing behind

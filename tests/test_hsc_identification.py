@@ -1,0 +1,100 @@
+"""Identified models: ARX coefficients, subspace poles, NARX sizes, one-step and free-run modes."""
+
+import numpy as np
+import pytest
+
+from hybridship.hsc.identification import (ARXModel, NARXConfig, NARXModel, StateSpaceModel, fit_arx,
+                                           fit_subspace)
+
+
+def _simulate_arx(A, B, U, nk=1):
+    N, ny = U.shape[0], A.shape[1]
+    Y = np.zeros((N, ny))
+    for k in range(N):
+        y = np.zeros(ny)
+        for i in range(A.shape[0]):
+            if k - 1 - i >= 0:
+                y += A[i] @ Y[k - 1 - i]
+        for j in range(B.shape[0]):
+            if k - nk - j >= 0:
+                y += B[j] @ U[k - nk - j]
+        Y[k] = y
+    return Y
+
+
+def test_arx_recovers_known_mimo_coefficients():
+    rng = np.random.default_rng(1)
+    A = np.array([[[0.5, 0.1], [-0.05, 0.3]], [[0.2, 0.0], [0.05, -0.1]], [[-0.1, 0.02], [0.0, 0.05]]])
+    B = np.array([[[1.0, 0.0, 0.3], [0.2, -0.5, 0.1]], [[0.4, 0.1, 0.0], [0.0, 0.3, -0.2]]])
+    U = rng.standard_normal((600, 3))
+    Y = _simulate_arx(A, B, U)
+    p = fit_arx(U, Y, na=3, nb=2, nk=1)
+    np.testing.assert_allclose(p.A, A, atol=1e-9)
+    np.testing.assert_allclose(p.B, B, atol=1e-9)
+    np.testing.assert_allclose(p.c, 0.0, atol=1e-9)
+
+
+def test_arx_model_modes_exact_on_noise_free_data():
+    rng = np.random.default_rng(2)
+    A = np.array([[[0.6, 0.1], [0.0, 0.4]]])
+    B = np.array([[[0.5, 0.2, 0.0], [0.0, 0.3, 0.4]]])
+    U = rng.standard_normal((400, 3))
+    Y = _simulate_arx(A, B, U) + np.array([10.0, 0.05])    # offsets: the model standardises
+    m = ARXModel(1, 1, 1).fit(U, Y)
+    np.testing.assert_allclose(m.one_step(U, Y)[5:], Y[5:], atol=1e-8)
+    np.testing.assert_allclose(m.free_run(U, Y, 5)[5:], Y[5:], atol=1e-8)
+    assert m.label == "ARX111"
+
+
+def _known_state_space(rng, N=3000):
+    A = np.array([[0.9, 0.2, 0.0], [-0.2, 0.9, 0.0], [0.0, 0.0, 0.5]])
+    B = np.array([[1.0, 0.0], [0.0, 0.5], [0.3, 1.0]])
+    C = np.array([[1.0, 0.0, 1.0], [0.0, 1.0, -1.0]])
+    U = rng.standard_normal((N, 2))
+    x = np.zeros(3)
+    Y = np.zeros((N, 2))
+    for k in range(N):
+        Y[k] = C @ x
+        x = A @ x + B @ U[k]
+    return A, U, Y
+
+
+def test_subspace_reproduces_known_poles():
+    A, U, Y = _known_state_space(np.random.default_rng(3))
+    p = fit_subspace(U, Y, order=3, block_rows=6)
+    got = np.sort_complex(p.poles)
+    want = np.sort_complex(np.linalg.eigvals(A))
+    np.testing.assert_allclose(got, want, atol=1e-6)
+
+
+def test_state_space_model_free_run_follows_noise_free_system():
+    A, U, Y = _known_state_space(np.random.default_rng(4), N=1500)
+    # the model delays its inputs by one sample: feed it inputs advanced by one
+    m = StateSpaceModel(order=3, block_rows=6).fit(np.vstack([U[1:], U[-1:]]), Y)
+    P = m.free_run(np.vstack([U[1:], U[-1:]]), Y, 20)
+    # the error of the 20-sample state estimate dies out with the poles (|z| <= 0.92); what is
+    # left is the subspace estimate's own small bias (about 0.1 % here)
+    assert np.max(np.abs(P[300:] - Y[300:])) < 5e-3 * np.abs(Y).max()
+    assert np.mean(np.abs(P[20:] - Y[20:])) < 0.05 * np.mean(np.abs(Y))
+
+
+@pytest.mark.parametrize("lags,n_inputs", [((5, 3), 19), ((7, 5), 29)])
+def test_narx_sizes_as_in_the_paper(lags, n_inputs):
+    m = NARXModel(NARXConfig(n_out=lags[0], n_in=lags[1]))
+    assert m.n_inputs == n_inputs
+
+
+def test_narx_learns_a_nonlinear_system_and_runs_free():
+    rng = np.random.default_rng(5)
+    N = 1500
+    U = np.repeat(rng.uniform(-1, 1, (N // 15, 3)), 15, axis=0)
+    Y = np.zeros((N, 2))
+    for k in range(1, N):
+        Y[k, 0] = 0.8 * Y[k - 1, 0] + 0.3 * np.tanh(2 * U[k - 1, 0])
+        Y[k, 1] = 0.6 * Y[k - 1, 1] + 0.4 * np.sin(2 * U[k - 1, 1]) + 0.2 * U[k - 1, 2]
+    m = NARXModel(NARXConfig(n_out=2, n_in=2, max_iter=200, restarts=1)).fit(U[:1000], Y[:1000])
+    one = m.one_step(U[1000:], Y[1000:])
+    free = m.free_run(U[1000:], Y[1000:], 5)
+    for P in (one, free):
+        err = np.abs(P[5:] - Y[1005:]).mean(0)
+        assert np.all(err < 0.35 * np.abs(Y[1005:] - Y[1005:].mean(0)).mean(0)), err

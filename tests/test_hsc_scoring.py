@@ -1,0 +1,32 @@
+"""R and MAE against hand-computed values."""
+
+import math
+
+import numpy as np
+import pytest
+
+from hybridship.hsc.scoring import correlation, mean_absolute_error, score
+
+
+def test_mae_and_r_hand_computed():
+    y = [1.0, 2.0, 3.0, 4.0]
+    p = [1.0, 3.0, 2.0, 5.0]
+    # |errors| = 0, 1, 1, 1
+    assert mean_absolute_error(y, p) == pytest.approx(0.75)
+    # deviations (-1.5, -0.5, 0.5, 1.5) and (-1.75, 0.25, -0.75, 2.25):
+    # sum of products 5.5, sums of squares 5 and 8.75
+    assert correlation(y, p) == pytest.approx(5.5 / math.sqrt(5 * 8.75))
+    assert score(y, p) == pytest.approx((0.8315218, 0.75), abs=1e-7)
+
+
+def test_r_is_scale_free_and_signed():
+    y = np.array([0.0, 1.0, 2.0])
+    assert correlation(y, 3 * y + 7) == pytest.approx(1.0)
+    assert correlation(y, -y) == pytest.approx(-1.0)
+    assert math.isnan(correlation(y, np.ones(3)))
+
+
+def test_nonfinite_prediction_scores_nan_and_sizes_checked():
+    assert math.isnan(mean_absolute_error([1, 2], [1, np.inf]))
+    with pytest.raises(ValueError):
+        score([1, 2, 3], [1, 2])

@@ -1,0 +1,105 @@
+"""Planing-craft simulator and vessel file: steady speed/trim in the documented credible range."""
+
+import math
+
+import numpy as np
+import pytest
+
+from hybridship.hsc.simulator import KNOT_M_S, PlaningCraftModel, savitsky_planing
+from hybridship.hsc.trials import generate_trial, paper_trial
+from hybridship.hsc.vessel import PlaningCraftFileError, load_planing_craft, planing_craft_from_dict
+
+RPMS = np.linspace(800, 4000, 9)
+
+
+@pytest.fixture(scope="module")
+def craft():
+    return load_planing_craft()
+
+
+@pytest.fixture(scope="module", params=["nominal", "truth"])
+def curve(request, craft):
+    c = craft if request.param == "nominal" else craft.perturbed()
+    return PlaningCraftModel(c, "interceptor").steady_curve(RPMS, 0.0)
+
+
+def test_top_speed_near_40_kn_at_4000_rpm(curve):
+    assert curve[-1].rpm == 4000
+    assert 37.0 <= curve[-1].speed_kn <= 43.0
+
+
+def test_speed_rises_with_rpm(curve):
+    v = np.array([s.speed_kn for s in curve])
+    assert np.all(np.diff(v) > 0)
+    assert v[0] < 8.0                      # idle: displacement speed
+
+
+def test_running_trim_2_to_6_deg_between_15_and_40_kn(curve):
+    planing = [s for s in curve if 15.0 <= s.speed_kn <= 40.0]
+    assert len(planing) >= 3
+    for s in planing:
+        assert 2.0 <= s.trim_deg <= 6.5, (s.speed_kn, s.trim_deg)
+    # trim falls with speed once planing
+    trims = [s.trim_deg for s in planing]
+    assert trims[-1] < trims[0]
+
+
+def test_interceptor_and_tabs_lower_the_trim(craft):
+    for act in ("interceptor", "trim_tab"):
+        m = PlaningCraftModel(craft, act)
+        off = m.steady_state(3200, 0.0)
+        on = m.steady_state(3200, 1.0, guess=off)
+        assert on.trim_deg < off.trim_deg - 0.5
+
+
+@pytest.mark.parametrize("rpm", [1500, 2600, 4000])
+def test_no_porpoising(craft, rpm):
+    """The linearised surge-heave-pitch motion about the equilibrium is stable."""
+    m = PlaningCraftModel(craft.perturbed(), "trim_tab")
+    s = m.steady_state(rpm, 0.5)
+    y0 = np.array([0.0, s.speed_m_s, s.heave_m, 0.0, s.trim_rad, 0.0, float(rpm)])
+    J = np.zeros((6, 6))
+    for i in range(1, 7):
+        e = np.zeros(7)
+        e[i] = 1e-6 * max(1.0, abs(y0[i]))
+        J[:, i - 1] = (np.array(m.derivatives(y0 + e, rpm, 0.5))[1:] - np.array(m.derivatives(y0 - e, rpm, 0.5))[1:]) / (2 * e[i])
+    assert np.max(np.linalg.eigvals(J).real) < 0
+
+
+def test_savitsky_lift_grows_with_trim_and_immersion():
+    args = (2.9, math.radians(20), 1025.0, 1.19e-6)
+    l1 = savitsky_planing(15.0, math.radians(3), 0.3, *args)[0]
+    l2 = savitsky_planing(15.0, math.radians(4), 0.3, *args)[0]
+    l3 = savitsky_planing(15.0, math.radians(3), 0.4, *args)[0]
+    assert 0 < l1 < l2 and l1 < l3
+    assert savitsky_planing(15.0, math.radians(3), -0.1, *args) == (0.0, 0.0, 0.0, 0.0)
+
+
+def test_vessel_file_kind_and_field_errors(craft):
+    data = craft.model_dump()
+    data["kind"] = "ship"
+    with pytest.raises(PlaningCraftFileError, match="kind"):
+        planing_craft_from_dict(data, "x.toml")
+    data = craft.model_dump()
+    data["hull"]["deadrise_deg"] = -3
+    with pytest.raises(PlaningCraftFileError, match="hull.deadrise_deg"):
+        planing_craft_from_dict(data, "x.toml")
+
+
+def test_trial_gps_delay_realigned_and_reproducible(craft):
+    cfg = paper_trial(2, scale=0.03)
+    a = generate_trial(cfg, craft)
+    b = generate_trial(cfg, craft)
+    pd_equal = np.array_equal(a.data.to_numpy(), b.data.to_numpy())
+    assert pd_equal
+    d = a.delay_samples
+    assert d == 20 and len(a.data) == cfg.n_samples and len(a.raw) == cfg.n_samples + d
+    truth = a.truth.speed_m_s
+    # aligned speed matches the true speed at the same time (noise only) ...
+    assert np.std(a.data.speed_m_s - truth) < 2 * craft.sensors.gps_speed_noise_m_s
+    # ... while the raw GPS channel lags it by 2 s
+    raw = a.raw.gps_speed_m_s.to_numpy()[d:d + cfg.n_samples - d]
+    assert np.max(np.abs(raw - truth[:cfg.n_samples - d])) < 6 * craft.sensors.gps_speed_noise_m_s
+    assert np.std(a.raw.gps_speed_m_s.to_numpy()[:cfg.n_samples] - truth) > 2 * craft.sensors.gps_speed_noise_m_s
+    assert a.data.rpm.between(700, 4100).all() and a.data.pwm_pct.between(10, 100).all()
+    assert (truth.max() - truth.min()) / KNOT_M_S > 5          # the inputs excite the speed
