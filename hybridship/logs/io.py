@@ -12,19 +12,39 @@ column, the first offending row (0-based position among the data rows, header ex
 and its ``time_s`` where relevant, and what was expected:
 
 * missing required columns (``time_s``, ``north_m``, ``east_m``, ``heading_deg``) or
-  duplicated column names;
+  duplicated column names; when a column with the same quantity in another unit is
+  present (``heading_rad``, ``time_ms``, ...) the message says so;
 * non-numeric values in a known numeric column; infinities anywhere in one;
-* ``time_s`` not finite or not strictly increasing; NaN in a required column;
-* a heading that looks like radians (see :func:`heading_looks_like_radians` for the rule);
+* ``time_s`` not finite or not strictly increasing; a median sample spacing outside
+  0.01..60 s (``time_s`` in milliseconds?); NaN in a required column (unless
+  ``allow_missing``, the forecast-time mode of :mod:`hybridship.quality`);
+* a heading outside -360..720 deg (milliradians, centidegrees?) or one that looks like
+  radians (see :func:`heading_looks_like_radians` for the rule); the same radian rule for
+  ``wind_dir_deg`` and every ``<thruster>_azimuth_deg``;
 * ``|u_m_s|`` or ``|v_m_s|`` above 30 m/s (knots?), ``|r_deg_s|`` above 60 deg/s
   (rad/s vs deg/s mix-up?), ``wind_speed_m_s`` outside 0..80 m/s;
+* ``u_m_s``/``v_m_s`` whose speed is not the speed of the track (see
+  :func:`speed_scale_vs_track`): knots (1.94 x) and km/h (3.6 x) are named;
+* ``r_deg_s`` that is 1/57.3 of the heading's rate of change (rad/s) or 57.3 x (converted
+  twice), or whose sign is opposite to it (counter-clockwise convention);
 * thruster columns (``<name>_rpm``, ``<name>_azimuth_deg``) naming a thruster that is not
   in ``thruster_names`` (when given);
 * ``dp_active`` values other than 0/1.
 
+:func:`check_log_against_vessel` adds the checks that need the vessel file: every
+thruster column names a thruster of the vessel, an azimuth thruster with a logged rpm also
+has its azimuth logged, all or none of the thrusters are logged (and none only when the
+vessel is not station keeping), ``|rpm|`` within 1.25 x the thruster's ``max_rpm``, and the
+rpm sign convention (an azimuth thruster that runs only "astern" for a minute or more
+is taken to log its shaft rotation direction, not the thrust sign), and every rudder's
+angle when thrusters are logged.
+
 Optional columns may contain missing values (empty CSV cells / Parquet nulls). Columns
 that are neither in the format nor ``truth_*`` are reported once per call with a
-:class:`LogFormatWarning` and kept.
+:class:`LogFormatWarning` and kept; when one looks like a format column in another unit
+(``wind_speed_kn``) the warning says so.
+
+Nothing here modifies the caller's DataFrame or file: validation reads, conversion copies.
 """
 
 from __future__ import annotations
@@ -36,6 +56,7 @@ import warnings
 from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
+from typing import NamedTuple
 
 import numpy as np
 import pandas as pd
@@ -55,6 +76,10 @@ __all__ = [
     "validate_log",
     "log_to_arrays",
     "heading_looks_like_radians",
+    "angle_looks_like_radians",
+    "speed_scale_vs_track",
+    "SpeedScale",
+    "check_log_against_vessel",
 ]
 
 #: Columns every log must have.
@@ -67,6 +92,29 @@ TRUTH_PREFIX = "truth_"
 MAX_SPEED_M_S = 30.0
 MAX_YAW_RATE_DEG_S = 60.0
 MAX_WIND_SPEED_M_S = 80.0
+#: Plausible median sample spacing [s]; outside it ``time_s`` is in another unit.
+MIN_SAMPLE_SPACING_S = 0.01
+MAX_SAMPLE_SPACING_S = 60.0
+#: A heading in degrees lies in this range in every wrap convention (with slack for a
+#: logger that wraps late); beyond it the column is in another unit.
+HEADING_RANGE_DEG = (-360.0, 720.0)
+#: Speed-vs-track check: displacements over this lag [s] are compared ...
+SPEED_CHECK_LAG_S = 20.0
+#: ... when their rms reaches this [m] (the correlation gate below keeps noise out) ...
+SPEED_CHECK_MIN_DISPLACEMENT_M = 1.0
+#: ... and the two agree in shape (complex correlation at least this).
+SPEED_CHECK_MIN_CORRELATION = 0.8
+#: Speed scale factors of common unit mix-ups (logged / true for a m/s column).
+KNOTS_PER_M_S = 1.0 / 0.514444
+KM_H_PER_M_S = 3.6
+#: The logged speed may differ from the track's by at most this factor either way
+#: (the geometric mean of 1 and 1.94: knots are refused, noise is not).
+_SPEED_SCALE_SPLIT = float(np.sqrt(KNOTS_PER_M_S))
+#: ``|rpm|`` beyond this multiple of a thruster's ``max_rpm`` is a unit error (refused).
+RPM_UNIT_FACTOR = 1.25
+#: An azimuth thruster negative in at least this many samples and never positive is taken
+#: to log its rotation direction instead of the thrust sign.
+RPM_SIGN_MIN_SAMPLES = 60
 
 _THRUSTER_RE = re.compile(r"^(?P<name>.+)_(?P<kind>rpm|azimuth_deg)$")
 _EXTENSIONS = (".csv", ".csv.gz", ".parquet", ".pq")
@@ -108,6 +156,37 @@ _RAD_LIMIT = 2.0 * np.pi + 0.1
 _RAD_SPREAD_LIMIT = 5.5
 #: Ratio std(r_deg_s) / std(heading rate) splitting degrees (~1) from radians (~57.3).
 _RATE_SCALE_SPLIT = float(np.sqrt(180.0 / np.pi))
+
+
+def angle_looks_like_radians(time_s, angle, rate_deg_s=None) -> tuple[bool, str]:
+    """Decide whether an angle column (heading, azimuth, wind direction) holds radians.
+
+    The rule of :func:`heading_looks_like_radians`, which is this function; ``rate_deg_s``
+    is the logged rate of change of the angle (``r_deg_s`` for the heading), if any.
+    """
+    return heading_looks_like_radians(time_s, angle, rate_deg_s)
+
+
+def _rate_evidence(t: np.ndarray, h: np.ndarray, r: np.ndarray, wrap: float) -> tuple[float, float] | None:
+    """Correlation and scale ``std(r) / std(dh/dt)`` of a logged rate against an angle series.
+
+    Uses steps within 1.5 nominal periods, with finite ends, not wrapping (``|dh| <=
+    wrap / 2``); None with fewer than 10 such steps or no variation.
+    """
+    ok = np.isfinite(h)
+    t, h, r = t[ok], h[ok], r[ok]
+    if t.size < 11:
+        return None
+    dt = np.diff(t)
+    dh = np.diff(h)
+    step_ok = (dt <= 1.5 * np.median(dt)) & np.isfinite(r[1:]) & np.isfinite(r[:-1]) & (np.abs(dh) <= 0.5 * wrap)
+    if step_ok.sum() < 10:
+        return None
+    r_mid = 0.5 * (r[1:] + r[:-1])[step_ok]
+    rate = (dh / dt)[step_ok]
+    if not (np.std(rate) > 0.0 and np.std(r_mid) > 0.0):
+        return None
+    return float(np.corrcoef(rate, r_mid)[0, 1]), float(np.std(r_mid) / np.std(rate))
 
 
 def heading_looks_like_radians(time_s, heading, r_deg_s=None) -> tuple[bool, str]:
@@ -176,22 +255,16 @@ def heading_looks_like_radians(time_s, heading, r_deg_s=None) -> tuple[bool, str
         )
 
     if r_deg_s is not None:
-        r = np.asarray(r_deg_s, dtype=float)[ok]
-        dt = np.diff(t_ok)
-        step_ok = (dt <= 1.5 * np.median(dt)) & np.isfinite(r[1:]) & np.isfinite(r[:-1]) & ~big
-        if step_ok.sum() >= 10:
-            r_mid = 0.5 * (r[1:] + r[:-1])[step_ok]
-            rate = (dh / dt)[step_ok]
-            if np.std(rate) > 0.0 and np.std(r_mid) > 0.0:
-                corr = float(np.corrcoef(rate, r_mid)[0, 1])
-                k = float(np.std(r_mid) / np.std(rate))
-                if corr >= 0.3:
-                    if k > _RATE_SCALE_SPLIT:
-                        return True, (
-                            f"r_deg_s is {k:.1f} times its rate of change (about 1 expected for "
-                            f"degrees, 57.3 for radians)"
-                        )
-                    return False, f"r_deg_s is {k:.2f} times its rate of change, as for degrees"
+        ev = _rate_evidence(t, h, np.asarray(r_deg_s, dtype=float), 2.0 * np.pi)
+        if ev is not None:
+            corr, k = ev
+            if corr >= 0.3:
+                if k > _RATE_SCALE_SPLIT:
+                    return True, (
+                        f"r_deg_s is {k:.1f} times its rate of change (about 1 expected for "
+                        f"degrees, 57.3 for radians)"
+                    )
+                return False, f"r_deg_s is {k:.2f} times its rate of change, as for degrees"
 
     spread = float(np.ptp(h_ok))
     if spread >= _RAD_SPREAD_LIMIT:
@@ -217,11 +290,15 @@ def _row_at(time_s: np.ndarray | None, i: int) -> str:
     return f"row {i} (time_s {time_s[i]:g})"
 
 
-def _to_float(df: pd.DataFrame, col: str, source: str, time_s: np.ndarray | None) -> np.ndarray:
-    """Column as float array; non-numeric entries and infinities are errors, blanks NaN."""
+def _to_float(df: pd.DataFrame, col: str, source: str, time_s: np.ndarray | None,
+              *, inf_is_missing: bool = False) -> np.ndarray:
+    """Column as a new float array; non-numeric entries are errors, blanks NaN.
+
+    Infinities are errors too, unless ``inf_is_missing`` (then they become NaN).
+    """
     s = df[col]
     if s.dtype == bool:
-        return s.to_numpy(dtype=float)
+        return s.to_numpy(dtype=float, copy=True)
     num = pd.to_numeric(s, errors="coerce")
     bad = num.isna().to_numpy() & s.notna().to_numpy()
     if bad.any():
@@ -231,9 +308,12 @@ def _to_float(df: pd.DataFrame, col: str, source: str, time_s: np.ndarray | None
             f"with '.' as decimal separator or an empty cell{_where(source)}",
             column=col, row=i, time_s=None if time_s is None else float(time_s[i]),
         )
-    x = num.to_numpy(dtype=float, na_value=np.nan)
+    x = np.array(num.to_numpy(dtype=float, na_value=np.nan), dtype=float)  # a copy, never a view
     inf = np.isinf(x)
     if inf.any():
+        if inf_is_missing:
+            x[inf] = np.nan
+            return x
         i = int(np.argmax(inf))
         raise LogFormatError(
             f"{col}: infinite value {x[i]} at {_row_at(time_s, i)}; expected a finite number "
@@ -268,29 +348,139 @@ def _limit_error(col: str, x: np.ndarray, bad: np.ndarray, t: np.ndarray, expect
     )
 
 
-def _validate(df: pd.DataFrame, thruster_names, rotatable, source: str, warn_unknown: bool) -> None:
-    if not isinstance(df, pd.DataFrame):
-        raise TypeError(f"expected a pandas DataFrame, got {type(df).__name__}")
-    names, rot = _check_thruster_args(thruster_names, rotatable)
-    cols = [str(c) for c in df.columns]
+#: Name stems of each format column; a column ``<stem>`` or ``<stem>_<unit>`` with another
+#: unit is pointed out (required: in the error; optional: in the unknown-column warning).
+_UNIT_STEMS = {
+    "time_s": ("time", "t", "timestamp"),
+    "north_m": ("north",),
+    "east_m": ("east",),
+    "heading_deg": ("heading", "hdg", "psi", "yaw"),
+    "u_m_s": ("u", "surge", "surge_speed"),
+    "v_m_s": ("v", "sway", "sway_speed"),
+    "r_deg_s": ("r", "yaw_rate", "rot"),
+    "wind_speed_m_s": ("wind_speed", "windspeed", "wind"),
+    "wind_dir_deg": ("wind_dir", "wind_direction", "winddir"),
+}
 
-    dup = sorted({c for c in cols if cols.count(c) > 1})
-    if dup:
-        raise LogFormatError(f"{dup[0]}: column appears more than once; column names must be unique{_where(source)}",
-                             column=dup[0])
-    missing = [c for c in REQUIRED_COLUMNS if c not in cols]
-    if missing:
-        raise LogFormatError(
-            f"{missing[0]}: required column missing (missing: {', '.join(missing)}; required: "
-            f"{', '.join(REQUIRED_COLUMNS)}; found: {', '.join(cols) or 'none'}){_where(source)}",
-            column=missing[0],
-        )
-    if len(df) == 0:
-        raise LogFormatError(f"time_s: the log has no rows; expected at least one sample{_where(source)}",
-                             column="time_s")
 
-    # time_s first: every other message quotes it.
-    t = _to_float(df, "time_s", source, None)
+def _unit_variant_of(col: str) -> str | None:
+    """The format column that ``col`` looks like in another unit (``heading_rad`` ->
+    ``heading_deg``): ``col`` is a stem or ``<stem>_<unit>``, longest stem wins; else None."""
+    c = col.lower()
+    if c in _UNIT_STEMS or c in REQUIRED_COLUMNS or c in OPTIONAL_COLUMNS:
+        return None
+    best, best_len = None, -1
+    for fmt, stems in _UNIT_STEMS.items():
+        for stem in stems:
+            if (c == stem or c.startswith(stem + "_")) and len(stem) > best_len:
+                best, best_len = fmt, len(stem)
+    return best
+
+
+class SpeedScale(NamedTuple):
+    """Logged speed against the speed of the track (see :func:`speed_scale_vs_track`).
+
+    Attributes
+    ----------
+    scale : float
+        rms of the displacements integrated from ``u_m_s``/``v_m_s`` over the rms of the
+        track's displacements (1 when both are in m/s and metres).
+    correlation : float
+        Magnitude of the complex correlation of the two displacement series (1 = same
+        shape; small = the velocities do not describe this track).
+    rms_displacement_m : float
+        The larger of the two rms displacements [m].
+    time_span_s : tuple of float
+        First and last ``time_s`` of the samples used.
+    """
+
+    scale: float
+    correlation: float
+    rms_displacement_m: float
+    time_span_s: tuple[float, float]
+
+
+def speed_scale_vs_track(time_s, north_m, east_m, heading_deg, u_m_s, v_m_s, *,
+                         lag_s: float = SPEED_CHECK_LAG_S) -> SpeedScale | None:
+    """Compare the logged body velocities with the motion of the logged track.
+
+    The body velocities ``(u, v)`` are rotated into NED with the logged heading and
+    integrated (trapezoid) within each gap-free run of finite samples; their
+    displacements over ``lag_s`` are compared with the track's displacements over the
+    same windows, as complex numbers ``north + i east``. Over a 20-s lag GNSS noise
+    (~1 m) is small against the displacement of a moving ship, and a constant heading
+    offset does not change the scale.
+
+    Parameters
+    ----------
+    time_s : array_like, shape (N,)
+        Sample times [s], finite and strictly increasing.
+    north_m, east_m, heading_deg, u_m_s, v_m_s : array_like, shape (N,)
+        The log's columns (NaN samples split the runs).
+    lag_s : float, default 20
+        Displacement lag [s].
+
+    Returns
+    -------
+    SpeedScale or None
+        None when no run is longer than the lag.
+    """
+    t = np.asarray(time_s, dtype=float)
+    cols = [np.asarray(c, dtype=float) for c in (north_m, east_m, heading_deg, u_m_s, v_m_s)]
+    n = t.size
+    if n < 3:
+        return None
+    finite = np.all(np.isfinite(np.vstack(cols)), axis=0)
+    dt = float(np.median(np.diff(t)))
+    lag = max(1, int(round(lag_s / dt)))
+    zv_all, zt_all, used = [], [], []
+    for seg in split_segments(t):
+        ok = finite[seg]
+        idx = np.arange(seg.start, seg.stop)
+        # runs of finite samples inside the segment
+        edges = np.flatnonzero(np.diff(np.concatenate(([0], ok.astype(int), [0]))))
+        for a, b in zip(edges[::2], edges[1::2]):
+            rows = idx[a:b]
+            if rows.size <= lag:
+                continue
+            psi = np.radians(cols[2][rows])
+            c, s = np.cos(psi), np.sin(psi)
+            vn = c * cols[3][rows] - s * cols[4][rows]
+            ve = s * cols[3][rows] + c * cols[4][rows]
+            tr = t[rows]
+            h = np.diff(tr)
+            pn = np.concatenate(([0.0], np.cumsum(0.5 * h * (vn[1:] + vn[:-1]))))
+            pe = np.concatenate(([0.0], np.cumsum(0.5 * h * (ve[1:] + ve[:-1]))))
+            zv = (pn[lag:] - pn[:-lag]) + 1j * (pe[lag:] - pe[:-lag])
+            zt = (cols[0][rows][lag:] - cols[0][rows][:-lag]) + 1j * (cols[1][rows][lag:] - cols[1][rows][:-lag])
+            zv_all.append(zv)
+            zt_all.append(zt)
+            used.append((tr[0], tr[-1]))
+    if not zv_all:
+        return None
+    zv = np.concatenate(zv_all)
+    zt = np.concatenate(zt_all)
+    s_v = float(np.sqrt(np.mean(np.abs(zv) ** 2)))
+    s_t = float(np.sqrt(np.mean(np.abs(zt) ** 2)))
+    denom = np.linalg.norm(zv) * np.linalg.norm(zt)
+    corr = float(np.abs(np.vdot(zv, zt)) / denom) if denom > 0 else 0.0
+    scale = s_v / s_t if s_t > 0 else np.inf
+    span = (float(min(u[0] for u in used)), float(max(u[1] for u in used)))
+    return SpeedScale(scale, corr, max(s_v, s_t), span)
+
+
+def _speed_unit_guess(scale: float) -> str:
+    for factor, unit in ((KNOTS_PER_M_S, "knots"), (KM_H_PER_M_S, "km/h")):
+        if abs(np.log(scale / factor)) < np.log(1.15):
+            return f"looks like {unit}"
+    if scale > 1e3:
+        return "north_m/east_m hardly move: positions in degrees of latitude/longitude?"
+    if scale < 1.0:
+        return "the velocities are too small for the track: another unit, or positions in feet?"
+    return "another unit?"
+
+
+def _check_time(t: np.ndarray, source: str) -> None:
     nonfinite = ~np.isfinite(t)
     if nonfinite.any():
         i = int(np.argmax(nonfinite))
@@ -304,12 +494,63 @@ def _validate(df: pd.DataFrame, thruster_names, rotatable, source: str, warn_unk
             f"strictly increasing times{_where(source)}",
             column="time_s", row=i, time_s=float(t[i]),
         )
+    if t.size >= 2:
+        med = float(np.median(np.diff(t)))
+        if not MIN_SAMPLE_SPACING_S <= med <= MAX_SAMPLE_SPACING_S:
+            hint = "milliseconds" if med > MAX_SAMPLE_SPACING_S else "minutes or hours"
+            raise LogFormatError(
+                f"time_s: median sample spacing {med:g} between time_s {t[0]:g} and {t[-1]:g}; the log "
+                f"format expects seconds (nominal 1 Hz; spacing {MIN_SAMPLE_SPACING_S:g}..{MAX_SAMPLE_SPACING_S:g} s "
+                f"accepted): is time_s in {hint}?{_where(source)}",
+                column="time_s",
+            )
+
+
+def _check_angle_unit(col: str, t: np.ndarray, x: np.ndarray, source: str, rate=None) -> None:
+    is_rad, reason = angle_looks_like_radians(t, x, rate)
+    if is_rad:
+        ok = np.isfinite(x)
+        raise LogFormatError(
+            f"{col}: values span {np.min(x[ok]):.2f}..{np.max(x[ok]):.2f}, which looks like radians ({reason}); "
+            f"the log format expects degrees (column {col}; rows with time_s {t[0]:g}..{t[-1]:g}){_where(source)}",
+            column=col,
+        )
+
+
+def _validate(df: pd.DataFrame, thruster_names, rotatable, source: str, warn_unknown: bool,
+              allow_missing: bool = False) -> None:
+    if not isinstance(df, pd.DataFrame):
+        raise TypeError(f"expected a pandas DataFrame, got {type(df).__name__}")
+    names, rot = _check_thruster_args(thruster_names, rotatable)
+    cols = [str(c) for c in df.columns]
+
+    dup = sorted({c for c in cols if cols.count(c) > 1})
+    if dup:
+        raise LogFormatError(f"{dup[0]}: column appears more than once; column names must be unique{_where(source)}",
+                             column=dup[0])
+    missing = [c for c in REQUIRED_COLUMNS if c not in cols]
+    if missing:
+        hints = [f"found {c!r}, which looks like {_unit_variant_of(c)} in another unit"
+                 for c in cols if _unit_variant_of(c) in missing]
+        hint = f"; {'; '.join(hints)}: convert it and name it as the format says" if hints else ""
+        raise LogFormatError(
+            f"{missing[0]}: required column missing (missing: {', '.join(missing)}; required: "
+            f"{', '.join(REQUIRED_COLUMNS)}; found: {', '.join(cols) or 'none'}){hint}{_where(source)}",
+            column=missing[0],
+        )
+    if len(df) == 0:
+        raise LogFormatError(f"time_s: the log has no rows; expected at least one sample{_where(source)}",
+                             column="time_s")
+
+    # time_s first: every other message quotes it.
+    t = _to_float(df, "time_s", source, None)
+    _check_time(t, source)
 
     values: dict[str, np.ndarray] = {}
     for col in REQUIRED_COLUMNS[1:]:
-        x = _to_float(df, col, source, t)
+        x = _to_float(df, col, source, t, inf_is_missing=allow_missing)
         bad = ~np.isfinite(x)
-        if bad.any():
+        if bad.any() and not allow_missing:
             i = int(np.argmax(bad))
             raise LogFormatError(
                 f"{col}: missing or non-finite value ({x[i]}) at {_row_at(t, i)}, {int(bad.sum())} such "
@@ -321,14 +562,13 @@ def _validate(df: pd.DataFrame, thruster_names, rotatable, source: str, warn_unk
         if col in cols:
             values[col] = _to_float(df, col, source, t)
 
-    is_rad, reason = heading_looks_like_radians(t, values["heading_deg"], values.get("r_deg_s"))
-    if is_rad:
-        h = values["heading_deg"]
-        raise LogFormatError(
-            f"heading_deg: values span {h.min():.2f}..{h.max():.2f}, which looks like radians ({reason}); "
-            f"the log format expects degrees (column heading_deg){_where(source)}",
-            column="heading_deg",
-        )
+    h = values["heading_deg"]
+    lo, hi = HEADING_RANGE_DEG
+    bad = np.isfinite(h) & ((h < lo) | (h > hi))
+    if bad.any():
+        raise _limit_error("heading_deg", h, bad, t, f"is outside {lo:g}..{hi:g}; the log format expects "
+                           "degrees (0..360 or -180..180): is it in milliradians or centidegrees?", source)
+    _check_angle_unit("heading_deg", t, h, source, values.get("r_deg_s"))
 
     for col in ("u_m_s", "v_m_s"):
         if col in values:
@@ -344,12 +584,46 @@ def _validate(df: pd.DataFrame, thruster_names, rotatable, source: str, warn_unk
             raise _limit_error("r_deg_s", x, bad, t, f"exceeds {MAX_YAW_RATE_DEG_S:g} deg/s in magnitude, "
                                "implausible for a ship; the log format expects deg/s; check the rad/s vs "
                                "deg/s conversion (converted twice?)", source)
+        ev = _rate_evidence(t, h, x, 360.0)
+        if ev is not None:
+            corr, k = ev
+            span = f"between time_s {t[0]:g} and {t[-1]:g}"
+            if corr <= -0.3:
+                raise LogFormatError(
+                    f"r_deg_s: has the opposite sign of the rate of change of heading_deg {span} "
+                    f"(correlation {corr:.2f}); the log format expects the yaw rate positive clockwise seen "
+                    f"from above (NED): is the sign reversed (counter-clockwise / ENU convention)?{_where(source)}",
+                    column="r_deg_s")
+            if corr >= 0.3 and k < 1.0 / _RATE_SCALE_SPLIT:
+                raise LogFormatError(
+                    f"r_deg_s: is {k:.4f} times the rate of change of heading_deg {span} (about 1 expected "
+                    f"for deg/s, 0.0175 for rad/s): looks like rad/s; the log format expects deg/s{_where(source)}",
+                    column="r_deg_s")
+            if corr >= 0.3 and k > _RATE_SCALE_SPLIT:
+                raise LogFormatError(
+                    f"r_deg_s: is {k:.1f} times the rate of change of heading_deg {span} (about 1 expected "
+                    f"for deg/s): converted from rad/s twice?; the log format expects deg/s{_where(source)}",
+                    column="r_deg_s")
+    if "u_m_s" in values and "v_m_s" in values:
+        sc = speed_scale_vs_track(t, values["north_m"], values["east_m"], h, values["u_m_s"], values["v_m_s"])
+        if (sc is not None and sc.rms_displacement_m >= SPEED_CHECK_MIN_DISPLACEMENT_M
+                and sc.correlation >= SPEED_CHECK_MIN_CORRELATION
+                and not 1.0 / _SPEED_SCALE_SPLIT <= sc.scale <= _SPEED_SCALE_SPLIT):
+            raise LogFormatError(
+                f"u_m_s, v_m_s: the logged speed is {sc.scale:.3g} times the speed of the track "
+                f"(north_m, east_m) over {SPEED_CHECK_LAG_S:g}-s windows between time_s {sc.time_span_s[0]:g} "
+                f"and {sc.time_span_s[1]:g} (correlation {sc.correlation:.2f}); expected 1 for m/s "
+                f"({KNOTS_PER_M_S:.2f} would be knots, {KM_H_PER_M_S:g} km/h): {_speed_unit_guess(sc.scale)}"
+                f"{_where(source)}",
+                column="u_m_s")
     if "wind_speed_m_s" in values:
         x = values["wind_speed_m_s"]
         bad = (x < 0.0) | (x > MAX_WIND_SPEED_M_S)
         if bad.any():
             raise _limit_error("wind_speed_m_s", x, bad, t, f"is outside 0..{MAX_WIND_SPEED_M_S:g} m/s; the "
                                "log format expects a non-negative true wind speed in m/s (knots?)", source)
+    if "wind_dir_deg" in values:
+        _check_angle_unit("wind_dir_deg", t, values["wind_dir_deg"], source)
     if "dp_active" in values:
         x = values["dp_active"]
         bad = np.isfinite(x) & (x != 0.0) & (x != 1.0)
@@ -364,7 +638,9 @@ def _validate(df: pd.DataFrame, thruster_names, rotatable, source: str, warn_unk
             continue
         m = _THRUSTER_RE.match(col)
         if m is None:
-            ignored.append(col)
+            variant = _unit_variant_of(col)
+            ignored.append(col if variant is None else
+                           f"{col} (looks like {variant} in another unit; the format expects {variant})")
             continue
         name, kind = m.group("name"), m.group("kind")
         if names is not None and name not in names:
@@ -373,9 +649,11 @@ def _validate(df: pd.DataFrame, thruster_names, rotatable, source: str, warn_unk
                 f"(expected columns <thruster>_rpm and <thruster>_azimuth_deg){_where(source)}",
                 column=col,
             )
-        _to_float(df, col, source, t)  # numeric, no infinities
+        x = _to_float(df, col, source, t)  # numeric, no infinities
         if kind == "azimuth_deg" and rot is not None and not rot[names.index(name)]:
             ignored.append(f"{col} (thruster '{name}' is not rotatable)")
+        elif kind == "azimuth_deg":
+            _check_angle_unit(col, t, x, source)
 
     if ignored and warn_unknown:
         warnings.warn(
@@ -391,6 +669,7 @@ def validate_log(
     thruster_names: Sequence[str] | None = None,
     rotatable: Sequence[bool] | None = None,
     source: str = "log",
+    allow_missing: bool = False,
 ) -> None:
     """Check a log DataFrame against the log format; raise on the first problem.
 
@@ -406,6 +685,12 @@ def validate_log(
         thruster is reported (warning) and ignored.
     source : str, default "log"
         Where the data come from (a file name), quoted in messages.
+    allow_missing : bool, default False
+        Accept missing (empty, NaN) or infinite values in ``north_m``, ``east_m`` and
+        ``heading_deg`` as missing samples (forecast-time mode: :mod:`hybridship.quality`
+        decides per forecast start whether enough valid samples remain). ``time_s`` must
+        still be finite and strictly increasing (:func:`hybridship.quality.sort_samples`
+        repairs late and duplicated samples first).
 
     Raises
     ------
@@ -420,7 +705,117 @@ def validate_log(
     LogFormatWarning
         Once, listing every column that is neither in the format nor ``truth_*``.
     """
-    _validate(df, thruster_names, rotatable, source, warn_unknown=True)
+    _validate(df, thruster_names, rotatable, source, warn_unknown=True, allow_missing=allow_missing)
+
+
+def check_log_against_vessel(log, vessel, *, source: str | None = None, allow_missing: bool = False) -> None:
+    """Validate a log and check it against a vessel file's thrusters.
+
+    Besides :func:`validate_log` with the vessel's thruster names, refuses (with a
+    :class:`LogFormatError` naming the column, row and time where relevant):
+
+    * ``|<name>_rpm|`` above ``RPM_UNIT_FACTOR`` (1.25) times the thruster's ``max_rpm``:
+      a unit error (motor rpm before the gear, rev/s x 60 twice, ...);
+    * an azimuth thruster whose ``<name>_rpm`` is logged but not its ``<name>_azimuth_deg``
+      (the forecast would take its thrust as pointing forward);
+    * some thrusters' ``<name>_rpm`` logged and others' not (the forecast would take the
+      missing ones as stopped);
+    * no ``<name>_rpm`` at all while ``dp_active`` is 1 somewhere, or absent (the
+      forecast would take a station-keeping vessel as drifting without thrust);
+    * a rudder's ``<name>_azimuth_deg`` missing while thruster rpm are logged;
+    * an azimuth thruster whose rpm is negative in at least ``RPM_SIGN_MIN_SAMPLES`` (60)
+      samples and never positive: the log format's sign is that of the thrust along the
+      thruster axis, and an azimuth thruster turns rather than reverses, so such a log most
+      likely carries the shaft's rotation direction (a counter-rotating propeller). Tunnel
+      thrusters push either way and fixed propellers may back for a whole log: not checked.
+
+    Parameters
+    ----------
+    log : pandas.DataFrame or path
+        The log (never modified); a path is read with :func:`read_log`.
+    vessel : hybridship.vessel.Vessel or str or path
+        A validated vessel, or a packaged vessel name / vessel file.
+    source : str, optional
+        Quoted in messages (default: the file name, or "log").
+    allow_missing : bool, default False
+        As in :func:`validate_log`.
+
+    Raises
+    ------
+    LogFormatError
+    hybridship.vessel.VesselFileError
+        If ``vessel`` names an invalid vessel file.
+    """
+    from hybridship.vessel import Vessel, load_vessel
+
+    v = vessel if isinstance(vessel, Vessel) else load_vessel(vessel)
+    names, rot = v.thruster_names, v.rotatable
+    if isinstance(log, (str, os.PathLike)):
+        source = source or str(log)
+        df = read_log(log, validate=False)
+    else:
+        df = log
+    source = source or "log"
+    _validate(df, names, rot, source, warn_unknown=True, allow_missing=allow_missing)
+    cols = set(map(str, df.columns))
+    t = _to_float(df, "time_s", source, None)
+    # Command channels are thrusters and (in newer vessel files) rudders; only thrusters
+    # have an rpm, a rudder logs its angle as <name>_azimuth_deg.
+    names = [th.name for th in v.thrusters]
+    rudders = [r.name for r in getattr(v, "rudders", None) or []]
+    logged = [f"{n}_rpm" in cols for n in names]
+    vessel_note = f" of vessel {v.name!r}"
+    if names and any(logged) and not all(logged):
+        miss = [f"{n}_rpm" for n, ok in zip(names, logged) if not ok]
+        have = [f"{n}_rpm" for n, ok in zip(names, logged) if ok]
+        raise LogFormatError(
+            f"{miss[0]}: missing while {', '.join(have)} are logged; expected the rpm of every thruster"
+            f"{vessel_note} ({', '.join(f'{n}_rpm' for n in names)}), else the forecast would take "
+            f"{', '.join(miss)} as stopped{_where(source)}", column=miss[0])
+    for rud in rudders:
+        if any(logged) and f"{rud}_azimuth_deg" not in cols:
+            raise LogFormatError(
+                f"{rud}_azimuth_deg: missing while thruster rpm are logged; expected the angle of rudder "
+                f"{rud!r}{vessel_note} in degrees (positive to starboard), else the forecast would take it "
+                f"as amidships{_where(source)}", column=f"{rud}_azimuth_deg")
+    if names and not any(logged):
+        dp = _to_float(df, "dp_active", source, t) if "dp_active" in cols else None
+        if dp is None or np.any(dp == 1.0):
+            i = 0 if dp is None else int(np.argmax(dp == 1.0))
+            raise LogFormatError(
+                f"{names[0]}_rpm: no thruster rpm columns while dp_active is "
+                f"{'absent (taken as 1)' if dp is None else f'1 at {_row_at(t, i)}'}; expected "
+                f"{', '.join(f'{n}_rpm' for n in names)} for vessel {v.name!r}, or dp_active = 0 for a vessel "
+                f"drifting without thrust{_where(source)}", column=f"{names[0]}_rpm")
+    for th, ok in zip(v.thrusters, logged):
+        if not ok:
+            continue
+        col = f"{th.name}_rpm"
+        x = _to_float(df, col, source, t)
+        limit = RPM_UNIT_FACTOR * th.max_rpm
+        bad = np.abs(x) > limit
+        if bad.any():
+            raise _limit_error(col, x, bad, t, f"exceeds {RPM_UNIT_FACTOR:g} x max_rpm ({th.max_rpm:g} rpm) of "
+                               f"thruster {th.name!r}{vessel_note} in magnitude; the log format expects the "
+                               "propeller shaft speed in rpm: is it the motor speed before the gear, or "
+                               "another unit?", source)
+        if th.type == "azimuth" and f"{th.name}_azimuth_deg" not in cols:
+            raise LogFormatError(
+                f"{th.name}_azimuth_deg: missing while {col} is logged; thruster {th.name!r}{vessel_note} is an "
+                f"azimuth thruster and its thrust direction is needed (expected column {th.name}_azimuth_deg "
+                f"in degrees, 0 = forward, positive to starboard){_where(source)}",
+                column=f"{th.name}_azimuth_deg")
+        if th.type == "azimuth":
+            neg = np.isfinite(x) & (x < 0.0)
+            pos = np.isfinite(x) & (x > 0.0)
+            if neg.sum() >= RPM_SIGN_MIN_SAMPLES and not pos.any():
+                i = int(np.argmax(neg))
+                raise LogFormatError(
+                    f"{col}: negative in all {int(neg.sum())} non-zero samples (first at {_row_at(t, i)}) and "
+                    f"never positive; the log format expects signed rpm with positive = thrust forward along "
+                    f"the thruster axis: does the column carry the shaft's rotation direction (e.g. a "
+                    f"counter-rotating propeller) instead?{_where(source)}",
+                    column=col, row=i, time_s=float(t[i]))
 
 
 # --------------------------------------------------------------------------------------
@@ -444,6 +839,8 @@ def read_log(
     *,
     thruster_names: Sequence[str] | None = None,
     rotatable: Sequence[bool] | None = None,
+    validate: bool = True,
+    allow_missing: bool = False,
 ) -> pd.DataFrame:
     """Read and validate a log file (CSV, ``.csv.gz`` or Parquet, by extension).
 
@@ -451,8 +848,11 @@ def read_log(
     ----------
     path : str or path-like
         The file; ``.csv``, ``.csv.gz``, ``.parquet`` or ``.pq``.
-    thruster_names, rotatable : optional
+    thruster_names, rotatable, allow_missing : optional
         As in :func:`validate_log`.
+    validate : bool, default True
+        False only parses the container (for repair tools such as
+        :func:`hybridship.quality.sort_samples`, which validate afterwards).
 
     Returns
     -------
@@ -474,7 +874,8 @@ def read_log(
     else:
         df = pd.read_csv(path, compression="gzip" if kind == "csv.gz" else None)
     df = df.reset_index(drop=True)
-    _validate(df, thruster_names, rotatable, str(path), warn_unknown=True)
+    if validate:
+        _validate(df, thruster_names, rotatable, str(path), warn_unknown=True, allow_missing=allow_missing)
     return df
 
 
@@ -548,7 +949,8 @@ class LogArrays:
     azimuth_rad : ndarray, shape (N, K)
         Azimuth angle commands [rad]; 0 for fixed thrusters and missing columns.
     wind : ndarray, shape (N, 2)
-        ``[wind_speed_m_s, wind_dir_from_rad]``; zeros when the log has no wind.
+        ``[wind_speed_m_s, wind_dir_from_rad]``; zeros when the log has no wind. Missing
+        samples are filled by holding the last logged value (see ``wind_logged``).
     has_wind : bool
         Whether the log has (any finite) wind speed and direction.
     dp_active : ndarray of int, shape (N,)
@@ -559,6 +961,16 @@ class LogArrays:
     rotatable : tuple of bool
     thruster_logged : tuple of bool
         Per thruster, whether its ``<name>_rpm`` column was in the log.
+    wind_logged : ndarray of bool, shape (N,)
+        True where both wind speed and direction were logged (finite) at that row, False
+        where ``wind`` holds an earlier value or zeros (a dropped wind sensor). Default:
+        ``has_wind`` everywhere.
+
+    Notes
+    -----
+    ``eta`` may contain NaN only when built with ``allow_missing=True`` (forecast-time
+    mode); ``nu`` is NaN where it could not be derived (single-sample segments, next to a
+    missing position).
     """
 
     time_s: np.ndarray
@@ -574,8 +986,11 @@ class LogArrays:
     thruster_names: tuple[str, ...]
     rotatable: tuple[bool, ...]
     thruster_logged: tuple[bool, ...]
+    wind_logged: np.ndarray | None = None
 
     def __post_init__(self):
+        if self.wind_logged is None:
+            object.__setattr__(self, "wind_logged", np.full(self.time_s.shape[0], bool(self.has_wind)))
         for v in vars(self).values():
             if isinstance(v, np.ndarray):
                 v.flags.writeable = False
@@ -593,6 +1008,15 @@ class LogArrays:
         return [slice(int(a), int(b)) for a, b in zip(bounds[:-1], bounds[1:])]
 
 
+def _unwrap_finite(psi_rad: np.ndarray) -> np.ndarray:
+    """Unwrap a heading series over its finite samples; NaN samples stay NaN (``np.unwrap``
+    alone would turn everything after the first NaN into NaN)."""
+    out = np.array(psi_rad, dtype=float)
+    ok = np.isfinite(out)
+    out[ok] = frames.unwrap_heading(out[ok])
+    return out
+
+
 def _held(x: np.ndarray, default: float) -> np.ndarray:
     """Fill NaNs by holding the last logged value (a logger logs commands that persist),
     then the first one backwards, then ``default`` if the column is empty."""
@@ -604,6 +1028,7 @@ def log_to_arrays(
     *,
     thruster_names: Sequence[str],
     rotatable: Sequence[bool],
+    allow_missing: bool = False,
 ) -> LogArrays:
     """Validate a log DataFrame and convert it to :class:`LogArrays` (SI units, radians).
 
@@ -616,6 +1041,11 @@ def log_to_arrays(
         columns.
     rotatable : sequence of bool
         Per thruster, whether it is an azimuth thruster.
+    allow_missing : bool, default False
+        Accept missing positions and headings (as in :func:`validate_log`); they stay NaN
+        in ``eta`` (the heading is unwrapped over the finite samples) and the velocities
+        derived next to them are NaN. For forecast-time use with
+        :func:`hybridship.quality.assess_start_window`.
 
     Returns
     -------
@@ -640,19 +1070,22 @@ def log_to_arrays(
     names, rot = _check_thruster_args(thruster_names, rotatable)
     if names is None or rot is None:
         raise ValueError("log_to_arrays needs thruster_names and rotatable")
-    _validate(df, names, rot, "log", warn_unknown=False)
+    _validate(df, names, rot, "log", warn_unknown=False, allow_missing=allow_missing)
     cols = set(map(str, df.columns))
 
     def col(name: str) -> np.ndarray:
-        # A copy: LogArrays must not alias the caller's DataFrame.
-        return np.array(pd.to_numeric(df[name], errors="coerce").to_numpy(dtype=float, na_value=np.nan))
+        # A copy: LogArrays must not alias the caller's DataFrame. Infinities (only possible
+        # in required columns with allow_missing) are missing samples.
+        x = np.array(pd.to_numeric(df[name], errors="coerce").to_numpy(dtype=float, na_value=np.nan))
+        x[np.isinf(x)] = np.nan
+        return x
 
     t = col("time_s")
     n = t.size
     segments = split_segments(t)
     seg_id = segment_ids(segments, n)
 
-    psi = frames.unwrap_heading(np.radians(col("heading_deg")))
+    psi = _unwrap_finite(np.radians(col("heading_deg")))
     eta = np.column_stack([col("north_m"), col("east_m"), psi])
 
     def grad(x, ts):
@@ -683,8 +1116,10 @@ def log_to_arrays(
 
     wind = np.zeros((n, 2))
     has_wind = False
+    wind_logged = np.zeros(n, dtype=bool)
     if {"wind_speed_m_s", "wind_dir_deg"} <= cols:
         speed, direction = col("wind_speed_m_s"), col("wind_dir_deg")
+        wind_logged = np.isfinite(speed) & np.isfinite(direction)
         if np.isfinite(speed).any() and np.isfinite(direction).any():
             has_wind = True
             wind[:, 0] = _held(speed, 0.0)
@@ -708,4 +1143,5 @@ def log_to_arrays(
         thruster_names=names,
         rotatable=rot,
         thruster_logged=tuple(logged),
+        wind_logged=wind_logged,
     )

@@ -1,0 +1,146 @@
+"""Valid input ranges of the physics (hybridship.limits): clip or refuse, never propagate."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
+
+from hybridship.limits import KNOT_M_S, Envelope, InputRangeError, check_or_clip_inputs, envelope_for
+from hybridship.physics.model import DynamicModel
+
+MODEL = DynamicModel("gunnerus")
+MAX_RPM = np.array([t.max_rpm for t in MODEL.vessel.thrusters])
+
+
+def test_envelope_of_the_vessel():
+    env = envelope_for(MODEL)
+    assert env.max_rpm == tuple(MAX_RPM) and env.thruster_names == ("tunnel", "port", "stbd")
+    assert env.wind_speed_max_m_s == pytest.approx(100 * KNOT_M_S) and env.current_speed_max_m_s == 5.0
+    assert envelope_for("gunnerus", surge_max_m_s=6.0).surge_max_m_s == 6.0
+
+
+def test_extremes_are_clipped_and_flagged_per_batch_element():
+    nu = np.array([[9.0, 0.0, 0.0], [1.0, 1.0, 0.1]])
+    rpm = np.array([[300.0, 100.0, -250.0], [0.0, 0.0, 0.0]])
+    wind = np.array([[100.0 * KNOT_M_S * 1.2, 7.0], [5.0, 1.0]])          # 120 kn
+    current = np.array([[1.0, 0.0], [6.0, -7.0]])
+    before = [a.copy() for a in (nu, rpm, wind, current)]
+    c = check_or_clip_inputs(MODEL, nu=nu, rpm=rpm, wind=wind, current=current, azimuth_rad=[4.0, 0.0, -4.0])
+    for a, b in zip((nu, rpm, wind, current), before):
+        np.testing.assert_array_equal(a, b)                                  # caller's arrays untouched
+    np.testing.assert_allclose(c.nu[0], [8.0, 0.0, 0.0])
+    np.testing.assert_allclose(c.rpm[0], [300.0, 100.0, -217.0])
+    np.testing.assert_allclose(c.wind[:, 0], [100.0 * KNOT_M_S, 5.0])
+    np.testing.assert_allclose(c.current[:, 0], [1.0, 5.0])
+    assert -np.pi <= c.current[1, 1] < np.pi and -np.pi <= c.wind[0, 1] < np.pi
+    np.testing.assert_allclose(np.cos(c.azimuth_rad), np.cos([4.0, 0.0, -4.0]))   # same direction
+    np.testing.assert_array_equal(c.clipped, [True, True])
+    np.testing.assert_array_equal(c.clipped_fields["nu"], [True, False])
+    np.testing.assert_array_equal(c.clipped_fields["rpm"], [True, False])
+    np.testing.assert_array_equal(c.clipped_fields["current"], [False, True])
+    assert "wind clipped" in c.notes[0] and "current clipped" in c.notes[1]
+    assert c.eta is None and c.substeps == 1
+
+
+def test_inputs_within_range_pass_unchanged():
+    rpm = np.array([[200.0, -100.0, 217.0]])
+    c = check_or_clip_inputs(MODEL, eta=[1e3, -2e3, 40.0], nu=[5.0, -3.0, 0.2], rpm=rpm, wind=[30.0, 2.0],
+                             current=[1.0, 0.5], dt_s=1.0)
+    assert not c.clipped.any()
+    np.testing.assert_array_equal(c.rpm, rpm)
+    np.testing.assert_array_equal(c.nu, [5.0, -3.0, 0.2])
+
+
+@pytest.mark.parametrize("kwargs, pattern", [
+    (dict(nu=[np.nan, 0, 0]), r"nu\[u_m_s\]: nan is not finite \(a fault, not an extreme\)"),
+    (dict(wind=[[5.0, 0.0], [np.inf, 0.0]]), r"wind\[batch 1, speed_m_s\]: inf is not finite"),
+    (dict(rpm=[0.0, 500.0, 0.0]), r"rpm\[thruster 'port'\]: 500 is more than 2 x max_rpm \(a unit error\?\)"),
+    (dict(wind=[-1.0, 0.0]), r"wind\[speed_m_s\]: -1 is negative"),
+    (dict(current=[-0.5, 0.0]), r"current\[speed_m_s\]: -0.5 is negative"),
+    (dict(eta=[[0, 0, 0], [2e7, 0, 0]]), r"eta\[batch 1, north_m\]: 2e\+07 is outside .*\|north_m\|, \|east_m\| <= 1e\+07 m"),
+    (dict(eta=[0, 0, 1e5]), r"eta\[psi_rad\]: 100000 is outside"),
+])
+def test_always_refused(kwargs, pattern):
+    for mode in ("clip", "refuse"):
+        with pytest.raises(InputRangeError, match=pattern):
+            check_or_clip_inputs(MODEL, mode=mode, **kwargs)
+
+
+@pytest.mark.parametrize("kwargs, field_, pattern", [
+    (dict(nu=np.zeros((2, 5, 3)) + [0, 5, 0]), "nu", r"nu\[batch 0, step 0, v_m_s\]: 5 is outside .*\|v_m_s\| <= 4 m/s"),
+    (dict(rpm=[0.0, 0.0, 250.0]), "rpm", r"rpm\[thruster 'stbd'\]: 250 .*max_rpm"),
+    (dict(wind=[60.0, 0.0]), "wind", r"wind\[speed_m_s\]: 60 is outside .*51\.4"),
+    (dict(current=[5.5, 0.0]), "current", r"current\[speed_m_s\]: 5.5 is outside"),
+    (dict(dt_s=2.0), "dt_s", r"RK4 step 2 s exceeds 1 s; use substeps >= 2"),
+])
+def test_refuse_mode_refuses_what_clip_mode_clips(kwargs, field_, pattern):
+    with pytest.raises(InputRangeError, match=pattern) as info:
+        check_or_clip_inputs(MODEL, mode="refuse", **kwargs)
+    assert info.value.field == field_
+    check_or_clip_inputs(MODEL, mode="clip", **kwargs)
+
+
+def test_large_steps_get_substeps():
+    assert check_or_clip_inputs(MODEL, dt_s=2.5).substeps == 3
+    assert check_or_clip_inputs(MODEL, dt_s=2.0, substeps=4).substeps == 4
+    with pytest.raises(InputRangeError, match="dt_s"):
+        check_or_clip_inputs(MODEL, dt_s=-1.0)
+
+
+def test_arguments():
+    with pytest.raises(ValueError, match="mode"):
+        check_or_clip_inputs(MODEL, mode="ignore")
+    with pytest.raises(ValueError, match="rpm needs the vessel"):
+        check_or_clip_inputs(rpm=[0.0])
+    with pytest.raises(ValueError, match="width 2 does not match"):
+        check_or_clip_inputs(MODEL, rpm=[0.0, 0.0])
+    check_or_clip_inputs(envelope=Envelope(), nu=[1.0, 0.0, 0.0])
+
+
+def test_extremes_that_overflow_the_integrator_are_finite_after_clipping():
+    """At |u| 20 m/s, v 8 m/s, full rpm, 51 m/s wind and 5 m/s current the 1-s RK4 rollout
+    of Gunnerus overflowed (inf) when the envelope was chosen; clipped, it stays finite."""
+    x = dict(eta=[0.0, 0.0, 0.0], nu=[20.0, 8.0, 0.5], rpm=MAX_RPM * 1.5, wind=[60.0, 0.0], current=[5.0, np.pi],
+             azimuth_rad=[0.0, 0.0, 0.0])
+    c = check_or_clip_inputs(MODEL, **x, dt_s=1.0)
+    assert c.clipped.all() and set(k for k, v in c.clipped_fields.items() if v.any()) == {"nu", "rpm", "wind"}
+    res = MODEL.rollout(c.eta, c.nu, 120, rpm=c.rpm, wind=c.wind, current=c.current, azimuth_rad=c.azimuth_rad)
+    assert np.isfinite(res.eta).all() and np.isfinite(res.nu).all()
+    assert np.abs(res.nu[..., 0]).max() < 20.0
+
+
+finite = st.floats(min_value=-1e6, max_value=1e6, allow_nan=False, allow_infinity=False)
+angles = st.floats(min_value=-1e3, max_value=1e3, allow_nan=False, allow_infinity=False)
+
+
+@settings(max_examples=100, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(nu=st.tuples(finite, finite, finite),
+       rpm_factor=st.tuples(*[st.floats(-2.0, 2.0)] * 3),
+       az=st.tuples(angles, angles, angles),
+       wind=st.tuples(st.floats(0.0, 1e4), angles),
+       current=st.tuples(st.floats(0.0, 1e3), angles),
+       dt_s=st.sampled_from([0.1, 0.5, 1.0, 2.0]))
+def test_any_finite_input_is_refused_or_clipped_to_a_finite_forecast(nu, rpm_factor, az, wind, current, dt_s):
+    rpm = np.asarray(rpm_factor) * MAX_RPM
+    try:
+        c = check_or_clip_inputs(MODEL, eta=[0.0, 0.0, 0.3], nu=nu, rpm=rpm, azimuth_rad=az, wind=wind,
+                                 current=current, dt_s=dt_s)
+    except InputRangeError:
+        return  # refused, with a message: fine
+    res = MODEL.rollout(c.eta, c.nu, 60, dt_s=dt_s, substeps=c.substeps, rpm=c.rpm, azimuth_rad=c.azimuth_rad,
+                        wind=c.wind, current=c.current)
+    assert np.isfinite(res.eta).all() and np.isfinite(res.nu).all() and np.isfinite(res.nu_dot).all()
+
+
+def test_rudder_channels_clip_the_angle_and_ignore_rpm():
+    env = envelope_for("esso_osaka_model")
+    assert env.thruster_names == ("propeller", "rudder") and env.max_rpm[1] == np.inf
+    lim = env.max_angle_rad[1]
+    assert env.max_angle_rad[0] == np.inf and 0 < lim < np.pi / 2
+    c = check_or_clip_inputs("esso_osaka_model", rpm=[600.0, 0.0], azimuth_rad=[[0.0, 0.3], [0.0, 1.2]])
+    np.testing.assert_allclose(c.azimuth_rad[:, 1], [0.3, lim])
+    np.testing.assert_array_equal(c.clipped_fields["azimuth_rad"], [False, True])
+    with pytest.raises(InputRangeError, match=r"azimuth_rad\[batch 1, rudder 'rudder'\]: 1.2 is outside"):
+        check_or_clip_inputs("esso_osaka_model", mode="refuse", azimuth_rad=[[0.0, 0.3], [0.0, 1.2]])

@@ -1,0 +1,199 @@
+"""Model files (issue 9): damaged, foreign or hostile files are refused; writes are atomic.
+
+A small hybrid is trained once on a short synthetic log; every test then damages a copy
+of its model file in one way and checks that :meth:`HybridPredictor.load` refuses it with
+a :class:`ModelFileError` that says what is wrong, without running code from the file.
+The tampering works on the file's arrays generically (load every array, change one,
+save again), so it does not depend on which arrays a model version stores.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import pickle
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from hybridship.physics.model import DynamicModel
+from hybridship.predictors import HybridPredictor, ModelFileError
+from hybridship.residual.ensemble import EnsembleConfig
+from hybridship.sim.synthetic import physics_log
+from hybridship.vessel import vessel_from_dict
+
+TINY = EnsembleConfig(n_members=2, hidden=8, max_epochs=15, patience=5, seed=0)
+
+
+@pytest.fixture(scope="module")
+def model():
+    return DynamicModel("gunnerus")
+
+
+@pytest.fixture(scope="module")
+def saved(model, tmp_path_factory):
+    """(predictor, path of its model file, raw bytes of the file)."""
+    log = physics_log(model, seed=2, duration_s=300.0, t_shutdown_s=None, current=(0.2, 1.0))
+    hp = HybridPredictor(model.vessel, ensemble_config=TINY).fit([log])
+    path = hp.save(tmp_path_factory.mktemp("model") / "model.npz")
+    return hp, path, path.read_bytes()
+
+
+def _arrays(path) -> dict:
+    with np.load(path, allow_pickle=False) as z:
+        return {k: z[k] for k in z.files}
+
+
+def _meta(arrays) -> dict:
+    return json.loads(bytes(arrays["metadata_json"]).decode("utf-8"))
+
+
+def _rewrite(saved, tmp_path, *, meta_change=None, array_change=None, name="tampered.npz") -> Path:
+    _, path, _ = saved
+    arrays = _arrays(path)
+    if meta_change is not None:
+        meta = _meta(arrays)
+        meta_change(meta)
+        arrays["metadata_json"] = np.frombuffer(json.dumps(meta).encode("utf-8"), dtype=np.uint8)
+    if array_change is not None:
+        array_change(arrays)
+    out = tmp_path / name
+    np.savez(out, **arrays)
+    return out
+
+
+def _refused(path, pattern, **kw):
+    with pytest.raises(ModelFileError, match=pattern):
+        HybridPredictor.load(path, **kw)
+
+
+def test_round_trip_still_loads(saved):
+    hp, path, raw = saved
+    back = HybridPredictor.load(path)
+    for a, b in zip(hp.ensemble.weights, back.ensemble.weights):
+        np.testing.assert_array_equal(a, b)
+    assert path.read_bytes() == raw                  # loading never writes
+
+
+def test_truncated_file_is_refused(saved, tmp_path):
+    _, _, raw = saved
+    for cut in (0, 10, len(raw) // 2, len(raw) - 1):
+        p = tmp_path / f"cut{cut}.npz"
+        p.write_bytes(raw[:cut])
+        _refused(p, rf"{p.name}: not a readable hybridship model file")
+
+
+def test_flipped_bytes_are_refused(saved, tmp_path):
+    _, _, raw = saved
+    for pos in (len(raw) // 3, len(raw) // 2, 2 * len(raw) // 3):
+        b = bytearray(raw)
+        b[pos] ^= 0xFF
+        p = tmp_path / f"flip{pos}.npz"
+        p.write_bytes(bytes(b))
+        with pytest.raises(ModelFileError, match=p.name):
+            HybridPredictor.load(p)
+
+
+def test_missing_file_is_a_model_file_error(tmp_path):
+    _refused(tmp_path / "nope.npz", "model file not found")
+
+
+def test_incompatible_format_version_is_refused(saved, tmp_path):
+    for version in (0, 99, "1", None):
+        p = _rewrite(saved, tmp_path, meta_change=lambda m: m.update(format_version=version), name=f"v{version}.npz")
+        _refused(p, rf"model format version {version} is not supported \(this hybridship reads version \d+\)")
+
+
+def test_a_file_that_is_not_a_model_is_refused(saved, tmp_path):
+    p = tmp_path / "other.npz"
+    np.savez(p, x=np.arange(3.0))
+    _refused(p, "metadata missing or damaged")
+    p = _rewrite(saved, tmp_path, meta_change=lambda m: m.update(format="something-else"), name="fmt.npz")
+    _refused(p, "not a hybridship model file")
+    p = _rewrite(saved, tmp_path, array_change=lambda a: a.update(metadata_json=np.frombuffer(b"{not json", np.uint8)),
+                 name="json.npz")
+    _refused(p, "metadata missing or damaged")
+
+
+def test_damaged_weights_are_refused(saved, tmp_path):
+    def nan_weight(a):
+        w = a["w0"].copy()
+        w.flat[0] = np.nan
+        a["w0"] = w
+
+    _refused(_rewrite(saved, tmp_path, array_change=nan_weight, name="nan.npz"), r"damaged model contents: .*NaN")
+    _refused(_rewrite(saved, tmp_path, array_change=lambda a: a.update(w2=a["w2"][:, :-1]), name="shape.npz"),
+             r"damaged model contents: weight shapes")
+    _refused(_rewrite(saved, tmp_path, array_change=lambda a: a.pop("w5"), name="missing.npz"),
+             r"damaged model contents")
+
+
+def test_another_vessels_model_is_refused(saved, model, tmp_path):
+    _, path, _ = saved
+    d = model.vessel.model_dump()
+    d["name"] = "gunnerus-sister"
+    d["rigid_body"]["mass_kg"] *= 1.2
+    other = vessel_from_dict(d)
+    _refused(path, r"trained for vessel 'gunnerus' with other parameters; refusing to use it with vessel "
+                   r"'gunnerus-sister'", vessel=other)
+    # a file claiming gunnerus but trained on other parameters (fingerprint mismatch)
+    p = _rewrite(saved, tmp_path, meta_change=lambda m: m.update(vessel_fingerprint="0" * 16), name="fp.npz")
+    _refused(p, "trained for vessel 'gunnerus' with other parameters")
+
+
+class _Payload:
+    """Unpickling this creates a marker file: proof that code from the file ran."""
+
+    marker = ""
+
+    def __reduce__(self):
+        return (open, (self.marker, "w"))
+
+
+def test_loading_never_executes_code_from_the_file(saved, tmp_path):
+    marker = tmp_path / "code_ran"
+    _Payload.marker = str(marker)
+    # 1. an object (pickled) array inside an otherwise valid model file
+    arrays = _arrays(saved[1])
+    arrays["w0"] = np.array([_Payload()], dtype=object)
+    p = tmp_path / "pickled_array.npz"
+    np.savez(p, **arrays)                     # numpy pickles object arrays when saving
+    # 2. the metadata itself as a pickled object
+    arrays = _arrays(saved[1])
+    arrays["metadata_json"] = np.array([_Payload()], dtype=object)
+    q = tmp_path / "pickled_meta.npz"
+    np.savez(q, **arrays)
+    # 3. a plain pickle file named like a model
+    r = tmp_path / "plain_pickle.npz"
+    r.write_bytes(pickle.dumps(_Payload()))
+    for f in (p, q, r):
+        with pytest.raises(ModelFileError, match=f.name):
+            HybridPredictor.load(f)
+    assert not marker.exists()
+    # the payload is live: unpickling it really would have run code
+    pickle.loads(r.read_bytes()).close()
+    assert marker.exists()
+
+
+def test_a_crash_while_saving_leaves_no_half_written_model(saved, tmp_path, monkeypatch):
+    hp, _, _ = saved
+    path = tmp_path / "m.npz"
+    hp.save(path)
+    good = path.read_bytes()
+    real_savez = np.savez
+
+    def crash_midway(fh, **arrays):
+        real_savez(fh, **{k: arrays[k] for k in list(arrays)[:2]})   # part of the output ...
+        raise OSError("disk full")                                      # ... then the crash
+
+    monkeypatch.setattr(np, "savez", crash_midway)
+    with pytest.raises(OSError, match="disk full"):
+        hp.save(path)
+    assert path.read_bytes() == good                      # the previous model is intact
+    with pytest.raises(OSError, match="disk full"):
+        hp.save(tmp_path / "new.npz")
+    assert not (tmp_path / "new.npz").exists()            # no half-written new model
+    assert sorted(os.listdir(tmp_path)) == ["m.npz"]      # and no temporary files
+    monkeypatch.setattr(np, "savez", real_savez)
+    HybridPredictor.load(path)

@@ -1,0 +1,299 @@
+"""Sensor faults at forecast time (hybridship.quality): fault injection and replay.
+
+A noise-free log made by the dynamic model itself is the reference: without faults the
+start values are the predictors' plain rule; each fault is injected at a known time and
+the log is replayed through :func:`assess_start_window` at every start time, checking the
+documented behaviour (which starts are flagged, which refused, and that every accepted
+start's values are finite and close to the fault-free ones).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pandas as pd
+import pytest
+
+from hybridship.physics.model import DynamicModel
+from hybridship.quality import (FaultFlags, SortedLog, StartWindowError, assess_start_window, forecast_log_arrays,
+                                sort_samples)
+from hybridship.sim.synthetic import physics_log
+
+T_FAULT = 300  # fault time [s] = row (1 Hz log starting at 0)
+F = FaultFlags
+
+
+@pytest.fixture(scope="module")
+def model():
+    return DynamicModel("gunnerus")
+
+
+@pytest.fixture(scope="module")
+def log(model):
+    """Moving ship, rpm up to 60 % of max, never shut down, 1 Hz, 500 s."""
+    return physics_log(model, seed=3, duration_s=500.0, t_shutdown_s=None, rpm_scale=0.6)
+
+
+def _assess(model, df, starts, **kw):
+    arrays, order = forecast_log_arrays(df, model.vessel)
+    return arrays, assess_start_window(arrays, arrays.time_s.searchsorted(starts), 3.0, order=order, **kw)
+
+
+def _plain_rule(df, rows):
+    """Position at the start row; heading (unwrapped) and velocities averaged over 3 rows; wind at the row."""
+    psi = np.unwrap(np.radians(df.heading_deg.to_numpy()))
+    nu = np.column_stack([df.u_m_s, df.v_m_s, np.radians(df.r_deg_s)])
+    eta0 = np.array([[df.north_m[i], df.east_m[i], psi[i - 2: i + 1].mean()] for i in rows])
+    nu0 = np.array([nu[i - 2: i + 1].mean(axis=0) for i in rows])
+    wind = np.column_stack([df.wind_speed_m_s[rows], np.radians(df.wind_dir_deg[rows])])
+    return eta0, nu0, wind
+
+
+# ----------------------------------------------------------------------------- no fault
+
+
+def test_without_faults_the_start_values_are_the_plain_rule(model, log):
+    starts = np.arange(3, 490, 7)
+    _, sw = _assess(model, log, starts)
+    eta0, nu0, wind = _plain_rule(log, starts)
+    np.testing.assert_allclose(sw.eta0, eta0, rtol=0, atol=1e-12)
+    np.testing.assert_allclose(sw.nu0, nu0, rtol=0, atol=1e-12)
+    np.testing.assert_allclose(sw.wind, wind, rtol=0, atol=1e-12)
+    degraded = {k: int(v.sum()) for k, v in sw.flags.items() if v.any() and k not in F.INFORMATIONAL}
+    assert degraded == {}
+    assert not sw.degraded.any() and set(sw.flags) == set(F.START_WINDOW)
+
+
+def test_a_ship_at_rest_with_constant_noise_free_values_is_not_frozen(model):
+    rest = physics_log(model, seed=4, duration_s=200.0, t_shutdown_s=None, rpm_scale=0.0, wind=(0.0, 0.0))
+    assert rest.north_m.nunique() == 1 and rest.u_m_s.abs().max() == 0.0
+    _, sw = _assess(model, rest, [100.0, 150.0])
+    assert not sw.degraded.any()
+
+
+# ----------------------------------------------------------------------------- fault injection
+
+def _nan(cols, rows):
+    def inject(df):
+        df.loc[rows, cols] = np.nan
+        return df
+    return inject
+
+
+def _freeze(cols, first, last):
+    def inject(df):
+        df.loc[first:last, cols] = df.loc[first, cols].to_numpy()
+        return df
+    return inject
+
+
+def _shift(col, rows, metres):
+    def inject(df):
+        df.loc[rows, col] += metres
+        return df
+    return inject
+
+
+def _swap(a, b):
+    def inject(df):
+        order = list(range(len(df)))
+        order[a], order[b] = order[b], order[a]
+        return df.iloc[order].reset_index(drop=True)
+    return inject
+
+
+def _drop(rows):
+    return lambda df: df.drop(index=rows).reset_index(drop=True)
+
+
+def _duplicate(row, north_offset=0.0):
+    def inject(df):
+        extra = df.iloc[[row]].copy()
+        extra["north_m"] += north_offset
+        return pd.concat([df.iloc[: row + 1], extra, df.iloc[row + 1:]]).reset_index(drop=True)
+    return inject
+
+
+# name: dict(inject, flag, flagged = starts that must carry the flag, refused = starts refused,
+#           pos_tol [m] / head_tol [deg] = largest error of accepted starts against the
+#           fault-free values, span = last start that may carry other flags)
+# "window(a, b)" = starts whose 3-s window holds a time in a..b = starts a..b+2.
+def window(a, b):
+    return set(range(a, b + 3))
+
+
+def fault(inject, flag, flagged, refused=(), pos_tol=0.0, head_tol=1.0, span=T_FAULT + 20):
+    return dict(inject=inject, flag=flag, flagged=set(flagged), refused=set(refused), pos_tol=pos_tol,
+                head_tol=head_tol, span=span)
+
+
+T = T_FAULT
+FAULTS = {
+    "nan position, one sample": fault(_nan(["north_m"], [T]), F.NAN_IN_WINDOW, window(T, T), pos_tol=0.05),
+    "nan heading, one sample": fault(_nan(["heading_deg"], [T]), F.NAN_IN_WINDOW, window(T, T)),
+    "nan heading, three samples": fault(_nan(["heading_deg"], [T, T + 1, T + 2]), F.NAN_IN_WINDOW,
+                                        window(T, T + 2), refused=range(T + 1, T + 4)),
+    "missing sample": fault(_drop([T]), F.NAN_IN_WINDOW, window(T - 1, T) - {T - 1, T}),
+    "two missing samples": fault(_drop([T, T + 1]), F.NAN_IN_WINDOW, window(T, T + 1) - {T, T + 1},
+                                 refused={T + 2}),
+    # detected once frozen for 3 s while the logged speed (0.68 m/s here) moved the ship
+    # 2 m, i.e. from 303; refused until live positions return at 321 (an unconfirmed jump
+    # at 321 itself); before 303 the error is at most 2 m (the documented bound)
+    "frozen gnss": fault(_freeze(["north_m", "east_m"], T, T + 20), F.FROZEN_SENSOR, range(T + 3, T + 23),
+                         refused=range(T + 3, T + 22), pos_tol=2.0, span=T + 23),
+    "frozen gyro": fault(_freeze(["heading_deg"], T, T + 20), F.FROZEN_SENSOR, range(T + 3, T + 23),
+                         refused=range(T + 3, T + 22), head_tol=1.5),
+    "gnss spike": fault(_shift("north_m", [T], 25.0), F.POSITION_JUMP, window(T, T + 1), pos_tol=0.05),
+    "gnss datum shift": fault(_shift("north_m", slice(T, None), 25.0), F.POSITION_JUMP, window(T, T),
+                              pos_tol=25.05),
+    "wind sensor dropped": fault(_nan(["wind_speed_m_s", "wind_dir_deg"], list(range(T, T + 30))),
+                                 F.WIND_DROPPED, range(T + 2, T + 30), span=T + 31),
+    # the flag marks the windows holding the late arrivals: 300 in the first case, 300..305
+    # (all came after 306) in the second
+    "samples out of order": fault(_swap(T, T + 1), F.LATE_OR_OUT_OF_ORDER, window(T, T)),
+    "late sample": fault(_swap(T, T + 6), F.LATE_OR_OUT_OF_ORDER, window(T, T + 5)),
+    "exact duplicate": fault(_duplicate(T), F.LATE_OR_OUT_OF_ORDER, window(T, T)),
+    "conflicting duplicate": fault(_duplicate(T, north_offset=3.0), F.LATE_OR_OUT_OF_ORDER, window(T, T),
+                                   pos_tol=0.05),
+}
+
+
+@pytest.mark.parametrize("name", list(FAULTS))
+def test_fault_replay(model, log, name):
+    spec = FAULTS[name]
+    flag = spec["flag"]
+    df = spec["inject"](log.copy())
+    starts = np.intersect1d(np.arange(T - 20, T + 40), df.time_s).astype(float)  # sample times only
+    arrays, sw = _assess(model, df, starts, on_refuse="flag")
+    got_flagged = set(sw.start_time_s[sw.flags[flag]].astype(int))
+    got_refused = set(sw.start_time_s[sw.refused].astype(int))
+    assert got_flagged == spec["flagged"], f"{name}: {flag} at {sorted(got_flagged ^ spec['flagged'])} differs"
+    assert got_refused == spec["refused"], f"{name}: refused {sorted(got_refused)}"
+    # starts away from the fault carry no degradation flag at all
+    near = spec["flagged"] | spec["refused"] | set(range(T - 2, spec["span"] + 1))
+    quiet = ~np.isin(sw.start_time_s.astype(int), sorted(near))
+    assert quiet.sum() >= 20 and not sw.degraded[quiet].any()
+    # accepted starts: finite, and close to the fault-free start values
+    ok = ~sw.refused
+    assert np.isfinite(sw.eta0[ok]).all() and np.isfinite(sw.nu0[ok]).all() and np.isfinite(sw.wind[ok]).all()
+    rows = starts[ok].astype(int)
+    eta_ref, nu_ref, wind_ref = _plain_rule(log, rows)
+    err_pos = np.hypot(*(sw.eta0[ok, :2] - eta_ref[:, :2]).T)
+    assert err_pos.max() <= spec["pos_tol"] + 1e-9, f"{name}: position off by {err_pos.max():.3f} m"
+    err_head = np.degrees(np.abs(sw.eta0[ok, 2] - eta_ref[:, 2])).max()
+    assert err_head <= spec["head_tol"], f"{name}: heading off by {err_head:.2f} deg"
+    assert np.abs(sw.nu0[ok] - nu_ref).max() < 0.05
+    # refused starts: NaN start values and a reason in the notes
+    assert np.isnan(sw.eta0[sw.refused]).all()
+    assert all("too little valid data" in sw.notes[k] for k in np.flatnonzero(sw.refused))
+    if flag == F.WIND_DROPPED:
+        assert np.all(sw.wind[sw.flags[flag]] == 0.0)   # falls back to no wind
+
+
+def test_refusal_raises_a_clear_error_by_default(model, log):
+    df = _nan(["heading_deg"], [T_FAULT, T_FAULT - 1])(log.copy())
+    with pytest.raises(StartWindowError, match=r"start time_s 300: refused, .*too little valid data in the 3-s "
+                                               r"window \(time_s 298\.\.300\): heading: 1 valid of 3") as info:
+        _assess(model, df, [250.0, 300.0])
+    assert info.value.start_time_s == 300.0 and list(info.value.refused_start_times_s) == [300.0]
+
+
+def test_frozen_gnss_refusal_names_the_frozen_sensor(model, log):
+    df = _freeze(["north_m", "east_m"], T_FAULT, T_FAULT + 20)(log.copy())
+    with pytest.raises(StartWindowError, match=r"frozen for >= 3 s: position \(the logged speed says the ship "
+                                               r"moved\).*position: no valid sample"):
+        _assess(model, df, [T_FAULT + 15.0])
+
+
+def test_frozen_logged_velocity_is_replaced_by_the_track(model, log):
+    u = log.u_m_s.to_numpy()
+    i = int(np.argmax(np.abs(u[20:400] - u[:380]))) + 20     # where u changes most over 20 s
+    df = _freeze(["u_m_s"], i - 20, i)(log.copy())
+    _, sw = _assess(model, df, [float(i)])
+    assert sw.flags[F.FROZEN_SENSOR][0] and "u_m_s (disagrees with the track)" in sw.notes[0]
+    _, nu_ref, _ = _plain_rule(log, [i])
+    stale_error = abs(df.u_m_s[i] - nu_ref[0, 0])
+    assert stale_error > 0.2                                 # the frozen value is far off ...
+    assert abs(sw.nu0[0, 0] - nu_ref[0, 0]) < 0.1 * stale_error  # ... the track-derived one is not
+
+
+def test_gnss_spike_without_logged_velocities_is_rederived(model, log):
+    df = log.drop(columns=["u_m_s", "v_m_s"])
+    clean = _assess(model, df, [T_FAULT + 1.0])[1]
+    spiked = _assess(model, _shift("north_m", [T_FAULT], 25.0)(df.copy()), [T_FAULT + 1.0])[1]
+    assert spiked.flags[F.POSITION_JUMP][0] and not clean.degraded[0]
+    np.testing.assert_allclose(spiked.eta0, clean.eta0, atol=1e-9)     # the start sample itself is fine
+    np.testing.assert_allclose(spiked.nu0[0, :2], clean.nu0[0, :2], atol=0.05)  # 25 m would give 12 m/s
+
+
+def test_heading_wrap_in_the_window_averages_unwrapped(model, log):
+    df = log.copy()
+    df.loc[T_FAULT - 2: T_FAULT, "heading_deg"] = [359.0, 0.0, 1.0]
+    df.loc[T_FAULT - 12: T_FAULT - 3, "heading_deg"] = 359.0
+    df.loc[T_FAULT + 1: T_FAULT + 10, "heading_deg"] = 1.0
+    df = df.drop(columns="r_deg_s")
+    _, sw = _assess(model, df, [float(T_FAULT)])
+    assert sw.flags[F.HEADING_WRAPPED][0] and not sw.degraded[0]
+    assert abs(np.degrees(sw.eta0[0, 2]) % 360.0 - 0.0) < 1e-9 or abs(np.degrees(sw.eta0[0, 2]) % 360.0 - 360) < 1e-9
+
+
+def test_one_missing_wind_sample_holds_the_latest_valid_one(model, log):
+    df = _nan(["wind_speed_m_s"], [T_FAULT])(log.assign(wind_speed_m_s=np.linspace(5, 10, len(log))))
+    _, sw = _assess(model, df, [float(T_FAULT)])
+    assert sw.flags[F.NAN_IN_WINDOW][0] and not sw.flags[F.WIND_DROPPED][0]
+    assert sw.wind[0, 0] == df.wind_speed_m_s[T_FAULT - 1]
+
+
+def test_a_log_without_wind_is_not_a_dropped_sensor(model, log):
+    _, sw = _assess(model, log.drop(columns=["wind_speed_m_s", "wind_dir_deg"]), [float(T_FAULT)])
+    assert not sw.flags[F.WIND_DROPPED][0] and np.all(sw.wind == 0.0)
+
+
+def test_first_sample_of_a_log_is_refused(model, log):
+    _, sw = _assess(model, log, [0.0, 1.0, 2.0], on_refuse="flag")
+    np.testing.assert_array_equal(sw.refused, [True, False, False])
+    assert sw.flags[F.NAN_IN_WINDOW][:2].all()             # fewer samples than the window holds
+
+
+# ----------------------------------------------------------------------------- sort_samples
+
+
+def test_sort_samples_reports_and_repairs():
+    df = pd.DataFrame({"time_s": [0.0, 1.0, 3.0, 2.0, 3.0, 4.0, 4.0, np.nan, 5.0],
+                       "north_m": [0.0, 1.0, 3.0, 2.0, 3.0, 4.0, 4.5, 9.0, 5.0],
+                       "east_m": 0.0, "heading_deg": 10.0, "dp_active": 1})
+    before = df.copy(deep=True)
+    out = sort_samples(df)
+    assert isinstance(out, SortedLog) and out.changed
+    pd.testing.assert_frame_equal(df, before)
+    np.testing.assert_array_equal(out.frame.time_s, [0, 1, 2, 3, 4, 5])
+    np.testing.assert_array_equal(out.late_time_s, [2.0])   # 2 came after 3; the second 3 is a duplicate
+    np.testing.assert_array_equal(out.duplicate_time_s, [3.0])
+    np.testing.assert_array_equal(out.conflicting_time_s, [4.0])
+    assert out.n_without_time == 1
+    assert np.isnan(out.frame.north_m[4]) and np.isnan(out.frame.dp_active[4])  # neither value trusted
+    np.testing.assert_array_equal(out.frame.north_m.drop(index=4), [0, 1, 2, 3, 5])
+    assert list(out.affected_time_s) == [2.0, 3.0, 4.0]
+    clean = sort_samples(df.iloc[:3])
+    assert not clean.changed
+
+
+def test_start_window_table_and_flag_names(model, log):
+    _, sw = _assess(model, _nan(["north_m"], [T_FAULT])(log.copy()), [250.0, float(T_FAULT)])
+    table = sw.to_frame()
+    assert list(table.columns) == ["start_time_s", *F.START_WINDOW, "notes"]
+    assert table.nan_in_window.tolist() == [False, True] and table.notes[1]
+    cols = sw.flag_columns(61)
+    assert set(cols) == set(F.START_WINDOW) and cols[F.NAN_IN_WINDOW].shape == (122,)
+    assert cols[F.NAN_IN_WINDOW][:61].sum() == 0 and cols[F.NAN_IN_WINDOW][61:].all()
+    assert set(F.START_WINDOW) < set(F.ALL) and {F.INPUT_CLIPPED, F.OUT_OF_ENVELOPE} <= set(F.ALL)
+    assert len(set(F.ALL)) == len(F.ALL)
+
+
+def test_arguments_are_checked(model, log):
+    arrays, _ = forecast_log_arrays(log, model.vessel)
+    with pytest.raises(ValueError, match="on_refuse"):
+        assess_start_window(arrays, [5], on_refuse="ignore")
+    with pytest.raises(IndexError, match="idx"):
+        assess_start_window(arrays, [len(arrays)])
+    with pytest.raises(ValueError, match="window_s"):
+        assess_start_window(arrays, [5], window_s=0.0)

@@ -1,0 +1,262 @@
+"""Input validation of logs (issue 9): units, ranges, sign conventions, vessel match, no mutation.
+
+Each bad input is a well-formed log with one realistic mistake injected; the test checks
+that it is refused and that the message names the field, the row or time where there is
+one, and what was expected (or which unit mix-up it looks like).
+"""
+
+from __future__ import annotations
+
+import warnings
+
+import numpy as np
+import pandas as pd
+import pytest
+
+from hybridship.logs.io import (LogFormatError, LogFormatWarning, check_log_against_vessel, log_to_arrays,
+                                read_log, speed_scale_vs_track, validate_log, write_log)
+from hybridship.physics.model import DynamicModel
+from hybridship.quality import forecast_log_arrays, sort_samples
+from hybridship.sim.synthetic import physics_log
+
+THRUSTERS = ["tunnel", "port", "stbd"]
+ROTATABLE = [False, True, True]
+
+
+@pytest.fixture(scope="module")
+def model():
+    return DynamicModel("gunnerus")
+
+
+@pytest.fixture(scope="module")
+def moving_log(model):
+    """A noise-free log of a ship moving (rpm up to 60 % of max, no shutdown): 20-s
+    displacements of several metres, so the velocity checks can decide."""
+    return physics_log(model, seed=3, duration_s=400.0, t_shutdown_s=None, rpm_scale=0.6)
+
+
+def _refused(df, pattern, **kw):
+    before = df.copy(deep=True)
+    with pytest.raises(LogFormatError, match=pattern) as info:
+        validate_log(df, thruster_names=THRUSTERS, rotatable=ROTATABLE, **kw)
+    pd.testing.assert_frame_equal(df, before)  # never modified, also when refusing
+    return info.value
+
+
+# ----------------------------------------------------------------------------- units
+
+
+def test_the_clean_log_passes(moving_log, model):
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        validate_log(moving_log, thruster_names=THRUSTERS, rotatable=ROTATABLE)
+        check_log_against_vessel(moving_log, model.vessel)
+    sc = speed_scale_vs_track(moving_log.time_s, moving_log.north_m, moving_log.east_m, moving_log.heading_deg,
+                              moving_log.u_m_s, moving_log.v_m_s)
+    assert sc.rms_displacement_m > 5.0 and sc.correlation > 0.99 and abs(sc.scale - 1.0) < 0.01
+
+
+@pytest.mark.parametrize("factor, unit", [(1.0 / 0.514444, "knots"), (3.6, "km/h")])
+def test_speeds_in_knots_or_km_h_are_refused_naming_the_unit(moving_log, factor, unit):
+    df = moving_log.assign(u_m_s=moving_log.u_m_s * factor, v_m_s=moving_log.v_m_s * factor)
+    assert df.u_m_s.abs().max() < 30.0          # the 30 m/s range check alone would not see it
+    err = _refused(df, rf"u_m_s, v_m_s: the logged speed is {factor:.3g} times the speed of the track.*"
+                       rf"looks like {unit}")
+    assert err.column == "u_m_s"
+
+
+def test_positions_in_degrees_are_refused(moving_log):
+    df = moving_log.assign(north_m=63.4 + moving_log.north_m / 111_000.0, east_m=10.4 + moving_log.east_m / 50_000.0)
+    _refused(df, r"u_m_s, v_m_s: .*north_m/east_m hardly move: positions in degrees of latitude/longitude\?")
+
+
+def test_speed_check_stays_quiet_when_velocities_do_not_describe_the_track(moving_log):
+    # A shuffled velocity column has nothing to do with the track: no unit can be
+    # inferred, so no unit error is claimed (the check only speaks when shapes agree).
+    rng = np.random.default_rng(0)
+    df = moving_log.assign(u_m_s=rng.permutation(moving_log.u_m_s.to_numpy()) * 1.94)
+    validate_log(df, thruster_names=THRUSTERS, rotatable=ROTATABLE)
+
+
+def test_yaw_rate_in_rad_s_is_refused(moving_log):
+    df = moving_log.assign(r_deg_s=np.radians(moving_log.r_deg_s))
+    err = _refused(df, r"r_deg_s: is 0\.01\d+ times the rate of change of heading_deg .*looks like rad/s")
+    assert err.column == "r_deg_s"
+
+
+def test_yaw_rate_sign_convention_is_checked(moving_log):
+    _refused(moving_log.assign(r_deg_s=-moving_log.r_deg_s),
+             r"r_deg_s: has the opposite sign .*positive clockwise.*counter-clockwise / ENU")
+
+
+@pytest.mark.parametrize("scale, hint", [(1000.0 * np.pi / 180.0, "milliradians"), (100.0, "centidegrees")])
+def test_heading_out_of_degree_range_is_refused(moving_log, scale, hint):
+    df = moving_log.assign(heading_deg=moving_log.heading_deg * scale)
+    err = _refused(df, rf"heading_deg: value [\d.e+]+ at row \d+ \(time_s [\d.]+\) is outside -360\.\.720.*{hint}")
+    assert err.row is not None and err.time_s == df.time_s[err.row]
+
+
+def test_heading_in_radians_is_refused(moving_log):
+    _refused(moving_log.assign(heading_deg=np.radians(moving_log.heading_deg)),
+             r"heading_deg: .*looks like radians.*expects degrees")
+
+
+def test_azimuth_and_wind_direction_in_radians_are_refused(moving_log):
+    _refused(moving_log.assign(port_azimuth_deg=np.radians(moving_log.port_azimuth_deg)),
+             r"port_azimuth_deg: values span .*looks like radians.*expects degrees")
+    t = moving_log.time_s.to_numpy()
+    veering = np.radians(np.mod(200.0 + 1.0 * t, 360.0))  # a wind veering through north, in radians
+    _refused(moving_log.assign(wind_dir_deg=veering), r"wind_dir_deg: values span .*looks like radians")
+
+
+def test_time_in_milliseconds_is_refused(moving_log):
+    err = _refused(moving_log.assign(time_s=moving_log.time_s * 1000.0),
+                   r"time_s: median sample spacing 1000 .*expects seconds.*milliseconds")
+    assert err.column == "time_s"
+
+
+def test_missing_required_column_points_at_a_unit_variant(moving_log):
+    df = moving_log.rename(columns={"heading_deg": "heading_rad"})
+    df["heading_rad"] = np.radians(df["heading_rad"])
+    _refused(df, r"heading_deg: required column missing .*found 'heading_rad', which looks like heading_deg "
+                 r"in another unit")
+
+
+def test_optional_column_in_another_unit_is_named_in_the_warning(moving_log):
+    df = moving_log.rename(columns={"wind_speed_m_s": "wind_speed_kn"})
+    with pytest.warns(LogFormatWarning, match=r"wind_speed_kn \(looks like wind_speed_m_s in another unit"):
+        validate_log(df, thruster_names=THRUSTERS, rotatable=ROTATABLE)
+
+
+def test_strictly_increasing_time_names_row_and_time(moving_log):
+    df = moving_log.copy()
+    df.loc[40, "time_s"] = 38.5
+    err = _refused(df, r"time_s: not strictly increasing at row 40 \(time_s 38\.5 after 39\)")
+    assert (err.column, err.row, err.time_s) == ("time_s", 40, 38.5)
+
+
+def test_missing_required_values_refused_unless_allowed(moving_log):
+    df = moving_log.copy()
+    df.loc[12, "east_m"] = np.nan
+    df.loc[13, "heading_deg"] = np.inf
+    err = _refused(df, r"east_m: missing or non-finite value \(nan\) at row 12 \(time_s 12\)")
+    assert (err.row, err.time_s) == (12, 12.0)
+    validate_log(df, thruster_names=THRUSTERS, rotatable=ROTATABLE, allow_missing=True)
+    arr = log_to_arrays(df, thruster_names=THRUSTERS, rotatable=ROTATABLE, allow_missing=True)
+    assert np.isnan(arr.eta[12, 1]) and np.isnan(arr.eta[13, 2])
+    # the heading is unwrapped over the finite samples: a NaN does not poison the rest
+    assert np.isfinite(arr.eta[14:, 2]).all()
+    np.testing.assert_allclose(np.diff(arr.eta[14:, 2]), np.radians(np.diff(moving_log.heading_deg[14:])
+                                                                     + 180.0) % (2 * np.pi) - np.pi, atol=1e-9)
+    # other formats errors are still refused in that mode
+    bad = df.assign(u_m_s=df.u_m_s * 3.6)
+    with pytest.raises(LogFormatError, match="km/h"):
+        validate_log(bad, thruster_names=THRUSTERS, rotatable=ROTATABLE, allow_missing=True)
+
+
+# ----------------------------------------------------------------------------- vessel
+
+
+def test_check_log_against_vessel_accepts_good_logs(model, moving_log, tmp_path):
+    check_log_against_vessel(moving_log, model.vessel)
+    check_log_against_vessel(moving_log, "gunnerus")
+    path = tmp_path / "log.csv"
+    write_log(moving_log, path)
+    check_log_against_vessel(path, model.vessel)
+    drift = moving_log[["time_s", "north_m", "east_m", "heading_deg"]].assign(dp_active=0)
+    check_log_against_vessel(drift, model.vessel)     # no thrusters logged, none running
+
+
+def _vessel_refused(model, df, pattern):
+    before = df.copy(deep=True)
+    with pytest.raises(LogFormatError, match=pattern) as info:
+        check_log_against_vessel(df, model.vessel)
+    pd.testing.assert_frame_equal(df, before)
+    return info.value
+
+
+def test_thruster_names_must_match_the_vessel(model, moving_log):
+    _vessel_refused(model, moving_log.rename(columns={"port_rpm": "ps_rpm"}),
+                    r"ps_rpm: names unknown thruster 'ps'; known thrusters: tunnel, port, stbd")
+
+
+def test_rpm_beyond_max_is_refused_as_a_unit_error(model, moving_log):
+    df = moving_log.copy()
+    df.loc[77, "stbd_rpm"] = 1000.0
+    err = _vessel_refused(model, df, r"stbd_rpm: value 1000 at row 77 \(time_s 77\) exceeds 1\.25 x max_rpm "
+                                     r"\(217 rpm\) of thruster 'stbd' of vessel 'gunnerus'")
+    assert (err.column, err.row, err.time_s) == ("stbd_rpm", 77, 77.0)
+
+
+def test_rpm_sign_convention_is_checked(model, moving_log):
+    df = moving_log.assign(port_rpm=-moving_log.port_rpm.abs() - 1.0)
+    _vessel_refused(model, df, r"port_rpm: negative in all \d+ non-zero samples .*rotation direction")
+    # a tunnel thruster may push one way for a whole log: not checked
+    check_log_against_vessel(moving_log.assign(tunnel_rpm=-moving_log.tunnel_rpm.abs() - 1.0), model.vessel)
+
+
+def test_incomplete_thruster_logging_is_refused(model, moving_log):
+    _vessel_refused(model, moving_log.drop(columns="stbd_azimuth_deg"),
+                    r"stbd_azimuth_deg: missing while stbd_rpm is logged; .*azimuth thruster")
+    _vessel_refused(model, moving_log.drop(columns="tunnel_rpm"),
+                    r"tunnel_rpm: missing while port_rpm, stbd_rpm are logged")
+    no_rpm = moving_log.drop(columns=[c for c in moving_log if c.endswith(("_rpm", "_azimuth_deg"))])
+    _vessel_refused(model, no_rpm, r"tunnel_rpm: no thruster rpm columns while dp_active is 1 at row 0")
+    _vessel_refused(model, no_rpm.drop(columns="dp_active"), r"dp_active is absent \(taken as 1\)")
+
+
+# ----------------------------------------------------------------------------- no mutation
+
+
+def test_no_function_modifies_the_callers_data(model, moving_log, tmp_path):
+    df = moving_log.copy()
+    df.loc[5, "north_m"] = np.nan                 # a sensor fault, tolerated at forecast time
+    df = pd.concat([df.iloc[:50], df.iloc[[51, 50]], df.iloc[52:]])  # out of order
+    before = df.copy(deep=True)
+    path = tmp_path / "log.csv"
+    moving_log.to_csv(path, index=False)
+    file_before = path.read_bytes()
+
+    order = sort_samples(df)
+    arr, _ = forecast_log_arrays(df, model.vessel)
+    arr2, _ = forecast_log_arrays(path, model.vessel)
+    check_log_against_vessel(path, model.vessel)
+    clean = order.frame.copy()
+    clean_before = clean.copy(deep=True)
+    validate_log(clean, thruster_names=THRUSTERS, rotatable=ROTATABLE, allow_missing=True)
+    arr3 = log_to_arrays(clean, thruster_names=THRUSTERS, rotatable=ROTATABLE, allow_missing=True)
+    write_log(moving_log, tmp_path / "out.csv")
+    read_log(path)
+
+    pd.testing.assert_frame_equal(df, before, check_exact=True)
+    pd.testing.assert_frame_equal(clean, clean_before, check_exact=True)
+    assert path.read_bytes() == file_before
+    # the arrays are copies: writing to the frame afterwards does not change them
+    eta = arr3.eta.copy()
+    clean.loc[:, "north_m"] = 0.0
+    np.testing.assert_array_equal(arr3.eta, eta)
+    assert not np.shares_memory(arr.eta, df["north_m"].to_numpy())
+    assert arr2.eta.flags.writeable is False
+
+
+def test_read_log_without_validation_returns_the_raw_frame(tmp_path, moving_log):
+    df = moving_log.copy()
+    df.loc[3, "time_s"] = 1.0  # repeated time: refused by validation
+    path = tmp_path / "raw.csv"
+    df.to_csv(path, index=False)
+    with pytest.raises(LogFormatError, match="time_s: not strictly increasing at row 3"):
+        read_log(path)
+    raw = read_log(path, validate=False)
+    assert raw.loc[3, "time_s"] == 1.0
+
+
+def test_rudder_angles_are_command_channels():
+    from hybridship.vessel import load_vessel
+
+    v = load_vessel("esso_osaka_model")
+    t = np.arange(100.0)
+    df = pd.DataFrame(dict(time_s=t, north_m=3.0 * t, east_m=0.0, heading_deg=10.0 + 0.01 * t, propeller_rpm=600.0,
+                           rudder_azimuth_deg=np.linspace(-20.0, 20.0, 100)))
+    check_log_against_vessel(df, v)                      # a rudder has no rpm column: not "missing"
+    with pytest.raises(LogFormatError, match=r"rudder_azimuth_deg: missing while thruster rpm are logged"):
+        check_log_against_vessel(df.drop(columns="rudder_azimuth_deg"), v)
