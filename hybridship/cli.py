@@ -281,11 +281,17 @@ def _cmd_forecast(args) -> int:
     fc = hp.forecast(args.log, args.start_time, args.horizon_s, guard=not args.no_guard)
     df = fc.to_frame()
     atomic_write(args.out, lambda fh: fh.write(df.to_csv(index=False).encode("utf-8")))
+    from .quality import FaultFlags
+
     last = df[df.lead_s == df.lead_s.max()]
     for _, row in last.iterrows():
+        flags = [name for name in FaultFlags.ALL if name != FaultFlags.OUT_OF_ENVELOPE and bool(row.get(name, False))]
+        ooe = "yes" if bool(row.get(FaultFlags.OUT_OF_ENVELOPE, False)) else "no"
         print(f"start {row.start_time_s:g} s -> +{row.lead_s:g} s: north {row.north_m:.1f} m, east {row.east_m:.1f} m, "
-              f"heading {row.heading_deg:.1f} deg (1-sigma {row.north_std_m:.1f}/{row.east_std_m:.1f} m, "
-              f"guard weight {row.guard_weight:.2f})" if "guard_weight" in row else "")
+              f"heading {row.heading_deg:.1f} deg (1-sigma {row.north_std_m:.1f}/{row.east_std_m:.1f} m); "
+              f"{FaultFlags.OUT_OF_ENVELOPE}: {ooe} (min guard weight "
+              f"{df[df.start_time_s == row.start_time_s].guard_weight.min():.2f}); "
+              f"flags: {', '.join(flags) if flags else 'none'}")
     print(f"wrote {args.out}")
     return 0
 

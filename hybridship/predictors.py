@@ -24,7 +24,9 @@ import pandas as pd
 
 from .fileio import atomic_write
 from .frames import wrap_2pi
+from .limits import check_or_clip_inputs
 from .logs.io import LogArrays, log_to_arrays, read_log
+from .quality import FaultFlags, assess_start_window, forecast_log_arrays
 from .physics.integrate import rollout_batch
 from .physics.model import DynamicModel
 from .residual.ensemble import EnsembleConfig, MLPEnsemble, fit_ensemble
@@ -51,6 +53,10 @@ class ForecastResult:
     nu : (S, H+1, 3) ``[u_m_s, v_m_s, r_rad_s]``.
     eta_std : (S, H+1, 3) ensemble standard deviation, or None.
     guard_weight : (S, H+1) the guard's shrink factor applied at each step, or None.
+    flags : dict of flag name -> (S,) bool, keys :attr:`hybridship.quality.FaultFlags.ALL`
+        (what was degraded at each start: sensor faults in the start window, clipped
+        inputs, the hybrid's correction shrunk by the guard), or None.
+    notes : (S,) str, what was done about each start's faults ("" when clean), or None.
     """
 
     start_time_s: np.ndarray
@@ -59,6 +65,8 @@ class ForecastResult:
     nu: np.ndarray
     eta_std: np.ndarray | None = None
     guard_weight: np.ndarray | None = None
+    flags: dict | None = None
+    notes: tuple | None = None
 
     def to_frame(self) -> pd.DataFrame:
         """Tidy table: one row per start time and lead time, degrees at this edge."""
@@ -80,6 +88,11 @@ class ForecastResult:
             cols["heading_std_deg"] = np.degrees(self.eta_std[..., 2]).ravel()
         if self.guard_weight is not None:
             cols["guard_weight"] = self.guard_weight.ravel()
+        if self.flags is not None:
+            for name in FaultFlags.ALL:
+                cols[name] = np.repeat(np.asarray(self.flags[name], dtype=bool), H1)
+        if self.notes is not None:
+            cols["notes"] = np.repeat(np.asarray(self.notes, dtype=object), H1)
         return pd.DataFrame(cols)
 
 
@@ -117,7 +130,7 @@ def start_indices(arrays: LogArrays, start_times_s) -> np.ndarray:
     return idx
 
 
-def _held_inputs(arrays: LogArrays, idx: np.ndarray, *, stop_after_failure: bool = True):
+def _held_inputs(arrays: LogArrays, idx: np.ndarray, *, stop_after_failure: bool = True, wind=None):
     """Commands and wind at the start rows, shaped (S, 1, width) for the kernels.
 
     With ``stop_after_failure`` the rpm of a start where station keeping is off
@@ -129,8 +142,9 @@ def _held_inputs(arrays: LogArrays, idx: np.ndarray, *, stop_after_failure: bool
     rpm = arrays.rpm[idx].copy()
     if stop_after_failure:
         rpm[arrays.dp_active[idx] == 0] = 0.0
+    wind = arrays.wind[idx] if wind is None else wind
     return (np.ascontiguousarray(rpm[:, None]), np.ascontiguousarray(arrays.azimuth_rad[idx][:, None]),
-            np.ascontiguousarray(arrays.wind[idx][:, None]))
+            np.ascontiguousarray(wind[:, None]))
 
 
 class DeadReckoning:
@@ -147,7 +161,8 @@ class DeadReckoning:
         return self
 
     def forecast(self, log, start_times_s, horizon_s: float = 60.0) -> ForecastResult:
-        arrays, idx, dt, H, eta0, nu0 = _forecast_setup(self.model, self.config, log, start_times_s, horizon_s)
+        st = _forecast_setup(self.model, self.config, log, start_times_s, horizon_s)
+        arrays, idx, dt, H, eta0, nu0 = st.arrays, st.idx, st.dt, st.H, st.eta0, st.nu0
         lead = np.arange(H + 1) * dt
         c, s = np.cos(eta0[:, 2]), np.sin(eta0[:, 2])
         vn = c * nu0[:, 0] - s * nu0[:, 1]
@@ -157,19 +172,55 @@ class DeadReckoning:
         eta[..., 1] = eta0[:, 1:2] + ve[:, None] * lead
         eta[..., 2] = eta0[:, 2:3] + nu0[:, 2:3] * lead
         nu = np.broadcast_to(nu0[:, None, :], eta.shape).copy()
-        return ForecastResult(arrays.time_s[idx], lead, eta, nu)
+        return ForecastResult(arrays.time_s[idx], lead, eta, nu, flags=st.flags, notes=st.notes)
 
 
-def _forecast_setup(model, config: ResidualConfig, log, start_times_s, horizon_s: float):
-    """Validated log arrays, start rows, step [s], number of steps and causal start states."""
+@dataclass
+class _Setup:
+    """Everything a forecast needs, after the log and start-window checks."""
+
+    arrays: LogArrays
+    idx: np.ndarray
+    dt: float
+    H: int
+    eta0: np.ndarray
+    nu0: np.ndarray
+    rpm: np.ndarray
+    az: np.ndarray
+    wind: np.ndarray
+    substeps: int
+    flags: dict
+    notes: tuple
+
+
+def _forecast_setup(model, config: ResidualConfig, log, start_times_s, horizon_s: float,
+                    stop_after_failure: bool = True) -> _Setup:
+    """Checked log arrays, start rows, step, horizon, start states and held inputs.
+
+    The log goes through :func:`hybridship.quality.forecast_log_arrays` (re-sorted,
+    checked against the vessel; sensor faults tolerated, format errors refused), the start
+    values through :func:`hybridship.quality.assess_start_window` (valid samples of the
+    window used, faults flagged, a start with too little valid data refused), and the held
+    inputs through :func:`hybridship.limits.check_or_clip_inputs` (clipped to the
+    documented envelope and flagged).
+    """
     if not horizon_s > 0:
         raise ValueError(f"horizon_s: must be > 0, got {horizon_s}")
-    arrays = as_log_arrays(log, model.vessel)
+    arrays, order = forecast_log_arrays(log, model.vessel)
     idx = start_indices(arrays, start_times_s)
     dt = float(np.median(np.diff(arrays.time_s)))
     H = int(round(horizon_s / dt))
-    eta0, nu0 = _start_states_simple(arrays, idx, config, dt)
-    return arrays, idx, dt, H, eta0, nu0
+    sw = assess_start_window(arrays, idx, config.start_average_s, order=order)
+    rpm, az, wind = _held_inputs(arrays, idx, stop_after_failure=stop_after_failure, wind=sw.wind)
+    chk = check_or_clip_inputs(model.vessel, eta=sw.eta0, nu=sw.nu0, rpm=rpm[:, 0], azimuth_rad=az[:, 0],
+                               wind=wind[:, 0], dt_s=dt)
+    flags = {name: np.zeros(len(idx), dtype=bool) for name in FaultFlags.ALL}
+    flags.update({k: np.asarray(v, dtype=bool) for k, v in sw.flags.items()})
+    flags[FaultFlags.INPUT_CLIPPED] = np.asarray(chk.clipped, dtype=bool)
+    notes = tuple(sw.notes) if len(sw.notes) == len(idx) else ("",) * len(idx)
+    return _Setup(arrays, idx, dt, H, chk.eta, chk.nu, np.ascontiguousarray(chk.rpm[:, None]),
+                  np.ascontiguousarray(chk.azimuth_rad[:, None]), np.ascontiguousarray(chk.wind[:, None]),
+                  int(chk.substeps), flags, notes)
 
 
 def _start_states_simple(arrays: LogArrays, idx, config: ResidualConfig, dt: float):
@@ -203,11 +254,11 @@ class DynamicPredictor:
         return self
 
     def forecast(self, log, start_times_s, horizon_s: float = 60.0) -> ForecastResult:
-        arrays, idx, dt, H, eta0, nu0 = _forecast_setup(self.model, self.residual_config, log, start_times_s,
-                                                        horizon_s)
-        rpm, az, wind = _held_inputs(arrays, idx, stop_after_failure=self.stop_after_failure)
-        res = self.model.rollout(eta0, nu0, H, dt_s=dt, rpm=rpm, azimuth_rad=az, wind=wind)
-        return ForecastResult(arrays.time_s[idx], res.time_s, res.eta, res.nu)
+        st = _forecast_setup(self.model, self.residual_config, log, start_times_s, horizon_s,
+                             self.stop_after_failure)
+        res = self.model.rollout(st.eta0, st.nu0, st.H, dt_s=st.dt, substeps=st.substeps, rpm=st.rpm,
+                                 azimuth_rad=st.az, wind=st.wind)
+        return ForecastResult(st.arrays.time_s[st.idx], res.time_s, res.eta, res.nu, flags=st.flags, notes=st.notes)
 
 
 class DataOnlyPredictor:
@@ -273,12 +324,14 @@ class DataOnlyPredictor:
         """Iterate the ensemble from every start time; commands and wind held at start values."""
         if self.ensemble is None:
             raise RuntimeError("DataOnlyPredictor: call fit() before forecast()")
-        arrays, idx, dt, H, eta0, nu0 = _forecast_setup(self.model, self.config, log, start_times_s, horizon_s)
-        rpm, az, wind = (x[:, 0] for x in _held_inputs(arrays, idx, stop_after_failure=self.stop_after_failure))
+        st = _forecast_setup(self.model, self.config, log, start_times_s, horizon_s, self.stop_after_failure)
+        arrays, idx, dt, H, eta0, nu0 = st.arrays, st.idx, st.dt, st.H, st.eta0, st.nu0
+        rpm, az, wind = st.rpm[:, 0], st.az[:, 0], st.wind[:, 0]
         n_avg = max(1, int(round(self.config.start_average_s / dt)))
         lo = np.maximum(idx - n_avg, 0)
         same = arrays.segment_id[lo] == arrays.segment_id[idx]
         acc0 = np.where(same[:, None], (arrays.nu[idx] - arrays.nu[lo]) / (np.maximum(idx - lo, 1) * dt)[:, None], 0.0)
+        acc0 = np.nan_to_num(acc0)      # a missing sample at either end: start from zero acceleration
         E, S = self.ensemble.n_members, len(idx)
         eta = np.broadcast_to(eta0, (E, S, 3)).copy()
         nu = np.broadcast_to(nu0, (E, S, 3)).copy()
@@ -299,7 +352,7 @@ class DataOnlyPredictor:
             nu = nu + dt * acc
             out[:, :, j + 1], out_nu[:, :, j + 1] = eta, nu
         return ForecastResult(arrays.time_s[idx], np.arange(H + 1) * dt, out.mean(axis=0), out_nu.mean(axis=0),
-                              out.std(axis=0))
+                              out.std(axis=0), flags=st.flags, notes=st.notes)
 
 
 class HybridPredictor:
@@ -386,22 +439,22 @@ class HybridPredictor:
     def forecast(self, log, start_times_s, horizon_s: float = 60.0, *, guard: bool | None = None) -> ForecastResult:
         """Forecast from every start time (one batch); commands and wind held at start values."""
         self._check_fitted()
-        arrays = as_log_arrays(log, self.model.vessel)
-        idx = start_indices(arrays, start_times_s)
-        prep = prepare_log(self.model, arrays, self.residual_config)
-        starts = [prep.start_state(int(i)) for i in idx]
-        eta0 = np.array([s[0] for s in starts])
-        nu0 = np.array([s[1] for s in starts])
-        dev0 = np.array([s[2] for s in starts])
+        st = _forecast_setup(self.model, self.residual_config, log, start_times_s, horizon_s,
+                             self.stop_after_failure)
+        prep = prepare_log(self.model, st.arrays, self.residual_config)
+        dev0 = np.array([prep.start_state(int(i))[2] for i in st.idx])
         E = self.ensemble.n_members
-        bias0 = np.stack([prep.bias_members(int(i), E, self.ensemble_config.seed) for i in idx], axis=1)
-        rpm, az, wind = _held_inputs(arrays, idx, stop_after_failure=self.stop_after_failure)
-        H = int(round(horizon_s / prep.dt_s))
-        out = self.rollout(eta0, nu0, dev0, bias0, rpm, az, wind, H, prep.dt_s,
-                           guard=self.use_guard if guard is None else guard)
-        return ForecastResult(arrays.time_s[idx], np.arange(H + 1) * prep.dt_s, *out)
+        bias0 = np.stack([prep.bias_members(int(i), E, self.ensemble_config.seed) for i in st.idx], axis=1)
+        eta, nu, std, wgt = self.rollout(st.eta0, st.nu0, dev0, bias0, st.rpm, st.az, st.wind, st.H, st.dt,
+                                         guard=self.use_guard if guard is None else guard, substeps=st.substeps)
+        flags = dict(st.flags)
+        if wgt is not None:
+            flags[FaultFlags.OUT_OF_ENVELOPE] = np.any(wgt < 1.0, axis=1)
+        return ForecastResult(st.arrays.time_s[st.idx], np.arange(st.H + 1) * st.dt, eta, nu, std, wgt,
+                              flags=flags, notes=st.notes)
 
-    def rollout(self, eta0, nu0, dev0, bias0_ned, rpm, az, wind, n_steps: int, dt_s: float, *, guard: bool = True):
+    def rollout(self, eta0, nu0, dev0, bias0_ned, rpm, az, wind, n_steps: int, dt_s: float, *, guard: bool = True,
+                substeps: int = 1):
         """Batched hybrid rollout from states (S, 3), previous residual deviations (S, 3),
         biases (S, 3) or per member (E, S, 3) (surge/sway in NED) and held inputs (S, 1, K|2).
 
@@ -445,7 +498,7 @@ class HybridPredictor:
         feats = np.empty((E, S, 9))
         for j in range(n_steps):
             rollout_batch(np.ascontiguousarray(eta[:, j]), np.ascontiguousarray(nu[:, j]), rpm, az, wind, current,
-                          zeros3, zeros3, P, dt_s, 1, 1, e1, n1, a1)
+                          zeros3, zeros3, P, dt_s, 1, int(substeps), e1, n1, a1)
             feats[:, :, 0:3] = n1[:, 1]
             feats[:, :, 3:6] = a1[:, 1]
             feats[:, :, 6:9] = r_prev
@@ -504,7 +557,9 @@ class HybridPredictor:
         arrays = {f"w{i}": w for i, w in enumerate(e.weights)}
         arrays.update(x_mean=e.x_mean, x_std=e.x_std, y_mean=e.y_mean, y_std=e.y_std,
                       guard_mean=g.mean, guard_inv_cov=g.inv_cov, thrust_scale=self.thrust_regime.scale)
-        meta = json.dumps(self._metadata(), sort_keys=True)
+        meta_d = self._metadata()
+        meta_d["content_sha256"] = _content_hash(arrays)
+        meta = json.dumps(meta_d, sort_keys=True)
         arrays["metadata_json"] = np.frombuffer(meta.encode("utf-8"), dtype=np.uint8)
         return atomic_write(path, lambda fh: np.savez(fh, **arrays))
 
@@ -532,12 +587,24 @@ class HybridPredictor:
         if meta.get("format_version") != MODEL_FORMAT_VERSION:
             raise ModelFileError(f"{path}: model format version {meta.get('format_version')} is not supported "
                                  f"(this hybridship reads version {MODEL_FORMAT_VERSION})")
-        residual_config = ResidualConfig(**{k: tuple(v) if k == "features" else v
-                                            for k, v in meta["residual_config"].items()})
-        obj = cls(vessel if vessel is not None else meta["vessel"], residual_config=residual_config,
-                  ensemble_config=EnsembleConfig(**meta["ensemble_config"]), guard=meta["use_guard"],
-                  guard_quantile=meta["guard_quantile"], stop_after_failure=meta["stop_after_failure"])
-        if _vessel_fingerprint(obj.model.vessel) != meta["vessel_fingerprint"]:
+        content = {k: v for k, v in data.items() if k != "metadata_json"}
+        if meta.get("content_sha256") != _content_hash(content):
+            raise ModelFileError(f"{path}: content checksum does not match the metadata: the file was "
+                                 f"tampered with or damaged")
+        try:
+            residual_config = ResidualConfig(**{k: tuple(v) if k == "features" else v
+                                                for k, v in meta["residual_config"].items()})
+            obj = cls(vessel if vessel is not None else meta["vessel"], residual_config=residual_config,
+                      ensemble_config=EnsembleConfig(**meta["ensemble_config"]), guard=meta["use_guard"],
+                      guard_quantile=meta["guard_quantile"], stop_after_failure=meta["stop_after_failure"])
+            fingerprint = meta["vessel_fingerprint"]
+            guard_d0, guard_scale = float(meta["guard"]["d0"]), float(meta["guard"]["scale"])
+            thrust_lo = float(meta["thrust_regime"]["lo"])
+        except (KeyError, TypeError, ValueError, AttributeError) as err:
+            if "VesselFileError" in type(err).__name__:
+                raise
+            raise ModelFileError(f"{path}: damaged model metadata ({type(err).__name__}: {err})") from None
+        if _vessel_fingerprint(obj.model.vessel) != fingerprint:
             raise ModelFileError(f"{path}: trained for vessel {meta['vessel']!r} with other parameters; "
                                  f"refusing to use it with vessel {obj.model.vessel.name!r}")
         try:
@@ -548,10 +615,8 @@ class HybridPredictor:
             if [w.shape for w in weights] != expected:
                 raise ValueError(f"weight shapes {[w.shape for w in weights]} do not match {expected}")
             ens = MLPEnsemble(weights, data["x_mean"], data["x_std"], data["y_mean"], data["y_std"])
-            guard = EnvelopeGuard(data["guard_mean"], data["guard_inv_cov"], float(meta["guard"]["d0"]),
-                                  float(meta["guard"]["scale"]))
-            thrust_regime = ThrustRegime(np.asarray(data["thrust_scale"], dtype=float),
-                                         float(meta["thrust_regime"]["lo"]))
+            guard = EnvelopeGuard(data["guard_mean"], data["guard_inv_cov"], guard_d0, guard_scale)
+            thrust_regime = ThrustRegime(np.asarray(data["thrust_scale"], dtype=float), thrust_lo)
             for name, a in [("weights", np.concatenate([w.ravel() for w in weights])), ("x_std", ens.x_std),
                             ("y_std", ens.y_std), ("guard_inv_cov", guard.inv_cov),
                             ("thrust_scale", thrust_regime.scale)]:
@@ -562,6 +627,18 @@ class HybridPredictor:
         obj.ensemble, obj.guard, obj.thrust_regime = ens, guard, thrust_regime
         obj.training_info = meta.get("training_info", {})
         return obj
+
+
+def _content_hash(arrays: dict) -> str:
+    """sha256 over every array's name, dtype, shape and bytes (sorted by name)."""
+    import hashlib
+
+    h = hashlib.sha256()
+    for name in sorted(arrays):
+        a = np.ascontiguousarray(arrays[name])
+        h.update(f"{name}|{a.dtype.str}|{a.shape}|".encode())
+        h.update(a.tobytes())
+    return h.hexdigest()
 
 
 def _vessel_fingerprint(vessel) -> str:

@@ -49,7 +49,13 @@ def _meta(arrays) -> dict:
     return json.loads(bytes(arrays["metadata_json"]).decode("utf-8"))
 
 
-def _rewrite(saved, tmp_path, *, meta_change=None, array_change=None, name="tampered.npz") -> Path:
+def _rewrite(saved, tmp_path, *, meta_change=None, array_change=None, name="tampered.npz",
+             restamp=False) -> Path:
+    """A copy of the saved model with its metadata and/or arrays changed.
+
+    ``restamp`` recomputes the content checksum after the change (a consistently written
+    file with bad contents), so that the checks behind the checksum are reached.
+    """
     _, path, _ = saved
     arrays = _arrays(path)
     if meta_change is not None:
@@ -58,6 +64,12 @@ def _rewrite(saved, tmp_path, *, meta_change=None, array_change=None, name="tamp
         arrays["metadata_json"] = np.frombuffer(json.dumps(meta).encode("utf-8"), dtype=np.uint8)
     if array_change is not None:
         array_change(arrays)
+    if restamp:
+        from hybridship.predictors import _content_hash
+
+        meta = _meta(arrays)
+        meta["content_sha256"] = _content_hash({k: v for k, v in arrays.items() if k != "metadata_json"})
+        arrays["metadata_json"] = np.frombuffer(json.dumps(meta).encode("utf-8"), dtype=np.uint8)
     out = tmp_path / name
     np.savez(out, **arrays)
     return out
@@ -122,10 +134,12 @@ def test_damaged_weights_are_refused(saved, tmp_path):
         w.flat[0] = np.nan
         a["w0"] = w
 
-    _refused(_rewrite(saved, tmp_path, array_change=nan_weight, name="nan.npz"), r"damaged model contents: .*NaN")
-    _refused(_rewrite(saved, tmp_path, array_change=lambda a: a.update(w2=a["w2"][:, :-1]), name="shape.npz"),
-             r"damaged model contents: weight shapes")
-    _refused(_rewrite(saved, tmp_path, array_change=lambda a: a.pop("w5"), name="missing.npz"),
+    _refused(_rewrite(saved, tmp_path, array_change=nan_weight, name="nan.npz"), r"checksum does not match")
+    _refused(_rewrite(saved, tmp_path, array_change=nan_weight, name="nan2.npz", restamp=True),
+             r"damaged model contents: .*NaN")
+    _refused(_rewrite(saved, tmp_path, array_change=lambda a: a.update(w2=a["w2"][:, :-1]), name="shape.npz",
+                      restamp=True), r"damaged model contents: weight shapes")
+    _refused(_rewrite(saved, tmp_path, array_change=lambda a: a.pop("w5"), name="missing.npz", restamp=True),
              r"damaged model contents")
 
 

@@ -30,7 +30,7 @@ from hybridship.quality import FaultFlags, StartWindowError
 from hybridship.residual.ensemble import EnsembleConfig
 from hybridship.sim.synthetic import physics_log
 
-pytestmark = pytest.mark.xfail(reason="awaiting integration", strict=False)
+
 
 F = FaultFlags
 START = 600.0

@@ -192,7 +192,7 @@ class PreparedLog:
 
     def trainable_rows(self, mask: np.ndarray | None = None) -> np.ndarray:
         """Rows i whose target and features are all defined (i - 1 and i - 2 in i's segment)."""
-        ok = np.isfinite(self.residual).all(1)
+        ok = np.isfinite(self.residual).all(1) & np.isfinite(self.thrust_acc).all(1)
         ok[1:] &= ok[:-1]
         ok[0] = False
         okb = np.isfinite(self.bias_ned).all(1)
@@ -297,23 +297,31 @@ def prepare_log(model, arrays: LogArrays, config: ResidualConfig = ResidualConfi
             nu_dot[sl] = np.gradient(x, dt, axis=0)
         nu_c[sl] = _causal_savgol(x, w, config.polyorder, 0, dt)
 
+    # Rows whose state or inputs are missing (a sensor fault in a forecast log) give no
+    # prediction: they are integrated from zeros and then masked, never propagated.
+    eta_in = np.nan_to_num(arrays.eta)
+    rpm_in, az_in, wind_in = (np.nan_to_num(x) for x in (arrays.rpm, arrays.azimuth_rad, arrays.wind))
+    inputs_ok = (np.isfinite(arrays.eta).all(1) & np.isfinite(arrays.rpm).all(1)
+                 & np.isfinite(arrays.azimuth_rad).all(1) & np.isfinite(arrays.wind).all(1))
+
     # One-step model predictions from every sample (all samples in one batch).
     def one_step(nu_start):  # -> predictions for row i made from row i - 1
-        res = model.rollout(arrays.eta, np.nan_to_num(nu_start), 1, dt_s=dt, rpm=arrays.rpm,
-                            azimuth_rad=arrays.azimuth_rad, wind=arrays.wind)
+        res = model.rollout(eta_in, np.nan_to_num(nu_start), 1, dt_s=dt, rpm=rpm_in,
+                            azimuth_rad=az_in, wind=wind_in)
         nh = np.full((N, 3), np.nan)
         ndh = np.full((N, 3), np.nan)
-        same = arrays.segment_id[1:] == arrays.segment_id[:-1]
+        same = ((arrays.segment_id[1:] == arrays.segment_id[:-1]) & inputs_ok[:-1]
+                & np.isfinite(nu_start[:-1]).all(1))
         nh[1:][same] = res.nu[:-1, 1][same]
         ndh[1:][same] = res.nu_dot[:-1, 1][same]
         return nh, ndh
 
     # The thrusters' share of the model acceleration, from row i - 1 (stored at row i).
-    _, parts, _ = model.acceleration(arrays.eta, np.nan_to_num(nu_s), rpm=arrays.rpm,
-                                     azimuth_rad=arrays.azimuth_rad, wind=arrays.wind, return_parts=True)
+    _, parts, _ = model.acceleration(eta_in, np.nan_to_num(nu_s), rpm=rpm_in,
+                                     azimuth_rad=az_in, wind=wind_in, return_parts=True)
     a_thr = parts[:, 1] @ np.linalg.inv(model.mass_matrix).T
     thrust_acc = np.full((N, 3), np.nan)
-    same_seg = arrays.segment_id[1:] == arrays.segment_id[:-1]
+    same_seg = (arrays.segment_id[1:] == arrays.segment_id[:-1]) & inputs_ok[:-1]
     thrust_acc[1:][same_seg] = a_thr[:-1][same_seg]
 
     nu_hat, nu_dot_hat = one_step(nu_s)
