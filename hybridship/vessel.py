@@ -2,7 +2,9 @@
 
 A vessel file (TOML) describes one ship for the 3-DOF model: main particulars, rigid
 body, added mass, damping, thrusters, wind loads and, optionally, the perturbation that
-turns it into the simulator's "true" vessel. Hydrodynamic coefficients are either given
+turns it into the simulator's "true" vessel. Actuators are thrusters and propellers
+(``[[thrusters]]``, four-quadrant propeller model) and rudders (``[[rudders]]``, MMG
+standard method, each paired with the propeller whose slipstream reaches it). Hydrodynamic coefficients are either given
 explicitly or derived by a named method (e.g. ``method = "clarke1983"``), so a reader can
 see where every number comes from. See ``docs/vessel-file.md`` for every field.
 
@@ -109,17 +111,37 @@ class LinearDamping(_Strict):
         return self
 
 
+class MMGLinearDerivatives(_Strict):
+    """Linear hull derivatives of the MMG standard method (Yasukawa & Yoshimura 2015).
+
+    Non-dimensional on the MMG basis: ``Y_H = (rho/2) L d U^2 (Y'_v v' + Y'_r r')`` and
+    ``N_H = (rho/2) L^2 d U^2 (N'_v v' + N'_r r')`` with ``v' = v/U``, ``r' = r L/U``, L the
+    length between perpendiculars and d the draught of ``[particulars]``. MMG writes the
+    added-mass Coriolis force ``(m + m_x) u r`` on the left-hand side and has no Munk
+    moment there, so its N'_v includes the Munk moment (see
+    :func:`hybridship.physics.hull.mmg_lift`).
+    """
+
+    Y_v: float
+    Y_r: float
+    N_v: float
+    N_r: float
+
+
 class NonlinearDamping(_Strict):
     """Nonlinear damping D_n(nu_r).
 
     ``"crossflow"``: ITTC-1957 surge resistance ``d_uu = 0.5 rho S ((1+k) C_F + C_R)`` and
     Hoerner cross-flow drag by strip theory in sway and yaw. ``"quadratic"``: explicit
     positive ``d_uu`` [kg/m], ``d_vv`` [kg/m], ``d_rr`` [kg m^2] (force ``-d |x| x``).
-    ``"none"``: no nonlinear damping.
+    ``"none"``: no nonlinear damping. With ``surge_resistance = "explicit"`` the cross-flow
+    method takes the surge resistance from ``d_uu`` alone (no ITTC line, no wetted surface).
 
     ``lift = "clarke1983"`` adds the manoeuvring (lift) forces that grow with forward speed:
     Clarke's linear derivatives Y_v, Y_r, N_v, N_r divided by U, less the parts that
     C_A(nu_r) already represents, times |u_r| (see :func:`hybridship.physics.hull.clarke1983_lift`).
+    ``lift = "mmg"`` takes the same four derivatives from the ``[damping.nonlinear.mmg]``
+    table (MMG standard-method normalisation, :class:`MMGLinearDerivatives`).
     """
 
     method: Literal["crossflow", "quadratic", "none"]
@@ -132,13 +154,19 @@ class NonlinearDamping(_Strict):
     d_uu: float = Field(0.0, ge=0)
     d_vv: float = Field(0.0, ge=0)
     d_rr: float = Field(0.0, ge=0)
-    lift: Literal["clarke1983", "none"] = Field(
-        "none", description="speed-proportional sway/yaw terms |u_r| [v_r, r] from Clarke et al. (1983)")
+    lift: Literal["clarke1983", "mmg", "none"] = Field(
+        "none", description="speed-proportional sway/yaw terms |u_r| [v_r, r] (Clarke et al. 1983 or MMG)")
+    surge_resistance: Literal["ittc1957", "explicit"] = Field(
+        "ittc1957", description="crossflow method: surge resistance from the ITTC line or from d_uu alone")
+    mmg: Optional[MMGLinearDerivatives] = None
 
     @model_validator(mode="after")
     def _complete(self):
-        if self.method == "crossflow" and self.wetted_surface_m2 is None:
-            raise ValueError("method 'crossflow' needs wetted_surface_m2")
+        if (self.method == "crossflow" and self.surge_resistance == "ittc1957"
+                and self.wetted_surface_m2 is None):
+            raise ValueError("method 'crossflow' needs wetted_surface_m2 (or surge_resistance = 'explicit')")
+        if self.lift == "mmg" and self.mmg is None:
+            raise ValueError("lift 'mmg' needs a [damping.nonlinear.mmg] table (Y_v, Y_r, N_v, N_r)")
         return self
 
 
@@ -177,6 +205,62 @@ class Thruster(_Strict):
         if self.type == "fixed":
             return float(np.radians(self.angle_deg))
         return 0.0
+
+
+class Rudder(_Strict):
+    """A rudder (MMG standard method, Yasukawa & Yoshimura 2015; see :mod:`hybridship.physics.rudder`).
+
+    Its command is the rudder angle delta [rad], carried in the vessel's per-actuator angle
+    array (log column ``<name>_azimuth_deg``): positive delta deflects the trailing edge to
+    starboard, which turns the ship to starboard (the MMG convention). Positions are from
+    the body origin (x forward, y starboard) [m]. The rudder sits in the slipstream of the
+    paired ``propeller`` (a ``fixed`` thruster pointing forward), or in the plain wake
+    when ``propeller`` is omitted.
+
+    Attributes (MMG symbol in brackets)
+    ----------
+    area_m2 : movable rudder area [A_R].
+    span_m : rudder span [H_R]; sets eta = D_P / H_R and the aspect ratio H_R^2 / A_R.
+    lift_gradient : normal-force gradient [f_alpha, 1/rad]; default Fujii's
+        ``6.13 Lambda / (Lambda + 2.25)`` from the aspect ratio Lambda.
+    wake_ratio : (1 - w_R) / (1 - w_P) [epsilon].
+    slipstream_factor : propeller slipstream amplification at the rudder [kappa].
+    flow_straightening_neg, flow_straightening_pos : [gamma_R] for beta_R < 0 and > 0.
+    l_R_m : effective longitudinal position in the flow-straightening angle [l_R = l'_R L].
+    steering_resistance_deduction : [t_R].
+    hull_force_factor : extra hull lateral force per unit rudder force [a_H].
+    x_H_m : position of that extra hull force [x_H = x'_H L].
+    """
+
+    name: str = Field(pattern=r"^[a-z][a-z0-9_]*$")
+    propeller: Optional[str] = Field(None, description="name of the fixed thruster ahead of the rudder")
+    x_m: float = Field(description="rudder position x_R [m] from the body origin (negative aft)")
+    y_m: float = 0.0
+    area_m2: float = Field(gt=0)
+    span_m: float = Field(gt=0)
+    lift_gradient: Optional[float] = Field(None, gt=0, le=2 * np.pi)
+    wake_ratio: float = Field(1.0, gt=0, le=3)
+    slipstream_factor: float = Field(0.5, ge=0, le=2)
+    flow_straightening_neg: float = Field(0.5, ge=0, le=2)
+    flow_straightening_pos: float = Field(0.5, ge=0, le=2)
+    l_R_m: Optional[float] = Field(None, description="default: x_m")
+    steering_resistance_deduction: float = Field(0.0, ge=0, lt=1)
+    hull_force_factor: float = Field(0.0, ge=0, le=2)
+    x_H_m: Optional[float] = Field(None, description="default: x_m")
+    max_angle_deg: float = Field(35.0, gt=0, le=90, description="mechanical limit [deg] (for reference)")
+
+    @property
+    def aspect_ratio(self) -> float:
+        """Geometric aspect ratio Lambda = H_R^2 / A_R [-]."""
+        return self.span_m**2 / self.area_m2
+
+    @property
+    def f_alpha(self) -> float:
+        """Normal-force gradient [1/rad]: the given one, else Fujii's formula."""
+        if self.lift_gradient is not None:
+            return self.lift_gradient
+        lam = self.aspect_ratio
+        return 6.13 * lam / (lam + 2.25)
 
 
 class WindTable(_Strict):
@@ -252,6 +336,7 @@ class Vessel(_Strict):
     added_mass: AddedMass
     damping: Damping
     thrusters: list[Thruster] = Field(default_factory=list)
+    rudders: list[Rudder] = Field(default_factory=list)
     wind: Wind
     true_vessel: TrueVesselPerturbation = TrueVesselPerturbation()
 
@@ -264,6 +349,16 @@ class Vessel(_Strict):
         dup = {n for n in names if names.count(n) > 1}
         if dup:
             raise ValueError(f"thrusters: duplicate names {sorted(dup)}")
+        rnames = [r.name for r in self.rudders]
+        dup = {n for n in rnames if rnames.count(n) > 1 or n in names}
+        if dup:
+            raise ValueError(f"rudders: duplicate names {sorted(dup)} (names must differ from each other "
+                             "and from the thrusters')")
+        forward = [t.name for t in self.thrusters if t.type == "fixed" and abs(t.fixed_angle_rad) < 1e-9]
+        for i, r in enumerate(self.rudders):
+            if r.propeller is not None and r.propeller not in forward:
+                raise ValueError(f"rudders[{i}].propeller: {r.propeller!r} is not a thruster of type 'fixed' "
+                                 f"with angle_deg = 0 (candidates: {forward or 'none'})")
         # Import here: physics.model imports this module.
         from .physics.model import mass_matrices
 
@@ -275,12 +370,28 @@ class Vessel(_Strict):
         return self
 
     @property
+    def actuator_names(self) -> list[str]:
+        """Names of the command channels: the thrusters in file order, then the rudders."""
+        return [t.name for t in self.thrusters] + [r.name for r in self.rudders]
+
+    @property
     def thruster_names(self) -> list[str]:
-        return [t.name for t in self.thrusters]
+        """Command channels as the logs name them (:attr:`actuator_names`).
+
+        A log carries ``<name>_rpm`` for every thruster and ``<name>_azimuth_deg`` for every
+        azimuth thruster and every rudder (the rudder angle, positive to starboard).
+        """
+        return self.actuator_names
 
     @property
     def rotatable(self) -> list[bool]:
-        return [t.type == "azimuth" for t in self.thrusters]
+        """Per command channel, whether it has an angle command (azimuth thrusters, rudders)."""
+        return [t.type == "azimuth" for t in self.thrusters] + [True] * len(self.rudders)
+
+    @property
+    def n_actuators(self) -> int:
+        """Number of command channels (width of the ``rpm`` and ``azimuth_rad`` arrays)."""
+        return len(self.thrusters) + len(self.rudders)
 
 
 def _format_validation_error(err: ValidationError, source: str) -> str:

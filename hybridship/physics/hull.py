@@ -121,6 +121,33 @@ def clarke1983_lift(derivs: dict[str, float], M_A: np.ndarray) -> np.ndarray:
     ])
 
 
+def mmg_lift(Y_v: float, Y_r: float, N_v: float, N_r: float, L_m: float, d_m: float,
+             M_A: np.ndarray, rho_kg_m3: float = 1025.0) -> np.ndarray:
+    """Speed-proportional damping ``[d_vv, d_vr, d_rv, d_rr]`` per unit |u_r| from MMG derivatives.
+
+    The MMG standard method (Yasukawa & Yoshimura 2015) normalises the hull force with
+    ``(rho/2) L d U^2`` and the moment with ``(rho/2) L^2 d U^2``, with ``v' = v/U`` and
+    ``r' = r L/U``; so per unit speed ``Y_v/U = Y'_v (rho/2) L d``, ``Y_r/U = Y'_r (rho/2) L^2 d``,
+    ``N_v/U = N'_v (rho/2) L^2 d``, ``N_r/U = N'_r (rho/2) L^3 d``.
+
+    MMG's equations of motion carry ``(m + m_x) u r`` in sway and ``(m + m_y) v r`` in surge
+    on the left-hand side, exactly what ``C_RB`` and ``C_A`` give here, but no added-mass
+    term in yaw: its N'_v contains the Munk moment ``-(m_y - m_x) u v`` that ``C_A`` already
+    gives here, and likewise N'_r the ``-M_A23 u r`` part. Hence (compare
+    :func:`clarke1983_lift`, whose derivatives also include the sway Coriolis term)
+    ``d_vv = -Y_v/U``, ``d_vr = -Y_r/U``, ``d_rv = -N_v/U - (M_A22 - M_A11)``,
+    ``d_rr = -N_r/U - M_A23``.
+    """
+    q = 0.5 * rho_kg_m3 * d_m
+    xa, ya, yra = M_A[0, 0], M_A[1, 1], M_A[1, 2]
+    return np.array([
+        -Y_v * q * L_m,
+        -Y_r * q * L_m**2,
+        -N_v * q * L_m**2 - (ya - xa),
+        -N_r * q * L_m**3 - yra,
+    ])
+
+
 def added_mass_matrix(X_udot_kg: float, Y_vdot_kg: float, Y_rdot_kg_m: float,
                       N_vdot_kg_m: float, N_rdot_kg_m2: float) -> np.ndarray:
     """Added-mass matrix M_A (3x3, positive definite) from the (negative) derivatives.

@@ -69,7 +69,7 @@ def rollout_batch(eta0, nu0, rpm, az, wind, current, tau_ext, acc_ext, P, dt, n_
     k4 = np.empty(6)
     xt = np.empty(6)
     thrusts = np.empty((1, max(K, 1)))
-    prep = np.empty(2 * K + 4)
+    prep = np.empty(2 * P.thr.shape[0] + 4 + 2 * P.rud.shape[0])
     for b in range(B):
         for i in range(3):
             x[i] = eta0[b, i]
@@ -108,7 +108,7 @@ def step_batch(eta, nu, rpm, az, wind, current, tau_ext, acc_ext, P, dt, substep
     k4 = np.empty(6)
     xt = np.empty(6)
     thrusts = np.empty((1, max(K, 1)))
-    prep = np.empty(2 * K + 4)
+    prep = np.empty(2 * P.thr.shape[0] + 4 + 2 * P.rud.shape[0])
     for b in range(eta.shape[0]):
         for i in range(3):
             x[i] = eta[b, i]

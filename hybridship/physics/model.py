@@ -1,4 +1,4 @@
-"""The 3-DOF dynamic model: eq. 1 solved for nu_dot, with thrusters (eq. 2) and wind (eq. 3).
+"""The 3-DOF dynamic model: eq. 1 solved for nu_dot, with thrusters (eq. 2), rudders and wind (eq. 3).
 
 .. math::
 
@@ -11,6 +11,12 @@ The current is irrotational and constant in NED (speed, direction it flows TO); 
 rotating body frame ``nu_c = R(psi)^T v_c`` so ``d(nu_c)/dt = [r v_c, -r u_c, 0]``.
 ``tau_ext`` is any further body-frame load (the simulator's wave drift) and ``accel_ext``
 an additive acceleration (the hybrid's residual correction).
+
+Actuators are command channels: the thrusters (and propellers) of the vessel file in
+order, then its rudders. Every input array ``rpm`` / ``azimuth_rad`` has one column per
+channel; a rudder's angle [rad] sits in its ``azimuth_rad`` column (its ``rpm`` column is
+ignored), or comes from the ``rudder_rad`` keyword of :class:`DynamicModel`. Rudder loads
+(:mod:`.rudder`) use the thrust of their propeller and count as actuator ("thrust") loads.
 
 A vessel file is turned once into :class:`ModelArrays`, a tuple of plain float arrays
 that the compiled kernels read; :class:`DynamicModel` is the thin object around them.
@@ -26,13 +32,15 @@ import numpy as np
 
 from . import hull, wind as wind_curves
 from .propeller import load_wageningen
+from .rudder import RUD_NCOL, pack_rudders, rudder_forces_scalar
 from .thrusters import (THR_ALPHA_FIXED, THR_D, THR_IS_AZIMUTH, THR_MAX_RPM, THR_TDED, THR_WAKE,
                         THR_X, THR_Y, thrust_directions, thruster_forces_scalar)
 
 #: Number of samples of the uniform wind-coefficient table over gamma in [-pi, pi].
 WIND_TABLE_SIZE = 721
 
-#: Order of the load components in ``tau_parts``: hull (C, D terms), thrusters, wind, external.
+#: Order of the load components in ``tau_parts``: hull (C, D terms), actuators (thrusters,
+#: propellers and rudders), wind, external.
 TAU_PARTS = ("hull", "thrust", "wind", "external")
 
 
@@ -52,6 +60,7 @@ class ModelArrays(NamedTuple):
     thr_coef : (K, 4, N) four-quadrant Fourier coefficients.
     wind_p : (4,) ``[rho_air_kg_m3, A_F_m2, A_L_m2, L_oa_m]``.
     wind_table : (WIND_TABLE_SIZE, 3) C_X, C_Y, C_N on ``linspace(-pi, pi)``.
+    rud : (R, RUD_NCOL) rudder parameters (columns ``RUD_*`` of :mod:`.rudder`); R may be 0.
     """
 
     m_inv: np.ndarray
@@ -66,6 +75,7 @@ class ModelArrays(NamedTuple):
     thr_coef: np.ndarray
     wind_p: np.ndarray
     wind_table: np.ndarray
+    rud: np.ndarray
 
 
 # --------------------------------------------------------------------------- building
@@ -144,8 +154,9 @@ def build_model_arrays(vessel, *, true_vessel: bool = False) -> ModelArrays:
     strip_x = np.zeros(0)
     strip_w = np.zeros(0)
     if nl.method == "crossflow":
-        d_quad[0] += hull.surge_quadratic_resistance(nl.wetted_surface_m2, p.L_pp_m, nl.speed_ref_m_s,
-                                                     nl.form_factor_k, nl.C_R, rho)
+        if nl.surge_resistance == "ittc1957":
+            d_quad[0] += hull.surge_quadratic_resistance(nl.wetted_surface_m2, p.L_pp_m, nl.speed_ref_m_s,
+                                                         nl.form_factor_k, nl.C_R, rho)
         cd = nl.cd_2d if nl.cd_2d is not None else hull.hoerner_cd(p.B_m, p.T_m)
         strip_x, strip_w = hull.crossflow_strips(p.L_pp_m, p.T_m, cd, nl.strips, rho)
     elif nl.method == "none":
@@ -154,6 +165,10 @@ def build_model_arrays(vessel, *, true_vessel: bool = False) -> ModelArrays:
     if nl.lift == "clarke1983":
         derivs = hull.clarke1983_derivatives(p.L_pp_m, p.B_m, p.T_m, p.C_B, rho)
         d_lift = hull.clarke1983_lift(derivs, sum(mass_matrices(vessel)) - M_RB) * nd_s[[1, 1, 2, 2]]
+    elif nl.lift == "mmg":
+        g = nl.mmg
+        d_lift = hull.mmg_lift(g.Y_v, g.Y_r, g.N_v, g.N_r, p.L_pp_m, p.T_m, sum(mass_matrices(vessel)) - M_RB,
+                               rho) * nd_s[[1, 1, 2, 2]]
     # Sway and yaw cross-flow share strips; scale sway via the weights and yaw on top
     # through d_rr so that both factors act independently to first order.
     d_quad = d_quad * nd_s
@@ -191,7 +206,8 @@ def build_model_arrays(vessel, *, true_vessel: bool = False) -> ModelArrays:
     arrays = ModelArrays(
         m_inv=np.linalg.inv(M), m_a=M_A, rb=np.array([rb.mass_kg, rb.x_g_m, rho]), d_lin=D,
         d_quad=d_quad, d_lift=d_lift, strip_x=strip_x, strip_w=strip_w, thr=thr, thr_coef=thr_coef,
-        wind_p=wind_p, wind_table=np.ascontiguousarray(wind_table, dtype=float))
+        wind_p=wind_p, wind_table=np.ascontiguousarray(wind_table, dtype=float),
+        rud=pack_rudders(vessel).reshape(-1, RUD_NCOL))
     return ModelArrays(*(np.ascontiguousarray(a, dtype=float) for a in arrays))
 
 
@@ -246,6 +262,11 @@ def vessel_rhs(c, s, u, v, r, rpm, prep, tau_ext, acc_ext, P, thrusts, b):
     h0, h1, h2 = hull.hull_forces_scalar(u, v, r, ur, vr, P.rb[0], P.rb[1], P.m_a, P.d_lin, P.d_quad,
                                          P.d_lift, P.strip_x, P.strip_w)
     t0, t1, t2 = thruster_forces_scalar(ur, vr, r, rpm, prep, P.thr, P.thr_coef, P.rb[2], thrusts, b)
+    if P.rud.shape[0] > 0:
+        q0, q1, q2 = rudder_forces_scalar(ur, vr, r, prep, 2 * K + 4, P.rud, P.thr, P.rb[2], thrusts, b)
+        t0 += q0
+        t1 += q1
+        t2 += q2
     w0, w1, w2 = wind_force_scalar(u, v, c, s, prep[2 * K], prep[2 * K + 1], P.wind_p, P.wind_table)
     # M_A d(nu_c)/dt: the current seen from the rotating body frame changes direction.
     ncd0 = r * vc
@@ -263,23 +284,28 @@ def vessel_rhs(c, s, u, v, r, rpm, prep, tau_ext, acc_ext, P, thrusts, b):
 
 @numba.njit(cache=True)
 def prepare_inputs(azimuth, wind_speed, wind_dir_from, cur_speed, cur_dir_to, P, prep):
-    """Trigonometry of inputs held over a step, into ``prep[2K + 4]``.
+    """Trigonometry of inputs held over a step, into ``prep[2K + 4 + 2R]``.
 
     Layout: cos(alpha) (K), sin(alpha) (K), wind velocity north, east (the way it blows)
-    [m/s], current velocity north, east [m/s].
+    [m/s], current velocity north, east [m/s], cos(delta) (R), sin(delta) (R). ``azimuth``
+    has one entry per command channel: K thrusters, then R rudders.
     """
     K = P.thr.shape[0]
+    R = P.rud.shape[0]
     thrust_directions(azimuth, P.thr, prep)
     prep[2 * K] = -wind_speed * math.cos(wind_dir_from)  # "from" -> velocity points the other way
     prep[2 * K + 1] = -wind_speed * math.sin(wind_dir_from)
     prep[2 * K + 2] = cur_speed * math.cos(cur_dir_to)
     prep[2 * K + 3] = cur_speed * math.sin(cur_dir_to)
+    for j in range(R):
+        prep[2 * K + 4 + j] = math.cos(azimuth[K + j])
+        prep[2 * K + 4 + R + j] = math.sin(azimuth[K + j])
 
 
 @numba.njit(cache=True)
 def dynamics_batch(eta, nu, rpm, azimuth, wind, current, tau_ext, acc_ext, P, nu_dot, parts, thrusts):
     """Batched :func:`vessel_rhs`: all arrays have a leading batch axis B."""
-    prep = np.empty(2 * P.thr.shape[0] + 4)
+    prep = np.empty(2 * P.thr.shape[0] + 4 + 2 * P.rud.shape[0])
     for b in range(eta.shape[0]):
         prepare_inputs(azimuth[b], wind[b, 0], wind[b, 1], current[b, 0], current[b, 1], P, prep)
         out = vessel_rhs(math.cos(eta[b, 2]), math.sin(eta[b, 2]), nu[b, 0], nu[b, 1], nu[b, 2], rpm[b], prep,
@@ -348,9 +374,14 @@ class DynamicModel:
     of shape ``(width,)`` (same for every vessel), ``(B, width)`` (held) or, for rollouts,
     ``(B, n_steps, width)`` (one value per output step):
 
-    * ``rpm``: shaft speed of each thruster [rpm], width K (vessel-file order);
-    * ``azimuth_rad``: thrust direction of each thruster [rad], width K (ignored for
-      fixed-axis thrusters);
+    * ``rpm``: shaft speed of each thruster [rpm], one column per command channel (K
+      thrusters in vessel-file order, then R rudders, whose columns are ignored); width
+      K alone is accepted too;
+    * ``azimuth_rad``: thrust direction of each thruster [rad] (ignored for fixed-axis
+      thrusters) and, in the rudder columns, the rudder angle delta [rad] (positive turns
+      the ship to starboard); width K + R, or K (rudders then at 0 or from ``rudder_rad``);
+    * ``rudder_rad``: rudder angles [rad], width R; when given they replace the rudder
+      columns of ``azimuth_rad``;
     * ``wind``: ``[speed_m_s, dir_from_rad]`` true wind (direction it comes FROM);
     * ``current``: ``[speed_m_s, dir_to_rad]`` (direction it flows TO), NED;
     * ``tau_ext``: extra body-frame load ``[X_N, Y_N, N_Nm]``;
@@ -365,8 +396,18 @@ class DynamicModel:
         self.arrays = build_model_arrays(self.vessel, true_vessel=self.true_vessel)
 
     @property
+    def n_actuators(self) -> int:
+        """Command channels K + R (thrusters, then rudders): the width of ``rpm`` and ``azimuth_rad``."""
+        return len(self.vessel.thrusters) + len(self.vessel.rudders)
+
+    @property
     def n_thrusters(self) -> int:
-        return len(self.vessel.thrusters)
+        """Command channels, as :attr:`n_actuators` (equal to the thruster count without rudders)."""
+        return self.n_actuators
+
+    @property
+    def n_rudders(self) -> int:
+        return len(self.vessel.rudders)
 
     @property
     def mass_matrix(self) -> np.ndarray:
@@ -383,35 +424,54 @@ class DynamicModel:
             raise ValueError(f"{name}: contains NaN or inf")
         return np.ascontiguousarray(a)
 
-    def _inputs(self, B, S, rpm, azimuth_rad, wind, current, tau_ext, accel_ext):
-        K = self.n_thrusters
-        return (_as_input("rpm", rpm, B, S, K), _as_input("azimuth_rad", azimuth_rad, B, S, K),
+    def _channels(self, name, value, B, S):
+        """A per-channel command as ``(B, S_or_1, K + R)``; width K (thrusters only) is padded with zeros."""
+        K, R = len(self.vessel.thrusters), self.n_rudders
+        if R > 0 and value is not None and np.ndim(value) >= 1 and np.shape(value)[-1] == K:
+            a = _as_input(name, value, B, S, K)
+            return np.ascontiguousarray(np.concatenate([a, np.zeros(a.shape[:2] + (R,))], axis=2))
+        return _as_input(name, value, B, S, K + R)
+
+    def _inputs(self, B, S, rpm, azimuth_rad, wind, current, tau_ext, accel_ext, rudder_rad=None):
+        K, R = len(self.vessel.thrusters), self.n_rudders
+        az = self._channels("azimuth_rad", azimuth_rad, B, S)
+        if rudder_rad is not None:
+            if R == 0:
+                raise ValueError(f"rudder_rad: vessel {self.vessel.name!r} has no rudders")
+            rud = _as_input("rudder_rad", rudder_rad, B, S, R)
+            steps = max(az.shape[1], rud.shape[1])
+            az = np.array(np.broadcast_to(az, (B, steps, K + R)))
+            az[:, :, K:] = rud
+        return (self._channels("rpm", rpm, B, S), np.ascontiguousarray(az),
                 _as_input("wind", wind, B, S, 2), _as_input("current", current, B, S, 2),
                 _as_input("tau_ext", tau_ext, B, S, 3), _as_input("accel_ext", accel_ext, B, S, 3))
 
     def acceleration(self, eta, nu, *, rpm=None, azimuth_rad=None, wind=None, current=None,
-                     tau_ext=None, accel_ext=None, return_parts: bool = False):
+                     tau_ext=None, accel_ext=None, rudder_rad=None, return_parts: bool = False):
         """nu_dot (B, 3) for states ``eta``, ``nu`` (each (3,) or (B, 3)).
 
         With ``return_parts`` also the loads ``(B, 4, 3)`` in the order of ``TAU_PARTS``
-        (hull C and D terms, thrusters, wind, external) and the thrusts ``(B, K)`` [N].
+        (hull C and D terms, actuators incl. rudders, wind, external) and the delivered
+        thrusts ``(B, K)`` [N] of the K thrusters.
         """
         eta = self._state("eta", eta)
         nu = self._state("nu", nu)
         B = max(eta.shape[0], nu.shape[0])
         eta = np.ascontiguousarray(np.broadcast_to(eta, (B, 3)))
         nu = np.ascontiguousarray(np.broadcast_to(nu, (B, 3)))
-        ins = [a[:, 0] for a in self._inputs(B, None, rpm, azimuth_rad, wind, current, tau_ext, accel_ext)]
+        ins = [np.ascontiguousarray(a[:, 0]) for a in
+               self._inputs(B, None, rpm, azimuth_rad, wind, current, tau_ext, accel_ext, rudder_rad)]
         nu_dot = np.empty((B, 3))
         parts = np.empty((B, 4, 3))
-        thrusts = np.empty((B, max(self.n_thrusters, 1)))
+        K = len(self.vessel.thrusters)
+        thrusts = np.empty((B, max(K, 1)))
         dynamics_batch(eta, nu, *ins, self.arrays, nu_dot, parts, thrusts)
         if return_parts:
-            return nu_dot, parts, thrusts[:, : self.n_thrusters]
+            return nu_dot, parts, thrusts[:, :K]
         return nu_dot
 
     def step(self, eta, nu, *, dt_s: float = 1.0, substeps: int = 1, rpm=None, azimuth_rad=None,
-             wind=None, current=None, tau_ext=None, accel_ext=None):
+             wind=None, current=None, tau_ext=None, accel_ext=None, rudder_rad=None):
         """Advance (B, 3) states by one step of ``dt_s`` with held inputs; returns ``(eta, nu)``."""
         from .integrate import step_batch
 
@@ -419,14 +479,15 @@ class DynamicModel:
         nu = self._state("nu", nu)
         B = eta.shape[0]
         ins = [np.ascontiguousarray(a[:, 0]) for a in
-               self._inputs(B, None, rpm, azimuth_rad, wind, current, tau_ext, accel_ext)]
+               self._inputs(B, None, rpm, azimuth_rad, wind, current, tau_ext, accel_ext, rudder_rad)]
         eta_next = np.empty((B, 3))
         nu_next = np.empty((B, 3))
         step_batch(eta, nu, *ins, self.arrays, float(dt_s), int(substeps), eta_next, nu_next)
         return eta_next, nu_next
 
     def rollout(self, eta0, nu0, n_steps: int, *, dt_s: float = 1.0, substeps: int = 1, rpm=None,
-                azimuth_rad=None, wind=None, current=None, tau_ext=None, accel_ext=None) -> RolloutResult:
+                azimuth_rad=None, wind=None, current=None, tau_ext=None, accel_ext=None,
+                rudder_rad=None) -> RolloutResult:
         """Integrate ``n_steps`` output steps of ``dt_s`` seconds (RK4, ``substeps`` per step).
 
         Inputs are held at their values (``(width,)`` or ``(B, width)``) or given per step
@@ -441,7 +502,7 @@ class DynamicModel:
         if eta0.shape != nu0.shape:
             raise ValueError(f"eta0 and nu0 must have the same shape, got {eta0.shape} and {nu0.shape}")
         B, S = eta0.shape[0], int(n_steps)
-        ins = self._inputs(B, S, rpm, azimuth_rad, wind, current, tau_ext, accel_ext)
+        ins = self._inputs(B, S, rpm, azimuth_rad, wind, current, tau_ext, accel_ext, rudder_rad)
         eta = np.empty((B, S + 1, 3))
         nu = np.empty((B, S + 1, 3))
         nu_dot = np.empty((B, S + 1, 3))

@@ -98,8 +98,6 @@ def relative_wind(wind_speed_m_s, wind_dir_from_rad, psi_rad, u_m_s, v_m_s):
     u_m_s, v_m_s : array_like
         Ship velocity over ground in body axes [m/s] (surge forward, sway starboard).
 
-    All inputs broadcast against each other (any shapes).
-
     Returns
     -------
     V_rw_m_s : ndarray
@@ -110,6 +108,8 @@ def relative_wind(wind_speed_m_s, wind_dir_from_rad, psi_rad, u_m_s, v_m_s):
 
     Notes
     -----
+    All inputs broadcast against each other (any shapes).
+
     The wind blows towards ``beta + pi``, so in NED its velocity is
     ``-V_w [cos beta, sin beta]``; rotating into body axes gives
     ``u_w = -V_w cos(beta - psi)`` and ``v_w = -V_w sin(beta - psi)``

@@ -1,0 +1,97 @@
+"""Esso Osaka manoeuvring benchmark (issue 6): split, train, forecast, tables and figures.
+
+One command makes everything on ``docs/esso-osaka.md``::
+
+    python benchmarks/esso_osaka.py --out out/esso-osaka
+
+It splits the runs of ``../shared/data/esso-osaka-frt/data`` into train and test folders
+(symbolic links, whole recordings per side, seed 0; the data are never copied), runs
+:func:`hybridship.manoeuvre.run_manoeuvre_benchmark` on them, writes ``errors.csv`` and
+``README.md`` to ``--out``, the figures ``docs/figures/esso_*.png``, and replaces the
+generated tables between the ``<!-- generated:... -->`` markers of ``docs/esso-osaka.md``.
+With ``--quick`` it makes a smoke run (small ensembles, starts every 5 s) and leaves the
+docs alone unless ``--docs`` is given.
+"""
+
+from __future__ import annotations
+
+import argparse
+import re
+import shlex
+import sys
+import time
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+def replace_generated(text: str, key: str, body: str) -> str:
+    """Replace the block between ``<!-- generated:key -->`` and ``<!-- /generated:key -->``."""
+    pat = re.compile(rf"(<!-- generated:{re.escape(key)} -->\n).*?(<!-- /generated:{re.escape(key)} -->)", re.S)
+    if not pat.search(text):
+        raise ValueError(f"docs: no generated block {key!r}")
+    return pat.sub(lambda m: m.group(1) + body + m.group(2), text)
+
+
+def main(argv=None) -> int:
+    import torch
+
+    from hybridship.logs.esso_osaka import RUN_KINDS, default_data_dir
+    from hybridship.manoeuvre import (COMMAND_MODES, HORIZONS_S, _md_table, pivot, run_manoeuvre_benchmark,
+                                      split_runs, wins)
+
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--data", type=Path, default=default_data_dir() / "data", help="folder of the published runs")
+    ap.add_argument("--out", type=Path, default=ROOT / "out" / "esso-osaka")
+    ap.add_argument("--seed", type=int, default=0)
+    ap.add_argument("--test-fraction", type=float, default=0.3)
+    ap.add_argument("--quick", action="store_true")
+    ap.add_argument("--docs", action="store_true", help="update docs/ also with --quick")
+    args = ap.parse_args(argv)
+    torch.set_num_threads(1)
+    if not args.data.is_dir():
+        print(f"error: {args.data}: data folder not found (see ../shared/data/esso-osaka-frt/README.md)",
+              file=sys.stderr)
+        return 2
+    command = "python benchmarks/esso_osaka.py " + " ".join(shlex.quote(a) for a in (argv or sys.argv[1:]))
+    train_dir, test_dir = split_runs(args.data, args.out / "split", test_fraction=args.test_fraction,
+                                     seed=args.seed)
+    docs = (not args.quick) or args.docs
+    t0 = time.perf_counter()
+    res = run_manoeuvre_benchmark("esso_osaka_model", train_dir, test_dir, HORIZONS_S, args.out, seed=args.seed,
+                                  quick=args.quick, command=command.strip(),
+                                  figures_dir=(ROOT / "docs" / "figures") if docs else None, progress=True)
+    print(f"benchmark: {time.perf_counter() - t0:.0f} s; {args.out / 'errors.csv'}")
+    if docs:
+        page = ROOT / "docs" / "esso-osaka.md"
+        text = page.read_text(encoding="utf-8")
+        e = res.errors
+        runs = ("Train runs: " + ", ".join(f"`{r.name}`" for r in res.train) + ".\n\nTest runs: "
+                + ", ".join(f"`{r.name}` ({r.kind})" for r in res.test) + ".\n")
+        text = replace_generated(text, "runs", runs)
+        for mode in COMMAND_MODES:
+            for state, digits in (("distance_m", 3), ("heading_deg", 2)):
+                body = f"Made by `{command.strip()}` (`errors.csv`, rows `state = {state}`, " \
+                       f"`commands = {mode}`).\n\n" + _md_table(pivot(e, state, mode), digits)
+                text = replace_generated(text, f"{state}-{mode}", body)
+        lines = []
+        kind_order = {k: i for i, k in enumerate(RUN_KINDS + ("all",))}
+        for other in ("dynamic", "dead_reckoning", "data_only"):
+            for mode in COMMAND_MODES:
+                cells, total = wins(e, "hybrid", other, commands=mode)
+                if not total:
+                    continue
+                tab = pivot(e, "distance_m", mode)
+                lost = [(k, c) for k in tab.index.get_level_values(0).unique() for c in tab.columns
+                        if (k, "hybrid") in tab.index and (k, other) in tab.index and (k, c) not in cells]
+                lost.sort(key=lambda kc: (kind_order.get(kc[0], 99), float(kc[1].split()[0])))
+                lines.append(f"- vs {other}, commands {mode}: hybrid lower in {len(cells)} of {total} cells"
+                             + (f"; not in: {', '.join(f'{k} {c}' for k, c in lost)}" if lost else ""))
+        text = replace_generated(text, "wins", "\n".join(lines) + "\n")
+        page.write_text(text, encoding="utf-8")
+        print(f"updated {page.relative_to(ROOT)}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,721 @@
+"""Manoeuvring benchmark on free-running model tests (issue 6: the tanker Esso Osaka).
+
+Train on the runs of one folder, test on the runs of another (never the same run), and
+forecast from every start time (every ``start_every_s``; every sample with
+``start_every_s=None``) ``horizons_s`` ahead. Two command modes:
+
+* ``known``: the logged future propeller and rudder commands are fed to the forecast
+  (a manoeuvring case: the helmsman's orders are known in advance);
+* ``held``: commands held at their values at the start.
+
+The wind is held at its start value in both modes (its future is not known at a start).
+Errors: absolute ``x0_m``, ``y0_m`` (earth frame of the pond, used as north/east),
+``heading_deg`` (wrapped) and the position ``distance_m``, averaged over all start times
+of all test runs of a kind (``kind = all`` pools every start time).
+
+Predictors: the hybrid (:class:`~hybridship.predictors.HybridPredictor`), the physics
+alone (:class:`~hybridship.predictors.DynamicPredictor`), constant-velocity dead reckoning
+(:class:`~hybridship.predictors.DeadReckoning`) and a data-only ensemble
+(``DataOnlyPredictor``, used when :mod:`hybridship.predictors` provides it).
+
+Interim adapters (until the predictors take per-step commands, see
+:func:`known_commands`): the physics is given the per-step commands through a thin proxy
+of its model's ``rollout``; the hybrid through a stand-in for the one-step physics call
+of its rollout loop, which hands it the commands of step j at its j-th call and checks
+the call pattern, so a change of that loop fails loudly instead of silently.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import inspect
+import time
+from dataclasses import dataclass, field, replace
+from pathlib import Path
+from typing import Callable
+
+import numpy as np
+import pandas as pd
+
+from .fileio import atomic_write
+from .frames import wrap_pi
+from .logs.esso_osaka import EssoRun, RUN_KINDS, esso_log_arrays, list_runs
+from .logs.io import LogArrays, log_to_arrays
+from .residual.ensemble import EnsembleConfig
+from .residual.features import ALL_FEATURES, ResidualConfig
+
+#: Default forecast horizons [s] (model scale; x 10.4 at full scale).
+HORIZONS_S = (5, 10, 20, 30)
+#: Error states in ``errors.csv``.
+STATES = ("x0_m", "y0_m", "heading_deg", "distance_m")
+#: Exact columns of ``errors.csv``.
+ERROR_COLUMNS = ("model", "kind", "state", "horizon_s", "mae", "commands")
+COMMAND_MODES = ("known", "held")
+#: Order of the predictors in tables.
+MODEL_ORDER = ("hybrid", "dynamic", "data_only", "dead_reckoning")
+
+CITATION = (
+    "Wakita K., Maki A., Umeda N., Miyauchi Y., Shimoji T., Rachman D.M., Akimoto Y. (2022). On neural "
+    "network identification for low-speed ship maneuvering model. J. Mar. Sci. Technol. 27, 772-785. "
+    "doi:10.1007/s00773-021-00867-1. Miyauchi Y., Maki A., Umeda N., Rachman D.M., Akimoto Y. (2022). "
+    "System parameter exploration of ship maneuvering model for automatic docking/berthing using CMA-ES. "
+    "J. Mar. Sci. Technol. 27, 1065-1083. doi:10.1007/s00773-022-00889-3. Data: "
+    "github.com/NAOE-5thLab/FRT-DS-ESSO @e694dfd, CC BY-NC 4.0."
+)
+
+
+@dataclass(frozen=True)
+class ManoeuvreConfig:
+    """Settings of the manoeuvring benchmark (chosen before looking at test errors).
+
+    Attributes
+    ----------
+    start_every_s : spacing of forecast start times [s]; None = every sample.
+    step_s : forecast and training step [s]; None = the data's own (0.1 s here). A
+        larger step decimates the runs (every k-th sample, k = step / data step).
+    residual : residual features and start-state windows. Chosen on a validation split
+        of the training runs (never the test runs): the start state is the last sample
+        (the logged velocities are already filtered and lag the positions by 0.6 s; any
+        average adds lag); velocities are smoothed over 2 s for the targets (10-Hz
+        differences are noise); the features are the model-predicted velocities and
+        accelerations, without the paper's previous-residual input and without a
+        running bias: at 10 Hz the previous residual correlates 0.98 with the next, the
+        networks learn to hold it, and a held residual acceleration integrates into
+        metres within 30 s.
+    ensemble : residual ensemble training.
+    train_row_stride : use every k-th trainable row for training (speed; 10 Hz rows are
+        strongly correlated).
+    """
+
+    start_every_s: float | None = 1.0
+    step_s: float | None = None
+    residual: ResidualConfig = field(default_factory=lambda: ResidualConfig(
+        features=ALL_FEATURES[:6], deriv_window_s=2.0, start_average_s=0.1, bias_window_s=0.0))
+    ensemble: EnsembleConfig = field(default_factory=lambda: EnsembleConfig(n_members=8, max_epochs=600))
+    train_row_stride: int = 2
+
+    @classmethod
+    def quick(cls, seed: int = 0) -> "ManoeuvreConfig":
+        """A small configuration for smoke runs and tests (seconds, not minutes)."""
+        base = cls()
+        return replace(base, start_every_s=5.0, train_row_stride=10,
+                       ensemble=replace(base.ensemble, n_members=3, max_epochs=60, patience=20, seed=seed))
+
+
+@dataclass
+class Run:
+    """One run ready for the benchmark: its file, kind and arrays (possibly decimated)."""
+
+    run: EssoRun
+    arrays: LogArrays
+
+    @property
+    def kind(self) -> str:
+        return self.run.kind
+
+    @property
+    def name(self) -> str:
+        return self.run.name
+
+
+# --------------------------------------------------------------------------------------
+# Runs
+# --------------------------------------------------------------------------------------
+
+
+def _decimate(arrays: LogArrays, vessel, step_s: float | None) -> LogArrays:
+    if step_s is None:
+        return arrays
+    dt = float(np.median(np.diff(arrays.time_s)))
+    k = int(round(step_s / dt))
+    if k < 1 or abs(k * dt - step_s) > 0.01 * step_s:
+        raise ValueError(f"step_s: {step_s} s is not a whole multiple of the data step {dt:g} s")
+    if k == 1:
+        return arrays
+    sl = slice(None, None, k)
+    df = pd.DataFrame({"time_s": arrays.time_s[sl], "north_m": arrays.eta[sl, 0], "east_m": arrays.eta[sl, 1],
+                       "heading_deg": np.degrees(wrap_pi(arrays.eta[sl, 2])), "u_m_s": arrays.nu[sl, 0],
+                       "v_m_s": arrays.nu[sl, 1], "r_deg_s": np.degrees(arrays.nu[sl, 2]),
+                       "wind_speed_m_s": arrays.wind[sl, 0], "wind_dir_deg": np.degrees(arrays.wind[sl, 1])})
+    for j, (name, rot) in enumerate(zip(arrays.thruster_names, arrays.rotatable)):
+        df[f"{name}_rpm"] = arrays.rpm[sl, j]
+        if rot:
+            df[f"{name}_azimuth_deg"] = np.degrees(arrays.azimuth_rad[sl, j])
+    return log_to_arrays(df, thruster_names=vessel.thruster_names, rotatable=vessel.rotatable)
+
+
+def load_runs(folder, vessel, *, step_s: float | None = None) -> list[Run]:
+    """Every run of the Esso Osaka format under ``folder`` (see :func:`~hybridship.logs.esso_osaka.list_runs`)."""
+    runs = [Run(r, _decimate(esso_log_arrays(r.path, vessel), vessel, step_s)) for r in list_runs(folder)]
+    if not runs:
+        raise FileNotFoundError(f"{folder}: no runs (*.csv, *.csv.gz) found")
+    return runs
+
+
+def split_runs(data_dir, out_dir, *, test_fraction: float = 0.3, seed: int = 0) -> tuple[Path, Path]:
+    """Split the runs of ``data_dir`` into ``out_dir/train`` and ``out_dir/test`` (symbolic links).
+
+    Whole recordings go to one side (the pieces of one long random recording stay
+    together); per kind, ``round(test_fraction * recordings)`` (at least one) recordings,
+    drawn with ``seed``, are test runs. The data are linked, never copied.
+    """
+    data_dir, out_dir = Path(data_dir), Path(out_dir)
+    runs = list_runs(data_dir)
+    rng = np.random.default_rng(seed)
+    test = set()
+    for kind in RUN_KINDS:
+        recs = sorted({r.recording for r in runs if r.kind == kind})
+        if len(recs) < 2:
+            continue
+        n_test = max(1, int(round(test_fraction * len(recs))))
+        test |= set(rng.choice(recs, size=n_test, replace=False).tolist())
+    dirs = (out_dir / "train", out_dir / "test")
+    for d in dirs:
+        if d.exists():
+            for p in sorted(d.rglob("*"), reverse=True):
+                if p.is_symlink() or p.is_file():
+                    p.unlink()
+                elif p.is_dir():
+                    p.rmdir()
+        d.mkdir(parents=True, exist_ok=True)
+    for r in runs:
+        d = dirs[1] if r.recording in test else dirs[0]
+        (d / r.kind).mkdir(exist_ok=True)
+        (d / r.kind / r.path.name).symlink_to(r.path.resolve())
+    return dirs
+
+
+# --------------------------------------------------------------------------------------
+# Known-command adapters (interim; see the module docstring)
+# --------------------------------------------------------------------------------------
+
+
+def _command_steps(arrays: LogArrays, idx: np.ndarray, n_steps: int):
+    """Logged commands of the ``n_steps`` steps after each start row: rpm, azimuth (S, H, K)."""
+    rows = np.minimum(idx[:, None] + np.arange(n_steps)[None, :], len(arrays.time_s) - 1)
+    return np.ascontiguousarray(arrays.rpm[rows]), np.ascontiguousarray(arrays.azimuth_rad[rows])
+
+
+class _KnownCommandsModel:
+    """Proxy of a DynamicModel whose ``rollout`` uses given per-step rpm and angles."""
+
+    def __init__(self, model, rpm_steps, az_steps):
+        self._model, self._rpm, self._az = model, rpm_steps, az_steps
+
+    def __getattr__(self, name):
+        return getattr(self._model, name)
+
+    def rollout(self, eta0, nu0, n_steps, **kw):
+        H = int(n_steps)
+        if self._rpm.shape[0] != np.shape(eta0)[0] or self._rpm.shape[1] < H:
+            raise RuntimeError("known commands: the forecast asked for other start times or a longer horizon")
+        kw["rpm"] = self._rpm[:, :H]
+        kw["azimuth_rad"] = self._az[:, :H]
+        return self._model.rollout(eta0, nu0, H, **kw)
+
+
+@contextlib.contextmanager
+def _hybrid_known_commands(rpm_steps, az_steps):
+    """Hand the hybrid's j-th one-step physics call the commands of step j."""
+    from . import predictors as pred_mod
+
+    original = pred_mod.rollout_batch
+    calls = {"n": 0}
+
+    def stepper(eta0, nu0, rpm, az, *args):
+        # rollout_batch(eta0, nu0, rpm, az, wind, current, tau_ext, acc_ext, P, dt, n_steps, substeps, ...)
+        n_steps = args[6] if len(args) == 11 else None
+        j = calls["n"]
+        if eta0.shape[0] != rpm_steps.shape[0] or n_steps != 1 or j >= rpm_steps.shape[1]:
+            raise RuntimeError("known commands: HybridPredictor.rollout no longer makes one one-step physics "
+                               "call per step; update hybridship.manoeuvre._hybrid_known_commands")
+        calls["n"] += 1
+        return original(eta0, nu0, np.ascontiguousarray(rpm_steps[:, j: j + 1]),
+                        np.ascontiguousarray(az_steps[:, j: j + 1]), *args)
+
+    pred_mod.rollout_batch = stepper
+    try:
+        yield calls
+    finally:
+        pred_mod.rollout_batch = original
+
+
+def _accepts_commands(predictor) -> bool:
+    try:
+        return "commands" in inspect.signature(predictor.forecast).parameters
+    except (TypeError, ValueError):
+        return False
+
+
+def known_commands(predictor, arrays: LogArrays, start_times_s, horizon_s: float):
+    """Forecast with the logged future commands known.
+
+    Uses ``predictor.forecast(..., commands="known")`` when the predictor accepts a
+    ``commands`` keyword; otherwise the interim adapters for the physics and the hybrid;
+    dead reckoning ignores commands. Returns None for a predictor that cannot use them.
+    """
+    from .predictors import DeadReckoning, DynamicPredictor, HybridPredictor, start_indices
+
+    if _accepts_commands(predictor):
+        return predictor.forecast(arrays, start_times_s, horizon_s=horizon_s, commands="known")
+    if isinstance(predictor, DeadReckoning):
+        return predictor.forecast(arrays, start_times_s, horizon_s=horizon_s)
+    idx = start_indices(arrays, start_times_s)
+    dt = float(np.median(np.diff(arrays.time_s)))
+    H = int(round(horizon_s / dt))
+    rpm, az = _command_steps(arrays, idx, H)
+    if isinstance(predictor, HybridPredictor):
+        with _hybrid_known_commands(rpm, az) as calls:
+            fc = predictor.forecast(arrays, start_times_s, horizon_s=horizon_s)
+        if calls["n"] != H:
+            raise RuntimeError(f"known commands: expected {H} one-step calls, saw {calls['n']}")
+        return fc
+    if isinstance(predictor, DynamicPredictor):
+        model = predictor.model
+        predictor.model = _KnownCommandsModel(model, rpm, az)
+        try:
+            return predictor.forecast(arrays, start_times_s, horizon_s=horizon_s)
+        finally:
+            predictor.model = model
+    return None
+
+
+# --------------------------------------------------------------------------------------
+# Predictors
+# --------------------------------------------------------------------------------------
+
+
+def data_only_class():
+    """The data-only predictor class of :mod:`hybridship.predictors`, or None while it does not exist."""
+    from . import predictors
+
+    return getattr(predictors, "DataOnlyPredictor", None)
+
+
+def make_predictors(vessel, config: ManoeuvreConfig) -> dict[str, object]:
+    """Unfitted predictors by table name (the data-only one only when available)."""
+    from .predictors import DeadReckoning, DynamicPredictor, HybridPredictor
+
+    rc, ec = config.residual, config.ensemble
+    out = {
+        "hybrid": HybridPredictor(vessel, residual_config=rc, ensemble_config=ec),
+        "dynamic": DynamicPredictor(vessel, residual_config=rc),
+        "dead_reckoning": DeadReckoning(vessel, start_average_s=rc.start_average_s),
+    }
+    cls = data_only_class()
+    if cls is not None:
+        kw = {}
+        params = inspect.signature(cls).parameters
+        for name, value in (("residual_config", rc), ("ensemble_config", ec),
+                            ("start_average_s", rc.start_average_s)):
+            if name in params:
+                kw[name] = value
+        out["data_only"] = cls(vessel, **kw)
+    return out
+
+
+def _fit(name, predictor, runs: list[Run], config: ManoeuvreConfig):
+    """Fit on the training runs (the hybrid on every ``train_row_stride``-th trainable row)."""
+    import torch
+
+    torch.set_num_threads(1)
+    logs = [r.arrays for r in runs]
+    if name == "hybrid" and config.train_row_stride > 1:
+        from .residual.ensemble import fit_ensemble
+        from .residual.guard import EnvelopeGuard
+
+        X, Y, seg = predictor.training_data(logs)
+        keep = np.arange(0, X.shape[0], config.train_row_stride)
+        thr = getattr(predictor, "_training_thrust_acc", None)
+        predictor.ensemble = fit_ensemble(X[keep], Y[keep], predictor.ensemble_config, segment_id=seg[keep])
+        predictor.guard = EnvelopeGuard.fit((X[keep] - predictor.ensemble.x_mean) / predictor.ensemble.x_std,
+                                            quantile=predictor.guard_quantile)
+        if thr is not None and hasattr(predictor, "thrust_regime"):
+            from .residual.guard import ThrustRegime
+
+            predictor.thrust_regime = ThrustRegime.fit(thr[keep])
+        predictor.training_info = {"n_rows": int(keep.size), "epochs": predictor.ensemble.history.get("epochs"),
+                                   "best_val_mse": predictor.ensemble.history.get("best_val_mse")}
+        return predictor
+    return predictor.fit(logs)
+
+
+# --------------------------------------------------------------------------------------
+# Errors
+# --------------------------------------------------------------------------------------
+
+
+def start_rows(arrays: LogArrays, horizon_steps: int, start_every_s: float | None, warmup_s: float = 3.0):
+    """Start rows: every ``start_every_s`` after a warm-up, leaving ``horizon_steps`` of measurements."""
+    t = arrays.time_s
+    dt = float(np.median(np.diff(t)))
+    stride = 1 if start_every_s is None else max(1, int(round(start_every_s / dt)))
+    first = int(round(warmup_s / dt))
+    last = len(t) - 1 - horizon_steps
+    return np.arange(first, last + 1, stride) if last >= first else np.zeros(0, int)
+
+
+def forecast_errors(forecast: Callable, arrays: LogArrays, rows: np.ndarray, steps: np.ndarray) -> np.ndarray:
+    """Absolute errors ``(S, n_horizons, 4)``: |x0|, |y0| [m], |heading| [deg], distance [m]."""
+    dt = float(np.median(np.diff(arrays.time_s)))
+    fc = forecast(arrays, arrays.time_s[rows], float(steps.max() * dt))
+    pred = fc.eta[:, steps]
+    truth = arrays.eta[rows[:, None] + steps[None, :]]
+    err = np.empty(pred.shape[:2] + (4,))
+    err[..., :2] = np.abs(pred[..., :2] - truth[..., :2])
+    err[..., 2] = np.degrees(np.abs(wrap_pi(pred[..., 2] - truth[..., 2])))
+    err[..., 3] = np.hypot(err[..., 0], err[..., 1])
+    return err
+
+
+def error_table(per_run: dict, runs: list[Run], horizons_s) -> pd.DataFrame:
+    """``errors.csv`` rows from per-run errors ``{(model, commands): [errors (S, nh, 4) per run]}``."""
+    rows = []
+    for (model, commands), errs in per_run.items():
+        kinds = {}
+        for run, e in zip(runs, errs):
+            if e is not None and e.size:
+                kinds.setdefault(run.kind, []).append(e)
+        groups = {k: np.concatenate(v) for k, v in kinds.items()}
+        if groups:
+            groups["all"] = np.concatenate(list(groups.values()))
+        for kind, e in groups.items():
+            mae = e.mean(axis=0)
+            for h, horizon in enumerate(horizons_s):
+                for s, state in enumerate(STATES):
+                    rows.append((model, kind, state, float(horizon), float(mae[h, s]), commands))
+    df = pd.DataFrame(rows, columns=list(ERROR_COLUMNS))
+    order = {m: i for i, m in enumerate(MODEL_ORDER)}
+    korder = {k: i for i, k in enumerate(RUN_KINDS + ("all",))}
+    df = df.sort_values(by=["commands", "model", "kind", "state", "horizon_s"],
+                        key=lambda c: c.map(order) if c.name == "model" else
+                        (c.map(korder) if c.name == "kind" else
+                         (c.map({m: i for i, m in enumerate(COMMAND_MODES)}) if c.name == "commands" else c)))
+    return df.reset_index(drop=True)
+
+
+# --------------------------------------------------------------------------------------
+# Benchmark
+# --------------------------------------------------------------------------------------
+
+
+@dataclass
+class BenchmarkResult:
+    """Everything the benchmark computed (for figures and docs)."""
+
+    errors: pd.DataFrame
+    train: list[Run]
+    test: list[Run]
+    predictors: dict
+    horizons_s: tuple
+    config: ManoeuvreConfig
+    timings_s: dict
+    n_starts: dict
+
+
+def run_manoeuvre_benchmark(vessel, train_dir, test_dir, horizons_s=HORIZONS_S, out_dir="manoeuvre-benchmark",
+                            seed: int = 0, quick: bool = False, *, config: ManoeuvreConfig | None = None,
+                            command: str | None = None, figures_dir=None, progress: bool = False):
+    """Train on the runs in ``train_dir``, forecast every run in ``test_dir``, write tables.
+
+    Parameters
+    ----------
+    vessel : Vessel or str
+        Vessel file or packaged name (``"esso_osaka_model"``).
+    train_dir, test_dir : path
+        Folders of runs in the Esso Osaka CSV format (searched recursively). A run found
+        in both is refused (train and test must differ).
+    horizons_s : sequence of float
+        Forecast horizons [s].
+    out_dir : path
+        Where ``errors.csv`` (columns :data:`ERROR_COLUMNS`) and ``README.md`` go.
+    seed : int
+        Seed of the ensembles.
+    quick : bool
+        Use :meth:`ManoeuvreConfig.quick` (a smoke run).
+    config : ManoeuvreConfig, optional
+        Overrides ``quick``.
+    command : str, optional
+        The command line to quote in the Markdown.
+    figures_dir : path, optional
+        Also write the figures (``esso_*.png``) there.
+
+    Returns
+    -------
+    BenchmarkResult
+    """
+    from .vessel import Vessel, load_vessel
+
+    v = vessel if isinstance(vessel, Vessel) else load_vessel(vessel)
+    cfg = config or (ManoeuvreConfig.quick(seed) if quick else ManoeuvreConfig())
+    cfg = replace(cfg, ensemble=replace(cfg.ensemble, seed=seed))
+    horizons_s = tuple(float(h) for h in horizons_s)
+    if not horizons_s or min(horizons_s) <= 0:
+        raise ValueError(f"horizons_s: need positive horizons, got {horizons_s}")
+    train = load_runs(train_dir, v, step_s=cfg.step_s)
+    test = load_runs(test_dir, v, step_s=cfg.step_s)
+    both = {r.run.path.resolve() for r in train} & {r.run.path.resolve() for r in test}
+    if both:
+        raise ValueError(f"test_dir: {len(both)} run(s) are also in train_dir (e.g. {sorted(both)[0].name}); "
+                         "train and test runs must differ")
+    dt = float(np.median(np.diff(test[0].arrays.time_s)))
+    steps = np.array([int(round(h / dt)) for h in horizons_s])
+    if np.any(steps < 1):
+        raise ValueError(f"horizons_s: every horizon must be at least one step ({dt:g} s)")
+
+    predictors = make_predictors(v, cfg)
+    timings = {}
+    for name, p in predictors.items():
+        t0 = time.perf_counter()
+        _fit(name, p, train, cfg)
+        timings[f"fit_{name}"] = time.perf_counter() - t0
+
+    per_run: dict = {}
+    n_starts = {}
+    for run in test:
+        rows = start_rows(run.arrays, int(steps.max()), cfg.start_every_s)
+        n_starts[run.name] = int(rows.size)
+        for name, p in predictors.items():
+            for mode in COMMAND_MODES:
+                t0 = time.perf_counter()
+                if rows.size == 0:
+                    err = None
+                elif mode == "held":
+                    err = forecast_errors(lambda a, st, h: p.forecast(a, st, horizon_s=h), run.arrays, rows, steps)
+                else:
+                    probe = known_commands(p, run.arrays, run.arrays.time_s[rows[:1]], float(steps[0] * dt))
+                    err = None if probe is None else forecast_errors(
+                        lambda a, st, h: known_commands(p, a, st, h), run.arrays, rows, steps)
+                per_run.setdefault((name, mode), []).append(err)
+                timings[f"forecast_{name}_{mode}"] = timings.get(f"forecast_{name}_{mode}", 0.0) + \
+                    time.perf_counter() - t0
+        if progress:
+            print(f"  {run.name}: {rows.size} starts", flush=True)
+    per_run = {k: v_ for k, v_ in per_run.items() if any(e is not None for e in v_)}
+    errors = error_table(per_run, test, horizons_s)
+
+    out_dir = Path(out_dir)
+    atomic_write(out_dir / "errors.csv", lambda fh: fh.write(errors.to_csv(index=False).encode()))
+    result = BenchmarkResult(errors, train, test, predictors, horizons_s, cfg, timings, n_starts)
+    md = markdown_report(result, command=command)
+    atomic_write(out_dir / "README.md", lambda fh: fh.write(md.encode()))
+    if figures_dir is not None:
+        write_figures(result, figures_dir)
+    return result
+
+
+# --------------------------------------------------------------------------------------
+# Markdown
+# --------------------------------------------------------------------------------------
+
+
+def pivot(errors: pd.DataFrame, state: str, commands: str) -> pd.DataFrame:
+    """MAE table: rows (kind, model), columns horizons [s]."""
+    sel = errors[(errors.state == state) & (errors.commands == commands)]
+    if sel.empty:
+        return pd.DataFrame()
+    tab = sel.pivot_table(index=["kind", "model"], columns="horizon_s", values="mae", sort=False)
+    tab.columns = [f"{h:g} s" for h in tab.columns]
+    return tab
+
+
+def _md_table(tab: pd.DataFrame, digits: int = 3) -> str:
+    if tab.empty:
+        return "(no rows)\n"
+    cols = ["kind", "model"] + list(tab.columns)
+    lines = ["| " + " | ".join(cols) + " |", "|" + "---|" * len(cols)]
+    best = tab.groupby(level=0, sort=False).transform("min")
+    for (kind, model), row in tab.iterrows():
+        cells = []
+        for c in tab.columns:
+            val = f"{row[c]:.{digits}f}"
+            cells.append(f"**{val}**" if np.isclose(row[c], best.loc[(kind, model), c]) else val)
+        lines.append(f"| {kind} | {model} | " + " | ".join(cells) + " |")
+    return "\n".join(lines) + "\n"
+
+
+def wins(errors: pd.DataFrame, model: str, other: str, state: str = "distance_m", commands: str = "known"):
+    """(kind, horizon) cells where ``model`` has a lower MAE than ``other``, and the total cell count."""
+    a = pivot(errors, state, commands)
+    if a.empty:
+        return [], 0
+    cells, total = [], 0
+    for kind in a.index.get_level_values(0).unique():
+        if (kind, model) not in a.index or (kind, other) not in a.index:
+            continue
+        for c in a.columns:
+            total += 1
+            if a.loc[(kind, model), c] < a.loc[(kind, other), c]:
+                cells.append((kind, c))
+    return cells, total
+
+
+def markdown_report(result: BenchmarkResult, *, command: str | None = None) -> str:
+    """The benchmark's Markdown summary (tables of MAE by kind, model and horizon)."""
+    e = result.errors
+    lines = ["# Manoeuvring benchmark: Esso Osaka free-running model tests", ""]
+    if command:
+        lines += ["Made by:", "", "```", command, "```", ""]
+    lines += [f"Train runs: {len(result.train)} ({', '.join(sorted({r.kind for r in result.train}))}); "
+              f"test runs: {len(result.test)}; start times: {sum(result.n_starts.values())} "
+              f"(every {result.config.start_every_s} s); horizons {', '.join(f'{h:g}' for h in result.horizons_s)} s.",
+              "", "Test runs: " + ", ".join(f"`{r.name}` ({r.kind})" for r in result.test), ""]
+    if "data_only" not in result.predictors:
+        lines += ["The data-only ensemble (`DataOnlyPredictor`) is not available in this version of "
+                  "`hybridship.predictors`; its rows are missing.", ""]
+    for commands in COMMAND_MODES:
+        for state, unit in (("distance_m", "m"), ("heading_deg", "deg")):
+            lines += [f"## {state.split('_')[0]} error [{unit}], commands {commands}", "",
+                      _md_table(pivot(e, state, commands), 3 if unit == "m" else 2), ""]
+    for other in ("dynamic", "dead_reckoning", "data_only"):
+        cells, total = wins(e, "hybrid", other)
+        if total:
+            lines.append(f"- hybrid below {other} (distance, known commands): {len(cells)} of {total} "
+                         "kind x horizon cells")
+    lines += ["", f"All states (x0, y0, heading, distance) are in `errors.csv`.", "", "Cite: " + CITATION, ""]
+    return "\n".join(lines)
+
+
+# --------------------------------------------------------------------------------------
+# Figures
+# --------------------------------------------------------------------------------------
+
+_COLOURS = {"hybrid": "tab:red", "dynamic": "tab:blue", "data_only": "tab:green", "dead_reckoning": "tab:grey"}
+
+
+def learned_residual(hybrid, runs: list[Run]) -> pd.DataFrame:
+    """The hybrid's residual on the training rows, beside speed and rudder angle.
+
+    Returns one row per trainable sample: ``u_m_s``, ``rudder_deg`` (the first rudder's
+    angle), the measured residual ``res_*`` (body-frame acceleration the physics misses)
+    and the ensemble's prediction of it ``pred_*`` (learned deviation plus bias).
+    """
+    from .residual.features import prepare_log
+
+    out = []
+    K = len(hybrid.model.vessel.thrusters)
+    for run in runs:
+        prep = prepare_log(hybrid.model, run.arrays, hybrid.residual_config)
+        rows = prep.trainable_rows()
+        if rows.size == 0:
+            continue
+        mean, _ = hybrid.ensemble.predict(prep.features(rows))
+        bias = prep.bias_body(rows - 1, run.arrays.eta[rows, 2])
+        pred = mean + bias
+        res = prep.residual[rows]
+        delta = run.arrays.azimuth_rad[rows, K] if run.arrays.azimuth_rad.shape[1] > K else np.zeros(rows.size)
+        out.append(pd.DataFrame({
+            "kind": run.kind, "u_m_s": run.arrays.nu[rows, 0], "rudder_deg": np.degrees(delta),
+            "res_u_m_s2": res[:, 0], "res_v_m_s2": res[:, 1], "res_r_rad_s2": res[:, 2],
+            "pred_u_m_s2": pred[:, 0], "pred_v_m_s2": pred[:, 1], "pred_r_rad_s2": pred[:, 2]}))
+    return pd.concat(out, ignore_index=True) if out else pd.DataFrame()
+
+
+def _savefig(fig, path):
+    atomic_write(path, lambda fh: fig.savefig(fh, format="png", dpi=110, bbox_inches="tight"))
+
+
+def write_figures(result: BenchmarkResult, figures_dir) -> list[Path]:
+    """Figures ``esso_tracks.png``, ``esso_error_vs_horizon.png`` and ``esso_residual.png``."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    figures_dir = Path(figures_dir)
+    paths = []
+    H = float(max(result.horizons_s))
+
+    # 1. measured tracks with forecasts (known commands) overlaid, one test run per kind
+    kinds = [k for k in RUN_KINDS if any(r.kind == k for r in result.test)]
+    fig, axes = plt.subplots(1, len(kinds), figsize=(4.2 * len(kinds), 4.4), squeeze=False)
+    for ax, kind in zip(axes[0], kinds):
+        run = max((r for r in result.test if r.kind == kind), key=lambda r: len(r.arrays.time_s))
+        a = run.arrays
+        ax.plot(a.eta[:, 1], a.eta[:, 0], color="k", lw=1.0, label="measured")
+        dt = float(np.median(np.diff(a.time_s)))
+        rows = start_rows(a, int(round(H / dt)), None)
+        span = rows[-1] - rows[0] if rows.size else 0
+        pick = rows[np.unique(np.linspace(0, rows.size - 1, 12).round().astype(int))] if span else rows
+        for name in ("dynamic", "hybrid"):
+            p = result.predictors.get(name)
+            if p is None or pick.size == 0:
+                continue
+            fc = known_commands(p, a, a.time_s[pick], H)
+            for k in range(len(pick)):
+                ax.plot(fc.eta[k, :, 1], fc.eta[k, :, 0], color=_COLOURS[name], lw=1.0, alpha=0.8,
+                        label=name if k == 0 else None)
+            ax.plot(fc.eta[:, 0, 1], fc.eta[:, 0, 0], "o", color="k", ms=2.5)
+        ax.set_title(f"{kind}: {run.name}", fontsize=8)
+        ax.set_xlabel("y0 [m]")
+        ax.set_ylabel("x0 [m]")
+        ax.set_aspect("equal", adjustable="datalim")
+        ax.legend(fontsize=7)
+    fig.suptitle(f"Measured tracks and {H:g}-s forecasts (logged commands known) from 12 starts spread over "
+                 "each run", fontsize=9)
+    paths.append(figures_dir / "esso_tracks.png")
+    _savefig(fig, paths[-1])
+    plt.close(fig)
+
+    # 2. error vs horizon per kind
+    e = result.errors
+    panels = [k for k in RUN_KINDS + ("all",) if k in set(e.kind)]
+    fig, axes = plt.subplots(1, len(panels), figsize=(3.3 * len(panels), 3.2), squeeze=False, sharey=False)
+    for ax, kind in zip(axes[0], panels):
+        for model in MODEL_ORDER:
+            for mode, ls in (("known", "-"), ("held", "--")):
+                sel = e[(e.kind == kind) & (e.model == model) & (e.commands == mode) & (e.state == "distance_m")]
+                if not sel.empty:
+                    ax.plot(sel.horizon_s, sel.mae, ls, marker="o", ms=3, color=_COLOURS.get(model, "k"),
+                            label=f"{model} ({mode})")
+        ax.set_title(kind, fontsize=9)
+        ax.set_xlabel("horizon [s]")
+        ax.set_yscale("log")
+        ax.grid(alpha=0.3)
+    axes[0, 0].set_ylabel("mean distance error [m]")
+    axes[0, -1].legend(fontsize=6)
+    paths.append(figures_dir / "esso_error_vs_horizon.png")
+    _savefig(fig, paths[-1])
+    plt.close(fig)
+
+    # 3. learned residual against speed and rudder angle
+    hyb = result.predictors.get("hybrid")
+    if hyb is not None and hyb.ensemble is not None:
+        df = learned_residual(hyb, result.train)
+        if not df.empty:
+            u_edges = np.linspace(-0.1, 0.6, 15)
+            d_edges = np.linspace(-36, 36, 13)
+            fig, axes = plt.subplots(2, 3, figsize=(12, 6.5), sharex=True, sharey=True)
+            comps = (("u_m_s2", "surge [m/s²]"), ("v_m_s2", "sway [m/s²]"), ("r_rad_s2", "yaw [rad/s²]"))
+            for col, (c, label) in enumerate(comps):
+                lim = None
+                for row, (prefix, what) in enumerate((("res_", "measured residual"), ("pred_", "learned"))):
+                    stat = _binned_mean(df["u_m_s"], df["rudder_deg"], df[prefix + c], u_edges, d_edges)
+                    if lim is None:
+                        lim = np.nanpercentile(np.abs(stat), 95) or 1.0
+                    im = axes[row, col].pcolormesh(u_edges, d_edges, stat.T, cmap="RdBu_r", vmin=-lim, vmax=lim)
+                    axes[row, col].set_title(f"{what}, {label}", fontsize=9)
+                    fig.colorbar(im, ax=axes[row, col])
+                axes[1, col].set_xlabel("u [m/s]")
+            axes[0, 0].set_ylabel("rudder angle [deg]")
+            axes[1, 0].set_ylabel("rudder angle [deg]")
+            fig.suptitle("Acceleration the published physics misses on the training runs (bin means)", fontsize=10)
+            paths.append(figures_dir / "esso_residual.png")
+            _savefig(fig, paths[-1])
+            plt.close(fig)
+    return paths
+
+
+def _binned_mean(x, y, z, x_edges, y_edges, min_count: int = 20):
+    """Mean of z in (x, y) bins (NaN where fewer than ``min_count`` samples)."""
+    x, y, z = (np.asarray(a, float) for a in (x, y, z))
+    ix = np.digitize(x, x_edges) - 1
+    iy = np.digitize(y, y_edges) - 1
+    ok = (ix >= 0) & (ix < len(x_edges) - 1) & (iy >= 0) & (iy < len(y_edges) - 1) & np.isfinite(z)
+    shape = (len(x_edges) - 1, len(y_edges) - 1)
+    s = np.zeros(shape)
+    n = np.zeros(shape)
+    np.add.at(s, (ix[ok], iy[ok]), z[ok])
+    np.add.at(n, (ix[ok], iy[ok]), 1)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        return np.where(n >= min_count, s / n, np.nan)

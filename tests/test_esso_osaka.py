@@ -1,0 +1,261 @@
+"""Esso Osaka free-running model tests: loader, sign conventions and the physics basis against the data.
+
+Reads ``../shared/data/esso-osaka-frt/`` (or ``$HYBRIDSHIP_ESSO_OSAKA_DIR``); the data are
+CC BY-NC and never copied into the repository, so the module is skipped without them.
+"""
+
+from __future__ import annotations
+
+import gzip
+import shutil
+
+import numpy as np
+import pandas as pd
+import pytest
+
+from hybridship.logs.esso_osaka import (ESSO_COLUMNS, RUN_KINDS, convention_checks, default_data_dir,
+                                        esso_log_arrays, list_runs, read_esso_osaka, read_esso_raw, run_kind)
+from hybridship.logs.io import LogFormatError, validate_log
+from hybridship.physics.model import DynamicModel
+
+DATA = default_data_dir()
+if not (DATA / "data").is_dir():
+    pytest.skip(f"Esso Osaka data not found at {DATA / 'data'} (set HYBRIDSHIP_ESSO_OSAKA_DIR to the "
+                "esso-osaka-frt folder to run these tests)", allow_module_level=True)
+
+
+@pytest.fixture(scope="module")
+def runs():
+    return list_runs(DATA / "data")
+
+
+@pytest.fixture(scope="module")
+def raws(runs):
+    return {r.name: read_esso_raw(r.path) for r in runs}
+
+
+def test_runs_kinds_and_duplicates(runs):
+    manifest = pd.read_csv(DATA / "MANIFEST.csv")
+    names = {r.name for r in runs}
+    # the manifest's files, less the truncated duplicate whose full run is present
+    assert len(runs) == len(manifest) - 1
+    assert "turn_cut_14-Sep-2020_15_58_08" not in names and "turn_14-Sep-2020_15_58_08" in names
+    assert "turn_cut_14-Sep-2020_16_09_02" in names  # no uncut twin here: kept
+    assert len(list_runs(DATA / "data", include_duplicates=True)) == len(manifest)
+    assert {r.kind for r in runs} == set(RUN_KINDS)
+    for r in runs:
+        assert r.kind == manifest.loc[manifest.file == r.path.relative_to(DATA).as_posix(), "kind"].item()
+    pieces = {r.recording for r in runs if r.name.startswith("random_06-Aug-2020_16_24_25")}
+    assert pieces == {"random_06-Aug-2020_16_24_25"}
+
+
+def test_kind_from_name_without_manifest(tmp_path, runs):
+    src = next(r for r in runs if r.kind == "zigzag").path
+    dst = tmp_path / "zigzag_copy.csv.gz"
+    shutil.copy(src, dst)
+    assert run_kind(dst) == "zigzag"
+    with pytest.raises(ValueError, match="run kind"):
+        run_kind(tmp_path / "mystery.csv")
+
+
+def test_plain_and_gzip_give_the_same_log(tmp_path, runs):
+    src = next(r for r in runs if r.kind == "berthing").path
+    plain = tmp_path / "berthing_x.csv"
+    with gzip.open(src, "rb") as fi, open(plain, "wb") as fo:
+        shutil.copyfileobj(fi, fo)
+    pd.testing.assert_frame_equal(read_esso_osaka(src), read_esso_osaka(plain))
+
+
+def test_trailing_empty_rows_dropped_and_bad_files_refused(tmp_path, runs, raws):
+    z = next(r for r in runs if r.name == "zigzag_31-Jul-2020_13_50_28")
+    manifest = pd.read_csv(DATA / "MANIFEST.csv").set_index("file")
+    row = manifest.loc[z.path.relative_to(DATA).as_posix()]
+    assert len(raws[z.name]) == row.rows - row.rows_all_nan
+    bad = raws[z.name].drop(columns=["n_prop [rps]"])
+    bad.to_csv(tmp_path / "zigzag_bad.csv", index=False)
+    with pytest.raises(LogFormatError, match="n_prop"):
+        read_esso_raw(tmp_path / "zigzag_bad.csv")
+    hole = raws[z.name].copy()
+    hole.iloc[5, 3] = np.nan
+    hole.to_csv(tmp_path / "zigzag_hole.csv", index=False)
+    with pytest.raises(LogFormatError, match=r"y_position_mid \[m\].*row 5"):
+        read_esso_raw(tmp_path / "zigzag_hole.csv")
+
+
+def test_log_is_valid_and_in_si_after_conversion(runs, raws):
+    r = next(r for r in runs if r.kind == "random")
+    log = read_esso_osaka(r.path)
+    validate_log(log, thruster_names=["propeller", "rudder"], rotatable=[False, True])
+    raw = raws[r.name]
+    a = esso_log_arrays(log)
+    assert np.median(np.diff(a.time_s)) == pytest.approx(0.1)
+    np.testing.assert_allclose(a.rpm[:, 0], 60 * raw["n_prop [rps]"])
+    np.testing.assert_allclose(a.azimuth_rad[:, 1], raw["delta_rudder [rad]"], atol=1e-12)
+    np.testing.assert_allclose(a.nu[:, 2], raw["r_angvelo [rad/s]"], atol=1e-12)
+    np.testing.assert_allclose(np.angle(np.exp(1j * (a.eta[:, 2] - raw["psi_hat [rad]"]))), 0, atol=1e-9)
+    assert a.has_wind and a.wind[:, 0].max() > 0
+    assert (a.rpm[:, 0] < 0).any()  # random runs include astern
+
+
+def test_sign_conventions_hold_in_every_run(runs, raws):
+    for r in runs:
+        c = convention_checks(raws[r.name])
+        ok = np.hypot(c["rms_north_m_s"], c["rms_east_m_s"])
+        flipped = np.hypot(c["rms_north_flipped_psi_m_s"], c["rms_east_flipped_psi_m_s"])
+        assert ok < 0.7 * flipped, r.name                  # psi from +x0 towards +y0
+        assert c["rms_v_m_s"] < 0.5 * c["rms_v_flipped_m_s"], r.name  # vm positive to starboard
+        assert c["corr_r_dpsi"] > 0.3, r.name               # r is d(psi)/dt, clockwise
+        assert c["corr_delta_r5"] > 0.2, r.name             # + rudder turns to starboard
+        assert c["rms_apparent_wind_m_s"] < 0.02, r.name    # wind 'from' directions as documented
+
+
+def test_velocity_lag_of_about_0_6_s(raws):
+    raw = raws["random_03-Aug-2020_11_04_37"]
+    lags = np.arange(0.0, 1.3, 0.1)
+    err = [convention_checks(raw, lag_s=lag)["rms_east_m_s"] for lag in lags]
+    assert 0.3 <= lags[int(np.argmin(err))] <= 0.9
+
+
+def test_turning_runs_steady_rate_has_the_sign_of_the_rudder(runs, raws):
+    for r in (r for r in runs if r.kind == "turning"):
+        raw = raws[r.name]
+        d = raw["delta_rudder [rad]"].to_numpy()
+        rr = raw["r_angvelo [rad/s]"].to_numpy()
+        held = np.abs(d) > np.radians(15)
+        tail = held & (np.arange(len(d)) > len(d) // 2)
+        assert np.sign(np.median(rr[tail])) == np.sign(np.median(d[tail])), r.name
+
+
+def _held_turn(raw):
+    """Last half of the longest stretch with the rudder held beyond 15 deg at constant n, or None."""
+    d = raw["delta_rudder [rad]"].to_numpy()
+    n = raw["n_prop [rps]"].to_numpy()
+    key = np.where(np.abs(d) > np.radians(15), np.round(d, 2) * 1000 + np.round(n, 1), np.nan)
+    best, start = (0, 0), 0
+    for i in range(1, len(d) + 1):
+        if i == len(d) or not key[i] == key[start]:
+            if np.isfinite(key[start]) and i - start > best[1] - best[0]:
+                best = (start, i)
+            start = i
+    a, b = best
+    if (b - a) * 0.1 < 120.0:  # less than two minutes held: no steady turn
+        return None
+    return slice((a + b) // 2, b)
+
+
+def test_published_physics_reproduces_the_steady_turning_rate(runs, raws):
+    """Physics basis (no fitting): steady turn rates within a factor 1.5 of the data's."""
+    model = DynamicModel("esso_osaka_model")
+    checked = 0
+    for r in (r for r in runs if r.kind == "turning"):
+        raw = raws[r.name]
+        tail = _held_turn(raw)
+        if tail is None:
+            continue
+        d = raw["delta_rudder [rad]"].to_numpy()[tail]
+        n = raw["n_prop [rps]"].to_numpy()[tail]
+        rate_data = np.median(raw["r_angvelo [rad/s]"].to_numpy()[tail])
+        res = model.rollout([0, 0, 0], [0.3, 0, 0], 3000, dt_s=0.1, rpm=[60 * n[0], 0], rudder_rad=[d[0]])
+        rate_model = res.nu[0, -1, 2]
+        assert 1 / 1.5 < rate_model / rate_data < 1.5, (r.name, rate_model, rate_data)
+        checked += 1
+    assert checked >= 8
+
+
+def test_columns_constant():
+    assert len(ESSO_COLUMNS) == 13 and ESSO_COLUMNS[0] == "t [s]"
+
+
+# ----------------------------------------------------------------------------- benchmark
+
+SMALL_TRAIN = ("berthing/berthing_12-Nov-2020_13_37_05.csv.gz", "zigzag/zigzag_31-Jul-2020_13_57_45.csv.gz")
+SMALL_TEST = ("berthing/berthing_12-Nov-2020_13_09_11.csv.gz", "zigzag/zigzag_31-Jul-2020_13_14_21.csv.gz")
+
+
+def _link(tmp_path, name, files):
+    d = tmp_path / name
+    for f in files:
+        (d / f).parent.mkdir(parents=True, exist_ok=True)
+        (d / f).symlink_to(DATA / "data" / f)
+    return d
+
+
+def _tiny_config():
+    from dataclasses import replace
+
+    from hybridship.manoeuvre import ManoeuvreConfig
+
+    q = ManoeuvreConfig.quick()
+    return replace(q, start_every_s=10.0, ensemble=replace(q.ensemble, n_members=2, max_epochs=5))
+
+
+def test_manoeuvre_benchmark_writes_the_tables(tmp_path):
+    from hybridship.manoeuvre import ERROR_COLUMNS, STATES, run_manoeuvre_benchmark
+
+    train, test = _link(tmp_path, "train", SMALL_TRAIN), _link(tmp_path, "test", SMALL_TEST)
+    res = run_manoeuvre_benchmark("esso_osaka_model", train, test, (5, 10), tmp_path / "out", seed=0,
+                                  config=_tiny_config(), command="hybridship benchmark manoeuvre ...")
+    e = pd.read_csv(tmp_path / "out" / "errors.csv")
+    assert tuple(e.columns) == ERROR_COLUMNS
+    assert set(e.state) == set(STATES) and set(e.horizon_s) == {5.0, 10.0}
+    assert set(e.kind) == {"berthing", "zigzag", "all"} and set(e.commands) == {"known", "held"}
+    assert {"hybrid", "dynamic", "dead_reckoning"} <= set(e.model)
+    assert (e.mae >= 0).all() and np.isfinite(e.mae).all()
+    # distance is at least as large as either coordinate error, and errors grow with the horizon
+    piv = e.pivot_table(index=["model", "kind", "commands", "horizon_s"], columns="state", values="mae")
+    assert (piv.distance_m >= piv[["x0_m", "y0_m"]].max(axis=1) - 1e-12).all()
+    d = e[(e.state == "distance_m")].pivot_table(index=["model", "kind", "commands"], columns="horizon_s",
+                                                 values="mae")
+    assert (d[10.0] > d[5.0]).all()
+    md = (tmp_path / "out" / "README.md").read_text()
+    assert "doi:10.1007/s00773-021-00867-1" in md and "hybridship benchmark manoeuvre" in md
+    # known commands change the physics forecast, held ones are what DynamicPredictor does
+    known = e[(e.model == "dynamic") & (e.commands == "known")].mae.to_numpy()
+    held = e[(e.model == "dynamic") & (e.commands == "held")].mae.to_numpy()
+    assert not np.allclose(known, held)
+    assert len(res.test) == 2
+
+
+def test_benchmark_refuses_the_same_run_in_train_and_test(tmp_path):
+    from hybridship.manoeuvre import run_manoeuvre_benchmark
+
+    train = _link(tmp_path, "train", SMALL_TRAIN)
+    test = _link(tmp_path, "test", SMALL_TRAIN[:1])
+    with pytest.raises(ValueError, match="also in train_dir"):
+        run_manoeuvre_benchmark("esso_osaka_model", train, test, (5,), tmp_path / "out", config=_tiny_config())
+
+
+def test_known_commands_adapters(tmp_path):
+    """Known commands: equal to held when the commands are constant, to a direct rollout otherwise."""
+    from hybridship.logs.esso_osaka import esso_to_log
+    from hybridship.logs.io import log_to_arrays
+    from hybridship.manoeuvre import Run, _fit, known_commands, make_predictors
+    from hybridship.logs.esso_osaka import EssoRun
+    from hybridship.vessel import load_vessel
+
+    v = load_vessel("esso_osaka_model")
+    cfg = _tiny_config()
+    preds = make_predictors(v, cfg)
+    train_arrays = esso_log_arrays(DATA / "data" / SMALL_TRAIN[0], v)
+    _fit("hybrid", preds["hybrid"], [Run(EssoRun(DATA, "x", "berthing", "x"), train_arrays)], cfg)
+    raw = read_esso_raw(DATA / "data" / SMALL_TEST[1])
+    log = esso_to_log(raw)
+    a = log_to_arrays(log, thruster_names=v.thruster_names, rotatable=v.rotatable)
+    const = log.copy()
+    const["propeller_rpm"] = 600.0
+    const["rudder_azimuth_deg"] = 10.0
+    c = log_to_arrays(const, thruster_names=v.thruster_names, rotatable=v.rotatable)
+    starts = a.time_s[[30, 200, 500]]
+    for name in ("dynamic", "hybrid"):
+        p = preds[name]
+        held, known = p.forecast(c, starts, horizon_s=10.0), known_commands(p, c, starts, 10.0)
+        np.testing.assert_allclose(known.eta, held.eta, atol=1e-12, err_msg=name)
+        assert not np.allclose(known_commands(p, a, starts, 10.0).eta, p.forecast(a, starts, horizon_s=10.0).eta)
+    # the physics with known commands is the model's rollout with the logged per-step commands
+    p = preds["dynamic"]
+    fc = known_commands(p, a, starts, 10.0)
+    idx = np.searchsorted(a.time_s, starts)
+    rows = idx[:, None] + np.arange(100)[None, :]
+    direct = p.model.rollout(fc.eta[:, 0], fc.nu[:, 0], 100, dt_s=0.1, rpm=a.rpm[rows], azimuth_rad=a.azimuth_rad[rows],
+                             wind=a.wind[idx])
+    np.testing.assert_allclose(fc.eta, direct.eta, atol=1e-12)

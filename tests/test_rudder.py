@@ -1,0 +1,221 @@
+"""Rudder (MMG standard method) and main propeller: physics, vessel file and model interface."""
+
+from __future__ import annotations
+
+import copy
+import math
+import tomllib
+
+import numpy as np
+import pytest
+
+from hybridship.physics.model import DynamicModel
+from hybridship.physics.rudder import rudder_forces, rudder_inflow_scalar
+from hybridship.vessel import VesselFileError, packaged_vessel_text, vessel_from_dict
+
+RPM8 = 8.0 * 60.0  # 8 rev/s, the turning-test propeller speed of the Esso Osaka model
+
+
+def esso_dict():
+    return tomllib.loads(packaged_vessel_text("esso_osaka_model"))
+
+
+@pytest.fixture(scope="module")
+def esso():
+    return DynamicModel("esso_osaka_model")
+
+
+@pytest.fixture(scope="module")
+def esso_symmetric():
+    """The Esso model with equal flow straightening on both sides (a port/starboard symmetric rudder)."""
+    d = esso_dict()
+    d["rudders"][0]["flow_straightening_pos"] = d["rudders"][0]["flow_straightening_neg"]
+    return DynamicModel(vessel_from_dict(d, "symmetric.toml"))
+
+
+# ----------------------------------------------------------------------------- forces
+
+
+def test_positive_rudder_angle_turns_to_starboard(esso):
+    F = rudder_forces(esso, [0.3, 0.0, 0.0], [math.radians(20)], [2.0])[0, 0]
+    assert F[1] < 0.0 < F[2]          # stern pushed to port, bow turns to starboard
+    assert F[0] < 0.0                 # rudder drag
+    F_neg = rudder_forces(esso, [0.3, 0.0, 0.0], [math.radians(-20)], [2.0])[0, 0]
+    assert F_neg[1] > 0.0 > F_neg[2]
+    # and the integrated ship: steady yaw rate has the sign of delta
+    for deg in (20.0, -35.0):
+        res = esso.rollout([0, 0, 0], [0.3, 0, 0], 1500, dt_s=0.1, rpm=[RPM8, 0.0],
+                           rudder_rad=[math.radians(deg)])
+        assert np.sign(res.nu[0, -1, 2]) == np.sign(deg)
+        assert np.sign(res.eta[0, -1, 2]) == np.sign(deg)
+
+
+@pytest.mark.parametrize("thrust", [0.0, 0.5, 5.0, -2.0])
+@pytest.mark.parametrize("u", [0.0, 0.3, -0.1])
+def test_zero_angle_and_symmetric_inflow_give_no_lateral_force(esso, thrust, u):
+    F = rudder_forces(esso, [u, 0.0, 0.0], [0.0], [thrust])[0, 0]
+    assert F == pytest.approx([0.0, 0.0, 0.0], abs=1e-12)
+
+
+def test_slipstream_increases_force_with_propeller_loading(esso):
+    thrusts = np.linspace(0.0, 6.0, 13)
+    delta = math.radians(15)
+    for u in (0.0, 0.1, 0.4):
+        F = rudder_forces(esso, np.tile([u, 0.0, 0.0], (13, 1)), np.full((13, 1), delta), thrusts[:, None])[:, 0]
+        assert np.all(np.diff(F[:, 2]) > 0.0), u       # yaw moment grows with thrust
+        assert np.all(np.diff(-F[:, 1]) > 0.0), u
+    # at rest only the slipstream makes a force; without thrust there is none
+    assert rudder_forces(esso, [0.0, 0.0, 0.0], [delta], [0.0])[0, 0] == pytest.approx([0, 0, 0], abs=1e-12)
+    assert abs(rudder_forces(esso, [0.0, 0.0, 0.0], [delta], [3.0])[0, 0, 2]) > 1e-3
+    # a reversing propeller's race runs forward: the rudder sees the plain wake
+    np.testing.assert_allclose(rudder_forces(esso, [0.2, 0, 0], [delta], [-3.0]),
+                               rudder_forces(esso, [0.2, 0, 0], [delta], [0.0]), rtol=1e-12)
+
+
+def test_mirror_symmetry(esso, esso_symmetric):
+    rng = np.random.default_rng(0)
+    nu = np.column_stack([rng.uniform(-0.1, 0.5, 50), rng.uniform(-0.1, 0.1, 50), rng.uniform(-0.1, 0.1, 50)])
+    delta = rng.uniform(-0.6, 0.6, (50, 1))
+    T = rng.uniform(-1.0, 5.0, (50, 1))
+    mirror = nu * [1, -1, -1]
+    F = rudder_forces(esso_symmetric, nu, delta, T)
+    Fm = rudder_forces(esso_symmetric, mirror, -delta, T)
+    np.testing.assert_allclose(Fm, F * [1, -1, -1], atol=1e-12)
+    # the KVLCC2 flow straightening differs by side, so only the straight-inflow case is symmetric
+    straight = nu * [1, 0, 0]
+    np.testing.assert_allclose(rudder_forces(esso, straight, -delta, T), rudder_forces(esso, straight, delta, T)
+                               * [1, -1, -1], atol=1e-12)
+
+
+def test_reproduces_the_mmg_standard_formulae_ahead(esso):
+    """Independent transcription of Yasukawa & Yoshimura (2015) eqs. for u > 0, n > 0."""
+    v = esso.vessel
+    rd, pr = v.rudders[0], v.thrusters[0]
+    L, rho = v.particulars.L_pp_m, v.particulars.rho_water_kg_m3
+    u, vm, r, delta, n = 0.35, 0.02, 0.03, math.radians(12), 9.0
+    w = pr.wake_fraction
+    J = u * (1 - w) / (n * pr.diameter_m)
+    T = 1.7  # open-water thrust [N]
+    KT = T / (rho * n**2 * pr.diameter_m**4)
+    eta = pr.diameter_m / rd.span_m
+    kappa, eps = rd.slipstream_factor, rd.wake_ratio
+    uR = eps * u * (1 - w) * math.sqrt(eta * (1 + kappa * (math.sqrt(1 + 8 * KT / (math.pi * J**2)) - 1))**2
+                                       + (1 - eta))
+    U = math.hypot(u, vm)
+    beta = math.atan(-vm / u)
+    beta_R = beta - (rd.l_R_m / L) * (r * L / U)
+    gamma = rd.flow_straightening_neg if beta_R < 0 else rd.flow_straightening_pos
+    vR = U * gamma * beta_R
+    FN = 0.5 * rho * rd.area_m2 * (uR**2 + vR**2) * rd.f_alpha * math.sin(delta - math.atan(vR / uR))
+    XR = -(1 - rd.steering_resistance_deduction) * FN * math.sin(delta)
+    YR = -(1 + rd.hull_force_factor) * FN * math.cos(delta)
+    NR = -(rd.x_m + rd.hull_force_factor * rd.x_H_m) * FN * math.cos(delta)
+    F = rudder_forces(esso, [u, vm, r], [delta], [T])[0, 0]
+    # the kernel uses v_R = -gamma (v + l_R r), the small-angle form of U gamma beta_R
+    np.testing.assert_allclose(F, [XR, YR, NR], rtol=2e-3)
+
+
+def test_inflow_is_continuous_through_zero_and_astern_reverses_the_rudder(esso):
+    args = (0.08, 1000.0, 1.09, 0.5, 0.66)
+    for T in (0.0, 2.0):
+        lo = rudder_inflow_scalar(-1e-9, T, *args)
+        hi = rudder_inflow_scalar(1e-9, T, *args)
+        assert abs(hi - lo) < 1e-6
+    # going astern without thrust, the same rudder angle turns the other way
+    ahead = rudder_forces(esso, [0.2, 0, 0], [0.3], [0.0])[0, 0]
+    astern = rudder_forces(esso, [-0.2, 0, 0], [0.3], [0.0])[0, 0]
+    assert np.sign(ahead[2]) == -np.sign(astern[2]) != 0
+
+
+def test_lateral_inflow_loads_an_unmoved_rudder_as_damping(esso):
+    # the ship sliding to starboard: the rudder at 0 deg pushes the stern back to port
+    F = rudder_forces(esso, [0.3, 0.05, 0.0], [0.0], [1.0])[0, 0]
+    assert F[1] < 0.0
+    # yawing to starboard: the stern moves to port, the rudder resists (moment < 0)
+    F = rudder_forces(esso, [0.3, 0.0, 0.02], [0.0], [1.0])[0, 0]
+    assert F[2] < 0.0
+
+
+# ----------------------------------------------------------------------------- propeller
+
+
+def test_main_propeller_reverses_and_stops_the_ship(esso):
+    # ahead at 0.3 m/s, propeller reversed to -10 rev/s: the ship stops and goes astern
+    res = esso.rollout([0, 0, 0], [0.3, 0, 0], 1000, dt_s=0.1, rpm=[-600.0, 0.0])
+    u = res.nu[0, :, 0]
+    assert u[0] > 0.0 > u[-1]
+    _, parts, thrust = esso.acceleration([0, 0, 0], [0.3, 0, 0], rpm=[-600.0, 0.0], return_parts=True)
+    assert thrust[0, 0] < 0.0 and parts[0, 1, 0] < 0.0
+    # steady ahead speed grows with the shaft speed
+    speeds = [esso.rollout([0, 0, 0], [0.2, 0, 0], 2000, dt_s=0.1, rpm=[n * 60, 0.0]).nu[0, -1, 0]
+              for n in (6.0, 10.0, 14.0)]
+    assert 0.0 < speeds[0] < speeds[1] < speeds[2]
+
+
+# ----------------------------------------------------------------------------- interface
+
+
+def test_rudder_keyword_equals_angle_channel_and_per_step_equals_held(esso):
+    eta0 = np.array([[0, 0, 0.1], [1, 2, -0.5]])
+    nu0 = np.array([[0.3, 0.01, 0.0], [0.1, -0.02, 0.01]])
+    delta = np.array([[0.2], [-0.4]])
+    rpm = np.array([[RPM8, 0.0], [-300.0, 0.0]])
+    a = esso.rollout(eta0, nu0, 50, dt_s=0.1, rpm=rpm, azimuth_rad=np.column_stack([np.zeros(2), delta]))
+    b = esso.rollout(eta0, nu0, 50, dt_s=0.1, rpm=rpm[:, :1], rudder_rad=delta)
+    c = esso.rollout(eta0, nu0, 50, dt_s=0.1, rpm=np.repeat(rpm[:, None], 50, 1),
+                     rudder_rad=np.repeat(delta[:, None], 50, 1))
+    np.testing.assert_allclose(a.eta, b.eta, rtol=0, atol=1e-12)
+    np.testing.assert_allclose(a.eta, c.eta, rtol=0, atol=1e-12)
+    single = esso.rollout(eta0[1], nu0[1], 50, dt_s=0.1, rpm=rpm[1], rudder_rad=delta[1])
+    np.testing.assert_allclose(single.eta[0], a.eta[1], rtol=0, atol=1e-12)
+    # per-step rudder commands do act: a rudder put over halfway changes the end state
+    steps = np.repeat(delta[:, None], 50, 1).copy()
+    steps[:, 25:] = 0.0
+    d = esso.rollout(eta0, nu0, 50, dt_s=0.1, rpm=rpm, rudder_rad=steps)
+    assert np.abs(d.eta[:, -1] - a.eta[:, -1]).max() > 1e-4
+    # the model's one-step acceleration sees the rudder too
+    acc0 = esso.acceleration(eta0, nu0, rpm=rpm, rudder_rad=[[0.0], [0.0]])
+    acc1 = esso.acceleration(eta0, nu0, rpm=rpm, rudder_rad=delta)
+    assert np.all(np.abs(acc1[:, 2] - acc0[:, 2]) > 0.0)
+
+
+def test_channels_and_errors(esso):
+    v = esso.vessel
+    assert v.thruster_names == ["propeller", "rudder"] and v.rotatable == [False, True]
+    assert esso.n_actuators == 2 and esso.n_rudders == 1
+    with pytest.raises(ValueError, match="rudder_rad"):
+        esso.acceleration([0, 0, 0], [0.3, 0, 0], rpm=[RPM8], rudder_rad=[0.1, 0.2])
+    with pytest.raises(ValueError, match="rudder_rad"):
+        DynamicModel("gunnerus").acceleration([0, 0, 0], [0, 0, 0], rudder_rad=[0.1])
+    with pytest.raises(ValueError, match="rpm"):
+        esso.acceleration([0, 0, 0], [0.3, 0, 0], rpm=[RPM8, 0.0, 0.0])
+
+
+@pytest.mark.parametrize("edit, field", [
+    (lambda d: d["rudders"][0].__setitem__("propeller", "nope"), r"rudders\[0\].propeller"),
+    (lambda d: d["rudders"][0].__setitem__("area_m2", -0.01), r"rudders\[0\].area_m2"),
+    (lambda d: d["rudders"][0].__setitem__("name", "propeller"), "rudders: duplicate"),
+    (lambda d: d["thrusters"][0].__setitem__("angle_deg", 90.0), r"rudders\[0\].propeller"),
+    (lambda d: d["damping"]["nonlinear"].pop("mmg"), "lift 'mmg'"),
+])
+def test_invalid_rudder_files_name_the_field(edit, field):
+    d = copy.deepcopy(esso_dict())
+    edit(d)
+    with pytest.raises(VesselFileError, match=field):
+        vessel_from_dict(d, "bad.toml")
+
+
+def test_rudder_without_propeller_and_mixed_actuators():
+    """A vessel with thrusters, a propeller and two rudders (one without propeller)."""
+    d = copy.deepcopy(esso_dict())
+    d["thrusters"].append({"name": "bow", "type": "tunnel", "x_m": 1.2, "diameter_m": 0.05, "max_rpm": 3000.0})
+    d["rudders"].append(dict(d["rudders"][0], name="aux", propeller=None, y_m=0.1))
+    d["rudders"][1].pop("propeller")
+    m = DynamicModel(vessel_from_dict(d, "mixed.toml"))
+    assert m.vessel.thruster_names == ["propeller", "bow", "rudder", "aux"]
+    assert m.vessel.rotatable == [False, False, True, True]
+    acc = m.acceleration([0, 0, 0], [0.3, 0, 0], rpm=[RPM8, 600.0, 0, 0], azimuth_rad=[0, 0, 0.2, 0.2])
+    acc_off = m.acceleration([0, 0, 0], [0.3, 0, 0], rpm=[RPM8, 600.0, 0, 0], azimuth_rad=[0, 0, 0.0, 0.0])
+    assert acc[0, 2] > acc_off[0, 2]
+    F = rudder_forces(m, [0.3, 0, 0], [0.2, 0.2], [3.0, 3.0])[0]
+    assert abs(F[1, 2]) < abs(F[0, 2])  # no slipstream on the auxiliary rudder
