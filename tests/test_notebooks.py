@@ -1,0 +1,142 @@
+"""The documentation notebooks run, and the reference pages keep up with the code.
+
+* Every ``docs/notebooks/*.py`` (Jupytext percent format) is converted with jupytext and
+  executed with nbclient in its small configuration (``HYBRIDSHIP_SMALL=1``), each in a
+  fresh kernel with a temporary working directory. Skipped, with a message, when
+  jupytext, nbclient or ipykernel are not installed (``pip install -e ".[test]"``
+  installs them).
+* Every notebook is in the site's navigation (``mkdocs.yml``).
+* ``docs/reference/vessel-file.md`` names every field of the vessel-file schema, and
+  ``docs/reference/cli.md`` every command and option of ``hybridship --help``.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import importlib.util
+import io
+import re
+from pathlib import Path
+
+import pytest
+
+ROOT = Path(__file__).resolve().parents[1]
+DOCS = ROOT / "docs"
+NOTEBOOKS = sorted((DOCS / "notebooks").glob("*.py"))
+TRUTHSIM_DEV = ROOT.parent / "shared" / "data" / "truthsim-dev"
+_MISSING = [m for m in ("jupytext", "nbclient", "ipykernel") if importlib.util.find_spec(m) is None]
+
+
+def test_there_are_notebooks():
+    assert NOTEBOOKS, f"no notebooks found in {DOCS / 'notebooks'}"
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("path", NOTEBOOKS, ids=[p.stem for p in NOTEBOOKS])
+def test_notebook_runs_in_small_configuration(path, tmp_path, monkeypatch):
+    if _MISSING:
+        pytest.skip(f"executing notebooks needs {', '.join(_MISSING)} (pip install -e '.[test]')")
+    import jupytext
+    import nbclient
+
+    monkeypatch.setenv("HYBRIDSHIP_SMALL", "1")
+    monkeypatch.setenv("MPLBACKEND", "Agg")           # no figure rendering: faster, no display
+    if TRUTHSIM_DEV.is_dir():
+        monkeypatch.setenv("HYBRIDSHIP_TRUTHSIM_DEV", str(TRUTHSIM_DEV))
+    nb = jupytext.read(path)
+    client = nbclient.NotebookClient(nb, timeout=600, kernel_name="python3",
+                                     resources={"metadata": {"path": str(tmp_path)}})
+    client.execute()                                  # raises CellExecutionError with the traceback
+
+
+def test_every_notebook_is_in_the_site_navigation():
+    nav = (ROOT / "mkdocs.yml").read_text(encoding="utf-8")
+    missing = [p.name for p in NOTEBOOKS if f"notebooks/{p.name}" not in nav]
+    assert not missing, f"add these notebooks to the nav of mkdocs.yml: {missing}"
+
+
+# --------------------------------------------------------------------------- reference pages
+
+
+def _schema_fields(model, prefix=""):
+    """(dotted path, field name) of every field of a pydantic model, recursively."""
+    import typing
+
+    from pydantic import BaseModel
+
+    out = []
+    for name, info in model.model_fields.items():
+        out.append((prefix + name, name))
+        ann = info.annotation
+        stack = [ann]
+        while stack:
+            a = stack.pop()
+            if isinstance(a, type) and issubclass(a, BaseModel):
+                out += _schema_fields(a, prefix + name + ".")
+            else:
+                stack.extend(typing.get_args(a))
+    return out
+
+
+def test_vessel_file_reference_names_every_field():
+    from hybridship.vessel import Vessel
+
+    page = (DOCS / "reference" / "vessel-file.md").read_text(encoding="utf-8")
+    missing = sorted({path for path, name in _schema_fields(Vessel)
+                      if f"`{name}`" not in page and f"[{name}]" not in page and f"[[{name}]]" not in page
+                      and not re.search(rf"\[[a-z_.]*\.{re.escape(name)}\]", page)})
+    assert not missing, f"docs/reference/vessel-file.md does not describe these vessel-file fields: {missing}"
+
+
+def _help(*args) -> str:
+    from hybridship.cli import main
+
+    buf = io.StringIO()
+    with contextlib.redirect_stdout(buf):
+        assert main([*args, "--help"]) == 0
+    return buf.getvalue()
+
+
+def _subcommands(*prefix) -> list[tuple[str, ...]]:
+    """Every command below ``prefix`` (depth first), from the help texts."""
+    text = _help(*prefix)
+    if "positional arguments:" not in text:
+        return []
+    body = text.split("positional arguments:", 1)[1].split("\noptions:", 1)[0]
+    out = []
+    for c in re.findall(r"^ {4}(\w[\w-]*)(?: {2,}|$)", body, flags=re.M):
+        out.append((*prefix, c))
+        out += _subcommands(*prefix, c)
+    return out
+
+
+def test_cli_reference_names_every_command_and_option():
+    page = (DOCS / "reference" / "cli.md").read_text(encoding="utf-8")
+    commands = _subcommands()
+    assert commands, f"could not find the commands in:\n{_help()}"
+    missing = []
+    for cmd in commands:
+        heading = re.search(rf"^#+ `hybridship {' '.join(cmd)}`\n", page, flags=re.M)
+        if heading is None:
+            missing.append(f"hybridship {' '.join(cmd)}")
+            continue
+        section = re.split(r"^#+ `hybridship ", page[heading.end():], maxsplit=1, flags=re.M)[0]
+        for opt in sorted(set(re.findall(r"(?<![\w-])--[a-z][a-z0-9-]*", _help(*cmd))) - {"--help"}):
+            if opt not in section:
+                missing.append(f"hybridship {' '.join(cmd)} {opt}")
+    assert not missing, ("docs/reference/cli.md is behind `hybridship --help`; add a section with the help "
+                         f"text and a description for: {missing}")
+
+
+def test_api_reference_covers_every_module():
+    """Every top-level module and subpackage of hybridship has a ``::: hybridship.<name>`` entry
+    (subpackages render their submodules with ``show_submodules``)."""
+    import hybridship
+
+    pkg = Path(hybridship.__file__).parent
+    names = {p.stem for p in pkg.glob("*.py") if p.stem != "__init__"}
+    names |= {p.name for p in pkg.iterdir() if (p / "__init__.py").is_file() and p.name not in ("data", "vessels")}
+    pages = "".join(p.read_text(encoding="utf-8") for p in (DOCS / "reference" / "api").glob("*.md"))
+    documented = set(re.findall(r"^::: hybridship\.(\w+)", pages, flags=re.M))
+    missing = sorted(names - documented)
+    assert not missing, f"add `::: hybridship.<name>` entries to docs/reference/api/*.md for: {missing}"
