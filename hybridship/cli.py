@@ -323,7 +323,37 @@ def _add_benchmark(sub) -> None:
     h.add_argument("--seed", type=int, default=0, help="seed of the trials and of training (default 0)")
     h.add_argument("--quick", action="store_true", help="a small, fast configuration (for tests)")
     h.set_defaults(func=_cmd_benchmark_hsc)
+    m = bsub.add_parser("manoeuvre", help="manoeuvring forecasts on free-running runs (e.g. Esso Osaka)",
+                        description="Train on the runs in --train, forecast every start time of the runs in "
+                                    "--test at the given horizons (future commands known and held) and write "
+                                    "errors.csv (model,kind,state,horizon_s,mae,commands) and Markdown to --out.")
+    m.add_argument("--vessel", default="esso_osaka_model", help="packaged vessel name or vessel TOML file")
+    m.add_argument("--train", required=True, type=Path, help="folder of training runs")
+    m.add_argument("--test", required=True, type=Path, help="folder of test runs (never the training runs)")
+    m.add_argument("--horizons-s", default="5,10,20,30", help="comma-separated horizons [s] (default 5,10,20,30)")
+    m.add_argument("--out", type=Path, default=Path("manoeuvre-benchmark"), help="output folder")
+    m.add_argument("--seed", type=int, default=0, help="seed of training (default 0)")
+    m.add_argument("--quick", action="store_true", help="a small, fast configuration (for tests)")
+    m.set_defaults(func=_cmd_benchmark_manoeuvre)
     p.set_defaults(func=_cmd_benchmark_missing)
+
+
+def _cmd_benchmark_manoeuvre(args) -> int:
+    from .manoeuvre import run_manoeuvre_benchmark
+
+    try:
+        horizons = tuple(float(h) for h in args.horizons_s.split(",") if h.strip())
+    except ValueError:
+        raise UsageError(f"{_PROG} benchmark manoeuvre: error: --horizons-s: expected numbers like 5,10,20,30, "
+                         f"got {args.horizons_s!r}") from None
+    if not horizons or any(not h > 0 for h in horizons):
+        raise UsageError(f"{_PROG} benchmark manoeuvre: error: --horizons-s: horizons must be > 0 s")
+    for opt, folder in (("--train", args.train), ("--test", args.test)):
+        if not folder.is_dir():
+            raise UsageError(f"{_PROG} benchmark manoeuvre: error: {opt} {folder}: not a folder")
+    run_manoeuvre_benchmark(args.vessel, args.train, args.test, horizons, args.out, seed=args.seed,
+                            quick=args.quick, progress=True)
+    return 0
 
 
 def _cmd_benchmark_hsc(args) -> int:
