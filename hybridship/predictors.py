@@ -284,8 +284,9 @@ class DataOnlyPredictor:
         self.config = ResidualConfig(start_average_s=start_average_s)
         self.stop_after_failure = bool(stop_after_failure)
         self.ensemble: MLPEnsemble | None = None
-        rpm_max = [t.max_rpm for t in self.model.vessel.thrusters]
-        self._rpm_scale = np.array(rpm_max, dtype=float)
+        # one scale per command channel: thrusters by their max rpm, rudders (no rpm) by 1
+        v = self.model.vessel
+        self._rpm_scale = np.array([t.max_rpm for t in v.thrusters] + [1.0] * len(v.rudders), dtype=float)
         self._rot = np.array(self.model.vessel.rotatable, dtype=bool)
 
     def _features(self, nu, rpm, az, wind, psi, acc_prev):
