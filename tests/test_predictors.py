@@ -161,7 +161,8 @@ def test_thrust_regime_switches_the_nets_off_when_thrusters_stop():
     rng = np.random.default_rng(0)
     working = rng.normal([0.02, -0.01, 0.0005], [0.01, 0.01, 0.0003], size=(2000, 3))   # station keeping
     regime = ThrustRegime.fit(working)
-    assert np.all(regime.weight(working[:100]) >= 0.0) and np.median(regime.weight(working)) == 1.0
+    assert np.median(regime.weight(working)) == 1.0            # station keeping: nets fully on
+    assert np.mean(regime.weight(working) == 1.0) > 0.98
     assert regime.weight(np.zeros(3)) == 0.0                   # all thrusters stopped: nets off
     # trained on drifting rows as well (zero thrust seen): the nets stay on
     both = ThrustRegime.fit(np.vstack([working, np.zeros((200, 3))]))

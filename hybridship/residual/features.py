@@ -361,12 +361,9 @@ def causal_bias(residual_c: np.ndarray, arrays: LogArrays, dt_s: float, config: 
         return out
     psi = arrays.eta[:, 2]
     c, s = np.cos(psi), np.sin(psi)
-    r = residual_c
-    if config.bias_frame == "ned":
-        vals = np.column_stack([c * r[:, 0] - s * r[:, 1], s * r[:, 0] + c * r[:, 1], r[:, 2]])
-    else:
-        vals = r.copy()
-    use = np.isfinite(vals).all(1) & arrays.dp_active.astype(bool)
+    vals, use = _residual_ned(residual_c, arrays)
+    if config.bias_frame == "body":
+        vals = residual_c.copy()
     w = max(1, int(round(config.bias_window_s / dt_s)))
     for sl in arrays.segments:
         v = np.where(use[sl, None], vals[sl], 0.0)
