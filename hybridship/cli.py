@@ -166,8 +166,7 @@ def _cmd_simulate(args) -> int:
 
     cfg = scenario.DPLossConfig(seed=args.seed, beaufort=tuple(args.beaufort), **overrides)
     df = scenario.simulate_dp_loss(cfg, vessel=vessel, progress=progress)
-    write_log(df, args.out, thruster_names=[t.name for t in vessel.thrusters],
-              rotatable=[t.type == "azimuth" for t in vessel.thrusters])
+    write_log(df, args.out, thruster_names=vessel.thruster_names, rotatable=vessel.rotatable)
     stats = scenario.drift_statistics(df)
     print(f"wrote {args.out}: {len(df)} rows, DP shutdown at {stats['t_shutdown_s']:g} s, "
           f"drift excursion {stats['drift_excursion_60s_m']:.1f} m after 60 s, "
@@ -260,7 +259,10 @@ def _add_forecast(sub) -> None:
     p.add_argument("--model", required=True, type=Path, help="model file from 'hybridship train'")
     p.add_argument("--log", required=True, type=Path, help="log file")
     p.add_argument("--start-time", required=True, type=float, nargs="+", help="start time(s) [s] (sample times)")
-    p.add_argument("--horizon-s", type=float, default=60.0)
+    p.add_argument("--horizon-s", type=float, default=60.0, help="forecast horizon [s] (default 60)")
+    p.add_argument("--commands", choices=("held", "known"), default="held",
+                   help="held: commands stay at their start values (default); known: use the log's future "
+                        "commands (the log must extend --horizon-s past each start)")
     p.add_argument("--no-guard", action="store_true", help="do not shrink the correction outside the envelope")
     p.add_argument("--out", required=True, type=Path, help="forecast table to write (.csv)")
     p.set_defaults(func=_cmd_forecast)
@@ -278,7 +280,7 @@ def _cmd_forecast(args) -> int:
         raise UsageError(f"{_PROG} forecast: error: {_one_line(exc)}") from None
     if not args.log.is_file():
         raise UsageError(f"{_PROG} forecast: error: --log {args.log}: file not found")
-    fc = hp.forecast(args.log, args.start_time, args.horizon_s, guard=not args.no_guard)
+    fc = hp.forecast(args.log, args.start_time, args.horizon_s, guard=not args.no_guard, commands=args.commands)
     df = fc.to_frame()
     atomic_write(args.out, lambda fh: fh.write(df.to_csv(index=False).encode("utf-8")))
     from .quality import FaultFlags

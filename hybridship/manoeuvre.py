@@ -16,19 +16,12 @@ of all test runs of a kind (``kind = all`` pools every start time).
 Predictors: the hybrid (:class:`~hybridship.predictors.HybridPredictor`), the physics
 alone (:class:`~hybridship.predictors.DynamicPredictor`), constant-velocity dead reckoning
 (:class:`~hybridship.predictors.DeadReckoning`) and a data-only ensemble
-(``DataOnlyPredictor``, used when :mod:`hybridship.predictors` provides it).
-
-Interim adapters (until the predictors take per-step commands, see
-:func:`known_commands`): the physics is given the per-step commands through a thin proxy
-of its model's ``rollout``; the hybrid through a stand-in for the one-step physics call
-of its rollout loop, which hands it the commands of step j at its j-th call and checks
-the call pattern, so a change of that loop fails loudly instead of silently.
+(:class:`~hybridship.predictors.DataOnlyPredictor`), each through its
+``forecast(..., commands="known" | "held")``.
 """
 
 from __future__ import annotations
 
-import contextlib
-import inspect
 import time
 from dataclasses import dataclass, field, replace
 from pathlib import Path
@@ -186,157 +179,31 @@ def split_runs(data_dir, out_dir, *, test_fraction: float = 0.3, seed: int = 0) 
 
 
 # --------------------------------------------------------------------------------------
-# Known-command adapters (interim; see the module docstring)
-# --------------------------------------------------------------------------------------
-
-
-def _command_steps(arrays: LogArrays, idx: np.ndarray, n_steps: int):
-    """Logged commands of the ``n_steps`` steps after each start row: rpm, azimuth (S, H, K)."""
-    rows = np.minimum(idx[:, None] + np.arange(n_steps)[None, :], len(arrays.time_s) - 1)
-    return np.ascontiguousarray(arrays.rpm[rows]), np.ascontiguousarray(arrays.azimuth_rad[rows])
-
-
-class _KnownCommandsModel:
-    """Proxy of a DynamicModel whose ``rollout`` uses given per-step rpm and angles."""
-
-    def __init__(self, model, rpm_steps, az_steps):
-        self._model, self._rpm, self._az = model, rpm_steps, az_steps
-
-    def __getattr__(self, name):
-        return getattr(self._model, name)
-
-    def rollout(self, eta0, nu0, n_steps, **kw):
-        H = int(n_steps)
-        if self._rpm.shape[0] != np.shape(eta0)[0] or self._rpm.shape[1] < H:
-            raise RuntimeError("known commands: the forecast asked for other start times or a longer horizon")
-        kw["rpm"] = self._rpm[:, :H]
-        kw["azimuth_rad"] = self._az[:, :H]
-        return self._model.rollout(eta0, nu0, H, **kw)
-
-
-@contextlib.contextmanager
-def _hybrid_known_commands(rpm_steps, az_steps):
-    """Hand the hybrid's j-th one-step physics call the commands of step j."""
-    from . import predictors as pred_mod
-
-    original = pred_mod.rollout_batch
-    calls = {"n": 0}
-
-    def stepper(eta0, nu0, rpm, az, *args):
-        # rollout_batch(eta0, nu0, rpm, az, wind, current, tau_ext, acc_ext, P, dt, n_steps, substeps, ...)
-        n_steps = args[6] if len(args) == 11 else None
-        j = calls["n"]
-        if eta0.shape[0] != rpm_steps.shape[0] or n_steps != 1 or j >= rpm_steps.shape[1]:
-            raise RuntimeError("known commands: HybridPredictor.rollout no longer makes one one-step physics "
-                               "call per step; update hybridship.manoeuvre._hybrid_known_commands")
-        calls["n"] += 1
-        return original(eta0, nu0, np.ascontiguousarray(rpm_steps[:, j: j + 1]),
-                        np.ascontiguousarray(az_steps[:, j: j + 1]), *args)
-
-    pred_mod.rollout_batch = stepper
-    try:
-        yield calls
-    finally:
-        pred_mod.rollout_batch = original
-
-
-def _accepts_commands(predictor) -> bool:
-    try:
-        return "commands" in inspect.signature(predictor.forecast).parameters
-    except (TypeError, ValueError):
-        return False
-
-
-def known_commands(predictor, arrays: LogArrays, start_times_s, horizon_s: float):
-    """Forecast with the logged future commands known.
-
-    Uses ``predictor.forecast(..., commands="known")`` when the predictor accepts a
-    ``commands`` keyword; otherwise the interim adapters for the physics and the hybrid;
-    dead reckoning ignores commands. Returns None for a predictor that cannot use them.
-    """
-    from .predictors import DeadReckoning, DynamicPredictor, HybridPredictor, start_indices
-
-    if _accepts_commands(predictor):
-        return predictor.forecast(arrays, start_times_s, horizon_s=horizon_s, commands="known")
-    if isinstance(predictor, DeadReckoning):
-        return predictor.forecast(arrays, start_times_s, horizon_s=horizon_s)
-    idx = start_indices(arrays, start_times_s)
-    dt = float(np.median(np.diff(arrays.time_s)))
-    H = int(round(horizon_s / dt))
-    rpm, az = _command_steps(arrays, idx, H)
-    if isinstance(predictor, HybridPredictor):
-        with _hybrid_known_commands(rpm, az) as calls:
-            fc = predictor.forecast(arrays, start_times_s, horizon_s=horizon_s)
-        if calls["n"] != H:
-            raise RuntimeError(f"known commands: expected {H} one-step calls, saw {calls['n']}")
-        return fc
-    if isinstance(predictor, DynamicPredictor):
-        model = predictor.model
-        predictor.model = _KnownCommandsModel(model, rpm, az)
-        try:
-            return predictor.forecast(arrays, start_times_s, horizon_s=horizon_s)
-        finally:
-            predictor.model = model
-    return None
-
-
-# --------------------------------------------------------------------------------------
 # Predictors
 # --------------------------------------------------------------------------------------
 
 
-def data_only_class():
-    """The data-only predictor class of :mod:`hybridship.predictors`, or None while it does not exist."""
-    from . import predictors
-
-    return getattr(predictors, "DataOnlyPredictor", None)
-
-
 def make_predictors(vessel, config: ManoeuvreConfig) -> dict[str, object]:
-    """Unfitted predictors by table name (the data-only one only when available)."""
-    from .predictors import DeadReckoning, DynamicPredictor, HybridPredictor
+    """Unfitted predictors by table name."""
+    from .predictors import DataOnlyPredictor, DeadReckoning, DynamicPredictor, HybridPredictor
 
     rc, ec = config.residual, config.ensemble
-    out = {
+    return {
         "hybrid": HybridPredictor(vessel, residual_config=rc, ensemble_config=ec),
         "dynamic": DynamicPredictor(vessel, residual_config=rc),
+        "data_only": DataOnlyPredictor(vessel, ensemble_config=ec, start_average_s=rc.start_average_s),
         "dead_reckoning": DeadReckoning(vessel, start_average_s=rc.start_average_s),
     }
-    cls = data_only_class()
-    if cls is not None:
-        kw = {}
-        params = inspect.signature(cls).parameters
-        for name, value in (("residual_config", rc), ("ensemble_config", ec),
-                            ("start_average_s", rc.start_average_s)):
-            if name in params:
-                kw[name] = value
-        out["data_only"] = cls(vessel, **kw)
-    return out
 
 
 def _fit(name, predictor, runs: list[Run], config: ManoeuvreConfig):
-    """Fit on the training runs (the hybrid on every ``train_row_stride``-th trainable row)."""
+    """Fit on the training runs; both learned models on every ``train_row_stride``-th row."""
     import torch
 
     torch.set_num_threads(1)
     logs = [r.arrays for r in runs]
-    if name == "hybrid" and config.train_row_stride > 1:
-        from .residual.ensemble import fit_ensemble
-        from .residual.guard import EnvelopeGuard
-
-        X, Y, seg = predictor.training_data(logs)
-        keep = np.arange(0, X.shape[0], config.train_row_stride)
-        thr = getattr(predictor, "_training_thrust_acc", None)
-        predictor.ensemble = fit_ensemble(X[keep], Y[keep], predictor.ensemble_config, segment_id=seg[keep])
-        predictor.guard = EnvelopeGuard.fit((X[keep] - predictor.ensemble.x_mean) / predictor.ensemble.x_std,
-                                            quantile=predictor.guard_quantile)
-        if thr is not None and hasattr(predictor, "thrust_regime"):
-            from .residual.guard import ThrustRegime
-
-            predictor.thrust_regime = ThrustRegime.fit(thr[keep])
-        predictor.training_info = {"n_rows": int(keep.size), "epochs": predictor.ensemble.history.get("epochs"),
-                                   "best_val_mse": predictor.ensemble.history.get("best_val_mse")}
-        return predictor
+    if name in ("hybrid", "data_only"):
+        return predictor.fit(logs, row_stride=config.train_row_stride)
     return predictor.fit(logs)
 
 
@@ -478,14 +345,8 @@ def run_manoeuvre_benchmark(vessel, train_dir, test_dir, horizons_s=HORIZONS_S, 
         for name, p in predictors.items():
             for mode in COMMAND_MODES:
                 t0 = time.perf_counter()
-                if rows.size == 0:
-                    err = None
-                elif mode == "held":
-                    err = forecast_errors(lambda a, st, h: p.forecast(a, st, horizon_s=h), run.arrays, rows, steps)
-                else:
-                    probe = known_commands(p, run.arrays, run.arrays.time_s[rows[:1]], float(steps[0] * dt))
-                    err = None if probe is None else forecast_errors(
-                        lambda a, st, h: known_commands(p, a, st, h), run.arrays, rows, steps)
+                err = None if rows.size == 0 else forecast_errors(
+                    lambda a, st, h: p.forecast(a, st, horizon_s=h, commands=mode), run.arrays, rows, steps)
                 per_run.setdefault((name, mode), []).append(err)
                 timings[f"forecast_{name}_{mode}"] = timings.get(f"forecast_{name}_{mode}", 0.0) + \
                     time.perf_counter() - t0
@@ -560,9 +421,6 @@ def markdown_report(result: BenchmarkResult, *, command: str | None = None) -> s
               f"test runs: {len(result.test)}; start times: {sum(result.n_starts.values())} "
               f"(every {result.config.start_every_s} s); horizons {', '.join(f'{h:g}' for h in result.horizons_s)} s.",
               "", "Test runs: " + ", ".join(f"`{r.name}` ({r.kind})" for r in result.test), ""]
-    if "data_only" not in result.predictors:
-        lines += ["The data-only ensemble (`DataOnlyPredictor`) is not available in this version of "
-                  "`hybridship.predictors`; its rows are missing.", ""]
     for commands in COMMAND_MODES:
         for state, unit in (("distance_m", "m"), ("heading_deg", "deg")):
             lines += [f"## {state.split('_')[0]} error [{unit}], commands {commands}", "",
@@ -572,7 +430,7 @@ def markdown_report(result: BenchmarkResult, *, command: str | None = None) -> s
         if total:
             lines.append(f"- hybrid below {other} (distance, known commands): {len(cells)} of {total} "
                          "kind x horizon cells")
-    lines += ["", f"All states (x0, y0, heading, distance) are in `errors.csv`.", "", "Cite: " + CITATION, ""]
+    lines += ["", "All states (x0, y0, heading, distance) are in `errors.csv`.", "", "Cite: " + CITATION, ""]
     return "\n".join(lines)
 
 
@@ -641,7 +499,7 @@ def write_figures(result: BenchmarkResult, figures_dir) -> list[Path]:
             p = result.predictors.get(name)
             if p is None or pick.size == 0:
                 continue
-            fc = known_commands(p, a, a.time_s[pick], H)
+            fc = p.forecast(a, a.time_s[pick], horizon_s=H, commands="known")
             for k in range(len(pick)):
                 ax.plot(fc.eta[k, :, 1], fc.eta[k, :, 0], color=_COLOURS[name], lw=1.0, alpha=0.8,
                         label=name if k == 0 else None)

@@ -1,8 +1,11 @@
 """Forecasters with one interface: dead reckoning, the dynamic model, a data-only ensemble, and the hybrid.
 
-All three have ``fit(logs)`` and ``forecast(log, start_times_s, horizon_s=60)``; the
-forecast is a :class:`ForecastResult` (arrays, batch-first over start times) with a
-``to_frame()`` tidy pandas view. Many start times are integrated as one batch.
+All four have ``fit(logs)`` and ``forecast(log, start_times_s, horizon_s=60,
+commands="held")``; the forecast is a :class:`ForecastResult` (arrays, batch-first over
+start times) with a ``to_frame()`` tidy pandas view. Many start times are integrated as
+one batch. ``commands="known"`` feeds the logged future commands to the forecast (a
+manoeuvre whose orders are known); ``"held"`` keeps them at their start values (a DP loss,
+or a forecast whose future orders are unknown). The wind is held in both modes.
 
 The hybrid (Skulstad et al. 2022, sec. 3.2) steps the dynamic model one second, asks the
 ensemble for the acceleration residual from the model-predicted velocities,
@@ -160,8 +163,9 @@ class DeadReckoning:
         """Nothing to learn; returns self."""
         return self
 
-    def forecast(self, log, start_times_s, horizon_s: float = 60.0) -> ForecastResult:
-        st = _forecast_setup(self.model, self.config, log, start_times_s, horizon_s)
+    def forecast(self, log, start_times_s, horizon_s: float = 60.0, *, commands: str = "held") -> ForecastResult:
+        """Constant-velocity tracks from every start time (``commands`` is checked, then unused)."""
+        st = _forecast_setup(self.model, self.config, log, start_times_s, horizon_s, commands=commands)
         arrays, idx, dt, H, eta0, nu0 = st.arrays, st.idx, st.dt, st.H, st.eta0, st.nu0
         lead = np.arange(H + 1) * dt
         c, s = np.cos(eta0[:, 2]), np.sin(eta0[:, 2])
@@ -193,9 +197,48 @@ class _Setup:
     notes: tuple
 
 
+#: Command modes of ``forecast(..., commands=)``.
+COMMAND_MODES = ("held", "known")
+
+
+def _known_command_steps(arrays: LogArrays, idx: np.ndarray, H: int, rpm0: np.ndarray, az0: np.ndarray,
+                         stop_after_failure: bool = True):
+    """Logged commands of the H steps after each start row, (S, H, K) each.
+
+    Step 0 is the start's command as the held mode uses it (``rpm0``, ``az0``, (S, K));
+    a missing (NaN) command later on holds the last valid one (a dropped sample, not a
+    new order). With ``stop_after_failure`` the rpm of steps where ``dp_active == 0`` is
+    0, as in :func:`_held_inputs`.
+    """
+    n = len(arrays.time_s)
+    last = idx + H - 1
+    if np.any(last >= n):
+        k = int(np.argmax(last >= n))
+        raise ValueError(f"commands='known': the log ends at {arrays.time_s[-1]:g} s, but the start at "
+                         f"{arrays.time_s[idx[k]]:g} s needs logged commands for {H} steps after it; "
+                         "use commands='held' or an earlier start time")
+    rows = idx[:, None] + np.arange(H)[None, :]
+    out = []
+    for x, x0 in ((arrays.rpm, rpm0), (arrays.azimuth_rad, az0)):
+        steps = x[rows]                                   # (S, H, K), a copy
+        steps[:, 0] = x0
+        if stop_after_failure and x is arrays.rpm:
+            steps[arrays.dp_active[rows] == 0] = 0.0
+        valid = np.isfinite(steps)
+        pos = np.where(valid, np.arange(H)[None, :, None], 0)
+        np.maximum.accumulate(pos, axis=1, out=pos)       # index of the last valid step so far
+        out.append(np.take_along_axis(steps, pos, axis=1))
+    return out
+
+
 def _forecast_setup(model, config: ResidualConfig, log, start_times_s, horizon_s: float,
-                    stop_after_failure: bool = True) -> _Setup:
-    """Checked log arrays, start rows, step, horizon, start states and held inputs.
+                    stop_after_failure: bool = True, commands: str = "held") -> _Setup:
+    """Checked log arrays, start rows, step, horizon, start states and commands.
+
+    With ``commands="held"`` the commands are the start's, shaped (S, 1, K); with
+    ``commands="known"`` they are the logged commands of the H steps after each start,
+    (S, H, K) (see :func:`_known_command_steps`). The wind is held at its start value
+    in both modes (its future is not known at a start).
 
     The log goes through :func:`hybridship.quality.forecast_log_arrays` (re-sorted,
     checked against the vessel; sensor faults tolerated, format errors refused), the start
@@ -206,40 +249,30 @@ def _forecast_setup(model, config: ResidualConfig, log, start_times_s, horizon_s
     """
     if not horizon_s > 0:
         raise ValueError(f"horizon_s: must be > 0, got {horizon_s}")
+    if commands not in COMMAND_MODES:
+        raise ValueError(f"commands: expected one of {COMMAND_MODES}, got {commands!r}")
     arrays, order = forecast_log_arrays(log, model.vessel)
     idx = start_indices(arrays, start_times_s)
     dt = float(np.median(np.diff(arrays.time_s)))
     H = int(round(horizon_s / dt))
     sw = assess_start_window(arrays, idx, config.start_average_s, order=order)
     rpm, az, wind = _held_inputs(arrays, idx, stop_after_failure=stop_after_failure, wind=sw.wind)
-    chk = check_or_clip_inputs(model.vessel, eta=sw.eta0, nu=sw.nu0, rpm=rpm[:, 0], azimuth_rad=az[:, 0],
+    if commands == "known":
+        rpm, az = _known_command_steps(arrays, idx, H, rpm[:, 0], az[:, 0], stop_after_failure)
+    chk = check_or_clip_inputs(model.vessel, eta=sw.eta0, nu=sw.nu0, rpm=rpm, azimuth_rad=az,
                                wind=wind[:, 0], dt_s=dt)
     flags = {name: np.zeros(len(idx), dtype=bool) for name in FaultFlags.ALL}
     flags.update({k: np.asarray(v, dtype=bool) for k, v in sw.flags.items()})
     flags[FaultFlags.INPUT_CLIPPED] = np.asarray(chk.clipped, dtype=bool)
     notes = tuple(sw.notes) if len(sw.notes) == len(idx) else ("",) * len(idx)
-    return _Setup(arrays, idx, dt, H, chk.eta, chk.nu, np.ascontiguousarray(chk.rpm[:, None]),
-                  np.ascontiguousarray(chk.azimuth_rad[:, None]), np.ascontiguousarray(chk.wind[:, None]),
+    return _Setup(arrays, idx, dt, H, chk.eta, chk.nu, np.ascontiguousarray(chk.rpm),
+                  np.ascontiguousarray(chk.azimuth_rad), np.ascontiguousarray(chk.wind[:, None]),
                   int(chk.substeps), flags, notes)
 
 
-def _start_states_simple(arrays: LogArrays, idx, config: ResidualConfig, dt: float):
-    """Causal start states (position at the start, 3-s mean heading and velocities)."""
-    n_avg = max(1, int(round(config.start_average_s / dt)))
-    eta0 = np.empty((len(idx), 3))
-    nu0 = np.empty((len(idx), 3))
-    seg = arrays.segment_id
-    for k, i in enumerate(idx):
-        lo = max(i - n_avg + 1, 0)
-        lo += int(np.argmax(seg[lo: i + 1] == seg[i]))
-        eta0[k] = arrays.eta[i]
-        eta0[k, 2] = arrays.eta[lo: i + 1, 2].mean()
-        nu0[k] = arrays.nu[lo: i + 1].mean(axis=0)
-    return eta0, nu0
-
-
 class DynamicPredictor:
-    """The dynamic model alone (Skulstad et al. sec. 3.1): commands and wind held at start values."""
+    """The dynamic model alone (Skulstad et al. sec. 3.1): wind held at its start value, commands
+    held (``commands="held"``) or the logged future ones (``commands="known"``)."""
 
     name = "dynamic"
 
@@ -253,9 +286,23 @@ class DynamicPredictor:
         """The physics has nothing to learn from logs here; returns self."""
         return self
 
-    def forecast(self, log, start_times_s, horizon_s: float = 60.0) -> ForecastResult:
+    def forecast(self, log, start_times_s, horizon_s: float = 60.0, *, commands: str = "held") -> ForecastResult:
+        """Integrate the model from every start time (one batch).
+
+        Parameters
+        ----------
+        log : path, DataFrame or LogArrays
+        start_times_s : float or sequence of float
+            Sample times of the log [s].
+        horizon_s : float
+            Forecast horizon [s]; the step is the log's.
+        commands : {"held", "known"}
+            ``held``: commands stay at their start values; ``known``: the logged commands
+            of the steps after each start are used (a manoeuvre whose orders are known;
+            the log must extend ``horizon_s`` past every start).
+        """
         st = _forecast_setup(self.model, self.residual_config, log, start_times_s, horizon_s,
-                             self.stop_after_failure)
+                             self.stop_after_failure, commands)
         res = self.model.rollout(st.eta0, st.nu0, st.H, dt_s=st.dt, substeps=st.substeps, rpm=st.rpm,
                                  azimuth_rad=st.az, wind=st.wind)
         return ForecastResult(st.arrays.time_s[st.idx], res.time_s, res.eta, res.nu, flags=st.flags, notes=st.notes)
@@ -296,8 +343,11 @@ class DataOnlyPredictor:
         a = az[..., self._rot]
         return np.concatenate([nu, rpm / self._rpm_scale, np.cos(a), np.sin(a), rel, acc_prev], axis=-1)
 
-    def fit(self, logs: Iterable, *, dp_only: bool = True, progress: bool = False) -> "DataOnlyPredictor":
-        """Learn one-step accelerations from logs (by default their DP part only)."""
+    def fit(self, logs: Iterable, *, dp_only: bool = True, progress: bool = False,
+            row_stride: int = 1) -> "DataOnlyPredictor":
+        """Learn one-step accelerations from logs (by default their DP part only), from every
+        ``row_stride``-th usable row (see :meth:`HybridPredictor.fit`)."""
+        stride = _check_row_stride(row_stride)
         Xs, Ys, segs = [], [], []
         for k, log in enumerate(logs):
             a = as_log_arrays(log, self.model.vessel)
@@ -317,17 +367,19 @@ class DataOnlyPredictor:
             segs.append(seg[rows] + 10_000 * k)
         if not Xs:
             raise ValueError("fit: no usable training rows in the logs")
-        self.ensemble = fit_ensemble(np.concatenate(Xs), np.concatenate(Ys), self.ensemble_config,
-                                     segment_id=np.concatenate(segs), progress=progress)
+        X, Y, seg = (np.concatenate(z)[::stride] for z in (Xs, Ys, segs))
+        self.ensemble = fit_ensemble(X, Y, self.ensemble_config, segment_id=seg, progress=progress)
         return self
 
-    def forecast(self, log, start_times_s, horizon_s: float = 60.0) -> ForecastResult:
-        """Iterate the ensemble from every start time; commands and wind held at start values."""
+    def forecast(self, log, start_times_s, horizon_s: float = 60.0, *, commands: str = "held") -> ForecastResult:
+        """Iterate the ensemble from every start time; wind held, commands held or known
+        (see :meth:`DynamicPredictor.forecast`)."""
         if self.ensemble is None:
             raise RuntimeError("DataOnlyPredictor: call fit() before forecast()")
-        st = _forecast_setup(self.model, self.config, log, start_times_s, horizon_s, self.stop_after_failure)
+        st = _forecast_setup(self.model, self.config, log, start_times_s, horizon_s, self.stop_after_failure,
+                             commands)
         arrays, idx, dt, H, eta0, nu0 = st.arrays, st.idx, st.dt, st.H, st.eta0, st.nu0
-        rpm, az, wind = st.rpm[:, 0], st.az[:, 0], st.wind[:, 0]
+        rpm, az, wind = st.rpm, st.az, st.wind[:, 0]          # commands (S, 1 or H, K)
         n_avg = max(1, int(round(self.config.start_average_s / dt)))
         lo = np.maximum(idx - n_avg, 0)
         same = arrays.segment_id[lo] == arrays.segment_id[idx]
@@ -342,7 +394,8 @@ class DataOnlyPredictor:
         out[:, :, 0], out_nu[:, :, 0] = eta, nu
         rpm_e, az_e, wind_e = (np.broadcast_to(x, (E,) + x.shape) for x in (rpm, az, wind))
         for j in range(H):
-            X = self._features(nu, rpm_e, az_e, wind_e, eta[..., 2], acc)
+            jc = j if rpm.shape[1] > 1 else 0
+            X = self._features(nu, rpm_e[:, :, jc], az_e[:, :, jc], wind_e, eta[..., 2], acc)
             acc = self.ensemble.predict_members(X)                 # (E, S, 3), member e on its own path
             nu_mid = nu + 0.5 * dt * acc
             psi_mid = eta[..., 2] + 0.5 * dt * nu_mid[..., 2]
@@ -410,7 +463,8 @@ class HybridPredictor:
         self._training_thrust_acc = np.concatenate(thr)
         return np.concatenate(Xs), np.concatenate(Ys), np.concatenate(segs)
 
-    def fit(self, logs: Iterable, *, dp_only: bool = True, progress: bool = False) -> "HybridPredictor":
+    def fit(self, logs: Iterable, *, dp_only: bool = True, progress: bool = False,
+            row_stride: int = 1) -> "HybridPredictor":
         """Learn the acceleration residual from logs (by default only their DP part).
 
         Parameters
@@ -420,13 +474,20 @@ class HybridPredictor:
             Train only on rows with ``dp_active == 1`` (the part before a failure).
         progress : bool
             Show a progress bar.
+        row_stride : int
+            Train on every ``row_stride``-th trainable row (for high-rate logs, whose
+            neighbouring rows carry almost the same information); the guard is fitted on
+            the same rows.
         """
+        stride = _check_row_stride(row_stride)
         X, Y, seg = self.training_data(logs, dp_only=dp_only)
+        X, Y, seg, thr = X[::stride], Y[::stride], seg[::stride], self._training_thrust_acc[::stride]
         self.ensemble = fit_ensemble(X, Y, self.ensemble_config, segment_id=seg, progress=progress)
         self.guard = EnvelopeGuard.fit((X - self.ensemble.x_mean) / self.ensemble.x_std,
                                        quantile=self.guard_quantile)
-        self.thrust_regime = ThrustRegime.fit(self._training_thrust_acc)
-        self.training_info = {"n_rows": int(X.shape[0]), "epochs": self.ensemble.history["epochs"],
+        self.thrust_regime = ThrustRegime.fit(thr)
+        self.training_info = {"n_rows": int(X.shape[0]), "row_stride": stride,
+                              "epochs": self.ensemble.history["epochs"],
                               "best_val_mse": self.ensemble.history["best_val_mse"],
                               "residual_std": Y.std(0).tolist()}
         return self
@@ -437,11 +498,21 @@ class HybridPredictor:
         if self.ensemble is None:
             raise RuntimeError("HybridPredictor: call fit() or load() before forecast()")
 
-    def forecast(self, log, start_times_s, horizon_s: float = 60.0, *, guard: bool | None = None) -> ForecastResult:
-        """Forecast from every start time (one batch); commands and wind held at start values."""
+    def forecast(self, log, start_times_s, horizon_s: float = 60.0, *, guard: bool | None = None,
+                 commands: str = "held") -> ForecastResult:
+        """Forecast from every start time (one batch).
+
+        Parameters
+        ----------
+        log, start_times_s, horizon_s, commands
+            As in :meth:`DynamicPredictor.forecast` (wind held; commands held or known).
+        guard : bool, optional
+            Shrink the learned correction outside the training envelope (default: the
+            ``guard`` given at construction).
+        """
         self._check_fitted()
         st = _forecast_setup(self.model, self.residual_config, log, start_times_s, horizon_s,
-                             self.stop_after_failure)
+                             self.stop_after_failure, commands)
         prep = prepare_log(self.model, st.arrays, self.residual_config)
         dev0 = np.array([prep.start_state(int(i))[2] for i in st.idx])
         E = self.ensemble.n_members
@@ -454,10 +525,16 @@ class HybridPredictor:
         return ForecastResult(st.arrays.time_s[st.idx], np.arange(st.H + 1) * st.dt, eta, nu, std, wgt,
                               flags=flags, notes=st.notes)
 
+    def _thrust_weight(self, eta, nu, rpm, az, wind):
+        """Thrust-regime weight (S,) of commands (S, K) at states (S, 3) (1 without a regime)."""
+        _, parts, _ = self.model.acceleration(eta, nu, rpm=rpm, azimuth_rad=az, wind=wind, return_parts=True)
+        return self.thrust_regime.weight(parts[:, 1] @ np.linalg.inv(self.model.mass_matrix).T)
+
     def rollout(self, eta0, nu0, dev0, bias0_ned, rpm, az, wind, n_steps: int, dt_s: float, *, guard: bool = True,
                 substeps: int = 1):
         """Batched hybrid rollout from states (S, 3), previous residual deviations (S, 3),
-        biases (S, 3) or per member (E, S, 3) (surge/sway in NED) and held inputs (S, 1, K|2).
+        biases (S, 3) or per member (E, S, 3) (surge/sway in NED), commands held (S, 1, K) or
+        per step (S, n_steps, K), and held wind (S, 1, 2).
 
         Every step: the physics advances the ensemble-mean state one step (RK4) and
         predicts the acceleration there; each member predicts its residual deviation from
@@ -483,12 +560,14 @@ class HybridPredictor:
         wgt = np.ones((S, n_steps + 1))
         eta[:, 0], nu[:, 0] = eta0, nu0
         bias0_ned = np.broadcast_to(bias0_ned, (E, S, 3))
+        per_step = rpm.shape[1] > 1
+        if per_step and (rpm.shape[1] < n_steps or az.shape[1] < n_steps):
+            raise ValueError(f"rpm, az: per-step commands need {n_steps} steps, got {rpm.shape[1]}, {az.shape[1]}")
+        thrust_guard = guard and self.thrust_regime is not None
         w_thrust = np.ones(S)
-        if guard and self.thrust_regime is not None:
-            # thrust regime of the held commands at the start (commands do not change)
-            _, parts, _ = self.model.acceleration(eta0, nu0, rpm=rpm[:, 0], azimuth_rad=az[:, 0],
-                                                  wind=wind[:, 0], return_parts=True)
-            w_thrust = self.thrust_regime.weight(parts[:, 1] @ np.linalg.inv(self.model.mass_matrix).T)
+        if thrust_guard:
+            # thrust regime of the commands at the start; re-judged every step when they change
+            w_thrust = self._thrust_weight(eta0, nu0, rpm[:, 0], az[:, 0], wind[:, 0])
             wgt[:, 0] = w_thrust
         r_prev = np.broadcast_to(dev0, (E, S, 3)).copy()
         d_nu = np.zeros((E, S, 3))        # member velocity deviations from the mean
@@ -498,8 +577,12 @@ class HybridPredictor:
         a1 = np.empty((S, 2, 3))
         feats = np.empty((E, S, 9))
         for j in range(n_steps):
-            rollout_batch(np.ascontiguousarray(eta[:, j]), np.ascontiguousarray(nu[:, j]), rpm, az, wind, current,
-                          zeros3, zeros3, P, dt_s, 1, int(substeps), e1, n1, a1)
+            rpm_j, az_j = (np.ascontiguousarray(rpm[:, j:j + 1]), np.ascontiguousarray(az[:, j:j + 1])) \
+                if per_step else (rpm, az)
+            if thrust_guard and per_step and j > 0:
+                w_thrust = self._thrust_weight(eta[:, j], nu[:, j], rpm_j[:, 0], az_j[:, 0], wind[:, 0])
+            rollout_batch(np.ascontiguousarray(eta[:, j]), np.ascontiguousarray(nu[:, j]), rpm_j, az_j, wind,
+                          current, zeros3, zeros3, P, dt_s, 1, int(substeps), e1, n1, a1)
             feats[:, :, 0:3] = n1[:, 1]
             feats[:, :, 3:6] = a1[:, 1]
             feats[:, :, 6:9] = r_prev
@@ -628,6 +711,12 @@ class HybridPredictor:
         obj.ensemble, obj.guard, obj.thrust_regime = ens, guard, thrust_regime
         obj.training_info = meta.get("training_info", {})
         return obj
+
+
+def _check_row_stride(row_stride) -> int:
+    if isinstance(row_stride, bool) or not isinstance(row_stride, (int, np.integer)) or row_stride < 1:
+        raise ValueError(f"row_stride: expected an integer >= 1, got {row_stride!r}")
+    return int(row_stride)
 
 
 def _content_hash(arrays: dict) -> str:

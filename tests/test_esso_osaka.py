@@ -225,35 +225,35 @@ def test_benchmark_refuses_the_same_run_in_train_and_test(tmp_path):
         run_manoeuvre_benchmark("esso_osaka_model", train, test, (5,), tmp_path / "out", config=_tiny_config())
 
 
-def test_known_commands_adapters(tmp_path):
+def test_known_commands_on_a_real_run(tmp_path):
     """Known commands: equal to held when the commands are constant, to a direct rollout otherwise."""
-    from hybridship.logs.esso_osaka import esso_to_log
+    from hybridship.logs.esso_osaka import EssoRun, esso_to_log
     from hybridship.logs.io import log_to_arrays
-    from hybridship.manoeuvre import Run, _fit, known_commands, make_predictors
-    from hybridship.logs.esso_osaka import EssoRun
+    from hybridship.manoeuvre import Run, _fit, make_predictors
     from hybridship.vessel import load_vessel
 
     v = load_vessel("esso_osaka_model")
     cfg = _tiny_config()
     preds = make_predictors(v, cfg)
-    train_arrays = esso_log_arrays(DATA / "data" / SMALL_TRAIN[0], v)
-    _fit("hybrid", preds["hybrid"], [Run(EssoRun(DATA, "x", "berthing", "x"), train_arrays)], cfg)
-    raw = read_esso_raw(DATA / "data" / SMALL_TEST[1])
-    log = esso_to_log(raw)
+    train = [Run(EssoRun(DATA, "x", "berthing", "x"), esso_log_arrays(DATA / "data" / SMALL_TRAIN[0], v))]
+    for name in ("hybrid", "data_only"):
+        _fit(name, preds[name], train, cfg)
+    log = esso_to_log(read_esso_raw(DATA / "data" / SMALL_TEST[1]))
     a = log_to_arrays(log, thruster_names=v.thruster_names, rotatable=v.rotatable)
     const = log.copy()
     const["propeller_rpm"] = 600.0
     const["rudder_azimuth_deg"] = 10.0
     c = log_to_arrays(const, thruster_names=v.thruster_names, rotatable=v.rotatable)
     starts = a.time_s[[30, 200, 500]]
-    for name in ("dynamic", "hybrid"):
+    for name in ("dynamic", "hybrid", "data_only"):
         p = preds[name]
-        held, known = p.forecast(c, starts, horizon_s=10.0), known_commands(p, c, starts, 10.0)
+        held, known = p.forecast(c, starts, horizon_s=10.0), p.forecast(c, starts, horizon_s=10.0, commands="known")
         np.testing.assert_allclose(known.eta, held.eta, atol=1e-12, err_msg=name)
-        assert not np.allclose(known_commands(p, a, starts, 10.0).eta, p.forecast(a, starts, horizon_s=10.0).eta)
+        assert not np.allclose(p.forecast(a, starts, horizon_s=10.0, commands="known").eta,
+                               p.forecast(a, starts, horizon_s=10.0).eta), name
     # the physics with known commands is the model's rollout with the logged per-step commands
     p = preds["dynamic"]
-    fc = known_commands(p, a, starts, 10.0)
+    fc = p.forecast(a, starts, horizon_s=10.0, commands="known")
     idx = np.searchsorted(a.time_s, starts)
     rows = idx[:, None] + np.arange(100)[None, :]
     direct = p.model.rollout(fc.eta[:, 0], fc.nu[:, 0], 100, dt_s=0.1, rpm=a.rpm[rows], azimuth_rad=a.azimuth_rad[rows],

@@ -195,3 +195,63 @@ def test_guarded_hybrid_beats_physics_after_a_simulated_dp_loss():
     assert np.all(e_h < 0.8 * e_d), (e_h, e_d)
     fc = hp.forecast(logs[0], logs[0].time_s[[metrics.shutdown_index(logs[0]) + 1]], 60)
     assert fc.guard_weight[0, 0] == 0.0                        # thrusters stopped: nets off
+
+
+def test_known_commands_reproduce_a_log_the_model_made(model, exact_logs):
+    """With the logged future commands the physics retraces its own log; held ones do not."""
+    from hybridship.residual.features import ResidualConfig
+
+    log = exact_logs[0]
+    dyn = DynamicPredictor(model.vessel, residual_config=ResidualConfig(start_average_s=1.0))
+    rpm = log.filter(like="_rpm").to_numpy()
+    change = np.flatnonzero(np.any(np.diff(rpm[:800], axis=0) != 0, axis=1)) + 1
+    change = change[change > 100]
+    starts = change[:5]                                       # at a command change; the next one comes
+    first_change = change[1:6] - starts                       # 10-40 s later
+    truth = log[["north_m", "east_m"]].to_numpy()[starts[:, None] + np.arange(61)]
+    known = dyn.forecast(log, starts, 60, commands="known")
+    held = dyn.forecast(log, starts, 60, commands="held")
+    # 4 RK4 substeps made the log, 1 the forecast: O(dt^4) apart
+    assert np.abs(known.eta[..., :2] - truth).max() < 0.01
+    assert np.abs(held.eta[:, -1, :2] - truth[:, -1]).max() > 1.0
+    # held is known with the start's commands: identical up to the first change
+    for k, n in enumerate(first_change):
+        np.testing.assert_allclose(known.eta[k, :n + 1], held.eta[k, :n + 1], atol=1e-12)
+        assert np.abs(known.eta[k, n + 2] - held.eta[k, n + 2]).max() > 0
+
+
+def test_known_commands_need_the_logged_future(model, exact_logs):
+    dyn = DynamicPredictor(model.vessel)
+    with pytest.raises(ValueError, match="commands='known'.*log ends"):
+        dyn.forecast(exact_logs[0], [1180], 60, commands="known")
+    with pytest.raises(ValueError, match="commands: expected one of"):
+        dyn.forecast(exact_logs[0], [100], 60, commands="future")
+    # a dropped command sample holds the last valid one instead of poisoning the forecast
+    log = exact_logs[0].copy()
+    col = log.filter(like="_rpm").columns[0]
+    log.loc[130, col] = np.nan
+    fc = dyn.forecast(log, [100], 60, commands="known")
+    assert np.all(np.isfinite(fc.eta))
+
+
+def test_hybrid_guard_sees_known_commands_stop(model, exact_logs):
+    """Nets trained in station keeping switch off at the step the known commands stop."""
+    hp = HybridPredictor(model.vessel, ensemble_config=SMALL).fit(exact_logs[:2])
+    log = exact_logs[2]                                        # thrusters stop at 900 s
+    known = hp.forecast(log, [870], 60, commands="known")
+    held = hp.forecast(log, [870], 60, commands="held")
+    w = known.guard_weight[0]
+    assert np.all(w[31:] == 0.0)                               # steps after the stop: nets off
+    assert w[1:30].mean() > 0.5                                # before it: (mostly) on
+    assert held.guard_weight[0, 31:].mean() > 0.5              # held commands never stop
+    assert known.flags["out_of_envelope"][0]
+
+
+def test_row_stride_trains_on_every_kth_row(model, current_logs):
+    cfg = EnsembleConfig(n_members=2, max_epochs=5, patience=5, seed=1)
+    full = HybridPredictor(model.vessel, ensemble_config=cfg).fit(current_logs[:1])
+    thin = HybridPredictor(model.vessel, ensemble_config=cfg).fit(current_logs[:1], row_stride=3)
+    assert thin.training_info["n_rows"] == -(-full.training_info["n_rows"] // 3)
+    for bad in (0, 1.5, True):
+        with pytest.raises(ValueError, match="row_stride"):
+            HybridPredictor(model.vessel, ensemble_config=cfg).fit(current_logs[:1], row_stride=bad)
