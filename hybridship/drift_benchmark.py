@@ -92,11 +92,16 @@ def run_drift_benchmark(train=None, test=None, out_dir="drift-benchmark", *, ves
         with a ``train`` folder tests on the training logs' drifts.
     out_dir : path
         Folder for the outputs (created).
-    members, seed : ensemble size and seed of every ensemble model.
-    n_intervals : successive start times after each shutdown (the paper's 20).
-    horizon_s : forecast length [s]; the table's horizons are 15, 30, 45, 60 s within it.
-    dp_only : train on the DP part (``dp_active == 1``) only.
-    ensemble_config : overrides ``members``/``seed`` (e.g. fewer epochs in tests).
+    members, seed : int
+        Ensemble size and seed of every ensemble model.
+    n_intervals : int
+        Successive start times after each shutdown (the paper's 20).
+    horizon_s : float
+        Forecast length [s]; the table's horizons are 15, 30, 45, 60 s within it.
+    dp_only : bool
+        Train on the DP part (``dp_active == 1``) only.
+    ensemble_config : EnsembleConfig or None
+        Overrides ``members``/``seed`` (e.g. fewer epochs in tests).
     """
     def say(msg):
         if progress:

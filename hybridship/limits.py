@@ -69,20 +69,31 @@ class Envelope:
 
     Attributes
     ----------
-    position_max_m : largest ``|north|``, ``|east|`` [m].
-    heading_max_rad : largest ``|psi|`` (unwrapped) [rad].
-    surge_max_m_s, sway_max_m_s : largest ``|u|``, ``|v|`` [m/s].
-    yaw_rate_max_rad_s : largest ``|r|`` [rad/s].
-    wind_speed_max_m_s : largest true wind speed [m/s] (100 kn).
-    current_speed_max_m_s : largest current speed [m/s].
-    max_rpm : per command channel (thrusters, then rudders), largest ``|rpm|`` (the vessel
+    position_max_m : float
+        Largest ``|north|``, ``|east|`` [m].
+    heading_max_rad : float
+        Largest ``|psi|`` (unwrapped) [rad].
+    surge_max_m_s, sway_max_m_s : float
+        Largest ``|u|``, ``|v|`` [m/s].
+    yaw_rate_max_rad_s : float
+        Largest ``|r|`` [rad/s].
+    wind_speed_max_m_s : float
+        Largest true wind speed [m/s] (100 kn).
+    current_speed_max_m_s : float
+        Largest current speed [m/s].
+    max_rpm : tuple of float
+        Per command channel (thrusters, then rudders), largest ``|rpm|`` (the vessel
         file's ``max_rpm``; ``inf`` for a rudder, which has no rpm).
-    thruster_names : per command channel, its name (quoted in messages).
-    max_angle_rad : per command channel, largest ``|angle|`` [rad]: ``inf`` for thrusters
+    thruster_names : tuple of str
+        Per command channel, its name (quoted in messages).
+    max_angle_rad : tuple of float
+        Per command channel, largest ``|angle|`` [rad]: ``inf`` for thrusters
         (any direction), a rudder's ``max_angle_deg`` (mechanical limit).
-    rpm_refuse_factor : ``|rpm|`` beyond this multiple of ``max_rpm`` is refused even when
+    rpm_refuse_factor : float
+        ``|rpm|`` beyond this multiple of ``max_rpm`` is refused even when
         clipping (a unit error).
-    rk4_step_max_s : largest RK4 step ``dt_s / substeps`` [s].
+    rk4_step_max_s : float
+        Largest RK4 step ``dt_s / substeps`` [s].
     """
 
     position_max_m: float = 1e7

@@ -63,21 +63,26 @@ class ManoeuvreConfig:
 
     Attributes
     ----------
-    start_every_s : spacing of forecast start times [s]; None = every sample.
-    step_s : forecast and training step [s]; None = the data's own (0.1 s here). A
-        larger step decimates the runs (every k-th sample, k = step / data step).
-    residual : residual features and start-state windows. Chosen on a validation split
-        of the training runs (never the test runs): the start state is the last sample
-        (the logged velocities are already filtered and lag the positions by 0.6 s; any
+    start_every_s : float or None
+        Spacing of forecast start times [s]; None = every sample.
+    step_s : float or None
+        Forecast and training step [s]; None = the data's own (0.1 s here). A larger
+        step decimates the runs (every k-th sample, k = step / data step).
+    residual : ResidualConfig
+        Residual features and start-state windows. Chosen on a validation split of the
+        training runs (never the test runs): the start state is the last sample (the
+        logged velocities are already filtered and lag the positions by 0.6 s; any
         average adds lag); velocities are smoothed over 2 s for the targets (10-Hz
         differences are noise); the features are the model-predicted velocities and
         accelerations, without the paper's previous-residual input and without a
         running bias: at 10 Hz the previous residual correlates 0.98 with the next, the
         networks learn to hold it, and a held residual acceleration integrates into
         metres within 30 s.
-    ensemble : residual ensemble training.
-    train_row_stride : use every k-th trainable row for training (speed; 10 Hz rows are
-        strongly correlated).
+    ensemble : EnsembleConfig
+        Training of the residual and data-only ensembles.
+    train_row_stride : int
+        Train the hybrid and the data-only ensemble on every k-th usable row (speed;
+        10-Hz rows are strongly correlated).
     """
 
     start_every_s: float | None = 1.0

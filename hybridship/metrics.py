@@ -57,7 +57,8 @@ def drift_errors(predictor, arrays, *, n_intervals: int = 20, horizons_s=HORIZON
 
     Parameters
     ----------
-    predictor : object with ``forecast(log, start_times_s, horizon_s)``
+    predictor : object
+        Any object with a ``forecast(log, start_times_s, horizon_s)`` method.
     arrays : LogArrays
     n_intervals : int
         Number of successive start times from the shutdown.

@@ -50,16 +50,24 @@ class ForecastResult:
 
     Attributes
     ----------
-    start_time_s : (S,) start times [s].
-    lead_s : (H+1,) time since the start [s].
-    eta : (S, H+1, 3) ``[north_m, east_m, psi_rad]`` (ensemble mean for the hybrid).
-    nu : (S, H+1, 3) ``[u_m_s, v_m_s, r_rad_s]``.
-    eta_std : (S, H+1, 3) ensemble standard deviation, or None.
-    guard_weight : (S, H+1) the guard's shrink factor applied at each step, or None.
-    flags : dict of flag name -> (S,) bool, keys :attr:`hybridship.quality.FaultFlags.ALL`
-        (what was degraded at each start: sensor faults in the start window, clipped
-        inputs, the hybrid's correction shrunk by the guard), or None.
-    notes : (S,) str, what was done about each start's faults ("" when clean), or None.
+    start_time_s : ndarray, shape (S,)
+        Start times [s].
+    lead_s : ndarray, shape (H+1,)
+        Time since the start [s].
+    eta : ndarray, shape (S, H+1, 3)
+        ``[north_m, east_m, psi_rad]`` (the ensemble mean for the hybrid).
+    nu : ndarray, shape (S, H+1, 3)
+        ``[u_m_s, v_m_s, r_rad_s]``.
+    eta_std : ndarray, shape (S, H+1, 3), or None
+        Ensemble standard deviation of ``eta`` [m, m, rad].
+    guard_weight : ndarray, shape (S, H+1), or None
+        The guard's shrink factor applied at each step (0..1).
+    flags : dict of str to ndarray of bool, shape (S,), or None
+        Keys :attr:`hybridship.quality.FaultFlags.ALL`: what was degraded at each start
+        (sensor faults in the start window, clipped inputs, the hybrid's correction
+        shrunk by the guard).
+    notes : tuple of str, length S, or None
+        What was done about each start's faults ("" when clean).
     """
 
     start_time_s: np.ndarray

@@ -276,6 +276,7 @@ def forecast_log_arrays(log, vessel, *, source: str | None = None) -> tuple[LogA
     log : path, pandas.DataFrame or LogArrays
         LogArrays are returned as they are (with ``None`` as the sort report).
     vessel : hybridship.vessel.Vessel or str
+        Vessel, or a packaged name or vessel-file path (see :func:`hybridship.vessel.load_vessel`).
     source : str, optional
         Quoted in messages (default: the file name or "log").
 

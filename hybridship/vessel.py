@@ -4,9 +4,10 @@ A vessel file (TOML) describes one ship for the 3-DOF model: main particulars, r
 body, added mass, damping, thrusters, wind loads and, optionally, the perturbation that
 turns it into the simulator's "true" vessel. Actuators are thrusters and propellers
 (``[[thrusters]]``, four-quadrant propeller model) and rudders (``[[rudders]]``, MMG
-standard method, each paired with the propeller whose slipstream reaches it). Hydrodynamic coefficients are either given
-explicitly or derived by a named method (e.g. ``method = "clarke1983"``), so a reader can
-see where every number comes from. See ``docs/vessel-file.md`` for every field.
+standard method, each paired with the propeller whose slipstream reaches it).
+Hydrodynamic coefficients are either given explicitly or derived by a named method (e.g.
+``method = "clarke1983"``), so a reader can see where every number comes from. See
+``docs/reference/vessel-file.md`` for every field.
 
 Errors raise :class:`VesselFileError` naming the field, e.g.
 ``gunnerus.toml: thrusters[1].diameter_m: Input should be greater than 0 (got -1.9)``.

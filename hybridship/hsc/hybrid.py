@@ -62,10 +62,14 @@ class GreyBoxTables:
 
     Attributes
     ----------
-    v0_m_s, dv_m_s : first speed and spacing of the grid.
-    act : (na,) actuator fractions of the rows.
-    resistance_n : (na, nv) resistance at the equilibrium (= thrust) [N].
-    trim_rad : (na, nv) running trim [rad].
+    v0_m_s, dv_m_s : float
+        First speed and spacing of the grid [m/s].
+    act : ndarray, shape (na,)
+        Actuator fractions of the rows.
+    resistance_n : ndarray, shape (na, nv)
+        Resistance at the equilibrium (= thrust) [N].
+    trim_rad : ndarray, shape (na, nv)
+        Running trim [rad].
     """
 
     v0_m_s: float
@@ -238,6 +242,7 @@ class HybridModel:
     craft : PlaningCraft
         The *nominal* vessel file.
     actuator : {"interceptor", "trim_tab"}
+        The trim device.
     ensemble : EnsembleConfig
     acc_lags : int
         Lags of the heave acceleration in the residual features.

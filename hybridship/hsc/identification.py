@@ -285,12 +285,18 @@ class NARXConfig:
 
     Attributes
     ----------
-    n_out, n_in : lags of the outputs and of the inputs (``2 n_out + 3 n_in`` network inputs).
-    hidden : neurons of the hidden layers (log-sigmoid); the output layer is linear.
-    max_iter : L-BFGS iterations at most (full batch; a quasi-Newton stand-in for Levenberg-Marquardt).
-    restarts : random initialisations; the one with the lowest held-out error is kept.
-    val_fraction : last fraction of the training data held out for early stopping.
-    seed : seed of the initial weights.
+    n_out, n_in : int
+        Lags of the outputs and of the inputs (``2 n_out + 3 n_in`` network inputs).
+    hidden : tuple of int
+        Neurons of the hidden layers (log-sigmoid); the output layer is linear.
+    max_iter : int
+        L-BFGS iterations at most (full batch; a quasi-Newton stand-in for Levenberg-Marquardt).
+    restarts : int
+        Random initialisations; the one with the lowest held-out error is kept.
+    val_fraction : float
+        Last fraction of the training data held out for early stopping.
+    seed : int
+        Seed of the initial weights.
     """
 
     n_out: int = 5

@@ -46,17 +46,28 @@ class TrialConfig:
 
     Attributes
     ----------
-    sea_state : WMO sea-state code of the trial (1 or 2); a label.
-    n_samples, n_train : aligned samples in all and in the training part (the rest validate).
-    actuator : trim device driven by the PWM input.
-    sea : head-sea wave conditions.
-    seed : seed of the input schedule, the waves and the sensor noise.
-    rpm_range : engine-speed command range [rpm].
-    pwm_range_pct : PWM duty range [%].
-    hold_s : (min, max) duration of an engine-speed level [s].
-    ramp_rpm_s : (min, max) slew rate of the engine-speed sweeps [rpm/s].
-    pwm_period_s : (min, max) full period of the PWM switching [s].
-    settle_s : simulated time before the logger starts [s].
+    sea_state : int
+        WMO sea-state code of the trial (1 or 2); a label.
+    n_samples, n_train : int
+        Aligned samples in all and in the training part (the rest validate).
+    actuator : {"interceptor", "trim_tab"}
+        Trim device driven by the PWM input.
+    sea : SeaConditions
+        Head-sea wave conditions.
+    seed : int
+        Seed of the input schedule, the waves and the sensor noise.
+    rpm_range : tuple of float
+        Engine-speed command range (min, max) [rpm].
+    pwm_range_pct : tuple of float
+        PWM duty range (min, max) [%].
+    hold_s : tuple of float
+        (min, max) duration of an engine-speed level [s].
+    ramp_rpm_s : tuple of float
+        (min, max) slew rate of the engine-speed sweeps [rpm/s].
+    pwm_period_s : tuple of float
+        (min, max) full period of the PWM switching [s].
+    settle_s : float
+        Simulated time before the logger starts [s].
     """
 
     sea_state: int

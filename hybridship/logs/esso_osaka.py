@@ -225,9 +225,13 @@ class EssoRun:
     Attributes
     ----------
     path : Path
-    name : file name without ``.csv``/``.csv.gz``.
-    kind : one of :data:`RUN_KINDS`.
-    recording : the recording the file belongs to (pieces ``_<k>`` of one recording share it).
+        Path of the run file.
+    name : str
+        File name without ``.csv``/``.csv.gz``.
+    kind : str
+        One of :data:`RUN_KINDS`.
+    recording : str
+        The recording the file belongs to (pieces ``_<k>`` of one recording share it).
     """
 
     path: Path

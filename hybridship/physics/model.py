@@ -49,18 +49,30 @@ class ModelArrays(NamedTuple):
 
     Attributes
     ----------
-    m_inv : (3, 3) inverse of M = M_RB + M_A.
-    m_a : (3, 3) symmetric added-mass matrix M_A.
-    rb : (3,) ``[mass_kg, x_g_m, rho_water_kg_m3]``.
-    d_lin : (3, 3) linear damping D.
-    d_quad : (3,) quadratic damping ``[d_uu, d_vv, d_rr]`` (force ``-d |x| x``).
-    d_lift : (4,) speed-proportional sway/yaw damping per unit |u_r| (see ``hull.clarke1983_lift``).
-    strip_x, strip_w : (n,) cross-flow drag strip positions [m] and weights [kg/m^2].
-    thr : (K, 8) thruster parameters (columns ``THR_*`` of :mod:`.thrusters`).
-    thr_coef : (K, 4, N) four-quadrant Fourier coefficients.
-    wind_p : (4,) ``[rho_air_kg_m3, A_F_m2, A_L_m2, L_oa_m]``.
-    wind_table : (WIND_TABLE_SIZE, 3) C_X, C_Y, C_N on ``linspace(-pi, pi)``.
-    rud : (R, RUD_NCOL) rudder parameters (columns ``RUD_*`` of :mod:`.rudder`); R may be 0.
+    m_inv : ndarray, shape (3, 3)
+        Inverse of M = M_RB + M_A.
+    m_a : ndarray, shape (3, 3)
+        Symmetric added-mass matrix M_A.
+    rb : ndarray, shape (3,)
+        ``[mass_kg, x_g_m, rho_water_kg_m3]``.
+    d_lin : ndarray, shape (3, 3)
+        Linear damping D.
+    d_quad : ndarray, shape (3,)
+        Quadratic damping ``[d_uu, d_vv, d_rr]`` (force ``-d |x| x``).
+    d_lift : ndarray, shape (4,)
+        Speed-proportional sway/yaw damping per unit |u_r| (see ``hull.clarke1983_lift``).
+    strip_x, strip_w : ndarray, shape (n,)
+        Cross-flow drag strip positions [m] and weights [kg/m^2].
+    thr : ndarray, shape (K, 8)
+        Thruster parameters (columns ``THR_*`` of :mod:`.thrusters`).
+    thr_coef : ndarray, shape (K, 4, N)
+        Four-quadrant Fourier coefficients.
+    wind_p : ndarray, shape (4,)
+        ``[rho_air_kg_m3, A_F_m2, A_L_m2, L_oa_m]``.
+    wind_table : ndarray, shape (WIND_TABLE_SIZE, 3)
+        C_X, C_Y, C_N on ``linspace(-pi, pi)``.
+    rud : ndarray, shape (R, RUD_NCOL)
+        Rudder parameters (columns ``RUD_*`` of :mod:`.rudder`); R may be 0.
     """
 
     m_inv: np.ndarray
@@ -326,10 +338,14 @@ class RolloutResult(NamedTuple):
 
     Attributes
     ----------
-    time_s : (S+1,) time since the start [s].
-    eta : (B, S+1, 3) ``[north_m, east_m, psi_rad]`` (heading unwrapped).
-    nu : (B, S+1, 3) ``[u_m_s, v_m_s, r_rad_s]``.
-    nu_dot : (B, S+1, 3) ``[u_dot_m_s2, v_dot_m_s2, r_dot_rad_s2]``.
+    time_s : ndarray, shape (S+1,)
+        Time since the start [s].
+    eta : ndarray, shape (B, S+1, 3)
+        ``[north_m, east_m, psi_rad]`` (heading unwrapped).
+    nu : ndarray, shape (B, S+1, 3)
+        ``[u_m_s, v_m_s, r_rad_s]``.
+    nu_dot : ndarray, shape (B, S+1, 3)
+        ``[u_dot_m_s2, v_dot_m_s2, r_dot_rad_s2]``.
     """
 
     time_s: np.ndarray

@@ -169,6 +169,7 @@ def rudder_forces(model, nu_r, delta_rad, thrust_open_N=None):
     Parameters
     ----------
     model : hybridship.physics.model.DynamicModel
+        The model whose rudders are evaluated.
     nu_r : array_like, shape (B, 3) or (3,)
         ``[u_r, v_r, r]`` relative to the water [m/s, m/s, rad/s].
     delta_rad : array_like, shape (B, R) or (R,)

@@ -22,16 +22,25 @@ class EnsembleConfig:
 
     Attributes
     ----------
-    n_members : number of networks E.
-    hidden : units of each hidden layer (two layers).
-    lr : Adam learning rate.
-    max_epochs : full-batch Adam iterations at most.
-    patience : epochs without validation improvement before a member stops improving.
-    weight_decay : L2 penalty on the weights.
-    val_fraction : last fraction of each time-ordered segment used for validation.
-    bootstrap : train each member on a bootstrap resample of the training rows (bagging),
+    n_members : int
+        Number of networks E.
+    hidden : int
+        Units of each hidden layer (two layers).
+    lr : float
+        Adam learning rate.
+    max_epochs : int
+        Full-batch Adam iterations at most.
+    patience : int
+        Epochs without validation improvement before a member stops improving.
+    weight_decay : float
+        L2 penalty on the weights.
+    val_fraction : float
+        Last fraction of each time-ordered segment used for validation.
+    bootstrap : bool
+        Train each member on a bootstrap resample of the training rows (bagging),
         which spreads the members where data are thin and so calibrates the spread.
-    seed : seed of the initial weights and the bootstrap draws.
+    seed : int
+        Seed of the initial weights and the bootstrap draws.
     """
 
     n_members: int = 10
@@ -63,8 +72,10 @@ class MLPEnsemble:
     ----------
     weights : list of ndarray
         ``[W1 (E, n_in, H), b1 (E, 1, H), W2 (E, H, H), b2 (E, 1, H), W3 (E, H, n_out), b3 (E, 1, n_out)]``.
-    x_mean, x_std : (n_in,) input standardisation.
-    y_mean, y_std : (n_out,) output standardisation.
+    x_mean, x_std : ndarray, shape (n_in,)
+        Input standardisation.
+    y_mean, y_std : ndarray, shape (n_out,)
+        Output standardisation.
     """
 
     weights: list
@@ -91,7 +102,9 @@ class MLPEnsemble:
 
         Parameters
         ----------
-        X : ndarray, shape (N, n_in) (same input for all members) or (E, N, n_in).
+        X : ndarray, shape (N, n_in) or (E, N, n_in)
+            Inputs: shape (N, n_in) gives the same input to all members, shape (E, N, n_in)
+            one input per member.
 
         Returns
         -------

@@ -61,18 +61,26 @@ class ResidualConfig:
 
     Attributes
     ----------
-    features : names from :data:`ALL_FEATURES`.
-    deriv_window_s : Savitzky-Golay window for smoothing the velocities [s]; 0 uses the logged
+    features : tuple of str
+        Names from :data:`ALL_FEATURES`.
+    deriv_window_s : float
+        Savitzky-Golay window for smoothing the velocities [s]; 0 uses the logged
         velocities as they are (unbiased under white noise, and exact on a model-made log).
-    polyorder : Savitzky-Golay polynomial order.
-    start_average_s : causal moving-average window of heading and velocities at a start [s].
-    start_residual_window_s : window of the causal residual average that starts the
+    polyorder : int
+        Savitzky-Golay polynomial order.
+    start_average_s : float
+        Causal moving-average window of heading and velocities at a start [s].
+    start_residual_window_s : float
+        Window of the causal residual average that starts the
         autoregressive input [s]; 0 starts it at zero deviation (the bias already holds the
         recent mean, and a short window at a failure mixes in the thrusters' run-down).
-    bias_window_s : window of the causal residual mean used as the bias [s]; 0 = no bias
+    bias_window_s : float
+        Window of the causal residual mean used as the bias [s]; 0 = no bias
         (the paper's scheme).
-    bias_frame : ``"ned"`` or ``"body"``: the frame in which the bias is held constant.
-    bias_block_s : length of the residual blocks whose means spread the ensemble members'
+    bias_frame : {"ned", "body"}
+        The frame in which the bias is held constant.
+    bias_block_s : float
+        Length of the residual blocks whose means spread the ensemble members'
         biases [s] (the forecast horizon is a good choice: the spread then reflects how much
         a one-minute mean of the unknown force varies around the long mean).
     """
@@ -265,6 +273,7 @@ def prepare_log(model, arrays: LogArrays, config: ResidualConfig = ResidualConfi
     Parameters
     ----------
     model : hybridship.physics.model.DynamicModel
+        The physics model that makes the one-step predictions.
     arrays : LogArrays
         A validated log (see :func:`hybridship.logs.io.log_to_arrays`).
     config : ResidualConfig

@@ -27,10 +27,14 @@ class EnvelopeGuard:
 
     Attributes
     ----------
-    mean : (n,) feature mean.
-    inv_cov : (n, n) inverse (regularised) covariance.
-    d0 : distance at which shrinking starts (the ``quantile`` of training distances).
-    scale : e-folding distance of the shrink factor beyond ``d0``.
+    mean : ndarray, shape (n,)
+        Feature mean.
+    inv_cov : ndarray, shape (n, n)
+        Inverse (regularised) covariance.
+    d0 : float
+        Distance at which shrinking starts (the ``quantile`` of training distances).
+    scale : float
+        E-folding distance of the shrink factor beyond ``d0``.
     """
 
     mean: np.ndarray
@@ -91,8 +95,10 @@ class ThrustRegime:
 
     Attributes
     ----------
-    scale : (3,) per-axis scale of ``M^-1 tau_thr`` [m/s^2, m/s^2, rad/s^2].
-    lo : thrust level below which the weight falls (dimensionless).
+    scale : ndarray, shape (3,)
+        Per-axis scale of ``M^-1 tau_thr`` [m/s^2, m/s^2, rad/s^2].
+    lo : float
+        Thrust level below which the weight falls (dimensionless).
     """
 
     scale: np.ndarray

@@ -75,8 +75,10 @@ class ThrusterLimits:
 
     Attributes
     ----------
-    forward_N : (K,) force at ``+max_rpm`` [N] (> 0).
-    reverse_N : (K,) magnitude of the force at ``-max_rpm`` [N] (> 0; B-series propellers
+    forward_N : ndarray, shape (K,)
+        Force at ``+max_rpm`` [N] (> 0).
+    reverse_N : ndarray, shape (K,)
+        Magnitude of the force at ``-max_rpm`` [N] (> 0; B-series propellers
         are weaker astern).
     """
 
@@ -90,6 +92,7 @@ def bollard_thrust_limits(vessel) -> ThrusterLimits:
     Parameters
     ----------
     vessel : hybridship.vessel.Vessel or str
+        Vessel, or a packaged name or vessel-file path (see :func:`hybridship.vessel.load_vessel`).
 
     Returns
     -------
@@ -117,6 +120,7 @@ def extended_configuration(vessel):
     Parameters
     ----------
     vessel : hybridship.vessel.Vessel or str
+        Vessel, or a packaged name or vessel-file path (see :func:`hybridship.vessel.load_vessel`).
 
     Returns
     -------
@@ -144,16 +148,24 @@ class AllocationResult:
 
     Attributes
     ----------
-    rpm : (K,) shaft speed commands [rpm], signed, within ``+-max_rpm``.
-    azimuth_rad : (K,) thrust directions [rad] in [-pi, pi) (fixed-axis thrusters: their axis).
-    thrust_N : (K,) delivered force along each thruster axis at the commanded rpm and the
+    rpm : ndarray, shape (K,)
+        Shaft speed commands [rpm], signed, within ``+-max_rpm``.
+    azimuth_rad : ndarray, shape (K,)
+        Thrust directions [rad] in [-pi, pi) (fixed-axis thrusters: their axis).
+    thrust_N : ndarray, shape (K,)
+        Delivered force along each thruster axis at the commanded rpm and the
         given inflow (four-quadrant model, after thrust deduction) [N].
-    tau_achieved : (3,) generalised force ``[X_N, Y_N, N_Nm]`` those commands deliver.
-    saturated : True when a thrust limit (bollard limit or max_rpm at the actual inflow) cut
+    tau_achieved : ndarray, shape (3,)
+        Generalised force ``[X_N, Y_N, N_Nm]`` those commands deliver.
+    saturated : bool
+        True when a thrust limit (bollard limit or max_rpm at the actual inflow) cut
         the demand. Thrusters at their bollard limit then run at ``+-max_rpm``.
-    rate_limited : True when an azimuth or rpm rate limit was active.
-    demand_scale : fraction of the demand the magnitude limits allow (1 when feasible).
-    tau_desired : (3,) the demand, for reference.
+    rate_limited : bool
+        True when an azimuth or rpm rate limit was active.
+    demand_scale : float
+        Fraction of the demand the magnitude limits allow (1 when feasible).
+    tau_desired : ndarray, shape (3,)
+        The demand ``[X_N, Y_N, N_Nm]``, for reference.
     """
 
     rpm: np.ndarray
@@ -485,6 +497,7 @@ def thrust_capacity(vessel) -> np.ndarray:
     Parameters
     ----------
     vessel : hybridship.vessel.Vessel or str
+        Vessel, or a packaged name or vessel-file path (see :func:`hybridship.vessel.load_vessel`).
 
     Returns
     -------

@@ -73,8 +73,10 @@ class DPGains:
     Attributes
     ----------
     Kp, Kd, Ki : ndarray, shape (3, 3)
-    omega_n_rad_s : (3,) natural frequencies the gains were placed at.
-    zeta : (3,) relative damping.
+    omega_n_rad_s : ndarray, shape (3,)
+        Natural frequencies the gains were placed at [rad/s].
+    zeta : ndarray, shape (3,)
+        Relative damping.
     """
 
     Kp: np.ndarray

@@ -588,6 +588,7 @@ def mean_drift_loads(psi_rad, components: WaveField, hull, rho_kg_m3=RHO_SEAWATE
         Heading [rad].
     components : WaveField
     hull : HullDimensions or mapping
+        Hull dimensions (see :func:`drift_coefficients`).
     rho_kg_m3 : float
 
     Returns
@@ -920,6 +921,7 @@ def gust_wind(time_s, mean_speed_m_s, mean_dir_from_rad, rng, intensity=0.1, *, 
     mean_dir_from_rad : float
         Mean direction the wind comes FROM [rad], clockwise from north.
     rng : numpy.random.Generator or int
+        Random source (or seed).
     intensity : float
         Turbulence intensity ``sigma_U / U_mean`` [-], in [0, 0.5].
     spectrum : {"harris", "davenport"}
@@ -988,6 +990,7 @@ def current_series(time_s, mean_speed_m_s, mean_dir_to_rad, rng, speed_var=0.1,
     mean_dir_to_rad : float
         Mean direction the current flows TO [rad], clockwise from north.
     rng : numpy.random.Generator or int
+        Random source (or seed).
     speed_var : float
         Standard deviation of the speed as a fraction of the mean [-] (0.1 = +-10 %).
     dir_var_rad : float
@@ -1114,6 +1117,7 @@ class SeaState:
         Parameters
         ----------
         rng : numpy.random.Generator or int
+            Random source (or seed).
         beaufort : (int, int)
             Inclusive Beaufort range, 0 <= lo <= hi <= 12.
         """
