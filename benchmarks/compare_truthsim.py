@@ -115,7 +115,7 @@ def main(argv=None) -> int:
     for _, r in res.iterrows():
         d = (r["drift_dir_to_deg|ours"] - r["drift_dir_to_deg|truthsim"] + 180.0) % 360.0 - 180.0
         ang.append(d)
-    print(f"\nDirection of the 600 s net drift, ours minus truthsim [deg]: "
+    print("\nDirection of the 600 s net drift, ours minus truthsim [deg]: "
           + ", ".join(f"{a:+.0f}" for a in ang))
 
     # ---- figure
