@@ -226,17 +226,18 @@ def _known_command_steps(arrays: LogArrays, idx: np.ndarray, H: int, rpm0: np.nd
                          f"{arrays.time_s[idx[k]]:g} s needs logged commands for {H} steps after it; "
                          "use commands='held' or an earlier start time")
     rows = idx[:, None] + np.arange(H)[None, :]
-    out = []
-    for x, x0 in ((arrays.rpm, rpm0), (arrays.azimuth_rad, az0)):
-        steps = x[rows]                                   # (S, H, K), a copy
-        steps[:, 0] = x0
-        if stop_after_failure and x is arrays.rpm:
-            steps[arrays.dp_active[rows] == 0] = 0.0
-        valid = np.isfinite(steps)
-        pos = np.where(valid, np.arange(H)[None, :, None], 0)
-        np.maximum.accumulate(pos, axis=1, out=pos)       # index of the last valid step so far
-        out.append(np.take_along_axis(steps, pos, axis=1))
-    return out
+    rpm, az = arrays.rpm[rows], arrays.azimuth_rad[rows]          # (S, H, K), copies
+    rpm[:, 0], az[:, 0] = rpm0, az0
+    if stop_after_failure:
+        rpm[arrays.dp_active[rows] == 0] = 0.0
+    return _hold_last_valid(rpm), _hold_last_valid(az)
+
+
+def _hold_last_valid(steps: np.ndarray) -> np.ndarray:
+    """Replace NaN entries of ``steps`` (S, H, K) by the last finite value before them in H."""
+    pos = np.where(np.isfinite(steps), np.arange(steps.shape[1])[None, :, None], 0)
+    np.maximum.accumulate(pos, axis=1, out=pos)                 # index of the last valid step so far
+    return np.take_along_axis(steps, pos, axis=1)
 
 
 def _forecast_setup(model, config: ResidualConfig, log, start_times_s, horizon_s: float,

@@ -228,10 +228,14 @@ def test_known_commands_need_the_logged_future(model, exact_logs):
         dyn.forecast(exact_logs[0], [100], 60, commands="future")
     # a dropped command sample holds the last valid one instead of poisoning the forecast
     log = exact_logs[0].copy()
-    col = log.filter(like="_rpm").columns[0]
-    log.loc[130, col] = np.nan
+    rpm_cols = log.filter(like="_rpm").columns
+    held_value = log.loc[129, rpm_cols].to_numpy()
+    log.loc[130:132, rpm_cols] = np.nan
     fc = dyn.forecast(log, [100], 60, commands="known")
-    assert np.all(np.isfinite(fc.eta))
+    filled = exact_logs[0].copy()
+    filled.loc[130:132, rpm_cols] = held_value
+    np.testing.assert_allclose(fc.eta, dyn.forecast(filled, [100], 60, commands="known").eta, atol=1e-12)
+    assert np.all(exact_logs[0].loc[130:132, rpm_cols].notna().to_numpy())   # the caller's log is untouched
 
 
 def test_hybrid_guard_sees_known_commands_stop(model, exact_logs):
