@@ -334,6 +334,8 @@ def _add_benchmark(sub) -> None:
     m.add_argument("--test", required=True, type=Path, help="folder of test runs (never the training runs)")
     m.add_argument("--horizons-s", default="5,10,20,30", help="comma-separated horizons [s] (default 5,10,20,30)")
     m.add_argument("--out", type=Path, default=Path("manoeuvre-benchmark"), help="output folder")
+    m.add_argument("--step-s", type=float, default=None,
+                   help="forecast and training step [s], a whole multiple of the data's (default: the data's own)")
     m.add_argument("--seed", type=int, default=0, help="seed of training (default 0)")
     m.add_argument("--quick", action="store_true", help="a small, fast configuration (for tests)")
     m.set_defaults(func=_cmd_benchmark_manoeuvre)
@@ -341,7 +343,9 @@ def _add_benchmark(sub) -> None:
 
 
 def _cmd_benchmark_manoeuvre(args) -> int:
-    from .manoeuvre import run_manoeuvre_benchmark
+    from dataclasses import replace
+
+    from .manoeuvre import ManoeuvreConfig, run_manoeuvre_benchmark
 
     try:
         horizons = tuple(float(h) for h in args.horizons_s.split(",") if h.strip())
@@ -353,8 +357,11 @@ def _cmd_benchmark_manoeuvre(args) -> int:
     for opt, folder in (("--train", args.train), ("--test", args.test)):
         if not folder.is_dir():
             raise UsageError(f"{_PROG} benchmark manoeuvre: error: {opt} {folder}: not a folder")
+    if args.step_s is not None and not args.step_s > 0:
+        raise UsageError(f"{_PROG} benchmark manoeuvre: error: --step-s must be > 0 s, got {args.step_s}")
+    cfg = ManoeuvreConfig.quick(args.seed) if args.quick else ManoeuvreConfig()
     run_manoeuvre_benchmark(args.vessel, args.train, args.test, horizons, args.out, seed=args.seed,
-                            quick=args.quick, progress=True)
+                            config=replace(cfg, step_s=args.step_s), progress=True)
     return 0
 
 

@@ -152,7 +152,14 @@ def _decimate(arrays: LogArrays, vessel, step_s: float | None) -> LogArrays:
 
 
 def load_runs(folder, vessel, *, step_s: float | None = None) -> list[Run]:
-    """Every run of the Esso Osaka format under ``folder`` (see :func:`~hybridship.logs.esso_osaka.list_runs`)."""
+    """Every run of the Esso Osaka format under ``folder`` (see :func:`~hybridship.logs.esso_osaka.list_runs`).
+
+    ``vessel`` is a Vessel or a packaged name / vessel file; ``step_s`` [s] decimates the
+    runs to that step (a whole multiple of the data's; None keeps the data's own).
+    """
+    from .vessel import Vessel, load_vessel
+
+    vessel = vessel if isinstance(vessel, Vessel) else load_vessel(vessel)
     runs = [Run(r, _decimate(esso_log_arrays(r.path, vessel), vessel, step_s)) for r in list_runs(folder)]
     if not runs:
         raise FileNotFoundError(f"{folder}: no runs (*.csv, *.csv.gz) found")

@@ -483,7 +483,8 @@ def assess_start_window(
 
     for k, i in enumerate(idx):
         t0 = t[i]
-        lo = int(np.searchsorted(t, t0 - window_s + 0.5 * dt_nom, side="left"))
+        # the window always holds the start row (a window shorter than half a step would not)
+        lo = min(int(np.searchsorted(t, t0 - window_s + 0.5 * dt_nom, side="left")), int(i))
         W = np.arange(lo, i + 1)
         note: list[str] = []
 

@@ -259,3 +259,28 @@ def test_known_commands_on_a_real_run(tmp_path):
     direct = p.model.rollout(fc.eta[:, 0], fc.nu[:, 0], 100, dt_s=0.1, rpm=a.rpm[rows], azimuth_rad=a.azimuth_rad[rows],
                              wind=a.wind[idx])
     np.testing.assert_allclose(fc.eta, direct.eta, atol=1e-12)
+
+
+def test_benchmark_at_a_coarser_step_through_the_cli(tmp_path, capsys):
+    """--step-s 0.5 decimates the 10-Hz runs; the physics' error barely depends on the step,
+    and a step that is not a whole multiple of the data's is refused with a one-line error."""
+    from hybridship.cli import main
+    from hybridship.manoeuvre import load_runs
+
+    train = _link(tmp_path, "train", SMALL_TRAIN)
+    test = _link(tmp_path, "test", SMALL_TEST)
+    runs = load_runs(test, "esso_osaka_model", step_s=0.5)
+    assert all(np.allclose(np.diff(r.arrays.time_s), 0.5) for r in runs)
+    errs = {}
+    for step in ("0.5", None):
+        out = tmp_path / f"out{step}"
+        argv = ["benchmark", "manoeuvre", "--train", str(train), "--test", str(test), "--horizons-s", "5,10",
+                "--out", str(out), "--quick"] + (["--step-s", step] if step else [])
+        assert main(argv) == 0
+        e = pd.read_csv(out / "errors.csv")
+        errs[step] = e[(e.model == "dynamic") & (e.kind == "all") & (e.state == "distance_m")
+                       & (e.commands == "known")].set_index("horizon_s").mae
+    assert np.allclose(errs["0.5"], errs[None], rtol=0.25), errs
+    assert main(["benchmark", "manoeuvre", "--train", str(train), "--test", str(test), "--out",
+                 str(tmp_path / "bad"), "--quick", "--step-s", "0.25"]) == 1
+    assert "step_s: 0.25 s is not a whole multiple" in capsys.readouterr().err

@@ -259,3 +259,11 @@ def test_row_stride_trains_on_every_kth_row(model, current_logs):
     for bad in (0, 1.5, True):
         with pytest.raises(ValueError, match="row_stride"):
             HybridPredictor(model.vessel, ensemble_config=cfg).fit(current_logs[:1], row_stride=bad)
+
+
+def test_a_start_window_shorter_than_a_step_uses_the_start_row(model, exact_logs):
+    from hybridship.residual.features import ResidualConfig
+
+    log = exact_logs[0]
+    fc = DynamicPredictor(model.vessel, residual_config=ResidualConfig(start_average_s=0.1)).forecast(log, [300], 10)
+    np.testing.assert_allclose(fc.nu[0, 0], log.loc[300, ["u_m_s", "v_m_s"]].tolist() + [np.radians(log.r_deg_s[300])])
