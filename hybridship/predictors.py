@@ -35,7 +35,7 @@ from .physics.model import DynamicModel
 from .residual.ensemble import EnsembleConfig, MLPEnsemble, fit_ensemble
 from .residual.features import ResidualConfig, prepare_log
 from .residual.environment import (EnvironmentConfig, EnvironmentEstimator, current_input,
-                                   thrust_accel)
+                                   environment_accel, thrust_accel)
 from .residual.guard import EnvelopeGuard, ThrustRegime
 
 #: Version of the model-file format written by :meth:`HybridPredictor.save`.
@@ -478,13 +478,19 @@ class HybridPredictor:
     # ------------------------------------------------------------------ training
 
     def training_data(self, logs: Iterable, *, dp_only: bool = True):
-        """Features X, targets Y and a per-log segment label from the given logs."""
+        """Features X, targets Y and a per-log segment label from the given logs.
+
+        The targets are the residual deviations from the environment the forecast will use:
+        with ``environment="estimator"`` the acceleration that the (fitted) estimator's
+        causal state explains at each row (:func:`~hybridship.residual.environment.environment_accel`),
+        otherwise the ``bias_window_s`` mean residual.
+        """
         Xs, Ys, segs, thr = [], [], [], []
-        self._fit_arrays = []
         for k, log in enumerate(logs):
             arrays = as_log_arrays(log, self.model.vessel)
-            self._fit_arrays.append(arrays)
             prep = prepare_log(self.model, arrays, self.residual_config)
+            if self.environment == "estimator":
+                prep.env_body = environment_accel(self.model, arrays, self.estimator.run(arrays), prep.nu_s)
             mask = arrays.dp_active.astype(bool) if dp_only else None
             rows = prep.trainable_rows(mask)
             if rows.size == 0:
@@ -516,15 +522,16 @@ class HybridPredictor:
             the same rows.
         """
         stride = _check_row_stride(row_stride)
+        logs = [as_log_arrays(x, self.model.vessel) for x in logs]
+        self.estimator = EnvironmentEstimator(self.model, self.environment_config)
+        if self.environment == "estimator":
+            self.estimator.fit(logs, dp_only=dp_only)
         X, Y, seg = self.training_data(logs, dp_only=dp_only)
         X, Y, seg, thr = X[::stride], Y[::stride], seg[::stride], self._training_thrust_acc[::stride]
         self.ensemble = fit_ensemble(X, Y, self.ensemble_config, segment_id=seg, progress=progress)
         self.guard = EnvelopeGuard.fit((X - self.ensemble.x_mean) / self.ensemble.x_std,
                                        quantile=self.guard_quantile)
         self.thrust_regime = ThrustRegime.fit(thr)
-        self.estimator = EnvironmentEstimator(self.model, self.environment_config)
-        if self.environment == "estimator":
-            self.estimator.fit(self._fit_arrays, dp_only=dp_only)
         self.training_info = {"n_rows": int(X.shape[0]), "row_stride": stride,
                               "epochs": self.ensemble.history["epochs"],
                               "best_val_mse": self.ensemble.history["best_val_mse"],

@@ -89,6 +89,7 @@ class EnvironmentConfig(BaseModel):
     wave_window_s: float = Field(30.0, gt=0)
     variance_window_s: float = Field(600.0, gt=0)
     reset_yaw_load_at_stop: bool = True
+    yaw_load_kept_at_stop: float = Field(0.0, ge=0.0, le=1.0)
 
 
 @dataclass(frozen=True)
@@ -135,8 +136,8 @@ class EnvironmentEstimate:
     def sample_environment(self, n: int, seed: int = 0) -> np.ndarray:
         """Draws of ``[v_c (2), b (3), theta (3)]`` from the posterior, shape (n, S, 8).
 
-        Draw 0 is the mean (so an ensemble's first member is the point estimate), and the
-        other draws are centred on it (their mean is the posterior mean).
+        The draws are centred: their mean is the posterior mean whatever ``n``, so an
+        ensemble forecast's mean does not depend on the sampling.
         Deterministic for a given ``seed`` and row: a start's draws do not depend on which
         other starts are forecast with it.
         """
@@ -148,11 +149,8 @@ class EnvironmentEstimate:
         L = np.linalg.cholesky(Pe + 1e-18 * np.eye(8))                  # (S, 8, 8)
         z = np.stack([np.random.default_rng([seed, int(r)]).standard_normal((n - 1, 8)) for r in self.rows],
                      axis=1)                                             # (n - 1, S, 8)
-        dev = np.einsum("sij,nsj->nsi", L, z)
-        if n > 2:   # centred, so that the members' mean is the posterior mean
-            dev -= dev.mean(axis=0)
-        out[1:] += dev
-        return out
+        dev = np.concatenate([np.zeros((1, S, 8)), np.einsum("sij,nsj->nsi", L, z)])
+        return out + dev - dev.mean(axis=0)     # centred: the members' mean is the posterior mean
 
 
 def thrust_accel(model, eta, nu, rpm, az, wind) -> np.ndarray:
@@ -174,6 +172,31 @@ def external_accel(psi_rad, load_ned, theta, a_thr) -> np.ndarray:
     out[..., 0] += c * load_ned[..., 0] + s * load_ned[..., 1]
     out[..., 1] += -s * load_ned[..., 0] + c * load_ned[..., 1]
     out[..., 2] += load_ned[..., 2]
+    return out
+
+
+def environment_accel(model, arrays, estimate: EnvironmentEstimate, nu=None) -> np.ndarray:
+    """The acceleration (N, 3) [m/s^2, m/s^2, rad/s^2] that the estimate explains at every row.
+
+    ``a(current, accel_ext) - a(no environment)`` of the dynamic model at each row's logged
+    state and commands (``nu`` overrides the logged velocities), where the estimate at that
+    row (an :class:`EnvironmentEstimate` over all rows) gives the current, the load and the
+    thrust error. NaN where the row has no estimate or input.
+    """
+    eta = np.nan_to_num(arrays.eta)
+    nu = np.nan_to_num(arrays.nu if nu is None else nu)
+    rpm, az, wind = (np.nan_to_num(v) for v in (arrays.rpm, arrays.azimuth_rad, arrays.wind))
+    n = len(arrays.time_s)
+    x = np.full((n, N_STATE), np.nan)
+    x[estimate.rows] = estimate.x
+    ok = np.isfinite(x).all(1)
+    xe = np.nan_to_num(x)
+    a_thr = thrust_accel(model, eta, nu, rpm, az, wind)
+    acc = external_accel(eta[:, 2], xe[:, LOAD], xe[:, THR], a_thr)
+    a_env = model.acceleration(eta, nu, rpm=rpm, azimuth_rad=az, wind=wind,
+                               current=current_input(xe[:, CUR]), accel_ext=acc)
+    out = a_env - model.acceleration(eta, nu, rpm=rpm, azimuth_rad=az, wind=wind)
+    out[~ok] = np.nan
     return out
 
 
@@ -311,21 +334,29 @@ class EnvironmentEstimator:
         return f[0], F @ P @ F.T + Q
 
     def _forget_yaw_load(self, x, P):
-        """At a thrust stop, return the yaw load to its prior (see the module notes).
+        """At a thrust stop, return the environment's yaw moment to its prior (module notes).
 
         Under station keeping the yaw offset is the small difference of large thruster
         moments, and a per-DOF efficiency factor cannot describe an error in the thrusters'
         lever arms: the filter's yaw load then holds thruster-model error with a confidence
-        it does not deserve. When the thrusters stop, that part is gone, so the yaw load
-        restarts from its prior and the drift samples identify it afresh.
+        it does not deserve, and it also balances whatever yaw moment the hull model gives
+        the estimated current. When the thrusters stop, the total environmental yaw moment
+        (current through the hull plus load) restarts from zero with the prior's spread, and
+        the drift samples identify it afresh; the current keeps acting through the hull as
+        the ship starts to move.
         """
         k = LOAD.start + 2
         x = x.copy()
         P = P.copy()
-        x[k] = 0.0
+        eta, nu = x[None, 0:3], x[None, 3:6]
+        a_c = self.model.acceleration(eta, nu, current=current_input(x[None, CUR]))[0, 2]
+        a_0 = self.model.acceleration(eta, nu)[0, 2]
+        total = x[k] + (a_c - a_0)              # the environment's yaw acceleration under DP
+        kept = self.config.yaw_load_kept_at_stop
+        x[k] = kept * total - (a_c - a_0)
         P[k, :] = 0.0
         P[:, k] = 0.0
-        P[k, k] = self.config.load_yaw_prior_rad_s2 ** 2
+        P[k, k] = self.config.load_yaw_prior_rad_s2 ** 2 + ((1.0 - kept) * total) ** 2
         return x, P
 
     @staticmethod

@@ -153,6 +153,8 @@ class PreparedLog:
     model's prediction FOR sample ``i`` made from sample ``i - 1`` (NaN where ``i - 1`` is
     in another segment or does not exist); ``residual[i] = nu_dot[i] - nu_dot_hat[i]``.
     The ``_c`` arrays are the causal counterparts used at forecast starts.
+    ``env_body``, when set, is the environment estimator's acceleration at each row (body
+    frame), which then replaces the bias in :meth:`deviation`.
     ``thrust_acc[i]`` is ``M^-1 tau_thrust`` [m/s^2, m/s^2, rad/s^2] at the state and
     commands of row ``i - 1`` (the thrusters' share of the model's acceleration; the guard
     uses it to tell the thruster regime of the training data from that of a forecast).
@@ -170,6 +172,7 @@ class PreparedLog:
     bias_ned: np.ndarray
     thrust_acc: np.ndarray
     config: ResidualConfig = field(default_factory=ResidualConfig)
+    env_body: np.ndarray | None = None
 
     def bias_body(self, rows: np.ndarray, psi_rad=None) -> np.ndarray:
         """The bias known at ``rows`` (from data up to and including them) in the body frame.
@@ -188,8 +191,14 @@ class PreparedLog:
         return out
 
     def deviation(self, rows: np.ndarray) -> np.ndarray:
-        """Residual minus the bias known one sample earlier, at ``rows``."""
+        """Residual minus the environment known one sample earlier, at ``rows``.
+
+        The environment is ``env_body[rows - 1]`` when set (the environment estimator's
+        acceleration, body frame), else the bias known one sample earlier.
+        """
         rows = np.asarray(rows)
+        if self.env_body is not None:
+            return self.residual[rows] - self.env_body[rows - 1]
         return self.residual[rows] - self.bias_body(rows - 1, self.arrays.eta[rows, 2])
 
     def features(self, rows: np.ndarray) -> np.ndarray:
@@ -203,7 +212,7 @@ class PreparedLog:
         ok = np.isfinite(self.residual).all(1) & np.isfinite(self.thrust_acc).all(1)
         ok[1:] &= ok[:-1]
         ok[0] = False
-        okb = np.isfinite(self.bias_ned).all(1)
+        okb = np.isfinite(self.bias_ned if self.env_body is None else self.env_body).all(1)
         ok[2:] &= okb[1:-1] & okb[:-2]
         ok[:2] = False
         if mask is not None:
