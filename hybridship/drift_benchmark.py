@@ -229,18 +229,19 @@ def _md_table(df: pd.DataFrame) -> str:
 
 
 def _markdown(table2, table3, coverage, timing, test_names, n_train, ens_cfg, n_intervals) -> str:
-    parts = [f"# Drift benchmark\n\nTest logs: {', '.join(test_names)}; trained on {n_train} logs; "
+    # No top-level heading: the file reads on its own and is also included in the docs pages.
+    parts = [f"Drift benchmark. Test logs: {', '.join(test_names)}; trained on {n_train} logs; "
              f"{ens_cfg.n_members}-member ensembles, seed {ens_cfg.seed}; {n_intervals} forecasts after each "
              f"failure.\n",
-             "## Table 2: mean absolute error (first 5 / first 20 intervals)\n\nNorth and east in m, yaw in deg.\n",
+             "### Table 2: mean absolute error (first 5 / first 20 intervals)\n\nNorth and east in m, yaw in deg.\n",
              _md_table(table2)]
     for m, t in table3.items():
-        parts += [f"\n## Table 3: % error reduction of `{m}` relative to `dynamic` (5/20)\n", _md_table(t)]
+        parts += [f"\n### Table 3: % error reduction of `{m}` relative to `dynamic` (5/20)\n", _md_table(t)]
     cov = coverage.pivot_table(index=["model", "sigma"], columns="horizon_s", values="coverage")
     cov.columns = [f"{c:g} s" for c in cov.columns]
-    parts += ["\n## Coverage of the ensemble spread (north and east pooled)\n\nA calibrated Gaussian forecast "
+    parts += ["\n### Coverage of the ensemble spread (north and east pooled)\n\nA calibrated Gaussian forecast "
               "covers 0.683 (1 sigma) and 0.954 (2 sigma).\n", _md_table(cov.round(2))]
-    parts += ["\n## Wall time [s]\n", _md_table(timing.assign(seconds=timing.seconds.round(2)).set_index("model"))]
+    parts += ["\n### Wall time [s]\n", _md_table(timing.assign(seconds=timing.seconds.round(2)).set_index("model"))]
     return "\n".join(parts) + "\n"
 
 
