@@ -37,7 +37,9 @@ from .residual.features import ResidualConfig, prepare_log
 from .residual.guard import EnvelopeGuard, ThrustRegime
 
 #: Version of the model-file format written by :meth:`HybridPredictor.save`.
-MODEL_FORMAT_VERSION = 2
+#: 3: the validated vessel description is embedded in the metadata (``vessel_description``),
+#: so a model loads without its vessel file; 2 stored only the vessel's name.
+MODEL_FORMAT_VERSION = 3
 
 
 class ModelFileError(ValueError):
@@ -631,6 +633,7 @@ class HybridPredictor:
         return {
             "format": "hybridship-model", "format_version": MODEL_FORMAT_VERSION,
             "kind": "HybridPredictor", "vessel": v.name,
+            "vessel_description": v.model_dump(mode="json"),
             "vessel_fingerprint": _vessel_fingerprint(v),
             "features": list(self.residual_config.features),
             "residual_config": asdict(self.residual_config),
@@ -660,6 +663,16 @@ class HybridPredictor:
     def load(cls, path, vessel=None) -> "HybridPredictor":
         """Load a model file written by :meth:`save` (never executes code from the file).
 
+        Parameters
+        ----------
+        path : str or path-like
+            The ``.npz`` model file.
+        vessel : Vessel or str, optional
+            The vessel to forecast for (a :class:`~hybridship.vessel.Vessel`, a packaged
+            name or a vessel TOML file); it must be the one the model was trained for
+            (same validated description). Default: the vessel description embedded in
+            the file, so no vessel file is needed.
+
         Raises :class:`ModelFileError` for an unreadable, truncated or tampered file, another
         format version, or a vessel that differs from the one the model was trained for.
         """
@@ -677,9 +690,15 @@ class HybridPredictor:
             raise ModelFileError(f"{path}: metadata missing or damaged") from None
         if meta.get("format") != "hybridship-model":
             raise ModelFileError(f"{path}: not a hybridship model file")
-        if meta.get("format_version") != MODEL_FORMAT_VERSION:
-            raise ModelFileError(f"{path}: model format version {meta.get('format_version')} is not supported "
-                                 f"(this hybridship reads version {MODEL_FORMAT_VERSION})")
+        version = meta.get("format_version")
+        if version != MODEL_FORMAT_VERSION:
+            older = (f": written by an older hybridship (format {version}), whose model files hold only the "
+                     f"vessel's name; retrain with `hybridship train` (or HybridPredictor.fit) to write a "
+                     f"version-{MODEL_FORMAT_VERSION} file that carries its vessel"
+                     if isinstance(version, int) and not isinstance(version, bool) and 1 <= version < MODEL_FORMAT_VERSION
+                     else "")
+            raise ModelFileError(f"{path}: model format version {version} is not supported "
+                                 f"(this hybridship reads version {MODEL_FORMAT_VERSION}){older}")
         content = {k: v for k, v in data.items() if k != "metadata_json"}
         if meta.get("content_sha256") != _content_hash(content):
             raise ModelFileError(f"{path}: content checksum does not match the metadata: the file was "
@@ -687,17 +706,23 @@ class HybridPredictor:
         try:
             residual_config = ResidualConfig(**{k: tuple(v) if k == "features" else v
                                                 for k, v in meta["residual_config"].items()})
-            obj = cls(vessel if vessel is not None else meta["vessel"], residual_config=residual_config,
+            embedded = vessel is None
+            if embedded:
+                vessel = _embedded_vessel(meta["vessel_description"], path)
+            obj = cls(vessel, residual_config=residual_config,
                       ensemble_config=EnsembleConfig(**meta["ensemble_config"]), guard=meta["use_guard"],
                       guard_quantile=meta["guard_quantile"], stop_after_failure=meta["stop_after_failure"])
             fingerprint = meta["vessel_fingerprint"]
             guard_d0, guard_scale = float(meta["guard"]["d0"]), float(meta["guard"]["scale"])
             thrust_lo = float(meta["thrust_regime"]["lo"])
         except (KeyError, TypeError, ValueError, AttributeError) as err:
-            if "VesselFileError" in type(err).__name__:
+            if isinstance(err, ModelFileError) or "VesselFileError" in type(err).__name__:
                 raise
             raise ModelFileError(f"{path}: damaged model metadata ({type(err).__name__}: {err})") from None
         if _vessel_fingerprint(obj.model.vessel) != fingerprint:
+            if embedded:
+                raise ModelFileError(f"{path}: the embedded description of vessel {meta['vessel']!r} does not "
+                                     f"match its fingerprint: the metadata was edited or damaged")
             raise ModelFileError(f"{path}: trained for vessel {meta['vessel']!r} with other parameters; "
                                  f"refusing to use it with vessel {obj.model.vessel.name!r}")
         try:
@@ -726,6 +751,18 @@ def _check_row_stride(row_stride) -> int:
     if isinstance(row_stride, bool) or not isinstance(row_stride, (int, np.integer)) or row_stride < 1:
         raise ValueError(f"row_stride: expected an integer >= 1, got {row_stride!r}")
     return int(row_stride)
+
+
+def _embedded_vessel(description, path):
+    """The :class:`~hybridship.vessel.Vessel` embedded in a model file's metadata (validated again)."""
+    from .vessel import VesselFileError, vessel_from_dict
+
+    if not isinstance(description, dict):
+        raise ModelFileError(f"{path}: damaged model metadata: vessel_description is not a table")
+    try:
+        return vessel_from_dict(description, source=f"{Path(path).name} (embedded vessel)")
+    except VesselFileError as err:
+        raise ModelFileError(f"{path}: damaged model metadata: the embedded vessel is invalid: {err}") from None
 
 
 def _content_hash(arrays: dict) -> str:

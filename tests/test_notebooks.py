@@ -15,6 +15,7 @@ from __future__ import annotations
 import contextlib
 import importlib.util
 import io
+import os
 import re
 from pathlib import Path
 
@@ -41,6 +42,8 @@ def test_notebook_runs_in_small_configuration(path, tmp_path, monkeypatch):
 
     monkeypatch.setenv("HYBRIDSHIP_SMALL", "1")
     monkeypatch.setenv("MPLBACKEND", "Agg")           # no figure rendering: faster, no display
+    # the kernel imports the hybridship beside this test, not another installed copy
+    monkeypatch.setenv("PYTHONPATH", os.pathsep.join(filter(None, [str(ROOT), os.environ.get("PYTHONPATH")])))
     if TRUTHSIM_DEV.is_dir():
         monkeypatch.setenv("HYBRIDSHIP_TRUTHSIM_DEV", str(TRUTHSIM_DEV))
     nb = jupytext.read(path)
