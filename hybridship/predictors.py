@@ -28,8 +28,9 @@ import pandas as pd
 from .fileio import atomic_write
 from .frames import wrap_2pi
 from .limits import check_or_clip_inputs
-from .logs.io import LogArrays, log_to_arrays, read_log
-from .quality import FaultFlags, assess_start_window, forecast_log_arrays
+from .logs.ingest import ingest
+from .logs.io import LogArrays
+from .quality import FaultFlags, assess_start_window
 from .physics.integrate import rollout_batch
 from .physics.model import DynamicModel
 from .residual.ensemble import EnsembleConfig, MLPEnsemble, fit_ensemble
@@ -112,16 +113,10 @@ class ForecastResult:
 # --------------------------------------------------------------------------- helpers
 
 
-def as_log_arrays(log, vessel) -> LogArrays:
-    """Accept a LogArrays, a DataFrame in the log format, or a path to a log file."""
-    if isinstance(log, LogArrays):
-        return log
-    names, rot = vessel.thruster_names, vessel.rotatable
-    if isinstance(log, (str, Path)):
-        log = read_log(log, thruster_names=names, rotatable=rot)
-    if isinstance(log, pd.DataFrame):
-        return log_to_arrays(log, thruster_names=names, rotatable=rot)
-    raise TypeError(f"log: expected a path, a DataFrame or LogArrays, got {type(log).__name__}")
+def as_log_arrays(log, vessel, *, purpose: str = "fit") -> LogArrays:
+    """A path, a DataFrame in the log format or LogArrays, through :func:`hybridship.logs.ingest.ingest`
+    (re-sorted, checked against ``vessel`` once; ``purpose`` "fit" or "forecast")."""
+    return ingest(log, vessel, purpose=purpose)
 
 
 def start_indices(arrays: LogArrays, start_times_s) -> np.ndarray:
@@ -251,8 +246,8 @@ def _forecast_setup(model, config: ResidualConfig, log, start_times_s, horizon_s
     (S, H, K) (see :func:`_known_command_steps`). The wind is held at its start value
     in both modes (its future is not known at a start).
 
-    The log goes through :func:`hybridship.quality.forecast_log_arrays` (re-sorted,
-    checked against the vessel; sensor faults tolerated, format errors refused), the start
+    The log goes through :func:`hybridship.logs.ingest.ingest` with ``purpose="forecast"``
+    (re-sorted, checked against the vessel; sensor faults tolerated, format errors refused), the start
     values through :func:`hybridship.quality.assess_start_window` (valid samples of the
     window used, faults flagged, a start with too little valid data refused), and the held
     inputs through :func:`hybridship.limits.check_or_clip_inputs` (clipped to the
@@ -262,11 +257,11 @@ def _forecast_setup(model, config: ResidualConfig, log, start_times_s, horizon_s
         raise ValueError(f"horizon_s: must be > 0, got {horizon_s}")
     if commands not in COMMAND_MODES:
         raise ValueError(f"commands: expected one of {COMMAND_MODES}, got {commands!r}")
-    arrays, order = forecast_log_arrays(log, model.vessel)
+    arrays = ingest(log, model.vessel, purpose="forecast")
     idx = start_indices(arrays, start_times_s)
-    dt = float(np.median(np.diff(arrays.time_s)))
+    dt = arrays.dt_s
     H = int(round(horizon_s / dt))
-    sw = assess_start_window(arrays, idx, config.start_average_s, order=order)
+    sw = assess_start_window(arrays, idx, config.start_average_s)
     rpm, az, wind = _held_inputs(arrays, idx, stop_after_failure=stop_after_failure, wind=sw.wind)
     if commands == "known":
         rpm, az = _known_command_steps(arrays, idx, H, rpm[:, 0], az[:, 0], stop_after_failure)
@@ -779,6 +774,6 @@ def _content_hash(arrays: dict) -> str:
 
 def _vessel_fingerprint(vessel) -> str:
     """A stable hash of the validated vessel description (so a model is not used on another ship)."""
-    import hashlib
+    from .vessel import fingerprint
 
-    return hashlib.sha256(json.dumps(vessel.model_dump(mode="json"), sort_keys=True).encode()).hexdigest()[:16]
+    return fingerprint(vessel)

@@ -395,6 +395,18 @@ class Vessel(_Strict):
         return len(self.thrusters) + len(self.rudders)
 
 
+def fingerprint(vessel: Vessel) -> str:
+    """A stable hash of the validated vessel description (16 hex digits).
+
+    Two vessels with the same fingerprint have the same parameters; model files and
+    checked logs (:func:`hybridship.logs.ingest.ingest`) record it.
+    """
+    import hashlib
+    import json
+
+    return hashlib.sha256(json.dumps(vessel.model_dump(mode="json"), sort_keys=True).encode()).hexdigest()[:16]
+
+
 def _format_validation_error(err: ValidationError, source: str) -> str:
     lines = []
     for e in err.errors():

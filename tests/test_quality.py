@@ -269,6 +269,7 @@ def test_sort_samples_reports_and_repairs():
     np.testing.assert_array_equal(out.late_time_s, [2.0])   # 2 came after 3; the second 3 is a duplicate
     np.testing.assert_array_equal(out.duplicate_time_s, [3.0])
     np.testing.assert_array_equal(out.conflicting_time_s, [4.0])
+    np.testing.assert_array_equal(out.conflicting_rows, [[5, 6]])
     assert out.n_without_time == 1
     assert np.isnan(out.frame.north_m[4]) and np.isnan(out.frame.dp_active[4])  # neither value trusted
     np.testing.assert_array_equal(out.frame.north_m.drop(index=4), [0, 1, 2, 3, 5])
