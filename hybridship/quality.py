@@ -20,8 +20,8 @@ Faults and their behaviour (``FaultFlags`` names the flags):
 ``late_or_out_of_order``
     Samples whose ``time_s`` is earlier than a sample before them in the file (arrived
     late), or repeated times. :func:`sort_samples` re-sorts by time (stable); an exact
-    duplicate row is dropped; duplicates that disagree are merged into one sample whose
-    values are all missing (neither is trusted). Flagged for starts whose window contains
+    duplicate row is dropped; duplicates that disagree are all removed (neither is trusted;
+    the time becomes a missing sample). Flagged for starts whose window contains
     such a time. Rows without a finite ``time_s`` cannot be placed and are dropped
     (counted in :attr:`SortedLog.n_without_time`).
 ``nan_in_window``
@@ -385,7 +385,9 @@ def assess_start_window(
             note.append(f"{'; '.join(x for x in (what, gap) if x)} in the window: valid samples used")
 
         # ---- late / out of order
-        if affected.size and np.any((affected >= t[lo] - 1e-9) & (affected <= t0 + 1e-9)):
+        # the nominal window: a removed (conflicting) sample leaves no row but is still in it
+        if affected.size and np.any((affected >= min(t[lo], t0 - window_s + 0.5 * dt_nom) - 1e-9)
+                                    & (affected <= t0 + 1e-9)):
             flags[FaultFlags.LATE_OR_OUT_OF_ORDER][k] = True
             note.append("late, out-of-order or duplicated samples in the window: re-sorted by time")
 

@@ -15,7 +15,7 @@ gets the same checks, and the same messages, whether it is trained on or forecas
 ``"forecast"``
     Sensor faults pass, for :func:`hybridship.quality.assess_start_window` to judge per
     forecast start: missing positions and headings stay NaN; conflicting duplicates are
-    merged into one sample whose values are all missing (neither is trusted).
+    both removed (neither is trusted; the time becomes a missing sample).
 
 In both, late (out-of-order) samples are re-sorted, exact duplicates dropped and rows
 without a finite ``time_s`` dropped; the affected times travel with the arrays
@@ -66,8 +66,8 @@ class SortedLog:
     duplicate_time_s : ndarray
         Times that appeared more than once with identical rows (one kept).
     conflicting_time_s : ndarray
-        Times that appeared more than once with differing rows (merged into one sample
-        whose values are all missing).
+        Times that appeared more than once with differing rows (all of them removed:
+        neither is trusted, the time becomes a missing sample).
     conflicting_rows : ndarray of int
         Input rows (0-based positions) of the first two samples of each conflicting time.
     n_without_time : int
@@ -88,7 +88,7 @@ class SortedLog:
 
     @property
     def changed(self) -> bool:
-        """Whether anything was re-sorted, dropped or merged."""
+        """Whether anything was re-sorted, dropped or removed."""
         return bool(self.affected_time_s.size or self.n_without_time)
 
 
@@ -109,7 +109,7 @@ def _rows_equal(block: pd.DataFrame) -> bool:
 
 
 def sort_samples(df: pd.DataFrame, *, source: str = "log") -> SortedLog:
-    """Re-sort a log's samples by time; drop exact duplicates; blank conflicting ones.
+    """Re-sort a log's samples by time; drop exact duplicates; remove conflicting ones.
 
     Parameters
     ----------
@@ -145,7 +145,7 @@ def sort_samples(df: pd.DataFrame, *, source: str = "log") -> SortedLog:
     ts = tt[order]
     dup_mask = np.zeros(ts.size, dtype=bool)
     dup_mask[1:] = ts[1:] == ts[:-1]
-    duplicate, conflicting, conflicting_rows, drop, blank_rows = [], [], [], [], []
+    duplicate, conflicting, conflicting_rows, drop = [], [], [], []
     if dup_mask.any():
         starts = np.flatnonzero(~dup_mask)
         ends = np.concatenate((starts[1:], [ts.size]))
@@ -154,15 +154,11 @@ def sort_samples(df: pd.DataFrame, *, source: str = "log") -> SortedLog:
                 continue
             if _rows_equal(frame.iloc[a:b]):
                 duplicate.append(ts[a])
+                drop.extend(range(a + 1, b))
             else:
                 conflicting.append(ts[a])
                 conflicting_rows.append(rows[order[a:a + 2]])
-                blank_rows.append(a)
-            drop.extend(range(a + 1, b))
-        if blank_rows:
-            value_cols = [c for c in frame.columns if str(c) != "time_s"]
-            frame = frame.astype({c: float for c in value_cols if frame[c].dtype.kind in "iub"})
-            frame.loc[blank_rows, value_cols] = np.nan
+                drop.extend(range(a, b))
         frame = frame.drop(index=drop).reset_index(drop=True)
     return SortedLog(frame=frame, late_time_s=np.unique(tt[late]), duplicate_time_s=np.asarray(duplicate, float),
                      conflicting_time_s=np.asarray(conflicting, float), n_without_time=n_without,
