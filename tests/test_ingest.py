@@ -27,11 +27,6 @@ TINY = EnsembleConfig(n_members=2, hidden=8, max_epochs=15, patience=5, seed=0)
 
 
 @pytest.fixture(scope="module")
-def model():
-    return DynamicModel("gunnerus")
-
-
-@pytest.fixture(scope="module")
 def log(model):
     return physics_log(model, seed=2, duration_s=300.0, t_shutdown_s=None, current=(0.2, 1.0))
 

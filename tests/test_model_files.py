@@ -17,18 +17,12 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from hybridship.physics.model import DynamicModel
 from hybridship.predictors import HybridPredictor, ModelFileError
 from hybridship.residual.ensemble import EnsembleConfig
 from hybridship.sim.synthetic import physics_log
 from hybridship.vessel import vessel_from_dict
 
 TINY = EnsembleConfig(n_members=2, hidden=8, max_epochs=15, patience=5, seed=0)
-
-
-@pytest.fixture(scope="module")
-def model():
-    return DynamicModel("gunnerus")
 
 
 @pytest.fixture(scope="module")

@@ -21,10 +21,11 @@ from pathlib import Path
 
 import pytest
 
-ROOT = Path(__file__).resolve().parents[1]
+from conftest import ROOT, shared_data_path
+
 DOCS = ROOT / "docs"
 NOTEBOOKS = sorted((DOCS / "notebooks").glob("*.py"))
-TRUTHSIM_DEV = ROOT.parent / "shared" / "data" / "truthsim-dev"
+TRUTHSIM_DEV = shared_data_path("truthsim-dev")     # optional: notebook 2 uses it when present
 _MISSING = [m for m in ("jupytext", "nbclient", "ipykernel") if importlib.util.find_spec(m) is None]
 
 

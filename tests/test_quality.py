@@ -13,18 +13,12 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from hybridship.physics.model import DynamicModel
 from hybridship.quality import (FaultFlags, SortedLog, StartWindowError, assess_start_window, forecast_log_arrays,
                                 sort_samples)
 from hybridship.sim.synthetic import physics_log
 
 T_FAULT = 300  # fault time [s] = row (1 Hz log starting at 0)
 F = FaultFlags
-
-
-@pytest.fixture(scope="module")
-def model():
-    return DynamicModel("gunnerus")
 
 
 @pytest.fixture(scope="module")
