@@ -360,8 +360,8 @@ class Vessel(_Strict):
             if r.propeller is not None and r.propeller not in forward:
                 raise ValueError(f"rudders[{i}].propeller: {r.propeller!r} is not a thruster of type 'fixed' "
                                  f"with angle_deg = 0 (candidates: {forward or 'none'})")
-        # Import here: physics.model imports this module.
-        from .physics.model import mass_matrices
+        # Imported here: numba (behind physics) is only needed once a vessel is validated.
+        from .physics.hull import mass_matrices
 
         M_RB, M_A = mass_matrices(self)
         eig = np.linalg.eigvalsh(0.5 * (M_RB + M_A + (M_RB + M_A).T))
