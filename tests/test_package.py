@@ -1,9 +1,12 @@
-"""The package as a whole: no import cycles."""
+"""The package as a whole: no import cycles, a light ``import hybridship``, the public API."""
 
 from __future__ import annotations
 
 import ast
+import subprocess
+import sys
 
+import hybridship
 from conftest import ROOT
 
 PKG = ROOT / "hybridship"
@@ -90,3 +93,29 @@ def test_the_import_graph_has_no_cycles():
 def test_the_cycle_finder_finds_a_cycle():
     graph = {"a": {"b"}, "b": {"c"}, "c": {"a"}, "d": {"a"}, "e": set()}
     assert _cycles(graph) == [["a", "b", "c"]]
+
+
+def test_public_api_is_importable_from_the_package():
+    from hybridship import DynamicModel, HybridPredictor, read_log
+    from hybridship.logs.io import read_log as io_read_log
+    from hybridship.physics.model import DynamicModel as Model
+    from hybridship.predictors import HybridPredictor as Hybrid
+
+    assert (DynamicModel, HybridPredictor, read_log) == (Model, Hybrid, io_read_log)
+    for name in hybridship.__all__:
+        assert getattr(hybridship, name) is not None, name
+    assert set(hybridship.__all__) <= set(dir(hybridship))
+
+
+def test_importing_the_package_loads_no_heavy_dependency():
+    code = ("import sys, hybridship; print(','.join(m for m in ('numpy', 'pandas', 'numba', 'torch', 'scipy') "
+            "if m in sys.modules))")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True, cwd=ROOT)
+    assert out.stdout.strip() == ""
+
+
+def test_an_unknown_name_is_an_attribute_error():
+    import pytest
+
+    with pytest.raises(AttributeError, match="no attribute 'nope'"):
+        hybridship.nope  # noqa: B018
