@@ -17,6 +17,7 @@ __version__ = "0.1.0"
 #: Public name -> module that defines it.
 _EXPORTS = {
     # forecasters and their results
+    "Forecaster": "hybridship.forecaster",
     "HybridPredictor": "hybridship.predictors",
     "DynamicPredictor": "hybridship.predictors",
     "DataOnlyPredictor": "hybridship.predictors",
