@@ -204,8 +204,11 @@ def make_predictors(vessel, config: ManoeuvreConfig) -> dict[str, object]:
 
     rc, ec = config.residual, config.ensemble
     return {
+        # The manoeuvre hybrid keeps the mean residual of its runs as its environment: the
+        # environment estimator is built and verified for station keeping and drift (1 Hz);
+        # on these 10-Hz manoeuvring runs it is not yet measured.
         "hybrid": HybridPredictor(vessel, residual_config=rc, ensemble_config=ec,
-                                  guard_quantile=config.guard_quantile),
+                                  guard_quantile=config.guard_quantile, environment="mean"),
         "dynamic": DynamicPredictor(vessel, residual_config=rc),
         "data_only": DataOnlyPredictor(vessel, ensemble_config=ec, start_average_s=rc.start_average_s),
         "dead_reckoning": DeadReckoning(vessel, start_average_s=rc.start_average_s),

@@ -35,12 +35,18 @@ from .physics.integrate import rollout_batch
 from .physics.model import DynamicModel
 from .residual.ensemble import EnsembleConfig, MLPEnsemble, fit_ensemble
 from .residual.features import ResidualConfig, prepare_log
+from .residual.environment import (EnvironmentConfig, EnvironmentEstimator, current_input,
+                                   thrust_accel)
 from .residual.guard import EnvelopeGuard, ThrustRegime
 
 #: Version of the model-file format written by :meth:`HybridPredictor.save`.
-#: 3: the validated vessel description is embedded in the metadata (``vessel_description``),
-#: so a model loads without its vessel file; 2 stored only the vessel's name.
-MODEL_FORMAT_VERSION = 3
+#: 4: the validated vessel description is embedded in the metadata (``vessel_description``),
+#: so a model loads without its vessel file; 3 added the environment estimator; 2 and 3
+#: stored only the vessel's name.
+MODEL_FORMAT_VERSION = 4
+
+#: Where the hybrid's slowly varying environment comes from (see :class:`HybridPredictor`).
+ENVIRONMENT_SOURCES = ("estimator", "mean")
 
 
 class ModelFileError(ValueError):
@@ -429,13 +435,33 @@ class HybridPredictor:
         Apply the out-of-envelope guard by default in :meth:`forecast`.
     guard_quantile : float
         Quantile of training Mahalanobis distances where shrinking starts.
+    environment : {"estimator", "mean"}
+        The slowly varying part of the residual. ``"estimator"`` (default): the
+        environment estimator (:mod:`hybridship.residual.environment`: current, load and
+        thrust-model error, run causally over the log up to each start, including the drift
+        samples after a failure); the forecast starts from its filtered state and the
+        ensemble members draw the environment from its posterior. ``"mean"``: the causal
+        ``bias_window_s`` mean residual of station keeping (the scheme before the estimator).
+    environment_config : EnvironmentConfig
+    environment_window_s : float
+        How far before the earliest start the estimator starts filtering [s].
     """
 
     name = "hybrid"
 
     def __init__(self, vessel="gunnerus", *, residual_config: ResidualConfig = ResidualConfig(),
                  ensemble_config: EnsembleConfig = EnsembleConfig(), guard: bool = True,
-                 guard_quantile: float = 0.99, stop_after_failure: bool = True):
+                 guard_quantile: float = 0.99, stop_after_failure: bool = True,
+                 environment: str = "estimator", environment_config: EnvironmentConfig = EnvironmentConfig(),
+                 environment_window_s: float = 1800.0):
+        if environment not in ENVIRONMENT_SOURCES:
+            raise ValueError(f"environment: expected one of {ENVIRONMENT_SOURCES}, got {environment!r}")
+        if not environment_window_s > 0:
+            raise ValueError(f"environment_window_s: must be > 0 s, got {environment_window_s}")
+        self.environment = environment
+        self.environment_config = environment_config
+        self.environment_window_s = float(environment_window_s)
+        self.estimator: EnvironmentEstimator | None = None
         self.model = DynamicModel(vessel)
         self.stop_after_failure = bool(stop_after_failure)
         self.residual_config = residual_config
@@ -452,8 +478,10 @@ class HybridPredictor:
     def training_data(self, logs: Iterable, *, dp_only: bool = True):
         """Features X, targets Y and a per-log segment label from the given logs."""
         Xs, Ys, segs, thr = [], [], [], []
+        self._fit_arrays = []
         for k, log in enumerate(logs):
             arrays = as_log_arrays(log, self.model.vessel)
+            self._fit_arrays.append(arrays)
             prep = prepare_log(self.model, arrays, self.residual_config)
             mask = arrays.dp_active.astype(bool) if dp_only else None
             rows = prep.trainable_rows(mask)
@@ -492,6 +520,9 @@ class HybridPredictor:
         self.guard = EnvelopeGuard.fit((X - self.ensemble.x_mean) / self.ensemble.x_std,
                                        quantile=self.guard_quantile)
         self.thrust_regime = ThrustRegime.fit(thr)
+        self.estimator = EnvironmentEstimator(self.model, self.environment_config)
+        if self.environment == "estimator":
+            self.estimator.fit(self._fit_arrays, dp_only=dp_only)
         self.training_info = {"n_rows": int(X.shape[0]), "row_stride": stride,
                               "epochs": self.ensemble.history["epochs"],
                               "best_val_mse": self.ensemble.history["best_val_mse"],
@@ -505,7 +536,7 @@ class HybridPredictor:
             raise RuntimeError("HybridPredictor: call fit() or load() before forecast()")
 
     def forecast(self, log, start_times_s, horizon_s: float = 60.0, *, guard: bool | None = None,
-                 commands: str = "held") -> ForecastResult:
+                 commands: str = "held", nets: bool = True) -> ForecastResult:
         """Forecast from every start time (one batch).
 
         Parameters
@@ -515,21 +546,57 @@ class HybridPredictor:
         guard : bool, optional
             Shrink the learned correction outside the training envelope (default: the
             ``guard`` given at construction).
+        nets : bool
+            Use the nets' learned deviation; False gives physics + environment alone (to
+            measure what the nets add).
         """
         self._check_fitted()
         st = _forecast_setup(self.model, self.residual_config, log, start_times_s, horizon_s,
                              self.stop_after_failure, commands)
-        prep = prepare_log(self.model, st.arrays, self.residual_config)
-        dev0 = np.array([prep.start_state(int(i))[2] for i in st.idx])
         E = self.ensemble.n_members
-        bias0 = np.stack([prep.bias_members(int(i), E, self.ensemble_config.seed) for i in st.idx], axis=1)
-        eta, nu, std, wgt = self.rollout(st.eta0, st.nu0, dev0, bias0, st.rpm, st.az, st.wind, st.H, st.dt,
-                                         guard=self.use_guard if guard is None else guard, substeps=st.substeps)
+        if self.environment == "estimator":
+            eta0, nu0, dev0, bias0, current, acc_ext = self._estimated_start(st, E)
+        else:
+            prep = prepare_log(self.model, st.arrays, self.residual_config)
+            dev0 = np.array([prep.start_state(int(i))[2] for i in st.idx])
+            bias0 = np.stack([prep.bias_members(int(i), E, self.ensemble_config.seed) for i in st.idx], axis=1)
+            eta0, nu0, current, acc_ext = st.eta0, st.nu0, None, None
+        eta, nu, std, wgt = self.rollout(eta0, nu0, dev0, bias0, st.rpm, st.az, st.wind, st.H, st.dt,
+                                         guard=self.use_guard if guard is None else guard, substeps=st.substeps,
+                                         current=current, accel_ext=acc_ext, nets=nets)
         flags = dict(st.flags)
         if wgt is not None:
             flags[FaultFlags.OUT_OF_ENVELOPE] = np.any(wgt < 1.0, axis=1)
         return ForecastResult(st.arrays.time_s[st.idx], np.arange(st.H + 1) * st.dt, eta, nu, std, wgt,
                               flags=flags, notes=st.notes)
+
+    def environment_estimate(self, log, start_times_s):
+        """The environment estimator's state at each start time (causal), see
+        :class:`hybridship.residual.environment.EnvironmentEstimate`."""
+        self._check_fitted()
+        arrays = as_log_arrays(log, self.model.vessel)
+        return self._run_estimator(arrays, start_indices(arrays, start_times_s))
+
+    def _run_estimator(self, arrays, idx):
+        dt = float(np.median(np.diff(arrays.time_s)))
+        first = max(0, int(idx.min()) - int(round(self.environment_window_s / dt)))
+        return self.estimator.run(arrays, idx, first_row=first)
+
+    def _estimated_start(self, st, n_members: int):
+        """Start states and environment from the estimator at every start row.
+
+        Returns ``eta0, nu0`` (S, 3) (the filtered state), ``dev0`` (S, 3) zeros, the
+        members' loads (E, S, 3) (surge/sway in NED, member 0 the mean), the mean current
+        ``(S, 1, 2)`` and the thrust-error acceleration of the start's commands ``(S, 1, 3)``
+        (body; 0 once the thrusters have stopped).
+        """
+        est = self._run_estimator(st.arrays, st.idx)
+        eta0, nu0 = est.x[:, 0:3].copy(), est.x[:, 3:6].copy()
+        draws = est.sample_environment(n_members, self.ensemble_config.seed)      # (E, S, 8)
+        current = np.ascontiguousarray(current_input(est.current_ned_m_s)[:, None, :])
+        a_thr = thrust_accel(self.model, eta0, nu0, st.rpm[:, 0], st.az[:, 0], st.wind[:, 0])
+        acc_ext = np.ascontiguousarray((est.thrust_error * a_thr)[:, None, :])
+        return eta0, nu0, np.zeros_like(eta0), draws[..., 2:5], current, acc_ext
 
     def _thrust_weight(self, eta, nu, rpm, az, wind):
         """Thrust-regime weight (S,) of commands (S, K) at states (S, 3) (1 without a regime)."""
@@ -537,10 +604,12 @@ class HybridPredictor:
         return self.thrust_regime.weight(parts[:, 1] @ np.linalg.inv(self.model.mass_matrix).T)
 
     def rollout(self, eta0, nu0, dev0, bias0_ned, rpm, az, wind, n_steps: int, dt_s: float, *, guard: bool = True,
-                substeps: int = 1):
+                substeps: int = 1, current=None, accel_ext=None, nets: bool = True):
         """Batched hybrid rollout from states (S, 3), previous residual deviations (S, 3),
         biases (S, 3) or per member (E, S, 3) (surge/sway in NED), commands held (S, 1, K) or
-        per step (S, n_steps, K), and held wind (S, 1, 2).
+        per step (S, n_steps, K), held wind (S, 1, 2), and optionally a held current
+        ``[speed_m_s, dir_to_rad]`` (S, 1, 2) and a body-frame extra acceleration (S, 1, 3)
+        for the physics.
 
         Every step: the physics advances the ensemble-mean state one step (RK4) and
         predicts the acceleration there; each member predicts its residual deviation from
@@ -559,7 +628,8 @@ class HybridPredictor:
         E = ens.n_members
         fidx = self.residual_config.feature_index
         zeros3 = np.zeros((S, 1, 3))
-        current = np.zeros((S, 1, 2))
+        acc_phys = zeros3 if accel_ext is None else np.ascontiguousarray(accel_ext, dtype=float)
+        current = np.zeros((S, 1, 2)) if current is None else np.ascontiguousarray(current, dtype=float)
         eta = np.empty((S, n_steps + 1, 3))
         nu = np.empty((S, n_steps + 1, 3))
         std = np.zeros((S, n_steps + 1, 3))
@@ -588,12 +658,12 @@ class HybridPredictor:
             if thrust_guard and per_step and j > 0:
                 w_thrust = self._thrust_weight(eta[:, j], nu[:, j], rpm_j[:, 0], az_j[:, 0], wind[:, 0])
             rollout_batch(np.ascontiguousarray(eta[:, j]), np.ascontiguousarray(nu[:, j]), rpm_j, az_j, wind,
-                          current, zeros3, zeros3, P, dt_s, 1, int(substeps), e1, n1, a1)
+                          current, zeros3, acc_phys, P, dt_s, 1, int(substeps), e1, n1, a1)
             feats[:, :, 0:3] = n1[:, 1]
             feats[:, :, 3:6] = a1[:, 1]
             feats[:, :, 6:9] = r_prev
             X = feats[..., fidx]
-            r = ens.predict_members(X)                          # (E, S, 3)
+            r = ens.predict_members(X) if nets else np.zeros((E, S, 3))     # (E, S, 3)
             if guard:
                 z = (X.mean(axis=0) - ens.x_mean) / ens.x_std
                 w = self.guard.weight(z) * w_thrust             # (S,)
@@ -637,6 +707,11 @@ class HybridPredictor:
             "stop_after_failure": self.stop_after_failure,
             "guard": {"d0": self.guard.d0, "scale": self.guard.scale},
             "thrust_regime": {"lo": self.thrust_regime.lo},
+            "environment": self.environment,
+            "environment_config": self.environment_config.model_dump(mode="json"),
+            "environment_window_s": self.environment_window_s,
+            "thrust_error_prior": {"mean": self.estimator.thrust_error_mean.tolist(),
+                                   "std": self.estimator.thrust_error_std.tolist()},
             "training_info": self.training_info,
         }
 
@@ -706,7 +781,14 @@ class HybridPredictor:
                 vessel = _embedded_vessel(meta["vessel_description"], path)
             obj = cls(vessel, residual_config=residual_config,
                       ensemble_config=EnsembleConfig(**meta["ensemble_config"]), guard=meta["use_guard"],
-                      guard_quantile=meta["guard_quantile"], stop_after_failure=meta["stop_after_failure"])
+                      guard_quantile=meta["guard_quantile"], stop_after_failure=meta["stop_after_failure"],
+                      environment=meta["environment"],
+                      environment_config=EnvironmentConfig(**meta["environment_config"]),
+                      environment_window_s=meta["environment_window_s"])
+            thr_mean = np.asarray(meta["thrust_error_prior"]["mean"], dtype=float).reshape(3)
+            thr_std = np.asarray(meta["thrust_error_prior"]["std"], dtype=float).reshape(3)
+            if not (np.all(np.isfinite(thr_mean)) and np.all(thr_std > 0)):
+                raise ValueError("thrust_error_prior: expected finite means and positive spreads")
             fingerprint = meta["vessel_fingerprint"]
             guard_d0, guard_scale = float(meta["guard"]["d0"]), float(meta["guard"]["scale"])
             thrust_lo = float(meta["thrust_regime"]["lo"])
@@ -738,6 +820,8 @@ class HybridPredictor:
         except (KeyError, ValueError) as err:
             raise ModelFileError(f"{path}: damaged model contents: {err}") from None
         obj.ensemble, obj.guard, obj.thrust_regime = ens, guard, thrust_regime
+        obj.estimator = EnvironmentEstimator(obj.model, obj.environment_config)
+        obj.estimator.thrust_error_mean, obj.estimator.thrust_error_std = thr_mean, thr_std
         obj.training_info = meta.get("training_info", {})
         return obj
 

@@ -30,13 +30,13 @@ def test_tables_have_the_papers_layout_and_physics_is_exact_on_its_own_logs(tiny
                               progress=False)
     errors = pd.read_csv(tmp_path / "out" / "errors.csv")
     assert list(errors.columns) == ["model", "state", "window", "horizon_s", "mae"]
-    assert set(errors.model) == {"hybrid", "hybrid_guarded", "dynamic", "dead_reckoning", "data_only"}
+    assert set(errors.model) == {"hybrid", "hybrid_nets_unguarded", "hybrid_mean_bias", "dynamic", "dead_reckoning", "data_only"}
     assert set(errors.state) == {"north_m", "east_m", "yaw_deg"}
     assert set(errors.window) == {5, 20} and set(errors.horizon_s) == {15, 30, 45, 60}
-    assert len(errors) == 5 * 3 * 2 * 4 and np.isfinite(errors.mae).all()
+    assert len(errors) == 6 * 3 * 2 * 4 and np.isfinite(errors.mae).all()
     cov = pd.read_csv(tmp_path / "out" / "coverage.csv")
     assert list(cov.columns) == ["model", "horizon_s", "sigma", "coverage"]
-    assert {"hybrid", "hybrid_guarded", "data_only"} <= set(cov.model)
+    assert {"hybrid", "hybrid_nets_unguarded", "data_only"} <= set(cov.model)
     assert cov.coverage.between(0, 1).all()
     dyn = errors[errors.model == "dynamic"]
     # the log was made by the same model: only the 3-s start average separates them
@@ -47,8 +47,8 @@ def test_tables_have_the_papers_layout_and_physics_is_exact_on_its_own_logs(tiny
     at60 = lambda df: df[(df.horizon_s == 60) & df.state.isin(pos)].mae.to_numpy()  # noqa: E731
     assert np.all(at60(dyn) < 0.25 * at60(dr)), (at60(dyn), at60(dr))
     table = (tmp_path / "out" / "tables.md").read_text()
-    assert "| hybrid_guarded | north_m |" in table and "/" in table.split("| hybrid | north_m |")[1].split("\n")[0]
-    assert res.table2.shape == (15, 4)
+    assert "| hybrid_nets_unguarded | north_m |" in table and "/" in table.split("| hybrid | north_m |")[1].split("\n")[0]
+    assert res.table2.shape == (18, 4)
 
 
 def test_benchmark_is_deterministic_and_the_cli_reports_bad_folders(tiny_folder, tmp_path, capsys):

@@ -125,8 +125,9 @@ def test_incompatible_format_version_is_refused(saved, tmp_path):
 
 
 def test_an_older_format_says_retrain(saved, tmp_path):
-    p = _rewrite(saved, tmp_path, meta_change=lambda m: m.update(format_version=2), name="v2.npz")
-    _refused(p, r"written by an older hybridship \(format 2\).*retrain with `hybridship train`")
+    for old in (2, 3):
+        p = _rewrite(saved, tmp_path, meta_change=lambda m: m.update(format_version=old), name=f"v{old}.npz")
+        _refused(p, rf"written by an older hybridship \(format {old}\).*retrain with `hybridship train`")
 
 
 def test_the_model_file_carries_its_vessel(saved, model, tmp_path):

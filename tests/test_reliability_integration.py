@@ -61,7 +61,9 @@ def test_nan_in_the_start_window_is_used_and_flagged(model, log, hybrid, predict
     fc = p.forecast(bad, [START], 30)
     ref = p.forecast(log, [START], 30)
     assert _flags(fc) == {F.NAN_IN_WINDOW} and _flags(ref) <= {F.OUT_OF_ENVELOPE}
-    np.testing.assert_allclose(fc.eta, ref.eta, atol=1e-6)
+    # the hybrid's environment estimator filters the whole window: one fewer position sample
+    # moves its estimate a little, the others use the start window's mean of the valid samples
+    np.testing.assert_allclose(fc.eta, ref.eta, atol=1e-3 if predictor == "hybrid" else 1e-6)
     frame = fc.to_frame()
     assert set(F.ALL) <= set(frame) and frame[F.NAN_IN_WINDOW].all()
     pd.testing.assert_frame_equal(bad, before)

@@ -264,7 +264,7 @@ fig.tight_layout()
 # here on the held-out log only (one scenario: expect large scatter between scenarios).
 
 # %%
-predictors = {"hybrid": (hybrid, {"guard": False}), "hybrid_guarded": (hybrid, {"guard": True}),
+predictors = {"hybrid": (hybrid, {}), "hybrid_nets_unguarded": (hybrid, {"guard": False}),
               "dynamic": (DynamicPredictor("gunnerus"), {}), "dead_reckoning": (DeadReckoning("gunnerus"), {})}
 errors = {name: [metrics.drift_errors(p, test, **kw)] for name, (p, kw) in predictors.items()}
 long = metrics.error_table(errors)

@@ -200,7 +200,7 @@ if HAVE_DATA:
 
 # %%
 if HAVE_DATA:
-    predictors = {"hybrid": (hybrid, {"guard": False}), "hybrid_guarded": (hybrid, {"guard": True}),
+    predictors = {"hybrid": (hybrid, {}), "hybrid_nets_unguarded": (hybrid, {"guard": False}),
                   "dynamic": (DynamicPredictor("gunnerus"), {}), "dead_reckoning": (DeadReckoning("gunnerus"), {})}
     errors = {name: [metrics.drift_errors(p, test, **kw)] for name, (p, kw) in predictors.items()}
     print(f"{held_out.name}: mean absolute error, first 5 / first 20 forecasts (m, m, deg)")

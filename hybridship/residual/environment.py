@@ -1,0 +1,407 @@
+"""The environment estimator: current, slowly varying load and thruster-model error from a log.
+
+An extended Kalman filter in the spirit of the bias state of a DP observer (Fossen 2021,
+ch. 13), with the unknown inputs given their physical structure instead of one lumped bias.
+Its state (14) is
+
+* ``eta = [north_m, east_m, psi_rad]`` and ``nu = [u_m_s, v_m_s, r_rad_s]`` (the filtered
+  motion, measured by the log's position, heading and velocities);
+* ``v_c = [north_m_s, east_m_s]``: an irrotational current, constant in NED. It acts
+  through the relative velocity ``nu_r = nu - R(psi)^T v_c`` of the hull model, so a
+  drifting ship is carried along by it rather than pushed by a constant force;
+* ``b = [north_m_s2, east_m_s2, yaw_rad_s2]``: a slowly varying environmental load (wave
+  drift, wind-model error) as an acceleration, surge/sway in NED (it does not turn with the
+  ship), yaw as is;
+* ``theta = [x, y, n]``: the thrust-model error per degree of freedom, as a fraction of the
+  model's thrust acceleration ``M^-1 tau_thr``; the delivered thrust acceleration is
+  ``(1 + theta) * M^-1 tau_thr`` componentwise.
+
+The process model is the project's dynamic model (one RK4 step per sample) with the current
+and with ``accel_ext = R(psi)^T b + theta * M^-1 tau_thr``; its Jacobian is taken by finite
+differences in one batched model call. ``v_c``, ``b`` and ``theta`` are random walks.
+
+What the data can separate, and what the filter then does:
+
+* **Load vs. thrust error.** While the thrusters hold the ship on station, the thrust
+  answers the environment, so their mean effects add up to one observed offset. The filter
+  splits that offset in proportion to the prior spreads (``load_prior_m_s2`` against
+  ``thrust_error_prior`` times the thrust acceleration) and keeps the split's uncertainty as
+  a correlation between ``b`` and ``theta``. Thrust that varies independently of the slow
+  environment (command steps in a manoeuvre, the thrust step at a DP failure in a training
+  log) identifies ``theta``; :meth:`EnvironmentEstimator.fit` carries such an estimate from
+  training logs into the prior. When the thrusters stop, the ``theta`` term vanishes, and
+  the first drift samples resolve the correlation: the residual is environment only.
+* **Current vs. load.** A ship at rest feels a current as a force; nothing in station-keeping
+  data tells the two apart, and the split then follows the prior spreads. Once the ship moves
+  through the water (a drift, a manoeuvre) the relative velocity changes, and the current is
+  observable through the hull's damping.
+
+All quantities are SI and radians inside.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+import pandas as pd
+from pydantic import BaseModel, ConfigDict, Field
+
+from ..frames import wrap_pi
+
+#: State layout of the filter.
+STATE_NAMES = ("north_m", "east_m", "psi_rad", "u_m_s", "v_m_s", "r_rad_s",
+               "current_north_m_s", "current_east_m_s",
+               "load_north_m_s2", "load_east_m_s2", "load_yaw_rad_s2",
+               "thrust_error_x", "thrust_error_y", "thrust_error_n")
+N_STATE = len(STATE_NAMES)
+ENV = slice(6, 14)          # the environment part: current, load, thrust error
+CUR, LOAD, THR = slice(6, 8), slice(8, 11), slice(11, 14)
+
+
+class EnvironmentConfig(BaseModel):
+    """Noise and prior settings of :class:`EnvironmentEstimator` (recorded in model files).
+
+    Measurement standard deviations include the wave-frequency motion the filter does not
+    model; the process noise on ``nu`` covers unmodelled fast loads (first-order waves,
+    gusts beyond the wind model). The random-walk intensities set how fast ``b``, ``v_c``
+    and ``theta`` may move [unit per sqrt(s)].
+    """
+
+    model_config = ConfigDict(frozen=True, extra="forbid")
+
+    position_std_m: float = Field(0.5, gt=0)
+    heading_std_deg: float = Field(0.3, gt=0)
+    velocity_std_m_s: float = Field(0.05, gt=0)
+    yaw_rate_std_deg_s: float = Field(0.1, gt=0)
+    accel_noise_m_s2: float = Field(0.01, gt=0)
+    yaw_accel_noise_rad_s2: float = Field(3e-4, gt=0)
+    current_prior_m_s: float = Field(0.02, gt=0)
+    current_walk_m_s: float = Field(0.0, ge=0)
+    load_prior_m_s2: float = Field(0.02, gt=0)
+    load_yaw_prior_rad_s2: float = Field(3e-5, gt=0)
+    load_walk_m_s2: float = Field(2e-5, ge=0)
+    load_yaw_walk_rad_s2: float = Field(1e-6, ge=0)
+    thrust_error_prior: tuple[float, float, float] = (0.2, 0.2, 0.5)
+    thrust_error_walk: float = Field(2e-3, ge=0)
+    use_velocity: bool = True
+    adaptive_measurement_std: bool = True
+    wave_window_s: float = Field(30.0, gt=0)
+    variance_window_s: float = Field(600.0, gt=0)
+    reset_yaw_load_at_stop: bool = True
+
+
+@dataclass(frozen=True)
+class EnvironmentEstimate:
+    """Filtered state at chosen rows of a log (each estimate uses only rows up to its own).
+
+    Attributes
+    ----------
+    rows : ndarray of int, shape (S,)
+        Log rows of the estimates.
+    time_s : ndarray, shape (S,)
+    x : ndarray, shape (S, 14)
+        State means in the order of :data:`STATE_NAMES` (SI, radians).
+    P : ndarray, shape (S, 14, 14)
+        State covariances.
+    """
+
+    rows: np.ndarray
+    time_s: np.ndarray
+    x: np.ndarray
+    P: np.ndarray
+
+    @property
+    def current_ned_m_s(self) -> np.ndarray:
+        """Current velocity ``[north, east]`` [m/s], (S, 2)."""
+        return self.x[:, CUR]
+
+    @property
+    def current_speed_dir(self) -> np.ndarray:
+        """Current as the model takes it: ``[speed_m_s, dir_to_rad]``, (S, 2)."""
+        c = self.x[:, CUR]
+        return np.column_stack([np.hypot(c[:, 0], c[:, 1]), np.arctan2(c[:, 1], c[:, 0])])
+
+    @property
+    def load_accel(self) -> np.ndarray:
+        """Environmental load ``[north_m_s2, east_m_s2, yaw_rad_s2]``, (S, 3)."""
+        return self.x[:, LOAD]
+
+    @property
+    def thrust_error(self) -> np.ndarray:
+        """Thrust-model error per DOF (fraction of the model's thrust acceleration), (S, 3)."""
+        return self.x[:, THR]
+
+    def sample_environment(self, n: int, seed: int = 0) -> np.ndarray:
+        """Draws of ``[v_c (2), b (3), theta (3)]`` from the posterior, shape (n, S, 8).
+
+        Draw 0 is the mean (so an ensemble's first member is the point estimate), and the
+        other draws are centred on it (their mean is the posterior mean).
+        Deterministic for a given ``seed`` and row: a start's draws do not depend on which
+        other starts are forecast with it.
+        """
+        S = self.x.shape[0]
+        out = np.broadcast_to(self.x[:, ENV], (n, S, 8)).copy()
+        if n < 2:
+            return out
+        Pe = self.P[:, ENV, ENV]
+        L = np.linalg.cholesky(Pe + 1e-18 * np.eye(8))                  # (S, 8, 8)
+        z = np.stack([np.random.default_rng([seed, int(r)]).standard_normal((n - 1, 8)) for r in self.rows],
+                     axis=1)                                             # (n - 1, S, 8)
+        dev = np.einsum("sij,nsj->nsi", L, z)
+        if n > 2:   # centred, so that the members' mean is the posterior mean
+            dev -= dev.mean(axis=0)
+        out[1:] += dev
+        return out
+
+
+def thrust_accel(model, eta, nu, rpm, az, wind) -> np.ndarray:
+    """The model's thrust acceleration ``M^-1 tau_thr`` (B, 3) [m/s^2, m/s^2, rad/s^2]."""
+    _, parts, _ = model.acceleration(eta, nu, rpm=rpm, azimuth_rad=az, wind=wind, return_parts=True)
+    return parts[:, 1] @ model.arrays.m_inv.T
+
+
+def current_input(v_c_ned: np.ndarray) -> np.ndarray:
+    """NED current velocity (..., 2) -> the model's ``[speed_m_s, dir_to_rad]`` (..., 2)."""
+    return np.stack([np.hypot(v_c_ned[..., 0], v_c_ned[..., 1]),
+                     np.arctan2(v_c_ned[..., 1], v_c_ned[..., 0])], axis=-1)
+
+
+def external_accel(psi_rad, load_ned, theta, a_thr) -> np.ndarray:
+    """``R(psi)^T b + theta * a_thr``: the estimator's extra body-frame acceleration (..., 3)."""
+    c, s = np.cos(psi_rad), np.sin(psi_rad)
+    out = theta * a_thr
+    out[..., 0] += c * load_ned[..., 0] + s * load_ned[..., 1]
+    out[..., 1] += -s * load_ned[..., 0] + c * load_ned[..., 1]
+    out[..., 2] += load_ned[..., 2]
+    return out
+
+
+class EnvironmentEstimator:
+    """Causal environment estimation over a log (see the module notes).
+
+    Parameters
+    ----------
+    model : hybridship.physics.model.DynamicModel
+    config : EnvironmentConfig
+    """
+
+    def __init__(self, model, config: EnvironmentConfig = EnvironmentConfig()):
+        self.model = model
+        self.config = config
+        #: Prior mean and standard deviation of ``theta``; :meth:`fit` may replace them.
+        self.thrust_error_mean = np.zeros(3)
+        self.thrust_error_std = np.asarray(config.thrust_error_prior, dtype=float)
+
+    # ------------------------------------------------------------------ learning
+
+    def fit(self, logs_arrays, *, dp_only: bool = False, after_stop_s: float = 60.0) -> "EnvironmentEstimator":
+        """Carry the thrust-model error seen at thrust stops in training logs into the prior.
+
+        Station keeping alone cannot separate thrust error from load: the thrust answers the
+        environment, and a regression of the residual on the thrust is biased by that loop.
+        A thrust stop (a DP failure: ``dp_active`` 1 -> 0) can: the environment is the same
+        just before and just after it, so what changes in the residual is the thrust
+        model's error. For every stop with ``after_stop_s`` of samples after it, the filter
+        runs to that point and its ``theta`` (resolved by the drift samples through the
+        load/thrust-error correlation it carried) is kept. The precision-weighted mean over
+        the stops becomes the prior mean; the spread between stops (at least each stop's own
+        uncertainty) its standard deviation. Without stops, or with ``dp_only`` (the paper's
+        protocol, in which nothing of a failure is seen), the prior stays as configured:
+        0 +- ``thrust_error_prior``.
+
+        Parameters
+        ----------
+        logs_arrays : iterable of LogArrays
+        dp_only : bool
+            Training sees only station keeping: nothing to learn here.
+        after_stop_s : float
+            Drift time after a stop that the filter reads before its estimate is taken [s].
+        """
+        if dp_only:
+            return self
+        means, precs = [], []
+        for a in logs_arrays:
+            dp = a.dp_active.astype(bool)
+            stops = np.flatnonzero(dp[:-1] & ~dp[1:]) + 1
+            for i in stops:
+                end = int(np.searchsorted(a.time_s, a.time_s[i] + after_stop_s))
+                if end >= len(a.time_s) or a.segment_id[end] != a.segment_id[i]:
+                    continue
+                first = int(np.searchsorted(a.time_s, a.time_s[i] - 1800.0))
+                est = self.run(a, np.array([end]), first_row=first)
+                means.append(est.x[0, THR])
+                precs.append(1.0 / np.diag(est.P[0])[THR])
+        if not means:
+            return self
+        means, precs = np.array(means), np.array(precs)
+        m = np.sum(precs * means, axis=0) / precs.sum(axis=0)
+        between = np.sqrt(np.sum(precs * (means - m) ** 2, axis=0) / precs.sum(axis=0))
+        self.thrust_error_mean = m
+        self.thrust_error_std = np.maximum(between, 1.0 / np.sqrt(precs.sum(axis=0)))
+        return self
+
+    # ------------------------------------------------------------------ filtering
+
+    def _initial(self, eta0, nu0):
+        c = self.config
+        x = np.zeros(N_STATE)
+        x[0:3], x[3:6] = eta0, nu0
+        x[THR] = self.thrust_error_mean
+        sd = np.concatenate([[c.position_std_m] * 2, [np.radians(c.heading_std_deg)],
+                             [c.velocity_std_m_s] * 2, [np.radians(c.yaw_rate_std_deg_s)],
+                             [c.current_prior_m_s] * 2, [c.load_prior_m_s2] * 2, [c.load_yaw_prior_rad_s2],
+                             self.thrust_error_std])
+        return x, np.diag(sd ** 2)
+
+    def _process_noise(self, dt):
+        c = self.config
+        q = np.concatenate([[1e-6] * 3, [c.accel_noise_m_s2 * dt] * 2, [c.yaw_accel_noise_rad_s2 * dt],
+                            [c.current_walk_m_s] * 2, [c.load_walk_m_s2] * 2, [c.load_yaw_walk_rad_s2],
+                            [c.thrust_error_walk] * 3]) ** 2
+        q[6:] *= dt
+        return np.diag(q)
+
+    def _measurement_std(self):
+        c = self.config
+        return np.array([c.position_std_m, c.position_std_m, np.radians(c.heading_std_deg),
+                         c.velocity_std_m_s, c.velocity_std_m_s, np.radians(c.yaw_rate_std_deg_s)])
+
+    def _wave_motion_std(self, arrays, lo: int, hi: int) -> np.ndarray:
+        """Per row, the standard deviation of the fast part of each measured channel (n, 6).
+
+        The fast part is the signal less its centred ``wave_window_s`` moving mean: the
+        wave-frequency motion and sensor noise, which the filter treats as measurement noise
+        (a DP observer's wave filter in its simplest form). The value at row ``i`` is the
+        spread over the ``variance_window_s`` before it, from fast parts whose centred
+        window ends at or before ``i``, so it uses rows up to ``i`` only (causal). Positions
+        keep the configured value (a GNSS error is slow, not wave-like).
+        """
+        n = len(arrays.time_s)
+        out = np.zeros((n, 6))
+        t = arrays.time_s[lo: hi + 1]
+        if len(t) < 10:
+            return out
+        dt = float(np.median(np.diff(t)))
+        w = max(3, int(round(self.config.wave_window_s / dt)))
+        w += 1 - w % 2                                   # odd: a centred window
+        x = pd.DataFrame(np.column_stack([arrays.eta[lo: hi + 1], arrays.nu[lo: hi + 1]]))
+        fast = x - x.rolling(w, center=True, min_periods=w).mean()
+        nv = max(2 * w, int(round(self.config.variance_window_s / dt)))
+        sd = fast.rolling(nv, min_periods=w).std().shift(w // 2)   # only centred windows that have ended
+        sd = sd.to_numpy().copy()
+        sd[:, 0:2] = 0.0
+        out[lo: hi + 1] = np.nan_to_num(sd)
+        return out
+
+    def _predict(self, x, P, dt, rpm, az, wind, Q):
+        """EKF time update over one step (model Jacobian by forward differences, one batch)."""
+        h = np.array([1e-3, 1e-3, 1e-5, 1e-4, 1e-4, 1e-6, 1e-3, 1e-3, 1e-5, 1e-5, 1e-7, 1e-3, 1e-3, 1e-3])
+        X = np.repeat(x[None], N_STATE + 1, axis=0)
+        X[1:] += np.diag(h)
+        eta, nu = X[:, 0:3], X[:, 3:6]
+        B = X.shape[0]
+        rpm_b, az_b, wind_b = (np.broadcast_to(v, (B, v.shape[-1])) for v in (rpm, az, wind))
+        a_thr = thrust_accel(self.model, eta, nu, rpm_b, az_b, wind_b)
+        acc = external_accel(eta[:, 2], X[:, LOAD], X[:, THR], a_thr)
+        eta1, nu1 = self.model.step(eta, nu, dt_s=dt, rpm=rpm_b, azimuth_rad=az_b, wind=wind_b,
+                                    current=current_input(X[:, CUR]), accel_ext=acc)
+        f = np.concatenate([eta1, nu1, X[:, 6:]], axis=1)
+        F = ((f[1:] - f[0]) / h[:, None]).T
+        return f[0], F @ P @ F.T + Q
+
+    def _forget_yaw_load(self, x, P):
+        """At a thrust stop, return the yaw load to its prior (see the module notes).
+
+        Under station keeping the yaw offset is the small difference of large thruster
+        moments, and a per-DOF efficiency factor cannot describe an error in the thrusters'
+        lever arms: the filter's yaw load then holds thruster-model error with a confidence
+        it does not deserve. When the thrusters stop, that part is gone, so the yaw load
+        restarts from its prior and the drift samples identify it afresh.
+        """
+        k = LOAD.start + 2
+        x = x.copy()
+        P = P.copy()
+        x[k] = 0.0
+        P[k, :] = 0.0
+        P[:, k] = 0.0
+        P[k, k] = self.config.load_yaw_prior_rad_s2 ** 2
+        return x, P
+
+    @staticmethod
+    def _update(x, P, z, H_rows, r_std, wrap_idx):
+        """EKF measurement update with the components ``H_rows`` of the state measured as ``z``."""
+        y = z - x[H_rows]
+        for k in wrap_idx:
+            y[k] = wrap_pi(y[k])
+        S = P[np.ix_(H_rows, H_rows)] + np.diag(r_std ** 2)
+        PHt = P[:, H_rows]
+        K = np.linalg.solve(S, PHt.T).T
+        x = x + K @ y
+        P = P - K @ PHt.T
+        return x, 0.5 * (P + P.T)
+
+    def run(self, arrays, rows=None, *, first_row: int = 0) -> EnvironmentEstimate:
+        """Filter the log from ``first_row`` and return the estimates at ``rows`` (default: all).
+
+        The estimate at row ``i`` uses the samples ``first_row .. i`` only (causal). A gap
+        (a new segment) restarts the motion states from the measurement and keeps the
+        environment states, whose uncertainty grows over the gap.
+
+        Parameters
+        ----------
+        arrays : LogArrays
+        rows : array of int, optional
+            Rows at which to report (sorted or not); all rows >= ``first_row`` by default.
+        first_row : int
+            Row at which the filter starts (its prior applies there).
+        """
+        n = len(arrays.time_s)
+        rows = np.arange(first_row, n) if rows is None else np.asarray(rows, dtype=int)
+        if rows.size and (rows.min() < first_row or rows.max() >= n):
+            raise ValueError(f"rows: must lie in [{first_row}, {n - 1}]")
+        want = np.zeros(n, bool)
+        want[rows] = True
+        last = int(rows.max()) if rows.size else first_row
+        out_x = np.empty((n, N_STATE)) if rows.size else None
+        out_P = {}
+        t, eta_m, nu_m, seg = arrays.time_s, arrays.eta, arrays.nu, arrays.segment_id
+        nu_ok = np.isfinite(nu_m) & (arrays.nu_logged if self.config.use_velocity else False)
+        eta_ok = np.isfinite(eta_m)
+        r_std = np.broadcast_to(self._measurement_std(), (n, 6))
+        if self.config.adaptive_measurement_std:
+            r_std = np.maximum(r_std, self._wave_motion_std(arrays, first_row, last))
+        rpm = np.nan_to_num(arrays.rpm)
+        az = np.nan_to_num(arrays.azimuth_rad)
+        wind = np.nan_to_num(arrays.wind)
+        dp = arrays.dp_active.astype(bool)
+        x = P = None
+        for i in range(first_row, last + 1):
+            if x is None or seg[i] != seg[i - 1] or not np.isfinite(x).all():
+                if not eta_ok[i].all():
+                    continue
+                nu0 = np.where(np.isfinite(nu_m[i]), nu_m[i], 0.0)
+                x0, P0 = self._initial(eta_m[i], nu0)
+                if x is not None and np.isfinite(x).all():       # keep what is known of the environment
+                    gap = max(t[i] - t[i - 1], 0.0)
+                    x0[ENV], P0[ENV, ENV] = x[ENV], P[ENV, ENV] + self._process_noise(gap)[ENV, ENV]
+                x, P = x0, P0
+            else:
+                dt = t[i] - t[i - 1]
+                x, P = self._predict(x, P, dt, rpm[i - 1], az[i - 1], wind[i - 1], self._process_noise(dt))
+                m = np.concatenate([eta_ok[i], nu_ok[i]])
+                if m.any():
+                    H_rows = np.flatnonzero(m)
+                    z = np.concatenate([eta_m[i], nu_m[i]])[H_rows]
+                    wrap_idx = [k for k, j in enumerate(H_rows) if j == 2]
+                    x, P = self._update(x, P, z, H_rows, r_std[i, H_rows], wrap_idx)
+                if dp[i - 1] and not dp[i] and self.config.reset_yaw_load_at_stop:
+                    x, P = self._forget_yaw_load(x, P)
+            if want[i]:
+                out_x[i] = x
+                out_P[i] = P
+        miss = [int(r) for r in rows if r not in out_P]
+        if miss:
+            raise ValueError(f"log: no valid position/heading at or before row {miss[0]} "
+                             f"(time {t[miss[0]]:g} s) to start the environment estimate")
+        return EnvironmentEstimate(rows, t[rows], out_x[rows], np.stack([out_P[int(r)] for r in rows]))

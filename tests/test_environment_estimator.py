@@ -1,0 +1,118 @@
+"""The environment estimator: identification on logs where the answer is known, causality, online update."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from hybridship.physics.model import DynamicModel
+from hybridship.predictors import HybridPredictor, as_log_arrays
+from hybridship.residual.ensemble import EnsembleConfig
+from hybridship.residual.environment import EnvironmentConfig, EnvironmentEstimator, external_accel
+from hybridship.sim.synthetic import physics_log
+
+TINY = EnsembleConfig(n_members=3, hidden=8, max_epochs=20, patience=5, seed=0)
+
+
+def _last(est_obj, log, model):
+    a = as_log_arrays(log, model.vessel)
+    return est_obj.run(a, np.array([len(a.time_s) - 1]))
+
+
+def test_constant_force_alone_is_identified_as_a_load(model):
+    """A constant surge load on a ship with idle thrusters (so she keeps her heading and the
+    load is constant in NED too), no current: the estimated load, rotated into the body frame,
+    equals M^-1 tau within 10 %, and nothing is put into current or thrust error."""
+    tau = np.array([4000.0, 0.0, 0.0])
+    log = physics_log(model, duration_s=600, t_shutdown_s=None, seed=3, tau_ext_N=tau, wind=(0.0, 0.0),
+                      rpm_scale=0.0)
+    est = _last(EnvironmentEstimator(model), log, model)
+    psi = est.x[0, 2]
+    load_body = external_accel(np.array([psi]), est.load_accel, np.zeros((1, 3)), np.zeros((1, 3)))[0]
+    want = model.arrays.m_inv @ tau
+    assert abs(load_body[0] - want[0]) < 0.1 * want[0]
+    assert abs(load_body[1]) < 0.3 * want[0]
+    assert np.abs(est.current_ned_m_s).max() < 0.05          # not mistaken for a current
+    assert np.abs(est.thrust_error).max() < 0.05               # nor for thrust error
+
+
+def test_current_alone_is_identified_as_a_current(model):
+    """A steady 0.3 m/s current on a ship manoeuvring under random commands: with a prior wide
+    enough to admit it, the filter finds the current (speed within 0.05 m/s, direction within
+    15 deg) and leaves the load near zero, because the hull's response to the relative
+    velocity changes as the ship moves through the water."""
+    log = physics_log(model, duration_s=1500, t_shutdown_s=None, seed=4, current=(0.3, 1.0), wind=(0.0, 0.0),
+                      rpm_scale=0.5)
+    cfg = EnvironmentConfig(current_prior_m_s=0.5, current_walk_m_s=0.0)
+    est = _last(EnvironmentEstimator(model, cfg), log, model)
+    speed, direction = est.current_speed_dir[0]
+    assert abs(speed - 0.3) < 0.05
+    assert abs(np.degrees(np.angle(np.exp(1j * (direction - 1.0))))) < 15.0
+    assert np.abs(est.load_accel[0, :2]).max() < 2e-3
+
+
+def test_twenty_percent_thrust_deficit_is_identified(model):
+    """The true ship delivers 80 % of the model's thrust; commands vary independently of the
+    (absent) environment, so the per-DOF thrust error in surge and sway is found near -0.2."""
+    spec = model.vessel.model_dump()
+    spec["true_vessel"] = {"thrust_scale": 0.8}
+    true_model = DynamicModel(type(model.vessel).model_validate(spec), true_vessel=True)
+    log = physics_log(true_model, duration_s=1500, t_shutdown_s=None, seed=5, wind=(0.0, 0.0), rpm_scale=0.5)
+    est = _last(EnvironmentEstimator(model), log, model)
+    np.testing.assert_allclose(est.thrust_error[0, :2], [-0.2, -0.2], atol=0.05)
+    assert np.abs(est.load_accel[0, :2]).max() < 2e-3
+
+
+def test_estimate_is_causal(model):
+    """The estimate at a row does not change when later rows of the log change."""
+    log = physics_log(model, duration_s=600, t_shutdown_s=400, seed=6, tau_ext_N=(2000.0, 0.0, 0.0))
+    a = as_log_arrays(log, model.vessel)
+    rows = np.array([350, 420])
+    before = EnvironmentEstimator(model).run(a, rows)
+    changed = log.copy()
+    changed.loc[421:, ["north_m", "east_m"]] += 50.0
+    changed.loc[421:, "u_m_s"] += 1.0
+    after = EnvironmentEstimator(model).run(as_log_arrays(changed, model.vessel), rows)
+    np.testing.assert_array_equal(before.x, after.x)
+    np.testing.assert_array_equal(before.P, after.P)
+
+
+def test_drift_samples_update_the_estimate_online(model):
+    """After the thrusters stop, every new drift sample moves the estimate (and the forecast
+    from that start): the estimator keeps running on the drift, and the load's uncertainty
+    shrinks as samples arrive."""
+    log = physics_log(model, duration_s=1000, t_shutdown_s=800, seed=7, tau_ext_N=(3000.0, 3000.0, 0.0))
+    a = as_log_arrays(log, model.vessel)
+    i0 = int(np.flatnonzero(a.dp_active == 0)[0])
+    rows = i0 + np.arange(1, 20)
+    est = EnvironmentEstimator(model).run(a, rows)
+    steps = np.abs(np.diff(est.x[:, 8:11], axis=0)).max(axis=1)
+    assert np.all(steps > 0)
+    sd = np.sqrt(np.einsum("sii->si", est.P[:, 8:10, 8:10]))
+    assert sd[-1].max() < sd[0].max()
+
+
+def test_hybrid_forecasts_after_a_failure_use_the_drift_samples(model):
+    """Forecasts started 1..19 s after the failure use the estimate at their own start: a
+    forecast from start k equals the one made from a log cut right after k, and differs from
+    the one made without the drift samples since the failure."""
+    logs = [physics_log(model, duration_s=1100, t_shutdown_s=900, seed=s, tau_ext_N=(3000.0, -2000.0, 0.0))
+            for s in (8, 9)]
+    hp = HybridPredictor(model.vessel, ensemble_config=TINY).fit(logs[:1])
+    test = logs[1]
+    t0 = float(test.time_s[np.flatnonzero(test.dp_active.to_numpy() == 0)[0]])
+    starts = t0 + np.arange(1, 20)
+    full = hp.forecast(test, starts, 60.0)
+    k = 10
+    cut = test[test.time_s <= starts[k] + 60.0].reset_index(drop=True)
+    again = hp.forecast(cut, [starts[k]], 60.0)
+    np.testing.assert_allclose(again.eta[0], full.eta[k], atol=1e-9)
+    est = hp.environment_estimate(test, starts)
+    assert not np.allclose(est.load_accel[0], est.load_accel[-1])
+
+
+def test_config_rejects_bad_values():
+    with pytest.raises(ValueError, match="position_std_m"):
+        EnvironmentConfig(position_std_m=0.0)
+    with pytest.raises(ValueError, match="environment"):
+        HybridPredictor("gunnerus", environment="nets")
