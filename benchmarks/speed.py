@@ -9,12 +9,18 @@ Usage::
     python benchmarks/speed.py            # human-readable table
     python benchmarks/speed.py --json     # one JSON object (keys below) for tracking
     python benchmarks/speed.py --quick    # smaller batches, for CI smoke tests
+    python benchmarks/speed.py --profile-long-log   # cProfile of the long-log forecast only
 
 JSON keys: ``physics_forecasts_per_s`` (at the largest B), ``physics_single_forecast_ms``,
 ``physics_vessel_steps_per_s`` and ``physics_by_batch`` (B -> forecasts/s); for the hybrid
 (10-member ensemble, guard on) ``hybrid_forecasts_per_s`` (at the largest hybrid batch),
 ``hybrid_single_forecast_ms``, ``hybrid_by_batch`` and ``train_s`` (training on 3 000
-samples of a synthetic log with default settings).
+samples of a synthetic log with default settings); for the cost of a forecast against the
+length of its log ``forecast_long_log_ms`` (a hybrid forecast, 60 s ahead from 2 start times,
+on a 1-hour 10-Hz log passed as a DataFrame, ingest included), ``forecast_short_log_ms``
+(the same forecast on the last 2 minutes of that log), ``forecast_long_short_ratio`` (their
+ratio; the target is at most 2) and ``forecast_long_log_ingested_ms`` (the long log passed
+as already ingested LogArrays, so its validation is not repeated).
 """
 
 from __future__ import annotations
@@ -128,14 +134,73 @@ def hybrid_speed(batches=(1, 1_000, 10_000), seed: int = 0) -> dict:
             "train_samples": hp.training_info["n_rows"]}
 
 
+def _long_log_case(seed: int = 0, hours: float = 1.0, rate_hz: float = 10.0, short_s: float = 120.0):
+    """(hybrid, long log, short log, start times) of the long-log forecast benchmark."""
+    import torch
+
+    torch.set_num_threads(1)
+    from hybridship.predictors import HybridPredictor
+    from hybridship.residual.ensemble import EnsembleConfig
+    from hybridship.sim.synthetic import physics_log
+
+    model = DynamicModel("gunnerus")
+    long = physics_log(model, duration_s=hours * 3600.0, dt_s=1.0 / rate_hz, t_shutdown_s=None, seed=seed,
+                       current=(0.3, 1.0))
+    t_end = float(long.time_s.iloc[-1])
+    short = long[long.time_s >= t_end - short_s].reset_index(drop=True)
+    hp = HybridPredictor(model.vessel, ensemble_config=EnsembleConfig(max_epochs=30, patience=10, seed=seed))
+    hp.fit([short], row_stride=5)
+    return hp, long, short, [t_end - 20.0, t_end - 10.0]
+
+
+def long_log_speed(seed: int = 0) -> dict:
+    """Time one hybrid forecast (2 starts, 60 s) on a 1-hour 10-Hz log and on its last 2 minutes.
+
+    The hybrid (10 members, a short training on the short log) forecasts from 20 s and 10 s
+    before the end of each log, with the commands held; both logs are passed as DataFrames,
+    so each call ingests (re-sorts, validates, converts) its log, as a user's call would.
+    """
+    from hybridship.logs.ingest import ingest
+
+    hp, long, short, starts = _long_log_case(seed)
+    model = hp.model
+    t_long = _time(lambda: hp.forecast(long, starts, 60.0), min_time_s=3.0, max_repeats=5)
+    t_short = _time(lambda: hp.forecast(short, starts, 60.0), min_time_s=3.0, max_repeats=20)
+    ingested = ingest(long, model.vessel, purpose="forecast")
+    t_ingested = _time(lambda: hp.forecast(ingested, starts, 60.0), min_time_s=3.0, max_repeats=5)
+    return {"forecast_long_log_ms": t_long * 1e3, "forecast_short_log_ms": t_short * 1e3,
+            "forecast_long_short_ratio": t_long / t_short, "forecast_long_log_ingested_ms": t_ingested * 1e3,
+            "forecast_long_log_rows": len(long), "forecast_short_log_rows": len(short)}
+
+
+def profile_long_log(seed: int = 0, top: int = 25) -> None:
+    """Print a cProfile of the long-log forecast (cumulative time), after one warm-up call."""
+    import cProfile
+    import pstats
+
+    hp, long, _, starts = _long_log_case(seed)
+    hp.forecast(long, starts, 60.0)
+    prof = cProfile.Profile()
+    prof.enable()
+    hp.forecast(long, starts, 60.0)
+    prof.disable()
+    pstats.Stats(prof).sort_stats("cumulative").print_stats(r"hybridship", top)
+
+
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--json", action="store_true", help="print one JSON object")
     ap.add_argument("--quick", action="store_true", help="small batches (smoke test)")
+    ap.add_argument("--profile-long-log", action="store_true",
+                    help="print a cProfile of the long-log hybrid forecast and stop")
     args = ap.parse_args(argv)
+    if args.profile_long_log:
+        profile_long_log()
+        return 0
     batches = (1, 100, 1_000) if args.quick else (1, 1_000, 100_000)
     res = physics_speed(batches)
     res.update(hybrid_speed((1, 100) if args.quick else (1, 1_000, 10_000)))
+    res.update(long_log_speed())
     if args.json:
         print(json.dumps(res, sort_keys=True))
         return 0
@@ -151,6 +216,12 @@ def main(argv=None) -> int:
         print(f"{int(b):>8} {f:>14,.0f}")
     print(f"single forecast latency: {res['hybrid_single_forecast_ms']:.3f} ms")
     print(f"training on {res['train_samples']} samples: {res['train_s']:.1f} s")
+    print()
+    print("hybrid forecast from 2 start times (60 s ahead) against the length of the log, 10 Hz")
+    print(f"  {res['forecast_long_log_rows']} rows (1 h): {res['forecast_long_log_ms']:.0f} ms "
+          f"({res['forecast_long_log_ingested_ms']:.0f} ms when passed already ingested)")
+    print(f"  {res['forecast_short_log_rows']} rows (2 min): {res['forecast_short_log_ms']:.0f} ms")
+    print(f"  ratio {res['forecast_long_short_ratio']:.1f} (target <= 2)")
     return 0
 
 

@@ -33,7 +33,8 @@ import pandas as pd
 from .fileio import atomic_write
 from .frames import wrap_pi
 from .logs.esso_osaka import EssoRun, RUN_KINDS, esso_log_arrays, list_runs
-from .logs.io import LogArrays, log_to_arrays
+from .logs.ingest import ingest
+from .logs.io import LogArrays
 from .residual.ensemble import EnsembleConfig
 from .residual.features import ALL_FEATURES, ResidualConfig
 
@@ -131,24 +132,16 @@ class Run:
 
 
 def _decimate(arrays: LogArrays, vessel, step_s: float | None) -> LogArrays:
+    """Every k-th row of a run (``step_s`` = k data steps), with the velocities as converted."""
     if step_s is None:
         return arrays
-    dt = float(np.median(np.diff(arrays.time_s)))
+    dt = arrays.dt_s
     k = int(round(step_s / dt))
     if k < 1 or abs(k * dt - step_s) > 0.01 * step_s:
         raise ValueError(f"step_s: {step_s} s is not a whole multiple of the data step {dt:g} s")
     if k == 1:
         return arrays
-    sl = slice(None, None, k)
-    df = pd.DataFrame({"time_s": arrays.time_s[sl], "north_m": arrays.eta[sl, 0], "east_m": arrays.eta[sl, 1],
-                       "heading_deg": np.degrees(wrap_pi(arrays.eta[sl, 2])), "u_m_s": arrays.nu[sl, 0],
-                       "v_m_s": arrays.nu[sl, 1], "r_deg_s": np.degrees(arrays.nu[sl, 2]),
-                       "wind_speed_m_s": arrays.wind[sl, 0], "wind_dir_deg": np.degrees(arrays.wind[sl, 1])})
-    for j, (name, rot) in enumerate(zip(arrays.thruster_names, arrays.rotatable)):
-        df[f"{name}_rpm"] = arrays.rpm[sl, j]
-        if rot:
-            df[f"{name}_azimuth_deg"] = np.degrees(arrays.azimuth_rad[sl, j])
-    return log_to_arrays(df, thruster_names=vessel.thruster_names, rotatable=vessel.rotatable)
+    return ingest(arrays.to_frame(derived_velocities=True).iloc[::k], vessel, purpose="fit")
 
 
 def load_runs(folder, vessel, *, step_s: float | None = None) -> list[Run]:
@@ -160,7 +153,8 @@ def load_runs(folder, vessel, *, step_s: float | None = None) -> list[Run]:
     from .vessel import Vessel, load_vessel
 
     vessel = vessel if isinstance(vessel, Vessel) else load_vessel(vessel)
-    runs = [Run(r, _decimate(esso_log_arrays(r.path, vessel), vessel, step_s)) for r in list_runs(folder)]
+    runs = [Run(r, ingest(_decimate(esso_log_arrays(r.path, vessel), vessel, step_s), vessel, purpose="fit"))
+            for r in list_runs(folder)]
     if not runs:
         raise FileNotFoundError(f"{folder}: no runs (*.csv, *.csv.gz) found")
     return runs

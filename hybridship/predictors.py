@@ -28,8 +28,9 @@ import pandas as pd
 from .fileio import atomic_write
 from .frames import wrap_2pi
 from .limits import check_or_clip_inputs
-from .logs.io import LogArrays, log_to_arrays, read_log
-from .quality import FaultFlags, assess_start_window, forecast_log_arrays
+from .logs.ingest import ingest
+from .logs.io import LogArrays
+from .quality import FaultFlags, assess_start_window
 from .physics.integrate import rollout_batch
 from .physics.model import DynamicModel
 from .residual.ensemble import EnsembleConfig, MLPEnsemble, fit_ensemble
@@ -39,7 +40,10 @@ from .residual.environment import (EnvironmentConfig, EnvironmentEstimator, curr
 from .residual.guard import EnvelopeGuard, ThrustRegime
 
 #: Version of the model-file format written by :meth:`HybridPredictor.save`.
-MODEL_FORMAT_VERSION = 3
+#: 4: the validated vessel description is embedded in the metadata (``vessel_description``),
+#: so a model loads without its vessel file; 3 added the environment estimator; 2 and 3
+#: stored only the vessel's name.
+MODEL_FORMAT_VERSION = 4
 
 #: Where the hybrid's slowly varying environment comes from (see :class:`HybridPredictor`).
 ENVIRONMENT_SOURCES = ("estimator", "mean")
@@ -115,16 +119,10 @@ class ForecastResult:
 # --------------------------------------------------------------------------- helpers
 
 
-def as_log_arrays(log, vessel) -> LogArrays:
-    """Accept a LogArrays, a DataFrame in the log format, or a path to a log file."""
-    if isinstance(log, LogArrays):
-        return log
-    names, rot = vessel.thruster_names, vessel.rotatable
-    if isinstance(log, (str, Path)):
-        log = read_log(log, thruster_names=names, rotatable=rot)
-    if isinstance(log, pd.DataFrame):
-        return log_to_arrays(log, thruster_names=names, rotatable=rot)
-    raise TypeError(f"log: expected a path, a DataFrame or LogArrays, got {type(log).__name__}")
+def as_log_arrays(log, vessel, *, purpose: str = "fit") -> LogArrays:
+    """A path, a DataFrame in the log format or LogArrays, through :func:`hybridship.logs.ingest.ingest`
+    (re-sorted, checked against ``vessel`` once; ``purpose`` "fit" or "forecast")."""
+    return ingest(log, vessel, purpose=purpose)
 
 
 def start_indices(arrays: LogArrays, start_times_s) -> np.ndarray:
@@ -254,8 +252,8 @@ def _forecast_setup(model, config: ResidualConfig, log, start_times_s, horizon_s
     (S, H, K) (see :func:`_known_command_steps`). The wind is held at its start value
     in both modes (its future is not known at a start).
 
-    The log goes through :func:`hybridship.quality.forecast_log_arrays` (re-sorted,
-    checked against the vessel; sensor faults tolerated, format errors refused), the start
+    The log goes through :func:`hybridship.logs.ingest.ingest` with ``purpose="forecast"``
+    (re-sorted, checked against the vessel; sensor faults tolerated, format errors refused), the start
     values through :func:`hybridship.quality.assess_start_window` (valid samples of the
     window used, faults flagged, a start with too little valid data refused), and the held
     inputs through :func:`hybridship.limits.check_or_clip_inputs` (clipped to the
@@ -265,11 +263,11 @@ def _forecast_setup(model, config: ResidualConfig, log, start_times_s, horizon_s
         raise ValueError(f"horizon_s: must be > 0, got {horizon_s}")
     if commands not in COMMAND_MODES:
         raise ValueError(f"commands: expected one of {COMMAND_MODES}, got {commands!r}")
-    arrays, order = forecast_log_arrays(log, model.vessel)
+    arrays = ingest(log, model.vessel, purpose="forecast")
     idx = start_indices(arrays, start_times_s)
-    dt = float(np.median(np.diff(arrays.time_s)))
+    dt = arrays.dt_s
     H = int(round(horizon_s / dt))
-    sw = assess_start_window(arrays, idx, config.start_average_s, order=order)
+    sw = assess_start_window(arrays, idx, config.start_average_s)
     rpm, az, wind = _held_inputs(arrays, idx, stop_after_failure=stop_after_failure, wind=sw.wind)
     if commands == "known":
         rpm, az = _known_command_steps(arrays, idx, H, rpm[:, 0], az[:, 0], stop_after_failure)
@@ -707,6 +705,7 @@ class HybridPredictor:
         return {
             "format": "hybridship-model", "format_version": MODEL_FORMAT_VERSION,
             "kind": "HybridPredictor", "vessel": v.name,
+            "vessel_description": v.model_dump(mode="json"),
             "vessel_fingerprint": _vessel_fingerprint(v),
             "features": list(self.residual_config.features),
             "residual_config": asdict(self.residual_config),
@@ -741,6 +740,16 @@ class HybridPredictor:
     def load(cls, path, vessel=None) -> "HybridPredictor":
         """Load a model file written by :meth:`save` (never executes code from the file).
 
+        Parameters
+        ----------
+        path : str or path-like
+            The ``.npz`` model file.
+        vessel : Vessel or str, optional
+            The vessel to forecast for (a :class:`~hybridship.vessel.Vessel`, a packaged
+            name or a vessel TOML file); it must be the one the model was trained for
+            (same validated description). Default: the vessel description embedded in
+            the file, so no vessel file is needed.
+
         Raises :class:`ModelFileError` for an unreadable, truncated or tampered file, another
         format version, or a vessel that differs from the one the model was trained for.
         """
@@ -758,9 +767,15 @@ class HybridPredictor:
             raise ModelFileError(f"{path}: metadata missing or damaged") from None
         if meta.get("format") != "hybridship-model":
             raise ModelFileError(f"{path}: not a hybridship model file")
-        if meta.get("format_version") != MODEL_FORMAT_VERSION:
-            raise ModelFileError(f"{path}: model format version {meta.get('format_version')} is not supported "
-                                 f"(this hybridship reads version {MODEL_FORMAT_VERSION})")
+        version = meta.get("format_version")
+        if version != MODEL_FORMAT_VERSION:
+            older = (f": written by an older hybridship (format {version}), whose model files hold only the "
+                     f"vessel's name; retrain with `hybridship train` (or HybridPredictor.fit) to write a "
+                     f"version-{MODEL_FORMAT_VERSION} file that carries its vessel"
+                     if isinstance(version, int) and not isinstance(version, bool) and 1 <= version < MODEL_FORMAT_VERSION
+                     else "")
+            raise ModelFileError(f"{path}: model format version {version} is not supported "
+                                 f"(this hybridship reads version {MODEL_FORMAT_VERSION}){older}")
         content = {k: v for k, v in data.items() if k != "metadata_json"}
         if meta.get("content_sha256") != _content_hash(content):
             raise ModelFileError(f"{path}: content checksum does not match the metadata: the file was "
@@ -768,7 +783,10 @@ class HybridPredictor:
         try:
             residual_config = ResidualConfig(**{k: tuple(v) if k == "features" else v
                                                 for k, v in meta["residual_config"].items()})
-            obj = cls(vessel if vessel is not None else meta["vessel"], residual_config=residual_config,
+            embedded = vessel is None
+            if embedded:
+                vessel = _embedded_vessel(meta["vessel_description"], path)
+            obj = cls(vessel, residual_config=residual_config,
                       ensemble_config=EnsembleConfig(**meta["ensemble_config"]), guard=meta["use_guard"],
                       guard_quantile=meta["guard_quantile"], stop_after_failure=meta["stop_after_failure"],
                       environment=meta["environment"],
@@ -782,10 +800,13 @@ class HybridPredictor:
             guard_d0, guard_scale = float(meta["guard"]["d0"]), float(meta["guard"]["scale"])
             thrust_lo = float(meta["thrust_regime"]["lo"])
         except (KeyError, TypeError, ValueError, AttributeError) as err:
-            if "VesselFileError" in type(err).__name__:
+            if isinstance(err, ModelFileError) or "VesselFileError" in type(err).__name__:
                 raise
             raise ModelFileError(f"{path}: damaged model metadata ({type(err).__name__}: {err})") from None
         if _vessel_fingerprint(obj.model.vessel) != fingerprint:
+            if embedded:
+                raise ModelFileError(f"{path}: the embedded description of vessel {meta['vessel']!r} does not "
+                                     f"match its fingerprint: the metadata was edited or damaged")
             raise ModelFileError(f"{path}: trained for vessel {meta['vessel']!r} with other parameters; "
                                  f"refusing to use it with vessel {obj.model.vessel.name!r}")
         try:
@@ -818,6 +839,18 @@ def _check_row_stride(row_stride) -> int:
     return int(row_stride)
 
 
+def _embedded_vessel(description, path):
+    """The :class:`~hybridship.vessel.Vessel` embedded in a model file's metadata (validated again)."""
+    from .vessel import VesselFileError, vessel_from_dict
+
+    if not isinstance(description, dict):
+        raise ModelFileError(f"{path}: damaged model metadata: vessel_description is not a table")
+    try:
+        return vessel_from_dict(description, source=f"{Path(path).name} (embedded vessel)")
+    except VesselFileError as err:
+        raise ModelFileError(f"{path}: damaged model metadata: the embedded vessel is invalid: {err}") from None
+
+
 def _content_hash(arrays: dict) -> str:
     """sha256 over every array's name, dtype, shape and bytes (sorted by name)."""
     import hashlib
@@ -832,6 +865,6 @@ def _content_hash(arrays: dict) -> str:
 
 def _vessel_fingerprint(vessel) -> str:
     """A stable hash of the validated vessel description (so a model is not used on another ship)."""
-    import hashlib
+    from .vessel import fingerprint
 
-    return hashlib.sha256(json.dumps(vessel.model_dump(mode="json"), sort_keys=True).encode()).hexdigest()[:16]
+    return fingerprint(vessel)

@@ -10,8 +10,8 @@ forecast result (and the CLI) can say what was degraded. The predictors call the
 
 Pipeline at forecast time::
 
-    arrays, order = forecast_log_arrays(log, vessel)        # sort, repair, validate, convert
-    window = assess_start_window(arrays, idx, 3.0, order=order)
+    arrays = ingest(log, vessel, purpose="forecast")          # sort, repair, validate, convert
+    window = assess_start_window(arrays, idx, 3.0)
     eta0, nu0, wind0 = window.eta0, window.nu0, window.wind  # use these as start values
     window.flags[FaultFlags.WIND_DROPPED]                    # (S,) bool per start
 
@@ -20,8 +20,8 @@ Faults and their behaviour (``FaultFlags`` names the flags):
 ``late_or_out_of_order``
     Samples whose ``time_s`` is earlier than a sample before them in the file (arrived
     late), or repeated times. :func:`sort_samples` re-sorts by time (stable); an exact
-    duplicate row is dropped; duplicates that disagree are merged into one sample whose
-    values are all missing (neither is trusted). Flagged for starts whose window contains
+    duplicate row is dropped; duplicates that disagree are all removed (neither is trusted;
+    the time becomes a missing sample). Flagged for starts whose window contains
     such a time. Rows without a finite ``time_s`` cannot be placed and are dropped
     (counted in :attr:`SortedLog.n_without_time`).
 ``nan_in_window``
@@ -73,15 +73,13 @@ Faults and their behaviour (``FaultFlags`` names the flags):
 from __future__ import annotations
 
 import math
-import os
 from dataclasses import dataclass, field
-from pathlib import Path
 
 import numpy as np
 import pandas as pd
 
-from .logs.io import (REQUIRED_COLUMNS, LogArrays, LogFormatError, _to_float, check_log_against_vessel,
-                      log_to_arrays, read_log)
+from .logs.ingest import SortedLog, ingest_with_report, sort_samples
+from .logs.io import LogArrays
 
 __all__ = [
     "FaultFlags",
@@ -148,133 +146,23 @@ class StartWindowError(ValueError):
 # --------------------------------------------------------------------------------------
 
 
-@dataclass(frozen=True, eq=False)
-class SortedLog:
-    """A log re-sorted by time (see :func:`sort_samples`).
-
-    Attributes
-    ----------
-    frame : pandas.DataFrame
-        A new frame, sorted by ``time_s`` with unique times and a fresh ``RangeIndex``.
-    late_time_s : ndarray
-        Times of samples that came after a later sample in the input (arrived late).
-    duplicate_time_s : ndarray
-        Times that appeared more than once with identical rows (one kept).
-    conflicting_time_s : ndarray
-        Times that appeared more than once with differing rows (merged into one sample
-        whose values are all missing).
-    n_without_time : int
-        Rows dropped because ``time_s`` was missing or not finite.
-    """
-
-    frame: pd.DataFrame
-    late_time_s: np.ndarray
-    duplicate_time_s: np.ndarray
-    conflicting_time_s: np.ndarray
-    n_without_time: int
-
-    @property
-    def affected_time_s(self) -> np.ndarray:
-        """Sorted unique times of late, duplicated or conflicting samples."""
-        return np.unique(np.concatenate([self.late_time_s, self.duplicate_time_s, self.conflicting_time_s]))
-
-    @property
-    def changed(self) -> bool:
-        """Whether anything was re-sorted, dropped or merged."""
-        return bool(self.affected_time_s.size or self.n_without_time)
-
-
-def _rows_equal(block: pd.DataFrame) -> bool:
-    """Whether all rows of ``block`` are identical (NaN equal to NaN)."""
-    first = block.iloc[0]
-    for _, row in block.iloc[1:].iterrows():
-        for a, b in zip(first.to_numpy(), row.to_numpy()):
-            if a is b:
-                continue
-            a_nan = isinstance(a, float) and math.isnan(a)
-            b_nan = isinstance(b, float) and math.isnan(b)
-            if a_nan and b_nan:
-                continue
-            if a_nan or b_nan or a != b:
-                return False
-    return True
-
-
-def sort_samples(df: pd.DataFrame, *, source: str = "log") -> SortedLog:
-    """Re-sort a log's samples by time; drop exact duplicates; blank conflicting ones.
-
-    Parameters
-    ----------
-    df : pandas.DataFrame
-        A log in the log format, possibly with samples out of order (never modified).
-    source : str, default "log"
-        Quoted in messages.
-
-    Returns
-    -------
-    SortedLog
-
-    Raises
-    ------
-    LogFormatError
-        If ``time_s`` is missing or holds non-numeric values.
-    """
-    if not isinstance(df, pd.DataFrame):
-        raise TypeError(f"expected a pandas DataFrame, got {type(df).__name__}")
-    if "time_s" not in map(str, df.columns):
-        raise LogFormatError(f"time_s: required column missing (required: {', '.join(REQUIRED_COLUMNS)}) "
-                             f"(in {source})", column="time_s")
-    t = _to_float(df, "time_s", source, None, inf_is_missing=True)
-    has_time = np.isfinite(t)
-    n_without = int((~has_time).sum())
-    rows = np.flatnonzero(has_time)
-    tt = t[rows]
-    # arrived late: earlier than some sample before it in the input
-    prev_max = np.maximum.accumulate(np.concatenate(([-np.inf], tt[:-1])))
-    late = tt < prev_max
-    order = np.argsort(tt, kind="stable")
-    frame = df.iloc[rows[order]].reset_index(drop=True)
-    ts = tt[order]
-    dup_mask = np.zeros(ts.size, dtype=bool)
-    dup_mask[1:] = ts[1:] == ts[:-1]
-    duplicate, conflicting = [], []
-    drop = []
-    if dup_mask.any():
-        starts = np.flatnonzero(~dup_mask)
-        ends = np.concatenate((starts[1:], [ts.size]))
-        blank_rows = []
-        for a, b in zip(starts, ends):
-            if b - a < 2:
-                continue
-            block = frame.iloc[a:b]
-            if _rows_equal(block):
-                duplicate.append(ts[a])
-            else:
-                conflicting.append(ts[a])
-                blank_rows.append(a)
-            drop.extend(range(a + 1, b))
-        if blank_rows:
-            value_cols = [c for c in frame.columns if str(c) != "time_s"]
-            frame = frame.astype({c: float for c in value_cols if frame[c].dtype.kind in "iub"})
-            frame.loc[blank_rows, value_cols] = np.nan
-        frame = frame.drop(index=drop).reset_index(drop=True)
-    return SortedLog(frame=frame, late_time_s=np.unique(tt[late]), duplicate_time_s=np.asarray(duplicate, float),
-                     conflicting_time_s=np.asarray(conflicting, float), n_without_time=n_without)
+# SortedLog and sort_samples live in hybridship.logs.ingest (re-exported here).
 
 
 def forecast_log_arrays(log, vessel, *, source: str | None = None) -> tuple[LogArrays, SortedLog | None]:
     """A log as :class:`LogArrays` for forecasting, tolerating sensor faults.
 
-    Reads a path without validation, re-sorts it with :func:`sort_samples`, checks it
-    against the vessel (:func:`hybridship.logs.io.check_log_against_vessel`) with missing
-    positions and headings allowed, and converts it with ``allow_missing=True``. Format
-    errors (units, names, ranges, thruster columns) are still refused; only sensor faults
-    pass, for :func:`assess_start_window` to judge per start.
+    :func:`hybridship.logs.ingest.ingest` with ``purpose="forecast"``: re-sorted with
+    :func:`sort_samples`, checked against the vessel
+    (:func:`hybridship.logs.io.check_log_against_vessel`) with missing positions and
+    headings allowed, and converted. Format errors (units, names, ranges, thruster
+    columns) are still refused; only sensor faults pass, for :func:`assess_start_window`
+    to judge per start.
 
     Parameters
     ----------
     log : path, pandas.DataFrame or LogArrays
-        LogArrays are returned as they are (with ``None`` as the sort report).
+        LogArrays are checked too (see :func:`~hybridship.logs.ingest.ingest`).
     vessel : hybridship.vessel.Vessel or str
         Vessel, or a packaged name or vessel-file path (see :func:`hybridship.vessel.load_vessel`).
     source : str, optional
@@ -284,25 +172,9 @@ def forecast_log_arrays(log, vessel, *, source: str | None = None) -> tuple[LogA
     -------
     arrays : LogArrays
     order : SortedLog or None
+        The sort report (None when already-checked LogArrays were passed through).
     """
-    if isinstance(log, LogArrays):
-        return log, None
-    from .vessel import Vessel, load_vessel
-
-    v = vessel if isinstance(vessel, Vessel) else load_vessel(vessel)
-    if isinstance(log, (str, os.PathLike)):
-        source = source or str(log)
-        df = read_log(Path(log), validate=False)
-    elif isinstance(log, pd.DataFrame):
-        df = log
-    else:
-        raise TypeError(f"log: expected a path, a DataFrame or LogArrays, got {type(log).__name__}")
-    source = source or "log"
-    order = sort_samples(df, source=source)
-    check_log_against_vessel(order.frame, v, source=source, allow_missing=True)
-    arrays = log_to_arrays(order.frame, thruster_names=v.thruster_names, rotatable=v.rotatable,
-                           allow_missing=True)
-    return arrays, order
+    return ingest_with_report(log, vessel, purpose="forecast", name=source)
 
 
 # --------------------------------------------------------------------------------------
@@ -423,7 +295,8 @@ def assess_start_window(
     window_s : float, default 3.0
         Start window [s]: rows with ``t0 - window_s < time_s <= t0`` (half a sample of slack).
     order : SortedLog, optional
-        The sort report of the log, to flag ``late_or_out_of_order``.
+        The sort report of the log, to flag ``late_or_out_of_order`` (default: the times
+        the ingest re-sorted or dropped, :attr:`LogArrays.resorted_time_s`).
     frozen_s : float, default 3.0
         A channel bit-identical for at least this long [s] is checked for being frozen
         (it counts as frozen only if the independent channel contradicts it, so a short
@@ -468,7 +341,7 @@ def assess_start_window(
     eta, nu, psi = arrays.eta, arrays.nu, arrays.eta[:, 2]
     pos = eta[:, :2]
     has_col = arrays.nu_logged.any(axis=0)           # which velocity columns the log has
-    affected = order.affected_time_s if order is not None else np.zeros(0)
+    affected = order.affected_time_s if order is not None else arrays.resorted_time_s
 
     pos_first, pos_last = _runs(pos)
     head_first, head_last = _runs(psi)
@@ -512,7 +385,9 @@ def assess_start_window(
             note.append(f"{'; '.join(x for x in (what, gap) if x)} in the window: valid samples used")
 
         # ---- late / out of order
-        if affected.size and np.any((affected >= t[lo] - 1e-9) & (affected <= t0 + 1e-9)):
+        # the nominal window: a removed (conflicting) sample leaves no row but is still in it
+        if affected.size and np.any((affected >= min(t[lo], t0 - window_s + 0.5 * dt_nom) - 1e-9)
+                                    & (affected <= t0 + 1e-9)):
             flags[FaultFlags.LATE_OR_OUT_OF_ORDER][k] = True
             note.append("late, out-of-order or duplicated samples in the window: re-sorted by time")
 

@@ -360,8 +360,8 @@ class Vessel(_Strict):
             if r.propeller is not None and r.propeller not in forward:
                 raise ValueError(f"rudders[{i}].propeller: {r.propeller!r} is not a thruster of type 'fixed' "
                                  f"with angle_deg = 0 (candidates: {forward or 'none'})")
-        # Import here: physics.model imports this module.
-        from .physics.model import mass_matrices
+        # Imported here: numba (behind physics) is only needed once a vessel is validated.
+        from .physics.hull import mass_matrices
 
         M_RB, M_A = mass_matrices(self)
         eig = np.linalg.eigvalsh(0.5 * (M_RB + M_A + (M_RB + M_A).T))
@@ -393,6 +393,18 @@ class Vessel(_Strict):
     def n_actuators(self) -> int:
         """Number of command channels (width of the ``rpm`` and ``azimuth_rad`` arrays)."""
         return len(self.thrusters) + len(self.rudders)
+
+
+def fingerprint(vessel: Vessel) -> str:
+    """A stable hash of the validated vessel description (16 hex digits).
+
+    Two vessels with the same fingerprint have the same parameters; model files and
+    checked logs (:func:`hybridship.logs.ingest.ingest`) record it.
+    """
+    import hashlib
+    import json
+
+    return hashlib.sha256(json.dumps(vessel.model_dump(mode="json"), sort_keys=True).encode()).hexdigest()[:16]
 
 
 def _format_validation_error(err: ValidationError, source: str) -> str:

@@ -21,11 +21,6 @@ from hybridship.sim.dp import DPController, ReferenceModel, pid_gains
 LOAD_SCALE = np.array([1.0, 1.0, 10.0])
 
 
-@pytest.fixture(scope="module")
-def model():
-    return DynamicModel("gunnerus")
-
-
 def thruster_load(model, nu, result):
     """Load the physics model computes for the allocated commands at velocity ``nu`` (no current)."""
     _, parts, _ = model.acceleration(np.zeros(3), nu, rpm=result.rpm, azimuth_rad=result.azimuth_rad,

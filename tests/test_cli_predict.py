@@ -54,3 +54,32 @@ def test_drift_table_layout_and_physics_log_error_near_zero():
     table = metrics.paper_table(long)
     assert list(table.columns) == ["15 s", "30 s", "45 s", "60 s"]
     assert all("/" in c for c in table.to_numpy().ravel())
+
+
+def test_own_vessel_model_forecasts_where_no_vessel_file_is(tmp_path, monkeypatch, capsys):
+    """Defect 1 of issue 15: ``train --vessel my_ship.toml`` then ``forecast --model`` in a folder
+    without the vessel file. The model file carries its vessel, so the forecast needs none."""
+    import re
+
+    from hybridship.vessel import load_vessel, packaged_vessel_text
+
+    work, elsewhere = tmp_path / "work", tmp_path / "elsewhere"
+    (work / "logs").mkdir(parents=True)
+    elsewhere.mkdir()
+    text = packaged_vessel_text("gunnerus")
+    text = re.sub(r'(?m)^name = "gunnerus"', 'name = "my_ship"', text, count=1)
+    text = re.sub(r"(?m)^mass_kg = [0-9.]+", "mass_kg = 630000.0", text, count=1)   # not gunnerus any more
+    (work / "my_ship.toml").write_text(text)
+    vessel = load_vessel(work / "my_ship.toml")
+    assert vessel.name == "my_ship" and vessel.rigid_body.mass_kg == 630000.0
+    write_log(physics_log(DynamicModel(vessel), seed=1, duration_s=240.0, t_shutdown_s=None, current=(0.2, 2.0)),
+              work / "logs" / "a.csv", thruster_names=vessel.thruster_names, rotatable=vessel.rotatable)
+    monkeypatch.chdir(work)
+    assert main(["train", "--vessel", "my_ship.toml", "--logs", "logs", "--out", "m.npz", "--members", "2"]) == 0
+    monkeypatch.chdir(elsewhere)                     # no my_ship.toml here, and it is not packaged
+    out = elsewhere / "fc.csv"
+    rc = main(["forecast", "--model", str(work / "m.npz"), "--log", str(work / "logs" / "a.csv"),
+               "--start-time", "200", "--horizon-s", "20", "--out", str(out)])
+    assert rc == 0, capsys.readouterr().err
+    df = pd.read_csv(out)
+    assert len(df) == 21 and df[["north_m", "east_m", "heading_deg"]].notna().all().all()

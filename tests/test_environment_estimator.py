@@ -14,11 +14,6 @@ from hybridship.sim.synthetic import physics_log
 TINY = EnsembleConfig(n_members=3, hidden=8, max_epochs=20, patience=5, seed=0)
 
 
-@pytest.fixture(scope="module")
-def model():
-    return DynamicModel("gunnerus")
-
-
 def _last(est_obj, log, model):
     a = as_log_arrays(log, model.vessel)
     return est_obj.run(a, np.array([len(a.time_s) - 1]))

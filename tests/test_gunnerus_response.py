@@ -14,15 +14,9 @@ import numpy as np
 import pytest
 from scipy.optimize import brentq
 
-from hybridship.physics.model import DynamicModel
 
 KNOT = 1852.0 / 3600.0
 TUNNEL, PORT, STBD = 0, 1, 2
-
-
-@pytest.fixture(scope="module")
-def model():
-    return DynamicModel("gunnerus")
 
 
 def steady_speed(model, rpm):

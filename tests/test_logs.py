@@ -28,7 +28,6 @@ from hybridship.logs.io import heading_looks_like_radians
 
 THRUSTERS = ["tunnel", "port", "stbd"]
 ROTATABLE = [False, True, True]
-DATA_DIR = Path(__file__).resolve().parents[1].parent / "shared" / "data"
 
 # Circular track: constant body velocity and yaw rate.
 U_M_S, V_M_S, R_DEG_S = 2.0, 0.5, 1.0
@@ -388,10 +387,11 @@ def test_moving_average_start():
 # --------------------------------------------------------------------------------------
 
 
-def _dev_logs() -> list[Path]:
-    logs = sorted((DATA_DIR / "truthsim-dev" / "logs").glob("*.csv.gz"))
+def _dev_logs(shared_data) -> list[Path]:
+    folder = shared_data("truthsim-dev", "logs")
+    logs = sorted(folder.glob("*.csv.gz"))
     if not logs:
-        pytest.skip(f"development logs not found in {DATA_DIR / 'truthsim-dev' / 'logs'} (shared data checkout absent)")
+        pytest.skip(f"no development logs (*.csv.gz) in {folder}")
     return logs
 
 
@@ -399,11 +399,11 @@ def _increments(x: np.ndarray, lag: int) -> np.ndarray:
     return x[lag:] - x[:-lag]
 
 
-def test_dev_logs_read_and_velocities_match_heading():
+def test_dev_logs_read_and_velocities_match_heading(shared_data):
     from scipy.integrate import cumulative_trapezoid
 
     lag = 20  # compare 20-s displacements: GNSS noise is small against them
-    for path in _dev_logs():
+    for path in _dev_logs(shared_data):
         with warnings.catch_warnings():
             warnings.simplefilter("error", LogFormatWarning)  # only format and truth_* columns
             df = read_log(path, thruster_names=THRUSTERS, rotatable=ROTATABLE)

@@ -17,18 +17,12 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from hybridship.physics.model import DynamicModel
 from hybridship.predictors import HybridPredictor, ModelFileError
 from hybridship.residual.ensemble import EnsembleConfig
 from hybridship.sim.synthetic import physics_log
 from hybridship.vessel import vessel_from_dict
 
 TINY = EnsembleConfig(n_members=2, hidden=8, max_epochs=15, patience=5, seed=0)
-
-
-@pytest.fixture(scope="module")
-def model():
-    return DynamicModel("gunnerus")
 
 
 @pytest.fixture(scope="module")
@@ -130,6 +124,32 @@ def test_incompatible_format_version_is_refused(saved, tmp_path):
         _refused(p, rf"model format version {version} is not supported \(this hybridship reads version \d+\)")
 
 
+def test_an_older_format_says_retrain(saved, tmp_path):
+    for old in (2, 3):
+        p = _rewrite(saved, tmp_path, meta_change=lambda m: m.update(format_version=old), name=f"v{old}.npz")
+        _refused(p, rf"written by an older hybridship \(format {old}\).*retrain with `hybridship train`")
+
+
+def test_the_model_file_carries_its_vessel(saved, model, tmp_path):
+    hp, path, _ = saved
+    meta = _meta(_arrays(path))
+    assert meta["vessel_description"] == model.vessel.model_dump(mode="json")
+    # loads from the embedded description alone: the packaged name is not looked up
+    p = _rewrite(saved, tmp_path, meta_change=lambda m: m.update(vessel="no_such_ship"), name="renamed.npz")
+    assert HybridPredictor.load(p).model.vessel == model.vessel
+    # an edited embedded description no longer matches the fingerprint
+    def heavier(m):
+        m["vessel_description"]["rigid_body"]["mass_kg"] *= 1.2
+    _refused(_rewrite(saved, tmp_path, meta_change=heavier, name="heavier.npz"),
+             "embedded description of vessel 'gunnerus' does not match its fingerprint")
+    def invalid(m):
+        m["vessel_description"]["rigid_body"]["mass_kg"] = -1.0
+    _refused(_rewrite(saved, tmp_path, meta_change=invalid, name="invalid.npz"),
+             r"embedded vessel is invalid: .*rigid_body.mass_kg")
+    _refused(_rewrite(saved, tmp_path, meta_change=lambda m: m.pop("vessel_description"), name="novessel.npz"),
+             "damaged model metadata")
+
+
 def test_a_file_that_is_not_a_model_is_refused(saved, tmp_path):
     p = tmp_path / "other.npz"
     np.savez(p, x=np.arange(3.0))
@@ -166,7 +186,8 @@ def test_another_vessels_model_is_refused(saved, model, tmp_path):
                    r"'gunnerus-sister'", vessel=other)
     # a file claiming gunnerus but trained on other parameters (fingerprint mismatch)
     p = _rewrite(saved, tmp_path, meta_change=lambda m: m.update(vessel_fingerprint="0" * 16), name="fp.npz")
-    _refused(p, "trained for vessel 'gunnerus' with other parameters")
+    _refused(p, "trained for vessel 'gunnerus' with other parameters", vessel="gunnerus")
+    _refused(p, "embedded description of vessel 'gunnerus' does not match its fingerprint")
 
 
 class _Payload:

@@ -15,15 +15,17 @@ from __future__ import annotations
 import contextlib
 import importlib.util
 import io
+import os
 import re
 from pathlib import Path
 
 import pytest
 
-ROOT = Path(__file__).resolve().parents[1]
+from conftest import ROOT, shared_data_path
+
 DOCS = ROOT / "docs"
 NOTEBOOKS = sorted((DOCS / "notebooks").glob("*.py"))
-TRUTHSIM_DEV = ROOT.parent / "shared" / "data" / "truthsim-dev"
+TRUTHSIM_DEV = shared_data_path("truthsim-dev")     # optional: notebook 2 uses it when present
 _MISSING = [m for m in ("jupytext", "nbclient", "ipykernel") if importlib.util.find_spec(m) is None]
 
 
@@ -41,6 +43,8 @@ def test_notebook_runs_in_small_configuration(path, tmp_path, monkeypatch):
 
     monkeypatch.setenv("HYBRIDSHIP_SMALL", "1")
     monkeypatch.setenv("MPLBACKEND", "Agg")           # no figure rendering: faster, no display
+    # the kernel imports the hybridship beside this test, not another installed copy
+    monkeypatch.setenv("PYTHONPATH", os.pathsep.join(filter(None, [str(ROOT), os.environ.get("PYTHONPATH")])))
     if TRUTHSIM_DEV.is_dir():
         monkeypatch.setenv("HYBRIDSHIP_TRUTHSIM_DEV", str(TRUTHSIM_DEV))
     nb = jupytext.read(path)

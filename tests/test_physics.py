@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import copy
 import tomllib
-from pathlib import Path
 
 import numpy as np
 import pandas as pd
@@ -19,7 +18,6 @@ from hybridship.physics.propeller import ct_cq_star, kt_kq, load_wageningen, rpm
 from hybridship.physics.thrusters import configuration_matrix
 from hybridship.vessel import VesselFileError, load_vessel, packaged_vessel_text, vessel_from_dict
 
-SHARED = Path(__file__).resolve().parents[1].parent / "shared" / "data"
 
 
 def gunnerus_dict() -> dict:
@@ -173,10 +171,8 @@ def test_propeller_reproduces_reference_bollard_coefficients():
     assert p.kq0 == pytest.approx(0.06607, abs=5e-6)
 
 
-def test_propeller_against_shared_check_values():
-    f = SHARED / "reference" / "wageningen_b_series_4q_check_values.csv"
-    if not f.exists():
-        pytest.skip(f"shared reference data not found at {f}")
+def test_propeller_against_shared_check_values(shared_data):
+    f = shared_data("reference", "wageningen_b_series_4q_check_values.csv")
     chk = pd.read_csv(f)
     for (series, pd_ratio), g in chk.groupby(["series", "pitch_diameter_ratio"]):
         p = load_wageningen(series, pd_ratio)

@@ -6,7 +6,6 @@ import numpy as np
 import pytest
 
 from hybridship.logs.io import LogFormatError
-from hybridship.physics.model import DynamicModel
 from hybridship.predictors import (DeadReckoning, DynamicPredictor, HybridPredictor, ModelFileError,
                                    as_log_arrays)
 from hybridship.residual.ensemble import EnsembleConfig, fit_ensemble
@@ -15,11 +14,6 @@ from hybridship.residual.guard import EnvelopeGuard
 from hybridship.sim.synthetic import physics_log
 
 SMALL = EnsembleConfig(n_members=4, max_epochs=250, patience=40, seed=1)
-
-
-@pytest.fixture(scope="module")
-def model():
-    return DynamicModel("gunnerus")
 
 
 @pytest.fixture(scope="module")

@@ -13,18 +13,12 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from hybridship.physics.model import DynamicModel
 from hybridship.quality import (FaultFlags, SortedLog, StartWindowError, assess_start_window, forecast_log_arrays,
                                 sort_samples)
 from hybridship.sim.synthetic import physics_log
 
 T_FAULT = 300  # fault time [s] = row (1 Hz log starting at 0)
 F = FaultFlags
-
-
-@pytest.fixture(scope="module")
-def model():
-    return DynamicModel("gunnerus")
 
 
 @pytest.fixture(scope="module")
@@ -152,7 +146,8 @@ FAULTS = {
     "samples out of order": fault(_swap(T, T + 1), F.LATE_OR_OUT_OF_ORDER, window(T, T)),
     "late sample": fault(_swap(T, T + 6), F.LATE_OR_OUT_OF_ORDER, window(T, T + 5)),
     "exact duplicate": fault(_duplicate(T), F.LATE_OR_OUT_OF_ORDER, window(T, T)),
-    "conflicting duplicate": fault(_duplicate(T, north_offset=3.0), F.LATE_OR_OUT_OF_ORDER, window(T, T),
+    # both samples of the conflicting time are removed: T is no longer a sample time
+    "conflicting duplicate": fault(_duplicate(T, north_offset=3.0), F.LATE_OR_OUT_OF_ORDER, window(T, T) - {T},
                                    pos_tol=0.05),
 }
 
@@ -162,7 +157,8 @@ def test_fault_replay(model, log, name):
     spec = FAULTS[name]
     flag = spec["flag"]
     df = spec["inject"](log.copy())
-    starts = np.intersect1d(np.arange(T - 20, T + 40), df.time_s).astype(float)  # sample times only
+    ingested = forecast_log_arrays(df, model.vessel)[0].time_s
+    starts = np.intersect1d(np.arange(T - 20, T + 40), ingested).astype(float)  # sample times only
     arrays, sw = _assess(model, df, starts, on_refuse="flag")
     got_flagged = set(sw.start_time_s[sw.flags[flag]].astype(int))
     got_refused = set(sw.start_time_s[sw.refused].astype(int))
@@ -265,13 +261,13 @@ def test_sort_samples_reports_and_repairs():
     out = sort_samples(df)
     assert isinstance(out, SortedLog) and out.changed
     pd.testing.assert_frame_equal(df, before)
-    np.testing.assert_array_equal(out.frame.time_s, [0, 1, 2, 3, 4, 5])
+    np.testing.assert_array_equal(out.frame.time_s, [0, 1, 2, 3, 5])   # 4 removed: neither value trusted
     np.testing.assert_array_equal(out.late_time_s, [2.0])   # 2 came after 3; the second 3 is a duplicate
     np.testing.assert_array_equal(out.duplicate_time_s, [3.0])
     np.testing.assert_array_equal(out.conflicting_time_s, [4.0])
+    np.testing.assert_array_equal(out.conflicting_rows, [[5, 6]])
     assert out.n_without_time == 1
-    assert np.isnan(out.frame.north_m[4]) and np.isnan(out.frame.dp_active[4])  # neither value trusted
-    np.testing.assert_array_equal(out.frame.north_m.drop(index=4), [0, 1, 2, 3, 5])
+    np.testing.assert_array_equal(out.frame.north_m, [0, 1, 2, 3, 5])
     assert list(out.affected_time_s) == [2.0, 3.0, 4.0]
     clean = sort_samples(df.iloc[:3])
     assert not clean.changed

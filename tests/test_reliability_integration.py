@@ -24,7 +24,6 @@ import pytest
 from hybridship.cli import main
 from hybridship.logs.io import LogFormatError, write_log
 from hybridship.limits import KNOT_M_S
-from hybridship.physics.model import DynamicModel
 from hybridship.predictors import DeadReckoning, DynamicPredictor, HybridPredictor, ModelFileError
 from hybridship.quality import FaultFlags, StartWindowError
 from hybridship.residual.ensemble import EnsembleConfig
@@ -34,11 +33,6 @@ from hybridship.sim.synthetic import physics_log
 
 F = FaultFlags
 START = 600.0
-
-
-@pytest.fixture(scope="module")
-def model():
-    return DynamicModel("gunnerus")
 
 
 @pytest.fixture(scope="module")

@@ -15,17 +15,11 @@ import pytest
 
 from hybridship.logs.io import (LogFormatError, LogFormatWarning, check_log_against_vessel, log_to_arrays,
                                 read_log, speed_scale_vs_track, validate_log, write_log)
-from hybridship.physics.model import DynamicModel
 from hybridship.quality import forecast_log_arrays, sort_samples
 from hybridship.sim.synthetic import physics_log
 
 THRUSTERS = ["tunnel", "port", "stbd"]
 ROTATABLE = [False, True, True]
-
-
-@pytest.fixture(scope="module")
-def model():
-    return DynamicModel("gunnerus")
 
 
 @pytest.fixture(scope="module")

@@ -7,7 +7,6 @@ from __future__ import annotations
 
 import math
 import warnings
-from pathlib import Path
 
 import numpy as np
 import pandas as pd
@@ -22,7 +21,6 @@ from hybridship.sim.scenario import (DPLossConfig, SensorNoise, drift_statistics
 THRUSTERS = dict(thruster_names=["tunnel", "port", "stbd"], rotatable=[False, True, True])
 SHORT = dict(t_shutdown_s=600.0, drift_s=300.0)
 TINY = dict(t_shutdown_s=120.0, drift_s=60.0)  # for checks that need no physics
-TRUTHSIM = Path("/work/shared/data/truthsim-dev")
 
 
 @pytest.fixture(scope="module", params=[0, 4], ids=lambda s: f"seed{s}")
@@ -192,11 +190,10 @@ def test_log_validates_and_round_trips(moderate, tmp_path, ext):
     assert "tunnel_azimuth_deg" not in df.columns
 
 
-def test_drift_statistics_reproduce_truthsim_summary():
-    if not (TRUTHSIM / "scenarios.csv").exists():
-        pytest.skip("truthsim-dev data not available")
-    summary = pd.read_csv(TRUTHSIM / "scenarios.csv").iloc[0]
-    st = drift_statistics(read_log(TRUTHSIM / "logs" / summary["file"]))
+def test_drift_statistics_reproduce_truthsim_summary(shared_data):
+    truthsim = shared_data("truthsim-dev")
+    summary = pd.read_csv(shared_data("truthsim-dev", "scenarios.csv")).iloc[0]
+    st = drift_statistics(read_log(truthsim / "logs" / summary["file"]))
     assert st["t_shutdown_s"] == summary["t_shutdown_s"]
     for key in ("drift_excursion_60s_m", "drift_excursion_600s_m", "drift_mean_sog_mps", "dp_pos_std_m"):
         assert st[key] == pytest.approx(summary[key], rel=0.05), key

@@ -253,9 +253,10 @@ t0 = time.perf_counter()
 hybrid.fit(train_files)
 print(f"trained {MEMBERS} members on {hybrid.training_info['n_rows']} rows in {time.perf_counter() - t0:.1f} s")
 model_file = hybrid.save(WORK / "supply.hybrid.npz")
-# A model file records its vessel's name and a fingerprint of its parameters: for a vessel
-# that is not packaged with hybridship, pass the vessel file when loading.
-hybrid = HybridPredictor.load(model_file, vessel=vessel_file)
+# A model file embeds its validated vessel description (and a fingerprint of it): it loads
+# without the vessel file. Passing a vessel checks that it is the one the model was trained for.
+hybrid = HybridPredictor.load(model_file)
+assert hybrid.model.vessel == HybridPredictor.load(model_file, vessel=vessel_file).model.vessel
 print("saved and reloaded", model_file.name)
 
 # %% [markdown]

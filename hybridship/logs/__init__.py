@@ -1,4 +1,9 @@
-"""Vessel logs: the project log format (read, write, validate) and conversion to arrays."""
+"""Vessel logs: the project log format (read, write, validate) and conversion to arrays.
+
+Every log that fit, forecast, the benchmarks and the CLI use goes through
+:func:`hybridship.logs.ingest.ingest` (module :mod:`hybridship.logs.ingest`; the function
+is not re-exported here, where its name would hide the module).
+"""
 
 from hybridship.logs.io import (
     LogArrays,

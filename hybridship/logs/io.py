@@ -49,6 +49,7 @@ Nothing here modifies the caller's DataFrame or file: validation reads, conversi
 
 from __future__ import annotations
 
+import functools
 import gzip
 import os
 import re
@@ -965,6 +966,10 @@ class LogArrays:
         True where both wind speed and direction were logged (finite) at that row, False
         where ``wind`` holds an earlier value or zeros (a dropped wind sensor). Default:
         ``has_wind`` everywhere.
+    resorted_time_s : ndarray, shape (M,)
+        Times of samples that arrived late, were duplicated or conflicted in the source
+        and were re-sorted, dropped or removed by :func:`hybridship.logs.ingest.ingest`
+        (flagged ``late_or_out_of_order`` at forecast time). Default: none.
 
     Notes
     -----
@@ -987,10 +992,13 @@ class LogArrays:
     rotatable: tuple[bool, ...]
     thruster_logged: tuple[bool, ...]
     wind_logged: np.ndarray | None = None
+    resorted_time_s: np.ndarray | None = None
 
     def __post_init__(self):
         if self.wind_logged is None:
             object.__setattr__(self, "wind_logged", np.full(self.time_s.shape[0], bool(self.has_wind)))
+        if self.resorted_time_s is None:
+            object.__setattr__(self, "resorted_time_s", np.zeros(0))
         for v in vars(self).values():
             if isinstance(v, np.ndarray):
                 v.flags.writeable = False
@@ -1006,6 +1014,45 @@ class LogArrays:
         starts = np.flatnonzero(np.diff(self.segment_id) != 0) + 1
         bounds = np.concatenate(([0], starts, [len(self)]))
         return [slice(int(a), int(b)) for a, b in zip(bounds[:-1], bounds[1:])]
+
+    @functools.cached_property
+    def dt_s(self) -> float:
+        """Nominal sample period [s]: the median spacing of ``time_s`` (NaN below 2 samples)."""
+        if len(self) < 2:
+            return float("nan")
+        return float(np.median(np.diff(self.time_s)))
+
+    def to_frame(self, *, derived_velocities: bool = False) -> pd.DataFrame:
+        """The log as a new DataFrame in the log format (degrees at this edge).
+
+        Velocities are written where they were logged and left missing where they were
+        derived (so converting the frame back derives them again), unless
+        ``derived_velocities``. Wind is written where it was logged, the thrusters' rpm
+        when their column was logged, and the angle of every rotatable command channel
+        (azimuth thrusters and rudders). Heading is written in 0..360 deg.
+
+        Parameters
+        ----------
+        derived_velocities : bool, default False
+            Write the full ``nu`` (logged and derived) in ``u_m_s``, ``v_m_s``, ``r_deg_s``.
+        """
+        cols = {"time_s": self.time_s, "north_m": self.eta[:, 0], "east_m": self.eta[:, 1],
+                "heading_deg": np.degrees(frames.wrap_2pi(self.eta[:, 2]))}
+        for j, (name, scale) in enumerate((("u_m_s", 1.0), ("v_m_s", 1.0), ("r_deg_s", 180.0 / np.pi))):
+            if derived_velocities:
+                cols[name] = self.nu[:, j] * scale
+            elif self.nu_logged[:, j].any():
+                cols[name] = np.where(self.nu_logged[:, j], self.nu[:, j] * scale, np.nan)
+        if self.has_wind:
+            cols["wind_speed_m_s"] = np.where(self.wind_logged, self.wind[:, 0], np.nan)
+            cols["wind_dir_deg"] = np.where(self.wind_logged, np.degrees(frames.wrap_2pi(self.wind[:, 1])), np.nan)
+        for j, (name, rot) in enumerate(zip(self.thruster_names, self.rotatable)):
+            if self.thruster_logged[j]:
+                cols[f"{name}_rpm"] = self.rpm[:, j]
+            if rot:
+                cols[f"{name}_azimuth_deg"] = np.degrees(self.azimuth_rad[:, j])
+        cols["dp_active"] = self.dp_active
+        return pd.DataFrame({k: np.array(v) for k, v in cols.items()})
 
 
 def _unwrap_finite(psi_rad: np.ndarray) -> np.ndarray:
@@ -1071,6 +1118,11 @@ def log_to_arrays(
     if names is None or rot is None:
         raise ValueError("log_to_arrays needs thruster_names and rotatable")
     _validate(df, names, rot, "log", warn_unknown=False, allow_missing=allow_missing)
+    return _frame_to_arrays(df, names, rot)
+
+
+def _frame_to_arrays(df: pd.DataFrame, names: tuple, rot: tuple, resorted_time_s=None) -> LogArrays:
+    """Convert a validated log frame (see :func:`log_to_arrays`; no checks here)."""
     cols = set(map(str, df.columns))
 
     def col(name: str) -> np.ndarray:
@@ -1144,4 +1196,5 @@ def log_to_arrays(
         rotatable=rot,
         thruster_logged=tuple(logged),
         wind_logged=wind_logged,
+        resorted_time_s=resorted_time_s,
     )

@@ -160,6 +160,20 @@ def added_mass_matrix(X_udot_kg: float, Y_vdot_kg: float, Y_rdot_kg_m: float,
     return np.array([[-X_udot_kg, 0.0, 0.0], [0.0, -Y_vdot_kg, off], [0.0, off, -N_rdot_kg_m2]])
 
 
+def mass_matrices(vessel, added_mass_scale=(1.0, 1.0, 1.0)):
+    """``(M_RB, M_A)`` for a vessel, with optional per-DOF scaling of the added mass."""
+    p, rb, am = vessel.particulars, vessel.rigid_body, vessel.added_mass
+    M_RB = rigid_body_mass(rb.mass_kg, rb.I_z, rb.x_g_m)
+    if am.method == "clarke1983":
+        c = clarke1983_derivatives(p.L_pp_m, p.B_m, p.T_m, p.C_B, p.rho_water_kg_m3)
+        X_udot = added_mass_surge_soding(rb.mass_kg, p.L_pp_m, p.rho_water_kg_m3)
+        M_A = added_mass_matrix(X_udot, c["Y_vdot_kg"], c["Y_rdot_kg_m"], c["N_vdot_kg_m"], c["N_rdot_kg_m2"])
+    else:
+        M_A = added_mass_matrix(am.X_udot_kg, am.Y_vdot_kg, am.Y_rdot_kg_m, am.N_vdot_kg_m, am.N_rdot_kg_m2)
+    s = np.sqrt(np.asarray(added_mass_scale, float))
+    return M_RB, M_A * np.outer(s, s)  # keeps M_A symmetric; diagonal scaled by the factors
+
+
 def linear_damping_from_time_constants(M: np.ndarray, T_surge_s: float, T_sway_s: float,
                                        T_yaw_s: float) -> np.ndarray:
     """Diagonal low-speed linear damping ``D = diag(M11/T1, M22/T2, M33/T3)`` [SI].

@@ -14,7 +14,7 @@ import math
 import numba
 import numpy as np
 
-from .model import prepare_inputs, vessel_rhs
+from .rhs import prepare_inputs, vessel_rhs
 
 
 @numba.njit(cache=True, fastmath=True)
@@ -34,7 +34,7 @@ def _deriv(x, rpm, prep, tau, acc, P, k, thrusts):
 def rk4_step_scalar(x, h, rpm, prep, tau, acc, P, k1, k2, k3, k4, xt, thrusts):
     """One classical RK4 step of length ``h`` [s] for one vessel, updating ``x[6]`` in place.
 
-    ``prep`` holds the prepared held inputs (:func:`hybridship.physics.model.prepare_inputs`).
+    ``prep`` holds the prepared held inputs (:func:`hybridship.physics.rhs.prepare_inputs`).
     """
     _deriv(x, rpm, prep, tau, acc, P, k1, thrusts)
     for i in range(6):

@@ -24,17 +24,17 @@ that the compiled kernels read; :class:`DynamicModel` is the thin object around 
 
 from __future__ import annotations
 
-import math
 from typing import NamedTuple
 
-import numba
 import numpy as np
 
 from . import hull, wind as wind_curves
+from .hull import mass_matrices  # moved to hull (vessel validation needs it without this module)
+from .integrate import rollout_batch, step_batch
 from .propeller import load_wageningen
-from .rudder import RUD_NCOL, pack_rudders, rudder_forces_scalar
-from .thrusters import (THR_ALPHA_FIXED, THR_D, THR_IS_AZIMUTH, THR_MAX_RPM, THR_TDED, THR_WAKE,
-                        THR_X, THR_Y, thrust_directions, thruster_forces_scalar)
+from .rhs import dynamics_batch, prepare_inputs, vessel_rhs, wind_force_scalar  # noqa: F401 (kernels' old home)
+from .rudder import RUD_NCOL, pack_rudders
+from .thrusters import THR_ALPHA_FIXED, THR_D, THR_IS_AZIMUTH, THR_MAX_RPM, THR_TDED, THR_WAKE, THR_X, THR_Y
 
 #: Number of samples of the uniform wind-coefficient table over gamma in [-pi, pi].
 WIND_TABLE_SIZE = 721
@@ -91,22 +91,6 @@ class ModelArrays(NamedTuple):
 
 
 # --------------------------------------------------------------------------- building
-
-
-def mass_matrices(vessel, added_mass_scale=(1.0, 1.0, 1.0)):
-    """``(M_RB, M_A)`` for a vessel, with optional per-DOF scaling of the added mass."""
-    p, rb, am = vessel.particulars, vessel.rigid_body, vessel.added_mass
-    M_RB = hull.rigid_body_mass(rb.mass_kg, rb.I_z, rb.x_g_m)
-    if am.method == "clarke1983":
-        c = hull.clarke1983_derivatives(p.L_pp_m, p.B_m, p.T_m, p.C_B, p.rho_water_kg_m3)
-        X_udot = hull.added_mass_surge_soding(rb.mass_kg, p.L_pp_m, p.rho_water_kg_m3)
-        M_A = hull.added_mass_matrix(X_udot, c["Y_vdot_kg"], c["Y_rdot_kg_m"], c["N_vdot_kg_m"],
-                                     c["N_rdot_kg_m2"])
-    else:
-        M_A = hull.added_mass_matrix(am.X_udot_kg, am.Y_vdot_kg, am.Y_rdot_kg_m, am.N_vdot_kg_m,
-                                     am.N_rdot_kg_m2)
-    s = np.sqrt(np.asarray(added_mass_scale, float))
-    return M_RB, M_A * np.outer(s, s)  # keeps M_A symmetric; diagonal scaled by the factors
 
 
 def wind_coefficient_curve(vessel):
@@ -221,113 +205,6 @@ def build_model_arrays(vessel, *, true_vessel: bool = False) -> ModelArrays:
         wind_p=wind_p, wind_table=np.ascontiguousarray(wind_table, dtype=float),
         rud=pack_rudders(vessel).reshape(-1, RUD_NCOL))
     return ModelArrays(*(np.ascontiguousarray(a, dtype=float) for a in arrays))
-
-
-# --------------------------------------------------------------------------- kernels
-
-
-@numba.njit(cache=True, fastmath=True)
-def wind_force_scalar(u, v, c, s, wn, we, wind_p, table):
-    """Wind load (eq. 3) on one vessel, returned as ``(X_N, Y_N, N_Nm)``.
-
-    Relative wind per Fossen (2021, sec. 10.1): ``(u_rw, v_rw) = (u, v) - wind velocity in
-    body axes``, ``gamma_rw = -atan2(v_rw, u_rw)`` (0 head wind, > 0 from port).
-    ``c, s`` are cos and sin of the heading, ``wn, we`` the true wind velocity (the way it
-    blows, NED) [m/s] from :func:`prepare_inputs`.
-    """
-    urw = u - (c * wn + s * we)
-    vrw = v - (-s * wn + c * we)
-    vr2 = urw * urw + vrw * vrw
-    if vr2 == 0.0:
-        return 0.0, 0.0, 0.0
-    gamma = -math.atan2(vrw, urw)
-    n = table.shape[0]
-    pos = (gamma + math.pi) / (2.0 * math.pi) * (n - 1)
-    i0 = int(math.floor(pos))
-    if i0 < 0:
-        i0 = 0
-    if i0 > n - 2:
-        i0 = n - 2
-    f = pos - i0
-    q = 0.5 * wind_p[0] * vr2
-    return (q * wind_p[1] * ((1.0 - f) * table[i0, 0] + f * table[i0 + 1, 0]),
-            q * wind_p[2] * ((1.0 - f) * table[i0, 1] + f * table[i0 + 1, 1]),
-            q * wind_p[2] * wind_p[3] * ((1.0 - f) * table[i0, 2] + f * table[i0 + 1, 2]))
-
-
-@numba.njit(cache=True, fastmath=True)
-def vessel_rhs(c, s, u, v, r, rpm, prep, tau_ext, acc_ext, P, thrusts, b):
-    """nu_dot of one vessel (eq. 1 solved for nu_dot).
-
-    ``c, s`` are cos and sin of the heading psi (computed once by the caller); ``prep`` the
-    prepared held inputs of :func:`prepare_inputs`; thrusts [N] go to ``thrusts[b]``.
-
-    Returns a 12-tuple: nu_dot (3), then the hull, thruster and wind loads (3 each).
-    """
-    K = P.thr.shape[0]
-    vcn = prep[2 * K + 2]
-    vce = prep[2 * K + 3]
-    uc = c * vcn + s * vce
-    vc = -s * vcn + c * vce
-    ur = u - uc
-    vr = v - vc
-    h0, h1, h2 = hull.hull_forces_scalar(u, v, r, ur, vr, P.rb[0], P.rb[1], P.m_a, P.d_lin, P.d_quad,
-                                         P.d_lift, P.strip_x, P.strip_w)
-    t0, t1, t2 = thruster_forces_scalar(ur, vr, r, rpm, prep, P.thr, P.thr_coef, P.rb[2], thrusts, b)
-    if P.rud.shape[0] > 0:
-        q0, q1, q2 = rudder_forces_scalar(ur, vr, r, prep, 2 * K + 4, P.rud, P.thr, P.rb[2], thrusts, b)
-        t0 += q0
-        t1 += q1
-        t2 += q2
-    w0, w1, w2 = wind_force_scalar(u, v, c, s, prep[2 * K], prep[2 * K + 1], P.wind_p, P.wind_table)
-    # M_A d(nu_c)/dt: the current seen from the rotating body frame changes direction.
-    ncd0 = r * vc
-    ncd1 = -r * uc
-    m_a = P.m_a
-    rhs0 = h0 + t0 + w0 + tau_ext[0] + m_a[0, 0] * ncd0 + m_a[0, 1] * ncd1
-    rhs1 = h1 + t1 + w1 + tau_ext[1] + m_a[1, 0] * ncd0 + m_a[1, 1] * ncd1
-    rhs2 = h2 + t2 + w2 + tau_ext[2] + m_a[2, 0] * ncd0 + m_a[2, 1] * ncd1
-    mi = P.m_inv
-    return (mi[0, 0] * rhs0 + mi[0, 1] * rhs1 + mi[0, 2] * rhs2 + acc_ext[0],
-            mi[1, 0] * rhs0 + mi[1, 1] * rhs1 + mi[1, 2] * rhs2 + acc_ext[1],
-            mi[2, 0] * rhs0 + mi[2, 1] * rhs1 + mi[2, 2] * rhs2 + acc_ext[2],
-            h0, h1, h2, t0, t1, t2, w0, w1, w2)
-
-
-@numba.njit(cache=True)
-def prepare_inputs(azimuth, wind_speed, wind_dir_from, cur_speed, cur_dir_to, P, prep):
-    """Trigonometry of inputs held over a step, into ``prep[2K + 4 + 2R]``.
-
-    Layout: cos(alpha) (K), sin(alpha) (K), wind velocity north, east (the way it blows)
-    [m/s], current velocity north, east [m/s], cos(delta) (R), sin(delta) (R). ``azimuth``
-    has one entry per command channel: K thrusters, then R rudders.
-    """
-    K = P.thr.shape[0]
-    R = P.rud.shape[0]
-    thrust_directions(azimuth, P.thr, prep)
-    prep[2 * K] = -wind_speed * math.cos(wind_dir_from)  # "from" -> velocity points the other way
-    prep[2 * K + 1] = -wind_speed * math.sin(wind_dir_from)
-    prep[2 * K + 2] = cur_speed * math.cos(cur_dir_to)
-    prep[2 * K + 3] = cur_speed * math.sin(cur_dir_to)
-    for j in range(R):
-        prep[2 * K + 4 + j] = math.cos(azimuth[K + j])
-        prep[2 * K + 4 + R + j] = math.sin(azimuth[K + j])
-
-
-@numba.njit(cache=True)
-def dynamics_batch(eta, nu, rpm, azimuth, wind, current, tau_ext, acc_ext, P, nu_dot, parts, thrusts):
-    """Batched :func:`vessel_rhs`: all arrays have a leading batch axis B."""
-    prep = np.empty(2 * P.thr.shape[0] + 4 + 2 * P.rud.shape[0])
-    for b in range(eta.shape[0]):
-        prepare_inputs(azimuth[b], wind[b, 0], wind[b, 1], current[b, 0], current[b, 1], P, prep)
-        out = vessel_rhs(math.cos(eta[b, 2]), math.sin(eta[b, 2]), nu[b, 0], nu[b, 1], nu[b, 2], rpm[b], prep,
-                         tau_ext[b], acc_ext[b], P, thrusts, b)
-        for i in range(3):
-            nu_dot[b, i] = out[i]
-            parts[b, 0, i] = out[3 + i]
-            parts[b, 1, i] = out[6 + i]
-            parts[b, 2, i] = out[9 + i]
-            parts[b, 3, i] = tau_ext[b, i]
 
 
 # --------------------------------------------------------------------------- thin class
@@ -489,8 +366,6 @@ class DynamicModel:
     def step(self, eta, nu, *, dt_s: float = 1.0, substeps: int = 1, rpm=None, azimuth_rad=None,
              wind=None, current=None, tau_ext=None, accel_ext=None, rudder_rad=None):
         """Advance (B, 3) states by one step of ``dt_s`` with held inputs; returns ``(eta, nu)``."""
-        from .integrate import step_batch
-
         eta = self._state("eta", eta)
         nu = self._state("nu", nu)
         B = eta.shape[0]
@@ -509,8 +384,6 @@ class DynamicModel:
         Inputs are held at their values (``(width,)`` or ``(B, width)``) or given per step
         (``(B, n_steps, width)``). See the class notes for the inputs.
         """
-        from .integrate import rollout_batch
-
         if int(n_steps) < 1 or int(substeps) < 1 or not dt_s > 0:
             raise ValueError(f"n_steps and substeps must be >= 1 and dt_s > 0, got {n_steps}, {substeps}, {dt_s}")
         eta0 = self._state("eta0", eta0)

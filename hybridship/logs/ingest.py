@@ -1,0 +1,288 @@
+"""One way in: every log that fit, forecast, the benchmarks or the CLI use passes :func:`ingest`.
+
+:func:`ingest` reads a log (a path, a DataFrame in the log format, or :class:`LogArrays`),
+re-sorts its samples by time, validates it once against the vessel
+(:func:`hybridship.logs.io.check_log_against_vessel`: the log format, thruster columns,
+rpm limits and sign conventions) and converts it to :class:`LogArrays`. So the same log
+gets the same checks, and the same messages, whether it is trained on or forecast from.
+
+``purpose`` decides what is repaired and what is refused:
+
+``"fit"``
+    Training data must be clean: missing positions or headings are refused (naming the
+    column and row), and so are conflicting duplicates (two samples with one time and
+    different values).
+``"forecast"``
+    Sensor faults pass, for :func:`hybridship.quality.assess_start_window` to judge per
+    forecast start: missing positions and headings stay NaN; conflicting duplicates are
+    both removed (neither is trusted; the time becomes a missing sample).
+
+In both, late (out-of-order) samples are re-sorted, exact duplicates dropped and rows
+without a finite ``time_s`` dropped; the affected times travel with the arrays
+(:attr:`LogArrays.resorted_time_s`) so that a forecast can flag them.
+
+LogArrays are checked as well, through their :meth:`LogArrays.to_frame` view; arrays that
+:func:`ingest` returned carry a mark (vessel fingerprint and purpose), so passing them in
+again costs nothing. Nothing here modifies the caller's data.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+
+from hybridship.logs.io import (REQUIRED_COLUMNS, LogArrays, LogFormatError, _frame_to_arrays, _to_float,
+                                check_log_against_vessel, read_log)
+
+__all__ = ["PURPOSES", "SortedLog", "ingest", "ingest_with_report", "sort_samples"]
+
+#: Values of ``ingest(..., purpose=)``.
+PURPOSES = ("fit", "forecast")
+
+#: Attribute of an ingested LogArrays: (vessel fingerprint, purpose).
+_MARK = "_ingested_for"
+
+
+# --------------------------------------------------------------------------------------
+# Late, out-of-order and duplicated samples
+# --------------------------------------------------------------------------------------
+
+
+@dataclass(frozen=True, eq=False)
+class SortedLog:
+    """A log re-sorted by time (see :func:`sort_samples`).
+
+    Attributes
+    ----------
+    frame : pandas.DataFrame
+        A new frame, sorted by ``time_s`` with unique times and a fresh ``RangeIndex``.
+    late_time_s : ndarray
+        Times of samples that came after a later sample in the input (arrived late).
+    duplicate_time_s : ndarray
+        Times that appeared more than once with identical rows (one kept).
+    conflicting_time_s : ndarray
+        Times that appeared more than once with differing rows (all of them removed:
+        neither is trusted, the time becomes a missing sample).
+    conflicting_rows : ndarray of int
+        Input rows (0-based positions) of the first two samples of each conflicting time.
+    n_without_time : int
+        Rows dropped because ``time_s`` was missing or not finite.
+    """
+
+    frame: pd.DataFrame
+    late_time_s: np.ndarray
+    duplicate_time_s: np.ndarray
+    conflicting_time_s: np.ndarray
+    n_without_time: int
+    conflicting_rows: np.ndarray = field(default_factory=lambda: np.zeros((0, 2), dtype=int))
+
+    @property
+    def affected_time_s(self) -> np.ndarray:
+        """Sorted unique times of late, duplicated or conflicting samples."""
+        return np.unique(np.concatenate([self.late_time_s, self.duplicate_time_s, self.conflicting_time_s]))
+
+    @property
+    def changed(self) -> bool:
+        """Whether anything was re-sorted, dropped or removed."""
+        return bool(self.affected_time_s.size or self.n_without_time)
+
+
+def _rows_equal(block: pd.DataFrame) -> bool:
+    """Whether all rows of ``block`` are identical (NaN equal to NaN)."""
+    first = block.iloc[0]
+    for _, row in block.iloc[1:].iterrows():
+        for a, b in zip(first.to_numpy(), row.to_numpy()):
+            if a is b:
+                continue
+            a_nan = isinstance(a, float) and math.isnan(a)
+            b_nan = isinstance(b, float) and math.isnan(b)
+            if a_nan and b_nan:
+                continue
+            if a_nan or b_nan or a != b:
+                return False
+    return True
+
+
+def sort_samples(df: pd.DataFrame, *, source: str = "log") -> SortedLog:
+    """Re-sort a log's samples by time; drop exact duplicates; remove conflicting ones.
+
+    Parameters
+    ----------
+    df : pandas.DataFrame
+        A log in the log format, possibly with samples out of order (never modified).
+    source : str, default "log"
+        Quoted in messages.
+
+    Returns
+    -------
+    SortedLog
+
+    Raises
+    ------
+    LogFormatError
+        If ``time_s`` is missing or holds non-numeric values.
+    """
+    if not isinstance(df, pd.DataFrame):
+        raise TypeError(f"expected a pandas DataFrame, got {type(df).__name__}")
+    if "time_s" not in map(str, df.columns):
+        raise LogFormatError(f"time_s: required column missing (required: {', '.join(REQUIRED_COLUMNS)}) "
+                             f"(in {source})", column="time_s")
+    t = _to_float(df, "time_s", source, None, inf_is_missing=True)
+    has_time = np.isfinite(t)
+    n_without = int((~has_time).sum())
+    rows = np.flatnonzero(has_time)
+    tt = t[rows]
+    # arrived late: earlier than some sample before it in the input
+    prev_max = np.maximum.accumulate(np.concatenate(([-np.inf], tt[:-1])))
+    late = tt < prev_max
+    order = np.argsort(tt, kind="stable")
+    frame = df.iloc[rows[order]].reset_index(drop=True)
+    ts = tt[order]
+    dup_mask = np.zeros(ts.size, dtype=bool)
+    dup_mask[1:] = ts[1:] == ts[:-1]
+    duplicate, conflicting, conflicting_rows, drop = [], [], [], []
+    if dup_mask.any():
+        starts = np.flatnonzero(~dup_mask)
+        ends = np.concatenate((starts[1:], [ts.size]))
+        for a, b in zip(starts, ends):
+            if b - a < 2:
+                continue
+            if _rows_equal(frame.iloc[a:b]):
+                duplicate.append(ts[a])
+                drop.extend(range(a + 1, b))
+            else:
+                conflicting.append(ts[a])
+                conflicting_rows.append(rows[order[a:a + 2]])
+                drop.extend(range(a, b))
+        frame = frame.drop(index=drop).reset_index(drop=True)
+    return SortedLog(frame=frame, late_time_s=np.unique(tt[late]), duplicate_time_s=np.asarray(duplicate, float),
+                     conflicting_time_s=np.asarray(conflicting, float), n_without_time=n_without,
+                     conflicting_rows=np.asarray(conflicting_rows, dtype=int).reshape(-1, 2))
+
+
+# --------------------------------------------------------------------------------------
+# The ingest
+# --------------------------------------------------------------------------------------
+
+
+def _vessel(vessel):
+    from hybridship.vessel import Vessel, load_vessel
+
+    return vessel if isinstance(vessel, Vessel) else load_vessel(vessel)
+
+
+def _refuse_conflicts(order: SortedLog, source: str) -> None:
+    """Training data: two samples with one time and different values are refused."""
+    if order.conflicting_time_s.size:
+        t = float(order.conflicting_time_s[0])
+        r0, r1 = (int(r) for r in order.conflicting_rows[0])
+        raise LogFormatError(
+            f"time_s: {t:g} appears at rows {r0} and {r1} with different values (a repeated time stamp?); "
+            f"training needs one sample per time: remove or correct one of them "
+            f"({order.conflicting_time_s.size} such time(s) in all) (in {source})",
+            column="time_s", row=r1, time_s=t)
+
+
+def _from_arrays(arrays: LogArrays, v, purpose: str, key) -> tuple[LogArrays, SortedLog | None]:
+    """Check LogArrays through their frame view; keep the caller's arrays when nothing moved."""
+    mark = getattr(arrays, _MARK, None)
+    if mark is not None and mark[0] == key[0] and (mark[1] == purpose or mark[1] == "fit"):
+        return arrays, None
+    if tuple(arrays.thruster_names) != tuple(v.thruster_names) or tuple(arrays.rotatable) != tuple(v.rotatable):
+        raise LogFormatError(
+            f"thruster_names: the arrays carry command channels {list(arrays.thruster_names)} (rotatable "
+            f"{list(arrays.rotatable)}), vessel {v.name!r} has {list(v.thruster_names)} (rotatable "
+            f"{list(v.rotatable)}); build them for this vessel (in LogArrays)", column="thruster_names")
+    out, order = _from_frame(arrays.to_frame(), v, purpose, "LogArrays")
+    if not order.changed and len(out) == len(arrays):
+        out = arrays                                   # checked; the caller's values, unchanged
+    else:
+        # re-sorted: keep the caller's heading branch (the frame view wraps it to 0..360 deg)
+        ok_in, ok_out = np.isfinite(arrays.eta[:, 2]), np.isfinite(out.eta[:, 2])
+        if ok_in.any() and ok_out.any():
+            k = round((arrays.eta[ok_in, 2][0] - out.eta[ok_out, 2][0]) / (2 * np.pi))
+            if k:
+                eta = out.eta.copy()
+                eta[:, 2] += 2 * np.pi * k
+                out = _replace_eta(out, eta)
+    return out, order
+
+
+def _replace_eta(arrays: LogArrays, eta: np.ndarray) -> LogArrays:
+    from dataclasses import fields
+
+    kw = {f.name: getattr(arrays, f.name) for f in fields(arrays)}
+    kw["eta"] = eta
+    return LogArrays(**kw)
+
+
+def _from_frame(df: pd.DataFrame, v, purpose: str, source: str) -> tuple[LogArrays, SortedLog]:
+    order = sort_samples(df, source=source)
+    if purpose == "fit":
+        _refuse_conflicts(order, source)
+    allow_missing = purpose == "forecast"
+    check_log_against_vessel(order.frame, v, source=source, allow_missing=allow_missing)
+    arrays = _frame_to_arrays(order.frame, tuple(v.thruster_names), tuple(v.rotatable),
+                              resorted_time_s=order.affected_time_s)
+    return arrays, order
+
+
+def ingest_with_report(source, vessel, *, purpose: str = "fit",
+                       name: str | None = None) -> tuple[LogArrays, SortedLog | None]:
+    """:func:`ingest`, also returning the sort report (None when LogArrays were passed through)."""
+    from hybridship.vessel import fingerprint
+
+    if purpose not in PURPOSES:
+        raise ValueError(f"purpose: expected one of {PURPOSES}, got {purpose!r}")
+    v = _vessel(vessel)
+    key = (fingerprint(v), purpose)
+    if isinstance(source, LogArrays):
+        arrays, order = _from_arrays(source, v, purpose, key)
+    elif isinstance(source, (str, os.PathLike)):
+        df = read_log(Path(source), validate=False)
+        arrays, order = _from_frame(df, v, purpose, name or str(source))
+    elif isinstance(source, pd.DataFrame):
+        arrays, order = _from_frame(source, v, purpose, name or "log")
+    else:
+        raise TypeError(f"log: expected a path, a DataFrame or LogArrays, got {type(source).__name__}")
+    if order is not None or getattr(arrays, _MARK, None) is None:
+        object.__setattr__(arrays, _MARK, key)       # a memo of the check, not data: values unchanged
+    return arrays, order
+
+
+def ingest(source, vessel, *, purpose: str = "fit", name: str | None = None) -> LogArrays:
+    """Read, re-sort, validate once against the vessel, and convert a log to :class:`LogArrays`.
+
+    Parameters
+    ----------
+    source : path, pandas.DataFrame or LogArrays
+        A log file (``.csv``, ``.csv.gz``, ``.parquet``, ``.pq``), a DataFrame in the log
+        format, or arrays (checked through :meth:`LogArrays.to_frame` unless
+        :func:`ingest` made them for this vessel). Never modified.
+    vessel : hybridship.vessel.Vessel or str or path
+        The vessel, or a packaged name / vessel file.
+    purpose : {"fit", "forecast"}
+        ``"fit"`` refuses missing positions/headings and conflicting duplicates;
+        ``"forecast"`` keeps sensor faults for the start-window checks (see the module
+        docstring).
+    name : str, optional
+        Quoted in messages (default: the file name, "log" or "LogArrays").
+
+    Returns
+    -------
+    LogArrays
+        Sorted, checked; :attr:`LogArrays.resorted_time_s` lists what was repaired.
+
+    Raises
+    ------
+    LogFormatError
+        Naming the column, row and time where relevant.
+    hybridship.vessel.VesselFileError
+        If ``vessel`` names an invalid vessel file.
+    """
+    return ingest_with_report(source, vessel, purpose=purpose, name=name)[0]

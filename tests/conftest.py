@@ -1,0 +1,47 @@
+"""Shared test fixtures: the Gunnerus model, and the one way to find ``../shared/data``.
+
+Data never go into the repository: tests read them from ``../shared/data/`` relative to the
+repository root and skip, saying where they looked, when they are absent. Use the
+``shared_data`` fixture for that (``shared_data("truthsim-dev", "logs")``); the Esso Osaka
+tests use :func:`hybridship.logs.esso_osaka.default_data_dir`, the library's own locator of
+the same folder (it also honours ``$HYBRIDSHIP_ESSO_OSAKA_DIR``).
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pytest
+
+#: The repository root (the folder holding ``hybridship/`` and ``tests/``).
+ROOT = Path(__file__).resolve().parents[1]
+#: Where the shared data sets live: ``../shared/data`` relative to the repository root.
+SHARED_DATA = ROOT.parent / "shared" / "data"
+
+
+def shared_data_path(*parts: str) -> Path:
+    """``../shared/data/<parts>`` (the path may not exist)."""
+    return SHARED_DATA.joinpath(*parts)
+
+
+@pytest.fixture(scope="session")
+def shared_data():
+    """A function ``(*parts) -> Path`` under ``../shared/data`` that skips the calling test, naming
+    the path, when it does not exist."""
+
+    def locate(*parts: str) -> Path:
+        path = shared_data_path(*parts)
+        if not path.exists():
+            pytest.skip(f"shared data not found at {path} (tests read ../shared/data beside the repository; "
+                        "the data are never copied into it)")
+        return path
+
+    return locate
+
+
+@pytest.fixture(scope="session")
+def model():
+    """The packaged Gunnerus dynamic model (read-only; shared by every test module)."""
+    from hybridship.physics.model import DynamicModel
+
+    return DynamicModel("gunnerus")

@@ -1,0 +1,201 @@
+"""The forecaster contract (:mod:`hybridship.forecaster`), one suite for every forecaster.
+
+Each forecaster (dead reckoning, the dynamic model, the data-only ensemble, the hybrid) is
+run through the same checks: it is a :class:`~hybridship.forecaster.Forecaster`, ``fit``
+returns it, a learner refuses to forecast unfitted, ``forecast`` leaves the learned state
+alone, results have the documented shapes, bad inputs raise errors that start with the
+field's name, held-command forecasts are causal (rows after the start do not matter), the
+same call gives the same numbers, and model files round-trip where a forecaster has them.
+Tiny ensembles on short logs keep it fast.
+"""
+
+from __future__ import annotations
+
+import re
+
+import numpy as np
+import pandas as pd
+import pytest
+
+from hybridship import Forecaster
+from hybridship.logs.io import LogFormatError
+from hybridship.predictors import DataOnlyPredictor, DeadReckoning, DynamicPredictor, ForecastResult, HybridPredictor
+from hybridship.quality import FaultFlags
+from hybridship.residual.ensemble import EnsembleConfig
+from hybridship.sim.synthetic import physics_log
+
+TINY = EnsembleConfig(n_members=2, hidden=8, max_epochs=15, patience=5, seed=0)
+KINDS = {
+    "dead_reckoning": (lambda v: DeadReckoning(v), False),
+    "dynamic": (lambda v: DynamicPredictor(v), False),
+    "data_only": (lambda v: DataOnlyPredictor(v, ensemble_config=TINY), True),
+    "hybrid": (lambda v: HybridPredictor(v, ensemble_config=TINY), True),
+}
+STARTS = [150.0, 200.0]
+HORIZON_S = 20.0
+
+
+@pytest.fixture(scope="module")
+def train_log(model):
+    return physics_log(model, seed=2, duration_s=300.0, t_shutdown_s=None, current=(0.2, 1.0))
+
+
+@pytest.fixture(scope="module")
+def test_log(model):
+    return physics_log(model, seed=5, duration_s=300.0, t_shutdown_s=None, current=(0.2, 1.0))
+
+
+@pytest.fixture(scope="module")
+def fitted(model, train_log):
+    """kind -> a forecaster fitted on the training log (built once per module)."""
+    return {kind: make(model.vessel).fit([train_log]) for kind, (make, _) in KINDS.items()}
+
+
+def _learned_state(obj, depth: int = 0) -> list:
+    """Every array and number reachable from a forecaster's attributes (its learned state),
+    in a fixed order; the dynamic model (fixed by the vessel) is left out."""
+    if isinstance(obj, np.ndarray):
+        return [obj.copy()]
+    if isinstance(obj, (bool, int, float, str, type(None))):
+        return [obj]
+    if depth > 4 or type(obj).__name__ == "DynamicModel":
+        return []
+    if isinstance(obj, dict):
+        return [x for k in sorted(obj, key=str) for x in [k, *_learned_state(obj[k], depth + 1)]]
+    if isinstance(obj, (list, tuple)):
+        return [x for v in obj for x in _learned_state(v, depth + 1)]
+    if hasattr(obj, "__dict__"):
+        return _learned_state(vars(obj), depth + 1)
+    return [repr(obj)]
+
+
+def _same(a: list, b: list) -> bool:
+    if len(a) != len(b):
+        return False
+    for x, y in zip(a, b):
+        if isinstance(x, np.ndarray) or isinstance(y, np.ndarray):
+            if not (isinstance(x, np.ndarray) and isinstance(y, np.ndarray) and x.shape == y.shape
+                    and np.array_equal(x, y, equal_nan=True)):
+                return False
+        elif x != y and not (isinstance(x, float) and isinstance(y, float) and np.isnan(x) and np.isnan(y)):
+            return False
+    return True
+
+
+def _assert_same_forecast(a: ForecastResult, b: ForecastResult):
+    np.testing.assert_array_equal(a.start_time_s, b.start_time_s)
+    np.testing.assert_array_equal(a.eta, b.eta)
+    np.testing.assert_array_equal(a.nu, b.nu)
+    if a.eta_std is not None or b.eta_std is not None:
+        np.testing.assert_array_equal(a.eta_std, b.eta_std)
+
+
+# --------------------------------------------------------------------------- the checks
+
+
+@pytest.mark.parametrize("kind", KINDS)
+def test_is_a_forecaster_and_fit_returns_itself(kind, model, train_log):
+    make, _ = KINDS[kind]
+    p = make(model.vessel)
+    assert isinstance(p, Forecaster) and isinstance(p.name, str) and p.name
+    assert p.fit([train_log]) is p
+
+
+@pytest.mark.parametrize("kind", KINDS)
+def test_unfitted(kind, model, test_log):
+    make, learns = KINDS[kind]
+    p = make(model.vessel)
+    if learns:
+        with pytest.raises(RuntimeError, match=r"call fit\(\)"):
+            p.forecast(test_log, STARTS, HORIZON_S)
+    else:
+        assert isinstance(p.forecast(test_log, STARTS, HORIZON_S), ForecastResult)   # nothing to learn
+
+
+@pytest.mark.parametrize("kind", KINDS)
+def test_result_shapes_and_forecast_leaves_the_learned_state_alone(kind, fitted, test_log):
+    p = fitted[kind]
+    before = _learned_state(p)
+    fc = p.forecast(test_log, STARTS, HORIZON_S)
+    fc_known = p.forecast(test_log, STARTS, HORIZON_S, commands="known")
+    assert _same(before, _learned_state(p)), "forecast changed the learned state"
+    if KINDS[kind][1]:                                   # the snapshot does see learned state
+        assert not _same(before, _learned_state(KINDS[kind][0](p.model.vessel)))
+    H = int(HORIZON_S)                                    # the log's step is 1 s
+    for f in (fc, fc_known):
+        assert isinstance(f, ForecastResult)
+        np.testing.assert_array_equal(f.start_time_s, STARTS)
+        np.testing.assert_array_equal(f.lead_s, np.arange(H + 1, dtype=float))
+        assert f.eta.shape == f.nu.shape == (len(STARTS), H + 1, 3)
+        assert np.isfinite(f.eta).all() and np.isfinite(f.nu).all()
+        assert set(f.flags) == set(FaultFlags.ALL) and all(v.shape == (len(STARTS),) for v in f.flags.values())
+        assert len(f.to_frame()) == len(STARTS) * (H + 1)
+
+
+def _bad_inputs(log: pd.DataFrame):
+    """(description, call arguments, exception type, message start) of inputs every forecaster refuses."""
+    rpm_60x = log.copy()
+    rpm_60x["port_rpm"] *= 60.0
+    return [
+        ("horizon 0", (log, STARTS, 0.0), {}, ValueError, "horizon_s"),
+        ("unknown command mode", (log, STARTS, HORIZON_S), {"commands": "maybe"}, ValueError, "commands"),
+        ("start between samples", (log, [150.5], HORIZON_S), {}, ValueError, "start_times_s"),
+        ("start outside the log", (log, [9999.0], HORIZON_S), {}, ValueError, "start_times_s"),
+        ("no start", (log, [], HORIZON_S), {}, ValueError, "start_times_s"),
+        ("NaN start", (log, [np.nan], HORIZON_S), {}, ValueError, "start_times_s"),
+        ("rpm 60 x too large", (rpm_60x, STARTS, HORIZON_S), {}, LogFormatError, "port_rpm"),
+        ("no heading column", (log.drop(columns="heading_deg"), STARTS, HORIZON_S), {}, LogFormatError,
+         "heading_deg"),
+        ("known commands past the log's end", (log, [290.0], HORIZON_S), {"commands": "known"}, ValueError,
+         "commands"),
+        ("not a log", ([1, 2, 3], STARTS, HORIZON_S), {}, TypeError, "log"),
+    ]
+
+
+@pytest.mark.parametrize("kind", KINDS)
+def test_bad_inputs_name_the_field(kind, fitted, test_log):
+    p = fitted[kind]
+    for what, args, kw, exc, field in _bad_inputs(test_log):
+        with pytest.raises(exc) as err:
+            p.forecast(*args, **kw)
+        assert re.match(rf"{field}\b", str(err.value)), f"{kind}, {what}: {err.value}"
+
+
+@pytest.mark.parametrize("kind", KINDS)
+def test_held_command_forecasts_are_causal(kind, fitted, test_log):
+    """Rows after the start (positions, headings, velocities, commands, wind) do not matter."""
+    p = fitted[kind]
+    t0 = 150.0
+    later = test_log.copy()
+    after = later.time_s > t0
+    later.loc[after, "north_m"] += 40.0
+    later.loc[after, "heading_deg"] = (later.loc[after, "heading_deg"] + 30.0) % 360.0
+    later.loc[after, ["u_m_s", "v_m_s"]] *= 0.5
+    later.loc[after, "r_deg_s"] *= -1.0
+    later.loc[after, ["tunnel_rpm", "port_rpm", "stbd_rpm"]] *= -0.5
+    later.loc[after, "wind_speed_m_s"] = 12.0
+    _assert_same_forecast(p.forecast(test_log, [t0], HORIZON_S), p.forecast(later, [t0], HORIZON_S))
+    if kind != "dead_reckoning":       # the change matters where a forecast may use it: known commands
+        assert not np.array_equal(p.forecast(test_log, [t0], HORIZON_S, commands="known").eta,
+                                  p.forecast(later, [t0], HORIZON_S, commands="known").eta)
+    # and a log that ends at the start gives the same forecast
+    _assert_same_forecast(p.forecast(test_log, [t0], HORIZON_S), p.forecast(test_log[~after], [t0], HORIZON_S))
+
+
+@pytest.mark.parametrize("kind", KINDS)
+def test_deterministic(kind, model, fitted, train_log, test_log):
+    p = fitted[kind]
+    _assert_same_forecast(p.forecast(test_log, STARTS, HORIZON_S), p.forecast(test_log, STARTS, HORIZON_S))
+    make, _ = KINDS[kind]
+    again = make(model.vessel).fit([train_log])                  # same data, same seed
+    _assert_same_forecast(p.forecast(test_log, STARTS, HORIZON_S), again.forecast(test_log, STARTS, HORIZON_S))
+
+
+@pytest.mark.parametrize("kind", KINDS)
+def test_model_files_round_trip_where_supported(kind, fitted, test_log, tmp_path):
+    p = fitted[kind]
+    if not hasattr(p, "save"):
+        pytest.skip(f"{kind} has no model file")
+    back = type(p).load(p.save(tmp_path / f"{kind}.npz"))
+    assert isinstance(back, Forecaster)
+    _assert_same_forecast(p.forecast(test_log, STARTS, HORIZON_S), back.forecast(test_log, STARTS, HORIZON_S))

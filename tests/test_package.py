@@ -1,0 +1,121 @@
+"""The package as a whole: no import cycles, a light ``import hybridship``, the public API."""
+
+from __future__ import annotations
+
+import ast
+import subprocess
+import sys
+
+import hybridship
+from conftest import ROOT
+
+PKG = ROOT / "hybridship"
+
+
+def _modules() -> dict[str, object]:
+    """Dotted module name -> path of every module of the package."""
+    out = {}
+    for path in PKG.rglob("*.py"):
+        rel = path.relative_to(ROOT).with_suffix("")
+        parts = rel.parts[:-1] if rel.name == "__init__" else rel.parts
+        out[".".join(parts)] = path
+    return out
+
+
+def _imports(name: str, path, modules) -> set[str]:
+    """Modules of the package that ``name`` imports, at the top level or inside functions."""
+    is_pkg = path.name == "__init__.py"
+    found = set()
+    for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"))):
+        if isinstance(node, ast.Import):
+            found.update(a.name for a in node.names)
+        elif isinstance(node, ast.ImportFrom):
+            if node.level:
+                base = (name if is_pkg else name.rpartition(".")[0]).split(".")
+                base = base[: len(base) - (node.level - 1)]
+                mod = ".".join(base + ([node.module] if node.module else []))
+            else:
+                mod = node.module
+            found.add(mod)
+            found.update(f"{mod}.{a.name}" for a in node.names)       # "from . import hull"
+    return {m for m in found if m in modules and m != name}
+
+
+def _cycles(graph: dict[str, set[str]]) -> list[list[str]]:
+    """Strongly connected components with more than one module (Tarjan, iterative)."""
+    index, low, on, stack, out, counter = {}, {}, set(), [], [], [0]
+    for root in graph:
+        if root in index:
+            continue
+        work = [(root, iter(sorted(graph[root])))]
+        index[root] = low[root] = counter[0]
+        counter[0] += 1
+        stack.append(root)
+        on.add(root)
+        while work:
+            v, it = work[-1]
+            w = next(it, None)
+            if w is not None:
+                if w not in index:
+                    index[w] = low[w] = counter[0]
+                    counter[0] += 1
+                    stack.append(w)
+                    on.add(w)
+                    work.append((w, iter(sorted(graph[w]))))
+                elif w in on:
+                    low[v] = min(low[v], index[w])
+                continue
+            work.pop()
+            if work:
+                low[work[-1][0]] = min(low[work[-1][0]], low[v])
+            if low[v] == index[v]:
+                comp = []
+                while True:
+                    w = stack.pop()
+                    on.discard(w)
+                    comp.append(w)
+                    if w == v:
+                        break
+                if len(comp) > 1:
+                    out.append(sorted(comp))
+    return out
+
+
+def test_the_import_graph_has_no_cycles():
+    """Every import counts, also one inside a function (a deferred import hides a cycle, it
+    does not remove it)."""
+    modules = _modules()
+    graph = {name: _imports(name, path, modules) for name, path in modules.items()}
+    assert "hybridship.physics.rhs" in graph["hybridship.physics.integrate"]      # the walker sees imports
+    assert _cycles(graph) == []
+
+
+def test_the_cycle_finder_finds_a_cycle():
+    graph = {"a": {"b"}, "b": {"c"}, "c": {"a"}, "d": {"a"}, "e": set()}
+    assert _cycles(graph) == [["a", "b", "c"]]
+
+
+def test_public_api_is_importable_from_the_package():
+    from hybridship import DynamicModel, HybridPredictor, read_log
+    from hybridship.logs.io import read_log as io_read_log
+    from hybridship.physics.model import DynamicModel as Model
+    from hybridship.predictors import HybridPredictor as Hybrid
+
+    assert (DynamicModel, HybridPredictor, read_log) == (Model, Hybrid, io_read_log)
+    for name in hybridship.__all__:
+        assert getattr(hybridship, name) is not None, name
+    assert set(hybridship.__all__) <= set(dir(hybridship))
+
+
+def test_importing_the_package_loads_no_heavy_dependency():
+    code = ("import sys, hybridship; print(','.join(m for m in ('numpy', 'pandas', 'numba', 'torch', 'scipy') "
+            "if m in sys.modules))")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True, cwd=ROOT)
+    assert out.stdout.strip() == ""
+
+
+def test_an_unknown_name_is_an_attribute_error():
+    import pytest
+
+    with pytest.raises(AttributeError, match="no attribute 'nope'"):
+        hybridship.nope  # noqa: B018
