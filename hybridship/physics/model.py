@@ -363,6 +363,33 @@ class DynamicModel:
             return nu_dot, parts, thrusts[:, :K]
         return nu_dot
 
+    def acceleration_unchecked(self, eta, nu, rpm, azimuth_rad, wind, current, tau_ext, accel_ext):
+        """:meth:`acceleration` for inputs already checked by the caller: every argument a
+        C-contiguous float array ``(B, width)`` of the model's widths (commands K + R).
+
+        For inner loops that validated their inputs once at their boundary (the environment
+        estimator); returns ``nu_dot (B, 3)`` and the loads ``(B, 4, 3)``.
+        """
+        B = eta.shape[0]
+        nu_dot = np.empty((B, 3))
+        parts = np.empty((B, 4, 3))
+        thrusts = np.empty((B, max(len(self.vessel.thrusters), 1)))
+        dynamics_batch(eta, nu, rpm, azimuth_rad, wind, current, tau_ext, accel_ext, self.arrays, nu_dot, parts,
+                       thrusts)
+        return nu_dot, parts
+
+    def step_unchecked(self, eta, nu, rpm, azimuth_rad, wind, current, tau_ext, accel_ext, dt_s: float,
+                       substeps: int = 1):
+        """:meth:`step` for inputs already checked by the caller (as :meth:`acceleration_unchecked`)."""
+        from .integrate import step_batch
+
+        B = eta.shape[0]
+        eta_next = np.empty((B, 3))
+        nu_next = np.empty((B, 3))
+        step_batch(eta, nu, rpm, azimuth_rad, wind, current, tau_ext, accel_ext, self.arrays, float(dt_s),
+                   int(substeps), eta_next, nu_next)
+        return eta_next, nu_next
+
     def step(self, eta, nu, *, dt_s: float = 1.0, substeps: int = 1, rpm=None, azimuth_rad=None,
              wind=None, current=None, tau_ext=None, accel_ext=None, rudder_rad=None):
         """Advance (B, 3) states by one step of ``dt_s`` with held inputs; returns ``(eta, nu)``."""
