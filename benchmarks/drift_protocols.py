@@ -5,7 +5,9 @@ For every test log, forecasts start at each of the first 20 samples after the sh
 
 * ``physics``: the dynamic model alone (:class:`~hybridship.predictors.DynamicPredictor`);
 * ``estimator``: physics + the environment estimator, nets off (``forecast(nets=False)``);
-* ``hybrid``: the default hybrid (estimator + guarded nets), as trained by the protocol.
+* ``hybrid``: the default hybrid (estimator + guarded nets, which stay off after a failure);
+* ``hybrid_nets_after_stop``: the same model with its nets allowed after the failure (the
+  guard still applies: nets trained on station keeping alone are off once the thrust stops).
 
 Protocols:
 
@@ -55,7 +57,8 @@ def _errors(pred, arrays, **kw):
 
 def _score(rows, data, protocol, hybrid, tests):
     dyn = DynamicPredictor(hybrid.model.vessel)
-    for name, pred, kw in (("physics", dyn, {}), ("estimator", hybrid, {"nets": False}), ("hybrid", hybrid, {})):
+    for name, pred, kw in (("physics", dyn, {}), ("estimator", hybrid, {"nets": False}), ("hybrid", hybrid, {}),
+                           ("hybrid_nets_after_stop", hybrid, {"nets_after_stop": True})):
         errs = {name: [_errors(pred, a, **kw) for a in tests]}
         long = metrics.error_table(errs, horizons_s=HORIZONS)
         long.insert(0, "protocol", protocol)
@@ -101,7 +104,7 @@ def ratio_table(df: pd.DataFrame) -> pd.DataFrame:
     out = []
     for (data, protocol), g in d.groupby(level=[0, 1]):
         phys = g.xs("physics", level=2)
-        for model in ("estimator", "hybrid"):
+        for model in ("estimator", "hybrid", "hybrid_nets_after_stop"):
             r = (g.xs(model, level=2) / phys).droplevel([0, 1])
             row = {"data": data, "protocol": protocol, "model": model}
             for state in metrics.STATES:

@@ -445,6 +445,11 @@ class HybridPredictor:
     environment_config : EnvironmentConfig
     environment_window_s : float
         How far before the earliest start the estimator starts filtering [s].
+    nets_after_stop : bool
+        Let the nets correct forecasts that start after a failure (``dp_active == 0``).
+        Off by default: on drift, the nets did not improve on the environment estimator
+        alone under any training protocol we measured, including training on logs with
+        earlier failures (``benchmarks/drift_protocols.py``, see the drift results).
     """
 
     name = "hybrid"
@@ -453,7 +458,7 @@ class HybridPredictor:
                  ensemble_config: EnsembleConfig = EnsembleConfig(), guard: bool = True,
                  guard_quantile: float = 0.99, stop_after_failure: bool = True,
                  environment: str = "estimator", environment_config: EnvironmentConfig = EnvironmentConfig(),
-                 environment_window_s: float = 1800.0):
+                 environment_window_s: float = 1800.0, nets_after_stop: bool = False):
         if environment not in ENVIRONMENT_SOURCES:
             raise ValueError(f"environment: expected one of {ENVIRONMENT_SOURCES}, got {environment!r}")
         if not environment_window_s > 0:
@@ -461,6 +466,7 @@ class HybridPredictor:
         self.environment = environment
         self.environment_config = environment_config
         self.environment_window_s = float(environment_window_s)
+        self.nets_after_stop = bool(nets_after_stop)
         self.estimator: EnvironmentEstimator | None = None
         self.model = DynamicModel(vessel)
         self.stop_after_failure = bool(stop_after_failure)
@@ -543,7 +549,7 @@ class HybridPredictor:
             raise RuntimeError("HybridPredictor: call fit() or load() before forecast()")
 
     def forecast(self, log, start_times_s, horizon_s: float = 60.0, *, guard: bool | None = None,
-                 commands: str = "held", nets: bool = True) -> ForecastResult:
+                 commands: str = "held", nets: bool = True, nets_after_stop: bool | None = None) -> ForecastResult:
         """Forecast from every start time (one batch).
 
         Parameters
@@ -556,6 +562,8 @@ class HybridPredictor:
         nets : bool
             Use the nets' learned deviation; False gives physics + environment alone (to
             measure what the nets add).
+        nets_after_stop : bool, optional
+            Override the model's ``nets_after_stop`` for this call.
         """
         self._check_fitted()
         st = _forecast_setup(self.model, self.residual_config, log, start_times_s, horizon_s,
@@ -570,12 +578,20 @@ class HybridPredictor:
             eta0, nu0, current, acc_ext = st.eta0, st.nu0, None, None
         eta, nu, std, wgt = self.rollout(eta0, nu0, dev0, bias0, st.rpm, st.az, st.wind, st.H, st.dt,
                                          guard=self.use_guard if guard is None else guard, substeps=st.substeps,
-                                         current=current, accel_ext=acc_ext, nets=nets)
+                                         current=current, accel_ext=acc_ext, nets=nets,
+                                         nets_weight=self._after_stop_weight(st, nets_after_stop))
         flags = dict(st.flags)
         if wgt is not None:
             flags[FaultFlags.OUT_OF_ENVELOPE] = np.any(wgt < 1.0, axis=1)
         return ForecastResult(st.arrays.time_s[st.idx], np.arange(st.H + 1) * st.dt, eta, nu, std, wgt,
                               flags=flags, notes=st.notes)
+
+    def _after_stop_weight(self, st, nets_after_stop):
+        """Per start, 0 where the nets must stay off because the start is after a failure."""
+        allow = self.nets_after_stop if nets_after_stop is None else bool(nets_after_stop)
+        if allow:
+            return None
+        return (st.arrays.dp_active[st.idx] != 0).astype(float)
 
     def environment_estimate(self, log, start_times_s):
         """The environment estimator's state at each start time (causal), see
@@ -611,7 +627,7 @@ class HybridPredictor:
         return self.thrust_regime.weight(parts[:, 1] @ np.linalg.inv(self.model.mass_matrix).T)
 
     def rollout(self, eta0, nu0, dev0, bias0_ned, rpm, az, wind, n_steps: int, dt_s: float, *, guard: bool = True,
-                substeps: int = 1, current=None, accel_ext=None, nets: bool = True):
+                substeps: int = 1, current=None, accel_ext=None, nets: bool = True, nets_weight=None):
         """Batched hybrid rollout from states (S, 3), previous residual deviations (S, 3),
         biases (S, 3) or per member (E, S, 3) (surge/sway in NED), commands held (S, 1, K) or
         per step (S, n_steps, K), held wind (S, 1, 2), and optionally a held current
@@ -648,10 +664,11 @@ class HybridPredictor:
             raise ValueError(f"rpm, az: per-step commands need {n_steps} steps, got {rpm.shape[1]}, {az.shape[1]}")
         thrust_guard = guard and self.thrust_regime is not None
         w_thrust = np.ones(S)
+        w_start = np.ones(S) if nets_weight is None else np.asarray(nets_weight, dtype=float)
         if thrust_guard:
             # thrust regime of the commands at the start; re-judged every step when they change
             w_thrust = self._thrust_weight(eta0, nu0, rpm[:, 0], az[:, 0], wind[:, 0])
-            wgt[:, 0] = w_thrust
+            wgt[:, 0] = w_thrust * w_start
         r_prev = np.broadcast_to(dev0, (E, S, 3)).copy()
         d_nu = np.zeros((E, S, 3))        # member velocity deviations from the mean
         d_eta = np.zeros((E, S, 3))       # member position deviations (NED)
@@ -673,7 +690,7 @@ class HybridPredictor:
             r = ens.predict_members(X) if nets else np.zeros((E, S, 3))     # (E, S, 3)
             if guard:
                 z = (X.mean(axis=0) - ens.x_mean) / ens.x_std
-                w = self.guard.weight(z) * w_thrust             # (S,)
+                w = self.guard.weight(z) * w_thrust * w_start   # (S,)
                 r = r * w[None, :, None]
                 wgt[:, j + 1] = w
             psi = e1[:, 1, 2]
@@ -717,6 +734,7 @@ class HybridPredictor:
             "environment": self.environment,
             "environment_config": self.environment_config.model_dump(mode="json"),
             "environment_window_s": self.environment_window_s,
+            "nets_after_stop": self.nets_after_stop,
             "thrust_error_prior": {"mean": self.estimator.thrust_error_mean.tolist(),
                                    "std": self.estimator.thrust_error_std.tolist()},
             "training_info": self.training_info,
@@ -791,7 +809,8 @@ class HybridPredictor:
                       guard_quantile=meta["guard_quantile"], stop_after_failure=meta["stop_after_failure"],
                       environment=meta["environment"],
                       environment_config=EnvironmentConfig(**meta["environment_config"]),
-                      environment_window_s=meta["environment_window_s"])
+                      environment_window_s=meta["environment_window_s"],
+                      nets_after_stop=meta["nets_after_stop"])
             thr_mean = np.asarray(meta["thrust_error_prior"]["mean"], dtype=float).reshape(3)
             thr_std = np.asarray(meta["thrust_error_prior"]["std"], dtype=float).reshape(3)
             if not (np.all(np.isfinite(thr_mean)) and np.all(thr_std > 0)):
