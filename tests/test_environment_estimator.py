@@ -116,3 +116,21 @@ def test_config_rejects_bad_values():
         EnvironmentConfig(position_std_m=0.0)
     with pytest.raises(ValueError, match="environment"):
         HybridPredictor("gunnerus", environment="nets")
+
+
+def test_nets_stay_off_after_a_failure_unless_allowed(model):
+    """Trained on whole logs (drift included), the thrust regime alone would keep the nets on
+    after a failure; by default they are off there (guard weight 0), and nets_after_stop
+    turns them back on."""
+    logs = [physics_log(model, duration_s=1000, t_shutdown_s=800, seed=s, tau_ext_N=(2000.0, 0.0, 0.0))
+            for s in (10, 11)]
+    hp = HybridPredictor(model.vessel, ensemble_config=TINY).fit(logs[:1], dp_only=False)
+    t0 = float(logs[1].time_s[np.flatnonzero(logs[1].dp_active.to_numpy() == 0)[0]])
+    starts = t0 + np.arange(2, 6)
+    off = hp.forecast(logs[1], starts, 30.0)
+    on = hp.forecast(logs[1], starts, 30.0, nets_after_stop=True)
+    assert np.all(off.guard_weight[:, 1:] == 0.0)
+    assert np.any(on.guard_weight[:, 1:] > 0.0)
+    assert not np.allclose(off.eta, on.eta)
+    before = hp.forecast(logs[1], [t0 - 100.0], 30.0)          # station keeping: nets on as before
+    assert np.any(before.guard_weight[:, 1:] > 0.0)
