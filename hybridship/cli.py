@@ -264,6 +264,9 @@ def _add_forecast(sub) -> None:
                    help="held: commands stay at their start values (default); known: use the log's future "
                         "commands (the log must extend --horizon-s past each start)")
     p.add_argument("--no-guard", action="store_true", help="do not shrink the correction outside the envelope")
+    p.add_argument("--quantiles", default="", metavar="Q1,Q2,...",
+                   help="also write these quantiles of north, east and heading (probabilities in (0, 1), e.g. "
+                        "0.05,0.95), from the calibrated spread")
     p.add_argument("--out", required=True, type=Path, help="forecast table to write (.csv)")
     p.set_defaults(func=_cmd_forecast)
 
@@ -275,13 +278,20 @@ def _cmd_forecast(args) -> int:
     if not args.horizon_s > 0:
         raise UsageError(f"{_PROG} forecast: error: --horizon-s must be > 0, got {args.horizon_s}")
     try:
+        quantiles = [float(q) for q in args.quantiles.split(",") if q.strip()]
+    except ValueError:
+        quantiles = [float("nan")]
+    if not all(0.0 < q < 1.0 for q in quantiles):
+        raise UsageError(f"{_PROG} forecast: error: --quantiles: expected comma-separated probabilities in "
+                         f"(0, 1), e.g. 0.05,0.95; got {args.quantiles!r}")
+    try:
         hp = HybridPredictor.load(args.model)
     except ModelFileError as exc:
         raise UsageError(f"{_PROG} forecast: error: {_one_line(exc)}") from None
     if not args.log.is_file():
         raise UsageError(f"{_PROG} forecast: error: --log {args.log}: file not found")
     fc = hp.forecast(args.log, args.start_time, args.horizon_s, guard=not args.no_guard, commands=args.commands)
-    df = fc.to_frame()
+    df = fc.to_frame(quantiles=quantiles)
     atomic_write(args.out, lambda fh: fh.write(df.to_csv(index=False).encode("utf-8")))
     from .quality import FaultFlags
 

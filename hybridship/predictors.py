@@ -32,12 +32,13 @@ from .logs.io import LogArrays, log_to_arrays, read_log
 from .quality import FaultFlags, assess_start_window, forecast_log_arrays
 from .physics.integrate import rollout_batch
 from .physics.model import DynamicModel
+from .residual.calibration import CalibrationConfig, SpreadCalibration, fit_spread_scale
 from .residual.ensemble import EnsembleConfig, MLPEnsemble, fit_ensemble
 from .residual.features import ResidualConfig, prepare_log
 from .residual.guard import EnvelopeGuard, ThrustRegime
 
 #: Version of the model-file format written by :meth:`HybridPredictor.save`.
-MODEL_FORMAT_VERSION = 2
+MODEL_FORMAT_VERSION = 3
 
 
 class ModelFileError(ValueError):
@@ -79,8 +80,28 @@ class ForecastResult:
     flags: dict | None = None
     notes: tuple | None = None
 
-    def to_frame(self) -> pd.DataFrame:
-        """Tidy table: one row per start time and lead time, degrees at this edge."""
+    def quantiles(self, q) -> np.ndarray:
+        """Gaussian quantiles of ``eta`` from ``eta_std``: shape (len(q), S, H+1, 3) [m, m, rad].
+
+        With a calibrated spread (the hybrid's default) these are the calibrated bands;
+        ``q`` are probabilities in (0, 1).
+        """
+        from scipy.stats import norm
+
+        q = np.atleast_1d(np.asarray(q, dtype=float))
+        if q.size == 0 or not np.all((q > 0) & (q < 1)):
+            raise ValueError(f"quantiles: expected probabilities in (0, 1), got {q.tolist()}")
+        if self.eta_std is None:
+            raise ValueError("quantiles: this forecast has no spread (eta_std is None)")
+        z = norm.ppf(q)[:, None, None, None]
+        return self.eta[None] + z * self.eta_std[None]
+
+    def to_frame(self, quantiles=()) -> pd.DataFrame:
+        """Tidy table: one row per start time and lead time, degrees at this edge.
+
+        ``quantiles`` (probabilities) add columns ``north_q<q>_m``, ``east_q<q>_m`` and
+        ``heading_q<q>_deg`` (see :meth:`quantiles`).
+        """
         S, H1, _ = self.eta.shape
         cols = {
             "start_time_s": np.repeat(self.start_time_s, H1),
@@ -97,6 +118,12 @@ class ForecastResult:
             cols["north_std_m"] = self.eta_std[..., 0].ravel()
             cols["east_std_m"] = self.eta_std[..., 1].ravel()
             cols["heading_std_deg"] = np.degrees(self.eta_std[..., 2]).ravel()
+        if len(quantiles):
+            Q = self.quantiles(quantiles)
+            for q, eq in zip(np.atleast_1d(quantiles), Q):
+                cols[f"north_q{q:g}_m"] = eq[..., 0].ravel()
+                cols[f"east_q{q:g}_m"] = eq[..., 1].ravel()
+                cols[f"heading_q{q:g}_deg"] = np.degrees(eq[..., 2]).ravel()
         if self.guard_weight is not None:
             cols["guard_weight"] = self.guard_weight.ravel()
         if self.flags is not None:
@@ -432,13 +459,18 @@ class HybridPredictor:
         Apply the out-of-envelope guard by default in :meth:`forecast`.
     guard_quantile : float
         Quantile of training Mahalanobis distances where shrinking starts.
+    calibration_config : CalibrationConfig
+        How :meth:`fit` holds back the end of each training log and calibrates the
+        spread on it (see :mod:`hybridship.residual.calibration`); ``fraction=0`` keeps
+        the raw ensemble spread.
     """
 
     name = "hybrid"
 
     def __init__(self, vessel="gunnerus", *, residual_config: ResidualConfig = ResidualConfig(),
                  ensemble_config: EnsembleConfig = EnsembleConfig(), guard: bool = True,
-                 guard_quantile: float = 0.99, stop_after_failure: bool = True):
+                 guard_quantile: float = 0.99, stop_after_failure: bool = True,
+                 calibration_config: CalibrationConfig = CalibrationConfig()):
         self.model = DynamicModel(vessel)
         self.stop_after_failure = bool(stop_after_failure)
         self.residual_config = residual_config
@@ -448,17 +480,26 @@ class HybridPredictor:
         self.ensemble: MLPEnsemble | None = None
         self.guard: EnvelopeGuard | None = None
         self.thrust_regime: ThrustRegime | None = None
+        self.calibration_config = calibration_config
+        #: command mode -> {"position": SpreadCalibration, "heading": SpreadCalibration}
+        self.calibration: dict = {}
         self.training_info: dict = {}
 
     # ------------------------------------------------------------------ training
 
-    def training_data(self, logs: Iterable, *, dp_only: bool = True):
-        """Features X, targets Y and a per-log segment label from the given logs."""
+    def training_data(self, logs: Iterable, *, dp_only: bool = True, row_masks=None):
+        """Features X, targets Y and a per-log segment label from the given logs.
+
+        ``row_masks`` (one boolean array per log, or None) limits the rows that may be
+        used (for example to leave out the part held back for calibration).
+        """
         Xs, Ys, segs, thr = [], [], [], []
         for k, log in enumerate(logs):
             arrays = as_log_arrays(log, self.model.vessel)
             prep = prepare_log(self.model, arrays, self.residual_config)
             mask = arrays.dp_active.astype(bool) if dp_only else None
+            if row_masks is not None and row_masks[k] is not None:
+                mask = row_masks[k] if mask is None else (mask & row_masks[k])
             rows = prep.trainable_rows(mask)
             if rows.size == 0:
                 continue
@@ -473,8 +514,9 @@ class HybridPredictor:
         return np.concatenate(Xs), np.concatenate(Ys), np.concatenate(segs)
 
     def fit(self, logs: Iterable, *, dp_only: bool = True, progress: bool = False,
-            row_stride: int = 1) -> "HybridPredictor":
-        """Learn the acceleration residual from logs (by default only their DP part).
+            row_stride: int = 1, calibration: CalibrationConfig | None = None) -> "HybridPredictor":
+        """Learn the acceleration residual from logs (by default only their DP part), then
+        calibrate the spread on the held-back end of each log.
 
         Parameters
         ----------
@@ -487,9 +529,44 @@ class HybridPredictor:
             Train on every ``row_stride``-th trainable row (for high-rate logs, whose
             neighbouring rows carry almost the same information); the guard is fitted on
             the same rows.
+        calibration : CalibrationConfig, optional
+            Overrides the ``calibration_config`` given at construction (for example
+            ``CalibrationConfig(commands=("known",))`` for a manoeuvring model, or
+            ``fraction=0`` for none).
+
+        Notes
+        -----
+        With ``calibration.fraction > 0`` the last part (in time order) of each log's usable
+        rows is not trained on; forecasts from start times in it, made in each of the
+        ``calibration.commands`` modes over ``calibration.horizon_s``, give the per-lead
+        scale of the spread (:func:`hybridship.residual.calibration.fit_spread_scale`,
+        north and east pooled for the position, the heading on its own). Every later
+        forecast's ``eta_std`` is calibrated with it.
         """
         stride = _check_row_stride(row_stride)
-        X, Y, seg = self.training_data(logs, dp_only=dp_only)
+        cal = self.calibration_config if calibration is None else calibration
+        if not isinstance(cal, CalibrationConfig):
+            raise TypeError(f"calibration: expected a CalibrationConfig, got {type(cal).__name__}")
+        logs = [as_log_arrays(log, self.model.vessel) for log in logs]
+        cuts = [self._calibration_cut(a, cal, dp_only) for a in logs]
+        masks = [None if c >= len(a) else (np.arange(len(a)) < c) for a, c in zip(logs, cuts)]
+        self._fit_nets(logs, dp_only=dp_only, progress=progress, stride=stride, row_masks=masks)
+        self.calibration = {}
+        cal_info = {"fraction": cal.fraction, "commands": list(cal.commands), "horizon_s": cal.horizon_s,
+                    "refit": cal.refit, "n_starts": {}}
+        if cal.fraction > 0:
+            for mode in cal.commands:
+                fitted, n = self._calibrate(logs, cuts, cal, dp_only, mode)
+                cal_info["n_starts"][mode] = n
+                if fitted is not None:
+                    self.calibration[mode] = fitted
+            if cal.refit:
+                self._fit_nets(logs, dp_only=dp_only, progress=progress, stride=stride, row_masks=None)
+        self.training_info["calibration"] = cal_info
+        return self
+
+    def _fit_nets(self, logs, *, dp_only, progress, stride, row_masks):
+        X, Y, seg = self.training_data(logs, dp_only=dp_only, row_masks=row_masks)
         X, Y, seg, thr = X[::stride], Y[::stride], seg[::stride], self._training_thrust_acc[::stride]
         self.ensemble = fit_ensemble(X, Y, self.ensemble_config, segment_id=seg, progress=progress)
         self.guard = EnvelopeGuard.fit((X - self.ensemble.x_mean) / self.ensemble.x_std,
@@ -499,7 +576,74 @@ class HybridPredictor:
                               "epochs": self.ensemble.history["epochs"],
                               "best_val_mse": self.ensemble.history["best_val_mse"],
                               "residual_std": Y.std(0).tolist()}
-        return self
+
+    @staticmethod
+    def _calibration_cut(a: LogArrays, cal: CalibrationConfig, dp_only: bool) -> int:
+        """First row of the held-back part of log ``a`` (``len(a)`` when nothing is held back)."""
+        n = len(a)
+        if cal.fraction == 0 or n < 4:
+            return n
+        usable = np.flatnonzero(a.dp_active.astype(bool)) if dp_only else np.arange(n)
+        if usable.size < 4:
+            return n
+        dt = float(np.median(np.diff(a.time_s)))
+        n_cal = max(int(round(cal.fraction * usable.size)), int(np.ceil(1.1 * cal.horizon_s / dt)))
+        n_cal = min(n_cal, usable.size // 2)
+        return int(usable[-n_cal]) if n_cal > 0 else n
+
+    def _calibration_starts(self, a: LogArrays, cut: int, H: int, dp_only: bool) -> np.ndarray:
+        """Rows >= ``cut`` whose next H rows are in the same segment (and station keeping with ``dp_only``)."""
+        n = len(a)
+        if cut >= n - H:
+            return np.zeros(0, int)
+        r = np.arange(cut, n - H)
+        seg = a.segment_id
+        ok = seg[r + H] == seg[r]
+        ok &= np.isfinite(a.eta[r]).all(1) & np.isfinite(a.nu[r]).all(1)
+        if dp_only:
+            bad = np.concatenate([[0], np.cumsum(a.dp_active == 0)])
+            ok &= (bad[r + H + 1] - bad[r]) == 0
+        return r[ok]
+
+    def _calibrate(self, logs, cuts, cal: CalibrationConfig, dp_only: bool, mode: str):
+        """Calibration of one command mode from held-back starts; (None, 0) without any start."""
+        from .frames import wrap_pi
+
+        cand = []
+        for a, cut in zip(logs, cuts):
+            if cut >= len(a):
+                cand.append(np.zeros(0, int))
+                continue
+            dt = float(np.median(np.diff(a.time_s)))
+            cand.append(self._calibration_starts(a, cut, int(round(cal.horizon_s / dt)), dp_only))
+        total = sum(c.size for c in cand)
+        if total == 0:
+            return None, 0
+        pos_e, pos_s, hdg_e, hdg_s, lead = [], [], [], [], None
+        for a, rows in zip(logs, cand):
+            if rows.size == 0:
+                continue
+            dt = float(np.median(np.diff(a.time_s)))
+            every = max(1, int(np.ceil(total / cal.max_starts))) if cal.start_every_s is None \
+                else max(1, int(round(cal.start_every_s / dt)))
+            rows = rows[::every]
+            fc = self.forecast(a, a.time_s[rows], cal.horizon_s, commands=mode, calibrated=False)
+            H = fc.eta.shape[1] - 1
+            truth = a.eta[rows[:, None] + np.arange(1, H + 1)[None, :]]          # (S, H, 3)
+            e = np.abs(fc.eta[:, 1:] - truth)
+            pos_e += [e[..., 0], e[..., 1]]
+            pos_s += [fc.eta_std[:, 1:, 0], fc.eta_std[:, 1:, 1]]
+            hdg_e.append(np.abs(wrap_pi(fc.eta[:, 1:, 2] - truth[..., 2])))
+            hdg_s.append(fc.eta_std[:, 1:, 2])
+            lead = fc.lead_s[1:] if lead is None or fc.lead_s.size - 1 < lead.size else lead
+        Hm = lead.size
+        kw = dict(sigma=cal.sigma, coverage=cal.coverage, floor_quantile=cal.floor_quantile)
+        n = sum(x.shape[0] for x in hdg_e)
+        if n < 10:
+            return None, n
+        cat = lambda xs: np.concatenate([x[:, :Hm] for x in xs])  # noqa: E731
+        return ({"position": fit_spread_scale(cat(pos_e), cat(pos_s), lead, min_samples=10, **kw),
+                 "heading": fit_spread_scale(cat(hdg_e), cat(hdg_s), lead, min_samples=10, **kw)}, n)
 
     # ------------------------------------------------------------------ forecasting
 
@@ -508,7 +652,7 @@ class HybridPredictor:
             raise RuntimeError("HybridPredictor: call fit() or load() before forecast()")
 
     def forecast(self, log, start_times_s, horizon_s: float = 60.0, *, guard: bool | None = None,
-                 commands: str = "held") -> ForecastResult:
+                 commands: str = "held", calibrated: bool = True) -> ForecastResult:
         """Forecast from every start time (one batch).
 
         Parameters
@@ -518,6 +662,9 @@ class HybridPredictor:
         guard : bool, optional
             Shrink the learned correction outside the training envelope (default: the
             ``guard`` given at construction).
+        calibrated : bool
+            Report the calibrated spread (the default, when :meth:`fit` calibrated the
+            mode ``commands``); False gives the raw ensemble spread.
         """
         self._check_fitted()
         st = _forecast_setup(self.model, self.residual_config, log, start_times_s, horizon_s,
@@ -531,8 +678,19 @@ class HybridPredictor:
         flags = dict(st.flags)
         if wgt is not None:
             flags[FaultFlags.OUT_OF_ENVELOPE] = np.any(wgt < 1.0, axis=1)
+        if calibrated and commands in self.calibration:
+            std = self.calibrated_std(std, np.arange(st.H + 1) * st.dt, commands)
         return ForecastResult(st.arrays.time_s[st.idx], np.arange(st.H + 1) * st.dt, eta, nu, std, wgt,
                               flags=flags, notes=st.notes)
+
+    def calibrated_std(self, std: np.ndarray, lead_s: np.ndarray, commands: str) -> np.ndarray:
+        """Raw ensemble spread (S, H+1, 3) at lead times (H+1,) [s] -> calibrated spread."""
+        c = self.calibration[commands]
+        out = np.empty_like(std)
+        out[..., 0] = c["position"].apply(std[..., 0], lead_s)
+        out[..., 1] = c["position"].apply(std[..., 1], lead_s)
+        out[..., 2] = c["heading"].apply(std[..., 2], lead_s)
+        return out
 
     def _thrust_weight(self, eta, nu, rpm, az, wind):
         """Thrust-regime weight (S,) of commands (S, K) at states (S, 3) (1 without a regime)."""
@@ -639,6 +797,8 @@ class HybridPredictor:
             "stop_after_failure": self.stop_after_failure,
             "guard": {"d0": self.guard.d0, "scale": self.guard.scale},
             "thrust_regime": {"lo": self.thrust_regime.lo},
+            "calibration_config": asdict(self.calibration_config),
+            "calibrated_commands": sorted(self.calibration),
             "training_info": self.training_info,
         }
 
@@ -650,6 +810,9 @@ class HybridPredictor:
         arrays = {f"w{i}": w for i, w in enumerate(e.weights)}
         arrays.update(x_mean=e.x_mean, x_std=e.x_std, y_mean=e.y_mean, y_std=e.y_std,
                       guard_mean=g.mean, guard_inv_cov=g.inv_cov, thrust_scale=self.thrust_regime.scale)
+        for mode, c in self.calibration.items():
+            for what, sc in c.items():
+                arrays[f"cal_{mode}_{what}"] = np.stack([sc.lead_s, sc.scale, sc.floor])
         meta_d = self._metadata()
         meta_d["content_sha256"] = _content_hash(arrays)
         meta = json.dumps(meta_d, sort_keys=True)
@@ -689,7 +852,9 @@ class HybridPredictor:
                                                 for k, v in meta["residual_config"].items()})
             obj = cls(vessel if vessel is not None else meta["vessel"], residual_config=residual_config,
                       ensemble_config=EnsembleConfig(**meta["ensemble_config"]), guard=meta["use_guard"],
-                      guard_quantile=meta["guard_quantile"], stop_after_failure=meta["stop_after_failure"])
+                      guard_quantile=meta["guard_quantile"], stop_after_failure=meta["stop_after_failure"],
+                      calibration_config=CalibrationConfig(**meta["calibration_config"]))
+            calibrated_commands = list(meta["calibrated_commands"])
             fingerprint = meta["vessel_fingerprint"]
             guard_d0, guard_scale = float(meta["guard"]["d0"]), float(meta["guard"]["scale"])
             thrust_lo = float(meta["thrust_regime"]["lo"])
@@ -710,6 +875,14 @@ class HybridPredictor:
             ens = MLPEnsemble(weights, data["x_mean"], data["x_std"], data["y_mean"], data["y_std"])
             guard = EnvelopeGuard(data["guard_mean"], data["guard_inv_cov"], guard_d0, guard_scale)
             thrust_regime = ThrustRegime(np.asarray(data["thrust_scale"], dtype=float), thrust_lo)
+            calibration = {}
+            for mode in calibrated_commands:
+                calibration[mode] = {}
+                for what in ("position", "heading"):
+                    a = np.asarray(data[f"cal_{mode}_{what}"], dtype=float)
+                    if a.ndim != 2 or a.shape[0] != 3:
+                        raise ValueError(f"cal_{mode}_{what} has shape {a.shape}, expected (3, H)")
+                    calibration[mode][what] = SpreadCalibration(a[0], a[1], a[2])
             for name, a in [("weights", np.concatenate([w.ravel() for w in weights])), ("x_std", ens.x_std),
                             ("y_std", ens.y_std), ("guard_inv_cov", guard.inv_cov),
                             ("thrust_scale", thrust_regime.scale)]:
@@ -718,6 +891,7 @@ class HybridPredictor:
         except (KeyError, ValueError) as err:
             raise ModelFileError(f"{path}: damaged model contents: {err}") from None
         obj.ensemble, obj.guard, obj.thrust_regime = ens, guard, thrust_regime
+        obj.calibration = calibration
         obj.training_info = meta.get("training_info", {})
         return obj
 
