@@ -14,7 +14,10 @@ JSON keys: ``physics_forecasts_per_s`` (at the largest B), ``physics_single_fore
 ``physics_vessel_steps_per_s`` and ``physics_by_batch`` (B -> forecasts/s); for the hybrid
 (10-member ensemble, guard on) ``hybrid_forecasts_per_s`` (at the largest hybrid batch),
 ``hybrid_single_forecast_ms``, ``hybrid_by_batch`` and ``train_s`` (training on 3 000
-samples of a synthetic log with default settings).
+samples of a synthetic log with default settings); ``manoeuvre_train_s`` (training the
+manoeuvre benchmark's hybrid, :class:`hybridship.manoeuvre.ManoeuvreConfig` as it stands,
+on the Esso Osaka training runs of the benchmark's split, seed 0, one core; null when the
+data are absent or with ``--quick``) and ``manoeuvre_training`` (its training mode).
 """
 
 from __future__ import annotations
@@ -128,6 +131,29 @@ def hybrid_speed(batches=(1, 1_000, 10_000), seed: int = 0) -> dict:
             "train_samples": hp.training_info["n_rows"]}
 
 
+def manoeuvre_train_speed() -> dict:
+    """Wall time of training the manoeuvre benchmark's hybrid on the Esso Osaka training runs."""
+    import tempfile
+
+    import torch
+
+    torch.set_num_threads(1)
+    from hybridship.logs.esso_osaka import default_data_dir
+    from hybridship.manoeuvre import ManoeuvreConfig, _fit, load_runs, make_predictors, split_runs
+
+    data = default_data_dir() / "data"
+    if not data.is_dir():
+        return {"manoeuvre_train_s": None, "manoeuvre_training": None}
+    cfg = ManoeuvreConfig()
+    with tempfile.TemporaryDirectory() as tmp:
+        train_dir, _ = split_runs(data, tmp, seed=0)
+        runs = load_runs(train_dir, "esso_osaka_model")
+        hp = make_predictors("esso_osaka_model", cfg)["hybrid"]
+        t0 = time.perf_counter()
+        _fit("hybrid", hp, runs, cfg)
+        return {"manoeuvre_train_s": time.perf_counter() - t0, "manoeuvre_training": cfg.training}
+
+
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--json", action="store_true", help="print one JSON object")
@@ -136,6 +162,7 @@ def main(argv=None) -> int:
     batches = (1, 100, 1_000) if args.quick else (1, 1_000, 100_000)
     res = physics_speed(batches)
     res.update(hybrid_speed((1, 100) if args.quick else (1, 1_000, 10_000)))
+    res.update({"manoeuvre_train_s": None, "manoeuvre_training": None} if args.quick else manoeuvre_train_speed())
     if args.json:
         print(json.dumps(res, sort_keys=True))
         return 0
@@ -151,6 +178,9 @@ def main(argv=None) -> int:
         print(f"{int(b):>8} {f:>14,.0f}")
     print(f"single forecast latency: {res['hybrid_single_forecast_ms']:.3f} ms")
     print(f"training on {res['train_samples']} samples: {res['train_s']:.1f} s")
+    if res["manoeuvre_train_s"] is not None:
+        print(f"training the manoeuvre hybrid ({res['manoeuvre_training']}) on the Esso Osaka training runs: "
+              f"{res['manoeuvre_train_s']:.0f} s")
     return 0
 
 

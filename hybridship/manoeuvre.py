@@ -36,6 +36,7 @@ from .logs.esso_osaka import EssoRun, RUN_KINDS, esso_log_arrays, list_runs
 from .logs.io import LogArrays, log_to_arrays
 from .residual.calibration import CalibrationConfig
 from .residual.ensemble import EnsembleConfig
+from .residual.multistep import MultiStepConfig
 from .residual.features import ALL_FEATURES, ResidualConfig
 
 #: Default forecast horizons [s] (model scale; x 10.4 at full scale).
@@ -99,6 +100,13 @@ class ManoeuvreConfig:
         The hybrid's spread calibration (the last 20 % of each training run held back,
         both command modes; the benchmark sets its horizon to the longest forecast
         horizon).
+    training : {"one_step", "multi_step"}
+        How the hybrid's nets are trained (see :class:`~hybridship.predictors.HybridPredictor`).
+    multistep : MultiStepConfig
+        Settings of multi-step training.
+    command_guard : bool
+        Fit and apply the hybrid's command-regime guard
+        (:class:`~hybridship.residual.guard.CommandRegime`).
     """
 
     start_every_s: float | None = 1.0
@@ -110,6 +118,9 @@ class ManoeuvreConfig:
     data_only_row_stride: int = 1
     guard_quantile: float = 0.99
     calibration: CalibrationConfig = field(default_factory=lambda: CalibrationConfig(horizon_s=30.0))
+    training: str = "one_step"
+    multistep: MultiStepConfig = field(default_factory=MultiStepConfig)
+    command_guard: bool = False
 
     @classmethod
     def quick(cls, seed: int = 0) -> "ManoeuvreConfig":
@@ -221,7 +232,9 @@ def make_predictors(vessel, config: ManoeuvreConfig) -> dict[str, object]:
     rc, ec = config.residual, config.ensemble
     return {
         "hybrid": HybridPredictor(vessel, residual_config=rc, ensemble_config=ec,
-                                  guard_quantile=config.guard_quantile, calibration_config=config.calibration),
+                                  guard_quantile=config.guard_quantile, calibration_config=config.calibration,
+                                  training=config.training, multistep_config=config.multistep,
+                                  command_guard=config.command_guard),
         "dynamic": DynamicPredictor(vessel, residual_config=rc),
         "data_only": DataOnlyPredictor(vessel, ensemble_config=ec, start_average_s=rc.start_average_s),
         "dead_reckoning": DeadReckoning(vessel, start_average_s=rc.start_average_s),

@@ -34,8 +34,9 @@ from .physics.integrate import rollout_batch
 from .physics.model import DynamicModel
 from .residual.calibration import CalibrationConfig, SpreadCalibration, fit_spread_scale
 from .residual.ensemble import EnsembleConfig, MLPEnsemble, fit_ensemble
-from .residual.features import ResidualConfig, prepare_log
-from .residual.guard import EnvelopeGuard, ThrustRegime
+from .residual.features import COMMAND_FEATURES, ResidualConfig, command_feature_columns, command_scales, prepare_log
+from .residual.multistep import MultiStepConfig, collect_starts, train_multistep
+from .residual.guard import CommandRegime, EnvelopeGuard, ThrustRegime
 
 #: Version of the model-file format written by :meth:`HybridPredictor.save`.
 MODEL_FORMAT_VERSION = 3
@@ -463,14 +464,33 @@ class HybridPredictor:
         How :meth:`fit` holds back the end of each training log and calibrates the
         spread on it (see :mod:`hybridship.residual.calibration`); ``fraction=0`` keeps
         the raw ensemble spread.
+    training : {"one_step", "multi_step"}
+        ``one_step``: the nets fit the one-step residual (Skulstad et al.);
+        ``multi_step``: then they are fine-tuned on the error of the hybrid's own
+        rollouts (:mod:`hybridship.residual.multistep`, commands known).
+    multistep_config : MultiStepConfig
+        Settings of the multi-step training.
+    command_guard : bool
+        Also fit a :class:`~hybridship.residual.guard.CommandRegime` on the held-back
+        calibration rows (needs ``calibration_config.fraction > 0``) and apply it with the guard.
     """
+
+    #: Training modes of the nets.
+    TRAINING_MODES = ("one_step", "multi_step")
 
     name = "hybrid"
 
     def __init__(self, vessel="gunnerus", *, residual_config: ResidualConfig = ResidualConfig(),
                  ensemble_config: EnsembleConfig = EnsembleConfig(), guard: bool = True,
                  guard_quantile: float = 0.99, stop_after_failure: bool = True,
-                 calibration_config: CalibrationConfig = CalibrationConfig()):
+                 calibration_config: CalibrationConfig = CalibrationConfig(), training: str = "one_step",
+                 multistep_config: MultiStepConfig = MultiStepConfig(), command_guard: bool = False):
+        if training not in self.TRAINING_MODES:
+            raise ValueError(f"training: expected one of {self.TRAINING_MODES}, got {training!r}")
+        self.training = training
+        self.multistep_config = multistep_config
+        self.command_guard = bool(command_guard)
+        self.command_regime: CommandRegime | None = None
         self.model = DynamicModel(vessel)
         self.stop_after_failure = bool(stop_after_failure)
         self.residual_config = residual_config
@@ -551,6 +571,9 @@ class HybridPredictor:
         cuts = [self._calibration_cut(a, cal, dp_only) for a in logs]
         masks = [None if c >= len(a) else (np.arange(len(a)) < c) for a, c in zip(logs, cuts)]
         self._fit_nets(logs, dp_only=dp_only, progress=progress, stride=stride, row_masks=masks)
+        self.command_regime = None
+        if self.command_guard and cal.fraction > 0:
+            self.command_regime = self._fit_command_regime(logs, masks, dp_only, stride)
         self.calibration = {}
         cal_info = {"fraction": cal.fraction, "commands": list(cal.commands), "horizon_s": cal.horizon_s,
                     "refit": cal.refit, "n_starts": {}}
@@ -575,7 +598,44 @@ class HybridPredictor:
         self.training_info = {"n_rows": int(X.shape[0]), "row_stride": stride,
                               "epochs": self.ensemble.history["epochs"],
                               "best_val_mse": self.ensemble.history["best_val_mse"],
-                              "residual_std": Y.std(0).tolist()}
+                              "residual_std": Y.std(0).tolist(), "training": self.training}
+        if self.training == "multi_step":
+            preps = [prepare_log(self.model, a, self.residual_config) for a in logs]
+            starts = collect_starts(preps, row_masks if row_masks is not None else [None] * len(logs),
+                                    self.multistep_config, dp_only=dp_only)
+            self.ensemble, hist = train_multistep(self.ensemble, self.model, starts,
+                                                  self.residual_config.feature_index, self.multistep_config,
+                                                  seed=self.ensemble_config.seed, progress=progress)
+            self.training_info["multi_step"] = {k: hist[k] for k in ("iterations", "n_starts", "n_val_starts", "val_loss",
+                                                                     "best_val_loss")}
+
+    def _regime_inputs(self, prep, rows):
+        """(rpm / max rpm, model-predicted u [m/s], first rotatable angle [rad]) of rows predicted from row - 1."""
+        sc = command_scales(self.model, self.model.vessel.rotatable)
+        a = prep.arrays
+        ang = a.azimuth_rad[rows - 1, sc["angle_channel"]] if sc["angle_channel"] is not None else np.zeros(rows.size)
+        return a.rpm[rows - 1, 0] / sc["rpm_scale"], prep.nu_hat[rows, 0], ang
+
+    def _fit_command_regime(self, logs, masks, dp_only, stride) -> CommandRegime | None:
+        """Command-regime weights from the held-back rows (see :class:`CommandRegime`)."""
+        tr_in, he_in, T, Pm = [], [], [], []
+        for a, m in zip(logs, masks):
+            prep = prepare_log(self.model, a, self.residual_config)
+            dp = a.dp_active.astype(bool) if dp_only else np.ones(len(a), bool)
+            held = dp & ~m if m is not None else np.zeros(len(a), bool)
+            rows_t = prep.trainable_rows(dp & m if m is not None else dp)[::stride]
+            rows_h = prep.trainable_rows(held)
+            if rows_t.size:
+                tr_in.append(self._regime_inputs(prep, rows_t))
+            if rows_h.size:
+                he_in.append(self._regime_inputs(prep, rows_h))
+                T.append(prep.deviation(rows_h) / self.ensemble.y_std)
+                Pm.append(self.ensemble.predict(prep.features(rows_h))[0] / self.ensemble.y_std)
+        if not tr_in or not he_in:
+            return None
+        cat = lambda parts: tuple(np.concatenate([p[k] for p in parts]) for k in range(3))  # noqa: E731
+        return CommandRegime.fit(cat(tr_in), cat(he_in), np.concatenate(T), np.concatenate(Pm),
+                                 length_m=self.model.vessel.particulars.L_pp_m)
 
     @staticmethod
     def _calibration_cut(a: LogArrays, cal: CalibrationConfig, dp_only: bool) -> int:
@@ -742,7 +802,10 @@ class HybridPredictor:
         e1 = np.empty((S, 2, 3))
         n1 = np.empty((S, 2, 3))
         a1 = np.empty((S, 2, 3))
-        feats = np.empty((E, S, 9))
+        use_cmd = self.residual_config.uses_command_features
+        feats = np.zeros((E, S, 9 + len(COMMAND_FEATURES)))
+        cmd_guard = guard and self.command_regime is not None
+        scales = command_scales(self.model, self.model.vessel.rotatable)
         for j in range(n_steps):
             rpm_j, az_j = (np.ascontiguousarray(rpm[:, j:j + 1]), np.ascontiguousarray(az[:, j:j + 1])) \
                 if per_step else (rpm, az)
@@ -753,11 +816,20 @@ class HybridPredictor:
             feats[:, :, 0:3] = n1[:, 1]
             feats[:, :, 3:6] = a1[:, 1]
             feats[:, :, 6:9] = r_prev
+            if use_cmd:
+                jp = max(j - 1, 0) if per_step else 0
+                feats[:, :, 9:] = command_feature_columns(
+                    n1[:, 1], e1[:, 1, 2], rpm_j[:, 0], rpm[:, jp], az_j[:, 0], az[:, jp], wind[:, 0], dt_s,
+                    scales["rpm_scale"], scales["angle_channel"])
             X = feats[..., fidx]
             r = ens.predict_members(X)                          # (E, S, 3)
             if guard:
                 z = (X.mean(axis=0) - ens.x_mean) / ens.x_std
                 w = self.guard.weight(z) * w_thrust             # (S,)
+                if cmd_guard:
+                    ch = scales["angle_channel"]
+                    w = w * self.command_regime.weight(rpm_j[:, 0, 0] / scales["rpm_scale"], n1[:, 1, 0],
+                                                       az_j[:, 0, ch] if ch is not None else np.zeros(S))
                 r = r * w[None, :, None]
                 wgt[:, j + 1] = w
             psi = e1[:, 1, 2]
@@ -798,6 +870,10 @@ class HybridPredictor:
             "guard": {"d0": self.guard.d0, "scale": self.guard.scale},
             "thrust_regime": {"lo": self.thrust_regime.lo},
             "calibration_config": asdict(self.calibration_config),
+            "training": self.training, "multistep_config": asdict(self.multistep_config),
+            "command_guard": self.command_guard,
+            "command_regime": None if self.command_regime is None else {
+                k: getattr(self.command_regime, k) for k in ("rpm_eps", "froude_lo", "angle_hard_rad", "length_m")},
             "calibrated_commands": sorted(self.calibration),
             "training_info": self.training_info,
         }
@@ -810,6 +886,9 @@ class HybridPredictor:
         arrays = {f"w{i}": w for i, w in enumerate(e.weights)}
         arrays.update(x_mean=e.x_mean, x_std=e.x_std, y_mean=e.y_mean, y_std=e.y_std,
                       guard_mean=g.mean, guard_inv_cov=g.inv_cov, thrust_scale=self.thrust_regime.scale)
+        if self.command_regime is not None:
+            cr = self.command_regime
+            arrays.update(cmd_regime_weights=cr.weights, cmd_regime_n_train=cr.n_train, cmd_regime_n_held=cr.n_held)
         for mode, c in self.calibration.items():
             for what, sc in c.items():
                 arrays[f"cal_{mode}_{what}"] = np.stack([sc.lead_s, sc.scale, sc.floor])
@@ -853,7 +932,10 @@ class HybridPredictor:
             obj = cls(vessel if vessel is not None else meta["vessel"], residual_config=residual_config,
                       ensemble_config=EnsembleConfig(**meta["ensemble_config"]), guard=meta["use_guard"],
                       guard_quantile=meta["guard_quantile"], stop_after_failure=meta["stop_after_failure"],
-                      calibration_config=CalibrationConfig(**meta["calibration_config"]))
+                      calibration_config=CalibrationConfig(**meta["calibration_config"]),
+                      training=meta["training"], multistep_config=MultiStepConfig(**meta["multistep_config"]),
+                      command_guard=meta["command_guard"])
+            regime_meta = meta["command_regime"]
             calibrated_commands = list(meta["calibrated_commands"])
             fingerprint = meta["vessel_fingerprint"]
             guard_d0, guard_scale = float(meta["guard"]["d0"]), float(meta["guard"]["scale"])
@@ -892,6 +974,16 @@ class HybridPredictor:
             raise ModelFileError(f"{path}: damaged model contents: {err}") from None
         obj.ensemble, obj.guard, obj.thrust_regime = ens, guard, thrust_regime
         obj.calibration = calibration
+        obj.command_regime = None
+        if regime_meta is not None:
+            try:
+                w = np.asarray(data["cmd_regime_weights"], dtype=float)
+                if w.shape != (CommandRegime.N_REGIMES,) or not np.all((w >= 0) & (w <= 1)):
+                    raise ValueError(f"cmd_regime_weights: expected {CommandRegime.N_REGIMES} weights in [0, 1]")
+                obj.command_regime = CommandRegime(w, np.asarray(data["cmd_regime_n_train"]),
+                                                   np.asarray(data["cmd_regime_n_held"]), **regime_meta)
+            except (KeyError, TypeError, ValueError) as err:
+                raise ModelFileError(f"{path}: damaged model contents: {err}") from None
         obj.training_info = meta.get("training_info", {})
         return obj
 
