@@ -11,7 +11,10 @@ comparison on the benchmark's own split (after the choice was made)::
 
     python benchmarks/esso_training.py --test-split --out out/esso-training-test
 
-Variants share the ensemble size, seed and features unless their name says otherwise.
+Variants share the ensemble size, seed and features unless their name says otherwise:
+``one_step`` / ``multi_step`` (training mode), ``_h<s>``, ``_b<n>``, ``_i<n>`` (multi-step
+horizon, batch of starts, iterations), ``+cmd`` (all command-aware features added),
+``+rate`` (only the command rates added), ``+cg`` (command-regime guard).
 Writes ``errors.csv`` and ``coverage.csv`` (the manoeuvre benchmark's columns) and
 ``timing.csv`` (training seconds), and prints the distance and heading tables with
 commands known.
@@ -44,6 +47,15 @@ def variants(cfg, names):
             kw["training"] = "one_step"
         elif name.startswith("multi_step"):
             kw["training"] = "multi_step"
+        import re
+
+        ms = {}
+        for key, field, conv in (("h", "horizon_s", float), ("b", "batch_starts", int), ("i", "iterations", int)):
+            m = re.search(rf"_{key}(\d+(?:\.\d+)?)", name)
+            if m:
+                ms[field] = conv(m.group(1))
+        if ms:
+            kw["multistep_config"] = replace(cfg.multistep, **ms)
         if "+cmd" in name:
             extra = tuple(f for f in ALL_FEATURES[9:] if f not in cfg.residual.features)
             kw["residual_config"] = replace(cfg.residual, features=tuple(cfg.residual.features) + extra)
@@ -52,6 +64,26 @@ def variants(cfg, names):
                                             + tuple(f for f in ALL_FEATURES[9:] if "rate" in f))
         out[name] = HybridPredictor("esso_osaka_model", **kw)
     return out
+
+
+def with_command_guard(p, logs, stride):
+    """A copy of the fitted hybrid ``p`` with the command-regime guard fitted and the spread recalibrated."""
+    import copy
+
+    q = copy.deepcopy(p)
+    q.command_guard = True
+    cal = q.calibration_config
+    cuts = [q._calibration_cut(a, cal, True) for a in logs]
+    masks = [None if c >= len(a) else (np.arange(len(a)) < c) for a, c in zip(logs, cuts)]
+    q.command_regime = q._fit_command_regime(logs, masks, True, stride)
+    q.calibration = {}
+    for mode in cal.commands:
+        fitted, _ = q._calibrate(logs, cuts, cal, True, mode)
+        if fitted is not None:
+            q.calibration[mode] = fitted
+    print("command-regime weights:", np.round(q.command_regime.weights, 2).tolist(),
+          "held-back rows:", q.command_regime.n_held.tolist(), flush=True)
+    return q
 
 
 def main(argv=None) -> int:
@@ -72,6 +104,8 @@ def main(argv=None) -> int:
     ap.add_argument("--variants", default="one_step,multi_step")
     ap.add_argument("--commands", default="known", help="command modes to score (comma-separated)")
     ap.add_argument("--horizons-s", default="5,10,20,30")
+    ap.add_argument("--with-command-guard", action="store_true",
+                    help="also score every variant with the command-regime guard fitted on its nets (suffix +cg)")
     args = ap.parse_args(argv)
     torch.set_num_threads(1)
     if not (args.split / "train").is_dir():
@@ -90,10 +124,17 @@ def main(argv=None) -> int:
     models = {"dynamic": make_predictors(v, cfg)["dynamic"]} | variants(cfg, args.variants.split(","))
     dt = float(np.median(np.diff(val_runs[0].arrays.time_s)))
     steps = np.array([int(round(h / dt)) for h in horizons])
+    if args.with_command_guard:
+        # the same nets with the command-regime guard fitted afterwards (no retraining)
+        models = {k: models[k] for k in models} | {f"{k}+cg": None for k in models
+                                                   if k != "dynamic" and "+cg" not in k}
     per, per_z, timing = {}, {}, []
     for name, p in models.items():
         t0 = time.perf_counter()
-        if name != "dynamic":
+        if p is None:
+            p = models[name] = with_command_guard(models[name[:-3]], [r.arrays for r in fit_runs],
+                                                  cfg.train_row_stride)
+        elif name != "dynamic":
             p.fit([r.arrays for r in fit_runs], row_stride=cfg.train_row_stride)
         timing.append({"model": name, "train_s": time.perf_counter() - t0})
         print(f"{name}: trained in {timing[-1]['train_s']:.0f} s", flush=True)

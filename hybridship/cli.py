@@ -325,6 +325,8 @@ def _add_benchmark(sub) -> None:
     d.add_argument("--intervals", type=int, default=20, help="start times after each failure (default 20)")
     d.add_argument("--scenarios", type=int, default=3, help="embedded scenarios when no folders are given")
     d.add_argument("--all-rows", action="store_true", help="train on every row, not only dp_active == 1")
+    d.add_argument("--training", choices=("one_step", "multi_step"), default="one_step",
+                   help="how the hybrid's nets are trained (default one_step)")
     d.add_argument("--no-plots", action="store_true", help="skip the figures")
     d.set_defaults(func=_cmd_benchmark_drift)
     h = bsub.add_parser("hsc", help="high-speed craft: SS, ARX, NARX-ANN and hybrid on simulated sea trials",
@@ -406,7 +408,7 @@ def _cmd_benchmark_drift(args) -> int:
         raise UsageError(f"{_PROG} benchmark drift: error: {_one_line(exc)}") from None
     res = run_drift_benchmark(args.train, args.test, args.out, vessel=vessel, members=args.members,
                               seed=args.seed, n_intervals=args.intervals, dp_only=not args.all_rows,
-                              n_scenarios=args.scenarios, plots=not args.no_plots)
+                              n_scenarios=args.scenarios, plots=not args.no_plots, training=args.training)
     print()
     print(res.outputs["tables.md"].read_text())
     return 0

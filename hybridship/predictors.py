@@ -576,7 +576,7 @@ class HybridPredictor:
             self.command_regime = self._fit_command_regime(logs, masks, dp_only, stride)
         self.calibration = {}
         cal_info = {"fraction": cal.fraction, "commands": list(cal.commands), "horizon_s": cal.horizon_s,
-                    "refit": cal.refit, "n_starts": {}}
+                    "refit": cal.refit, "n_starts": {}, "dp_only": bool(dp_only)}
         if cal.fraction > 0:
             for mode in cal.commands:
                 fitted, n = self._calibrate(logs, cuts, cal, dp_only, mode)
@@ -739,7 +739,13 @@ class HybridPredictor:
         if wgt is not None:
             flags[FaultFlags.OUT_OF_ENVELOPE] = np.any(wgt < 1.0, axis=1)
         if calibrated and commands in self.calibration:
-            std = self.calibrated_std(std, np.arange(st.H + 1) * st.dt, commands)
+            cal_std = self.calibrated_std(std, np.arange(st.H + 1) * st.dt, commands)
+            if self.training_info.get("calibration", {}).get("dp_only", False) and self.stop_after_failure:
+                # calibrated on station-keeping starts only: a start after a failure (a drift) is
+                # another regime, whose spread keeps the raw ensemble value
+                drift = st.arrays.dp_active[st.idx] == 0
+                cal_std[drift] = std[drift]
+            std = cal_std
         return ForecastResult(st.arrays.time_s[st.idx], np.arange(st.H + 1) * st.dt, eta, nu, std, wgt,
                               flags=flags, notes=st.notes)
 

@@ -113,3 +113,15 @@ def test_cli_forecast_quantiles(fitted, tmp_path, capsys):
     assert main(["forecast", "--model", str(model), "--log", str(tmp_path / "log.csv.gz"), "--start-time", "300",
                  "--quantiles", "0.05,1.5", "--out", str(out)]) == 2
     assert "--quantiles" in capsys.readouterr().err
+
+
+def test_station_keeping_calibration_leaves_a_drift_start_raw():
+    m = DynamicModel("gunnerus")
+    logs = [physics_log(m, seed=s, duration_s=900.0, t_shutdown_s=700.0, current=(0.2, 1.0)) for s in (3, 4)]
+    hp = HybridPredictor(m.vessel, ensemble_config=TINY,
+                         calibration_config=CalibrationConfig(horizon_s=30.0, max_starts=100)).fit(logs)
+    assert hp.training_info["calibration"]["dp_only"] and "held" in hp.calibration
+    starts = [600.0, 750.0]                      # station keeping, then a drift after the failure at 700 s
+    fc, raw = hp.forecast(logs[0], starts, 30.0), hp.forecast(logs[0], starts, 30.0, calibrated=False)
+    assert not np.allclose(fc.eta_std[0, 1:], raw.eta_std[0, 1:])
+    np.testing.assert_allclose(fc.eta_std[1], raw.eta_std[1])

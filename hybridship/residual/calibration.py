@@ -44,7 +44,9 @@ class CalibrationConfig:
     fraction : float
         Share of each training log held back for calibration, 0 <= fraction < 0.6: the
         last part in time order of the rows the nets may train on (with ``dp_only``, of
-        the station-keeping rows). 0 switches calibration off (the raw ensemble spread).
+        the station-keeping rows; the scale then applies only to forecasts that start
+        while station keeping is on, and a start after a failure keeps the raw spread).
+        0 switches calibration off (the raw ensemble spread).
     commands : tuple of str
         Command modes to calibrate (``"held"``, ``"known"``): the calibration forecasts are
         made in each mode and a forecast uses the scale of its own mode.

@@ -65,7 +65,7 @@ class MultiStepConfig:
     lr: float = 1e-3
     val_fraction: float = 0.2
     val_every: int = 10
-    max_val_starts: int = 512
+    max_val_starts: int = 256
     heading_length_m: float | None = None
     fd_step: float = 1e-6
 
