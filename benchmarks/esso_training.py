@@ -11,10 +11,13 @@ comparison on the benchmark's own split (after the choice was made)::
 
     python benchmarks/esso_training.py --test-split --out out/esso-training-test
 
-Variants share the ensemble size, seed and features unless their name says otherwise:
-``one_step`` / ``multi_step`` (training mode), ``_h<s>``, ``_b<n>``, ``_i<n>`` (multi-step
-horizon, batch of starts, iterations), ``+cmd`` (all command-aware features added),
-``+rate`` (only the command rates added), ``+cg`` (command-regime guard).
+Variants share the ensemble size, seed, calibration and features (the six model-predicted
+velocities and accelerations) unless their name says otherwise:
+``one_step`` / ``multi_step`` (training mode), ``_h<s>``, ``_b<n>``, ``_i<n>``, ``_v<n>``
+(multi-step horizon, batch of starts, iterations, validation starts; otherwise
+``MultiStepConfig()``), ``+cmd`` (all command-aware features added),
+``+rate`` (only the command rates added), ``+cg`` (command-regime guard; off otherwise, whatever
+the benchmark default).
 Writes ``errors.csv`` and ``coverage.csv`` (the manoeuvre benchmark's columns) and
 ``timing.csv`` (training seconds), and prints the distance and heading tables with
 commands known.
@@ -38,11 +41,16 @@ def variants(cfg, names):
     from hybridship.predictors import HybridPredictor
     from hybridship.residual.features import ALL_FEATURES
 
+    from hybridship.residual.multistep import MultiStepConfig
+
+    # a fixed base, whatever the benchmark's defaults are now: the six model-predicted
+    # velocities and accelerations, one-step training, MultiStepConfig() and no command guard
+    base_rc = replace(cfg.residual, features=ALL_FEATURES[:6])
     out = {}
     for name in names:
-        kw = dict(residual_config=cfg.residual, ensemble_config=cfg.ensemble, guard_quantile=cfg.guard_quantile,
-                  calibration_config=cfg.calibration, training=cfg.training, multistep_config=cfg.multistep,
-                  command_guard=cfg.command_guard or "+cg" in name)
+        kw = dict(residual_config=base_rc, ensemble_config=cfg.ensemble, guard_quantile=cfg.guard_quantile,
+                  calibration_config=cfg.calibration, training="one_step", multistep_config=MultiStepConfig(),
+                  command_guard="+cg" in name)
         if name.startswith("one_step"):
             kw["training"] = "one_step"
         elif name.startswith("multi_step"):
@@ -50,17 +58,18 @@ def variants(cfg, names):
         import re
 
         ms = {}
-        for key, field, conv in (("h", "horizon_s", float), ("b", "batch_starts", int), ("i", "iterations", int)):
+        for key, field, conv in (("h", "horizon_s", float), ("b", "batch_starts", int), ("i", "iterations", int),
+                                 ("v", "max_val_starts", int)):
             m = re.search(rf"_{key}(\d+(?:\.\d+)?)", name)
             if m:
                 ms[field] = conv(m.group(1))
         if ms:
-            kw["multistep_config"] = replace(cfg.multistep, **ms)
+            kw["multistep_config"] = replace(MultiStepConfig(), **ms)
         if "+cmd" in name:
-            extra = tuple(f for f in ALL_FEATURES[9:] if f not in cfg.residual.features)
-            kw["residual_config"] = replace(cfg.residual, features=tuple(cfg.residual.features) + extra)
+            extra = tuple(f for f in ALL_FEATURES[9:] if f not in base_rc.features)
+            kw["residual_config"] = replace(base_rc, features=tuple(base_rc.features) + extra)
         if "+rate" in name:
-            kw["residual_config"] = replace(cfg.residual, features=tuple(cfg.residual.features)
+            kw["residual_config"] = replace(base_rc, features=tuple(base_rc.features)
                                             + tuple(f for f in ALL_FEATURES[9:] if "rate" in f))
         out[name] = HybridPredictor("esso_osaka_model", **kw)
     return out
