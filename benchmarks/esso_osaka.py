@@ -37,8 +37,8 @@ def main(argv=None) -> int:
     import torch
 
     from hybridship.logs.esso_osaka import RUN_KINDS, default_data_dir
-    from hybridship.manoeuvre import (COMMAND_MODES, HORIZONS_S, _md_table, pivot, run_manoeuvre_benchmark,
-                                      split_runs, wins)
+    from hybridship.manoeuvre import (COMMAND_MODES, HORIZONS_S, _md_coverage, _md_table, pivot,
+                                      run_manoeuvre_benchmark, split_runs, wins)
 
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--data", type=Path, default=default_data_dir() / "data", help="folder of the published runs")
@@ -88,6 +88,17 @@ def main(argv=None) -> int:
                 lines.append(f"- vs {other}, commands {mode}: hybrid lower in {len(cells)} of {total} cells"
                              + (f"; not in: {', '.join(f'{k} {c}' for k, c in lost)}" if lost else ""))
         text = replace_generated(text, "wins", "\n".join(lines) + "\n")
+        cov = f"Made by `{command.strip()}` (`coverage.csv`, rows `kind = all`).\n\n" + _md_coverage(res.coverage)
+        text = replace_generated(text, "coverage", cov)
+        cfg = res.config
+        setup = (f"Made by `{command.strip()}`. Hybrid: features `{', '.join(cfg.residual.features)}`; "
+                 f"training `{cfg.training}`"
+                 + (f" (multi-step horizon {cfg.multistep.horizon_s:g} s, {cfg.multistep.iterations} iterations of "
+                    f"{cfg.multistep.batch_starts} starts)" if cfg.training == "multi_step" else "")
+                 + f"; command-regime guard {'on' if cfg.command_guard else 'off'}; spread calibrated on the last "
+                 f"{cfg.calibration.fraction:.0%} of each training run; {cfg.ensemble.n_members} members, seed "
+                 f"{cfg.ensemble.seed}. Training took {res.timings_s['fit_hybrid']:.0f} s on one core.\n")
+        text = replace_generated(text, "setup", setup)
         page.write_text(text, encoding="utf-8")
         print(f"updated {page.relative_to(ROOT)}")
     return 0

@@ -20,7 +20,11 @@ length of its log ``forecast_long_log_ms`` (a hybrid forecast, 60 s ahead from 2
 on a 1-hour 10-Hz log passed as a DataFrame, ingest included), ``forecast_short_log_ms``
 (the same forecast on the last 2 minutes of that log), ``forecast_long_short_ratio`` (their
 ratio; the target is at most 2) and ``forecast_long_log_ingested_ms`` (the long log passed
-as already ingested LogArrays, so its validation is not repeated).
+as already ingested LogArrays, so its validation is not repeated);
+``manoeuvre_train_s`` (training the
+manoeuvre benchmark's hybrid, :class:`hybridship.manoeuvre.ManoeuvreConfig` as it stands,
+on the Esso Osaka training runs of the benchmark's split, seed 0, one core; null when the
+data are absent or with ``--quick``) and ``manoeuvre_training`` (its training mode).
 """
 
 from __future__ import annotations
@@ -187,6 +191,29 @@ def profile_long_log(seed: int = 0, top: int = 25) -> None:
     pstats.Stats(prof).sort_stats("cumulative").print_stats(r"hybridship", top)
 
 
+def manoeuvre_train_speed() -> dict:
+    """Wall time of training the manoeuvre benchmark's hybrid on the Esso Osaka training runs."""
+    import tempfile
+
+    import torch
+
+    torch.set_num_threads(1)
+    from hybridship.logs.esso_osaka import default_data_dir
+    from hybridship.manoeuvre import ManoeuvreConfig, _fit, load_runs, make_predictors, split_runs
+
+    data = default_data_dir() / "data"
+    if not data.is_dir():
+        return {"manoeuvre_train_s": None, "manoeuvre_training": None}
+    cfg = ManoeuvreConfig()
+    with tempfile.TemporaryDirectory() as tmp:
+        train_dir, _ = split_runs(data, tmp, seed=0)
+        runs = load_runs(train_dir, "esso_osaka_model")
+        hp = make_predictors("esso_osaka_model", cfg)["hybrid"]
+        t0 = time.perf_counter()
+        _fit("hybrid", hp, runs, cfg)
+        return {"manoeuvre_train_s": time.perf_counter() - t0, "manoeuvre_training": cfg.training}
+
+
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--json", action="store_true", help="print one JSON object")
@@ -201,6 +228,7 @@ def main(argv=None) -> int:
     res = physics_speed(batches)
     res.update(hybrid_speed((1, 100) if args.quick else (1, 1_000, 10_000)))
     res.update(long_log_speed())
+    res.update({"manoeuvre_train_s": None, "manoeuvre_training": None} if args.quick else manoeuvre_train_speed())
     if args.json:
         print(json.dumps(res, sort_keys=True))
         return 0
@@ -222,6 +250,9 @@ def main(argv=None) -> int:
           f"({res['forecast_long_log_ingested_ms']:.0f} ms when passed already ingested)")
     print(f"  {res['forecast_short_log_rows']} rows (2 min): {res['forecast_short_log_ms']:.0f} ms")
     print(f"  ratio {res['forecast_long_short_ratio']:.1f} (target <= 2)")
+    if res["manoeuvre_train_s"] is not None:
+        print(f"training the manoeuvre hybrid ({res['manoeuvre_training']}) on the Esso Osaka training runs: "
+              f"{res['manoeuvre_train_s']:.0f} s")
     return 0
 
 

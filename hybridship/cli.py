@@ -264,6 +264,9 @@ def _add_forecast(sub) -> None:
                    help="held: commands stay at their start values (default); known: use the log's future "
                         "commands (the log must extend --horizon-s past each start)")
     p.add_argument("--no-guard", action="store_true", help="do not shrink the correction outside the envelope")
+    p.add_argument("--quantiles", default="", metavar="Q1,Q2,...",
+                   help="also write these quantiles of north, east and heading (probabilities in (0, 1), e.g. "
+                        "0.05,0.95), from the calibrated spread")
     p.add_argument("--out", required=True, type=Path, help="forecast table to write (.csv)")
     p.set_defaults(func=_cmd_forecast)
 
@@ -275,13 +278,20 @@ def _cmd_forecast(args) -> int:
     if not args.horizon_s > 0:
         raise UsageError(f"{_PROG} forecast: error: --horizon-s must be > 0, got {args.horizon_s}")
     try:
+        quantiles = [float(q) for q in args.quantiles.split(",") if q.strip()]
+    except ValueError:
+        quantiles = [float("nan")]
+    if not all(0.0 < q < 1.0 for q in quantiles):
+        raise UsageError(f"{_PROG} forecast: error: --quantiles: expected comma-separated probabilities in "
+                         f"(0, 1), e.g. 0.05,0.95; got {args.quantiles!r}")
+    try:
         hp = HybridPredictor.load(args.model)
     except ModelFileError as exc:
         raise UsageError(f"{_PROG} forecast: error: {_one_line(exc)}") from None
     if not args.log.is_file():
         raise UsageError(f"{_PROG} forecast: error: --log {args.log}: file not found")
     fc = hp.forecast(args.log, args.start_time, args.horizon_s, guard=not args.no_guard, commands=args.commands)
-    df = fc.to_frame()
+    df = fc.to_frame(quantiles=quantiles)
     atomic_write(args.out, lambda fh: fh.write(df.to_csv(index=False).encode("utf-8")))
     from .quality import FaultFlags
 
@@ -315,6 +325,8 @@ def _add_benchmark(sub) -> None:
     d.add_argument("--intervals", type=int, default=20, help="start times after each failure (default 20)")
     d.add_argument("--scenarios", type=int, default=3, help="embedded scenarios when no folders are given")
     d.add_argument("--all-rows", action="store_true", help="train on every row, not only dp_active == 1")
+    d.add_argument("--training", choices=("one_step", "multi_step"), default="one_step",
+                   help="how the hybrid's nets are trained (default one_step)")
     d.add_argument("--no-plots", action="store_true", help="skip the figures")
     d.set_defaults(func=_cmd_benchmark_drift)
     h = bsub.add_parser("hsc", help="high-speed craft: SS, ARX, NARX-ANN and hybrid on simulated sea trials",
@@ -396,7 +408,7 @@ def _cmd_benchmark_drift(args) -> int:
         raise UsageError(f"{_PROG} benchmark drift: error: {_one_line(exc)}") from None
     res = run_drift_benchmark(args.train, args.test, args.out, vessel=vessel, members=args.members,
                               seed=args.seed, n_intervals=args.intervals, dp_only=not args.all_rows,
-                              n_scenarios=args.scenarios, plots=not args.no_plots)
+                              n_scenarios=args.scenarios, plots=not args.no_plots, training=args.training)
     print()
     print(res.outputs["tables.md"].read_text())
     return 0

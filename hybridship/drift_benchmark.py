@@ -88,7 +88,7 @@ class DriftBenchmarkResult:
 def run_drift_benchmark(train=None, test=None, out_dir="drift-benchmark", *, vessel="gunnerus",
                         members: int = 10, seed: int = 0, n_intervals: int = 20, horizon_s: float = 60.0,
                         dp_only: bool = True, n_scenarios: int = 3, ensemble_config: EnsembleConfig | None = None,
-                        plots: bool = True, progress: bool = True) -> DriftBenchmarkResult:
+                        plots: bool = True, progress: bool = True, training: str = "one_step") -> DriftBenchmarkResult:
     """Train, forecast after every failure, and write the tables and figures.
 
     Parameters
@@ -108,6 +108,8 @@ def run_drift_benchmark(train=None, test=None, out_dir="drift-benchmark", *, ves
         Train on the DP part (``dp_active == 1``) only.
     ensemble_config : EnsembleConfig or None
         Overrides ``members``/``seed`` (e.g. fewer epochs in tests).
+    training : {"one_step", "multi_step"}
+        How the hybrid's nets are trained (see :class:`~hybridship.predictors.HybridPredictor`).
     """
     def say(msg):
         if progress:
@@ -130,7 +132,7 @@ def run_drift_benchmark(train=None, test=None, out_dir="drift-benchmark", *, ves
     ens_cfg = ensemble_config or EnsembleConfig(n_members=members, seed=seed)
     horizons = tuple(h for h in metrics.HORIZONS_S if h <= horizon_s + 1e-9)
 
-    hybrid = HybridPredictor(vessel, ensemble_config=ens_cfg)
+    hybrid = HybridPredictor(vessel, ensemble_config=ens_cfg, training=training)
     train_arrays = [as_log_arrays(x, hybrid.model.vessel) for x in train_logs]
     test_arrays = [as_log_arrays(x, hybrid.model.vessel) for x in test_logs]
     data_only = DataOnlyPredictor(vessel, ensemble_config=ens_cfg)

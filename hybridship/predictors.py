@@ -33,17 +33,20 @@ from .logs.io import LogArrays
 from .quality import FaultFlags, assess_start_window
 from .physics.integrate import rollout_batch
 from .physics.model import DynamicModel
+from .residual.calibration import CalibrationConfig, SpreadCalibration, fit_spread_scale
 from .residual.ensemble import EnsembleConfig, MLPEnsemble, fit_ensemble
-from .residual.features import ResidualConfig, prepare_log
+from .residual.features import COMMAND_FEATURES, ResidualConfig, command_feature_columns, command_scales, prepare_log
 from .residual.environment import (EnvironmentConfig, EnvironmentEstimator, current_input,
                                    environment_accel, thrust_accel)
-from .residual.guard import EnvelopeGuard, ThrustRegime
+from .residual.multistep import MultiStepConfig, collect_starts, train_multistep
+from .residual.guard import CommandRegime, EnvelopeGuard, ThrustRegime
 
 #: Version of the model-file format written by :meth:`HybridPredictor.save`.
-#: 4: the validated vessel description is embedded in the metadata (``vessel_description``),
-#: so a model loads without its vessel file; 3 added the environment estimator; 2 and 3
+#: 5: the spread calibration, the nets' training mode and the command regime; 4: the
+#: validated vessel description is embedded in the metadata (``vessel_description``), so a
+#: model loads without its vessel file; 3 added the environment estimator; 2 and earlier
 #: stored only the vessel's name.
-MODEL_FORMAT_VERSION = 4
+MODEL_FORMAT_VERSION = 5
 
 #: Where the hybrid's slowly varying environment comes from (see :class:`HybridPredictor`).
 ENVIRONMENT_SOURCES = ("estimator", "mean")
@@ -88,8 +91,28 @@ class ForecastResult:
     flags: dict | None = None
     notes: tuple | None = None
 
-    def to_frame(self) -> pd.DataFrame:
-        """Tidy table: one row per start time and lead time, degrees at this edge."""
+    def quantiles(self, q) -> np.ndarray:
+        """Gaussian quantiles of ``eta`` from ``eta_std``: shape (len(q), S, H+1, 3) [m, m, rad].
+
+        With a calibrated spread (the hybrid's default) these are the calibrated bands;
+        ``q`` are probabilities in (0, 1).
+        """
+        from scipy.stats import norm
+
+        q = np.atleast_1d(np.asarray(q, dtype=float))
+        if q.size == 0 or not np.all((q > 0) & (q < 1)):
+            raise ValueError(f"quantiles: expected probabilities in (0, 1), got {q.tolist()}")
+        if self.eta_std is None:
+            raise ValueError("quantiles: this forecast has no spread (eta_std is None)")
+        z = norm.ppf(q)[:, None, None, None]
+        return self.eta[None] + z * self.eta_std[None]
+
+    def to_frame(self, quantiles=()) -> pd.DataFrame:
+        """Tidy table: one row per start time and lead time, degrees at this edge.
+
+        ``quantiles`` (probabilities) add columns ``north_q<q>_m``, ``east_q<q>_m`` and
+        ``heading_q<q>_deg`` (see :meth:`quantiles`).
+        """
         S, H1, _ = self.eta.shape
         cols = {
             "start_time_s": np.repeat(self.start_time_s, H1),
@@ -106,6 +129,12 @@ class ForecastResult:
             cols["north_std_m"] = self.eta_std[..., 0].ravel()
             cols["east_std_m"] = self.eta_std[..., 1].ravel()
             cols["heading_std_deg"] = np.degrees(self.eta_std[..., 2]).ravel()
+        if len(quantiles):
+            Q = self.quantiles(quantiles)
+            for q, eq in zip(np.atleast_1d(quantiles), Q):
+                cols[f"north_q{q:g}_m"] = eq[..., 0].ravel()
+                cols[f"east_q{q:g}_m"] = eq[..., 1].ravel()
+                cols[f"heading_q{q:g}_deg"] = np.degrees(eq[..., 2]).ravel()
         if self.guard_weight is not None:
             cols["guard_weight"] = self.guard_weight.ravel()
         if self.flags is not None:
@@ -450,7 +479,23 @@ class HybridPredictor:
         Off by default: on drift, the nets did not improve on the environment estimator
         alone under any training protocol we measured, including training on logs with
         earlier failures (``benchmarks/drift_protocols.py``, see the drift results).
+    calibration_config : CalibrationConfig
+        How :meth:`fit` holds back the end of each training log and calibrates the
+        spread on it (see :mod:`hybridship.residual.calibration`); ``fraction=0`` keeps
+        the raw ensemble spread.
+    training : {"one_step", "multi_step"}
+        ``one_step``: the nets fit the one-step residual (Skulstad et al.);
+        ``multi_step``: then they are fine-tuned on the error of the hybrid's own
+        rollouts (:mod:`hybridship.residual.multistep`, commands known).
+    multistep_config : MultiStepConfig
+        Settings of the multi-step training.
+    command_guard : bool
+        Also fit a :class:`~hybridship.residual.guard.CommandRegime` on the held-back
+        calibration rows (needs ``calibration_config.fraction > 0``) and apply it with the guard.
     """
+
+    #: Training modes of the nets.
+    TRAINING_MODES = ("one_step", "multi_step")
 
     name = "hybrid"
 
@@ -458,7 +503,15 @@ class HybridPredictor:
                  ensemble_config: EnsembleConfig = EnsembleConfig(), guard: bool = True,
                  guard_quantile: float = 0.99, stop_after_failure: bool = True,
                  environment: str = "estimator", environment_config: EnvironmentConfig = EnvironmentConfig(),
-                 environment_window_s: float = 1800.0, nets_after_stop: bool = False):
+                 environment_window_s: float = 1800.0, nets_after_stop: bool = False,
+                 calibration_config: CalibrationConfig = CalibrationConfig(), training: str = "one_step",
+                 multistep_config: MultiStepConfig = MultiStepConfig(), command_guard: bool = False):
+        if training not in self.TRAINING_MODES:
+            raise ValueError(f"training: expected one of {self.TRAINING_MODES}, got {training!r}")
+        self.training = training
+        self.multistep_config = multistep_config
+        self.command_guard = bool(command_guard)
+        self.command_regime: CommandRegime | None = None
         if environment not in ENVIRONMENT_SOURCES:
             raise ValueError(f"environment: expected one of {ENVIRONMENT_SOURCES}, got {environment!r}")
         if not environment_window_s > 0:
@@ -477,17 +530,22 @@ class HybridPredictor:
         self.ensemble: MLPEnsemble | None = None
         self.guard: EnvelopeGuard | None = None
         self.thrust_regime: ThrustRegime | None = None
+        self.calibration_config = calibration_config
+        #: command mode -> {"position": SpreadCalibration, "heading": SpreadCalibration}
+        self.calibration: dict = {}
         self.training_info: dict = {}
 
     # ------------------------------------------------------------------ training
 
-    def training_data(self, logs: Iterable, *, dp_only: bool = True):
+    def training_data(self, logs: Iterable, *, dp_only: bool = True, row_masks=None):
         """Features X, targets Y and a per-log segment label from the given logs.
 
         The targets are the residual deviations from the environment the forecast will use:
         with ``environment="estimator"`` the acceleration that the (fitted) estimator's
         causal state explains at each row (:func:`~hybridship.residual.environment.environment_accel`),
-        otherwise the ``bias_window_s`` mean residual.
+        otherwise the ``bias_window_s`` mean residual. ``row_masks`` (one boolean array per
+        log, or None) limits the rows that may be used (for example to leave out the part
+        held back for calibration).
         """
         Xs, Ys, segs, thr = [], [], [], []
         for k, log in enumerate(logs):
@@ -496,6 +554,8 @@ class HybridPredictor:
             if self.environment == "estimator":
                 prep.env_body = environment_accel(self.model, arrays, self.estimator.run(arrays), prep.nu_s)
             mask = arrays.dp_active.astype(bool) if dp_only else None
+            if row_masks is not None and row_masks[k] is not None:
+                mask = row_masks[k] if mask is None else (mask & row_masks[k])
             rows = prep.trainable_rows(mask)
             if rows.size == 0:
                 continue
@@ -510,8 +570,9 @@ class HybridPredictor:
         return np.concatenate(Xs), np.concatenate(Ys), np.concatenate(segs)
 
     def fit(self, logs: Iterable, *, dp_only: bool = True, progress: bool = False,
-            row_stride: int = 1) -> "HybridPredictor":
-        """Learn the acceleration residual from logs (by default only their DP part).
+            row_stride: int = 1, calibration: CalibrationConfig | None = None) -> "HybridPredictor":
+        """Learn the acceleration residual from logs (by default only their DP part), then
+        calibrate the spread on the held-back end of each log.
 
         Parameters
         ----------
@@ -524,13 +585,50 @@ class HybridPredictor:
             Train on every ``row_stride``-th trainable row (for high-rate logs, whose
             neighbouring rows carry almost the same information); the guard is fitted on
             the same rows.
+        calibration : CalibrationConfig, optional
+            Overrides the ``calibration_config`` given at construction (for example
+            ``CalibrationConfig(commands=("known",))`` for a manoeuvring model, or
+            ``fraction=0`` for none).
+
+        Notes
+        -----
+        With ``calibration.fraction > 0`` the last part (in time order) of each log's usable
+        rows is not trained on; forecasts from start times in it, made in each of the
+        ``calibration.commands`` modes over ``calibration.horizon_s``, give the per-lead
+        scale of the spread (:func:`hybridship.residual.calibration.fit_spread_scale`,
+        north and east pooled for the position, the heading on its own). Every later
+        forecast's ``eta_std`` is calibrated with it.
         """
         stride = _check_row_stride(row_stride)
-        logs = [as_log_arrays(x, self.model.vessel) for x in logs]
+        cal = self.calibration_config if calibration is None else calibration
+        if not isinstance(cal, CalibrationConfig):
+            raise TypeError(f"calibration: expected a CalibrationConfig, got {type(cal).__name__}")
+        logs = [as_log_arrays(log, self.model.vessel) for log in logs]
         self.estimator = EnvironmentEstimator(self.model, self.environment_config)
         if self.environment == "estimator":
             self.estimator.fit(logs, dp_only=dp_only)
-        X, Y, seg = self.training_data(logs, dp_only=dp_only)
+        cuts = [self._calibration_cut(a, cal, dp_only) for a in logs]
+        masks = [None if c >= len(a) else (np.arange(len(a)) < c) for a, c in zip(logs, cuts)]
+        self._fit_nets(logs, dp_only=dp_only, progress=progress, stride=stride, row_masks=masks)
+        self.command_regime = None
+        if self.command_guard and cal.fraction > 0:
+            self.command_regime = self._fit_command_regime(logs, masks, dp_only, stride)
+        self.calibration = {}
+        cal_info = {"fraction": cal.fraction, "commands": list(cal.commands), "horizon_s": cal.horizon_s,
+                    "refit": cal.refit, "n_starts": {}, "dp_only": bool(dp_only)}
+        if cal.fraction > 0:
+            for mode in cal.commands:
+                fitted, n = self._calibrate(logs, cuts, cal, dp_only, mode)
+                cal_info["n_starts"][mode] = n
+                if fitted is not None:
+                    self.calibration[mode] = fitted
+            if cal.refit:
+                self._fit_nets(logs, dp_only=dp_only, progress=progress, stride=stride, row_masks=None)
+        self.training_info["calibration"] = cal_info
+        return self
+
+    def _fit_nets(self, logs, *, dp_only, progress, stride, row_masks):
+        X, Y, seg = self.training_data(logs, dp_only=dp_only, row_masks=row_masks)
         X, Y, seg, thr = X[::stride], Y[::stride], seg[::stride], self._training_thrust_acc[::stride]
         self.ensemble = fit_ensemble(X, Y, self.ensemble_config, segment_id=seg, progress=progress)
         self.guard = EnvelopeGuard.fit((X - self.ensemble.x_mean) / self.ensemble.x_std,
@@ -539,8 +637,112 @@ class HybridPredictor:
         self.training_info = {"n_rows": int(X.shape[0]), "row_stride": stride,
                               "epochs": self.ensemble.history["epochs"],
                               "best_val_mse": self.ensemble.history["best_val_mse"],
-                              "residual_std": Y.std(0).tolist()}
-        return self
+                              "residual_std": Y.std(0).tolist(), "training": self.training}
+        if self.training == "multi_step":
+            preps = [prepare_log(self.model, a, self.residual_config) for a in logs]
+            starts = collect_starts(preps, row_masks if row_masks is not None else [None] * len(logs),
+                                    self.multistep_config, dp_only=dp_only)
+            self.ensemble, hist = train_multistep(self.ensemble, self.model, starts,
+                                                  self.residual_config.feature_index, self.multistep_config,
+                                                  seed=self.ensemble_config.seed, progress=progress)
+            self.training_info["multi_step"] = {k: hist[k] for k in ("iterations", "n_starts", "n_val_starts", "val_loss",
+                                                                     "best_val_loss")}
+
+    def _regime_inputs(self, prep, rows):
+        """(rpm / max rpm, model-predicted u [m/s], first rotatable angle [rad]) of rows predicted from row - 1."""
+        sc = command_scales(self.model, self.model.vessel.rotatable)
+        a = prep.arrays
+        ang = a.azimuth_rad[rows - 1, sc["angle_channel"]] if sc["angle_channel"] is not None else np.zeros(rows.size)
+        return a.rpm[rows - 1, 0] / sc["rpm_scale"], prep.nu_hat[rows, 0], ang
+
+    def _fit_command_regime(self, logs, masks, dp_only, stride) -> CommandRegime | None:
+        """Command-regime weights from the held-back rows (see :class:`CommandRegime`)."""
+        tr_in, he_in, T, Pm = [], [], [], []
+        for a, m in zip(logs, masks):
+            prep = prepare_log(self.model, a, self.residual_config)
+            dp = a.dp_active.astype(bool) if dp_only else np.ones(len(a), bool)
+            held = dp & ~m if m is not None else np.zeros(len(a), bool)
+            rows_t = prep.trainable_rows(dp & m if m is not None else dp)[::stride]
+            rows_h = prep.trainable_rows(held)
+            if rows_t.size:
+                tr_in.append(self._regime_inputs(prep, rows_t))
+            if rows_h.size:
+                he_in.append(self._regime_inputs(prep, rows_h))
+                T.append(prep.deviation(rows_h) / self.ensemble.y_std)
+                Pm.append(self.ensemble.predict(prep.features(rows_h))[0] / self.ensemble.y_std)
+        if not tr_in or not he_in:
+            return None
+        cat = lambda parts: tuple(np.concatenate([p[k] for p in parts]) for k in range(3))  # noqa: E731
+        return CommandRegime.fit(cat(tr_in), cat(he_in), np.concatenate(T), np.concatenate(Pm),
+                                 length_m=self.model.vessel.particulars.L_pp_m)
+
+    @staticmethod
+    def _calibration_cut(a: LogArrays, cal: CalibrationConfig, dp_only: bool) -> int:
+        """First row of the held-back part of log ``a`` (``len(a)`` when nothing is held back)."""
+        n = len(a)
+        if cal.fraction == 0 or n < 4:
+            return n
+        usable = np.flatnonzero(a.dp_active.astype(bool)) if dp_only else np.arange(n)
+        if usable.size < 4:
+            return n
+        dt = float(np.median(np.diff(a.time_s)))
+        n_cal = max(int(round(cal.fraction * usable.size)), int(np.ceil(1.1 * cal.horizon_s / dt)))
+        n_cal = min(n_cal, usable.size // 2)
+        return int(usable[-n_cal]) if n_cal > 0 else n
+
+    def _calibration_starts(self, a: LogArrays, cut: int, H: int, dp_only: bool) -> np.ndarray:
+        """Rows >= ``cut`` whose next H rows are in the same segment (and station keeping with ``dp_only``)."""
+        n = len(a)
+        if cut >= n - H:
+            return np.zeros(0, int)
+        r = np.arange(cut, n - H)
+        seg = a.segment_id
+        ok = seg[r + H] == seg[r]
+        ok &= np.isfinite(a.eta[r]).all(1) & np.isfinite(a.nu[r]).all(1)
+        if dp_only:
+            bad = np.concatenate([[0], np.cumsum(a.dp_active == 0)])
+            ok &= (bad[r + H + 1] - bad[r]) == 0
+        return r[ok]
+
+    def _calibrate(self, logs, cuts, cal: CalibrationConfig, dp_only: bool, mode: str):
+        """Calibration of one command mode from held-back starts; (None, 0) without any start."""
+        from .frames import wrap_pi
+
+        cand = []
+        for a, cut in zip(logs, cuts):
+            if cut >= len(a):
+                cand.append(np.zeros(0, int))
+                continue
+            dt = float(np.median(np.diff(a.time_s)))
+            cand.append(self._calibration_starts(a, cut, int(round(cal.horizon_s / dt)), dp_only))
+        total = sum(c.size for c in cand)
+        if total == 0:
+            return None, 0
+        pos_e, pos_s, hdg_e, hdg_s, lead = [], [], [], [], None
+        for a, rows in zip(logs, cand):
+            if rows.size == 0:
+                continue
+            dt = float(np.median(np.diff(a.time_s)))
+            every = max(1, int(np.ceil(total / cal.max_starts))) if cal.start_every_s is None \
+                else max(1, int(round(cal.start_every_s / dt)))
+            rows = rows[::every]
+            fc = self.forecast(a, a.time_s[rows], cal.horizon_s, commands=mode, calibrated=False)
+            H = fc.eta.shape[1] - 1
+            truth = a.eta[rows[:, None] + np.arange(1, H + 1)[None, :]]          # (S, H, 3)
+            e = np.abs(fc.eta[:, 1:] - truth)
+            pos_e += [e[..., 0], e[..., 1]]
+            pos_s += [fc.eta_std[:, 1:, 0], fc.eta_std[:, 1:, 1]]
+            hdg_e.append(np.abs(wrap_pi(fc.eta[:, 1:, 2] - truth[..., 2])))
+            hdg_s.append(fc.eta_std[:, 1:, 2])
+            lead = fc.lead_s[1:] if lead is None or fc.lead_s.size - 1 < lead.size else lead
+        Hm = lead.size
+        kw = dict(sigma=cal.sigma, coverage=cal.coverage, floor_quantile=cal.floor_quantile)
+        n = sum(x.shape[0] for x in hdg_e)
+        if n < 10:
+            return None, n
+        cat = lambda xs: np.concatenate([x[:, :Hm] for x in xs])  # noqa: E731
+        return ({"position": fit_spread_scale(cat(pos_e), cat(pos_s), lead, min_samples=10, **kw),
+                 "heading": fit_spread_scale(cat(hdg_e), cat(hdg_s), lead, min_samples=10, **kw)}, n)
 
     # ------------------------------------------------------------------ forecasting
 
@@ -549,7 +751,8 @@ class HybridPredictor:
             raise RuntimeError("HybridPredictor: call fit() or load() before forecast()")
 
     def forecast(self, log, start_times_s, horizon_s: float = 60.0, *, guard: bool | None = None,
-                 commands: str = "held", nets: bool = True, nets_after_stop: bool | None = None) -> ForecastResult:
+                 commands: str = "held", nets: bool = True, nets_after_stop: bool | None = None,
+                 calibrated: bool = True) -> ForecastResult:
         """Forecast from every start time (one batch).
 
         Parameters
@@ -564,6 +767,9 @@ class HybridPredictor:
             measure what the nets add).
         nets_after_stop : bool, optional
             Override the model's ``nets_after_stop`` for this call.
+        calibrated : bool
+            Report the calibrated spread (the default, when :meth:`fit` calibrated the
+            mode ``commands``); False gives the raw ensemble spread.
         """
         self._check_fitted()
         st = _forecast_setup(self.model, self.residual_config, log, start_times_s, horizon_s,
@@ -583,6 +789,14 @@ class HybridPredictor:
         flags = dict(st.flags)
         if wgt is not None:
             flags[FaultFlags.OUT_OF_ENVELOPE] = np.any(wgt < 1.0, axis=1)
+        if calibrated and commands in self.calibration:
+            cal_std = self.calibrated_std(std, np.arange(st.H + 1) * st.dt, commands)
+            if self.training_info.get("calibration", {}).get("dp_only", False) and self.stop_after_failure:
+                # calibrated on station-keeping starts only: a start after a failure (a drift) is
+                # another regime, whose spread keeps the raw ensemble value
+                drift = st.arrays.dp_active[st.idx] == 0
+                cal_std[drift] = std[drift]
+            std = cal_std
         return ForecastResult(st.arrays.time_s[st.idx], np.arange(st.H + 1) * st.dt, eta, nu, std, wgt,
                               flags=flags, notes=st.notes)
 
@@ -620,6 +834,14 @@ class HybridPredictor:
         a_thr = thrust_accel(self.model, eta0, nu0, st.rpm[:, 0], st.az[:, 0], st.wind[:, 0])
         acc_ext = np.ascontiguousarray((est.thrust_error * a_thr)[:, None, :])
         return eta0, nu0, np.zeros_like(eta0), draws[..., 2:5], current, acc_ext
+    def calibrated_std(self, std: np.ndarray, lead_s: np.ndarray, commands: str) -> np.ndarray:
+        """Raw ensemble spread (S, H+1, 3) at lead times (H+1,) [s] -> calibrated spread."""
+        c = self.calibration[commands]
+        out = np.empty_like(std)
+        out[..., 0] = c["position"].apply(std[..., 0], lead_s)
+        out[..., 1] = c["position"].apply(std[..., 1], lead_s)
+        out[..., 2] = c["heading"].apply(std[..., 2], lead_s)
+        return out
 
     def _thrust_weight(self, eta, nu, rpm, az, wind):
         """Thrust-regime weight (S,) of commands (S, K) at states (S, 3) (1 without a regime)."""
@@ -675,7 +897,10 @@ class HybridPredictor:
         e1 = np.empty((S, 2, 3))
         n1 = np.empty((S, 2, 3))
         a1 = np.empty((S, 2, 3))
-        feats = np.empty((E, S, 9))
+        use_cmd = self.residual_config.uses_command_features
+        feats = np.zeros((E, S, 9 + len(COMMAND_FEATURES)))
+        cmd_guard = guard and self.command_regime is not None
+        scales = command_scales(self.model, self.model.vessel.rotatable)
         for j in range(n_steps):
             rpm_j, az_j = (np.ascontiguousarray(rpm[:, j:j + 1]), np.ascontiguousarray(az[:, j:j + 1])) \
                 if per_step else (rpm, az)
@@ -686,11 +911,20 @@ class HybridPredictor:
             feats[:, :, 0:3] = n1[:, 1]
             feats[:, :, 3:6] = a1[:, 1]
             feats[:, :, 6:9] = r_prev
+            if use_cmd:
+                jp = max(j - 1, 0) if per_step else 0
+                feats[:, :, 9:] = command_feature_columns(
+                    n1[:, 1], e1[:, 1, 2], rpm_j[:, 0], rpm[:, jp], az_j[:, 0], az[:, jp], wind[:, 0], dt_s,
+                    scales["rpm_scale"], scales["angle_channel"])
             X = feats[..., fidx]
             r = ens.predict_members(X) if nets else np.zeros((E, S, 3))     # (E, S, 3)
             if guard:
                 z = (X.mean(axis=0) - ens.x_mean) / ens.x_std
                 w = self.guard.weight(z) * w_thrust * w_start   # (S,)
+                if cmd_guard:
+                    ch = scales["angle_channel"]
+                    w = w * self.command_regime.weight(rpm_j[:, 0, 0] / scales["rpm_scale"], n1[:, 1, 0],
+                                                       az_j[:, 0, ch] if ch is not None else np.zeros(S))
                 r = r * w[None, :, None]
                 wgt[:, j + 1] = w
             psi = e1[:, 1, 2]
@@ -737,6 +971,12 @@ class HybridPredictor:
             "nets_after_stop": self.nets_after_stop,
             "thrust_error_prior": {"mean": self.estimator.thrust_error_mean.tolist(),
                                    "std": self.estimator.thrust_error_std.tolist()},
+            "calibration_config": asdict(self.calibration_config),
+            "training": self.training, "multistep_config": asdict(self.multistep_config),
+            "command_guard": self.command_guard,
+            "command_regime": None if self.command_regime is None else {
+                k: getattr(self.command_regime, k) for k in ("rpm_eps", "froude_lo", "angle_hard_rad", "length_m")},
+            "calibrated_commands": sorted(self.calibration),
             "training_info": self.training_info,
         }
 
@@ -748,6 +988,12 @@ class HybridPredictor:
         arrays = {f"w{i}": w for i, w in enumerate(e.weights)}
         arrays.update(x_mean=e.x_mean, x_std=e.x_std, y_mean=e.y_mean, y_std=e.y_std,
                       guard_mean=g.mean, guard_inv_cov=g.inv_cov, thrust_scale=self.thrust_regime.scale)
+        if self.command_regime is not None:
+            cr = self.command_regime
+            arrays.update(cmd_regime_weights=cr.weights, cmd_regime_n_train=cr.n_train, cmd_regime_n_held=cr.n_held)
+        for mode, c in self.calibration.items():
+            for what, sc in c.items():
+                arrays[f"cal_{mode}_{what}"] = np.stack([sc.lead_s, sc.scale, sc.floor])
         meta_d = self._metadata()
         meta_d["content_sha256"] = _content_hash(arrays)
         meta = json.dumps(meta_d, sort_keys=True)
@@ -787,9 +1033,9 @@ class HybridPredictor:
             raise ModelFileError(f"{path}: not a hybridship model file")
         version = meta.get("format_version")
         if version != MODEL_FORMAT_VERSION:
-            older = (f": written by an older hybridship (format {version}), whose model files hold only the "
-                     f"vessel's name; retrain with `hybridship train` (or HybridPredictor.fit) to write a "
-                     f"version-{MODEL_FORMAT_VERSION} file that carries its vessel"
+            older = (f": written by an older hybridship (format {version}); retrain with `hybridship train` "
+                     f"(or HybridPredictor.fit) to write a version-{MODEL_FORMAT_VERSION} file, which carries "
+                     f"its vessel, its environment estimator and its spread calibration"
                      if isinstance(version, int) and not isinstance(version, bool) and 1 <= version < MODEL_FORMAT_VERSION
                      else "")
             raise ModelFileError(f"{path}: model format version {version} is not supported "
@@ -810,11 +1056,16 @@ class HybridPredictor:
                       environment=meta["environment"],
                       environment_config=EnvironmentConfig(**meta["environment_config"]),
                       environment_window_s=meta["environment_window_s"],
-                      nets_after_stop=meta["nets_after_stop"])
+                      nets_after_stop=meta["nets_after_stop"],
+                      calibration_config=CalibrationConfig(**meta["calibration_config"]),
+                      training=meta["training"], multistep_config=MultiStepConfig(**meta["multistep_config"]),
+                      command_guard=meta["command_guard"])
             thr_mean = np.asarray(meta["thrust_error_prior"]["mean"], dtype=float).reshape(3)
             thr_std = np.asarray(meta["thrust_error_prior"]["std"], dtype=float).reshape(3)
             if not (np.all(np.isfinite(thr_mean)) and np.all(thr_std > 0)):
                 raise ValueError("thrust_error_prior: expected finite means and positive spreads")
+            regime_meta = meta["command_regime"]
+            calibrated_commands = list(meta["calibrated_commands"])
             fingerprint = meta["vessel_fingerprint"]
             guard_d0, guard_scale = float(meta["guard"]["d0"]), float(meta["guard"]["scale"])
             thrust_lo = float(meta["thrust_regime"]["lo"])
@@ -838,6 +1089,14 @@ class HybridPredictor:
             ens = MLPEnsemble(weights, data["x_mean"], data["x_std"], data["y_mean"], data["y_std"])
             guard = EnvelopeGuard(data["guard_mean"], data["guard_inv_cov"], guard_d0, guard_scale)
             thrust_regime = ThrustRegime(np.asarray(data["thrust_scale"], dtype=float), thrust_lo)
+            calibration = {}
+            for mode in calibrated_commands:
+                calibration[mode] = {}
+                for what in ("position", "heading"):
+                    a = np.asarray(data[f"cal_{mode}_{what}"], dtype=float)
+                    if a.ndim != 2 or a.shape[0] != 3:
+                        raise ValueError(f"cal_{mode}_{what} has shape {a.shape}, expected (3, H)")
+                    calibration[mode][what] = SpreadCalibration(a[0], a[1], a[2])
             for name, a in [("weights", np.concatenate([w.ravel() for w in weights])), ("x_std", ens.x_std),
                             ("y_std", ens.y_std), ("guard_inv_cov", guard.inv_cov),
                             ("thrust_scale", thrust_regime.scale)]:
@@ -848,6 +1107,17 @@ class HybridPredictor:
         obj.ensemble, obj.guard, obj.thrust_regime = ens, guard, thrust_regime
         obj.estimator = EnvironmentEstimator(obj.model, obj.environment_config)
         obj.estimator.thrust_error_mean, obj.estimator.thrust_error_std = thr_mean, thr_std
+        obj.calibration = calibration
+        obj.command_regime = None
+        if regime_meta is not None:
+            try:
+                w = np.asarray(data["cmd_regime_weights"], dtype=float)
+                if w.shape != (CommandRegime.N_REGIMES,) or not np.all((w >= 0) & (w <= 1)):
+                    raise ValueError(f"cmd_regime_weights: expected {CommandRegime.N_REGIMES} weights in [0, 1]")
+                obj.command_regime = CommandRegime(w, np.asarray(data["cmd_regime_n_train"]),
+                                                   np.asarray(data["cmd_regime_n_held"]), **regime_meta)
+            except (KeyError, TypeError, ValueError) as err:
+                raise ModelFileError(f"{path}: damaged model contents: {err}") from None
         obj.training_info = meta.get("training_info", {})
         return obj
 

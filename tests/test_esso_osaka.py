@@ -214,6 +214,16 @@ def test_manoeuvre_benchmark_writes_the_tables(tmp_path):
     held = e[(e.model == "dynamic") & (e.commands == "held")].mae.to_numpy()
     assert not np.allclose(known, held)
     assert len(res.test) == 2
+    # coverage.csv: the drift benchmark's columns plus kind and commands, for the models with a spread
+    from hybridship.manoeuvre import COVERAGE_COLUMNS
+
+    c = pd.read_csv(tmp_path / "out" / "coverage.csv")
+    assert tuple(c.columns) == COVERAGE_COLUMNS
+    assert set(c.model) == {"hybrid", "data_only"} and set(c.sigma) == {1, 2}
+    assert set(c.kind) == {"berthing", "zigzag", "all"} and set(c.commands) == {"known", "held"}
+    assert c.coverage.between(0, 1).all()
+    piv = c.pivot_table(index=["model", "kind", "commands", "horizon_s"], columns="sigma", values="coverage")
+    assert (piv[2] >= piv[1]).all()
 
 
 def test_benchmark_refuses_the_same_run_in_train_and_test(tmp_path):

@@ -43,7 +43,7 @@ from hybridship import metrics
 from hybridship.physics.model import DynamicModel
 from hybridship.predictors import DeadReckoning, DynamicPredictor, HybridPredictor, as_log_arrays
 from hybridship.residual.ensemble import EnsembleConfig
-from hybridship.residual.features import ALL_FEATURES, TARGETS, prepare_log
+from hybridship.residual.features import TARGETS, prepare_log
 from hybridship.sim.scenario import DPLossConfig, drift_statistics, simulate_dp_loss
 
 torch.set_num_threads(1)  # small networks; the machine may be shared
@@ -135,7 +135,7 @@ model = hybrid.model                     # the nominal DynamicModel("gunnerus")
 arrays = as_log_arrays(train_logs[0], model.vessel)
 prep = prepare_log(model, arrays, hybrid.residual_config)
 rows = prep.trainable_rows(arrays.dp_active.astype(bool))
-print(f"{len(rows)} trainable DP rows of {len(arrays)}; features {list(ALL_FEATURES)}; targets {list(TARGETS)}")
+print(f"{len(rows)} trainable DP rows of {len(arrays)}; features {list(hybrid.residual_config.features)}; targets {list(TARGETS)}")
 res_tot = prep.residual[rows]
 dev = prep.deviation(rows)
 print("residual mean  [m/s2, m/s2, rad/s2]:", np.round(res_tot.mean(0), 5))

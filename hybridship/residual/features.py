@@ -42,14 +42,23 @@ from scipy.signal import savgol_coeffs, savgol_filter
 
 from ..logs.io import LogArrays
 
+#: Optional command-aware features (appended after the paper's nine): the main
+#: propeller's rpm over its maximum and its rate [1/s]; the first rotatable actuator's
+#: angle (rudder or azimuth, wrapped to (-pi, pi]) [rad] and its rate [rad/s]; the ship's
+#: velocity through the air in body axes (Fossen's ``u_rw, v_rw``, from the model-predicted
+#: velocities and the held wind) [m/s]; the drift angle ``atan2(v_hat, |u_hat|)`` [rad].
+#: The commands are those of the step being predicted, the rates their change over it.
+COMMAND_FEATURES = ("rpm_main_rel", "rpm_main_rate_rel_s", "angle_main_rad", "angle_main_rate_rad_s",
+                    "wind_rel_u_m_s", "wind_rel_v_m_s", "drift_angle_rad")
+
 #: Every feature the hybrid can use, in a fixed order. ``_hat`` = model one-step prediction.
 ALL_FEATURES = ("u_hat_m_s", "v_hat_m_s", "r_hat_rad_s",
                 "u_dot_hat_m_s2", "v_dot_hat_m_s2", "r_dot_hat_rad_s2",
-                "res_u_prev_m_s2", "res_v_prev_m_s2", "res_r_prev_rad_s2")
+                "res_u_prev_m_s2", "res_v_prev_m_s2", "res_r_prev_rad_s2") + COMMAND_FEATURES
 
 #: The paper's feature set (sec. 3.3): model-predicted velocities and accelerations plus
 #: the previous residual.
-PAPER_FEATURES = ALL_FEATURES
+PAPER_FEATURES = ALL_FEATURES[:9]
 
 #: Residual target names (body-frame acceleration discrepancy).
 TARGETS = ("res_u_m_s2", "res_v_m_s2", "res_r_rad_s2")
@@ -114,6 +123,47 @@ class ResidualConfig:
     def feature_index(self) -> np.ndarray:
         return np.array([ALL_FEATURES.index(f) for f in self.features])
 
+    @property
+    def uses_command_features(self) -> bool:
+        """Whether any feature of :data:`COMMAND_FEATURES` is selected."""
+        return any(f in COMMAND_FEATURES for f in self.features)
+
+
+def command_feature_columns(nu_hat, psi_rad, rpm, rpm_prev, az, az_prev, wind, dt_s: float,
+                            rpm_scale: float, angle_channel: int | None, lib=np):
+    """The :data:`COMMAND_FEATURES` columns, shape (..., 7).
+
+    ``nu_hat`` (..., 3) and ``psi_rad`` (...) may be torch tensors (``lib=torch``); the
+    commands ``rpm``/``rpm_prev`` (..., K), ``az``/``az_prev`` (..., K) and ``wind``
+    (..., 2: speed [m/s], direction it blows from [rad]) are numpy arrays.
+    ``angle_channel`` is the command channel of the first rotatable actuator (None: none).
+    """
+    def wrap(a):
+        return (a + np.pi) % (2 * np.pi) - np.pi
+
+    rpm_rel = rpm[..., 0] / rpm_scale
+    rpm_rate = (rpm[..., 0] - rpm_prev[..., 0]) / (rpm_scale * dt_s)
+    if angle_channel is None:
+        ang = np.zeros_like(rpm_rel)
+        ang_rate = np.zeros_like(rpm_rel)
+    else:
+        ang = wrap(az[..., angle_channel])
+        ang_rate = wrap(az[..., angle_channel] - az_prev[..., angle_channel]) / dt_s
+    cmd = np.stack([rpm_rel, rpm_rate, ang, ang_rate], axis=-1)
+    if lib is np:
+        d = wind[..., 1] - psi_rad
+        urw = nu_hat[..., 0] + wind[..., 0] * np.cos(d)
+        vrw = nu_hat[..., 1] + wind[..., 0] * np.sin(d)
+        drift = np.arctan2(nu_hat[..., 1], np.abs(nu_hat[..., 0]))
+        return np.concatenate([cmd, np.stack([urw, vrw, drift], axis=-1)], axis=-1)
+    t = lib.as_tensor
+    d = t(wind[..., 1], dtype=nu_hat.dtype) - psi_rad
+    V = t(wind[..., 0], dtype=nu_hat.dtype)
+    urw = nu_hat[..., 0] + V * lib.cos(d)
+    vrw = nu_hat[..., 1] + V * lib.sin(d)
+    drift = lib.atan2(nu_hat[..., 1], lib.abs(nu_hat[..., 0]))
+    return lib.cat([t(cmd, dtype=nu_hat.dtype), lib.stack([urw, vrw, drift], dim=-1)], dim=-1)
+
 
 def _window(window_s: float, dt_s: float, polyorder: int) -> int:
     w = max(int(round(window_s / dt_s)), polyorder + 2)
@@ -173,6 +223,8 @@ class PreparedLog:
     thrust_acc: np.ndarray
     config: ResidualConfig = field(default_factory=ResidualConfig)
     env_body: np.ndarray | None = None
+    rpm_scale: float = 1.0
+    angle_channel: int | None = None
 
     def bias_body(self, rows: np.ndarray, psi_rad=None) -> np.ndarray:
         """The bias known at ``rows`` (from data up to and including them) in the body frame.
@@ -204,7 +256,16 @@ class PreparedLog:
     def features(self, rows: np.ndarray) -> np.ndarray:
         """Feature matrix (len(rows), n_features) for predicting the residual deviation at ``rows``."""
         rows = np.asarray(rows)
-        full = np.concatenate([self.nu_hat[rows], self.nu_dot_hat[rows], self.deviation(rows - 1)], axis=1)
+        parts = [self.nu_hat[rows], self.nu_dot_hat[rows], self.deviation(rows - 1)]
+        if self.config.uses_command_features:
+            a = self.arrays
+            # row i is predicted from row i - 1 with the commands of i - 1; their rate over (i - 2, i - 1)
+            parts.append(command_feature_columns(self.nu_hat[rows], a.eta[rows - 1, 2], a.rpm[rows - 1],
+                                                 a.rpm[rows - 2], a.azimuth_rad[rows - 1], a.azimuth_rad[rows - 2],
+                                                 a.wind[rows - 1], self.dt_s, self.rpm_scale, self.angle_channel))
+        else:
+            parts.append(np.zeros((rows.size, len(COMMAND_FEATURES))))
+        full = np.concatenate(parts, axis=1)
         return full[:, self.config.feature_index]
 
     def trainable_rows(self, mask: np.ndarray | None = None) -> np.ndarray:
@@ -349,7 +410,16 @@ def prepare_log(model, arrays: LogArrays, config: ResidualConfig = ResidualConfi
     return PreparedLog(arrays=arrays, dt_s=dt, nu_s=nu_s, nu_dot=nu_dot, nu_hat=nu_hat, nu_dot_hat=nu_dot_hat,
                        residual=residual, nu_c=nu_c, residual_c=residual_c,
                        bias_ned=causal_bias(residual_c, arrays, dt, config), thrust_acc=thrust_acc,
-                       config=config)
+                       config=config, **command_scales(model, arrays.rotatable))
+
+
+def command_scales(model, rotatable) -> dict:
+    """``rpm_scale`` (the first thruster's max rpm) and ``angle_channel`` (the first rotatable
+    command channel, or None) for :func:`command_feature_columns`."""
+    thr = model.vessel.thrusters
+    rpm_scale = float(thr[0].max_rpm) if thr and thr[0].max_rpm > 0 else 1.0
+    rot = np.flatnonzero(np.asarray(rotatable, dtype=bool))
+    return {"rpm_scale": rpm_scale, "angle_channel": int(rot[0]) if rot.size else None}
 
 
 def _residual_ned(residual_c: np.ndarray, arrays: LogArrays):

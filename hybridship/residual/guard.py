@@ -127,3 +127,81 @@ class ThrustRegime:
         if self.lo <= 0.0:
             return np.ones_like(lev)
         return np.clip(2.0 * lev / self.lo - 1.0, 0.0, 1.0)
+
+
+@dataclass
+class CommandRegime:
+    """Shrink the learned correction in command regimes where it did not help on held-back data.
+
+    The Mahalanobis envelope sees the nets' inputs, not the way the ship is driven: a slow
+    approach with the propeller reversing lies inside the envelope of forward-speed
+    turning runs, yet the residual there is another function. Each step is put in one of
+    12 regimes,
+
+    * propeller: ahead (rpm / max rpm > ``rpm_eps``), stopped, astern (< ``-rpm_eps``);
+    * speed: low (Froude number of ``|u|`` below ``froude_lo``) or not;
+    * first rotatable actuator (rudder): hard over (``|angle| > angle_hard_rad``) or not;
+
+    and each regime has a weight in [0, 1]: the least-squares scale of the nets' mean
+    one-step prediction onto the measured residual deviation on rows the nets were not
+    trained on (the part :meth:`hybridship.predictors.HybridPredictor.fit` holds back),
+    clipped to [0, 1], summed over the three standardised outputs. A regime with fewer than
+    ``min_rows`` held-back rows keeps weight 1 if the training rows covered it (at least
+    ``min_rows`` of them) and gets 0 if neither did (never seen: no correction).
+
+    Attributes
+    ----------
+    weights : ndarray, shape (12,)
+        Weight per regime (see :meth:`regime`).
+    n_train, n_held : ndarray of int, shape (12,)
+        Training and held-back rows per regime.
+    rpm_eps, froude_lo, angle_hard_rad, length_m : float
+        Regime boundaries and the ship length of the Froude number [m].
+    """
+
+    weights: np.ndarray
+    n_train: np.ndarray
+    n_held: np.ndarray
+    rpm_eps: float = 0.05
+    froude_lo: float = 0.05
+    angle_hard_rad: float = float(np.radians(20.0))
+    length_m: float = 1.0
+
+    N_REGIMES = 12
+
+    def regime(self, rpm_rel, u_m_s, angle_rad) -> np.ndarray:
+        """Regime index 0..11 of each row (arrays of one shape)."""
+        rpm_rel = np.asarray(rpm_rel, dtype=float)
+        prop = np.where(rpm_rel > self.rpm_eps, 0, np.where(rpm_rel < -self.rpm_eps, 2, 1))
+        low = np.abs(np.asarray(u_m_s, dtype=float)) < self.froude_lo * np.sqrt(9.81 * self.length_m)
+        hard = np.abs(np.asarray(angle_rad, dtype=float)) > self.angle_hard_rad
+        return prop * 4 + low.astype(int) * 2 + hard.astype(int)
+
+    def weight(self, rpm_rel, u_m_s, angle_rad) -> np.ndarray:
+        """Weight of each row's regime."""
+        return self.weights[self.regime(rpm_rel, u_m_s, angle_rad)]
+
+    @classmethod
+    def fit(cls, train_cmd, held_cmd, held_target, held_pred, *, length_m: float, min_rows: int = 50,
+            **bounds) -> "CommandRegime":
+        """Fit from ``(rpm_rel, u_m_s, angle_rad)`` tuples of arrays for the training and the
+        held-back rows, and the held-back rows' standardised targets and mean predictions ``(N, 3)``."""
+        obj = cls(np.ones(cls.N_REGIMES), np.zeros(cls.N_REGIMES, int), np.zeros(cls.N_REGIMES, int),
+                  length_m=float(length_m), **bounds)
+        rt = obj.regime(*train_cmd)
+        rh = obj.regime(*held_cmd)
+        obj.n_train = np.bincount(rt.ravel(), minlength=cls.N_REGIMES)
+        obj.n_held = np.bincount(rh.ravel(), minlength=cls.N_REGIMES)
+        T = np.asarray(held_target, dtype=float)
+        Pm = np.asarray(held_pred, dtype=float)
+        w = np.ones(cls.N_REGIMES)
+        for k in range(cls.N_REGIMES):
+            sel = rh == k
+            if obj.n_held[k] >= min_rows:
+                num = float((T[sel] * Pm[sel]).sum())
+                den = float((Pm[sel] ** 2).sum())
+                w[k] = float(np.clip(num / den, 0.0, 1.0)) if den > 0 else 1.0
+            elif obj.n_train[k] < min_rows:
+                w[k] = 0.0
+        obj.weights = w
+        return obj

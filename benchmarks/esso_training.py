@@ -1,0 +1,175 @@
+"""Esso Osaka: hybrid variants (training mode, features, guard) on a validation split or the test runs.
+
+Selection (the test runs play no part)::
+
+    python benchmarks/esso_training.py --out out/esso-training-val
+
+splits the benchmark's *training* runs (``out/esso-osaka/split/train``, made by
+``benchmarks/esso_osaka.py``) again, seed 1, as ``benchmarks/esso_validation.py`` does,
+trains every variant on the fitting part and scores it on the validation part. The
+comparison on the benchmark's own split (after the choice was made)::
+
+    python benchmarks/esso_training.py --test-split --out out/esso-training-test
+
+Variants share the ensemble size, seed, calibration and features (the six model-predicted
+velocities and accelerations) unless their name says otherwise:
+``one_step`` / ``multi_step`` (training mode), ``_h<s>``, ``_b<n>``, ``_i<n>``, ``_v<n>``
+(multi-step horizon, batch of starts, iterations, validation starts; otherwise
+``MultiStepConfig()``), ``+cmd`` (all command-aware features added),
+``+rate`` (only the command rates added), ``+cg`` (command-regime guard; off otherwise, whatever
+the benchmark default).
+Writes ``errors.csv`` and ``coverage.csv`` (the manoeuvre benchmark's columns) and
+``timing.csv`` (training seconds), and prints the distance and heading tables with
+commands known.
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+import time
+from dataclasses import replace
+from pathlib import Path
+
+import numpy as np
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+def variants(cfg, names):
+    """Unfitted hybrids by variant name."""
+    from hybridship.predictors import HybridPredictor
+    from hybridship.residual.features import ALL_FEATURES
+
+    from hybridship.residual.multistep import MultiStepConfig
+
+    # a fixed base, whatever the benchmark's defaults are now: the six model-predicted
+    # velocities and accelerations, one-step training, MultiStepConfig() and no command guard
+    base_rc = replace(cfg.residual, features=ALL_FEATURES[:6])
+    out = {}
+    for name in names:
+        kw = dict(residual_config=base_rc, ensemble_config=cfg.ensemble, guard_quantile=cfg.guard_quantile,
+                  calibration_config=cfg.calibration, training="one_step", multistep_config=MultiStepConfig(),
+                  command_guard="+cg" in name)
+        if name.startswith("one_step"):
+            kw["training"] = "one_step"
+        elif name.startswith("multi_step"):
+            kw["training"] = "multi_step"
+        import re
+
+        ms = {}
+        for key, field, conv in (("h", "horizon_s", float), ("b", "batch_starts", int), ("i", "iterations", int),
+                                 ("v", "max_val_starts", int)):
+            m = re.search(rf"_{key}(\d+(?:\.\d+)?)", name)
+            if m:
+                ms[field] = conv(m.group(1))
+        if ms:
+            kw["multistep_config"] = replace(MultiStepConfig(), **ms)
+        if "+cmd" in name:
+            extra = tuple(f for f in ALL_FEATURES[9:] if f not in base_rc.features)
+            kw["residual_config"] = replace(base_rc, features=tuple(base_rc.features) + extra)
+        if "+rate" in name:
+            kw["residual_config"] = replace(base_rc, features=tuple(base_rc.features)
+                                            + tuple(f for f in ALL_FEATURES[9:] if "rate" in f))
+        out[name] = HybridPredictor("esso_osaka_model", **kw)
+    return out
+
+
+def with_command_guard(p, logs, stride):
+    """A copy of the fitted hybrid ``p`` with the command-regime guard fitted and the spread recalibrated."""
+    import copy
+
+    q = copy.deepcopy(p)
+    q.command_guard = True
+    cal = q.calibration_config
+    cuts = [q._calibration_cut(a, cal, True) for a in logs]
+    masks = [None if c >= len(a) else (np.arange(len(a)) < c) for a, c in zip(logs, cuts)]
+    q.command_regime = q._fit_command_regime(logs, masks, True, stride)
+    q.calibration = {}
+    for mode in cal.commands:
+        fitted, _ = q._calibrate(logs, cuts, cal, True, mode)
+        if fitted is not None:
+            q.calibration[mode] = fitted
+    print("command-regime weights:", np.round(q.command_regime.weights, 2).tolist(),
+          "held-back rows:", q.command_regime.n_held.tolist(), flush=True)
+    return q
+
+
+def main(argv=None) -> int:
+    import pandas as pd
+    import torch
+
+    from hybridship.fileio import atomic_write
+    from hybridship.manoeuvre import (COMMAND_MODES, ManoeuvreConfig, coverage_table, error_table, forecast_errors,
+                                      load_runs, make_predictors, split_runs, start_rows)
+    from hybridship.vessel import load_vessel
+
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--split", type=Path, default=ROOT / "out" / "esso-osaka" / "split",
+                    help="the benchmark's split (default out/esso-osaka/split)")
+    ap.add_argument("--test-split", action="store_true",
+                    help="score on the benchmark's test runs (after selection) instead of a validation split")
+    ap.add_argument("--out", type=Path, default=ROOT / "out" / "esso-training-val")
+    ap.add_argument("--variants", default="one_step,multi_step")
+    ap.add_argument("--commands", default="known", help="command modes to score (comma-separated)")
+    ap.add_argument("--horizons-s", default="5,10,20,30")
+    ap.add_argument("--with-command-guard", action="store_true",
+                    help="also score every variant with the command-regime guard fitted on its nets (suffix +cg)")
+    args = ap.parse_args(argv)
+    torch.set_num_threads(1)
+    if not (args.split / "train").is_dir():
+        print(f"error: {args.split / 'train'}: not found; run benchmarks/esso_osaka.py first", file=sys.stderr)
+        return 2
+    horizons = tuple(float(h) for h in args.horizons_s.split(","))
+    modes = [m for m in args.commands.split(",") if m in COMMAND_MODES]
+    if args.test_split:
+        fit_dir, val_dir = args.split / "train", args.split / "test"
+    else:
+        fit_dir, val_dir = split_runs(args.split / "train", args.out / "split", seed=1)
+    v = load_vessel("esso_osaka_model")
+    cfg = ManoeuvreConfig()
+    cfg = replace(cfg, calibration=replace(cfg.calibration, horizon_s=max(horizons)))
+    fit_runs, val_runs = load_runs(fit_dir, v), load_runs(val_dir, v)
+    models = {"dynamic": make_predictors(v, cfg)["dynamic"]} | variants(cfg, args.variants.split(","))
+    dt = float(np.median(np.diff(val_runs[0].arrays.time_s)))
+    steps = np.array([int(round(h / dt)) for h in horizons])
+    if args.with_command_guard:
+        # the same nets with the command-regime guard fitted afterwards (no retraining)
+        models = {k: models[k] for k in models} | {f"{k}+cg": None for k in models
+                                                   if k != "dynamic" and "+cg" not in k}
+    per, per_z, timing = {}, {}, []
+    for name, p in models.items():
+        t0 = time.perf_counter()
+        if p is None:
+            p = models[name] = with_command_guard(models[name[:-3]], [r.arrays for r in fit_runs],
+                                                  cfg.train_row_stride)
+        elif name != "dynamic":
+            p.fit([r.arrays for r in fit_runs], row_stride=cfg.train_row_stride)
+        timing.append({"model": name, "train_s": time.perf_counter() - t0})
+        print(f"{name}: trained in {timing[-1]['train_s']:.0f} s", flush=True)
+        for mode in modes:
+            res = [forecast_errors(lambda a, st, h: p.forecast(a, st, horizon_s=h, commands=mode), r.arrays,
+                                   start_rows(r.arrays, int(steps.max()), cfg.start_every_s), steps, return_z=True)
+                   for r in val_runs]
+            per[(name, mode)] = [e for e, _ in res]
+            if name != "dynamic":
+                per_z[(name, mode)] = [z for _, z in res]
+    errors = error_table(per, val_runs, horizons)
+    coverage = coverage_table(per_z, val_runs, horizons)
+    args.out.mkdir(parents=True, exist_ok=True)
+    for fname, df in (("errors.csv", errors), ("coverage.csv", coverage), ("timing.csv", pd.DataFrame(timing))):
+        atomic_write(args.out / fname, lambda fh, df=df: fh.write(df.to_csv(index=False).encode()))
+    print(f"scored on: {', '.join(r.name for r in val_runs)}")
+    for state in ("distance_m", "heading_deg"):
+        d = errors[errors.state == state].pivot_table(index=["commands", "kind", "model"], columns="horizon_s",
+                                                      values="mae", sort=False)
+        print(f"{state}:\n{d.round(3).to_string()}")
+    c = coverage[coverage.kind == "all"].pivot_table(index=["commands", "model", "sigma"], columns="horizon_s",
+                                                     values="coverage", sort=False)
+    print(f"coverage (all kinds):\n{c.round(3).to_string()}")
+    print(f"wrote {args.out}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

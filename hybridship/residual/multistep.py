@@ -1,0 +1,319 @@
+"""Multi-step training of the residual ensemble: the error of the hybrid's own rollout.
+
+One-step training fits the residual at measured states; a forecast evaluates it at the
+states the hybrid itself reaches, and what is scored is the position and heading after
+many steps. Here the nets are trained on that: from many start times of the training
+logs, the hybrid is unrolled ``horizon_s`` ahead exactly as
+:meth:`hybridship.predictors.HybridPredictor.rollout` does it (the physics steps the
+ensemble-mean state, every member predicts its residual from the model-predicted
+velocities and accelerations, the mean residual corrects the state), and the loss is
+
+.. math::  \\frac{1}{S H} \\sum_{s, j} (\\Delta x_{sj}^2 + \\Delta y_{sj}^2 + (\\tfrac{L}{2} \\Delta\\psi_{sj})^2),
+
+the squared position and heading errors of the forecast (heading weighted by half the
+ship length ``L``, so that a heading error counts like the displacement of the bow).
+Gradients flow back through the unrolled steps. The physics step is the numba kernel;
+its Jacobian with respect to the state (heading and velocities; the dynamics do not
+depend on the position without a current) comes from forward finite differences, one
+extra batched kernel call per step (:class:`PhysicsStep`). The nets start from the
+one-step fit (warm start) and each member keeps its weights of the best validation loss
+(the last part of every log's starts, in time order). Because the loss is that of the
+ensemble mean, the members move together and keep the spread of the one-step bagging
+(the spread is calibrated afterwards in any case).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+
+@dataclass(frozen=True)
+class MultiStepConfig:
+    """Settings of multi-step training (validated).
+
+    Attributes
+    ----------
+    horizon_s : float
+        Length of each unrolled forecast [s].
+    iterations : int
+        Adam steps (each on one batch of starts).
+    batch_starts : int
+        Start times per batch.
+    start_every_s : float
+        Spacing of candidate start times in the training logs [s].
+    lr : float
+        Adam learning rate (the nets are warm-started from the one-step fit).
+    val_fraction : float
+        Last fraction of each log's starts used for validation (early stopping).
+    val_every : int
+        Validate every this many iterations.
+    max_val_starts : int
+        Validation starts at most (evenly thinned).
+    heading_length_m : float or None
+        Length that turns the heading error into metres in the loss; None: half the
+        vessel's L_pp.
+    fd_step : float
+        Relative finite-difference step of the physics Jacobian.
+    """
+
+    horizon_s: float = 10.0
+    iterations: int = 150
+    batch_starts: int = 128
+    start_every_s: float = 1.0
+    lr: float = 1e-3
+    val_fraction: float = 0.2
+    val_every: int = 10
+    max_val_starts: int = 256
+    heading_length_m: float | None = None
+    fd_step: float = 1e-6
+
+    def __post_init__(self):
+        checks = {"horizon_s": self.horizon_s > 0, "iterations": self.iterations >= 1,
+                  "batch_starts": self.batch_starts >= 1, "start_every_s": self.start_every_s > 0,
+                  "lr": self.lr > 0, "val_fraction": 0.0 < self.val_fraction < 0.9,
+                  "val_every": self.val_every >= 1, "max_val_starts": self.max_val_starts >= 1,
+                  "heading_length_m": self.heading_length_m is None or self.heading_length_m >= 0,
+                  "fd_step": 0 < self.fd_step < 1e-2}
+        bad = [k for k, ok in checks.items() if not ok]
+        if bad:
+            raise ValueError(f"MultiStepConfig: invalid {', '.join(f'{k}={getattr(self, k)!r}' for k in bad)}")
+
+
+@dataclass
+class Starts:
+    """Start states of training rollouts with their commands and the measured tracks.
+
+    Attributes
+    ----------
+    eta0, nu0, dev0 : ndarray, shape (S, 3)
+        Start pose, velocities and previous residual deviation.
+    bias0 : ndarray, shape (S, 3)
+        Residual bias at the start (surge/sway in NED).
+    rpm, az : ndarray, shape (S, H, K)
+        Logged commands of the steps after each start.
+    wind : ndarray, shape (S, 1, 2)
+        Wind held at its start value.
+    truth : ndarray, shape (S, H, 3)
+        Measured pose at steps 1..H.
+    is_val : ndarray of bool, shape (S,)
+        Validation starts.
+    dt_s : float
+    """
+
+    eta0: np.ndarray
+    nu0: np.ndarray
+    dev0: np.ndarray
+    bias0: np.ndarray
+    rpm: np.ndarray
+    az: np.ndarray
+    wind: np.ndarray
+    truth: np.ndarray
+    is_val: np.ndarray
+    dt_s: float
+
+    def take(self, idx) -> "Starts":
+        return Starts(*(getattr(self, k)[idx] for k in ("eta0", "nu0", "dev0", "bias0", "rpm", "az", "wind",
+                                                        "truth", "is_val")), self.dt_s)
+
+
+def collect_starts(preps, masks, config: MultiStepConfig, dp_only: bool = True) -> Starts:
+    """Start times of the training rollouts from prepared logs.
+
+    ``preps``: :class:`~hybridship.residual.features.PreparedLog` per log; ``masks``: a
+    boolean row mask per log (None: every row) of the rows that may be used (start and
+    the whole horizon inside it, in one segment, and station keeping with ``dp_only``).
+    """
+    out = {k: [] for k in ("eta0", "nu0", "dev0", "bias0", "rpm", "az", "wind", "truth", "is_val")}
+    dts = set()
+    for prep, mask in zip(preps, masks):
+        a = prep.arrays
+        n = len(a.time_s)
+        dt = prep.dt_s
+        dts.add(round(dt, 9))
+        H = int(round(config.horizon_s / dt))
+        if n <= H + 2:
+            continue
+        ok = np.ones(n, bool) if mask is None else np.asarray(mask, bool).copy()
+        if dp_only:
+            ok &= a.dp_active.astype(bool)
+        ok &= np.isfinite(a.eta).all(1) & np.isfinite(a.nu).all(1) & np.isfinite(a.rpm).all(1) \
+            & np.isfinite(a.azimuth_rad).all(1)
+        bad = np.concatenate([[0], np.cumsum(~ok)])
+        r = np.arange(1, n - H, max(1, int(round(config.start_every_s / dt))))
+        r = r[((bad[r + H + 1] - bad[r]) == 0) & (a.segment_id[r + H] == a.segment_id[r])]
+        if r.size == 0:
+            continue
+        st = [prep.start_state(int(i)) for i in r]
+        out["eta0"].append(np.array([s[0] for s in st]))
+        out["nu0"].append(np.array([s[1] for s in st]))
+        out["dev0"].append(np.array([s[2] for s in st]))
+        out["bias0"].append(np.array([s[3] for s in st]))
+        rows = r[:, None] + np.arange(H)[None, :]
+        out["rpm"].append(a.rpm[rows])
+        out["az"].append(a.azimuth_rad[rows])
+        out["wind"].append(a.wind[r][:, None])
+        out["truth"].append(a.eta[rows + 1])
+        is_val = np.zeros(r.size, bool)
+        n_val = int(round(config.val_fraction * r.size))
+        if n_val > 0 and r.size - n_val >= 1:
+            is_val[-n_val:] = True
+        out["is_val"].append(is_val)
+    if not out["eta0"]:
+        raise ValueError(f"multi-step training: no start time with {config.horizon_s:g} s of usable data after it")
+    if len(dts) != 1:
+        raise ValueError(f"multi-step training: the logs have different steps {sorted(dts)} s")
+    return Starts(*(np.concatenate(out[k]) for k in out), float(dts.pop()))
+
+
+def _torch_physics_step():
+    import torch
+
+    from ..physics.integrate import rollout_batch
+
+    class PhysicsStep(torch.autograd.Function):
+        """One RK4 step of the numba kernel, ``x (S, 6) -> (eta1, nu1, nu_dot1) (S, 9)``; the
+        Jacobian with respect to heading and velocities by forward differences."""
+
+        @staticmethod
+        def forward(ctx, x, rpm, az, wind, P, dt, substeps, fd_step):
+            X = x.detach().numpy()
+            S = X.shape[0]
+            h = fd_step * np.array([1.0, 1.0, 1.0, 1.0, 1.0, 0.1])
+            Xb = np.tile(X, (5, 1))
+            for k, col in enumerate((2, 3, 4, 5)):
+                Xb[(k + 1) * S:(k + 2) * S, col] += h[col]
+            B = Xb.shape[0]
+            e1 = np.empty((B, 2, 3))
+            n1 = np.empty((B, 2, 3))
+            a1 = np.empty((B, 2, 3))
+            z3 = np.zeros((B, 1, 3))
+            rollout_batch(np.ascontiguousarray(Xb[:, :3]), np.ascontiguousarray(Xb[:, 3:]),
+                          np.ascontiguousarray(np.tile(rpm, (5, 1, 1))), np.ascontiguousarray(np.tile(az, (5, 1, 1))),
+                          np.ascontiguousarray(np.tile(wind, (5, 1, 1))), np.zeros((B, 1, 2)), z3, z3, P, dt, 1,
+                          int(substeps), e1, n1, a1)
+            Y = np.concatenate([e1[:, 1], n1[:, 1], a1[:, 1]], axis=1)          # (5S, 9)
+            Y0 = Y[:S]
+            J = np.zeros((S, 9, 6))
+            J[:, 0, 0] = 1.0                                                    # position shifts the pose only
+            J[:, 1, 1] = 1.0
+            for k, col in enumerate((2, 3, 4, 5)):
+                J[:, :, col] = (Y[(k + 1) * S:(k + 2) * S] - Y0) / h[col]
+            ctx.save_for_backward(torch.from_numpy(J))
+            return torch.from_numpy(Y0.copy())
+
+        @staticmethod
+        def backward(ctx, grad_y):
+            (J,) = ctx.saved_tensors
+            return torch.einsum("so,sok->sk", grad_y, J), None, None, None, None, None, None, None
+
+    return PhysicsStep
+
+
+def train_multistep(ensemble, model, starts: Starts, feature_index, config: MultiStepConfig, *,
+                    substeps: int = 1, seed: int = 0, progress: bool = False):
+    """Fine-tune a one-step :class:`~hybridship.residual.ensemble.MLPEnsemble` on the multi-step loss.
+
+    Returns a new ensemble (same normalisation, weights of the best validation loss) and a
+    history dict (``train_loss``, ``val_loss``, ``best_val_loss``, ``iterations``, ``n_starts``).
+    """
+    import torch
+    from tqdm.auto import tqdm
+
+    from .ensemble import MLPEnsemble
+    from .features import ALL_FEATURES, COMMAND_FEATURES, command_feature_columns, command_scales
+
+    PhysicsStep = _torch_physics_step()
+    P = model.arrays
+    dt = starts.dt_s
+    H = starts.truth.shape[1]
+    L = config.heading_length_m if config.heading_length_m is not None else 0.5 * model.vessel.particulars.L_pp_m
+    fidx = torch.as_tensor(np.asarray(feature_index), dtype=torch.long)
+    tr = np.flatnonzero(~starts.is_val)
+    va = np.flatnonzero(starts.is_val)
+    if va.size == 0:
+        va = tr
+    if va.size > config.max_val_starts:
+        va = va[np.linspace(0, va.size - 1, config.max_val_starts).round().astype(int)]
+    rng = np.random.default_rng(seed)
+    dd = torch.float64
+    params = [torch.tensor(w, dtype=dd, requires_grad=True) for w in ensemble.weights]
+    x_mean, x_std = (torch.as_tensor(a, dtype=dd) for a in (ensemble.x_mean, ensemble.x_std))
+    y_mean, y_std = (torch.as_tensor(a, dtype=dd) for a in (ensemble.y_mean, ensemble.y_std))
+    E = ensemble.n_members
+    use_cmd = any(ALL_FEATURES[i] in COMMAND_FEATURES for i in np.asarray(feature_index))
+    scales = command_scales(model, model.vessel.rotatable)
+
+    def rollout_loss(s: Starts):
+        S = s.eta0.shape[0]
+        x = torch.as_tensor(np.concatenate([s.eta0, s.nu0], axis=1), dtype=dd)
+        r_prev = torch.as_tensor(s.dev0, dtype=dd).expand(E, S, 3)
+        bias = torch.as_tensor(s.bias0, dtype=dd)
+        truth = torch.as_tensor(s.truth, dtype=dd)
+        loss = torch.zeros((), dtype=dd)
+        for j in range(H):
+            y = PhysicsStep.apply(x, s.rpm[:, j:j + 1], s.az[:, j:j + 1], s.wind, P, dt, substeps, config.fd_step)
+            e1, n1, a1 = y[:, :3], y[:, 3:6], y[:, 6:9]
+            cols = [n1.expand(E, S, 3), a1.expand(E, S, 3), r_prev]
+            if use_cmd:
+                jp = max(j - 1, 0)
+                cf = command_feature_columns(n1, e1[:, 2], s.rpm[:, j], s.rpm[:, jp], s.az[:, j], s.az[:, jp],
+                                             s.wind[:, 0], dt, scales["rpm_scale"], scales["angle_channel"], lib=torch)
+                cols.append(cf.expand(E, S, cf.shape[-1]))
+            else:
+                cols.append(torch.zeros((E, S, len(COMMAND_FEATURES)), dtype=dd))
+            feats = torch.cat(cols, dim=2)[..., fidx]
+            z = (feats - x_mean) / x_std
+            hdn = torch.tanh(torch.baddbmm(params[1], z, params[0]))
+            hdn = torch.tanh(torch.baddbmm(params[3], hdn, params[2]))
+            r = torch.baddbmm(params[5], hdn, params[4]) * y_std + y_mean        # (E, S, 3)
+            r_prev = r
+            c, sn = torch.cos(e1[:, 2]), torch.sin(e1[:, 2])
+            rb = torch.stack([c * bias[:, 0] + sn * bias[:, 1], -sn * bias[:, 0] + c * bias[:, 1], bias[:, 2]], 1)
+            rm = r.mean(0) + rb
+            nu = n1 + dt * rm
+            half = 0.5 * dt * dt
+            eta = torch.stack([e1[:, 0] + half * (c * rm[:, 0] - sn * rm[:, 1]),
+                               e1[:, 1] + half * (sn * rm[:, 0] + c * rm[:, 1]),
+                               e1[:, 2] + half * rm[:, 2]], 1)
+            x = torch.cat([eta, nu], 1)
+            d = eta - truth[:, j]
+            dpsi = torch.atan2(torch.sin(d[:, 2]), torch.cos(d[:, 2]))
+            loss = loss + (d[:, 0] ** 2 + d[:, 1] ** 2 + (L * dpsi) ** 2).mean()
+        return loss / H
+
+    opt = torch.optim.Adam(params, lr=config.lr)
+    val_data = starts.take(va)
+    with torch.no_grad():
+        best = float(rollout_loss(val_data))
+    best_params = [p.detach().clone() for p in params]
+    hist = {"train_loss": [], "val_loss": [best], "iterations": 0, "n_starts": int(tr.size),
+            "n_val_starts": int(va.size)}
+    threads = torch.get_num_threads()
+    torch.set_num_threads(1)
+    try:
+        bar = tqdm(range(config.iterations), desc="multi-step training", disable=not progress, leave=False)
+        for it in bar:
+            batch = starts.take(rng.choice(tr, size=min(config.batch_starts, tr.size), replace=False))
+            opt.zero_grad()
+            loss = rollout_loss(batch)
+            loss.backward()
+            opt.step()
+            hist["train_loss"].append(float(loss.detach()))
+            hist["iterations"] = it + 1
+            if (it + 1) % config.val_every == 0 or it + 1 == config.iterations:
+                with torch.no_grad():
+                    v = float(rollout_loss(val_data))
+                hist["val_loss"].append(v)
+                if v < best:
+                    best = v
+                    best_params = [p.detach().clone() for p in params]
+                if progress:
+                    bar.set_postfix(train=f"{hist['train_loss'][-1]:.4g}", val=f"{v:.4g}")
+    finally:
+        torch.set_num_threads(threads)
+    hist["best_val_loss"] = best
+    new = MLPEnsemble([p.numpy().astype(float) for p in best_params], ensemble.x_mean, ensemble.x_std,
+                      ensemble.y_mean, ensemble.y_std, dict(ensemble.history))
+    return new, hist

@@ -1,0 +1,127 @@
+"""Spread calibration (issue 17): the scale function, its config, the hybrid's default and the model file."""
+
+from __future__ import annotations
+
+import numpy as np
+import pandas as pd
+import pytest
+
+from hybridship.physics.model import DynamicModel
+from hybridship.predictors import HybridPredictor
+from hybridship.residual.calibration import (CalibrationConfig, SpreadCalibration, coverage_of,
+                                             fit_spread_scale)
+from hybridship.residual.ensemble import EnsembleConfig
+from hybridship.sim.synthetic import physics_log
+
+TINY = EnsembleConfig(n_members=3, hidden=8, max_epochs=15, patience=5, seed=0)
+
+
+def test_scale_recovers_a_known_underdispersion_and_gives_nominal_coverage_on_new_data():
+    rng = np.random.default_rng(0)
+    lead = np.array([1.0, 2.0, 5.0])
+    true_ratio = np.array([3.0, 5.0, 0.5])           # errors are this many times the reported spread
+    s = rng.uniform(0.5, 2.0, (20_000, 3))
+    e = np.abs(rng.normal(0.0, s * true_ratio))
+    cal = fit_spread_scale(e, s, lead, floor_quantile=0.0)
+    np.testing.assert_allclose(cal.scale, true_ratio, rtol=0.05)
+    s2 = rng.uniform(0.5, 2.0, (20_000, 3))
+    e2 = np.abs(rng.normal(0.0, s2 * true_ratio))
+    cov = coverage_of(e2, cal.apply(s2, lead))
+    np.testing.assert_allclose(cov[:, 1], 0.9545, atol=0.01)
+    np.testing.assert_allclose(cov[:, 0], 0.6827, atol=0.02)   # Gaussian errors: 1 sigma follows
+
+
+def test_floor_keeps_a_zero_spread_from_hiding_an_error():
+    rng = np.random.default_rng(1)
+    s = rng.uniform(0.5, 1.5, (1000, 1))
+    s[:200] = 0.0                                      # members agree (guard shrank the correction)
+    e = np.abs(rng.normal(0.0, 1.0, (1000, 1)))
+    cal = fit_spread_scale(e, s, [1.0], floor_quantile=0.3)
+    assert cal.floor[0] > 0.4 and np.isfinite(cal.scale[0])
+    assert coverage_of(e, cal.apply(s, np.array([1.0])))[0, 1] >= 0.95
+
+
+def test_apply_interpolates_holds_beyond_and_leaves_the_start_alone():
+    cal = SpreadCalibration([1.0, 3.0], [2.0, 4.0], [0.0, 0.0])
+    out = cal.apply(np.ones((2, 5)), np.array([0.0, 1.0, 2.0, 3.0, 10.0]))
+    np.testing.assert_allclose(out[0], [1.0, 2.0, 3.0, 4.0, 4.0])
+
+
+@pytest.mark.parametrize("kw, field", [(dict(fraction=0.7), "fraction"), (dict(commands=("later",)), "commands"),
+                                       (dict(horizon_s=0.0), "horizon_s"), (dict(coverage=1.0), "coverage"),
+                                       (dict(max_starts=2), "max_starts")])
+def test_config_errors_name_the_field(kw, field):
+    with pytest.raises(ValueError, match=field):
+        CalibrationConfig(**kw)
+
+
+def test_fit_spread_scale_refuses_bad_shapes_and_negative_errors():
+    with pytest.raises(ValueError, match="abs_err and std"):
+        fit_spread_scale(np.ones((30, 2)), np.ones((30, 3)), [1.0, 2.0])
+    with pytest.raises(ValueError, match=">= 0"):
+        fit_spread_scale(-np.ones((30, 1)), np.ones((30, 1)), [1.0])
+    with pytest.raises(ValueError, match="finite samples"):
+        fit_spread_scale(np.ones((5, 1)), np.ones((5, 1)), [1.0])
+
+
+@pytest.fixture(scope="module")
+def fitted():
+    m = DynamicModel("gunnerus")
+    logs = [physics_log(m, seed=s, duration_s=600.0, t_shutdown_s=None, current=(0.2, 1.0)) for s in (3, 4)]
+    cfg = CalibrationConfig(horizon_s=30.0, max_starts=200)
+    return HybridPredictor(m.vessel, ensemble_config=TINY, calibration_config=cfg).fit(logs), logs
+
+
+def test_fit_holds_back_the_end_and_forecasts_carry_the_calibrated_spread(fitted, tmp_path):
+    hp, logs = fitted
+    uncal = HybridPredictor(hp.model.vessel, ensemble_config=TINY,
+                            calibration_config=CalibrationConfig(fraction=0.0)).fit(logs)
+    assert uncal.calibration == {} and set(hp.calibration) == {"held", "known"}
+    # the held-back 20 % are not trained on
+    assert hp.training_info["n_rows"] < 0.85 * uncal.training_info["n_rows"]
+    assert hp.training_info["calibration"]["n_starts"]["held"] >= 50
+    starts = [300.0, 350.0]
+    raw = hp.forecast(logs[0], starts, 40.0, calibrated=False)
+    fc = hp.forecast(logs[0], starts, 40.0)
+    np.testing.assert_allclose(fc.eta, raw.eta)
+    expected = hp.calibration["held"]["position"].apply(raw.eta_std[..., 0], raw.lead_s)
+    np.testing.assert_allclose(fc.eta_std[..., 0], expected)
+    assert not np.allclose(fc.eta_std[:, 1:], raw.eta_std[:, 1:])
+    # round trip through the model file keeps the scales
+    back = HybridPredictor.load(hp.save(tmp_path / "m.npz"))
+    np.testing.assert_allclose(back.forecast(logs[0], starts, 40.0).eta_std, fc.eta_std)
+    assert back.calibration_config == hp.calibration_config
+    # quantiles come from the calibrated spread
+    q = fc.quantiles([0.05, 0.95])
+    np.testing.assert_allclose(q[1] - q[0], 2 * 1.6448536 * fc.eta_std, rtol=1e-6)
+    df = fc.to_frame(quantiles=[0.05, 0.95])
+    assert {"north_q0.05_m", "east_q0.95_m", "heading_q0.95_deg"} <= set(df.columns)
+
+
+def test_cli_forecast_quantiles(fitted, tmp_path, capsys):
+    from hybridship.cli import main
+    from hybridship.logs.io import write_log
+
+    hp, logs = fitted
+    model = hp.save(tmp_path / "m.npz")
+    write_log(logs[0], tmp_path / "log.csv.gz")
+    out = tmp_path / "fc.csv"
+    assert main(["forecast", "--model", str(model), "--log", str(tmp_path / "log.csv.gz"), "--start-time", "300",
+                 "--horizon-s", "20", "--quantiles", "0.05,0.95", "--out", str(out)]) == 0
+    df = pd.read_csv(out)
+    assert (df["north_q0.95_m"] >= df["north_q0.05_m"]).all()
+    assert main(["forecast", "--model", str(model), "--log", str(tmp_path / "log.csv.gz"), "--start-time", "300",
+                 "--quantiles", "0.05,1.5", "--out", str(out)]) == 2
+    assert "--quantiles" in capsys.readouterr().err
+
+
+def test_station_keeping_calibration_leaves_a_drift_start_raw():
+    m = DynamicModel("gunnerus")
+    logs = [physics_log(m, seed=s, duration_s=900.0, t_shutdown_s=700.0, current=(0.2, 1.0)) for s in (3, 4)]
+    hp = HybridPredictor(m.vessel, ensemble_config=TINY,
+                         calibration_config=CalibrationConfig(horizon_s=30.0, max_starts=100)).fit(logs)
+    assert hp.training_info["calibration"]["dp_only"] and "held" in hp.calibration
+    starts = [600.0, 750.0]                      # station keeping, then a drift after the failure at 700 s
+    fc, raw = hp.forecast(logs[0], starts, 30.0), hp.forecast(logs[0], starts, 30.0, calibrated=False)
+    assert not np.allclose(fc.eta_std[0, 1:], raw.eta_std[0, 1:])
+    np.testing.assert_allclose(fc.eta_std[1], raw.eta_std[1])

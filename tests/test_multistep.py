@@ -1,0 +1,113 @@
+"""Multi-step training (issue 17) and the command-aware features."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from hybridship.physics.model import DynamicModel
+from hybridship.predictors import HybridPredictor, as_log_arrays
+from hybridship.residual.calibration import CalibrationConfig
+from hybridship.residual.ensemble import EnsembleConfig
+from hybridship.residual.features import ALL_FEATURES, COMMAND_FEATURES, PAPER_FEATURES, ResidualConfig, prepare_log
+from hybridship.residual.multistep import MultiStepConfig, _torch_physics_step
+from hybridship.sim.synthetic import physics_log
+
+TINY = EnsembleConfig(n_members=2, hidden=8, max_epochs=20, patience=5, seed=0)
+
+
+def test_feature_names_keep_the_papers_order_and_append_the_command_ones():
+    assert ALL_FEATURES[:9] == PAPER_FEATURES and ALL_FEATURES[9:] == COMMAND_FEATURES
+    assert ResidualConfig().features == PAPER_FEATURES
+
+
+def test_physics_step_jacobian_matches_central_differences():
+    torch = pytest.importorskip("torch")
+    m = DynamicModel("gunnerus")
+    step = _torch_physics_step()
+    rng = np.random.default_rng(0)
+    S = 4
+    x0 = np.column_stack([rng.normal(0, 5, S), rng.normal(0, 5, S), rng.uniform(-3, 3, S),
+                          rng.normal(0, 0.5, S), rng.normal(0, 0.3, S), rng.normal(0, 0.01, S)])
+    rpm = rng.uniform(20, 100, (S, 1, 3))
+    az = rng.uniform(-1, 1, (S, 1, 3))
+    wind = np.column_stack([rng.uniform(0, 10, S), rng.uniform(0, 6, S)])[:, None]
+    x = torch.tensor(x0, requires_grad=True)
+    w = torch.tensor(rng.normal(size=(S, 9)))
+    (step.apply(x, rpm, az, wind, m.arrays, 1.0, 1, 1e-6) * w).sum().backward()
+
+    def f(xx):
+        with torch.no_grad():
+            return float((step.apply(torch.tensor(xx), rpm, az, wind, m.arrays, 1.0, 1, 1e-6) * w).sum())
+    num = np.zeros(6)
+    for k in range(6):
+        hk = 1e-5
+        e = np.zeros_like(x0)
+        e[:, k] = hk
+        num[k] = (f(x0 + e) - f(x0 - e)) / (2 * hk)
+    np.testing.assert_allclose(x.grad.numpy().sum(0), num, rtol=1e-3, atol=1e-6)
+
+
+def test_multi_step_training_lowers_its_own_validation_loss_and_round_trips(tmp_path):
+    m = DynamicModel("gunnerus")
+    logs = [physics_log(m, seed=s, duration_s=500.0, t_shutdown_s=None, current=(0.3, 1.0)) for s in (5, 6)]
+    cfg = MultiStepConfig(horizon_s=10.0, iterations=12, batch_starts=16, start_every_s=5.0, lr=3e-3, val_every=3)
+    rc = ResidualConfig(features=PAPER_FEATURES[:6] + ("rpm_main_rel", "angle_main_rad", "wind_rel_u_m_s",
+                                                       "drift_angle_rad"), bias_window_s=0.0)
+    hp = HybridPredictor(m.vessel, residual_config=rc, ensemble_config=TINY, training="multi_step",
+                         multistep_config=cfg, calibration_config=CalibrationConfig(fraction=0.0)).fit(logs)
+    info = hp.training_info["multi_step"]
+    assert info["iterations"] == 12 and info["best_val_loss"] <= info["val_loss"][0]
+    back = HybridPredictor.load(hp.save(tmp_path / "m.npz"))
+    assert back.training == "multi_step" and back.residual_config.features == rc.features
+    a = as_log_arrays(logs[0], m.vessel)
+    fc, fb = hp.forecast(a, [100.0, 200.0], 20.0, commands="known"), back.forecast(a, [100.0, 200.0], 20.0,
+                                                                                     commands="known")
+    np.testing.assert_allclose(fb.eta, fc.eta)
+    assert np.all(np.isfinite(fc.eta))
+    with pytest.raises(ValueError, match="training"):
+        HybridPredictor(m.vessel, training="two_step")
+    with pytest.raises(ValueError, match="horizon_s"):
+        MultiStepConfig(horizon_s=0)
+
+
+def test_command_features_in_training_rows_match_the_rollout():
+    """The rollout computes the command features of a step as prepare_log does for a row."""
+    m = DynamicModel("gunnerus")
+    log = physics_log(m, seed=7, duration_s=200.0, t_shutdown_s=None)
+    a = as_log_arrays(log, m.vessel)
+    rc = ResidualConfig(features=COMMAND_FEATURES, bias_window_s=0.0, deriv_window_s=0.0)
+    prep = prepare_log(m, a, rc)
+    rows = np.array([50, 51, 120])
+    X = prep.features(rows)
+    assert X.shape == (3, len(COMMAND_FEATURES)) and np.all(np.isfinite(X))
+    np.testing.assert_allclose(X[:, 0], a.rpm[rows - 1, 0] / m.vessel.thrusters[0].max_rpm)
+
+
+def test_command_regime_weights_and_model_file(tmp_path):
+    from hybridship.residual.guard import CommandRegime
+
+    rng = np.random.default_rng(0)
+    n = 2000
+    # training rows: ahead only; held-back rows: ahead (nets right) and astern at low speed (nets wrong)
+    train = (rng.uniform(0.3, 1.0, n), rng.uniform(0.5, 1.0, n), rng.uniform(-0.1, 0.1, n))
+    held = (np.r_[rng.uniform(0.3, 1.0, 300), rng.uniform(-1.0, -0.3, 300)], np.r_[np.full(300, 0.8),
+            np.full(300, 0.01)], np.zeros(600))
+    T = rng.normal(size=(600, 3))
+    Pm = np.r_[T[:300] + 0.1 * rng.normal(size=(300, 3)), -T[300:]]
+    cr = CommandRegime.fit(train, held, T, Pm, length_m=3.0)
+    k_ahead, k_astern_low = cr.regime(0.5, 0.8, 0.0), cr.regime(-0.5, 0.01, 0.0)
+    assert cr.weights[k_ahead] > 0.9 and cr.weights[k_astern_low] == 0.0
+    assert cr.weights[cr.regime(-0.5, 0.8, 0.5)] == 0.0          # never seen at all
+    np.testing.assert_allclose(cr.weight(np.array([0.5, -0.5]), np.array([0.8, 0.01]), np.zeros(2)),
+                               cr.weights[[k_ahead, k_astern_low]])
+
+    m = DynamicModel("gunnerus")
+    logs = [physics_log(m, seed=s, duration_s=400.0, t_shutdown_s=None, current=(0.3, 1.0)) for s in (8, 9)]
+    hp = HybridPredictor(m.vessel, ensemble_config=TINY, command_guard=True,
+                         calibration_config=CalibrationConfig(horizon_s=20.0, max_starts=50)).fit(logs)
+    assert hp.command_regime is not None and hp.command_regime.n_held.sum() > 0
+    back = HybridPredictor.load(hp.save(tmp_path / "m.npz"))
+    np.testing.assert_allclose(back.command_regime.weights, hp.command_regime.weights)
+    fc = hp.forecast(logs[0], [150.0], 20.0)
+    np.testing.assert_allclose(back.forecast(logs[0], [150.0], 20.0).guard_weight, fc.guard_weight)
