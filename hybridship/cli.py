@@ -327,6 +327,8 @@ def _add_benchmark(sub) -> None:
     d.add_argument("--all-rows", action="store_true", help="train on every row, not only dp_active == 1")
     d.add_argument("--training", choices=("one_step", "multi_step"), default="one_step",
                    help="how the hybrid's nets are trained (default one_step)")
+    d.add_argument("--calibration-scenarios", type=int, default=6,
+                   help="simulated DP losses that calibrate the hybrid's spread after a failure (default 6; 0: none)")
     d.add_argument("--no-plots", action="store_true", help="skip the figures")
     d.set_defaults(func=_cmd_benchmark_drift)
     h = bsub.add_parser("hsc", help="high-speed craft: SS, ARX, NARX-ANN and hybrid on simulated sea trials",
@@ -394,6 +396,9 @@ def _cmd_benchmark_drift(args) -> int:
 
     if args.members < 1 or args.intervals < 1 or args.scenarios < 1:
         raise UsageError(f"{_PROG} benchmark drift: error: --members, --intervals and --scenarios must be >= 1")
+    if not 0 <= args.calibration_scenarios <= 20:
+        raise UsageError(f"{_PROG} benchmark drift: error: --calibration-scenarios must be in 0..20, "
+                         f"got {args.calibration_scenarios}")
     if args.test is not None and args.train is None:
         raise UsageError(f"{_PROG} benchmark drift: error: --test needs --train")
     for opt, folder in (("--train", args.train), ("--test", args.test)):
@@ -408,7 +413,8 @@ def _cmd_benchmark_drift(args) -> int:
         raise UsageError(f"{_PROG} benchmark drift: error: {_one_line(exc)}") from None
     res = run_drift_benchmark(args.train, args.test, args.out, vessel=vessel, members=args.members,
                               seed=args.seed, n_intervals=args.intervals, dp_only=not args.all_rows,
-                              n_scenarios=args.scenarios, plots=not args.no_plots, training=args.training)
+                              n_scenarios=args.scenarios, plots=not args.no_plots, training=args.training,
+                              calibration_scenarios=args.calibration_scenarios)
     print()
     print(res.outputs["tables.md"].read_text())
     return 0

@@ -26,7 +26,7 @@ import numpy as np
 import pandas as pd
 
 from .fileio import atomic_write
-from .frames import wrap_2pi
+from .frames import wrap_2pi, wrap_pi
 from .limits import check_or_clip_inputs
 from .logs.ingest import ingest
 from .logs.io import LogArrays
@@ -47,6 +47,10 @@ from .residual.guard import CommandRegime, EnvelopeGuard, ThrustRegime
 #: model loads without its vessel file; 3 added the environment estimator; 2 and earlier
 #: stored only the vessel's name.
 MODEL_FORMAT_VERSION = 5
+
+#: Key of the spread calibration for forecasts that start after a failure
+#: (:meth:`HybridPredictor.calibrate_after_stop`).
+AFTER_STOP = "after_stop"
 
 #: Where the hybrid's slowly varying environment comes from (see :class:`HybridPredictor`).
 ENVIRONMENT_SOURCES = ("estimator", "mean")
@@ -789,14 +793,9 @@ class HybridPredictor:
         flags = dict(st.flags)
         if wgt is not None:
             flags[FaultFlags.OUT_OF_ENVELOPE] = np.any(wgt < 1.0, axis=1)
-        if calibrated and commands in self.calibration:
-            cal_std = self.calibrated_std(std, np.arange(st.H + 1) * st.dt, commands)
-            if self.training_info.get("calibration", {}).get("dp_only", False) and self.stop_after_failure:
-                # calibrated on station-keeping starts only: a start after a failure (a drift) is
-                # another regime, whose spread keeps the raw ensemble value
-                drift = st.arrays.dp_active[st.idx] == 0
-                cal_std[drift] = std[drift]
-            std = cal_std
+        if calibrated:
+            std = self._calibrated_forecast_std(std, np.arange(st.H + 1) * st.dt, commands,
+                                                st.arrays.dp_active[st.idx] == 0)
         return ForecastResult(st.arrays.time_s[st.idx], np.arange(st.H + 1) * st.dt, eta, nu, std, wgt,
                               flags=flags, notes=st.notes)
 
@@ -834,6 +833,75 @@ class HybridPredictor:
         a_thr = thrust_accel(self.model, eta0, nu0, st.rpm[:, 0], st.az[:, 0], st.wind[:, 0])
         acc_ext = np.ascontiguousarray((est.thrust_error * a_thr)[:, None, :])
         return eta0, nu0, np.zeros_like(eta0), draws[..., 2:5], current, acc_ext
+    def _calibrated_forecast_std(self, std, lead_s, commands, after_stop):
+        """The spread each start reports: starts after a failure (``after_stop``, (S,)) use the
+        ``"after_stop"`` calibration when :meth:`calibrate_after_stop` made one, others the
+        calibration of their command mode; where none applies, the raw spread."""
+        out = std
+        if commands in self.calibration:
+            out = self.calibrated_std(std, lead_s, commands)
+            if self.training_info.get("calibration", {}).get("dp_only", False) and self.stop_after_failure:
+                # calibrated on station-keeping starts only: a start after a failure (a drift) is
+                # another regime, whose spread keeps the raw ensemble value unless calibrated below
+                out[after_stop] = std[after_stop]
+        if AFTER_STOP in self.calibration and self.stop_after_failure and np.any(after_stop):
+            out = out.copy()
+            out[after_stop] = self.calibrated_std(std[after_stop], lead_s, AFTER_STOP)
+        return out
+
+    def calibrate_after_stop(self, logs, *, n_intervals: int = 20, horizon_s: float = 60.0,
+                             cal: CalibrationConfig | None = None) -> "HybridPredictor":
+        """Calibrate the spread of forecasts that start after a failure, on logs that contain one.
+
+        Station-keeping logs hold no drift, so the spread of a drift forecast cannot be
+        calibrated on them. Logs with failures can: the vessel's own earlier ones (a fleet)
+        or DP losses simulated for the vessel by the project's simulator
+        (:func:`hybridship.sim.scenario.embedded_scenarios` for the Gunnerus). Forecasts from
+        the first ``n_intervals`` samples after each failure (commands held: rpm 0) give a
+        per-lead scale of the spread (:func:`~hybridship.residual.calibration.fit_spread_scale`,
+        north and east pooled; heading on its own), kept as ``calibration["after_stop"]``
+        (stored in the model file) and used by every later forecast that starts after a
+        failure. The logs must not be the ones the coverage is then judged on.
+
+        Parameters
+        ----------
+        logs : iterable of path, DataFrame or LogArrays
+            Logs with a DP failure (``dp_active`` 1 -> 0) and ``horizon_s`` of drift after
+            the first ``n_intervals`` samples.
+        n_intervals : int
+            Start times after each failure (1 s apart at 1 Hz).
+        horizon_s : float
+            Longest calibrated lead time [s].
+        cal : CalibrationConfig, optional
+            ``sigma``, ``coverage`` and ``floor_quantile`` of the fit (default: the model's).
+        """
+        from . import metrics
+
+        self._check_fitted()
+        cal = self.calibration_config if cal is None else cal
+        arrays = [as_log_arrays(x, self.model.vessel) for x in logs]
+        if not arrays:
+            raise ValueError("logs: at least one log with a DP failure is needed")
+        dt = arrays[0].dt_s
+        lead = np.arange(1, int(round(horizon_s / dt)) + 1) * dt
+        errs, stds = [], []
+        for a in arrays:
+            p, t, sd = metrics.drift_forecasts(self, a, n_intervals=n_intervals, horizons_s=tuple(lead),
+                                               calibrated=False)
+            e = np.abs(p - t)
+            e[..., 2] = np.abs(wrap_pi(p[..., 2] - t[..., 2]))
+            errs.append(e)
+            stds.append(sd)
+        e, sd = np.concatenate(errs), np.concatenate(stds)          # (N, H, 3)
+        kw = dict(sigma=cal.sigma, coverage=cal.coverage, floor_quantile=cal.floor_quantile)
+        pos = fit_spread_scale(np.concatenate([e[..., 0], e[..., 1]]), np.concatenate([sd[..., 0], sd[..., 1]]),
+                               lead, **kw)
+        head = fit_spread_scale(e[..., 2], sd[..., 2], lead, **kw)
+        self.calibration[AFTER_STOP] = {"position": pos, "heading": head}
+        self.training_info.setdefault("calibration", {})["after_stop"] = {
+            "n_logs": len(arrays), "n_starts": int(e.shape[0]), "horizon_s": float(lead[-1])}
+        return self
+
     def calibrated_std(self, std: np.ndarray, lead_s: np.ndarray, commands: str) -> np.ndarray:
         """Raw ensemble spread (S, H+1, 3) at lead times (H+1,) [s] -> calibrated spread."""
         c = self.calibration[commands]

@@ -27,6 +27,7 @@ def tiny_folder(tmp_path_factory):
 
 def test_tables_have_the_papers_layout_and_physics_is_exact_on_its_own_logs(tiny_folder, tmp_path):
     res = run_drift_benchmark(tiny_folder, None, tmp_path / "out", ensemble_config=TINY, plots=False,
+                              calibration_scenarios=1,
                               progress=False)
     errors = pd.read_csv(tmp_path / "out" / "errors.csv")
     assert list(errors.columns) == ["model", "state", "window", "horizon_s", "mae"]
@@ -52,8 +53,10 @@ def test_tables_have_the_papers_layout_and_physics_is_exact_on_its_own_logs(tiny
 
 
 def test_benchmark_is_deterministic_and_the_cli_reports_bad_folders(tiny_folder, tmp_path, capsys):
-    a = run_drift_benchmark(tiny_folder, None, tmp_path / "a", ensemble_config=TINY, plots=False, progress=False)
-    b = run_drift_benchmark(tiny_folder, None, tmp_path / "b", ensemble_config=TINY, plots=False, progress=False)
+    a = run_drift_benchmark(tiny_folder, None, tmp_path / "a", ensemble_config=TINY, plots=False, progress=False,
+                            calibration_scenarios=0)
+    b = run_drift_benchmark(tiny_folder, None, tmp_path / "b", ensemble_config=TINY, plots=False, progress=False,
+                            calibration_scenarios=0)
     pd.testing.assert_frame_equal(a.errors, b.errors)
     assert main(["benchmark", "drift", "--train", str(tmp_path / "missing"), "--out", str(tmp_path / "c")]) == 2
     err = capsys.readouterr().err.strip()

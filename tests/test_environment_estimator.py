@@ -134,3 +134,35 @@ def test_nets_stay_off_after_a_failure_unless_allowed(model):
     assert not np.allclose(off.eta, on.eta)
     before = hp.forecast(logs[1], [t0 - 100.0], 30.0)          # station keeping: nets on as before
     assert np.any(before.guard_weight[:, 1:] > 0.0)
+
+
+def test_spread_after_a_stop_is_calibrated_on_logs_with_failures(model, tmp_path):
+    """calibrate_after_stop scales the spread of starts after a failure only: on its own
+    calibration logs the calibrated 2-sigma band then covers at least 95.45 % of the
+    north/east errors at every lead (split-conformal), a start after the failure is
+    calibrated whatever other starts it is forecast with, and the scale survives a
+    model-file round trip."""
+    from hybridship import metrics
+
+    train = [physics_log(model, duration_s=1000, t_shutdown_s=800, seed=s, tau_ext_N=(3000.0, -2000.0, 0.0))
+             for s in (12, 13)]
+    cal_logs = [physics_log(model, duration_s=1000, t_shutdown_s=800, seed=s, current=(0.2, 2.0),
+                            tau_ext_N=(2000.0, 1000.0, 0.0)) for s in (14, 15, 16)]
+    hp = HybridPredictor(model.vessel, ensemble_config=TINY).fit(train)
+    hp.calibrate_after_stop(cal_logs, n_intervals=20, horizon_s=60.0)
+    assert "after_stop" in hp.calibration
+    cov = []
+    for log in cal_logs:
+        a = as_log_arrays(log, model.vessel)
+        p, t, sd = metrics.drift_forecasts(hp, a, n_intervals=20, horizons_s=tuple(range(1, 61)))
+        cov.append(np.abs(p - t)[..., :2] <= 2.0 * sd[..., :2])
+    assert np.concatenate(cov).mean(axis=(0, 2)).min() >= 0.95
+    log = cal_logs[0]
+    t0 = float(log.time_s[np.flatnonzero(log.dp_active.to_numpy() == 0)[0]])
+    raw = hp.forecast(log, [t0 - 50.0, t0 + 5.0], 60.0, calibrated=False)
+    cal = hp.forecast(log, [t0 - 50.0, t0 + 5.0], 60.0)
+    assert not np.allclose(raw.eta_std[1, 1:], cal.eta_std[1, 1:])
+    np.testing.assert_allclose(hp.forecast(log, [t0 + 5.0], 60.0).eta_std[0], cal.eta_std[1])
+    path = hp.save(tmp_path / "m.npz")
+    again = HybridPredictor.load(path).forecast(log, [t0 - 50.0, t0 + 5.0], 60.0)
+    np.testing.assert_allclose(again.eta_std, cal.eta_std)
