@@ -219,6 +219,9 @@ class EnvironmentEstimator:
         #: Prior mean and standard deviation of ``theta``; :meth:`fit` may replace them.
         self.thrust_error_mean = np.zeros(3)
         self.thrust_error_std = np.asarray(config.thrust_error_prior, dtype=float)
+        #: Share of the station-keeping yaw environment kept at a thrust stop (see
+        #: :meth:`_forget_yaw_load`); :meth:`fit` learns it from training stops.
+        self.yaw_load_kept = float(config.yaw_load_kept_at_stop)
 
     # ------------------------------------------------------------------ learning
 
@@ -233,9 +236,13 @@ class EnvironmentEstimator:
         runs to that point and its ``theta`` (resolved by the drift samples through the
         load/thrust-error correlation it carried) is kept. The precision-weighted mean over
         the stops becomes the prior mean; the spread between stops (at least each stop's own
-        uncertainty) its standard deviation. Without stops, or with ``dp_only`` (the paper's
-        protocol, in which nothing of a failure is seen), the prior stays as configured:
-        0 +- ``thrust_error_prior``.
+        uncertainty) its standard deviation. The same stops tell how much of the
+        station-keeping yaw environment (yaw load plus the hull's moment from the current)
+        survives the stop: the least-squares ratio of the drift's yaw environment 60 s after
+        each stop to the one before it, clipped to [0, 1], becomes ``yaw_load_kept``.
+        Without stops, or with ``dp_only`` (the paper's protocol, in which nothing of a
+        failure is seen), the priors stay as configured: 0 +- ``thrust_error_prior`` and
+        ``yaw_load_kept_at_stop``.
 
         Parameters
         ----------
@@ -247,7 +254,8 @@ class EnvironmentEstimator:
         """
         if dp_only:
             return self
-        means, precs = [], []
+        self.yaw_load_kept = float(self.config.yaw_load_kept_at_stop)   # the drifts below use the prior
+        means, precs, yaw_before, yaw_after = [], [], [], []
         for a in logs_arrays:
             dp = a.dp_active.astype(bool)
             stops = np.flatnonzero(dp[:-1] & ~dp[1:]) + 1
@@ -256,11 +264,17 @@ class EnvironmentEstimator:
                 if end >= len(a.time_s) or a.segment_id[end] != a.segment_id[i]:
                     continue
                 first = int(np.searchsorted(a.time_s, a.time_s[i] - 1800.0))
-                est = self.run(a, np.array([end]), first_row=first)
-                means.append(est.x[0, THR])
-                precs.append(1.0 / np.diag(est.P[0])[THR])
+                est = self.run(a, np.array([i - 1, end]), first_row=first)
+                means.append(est.x[1, THR])
+                precs.append(1.0 / np.diag(est.P[1])[THR])
+                yaw_before.append(self._total_yaw_env(est.x[0]))
+                yaw_after.append(self._total_yaw_env(est.x[1]))
         if not means:
             return self
+        # How much of the station-keeping yaw environment the drift kept (least squares over stops)
+        yb, ya = np.array(yaw_before), np.array(yaw_after)
+        if np.sum(yb * yb) > 0:
+            self.yaw_load_kept = float(np.clip(np.sum(yb * ya) / np.sum(yb * yb), 0.0, 1.0))
         means, precs = np.array(means), np.array(precs)
         m = np.sum(precs * means, axis=0) / precs.sum(axis=0)
         between = np.sqrt(np.sum(precs * (means - m) ** 2, axis=0) / precs.sum(axis=0))
@@ -358,16 +372,22 @@ class EnvironmentEstimator:
         k = LOAD.start + 2
         x = x.copy()
         P = P.copy()
-        eta, nu = x[None, 0:3], x[None, 3:6]
-        a_c = self.model.acceleration(eta, nu, current=current_input(x[None, CUR]))[0, 2]
-        a_0 = self.model.acceleration(eta, nu)[0, 2]
-        total = x[k] + (a_c - a_0)              # the environment's yaw acceleration under DP
-        kept = self.config.yaw_load_kept_at_stop
-        x[k] = kept * total - (a_c - a_0)
+        current_yaw = self._total_yaw_env(x) - x[k]
+        total = x[k] + current_yaw              # the environment's yaw acceleration under DP
+        kept = self.yaw_load_kept
+        x[k] = kept * total - current_yaw
         P[k, :] = 0.0
         P[:, k] = 0.0
         P[k, k] = self.config.load_yaw_prior_rad_s2 ** 2 + ((1.0 - kept) * total) ** 2
         return x, P
+
+    def _total_yaw_env(self, x) -> float:
+        """Yaw acceleration of the estimated environment at state ``x``: load plus the hull's
+        response to the estimated current [rad/s^2]."""
+        eta, nu = x[None, 0:3], x[None, 3:6]
+        a_c = self.model.acceleration(eta, nu, current=current_input(x[None, CUR]))[0, 2]
+        a_0 = self.model.acceleration(eta, nu)[0, 2]
+        return float(x[LOAD.start + 2] + a_c - a_0)
 
     @staticmethod
     def _update(x, P, z, H_rows, r_std, wrap_idx):
