@@ -165,6 +165,8 @@ def run_drift_benchmark(train=None, test=None, out_dir="drift-benchmark", *, ves
     # copy that differs only in where the environment comes from, so no second training.
     mean_bias = copy.copy(hybrid)
     mean_bias.environment = "mean"
+    # its spread after a failure stays raw: the after-stop scale was fitted for the estimator
+    mean_bias.calibration = {k: v for k, v in hybrid.calibration.items() if k != "after_stop"}
     predictors = {"hybrid": (hybrid, {"guard": True}), "hybrid_nets_unguarded": (hybrid, {"guard": False}),
                   "hybrid_mean_bias": (mean_bias, {"guard": True}),
                   "dynamic": (DynamicPredictor(vessel), {}), "dead_reckoning": (DeadReckoning(vessel), {}),
