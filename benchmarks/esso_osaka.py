@@ -97,7 +97,8 @@ def main(argv=None) -> int:
                     f"{cfg.multistep.batch_starts} starts)" if cfg.training == "multi_step" else "")
                  + f"; command-regime guard {'on' if cfg.command_guard else 'off'}; spread calibrated on the last "
                  f"{cfg.calibration.fraction:.0%} of each training run; {cfg.ensemble.n_members} members, seed "
-                 f"{cfg.ensemble.seed}. Training took {res.timings_s['fit_hybrid']:.0f} s on one core.\n")
+                 f"{cfg.ensemble.seed}. Training took {res.timings_s['fit_hybrid']:.0f} s (wall time, one thread, "
+                 "on a shared machine).\n")
         text = replace_generated(text, "setup", setup)
         page.write_text(text, encoding="utf-8")
         print(f"updated {page.relative_to(ROOT)}")

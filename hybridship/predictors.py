@@ -649,8 +649,8 @@ class HybridPredictor:
             self.ensemble, hist = train_multistep(self.ensemble, self.model, starts,
                                                   self.residual_config.feature_index, self.multistep_config,
                                                   seed=self.ensemble_config.seed, progress=progress)
-            self.training_info["multi_step"] = {k: hist[k] for k in ("iterations", "n_starts", "n_val_starts", "val_loss",
-                                                                     "best_val_loss")}
+            self.training_info["multi_step"] = {k: hist[k] for k in ("iterations", "n_starts", "n_val_starts",
+                                                                     "val_loss", "best_val_loss")}
 
     def _regime_inputs(self, prep, rows):
         """(rpm / max rpm, model-predicted u [m/s], first rotatable angle [rad]) of rows predicted from row - 1."""
