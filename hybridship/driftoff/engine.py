@@ -119,7 +119,7 @@ def _deriv(x, t, rpm0, rpm_now, inv_tau, prep, tau_wave, hold, acc_ned, Q, thrus
 @numba.njit(cache=True, fastmath={"nsz", "arcp", "contract", "afn", "reassoc"})
 def _kernel(psi0, P, m_inv, m_a, d_lin, d_quad, d_lift, strip_w, thr, wind_p,
             az, rpm0, tau_rpm_s, balance, wind_mean, wind_dir, gust_f, gust_a, gust_ph,
-            cur, acc_ned, wave_w, wave_a, wave_ph, wave_dir, hull, dt, n_steps, radii, t_react,
+            cur, acc_ned, nu0, wave_w, wave_a, wave_ph, wave_dir, hull, dt, n_steps, radii, t_react,
             t_reach, r_react, track):
     B = psi0.shape[0]
     n_r = radii.shape[0]
@@ -145,9 +145,11 @@ def _kernel(psi0, P, m_inv, m_a, d_lin, d_quad, d_lift, strip_w, thr, wind_p,
     for b in range(B):
         Q = ModelArrays(m_inv[b], m_a[b], P.rb, d_lin[b], d_quad[b], d_lift[b], P.strip_x, strip_w[b],
                         thr[b], P.thr_coef, wind_p[b], P.wind_table, P.rud)
-        for i in range(6):
+        for i in range(3):
             x[i] = 0.0
         x[2] = psi0[b]
+        for i in range(3):
+            x[3 + i] = nu0[b, i]
         for i in range(3):
             hold[i] = 0.0
         if balance:
@@ -222,8 +224,8 @@ def _kernel(psi0, P, m_inv, m_a, d_lin, d_quad, d_lift, strip_w, thr, wind_p,
 
 
 def run_kernel(psi0, P, stack, az, rpm0, tau_rpm_s, balance, wind_mean, wind_dir, gust_f, gust_a, gust_ph,
-               cur, acc_ned, waves, hull, dt_s, n_steps, radii_m, t_react_s, keep_tracks=False):
-    """Call the compiled kernel on contiguous float arrays.
+               cur, acc_ned, waves, hull, dt_s, n_steps, radii_m, t_react_s, keep_tracks=False, nu0=None):
+    """Call the compiled kernel on contiguous float arrays (``nu0`` (B, 3): start velocities, default rest).
 
     Returns ``(t_reach_s (B, R), excursion_m (B, Q), track (B, n_steps + 1, 3) or None)``.
     """
@@ -235,6 +237,6 @@ def run_kernel(psi0, P, stack, az, rpm0, tau_rpm_s, balance, wind_mean, wind_dir
     _kernel(f(psi0), P, f(stack.m_inv), f(stack.m_a), f(stack.d_lin), f(stack.d_quad), f(stack.d_lift),
             f(stack.strip_w), f(stack.thr), f(stack.wind_p), f(az), f(rpm0), float(tau_rpm_s), bool(balance),
             f(wind_mean), f(wind_dir), f(gust_f), f(gust_a), f(gust_ph), f(cur), f(acc_ned),
-            f(waves[0]), f(waves[1]), f(waves[2]), f(waves[3]), f(hull), float(dt_s), int(n_steps),
+            f(np.zeros((B, 3)) if nu0 is None else np.broadcast_to(nu0, (B, 3))), f(waves[0]), f(waves[1]), f(waves[2]), f(waves[3]), f(hull), float(dt_s), int(n_steps),
             f(radii_m), f(t_react_s), t_reach, r_react, track)
     return t_reach, r_react, (track if keep_tracks else None)
