@@ -14,7 +14,10 @@ JSON keys: ``physics_forecasts_per_s`` (at the largest B), ``physics_single_fore
 ``physics_vessel_steps_per_s`` and ``physics_by_batch`` (B -> forecasts/s); for the hybrid
 (10-member ensemble, guard on) ``hybrid_forecasts_per_s`` (at the largest hybrid batch),
 ``hybrid_single_forecast_ms``, ``hybrid_by_batch`` and ``train_s`` (training on 3 000
-samples of a synthetic log with default settings).
+samples of a synthetic log with default settings); for drift-off analysis
+``driftoff_samples_per_s`` (Monte-Carlo blackouts per second: 8 headings x 100 samples of
+one weather state, 300 s horizon, all default loads) and ``driftoff_state_s`` (wall time of
+that weather state).
 """
 
 from __future__ import annotations
@@ -128,6 +131,19 @@ def hybrid_speed(batches=(1, 1_000, 10_000), seed: int = 0) -> dict:
             "train_samples": hp.training_info["n_rows"]}
 
 
+def driftoff_speed(n_samples: int = 100) -> dict:
+    """Time the Monte-Carlo blackouts of one weather state at 8 headings (planning mode)."""
+    from hybridship.driftoff.planning import DriftOffSettings, simulate_blackouts
+    from hybridship.driftoff.weather import WeatherState
+
+    w = WeatherState.from_degrees(wind_speed_m_s=10.0, wind_dir_deg=30.0, hs_m=1.0, tp_s=6.0, current_m_s=0.2,
+                                  current_dir_deg=200.0)
+    st = DriftOffSettings(n_samples=n_samples)
+    psi = np.radians(np.arange(0, 360, 45))
+    t = _time(lambda: simulate_blackouts("gunnerus", w, psi, settings=st), min_time_s=1.0, max_repeats=20)
+    return {"driftoff_samples_per_s": psi.size * n_samples / t, "driftoff_state_s": t}
+
+
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--json", action="store_true", help="print one JSON object")
@@ -136,6 +152,7 @@ def main(argv=None) -> int:
     batches = (1, 100, 1_000) if args.quick else (1, 1_000, 100_000)
     res = physics_speed(batches)
     res.update(hybrid_speed((1, 100) if args.quick else (1, 1_000, 10_000)))
+    res.update(driftoff_speed(20 if args.quick else 100))
     if args.json:
         print(json.dumps(res, sort_keys=True))
         return 0
@@ -151,6 +168,9 @@ def main(argv=None) -> int:
         print(f"{int(b):>8} {f:>14,.0f}")
     print(f"single forecast latency: {res['hybrid_single_forecast_ms']:.3f} ms")
     print(f"training on {res['train_samples']} samples: {res['train_s']:.1f} s")
+    print()
+    print(f"drift-off blackouts (8 headings x samples, 300 s horizon): {res['driftoff_samples_per_s']:,.0f} samples/s, "
+          f"{res['driftoff_state_s']:.3f} s per weather state")
     return 0
 
 

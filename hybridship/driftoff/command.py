@@ -27,7 +27,7 @@ def _floats(text: str) -> list[float]:
     return vals
 
 
-def _common(p) -> None:
+def _common(p, plots: bool = True) -> None:
     p.add_argument("--vessel", default="gunnerus", help="packaged vessel name or vessel TOML file (default gunnerus)")
     p.add_argument("--radii-m", type=_floats, default=[3.0, 5.0, 10.0],
                    help="limit radii [m], comma-separated (default 3,5,10)")
@@ -41,7 +41,8 @@ def _common(p) -> None:
                    help="multiplier of the vessel file's [true_vessel] spread; 0 = nominal model (default 1)")
     p.add_argument("--seed", type=int, default=0, help="seed (default 0)")
     p.add_argument("--out", type=Path, required=True, help="output folder")
-    p.add_argument("--no-plots", action="store_true", help="skip the figures")
+    if plots:
+        p.add_argument("--no-plots", action="store_true", help="skip the figures")
 
 
 def _weather(p, table: bool) -> None:
@@ -114,7 +115,7 @@ def add_parser(sub, parser_class, usage_error=None) -> None:
                    help="a state is operable when P(exceed) <= this (default 0.1)")
     c.add_argument("--progress", action=argparse.BooleanOptionalAction, default=None,
                    help="show a progress bar (default: when stderr is a terminal)")
-    _common(c)
+    _common(c, plots=False)
     c.set_defaults(func=_cmd_season)
 
 

@@ -44,16 +44,24 @@ HULL_FIELDS = ("L_m", "B_m", "T_m", "bow_factor", "side_factor", "yaw_lever_fact
 @numba.njit(cache=True, fastmath=True)
 def _wave_drift(t, n, e, psi, w, a, ph, chi, hull, mean_only, out):
     """Newman geometric slowly varying drift (or its mean) of one ship, body frame, into ``out[3]``."""
+    work = np.zeros((6, 3))
+    _wave_drift_work(t, n, e, psi, w, a, ph, chi, hull, mean_only, out, work)
+
+
+@numba.njit(cache=True, fastmath=True)
+def _wave_drift_work(t, n, e, psi, w, a, ph, chi, hull, mean_only, out, work):
+    """:func:`_wave_drift` with a caller-provided ``work`` buffer (6, 3) (no allocation in the loop)."""
     L, B, T = hull[0], hull[1], hull[2]
     cx, cy, cn = hull[3], hull[4], hull[5]
     half_rho_g = 0.5 * hull[6] * hull[7]
     g = hull[7]
-    cp = np.zeros(3)
-    sp = np.zeros(3)
-    cm = np.zeros(3)
-    sm = np.zeros(3)
-    mean = np.zeros(3)
-    d = np.zeros(3)
+    work[:, :] = 0.0
+    cp = work[0]
+    sp = work[1]
+    cm = work[2]
+    sm = work[3]
+    mean = work[4]
+    d = work[5]
     for j in range(w.shape[0]):
         if a[j] == 0.0:
             continue
@@ -91,18 +99,16 @@ def _wave_drift(t, n, e, psi, w, a, ph, chi, hull, mean_only, out):
 
 
 @numba.njit(cache=True, fastmath=True)
-def _deriv(x, t, rpm0, rpm_now, inv_tau, prep, tau_wave, hold, acc_ned, Q, thrusts, k):
-    """State derivative of one ship at time ``t`` (spin-down evaluated at ``t``)."""
+def _deriv(x, t, rpm0, rpm_now, inv_tau, prep, tau_wave, hold, acc_ned, Q, thrusts, k, tau, acc):
+    """State derivative of one ship at time ``t`` (spin-down evaluated at ``t``); ``tau``, ``acc`` are (3,) buffers."""
     c = math.cos(x[2])
     s = math.sin(x[2])
     decay = math.exp(-t * inv_tau)
     for i in range(rpm0.shape[0]):
         rpm_now[i] = rpm0[i] * decay
     d2 = decay * decay
-    tau = np.empty(3)
     for i in range(3):
         tau[i] = tau_wave[i] + hold[i] * d2
-    acc = np.empty(3)
     acc[0] = c * acc_ned[0] + s * acc_ned[1]
     acc[1] = -s * acc_ned[0] + c * acc_ned[1]
     acc[2] = acc_ned[2]
@@ -142,6 +148,9 @@ def _kernel(psi0, P, m_inv, m_a, d_lin, d_quad, d_lift, strip_w, thr, wind_p,
     tau_wave = np.empty(3)
     hold = np.zeros(3)
     zeros_rpm = np.zeros(n_ch)
+    tau_b = np.empty(3)
+    acc_b = np.empty(3)
+    work = np.zeros((6, 3))
     for b in range(B):
         Q = ModelArrays(m_inv[b], m_a[b], P.rb, d_lin[b], d_quad[b], d_lift[b], P.strip_x, strip_w[b],
                         thr[b], P.thr_coef, wind_p[b], P.wind_table, P.rud)
@@ -155,8 +164,8 @@ def _kernel(psi0, P, m_inv, m_a, d_lin, d_quad, d_lift, strip_w, thr, wind_p,
         if balance:
             # Holding load = -(environment at rest with mean wind and mean wave drift) = -M nu_dot0.
             prepare_inputs(az[b], wind_mean[b], wind_dir[b], cur[b, 0], cur[b, 1], Q, prep)
-            _wave_drift(0.0, 0.0, 0.0, x[2], wave_w[b], wave_a[b], wave_ph[b], wave_dir[b], hull, True, tau_wave)
-            _deriv(x, 1e9, zeros_rpm, rpm_now, inv_tau, prep, tau_wave, hold, acc_ned[b], Q, thrusts, k1)
+            _wave_drift_work(0.0, 0.0, 0.0, x[2], wave_w[b], wave_a[b], wave_ph[b], wave_dir[b], hull, True, tau_wave, work)
+            _deriv(x, 1e9, zeros_rpm, rpm_now, inv_tau, prep, tau_wave, hold, acc_ned[b], Q, thrusts, k1, tau_b, acc_b)
             Mb = np.linalg.inv(m_inv[b])
             for i in range(3):
                 hold[i] = -(Mb[i, 0] * k1[3] + Mb[i, 1] * k1[4] + Mb[i, 2] * k1[5])
@@ -179,18 +188,18 @@ def _kernel(psi0, P, m_inv, m_a, d_lin, d_quad, d_lift, strip_w, thr, wind_p,
             if ws < 0.0:
                 ws = 0.0
             prepare_inputs(az[b], ws, wind_dir[b], cur[b, 0], cur[b, 1], Q, prep)
-            _wave_drift(t0, x[0], x[1], x[2], wave_w[b], wave_a[b], wave_ph[b], wave_dir[b], hull, False, tau_wave)
+            _wave_drift_work(t0, x[0], x[1], x[2], wave_w[b], wave_a[b], wave_ph[b], wave_dir[b], hull, False, tau_wave, work)
             # RK4 with the spin-down evaluated at the stage times
-            _deriv(x, t0, rpm0[b], rpm_now, inv_tau, prep, tau_wave, hold, acc_ned[b], Q, thrusts, k1)
+            _deriv(x, t0, rpm0[b], rpm_now, inv_tau, prep, tau_wave, hold, acc_ned[b], Q, thrusts, k1, tau_b, acc_b)
             for i in range(6):
                 xt[i] = x[i] + 0.5 * dt * k1[i]
-            _deriv(xt, t0 + 0.5 * dt, rpm0[b], rpm_now, inv_tau, prep, tau_wave, hold, acc_ned[b], Q, thrusts, k2)
+            _deriv(xt, t0 + 0.5 * dt, rpm0[b], rpm_now, inv_tau, prep, tau_wave, hold, acc_ned[b], Q, thrusts, k2, tau_b, acc_b)
             for i in range(6):
                 xt[i] = x[i] + 0.5 * dt * k2[i]
-            _deriv(xt, t0 + 0.5 * dt, rpm0[b], rpm_now, inv_tau, prep, tau_wave, hold, acc_ned[b], Q, thrusts, k3)
+            _deriv(xt, t0 + 0.5 * dt, rpm0[b], rpm_now, inv_tau, prep, tau_wave, hold, acc_ned[b], Q, thrusts, k3, tau_b, acc_b)
             for i in range(6):
                 xt[i] = x[i] + dt * k3[i]
-            _deriv(xt, t0 + dt, rpm0[b], rpm_now, inv_tau, prep, tau_wave, hold, acc_ned[b], Q, thrusts, k4)
+            _deriv(xt, t0 + dt, rpm0[b], rpm_now, inv_tau, prep, tau_wave, hold, acc_ned[b], Q, thrusts, k4, tau_b, acc_b)
             for i in range(6):
                 x[i] += dt / 6.0 * (k1[i] + 2.0 * k2[i] + 2.0 * k3[i] + k4[i])
             t1 = t0 + dt
