@@ -132,7 +132,8 @@ def main(argv=None) -> int:
             f"\n\n{len(states)} hourly states x {psi.size} headings x {args.samples} samples = {n} blackouts. "
             f"Cluster start-up and warm-up (not in the wall times): {startup:.1f} s. Single-process and cluster "
             f"tables identical: **{equal}**. `year_wall_s` (8 760 states): {year}. "
-            f"Machine: {os.cpu_count()} logical cores, shared with other jobs while measured.\n\n"
+            f"Machine: {os.cpu_count()} logical cores, 1-min load average at the end {os.getloadavg()[0]:.1f} "
+            f"(above the core count = other jobs competed for the cores).\n\n"
             + markdown_table(res, digits=1) + "\n")
     write_text(args.out / "tables.md", text)
     print(text)

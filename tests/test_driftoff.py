@@ -271,3 +271,31 @@ def test_live_bad_input_names_the_field():
         environment_from_log([1, 2, 3], "gunnerus")
     with pytest.raises(ValueError, match="window_s"):
         environment_from_log(pd.DataFrame({"time_s": [0.0, 1.0, 2.0]}), "gunnerus", window_s=-5)
+
+
+def test_cli_season_in_this_process(tmp_path):
+    from hybridship.cli import main
+
+    states = [WeatherState.from_degrees(wind_speed_m_s=u, wind_dir_deg=40.0, hs_m=0.5, tp_s=5.0) for u in (6.0, 12.0)]
+    table = tmp_path / "weather.csv"
+    states_to_frame(states, ["h0", "h1"]).to_csv(table, index=False)
+    out = tmp_path / "season"
+    assert main(["drift-off", "season", "--weather-table", str(table), "--scheduler", "none", "--samples", "3",
+                 "--headings-deg", "0,90", "--horizon-s", "90", "--no-progress", "--out", str(out)]) == 0
+    season = pd.read_csv(out / "season.csv")
+    assert len(season) == 2 * 2 * 3 and list(season["label"].unique()) == ["h0", "h1"]
+    assert (out / "operability.csv").is_file() and (out / "summary.md").is_file()
+
+
+def test_cli_live_on_a_truthsim_log(tmp_path):
+    files = sorted(TRUTHSIM_DEV.glob("dev_*.csv.gz")) if TRUTHSIM_DEV.is_dir() else []
+    if not files:
+        pytest.skip(f"truthsim-dev logs not found under {TRUTHSIM_DEV}")
+    from hybridship.cli import main
+
+    out = tmp_path / "live"
+    assert main(["drift-off", "live", "--log", str(files[0]), "--time-s", "2900", "--samples", "10",
+                 "--radii-m", "5,10", "--no-plots", "--out", str(out)]) == 0
+    times = pd.read_csv(out / "times.csv")
+    assert len(times) == 2
+    assert main(["drift-off", "live", "--log", str(files[0]), "--time-s", "1e9", "--out", str(out)]) == 2
