@@ -12,7 +12,8 @@ time to reach a radius is measured from ``t_b`` on
 
 and placed in the predicted distribution: the percentile is the share of predicted samples
 that reach the radius no later than the actual time (50 = the median prediction; near 0 the
-actual drift was slower than every sample, near 100 faster). Each update is timed.
+vessel got there sooner than almost every sample, i.e. drifted faster than predicted; near
+100 more slowly). Each update is timed.
 
 Usage::
 
