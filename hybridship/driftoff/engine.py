@@ -41,61 +41,95 @@ __all__ = ["run_kernel", "HULL_FIELDS"]
 HULL_FIELDS = ("L_m", "B_m", "T_m", "bow_factor", "side_factor", "yaw_lever_factor", "rho_kg_m3", "g_m_s2")
 
 
-@numba.njit(cache=True, fastmath=True)
-def _wave_drift(t, n, e, psi, w, a, ph, chi, hull, mean_only, out):
-    """Newman geometric slowly varying drift (or its mean) of one ship, body frame, into ``out[3]``."""
-    work = np.zeros((6, 3))
-    _wave_drift_work(t, n, e, psi, w, a, ph, chi, hull, mean_only, out, work)
+#: Columns of the per-component table of :func:`_wave_prep`.
+_WP_W, _WP_KX, _WP_KE, _WP_CCHI, _WP_SCHI, _WP_PH, _WP_AX, _WP_AY, _WP_AN, _WP_MX, _WP_MY, _WP_MN = range(12)
+_WP_NCOL = 12
 
 
 @numba.njit(cache=True, fastmath=True)
-def _wave_drift_work(t, n, e, psi, w, a, ph, chi, hull, mean_only, out, work):
-    """:func:`_wave_drift` with a caller-provided ``work`` buffer (6, 3) (no allocation in the loop)."""
+def _wave_prep(w, a, ph, chi, hull, pre):
+    """Per-component constants of the drift loads of one ship into ``pre`` (n, ``_WP_NCOL``).
+
+    With ``F_x = -(rho g / 2) c_x B p(k) f(k, L)`` and ``F_y = -(rho g / 2) c_y L p(k) f(k, B)``
+    (:func:`hybridship.sim.environment.drift_coefficients`), ``D_x = F_x cos b |cos b|``,
+    ``D_y = F_y sin b |sin b|`` and ``D_n = c_n L cos b D_y``; so ``A sqrt|D|`` factors into a
+    constant (stored here) times ``|cos b|``, ``|sin b|`` and ``sqrt|cos b| |sin b|``.
+    """
     L, B, T = hull[0], hull[1], hull[2]
     cx, cy, cn = hull[3], hull[4], hull[5]
     half_rho_g = 0.5 * hull[6] * hull[7]
     g = hull[7]
-    work[:, :] = 0.0
-    cp = work[0]
-    sp = work[1]
-    cm = work[2]
-    sm = work[3]
-    mean = work[4]
-    d = work[5]
     for j in range(w.shape[0]):
-        if a[j] == 0.0:
-            continue
         k = w[j] * w[j] / g
-        beta = chi[j] - psi
-        beta = beta - 2.0 * math.pi * math.floor((beta + math.pi) / (2.0 * math.pi))
         p = -math.expm1(-2.0 * k * T)
         kl = (k * L) ** 2
         kb = (k * B) ** 2
-        cb = math.cos(beta)
-        sb = math.sin(beta)
-        d[0] = -half_rho_g * cx * B * p * kl / (1.0 + kl) * cb * abs(cb)
-        d[1] = -half_rho_g * cy * L * p * kb / (1.0 + kb) * sb * abs(sb)
-        d[2] = cn * L * cb * d[1]
+        fx = -half_rho_g * cx * B * p * kl / (1.0 + kl)
+        fy = -half_rho_g * cy * L * p * kb / (1.0 + kb)
+        a2 = a[j] * a[j]
+        pre[j, _WP_W] = w[j]
+        pre[j, _WP_KX] = k * math.cos(chi[j])
+        pre[j, _WP_KE] = k * math.sin(chi[j])
+        pre[j, _WP_CCHI] = math.cos(chi[j])
+        pre[j, _WP_SCHI] = math.sin(chi[j])
+        pre[j, _WP_PH] = ph[j]
+        pre[j, _WP_MX] = a2 * fx                    # signed: mean load = M * (trig factor)
+        pre[j, _WP_MY] = a2 * fy
+        pre[j, _WP_MN] = a2 * cn * L * fy
+        pre[j, _WP_AX] = math.sqrt(abs(a2 * fx))
+        pre[j, _WP_AY] = math.sqrt(abs(a2 * fy))
+        pre[j, _WP_AN] = math.sqrt(abs(a2 * cn * L * fy))
+
+
+@numba.njit(cache=True, fastmath=True)
+def _wave_eval(t, n, e, psi, pre, mean_only, out, work):
+    """Newman geometric slowly varying drift (or its mean) at time ``t``, position ``(n, e)``
+    and heading ``psi``, body frame, into ``out[3]`` (``work``: a (4, 3) buffer)."""
+    work[:, :] = 0.0
+    cpsi = math.cos(psi)
+    spsi = math.sin(psi)
+    for c in range(3):
+        out[c] = 0.0
+    for j in range(pre.shape[0]):
+        cb = pre[j, _WP_CCHI] * cpsi + pre[j, _WP_SCHI] * spsi      # cos(chi - psi)
+        sb = pre[j, _WP_SCHI] * cpsi - pre[j, _WP_CCHI] * spsi      # sin(chi - psi)
         if mean_only:
-            for c in range(3):
-                mean[c] += a[j] * a[j] * d[c]
+            out[0] += pre[j, _WP_MX] * cb * abs(cb)
+            out[1] += pre[j, _WP_MY] * sb * abs(sb)
+            out[2] += pre[j, _WP_MN] * cb * sb * abs(sb)
             continue
-        theta = w[j] * t + k * (math.cos(chi[j]) * n + math.sin(chi[j]) * e) + ph[j]
+        theta = pre[j, _WP_W] * t + pre[j, _WP_KX] * n + pre[j, _WP_KE] * e + pre[j, _WP_PH]
         ct = math.cos(theta)
         st = math.sin(theta)
+        amp0 = pre[j, _WP_AX] * abs(cb)
+        amp1 = pre[j, _WP_AY] * abs(sb)
+        amp2 = pre[j, _WP_AN] * math.sqrt(abs(cb)) * abs(sb)
+        # the sign of each drift coefficient picks the group (|Z+|^2 - |Z-|^2)
+        g0 = 0 if pre[j, _WP_MX] * cb > 0.0 else 2
+        g1 = 0 if pre[j, _WP_MY] * sb > 0.0 else 2
+        g2 = 0 if pre[j, _WP_MN] * cb * sb > 0.0 else 2
+        work[g0, 0] += amp0 * ct
+        work[g0 + 1, 0] += amp0 * st
+        work[g1, 1] += amp1 * ct
+        work[g1 + 1, 1] += amp1 * st
+        work[g2, 2] += amp2 * ct
+        work[g2 + 1, 2] += amp2 * st
+    if not mean_only:
         for c in range(3):
-            amp = a[j] * math.sqrt(abs(d[c]))
-            if d[c] > 0.0:
-                cp[c] += amp * ct
-                sp[c] += amp * st
-            else:
-                cm[c] += amp * ct
-                sm[c] += amp * st
-    for c in range(3):
-        if mean_only:
-            out[c] = mean[c]
-        else:
-            out[c] = cp[c] * cp[c] + sp[c] * sp[c] - cm[c] * cm[c] - sm[c] * sm[c]
+            out[c] = work[0, c] ** 2 + work[1, c] ** 2 - work[2, c] ** 2 - work[3, c] ** 2
+
+
+@numba.njit(cache=True, fastmath=True)
+def _wave_drift(t, n, e, psi, w, a, ph, chi, hull, mean_only, out):
+    """Newman geometric slowly varying drift (or its mean) of one ship, body frame, into ``out[3]``.
+
+    Same loads as :func:`hybridship.sim.environment.wave_drift_loads` (``newman="geometric"``)
+    and :func:`~hybridship.sim.environment.mean_drift_loads` for components ``w, a, ph, chi``
+    (frequency, amplitude, phase, direction from).
+    """
+    pre = np.empty((w.shape[0], _WP_NCOL))
+    _wave_prep(w, a, ph, chi, hull, pre)
+    _wave_eval(t, n, e, psi, pre, mean_only, out, np.zeros((4, 3)))
 
 
 @numba.njit(cache=True, fastmath=True)
@@ -150,10 +184,12 @@ def _kernel(psi0, P, m_inv, m_a, d_lin, d_quad, d_lift, strip_w, thr, wind_p,
     zeros_rpm = np.zeros(n_ch)
     tau_b = np.empty(3)
     acc_b = np.empty(3)
-    work = np.zeros((6, 3))
+    work = np.zeros((4, 3))
+    pre = np.empty((wave_w.shape[1], _WP_NCOL))
     for b in range(B):
         Q = ModelArrays(m_inv[b], m_a[b], P.rb, d_lin[b], d_quad[b], d_lift[b], P.strip_x, strip_w[b],
                         thr[b], P.thr_coef, wind_p[b], P.wind_table, P.rud)
+        _wave_prep(wave_w[b], wave_a[b], wave_ph[b], wave_dir[b], hull, pre)
         for i in range(3):
             x[i] = 0.0
         x[2] = psi0[b]
@@ -164,7 +200,7 @@ def _kernel(psi0, P, m_inv, m_a, d_lin, d_quad, d_lift, strip_w, thr, wind_p,
         if balance:
             # Holding load = -(environment at rest with mean wind and mean wave drift) = -M nu_dot0.
             prepare_inputs(az[b], wind_mean[b], wind_dir[b], cur[b, 0], cur[b, 1], Q, prep)
-            _wave_drift_work(0.0, 0.0, 0.0, x[2], wave_w[b], wave_a[b], wave_ph[b], wave_dir[b], hull, True, tau_wave, work)
+            _wave_eval(0.0, 0.0, 0.0, x[2], pre, True, tau_wave, work)
             _deriv(x, 1e9, zeros_rpm, rpm_now, inv_tau, prep, tau_wave, hold, acc_ned[b], Q, thrusts, k1, tau_b, acc_b)
             Mb = np.linalg.inv(m_inv[b])
             for i in range(3):
@@ -188,7 +224,7 @@ def _kernel(psi0, P, m_inv, m_a, d_lin, d_quad, d_lift, strip_w, thr, wind_p,
             if ws < 0.0:
                 ws = 0.0
             prepare_inputs(az[b], ws, wind_dir[b], cur[b, 0], cur[b, 1], Q, prep)
-            _wave_drift_work(t0, x[0], x[1], x[2], wave_w[b], wave_a[b], wave_ph[b], wave_dir[b], hull, False, tau_wave, work)
+            _wave_eval(t0, x[0], x[1], x[2], pre, False, tau_wave, work)
             # RK4 with the spin-down evaluated at the stage times
             _deriv(x, t0, rpm0[b], rpm_now, inv_tau, prep, tau_wave, hold, acc_ned[b], Q, thrusts, k1, tau_b, acc_b)
             for i in range(6):
