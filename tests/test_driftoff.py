@@ -299,3 +299,21 @@ def test_cli_live_on_a_truthsim_log(tmp_path):
     times = pd.read_csv(out / "times.csv")
     assert len(times) == 2
     assert main(["drift-off", "live", "--log", str(files[0]), "--time-s", "1e9", "--out", str(out)]) == 2
+
+
+def test_live_current_members_carry_the_vessel_along():
+    from hybridship.driftoff.live import EnvironmentEstimate
+
+    z3 = np.zeros(3)
+    est = EnvironmentEstimate(time_s=0.0, eta=z3, nu=z3, rpm=z3, azimuth_rad=z3, wind_speed_m_s=0.0,
+                              wind_dir_from_rad=0.0, gust_intensity=0.0, accel_ned=z3, accel_members=np.zeros((1, 3)))
+    st = DriftOffSettings(n_samples=2, horizon_s=300.0, radii_m=(5.0, 50.0), reaction_times_s=(300.0,),
+                          vessel_spread=0.0)
+    assert np.all(np.isinf(blackout_now(est, "gunnerus", st).t_reach_s))
+    import dataclasses
+
+    moving = dataclasses.replace(est, current_members_ned_m_s=np.array([[0.0, 0.5]]))   # 0.5 m/s towards east
+    r = blackout_now(moving, "gunnerus", st)
+    t50 = r.t_reach_s[0, 0, 1]
+    # carried along: reaches 50 m later than a body already moving at 0.5 m/s, but not much later
+    assert 100.0 < t50 < 200.0, t50

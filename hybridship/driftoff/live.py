@@ -54,6 +54,10 @@ class EnvironmentEstimate:
         Estimated unexplained acceleration ``[a_north_m_s2, a_east_m_s2, r_dot_rad_s2]``.
     accel_members : ndarray (M, 3)
         Its members (the uncertainty); their mean is ``accel_ned``.
+    current_members_ned_m_s : ndarray (M_c, 2) or None
+        Current velocity members ``[north_m_s, east_m_s]`` when an estimator separates the
+        current from the other loads (it then acts through the relative velocity); None
+        (the residual mean) = the current is inside ``accel_ned``.
     """
 
     time_s: float
@@ -66,6 +70,7 @@ class EnvironmentEstimate:
     gust_intensity: float
     accel_ned: np.ndarray
     accel_members: np.ndarray
+    current_members_ned_m_s: np.ndarray | None = None
 
 
 def _arrays(log, model, window_s: float) -> LogArrays:
@@ -159,11 +164,18 @@ def blackout_now(estimate: EnvironmentEstimate, vessel="gunnerus", settings: Dri
     az[:k] = estimate.azimuth_rad[:k]
     members = estimate.accel_members
     acc = members[np.arange(N) % members.shape[0]]
+    cur = np.zeros((N, 2))
+    if estimate.current_members_ned_m_s is not None:
+        c = np.asarray(estimate.current_members_ned_m_s, float).reshape(-1, 2)
+        if c.shape[0] == 0 or not np.all(np.isfinite(c)):
+            raise ValueError("estimate.current_members_ned_m_s: expected finite (M, 2) [north, east] m/s")
+        c = c[np.arange(N) % c.shape[0]]
+        cur = np.column_stack([np.hypot(c[:, 0], c[:, 1]), np.arctan2(c[:, 1], c[:, 0])])  # speed, dir TO
     nu0 = np.zeros(3) if start_at_rest else estimate.nu
     t_reach, exc, _ = engine.run_kernel(
         np.full(N, estimate.eta[2]), model.arrays, stack, np.broadcast_to(az, (N, K)), np.broadcast_to(rpm, (N, K)),
         st.rpm_time_constant_s, False, envs.wind_mean_m_s, envs.wind_dir_from_rad, envs.gust_f_hz,
-        envs.gust_amp_m_s, envs.gust_phase_rad, np.zeros((N, 2)), acc, envs.waves, hull_array(ves), st.dt_s,
+        envs.gust_amp_m_s, envs.gust_phase_rad, cur, acc, envs.waves, hull_array(ves), st.dt_s,
         st.n_steps, np.asarray(st.radii_m), np.asarray(st.reaction_times_s), nu0=nu0)
     psi = np.array([estimate.eta[2]])
     rel = np.mod(estimate.wind_dir_from_rad - psi, 2.0 * np.pi)
