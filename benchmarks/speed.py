@@ -24,7 +24,11 @@ as already ingested LogArrays, so its validation is not repeated);
 ``manoeuvre_train_s`` (training the
 manoeuvre benchmark's hybrid, :class:`hybridship.manoeuvre.ManoeuvreConfig` as it stands,
 on the Esso Osaka training runs of the benchmark's split, seed 0, one core; null when the
-data are absent or with ``--quick``) and ``manoeuvre_training`` (its training mode).
+data are absent or with ``--quick``) and ``manoeuvre_training`` (its training mode);
+for drift-off analysis
+``driftoff_samples_per_s`` (Monte-Carlo blackouts per second: 8 headings x 100 samples of
+one weather state, 300 s horizon, all default loads) and ``driftoff_state_s`` (wall time of
+that weather state).
 """
 
 from __future__ import annotations
@@ -212,6 +216,17 @@ def manoeuvre_train_speed() -> dict:
         t0 = time.perf_counter()
         _fit("hybrid", hp, runs, cfg)
         return {"manoeuvre_train_s": time.perf_counter() - t0, "manoeuvre_training": cfg.training}
+def driftoff_speed(n_samples: int = 100) -> dict:
+    """Time the Monte-Carlo blackouts of one weather state at 8 headings (planning mode)."""
+    from hybridship.driftoff.planning import DriftOffSettings, simulate_blackouts
+    from hybridship.driftoff.weather import WeatherState
+
+    w = WeatherState.from_degrees(wind_speed_m_s=10.0, wind_dir_deg=30.0, hs_m=1.0, tp_s=6.0, current_m_s=0.2,
+                                  current_dir_deg=200.0)
+    st = DriftOffSettings(n_samples=n_samples)
+    psi = np.radians(np.arange(0, 360, 45))
+    t = _time(lambda: simulate_blackouts("gunnerus", w, psi, settings=st), min_time_s=1.0, max_repeats=20)
+    return {"driftoff_samples_per_s": psi.size * n_samples / t, "driftoff_state_s": t}
 
 
 def main(argv=None) -> int:
@@ -229,6 +244,7 @@ def main(argv=None) -> int:
     res.update(hybrid_speed((1, 100) if args.quick else (1, 1_000, 10_000)))
     res.update(long_log_speed())
     res.update({"manoeuvre_train_s": None, "manoeuvre_training": None} if args.quick else manoeuvre_train_speed())
+    res.update(driftoff_speed(20 if args.quick else 100))
     if args.json:
         print(json.dumps(res, sort_keys=True))
         return 0
@@ -253,6 +269,8 @@ def main(argv=None) -> int:
     if res["manoeuvre_train_s"] is not None:
         print(f"training the manoeuvre hybrid ({res['manoeuvre_training']}) on the Esso Osaka training runs: "
               f"{res['manoeuvre_train_s']:.0f} s")
+    print(f"drift-off blackouts (8 headings x samples, 300 s horizon): {res['driftoff_samples_per_s']:,.0f} samples/s, "
+          f"{res['driftoff_state_s']:.3f} s per weather state")
     return 0
 
 

@@ -22,6 +22,9 @@ train
     DP part of every log in DIR.
 forecast
     ``hybridship forecast --model MODEL.npz --log FILE --start-time T --horizon-s 60 --out forecast.csv``
+drift-off
+    ``hybridship drift-off planning|live|season ...``: time to reach a limit radius after a
+    blackout (:mod:`hybridship.driftoff.command`).
 """
 
 from __future__ import annotations
@@ -420,6 +423,12 @@ def _cmd_benchmark_drift(args) -> int:
     return 0
 
 
+def _add_drift_off(sub) -> None:
+    from .driftoff.command import add_parser
+
+    add_parser(sub, _Parser, UsageError)
+
+
 def _build_parser() -> argparse.ArgumentParser:
     """The top-level parser with every subcommand registered."""
     parser = _Parser(prog=_PROG, description="Ship drift forecasting with a 3-DOF Fossen model and "
@@ -430,6 +439,7 @@ def _build_parser() -> argparse.ArgumentParser:
     _add_train(sub)
     _add_benchmark(sub)
     _add_forecast(sub)
+    _add_drift_off(sub)
     return parser
 
 

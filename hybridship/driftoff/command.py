@@ -1,0 +1,266 @@
+"""``hybridship drift-off planning|live|season``: the drift-off command line.
+
+Registered by :mod:`hybridship.cli`; heavy imports happen inside the commands so that
+``hybridship --help`` stays fast. Degrees and comma-separated lists at this edge; SI and
+radians inside. Bad input raises :class:`hybridship.cli.UsageError` naming the option.
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+import sys
+from pathlib import Path
+
+__all__ = ["add_parser"]
+
+_PROG = "hybridship drift-off"
+
+
+def _floats(text: str) -> list[float]:
+    try:
+        vals = [float(x) for x in str(text).split(",") if x.strip()]
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected comma-separated numbers, got {text!r}") from None
+    if not vals:
+        raise argparse.ArgumentTypeError(f"expected at least one number, got {text!r}")
+    return vals
+
+
+def _common(p, plots: bool = True) -> None:
+    p.add_argument("--vessel", default="gunnerus", help="packaged vessel name or vessel TOML file (default gunnerus)")
+    p.add_argument("--radii-m", type=_floats, default=[3.0, 5.0, 10.0],
+                   help="limit radii [m], comma-separated (default 3,5,10)")
+    p.add_argument("--reaction-times-s", type=_floats, default=[30.0, 60.0],
+                   help="operator reaction times [s], comma-separated (default 30,60)")
+    p.add_argument("--samples", type=int, default=100, help="Monte-Carlo samples per heading (default 100)")
+    p.add_argument("--horizon-s", type=float, default=300.0, help="longest simulated drift [s] (default 300)")
+    p.add_argument("--dt-s", type=float, default=1.0, help="integration output step [s] (default 1)")
+    p.add_argument("--quantile", type=float, default=0.9, help="watch-circle quantile (default 0.9)")
+    p.add_argument("--vessel-spread", type=float, default=1.0,
+                   help="multiplier of the vessel file's [true_vessel] spread; 0 = nominal model (default 1)")
+    p.add_argument("--seed", type=int, default=0, help="seed (default 0)")
+    p.add_argument("--out", type=Path, required=True, help="output folder")
+    if plots:
+        p.add_argument("--no-plots", action="store_true", help="skip the figures")
+
+
+def _weather(p, table: bool) -> None:
+    g = p.add_argument_group("weather (means; directions in degrees, wind and waves FROM, current TO)")
+    g.add_argument("--wind-m-s", type=float, default=10.0, help="mean wind speed [m/s] (default 10)")
+    g.add_argument("--wind-dir-deg", type=float, default=0.0, help="wind direction, from [deg] (default 0)")
+    g.add_argument("--gust-intensity", type=float, default=0.1, help="turbulence intensity (default 0.1)")
+    g.add_argument("--hs-m", type=float, default=1.0, help="significant wave height [m] (default 1)")
+    g.add_argument("--tp-s", type=float, default=6.0, help="peak period [s] (default 6)")
+    g.add_argument("--wave-dir-deg", type=float, default=None, help="wave direction, from [deg] (default: the wind's)")
+    g.add_argument("--current-m-s", type=float, default=0.2, help="current speed [m/s] (default 0.2)")
+    g.add_argument("--current-dir-deg", type=float, default=0.0, help="current direction, to [deg] (default 0)")
+    u = p.add_argument_group("weather uncertainty (one standard deviation each; default 0 = known)")
+    u.add_argument("--wind-std-m-s", type=float, default=0.0, help="wind speed [m/s]")
+    u.add_argument("--wind-dir-std-deg", type=float, default=0.0, help="wind direction [deg]")
+    u.add_argument("--hs-std-m", type=float, default=0.0, help="significant wave height [m]")
+    u.add_argument("--tp-std-s", type=float, default=0.0, help="peak period [s]")
+    u.add_argument("--wave-dir-std-deg", type=float, default=0.0, help="wave direction [deg]")
+    u.add_argument("--current-std-m-s", type=float, default=0.0, help="current speed [m/s]")
+    u.add_argument("--current-dir-std-deg", type=float, default=0.0, help="current direction [deg]")
+
+
+_USAGE_ERROR = ValueError
+
+
+def add_parser(sub, parser_class, usage_error=None) -> None:
+    """Register ``drift-off`` and its three modes on the subparsers ``sub``.
+
+    ``usage_error`` is the exception class the caller reports as a usage error (exit 2).
+    """
+    global _USAGE_ERROR
+    if usage_error is not None:
+        _USAGE_ERROR = usage_error
+    p = sub.add_parser("drift-off", help="time to reach a limit radius after a blackout (planning, live, season)",
+                       description="Monte-Carlo blackouts: rpm to zero with spin-down, the physics model plus wind "
+                                   "gusts, wave drift and current, perturbed vessels. Writes summary.md, CSV tables "
+                                   "and figures to --out.")
+    dsub = p.add_subparsers(dest="mode", metavar="MODE", parser_class=parser_class)
+    p.set_defaults(func=_missing_mode)
+
+    a = dsub.add_parser("planning", help="one weather state (means with uncertainty) at several headings",
+                        description="Monte-Carlo blackouts of one weather state at each heading.")
+    a.add_argument("--headings-deg", type=_floats, default=[0, 45, 90, 135, 180, 225, 270, 315],
+                   help="vessel headings [deg], comma-separated (default every 45 deg)")
+    _weather(a, table=False)
+    _common(a)
+    a.set_defaults(func=_cmd_planning)
+
+    b = dsub.add_parser("live", help="a blackout now, from a station-keeping log",
+                        description="Estimate the environment from the log up to --time-s (wind, 900-s residual "
+                                    "mean) and run blackouts from the state and thruster rpm at that time.")
+    b.add_argument("--log", type=Path, required=True, help="station-keeping log (.csv, .csv.gz, .parquet)")
+    b.add_argument("--time-s", type=float, default=None, help="time of the blackout [s] (default: the last row)")
+    b.add_argument("--window-s", type=float, default=900.0, help="residual-mean window [s] (default 900)")
+    _common(b)
+    b.set_defaults(func=_cmd_live)
+
+    c = dsub.add_parser("season", help="sweep a table of weather states (e.g. hourly hindcast) on Dask",
+                        description="Blackouts for every weather state x heading x sample; chunks of states run "
+                                    "as Dask futures on a LocalCluster, a given scheduler, or in this process.")
+    c.add_argument("--weather-table", type=Path, required=True,
+                   help="CSV of weather states (columns: see docs/drift-off.md)")
+    c.add_argument("--headings-deg", type=_floats, default=[0, 45, 90, 135, 180, 225, 270, 315],
+                   help="vessel headings [deg], comma-separated (default every 45 deg)")
+    c.add_argument("--scheduler", default="local",
+                   help="'local' (LocalCluster), a scheduler address tcp://host:8786, or 'none' (this process)")
+    c.add_argument("--workers", type=int, default=2, help="LocalCluster workers (default 2)")
+    c.add_argument("--chunk-size", type=int, default=24, help="weather states per task (default 24)")
+    c.add_argument("--max-p-exceed", type=float, default=0.1,
+                   help="a state is operable when P(exceed) <= this (default 0.1)")
+    c.add_argument("--progress", action=argparse.BooleanOptionalAction, default=None,
+                   help="show a progress bar (default: when stderr is a terminal)")
+    _common(c, plots=False)
+    c.set_defaults(func=_cmd_season)
+
+
+def _usage(msg):
+    return _USAGE_ERROR(msg)
+
+
+def _missing_mode(args) -> int:
+    raise _usage(f"{_PROG}: error: choose a mode: planning, live or season (try '{_PROG} --help')")
+
+
+def _settings(args, mode):
+    from .planning import DriftOffSettings
+
+    if not 0.0 < args.quantile < 1.0:
+        raise _usage(f"{_PROG} {mode}: error: --quantile must be in (0, 1), got {args.quantile}")
+    names = {"radii_m": "--radii-m", "reaction_times_s": "--reaction-times-s", "n_samples": "--samples",
+             "horizon_s": "--horizon-s", "dt_s": "--dt-s", "vessel_spread": "--vessel-spread", "seed": "--seed"}
+    try:
+        return DriftOffSettings(radii_m=tuple(args.radii_m), reaction_times_s=tuple(args.reaction_times_s),
+                                n_samples=args.samples, horizon_s=args.horizon_s, dt_s=args.dt_s,
+                                vessel_spread=args.vessel_spread, seed=args.seed)
+    except (ValueError, TypeError) as exc:
+        msg = " ".join(str(exc).split())
+        field = msg.split(":", 1)[0]
+        raise _usage(f"{_PROG} {mode}: error: {names.get(field, field)}: {msg.split(':', 1)[-1].strip()}") from None
+
+
+def _model(args, mode):
+    from hybridship.vessel import VesselFileError
+
+    from .planning import get_model
+
+    try:
+        return get_model(args.vessel)
+    except (VesselFileError, ValueError, FileNotFoundError) as exc:
+        raise _usage(f"{_PROG} {mode}: error: --vessel: {' '.join(str(exc).split())}") from None
+
+
+def _cmd_planning(args) -> int:
+    from .planning import simulate_blackouts
+    from .report import write_report
+    from .weather import WeatherState, WeatherUncertainty
+
+    st = _settings(args, "planning")
+    try:
+        w = WeatherState.from_degrees(wind_speed_m_s=args.wind_m_s, wind_dir_deg=args.wind_dir_deg, hs_m=args.hs_m,
+                                      tp_s=args.tp_s, wave_dir_deg=args.wave_dir_deg, current_m_s=args.current_m_s,
+                                      current_dir_deg=args.current_dir_deg, gust_intensity=args.gust_intensity)
+        u = WeatherUncertainty(args.wind_std_m_s, math.radians(args.wind_dir_std_deg), args.hs_std_m, args.tp_std_s,
+                               math.radians(args.wave_dir_std_deg), args.current_std_m_s,
+                               math.radians(args.current_dir_std_deg))
+    except (ValueError, TypeError) as exc:
+        raise _usage(f"{_PROG} planning: error: {' '.join(str(exc).split())}") from None
+    model = _model(args, "planning")
+    res = simulate_blackouts(model, w, [math.radians(h) for h in args.headings_deg], uncertainty=u, settings=st)
+    inputs = {"vessel": model.vessel.name, "wind": f"{args.wind_m_s:g} +- {args.wind_std_m_s:g} m/s from "
+              f"{args.wind_dir_deg:g} +- {args.wind_dir_std_deg:g} deg, gust intensity {args.gust_intensity:g}",
+              "waves": f"Hs {args.hs_m:g} +- {args.hs_std_m:g} m, Tp {args.tp_s:g} +- {args.tp_std_s:g} s, from "
+              f"{args.wind_dir_deg if args.wave_dir_deg is None else args.wave_dir_deg:g} +- "
+              f"{args.wave_dir_std_deg:g} deg",
+              "current": f"{args.current_m_s:g} +- {args.current_std_m_s:g} m/s to {args.current_dir_deg:g} +- "
+              f"{args.current_dir_std_deg:g} deg", "vessel spread": f"{st.vessel_spread:g} x [true_vessel]",
+              "seed": st.seed}
+    paths = write_report(res, args.out, title="Drift-off analysis (planning)", inputs=inputs, quantile=args.quantile,
+                         plots=not args.no_plots)
+    print(paths["summary.md"].read_text())
+    return 0
+
+
+def _cmd_live(args) -> int:
+    import time
+
+    import numpy as np
+
+    from hybridship.logs.io import read_log
+
+    from .live import blackout_now, environment_from_log
+    from .report import write_report
+
+    st = _settings(args, "live")
+    model = _model(args, "live")
+    if not args.log.is_file():
+        raise _usage(f"{_PROG} live: error: --log {args.log}: no such file")
+    df = read_log(args.log)
+    t = df["time_s"].to_numpy(float)
+    if args.time_s is not None:
+        if not (t[0] <= args.time_s <= t[-1]):
+            raise _usage(f"{_PROG} live: error: --time-s {args.time_s:g} is outside the log ({t[0]:g} to {t[-1]:g} s)")
+        df = df.iloc[: int(np.searchsorted(t, args.time_s, side="right"))]
+    t0 = time.perf_counter()
+    try:
+        est = environment_from_log(df, model, window_s=args.window_s, seed=args.seed)
+    except ValueError as exc:
+        raise _usage(f"{_PROG} live: error: {' '.join(str(exc).split())}") from None
+    res = blackout_now(est, model, st)
+    dt = time.perf_counter() - t0
+    inputs = {"vessel": model.vessel.name, "log": str(args.log), "blackout at [s]": f"{est.time_s:g}",
+              "heading [deg]": f"{math.degrees(est.eta[2]) % 360:.1f}",
+              "mean wind": f"{est.wind_speed_m_s:.2f} m/s from {math.degrees(est.wind_dir_from_rad) % 360:.0f} deg, "
+              f"gust intensity {est.gust_intensity:.2f}",
+              "residual mean (N, E) [m/s^2]": f"{est.accel_ned[0]:.4f}, {est.accel_ned[1]:.4f}",
+              "update time [s]": f"{dt:.3f}"}
+    paths = write_report(res, args.out, title="Drift-off analysis (live: blackout now)", inputs=inputs,
+                         quantile=args.quantile, plots=not args.no_plots)
+    print(paths["summary.md"].read_text())
+    return 0
+
+
+def _cmd_season(args) -> int:
+    from .report import markdown_table, write_frame, write_text
+    from .season import require_dask, season_sweep
+    from .weather import read_weather_table
+
+    st = _settings(args, "season")
+    for opt, v in (("--workers", args.workers), ("--chunk-size", args.chunk_size)):
+        if v < 1:
+            raise _usage(f"{_PROG} season: error: {opt} must be >= 1, got {v}")
+    if not 0.0 <= args.max_p_exceed <= 1.0:
+        raise _usage(f"{_PROG} season: error: --max-p-exceed must be in [0, 1], got {args.max_p_exceed}")
+    try:
+        states, labels = read_weather_table(args.weather_table)
+    except (ValueError, FileNotFoundError) as exc:
+        raise _usage(f"{_PROG} season: error: --weather-table: {' '.join(str(exc).split())}") from None
+    scheduler = None if args.scheduler.lower() == "none" else args.scheduler
+    if scheduler is not None:
+        try:
+            require_dask()
+        except ImportError as exc:
+            raise _usage(f"{_PROG} season: error: {exc}") from None
+    model = _model(args, "season")
+    progress = sys.stderr.isatty() if args.progress is None else args.progress
+    res = season_sweep(args.vessel, states, [math.radians(h) for h in args.headings_deg], settings=st,
+                       labels=labels, quantile=args.quantile, scheduler=scheduler, n_workers=args.workers,
+                       chunk_size=args.chunk_size, progress=progress)
+    out = Path(args.out)
+    write_frame(out / "season.csv", res.to_frame())
+    op = res.operability(args.max_p_exceed)
+    write_frame(out / "operability.csv", op)
+    n = len(states) * len(args.headings_deg) * st.n_samples
+    text = (f"# Drift-off season sweep\n\n{len(states)} weather states x {len(args.headings_deg)} headings x "
+            f"{st.n_samples} samples = {n} blackouts of {model.vessel.name} in {res.wall_s:.1f} s "
+            f"({n / res.wall_s:.0f} samples/s; scheduler {args.scheduler}).\n\n"
+            f"## Share of states with P(exceed) <= {args.max_p_exceed:g}, per heading, radius and reaction time\n\n"
+            + markdown_table(op) + "\n")
+    write_text(out / "summary.md", text)
+    print(text)
+    return 0

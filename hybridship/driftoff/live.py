@@ -1,0 +1,184 @@
+"""Live mode: "a blackout now", from the station-keeping log up to now.
+
+:func:`environment_from_log` is the one place that turns a log into the environment a
+blackout would meet (:class:`EnvironmentEstimate`); today it uses the residual scheme's
+causal bias (:mod:`hybridship.residual.features`): the mean, over the last 900 s, of the
+acceleration the physics model does not explain while the DP holds position (current, mean
+wave drift and model error), held in NED, with its spread from
+:meth:`~hybridship.residual.features.PreparedLog.bias_members` (the variability of
+one-minute means within the window). A dedicated drift estimator can replace this function
+without touching the rest.
+
+:func:`blackout_now` then runs the Monte-Carlo blackouts from the logged heading,
+velocity, thruster rpm (spinning down) and azimuths, with the measured mean wind and its
+gustiness, the estimated extra acceleration per sample (one bias member each) and
+perturbed vessels. Only the last ``window_s`` of the log are read, so an update costs the
+same at any log length (``benchmarks/driftoff_live.py`` measures it).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+import pandas as pd
+
+from ..logs.io import LogArrays, log_to_arrays
+from ..residual.features import ResidualConfig, prepare_log
+from . import engine, spread
+from .planning import DriftOffResult, DriftOffSettings, get_model, hull_array, state_rng
+
+__all__ = ["EnvironmentEstimate", "environment_from_log", "blackout_now"]
+
+
+@dataclass(frozen=True)
+class EnvironmentEstimate:
+    """What the log says about the environment now (SI units, radians).
+
+    Attributes
+    ----------
+    time_s : float
+        Time of the last row used [s].
+    eta : ndarray (3,)
+        ``[north_m, east_m, psi_rad]`` now.
+    nu : ndarray (3,)
+        ``[u_m_s, v_m_s, r_rad_s]`` now (mean of the last 3 s).
+    rpm, azimuth_rad : ndarray (K,)
+        Thruster commands now (the spin-down starts from these).
+    wind_speed_m_s, wind_dir_from_rad : float
+        Mean measured wind over ``wind_window_s``.
+    gust_intensity : float
+        Standard deviation over mean of the measured wind speed, clipped to [0, 0.5].
+    accel_ned : ndarray (3,)
+        Estimated unexplained acceleration ``[a_north_m_s2, a_east_m_s2, r_dot_rad_s2]``.
+    accel_members : ndarray (M, 3)
+        Its members (the uncertainty); their mean is ``accel_ned``.
+    current_members_ned_m_s : ndarray (M_c, 2) or None
+        Current velocity members ``[north_m_s, east_m_s]`` when an estimator separates the
+        current from the other loads (it then acts through the relative velocity); None
+        (the residual mean) = the current is inside ``accel_ned``.
+    """
+
+    time_s: float
+    eta: np.ndarray
+    nu: np.ndarray
+    rpm: np.ndarray
+    azimuth_rad: np.ndarray
+    wind_speed_m_s: float
+    wind_dir_from_rad: float
+    gust_intensity: float
+    accel_ned: np.ndarray
+    accel_members: np.ndarray
+    current_members_ned_m_s: np.ndarray | None = None
+
+
+def _arrays(log, model, window_s: float) -> LogArrays:
+    ves = model.vessel
+    if isinstance(log, LogArrays):
+        return log
+    if not isinstance(log, pd.DataFrame):
+        raise TypeError(f"log: expected a pandas DataFrame or LogArrays, got {type(log).__name__}")
+    if "time_s" not in log.columns:
+        raise ValueError("log: missing column 'time_s'")
+    if len(log) < 3:
+        raise ValueError(f"log: need at least 3 rows, got {len(log)}")
+    t = log["time_s"].to_numpy(float)
+    tail = log.iloc[int(np.searchsorted(t, t[-1] - window_s, side="left")):]
+    return log_to_arrays(tail, thruster_names=[t.name for t in ves.thrusters],
+                         rotatable=[t.type == "azimuth" for t in ves.thrusters])
+
+
+def environment_from_log(log, vessel="gunnerus", *, window_s: float = 900.0, wind_window_s: float = 120.0,
+                         n_members: int = 20, seed: int = 0) -> EnvironmentEstimate:
+    """The environment a blackout at the log's last row would meet (see the module notes).
+
+    Parameters
+    ----------
+    log : pandas.DataFrame or LogArrays
+        Station-keeping log up to now (project log format); only the last ``window_s``
+        seconds are used. Never modified.
+    vessel : str, Vessel or DynamicModel
+    window_s : float
+        Length of the residual-mean window [s] (the bias window of the residual scheme).
+    wind_window_s : float
+        Window of the mean wind [s].
+    n_members : int
+        Members of the acceleration estimate.
+    seed : int
+    """
+    for name, v in (("window_s", window_s), ("wind_window_s", wind_window_s)):
+        if not (isinstance(v, (int, float)) and math.isfinite(v) and v > 0):
+            raise ValueError(f"{name}: expected a number > 0 s, got {v!r}")
+    if isinstance(n_members, bool) or not isinstance(n_members, (int, np.integer)) or n_members < 1:
+        raise ValueError(f"n_members: expected a positive int, got {n_members!r}")
+    model = get_model(vessel)
+    a = _arrays(log, model, window_s)
+    cfg = ResidualConfig(bias_window_s=float(window_s))
+    prep = prepare_log(model, a, cfg)
+    idx = len(a.time_s) - 1
+    members = prep.bias_members(idx, int(n_members), seed=seed)
+    eta0, nu0, _, bias0 = prep.start_state(idx)
+    t = a.time_s
+    sel = (t >= t[-1] - wind_window_s) & np.isfinite(a.wind).all(1)
+    if a.has_wind and sel.any():
+        ws, wd = a.wind[sel, 0], a.wind[sel, 1]
+        vn, ve = np.mean(ws * np.cos(wd)), np.mean(ws * np.sin(wd))
+        w_speed, w_dir = float(np.hypot(vn, ve)), float(math.atan2(ve, vn))
+        gi = float(np.clip(np.std(ws) / w_speed, 0.0, 0.5)) if w_speed > 0 else 0.0
+    else:
+        w_speed, w_dir, gi = 0.0, 0.0, 0.0
+    return EnvironmentEstimate(time_s=float(t[-1]), eta=eta0, nu=nu0, rpm=np.nan_to_num(a.rpm[idx]).copy(),
+                               azimuth_rad=np.nan_to_num(a.azimuth_rad[idx]).copy(), wind_speed_m_s=w_speed,
+                               wind_dir_from_rad=w_dir, gust_intensity=gi, accel_ned=np.asarray(bias0, float),
+                               accel_members=members)
+
+
+def blackout_now(estimate: EnvironmentEstimate, vessel="gunnerus", settings: DriftOffSettings | None = None,
+                 *, start_at_rest: bool = False) -> DriftOffResult:
+    """Monte-Carlo blackouts from the state and environment of ``estimate`` (one heading: now's).
+
+    The spin-down starts from the logged rpm and azimuths (no holding load); each sample
+    draws a perturbed vessel, gust harmonics of the measured gustiness and one member of
+    the acceleration estimate (cycled). Distances are measured from the position now.
+    """
+    if not isinstance(estimate, EnvironmentEstimate):
+        raise TypeError(f"estimate: expected an EnvironmentEstimate, got {type(estimate).__name__}")
+    st = settings or DriftOffSettings()
+    model = get_model(vessel)
+    ves = model.vessel
+    N = st.n_samples
+    rng = state_rng(st.seed, 0)
+    scales = spread.draw_scales(ves, N, rng, st.vessel_spread)
+    stack = spread.scaled_arrays(model.arrays, scales)
+    from .weather import WeatherState, sample_environment
+
+    w = WeatherState(estimate.wind_speed_m_s, estimate.wind_dir_from_rad, gust_intensity=estimate.gust_intensity)
+    envs = sample_environment(w, None, N, rng, duration_s=st.horizon_s, dt_s=st.dt_s,
+                              n_gust=st.n_gust_harmonics, n_wave=1)
+    K = model.n_actuators
+    rpm = np.zeros(K)
+    az = np.zeros(K)
+    k = len(ves.thrusters)
+    rpm[:k] = estimate.rpm[:k]
+    az[:k] = estimate.azimuth_rad[:k]
+    members = estimate.accel_members
+    acc = members[np.arange(N) % members.shape[0]]
+    cur = np.zeros((N, 2))
+    if estimate.current_members_ned_m_s is not None:
+        c = np.asarray(estimate.current_members_ned_m_s, float).reshape(-1, 2)
+        if c.shape[0] == 0 or not np.all(np.isfinite(c)):
+            raise ValueError("estimate.current_members_ned_m_s: expected finite (M, 2) [north, east] m/s")
+        c = c[np.arange(N) % c.shape[0]]
+        cur = np.column_stack([np.hypot(c[:, 0], c[:, 1]), np.arctan2(c[:, 1], c[:, 0])])  # speed, dir TO
+    nu0 = np.zeros(3) if start_at_rest else estimate.nu
+    t_reach, exc, _ = engine.run_kernel(
+        np.full(N, estimate.eta[2]), model.arrays, stack, np.broadcast_to(az, (N, K)), np.broadcast_to(rpm, (N, K)),
+        st.rpm_time_constant_s, False, envs.wind_mean_m_s, envs.wind_dir_from_rad, envs.gust_f_hz,
+        envs.gust_amp_m_s, envs.gust_phase_rad, cur, acc, envs.waves, hull_array(ves), st.dt_s,
+        st.n_steps, np.asarray(st.radii_m), np.asarray(st.reaction_times_s), nu0=nu0)
+    psi = np.array([estimate.eta[2]])
+    rel = np.mod(estimate.wind_dir_from_rad - psi, 2.0 * np.pi)
+    return DriftOffResult(headings_rad=psi, weather_rel_rad=rel, radii_m=np.asarray(st.radii_m),
+                          reaction_times_s=np.asarray(st.reaction_times_s), t_reach_s=t_reach[None],
+                          excursion_m=exc[None], horizon_s=st.n_steps * st.dt_s)

@@ -1,0 +1,276 @@
+"""Planning mode: Monte-Carlo blackouts for one weather state and a set of headings.
+
+:func:`simulate_blackouts` draws ``n_samples`` perturbed vessels and environment samples
+(common to all headings, so that headings are compared on the same draws), integrates all
+``headings x samples`` blackouts in one kernel call (:mod:`hybridship.driftoff.engine`)
+and returns a :class:`DriftOffResult`:
+
+* the time to reach each radius, per heading and sample (``inf`` when not reached within
+  the horizon);
+* the probability of exceeding each radius within each reaction time,
+  ``P(T_r <= t_react)``;
+* the watch-circle radius: the largest distance from the blackout position reached up to
+  the reaction time, at a chosen quantile (a circle the vessel stays inside, with that
+  probability, until the operator has reacted).
+
+Randomness: one :class:`numpy.random.SeedSequence` ``(seed, spawn_key=(index,))`` per
+weather state, so a state's samples depend on its index in a sweep, never on how the
+sweep is chunked.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from functools import lru_cache
+
+import numpy as np
+import pandas as pd
+
+from ..physics.model import DynamicModel
+from ..sim import environment as env
+from . import engine, spread
+from .weather import WeatherState, WeatherUncertainty, sample_environment
+
+__all__ = ["DriftOffSettings", "DriftOffResult", "simulate_blackouts", "state_rng", "get_model", "hull_array"]
+
+
+@lru_cache(maxsize=8)
+def _model_by_name(name: str) -> DynamicModel:
+    return DynamicModel(name)
+
+
+def get_model(vessel) -> DynamicModel:
+    """A nominal :class:`DynamicModel` from a model, a vessel, or a packaged name / file path (cached)."""
+    if isinstance(vessel, DynamicModel):
+        return vessel
+    if isinstance(vessel, str):
+        return _model_by_name(vessel)
+    return DynamicModel(vessel)
+
+
+def hull_array(vessel) -> np.ndarray:
+    """The wave-drift hull constants (``engine.HULL_FIELDS``) of a vessel, as the simulator builds them."""
+    p = vessel.particulars
+    h = env.HullDimensions(L_m=p.L_pp_m, B_m=p.B_m, T_m=p.T_m)
+    return np.array([h.L_m, h.B_m, h.T_m, h.bow_factor, h.side_factor, h.yaw_lever_factor,
+                     p.rho_water_kg_m3, env.G_M_S2])
+
+
+def state_rng(seed: int, index: int = 0) -> np.random.Generator:
+    """The random generator of weather state ``index`` of a run seeded with ``seed``."""
+    return np.random.default_rng(np.random.SeedSequence(int(seed), spawn_key=(int(index),)))
+
+
+def _positive_list(name, values, *, allow_zero=False):
+    try:
+        a = np.atleast_1d(np.asarray(values, dtype=float))
+    except (TypeError, ValueError):
+        raise TypeError(f"{name}: expected numbers, got {values!r}") from None
+    if a.ndim != 1 or a.size == 0:
+        raise ValueError(f"{name}: expected a non-empty list of numbers, got {values!r}")
+    if not np.all(np.isfinite(a)) or np.any(a < 0) or (not allow_zero and np.any(a == 0)):
+        raise ValueError(f"{name}: expected finite numbers {'>=' if allow_zero else '>'} 0, got {values!r}")
+    return a
+
+
+@dataclass(frozen=True)
+class DriftOffSettings:
+    """Numerical settings of a drift-off study (validated; errors name the field).
+
+    Attributes
+    ----------
+    radii_m : tuple of float
+        Limit radii from the blackout position [m].
+    reaction_times_s : tuple of float
+        Operator reaction times [s].
+    n_samples : int
+        Monte-Carlo samples per heading.
+    horizon_s : float
+        Longest simulated drift [s]; radii not reached by then count as never reached.
+    dt_s : float
+        Output step [s] (RK4, inputs held over a step).
+    rpm_time_constant_s : float
+        First-order spin-down time constant of the thrusters [s].
+    vessel_spread : float
+        Multiplier of the ``[true_vessel]`` spread (0 = nominal model, see :mod:`.spread`).
+    n_wave_components, n_gust_harmonics : int
+        Wave components and gust harmonics per sample.
+    seed : int
+        Seed of the run (each weather state uses ``SeedSequence(seed, spawn_key=(index,))``).
+    """
+
+    radii_m: tuple = (3.0, 5.0, 10.0)
+    reaction_times_s: tuple = (30.0, 60.0)
+    n_samples: int = 100
+    horizon_s: float = 300.0
+    dt_s: float = 1.0
+    rpm_time_constant_s: float = 1.5
+    vessel_spread: float = 1.0
+    n_wave_components: int = 20
+    n_gust_harmonics: int = 20
+    seed: int = 0
+
+    def __post_init__(self):
+        set_ = lambda k, v: object.__setattr__(self, k, v)  # noqa: E731
+        set_("radii_m", tuple(np.sort(_positive_list("radii_m", self.radii_m)).tolist()))
+        set_("reaction_times_s", tuple(_positive_list("reaction_times_s", self.reaction_times_s,
+                                                      allow_zero=True).tolist()))
+        for k in ("horizon_s", "dt_s", "rpm_time_constant_s"):
+            set_(k, float(_positive_list(k, getattr(self, k))[0]))
+        set_("vessel_spread", float(_positive_list("vessel_spread", self.vessel_spread, allow_zero=True)[0]))
+        for k in ("n_samples", "n_wave_components", "n_gust_harmonics"):
+            v = getattr(self, k)
+            if isinstance(v, bool) or not isinstance(v, (int, np.integer)) or v < 1:
+                raise ValueError(f"{k}: expected a positive int, got {v!r}")
+            set_(k, int(v))
+        if isinstance(self.seed, bool) or not isinstance(self.seed, (int, np.integer)) or self.seed < 0:
+            raise ValueError(f"seed: expected a non-negative int, got {self.seed!r}")
+        if self.dt_s > self.horizon_s:
+            raise ValueError(f"dt_s: must be <= horizon_s = {self.horizon_s:g}, got {self.dt_s!r}")
+        if max(self.reaction_times_s) > self.horizon_s:
+            raise ValueError(f"reaction_times_s: must be <= horizon_s = {self.horizon_s:g}, "
+                             f"got {self.reaction_times_s!r}")
+
+    @property
+    def n_steps(self) -> int:
+        return int(math.ceil(self.horizon_s / self.dt_s - 1e-9))
+
+
+@dataclass(frozen=True)
+class DriftOffResult:
+    """Monte-Carlo blackouts of one weather state (SI units; see the module notes).
+
+    Attributes
+    ----------
+    headings_rad : ndarray (H,)
+        Vessel headings at the blackout [rad].
+    weather_rel_rad : ndarray (H,)
+        Mean wind direction (from) relative to the bow [rad] in [0, 2 pi): 0 = head wind,
+        pi/2 = wind from starboard.
+    radii_m : ndarray (R,)
+    reaction_times_s : ndarray (Q,)
+    t_reach_s : ndarray (H, N, R)
+        Time to reach each radius [s]; ``inf`` if not reached within ``horizon_s``.
+    excursion_m : ndarray (H, N, Q)
+        Largest distance from the blackout position up to each reaction time [m].
+    horizon_s : float
+    tracks : ndarray (H, N, S + 1, 3) or None
+        ``[north_m, east_m, psi_rad]`` per step when asked for.
+    """
+
+    headings_rad: np.ndarray
+    weather_rel_rad: np.ndarray
+    radii_m: np.ndarray
+    reaction_times_s: np.ndarray
+    t_reach_s: np.ndarray
+    excursion_m: np.ndarray
+    horizon_s: float
+    tracks: np.ndarray | None = None
+
+    @property
+    def n_samples(self) -> int:
+        return int(self.t_reach_s.shape[1])
+
+    def time_quantiles(self, q=(0.1, 0.5, 0.9)) -> np.ndarray:
+        """Quantiles of the time to reach each radius, (H, R, len(q)) [s]; ``inf`` where not reached."""
+        return np.moveaxis(np.quantile(self.t_reach_s, np.asarray(q, float), axis=1, method="lower"), 0, -1)
+
+    def p_exceed(self) -> np.ndarray:
+        """P(radius exceeded within the reaction time), (H, R, Q)."""
+        return (self.t_reach_s[:, :, :, None] <= self.reaction_times_s[None, None, None, :]).mean(axis=1)
+
+    def watch_circle(self, quantile: float = 0.9) -> np.ndarray:
+        """Watch-circle radii (H, Q) [m]: the ``quantile`` of the excursion up to each reaction time."""
+        q = float(quantile)
+        if not 0.0 < q < 1.0:
+            raise ValueError(f"quantile: expected a number in (0, 1), got {quantile!r}")
+        return np.quantile(self.excursion_m, q, axis=1)
+
+    def exceedance_curves(self, time_s) -> np.ndarray:
+        """P(T_r <= t) on the times ``time_s`` (T,), shape (H, R, T)."""
+        t = np.asarray(time_s, float)
+        return (self.t_reach_s[:, :, :, None] <= t[None, None, None, :]).mean(axis=1)
+
+    def summary_frames(self, quantile: float = 0.9) -> tuple[pd.DataFrame, pd.DataFrame]:
+        """Two tidy tables: time to reach per (heading, radius), and watch circles per (heading, reaction time)."""
+        tq = self.time_quantiles((0.1, 0.5, 0.9))
+        pe = self.p_exceed()
+        rows = []
+        for h, psi in enumerate(self.headings_rad):
+            for r, rad in enumerate(self.radii_m):
+                row = {"heading_deg": math.degrees(psi) % 360.0,
+                       "wind_rel_deg": math.degrees(self.weather_rel_rad[h]) % 360.0, "radius_m": rad,
+                       "t_p10_s": tq[h, r, 0], "t_p50_s": tq[h, r, 1], "t_p90_s": tq[h, r, 2],
+                       "reached_frac": float(np.isfinite(self.t_reach_s[h, :, r]).mean())}
+                for q, tr in enumerate(self.reaction_times_s):
+                    row[f"p_exceed_{tr:g}s"] = pe[h, r, q]
+                rows.append(row)
+        times = pd.DataFrame(rows)
+        wc = self.watch_circle(quantile)
+        rows = [{"heading_deg": math.degrees(psi) % 360.0,
+                 "wind_rel_deg": math.degrees(self.weather_rel_rad[h]) % 360.0, "reaction_time_s": tr,
+                 "quantile": quantile, "watch_radius_m": wc[h, q]}
+                for h, psi in enumerate(self.headings_rad) for q, tr in enumerate(self.reaction_times_s)]
+        return times, pd.DataFrame(rows)
+
+
+def _headings(headings_rad):
+    a = np.atleast_1d(np.asarray(headings_rad, dtype=float))
+    if a.ndim != 1 or a.size == 0 or not np.all(np.isfinite(a)):
+        raise ValueError(f"headings: expected a non-empty list of finite angles, got {headings_rad!r}")
+    return a
+
+
+def simulate_blackouts(vessel, weather: WeatherState, headings_rad, *, uncertainty: WeatherUncertainty | None = None,
+                       settings: DriftOffSettings | None = None, index: int = 0,
+                       keep_tracks: bool = False) -> DriftOffResult:
+    """Monte-Carlo blackouts of one weather state at each heading (planning mode).
+
+    Parameters
+    ----------
+    vessel : str, Vessel or DynamicModel
+        The vessel (nominal model; samples perturb it, see :mod:`.spread`).
+    weather : WeatherState
+        Mean weather.
+    headings_rad : array_like (H,)
+        Headings at the blackout [rad], clockwise from north.
+    uncertainty : WeatherUncertainty, optional
+        Standard deviations of the weather (default: known exactly).
+    settings : DriftOffSettings, optional
+    index : int
+        Index of this weather state in a sweep (selects its random stream).
+    keep_tracks : bool
+        Keep the drift tracks (disables the early stop; memory H x N x steps).
+    """
+    if not isinstance(weather, WeatherState):
+        raise TypeError(f"weather: expected a WeatherState, got {type(weather).__name__}")
+    if uncertainty is not None and not isinstance(uncertainty, WeatherUncertainty):
+        raise TypeError(f"uncertainty: expected a WeatherUncertainty or None, got {type(uncertainty).__name__}")
+    st = settings or DriftOffSettings()
+    psi = _headings(headings_rad)
+    model = get_model(vessel)
+    ves = model.vessel
+    rng = state_rng(st.seed, index)
+    N, H = st.n_samples, psi.size
+    scales = spread.draw_scales(ves, N, rng, st.vessel_spread)
+    envs = sample_environment(weather, uncertainty, N, rng, duration_s=st.horizon_s, dt_s=st.dt_s,
+                              n_gust=st.n_gust_harmonics, n_wave=st.n_wave_components)
+    stack = spread.scaled_arrays(model.arrays, scales)
+    tile = lambda a: np.concatenate([a] * H, axis=0)  # noqa: E731  (heading-major: b = h * N + n)
+    stack_b = spread.StackedArrays(*(tile(a) for a in stack))
+    K = model.n_actuators
+    az0 = np.zeros(K)
+    az0[: len(ves.thrusters)] = [t.fixed_angle_rad for t in ves.thrusters]
+    t_reach, exc, track = engine.run_kernel(
+        np.repeat(psi, N), model.arrays, stack_b, np.broadcast_to(az0, (H * N, K)), np.zeros((H * N, K)),
+        st.rpm_time_constant_s, True, tile(envs.wind_mean_m_s), tile(envs.wind_dir_from_rad),
+        tile(envs.gust_f_hz), tile(envs.gust_amp_m_s), tile(envs.gust_phase_rad), tile(envs.current),
+        np.zeros((H * N, 3)), tuple(tile(w) for w in envs.waves), hull_array(ves), st.dt_s, st.n_steps,
+        np.asarray(st.radii_m), np.asarray(st.reaction_times_s), keep_tracks)
+    R, Q = len(st.radii_m), len(st.reaction_times_s)
+    rel = np.mod(weather.wind_dir_from_rad - psi, 2.0 * np.pi)
+    return DriftOffResult(headings_rad=psi, weather_rel_rad=rel, radii_m=np.asarray(st.radii_m),
+                          reaction_times_s=np.asarray(st.reaction_times_s), t_reach_s=t_reach.reshape(H, N, R),
+                          excursion_m=exc.reshape(H, N, Q), horizon_s=st.n_steps * st.dt_s,
+                          tracks=None if track is None else track.reshape(H, N, st.n_steps + 1, 3))

@@ -1,0 +1,127 @@
+"""What a DP operator reads at a glance: polar plot, exceedance curves, one-page summary.
+
+* :func:`polar_plot`: time to reach each radius (median line, 10 % quantile dashed)
+  against the wind direction relative to the bow (0 = head wind, 90 = from starboard);
+* :func:`exceedance_plot`: P(radius reached by t) against t, one panel per radius, one
+  line per heading, with the reaction times marked;
+* :func:`write_report`: ``summary.md`` (one page), ``times.csv`` and ``watch.csv``
+  (:meth:`~hybridship.driftoff.planning.DriftOffResult.summary_frames`) and the two
+  figures, each written atomically.
+"""
+
+from __future__ import annotations
+
+import io
+import math
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+
+from ..fileio import atomic_write
+from .planning import DriftOffResult
+
+__all__ = ["polar_plot", "exceedance_plot", "markdown_table", "write_report", "write_text", "write_frame"]
+
+
+def write_text(path, text: str) -> Path:
+    """Write UTF-8 text atomically."""
+    return atomic_write(path, lambda fh: fh.write(text.encode("utf-8")))
+
+
+def write_frame(path, df: pd.DataFrame) -> Path:
+    """Write a DataFrame as CSV atomically (no index)."""
+    return write_text(path, df.to_csv(index=False, float_format="%.6g"))
+
+
+def _save_fig(fig, path) -> Path:
+    buf = io.BytesIO()
+    fig.savefig(buf, format=Path(path).suffix.lstrip(".") or "png", dpi=120, bbox_inches="tight")
+    return atomic_write(path, lambda fh: fh.write(buf.getvalue()))
+
+
+def polar_plot(result: DriftOffResult, ax=None, title: str | None = None):
+    """Time to reach each radius against the wind direction relative to the bow (polar axes)."""
+    import matplotlib.pyplot as plt
+
+    if ax is None:
+        fig = plt.figure(figsize=(6, 6))
+        ax = fig.add_subplot(projection="polar")
+    ax.set_theta_zero_location("N")
+    ax.set_theta_direction(-1)           # clockwise, like a compass: 90 deg = from starboard
+    order = np.argsort(result.weather_rel_rad)
+    th = result.weather_rel_rad[order]
+    tq = result.time_quantiles((0.1, 0.5))[order]
+    tq = np.where(np.isfinite(tq), tq, np.nan)
+    closed = lambda a: np.concatenate([a, a[:1]])  # noqa: E731
+    for r, rad in enumerate(result.radii_m):
+        line, = ax.plot(closed(th), closed(tq[:, r, 1]), marker="o", label=f"{rad:g} m, median")
+        ax.plot(closed(th), closed(tq[:, r, 0]), ls="--", color=line.get_color(), label=f"{rad:g} m, 10 %")
+    ax.set_title(title or "time to reach radius [s] vs wind direction off the bow", fontsize=10)
+    ax.legend(loc="lower left", bbox_to_anchor=(1.05, 0.0), fontsize=8)
+    return ax.figure
+
+
+def exceedance_plot(result: DriftOffResult, n_times: int = 200):
+    """P(radius reached by t) vs t: one panel per radius, one line per heading."""
+    import matplotlib.pyplot as plt
+
+    t = np.linspace(0.0, result.horizon_s, n_times)
+    p = result.exceedance_curves(t)
+    R = len(result.radii_m)
+    fig, axes = plt.subplots(1, R, figsize=(4 * R, 3.2), sharey=True, squeeze=False)
+    for r, ax in enumerate(axes[0]):
+        for h, psi in enumerate(result.headings_rad):
+            ax.plot(t, p[h, r], label=f"hdg {math.degrees(psi) % 360:.0f}, wind {math.degrees(result.weather_rel_rad[h]) % 360:.0f} off bow")
+        for tr in result.reaction_times_s:
+            ax.axvline(tr, color="k", lw=0.8, ls=":")
+        ax.set_title(f"radius {result.radii_m[r]:g} m", fontsize=10)
+        ax.set_xlabel("time after blackout [s]")
+        ax.grid(alpha=0.3)
+    axes[0, 0].set_ylabel("P(reached)")
+    axes[0, -1].legend(fontsize=7, loc="lower right")
+    fig.tight_layout()
+    return fig
+
+
+def markdown_table(df: pd.DataFrame, digits: int = 2) -> str:
+    """A DataFrame as a Markdown table (numbers rounded; inf shown as "never")."""
+    def fmt(v):
+        if isinstance(v, (float, np.floating)):
+            if np.isinf(v):
+                return "never"
+            return f"{v:.{digits}f}".rstrip("0").rstrip(".") if math.isfinite(v) else "-"
+        return str(v)
+
+    head = "| " + " | ".join(df.columns) + " |\n|" + "---|" * len(df.columns) + "\n"
+    return head + "".join("| " + " | ".join(fmt(v) for v in row) + " |\n" for row in df.itertuples(index=False))
+
+
+def write_report(result: DriftOffResult, out_dir, *, title: str = "Drift-off analysis", inputs: dict | None = None,
+                 quantile: float = 0.9, plots: bool = True) -> dict:
+    """Write ``summary.md``, ``times.csv``, ``watch.csv`` and (with ``plots``) ``polar.png``,
+    ``exceedance.png`` to ``out_dir``; returns the paths by name."""
+    out = Path(out_dir)
+    times, watch = result.summary_frames(quantile)
+    paths = {"times.csv": write_frame(out / "times.csv", times), "watch.csv": write_frame(out / "watch.csv", watch)}
+    lines = [f"# {title}", ""]
+    if inputs:
+        lines += ["| input | value |", "|---|---|"] + [f"| {k} | {v} |" for k, v in inputs.items()] + [""]
+    lines += [f"{result.n_samples} Monte-Carlo blackouts per heading; horizon {result.horizon_s:g} s "
+              "(\"never\" = not reached within it).", "",
+              "## Time to reach each radius [s] and P(exceeded within the reaction time)", "",
+              markdown_table(times), "",
+              f"## Watch circles: excursion up to the reaction time at the {quantile:g} quantile [m]", "",
+              markdown_table(watch), ""]
+    if plots:
+        import matplotlib.pyplot as plt
+
+        fig = polar_plot(result)
+        paths["polar.png"] = _save_fig(fig, out / "polar.png")
+        plt.close(fig)
+        fig = exceedance_plot(result)
+        paths["exceedance.png"] = _save_fig(fig, out / "exceedance.png")
+        plt.close(fig)
+        lines += ["![time to reach vs wind direction](polar.png)", "", "![exceedance curves](exceedance.png)", ""]
+    paths["summary.md"] = write_text(out / "summary.md", "\n".join(lines))
+    return paths

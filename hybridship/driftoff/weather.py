@@ -1,0 +1,266 @@
+"""Weather for drift-off studies: one state with its uncertainty, or a table of states.
+
+A :class:`WeatherState` holds means (SI units and radians inside); a
+:class:`WeatherUncertainty` the standard deviations the Monte-Carlo samples draw from
+(normal, speeds and heights clipped at 0, periods at 1 s). :func:`read_weather_table`
+reads an hourly hindcast (or any list of states) from CSV; its columns, degrees at this
+edge as everywhere in the project's files:
+
+==================  ========  ==============================================================
+column              unit      meaning
+==================  ========  ==============================================================
+``time``            ISO 8601  optional label of the state (kept as text)
+``wind_speed_m_s``  m/s       mean 10 m wind speed (>= 0)
+``wind_dir_deg``    deg       direction the wind comes FROM, clockwise from north
+``hs_m``            m         significant wave height (>= 0; 0 = no waves)
+``tp_s``            s         spectral peak period (> 0)
+``wave_dir_deg``    deg       direction the waves come FROM, clockwise from north
+``current_m_s``     m/s       current speed (>= 0)
+``current_dir_deg`` deg       direction the current flows TO, clockwise from north
+``gust_intensity``  -         optional turbulence intensity sigma_U / U in [0, 0.5] (default 0.1)
+==================  ========  ==============================================================
+
+:func:`sample_environment` turns a state, its uncertainty and a random generator into the
+per-sample arrays the kernel reads (wind with gust harmonics, current, wave components).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+
+from ..sim import environment as env
+
+__all__ = ["WeatherState", "WeatherUncertainty", "TABLE_COLUMNS", "read_weather_table", "states_to_frame",
+           "SampledEnvironment", "sample_environment"]
+
+#: Required columns of a weather table (see the module notes), and the optional ones.
+TABLE_COLUMNS = ("wind_speed_m_s", "wind_dir_deg", "hs_m", "tp_s", "wave_dir_deg", "current_m_s",
+                 "current_dir_deg")
+OPTIONAL_COLUMNS = ("time", "gust_intensity")
+
+
+def _check(name, value, lo=None, hi=None, lo_open=False):
+    if isinstance(value, bool):
+        raise TypeError(f"{name}: expected a number, got {value!r}")
+    try:
+        v = float(value)
+    except (TypeError, ValueError):
+        raise TypeError(f"{name}: expected a number, got {value!r}") from None
+    if not math.isfinite(v):
+        raise ValueError(f"{name}: must be finite, got {value!r}")
+    if lo is not None and (v <= lo if lo_open else v < lo):
+        raise ValueError(f"{name}: must be {'>' if lo_open else '>='} {lo:g}, got {value!r}")
+    if hi is not None and v > hi:
+        raise ValueError(f"{name}: must be <= {hi:g}, got {value!r}")
+    return v
+
+
+@dataclass(frozen=True)
+class WeatherState:
+    """Mean weather of one state (SI, radians; directions as in :mod:`hybridship.sim.environment`).
+
+    Attributes
+    ----------
+    wind_speed_m_s : float
+        Mean 10 m wind speed [m/s].
+    wind_dir_from_rad : float
+        Direction the wind comes FROM [rad], clockwise from north.
+    hs_m, tp_s : float
+        Significant wave height [m] and peak period [s] (JONSWAP, gamma 3.3, long-crested).
+    wave_dir_from_rad : float
+        Direction the waves come FROM [rad].
+    current_speed_m_s : float
+        Current speed [m/s].
+    current_dir_to_rad : float
+        Direction the current flows TO [rad].
+    gust_intensity : float
+        Turbulence intensity sigma_U / U [-] in [0, 0.5].
+    """
+
+    wind_speed_m_s: float = 0.0
+    wind_dir_from_rad: float = 0.0
+    hs_m: float = 0.0
+    tp_s: float = 6.0
+    wave_dir_from_rad: float = 0.0
+    current_speed_m_s: float = 0.0
+    current_dir_to_rad: float = 0.0
+    gust_intensity: float = 0.1
+
+    def __post_init__(self):
+        rules = {"wind_speed_m_s": dict(lo=0.0), "hs_m": dict(lo=0.0), "tp_s": dict(lo=0.0, lo_open=True),
+                 "current_speed_m_s": dict(lo=0.0), "gust_intensity": dict(lo=0.0, hi=0.5)}
+        for f in dataclasses.fields(self):
+            object.__setattr__(self, f.name, _check(f"weather.{f.name}", getattr(self, f.name),
+                                                    **rules.get(f.name, {})))
+
+    @classmethod
+    def from_degrees(cls, *, wind_speed_m_s=0.0, wind_dir_deg=0.0, hs_m=0.0, tp_s=6.0, wave_dir_deg=None,
+                     current_m_s=0.0, current_dir_deg=0.0, gust_intensity=0.1) -> "WeatherState":
+        """Build from degrees (the file and CLI edge); waves default to the wind direction."""
+        wave = wind_dir_deg if wave_dir_deg is None else wave_dir_deg
+        return cls(wind_speed_m_s, math.radians(_check("weather.wind_dir_deg", wind_dir_deg)), hs_m, tp_s,
+                   math.radians(_check("weather.wave_dir_deg", wave)), current_m_s,
+                   math.radians(_check("weather.current_dir_deg", current_dir_deg)), gust_intensity)
+
+
+@dataclass(frozen=True)
+class WeatherUncertainty:
+    """Standard deviations of the weather the samples draw from (0 = known exactly).
+
+    Attributes
+    ----------
+    wind_speed_m_s, wind_dir_rad, hs_m, tp_s, wave_dir_rad, current_speed_m_s, current_dir_rad : float
+        One standard deviation of the corresponding :class:`WeatherState` field
+        [m/s, rad, m, s, rad, m/s, rad].
+    """
+
+    wind_speed_m_s: float = 0.0
+    wind_dir_rad: float = 0.0
+    hs_m: float = 0.0
+    tp_s: float = 0.0
+    wave_dir_rad: float = 0.0
+    current_speed_m_s: float = 0.0
+    current_dir_rad: float = 0.0
+
+    def __post_init__(self):
+        for f in dataclasses.fields(self):
+            object.__setattr__(self, f.name, _check(f"uncertainty.{f.name}", getattr(self, f.name), lo=0.0))
+
+    @classmethod
+    def typical(cls) -> "WeatherUncertainty":
+        """A forecast-like default: 1.5 m/s, 15 deg wind; 0.25 m, 1 s, 20 deg waves; 0.1 m/s, 30 deg current."""
+        return cls(1.5, math.radians(15.0), 0.25, 1.0, math.radians(20.0), 0.1, math.radians(30.0))
+
+
+def read_weather_table(path_or_frame) -> tuple[list[WeatherState], list[str]]:
+    """Weather states from a CSV file (or DataFrame) with the columns of the module notes.
+
+    Returns the states and their labels (the ``time`` column, or the row numbers). Errors
+    name the file, the column and the first bad row.
+    """
+    if isinstance(path_or_frame, pd.DataFrame):
+        df, src = path_or_frame, "weather table"
+    else:
+        src = str(path_or_frame)
+        if not Path(src).is_file():
+            raise FileNotFoundError(f"weather table: no such file {src!r}")
+        df = pd.read_csv(src)
+    missing = [c for c in TABLE_COLUMNS if c not in df.columns]
+    if missing:
+        raise ValueError(f"{src}: missing column(s) {missing}; expected {list(TABLE_COLUMNS)} "
+                         f"(optional {list(OPTIONAL_COLUMNS)})")
+    if len(df) == 0:
+        raise ValueError(f"{src}: no rows")
+    cols = {}
+    for c in TABLE_COLUMNS + ("gust_intensity",):
+        if c not in df.columns:
+            continue
+        v = pd.to_numeric(df[c], errors="coerce").to_numpy(float)
+        bad = ~np.isfinite(v)
+        if c in ("wind_speed_m_s", "hs_m", "current_m_s"):
+            bad |= v < 0
+        if c == "tp_s":
+            bad |= ~(v > 0)
+        if c == "gust_intensity":
+            bad |= (v < 0) | (v > 0.5)
+        if bad.any():
+            i = int(np.flatnonzero(bad)[0])
+            raise ValueError(f"{src}: column {c!r}, row {i}: invalid value {df[c].iloc[i]!r} "
+                             f"({int(bad.sum())} bad row(s))")
+        cols[c] = v
+    gi = cols.get("gust_intensity", np.full(len(df), 0.1))
+    states = [WeatherState(cols["wind_speed_m_s"][i], math.radians(cols["wind_dir_deg"][i]), cols["hs_m"][i],
+                           cols["tp_s"][i], math.radians(cols["wave_dir_deg"][i]), cols["current_m_s"][i],
+                           math.radians(cols["current_dir_deg"][i]), gi[i]) for i in range(len(df))]
+    labels = [str(x) for x in df["time"]] if "time" in df.columns else [str(i) for i in range(len(df))]
+    return states, labels
+
+
+def states_to_frame(states, labels=None) -> pd.DataFrame:
+    """The inverse of :func:`read_weather_table` (degrees at the edge)."""
+    rows = [{"wind_speed_m_s": s.wind_speed_m_s, "wind_dir_deg": math.degrees(s.wind_dir_from_rad) % 360.0,
+             "hs_m": s.hs_m, "tp_s": s.tp_s, "wave_dir_deg": math.degrees(s.wave_dir_from_rad) % 360.0,
+             "current_m_s": s.current_speed_m_s, "current_dir_deg": math.degrees(s.current_dir_to_rad) % 360.0,
+             "gust_intensity": s.gust_intensity} for s in states]
+    df = pd.DataFrame(rows)
+    if labels is not None:
+        df.insert(0, "time", list(labels))
+    return df
+
+
+@dataclass(frozen=True)
+class SampledEnvironment:
+    """Per-sample environment arrays for the kernel (N samples).
+
+    Attributes
+    ----------
+    wind_mean_m_s, wind_dir_from_rad : ndarray (N,)
+    gust_f_hz, gust_amp_m_s, gust_phase_rad : ndarray (N, n_gust)
+        Gust harmonics added to the mean speed.
+    current : ndarray (N, 2)
+        ``[speed_m_s, dir_to_rad]``.
+    waves : tuple of 4 ndarrays (N, n_wave)
+        Component frequency [rad/s], amplitude [m], phase [rad], direction from [rad].
+    """
+
+    wind_mean_m_s: np.ndarray
+    wind_dir_from_rad: np.ndarray
+    gust_f_hz: np.ndarray
+    gust_amp_m_s: np.ndarray
+    gust_phase_rad: np.ndarray
+    current: np.ndarray
+    waves: tuple
+
+
+def _harris_shape(f_hz, u_m_s, length_scale_m=1800.0):
+    """Harris (1971) spectrum up to a constant (as :func:`hybridship.sim.environment.harris_spectrum`)."""
+    return u_m_s * length_scale_m / (2.0 + (f_hz * length_scale_m / u_m_s) ** 2) ** (5.0 / 6.0)
+
+
+def sample_environment(state: WeatherState, uncertainty: WeatherUncertainty | None, n: int,
+                       rng: np.random.Generator, *, duration_s: float, dt_s: float, n_gust: int = 20,
+                       n_wave: int = 20) -> SampledEnvironment:
+    """Draw ``n`` environment samples of a weather state (see :class:`SampledEnvironment`).
+
+    Weather means are drawn from ``uncertainty`` (normal); each sample then gets its own
+    gust harmonics (Harris shape, log-spaced jittered frequencies between ``1 / duration_s``
+    and the Nyquist frequency of ``dt_s``, rescaled to ``gust_intensity * U``) and its own
+    random-phase JONSWAP components (:func:`~hybridship.sim.environment.make_wave_components`).
+    The order of draws is fixed, so a seed gives the same samples.
+    """
+    u = uncertainty or WeatherUncertainty()
+    s = state
+    z = rng.standard_normal((n, 7))
+    wind = np.maximum(s.wind_speed_m_s + u.wind_speed_m_s * z[:, 0], 0.0)
+    wind_dir = s.wind_dir_from_rad + u.wind_dir_rad * z[:, 1]
+    hs = np.maximum(s.hs_m + u.hs_m * z[:, 2], 0.0)
+    tp = np.maximum(s.tp_s + u.tp_s * z[:, 3], 1.0)
+    wave_dir = s.wave_dir_from_rad + u.wave_dir_rad * z[:, 4]
+    cur = np.maximum(s.current_speed_m_s + u.current_speed_m_s * z[:, 5], 0.0)
+    cur_dir = s.current_dir_to_rad + u.current_dir_rad * z[:, 6]
+
+    f_lo = 1.0 / duration_s
+    f_hi = max(0.5 / dt_s, 2.0 * f_lo)
+    edges = np.geomspace(f_lo, f_hi, n_gust + 1)
+    freq = edges[:-1] + rng.uniform(0.0, 1.0, (n, n_gust)) * np.diff(edges)
+    phase = rng.uniform(0.0, 2.0 * np.pi, (n, n_gust))
+    u_ref = np.maximum(wind, 1.0)[:, None]
+    amp = np.sqrt(2.0 * _harris_shape(freq, u_ref) * np.diff(edges))
+    amp *= (s.gust_intensity * wind)[:, None] / np.sqrt(0.5 * np.sum(amp**2, axis=1, keepdims=True))
+
+    ww = np.ones((n, n_wave))
+    wa = np.zeros((n, n_wave))
+    wp = np.zeros((n, n_wave))
+    wd = np.zeros((n, n_wave))
+    seeds = rng.integers(0, 2**63 - 1, n)
+    for i in range(n):
+        if hs[i] > 0.0:
+            c = env.make_wave_components(hs[i], tp[i], wave_dir[i], np.random.default_rng(seeds[i]), n_wave)
+            ww[i], wa[i], wp[i], wd[i] = c.omega_rad_s, c.amplitude_m, c.phase_rad, c.dir_from_rad
+    return SampledEnvironment(wind, wind_dir, freq, amp, phase, np.column_stack([cur, cur_dir]), (ww, wa, wp, wd))

@@ -1,0 +1,319 @@
+"""Drift-off analysis: physics facts, statistics, seeds, cluster equality, input errors."""
+
+from __future__ import annotations
+
+import importlib.util
+import math
+import time
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+import pytest
+from scipy.integrate import solve_ivp
+
+from hybridship.driftoff import engine, spread
+from hybridship.driftoff.live import blackout_now, environment_from_log
+from hybridship.driftoff.planning import DriftOffSettings, get_model, hull_array, simulate_blackouts
+from hybridship.driftoff.season import season_sweep
+from hybridship.driftoff.weather import (WeatherState, WeatherUncertainty, read_weather_table,
+                                         states_to_frame)
+from hybridship.physics.model import build_model_arrays
+from hybridship.sim import environment as env
+
+ROOT = Path(__file__).resolve().parents[1]
+TRUTHSIM_DEV = ROOT.parent / "shared" / "data" / "truthsim-dev" / "logs"
+
+CALM_FAST = dict(n_samples=4, horizon_s=120.0, radii_m=(3.0, 5.0, 10.0), reaction_times_s=(30.0, 60.0))
+
+
+def test_no_environment_never_reaches_any_radius():
+    calm = WeatherState(gust_intensity=0.0)
+    r = simulate_blackouts("gunnerus", calm, np.radians([0, 90, 200]), settings=DriftOffSettings(**CALM_FAST))
+    assert np.all(np.isinf(r.t_reach_s))
+    assert np.all(r.excursion_m < 1e-9)
+    assert np.all(r.p_exceed() == 0.0)
+
+
+def _scipy_time_to_reach(wind_m_s, radii, tau_rpm_s=1.5):
+    """Independent adaptive solve of the nominal model's drift equation with a constant beam wind."""
+    model = get_model("gunnerus")
+    K = model.n_actuators
+    az = np.array([t.fixed_angle_rad for t in model.vessel.thrusters])
+    wind = [wind_m_s, math.pi / 2]           # from starboard (heading 0)
+    nu_dot0 = model.acceleration(np.zeros(3), np.zeros(3), rpm=np.zeros(K), azimuth_rad=az, wind=wind)[0]
+    hold = -model.mass_matrix @ nu_dot0      # the DP's thrust at the blackout, spinning down
+
+    def rhs(t, x):
+        nd = model.acceleration(x[:3], x[3:], rpm=np.zeros(K), azimuth_rad=az, wind=wind,
+                                tau_ext=hold * math.exp(-2.0 * t / tau_rpm_s))[0]
+        c, s = math.cos(x[2]), math.sin(x[2])
+        return [c * x[3] - s * x[4], s * x[3] + c * x[4], x[5], *nd]
+
+    events = []
+    for R in radii:
+        ev = lambda t, x, R=R: math.hypot(x[0], x[1]) - R  # noqa: E731
+        ev.terminal = R == max(radii)
+        ev.direction = 1
+        events.append(ev)
+    sol = solve_ivp(rhs, (0.0, 200.0), np.zeros(6), method="DOP853", rtol=1e-8, atol=1e-9, events=events)
+    return np.array([e[0] if len(e) else np.inf for e in sol.t_events])
+
+
+def test_constant_beam_wind_matches_independent_ode_solve():
+    radii = (3.0, 5.0, 10.0)
+    st = DriftOffSettings(n_samples=1, horizon_s=200.0, dt_s=0.5, radii_m=radii, reaction_times_s=(30.0,),
+                          vessel_spread=0.0)
+    w = WeatherState(wind_speed_m_s=12.0, wind_dir_from_rad=math.pi / 2, gust_intensity=0.0)
+    r = simulate_blackouts("gunnerus", w, [0.0], settings=st)
+    expected = _scipy_time_to_reach(12.0, radii)
+    assert np.all(np.isfinite(expected))
+    np.testing.assert_allclose(r.t_reach_s[0, 0], expected, rtol=0.01)
+
+
+def test_time_to_reach_decreases_with_wind_speed():
+    st = DriftOffSettings(n_samples=12, horizon_s=240.0, radii_m=(3.0, 5.0), reaction_times_s=(30.0,), seed=3)
+    med = []
+    for u in (5.0, 8.0, 11.0, 14.0):
+        w = WeatherState.from_degrees(wind_speed_m_s=u, wind_dir_deg=60.0, hs_m=0.5, tp_s=5.0, current_m_s=0.1,
+                                      current_dir_deg=240.0)
+        med.append(np.median(simulate_blackouts("gunnerus", w, [0.0], settings=st).t_reach_s[0], axis=0))
+    med = np.array(med)
+    assert np.all(np.isfinite(med))
+    assert np.all(np.diff(med, axis=0) < 0), med
+
+
+def test_larger_reaction_time_gives_larger_watch_circle():
+    st = DriftOffSettings(n_samples=16, horizon_s=120.0, reaction_times_s=(10.0, 20.0, 40.0, 80.0))
+    w = WeatherState.from_degrees(wind_speed_m_s=9.0, wind_dir_deg=30.0, hs_m=1.0, tp_s=6.0, current_m_s=0.2)
+    r = simulate_blackouts("gunnerus", w, np.radians([0, 90]), settings=st)
+    for q in (0.5, 0.9):
+        wc = r.watch_circle(q)
+        assert np.all(np.diff(wc, axis=1) > 0), wc
+    # consistency: P(exceed r within t) is the share of samples whose excursion up to t reaches r
+    pe = r.p_exceed()
+    for k, tr in enumerate(r.reaction_times_s):
+        frac = (r.excursion_m[:, :, k, None] >= r.radii_m[None, None, :] - 1e-9).mean(axis=1)
+        np.testing.assert_allclose(pe[:, :, k], frac)
+
+
+def test_scaled_arrays_reproduce_the_true_vessel():
+    model = get_model("gunnerus")
+    st = spread.scaled_arrays(model.arrays, spread.true_vessel_scales(model.vessel, 2))
+    true = build_model_arrays(model.vessel, true_vessel=True)
+    for name in ("m_inv", "m_a", "d_lin", "d_quad", "d_lift", "strip_w", "thr"):
+        np.testing.assert_allclose(getattr(st, name)[1], getattr(true, name), rtol=1e-12, atol=1e-12, err_msg=name)
+    # wind: the model's wind kernel gives the same loads from the scaled areas and arm
+    from hybridship.physics.model import wind_force_scalar
+
+    for ang in np.linspace(-3.0, 3.0, 13):
+        f_st = wind_force_scalar(0.1, -0.2, 1.0, 0.0, 8 * math.cos(ang), 8 * math.sin(ang), st.wind_p[1],
+                                 model.arrays.wind_table)
+        f_true = wind_force_scalar(0.1, -0.2, 1.0, 0.0, 8 * math.cos(ang), 8 * math.sin(ang), true.wind_p,
+                                   true.wind_table)
+        np.testing.assert_allclose(f_st, f_true, rtol=1e-9, atol=1e-9)
+
+
+def test_spread_zero_is_the_nominal_model():
+    model = get_model("gunnerus")
+    sc = spread.draw_scales(model.vessel, 3, np.random.default_rng(0), 0.0)
+    st = spread.scaled_arrays(model.arrays, sc)
+    np.testing.assert_allclose(st.m_inv[2], model.arrays.m_inv)
+    np.testing.assert_allclose(st.wind_p[2], model.arrays.wind_p)
+
+
+def test_kernel_wave_drift_matches_the_simulator():
+    comps = env.make_wave_components(1.2, 6.5, 0.7, np.random.default_rng(5), 15)
+    ves = get_model("gunnerus").vessel
+    hull = hull_array(ves)
+    p = ves.particulars
+    hd = env.HullDimensions(L_m=p.L_pp_m, B_m=p.B_m, T_m=p.T_m)
+    out = np.empty(3)
+    for t, n, e, psi in ((0.0, 0.0, 0.0, 0.1), (37.0, 3.0, -8.0, 1.9), (120.5, -20.0, 5.0, -2.5)):
+        engine._wave_drift(t, n, e, psi, comps.omega_rad_s, comps.amplitude_m, comps.phase_rad, comps.dir_from_rad,
+                           hull, False, out)
+        ref = env.wave_drift_loads([t], psi, comps, hd, p.rho_water_kg_m3, position_ne_m=[[n, e]])[0]
+        np.testing.assert_allclose(out, ref, rtol=1e-9, atol=1e-6)
+        engine._wave_drift(t, n, e, psi, comps.omega_rad_s, comps.amplitude_m, comps.phase_rad, comps.dir_from_rad,
+                           hull, True, out)
+        np.testing.assert_allclose(out, env.mean_drift_loads(psi, comps, hd, p.rho_water_kg_m3), rtol=1e-9, atol=1e-6)
+
+
+def test_same_seed_same_result_and_index_selects_the_stream():
+    st = DriftOffSettings(n_samples=5, horizon_s=90.0, seed=7)
+    w = WeatherState.from_degrees(wind_speed_m_s=8.0, hs_m=0.8, tp_s=6.0, current_m_s=0.2, current_dir_deg=90.0)
+    a = simulate_blackouts("gunnerus", w, [0.3], settings=st, index=4)
+    b = simulate_blackouts("gunnerus", w, [0.3], settings=st, index=4)
+    c = simulate_blackouts("gunnerus", w, [0.3], settings=st, index=5)
+    np.testing.assert_array_equal(a.t_reach_s, b.t_reach_s)
+    assert not np.array_equal(a.excursion_m, c.excursion_m)
+
+
+def test_weather_uncertainty_widens_the_distribution():
+    st = DriftOffSettings(n_samples=40, horizon_s=150.0, radii_m=(5.0,), reaction_times_s=(30.0,), vessel_spread=0.0)
+    w = WeatherState.from_degrees(wind_speed_m_s=10.0, wind_dir_deg=90.0, gust_intensity=0.0)
+    sharp = simulate_blackouts("gunnerus", w, [0.0], settings=st).t_reach_s[0, :, 0]
+    wide = simulate_blackouts("gunnerus", w, [0.0], uncertainty=WeatherUncertainty(wind_speed_m_s=2.0),
+                              settings=st).t_reach_s[0, :, 0]
+    assert np.ptp(sharp) < 1e-9 < np.ptp(wide)
+
+
+def test_season_single_process_equals_cluster():
+    if importlib.util.find_spec("distributed") is None:
+        pytest.skip("dask.distributed is not installed (pip install -e '.[cluster]')")
+    from dask.distributed import Client, LocalCluster
+
+    rng = np.random.default_rng(1)
+    states = [WeatherState.from_degrees(wind_speed_m_s=rng.uniform(3, 14), wind_dir_deg=rng.uniform(0, 360),
+                                        hs_m=rng.uniform(0, 1.5), tp_s=rng.uniform(4, 8), current_m_s=rng.uniform(0, 0.3),
+                                        current_dir_deg=rng.uniform(0, 360)) for _ in range(5)]
+    st = DriftOffSettings(n_samples=4, horizon_s=90.0, seed=11)
+    psi = np.radians([0, 120])
+    one = season_sweep("gunnerus", states, psi, settings=st, chunk_size=2, progress=False)
+    with LocalCluster(n_workers=2, threads_per_worker=1, processes=False, dashboard_address=":0") as cluster, \
+            Client(cluster) as client:
+        many = season_sweep("gunnerus", states, psi, settings=st, chunk_size=3, scheduler=client, progress=False)
+    pd.testing.assert_frame_equal(one.to_frame(), many.to_frame(), check_exact=True)
+    # and the same as the states run one by one
+    r3 = simulate_blackouts("gunnerus", states[3], psi, settings=st, index=3)
+    np.testing.assert_array_equal(one.p_exceed[3], r3.p_exceed())
+
+
+def test_weather_table_round_trip_and_errors(tmp_path):
+    states = [WeatherState.from_degrees(wind_speed_m_s=5.0, wind_dir_deg=10.0, hs_m=1.0, tp_s=7.0, wave_dir_deg=20.0,
+                                        current_m_s=0.3, current_dir_deg=200.0)]
+    df = states_to_frame(states, ["2024-01-01T00:00"])
+    path = tmp_path / "w.csv"
+    df.to_csv(path, index=False)
+    back, labels = read_weather_table(path)
+    assert labels == ["2024-01-01T00:00"]
+    assert math.isclose(back[0].wave_dir_from_rad, states[0].wave_dir_from_rad)
+    bad = df.copy()
+    bad.loc[0, "tp_s"] = -1.0
+    with pytest.raises(ValueError, match="tp_s.*row 0"):
+        read_weather_table(bad)
+    with pytest.raises(ValueError, match="hs_m"):
+        read_weather_table(df.drop(columns=["hs_m"]))
+
+
+@pytest.mark.parametrize("kwargs, field", [
+    (dict(radii_m=(-1.0,)), "radii_m"), (dict(n_samples=0), "n_samples"), (dict(dt_s=0.0), "dt_s"),
+    (dict(reaction_times_s=(500.0,)), "reaction_times_s"), (dict(vessel_spread=float("nan")), "vessel_spread"),
+    (dict(seed=-1), "seed")])
+def test_bad_settings_name_the_field(kwargs, field):
+    with pytest.raises((ValueError, TypeError), match=field):
+        DriftOffSettings(**kwargs)
+
+
+def test_bad_weather_names_the_field():
+    with pytest.raises(ValueError, match="weather.hs_m"):
+        WeatherState(hs_m=-0.5)
+    with pytest.raises(ValueError, match="weather.gust_intensity"):
+        WeatherState(gust_intensity=0.9)
+    with pytest.raises(ValueError, match="uncertainty.wind_speed_m_s"):
+        WeatherUncertainty(wind_speed_m_s=-1.0)
+    with pytest.raises(TypeError, match="weather"):
+        simulate_blackouts("gunnerus", {"wind": 3}, [0.0])
+    with pytest.raises(ValueError, match="headings"):
+        simulate_blackouts("gunnerus", WeatherState(), [float("nan")])
+
+
+def test_cli_reports_bad_input_naming_the_option(tmp_path, capsys):
+    from hybridship.cli import main
+
+    assert main(["drift-off", "planning", "--out", str(tmp_path), "--radii-m", "-3"]) == 2
+    assert "--radii-m" in capsys.readouterr().err
+    assert main(["drift-off", "planning", "--out", str(tmp_path), "--hs-m", "-1"]) == 2
+    assert "hs_m" in capsys.readouterr().err
+    assert main(["drift-off", "season", "--out", str(tmp_path), "--weather-table", str(tmp_path / "nope.csv")]) == 2
+    assert "--weather-table" in capsys.readouterr().err
+
+
+def test_cli_planning_writes_the_report(tmp_path, capsys):
+    from hybridship.cli import main
+
+    out = tmp_path / "plan"
+    assert main(["drift-off", "planning", "--out", str(out), "--samples", "3", "--headings-deg", "0,90",
+                 "--horizon-s", "90", "--no-plots"]) == 0
+    times = pd.read_csv(out / "times.csv")
+    assert len(times) == 2 * 3 and (out / "summary.md").is_file() and (out / "watch.csv").is_file()
+    assert "Time to reach" in capsys.readouterr().out
+
+
+def _failure_log():
+    files = sorted(TRUTHSIM_DEV.glob("dev_*.csv.gz")) if TRUTHSIM_DEV.is_dir() else []
+    if not files:
+        pytest.skip(f"truthsim-dev logs not found under {TRUTHSIM_DEV}")
+    df = pd.read_csv(files[0])
+    dp = df["dp_active"].to_numpy()
+    i = int(np.flatnonzero((dp[:-1] == 1) & (dp[1:] == 0))[0])
+    return df, i
+
+
+def test_live_update_is_fast_and_does_not_touch_the_log():
+    df, i = _failure_log()
+    hist = df.iloc[: i + 1]
+    before = hist.copy()
+    st = DriftOffSettings(n_samples=100, radii_m=(5.0, 10.0))
+    blackout_now(environment_from_log(hist, "gunnerus"), "gunnerus", st)       # compile / warm up
+    t0 = time.perf_counter()
+    est = environment_from_log(hist, "gunnerus")
+    res = blackout_now(est, "gunnerus", st)
+    dt = time.perf_counter() - t0
+    pd.testing.assert_frame_equal(hist, before)
+    assert dt < 1.0, f"live update took {dt:.2f} s"
+    assert np.all(np.isfinite(est.accel_ned)) and est.accel_members.shape == (20, 3)
+    assert res.t_reach_s.shape == (1, 100, 2) and np.isfinite(res.t_reach_s).mean() > 0.5
+
+
+def test_live_bad_input_names_the_field():
+    with pytest.raises(TypeError, match="log"):
+        environment_from_log([1, 2, 3], "gunnerus")
+    with pytest.raises(ValueError, match="window_s"):
+        environment_from_log(pd.DataFrame({"time_s": [0.0, 1.0, 2.0]}), "gunnerus", window_s=-5)
+
+
+def test_cli_season_in_this_process(tmp_path):
+    from hybridship.cli import main
+
+    states = [WeatherState.from_degrees(wind_speed_m_s=u, wind_dir_deg=40.0, hs_m=0.5, tp_s=5.0) for u in (6.0, 12.0)]
+    table = tmp_path / "weather.csv"
+    states_to_frame(states, ["h0", "h1"]).to_csv(table, index=False)
+    out = tmp_path / "season"
+    assert main(["drift-off", "season", "--weather-table", str(table), "--scheduler", "none", "--samples", "3",
+                 "--headings-deg", "0,90", "--horizon-s", "90", "--no-progress", "--out", str(out)]) == 0
+    season = pd.read_csv(out / "season.csv")
+    assert len(season) == 2 * 2 * 3 and list(season["label"].unique()) == ["h0", "h1"]
+    assert (out / "operability.csv").is_file() and (out / "summary.md").is_file()
+
+
+def test_cli_live_on_a_truthsim_log(tmp_path):
+    files = sorted(TRUTHSIM_DEV.glob("dev_*.csv.gz")) if TRUTHSIM_DEV.is_dir() else []
+    if not files:
+        pytest.skip(f"truthsim-dev logs not found under {TRUTHSIM_DEV}")
+    from hybridship.cli import main
+
+    out = tmp_path / "live"
+    assert main(["drift-off", "live", "--log", str(files[0]), "--time-s", "2900", "--samples", "10",
+                 "--radii-m", "5,10", "--no-plots", "--out", str(out)]) == 0
+    times = pd.read_csv(out / "times.csv")
+    assert len(times) == 2
+    assert main(["drift-off", "live", "--log", str(files[0]), "--time-s", "1e9", "--out", str(out)]) == 2
+
+
+def test_live_current_members_carry_the_vessel_along():
+    from hybridship.driftoff.live import EnvironmentEstimate
+
+    z3 = np.zeros(3)
+    est = EnvironmentEstimate(time_s=0.0, eta=z3, nu=z3, rpm=z3, azimuth_rad=z3, wind_speed_m_s=0.0,
+                              wind_dir_from_rad=0.0, gust_intensity=0.0, accel_ned=z3, accel_members=np.zeros((1, 3)))
+    st = DriftOffSettings(n_samples=2, horizon_s=300.0, radii_m=(5.0, 50.0), reaction_times_s=(300.0,),
+                          vessel_spread=0.0)
+    assert np.all(np.isinf(blackout_now(est, "gunnerus", st).t_reach_s))
+    import dataclasses
+
+    moving = dataclasses.replace(est, current_members_ned_m_s=np.array([[0.0, 0.5]]))   # 0.5 m/s towards east
+    r = blackout_now(moving, "gunnerus", st)
+    t50 = r.t_reach_s[0, 0, 1]
+    # carried along: reaches 50 m later than a body already moving at 0.5 m/s, but not much later
+    assert 100.0 < t50 < 200.0, t50
