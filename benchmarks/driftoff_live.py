@@ -2,8 +2,9 @@
 
 For each log of ``../shared/data/truthsim-dev/logs`` (an independent simulator): the
 blackout time ``t_b`` is the first row where ``dp_active`` goes 1 -> 0. The prediction
-uses only the rows before ``t_b`` (:func:`hybridship.driftoff.live.environment_from_log`,
-the 900-s residual mean, then :func:`~hybridship.driftoff.live.blackout_now`). The actual
+uses only the rows before ``t_b`` (:func:`hybridship.driftoff.live.environment_from_log`:
+the environment estimator, or with ``--method mean`` the 900-s residual mean; then
+:func:`~hybridship.driftoff.live.blackout_now`). The actual
 time to reach a radius is measured from ``t_b`` on
 
 * the noise-free low-frequency track ``truth_north_lf_m``, ``truth_east_lf_m`` (distance
@@ -55,7 +56,7 @@ def first_time(t, d, radius):
     return float(t[k - 1] + (radius - d[k - 1]) / (d[k] - d[k - 1]) * (t[k] - t[k - 1]))
 
 
-def evaluate(path: Path, settings: DriftOffSettings, repeats: int = 3) -> list[dict]:
+def evaluate(path: Path, settings: DriftOffSettings, repeats: int = 3, method: str = "estimator") -> list[dict]:
     df = pd.read_csv(path)
     dp = df["dp_active"].to_numpy()
     starts = np.flatnonzero((dp[:-1] == 1) & (dp[1:] == 0))
@@ -66,7 +67,7 @@ def evaluate(path: Path, settings: DriftOffSettings, repeats: int = 3) -> list[d
     times = []
     for _ in range(repeats):
         t0 = time.perf_counter()
-        est = environment_from_log(hist, "gunnerus")
+        est = environment_from_log(hist, "gunnerus", method=method)
         res = blackout_now(est, "gunnerus", settings)
         times.append(time.perf_counter() - t0)
     t = df["time_s"].to_numpy(float)[b:] - df["time_s"].iloc[b]
@@ -93,6 +94,8 @@ def main(argv=None) -> int:
     ap.add_argument("--samples", type=int, default=500, help="Monte-Carlo samples (default 500)")
     ap.add_argument("--vessel-spread", type=float, default=1.0, help="[true_vessel] spread multiplier (default 1)")
     ap.add_argument("--seed", type=int, default=0)
+    ap.add_argument("--method", choices=("estimator", "mean"), default="estimator",
+                    help="environment from the environment estimator (default) or the 900-s residual mean")
     args = ap.parse_args(argv)
     files = sorted(args.data.glob("*.csv.gz")) if args.data.is_dir() else []
     if not files:
@@ -102,13 +105,13 @@ def main(argv=None) -> int:
                           vessel_spread=args.vessel_spread, seed=args.seed)
     rows = []
     for f in files:
-        rows += evaluate(f, st)
+        rows += evaluate(f, st, method=args.method)
     res = pd.DataFrame(rows)
     write_frame(args.out / "live.csv", res)
     lf = res[res.track == "truth_lf"]
     inside = ((lf.percentile >= 10) & (lf.percentile <= 90)).mean()
-    text = (f"# Live drift-off on truthsim-dev\n\nCommand: `python benchmarks/driftoff_live.py --samples {args.samples}"
-            f" --vessel-spread {args.vessel_spread:g} --seed {args.seed}`\n\n"
+    text = (f"Command: `python benchmarks/driftoff_live.py --samples {args.samples}"
+            f" --vessel-spread {args.vessel_spread:g} --seed {args.seed} --method {args.method}`\n\n"
             f"{len(files)} logs, {args.samples} samples per prediction; update time (environment estimate + "
             f"blackouts) median {res.update_s.median():.3f} s, max {res.update_s.max():.3f} s.\n"
             f"Truth-track actual times inside the predicted 10-90 % band: {100 * inside:.0f} % of "

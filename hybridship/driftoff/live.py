@@ -1,13 +1,17 @@
 """Live mode: "a blackout now", from the station-keeping log up to now.
 
 :func:`environment_from_log` is the one place that turns a log into the environment a
-blackout would meet (:class:`EnvironmentEstimate`); today it uses the residual scheme's
-causal bias (:mod:`hybridship.residual.features`): the mean, over the last 900 s, of the
-acceleration the physics model does not explain while the DP holds position (current, mean
-wave drift and model error), held in NED, with its spread from
-:meth:`~hybridship.residual.features.PreparedLog.bias_members` (the variability of
-one-minute means within the window). A dedicated drift estimator can replace this function
-without touching the rest.
+blackout would meet (:class:`EnvironmentEstimate`). By default (``method="estimator"``) it
+runs the environment estimator (:mod:`hybridship.residual.environment`) over the last
+``window_s`` of the log: the filtered state now, the current (acting through the relative
+velocity) and the load, with members drawn from the estimator's posterior, and the yaw
+environment treated as at a logged thrust stop
+(:meth:`~hybridship.residual.environment.EnvironmentEstimator.at_thrust_stop`).
+``method="mean"`` uses the residual scheme's causal bias instead
+(:mod:`hybridship.residual.features`): the mean, over the last 900 s, of the acceleration
+the physics model does not explain while the DP holds position (current, mean wave drift
+and model error), held in NED, with its spread from
+:meth:`~hybridship.residual.features.PreparedLog.bias_members`.
 
 :func:`blackout_now` then runs the Monte-Carlo blackouts from the logged heading,
 velocity, thruster rpm (spinning down) and azimuths, with the measured mean wind and its
@@ -89,8 +93,12 @@ def _arrays(log, model, window_s: float) -> LogArrays:
                          rotatable=[t.type == "azimuth" for t in ves.thrusters])
 
 
+#: How :func:`environment_from_log` estimates the environment.
+METHODS = ("estimator", "mean")
+
+
 def environment_from_log(log, vessel="gunnerus", *, window_s: float = 900.0, wind_window_s: float = 120.0,
-                         n_members: int = 20, seed: int = 0) -> EnvironmentEstimate:
+                         n_members: int = 20, seed: int = 0, method: str = "estimator") -> EnvironmentEstimate:
     """The environment a blackout at the log's last row would meet (see the module notes).
 
     Parameters
@@ -106,7 +114,11 @@ def environment_from_log(log, vessel="gunnerus", *, window_s: float = 900.0, win
     n_members : int
         Members of the acceleration estimate.
     seed : int
+    method : {"estimator", "mean"}
+        The environment estimator (default) or the residual mean (see the module notes).
     """
+    if method not in METHODS:
+        raise ValueError(f"method: expected one of {METHODS}, got {method!r}")
     for name, v in (("window_s", window_s), ("wind_window_s", wind_window_s)):
         if not (isinstance(v, (int, float)) and math.isfinite(v) and v > 0):
             raise ValueError(f"{name}: expected a number > 0 s, got {v!r}")
@@ -114,11 +126,14 @@ def environment_from_log(log, vessel="gunnerus", *, window_s: float = 900.0, win
         raise ValueError(f"n_members: expected a positive int, got {n_members!r}")
     model = get_model(vessel)
     a = _arrays(log, model, window_s)
-    cfg = ResidualConfig(bias_window_s=float(window_s))
-    prep = prepare_log(model, a, cfg)
     idx = len(a.time_s) - 1
-    members = prep.bias_members(idx, int(n_members), seed=seed)
-    eta0, nu0, _, bias0 = prep.start_state(idx)
+    current_members = None
+    if method == "estimator":
+        eta0, nu0, bias0, members, current_members = _estimated(model, a, idx, int(n_members), seed)
+    else:
+        prep = prepare_log(model, a, ResidualConfig(bias_window_s=float(window_s)))
+        members = prep.bias_members(idx, int(n_members), seed=seed)
+        eta0, nu0, _, bias0 = prep.start_state(idx)
     t = a.time_s
     sel = (t >= t[-1] - wind_window_s) & np.isfinite(a.wind).all(1)
     if a.has_wind and sel.any():
@@ -131,7 +146,22 @@ def environment_from_log(log, vessel="gunnerus", *, window_s: float = 900.0, win
     return EnvironmentEstimate(time_s=float(t[-1]), eta=eta0, nu=nu0, rpm=np.nan_to_num(a.rpm[idx]).copy(),
                                azimuth_rad=np.nan_to_num(a.azimuth_rad[idx]).copy(), wind_speed_m_s=w_speed,
                                wind_dir_from_rad=w_dir, gust_intensity=gi, accel_ned=np.asarray(bias0, float),
-                               accel_members=members)
+                               accel_members=members, current_members_ned_m_s=current_members)
+
+
+def _estimated(model, a: LogArrays, idx: int, n_members: int, seed: int):
+    """(eta, nu, load, load members, current members) from the environment estimator at row
+    ``idx``, as if the thrusters stopped there."""
+    from ..residual.environment import CUR, LOAD, EnvironmentEstimator
+    from ..residual.environment import EnvironmentEstimate as FilterEstimate
+
+    est = EnvironmentEstimator(model)
+    at = est.run(a, np.array([idx]))
+    x, P = est.at_thrust_stop(at.x[0], at.P[0])
+    draws = FilterEstimate(at.rows, at.time_s, x[None], P[None]).sample_environment(n_members, seed)[:, 0]
+    off = CUR.start                                   # draws hold [current (2), load (3), thrust error (3)]
+    return (x[0:3].copy(), x[3:6].copy(), x[LOAD].copy(), draws[:, LOAD.start - off:LOAD.stop - off].copy(),
+            draws[:, CUR.start - off:CUR.stop - off].copy())
 
 
 def blackout_now(estimate: EnvironmentEstimate, vessel="gunnerus", settings: DriftOffSettings | None = None,

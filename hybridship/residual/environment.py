@@ -220,7 +220,7 @@ class EnvironmentEstimator:
         self.thrust_error_mean = np.zeros(3)
         self.thrust_error_std = np.asarray(config.thrust_error_prior, dtype=float)
         #: Share of the station-keeping yaw environment kept at a thrust stop (see
-        #: :meth:`_forget_yaw_load`); :meth:`fit` learns it from training stops.
+        #: :meth:`at_thrust_stop`); :meth:`fit` learns it from training stops.
         self.yaw_load_kept = float(config.yaw_load_kept_at_stop)
 
     # ------------------------------------------------------------------ learning
@@ -357,8 +357,11 @@ class EnvironmentEstimator:
         F = ((f[1:] - f[0]) / h[:, None]).T
         return f[0], F @ P @ F.T + Q
 
-    def _forget_yaw_load(self, x, P):
-        """At a thrust stop, return the environment's yaw moment to its prior (module notes).
+    def at_thrust_stop(self, x, P):
+        """State (14,) and covariance at a thrust stop: the yaw environment restarts (module notes).
+
+        Applied by the filter where ``dp_active`` goes 1 -> 0, and usable for "a blackout
+        now" (drift-off live mode).
 
         Under station keeping the yaw offset is the small difference of large thruster
         moments, and a per-DOF efficiency factor cannot describe an error in the thrusters'
@@ -485,7 +488,7 @@ class EnvironmentEstimator:
                     wrap_idx = [k for k, j in enumerate(H_rows) if j == 2]
                     x, P = self._update(x, P, z[i, H_rows], H_rows, r_std[i, H_rows], wrap_idx)
                 if dp[prev] and not dp[i] and self.config.reset_yaw_load_at_stop:
-                    x, P = self._forget_yaw_load(x, P)
+                    x, P = self.at_thrust_stop(x, P)
             prev = i
             if i in want:
                 out_x[i] = x
