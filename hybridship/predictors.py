@@ -1039,7 +1039,6 @@ class HybridPredictor:
             "nets_after_stop": self.nets_after_stop,
             "thrust_error_prior": {"mean": self.estimator.thrust_error_mean.tolist(),
                                    "std": self.estimator.thrust_error_std.tolist()},
-            "yaw_load_kept": self.estimator.yaw_load_kept,
             "calibration_config": asdict(self.calibration_config),
             "training": self.training, "multistep_config": asdict(self.multistep_config),
             "command_guard": self.command_guard,
@@ -1133,9 +1132,6 @@ class HybridPredictor:
             thr_std = np.asarray(meta["thrust_error_prior"]["std"], dtype=float).reshape(3)
             if not (np.all(np.isfinite(thr_mean)) and np.all(thr_std > 0)):
                 raise ValueError("thrust_error_prior: expected finite means and positive spreads")
-            yaw_kept = float(meta["yaw_load_kept"])
-            if not 0.0 <= yaw_kept <= 1.0:
-                raise ValueError(f"yaw_load_kept: expected a number in [0, 1], got {yaw_kept}")
             regime_meta = meta["command_regime"]
             calibrated_commands = list(meta["calibrated_commands"])
             fingerprint = meta["vessel_fingerprint"]
@@ -1179,7 +1175,6 @@ class HybridPredictor:
         obj.ensemble, obj.guard, obj.thrust_regime = ens, guard, thrust_regime
         obj.estimator = EnvironmentEstimator(obj.model, obj.environment_config)
         obj.estimator.thrust_error_mean, obj.estimator.thrust_error_std = thr_mean, thr_std
-        obj.estimator.yaw_load_kept = yaw_kept
         obj.calibration = calibration
         obj.command_regime = None
         if regime_meta is not None:

@@ -167,14 +167,3 @@ def test_spread_after_a_stop_is_calibrated_on_logs_with_failures(model, tmp_path
     again = HybridPredictor.load(path).forecast(log, [t0 - 50.0, t0 + 5.0], 60.0)
     np.testing.assert_allclose(again.eta_std, cal.eta_std)
 
-
-def test_yaw_environment_kept_at_a_stop_is_learned_from_training_stops(model):
-    """A constant yaw moment that is environment (it stays when the thrusters stop): from
-    training logs with failures the estimator learns to keep most of the station-keeping
-    yaw environment at a stop; without failures (dp_only) it keeps the configured prior."""
-    logs = [physics_log(model, duration_s=1200, t_shutdown_s=900, seed=s, wind=(0.0, 0.0),
-                        tau_ext_N=(0.0, 0.0, 60000.0)) for s in (17, 18)]
-    arrays = [as_log_arrays(x, model.vessel) for x in logs]
-    learned = EnvironmentEstimator(model).fit(arrays)
-    assert learned.yaw_load_kept > 0.7
-    assert EnvironmentEstimator(model).fit(arrays, dp_only=True).yaw_load_kept == 0.0

@@ -219,9 +219,6 @@ class EnvironmentEstimator:
         #: Prior mean and standard deviation of ``theta``; :meth:`fit` may replace them.
         self.thrust_error_mean = np.zeros(3)
         self.thrust_error_std = np.asarray(config.thrust_error_prior, dtype=float)
-        #: Share of the station-keeping yaw environment kept at a thrust stop (see
-        #: :meth:`at_thrust_stop`); :meth:`fit` learns it from training stops.
-        self.yaw_load_kept = float(config.yaw_load_kept_at_stop)
 
     # ------------------------------------------------------------------ learning
 
@@ -236,13 +233,16 @@ class EnvironmentEstimator:
         runs to that point and its ``theta`` (resolved by the drift samples through the
         load/thrust-error correlation it carried) is kept. The precision-weighted mean over
         the stops becomes the prior mean; the spread between stops (at least each stop's own
-        uncertainty) its standard deviation. The same stops tell how much of the
-        station-keeping yaw environment (yaw load plus the hull's moment from the current)
-        survives the stop: the least-squares ratio of the drift's yaw environment 60 s after
-        each stop to the one before it, clipped to [0, 1], becomes ``yaw_load_kept``.
-        Without stops, or with ``dp_only`` (the paper's protocol, in which nothing of a
-        failure is seen), the priors stay as configured: 0 +- ``thrust_error_prior`` and
-        ``yaw_load_kept_at_stop``.
+        uncertainty) its standard deviation. Without stops, or with ``dp_only`` (the paper's
+        protocol, in which nothing of a failure is seen), the prior stays as configured:
+        0 +- ``thrust_error_prior``.
+
+        Not learned here: how much of the station-keeping yaw environment survives a stop
+        (``yaw_load_kept_at_stop``). Learning it as the ratio of the drift's yaw environment
+        60 s after each training stop to the one before it was tried: it helped on our own
+        scenarios and made truthsim-dev's heading 1.4-1.9x worse than physics under the fleet
+        protocol, because the drift's yaw residual there also holds the hull model's yaw
+        error at drift speeds, which the ratio then mistakes for environment.
 
         Parameters
         ----------
@@ -254,8 +254,7 @@ class EnvironmentEstimator:
         """
         if dp_only:
             return self
-        self.yaw_load_kept = float(self.config.yaw_load_kept_at_stop)   # the drifts below use the prior
-        means, precs, yaw_before, yaw_after = [], [], [], []
+        means, precs = [], []
         for a in logs_arrays:
             dp = a.dp_active.astype(bool)
             stops = np.flatnonzero(dp[:-1] & ~dp[1:]) + 1
@@ -264,17 +263,11 @@ class EnvironmentEstimator:
                 if end >= len(a.time_s) or a.segment_id[end] != a.segment_id[i]:
                     continue
                 first = int(np.searchsorted(a.time_s, a.time_s[i] - 1800.0))
-                est = self.run(a, np.array([i - 1, end]), first_row=first)
-                means.append(est.x[1, THR])
-                precs.append(1.0 / np.diag(est.P[1])[THR])
-                yaw_before.append(self._total_yaw_env(est.x[0]))
-                yaw_after.append(self._total_yaw_env(est.x[1]))
+                est = self.run(a, np.array([end]), first_row=first)
+                means.append(est.x[0, THR])
+                precs.append(1.0 / np.diag(est.P[0])[THR])
         if not means:
             return self
-        # How much of the station-keeping yaw environment the drift kept (least squares over stops)
-        yb, ya = np.array(yaw_before), np.array(yaw_after)
-        if np.sum(yb * yb) > 0:
-            self.yaw_load_kept = float(np.clip(np.sum(yb * ya) / np.sum(yb * yb), 0.0, 1.0))
         means, precs = np.array(means), np.array(precs)
         m = np.sum(precs * means, axis=0) / precs.sum(axis=0)
         between = np.sqrt(np.sum(precs * (means - m) ** 2, axis=0) / precs.sum(axis=0))
@@ -377,7 +370,7 @@ class EnvironmentEstimator:
         P = P.copy()
         current_yaw = self._total_yaw_env(x) - x[k]
         total = x[k] + current_yaw              # the environment's yaw acceleration under DP
-        kept = self.yaw_load_kept
+        kept = self.config.yaw_load_kept_at_stop
         x[k] = kept * total - current_yaw
         P[k, :] = 0.0
         P[:, k] = 0.0
