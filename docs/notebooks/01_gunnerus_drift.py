@@ -43,6 +43,7 @@ from hybridship import metrics
 from hybridship.physics.model import DynamicModel
 from hybridship.predictors import DeadReckoning, DynamicPredictor, HybridPredictor, as_log_arrays
 from hybridship.residual.ensemble import EnsembleConfig
+from hybridship.residual.environment import EnvironmentEstimator, environment_accel
 from hybridship.residual.features import TARGETS, prepare_log
 from hybridship.sim.scenario import DPLossConfig, drift_statistics, simulate_dp_loss
 
@@ -124,9 +125,11 @@ fig.tight_layout()
 # `prepare_log` starts the dynamic model from every sample with the logged commands and
 # wind held, predicts one step ahead and compares with the next measured velocity. The
 # difference divided by the step is the residual acceleration that the model misses,
-# `res = (nu(t+1) - nu_hat(t+1)) / dt`, in the body frame. A causal 900-s mean of it is the
-# bias (held fixed in NED for surge and sway); the networks learn what remains, the
-# deviation. See [the residual scheme](../../concepts/residual/).
+# `res = (nu(t+1) - nu_hat(t+1)) / dt`, in the body frame. The slowly varying part of it is
+# the environment, which the [environment estimator](../../concepts/environment/) follows
+# causally (a current acting through the relative velocity, a load in NED and a thrust-model
+# error); the networks learn what remains, the deviation. See
+# [the residual scheme](../../concepts/residual/).
 
 # %%
 hybrid = HybridPredictor("gunnerus", ensemble_config=EnsembleConfig(n_members=MEMBERS, max_epochs=MAX_EPOCHS,
@@ -134,13 +137,16 @@ hybrid = HybridPredictor("gunnerus", ensemble_config=EnsembleConfig(n_members=ME
 model = hybrid.model                     # the nominal DynamicModel("gunnerus")
 arrays = as_log_arrays(train_logs[0], model.vessel)
 prep = prepare_log(model, arrays, hybrid.residual_config)
+# the acceleration the estimator's causal state explains at each row (its prior here: fit
+# may still refine the thrust-error prior from failures in the training logs)
+prep.env_body = environment_accel(model, arrays, EnvironmentEstimator(model).run(arrays), prep.nu_s)
 rows = prep.trainable_rows(arrays.dp_active.astype(bool))
 print(f"{len(rows)} trainable DP rows of {len(arrays)}; features {list(hybrid.residual_config.features)}; targets {list(TARGETS)}")
 res_tot = prep.residual[rows]
 dev = prep.deviation(rows)
 print("residual mean  [m/s2, m/s2, rad/s2]:", np.round(res_tot.mean(0), 5))
 print("residual std                       :", np.round(res_tot.std(0), 5))
-print("deviation std (after the bias)     :", np.round(dev.std(0), 5))
+print("deviation std (after the environment):", np.round(dev.std(0), 5))
 
 # %% [markdown]
 # ## 4. Train the ensemble
@@ -176,7 +182,7 @@ ax.legend()
 # * and the differences between the true and the nominal ship (the `[true_vessel]`
 #   factors), which are not an external force at all but show up in the residual too.
 #
-# The learned residual is the bias plus the ensemble's mean deviation. Below, both are
+# The learned residual is the estimated environment plus the ensemble's mean deviation. Below, both are
 # plotted beside `a_current + a_wave2` for the DP part of a training log. Agreement is not
 # expected sample by sample (the residual also holds the model-parameter error and the
 # measurement noise); the slowly varying part is what matters for a drift forecast.
@@ -191,9 +197,9 @@ tau_wave2 = df0[["truth_tau_wave2_x_N", "truth_tau_wave2_y_N", "truth_tau_wave2_
 a_wave2 = tau_wave2 @ np.linalg.inv(model.mass_matrix).T
 unknown = (a_current + a_wave2)[rows]
 
-bias_b = prep.bias_body(rows - 1, arrays.eta[rows, 2])
+env_b = prep.env_body[rows - 1]
 dev_mean, dev_std = hybrid.ensemble.predict(prep.features(rows))
-learned = bias_b + dev_mean
+learned = env_b + dev_mean
 
 t = arrays.time_s[rows]
 labels = ["surge [m/s2]", "sway [m/s2]", "yaw [rad/s2]"]
@@ -201,10 +207,10 @@ fig, ax = plt.subplots(3, 1, figsize=(11, 8), sharex=True)
 for k in range(3):
     ax[k].plot(t, res_tot[:, k], color="0.8", lw=0.5, label="residual target")
     ax[k].plot(t, unknown[:, k], lw=1.0, label="current + wave drift (truth)")
-    ax[k].plot(t, learned[:, k], lw=1.0, label="learned: bias + ensemble mean")
+    ax[k].plot(t, learned[:, k], lw=1.0, label="learned: environment + ensemble mean")
     ax[k].fill_between(t, learned[:, k] - 2 * dev_std[:, k], learned[:, k] + 2 * dev_std[:, k], alpha=0.3,
                        label="ensemble +-2 sigma")
-    ax[k].plot(t, bias_b[:, k], "k--", lw=0.8, label="bias")
+    ax[k].plot(t, env_b[:, k], "k--", lw=0.8, label="estimated environment")
     ax[k].set_ylabel(labels[k])
 ax[0].legend(ncol=3, fontsize=8)
 ax[-1].set_xlabel("time [s]")
