@@ -137,7 +137,7 @@ def main(argv=None) -> int:
     atomic_write(args.out / "protocols.csv",
                  lambda fh: fh.write(df.to_csv(index=False, float_format="%.6g").encode("utf-8")))
     tab = ratio_table(df)
-    md = ["# What the nets add after a DP failure, by training protocol", "",
+    md = ["What the nets add after a DP failure, by training protocol.", "",
           "Mean absolute error at 60 s as a ratio to physics alone, first 5 / first 20 intervals "
           "(below 1: better than physics).", "",
           "| " + " | ".join(tab.columns) + " |", "| " + " | ".join("---" for _ in tab.columns) + " |"]
