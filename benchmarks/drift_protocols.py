@@ -40,7 +40,7 @@ import pandas as pd
 
 from hybridship import metrics
 from hybridship.drift_benchmark import log_files
-from hybridship.fileio import atomic_write
+from hybridship.fileio import atomic_write, markdown_table
 from hybridship.predictors import DynamicPredictor, HybridPredictor, as_log_arrays
 from hybridship.residual.ensemble import EnsembleConfig
 
@@ -139,9 +139,7 @@ def main(argv=None) -> int:
     tab = ratio_table(df)
     md = ["What the nets add after a DP failure, by training protocol.", "",
           "Mean absolute error at 60 s as a ratio to physics alone, first 5 / first 20 intervals "
-          "(below 1: better than physics).", "",
-          "| " + " | ".join(tab.columns) + " |", "| " + " | ".join("---" for _ in tab.columns) + " |"]
-    md += ["| " + " | ".join(str(v) for v in r) + " |" for r in tab.itertuples(index=False)]
+          "(below 1: better than physics).", "", markdown_table(tab)]
     atomic_write(args.out / "protocols.md", lambda fh: fh.write(("\n".join(md) + "\n").encode("utf-8")))
     print("\n".join(md))
     return 0

@@ -30,7 +30,7 @@ import numpy as np
 import pandas as pd
 
 from hybridship.drift_benchmark import log_files
-from hybridship.fileio import atomic_write
+from hybridship.fileio import atomic_write, markdown_table
 from hybridship.frames import body_to_ned
 from hybridship.metrics import shutdown_index
 from hybridship.physics.model import DynamicModel
@@ -99,9 +99,7 @@ def main(argv=None) -> int:
     args.out.mkdir(parents=True, exist_ok=True)
     atomic_write(args.out / "environment_vs_truth.csv",
                  lambda fh: fh.write(table.to_csv(index=False, float_format="%.4g").encode("utf-8")))
-    t = table.round(2)
-    md = ["| " + " | ".join(t.columns) + " |", "| " + " | ".join("---" for _ in t.columns) + " |"]
-    md += ["| " + " | ".join(str(v) for v in row) + " |" for row in t.itertuples(index=False)]
+    md = [markdown_table(table.round(2))]
     atomic_write(args.out / "environment_vs_truth.md", lambda fh: fh.write(("\n".join(md) + "\n").encode("utf-8")))
     _plot(args.out / "environment_vs_truth.png", series)
     print("\n".join(md))

@@ -25,7 +25,7 @@ import pandas as pd
 
 from hybridship import metrics
 from hybridship.drift_benchmark import log_files
-from hybridship.fileio import atomic_write
+from hybridship.fileio import atomic_write, markdown_table
 from hybridship.predictors import DynamicPredictor, HybridPredictor, as_log_arrays
 from hybridship.residual.ensemble import EnsembleConfig
 from hybridship.residual.environment import EnvironmentConfig
@@ -85,8 +85,7 @@ def main(argv=None) -> int:
     df = pd.DataFrame(rows)
     args.out.mkdir(parents=True, exist_ok=True)
     atomic_write(args.out / "variants.csv", lambda fh: fh.write(df.to_csv(index=False).encode("utf-8")))
-    md = ["| " + " | ".join(df.columns) + " |", "| " + " | ".join("---" for _ in df.columns) + " |"]
-    md += ["| " + " | ".join(str(v) for v in r) + " |" for r in df.itertuples(index=False)]
+    md = [markdown_table(df)]
     atomic_write(args.out / "variants.md", lambda fh: fh.write(("\n".join(md) + "\n").encode("utf-8")))
     print("\n".join(md))
     return 0

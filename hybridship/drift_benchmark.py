@@ -38,7 +38,7 @@ import numpy as np
 import pandas as pd
 
 from . import metrics
-from .fileio import atomic_write
+from .fileio import atomic_write, markdown_table
 from .predictors import DataOnlyPredictor, DeadReckoning, DynamicPredictor, HybridPredictor, as_log_arrays
 from .residual.ensemble import EnsembleConfig
 
@@ -244,11 +244,7 @@ def _write_csv(path: Path, df: pd.DataFrame) -> Path:
 
 
 def _md_table(df: pd.DataFrame) -> str:
-    df = df.reset_index()
-    head = "| " + " | ".join(str(c) for c in df.columns) + " |"
-    sep = "| " + " | ".join("---" for _ in df.columns) + " |"
-    rows = ["| " + " | ".join(str(v) for v in r) + " |" for r in df.itertuples(index=False)]
-    return "\n".join([head, sep, *rows])
+    return markdown_table(df.reset_index())
 
 
 def _markdown(table2, table3, coverage, timing, test_names, n_train, ens_cfg, n_intervals) -> str:

@@ -28,3 +28,11 @@ def atomic_write(path, write: Callable[[BinaryIO], None]) -> Path:
         tmp.unlink(missing_ok=True)
         raise
     return path
+
+
+def markdown_table(df) -> str:
+    """A pandas DataFrame (its columns, then its rows as they are) as a Markdown table."""
+    head = "| " + " | ".join(str(c) for c in df.columns) + " |"
+    sep = "| " + " | ".join("---" for _ in df.columns) + " |"
+    rows = ["| " + " | ".join(str(v) for v in r) + " |" for r in df.itertuples(index=False)]
+    return "\n".join([head, sep, *rows])

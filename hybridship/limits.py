@@ -63,6 +63,27 @@ __all__ = [
 KNOT_M_S = 1852.0 / 3600.0
 
 
+
+def check_number(name: str, value, *, lo=None, hi=None, lo_open: bool = False, allow_none: bool = False):
+    """``value`` as a finite float within ``[lo, hi]`` (``(lo, hi]`` with ``lo_open``), or an
+    error naming ``name`` and what was expected (TypeError for a non-number, ValueError
+    otherwise). ``allow_none`` passes None through."""
+    if value is None and allow_none:
+        return None
+    if isinstance(value, bool):
+        raise TypeError(f"{name}: expected a number, got {value!r}")
+    try:
+        v = float(value)
+    except (TypeError, ValueError):
+        raise TypeError(f"{name}: expected a number, got {value!r}") from None
+    if not math.isfinite(v):
+        raise ValueError(f"{name}: must be finite, got {value!r}")
+    if lo is not None and (v <= lo if lo_open else v < lo):
+        raise ValueError(f"{name}: must be {'>' if lo_open else '>='} {lo:g}, got {value!r}")
+    if hi is not None and v > hi:
+        raise ValueError(f"{name}: must be <= {hi:g}, got {value!r}")
+    return v
+
 @dataclass(frozen=True)
 class Envelope:
     """Valid ranges of the physics inputs (see the module table).

@@ -34,6 +34,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
+from ..limits import check_number
 from ..sim import environment as env
 
 __all__ = ["WeatherState", "WeatherUncertainty", "TABLE_COLUMNS", "read_weather_table", "states_to_frame",
@@ -46,19 +47,7 @@ OPTIONAL_COLUMNS = ("time", "gust_intensity")
 
 
 def _check(name, value, lo=None, hi=None, lo_open=False):
-    if isinstance(value, bool):
-        raise TypeError(f"{name}: expected a number, got {value!r}")
-    try:
-        v = float(value)
-    except (TypeError, ValueError):
-        raise TypeError(f"{name}: expected a number, got {value!r}") from None
-    if not math.isfinite(v):
-        raise ValueError(f"{name}: must be finite, got {value!r}")
-    if lo is not None and (v <= lo if lo_open else v < lo):
-        raise ValueError(f"{name}: must be {'>' if lo_open else '>='} {lo:g}, got {value!r}")
-    if hi is not None and v > hi:
-        raise ValueError(f"{name}: must be <= {hi:g}, got {value!r}")
-    return v
+    return check_number(name, value, lo=lo, hi=hi, lo_open=lo_open)
 
 
 @dataclass(frozen=True)

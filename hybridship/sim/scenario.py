@@ -49,6 +49,7 @@ import pandas as pd
 from scipy.signal import lfilter
 
 from hybridship.frames import ned_to_body, wrap_pi
+from hybridship.limits import check_number as _number
 from hybridship.physics.model import DynamicModel
 from hybridship.sim import environment as env
 from hybridship.sim.allocation import ThrustAllocator, bollard_thrust_limits
@@ -77,23 +78,6 @@ _EPS_S = 1e-9
 # --------------------------------------------------------------------------- validation helpers
 
 
-def _number(name, value, *, lo=None, hi=None, lo_open=False, allow_none=False):
-    """``value`` as a finite float within bounds, or ValueError naming ``name``."""
-    if value is None and allow_none:
-        return None
-    if isinstance(value, bool):
-        raise TypeError(f"{name}: expected a number, got {value!r}")
-    try:
-        v = float(value)
-    except (TypeError, ValueError):
-        raise TypeError(f"{name}: expected a number, got {value!r}") from None
-    if not math.isfinite(v):
-        raise ValueError(f"{name}: must be finite, got {value!r}")
-    if lo is not None and (v <= lo if lo_open else v < lo):
-        raise ValueError(f"{name}: must be {'>' if lo_open else '>='} {lo:g}, got {value!r}")
-    if hi is not None and v > hi:
-        raise ValueError(f"{name}: must be <= {hi:g}, got {value!r}")
-    return v
 
 
 def _is_multiple(a, b):
