@@ -24,7 +24,7 @@ _EXPORTS = {
     "DeadReckoning": "hybridship.predictors",
     "ForecastResult": "hybridship.predictors",
     "ModelFileError": "hybridship.predictors",
-    "FaultFlags": "hybridship.quality",
+    "FaultFlags": "hybridship.forecast_inputs",
     "EnsembleConfig": "hybridship.residual.ensemble",
     "ResidualConfig": "hybridship.residual.features",
     # physics

@@ -296,7 +296,7 @@ def _cmd_forecast(args) -> int:
     fc = hp.forecast(args.log, args.start_time, args.horizon_s, guard=not args.no_guard, commands=args.commands)
     df = fc.to_frame(quantiles=quantiles)
     atomic_write(args.out, lambda fh: fh.write(df.to_csv(index=False).encode("utf-8")))
-    from .quality import FaultFlags
+    from .forecast_inputs import FaultFlags
 
     last = df[df.lead_s == df.lead_s.max()]
     for _, row in last.iterrows():

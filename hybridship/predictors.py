@@ -27,10 +27,10 @@ import pandas as pd
 
 from .fileio import atomic_write
 from .frames import wrap_2pi, wrap_pi
-from .limits import check_or_clip_inputs
+from .forecast_inputs import check_or_clip_inputs
 from .logs.ingest import ingest
 from .logs.io import LogArrays
-from .quality import FaultFlags, assess_start_window
+from .forecast_inputs import FaultFlags, assess_start_window
 from .physics.integrate import rollout_batch
 from .physics.model import DynamicModel
 from .residual.calibration import CalibrationConfig, SpreadCalibration, fit_spread_scale

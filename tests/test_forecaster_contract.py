@@ -20,7 +20,7 @@ import pytest
 from hybridship import Forecaster
 from hybridship.logs.io import LogFormatError
 from hybridship.predictors import DataOnlyPredictor, DeadReckoning, DynamicPredictor, ForecastResult, HybridPredictor
-from hybridship.quality import FaultFlags
+from hybridship.forecast_inputs import FaultFlags
 from hybridship.residual.ensemble import EnsembleConfig
 from hybridship.sim.synthetic import physics_log
 

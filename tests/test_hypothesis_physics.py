@@ -1,6 +1,6 @@
 """Property-based tests (hypothesis) of the physics, the frames and the log readers.
 
-* random valid states and commands (within :mod:`hybridship.limits`' envelope) give finite
+* random valid states and commands (within :mod:`hybridship.forecast_inputs.limits`' envelope) give finite
   accelerations, and finite rollouts over a minute;
 * frame rotations preserve norms and invert each other;
 * random valid logs survive write -> read unchanged in every container.
@@ -21,7 +21,7 @@ from hypothesis import strategies as st
 from hypothesis.extra import numpy as hnp
 
 from hybridship import frames
-from hybridship.limits import envelope_for
+from hybridship.forecast_inputs.limits import envelope_for
 from hybridship.logs.io import LogFormatError, log_to_arrays, read_log, validate_log, write_log
 from hybridship.physics.model import DynamicModel
 

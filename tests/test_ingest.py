@@ -19,7 +19,7 @@ from hybridship.logs.ingest import ingest, ingest_with_report
 from hybridship.logs.io import LogArrays, LogFormatError, log_to_arrays
 from hybridship.physics.model import DynamicModel
 from hybridship.predictors import DataOnlyPredictor, DynamicPredictor, HybridPredictor
-from hybridship.quality import FaultFlags, StartWindowError
+from hybridship.forecast_inputs import FaultFlags, StartWindowError
 from hybridship.residual.ensemble import EnsembleConfig
 from hybridship.sim.synthetic import physics_log
 

@@ -1,4 +1,4 @@
-"""Valid input ranges of the physics (hybridship.limits): clip or refuse, never propagate."""
+"""Valid input ranges of the physics (hybridship.forecast_inputs.limits): clip or refuse, never propagate."""
 
 from __future__ import annotations
 
@@ -7,7 +7,7 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from hybridship.limits import KNOT_M_S, Envelope, InputRangeError, check_or_clip_inputs, envelope_for
+from hybridship.forecast_inputs.limits import KNOT_M_S, Envelope, InputRangeError, check_or_clip_inputs, envelope_for
 from hybridship.physics.model import DynamicModel
 
 MODEL = DynamicModel("gunnerus")

@@ -1,4 +1,4 @@
-"""Sensor faults at forecast time (hybridship.quality): fault injection and replay.
+"""Sensor faults at forecast time (hybridship.forecast_inputs.start_window): fault injection and replay.
 
 A noise-free log made by the dynamic model itself is the reference: without faults the
 start values are the predictors' plain rule; each fault is injected at a known time and
@@ -13,8 +13,8 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from hybridship.quality import (FaultFlags, SortedLog, StartWindowError, assess_start_window, forecast_log_arrays,
-                                sort_samples)
+from hybridship.forecast_inputs import FaultFlags, StartWindowError, assess_start_window, forecast_log_arrays
+from hybridship.logs.ingest import SortedLog, sort_samples
 from hybridship.sim.synthetic import physics_log
 
 T_FAULT = 300  # fault time [s] = row (1 Hz log starting at 0)

@@ -1,16 +1,16 @@
-"""Wanted behaviour once quality.py / limits.py are wired into the predictors and the CLI.
+"""Wanted behaviour once hybridship.forecast_inputs is wired into the predictors and the CLI.
 
 These tests describe the integration the lead does in ``predictors.py`` and ``cli.py``
 (see the report of issue 9 and ``docs/reliability.md``); they are marked xfail until then.
 Wanted API:
 
 * ``ForecastResult.flags``: dict of flag name -> (S,) bool, keys
-  :attr:`hybridship.quality.FaultFlags.ALL`; ``ForecastResult.notes``: (S,) str.
+  :attr:`hybridship.forecast_inputs.FaultFlags.ALL`; ``ForecastResult.notes``: (S,) str.
 * ``ForecastResult.to_frame()`` carries one bool column per flag (repeated per lead).
-* Forecast logs go through :func:`hybridship.quality.forecast_log_arrays` (sensor faults
+* Forecast logs go through :func:`hybridship.forecast_inputs.start_window.forecast_log_arrays` (sensor faults
   tolerated, format errors still refused, thrusters checked against the vessel) and start
-  values through :func:`hybridship.quality.assess_start_window`; held inputs through
-  :func:`hybridship.limits.check_or_clip_inputs`.
+  values through :func:`hybridship.forecast_inputs.start_window.assess_start_window`; held inputs through
+  :func:`hybridship.forecast_inputs.limits.check_or_clip_inputs`.
 """
 
 from __future__ import annotations
@@ -23,9 +23,9 @@ import pytest
 
 from hybridship.cli import main
 from hybridship.logs.io import LogFormatError, write_log
-from hybridship.limits import KNOT_M_S
+from hybridship.forecast_inputs.limits import KNOT_M_S
 from hybridship.predictors import DeadReckoning, DynamicPredictor, HybridPredictor, ModelFileError
-from hybridship.quality import FaultFlags, StartWindowError
+from hybridship.forecast_inputs import FaultFlags, StartWindowError
 from hybridship.residual.ensemble import EnsembleConfig
 from hybridship.sim.synthetic import physics_log
 

@@ -13,9 +13,10 @@ import numpy as np
 import pandas as pd
 import pytest
 
+from hybridship.forecast_inputs import forecast_log_arrays
+from hybridship.logs.ingest import sort_samples
 from hybridship.logs.io import (LogFormatError, LogFormatWarning, check_log_against_vessel, log_to_arrays,
                                 read_log, speed_scale_vs_track, validate_log, write_log)
-from hybridship.quality import forecast_log_arrays, sort_samples
 from hybridship.sim.synthetic import physics_log
 
 THRUSTERS = ["tunnel", "port", "stbd"]

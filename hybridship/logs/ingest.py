@@ -13,7 +13,7 @@ gets the same checks, and the same messages, whether it is trained on or forecas
     column and row), and so are conflicting duplicates (two samples with one time and
     different values).
 ``"forecast"``
-    Sensor faults pass, for :func:`hybridship.quality.assess_start_window` to judge per
+    Sensor faults pass, for :func:`hybridship.forecast_inputs.start_window.assess_start_window` to judge per
     forecast start: missing positions and headings stay NaN; conflicting duplicates are
     both removed (neither is trusted; the time becomes a missing sample).
 

@@ -17,7 +17,7 @@ and its ``time_s`` where relevant, and what was expected:
 * non-numeric values in a known numeric column; infinities anywhere in one;
 * ``time_s`` not finite or not strictly increasing; a median sample spacing outside
   0.01..60 s (``time_s`` in milliseconds?); NaN in a required column (unless
-  ``allow_missing``, the forecast-time mode of :mod:`hybridship.quality`);
+  ``allow_missing``, the forecast-time mode of :mod:`hybridship.forecast_inputs.start_window`);
 * a heading outside -360..720 deg (milliradians, centidegrees?) or one that looks like
   radians (see :func:`heading_looks_like_radians` for the rule); the same radian rule for
   ``wind_dir_deg`` and every ``<thruster>_azimuth_deg``;
@@ -688,9 +688,9 @@ def validate_log(
         Where the data come from (a file name), quoted in messages.
     allow_missing : bool, default False
         Accept missing (empty, NaN) or infinite values in ``north_m``, ``east_m`` and
-        ``heading_deg`` as missing samples (forecast-time mode: :mod:`hybridship.quality`
+        ``heading_deg`` as missing samples (forecast-time mode: :mod:`hybridship.forecast_inputs.start_window`
         decides per forecast start whether enough valid samples remain). ``time_s`` must
-        still be finite and strictly increasing (:func:`hybridship.quality.sort_samples`
+        still be finite and strictly increasing (:func:`hybridship.logs.ingest.sort_samples`
         repairs late and duplicated samples first).
 
     Raises
@@ -853,7 +853,7 @@ def read_log(
         As in :func:`validate_log`.
     validate : bool, default True
         False only parses the container (for repair tools such as
-        :func:`hybridship.quality.sort_samples`, which validate afterwards).
+        :func:`hybridship.logs.ingest.sort_samples`, which validate afterwards).
 
     Returns
     -------
@@ -1092,7 +1092,7 @@ def log_to_arrays(
         Accept missing positions and headings (as in :func:`validate_log`); they stay NaN
         in ``eta`` (the heading is unwrapped over the finite samples) and the velocities
         derived next to them are NaN. For forecast-time use with
-        :func:`hybridship.quality.assess_start_window`.
+        :func:`hybridship.forecast_inputs.start_window.assess_start_window`.
 
     Returns
     -------

@@ -49,7 +49,7 @@ import pandas as pd
 from scipy.signal import lfilter
 
 from hybridship.frames import ned_to_body, wrap_pi
-from hybridship.limits import check_number as _number
+from hybridship.forecast_inputs.limits import check_number as _number
 from hybridship.physics.model import DynamicModel
 from hybridship.sim import environment as env
 from hybridship.sim.allocation import ThrustAllocator, bollard_thrust_limits

@@ -19,11 +19,11 @@ Faults and their behaviour (``FaultFlags`` names the flags):
 
 ``late_or_out_of_order``
     Samples whose ``time_s`` is earlier than a sample before them in the file (arrived
-    late), or repeated times. :func:`sort_samples` re-sorts by time (stable); an exact
+    late), or repeated times. :func:`~hybridship.logs.ingest.sort_samples` re-sorts by time (stable); an exact
     duplicate row is dropped; duplicates that disagree are all removed (neither is trusted;
     the time becomes a missing sample). Flagged for starts whose window contains
     such a time. Rows without a finite ``time_s`` cannot be placed and are dropped
-    (counted in :attr:`SortedLog.n_without_time`).
+    (counted in :attr:`~hybridship.logs.ingest.SortedLog.n_without_time`).
 ``nan_in_window``
     A missing (NaN) position, heading, logged velocity or wind sample, or a missing sample
     (fewer rows than ``window_s`` holds at the nominal rate) in the window. The start
@@ -66,7 +66,7 @@ Faults and their behaviour (``FaultFlags`` names the flags):
     forecast falls back to no wind (speed 0) and is flagged. With a valid sample the
     latest one is used (as without faults).
 ``input_clipped``, ``out_of_envelope``
-    Set by :func:`hybridship.limits.check_or_clip_inputs` and from the out-of-envelope
+    Set by :func:`hybridship.forecast_inputs.limits.check_or_clip_inputs` and from the out-of-envelope
     guard's weight; named here so that every flag column comes from one list.
 """
 
@@ -78,15 +78,13 @@ from dataclasses import dataclass, field
 import numpy as np
 import pandas as pd
 
-from .logs.ingest import SortedLog, ingest_with_report, sort_samples
-from .logs.io import LogArrays
+from ..logs.ingest import SortedLog, ingest_with_report
+from ..logs.io import LogArrays
 
 __all__ = [
     "FaultFlags",
     "StartWindow",
     "StartWindowError",
-    "SortedLog",
-    "sort_samples",
     "forecast_log_arrays",
     "assess_start_window",
 ]
@@ -141,19 +139,11 @@ class StartWindowError(ValueError):
         self.refused_start_times_s = np.asarray(refused_start_times_s, dtype=float)
 
 
-# --------------------------------------------------------------------------------------
-# Late, out-of-order and duplicated samples
-# --------------------------------------------------------------------------------------
-
-
-# SortedLog and sort_samples live in hybridship.logs.ingest (re-exported here).
-
-
 def forecast_log_arrays(log, vessel, *, source: str | None = None) -> tuple[LogArrays, SortedLog | None]:
     """A log as :class:`LogArrays` for forecasting, tolerating sensor faults.
 
     :func:`hybridship.logs.ingest.ingest` with ``purpose="forecast"``: re-sorted with
-    :func:`sort_samples`, checked against the vessel
+    :func:`~hybridship.logs.ingest.sort_samples`, checked against the vessel
     (:func:`hybridship.logs.io.check_log_against_vessel`) with missing positions and
     headings allowed, and converted. Format errors (units, names, ranges, thruster
     columns) are still refused; only sensor faults pass, for :func:`assess_start_window`

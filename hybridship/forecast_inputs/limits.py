@@ -40,7 +40,7 @@ the value and the valid range.
 The ranges were verified for the packaged ``gunnerus`` vessel; for another vessel file,
 run ``tests/test_limits.py``'s envelope test with it (or pass a narrower
 :class:`Envelope`). The lead wires :func:`check_or_clip_inputs` into the predictors, whose
-forecast carries the ``input_clipped`` flag (:attr:`hybridship.quality.FaultFlags.INPUT_CLIPPED`).
+forecast carries the ``input_clipped`` flag (:attr:`hybridship.forecast_inputs.FaultFlags.INPUT_CLIPPED`).
 """
 
 from __future__ import annotations
@@ -141,7 +141,7 @@ def envelope_for(vessel, **overrides) -> Envelope:
     **overrides
         Fields of :class:`Envelope` to change.
     """
-    from .vessel import Vessel, load_vessel
+    from ..vessel import Vessel, load_vessel
 
     v = getattr(vessel, "vessel", vessel)
     if not isinstance(v, Vessel):
@@ -302,7 +302,7 @@ def check_or_clip_inputs(
         value = a[index]
         raise InputRangeError(
             f"{_where_text(name, a, index, components)}: {value:g} is {why or 'outside the valid range'}; "
-            f"valid: {valid} (hybridship.limits)",
+            f"valid: {valid} (hybridship.forecast_inputs.limits)",
             field=name, index=index, value=value, valid=valid)
 
     def limit(name, a, col, hi, valid, components, lo=None):

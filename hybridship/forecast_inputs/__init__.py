@@ -1,0 +1,43 @@
+"""Forecast inputs: what a forecast starts from and what it holds, checked before the physics runs.
+
+The log itself is read, re-sorted and validated once, at the boundary, by
+:func:`hybridship.logs.ingest.ingest`. What remains is judged per forecast:
+
+* :mod:`~hybridship.forecast_inputs.start_window`: sensor faults in each start window
+  (missing, frozen, jumping, late samples; a dropped wind sensor), the start values
+  computed from the valid samples, and a flag per fault;
+* :mod:`~hybridship.forecast_inputs.limits`: valid ranges of the physics inputs (states,
+  commands, wind, current, step), clipped and flagged or refused.
+"""
+
+from hybridship.forecast_inputs.limits import (
+    KNOT_M_S,
+    CheckedInputs,
+    Envelope,
+    InputRangeError,
+    check_number,
+    check_or_clip_inputs,
+    envelope_for,
+)
+from hybridship.forecast_inputs.start_window import (
+    FaultFlags,
+    StartWindow,
+    StartWindowError,
+    assess_start_window,
+    forecast_log_arrays,
+)
+
+__all__ = [
+    "KNOT_M_S",
+    "CheckedInputs",
+    "Envelope",
+    "FaultFlags",
+    "InputRangeError",
+    "StartWindow",
+    "StartWindowError",
+    "assess_start_window",
+    "check_number",
+    "check_or_clip_inputs",
+    "envelope_for",
+    "forecast_log_arrays",
+]
