@@ -7,7 +7,7 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from hybridship.forecast_inputs.limits import KNOT_M_S, Envelope, InputRangeError, check_or_clip_inputs, envelope_for
+from hybridship.forecast_inputs import KNOT_M_S, Envelope, InputRangeError, check_or_clip_inputs, envelope_for
 from hybridship.physics.model import DynamicModel
 
 MODEL = DynamicModel("gunnerus")

@@ -132,7 +132,6 @@ LONG_FUNCTIONS_ALLOWED = {
     "HybridPredictor.load",         # predictors
     "run_drift_benchmark",          # drift benchmark
     "assess_start_window",          # forecast_inputs/start_window.py
-    "check_or_clip_inputs",         # forecast_inputs/limits.py
     "_validate",                    # logs/io.py
     "check_log_against_vessel",     # logs/io.py
 }

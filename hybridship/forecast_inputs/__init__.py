@@ -7,22 +7,22 @@ The log itself is read, re-sorted and validated once, at the boundary, by
   (missing, frozen, jumping, late samples; a dropped wind sensor), the start values
   computed from the valid samples, and a flag per fault;
 * :mod:`~hybridship.forecast_inputs.limits`: valid ranges of the physics inputs (states,
-  commands, wind, current, step), clipped and flagged or refused.
+  wind, current, step), clipped and flagged or refused, with the command checks of
+  :mod:`~hybridship.forecast_inputs.commands` (propeller speeds, thruster and rudder angles);
+* :mod:`~hybridship.forecast_inputs.faults`: the flag names and the two refusals.
 """
 
+from hybridship.forecast_inputs.faults import FaultFlags, InputRangeError, StartWindowError
 from hybridship.forecast_inputs.limits import (
     KNOT_M_S,
     CheckedInputs,
     Envelope,
-    InputRangeError,
     check_number,
     check_or_clip_inputs,
     envelope_for,
 )
 from hybridship.forecast_inputs.start_window import (
-    FaultFlags,
     StartWindow,
-    StartWindowError,
     assess_start_window,
     forecast_log_arrays,
 )

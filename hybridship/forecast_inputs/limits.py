@@ -34,13 +34,19 @@ RK4 step ``dt_s / substeps`` [s]  ``<= 1``                      substeps raised 
 
 Non-finite values (NaN, inf) are always refused: they are faults, not extremes. With
 ``mode="refuse"`` every out-of-range value is refused. Refusal raises
-:class:`InputRangeError` naming the input, the batch element (and step), the component,
+:class:`~hybridship.forecast_inputs.faults.InputRangeError` naming the input, the batch element (and step), the component,
 the value and the valid range.
 
 The ranges were verified for the packaged ``gunnerus`` vessel; for another vessel file,
 run ``tests/test_limits.py``'s envelope test with it (or pass a narrower
-:class:`Envelope`). The lead wires :func:`check_or_clip_inputs` into the predictors, whose
-forecast carries the ``input_clipped`` flag (:attr:`hybridship.forecast_inputs.FaultFlags.INPUT_CLIPPED`).
+:class:`Envelope`). The predictors pass the inputs they hold through
+:func:`check_or_clip_inputs`, and their forecast carries the ``input_clipped`` flag
+(:attr:`hybridship.forecast_inputs.faults.FaultFlags.INPUT_CLIPPED`).
+
+:func:`check_or_clip_inputs` is a short driver over one named check per kind of input:
+:func:`refuse_non_finite`, :func:`refuse_far_states`, :func:`clip_velocities`, the command
+checks of :mod:`hybridship.forecast_inputs.commands` (``clip_rpm``,
+``wrap_and_clip_angles``), :func:`clip_flow` (wind, current) and :func:`rk4_substeps`.
 """
 
 from __future__ import annotations
@@ -50,18 +56,26 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from ..frames import wrap_pi
+from .commands import clip_rpm, wrap_and_clip_angles
+from .faults import COMPONENTS, InputRangeError, batch_mask, column_mask, refuse
+
 __all__ = [
     "Envelope",
     "envelope_for",
-    "InputRangeError",
     "CheckedInputs",
     "check_or_clip_inputs",
+    "check_number",
+    "refuse_non_finite",
+    "refuse_far_states",
+    "clip_velocities",
+    "clip_flow",
+    "rk4_substeps",
     "KNOT_M_S",
 ]
 
 #: One knot [m/s].
 KNOT_M_S = 1852.0 / 3600.0
-
 
 
 def check_number(name: str, value, *, lo=None, hi=None, lo_open: bool = False, allow_none: bool = False):
@@ -83,6 +97,7 @@ def check_number(name: str, value, *, lo=None, hi=None, lo_open: bool = False, a
     if hi is not None and v > hi:
         raise ValueError(f"{name}: must be <= {hi:g}, got {value!r}")
     return v
+
 
 @dataclass(frozen=True)
 class Envelope:
@@ -153,28 +168,6 @@ def envelope_for(vessel, **overrides) -> Envelope:
                     + tuple(math.radians(r.max_angle_deg) for r in rudders), **overrides)
 
 
-class InputRangeError(ValueError):
-    """A physics input is non-finite or outside its valid range (and was not clipped).
-
-    Attributes
-    ----------
-    field : str
-        The input (``"rpm"``, ``"wind"``, ...).
-    index : tuple of int
-        Position of the offending value in the input array.
-    value : float
-    valid : str
-        The valid range, as text.
-    """
-
-    def __init__(self, message: str, *, field: str, index: tuple, value: float, valid: str):
-        super().__init__(message)
-        self.field = field
-        self.index = tuple(int(i) for i in index)
-        self.value = float(value)
-        self.valid = valid
-
-
 @dataclass(frozen=True, eq=False)
 class CheckedInputs:
     """Inputs after :func:`check_or_clip_inputs` (new arrays; None where not given).
@@ -203,25 +196,6 @@ class CheckedInputs:
     clipped: np.ndarray
     clipped_fields: dict
     notes: tuple
-
-
-def _wrap(a):
-    return np.mod(a + np.pi, 2.0 * np.pi) - np.pi
-
-
-def _loc(a: np.ndarray, flat: int) -> tuple:
-    return np.unravel_index(flat, a.shape)
-
-
-def _where_text(name: str, a: np.ndarray, index: tuple, components) -> str:
-    parts = []
-    if a.ndim >= 2:
-        parts.append(f"batch {index[0]}")
-    if a.ndim == 3:
-        parts.append(f"step {index[1]}")
-    comp = components[index[-1]] if components and index[-1] < len(components) else f"component {index[-1]}"
-    parts.append(comp)
-    return f"{name}[{', '.join(parts)}]"
 
 
 def check_or_clip_inputs(
@@ -276,52 +250,60 @@ def check_or_clip_inputs(
     """
     if mode not in ("clip", "refuse"):
         raise ValueError(f"mode must be 'clip' or 'refuse', got {mode!r}")
-    if envelope is None:
-        if vessel is None:
-            if rpm is not None:
-                raise ValueError("check_or_clip_inputs: rpm needs the vessel (for max_rpm) or an envelope")
-            envelope = Envelope()
-        else:
-            envelope = envelope_for(vessel)
-    env = envelope
+    env = envelope if envelope is not None else _default_envelope(vessel, rpm_given=rpm is not None)
     clip = mode == "clip"
-
-    given = {k: (None if v is None else np.array(v, dtype=float))
+    given = {k: (None if v is None else np.array(v, dtype=float))      # copies: clipped in place
              for k, v in dict(eta=eta, nu=nu, rpm=rpm, azimuth_rad=azimuth_rad, wind=wind, current=current).items()}
     B = max([a.shape[0] for a in given.values() if a is not None and a.ndim >= 2] or [1])
+
+    refuse_non_finite(given)
     fields: dict[str, np.ndarray] = {}
+    if given["eta"] is not None:
+        refuse_far_states(given["eta"], env)
+    if given["nu"] is not None:
+        fields["nu"] = clip_velocities(given["nu"], env, clip, B)
+    if given["rpm"] is not None:
+        fields["rpm"] = clip_rpm(given["rpm"], env, clip, B)
+    if given["azimuth_rad"] is not None:
+        given["azimuth_rad"], clipped_angles = wrap_and_clip_angles(given["azimuth_rad"], env, clip, B)
+        if clipped_angles is not None:
+            fields["azimuth_rad"] = clipped_angles
+    for name, hi in (("wind", env.wind_speed_max_m_s), ("current", env.current_speed_max_m_s)):
+        if given[name] is not None:
+            fields[name] = clip_flow(name, given[name], hi, clip, B)
+    steps = rk4_substeps(dt_s, substeps, env, clip)
+
+    clipped = np.zeros(B, dtype=bool)
     notes = [[] for _ in range(B)]
+    for name, m in fields.items():
+        clipped |= m
+        for b in np.flatnonzero(m):
+            notes[b].append(f"{name} clipped to its valid range")
+    return CheckedInputs(**given, substeps=steps, clipped=clipped, clipped_fields=fields,
+                         notes=tuple("; ".join(n) for n in notes))
 
-    def batch_mask(a: np.ndarray, bad: np.ndarray) -> np.ndarray:
-        m = bad.reshape(bad.shape[0], -1).any(axis=1) if a.ndim >= 2 else np.array([bad.any()])
-        return np.broadcast_to(m, (B,)).copy() if m.shape[0] in (1, B) else m
 
-    def refuse(name, a, bad, valid, components, why=""):
-        flat = int(np.argmax(bad))
-        index = _loc(a, flat)
-        value = a[index]
-        raise InputRangeError(
-            f"{_where_text(name, a, index, components)}: {value:g} is {why or 'outside the valid range'}; "
-            f"valid: {valid} (hybridship.forecast_inputs.limits)",
-            field=name, index=index, value=value, valid=valid)
+def _default_envelope(vessel, *, rpm_given: bool) -> Envelope:
+    """The vessel's envelope; without a vessel the default one (which has no thrusters)."""
+    if vessel is not None:
+        return envelope_for(vessel)
+    if rpm_given:
+        raise ValueError("check_or_clip_inputs: rpm needs the vessel (for max_rpm) or an envelope")
+    return Envelope()
 
-    def limit(name, a, col, hi, valid, components, lo=None):
-        """Clip ``a[..., col]`` to [-hi, hi] (or [lo, hi]); returns the batch mask."""
-        x = a[..., col]
-        lower = -hi if lo is None else lo
-        bad = (x > hi) | (x < lower)
-        if not bad.any():
-            return np.zeros(B, dtype=bool)
-        if not clip:
-            refuse(name, a, np.zeros(a.shape, bool) | _expand(bad, a, col), valid, components)
-        a[..., col] = np.clip(x, lower, hi)
-        return batch_mask(a, bad)
 
-    def _expand(bad_col, a, col):
-        full = np.zeros(a.shape, dtype=bool)
-        full[..., col] = bad_col
-        return full
+# --------------------------------------------------------------------------------------
+# Number checks (the commands' are in hybridship.forecast_inputs.commands)
+# --------------------------------------------------------------------------------------
 
+
+def refuse_non_finite(given: dict) -> None:
+    """NaN or inf in any input.
+
+    Fault: a missing or overflowed value (a fault, not an extreme: there is nothing to
+    clip it to). Evidence: ``~isfinite``, checked for every input (and its shape) before
+    any range. Refused in every mode.
+    """
     for name, a in given.items():
         if a is None:
             continue
@@ -329,105 +311,92 @@ def check_or_clip_inputs(
             raise ValueError(f"{name}: expected shape (width,), (B, width) or (B, S, width), got {a.shape}")
         nonfinite = ~np.isfinite(a)
         if nonfinite.any():
-            refuse(name, a, nonfinite, "finite values", _COMPONENTS.get(name), "not finite (a fault, not an extreme)")
+            refuse(name, a, nonfinite, "finite values", COMPONENTS.get(name), "not finite (a fault, not an extreme)")
 
-    a = given["eta"]
-    if a is not None:
-        comps = _COMPONENTS["eta"]
-        bad = np.zeros(a.shape, dtype=bool)
-        bad[..., :2] = np.abs(a[..., :2]) > env.position_max_m
-        if bad.any():
-            refuse("eta", a, bad, f"|north_m|, |east_m| <= {env.position_max_m:g} m", comps)
-        bad = _expand(np.abs(a[..., 2]) > env.heading_max_rad, a, 2)
-        if bad.any():
-            refuse("eta", a, bad, f"|psi_rad| <= {env.heading_max_rad:g}", comps)
 
-    a = given["nu"]
-    if a is not None:
-        comps = _COMPONENTS["nu"]
-        m = np.zeros(B, dtype=bool)
-        for col, hi, unit in ((0, env.surge_max_m_s, "m/s"), (1, env.sway_max_m_s, "m/s"),
-                              (2, env.yaw_rate_max_rad_s, "rad/s")):
-            m |= limit("nu", a, col, hi, f"|{comps[col]}| <= {hi:g} {unit}", comps)
-        fields["nu"] = m
+def refuse_far_states(eta: np.ndarray, env: Envelope) -> None:
+    """Positions or headings far outside any voyage.
 
-    a = given["rpm"]
-    if a is not None:
-        max_rpm = np.asarray(env.max_rpm, dtype=float)
-        if a.shape[-1] != max_rpm.size:
-            raise ValueError(f"rpm: width {a.shape[-1]} does not match the vessel's {max_rpm.size} thrusters")
-        comps = [f"thruster {n!r}" for n in env.thruster_names] if len(env.thruster_names) == max_rpm.size \
-            else [f"thruster {i}" for i in range(max_rpm.size)]
-        far = np.abs(a) > env.rpm_refuse_factor * max_rpm
-        if far.any():
-            refuse("rpm", a, far, f"|rpm| <= max_rpm {max_rpm.tolist()} (clipped up to "
-                   f"{env.rpm_refuse_factor:g} x max_rpm)", comps,
-                   f"more than {env.rpm_refuse_factor:g} x max_rpm (a unit error?)")
-        bad = np.abs(a) > max_rpm
-        if bad.any():
-            if not clip:
-                refuse("rpm", a, bad, f"|rpm| <= max_rpm {max_rpm.tolist()}", comps)
-            a[...] = np.clip(a, -max_rpm, max_rpm)
-        fields["rpm"] = batch_mask(a, bad)
+    Fault: a position beyond ``position_max_m`` (latitude/longitude in degrees times a
+    wrong factor, a datum error) or an unwrapped heading beyond ``heading_max_rad``.
+    Evidence: the magnitudes. Refused in every mode: there is no meaningful clip.
+    """
+    comps = COMPONENTS["eta"]
+    bad = np.zeros(eta.shape, dtype=bool)
+    bad[..., :2] = np.abs(eta[..., :2]) > env.position_max_m
+    if bad.any():
+        refuse("eta", eta, bad, f"|north_m|, |east_m| <= {env.position_max_m:g} m", comps)
+    bad = column_mask(eta, 2, np.abs(eta[..., 2]) > env.heading_max_rad)
+    if bad.any():
+        refuse("eta", eta, bad, f"|psi_rad| <= {env.heading_max_rad:g}", comps)
 
-    a = given["azimuth_rad"]
-    if a is not None:
-        a = _wrap(a)
-        given["azimuth_rad"] = a
-        if env.max_angle_rad:
-            lim = np.asarray(env.max_angle_rad, dtype=float)
-            if a.shape[-1] != lim.size:
-                raise ValueError(f"azimuth_rad: width {a.shape[-1]} does not match the vessel's {lim.size} "
-                                 "command channels")
-            bad = np.abs(a) > lim
-            if bad.any():
-                if not clip:
-                    comps = [f"rudder {n!r}" for n in env.thruster_names] or None
-                    refuse("azimuth_rad", a, bad, f"|rudder angle| <= {np.degrees(lim[np.isfinite(lim)]).tolist()} "
-                           "deg (the rudders' max_angle_deg)", comps)
-                a[...] = np.clip(a, -lim, lim)
-            fields["azimuth_rad"] = batch_mask(a, bad)
 
-    for name, hi in (("wind", env.wind_speed_max_m_s), ("current", env.current_speed_max_m_s)):
-        a = given[name]
-        if a is None:
-            continue
-        comps = _COMPONENTS[name]
-        neg = _expand(a[..., 0] < 0.0, a, 0)
-        if neg.any():
-            refuse(name, a, neg, f"0 <= speed_m_s <= {hi:g}", comps, "negative (a speed is >= 0)")
-        fields[name] = limit(name, a, 0, hi, f"0 <= speed_m_s <= {hi:g}", comps, lo=0.0)
-        a[..., 1] = _wrap(a[..., 1])
+def _clip_column(name, a, col, lo, hi, valid, comps, clip: bool, batch: int) -> np.ndarray:
+    """Clip ``a[..., col]`` to [lo, hi] in place, or refuse; (batch,) mask of what was clipped."""
+    x = a[..., col]
+    bad = (x > hi) | (x < lo)
+    if not bad.any():
+        return np.zeros(batch, dtype=bool)
+    if not clip:
+        refuse(name, a, column_mask(a, col, bad), valid, comps)
+    a[..., col] = np.clip(x, lo, hi)
+    return batch_mask(a, bad, batch)
 
+
+def clip_velocities(nu: np.ndarray, env: Envelope, clip: bool, batch: int) -> np.ndarray:
+    """Body velocities beyond the range where the integrator stays stable.
+
+    Fault: ``|u|``, ``|v|`` or ``|r|`` beyond ``surge_max_m_s``, ``sway_max_m_s``,
+    ``yaw_rate_max_rad_s`` (RK4 overflows near 15 m/s with 1-s steps). Evidence: the
+    magnitudes. Repair: clipped in place and flagged (``mode="clip"``) or refused.
+    Returns the (B,) mask of clipped batch elements.
+    """
+    comps = COMPONENTS["nu"]
+    m = np.zeros(batch, dtype=bool)
+    for col, hi, unit in ((0, env.surge_max_m_s, "m/s"), (1, env.sway_max_m_s, "m/s"),
+                          (2, env.yaw_rate_max_rad_s, "rad/s")):
+        m |= _clip_column("nu", nu, col, -hi, hi, f"|{comps[col]}| <= {hi:g} {unit}", comps, clip, batch)
+    return m
+
+
+def clip_flow(name: str, a: np.ndarray, hi: float, clip: bool, batch: int) -> np.ndarray:
+    """Wind or current ``[speed_m_s, dir_rad]`` out of range.
+
+    Fault: a negative speed (refused in every mode: a speed is >= 0, the sign is a
+    convention error) or a speed beyond ``hi`` (clipped in place and flagged, or refused).
+    The direction is wrapped to [-pi, pi) (same direction, not flagged). Returns the (B,)
+    mask of clipped batch elements.
+    """
+    comps = COMPONENTS[name]
+    neg = column_mask(a, 0, a[..., 0] < 0.0)
+    if neg.any():
+        refuse(name, a, neg, f"0 <= speed_m_s <= {hi:g}", comps, "negative (a speed is >= 0)")
+    m = _clip_column(name, a, 0, 0.0, hi, f"0 <= speed_m_s <= {hi:g}", comps, clip, batch)
+    a[..., 1] = wrap_pi(a[..., 1])
+    return m
+
+
+def rk4_substeps(dt_s: float | None, substeps: int, env: Envelope, clip: bool) -> int:
+    """RK4 substeps per output step, raised until ``dt_s / substeps <= rk4_step_max_s``.
+
+    Fault: an integration step too long for the explicit integrator. Evidence: ``dt_s /
+    substeps``. Repair: more substeps (not flagged: the forecast is the same, only finer),
+    or refused with ``mode="refuse"``; a non-positive or non-finite ``dt_s`` is refused.
+    """
     steps = int(substeps)
     if steps < 1:
         raise ValueError(f"substeps must be >= 1, got {substeps}")
-    if dt_s is not None:
-        if not (math.isfinite(dt_s) and dt_s > 0):
-            raise InputRangeError(f"dt_s: {dt_s!r} is not a positive finite step; valid: 0 < dt_s",
-                                  field="dt_s", index=(), value=float(dt_s), valid="0 < dt_s")
-        h = dt_s / steps
-        if h > env.rk4_step_max_s * (1 + 1e-12):
-            if not clip:
-                raise InputRangeError(
-                    f"dt_s / substeps: RK4 step {h:g} s exceeds {env.rk4_step_max_s:g} s; use substeps >= "
-                    f"{math.ceil(dt_s / env.rk4_step_max_s)}", field="dt_s", index=(), value=h,
-                    valid=f"dt_s / substeps <= {env.rk4_step_max_s:g} s")
-            steps = math.ceil(dt_s / env.rk4_step_max_s - 1e-12)
-
-    clipped = np.zeros(B, dtype=bool)
-    for name, m in fields.items():
-        clipped |= m
-        for b in np.flatnonzero(m):
-            notes[b].append(f"{name} clipped to its valid range")
-    return CheckedInputs(eta=given["eta"], nu=given["nu"], rpm=given["rpm"], azimuth_rad=given["azimuth_rad"],
-                         wind=given["wind"], current=given["current"], substeps=steps, clipped=clipped,
-                         clipped_fields=fields, notes=tuple("; ".join(n) for n in notes))
-
-
-_COMPONENTS = {
-    "eta": ("north_m", "east_m", "psi_rad"),
-    "nu": ("u_m_s", "v_m_s", "r_rad_s"),
-    "wind": ("speed_m_s", "dir_from_rad"),
-    "current": ("speed_m_s", "dir_to_rad"),
-}
+    if dt_s is None:
+        return steps
+    if not (math.isfinite(dt_s) and dt_s > 0):
+        raise InputRangeError(f"dt_s: {dt_s!r} is not a positive finite step; valid: 0 < dt_s",
+                              field="dt_s", index=(), value=float(dt_s), valid="0 < dt_s")
+    h = dt_s / steps
+    if h > env.rk4_step_max_s * (1 + 1e-12):
+        if not clip:
+            raise InputRangeError(
+                f"dt_s / substeps: RK4 step {h:g} s exceeds {env.rk4_step_max_s:g} s; use substeps >= "
+                f"{math.ceil(dt_s / env.rk4_step_max_s)}", field="dt_s", index=(), value=h,
+                valid=f"dt_s / substeps <= {env.rk4_step_max_s:g} s")
+        steps = math.ceil(dt_s / env.rk4_step_max_s - 1e-12)
+    return steps

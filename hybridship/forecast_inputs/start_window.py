@@ -80,63 +80,13 @@ import pandas as pd
 
 from ..logs.ingest import SortedLog, ingest_with_report
 from ..logs.io import LogArrays
+from .faults import FaultFlags, StartWindowError
 
 __all__ = [
-    "FaultFlags",
     "StartWindow",
-    "StartWindowError",
     "forecast_log_arrays",
     "assess_start_window",
 ]
-
-
-class FaultFlags:
-    """Names of the fault flags (column names in forecast tables and CLI output).
-
-    Attributes
-    ----------
-    START_WINDOW : tuple of str
-        The flags :func:`assess_start_window` sets.
-    ALL : tuple of str
-        Every flag, in the order of the forecast table's columns.
-    INFORMATIONAL : tuple of str
-        Flags that do not mean the forecast was degraded.
-    """
-
-    NAN_IN_WINDOW = "nan_in_window"
-    TOO_LITTLE_VALID = "too_little_valid"
-    FROZEN_SENSOR = "frozen_sensor"
-    POSITION_JUMP = "position_jump"
-    HEADING_WRAPPED = "heading_wrapped"
-    WIND_DROPPED = "wind_dropped"
-    LATE_OR_OUT_OF_ORDER = "late_or_out_of_order"
-    INPUT_CLIPPED = "input_clipped"
-    OUT_OF_ENVELOPE = "out_of_envelope"
-
-    START_WINDOW = (NAN_IN_WINDOW, TOO_LITTLE_VALID, FROZEN_SENSOR, POSITION_JUMP, HEADING_WRAPPED,
-                    WIND_DROPPED, LATE_OR_OUT_OF_ORDER)
-    ALL = START_WINDOW + (INPUT_CLIPPED, OUT_OF_ENVELOPE)
-    INFORMATIONAL = (HEADING_WRAPPED,)
-
-
-class StartWindowError(ValueError):
-    """A forecast start has too little valid data in its start window.
-
-    Attributes
-    ----------
-    start_time_s : float
-        The first refused start.
-    reason : str
-        What was missing or invalid there.
-    refused_start_times_s : ndarray
-        Every refused start of the call.
-    """
-
-    def __init__(self, message: str, *, start_time_s: float, reason: str, refused_start_times_s):
-        super().__init__(message)
-        self.start_time_s = float(start_time_s)
-        self.reason = reason
-        self.refused_start_times_s = np.asarray(refused_start_times_s, dtype=float)
 
 
 def forecast_log_arrays(log, vessel, *, source: str | None = None) -> tuple[LogArrays, SortedLog | None]:
