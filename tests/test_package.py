@@ -131,7 +131,6 @@ LONG_FUNCTIONS_ALLOWED = {
     "train_multistep",              # residual/multistep.py
     "HybridPredictor.load",         # predictors
     "run_drift_benchmark",          # drift benchmark
-    "assess_start_window",          # forecast_inputs/start_window.py
     "_validate",                    # logs/io.py
     "check_log_against_vessel",     # logs/io.py
 }

@@ -1,18 +1,50 @@
-"""The fault vocabulary of the forecast inputs: flag names, the two refusals, and how a
-refused value is named.
+"""Faults of the forecast inputs: their names, the two refusals, and the start-window detectors.
 
 :class:`FaultFlags` names every flag a forecast can carry (the columns of forecast tables
 and CLI output). A start window with too little valid data is refused with
 :class:`StartWindowError`; a physics input that is non-finite or out of range (and not
 clipped) with :class:`InputRangeError`, whose message names the input, the batch element
 (and step), the component, the value and the valid range.
+
+The start-window detectors each look for one fault in one forecast start's window
+(:class:`Window`) of a log (:class:`LogView`), set its flag with a note saying what was
+found and done, and mark the samples they find invalid. The driver,
+:func:`hybridship.forecast_inputs.start_window.assess_start_window`, runs them in this
+order, which the notes follow:
+
+1. :func:`detect_missing_samples` (``nan_in_window``),
+2. :func:`detect_late_samples` (``late_or_out_of_order``),
+3. :func:`detect_frozen_channels` (``frozen_sensor``),
+4. :func:`detect_position_jumps` (``position_jump``),
+5. :func:`detect_heading_wrap` (``heading_wrapped``, informational),
+6. :func:`rederive_velocities` (the repair of frozen or jump-spoilt velocities),
+7. :func:`detect_too_little_valid` (``too_little_valid``: the start is refused),
+8. :func:`detect_dropped_wind` (``wind_dropped``).
 """
 
 from __future__ import annotations
 
+import math
+from dataclasses import dataclass, field
+
 import numpy as np
 
-__all__ = ["FaultFlags", "StartWindowError", "InputRangeError"]
+__all__ = [
+    "FaultFlags",
+    "StartWindowError",
+    "InputRangeError",
+    "WindowSettings",
+    "LogView",
+    "Window",
+    "detect_missing_samples",
+    "detect_late_samples",
+    "detect_frozen_channels",
+    "detect_position_jumps",
+    "detect_heading_wrap",
+    "rederive_velocities",
+    "detect_too_little_valid",
+    "detect_dropped_wind",
+]
 
 
 class FaultFlags:
@@ -131,3 +163,458 @@ def column_mask(a: np.ndarray, col: int, bad_col: np.ndarray) -> np.ndarray:
     full = np.zeros(a.shape, dtype=bool)
     full[..., col] = bad_col
     return full
+
+
+# --------------------------------------------------------------------------------------
+# Start-window detectors
+# --------------------------------------------------------------------------------------
+#
+# Each detector looks at one forecast start's window (a Window) in one log (a LogView),
+# sets its flag with a note, and marks the samples it finds invalid; the driver is
+# hybridship.forecast_inputs.start_window.assess_start_window.
+
+
+@dataclass(frozen=True)
+class WindowSettings:
+    """Thresholds of the start-window detectors (see
+    :func:`~hybridship.forecast_inputs.start_window.assess_start_window` for each)."""
+
+    window_s: float = 3.0
+    frozen_s: float = 3.0
+    frozen_motion_m: float = 2.0
+    frozen_turn_deg: float = 1.0
+    jump_m: float = 5.0
+    lookback_s: float = 10.0
+    min_valid_fraction: float = 0.5
+
+    def __post_init__(self):
+        if (not self.window_s > 0 or not self.frozen_s > 0 or not self.jump_m > 0
+                or not 0 < self.min_valid_fraction <= 1):
+            raise ValueError("window_s, frozen_s and jump_m must be > 0 and min_valid_fraction in (0, 1]")
+
+    @property
+    def frozen_turn_rad(self) -> float:
+        """``frozen_turn_deg`` [rad]."""
+        return math.radians(self.frozen_turn_deg)
+
+
+@dataclass(frozen=True, eq=False)
+class LogView:
+    """What the detectors need of a log, computed once for all starts.
+
+    Attributes
+    ----------
+    arrays : LogArrays
+    dt_nom : float
+        Nominal sample period [s] (median spacing; 1 for a single sample).
+    n_nom : int
+        Samples a full start window holds at the nominal rate.
+    n_min : int
+        Valid samples needed of the heading and of each velocity component.
+    affected_time_s : ndarray
+        Times of late, duplicated or removed samples.
+    pos_runs, head_runs, vel_runs
+        First and last row of each row's run of bit-identical values (position, heading,
+        and each of u, v, r).
+    """
+
+    arrays: object
+    dt_nom: float
+    n_nom: int
+    n_min: int
+    affected_time_s: np.ndarray
+    pos_runs: tuple
+    head_runs: tuple
+    vel_runs: tuple
+
+    @classmethod
+    def build(cls, arrays, settings: WindowSettings, affected_time_s) -> "LogView":
+        """The view of ``arrays``; ``affected_time_s`` from the sort report (or the arrays)."""
+        t = arrays.time_s
+        dt_nom = float(np.median(np.diff(t))) if len(arrays) > 1 else 1.0
+        n_nom = max(1, int(round(settings.window_s / dt_nom)))
+        n_min = max(1, math.ceil(settings.min_valid_fraction * n_nom))
+        return cls(arrays, dt_nom, n_nom, n_min, np.asarray(affected_time_s), _runs(arrays.eta[:, :2]),
+                   _runs(arrays.eta[:, 2]), tuple(_runs(arrays.nu[:, j]) for j in range(3)))
+
+    @property
+    def t(self) -> np.ndarray:
+        return self.arrays.time_s
+
+    @property
+    def pos(self) -> np.ndarray:
+        return self.arrays.eta[:, :2]
+
+    @property
+    def psi(self) -> np.ndarray:
+        return self.arrays.eta[:, 2]
+
+    @property
+    def nu(self) -> np.ndarray:
+        return self.arrays.nu
+
+
+@dataclass(eq=False)
+class Window:
+    """One forecast start's window and what is valid in it (the detectors update it).
+
+    Attributes
+    ----------
+    start : int
+        The start row ``i``.
+    lo : int
+        First row of the window.
+    rows : ndarray of int, shape (w,)
+        ``lo .. start``.
+    pos_ok, head_ok, wind_ok : ndarray of bool, shape (w,)
+        Valid position / heading / wind samples.
+    vel_ok : ndarray of bool, shape (w, 3)
+        Valid u, v, r samples.
+    vel_replace : ndarray of bool, shape (3,)
+        Components to derive again from the valid positions (headings).
+    shift_from : int
+        First row after a lasting position shift (``lo`` without one).
+    flags : set of str
+    notes : list of str
+    """
+
+    start: int
+    lo: int
+    rows: np.ndarray
+    pos_ok: np.ndarray
+    head_ok: np.ndarray
+    vel_ok: np.ndarray
+    wind_ok: np.ndarray
+    vel_replace: np.ndarray
+    shift_from: int
+    flags: set = field(default_factory=set)
+    notes: list = field(default_factory=list)
+
+    @classmethod
+    def at(cls, view: LogView, i: int, window_s: float) -> "Window":
+        """The rows with ``t0 - window_s < time_s <= t0`` (half a sample of slack), always
+        holding the start row; every finite sample valid."""
+        t = view.t
+        lo = min(int(np.searchsorted(t, t[i] - window_s + 0.5 * view.dt_nom, side="left")), i)
+        W = np.arange(lo, i + 1)
+        return cls(start=i, lo=lo, rows=W, pos_ok=np.all(np.isfinite(view.pos[W]), axis=1),
+                   head_ok=np.isfinite(view.psi[W]), vel_ok=np.isfinite(view.nu[W]),
+                   wind_ok=view.arrays.wind_logged[W], vel_replace=np.zeros(3, dtype=bool), shift_from=lo)
+
+    def flag(self, name: str, note: str) -> None:
+        """Set flag ``name`` and say what was found and done."""
+        self.flags.add(name)
+        self.notes.append(note)
+
+
+def detect_missing_samples(view: LogView, win: Window) -> None:
+    """Missing samples in the window.
+
+    Fault: a NaN position, heading, logged velocity or wind sample, or fewer rows than the
+    window holds at the nominal rate (a gap). Evidence: non-finite values; the row count
+    against :attr:`LogView.n_nom`. Flags ``nan_in_window``; nothing to repair: the start
+    values use the valid samples only.
+    """
+    a, W = view.arrays, win.rows
+    n_missing = max(0, view.n_nom - W.size)
+    cols = [] if win.pos_ok.all() else ["position"]
+    if not win.head_ok.all():
+        cols.append("heading")
+    has_col = a.nu_logged.any(axis=0)
+    cols += [name for j, name in enumerate(("u", "v", "r")) if has_col[j] and not a.nu_logged[W, j].all()]
+    if a.has_wind and not win.wind_ok.all():
+        cols.append("wind")
+    if cols or n_missing:
+        what = f"missing {', '.join(cols)}" if cols else ""
+        gap = f"{n_missing} missing sample(s)" if n_missing else ""
+        win.flag(FaultFlags.NAN_IN_WINDOW,
+                 f"{'; '.join(x for x in (what, gap) if x)} in the window: valid samples used")
+
+
+def detect_late_samples(view: LogView, win: Window, settings: WindowSettings) -> None:
+    """Late, out-of-order or duplicated samples in the window.
+
+    Fault: samples that arrived after a later one, repeated, or conflicting (removed).
+    Evidence: their times (the ingest's sort report) within the nominal window, which
+    also covers a removed sample that left no row. Flags ``late_or_out_of_order``; the
+    ingest already re-sorted them.
+    """
+    t, affected = view.t, view.affected_time_s
+    t0 = t[win.start]
+    lo_t = min(t[win.lo], t0 - settings.window_s + 0.5 * view.dt_nom)
+    if affected.size and np.any((affected >= lo_t - 1e-9) & (affected <= t0 + 1e-9)):
+        win.flag(FaultFlags.LATE_OR_OUT_OF_ORDER,
+                 "late, out-of-order or duplicated samples in the window: re-sorted by time")
+
+
+def _stale_rows(view: LogView, win: Window, runs, contradicted, frozen_s: float) -> np.ndarray:
+    """Rows of the window that repeat the first sample of a run of bit-identical values
+    lasting ``frozen_s`` or more (up to the start row only: causal) that an independent
+    channel contradicts (``contradicted(a, b)`` over the run's rows ``a..b``)."""
+    first, last = runs
+    t, W, i = view.t, win.rows, win.start
+    stale = np.zeros(W.size, dtype=bool)
+    for a in np.unique(first[W]):
+        b = min(int(last[a]), i)
+        if b <= a or t[b] - t[a] < frozen_s - 1e-9:
+            continue
+        if contradicted(a, b):
+            stale |= (W > a) & (W <= b)
+    return stale
+
+
+def _uv_logged(view: LogView, a: int, b: int) -> bool:
+    return view.arrays.nu_logged[a:b + 1, 0].all() and view.arrays.nu_logged[a:b + 1, 1].all()
+
+
+def _position_contradicted(view: LogView, a: int, b: int, motion_m: float) -> bool:
+    """The logged u, v move the ship by ``motion_m`` or more over rows ``a..b``."""
+    if not _uv_logged(view, a, b):
+        return False
+    v_ned = _ned(view.nu[a:b + 1, :2], view.psi[a:b + 1])
+    if not np.all(np.isfinite(v_ned)):
+        return False
+    return float(np.hypot(*_trapz(v_ned, view.t[a:b + 1], axis=0))) >= motion_m
+
+
+def _heading_contradicted(view: LogView, a: int, b: int, turn_rad: float) -> bool:
+    """The logged yaw rate turns the ship by ``turn_rad`` or more over rows ``a..b``."""
+    if not view.arrays.nu_logged[a:b + 1, 2].all():
+        return False
+    return abs(float(_trapz(view.nu[a:b + 1, 2], view.t[a:b + 1]))) >= turn_rad
+
+
+def _velocity_contradicted(view: LogView, j: int, a: int, b: int, settings: WindowSettings) -> bool:
+    """A logged u or v (``j`` = 0, 1) disagrees with the track, or r (``j`` = 2) with the
+    heading, by ``frozen_motion_m`` / ``frozen_turn_deg`` or more over rows ``a..b``."""
+    nu, psi, pos, t = view.nu, view.psi, view.pos, view.t
+    if not view.arrays.nu_logged[a:b + 1, j].all():
+        return False
+    if j == 2:
+        if not (np.isfinite(psi[a]) and np.isfinite(psi[b])):
+            return False
+        return abs((psi[b] - psi[a]) - nu[a, 2] * (t[b] - t[a])) >= settings.frozen_turn_rad
+    if not (np.all(np.isfinite(pos[[a, b]])) and np.isfinite(psi[a:b + 1]).all()):
+        return False
+    if not view.arrays.nu_logged[a:b + 1, 1 - j].all():
+        return False
+    disp_log = _trapz(_ned(nu[a:b + 1, :2], psi[a:b + 1]), t[a:b + 1], axis=0)
+    return float(np.hypot(*(disp_log - (pos[b] - pos[a])))) >= settings.frozen_motion_m
+
+
+def detect_frozen_channels(view: LogView, win: Window, settings: WindowSettings) -> None:
+    """Sensors repeating one value while an independent channel says it changed.
+
+    Fault: a position, heading or logged velocity bit-identical for ``frozen_s`` or more.
+    Evidence: a position while the logged speed moves the ship by ``frozen_motion_m``; a
+    heading while the logged yaw rate turns it by ``frozen_turn_deg``; u, v (r) while the
+    track (heading) disagrees by as much. Without that evidence a constant value cannot
+    be told from a ship at rest and is not flagged. Flags ``frozen_sensor``. Repair: the
+    repeats are invalid; a frozen velocity is derived from the track instead.
+    """
+    s = settings
+    found = []
+    stale = _stale_rows(view, win, view.pos_runs, lambda a, b: _position_contradicted(view, a, b, s.frozen_motion_m),
+                        s.frozen_s)
+    if stale.any():
+        win.pos_ok &= ~stale
+        found.append("position (the logged speed says the ship moved)")
+    stale = _stale_rows(view, win, view.head_runs, lambda a, b: _heading_contradicted(view, a, b, s.frozen_turn_rad),
+                        s.frozen_s)
+    if stale.any():
+        win.head_ok &= ~stale
+        found.append("heading (the logged yaw rate says it turned)")
+    for j, name in enumerate(("u_m_s", "v_m_s", "r_deg_s")):
+        stale = _stale_rows(view, win, view.vel_runs[j],
+                            lambda a, b, j=j: _velocity_contradicted(view, j, a, b, s), s.frozen_s)
+        if stale.any():
+            win.vel_ok[:, j] = False
+            win.vel_replace[j] = True
+            found.append(f"{name} (disagrees with the track): derived from the track instead")
+    if found:
+        win.flag(FaultFlags.FROZEN_SENSOR, f"frozen for >= {s.frozen_s:g} s: {'; '.join(found)}")
+
+
+def _jump_rows(view: LogView, win: Window, settings: WindowSettings) -> np.ndarray:
+    """Rows ending a position step (from the row before) that the velocity does not
+    explain within ``jump_m``: logged velocities where both ends have them, else the median
+    step velocity; steps ending from ``lookback_s`` before the window up to the start."""
+    a, t, pos, psi, nu = view.arrays, view.t, view.pos, view.psi, view.nu
+    lb = int(np.searchsorted(t, t[win.start] - settings.window_s - settings.lookback_s, side="left"))
+    rows = np.arange(max(lb, 1), win.start + 1)               # step r goes from row r-1 to r
+    if not rows.size:
+        return rows
+    p_ok = np.all(np.isfinite(pos[rows]), axis=1) & np.all(np.isfinite(pos[rows - 1]), axis=1)
+    dts = t[rows] - t[rows - 1]
+    same = (a.segment_id[rows] == a.segment_id[rows - 1]) & p_ok
+    steps = pos[rows] - pos[rows - 1]
+    step_v = steps / dts[:, None]
+    both_logged = (a.nu_logged[rows, 0] & a.nu_logged[rows, 1]
+                   & a.nu_logged[rows - 1, 0] & a.nu_logged[rows - 1, 1])
+    v_log = 0.5 * (_ned(nu[rows, :2], psi[rows]) + _ned(nu[rows - 1, :2], psi[rows - 1]))
+    v_med = np.median(step_v[same], axis=0) if same.any() else np.zeros(2)
+    v_ref = np.where((both_logged & np.all(np.isfinite(v_log), axis=1))[:, None], v_log, v_med)
+    err = np.hypot(*(steps - v_ref * dts[:, None]).T)
+    return rows[same & (err > settings.jump_m)]
+
+
+def _outliers(jump_rows: np.ndarray, start: int) -> set:
+    """Rows of a spike (a jump away and back) or of an unconfirmed jump into the start row."""
+    jump_set = set(int(r) for r in jump_rows)
+    bad = set()
+    for r in sorted(jump_set):
+        if (r - 1) in bad:                       # the return from a spike
+            continue
+        if r == start or (r + 1) in jump_set:    # unconfirmed jump into the start, or a spike
+            bad.add(r)
+    return bad
+
+
+def detect_position_jumps(view: LogView, win: Window, settings: WindowSettings) -> None:
+    """Position steps the velocity does not explain.
+
+    Fault: a step between consecutive positions off by more than ``jump_m`` from what
+    the velocity explains. Evidence: see :func:`_jump_rows`; a jump away and back is a
+    spike, a jump into the start row cannot yet be told from a lasting shift, anything
+    else is a lasting shift (a datum change). Flags ``position_jump`` when a jump ends in
+    the window. Repair: spike (and unconfirmed) positions are invalid, velocities derived
+    across any jump are derived again, and after a lasting shift only the new positions
+    count.
+    """
+    jump_end = _jump_rows(view, win, settings)
+    in_w = jump_end[jump_end >= win.lo]
+    if not in_w.size:
+        return
+    W = win.rows
+    bad_pos = _outliers(jump_end, win.start)
+    for r in bad_pos:
+        win.pos_ok &= W != r
+    touched = set()                              # derived velocities next to a jump are invalid
+    for r in jump_end:
+        touched.update((int(r) - 1, int(r)))
+    for r in bad_pos:
+        touched.update((r - 1, r, r + 1))
+    for j in range(2):
+        hit = ~view.arrays.nu_logged[W, j] & np.isin(W, list(touched))
+        if hit.any():
+            win.vel_ok[:, j] &= ~hit
+            win.vel_replace[j] = True
+    lasting = [int(r) for r in in_w if int(r) not in bad_pos and int(r) - 1 not in bad_pos]
+    if lasting:
+        win.shift_from = max(lasting)
+    win.flag(FaultFlags.POSITION_JUMP,
+             f"position jump of more than {settings.jump_m:g} m at time_s "
+             f"{', '.join(f'{view.t[int(r)]:g}' for r in in_w)}: "
+             f"{'outlier(s) dropped' if bad_pos else 'lasting shift, new positions used'}")
+
+
+def detect_heading_wrap(view: LogView, win: Window) -> None:
+    """The heading crossing 0/360 deg (or +-180 deg) in the window.
+
+    Not a fault (informational). Evidence: the valid unwrapped headings fall in more than
+    one turn (or half-turn). Flags ``heading_wrapped``; the mean is taken unwrapped.
+    """
+    hv = view.psi[win.rows][win.head_ok]
+    if hv.size > 1:
+        two_pi = 2.0 * np.pi
+        if np.ptp(np.floor(hv / two_pi)) > 0 or np.ptp(np.floor((hv + np.pi) / two_pi)) > 0:
+            win.flag(FaultFlags.HEADING_WRAPPED, "heading crosses 0/360 deg (or +-180 deg): averaged unwrapped")
+
+
+def rederive_velocities(view: LogView, win: Window) -> np.ndarray:
+    """The window's ``nu`` with the components marked for replacement derived again.
+
+    Repair (no flag of its own): u, v from the end points of the valid positions (after
+    a lasting shift, the new ones) rotated with the mean valid heading; r from the end
+    points of the valid headings. Those components become valid. Returns (w, 3).
+    """
+    t, pos, psi, W = view.t, view.pos, view.psi, win.rows
+    nu_w = view.nu[W].copy()
+    if win.vel_replace[:2].any() and win.head_ok.any():
+        ok_rows = W[win.pos_ok & (W >= win.shift_from)]
+        if ok_rows.size >= 2:
+            a, b = ok_rows[0], ok_rows[-1]
+            v_ned = (pos[b] - pos[a]) / (t[b] - t[a])
+            psi_m = float(np.mean(psi[W][win.head_ok]))
+            c, s = math.cos(psi_m), math.sin(psi_m)
+            track = (c * v_ned[0] + s * v_ned[1], -s * v_ned[0] + c * v_ned[1])
+            for j in np.flatnonzero(win.vel_replace[:2]):
+                nu_w[:, j] = track[j]
+                win.vel_ok[:, j] = True
+    if win.vel_replace[2]:
+        ok_rows = W[win.head_ok]
+        if ok_rows.size >= 2:
+            a, b = ok_rows[0], ok_rows[-1]
+            nu_w[:, 2] = (psi[b] - psi[a]) / (t[b] - t[a])
+            win.vel_ok[:, 2] = True
+    return nu_w
+
+
+def detect_too_little_valid(view: LogView, win: Window, settings: WindowSettings) -> bool:
+    """Too little valid data left to start from.
+
+    Fault: fewer than :attr:`LogView.n_min` valid samples of the heading or of a velocity
+    component, or no valid position. Evidence: the counts after the other detectors.
+    Flags ``too_little_valid`` and returns True: the start is refused.
+    """
+    counts = {"heading": int(win.head_ok.sum()), "u": int(win.vel_ok[:, 0].sum()),
+              "v": int(win.vel_ok[:, 1].sum()), "r": int(win.vel_ok[:, 2].sum())}
+    short = [f"{name}: {c} valid of {view.n_nom}" for name, c in counts.items() if c < view.n_min]
+    if not win.pos_ok.any():
+        short.insert(0, "position: no valid sample")
+    if short:
+        t = view.t
+        win.flag(FaultFlags.TOO_LITTLE_VALID,
+                 f"too little valid data in the {settings.window_s:g}-s window (time_s {t[win.lo]:g}.."
+                 f"{t[win.start]:g}): {'; '.join(short)}; need at least {view.n_min} valid sample(s) of each "
+                 "and one position")
+    return bool(short)
+
+
+def detect_dropped_wind(view: LogView, win: Window) -> np.ndarray:
+    """The wind to hold over the forecast: the latest valid sample in the window.
+
+    Fault: the log has wind columns but no valid wind sample in the window (sensor
+    dropped). Evidence: :attr:`LogArrays.wind_logged`. Flags ``wind_dropped``; repair:
+    no wind (zeros). Returns ``[speed_m_s, dir_from_rad]``.
+    """
+    a = view.arrays
+    if not a.has_wind:
+        return np.zeros(2)
+    w_rows = win.rows[win.wind_ok]
+    if w_rows.size:
+        return a.wind[w_rows[-1]]
+    win.flag(FaultFlags.WIND_DROPPED, "no valid wind sample in the window (sensor dropped): forecast without wind")
+    return np.zeros(2)
+
+
+def _runs(x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """First and last row of the run of bit-identical finite values containing each row.
+
+    A non-finite row forms a run of its own. ``x`` has shape (N,) or (N, m).
+    """
+    x2 = x.reshape(x.shape[0], -1)
+    n = x2.shape[0]
+    fin = np.all(np.isfinite(x2), axis=1)
+    change = np.ones(n, dtype=bool)
+    if n > 1:
+        change[1:] = np.any(x2[1:] != x2[:-1], axis=1) | ~fin[1:] | ~fin[:-1]
+    idx = np.arange(n)
+    first = np.maximum.accumulate(np.where(change, idx, 0))
+    end_change = np.ones(n, dtype=bool)
+    end_change[:-1] = change[1:]
+    last = np.minimum.accumulate(np.where(end_change, idx, n - 1)[::-1])[::-1]
+    return first, last
+
+
+def _trapz(y: np.ndarray, x: np.ndarray, axis: int = 0) -> np.ndarray:
+    """Trapezoid integral of ``y`` over ``x`` along ``axis`` (``np.trapezoid`` needs numpy 2)."""
+    y = np.moveaxis(np.asarray(y, dtype=float), axis, 0)
+    h = np.diff(np.asarray(x, dtype=float))
+    return np.tensordot(h, 0.5 * (y[1:] + y[:-1]), axes=(0, 0))
+
+
+def _ned(vel_body: np.ndarray, psi: np.ndarray) -> np.ndarray:
+    """Body ``[u, v]`` rotated into NED ``[north, east]`` (the R(psi) of :func:`hybridship.frames.body_to_ned`)."""
+    c, s = np.cos(psi), np.sin(psi)
+    return np.stack([c * vel_body[..., 0] - s * vel_body[..., 1], s * vel_body[..., 0] + c * vel_body[..., 1]], -1)

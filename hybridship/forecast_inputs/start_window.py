@@ -8,6 +8,9 @@ valid, compute the start values from those, and return a flag per fault so that 
 forecast result (and the CLI) can say what was degraded. The predictors call them; see
 ``docs/reliability.md`` for the table of faults, behaviours and tests.
 
+:func:`assess_start_window` is a short driver: one named detector per fault (in
+:mod:`hybridship.forecast_inputs.faults`) looks at each start's window in turn.
+
 Pipeline at forecast time::
 
     arrays = ingest(log, vessel, purpose="forecast")          # sort, repair, validate, convert
@@ -80,7 +83,9 @@ import pandas as pd
 
 from ..logs.ingest import SortedLog, ingest_with_report
 from ..logs.io import LogArrays
-from .faults import FaultFlags, StartWindowError
+from .faults import (FaultFlags, LogView, StartWindowError, Window, WindowSettings, detect_dropped_wind,
+                     detect_frozen_channels, detect_heading_wrap, detect_late_samples, detect_missing_samples,
+                     detect_position_jumps, detect_too_little_valid, rederive_velocities)
 
 __all__ = [
     "StartWindow",
@@ -175,37 +180,6 @@ class StartWindow:
         return {k: np.repeat(self.flags[k], repeat) for k in FaultFlags.START_WINDOW}
 
 
-def _runs(x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """First and last row of the run of bit-identical finite values containing each row.
-
-    A non-finite row forms a run of its own. ``x`` has shape (N,) or (N, m).
-    """
-    x2 = x.reshape(x.shape[0], -1)
-    n = x2.shape[0]
-    fin = np.all(np.isfinite(x2), axis=1)
-    change = np.ones(n, dtype=bool)
-    if n > 1:
-        change[1:] = np.any(x2[1:] != x2[:-1], axis=1) | ~fin[1:] | ~fin[:-1]
-    idx = np.arange(n)
-    first = np.maximum.accumulate(np.where(change, idx, 0))
-    end_change = np.ones(n, dtype=bool)
-    end_change[:-1] = change[1:]
-    last = np.minimum.accumulate(np.where(end_change, idx, n - 1)[::-1])[::-1]
-    return first, last
-
-
-def _trapz(y: np.ndarray, x: np.ndarray, axis: int = 0) -> np.ndarray:
-    """Trapezoid integral of ``y`` over ``x`` along ``axis`` (``np.trapezoid`` needs numpy 2)."""
-    y = np.moveaxis(np.asarray(y, dtype=float), axis, 0)
-    h = np.diff(np.asarray(x, dtype=float))
-    return np.tensordot(h, 0.5 * (y[1:] + y[:-1]), axes=(0, 0))
-
-
-def _ned(vel_body: np.ndarray, psi: np.ndarray) -> np.ndarray:
-    c, s = np.cos(psi), np.sin(psi)
-    return np.stack([c * vel_body[..., 0] - s * vel_body[..., 1], s * vel_body[..., 0] + c * vel_body[..., 1]], -1)
-
-
 def assess_start_window(
     arrays: LogArrays,
     idx,
@@ -267,258 +241,72 @@ def assess_start_window(
     """
     if on_refuse not in ("raise", "flag"):
         raise ValueError(f"on_refuse must be 'raise' or 'flag', got {on_refuse!r}")
-    if not window_s > 0 or not frozen_s > 0 or not jump_m > 0 or not 0 < min_valid_fraction <= 1:
-        raise ValueError("window_s, frozen_s and jump_m must be > 0 and min_valid_fraction in (0, 1]")
+    settings = WindowSettings(window_s, frozen_s, frozen_motion_m, frozen_turn_deg, jump_m, lookback_s,
+                              min_valid_fraction)
     idx = np.atleast_1d(np.asarray(idx, dtype=int))
-    t = arrays.time_s
     n = len(arrays)
     if np.any((idx < 0) | (idx >= n)):
         raise IndexError(f"idx: start rows must lie in 0..{n - 1}, got {idx[(idx < 0) | (idx >= n)][0]}")
+    view = LogView.build(arrays, settings, order.affected_time_s if order is not None else arrays.resorted_time_s)
     S = idx.size
-    dt_nom = float(np.median(np.diff(t))) if n > 1 else 1.0
-    n_nom = max(1, int(round(window_s / dt_nom)))
-    n_min = max(1, math.ceil(min_valid_fraction * n_nom))
-    eta, nu, psi = arrays.eta, arrays.nu, arrays.eta[:, 2]
-    pos = eta[:, :2]
-    has_col = arrays.nu_logged.any(axis=0)           # which velocity columns the log has
-    affected = order.affected_time_s if order is not None else arrays.resorted_time_s
-
-    pos_first, pos_last = _runs(pos)
-    head_first, head_last = _runs(psi)
-    vel_runs = [_runs(nu[:, j]) for j in range(3)]
-
-    out_eta = np.full((S, 3), np.nan)
-    out_nu = np.full((S, 3), np.nan)
-    out_wind = np.zeros((S, 2))
+    out_eta, out_nu, out_wind = np.full((S, 3), np.nan), np.full((S, 3), np.nan), np.zeros((S, 2))
     flags = {k: np.zeros(S, dtype=bool) for k in FaultFlags.START_WINDOW}
-    notes: list[str] = []
-    turn_rad = math.radians(frozen_turn_deg)
-
+    notes = []
     for k, i in enumerate(idx):
-        t0 = t[i]
-        # the window always holds the start row (a window shorter than half a step would not)
-        lo = min(int(np.searchsorted(t, t0 - window_s + 0.5 * dt_nom, side="left")), int(i))
-        W = np.arange(lo, i + 1)
-        note: list[str] = []
-
-        pos_ok = np.all(np.isfinite(pos[W]), axis=1)
-        head_ok = np.isfinite(psi[W])
-        vel_ok = np.isfinite(nu[W])                      # (w, 3)
-        wind_ok = arrays.wind_logged[W]
-
-        # ---- missing samples / NaN
-        n_missing = max(0, n_nom - W.size)
-        nan_cols = []
-        if not pos_ok.all():
-            nan_cols.append("position")
-        if not head_ok.all():
-            nan_cols.append("heading")
-        for j, name in enumerate(("u", "v", "r")):
-            if has_col[j] and not arrays.nu_logged[W, j].all():
-                nan_cols.append(name)
-        if arrays.has_wind and not wind_ok.all():
-            nan_cols.append("wind")
-        if nan_cols or n_missing:
-            flags[FaultFlags.NAN_IN_WINDOW][k] = True
-            what = f"missing {', '.join(nan_cols)}" if nan_cols else ""
-            gap = f"{n_missing} missing sample(s)" if n_missing else ""
-            note.append(f"{'; '.join(x for x in (what, gap) if x)} in the window: valid samples used")
-
-        # ---- late / out of order
-        # the nominal window: a removed (conflicting) sample leaves no row but is still in it
-        if affected.size and np.any((affected >= min(t[lo], t0 - window_s + 0.5 * dt_nom) - 1e-9)
-                                    & (affected <= t0 + 1e-9)):
-            flags[FaultFlags.LATE_OR_OUT_OF_ORDER][k] = True
-            note.append("late, out-of-order or duplicated samples in the window: re-sorted by time")
-
-        # ---- frozen channels (runs up to the start row only: causal)
-        def stale_rows(first, last, contradicted) -> np.ndarray:
-            """Rows of W that repeat the first sample of a frozen, contradicted run."""
-            stale = np.zeros(W.size, dtype=bool)
-            for a in np.unique(first[W]):
-                b = min(int(last[a]), i)
-                if b <= a or t[b] - t[a] < frozen_s - 1e-9:
-                    continue
-                if contradicted(a, b):
-                    stale |= (W > a) & (W <= b)
-            return stale
-
-        def logged_uv(a, b):
-            return arrays.nu_logged[a:b + 1, 0].all() and arrays.nu_logged[a:b + 1, 1].all()
-
-        def pos_contradicted(a, b):
-            if not logged_uv(a, b):
-                return False
-            v_ned = _ned(nu[a:b + 1, :2], psi[a:b + 1])
-            if not np.all(np.isfinite(v_ned)):
-                return False
-            disp = _trapz(v_ned, t[a:b + 1], axis=0)
-            return float(np.hypot(*disp)) >= frozen_motion_m
-
-        def head_contradicted(a, b):
-            if not arrays.nu_logged[a:b + 1, 2].all():
-                return False
-            return abs(float(_trapz(nu[a:b + 1, 2], t[a:b + 1]))) >= turn_rad
-
-        def vel_contradicted(j):
-            def check(a, b):
-                if not arrays.nu_logged[a:b + 1, j].all():
-                    return False
-                if j == 2:
-                    if not (np.isfinite(psi[a]) and np.isfinite(psi[b])):
-                        return False
-                    return abs((psi[b] - psi[a]) - nu[a, 2] * (t[b] - t[a])) >= turn_rad
-                if not (np.all(np.isfinite(pos[[a, b]])) and np.isfinite(psi[a:b + 1]).all()):
-                    return False
-                v_body = nu[a:b + 1, :2].copy()
-                other = 1 - j
-                if not arrays.nu_logged[a:b + 1, other].all():
-                    return False
-                disp_log = _trapz(_ned(v_body, psi[a:b + 1]), t[a:b + 1], axis=0)
-                disp_track = pos[b] - pos[a]
-                return float(np.hypot(*(disp_log - disp_track))) >= frozen_motion_m
-            return check
-
-        frozen_what = []
-        st = stale_rows(pos_first, pos_last, pos_contradicted)
-        if st.any():
-            pos_ok &= ~st
-            frozen_what.append("position (the logged speed says the ship moved)")
-        st = stale_rows(head_first, head_last, head_contradicted)
-        if st.any():
-            head_ok &= ~st
-            frozen_what.append("heading (the logged yaw rate says it turned)")
-        vel_replace = np.zeros(3, dtype=bool)
-        for j, name in enumerate(("u_m_s", "v_m_s", "r_deg_s")):
-            st = stale_rows(*vel_runs[j], vel_contradicted(j))
-            if st.any():
-                vel_ok[:, j] = False
-                vel_replace[j] = True
-                frozen_what.append(f"{name} (disagrees with the track): derived from the track instead")
-        if frozen_what:
-            flags[FaultFlags.FROZEN_SENSOR][k] = True
-            note.append(f"frozen for >= {frozen_s:g} s: {'; '.join(frozen_what)}")
-
-        # ---- position jumps (steps ending in the window)
-        shift_from = lo
-        lb = int(np.searchsorted(t, t0 - window_s - lookback_s, side="left"))
-        rows = np.arange(max(lb, 1), i + 1)               # step r goes from row r-1 to r
-        if rows.size:
-            p_ok = np.all(np.isfinite(pos[rows]), axis=1) & np.all(np.isfinite(pos[rows - 1]), axis=1)
-            dts = t[rows] - t[rows - 1]
-            same = (arrays.segment_id[rows] == arrays.segment_id[rows - 1]) & p_ok
-            steps = pos[rows] - pos[rows - 1]
-            step_v = steps / dts[:, None]
-            both_logged = (arrays.nu_logged[rows, 0] & arrays.nu_logged[rows, 1]
-                           & arrays.nu_logged[rows - 1, 0] & arrays.nu_logged[rows - 1, 1])
-            v_log = 0.5 * (_ned(nu[rows, :2], psi[rows]) + _ned(nu[rows - 1, :2], psi[rows - 1]))
-            v_med = np.median(step_v[same], axis=0) if same.any() else np.zeros(2)
-            v_ref = np.where((both_logged & np.all(np.isfinite(v_log), axis=1))[:, None], v_log, v_med)
-            err = np.hypot(*(steps - v_ref * dts[:, None]).T)
-            jump = same & (err > jump_m)
-            jump_end = rows[jump]
-            in_w = jump_end[jump_end >= lo]
-            if in_w.size:
-                flags[FaultFlags.POSITION_JUMP][k] = True
-                jump_set = set(int(r) for r in jump_end)
-                bad_pos = set()
-                for r in sorted(jump_set):
-                    if (r - 1) in bad_pos:               # the return from a spike
-                        continue
-                    if r == i or (r + 1) in jump_set:   # unconfirmed jump into the start, or a spike
-                        bad_pos.add(r)
-                for r in bad_pos:
-                    pos_ok &= W != r
-                # derived velocities next to a jump are invalid
-                touched = set()
-                for r in jump_end:
-                    touched.update((int(r) - 1, int(r)))
-                for r in bad_pos:
-                    touched.update((r - 1, r, r + 1))
-                for j in range(2):
-                    hit = ~arrays.nu_logged[W, j] & np.isin(W, list(touched))
-                    if hit.any():
-                        vel_ok[:, j] &= ~hit
-                        vel_replace[j] = True  # derived velocity: re-derive from the valid positions
-                lasting = [int(r) for r in in_w if int(r) not in bad_pos and int(r) - 1 not in bad_pos]
-                if lasting:
-                    shift_from = max(lasting)
-                note.append(f"position jump of more than {jump_m:g} m at time_s "
-                            f"{', '.join(f'{t[int(r)]:g}' for r in in_w)}: "
-                            f"{'outlier(s) dropped' if bad_pos else 'lasting shift, new positions used'}")
-
-        # ---- heading wrap (informational)
-        hv = psi[W][head_ok]
-        if hv.size > 1:
-            two_pi = 2.0 * np.pi
-            if np.ptp(np.floor(hv / two_pi)) > 0 or np.ptp(np.floor((hv + np.pi) / two_pi)) > 0:
-                flags[FaultFlags.HEADING_WRAPPED][k] = True
-                note.append("heading crosses 0/360 deg (or +-180 deg): averaged unwrapped")
-
-        # ---- replacement of frozen logged velocities by track-derived ones
-        # (end points of the valid samples in the window; positions after a lasting shift)
-        nu_w = nu[W].copy()
-        if vel_replace[:2].any() and head_ok.any():
-            ok_rows = W[pos_ok & (W >= shift_from)]
-            if ok_rows.size >= 2:
-                a, b = ok_rows[0], ok_rows[-1]
-                v_ned = (pos[b] - pos[a]) / (t[b] - t[a])
-                psi_m = float(np.mean(psi[W][head_ok]))
-                c, s = math.cos(psi_m), math.sin(psi_m)
-                track = (c * v_ned[0] + s * v_ned[1], -s * v_ned[0] + c * v_ned[1])
-                for j in np.flatnonzero(vel_replace[:2]):
-                    nu_w[:, j] = track[j]
-                    vel_ok[:, j] = True
-        if vel_replace[2]:
-            ok_rows = W[head_ok]
-            if ok_rows.size >= 2:
-                a, b = ok_rows[0], ok_rows[-1]
-                nu_w[:, 2] = (psi[b] - psi[a]) / (t[b] - t[a])
-                vel_ok[:, 2] = True
-
-        # ---- enough valid data?
-        counts = {"heading": int(head_ok.sum()), "u": int(vel_ok[:, 0].sum()), "v": int(vel_ok[:, 1].sum()),
-                  "r": int(vel_ok[:, 2].sum())}
-        short = [f"{name}: {c} valid of {n_nom}" for name, c in counts.items() if c < n_min]
-        if not pos_ok.any():
-            short.insert(0, "position: no valid sample")
-        if short:
-            flags[FaultFlags.TOO_LITTLE_VALID][k] = True
-            note.append(f"too little valid data in the {window_s:g}-s window (time_s {t[lo]:g}..{t0:g}): "
-                        f"{'; '.join(short)}; need at least {n_min} valid sample(s) of each and one position")
-            notes.append("; ".join(note))
-            continue
-
-        psi0 = float(np.mean(psi[W][head_ok]))
-        nu0 = np.array([np.mean(nu_w[vel_ok[:, j], j]) for j in range(3)])
-        last = int(W[np.flatnonzero(pos_ok)[-1]])
-        p0 = pos[last].copy()
-        if last != i:
-            c, s = math.cos(psi0), math.sin(psi0)
-            p0 += (t0 - t[last]) * np.array([c * nu0[0] - s * nu0[1], s * nu0[0] + c * nu0[1]])
-            note.append(f"position from time_s {t[last]:g} moved to the start with the mean velocity")
-        out_eta[k] = [p0[0], p0[1], psi0]
-        out_nu[k] = nu0
-
-        # ---- wind
-        if arrays.has_wind:
-            w_rows = W[wind_ok]
-            if w_rows.size:
-                out_wind[k] = arrays.wind[w_rows[-1]]
-            else:
-                flags[FaultFlags.WIND_DROPPED][k] = True
-                note.append("no valid wind sample in the window (sensor dropped): forecast without wind")
-        notes.append("; ".join(note))
-
-    result = StartWindow(start_time_s=t[idx].copy(), eta0=out_eta, nu0=out_nu, wind=out_wind, flags=flags,
-                         notes=tuple(notes))
-    refused = result.refused
-    if on_refuse == "raise" and refused.any():
-        k = int(np.argmax(refused))
-        reason = notes[k]
-        more = f" ({int(refused.sum())} of {S} starts refused, at time_s " \
-               f"{', '.join(f'{x:g}' for x in result.start_time_s[refused][:5])}{', ...' if refused.sum() > 5 else ''})"
-        raise StartWindowError(
-            f"start time_s {t[idx[k]]:g}: refused, {reason}{more if refused.sum() > 1 else ''}",
-            start_time_s=float(t[idx[k]]), reason=reason, refused_start_times_s=result.start_time_s[refused])
+        win, start = _assess_start(view, int(i), settings)
+        if start is not None:
+            out_eta[k], out_nu[k], out_wind[k] = start
+        for name in win.flags:
+            flags[name][k] = True
+        notes.append("; ".join(win.notes))
+    result = StartWindow(start_time_s=arrays.time_s[idx].copy(), eta0=out_eta, nu0=out_nu, wind=out_wind,
+                         flags=flags, notes=tuple(notes))
+    if on_refuse == "raise" and result.refused.any():
+        raise _refusal(result)
     return result
+
+
+def _assess_start(view: LogView, i: int, settings: WindowSettings):
+    """Run the detectors on the window of start row ``i``.
+
+    Returns the window (flags, notes) and ``(eta0, nu0, wind)``, or None when refused.
+    """
+    win = Window.at(view, i, settings.window_s)
+    detect_missing_samples(view, win)
+    detect_late_samples(view, win, settings)
+    detect_frozen_channels(view, win, settings)
+    detect_position_jumps(view, win, settings)
+    detect_heading_wrap(view, win)
+    nu_w = rederive_velocities(view, win)
+    if detect_too_little_valid(view, win, settings):
+        return win, None
+    eta0, nu0 = _start_values(view, win, nu_w)
+    return win, (eta0, nu0, detect_dropped_wind(view, win))
+
+
+def _start_values(view: LogView, win: Window, nu_w: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """``eta0``: the latest valid position, moved to the start time with the mean velocity
+    when it is older, and the mean valid heading; ``nu0``: the mean valid velocities."""
+    t, W = view.t, win.rows
+    psi0 = float(np.mean(view.psi[W][win.head_ok]))
+    nu0 = np.array([np.mean(nu_w[win.vel_ok[:, j], j]) for j in range(3)])
+    last = int(W[np.flatnonzero(win.pos_ok)[-1]])
+    p0 = view.pos[last].copy()
+    if last != win.start:
+        c, s = math.cos(psi0), math.sin(psi0)
+        p0 += (t[win.start] - t[last]) * np.array([c * nu0[0] - s * nu0[1], s * nu0[0] + c * nu0[1]])
+        win.notes.append(f"position from time_s {t[last]:g} moved to the start with the mean velocity")
+    return np.array([p0[0], p0[1], psi0]), nu0
+
+
+def _refusal(result: StartWindow) -> StartWindowError:
+    """The error for the first refused start, listing (up to five of) the others."""
+    refused = result.refused
+    k = int(np.argmax(refused))
+    reason = result.notes[k]
+    t_refused = result.start_time_s[refused]
+    more = (f" ({int(refused.sum())} of {refused.size} starts refused, at time_s "
+            f"{', '.join(f'{x:g}' for x in t_refused[:5])}{', ...' if refused.sum() > 5 else ''})")
+    t0 = result.start_time_s[k]
+    return StartWindowError(f"start time_s {t0:g}: refused, {reason}{more if refused.sum() > 1 else ''}",
+                            start_time_s=float(t0), reason=reason, refused_start_times_s=t_refused)
