@@ -431,3 +431,21 @@ def test_dev_logs_read_and_velocities_match_heading(shared_data):
         assert np.corrcoef(from_rate, from_heading)[0, 1] > 0.95, path.name
         slope = np.dot(from_rate, from_heading) / np.dot(from_rate, from_rate)
         assert 0.95 < slope < 1.05, f"{path.name}: yaw rate scale {slope:.3f}"
+
+
+def test_the_column_spec_is_the_documented_format():
+    """Every column of the declarative spec is in the log-format page's table, with its unit
+    and whether it is required; and nothing else is required."""
+    from conftest import ROOT
+    from hybridship.logs.columns import COLUMNS, REQUIRED_COLUMNS
+
+    rows = [line for line in (ROOT / "docs" / "reference" / "log-format.md").read_text(encoding="utf-8").splitlines()
+            if line.startswith("| `")]
+    for spec in COLUMNS:
+        row = next((r for r in rows if f"`{spec.name}`" in r.split("|")[1]), None)
+        assert row is not None, spec.name
+        unit, required = (c.strip() for c in row.split("|")[2:4])
+        assert unit == (spec.unit or "0/1"), spec.name
+        assert required == ("yes" if spec.required else "no"), spec.name
+    assert REQUIRED_COLUMNS == ("time_s", "north_m", "east_m", "heading_deg")
+

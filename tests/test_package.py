@@ -131,8 +131,6 @@ LONG_FUNCTIONS_ALLOWED = {
     "train_multistep",              # residual/multistep.py
     "HybridPredictor.load",         # predictors
     "run_drift_benchmark",          # drift benchmark
-    "_validate",                    # logs/io.py
-    "check_log_against_vessel",     # logs/io.py
 }
 MAX_FUNCTION_LINES = 100
 

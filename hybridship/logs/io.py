@@ -7,9 +7,12 @@ degrees come in, :class:`LogArrays` in SI units and radians go out.
 Containers (chosen by the file name's extension): ``.csv``, ``.csv.gz`` (gzip CSV) and
 ``.parquet`` / ``.pq``.
 
-Validation (:func:`validate_log`) refuses, with a :class:`LogFormatError` that names the
-column, the first offending row (0-based position among the data rows, header excluded)
-and its ``time_s`` where relevant, and what was expected:
+Each column's rules (unit, required or optional, finite, plausible range, bound to the
+vessel file, angle in degrees) are declared once in :data:`hybridship.logs.columns.COLUMNS`;
+small named checks here apply them. Validation (:func:`validate_log`) refuses, with a
+:class:`LogFormatError` that names the column, the first offending row (0-based position
+among the data rows, header excluded) and its ``time_s`` where relevant, and what was
+expected:
 
 * missing required columns (``time_s``, ``north_m``, ``east_m``, ``heading_deg``) or
   duplicated column names; when a column with the same quantity in another unit is
@@ -31,7 +34,9 @@ and its ``time_s`` where relevant, and what was expected:
   in ``thruster_names`` (when given);
 * ``dp_active`` values other than 0/1.
 
-:func:`check_log_against_vessel` adds the checks that need the vessel file: every
+Each column is checked on its own first, then against the others (yaw rate against
+heading, speed against track), then the thruster columns. :func:`check_log_against_vessel`
+adds the checks that need the vessel file: every
 thruster column names a thruster of the vessel, an azimuth thruster with a logged rpm also
 has its azimuth logged, all or none of the thrusters are logged (and none only when the
 vessel is not station keeping), ``|rpm|`` within 1.25 x the thruster's ``max_rpm``, and the
@@ -52,7 +57,6 @@ from __future__ import annotations
 import functools
 import gzip
 import os
-import re
 import warnings
 from collections.abc import Sequence
 from dataclasses import dataclass
@@ -64,6 +68,8 @@ import pandas as pd
 
 from hybridship import frames
 from hybridship.fileio import atomic_write
+from hybridship.logs.columns import (COLUMNS, MAX_SAMPLE_SPACING_S, MIN_SAMPLE_SPACING_S, OPTIONAL_COLUMNS,
+                                     REQUIRED_COLUMNS, TRUTH_PREFIX, ColumnSpec, channel_column, column_spec)
 from hybridship.logs.preprocess import segment_ids, segmentwise, split_segments
 
 __all__ = [
@@ -83,22 +89,6 @@ __all__ = [
     "check_log_against_vessel",
 ]
 
-#: Columns every log must have.
-REQUIRED_COLUMNS = ("time_s", "north_m", "east_m", "heading_deg")
-#: Fixed-name optional columns of the format (thruster columns are matched by pattern).
-OPTIONAL_COLUMNS = ("u_m_s", "v_m_s", "r_deg_s", "wind_speed_m_s", "wind_dir_deg", "dp_active")
-TRUTH_PREFIX = "truth_"
-
-#: Plausibility limits (a ship, not a missile): beyond these a unit mix-up is more likely.
-MAX_SPEED_M_S = 30.0
-MAX_YAW_RATE_DEG_S = 60.0
-MAX_WIND_SPEED_M_S = 80.0
-#: Plausible median sample spacing [s]; outside it ``time_s`` is in another unit.
-MIN_SAMPLE_SPACING_S = 0.01
-MAX_SAMPLE_SPACING_S = 60.0
-#: A heading in degrees lies in this range in every wrap convention (with slack for a
-#: logger that wraps late); beyond it the column is in another unit.
-HEADING_RANGE_DEG = (-360.0, 720.0)
 #: Speed-vs-track check: displacements over this lag [s] are compared ...
 SPEED_CHECK_LAG_S = 20.0
 #: ... when their rms reaches this [m] (the correlation gate below keeps noise out) ...
@@ -111,13 +101,10 @@ KM_H_PER_M_S = 3.6
 #: The logged speed may differ from the track's by at most this factor either way
 #: (the geometric mean of 1 and 1.94: knots are refused, noise is not).
 _SPEED_SCALE_SPLIT = float(np.sqrt(KNOTS_PER_M_S))
-#: ``|rpm|`` beyond this multiple of a thruster's ``max_rpm`` is a unit error (refused).
-RPM_UNIT_FACTOR = 1.25
 #: An azimuth thruster negative in at least this many samples and never positive is taken
 #: to log its rotation direction instead of the thrust sign.
 RPM_SIGN_MIN_SAMPLES = 60
 
-_THRUSTER_RE = re.compile(r"^(?P<name>.+)_(?P<kind>rpm|azimuth_deg)$")
 _EXTENSIONS = (".csv", ".csv.gz", ".parquet", ".pq")
 
 
@@ -351,17 +338,7 @@ def _limit_error(col: str, x: np.ndarray, bad: np.ndarray, t: np.ndarray, expect
 
 #: Name stems of each format column; a column ``<stem>`` or ``<stem>_<unit>`` with another
 #: unit is pointed out (required: in the error; optional: in the unknown-column warning).
-_UNIT_STEMS = {
-    "time_s": ("time", "t", "timestamp"),
-    "north_m": ("north",),
-    "east_m": ("east",),
-    "heading_deg": ("heading", "hdg", "psi", "yaw"),
-    "u_m_s": ("u", "surge", "surge_speed"),
-    "v_m_s": ("v", "sway", "sway_speed"),
-    "r_deg_s": ("r", "yaw_rate", "rot"),
-    "wind_speed_m_s": ("wind_speed", "windspeed", "wind"),
-    "wind_dir_deg": ("wind_dir", "wind_direction", "winddir"),
-}
+_UNIT_STEMS = {c.name: c.other_unit_stems for c in COLUMNS if c.other_unit_stems}
 
 
 def _unit_variant_of(col: str) -> str | None:
@@ -520,11 +497,42 @@ def _check_angle_unit(col: str, t: np.ndarray, x: np.ndarray, source: str, rate=
 
 def _validate(df: pd.DataFrame, thruster_names, rotatable, source: str, warn_unknown: bool,
               allow_missing: bool = False) -> None:
+    """Check ``df`` against the log format (:data:`hybridship.logs.columns.COLUMNS`).
+
+    The checks run in this order, so that every message can quote ``time_s``: column
+    names; ``time_s``; each fixed-name column parsed (and required ones finite); each
+    column's own rules (range, allowed values, angle unit); the rules between columns
+    (yaw rate against heading, speed against track); the per-channel columns.
+    """
     if not isinstance(df, pd.DataFrame):
         raise TypeError(f"expected a pandas DataFrame, got {type(df).__name__}")
     names, rot = _check_thruster_args(thruster_names, rotatable)
     cols = [str(c) for c in df.columns]
+    _check_column_names(cols, source)
+    if len(df) == 0:
+        raise LogFormatError(f"time_s: the log has no rows; expected at least one sample{_where(source)}",
+                             column="time_s")
+    t = _to_float(df, "time_s", source, None)
+    _check_time(t, source)
+    values = _parse_fixed_columns(df, cols, t, source, allow_missing)
+    for name, x in values.items():
+        _check_column_values(column_spec(name), x, t, source, values)
+    if "r_deg_s" in values:
+        _check_yaw_rate_vs_heading(t, values["heading_deg"], values["r_deg_s"], source)
+    if "u_m_s" in values and "v_m_s" in values:
+        _check_speed_vs_track(t, values, source)
+    ignored = _check_channel_columns(df, cols, t, names, rot, source)
+    if ignored and warn_unknown:
+        warnings.warn(
+            f"{source}: ignoring {len(ignored)} column(s) not in the log format: {', '.join(ignored)}",
+            LogFormatWarning,
+            stacklevel=3,
+        )
 
+
+def _check_column_names(cols: list[str], source: str) -> None:
+    """Unique column names, and every required column present (pointing out one that
+    looks like it in another unit, ``heading_rad``)."""
     dup = sorted({c for c in cols if cols.count(c) > 1})
     if dup:
         raise LogFormatError(f"{dup[0]}: column appears more than once; column names must be unique{_where(source)}",
@@ -539,111 +547,109 @@ def _validate(df: pd.DataFrame, thruster_names, rotatable, source: str, warn_unk
             f"{', '.join(REQUIRED_COLUMNS)}; found: {', '.join(cols) or 'none'}){hint}{_where(source)}",
             column=missing[0],
         )
-    if len(df) == 0:
-        raise LogFormatError(f"time_s: the log has no rows; expected at least one sample{_where(source)}",
-                             column="time_s")
 
-    # time_s first: every other message quotes it.
-    t = _to_float(df, "time_s", source, None)
-    _check_time(t, source)
 
+def _parse_fixed_columns(df: pd.DataFrame, cols: list[str], t: np.ndarray, source: str,
+                         allow_missing: bool) -> dict[str, np.ndarray]:
+    """The fixed-name columns present besides ``time_s``, as floats, in spec order.
+
+    Non-numeric values and infinities are refused; a missing sample in a column whose spec
+    says ``finite`` too, unless ``allow_missing`` (then infinities are missing samples).
+    """
     values: dict[str, np.ndarray] = {}
-    for col in REQUIRED_COLUMNS[1:]:
-        x = _to_float(df, col, source, t, inf_is_missing=allow_missing)
+    for spec in COLUMNS:
+        if spec.per_channel or spec.name == "time_s" or spec.name not in cols:
+            continue
+        x = _to_float(df, spec.name, source, t, inf_is_missing=spec.finite and allow_missing)
         bad = ~np.isfinite(x)
-        if bad.any() and not allow_missing:
+        if spec.finite and bad.any() and not allow_missing:
             i = int(np.argmax(bad))
             raise LogFormatError(
-                f"{col}: missing or non-finite value ({x[i]}) at {_row_at(t, i)}, {int(bad.sum())} such "
+                f"{spec.name}: missing or non-finite value ({x[i]}) at {_row_at(t, i)}, {int(bad.sum())} such "
                 f"row(s) in all; required columns must be finite{_where(source)}",
-                column=col, row=i, time_s=float(t[i]),
+                column=spec.name, row=i, time_s=float(t[i]),
             )
-        values[col] = x
-    for col in OPTIONAL_COLUMNS:
-        if col in cols:
-            values[col] = _to_float(df, col, source, t)
+        values[spec.name] = x
+    return values
 
-    h = values["heading_deg"]
-    lo, hi = HEADING_RANGE_DEG
-    bad = np.isfinite(h) & ((h < lo) | (h > hi))
-    if bad.any():
-        raise _limit_error("heading_deg", h, bad, t, f"is outside {lo:g}..{hi:g}; the log format expects "
-                           "degrees (0..360 or -180..180): is it in milliradians or centidegrees?", source)
-    _check_angle_unit("heading_deg", t, h, source, values.get("r_deg_s"))
 
-    for col in ("u_m_s", "v_m_s"):
-        if col in values:
-            x = values[col]
-            bad = np.abs(x) > MAX_SPEED_M_S
-            if bad.any():
-                raise _limit_error(col, x, bad, t, f"exceeds {MAX_SPEED_M_S:g} m/s in magnitude; the log "
-                                   "format expects m/s; is the column in knots (or another unit)?", source)
-    if "r_deg_s" in values:
-        x = values["r_deg_s"]
-        bad = np.abs(x) > MAX_YAW_RATE_DEG_S
+def _check_column_values(spec: ColumnSpec, x: np.ndarray, t: np.ndarray, source: str,
+                         values: dict[str, np.ndarray]) -> None:
+    """One column's own rules from its spec: the plausible range, the allowed values, and
+    (for an angle) that it is not in radians. Missing samples pass."""
+    if spec.bound is not None:
+        bad = spec.bound.violated(x)
         if bad.any():
-            raise _limit_error("r_deg_s", x, bad, t, f"exceeds {MAX_YAW_RATE_DEG_S:g} deg/s in magnitude, "
-                               "implausible for a ship; the log format expects deg/s; check the rad/s vs "
-                               "deg/s conversion (converted twice?)", source)
-        ev = _rate_evidence(t, h, x, 360.0)
-        if ev is not None:
-            corr, k = ev
-            span = f"between time_s {t[0]:g} and {t[-1]:g}"
-            if corr <= -0.3:
-                raise LogFormatError(
-                    f"r_deg_s: has the opposite sign of the rate of change of heading_deg {span} "
-                    f"(correlation {corr:.2f}); the log format expects the yaw rate positive clockwise seen "
-                    f"from above (NED): is the sign reversed (counter-clockwise / ENU convention)?{_where(source)}",
-                    column="r_deg_s")
-            if corr >= 0.3 and k < 1.0 / _RATE_SCALE_SPLIT:
-                raise LogFormatError(
-                    f"r_deg_s: is {k:.4f} times the rate of change of heading_deg {span} (about 1 expected "
-                    f"for deg/s, 0.0175 for rad/s): looks like rad/s; the log format expects deg/s{_where(source)}",
-                    column="r_deg_s")
-            if corr >= 0.3 and k > _RATE_SCALE_SPLIT:
-                raise LogFormatError(
-                    f"r_deg_s: is {k:.1f} times the rate of change of heading_deg {span} (about 1 expected "
-                    f"for deg/s): converted from rad/s twice?; the log format expects deg/s{_where(source)}",
-                    column="r_deg_s")
-    if "u_m_s" in values and "v_m_s" in values:
-        sc = speed_scale_vs_track(t, values["north_m"], values["east_m"], h, values["u_m_s"], values["v_m_s"])
-        if (sc is not None and sc.rms_displacement_m >= SPEED_CHECK_MIN_DISPLACEMENT_M
-                and sc.correlation >= SPEED_CHECK_MIN_CORRELATION
-                and not 1.0 / _SPEED_SCALE_SPLIT <= sc.scale <= _SPEED_SCALE_SPLIT):
-            raise LogFormatError(
-                f"u_m_s, v_m_s: the logged speed is {sc.scale:.3g} times the speed of the track "
-                f"(north_m, east_m) over {SPEED_CHECK_LAG_S:g}-s windows between time_s {sc.time_span_s[0]:g} "
-                f"and {sc.time_span_s[1]:g} (correlation {sc.correlation:.2f}); expected 1 for m/s "
-                f"({KNOTS_PER_M_S:.2f} would be knots, {KM_H_PER_M_S:g} km/h): {_speed_unit_guess(sc.scale)}"
-                f"{_where(source)}",
-                column="u_m_s")
-    if "wind_speed_m_s" in values:
-        x = values["wind_speed_m_s"]
-        bad = (x < 0.0) | (x > MAX_WIND_SPEED_M_S)
+            raise _limit_error(spec.name, x, bad, t, f"{spec.bound.text(spec.unit)}; {spec.expects}", source)
+    if spec.allowed:
+        bad = np.isfinite(x) & ~np.isin(x, spec.allowed)
         if bad.any():
-            raise _limit_error("wind_speed_m_s", x, bad, t, f"is outside 0..{MAX_WIND_SPEED_M_S:g} m/s; the "
-                               "log format expects a non-negative true wind speed in m/s (knots?)", source)
-    if "wind_dir_deg" in values:
-        _check_angle_unit("wind_dir_deg", t, values["wind_dir_deg"], source)
-    if "dp_active" in values:
-        x = values["dp_active"]
-        bad = np.isfinite(x) & (x != 0.0) & (x != 1.0)
-        if bad.any():
-            raise _limit_error("dp_active", x, bad, t, "is not 0 or 1; the log format expects 1 while the "
-                               "station-keeping controller is active, else 0", source)
+            allowed = " or ".join(f"{a:g}" for a in spec.allowed)
+            raise _limit_error(spec.name, x, bad, t, f"is not {allowed}; {spec.expects}", source)
+    if spec.angle:
+        _check_angle_unit(spec.name, t, x, source, values.get(spec.rate_column) if spec.rate_column else None)
 
-    # Thruster columns, matched by name pattern; truth_* columns are never interpreted.
+
+def _check_yaw_rate_vs_heading(t: np.ndarray, h: np.ndarray, r: np.ndarray, source: str) -> None:
+    """``r_deg_s`` against the rate of change of ``heading_deg``: refused when its sign is
+    reversed (counter-clockwise convention), or its scale says rad/s or deg/s converted
+    twice (see :func:`heading_looks_like_radians` for the correlation and scale rule)."""
+    ev = _rate_evidence(t, h, r, 360.0)
+    if ev is None:
+        return
+    corr, k = ev
+    span = f"between time_s {t[0]:g} and {t[-1]:g}"
+    if corr <= -0.3:
+        raise LogFormatError(
+            f"r_deg_s: has the opposite sign of the rate of change of heading_deg {span} "
+            f"(correlation {corr:.2f}); the log format expects the yaw rate positive clockwise seen "
+            f"from above (NED): is the sign reversed (counter-clockwise / ENU convention)?{_where(source)}",
+            column="r_deg_s")
+    if corr >= 0.3 and k < 1.0 / _RATE_SCALE_SPLIT:
+        raise LogFormatError(
+            f"r_deg_s: is {k:.4f} times the rate of change of heading_deg {span} (about 1 expected "
+            f"for deg/s, 0.0175 for rad/s): looks like rad/s; the log format expects deg/s{_where(source)}",
+            column="r_deg_s")
+    if corr >= 0.3 and k > _RATE_SCALE_SPLIT:
+        raise LogFormatError(
+            f"r_deg_s: is {k:.1f} times the rate of change of heading_deg {span} (about 1 expected "
+            f"for deg/s): converted from rad/s twice?; the log format expects deg/s{_where(source)}",
+            column="r_deg_s")
+
+
+def _check_speed_vs_track(t: np.ndarray, values: dict[str, np.ndarray], source: str) -> None:
+    """``u_m_s``/``v_m_s`` against the motion of the track (:func:`speed_scale_vs_track`):
+    refused when the two agree in shape but not in scale (knots, km/h)."""
+    sc = speed_scale_vs_track(t, values["north_m"], values["east_m"], values["heading_deg"], values["u_m_s"],
+                              values["v_m_s"])
+    if (sc is not None and sc.rms_displacement_m >= SPEED_CHECK_MIN_DISPLACEMENT_M
+            and sc.correlation >= SPEED_CHECK_MIN_CORRELATION
+            and not 1.0 / _SPEED_SCALE_SPLIT <= sc.scale <= _SPEED_SCALE_SPLIT):
+        raise LogFormatError(
+            f"u_m_s, v_m_s: the logged speed is {sc.scale:.3g} times the speed of the track "
+            f"(north_m, east_m) over {SPEED_CHECK_LAG_S:g}-s windows between time_s {sc.time_span_s[0]:g} "
+            f"and {sc.time_span_s[1]:g} (correlation {sc.correlation:.2f}); expected 1 for m/s "
+            f"({KNOTS_PER_M_S:.2f} would be knots, {KM_H_PER_M_S:g} km/h): {_speed_unit_guess(sc.scale)}"
+            f"{_where(source)}",
+            column="u_m_s")
+
+
+def _check_channel_columns(df: pd.DataFrame, cols: list[str], t: np.ndarray, names, rot, source: str) -> list[str]:
+    """The per-channel columns (``<thruster>_rpm``, ``<thruster>_azimuth_deg``), matched by
+    pattern: each names a known channel (when ``names`` is given), is numeric, and an angle
+    is not in radians. Returns the columns to ignore (unknown names; angles of fixed
+    thrusters), with a note each; ``truth_*`` columns are never interpreted."""
     ignored: list[str] = []
     for col in cols:
         if col in REQUIRED_COLUMNS or col in OPTIONAL_COLUMNS or col.startswith(TRUTH_PREFIX):
             continue
-        m = _THRUSTER_RE.match(col)
-        if m is None:
+        match = channel_column(col)
+        if match is None:
             variant = _unit_variant_of(col)
             ignored.append(col if variant is None else
                            f"{col} (looks like {variant} in another unit; the format expects {variant})")
             continue
-        name, kind = m.group("name"), m.group("kind")
+        spec, name = match
         if names is not None and name not in names:
             raise LogFormatError(
                 f"{col}: names unknown thruster '{name}'; known thrusters: {', '.join(names) or 'none'} "
@@ -651,17 +657,11 @@ def _validate(df: pd.DataFrame, thruster_names, rotatable, source: str, warn_unk
                 column=col,
             )
         x = _to_float(df, col, source, t)  # numeric, no infinities
-        if kind == "azimuth_deg" and rot is not None and not rot[names.index(name)]:
+        if spec.rotatable_only and rot is not None and not rot[names.index(name)]:
             ignored.append(f"{col} (thruster '{name}' is not rotatable)")
-        elif kind == "azimuth_deg":
+        elif spec.angle:
             _check_angle_unit(col, t, x, source)
-
-    if ignored and warn_unknown:
-        warnings.warn(
-            f"{source}: ignoring {len(ignored)} column(s) not in the log format: {', '.join(ignored)}",
-            LogFormatWarning,
-            stacklevel=3,
-        )
+    return ignored
 
 
 def validate_log(
@@ -750,73 +750,102 @@ def check_log_against_vessel(log, vessel, *, source: str | None = None, allow_mi
     from hybridship.vessel import Vessel, load_vessel
 
     v = vessel if isinstance(vessel, Vessel) else load_vessel(vessel)
-    names, rot = v.thruster_names, v.rotatable
     if isinstance(log, (str, os.PathLike)):
         source = source or str(log)
         df = read_log(log, validate=False)
     else:
         df = log
     source = source or "log"
-    _validate(df, names, rot, source, warn_unknown=True, allow_missing=allow_missing)
+    _validate(df, v.thruster_names, v.rotatable, source, warn_unknown=True, allow_missing=allow_missing)
     cols = set(map(str, df.columns))
     t = _to_float(df, "time_s", source, None)
-    # Command channels are thrusters and (in newer vessel files) rudders; only thrusters
-    # have an rpm, a rudder logs its angle as <name>_azimuth_deg.
-    names = [th.name for th in v.thrusters]
-    rudders = [r.name for r in getattr(v, "rudders", None) or []]
-    logged = [f"{n}_rpm" in cols for n in names]
-    vessel_note = f" of vessel {v.name!r}"
-    if names and any(logged) and not all(logged):
-        miss = [f"{n}_rpm" for n, ok in zip(names, logged) if not ok]
-        have = [f"{n}_rpm" for n, ok in zip(names, logged) if ok]
+    _check_all_or_no_rpm(v, cols, source)
+    _check_rudder_angles_logged(v, cols, source)
+    _check_rpm_while_station_keeping(v, df, cols, t, source)
+    for th in v.thrusters:
+        if column_spec("<thruster>_rpm").for_channel(th.name) in cols:
+            _check_thruster_columns(v, th, df, cols, t, source)
+
+
+def _rpm_columns(v) -> list[str]:
+    """The vessel's thruster rpm columns, in vessel-file order (rudders have no rpm)."""
+    return [column_spec("<thruster>_rpm").for_channel(th.name) for th in v.thrusters]
+
+
+def _check_all_or_no_rpm(v, cols: set, source: str) -> None:
+    """Some thrusters' rpm logged and others' not: the forecast would take the missing
+    ones as stopped."""
+    rpm_cols = _rpm_columns(v)
+    miss = [c for c in rpm_cols if c not in cols]
+    have = [c for c in rpm_cols if c in cols]
+    if have and miss:
         raise LogFormatError(
             f"{miss[0]}: missing while {', '.join(have)} are logged; expected the rpm of every thruster"
-            f"{vessel_note} ({', '.join(f'{n}_rpm' for n in names)}), else the forecast would take "
+            f" of vessel {v.name!r} ({', '.join(rpm_cols)}), else the forecast would take "
             f"{', '.join(miss)} as stopped{_where(source)}", column=miss[0])
-    for rud in rudders:
-        if any(logged) and f"{rud}_azimuth_deg" not in cols:
+
+
+def _check_rudder_angles_logged(v, cols: set, source: str) -> None:
+    """A rudder's angle missing while thruster rpm are logged: the forecast would take the
+    rudder as amidships."""
+    if not any(c in cols for c in _rpm_columns(v)):
+        return
+    for rud in getattr(v, "rudders", None) or []:
+        col = column_spec("<thruster>_azimuth_deg").for_channel(rud.name)
+        if col not in cols:
             raise LogFormatError(
-                f"{rud}_azimuth_deg: missing while thruster rpm are logged; expected the angle of rudder "
-                f"{rud!r}{vessel_note} in degrees (positive to starboard), else the forecast would take it "
-                f"as amidships{_where(source)}", column=f"{rud}_azimuth_deg")
-    if names and not any(logged):
-        dp = _to_float(df, "dp_active", source, t) if "dp_active" in cols else None
-        if dp is None or np.any(dp == 1.0):
-            i = 0 if dp is None else int(np.argmax(dp == 1.0))
-            raise LogFormatError(
-                f"{names[0]}_rpm: no thruster rpm columns while dp_active is "
-                f"{'absent (taken as 1)' if dp is None else f'1 at {_row_at(t, i)}'}; expected "
-                f"{', '.join(f'{n}_rpm' for n in names)} for vessel {v.name!r}, or dp_active = 0 for a vessel "
-                f"drifting without thrust{_where(source)}", column=f"{names[0]}_rpm")
-    for th, ok in zip(v.thrusters, logged):
-        if not ok:
-            continue
-        col = f"{th.name}_rpm"
-        x = _to_float(df, col, source, t)
-        limit = RPM_UNIT_FACTOR * th.max_rpm
-        bad = np.abs(x) > limit
-        if bad.any():
-            raise _limit_error(col, x, bad, t, f"exceeds {RPM_UNIT_FACTOR:g} x max_rpm ({th.max_rpm:g} rpm) of "
-                               f"thruster {th.name!r}{vessel_note} in magnitude; the log format expects the "
-                               "propeller shaft speed in rpm: is it the motor speed before the gear, or "
-                               "another unit?", source)
-        if th.type == "azimuth" and f"{th.name}_azimuth_deg" not in cols:
-            raise LogFormatError(
-                f"{th.name}_azimuth_deg: missing while {col} is logged; thruster {th.name!r}{vessel_note} is an "
-                f"azimuth thruster and its thrust direction is needed (expected column {th.name}_azimuth_deg "
-                f"in degrees, 0 = forward, positive to starboard){_where(source)}",
-                column=f"{th.name}_azimuth_deg")
-        if th.type == "azimuth":
-            neg = np.isfinite(x) & (x < 0.0)
-            pos = np.isfinite(x) & (x > 0.0)
-            if neg.sum() >= RPM_SIGN_MIN_SAMPLES and not pos.any():
-                i = int(np.argmax(neg))
-                raise LogFormatError(
-                    f"{col}: negative in all {int(neg.sum())} non-zero samples (first at {_row_at(t, i)}) and "
-                    f"never positive; the log format expects signed rpm with positive = thrust forward along "
-                    f"the thruster axis: does the column carry the shaft's rotation direction (e.g. a "
-                    f"counter-rotating propeller) instead?{_where(source)}",
-                    column=col, row=i, time_s=float(t[i]))
+                f"{col}: missing while thruster rpm are logged; expected the angle of rudder "
+                f"{rud.name!r} of vessel {v.name!r} in degrees (positive to starboard), else the forecast would "
+                f"take it as amidships{_where(source)}", column=col)
+
+
+def _check_rpm_while_station_keeping(v, df: pd.DataFrame, cols: set, t: np.ndarray, source: str) -> None:
+    """No thruster rpm at all while ``dp_active`` is 1 somewhere, or absent (taken as 1):
+    the forecast would take a station-keeping vessel as drifting without thrust."""
+    rpm_cols = _rpm_columns(v)
+    if not rpm_cols or any(c in cols for c in rpm_cols):
+        return
+    dp = _to_float(df, "dp_active", source, t) if "dp_active" in cols else None
+    if dp is None or np.any(dp == 1.0):
+        i = 0 if dp is None else int(np.argmax(dp == 1.0))
+        raise LogFormatError(
+            f"{rpm_cols[0]}: no thruster rpm columns while dp_active is "
+            f"{'absent (taken as 1)' if dp is None else f'1 at {_row_at(t, i)}'}; expected "
+            f"{', '.join(rpm_cols)} for vessel {v.name!r}, or dp_active = 0 for a vessel "
+            f"drifting without thrust{_where(source)}", column=rpm_cols[0])
+
+
+def _check_thruster_columns(v, th, df: pd.DataFrame, cols: set, t: np.ndarray, source: str) -> None:
+    """A logged thruster's rpm within its spec's bound on the vessel's ``max_rpm``; an
+    azimuth thruster's angle logged with it, and its rpm sign that of the thrust (not the
+    shaft's rotation direction: negative in ``RPM_SIGN_MIN_SAMPLES`` samples and never
+    positive)."""
+    spec = column_spec("<thruster>_rpm")
+    col = spec.for_channel(th.name)
+    x = _to_float(df, col, source, t)
+    bad = np.abs(x) > spec.vessel_factor * th.max_rpm
+    if bad.any():
+        raise _limit_error(col, x, bad, t, f"exceeds {spec.vessel_factor:g} x max_rpm ({th.max_rpm:g} rpm) of "
+                           f"thruster {th.name!r} of vessel {v.name!r} in magnitude; {spec.expects}", source)
+    if th.type != "azimuth":
+        return
+    az_col = column_spec("<thruster>_azimuth_deg").for_channel(th.name)
+    if az_col not in cols:
+        raise LogFormatError(
+            f"{az_col}: missing while {col} is logged; thruster {th.name!r} of vessel {v.name!r} is an "
+            f"azimuth thruster and its thrust direction is needed (expected column {az_col} "
+            f"in degrees, 0 = forward, positive to starboard){_where(source)}",
+            column=az_col)
+    neg = np.isfinite(x) & (x < 0.0)
+    pos = np.isfinite(x) & (x > 0.0)
+    if neg.sum() >= RPM_SIGN_MIN_SAMPLES and not pos.any():
+        i = int(np.argmax(neg))
+        raise LogFormatError(
+            f"{col}: negative in all {int(neg.sum())} non-zero samples (first at {_row_at(t, i)}) and "
+            f"never positive; the log format expects signed rpm with positive = thrust forward along "
+            f"the thruster axis: does the column carry the shaft's rotation direction (e.g. a "
+            f"counter-rotating propeller) instead?{_where(source)}",
+            column=col, row=i, time_s=float(t[i]))
 
 
 # --------------------------------------------------------------------------------------
