@@ -47,7 +47,7 @@ import numpy as np
 import pandas as pd
 from pydantic import BaseModel, ConfigDict, Field
 
-from ..frames import wrap_pi
+from . import environment_kernel as kernel
 
 #: Forward-difference steps of the filter's Jacobian, per state (SI units, radians).
 _FD_STEP = np.array([1e-3, 1e-3, 1e-5, 1e-4, 1e-4, 1e-6, 1e-3, 1e-3, 1e-5, 1e-5, 1e-7, 1e-3, 1e-3, 1e-3])
@@ -277,24 +277,21 @@ class EnvironmentEstimator:
 
     # ------------------------------------------------------------------ filtering
 
-    def _initial(self, eta0, nu0):
+    def _prior_sd(self) -> np.ndarray:
+        """Prior standard deviations of the 14 states at a filter start (SI, radians)."""
         c = self.config
-        x = np.zeros(N_STATE)
-        x[0:3], x[3:6] = eta0, nu0
-        x[THR] = self.thrust_error_mean
-        sd = np.concatenate([[c.position_std_m] * 2, [np.radians(c.heading_std_deg)],
-                             [c.velocity_std_m_s] * 2, [np.radians(c.yaw_rate_std_deg_s)],
-                             [c.current_prior_m_s] * 2, [c.load_prior_m_s2] * 2, [c.load_yaw_prior_rad_s2],
-                             self.thrust_error_std])
-        return x, np.diag(sd ** 2)
+        return np.concatenate([[c.position_std_m] * 2, [np.radians(c.heading_std_deg)],
+                               [c.velocity_std_m_s] * 2, [np.radians(c.yaw_rate_std_deg_s)],
+                               [c.current_prior_m_s] * 2, [c.load_prior_m_s2] * 2, [c.load_yaw_prior_rad_s2],
+                               self.thrust_error_std])
 
-    def _process_noise(self, dt):
+    def _process_noise_base(self) -> np.ndarray:
+        """Process-noise intensities (14,) that :func:`.environment_kernel.process_noise` scales by
+        the step: position [m], velocity per second [m/s^2, rad/s^2], random walks per sqrt(s)."""
         c = self.config
-        q = np.concatenate([[1e-6] * 3, [c.accel_noise_m_s2 * dt] * 2, [c.yaw_accel_noise_rad_s2 * dt],
-                            [c.current_walk_m_s] * 2, [c.load_walk_m_s2] * 2, [c.load_yaw_walk_rad_s2],
-                            [c.thrust_error_walk] * 3]) ** 2
-        q[6:] *= dt
-        return np.diag(q)
+        return np.concatenate([[1e-6] * 3, [c.accel_noise_m_s2] * 2, [c.yaw_accel_noise_rad_s2],
+                               [c.current_walk_m_s] * 2, [c.load_walk_m_s2] * 2, [c.load_yaw_walk_rad_s2],
+                               [c.thrust_error_walk] * 3])
 
     def _measurement_std(self):
         c = self.config
@@ -328,28 +325,6 @@ class EnvironmentEstimator:
         out[lo: hi + 1] = np.nan_to_num(sd)
         return out
 
-    def _predict(self, x, P, dt, rpm, az, wind, Q):
-        """EKF time update over one step (model Jacobian by forward differences, one batch).
-
-        Inputs were checked once in :meth:`_log_inputs`; the model's unchecked kernels are
-        called here (this runs once per sample).
-        """
-        h = _FD_STEP
-        X = np.repeat(x[None], N_STATE + 1, axis=0)
-        X[1:] += np.diag(h)
-        eta, nu = np.ascontiguousarray(X[:, 0:3]), np.ascontiguousarray(X[:, 3:6])
-        B = X.shape[0]
-        rpm_b, az_b, wind_b = (np.ascontiguousarray(np.broadcast_to(v, (B, v.shape[-1]))) for v in (rpm, az, wind))
-        cur = np.ascontiguousarray(current_input(X[:, CUR]))
-        zeros = np.zeros((B, 3))
-        _, parts = self.model.acceleration_unchecked(eta, nu, rpm_b, az_b, wind_b, cur, zeros, zeros)
-        a_thr = parts[:, 1] @ self.model.arrays.m_inv.T
-        acc = np.ascontiguousarray(external_accel(eta[:, 2], X[:, LOAD], X[:, THR], a_thr))
-        eta1, nu1 = self.model.step_unchecked(eta, nu, rpm_b, az_b, wind_b, cur, zeros, acc, dt)
-        f = np.concatenate([eta1, nu1, X[:, 6:]], axis=1)
-        F = ((f[1:] - f[0]) / h[:, None]).T
-        return f[0], F @ P @ F.T + Q
-
     def at_thrust_stop(self, x, P):
         """State (14,) and covariance at a thrust stop: the yaw environment restarts (module notes).
 
@@ -365,38 +340,11 @@ class EnvironmentEstimator:
         the drift samples identify it afresh; the current keeps acting through the hull as
         the ship starts to move.
         """
-        k = LOAD.start + 2
-        x = x.copy()
-        P = P.copy()
-        current_yaw = self._total_yaw_env(x) - x[k]
-        total = x[k] + current_yaw              # the environment's yaw acceleration under DP
-        kept = self.config.yaw_load_kept_at_stop
-        x[k] = kept * total - current_yaw
-        P[k, :] = 0.0
-        P[:, k] = 0.0
-        P[k, k] = self.config.load_yaw_prior_rad_s2 ** 2 + ((1.0 - kept) * total) ** 2
+        c = self.config
+        x, P = kernel.at_thrust_stop(np.ascontiguousarray(x, dtype=float), np.ascontiguousarray(P, dtype=float),
+                                     float(c.yaw_load_kept_at_stop), float(c.load_yaw_prior_rad_s2),
+                                     self.model.arrays, kernel._workspace(self.model.arrays))
         return x, P
-
-    def _total_yaw_env(self, x) -> float:
-        """Yaw acceleration of the estimated environment at state ``x``: load plus the hull's
-        response to the estimated current [rad/s^2]."""
-        eta, nu = x[None, 0:3], x[None, 3:6]
-        a_c = self.model.acceleration(eta, nu, current=current_input(x[None, CUR]))[0, 2]
-        a_0 = self.model.acceleration(eta, nu)[0, 2]
-        return float(x[LOAD.start + 2] + a_c - a_0)
-
-    @staticmethod
-    def _update(x, P, z, H_rows, r_std, wrap_idx):
-        """EKF measurement update with the components ``H_rows`` of the state measured as ``z``."""
-        y = z - x[H_rows]
-        for k in wrap_idx:
-            y[k] = wrap_pi(y[k])
-        S = P[np.ix_(H_rows, H_rows)] + np.diag(r_std ** 2)
-        PHt = P[:, H_rows]
-        K = np.linalg.solve(S, PHt.T).T
-        x = x + K @ y
-        P = P - K @ PHt.T
-        return x, 0.5 * (P + P.T)
 
     def run(self, arrays, rows=None, *, first_row: int = 0) -> EnvironmentEstimate:
         """Filter the log from ``first_row`` and return the estimates at ``rows`` (default: all).
@@ -436,53 +384,47 @@ class EnvironmentEstimator:
                                    np.stack([out_P[int(r)] for r in rows]))
 
     def _log_inputs(self, arrays, first_row: int, last: int) -> dict:
-        """Measurements, their noise and the model's inputs for every row, checked once."""
+        """Measurements, their noise and the model's inputs at the rows ``first_row .. last`` (zero elsewhere)."""
         n = len(arrays.time_s)
         r_std = np.broadcast_to(self._measurement_std(), (n, 6))
         if self.config.adaptive_measurement_std:
             r_std = np.maximum(r_std, self._wave_motion_std(arrays, first_row, last))
         model = self.model
+        sl = slice(first_row, last + 1)     # only the rows the filter reads are converted
+        w = last + 1 - first_row
+
+        def rows(a):
+            """A window's values (w, ...) placed at their log rows (n, ...); zero elsewhere."""
+            out = np.zeros((n,) + a.shape[1:], dtype=a.dtype)
+            out[sl] = a
+            return out
+
+        nu_ok = np.isfinite(arrays.nu[sl]) & (arrays.nu_logged[sl] if self.config.use_velocity else False)
         return {
-            "z": np.column_stack([arrays.eta, arrays.nu]),
-            "z_ok": np.column_stack([np.isfinite(arrays.eta),
-                                     np.isfinite(arrays.nu) & (arrays.nu_logged if self.config.use_velocity
-                                                               else False)]),
+            "z": rows(np.column_stack([arrays.eta[sl], arrays.nu[sl]])),
+            "z_ok": rows(np.column_stack([np.isfinite(arrays.eta[sl]), nu_ok])),
             "r_std": r_std,
             # command channels padded to the model's width once (thrusters, then rudders)
-            "rpm": model._channels("rpm", np.nan_to_num(arrays.rpm), n, None)[:, 0],
-            "az": model._channels("azimuth_rad", np.nan_to_num(arrays.azimuth_rad), n, None)[:, 0],
-            "wind": np.ascontiguousarray(np.nan_to_num(arrays.wind)),
-            "dp": arrays.dp_active.astype(bool),
+            "rpm": rows(model._channels("rpm", np.nan_to_num(arrays.rpm[sl]), w, None)[:, 0]),
+            "az": rows(model._channels("azimuth_rad", np.nan_to_num(arrays.azimuth_rad[sl]), w, None)[:, 0]),
+            "wind": rows(np.nan_to_num(arrays.wind[sl])),
+            "dp": rows(arrays.dp_active[sl].astype(bool)),
         }
 
     def _filter(self, arrays, grid, want, inputs, out_x, out_P):
         """Run the filter over the rows ``grid`` (increasing), storing the estimates at ``want``."""
-        t, seg = arrays.time_s, arrays.segment_id
-        z, z_ok, r_std, dp = inputs["z"], inputs["z_ok"], inputs["r_std"], inputs["dp"]
-        x = P = None
-        prev = None
-        for i in grid:
-            i = int(i)
-            if x is None or seg[i] != seg[prev] or not np.isfinite(x).all():
-                if not z_ok[i, :3].all():
-                    prev = i
-                    continue
-                x0, P0 = self._initial(z[i, :3], np.where(np.isfinite(z[i, 3:]), z[i, 3:], 0.0))
-                if x is not None and np.isfinite(x).all():       # keep what is known of the environment
-                    gap = max(t[i] - t[prev], 0.0)
-                    x0[ENV], P0[ENV, ENV] = x[ENV], P[ENV, ENV] + self._process_noise(gap)[ENV, ENV]
-                x, P = x0, P0
-            else:
-                dt = t[i] - t[prev]
-                x, P = self._predict(x, P, dt, inputs["rpm"][prev], inputs["az"][prev], inputs["wind"][prev],
-                                     self._process_noise(dt))
-                H_rows = np.flatnonzero(z_ok[i])
-                if H_rows.size:
-                    wrap_idx = [k for k, j in enumerate(H_rows) if j == 2]
-                    x, P = self._update(x, P, z[i, H_rows], H_rows, r_std[i, H_rows], wrap_idx)
-                if dp[prev] and not dp[i] and self.config.reset_yaw_load_at_stop:
-                    x, P = self.at_thrust_stop(x, P)
-            prev = i
-            if i in want:
-                out_x[i] = x
-                out_P[i] = P
+        want = sorted(want)
+        slot = np.full(len(arrays.time_s), -1, dtype=np.int64)
+        slot[want] = np.arange(len(want))
+        xs, Ps = np.empty((len(want), N_STATE)), np.empty((len(want), N_STATE, N_STATE))
+        done = np.zeros(len(want), dtype=np.bool_)
+        c = self.config
+        kernel.filter_grid(np.ascontiguousarray(grid, dtype=np.int64), slot, arrays.time_s, arrays.segment_id,
+                           inputs["z"], inputs["z_ok"], inputs["r_std"], inputs["rpm"], inputs["az"],
+                           inputs["wind"], inputs["dp"], self.model.arrays, np.asarray(self.thrust_error_mean, float),
+                           self._prior_sd(), self._process_noise_base(), _FD_STEP,
+                           bool(c.reset_yaw_load_at_stop), float(c.yaw_load_kept_at_stop),
+                           float(c.load_yaw_prior_rad_s2), xs, Ps, done)
+        for k, i in enumerate(want):
+            if done[k]:
+                out_x[i], out_P[i] = xs[k], Ps[k]

@@ -1,0 +1,277 @@
+"""Compiled kernels of the environment estimator's extended Kalman filter.
+
+The filter itself (state layout, noise model, what is identified) is described in
+:mod:`hybridship.residual.environment`; this module holds its inner loop, compiled with
+numba so that filtering the 30 minutes before a forecast costs milliseconds, not a
+Python-level loop over samples. Everything here trusts its inputs: the estimator checks
+the log once, at its boundary, before calling :func:`filter_grid`.
+
+The process model is the dynamic model's own right-hand side and RK4 step
+(:mod:`hybridship.physics.rhs`, :mod:`hybridship.physics.integrate`), so the filter and
+the forecasts share one set of equations.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numba
+import numpy as np
+
+from ..physics.integrate import rk4_step_scalar
+from ..physics.rhs import prepare_inputs, vessel_rhs
+
+#: Indices of the state (see :data:`hybridship.residual.environment.STATE_NAMES`).
+_N = 14
+_CUR = 6
+_LOAD = 8
+_THR = 11
+_YAW_LOAD = _LOAD + 2
+
+
+@numba.njit(cache=True)
+def _prep_for(x, rpm, az, wind, P, prep):
+    """Prepared held inputs of the model at state ``x`` (its current as speed and direction)."""
+    cn, ce = x[_CUR], x[_CUR + 1]
+    prepare_inputs(az, wind[0], wind[1], math.hypot(cn, ce), math.atan2(ce, cn), P, prep)
+
+
+@numba.njit(cache=True)
+def _thrust_accel(x, rpm, prep, P, zeros3, thrusts, out):
+    """``M^-1 tau_thr`` (thrusters and rudders) at state ``x`` into ``out`` (3,)."""
+    c, s = math.cos(x[2]), math.sin(x[2])
+    r = vessel_rhs(c, s, x[3], x[4], x[5], rpm, prep, zeros3, zeros3, P, thrusts, 0)
+    mi = P.m_inv
+    for i in range(3):
+        out[i] = mi[i, 0] * r[6] + mi[i, 1] * r[7] + mi[i, 2] * r[8]
+
+
+@numba.njit(cache=True)
+def _external_accel(x, a_thr, out):
+    """``R(psi)^T b + theta * a_thr``: the filter's extra body-frame acceleration (3,)."""
+    c, s = math.cos(x[2]), math.sin(x[2])
+    bn, be = x[_LOAD], x[_LOAD + 1]
+    out[0] = x[_THR] * a_thr[0] + c * bn + s * be
+    out[1] = x[_THR + 1] * a_thr[1] - s * bn + c * be
+    out[2] = x[_THR + 2] * a_thr[2] + x[_LOAD + 2]
+
+
+@numba.njit(cache=True)
+def _rk4(x, dt, rpm, prep, acc, P, f, work):
+    """The motion part ``f[0:6]`` of one RK4 step of the dynamic model from ``x[0:6]``, with
+    the prepared inputs ``prep`` and the external acceleration ``acc`` held."""
+    zeros3, thrusts, s6, k1, k2, k3, k4, xt = work[1], work[2], work[5], work[6], work[7], work[8], work[9], work[10]
+    for i in range(6):
+        s6[i] = x[i]
+    rk4_step_scalar(s6, dt, rpm, prep, zeros3, acc, P, k1, k2, k3, k4, xt, thrusts)
+    for i in range(6):
+        f[i] = s6[i]
+
+
+@numba.njit(cache=True)
+def _transition(x, dt, rpm, az, wind, P, f, work, a_thr, acc):
+    """One process-model step of the 14-state ``x`` into ``f``: RK4 of the dynamic model with
+    the current and the external acceleration of :func:`_external_accel` (left in ``a_thr``
+    and ``acc``); the environment states are random walks (kept)."""
+    prep = work[0]
+    _prep_for(x, rpm, az, wind, P, prep)
+    _thrust_accel(x, rpm, prep, P, work[1], work[2], a_thr)
+    _external_accel(x, a_thr, acc)
+    _rk4(x, dt, rpm, prep, acc, P, f, work)
+    for i in range(6, _N):
+        f[i] = x[i]
+
+
+@numba.njit(cache=True)
+def _workspace(P):
+    K = P.thr.shape[0]
+    return (np.empty(2 * K + 4 + 2 * P.rud.shape[0]), np.zeros(3), np.empty((1, max(K, 1))), np.empty(3),
+            np.empty(3), np.empty(6), np.empty(6), np.empty(6), np.empty(6), np.empty(6), np.empty(6))
+
+
+@numba.njit(cache=True)
+def predict(x, Pc, dt, rpm, az, wind, Q, fd_step, P, work):
+    """EKF time update over ``dt`` [s]: the mean through the process model, the covariance
+    through its Jacobian ``F``. Returns ``(x, P)`` (new arrays).
+
+    ``F`` is taken by forward differences (steps ``fd_step``) where the state enters the
+    model nonlinearly (heading, velocities, current). The rest follows from the model's
+    structure, which saves six of the fourteen model steps: position does not enter the
+    dynamics (unit columns); the load ``b`` and the thrust error ``theta`` enter only through
+    the held external acceleration ``acc = R(psi)^T b + theta * a_thr``, so their columns are
+    the step's sensitivity to ``acc`` (three differences) times ``R(psi)^T`` and ``a_thr``.
+    """
+    f0 = np.empty(_N)
+    a_thr = np.empty(3)
+    acc = np.empty(3)
+    _transition(x, dt, rpm, az, wind, P, f0, work, a_thr, acc)
+    F = np.zeros((_N, _N))
+    for j in range(_N):
+        if j < 2 or j >= 6 + 2:
+            F[j, j] = 1.0
+    xp = x.copy()
+    fj = np.empty(_N)
+    a_j = np.empty(3)
+    acc_j = np.empty(3)
+    for j in range(2, _LOAD):                   # heading, velocities, current
+        xp[j] = x[j] + fd_step[j]
+        _transition(xp, dt, rpm, az, wind, P, fj, work, a_j, acc_j)
+        for i in range(_N):
+            F[i, j] = (fj[i] - f0[i]) / fd_step[j]
+        xp[j] = x[j]
+    # sensitivity of the step to the held acceleration, with the nominal inputs
+    _prep_for(x, rpm, az, wind, P, work[0])
+    c, s = math.cos(x[2]), math.sin(x[2])
+    for d in range(3):
+        h = fd_step[_LOAD + d]
+        acc_j[:] = acc
+        acc_j[d] += h
+        _rk4(x, dt, rpm, work[0], acc_j, P, fj, work)
+        for i in range(6):
+            g = (fj[i] - f0[i]) / h
+            F[i, _THR + d] = g * a_thr[d]       # d acc_d / d theta_d = a_thr_d
+            if d == 0:                          # d acc / d b = R(psi)^T
+                F[i, _LOAD] += c * g
+                F[i, _LOAD + 1] += s * g
+            elif d == 1:
+                F[i, _LOAD] += -s * g
+                F[i, _LOAD + 1] += c * g
+            else:
+                F[i, _LOAD + 2] = g
+    return f0, F @ Pc @ F.T + Q
+
+
+@numba.njit(cache=True)
+def update(x, Pc, z, z_ok, r_std):
+    """EKF measurement update with the measured components ``z_ok`` (6,) of ``[eta, nu]``.
+
+    The heading innovation is wrapped to (-pi, pi]. Returns ``(x, P)`` (new arrays).
+    """
+    idx = np.flatnonzero(z_ok)
+    m = idx.size
+    if m == 0:
+        return x, Pc
+    y = np.empty(m)
+    S = np.empty((m, m))
+    PHt = np.empty((_N, m))
+    for a in range(m):
+        y[a] = z[idx[a]] - x[idx[a]]
+        if idx[a] == 2:
+            y[a] = (y[a] + math.pi) % (2.0 * math.pi) - math.pi
+        for b in range(m):
+            S[a, b] = Pc[idx[a], idx[b]]
+        S[a, a] += r_std[idx[a]] ** 2
+        for i in range(_N):
+            PHt[i, a] = Pc[i, idx[a]]
+    K = np.linalg.solve(S, PHt.T).T
+    x = x + K @ y
+    Pn = Pc - K @ PHt.T
+    return x, 0.5 * (Pn + Pn.T)
+
+
+@numba.njit(cache=True)
+def process_noise(dt, q_base):
+    """Process-noise covariance over ``dt`` [s]: position noise fixed, velocity noise growing
+    with ``dt``, the environment's random walks with ``dt`` (variance)."""
+    Q = np.zeros((_N, _N))
+    for i in range(_N):
+        if i < 3:
+            Q[i, i] = q_base[i] ** 2
+        elif i < 6:
+            Q[i, i] = (q_base[i] * dt) ** 2
+        else:
+            Q[i, i] = q_base[i] ** 2 * dt
+    return Q
+
+
+@numba.njit(cache=True)
+def current_yaw_accel(x, P, work):
+    """Yaw acceleration [rad/s^2] of the hull's response to the estimated current at state
+    ``x`` (no thrust, no wind): ``a_r(current) - a_r(no current)``."""
+    prep = work[0]
+    zeros3 = work[1]
+    thrusts = work[2]
+    K = P.thr.shape[0]
+    W = K + P.rud.shape[0]
+    rpm = np.zeros(W)
+    az = np.zeros(W)
+    c, s = math.cos(x[2]), math.sin(x[2])
+    cn, ce = x[_CUR], x[_CUR + 1]
+    prepare_inputs(az, 0.0, 0.0, math.hypot(cn, ce), math.atan2(ce, cn), P, prep)
+    a_c = vessel_rhs(c, s, x[3], x[4], x[5], rpm, prep, zeros3, zeros3, P, thrusts, 0)[2]
+    prepare_inputs(az, 0.0, 0.0, 0.0, 0.0, P, prep)
+    a_0 = vessel_rhs(c, s, x[3], x[4], x[5], rpm, prep, zeros3, zeros3, P, thrusts, 0)[2]
+    return a_c - a_0
+
+
+@numba.njit(cache=True)
+def at_thrust_stop(x, Pc, kept, yaw_prior, P, work):
+    """State and covariance at a thrust stop: the yaw environment restarts (see
+    :meth:`hybridship.residual.environment.EnvironmentEstimator.at_thrust_stop`)."""
+    k = _YAW_LOAD
+    x = x.copy()
+    Pn = Pc.copy()
+    current_yaw = current_yaw_accel(x, P, work)
+    total = x[k] + current_yaw
+    x[k] = kept * total - current_yaw
+    for i in range(_N):
+        Pn[k, i] = 0.0
+        Pn[i, k] = 0.0
+    Pn[k, k] = yaw_prior ** 2 + ((1.0 - kept) * total) ** 2
+    return x, Pn
+
+
+@numba.njit(cache=True)
+def filter_grid(grid, slot, t, seg, z, z_ok, r_std, rpm, az, wind, dp, P, prior_thr, prior_sd, q_base, fd_step,
+                reset_at_stop, kept, yaw_prior, out_x, out_P, done):
+    """Run the filter over the log rows ``grid`` (increasing).
+
+    At a row ``i`` with ``slot[i] >= 0`` the estimate goes to ``out_x[slot[i]]``,
+    ``out_P[slot[i]]`` and ``done[slot[i]]`` is set. A new segment (or a lost estimate)
+    restarts the motion states from the measurement and keeps the environment, whose
+    covariance grows by the process noise over the gap. Rows whose position or heading is
+    missing cannot start the filter.
+    """
+    work = _workspace(P)
+    x = np.zeros(_N)
+    Pc = np.zeros((_N, _N))
+    started = False
+    prev = -1
+    for gi in range(grid.size):
+        i = grid[gi]
+        finite = True
+        for j in range(_N):
+            if not math.isfinite(x[j]):
+                finite = False
+        if not started or seg[i] != seg[prev] or not finite:
+            if not (z_ok[i, 0] and z_ok[i, 1] and z_ok[i, 2]):
+                prev = i
+                continue
+            x0 = np.zeros(_N)
+            P0 = np.zeros((_N, _N))
+            for j in range(3):
+                x0[j] = z[i, j]
+                x0[3 + j] = z[i, 3 + j] if math.isfinite(z[i, 3 + j]) else 0.0
+                x0[_THR + j] = prior_thr[j]
+            for j in range(_N):
+                P0[j, j] = prior_sd[j] ** 2
+            if started and finite:                  # keep what is known of the environment
+                Qg = process_noise(max(t[i] - t[prev], 0.0), q_base)
+                for a in range(6, _N):
+                    x0[a] = x[a]
+                    for b in range(6, _N):
+                        P0[a, b] = Pc[a, b] + Qg[a, b]
+            x, Pc = x0, P0
+            started = True
+        else:
+            dt = t[i] - t[prev]
+            x, Pc = predict(x, Pc, dt, rpm[prev], az[prev], wind[prev], process_noise(dt, q_base), fd_step, P, work)
+            x, Pc = update(x, Pc, z[i], z_ok[i], r_std[i])
+            if reset_at_stop and dp[prev] and not dp[i]:
+                x, Pc = at_thrust_stop(x, Pc, kept, yaw_prior, P, work)
+        prev = i
+        s = slot[i]
+        if s >= 0:
+            out_x[s] = x
+            out_P[s] = Pc
+            done[s] = True
