@@ -37,7 +37,7 @@ from .residual.calibration import CalibrationConfig, SpreadCalibration, fit_spre
 from .residual.ensemble import EnsembleConfig, MLPEnsemble, fit_ensemble
 from .residual.features import COMMAND_FEATURES, ResidualConfig, command_feature_columns, command_scales, prepare_log
 from .residual.environment import (EnvironmentConfig, EnvironmentEstimator, current_input,
-                                   environment_accel, thrust_accel)
+                                   environment_accel)
 from .residual.multistep import MultiStepConfig, collect_starts, train_multistep
 from .residual.guard import CommandRegime, EnvelopeGuard, ThrustRegime
 
@@ -830,8 +830,8 @@ class HybridPredictor:
         eta0, nu0 = est.x[:, 0:3].copy(), est.x[:, 3:6].copy()
         draws = est.sample_environment(n_members, self.ensemble_config.seed)      # (E, S, 8)
         current = np.ascontiguousarray(current_input(est.current_ned_m_s)[:, None, :])
-        a_thr = thrust_accel(self.model, eta0, nu0, st.rpm[:, 0], st.az[:, 0], st.wind[:, 0])
-        acc_ext = np.ascontiguousarray((est.thrust_error * a_thr)[:, None, :])
+        a_err = est.thrust_error_accel(self.model, eta0, nu0, st.rpm[:, 0], st.az[:, 0], st.wind[:, 0])
+        acc_ext = np.ascontiguousarray(a_err[:, None, :])
         return eta0, nu0, np.zeros_like(eta0), draws[..., 2:5], current, acc_ext
     def _calibrated_forecast_std(self, std, lead_s, commands, after_stop):
         """The spread each start reports: starts after a failure (``after_stop``, (S,)) use the

@@ -42,6 +42,7 @@ All quantities are SI and radians inside.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Literal
 
 import numpy as np
 import pandas as pd
@@ -50,16 +51,17 @@ from pydantic import BaseModel, ConfigDict, Field
 from . import environment_kernel as kernel
 
 #: Forward-difference steps of the filter's Jacobian, per state (SI units, radians).
-_FD_STEP = np.array([1e-3, 1e-3, 1e-5, 1e-4, 1e-4, 1e-6, 1e-3, 1e-3, 1e-5, 1e-5, 1e-7, 1e-3, 1e-3, 1e-3])
+_FD_STEP = np.array([1e-3, 1e-3, 1e-5, 1e-4, 1e-4, 1e-6, 1e-3, 1e-3, 1e-5, 1e-5, 1e-7])
 
-#: State layout of the filter.
+#: State layout of the filter with one thrust-model error per degree of freedom (the
+#: default); :func:`state_names` gives the layout for any setting.
 STATE_NAMES = ("north_m", "east_m", "psi_rad", "u_m_s", "v_m_s", "r_rad_s",
                "current_north_m_s", "current_east_m_s",
                "load_north_m_s2", "load_east_m_s2", "load_yaw_rad_s2",
                "thrust_error_x", "thrust_error_y", "thrust_error_n")
-N_STATE = len(STATE_NAMES)
-ENV = slice(6, 14)          # the environment part: current, load, thrust error
-CUR, LOAD, THR = slice(6, 8), slice(8, 11), slice(11, 14)
+ENV = slice(6, None)        # the environment part: current, load, thrust error
+CUR, LOAD, THR = slice(6, 8), slice(8, 11), slice(11, None)
+THRUST_ERROR_MODELS = ("per_dof", "per_thruster")
 
 
 class EnvironmentConfig(BaseModel):
@@ -69,6 +71,11 @@ class EnvironmentConfig(BaseModel):
     model; the process noise on ``nu`` covers unmodelled fast loads (first-order waves,
     gusts beyond the wind model). The random-walk intensities set how fast ``b``, ``v_c``
     and ``theta`` may move [unit per sqrt(s)].
+
+    ``thrust_error_model`` chooses the structure of ``theta``: ``"per_dof"`` (three
+    efficiency factors on the surge, sway and yaw thrust, prior ``thrust_error_prior``) or
+    ``"per_thruster"`` (one efficiency factor per thruster, acting through that thruster's
+    lever arm, prior ``thrust_error_prior_per_thruster`` each).
     """
 
     model_config = ConfigDict(frozen=True, extra="forbid")
@@ -86,14 +93,16 @@ class EnvironmentConfig(BaseModel):
     load_walk_m_s2: float = Field(2e-5, ge=0)
     load_yaw_walk_rad_s2: float = Field(1e-6, ge=0)
     thrust_error_prior: tuple[float, float, float] = (0.2, 0.2, 0.5)
-    thrust_error_walk: float = Field(2e-3, ge=0)
+    thrust_error_model: Literal["per_dof", "per_thruster"] = "per_thruster"
+    thrust_error_prior_per_thruster: float = Field(0.2, gt=0)
+    thrust_error_walk: float = Field(0.0, ge=0)
     use_velocity: bool = True
     adaptive_measurement_std: bool = True
     wave_window_s: float = Field(30.0, gt=0)
     variance_window_s: float = Field(600.0, gt=0)
     reset_yaw_load_at_stop: bool = True
     filter_step_s: float = Field(1.0, gt=0)
-    yaw_load_kept_at_stop: float = Field(0.0, ge=0.0, le=1.0)
+    yaw_load_kept_at_stop: float = Field(1.0, ge=0.0, le=1.0)
 
 
 @dataclass(frozen=True)
@@ -115,6 +124,7 @@ class EnvironmentEstimate:
     time_s: np.ndarray
     x: np.ndarray
     P: np.ndarray
+    thrust_error_model: str = "per_dof"
 
     @property
     def current_ned_m_s(self) -> np.ndarray:
@@ -134,33 +144,58 @@ class EnvironmentEstimate:
 
     @property
     def thrust_error(self) -> np.ndarray:
-        """Thrust-model error per DOF (fraction of the model's thrust acceleration), (S, 3)."""
+        """Thrust-model error (fractions of the thrust), (S, n_theta): per DOF or per thruster
+        as :attr:`thrust_error_model` says."""
         return self.x[:, THR]
 
+    def thrust_error_accel(self, model, eta, nu, rpm, az, wind) -> np.ndarray:
+        """Acceleration (S, 3) [m/s^2, m/s^2, rad/s^2] of the estimated thrust-model error at
+        the states ``eta, nu`` (S, 3) and commands ``rpm, az`` (S, K + R), ``wind`` (S, 2)."""
+        return thrust_error_accel(model, self.thrust_error_model, eta, nu, rpm, az, wind,
+                                  self.current_ned_m_s, self.thrust_error)
+
     def sample_environment(self, n: int, seed: int = 0) -> np.ndarray:
-        """Draws of ``[v_c (2), b (3), theta (3)]`` from the posterior, shape (n, S, 8).
+        """Draws of ``[v_c (2), b (3), theta (n_theta)]`` from the posterior, shape (n, S, 5 + n_theta).
 
         The draws are centred: their mean is the posterior mean whatever ``n``, so an
         ensemble forecast's mean does not depend on the sampling.
         Deterministic for a given ``seed`` and row: a start's draws do not depend on which
         other starts are forecast with it.
         """
-        S = self.x.shape[0]
-        out = np.broadcast_to(self.x[:, ENV], (n, S, 8)).copy()
+        S, m = self.x.shape[0], self.x.shape[1] - ENV.start
+        out = np.broadcast_to(self.x[:, ENV], (n, S, m)).copy()
         if n < 2:
             return out
         Pe = self.P[:, ENV, ENV]
-        L = np.linalg.cholesky(Pe + 1e-18 * np.eye(8))                  # (S, 8, 8)
-        z = np.stack([np.random.default_rng([seed, int(r)]).standard_normal((n - 1, 8)) for r in self.rows],
-                     axis=1)                                             # (n - 1, S, 8)
-        dev = np.concatenate([np.zeros((1, S, 8)), np.einsum("sij,nsj->nsi", L, z)])
+        L = np.linalg.cholesky(Pe + 1e-18 * np.eye(m))                  # (S, m, m)
+        z = np.stack([np.random.default_rng([seed, int(r)]).standard_normal((n - 1, m)) for r in self.rows],
+                     axis=1)                                             # (n - 1, S, m)
+        dev = np.concatenate([np.zeros((1, S, m)), np.einsum("sij,nsj->nsi", L, z)])
         return out + dev - dev.mean(axis=0)     # centred: the members' mean is the posterior mean
 
 
-def thrust_accel(model, eta, nu, rpm, az, wind) -> np.ndarray:
-    """The model's thrust acceleration ``M^-1 tau_thr`` (B, 3) [m/s^2, m/s^2, rad/s^2]."""
-    _, parts, _ = model.acceleration(eta, nu, rpm=rpm, azimuth_rad=az, wind=wind, return_parts=True)
-    return parts[:, 1] @ model.arrays.m_inv.T
+def state_names(model, config: "EnvironmentConfig") -> tuple[str, ...]:
+    """The filter's state layout for ``model`` and ``config``: :data:`STATE_NAMES` with the
+    thrust-model error per degree of freedom, or ``thrust_error_<thruster>`` per thruster."""
+    if config.thrust_error_model == "per_dof":
+        return STATE_NAMES
+    return STATE_NAMES[:THR.start] + tuple(f"thrust_error_{t.name}" for t in model.vessel.thrusters)
+
+
+def thrust_error_accel(model, thrust_error_model, eta, nu, rpm, az, wind, current_ned, theta) -> np.ndarray:
+    """Acceleration (B, 3) [m/s^2, m/s^2, rad/s^2] of the thrust-model error ``theta``.
+
+    Per DOF, ``theta * M^-1 tau_thr`` componentwise; per thruster, ``M^-1 sum_i theta_i
+    tau_i`` with each thruster's generalised force ``tau_i``. At states ``eta, nu`` (B, 3),
+    commands ``rpm, az`` (B, K + R), ``wind`` (B, 2) and current ``current_ned`` (B, 2) [m/s].
+    """
+    B = len(eta)
+    args = [np.ascontiguousarray(np.broadcast_to(np.asarray(a, dtype=float), (B,) + np.shape(a)[-1:]))
+            for a in (eta, nu, model._channels("rpm", rpm, B, None)[:, 0],
+                      model._channels("azimuth_rad", az, B, None)[:, 0], wind, current_ned, theta)]
+    out = np.empty((B, 3))
+    kernel.thrust_error_accel_batch(*args, model.arrays, thrust_error_model == "per_thruster", out)
+    return out
 
 
 def current_input(v_c_ned: np.ndarray) -> np.ndarray:
@@ -170,9 +205,10 @@ def current_input(v_c_ned: np.ndarray) -> np.ndarray:
 
 
 def external_accel(psi_rad, load_ned, theta, a_thr) -> np.ndarray:
-    """``R(psi)^T b + theta * a_thr``: the estimator's extra body-frame acceleration (..., 3)."""
+    """``R(psi)^T b + theta * a_thr``: the estimator's extra body-frame acceleration (..., 3)
+    (per-DOF thrust error; ``theta = 0`` gives the load alone)."""
     c, s = np.cos(psi_rad), np.sin(psi_rad)
-    out = theta * a_thr
+    out = np.zeros(np.shape(load_ned)) + theta * np.asarray(a_thr)
     out[..., 0] += c * load_ned[..., 0] + s * load_ned[..., 1]
     out[..., 1] += -s * load_ned[..., 0] + c * load_ned[..., 1]
     out[..., 2] += load_ned[..., 2]
@@ -191,12 +227,12 @@ def environment_accel(model, arrays, estimate: EnvironmentEstimate, nu=None) -> 
     nu = np.nan_to_num(arrays.nu if nu is None else nu)
     rpm, az, wind = (np.nan_to_num(v) for v in (arrays.rpm, arrays.azimuth_rad, arrays.wind))
     n = len(arrays.time_s)
-    x = np.full((n, N_STATE), np.nan)
+    x = np.full((n, estimate.x.shape[1]), np.nan)
     x[estimate.rows] = estimate.x
     ok = np.isfinite(x).all(1)
     xe = np.nan_to_num(x)
-    a_thr = thrust_accel(model, eta, nu, rpm, az, wind)
-    acc = external_accel(eta[:, 2], xe[:, LOAD], xe[:, THR], a_thr)
+    acc = external_accel(eta[:, 2], xe[:, LOAD], 0.0, 0.0) + thrust_error_accel(
+        model, estimate.thrust_error_model, eta, nu, rpm, az, wind, xe[:, CUR], xe[:, THR])
     a_env = model.acceleration(eta, nu, rpm=rpm, azimuth_rad=az, wind=wind,
                                current=current_input(xe[:, CUR]), accel_ext=acc)
     out = a_env - model.acceleration(eta, nu, rpm=rpm, azimuth_rad=az, wind=wind)
@@ -216,9 +252,14 @@ class EnvironmentEstimator:
     def __init__(self, model, config: EnvironmentConfig = EnvironmentConfig()):
         self.model = model
         self.config = config
+        #: The filter's state layout (:func:`state_names`).
+        self.state_names = state_names(model, config)
+        n_theta = len(self.state_names) - THR.start
         #: Prior mean and standard deviation of ``theta``; :meth:`fit` may replace them.
-        self.thrust_error_mean = np.zeros(3)
-        self.thrust_error_std = np.asarray(config.thrust_error_prior, dtype=float)
+        self.thrust_error_mean = np.zeros(n_theta)
+        self.thrust_error_std = (np.asarray(config.thrust_error_prior, dtype=float)
+                                 if config.thrust_error_model == "per_dof"
+                                 else np.full(n_theta, config.thrust_error_prior_per_thruster))
 
     # ------------------------------------------------------------------ learning
 
@@ -291,7 +332,7 @@ class EnvironmentEstimator:
         c = self.config
         return np.concatenate([[1e-6] * 3, [c.accel_noise_m_s2] * 2, [c.yaw_accel_noise_rad_s2],
                                [c.current_walk_m_s] * 2, [c.load_walk_m_s2] * 2, [c.load_yaw_walk_rad_s2],
-                               [c.thrust_error_walk] * 3])
+                               [c.thrust_error_walk] * len(self.thrust_error_mean)])
 
     def _measurement_std(self):
         c = self.config
@@ -381,7 +422,7 @@ class EnvironmentEstimator:
             raise ValueError(f"log: no valid position/heading at or before row {miss[0]} "
                              f"(time {arrays.time_s[miss[0]]:g} s) to start the environment estimate")
         return EnvironmentEstimate(rows, arrays.time_s[rows], np.stack([out_x[int(r)] for r in rows]),
-                                   np.stack([out_P[int(r)] for r in rows]))
+                                   np.stack([out_P[int(r)] for r in rows]), self.config.thrust_error_model)
 
     def _log_inputs(self, arrays, first_row: int, last: int) -> dict:
         """Measurements, their noise and the model's inputs at the rows ``first_row .. last`` (zero elsewhere)."""
@@ -416,12 +457,14 @@ class EnvironmentEstimator:
         want = sorted(want)
         slot = np.full(len(arrays.time_s), -1, dtype=np.int64)
         slot[want] = np.arange(len(want))
-        xs, Ps = np.empty((len(want), N_STATE)), np.empty((len(want), N_STATE, N_STATE))
+        n = len(self.state_names)
+        xs, Ps = np.empty((len(want), n)), np.empty((len(want), n, n))
         done = np.zeros(len(want), dtype=np.bool_)
         c = self.config
         kernel.filter_grid(np.ascontiguousarray(grid, dtype=np.int64), slot, arrays.time_s, arrays.segment_id,
                            inputs["z"], inputs["z_ok"], inputs["r_std"], inputs["rpm"], inputs["az"],
-                           inputs["wind"], inputs["dp"], self.model.arrays, np.asarray(self.thrust_error_mean, float),
+                           inputs["wind"], inputs["dp"], self.model.arrays, c.thrust_error_model == "per_thruster",
+                           np.asarray(self.thrust_error_mean, float),
                            self._prior_sd(), self._process_noise_base(), _FD_STEP,
                            bool(c.reset_yaw_load_at_stop), float(c.yaw_load_kept_at_stop),
                            float(c.load_yaw_prior_rad_s2), xs, Ps, done)

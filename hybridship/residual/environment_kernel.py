@@ -21,8 +21,8 @@ import numpy as np
 from ..physics.integrate import rk4_step_scalar
 from ..physics.rhs import prepare_inputs, vessel_rhs
 
-#: Indices of the state (see :data:`hybridship.residual.environment.STATE_NAMES`).
-_N = 14
+#: Indices of the state (see :func:`hybridship.residual.environment.state_names`); the
+#: thrust-model error (one per degree of freedom or one per thruster) fills the rest.
 _CUR = 6
 _LOAD = 8
 _THR = 11
@@ -37,23 +37,42 @@ def _prep_for(x, rpm, az, wind, P, prep):
 
 
 @numba.njit(cache=True)
-def _thrust_accel(x, rpm, prep, P, zeros3, thrusts, out):
-    """``M^-1 tau_thr`` (thrusters and rudders) at state ``x`` into ``out`` (3,)."""
+def _thrust_basis(x, rpm, prep, P, per_thruster, zeros3, thrusts, T):
+    """The thrust-error basis ``T`` (3, n_theta) at state ``x``: ``accel = T @ theta``.
+
+    Per degree of freedom, ``T = diag(M^-1 tau_thr)`` (thrusters and rudders together); per
+    thruster, column ``i`` is ``M^-1`` times thruster ``i``'s generalised force
+    ``f_i [cos a_i, sin a_i, x_i sin a_i - y_i cos a_i]`` (the thrust configuration matrix
+    times its delivered thrust), so an efficiency error of one thruster acts through its own
+    lever arm.
+    """
     c, s = math.cos(x[2]), math.sin(x[2])
     r = vessel_rhs(c, s, x[3], x[4], x[5], rpm, prep, zeros3, zeros3, P, thrusts, 0)
     mi = P.m_inv
-    for i in range(3):
-        out[i] = mi[i, 0] * r[6] + mi[i, 1] * r[7] + mi[i, 2] * r[8]
+    T[:, :] = 0.0
+    if not per_thruster:
+        for i in range(3):
+            T[i, i] = mi[i, 0] * r[6] + mi[i, 1] * r[7] + mi[i, 2] * r[8]
+        return
+    K = P.thr.shape[0]
+    for k in range(K):
+        ca, sa, f = prep[k], prep[K + k], thrusts[0, k]
+        g0, g1, g2 = ca * f, sa * f, (P.thr[k, 0] * sa - P.thr[k, 1] * ca) * f
+        for i in range(3):
+            T[i, k] = mi[i, 0] * g0 + mi[i, 1] * g1 + mi[i, 2] * g2
 
 
 @numba.njit(cache=True)
-def _external_accel(x, a_thr, out):
-    """``R(psi)^T b + theta * a_thr``: the filter's extra body-frame acceleration (3,)."""
+def _external_accel(x, T, out):
+    """``R(psi)^T b + T theta``: the filter's extra body-frame acceleration (3,)."""
     c, s = math.cos(x[2]), math.sin(x[2])
     bn, be = x[_LOAD], x[_LOAD + 1]
-    out[0] = x[_THR] * a_thr[0] + c * bn + s * be
-    out[1] = x[_THR + 1] * a_thr[1] - s * bn + c * be
-    out[2] = x[_THR + 2] * a_thr[2] + x[_LOAD + 2]
+    out[0] = c * bn + s * be
+    out[1] = -s * bn + c * be
+    out[2] = x[_LOAD + 2]
+    for j in range(T.shape[1]):
+        for i in range(3):
+            out[i] += T[i, j] * x[_THR + j]
 
 
 @numba.njit(cache=True)
@@ -69,16 +88,16 @@ def _rk4(x, dt, rpm, prep, acc, P, f, work):
 
 
 @numba.njit(cache=True)
-def _transition(x, dt, rpm, az, wind, P, f, work, a_thr, acc):
-    """One process-model step of the 14-state ``x`` into ``f``: RK4 of the dynamic model with
-    the current and the external acceleration of :func:`_external_accel` (left in ``a_thr``
-    and ``acc``); the environment states are random walks (kept)."""
+def _transition(x, dt, rpm, az, wind, P, per_thruster, f, work, T, acc):
+    """One process-model step of the state ``x`` into ``f``: RK4 of the dynamic model with
+    the current and the external acceleration of :func:`_external_accel` (left in ``T`` and
+    ``acc``); the environment states are random walks (kept)."""
     prep = work[0]
     _prep_for(x, rpm, az, wind, P, prep)
-    _thrust_accel(x, rpm, prep, P, work[1], work[2], a_thr)
-    _external_accel(x, a_thr, acc)
+    _thrust_basis(x, rpm, prep, P, per_thruster, work[1], work[2], T)
+    _external_accel(x, T, acc)
     _rk4(x, dt, rpm, prep, acc, P, f, work)
-    for i in range(6, _N):
+    for i in range(6, x.size):
         f[i] = x[i]
 
 
@@ -90,54 +109,54 @@ def _workspace(P):
 
 
 @numba.njit(cache=True)
-def predict(x, Pc, dt, rpm, az, wind, Q, fd_step, P, work):
+def predict(x, Pc, dt, rpm, az, wind, Q, fd_step, P, per_thruster, work):
     """EKF time update over ``dt`` [s]: the mean through the process model, the covariance
     through its Jacobian ``F``. Returns ``(x, P)`` (new arrays).
 
     ``F`` is taken by forward differences (steps ``fd_step``) where the state enters the
     model nonlinearly (heading, velocities, current). The rest follows from the model's
-    structure, which saves six of the fourteen model steps: position does not enter the
-    dynamics (unit columns); the load ``b`` and the thrust error ``theta`` enter only through
-    the held external acceleration ``acc = R(psi)^T b + theta * a_thr``, so their columns are
-    the step's sensitivity to ``acc`` (three differences) times ``R(psi)^T`` and ``a_thr``.
+    structure, which saves most of the model steps: position does not enter the dynamics
+    (unit columns); the load ``b`` and the thrust error ``theta`` enter only through the
+    held external acceleration ``acc = R(psi)^T b + T theta``, so their columns are the
+    step's sensitivity to ``acc`` (three differences) times ``R(psi)^T`` and ``T``.
     """
-    f0 = np.empty(_N)
-    a_thr = np.empty(3)
+    n = x.size
+    n_theta = n - _THR
+    f0 = np.empty(n)
+    T = np.empty((3, n_theta))
     acc = np.empty(3)
-    _transition(x, dt, rpm, az, wind, P, f0, work, a_thr, acc)
-    F = np.zeros((_N, _N))
-    for j in range(_N):
-        if j < 2 or j >= 6 + 2:
+    _transition(x, dt, rpm, az, wind, P, per_thruster, f0, work, T, acc)
+    F = np.zeros((n, n))
+    for j in range(n):
+        if j < 2 or j >= _LOAD:
             F[j, j] = 1.0
     xp = x.copy()
-    fj = np.empty(_N)
-    a_j = np.empty(3)
+    fj = np.empty(n)
+    T_j = np.empty((3, n_theta))
     acc_j = np.empty(3)
     for j in range(2, _LOAD):                   # heading, velocities, current
         xp[j] = x[j] + fd_step[j]
-        _transition(xp, dt, rpm, az, wind, P, fj, work, a_j, acc_j)
-        for i in range(_N):
+        _transition(xp, dt, rpm, az, wind, P, per_thruster, fj, work, T_j, acc_j)
+        for i in range(n):
             F[i, j] = (fj[i] - f0[i]) / fd_step[j]
         xp[j] = x[j]
-    # sensitivity of the step to the held acceleration, with the nominal inputs
+    # sensitivity G (6, 3) of the step to the held acceleration, with the nominal inputs
     _prep_for(x, rpm, az, wind, P, work[0])
-    c, s = math.cos(x[2]), math.sin(x[2])
+    G = np.empty((6, 3))
     for d in range(3):
         h = fd_step[_LOAD + d]
         acc_j[:] = acc
         acc_j[d] += h
         _rk4(x, dt, rpm, work[0], acc_j, P, fj, work)
         for i in range(6):
-            g = (fj[i] - f0[i]) / h
-            F[i, _THR + d] = g * a_thr[d]       # d acc_d / d theta_d = a_thr_d
-            if d == 0:                          # d acc / d b = R(psi)^T
-                F[i, _LOAD] += c * g
-                F[i, _LOAD + 1] += s * g
-            elif d == 1:
-                F[i, _LOAD] += -s * g
-                F[i, _LOAD + 1] += c * g
-            else:
-                F[i, _LOAD + 2] = g
+            G[i, d] = (fj[i] - f0[i]) / h
+    c, s = math.cos(x[2]), math.sin(x[2])
+    for i in range(6):
+        F[i, _LOAD] = c * G[i, 0] - s * G[i, 1]          # d acc / d b = R(psi)^T
+        F[i, _LOAD + 1] = s * G[i, 0] + c * G[i, 1]
+        F[i, _LOAD + 2] = G[i, 2]
+        for j in range(n_theta):                         # d acc / d theta = T
+            F[i, _THR + j] = G[i, 0] * T[0, j] + G[i, 1] * T[1, j] + G[i, 2] * T[2, j]
     return f0, F @ Pc @ F.T + Q
 
 
@@ -149,11 +168,12 @@ def update(x, Pc, z, z_ok, r_std):
     """
     idx = np.flatnonzero(z_ok)
     m = idx.size
+    n = x.size
     if m == 0:
         return x, Pc
     y = np.empty(m)
     S = np.empty((m, m))
-    PHt = np.empty((_N, m))
+    PHt = np.empty((n, m))
     for a in range(m):
         y[a] = z[idx[a]] - x[idx[a]]
         if idx[a] == 2:
@@ -161,7 +181,7 @@ def update(x, Pc, z, z_ok, r_std):
         for b in range(m):
             S[a, b] = Pc[idx[a], idx[b]]
         S[a, a] += r_std[idx[a]] ** 2
-        for i in range(_N):
+        for i in range(n):
             PHt[i, a] = Pc[i, idx[a]]
     K = np.linalg.solve(S, PHt.T).T
     x = x + K @ y
@@ -173,8 +193,9 @@ def update(x, Pc, z, z_ok, r_std):
 def process_noise(dt, q_base):
     """Process-noise covariance over ``dt`` [s]: position noise fixed, velocity noise growing
     with ``dt``, the environment's random walks with ``dt`` (variance)."""
-    Q = np.zeros((_N, _N))
-    for i in range(_N):
+    n = q_base.size
+    Q = np.zeros((n, n))
+    for i in range(n):
         if i < 3:
             Q[i, i] = q_base[i] ** 2
         elif i < 6:
@@ -214,7 +235,7 @@ def at_thrust_stop(x, Pc, kept, yaw_prior, P, work):
     current_yaw = current_yaw_accel(x, P, work)
     total = x[k] + current_yaw
     x[k] = kept * total - current_yaw
-    for i in range(_N):
+    for i in range(x.size):
         Pn[k, i] = 0.0
         Pn[i, k] = 0.0
     Pn[k, k] = yaw_prior ** 2 + ((1.0 - kept) * total) ** 2
@@ -222,8 +243,8 @@ def at_thrust_stop(x, Pc, kept, yaw_prior, P, work):
 
 
 @numba.njit(cache=True)
-def filter_grid(grid, slot, t, seg, z, z_ok, r_std, rpm, az, wind, dp, P, prior_thr, prior_sd, q_base, fd_step,
-                reset_at_stop, kept, yaw_prior, out_x, out_P, done):
+def filter_grid(grid, slot, t, seg, z, z_ok, r_std, rpm, az, wind, dp, P, per_thruster, prior_thr, prior_sd, q_base,
+                fd_step, reset_at_stop, kept, yaw_prior, out_x, out_P, done):
     """Run the filter over the log rows ``grid`` (increasing).
 
     At a row ``i`` with ``slot[i] >= 0`` the estimate goes to ``out_x[slot[i]]``,
@@ -233,39 +254,42 @@ def filter_grid(grid, slot, t, seg, z, z_ok, r_std, rpm, az, wind, dp, P, prior_
     missing cannot start the filter.
     """
     work = _workspace(P)
-    x = np.zeros(_N)
-    Pc = np.zeros((_N, _N))
+    n = prior_sd.size
+    x = np.zeros(n)
+    Pc = np.zeros((n, n))
     started = False
     prev = -1
     for gi in range(grid.size):
         i = grid[gi]
         finite = True
-        for j in range(_N):
+        for j in range(n):
             if not math.isfinite(x[j]):
                 finite = False
         if not started or seg[i] != seg[prev] or not finite:
             if not (z_ok[i, 0] and z_ok[i, 1] and z_ok[i, 2]):
                 prev = i
                 continue
-            x0 = np.zeros(_N)
-            P0 = np.zeros((_N, _N))
+            x0 = np.zeros(n)
+            P0 = np.zeros((n, n))
             for j in range(3):
                 x0[j] = z[i, j]
                 x0[3 + j] = z[i, 3 + j] if math.isfinite(z[i, 3 + j]) else 0.0
+            for j in range(n - _THR):
                 x0[_THR + j] = prior_thr[j]
-            for j in range(_N):
+            for j in range(n):
                 P0[j, j] = prior_sd[j] ** 2
             if started and finite:                  # keep what is known of the environment
                 Qg = process_noise(max(t[i] - t[prev], 0.0), q_base)
-                for a in range(6, _N):
+                for a in range(6, n):
                     x0[a] = x[a]
-                    for b in range(6, _N):
+                    for b in range(6, n):
                         P0[a, b] = Pc[a, b] + Qg[a, b]
             x, Pc = x0, P0
             started = True
         else:
             dt = t[i] - t[prev]
-            x, Pc = predict(x, Pc, dt, rpm[prev], az[prev], wind[prev], process_noise(dt, q_base), fd_step, P, work)
+            x, Pc = predict(x, Pc, dt, rpm[prev], az[prev], wind[prev], process_noise(dt, q_base), fd_step, P,
+                            per_thruster, work)
             x, Pc = update(x, Pc, z[i], z_ok[i], r_std[i])
             if reset_at_stop and dp[prev] and not dp[i]:
                 x, Pc = at_thrust_stop(x, Pc, kept, yaw_prior, P, work)
@@ -275,3 +299,26 @@ def filter_grid(grid, slot, t, seg, z, z_ok, r_std, rpm, az, wind, dp, P, prior_
             out_x[s] = x
             out_P[s] = Pc
             done[s] = True
+
+
+@numba.njit(cache=True)
+def thrust_error_accel_batch(eta, nu, rpm, az, wind, current_ned, theta, P, per_thruster, out):
+    """``T theta`` (B, 3) [m/s^2, m/s^2, rad/s^2]: the acceleration of the thrust-model error
+    ``theta`` (B, n_theta) at each state, commands and current ``current_ned`` (B, 2) [m/s]."""
+    work = _workspace(P)
+    n_theta = theta.shape[1]
+    x = np.zeros(_THR + n_theta)
+    T = np.empty((3, n_theta))
+    for b in range(eta.shape[0]):
+        for i in range(3):
+            x[i] = eta[b, i]
+            x[3 + i] = nu[b, i]
+        x[_CUR] = current_ned[b, 0]
+        x[_CUR + 1] = current_ned[b, 1]
+        _prep_for(x, rpm[b], az[b], wind[b], P, work[0])
+        _thrust_basis(x, rpm[b], work[0], P, per_thruster, work[1], work[2], T)
+        for i in range(3):
+            acc = 0.0
+            for j in range(n_theta):
+                acc += T[i, j] * theta[b, j]
+            out[b, i] = acc
