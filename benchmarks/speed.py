@@ -22,7 +22,7 @@ on a 1-hour 10-Hz log passed as a DataFrame, ingest included), ``forecast_short_
 ratio; the target is at most 2) and ``forecast_long_log_ingested_ms`` (the long log passed
 as already ingested LogArrays, so its validation is not repeated);
 ``manoeuvre_train_s`` (training the
-manoeuvre benchmark's hybrid, :class:`hybridship.manoeuvre.ManoeuvreConfig` as it stands,
+manoeuvre benchmark's hybrid, :class:`hybridship.evaluation.manoeuvre.ManoeuvreConfig` as it stands,
 on the Esso Osaka training runs of the benchmark's split, seed 0, one core; null when the
 data are absent or with ``--quick``) and ``manoeuvre_training`` (its training mode);
 for drift-off analysis
@@ -202,8 +202,8 @@ def manoeuvre_train_speed() -> dict:
     import torch
 
     torch.set_num_threads(1)
-    from hybridship.logs.esso_osaka import default_data_dir
-    from hybridship.manoeuvre import ManoeuvreConfig, _fit, load_runs, make_predictors, split_runs
+    from hybridship.datasets.esso_osaka import default_data_dir
+    from hybridship.evaluation.manoeuvre import ManoeuvreConfig, _fit, load_runs, make_predictors, split_runs
 
     data = default_data_dir() / "data"
     if not data.is_dir():

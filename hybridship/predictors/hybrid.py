@@ -466,7 +466,7 @@ class HybridPredictor:
         cal : CalibrationConfig, optional
             ``sigma``, ``coverage`` and ``floor_quantile`` of the fit (default: the model's).
         """
-        from .. import metrics
+        from ..evaluation import metrics
 
         self._check_fitted()
         cal = self.calibration_config if cal is None else cal

@@ -38,9 +38,9 @@ import numpy as np
 import pandas as pd
 
 from . import metrics
-from .fileio import atomic_write, markdown_table
-from .predictors import DataOnlyPredictor, DeadReckoning, DynamicPredictor, HybridPredictor, as_log_arrays
-from .residual.ensemble import EnsembleConfig
+from ..fileio import atomic_write, markdown_table
+from ..predictors import DataOnlyPredictor, DeadReckoning, DynamicPredictor, HybridPredictor, as_log_arrays
+from ..residual.ensemble import EnsembleConfig
 
 #: File endings read as logs from a folder.
 LOG_SUFFIXES = (".csv", ".csv.gz", ".parquet", ".pq")
@@ -123,7 +123,7 @@ def run_drift_benchmark(train=None, test=None, out_dir="drift-benchmark", *, ves
             print(msg, flush=True)
 
     if train is None and test is None:
-        from .sim.scenario import embedded_scenarios
+        from ..sim.scenario import embedded_scenarios
 
         scen = embedded_scenarios(n_scenarios, seed)
         train_logs = test_logs = [s.log for s in scen]
@@ -150,7 +150,7 @@ def run_drift_benchmark(train=None, test=None, out_dir="drift-benchmark", *, ves
         timing.append({"model": name, "what": "train", "seconds": time.perf_counter() - t0})
         say(f"trained {name} on {len(train_arrays)} logs ({timing[-1]['seconds']:.1f} s)")
     if calibration_scenarios > 0 and hybrid.model.vessel.name == "gunnerus":
-        from .sim.scenario import embedded_scenarios
+        from ..sim.scenario import embedded_scenarios
 
         t0 = time.perf_counter()
         sims = embedded_scenarios(int(calibration_scenarios), seed + 1000)
