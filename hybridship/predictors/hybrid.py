@@ -10,20 +10,17 @@ position uncertainty.
 
 from __future__ import annotations
 
-import json
-from dataclasses import asdict
 from pathlib import Path
 from typing import Iterable
 
 import numpy as np
 
-from ..fileio import atomic_write
 from ..frames import wrap_pi
 from ..logs.io import LogArrays
 from ..quality import FaultFlags
 from ..physics.integrate import rollout_batch
 from ..physics.model import DynamicModel
-from ..residual.calibration import CalibrationConfig, SpreadCalibration, fit_spread_scale
+from ..residual.calibration import CalibrationConfig, fit_spread_scale
 from ..residual.ensemble import EnsembleConfig, MLPEnsemble, fit_ensemble
 from ..residual.features import COMMAND_FEATURES, ResidualConfig, command_feature_columns, command_scales, prepare_log
 from ..residual.environment import (EnvironmentConfig, EnvironmentEstimator, current_input,
@@ -31,8 +28,7 @@ from ..residual.environment import (EnvironmentConfig, EnvironmentEstimator, cur
 from ..residual.multistep import MultiStepConfig, collect_starts, train_multistep
 from ..residual.guard import CommandRegime, EnvelopeGuard, ThrustRegime
 from .forecast_setup import _check_row_stride, _forecast_setup, as_log_arrays, start_indices
-from .model_file import (MODEL_FORMAT_VERSION, ModelFileError, _content_hash, _embedded_vessel,
-                         _vessel_fingerprint)
+from .model_file import load_model, save_model
 from .result import ForecastResult
 
 __all__ = ["AFTER_STOP", "ENVIRONMENT_SOURCES", "HybridPredictor"]
@@ -610,54 +606,11 @@ class HybridPredictor:
 
     # ------------------------------------------------------------------ model files
 
-    def _metadata(self) -> dict:
-        v = self.model.vessel
-        return {
-            "format": "hybridship-model", "format_version": MODEL_FORMAT_VERSION,
-            "kind": "HybridPredictor", "vessel": v.name,
-            "vessel_description": v.model_dump(mode="json"),
-            "vessel_fingerprint": _vessel_fingerprint(v),
-            "features": list(self.residual_config.features),
-            "residual_config": asdict(self.residual_config),
-            "ensemble_config": asdict(self.ensemble_config),
-            "use_guard": self.use_guard, "guard_quantile": self.guard_quantile,
-            "stop_after_failure": self.stop_after_failure,
-            "guard": {"d0": self.guard.d0, "scale": self.guard.scale},
-            "thrust_regime": {"lo": self.thrust_regime.lo},
-            "environment": self.environment,
-            "environment_config": self.environment_config.model_dump(mode="json"),
-            "environment_window_s": self.environment_window_s,
-            "nets_after_stop": self.nets_after_stop,
-            "thrust_error_prior": {"mean": self.estimator.thrust_error_mean.tolist(),
-                                   "std": self.estimator.thrust_error_std.tolist()},
-            "calibration_config": asdict(self.calibration_config),
-            "training": self.training, "multistep_config": asdict(self.multistep_config),
-            "command_guard": self.command_guard,
-            "command_regime": None if self.command_regime is None else {
-                k: getattr(self.command_regime, k) for k in ("rpm_eps", "froude_lo", "angle_hard_rad", "length_m")},
-            "calibrated_commands": sorted(self.calibration),
-            "training_info": self.training_info,
-        }
-
     def save(self, path) -> Path:
-        """Write the model as one ``.npz`` (arrays only, no pickle) with JSON metadata, atomically."""
+        """Write the model as one ``.npz`` (arrays only, no pickle) with JSON metadata, atomically
+        (see :mod:`hybridship.predictors.model_file`)."""
         self._check_fitted()
-        path = Path(path)
-        e, g = self.ensemble, self.guard
-        arrays = {f"w{i}": w for i, w in enumerate(e.weights)}
-        arrays.update(x_mean=e.x_mean, x_std=e.x_std, y_mean=e.y_mean, y_std=e.y_std,
-                      guard_mean=g.mean, guard_inv_cov=g.inv_cov, thrust_scale=self.thrust_regime.scale)
-        if self.command_regime is not None:
-            cr = self.command_regime
-            arrays.update(cmd_regime_weights=cr.weights, cmd_regime_n_train=cr.n_train, cmd_regime_n_held=cr.n_held)
-        for mode, c in self.calibration.items():
-            for what, sc in c.items():
-                arrays[f"cal_{mode}_{what}"] = np.stack([sc.lead_s, sc.scale, sc.floor])
-        meta_d = self._metadata()
-        meta_d["content_sha256"] = _content_hash(arrays)
-        meta = json.dumps(meta_d, sort_keys=True)
-        arrays["metadata_json"] = np.frombuffer(meta.encode("utf-8"), dtype=np.uint8)
-        return atomic_write(path, lambda fh: np.savez(fh, **arrays))
+        return save_model(self, path)
 
     @classmethod
     def load(cls, path, vessel=None) -> "HybridPredictor":
@@ -676,106 +629,4 @@ class HybridPredictor:
         Raises :class:`ModelFileError` for an unreadable, truncated or tampered file, another
         format version, or a vessel that differs from the one the model was trained for.
         """
-        path = Path(path)
-        try:
-            with np.load(path, allow_pickle=False) as z:
-                data = {k: z[k] for k in z.files}
-        except FileNotFoundError:
-            raise ModelFileError(f"{path}: model file not found") from None
-        except Exception as err:  # zip/npy parse errors of a damaged file
-            raise ModelFileError(f"{path}: not a readable hybridship model file ({type(err).__name__}: {err})") from None
-        try:
-            meta = json.loads(bytes(data["metadata_json"]).decode("utf-8"))
-        except Exception:
-            raise ModelFileError(f"{path}: metadata missing or damaged") from None
-        if meta.get("format") != "hybridship-model":
-            raise ModelFileError(f"{path}: not a hybridship model file")
-        version = meta.get("format_version")
-        if version != MODEL_FORMAT_VERSION:
-            older = (f": written by an older hybridship (format {version}); retrain with `hybridship train` "
-                     f"(or HybridPredictor.fit) to write a version-{MODEL_FORMAT_VERSION} file, which carries "
-                     f"its vessel, its environment estimator and its spread calibration"
-                     if isinstance(version, int) and not isinstance(version, bool) and 1 <= version < MODEL_FORMAT_VERSION
-                     else "")
-            raise ModelFileError(f"{path}: model format version {version} is not supported "
-                                 f"(this hybridship reads version {MODEL_FORMAT_VERSION}){older}")
-        content = {k: v for k, v in data.items() if k != "metadata_json"}
-        if meta.get("content_sha256") != _content_hash(content):
-            raise ModelFileError(f"{path}: content checksum does not match the metadata: the file was "
-                                 f"tampered with or damaged")
-        try:
-            residual_config = ResidualConfig(**{k: tuple(v) if k == "features" else v
-                                                for k, v in meta["residual_config"].items()})
-            embedded = vessel is None
-            if embedded:
-                vessel = _embedded_vessel(meta["vessel_description"], path)
-            obj = cls(vessel, residual_config=residual_config,
-                      ensemble_config=EnsembleConfig(**meta["ensemble_config"]), guard=meta["use_guard"],
-                      guard_quantile=meta["guard_quantile"], stop_after_failure=meta["stop_after_failure"],
-                      environment=meta["environment"],
-                      environment_config=EnvironmentConfig(**meta["environment_config"]),
-                      environment_window_s=meta["environment_window_s"],
-                      nets_after_stop=meta["nets_after_stop"],
-                      calibration_config=CalibrationConfig(**meta["calibration_config"]),
-                      training=meta["training"], multistep_config=MultiStepConfig(**meta["multistep_config"]),
-                      command_guard=meta["command_guard"])
-            thr_mean = np.asarray(meta["thrust_error_prior"]["mean"], dtype=float).reshape(3)
-            thr_std = np.asarray(meta["thrust_error_prior"]["std"], dtype=float).reshape(3)
-            if not (np.all(np.isfinite(thr_mean)) and np.all(thr_std > 0)):
-                raise ValueError("thrust_error_prior: expected finite means and positive spreads")
-            regime_meta = meta["command_regime"]
-            calibrated_commands = list(meta["calibrated_commands"])
-            fingerprint = meta["vessel_fingerprint"]
-            guard_d0, guard_scale = float(meta["guard"]["d0"]), float(meta["guard"]["scale"])
-            thrust_lo = float(meta["thrust_regime"]["lo"])
-        except (KeyError, TypeError, ValueError, AttributeError) as err:
-            if isinstance(err, ModelFileError) or "VesselFileError" in type(err).__name__:
-                raise
-            raise ModelFileError(f"{path}: damaged model metadata ({type(err).__name__}: {err})") from None
-        if _vessel_fingerprint(obj.model.vessel) != fingerprint:
-            if embedded:
-                raise ModelFileError(f"{path}: the embedded description of vessel {meta['vessel']!r} does not "
-                                     f"match its fingerprint: the metadata was edited or damaged")
-            raise ModelFileError(f"{path}: trained for vessel {meta['vessel']!r} with other parameters; "
-                                 f"refusing to use it with vessel {obj.model.vessel.name!r}")
-        try:
-            weights = [np.asarray(data[f"w{i}"], dtype=float) for i in range(6)]
-            n_in = len(residual_config.features)
-            E, H = weights[0].shape[0], weights[0].shape[2]
-            expected = [(E, n_in, H), (E, 1, H), (E, H, H), (E, 1, H), (E, H, 3), (E, 1, 3)]
-            if [w.shape for w in weights] != expected:
-                raise ValueError(f"weight shapes {[w.shape for w in weights]} do not match {expected}")
-            ens = MLPEnsemble(weights, data["x_mean"], data["x_std"], data["y_mean"], data["y_std"])
-            guard = EnvelopeGuard(data["guard_mean"], data["guard_inv_cov"], guard_d0, guard_scale)
-            thrust_regime = ThrustRegime(np.asarray(data["thrust_scale"], dtype=float), thrust_lo)
-            calibration = {}
-            for mode in calibrated_commands:
-                calibration[mode] = {}
-                for what in ("position", "heading"):
-                    a = np.asarray(data[f"cal_{mode}_{what}"], dtype=float)
-                    if a.ndim != 2 or a.shape[0] != 3:
-                        raise ValueError(f"cal_{mode}_{what} has shape {a.shape}, expected (3, H)")
-                    calibration[mode][what] = SpreadCalibration(a[0], a[1], a[2])
-            for name, a in [("weights", np.concatenate([w.ravel() for w in weights])), ("x_std", ens.x_std),
-                            ("y_std", ens.y_std), ("guard_inv_cov", guard.inv_cov),
-                            ("thrust_scale", thrust_regime.scale)]:
-                if not np.all(np.isfinite(a)):
-                    raise ValueError(f"{name} contains NaN or inf")
-        except (KeyError, ValueError) as err:
-            raise ModelFileError(f"{path}: damaged model contents: {err}") from None
-        obj.ensemble, obj.guard, obj.thrust_regime = ens, guard, thrust_regime
-        obj.estimator = EnvironmentEstimator(obj.model, obj.environment_config)
-        obj.estimator.thrust_error_mean, obj.estimator.thrust_error_std = thr_mean, thr_std
-        obj.calibration = calibration
-        obj.command_regime = None
-        if regime_meta is not None:
-            try:
-                w = np.asarray(data["cmd_regime_weights"], dtype=float)
-                if w.shape != (CommandRegime.N_REGIMES,) or not np.all((w >= 0) & (w <= 1)):
-                    raise ValueError(f"cmd_regime_weights: expected {CommandRegime.N_REGIMES} weights in [0, 1]")
-                obj.command_regime = CommandRegime(w, np.asarray(data["cmd_regime_n_train"]),
-                                                   np.asarray(data["cmd_regime_n_held"]), **regime_meta)
-            except (KeyError, TypeError, ValueError) as err:
-                raise ModelFileError(f"{path}: damaged model contents: {err}") from None
-        obj.training_info = meta.get("training_info", {})
-        return obj
+        return load_model(cls, path, vessel)
