@@ -31,10 +31,10 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from hybridship.drift_benchmark import log_files
+from hybridship.evaluation.drift import log_files
 from hybridship.fileio import atomic_write, markdown_table
 from hybridship.frames import body_to_ned
-from hybridship.metrics import shutdown_index
+from hybridship.evaluation.metrics import shutdown_index
 from hybridship.physics.model import DynamicModel
 from hybridship.predictors import as_log_arrays
 from hybridship.residual.environment import EnvironmentEstimator

@@ -25,7 +25,7 @@ ratio; the target is at most 2; CPU times, the ratio the median over alternating
 validation is not repeated), ``forecast_2h_log_ms`` and ``forecast_2h_1h_ratio`` (a 2-hour
 log against the 1-hour one: the cost stops growing beyond what the forecast reads);
 ``manoeuvre_train_s`` (training the
-manoeuvre benchmark's hybrid, :class:`hybridship.manoeuvre.ManoeuvreConfig` as it stands,
+manoeuvre benchmark's hybrid, :class:`hybridship.evaluation.manoeuvre.ManoeuvreConfig` as it stands,
 on the Esso Osaka training runs of the benchmark's split, seed 0, one core; null when the
 data are absent or with ``--quick``) and ``manoeuvre_training`` (its training mode);
 for drift-off analysis
@@ -232,8 +232,8 @@ def manoeuvre_train_speed() -> dict:
     import torch
 
     torch.set_num_threads(1)
-    from hybridship.logs.esso_osaka import default_data_dir
-    from hybridship.manoeuvre import ManoeuvreConfig, _fit, load_runs, make_predictors, split_runs
+    from hybridship.datasets.esso_osaka import default_data_dir
+    from hybridship.evaluation.manoeuvre import ManoeuvreConfig, _fit, load_runs, make_predictors, split_runs
 
     data = default_data_dir() / "data"
     if not data.is_dir():

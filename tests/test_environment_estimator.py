@@ -161,7 +161,7 @@ def test_spread_after_a_stop_is_calibrated_on_logs_with_failures(model, tmp_path
     north/east errors at every lead (split-conformal), a start after the failure is
     calibrated whatever other starts it is forecast with, and the scale survives a
     model-file round trip."""
-    from hybridship import metrics
+    from hybridship.evaluation import metrics
 
     train = [physics_log(model, duration_s=1000, t_shutdown_s=800, seed=s, tau_ext_N=(3000.0, -2000.0, 0.0))
              for s in (12, 13)]

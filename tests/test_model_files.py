@@ -59,7 +59,7 @@ def _rewrite(saved, tmp_path, *, meta_change=None, array_change=None, name="tamp
     if array_change is not None:
         array_change(arrays)
     if restamp:
-        from hybridship.predictors import _content_hash
+        from hybridship.predictors.model_file import _content_hash
 
         meta = _meta(arrays)
         meta["content_sha256"] = _content_hash({k: v for k, v in arrays.items() if k != "metadata_json"})
