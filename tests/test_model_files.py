@@ -125,7 +125,7 @@ def test_incompatible_format_version_is_refused(saved, tmp_path):
 
 
 def test_an_older_format_says_retrain(saved, tmp_path):
-    for old in (2, 3):
+    for old in (2, 3, 5):
         p = _rewrite(saved, tmp_path, meta_change=lambda m: m.update(format_version=old), name=f"v{old}.npz")
         _refused(p, rf"written by an older hybridship \(format {old}\).*retrain with `hybridship train`")
 
