@@ -1,6 +1,6 @@
 """The drift benchmark (Skulstad et al. 2022, Tables 2 and 3) on the embedded scenarios or any folders.
 
-Same as ``hybridship benchmark drift``; see :mod:`hybridship.drift_benchmark`.
+Same as ``hybridship benchmark drift``; see :mod:`hybridship.evaluation.drift`.
 
 Examples
 --------

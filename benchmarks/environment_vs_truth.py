@@ -1,17 +1,19 @@
 """The environment estimator against the simulator's truth on truthsim-dev, before and after the failure.
 
 For every log the estimator (default :class:`~hybridship.residual.environment.EnvironmentConfig`,
-thrust-error prior 0) filters the last 30 min of station keeping and the drift. The truth
+thrust-error prior mean 0) filters the last 30 min of station keeping and the drift. The truth
 columns used:
 
 * current: ``truth_current_speed_mps``, ``truth_current_dir_to_deg``;
 * load: the second-order wave drift ``truth_tau_wave2_*`` plus the wind model's error
   (``truth_tau_wind_*`` less this project's wind model at the logged wind), i.e. what the
   estimator's load stands for, rotated to NED [N] (yaw [N m]);
-* thrust error: the least-squares factor of ``truth_tau_thrust_*`` on the model's thrust
-  over the last 30 min of DP, less 1.
+* thrust error: ``truth_tau_thrust_*`` less the model's thrust load at the logged commands
+  and states, as a body-frame force [N] (yaw [N m]); it compares with the estimate whatever
+  the structure of ``theta`` (per thruster or per DOF).
 
-The estimated load is a force ``M b`` (M with added mass). Windows: ``dp`` = the last 300 s
+The estimated load is a force ``M b`` (M with added mass), the estimated thrust error
+``M T theta`` at each row's logged state and commands. Windows: ``dp`` = the last 300 s
 before the failure, ``drift`` = 60..300 s after it (the estimate at each row uses the rows
 up to it only). Writes ``environment_vs_truth.csv``/``.md`` and ``environment_vs_truth.png``.
 
@@ -29,10 +31,10 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from hybridship.drift_benchmark import log_files
+from hybridship.evaluation.drift import log_files
 from hybridship.fileio import atomic_write, markdown_table
 from hybridship.frames import body_to_ned
-from hybridship.metrics import shutdown_index
+from hybridship.evaluation.metrics import shutdown_index
 from hybridship.physics.model import DynamicModel
 from hybridship.predictors import as_log_arrays
 from hybridship.residual.environment import EnvironmentEstimator
@@ -41,7 +43,8 @@ TRUTHSIM = Path(__file__).resolve().parents[1].parent / "shared" / "data" / "tru
 
 
 def _truth(df, model, a):
-    """Truth current (N, 2: speed, dir_to_rad), load in NED (N, 3) and thrust factor error (3,)."""
+    """Truth current (N, 2: speed, dir_to_rad), load in NED (N, 3) and the thrust model's error
+    as a body-frame force (N, 3) [N, N, N m]: the simulator's thrust load less the model's."""
     psi = a.eta[:, 2]
     cur = np.column_stack([df.truth_current_speed_mps, np.radians(df.truth_current_dir_to_deg)])
     _, parts, _ = model.acceleration(a.eta, np.nan_to_num(a.nu), rpm=a.rpm, azimuth_rad=a.azimuth_rad,
@@ -49,12 +52,8 @@ def _truth(df, model, a):
     wave2 = df[["truth_tau_wave2_x_N", "truth_tau_wave2_y_N", "truth_tau_wave2_n_Nm"]].to_numpy()
     wind_t = df[["truth_tau_wind_x_N", "truth_tau_wind_y_N", "truth_tau_wind_n_Nm"]].to_numpy()
     load = body_to_ned(wave2 + wind_t - parts[:, 2], psi)
-    i0 = shutdown_index(a)
-    dp = slice(max(0, i0 - 1800), i0)
-    thr_t = df[["truth_tau_thrust_x_N", "truth_tau_thrust_y_N", "truth_tau_thrust_n_Nm"]].to_numpy()[dp]
-    thr_m = parts[dp, 1]
-    k = np.sum(thr_m * thr_t, axis=0) / np.sum(thr_m * thr_m, axis=0)
-    return cur, load, k - 1.0
+    thr_t = df[["truth_tau_thrust_x_N", "truth_tau_thrust_y_N", "truth_tau_thrust_n_Nm"]].to_numpy()
+    return cur, load, thr_t - parts[:, 1]
 
 
 def main(argv=None) -> int:
@@ -84,6 +83,9 @@ def main(argv=None) -> int:
         load_e = body_to_ned(b_body @ M.T, psi)
         cur_e = est.current_speed_dir
         r = np.arange(first, last + 1)
+        # the estimated thrust error as a force, at the logged states and commands of each row
+        thr_e = est.thrust_error_accel(model, a.eta[r], np.nan_to_num(a.nu[r]), np.nan_to_num(a.rpm[r]),
+                                       np.nan_to_num(a.azimuth_rad[r]), np.nan_to_num(a.wind[r])) @ M.T
         series.append((f.name, a.time_s[r] - a.time_s[i0], load_e, load_t[r], cur_e, cur_t[r]))
         for win, sel in (("dp", (r >= i0 - 300) & (r < i0)), ("drift", (r >= i0 + 60) & (r <= i0 + 300))):
             rows.append({
@@ -92,8 +94,10 @@ def main(argv=None) -> int:
                 "load_north_kN_est": load_e[sel, 0].mean() / 1e3, "load_north_kN_true": load_t[r][sel, 0].mean() / 1e3,
                 "load_east_kN_est": load_e[sel, 1].mean() / 1e3, "load_east_kN_true": load_t[r][sel, 1].mean() / 1e3,
                 "load_yaw_kNm_est": load_e[sel, 2].mean() / 1e3, "load_yaw_kNm_true": load_t[r][sel, 2].mean() / 1e3,
-                "thrust_error_x_est": est.thrust_error[sel, 0].mean(), "thrust_error_x_true": thr_t[0],
-                "thrust_error_y_est": est.thrust_error[sel, 1].mean(), "thrust_error_y_true": thr_t[1],
+                "thrust_error_x_kN_est": thr_e[sel, 0].mean() / 1e3, "thrust_error_x_kN_true": thr_t[r][sel, 0].mean() / 1e3,
+                "thrust_error_y_kN_est": thr_e[sel, 1].mean() / 1e3, "thrust_error_y_kN_true": thr_t[r][sel, 1].mean() / 1e3,
+                "thrust_error_n_kNm_est": thr_e[sel, 2].mean() / 1e3,
+                "thrust_error_n_kNm_true": thr_t[r][sel, 2].mean() / 1e3,
             })
     table = pd.DataFrame(rows)
     args.out.mkdir(parents=True, exist_ok=True)

@@ -6,7 +6,7 @@ One command makes everything on ``docs/esso-osaka.md``::
 
 It splits the runs of ``../shared/data/esso-osaka-frt/data`` into train and test folders
 (symbolic links, whole recordings per side, seed 0; the data are never copied), runs
-:func:`hybridship.manoeuvre.run_manoeuvre_benchmark` on them, writes ``errors.csv`` and
+:func:`hybridship.evaluation.manoeuvre.run_manoeuvre_benchmark` on them, writes ``errors.csv`` and
 ``README.md`` to ``--out``, the figures ``docs/figures/esso_*.png``, and replaces the
 generated tables between the ``<!-- generated:... -->`` markers of ``docs/esso-osaka.md``.
 With ``--quick`` it makes a smoke run (small ensembles, starts every 5 s) and leaves the
@@ -36,8 +36,8 @@ def replace_generated(text: str, key: str, body: str) -> str:
 def main(argv=None) -> int:
     import torch
 
-    from hybridship.logs.esso_osaka import RUN_KINDS, default_data_dir
-    from hybridship.manoeuvre import (COMMAND_MODES, HORIZONS_S, _md_coverage, _md_table, pivot,
+    from hybridship.datasets.esso_osaka import RUN_KINDS, default_data_dir
+    from hybridship.evaluation.manoeuvre import (COMMAND_MODES, HORIZONS_S, _md_coverage, _md_table, pivot,
                                       run_manoeuvre_benchmark, split_runs, wins)
 
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])

@@ -100,7 +100,7 @@ def main(argv=None) -> int:
     import torch
 
     from hybridship.fileio import atomic_write
-    from hybridship.manoeuvre import (COMMAND_MODES, ManoeuvreConfig, coverage_table, error_table, forecast_errors,
+    from hybridship.evaluation.manoeuvre import (COMMAND_MODES, ManoeuvreConfig, coverage_table, error_table, forecast_errors,
                                       load_runs, make_predictors, split_runs, start_rows)
     from hybridship.vessel import load_vessel
 

@@ -28,7 +28,7 @@ def main(argv=None) -> int:
     import torch
 
     from hybridship.fileio import atomic_write
-    from hybridship.manoeuvre import (COMMAND_MODES, ManoeuvreConfig, _fit, error_table, forecast_errors,
+    from hybridship.evaluation.manoeuvre import (COMMAND_MODES, ManoeuvreConfig, _fit, error_table, forecast_errors,
                                       load_runs, make_predictors, split_runs, start_rows)
     from hybridship.residual.guard import EnvelopeGuard
     from hybridship.vessel import load_vessel

@@ -23,8 +23,8 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from hybridship import metrics
-from hybridship.drift_benchmark import log_files
+from hybridship.evaluation import metrics
+from hybridship.evaluation.drift import log_files
 from hybridship.fileio import atomic_write, markdown_table
 from hybridship.predictors import DynamicPredictor, HybridPredictor, as_log_arrays
 from hybridship.residual.ensemble import EnsembleConfig
@@ -34,15 +34,28 @@ TRUTHSIM = Path(__file__).resolve().parents[1].parent / "shared" / "data" / "tru
 
 #: name -> (HybridPredictor keyword arguments, what the row shows)
 VARIANTS = {
-    "default": ({}, "the default estimator"),
-    "keep_dp_yaw_load": ({"environment_config": EnvironmentConfig(yaw_load_kept_at_stop=1.0)},
-                         "the yaw load of station keeping kept after the stop"),
+    "default": ({}, "the default estimator (thrust error per thruster, DP yaw load kept at the stop)"),
+    "per_dof_reset_yaw": ({"environment_config": EnvironmentConfig(
+        thrust_error_model="per_dof", yaw_load_kept_at_stop=0.0, thrust_error_walk=2e-3)},
+        "thrust error per DOF, yaw environment restarted at the stop (the previous default)"),
+    "per_dof": ({"environment_config": EnvironmentConfig(thrust_error_model="per_dof")},
+                "thrust error per DOF instead of per thruster"),
+    "reset_yaw_at_stop": ({"environment_config": EnvironmentConfig(yaw_load_kept_at_stop=0.0)},
+                          "yaw environment restarted from zero at the stop"),
     "half_dp_yaw_load": ({"environment_config": EnvironmentConfig(yaw_load_kept_at_stop=0.5)},
-                         "half of it kept"),
+                         "half of the DP yaw environment kept at the stop"),
+    "thrust_error_walk": ({"environment_config": EnvironmentConfig(thrust_error_walk=2e-3)},
+                          "thrust error a random walk (2e-3 per sqrt(s)) instead of constant"),
+    "tight_thrust_prior": ({"environment_config": EnvironmentConfig(thrust_error_prior_per_thruster=0.1)},
+                           "thrust-error prior 0.1 per thruster instead of 0.2"),
+    "wide_thrust_prior": ({"environment_config": EnvironmentConfig(thrust_error_prior_per_thruster=0.4)},
+                          "thrust-error prior 0.4 per thruster instead of 0.2"),
+    "current_prior_0.1": ({"environment_config": EnvironmentConfig(current_prior_m_s=0.1)},
+                          "current prior 0.1 m/s instead of 0.02 m/s"),
     "wide_current_prior": ({"environment_config": EnvironmentConfig(current_prior_m_s=0.3)},
                            "current prior 0.3 m/s instead of 0.02 m/s"),
-    "tight_yaw_thrust_prior": ({"environment_config": EnvironmentConfig(thrust_error_prior=(0.2, 0.2, 0.1))},
-                               "yaw thrust-error prior 0.1 instead of 0.5"),
+    "wide_yaw_load_prior": ({"environment_config": EnvironmentConfig(load_yaw_prior_rad_s2=1e-4)},
+                            "yaw-load prior 1e-4 rad/s^2 instead of 3e-5"),
     "fixed_noise": ({"environment_config": EnvironmentConfig(adaptive_measurement_std=False)},
                     "no wave-motion noise estimate (configured sensor noise only)"),
     "mean_bias": ({"environment": "mean"}, "900-s mean residual, no estimator"),
@@ -59,6 +72,8 @@ def _errors(pred, arrays, **kw):
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--out", type=Path, required=True)
+    ap.add_argument("--only", nargs="+", choices=list(VARIANTS), default=list(VARIANTS),
+                    help="the variants to run (default: all)")
     args = ap.parse_args(argv)
     from hybridship.sim.scenario import embedded_scenarios
 
@@ -72,7 +87,8 @@ def main(argv=None) -> int:
         dyn = DynamicPredictor("gunnerus")
         arrays = [as_log_arrays(x, dyn.model.vessel) for x in logs]
         phys = np.stack([_errors(dyn, a) for a in arrays])                       # (L, 20, 3)
-        for vname, (kw, what) in VARIANTS.items():
+        for vname in args.only:
+            kw, what = VARIANTS[vname]
             hp = HybridPredictor("gunnerus", ensemble_config=TINY, **kw).fit(arrays, dp_only=True)
             e = np.stack([_errors(hp, a, nets=False) for a in arrays])
             row = {"data": dname, "variant": vname, "what": what}

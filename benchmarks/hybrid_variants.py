@@ -27,7 +27,7 @@ from pathlib import Path
 
 import numpy as np
 
-from hybridship import metrics
+from hybridship.evaluation import metrics
 from hybridship.fileio import atomic_write
 from hybridship.predictors import DynamicPredictor, HybridPredictor, as_log_arrays
 from hybridship.residual.ensemble import EnsembleConfig

@@ -196,7 +196,7 @@ def _add_demo(sub) -> None:
 def _cmd_demo(args) -> int:
     import time
 
-    from . import metrics
+    from .evaluation import metrics
     from .predictors import DeadReckoning, DynamicPredictor, HybridPredictor, as_log_arrays
     from .residual.ensemble import EnsembleConfig
     from .sim.scenario import embedded_scenarios
@@ -362,7 +362,7 @@ def _add_benchmark(sub) -> None:
 def _cmd_benchmark_manoeuvre(args) -> int:
     from dataclasses import replace
 
-    from .manoeuvre import ManoeuvreConfig, run_manoeuvre_benchmark
+    from .evaluation.manoeuvre import ManoeuvreConfig, run_manoeuvre_benchmark
 
     try:
         horizons = tuple(float(h) for h in args.horizons_s.split(",") if h.strip())
@@ -394,7 +394,7 @@ def _cmd_benchmark_missing(args) -> int:
 
 
 def _cmd_benchmark_drift(args) -> int:
-    from .drift_benchmark import log_files, run_drift_benchmark
+    from .evaluation.drift import log_files, run_drift_benchmark
     from .vessel import VesselFileError, load_vessel
 
     if args.members < 1 or args.intervals < 1 or args.scenarios < 1:

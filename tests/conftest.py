@@ -3,7 +3,7 @@
 Data never go into the repository: tests read them from ``../shared/data/`` relative to the
 repository root and skip, saying where they looked, when they are absent. Use the
 ``shared_data`` fixture for that (``shared_data("truthsim-dev", "logs")``); the Esso Osaka
-tests use :func:`hybridship.logs.esso_osaka.default_data_dir`, the library's own locator of
+tests use :func:`hybridship.datasets.esso_osaka.default_data_dir`, the library's own locator of
 the same folder (it also honours ``$HYBRIDSHIP_ESSO_OSAKA_DIR``).
 """
 

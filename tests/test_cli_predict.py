@@ -5,7 +5,7 @@ from __future__ import annotations
 import pandas as pd
 import pytest
 
-from hybridship import metrics
+from hybridship.evaluation import metrics
 from hybridship.cli import main
 from hybridship.logs.io import write_log
 from hybridship.physics.model import DynamicModel

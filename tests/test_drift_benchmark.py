@@ -7,7 +7,7 @@ import pandas as pd
 import pytest
 
 from hybridship.cli import main
-from hybridship.drift_benchmark import run_drift_benchmark
+from hybridship.evaluation.drift import run_drift_benchmark
 from hybridship.logs.io import write_log
 from hybridship.physics.model import DynamicModel
 from hybridship.residual.ensemble import EnsembleConfig

@@ -13,7 +13,7 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from hybridship.logs.esso_osaka import (ESSO_COLUMNS, RUN_KINDS, convention_checks, default_data_dir,
+from hybridship.datasets.esso_osaka import (ESSO_COLUMNS, RUN_KINDS, convention_checks, default_data_dir,
                                         esso_log_arrays, list_runs, read_esso_osaka, read_esso_raw, run_kind)
 from hybridship.logs.io import LogFormatError, validate_log
 from hybridship.physics.model import DynamicModel
@@ -183,14 +183,14 @@ def _link(tmp_path, name, files):
 def _tiny_config():
     from dataclasses import replace
 
-    from hybridship.manoeuvre import ManoeuvreConfig
+    from hybridship.evaluation.manoeuvre import ManoeuvreConfig
 
     q = ManoeuvreConfig.quick()
     return replace(q, start_every_s=10.0, ensemble=replace(q.ensemble, n_members=2, max_epochs=5))
 
 
 def test_manoeuvre_benchmark_writes_the_tables(tmp_path):
-    from hybridship.manoeuvre import ERROR_COLUMNS, STATES, run_manoeuvre_benchmark
+    from hybridship.evaluation.manoeuvre import ERROR_COLUMNS, STATES, run_manoeuvre_benchmark
 
     train, test = _link(tmp_path, "train", SMALL_TRAIN), _link(tmp_path, "test", SMALL_TEST)
     res = run_manoeuvre_benchmark("esso_osaka_model", train, test, (5, 10), tmp_path / "out", seed=0,
@@ -215,7 +215,7 @@ def test_manoeuvre_benchmark_writes_the_tables(tmp_path):
     assert not np.allclose(known, held)
     assert len(res.test) == 2
     # coverage.csv: the drift benchmark's columns plus kind and commands, for the models with a spread
-    from hybridship.manoeuvre import COVERAGE_COLUMNS
+    from hybridship.evaluation.manoeuvre import COVERAGE_COLUMNS
 
     c = pd.read_csv(tmp_path / "out" / "coverage.csv")
     assert tuple(c.columns) == COVERAGE_COLUMNS
@@ -227,7 +227,7 @@ def test_manoeuvre_benchmark_writes_the_tables(tmp_path):
 
 
 def test_benchmark_refuses_the_same_run_in_train_and_test(tmp_path):
-    from hybridship.manoeuvre import run_manoeuvre_benchmark
+    from hybridship.evaluation.manoeuvre import run_manoeuvre_benchmark
 
     train = _link(tmp_path, "train", SMALL_TRAIN)
     test = _link(tmp_path, "test", SMALL_TRAIN[:1])
@@ -237,9 +237,9 @@ def test_benchmark_refuses_the_same_run_in_train_and_test(tmp_path):
 
 def test_known_commands_on_a_real_run(tmp_path):
     """Known commands: equal to held when the commands are constant, to a direct rollout otherwise."""
-    from hybridship.logs.esso_osaka import EssoRun, esso_to_log
+    from hybridship.datasets.esso_osaka import EssoRun, esso_to_log
     from hybridship.logs.io import log_to_arrays
-    from hybridship.manoeuvre import Run, _fit, make_predictors
+    from hybridship.evaluation.manoeuvre import Run, _fit, make_predictors
     from hybridship.vessel import load_vessel
 
     v = load_vessel("esso_osaka_model")
@@ -275,7 +275,7 @@ def test_benchmark_at_a_coarser_step_through_the_cli(tmp_path, capsys):
     """--step-s 0.5 decimates the 10-Hz runs; the physics' error barely depends on the step,
     and a step that is not a whole multiple of the data's is refused with a one-line error."""
     from hybridship.cli import main
-    from hybridship.manoeuvre import load_runs
+    from hybridship.evaluation.manoeuvre import load_runs
 
     train = _link(tmp_path, "train", SMALL_TRAIN)
     test = _link(tmp_path, "test", SMALL_TEST)

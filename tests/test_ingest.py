@@ -14,7 +14,7 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from hybridship import metrics
+from hybridship.evaluation import metrics
 from hybridship.logs.ingest import ingest, ingest_with_report
 from hybridship.logs.io import LogArrays, LogFormatError, log_to_arrays
 from hybridship.physics.model import DynamicModel

@@ -129,8 +129,6 @@ LONG_FUNCTIONS_ALLOWED = {
     "_kernel",                      # driftoff/engine.py
     "fit_ensemble",                 # residual/ensemble.py
     "train_multistep",              # residual/multistep.py
-    "HybridPredictor.load",         # predictors
-    "run_drift_benchmark",          # drift benchmark
 }
 MAX_FUNCTION_LINES = 100
 

@@ -176,7 +176,7 @@ def test_bias_members_are_centred_on_the_bias_and_reproducible(model, current_lo
 @pytest.mark.slow
 def test_guarded_hybrid_beats_physics_after_a_simulated_dp_loss():
     """Trained on the DP part only; first 20 forecasts after the failure, 60 s ahead."""
-    from hybridship import metrics
+    from hybridship.evaluation import metrics
     from hybridship.sim.scenario import embedded_scenarios
 
     scen = embedded_scenarios(2, 0)

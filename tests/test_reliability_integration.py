@@ -1,6 +1,6 @@
 """Wanted behaviour once hybridship.forecast_inputs is wired into the predictors and the CLI.
 
-These tests describe the integration the lead does in ``predictors.py`` and ``cli.py``
+These tests describe the integration the lead does in ``hybridship/predictors/`` and ``cli.py``
 (see the report of issue 9 and ``docs/reliability.md``); they are marked xfail until then.
 Wanted API:
 

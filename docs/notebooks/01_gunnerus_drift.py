@@ -39,7 +39,7 @@ import matplotlib.pyplot as plt
 import numpy as np
 import torch
 
-from hybridship import metrics
+from hybridship.evaluation import metrics
 from hybridship.physics.model import DynamicModel
 from hybridship.predictors import DeadReckoning, DynamicPredictor, HybridPredictor, as_log_arrays
 from hybridship.residual.ensemble import EnsembleConfig

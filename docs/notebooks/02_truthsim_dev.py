@@ -38,7 +38,7 @@ import numpy as np
 import pandas as pd
 import torch
 
-from hybridship import metrics
+from hybridship.evaluation import metrics
 from hybridship.logs.io import read_log
 from hybridship.predictors import DeadReckoning, DynamicPredictor, HybridPredictor, as_log_arrays
 from hybridship.residual.ensemble import EnsembleConfig

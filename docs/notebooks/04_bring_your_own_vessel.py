@@ -36,7 +36,7 @@ import matplotlib.pyplot as plt
 import numpy as np
 import torch
 
-from hybridship import metrics
+from hybridship.evaluation import metrics
 from hybridship.logs.io import write_log
 from hybridship.physics.model import DynamicModel
 from hybridship.predictors import DeadReckoning, DynamicPredictor, HybridPredictor, as_log_arrays

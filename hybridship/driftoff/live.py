@@ -158,8 +158,9 @@ def _estimated(model, a: LogArrays, idx: int, n_members: int, seed: int):
     est = EnvironmentEstimator(model)
     at = est.run(a, np.array([idx]))
     x, P = est.at_thrust_stop(at.x[0], at.P[0])
-    draws = FilterEstimate(at.rows, at.time_s, x[None], P[None]).sample_environment(n_members, seed)[:, 0]
-    off = CUR.start                                   # draws hold [current (2), load (3), thrust error (3)]
+    draws = FilterEstimate(at.rows, at.time_s, x[None], P[None], at.thrust_error_model).sample_environment(
+        n_members, seed)[:, 0]
+    off = CUR.start                                   # draws hold [current (2), load (3), thrust error]
     return (x[0:3].copy(), x[3:6].copy(), x[LOAD].copy(), draws[:, LOAD.start - off:LOAD.stop - off].copy(),
             draws[:, CUR.start - off:CUR.stop - off].copy())
 

@@ -42,24 +42,26 @@ All quantities are SI and radians inside.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Literal
 
 import numpy as np
 import pandas as pd
 from pydantic import BaseModel, ConfigDict, Field
 
-from ..frames import wrap_pi
+from . import environment_kernel as kernel
 
 #: Forward-difference steps of the filter's Jacobian, per state (SI units, radians).
-_FD_STEP = np.array([1e-3, 1e-3, 1e-5, 1e-4, 1e-4, 1e-6, 1e-3, 1e-3, 1e-5, 1e-5, 1e-7, 1e-3, 1e-3, 1e-3])
+_FD_STEP = np.array([1e-3, 1e-3, 1e-5, 1e-4, 1e-4, 1e-6, 1e-3, 1e-3, 1e-5, 1e-5, 1e-7])
 
-#: State layout of the filter.
+#: State layout of the filter with one thrust-model error per degree of freedom (the
+#: default); :func:`state_names` gives the layout for any setting.
 STATE_NAMES = ("north_m", "east_m", "psi_rad", "u_m_s", "v_m_s", "r_rad_s",
                "current_north_m_s", "current_east_m_s",
                "load_north_m_s2", "load_east_m_s2", "load_yaw_rad_s2",
                "thrust_error_x", "thrust_error_y", "thrust_error_n")
-N_STATE = len(STATE_NAMES)
-ENV = slice(6, 14)          # the environment part: current, load, thrust error
-CUR, LOAD, THR = slice(6, 8), slice(8, 11), slice(11, 14)
+ENV = slice(6, None)        # the environment part: current, load, thrust error
+CUR, LOAD, THR = slice(6, 8), slice(8, 11), slice(11, None)
+THRUST_ERROR_MODELS = ("per_dof", "per_thruster")
 
 
 class EnvironmentConfig(BaseModel):
@@ -69,6 +71,11 @@ class EnvironmentConfig(BaseModel):
     model; the process noise on ``nu`` covers unmodelled fast loads (first-order waves,
     gusts beyond the wind model). The random-walk intensities set how fast ``b``, ``v_c``
     and ``theta`` may move [unit per sqrt(s)].
+
+    ``thrust_error_model`` chooses the structure of ``theta``: ``"per_dof"`` (three
+    efficiency factors on the surge, sway and yaw thrust, prior ``thrust_error_prior``) or
+    ``"per_thruster"`` (one efficiency factor per thruster, acting through that thruster's
+    lever arm, prior ``thrust_error_prior_per_thruster`` each).
     """
 
     model_config = ConfigDict(frozen=True, extra="forbid")
@@ -86,14 +93,16 @@ class EnvironmentConfig(BaseModel):
     load_walk_m_s2: float = Field(2e-5, ge=0)
     load_yaw_walk_rad_s2: float = Field(1e-6, ge=0)
     thrust_error_prior: tuple[float, float, float] = (0.2, 0.2, 0.5)
-    thrust_error_walk: float = Field(2e-3, ge=0)
+    thrust_error_model: Literal["per_dof", "per_thruster"] = "per_thruster"
+    thrust_error_prior_per_thruster: float = Field(0.2, gt=0)
+    thrust_error_walk: float = Field(0.0, ge=0)
     use_velocity: bool = True
     adaptive_measurement_std: bool = True
     wave_window_s: float = Field(30.0, gt=0)
     variance_window_s: float = Field(600.0, gt=0)
     reset_yaw_load_at_stop: bool = True
     filter_step_s: float = Field(1.0, gt=0)
-    yaw_load_kept_at_stop: float = Field(0.0, ge=0.0, le=1.0)
+    yaw_load_kept_at_stop: float = Field(1.0, ge=0.0, le=1.0)
 
 
 @dataclass(frozen=True)
@@ -115,6 +124,7 @@ class EnvironmentEstimate:
     time_s: np.ndarray
     x: np.ndarray
     P: np.ndarray
+    thrust_error_model: str = "per_dof"
 
     @property
     def current_ned_m_s(self) -> np.ndarray:
@@ -134,33 +144,58 @@ class EnvironmentEstimate:
 
     @property
     def thrust_error(self) -> np.ndarray:
-        """Thrust-model error per DOF (fraction of the model's thrust acceleration), (S, 3)."""
+        """Thrust-model error (fractions of the thrust), (S, n_theta): per DOF or per thruster
+        as :attr:`thrust_error_model` says."""
         return self.x[:, THR]
 
+    def thrust_error_accel(self, model, eta, nu, rpm, az, wind) -> np.ndarray:
+        """Acceleration (S, 3) [m/s^2, m/s^2, rad/s^2] of the estimated thrust-model error at
+        the states ``eta, nu`` (S, 3) and commands ``rpm, az`` (S, K + R), ``wind`` (S, 2)."""
+        return thrust_error_accel(model, self.thrust_error_model, eta, nu, rpm, az, wind,
+                                  self.current_ned_m_s, self.thrust_error)
+
     def sample_environment(self, n: int, seed: int = 0) -> np.ndarray:
-        """Draws of ``[v_c (2), b (3), theta (3)]`` from the posterior, shape (n, S, 8).
+        """Draws of ``[v_c (2), b (3), theta (n_theta)]`` from the posterior, shape (n, S, 5 + n_theta).
 
         The draws are centred: their mean is the posterior mean whatever ``n``, so an
         ensemble forecast's mean does not depend on the sampling.
         Deterministic for a given ``seed`` and row: a start's draws do not depend on which
         other starts are forecast with it.
         """
-        S = self.x.shape[0]
-        out = np.broadcast_to(self.x[:, ENV], (n, S, 8)).copy()
+        S, m = self.x.shape[0], self.x.shape[1] - ENV.start
+        out = np.broadcast_to(self.x[:, ENV], (n, S, m)).copy()
         if n < 2:
             return out
         Pe = self.P[:, ENV, ENV]
-        L = np.linalg.cholesky(Pe + 1e-18 * np.eye(8))                  # (S, 8, 8)
-        z = np.stack([np.random.default_rng([seed, int(r)]).standard_normal((n - 1, 8)) for r in self.rows],
-                     axis=1)                                             # (n - 1, S, 8)
-        dev = np.concatenate([np.zeros((1, S, 8)), np.einsum("sij,nsj->nsi", L, z)])
+        L = np.linalg.cholesky(Pe + 1e-18 * np.eye(m))                  # (S, m, m)
+        z = np.stack([np.random.default_rng([seed, int(r)]).standard_normal((n - 1, m)) for r in self.rows],
+                     axis=1)                                             # (n - 1, S, m)
+        dev = np.concatenate([np.zeros((1, S, m)), np.einsum("sij,nsj->nsi", L, z)])
         return out + dev - dev.mean(axis=0)     # centred: the members' mean is the posterior mean
 
 
-def thrust_accel(model, eta, nu, rpm, az, wind) -> np.ndarray:
-    """The model's thrust acceleration ``M^-1 tau_thr`` (B, 3) [m/s^2, m/s^2, rad/s^2]."""
-    _, parts, _ = model.acceleration(eta, nu, rpm=rpm, azimuth_rad=az, wind=wind, return_parts=True)
-    return parts[:, 1] @ model.arrays.m_inv.T
+def state_names(model, config: "EnvironmentConfig") -> tuple[str, ...]:
+    """The filter's state layout for ``model`` and ``config``: :data:`STATE_NAMES` with the
+    thrust-model error per degree of freedom, or ``thrust_error_<thruster>`` per thruster."""
+    if config.thrust_error_model == "per_dof":
+        return STATE_NAMES
+    return STATE_NAMES[:THR.start] + tuple(f"thrust_error_{t.name}" for t in model.vessel.thrusters)
+
+
+def thrust_error_accel(model, thrust_error_model, eta, nu, rpm, az, wind, current_ned, theta) -> np.ndarray:
+    """Acceleration (B, 3) [m/s^2, m/s^2, rad/s^2] of the thrust-model error ``theta``.
+
+    Per DOF, ``theta * M^-1 tau_thr`` componentwise; per thruster, ``M^-1 sum_i theta_i
+    tau_i`` with each thruster's generalised force ``tau_i``. At states ``eta, nu`` (B, 3),
+    commands ``rpm, az`` (B, K + R), ``wind`` (B, 2) and current ``current_ned`` (B, 2) [m/s].
+    """
+    B = len(eta)
+    args = [np.ascontiguousarray(np.broadcast_to(np.asarray(a, dtype=float), (B,) + np.shape(a)[-1:]))
+            for a in (eta, nu, model._channels("rpm", rpm, B, None)[:, 0],
+                      model._channels("azimuth_rad", az, B, None)[:, 0], wind, current_ned, theta)]
+    out = np.empty((B, 3))
+    kernel.thrust_error_accel_batch(*args, model.arrays, thrust_error_model == "per_thruster", out)
+    return out
 
 
 def current_input(v_c_ned: np.ndarray) -> np.ndarray:
@@ -170,9 +205,10 @@ def current_input(v_c_ned: np.ndarray) -> np.ndarray:
 
 
 def external_accel(psi_rad, load_ned, theta, a_thr) -> np.ndarray:
-    """``R(psi)^T b + theta * a_thr``: the estimator's extra body-frame acceleration (..., 3)."""
+    """``R(psi)^T b + theta * a_thr``: the estimator's extra body-frame acceleration (..., 3)
+    (per-DOF thrust error; ``theta = 0`` gives the load alone)."""
     c, s = np.cos(psi_rad), np.sin(psi_rad)
-    out = theta * a_thr
+    out = np.zeros(np.shape(load_ned)) + theta * np.asarray(a_thr)
     out[..., 0] += c * load_ned[..., 0] + s * load_ned[..., 1]
     out[..., 1] += -s * load_ned[..., 0] + c * load_ned[..., 1]
     out[..., 2] += load_ned[..., 2]
@@ -191,12 +227,12 @@ def environment_accel(model, arrays, estimate: EnvironmentEstimate, nu=None) -> 
     nu = np.nan_to_num(arrays.nu if nu is None else nu)
     rpm, az, wind = (np.nan_to_num(v) for v in (arrays.rpm, arrays.azimuth_rad, arrays.wind))
     n = len(arrays.time_s)
-    x = np.full((n, N_STATE), np.nan)
+    x = np.full((n, estimate.x.shape[1]), np.nan)
     x[estimate.rows] = estimate.x
     ok = np.isfinite(x).all(1)
     xe = np.nan_to_num(x)
-    a_thr = thrust_accel(model, eta, nu, rpm, az, wind)
-    acc = external_accel(eta[:, 2], xe[:, LOAD], xe[:, THR], a_thr)
+    acc = external_accel(eta[:, 2], xe[:, LOAD], 0.0, 0.0) + thrust_error_accel(
+        model, estimate.thrust_error_model, eta, nu, rpm, az, wind, xe[:, CUR], xe[:, THR])
     a_env = model.acceleration(eta, nu, rpm=rpm, azimuth_rad=az, wind=wind,
                                current=current_input(xe[:, CUR]), accel_ext=acc)
     out = a_env - model.acceleration(eta, nu, rpm=rpm, azimuth_rad=az, wind=wind)
@@ -216,9 +252,14 @@ class EnvironmentEstimator:
     def __init__(self, model, config: EnvironmentConfig = EnvironmentConfig()):
         self.model = model
         self.config = config
+        #: The filter's state layout (:func:`state_names`).
+        self.state_names = state_names(model, config)
+        n_theta = len(self.state_names) - THR.start
         #: Prior mean and standard deviation of ``theta``; :meth:`fit` may replace them.
-        self.thrust_error_mean = np.zeros(3)
-        self.thrust_error_std = np.asarray(config.thrust_error_prior, dtype=float)
+        self.thrust_error_mean = np.zeros(n_theta)
+        self.thrust_error_std = (np.asarray(config.thrust_error_prior, dtype=float)
+                                 if config.thrust_error_model == "per_dof"
+                                 else np.full(n_theta, config.thrust_error_prior_per_thruster))
 
     # ------------------------------------------------------------------ learning
 
@@ -277,24 +318,21 @@ class EnvironmentEstimator:
 
     # ------------------------------------------------------------------ filtering
 
-    def _initial(self, eta0, nu0):
+    def _prior_sd(self) -> np.ndarray:
+        """Prior standard deviations of the 14 states at a filter start (SI, radians)."""
         c = self.config
-        x = np.zeros(N_STATE)
-        x[0:3], x[3:6] = eta0, nu0
-        x[THR] = self.thrust_error_mean
-        sd = np.concatenate([[c.position_std_m] * 2, [np.radians(c.heading_std_deg)],
-                             [c.velocity_std_m_s] * 2, [np.radians(c.yaw_rate_std_deg_s)],
-                             [c.current_prior_m_s] * 2, [c.load_prior_m_s2] * 2, [c.load_yaw_prior_rad_s2],
-                             self.thrust_error_std])
-        return x, np.diag(sd ** 2)
+        return np.concatenate([[c.position_std_m] * 2, [np.radians(c.heading_std_deg)],
+                               [c.velocity_std_m_s] * 2, [np.radians(c.yaw_rate_std_deg_s)],
+                               [c.current_prior_m_s] * 2, [c.load_prior_m_s2] * 2, [c.load_yaw_prior_rad_s2],
+                               self.thrust_error_std])
 
-    def _process_noise(self, dt):
+    def _process_noise_base(self) -> np.ndarray:
+        """Process-noise intensities (14,) that :func:`.environment_kernel.process_noise` scales by
+        the step: position [m], velocity per second [m/s^2, rad/s^2], random walks per sqrt(s)."""
         c = self.config
-        q = np.concatenate([[1e-6] * 3, [c.accel_noise_m_s2 * dt] * 2, [c.yaw_accel_noise_rad_s2 * dt],
-                            [c.current_walk_m_s] * 2, [c.load_walk_m_s2] * 2, [c.load_yaw_walk_rad_s2],
-                            [c.thrust_error_walk] * 3]) ** 2
-        q[6:] *= dt
-        return np.diag(q)
+        return np.concatenate([[1e-6] * 3, [c.accel_noise_m_s2] * 2, [c.yaw_accel_noise_rad_s2],
+                               [c.current_walk_m_s] * 2, [c.load_walk_m_s2] * 2, [c.load_yaw_walk_rad_s2],
+                               [c.thrust_error_walk] * len(self.thrust_error_mean)])
 
     def _measurement_std(self):
         c = self.config
@@ -328,28 +366,6 @@ class EnvironmentEstimator:
         out[lo: hi + 1] = np.nan_to_num(sd)
         return out
 
-    def _predict(self, x, P, dt, rpm, az, wind, Q):
-        """EKF time update over one step (model Jacobian by forward differences, one batch).
-
-        Inputs were checked once in :meth:`_log_inputs`; the model's unchecked kernels are
-        called here (this runs once per sample).
-        """
-        h = _FD_STEP
-        X = np.repeat(x[None], N_STATE + 1, axis=0)
-        X[1:] += np.diag(h)
-        eta, nu = np.ascontiguousarray(X[:, 0:3]), np.ascontiguousarray(X[:, 3:6])
-        B = X.shape[0]
-        rpm_b, az_b, wind_b = (np.ascontiguousarray(np.broadcast_to(v, (B, v.shape[-1]))) for v in (rpm, az, wind))
-        cur = np.ascontiguousarray(current_input(X[:, CUR]))
-        zeros = np.zeros((B, 3))
-        _, parts = self.model.acceleration_unchecked(eta, nu, rpm_b, az_b, wind_b, cur, zeros, zeros)
-        a_thr = parts[:, 1] @ self.model.arrays.m_inv.T
-        acc = np.ascontiguousarray(external_accel(eta[:, 2], X[:, LOAD], X[:, THR], a_thr))
-        eta1, nu1 = self.model.step_unchecked(eta, nu, rpm_b, az_b, wind_b, cur, zeros, acc, dt)
-        f = np.concatenate([eta1, nu1, X[:, 6:]], axis=1)
-        F = ((f[1:] - f[0]) / h[:, None]).T
-        return f[0], F @ P @ F.T + Q
-
     def at_thrust_stop(self, x, P):
         """State (14,) and covariance at a thrust stop: the yaw environment restarts (module notes).
 
@@ -365,38 +381,11 @@ class EnvironmentEstimator:
         the drift samples identify it afresh; the current keeps acting through the hull as
         the ship starts to move.
         """
-        k = LOAD.start + 2
-        x = x.copy()
-        P = P.copy()
-        current_yaw = self._total_yaw_env(x) - x[k]
-        total = x[k] + current_yaw              # the environment's yaw acceleration under DP
-        kept = self.config.yaw_load_kept_at_stop
-        x[k] = kept * total - current_yaw
-        P[k, :] = 0.0
-        P[:, k] = 0.0
-        P[k, k] = self.config.load_yaw_prior_rad_s2 ** 2 + ((1.0 - kept) * total) ** 2
+        c = self.config
+        x, P = kernel.at_thrust_stop(np.ascontiguousarray(x, dtype=float), np.ascontiguousarray(P, dtype=float),
+                                     float(c.yaw_load_kept_at_stop), float(c.load_yaw_prior_rad_s2),
+                                     self.model.arrays, kernel._workspace(self.model.arrays))
         return x, P
-
-    def _total_yaw_env(self, x) -> float:
-        """Yaw acceleration of the estimated environment at state ``x``: load plus the hull's
-        response to the estimated current [rad/s^2]."""
-        eta, nu = x[None, 0:3], x[None, 3:6]
-        a_c = self.model.acceleration(eta, nu, current=current_input(x[None, CUR]))[0, 2]
-        a_0 = self.model.acceleration(eta, nu)[0, 2]
-        return float(x[LOAD.start + 2] + a_c - a_0)
-
-    @staticmethod
-    def _update(x, P, z, H_rows, r_std, wrap_idx):
-        """EKF measurement update with the components ``H_rows`` of the state measured as ``z``."""
-        y = z - x[H_rows]
-        for k in wrap_idx:
-            y[k] = wrap_pi(y[k])
-        S = P[np.ix_(H_rows, H_rows)] + np.diag(r_std ** 2)
-        PHt = P[:, H_rows]
-        K = np.linalg.solve(S, PHt.T).T
-        x = x + K @ y
-        P = P - K @ PHt.T
-        return x, 0.5 * (P + P.T)
 
     def run(self, arrays, rows=None, *, first_row: int = 0) -> EnvironmentEstimate:
         """Filter the log from ``first_row`` and return the estimates at ``rows`` (default: all).
@@ -433,56 +422,52 @@ class EnvironmentEstimator:
             raise ValueError(f"log: no valid position/heading at or before row {miss[0]} "
                              f"(time {arrays.time_s[miss[0]]:g} s) to start the environment estimate")
         return EnvironmentEstimate(rows, arrays.time_s[rows], np.stack([out_x[int(r)] for r in rows]),
-                                   np.stack([out_P[int(r)] for r in rows]))
+                                   np.stack([out_P[int(r)] for r in rows]), self.config.thrust_error_model)
 
     def _log_inputs(self, arrays, first_row: int, last: int) -> dict:
-        """Measurements, their noise and the model's inputs for every row, checked once."""
+        """Measurements, their noise and the model's inputs at the rows ``first_row .. last`` (zero elsewhere)."""
         n = len(arrays.time_s)
         r_std = np.broadcast_to(self._measurement_std(), (n, 6))
         if self.config.adaptive_measurement_std:
             r_std = np.maximum(r_std, self._wave_motion_std(arrays, first_row, last))
         model = self.model
+        sl = slice(first_row, last + 1)     # only the rows the filter reads are converted
+        w = last + 1 - first_row
+
+        def rows(a):
+            """A window's values (w, ...) placed at their log rows (n, ...); zero elsewhere."""
+            out = np.zeros((n,) + a.shape[1:], dtype=a.dtype)
+            out[sl] = a
+            return out
+
+        nu_ok = np.isfinite(arrays.nu[sl]) & (arrays.nu_logged[sl] if self.config.use_velocity else False)
         return {
-            "z": np.column_stack([arrays.eta, arrays.nu]),
-            "z_ok": np.column_stack([np.isfinite(arrays.eta),
-                                     np.isfinite(arrays.nu) & (arrays.nu_logged if self.config.use_velocity
-                                                               else False)]),
+            "z": rows(np.column_stack([arrays.eta[sl], arrays.nu[sl]])),
+            "z_ok": rows(np.column_stack([np.isfinite(arrays.eta[sl]), nu_ok])),
             "r_std": r_std,
             # command channels padded to the model's width once (thrusters, then rudders)
-            "rpm": model._channels("rpm", np.nan_to_num(arrays.rpm), n, None)[:, 0],
-            "az": model._channels("azimuth_rad", np.nan_to_num(arrays.azimuth_rad), n, None)[:, 0],
-            "wind": np.ascontiguousarray(np.nan_to_num(arrays.wind)),
-            "dp": arrays.dp_active.astype(bool),
+            "rpm": rows(model._channels("rpm", np.nan_to_num(arrays.rpm[sl]), w, None)[:, 0]),
+            "az": rows(model._channels("azimuth_rad", np.nan_to_num(arrays.azimuth_rad[sl]), w, None)[:, 0]),
+            "wind": rows(np.nan_to_num(arrays.wind[sl])),
+            "dp": rows(arrays.dp_active[sl].astype(bool)),
         }
 
     def _filter(self, arrays, grid, want, inputs, out_x, out_P):
         """Run the filter over the rows ``grid`` (increasing), storing the estimates at ``want``."""
-        t, seg = arrays.time_s, arrays.segment_id
-        z, z_ok, r_std, dp = inputs["z"], inputs["z_ok"], inputs["r_std"], inputs["dp"]
-        x = P = None
-        prev = None
-        for i in grid:
-            i = int(i)
-            if x is None or seg[i] != seg[prev] or not np.isfinite(x).all():
-                if not z_ok[i, :3].all():
-                    prev = i
-                    continue
-                x0, P0 = self._initial(z[i, :3], np.where(np.isfinite(z[i, 3:]), z[i, 3:], 0.0))
-                if x is not None and np.isfinite(x).all():       # keep what is known of the environment
-                    gap = max(t[i] - t[prev], 0.0)
-                    x0[ENV], P0[ENV, ENV] = x[ENV], P[ENV, ENV] + self._process_noise(gap)[ENV, ENV]
-                x, P = x0, P0
-            else:
-                dt = t[i] - t[prev]
-                x, P = self._predict(x, P, dt, inputs["rpm"][prev], inputs["az"][prev], inputs["wind"][prev],
-                                     self._process_noise(dt))
-                H_rows = np.flatnonzero(z_ok[i])
-                if H_rows.size:
-                    wrap_idx = [k for k, j in enumerate(H_rows) if j == 2]
-                    x, P = self._update(x, P, z[i, H_rows], H_rows, r_std[i, H_rows], wrap_idx)
-                if dp[prev] and not dp[i] and self.config.reset_yaw_load_at_stop:
-                    x, P = self.at_thrust_stop(x, P)
-            prev = i
-            if i in want:
-                out_x[i] = x
-                out_P[i] = P
+        want = sorted(want)
+        slot = np.full(len(arrays.time_s), -1, dtype=np.int64)
+        slot[want] = np.arange(len(want))
+        n = len(self.state_names)
+        xs, Ps = np.empty((len(want), n)), np.empty((len(want), n, n))
+        done = np.zeros(len(want), dtype=np.bool_)
+        c = self.config
+        kernel.filter_grid(np.ascontiguousarray(grid, dtype=np.int64), slot, arrays.time_s, arrays.segment_id,
+                           inputs["z"], inputs["z_ok"], inputs["r_std"], inputs["rpm"], inputs["az"],
+                           inputs["wind"], inputs["dp"], self.model.arrays, c.thrust_error_model == "per_thruster",
+                           np.asarray(self.thrust_error_mean, float),
+                           self._prior_sd(), self._process_noise_base(), _FD_STEP,
+                           bool(c.reset_yaw_load_at_stop), float(c.yaw_load_kept_at_stop),
+                           float(c.load_yaw_prior_rad_s2), xs, Ps, done)
+        for k, i in enumerate(want):
+            if done[k]:
+                out_x[i], out_P[i] = xs[k], Ps[k]

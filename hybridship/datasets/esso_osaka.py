@@ -51,7 +51,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from .io import LogArrays, LogFormatError, log_to_arrays, validate_log
+from ..logs.io import LogArrays, LogFormatError, log_to_arrays, validate_log
 
 __all__ = [
     "ESSO_COLUMNS",

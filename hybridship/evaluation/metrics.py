@@ -11,7 +11,7 @@ from __future__ import annotations
 import numpy as np
 import pandas as pd
 
-from .frames import wrap_pi
+from ..frames import wrap_pi
 
 #: The paper's horizons [s] and averaging windows [intervals].
 HORIZONS_S = (15, 30, 45, 60)

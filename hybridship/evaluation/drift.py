@@ -38,9 +38,9 @@ import numpy as np
 import pandas as pd
 
 from . import metrics
-from .fileio import atomic_write, markdown_table
-from .predictors import DataOnlyPredictor, DeadReckoning, DynamicPredictor, HybridPredictor, as_log_arrays
-from .residual.ensemble import EnsembleConfig
+from ..fileio import atomic_write, markdown_table
+from ..predictors import DataOnlyPredictor, DeadReckoning, DynamicPredictor, HybridPredictor, as_log_arrays
+from ..residual.ensemble import EnsembleConfig
 
 #: File endings read as logs from a folder.
 LOG_SUFFIXES = (".csv", ".csv.gz", ".parquet", ".pq")
@@ -122,18 +122,7 @@ def run_drift_benchmark(train=None, test=None, out_dir="drift-benchmark", *, ves
         if progress:
             print(msg, flush=True)
 
-    if train is None and test is None:
-        from .sim.scenario import embedded_scenarios
-
-        scen = embedded_scenarios(n_scenarios, seed)
-        train_logs = test_logs = [s.log for s in scen]
-        train_names = test_names = [s.name for s in scen]
-        say(f"embedded scenarios: {', '.join(train_names)} (train on DP parts, test on drifts)")
-    else:
-        if train is None:
-            raise ValueError("train: a folder of training logs is needed when test is given")
-        train_logs, train_names = _logs(train)
-        test_logs, test_names = (train_logs, train_names) if test is None else _logs(test)
+    train_logs, train_names, test_logs, test_names = _benchmark_logs(train, test, n_scenarios, seed, say)
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
     ens_cfg = ensemble_config or EnsembleConfig(n_members=members, seed=seed)
@@ -143,76 +132,18 @@ def run_drift_benchmark(train=None, test=None, out_dir="drift-benchmark", *, ves
     train_arrays = [as_log_arrays(x, hybrid.model.vessel) for x in train_logs]
     test_arrays = [as_log_arrays(x, hybrid.model.vessel) for x in test_logs]
     data_only = DataOnlyPredictor(vessel, ensemble_config=ens_cfg)
-    timing = []
-    for name, pred in (("hybrid", hybrid), ("data_only", data_only)):
-        t0 = time.perf_counter()
-        pred.fit(train_arrays, dp_only=dp_only)
-        timing.append({"model": name, "what": "train", "seconds": time.perf_counter() - t0})
-        say(f"trained {name} on {len(train_arrays)} logs ({timing[-1]['seconds']:.1f} s)")
-    if calibration_scenarios > 0 and hybrid.model.vessel.name == "gunnerus":
-        from .sim.scenario import embedded_scenarios
+    timing = _fit_ensembles({"hybrid": hybrid, "data_only": data_only}, train_arrays, dp_only, say)
+    timing += _calibrate_after_stop(hybrid, calibration_scenarios, seed, n_intervals, horizon_s, say)
+    predictors = _benchmark_models(vessel, hybrid, data_only)
 
-        t0 = time.perf_counter()
-        sims = embedded_scenarios(int(calibration_scenarios), seed + 1000)
-        hybrid.calibrate_after_stop([s.log for s in sims], n_intervals=n_intervals, horizon_s=horizon_s)
-        timing.append({"model": "hybrid", "what": f"calibrate after stop on {len(sims)} simulated DP losses",
-                       "seconds": time.perf_counter() - t0})
-        say(f"calibrated the hybrid's spread after a failure on {len(sims)} simulated DP losses "
-            f"({timing[-1]['seconds']:.1f} s)")
-    elif calibration_scenarios > 0:
-        say(f"no simulated DP losses for vessel {hybrid.model.vessel.name!r}: the spread after a failure is raw")
-    # The same fitted nets with the earlier environment (the 900-s mean residual): a shallow
-    # copy that differs only in where the environment comes from, so no second training.
-    mean_bias = copy.copy(hybrid)
-    mean_bias.environment = "mean"
-    # its spread after a failure stays raw: the after-stop scale was fitted for the estimator
-    mean_bias.calibration = {k: v for k, v in hybrid.calibration.items() if k != "after_stop"}
-    predictors = {"hybrid": (hybrid, {"guard": True}), "hybrid_nets_unguarded": (hybrid, {"guard": False}),
-                  "hybrid_mean_bias": (mean_bias, {"guard": True}),
-                  "dynamic": (DynamicPredictor(vessel), {}), "dead_reckoning": (DeadReckoning(vessel), {}),
-                  "data_only": (data_only, {})}
-
-    dt = float(np.median(np.diff(test_arrays[0].time_s)))
-    all_h = tuple(float(k * dt) for k in range(1, int(round(horizon_s / dt)) + 1))
-    pick = [all_h.index(float(h)) for h in horizons]
-    fc = {}
-    for name, (pred, kw) in predictors.items():
-        t0 = time.perf_counter()
-        fc[name] = [metrics.drift_forecasts(pred, a, n_intervals=n_intervals, horizons_s=all_h, **kw)
-                    for a in test_arrays]
-        sec = time.perf_counter() - t0
-        timing.append({"model": name, "what": f"forecast {len(test_arrays) * n_intervals} x {horizon_s:g} s",
-                       "seconds": sec})
-    timing = pd.DataFrame(timing)
+    fc, all_h, pick, fc_timing = _forecast_after_failures(predictors, test_arrays, n_intervals, horizon_s, horizons)
+    timing = pd.DataFrame(timing + fc_timing)
 
     errors = {name: [metrics.absolute_errors(p[:, pick], t[:, pick]) for p, t, _ in per_log]
               for name, per_log in fc.items()}
     windows = tuple(w for w in metrics.WINDOWS if w <= n_intervals) or (n_intervals,)
     long = metrics.error_table(errors, horizons_s=horizons, windows=windows)
-    cov_rows = []
-    for name in ENSEMBLE_MODELS:
-        P = np.stack([p[:, pick] for p, _, _ in fc[name]])
-        T = np.stack([t[:, pick] for _, t, _ in fc[name]])
-        S = np.stack([s[:, pick] for _, _, s in fc[name]])
-        c = metrics.coverage(P, T, S)
-        for j, h in enumerate(horizons):
-            for k, sig in enumerate((1, 2)):
-                cov_rows.append({"model": name, "horizon_s": h, "sigma": sig, "coverage": float(c[j, k])})
-        if len(test_arrays) >= 2:
-            # Leave-one-log-out spread calibration: scale each log's spread by the factor that
-            # gives 1-sigma coverage on the OTHER logs' drifts (per horizon), then score it.
-            z = np.abs(P - T)[..., :2] / np.maximum(S[..., :2], 1e-12)          # (L, S, nh, 2)
-            Scal = np.empty_like(S)
-            for i in range(len(test_arrays)):
-                others = np.delete(z, i, axis=0)
-                k = np.quantile(np.moveaxis(others, 2, 0).reshape(len(horizons), -1), 0.6827, axis=1)
-                Scal[i] = S[i] * k[None, :, None]
-            c = metrics.coverage(P, T, Scal)
-            for j, h in enumerate(horizons):
-                for k, sig in enumerate((1, 2)):
-                    cov_rows.append({"model": name + "_loo_calibrated", "horizon_s": h, "sigma": sig,
-                                     "coverage": float(c[j, k])})
-    coverage = pd.DataFrame(cov_rows)
+    coverage = _coverage_table(fc, pick, horizons, len(test_arrays))
 
     outputs = {}
     outputs["errors.csv"] = _write_csv(out / "errors.csv", long)
@@ -228,6 +159,122 @@ def run_drift_benchmark(train=None, test=None, out_dir="drift-benchmark", *, ves
     for k, v in outputs.items():
         say(f"wrote {k}: {v}")
     return DriftBenchmarkResult(long, coverage, timing, table2, table3, outputs)
+
+
+def _benchmark_logs(train, test, n_scenarios: int, seed: int, say):
+    """``(train_logs, train_names, test_logs, test_names)``: the folders or lists given, or the
+    embedded scenarios when both are None (train on their DP parts, test on their drifts)."""
+    if train is None and test is None:
+        from ..sim.scenario import embedded_scenarios
+
+        scen = embedded_scenarios(n_scenarios, seed)
+        train_logs = test_logs = [s.log for s in scen]
+        train_names = test_names = [s.name for s in scen]
+        say(f"embedded scenarios: {', '.join(train_names)} (train on DP parts, test on drifts)")
+    else:
+        if train is None:
+            raise ValueError("train: a folder of training logs is needed when test is given")
+        train_logs, train_names = _logs(train)
+        test_logs, test_names = (train_logs, train_names) if test is None else _logs(test)
+    return train_logs, train_names, test_logs, test_names
+
+
+def _fit_ensembles(models: dict, train_arrays, dp_only: bool, say) -> list[dict]:
+    """Fit each model on the training logs, in order; timing rows."""
+    timing = []
+    for name, pred in models.items():
+        t0 = time.perf_counter()
+        pred.fit(train_arrays, dp_only=dp_only)
+        timing.append({"model": name, "what": "train", "seconds": time.perf_counter() - t0})
+        say(f"trained {name} on {len(train_arrays)} logs ({timing[-1]['seconds']:.1f} s)")
+    return timing
+
+
+def _calibrate_after_stop(hybrid, calibration_scenarios: int, seed: int, n_intervals: int, horizon_s: float,
+                          say) -> list[dict]:
+    """Calibrate the hybrid's spread after a failure on simulated DP losses (Gunnerus only); timing rows."""
+    timing = []
+    if calibration_scenarios > 0 and hybrid.model.vessel.name == "gunnerus":
+        from ..sim.scenario import embedded_scenarios
+
+        t0 = time.perf_counter()
+        sims = embedded_scenarios(int(calibration_scenarios), seed + 1000)
+        hybrid.calibrate_after_stop([s.log for s in sims], n_intervals=n_intervals, horizon_s=horizon_s)
+        timing.append({"model": "hybrid", "what": f"calibrate after stop on {len(sims)} simulated DP losses",
+                       "seconds": time.perf_counter() - t0})
+        say(f"calibrated the hybrid's spread after a failure on {len(sims)} simulated DP losses "
+            f"({timing[-1]['seconds']:.1f} s)")
+    elif calibration_scenarios > 0:
+        say(f"no simulated DP losses for vessel {hybrid.model.vessel.name!r}: the spread after a failure is raw")
+    return timing
+
+
+def _benchmark_models(vessel, hybrid, data_only) -> dict:
+    """Table name -> (forecaster, forecast keyword arguments), in table order."""
+    # The same fitted nets with the earlier environment (the 900-s mean residual): a shallow
+    # copy that differs only in where the environment comes from, so no second training.
+    mean_bias = copy.copy(hybrid)
+    mean_bias.environment = "mean"
+    # its spread after a failure stays raw: the after-stop scale was fitted for the estimator
+    mean_bias.calibration = {k: v for k, v in hybrid.calibration.items() if k != "after_stop"}
+    return {"hybrid": (hybrid, {"guard": True}), "hybrid_nets_unguarded": (hybrid, {"guard": False}),
+            "hybrid_mean_bias": (mean_bias, {"guard": True}),
+            "dynamic": (DynamicPredictor(vessel), {}), "dead_reckoning": (DeadReckoning(vessel), {}),
+            "data_only": (data_only, {})}
+
+
+def _forecast_after_failures(predictors: dict, test_arrays, n_intervals: int, horizon_s: float, horizons):
+    """Every model's forecasts after the failure of every test log.
+
+    Returns ``fc`` (name -> per log ``(pred, truth, std)``), every lead time ``all_h`` [s], the
+    indices ``pick`` of the table's ``horizons`` among them, and timing rows.
+    """
+    dt = float(np.median(np.diff(test_arrays[0].time_s)))
+    all_h = tuple(float(k * dt) for k in range(1, int(round(horizon_s / dt)) + 1))
+    pick = [all_h.index(float(h)) for h in horizons]
+    fc, timing = {}, []
+    for name, (pred, kw) in predictors.items():
+        t0 = time.perf_counter()
+        fc[name] = [metrics.drift_forecasts(pred, a, n_intervals=n_intervals, horizons_s=all_h, **kw)
+                    for a in test_arrays]
+        sec = time.perf_counter() - t0
+        timing.append({"model": name, "what": f"forecast {len(test_arrays) * n_intervals} x {horizon_s:g} s",
+                       "seconds": sec})
+    return fc, all_h, pick, timing
+
+
+def _coverage_table(fc: dict, pick, horizons, n_logs: int) -> pd.DataFrame:
+    """Coverage of the ensemble models' spread at 1 and 2 sigma (north and east pooled), and with
+    two or more test logs the leave-one-log-out calibrated spread's (``<model>_loo_calibrated``)."""
+    cov_rows = []
+    for name in ENSEMBLE_MODELS:
+        P = np.stack([p[:, pick] for p, _, _ in fc[name]])
+        T = np.stack([t[:, pick] for _, t, _ in fc[name]])
+        S = np.stack([s[:, pick] for _, _, s in fc[name]])
+        cov_rows += _coverage_rows(name, metrics.coverage(P, T, S), horizons)
+        if n_logs >= 2:
+            cov_rows += _coverage_rows(name + "_loo_calibrated",
+                                       metrics.coverage(P, T, _loo_calibrated_spread(P, T, S, len(horizons))),
+                                       horizons)
+    return pd.DataFrame(cov_rows)
+
+
+def _coverage_rows(name: str, c: np.ndarray, horizons) -> list[dict]:
+    """Rows ``model, horizon_s, sigma, coverage`` from coverages ``c`` (horizon, sigma 1 and 2)."""
+    return [{"model": name, "horizon_s": h, "sigma": sig, "coverage": float(c[j, k])}
+            for j, h in enumerate(horizons) for k, sig in enumerate((1, 2))]
+
+
+def _loo_calibrated_spread(P, T, S, n_horizons: int) -> np.ndarray:
+    """Leave-one-log-out spread calibration: scale each log's spread by the factor that gives
+    1-sigma coverage on the OTHER logs' drifts (per horizon)."""
+    z = np.abs(P - T)[..., :2] / np.maximum(S[..., :2], 1e-12)          # (L, S, nh, 2)
+    Scal = np.empty_like(S)
+    for i in range(P.shape[0]):
+        others = np.delete(z, i, axis=0)
+        k = np.quantile(np.moveaxis(others, 2, 0).reshape(n_horizons, -1), 0.6827, axis=1)
+        Scal[i] = S[i] * k[None, :, None]
+    return Scal
 
 
 def _logs(spec):

@@ -30,15 +30,15 @@ from typing import Callable
 import numpy as np
 import pandas as pd
 
-from .fileio import atomic_write
-from .frames import wrap_pi
-from .logs.esso_osaka import EssoRun, RUN_KINDS, esso_log_arrays, list_runs
-from .logs.ingest import ingest
-from .logs.io import LogArrays
-from .residual.calibration import CalibrationConfig
-from .residual.ensemble import EnsembleConfig
-from .residual.multistep import MultiStepConfig
-from .residual.features import ALL_FEATURES, COMMAND_FEATURES, ResidualConfig
+from ..datasets.esso_osaka import EssoRun, RUN_KINDS, esso_log_arrays, list_runs
+from ..fileio import atomic_write
+from ..frames import wrap_pi
+from ..logs.ingest import ingest
+from ..logs.io import LogArrays
+from ..residual.calibration import CalibrationConfig
+from ..residual.ensemble import EnsembleConfig
+from ..residual.multistep import MultiStepConfig
+from ..residual.features import ALL_FEATURES, COMMAND_FEATURES, ResidualConfig
 
 #: Default forecast horizons [s] (model scale; x 10.4 at full scale).
 HORIZONS_S = (5, 10, 20, 30)
@@ -174,12 +174,12 @@ def _decimate(arrays: LogArrays, vessel, step_s: float | None) -> LogArrays:
 
 
 def load_runs(folder, vessel, *, step_s: float | None = None) -> list[Run]:
-    """Every run of the Esso Osaka format under ``folder`` (see :func:`~hybridship.logs.esso_osaka.list_runs`).
+    """Every run of the Esso Osaka format under ``folder`` (see :func:`~hybridship.datasets.esso_osaka.list_runs`).
 
     ``vessel`` is a Vessel or a packaged name / vessel file; ``step_s`` [s] decimates the
     runs to that step (a whole multiple of the data's; None keeps the data's own).
     """
-    from .vessel import Vessel, load_vessel
+    from ..vessel import Vessel, load_vessel
 
     vessel = vessel if isinstance(vessel, Vessel) else load_vessel(vessel)
     runs = [Run(r, ingest(_decimate(esso_log_arrays(r.path, vessel), vessel, step_s), vessel, purpose="fit"))
@@ -229,7 +229,7 @@ def split_runs(data_dir, out_dir, *, test_fraction: float = 0.3, seed: int = 0) 
 
 def make_predictors(vessel, config: ManoeuvreConfig) -> dict[str, object]:
     """Unfitted predictors by table name."""
-    from .predictors import DataOnlyPredictor, DeadReckoning, DynamicPredictor, HybridPredictor
+    from ..predictors import DataOnlyPredictor, DeadReckoning, DynamicPredictor, HybridPredictor
 
     rc, ec = config.residual, config.ensemble
     return {
@@ -401,7 +401,7 @@ def run_manoeuvre_benchmark(vessel, train_dir, test_dir, horizons_s=HORIZONS_S, 
     -------
     BenchmarkResult
     """
-    from .vessel import Vessel, load_vessel
+    from ..vessel import Vessel, load_vessel
 
     v = vessel if isinstance(vessel, Vessel) else load_vessel(vessel)
     cfg = config or (ManoeuvreConfig.quick(seed) if quick else ManoeuvreConfig())
@@ -563,7 +563,7 @@ def learned_residual(hybrid, runs: list[Run]) -> pd.DataFrame:
     angle), the measured residual ``res_*`` (body-frame acceleration the physics misses)
     and the ensemble's prediction of it ``pred_*`` (learned deviation plus bias).
     """
-    from .residual.features import prepare_log
+    from ..residual.features import prepare_log
 
     out = []
     K = len(hybrid.model.vessel.thrusters)

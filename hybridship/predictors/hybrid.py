@@ -1,11 +1,4 @@
-"""Forecasters with one interface: dead reckoning, the dynamic model, a data-only ensemble, and the hybrid.
-
-All four have ``fit(logs)`` and ``forecast(log, start_times_s, horizon_s=60,
-commands="held")``; the forecast is a :class:`ForecastResult` (arrays, batch-first over
-start times) with a ``to_frame()`` tidy pandas view. Many start times are integrated as
-one batch. ``commands="known"`` feeds the logged future commands to the forecast (a
-manoeuvre whose orders are known); ``"held"`` keeps them at their start values (a DP loss,
-or a forecast whose future orders are unknown). The wind is held in both modes.
+"""The hybrid forecaster: the dynamic model plus a residual ensemble and the out-of-envelope guard.
 
 The hybrid (Skulstad et al. 2022, sec. 3.2) steps the dynamic model one second, asks the
 ensemble for the acceleration residual from the model-predicted velocities,
@@ -17,36 +10,28 @@ position uncertainty.
 
 from __future__ import annotations
 
-import json
-from dataclasses import asdict, dataclass
 from pathlib import Path
 from typing import Iterable
 
 import numpy as np
-import pandas as pd
 
-from .fileio import atomic_write
-from .frames import wrap_2pi, wrap_pi
-from .forecast_inputs import check_or_clip_inputs
-from .logs.ingest import ingest
-from .logs.io import LogArrays
-from .forecast_inputs import FaultFlags, assess_start_window
-from .physics.integrate import rollout_batch
-from .physics.model import DynamicModel
-from .residual.calibration import CalibrationConfig, SpreadCalibration, fit_spread_scale
-from .residual.ensemble import EnsembleConfig, MLPEnsemble, fit_ensemble
-from .residual.features import COMMAND_FEATURES, ResidualConfig, command_feature_columns, command_scales, prepare_log
-from .residual.environment import (EnvironmentConfig, EnvironmentEstimator, current_input,
-                                   environment_accel, thrust_accel)
-from .residual.multistep import MultiStepConfig, collect_starts, train_multistep
-from .residual.guard import CommandRegime, EnvelopeGuard, ThrustRegime
+from ..forecast_inputs import FaultFlags
+from ..frames import wrap_pi
+from ..logs.io import LogArrays
+from ..physics.integrate import rollout_batch
+from ..physics.model import DynamicModel
+from ..residual.calibration import CalibrationConfig, fit_spread_scale
+from ..residual.ensemble import EnsembleConfig, MLPEnsemble, fit_ensemble
+from ..residual.features import COMMAND_FEATURES, ResidualConfig, command_feature_columns, command_scales, prepare_log
+from ..residual.environment import (EnvironmentConfig, EnvironmentEstimator, current_input,
+                                    environment_accel)
+from ..residual.multistep import MultiStepConfig, collect_starts, train_multistep
+from ..residual.guard import CommandRegime, EnvelopeGuard, ThrustRegime
+from .forecast_setup import _check_row_stride, _forecast_setup, as_log_arrays, start_indices
+from .model_file import load_model, save_model
+from .result import ForecastResult
 
-#: Version of the model-file format written by :meth:`HybridPredictor.save`.
-#: 5: the spread calibration, the nets' training mode and the command regime; 4: the
-#: validated vessel description is embedded in the metadata (``vessel_description``), so a
-#: model loads without its vessel file; 3 added the environment estimator; 2 and earlier
-#: stored only the vessel's name.
-MODEL_FORMAT_VERSION = 5
+__all__ = ["AFTER_STOP", "ENVIRONMENT_SOURCES", "HybridPredictor"]
 
 #: Key of the spread calibration for forecasts that start after a failure
 #: (:meth:`HybridPredictor.calibrate_after_stop`).
@@ -54,404 +39,6 @@ AFTER_STOP = "after_stop"
 
 #: Where the hybrid's slowly varying environment comes from (see :class:`HybridPredictor`).
 ENVIRONMENT_SOURCES = ("estimator", "mean")
-
-
-class ModelFileError(ValueError):
-    """A model file is unreadable, tampered, truncated, from another version or vessel."""
-
-
-@dataclass
-class ForecastResult:
-    """Forecasts from S start times over H steps (index 0 = the start).
-
-    Attributes
-    ----------
-    start_time_s : ndarray, shape (S,)
-        Start times [s].
-    lead_s : ndarray, shape (H+1,)
-        Time since the start [s].
-    eta : ndarray, shape (S, H+1, 3)
-        ``[north_m, east_m, psi_rad]`` (the ensemble mean for the hybrid).
-    nu : ndarray, shape (S, H+1, 3)
-        ``[u_m_s, v_m_s, r_rad_s]``.
-    eta_std : ndarray, shape (S, H+1, 3), or None
-        Ensemble standard deviation of ``eta`` [m, m, rad].
-    guard_weight : ndarray, shape (S, H+1), or None
-        The guard's shrink factor applied at each step (0..1).
-    flags : dict of str to ndarray of bool, shape (S,), or None
-        Keys :attr:`hybridship.quality.FaultFlags.ALL`: what was degraded at each start
-        (sensor faults in the start window, clipped inputs, the hybrid's correction
-        shrunk by the guard).
-    notes : tuple of str, length S, or None
-        What was done about each start's faults ("" when clean).
-    """
-
-    start_time_s: np.ndarray
-    lead_s: np.ndarray
-    eta: np.ndarray
-    nu: np.ndarray
-    eta_std: np.ndarray | None = None
-    guard_weight: np.ndarray | None = None
-    flags: dict | None = None
-    notes: tuple | None = None
-
-    def quantiles(self, q) -> np.ndarray:
-        """Gaussian quantiles of ``eta`` from ``eta_std``: shape (len(q), S, H+1, 3) [m, m, rad].
-
-        With a calibrated spread (the hybrid's default) these are the calibrated bands;
-        ``q`` are probabilities in (0, 1).
-        """
-        from scipy.stats import norm
-
-        q = np.atleast_1d(np.asarray(q, dtype=float))
-        if q.size == 0 or not np.all((q > 0) & (q < 1)):
-            raise ValueError(f"quantiles: expected probabilities in (0, 1), got {q.tolist()}")
-        if self.eta_std is None:
-            raise ValueError("quantiles: this forecast has no spread (eta_std is None)")
-        z = norm.ppf(q)[:, None, None, None]
-        return self.eta[None] + z * self.eta_std[None]
-
-    def to_frame(self, quantiles=()) -> pd.DataFrame:
-        """Tidy table: one row per start time and lead time, degrees at this edge.
-
-        ``quantiles`` (probabilities) add columns ``north_q<q>_m``, ``east_q<q>_m`` and
-        ``heading_q<q>_deg`` (see :meth:`quantiles`).
-        """
-        S, H1, _ = self.eta.shape
-        cols = {
-            "start_time_s": np.repeat(self.start_time_s, H1),
-            "lead_s": np.tile(self.lead_s, S),
-            "time_s": (self.start_time_s[:, None] + self.lead_s[None, :]).ravel(),
-            "north_m": self.eta[..., 0].ravel(),
-            "east_m": self.eta[..., 1].ravel(),
-            "heading_deg": np.degrees(wrap_2pi(self.eta[..., 2])).ravel(),
-            "u_m_s": self.nu[..., 0].ravel(),
-            "v_m_s": self.nu[..., 1].ravel(),
-            "r_deg_s": np.degrees(self.nu[..., 2]).ravel(),
-        }
-        if self.eta_std is not None:
-            cols["north_std_m"] = self.eta_std[..., 0].ravel()
-            cols["east_std_m"] = self.eta_std[..., 1].ravel()
-            cols["heading_std_deg"] = np.degrees(self.eta_std[..., 2]).ravel()
-        if len(quantiles):
-            Q = self.quantiles(quantiles)
-            for q, eq in zip(np.atleast_1d(quantiles), Q):
-                cols[f"north_q{q:g}_m"] = eq[..., 0].ravel()
-                cols[f"east_q{q:g}_m"] = eq[..., 1].ravel()
-                cols[f"heading_q{q:g}_deg"] = np.degrees(eq[..., 2]).ravel()
-        if self.guard_weight is not None:
-            cols["guard_weight"] = self.guard_weight.ravel()
-        if self.flags is not None:
-            for name in FaultFlags.ALL:
-                cols[name] = np.repeat(np.asarray(self.flags[name], dtype=bool), H1)
-        if self.notes is not None:
-            cols["notes"] = np.repeat(np.asarray(self.notes, dtype=object), H1)
-        return pd.DataFrame(cols)
-
-
-# --------------------------------------------------------------------------- helpers
-
-
-def as_log_arrays(log, vessel, *, purpose: str = "fit") -> LogArrays:
-    """A path, a DataFrame in the log format or LogArrays, through :func:`hybridship.logs.ingest.ingest`
-    (re-sorted, checked against ``vessel`` once; ``purpose`` "fit" or "forecast")."""
-    return ingest(log, vessel, purpose=purpose)
-
-
-def start_indices(arrays: LogArrays, start_times_s) -> np.ndarray:
-    """Row index of each start time; every start time must be a sample time (within dt/4)."""
-    t = arrays.time_s
-    st = np.atleast_1d(np.asarray(start_times_s, dtype=float))
-    if st.size == 0:
-        raise ValueError("start_times_s: at least one start time is needed")
-    if not np.all(np.isfinite(st)):
-        raise ValueError("start_times_s: contains NaN or inf")
-    idx = np.clip(np.searchsorted(t, st), 0, len(t) - 1)
-    prev = np.clip(idx - 1, 0, len(t) - 1)
-    idx = np.where(np.abs(t[prev] - st) < np.abs(t[idx] - st), prev, idx)
-    dt = float(np.median(np.diff(t))) if len(t) > 1 else 1.0
-    bad = np.abs(t[idx] - st) > 0.25 * dt
-    if bad.any():
-        raise ValueError(f"start_times_s: {st[bad][0]} s is not a sample time of the log "
-                         f"(log spans {t[0]}..{t[-1]} s, dt {dt:g} s)")
-    return idx
-
-
-def _held_inputs(arrays: LogArrays, idx: np.ndarray, *, stop_after_failure: bool = True, wind=None):
-    """Commands and wind at the start rows, shaped (S, 1, width) for the kernels.
-
-    With ``stop_after_failure`` the rpm of a start where station keeping is off
-    (``dp_active == 0``) is taken as 0: after a power failure no thrust is commanded, while
-    the logged shaft speed is still running down for a second or two, and holding that
-    value for a minute would push every forecast. Azimuth angles stay as logged (a
-    stopped propeller still gives drag along its axis).
-    """
-    rpm = arrays.rpm[idx].copy()
-    if stop_after_failure:
-        rpm[arrays.dp_active[idx] == 0] = 0.0
-    wind = arrays.wind[idx] if wind is None else wind
-    return (np.ascontiguousarray(rpm[:, None]), np.ascontiguousarray(arrays.azimuth_rad[idx][:, None]),
-            np.ascontiguousarray(wind[:, None]))
-
-
-class DeadReckoning:
-    """Constant course and speed from the start's 3-s average state (a baseline)."""
-
-    name = "dead_reckoning"
-
-    def __init__(self, vessel="gunnerus", *, start_average_s: float = 3.0):
-        self.model = DynamicModel(vessel)
-        self.config = ResidualConfig(start_average_s=start_average_s)
-
-    def fit(self, logs=(), **_):
-        """Nothing to learn; returns self."""
-        return self
-
-    def forecast(self, log, start_times_s, horizon_s: float = 60.0, *, commands: str = "held") -> ForecastResult:
-        """Constant-velocity tracks from every start time (``commands`` is checked, then unused)."""
-        st = _forecast_setup(self.model, self.config, log, start_times_s, horizon_s, commands=commands)
-        arrays, idx, dt, H, eta0, nu0 = st.arrays, st.idx, st.dt, st.H, st.eta0, st.nu0
-        lead = np.arange(H + 1) * dt
-        c, s = np.cos(eta0[:, 2]), np.sin(eta0[:, 2])
-        vn = c * nu0[:, 0] - s * nu0[:, 1]
-        ve = s * nu0[:, 0] + c * nu0[:, 1]
-        eta = np.empty((len(idx), H + 1, 3))
-        eta[..., 0] = eta0[:, :1] + vn[:, None] * lead
-        eta[..., 1] = eta0[:, 1:2] + ve[:, None] * lead
-        eta[..., 2] = eta0[:, 2:3] + nu0[:, 2:3] * lead
-        nu = np.broadcast_to(nu0[:, None, :], eta.shape).copy()
-        return ForecastResult(arrays.time_s[idx], lead, eta, nu, flags=st.flags, notes=st.notes)
-
-
-@dataclass
-class _Setup:
-    """Everything a forecast needs, after the log and start-window checks."""
-
-    arrays: LogArrays
-    idx: np.ndarray
-    dt: float
-    H: int
-    eta0: np.ndarray
-    nu0: np.ndarray
-    rpm: np.ndarray
-    az: np.ndarray
-    wind: np.ndarray
-    substeps: int
-    flags: dict
-    notes: tuple
-
-
-#: Command modes of ``forecast(..., commands=)``.
-COMMAND_MODES = ("held", "known")
-
-
-def _known_command_steps(arrays: LogArrays, idx: np.ndarray, H: int, rpm0: np.ndarray, az0: np.ndarray,
-                         stop_after_failure: bool = True):
-    """Logged commands of the H steps after each start row, (S, H, K) each.
-
-    Step 0 is the start's command as the held mode uses it (``rpm0``, ``az0``, (S, K));
-    a missing (NaN) command later on holds the last valid one (a dropped sample, not a
-    new order). With ``stop_after_failure`` the rpm of steps where ``dp_active == 0`` is
-    0, as in :func:`_held_inputs`.
-    """
-    n = len(arrays.time_s)
-    last = idx + H - 1
-    if np.any(last >= n):
-        k = int(np.argmax(last >= n))
-        raise ValueError(f"commands='known': the log ends at {arrays.time_s[-1]:g} s, but the start at "
-                         f"{arrays.time_s[idx[k]]:g} s needs logged commands for {H} steps after it; "
-                         "use commands='held' or an earlier start time")
-    rows = idx[:, None] + np.arange(H)[None, :]
-    rpm, az = arrays.rpm[rows], arrays.azimuth_rad[rows]          # (S, H, K), copies
-    rpm[:, 0], az[:, 0] = rpm0, az0
-    if stop_after_failure:
-        rpm[arrays.dp_active[rows] == 0] = 0.0
-    return _hold_last_valid(rpm), _hold_last_valid(az)
-
-
-def _hold_last_valid(steps: np.ndarray) -> np.ndarray:
-    """Replace NaN entries of ``steps`` (S, H, K) by the last finite value before them in H."""
-    pos = np.where(np.isfinite(steps), np.arange(steps.shape[1])[None, :, None], 0)
-    np.maximum.accumulate(pos, axis=1, out=pos)                 # index of the last valid step so far
-    return np.take_along_axis(steps, pos, axis=1)
-
-
-def _forecast_setup(model, config: ResidualConfig, log, start_times_s, horizon_s: float,
-                    stop_after_failure: bool = True, commands: str = "held") -> _Setup:
-    """Checked log arrays, start rows, step, horizon, start states and commands.
-
-    With ``commands="held"`` the commands are the start's, shaped (S, 1, K); with
-    ``commands="known"`` they are the logged commands of the H steps after each start,
-    (S, H, K) (see :func:`_known_command_steps`). The wind is held at its start value
-    in both modes (its future is not known at a start).
-
-    The log goes through :func:`hybridship.logs.ingest.ingest` with ``purpose="forecast"``
-    (re-sorted, checked against the vessel; sensor faults tolerated, format errors refused), the start
-    values through :func:`hybridship.quality.assess_start_window` (valid samples of the
-    window used, faults flagged, a start with too little valid data refused), and the held
-    inputs through :func:`hybridship.limits.check_or_clip_inputs` (clipped to the
-    documented envelope and flagged).
-    """
-    if not horizon_s > 0:
-        raise ValueError(f"horizon_s: must be > 0, got {horizon_s}")
-    if commands not in COMMAND_MODES:
-        raise ValueError(f"commands: expected one of {COMMAND_MODES}, got {commands!r}")
-    arrays = ingest(log, model.vessel, purpose="forecast")
-    idx = start_indices(arrays, start_times_s)
-    dt = arrays.dt_s
-    H = int(round(horizon_s / dt))
-    sw = assess_start_window(arrays, idx, config.start_average_s)
-    rpm, az, wind = _held_inputs(arrays, idx, stop_after_failure=stop_after_failure, wind=sw.wind)
-    if commands == "known":
-        rpm, az = _known_command_steps(arrays, idx, H, rpm[:, 0], az[:, 0], stop_after_failure)
-    chk = check_or_clip_inputs(model.vessel, eta=sw.eta0, nu=sw.nu0, rpm=rpm, azimuth_rad=az,
-                               wind=wind[:, 0], dt_s=dt)
-    flags = {name: np.zeros(len(idx), dtype=bool) for name in FaultFlags.ALL}
-    flags.update({k: np.asarray(v, dtype=bool) for k, v in sw.flags.items()})
-    flags[FaultFlags.INPUT_CLIPPED] = np.asarray(chk.clipped, dtype=bool)
-    notes = tuple(sw.notes) if len(sw.notes) == len(idx) else ("",) * len(idx)
-    return _Setup(arrays, idx, dt, H, chk.eta, chk.nu, np.ascontiguousarray(chk.rpm),
-                  np.ascontiguousarray(chk.azimuth_rad), np.ascontiguousarray(chk.wind[:, None]),
-                  int(chk.substeps), flags, notes)
-
-
-class DynamicPredictor:
-    """The dynamic model alone (Skulstad et al. sec. 3.1): wind held at its start value, commands
-    held (``commands="held"``) or the logged future ones (``commands="known"``)."""
-
-    name = "dynamic"
-
-    def __init__(self, vessel="gunnerus", *, residual_config: ResidualConfig = ResidualConfig(),
-                 stop_after_failure: bool = True):
-        self.model = DynamicModel(vessel)
-        self.residual_config = residual_config
-        self.stop_after_failure = bool(stop_after_failure)
-
-    def fit(self, logs=(), **_):
-        """The physics has nothing to learn from logs here; returns self."""
-        return self
-
-    def forecast(self, log, start_times_s, horizon_s: float = 60.0, *, commands: str = "held") -> ForecastResult:
-        """Integrate the model from every start time (one batch).
-
-        Parameters
-        ----------
-        log : path, DataFrame or LogArrays
-        start_times_s : float or sequence of float
-            Sample times of the log [s].
-        horizon_s : float
-            Forecast horizon [s]; the step is the log's.
-        commands : {"held", "known"}
-            ``held``: commands stay at their start values; ``known``: the logged commands
-            of the steps after each start are used (a manoeuvre whose orders are known;
-            the log must extend ``horizon_s`` past every start).
-        """
-        st = _forecast_setup(self.model, self.residual_config, log, start_times_s, horizon_s,
-                             self.stop_after_failure, commands)
-        res = self.model.rollout(st.eta0, st.nu0, st.H, dt_s=st.dt, substeps=st.substeps, rpm=st.rpm,
-                                 azimuth_rad=st.az, wind=st.wind)
-        return ForecastResult(st.arrays.time_s[st.idx], res.time_s, res.eta, res.nu, flags=st.flags, notes=st.notes)
-
-
-class DataOnlyPredictor:
-    """A data-only baseline: an ensemble of the hybrid's size that predicts the whole acceleration.
-
-    No physics: each member maps the present velocities, commands, wind and the previous
-    acceleration to the next one-step acceleration ``(nu(t+1) - nu(t)) / dt`` and is
-    iterated ``H`` steps; positions follow by integrating the velocities. Each member runs
-    its own trajectory (one batched array operation over members and start times); the
-    forecast is the member mean and the spread their standard deviation.
-
-    Features, in order: ``u, v, r`` [m/s, m/s, rad/s]; each thruster's rpm / max rpm; cos
-    and sin of each rotatable thruster's angle; the hull's velocity through the air in the
-    body frame [m/s]; the previous acceleration.
-    """
-
-    name = "data_only"
-
-    def __init__(self, vessel="gunnerus", *, ensemble_config: EnsembleConfig = EnsembleConfig(),
-                 start_average_s: float = 3.0, stop_after_failure: bool = True):
-        self.model = DynamicModel(vessel)
-        self.ensemble_config = ensemble_config
-        self.config = ResidualConfig(start_average_s=start_average_s)
-        self.stop_after_failure = bool(stop_after_failure)
-        self.ensemble: MLPEnsemble | None = None
-        # one scale per command channel: thrusters by their max rpm, rudders (no rpm) by 1
-        v = self.model.vessel
-        self._rpm_scale = np.array([t.max_rpm for t in v.thrusters] + [1.0] * len(v.rudders), dtype=float)
-        self._rot = np.array(self.model.vessel.rotatable, dtype=bool)
-
-    def _features(self, nu, rpm, az, wind, psi, acc_prev):
-        """Feature rows (..., F) from arrays with matching leading shapes."""
-        rel = wind[..., 0:1] * np.stack([np.cos(wind[..., 1] - psi), np.sin(wind[..., 1] - psi)], axis=-1)
-        rel = nu[..., :2] - rel      # the hull's velocity through the air, body axes (wind blows FROM dir)
-        a = az[..., self._rot]
-        return np.concatenate([nu, rpm / self._rpm_scale, np.cos(a), np.sin(a), rel, acc_prev], axis=-1)
-
-    def fit(self, logs: Iterable, *, dp_only: bool = True, progress: bool = False,
-            row_stride: int = 1) -> "DataOnlyPredictor":
-        """Learn one-step accelerations from logs (by default their DP part only), from every
-        ``row_stride``-th usable row (see :meth:`HybridPredictor.fit`)."""
-        stride = _check_row_stride(row_stride)
-        Xs, Ys, segs = [], [], []
-        for k, log in enumerate(logs):
-            a = as_log_arrays(log, self.model.vessel)
-            dt = float(np.median(np.diff(a.time_s)))
-            seg = a.segment_id
-            ok = np.zeros(len(a.time_s), bool)
-            ok[2:] = (seg[2:] == seg[1:-1]) & (seg[1:-1] == seg[:-2])
-            if dp_only:
-                ok[1:] &= a.dp_active[:-1].astype(bool) & a.dp_active[1:].astype(bool)
-            rows = np.flatnonzero(ok)               # predict row i from row i - 1
-            if rows.size == 0:
-                continue
-            acc_prev = (a.nu[rows - 1] - a.nu[rows - 2]) / dt
-            Xs.append(self._features(a.nu[rows - 1], a.rpm[rows - 1], a.azimuth_rad[rows - 1],
-                                     a.wind[rows - 1], a.eta[rows - 1, 2], acc_prev))
-            Ys.append((a.nu[rows] - a.nu[rows - 1]) / dt)
-            segs.append(seg[rows] + 10_000 * k)
-        if not Xs:
-            raise ValueError("fit: no usable training rows in the logs")
-        X, Y, seg = (np.concatenate(z)[::stride] for z in (Xs, Ys, segs))
-        self.ensemble = fit_ensemble(X, Y, self.ensemble_config, segment_id=seg, progress=progress)
-        return self
-
-    def forecast(self, log, start_times_s, horizon_s: float = 60.0, *, commands: str = "held") -> ForecastResult:
-        """Iterate the ensemble from every start time; wind held, commands held or known
-        (see :meth:`DynamicPredictor.forecast`)."""
-        if self.ensemble is None:
-            raise RuntimeError("DataOnlyPredictor: call fit() before forecast()")
-        st = _forecast_setup(self.model, self.config, log, start_times_s, horizon_s, self.stop_after_failure,
-                             commands)
-        arrays, idx, dt, H, eta0, nu0 = st.arrays, st.idx, st.dt, st.H, st.eta0, st.nu0
-        rpm, az, wind = st.rpm, st.az, st.wind[:, 0]          # commands (S, 1 or H, K)
-        n_avg = max(1, int(round(self.config.start_average_s / dt)))
-        lo = np.maximum(idx - n_avg, 0)
-        same = arrays.segment_id[lo] == arrays.segment_id[idx]
-        acc0 = np.where(same[:, None], (arrays.nu[idx] - arrays.nu[lo]) / (np.maximum(idx - lo, 1) * dt)[:, None], 0.0)
-        acc0 = np.nan_to_num(acc0)      # a missing sample at either end: start from zero acceleration
-        E, S = self.ensemble.n_members, len(idx)
-        eta = np.broadcast_to(eta0, (E, S, 3)).copy()
-        nu = np.broadcast_to(nu0, (E, S, 3)).copy()
-        acc = np.broadcast_to(acc0, (E, S, 3)).copy()
-        out = np.empty((E, S, H + 1, 3))
-        out_nu = np.empty((E, S, H + 1, 3))
-        out[:, :, 0], out_nu[:, :, 0] = eta, nu
-        rpm_e, az_e, wind_e = (np.broadcast_to(x, (E,) + x.shape) for x in (rpm, az, wind))
-        for j in range(H):
-            jc = j if rpm.shape[1] > 1 else 0
-            X = self._features(nu, rpm_e[:, :, jc], az_e[:, :, jc], wind_e, eta[..., 2], acc)
-            acc = self.ensemble.predict_members(X)                 # (E, S, 3), member e on its own path
-            nu_mid = nu + 0.5 * dt * acc
-            psi_mid = eta[..., 2] + 0.5 * dt * nu_mid[..., 2]
-            c, s = np.cos(psi_mid), np.sin(psi_mid)
-            eta[..., 0] += dt * (c * nu_mid[..., 0] - s * nu_mid[..., 1])
-            eta[..., 1] += dt * (s * nu_mid[..., 0] + c * nu_mid[..., 1])
-            eta[..., 2] += dt * nu_mid[..., 2]
-            nu = nu + dt * acc
-            out[:, :, j + 1], out_nu[:, :, j + 1] = eta, nu
-        return ForecastResult(arrays.time_s[idx], np.arange(H + 1) * dt, out.mean(axis=0), out_nu.mean(axis=0),
-                              out.std(axis=0), flags=st.flags, notes=st.notes)
 
 
 class HybridPredictor:
@@ -710,7 +297,7 @@ class HybridPredictor:
 
     def _calibrate(self, logs, cuts, cal: CalibrationConfig, dp_only: bool, mode: str):
         """Calibration of one command mode from held-back starts; (None, 0) without any start."""
-        from .frames import wrap_pi
+        from ..frames import wrap_pi
 
         cand = []
         for a, cut in zip(logs, cuts):
@@ -830,8 +417,8 @@ class HybridPredictor:
         eta0, nu0 = est.x[:, 0:3].copy(), est.x[:, 3:6].copy()
         draws = est.sample_environment(n_members, self.ensemble_config.seed)      # (E, S, 8)
         current = np.ascontiguousarray(current_input(est.current_ned_m_s)[:, None, :])
-        a_thr = thrust_accel(self.model, eta0, nu0, st.rpm[:, 0], st.az[:, 0], st.wind[:, 0])
-        acc_ext = np.ascontiguousarray((est.thrust_error * a_thr)[:, None, :])
+        a_err = est.thrust_error_accel(self.model, eta0, nu0, st.rpm[:, 0], st.az[:, 0], st.wind[:, 0])
+        acc_ext = np.ascontiguousarray(a_err[:, None, :])
         return eta0, nu0, np.zeros_like(eta0), draws[..., 2:5], current, acc_ext
     def _calibrated_forecast_std(self, std, lead_s, commands, after_stop):
         """The spread each start reports: starts after a failure (``after_stop``, (S,)) use the
@@ -875,7 +462,7 @@ class HybridPredictor:
         cal : CalibrationConfig, optional
             ``sigma``, ``coverage`` and ``floor_quantile`` of the fit (default: the model's).
         """
-        from . import metrics
+        from ..evaluation import metrics
 
         self._check_fitted()
         cal = self.calibration_config if cal is None else cal
@@ -1019,54 +606,11 @@ class HybridPredictor:
 
     # ------------------------------------------------------------------ model files
 
-    def _metadata(self) -> dict:
-        v = self.model.vessel
-        return {
-            "format": "hybridship-model", "format_version": MODEL_FORMAT_VERSION,
-            "kind": "HybridPredictor", "vessel": v.name,
-            "vessel_description": v.model_dump(mode="json"),
-            "vessel_fingerprint": _vessel_fingerprint(v),
-            "features": list(self.residual_config.features),
-            "residual_config": asdict(self.residual_config),
-            "ensemble_config": asdict(self.ensemble_config),
-            "use_guard": self.use_guard, "guard_quantile": self.guard_quantile,
-            "stop_after_failure": self.stop_after_failure,
-            "guard": {"d0": self.guard.d0, "scale": self.guard.scale},
-            "thrust_regime": {"lo": self.thrust_regime.lo},
-            "environment": self.environment,
-            "environment_config": self.environment_config.model_dump(mode="json"),
-            "environment_window_s": self.environment_window_s,
-            "nets_after_stop": self.nets_after_stop,
-            "thrust_error_prior": {"mean": self.estimator.thrust_error_mean.tolist(),
-                                   "std": self.estimator.thrust_error_std.tolist()},
-            "calibration_config": asdict(self.calibration_config),
-            "training": self.training, "multistep_config": asdict(self.multistep_config),
-            "command_guard": self.command_guard,
-            "command_regime": None if self.command_regime is None else {
-                k: getattr(self.command_regime, k) for k in ("rpm_eps", "froude_lo", "angle_hard_rad", "length_m")},
-            "calibrated_commands": sorted(self.calibration),
-            "training_info": self.training_info,
-        }
-
     def save(self, path) -> Path:
-        """Write the model as one ``.npz`` (arrays only, no pickle) with JSON metadata, atomically."""
+        """Write the model as one ``.npz`` (arrays only, no pickle) with JSON metadata, atomically
+        (see :mod:`hybridship.predictors.model_file`)."""
         self._check_fitted()
-        path = Path(path)
-        e, g = self.ensemble, self.guard
-        arrays = {f"w{i}": w for i, w in enumerate(e.weights)}
-        arrays.update(x_mean=e.x_mean, x_std=e.x_std, y_mean=e.y_mean, y_std=e.y_std,
-                      guard_mean=g.mean, guard_inv_cov=g.inv_cov, thrust_scale=self.thrust_regime.scale)
-        if self.command_regime is not None:
-            cr = self.command_regime
-            arrays.update(cmd_regime_weights=cr.weights, cmd_regime_n_train=cr.n_train, cmd_regime_n_held=cr.n_held)
-        for mode, c in self.calibration.items():
-            for what, sc in c.items():
-                arrays[f"cal_{mode}_{what}"] = np.stack([sc.lead_s, sc.scale, sc.floor])
-        meta_d = self._metadata()
-        meta_d["content_sha256"] = _content_hash(arrays)
-        meta = json.dumps(meta_d, sort_keys=True)
-        arrays["metadata_json"] = np.frombuffer(meta.encode("utf-8"), dtype=np.uint8)
-        return atomic_write(path, lambda fh: np.savez(fh, **arrays))
+        return save_model(self, path)
 
     @classmethod
     def load(cls, path, vessel=None) -> "HybridPredictor":
@@ -1085,143 +629,4 @@ class HybridPredictor:
         Raises :class:`ModelFileError` for an unreadable, truncated or tampered file, another
         format version, or a vessel that differs from the one the model was trained for.
         """
-        path = Path(path)
-        try:
-            with np.load(path, allow_pickle=False) as z:
-                data = {k: z[k] for k in z.files}
-        except FileNotFoundError:
-            raise ModelFileError(f"{path}: model file not found") from None
-        except Exception as err:  # zip/npy parse errors of a damaged file
-            raise ModelFileError(f"{path}: not a readable hybridship model file ({type(err).__name__}: {err})") from None
-        try:
-            meta = json.loads(bytes(data["metadata_json"]).decode("utf-8"))
-        except Exception:
-            raise ModelFileError(f"{path}: metadata missing or damaged") from None
-        if meta.get("format") != "hybridship-model":
-            raise ModelFileError(f"{path}: not a hybridship model file")
-        version = meta.get("format_version")
-        if version != MODEL_FORMAT_VERSION:
-            older = (f": written by an older hybridship (format {version}); retrain with `hybridship train` "
-                     f"(or HybridPredictor.fit) to write a version-{MODEL_FORMAT_VERSION} file, which carries "
-                     f"its vessel, its environment estimator and its spread calibration"
-                     if isinstance(version, int) and not isinstance(version, bool) and 1 <= version < MODEL_FORMAT_VERSION
-                     else "")
-            raise ModelFileError(f"{path}: model format version {version} is not supported "
-                                 f"(this hybridship reads version {MODEL_FORMAT_VERSION}){older}")
-        content = {k: v for k, v in data.items() if k != "metadata_json"}
-        if meta.get("content_sha256") != _content_hash(content):
-            raise ModelFileError(f"{path}: content checksum does not match the metadata: the file was "
-                                 f"tampered with or damaged")
-        try:
-            residual_config = ResidualConfig(**{k: tuple(v) if k == "features" else v
-                                                for k, v in meta["residual_config"].items()})
-            embedded = vessel is None
-            if embedded:
-                vessel = _embedded_vessel(meta["vessel_description"], path)
-            obj = cls(vessel, residual_config=residual_config,
-                      ensemble_config=EnsembleConfig(**meta["ensemble_config"]), guard=meta["use_guard"],
-                      guard_quantile=meta["guard_quantile"], stop_after_failure=meta["stop_after_failure"],
-                      environment=meta["environment"],
-                      environment_config=EnvironmentConfig(**meta["environment_config"]),
-                      environment_window_s=meta["environment_window_s"],
-                      nets_after_stop=meta["nets_after_stop"],
-                      calibration_config=CalibrationConfig(**meta["calibration_config"]),
-                      training=meta["training"], multistep_config=MultiStepConfig(**meta["multistep_config"]),
-                      command_guard=meta["command_guard"])
-            thr_mean = np.asarray(meta["thrust_error_prior"]["mean"], dtype=float).reshape(3)
-            thr_std = np.asarray(meta["thrust_error_prior"]["std"], dtype=float).reshape(3)
-            if not (np.all(np.isfinite(thr_mean)) and np.all(thr_std > 0)):
-                raise ValueError("thrust_error_prior: expected finite means and positive spreads")
-            regime_meta = meta["command_regime"]
-            calibrated_commands = list(meta["calibrated_commands"])
-            fingerprint = meta["vessel_fingerprint"]
-            guard_d0, guard_scale = float(meta["guard"]["d0"]), float(meta["guard"]["scale"])
-            thrust_lo = float(meta["thrust_regime"]["lo"])
-        except (KeyError, TypeError, ValueError, AttributeError) as err:
-            if isinstance(err, ModelFileError) or "VesselFileError" in type(err).__name__:
-                raise
-            raise ModelFileError(f"{path}: damaged model metadata ({type(err).__name__}: {err})") from None
-        if _vessel_fingerprint(obj.model.vessel) != fingerprint:
-            if embedded:
-                raise ModelFileError(f"{path}: the embedded description of vessel {meta['vessel']!r} does not "
-                                     f"match its fingerprint: the metadata was edited or damaged")
-            raise ModelFileError(f"{path}: trained for vessel {meta['vessel']!r} with other parameters; "
-                                 f"refusing to use it with vessel {obj.model.vessel.name!r}")
-        try:
-            weights = [np.asarray(data[f"w{i}"], dtype=float) for i in range(6)]
-            n_in = len(residual_config.features)
-            E, H = weights[0].shape[0], weights[0].shape[2]
-            expected = [(E, n_in, H), (E, 1, H), (E, H, H), (E, 1, H), (E, H, 3), (E, 1, 3)]
-            if [w.shape for w in weights] != expected:
-                raise ValueError(f"weight shapes {[w.shape for w in weights]} do not match {expected}")
-            ens = MLPEnsemble(weights, data["x_mean"], data["x_std"], data["y_mean"], data["y_std"])
-            guard = EnvelopeGuard(data["guard_mean"], data["guard_inv_cov"], guard_d0, guard_scale)
-            thrust_regime = ThrustRegime(np.asarray(data["thrust_scale"], dtype=float), thrust_lo)
-            calibration = {}
-            for mode in calibrated_commands:
-                calibration[mode] = {}
-                for what in ("position", "heading"):
-                    a = np.asarray(data[f"cal_{mode}_{what}"], dtype=float)
-                    if a.ndim != 2 or a.shape[0] != 3:
-                        raise ValueError(f"cal_{mode}_{what} has shape {a.shape}, expected (3, H)")
-                    calibration[mode][what] = SpreadCalibration(a[0], a[1], a[2])
-            for name, a in [("weights", np.concatenate([w.ravel() for w in weights])), ("x_std", ens.x_std),
-                            ("y_std", ens.y_std), ("guard_inv_cov", guard.inv_cov),
-                            ("thrust_scale", thrust_regime.scale)]:
-                if not np.all(np.isfinite(a)):
-                    raise ValueError(f"{name} contains NaN or inf")
-        except (KeyError, ValueError) as err:
-            raise ModelFileError(f"{path}: damaged model contents: {err}") from None
-        obj.ensemble, obj.guard, obj.thrust_regime = ens, guard, thrust_regime
-        obj.estimator = EnvironmentEstimator(obj.model, obj.environment_config)
-        obj.estimator.thrust_error_mean, obj.estimator.thrust_error_std = thr_mean, thr_std
-        obj.calibration = calibration
-        obj.command_regime = None
-        if regime_meta is not None:
-            try:
-                w = np.asarray(data["cmd_regime_weights"], dtype=float)
-                if w.shape != (CommandRegime.N_REGIMES,) or not np.all((w >= 0) & (w <= 1)):
-                    raise ValueError(f"cmd_regime_weights: expected {CommandRegime.N_REGIMES} weights in [0, 1]")
-                obj.command_regime = CommandRegime(w, np.asarray(data["cmd_regime_n_train"]),
-                                                   np.asarray(data["cmd_regime_n_held"]), **regime_meta)
-            except (KeyError, TypeError, ValueError) as err:
-                raise ModelFileError(f"{path}: damaged model contents: {err}") from None
-        obj.training_info = meta.get("training_info", {})
-        return obj
-
-
-def _check_row_stride(row_stride) -> int:
-    if isinstance(row_stride, bool) or not isinstance(row_stride, (int, np.integer)) or row_stride < 1:
-        raise ValueError(f"row_stride: expected an integer >= 1, got {row_stride!r}")
-    return int(row_stride)
-
-
-def _embedded_vessel(description, path):
-    """The :class:`~hybridship.vessel.Vessel` embedded in a model file's metadata (validated again)."""
-    from .vessel import VesselFileError, vessel_from_dict
-
-    if not isinstance(description, dict):
-        raise ModelFileError(f"{path}: damaged model metadata: vessel_description is not a table")
-    try:
-        return vessel_from_dict(description, source=f"{Path(path).name} (embedded vessel)")
-    except VesselFileError as err:
-        raise ModelFileError(f"{path}: damaged model metadata: the embedded vessel is invalid: {err}") from None
-
-
-def _content_hash(arrays: dict) -> str:
-    """sha256 over every array's name, dtype, shape and bytes (sorted by name)."""
-    import hashlib
-
-    h = hashlib.sha256()
-    for name in sorted(arrays):
-        a = np.ascontiguousarray(arrays[name])
-        h.update(f"{name}|{a.dtype.str}|{a.shape}|".encode())
-        h.update(a.tobytes())
-    return h.hexdigest()
-
-
-def _vessel_fingerprint(vessel) -> str:
-    """A stable hash of the validated vessel description (so a model is not used on another ship)."""
-    from .vessel import fingerprint
-
-    return fingerprint(vessel)
+        return load_model(cls, path, vessel)

@@ -1,0 +1,48 @@
+"""The dynamic model alone as a forecaster (Skulstad et al. 2022, sec. 3.1)."""
+
+from __future__ import annotations
+
+from ..physics.model import DynamicModel
+from ..residual.features import ResidualConfig
+from .forecast_setup import _forecast_setup
+from .result import ForecastResult
+
+__all__ = ["DynamicPredictor"]
+
+
+class DynamicPredictor:
+    """The dynamic model alone (Skulstad et al. sec. 3.1): wind held at its start value, commands
+    held (``commands="held"``) or the logged future ones (``commands="known"``)."""
+
+    name = "dynamic"
+
+    def __init__(self, vessel="gunnerus", *, residual_config: ResidualConfig = ResidualConfig(),
+                 stop_after_failure: bool = True):
+        self.model = DynamicModel(vessel)
+        self.residual_config = residual_config
+        self.stop_after_failure = bool(stop_after_failure)
+
+    def fit(self, logs=(), **_):
+        """The physics has nothing to learn from logs here; returns self."""
+        return self
+
+    def forecast(self, log, start_times_s, horizon_s: float = 60.0, *, commands: str = "held") -> ForecastResult:
+        """Integrate the model from every start time (one batch).
+
+        Parameters
+        ----------
+        log : path, DataFrame or LogArrays
+        start_times_s : float or sequence of float
+            Sample times of the log [s].
+        horizon_s : float
+            Forecast horizon [s]; the step is the log's.
+        commands : {"held", "known"}
+            ``held``: commands stay at their start values; ``known``: the logged commands
+            of the steps after each start are used (a manoeuvre whose orders are known;
+            the log must extend ``horizon_s`` past every start).
+        """
+        st = _forecast_setup(self.model, self.residual_config, log, start_times_s, horizon_s,
+                             self.stop_after_failure, commands)
+        res = self.model.rollout(st.eta0, st.nu0, st.H, dt_s=st.dt, substeps=st.substeps, rpm=st.rpm,
+                                 azimuth_rad=st.az, wind=st.wind)
+        return ForecastResult(st.arrays.time_s[st.idx], res.time_s, res.eta, res.nu, flags=st.flags, notes=st.notes)

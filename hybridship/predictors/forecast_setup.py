@@ -1,0 +1,160 @@
+"""What every forecast does first: the log through the one ingest, start rows, checked start
+states and the commands (held or known) of each start.
+
+:func:`_forecast_setup` runs the log through :func:`hybridship.logs.ingest.ingest`, the start
+window through :func:`hybridship.quality.assess_start_window` and the inputs through
+:func:`hybridship.limits.check_or_clip_inputs`; every forecaster of
+:mod:`hybridship.predictors` starts from its result.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..forecast_inputs import FaultFlags, assess_start_window, check_or_clip_inputs
+from ..logs.ingest import ingest
+from ..logs.io import LogArrays
+from ..residual.features import ResidualConfig
+
+__all__ = ["COMMAND_MODES", "as_log_arrays", "start_indices"]
+
+
+def as_log_arrays(log, vessel, *, purpose: str = "fit") -> LogArrays:
+    """A path, a DataFrame in the log format or LogArrays, through :func:`hybridship.logs.ingest.ingest`
+    (re-sorted, checked against ``vessel`` once; ``purpose`` "fit" or "forecast")."""
+    return ingest(log, vessel, purpose=purpose)
+
+
+def start_indices(arrays: LogArrays, start_times_s) -> np.ndarray:
+    """Row index of each start time; every start time must be a sample time (within dt/4)."""
+    t = arrays.time_s
+    st = np.atleast_1d(np.asarray(start_times_s, dtype=float))
+    if st.size == 0:
+        raise ValueError("start_times_s: at least one start time is needed")
+    if not np.all(np.isfinite(st)):
+        raise ValueError("start_times_s: contains NaN or inf")
+    idx = np.clip(np.searchsorted(t, st), 0, len(t) - 1)
+    prev = np.clip(idx - 1, 0, len(t) - 1)
+    idx = np.where(np.abs(t[prev] - st) < np.abs(t[idx] - st), prev, idx)
+    dt = float(np.median(np.diff(t))) if len(t) > 1 else 1.0
+    bad = np.abs(t[idx] - st) > 0.25 * dt
+    if bad.any():
+        raise ValueError(f"start_times_s: {st[bad][0]} s is not a sample time of the log "
+                         f"(log spans {t[0]}..{t[-1]} s, dt {dt:g} s)")
+    return idx
+
+
+def _held_inputs(arrays: LogArrays, idx: np.ndarray, *, stop_after_failure: bool = True, wind=None):
+    """Commands and wind at the start rows, shaped (S, 1, width) for the kernels.
+
+    With ``stop_after_failure`` the rpm of a start where station keeping is off
+    (``dp_active == 0``) is taken as 0: after a power failure no thrust is commanded, while
+    the logged shaft speed is still running down for a second or two, and holding that
+    value for a minute would push every forecast. Azimuth angles stay as logged (a
+    stopped propeller still gives drag along its axis).
+    """
+    rpm = arrays.rpm[idx].copy()
+    if stop_after_failure:
+        rpm[arrays.dp_active[idx] == 0] = 0.0
+    wind = arrays.wind[idx] if wind is None else wind
+    return (np.ascontiguousarray(rpm[:, None]), np.ascontiguousarray(arrays.azimuth_rad[idx][:, None]),
+            np.ascontiguousarray(wind[:, None]))
+
+
+@dataclass
+class _Setup:
+    """Everything a forecast needs, after the log and start-window checks."""
+
+    arrays: LogArrays
+    idx: np.ndarray
+    dt: float
+    H: int
+    eta0: np.ndarray
+    nu0: np.ndarray
+    rpm: np.ndarray
+    az: np.ndarray
+    wind: np.ndarray
+    substeps: int
+    flags: dict
+    notes: tuple
+
+
+#: Command modes of ``forecast(..., commands=)``.
+COMMAND_MODES = ("held", "known")
+
+
+def _known_command_steps(arrays: LogArrays, idx: np.ndarray, H: int, rpm0: np.ndarray, az0: np.ndarray,
+                         stop_after_failure: bool = True):
+    """Logged commands of the H steps after each start row, (S, H, K) each.
+
+    Step 0 is the start's command as the held mode uses it (``rpm0``, ``az0``, (S, K));
+    a missing (NaN) command later on holds the last valid one (a dropped sample, not a
+    new order). With ``stop_after_failure`` the rpm of steps where ``dp_active == 0`` is
+    0, as in :func:`_held_inputs`.
+    """
+    n = len(arrays.time_s)
+    last = idx + H - 1
+    if np.any(last >= n):
+        k = int(np.argmax(last >= n))
+        raise ValueError(f"commands='known': the log ends at {arrays.time_s[-1]:g} s, but the start at "
+                         f"{arrays.time_s[idx[k]]:g} s needs logged commands for {H} steps after it; "
+                         "use commands='held' or an earlier start time")
+    rows = idx[:, None] + np.arange(H)[None, :]
+    rpm, az = arrays.rpm[rows], arrays.azimuth_rad[rows]          # (S, H, K), copies
+    rpm[:, 0], az[:, 0] = rpm0, az0
+    if stop_after_failure:
+        rpm[arrays.dp_active[rows] == 0] = 0.0
+    return _hold_last_valid(rpm), _hold_last_valid(az)
+
+
+def _hold_last_valid(steps: np.ndarray) -> np.ndarray:
+    """Replace NaN entries of ``steps`` (S, H, K) by the last finite value before them in H."""
+    pos = np.where(np.isfinite(steps), np.arange(steps.shape[1])[None, :, None], 0)
+    np.maximum.accumulate(pos, axis=1, out=pos)                 # index of the last valid step so far
+    return np.take_along_axis(steps, pos, axis=1)
+
+
+def _forecast_setup(model, config: ResidualConfig, log, start_times_s, horizon_s: float,
+                    stop_after_failure: bool = True, commands: str = "held") -> _Setup:
+    """Checked log arrays, start rows, step, horizon, start states and commands.
+
+    With ``commands="held"`` the commands are the start's, shaped (S, 1, K); with
+    ``commands="known"`` they are the logged commands of the H steps after each start,
+    (S, H, K) (see :func:`_known_command_steps`). The wind is held at its start value
+    in both modes (its future is not known at a start).
+
+    The log goes through :func:`hybridship.logs.ingest.ingest` with ``purpose="forecast"``
+    (re-sorted, checked against the vessel; sensor faults tolerated, format errors refused), the start
+    values through :func:`hybridship.quality.assess_start_window` (valid samples of the
+    window used, faults flagged, a start with too little valid data refused), and the held
+    inputs through :func:`hybridship.limits.check_or_clip_inputs` (clipped to the
+    documented envelope and flagged).
+    """
+    if not horizon_s > 0:
+        raise ValueError(f"horizon_s: must be > 0, got {horizon_s}")
+    if commands not in COMMAND_MODES:
+        raise ValueError(f"commands: expected one of {COMMAND_MODES}, got {commands!r}")
+    arrays = ingest(log, model.vessel, purpose="forecast")
+    idx = start_indices(arrays, start_times_s)
+    dt = arrays.dt_s
+    H = int(round(horizon_s / dt))
+    sw = assess_start_window(arrays, idx, config.start_average_s)
+    rpm, az, wind = _held_inputs(arrays, idx, stop_after_failure=stop_after_failure, wind=sw.wind)
+    if commands == "known":
+        rpm, az = _known_command_steps(arrays, idx, H, rpm[:, 0], az[:, 0], stop_after_failure)
+    chk = check_or_clip_inputs(model.vessel, eta=sw.eta0, nu=sw.nu0, rpm=rpm, azimuth_rad=az,
+                               wind=wind[:, 0], dt_s=dt)
+    flags = {name: np.zeros(len(idx), dtype=bool) for name in FaultFlags.ALL}
+    flags.update({k: np.asarray(v, dtype=bool) for k, v in sw.flags.items()})
+    flags[FaultFlags.INPUT_CLIPPED] = np.asarray(chk.clipped, dtype=bool)
+    notes = tuple(sw.notes) if len(sw.notes) == len(idx) else ("",) * len(idx)
+    return _Setup(arrays, idx, dt, H, chk.eta, chk.nu, np.ascontiguousarray(chk.rpm),
+                  np.ascontiguousarray(chk.azimuth_rad), np.ascontiguousarray(chk.wind[:, None]),
+                  int(chk.substeps), flags, notes)
+
+def _check_row_stride(row_stride) -> int:
+    if isinstance(row_stride, bool) or not isinstance(row_stride, (int, np.integer)) or row_stride < 1:
+        raise ValueError(f"row_stride: expected an integer >= 1, got {row_stride!r}")
+    return int(row_stride)

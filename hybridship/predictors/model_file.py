@@ -1,0 +1,298 @@
+"""The model file of :class:`~hybridship.predictors.hybrid.HybridPredictor`: format version,
+errors, writing and reading (in named steps), content checksum and the embedded vessel.
+
+A model file is one ``.npz`` (arrays only, read with ``allow_pickle=False``) whose JSON
+metadata carry the validated vessel description, so a model loads without its vessel file
+and without executing code from the file.
+"""
+
+from __future__ import annotations
+
+import json
+from dataclasses import asdict
+from pathlib import Path
+
+import numpy as np
+
+from ..fileio import atomic_write
+from ..residual.calibration import CalibrationConfig, SpreadCalibration
+from ..residual.ensemble import EnsembleConfig, MLPEnsemble
+from ..residual.environment import EnvironmentConfig, EnvironmentEstimator
+from ..residual.features import ResidualConfig
+from ..residual.guard import CommandRegime, EnvelopeGuard, ThrustRegime
+from ..residual.multistep import MultiStepConfig
+
+__all__ = ["MODEL_FORMAT_VERSION", "ModelFileError", "load_model", "model_metadata", "save_model"]
+
+#: Version of the model-file format written by :func:`save_model` (:meth:`HybridPredictor.save`).
+#: 6: the environment estimator's thrust-model error per thruster (its prior has one entry
+#: per thruster); 5: the spread calibration, the nets' training mode and the command regime; 4: the
+#: validated vessel description is embedded in the metadata (``vessel_description``), so a
+#: model loads without its vessel file; 3 added the environment estimator; 2 and earlier
+#: stored only the vessel's name.
+MODEL_FORMAT_VERSION = 6
+
+
+class ModelFileError(ValueError):
+    """A model file is unreadable, tampered, truncated, from another version or vessel."""
+
+
+def _embedded_vessel(description, path):
+    """The :class:`~hybridship.vessel.Vessel` embedded in a model file's metadata (validated again)."""
+    from ..vessel import VesselFileError, vessel_from_dict
+
+    if not isinstance(description, dict):
+        raise ModelFileError(f"{path}: damaged model metadata: vessel_description is not a table")
+    try:
+        return vessel_from_dict(description, source=f"{Path(path).name} (embedded vessel)")
+    except VesselFileError as err:
+        raise ModelFileError(f"{path}: damaged model metadata: the embedded vessel is invalid: {err}") from None
+
+
+def _content_hash(arrays: dict) -> str:
+    """sha256 over every array's name, dtype, shape and bytes (sorted by name)."""
+    import hashlib
+
+    h = hashlib.sha256()
+    for name in sorted(arrays):
+        a = np.ascontiguousarray(arrays[name])
+        h.update(f"{name}|{a.dtype.str}|{a.shape}|".encode())
+        h.update(a.tobytes())
+    return h.hexdigest()
+
+
+def _vessel_fingerprint(vessel) -> str:
+    """A stable hash of the validated vessel description (so a model is not used on another ship)."""
+    from ..vessel import fingerprint
+
+    return fingerprint(vessel)
+
+
+# --------------------------------------------------------------------------- writing
+
+
+def model_metadata(predictor) -> dict:
+    """The JSON metadata of a fitted :class:`~hybridship.predictors.hybrid.HybridPredictor`:
+    settings, the embedded vessel and its fingerprint, the scalar learned state."""
+    p = predictor
+    v = p.model.vessel
+    return {
+        "format": "hybridship-model", "format_version": MODEL_FORMAT_VERSION,
+        "kind": "HybridPredictor", "vessel": v.name,
+        "vessel_description": v.model_dump(mode="json"),
+        "vessel_fingerprint": _vessel_fingerprint(v),
+        "features": list(p.residual_config.features),
+        "residual_config": asdict(p.residual_config),
+        "ensemble_config": asdict(p.ensemble_config),
+        "use_guard": p.use_guard, "guard_quantile": p.guard_quantile,
+        "stop_after_failure": p.stop_after_failure,
+        "guard": {"d0": p.guard.d0, "scale": p.guard.scale},
+        "thrust_regime": {"lo": p.thrust_regime.lo},
+        "environment": p.environment,
+        "environment_config": p.environment_config.model_dump(mode="json"),
+        "environment_window_s": p.environment_window_s,
+        "nets_after_stop": p.nets_after_stop,
+        "thrust_error_prior": {"mean": p.estimator.thrust_error_mean.tolist(),
+                               "std": p.estimator.thrust_error_std.tolist()},
+        "calibration_config": asdict(p.calibration_config),
+        "training": p.training, "multistep_config": asdict(p.multistep_config),
+        "command_guard": p.command_guard,
+        "command_regime": None if p.command_regime is None else {
+            k: getattr(p.command_regime, k) for k in ("rpm_eps", "froude_lo", "angle_hard_rad", "length_m")},
+        "calibrated_commands": sorted(p.calibration),
+        "training_info": p.training_info,
+    }
+
+
+def save_model(predictor, path) -> Path:
+    """Write a fitted hybrid as one ``.npz`` (arrays only, no pickle) with JSON metadata, atomically."""
+    p = predictor
+    path = Path(path)
+    e, g = p.ensemble, p.guard
+    arrays = {f"w{i}": w for i, w in enumerate(e.weights)}
+    arrays.update(x_mean=e.x_mean, x_std=e.x_std, y_mean=e.y_mean, y_std=e.y_std,
+                  guard_mean=g.mean, guard_inv_cov=g.inv_cov, thrust_scale=p.thrust_regime.scale)
+    if p.command_regime is not None:
+        cr = p.command_regime
+        arrays.update(cmd_regime_weights=cr.weights, cmd_regime_n_train=cr.n_train, cmd_regime_n_held=cr.n_held)
+    for mode, c in p.calibration.items():
+        for what, sc in c.items():
+            arrays[f"cal_{mode}_{what}"] = np.stack([sc.lead_s, sc.scale, sc.floor])
+    meta_d = model_metadata(p)
+    meta_d["content_sha256"] = _content_hash(arrays)
+    meta = json.dumps(meta_d, sort_keys=True)
+    arrays["metadata_json"] = np.frombuffer(meta.encode("utf-8"), dtype=np.uint8)
+    return atomic_write(path, lambda fh: np.savez(fh, **arrays))
+
+
+# --------------------------------------------------------------------------- reading
+
+
+def load_model(cls, path, vessel=None):
+    """Load a model file written by :func:`save_model` as an instance of ``cls`` (never executes
+    code from the file); see :meth:`~hybridship.predictors.hybrid.HybridPredictor.load`.
+
+    The steps: read the arrays, check the header (format, version) and the content
+    checksum, build the predictor from its settings and vessel, check the vessel against
+    the fingerprint, then restore the learned state (nets, guard, thrust regime, spread
+    calibration, environment prior, command regime).
+    """
+    path = Path(path)
+    data = _read_arrays(path)
+    meta = _read_checked_metadata(data, path)
+    obj, embedded, state = _build_predictor(cls, meta, vessel, path)
+    _check_vessel(obj, meta, state["fingerprint"], embedded, path)
+    _restore_learned_state(obj, data, state, path)
+    obj.training_info = meta.get("training_info", {})
+    return obj
+
+
+def _read_arrays(path: Path) -> dict:
+    """Every array of the ``.npz`` file (``allow_pickle=False``)."""
+    try:
+        with np.load(path, allow_pickle=False) as z:
+            return {k: z[k] for k in z.files}
+    except FileNotFoundError:
+        raise ModelFileError(f"{path}: model file not found") from None
+    except Exception as err:  # zip/npy parse errors of a damaged file
+        raise ModelFileError(f"{path}: not a readable hybridship model file ({type(err).__name__}: {err})") from None
+
+
+def _read_checked_metadata(data: dict, path: Path) -> dict:
+    """The JSON metadata, after the format, version and content-checksum checks."""
+    try:
+        meta = json.loads(bytes(data["metadata_json"]).decode("utf-8"))
+    except Exception:
+        raise ModelFileError(f"{path}: metadata missing or damaged") from None
+    if meta.get("format") != "hybridship-model":
+        raise ModelFileError(f"{path}: not a hybridship model file")
+    version = meta.get("format_version")
+    if version != MODEL_FORMAT_VERSION:
+        older = (f": written by an older hybridship (format {version}); retrain with `hybridship train` "
+                 f"(or HybridPredictor.fit) to write a version-{MODEL_FORMAT_VERSION} file, which carries "
+                 f"its vessel, its environment estimator and its spread calibration"
+                 if isinstance(version, int) and not isinstance(version, bool) and 1 <= version < MODEL_FORMAT_VERSION
+                 else "")
+        raise ModelFileError(f"{path}: model format version {version} is not supported "
+                             f"(this hybridship reads version {MODEL_FORMAT_VERSION}){older}")
+    content = {k: v for k, v in data.items() if k != "metadata_json"}
+    if meta.get("content_sha256") != _content_hash(content):
+        raise ModelFileError(f"{path}: content checksum does not match the metadata: the file was "
+                             f"tampered with or damaged")
+    return meta
+
+
+def _build_predictor(cls, meta: dict, vessel, path: Path):
+    """``(predictor, embedded, state)``: an unfitted ``cls`` with the file's settings, for
+    ``vessel`` or else the embedded vessel (``embedded``), and the scalar learned state."""
+    try:
+        residual_config = ResidualConfig(**{k: tuple(v) if k == "features" else v
+                                            for k, v in meta["residual_config"].items()})
+        embedded = vessel is None
+        if embedded:
+            vessel = _embedded_vessel(meta["vessel_description"], path)
+        obj = cls(vessel, residual_config=residual_config,
+                  ensemble_config=EnsembleConfig(**meta["ensemble_config"]), guard=meta["use_guard"],
+                  guard_quantile=meta["guard_quantile"], stop_after_failure=meta["stop_after_failure"],
+                  environment=meta["environment"],
+                  environment_config=EnvironmentConfig(**meta["environment_config"]),
+                  environment_window_s=meta["environment_window_s"],
+                  nets_after_stop=meta["nets_after_stop"],
+                  calibration_config=CalibrationConfig(**meta["calibration_config"]),
+                  training=meta["training"], multistep_config=MultiStepConfig(**meta["multistep_config"]),
+                  command_guard=meta["command_guard"])
+        state = _scalar_state(meta)
+    except (KeyError, TypeError, ValueError, AttributeError) as err:
+        if isinstance(err, ModelFileError) or "VesselFileError" in type(err).__name__:
+            raise
+        raise ModelFileError(f"{path}: damaged model metadata ({type(err).__name__}: {err})") from None
+    return obj, embedded, state
+
+
+def _scalar_state(meta: dict) -> dict:
+    """The learned state kept in the metadata: thrust-error prior, guard and thrust-regime
+    scalars, command-regime settings, calibrated modes and the vessel fingerprint."""
+    thr_mean = np.asarray(meta["thrust_error_prior"]["mean"], dtype=float).reshape(3)
+    thr_std = np.asarray(meta["thrust_error_prior"]["std"], dtype=float).reshape(3)
+    if not (np.all(np.isfinite(thr_mean)) and np.all(thr_std > 0)):
+        raise ValueError("thrust_error_prior: expected finite means and positive spreads")
+    return {"thr_mean": thr_mean, "thr_std": thr_std, "regime_meta": meta["command_regime"],
+            "calibrated_commands": list(meta["calibrated_commands"]),
+            "fingerprint": meta["vessel_fingerprint"],
+            "guard_d0": float(meta["guard"]["d0"]), "guard_scale": float(meta["guard"]["scale"]),
+            "thrust_lo": float(meta["thrust_regime"]["lo"])}
+
+
+def _check_vessel(obj, meta: dict, fingerprint: str, embedded: bool, path: Path) -> None:
+    """Refuse a vessel (embedded or passed) whose fingerprint is not the one trained for."""
+    if _vessel_fingerprint(obj.model.vessel) != fingerprint:
+        if embedded:
+            raise ModelFileError(f"{path}: the embedded description of vessel {meta['vessel']!r} does not "
+                                 f"match its fingerprint: the metadata was edited or damaged")
+        raise ModelFileError(f"{path}: trained for vessel {meta['vessel']!r} with other parameters; "
+                             f"refusing to use it with vessel {obj.model.vessel.name!r}")
+
+
+def _restore_learned_state(obj, data: dict, state: dict, path: Path) -> None:
+    """Nets, guard, thrust regime, spread calibration, environment prior and command regime
+    of ``obj`` from the file's arrays (shapes and values checked)."""
+    try:
+        ens, guard, thrust_regime = _read_nets(data, len(obj.residual_config.features), state)
+        calibration = _read_calibration(data, state["calibrated_commands"])
+        _check_finite(ens, guard, thrust_regime)
+    except (KeyError, ValueError) as err:
+        raise ModelFileError(f"{path}: damaged model contents: {err}") from None
+    obj.ensemble, obj.guard, obj.thrust_regime = ens, guard, thrust_regime
+    obj.estimator = EnvironmentEstimator(obj.model, obj.environment_config)
+    obj.estimator.thrust_error_mean, obj.estimator.thrust_error_std = state["thr_mean"], state["thr_std"]
+    obj.calibration = calibration
+    obj.command_regime = _read_command_regime(data, state["regime_meta"], path)
+
+
+def _read_nets(data: dict, n_in: int, state: dict):
+    """``(MLPEnsemble, EnvelopeGuard, ThrustRegime)`` from the arrays; ValueError on wrong shapes."""
+    weights = [np.asarray(data[f"w{i}"], dtype=float) for i in range(6)]
+    E, H = weights[0].shape[0], weights[0].shape[2]
+    expected = [(E, n_in, H), (E, 1, H), (E, H, H), (E, 1, H), (E, H, 3), (E, 1, 3)]
+    if [w.shape for w in weights] != expected:
+        raise ValueError(f"weight shapes {[w.shape for w in weights]} do not match {expected}")
+    ens = MLPEnsemble(weights, data["x_mean"], data["x_std"], data["y_mean"], data["y_std"])
+    guard = EnvelopeGuard(data["guard_mean"], data["guard_inv_cov"], state["guard_d0"], state["guard_scale"])
+    thrust_regime = ThrustRegime(np.asarray(data["thrust_scale"], dtype=float), state["thrust_lo"])
+    return ens, guard, thrust_regime
+
+
+def _check_finite(ens, guard, thrust_regime) -> None:
+    """ValueError naming the first learned array with a NaN or inf."""
+    for name, a in [("weights", np.concatenate([w.ravel() for w in ens.weights])), ("x_std", ens.x_std),
+                    ("y_std", ens.y_std), ("guard_inv_cov", guard.inv_cov),
+                    ("thrust_scale", thrust_regime.scale)]:
+        if not np.all(np.isfinite(a)):
+            raise ValueError(f"{name} contains NaN or inf")
+
+
+def _read_calibration(data: dict, modes) -> dict:
+    """Command mode -> {"position", "heading"} :class:`SpreadCalibration` from the arrays."""
+    calibration = {}
+    for mode in modes:
+        calibration[mode] = {}
+        for what in ("position", "heading"):
+            a = np.asarray(data[f"cal_{mode}_{what}"], dtype=float)
+            if a.ndim != 2 or a.shape[0] != 3:
+                raise ValueError(f"cal_{mode}_{what} has shape {a.shape}, expected (3, H)")
+            calibration[mode][what] = SpreadCalibration(a[0], a[1], a[2])
+    return calibration
+
+
+def _read_command_regime(data: dict, regime_meta, path: Path):
+    """The :class:`CommandRegime` stored with the model, or None when it has none."""
+    if regime_meta is None:
+        return None
+    try:
+        w = np.asarray(data["cmd_regime_weights"], dtype=float)
+        if w.shape != (CommandRegime.N_REGIMES,) or not np.all((w >= 0) & (w <= 1)):
+            raise ValueError(f"cmd_regime_weights: expected {CommandRegime.N_REGIMES} weights in [0, 1]")
+        return CommandRegime(w, np.asarray(data["cmd_regime_n_train"]),
+                             np.asarray(data["cmd_regime_n_held"]), **regime_meta)
+    except (KeyError, TypeError, ValueError) as err:
+        raise ModelFileError(f"{path}: damaged model contents: {err}") from None

@@ -1,0 +1,102 @@
+"""The result of every forecaster: :class:`ForecastResult` (arrays, batch-first over start times)."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+import pandas as pd
+
+from ..forecast_inputs import FaultFlags
+from ..frames import wrap_2pi
+
+__all__ = ["ForecastResult"]
+
+
+@dataclass
+class ForecastResult:
+    """Forecasts from S start times over H steps (index 0 = the start).
+
+    Attributes
+    ----------
+    start_time_s : ndarray, shape (S,)
+        Start times [s].
+    lead_s : ndarray, shape (H+1,)
+        Time since the start [s].
+    eta : ndarray, shape (S, H+1, 3)
+        ``[north_m, east_m, psi_rad]`` (the ensemble mean for the hybrid).
+    nu : ndarray, shape (S, H+1, 3)
+        ``[u_m_s, v_m_s, r_rad_s]``.
+    eta_std : ndarray, shape (S, H+1, 3), or None
+        Ensemble standard deviation of ``eta`` [m, m, rad].
+    guard_weight : ndarray, shape (S, H+1), or None
+        The guard's shrink factor applied at each step (0..1).
+    flags : dict of str to ndarray of bool, shape (S,), or None
+        Keys :attr:`hybridship.quality.FaultFlags.ALL`: what was degraded at each start
+        (sensor faults in the start window, clipped inputs, the hybrid's correction
+        shrunk by the guard).
+    notes : tuple of str, length S, or None
+        What was done about each start's faults ("" when clean).
+    """
+
+    start_time_s: np.ndarray
+    lead_s: np.ndarray
+    eta: np.ndarray
+    nu: np.ndarray
+    eta_std: np.ndarray | None = None
+    guard_weight: np.ndarray | None = None
+    flags: dict | None = None
+    notes: tuple | None = None
+
+    def quantiles(self, q) -> np.ndarray:
+        """Gaussian quantiles of ``eta`` from ``eta_std``: shape (len(q), S, H+1, 3) [m, m, rad].
+
+        With a calibrated spread (the hybrid's default) these are the calibrated bands;
+        ``q`` are probabilities in (0, 1).
+        """
+        from scipy.stats import norm
+
+        q = np.atleast_1d(np.asarray(q, dtype=float))
+        if q.size == 0 or not np.all((q > 0) & (q < 1)):
+            raise ValueError(f"quantiles: expected probabilities in (0, 1), got {q.tolist()}")
+        if self.eta_std is None:
+            raise ValueError("quantiles: this forecast has no spread (eta_std is None)")
+        z = norm.ppf(q)[:, None, None, None]
+        return self.eta[None] + z * self.eta_std[None]
+
+    def to_frame(self, quantiles=()) -> pd.DataFrame:
+        """Tidy table: one row per start time and lead time, degrees at this edge.
+
+        ``quantiles`` (probabilities) add columns ``north_q<q>_m``, ``east_q<q>_m`` and
+        ``heading_q<q>_deg`` (see :meth:`quantiles`).
+        """
+        S, H1, _ = self.eta.shape
+        cols = {
+            "start_time_s": np.repeat(self.start_time_s, H1),
+            "lead_s": np.tile(self.lead_s, S),
+            "time_s": (self.start_time_s[:, None] + self.lead_s[None, :]).ravel(),
+            "north_m": self.eta[..., 0].ravel(),
+            "east_m": self.eta[..., 1].ravel(),
+            "heading_deg": np.degrees(wrap_2pi(self.eta[..., 2])).ravel(),
+            "u_m_s": self.nu[..., 0].ravel(),
+            "v_m_s": self.nu[..., 1].ravel(),
+            "r_deg_s": np.degrees(self.nu[..., 2]).ravel(),
+        }
+        if self.eta_std is not None:
+            cols["north_std_m"] = self.eta_std[..., 0].ravel()
+            cols["east_std_m"] = self.eta_std[..., 1].ravel()
+            cols["heading_std_deg"] = np.degrees(self.eta_std[..., 2]).ravel()
+        if len(quantiles):
+            Q = self.quantiles(quantiles)
+            for q, eq in zip(np.atleast_1d(quantiles), Q):
+                cols[f"north_q{q:g}_m"] = eq[..., 0].ravel()
+                cols[f"east_q{q:g}_m"] = eq[..., 1].ravel()
+                cols[f"heading_q{q:g}_deg"] = np.degrees(eq[..., 2]).ravel()
+        if self.guard_weight is not None:
+            cols["guard_weight"] = self.guard_weight.ravel()
+        if self.flags is not None:
+            for name in FaultFlags.ALL:
+                cols[name] = np.repeat(np.asarray(self.flags[name], dtype=bool), H1)
+        if self.notes is not None:
+            cols["notes"] = np.repeat(np.asarray(self.notes, dtype=object), H1)
+        return pd.DataFrame(cols)

@@ -1,0 +1,324 @@
+"""Compiled kernels of the environment estimator's extended Kalman filter.
+
+The filter itself (state layout, noise model, what is identified) is described in
+:mod:`hybridship.residual.environment`; this module holds its inner loop, compiled with
+numba so that filtering the 30 minutes before a forecast costs milliseconds, not a
+Python-level loop over samples. Everything here trusts its inputs: the estimator checks
+the log once, at its boundary, before calling :func:`filter_grid`.
+
+The process model is the dynamic model's own right-hand side and RK4 step
+(:mod:`hybridship.physics.rhs`, :mod:`hybridship.physics.integrate`), so the filter and
+the forecasts share one set of equations.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numba
+import numpy as np
+
+from ..physics.integrate import rk4_step_scalar
+from ..physics.rhs import prepare_inputs, vessel_rhs
+
+#: Indices of the state (see :func:`hybridship.residual.environment.state_names`); the
+#: thrust-model error (one per degree of freedom or one per thruster) fills the rest.
+_CUR = 6
+_LOAD = 8
+_THR = 11
+_YAW_LOAD = _LOAD + 2
+
+
+@numba.njit(cache=True)
+def _prep_for(x, rpm, az, wind, P, prep):
+    """Prepared held inputs of the model at state ``x`` (its current as speed and direction)."""
+    cn, ce = x[_CUR], x[_CUR + 1]
+    prepare_inputs(az, wind[0], wind[1], math.hypot(cn, ce), math.atan2(ce, cn), P, prep)
+
+
+@numba.njit(cache=True)
+def _thrust_basis(x, rpm, prep, P, per_thruster, zeros3, thrusts, T):
+    """The thrust-error basis ``T`` (3, n_theta) at state ``x``: ``accel = T @ theta``.
+
+    Per degree of freedom, ``T = diag(M^-1 tau_thr)`` (thrusters and rudders together); per
+    thruster, column ``i`` is ``M^-1`` times thruster ``i``'s generalised force
+    ``f_i [cos a_i, sin a_i, x_i sin a_i - y_i cos a_i]`` (the thrust configuration matrix
+    times its delivered thrust), so an efficiency error of one thruster acts through its own
+    lever arm.
+    """
+    c, s = math.cos(x[2]), math.sin(x[2])
+    r = vessel_rhs(c, s, x[3], x[4], x[5], rpm, prep, zeros3, zeros3, P, thrusts, 0)
+    mi = P.m_inv
+    T[:, :] = 0.0
+    if not per_thruster:
+        for i in range(3):
+            T[i, i] = mi[i, 0] * r[6] + mi[i, 1] * r[7] + mi[i, 2] * r[8]
+        return
+    K = P.thr.shape[0]
+    for k in range(K):
+        ca, sa, f = prep[k], prep[K + k], thrusts[0, k]
+        g0, g1, g2 = ca * f, sa * f, (P.thr[k, 0] * sa - P.thr[k, 1] * ca) * f
+        for i in range(3):
+            T[i, k] = mi[i, 0] * g0 + mi[i, 1] * g1 + mi[i, 2] * g2
+
+
+@numba.njit(cache=True)
+def _external_accel(x, T, out):
+    """``R(psi)^T b + T theta``: the filter's extra body-frame acceleration (3,)."""
+    c, s = math.cos(x[2]), math.sin(x[2])
+    bn, be = x[_LOAD], x[_LOAD + 1]
+    out[0] = c * bn + s * be
+    out[1] = -s * bn + c * be
+    out[2] = x[_LOAD + 2]
+    for j in range(T.shape[1]):
+        for i in range(3):
+            out[i] += T[i, j] * x[_THR + j]
+
+
+@numba.njit(cache=True)
+def _rk4(x, dt, rpm, prep, acc, P, f, work):
+    """The motion part ``f[0:6]`` of one RK4 step of the dynamic model from ``x[0:6]``, with
+    the prepared inputs ``prep`` and the external acceleration ``acc`` held."""
+    zeros3, thrusts, s6, k1, k2, k3, k4, xt = work[1], work[2], work[5], work[6], work[7], work[8], work[9], work[10]
+    for i in range(6):
+        s6[i] = x[i]
+    rk4_step_scalar(s6, dt, rpm, prep, zeros3, acc, P, k1, k2, k3, k4, xt, thrusts)
+    for i in range(6):
+        f[i] = s6[i]
+
+
+@numba.njit(cache=True)
+def _transition(x, dt, rpm, az, wind, P, per_thruster, f, work, T, acc):
+    """One process-model step of the state ``x`` into ``f``: RK4 of the dynamic model with
+    the current and the external acceleration of :func:`_external_accel` (left in ``T`` and
+    ``acc``); the environment states are random walks (kept)."""
+    prep = work[0]
+    _prep_for(x, rpm, az, wind, P, prep)
+    _thrust_basis(x, rpm, prep, P, per_thruster, work[1], work[2], T)
+    _external_accel(x, T, acc)
+    _rk4(x, dt, rpm, prep, acc, P, f, work)
+    for i in range(6, x.size):
+        f[i] = x[i]
+
+
+@numba.njit(cache=True)
+def _workspace(P):
+    K = P.thr.shape[0]
+    return (np.empty(2 * K + 4 + 2 * P.rud.shape[0]), np.zeros(3), np.empty((1, max(K, 1))), np.empty(3),
+            np.empty(3), np.empty(6), np.empty(6), np.empty(6), np.empty(6), np.empty(6), np.empty(6))
+
+
+@numba.njit(cache=True)
+def predict(x, Pc, dt, rpm, az, wind, Q, fd_step, P, per_thruster, work):
+    """EKF time update over ``dt`` [s]: the mean through the process model, the covariance
+    through its Jacobian ``F``. Returns ``(x, P)`` (new arrays).
+
+    ``F`` is taken by forward differences (steps ``fd_step``) where the state enters the
+    model nonlinearly (heading, velocities, current). The rest follows from the model's
+    structure, which saves most of the model steps: position does not enter the dynamics
+    (unit columns); the load ``b`` and the thrust error ``theta`` enter only through the
+    held external acceleration ``acc = R(psi)^T b + T theta``, so their columns are the
+    step's sensitivity to ``acc`` (three differences) times ``R(psi)^T`` and ``T``.
+    """
+    n = x.size
+    n_theta = n - _THR
+    f0 = np.empty(n)
+    T = np.empty((3, n_theta))
+    acc = np.empty(3)
+    _transition(x, dt, rpm, az, wind, P, per_thruster, f0, work, T, acc)
+    F = np.zeros((n, n))
+    for j in range(n):
+        if j < 2 or j >= _LOAD:
+            F[j, j] = 1.0
+    xp = x.copy()
+    fj = np.empty(n)
+    T_j = np.empty((3, n_theta))
+    acc_j = np.empty(3)
+    for j in range(2, _LOAD):                   # heading, velocities, current
+        xp[j] = x[j] + fd_step[j]
+        _transition(xp, dt, rpm, az, wind, P, per_thruster, fj, work, T_j, acc_j)
+        for i in range(n):
+            F[i, j] = (fj[i] - f0[i]) / fd_step[j]
+        xp[j] = x[j]
+    # sensitivity G (6, 3) of the step to the held acceleration, with the nominal inputs
+    _prep_for(x, rpm, az, wind, P, work[0])
+    G = np.empty((6, 3))
+    for d in range(3):
+        h = fd_step[_LOAD + d]
+        acc_j[:] = acc
+        acc_j[d] += h
+        _rk4(x, dt, rpm, work[0], acc_j, P, fj, work)
+        for i in range(6):
+            G[i, d] = (fj[i] - f0[i]) / h
+    c, s = math.cos(x[2]), math.sin(x[2])
+    for i in range(6):
+        F[i, _LOAD] = c * G[i, 0] - s * G[i, 1]          # d acc / d b = R(psi)^T
+        F[i, _LOAD + 1] = s * G[i, 0] + c * G[i, 1]
+        F[i, _LOAD + 2] = G[i, 2]
+        for j in range(n_theta):                         # d acc / d theta = T
+            F[i, _THR + j] = G[i, 0] * T[0, j] + G[i, 1] * T[1, j] + G[i, 2] * T[2, j]
+    return f0, F @ Pc @ F.T + Q
+
+
+@numba.njit(cache=True)
+def update(x, Pc, z, z_ok, r_std):
+    """EKF measurement update with the measured components ``z_ok`` (6,) of ``[eta, nu]``.
+
+    The heading innovation is wrapped to (-pi, pi]. Returns ``(x, P)`` (new arrays).
+    """
+    idx = np.flatnonzero(z_ok)
+    m = idx.size
+    n = x.size
+    if m == 0:
+        return x, Pc
+    y = np.empty(m)
+    S = np.empty((m, m))
+    PHt = np.empty((n, m))
+    for a in range(m):
+        y[a] = z[idx[a]] - x[idx[a]]
+        if idx[a] == 2:
+            y[a] = (y[a] + math.pi) % (2.0 * math.pi) - math.pi
+        for b in range(m):
+            S[a, b] = Pc[idx[a], idx[b]]
+        S[a, a] += r_std[idx[a]] ** 2
+        for i in range(n):
+            PHt[i, a] = Pc[i, idx[a]]
+    K = np.linalg.solve(S, PHt.T).T
+    x = x + K @ y
+    Pn = Pc - K @ PHt.T
+    return x, 0.5 * (Pn + Pn.T)
+
+
+@numba.njit(cache=True)
+def process_noise(dt, q_base):
+    """Process-noise covariance over ``dt`` [s]: position noise fixed, velocity noise growing
+    with ``dt``, the environment's random walks with ``dt`` (variance)."""
+    n = q_base.size
+    Q = np.zeros((n, n))
+    for i in range(n):
+        if i < 3:
+            Q[i, i] = q_base[i] ** 2
+        elif i < 6:
+            Q[i, i] = (q_base[i] * dt) ** 2
+        else:
+            Q[i, i] = q_base[i] ** 2 * dt
+    return Q
+
+
+@numba.njit(cache=True)
+def current_yaw_accel(x, P, work):
+    """Yaw acceleration [rad/s^2] of the hull's response to the estimated current at state
+    ``x`` (no thrust, no wind): ``a_r(current) - a_r(no current)``."""
+    prep = work[0]
+    zeros3 = work[1]
+    thrusts = work[2]
+    K = P.thr.shape[0]
+    W = K + P.rud.shape[0]
+    rpm = np.zeros(W)
+    az = np.zeros(W)
+    c, s = math.cos(x[2]), math.sin(x[2])
+    cn, ce = x[_CUR], x[_CUR + 1]
+    prepare_inputs(az, 0.0, 0.0, math.hypot(cn, ce), math.atan2(ce, cn), P, prep)
+    a_c = vessel_rhs(c, s, x[3], x[4], x[5], rpm, prep, zeros3, zeros3, P, thrusts, 0)[2]
+    prepare_inputs(az, 0.0, 0.0, 0.0, 0.0, P, prep)
+    a_0 = vessel_rhs(c, s, x[3], x[4], x[5], rpm, prep, zeros3, zeros3, P, thrusts, 0)[2]
+    return a_c - a_0
+
+
+@numba.njit(cache=True)
+def at_thrust_stop(x, Pc, kept, yaw_prior, P, work):
+    """State and covariance at a thrust stop: the yaw environment restarts (see
+    :meth:`hybridship.residual.environment.EnvironmentEstimator.at_thrust_stop`)."""
+    k = _YAW_LOAD
+    x = x.copy()
+    Pn = Pc.copy()
+    current_yaw = current_yaw_accel(x, P, work)
+    total = x[k] + current_yaw
+    x[k] = kept * total - current_yaw
+    for i in range(x.size):
+        Pn[k, i] = 0.0
+        Pn[i, k] = 0.0
+    Pn[k, k] = yaw_prior ** 2 + ((1.0 - kept) * total) ** 2
+    return x, Pn
+
+
+@numba.njit(cache=True)
+def filter_grid(grid, slot, t, seg, z, z_ok, r_std, rpm, az, wind, dp, P, per_thruster, prior_thr, prior_sd, q_base,
+                fd_step, reset_at_stop, kept, yaw_prior, out_x, out_P, done):
+    """Run the filter over the log rows ``grid`` (increasing).
+
+    At a row ``i`` with ``slot[i] >= 0`` the estimate goes to ``out_x[slot[i]]``,
+    ``out_P[slot[i]]`` and ``done[slot[i]]`` is set. A new segment (or a lost estimate)
+    restarts the motion states from the measurement and keeps the environment, whose
+    covariance grows by the process noise over the gap. Rows whose position or heading is
+    missing cannot start the filter.
+    """
+    work = _workspace(P)
+    n = prior_sd.size
+    x = np.zeros(n)
+    Pc = np.zeros((n, n))
+    started = False
+    prev = -1
+    for gi in range(grid.size):
+        i = grid[gi]
+        finite = True
+        for j in range(n):
+            if not math.isfinite(x[j]):
+                finite = False
+        if not started or seg[i] != seg[prev] or not finite:
+            if not (z_ok[i, 0] and z_ok[i, 1] and z_ok[i, 2]):
+                prev = i
+                continue
+            x0 = np.zeros(n)
+            P0 = np.zeros((n, n))
+            for j in range(3):
+                x0[j] = z[i, j]
+                x0[3 + j] = z[i, 3 + j] if math.isfinite(z[i, 3 + j]) else 0.0
+            for j in range(n - _THR):
+                x0[_THR + j] = prior_thr[j]
+            for j in range(n):
+                P0[j, j] = prior_sd[j] ** 2
+            if started and finite:                  # keep what is known of the environment
+                Qg = process_noise(max(t[i] - t[prev], 0.0), q_base)
+                for a in range(6, n):
+                    x0[a] = x[a]
+                    for b in range(6, n):
+                        P0[a, b] = Pc[a, b] + Qg[a, b]
+            x, Pc = x0, P0
+            started = True
+        else:
+            dt = t[i] - t[prev]
+            x, Pc = predict(x, Pc, dt, rpm[prev], az[prev], wind[prev], process_noise(dt, q_base), fd_step, P,
+                            per_thruster, work)
+            x, Pc = update(x, Pc, z[i], z_ok[i], r_std[i])
+            if reset_at_stop and dp[prev] and not dp[i]:
+                x, Pc = at_thrust_stop(x, Pc, kept, yaw_prior, P, work)
+        prev = i
+        s = slot[i]
+        if s >= 0:
+            out_x[s] = x
+            out_P[s] = Pc
+            done[s] = True
+
+
+@numba.njit(cache=True)
+def thrust_error_accel_batch(eta, nu, rpm, az, wind, current_ned, theta, P, per_thruster, out):
+    """``T theta`` (B, 3) [m/s^2, m/s^2, rad/s^2]: the acceleration of the thrust-model error
+    ``theta`` (B, n_theta) at each state, commands and current ``current_ned`` (B, 2) [m/s]."""
+    work = _workspace(P)
+    n_theta = theta.shape[1]
+    x = np.zeros(_THR + n_theta)
+    T = np.empty((3, n_theta))
+    for b in range(eta.shape[0]):
+        for i in range(3):
+            x[i] = eta[b, i]
+            x[3 + i] = nu[b, i]
+        x[_CUR] = current_ned[b, 0]
+        x[_CUR + 1] = current_ned[b, 1]
+        _prep_for(x, rpm[b], az[b], wind[b], P, work[0])
+        _thrust_basis(x, rpm[b], work[0], P, per_thruster, work[1], work[2], T)
+        for i in range(3):
+            acc = 0.0
+            for j in range(n_theta):
+                acc += T[i, j] * theta[b, j]
+            out[b, i] = acc
