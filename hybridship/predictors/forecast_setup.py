@@ -2,8 +2,8 @@
 states and the commands (held or known) of each start.
 
 :func:`_forecast_setup` runs the log through :func:`hybridship.logs.ingest.ingest`, the start
-window through :func:`hybridship.quality.assess_start_window` and the inputs through
-:func:`hybridship.limits.check_or_clip_inputs`; every forecaster of
+window through :func:`hybridship.forecast_inputs.assess_start_window` and the inputs through
+:func:`hybridship.forecast_inputs.check_or_clip_inputs`; every forecaster of
 :mod:`hybridship.predictors` starts from its result.
 """
 
@@ -127,9 +127,9 @@ def _forecast_setup(model, config: ResidualConfig, log, start_times_s, horizon_s
 
     The log goes through :func:`hybridship.logs.ingest.ingest` with ``purpose="forecast"``
     (re-sorted, checked against the vessel; sensor faults tolerated, format errors refused), the start
-    values through :func:`hybridship.quality.assess_start_window` (valid samples of the
+    values through :func:`hybridship.forecast_inputs.assess_start_window` (valid samples of the
     window used, faults flagged, a start with too little valid data refused), and the held
-    inputs through :func:`hybridship.limits.check_or_clip_inputs` (clipped to the
+    inputs through :func:`hybridship.forecast_inputs.check_or_clip_inputs` (clipped to the
     documented envelope and flagged).
     """
     if not horizon_s > 0:

@@ -212,9 +212,9 @@ def _build_predictor(cls, meta: dict, vessel, path: Path):
 def _scalar_state(meta: dict) -> dict:
     """The learned state kept in the metadata: thrust-error prior, guard and thrust-regime
     scalars, command-regime settings, calibrated modes and the vessel fingerprint."""
-    thr_mean = np.asarray(meta["thrust_error_prior"]["mean"], dtype=float).reshape(3)
-    thr_std = np.asarray(meta["thrust_error_prior"]["std"], dtype=float).reshape(3)
-    if not (np.all(np.isfinite(thr_mean)) and np.all(thr_std > 0)):
+    thr_mean = np.asarray(meta["thrust_error_prior"]["mean"], dtype=float).ravel()
+    thr_std = np.asarray(meta["thrust_error_prior"]["std"], dtype=float).ravel()
+    if thr_mean.shape != thr_std.shape or not (np.all(np.isfinite(thr_mean)) and np.all(thr_std > 0)):
         raise ValueError("thrust_error_prior: expected finite means and positive spreads")
     return {"thr_mean": thr_mean, "thr_std": thr_std, "regime_meta": meta["command_regime"],
             "calibrated_commands": list(meta["calibrated_commands"]),
@@ -244,6 +244,11 @@ def _restore_learned_state(obj, data: dict, state: dict, path: Path) -> None:
         raise ModelFileError(f"{path}: damaged model contents: {err}") from None
     obj.ensemble, obj.guard, obj.thrust_regime = ens, guard, thrust_regime
     obj.estimator = EnvironmentEstimator(obj.model, obj.environment_config)
+    if state["thr_mean"].shape != obj.estimator.thrust_error_mean.shape:
+        raise ModelFileError(f"{path}: damaged model metadata (thrust_error_prior: expected "
+                             f"{obj.estimator.thrust_error_mean.size} entries, one per "
+                             f"{obj.environment_config.thrust_error_model.replace('_', ' ')[4:]}, "
+                             f"got {state['thr_mean'].size})")
     obj.estimator.thrust_error_mean, obj.estimator.thrust_error_std = state["thr_mean"], state["thr_std"]
     obj.calibration = calibration
     obj.command_regime = _read_command_regime(data, state["regime_meta"], path)

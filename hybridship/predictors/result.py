@@ -32,7 +32,7 @@ class ForecastResult:
     guard_weight : ndarray, shape (S, H+1), or None
         The guard's shrink factor applied at each step (0..1).
     flags : dict of str to ndarray of bool, shape (S,), or None
-        Keys :attr:`hybridship.quality.FaultFlags.ALL`: what was degraded at each start
+        Keys :attr:`hybridship.forecast_inputs.FaultFlags.ALL`: what was degraded at each start
         (sensor faults in the start window, clipped inputs, the hybrid's correction
         shrunk by the guard).
     notes : tuple of str, length S, or None

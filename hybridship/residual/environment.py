@@ -12,13 +12,15 @@ Its state (14) is
 * ``b = [north_m_s2, east_m_s2, yaw_rad_s2]``: a slowly varying environmental load (wave
   drift, wind-model error) as an acceleration, surge/sway in NED (it does not turn with the
   ship), yaw as is;
-* ``theta = [x, y, n]``: the thrust-model error per degree of freedom, as a fraction of the
-  model's thrust acceleration ``M^-1 tau_thr``; the delivered thrust acceleration is
-  ``(1 + theta) * M^-1 tau_thr`` componentwise.
+* ``theta``: the thrust-model error, by default one efficiency factor per thruster
+  (thruster ``i`` delivers ``(1 + theta_i)`` times the model's thrust, acting through its
+  own lever arm: ``M^-1 sum_i theta_i tau_i``); with ``thrust_error_model="per_dof"`` one
+  factor per degree of freedom on ``M^-1 tau_thr`` componentwise.
 
 The process model is the project's dynamic model (one RK4 step per sample) with the current
-and with ``accel_ext = R(psi)^T b + theta * M^-1 tau_thr``; its Jacobian is taken by finite
-differences in one batched model call. ``v_c``, ``b`` and ``theta`` are random walks.
+and with ``accel_ext = R(psi)^T b + T theta`` (``T``: the thrust-error basis, see
+:mod:`.environment_kernel`); the filter loop is compiled there. ``v_c`` and ``b`` are random
+walks, ``theta`` a constant of each thruster unless ``thrust_error_walk`` says otherwise.
 
 What the data can separate, and what the filter then does:
 
@@ -276,14 +278,16 @@ class EnvironmentEstimator:
         the stops becomes the prior mean; the spread between stops (at least each stop's own
         uncertainty) its standard deviation. Without stops, or with ``dp_only`` (the paper's
         protocol, in which nothing of a failure is seen), the prior stays as configured:
-        0 +- ``thrust_error_prior``.
+        0 +- ``thrust_error_prior_per_thruster`` (or ``thrust_error_prior`` per DOF).
 
         Not learned here: how much of the station-keeping yaw environment survives a stop
-        (``yaw_load_kept_at_stop``). Learning it as the ratio of the drift's yaw environment
-        60 s after each training stop to the one before it was tried: it helped on our own
-        scenarios and made truthsim-dev's heading 1.4-1.9x worse than physics under the fleet
-        protocol, because the drift's yaw residual there also holds the hull model's yaw
-        error at drift speeds, which the ratio then mistakes for environment.
+        (``yaw_load_kept_at_stop``). With the per-DOF thrust error, learning it as the ratio
+        of the drift's yaw environment 60 s after each training stop to the one before it was
+        tried: it helped on our own scenarios and made truthsim-dev's heading 1.4-1.9x worse
+        than physics under the fleet protocol, because the drift's yaw residual there also
+        holds the hull model's yaw error at drift speeds, which the ratio then mistakes for
+        environment. The per-thruster error separates the yaw load well enough that keeping
+        all of it is the default.
 
         Parameters
         ----------
@@ -367,19 +371,19 @@ class EnvironmentEstimator:
         return out
 
     def at_thrust_stop(self, x, P):
-        """State (14,) and covariance at a thrust stop: the yaw environment restarts (module notes).
+        """State and covariance at a thrust stop: the yaw environment's estimate restarts.
 
         Applied by the filter where ``dp_active`` goes 1 -> 0, and usable for "a blackout
         now" (drift-off live mode).
 
         Under station keeping the yaw offset is the small difference of large thruster
-        moments, and a per-DOF efficiency factor cannot describe an error in the thrusters'
-        lever arms: the filter's yaw load then holds thruster-model error with a confidence
-        it does not deserve, and it also balances whatever yaw moment the hull model gives
-        the estimated current. When the thrusters stop, the total environmental yaw moment
-        (current through the hull plus load) restarts from zero with the prior's spread, and
-        the drift samples identify it afresh; the current keeps acting through the hull as
-        the ship starts to move.
+        moments, so the yaw load's estimate is tied to the thrust error by a correlation that
+        no longer applies once the thrusters stop. The total environmental yaw moment
+        (current through the hull plus load) keeps the fraction ``yaw_load_kept_at_stop`` of
+        its station-keeping value (all of it by default, since the per-thruster thrust error
+        takes the thrusters' share); its correlations are cut and its variance becomes the
+        prior's plus the square of the part not kept, so the drift samples correct it. The
+        current keeps acting through the hull as the ship starts to move.
         """
         c = self.config
         x, P = kernel.at_thrust_stop(np.ascontiguousarray(x, dtype=float), np.ascontiguousarray(P, dtype=float),
