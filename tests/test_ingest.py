@@ -144,17 +144,33 @@ def test_a_repeated_time_stamp_early_in_a_log_is_repaired_and_flagged(model, log
     assert msg.startswith("time_s: 9 appears at rows 9 and 10 with different values")
 
 
-@pytest.mark.parametrize("environment", [
-    "estimator",
-    pytest.param("mean", marks=pytest.mark.xfail(
-        strict=True, raises=ValueError,
-        reason="environment='mean' runs prepare_log (residual/features.py) over the whole log: a missing "
-               "velocity at a segment edge ends in scipy's 'array must not contain infs or NaNs' in "
-               "savgol_filter, even for a start far from it")),
-])
+@pytest.mark.parametrize("environment", ["estimator", "mean"])
 def test_a_missing_velocity_at_the_start_of_a_log_does_not_break_a_later_hybrid_forecast(log, model, environment):
     hybrid = HybridPredictor(model.vessel, ensemble_config=TINY, environment=environment).fit([log])
     df = log.copy()
     df.loc[0, ["north_m", "u_m_s"]] = np.nan
     fc = hybrid.forecast(df, [250.0], 20)
     assert np.isfinite(fc.eta).all()
+
+
+@pytest.mark.parametrize("environment", ["estimator", "mean"])
+def test_a_forecast_reads_only_its_time_range(log, model, environment):
+    """A forecast reads the log from ``history_s`` (+ a margin) before its earliest start to
+    its horizon after the last: what lies outside that range (here a sensor fault and an
+    absurd rpm 1500 s before the start) changes nothing, and a fault inside it is refused
+    with the row and time the whole log's check names."""
+    hybrid = HybridPredictor(model.vessel, ensemble_config=TINY, environment=environment).fit([log])
+    long = physics_log(model, seed=7, duration_s=4000.0, t_shutdown_s=None, current=(0.2, 1.0))
+    start = [3900.0, 3910.0]
+    assert 3900.0 - hybrid.history_s - 60.0 > 1000.0
+    ref = hybrid.forecast(long, start, 30)
+    bad = long.copy()
+    bad.loc[bad.time_s < 1000.0, "north_m"] = np.nan
+    bad.loc[bad.time_s < 1000.0, "port_rpm"] = 60 * 217.0
+    fc = hybrid.forecast(bad, start, 30)
+    np.testing.assert_array_equal(fc.eta, ref.eta)
+    np.testing.assert_array_equal(fc.eta_std, ref.eta_std)
+    inside = long.copy()
+    inside.loc[3000, "port_rpm"] = 60 * 217.0
+    msg = _message(lambda: hybrid.forecast(inside, start, 30))
+    assert msg.startswith("port_rpm") and "row 3000" in msg, msg

@@ -232,22 +232,57 @@ def _from_frame(df: pd.DataFrame, v, purpose: str, source: str) -> tuple[LogArra
     return arrays, order
 
 
-def ingest_with_report(source, vessel, *, purpose: str = "fit",
-                       name: str | None = None) -> tuple[LogArrays, SortedLog | None]:
+def _time_range_frame(df: pd.DataFrame, time_range_s) -> pd.DataFrame:
+    """The rows of ``df`` whose ``time_s`` lies in ``time_range_s`` (rows whose time is not a
+    number are kept, so that the checks still report them; with no row in the range, all)."""
+    if time_range_s is None or "time_s" not in df.columns:
+        return df
+    t = pd.to_numeric(df["time_s"], errors="coerce").to_numpy(dtype=float)
+    inside = (t >= time_range_s[0]) & (t <= time_range_s[1])
+    if not inside.any():
+        return df           # nothing in range: the whole log, so that the start checks say why
+    keep = ~np.isfinite(t) | inside
+    return df if keep.all() else df[keep]
+
+
+def _between(arrays: LogArrays, time_range_s) -> LogArrays:
+    """The rows of sorted, checked ``arrays`` whose time lies in ``time_range_s`` (the check's memo kept)."""
+    if time_range_s is None:
+        return arrays
+    t = arrays.time_s
+    lo, hi = int(np.searchsorted(t, time_range_s[0], "left")), int(np.searchsorted(t, time_range_s[1], "right"))
+    if (lo == 0 and hi == len(t)) or lo >= hi:
+        return arrays
+    out = arrays.rows(slice(lo, hi))
+    object.__setattr__(out, _MARK, getattr(arrays, _MARK, None))
+    return out
+
+
+def ingest_with_report(source, vessel, *, purpose: str = "fit", name: str | None = None,
+                       time_range_s=None) -> tuple[LogArrays, SortedLog | None]:
     """:func:`ingest`, also returning the sort report (None when LogArrays were passed through)."""
     from hybridship.vessel import fingerprint
 
     if purpose not in PURPOSES:
         raise ValueError(f"purpose: expected one of {PURPOSES}, got {purpose!r}")
+    if time_range_s is not None and not (len(time_range_s) == 2 and time_range_s[0] <= time_range_s[1]):
+        raise ValueError(f"time_range_s: expected (first_s, last_s) with first_s <= last_s, got {time_range_s!r}")
     v = _vessel(vessel)
     key = (fingerprint(v), purpose)
     if isinstance(source, LogArrays):
         arrays, order = _from_arrays(source, v, purpose, key)
-    elif isinstance(source, (str, os.PathLike)):
-        df = read_log(Path(source), validate=False)
-        arrays, order = _from_frame(df, v, purpose, name or str(source))
-    elif isinstance(source, pd.DataFrame):
-        arrays, order = _from_frame(source, v, purpose, name or "log")
+        arrays = _between(arrays, time_range_s)
+    elif isinstance(source, (str, os.PathLike, pd.DataFrame)):
+        df = read_log(Path(source), validate=False) if not isinstance(source, pd.DataFrame) else source
+        where = name or (str(source) if not isinstance(source, pd.DataFrame) else "log")
+        try:
+            arrays, order = _from_frame(_time_range_frame(df, time_range_s), v, purpose, where)
+        except LogFormatError:
+            if time_range_s is None:
+                raise
+            # report the fault as the whole log's check would (its rows, its first fault)
+            arrays, order = _from_frame(df, v, purpose, where)
+            raise
     else:
         raise TypeError(f"log: expected a path, a DataFrame or LogArrays, got {type(source).__name__}")
     if order is not None or getattr(arrays, _MARK, None) is None:
@@ -255,7 +290,7 @@ def ingest_with_report(source, vessel, *, purpose: str = "fit",
     return arrays, order
 
 
-def ingest(source, vessel, *, purpose: str = "fit", name: str | None = None) -> LogArrays:
+def ingest(source, vessel, *, purpose: str = "fit", name: str | None = None, time_range_s=None) -> LogArrays:
     """Read, re-sort, validate once against the vessel, and convert a log to :class:`LogArrays`.
 
     Parameters
@@ -272,6 +307,11 @@ def ingest(source, vessel, *, purpose: str = "fit", name: str | None = None) -> 
         docstring).
     name : str, optional
         Quoted in messages (default: the file name, "log" or "LogArrays").
+    time_range_s : (first_s, last_s), optional
+        Keep only the samples with ``first_s <= time_s <= last_s``, before the checks: a
+        forecast reads what it uses, so its cost does not grow with the log's length. A
+        fault inside the range is reported as the whole log's check would report it (its
+        rows; the whole log's first fault); faults outside it do not matter.
 
     Returns
     -------
@@ -285,4 +325,4 @@ def ingest(source, vessel, *, purpose: str = "fit", name: str | None = None) -> 
     hybridship.vessel.VesselFileError
         If ``vessel`` names an invalid vessel file.
     """
-    return ingest_with_report(source, vessel, purpose=purpose, name=name)[0]
+    return ingest_with_report(source, vessel, purpose=purpose, name=name, time_range_s=time_range_s)[0]

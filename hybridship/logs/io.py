@@ -54,6 +54,8 @@ Nothing here modifies the caller's DataFrame or file: validation reads, conversi
 
 from __future__ import annotations
 
+import dataclasses
+
 import functools
 import gzip
 import os
@@ -1034,6 +1036,19 @@ class LogArrays:
 
     def __len__(self) -> int:
         return int(self.time_s.shape[0])
+
+    def rows(self, sl: slice) -> "LogArrays":
+        """The samples ``sl`` (a slice of rows) as new LogArrays; repairs listed in
+        :attr:`resorted_time_s` are kept where their time lies in the rows kept."""
+        n = len(self)
+        kw = {f.name: getattr(self, f.name) for f in dataclasses.fields(self)}
+        for k, v in kw.items():
+            if isinstance(v, np.ndarray) and k != "resorted_time_s" and v.shape[:1] == (n,):
+                kw[k] = v[sl]
+        t = kw["time_s"]
+        r = self.resorted_time_s
+        kw["resorted_time_s"] = r[(r >= t[0]) & (r <= t[-1])] if len(t) else r[:0]
+        return LogArrays(**kw)
 
     @property
     def segments(self) -> list[slice]:

@@ -18,7 +18,15 @@ from ..logs.ingest import ingest
 from ..logs.io import LogArrays
 from ..residual.features import ResidualConfig
 
-__all__ = ["COMMAND_MODES", "as_log_arrays", "start_indices"]
+__all__ = ["COMMAND_MODES", "FORECAST_HISTORY_S", "as_log_arrays", "start_indices"]
+
+#: Seconds of log before the earliest start that a forecast reads (at least): the hybrid's
+#: environment window. Every forecaster reads the same rows, so the start-window checks see
+#: the same samples whichever forecaster runs.
+FORECAST_HISTORY_S = 1800.0
+#: Extra seconds read at both ends of a forecast's time range, so that no filter or
+#: derivative near a start sees the edge of what was read.
+_RANGE_MARGIN_S = 60.0
 
 
 def as_log_arrays(log, vessel, *, purpose: str = "fit") -> LogArrays:
@@ -116,8 +124,21 @@ def _hold_last_valid(steps: np.ndarray) -> np.ndarray:
     return np.take_along_axis(steps, pos, axis=1)
 
 
+def _forecast_time_range(start_times_s, horizon_s: float, history_s: float):
+    """``(first_s, last_s)`` of the log a forecast reads, or None when the starts are not
+    finite numbers (then the start checks report them)."""
+    try:
+        st = np.atleast_1d(np.asarray(start_times_s, dtype=float))
+    except (TypeError, ValueError):
+        return None
+    if st.size == 0 or not np.all(np.isfinite(st)):
+        return None
+    return (float(st.min()) - history_s - _RANGE_MARGIN_S, float(st.max()) + horizon_s + _RANGE_MARGIN_S)
+
+
 def _forecast_setup(model, config: ResidualConfig, log, start_times_s, horizon_s: float,
-                    stop_after_failure: bool = True, commands: str = "held") -> _Setup:
+                    stop_after_failure: bool = True, commands: str = "held",
+                    history_s: float = FORECAST_HISTORY_S) -> _Setup:
     """Checked log arrays, start rows, step, horizon, start states and commands.
 
     With ``commands="held"`` the commands are the start's, shaped (S, 1, K); with
@@ -126,7 +147,9 @@ def _forecast_setup(model, config: ResidualConfig, log, start_times_s, horizon_s
     in both modes (its future is not known at a start).
 
     The log goes through :func:`hybridship.logs.ingest.ingest` with ``purpose="forecast"``
-    (re-sorted, checked against the vessel; sensor faults tolerated, format errors refused), the start
+    (re-sorted, checked against the vessel; sensor faults tolerated, format errors refused),
+    restricted to the rows from ``history_s`` before the earliest start to the horizon after
+    the last (so a forecast costs what it reads, not what the log holds), the start
     values through :func:`hybridship.forecast_inputs.assess_start_window` (valid samples of the
     window used, faults flagged, a start with too little valid data refused), and the held
     inputs through :func:`hybridship.forecast_inputs.check_or_clip_inputs` (clipped to the
@@ -136,7 +159,8 @@ def _forecast_setup(model, config: ResidualConfig, log, start_times_s, horizon_s
         raise ValueError(f"horizon_s: must be > 0, got {horizon_s}")
     if commands not in COMMAND_MODES:
         raise ValueError(f"commands: expected one of {COMMAND_MODES}, got {commands!r}")
-    arrays = ingest(log, model.vessel, purpose="forecast")
+    arrays = ingest(log, model.vessel, purpose="forecast",
+                    time_range_s=_forecast_time_range(start_times_s, horizon_s, history_s))
     idx = start_indices(arrays, start_times_s)
     dt = arrays.dt_s
     H = int(round(horizon_s / dt))

@@ -27,7 +27,7 @@ from ..residual.environment import (EnvironmentConfig, EnvironmentEstimator, cur
                                     environment_accel)
 from ..residual.multistep import MultiStepConfig, collect_starts, train_multistep
 from ..residual.guard import CommandRegime, EnvelopeGuard, ThrustRegime
-from .forecast_setup import _check_row_stride, _forecast_setup, as_log_arrays, start_indices
+from .forecast_setup import FORECAST_HISTORY_S, _check_row_stride, _forecast_setup, as_log_arrays, start_indices
 from .model_file import load_model, save_model
 from .result import ForecastResult
 
@@ -364,7 +364,7 @@ class HybridPredictor:
         """
         self._check_fitted()
         st = _forecast_setup(self.model, self.residual_config, log, start_times_s, horizon_s,
-                             self.stop_after_failure, commands)
+                             self.stop_after_failure, commands, history_s=self.history_s)
         E = self.ensemble.n_members
         if self.environment == "estimator":
             eta0, nu0, dev0, bias0, current, acc_ext = self._estimated_start(st, E)
@@ -385,6 +385,16 @@ class HybridPredictor:
                                                 st.arrays.dp_active[st.idx] == 0)
         return ForecastResult(st.arrays.time_s[st.idx], np.arange(st.H + 1) * st.dt, eta, nu, std, wgt,
                               flags=flags, notes=st.notes)
+
+    @property
+    def history_s(self) -> float:
+        """Seconds of log before the earliest start that :meth:`forecast` reads [s]: the
+        estimator's window, or the mean residual's windows, and at least
+        :data:`~hybridship.predictors.forecast_setup.FORECAST_HISTORY_S`."""
+        c = self.residual_config
+        own = (self.environment_window_s if self.environment == "estimator"
+               else c.bias_window_s + c.start_residual_window_s + c.deriv_window_s)
+        return max(FORECAST_HISTORY_S, float(own))
 
     def _after_stop_weight(self, st, nets_after_stop):
         """Per start, 0 where the nets must stay off because the start is after a failure."""

@@ -105,6 +105,7 @@ class EnvironmentConfig(BaseModel):
     reset_yaw_load_at_stop: bool = True
     filter_step_s: float = Field(1.0, gt=0)
     yaw_load_kept_at_stop: float = Field(1.0, ge=0.0, le=1.0)
+    yaw_load_std_at_stop: float = Field(1.0, ge=0.0)
 
 
 @dataclass(frozen=True)
@@ -387,7 +388,8 @@ class EnvironmentEstimator:
         """
         c = self.config
         x, P = kernel.at_thrust_stop(np.ascontiguousarray(x, dtype=float), np.ascontiguousarray(P, dtype=float),
-                                     float(c.yaw_load_kept_at_stop), float(c.load_yaw_prior_rad_s2),
+                                     float(c.yaw_load_kept_at_stop), float(c.yaw_load_std_at_stop),
+                                     float(c.load_yaw_prior_rad_s2),
                                      self.model.arrays, kernel._workspace(self.model.arrays))
         return x, P
 
@@ -470,7 +472,7 @@ class EnvironmentEstimator:
                            inputs["wind"], inputs["dp"], self.model.arrays, c.thrust_error_model == "per_thruster",
                            np.asarray(self.thrust_error_mean, float),
                            self._prior_sd(), self._process_noise_base(), _FD_STEP,
-                           bool(c.reset_yaw_load_at_stop), float(c.yaw_load_kept_at_stop),
+                           bool(c.reset_yaw_load_at_stop), float(c.yaw_load_kept_at_stop), float(c.yaw_load_std_at_stop),
                            float(c.load_yaw_prior_rad_s2), xs, Ps, done)
         for k, i in enumerate(want):
             if done[k]:

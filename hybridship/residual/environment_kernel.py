@@ -226,7 +226,7 @@ def current_yaw_accel(x, P, work):
 
 
 @numba.njit(cache=True)
-def at_thrust_stop(x, Pc, kept, yaw_prior, P, work):
+def at_thrust_stop(x, Pc, kept, stop_std, yaw_prior, P, work):
     """State and covariance at a thrust stop: the yaw environment restarts (see
     :meth:`hybridship.residual.environment.EnvironmentEstimator.at_thrust_stop`)."""
     k = _YAW_LOAD
@@ -238,13 +238,13 @@ def at_thrust_stop(x, Pc, kept, yaw_prior, P, work):
     for i in range(x.size):
         Pn[k, i] = 0.0
         Pn[i, k] = 0.0
-    Pn[k, k] = yaw_prior ** 2 + ((1.0 - kept) * total) ** 2
+    Pn[k, k] = yaw_prior ** 2 + (stop_std * total) ** 2
     return x, Pn
 
 
 @numba.njit(cache=True)
 def filter_grid(grid, slot, t, seg, z, z_ok, r_std, rpm, az, wind, dp, P, per_thruster, prior_thr, prior_sd, q_base,
-                fd_step, reset_at_stop, kept, yaw_prior, out_x, out_P, done):
+                fd_step, reset_at_stop, kept, stop_std, yaw_prior, out_x, out_P, done):
     """Run the filter over the log rows ``grid`` (increasing).
 
     At a row ``i`` with ``slot[i] >= 0`` the estimate goes to ``out_x[slot[i]]``,
@@ -292,7 +292,7 @@ def filter_grid(grid, slot, t, seg, z, z_ok, r_std, rpm, az, wind, dp, P, per_th
                             per_thruster, work)
             x, Pc = update(x, Pc, z[i], z_ok[i], r_std[i])
             if reset_at_stop and dp[prev] and not dp[i]:
-                x, Pc = at_thrust_stop(x, Pc, kept, yaw_prior, P, work)
+                x, Pc = at_thrust_stop(x, Pc, kept, stop_std, yaw_prior, P, work)
         prev = i
         s = slot[i]
         if s >= 0:

@@ -337,6 +337,19 @@ class PreparedLog:
         return eta0, nu0, dev0, bias0
 
 
+def _finite_runs(x: np.ndarray, segments) -> list[slice]:
+    """The runs of rows of ``x`` (N, k) that are finite in every column, within each segment:
+    a missing sample splits the smoothing and the derivative as a gap does, so it leaves
+    the other samples' values as they are instead of spoiling its whole segment."""
+    ok = np.isfinite(x).all(axis=1)
+    runs = []
+    for sl in segments:
+        m = np.concatenate([[False], ok[sl], [False]])
+        edges = np.flatnonzero(np.diff(m.astype(np.int8)))
+        runs += [slice(sl.start + int(a), sl.start + int(b)) for a, b in zip(edges[::2], edges[1::2])]
+    return runs
+
+
 def prepare_log(model, arrays: LogArrays, config: ResidualConfig = ResidualConfig()) -> PreparedLog:
     """Smoothed states, measured accelerations, one-step model predictions and residuals.
 
@@ -356,7 +369,7 @@ def prepare_log(model, arrays: LogArrays, config: ResidualConfig = ResidualConfi
     nu_s = np.full((N, 3), np.nan)
     nu_dot = np.full((N, 3), np.nan)
     nu_c = np.full((N, 3), np.nan)
-    for sl in arrays.segments:
+    for sl in _finite_runs(arrays.nu, arrays.segments):
         x = arrays.nu[sl]
         n = x.shape[0]
         w = _window(max(config.deriv_window_s, 5.0 * dt), dt, config.polyorder)
