@@ -44,6 +44,8 @@ VARIANTS = {
                           "yaw environment restarted from zero at the stop"),
     "half_dp_yaw_load": ({"environment_config": EnvironmentConfig(yaw_load_kept_at_stop=0.5)},
                          "half of the DP yaw environment kept at the stop"),
+    "yaw_spread_at_stop": ({"environment_config": EnvironmentConfig(yaw_load_std_at_stop=1.0)},
+                           "yaw environment kept at the stop, but with a spread of 100 % of it"),
     "thrust_error_walk": ({"environment_config": EnvironmentConfig(thrust_error_walk=2e-3)},
                           "thrust error a random walk (2e-3 per sqrt(s)) instead of constant"),
     "tight_thrust_prior": ({"environment_config": EnvironmentConfig(thrust_error_prior_per_thruster=0.1)},

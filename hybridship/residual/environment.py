@@ -74,6 +74,10 @@ class EnvironmentConfig(BaseModel):
     gusts beyond the wind model). The random-walk intensities set how fast ``b``, ``v_c``
     and ``theta`` may move [unit per sqrt(s)].
 
+    At a thrust stop the yaw environment keeps ``yaw_load_kept_at_stop`` of its
+    station-keeping value, with a spread of ``yaw_load_std_at_stop`` times that value on top
+    of its prior (default: the part not kept).
+
     ``thrust_error_model`` chooses the structure of ``theta``: ``"per_dof"`` (three
     efficiency factors on the surge, sway and yaw thrust, prior ``thrust_error_prior``) or
     ``"per_thruster"`` (one efficiency factor per thruster, acting through that thruster's
@@ -105,7 +109,7 @@ class EnvironmentConfig(BaseModel):
     reset_yaw_load_at_stop: bool = True
     filter_step_s: float = Field(1.0, gt=0)
     yaw_load_kept_at_stop: float = Field(1.0, ge=0.0, le=1.0)
-    yaw_load_std_at_stop: float = Field(1.0, ge=0.0)
+    yaw_load_std_at_stop: float | None = Field(None, ge=0.0)
 
 
 @dataclass(frozen=True)
@@ -339,6 +343,12 @@ class EnvironmentEstimator:
                                [c.current_walk_m_s] * 2, [c.load_walk_m_s2] * 2, [c.load_yaw_walk_rad_s2],
                                [c.thrust_error_walk] * len(self.thrust_error_mean)])
 
+    def _yaw_std_at_stop(self) -> float:
+        """Spread of the yaw environment just after a stop, as a fraction of its
+        station-keeping value: as configured, or the part not kept (``1 - kept``)."""
+        c = self.config
+        return float(1.0 - c.yaw_load_kept_at_stop if c.yaw_load_std_at_stop is None else c.yaw_load_std_at_stop)
+
     def _measurement_std(self):
         c = self.config
         return np.array([c.position_std_m, c.position_std_m, np.radians(c.heading_std_deg),
@@ -388,7 +398,7 @@ class EnvironmentEstimator:
         """
         c = self.config
         x, P = kernel.at_thrust_stop(np.ascontiguousarray(x, dtype=float), np.ascontiguousarray(P, dtype=float),
-                                     float(c.yaw_load_kept_at_stop), float(c.yaw_load_std_at_stop),
+                                     float(c.yaw_load_kept_at_stop), self._yaw_std_at_stop(),
                                      float(c.load_yaw_prior_rad_s2),
                                      self.model.arrays, kernel._workspace(self.model.arrays))
         return x, P
@@ -472,7 +482,7 @@ class EnvironmentEstimator:
                            inputs["wind"], inputs["dp"], self.model.arrays, c.thrust_error_model == "per_thruster",
                            np.asarray(self.thrust_error_mean, float),
                            self._prior_sd(), self._process_noise_base(), _FD_STEP,
-                           bool(c.reset_yaw_load_at_stop), float(c.yaw_load_kept_at_stop), float(c.yaw_load_std_at_stop),
+                           bool(c.reset_yaw_load_at_stop), float(c.yaw_load_kept_at_stop), self._yaw_std_at_stop(),
                            float(c.load_yaw_prior_rad_s2), xs, Ps, done)
         for k, i in enumerate(want):
             if done[k]:
