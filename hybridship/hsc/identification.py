@@ -28,8 +28,12 @@ inputs) and 7/5 (29 inputs), hidden layers of 5 and 4 log-sigmoid neurons, linea
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Annotated
 
 import numpy as np
+from pydantic import Field
+
+from ..config import Float, Int, NonEmpty, config_dataclass
 
 __all__ = [
     "ARXParameters",
@@ -279,7 +283,7 @@ class StateSpaceModel:
 # --------------------------------------------------------------------------- NARX network
 
 
-@dataclass(frozen=True)
+@config_dataclass(frozen=True)
 class NARXConfig:
     """The paper's NARX network (validated on creation).
 
@@ -299,19 +303,13 @@ class NARXConfig:
         Seed of the initial weights.
     """
 
-    n_out: int = 5
-    n_in: int = 3
-    hidden: tuple = (5, 4)
-    max_iter: int = 400
-    restarts: int = 3
-    val_fraction: float = 0.15
-    seed: int = 0
-
-    def __post_init__(self):
-        if self.n_out < 1 or self.n_in < 1 or not self.hidden or min(self.hidden) < 1:
-            raise ValueError(f"NARXConfig: invalid lags or layers in {self!r}")
-        if self.max_iter < 1 or self.restarts < 1 or not 0 < self.val_fraction < 0.5:
-            raise ValueError(f"NARXConfig: invalid training settings in {self!r}")
+    n_out: Annotated[Int, Field(ge=1)] = 5
+    n_in: Annotated[Int, Field(ge=1)] = 3
+    hidden: Annotated[tuple[Annotated[Int, Field(ge=1)], ...], NonEmpty] = (5, 4)
+    max_iter: Annotated[Int, Field(ge=1)] = 400
+    restarts: Annotated[Int, Field(ge=1)] = 3
+    val_fraction: Annotated[Float, Field(gt=0, lt=0.5)] = 0.15
+    seed: Int = 0
 
 
 class _MinMax:

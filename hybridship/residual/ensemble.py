@@ -12,11 +12,15 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
+from typing import Annotated
 
 import numpy as np
+from pydantic import Field
+
+from hybridship.config import Float, Int, config_dataclass
 
 
-@dataclass(frozen=True)
+@config_dataclass(frozen=True)
 class EnsembleConfig:
     """Training configuration of an :class:`MLPEnsemble` (validated on creation).
 
@@ -43,25 +47,15 @@ class EnsembleConfig:
         Seed of the initial weights and the bootstrap draws.
     """
 
-    n_members: int = 10
-    hidden: int = 20
-    lr: float = 1e-2
-    max_epochs: int = 800
-    patience: int = 100
-    weight_decay: float = 1e-5
-    val_fraction: float = 0.2
+    n_members: Annotated[Int, Field(ge=1)] = 10
+    hidden: Annotated[Int, Field(ge=1)] = 20
+    lr: Annotated[Float, Field(gt=0)] = 1e-2
+    max_epochs: Annotated[Int, Field(ge=1)] = 800
+    patience: Annotated[Int, Field(ge=1)] = 100
+    weight_decay: Annotated[Float, Field(ge=0)] = 1e-5
+    val_fraction: Annotated[Float, Field(gt=0, lt=0.9)] = 0.2
     bootstrap: bool = True
-    seed: int = 0
-
-    def __post_init__(self):
-        checks = {
-            "n_members": self.n_members >= 1, "hidden": self.hidden >= 1, "lr": self.lr > 0,
-            "max_epochs": self.max_epochs >= 1, "patience": self.patience >= 1,
-            "weight_decay": self.weight_decay >= 0, "val_fraction": 0.0 < self.val_fraction < 0.9,
-        }
-        bad = [k for k, ok in checks.items() if not ok]
-        if bad:
-            raise ValueError(f"EnsembleConfig: invalid {', '.join(f'{k}={getattr(self, k)!r}' for k in bad)}")
+    seed: Int = 0
 
 
 @dataclass

@@ -25,11 +25,15 @@ ensemble mean, the members move together and keep the spread of the one-step bag
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Annotated
 
 import numpy as np
+from pydantic import Field
+
+from hybridship.config import Float, Int, config_dataclass
 
 
-@dataclass(frozen=True)
+@config_dataclass(frozen=True)
 class MultiStepConfig:
     """Settings of multi-step training (validated).
 
@@ -58,27 +62,16 @@ class MultiStepConfig:
         Relative finite-difference step of the physics Jacobian.
     """
 
-    horizon_s: float = 10.0
-    iterations: int = 150
-    batch_starts: int = 128
-    start_every_s: float = 1.0
-    lr: float = 1e-3
-    val_fraction: float = 0.2
-    val_every: int = 10
-    max_val_starts: int = 256
-    heading_length_m: float | None = None
-    fd_step: float = 1e-6
-
-    def __post_init__(self):
-        checks = {"horizon_s": self.horizon_s > 0, "iterations": self.iterations >= 1,
-                  "batch_starts": self.batch_starts >= 1, "start_every_s": self.start_every_s > 0,
-                  "lr": self.lr > 0, "val_fraction": 0.0 < self.val_fraction < 0.9,
-                  "val_every": self.val_every >= 1, "max_val_starts": self.max_val_starts >= 1,
-                  "heading_length_m": self.heading_length_m is None or self.heading_length_m >= 0,
-                  "fd_step": 0 < self.fd_step < 1e-2}
-        bad = [k for k, ok in checks.items() if not ok]
-        if bad:
-            raise ValueError(f"MultiStepConfig: invalid {', '.join(f'{k}={getattr(self, k)!r}' for k in bad)}")
+    horizon_s: Annotated[Float, Field(gt=0)] = 10.0
+    iterations: Annotated[Int, Field(ge=1)] = 150
+    batch_starts: Annotated[Int, Field(ge=1)] = 128
+    start_every_s: Annotated[Float, Field(gt=0)] = 1.0
+    lr: Annotated[Float, Field(gt=0)] = 1e-3
+    val_fraction: Annotated[Float, Field(gt=0, lt=0.9)] = 0.2
+    val_every: Annotated[Int, Field(ge=1)] = 10
+    max_val_starts: Annotated[Int, Field(ge=1)] = 256
+    heading_length_m: Annotated[Float, Field(ge=0)] | None = None
+    fd_step: Annotated[Float, Field(gt=0, lt=1e-2)] = 1e-6
 
 
 @dataclass

@@ -39,6 +39,7 @@ import dataclasses
 import math
 from collections.abc import Iterable, Mapping
 from dataclasses import dataclass, field
+from typing import Annotated, Literal
 from functools import lru_cache
 from pathlib import Path
 
@@ -46,10 +47,11 @@ import numpy as np
 
 from ..fileio import atomic_write
 import pandas as pd
+from pydantic import Field, field_validator, model_validator
 from scipy.signal import lfilter
 
 from hybridship.frames import ned_to_body, wrap_pi
-from hybridship.limits import check_number as _number
+from hybridship.config import Float, Int, config_dataclass
 from hybridship.physics.model import DynamicModel
 from hybridship.sim import environment as env
 from hybridship.sim.allocation import ThrustAllocator, bollard_thrust_limits
@@ -80,6 +82,10 @@ _EPS_S = 1e-9
 
 
 
+Positive = Annotated[Float, Field(gt=0)]
+NonNeg = Annotated[Float, Field(ge=0)]
+
+
 def _is_multiple(a, b):
     """Whether ``a`` is a whole multiple of ``b`` (both > 0) within float tolerance."""
     q = a / b
@@ -89,7 +95,7 @@ def _is_multiple(a, b):
 # --------------------------------------------------------------------------- configuration
 
 
-@dataclass(frozen=True)
+@config_dataclass(frozen=True, prefix="noise")
 class SensorNoise:
     """Standard deviations of the sensor noise added to the measured log columns.
 
@@ -110,20 +116,14 @@ class SensorNoise:
         Anemometer white noise [m/s] and wind-vane white noise [deg].
     """
 
-    gnss_white_m: float = 0.10
-    gnss_markov_m: float = 0.15
-    gnss_markov_tau_s: float = 60.0
-    heading_white_deg: float = 0.05
-    uv_white_m_s: float = 0.02
-    r_white_deg_s: float = 0.03
-    wind_speed_white_m_s: float = 0.3
-    wind_dir_white_deg: float = 3.0
-
-    def __post_init__(self):
-        for f in dataclasses.fields(self):
-            name = f"noise.{f.name}"
-            positive = f.name == "gnss_markov_tau_s"
-            object.__setattr__(self, f.name, _number(name, getattr(self, f.name), lo=0.0, lo_open=positive))
+    gnss_white_m: NonNeg = 0.10
+    gnss_markov_m: NonNeg = 0.15
+    gnss_markov_tau_s: Positive = 60.0
+    heading_white_deg: NonNeg = 0.05
+    uv_white_m_s: NonNeg = 0.02
+    r_white_deg_s: NonNeg = 0.03
+    wind_speed_white_m_s: NonNeg = 0.3
+    wind_dir_white_deg: NonNeg = 3.0
 
     @classmethod
     def none(cls) -> "SensorNoise":
@@ -146,7 +146,7 @@ class SensorNoise:
         raise TypeError(f"noise: expected SensorNoise, a mapping or None, got {type(value).__name__}")
 
 
-@dataclass(frozen=True)
+@config_dataclass(frozen=True)
 class DPLossConfig:
     """Settings of one DP-loss scenario (seconds, degrees where named ``_deg``).
 
@@ -201,73 +201,53 @@ class DPLossConfig:
         the DP's wind feed-forward [s].
     """
 
-    seed: int = 0
+    seed: Annotated[Int, Field(ge=0)] = 0
     sea_state: env.SeaState | None = None
-    beaufort: tuple[float, float] = (2.0, 5.0)
-    t_shutdown_s: float = 3000.0
-    t_shutdown_jitter_s: float | None = None
-    drift_s: float = 900.0
-    dt_s: float = 1.0
-    sim_dt_s: float = 0.5
-    control_dt_s: float = 1.0
-    heading_mode: str = "weather"
-    heading_offset_max_deg: float = 20.0
-    heading_sp_deg: float | None = None
+    beaufort: tuple[Float, Float] = (2.0, 5.0)
+    t_shutdown_s: Positive = 3000.0
+    t_shutdown_jitter_s: NonNeg | None = None
+    drift_s: Positive = 900.0
+    dt_s: Positive = 1.0
+    sim_dt_s: Annotated[Float, Field(gt=0, le=2.0)] = 0.5
+    control_dt_s: Positive = 1.0
+    heading_mode: Literal["weather", "random"] = "weather"
+    heading_offset_max_deg: Annotated[Float, Field(ge=0, le=180.0)] = 20.0
+    heading_sp_deg: Float | None = None
     noise: SensorNoise = field(default_factory=SensorNoise)
-    rpm_time_constant_s: float = 1.5
-    n_wave_components: int = 50
-    wave_spreading: float | None = None
-    wave_filter_time_constant_s: float = 2.0
-    wind_filter_time_constant_s: float = 10.0
+    rpm_time_constant_s: Positive = 1.5
+    n_wave_components: Annotated[Int, Field(ge=1)] = 50
+    wave_spreading: Positive | None = None
+    wave_filter_time_constant_s: Positive = 2.0
+    wind_filter_time_constant_s: Positive = 10.0
 
-    def __post_init__(self):
-        set_ = lambda name, v: object.__setattr__(self, name, v)  # noqa: E731 (frozen dataclass)
-        if isinstance(self.seed, bool) or not isinstance(self.seed, (int, np.integer)) or self.seed < 0:
-            raise ValueError(f"seed: expected a non-negative int, got {self.seed!r}")
-        set_("seed", int(self.seed))
-        if self.sea_state is not None and not isinstance(self.sea_state, env.SeaState):
-            raise TypeError(f"sea_state: expected a SeaState or None, got {type(self.sea_state).__name__}")
-        try:
-            lo, hi = (float(b) for b in self.beaufort)
-        except (TypeError, ValueError):
-            raise ValueError(f"beaufort: expected a (lo, hi) pair, got {self.beaufort!r}") from None
-        if not (0.0 <= lo <= hi <= 12.0):
-            raise ValueError(f"beaufort: must satisfy 0 <= lo <= hi <= 12, got {self.beaufort!r}")
-        set_("beaufort", (lo, hi))
+    @field_validator("noise", mode="before")
+    @classmethod
+    def _noise(cls, v):
+        return SensorNoise() if v is None else v
 
-        for name in ("dt_s", "sim_dt_s", "control_dt_s", "rpm_time_constant_s",
-                     "wave_filter_time_constant_s", "wind_filter_time_constant_s"):
-            set_(name, _number(name, getattr(self, name), lo=0.0, lo_open=True))
-        if self.sim_dt_s > 2.0:
-            raise ValueError(f"sim_dt_s: must be <= 2 s to resolve the DP loop and thruster dynamics, "
-                             f"got {self.sim_dt_s!r}")
+    @field_validator("beaufort")
+    @classmethod
+    def _beaufort(cls, v):
+        if not (0.0 <= v[0] <= v[1] <= 12.0):
+            raise ValueError(f"must satisfy 0 <= lo <= hi <= 12, got {v!r}")
+        return v
+
+    @model_validator(mode="after")
+    def _steps_and_times(self):
+        # sim_dt_s <= 2 s resolves the DP loop and the thruster dynamics.
         for name in ("dt_s", "control_dt_s"):
             if not _is_multiple(getattr(self, name), self.sim_dt_s):
                 raise ValueError(f"{name}: must be a whole multiple of sim_dt_s = {self.sim_dt_s:g}, "
                                  f"got {getattr(self, name)!r}")
-        set_("t_shutdown_s", _number("t_shutdown_s", self.t_shutdown_s, lo=0.0, lo_open=True))
         if self.t_shutdown_jitter_s is None:
-            set_("t_shutdown_jitter_s", 0.04 * self.t_shutdown_s)
-        set_("t_shutdown_jitter_s", _number("t_shutdown_jitter_s", self.t_shutdown_jitter_s, lo=0.0))
+            object.__setattr__(self, "t_shutdown_jitter_s", 0.04 * self.t_shutdown_s)  # frozen
         if self.t_shutdown_s - self.t_shutdown_jitter_s < 10.0 * self.control_dt_s:
             raise ValueError(f"t_shutdown_s: t_shutdown_s - t_shutdown_jitter_s must leave at least "
                              f"{10 * self.control_dt_s:g} s of DP, got {self.t_shutdown_s:g} - "
                              f"{self.t_shutdown_jitter_s:g}")
-        set_("drift_s", _number("drift_s", self.drift_s, lo=0.0, lo_open=True))
         if not _is_multiple(self.drift_s, self.dt_s):
             raise ValueError(f"drift_s: must be a whole multiple of dt_s = {self.dt_s:g}, got {self.drift_s!r}")
-        if self.heading_mode not in ("weather", "random"):
-            raise ValueError(f"heading_mode: expected 'weather' or 'random', got {self.heading_mode!r}")
-        set_("heading_offset_max_deg", _number("heading_offset_max_deg", self.heading_offset_max_deg,
-                                               lo=0.0, hi=180.0))
-        set_("heading_sp_deg", _number("heading_sp_deg", self.heading_sp_deg, allow_none=True))
-        set_("noise", SensorNoise.from_any(self.noise))
-        n = self.n_wave_components
-        if isinstance(n, bool) or not isinstance(n, (int, np.integer)) or n < 1:
-            raise ValueError(f"n_wave_components: expected a positive int, got {n!r}")
-        set_("n_wave_components", int(n))
-        set_("wave_spreading", _number("wave_spreading", self.wave_spreading, lo=0.0, lo_open=True,
-                                       allow_none=True))
+        return self
 
     def replace(self, **changes) -> "DPLossConfig":
         """A copy with some fields changed (validated again)."""
