@@ -376,6 +376,74 @@ def _acceleration_field(components: env.WaveField) -> env.WaveField:
                          g_m_s2=components.g_m_s2)
 
 
+def _sensor_noise(nz: SensorNoise, n: int, h: float, rng) -> dict:
+    """Sensor noise on the integration grid (``n`` samples ``h`` apart; one draw each, in a
+    fixed order); the DP and the log sample it. Angles in radians."""
+    gnss = (nz.gnss_white_m * rng.standard_normal((n, 2))
+            + np.column_stack([_gauss_markov(n, h, nz.gnss_markov_m, nz.gnss_markov_tau_s, rng)
+                               for _ in range(2)]))
+    n_head = math.radians(nz.heading_white_deg) * rng.standard_normal(n)
+    n_uv = nz.uv_white_m_s * rng.standard_normal((n, 2))
+    n_r = math.radians(nz.r_white_deg_s) * rng.standard_normal(n)
+    n_ws = nz.wind_speed_white_m_s * rng.standard_normal(n)
+    n_wd = math.radians(nz.wind_dir_white_deg) * rng.standard_normal(n)
+    return dict(gnss=gnss, head=n_head, uv=n_uv, r=n_r, ws=n_ws, wd=n_wd)
+
+
+class _DPSystem:
+    """The DP system on the nominal model: sensors (LF + WF motion + noise), wave and wind
+    filters, controller and thrust allocation, started at ``eta0``."""
+
+    def __init__(self, nominal, ves, config: DPLossConfig, eta0, components, raos, noise: dict,
+                 wind_speed, wind_dir):
+        self.dp = DPController(nominal, dt_s=config.control_dt_s)
+        self.alloc = ThrustAllocator(ves, dt_s=config.control_dt_s)
+        self.dp.reset(eta0.copy())
+        self.wave_filter = _LowPass(config.wave_filter_time_constant_s, config.control_dt_s)
+        self.wind_filter = _LowPass(config.wind_filter_time_constant_s, config.control_dt_s, stages=1)
+        self.psi_meas_prev = None
+        self.components, self.raos, self.noise = components, raos, noise
+        self.wind_speed, self.wind_dir = wind_speed, wind_dir
+
+    def command(self, k: int, one, eta, nu):
+        """``(rpm, azimuth_rad)`` commands from what the sensors give at integration step ``k``
+        (time ``one[0]`` [s]) for the true state ``eta``, ``nu``."""
+        nz = self.noise
+        # What the sensors give now: LF + WF motion + noise (the log repeats it).
+        off, rate = env.wave_frequency_motion(one, eta[2], self.components, self.raos,
+                                              position_ne_m=eta[None, :2], return_rates=True)
+        nu_wf = ned_to_body(rate[0], eta[2])
+        psi_m = eta[2] + off[0, 2] + nz["head"][k]
+        # Filter the heading continuously across the 0/2 pi wrap.
+        prev = self.psi_meas_prev
+        psi_m = psi_m if prev is None else prev + float(wrap_pi(psi_m - prev))
+        self.psi_meas_prev = psi_m
+        gnss, n_uv = nz["gnss"], nz["uv"]
+        meas = np.array([eta[0] + off[0, 0] + gnss[k, 0], eta[1] + off[0, 1] + gnss[k, 1], psi_m,
+                         nu[0] + nu_wf[0] + n_uv[k, 0], nu[1] + nu_wf[1] + n_uv[k, 1],
+                         nu[2] + nu_wf[2] + nz["r"][k]])
+        est = self.wave_filter(meas)
+        ws_m = max(0.0, self.wind_speed[k] + nz["ws"][k])
+        wd_m = self.wind_dir[k] + nz["wd"][k]
+        # Smooth the wind as a vector (direction "from"), then back to speed and direction.
+        wv = self.wind_filter(np.array([ws_m * math.cos(wd_m), ws_m * math.sin(wd_m)]))
+        wind_est = np.array([math.hypot(wv[0], wv[1]), math.atan2(wv[1], wv[0])])
+        tau_dp = self.dp.update(est[:3], est[3:], wind=wind_est)
+        # The DP does not know the current: over-ground velocity stands in for the inflow.
+        res = self.alloc.allocate(tau_dp, est[3:])
+        return res.rpm, res.azimuth_rad
+
+
+class _Record:
+    """Logged samples of the true state and loads: ``n`` rows, ``K`` thrusters."""
+
+    def __init__(self, n: int, K: int):
+        self.eta, self.nu, self.nu_dot = (np.empty((n, 3)) for _ in range(3))
+        self.parts = np.empty((n, 4, 3))
+        self.thrust, self.rpm, self.az = (np.empty((n, K)) for _ in range(3))
+        self.k = np.empty(n, dtype=int)
+
+
 def _simulate(config: DPLossConfig, vessel, progress: bool):
     """The scenario as ``(DataFrame, ScenarioConditions)``; see :func:`simulate_dp_loss`."""
     true_model = DynamicModel(vessel, true_vessel=True)
@@ -406,41 +474,17 @@ def _simulate(config: DPLossConfig, vessel, progress: bool):
     wind_speed, wind_dir = sea.wind(t_sim, rng)
     cur_speed, cur_dir = sea.current(t_sim, rng)
 
-    # Sensor noise on the integration grid; DP and log sample it.
-    nz = config.noise
-    gnss = (nz.gnss_white_m * rng.standard_normal((n_sim + 1, 2))
-            + np.column_stack([_gauss_markov(n_sim + 1, h, nz.gnss_markov_m, nz.gnss_markov_tau_s, rng)
-                               for _ in range(2)]))
-    n_head = math.radians(nz.heading_white_deg) * rng.standard_normal(n_sim + 1)
-    n_uv = nz.uv_white_m_s * rng.standard_normal((n_sim + 1, 2))
-    n_r = math.radians(nz.r_white_deg_s) * rng.standard_normal(n_sim + 1)
-    n_ws = nz.wind_speed_white_m_s * rng.standard_normal(n_sim + 1)
-    n_wd = math.radians(nz.wind_dir_white_deg) * rng.standard_normal(n_sim + 1)
+    noise = _sensor_noise(config.noise, n_sim + 1, h, rng)
 
-    # DP system on the nominal model.
-    dp = DPController(nominal, dt_s=config.control_dt_s)
-    alloc = ThrustAllocator(ves, dt_s=config.control_dt_s)
     eta = np.array([0.0, 0.0, cond.heading_sp_rad])
     nu = np.zeros(3)
-    dp.reset(eta.copy())
-    wave_filter = _LowPass(config.wave_filter_time_constant_s, config.control_dt_s)
-    wind_filter = _LowPass(config.wind_filter_time_constant_s, config.control_dt_s, stages=1)
-    psi_meas_prev = None
+    dp = _DPSystem(nominal, ves, config, eta, components, raos, noise, wind_speed, wind_dir)
 
     rpm_cmd = np.zeros(K)
     rpm = np.zeros(K)
     azimuth = np.array([t.fixed_angle_rad for t in ves.thrusters], float)
     rpm_decay = math.exp(-h / config.rpm_time_constant_s)
-
-    n_log = n_sim // every_log + 1
-    rec_eta = np.empty((n_log, 3))
-    rec_nu = np.empty((n_log, 3))
-    rec_nu_dot = np.empty((n_log, 3))
-    rec_parts = np.empty((n_log, 4, 3))
-    rec_thrust = np.empty((n_log, K))
-    rec_rpm = np.empty((n_log, K))
-    rec_az = np.empty((n_log, K))
-    rec_k = np.empty(n_log, dtype=int)
+    rec = _Record(n_sim // every_log + 1, K)
 
     one = np.empty(1)
     bar = None
@@ -458,28 +502,7 @@ def _simulate(config: DPLossConfig, vessel, progress: bool):
 
             if k < k_shutdown:
                 if k % every_ctrl == 0:
-                    # What the sensors give now: LF + WF motion + noise (the log repeats it).
-                    off, rate = env.wave_frequency_motion(one, eta[2], components, raos,
-                                                          position_ne_m=eta[None, :2], return_rates=True)
-                    nu_wf = ned_to_body(rate[0], eta[2])
-                    psi_m = eta[2] + off[0, 2] + n_head[k]
-                    # Filter the heading continuously across the 0/2 pi wrap.
-                    psi_m = psi_m if psi_meas_prev is None else psi_meas_prev + float(wrap_pi(psi_m - psi_meas_prev))
-                    psi_meas_prev = psi_m
-                    meas = np.array([eta[0] + off[0, 0] + gnss[k, 0], eta[1] + off[0, 1] + gnss[k, 1], psi_m,
-                                     nu[0] + nu_wf[0] + n_uv[k, 0], nu[1] + nu_wf[1] + n_uv[k, 1],
-                                     nu[2] + nu_wf[2] + n_r[k]])
-                    est = wave_filter(meas)
-                    ws_m = max(0.0, wind_speed[k] + n_ws[k])
-                    wd_m = wind_dir[k] + n_wd[k]
-                    # Smooth the wind as a vector (direction "from"), then back to speed and direction.
-                    wv = wind_filter(np.array([ws_m * math.cos(wd_m), ws_m * math.sin(wd_m)]))
-                    wind_est = np.array([math.hypot(wv[0], wv[1]), math.atan2(wv[1], wv[0])])
-                    tau_dp = dp.update(est[:3], est[3:], wind=wind_est)
-                    # The DP does not know the current: over-ground velocity stands in for the inflow.
-                    res = alloc.allocate(tau_dp, est[3:])
-                    rpm_cmd = res.rpm
-                    azimuth = res.azimuth_rad
+                    rpm_cmd, azimuth = dp.command(k, one, eta, nu)
             else:
                 rpm_cmd = np.zeros(K)  # power lost: no command; azimuths stay where they were
             rpm = rpm_cmd + (rpm - rpm_cmd) * rpm_decay
@@ -489,9 +512,9 @@ def _simulate(config: DPLossConfig, vessel, progress: bool):
                 nu_dot, parts, thrusts = true_model.acceleration(eta, nu, rpm=rpm, azimuth_rad=azimuth,
                                                                  wind=wind_k, current=cur_k, tau_ext=tau_wave,
                                                                  return_parts=True)
-                rec_eta[i], rec_nu[i], rec_nu_dot[i] = eta, nu, nu_dot[0]
-                rec_parts[i], rec_thrust[i] = parts[0], thrusts[0]
-                rec_rpm[i], rec_az[i], rec_k[i] = rpm, azimuth, k
+                rec.eta[i], rec.nu[i], rec.nu_dot[i] = eta, nu, nu_dot[0]
+                rec.parts[i], rec.thrust[i] = parts[0], thrusts[0]
+                rec.rpm[i], rec.az[i], rec.k[i] = rpm, azimuth, k
                 if bar is not None and k > 0:
                     bar.update(every_log)
             if k == n_sim:
@@ -505,10 +528,9 @@ def _simulate(config: DPLossConfig, vessel, progress: bool):
         if bar is not None:
             bar.close()
 
-    df = _assemble_log(config, ves, cond, components, raos, rec_k, h, rec_eta, rec_nu, rec_nu_dot, rec_parts,
-                       rec_thrust, rec_rpm, rec_az, dict(speed=wind_speed, dir=wind_dir, cur=cur_speed,
-                                                         cur_dir=cur_dir),
-                       dict(gnss=gnss, head=n_head, uv=n_uv, r=n_r, ws=n_ws, wd=n_wd))
+    df = _assemble_log(config, ves, cond, components, raos, rec.k, h, rec.eta, rec.nu, rec.nu_dot, rec.parts,
+                       rec.thrust, rec.rpm, rec.az, dict(speed=wind_speed, dir=wind_dir, cur=cur_speed,
+                                                         cur_dir=cur_dir), noise)
     df.attrs["conditions"] = cond.as_dict()
     df.attrs["seed"] = config.seed
     df.attrs["vessel"] = ves.name
