@@ -18,6 +18,10 @@ The contract, beyond the signatures:
   field at fault.
 * Causal: with ``commands="held"`` a forecast uses nothing logged after its start time.
 * Deterministic: the same call on the same fitted forecaster gives the same numbers.
+
+The high-speed-craft models (:mod:`hybridship.hsc`) predict surge and pitch from records
+rather than ship motion from logs; their contract is
+:class:`hybridship.hsc.contract.SurgePitchModel`, checked by the same test module.
 """
 
 from __future__ import annotations

@@ -23,6 +23,8 @@ from typing import Literal, Optional
 import numpy as np
 from pydantic import BaseModel, ConfigDict, Field, ValidationError, model_validator
 
+from hybridship.config import format_validation_error
+
 #: Version of the vessel-file format this code reads.
 VESSEL_FORMAT_VERSION = 1
 
@@ -407,24 +409,12 @@ def fingerprint(vessel: Vessel) -> str:
     return hashlib.sha256(json.dumps(vessel.model_dump(mode="json"), sort_keys=True).encode()).hexdigest()[:16]
 
 
-def _format_validation_error(err: ValidationError, source: str) -> str:
-    lines = []
-    for e in err.errors():
-        loc = ""
-        for part in e["loc"]:
-            loc += f"[{part}]" if isinstance(part, int) else (f".{part}" if loc else str(part))
-        msg = e["msg"].removeprefix("Value error, ")
-        got = f" (got {e['input']!r})" if e["type"] not in ("missing", "value_error") and not isinstance(e["input"], dict) else ""
-        lines.append(f"{source}: {loc or '<top level>'}: {msg}{got}")
-    return "\n".join(lines)
-
-
 def vessel_from_dict(data: dict, source: str = "vessel") -> Vessel:
     """Validate a dictionary (e.g. parsed TOML) into a :class:`Vessel`."""
     try:
         return Vessel.model_validate(data)
     except ValidationError as err:
-        raise VesselFileError(_format_validation_error(err, source)) from None
+        raise VesselFileError(format_validation_error(err, source)) from None
 
 
 def vessels_dir():

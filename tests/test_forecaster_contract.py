@@ -1,12 +1,25 @@
-"""The forecaster contract (:mod:`hybridship.forecaster`), one suite for every forecaster.
+"""The forecaster contracts, one suite for every forecaster.
 
-Each forecaster (dead reckoning, the dynamic model, the data-only ensemble, the hybrid) is
-run through the same checks: it is a :class:`~hybridship.forecaster.Forecaster`, ``fit``
-returns it, a learner refuses to forecast unfitted, ``forecast`` leaves the learned state
-alone, results have the documented shapes, bad inputs raise errors that start with the
-field's name, held-command forecasts are causal (rows after the start do not matter), the
-same call gives the same numbers, and model files round-trip where a forecaster has them.
-Tiny ensembles on short logs keep it fast.
+Ship forecasters (:mod:`hybridship.forecaster`): dead reckoning, the dynamic model, the
+data-only ensemble and the hybrid are run through the same checks: it is a
+:class:`~hybridship.forecaster.Forecaster`, ``fit`` returns it, a learner refuses to
+forecast unfitted, ``forecast`` leaves the learned state alone, results have the documented
+shapes, bad inputs raise errors that start with the field's name, held-command forecasts
+are causal (rows after the start do not matter), the same call gives the same numbers, and
+model files round-trip where a forecaster has them (the data-only, dynamic and
+dead-reckoning forecasters have none: skipped).
+
+High-speed-craft models (:mod:`hybridship.hsc.contract`): the state-space (``ss``), ARX,
+NARX (``ann``) and hybrid surge/pitch models work on records (inputs ``U``, outputs ``Y``)
+rather than logs with start times, so they follow
+:class:`~hybridship.hsc.contract.SurgePitchModel` and run through the same checks recast
+for records: the protocol and ``fit -> self``; unfitted refusal (all four learn); learned
+state untouched by ``one_step``/``free_run``; shapes (NaN exactly in the rows before
+``n_init``); bad ``U``/``Y``/``Y_init``/``n_init`` named; causality (a prediction for row
+``k`` ignores rows ``k`` and later; a free run ignores every measured output after its
+initial rows); determinism (same call, and a refit). None has a model file, so the
+save/load check does not apply to them.
+Tiny ensembles on short logs and a short trial keep it fast.
 """
 
 from __future__ import annotations
@@ -199,3 +212,135 @@ def test_model_files_round_trip_where_supported(kind, fitted, test_log, tmp_path
     back = type(p).load(p.save(tmp_path / f"{kind}.npz"))
     assert isinstance(back, Forecaster)
     _assert_same_forecast(p.forecast(test_log, STARTS, HORIZON_S), back.forecast(test_log, STARTS, HORIZON_S))
+
+
+# --------------------------------------------------------------------------- high-speed craft
+
+from hybridship.hsc.benchmark import models_for  # noqa: E402
+from hybridship.hsc.contract import SurgePitchModel  # noqa: E402
+from hybridship.hsc.hybrid import GreyBoxTables  # noqa: E402
+from hybridship.hsc.trials import generate_trial, paper_trial  # noqa: E402
+from hybridship.hsc.vessel import load_planing_craft  # noqa: E402
+
+HSC_KINDS = ("ss", "arx", "ann", "hybrid")
+N_INIT = 10
+K_CUT = 60          # causality: rows from here on are changed
+
+
+@pytest.fixture(scope="module")
+def hsc_setup():
+    """(make, (U, Y) training part, (U, Y) validation part): a short sea-state-1 trial."""
+    craft = load_planing_craft()
+    cfg = paper_trial(1, scale=0.12)
+    trial = generate_trial(cfg, craft)
+    tables = GreyBoxTables.from_craft(craft, cfg.actuator, n_rpm=13)
+
+    def make(kind):
+        return models_for(1, craft, cfg.actuator, quick=True, tables=tables)[kind]
+
+    return make, trial.arrays("train"), trial.arrays("validation")
+
+
+@pytest.fixture(scope="module")
+def hsc_fitted(hsc_setup):
+    make, (U, Y), _ = hsc_setup
+    return {kind: make(kind).fit(U, Y) for kind in HSC_KINDS}
+
+
+@pytest.mark.parametrize("kind", HSC_KINDS)
+def test_hsc_is_a_surge_pitch_model_and_fit_returns_itself(kind, hsc_fitted, hsc_setup):
+    make, (U, Y), _ = hsc_setup
+    p = hsc_fitted[kind]
+    assert isinstance(p, SurgePitchModel) and p.name == kind
+    assert not isinstance(p, Forecaster)           # records, not logs: the other contract
+    U0, Y0 = U.copy(), Y.copy()
+    fresh = make(kind)
+    assert fresh.fit(U, Y) is fresh
+    np.testing.assert_array_equal(U, U0)            # the caller's arrays are not touched
+    np.testing.assert_array_equal(Y, Y0)
+
+
+@pytest.mark.parametrize("kind", HSC_KINDS)
+def test_hsc_unfitted(kind, hsc_setup):
+    make, _, (U, Y) = hsc_setup
+    p = make(kind)
+    with pytest.raises(RuntimeError, match=r"call fit\(\)"):
+        p.one_step(U, Y)
+    with pytest.raises(RuntimeError, match=r"call fit\(\)"):
+        p.free_run(U, Y, N_INIT)
+
+
+@pytest.mark.parametrize("kind", HSC_KINDS)
+def test_hsc_shapes_and_predictions_leave_the_learned_state_alone(kind, hsc_fitted, hsc_setup):
+    make, _, (U, Y) = hsc_setup
+    p = hsc_fitted[kind]
+    before = _learned_state(p)
+    one, free = p.one_step(U, Y), p.free_run(U, Y, N_INIT)
+    assert _same(before, _learned_state(p)), "a prediction changed the learned state"
+    assert not _same(before, _learned_state(make(kind)))     # the snapshot does see learned state
+    for out, n in ((one, p.n_init), (free, N_INIT)):
+        assert out.shape == Y.shape
+        assert np.isnan(out[:n]).all() and np.isfinite(out[n:]).all()
+
+
+def _hsc_bad_inputs(U, Y):
+    nan_u, nan_y = U.copy(), Y.copy()
+    nan_u[7, 1] = np.nan
+    nan_y[3, 0] = np.inf
+    return [
+        ("one_step", "U with 2 columns", (U[:, :2], Y), "U"),
+        ("one_step", "U not numeric", ("rpm", Y), "U"),
+        ("one_step", "NaN in U", (nan_u, Y), "U"),
+        ("one_step", "Y shorter than U", (U, Y[:-1]), "Y"),
+        ("one_step", "inf in Y", (U, nan_y), "Y"),
+        ("free_run", "n_init 0", (U, Y, 0), "n_init"),
+        ("free_run", "n_init past the record", (U, Y, len(U)), "n_init"),
+        ("free_run", "n_init not an integer", (U, Y, 10.5), "n_init"),
+        ("free_run", "Y_init too short", (U, Y[:5], N_INIT), "Y_init"),
+        ("free_run", "inf in the initial rows", (U, nan_y, N_INIT), "Y_init"),
+        ("free_run", "NaN in U", (nan_u, Y, N_INIT), "U"),
+        ("fit", "Y shorter than U", (U, Y[:-1]), "Y"),
+    ]
+
+
+@pytest.mark.parametrize("kind", HSC_KINDS)
+def test_hsc_bad_inputs_name_the_argument(kind, hsc_fitted, hsc_setup):
+    make, _, (U, Y) = hsc_setup
+    for method, what, args, field in _hsc_bad_inputs(U, Y):
+        target = make(kind) if method == "fit" else hsc_fitted[kind]
+        with pytest.raises(ValueError) as err:
+            getattr(target, method)(*args)
+        assert re.match(rf"{field}\b", str(err.value)), f"{kind}, {what}: {err.value}"
+
+
+@pytest.mark.parametrize("kind", HSC_KINDS)
+def test_hsc_predictions_are_causal(kind, hsc_fitted, hsc_setup):
+    _, _, (U, Y) = hsc_setup
+    p = hsc_fitted[kind]
+    U2, Y2 = U.copy(), Y.copy()
+    U2[K_CUT:, 0] *= 0.7                              # engine speed, PWM and measured outputs change
+    U2[K_CUT:, 1] = 100.0 - U2[K_CUT:, 1]
+    Y2[K_CUT:] += (1.0, 0.02)
+    one, one2 = p.one_step(U, Y), p.one_step(U2, Y2)
+    # (round-off: the state-space model's small matrix products differ in the last bit between arrays)
+    np.testing.assert_allclose(one[:K_CUT + 1], one2[:K_CUT + 1], rtol=1e-12, atol=1e-12)
+    assert not np.allclose(one[K_CUT + 1:], one2[K_CUT + 1:])   # later rows do use them
+    free = p.free_run(U, Y, N_INIT)
+    # measured outputs after n_init are unused
+    np.testing.assert_allclose(free, p.free_run(U, Y2, N_INIT), rtol=1e-12, atol=1e-12)
+    tail_nan = Y.copy()
+    tail_nan[N_INIT:] = np.nan
+    np.testing.assert_allclose(free, p.free_run(U, tail_nan, N_INIT), rtol=1e-12, atol=1e-12)
+    free2 = p.free_run(U2, Y, N_INIT)
+    np.testing.assert_allclose(free[:K_CUT + 1], free2[:K_CUT + 1], rtol=1e-12, atol=1e-12)
+    assert not np.allclose(free[K_CUT + 1:], free2[K_CUT + 1:])
+
+
+@pytest.mark.parametrize("kind", HSC_KINDS)
+def test_hsc_deterministic(kind, hsc_fitted, hsc_setup):
+    make, (Ut, Yt), (U, Y) = hsc_setup
+    p = hsc_fitted[kind]
+    again = make(kind).fit(Ut, Yt)                      # same record, same seed
+    for q in (p, again):
+        np.testing.assert_array_equal(p.one_step(U, Y), q.one_step(U, Y))
+        np.testing.assert_array_equal(p.free_run(U, Y, N_INIT), q.free_run(U, Y, N_INIT))

@@ -182,7 +182,8 @@ def test_rudder_keyword_equals_angle_channel_and_per_step_equals_held(esso):
 def test_channels_and_errors(esso):
     v = esso.vessel
     assert v.thruster_names == ["propeller", "rudder"] and v.rotatable == [False, True]
-    assert esso.n_actuators == 2 and esso.n_rudders == 1
+    assert esso.n_actuators == esso.n_channels == 2 and esso.n_rudders == 1
+    assert esso.n_thrusters == 1                  # thrusters and propellers only, as Fossen and MMG count them
     with pytest.raises(ValueError, match="rudder_rad"):
         esso.acceleration([0, 0, 0], [0.3, 0, 0], rpm=[RPM8], rudder_rad=[0.1, 0.2])
     with pytest.raises(ValueError, match="rudder_rad"):
@@ -219,3 +220,25 @@ def test_rudder_without_propeller_and_mixed_actuators():
     assert acc[0, 2] > acc_off[0, 2]
     F = rudder_forces(m, [0.3, 0, 0], [0.2, 0.2], [3.0, 3.0])[0]
     assert abs(F[1, 2]) < abs(F[0, 2])  # no slipstream on the auxiliary rudder
+
+
+def test_physics_log_commands_the_rudder(esso):
+    """A synthetic log of a rudder vessel: rudder angles commanded, logged in the rudder's angle
+    column, and read back into the rudder channel (a known-command forecast follows the log
+    more closely with them than with the rudder at midships)."""
+    from hybridship.predictors import DynamicPredictor
+    from hybridship.sim.synthetic import physics_log
+
+    log = physics_log(esso, duration_s=300.0, t_shutdown_s=None, rpm_scale=0.6, wind=(0.0, 0.0),
+                      hold_s=(30.0, 60.0), rudder_scale=0.5)
+    delta = log["rudder_azimuth_deg"].to_numpy()
+    assert np.abs(delta).max() <= 0.5 * esso.vessel.rudders[0].max_angle_deg and np.abs(delta).max() > 5.0
+    starts = [100.0, 150.0]
+
+    def end_error(frame):
+        fc = DynamicPredictor(esso.vessel).forecast(frame, starts, 60.0, commands="known")
+        truth = log.set_index("time_s").loc[[s + 60.0 for s in starts], ["north_m", "east_m"]].to_numpy()
+        return np.hypot(*(fc.eta[:, -1, :2] - truth).T).max()
+
+    midships = log.assign(rudder_azimuth_deg=0.0)
+    assert end_error(log) < 0.5 * end_error(midships)

@@ -141,7 +141,8 @@ def _settings(args, mode):
     except (ValueError, TypeError) as exc:
         msg = " ".join(str(exc).split())
         field = msg.split(":", 1)[0]
-        raise _usage(f"{_PROG} {mode}: error: {names.get(field, field)}: {msg.split(':', 1)[-1].strip()}") from None
+        option = names.get(field.split("[", 1)[0], field)  # radii_m[0] -> --radii-m
+        raise _usage(f"{_PROG} {mode}: error: {option}: {msg.split(':', 1)[-1].strip()}") from None
 
 
 def _model(args, mode):

@@ -156,7 +156,72 @@ def _deriv(x, t, rpm0, rpm_now, inv_tau, prep, tau_wave, hold, acc_ned, Q, thrus
 
 
 # No "nnan"/"ninf" here: the kernel tests for unreached radii and diverged states.
-@numba.njit(cache=True, fastmath={"nsz", "arcp", "contract", "afn", "reassoc"})
+_KERNEL_MATH = {"nsz", "arcp", "contract", "afn", "reassoc"}
+
+
+@numba.njit(cache=True, fastmath=_KERNEL_MATH)
+def _gust_speed(wind_mean, gust_f, gust_a, gust_ph, t):
+    """Mean wind plus the gust harmonics of one sample at time ``t`` [m/s], at least 0."""
+    ws = wind_mean
+    for h in range(gust_f.shape[0]):
+        ws += gust_a[h] * math.cos(2.0 * math.pi * gust_f[h] * t + gust_ph[h])
+    if ws < 0.0:
+        ws = 0.0
+    return ws
+
+
+@numba.njit(cache=True, fastmath=_KERNEL_MATH)
+def _holding_load(x, m_inv, az, wind_mean, wind_dir, cur, acc_ned, Q, pre, prep, tau_wave, work, rpm_now,
+                  zeros_rpm, inv_tau, hold, thrusts, k1, tau_b, acc_b):
+    """``hold = -(environment at rest with the mean wind and mean wave drift) = -M nu_dot0`` of one sample."""
+    prepare_inputs(az, wind_mean, wind_dir, cur[0], cur[1], Q, prep)
+    _wave_eval(0.0, 0.0, 0.0, x[2], pre, True, tau_wave, work)
+    _deriv(x, 1e9, zeros_rpm, rpm_now, inv_tau, prep, tau_wave, hold, acc_ned, Q, thrusts, k1, tau_b, acc_b)
+    Mb = np.linalg.inv(m_inv)
+    for i in range(3):
+        hold[i] = -(Mb[i, 0] * k1[3] + Mb[i, 1] * k1[4] + Mb[i, 2] * k1[5])
+
+
+@numba.njit(cache=True, fastmath=_KERNEL_MATH)
+def _rk4_step(x, t0, dt, rpm0, rpm_now, inv_tau, prep, tau_wave, hold, acc_ned, Q, thrusts,
+              xt, k1, k2, k3, k4, tau_b, acc_b):
+    """One RK4 step of ``x`` in place, the spin-down evaluated at the stage times."""
+    _deriv(x, t0, rpm0, rpm_now, inv_tau, prep, tau_wave, hold, acc_ned, Q, thrusts, k1, tau_b, acc_b)
+    for i in range(6):
+        xt[i] = x[i] + 0.5 * dt * k1[i]
+    _deriv(xt, t0 + 0.5 * dt, rpm0, rpm_now, inv_tau, prep, tau_wave, hold, acc_ned, Q, thrusts, k2, tau_b, acc_b)
+    for i in range(6):
+        xt[i] = x[i] + 0.5 * dt * k2[i]
+    _deriv(xt, t0 + 0.5 * dt, rpm0, rpm_now, inv_tau, prep, tau_wave, hold, acc_ned, Q, thrusts, k3, tau_b, acc_b)
+    for i in range(6):
+        xt[i] = x[i] + dt * k3[i]
+    _deriv(xt, t0 + dt, rpm0, rpm_now, inv_tau, prep, tau_wave, hold, acc_ned, Q, thrusts, k4, tau_b, acc_b)
+    for i in range(6):
+        x[i] += dt / 6.0 * (k1[i] + 2.0 * k2[i] + 2.0 * k3[i] + k4[i])
+
+
+@numba.njit(cache=True, fastmath=_KERNEL_MATH)
+def _record_passages(r, r_prev, m_prev, m, t0, dt, radii, t_react, reached, done_q, t_reach, r_react):
+    """First passage of each radius (interpolated in the step) and the largest excursion up to each
+    reaction time, for one sample's step from ``t0`` to ``t0 + dt``; returns whether every radius is reached."""
+    t1 = t0 + dt
+    all_reached = True
+    for i in range(radii.shape[0]):
+        if not reached[i]:
+            if r >= radii[i]:
+                reached[i] = True
+                t_reach[i] = t0 + dt * (radii[i] - r_prev) / (r - r_prev) if r > r_prev else t1
+            else:
+                all_reached = False
+    for q in range(t_react.shape[0]):
+        if not done_q[q] and t1 >= t_react[q]:
+            done_q[q] = True
+            f = (t_react[q] - t0) / dt
+            r_react[q] = m_prev + f * (m - m_prev)   # max excursion up to t_react
+    return all_reached
+
+
+@numba.njit(cache=True, fastmath=_KERNEL_MATH)
 def _kernel(psi0, P, m_inv, m_a, d_lin, d_quad, d_lift, strip_w, thr, wind_p,
             az, rpm0, tau_rpm_s, balance, wind_mean, wind_dir, gust_f, gust_a, gust_ph,
             cur, acc_ned, nu0, wave_w, wave_a, wave_ph, wave_dir, hull, dt, n_steps, radii, t_react,
@@ -198,13 +263,8 @@ def _kernel(psi0, P, m_inv, m_a, d_lin, d_quad, d_lift, strip_w, thr, wind_p,
         for i in range(3):
             hold[i] = 0.0
         if balance:
-            # Holding load = -(environment at rest with mean wind and mean wave drift) = -M nu_dot0.
-            prepare_inputs(az[b], wind_mean[b], wind_dir[b], cur[b, 0], cur[b, 1], Q, prep)
-            _wave_eval(0.0, 0.0, 0.0, x[2], pre, True, tau_wave, work)
-            _deriv(x, 1e9, zeros_rpm, rpm_now, inv_tau, prep, tau_wave, hold, acc_ned[b], Q, thrusts, k1, tau_b, acc_b)
-            Mb = np.linalg.inv(m_inv[b])
-            for i in range(3):
-                hold[i] = -(Mb[i, 0] * k1[3] + Mb[i, 1] * k1[4] + Mb[i, 2] * k1[5])
+            _holding_load(x, m_inv[b], az[b], wind_mean[b], wind_dir[b], cur[b], acc_ned[b], Q, pre, prep,
+                          tau_wave, work, rpm_now, zeros_rpm, inv_tau, hold, thrusts, k1, tau_b, acc_b)
         reached = np.zeros(n_r, dtype=np.bool_)
         done_q = np.zeros(n_q, dtype=np.bool_)
         for i in range(n_r):
@@ -218,45 +278,19 @@ def _kernel(psi0, P, m_inv, m_a, d_lin, d_quad, d_lift, strip_w, thr, wind_p,
                 track[b, 0, i] = x[i]
         for j in range(n_steps):
             t0 = j * dt
-            ws = wind_mean[b]
-            for h in range(gust_f.shape[1]):
-                ws += gust_a[b, h] * math.cos(2.0 * math.pi * gust_f[b, h] * t0 + gust_ph[b, h])
-            if ws < 0.0:
-                ws = 0.0
+            ws = _gust_speed(wind_mean[b], gust_f[b], gust_a[b], gust_ph[b], t0)
             prepare_inputs(az[b], ws, wind_dir[b], cur[b, 0], cur[b, 1], Q, prep)
             _wave_eval(t0, x[0], x[1], x[2], pre, False, tau_wave, work)
-            # RK4 with the spin-down evaluated at the stage times
-            _deriv(x, t0, rpm0[b], rpm_now, inv_tau, prep, tau_wave, hold, acc_ned[b], Q, thrusts, k1, tau_b, acc_b)
-            for i in range(6):
-                xt[i] = x[i] + 0.5 * dt * k1[i]
-            _deriv(xt, t0 + 0.5 * dt, rpm0[b], rpm_now, inv_tau, prep, tau_wave, hold, acc_ned[b], Q, thrusts, k2, tau_b, acc_b)
-            for i in range(6):
-                xt[i] = x[i] + 0.5 * dt * k2[i]
-            _deriv(xt, t0 + 0.5 * dt, rpm0[b], rpm_now, inv_tau, prep, tau_wave, hold, acc_ned[b], Q, thrusts, k3, tau_b, acc_b)
-            for i in range(6):
-                xt[i] = x[i] + dt * k3[i]
-            _deriv(xt, t0 + dt, rpm0[b], rpm_now, inv_tau, prep, tau_wave, hold, acc_ned[b], Q, thrusts, k4, tau_b, acc_b)
-            for i in range(6):
-                x[i] += dt / 6.0 * (k1[i] + 2.0 * k2[i] + 2.0 * k3[i] + k4[i])
+            _rk4_step(x, t0, dt, rpm0[b], rpm_now, inv_tau, prep, tau_wave, hold, acc_ned[b], Q, thrusts,
+                      xt, k1, k2, k3, k4, tau_b, acc_b)
             t1 = t0 + dt
             r = math.sqrt(x[0] * x[0] + x[1] * x[1])
             m = max(m_prev, r)
             if keep:
                 for i in range(3):
                     track[b, j + 1, i] = x[i]
-            all_reached = True
-            for i in range(n_r):
-                if not reached[i]:
-                    if r >= radii[i]:
-                        reached[i] = True
-                        t_reach[b, i] = t0 + dt * (radii[i] - r_prev) / (r - r_prev) if r > r_prev else t1
-                    else:
-                        all_reached = False
-            for q in range(n_q):
-                if not done_q[q] and t1 >= t_react[q]:
-                    done_q[q] = True
-                    f = (t_react[q] - t0) / dt
-                    r_react[b, q] = m_prev + f * (m - m_prev)   # max excursion up to t_react
+            all_reached = _record_passages(r, r_prev, m_prev, m, t0, dt, radii, t_react, reached, done_q,
+                                           t_reach[b], r_react[b])
             r_prev = r
             m_prev = m
             if not (np.isfinite(x[0]) and np.isfinite(x[1])):

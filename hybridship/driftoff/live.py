@@ -48,8 +48,11 @@ class EnvironmentEstimate:
         ``[north_m, east_m, psi_rad]`` now.
     nu : ndarray (3,)
         ``[u_m_s, v_m_s, r_rad_s]`` now (mean of the last 3 s).
-    rpm, azimuth_rad : ndarray (K,)
-        Thruster commands now (the spin-down starts from these).
+    rpm, azimuth_rad : ndarray (K,) or (K + R,)
+        Commands now per command channel: the K thrusters' rpm and azimuths [rad] (and,
+        when the estimate comes from LogArrays of a vessel with rudders, the R rudders'
+        angles packed after them in ``azimuth_rad``). The spin-down starts from the
+        thrusters' commands; the rudders are left at 0.
     wind_speed_m_s, wind_dir_from_rad : float
         Mean measured wind over ``wind_window_s``.
     gust_intensity : float

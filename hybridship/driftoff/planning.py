@@ -23,10 +23,13 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 from functools import lru_cache
+from typing import Annotated
 
 import numpy as np
 import pandas as pd
+from pydantic import Field, field_validator, model_validator
 
+from ..config import Float, Int, NonEmpty, config_dataclass
 from ..physics.model import DynamicModel
 from ..sim import environment as env
 from . import engine, spread
@@ -62,19 +65,7 @@ def state_rng(seed: int, index: int = 0) -> np.random.Generator:
     return np.random.default_rng(np.random.SeedSequence(int(seed), spawn_key=(int(index),)))
 
 
-def _positive_list(name, values, *, allow_zero=False):
-    try:
-        a = np.atleast_1d(np.asarray(values, dtype=float))
-    except (TypeError, ValueError):
-        raise TypeError(f"{name}: expected numbers, got {values!r}") from None
-    if a.ndim != 1 or a.size == 0:
-        raise ValueError(f"{name}: expected a non-empty list of numbers, got {values!r}")
-    if not np.all(np.isfinite(a)) or np.any(a < 0) or (not allow_zero and np.any(a == 0)):
-        raise ValueError(f"{name}: expected finite numbers {'>=' if allow_zero else '>'} 0, got {values!r}")
-    return a
-
-
-@dataclass(frozen=True)
+@config_dataclass(frozen=True)
 class DriftOffSettings:
     """Numerical settings of a drift-off study (validated; errors name the field).
 
@@ -100,37 +91,35 @@ class DriftOffSettings:
         Seed of the run (each weather state uses ``SeedSequence(seed, spawn_key=(index,))``).
     """
 
-    radii_m: tuple = (3.0, 5.0, 10.0)
-    reaction_times_s: tuple = (30.0, 60.0)
-    n_samples: int = 100
-    horizon_s: float = 300.0
-    dt_s: float = 1.0
-    rpm_time_constant_s: float = 1.5
-    vessel_spread: float = 1.0
-    n_wave_components: int = 20
-    n_gust_harmonics: int = 20
-    seed: int = 0
+    radii_m: Annotated[tuple[Annotated[Float, Field(gt=0)], ...], NonEmpty] = (3.0, 5.0, 10.0)
+    reaction_times_s: Annotated[tuple[Annotated[Float, Field(ge=0)], ...], NonEmpty] = (30.0, 60.0)
+    n_samples: Annotated[Int, Field(ge=1)] = 100
+    horizon_s: Annotated[Float, Field(gt=0)] = 300.0
+    dt_s: Annotated[Float, Field(gt=0)] = 1.0
+    rpm_time_constant_s: Annotated[Float, Field(gt=0)] = 1.5
+    vessel_spread: Annotated[Float, Field(ge=0)] = 1.0
+    n_wave_components: Annotated[Int, Field(ge=1)] = 20
+    n_gust_harmonics: Annotated[Int, Field(ge=1)] = 20
+    seed: Annotated[Int, Field(ge=0)] = 0
 
-    def __post_init__(self):
-        set_ = lambda k, v: object.__setattr__(self, k, v)  # noqa: E731
-        set_("radii_m", tuple(np.sort(_positive_list("radii_m", self.radii_m)).tolist()))
-        set_("reaction_times_s", tuple(_positive_list("reaction_times_s", self.reaction_times_s,
-                                                      allow_zero=True).tolist()))
-        for k in ("horizon_s", "dt_s", "rpm_time_constant_s"):
-            set_(k, float(_positive_list(k, getattr(self, k))[0]))
-        set_("vessel_spread", float(_positive_list("vessel_spread", self.vessel_spread, allow_zero=True)[0]))
-        for k in ("n_samples", "n_wave_components", "n_gust_harmonics"):
-            v = getattr(self, k)
-            if isinstance(v, bool) or not isinstance(v, (int, np.integer)) or v < 1:
-                raise ValueError(f"{k}: expected a positive int, got {v!r}")
-            set_(k, int(v))
-        if isinstance(self.seed, bool) or not isinstance(self.seed, (int, np.integer)) or self.seed < 0:
-            raise ValueError(f"seed: expected a non-negative int, got {self.seed!r}")
+    @field_validator("radii_m", "reaction_times_s", mode="before")
+    @classmethod
+    def _one_or_many(cls, v):
+        return tuple(np.atleast_1d(v).tolist()) if np.ndim(v) == 0 or isinstance(v, np.ndarray) else v
+
+    @field_validator("radii_m")
+    @classmethod
+    def _sorted(cls, v):
+        return tuple(sorted(v))
+
+    @model_validator(mode="after")
+    def _within_horizon(self):
         if self.dt_s > self.horizon_s:
             raise ValueError(f"dt_s: must be <= horizon_s = {self.horizon_s:g}, got {self.dt_s!r}")
         if max(self.reaction_times_s) > self.horizon_s:
             raise ValueError(f"reaction_times_s: must be <= horizon_s = {self.horizon_s:g}, "
                              f"got {self.reaction_times_s!r}")
+        return self
 
     @property
     def n_steps(self) -> int:

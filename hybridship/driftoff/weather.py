@@ -26,14 +26,16 @@ per-sample arrays the kernel reads (wind with gust harmonics, current, wave comp
 
 from __future__ import annotations
 
-import dataclasses
 import math
 from dataclasses import dataclass
+from typing import Annotated
 from pathlib import Path
 
 import numpy as np
 import pandas as pd
+from pydantic import Field
 
+from ..config import Float, config_dataclass
 from ..forecast_inputs.limits import check_number
 from ..sim import environment as env
 
@@ -46,11 +48,14 @@ TABLE_COLUMNS = ("wind_speed_m_s", "wind_dir_deg", "hs_m", "tp_s", "wave_dir_deg
 OPTIONAL_COLUMNS = ("time", "gust_intensity")
 
 
+_NonNeg = Annotated[Float, Field(ge=0.0)]
+
+
 def _check(name, value, lo=None, hi=None, lo_open=False):
     return check_number(name, value, lo=lo, hi=hi, lo_open=lo_open)
 
 
-@dataclass(frozen=True)
+@config_dataclass(frozen=True, prefix="weather")
 class WeatherState:
     """Mean weather of one state (SI, radians; directions as in :mod:`hybridship.sim.environment`).
 
@@ -72,21 +77,14 @@ class WeatherState:
         Turbulence intensity sigma_U / U [-] in [0, 0.5].
     """
 
-    wind_speed_m_s: float = 0.0
-    wind_dir_from_rad: float = 0.0
-    hs_m: float = 0.0
-    tp_s: float = 6.0
-    wave_dir_from_rad: float = 0.0
-    current_speed_m_s: float = 0.0
-    current_dir_to_rad: float = 0.0
-    gust_intensity: float = 0.1
-
-    def __post_init__(self):
-        rules = {"wind_speed_m_s": dict(lo=0.0), "hs_m": dict(lo=0.0), "tp_s": dict(lo=0.0, lo_open=True),
-                 "current_speed_m_s": dict(lo=0.0), "gust_intensity": dict(lo=0.0, hi=0.5)}
-        for f in dataclasses.fields(self):
-            object.__setattr__(self, f.name, _check(f"weather.{f.name}", getattr(self, f.name),
-                                                    **rules.get(f.name, {})))
+    wind_speed_m_s: _NonNeg = 0.0
+    wind_dir_from_rad: Float = 0.0
+    hs_m: _NonNeg = 0.0
+    tp_s: Annotated[Float, Field(gt=0.0)] = 6.0
+    wave_dir_from_rad: Float = 0.0
+    current_speed_m_s: _NonNeg = 0.0
+    current_dir_to_rad: Float = 0.0
+    gust_intensity: Annotated[Float, Field(ge=0.0, le=0.5)] = 0.1
 
     @classmethod
     def from_degrees(cls, *, wind_speed_m_s=0.0, wind_dir_deg=0.0, hs_m=0.0, tp_s=6.0, wave_dir_deg=None,
@@ -98,7 +96,7 @@ class WeatherState:
                    math.radians(_check("weather.current_dir_deg", current_dir_deg)), gust_intensity)
 
 
-@dataclass(frozen=True)
+@config_dataclass(frozen=True, prefix="uncertainty")
 class WeatherUncertainty:
     """Standard deviations of the weather the samples draw from (0 = known exactly).
 
@@ -109,17 +107,13 @@ class WeatherUncertainty:
         [m/s, rad, m, s, rad, m/s, rad].
     """
 
-    wind_speed_m_s: float = 0.0
-    wind_dir_rad: float = 0.0
-    hs_m: float = 0.0
-    tp_s: float = 0.0
-    wave_dir_rad: float = 0.0
-    current_speed_m_s: float = 0.0
-    current_dir_rad: float = 0.0
-
-    def __post_init__(self):
-        for f in dataclasses.fields(self):
-            object.__setattr__(self, f.name, _check(f"uncertainty.{f.name}", getattr(self, f.name), lo=0.0))
+    wind_speed_m_s: _NonNeg = 0.0
+    wind_dir_rad: _NonNeg = 0.0
+    hs_m: _NonNeg = 0.0
+    tp_s: _NonNeg = 0.0
+    wave_dir_rad: _NonNeg = 0.0
+    current_speed_m_s: _NonNeg = 0.0
+    current_dir_rad: _NonNeg = 0.0
 
     @classmethod
     def typical(cls) -> "WeatherUncertainty":

@@ -44,6 +44,7 @@ import numpy as np
 
 from hybridship.residual.ensemble import EnsembleConfig, fit_ensemble
 
+from .contract import check_free_run, check_record, require_fitted
 from .simulator import PlaningCraftModel
 from .vessel import PlaningCraft
 
@@ -258,6 +259,7 @@ class HybridModel:
         self.ensemble_config = ensemble
         self.acc_lags = acc_lags
         self.n_init = 2
+        self.shape = (3, 2)              # U: rpm, PWM %, heave acceleration; Y: speed, pitch
 
     def _input_features(self, U, a):
         lags = list(range(1, self.acc_lags + 1))
@@ -275,7 +277,7 @@ class HybridModel:
         return np.hstack([_lags(Y, [1, 2]), phys, self._input_features(U, a)])
 
     def fit(self, U, Y, *, progress: bool = False):
-        U, Y = np.asarray(U, float), np.asarray(Y, float)
+        U, Y = check_record(U, Y, min_rows=self.n_init + 10, shape=self.shape)
         k0 = self.n_init
         self.grey.fit(U, Y, k0 - 1)
         sim = self.grey.simulate(U, Y[k0 - 1], k0 - 1)
@@ -287,7 +289,8 @@ class HybridModel:
         return self
 
     def one_step(self, U, Y):
-        U, Y = np.asarray(U, float), np.asarray(Y, float)
+        require_fitted(self, "one_ens")
+        U, Y = check_record(U, Y, min_rows=self.n_init + 1, shape=self.shape)
         phys = self.grey.one_step(U, Y)
         out = np.full(Y.shape, np.nan)
         k0 = self.n_init
@@ -296,8 +299,9 @@ class HybridModel:
         return out
 
     def free_run(self, U, Y_init, n_init: int):
-        U = np.asarray(U, float)
-        sim = self.grey.simulate(U, np.asarray(Y_init, float)[n_init - 1], n_init - 1)
+        require_fitted(self, "free_ens")
+        U, Y_init, n_init = check_free_run(U, Y_init, n_init, self.n_init, self.shape)
+        sim = self.grey.simulate(U, Y_init[n_init - 1], n_init - 1)
         out = np.full(sim.shape, np.nan)
         mean, _ = self.free_ens.predict(self._free_features(U, sim)[n_init:])
         out[n_init:] = sim[n_init:] + mean
@@ -305,6 +309,8 @@ class HybridModel:
 
     def grey_free_run(self, U, Y_init, n_init: int):
         """The grey box alone (for the documentation's ablation)."""
-        sim = self.grey.simulate(np.asarray(U, float), np.asarray(Y_init, float)[n_init - 1], n_init - 1)
+        require_fitted(self, "free_ens")
+        U, Y_init, n_init = check_free_run(U, Y_init, n_init, self.n_init, self.shape)
+        sim = self.grey.simulate(U, Y_init[n_init - 1], n_init - 1)
         sim[:n_init] = np.nan
         return sim

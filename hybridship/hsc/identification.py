@@ -28,8 +28,13 @@ inputs) and 7/5 (29 inputs), hidden layers of 5 and 4 log-sigmoid neurons, linea
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Annotated
 
 import numpy as np
+from pydantic import Field
+
+from ..config import Float, Int, NonEmpty, config_dataclass
+from .contract import check_free_run, check_record, require_fitted
 
 __all__ = [
     "ARXParameters",
@@ -138,11 +143,15 @@ class ARXModel:
         return f"ARX{self.na}{self.nb}{self.nk}"
 
     def fit(self, U, Y):
+        U, Y = check_record(U, Y, min_rows=self.n_init + 2)
+        self.shape = (U.shape[1], Y.shape[1])             # (inputs, outputs) of the predictions
         self.su, self.sy = _Standardiser(U), _Standardiser(Y)
         self.params = fit_arx(self.su(U), self.sy(Y), self.na, self.nb, self.nk)
         return self
 
     def one_step(self, U, Y):
+        require_fitted(self, "params")
+        U, Y = check_record(U, Y, shape=self.shape)
         Zu, Zy = self.su(U), self.sy(Y)
         Phi, _, p = _arx_matrix(Zu, Zy, self.na, self.nb, self.nk)
         out = np.full(Y.shape, np.nan)
@@ -150,8 +159,8 @@ class ARXModel:
         return out
 
     def free_run(self, U, Y_init, n_init: int):
-        if n_init < self.n_init:
-            raise ValueError(f"{self.label}: free run needs n_init >= {self.n_init}")
+        require_fitted(self, "params")
+        U, Y_init, n_init = check_free_run(U, Y_init, n_init, self.n_init, self.shape)
         Zu = self.su(U)
         Z = np.zeros((U.shape[0], self.sy.mean.size))
         Z[:n_init] = self.sy(Y_init[:n_init])
@@ -240,6 +249,8 @@ class StateSpaceModel:
         return np.vstack([Z[:1], Z[:-1]])            # u[k-1] (the first sample repeated)
 
     def fit(self, U, Y):
+        U, Y = check_record(U, Y, min_rows=2 * self.block_rows + 2)
+        self.shape = (U.shape[1], Y.shape[1])             # (inputs, outputs) of the predictions
         self.su, self.sy = _Standardiser(U), _Standardiser(Y)
         self.params = fit_subspace(self._u(U), self.sy(Y), self.order, self.block_rows)
         self.K = self.params.kalman_gain()
@@ -257,6 +268,8 @@ class StateSpaceModel:
         return pred, x
 
     def one_step(self, U, Y):
+        require_fitted(self, "params")
+        U, Y = check_record(U, Y, shape=self.shape)
         Zu, Zy = self._u(U), self.sy(Y)
         pred, _ = self._filter(Zu, Zy, U.shape[0])
         out = self.sy.inverse(pred)
@@ -264,6 +277,8 @@ class StateSpaceModel:
         return out
 
     def free_run(self, U, Y_init, n_init: int):
+        require_fitted(self, "params")
+        U, Y_init, n_init = check_free_run(U, Y_init, n_init, self.n_init, self.shape)
         Zu = self._u(U)
         _, x = self._filter(Zu, self.sy(Y_init[:n_init]), n_init)
         p = self.params
@@ -279,7 +294,7 @@ class StateSpaceModel:
 # --------------------------------------------------------------------------- NARX network
 
 
-@dataclass(frozen=True)
+@config_dataclass(frozen=True)
 class NARXConfig:
     """The paper's NARX network (validated on creation).
 
@@ -299,19 +314,13 @@ class NARXConfig:
         Seed of the initial weights.
     """
 
-    n_out: int = 5
-    n_in: int = 3
-    hidden: tuple = (5, 4)
-    max_iter: int = 400
-    restarts: int = 3
-    val_fraction: float = 0.15
-    seed: int = 0
-
-    def __post_init__(self):
-        if self.n_out < 1 or self.n_in < 1 or not self.hidden or min(self.hidden) < 1:
-            raise ValueError(f"NARXConfig: invalid lags or layers in {self!r}")
-        if self.max_iter < 1 or self.restarts < 1 or not 0 < self.val_fraction < 0.5:
-            raise ValueError(f"NARXConfig: invalid training settings in {self!r}")
+    n_out: Annotated[Int, Field(ge=1)] = 5
+    n_in: Annotated[Int, Field(ge=1)] = 3
+    hidden: Annotated[tuple[Annotated[Int, Field(ge=1)], ...], NonEmpty] = (5, 4)
+    max_iter: Annotated[Int, Field(ge=1)] = 400
+    restarts: Annotated[Int, Field(ge=1)] = 3
+    val_fraction: Annotated[Float, Field(gt=0, lt=0.5)] = 0.15
+    seed: Int = 0
 
 
 class _MinMax:
@@ -352,6 +361,8 @@ class NARXModel:
         import torch
 
         c = self.config
+        U, Y = check_record(U, Y, min_rows=self.n_init + 10)
+        self.shape = (U.shape[1], Y.shape[1])             # (inputs, outputs) of the predictions
         self.su, self.sy = _MinMax(U), _MinMax(Y)
         Zu, Zy = self.su(U), self.sy(Y)
         X = self._features(Zu, Zy, self.n_init)
@@ -412,14 +423,16 @@ class NARXModel:
         return h
 
     def one_step(self, U, Y):
+        require_fitted(self, "weights")
+        U, Y = check_record(U, Y, min_rows=self.n_init + 1, shape=self.shape)
         Zu, Zy = self.su(U), self.sy(Y)
         out = np.full(Y.shape, np.nan)
         out[self.n_init:] = self.sy.inverse(self._net(self._features(Zu, Zy, self.n_init)))
         return out
 
     def free_run(self, U, Y_init, n_init: int):
-        if n_init < self.n_init:
-            raise ValueError(f"NARX: free run needs n_init >= {self.n_init}")
+        require_fitted(self, "weights")
+        U, Y_init, n_init = check_free_run(U, Y_init, n_init, self.n_init, self.shape)
         c = self.config
         Zu = self.su(U)
         Z = np.zeros((U.shape[0], Y_init.shape[1]))

@@ -67,9 +67,13 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import Annotated
 from typing import Literal
 
 import numpy as np
+from pydantic import Field
+
+from ..config import Float, Int, config_dataclass
 
 from hybridship.sim.environment import G_M_S2, make_wave_components
 
@@ -156,18 +160,14 @@ def savitsky_planing(speed_m_s: float, tau_rad: float, transom_draft_m: float, b
     return lift, lp, friction, lam
 
 
-@dataclass(frozen=True)
+@config_dataclass(frozen=True)
 class SeaConditions:
     """Head-sea irregular waves (JONSWAP); ``hs_m = 0`` gives calm water."""
 
-    hs_m: float = 0.0
-    tp_s: float = 2.0
-    gamma: float = 3.3
-    n_components: int = 40
-
-    def __post_init__(self):
-        if not (self.hs_m >= 0 and self.tp_s > 0 and 1 <= self.gamma <= 7 and self.n_components >= 1):
-            raise ValueError(f"SeaConditions: invalid {self!r}")
+    hs_m: Annotated[Float, Field(ge=0)] = 0.0
+    tp_s: Annotated[Float, Field(gt=0)] = 2.0
+    gamma: Annotated[Float, Field(ge=1, le=7)] = 3.3
+    n_components: Annotated[Int, Field(ge=1)] = 40
 
 
 @dataclass(frozen=True)

@@ -24,10 +24,13 @@ and scored on the aligned data; :attr:`TrialData.raw` keeps the log as recorded.
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from typing import Annotated, Literal
 
 import numpy as np
 import pandas as pd
+from pydantic import Field, model_validator
 
+from ..config import Float, Int, config_dataclass
 from .simulator import KNOT_M_S, PlaningCraftModel, SeaConditions, TrueRecord
 from .vessel import PlaningCraft, load_planing_craft
 
@@ -40,7 +43,7 @@ INPUTS = ("rpm", "pwm_pct", "heave_acc_m_s2")
 OUTPUTS = ("speed_m_s", "pitch_rad")
 
 
-@dataclass(frozen=True)
+@config_dataclass(frozen=True)
 class TrialConfig:
     """One simulated sea trial (validated on creation).
 
@@ -70,37 +73,32 @@ class TrialConfig:
         Simulated time before the logger starts [s].
     """
 
-    sea_state: int
-    n_samples: int
-    n_train: int
-    actuator: str
+    sea_state: Literal[1, 2]
+    n_samples: Int
+    n_train: Annotated[Int, Field(ge=50)]
+    actuator: Literal["interceptor", "trim_tab"]
     sea: SeaConditions
-    seed: int = 0
-    rpm_range: tuple = (800.0, 4000.0)
-    pwm_range_pct: tuple = (10.0, 100.0)
-    hold_s: tuple = (8.0, 30.0)
-    ramp_rpm_s: tuple = (60.0, 400.0)
-    pwm_period_s: tuple = (6.0, 24.0)
-    settle_s: float = 30.0
+    seed: Int = 0
+    rpm_range: tuple[Float, Float] = (800.0, 4000.0)
+    pwm_range_pct: tuple[Float, Float] = (10.0, 100.0)
+    hold_s: tuple[Float, Float] = (8.0, 30.0)
+    ramp_rpm_s: tuple[Float, Float] = (60.0, 400.0)
+    pwm_period_s: tuple[Float, Float] = (6.0, 24.0)
+    settle_s: Annotated[Float, Field(ge=0)] = 30.0
 
-    def __post_init__(self):
-        bad = []
-        if self.sea_state not in (1, 2):
-            bad.append("sea_state")
-        if not (50 <= self.n_train < self.n_samples):
-            bad.append("n_train")
-        if self.actuator not in ("interceptor", "trim_tab"):
-            bad.append("actuator")
-        if not (0 < self.rpm_range[0] < self.rpm_range[1]):
-            bad.append("rpm_range")
-        if not (0 <= self.pwm_range_pct[0] < self.pwm_range_pct[1] <= 100):
-            bad.append("pwm_range_pct")
-        if not (0 < self.hold_s[0] <= self.hold_s[1]) or not (0 < self.ramp_rpm_s[0] <= self.ramp_rpm_s[1]):
-            bad.append("hold_s/ramp_rpm_s")
-        if not (0 < self.pwm_period_s[0] <= self.pwm_period_s[1]) or self.settle_s < 0:
-            bad.append("pwm_period_s/settle_s")
-        if bad:
-            raise ValueError(f"TrialConfig: invalid {', '.join(bad)} in {self!r}")
+    @model_validator(mode="after")
+    def _ranges(self):
+        if not self.n_train < self.n_samples:
+            raise ValueError(f"n_train: must be < n_samples = {self.n_samples}, got {self.n_train}")
+        if not 0 < self.rpm_range[0] < self.rpm_range[1]:
+            raise ValueError(f"rpm_range: expected 0 < min < max, got {self.rpm_range}")
+        if not 0 <= self.pwm_range_pct[0] < self.pwm_range_pct[1] <= 100:
+            raise ValueError(f"pwm_range_pct: expected 0 <= min < max <= 100, got {self.pwm_range_pct}")
+        for name in ("hold_s", "ramp_rpm_s", "pwm_period_s"):
+            lo, hi = getattr(self, name)
+            if not 0 < lo <= hi:
+                raise ValueError(f"{name}: expected 0 < min <= max, got {(lo, hi)}")
+        return self
 
     @property
     def n_validation(self) -> int:

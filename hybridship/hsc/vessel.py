@@ -25,6 +25,7 @@ from typing import Literal
 
 from pydantic import BaseModel, ConfigDict, Field, ValidationError, model_validator
 
+from hybridship.config import format_validation_error
 from hybridship.vessel import VesselFileError, packaged_vessel_text
 
 __all__ = [
@@ -235,10 +236,7 @@ def planing_craft_from_dict(data: dict, source: str = "<dict>") -> PlaningCraft:
     try:
         return PlaningCraft.model_validate(data)
     except ValidationError as err:
-        first = err.errors()[0]
-        loc = ".".join(str(p) for p in first["loc"]) or "<file>"
-        got = f" (got {first['input']!r})" if "input" in first and not isinstance(first["input"], dict) else ""
-        raise PlaningCraftFileError(f"{source}: {loc}: {first['msg']}{got}") from None
+        raise PlaningCraftFileError(format_validation_error(err, source)) from None
 
 
 def load_planing_craft(name_or_path: str | Path = "volcano71") -> PlaningCraft:

@@ -12,10 +12,16 @@ rotating body frame ``nu_c = R(psi)^T v_c`` so ``d(nu_c)/dt = [r v_c, -r u_c, 0]
 ``tau_ext`` is any further body-frame load (the simulator's wave drift) and ``accel_ext``
 an additive acceleration (the hybrid's residual correction).
 
-Actuators are command channels: the thrusters (and propellers) of the vessel file in
-order, then its rudders. Every input array ``rpm`` / ``azimuth_rad`` has one column per
-channel; a rudder's angle [rad] sits in its ``azimuth_rad`` column (its ``rpm`` column is
-ignored), or comes from the ``rudder_rad`` keyword of :class:`DynamicModel`. Rudder loads
+Actuators, as in Fossen's and the MMG model's terms, are thrusters (and propellers) and
+rudders; each is one command channel, the K thrusters of the vessel file in order, then its
+R rudders (:attr:`DynamicModel.n_thrusters`, :attr:`~DynamicModel.n_rudders`,
+:attr:`~DynamicModel.n_channels`). A thruster is commanded by its shaft speed ``rpm`` and,
+for an azimuth thruster, its thrust direction ``azimuth_rad``; a rudder by its angle
+``rudder_rad`` (delta, positive turns the ship to starboard). The compiled kernels read the
+rudder angles packed after the thruster azimuths in one angle array; at the public methods,
+``rpm`` and ``azimuth_rad`` may be given for the K thrusters alone and the rudder angles as
+``rudder_rad``, or both K + R wide (a rudder's ``rpm`` column is then ignored and its angle
+sits in its ``azimuth_rad`` column, the packing the logs use). Rudder loads
 (:mod:`.rudder`) use the thrust of their propeller and count as actuator ("thrust") loads.
 
 A vessel file is turned once into :class:`ModelArrays`, a tuple of plain float arrays
@@ -289,17 +295,23 @@ class DynamicModel:
         self.arrays = build_model_arrays(self.vessel, true_vessel=self.true_vessel)
 
     @property
-    def n_actuators(self) -> int:
-        """Command channels K + R (thrusters, then rudders): the width of ``rpm`` and ``azimuth_rad``."""
+    def n_channels(self) -> int:
+        """Command channels K + R (thrusters, then rudders): the full width of ``rpm`` and ``azimuth_rad``."""
         return len(self.vessel.thrusters) + len(self.vessel.rudders)
 
     @property
+    def n_actuators(self) -> int:
+        """Actuators, thrusters and rudders: as :attr:`n_channels` (one command channel each)."""
+        return self.n_channels
+
+    @property
     def n_thrusters(self) -> int:
-        """Command channels, as :attr:`n_actuators` (equal to the thruster count without rudders)."""
-        return self.n_actuators
+        """Thrusters and propellers K (rudders not included; see :attr:`n_channels`)."""
+        return len(self.vessel.thrusters)
 
     @property
     def n_rudders(self) -> int:
+        """Rudders R (each behind one propeller; its angle is the command ``rudder_rad``)."""
         return len(self.vessel.rudders)
 
     @property

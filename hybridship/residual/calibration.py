@@ -27,15 +27,18 @@ forecaster (the hybrid on manoeuvres, the drift forecasts) can use them.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from typing import Annotated, Literal
 
 import numpy as np
+from pydantic import Field, field_validator, model_validator
+
+from hybridship.config import Float, Int, NonEmpty, config_dataclass, float_array
 
 #: Two-sided coverage of +-1 and +-2 standard deviations of a Gaussian.
 GAUSS_COVERAGE = {1.0: 0.6826894921370859, 2.0: 0.9544997361036416}
 
 
-@dataclass(frozen=True)
+@config_dataclass(frozen=True)
 class CalibrationConfig:
     """How :meth:`hybridship.predictors.HybridPredictor.fit` calibrates the spread (validated).
 
@@ -71,38 +74,28 @@ class CalibrationConfig:
         so its band would be a little wide), and training costs half.
     """
 
-    fraction: float = 0.2
-    commands: tuple = ("held", "known")
-    horizon_s: float = 60.0
-    start_every_s: float | None = None
-    max_starts: int = 2000
-    sigma: float = 2.0
-    coverage: float = GAUSS_COVERAGE[2.0]
-    floor_quantile: float = 0.1
+    fraction: Annotated[Float, Field(ge=0, lt=0.6)] = 0.2
+    commands: Annotated[tuple[Literal["held", "known"], ...], NonEmpty] = ("held", "known")
+    horizon_s: Annotated[Float, Field(gt=0)] = 60.0
+    start_every_s: Annotated[Float, Field(gt=0)] | None = None
+    max_starts: Annotated[Int, Field(ge=10)] = 2000
+    sigma: Annotated[Float, Field(gt=0)] = 2.0
+    coverage: Annotated[Float, Field(gt=0, lt=1)] = GAUSS_COVERAGE[2.0]
+    floor_quantile: Annotated[Float, Field(ge=0, lt=0.5)] = 0.1
     refit: bool = False
 
-    def __post_init__(self):
-        object.__setattr__(self, "commands", tuple(self.commands))
-        checks = {
-            "fraction": 0.0 <= self.fraction < 0.6,
-            "commands": len(self.commands) > 0 and all(c in ("held", "known") for c in self.commands)
-            and len(set(self.commands)) == len(self.commands),
-            "horizon_s": self.horizon_s > 0,
-            "start_every_s": self.start_every_s is None or self.start_every_s > 0,
-            "max_starts": isinstance(self.max_starts, (int, np.integer)) and self.max_starts >= 10,
-            "sigma": self.sigma > 0, "coverage": 0.0 < self.coverage < 1.0,
-            "floor_quantile": 0.0 <= self.floor_quantile < 0.5,
-        }
-        bad = [k for k, ok in checks.items() if not ok]
-        if bad:
-            expected = {"fraction": "0 <= fraction < 0.6", "commands": "a non-empty tuple of 'held'/'known'",
-                        "horizon_s": "> 0", "start_every_s": "None or > 0", "max_starts": "an integer >= 10",
-                        "sigma": "> 0", "coverage": "in (0, 1)", "floor_quantile": "in [0, 0.5)"}
-            raise ValueError("CalibrationConfig: " + "; ".join(
-                f"{k}={getattr(self, k)!r} (expected {expected[k]})" for k in bad))
+    @field_validator("commands")
+    @classmethod
+    def _distinct(cls, v):
+        if len(set(v)) != len(v):
+            raise ValueError(f"each mode at most once, got {v!r}")
+        return v
 
 
-@dataclass
+_NonNegVector = float_array(flat=True, lo=0.0)
+
+
+@config_dataclass(arbitrary_types=True)
 class SpreadCalibration:
     """Per-lead-time scale and floor of a standard deviation.
 
@@ -116,22 +109,19 @@ class SpreadCalibration:
         Lower bound of the raw spread, in its unit.
     """
 
-    lead_s: np.ndarray
-    scale: np.ndarray
-    floor: np.ndarray
+    lead_s: _NonNegVector
+    scale: _NonNegVector
+    floor: _NonNegVector
 
-    def __post_init__(self):
-        self.lead_s, self.scale, self.floor = (np.asarray(x, dtype=float).ravel()
-                                               for x in (self.lead_s, self.scale, self.floor))
+    @model_validator(mode="after")
+    def _aligned(self):
         n = self.lead_s.size
         if n == 0 or self.scale.size != n or self.floor.size != n:
-            raise ValueError(f"SpreadCalibration: lead_s, scale and floor need one equal non-zero length, "
+            raise ValueError(f"lead_s: lead_s, scale and floor need one equal non-zero length, "
                              f"got {self.lead_s.size}, {self.scale.size}, {self.floor.size}")
-        for name, a in (("lead_s", self.lead_s), ("scale", self.scale), ("floor", self.floor)):
-            if not np.all(np.isfinite(a)) or np.any(a < 0):
-                raise ValueError(f"SpreadCalibration: {name} must be finite and >= 0")
         if np.any(np.diff(self.lead_s) <= 0):
-            raise ValueError("SpreadCalibration: lead_s must increase")
+            raise ValueError("lead_s: must increase")
+        return self
 
     def apply(self, std: np.ndarray, lead_s: np.ndarray) -> np.ndarray:
         """Calibrated spread ``scale(h) * max(std, floor(h))``.

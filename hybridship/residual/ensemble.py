@@ -12,11 +12,15 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
+from typing import Annotated
 
 import numpy as np
+from pydantic import Field
+
+from hybridship.config import Float, Int, config_dataclass
 
 
-@dataclass(frozen=True)
+@config_dataclass(frozen=True)
 class EnsembleConfig:
     """Training configuration of an :class:`MLPEnsemble` (validated on creation).
 
@@ -43,25 +47,15 @@ class EnsembleConfig:
         Seed of the initial weights and the bootstrap draws.
     """
 
-    n_members: int = 10
-    hidden: int = 20
-    lr: float = 1e-2
-    max_epochs: int = 800
-    patience: int = 100
-    weight_decay: float = 1e-5
-    val_fraction: float = 0.2
+    n_members: Annotated[Int, Field(ge=1)] = 10
+    hidden: Annotated[Int, Field(ge=1)] = 20
+    lr: Annotated[Float, Field(gt=0)] = 1e-2
+    max_epochs: Annotated[Int, Field(ge=1)] = 800
+    patience: Annotated[Int, Field(ge=1)] = 100
+    weight_decay: Annotated[Float, Field(ge=0)] = 1e-5
+    val_fraction: Annotated[Float, Field(gt=0, lt=0.9)] = 0.2
     bootstrap: bool = True
-    seed: int = 0
-
-    def __post_init__(self):
-        checks = {
-            "n_members": self.n_members >= 1, "hidden": self.hidden >= 1, "lr": self.lr > 0,
-            "max_epochs": self.max_epochs >= 1, "patience": self.patience >= 1,
-            "weight_decay": self.weight_decay >= 0, "val_fraction": 0.0 < self.val_fraction < 0.9,
-        }
-        bad = [k for k, ok in checks.items() if not ok]
-        if bad:
-            raise ValueError(f"EnsembleConfig: invalid {', '.join(f'{k}={getattr(self, k)!r}' for k in bad)}")
+    seed: Int = 0
 
 
 @dataclass
@@ -136,6 +130,55 @@ def _time_ordered_split(segment_id: np.ndarray, val_fraction: float) -> np.ndarr
     return is_val
 
 
+def _training_rows(X, Y) -> tuple[np.ndarray, np.ndarray]:
+    """``X`` (N, n_in) and ``Y`` (N, n_out) as float arrays: N >= 20 finite rows, or an error."""
+    X = np.asarray(X, dtype=float)
+    Y = np.asarray(Y, dtype=float)
+    if X.ndim != 2 or Y.ndim != 2 or X.shape[0] != Y.shape[0]:
+        raise ValueError(f"fit_ensemble: X and Y must be (N, n_in) and (N, n_out), got {X.shape} and {Y.shape}")
+    if X.shape[0] < 20:
+        raise ValueError(f"fit_ensemble: need at least 20 training rows, got {X.shape[0]}")
+    for name, A in (("X", X), ("Y", Y)):
+        if not np.all(np.isfinite(A)):
+            raise ValueError(f"fit_ensemble: {name} contains NaN or inf (row {np.argwhere(~np.isfinite(A))[0, 0]})")
+    return X, Y
+
+
+def _standardise(A: np.ndarray, rows: np.ndarray):
+    """``(mean, std, standardised A)`` with the statistics of ``A[rows]`` (a constant column keeps std 1)."""
+    mean, std = A[rows].mean(0), A[rows].std(0)
+    std = np.where(std > 1e-12, std, 1.0)
+    return mean, std, (A - mean) / std
+
+
+def _initial_weights(E: int, n_in: int, H: int, n_out: int, gen) -> list:
+    """Batched weights and biases of ``E`` members ``n_in -> H tanh -> H tanh -> n_out``, trainable.
+
+    Glorot-uniform weights, as Keras (the paper's toolkit) uses for dense layers, drawn from
+    ``gen`` layer by layer; zero biases.
+    """
+    import torch
+
+    def init(fan_in, fan_out):
+        a = math.sqrt(6.0 / (fan_in + fan_out))
+        return (torch.rand(E, fan_in, fan_out, generator=gen) * 2 - 1) * a
+
+    params = [init(n_in, H), torch.zeros(E, 1, H), init(H, H), torch.zeros(E, 1, H),
+              init(H, n_out), torch.zeros(E, 1, n_out)]
+    for p in params:
+        p.requires_grad_(True)
+    return params
+
+
+def _forward(params, Z):
+    """Batched forward pass of the members, ``Z`` (E, n, n_in) -> (E, n, n_out) (torch)."""
+    import torch
+
+    h = torch.tanh(torch.baddbmm(params[1], Z, params[0]))
+    h = torch.tanh(torch.baddbmm(params[3], h, params[2]))
+    return torch.baddbmm(params[5], h, params[4])
+
+
 def fit_ensemble(X: np.ndarray, Y: np.ndarray, config: EnsembleConfig = EnsembleConfig(), *,
                  segment_id: np.ndarray | None = None, progress: bool = False) -> MLPEnsemble:
     """Train an ensemble on rows ``X (N, n_in) -> Y (N, n_out)``.
@@ -157,27 +200,13 @@ def fit_ensemble(X: np.ndarray, Y: np.ndarray, config: EnsembleConfig = Ensemble
     import torch
     from tqdm.auto import tqdm
 
-    X = np.asarray(X, dtype=float)
-    Y = np.asarray(Y, dtype=float)
-    if X.ndim != 2 or Y.ndim != 2 or X.shape[0] != Y.shape[0]:
-        raise ValueError(f"fit_ensemble: X and Y must be (N, n_in) and (N, n_out), got {X.shape} and {Y.shape}")
-    if X.shape[0] < 20:
-        raise ValueError(f"fit_ensemble: need at least 20 training rows, got {X.shape[0]}")
-    for name, A in (("X", X), ("Y", Y)):
-        if not np.all(np.isfinite(A)):
-            raise ValueError(f"fit_ensemble: {name} contains NaN or inf (row {np.argwhere(~np.isfinite(A))[0, 0]})")
+    X, Y = _training_rows(X, Y)
     seg = np.zeros(X.shape[0], int) if segment_id is None else np.asarray(segment_id)
     is_val = _time_ordered_split(seg, config.val_fraction)
     tr, va = np.flatnonzero(~is_val), np.flatnonzero(is_val)
     if va.size == 0:
         va = tr
-
-    x_mean, x_std = X[tr].mean(0), X[tr].std(0)
-    y_mean, y_std = Y[tr].mean(0), Y[tr].std(0)
-    x_std = np.where(x_std > 1e-12, x_std, 1.0)
-    y_std = np.where(y_std > 1e-12, y_std, 1.0)
-    Zx = (X - x_mean) / x_std
-    Zy = (Y - y_mean) / y_std
+    (x_mean, x_std, Zx), (y_mean, y_std, Zy) = _standardise(X, tr), _standardise(Y, tr)
 
     E, H, n_in, n_out = config.n_members, config.hidden, X.shape[1], Y.shape[1]
     rng = np.random.default_rng(config.seed)
@@ -196,21 +225,11 @@ def fit_ensemble(X: np.ndarray, Y: np.ndarray, config: EnsembleConfig = Ensemble
         Xv = torch.as_tensor(Zx[va], dtype=torch.float32).expand(E, -1, -1)
         Yv = torch.as_tensor(Zy[va], dtype=torch.float32).expand(E, -1, -1)
 
-        def init(fan_in, fan_out):
-            # Glorot-uniform, as Keras (the paper's toolkit) uses for dense layers
-            a = math.sqrt(6.0 / (fan_in + fan_out))
-            return (torch.rand(E, fan_in, fan_out, generator=gen) * 2 - 1) * a
-
-        params = [init(n_in, H), torch.zeros(E, 1, H), init(H, H), torch.zeros(E, 1, H),
-                  init(H, n_out), torch.zeros(E, 1, n_out)]
-        for p in params:
-            p.requires_grad_(True)
+        params = _initial_weights(E, n_in, H, n_out, gen)
         opt = torch.optim.Adam(params, lr=config.lr)
 
         def forward(Z):
-            h = torch.tanh(torch.baddbmm(params[1], Z, params[0]))
-            h = torch.tanh(torch.baddbmm(params[3], h, params[2]))
-            return torch.baddbmm(params[5], h, params[4])
+            return _forward(params, Z)
 
         best = torch.full((E,), float("inf"))
         best_params = [p.detach().clone() for p in params]

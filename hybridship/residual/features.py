@@ -36,10 +36,13 @@ one-step comparison).
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from typing import Annotated, Literal
 
 import numpy as np
+from pydantic import Field, field_validator
 from scipy.signal import savgol_coeffs, savgol_filter
 
+from ..config import Float, Int, config_dataclass
 from ..logs.io import LogArrays
 
 #: Optional command-aware features (appended after the paper's nine): the main
@@ -64,7 +67,7 @@ PAPER_FEATURES = ALL_FEATURES[:9]
 TARGETS = ("res_u_m_s2", "res_v_m_s2", "res_r_rad_s2")
 
 
-@dataclass(frozen=True)
+@config_dataclass(frozen=True)
 class ResidualConfig:
     """How logs become residual targets and features (recorded in the model file).
 
@@ -95,29 +98,21 @@ class ResidualConfig:
     """
 
     features: tuple[str, ...] = PAPER_FEATURES
-    deriv_window_s: float = 0.0
-    polyorder: int = 2
-    start_average_s: float = 3.0
-    start_residual_window_s: float = 0.0
-    bias_window_s: float = 900.0
-    bias_frame: str = "ned"
-    bias_block_s: float = 60.0
+    deriv_window_s: Annotated[Float, Field(ge=0)] = 0.0
+    polyorder: Annotated[Int, Field(ge=1)] = 2
+    start_average_s: Annotated[Float, Field(gt=0)] = 3.0
+    start_residual_window_s: Annotated[Float, Field(ge=0)] = 0.0
+    bias_window_s: Annotated[Float, Field(ge=0)] = 900.0
+    bias_frame: Literal["ned", "body"] = "ned"
+    bias_block_s: Annotated[Float, Field(gt=0)] = 60.0
 
-    def __post_init__(self):
-        if self.bias_window_s < 0:
-            raise ValueError(f"ResidualConfig.bias_window_s must be >= 0 (0 = no bias), got {self.bias_window_s}")
-        if self.bias_frame not in ("body", "ned"):
-            raise ValueError(f"ResidualConfig.bias_frame must be 'body' or 'ned', got {self.bias_frame!r}")
-        unknown = [f for f in self.features if f not in ALL_FEATURES]
-        if unknown or not self.features:
-            raise ValueError(f"ResidualConfig.features: unknown {unknown}; choose from {list(ALL_FEATURES)}")
-        if self.deriv_window_s < 0 or not self.start_average_s > 0 or self.start_residual_window_s < 0:
-            raise ValueError("ResidualConfig: start_average_s must be > 0 s, deriv_window_s and "
-                             "start_residual_window_s >= 0 s")
-        if not self.bias_block_s > 0:
-            raise ValueError(f"ResidualConfig.bias_block_s must be > 0 s, got {self.bias_block_s}")
-        if self.polyorder < 1:
-            raise ValueError(f"ResidualConfig.polyorder must be >= 1, got {self.polyorder}")
+    @field_validator("features")
+    @classmethod
+    def _known_features(cls, v):
+        unknown = [f for f in v if f not in ALL_FEATURES]
+        if unknown or not v:
+            raise ValueError(f"unknown {unknown}; choose from {list(ALL_FEATURES)}")
+        return v
 
     @property
     def feature_index(self) -> np.ndarray:

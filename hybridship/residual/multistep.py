@@ -25,11 +25,15 @@ ensemble mean, the members move together and keep the spread of the one-step bag
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Annotated
 
 import numpy as np
+from pydantic import Field
+
+from hybridship.config import Float, Int, config_dataclass
 
 
-@dataclass(frozen=True)
+@config_dataclass(frozen=True)
 class MultiStepConfig:
     """Settings of multi-step training (validated).
 
@@ -58,27 +62,16 @@ class MultiStepConfig:
         Relative finite-difference step of the physics Jacobian.
     """
 
-    horizon_s: float = 10.0
-    iterations: int = 150
-    batch_starts: int = 128
-    start_every_s: float = 1.0
-    lr: float = 1e-3
-    val_fraction: float = 0.2
-    val_every: int = 10
-    max_val_starts: int = 256
-    heading_length_m: float | None = None
-    fd_step: float = 1e-6
-
-    def __post_init__(self):
-        checks = {"horizon_s": self.horizon_s > 0, "iterations": self.iterations >= 1,
-                  "batch_starts": self.batch_starts >= 1, "start_every_s": self.start_every_s > 0,
-                  "lr": self.lr > 0, "val_fraction": 0.0 < self.val_fraction < 0.9,
-                  "val_every": self.val_every >= 1, "max_val_starts": self.max_val_starts >= 1,
-                  "heading_length_m": self.heading_length_m is None or self.heading_length_m >= 0,
-                  "fd_step": 0 < self.fd_step < 1e-2}
-        bad = [k for k, ok in checks.items() if not ok]
-        if bad:
-            raise ValueError(f"MultiStepConfig: invalid {', '.join(f'{k}={getattr(self, k)!r}' for k in bad)}")
+    horizon_s: Annotated[Float, Field(gt=0)] = 10.0
+    iterations: Annotated[Int, Field(ge=1)] = 150
+    batch_starts: Annotated[Int, Field(ge=1)] = 128
+    start_every_s: Annotated[Float, Field(gt=0)] = 1.0
+    lr: Annotated[Float, Field(gt=0)] = 1e-3
+    val_fraction: Annotated[Float, Field(gt=0, lt=0.9)] = 0.2
+    val_every: Annotated[Int, Field(ge=1)] = 10
+    max_val_starts: Annotated[Int, Field(ge=1)] = 256
+    heading_length_m: Annotated[Float, Field(ge=0)] | None = None
+    fd_step: Annotated[Float, Field(gt=0, lt=1e-2)] = 1e-6
 
 
 @dataclass
@@ -211,6 +204,44 @@ def _torch_physics_step():
     return PhysicsStep
 
 
+def _train_val_starts(starts: Starts, max_val_starts: int):
+    """Indices of the training starts and of at most ``max_val_starts`` validation starts
+    (spread evenly; the training starts when no start is held out)."""
+    tr = np.flatnonzero(~starts.is_val)
+    va = np.flatnonzero(starts.is_val)
+    if va.size == 0:
+        va = tr
+    if va.size > max_val_starts:
+        va = va[np.linspace(0, va.size - 1, max_val_starts).round().astype(int)]
+    return tr, va
+
+
+def _member_residuals(params, feats, x_mean, x_std, y_mean, y_std):
+    """Every member's residual acceleration from its features (torch), ``(E, S, 3)``."""
+    import torch
+
+    z = (feats - x_mean) / x_std
+    hdn = torch.tanh(torch.baddbmm(params[1], z, params[0]))
+    hdn = torch.tanh(torch.baddbmm(params[3], hdn, params[2]))
+    return torch.baddbmm(params[5], hdn, params[4]) * y_std + y_mean
+
+
+def _corrected_step(e1, n1, r, bias, dt: float):
+    """The physics step ``(e1, n1)`` corrected by the mean residual ``r`` plus the NED bias
+    ``bias`` (rotated into the body frame), held over the step ``dt`` [s]: ``(eta, nu)`` (torch)."""
+    import torch
+
+    c, sn = torch.cos(e1[:, 2]), torch.sin(e1[:, 2])
+    rb = torch.stack([c * bias[:, 0] + sn * bias[:, 1], -sn * bias[:, 0] + c * bias[:, 1], bias[:, 2]], 1)
+    rm = r.mean(0) + rb
+    nu = n1 + dt * rm
+    half = 0.5 * dt * dt
+    eta = torch.stack([e1[:, 0] + half * (c * rm[:, 0] - sn * rm[:, 1]),
+                       e1[:, 1] + half * (sn * rm[:, 0] + c * rm[:, 1]),
+                       e1[:, 2] + half * rm[:, 2]], 1)
+    return eta, nu
+
+
 def train_multistep(ensemble, model, starts: Starts, feature_index, config: MultiStepConfig, *,
                     substeps: int = 1, seed: int = 0, progress: bool = False):
     """Fine-tune a one-step :class:`~hybridship.residual.ensemble.MLPEnsemble` on the multi-step loss.
@@ -230,12 +261,7 @@ def train_multistep(ensemble, model, starts: Starts, feature_index, config: Mult
     H = starts.truth.shape[1]
     L = config.heading_length_m if config.heading_length_m is not None else 0.5 * model.vessel.particulars.L_pp_m
     fidx = torch.as_tensor(np.asarray(feature_index), dtype=torch.long)
-    tr = np.flatnonzero(~starts.is_val)
-    va = np.flatnonzero(starts.is_val)
-    if va.size == 0:
-        va = tr
-    if va.size > config.max_val_starts:
-        va = va[np.linspace(0, va.size - 1, config.max_val_starts).round().astype(int)]
+    tr, va = _train_val_starts(starts, config.max_val_starts)
     rng = np.random.default_rng(seed)
     dd = torch.float64
     params = [torch.tensor(w, dtype=dd, requires_grad=True) for w in ensemble.weights]
@@ -264,19 +290,9 @@ def train_multistep(ensemble, model, starts: Starts, feature_index, config: Mult
             else:
                 cols.append(torch.zeros((E, S, len(COMMAND_FEATURES)), dtype=dd))
             feats = torch.cat(cols, dim=2)[..., fidx]
-            z = (feats - x_mean) / x_std
-            hdn = torch.tanh(torch.baddbmm(params[1], z, params[0]))
-            hdn = torch.tanh(torch.baddbmm(params[3], hdn, params[2]))
-            r = torch.baddbmm(params[5], hdn, params[4]) * y_std + y_mean        # (E, S, 3)
+            r = _member_residuals(params, feats, x_mean, x_std, y_mean, y_std)        # (E, S, 3)
             r_prev = r
-            c, sn = torch.cos(e1[:, 2]), torch.sin(e1[:, 2])
-            rb = torch.stack([c * bias[:, 0] + sn * bias[:, 1], -sn * bias[:, 0] + c * bias[:, 1], bias[:, 2]], 1)
-            rm = r.mean(0) + rb
-            nu = n1 + dt * rm
-            half = 0.5 * dt * dt
-            eta = torch.stack([e1[:, 0] + half * (c * rm[:, 0] - sn * rm[:, 1]),
-                               e1[:, 1] + half * (sn * rm[:, 0] + c * rm[:, 1]),
-                               e1[:, 2] + half * rm[:, 2]], 1)
+            eta, nu = _corrected_step(e1, n1, r, bias, dt)
             x = torch.cat([eta, nu], 1)
             d = eta - truth[:, j]
             dpsi = torch.atan2(torch.sin(d[:, 2]), torch.cos(d[:, 2]))

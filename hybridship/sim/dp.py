@@ -43,6 +43,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from hybridship.config import config_dataclass, float_array
 from hybridship.frames import ned_to_body, rotation_z, wrap_pi
 from hybridship.physics.model import DynamicModel
 
@@ -66,7 +67,11 @@ def _vec3(name, value, *, positive=False):
     return a.copy()
 
 
-@dataclass(frozen=True)
+_Matrix3 = float_array((3, 3))
+_Vector3 = float_array((3,))
+
+
+@config_dataclass(frozen=True, arbitrary_types=True)
 class DPGains:
     """Body-frame PID gain matrices (3x3) [N/m, N s/m, N/(m s); yaw rows in N m per rad].
 
@@ -79,17 +84,11 @@ class DPGains:
         Relative damping.
     """
 
-    Kp: np.ndarray
-    Kd: np.ndarray
-    Ki: np.ndarray
-    omega_n_rad_s: np.ndarray
-    zeta: np.ndarray
-
-    def __post_init__(self):
-        for k in ("Kp", "Kd", "Ki"):
-            a = np.asarray(getattr(self, k), float)
-            if a.shape != (3, 3) or not np.all(np.isfinite(a)):
-                raise ValueError(f"{k}: expected a finite (3, 3) matrix, got shape {a.shape}")
+    Kp: _Matrix3
+    Kd: _Matrix3
+    Ki: _Matrix3
+    omega_n_rad_s: _Vector3
+    zeta: _Vector3
 
 
 def pid_gains(mass_matrix, omega_n_rad_s, zeta, ki_ratio: float = 0.1) -> DPGains:

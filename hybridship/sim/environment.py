@@ -47,11 +47,13 @@ from __future__ import annotations
 import dataclasses
 import math
 from collections.abc import Mapping
-from dataclasses import dataclass
+from typing import Annotated
 
 import numpy as np
+from pydantic import Field, model_validator
 from scipy.signal import lfilter
 
+from hybridship.config import Float, config_dataclass, float_array
 from hybridship.frames import wrap_2pi, wrap_pi
 
 __all__ = [
@@ -125,6 +127,11 @@ def _in_range(name, value, lo, hi, *, lo_open=False, hi_open=False):
         lb, rb = ("(" if lo_open else "["), (")" if hi_open else "]")
         raise ValueError(f"{name} must be in {lb}{lo}, {hi}{rb}, got {value!r}")
     return v
+
+
+_Pos = Annotated[Float, Field(gt=0.0)]
+_NonNeg = Annotated[Float, Field(ge=0.0)]
+_MaybeNaN = Annotated[float, Field(allow_inf_nan=True)]  # nan = unknown
 
 
 def _time_vector(time_s, *, min_len=1):
@@ -230,7 +237,7 @@ def jonswap_spectrum(omega_rad_s, hs_m, tp_s, gamma=3.3):
 # --------------------------------------------------------------------------- wave components
 
 
-@dataclass(frozen=True, eq=False)
+@config_dataclass(frozen=True, eq=False, arbitrary_types=True)
 class WaveField:
     """A discretised wave field: a sum of regular deep-water components.
 
@@ -260,45 +267,30 @@ class WaveField:
         Gravity used for the dispersion relation [m/s^2].
     """
 
-    omega_rad_s: np.ndarray
-    amplitude_m: np.ndarray
-    phase_rad: np.ndarray
-    dir_from_rad: np.ndarray
-    d_omega_rad_s: np.ndarray | None = None
-    hs_m: float = float("nan")
-    tp_s: float = float("nan")
-    gamma: float = float("nan")
-    mean_dir_from_rad: float = float("nan")
-    g_m_s2: float = G_M_S2
+    omega_rad_s: float_array(flat=True, lo=0.0, lo_open=True, readonly=True)
+    amplitude_m: float_array(flat=True, lo=0.0, readonly=True)
+    phase_rad: float_array(flat=True, readonly=True)
+    dir_from_rad: float_array(flat=True, readonly=True)
+    d_omega_rad_s: float_array(flat=True, finite=False, readonly=True) | None = None
+    hs_m: _MaybeNaN = float("nan")
+    tp_s: _MaybeNaN = float("nan")
+    gamma: _MaybeNaN = float("nan")
+    mean_dir_from_rad: _MaybeNaN = float("nan")
+    g_m_s2: _Pos = G_M_S2
 
-    def __post_init__(self):
-        arrays = {}
-        for name in ("omega_rad_s", "amplitude_m", "phase_rad", "dir_from_rad"):
-            a = np.array(getattr(self, name), dtype=float, copy=True).reshape(-1)
-            if not np.all(np.isfinite(a)):
-                raise ValueError(f"{name} must be finite")
-            arrays[name] = a
-        n = arrays["omega_rad_s"].size
+    @model_validator(mode="after")
+    def _components(self):
+        n = self.omega_rad_s.size
         if n == 0:
-            raise ValueError("omega_rad_s must hold at least one component")
-        for name, a in arrays.items():
-            if a.size != n:
-                raise ValueError(f"{name} must have {n} elements like omega_rad_s, got {a.size}")
-        if np.any(arrays["omega_rad_s"] <= 0.0):
-            raise ValueError("omega_rad_s must be > 0")
-        if np.any(arrays["amplitude_m"] < 0.0):
-            raise ValueError("amplitude_m must be >= 0")
-        dw = self.d_omega_rad_s
-        if dw is None:
+            raise ValueError("omega_rad_s: must hold at least one component")
+        if self.d_omega_rad_s is None:
             dw = np.full(n, np.nan)
-        dw = np.array(dw, dtype=float, copy=True).reshape(-1)
-        if dw.size != n:
-            raise ValueError(f"d_omega_rad_s must have {n} elements like omega_rad_s, got {dw.size}")
-        arrays["d_omega_rad_s"] = dw
-        _positive("g_m_s2", self.g_m_s2)
-        for name, a in arrays.items():
-            a.setflags(write=False)
-            object.__setattr__(self, name, a)
+            dw.setflags(write=False)
+            object.__setattr__(self, "d_omega_rad_s", dw)  # frozen
+        for name in ("amplitude_m", "phase_rad", "dir_from_rad", "d_omega_rad_s"):
+            if getattr(self, name).size != n:
+                raise ValueError(f"{name}: must have {n} elements like omega_rad_s, got {getattr(self, name).size}")
+        return self
 
     @property
     def n_components(self) -> int:
@@ -465,7 +457,7 @@ def make_wave_components(hs_m, tp_s, wave_dir_from_rad, rng, n_components=50, sp
 # --------------------------------------------------------------------------- wave drift
 
 
-@dataclass(frozen=True)
+@config_dataclass(frozen=True)
 class HullDimensions:
     """Main dimensions and drift-model factors of a ship hull.
 
@@ -488,19 +480,12 @@ class HullDimensions:
         observed tendency of a drifting ship to turn beam-on to the waves.
     """
 
-    L_m: float
-    B_m: float
-    T_m: float
-    bow_factor: float = 0.6
-    side_factor: float = 1.0
-    yaw_lever_factor: float = 0.2
-
-    def __post_init__(self):
-        for name in ("L_m", "B_m", "T_m"):
-            object.__setattr__(self, name, _positive(name, getattr(self, name)))
-        for name in ("bow_factor", "side_factor"):
-            object.__setattr__(self, name, _in_range(name, getattr(self, name), 0.0, 2.0))
-        object.__setattr__(self, "yaw_lever_factor", _in_range("yaw_lever_factor", self.yaw_lever_factor, -0.5, 0.5))
+    L_m: _Pos
+    B_m: _Pos
+    T_m: _Pos
+    bow_factor: Annotated[Float, Field(ge=0.0, le=2.0)] = 0.6
+    side_factor: Annotated[Float, Field(ge=0.0, le=2.0)] = 1.0
+    yaw_lever_factor: Annotated[Float, Field(ge=-0.5, le=0.5)] = 0.2
 
     @classmethod
     def from_any(cls, hull) -> "HullDimensions":
@@ -684,7 +669,7 @@ def wave_drift_loads(time_s, psi_rad, components: WaveField, hull, rho=RHO_SEAWA
 # --------------------------------------------------------------------------- wave-frequency motion
 
 
-@dataclass(frozen=True)
+@config_dataclass(frozen=True)
 class MotionRAOs:
     """Parametric first-order motion RAOs for surge, sway and yaw of a free-floating ship.
 
@@ -720,18 +705,12 @@ class MotionRAOs:
         Peak yaw amplitude per unit wave slope [rad/rad].
     """
 
-    L_m: float
-    B_m: float
-    T_m: float
-    surge_gain: float = 1.0
-    sway_gain: float = 1.0
-    yaw_gain: float = 0.2
-
-    def __post_init__(self):
-        for name in ("L_m", "B_m", "T_m"):
-            object.__setattr__(self, name, _positive(name, getattr(self, name)))
-        for name in ("surge_gain", "sway_gain", "yaw_gain"):
-            object.__setattr__(self, name, _in_range(name, getattr(self, name), 0.0, 5.0))
+    L_m: _Pos
+    B_m: _Pos
+    T_m: _Pos
+    surge_gain: Annotated[Float, Field(ge=0.0, le=5.0)] = 1.0
+    sway_gain: Annotated[Float, Field(ge=0.0, le=5.0)] = 1.0
+    yaw_gain: Annotated[Float, Field(ge=0.0, le=5.0)] = 0.2
 
     @classmethod
     def from_hull(cls, hull, **gains) -> "MotionRAOs":
@@ -1046,7 +1025,7 @@ def beaufort_wave_height(beaufort):
     return np.interp(b, np.arange(13.0), _BEAUFORT_HS_M)
 
 
-@dataclass(frozen=True)
+@config_dataclass(frozen=True)
 class SeaState:
     """Environmental conditions of one scenario (all SI, radians).
 
@@ -1072,30 +1051,15 @@ class SeaState:
         JONSWAP peak-enhancement factor [-], in [1, 7].
     """
 
-    hs_m: float
-    tp_s: float
-    wave_dir_from_rad: float
-    wind_speed_m_s: float
-    wind_dir_from_rad: float
-    gust_intensity: float = 0.1
-    current_speed_m_s: float = 0.0
-    current_dir_to_rad: float = 0.0
-    gamma: float = 3.3
-
-    def __post_init__(self):
-        checks = {
-            "hs_m": lambda n, v: _positive(n, v, allow_zero=True),
-            "tp_s": _positive,
-            "wave_dir_from_rad": _finite_scalar,
-            "wind_speed_m_s": lambda n, v: _positive(n, v, allow_zero=True),
-            "wind_dir_from_rad": _finite_scalar,
-            "gust_intensity": lambda n, v: _in_range(n, v, 0.0, 0.5),
-            "current_speed_m_s": lambda n, v: _positive(n, v, allow_zero=True),
-            "current_dir_to_rad": _finite_scalar,
-            "gamma": lambda n, v: _in_range(n, v, 1.0, 7.0),
-        }
-        for name, check in checks.items():
-            object.__setattr__(self, name, check(name, getattr(self, name)))
+    hs_m: _NonNeg
+    tp_s: _Pos
+    wave_dir_from_rad: Float
+    wind_speed_m_s: _NonNeg
+    wind_dir_from_rad: Float
+    gust_intensity: Annotated[Float, Field(ge=0.0, le=0.5)] = 0.1
+    current_speed_m_s: _NonNeg = 0.0
+    current_dir_to_rad: Float = 0.0
+    gamma: Annotated[Float, Field(ge=1.0, le=7.0)] = 3.3
 
     @classmethod
     def random(cls, rng, beaufort=(2, 5), *, hs_fetch_factor=(0.5, 1.0), tp_coefficient=(4.0, 6.0),

@@ -39,6 +39,7 @@ import dataclasses
 import math
 from collections.abc import Iterable, Mapping
 from dataclasses import dataclass, field
+from typing import Annotated, Literal
 from functools import lru_cache
 from pathlib import Path
 
@@ -46,10 +47,11 @@ import numpy as np
 
 from ..fileio import atomic_write
 import pandas as pd
+from pydantic import Field, field_validator, model_validator
 from scipy.signal import lfilter
 
 from hybridship.frames import ned_to_body, wrap_pi
-from hybridship.forecast_inputs.limits import check_number as _number
+from hybridship.config import Float, Int, config_dataclass
 from hybridship.physics.model import DynamicModel
 from hybridship.sim import environment as env
 from hybridship.sim.allocation import ThrustAllocator, bollard_thrust_limits
@@ -80,6 +82,10 @@ _EPS_S = 1e-9
 
 
 
+Positive = Annotated[Float, Field(gt=0)]
+NonNeg = Annotated[Float, Field(ge=0)]
+
+
 def _is_multiple(a, b):
     """Whether ``a`` is a whole multiple of ``b`` (both > 0) within float tolerance."""
     q = a / b
@@ -89,7 +95,7 @@ def _is_multiple(a, b):
 # --------------------------------------------------------------------------- configuration
 
 
-@dataclass(frozen=True)
+@config_dataclass(frozen=True, prefix="noise")
 class SensorNoise:
     """Standard deviations of the sensor noise added to the measured log columns.
 
@@ -110,20 +116,14 @@ class SensorNoise:
         Anemometer white noise [m/s] and wind-vane white noise [deg].
     """
 
-    gnss_white_m: float = 0.10
-    gnss_markov_m: float = 0.15
-    gnss_markov_tau_s: float = 60.0
-    heading_white_deg: float = 0.05
-    uv_white_m_s: float = 0.02
-    r_white_deg_s: float = 0.03
-    wind_speed_white_m_s: float = 0.3
-    wind_dir_white_deg: float = 3.0
-
-    def __post_init__(self):
-        for f in dataclasses.fields(self):
-            name = f"noise.{f.name}"
-            positive = f.name == "gnss_markov_tau_s"
-            object.__setattr__(self, f.name, _number(name, getattr(self, f.name), lo=0.0, lo_open=positive))
+    gnss_white_m: NonNeg = 0.10
+    gnss_markov_m: NonNeg = 0.15
+    gnss_markov_tau_s: Positive = 60.0
+    heading_white_deg: NonNeg = 0.05
+    uv_white_m_s: NonNeg = 0.02
+    r_white_deg_s: NonNeg = 0.03
+    wind_speed_white_m_s: NonNeg = 0.3
+    wind_dir_white_deg: NonNeg = 3.0
 
     @classmethod
     def none(cls) -> "SensorNoise":
@@ -146,7 +146,7 @@ class SensorNoise:
         raise TypeError(f"noise: expected SensorNoise, a mapping or None, got {type(value).__name__}")
 
 
-@dataclass(frozen=True)
+@config_dataclass(frozen=True)
 class DPLossConfig:
     """Settings of one DP-loss scenario (seconds, degrees where named ``_deg``).
 
@@ -201,73 +201,53 @@ class DPLossConfig:
         the DP's wind feed-forward [s].
     """
 
-    seed: int = 0
+    seed: Annotated[Int, Field(ge=0)] = 0
     sea_state: env.SeaState | None = None
-    beaufort: tuple[float, float] = (2.0, 5.0)
-    t_shutdown_s: float = 3000.0
-    t_shutdown_jitter_s: float | None = None
-    drift_s: float = 900.0
-    dt_s: float = 1.0
-    sim_dt_s: float = 0.5
-    control_dt_s: float = 1.0
-    heading_mode: str = "weather"
-    heading_offset_max_deg: float = 20.0
-    heading_sp_deg: float | None = None
+    beaufort: tuple[Float, Float] = (2.0, 5.0)
+    t_shutdown_s: Positive = 3000.0
+    t_shutdown_jitter_s: NonNeg | None = None
+    drift_s: Positive = 900.0
+    dt_s: Positive = 1.0
+    sim_dt_s: Annotated[Float, Field(gt=0, le=2.0)] = 0.5
+    control_dt_s: Positive = 1.0
+    heading_mode: Literal["weather", "random"] = "weather"
+    heading_offset_max_deg: Annotated[Float, Field(ge=0, le=180.0)] = 20.0
+    heading_sp_deg: Float | None = None
     noise: SensorNoise = field(default_factory=SensorNoise)
-    rpm_time_constant_s: float = 1.5
-    n_wave_components: int = 50
-    wave_spreading: float | None = None
-    wave_filter_time_constant_s: float = 2.0
-    wind_filter_time_constant_s: float = 10.0
+    rpm_time_constant_s: Positive = 1.5
+    n_wave_components: Annotated[Int, Field(ge=1)] = 50
+    wave_spreading: Positive | None = None
+    wave_filter_time_constant_s: Positive = 2.0
+    wind_filter_time_constant_s: Positive = 10.0
 
-    def __post_init__(self):
-        set_ = lambda name, v: object.__setattr__(self, name, v)  # noqa: E731 (frozen dataclass)
-        if isinstance(self.seed, bool) or not isinstance(self.seed, (int, np.integer)) or self.seed < 0:
-            raise ValueError(f"seed: expected a non-negative int, got {self.seed!r}")
-        set_("seed", int(self.seed))
-        if self.sea_state is not None and not isinstance(self.sea_state, env.SeaState):
-            raise TypeError(f"sea_state: expected a SeaState or None, got {type(self.sea_state).__name__}")
-        try:
-            lo, hi = (float(b) for b in self.beaufort)
-        except (TypeError, ValueError):
-            raise ValueError(f"beaufort: expected a (lo, hi) pair, got {self.beaufort!r}") from None
-        if not (0.0 <= lo <= hi <= 12.0):
-            raise ValueError(f"beaufort: must satisfy 0 <= lo <= hi <= 12, got {self.beaufort!r}")
-        set_("beaufort", (lo, hi))
+    @field_validator("noise", mode="before")
+    @classmethod
+    def _noise(cls, v):
+        return SensorNoise() if v is None else v
 
-        for name in ("dt_s", "sim_dt_s", "control_dt_s", "rpm_time_constant_s",
-                     "wave_filter_time_constant_s", "wind_filter_time_constant_s"):
-            set_(name, _number(name, getattr(self, name), lo=0.0, lo_open=True))
-        if self.sim_dt_s > 2.0:
-            raise ValueError(f"sim_dt_s: must be <= 2 s to resolve the DP loop and thruster dynamics, "
-                             f"got {self.sim_dt_s!r}")
+    @field_validator("beaufort")
+    @classmethod
+    def _beaufort(cls, v):
+        if not (0.0 <= v[0] <= v[1] <= 12.0):
+            raise ValueError(f"must satisfy 0 <= lo <= hi <= 12, got {v!r}")
+        return v
+
+    @model_validator(mode="after")
+    def _steps_and_times(self):
+        # sim_dt_s <= 2 s resolves the DP loop and the thruster dynamics.
         for name in ("dt_s", "control_dt_s"):
             if not _is_multiple(getattr(self, name), self.sim_dt_s):
                 raise ValueError(f"{name}: must be a whole multiple of sim_dt_s = {self.sim_dt_s:g}, "
                                  f"got {getattr(self, name)!r}")
-        set_("t_shutdown_s", _number("t_shutdown_s", self.t_shutdown_s, lo=0.0, lo_open=True))
         if self.t_shutdown_jitter_s is None:
-            set_("t_shutdown_jitter_s", 0.04 * self.t_shutdown_s)
-        set_("t_shutdown_jitter_s", _number("t_shutdown_jitter_s", self.t_shutdown_jitter_s, lo=0.0))
+            object.__setattr__(self, "t_shutdown_jitter_s", 0.04 * self.t_shutdown_s)  # frozen
         if self.t_shutdown_s - self.t_shutdown_jitter_s < 10.0 * self.control_dt_s:
             raise ValueError(f"t_shutdown_s: t_shutdown_s - t_shutdown_jitter_s must leave at least "
                              f"{10 * self.control_dt_s:g} s of DP, got {self.t_shutdown_s:g} - "
                              f"{self.t_shutdown_jitter_s:g}")
-        set_("drift_s", _number("drift_s", self.drift_s, lo=0.0, lo_open=True))
         if not _is_multiple(self.drift_s, self.dt_s):
             raise ValueError(f"drift_s: must be a whole multiple of dt_s = {self.dt_s:g}, got {self.drift_s!r}")
-        if self.heading_mode not in ("weather", "random"):
-            raise ValueError(f"heading_mode: expected 'weather' or 'random', got {self.heading_mode!r}")
-        set_("heading_offset_max_deg", _number("heading_offset_max_deg", self.heading_offset_max_deg,
-                                               lo=0.0, hi=180.0))
-        set_("heading_sp_deg", _number("heading_sp_deg", self.heading_sp_deg, allow_none=True))
-        set_("noise", SensorNoise.from_any(self.noise))
-        n = self.n_wave_components
-        if isinstance(n, bool) or not isinstance(n, (int, np.integer)) or n < 1:
-            raise ValueError(f"n_wave_components: expected a positive int, got {n!r}")
-        set_("n_wave_components", int(n))
-        set_("wave_spreading", _number("wave_spreading", self.wave_spreading, lo=0.0, lo_open=True,
-                                       allow_none=True))
+        return self
 
     def replace(self, **changes) -> "DPLossConfig":
         """A copy with some fields changed (validated again)."""
@@ -396,6 +376,74 @@ def _acceleration_field(components: env.WaveField) -> env.WaveField:
                          g_m_s2=components.g_m_s2)
 
 
+def _sensor_noise(nz: SensorNoise, n: int, h: float, rng) -> dict:
+    """Sensor noise on the integration grid (``n`` samples ``h`` apart; one draw each, in a
+    fixed order); the DP and the log sample it. Angles in radians."""
+    gnss = (nz.gnss_white_m * rng.standard_normal((n, 2))
+            + np.column_stack([_gauss_markov(n, h, nz.gnss_markov_m, nz.gnss_markov_tau_s, rng)
+                               for _ in range(2)]))
+    n_head = math.radians(nz.heading_white_deg) * rng.standard_normal(n)
+    n_uv = nz.uv_white_m_s * rng.standard_normal((n, 2))
+    n_r = math.radians(nz.r_white_deg_s) * rng.standard_normal(n)
+    n_ws = nz.wind_speed_white_m_s * rng.standard_normal(n)
+    n_wd = math.radians(nz.wind_dir_white_deg) * rng.standard_normal(n)
+    return dict(gnss=gnss, head=n_head, uv=n_uv, r=n_r, ws=n_ws, wd=n_wd)
+
+
+class _DPSystem:
+    """The DP system on the nominal model: sensors (LF + WF motion + noise), wave and wind
+    filters, controller and thrust allocation, started at ``eta0``."""
+
+    def __init__(self, nominal, ves, config: DPLossConfig, eta0, components, raos, noise: dict,
+                 wind_speed, wind_dir):
+        self.dp = DPController(nominal, dt_s=config.control_dt_s)
+        self.alloc = ThrustAllocator(ves, dt_s=config.control_dt_s)
+        self.dp.reset(eta0.copy())
+        self.wave_filter = _LowPass(config.wave_filter_time_constant_s, config.control_dt_s)
+        self.wind_filter = _LowPass(config.wind_filter_time_constant_s, config.control_dt_s, stages=1)
+        self.psi_meas_prev = None
+        self.components, self.raos, self.noise = components, raos, noise
+        self.wind_speed, self.wind_dir = wind_speed, wind_dir
+
+    def command(self, k: int, one, eta, nu):
+        """``(rpm, azimuth_rad)`` commands from what the sensors give at integration step ``k``
+        (time ``one[0]`` [s]) for the true state ``eta``, ``nu``."""
+        nz = self.noise
+        # What the sensors give now: LF + WF motion + noise (the log repeats it).
+        off, rate = env.wave_frequency_motion(one, eta[2], self.components, self.raos,
+                                              position_ne_m=eta[None, :2], return_rates=True)
+        nu_wf = ned_to_body(rate[0], eta[2])
+        psi_m = eta[2] + off[0, 2] + nz["head"][k]
+        # Filter the heading continuously across the 0/2 pi wrap.
+        prev = self.psi_meas_prev
+        psi_m = psi_m if prev is None else prev + float(wrap_pi(psi_m - prev))
+        self.psi_meas_prev = psi_m
+        gnss, n_uv = nz["gnss"], nz["uv"]
+        meas = np.array([eta[0] + off[0, 0] + gnss[k, 0], eta[1] + off[0, 1] + gnss[k, 1], psi_m,
+                         nu[0] + nu_wf[0] + n_uv[k, 0], nu[1] + nu_wf[1] + n_uv[k, 1],
+                         nu[2] + nu_wf[2] + nz["r"][k]])
+        est = self.wave_filter(meas)
+        ws_m = max(0.0, self.wind_speed[k] + nz["ws"][k])
+        wd_m = self.wind_dir[k] + nz["wd"][k]
+        # Smooth the wind as a vector (direction "from"), then back to speed and direction.
+        wv = self.wind_filter(np.array([ws_m * math.cos(wd_m), ws_m * math.sin(wd_m)]))
+        wind_est = np.array([math.hypot(wv[0], wv[1]), math.atan2(wv[1], wv[0])])
+        tau_dp = self.dp.update(est[:3], est[3:], wind=wind_est)
+        # The DP does not know the current: over-ground velocity stands in for the inflow.
+        res = self.alloc.allocate(tau_dp, est[3:])
+        return res.rpm, res.azimuth_rad
+
+
+class _Record:
+    """Logged samples of the true state and loads: ``n`` rows, ``K`` thrusters."""
+
+    def __init__(self, n: int, K: int):
+        self.eta, self.nu, self.nu_dot = (np.empty((n, 3)) for _ in range(3))
+        self.parts = np.empty((n, 4, 3))
+        self.thrust, self.rpm, self.az = (np.empty((n, K)) for _ in range(3))
+        self.k = np.empty(n, dtype=int)
+
+
 def _simulate(config: DPLossConfig, vessel, progress: bool):
     """The scenario as ``(DataFrame, ScenarioConditions)``; see :func:`simulate_dp_loss`."""
     true_model = DynamicModel(vessel, true_vessel=True)
@@ -426,41 +474,17 @@ def _simulate(config: DPLossConfig, vessel, progress: bool):
     wind_speed, wind_dir = sea.wind(t_sim, rng)
     cur_speed, cur_dir = sea.current(t_sim, rng)
 
-    # Sensor noise on the integration grid; DP and log sample it.
-    nz = config.noise
-    gnss = (nz.gnss_white_m * rng.standard_normal((n_sim + 1, 2))
-            + np.column_stack([_gauss_markov(n_sim + 1, h, nz.gnss_markov_m, nz.gnss_markov_tau_s, rng)
-                               for _ in range(2)]))
-    n_head = math.radians(nz.heading_white_deg) * rng.standard_normal(n_sim + 1)
-    n_uv = nz.uv_white_m_s * rng.standard_normal((n_sim + 1, 2))
-    n_r = math.radians(nz.r_white_deg_s) * rng.standard_normal(n_sim + 1)
-    n_ws = nz.wind_speed_white_m_s * rng.standard_normal(n_sim + 1)
-    n_wd = math.radians(nz.wind_dir_white_deg) * rng.standard_normal(n_sim + 1)
+    noise = _sensor_noise(config.noise, n_sim + 1, h, rng)
 
-    # DP system on the nominal model.
-    dp = DPController(nominal, dt_s=config.control_dt_s)
-    alloc = ThrustAllocator(ves, dt_s=config.control_dt_s)
     eta = np.array([0.0, 0.0, cond.heading_sp_rad])
     nu = np.zeros(3)
-    dp.reset(eta.copy())
-    wave_filter = _LowPass(config.wave_filter_time_constant_s, config.control_dt_s)
-    wind_filter = _LowPass(config.wind_filter_time_constant_s, config.control_dt_s, stages=1)
-    psi_meas_prev = None
+    dp = _DPSystem(nominal, ves, config, eta, components, raos, noise, wind_speed, wind_dir)
 
     rpm_cmd = np.zeros(K)
     rpm = np.zeros(K)
     azimuth = np.array([t.fixed_angle_rad for t in ves.thrusters], float)
     rpm_decay = math.exp(-h / config.rpm_time_constant_s)
-
-    n_log = n_sim // every_log + 1
-    rec_eta = np.empty((n_log, 3))
-    rec_nu = np.empty((n_log, 3))
-    rec_nu_dot = np.empty((n_log, 3))
-    rec_parts = np.empty((n_log, 4, 3))
-    rec_thrust = np.empty((n_log, K))
-    rec_rpm = np.empty((n_log, K))
-    rec_az = np.empty((n_log, K))
-    rec_k = np.empty(n_log, dtype=int)
+    rec = _Record(n_sim // every_log + 1, K)
 
     one = np.empty(1)
     bar = None
@@ -478,28 +502,7 @@ def _simulate(config: DPLossConfig, vessel, progress: bool):
 
             if k < k_shutdown:
                 if k % every_ctrl == 0:
-                    # What the sensors give now: LF + WF motion + noise (the log repeats it).
-                    off, rate = env.wave_frequency_motion(one, eta[2], components, raos,
-                                                          position_ne_m=eta[None, :2], return_rates=True)
-                    nu_wf = ned_to_body(rate[0], eta[2])
-                    psi_m = eta[2] + off[0, 2] + n_head[k]
-                    # Filter the heading continuously across the 0/2 pi wrap.
-                    psi_m = psi_m if psi_meas_prev is None else psi_meas_prev + float(wrap_pi(psi_m - psi_meas_prev))
-                    psi_meas_prev = psi_m
-                    meas = np.array([eta[0] + off[0, 0] + gnss[k, 0], eta[1] + off[0, 1] + gnss[k, 1], psi_m,
-                                     nu[0] + nu_wf[0] + n_uv[k, 0], nu[1] + nu_wf[1] + n_uv[k, 1],
-                                     nu[2] + nu_wf[2] + n_r[k]])
-                    est = wave_filter(meas)
-                    ws_m = max(0.0, wind_speed[k] + n_ws[k])
-                    wd_m = wind_dir[k] + n_wd[k]
-                    # Smooth the wind as a vector (direction "from"), then back to speed and direction.
-                    wv = wind_filter(np.array([ws_m * math.cos(wd_m), ws_m * math.sin(wd_m)]))
-                    wind_est = np.array([math.hypot(wv[0], wv[1]), math.atan2(wv[1], wv[0])])
-                    tau_dp = dp.update(est[:3], est[3:], wind=wind_est)
-                    # The DP does not know the current: over-ground velocity stands in for the inflow.
-                    res = alloc.allocate(tau_dp, est[3:])
-                    rpm_cmd = res.rpm
-                    azimuth = res.azimuth_rad
+                    rpm_cmd, azimuth = dp.command(k, one, eta, nu)
             else:
                 rpm_cmd = np.zeros(K)  # power lost: no command; azimuths stay where they were
             rpm = rpm_cmd + (rpm - rpm_cmd) * rpm_decay
@@ -509,9 +512,9 @@ def _simulate(config: DPLossConfig, vessel, progress: bool):
                 nu_dot, parts, thrusts = true_model.acceleration(eta, nu, rpm=rpm, azimuth_rad=azimuth,
                                                                  wind=wind_k, current=cur_k, tau_ext=tau_wave,
                                                                  return_parts=True)
-                rec_eta[i], rec_nu[i], rec_nu_dot[i] = eta, nu, nu_dot[0]
-                rec_parts[i], rec_thrust[i] = parts[0], thrusts[0]
-                rec_rpm[i], rec_az[i], rec_k[i] = rpm, azimuth, k
+                rec.eta[i], rec.nu[i], rec.nu_dot[i] = eta, nu, nu_dot[0]
+                rec.parts[i], rec.thrust[i] = parts[0], thrusts[0]
+                rec.rpm[i], rec.az[i], rec.k[i] = rpm, azimuth, k
                 if bar is not None and k > 0:
                     bar.update(every_log)
             if k == n_sim:
@@ -525,10 +528,9 @@ def _simulate(config: DPLossConfig, vessel, progress: bool):
         if bar is not None:
             bar.close()
 
-    df = _assemble_log(config, ves, cond, components, raos, rec_k, h, rec_eta, rec_nu, rec_nu_dot, rec_parts,
-                       rec_thrust, rec_rpm, rec_az, dict(speed=wind_speed, dir=wind_dir, cur=cur_speed,
-                                                         cur_dir=cur_dir),
-                       dict(gnss=gnss, head=n_head, uv=n_uv, r=n_r, ws=n_ws, wd=n_wd))
+    df = _assemble_log(config, ves, cond, components, raos, rec.k, h, rec.eta, rec.nu, rec.nu_dot, rec.parts,
+                       rec.thrust, rec.rpm, rec.az, dict(speed=wind_speed, dir=wind_dir, cur=cur_speed,
+                                                         cur_dir=cur_dir), noise)
     df.attrs["conditions"] = cond.as_dict()
     df.attrs["seed"] = config.seed
     df.attrs["vessel"] = ves.name

@@ -1,0 +1,147 @@
+"""Validated settings: pydantic dataclasses whose errors name the field.
+
+The package's settings objects (``EnsembleConfig``, ``DPLossConfig``, ``SeaState``, ...)
+are declared with :func:`config_dataclass`: a :func:`pydantic.dataclasses.dataclass` with
+field constraints (``Field(gt=..., ge=..., le=...)``, ``Literal``) and ``model_validator``\\ s
+for the cross-field rules. They keep dataclass semantics (positional construction,
+:func:`dataclasses.replace`, which re-validates, and :func:`dataclasses.asdict`, used by
+the model files), refuse unknown keywords, NaN and infinity, and raise a plain
+:class:`ValueError` whose message starts with the field name, e.g.::
+
+    ValueError: n_members: Input should be greater than or equal to 1 (got 0) [EnsembleConfig]
+
+The same formatter words the vessel-file errors (:func:`hybridship.vessel.vessel_from_dict`).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import functools
+from typing import Annotated
+
+import numpy as np
+from pydantic import AfterValidator, BeforeValidator, ConfigDict, ValidationError
+from pydantic.dataclasses import dataclass as _pydantic_dataclass
+
+__all__ = ["config_dataclass", "format_validation_error", "Int", "Float", "NonEmpty", "non_empty", "float_array"]
+
+
+def format_validation_error(err: ValidationError, source: str | None = None) -> str:
+    """One line per error: ``[source: ]field.path[i]: message (got value)``.
+
+    Errors raised by a model validator (no field location) whose message already starts
+    with the field name are given as they are.
+    """
+    lines = []
+    for e in err.errors():
+        loc = ""
+        for part in e["loc"]:
+            loc += f"[{part}]" if isinstance(part, int) else (f".{part}" if loc else str(part))
+        msg = e["msg"].removeprefix("Value error, ")
+        got = (f" (got {e['input']!r})" if e["type"] not in ("missing", "value_error")
+               and not isinstance(e["input"], dict) else "")
+        head = f"{source}: " if source is not None else ""
+        if loc or source is not None:
+            lines.append(f"{head}{loc or '<top level>'}: {msg}{got}")
+        else:
+            lines.append(f"{msg}{got}")
+    return "\n".join(lines)
+
+
+def _not_bool(v):
+    if isinstance(v, bool):
+        raise ValueError(f"expected an integer, not a bool ({v!r})")
+    return v
+
+
+def _number(v):
+    if isinstance(v, (bool, str, bytes)):
+        raise ValueError(f"expected a number, got {v!r}")
+    return v
+
+
+#: An ``int`` field that refuses ``True``/``False`` (pydantic would read them as 1/0);
+#: numpy integers are accepted.
+Int = Annotated[int, BeforeValidator(_not_bool)]
+
+def non_empty(v):
+    """After-validator of a sequence field: at least one item (``Annotated[tuple[...], AfterValidator(non_empty)]``;
+    unlike ``Field(min_length=1)`` it does not add a second error when an item is invalid)."""
+    if len(v) == 0:
+        raise ValueError("expected at least one value")
+    return v
+
+
+#: A ``float`` field that refuses bools and strings (pydantic would parse ``"1.5"``);
+#: numpy scalars are accepted. NaN and infinity are refused by every config.
+Float = Annotated[float, BeforeValidator(_number)]
+
+def float_array(shape: tuple | None = None, *, flat: bool = False, finite: bool = True,
+                lo: float | None = None, lo_open: bool = False, readonly: bool = False):
+    """A numpy-array field (needs ``config_dataclass(arbitrary_types=True)``): the input is
+    copied to a float array (the caller's array is never shared), raveled with ``flat``,
+    and checked for its ``shape``, finiteness and lower bound ``lo``."""
+    def convert(v):
+        try:
+            a = np.array(v, dtype=float, copy=True)
+        except (TypeError, ValueError):
+            raise ValueError(f"expected an array of numbers, got {type(v).__name__}") from None
+        if flat:
+            a = a.reshape(-1)
+        if shape is not None and a.shape != shape:
+            raise ValueError(f"expected shape {shape}, got {a.shape}")
+        if finite and not np.all(np.isfinite(a)):
+            raise ValueError("must be finite (no NaN or inf)")
+        if lo is not None and np.any(a <= lo if lo_open else a < lo):
+            raise ValueError(f"every entry must be {'>' if lo_open else '>='} {lo:g}")
+        if readonly:
+            a.setflags(write=False)
+        return a
+
+    return Annotated[np.ndarray, BeforeValidator(convert)]
+
+
+#: Marks a sequence field that needs at least one item: ``Annotated[tuple[Float, ...], NonEmpty]``.
+NonEmpty = AfterValidator(non_empty)
+
+
+def config_dataclass(cls=None, /, *, frozen: bool = False, arbitrary_types: bool = False,
+                     prefix: str | None = None, **kwargs):
+    """Declare a validated settings dataclass (see the module docstring).
+
+    Parameters
+    ----------
+    frozen : bool
+        As for :func:`dataclasses.dataclass`.
+    arbitrary_types : bool
+        Allow fields of non-pydantic types (e.g. numpy arrays, checked by validators).
+    prefix : str, optional
+        Written before the field names in error messages (``"weather"`` gives
+        ``weather.hs_m: ...``), for settings that usually sit inside another object.
+    **kwargs
+        Passed on to :func:`pydantic.dataclasses.dataclass` (e.g. ``eq=False``).
+    """
+    def wrap(c):
+        config = ConfigDict(extra="forbid", allow_inf_nan=False, arbitrary_types_allowed=arbitrary_types)
+        dc = _pydantic_dataclass(c, frozen=frozen, config=config, **kwargs)
+        init = dc.__init__
+        names = [f.name for f in dataclasses.fields(dc)]
+
+        @functools.wraps(init)
+        def __init__(self, *args, **kw):
+            if args and len(args) <= len(names) and not set(names[:len(args)]) & set(kw):
+                # Positional arguments by name, so that an error names the field.
+                kw = {**dict(zip(names, args)), **kw}
+                args = ()
+            try:
+                init(self, *args, **kw)
+            except ValidationError as err:
+                msg = format_validation_error(err)
+                if prefix:
+                    msg = "\n".join(f"{prefix}.{line}" for line in msg.split("\n"))
+                raise ValueError(f"{msg} [{dc.__name__}]") from None
+
+        dc.__init__ = __init__
+        return dc
+
+    return wrap if cls is None else wrap(cls)

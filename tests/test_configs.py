@@ -1,0 +1,85 @@
+"""Settings dataclasses: pydantic-validated, errors start with the field name, dataclass semantics kept."""
+
+import dataclasses
+
+import numpy as np
+import pydantic
+import pytest
+
+from hybridship.driftoff.planning import DriftOffSettings
+from hybridship.driftoff.weather import WeatherState, WeatherUncertainty
+from hybridship.hsc.identification import NARXConfig
+from hybridship.hsc.simulator import SeaConditions
+from hybridship.residual.calibration import CalibrationConfig, SpreadCalibration
+from hybridship.residual.ensemble import EnsembleConfig
+from hybridship.residual.features import ResidualConfig
+from hybridship.residual.multistep import MultiStepConfig
+from hybridship.sim.environment import HullDimensions, MotionRAOs, SeaState
+from hybridship.sim.scenario import DPLossConfig, SensorNoise
+
+# (class, keyword arguments that break one field, the message's start)
+BAD = [
+    (EnsembleConfig, dict(n_members=0), "n_members: "),
+    (EnsembleConfig, dict(val_fraction=0.95), "val_fraction: "),
+    (MultiStepConfig, dict(fd_step=0.1), "fd_step: "),
+    (ResidualConfig, dict(features=("nope",)), "features: unknown ['nope']"),
+    (ResidualConfig, dict(bias_frame="enu"), "bias_frame: "),
+    (CalibrationConfig, dict(commands=("held", "held")), "commands: "),
+    (CalibrationConfig, dict(max_starts=5), "max_starts: "),
+    (SpreadCalibration, dict(lead_s=[2.0, 1.0], scale=[1.0, 1.0], floor=[0.0, 0.0]), "lead_s: must increase"),
+    (DPLossConfig, dict(sim_dt_s=0.3), "dt_s: must be a whole multiple"),
+    (DPLossConfig, dict(noise={"uv_white_m_s": -0.1}), "noise.uv_white_m_s: "),
+    (SensorNoise, dict(gnss_markov_tau_s=0.0), "noise.gnss_markov_tau_s: "),
+    (SeaState, dict(hs_m=1.0, tp_s=6.0, wave_dir_from_rad=0.0, wind_speed_m_s=5.0, wind_dir_from_rad=0.0,
+                    gamma=9.0), "gamma: "),
+    (HullDimensions, dict(L_m=30.0, B_m=-1.0, T_m=3.0), "B_m: "),
+    (MotionRAOs, dict(L_m=30.0, B_m=8.0, T_m=3.0, yaw_gain=6.0), "yaw_gain: "),
+    (WeatherState, dict(tp_s=0.0), "weather.tp_s: "),
+    (WeatherUncertainty, dict(hs_m=-1.0), "uncertainty.hs_m: "),
+    (DriftOffSettings, dict(dt_s=400.0), "dt_s: must be <= horizon_s"),
+    (SeaConditions, dict(n_components=0), "n_components: "),
+    (NARXConfig, dict(hidden=()), "hidden: expected at least one value"),
+]
+
+
+@pytest.mark.parametrize("cls, kwargs, start", BAD, ids=[f"{c.__name__}-{s.split(':')[0]}" for c, _, s in BAD])
+def test_bad_value_is_a_value_error_starting_with_the_field(cls, kwargs, start):
+    assert pydantic.dataclasses.is_pydantic_dataclass(cls)
+    with pytest.raises(ValueError) as info:
+        cls(**kwargs)
+    assert str(info.value).startswith(start), str(info.value)
+    assert cls.__name__ in str(info.value)
+
+
+def test_bools_strings_nan_and_unknown_keywords_are_refused():
+    for kwargs, field in [(dict(n_members=True), "n_members"), (dict(lr="0.1"), "lr"),
+                          (dict(lr=float("nan")), "lr"), (dict(weight_decay=np.inf), "weight_decay"),
+                          (dict(n_member=3), "n_member")]:
+        with pytest.raises(ValueError, match=f"^{field}: "):
+            EnsembleConfig(**kwargs)
+
+
+def test_positional_arguments_are_named_in_errors_and_numpy_scalars_accepted():
+    with pytest.raises(ValueError, match="^weather.hs_m: "):
+        WeatherState(1.0, 0.0, -2.0)
+    cfg = EnsembleConfig(np.int64(3), hidden=np.int32(8), lr=np.float32(0.5))
+    assert (cfg.n_members, cfg.hidden) == (3, 8) and type(cfg.n_members) is int
+
+
+def test_dataclass_semantics_kept():
+    cfg = CalibrationConfig(commands=["known"])
+    assert cfg.commands == ("known",)
+    assert CalibrationConfig(**dataclasses.asdict(cfg)) == cfg  # the model-file round trip
+    with pytest.raises(ValueError, match="^fraction: "):
+        dataclasses.replace(cfg, fraction=0.9)  # replace validates again
+    with pytest.raises(dataclasses.FrozenInstanceError):
+        cfg.fraction = 0.1
+    assert DriftOffSettings(radii_m=[10.0, 3.0]).radii_m == (3.0, 10.0)
+    assert DPLossConfig(t_shutdown_s=1000.0).t_shutdown_jitter_s == pytest.approx(40.0)
+
+
+def test_arrays_are_copied_not_shared():
+    lead = np.array([1.0, 2.0])
+    cal = SpreadCalibration(lead, [1.0, 1.0], [0.0, 0.0])
+    lead[0] = 5.0
+    assert cal.lead_s[0] == 1.0
