@@ -18,7 +18,6 @@ import numpy as np
 from ..forecast_inputs import FaultFlags
 from ..frames import wrap_pi
 from ..logs.io import LogArrays
-from ..physics.integrate import rollout_batch
 from ..physics.model import DynamicModel
 from ..residual.calibration import CalibrationConfig, fit_spread_scale
 from ..residual.ensemble import EnsembleConfig, MLPEnsemble, fit_ensemble
@@ -521,7 +520,8 @@ class HybridPredictor:
         ``[speed_m_s, dir_to_rad]`` (S, 1, 2) and a body-frame extra acceleration (S, 1, 3)
         for the physics.
 
-        Every step: the physics advances the ensemble-mean state one step (RK4) and
+        Every step: the physics advances the ensemble-mean state one step (RK4, through
+        :meth:`DynamicModel.step_unchecked` with the extra acceleration ``accel_ext``) and
         predicts the acceleration there; each member predicts its residual deviation from
         those and its own previous deviation; the residual is the bias (rotated into the
         current heading) plus the guard-weighted mean deviation. It corrects the mean
@@ -533,7 +533,7 @@ class HybridPredictor:
         -------
         eta (S, H+1, 3), nu (S, H+1, 3), eta_std (S, H+1, 3), guard_weight (S, H+1)
         """
-        ens, P = self.ensemble, self.model.arrays
+        ens = self.ensemble
         S = eta0.shape[0]
         E = ens.n_members
         fidx = self.residual_config.feature_index
@@ -559,9 +559,10 @@ class HybridPredictor:
         r_prev = np.broadcast_to(dev0, (E, S, 3)).copy()
         d_nu = np.zeros((E, S, 3))        # member velocity deviations from the mean
         d_eta = np.zeros((E, S, 3))       # member position deviations (NED)
-        e1 = np.empty((S, 2, 3))
-        n1 = np.empty((S, 2, 3))
-        a1 = np.empty((S, 2, 3))
+        model = self.model
+        wind_s, current_s, acc_s = (np.ascontiguousarray(np.broadcast_to(a[:, 0], (S, a.shape[-1])))
+                                    for a in (wind, current, acc_phys))
+        zeros_s = np.zeros((S, 3))
         use_cmd = self.residual_config.uses_command_features
         feats = np.zeros((E, S, 9 + len(COMMAND_FEATURES)))
         cmd_guard = guard and self.command_regime is not None
@@ -571,15 +572,19 @@ class HybridPredictor:
                 if per_step else (rpm, az)
             if thrust_guard and per_step and j > 0:
                 w_thrust = self._thrust_weight(eta[:, j], nu[:, j], rpm_j[:, 0], az_j[:, 0], wind[:, 0])
-            rollout_batch(np.ascontiguousarray(eta[:, j]), np.ascontiguousarray(nu[:, j]), rpm_j, az_j, wind,
-                          current, zeros3, acc_phys, P, dt_s, 1, int(substeps), e1, n1, a1)
-            feats[:, :, 0:3] = n1[:, 1]
-            feats[:, :, 3:6] = a1[:, 1]
+            # physics: one public model step with the estimator's extra acceleration, and the
+            # model's acceleration at the new state (the nets' inputs)
+            rpm_s, az_s = np.ascontiguousarray(rpm_j[:, 0]), np.ascontiguousarray(az_j[:, 0])
+            eta_1, nu_1 = model.step_unchecked(np.ascontiguousarray(eta[:, j]), np.ascontiguousarray(nu[:, j]),
+                                               rpm_s, az_s, wind_s, current_s, zeros_s, acc_s, dt_s, int(substeps))
+            a_1, _ = model.acceleration_unchecked(eta_1, nu_1, rpm_s, az_s, wind_s, current_s, zeros_s, acc_s)
+            feats[:, :, 0:3] = nu_1
+            feats[:, :, 3:6] = a_1
             feats[:, :, 6:9] = r_prev
             if use_cmd:
                 jp = max(j - 1, 0) if per_step else 0
                 feats[:, :, 9:] = command_feature_columns(
-                    n1[:, 1], e1[:, 1, 2], rpm_j[:, 0], rpm[:, jp], az_j[:, 0], az[:, jp], wind[:, 0], dt_s,
+                    nu_1, eta_1[:, 2], rpm_j[:, 0], rpm[:, jp], az_j[:, 0], az[:, jp], wind[:, 0], dt_s,
                     scales["rpm_scale"], scales["angle_channel"])
             X = feats[..., fidx]
             r = ens.predict_members(X) if nets else np.zeros((E, S, 3))     # (E, S, 3)
@@ -588,11 +593,11 @@ class HybridPredictor:
                 w = self.guard.weight(z) * w_thrust * w_start   # (S,)
                 if cmd_guard:
                     ch = scales["angle_channel"]
-                    w = w * self.command_regime.weight(rpm_j[:, 0, 0] / scales["rpm_scale"], n1[:, 1, 0],
+                    w = w * self.command_regime.weight(rpm_j[:, 0, 0] / scales["rpm_scale"], nu_1[:, 0],
                                                        az_j[:, 0, ch] if ch is not None else np.zeros(S))
                 r = r * w[None, :, None]
                 wgt[:, j + 1] = w
-            psi = e1[:, 1, 2]
+            psi = eta_1[:, 2]
             c, s = np.cos(psi), np.sin(psi)
             r_prev = r
             # total residual = bias in today's heading + learned deviation
@@ -600,11 +605,11 @@ class HybridPredictor:
                                -s * bias0_ned[..., 0] + c * bias0_ned[..., 1], bias0_ned[..., 2]], axis=-1)
             r = r + bias_b
             r_mean = r.mean(axis=0)
-            nu[:, j + 1] = n1[:, 1] + dt_s * r_mean
+            nu[:, j + 1] = nu_1 + dt_s * r_mean
             half = 0.5 * dt_s * dt_s
-            eta[:, j + 1, 0] = e1[:, 1, 0] + half * (c * r_mean[:, 0] - s * r_mean[:, 1])
-            eta[:, j + 1, 1] = e1[:, 1, 1] + half * (s * r_mean[:, 0] + c * r_mean[:, 1])
-            eta[:, j + 1, 2] = e1[:, 1, 2] + half * r_mean[:, 2]
+            eta[:, j + 1, 0] = eta_1[:, 0] + half * (c * r_mean[:, 0] - s * r_mean[:, 1])
+            eta[:, j + 1, 1] = eta_1[:, 1] + half * (s * r_mean[:, 0] + c * r_mean[:, 1])
+            eta[:, j + 1, 2] = eta_1[:, 2] + half * r_mean[:, 2]
             dr = r - r_mean
             v_mid = d_nu + 0.5 * dt_s * dr
             d_eta[..., 0] += dt_s * (c * v_mid[..., 0] - s * v_mid[..., 1])
