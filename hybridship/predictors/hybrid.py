@@ -597,26 +597,8 @@ class HybridPredictor:
                                                        az_j[:, 0, ch] if ch is not None else np.zeros(S))
                 r = r * w[None, :, None]
                 wgt[:, j + 1] = w
-            psi = eta_1[:, 2]
-            c, s = np.cos(psi), np.sin(psi)
             r_prev = r
-            # total residual = bias in today's heading + learned deviation
-            bias_b = np.stack([c * bias0_ned[..., 0] + s * bias0_ned[..., 1],
-                               -s * bias0_ned[..., 0] + c * bias0_ned[..., 1], bias0_ned[..., 2]], axis=-1)
-            r = r + bias_b
-            r_mean = r.mean(axis=0)
-            nu[:, j + 1] = nu_1 + dt_s * r_mean
-            half = 0.5 * dt_s * dt_s
-            eta[:, j + 1, 0] = eta_1[:, 0] + half * (c * r_mean[:, 0] - s * r_mean[:, 1])
-            eta[:, j + 1, 1] = eta_1[:, 1] + half * (s * r_mean[:, 0] + c * r_mean[:, 1])
-            eta[:, j + 1, 2] = eta_1[:, 2] + half * r_mean[:, 2]
-            dr = r - r_mean
-            v_mid = d_nu + 0.5 * dt_s * dr
-            d_eta[..., 0] += dt_s * (c * v_mid[..., 0] - s * v_mid[..., 1])
-            d_eta[..., 1] += dt_s * (s * v_mid[..., 0] + c * v_mid[..., 1])
-            d_eta[..., 2] += dt_s * v_mid[..., 2]
-            d_nu += dt_s * dr
-            std[:, j + 1] = d_eta.std(axis=0)
+            eta[:, j + 1], nu[:, j + 1], std[:, j + 1] = _corrected_step(eta_1, nu_1, r, bias0_ned, dt_s, d_nu, d_eta)
         return eta, nu, std, (wgt if guard else None)
 
     # ------------------------------------------------------------------ model files
@@ -645,3 +627,33 @@ class HybridPredictor:
         format version, or a vessel that differs from the one the model was trained for.
         """
         return load_model(cls, path, vessel)
+
+
+def _corrected_step(eta_1, nu_1, r, bias0_ned, dt_s: float, d_nu, d_eta):
+    """The physics step ``eta_1, nu_1`` (S, 3) corrected by the residual: the members' learned
+    deviations ``r`` (E, S, 3) plus the bias ``bias0_ned`` (E, S, 3, surge/sway in NED)
+    rotated into the new heading, as a constant acceleration over the step (``nu += dt r``,
+    ``eta += 0.5 dt^2 R(psi) r`` with the members' mean). The members' deviations from that
+    mean are integrated the same way into ``d_nu``, ``d_eta`` (E, S, 3, updated in place).
+
+    Returns the corrected ``eta``, ``nu`` and the members' standard deviation of position
+    (each (S, 3)).
+    """
+    psi = eta_1[:, 2]
+    c, s = np.cos(psi), np.sin(psi)
+    bias_b = np.stack([c * bias0_ned[..., 0] + s * bias0_ned[..., 1],
+                       -s * bias0_ned[..., 0] + c * bias0_ned[..., 1], bias0_ned[..., 2]], axis=-1)
+    r = r + bias_b
+    r_mean = r.mean(axis=0)
+    nu = nu_1 + dt_s * r_mean
+    half = 0.5 * dt_s * dt_s
+    eta = np.column_stack([eta_1[:, 0] + half * (c * r_mean[:, 0] - s * r_mean[:, 1]),
+                           eta_1[:, 1] + half * (s * r_mean[:, 0] + c * r_mean[:, 1]),
+                           eta_1[:, 2] + half * r_mean[:, 2]])
+    dr = r - r_mean
+    v_mid = d_nu + 0.5 * dt_s * dr
+    d_eta[..., 0] += dt_s * (c * v_mid[..., 0] - s * v_mid[..., 1])
+    d_eta[..., 1] += dt_s * (s * v_mid[..., 0] + c * v_mid[..., 1])
+    d_eta[..., 2] += dt_s * v_mid[..., 2]
+    d_nu += dt_s * dr
+    return eta, nu, d_eta.std(axis=0)
