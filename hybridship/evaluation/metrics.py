@@ -12,44 +12,15 @@ import numpy as np
 import pandas as pd
 
 from ..frames import wrap_pi
+from ..predictors.after_failure import drift_forecasts, shutdown_index
 
 #: The paper's horizons [s] and averaging windows [intervals].
 HORIZONS_S = (15, 30, 45, 60)
 WINDOWS = (5, 20)
 STATES = ("north_m", "east_m", "yaw_deg")
 
-
-def shutdown_index(arrays) -> int:
-    """Row of the first ``dp_active == 0`` sample after station keeping (raises if none)."""
-    off = np.flatnonzero(arrays.dp_active == 0)
-    if off.size == 0:
-        raise ValueError("log: no DP shutdown (dp_active never 0); cannot evaluate drift forecasts")
-    return int(off[0])
-
-
-def drift_forecasts(predictor, arrays, *, n_intervals: int = 20, horizons_s=HORIZONS_S, **forecast_kw):
-    """Forecasts from successive start times after the shutdown of one log, at the horizons.
-
-    Returns
-    -------
-    pred, truth : ndarray, shape (n_intervals, len(horizons_s), 3)
-        Forecast and logged ``[north_m, east_m, psi_rad]``.
-    std : ndarray of the same shape, or None
-        The forecast's ensemble standard deviation (None for point forecasters).
-    """
-    i0 = shutdown_index(arrays)
-    dt = float(np.median(np.diff(arrays.time_s)))
-    steps = np.array([int(round(h / dt)) for h in horizons_s])
-    H = int(steps.max())
-    n_ok = min(n_intervals, len(arrays.time_s) - H - i0)
-    if n_ok < n_intervals:
-        raise ValueError(f"log: only {max(n_ok, 0)} start times after the shutdown leave {H * dt:g} s of "
-                         f"measurements; {n_intervals} are needed")
-    starts = i0 + np.arange(n_intervals)
-    fc = predictor.forecast(arrays, arrays.time_s[starts], horizon_s=H * dt, **forecast_kw)
-    truth = arrays.eta[starts[:, None] + steps[None, :]]        # (S, nh, 3)
-    std = None if fc.eta_std is None else fc.eta_std[:, steps]
-    return fc.eta[:, steps], truth, std
+__all__ = ["HORIZONS_S", "WINDOWS", "STATES", "drift_forecasts", "shutdown_index", "drift_errors",
+           "absolute_errors", "coverage", "error_table", "paper_table", "reduction_table"]
 
 
 def drift_errors(predictor, arrays, *, n_intervals: int = 20, horizons_s=HORIZONS_S, **forecast_kw) -> np.ndarray:

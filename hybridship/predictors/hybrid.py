@@ -26,6 +26,7 @@ from ..residual.environment import (EnvironmentConfig, EnvironmentEstimator, cur
                                     environment_accel)
 from ..residual.multistep import MultiStepConfig, collect_starts, train_multistep
 from ..residual.guard import CommandRegime, EnvelopeGuard, ThrustRegime
+from .after_failure import drift_forecasts
 from .forecast_setup import FORECAST_HISTORY_S, _check_row_stride, _forecast_setup, as_log_arrays, start_indices
 from .model_file import load_model, save_model
 from .result import ForecastResult
@@ -471,8 +472,6 @@ class HybridPredictor:
         cal : CalibrationConfig, optional
             ``sigma``, ``coverage`` and ``floor_quantile`` of the fit (default: the model's).
         """
-        from ..evaluation import metrics
-
         self._check_fitted()
         cal = self.calibration_config if cal is None else cal
         arrays = [as_log_arrays(x, self.model.vessel) for x in logs]
@@ -482,7 +481,7 @@ class HybridPredictor:
         lead = np.arange(1, int(round(horizon_s / dt)) + 1) * dt
         errs, stds = [], []
         for a in arrays:
-            p, t, sd = metrics.drift_forecasts(self, a, n_intervals=n_intervals, horizons_s=tuple(lead),
+            p, t, sd = drift_forecasts(self, a, n_intervals=n_intervals, horizons_s=tuple(lead),
                                                calibrated=False)
             e = np.abs(p - t)
             e[..., 2] = np.abs(wrap_pi(p[..., 2] - t[..., 2]))

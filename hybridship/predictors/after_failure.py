@@ -1,0 +1,46 @@
+"""Forecasts started after a DP failure: the starts the drift benchmark scores and the
+spread after a failure is calibrated on.
+
+Forecasts start at successive samples after the shutdown (one "interval" per start time,
+one second apart at 1 Hz), as in Skulstad et al. (2022); :mod:`hybridship.evaluation.metrics`
+turns them into the paper's error tables.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+__all__ = ["drift_forecasts", "shutdown_index"]
+
+
+def shutdown_index(arrays) -> int:
+    """Row of the first ``dp_active == 0`` sample after station keeping (raises if none)."""
+    off = np.flatnonzero(arrays.dp_active == 0)
+    if off.size == 0:
+        raise ValueError("log: no DP shutdown (dp_active never 0); cannot evaluate drift forecasts")
+    return int(off[0])
+
+
+def drift_forecasts(predictor, arrays, *, n_intervals: int = 20, horizons_s=(15, 30, 45, 60), **forecast_kw):
+    """Forecasts from successive start times after the shutdown of one log, at the horizons.
+
+    Returns
+    -------
+    pred, truth : ndarray, shape (n_intervals, len(horizons_s), 3)
+        Forecast and logged ``[north_m, east_m, psi_rad]``.
+    std : ndarray of the same shape, or None
+        The forecast's ensemble standard deviation (None for point forecasters).
+    """
+    i0 = shutdown_index(arrays)
+    dt = float(np.median(np.diff(arrays.time_s)))
+    steps = np.array([int(round(h / dt)) for h in horizons_s])
+    H = int(steps.max())
+    n_ok = min(n_intervals, len(arrays.time_s) - H - i0)
+    if n_ok < n_intervals:
+        raise ValueError(f"log: only {max(n_ok, 0)} start times after the shutdown leave {H * dt:g} s of "
+                         f"measurements; {n_intervals} are needed")
+    starts = i0 + np.arange(n_intervals)
+    fc = predictor.forecast(arrays, arrays.time_s[starts], horizon_s=H * dt, **forecast_kw)
+    truth = arrays.eta[starts[:, None] + steps[None, :]]        # (S, nh, 3)
+    std = None if fc.eta_std is None else fc.eta_std[:, steps]
+    return fc.eta[:, steps], truth, std
