@@ -169,7 +169,7 @@ def _cmd_simulate(args) -> int:
 
     cfg = scenario.DPLossConfig(seed=args.seed, beaufort=tuple(args.beaufort), **overrides)
     df = scenario.simulate_dp_loss(cfg, vessel=vessel, progress=progress)
-    write_log(df, args.out, thruster_names=vessel.thruster_names, rotatable=vessel.rotatable)
+    write_log(df, args.out, channel_names=vessel.channel_names, rotatable=vessel.rotatable)
     stats = scenario.drift_statistics(df)
     print(f"wrote {args.out}: {len(df)} rows, DP shutdown at {stats['t_shutdown_s']:g} s, "
           f"drift excursion {stats['drift_excursion_60s_m']:.1f} m after 60 s, "

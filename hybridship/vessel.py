@@ -378,7 +378,7 @@ class Vessel(_Strict):
         return [t.name for t in self.thrusters] + [r.name for r in self.rudders]
 
     @property
-    def thruster_names(self) -> list[str]:
+    def channel_names(self) -> list[str]:
         """Command channels as the logs name them (:attr:`actuator_names`).
 
         A log carries ``<name>_rpm`` for every thruster and ``<name>_azimuth_deg`` for every

@@ -73,7 +73,7 @@ def test_own_vessel_model_forecasts_where_no_vessel_file_is(tmp_path, monkeypatc
     vessel = load_vessel(work / "my_ship.toml")
     assert vessel.name == "my_ship" and vessel.rigid_body.mass_kg == 630000.0
     write_log(physics_log(DynamicModel(vessel), seed=1, duration_s=240.0, t_shutdown_s=None, current=(0.2, 2.0)),
-              work / "logs" / "a.csv", thruster_names=vessel.thruster_names, rotatable=vessel.rotatable)
+              work / "logs" / "a.csv", channel_names=vessel.channel_names, rotatable=vessel.rotatable)
     monkeypatch.chdir(work)
     assert main(["train", "--vessel", "my_ship.toml", "--logs", "logs", "--out", "m.npz", "--members", "2"]) == 0
     monkeypatch.chdir(elsewhere)                     # no my_ship.toml here, and it is not packaged

@@ -85,7 +85,7 @@ def test_trailing_empty_rows_dropped_and_bad_files_refused(tmp_path, runs, raws)
 def test_log_is_valid_and_in_si_after_conversion(runs, raws):
     r = next(r for r in runs if r.kind == "random")
     log = read_esso_osaka(r.path)
-    validate_log(log, thruster_names=["propeller", "rudder"], rotatable=[False, True])
+    validate_log(log, channel_names=["propeller", "rudder"], rotatable=[False, True])
     raw = raws[r.name]
     a = esso_log_arrays(log)
     assert np.median(np.diff(a.time_s)) == pytest.approx(0.1)
@@ -249,11 +249,11 @@ def test_known_commands_on_a_real_run(tmp_path):
     for name in ("hybrid", "data_only"):
         _fit(name, preds[name], train, cfg)
     log = esso_to_log(read_esso_raw(DATA / "data" / SMALL_TEST[1]))
-    a = log_to_arrays(log, thruster_names=v.thruster_names, rotatable=v.rotatable)
+    a = log_to_arrays(log, channel_names=v.channel_names, rotatable=v.rotatable)
     const = log.copy()
     const["propeller_rpm"] = 600.0
     const["rudder_azimuth_deg"] = 10.0
-    c = log_to_arrays(const, thruster_names=v.thruster_names, rotatable=v.rotatable)
+    c = log_to_arrays(const, channel_names=v.channel_names, rotatable=v.rotatable)
     starts = a.time_s[[30, 200, 500]]
     for name in ("dynamic", "hybrid", "data_only"):
         p = preds[name]

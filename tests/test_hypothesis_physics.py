@@ -28,7 +28,7 @@ from hybridship.physics.model import DynamicModel
 MODEL = DynamicModel("gunnerus")
 ENV = envelope_for(MODEL)
 MAX_RPM = np.asarray(ENV.max_rpm)
-THRUSTERS = list(ENV.thruster_names)
+THRUSTERS = list(ENV.channel_names)
 ROTATABLE = MODEL.vessel.rotatable
 B = 8  # vessels per example (the kernels are batched)
 
@@ -121,7 +121,7 @@ def valid_logs(draw):
     cols["dp_active"] = draw(hnp.arrays(np.int64, (n,), elements=st.integers(0, 1)))
     df = pd.DataFrame(cols)
     try:
-        validate_log(df, thruster_names=THRUSTERS, rotatable=ROTATABLE)
+        validate_log(df, channel_names=THRUSTERS, rotatable=ROTATABLE)
     except LogFormatError:
         assume(False)  # the rare draw that breaks a plausibility rule (e.g. ambiguous degrees)
     return df
@@ -131,14 +131,14 @@ def valid_logs(draw):
 @given(df=valid_logs())
 def test_readers_round_trip_random_valid_logs(df):
     before = df.copy(deep=True)
-    ref = log_to_arrays(df, thruster_names=THRUSTERS, rotatable=ROTATABLE)
+    ref = log_to_arrays(df, channel_names=THRUSTERS, rotatable=ROTATABLE)
     with tempfile.TemporaryDirectory() as tmp:
         for name in ("log.csv", "log.csv.gz", "log.parquet"):
             path = Path(tmp) / name
-            write_log(df, path, thruster_names=THRUSTERS, rotatable=ROTATABLE)
-            back = read_log(path, thruster_names=THRUSTERS, rotatable=ROTATABLE)
+            write_log(df, path, channel_names=THRUSTERS, rotatable=ROTATABLE)
+            back = read_log(path, channel_names=THRUSTERS, rotatable=ROTATABLE)
             pd.testing.assert_frame_equal(back, df, check_exact=True, check_dtype=False)
-            arr = log_to_arrays(back, thruster_names=THRUSTERS, rotatable=ROTATABLE)
+            arr = log_to_arrays(back, channel_names=THRUSTERS, rotatable=ROTATABLE)
             for field in ("time_s", "eta", "nu", "rpm", "azimuth_rad", "wind", "dp_active", "wind_logged"):
                 np.testing.assert_array_equal(getattr(arr, field), getattr(ref, field), err_msg=f"{name}: {field}")
         assert sorted(p.name for p in Path(tmp).iterdir()) == ["log.csv", "log.csv.gz", "log.parquet"]

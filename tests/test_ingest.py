@@ -65,15 +65,15 @@ def test_fit_and_forecast_refuse_the_same_log_with_the_same_message(model, log, 
 
 
 def test_log_arrays_get_the_vessel_checks_and_the_sorting(model, log):
-    names, rot = model.vessel.thruster_names, model.vessel.rotatable
+    names, rot = model.vessel.channel_names, model.vessel.rotatable
     drift = physics_log(model, seed=4, duration_s=300.0, t_shutdown_s=200.0)
-    unchecked = log_to_arrays(_rpm_60x(drift), thruster_names=names, rotatable=rot)   # no vessel checks here
+    unchecked = log_to_arrays(_rpm_60x(drift), channel_names=names, rotatable=rot)   # no vessel checks here
     with pytest.raises(LogFormatError, match="port_rpm: .*exceeds 1.25 x max_rpm"):
         metrics.drift_forecasts(DynamicPredictor(model.vessel), unchecked, n_intervals=2)
     with pytest.raises(LogFormatError, match="port_rpm"):
         ingest(unchecked, model.vessel, purpose="forecast")
     # arrays whose rows are out of order (built by hand) are re-sorted, and say so
-    good = log_to_arrays(log, thruster_names=names, rotatable=rot)
+    good = log_to_arrays(log, channel_names=names, rotatable=rot)
     perm = np.arange(len(good))
     perm[[100, 101]] = [101, 100]
     kw = {f.name: getattr(good, f.name) for f in fields(good)}
@@ -84,7 +84,7 @@ def test_log_arrays_get_the_vessel_checks_and_the_sorting(model, log):
     np.testing.assert_allclose(out.eta, good.eta, atol=1e-9)
     # another vessel's arrays are refused, naming the mismatch
     esso = DynamicModel("esso_osaka_model").vessel
-    with pytest.raises(LogFormatError, match="thruster_names: .*vessel 'esso_osaka_model'"):
+    with pytest.raises(LogFormatError, match="channel_names: .*vessel 'esso_osaka_model'"):
         ingest(good, esso)
 
 
@@ -96,8 +96,8 @@ def test_checked_arrays_pass_through_and_round_trip(model, log):
     back = ingest(arrays.to_frame(), model.vessel)
     for name in ("time_s", "eta", "nu", "nu_logged", "rpm", "azimuth_rad", "wind", "dp_active", "segment_id"):
         np.testing.assert_allclose(getattr(back, name), getattr(arrays, name), atol=1e-9, err_msg=name)
-    assert (back.thruster_names, back.rotatable, back.thruster_logged, back.has_wind) == \
-        (arrays.thruster_names, arrays.rotatable, arrays.thruster_logged, arrays.has_wind)
+    assert (back.channel_names, back.rotatable, back.channel_logged, back.has_wind) == \
+        (arrays.channel_names, arrays.rotatable, arrays.channel_logged, arrays.has_wind)
 
 
 def test_ingest_checks_its_arguments_and_never_modifies_the_input(model, log, tmp_path):

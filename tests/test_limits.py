@@ -16,7 +16,7 @@ MAX_RPM = np.array([t.max_rpm for t in MODEL.vessel.thrusters])
 
 def test_envelope_of_the_vessel():
     env = envelope_for(MODEL)
-    assert env.max_rpm == tuple(MAX_RPM) and env.thruster_names == ("tunnel", "port", "stbd")
+    assert env.max_rpm == tuple(MAX_RPM) and env.channel_names == ("tunnel", "port", "stbd")
     assert env.wind_speed_max_m_s == pytest.approx(100 * KNOT_M_S) and env.current_speed_max_m_s == 5.0
     assert envelope_for("gunnerus", surge_max_m_s=6.0).surge_max_m_s == 6.0
 
@@ -136,7 +136,7 @@ def test_any_finite_input_is_refused_or_clipped_to_a_finite_forecast(nu, rpm_fac
 
 def test_rudder_channels_clip_the_angle_and_ignore_rpm():
     env = envelope_for("esso_osaka_model")
-    assert env.thruster_names == ("propeller", "rudder") and env.max_rpm[1] == np.inf
+    assert env.channel_names == ("propeller", "rudder") and env.max_rpm[1] == np.inf
     lim = env.max_angle_rad[1]
     assert env.max_angle_rad[0] == np.inf and 0 < lim < np.pi / 2
     c = check_or_clip_inputs("esso_osaka_model", rpm=[600.0, 0.0], azimuth_rad=[[0.0, 0.3], [0.0, 1.2]])

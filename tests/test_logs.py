@@ -74,8 +74,8 @@ def test_round_trip(tmp_path, name):
     df = circle_log()
     before = df.copy(deep=True)
     path = tmp_path / name
-    write_log(df, path, thruster_names=THRUSTERS, rotatable=ROTATABLE)
-    back = read_log(path, thruster_names=THRUSTERS, rotatable=ROTATABLE)
+    write_log(df, path, channel_names=THRUSTERS, rotatable=ROTATABLE)
+    back = read_log(path, channel_names=THRUSTERS, rotatable=ROTATABLE)
     pd.testing.assert_frame_equal(back, df, check_exact=True)
     pd.testing.assert_frame_equal(df, before, check_exact=True)  # input untouched
     assert sorted(os.listdir(tmp_path)) == [name]  # no temp file left behind
@@ -176,7 +176,7 @@ def test_bad_input_raises_naming_column(case):
     df = mutate(circle_log())
     before = df.copy(deep=True)
     with pytest.raises(LogFormatError, match=pattern):
-        validate_log(df, thruster_names=THRUSTERS, rotatable=ROTATABLE)
+        validate_log(df, channel_names=THRUSTERS, rotatable=ROTATABLE)
     pd.testing.assert_frame_equal(df, before)
 
 
@@ -194,7 +194,7 @@ def test_error_attributes_and_file_name(tmp_path):
 
 def test_thruster_argument_mismatch():
     with pytest.raises(ValueError, match="rotatable"):
-        validate_log(circle_log(), thruster_names=THRUSTERS, rotatable=[True])
+        validate_log(circle_log(), channel_names=THRUSTERS, rotatable=[True])
 
 
 # --------------------------------------------------------------------------------------
@@ -235,7 +235,7 @@ def test_unknown_columns_warn_once_and_are_kept(tmp_path):
     path = tmp_path / "log.csv"
     df.to_csv(path, index=False)
     with pytest.warns(LogFormatWarning) as record:
-        back = read_log(path, thruster_names=THRUSTERS, rotatable=ROTATABLE)
+        back = read_log(path, channel_names=THRUSTERS, rotatable=ROTATABLE)
     msgs = [str(w.message) for w in record if issubclass(w.category, LogFormatWarning)]
     assert len(msgs) == 1
     assert "gps_quality" in msgs[0] and "pitch_deg" in msgs[0] and "not rotatable" in msgs[0]
@@ -246,7 +246,7 @@ def test_unknown_columns_warn_once_and_are_kept(tmp_path):
 def test_format_columns_do_not_warn():
     with warnings.catch_warnings():
         warnings.simplefilter("error")
-        validate_log(circle_log(), thruster_names=THRUSTERS, rotatable=ROTATABLE)
+        validate_log(circle_log(), channel_names=THRUSTERS, rotatable=ROTATABLE)
 
 
 # --------------------------------------------------------------------------------------
@@ -256,7 +256,7 @@ def test_format_columns_do_not_warn():
 
 def test_derived_velocities_on_circle_match_analytic():
     df = circle_log(120, velocities=False)
-    arr = log_to_arrays(df, thruster_names=THRUSTERS, rotatable=ROTATABLE)
+    arr = log_to_arrays(df, channel_names=THRUSTERS, rotatable=ROTATABLE)
     w = np.radians(R_DEG_S)
     assert not arr.nu_logged.any()
     # Heading unwrapped across north: a steady turn.
@@ -271,7 +271,7 @@ def test_derived_velocities_on_circle_match_analytic():
 def test_logged_velocities_are_used_and_converted():
     df = circle_log(60)
     df.loc[10, "u_m_s"] = np.nan  # a missing sample is derived instead
-    arr = log_to_arrays(df, thruster_names=THRUSTERS, rotatable=ROTATABLE)
+    arr = log_to_arrays(df, channel_names=THRUSTERS, rotatable=ROTATABLE)
     np.testing.assert_allclose(arr.nu[:, 2], np.radians(R_DEG_S))
     assert arr.nu_logged[:, 1:].all() and arr.nu_logged.sum() == 3 * 60 - 1
     assert not arr.nu_logged[10, 0]
@@ -281,7 +281,7 @@ def test_logged_velocities_are_used_and_converted():
 def test_log_to_arrays_commands_wind_and_defaults():
     df = circle_log(40)
     df.loc[5:7, "port_rpm"] = np.nan
-    arr = log_to_arrays(df, thruster_names=THRUSTERS, rotatable=ROTATABLE)
+    arr = log_to_arrays(df, channel_names=THRUSTERS, rotatable=ROTATABLE)
     n = len(df)
     assert arr.eta.shape == arr.nu.shape == (n, 3)
     assert arr.rpm.shape == arr.azimuth_rad.shape == (n, 3)
@@ -297,10 +297,10 @@ def test_log_to_arrays_commands_wind_and_defaults():
         arr.eta[0, 0] = 1.0  # read-only
 
     bare = df[["time_s", "north_m", "east_m", "heading_deg"]]
-    arr = log_to_arrays(bare, thruster_names=THRUSTERS, rotatable=ROTATABLE)
+    arr = log_to_arrays(bare, channel_names=THRUSTERS, rotatable=ROTATABLE)
     assert not arr.has_wind and np.all(arr.wind == 0.0)
     assert np.all(arr.dp_active == 1) and np.all(arr.rpm == 0.0)
-    assert arr.thruster_logged == (False, False, False)
+    assert arr.channel_logged == (False, False, False)
     assert np.isfinite(arr.nu).all()
 
 
@@ -309,7 +309,7 @@ def test_log_to_arrays_does_not_differentiate_across_gaps():
     # Remove 20 samples and shift the track after the gap: a naive derivative would spike.
     df = df.drop(index=range(40, 60)).reset_index(drop=True)
     df.loc[40:, "north_m"] += 500.0
-    arr = log_to_arrays(df, thruster_names=THRUSTERS, rotatable=ROTATABLE)
+    arr = log_to_arrays(df, channel_names=THRUSTERS, rotatable=ROTATABLE)
     assert [(s.start, s.stop) for s in arr.segments] == [(0, 40), (40, 80)]
     np.testing.assert_array_equal(arr.segment_id, np.repeat([0, 1], 40))
     np.testing.assert_allclose(arr.nu[:, :2], [[U_M_S, V_M_S]] * 80, atol=0.05)
@@ -406,9 +406,9 @@ def test_dev_logs_read_and_velocities_match_heading(shared_data):
     for path in _dev_logs(shared_data):
         with warnings.catch_warnings():
             warnings.simplefilter("error", LogFormatWarning)  # only format and truth_* columns
-            df = read_log(path, thruster_names=THRUSTERS, rotatable=ROTATABLE)
-        arr = log_to_arrays(df, thruster_names=THRUSTERS, rotatable=ROTATABLE)
-        assert arr.nu_logged.all() and arr.has_wind and all(arr.thruster_logged), path.name
+            df = read_log(path, channel_names=THRUSTERS, rotatable=ROTATABLE)
+        arr = log_to_arrays(df, channel_names=THRUSTERS, rotatable=ROTATABLE)
+        assert arr.nu_logged.all() and arr.has_wind and all(arr.channel_logged), path.name
         assert set(np.unique(arr.dp_active)) == {0, 1} and len(arr.segments) == 1, path.name
 
         # Logged (u, v) rotated to NED with the logged heading and integrated, against the

@@ -33,7 +33,7 @@ def moving_log(model):
 def _refused(df, pattern, **kw):
     before = df.copy(deep=True)
     with pytest.raises(LogFormatError, match=pattern) as info:
-        validate_log(df, thruster_names=THRUSTERS, rotatable=ROTATABLE, **kw)
+        validate_log(df, channel_names=THRUSTERS, rotatable=ROTATABLE, **kw)
     pd.testing.assert_frame_equal(df, before)  # never modified, also when refusing
     return info.value
 
@@ -44,7 +44,7 @@ def _refused(df, pattern, **kw):
 def test_the_clean_log_passes(moving_log, model):
     with warnings.catch_warnings():
         warnings.simplefilter("error")
-        validate_log(moving_log, thruster_names=THRUSTERS, rotatable=ROTATABLE)
+        validate_log(moving_log, channel_names=THRUSTERS, rotatable=ROTATABLE)
         check_log_against_vessel(moving_log, model.vessel)
     sc = speed_scale_vs_track(moving_log.time_s, moving_log.north_m, moving_log.east_m, moving_log.heading_deg,
                               moving_log.u_m_s, moving_log.v_m_s)
@@ -70,7 +70,7 @@ def test_speed_check_stays_quiet_when_velocities_do_not_describe_the_track(movin
     # inferred, so no unit error is claimed (the check only speaks when shapes agree).
     rng = np.random.default_rng(0)
     df = moving_log.assign(u_m_s=rng.permutation(moving_log.u_m_s.to_numpy()) * 1.94)
-    validate_log(df, thruster_names=THRUSTERS, rotatable=ROTATABLE)
+    validate_log(df, channel_names=THRUSTERS, rotatable=ROTATABLE)
 
 
 def test_yaw_rate_in_rad_s_is_refused(moving_log):
@@ -120,7 +120,7 @@ def test_missing_required_column_points_at_a_unit_variant(moving_log):
 def test_optional_column_in_another_unit_is_named_in_the_warning(moving_log):
     df = moving_log.rename(columns={"wind_speed_m_s": "wind_speed_kn"})
     with pytest.warns(LogFormatWarning, match=r"wind_speed_kn \(looks like wind_speed_m_s in another unit"):
-        validate_log(df, thruster_names=THRUSTERS, rotatable=ROTATABLE)
+        validate_log(df, channel_names=THRUSTERS, rotatable=ROTATABLE)
 
 
 def test_strictly_increasing_time_names_row_and_time(moving_log):
@@ -136,8 +136,8 @@ def test_missing_required_values_refused_unless_allowed(moving_log):
     df.loc[13, "heading_deg"] = np.inf
     err = _refused(df, r"east_m: missing or non-finite value \(nan\) at row 12 \(time_s 12\)")
     assert (err.row, err.time_s) == (12, 12.0)
-    validate_log(df, thruster_names=THRUSTERS, rotatable=ROTATABLE, allow_missing=True)
-    arr = log_to_arrays(df, thruster_names=THRUSTERS, rotatable=ROTATABLE, allow_missing=True)
+    validate_log(df, channel_names=THRUSTERS, rotatable=ROTATABLE, allow_missing=True)
+    arr = log_to_arrays(df, channel_names=THRUSTERS, rotatable=ROTATABLE, allow_missing=True)
     assert np.isnan(arr.eta[12, 1]) and np.isnan(arr.eta[13, 2])
     # the heading is unwrapped over the finite samples: a NaN does not poison the rest
     assert np.isfinite(arr.eta[14:, 2]).all()
@@ -146,7 +146,7 @@ def test_missing_required_values_refused_unless_allowed(moving_log):
     # other formats errors are still refused in that mode
     bad = df.assign(u_m_s=df.u_m_s * 3.6)
     with pytest.raises(LogFormatError, match="km/h"):
-        validate_log(bad, thruster_names=THRUSTERS, rotatable=ROTATABLE, allow_missing=True)
+        validate_log(bad, channel_names=THRUSTERS, rotatable=ROTATABLE, allow_missing=True)
 
 
 # ----------------------------------------------------------------------------- vessel
@@ -170,7 +170,7 @@ def _vessel_refused(model, df, pattern):
     return info.value
 
 
-def test_thruster_names_must_match_the_vessel(model, moving_log):
+def test_channel_names_must_match_the_vessel(model, moving_log):
     _vessel_refused(model, moving_log.rename(columns={"port_rpm": "ps_rpm"}),
                     r"ps_rpm: names unknown thruster 'ps'; known thrusters: tunnel, port, stbd")
 
@@ -218,8 +218,8 @@ def test_no_function_modifies_the_callers_data(model, moving_log, tmp_path):
     check_log_against_vessel(path, model.vessel)
     clean = order.frame.copy()
     clean_before = clean.copy(deep=True)
-    validate_log(clean, thruster_names=THRUSTERS, rotatable=ROTATABLE, allow_missing=True)
-    arr3 = log_to_arrays(clean, thruster_names=THRUSTERS, rotatable=ROTATABLE, allow_missing=True)
+    validate_log(clean, channel_names=THRUSTERS, rotatable=ROTATABLE, allow_missing=True)
+    arr3 = log_to_arrays(clean, channel_names=THRUSTERS, rotatable=ROTATABLE, allow_missing=True)
     write_log(moving_log, tmp_path / "out.csv")
     read_log(path)
 

@@ -181,7 +181,7 @@ def test_rudder_keyword_equals_angle_channel_and_per_step_equals_held(esso):
 
 def test_channels_and_errors(esso):
     v = esso.vessel
-    assert v.thruster_names == ["propeller", "rudder"] and v.rotatable == [False, True]
+    assert v.channel_names == ["propeller", "rudder"] and v.rotatable == [False, True]
     assert esso.n_actuators == esso.n_channels == 2 and esso.n_rudders == 1
     assert esso.n_thrusters == 1                  # thrusters and propellers only, as Fossen and MMG count them
     with pytest.raises(ValueError, match="rudder_rad"):
@@ -213,7 +213,7 @@ def test_rudder_without_propeller_and_mixed_actuators():
     d["rudders"].append(dict(d["rudders"][0], name="aux", propeller=None, y_m=0.1))
     d["rudders"][1].pop("propeller")
     m = DynamicModel(vessel_from_dict(d, "mixed.toml"))
-    assert m.vessel.thruster_names == ["propeller", "bow", "rudder", "aux"]
+    assert m.vessel.channel_names == ["propeller", "bow", "rudder", "aux"]
     assert m.vessel.rotatable == [False, False, True, True]
     acc = m.acceleration([0, 0, 0], [0.3, 0, 0], rpm=[RPM8, 600.0, 0, 0], azimuth_rad=[0, 0, 0.2, 0.2])
     acc_off = m.acceleration([0, 0, 0], [0.3, 0, 0], rpm=[RPM8, 600.0, 0, 0], azimuth_rad=[0, 0, 0.0, 0.0])

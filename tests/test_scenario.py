@@ -18,7 +18,7 @@ from hybridship.sim.environment import SeaState
 from hybridship.sim.scenario import (DPLossConfig, SensorNoise, drift_statistics,
                                      embedded_scenarios, simulate_dp_loss, sweep)
 
-THRUSTERS = dict(thruster_names=["tunnel", "port", "stbd"], rotatable=[False, True, True])
+THRUSTERS = dict(channel_names=["tunnel", "port", "stbd"], rotatable=[False, True, True])
 SHORT = dict(t_shutdown_s=600.0, drift_s=300.0)
 TINY = dict(t_shutdown_s=120.0, drift_s=60.0)  # for checks that need no physics
 

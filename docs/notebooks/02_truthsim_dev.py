@@ -116,7 +116,7 @@ vessel = load_vessel("gunnerus")
 RENAME = {"tunnel_rpm": "tunnel_rpm", "port_rpm": "port_rpm", "stbd_rpm": "stbd_rpm",
           "port_azimuth_deg": "port_azimuth_deg", "stbd_azimuth_deg": "stbd_azimuth_deg"}
 LOG_THRUSTERS = {"tunnel": (360.0, 20e3), "port": (200.0, 50e3), "stbd": (200.0, 50e3)}  # rpm, N (README)
-t_max_model = dict(zip(vessel.thruster_names, bollard_thrust_limits(vessel).forward_N))
+t_max_model = dict(zip(vessel.channel_names, bollard_thrust_limits(vessel).forward_N))
 RPM_FACTOR = {}
 for th in vessel.thrusters:
     rpm_ref, t_ref = LOG_THRUSTERS[th.name]

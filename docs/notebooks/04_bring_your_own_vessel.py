@@ -168,7 +168,7 @@ vessel_file.write_text(VESSEL_TOML)
 vessel = load_vessel(vessel_file)
 model = DynamicModel(vessel)
 print(vessel.name, "-", vessel.description)
-print("thrusters:", vessel.thruster_names, "rotatable:", vessel.rotatable)
+print("thrusters:", vessel.channel_names, "rotatable:", vessel.rotatable)
 print("M = M_RB + M_A [kg, kg, kg m^2]:\n", np.array2string(model.mass_matrix, precision=3))
 print("bollard thrust at max rpm [kN]:", np.round(bollard_thrust_limits(vessel).forward_N / 1e3, 1))
 
@@ -228,7 +228,7 @@ for seed in range(1, N_LOGS + 2):
     df = physics_log(true_model, duration_s=DURATION_S, t_shutdown_s=DURATION_S - 300.0, seed=seed,
                      current=CURRENT, tau_ext_N=TAU_EXT_N, wind=(10.0, np.radians(200.0)), rpm_scale=0.4)
     name = f"test_seed{seed:02d}.csv.gz" if seed == N_LOGS + 1 else f"train_seed{seed:02d}.csv.gz"
-    write_log(df, log_dir / name, thruster_names=vessel.thruster_names, rotatable=vessel.rotatable)
+    write_log(df, log_dir / name, channel_names=vessel.channel_names, rotatable=vessel.rotatable)
 print(f"wrote {N_LOGS + 1} logs in {time.perf_counter() - t0:.1f} s:", sorted(p.name for p in log_dir.iterdir()))
 df.iloc[::300, :16].round(2)
 

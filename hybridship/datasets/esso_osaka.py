@@ -191,7 +191,7 @@ def read_esso_osaka(path, *, vessel=None, velocity_lead_s: float = 0.0) -> pd.Da
     """Read one run into a validated log-format DataFrame (see :func:`esso_to_log`)."""
     log = esso_to_log(read_esso_raw(path), vessel=vessel, velocity_lead_s=velocity_lead_s)
     prop, rud = _channel_names(vessel)
-    validate_log(log, thruster_names=[prop, rud], rotatable=[False, True], source=str(path))
+    validate_log(log, channel_names=[prop, rud], rotatable=[False, True], source=str(path))
     return log
 
 
@@ -210,7 +210,7 @@ def esso_log_arrays(run, vessel="esso_osaka_model", *, velocity_lead_s: float = 
         log = run
     else:
         raise TypeError(f"run: expected a path, EssoRun or DataFrame, got {type(run).__name__}")
-    return log_to_arrays(log, thruster_names=v.thruster_names, rotatable=v.rotatable)
+    return log_to_arrays(log, channel_names=v.channel_names, rotatable=v.rotatable)
 
 
 # --------------------------------------------------------------------------------------

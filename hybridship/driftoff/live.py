@@ -92,7 +92,7 @@ def _arrays(log, model, window_s: float) -> LogArrays:
         raise ValueError(f"log: need at least 3 rows, got {len(log)}")
     t = log["time_s"].to_numpy(float)
     tail = log.iloc[int(np.searchsorted(t, t[-1] - window_s, side="left")):]
-    return log_to_arrays(tail, thruster_names=[t.name for t in ves.thrusters],
+    return log_to_arrays(tail, channel_names=[t.name for t in ves.thrusters],
                          rotatable=[t.type == "azimuth" for t in ves.thrusters])
 
 

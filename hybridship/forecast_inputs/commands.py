@@ -42,7 +42,7 @@ def clip_rpm(rpm: np.ndarray, env, clip: bool, batch: int) -> np.ndarray:
     max_rpm = np.asarray(env.max_rpm, dtype=float)
     if rpm.shape[-1] != max_rpm.size:
         raise ValueError(f"rpm: width {rpm.shape[-1]} does not match the vessel's {max_rpm.size} thrusters")
-    comps = [f"thruster {n!r}" for n in env.thruster_names] if len(env.thruster_names) == max_rpm.size \
+    comps = [f"thruster {n!r}" for n in env.channel_names] if len(env.channel_names) == max_rpm.size \
         else [f"thruster {i}" for i in range(max_rpm.size)]
     far = np.abs(rpm) > env.rpm_refuse_factor * max_rpm
     if far.any():
@@ -90,7 +90,7 @@ def wrap_and_clip_angles(azimuth_rad: np.ndarray, env, clip: bool, batch: int):
     bad = np.abs(a) > lim
     if bad.any():
         if not clip:
-            comps = [f"rudder {n!r}" for n in env.thruster_names] or None
+            comps = [f"rudder {n!r}" for n in env.channel_names] or None
             refuse("azimuth_rad", a, bad, f"|rudder angle| <= {np.degrees(lim[np.isfinite(lim)]).tolist()} "
                    "deg (the rudders' max_angle_deg)", comps)
         a[...] = np.clip(a, -lim, lim)

@@ -120,7 +120,7 @@ class Envelope:
     max_rpm : tuple of float
         Per command channel (thrusters, then rudders), largest ``|rpm|`` (the vessel
         file's ``max_rpm``; ``inf`` for a rudder, which has no rpm).
-    thruster_names : tuple of str
+    channel_names : tuple of str
         Per command channel, its name (quoted in messages).
     max_angle_rad : tuple of float
         Per command channel, largest ``|angle|`` [rad]: ``inf`` for thrusters
@@ -140,7 +140,7 @@ class Envelope:
     wind_speed_max_m_s: float = 100.0 * KNOT_M_S
     current_speed_max_m_s: float = 5.0
     max_rpm: tuple[float, ...] = field(default_factory=tuple)
-    thruster_names: tuple[str, ...] = field(default_factory=tuple)
+    channel_names: tuple[str, ...] = field(default_factory=tuple)
     max_angle_rad: tuple[float, ...] = field(default_factory=tuple)
     rpm_refuse_factor: float = 2.0
     rk4_step_max_s: float = 1.0
@@ -163,7 +163,7 @@ def envelope_for(vessel, **overrides) -> Envelope:
         v = load_vessel(v)
     rudders = list(getattr(v, "rudders", None) or [])
     return Envelope(max_rpm=tuple(float(t.max_rpm) for t in v.thrusters) + (math.inf,) * len(rudders),
-                    thruster_names=tuple(t.name for t in v.thrusters) + tuple(r.name for r in rudders),
+                    channel_names=tuple(t.name for t in v.thrusters) + tuple(r.name for r in rudders),
                     max_angle_rad=(math.inf,) * len(v.thrusters)
                     + tuple(math.radians(r.max_angle_deg) for r in rudders), **overrides)
 

@@ -193,11 +193,11 @@ def _from_arrays(arrays: LogArrays, v, purpose: str, key) -> tuple[LogArrays, So
     mark = getattr(arrays, _MARK, None)
     if mark is not None and mark[0] == key[0] and (mark[1] == purpose or mark[1] == "fit"):
         return arrays, None
-    if tuple(arrays.thruster_names) != tuple(v.thruster_names) or tuple(arrays.rotatable) != tuple(v.rotatable):
+    if tuple(arrays.channel_names) != tuple(v.channel_names) or tuple(arrays.rotatable) != tuple(v.rotatable):
         raise LogFormatError(
-            f"thruster_names: the arrays carry command channels {list(arrays.thruster_names)} (rotatable "
-            f"{list(arrays.rotatable)}), vessel {v.name!r} has {list(v.thruster_names)} (rotatable "
-            f"{list(v.rotatable)}); build them for this vessel (in LogArrays)", column="thruster_names")
+            f"channel_names: the arrays carry command channels {list(arrays.channel_names)} (rotatable "
+            f"{list(arrays.rotatable)}), vessel {v.name!r} has {list(v.channel_names)} (rotatable "
+            f"{list(v.rotatable)}); build them for this vessel (in LogArrays)", column="channel_names")
     out, order = _from_frame(arrays.to_frame(), v, purpose, "LogArrays")
     if not order.changed and len(out) == len(arrays):
         out = arrays                                   # checked; the caller's values, unchanged
@@ -227,7 +227,7 @@ def _from_frame(df: pd.DataFrame, v, purpose: str, source: str) -> tuple[LogArra
         _refuse_conflicts(order, source)
     allow_missing = purpose == "forecast"
     check_log_against_vessel(order.frame, v, source=source, allow_missing=allow_missing)
-    arrays = _frame_to_arrays(order.frame, tuple(v.thruster_names), tuple(v.rotatable),
+    arrays = _frame_to_arrays(order.frame, tuple(v.channel_names), tuple(v.rotatable),
                               resorted_time_s=order.affected_time_s)
     return arrays, order
 

@@ -31,7 +31,7 @@ expected:
 * ``r_deg_s`` that is 1/57.3 of the heading's rate of change (rad/s) or 57.3 x (converted
   twice), or whose sign is opposite to it (counter-clockwise convention);
 * thruster columns (``<name>_rpm``, ``<name>_azimuth_deg``) naming a thruster that is not
-  in ``thruster_names`` (when given);
+  in ``channel_names`` (when given);
 * ``dp_active`` values other than 0/1.
 
 Each column is checked on its own first, then against the others (yaw rate against
@@ -313,19 +313,19 @@ def _to_float(df: pd.DataFrame, col: str, source: str, time_s: np.ndarray | None
     return x
 
 
-def _check_thruster_args(thruster_names, rotatable) -> tuple[tuple[str, ...] | None, tuple[bool, ...] | None]:
-    if thruster_names is None:
+def _check_thruster_args(channel_names, rotatable) -> tuple[tuple[str, ...] | None, tuple[bool, ...] | None]:
+    if channel_names is None:
         if rotatable is not None:
-            raise ValueError("rotatable given without thruster_names")
+            raise ValueError("rotatable given without channel_names")
         return None, None
-    names = tuple(str(n) for n in thruster_names)
+    names = tuple(str(n) for n in channel_names)
     if len(set(names)) != len(names):
-        raise ValueError(f"thruster_names contains duplicates: {names}")
+        raise ValueError(f"channel_names contains duplicates: {names}")
     if rotatable is None:
         return names, None
     rot = tuple(bool(r) for r in rotatable)
     if len(rot) != len(names):
-        raise ValueError(f"rotatable has {len(rot)} entries for {len(names)} thruster_names {names}")
+        raise ValueError(f"rotatable has {len(rot)} entries for {len(names)} channel_names {names}")
     return names, rot
 
 
@@ -497,7 +497,7 @@ def _check_angle_unit(col: str, t: np.ndarray, x: np.ndarray, source: str, rate=
         )
 
 
-def _validate(df: pd.DataFrame, thruster_names, rotatable, source: str, warn_unknown: bool,
+def _validate(df: pd.DataFrame, channel_names, rotatable, source: str, warn_unknown: bool,
               allow_missing: bool = False) -> None:
     """Check ``df`` against the log format (:data:`hybridship.logs.columns.COLUMNS`).
 
@@ -508,7 +508,7 @@ def _validate(df: pd.DataFrame, thruster_names, rotatable, source: str, warn_unk
     """
     if not isinstance(df, pd.DataFrame):
         raise TypeError(f"expected a pandas DataFrame, got {type(df).__name__}")
-    names, rot = _check_thruster_args(thruster_names, rotatable)
+    names, rot = _check_thruster_args(channel_names, rotatable)
     cols = [str(c) for c in df.columns]
     _check_column_names(cols, source)
     if len(df) == 0:
@@ -669,7 +669,7 @@ def _check_channel_columns(df: pd.DataFrame, cols: list[str], t: np.ndarray, nam
 def validate_log(
     df: pd.DataFrame,
     *,
-    thruster_names: Sequence[str] | None = None,
+    channel_names: Sequence[str] | None = None,
     rotatable: Sequence[bool] | None = None,
     source: str = "log",
     allow_missing: bool = False,
@@ -680,8 +680,8 @@ def validate_log(
     ----------
     df : pandas.DataFrame
         The log, one row per sample (never modified).
-    thruster_names : sequence of str, optional
-        Thruster names of the vessel file. When given, every ``<name>_rpm`` /
+    channel_names : sequence of str, optional
+        Command channels of the vessel file (thrusters, then rudders). When given, every ``<name>_rpm`` /
         ``<name>_azimuth_deg`` column must name one of them.
     rotatable : sequence of bool, optional
         Per thruster, whether it is an azimuth thruster; an azimuth column of a fixed
@@ -701,14 +701,14 @@ def validate_log(
         On the first violation found; see the module docstring for the checks and
         :func:`heading_looks_like_radians` for the heading unit rule.
     ValueError
-        If ``rotatable`` does not match ``thruster_names``.
+        If ``rotatable`` does not match ``channel_names``.
 
     Warns
     -----
     LogFormatWarning
         Once, listing every column that is neither in the format nor ``truth_*``.
     """
-    _validate(df, thruster_names, rotatable, source, warn_unknown=True, allow_missing=allow_missing)
+    _validate(df, channel_names, rotatable, source, warn_unknown=True, allow_missing=allow_missing)
 
 
 def check_log_against_vessel(log, vessel, *, source: str | None = None, allow_missing: bool = False) -> None:
@@ -758,7 +758,7 @@ def check_log_against_vessel(log, vessel, *, source: str | None = None, allow_mi
     else:
         df = log
     source = source or "log"
-    _validate(df, v.thruster_names, v.rotatable, source, warn_unknown=True, allow_missing=allow_missing)
+    _validate(df, v.channel_names, v.rotatable, source, warn_unknown=True, allow_missing=allow_missing)
     cols = set(map(str, df.columns))
     t = _to_float(df, "time_s", source, None)
     _check_all_or_no_rpm(v, cols, source)
@@ -869,7 +869,7 @@ def _container(path: Path) -> str:
 def read_log(
     path: str | os.PathLike,
     *,
-    thruster_names: Sequence[str] | None = None,
+    channel_names: Sequence[str] | None = None,
     rotatable: Sequence[bool] | None = None,
     validate: bool = True,
     allow_missing: bool = False,
@@ -880,7 +880,7 @@ def read_log(
     ----------
     path : str or path-like
         The file; ``.csv``, ``.csv.gz``, ``.parquet`` or ``.pq``.
-    thruster_names, rotatable, allow_missing : optional
+    channel_names, rotatable, allow_missing : optional
         As in :func:`validate_log`.
     validate : bool, default True
         False only parses the container (for repair tools such as
@@ -907,7 +907,7 @@ def read_log(
         df = pd.read_csv(path, compression="gzip" if kind == "csv.gz" else None)
     df = df.reset_index(drop=True)
     if validate:
-        _validate(df, thruster_names, rotatable, str(path), warn_unknown=True, allow_missing=allow_missing)
+        _validate(df, channel_names, rotatable, str(path), warn_unknown=True, allow_missing=allow_missing)
     return df
 
 
@@ -915,7 +915,7 @@ def write_log(
     df: pd.DataFrame,
     path: str | os.PathLike,
     *,
-    thruster_names: Sequence[str] | None = None,
+    channel_names: Sequence[str] | None = None,
     rotatable: Sequence[bool] | None = None,
 ) -> None:
     """Validate a log and write it atomically (CSV, ``.csv.gz`` or Parquet, by extension).
@@ -930,7 +930,7 @@ def write_log(
         The log (never modified). The index is not written.
     path : str or path-like
         Destination; ``.csv``, ``.csv.gz``, ``.parquet`` or ``.pq``.
-    thruster_names, rotatable : optional
+    channel_names, rotatable : optional
         As in :func:`validate_log`.
 
     Raises
@@ -940,7 +940,7 @@ def write_log(
     """
     path = Path(path)
     kind = _container(path)
-    _validate(df, thruster_names, rotatable, str(path), warn_unknown=True)
+    _validate(df, channel_names, rotatable, str(path), warn_unknown=True)
     def write(fh):
         if kind == "parquet":
             df.to_parquet(fh, index=False)
@@ -976,10 +976,11 @@ class LogArrays:
         :func:`log_to_arrays`).
     nu_logged : ndarray of bool, shape (N, 3)
         True where the ``nu`` entry comes from the log, False where it was derived.
-    rpm : ndarray, shape (N, K)
-        Propeller speed commands [rpm] in ``thruster_names`` order.
-    azimuth_rad : ndarray, shape (N, K)
-        Azimuth angle commands [rad]; 0 for fixed thrusters and missing columns.
+    rpm : ndarray, shape (N, K + R)
+        Propeller speed commands [rpm] in ``channel_names`` order (0 in rudder channels).
+    azimuth_rad : ndarray, shape (N, K + R)
+        Angle commands per channel [rad]: a thruster's azimuth (0 for fixed thrusters and
+        missing columns), then each rudder's angle delta (positive to starboard).
     wind : ndarray, shape (N, 2)
         ``[wind_speed_m_s, wind_dir_from_rad]``; zeros when the log has no wind. Missing
         samples are filled by holding the last logged value (see ``wind_logged``).
@@ -989,10 +990,12 @@ class LogArrays:
         1 while station keeping is active; all ones when the column is absent.
     segment_id : ndarray of int, shape (N,)
         Gap-free segment label per row, 0, 1, ... (see :func:`split_segments`).
-    thruster_names : tuple of str
+    channel_names : tuple of str
+        The vessel's command channels: its K thrusters in file order, then its R rudders.
     rotatable : tuple of bool
-    thruster_logged : tuple of bool
-        Per thruster, whether its ``<name>_rpm`` column was in the log.
+        Per channel, whether it has an angle (azimuth thruster or rudder).
+    channel_logged : tuple of bool
+        Per channel, whether its ``<name>_rpm`` column was in the log.
     wind_logged : ndarray of bool, shape (N,)
         True where both wind speed and direction were logged (finite) at that row, False
         where ``wind`` holds an earlier value or zeros (a dropped wind sensor). Default:
@@ -1019,9 +1022,9 @@ class LogArrays:
     has_wind: bool
     dp_active: np.ndarray
     segment_id: np.ndarray
-    thruster_names: tuple[str, ...]
+    channel_names: tuple[str, ...]
     rotatable: tuple[bool, ...]
-    thruster_logged: tuple[bool, ...]
+    channel_logged: tuple[bool, ...]
     wind_logged: np.ndarray | None = None
     resorted_time_s: np.ndarray | None = None
 
@@ -1090,8 +1093,8 @@ class LogArrays:
         if self.has_wind:
             cols["wind_speed_m_s"] = np.where(self.wind_logged, self.wind[:, 0], np.nan)
             cols["wind_dir_deg"] = np.where(self.wind_logged, np.degrees(frames.wrap_2pi(self.wind[:, 1])), np.nan)
-        for j, (name, rot) in enumerate(zip(self.thruster_names, self.rotatable)):
-            if self.thruster_logged[j]:
+        for j, (name, rot) in enumerate(zip(self.channel_names, self.rotatable)):
+            if self.channel_logged[j]:
                 cols[f"{name}_rpm"] = self.rpm[:, j]
             if rot:
                 cols[f"{name}_azimuth_deg"] = np.degrees(self.azimuth_rad[:, j])
@@ -1117,7 +1120,7 @@ def _held(x: np.ndarray, default: float) -> np.ndarray:
 def log_to_arrays(
     df: pd.DataFrame,
     *,
-    thruster_names: Sequence[str],
+    channel_names: Sequence[str],
     rotatable: Sequence[bool],
     allow_missing: bool = False,
 ) -> LogArrays:
@@ -1127,7 +1130,7 @@ def log_to_arrays(
     ----------
     df : pandas.DataFrame
         The log (never modified).
-    thruster_names : sequence of str
+    channel_names : sequence of str
         Thruster names of the vessel file, in the order of the ``rpm`` / ``azimuth_rad``
         columns.
     rotatable : sequence of bool
@@ -1158,9 +1161,9 @@ def log_to_arrays(
     values in thruster, wind and ``dp_active`` columns are filled by holding the last
     logged value (then the first one backwards).
     """
-    names, rot = _check_thruster_args(thruster_names, rotatable)
+    names, rot = _check_thruster_args(channel_names, rotatable)
     if names is None or rot is None:
-        raise ValueError("log_to_arrays needs thruster_names and rotatable")
+        raise ValueError("log_to_arrays needs channel_names and rotatable")
     _validate(df, names, rot, "log", warn_unknown=False, allow_missing=allow_missing)
     return _frame_to_arrays(df, names, rot)
 
@@ -1236,9 +1239,9 @@ def _frame_to_arrays(df: pd.DataFrame, names: tuple, rot: tuple, resorted_time_s
         has_wind=has_wind,
         dp_active=dp,
         segment_id=seg_id,
-        thruster_names=names,
+        channel_names=names,
         rotatable=rot,
-        thruster_logged=tuple(logged),
+        channel_logged=tuple(logged),
         wind_logged=wind_logged,
         resorted_time_s=resorted_time_s,
     )

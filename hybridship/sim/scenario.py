@@ -816,7 +816,7 @@ def sweep(out_dir, seeds: Iterable[int], *, beaufort=(2, 5), fmt: str = "csv.gz"
     for cfg in it:
         df, cond = _simulate(cfg, ves, progress=False)
         path = out / log_file_name(cfg.seed, fmt)
-        write_log(df, path, thruster_names=names, rotatable=rotatable)
+        write_log(df, path, channel_names=names, rotatable=rotatable)
         paths.append(path)
         heading_mode = "fixed" if cfg.heading_sp_deg is not None else cfg.heading_mode
         rows.append({"file": path.name, "seed": cfg.seed, **cond.as_dict(), "heading_mode": heading_mode,
