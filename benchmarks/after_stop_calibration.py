@@ -1,0 +1,100 @@
+"""Coverage of the hybrid's spread after a failure, calibrated on different sets of simulated DP losses.
+
+The default hybrid (paper protocol: trained on the DP parts of the test logs, small nets,
+which stay off after a stop) is calibrated with
+:meth:`~hybridship.predictors.HybridPredictor.calibrate_after_stop` on ``--n`` DP losses
+simulated by the project's simulator, and its 2-sigma (and 1-sigma) coverage of the
+north/east errors of the first 20 forecasts after every failure is printed at 15, 30 and
+60 s, on the embedded scenarios and on truthsim-dev. The calibration set is varied:
+weather (``--beaufort``), station-keeping time before the failure (``--dp-s``) and the
+"real" ship (``--vessel-spread``: each scenario's hull drawn log-normally around the model
+with the vessel file's ``[true_vessel]`` spread, see :mod:`hybridship.driftoff.spread`;
+0 = the file's own true vessel for every scenario).
+
+Examples::
+
+    python benchmarks/after_stop_calibration.py                                   # the drift benchmark's set
+    python benchmarks/after_stop_calibration.py --n 8 --vessel-spread 1
+    python benchmarks/after_stop_calibration.py --n 8 --vessel-spread 1 --beaufort 2 6 --dp-s 1800
+    python benchmarks/after_stop_calibration.py --n 8 --vessel-spread 1 --beaufort 3 7 --dp-s 1800
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+
+from hybridship.driftoff.spread import draw_scales
+from hybridship.evaluation import metrics
+from hybridship.evaluation.drift import log_files
+from hybridship.predictors import HybridPredictor, as_log_arrays
+from hybridship.residual.ensemble import EnsembleConfig
+from hybridship.sim.scenario import DPLossConfig, embedded_scenarios, simulate_dp_loss
+from hybridship.vessel import load_vessel
+
+TRUTHSIM = Path(__file__).resolve().parents[1].parent / "shared" / "data" / "truthsim-dev" / "logs"
+SMALL = EnsembleConfig(n_members=10, hidden=4, max_epochs=1, patience=1, seed=0)
+HORIZONS_S = (15.0, 30.0, 60.0)
+
+
+def calibration_logs(n: int, seed: int, beaufort, dp_s: float, vessel_spread: float) -> list:
+    """``n`` simulated DP losses (600 s of drift each) for the calibration."""
+    v = load_vessel("gunnerus")
+    scales = draw_scales(v, n, np.random.default_rng(seed), vessel_spread) if vessel_spread > 0 else None
+    logs = []
+    for i in range(n):
+        vi = v
+        if scales is not None:
+            spec = v.model_dump()
+            spec["true_vessel"] = {"added_mass_scale": scales.added_mass[i].tolist(),
+                                   "linear_damping_scale": scales.linear_damping[i].tolist(),
+                                   "nonlinear_damping_scale": scales.nonlinear_damping[i].tolist(),
+                                   "wind_coefficient_scale": scales.wind_coefficient[i].tolist(),
+                                   "thrust_scale": float(scales.thrust[i])}
+            vi = type(v).model_validate(spec)
+        cfg = DPLossConfig(seed=seed + i, beaufort=tuple(beaufort), t_shutdown_s=dp_s, t_shutdown_jitter_s=30.0,
+                           drift_s=600.0)
+        logs.append(simulate_dp_loss(cfg, vessel=vi))
+    return logs
+
+
+def main(argv=None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap.add_argument("--n", type=int, default=6, help="simulated DP losses in the calibration set (default 6)")
+    ap.add_argument("--seed", type=int, default=1000, help="seed of the first one (default 1000, as the benchmark)")
+    ap.add_argument("--beaufort", type=float, nargs=2, default=(2.0, 5.0), help="weather range (default 2 5)")
+    ap.add_argument("--dp-s", type=float, default=600.0, help="station keeping before the failure [s] (default 600)")
+    ap.add_argument("--vessel-spread", type=float, default=0.0, help="hull spread (default 0: the file's true vessel)")
+    args = ap.parse_args(argv)
+    cal = calibration_logs(args.n, args.seed, args.beaufort, args.dp_s, args.vessel_spread)
+    data = {"embedded": [s.log for s in embedded_scenarios(3, 0)]}
+    if TRUTHSIM.is_dir():
+        data["truthsim-dev"] = [pd.read_csv(f) for f in log_files(TRUTHSIM)]
+    else:
+        print(f"skipping truthsim-dev: {TRUTHSIM} not found", file=sys.stderr)
+    print(f"calibration: {args.n} DP losses, Beaufort {args.beaufort[0]:g}-{args.beaufort[1]:g}, "
+          f"{args.dp_s:g} s of DP, hull spread {args.vessel_spread:g}")
+    print("| data | sigma | " + " | ".join(f"{h:g} s" for h in HORIZONS_S) + " |")
+    print("| --- | --- | " + " | ".join("---" for _ in HORIZONS_S) + " |")
+    for name, logs in data.items():
+        arrays = [as_log_arrays(x, "gunnerus") for x in logs]
+        hp = HybridPredictor("gunnerus", ensemble_config=SMALL).fit(arrays, dp_only=True)
+        hp.calibrate_after_stop(cal)
+        err, std = [], []
+        for a in arrays:
+            p, t, s = metrics.drift_forecasts(hp, a, n_intervals=20, horizons_s=HORIZONS_S)
+            err.append(np.abs(p - t)[..., :2])
+            std.append(s[..., :2])
+        err, std = np.concatenate(err), np.concatenate(std)
+        for k in (1, 2):
+            cov = (err <= k * std).mean(axis=(0, 2))
+            print(f"| {name} | {k} | " + " | ".join(f"{c:.2f}" for c in cov) + " |")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
