@@ -58,24 +58,24 @@ def test_twenty_percent_thrust_deficit_is_identified(model):
     spec["true_vessel"] = {"thrust_scale": 0.8}
     true_model = DynamicModel(type(model.vessel).model_validate(spec), true_vessel=True)
     log = physics_log(true_model, duration_s=1500, t_shutdown_s=None, seed=5, wind=(0.0, 0.0), rpm_scale=0.5)
-    est = _last(EnvironmentEstimator(model, EnvironmentConfig(thrust_error_model="per_dof")), log, model)
-    np.testing.assert_allclose(est.thrust_error[0, :2], [-0.2, -0.2], atol=0.05)
-    # one factor per thruster (the default) finds the same deficit on every thruster
     est = _last(EnvironmentEstimator(model), log, model)
+    np.testing.assert_allclose(est.thrust_error[0, :2], [-0.2, -0.2], atol=0.05)
+    # one factor per thruster finds the same deficit on every thruster
+    est = _last(EnvironmentEstimator(model, EnvironmentConfig(thrust_error_model="per_thruster")), log, model)
     np.testing.assert_allclose(est.thrust_error[0], [-0.2, -0.2, -0.2], atol=0.05)
     assert np.abs(est.load_accel[0, :2]).max() < 2e-3
 
 
 def test_a_deficit_of_one_thruster_is_found_on_that_thruster(model):
     """The true ship's tunnel thruster delivers 80 % of the model's thrust, the azimuths 100 %:
-    with one efficiency factor per thruster (the default, acting through its own lever arm), the filter
+    with one efficiency factor per thruster (acting through its own lever arm), the filter
     puts -0.2 on the tunnel and about 0 on the others, and no load."""
     spec = model.vessel.model_dump()
     spec["thrusters"][0]["thrust_deduction"] = 0.2          # tunnel: (1 - 0.2) of the model's thrust
     assert spec["thrusters"][0]["name"] == "tunnel"
     true_model = DynamicModel(type(model.vessel).model_validate(spec))
     log = physics_log(true_model, duration_s=1500, t_shutdown_s=None, seed=5, wind=(0.0, 0.0), rpm_scale=0.5)
-    estimator = EnvironmentEstimator(model)
+    estimator = EnvironmentEstimator(model, EnvironmentConfig(thrust_error_model="per_thruster"))
     assert estimator.state_names[-3:] == ("thrust_error_tunnel", "thrust_error_port", "thrust_error_stbd")
     est = _last(estimator, log, model)
     np.testing.assert_allclose(est.thrust_error[0], [-0.2, 0.0, 0.0], atol=0.05)

@@ -99,16 +99,16 @@ class EnvironmentConfig(BaseModel):
     load_walk_m_s2: float = Field(2e-5, ge=0)
     load_yaw_walk_rad_s2: float = Field(1e-6, ge=0)
     thrust_error_prior: tuple[float, float, float] = (0.2, 0.2, 0.5)
-    thrust_error_model: Literal["per_dof", "per_thruster"] = "per_thruster"
+    thrust_error_model: Literal["per_dof", "per_thruster"] = "per_dof"
     thrust_error_prior_per_thruster: float = Field(0.2, gt=0)
-    thrust_error_walk: float = Field(0.0, ge=0)
+    thrust_error_walk: float = Field(2e-3, ge=0)
     use_velocity: bool = True
     adaptive_measurement_std: bool = True
     wave_window_s: float = Field(30.0, gt=0)
     variance_window_s: float = Field(600.0, gt=0)
     reset_yaw_load_at_stop: bool = True
     filter_step_s: float = Field(1.0, gt=0)
-    yaw_load_kept_at_stop: float = Field(1.0, ge=0.0, le=1.0)
+    yaw_load_kept_at_stop: float = Field(0.0, ge=0.0, le=1.0)
     yaw_load_std_at_stop: float | None = Field(None, ge=0.0)
 
 
