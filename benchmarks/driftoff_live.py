@@ -56,7 +56,8 @@ def first_time(t, d, radius):
     return float(t[k - 1] + (radius - d[k - 1]) / (d[k] - d[k - 1]) * (t[k] - t[k - 1]))
 
 
-def evaluate(path: Path, settings: DriftOffSettings, repeats: int = 3, method: str = "estimator") -> list[dict]:
+def evaluate(path: Path, settings: DriftOffSettings, repeats: int = 3, method: str = "estimator",
+             environment_config=None) -> list[dict]:
     df = pd.read_csv(path)
     dp = df["dp_active"].to_numpy()
     starts = np.flatnonzero((dp[:-1] == 1) & (dp[1:] == 0))
@@ -67,7 +68,7 @@ def evaluate(path: Path, settings: DriftOffSettings, repeats: int = 3, method: s
     times = []
     for _ in range(repeats):
         t0 = time.perf_counter()
-        est = environment_from_log(hist, "gunnerus", method=method)
+        est = environment_from_log(hist, "gunnerus", method=method, environment_config=environment_config)
         res = blackout_now(est, "gunnerus", settings)
         times.append(time.perf_counter() - t0)
     t = df["time_s"].to_numpy(float)[b:] - df["time_s"].iloc[b]
@@ -96,7 +97,15 @@ def main(argv=None) -> int:
     ap.add_argument("--seed", type=int, default=0)
     ap.add_argument("--method", choices=("estimator", "mean"), default="estimator",
                     help="environment from the environment estimator (default) or the 900-s residual mean")
+    ap.add_argument("--thrust-error-model", choices=("per_dof", "per_thruster"), default="per_dof",
+                    help="the estimator's thrust-model error: per DOF (the default) or per thruster (with the "
+                         "station-keeping yaw load kept at the stop, the thrust error constant)")
     args = ap.parse_args(argv)
+    cfg = None
+    if args.thrust_error_model == "per_thruster":
+        from hybridship.residual.environment import EnvironmentConfig
+
+        cfg = EnvironmentConfig(thrust_error_model="per_thruster", yaw_load_kept_at_stop=1.0, thrust_error_walk=0.0)
     files = sorted(args.data.glob("*.csv.gz")) if args.data.is_dir() else []
     if not files:
         print(f"no logs found in {args.data}; nothing to do", file=sys.stderr)
@@ -105,13 +114,14 @@ def main(argv=None) -> int:
                           vessel_spread=args.vessel_spread, seed=args.seed)
     rows = []
     for f in files:
-        rows += evaluate(f, st, method=args.method)
+        rows += evaluate(f, st, method=args.method, environment_config=cfg)
     res = pd.DataFrame(rows)
     write_frame(args.out / "live.csv", res)
     lf = res[res.track == "truth_lf"]
     inside = ((lf.percentile >= 10) & (lf.percentile <= 90)).mean()
     text = (f"Command: `python benchmarks/driftoff_live.py --samples {args.samples}"
-            f" --vessel-spread {args.vessel_spread:g} --seed {args.seed} --method {args.method}`\n\n"
+            f" --vessel-spread {args.vessel_spread:g} --seed {args.seed} --method {args.method}"
+            + (" --thrust-error-model per_thruster" if cfg is not None else "") + "`\n\n"
             f"{len(files)} logs, {args.samples} samples per prediction; update time (environment estimate + "
             f"blackouts) median {res.update_s.median():.3f} s, max {res.update_s.max():.3f} s.\n"
             f"Truth-track actual times inside the predicted 10-90 % band: {100 * inside:.0f} % of "

@@ -101,7 +101,8 @@ METHODS = ("estimator", "mean")
 
 
 def environment_from_log(log, vessel="gunnerus", *, window_s: float = 900.0, wind_window_s: float = 120.0,
-                         n_members: int = 20, seed: int = 0, method: str = "estimator") -> EnvironmentEstimate:
+                         n_members: int = 20, seed: int = 0, method: str = "estimator",
+                         environment_config=None) -> EnvironmentEstimate:
     """The environment a blackout at the log's last row would meet (see the module notes).
 
     Parameters
@@ -119,6 +120,8 @@ def environment_from_log(log, vessel="gunnerus", *, window_s: float = 900.0, win
     seed : int
     method : {"estimator", "mean"}
         The environment estimator (default) or the residual mean (see the module notes).
+    environment_config : hybridship.residual.environment.EnvironmentConfig, optional
+        Settings of the environment estimator (default: its defaults).
     """
     if method not in METHODS:
         raise ValueError(f"method: expected one of {METHODS}, got {method!r}")
@@ -132,7 +135,8 @@ def environment_from_log(log, vessel="gunnerus", *, window_s: float = 900.0, win
     idx = len(a.time_s) - 1
     current_members = None
     if method == "estimator":
-        eta0, nu0, bias0, members, current_members = _estimated(model, a, idx, int(n_members), seed)
+        eta0, nu0, bias0, members, current_members = _estimated(model, a, idx, int(n_members), seed,
+                                                                environment_config)
     else:
         prep = prepare_log(model, a, ResidualConfig(bias_window_s=float(window_s)))
         members = prep.bias_members(idx, int(n_members), seed=seed)
@@ -152,13 +156,13 @@ def environment_from_log(log, vessel="gunnerus", *, window_s: float = 900.0, win
                                accel_members=members, current_members_ned_m_s=current_members)
 
 
-def _estimated(model, a: LogArrays, idx: int, n_members: int, seed: int):
+def _estimated(model, a: LogArrays, idx: int, n_members: int, seed: int, config=None):
     """(eta, nu, load, load members, current members) from the environment estimator at row
     ``idx``, as if the thrusters stopped there."""
     from ..residual.environment import CUR, LOAD, EnvironmentEstimator
     from ..residual.environment import EnvironmentEstimate as FilterEstimate
 
-    est = EnvironmentEstimator(model)
+    est = EnvironmentEstimator(model) if config is None else EnvironmentEstimator(model, config)
     at = est.run(a, np.array([idx]))
     x, P = est.at_thrust_stop(at.x[0], at.P[0])
     draws = FilterEstimate(at.rows, at.time_s, x[None], P[None], at.thrust_error_model).sample_environment(

@@ -12,15 +12,16 @@ Its state (14) is
 * ``b = [north_m_s2, east_m_s2, yaw_rad_s2]``: a slowly varying environmental load (wave
   drift, wind-model error) as an acceleration, surge/sway in NED (it does not turn with the
   ship), yaw as is;
-* ``theta``: the thrust-model error, by default one efficiency factor per thruster
-  (thruster ``i`` delivers ``(1 + theta_i)`` times the model's thrust, acting through its
-  own lever arm: ``M^-1 sum_i theta_i tau_i``); with ``thrust_error_model="per_dof"`` one
-  factor per degree of freedom on ``M^-1 tau_thr`` componentwise.
+* ``theta``: the thrust-model error, by default one efficiency factor per degree of
+  freedom on the model's thrust acceleration ``M^-1 tau_thr`` (componentwise); with
+  ``thrust_error_model="per_thruster"`` one factor per thruster (thruster ``i`` delivers
+  ``(1 + theta_i)`` times the model's thrust, acting through its own lever arm:
+  ``M^-1 sum_i theta_i tau_i``).
 
 The process model is the project's dynamic model (one RK4 step per sample) with the current
 and with ``accel_ext = R(psi)^T b + T theta`` (``T``: the thrust-error basis, see
 :mod:`.environment_kernel`); the filter loop is compiled there. ``v_c`` and ``b`` are random
-walks, ``theta`` a constant of each thruster unless ``thrust_error_walk`` says otherwise.
+walks, and so is ``theta`` unless ``thrust_error_walk`` is 0.
 
 What the data can separate, and what the filter then does:
 
@@ -33,6 +34,13 @@ What the data can separate, and what the filter then does:
   log) identifies ``theta``; :meth:`EnvironmentEstimator.fit` carries such an estimate from
   training logs into the prior. When the thrusters stop, the ``theta`` term vanishes, and
   the first drift samples resolve the correlation: the residual is environment only.
+* **Per DOF or per thruster.** One factor per DOF cannot describe the yaw error of one
+  thruster (it acts through that thruster's lever arm), so the station-keeping yaw load
+  holds thruster error and restarts at a stop (``yaw_load_kept_at_stop = 0``). One factor
+  per thruster splits yaw better and gives the best heading after a failure, but on the
+  independent truthsim-dev data it leaves less of the environment in the load (north,
+  east and the drift-off time to a limit worse, the spread overconfident), so it is an
+  option, not the default (``docs/concepts/environment.md``).
 * **Current vs. load.** A ship at rest feels a current as a force; nothing in station-keeping
   data tells the two apart, and the split then follows the prior spreads. Once the ship moves
   through the water (a drift, a manoeuvre) the relative velocity changes, and the current is
@@ -291,8 +299,8 @@ class EnvironmentEstimator:
         tried: it helped on our own scenarios and made truthsim-dev's heading 1.4-1.9x worse
         than physics under the fleet protocol, because the drift's yaw residual there also
         holds the hull model's yaw error at drift speeds, which the ratio then mistakes for
-        environment. The per-thruster error separates the yaw load well enough that keeping
-        all of it is the default.
+        environment. With the per-thruster error, keeping all of it gives the best heading on
+        both data sets, but that setting is not the default (see the module notes).
 
         Parameters
         ----------
@@ -391,9 +399,10 @@ class EnvironmentEstimator:
         moments, so the yaw load's estimate is tied to the thrust error by a correlation that
         no longer applies once the thrusters stop. The total environmental yaw moment
         (current through the hull plus load) keeps the fraction ``yaw_load_kept_at_stop`` of
-        its station-keeping value (all of it by default, since the per-thruster thrust error
-        takes the thrusters' share); its correlations are cut and its variance becomes the
-        prior's plus the square of the part not kept, so the drift samples correct it. The
+        its station-keeping value (none by default: with the per-DOF thrust error the yaw load
+        holds much of the thrusters' error); its correlations are cut and its variance becomes
+        the prior's plus the square of the part not kept (or ``yaw_load_std_at_stop``), so
+        the drift samples identify it. The
         current keeps acting through the hull as the ship starts to move.
         """
         c = self.config
