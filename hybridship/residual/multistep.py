@@ -56,6 +56,22 @@ class MultiStepConfig:
         vessel's L_pp.
     fd_step : float
         Relative finite-difference step of the physics Jacobian.
+    loss : {"squared", "absolute"}
+        ``squared``: the mean squared position and heading errors (above);
+        ``absolute``: the mean of the distance error plus ``L |dpsi|``, the form of the
+        scored mean absolute errors (large errors of a few starts then weigh less).
+    lead_weighting : {"uniform", "lead"}
+        Weight of each step's error in the loss: equal, or proportional to its lead time
+        (the late, scored part of the forecast counts more).
+    curriculum_start_s : float or None
+        Horizon of the first iteration [s]; it grows linearly to ``horizon_s`` over the
+        first ``curriculum_fraction`` of the iterations (short rollouts first). None: the
+        full horizon throughout. Validation always uses the full horizon.
+    curriculum_fraction : float
+        Share of the iterations over which the curriculum reaches the full horizon.
+    anchor_decay : float
+        Weight of an L2 penalty pulling the weights towards their one-step (warm-start)
+        values, per weight and relative to the loss [m^2]; 0 = none.
     """
 
     horizon_s: float = 10.0
@@ -68,6 +84,11 @@ class MultiStepConfig:
     max_val_starts: int = 256
     heading_length_m: float | None = None
     fd_step: float = 1e-6
+    loss: str = "squared"
+    lead_weighting: str = "uniform"
+    curriculum_start_s: float | None = None
+    curriculum_fraction: float = 0.5
+    anchor_decay: float = 0.0
 
     def __post_init__(self):
         checks = {"horizon_s": self.horizon_s > 0, "iterations": self.iterations >= 1,
@@ -76,9 +97,17 @@ class MultiStepConfig:
                   "val_every": self.val_every >= 1, "max_val_starts": self.max_val_starts >= 1,
                   "heading_length_m": self.heading_length_m is None or self.heading_length_m >= 0,
                   "fd_step": 0 < self.fd_step < 1e-2}
+        checks.update(_loss_checks(self))
         bad = [k for k, ok in checks.items() if not ok]
         if bad:
             raise ValueError(f"MultiStepConfig: invalid {', '.join(f'{k}={getattr(self, k)!r}' for k in bad)}")
+
+
+def _loss_checks(c: MultiStepConfig) -> dict:
+    """Validity of the loss and schedule settings (field -> ok)."""
+    return {"loss": c.loss in ("squared", "absolute"), "lead_weighting": c.lead_weighting in ("uniform", "lead"),
+            "curriculum_start_s": c.curriculum_start_s is None or 0 < c.curriculum_start_s <= c.horizon_s,
+            "curriculum_fraction": 0 < c.curriculum_fraction <= 1, "anchor_decay": c.anchor_decay >= 0}
 
 
 @dataclass
@@ -245,13 +274,15 @@ def train_multistep(ensemble, model, starts: Starts, feature_index, config: Mult
     use_cmd = any(ALL_FEATURES[i] in COMMAND_FEATURES for i in np.asarray(feature_index))
     scales = command_scales(model, model.vessel.rotatable)
 
-    def rollout_loss(s: Starts):
+    def rollout_loss(s: Starts, H=H):
         S = s.eta0.shape[0]
         x = torch.as_tensor(np.concatenate([s.eta0, s.nu0], axis=1), dtype=dd)
         r_prev = torch.as_tensor(s.dev0, dtype=dd).expand(E, S, 3)
         bias = torch.as_tensor(s.bias0, dtype=dd)
         truth = torch.as_tensor(s.truth, dtype=dd)
         loss = torch.zeros((), dtype=dd)
+        w = np.ones(H) if config.lead_weighting == "uniform" else np.arange(1, H + 1, dtype=float)
+        w = w / w.sum()
         for j in range(H):
             y = PhysicsStep.apply(x, s.rpm[:, j:j + 1], s.az[:, j:j + 1], s.wind, P, dt, substeps, config.fd_step)
             e1, n1, a1 = y[:, :3], y[:, 3:6], y[:, 6:9]
@@ -280,8 +311,22 @@ def train_multistep(ensemble, model, starts: Starts, feature_index, config: Mult
             x = torch.cat([eta, nu], 1)
             d = eta - truth[:, j]
             dpsi = torch.atan2(torch.sin(d[:, 2]), torch.cos(d[:, 2]))
-            loss = loss + (d[:, 0] ** 2 + d[:, 1] ** 2 + (L * dpsi) ** 2).mean()
-        return loss / H
+            if config.loss == "squared":
+                err = d[:, 0] ** 2 + d[:, 1] ** 2 + (L * dpsi) ** 2
+            else:  # the smoothed norm keeps the gradient finite at zero error
+                err = torch.sqrt(d[:, 0] ** 2 + d[:, 1] ** 2 + 1e-8) + L * torch.sqrt(dpsi ** 2 + 1e-8)
+            loss = loss + w[j] * err.mean()
+        return loss
+
+    params0 = [p.detach().clone() for p in params]
+    n_weights = sum(p.numel() for p in params)
+
+    def horizon_at(it: int) -> int:
+        if config.curriculum_start_s is None:
+            return H
+        h0 = max(1, int(round(config.curriculum_start_s / dt)))
+        ramp = max(1, int(round(config.curriculum_fraction * config.iterations)))
+        return int(round(h0 + (H - h0) * min(1.0, it / ramp)))
 
     opt = torch.optim.Adam(params, lr=config.lr)
     val_data = starts.take(va)
@@ -297,7 +342,10 @@ def train_multistep(ensemble, model, starts: Starts, feature_index, config: Mult
         for it in bar:
             batch = starts.take(rng.choice(tr, size=min(config.batch_starts, tr.size), replace=False))
             opt.zero_grad()
-            loss = rollout_loss(batch)
+            loss = rollout_loss(batch, horizon_at(it))
+            if config.anchor_decay > 0:
+                loss = loss + config.anchor_decay / n_weights * sum(((p - p0) ** 2).sum()
+                                                                    for p, p0 in zip(params, params0))
             loss.backward()
             opt.step()
             hist["train_loss"].append(float(loss.detach()))
