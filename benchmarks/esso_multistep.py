@@ -19,6 +19,12 @@ changes the nets). Writes ``errors.csv`` (the manoeuvre benchmark's columns) and
 ``variants.csv`` (per variant: pooled 30-s distance and heading, their ratios to the
 physics, the number of kind x horizon cells below the physics, training seconds, the
 multi-step history) and prints them.
+
+``--permutation`` also writes ``importance_<variant>.csv``: the rise of the pooled 30-s
+errors when one feature is permuted across the starts at every rollout step (a documented
+stand-in for the backward selection of Skulstad et al. sec. 3.3 that needs no retraining);
+``--drop-features`` retrains without the named features to confirm a removal, and
+``--hidden`` / ``--members`` change the nets (screening only).
 """
 
 from __future__ import annotations
