@@ -16,6 +16,8 @@ velocities and accelerations) unless their name says otherwise:
 ``one_step`` / ``multi_step`` (training mode), ``_h<s>``, ``_b<n>``, ``_i<n>``, ``_v<n>``
 (multi-step horizon, batch of starts, iterations, validation starts; otherwise
 ``MultiStepConfig()``), ``+cmd`` (all command-aware features added),
+``_abs`` (absolute-error loss), ``_lead`` (loss weighted by lead time), ``_hl<m>`` (heading
+length of the loss), ``_c<s>`` (curriculum from a ``<s>``-second horizon),
 ``+rate`` (only the command rates added), ``+cg`` (command-regime guard; off otherwise, whatever
 the benchmark default).
 Writes ``errors.csv`` and ``coverage.csv`` (the manoeuvre benchmark's columns) and
@@ -48,7 +50,9 @@ def variants(cfg, names):
     base_rc = replace(cfg.residual, features=ALL_FEATURES[:6])
     out = {}
     for name in names:
+        # environment="mean" as in the benchmark (the estimator's default is for station keeping)
         kw = dict(residual_config=base_rc, ensemble_config=cfg.ensemble, guard_quantile=cfg.guard_quantile,
+                  environment="mean",
                   calibration_config=cfg.calibration, training="one_step", multistep_config=MultiStepConfig(),
                   command_guard="+cg" in name)
         if name.startswith("one_step"):
@@ -59,10 +63,15 @@ def variants(cfg, names):
 
         ms = {}
         for key, field, conv in (("h", "horizon_s", float), ("b", "batch_starts", int), ("i", "iterations", int),
-                                 ("v", "max_val_starts", int)):
+                                 ("v", "max_val_starts", int), ("hl", "heading_length_m", float),
+                                 ("c", "curriculum_start_s", float)):
             m = re.search(rf"_{key}(\d+(?:\.\d+)?)", name)
             if m:
                 ms[field] = conv(m.group(1))
+        if "_abs" in name:
+            ms["loss"] = "absolute"
+        if "_lead" in name:
+            ms["lead_weighting"] = "lead"
         if ms:
             kw["multistep_config"] = replace(MultiStepConfig(), **ms)
         if "+cmd" in name:

@@ -71,6 +71,24 @@ def test_multi_step_training_lowers_its_own_validation_loss_and_round_trips(tmp_
         MultiStepConfig(horizon_s=0)
 
 
+def test_multi_step_loss_options_train_round_trip_and_are_validated(tmp_path):
+    m = DynamicModel("gunnerus")
+    logs = [physics_log(m, seed=s, duration_s=400.0, t_shutdown_s=None, current=(0.3, 1.0)) for s in (5, 6)]
+    cfg = MultiStepConfig(horizon_s=10.0, iterations=6, batch_starts=16, start_every_s=5.0, lr=3e-3, val_every=3,
+                          loss="absolute", lead_weighting="lead", curriculum_start_s=2.0, anchor_decay=1e-3)
+    rc = ResidualConfig(features=PAPER_FEATURES[:6], bias_window_s=0.0)
+    hp = HybridPredictor(m.vessel, residual_config=rc, ensemble_config=TINY, training="multi_step",
+                         multistep_config=cfg, calibration_config=CalibrationConfig(fraction=0.0)).fit(logs)
+    info = hp.training_info["multi_step"]
+    assert info["iterations"] == 6 and np.isfinite(info["val_loss"]).all()
+    assert info["best_val_loss"] <= info["val_loss"][0]
+    assert HybridPredictor.load(hp.save(tmp_path / "m.npz")).multistep_config == cfg
+    for field, value in (("loss", "l1"), ("lead_weighting", "late"), ("curriculum_start_s", 20.0),
+                         ("curriculum_fraction", 0.0), ("anchor_decay", -1.0)):
+        with pytest.raises(ValueError, match=field):
+            MultiStepConfig(horizon_s=10.0, **{field: value})
+
+
 def test_command_features_in_training_rows_match_the_rollout():
     """The rollout computes the command features of a step as prepare_log does for a row."""
     m = DynamicModel("gunnerus")

@@ -25,10 +25,10 @@ ensemble mean, the members move together and keep the spread of the one-step bag
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Annotated
+from typing import Annotated, Literal
 
 import numpy as np
-from pydantic import Field
+from pydantic import Field, model_validator
 
 from hybridship.config import Float, Int, config_dataclass
 
@@ -60,6 +60,22 @@ class MultiStepConfig:
         vessel's L_pp.
     fd_step : float
         Relative finite-difference step of the physics Jacobian.
+    loss : {"squared", "absolute"}
+        ``squared``: the mean squared position and heading errors (above);
+        ``absolute``: the mean of the distance error plus ``L |dpsi|``, the form of the
+        scored mean absolute errors (large errors of a few starts then weigh less).
+    lead_weighting : {"uniform", "lead"}
+        Weight of each step's error in the loss: equal, or proportional to its lead time
+        (the late, scored part of the forecast counts more).
+    curriculum_start_s : float or None
+        Horizon of the first iteration [s]; it grows linearly to ``horizon_s`` over the
+        first ``curriculum_fraction`` of the iterations (short rollouts first). None: the
+        full horizon throughout. Validation always uses the full horizon.
+    curriculum_fraction : float
+        Share of the iterations over which the curriculum reaches the full horizon.
+    anchor_decay : float
+        Weight of an L2 penalty pulling the weights towards their one-step (warm-start)
+        values, per weight and relative to the loss [m^2]; 0 = none.
     """
 
     horizon_s: Annotated[Float, Field(gt=0)] = 10.0
@@ -72,6 +88,18 @@ class MultiStepConfig:
     max_val_starts: Annotated[Int, Field(ge=1)] = 256
     heading_length_m: Annotated[Float, Field(ge=0)] | None = None
     fd_step: Annotated[Float, Field(gt=0, lt=1e-2)] = 1e-6
+    loss: Literal["squared", "absolute"] = "squared"
+    lead_weighting: Literal["uniform", "lead"] = "uniform"
+    curriculum_start_s: Annotated[Float, Field(gt=0)] | None = None
+    curriculum_fraction: Annotated[Float, Field(gt=0, le=1)] = 0.5
+    anchor_decay: Annotated[Float, Field(ge=0)] = 0.0
+
+    @model_validator(mode="after")
+    def _curriculum_within_horizon(self):
+        if self.curriculum_start_s is not None and self.curriculum_start_s > self.horizon_s:
+            raise ValueError(f"curriculum_start_s: must be at most horizon_s = {self.horizon_s:g} s, "
+                             f"got {self.curriculum_start_s:g}")
+        return self
 
 
 @dataclass
@@ -271,13 +299,15 @@ def train_multistep(ensemble, model, starts: Starts, feature_index, config: Mult
     use_cmd = any(ALL_FEATURES[i] in COMMAND_FEATURES for i in np.asarray(feature_index))
     scales = command_scales(model, model.vessel.rotatable)
 
-    def rollout_loss(s: Starts):
+    def rollout_loss(s: Starts, H=H):
         S = s.eta0.shape[0]
         x = torch.as_tensor(np.concatenate([s.eta0, s.nu0], axis=1), dtype=dd)
         r_prev = torch.as_tensor(s.dev0, dtype=dd).expand(E, S, 3)
         bias = torch.as_tensor(s.bias0, dtype=dd)
         truth = torch.as_tensor(s.truth, dtype=dd)
         loss = torch.zeros((), dtype=dd)
+        w = np.ones(H) if config.lead_weighting == "uniform" else np.arange(1, H + 1, dtype=float)
+        w = w / w.sum()
         for j in range(H):
             y = PhysicsStep.apply(x, s.rpm[:, j:j + 1], s.az[:, j:j + 1], s.wind, P, dt, substeps, config.fd_step)
             e1, n1, a1 = y[:, :3], y[:, 3:6], y[:, 6:9]
@@ -296,8 +326,22 @@ def train_multistep(ensemble, model, starts: Starts, feature_index, config: Mult
             x = torch.cat([eta, nu], 1)
             d = eta - truth[:, j]
             dpsi = torch.atan2(torch.sin(d[:, 2]), torch.cos(d[:, 2]))
-            loss = loss + (d[:, 0] ** 2 + d[:, 1] ** 2 + (L * dpsi) ** 2).mean()
-        return loss / H
+            if config.loss == "squared":
+                err = d[:, 0] ** 2 + d[:, 1] ** 2 + (L * dpsi) ** 2
+            else:  # the smoothed norm keeps the gradient finite at zero error
+                err = torch.sqrt(d[:, 0] ** 2 + d[:, 1] ** 2 + 1e-8) + L * torch.sqrt(dpsi ** 2 + 1e-8)
+            loss = loss + w[j] * err.mean()
+        return loss
+
+    params0 = [p.detach().clone() for p in params]
+    n_weights = sum(p.numel() for p in params)
+
+    def horizon_at(it: int) -> int:
+        if config.curriculum_start_s is None:
+            return H
+        h0 = max(1, int(round(config.curriculum_start_s / dt)))
+        ramp = max(1, int(round(config.curriculum_fraction * config.iterations)))
+        return int(round(h0 + (H - h0) * min(1.0, it / ramp)))
 
     opt = torch.optim.Adam(params, lr=config.lr)
     val_data = starts.take(va)
@@ -313,7 +357,10 @@ def train_multistep(ensemble, model, starts: Starts, feature_index, config: Mult
         for it in bar:
             batch = starts.take(rng.choice(tr, size=min(config.batch_starts, tr.size), replace=False))
             opt.zero_grad()
-            loss = rollout_loss(batch)
+            loss = rollout_loss(batch, horizon_at(it))
+            if config.anchor_decay > 0:
+                loss = loss + config.anchor_decay / n_weights * sum(((p - p0) ** 2).sum()
+                                                                    for p, p0 in zip(params, params0))
             loss.backward()
             opt.step()
             hist["train_loss"].append(float(loss.detach()))

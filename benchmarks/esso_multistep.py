@@ -1,0 +1,249 @@
+"""Esso Osaka: settings of the hybrid's multi-step training, screened on a validation split.
+
+::
+
+    python benchmarks/esso_multistep.py --out out/esso-multistep \\
+        --variants "base:;it300:iterations=300"
+
+splits the benchmark's *training* runs (``out/esso-osaka/split/train``, made by
+``benchmarks/esso_osaka.py``) again, seed 1, as ``benchmarks/esso_training.py`` does (the
+test runs play no part). The one-step nets are fitted once with the benchmark's features,
+members and seed (on the same rows as :meth:`~hybridship.predictors.HybridPredictor.fit`:
+the end of every run held back) and cached in ``--out``; every variant fine-tunes a copy of
+them with :func:`~hybridship.residual.multistep.train_multistep` and the benchmark's
+:class:`~hybridship.residual.multistep.MultiStepConfig` with the named fields replaced
+(``name:field=value,field=value``; values are parsed as Python literals). Each variant is
+scored on the validation runs from a start every ``--start-every-s`` with the logged
+commands known, without the command-regime guard and with the raw ensemble spread (neither
+changes the nets). Writes ``errors.csv`` (the manoeuvre benchmark's columns) and
+``variants.csv`` (per variant: pooled 30-s distance and heading, their ratios to the
+physics, the number of kind x horizon cells below the physics, training seconds, the
+multi-step history) and prints them.
+
+``--permutation`` also writes ``importance_<variant>.csv``: the rise of the pooled 30-s
+errors when one feature is permuted across the starts at every rollout step (a documented
+stand-in for the backward selection of Skulstad et al. sec. 3.3 that needs no retraining);
+``--drop-features`` retrains without the named features to confirm a removal, and
+``--hidden`` / ``--members`` change the nets (screening only).
+"""
+
+from __future__ import annotations
+
+import argparse
+import ast
+import copy
+import json
+import sys
+import time
+from dataclasses import replace
+from pathlib import Path
+
+import numpy as np
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+def parse_variants(spec: str) -> dict:
+    """``"a:x=1,y=2;b:"`` -> ``{"a": {"x": 1, "y": 2}, "b": {}}``."""
+    out = {}
+    for part in filter(None, (s.strip() for s in spec.split(";"))):
+        name, _, fields = part.partition(":")
+        kw = {}
+        for item in filter(None, (f.strip() for f in fields.split(","))):
+            k, _, v = item.partition("=")
+            try:
+                kw[k.strip()] = ast.literal_eval(v.strip())
+            except (ValueError, SyntaxError):
+                kw[k.strip()] = v.strip()
+        out[name.strip()] = kw
+    return out
+
+
+def one_step_hybrid(cfg, fit_runs, cache: Path):
+    """The benchmark's hybrid with one-step nets fitted on ``fit_runs`` (cached as a model file)."""
+    from hybridship.predictors import HybridPredictor
+
+    p = HybridPredictor("esso_osaka_model", residual_config=cfg.residual, ensemble_config=cfg.ensemble,
+                        guard_quantile=cfg.guard_quantile, environment="mean", calibration_config=cfg.calibration,
+                        training="one_step", multistep_config=cfg.multistep, command_guard=False)
+    logs = [r.arrays for r in fit_runs]
+    if cache.exists():
+        q = HybridPredictor.load(cache)
+        if tuple(q.residual_config.features) == tuple(cfg.residual.features):
+            return q, logs
+    cal = p.calibration_config
+    p.fit(logs, row_stride=cfg.train_row_stride, calibration=replace(cal, commands=("known",), start_every_s=30.0))
+    p.save(cache)
+    return p, logs
+
+
+def fine_tune(p, logs, ms_cfg, row_stride):
+    """A copy of the one-step hybrid ``p`` with its nets fine-tuned by ``ms_cfg``; (copy, history)."""
+    from hybridship.residual.features import prepare_log
+    from hybridship.residual.multistep import collect_starts, train_multistep
+
+    q = copy.deepcopy(p)
+    q.multistep_config = ms_cfg
+    q.training = "multi_step"
+    cal = q.calibration_config
+    cuts = [q._calibration_cut(a, cal, True) for a in logs]
+    masks = [None if c >= len(a) else (np.arange(len(a)) < c) for a, c in zip(logs, cuts)]
+    preps = [prepare_log(q.model, a, q.residual_config) for a in logs]
+    starts = collect_starts(preps, masks, ms_cfg, dp_only=True)
+    q.ensemble, hist = train_multistep(q.ensemble, q.model, starts, q.residual_config.feature_index, ms_cfg,
+                                       seed=q.ensemble_config.seed)
+    return q, hist
+
+
+def main(argv=None) -> int:
+    import pandas as pd
+    import torch
+
+    from hybridship.fileio import atomic_write
+    from hybridship.evaluation.manoeuvre import ManoeuvreConfig, error_table, forecast_errors, load_runs, split_runs, start_rows
+    from hybridship.predictors import DynamicPredictor
+    from hybridship.vessel import load_vessel
+
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--split", type=Path, default=ROOT / "out" / "esso-osaka" / "split",
+                    help="the benchmark's split (default out/esso-osaka/split)")
+    ap.add_argument("--out", type=Path, default=ROOT / "out" / "esso-multistep")
+    ap.add_argument("--variants", default="base:", help="name:field=value,...;name:... (MultiStepConfig fields)")
+    ap.add_argument("--start-every-s", type=float, default=1.0)
+    ap.add_argument("--members", type=int, default=None, help="ensemble members (screening; default the benchmark's)")
+    ap.add_argument("--hidden", type=int, default=None, help="units per hidden layer (default the benchmark's)")
+    ap.add_argument("--drop-features", default="", help="comma-separated features to leave out of the benchmark's")
+    ap.add_argument("--horizons-s", default="5,10,20,30")
+    ap.add_argument("--permutation", action="store_true",
+                    help="also the permutation importance of every feature of each variant (validation rollouts)")
+    args = ap.parse_args(argv)
+    torch.set_num_threads(1)
+    if not (args.split / "train").is_dir():
+        print(f"error: {args.split / 'train'}: not found; run benchmarks/esso_osaka.py first", file=sys.stderr)
+        return 2
+    horizons = tuple(float(h) for h in args.horizons_s.split(","))
+    fit_dir, val_dir = split_runs(args.split / "train", args.out / "split", seed=1)
+    v = load_vessel("esso_osaka_model")
+    cfg = ManoeuvreConfig()
+    cfg = replace(cfg, calibration=replace(cfg.calibration, horizon_s=max(horizons)))
+    if args.members:
+        cfg = replace(cfg, ensemble=replace(cfg.ensemble, n_members=args.members))
+    if args.hidden:
+        cfg = replace(cfg, ensemble=replace(cfg.ensemble, hidden=args.hidden))
+    drop = [f for f in args.drop_features.split(",") if f]
+    if drop:
+        cfg = replace(cfg, residual=replace(cfg.residual, features=tuple(f for f in cfg.residual.features
+                                                                         if f not in drop)))
+    fit_runs, val_runs = load_runs(fit_dir, v), load_runs(val_dir, v)
+    args.out.mkdir(parents=True, exist_ok=True)
+    t0 = time.perf_counter()
+    base, logs = one_step_hybrid(cfg, fit_runs, args.out / f"one_step_m{cfg.ensemble.n_members}"
+                                  f"_h{cfg.ensemble.hidden}_f{len(cfg.residual.features)}.npz")
+    print(f"one-step nets: {time.perf_counter() - t0:.0f} s", flush=True)
+    dt = float(np.median(np.diff(val_runs[0].arrays.time_s)))
+    steps = np.array([int(round(h / dt)) for h in horizons])
+
+    def score(p, **kw):
+        kw = kw | ({"calibrated": False} if hasattr(p, "calibration") else {})
+        return [forecast_errors(lambda a, st, h: p.forecast(a, st, horizon_s=h, commands="known", **kw),
+                                r.arrays, start_rows(r.arrays, int(steps.max()), args.start_every_s), steps)
+                for r in val_runs]
+
+    per = {("dynamic", "known"): score(DynamicPredictor(v, residual_config=cfg.residual)),
+           ("one_step", "known"): score(base)}
+    rows = []
+    prev = args.out / "errors.csv"
+    old = pd.read_csv(prev) if prev.exists() else None
+    for name, kw in parse_variants(args.variants).items():
+        ms = replace(cfg.multistep, **kw)
+        t0 = time.perf_counter()
+        q, hist = fine_tune(base, logs, ms, cfg.train_row_stride)
+        secs = time.perf_counter() - t0
+        per[(name, "known")] = score(q)
+        e = error_table(per, val_runs, horizons)
+        rows.append(summary(e, name, secs, hist, kw))
+        print(json.dumps(rows[-1]), flush=True)
+        if args.permutation:
+            imp = permutation_importance(q, score, horizons, val_runs)
+            atomic_write(args.out / f"importance_{name}.csv", lambda fh: fh.write(imp.to_csv(index=False).encode()))
+            print(imp.round(4).to_string(), flush=True)
+    errors = error_table(per, val_runs, horizons)
+    if old is not None:  # keep earlier variants of the same --out (same split, same one-step nets)
+        errors = pd.concat([old[~old.model.isin(errors.model.unique())], errors], ignore_index=True)
+    atomic_write(args.out / "errors.csv", lambda fh: fh.write(errors.to_csv(index=False).encode()))
+    rows = [summary(errors, "one_step", 0.0, {}, {})] + rows
+    vf = args.out / "variants.csv"
+    table = pd.DataFrame(rows)
+    if vf.exists():
+        oldv = pd.read_csv(vf)
+        table = pd.concat([oldv[~oldv.variant.isin(table.variant)], table], ignore_index=True)
+    atomic_write(vf, lambda fh: fh.write(table.to_csv(index=False).encode()))
+    d = errors[(errors.state == "distance_m")].pivot_table(index=["kind", "model"], columns="horizon_s",
+                                                           values="mae", sort=False)
+    print(d.round(3).to_string())
+    print(table.drop(columns=["history"]).to_string())
+    return 0
+
+
+def permutation_importance(p, score, horizons, runs, seed: int = 0):
+    """Rise of the pooled validation errors when one feature's values are permuted across the
+    starts at every step of the rollouts (guard off, so that only the nets see the permuted
+    input). A feature whose permutation does not raise the error is a candidate for removal."""
+    import pandas as pd
+
+    from hybridship.evaluation.manoeuvre import error_table
+
+    def pooled(per):
+        e = error_table({("m", "known"): per}, runs, horizons)
+        e = e[(e.kind == "all") & (e.horizon_s == max(horizons))]
+        return {s: float(e[e.state == s].mae.iloc[0]) for s in ("distance_m", "heading_deg")}
+
+    ref = pooled(score(p, guard=False))
+    out = [{"feature": "(none)", "dist30_m": ref["distance_m"], "head30_deg": ref["heading_deg"],
+            "d_dist30_m": 0.0, "d_head30_deg": 0.0}]
+    ens = p.ensemble
+    orig = type(ens).predict_members
+    for k, f in enumerate(p.residual_config.features):
+        rng = np.random.default_rng(seed)
+
+        def permuted(X, k=k, rng=rng):
+            X = np.array(X, copy=True)
+            X[..., k] = X[:, rng.permutation(X.shape[1]), k]
+            return orig(ens, X)
+
+        ens.predict_members = permuted
+        try:
+            r = pooled(score(p, guard=False))
+        finally:
+            del ens.predict_members
+        out.append({"feature": f, "dist30_m": r["distance_m"], "head30_deg": r["heading_deg"],
+                    "d_dist30_m": r["distance_m"] - ref["distance_m"],
+                    "d_head30_deg": r["heading_deg"] - ref["heading_deg"]})
+    return pd.DataFrame(out)
+
+
+def summary(e, name, secs, hist, kw) -> dict:
+    """Pooled 30-s figures of one variant against the physics (validation runs)."""
+    def mae(model, state, kind="all", h=None):
+        s = e[(e.model == model) & (e.state == state) & (e.kind == kind)]
+        return float(s[s.horizon_s == (h or s.horizon_s.max())].mae.iloc[0])
+
+    cells = 0
+    total = 0
+    for kind in e.kind.unique():
+        if kind == "all":
+            continue
+        for h in e.horizon_s.unique():
+            total += 1
+            cells += mae(name, "distance_m", kind, h) < mae("dynamic", "distance_m", kind, h)
+    d, hd = mae(name, "distance_m"), mae(name, "heading_deg")
+    return {"variant": name, "settings": json.dumps(kw), "dist30_m": round(d, 4), "head30_deg": round(hd, 3),
+            "dist_ratio": round(d / mae("dynamic", "distance_m"), 3),
+            "head_ratio": round(hd / mae("dynamic", "heading_deg"), 3), "cells_below": f"{cells}/{total}",
+            "train_s": round(secs, 1),
+            "history": json.dumps({k: hist[k] for k in ("iterations", "best_val_loss") if k in hist}
+                                  | {"val_loss": [round(x, 5) for x in hist.get("val_loss", [])]})}
+
+
+if __name__ == "__main__":
+    sys.exit(main())
