@@ -270,6 +270,28 @@ def _corrected_step(e1, n1, r, bias, dt: float):
     return eta, nu
 
 
+def _step_error(d, heading_length_m: float, loss: str):
+    """Per-start error of one step from ``d = predicted - true [north, east, psi]`` (S, 3):
+    squared distance plus ``(L dpsi)^2``, or distance plus ``L |dpsi|`` (a smoothed norm,
+    so that the gradient stays finite at zero error)."""
+    import torch
+
+    dpsi = torch.atan2(torch.sin(d[:, 2]), torch.cos(d[:, 2]))
+    if loss == "squared":
+        return d[:, 0] ** 2 + d[:, 1] ** 2 + (heading_length_m * dpsi) ** 2
+    return torch.sqrt(d[:, 0] ** 2 + d[:, 1] ** 2 + 1e-8) + heading_length_m * torch.sqrt(dpsi ** 2 + 1e-8)
+
+
+def _curriculum_horizon(config: MultiStepConfig, it: int, H: int, dt: float) -> int:
+    """Rollout steps of iteration ``it``: the full ``H``, or growing from
+    ``curriculum_start_s`` to ``H`` over the first ``curriculum_fraction`` of the iterations."""
+    if config.curriculum_start_s is None:
+        return H
+    h0 = max(1, int(round(config.curriculum_start_s / dt)))
+    ramp = max(1, int(round(config.curriculum_fraction * config.iterations)))
+    return int(round(h0 + (H - h0) * min(1.0, it / ramp)))
+
+
 def train_multistep(ensemble, model, starts: Starts, feature_index, config: MultiStepConfig, *,
                     substeps: int = 1, seed: int = 0, progress: bool = False):
     """Fine-tune a one-step :class:`~hybridship.residual.ensemble.MLPEnsemble` on the multi-step loss.
@@ -324,24 +346,11 @@ def train_multistep(ensemble, model, starts: Starts, feature_index, config: Mult
             r_prev = r
             eta, nu = _corrected_step(e1, n1, r, bias, dt)
             x = torch.cat([eta, nu], 1)
-            d = eta - truth[:, j]
-            dpsi = torch.atan2(torch.sin(d[:, 2]), torch.cos(d[:, 2]))
-            if config.loss == "squared":
-                err = d[:, 0] ** 2 + d[:, 1] ** 2 + (L * dpsi) ** 2
-            else:  # the smoothed norm keeps the gradient finite at zero error
-                err = torch.sqrt(d[:, 0] ** 2 + d[:, 1] ** 2 + 1e-8) + L * torch.sqrt(dpsi ** 2 + 1e-8)
-            loss = loss + w[j] * err.mean()
+            loss = loss + w[j] * _step_error(eta - truth[:, j], L, config.loss).mean()
         return loss
 
     params0 = [p.detach().clone() for p in params]
     n_weights = sum(p.numel() for p in params)
-
-    def horizon_at(it: int) -> int:
-        if config.curriculum_start_s is None:
-            return H
-        h0 = max(1, int(round(config.curriculum_start_s / dt)))
-        ramp = max(1, int(round(config.curriculum_fraction * config.iterations)))
-        return int(round(h0 + (H - h0) * min(1.0, it / ramp)))
 
     opt = torch.optim.Adam(params, lr=config.lr)
     val_data = starts.take(va)
@@ -357,7 +366,7 @@ def train_multistep(ensemble, model, starts: Starts, feature_index, config: Mult
         for it in bar:
             batch = starts.take(rng.choice(tr, size=min(config.batch_starts, tr.size), replace=False))
             opt.zero_grad()
-            loss = rollout_loss(batch, horizon_at(it))
+            loss = rollout_loss(batch, _curriculum_horizon(config, it, H, dt))
             if config.anchor_decay > 0:
                 loss = loss + config.anchor_decay / n_weights * sum(((p - p0) ** 2).sum()
                                                                     for p, p0 in zip(params, params0))
