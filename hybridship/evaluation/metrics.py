@@ -12,10 +12,9 @@ import numpy as np
 import pandas as pd
 
 from ..frames import wrap_pi
-from ..predictors.after_failure import drift_forecasts, shutdown_index
+from ..predictors.after_failure import HORIZONS_S, drift_forecasts, shutdown_index
 
-#: The paper's horizons [s] and averaging windows [intervals].
-HORIZONS_S = (15, 30, 45, 60)
+#: The paper's averaging windows [intervals] (its horizons, HORIZONS_S, come with the forecasts).
 WINDOWS = (5, 20)
 STATES = ("north_m", "east_m", "yaw_deg")
 

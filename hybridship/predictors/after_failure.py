@@ -10,7 +10,10 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["drift_forecasts", "shutdown_index"]
+__all__ = ["HORIZONS_S", "drift_forecasts", "shutdown_index"]
+
+#: The paper's horizons [s].
+HORIZONS_S = (15, 30, 45, 60)
 
 
 def shutdown_index(arrays) -> int:
@@ -21,7 +24,7 @@ def shutdown_index(arrays) -> int:
     return int(off[0])
 
 
-def drift_forecasts(predictor, arrays, *, n_intervals: int = 20, horizons_s=(15, 30, 45, 60), **forecast_kw):
+def drift_forecasts(predictor, arrays, *, n_intervals: int = 20, horizons_s=HORIZONS_S, **forecast_kw):
     """Forecasts from successive start times after the shutdown of one log, at the horizons.
 
     Returns

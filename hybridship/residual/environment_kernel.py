@@ -20,6 +20,7 @@ import numpy as np
 
 from ..physics.integrate import rk4_step_scalar
 from ..physics.rhs import prepare_inputs, vessel_rhs
+from ..physics.thrusters import THR_X, THR_Y
 
 #: Indices of the state (see :func:`hybridship.residual.environment.state_names`); the
 #: thrust-model error (one per degree of freedom or one per thruster) fills the rest.
@@ -57,7 +58,7 @@ def _thrust_basis(x, rpm, prep, P, per_thruster, zeros3, thrusts, T):
     K = P.thr.shape[0]
     for k in range(K):
         ca, sa, f = prep[k], prep[K + k], thrusts[0, k]
-        g0, g1, g2 = ca * f, sa * f, (P.thr[k, 0] * sa - P.thr[k, 1] * ca) * f
+        g0, g1, g2 = ca * f, sa * f, (P.thr[k, THR_X] * sa - P.thr[k, THR_Y] * ca) * f
         for i in range(3):
             T[i, k] = mi[i, 0] * g0 + mi[i, 1] * g1 + mi[i, 2] * g2
 
@@ -177,7 +178,7 @@ def update(x, Pc, z, z_ok, r_std):
     for a in range(m):
         y[a] = z[idx[a]] - x[idx[a]]
         if idx[a] == 2:
-            y[a] = (y[a] + math.pi) % (2.0 * math.pi) - math.pi
+            y[a] = (y[a] + math.pi) % (2.0 * math.pi) - math.pi     # hybridship.frames.wrap_pi, compiled
         for b in range(m):
             S[a, b] = Pc[idx[a], idx[b]]
         S[a, a] += r_std[idx[a]] ** 2
