@@ -11,8 +11,9 @@ weather (``--beaufort``), station-keeping time before the failure (``--dp-s``) a
 with the vessel file's ``[true_vessel]`` spread, see :mod:`hybridship.driftoff.spread`;
 0 = the file's own true vessel for every scenario).
 
-``--thrust-error-model per_thruster`` runs the estimator with one thrust-error factor per
-thruster (the yaw load kept at the stop) instead of the default.
+``--thrust-error-model per_dof`` runs the estimator with the per-DOF thrust error (the
+previous default, :data:`hybridship.residual.environment.PER_DOF`) instead of the default
+one per thruster.
 
 Examples::
 
@@ -36,7 +37,7 @@ from hybridship.evaluation import metrics
 from hybridship.evaluation.drift import log_files
 from hybridship.predictors import HybridPredictor, as_log_arrays
 from hybridship.residual.ensemble import EnsembleConfig
-from hybridship.residual.environment import EnvironmentConfig
+from hybridship.residual.environment import PER_DOF, EnvironmentConfig
 from hybridship.sim.scenario import DPLossConfig, embedded_scenarios, simulate_dp_loss
 from hybridship.vessel import load_vessel
 
@@ -73,12 +74,14 @@ def main(argv=None) -> int:
     ap.add_argument("--beaufort", type=float, nargs=2, default=(2.0, 5.0), help="weather range (default 2 5)")
     ap.add_argument("--dp-s", type=float, default=600.0, help="station keeping before the failure [s] (default 600)")
     ap.add_argument("--vessel-spread", type=float, default=0.0, help="hull spread (default 0: the file's true vessel)")
-    ap.add_argument("--thrust-error-model", choices=("per_dof", "per_thruster"), default="per_dof",
-                    help="the estimator's thrust-model error: per DOF (the default) or per thruster (with the "
-                         "station-keeping yaw load kept at the stop, the thrust error constant)")
+    ap.add_argument("--thrust-error-model", choices=("per_dof", "per_thruster"), default="per_thruster",
+                    help="the estimator's thrust-model error: per thruster (the default) or per DOF (the "
+                         "previous default, hybridship.residual.environment.PER_DOF)")
+    ap.add_argument("--held-load-window-s", type=float, default=EnvironmentConfig().held_load_window_s,
+                    help="station keeping read for the held-load term of the spread [s] (0: no such term)")
     args = ap.parse_args(argv)
-    cfg = (EnvironmentConfig(thrust_error_model="per_thruster", yaw_load_kept_at_stop=1.0, thrust_error_walk=0.0)
-           if args.thrust_error_model == "per_thruster" else EnvironmentConfig())
+    cfg = EnvironmentConfig(**(PER_DOF if args.thrust_error_model == "per_dof" else {}),
+                            held_load_window_s=args.held_load_window_s)
     cal = calibration_logs(args.n, args.seed, args.beaufort, args.dp_s, args.vessel_spread)
     data = {"embedded": [s.log for s in embedded_scenarios(3, 0)]}
     if TRUTHSIM.is_dir():
@@ -86,7 +89,8 @@ def main(argv=None) -> int:
     else:
         print(f"skipping truthsim-dev: {TRUTHSIM} not found", file=sys.stderr)
     print(f"calibration: {args.n} DP losses, Beaufort {args.beaufort[0]:g}-{args.beaufort[1]:g}, "
-          f"{args.dp_s:g} s of DP, hull spread {args.vessel_spread:g}; thrust error {args.thrust_error_model}")
+          f"{args.dp_s:g} s of DP, hull spread {args.vessel_spread:g}; thrust error {args.thrust_error_model}; "
+          f"held-load window {args.held_load_window_s:g} s")
     print("| data | sigma | " + " | ".join(f"{h:g} s" for h in HORIZONS_S) + " |")
     print("| --- | --- | " + " | ".join("---" for _ in HORIZONS_S) + " |")
     for name, logs in data.items():

@@ -97,15 +97,15 @@ def main(argv=None) -> int:
     ap.add_argument("--seed", type=int, default=0)
     ap.add_argument("--method", choices=("estimator", "mean"), default="estimator",
                     help="environment from the environment estimator (default) or the 900-s residual mean")
-    ap.add_argument("--thrust-error-model", choices=("per_dof", "per_thruster"), default="per_dof",
-                    help="the estimator's thrust-model error: per DOF (the default) or per thruster (with the "
-                         "station-keeping yaw load kept at the stop, the thrust error constant)")
+    ap.add_argument("--thrust-error-model", choices=("per_dof", "per_thruster"), default="per_thruster",
+                    help="the estimator's thrust-model error: per thruster (the default) or per DOF (the "
+                         "previous default, hybridship.residual.environment.PER_DOF)")
     args = ap.parse_args(argv)
     cfg = None
-    if args.thrust_error_model == "per_thruster":
-        from hybridship.residual.environment import EnvironmentConfig
+    if args.thrust_error_model == "per_dof":
+        from hybridship.residual.environment import PER_DOF, EnvironmentConfig
 
-        cfg = EnvironmentConfig(thrust_error_model="per_thruster", yaw_load_kept_at_stop=1.0, thrust_error_walk=0.0)
+        cfg = EnvironmentConfig(**PER_DOF)
     files = sorted(args.data.glob("*.csv.gz")) if args.data.is_dir() else []
     if not files:
         print(f"no logs found in {args.data}; nothing to do", file=sys.stderr)
@@ -121,7 +121,7 @@ def main(argv=None) -> int:
     inside = ((lf.percentile >= 10) & (lf.percentile <= 90)).mean()
     text = (f"Command: `python benchmarks/driftoff_live.py --samples {args.samples}"
             f" --vessel-spread {args.vessel_spread:g} --seed {args.seed} --method {args.method}"
-            + (" --thrust-error-model per_thruster" if cfg is not None else "") + "`\n\n"
+            + (" --thrust-error-model per_dof" if cfg is not None else "") + "`\n\n"
             f"{len(files)} logs, {args.samples} samples per prediction; update time (environment estimate + "
             f"blackouts) median {res.update_s.median():.3f} s, max {res.update_s.max():.3f} s.\n"
             f"Truth-track actual times inside the predicted 10-90 % band: {100 * inside:.0f} % of "

@@ -28,39 +28,37 @@ from hybridship.evaluation.drift import log_files
 from hybridship.fileio import atomic_write, markdown_table
 from hybridship.predictors import DynamicPredictor, HybridPredictor, as_log_arrays
 from hybridship.residual.ensemble import EnsembleConfig
-from hybridship.residual.environment import EnvironmentConfig
+from hybridship.residual.environment import PER_DOF, EnvironmentConfig
 
 TRUTHSIM = Path(__file__).resolve().parents[1].parent / "shared" / "data" / "truthsim-dev" / "logs"
 
 #: name -> (HybridPredictor keyword arguments, what the row shows)
-PER_THRUSTER = dict(thrust_error_model="per_thruster", yaw_load_kept_at_stop=1.0, thrust_error_walk=0.0)
+C = EnvironmentConfig
 VARIANTS = {
-    "default": ({}, "the default estimator (thrust error per DOF, yaw environment restarted at the stop)"),
-    "keep_dp_yaw_load": ({"environment_config": EnvironmentConfig(yaw_load_kept_at_stop=1.0)},
-                         "the yaw load of station keeping kept after the stop"),
-    "half_dp_yaw_load": ({"environment_config": EnvironmentConfig(yaw_load_kept_at_stop=0.5)},
-                         "half of it kept"),
-    "per_thruster": ({"environment_config": EnvironmentConfig(**PER_THRUSTER)},
-                     "thrust error per thruster (constant), DP yaw load kept at the stop"),
-    "per_thruster_reset_yaw": ({"environment_config": EnvironmentConfig(**{**PER_THRUSTER,
-                                                                          "yaw_load_kept_at_stop": 0.0})},
-                               "thrust error per thruster, yaw environment restarted at the stop"),
-    "per_thruster_yaw_spread": ({"environment_config": EnvironmentConfig(**PER_THRUSTER, yaw_load_std_at_stop=1.0)},
-                                "per thruster, yaw kept with a spread of 100 % of it"),
-    "per_thruster_walk": ({"environment_config": EnvironmentConfig(**{**PER_THRUSTER, "thrust_error_walk": 2e-3})},
-                          "per thruster, thrust error a random walk (2e-3 per sqrt(s))"),
-    "per_thruster_tight_prior": ({"environment_config": EnvironmentConfig(
-        **PER_THRUSTER, thrust_error_prior_per_thruster=0.1)}, "per thruster, prior 0.1 instead of 0.2"),
-    "per_thruster_wide_prior": ({"environment_config": EnvironmentConfig(
-        **PER_THRUSTER, thrust_error_prior_per_thruster=0.4)}, "per thruster, prior 0.4 instead of 0.2"),
-    "current_prior_0.1": ({"environment_config": EnvironmentConfig(current_prior_m_s=0.1)},
-                          "current prior 0.1 m/s instead of 0.02 m/s"),
-    "wide_current_prior": ({"environment_config": EnvironmentConfig(current_prior_m_s=0.3)},
-                           "current prior 0.3 m/s instead of 0.02 m/s"),
-    "tight_yaw_thrust_prior": ({"environment_config": EnvironmentConfig(thrust_error_prior=(0.2, 0.2, 0.1))},
-                               "yaw thrust-error prior 0.1 instead of 0.5"),
-    "fixed_noise": ({"environment_config": EnvironmentConfig(adaptive_measurement_std=False)},
+    "default": ({}, "the default estimator (thrust error per thruster, constant; the filter carries on at the stop)"),
+    "yaw_load_prior_3e-5": ({"environment_config": C(load_yaw_prior_rad_s2=3e-5)},
+                            "yaw-load prior 3e-5 rad/s2 instead of 1e-3 (it then decides the yaw split)"),
+    "yaw_load_prior_3e-4": ({"environment_config": C(load_yaw_prior_rad_s2=3e-4)},
+                            "yaw-load prior 3e-4 rad/s2"),
+    "restart_yaw_at_stop": ({"environment_config": C(reset_yaw_load_at_stop=True, yaw_load_kept_at_stop=0.0)},
+                            "yaw environment restarted from zero at the stop"),
+    "thrust_error_walk": ({"environment_config": C(thrust_error_walk=2e-3)},
+                          "thrust error a random walk (2e-3 per sqrt(s)) instead of constant"),
+    "tight_thrust_prior": ({"environment_config": C(thrust_error_prior_per_thruster=0.1)},
+                           "thrust-error prior 0.1 per thruster instead of 0.2"),
+    "wide_thrust_prior": ({"environment_config": C(thrust_error_prior_per_thruster=0.4)},
+                          "thrust-error prior 0.4 per thruster instead of 0.2"),
+    "current_prior_0.1": ({"environment_config": C(current_prior_m_s=0.1)}, "current prior 0.1 m/s instead of 0.02 m/s"),
+    "current_prior_0.3": ({"environment_config": C(current_prior_m_s=0.3)}, "current prior 0.3 m/s instead of 0.02 m/s"),
+    "fixed_noise": ({"environment_config": C(adaptive_measurement_std=False)},
                     "no wave-motion noise estimate (configured sensor noise only)"),
+    "per_dof": ({"environment_config": C(**PER_DOF)},
+                "thrust error per DOF, yaw environment restarted at the stop (the previous default)"),
+    "per_dof_keep_yaw": ({"environment_config": C(**{**PER_DOF, "yaw_load_kept_at_stop": 1.0})},
+                         "per DOF, the station-keeping yaw load kept at the stop"),
+    "per_dof_wide_yaw_prior": ({"environment_config": C(**{**PER_DOF, "load_yaw_prior_rad_s2": 1e-3,
+                                                          "reset_yaw_load_at_stop": False})},
+                               "per DOF with the default's yaw-load prior, carrying on at the stop"),
     "mean_bias": ({"environment": "mean"}, "900-s mean residual, no estimator"),
 }
 TINY = EnsembleConfig(n_members=2, hidden=4, max_epochs=1, patience=1, seed=0)

@@ -161,15 +161,29 @@ def _estimated(model, a: LogArrays, idx: int, n_members: int, seed: int, config=
     ``idx``, as if the thrusters stopped there."""
     from ..residual.environment import CUR, LOAD, EnvironmentEstimator
     from ..residual.environment import EnvironmentEstimate as FilterEstimate
+    from ..residual.load_variability import held_load_rows, unexplained_load_std
 
     est = EnvironmentEstimator(model) if config is None else EnvironmentEstimator(model, config)
-    at = est.run(a, np.array([idx]))
+    c = est.config
+    step = max(1, int(round(c.filter_step_s / a.dt_s)))
+    window = held_load_rows(a.dp_active, idx + 1, step, int(round(c.held_load_window_s / a.dt_s))) \
+        if c.held_load_window_s > 0 else np.zeros(0, dtype=int)
+    run = est.run(a, np.concatenate([[idx], window[window != idx]]))
+    at = run.take(slice(0, 1))
     x, P = est.at_thrust_stop(at.x[0], at.P[0])
     draws = FilterEstimate(at.rows, at.time_s, x[None], P[None], at.thrust_error_model).sample_environment(
         n_members, seed)[:, 0]
     off = CUR.start                                   # draws hold [current (2), load (3), thrust error]
-    return (x[0:3].copy(), x[3:6].copy(), x[LOAD].copy(), draws[:, LOAD.start - off:LOAD.stop - off].copy(),
-            draws[:, CUR.start - off:CUR.stop - off].copy())
+    loads = draws[:, LOAD.start - off:LOAD.stop - off].copy()
+    if window.size and n_members > 1:
+        # the load held over the blackout varies as it did in the station keeping before
+        # (hybridship.residual.load_variability), a centred draw per member
+        win = run.take(np.argsort(run.rows[1:], kind="stable") + 1)
+        sigma_b = unexplained_load_std(model, a, win, max(1, int(round(c.held_load_block_s / (step * a.dt_s)))))
+        pos = np.sqrt(0.5 * (sigma_b[0] ** 2 + sigma_b[1] ** 2))
+        z = np.random.default_rng([seed, 7]).standard_normal((n_members, 3))
+        loads += (z - z.mean(axis=0)) * np.array([pos, pos, sigma_b[2]])
+    return x[0:3].copy(), x[3:6].copy(), x[LOAD].copy(), loads, draws[:, CUR.start - off:CUR.stop - off].copy()
 
 
 def blackout_now(estimate: EnvironmentEstimate, vessel="gunnerus", settings: DriftOffSettings | None = None,

@@ -22,6 +22,7 @@ from ..physics.model import DynamicModel
 from ..residual.calibration import CalibrationConfig, fit_spread_scale
 from ..residual.ensemble import EnsembleConfig, MLPEnsemble, fit_ensemble
 from ..residual.features import COMMAND_FEATURES, ResidualConfig, command_feature_columns, command_scales, prepare_log
+from ..residual.load_variability import held_load_rows, held_load_spread, unexplained_load_std
 from ..residual.environment import (EnvironmentConfig, EnvironmentEstimator, current_input,
                                     environment_accel)
 from ..residual.multistep import MultiStepConfig, collect_starts, train_multistep
@@ -366,8 +367,9 @@ class HybridPredictor:
         st = _forecast_setup(self.model, self.residual_config, log, start_times_s, horizon_s,
                              self.stop_after_failure, commands, history_s=self.history_s)
         E = self.ensemble.n_members
+        sigma_b = None
         if self.environment == "estimator":
-            eta0, nu0, dev0, bias0, current, acc_ext = self._estimated_start(st, E)
+            eta0, nu0, dev0, bias0, current, acc_ext, sigma_b = self._estimated_start(st, E)
         else:
             prep = prepare_log(self.model, st.arrays, self.residual_config)
             dev0 = np.array([prep.start_state(int(i))[2] for i in st.idx])
@@ -377,12 +379,15 @@ class HybridPredictor:
                                          guard=self.use_guard if guard is None else guard, substeps=st.substeps,
                                          current=current, accel_ext=acc_ext, nets=nets,
                                          nets_weight=self._after_stop_weight(st, nets_after_stop))
+        after_stop = st.arrays.dp_active[st.idx] == 0
+        if sigma_b is not None and np.any(sigma_b):
+            # the load held over the forecast varies as it did in the station keeping before
+            std = np.sqrt(std ** 2 + held_load_spread(sigma_b, np.arange(st.H + 1) * st.dt) ** 2)
         flags = dict(st.flags)
         if wgt is not None:
             flags[FaultFlags.OUT_OF_ENVELOPE] = np.any(wgt < 1.0, axis=1)
         if calibrated:
-            std = self._calibrated_forecast_std(std, np.arange(st.H + 1) * st.dt, commands,
-                                                st.arrays.dp_active[st.idx] == 0)
+            std = self._calibrated_forecast_std(std, np.arange(st.H + 1) * st.dt, commands, after_stop)
         return ForecastResult(st.arrays.time_s[st.idx], np.arange(st.H + 1) * st.dt, eta, nu, std, wgt,
                               flags=flags, notes=st.notes)
 
@@ -410,26 +415,61 @@ class HybridPredictor:
         arrays = as_log_arrays(log, self.model.vessel)
         return self._run_estimator(arrays, start_indices(arrays, start_times_s))
 
-    def _run_estimator(self, arrays, idx):
+    def _run_estimator(self, arrays, idx, extra_rows=None):
+        """The filter from ``environment_window_s`` before the earliest start ``idx``: its
+        estimates at ``idx`` and, when given, also at ``extra_rows`` (from the same run)."""
         dt = float(np.median(np.diff(arrays.time_s)))
         first = max(0, int(idx.min()) - int(round(self.environment_window_s / dt)))
-        return self.estimator.run(arrays, idx, first_row=first)
+        if extra_rows is None:
+            return self.estimator.run(arrays, idx, first_row=first)
+        extra = np.asarray(extra_rows, dtype=int)
+        extra = extra[extra >= first]
+        est = self.estimator.run(arrays, np.concatenate([idx, extra]), first_row=first)
+        S = len(idx)
+        return est.take(slice(0, S)), est.take(slice(S, None))
 
     def _estimated_start(self, st, n_members: int):
         """Start states and environment from the estimator at every start row.
 
         Returns ``eta0, nu0`` (S, 3) (the filtered state), ``dev0`` (S, 3) zeros, the
         members' loads (E, S, 3) (surge/sway in NED, member 0 the mean), the mean current
-        ``(S, 1, 2)`` and the thrust-error acceleration of the start's commands ``(S, 1, 3)``
-        (body; 0 once the thrusters have stopped).
+        ``(S, 1, 2)``, the thrust-error acceleration of the start's commands ``(S, 1, 3)``
+        (body; 0 once the thrusters have stopped) and the held-load variability ``(S, 3)``
+        of :mod:`hybridship.residual.load_variability` (zeros for starts during station
+        keeping, or when ``held_load_window_s`` is 0).
         """
-        est = self._run_estimator(st.arrays, st.idx)
+        est, sigma_b = self._estimate_with_held_load(st)
         eta0, nu0 = est.x[:, 0:3].copy(), est.x[:, 3:6].copy()
         draws = est.sample_environment(n_members, self.ensemble_config.seed)      # (E, S, 8)
         current = np.ascontiguousarray(current_input(est.current_ned_m_s)[:, None, :])
         a_err = est.thrust_error_accel(self.model, eta0, nu0, st.rpm[:, 0], st.az[:, 0], st.wind[:, 0])
         acc_ext = np.ascontiguousarray(a_err[:, None, :])
-        return eta0, nu0, np.zeros_like(eta0), draws[..., 2:5], current, acc_ext
+        return eta0, nu0, np.zeros_like(eta0), draws[..., 2:5], current, acc_ext, sigma_b
+
+    def _estimate_with_held_load(self, st):
+        """The estimates at the start rows and, per start after a failure, the held-load
+        variability (S, 3) of the station keeping before it (one filter run for both)."""
+        c = self.environment_config
+        sigma_b = np.zeros((len(st.idx), 3))
+        after = (st.arrays.dp_active[st.idx] == 0) & self.stop_after_failure
+        if c.held_load_window_s == 0 or not np.any(after):
+            return self._run_estimator(st.arrays, st.idx), sigma_b
+        dt = st.arrays.dt_s
+        step = max(1, int(round(c.filter_step_s / dt)))
+        windows = {}        # starts after the same stop share one window
+        for k in np.flatnonzero(after):
+            rows = held_load_rows(st.arrays.dp_active, int(st.idx[k]), step, int(round(c.held_load_window_s / dt)))
+            windows.setdefault(tuple(rows[[0, -1]]) if rows.size else (), (rows, []))[1].append(k)
+        extra = np.concatenate([w[0] for w in windows.values()] + [np.zeros(0, dtype=int)])
+        est, est_w = self._run_estimator(st.arrays, st.idx, extra)
+        block = max(1, int(round(c.held_load_block_s / (step * dt))))
+        for rows, starts in windows.values():
+            keep = np.flatnonzero(np.isin(est_w.rows, rows))
+            if keep.size:
+                sub = est_w.take(keep[np.argsort(est_w.rows[keep], kind="stable")])
+                sigma_b[starts] = unexplained_load_std(self.model, st.arrays, sub, block)
+        return est, sigma_b
+
     def _calibrated_forecast_std(self, std, lead_s, commands, after_stop):
         """The spread each start reports: starts after a failure (``after_stop``, (S,)) use the
         ``"after_stop"`` calibration when :meth:`calibrate_after_stop` made one, others the

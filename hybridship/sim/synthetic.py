@@ -34,8 +34,9 @@ def physics_log(model: DynamicModel, *, duration_s: float = 1200.0, t_shutdown_s
         Seed of the random commands.
     current : (speed_m_s, dir_to_rad)
         Steady current acting on the vessel (unknown to a forecast model).
-    tau_ext_N : (X_N, Y_N, N_Nm)
-        Constant body-frame load acting on the vessel (unknown to a forecast model).
+    tau_ext_N : (X_N, Y_N, N_Nm) or array (n, 3)
+        Body-frame load acting on the vessel (unknown to a forecast model): constant, or
+        one row per step of ``dt_s`` (``n = duration_s / dt_s``).
     wind : (speed_m_s, dir_from_rad)
         Steady true wind, logged.
     hold_s : (min, max)
@@ -74,7 +75,7 @@ def physics_log(model: DynamicModel, *, duration_s: float = 1200.0, t_shutdown_s
     res = model.rollout([0.0, 0.0, 0.3], [0.0, 0.0, 0.0], n, dt_s=dt_s, substeps=4,
                         rpm=rpm[None], azimuth_rad=az[None], rudder_rad=delta[None] if R else None,
                         wind=np.asarray(wind, float),
-                        current=np.asarray(current, float), tau_ext=np.asarray(tau_ext_N, float))
+                        current=np.asarray(current, float), tau_ext=_per_step(tau_ext_N, n))
     eta, nu = res.eta[0], res.nu[0]
     # the command logged at a sample is the one applied over the following step
     rpm_log = np.vstack([rpm, np.zeros((1, K)) if t_shutdown_s is not None and time_s[-1] >= t_shutdown_s else rpm[-1:]])
@@ -98,3 +99,13 @@ def physics_log(model: DynamicModel, *, duration_s: float = 1200.0, t_shutdown_s
     cols["truth_v_dot_m_s2"] = res.nu_dot[0, :, 1]
     cols["truth_r_dot_rad_s2"] = res.nu_dot[0, :, 2]
     return pd.DataFrame(cols)
+
+
+def _per_step(tau_ext_N, n: int) -> np.ndarray:
+    """A constant load (3,) as it is, or a per-step one (n, 3) as the rollout's (1, n, 3)."""
+    tau = np.asarray(tau_ext_N, dtype=float)
+    if tau.ndim == 2:
+        if tau.shape != (n, 3):
+            raise ValueError(f"tau_ext_N: expected (3,) or ({n}, 3) [N, N, Nm], got {tau.shape}")
+        return tau[None]
+    return tau

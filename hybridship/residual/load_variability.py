@@ -1,0 +1,92 @@
+"""The spread of a drift forecast from the load the environment estimator does not follow.
+
+After a failure the hybrid holds the estimated environment (current, slowly varying load)
+over the forecast. The real load does not hold still: wave drift and gusts vary on the
+scale of the forecast, more in rough weather than in calm. The ensemble's spread (the
+posterior of the estimate) knows nothing of that variation, so a spread calibrated in one
+weather is too narrow in another.
+
+The station keeping before the failure shows how much the load varies. Over a window of
+station keeping (``window_s`` before the last station-keeping sample), the filter's
+low-frequency motion (the estimator treats wave-frequency motion as measurement noise) is
+cut into blocks of ``block_s``; in each block, the change of the low-frequency velocity
+less what the model, with the environment estimated there, explains is the mean
+acceleration the estimate missed. The standard deviation of these block means,
+``sigma_b``, is how far a held load may be off over about that time. Held over the
+forecast, an acceleration error ``sigma_b`` moves the ship by ``0.5 sigma_b t^2``. That
+term is added to the ensemble's spread (in quadrature) before the spread after a failure
+is calibrated (:meth:`hybridship.predictors.HybridPredictor.calibrate_after_stop`), so the
+calibrated spread grows with the variability of the weather the ship is in.
+
+Only samples before the start are used (the filter's estimates are causal).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from .environment import CUR, LOAD, THR, current_input, external_accel, thrust_error_accel
+
+__all__ = ["held_load_rows", "unexplained_load_std", "held_load_spread"]
+
+
+def held_load_rows(dp_active: np.ndarray, start: int, step: int, window_rows: int) -> np.ndarray:
+    """Station-keeping rows on the filter's grid whose estimates measure the load's variability
+    for a forecast starting at row ``start``: every ``step``-th row back from the last
+    ``dp_active`` row before ``start``, over at most ``window_rows`` rows (increasing).
+    Empty when there is no station keeping before ``start``."""
+    dp = np.flatnonzero(np.asarray(dp_active[:start]) != 0)
+    if dp.size == 0:
+        return dp
+    last = int(dp[-1])
+    rows = np.arange(last, max(last - window_rows, -1), -step)[::-1]
+    return rows[np.asarray(dp_active)[rows] != 0]
+
+
+def unexplained_load_std(model, arrays, estimate, block_rows: int) -> np.ndarray:
+    """Standard deviation of the block-mean acceleration that the estimate leaves unexplained.
+
+    Parameters
+    ----------
+    model : hybridship.physics.model.DynamicModel
+    arrays : LogArrays
+        The log (commands and wind at the estimate's rows).
+    estimate : EnvironmentEstimate
+        The filter's estimates at increasing, evenly spaced station-keeping rows (see
+        :func:`held_load_rows`).
+    block_rows : int
+        Estimates per block.
+
+    Returns
+    -------
+    ndarray, shape (3,)
+        ``[surge_m_s2, sway_m_s2, yaw_rad_s2]``; zeros with fewer than three blocks.
+    """
+    x, rows = estimate.x, estimate.rows
+    n_blocks = len(rows) // block_rows
+    if n_blocks < 3:
+        return np.zeros(3)
+    x = x[len(rows) - n_blocks * block_rows:]
+    rows = rows[len(rows) - n_blocks * block_rows:]
+    eta, nu = x[:, 0:3], x[:, 3:6]
+    ext = external_accel(eta[:, 2], x[:, LOAD], 0.0, 0.0) + thrust_error_accel(
+        model, estimate.thrust_error_model, eta, nu, arrays.rpm[rows], arrays.azimuth_rad[rows],
+        arrays.wind[rows], x[:, CUR], x[:, THR])
+    acc = model.acceleration(eta, nu, rpm=arrays.rpm[rows], azimuth_rad=arrays.azimuth_rad[rows],
+                             wind=arrays.wind[rows], current=current_input(x[:, CUR]), accel_ext=ext)
+    t = arrays.time_s[rows].reshape(n_blocks, block_rows)
+    nu_b = nu.reshape(n_blocks, block_rows, 3)
+    # a block's velocity change from the previous block's end, less the model's mean acceleration
+    dt_b = np.diff(np.concatenate([[t[0, 0]], t[:, -1]]))[1:]
+    dnu = (nu_b[1:, -1] - nu_b[:-1, -1]) / dt_b[:, None]
+    missed = dnu - acc.reshape(n_blocks, block_rows, 3)[1:].mean(axis=1)
+    return missed.std(axis=0, ddof=1)
+
+
+def held_load_spread(sigma_b: np.ndarray, lead_s: np.ndarray) -> np.ndarray:
+    """Position and heading spread ``0.5 sigma_b t^2`` of an acceleration error held over the
+    forecast: ``sigma_b`` (S, 3) [m/s^2, m/s^2, rad/s^2] at leads (H,) [s] -> (S, H, 3)
+    [m, m, rad]; north and east both take the RMS of surge and sway."""
+    pos = np.sqrt(0.5 * (sigma_b[:, 0] ** 2 + sigma_b[:, 1] ** 2))
+    per_dof = np.column_stack([pos, pos, sigma_b[:, 2]])
+    return 0.5 * per_dof[:, None, :] * np.asarray(lead_s, dtype=float)[None, :, None] ** 2

@@ -1,0 +1,89 @@
+"""The spread after a failure from the load's variability in the station keeping before it."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from hybridship.predictors import HybridPredictor, as_log_arrays
+from hybridship.residual.ensemble import EnsembleConfig
+from hybridship.residual.environment import EnvironmentConfig, EnvironmentEstimator
+from hybridship.residual.load_variability import held_load_rows, held_load_spread, unexplained_load_std
+from hybridship.sim.synthetic import physics_log
+
+TINY = EnsembleConfig(n_members=3, hidden=4, max_epochs=2, patience=1, seed=0)
+
+
+def _blocky_load(n: int, sigma_N: float, dof: int, *, block: int = 30, seed: int = 0) -> np.ndarray:
+    """A 1 kN sway load plus, in ``dof``, levels of std ``sigma_N`` [N] held for ``block`` steps
+    (a ship at low speed, as in station keeping)."""
+    rng = np.random.default_rng(seed)
+    levels = np.zeros((-(-n // block), 3))
+    levels[:, dof] = sigma_N * rng.standard_normal(len(levels))
+    return np.repeat(levels, block, axis=0)[:n] + np.array([0.0, 1000.0, 0.0])
+
+
+def _sigma_b(model, tau, *, window_s: float = 600.0, block_s: float = 30.0) -> np.ndarray:
+    """sigma_b over the last ``window_s`` of an idle ship under the load ``tau`` (all station keeping)."""
+    log = physics_log(model, duration_s=len(tau), t_shutdown_s=None, seed=1, tau_ext_N=tau, wind=(0.0, 0.0),
+                      rpm_scale=0.0)
+    a = as_log_arrays(log, model.vessel)
+    rows = held_load_rows(a.dp_active, len(a.time_s), 1, int(window_s))
+    est = EnvironmentEstimator(model).run(a, rows, first_row=0)
+    return unexplained_load_std(model, a, est, int(block_s))
+
+
+def test_held_load_rows_are_station_keeping_rows_before_the_start():
+    dp = np.array([1] * 50 + [0] * 10)
+    rows = held_load_rows(dp, 55, 2, 20)
+    assert rows.max() == 49 and np.all(np.diff(rows) == 2) and rows.size == 10
+    assert np.all(dp[rows] == 1)
+    assert held_load_rows(np.zeros(10, int), 5, 1, 100).size == 0
+
+
+def test_a_constant_load_has_no_variability_and_a_varying_one_is_measured(model):
+    """A constant load leaves almost nothing unexplained; a load whose level changes every
+    30 s with a standard deviation sigma is measured as about sigma / M in that DOF, and
+    twice the variation gives twice sigma_b."""
+    n = 1200
+    flat = _sigma_b(model, _blocky_load(n, 0.0, 0))
+    sway = _sigma_b(model, _blocky_load(n, 1500.0, 1))
+    sway2 = _sigma_b(model, _blocky_load(n, 3000.0, 1))
+    want = abs(model.arrays.m_inv[1, 1]) * 1500.0
+    assert 0.4 * want < sway[1] < 1.3 * want
+    assert flat[1] < 0.15 * sway[1]
+    assert 1.7 < sway2[1] / sway[1] < 2.3
+
+
+def test_held_load_spread_grows_with_the_square_of_the_lead():
+    s = held_load_spread(np.array([[3e-3, 4e-3, 1e-4]]), np.array([0.0, 10.0, 20.0]))
+    pos = np.sqrt(0.5 * (9e-6 + 16e-6))
+    np.testing.assert_allclose(s[0, :, 0], 0.5 * pos * np.array([0.0, 100.0, 400.0]))
+    np.testing.assert_allclose(s[0, :, 1], s[0, :, 0])
+    np.testing.assert_allclose(s[0, 2, 2], 0.5 * 1e-4 * 400.0)
+
+
+@pytest.fixture(scope="module")
+def drift_log(model):
+    n = 1500
+    return physics_log(model, duration_s=n, t_shutdown_s=1200, seed=2, tau_ext_N=_blocky_load(n, 3000.0, 1),
+                       wind=(5.0, 0.5), rpm_scale=0.3)
+
+
+def test_forecast_spread_after_a_failure_includes_the_held_load(model, drift_log):
+    """Starts after the failure get the held-load term on top of the ensemble's spread (it can
+    be switched off); starts during station keeping do not; the term uses no sample after
+    the start."""
+    on = HybridPredictor(model.vessel, ensemble_config=TINY).fit([drift_log], dp_only=True)
+    off = HybridPredictor(model.vessel, ensemble_config=TINY,
+                          environment_config=EnvironmentConfig(held_load_window_s=0.0)).fit([drift_log], dp_only=True)
+    starts = [1100.0, 1205.0]
+    f_on = on.forecast(drift_log, starts, 60.0, calibrated=False)
+    f_off = off.forecast(drift_log, starts, 60.0, calibrated=False)
+    np.testing.assert_allclose(f_on.eta, f_off.eta)                      # the mean is untouched
+    np.testing.assert_allclose(f_on.eta_std[0], f_off.eta_std[0])         # during station keeping
+    assert np.all(f_on.eta_std[1, -1, :2] > 1.2 * f_off.eta_std[1, -1, :2])
+    later = drift_log.copy()
+    later.loc[later.time_s > 1205.0, ["north_m", "east_m"]] += 100.0
+    f_later = on.forecast(later, [1205.0], 60.0, calibrated=False)
+    np.testing.assert_allclose(f_later.eta_std[0], f_on.eta_std[1])
