@@ -65,11 +65,13 @@ def one_step_hybrid(cfg, fit_runs, cache: Path):
 
     p = HybridPredictor("esso_osaka_model", residual_config=cfg.residual, ensemble_config=cfg.ensemble,
                         guard_quantile=cfg.guard_quantile, environment="mean", calibration_config=cfg.calibration,
-                        training="one_step", multistep_config=cfg.multistep, command_guard=False)
+                        training="one_step", multistep_config=cfg.multistep, command_guard=False,
+                        hull_correction=cfg.hull_correction, hull_fit=cfg.hull_fit)
     logs = [r.arrays for r in fit_runs]
     if cache.exists():
         q = HybridPredictor.load(cache)
-        if tuple(q.residual_config.features) == tuple(cfg.residual.features):
+        if tuple(q.residual_config.features) == tuple(cfg.residual.features) and \
+                q.hull_correction == cfg.hull_correction and q.hull_fit == cfg.hull_fit:
             return q, logs
     cal = p.calibration_config
     p.fit(logs, row_stride=cfg.train_row_stride, calibration=replace(cal, commands=("known",), start_every_s=30.0))
@@ -91,7 +93,8 @@ def fine_tune(p, logs, ms_cfg, row_stride):
     preps = [prepare_log(q.model, a, q.residual_config) for a in logs]
     starts = collect_starts(preps, masks, ms_cfg, dp_only=True)
     q.ensemble, hist = train_multistep(q.ensemble, q.model, starts, q.residual_config.feature_index, ms_cfg,
-                                       seed=q.ensemble_config.seed)
+                                       seed=q.ensemble_config.seed, hull=q.hull)
+    q.hull = hist.pop("hull", q.hull)
     return q, hist
 
 
@@ -111,7 +114,13 @@ def main(argv=None) -> int:
     ap.add_argument("--variants", default="base:", help="name:field=value,...;name:... (MultiStepConfig fields)")
     ap.add_argument("--start-every-s", type=float, default=1.0)
     ap.add_argument("--members", type=int, default=None, help="ensemble members (screening; default the benchmark's)")
+    ap.add_argument("--seed", type=int, default=None, help="seed of the nets (default the benchmark's)")
     ap.add_argument("--hidden", type=int, default=None, help="units per hidden layer (default the benchmark's)")
+    ap.add_argument("--hull", action="store_true",
+                    help="with the linear MMG-structured correction before the nets (HullCorrection)")
+    ap.add_argument("--hull-fit", choices=("one_step", "multi_step"), default="one_step",
+                    help="with --hull: identify the correction by ridge regression or by a free-run fit")
+    ap.add_argument("--hull-iterations", type=int, default=None, help="with --hull-fit multi_step: Adam steps")
     ap.add_argument("--drop-features", default="", help="comma-separated features to leave out of the benchmark's")
     ap.add_argument("--horizons-s", default="5,10,20,30")
     ap.add_argument("--permutation", action="store_true",
@@ -128,8 +137,14 @@ def main(argv=None) -> int:
     cfg = replace(cfg, calibration=replace(cfg.calibration, horizon_s=max(horizons)))
     if args.members:
         cfg = replace(cfg, ensemble=replace(cfg.ensemble, n_members=args.members))
+    if args.seed is not None:
+        cfg = replace(cfg, ensemble=replace(cfg.ensemble, seed=args.seed))
     if args.hidden:
         cfg = replace(cfg, ensemble=replace(cfg.ensemble, hidden=args.hidden))
+    if args.hull:
+        cfg = replace(cfg, hull_correction=True, hull_fit=args.hull_fit)
+        if args.hull_iterations:
+            cfg = replace(cfg, multistep=replace(cfg.multistep, hull_iterations=args.hull_iterations))
     drop = [f for f in args.drop_features.split(",") if f]
     if drop:
         cfg = replace(cfg, residual=replace(cfg.residual, features=tuple(f for f in cfg.residual.features
@@ -138,7 +153,10 @@ def main(argv=None) -> int:
     args.out.mkdir(parents=True, exist_ok=True)
     t0 = time.perf_counter()
     base, logs = one_step_hybrid(cfg, fit_runs, args.out / f"one_step_m{cfg.ensemble.n_members}"
-                                  f"_h{cfg.ensemble.hidden}_f{len(cfg.residual.features)}.npz")
+                                  f"_h{cfg.ensemble.hidden}_f{len(cfg.residual.features)}"
+                                  f"{'_s%d' % cfg.ensemble.seed if cfg.ensemble.seed else ''}"
+                                  f"{'_hull_' + cfg.hull_fit if cfg.hull_correction else ''}"
+                                  f"{cfg.multistep.hull_iterations if cfg.hull_fit == 'multi_step' else ''}.npz")
     print(f"one-step nets: {time.perf_counter() - t0:.0f} s", flush=True)
     dt = float(np.median(np.diff(val_runs[0].arrays.time_s)))
     steps = np.array([int(round(h / dt)) for h in horizons])
