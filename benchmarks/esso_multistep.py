@@ -123,6 +123,7 @@ def main(argv=None) -> int:
     ap.add_argument("--hull-iterations", type=int, default=None, help="with --hull-fit multi_step: Adam steps")
     ap.add_argument("--drop-features", default="", help="comma-separated features to leave out of the benchmark's")
     ap.add_argument("--horizons-s", default="5,10,20,30")
+    ap.add_argument("--save-models", action="store_true", help="also write each variant's model file to --out")
     ap.add_argument("--permutation", action="store_true",
                     help="also the permutation importance of every feature of each variant (validation rollouts)")
     args = ap.parse_args(argv)
@@ -177,6 +178,8 @@ def main(argv=None) -> int:
         t0 = time.perf_counter()
         q, hist = fine_tune(base, logs, ms, cfg.train_row_stride)
         secs = time.perf_counter() - t0
+        if args.save_models:
+            q.save(args.out / f"model_{name}.npz")
         per[(name, "known")] = score(q)
         e = error_table(per, val_runs, horizons)
         rows.append(summary(e, name, secs, hist, kw))

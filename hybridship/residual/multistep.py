@@ -80,6 +80,10 @@ class MultiStepConfig:
         With a hybrid's linear hull correction
         (:class:`~hybridship.residual.hull.HullCorrection`), fine-tune its coefficients
         together with the nets (a free-run fit of the grey-box part); otherwise it is held.
+    output_init : {"one_step", "zero"}
+        Start of the nets: the one-step fit as it is (warm start), or its hidden layers with
+        the output layer set to give no correction (the rollout then starts from the physics,
+        plus any hull correction, and the nets add only what lowers the rollout error).
     hull_iterations : int
         Adam steps of the free-run fit of the hull correction alone, before the nets
         (``HybridPredictor(hull_fit="multi_step")``).
@@ -103,6 +107,7 @@ class MultiStepConfig:
     curriculum_fraction: Annotated[Float, Field(gt=0, le=1)] = 0.5
     anchor_decay: Annotated[Float, Field(ge=0)] = 0.0
     tune_hull: bool = False
+    output_init: Literal["one_step", "zero"] = "one_step"
     hull_iterations: Annotated[Int, Field(ge=1)] = 100
     hull_lr: Annotated[Float, Field(gt=0)] = 1e-2
 
@@ -451,7 +456,11 @@ def _trainable_params(ensemble, hull, config: MultiStepConfig):
     nets = ensemble is not None
     if not nets and hull is None:
         raise ValueError("train_multistep: nothing to train (no ensemble and no hull correction)")
-    params = [torch.tensor(w, dtype=torch.float64, requires_grad=True) for w in ensemble.weights] if nets else []
+    weights = [np.array(w, dtype=float) for w in ensemble.weights] if nets else []
+    if nets and config.output_init == "zero":       # output layer: exactly no correction
+        weights[4][:] = 0.0
+        weights[5][:] = -ensemble.y_mean / ensemble.y_std
+    params = [torch.tensor(w, dtype=torch.float64, requires_grad=True) for w in weights]
     n_net = len(params)
     scale = ensemble.y_std if nets else hull.scale
     tune_hull = hull is not None and (config.tune_hull or not nets)
