@@ -24,7 +24,11 @@ multi-step history) and prints them.
 errors when one feature is permuted across the starts at every rollout step (a documented
 stand-in for the backward selection of Skulstad et al. sec. 3.3 that needs no retraining);
 ``--drop-features`` retrains without the named features to confirm a removal, and
-``--hidden`` / ``--members`` change the nets (screening only).
+``--hidden`` / ``--members`` / ``--seed`` change the nets (screening only). ``--hull`` (with
+``--hull-fit``) puts the linear hull correction in front of the nets
+(:class:`~hybridship.residual.hull.HullCorrection`), ``--with-command-guard`` also scores
+each variant with the command-regime guard fitted on its nets (``<variant>+cg``), and
+``--save-models`` writes each variant's model file.
 """
 
 from __future__ import annotations
@@ -124,6 +128,8 @@ def main(argv=None) -> int:
     ap.add_argument("--drop-features", default="", help="comma-separated features to leave out of the benchmark's")
     ap.add_argument("--horizons-s", default="5,10,20,30")
     ap.add_argument("--save-models", action="store_true", help="also write each variant's model file to --out")
+    ap.add_argument("--with-command-guard", action="store_true",
+                    help="also score each variant with the command-regime guard fitted on its nets (suffix +cg)")
     ap.add_argument("--permutation", action="store_true",
                     help="also the permutation importance of every feature of each variant (validation rollouts)")
     args = ap.parse_args(argv)
@@ -184,6 +190,13 @@ def main(argv=None) -> int:
         e = error_table(per, val_runs, horizons)
         rows.append(summary(e, name, secs, hist, kw))
         print(json.dumps(rows[-1]), flush=True)
+        if args.with_command_guard:
+            with_command_regime(q, logs, cfg.train_row_stride)
+            per[(name + "+cg", "known")] = score(q)
+            e = error_table(per, val_runs, horizons)
+            rows.append(summary(e, name + "+cg", secs, hist, kw))
+            print(json.dumps(rows[-1]), flush=True)
+            q.command_regime = None
         if args.permutation:
             imp = permutation_importance(q, score, horizons, val_runs)
             atomic_write(args.out / f"importance_{name}.csv", lambda fh: fh.write(imp.to_csv(index=False).encode()))
@@ -204,6 +217,14 @@ def main(argv=None) -> int:
     print(d.round(3).to_string())
     print(table.drop(columns=["history"]).to_string())
     return 0
+
+
+def with_command_regime(q, logs, stride):
+    """Fit the command-regime guard of the fine-tuned hybrid ``q`` on the held-back end of its logs (in place)."""
+    cal = q.calibration_config
+    cuts = [q._calibration_cut(a, cal, True) for a in logs]
+    masks = [None if c >= len(a) else (np.arange(len(a)) < c) for a, c in zip(logs, cuts)]
+    q.command_regime = q._fit_command_regime(logs, masks, True, stride)
 
 
 def permutation_importance(p, score, horizons, runs, seed: int = 0):
