@@ -176,6 +176,12 @@ def main(argv=None) -> int:
 
     per = {("dynamic", "known"): score(DynamicPredictor(v, residual_config=cfg.residual)),
            ("one_step", "known"): score(base)}
+    if base.hull is not None:  # the physics with the hull correction alone (the nets' output set to zero)
+        z = copy.deepcopy(base)
+        z.ensemble.weights[4][:] = 0.0
+        z.ensemble.weights[5][:] = 0.0
+        z.ensemble.y_mean = np.zeros(3)
+        per[("hull_only", "known")] = score(z)
     rows = []
     prev = args.out / "errors.csv"
     old = pd.read_csv(prev) if prev.exists() else None
@@ -205,7 +211,7 @@ def main(argv=None) -> int:
     if old is not None:  # keep earlier variants of the same --out (same split, same one-step nets)
         errors = pd.concat([old[~old.model.isin(errors.model.unique())], errors], ignore_index=True)
     atomic_write(args.out / "errors.csv", lambda fh: fh.write(errors.to_csv(index=False).encode()))
-    rows = [summary(errors, "one_step", 0.0, {}, {})] + rows
+    rows = [summary(errors, m, 0.0, {}, {}) for m in ("one_step", "hull_only") if (m, "known") in per] + rows
     vf = args.out / "variants.csv"
     table = pd.DataFrame(rows)
     if vf.exists():
