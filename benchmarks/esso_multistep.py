@@ -24,7 +24,11 @@ multi-step history) and prints them.
 errors when one feature is permuted across the starts at every rollout step (a documented
 stand-in for the backward selection of Skulstad et al. sec. 3.3 that needs no retraining);
 ``--drop-features`` retrains without the named features to confirm a removal, and
-``--hidden`` / ``--members`` change the nets (screening only).
+``--hidden`` / ``--members`` / ``--seed`` change the nets (screening only). ``--hull`` (with
+``--hull-fit``) puts the linear hull correction in front of the nets
+(:class:`~hybridship.residual.hull.HullCorrection`), ``--with-command-guard`` also scores
+each variant with the command-regime guard fitted on its nets (``<variant>+cg``), and
+``--save-models`` writes each variant's model file.
 """
 
 from __future__ import annotations
@@ -65,11 +69,13 @@ def one_step_hybrid(cfg, fit_runs, cache: Path):
 
     p = HybridPredictor("esso_osaka_model", residual_config=cfg.residual, ensemble_config=cfg.ensemble,
                         guard_quantile=cfg.guard_quantile, environment="mean", calibration_config=cfg.calibration,
-                        training="one_step", multistep_config=cfg.multistep, command_guard=False)
+                        training="one_step", multistep_config=cfg.multistep, command_guard=False,
+                        hull_correction=cfg.hull_correction, hull_fit=cfg.hull_fit)
     logs = [r.arrays for r in fit_runs]
     if cache.exists():
         q = HybridPredictor.load(cache)
-        if tuple(q.residual_config.features) == tuple(cfg.residual.features):
+        if tuple(q.residual_config.features) == tuple(cfg.residual.features) and \
+                q.hull_correction == cfg.hull_correction and q.hull_fit == cfg.hull_fit:
             return q, logs
     cal = p.calibration_config
     p.fit(logs, row_stride=cfg.train_row_stride, calibration=replace(cal, commands=("known",), start_every_s=30.0))
@@ -91,7 +97,8 @@ def fine_tune(p, logs, ms_cfg, row_stride):
     preps = [prepare_log(q.model, a, q.residual_config) for a in logs]
     starts = collect_starts(preps, masks, ms_cfg, dp_only=True)
     q.ensemble, hist = train_multistep(q.ensemble, q.model, starts, q.residual_config.feature_index, ms_cfg,
-                                       seed=q.ensemble_config.seed)
+                                       seed=q.ensemble_config.seed, hull=q.hull)
+    q.hull = hist.pop("hull", q.hull)
     return q, hist
 
 
@@ -111,9 +118,18 @@ def main(argv=None) -> int:
     ap.add_argument("--variants", default="base:", help="name:field=value,...;name:... (MultiStepConfig fields)")
     ap.add_argument("--start-every-s", type=float, default=1.0)
     ap.add_argument("--members", type=int, default=None, help="ensemble members (screening; default the benchmark's)")
+    ap.add_argument("--seed", type=int, default=None, help="seed of the nets (default the benchmark's)")
     ap.add_argument("--hidden", type=int, default=None, help="units per hidden layer (default the benchmark's)")
+    ap.add_argument("--hull", action="store_true",
+                    help="with the linear MMG-structured correction before the nets (HullCorrection)")
+    ap.add_argument("--hull-fit", choices=("one_step", "multi_step"), default="one_step",
+                    help="with --hull: identify the correction by ridge regression or by a free-run fit")
+    ap.add_argument("--hull-iterations", type=int, default=None, help="with --hull-fit multi_step: Adam steps")
     ap.add_argument("--drop-features", default="", help="comma-separated features to leave out of the benchmark's")
     ap.add_argument("--horizons-s", default="5,10,20,30")
+    ap.add_argument("--save-models", action="store_true", help="also write each variant's model file to --out")
+    ap.add_argument("--with-command-guard", action="store_true",
+                    help="also score each variant with the command-regime guard fitted on its nets (suffix +cg)")
     ap.add_argument("--permutation", action="store_true",
                     help="also the permutation importance of every feature of each variant (validation rollouts)")
     args = ap.parse_args(argv)
@@ -128,8 +144,14 @@ def main(argv=None) -> int:
     cfg = replace(cfg, calibration=replace(cfg.calibration, horizon_s=max(horizons)))
     if args.members:
         cfg = replace(cfg, ensemble=replace(cfg.ensemble, n_members=args.members))
+    if args.seed is not None:
+        cfg = replace(cfg, ensemble=replace(cfg.ensemble, seed=args.seed))
     if args.hidden:
         cfg = replace(cfg, ensemble=replace(cfg.ensemble, hidden=args.hidden))
+    if args.hull:
+        cfg = replace(cfg, hull_correction=True, hull_fit=args.hull_fit)
+        if args.hull_iterations:
+            cfg = replace(cfg, multistep=replace(cfg.multistep, hull_iterations=args.hull_iterations))
     drop = [f for f in args.drop_features.split(",") if f]
     if drop:
         cfg = replace(cfg, residual=replace(cfg.residual, features=tuple(f for f in cfg.residual.features
@@ -138,7 +160,10 @@ def main(argv=None) -> int:
     args.out.mkdir(parents=True, exist_ok=True)
     t0 = time.perf_counter()
     base, logs = one_step_hybrid(cfg, fit_runs, args.out / f"one_step_m{cfg.ensemble.n_members}"
-                                  f"_h{cfg.ensemble.hidden}_f{len(cfg.residual.features)}.npz")
+                                  f"_h{cfg.ensemble.hidden}_f{len(cfg.residual.features)}"
+                                  f"{'_s%d' % cfg.ensemble.seed if cfg.ensemble.seed else ''}"
+                                  f"{'_hull_' + cfg.hull_fit if cfg.hull_correction else ''}"
+                                  f"{cfg.multistep.hull_iterations if cfg.hull_fit == 'multi_step' else ''}.npz")
     print(f"one-step nets: {time.perf_counter() - t0:.0f} s", flush=True)
     dt = float(np.median(np.diff(val_runs[0].arrays.time_s)))
     steps = np.array([int(round(h / dt)) for h in horizons])
@@ -151,6 +176,12 @@ def main(argv=None) -> int:
 
     per = {("dynamic", "known"): score(DynamicPredictor(v, residual_config=cfg.residual)),
            ("one_step", "known"): score(base)}
+    if base.hull is not None:  # the physics with the hull correction alone (the nets' output set to zero)
+        z = copy.deepcopy(base)
+        z.ensemble.weights[4][:] = 0.0
+        z.ensemble.weights[5][:] = 0.0
+        z.ensemble.y_mean = np.zeros(3)
+        per[("hull_only", "known")] = score(z)
     rows = []
     prev = args.out / "errors.csv"
     old = pd.read_csv(prev) if prev.exists() else None
@@ -159,10 +190,19 @@ def main(argv=None) -> int:
         t0 = time.perf_counter()
         q, hist = fine_tune(base, logs, ms, cfg.train_row_stride)
         secs = time.perf_counter() - t0
+        if args.save_models:
+            q.save(args.out / f"model_{name}.npz")
         per[(name, "known")] = score(q)
         e = error_table(per, val_runs, horizons)
         rows.append(summary(e, name, secs, hist, kw))
         print(json.dumps(rows[-1]), flush=True)
+        if args.with_command_guard:
+            with_command_regime(q, logs, cfg.train_row_stride)
+            per[(name + "+cg", "known")] = score(q)
+            e = error_table(per, val_runs, horizons)
+            rows.append(summary(e, name + "+cg", secs, hist, kw))
+            print(json.dumps(rows[-1]), flush=True)
+            q.command_regime = None
         if args.permutation:
             imp = permutation_importance(q, score, horizons, val_runs)
             atomic_write(args.out / f"importance_{name}.csv", lambda fh: fh.write(imp.to_csv(index=False).encode()))
@@ -171,7 +211,7 @@ def main(argv=None) -> int:
     if old is not None:  # keep earlier variants of the same --out (same split, same one-step nets)
         errors = pd.concat([old[~old.model.isin(errors.model.unique())], errors], ignore_index=True)
     atomic_write(args.out / "errors.csv", lambda fh: fh.write(errors.to_csv(index=False).encode()))
-    rows = [summary(errors, "one_step", 0.0, {}, {})] + rows
+    rows = [summary(errors, m, 0.0, {}, {}) for m in ("one_step", "hull_only") if (m, "known") in per] + rows
     vf = args.out / "variants.csv"
     table = pd.DataFrame(rows)
     if vf.exists():
@@ -183,6 +223,14 @@ def main(argv=None) -> int:
     print(d.round(3).to_string())
     print(table.drop(columns=["history"]).to_string())
     return 0
+
+
+def with_command_regime(q, logs, stride):
+    """Fit the command-regime guard of the fine-tuned hybrid ``q`` on the held-back end of its logs (in place)."""
+    cal = q.calibration_config
+    cuts = [q._calibration_cut(a, cal, True) for a in logs]
+    masks = [None if c >= len(a) else (np.arange(len(a)) < c) for a, c in zip(logs, cuts)]
+    q.command_regime = q._fit_command_regime(logs, masks, True, stride)
 
 
 def permutation_importance(p, score, horizons, runs, seed: int = 0):

@@ -19,7 +19,10 @@ velocities and accelerations) unless their name says otherwise:
 ``_abs`` (absolute-error loss), ``_lead`` (loss weighted by lead time), ``_hl<m>`` (heading
 length of the loss), ``_c<s>`` (curriculum from a ``<s>``-second horizon),
 ``+rate`` (only the command rates added), ``+cg`` (command-regime guard; off otherwise, whatever
-the benchmark default).
+the benchmark default), ``+hull`` / ``+hullms`` (the linear hull correction before the nets,
+identified on the one-step residual / by a free-run fit), ``_th`` (the hull correction tuned
+with the nets in multi-step training), ``+refit`` (after calibrating, the nets refitted on all
+the training rows, ``CalibrationConfig.refit``).
 Writes ``errors.csv`` and ``coverage.csv`` (the manoeuvre benchmark's columns) and
 ``timing.csv`` (training seconds), and prints the distance and heading tables with
 commands known.
@@ -72,6 +75,13 @@ def variants(cfg, names):
             ms["loss"] = "absolute"
         if "_lead" in name:
             ms["lead_weighting"] = "lead"
+        if "_th" in name:
+            ms["tune_hull"] = True
+        if "+refit" in name:
+            kw["calibration_config"] = replace(cfg.calibration, refit=True)
+        if "+hull" in name:
+            kw["hull_correction"] = True
+            kw["hull_fit"] = "multi_step" if "+hullms" in name else "one_step"
         if ms:
             kw["multistep_config"] = replace(MultiStepConfig(), **ms)
         if "+cmd" in name:

@@ -129,3 +129,28 @@ def test_command_regime_weights_and_model_file(tmp_path):
     np.testing.assert_allclose(back.command_regime.weights, hp.command_regime.weights)
     fc = hp.forecast(logs[0], [150.0], 20.0)
     np.testing.assert_allclose(back.forecast(logs[0], [150.0], 20.0).guard_weight, fc.guard_weight)
+
+
+def test_zero_output_start_begins_at_the_physics_rollout():
+    """With output_init="zero" the first validation loss is that of the physics alone, and the
+    one-step ensemble passed in is not changed."""
+    from hybridship.residual.hull import HULL_REGRESSORS, HullCorrection
+    from hybridship.residual.multistep import collect_starts, train_multistep
+
+    m = DynamicModel("gunnerus")
+    logs = [physics_log(m, seed=s, duration_s=300.0, t_shutdown_s=None, current=(0.3, 1.0)) for s in (5, 6)]
+    rc = ResidualConfig(features=PAPER_FEATURES[:6], bias_window_s=0.0)
+    hp = HybridPredictor(m.vessel, residual_config=rc, ensemble_config=TINY,
+                         calibration_config=CalibrationConfig(fraction=0.0)).fit(logs)
+    cfg = MultiStepConfig(horizon_s=5.0, iterations=2, batch_starts=8, start_every_s=10.0, val_every=1)
+    starts = collect_starts([prepare_log(m, as_log_arrays(x, m.vessel), rc) for x in logs], [None, None], cfg)
+    before = hp.ensemble.predict_members(np.zeros((1, 6)))
+    _, h0 = train_multistep(hp.ensemble, m, starts, rc.feature_index,
+                            MultiStepConfig(**{**cfg.__dict__, "output_init": "zero"}))
+    P = len(HULL_REGRESSORS)
+    nothing = HullCorrection(np.zeros((P, 3)), np.zeros(P), np.ones(P), np.zeros(3), 30.0)
+    _, physics = train_multistep(None, m, starts, rc.feature_index, cfg, hull=nothing)
+    np.testing.assert_allclose(h0["val_loss"][0], physics["val_loss"][0], rtol=1e-12)
+    np.testing.assert_allclose(hp.ensemble.predict_members(np.zeros((1, 6))), before)
+    with pytest.raises(ValueError, match="output_init"):
+        MultiStepConfig(output_init="random")

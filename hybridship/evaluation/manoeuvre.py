@@ -115,6 +115,11 @@ class ManoeuvreConfig:
     command_guard : bool
         Fit and apply the hybrid's command-regime guard
         (:class:`~hybridship.residual.guard.CommandRegime`); chosen on the validation split.
+    hull_correction : bool
+        Fit the hybrid's linear MMG-structured correction before the nets
+        (:class:`~hybridship.residual.hull.HullCorrection`).
+    hull_fit : {"one_step", "multi_step"}
+        How that correction is identified (see :class:`~hybridship.predictors.HybridPredictor`).
     """
 
     start_every_s: float | None = 1.0
@@ -130,6 +135,8 @@ class ManoeuvreConfig:
     multistep: MultiStepConfig = field(default_factory=lambda: MultiStepConfig(horizon_s=30.0, batch_starts=64,
                                                                                iterations=100, loss="absolute"))
     command_guard: bool = True
+    hull_correction: bool = False
+    hull_fit: str = "one_step"
 
     @classmethod
     def quick(cls, seed: int = 0) -> "ManoeuvreConfig":
@@ -242,7 +249,8 @@ def make_predictors(vessel, config: ManoeuvreConfig) -> dict[str, object]:
                                   guard_quantile=config.guard_quantile, environment="mean",
                                   calibration_config=config.calibration,
                                   training=config.training, multistep_config=config.multistep,
-                                  command_guard=config.command_guard),
+                                  command_guard=config.command_guard, hull_correction=config.hull_correction,
+                                  hull_fit=config.hull_fit),
         "dynamic": DynamicPredictor(vessel, residual_config=rc),
         "data_only": DataOnlyPredictor(vessel, ensemble_config=ec, start_average_s=rc.start_average_s),
         "dead_reckoning": DeadReckoning(vessel, start_average_s=rc.start_average_s),

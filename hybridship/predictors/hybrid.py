@@ -10,6 +10,7 @@ position uncertainty.
 
 from __future__ import annotations
 
+from dataclasses import replace
 from pathlib import Path
 from typing import Iterable
 
@@ -27,6 +28,7 @@ from ..residual.environment import (EnvironmentConfig, EnvironmentEstimator, cur
                                     environment_accel)
 from ..residual.multistep import MultiStepConfig, collect_starts, train_multistep
 from ..residual.guard import CommandRegime, EnvelopeGuard, ThrustRegime
+from ..residual.hull import HullCorrection
 from .after_failure import drift_forecasts
 from .forecast_setup import FORECAST_HISTORY_S, _check_row_stride, _forecast_setup, as_log_arrays, start_indices
 from .model_file import load_model, save_model
@@ -84,6 +86,17 @@ class HybridPredictor:
     command_guard : bool
         Also fit a :class:`~hybridship.residual.guard.CommandRegime` on the held-back
         calibration rows (needs ``calibration_config.fraction > 0``) and apply it with the guard.
+    hull_correction : bool
+        Before the nets, fit a linear-in-parameters, MMG-structured correction of the
+        acceleration (:class:`~hybridship.residual.hull.HullCorrection`, ridge regression on
+        the one-step residual); the nets learn what remains. It is part of the model, not
+        shrunk by the guards (only switched off after a failure with the nets).
+    hull_ridge : float
+        Ridge penalty of that fit (per row, on standardised regressors).
+    hull_fit : {"one_step", "multi_step"}
+        How the hull correction is identified: ridge regression on the one-step residual,
+        or a free-run fit alone (from zero, the multi-step loss, ``multistep_config``'s
+        ``hull_iterations`` and ``hull_lr``) before the nets are fitted to what remains.
     """
 
     #: Training modes of the nets.
@@ -97,12 +110,21 @@ class HybridPredictor:
                  environment: str = "estimator", environment_config: EnvironmentConfig = EnvironmentConfig(),
                  environment_window_s: float = 1800.0, nets_after_stop: bool = False,
                  calibration_config: CalibrationConfig = CalibrationConfig(), training: str = "one_step",
-                 multistep_config: MultiStepConfig = MultiStepConfig(), command_guard: bool = False):
+                 multistep_config: MultiStepConfig = MultiStepConfig(), command_guard: bool = False,
+                 hull_correction: bool = False, hull_ridge: float = 1e-3, hull_fit: str = "one_step"):
         if training not in self.TRAINING_MODES:
             raise ValueError(f"training: expected one of {self.TRAINING_MODES}, got {training!r}")
         self.training = training
         self.multistep_config = multistep_config
         self.command_guard = bool(command_guard)
+        if not hull_ridge >= 0:
+            raise ValueError(f"hull_ridge: must be >= 0, got {hull_ridge}")
+        self.hull_correction = bool(hull_correction)
+        self.hull_ridge = float(hull_ridge)
+        if hull_fit not in self.TRAINING_MODES:
+            raise ValueError(f"hull_fit: expected one of {self.TRAINING_MODES}, got {hull_fit!r}")
+        self.hull_fit = hull_fit
+        self.hull: HullCorrection | None = None
         self.command_regime: CommandRegime | None = None
         if environment not in ENVIRONMENT_SOURCES:
             raise ValueError(f"environment: expected one of {ENVIRONMENT_SOURCES}, got {environment!r}")
@@ -139,7 +161,7 @@ class HybridPredictor:
         log, or None) limits the rows that may be used (for example to leave out the part
         held back for calibration).
         """
-        Xs, Ys, segs, thr = [], [], [], []
+        Xs, Ys, segs, thr, full = [], [], [], [], []
         for k, log in enumerate(logs):
             arrays = as_log_arrays(log, self.model.vessel)
             prep = prepare_log(self.model, arrays, self.residual_config)
@@ -151,7 +173,8 @@ class HybridPredictor:
             rows = prep.trainable_rows(mask)
             if rows.size == 0:
                 continue
-            Xs.append(prep.features(rows))
+            full.append(prep.full_features(rows))
+            Xs.append(full[-1][:, self.residual_config.feature_index])
             Ys.append(prep.deviation(rows))
             segs.append(arrays.segment_id[rows] + 10_000 * k)
             thr.append(prep.thrust_acc[rows])
@@ -159,6 +182,7 @@ class HybridPredictor:
             raise ValueError("fit: no usable training rows in the logs (need dp_active == 1 samples "
                              "in gap-free segments longer than the derivative window)")
         self._training_thrust_acc = np.concatenate(thr)
+        self._training_full = np.concatenate(full)
         return np.concatenate(Xs), np.concatenate(Ys), np.concatenate(segs)
 
     def fit(self, logs: Iterable, *, dp_only: bool = True, progress: bool = False,
@@ -222,6 +246,21 @@ class HybridPredictor:
     def _fit_nets(self, logs, *, dp_only, progress, stride, row_masks):
         X, Y, seg = self.training_data(logs, dp_only=dp_only, row_masks=row_masks)
         X, Y, seg, thr = X[::stride], Y[::stride], seg[::stride], self._training_thrust_acc[::stride]
+        residual_std = Y.std(0).tolist()
+        self.hull = None
+        starts = None
+        if self.hull_correction:
+            full = self._training_full[::stride]
+            self.hull = HullCorrection.fit(full, Y, self.model.vessel.particulars.L_pp_m, self.hull_ridge)
+            if self.hull_fit == "multi_step":
+                starts = self._multistep_starts(logs, row_masks, dp_only)
+                ms = self.multistep_config
+                _, hist = train_multistep(None, self.model, starts, self.residual_config.feature_index,
+                                          replace(ms, iterations=ms.hull_iterations, lr=ms.hull_lr),
+                                          seed=self.ensemble_config.seed, progress=progress, hull=self.hull.zeroed())
+                self.hull = hist["hull"]
+                hull_info = {k: hist[k] for k in ("iterations", "val_loss", "best_val_loss")}
+            Y = Y - self.hull.predict(full)
         self.ensemble = fit_ensemble(X, Y, self.ensemble_config, segment_id=seg, progress=progress)
         self.guard = EnvelopeGuard.fit((X - self.ensemble.x_mean) / self.ensemble.x_std,
                                        quantile=self.guard_quantile)
@@ -229,16 +268,25 @@ class HybridPredictor:
         self.training_info = {"n_rows": int(X.shape[0]), "row_stride": stride,
                               "epochs": self.ensemble.history["epochs"],
                               "best_val_mse": self.ensemble.history["best_val_mse"],
-                              "residual_std": Y.std(0).tolist(), "training": self.training}
+                              "residual_std": residual_std, "training": self.training}
+        if self.hull is not None:
+            self.training_info["hull_residual_std"] = Y.std(0).tolist()
+            if self.hull_fit == "multi_step":
+                self.training_info["hull_multi_step"] = hull_info
         if self.training == "multi_step":
-            preps = [prepare_log(self.model, a, self.residual_config) for a in logs]
-            starts = collect_starts(preps, row_masks if row_masks is not None else [None] * len(logs),
-                                    self.multistep_config, dp_only=dp_only)
+            starts = starts if starts is not None else self._multistep_starts(logs, row_masks, dp_only)
             self.ensemble, hist = train_multistep(self.ensemble, self.model, starts,
                                                   self.residual_config.feature_index, self.multistep_config,
-                                                  seed=self.ensemble_config.seed, progress=progress)
+                                                  seed=self.ensemble_config.seed, progress=progress,
+                                                  hull=self.hull)
+            self.hull = hist.pop("hull", self.hull)
             self.training_info["multi_step"] = {k: hist[k] for k in ("iterations", "n_starts", "n_val_starts",
                                                                      "val_loss", "best_val_loss")}
+
+    def _multistep_starts(self, logs, row_masks, dp_only):
+        preps = [prepare_log(self.model, a, self.residual_config) for a in logs]
+        return collect_starts(preps, row_masks if row_masks is not None else [None] * len(logs),
+                              self.multistep_config, dp_only=dp_only)
 
     def _regime_inputs(self, prep, rows):
         """(rpm / max rpm, model-predicted u [m/s], first rotatable angle [rad]) of rows predicted from row - 1."""
@@ -260,7 +308,10 @@ class HybridPredictor:
                 tr_in.append(self._regime_inputs(prep, rows_t))
             if rows_h.size:
                 he_in.append(self._regime_inputs(prep, rows_h))
-                T.append(prep.deviation(rows_h) / self.ensemble.y_std)
+                dev = prep.deviation(rows_h)
+                if self.hull is not None:
+                    dev = dev - self.hull.predict(prep.full_features(rows_h))
+                T.append(dev / self.ensemble.y_std)
                 Pm.append(self.ensemble.predict(prep.features(rows_h))[0] / self.ensemble.y_std)
         if not tr_in or not he_in:
             return None
@@ -636,6 +687,8 @@ class HybridPredictor:
                                                        az_j[:, 0, ch] if ch is not None else np.zeros(S))
                 r = r * w[None, :, None]
                 wgt[:, j + 1] = w
+            if nets and self.hull is not None:
+                r = r + (self.hull.predict(feats[0]) * w_start[:, None])[None]
             r_prev = r
             eta[:, j + 1], nu[:, j + 1], std[:, j + 1] = _corrected_step(eta_1, nu_1, r, bias0_ned, dt_s, d_nu, d_eta)
         return eta, nu, std, (wgt if guard else None)

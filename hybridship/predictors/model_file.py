@@ -20,6 +20,7 @@ from ..residual.ensemble import EnsembleConfig, MLPEnsemble
 from ..residual.environment import EnvironmentConfig, EnvironmentEstimator
 from ..residual.features import ResidualConfig
 from ..residual.guard import CommandRegime, EnvelopeGuard, ThrustRegime
+from ..residual.hull import HullCorrection
 from ..residual.multistep import MultiStepConfig
 
 __all__ = ["MODEL_FORMAT_VERSION", "ModelFileError", "load_model", "model_metadata", "save_model"]
@@ -97,6 +98,7 @@ def model_metadata(predictor) -> dict:
         "calibration_config": asdict(p.calibration_config),
         "training": p.training, "multistep_config": asdict(p.multistep_config),
         "command_guard": p.command_guard,
+        "hull_correction": p.hull_correction, "hull_ridge": p.hull_ridge, "hull_fit": p.hull_fit, "has_hull": p.hull is not None,
         "command_regime": None if p.command_regime is None else {
             k: getattr(p.command_regime, k) for k in ("rpm_eps", "froude_lo", "angle_hard_rad", "length_m")},
         "calibrated_commands": sorted(p.calibration),
@@ -115,6 +117,8 @@ def save_model(predictor, path) -> Path:
     if p.command_regime is not None:
         cr = p.command_regime
         arrays.update(cmd_regime_weights=cr.weights, cmd_regime_n_train=cr.n_train, cmd_regime_n_held=cr.n_held)
+    if p.hull is not None:
+        arrays.update(p.hull.arrays())
     for mode, c in p.calibration.items():
         for what, sc in c.items():
             arrays[f"cal_{mode}_{what}"] = np.stack([sc.lead_s, sc.scale, sc.floor])
@@ -200,7 +204,8 @@ def _build_predictor(cls, meta: dict, vessel, path: Path):
                   nets_after_stop=meta["nets_after_stop"],
                   calibration_config=CalibrationConfig(**meta["calibration_config"]),
                   training=meta["training"], multistep_config=MultiStepConfig(**meta["multistep_config"]),
-                  command_guard=meta["command_guard"])
+                  command_guard=meta["command_guard"], hull_correction=meta.get("hull_correction", False),
+                  hull_ridge=meta.get("hull_ridge", 1e-3), hull_fit=meta.get("hull_fit", "one_step"))
         state = _scalar_state(meta)
     except (KeyError, TypeError, ValueError, AttributeError) as err:
         if isinstance(err, ModelFileError) or "VesselFileError" in type(err).__name__:
@@ -220,7 +225,7 @@ def _scalar_state(meta: dict) -> dict:
             "calibrated_commands": list(meta["calibrated_commands"]),
             "fingerprint": meta["vessel_fingerprint"],
             "guard_d0": float(meta["guard"]["d0"]), "guard_scale": float(meta["guard"]["scale"]),
-            "thrust_lo": float(meta["thrust_regime"]["lo"])}
+            "thrust_lo": float(meta["thrust_regime"]["lo"]), "has_hull": bool(meta.get("has_hull", False))}
 
 
 def _check_vessel(obj, meta: dict, fingerprint: str, embedded: bool, path: Path) -> None:
@@ -240,9 +245,12 @@ def _restore_learned_state(obj, data: dict, state: dict, path: Path) -> None:
         ens, guard, thrust_regime = _read_nets(data, len(obj.residual_config.features), state)
         calibration = _read_calibration(data, state["calibrated_commands"])
         _check_finite(ens, guard, thrust_regime)
+        hull = (HullCorrection.from_arrays(data, obj.model.vessel.particulars.L_pp_m, obj.hull_ridge)
+                if state["has_hull"] else None)
     except (KeyError, ValueError) as err:
         raise ModelFileError(f"{path}: damaged model contents: {err}") from None
     obj.ensemble, obj.guard, obj.thrust_regime = ens, guard, thrust_regime
+    obj.hull = hull
     obj.estimator = EnvironmentEstimator(obj.model, obj.environment_config)
     if state["thr_mean"].shape != obj.estimator.thrust_error_mean.shape:
         raise ModelFileError(f"{path}: damaged model metadata (thrust_error_prior: expected "

@@ -250,6 +250,11 @@ class PreparedLog:
 
     def features(self, rows: np.ndarray) -> np.ndarray:
         """Feature matrix (len(rows), n_features) for predicting the residual deviation at ``rows``."""
+        return self.full_features(rows)[:, self.config.feature_index]
+
+    def full_features(self, rows: np.ndarray) -> np.ndarray:
+        """Every feature of :data:`ALL_FEATURES` (len(rows), len(ALL_FEATURES)) at ``rows``; the
+        command-aware ones are zeros unless the config selects one of them."""
         rows = np.asarray(rows)
         parts = [self.nu_hat[rows], self.nu_dot_hat[rows], self.deviation(rows - 1)]
         if self.config.uses_command_features:
@@ -260,8 +265,7 @@ class PreparedLog:
                                                  a.wind[rows - 1], self.dt_s, self.rpm_scale, self.angle_channel))
         else:
             parts.append(np.zeros((rows.size, len(COMMAND_FEATURES))))
-        full = np.concatenate(parts, axis=1)
-        return full[:, self.config.feature_index]
+        return np.concatenate(parts, axis=1)
 
     def trainable_rows(self, mask: np.ndarray | None = None) -> np.ndarray:
         """Rows i whose target and features are all defined (i - 1 and i - 2 in i's segment)."""

@@ -24,7 +24,7 @@ ensemble mean, the members move together and keep the spread of the one-step bag
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import Annotated, Literal
 
 import numpy as np
@@ -76,6 +76,19 @@ class MultiStepConfig:
     anchor_decay : float
         Weight of an L2 penalty pulling the weights towards their one-step (warm-start)
         values, per weight and relative to the loss [m^2]; 0 = none.
+    tune_hull : bool
+        With a hybrid's linear hull correction
+        (:class:`~hybridship.residual.hull.HullCorrection`), fine-tune its coefficients
+        together with the nets (a free-run fit of the grey-box part); otherwise it is held.
+    output_init : {"one_step", "zero"}
+        Start of the nets: the one-step fit as it is (warm start), or its hidden layers with
+        the output layer set to give no correction (the rollout then starts from the physics,
+        plus any hull correction, and the nets add only what lowers the rollout error).
+    hull_iterations : int
+        Adam steps of the free-run fit of the hull correction alone, before the nets
+        (``HybridPredictor(hull_fit="multi_step")``).
+    hull_lr : float
+        Learning rate of that fit (its coefficients are in units of the residual's spread).
     """
 
     horizon_s: Annotated[Float, Field(gt=0)] = 10.0
@@ -93,6 +106,10 @@ class MultiStepConfig:
     curriculum_start_s: Annotated[Float, Field(gt=0)] | None = None
     curriculum_fraction: Annotated[Float, Field(gt=0, le=1)] = 0.5
     anchor_decay: Annotated[Float, Field(ge=0)] = 0.0
+    tune_hull: bool = False
+    output_init: Literal["one_step", "zero"] = "one_step"
+    hull_iterations: Annotated[Int, Field(ge=1)] = 100
+    hull_lr: Annotated[Float, Field(gt=0)] = 1e-2
 
     @model_validator(mode="after")
     def _curriculum_within_horizon(self):
@@ -232,6 +249,26 @@ def _torch_physics_step():
     return PhysicsStep
 
 
+def _full_features(e1, n1, a1, r_prev, s: Starts, j: int, use_cmd: bool, scales: dict):
+    """Every feature of :data:`~hybridship.residual.features.ALL_FEATURES` at rollout step ``j``
+    (torch, (E, S, F)) from the physics step ``e1, n1, a1`` (S, 3) and the members' previous
+    residuals ``r_prev`` (E, S, 3); the command-aware ones are zeros unless ``use_cmd``."""
+    import torch
+
+    from .features import COMMAND_FEATURES, command_feature_columns
+
+    E, S = r_prev.shape[0], n1.shape[0]
+    cols = [n1.expand(E, S, 3), a1.expand(E, S, 3), r_prev]
+    if use_cmd:
+        jp = max(j - 1, 0)
+        cf = command_feature_columns(n1, e1[:, 2], s.rpm[:, j], s.rpm[:, jp], s.az[:, j], s.az[:, jp],
+                                     s.wind[:, 0], s.dt_s, scales["rpm_scale"], scales["angle_channel"], lib=torch)
+        cols.append(cf.expand(E, S, cf.shape[-1]))
+    else:
+        cols.append(torch.zeros((E, S, len(COMMAND_FEATURES)), dtype=n1.dtype))
+    return torch.cat(cols, dim=2)
+
+
 def _train_val_starts(starts: Starts, max_val_starts: int):
     """Indices of the training starts and of at most ``max_val_starts`` validation starts
     (spread evenly; the training starts when no start is held out)."""
@@ -293,17 +330,23 @@ def _curriculum_horizon(config: MultiStepConfig, it: int, H: int, dt: float) -> 
 
 
 def train_multistep(ensemble, model, starts: Starts, feature_index, config: MultiStepConfig, *,
-                    substeps: int = 1, seed: int = 0, progress: bool = False):
+                    substeps: int = 1, seed: int = 0, progress: bool = False, hull=None):
     """Fine-tune a one-step :class:`~hybridship.residual.ensemble.MLPEnsemble` on the multi-step loss.
 
+    ``hull``: the hybrid's :class:`~hybridship.residual.hull.HullCorrection` (None: none),
+    added to every step's residual, and fine-tuned too with ``config.tune_hull``. With
+    ``ensemble=None`` only the hull correction is trained (a free-run fit of the grey-box
+    part before the nets; the returned ensemble is then None).
+
     Returns a new ensemble (same normalisation, weights of the best validation loss) and a
-    history dict (``train_loss``, ``val_loss``, ``best_val_loss``, ``iterations``, ``n_starts``).
+    history dict (``train_loss``, ``val_loss``, ``best_val_loss``, ``iterations``, ``n_starts``;
+    ``hull``, the tuned correction, when one was tuned).
     """
     import torch
     from tqdm.auto import tqdm
 
     from .ensemble import MLPEnsemble
-    from .features import ALL_FEATURES, COMMAND_FEATURES, command_feature_columns, command_scales
+    from .features import ALL_FEATURES, COMMAND_FEATURES, command_scales
 
     PhysicsStep = _torch_physics_step()
     P = model.arrays
@@ -314,10 +357,9 @@ def train_multistep(ensemble, model, starts: Starts, feature_index, config: Mult
     tr, va = _train_val_starts(starts, config.max_val_starts)
     rng = np.random.default_rng(seed)
     dd = torch.float64
-    params = [torch.tensor(w, dtype=dd, requires_grad=True) for w in ensemble.weights]
-    x_mean, x_std = (torch.as_tensor(a, dtype=dd) for a in (ensemble.x_mean, ensemble.x_std))
-    y_mean, y_std = (torch.as_tensor(a, dtype=dd) for a in (ensemble.y_mean, ensemble.y_std))
-    E = ensemble.n_members
+    nets = ensemble is not None
+    params, n_net, scale, tune_hull = _trainable_params(ensemble, hull, config)
+    E = ensemble.n_members if nets else 1
     use_cmd = any(ALL_FEATURES[i] in COMMAND_FEATURES for i in np.asarray(feature_index))
     scales = command_scales(model, model.vessel.rotatable)
 
@@ -333,16 +375,8 @@ def train_multistep(ensemble, model, starts: Starts, feature_index, config: Mult
         for j in range(H):
             y = PhysicsStep.apply(x, s.rpm[:, j:j + 1], s.az[:, j:j + 1], s.wind, P, dt, substeps, config.fd_step)
             e1, n1, a1 = y[:, :3], y[:, 3:6], y[:, 6:9]
-            cols = [n1.expand(E, S, 3), a1.expand(E, S, 3), r_prev]
-            if use_cmd:
-                jp = max(j - 1, 0)
-                cf = command_feature_columns(n1, e1[:, 2], s.rpm[:, j], s.rpm[:, jp], s.az[:, j], s.az[:, jp],
-                                             s.wind[:, 0], dt, scales["rpm_scale"], scales["angle_channel"], lib=torch)
-                cols.append(cf.expand(E, S, cf.shape[-1]))
-            else:
-                cols.append(torch.zeros((E, S, len(COMMAND_FEATURES)), dtype=dd))
-            feats = torch.cat(cols, dim=2)[..., fidx]
-            r = _member_residuals(params, feats, x_mean, x_std, y_mean, y_std)        # (E, S, 3)
+            full = _full_features(e1, n1, a1, r_prev, s, j, use_cmd, scales)
+            r = _step_residual(params, n_net, full, fidx, ensemble, hull, scale)          # (E, S, 3)
             r_prev = r
             eta, nu = _corrected_step(e1, n1, r, bias, dt)
             x = torch.cat([eta, nu], 1)
@@ -352,7 +386,7 @@ def train_multistep(ensemble, model, starts: Starts, feature_index, config: Mult
     params0 = [p.detach().clone() for p in params]
     n_weights = sum(p.numel() for p in params)
 
-    opt = torch.optim.Adam(params, lr=config.lr)
+    opt = torch.optim.Adam([p for p in params if p.requires_grad], lr=config.lr)
     val_data = starts.take(va)
     with torch.no_grad():
         best = float(rollout_loss(val_data))
@@ -386,6 +420,51 @@ def train_multistep(ensemble, model, starts: Starts, feature_index, config: Mult
     finally:
         torch.set_num_threads(threads)
     hist["best_val_loss"] = best
-    new = MLPEnsemble([p.numpy().astype(float) for p in best_params], ensemble.x_mean, ensemble.x_std,
-                      ensemble.y_mean, ensemble.y_std, dict(ensemble.history))
-    return new, hist
+    if tune_hull:
+        hist["hull"] = replace(hull, theta=best_params[n_net].numpy() * scale,
+                               offset=best_params[n_net + 1].numpy() * scale)
+    if not nets:
+        return None, hist
+    return MLPEnsemble([p.numpy().astype(float) for p in best_params[:n_net]], ensemble.x_mean, ensemble.x_std,
+                       ensemble.y_mean, ensemble.y_std, dict(ensemble.history)), hist
+
+
+def _step_residual(params, n_net: int, full, fidx, ensemble, hull, scale):
+    """The members' residuals (E, S, 3) of one rollout step from the full features (E, S, F):
+    the nets' (none without an ensemble) plus the hull correction's (see :func:`_trainable_params`)."""
+    import torch
+
+    dd = full.dtype
+    if ensemble is not None:
+        r = _member_residuals(params, full[..., fidx], *(torch.as_tensor(a, dtype=dd) for a in (
+            ensemble.x_mean, ensemble.x_std, ensemble.y_mean, ensemble.y_std)))
+    else:
+        r = torch.zeros(full.shape[:2] + (3,), dtype=dd)
+    if hull is not None:
+        sc = torch.as_tensor(scale, dtype=dd)
+        r = r + hull.predict_torch(full[0], params[n_net] * sc, params[n_net + 1] * sc)
+    return r
+
+
+def _trainable_params(ensemble, hull, config: MultiStepConfig):
+    """``(params, n_net, scale, tune_hull)``: the torch tensors of the nets' weights (trained),
+    then the hull correction's coefficients and offset (trained with ``config.tune_hull``, or
+    when there are no nets) in units of ``scale`` (the nets' output spread, else the hull's
+    target spread), so that one Adam step size suits both."""
+    import torch
+
+    nets = ensemble is not None
+    if not nets and hull is None:
+        raise ValueError("train_multistep: nothing to train (no ensemble and no hull correction)")
+    weights = [np.array(w, dtype=float) for w in ensemble.weights] if nets else []
+    if nets and config.output_init == "zero":       # output layer: exactly no correction
+        weights[4][:] = 0.0
+        weights[5][:] = -ensemble.y_mean / ensemble.y_std
+    params = [torch.tensor(w, dtype=torch.float64, requires_grad=True) for w in weights]
+    n_net = len(params)
+    scale = ensemble.y_std if nets else hull.scale
+    tune_hull = hull is not None and (config.tune_hull or not nets)
+    if hull is not None:
+        params += [torch.tensor(hull.theta / scale, dtype=torch.float64, requires_grad=tune_hull),
+                   torch.tensor(hull.offset / scale, dtype=torch.float64, requires_grad=tune_hull)]
+    return params, n_net, scale, tune_hull
