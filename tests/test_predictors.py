@@ -8,6 +8,7 @@ import pytest
 from hybridship.logs.io import LogFormatError
 from hybridship.predictors import (DeadReckoning, DynamicPredictor, HybridPredictor, ModelFileError,
                                    as_log_arrays)
+from hybridship.residual.calibration import CalibrationConfig
 from hybridship.residual.ensemble import EnsembleConfig, fit_ensemble
 from hybridship.residual.features import prepare_log
 from hybridship.residual.guard import EnvelopeGuard
@@ -261,3 +262,14 @@ def test_a_start_window_shorter_than_a_step_uses_the_start_row(model, exact_logs
     log = exact_logs[0]
     fc = DynamicPredictor(model.vessel, residual_config=ResidualConfig(start_average_s=0.1)).forecast(log, [300], 10)
     np.testing.assert_allclose(fc.nu[0, 0], log.loc[300, ["u_m_s", "v_m_s"]].tolist() + [np.radians(log.r_deg_s[300])])
+
+
+def test_a_diverging_rollout_stops_with_a_clear_error(model, exact_logs):
+    """A learned correction that drives the state to non-finite values (here: nets forced to
+    answer 1e300) stops the forecast with an error that says so, not deep in the physics."""
+    hp = HybridPredictor(model.vessel, ensemble_config=SMALL, calibration_config=CalibrationConfig(fraction=0.0)
+                         ).fit(exact_logs[:1])
+    E = hp.ensemble.n_members
+    hp.ensemble.predict_members = lambda X: np.full((E,) + X.shape[1:-1] + (3,), 1e300)
+    with pytest.raises(FloatingPointError, match="diverged at lead"):
+        hp.forecast(exact_logs[1], [900.0], 60.0, guard=False)

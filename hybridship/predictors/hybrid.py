@@ -691,6 +691,7 @@ class HybridPredictor:
                 r = r + (self.hull.predict(feats[0]) * w_start[:, None])[None]
             r_prev = r
             eta[:, j + 1], nu[:, j + 1], std[:, j + 1] = _corrected_step(eta_1, nu_1, r, bias0_ned, dt_s, d_nu, d_eta)
+            _check_finite_step(eta[:, j + 1], nu[:, j + 1], (j + 1) * dt_s)
         return eta, nu, std, (wgt if guard else None)
 
     # ------------------------------------------------------------------ model files
@@ -719,6 +720,16 @@ class HybridPredictor:
         format version, or a vessel that differs from the one the model was trained for.
         """
         return load_model(cls, path, vessel)
+
+
+def _check_finite_step(eta, nu, lead_s: float):
+    """Stop a rollout whose state left the finite numbers, with a message that says why."""
+    bad = ~(np.isfinite(eta).all(axis=1) & np.isfinite(nu).all(axis=1))
+    if np.any(bad):
+        raise FloatingPointError(
+            f"forecast: the hybrid's rollout diverged at lead {lead_s:g} s for {int(bad.sum())} of {bad.size} "
+            f"start(s): the learned correction (nets or hull correction) drove the state to non-finite values. "
+            f"Retrain without the hull correction, with the guard on, or on data that covers this regime")
 
 
 def _corrected_step(eta_1, nu_1, r, bias0_ned, dt_s: float, d_nu, d_eta):
