@@ -20,6 +20,7 @@ Examples::
     python benchmarks/after_stop_calibration.py                                   # the drift benchmark's set
     python benchmarks/after_stop_calibration.py --n 8 --vessel-spread 1
     python benchmarks/after_stop_calibration.py --n 8 --vessel-spread 1 --beaufort 2 6 --dp-s 1800
+    python benchmarks/after_stop_calibration.py --n 8 --heading-mode mixed
     python benchmarks/after_stop_calibration.py --n 8 --vessel-spread 1 --beaufort 3 7 --dp-s 1800
 """
 
@@ -46,8 +47,10 @@ SMALL = EnsembleConfig(n_members=10, hidden=4, max_epochs=1, patience=1, seed=0)
 HORIZONS_S = (15.0, 30.0, 60.0)
 
 
-def calibration_logs(n: int, seed: int, beaufort, dp_s: float, vessel_spread: float) -> list:
-    """``n`` simulated DP losses (600 s of drift each) for the calibration."""
+def calibration_logs(n: int, seed: int, beaufort, dp_s: float, vessel_spread: float,
+                     heading_mode: str = "weather") -> list:
+    """``n`` simulated DP losses (600 s of drift each) for the calibration; ``heading_mode``
+    "mixed" alternates bow-to-weather and random heading set-points."""
     v = load_vessel("gunnerus")
     scales = draw_scales(v, n, np.random.default_rng(seed), vessel_spread) if vessel_spread > 0 else None
     logs = []
@@ -61,8 +64,9 @@ def calibration_logs(n: int, seed: int, beaufort, dp_s: float, vessel_spread: fl
                                    "wind_coefficient_scale": scales.wind_coefficient[i].tolist(),
                                    "thrust_scale": float(scales.thrust[i])}
             vi = type(v).model_validate(spec)
+        mode = ("random" if i % 2 else "weather") if heading_mode == "mixed" else heading_mode
         cfg = DPLossConfig(seed=seed + i, beaufort=tuple(beaufort), t_shutdown_s=dp_s, t_shutdown_jitter_s=30.0,
-                           drift_s=600.0)
+                           drift_s=600.0, heading_mode=mode)
         logs.append(simulate_dp_loss(cfg, vessel=vi))
     return logs
 
@@ -77,12 +81,15 @@ def main(argv=None) -> int:
     ap.add_argument("--thrust-error-model", choices=("per_dof", "per_thruster"), default="per_thruster",
                     help="the estimator's thrust-model error: per thruster (the default) or per DOF (the "
                          "previous default, hybridship.residual.environment.PER_DOF)")
+    ap.add_argument("--heading-mode", choices=("weather", "random", "mixed"), default="weather",
+                    help="heading set-points of the calibration losses: bow to weather (default), random, or "
+                         "alternating")
     ap.add_argument("--held-load-window-s", type=float, default=EnvironmentConfig().held_load_window_s,
                     help="station keeping read for the held-load term of the spread [s] (0: no such term)")
     args = ap.parse_args(argv)
     cfg = EnvironmentConfig(**(PER_DOF if args.thrust_error_model == "per_dof" else {}),
                             held_load_window_s=args.held_load_window_s)
-    cal = calibration_logs(args.n, args.seed, args.beaufort, args.dp_s, args.vessel_spread)
+    cal = calibration_logs(args.n, args.seed, args.beaufort, args.dp_s, args.vessel_spread, args.heading_mode)
     data = {"embedded": [s.log for s in embedded_scenarios(3, 0)]}
     if TRUTHSIM.is_dir():
         data["truthsim-dev"] = [pd.read_csv(f) for f in log_files(TRUTHSIM)]
