@@ -161,7 +161,7 @@ def _estimated(model, a: LogArrays, idx: int, n_members: int, seed: int, config=
     ``idx``, as if the thrusters stopped there."""
     from ..residual.environment import CUR, LOAD, EnvironmentEstimator
     from ..residual.environment import EnvironmentEstimate as FilterEstimate
-    from ..residual.load_variability import held_load_rows, unexplained_load_std
+    from ..residual.load_variability import held_load_rows, held_load_std_ned, unexplained_load_std
 
     est = EnvironmentEstimator(model) if config is None else EnvironmentEstimator(model, config)
     c = est.config
@@ -178,11 +178,10 @@ def _estimated(model, a: LogArrays, idx: int, n_members: int, seed: int, config=
     if window.size and n_members > 1:
         # the load held over the blackout varies as it did in the station keeping before
         # (hybridship.residual.load_variability), a centred draw per member
-        win = run.take(np.argsort(run.rows[1:], kind="stable") + 1)
-        sigma_b = unexplained_load_std(model, a, win, max(1, int(round(c.held_load_block_s / (step * a.dt_s)))))
-        pos = np.sqrt(0.5 * (sigma_b[0] ** 2 + sigma_b[1] ** 2))
+        sigma_b = unexplained_load_std(model, a, run.take(slice(1, None)),
+                                       max(1, int(round(c.held_load_block_s / (step * a.dt_s)))))
         z = np.random.default_rng([seed, 7]).standard_normal((n_members, 3))
-        loads += (z - z.mean(axis=0)) * np.array([pos, pos, sigma_b[2]])
+        loads += (z - z.mean(axis=0)) * held_load_std_ned(sigma_b)
     return x[0:3].copy(), x[3:6].copy(), x[LOAD].copy(), loads, draws[:, CUR.start - off:CUR.stop - off].copy()
 
 

@@ -466,18 +466,19 @@ class HybridPredictor:
         arrays = as_log_arrays(log, self.model.vessel)
         return self._run_estimator(arrays, start_indices(arrays, start_times_s))
 
-    def _run_estimator(self, arrays, idx, extra_rows=None):
-        """The filter from ``environment_window_s`` before the earliest start ``idx``: its
-        estimates at ``idx`` and, when given, also at ``extra_rows`` (from the same run)."""
+    def _filter_first_row(self, arrays, idx) -> int:
+        """Row at which the filter starts: ``environment_window_s`` before the earliest start."""
         dt = float(np.median(np.diff(arrays.time_s)))
-        first = max(0, int(idx.min()) - int(round(self.environment_window_s / dt)))
+        return max(0, int(idx.min()) - int(round(self.environment_window_s / dt)))
+
+    def _run_estimator(self, arrays, idx, extra_rows=None):
+        """The filter's estimates at the start rows ``idx`` and, when given, also at
+        ``extra_rows`` (rows at or after the filter's first row) from the same run."""
+        first = self._filter_first_row(arrays, idx)
         if extra_rows is None:
             return self.estimator.run(arrays, idx, first_row=first)
-        extra = np.asarray(extra_rows, dtype=int)
-        extra = extra[extra >= first]
-        est = self.estimator.run(arrays, np.concatenate([idx, extra]), first_row=first)
-        S = len(idx)
-        return est.take(slice(0, S)), est.take(slice(S, None))
+        est = self.estimator.run(arrays, np.concatenate([idx, extra_rows]), first_row=first)
+        return est.take(slice(0, len(idx))), est.take(slice(len(idx), None))
 
     def _estimated_start(self, st, n_members: int):
         """Start states and environment from the estimator at every start row.
@@ -491,7 +492,7 @@ class HybridPredictor:
         """
         est, sigma_b = self._estimate_with_held_load(st)
         eta0, nu0 = est.x[:, 0:3].copy(), est.x[:, 3:6].copy()
-        draws = est.sample_environment(n_members, self.ensemble_config.seed)      # (E, S, 8)
+        draws = est.sample_environment(n_members, self.ensemble_config.seed)      # (E, S, 5 + n_theta)
         current = np.ascontiguousarray(current_input(est.current_ned_m_s)[:, None, :])
         a_err = est.thrust_error_accel(self.model, eta0, nu0, st.rpm[:, 0], st.az[:, 0], st.wind[:, 0])
         acc_ext = np.ascontiguousarray(a_err[:, None, :])
@@ -507,18 +508,20 @@ class HybridPredictor:
             return self._run_estimator(st.arrays, st.idx), sigma_b
         dt = st.arrays.dt_s
         step = max(1, int(round(c.filter_step_s / dt)))
-        windows = {}        # starts after the same stop share one window
+        first = self._filter_first_row(st.arrays, st.idx)
+        windows = {}        # starts after the same stop share one window: (rows, starts)
         for k in np.flatnonzero(after):
             rows = held_load_rows(st.arrays.dp_active, int(st.idx[k]), step, int(round(c.held_load_window_s / dt)))
+            rows = rows[rows >= first]
             windows.setdefault(tuple(rows[[0, -1]]) if rows.size else (), (rows, []))[1].append(k)
-        extra = np.concatenate([w[0] for w in windows.values()] + [np.zeros(0, dtype=int)])
-        est, est_w = self._run_estimator(st.arrays, st.idx, extra)
+        windows = list(windows.values())
+        est, est_w = self._run_estimator(st.arrays, st.idx, np.concatenate([w[0] for w in windows]))
         block = max(1, int(round(c.held_load_block_s / (step * dt))))
-        for rows, starts in windows.values():
-            keep = np.flatnonzero(np.isin(est_w.rows, rows))
-            if keep.size:
-                sub = est_w.take(keep[np.argsort(est_w.rows[keep], kind="stable")])
-                sigma_b[starts] = unexplained_load_std(self.model, st.arrays, sub, block)
+        ends = np.cumsum([w[0].size for w in windows])
+        for (rows, starts), end in zip(windows, ends):
+            if rows.size:
+                sigma_b[starts] = unexplained_load_std(self.model, st.arrays, est_w.take(slice(end - rows.size, end)),
+                                                       block)
         return est, sigma_b
 
     def _calibrated_forecast_std(self, std, lead_s, commands, after_stop):

@@ -27,7 +27,7 @@ import numpy as np
 
 from .environment import CUR, LOAD, THR, current_input, external_accel, thrust_error_accel
 
-__all__ = ["held_load_rows", "unexplained_load_std", "held_load_spread"]
+__all__ = ["held_load_rows", "unexplained_load_std", "held_load_std_ned", "held_load_spread"]
 
 
 def held_load_rows(dp_active: np.ndarray, start: int, step: int, window_rows: int) -> np.ndarray:
@@ -77,16 +77,22 @@ def unexplained_load_std(model, arrays, estimate, block_rows: int) -> np.ndarray
     t = arrays.time_s[rows].reshape(n_blocks, block_rows)
     nu_b = nu.reshape(n_blocks, block_rows, 3)
     # a block's velocity change from the previous block's end, less the model's mean acceleration
-    dt_b = np.diff(np.concatenate([[t[0, 0]], t[:, -1]]))[1:]
-    dnu = (nu_b[1:, -1] - nu_b[:-1, -1]) / dt_b[:, None]
+    dnu = np.diff(nu_b[:, -1], axis=0) / np.diff(t[:, -1])[:, None]
     missed = dnu - acc.reshape(n_blocks, block_rows, 3)[1:].mean(axis=1)
     return missed.std(axis=0, ddof=1)
+
+
+def held_load_std_ned(sigma_b: np.ndarray) -> np.ndarray:
+    """``sigma_b`` (..., 3) in the body frame [m/s^2, m/s^2, rad/s^2] as a spread in
+    ``[north, east, yaw]``: north and east both take the RMS of surge and sway (the ship
+    turns during a drift, so neither body axis stays with one NED axis)."""
+    sigma_b = np.asarray(sigma_b, dtype=float)
+    pos = np.sqrt(0.5 * (sigma_b[..., 0] ** 2 + sigma_b[..., 1] ** 2))
+    return np.stack([pos, pos, sigma_b[..., 2]], axis=-1)
 
 
 def held_load_spread(sigma_b: np.ndarray, lead_s: np.ndarray) -> np.ndarray:
     """Position and heading spread ``0.5 sigma_b t^2`` of an acceleration error held over the
     forecast: ``sigma_b`` (S, 3) [m/s^2, m/s^2, rad/s^2] at leads (H,) [s] -> (S, H, 3)
-    [m, m, rad]; north and east both take the RMS of surge and sway."""
-    pos = np.sqrt(0.5 * (sigma_b[:, 0] ** 2 + sigma_b[:, 1] ** 2))
-    per_dof = np.column_stack([pos, pos, sigma_b[:, 2]])
-    return 0.5 * per_dof[:, None, :] * np.asarray(lead_s, dtype=float)[None, :, None] ** 2
+    [m, m, rad] (north and east as :func:`held_load_std_ned`)."""
+    return 0.5 * held_load_std_ned(sigma_b)[:, None, :] * np.asarray(lead_s, dtype=float)[None, :, None] ** 2
