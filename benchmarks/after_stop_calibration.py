@@ -5,7 +5,8 @@ which stay off after a stop) is calibrated with
 :meth:`~hybridship.predictors.HybridPredictor.calibrate_after_stop` on ``--n`` DP losses
 simulated by the project's simulator, and its 2-sigma (and 1-sigma) coverage of the
 north/east errors of the first 20 forecasts after every failure is printed at 15, 30 and
-60 s, on the embedded scenarios and on truthsim-dev. The calibration set is varied:
+60 s, on the embedded scenarios and on truthsim-dev, each with a 90 % interval that resamples
+whole failures (:func:`hybridship.evaluation.metrics.coverage_interval`). The calibration set is varied:
 weather (``--beaufort``), station-keeping time before the failure (``--dp-s``) and the
 "real" ship (``--vessel-spread``: each scenario's hull drawn log-normally around the model
 with the vessel file's ``[true_vessel]`` spread, see :mod:`hybridship.driftoff.spread`;
@@ -104,15 +105,11 @@ def main(argv=None) -> int:
         arrays = [as_log_arrays(x, "gunnerus") for x in logs]
         hp = HybridPredictor("gunnerus", ensemble_config=SMALL, environment_config=cfg).fit(arrays, dp_only=True)
         hp.calibrate_after_stop(cal)
-        err, std = [], []
-        for a in arrays:
-            p, t, s = metrics.drift_forecasts(hp, a, n_intervals=20, horizons_s=HORIZONS_S)
-            err.append(np.abs(p - t)[..., :2])
-            std.append(s[..., :2])
-        err, std = np.concatenate(err), np.concatenate(std)
+        fc = [metrics.drift_forecasts(hp, a, n_intervals=20, horizons_s=HORIZONS_S) for a in arrays]
+        P, T, S = (np.stack([f[i] for f in fc]) for i in range(3))       # (logs, starts, horizons, 3)
         for k in (1, 2):
-            cov = (err <= k * std).mean(axis=(0, 2))
-            print(f"| {name} | {k} | " + " | ".join(f"{c:.2f}" for c in cov) + " |")
+            ci = metrics.coverage_interval(P, T, S, k, seed=args.seed)
+            print(f"| {name} | {k} | " + " | ".join(f"{c:.2f} [{lo:.2f}, {hi:.2f}]" for c, lo, hi in ci) + " |")
     return 0
 
 

@@ -125,3 +125,42 @@ def test_station_keeping_calibration_leaves_a_drift_start_raw():
     fc, raw = hp.forecast(logs[0], starts, 30.0), hp.forecast(logs[0], starts, 30.0, calibrated=False)
     assert not np.allclose(fc.eta_std[0, 1:], raw.eta_std[0, 1:])
     np.testing.assert_allclose(fc.eta_std[1], raw.eta_std[1])
+
+
+# --- coverage with an interval over whole failures ---------------------------------------
+
+def _grouped(inside_per_group, n_starts=20, n_h=2):
+    """pred/truth/std (G, n_starts, n_h, 3) whose north/east errors are inside the 2-sigma band
+    for a given share of each group's starts."""
+    G = len(inside_per_group)
+    std = np.ones((G, n_starts, n_h, 3))
+    pred = np.zeros_like(std)
+    for g, share in enumerate(inside_per_group):
+        k = int(round((1 - share) * n_starts))
+        pred[g, :k, :, :2] = 3.0                                   # outside 2 sigma
+    return pred, np.zeros_like(std), std
+
+
+def test_coverage_interval_matches_the_pooled_coverage_and_widens_with_few_failures():
+    from hybridship.evaluation import metrics
+
+    pred, truth, std = _grouped([1, 1, 1, 0.0, 1, 1, 1, 1, 1, 1])
+    ci = metrics.coverage_interval(pred, truth, std, 2.0, seed=3)
+    assert ci.shape == (2, 3)
+    np.testing.assert_allclose(ci[:, 0], metrics.coverage(pred, truth, std)[:, 1])
+    np.testing.assert_allclose(ci[:, 0], 0.9)
+    # one failure in ten missed: the interval spans it, and does not pretend 200 starts are independent
+    assert np.all(ci[:, 1] <= 0.8) and np.all(ci[:, 2] == 1.0)
+    np.testing.assert_array_equal(ci, metrics.coverage_interval(pred, truth, std, 2.0, seed=3))
+    many = metrics.coverage_interval(*_grouped([1, 1, 1, 0.0, 1, 1, 1, 1, 1, 1] * 10), 2.0, seed=3)
+    assert np.all(many[:, 2] - many[:, 1] < 0.5 * (ci[:, 2] - ci[:, 1]))
+
+
+def test_coverage_interval_is_a_point_when_every_failure_agrees_and_undefined_for_one():
+    from hybridship.evaluation import metrics
+
+    ci = metrics.coverage_interval(*_grouped([0.5] * 6), 2.0)
+    np.testing.assert_allclose(ci, 0.5)
+    one = metrics.coverage_interval(*_grouped([0.5]), 2.0)
+    np.testing.assert_allclose(one[:, 0], 0.5)
+    assert np.isnan(one[:, 1:]).all()

@@ -39,6 +39,12 @@ def test_tables_have_the_papers_layout_and_physics_is_exact_on_its_own_logs(tiny
     assert list(cov.columns) == ["model", "horizon_s", "sigma", "coverage"]
     assert {"hybrid", "hybrid_nets_unguarded", "data_only"} <= set(cov.model)
     assert cov.coverage.between(0, 1).all()
+    ci = pd.read_csv(tmp_path / "out" / "coverage_intervals.csv")
+    assert list(ci.columns) == ["model", "horizon_s", "sigma", "coverage", "low", "high", "n_failures"]
+    two = cov[cov.sigma == 2].set_index(["model", "horizon_s"]).coverage
+    ci = ci.set_index(["model", "horizon_s"])
+    np.testing.assert_allclose(ci.coverage, two.loc[ci.index], atol=1e-6)
+    assert set(ci.index.get_level_values(0)) >= {"hybrid", "data_only"}
     dyn = errors[errors.model == "dynamic"]
     # the log was made by the same model: only the 3-s start average separates them
     assert dyn[dyn.state != "yaw_deg"].mae.max() < 0.15, dyn

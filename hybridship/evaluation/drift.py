@@ -10,6 +10,11 @@ samples after the shutdown of every log in ``test``, ``horizon_s`` ahead. The ou
   of north and east errors within 1 and 2 standard deviations of the ensemble; with two
   or more test logs also ``<model>_loo_calibrated``: the spread scaled, per horizon, by the
   factor that gives 68.3 % coverage on the other test logs (leave one log out);
+* ``coverage_intervals.csv``: ``model,horizon_s,sigma,coverage,low,high,n_failures``: the
+  2-sigma coverage of the ensemble models with a 90 % bootstrap interval that resamples
+  whole failures (:func:`~hybridship.evaluation.metrics.coverage_interval`): the starts
+  after one failure share one outcome, so the number of failures sets how much a
+  coverage figure can say;
 * ``tables.md``: Table 2 (cells "first-5/first-20"), Table 3 (% error reduction of the
   hybrids relative to the dynamic model), coverage and wall times;
 * ``timing.csv``: training and forecasting wall time per model;
@@ -144,15 +149,18 @@ def run_drift_benchmark(train=None, test=None, out_dir="drift-benchmark", *, ves
     windows = tuple(w for w in metrics.WINDOWS if w <= n_intervals) or (n_intervals,)
     long = metrics.error_table(errors, horizons_s=horizons, windows=windows)
     coverage = _coverage_table(fc, pick, horizons, len(test_arrays))
+    intervals = _coverage_intervals(fc, pick, horizons, seed)
 
     outputs = {}
     outputs["errors.csv"] = _write_csv(out / "errors.csv", long)
     outputs["coverage.csv"] = _write_csv(out / "coverage.csv", coverage)
+    outputs["coverage_intervals.csv"] = _write_csv(out / "coverage_intervals.csv", intervals)
     outputs["timing.csv"] = _write_csv(out / "timing.csv", timing)
     table2 = metrics.paper_table(long, windows=windows) if len(windows) == 2 else long
     table3 = {m: metrics.reduction_table(long, m, windows=windows) for m in TABLE3_MODELS} \
         if len(windows) == 2 else {}
-    md = _markdown(table2, table3, coverage, timing, test_names, len(train_arrays), ens_cfg, n_intervals)
+    md = _markdown(table2, table3, coverage, intervals, timing, test_names, len(train_arrays), ens_cfg,
+                   n_intervals)
     outputs["tables.md"] = atomic_write(out / "tables.md", lambda fh: fh.write(md.encode("utf-8")))
     if plots:
         outputs.update(_plots(out, fc, all_h, test_arrays, test_names))
@@ -259,6 +267,19 @@ def _coverage_table(fc: dict, pick, horizons, n_logs: int) -> pd.DataFrame:
     return pd.DataFrame(cov_rows)
 
 
+def _coverage_intervals(fc: dict, pick, horizons, seed: int, sigma: float = 2.0) -> pd.DataFrame:
+    """2-sigma coverage of the ensemble models with a 90 % interval over the failures (one per log)."""
+    rows = []
+    for name in ENSEMBLE_MODELS:
+        P = np.stack([p[:, pick] for p, _, _ in fc[name]])
+        T = np.stack([t[:, pick] for _, t, _ in fc[name]])
+        S = np.stack([s[:, pick] for _, _, s in fc[name]])
+        ci = metrics.coverage_interval(P, T, S, sigma, seed=seed)
+        rows += [{"model": name, "horizon_s": h, "sigma": sigma, "coverage": ci[j, 0], "low": ci[j, 1],
+                  "high": ci[j, 2], "n_failures": P.shape[0]} for j, h in enumerate(horizons)]
+    return pd.DataFrame(rows)
+
+
 def _coverage_rows(name: str, c: np.ndarray, horizons) -> list[dict]:
     """Rows ``model, horizon_s, sigma, coverage`` from coverages ``c`` (horizon, sigma 1 and 2)."""
     return [{"model": name, "horizon_s": h, "sigma": sig, "coverage": float(c[j, k])}
@@ -294,7 +315,7 @@ def _md_table(df: pd.DataFrame) -> str:
     return markdown_table(df.reset_index())
 
 
-def _markdown(table2, table3, coverage, timing, test_names, n_train, ens_cfg, n_intervals) -> str:
+def _markdown(table2, table3, coverage, intervals, timing, test_names, n_train, ens_cfg, n_intervals) -> str:
     # No top-level heading: the file reads on its own and is also included in the docs pages.
     parts = [f"Drift benchmark. Test logs: {', '.join(test_names)}; trained on {n_train} logs; "
              f"{ens_cfg.n_members}-member ensembles, seed {ens_cfg.seed}; {n_intervals} forecasts after each "
@@ -307,6 +328,13 @@ def _markdown(table2, table3, coverage, timing, test_names, n_train, ens_cfg, n_
     cov.columns = [f"{c:g} s" for c in cov.columns]
     parts += ["\n### Coverage of the ensemble spread (north and east pooled)\n\nA calibrated Gaussian forecast "
               "covers 0.683 (1 sigma) and 0.954 (2 sigma).\n", _md_table(cov.round(2))]
+    ci = intervals.assign(cell=[f"{c:.2f} [{lo:.2f}, {hi:.2f}]" for c, lo, hi in
+                                zip(intervals.coverage, intervals.low, intervals.high)])
+    ci = ci.pivot_table(index="model", columns="horizon_s", values="cell", aggfunc="first")
+    ci.columns = [f"{c:g} s" for c in ci.columns]
+    parts += [f"\n2-sigma coverage with a 90 % interval that resamples whole failures "
+              f"({int(intervals.n_failures.iloc[0])} here; the starts after one failure share one outcome):\n",
+              _md_table(ci)]
     parts += ["\n### Wall time [s]\n", _md_table(timing.assign(seconds=timing.seconds.round(2)).set_index("model"))]
     return "\n".join(parts) + "\n"
 

@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import numpy as np
 import pandas as pd
+from scipy import stats
 
 from ..frames import wrap_pi
 from ..predictors.after_failure import HORIZONS_S, drift_forecasts, shutdown_index
@@ -19,7 +20,7 @@ WINDOWS = (5, 20)
 STATES = ("north_m", "east_m", "yaw_deg")
 
 __all__ = ["HORIZONS_S", "WINDOWS", "STATES", "drift_forecasts", "shutdown_index", "drift_errors",
-           "absolute_errors", "coverage", "error_table", "paper_table", "reduction_table"]
+           "absolute_errors", "coverage", "coverage_interval", "error_table", "paper_table", "reduction_table"]
 
 
 def drift_errors(predictor, arrays, *, n_intervals: int = 20, horizons_s=HORIZONS_S, **forecast_kw) -> np.ndarray:
@@ -71,6 +72,47 @@ def coverage(pred: np.ndarray, truth: np.ndarray, std: np.ndarray, sigmas=(1.0, 
     e = np.moveaxis(err, -2, 0).reshape(nh, -1)
     s = np.moveaxis(s, -2, 0).reshape(nh, -1)
     return np.stack([(e <= k * s).mean(axis=1) for k in sigmas], axis=1)
+
+
+def coverage_interval(pred: np.ndarray, truth: np.ndarray, std: np.ndarray, sigma: float = 2.0, *,
+                      confidence: float = 0.90, n_resamples: int = 4000, seed: int = 0) -> np.ndarray:
+    """Coverage at ``sigma`` with a bootstrap interval that resamples whole failures.
+
+    Forecasts started one second apart after one failure share most of their future, so
+    their errors are nearly one draw: a coverage pooled over six failures rests on about
+    six independent outcomes per component, not on hundreds of starts. The interval
+    resamples the failures (the first axis), with all their starts and both components
+    (percentile bootstrap, :func:`scipy.stats.bootstrap`).
+
+    Parameters
+    ----------
+    pred, truth, std : ndarray, shape (G, ..., n_horizons, 3)
+        One group per failure (log) on the first axis; north and east are counted.
+    sigma : float
+        Width of the band in standard deviations.
+    confidence : float
+        Confidence level of the interval.
+    n_resamples : int
+    seed : int
+        Seed of the resampling (the same call gives the same interval).
+
+    Returns
+    -------
+    ndarray, shape (n_horizons, 3)
+        ``coverage, low, high`` per horizon; ``low`` and ``high`` are NaN with fewer than two
+        groups.
+    """
+    inside = np.abs(pred - truth)[..., :2] <= sigma * std[..., :2]       # (G, ..., nh, 2)
+    inside = np.moveaxis(inside, -2, 1).reshape(inside.shape[0], inside.shape[-2], -1)
+    hits, counts = inside.sum(axis=2).astype(float), float(inside.shape[2])   # (G, nh), per group
+    cov = hits.sum(axis=0) / (counts * hits.shape[0])
+    out = np.column_stack([cov, np.full_like(cov, np.nan), np.full_like(cov, np.nan)])
+    if hits.shape[0] < 2:
+        return out
+    res = stats.bootstrap((hits,), lambda h, axis: h.mean(axis=axis) / counts, confidence_level=confidence,
+                          n_resamples=n_resamples, method="percentile", axis=0, rng=np.random.default_rng(seed))
+    out[:, 1], out[:, 2] = res.confidence_interval.low, res.confidence_interval.high
+    return out
 
 
 def error_table(errors: dict, *, horizons_s=HORIZONS_S, windows=WINDOWS) -> pd.DataFrame:
