@@ -719,8 +719,11 @@ class HybridPredictor:
             (same validated description). Default: the vessel description embedded in
             the file, so no vessel file is needed.
 
-        Raises :class:`ModelFileError` for an unreadable, truncated or tampered file, another
-        format version, or a vessel that differs from the one the model was trained for.
+        Raises
+        ------
+        ModelFileError
+            For an unreadable, truncated or tampered file, another format version, or a
+            vessel that differs from the one the model was trained for.
         """
         return load_model(cls, path, vessel)
 
