@@ -9,9 +9,17 @@ scheme before the estimator (900-s mean residual, 3-s start window).
 Writes ``variants.csv`` and ``variants.md`` (60-s MAE as a ratio to physics alone, first
 5 / first 20 intervals) to ``--out``.
 
-Example::
+``--data own`` runs on ``--own-n`` fresh simulated scenarios of our own (seeds from
+``--own-seed``) instead.
+
+Examples::
 
     python benchmarks/estimator_variants.py --out docs/results/estimator-variants
+    python benchmarks/estimator_variants.py --data own --only default current_prior_0.1 current_prior_0.3 \
+        yaw_load_prior_3e-5 yaw_load_prior_1e-4 restart_yaw_at_stop per_dof mean_bias \
+        --out docs/results/estimator-variants-own-20
+    python benchmarks/estimator_variants.py --data own --own-seed 200 --only default yaw_load_prior_3e-5 \
+        yaw_load_prior_1e-4 --out docs/results/estimator-variants-own-20-seed200
 """
 
 from __future__ import annotations
@@ -38,6 +46,8 @@ VARIANTS = {
     "default": ({}, "the default estimator (thrust error per thruster, constant; the filter carries on at the stop)"),
     "yaw_load_prior_3e-5": ({"environment_config": C(load_yaw_prior_rad_s2=3e-5)},
                             "yaw-load prior 3e-5 rad/s2 instead of 1e-3 (it then decides the yaw split)"),
+    "yaw_load_prior_1e-4": ({"environment_config": C(load_yaw_prior_rad_s2=1e-4)},
+                            "yaw-load prior 1e-4 rad/s2"),
     "yaw_load_prior_3e-4": ({"environment_config": C(load_yaw_prior_rad_s2=3e-4)},
                             "yaw-load prior 3e-4 rad/s2"),
     "restart_yaw_at_stop": ({"environment_config": C(reset_yaw_load_at_stop=True, yaw_load_kept_at_stop=0.0)},
@@ -75,14 +85,23 @@ def main(argv=None) -> int:
     ap.add_argument("--out", type=Path, required=True)
     ap.add_argument("--only", nargs="+", choices=list(VARIANTS), default=list(VARIANTS),
                     help="the variants to run (default: all)")
+    ap.add_argument("--data", nargs="+", choices=("embedded", "truthsim-dev", "own"),
+                    default=("embedded", "truthsim-dev"), help="data sets (default: embedded truthsim-dev)")
+    ap.add_argument("--own-n", type=int, default=20, help="scenarios of the 'own' set (default 20)")
+    ap.add_argument("--own-seed", type=int, default=100, help="seed of its first scenario (default 100)")
     args = ap.parse_args(argv)
     from hybridship.sim.scenario import embedded_scenarios
 
-    data = {"embedded": [s.log for s in embedded_scenarios(3, 0)]}
-    if TRUTHSIM.is_dir():
+    data = {}
+    if "embedded" in args.data:
+        data["embedded"] = [s.log for s in embedded_scenarios(3, 0)]
+    if "truthsim-dev" in args.data and TRUTHSIM.is_dir():
         data["truthsim-dev"] = [pd.read_csv(f) for f in log_files(TRUTHSIM)]
-    else:
+    elif "truthsim-dev" in args.data:
         print(f"skipping truthsim-dev: {TRUTHSIM} not found", file=sys.stderr)
+    if "own" in args.data:
+        name = f"own {args.own_seed}-{args.own_seed + args.own_n - 1}"
+        data[name] = [s.log for s in embedded_scenarios(args.own_n, args.own_seed)]
     rows = []
     for dname, logs in data.items():
         dyn = DynamicPredictor("gunnerus")

@@ -1,0 +1,151 @@
+"""What limits a drift forecast: the physics given parts of the simulator's truth.
+
+After every failure of a set of simulated DP losses, the dynamic model (the project's hull,
+the model's wind) forecasts 60 s ahead from the first 20 samples, starting from the
+simulator's true low-frequency state, and is given one piece of the truth at a time:
+
+* ``model wind``: nothing else (no current, no load);
+* ``current in the hull``: the true current, acting through the relative velocity;
+* ``current as a held force``: the force the true current puts on the ship at rest
+  (computed with the model's hull over the last 10 minutes of station keeping, its mean
+  held in NED), which is all station keeping can show of a current;
+* ``wave drift held``: the mean second-order wave load of the last 10 minutes of station
+  keeping (``truth_tau_wave2_*``), held in NED;
+* the two combinations of those, and
+* ``true loads and current``: the simulator's own wind and wave-drift loads and current
+  sample by sample over the forecast (a ceiling: what is left is the hull model's error).
+
+No estimate is involved: the rows show how much each part of the environment is worth, and
+what a perfect estimate of the held quantities could give. Station keeping cannot tell a
+current from a force (the ship does not move through the water), so the difference between
+the ``current in the hull`` and ``current as a held force`` rows is what the estimator
+cannot know before the ship drifts.
+
+Writes ``drift_oracles.csv`` and ``drift_oracles.md`` to ``--out``: 60-s mean absolute
+heading error [deg] and the mean of the north and east errors [m], pooled over the first 20
+starts of every failure. Example::
+
+    python benchmarks/drift_oracles.py --out docs/results/drift-oracles
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+from scipy.signal import butter, filtfilt
+
+from hybridship.evaluation.drift import log_files
+from hybridship.fileio import atomic_write, markdown_table
+from hybridship.physics.model import DynamicModel
+from hybridship.sim.scenario import embedded_scenarios
+from hybridship.vessel import load_vessel
+
+TRUTHSIM = Path(__file__).resolve().parents[1].parent / "shared" / "data" / "truthsim-dev" / "logs"
+DOFS = ("x_N", "y_N", "n_Nm")
+N_STARTS, HORIZON, WINDOW = 20, 60, 600
+
+
+def _lf_velocities(d: pd.DataFrame) -> np.ndarray:
+    """Low-frequency body velocities [m/s, m/s, rad/s]: the simulator's own if logged, else the
+    total ones low-passed at 0.04 Hz (zero phase)."""
+    if "truth_u_lf_mps" in d:
+        return np.column_stack([d.truth_u_lf_mps, d.truth_v_lf_mps, np.radians(d.truth_r_lf_degps)])
+    b, a = butter(2, 0.04, fs=1.0)
+    return np.column_stack([filtfilt(b, a, d.truth_u_mps), filtfilt(b, a, d.truth_v_mps),
+                            np.radians(filtfilt(b, a, d.truth_r_degps))])
+
+
+def _to_ned(acc_body: np.ndarray, psi: np.ndarray) -> np.ndarray:
+    c, s = np.cos(psi), np.sin(psi)
+    return np.stack([c * acc_body[..., 0] - s * acc_body[..., 1], s * acc_body[..., 0] + c * acc_body[..., 1],
+                     acc_body[..., 2]], -1)
+
+
+def _to_body(acc_ned: np.ndarray, psi: np.ndarray) -> np.ndarray:
+    c, s = np.cos(psi), np.sin(psi)
+    return np.stack([c * acc_ned[..., 0] + s * acc_ned[..., 1], -s * acc_ned[..., 0] + c * acc_ned[..., 1],
+                     np.broadcast_to(acc_ned[..., 2], c.shape)], -1)
+
+
+def failure_oracles(model: DynamicModel, d: pd.DataFrame) -> dict:
+    """Heading [deg] and mean north/east [m] absolute errors at 60 s per oracle, for one log."""
+    i0 = int(np.flatnonzero(d.dp_active.to_numpy() == 0)[0])          # the first sample of the drift
+    nu = _lf_velocities(d)
+    psi = np.unwrap(np.radians(d.truth_heading_lf_deg.to_numpy(float)))
+    north, east = d.truth_north_lf_m.to_numpy(float), d.truth_east_lf_m.to_numpy(float)
+    current = np.column_stack([d.truth_current_speed_mps, np.radians(d.truth_current_dir_to_deg)])
+    wind = np.column_stack([d.truth_wind_speed_mps, np.radians(d.truth_wind_dir_from_deg)])
+    tau = {k: np.column_stack([d[f"truth_tau_{k}_{c}"].to_numpy(float) for c in DOFS]) for k in ("wind", "wave2")}
+    m_inv = np.linalg.inv(model.mass_matrix)
+
+    st = i0 + np.arange(N_STARTS)
+    path = np.stack([np.arange(s, s + HORIZON) for s in st])           # rows of each forecast step
+    psi_path = psi[path]                                                # heading along the true path
+    w = slice(max(i0 - WINDOW, 0), i0)
+    eta_w = np.column_stack([north[w], east[w], psi[w]])
+    zeros_w = np.zeros((eta_w.shape[0], model.n_channels))
+    rest = np.zeros_like(eta_w)
+    force_at_rest = (model.acceleration(eta_w, rest, rpm=zeros_w, azimuth_rad=zeros_w, current=current[w])
+                     - model.acceleration(eta_w, rest, rpm=zeros_w, azimuth_rad=zeros_w))
+    current_force = _to_body(_to_ned(force_at_rest, psi[w]).mean(0), psi_path)
+    wave_held = _to_body(_to_ned(tau["wave2"][w] @ m_inv.T, psi[w]).mean(0), psi_path)
+
+    eta0 = np.column_stack([north[st], east[st], psi[st]])
+    zeros = np.zeros((N_STARTS, model.n_channels))
+    truth = np.column_stack([north[st + HORIZON], east[st + HORIZON], psi[st + HORIZON]])
+
+    def run(**kw):
+        kw.setdefault("wind", wind[st])
+        end = model.rollout(eta0, nu[st], HORIZON, rpm=zeros, azimuth_rad=zeros, **kw).eta[:, -1]
+        return (float(np.degrees(np.abs(end[:, 2] - truth[:, 2])).mean()),
+                float(0.5 * np.abs(end[:, :2] - truth[:, :2]).mean(axis=0).sum()))
+
+    return {
+        "model wind": run(),
+        "current in the hull": run(current=current[st]),
+        "current as a held force": run(accel_ext=current_force),
+        "wave drift held": run(accel_ext=wave_held),
+        "current in the hull + wave drift held": run(current=current[st], accel_ext=wave_held),
+        "current as a held force + wave drift held": run(accel_ext=current_force + wave_held),
+        "true loads and current": run(wind=None, current=current[path], tau_ext=(tau["wind"] + tau["wave2"])[path]),
+    }
+
+
+def main(argv=None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap.add_argument("--out", type=Path, required=True)
+    ap.add_argument("--own", type=int, default=20, help="simulated DP losses of our own (default 20)")
+    ap.add_argument("--own-seed", type=int, default=100, help="seed of the first (default 100)")
+    args = ap.parse_args(argv)
+    model = DynamicModel(load_vessel("gunnerus"))
+    own = f"own {args.own_seed}-{args.own_seed + args.own - 1}"
+    data = {own: [s.log for s in embedded_scenarios(args.own, args.own_seed)]}
+    if TRUTHSIM.is_dir():
+        data["truthsim-dev"] = [pd.read_csv(f) for f in log_files(TRUTHSIM)]
+    else:
+        print(f"skipping truthsim-dev: {TRUTHSIM} not found", file=sys.stderr)
+    rows = []
+    for name, logs in data.items():
+        per_log = [failure_oracles(model, d) for d in logs]
+        base = np.mean([r["model wind"] for r in per_log], axis=0)
+        for oracle in per_log[0]:
+            h, ne = np.mean([r[oracle] for r in per_log], axis=0)
+            rows.append({"data": name, "given": oracle, "heading_deg": round(float(h), 2),
+                         "heading_ratio": round(float(h / base[0]), 2), "north_east_m": round(float(ne), 2),
+                         "north_east_ratio": round(float(ne / base[1]), 2)})
+            print(rows[-1], flush=True)
+    df = pd.DataFrame(rows)
+    args.out.mkdir(parents=True, exist_ok=True)
+    atomic_write(args.out / "drift_oracles.csv", lambda fh: fh.write(df.to_csv(index=False).encode("utf-8")))
+    md = markdown_table(df) + "\n"
+    atomic_write(args.out / "drift_oracles.md", lambda fh: fh.write(md.encode("utf-8")))
+    print(md)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
