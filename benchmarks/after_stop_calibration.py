@@ -12,6 +12,11 @@ weather (``--beaufort``), station-keeping time before the failure (``--dp-s``) a
 with the vessel file's ``[true_vessel]`` spread, see :mod:`hybridship.driftoff.spread`;
 0 = the file's own true vessel for every scenario).
 
+``--source own`` calibrates each log's spread on the data set's *other* failures instead
+(leave one out), as :meth:`~hybridship.predictors.HybridPredictor.fit` does with the
+training logs' failures and the drift benchmark does when its test logs are its training
+logs; ``--own N`` adds N fresh scenarios of our own (seeds 100 on).
+
 ``--thrust-error-model per_dof`` runs the estimator with the per-DOF thrust error (the
 previous default, :data:`hybridship.residual.environment.PER_DOF`) instead of the default
 one per thruster.
@@ -23,6 +28,7 @@ Examples::
     python benchmarks/after_stop_calibration.py --n 8 --vessel-spread 1 --beaufort 2 6 --dp-s 1800
     python benchmarks/after_stop_calibration.py --n 8 --heading-mode mixed
     python benchmarks/after_stop_calibration.py --n 8 --vessel-spread 1 --beaufort 3 7 --dp-s 1800
+    python benchmarks/after_stop_calibration.py --own 20 --source own
 """
 
 from __future__ import annotations
@@ -37,7 +43,8 @@ import pandas as pd
 from hybridship.driftoff.spread import draw_scales
 from hybridship.evaluation import metrics
 from hybridship.evaluation.drift import log_files
-from hybridship.predictors import HybridPredictor, as_log_arrays
+from hybridship.predictors import AFTER_STOP, HybridPredictor, as_log_arrays
+from hybridship.predictors.hybrid import after_stop_scales
 from hybridship.residual.ensemble import EnsembleConfig
 from hybridship.residual.environment import PER_DOF, EnvironmentConfig
 from hybridship.sim.scenario import DPLossConfig, embedded_scenarios, simulate_dp_loss
@@ -85,32 +92,58 @@ def main(argv=None) -> int:
     ap.add_argument("--heading-mode", choices=("weather", "random", "mixed"), default="weather",
                     help="heading set-points of the calibration losses: bow to weather (default), random, or "
                          "alternating")
+    ap.add_argument("--source", choices=("simulated", "own"), default="simulated",
+                    help="calibrate on the simulated DP losses (default) or, per log, on the data set's other "
+                         "failures (leave one out: what a model trained on the other logs gets from fit)")
+    ap.add_argument("--own", type=int, default=0,
+                    help="also score this many fresh scenarios of our own (seeds 100 on; default 0)")
     ap.add_argument("--held-load-window-s", type=float, default=EnvironmentConfig().held_load_window_s,
                     help="station keeping read for the held-load term of the spread [s] (0: no such term)")
     args = ap.parse_args(argv)
     cfg = EnvironmentConfig(**(PER_DOF if args.thrust_error_model == "per_dof" else {}),
                             held_load_window_s=args.held_load_window_s)
-    cal = calibration_logs(args.n, args.seed, args.beaufort, args.dp_s, args.vessel_spread, args.heading_mode)
+    cal = calibration_logs(args.n, args.seed, args.beaufort, args.dp_s, args.vessel_spread, args.heading_mode) \
+        if args.source == "simulated" else None
     data = {"embedded": [s.log for s in embedded_scenarios(3, 0)]}
+    if args.own:
+        data[f"own 100-{99 + args.own}"] = [s.log for s in embedded_scenarios(args.own, 100)]
     if TRUTHSIM.is_dir():
         data["truthsim-dev"] = [pd.read_csv(f) for f in log_files(TRUTHSIM)]
     else:
         print(f"skipping truthsim-dev: {TRUTHSIM} not found", file=sys.stderr)
-    print(f"calibration: {args.n} DP losses, Beaufort {args.beaufort[0]:g}-{args.beaufort[1]:g}, "
-          f"{args.dp_s:g} s of DP, hull spread {args.vessel_spread:g}; thrust error {args.thrust_error_model}; "
+    source = (f"{args.n} simulated DP losses, Beaufort {args.beaufort[0]:g}-{args.beaufort[1]:g}, "
+              f"{args.dp_s:g} s of DP, hull spread {args.vessel_spread:g}" if args.source == "simulated"
+              else "each log on the data set's other failures (leave one out)")
+    print(f"calibration: {source}; thrust error {args.thrust_error_model}; "
           f"held-load window {args.held_load_window_s:g} s")
     print("| data | sigma | " + " | ".join(f"{h:g} s" for h in HORIZONS_S) + " |")
     print("| --- | --- | " + " | ".join("---" for _ in HORIZONS_S) + " |")
     for name, logs in data.items():
         arrays = [as_log_arrays(x, "gunnerus") for x in logs]
         hp = HybridPredictor("gunnerus", ensemble_config=SMALL, environment_config=cfg).fit(arrays, dp_only=True)
-        hp.calibrate_after_stop(cal)
-        fc = [metrics.drift_forecasts(hp, a, n_intervals=20, horizons_s=HORIZONS_S) for a in arrays]
+        if args.source == "simulated":
+            hp.calibrate_after_stop(cal)
+            fc = [metrics.drift_forecasts(hp, a, n_intervals=20, horizons_s=HORIZONS_S) for a in arrays]
+        elif len(arrays) < 3:
+            print(f"| {name} | | too few failures ({len(arrays)}) to leave one out |")
+            continue
+        else:
+            fc = _leave_one_out(hp, arrays)
         P, T, S = (np.stack([f[i] for f in fc]) for i in range(3))       # (logs, starts, horizons, 3)
         for k in (1, 2):
             ci = metrics.coverage_interval(P, T, S, k, seed=args.seed)
             print(f"| {name} | {k} | " + " | ".join(f"{c:.2f} [{lo:.2f}, {hi:.2f}]" for c, lo, hi in ci) + " |")
     return 0
+
+
+def _leave_one_out(hp, arrays) -> list:
+    """Each log's forecasts after its failure with the spread calibrated on the other logs' failures."""
+    errors = hp.after_stop_errors(arrays)
+    out = []
+    for k, a in enumerate(arrays):
+        hp.calibration[AFTER_STOP] = after_stop_scales(errors[:k] + errors[k + 1:], hp.calibration_config)
+        out.append(metrics.drift_forecasts(hp, a, n_intervals=20, horizons_s=HORIZONS_S))
+    return out
 
 
 if __name__ == "__main__":

@@ -68,3 +68,31 @@ def test_benchmark_is_deterministic_and_the_cli_reports_bad_folders(tiny_folder,
     err = capsys.readouterr().err.strip()
     assert err.startswith("hybridship benchmark drift: error: --train") and "not a folder" in err
     assert main(["benchmark"]) == 2
+
+
+def test_a_failure_is_never_scored_with_a_spread_calibrated_on_it(tmp_path):
+    """Test logs that are the training logs: with enough failures each log's spread after the
+    failure is calibrated on the other logs' failures (leave one out); with too few, on
+    simulated DP losses (or raw), never on the fit's calibration that saw the scored drift."""
+    from hybridship.evaluation.drift import _calibrate_after_stop
+    from hybridship.predictors import HybridPredictor, as_log_arrays
+    from hybridship.predictors.hybrid import after_stop_scales
+
+    model = DynamicModel("gunnerus")
+    logs = [as_log_arrays(physics_log(model, duration_s=900, t_shutdown_s=700, seed=s, current=(0.2, 1.0 + s),
+                                      tau_ext_N=(2000.0, 1000.0, 0.0)), model.vessel) for s in range(4)]
+    hp = HybridPredictor(model.vessel, ensemble_config=TINY).fit(logs)
+    assert hp.training_info["calibration"]["after_stop"]["n_logs"] == 4
+    _, per_log = _calibrate_after_stop(hp, logs, True, 0, 0, 20, 60.0, lambda m: None)
+    errors = hp.after_stop_errors(logs)
+    for k in range(4):
+        expect = after_stop_scales(errors[:k] + errors[k + 1:], hp.calibration_config)
+        np.testing.assert_allclose(per_log[k]["position"].scale, expect["position"].scale)
+    assert not np.allclose(per_log[0]["position"].scale, per_log[1]["position"].scale)
+    # separate test logs: the fit's own calibration stands
+    _, none = _calibrate_after_stop(hp, logs[:1], False, 0, 0, 20, 60.0, lambda m: None)
+    assert none is None and "after_stop" in hp.calibration
+    # three test logs leave two for each: too few, and no simulated losses asked for -> raw
+    hp3 = HybridPredictor(model.vessel, ensemble_config=TINY).fit(logs[:3])
+    _, none = _calibrate_after_stop(hp3, logs[:3], True, 0, 0, 20, 60.0, lambda m: None)
+    assert none is None and "after_stop" not in hp3.calibration

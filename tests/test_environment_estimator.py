@@ -186,3 +186,25 @@ def test_spread_after_a_stop_is_calibrated_on_logs_with_failures(model, tmp_path
     again = HybridPredictor.load(path).forecast(log, [t0 - 50.0, t0 + 5.0], 60.0)
     np.testing.assert_allclose(again.eta_std, cal.eta_std)
 
+
+
+def test_fit_calibrates_the_spread_after_a_failure_on_the_training_logs_own_failures(model):
+    """With three failures in the training logs, fit calibrates the spread after a failure on
+    them (the scale calibrate_after_stop gives on the same logs); with two, or with the
+    option off, the spread after a failure stays raw."""
+    from hybridship.residual.calibration import CalibrationConfig
+
+    logs = [physics_log(model, duration_s=1000, t_shutdown_s=800, seed=s, current=(0.2, 2.0),
+                        tau_ext_N=(2000.0, 1000.0, 0.0)) for s in (14, 15, 16)]
+    hp = HybridPredictor(model.vessel, ensemble_config=TINY).fit(logs)
+    assert "after_stop" in hp.calibration
+    info = hp.training_info["calibration"]["after_stop"]
+    assert info["n_logs"] == 3 and info["source"] == "the training logs' failures"
+    off = HybridPredictor(model.vessel, ensemble_config=TINY).fit(
+        logs, calibration=CalibrationConfig(after_stop_min_failures=0))
+    assert "after_stop" not in off.calibration
+    off.calibrate_after_stop(logs)
+    for what in ("position", "heading"):
+        np.testing.assert_allclose(off.calibration["after_stop"][what].scale, hp.calibration["after_stop"][what].scale)
+    two = HybridPredictor(model.vessel, ensemble_config=TINY).fit(logs[:2])
+    assert "after_stop" not in two.calibration

@@ -45,6 +45,7 @@ import pandas as pd
 from . import metrics
 from ..fileio import atomic_write, markdown_table
 from ..predictors import DataOnlyPredictor, DeadReckoning, DynamicPredictor, HybridPredictor, as_log_arrays
+from ..predictors.hybrid import AFTER_STOP, after_stop_scales
 from ..residual.ensemble import EnsembleConfig
 
 #: File endings read as logs from a folder.
@@ -119,9 +120,13 @@ def run_drift_benchmark(train=None, test=None, out_dir="drift-benchmark", *, ves
     calibration_scenarios : int
         DP losses simulated by the project's simulator (:func:`~hybridship.sim.scenario.embedded_scenarios`,
         seeds from ``seed + 1000``, never the test scenarios) on which the hybrid's spread
-        after a failure is calibrated (:meth:`~hybridship.predictors.HybridPredictor.calibrate_after_stop`);
-        0: none, the raw spread. The simulator is set up for the Gunnerus only: other vessels
-        keep the raw spread.
+        after a failure is calibrated (:meth:`~hybridship.predictors.HybridPredictor.calibrate_after_stop`)
+        when the vessel's own failures are too few; 0: none, the raw spread. The simulator
+        is set up for the Gunnerus only: other vessels keep the raw spread. The vessel's own
+        failures are used instead when the training logs have at least
+        ``CalibrationConfig.after_stop_min_failures`` (3) of them: as ``fit`` calibrated on
+        them when the test logs are other logs, and per test log on the *other* logs'
+        failures (leave one out) when the test logs are the training logs.
     """
     def say(msg):
         if progress:
@@ -138,10 +143,13 @@ def run_drift_benchmark(train=None, test=None, out_dir="drift-benchmark", *, ves
     test_arrays = [as_log_arrays(x, hybrid.model.vessel) for x in test_logs]
     data_only = DataOnlyPredictor(vessel, ensemble_config=ens_cfg)
     timing = _fit_ensembles({"hybrid": hybrid, "data_only": data_only}, train_arrays, dp_only, say)
-    timing += _calibrate_after_stop(hybrid, calibration_scenarios, seed, n_intervals, horizon_s, say)
+    t_cal, per_log_cal = _calibrate_after_stop(hybrid, test_arrays, test_logs is train_logs, calibration_scenarios,
+                                               seed, n_intervals, horizon_s, say)
+    timing += t_cal
     predictors = _benchmark_models(vessel, hybrid, data_only)
 
-    fc, all_h, pick, fc_timing = _forecast_after_failures(predictors, test_arrays, n_intervals, horizon_s, horizons)
+    fc, all_h, pick, fc_timing = _forecast_after_failures(predictors, test_arrays, n_intervals, horizon_s, horizons,
+                                                          hybrid, per_log_cal)
     timing = pd.DataFrame(timing + fc_timing)
 
     errors = {name: [metrics.absolute_errors(p[:, pick], t[:, pick]) for p, t, _ in per_log]
@@ -198,14 +206,35 @@ def _fit_ensembles(models: dict, train_arrays, dp_only: bool, say) -> list[dict]
     return timing
 
 
-def _calibrate_after_stop(hybrid, calibration_scenarios: int, seed: int, n_intervals: int, horizon_s: float,
-                          say) -> list[dict]:
-    """Calibrate the hybrid's spread after a failure on simulated DP losses (Gunnerus only); timing rows."""
-    timing = []
+def _calibrate_after_stop(hybrid, test_arrays, test_is_train: bool, calibration_scenarios: int, seed: int,
+                          n_intervals: int, horizon_s: float, say) -> tuple[list[dict], list | None]:
+    """The hybrid's spread after a failure, calibrated on the vessel's own failures where the
+    training logs have enough of them, else on simulated DP losses (Gunnerus only).
+
+    ``fit`` calibrates on the training logs' failures itself (``after_stop_min_failures``);
+    when the test logs are the training logs, that calibration has seen the drifts it is
+    scored on, so each test log gets one fitted on the *other* logs' failures instead
+    (returned per log; None: one calibration for all). Returns timing rows and that list.
+    """
+    timing, t0 = [], time.perf_counter()
+    n_min = hybrid.calibration_config.after_stop_min_failures
+    own = hybrid.training_info.get("calibration", {}).get("after_stop", {}).get("source")
+    if own and not test_is_train:
+        n_own = hybrid.training_info["calibration"]["after_stop"]["n_logs"]
+        say(f"spread after a failure calibrated on the training logs' {n_own} failures")
+        return timing, None
+    if test_is_train and n_min > 0 and len(test_arrays) - 1 >= n_min:
+        errors = hybrid.after_stop_errors(test_arrays, n_intervals=n_intervals, horizon_s=horizon_s)
+        per_log = [after_stop_scales(errors[:k] + errors[k + 1:], hybrid.calibration_config)
+                   for k in range(len(errors))]
+        what = f"calibrate after stop on the other {len(errors) - 1} logs' failures, per test log"
+        timing.append({"model": "hybrid", "what": what, "seconds": time.perf_counter() - t0})
+        say(f"{what} ({timing[-1]['seconds']:.1f} s)")
+        return timing, per_log
+    hybrid.calibration.pop("after_stop", None)      # never a calibration that saw the scored drifts
     if calibration_scenarios > 0 and hybrid.model.vessel.name == "gunnerus":
         from ..sim.scenario import embedded_scenarios
 
-        t0 = time.perf_counter()
         sims = embedded_scenarios(int(calibration_scenarios), seed + 1000)
         hybrid.calibrate_after_stop([s.log for s in sims], n_intervals=n_intervals, horizon_s=horizon_s)
         timing.append({"model": "hybrid", "what": f"calibrate after stop on {len(sims)} simulated DP losses",
@@ -214,7 +243,7 @@ def _calibrate_after_stop(hybrid, calibration_scenarios: int, seed: int, n_inter
             f"({timing[-1]['seconds']:.1f} s)")
     elif calibration_scenarios > 0:
         say(f"no simulated DP losses for vessel {hybrid.model.vessel.name!r}: the spread after a failure is raw")
-    return timing
+    return timing, None
 
 
 def _benchmark_models(vessel, hybrid, data_only) -> dict:
@@ -231,8 +260,10 @@ def _benchmark_models(vessel, hybrid, data_only) -> dict:
             "data_only": (data_only, {})}
 
 
-def _forecast_after_failures(predictors: dict, test_arrays, n_intervals: int, horizon_s: float, horizons):
-    """Every model's forecasts after the failure of every test log.
+def _forecast_after_failures(predictors: dict, test_arrays, n_intervals: int, horizon_s: float, horizons,
+                             hybrid=None, per_log_cal=None):
+    """Every model's forecasts after the failure of every test log (the ``hybrid`` object with
+    the after-stop calibration ``per_log_cal[k]`` for log ``k`` when given).
 
     Returns ``fc`` (name -> per log ``(pred, truth, std)``), every lead time ``all_h`` [s], the
     indices ``pick`` of the table's ``horizons`` among them, and timing rows.
@@ -243,8 +274,11 @@ def _forecast_after_failures(predictors: dict, test_arrays, n_intervals: int, ho
     fc, timing = {}, []
     for name, (pred, kw) in predictors.items():
         t0 = time.perf_counter()
-        fc[name] = [metrics.drift_forecasts(pred, a, n_intervals=n_intervals, horizons_s=all_h, **kw)
-                    for a in test_arrays]
+        fc[name] = []
+        for k, a in enumerate(test_arrays):
+            if per_log_cal is not None and pred is hybrid:
+                pred.calibration[AFTER_STOP] = per_log_cal[k]
+            fc[name].append(metrics.drift_forecasts(pred, a, n_intervals=n_intervals, horizons_s=all_h, **kw))
         sec = time.perf_counter() - t0
         timing.append({"model": name, "what": f"forecast {len(test_arrays) * n_intervals} x {horizon_s:g} s",
                        "seconds": sec})

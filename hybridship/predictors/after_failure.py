@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["HORIZONS_S", "drift_forecasts", "shutdown_index"]
+__all__ = ["HORIZONS_S", "drift_forecasts", "has_drift", "shutdown_index"]
 
 #: The paper's horizons [s].
 HORIZONS_S = (15, 30, 45, 60)
@@ -22,6 +22,16 @@ def shutdown_index(arrays) -> int:
     if off.size == 0:
         raise ValueError("log: no DP shutdown (dp_active never 0); cannot evaluate drift forecasts")
     return int(off[0])
+
+
+def has_drift(arrays, n_intervals: int, horizon_s: float) -> bool:
+    """Whether a log has a DP failure followed by enough drift for :func:`drift_forecasts`
+    (``n_intervals`` starts, each with ``horizon_s`` of measurements after it)."""
+    off = np.flatnonzero(arrays.dp_active == 0)
+    if off.size == 0 or len(arrays.time_s) < 2:
+        return False
+    dt = float(np.median(np.diff(arrays.time_s)))
+    return len(arrays.time_s) - int(off[0]) - int(round(horizon_s / dt)) >= n_intervals
 
 
 def drift_forecasts(predictor, arrays, *, n_intervals: int = 20, horizons_s=HORIZONS_S, **forecast_kw):

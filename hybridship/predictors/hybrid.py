@@ -29,7 +29,7 @@ from ..residual.environment import (EnvironmentConfig, EnvironmentEstimator, cur
 from ..residual.multistep import MultiStepConfig, collect_starts, train_multistep
 from ..residual.guard import CommandRegime, EnvelopeGuard, ThrustRegime
 from ..residual.hull import HullCorrection
-from .after_failure import drift_forecasts
+from .after_failure import drift_forecasts, has_drift
 from .forecast_setup import FORECAST_HISTORY_S, _check_row_stride, _forecast_setup, as_log_arrays, start_indices
 from .model_file import load_model, save_model
 from .result import ForecastResult
@@ -39,6 +39,8 @@ __all__ = ["AFTER_STOP", "ENVIRONMENT_SOURCES", "HybridPredictor"]
 #: Key of the spread calibration for forecasts that start after a failure
 #: (:meth:`HybridPredictor.calibrate_after_stop`).
 AFTER_STOP = "after_stop"
+#: Start times after each failure that calibrate the spread after a failure (the paper's 20).
+AFTER_STOP_INTERVALS = 20
 
 #: Where the hybrid's slowly varying environment comes from (see :class:`HybridPredictor`).
 ENVIRONMENT_SOURCES = ("estimator", "mean")
@@ -213,7 +215,11 @@ class HybridPredictor:
         ``calibration.commands`` modes over ``calibration.horizon_s``, give the per-lead
         scale of the spread (:func:`hybridship.residual.calibration.fit_spread_scale`,
         north and east pooled for the position, the heading on its own). Every later
-        forecast's ``eta_std`` is calibrated with it.
+        forecast's ``eta_std`` is calibrated with it. With ``dp_only`` the nets never see a
+        failure, so a forecast that starts after one keeps the raw spread, unless the
+        training logs hold at least ``calibration.after_stop_min_failures`` failures with
+        enough drift after them: then the spread after a failure is calibrated on those
+        (:meth:`calibrate_after_stop`; ``training_info["calibration"]["after_stop"]``).
         """
         stride = _check_row_stride(row_stride)
         cal = self.calibration_config if calibration is None else calibration
@@ -241,6 +247,7 @@ class HybridPredictor:
             if cal.refit:
                 self._fit_nets(logs, dp_only=dp_only, progress=progress, stride=stride, row_masks=None)
         self.training_info["calibration"] = cal_info
+        self._calibrate_after_stop_on_training_logs(logs, cal)
         return self
 
     def _fit_nets(self, logs, *, dp_only, progress, stride, row_masks):
@@ -568,28 +575,41 @@ class HybridPredictor:
         """
         self._check_fitted()
         cal = self.calibration_config if cal is None else cal
+        errors = self.after_stop_errors(logs, n_intervals=n_intervals, horizon_s=horizon_s)
+        self.calibration[AFTER_STOP] = after_stop_scales(errors, cal)
+        self.training_info.setdefault("calibration", {})["after_stop"] = {
+            "n_logs": len(errors), "n_starts": int(sum(e.shape[0] for e, _, _ in errors)),
+            "horizon_s": float(errors[0][2][-1])}
+        return self
+
+    def after_stop_errors(self, logs, *, n_intervals: int = 20, horizon_s: float = 60.0) -> list:
+        """Per log with a failure: the raw (uncalibrated) forecasts' absolute errors and spreads
+        after it, ``(err, std, lead_s)`` with ``err, std`` (n_intervals, H, 3) [m, m, rad] at
+        every lead ``lead_s`` (H,) [s] up to ``horizon_s``; what :meth:`calibrate_after_stop`
+        fits (see :func:`after_stop_scales`)."""
+        self._check_fitted()
         arrays = [as_log_arrays(x, self.model.vessel) for x in logs]
         if not arrays:
             raise ValueError("logs: at least one log with a DP failure is needed")
-        dt = arrays[0].dt_s
-        lead = np.arange(1, int(round(horizon_s / dt)) + 1) * dt
-        errs, stds = [], []
+        out = []
         for a in arrays:
-            p, t, sd = drift_forecasts(self, a, n_intervals=n_intervals, horizons_s=tuple(lead),
-                                               calibrated=False)
+            lead = np.arange(1, int(round(horizon_s / a.dt_s)) + 1) * a.dt_s
+            p, t, sd = drift_forecasts(self, a, n_intervals=n_intervals, horizons_s=tuple(lead), calibrated=False)
             e = np.abs(p - t)
             e[..., 2] = np.abs(wrap_pi(p[..., 2] - t[..., 2]))
-            errs.append(e)
-            stds.append(sd)
-        e, sd = np.concatenate(errs), np.concatenate(stds)          # (N, H, 3)
-        kw = dict(sigma=cal.sigma, coverage=cal.coverage, floor_quantile=cal.floor_quantile)
-        pos = fit_spread_scale(np.concatenate([e[..., 0], e[..., 1]]), np.concatenate([sd[..., 0], sd[..., 1]]),
-                               lead, **kw)
-        head = fit_spread_scale(e[..., 2], sd[..., 2], lead, **kw)
-        self.calibration[AFTER_STOP] = {"position": pos, "heading": head}
-        self.training_info.setdefault("calibration", {})["after_stop"] = {
-            "n_logs": len(arrays), "n_starts": int(e.shape[0]), "horizon_s": float(lead[-1])}
-        return self
+            out.append((e, sd, lead))
+        return out
+
+    def _calibrate_after_stop_on_training_logs(self, logs, cal: CalibrationConfig):
+        """With at least ``cal.after_stop_min_failures`` failures in the training logs, the
+        spread after a failure is calibrated on them (the vessel's own failures)."""
+        if cal.after_stop_min_failures == 0 or self.environment != "estimator":
+            return
+        failed = [a for a in logs if has_drift(a, AFTER_STOP_INTERVALS, cal.horizon_s)]
+        if len(failed) < cal.after_stop_min_failures:
+            return
+        self.calibrate_after_stop(failed, n_intervals=AFTER_STOP_INTERVALS, horizon_s=cal.horizon_s, cal=cal)
+        self.training_info["calibration"]["after_stop"]["source"] = "the training logs' failures"
 
     def calibrated_std(self, std: np.ndarray, lead_s: np.ndarray, commands: str) -> np.ndarray:
         """Raw ensemble spread (S, H+1, 3) at lead times (H+1,) [s] -> calibrated spread."""
@@ -726,6 +746,19 @@ class HybridPredictor:
             vessel that differs from the one the model was trained for.
         """
         return load_model(cls, path, vessel)
+
+
+def after_stop_scales(errors: list, cal: CalibrationConfig) -> dict:
+    """The spread calibration after a failure from :meth:`HybridPredictor.after_stop_errors`
+    of some logs: a per-lead scale (:func:`~hybridship.residual.calibration.fit_spread_scale`)
+    for the position (north and east pooled) and for the heading."""
+    e = np.concatenate([x[0] for x in errors])
+    sd = np.concatenate([x[1] for x in errors])
+    lead = errors[0][2]
+    kw = dict(sigma=cal.sigma, coverage=cal.coverage, floor_quantile=cal.floor_quantile)
+    pos = fit_spread_scale(np.concatenate([e[..., 0], e[..., 1]]), np.concatenate([sd[..., 0], sd[..., 1]]),
+                           lead, **kw)
+    return {"position": pos, "heading": fit_spread_scale(e[..., 2], sd[..., 2], lead, **kw)}
 
 
 def _check_finite_step(eta, nu, lead_s: float):

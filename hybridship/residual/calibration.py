@@ -72,6 +72,12 @@ class CalibrationConfig:
         included) and keep the scale. Off by default: the scale is then exact for the
         nets that are shipped (a refit model is a little better than the one calibrated,
         so its band would be a little wide), and training costs half.
+    after_stop_min_failures : int
+        With at least this many DP failures in the training logs (a thrust stop followed by
+        ``horizon_s`` of drift after each of 20 start times), :meth:`fit` also calibrates
+        the spread of forecasts after a failure on them
+        (:meth:`~hybridship.predictors.HybridPredictor.calibrate_after_stop`): the vessel's
+        own failures, not simulated ones. 0: never.
     """
 
     fraction: Annotated[Float, Field(ge=0, lt=0.6)] = 0.2
@@ -83,6 +89,7 @@ class CalibrationConfig:
     coverage: Annotated[Float, Field(gt=0, lt=1)] = GAUSS_COVERAGE[2.0]
     floor_quantile: Annotated[Float, Field(ge=0, lt=0.5)] = 0.1
     refit: bool = False
+    after_stop_min_failures: Annotated[Int, Field(ge=0)] = 3
 
     @field_validator("commands")
     @classmethod
