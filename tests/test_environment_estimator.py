@@ -208,3 +208,9 @@ def test_fit_calibrates_the_spread_after_a_failure_on_the_training_logs_own_fail
         np.testing.assert_allclose(off.calibration["after_stop"][what].scale, hp.calibration["after_stop"][what].scale)
     two = HybridPredictor(model.vessel, ensemble_config=TINY).fit(logs[:2])
     assert "after_stop" not in two.calibration
+    from hybridship.predictors.after_failure import has_drift
+
+    a = as_log_arrays(logs[0], model.vessel)
+    assert has_drift(a, 20, 60.0) and not has_drift(a, 20, 200.0)
+    manoeuvring = logs[0].assign(dp_active=0)          # never on station: no failure to calibrate on
+    assert not has_drift(as_log_arrays(manoeuvring, model.vessel), 20, 60.0)

@@ -25,10 +25,12 @@ def shutdown_index(arrays) -> int:
 
 
 def has_drift(arrays, n_intervals: int, horizon_s: float) -> bool:
-    """Whether a log has a DP failure followed by enough drift for :func:`drift_forecasts`
-    (``n_intervals`` starts, each with ``horizon_s`` of measurements after it)."""
+    """Whether a log has a DP failure (station keeping, then ``dp_active`` 0) followed by enough
+    drift for :func:`drift_forecasts` (``n_intervals`` starts, each with ``horizon_s`` of
+    measurements after it). A log without station keeping before its first ``dp_active`` 0
+    (a manoeuvring log) has none."""
     off = np.flatnonzero(arrays.dp_active == 0)
-    if off.size == 0 or len(arrays.time_s) < 2:
+    if off.size == 0 or off[0] == 0 or len(arrays.time_s) < 2:
         return False
     dt = float(np.median(np.diff(arrays.time_s)))
     return len(arrays.time_s) - int(off[0]) - int(round(horizon_s / dt)) >= n_intervals
