@@ -164,3 +164,14 @@ def test_coverage_interval_is_a_point_when_every_failure_agrees_and_undefined_fo
     one = metrics.coverage_interval(*_grouped([0.5]), 2.0)
     np.testing.assert_allclose(one[:, 0], 0.5)
     assert np.isnan(one[:, 1:]).all()
+
+
+def test_grouped_coverage_pools_groups_of_different_sizes_by_their_counts():
+    from hybridship.evaluation import metrics
+
+    hits = np.array([[90.0], [0.0], [5.0]])
+    counts = np.array([100, 10, 5])
+    ci = metrics.grouped_coverage_interval(hits, counts, seed=1)
+    np.testing.assert_allclose(ci[0, 0], 95.0 / 115.0)
+    assert ci[0, 1] < ci[0, 0] < ci[0, 2]
+    np.testing.assert_array_equal(ci, metrics.grouped_coverage_interval(hits, counts, seed=1))

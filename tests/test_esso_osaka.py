@@ -224,6 +224,14 @@ def test_manoeuvre_benchmark_writes_the_tables(tmp_path):
     assert c.coverage.between(0, 1).all()
     piv = c.pivot_table(index=["model", "kind", "commands", "horizon_s"], columns="sigma", values="coverage")
     assert (piv[2] >= piv[1]).all()
+    # the 2-sigma coverage of all kinds, with an interval over the test runs
+    ci = pd.read_csv(tmp_path / "out" / "coverage_intervals.csv")
+    assert list(ci.columns) == ["model", "commands", "horizon_s", "sigma", "coverage", "low", "high", "n_runs"]
+    assert (ci.n_runs == 2).all() and (ci.low <= ci.coverage + 1e-12).all() and (ci.coverage <= ci.high + 1e-12).all()
+    pooled = c[(c.kind == "all") & (c.sigma == 2)].set_index(["model", "commands", "horizon_s"]).coverage
+    np.testing.assert_allclose(ci.set_index(["model", "commands", "horizon_s"]).coverage, pooled.loc[
+        ci.set_index(["model", "commands", "horizon_s"]).index])
+    assert "resamples whole runs" in md
 
 
 def test_benchmark_refuses_the_same_run_in_train_and_test(tmp_path):

@@ -333,6 +333,25 @@ def coverage_table(per_run_z: dict, runs: list[Run], horizons_s, sigmas=(1, 2)) 
                           key=lambda c: c.map(korder) if c.name == "kind" else c).reset_index(drop=True)
 
 
+def coverage_intervals(per_run_z: dict, horizons_s, sigma: float = 2.0, seed: int = 0) -> pd.DataFrame:
+    """``coverage_intervals.csv`` rows: the pooled coverage at ``sigma`` (all kinds) with a 90 %
+    bootstrap interval that resamples whole runs
+    (:func:`~hybridship.evaluation.metrics.grouped_coverage_interval`): the starts of one run
+    share its conditions, so the number of runs, not of starts, sets what a coverage can say."""
+    from .metrics import grouped_coverage_interval
+
+    rows = []
+    for (model, commands), zs in per_run_z.items():
+        zs = [z for z in zs if z is not None and z.size]
+        if not zs:
+            continue
+        hits = np.stack([(z <= sigma).sum(axis=(0, 2)) for z in zs])          # (runs, horizons)
+        ci = grouped_coverage_interval(hits, np.array([z.shape[0] * z.shape[2] for z in zs]), seed=seed)
+        rows += [(model, commands, float(h), sigma, *ci[j], len(zs)) for j, h in enumerate(horizons_s)]
+    return pd.DataFrame(rows, columns=["model", "commands", "horizon_s", "sigma", "coverage", "low", "high",
+                                       "n_runs"])
+
+
 def error_table(per_run: dict, runs: list[Run], horizons_s) -> pd.DataFrame:
     """``errors.csv`` rows from per-run errors ``{(model, commands): [errors (S, nh, 4) per run]}``."""
     rows = []
@@ -377,6 +396,7 @@ class BenchmarkResult:
     timings_s: dict
     n_starts: dict
     coverage: pd.DataFrame = field(default_factory=lambda: pd.DataFrame(columns=list(COVERAGE_COLUMNS)))
+    coverage_intervals: pd.DataFrame = field(default_factory=pd.DataFrame)
 
 
 def run_manoeuvre_benchmark(vessel, train_dir, test_dir, horizons_s=HORIZONS_S, out_dir="manoeuvre-benchmark",
@@ -465,7 +485,11 @@ def run_manoeuvre_benchmark(vessel, train_dir, test_dir, horizons_s=HORIZONS_S, 
     out_dir = Path(out_dir)
     atomic_write(out_dir / "errors.csv", lambda fh: fh.write(errors.to_csv(index=False).encode()))
     atomic_write(out_dir / "coverage.csv", lambda fh: fh.write(coverage.to_csv(index=False).encode()))
-    result = BenchmarkResult(errors, train, test, predictors, horizons_s, cfg, timings, n_starts, coverage)
+    intervals = coverage_intervals({k: v_ for k, v_ in per_run_z.items() if any(z is not None for z in v_)},
+                                   horizons_s)
+    atomic_write(out_dir / "coverage_intervals.csv", lambda fh: fh.write(intervals.to_csv(index=False).encode()))
+    result = BenchmarkResult(errors, train, test, predictors, horizons_s, cfg, timings, n_starts, coverage,
+                             intervals)
     md = markdown_report(result, command=command)
     atomic_write(out_dir / "README.md", lambda fh: fh.write(md.encode()))
     if figures_dir is not None:
@@ -554,6 +578,16 @@ def markdown_report(result: BenchmarkResult, *, command: str | None = None) -> s
     if not result.coverage.empty:
         lines += ["", "## spread coverage (x0 and y0 within 1 / 2 reported standard deviations, all kinds)", "",
                   _md_coverage(result.coverage), ""]
+    if not result.coverage_intervals.empty:
+        ci = result.coverage_intervals
+        lines += ["2-sigma coverage with a 90 % interval that resamples whole runs "
+                  f"({int(ci.n_runs.max())} test runs; the starts of one run share its conditions):", "",
+                  "| commands | model | " + " | ".join(f"{h:g} s" for h in sorted(ci.horizon_s.unique())) + " |",
+                  "|---|---|" + "---|" * ci.horizon_s.nunique()]
+        for (cmd, model), g in ci.groupby(["commands", "model"], sort=False):
+            cells = [f"{r.coverage:.3f} [{r.low:.2f}, {r.high:.2f}]" for r in g.sort_values("horizon_s").itertuples()]
+            lines.append(f"| {cmd} | {model} | " + " | ".join(cells) + " |")
+        lines.append("")
     lines += ["", "All states (x0, y0, heading, distance) are in `errors.csv`; coverage per kind in "
               "`coverage.csv`.", "", "Cite: " + CITATION, ""]
     return "\n".join(lines)

@@ -20,7 +20,7 @@ WINDOWS = (5, 20)
 STATES = ("north_m", "east_m", "yaw_deg")
 
 __all__ = ["HORIZONS_S", "WINDOWS", "STATES", "drift_forecasts", "shutdown_index", "drift_errors",
-           "absolute_errors", "coverage", "coverage_interval", "error_table", "paper_table", "reduction_table"]
+           "absolute_errors", "coverage", "coverage_interval", "grouped_coverage_interval", "error_table", "paper_table", "reduction_table"]
 
 
 def drift_errors(predictor, arrays, *, n_intervals: int = 20, horizons_s=HORIZONS_S, **forecast_kw) -> np.ndarray:
@@ -104,13 +104,37 @@ def coverage_interval(pred: np.ndarray, truth: np.ndarray, std: np.ndarray, sigm
     """
     inside = np.abs(pred - truth)[..., :2] <= sigma * std[..., :2]       # (G, ..., nh, 2)
     inside = np.moveaxis(inside, -2, 1).reshape(inside.shape[0], inside.shape[-2], -1)
-    hits, counts = inside.sum(axis=2).astype(float), float(inside.shape[2])   # (G, nh), per group
-    cov = hits.sum(axis=0) / (counts * hits.shape[0])
+    return grouped_coverage_interval(inside.sum(axis=2), np.full(inside.shape[0], inside.shape[2]),
+                                     confidence=confidence, n_resamples=n_resamples, seed=seed)
+
+
+def grouped_coverage_interval(hits: np.ndarray, counts: np.ndarray, *, confidence: float = 0.90,
+                              n_resamples: int = 4000, seed: int = 0) -> np.ndarray:
+    """Pooled coverage ``sum(hits) / sum(counts)`` and its percentile bootstrap interval over groups.
+
+    Parameters
+    ----------
+    hits : ndarray, shape (G, n_horizons)
+        Errors inside the band, per group (a failure, a run) and horizon.
+    counts : ndarray, shape (G,)
+        Errors counted per group (groups may differ in size).
+    confidence, n_resamples, seed
+        As in :func:`coverage_interval`.
+
+    Returns
+    -------
+    ndarray, shape (n_horizons, 3)
+        ``coverage, low, high``; ``low`` and ``high`` NaN with fewer than two groups.
+    """
+    hits = np.asarray(hits, dtype=float)
+    counts = np.broadcast_to(np.asarray(counts, dtype=float)[:, None], hits.shape)
+    cov = hits.sum(axis=0) / counts.sum(axis=0)
     out = np.column_stack([cov, np.full_like(cov, np.nan), np.full_like(cov, np.nan)])
     if hits.shape[0] < 2:
         return out
-    res = stats.bootstrap((hits,), lambda h, axis: h.mean(axis=axis) / counts, confidence_level=confidence,
-                          n_resamples=n_resamples, method="percentile", axis=0, rng=np.random.default_rng(seed))
+    res = stats.bootstrap((hits, counts), lambda h, c, axis: h.sum(axis=axis) / c.sum(axis=axis), paired=True,
+                          confidence_level=confidence, n_resamples=n_resamples, method="percentile", axis=0,
+                          rng=np.random.default_rng(seed))
     out[:, 1], out[:, 2] = res.confidence_interval.low, res.confidence_interval.high
     return out
 
