@@ -38,7 +38,8 @@ def main(argv=None) -> int:
 
     from hybridship.datasets.esso_osaka import RUN_KINDS, default_data_dir
     from hybridship.evaluation.manoeuvre import (COMMAND_MODES, HORIZONS_S, _md_coverage, _md_table, pivot,
-                                      run_manoeuvre_benchmark, split_runs, wins)
+                                                 run_manoeuvre_benchmark, split_runs, wins,
+                                                 md_coverage_intervals)
 
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--data", type=Path, default=default_data_dir() / "data", help="folder of the published runs")
@@ -88,7 +89,8 @@ def main(argv=None) -> int:
                 lines.append(f"- vs {other}, commands {mode}: hybrid lower in {len(cells)} of {total} cells"
                              + (f"; not in: {', '.join(f'{k} {c}' for k, c in lost)}" if lost else ""))
         text = replace_generated(text, "wins", "\n".join(lines) + "\n")
-        cov = f"Made by `{command.strip()}` (`coverage.csv`, rows `kind = all`).\n\n" + _md_coverage(res.coverage)
+        cov = (f"Made by `{command.strip()}` (`coverage.csv`, rows `kind = all`; `coverage_intervals.csv`).\n\n"
+               + _md_coverage(res.coverage) + "\n" + md_coverage_intervals(res.coverage_intervals))
         text = replace_generated(text, "coverage", cov)
         cfg = res.config
         setup = (f"Made by `{command.strip()}`. Hybrid: features `{', '.join(cfg.residual.features)}`; "

@@ -540,6 +540,18 @@ def _md_coverage(coverage: pd.DataFrame, kind: str = "all") -> str:
     return "\n".join(lines) + "\n"
 
 
+def md_coverage_intervals(ci: pd.DataFrame) -> str:
+    """Markdown of :func:`coverage_intervals`: rows (commands, model), columns horizons."""
+    lines = ["2-sigma coverage with a 90 % interval that resamples whole runs "
+             f"({int(ci.n_runs.max())} test runs; the starts of one run share its conditions):", "",
+             "| commands | model | " + " | ".join(f"{h:g} s" for h in sorted(ci.horizon_s.unique())) + " |",
+             "|---|---|" + "---|" * ci.horizon_s.nunique()]
+    for (cmd, model), g in ci.groupby(["commands", "model"], sort=False):
+        cells = [f"{r.coverage:.3f} [{r.low:.2f}, {r.high:.2f}]" for r in g.sort_values("horizon_s").itertuples()]
+        lines.append(f"| {cmd} | {model} | " + " | ".join(cells) + " |")
+    return "\n".join(lines) + "\n"
+
+
 def wins(errors: pd.DataFrame, model: str, other: str, state: str = "distance_m", commands: str = "known"):
     """(kind, horizon) cells where ``model`` has a lower MAE than ``other``, and the total cell count."""
     a = pivot(errors, state, commands)
@@ -579,15 +591,7 @@ def markdown_report(result: BenchmarkResult, *, command: str | None = None) -> s
         lines += ["", "## spread coverage (x0 and y0 within 1 / 2 reported standard deviations, all kinds)", "",
                   _md_coverage(result.coverage), ""]
     if not result.coverage_intervals.empty:
-        ci = result.coverage_intervals
-        lines += ["2-sigma coverage with a 90 % interval that resamples whole runs "
-                  f"({int(ci.n_runs.max())} test runs; the starts of one run share its conditions):", "",
-                  "| commands | model | " + " | ".join(f"{h:g} s" for h in sorted(ci.horizon_s.unique())) + " |",
-                  "|---|---|" + "---|" * ci.horizon_s.nunique()]
-        for (cmd, model), g in ci.groupby(["commands", "model"], sort=False):
-            cells = [f"{r.coverage:.3f} [{r.low:.2f}, {r.high:.2f}]" for r in g.sort_values("horizon_s").itertuples()]
-            lines.append(f"| {cmd} | {model} | " + " | ".join(cells) + " |")
-        lines.append("")
+        lines += [md_coverage_intervals(result.coverage_intervals)]
     lines += ["", "All states (x0, y0, heading, distance) are in `errors.csv`; coverage per kind in "
               "`coverage.csv`.", "", "Cite: " + CITATION, ""]
     return "\n".join(lines)
