@@ -317,8 +317,8 @@ def _add_benchmark(sub) -> None:
     bsub = p.add_subparsers(dest="benchmark", metavar="BENCHMARK", parser_class=_Parser)
     d = bsub.add_parser("drift", help="the paper's 15/30/45/60 s drift-error tables after a DP failure",
                         description="Train on --train (DP parts), forecast after every failure in --test, and "
-                                    "write errors.csv, coverage.csv, timing.csv, tables.md and figures to --out. "
-                                    "Without --train/--test: the embedded simulated scenarios.")
+                                    "write errors.csv, coverage.csv, coverage_intervals.csv, timing.csv, tables.md and figures "
+                                    "to --out. Without --train/--test: the embedded simulated scenarios.")
     d.add_argument("--train", type=Path, help="folder of training logs")
     d.add_argument("--test", type=Path, help="folder of test logs (default: the training logs' drifts)")
     d.add_argument("--out", type=Path, default=Path("drift-benchmark"), help="output folder (default drift-benchmark)")
@@ -331,7 +331,8 @@ def _add_benchmark(sub) -> None:
     d.add_argument("--training", choices=("one_step", "multi_step"), default="one_step",
                    help="how the hybrid's nets are trained (default one_step)")
     d.add_argument("--calibration-scenarios", type=int, default=6,
-                   help="simulated DP losses that calibrate the hybrid's spread after a failure (default 6; 0: none)")
+                   help="simulated DP losses that calibrate the hybrid's spread after a failure when the "
+                        "training logs hold too few failures of their own (default 6; 0: none)")
     d.add_argument("--no-plots", action="store_true", help="skip the figures")
     d.set_defaults(func=_cmd_benchmark_drift)
     h = bsub.add_parser("hsc", help="high-speed craft: SS, ARX, NARX-ANN and hybrid on simulated sea trials",
