@@ -175,3 +175,25 @@ def test_grouped_coverage_pools_groups_of_different_sizes_by_their_counts():
     np.testing.assert_allclose(ci[0, 0], 95.0 / 115.0)
     assert ci[0, 1] < ci[0, 0] < ci[0, 2]
     np.testing.assert_array_equal(ci, metrics.grouped_coverage_interval(hits, counts, seed=1))
+
+
+def test_grouped_coverage_interval_stays_within_the_groups_coverages():
+    """Property: for any groups (sizes, hits), the pooled coverage is the hits over the counts,
+    and the interval is ordered and never leaves the range of the groups' own coverages (a
+    resample's coverage is a count-weighted mean of them)."""
+    from hypothesis import given, settings
+    from hypothesis import strategies as st
+
+    from hybridship.evaluation import metrics
+
+    @settings(max_examples=40, deadline=None)
+    @given(st.lists(st.tuples(st.integers(1, 50), st.floats(0.0, 1.0)), min_size=2, max_size=12))
+    def check(groups):
+        counts = np.array([n for n, _ in groups])
+        hits = np.array([[round(f * n)] for n, f in groups], dtype=float)
+        cov, lo, hi = metrics.grouped_coverage_interval(hits, counts, n_resamples=500)[0]
+        np.testing.assert_allclose(cov, hits.sum() / counts.sum())
+        own = hits[:, 0] / counts
+        assert own.min() - 1e-12 <= lo <= hi <= own.max() + 1e-12
+
+    check()
