@@ -44,7 +44,7 @@ from hybridship.driftoff.spread import draw_scales
 from hybridship.evaluation import metrics
 from hybridship.evaluation.drift import log_files
 from hybridship.predictors import AFTER_STOP, HybridPredictor, as_log_arrays
-from hybridship.predictors.hybrid import after_stop_scales
+from hybridship.predictors.hybrid import leave_one_out_after_stop_scales
 from hybridship.residual.ensemble import EnsembleConfig
 from hybridship.residual.environment import PER_DOF, EnvironmentConfig
 from hybridship.sim.scenario import DPLossConfig, embedded_scenarios, simulate_dp_loss
@@ -138,10 +138,10 @@ def main(argv=None) -> int:
 
 def _leave_one_out(hp, arrays) -> list:
     """Each log's forecasts after its failure with the spread calibrated on the other logs' failures."""
-    errors = hp.after_stop_errors(arrays)
+    scales = leave_one_out_after_stop_scales(hp.after_stop_errors(arrays), hp.calibration_config)
     out = []
-    for k, a in enumerate(arrays):
-        hp.calibration[AFTER_STOP] = after_stop_scales(errors[:k] + errors[k + 1:], hp.calibration_config)
+    for a, cal in zip(arrays, scales):
+        hp.calibration[AFTER_STOP] = cal
         out.append(metrics.drift_forecasts(hp, a, n_intervals=20, horizons_s=HORIZONS_S))
     return out
 

@@ -40,6 +40,7 @@ from scipy.signal import butter, filtfilt
 
 from hybridship.evaluation.drift import log_files
 from hybridship.fileio import atomic_write, markdown_table
+from hybridship.frames import body_to_ned, ned_to_body, wrap_pi
 from hybridship.physics.model import DynamicModel
 from hybridship.sim.scenario import embedded_scenarios
 from hybridship.vessel import load_vessel
@@ -57,18 +58,6 @@ def _lf_velocities(d: pd.DataFrame) -> np.ndarray:
     b, a = butter(2, 0.04, fs=1.0)
     return np.column_stack([filtfilt(b, a, d.truth_u_mps), filtfilt(b, a, d.truth_v_mps),
                             np.radians(filtfilt(b, a, d.truth_r_degps))])
-
-
-def _to_ned(acc_body: np.ndarray, psi: np.ndarray) -> np.ndarray:
-    c, s = np.cos(psi), np.sin(psi)
-    return np.stack([c * acc_body[..., 0] - s * acc_body[..., 1], s * acc_body[..., 0] + c * acc_body[..., 1],
-                     acc_body[..., 2]], -1)
-
-
-def _to_body(acc_ned: np.ndarray, psi: np.ndarray) -> np.ndarray:
-    c, s = np.cos(psi), np.sin(psi)
-    return np.stack([c * acc_ned[..., 0] + s * acc_ned[..., 1], -s * acc_ned[..., 0] + c * acc_ned[..., 1],
-                     np.broadcast_to(acc_ned[..., 2], c.shape)], -1)
 
 
 def failure_oracles(model: DynamicModel, d: pd.DataFrame) -> dict:
@@ -91,8 +80,8 @@ def failure_oracles(model: DynamicModel, d: pd.DataFrame) -> dict:
     rest = np.zeros_like(eta_w)
     force_at_rest = (model.acceleration(eta_w, rest, rpm=zeros_w, azimuth_rad=zeros_w, current=current[w])
                      - model.acceleration(eta_w, rest, rpm=zeros_w, azimuth_rad=zeros_w))
-    current_force = _to_body(_to_ned(force_at_rest, psi[w]).mean(0), psi_path)
-    wave_held = _to_body(_to_ned(tau["wave2"][w] @ m_inv.T, psi[w]).mean(0), psi_path)
+    current_force = ned_to_body(body_to_ned(force_at_rest, psi[w]).mean(0), psi_path)
+    wave_held = ned_to_body(body_to_ned(tau["wave2"][w] @ m_inv.T, psi[w]).mean(0), psi_path)
 
     eta0 = np.column_stack([north[st], east[st], psi[st]])
     zeros = np.zeros((N_STARTS, model.n_channels))
@@ -101,7 +90,7 @@ def failure_oracles(model: DynamicModel, d: pd.DataFrame) -> dict:
     def run(**kw):
         kw.setdefault("wind", wind[st])
         end = model.rollout(eta0, nu[st], HORIZON, rpm=zeros, azimuth_rad=zeros, **kw).eta[:, -1]
-        return (float(np.degrees(np.abs(end[:, 2] - truth[:, 2])).mean()),
+        return (float(np.degrees(np.abs(wrap_pi(end[:, 2] - truth[:, 2]))).mean()),
                 float(0.5 * np.abs(end[:, :2] - truth[:, :2]).mean(axis=0).sum()))
 
     return {

@@ -30,6 +30,7 @@ from scipy.signal import butter, filtfilt
 
 from hybridship.evaluation.drift import log_files
 from hybridship.fileio import atomic_write, markdown_table
+from hybridship.frames import ned_to_body
 from hybridship.physics.model import DynamicModel
 
 TRUTHSIM = Path(__file__).resolve().parents[1].parent / "shared" / "data" / "truthsim-dev" / "logs"
@@ -50,9 +51,8 @@ def drift_residual(model, d: pd.DataFrame, cutoff_hz: float) -> pd.DataFrame:
                            for k in ("x_N", "y_N", "n_Nm")])
     z = np.zeros((len(d), model.n_channels))
     res = np.gradient(nu, dt, axis=0) - model.acceleration(eta, nu, rpm=z, azimuth_rad=z, current=cur, tau_ext=tau)
-    vc_n, vc_e = cur[:, 0] * np.cos(cur[:, 1]), cur[:, 0] * np.sin(cur[:, 1])
-    ur = u - (np.cos(psi) * vc_n + np.sin(psi) * vc_e)
-    vr = v - (-np.sin(psi) * vc_n + np.cos(psi) * vc_e)
+    v_c = np.column_stack([cur[:, 0] * np.cos(cur[:, 1]), cur[:, 0] * np.sin(cur[:, 1]), np.zeros(len(d))])
+    ur, vr = (nu - ned_to_body(v_c, psi))[:, :2].T          # velocity relative to the current (body)
     stop = int(np.flatnonzero(d.dp_active.to_numpy()[:-1] > d.dp_active.to_numpy()[1:])[0]) + 1
     sl = slice(stop, len(d) - 5)
     return pd.DataFrame({"res_r": res[sl, 2], "u_r v_r": (ur * vr)[sl], "abs(v_r) v_r": (np.abs(vr) * vr)[sl],

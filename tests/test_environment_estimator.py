@@ -208,9 +208,13 @@ def test_fit_calibrates_the_spread_after_a_failure_on_the_training_logs_own_fail
         np.testing.assert_allclose(off.calibration["after_stop"][what].scale, hp.calibration["after_stop"][what].scale)
     two = HybridPredictor(model.vessel, ensemble_config=TINY).fit(logs[:2])
     assert "after_stop" not in two.calibration
+
+
+def test_a_failure_needs_station_keeping_before_it_and_enough_drift_after_it(model):
     from hybridship.predictors.after_failure import has_drift
 
-    a = as_log_arrays(logs[0], model.vessel)
-    assert has_drift(a, 20, 60.0) and not has_drift(a, 20, 200.0)
-    manoeuvring = logs[0].assign(dp_active=0)          # never on station: no failure to calibrate on
+    log = physics_log(model, duration_s=1000, t_shutdown_s=800, seed=14)     # 200 s of drift
+    a = as_log_arrays(log, model.vessel)
+    assert has_drift(a, 20, 60.0) and has_drift(a, 20, 180.0) and not has_drift(a, 20, 182.0)
+    manoeuvring = log.assign(dp_active=0)          # never on station: no failure to calibrate on
     assert not has_drift(as_log_arrays(manoeuvring, model.vessel), 20, 60.0)

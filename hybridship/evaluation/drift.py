@@ -45,7 +45,7 @@ import pandas as pd
 from . import metrics
 from ..fileio import atomic_write, markdown_table
 from ..predictors import DataOnlyPredictor, DeadReckoning, DynamicPredictor, HybridPredictor, as_log_arrays
-from ..predictors.hybrid import AFTER_STOP, after_stop_scales
+from ..predictors.hybrid import AFTER_STOP, leave_one_out_after_stop_scales
 from ..residual.ensemble import EnsembleConfig
 
 #: File endings read as logs from a folder.
@@ -225,8 +225,7 @@ def _calibrate_after_stop(hybrid, test_arrays, test_is_train: bool, calibration_
         return timing, None
     if test_is_train and n_min > 0 and len(test_arrays) - 1 >= n_min:
         errors = hybrid.after_stop_errors(test_arrays, n_intervals=n_intervals, horizon_s=horizon_s)
-        per_log = [after_stop_scales(errors[:k] + errors[k + 1:], hybrid.calibration_config)
-                   for k in range(len(errors))]
+        per_log = leave_one_out_after_stop_scales(errors, hybrid.calibration_config)
         what = f"calibrate after stop on the other {len(errors) - 1} logs' failures, per test log"
         timing.append({"model": "hybrid", "what": what, "seconds": time.perf_counter() - t0})
         say(f"{what} ({timing[-1]['seconds']:.1f} s)")

@@ -39,6 +39,7 @@ from ..residual.calibration import CalibrationConfig
 from ..residual.ensemble import EnsembleConfig
 from ..residual.multistep import MultiStepConfig
 from ..residual.features import ALL_FEATURES, COMMAND_FEATURES, ResidualConfig
+from .metrics import grouped_coverage_interval
 
 #: Default forecast horizons [s] (model scale; x 10.4 at full scale).
 HORIZONS_S = (5, 10, 20, 30)
@@ -338,8 +339,6 @@ def coverage_intervals(per_run_z: dict, horizons_s, sigma: float = 2.0, seed: in
     bootstrap interval that resamples whole runs
     (:func:`~hybridship.evaluation.metrics.grouped_coverage_interval`): the starts of one run
     share its conditions, so the number of runs, not of starts, sets what a coverage can say."""
-    from .metrics import grouped_coverage_interval
-
     rows = []
     for (model, commands), zs in per_run_z.items():
         zs = [z for z in zs if z is not None and z.size]

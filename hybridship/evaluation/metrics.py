@@ -20,7 +20,8 @@ WINDOWS = (5, 20)
 STATES = ("north_m", "east_m", "yaw_deg")
 
 __all__ = ["HORIZONS_S", "WINDOWS", "STATES", "drift_forecasts", "shutdown_index", "drift_errors",
-           "absolute_errors", "coverage", "coverage_interval", "grouped_coverage_interval", "error_table", "paper_table", "reduction_table"]
+           "absolute_errors", "coverage", "coverage_interval", "grouped_coverage_interval", "error_table",
+           "paper_table", "reduction_table"]
 
 
 def drift_errors(predictor, arrays, *, n_intervals: int = 20, horizons_s=HORIZONS_S, **forecast_kw) -> np.ndarray:

@@ -761,6 +761,13 @@ def after_stop_scales(errors: list, cal: CalibrationConfig) -> dict:
     return {"position": pos, "heading": fit_spread_scale(e[..., 2], sd[..., 2], lead, **kw)}
 
 
+def leave_one_out_after_stop_scales(errors: list, cal: CalibrationConfig) -> list:
+    """For each log of :meth:`HybridPredictor.after_stop_errors`, the calibration of
+    :func:`after_stop_scales` fitted on the *other* logs' failures (so no failure is scored
+    with a spread calibrated on it)."""
+    return [after_stop_scales(errors[:k] + errors[k + 1:], cal) for k in range(len(errors))]
+
+
 def _check_finite_step(eta, nu, lead_s: float):
     """Stop a rollout whose state left the finite numbers, with a message that says why."""
     bad = ~(np.isfinite(eta).all(axis=1) & np.isfinite(nu).all(axis=1))
