@@ -22,7 +22,8 @@ length of the loss), ``_c<s>`` (curriculum from a ``<s>``-second horizon),
 the benchmark default), ``+hull`` / ``+hullms`` (the linear hull correction before the nets,
 identified on the one-step residual / by a free-run fit), ``_th`` (the hull correction tuned
 with the nets in multi-step training), ``+refit`` (after calibrating, the nets refitted on all
-the training rows, ``CalibrationConfig.refit``).
+the training rows, ``CalibrationConfig.refit``), ``+wind`` (the wind forecast fitted on the
+training runs' wind, ``wind_forecast="fit"``; held otherwise).
 Writes ``errors.csv`` and ``coverage.csv`` (the manoeuvre benchmark's columns) and
 ``timing.csv`` (training seconds), and prints the distance and heading tables with
 commands known.
@@ -84,6 +85,8 @@ def variants(cfg, names):
             kw["hull_fit"] = "multi_step" if "+hullms" in name else "one_step"
         if ms:
             kw["multistep_config"] = replace(MultiStepConfig(), **ms)
+        if "+wind" in name:
+            kw["wind_forecast"] = "fit"
         if "+cmd" in name:
             extra = tuple(f for f in ALL_FEATURES[9:] if f not in base_rc.features)
             kw["residual_config"] = replace(base_rc, features=tuple(base_rc.features) + extra)

@@ -9,7 +9,9 @@ The log itself is read, re-sorted and validated once, at the boundary, by
 * :mod:`~hybridship.forecast_inputs.limits`: valid ranges of the physics inputs (states,
   wind, current, step), clipped and flagged or refused, with the command checks of
   :mod:`~hybridship.forecast_inputs.commands` (propeller speeds, thruster and rudder angles);
-* :mod:`~hybridship.forecast_inputs.faults`: the flag names and the two refusals.
+* :mod:`~hybridship.forecast_inputs.faults`: the flag names and the two refusals;
+* :mod:`~hybridship.forecast_inputs.wind`: the wind over a forecast, held or a gust that
+  decays to the recent mean (:class:`~hybridship.forecast_inputs.wind.WindForecast`).
 """
 
 from hybridship.forecast_inputs.faults import FaultFlags, InputRangeError, StartWindowError
@@ -21,6 +23,7 @@ from hybridship.forecast_inputs.limits import (
     check_or_clip_inputs,
     envelope_for,
 )
+from hybridship.forecast_inputs.wind import HELD_WIND, WindForecast, fit_wind_forecast
 from hybridship.forecast_inputs.start_window import (
     StartWindow,
     assess_start_window,
@@ -28,6 +31,7 @@ from hybridship.forecast_inputs.start_window import (
 )
 
 __all__ = [
+    "HELD_WIND",
     "KNOT_M_S",
     "CheckedInputs",
     "Envelope",
@@ -35,9 +39,11 @@ __all__ = [
     "InputRangeError",
     "StartWindow",
     "StartWindowError",
+    "WindForecast",
     "assess_start_window",
     "check_number",
     "check_or_clip_inputs",
     "envelope_for",
+    "fit_wind_forecast",
     "forecast_log_arrays",
 ]

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from ..forecast_inputs.wind import HELD_WIND, WindForecast
 from ..physics.model import DynamicModel
 from ..residual.features import ResidualConfig
 from .forecast_setup import _forecast_setup
@@ -12,12 +13,20 @@ __all__ = ["DynamicPredictor"]
 
 class DynamicPredictor:
     """The dynamic model alone (Skulstad et al. sec. 3.1): wind held at its start value, commands
-    held (``commands="held"``) or the logged future ones (``commands="known"``)."""
+    held (``commands="held"``) or the logged future ones (``commands="known"``).
+
+    ``wind_forecast`` replaces the held wind by a decaying gust
+    (:class:`~hybridship.forecast_inputs.wind.WindForecast`), for example the one a hybrid
+    fitted, to show what the wind forecast alone does to the physics.
+    """
 
     name = "dynamic"
 
     def __init__(self, vessel="gunnerus", *, residual_config: ResidualConfig = ResidualConfig(),
-                 stop_after_failure: bool = True):
+                 stop_after_failure: bool = True, wind_forecast: WindForecast = HELD_WIND):
+        if not isinstance(wind_forecast, WindForecast):
+            raise TypeError(f"wind_forecast: expected a WindForecast, got {type(wind_forecast).__name__}")
+        self.wind_forecast = wind_forecast
         self.model = DynamicModel(vessel)
         self.residual_config = residual_config
         self.stop_after_failure = bool(stop_after_failure)
@@ -42,7 +51,7 @@ class DynamicPredictor:
             the log must extend ``horizon_s`` past every start).
         """
         st = _forecast_setup(self.model, self.residual_config, log, start_times_s, horizon_s,
-                             self.stop_after_failure, commands)
+                             self.stop_after_failure, commands, wind_forecast=self.wind_forecast)
         res = self.model.rollout(st.eta0, st.nu0, st.H, dt_s=st.dt, substeps=st.substeps, rpm=st.rpm,
                                  azimuth_rad=st.az, wind=st.wind)
         return ForecastResult(st.arrays.time_s[st.idx], res.time_s, res.eta, res.nu, flags=st.flags, notes=st.notes)

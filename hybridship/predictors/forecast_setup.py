@@ -14,6 +14,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..forecast_inputs import FaultFlags, assess_start_window, check_or_clip_inputs
+from ..forecast_inputs.wind import HELD_WIND, WindForecast
 from ..logs.ingest import ingest
 from ..logs.io import LogArrays
 from ..residual.features import ResidualConfig
@@ -83,7 +84,7 @@ class _Setup:
     nu0: np.ndarray
     rpm: np.ndarray
     az: np.ndarray
-    wind: np.ndarray
+    wind: np.ndarray        # (S, 1, 2) held, or (S, H, 2) per step
     substeps: int
     flags: dict
     notes: tuple
@@ -138,13 +139,15 @@ def _forecast_time_range(start_times_s, horizon_s: float, history_s: float):
 
 def _forecast_setup(model, config: ResidualConfig, log, start_times_s, horizon_s: float,
                     stop_after_failure: bool = True, commands: str = "held",
-                    history_s: float = FORECAST_HISTORY_S) -> _Setup:
+                    history_s: float = FORECAST_HISTORY_S, wind_forecast: WindForecast = HELD_WIND) -> _Setup:
     """Checked log arrays, start rows, step, horizon, start states and commands.
 
     With ``commands="held"`` the commands are the start's, shaped (S, 1, K); with
     ``commands="known"`` they are the logged commands of the H steps after each start,
-    (S, H, K) (see :func:`_known_command_steps`). The wind is held at its start value
-    in both modes (its future is not known at a start).
+    (S, H, K) (see :func:`_known_command_steps`). The wind's future is not known at a
+    start in either mode: it is held at its start value (S, 1, 2), or forecast by
+    ``wind_forecast`` from its start value and its recent mean (S, H, 2)
+    (:class:`~hybridship.forecast_inputs.wind.WindForecast`).
 
     The log goes through :func:`hybridship.logs.ingest.ingest` with ``purpose="forecast"``
     (re-sorted, checked against the vessel; sensor faults tolerated, format errors refused),
@@ -174,9 +177,9 @@ def _forecast_setup(model, config: ResidualConfig, log, start_times_s, horizon_s
     flags.update({k: np.asarray(v, dtype=bool) for k, v in sw.flags.items()})
     flags[FaultFlags.INPUT_CLIPPED] = np.asarray(chk.clipped, dtype=bool)
     notes = tuple(sw.notes) if len(sw.notes) == len(idx) else ("",) * len(idx)
+    wind = wind_forecast.steps(arrays.wind, arrays.time_s, idx, chk.wind, H, dt)
     return _Setup(arrays, idx, dt, H, chk.eta, chk.nu, np.ascontiguousarray(chk.rpm),
-                  np.ascontiguousarray(chk.azimuth_rad), np.ascontiguousarray(chk.wind[:, None]),
-                  int(chk.substeps), flags, notes)
+                  np.ascontiguousarray(chk.azimuth_rad), wind, int(chk.substeps), flags, notes)
 
 def _check_row_stride(row_stride) -> int:
     if isinstance(row_stride, bool) or not isinstance(row_stride, (int, np.integer)) or row_stride < 1:

@@ -17,6 +17,7 @@ from typing import Iterable
 import numpy as np
 
 from ..forecast_inputs import FaultFlags
+from ..forecast_inputs.wind import HELD_WIND, WindForecast, fit_wind_forecast
 from ..frames import wrap_pi
 from ..logs.io import LogArrays
 from ..physics.model import DynamicModel
@@ -99,6 +100,14 @@ class HybridPredictor:
         How the hull correction is identified: ridge regression on the one-step residual,
         or a free-run fit alone (from zero, the multi-step loss, ``multistep_config``'s
         ``hull_iterations`` and ``hull_lr``) before the nets are fitted to what remains.
+    wind_forecast : WindForecast or "fit"
+        The wind over a forecast (:mod:`hybridship.forecast_inputs.wind`). ``"fit"``
+        (default): :meth:`fit` chooses how fast the start's gust decays to the recent mean
+        wind by how well that predicts the training logs' own wind over
+        ``calibration_config.horizon_s`` (station keeping only with ``dp_only``); the
+        held wind when nothing predicts better. A :class:`~hybridship.forecast_inputs.wind.WindForecast`
+        is used as given (``HELD_WIND``: the paper's held wind). Stored in the model file;
+        multi-step training and the spread calibration use the same wind forecast.
     """
 
     #: Training modes of the nets.
@@ -113,7 +122,14 @@ class HybridPredictor:
                  environment_window_s: float = 1800.0, nets_after_stop: bool = False,
                  calibration_config: CalibrationConfig = CalibrationConfig(), training: str = "one_step",
                  multistep_config: MultiStepConfig = MultiStepConfig(), command_guard: bool = False,
-                 hull_correction: bool = False, hull_ridge: float = 1e-3, hull_fit: str = "one_step"):
+                 hull_correction: bool = False, hull_ridge: float = 1e-3, hull_fit: str = "one_step",
+                 wind_forecast: WindForecast | str = "fit"):
+        if not (isinstance(wind_forecast, WindForecast) or wind_forecast == "fit"):
+            raise ValueError(f"wind_forecast: expected a WindForecast or 'fit', got {wind_forecast!r}")
+        #: as given: a WindForecast, or "fit" (chosen by :meth:`fit` on the training logs' wind)
+        self.wind_forecast_option = wind_forecast
+        #: the wind forecast the forecasts use (set by :meth:`fit` with "fit")
+        self.wind_forecast: WindForecast = wind_forecast if isinstance(wind_forecast, WindForecast) else HELD_WIND
         if training not in self.TRAINING_MODES:
             raise ValueError(f"training: expected one of {self.TRAINING_MODES}, got {training!r}")
         self.training = training
@@ -230,6 +246,7 @@ class HybridPredictor:
         if self.environment == "estimator":
             self.estimator.fit(logs, dp_only=dp_only)
         cuts = [self._calibration_cut(a, cal, dp_only) for a in logs]
+        wind_info = self._fit_wind_forecast(logs, cuts, cal, dp_only)
         masks = [None if c >= len(a) else (np.arange(len(a)) < c) for a, c in zip(logs, cuts)]
         self._fit_nets(logs, dp_only=dp_only, progress=progress, stride=stride, row_masks=masks)
         self.command_regime = None
@@ -247,8 +264,28 @@ class HybridPredictor:
             if cal.refit:
                 self._fit_nets(logs, dp_only=dp_only, progress=progress, stride=stride, row_masks=None)
         self.training_info["calibration"] = cal_info
+        if wind_info is not None:
+            self.training_info["wind_forecast"] = wind_info
         self._calibrate_after_stop_on_training_logs(logs, cal)
         return self
+
+    def _fit_wind_forecast(self, logs, cuts, cal: CalibrationConfig, dp_only: bool):
+        """With ``wind_forecast="fit"``: the wind forecast that best predicts the training
+        logs' own wind over ``cal.horizon_s`` (:func:`~hybridship.forecast_inputs.wind.fit_wind_forecast`),
+        from the part of each log before the calibration cut and, with ``dp_only``, before
+        its first sample off station keeping (the nets' own rows)."""
+        if self.wind_forecast_option != "fit":
+            return None
+        ends = []
+        for a, cut in zip(logs, cuts):
+            off = np.flatnonzero(a.dp_active == 0) if dp_only else np.array([], dtype=int)
+            ends.append(min(int(cut), int(off[0]) if off.size else len(a)))
+        self.wind_forecast, scores = fit_wind_forecast(logs, cal.horizon_s, ends=ends)
+        held = min((v for k, v in scores.items() if k != "n_starts" and k[1] is None), default=float("nan"))
+        best = scores.get((self.wind_forecast.mean_window_s, self.wind_forecast.time_constant_s), held)
+        return {"mean_window_s": self.wind_forecast.mean_window_s,
+                "time_constant_s": self.wind_forecast.time_constant_s,
+                "error_m_s": best, "held_error_m_s": held, "n_starts": scores["n_starts"], "horizon_s": cal.horizon_s}
 
     def _fit_nets(self, logs, *, dp_only, progress, stride, row_masks):
         X, Y, seg = self.training_data(logs, dp_only=dp_only, row_masks=row_masks)
@@ -293,7 +330,7 @@ class HybridPredictor:
     def _multistep_starts(self, logs, row_masks, dp_only):
         preps = [prepare_log(self.model, a, self.residual_config) for a in logs]
         return collect_starts(preps, row_masks if row_masks is not None else [None] * len(logs),
-                              self.multistep_config, dp_only=dp_only)
+                              self.multistep_config, dp_only=dp_only, wind_forecast=self.wind_forecast)
 
     def _regime_inputs(self, prep, rows):
         """(rpm / max rpm, model-predicted u [m/s], first rotatable angle [rad]) of rows predicted from row - 1."""
@@ -423,7 +460,8 @@ class HybridPredictor:
         """
         self._check_fitted()
         st = _forecast_setup(self.model, self.residual_config, log, start_times_s, horizon_s,
-                             self.stop_after_failure, commands, history_s=self.history_s)
+                             self.stop_after_failure, commands, history_s=self.history_s,
+                             wind_forecast=self.wind_forecast)
         E = self.ensemble.n_members
         sigma_b = None
         if self.environment == "estimator":
@@ -629,7 +667,7 @@ class HybridPredictor:
                 substeps: int = 1, current=None, accel_ext=None, nets: bool = True, nets_weight=None):
         """Batched hybrid rollout from states (S, 3), previous residual deviations (S, 3),
         biases (S, 3) or per member (E, S, 3) (surge/sway in NED), commands held (S, 1, K) or
-        per step (S, n_steps, K), held wind (S, 1, 2), and optionally a held current
+        per step (S, n_steps, K), wind held (S, 1, 2) or per step (S, n_steps, 2), and optionally a held current
         ``[speed_m_s, dir_to_rad]`` (S, 1, 2) and a body-frame extra acceleration (S, 1, 3)
         for the physics.
 
@@ -662,6 +700,9 @@ class HybridPredictor:
         per_step = rpm.shape[1] > 1
         if per_step and (rpm.shape[1] < n_steps or az.shape[1] < n_steps):
             raise ValueError(f"rpm, az: per-step commands need {n_steps} steps, got {rpm.shape[1]}, {az.shape[1]}")
+        wind_per_step = wind.shape[1] > 1
+        if wind_per_step and wind.shape[1] < n_steps:
+            raise ValueError(f"wind: per-step wind needs {n_steps} steps, got {wind.shape[1]}")
         thrust_guard = guard and self.thrust_regime is not None
         w_thrust = np.ones(S)
         w_start = np.ones(S) if nets_weight is None else np.asarray(nets_weight, dtype=float)
@@ -683,8 +724,10 @@ class HybridPredictor:
         for j in range(n_steps):
             rpm_j, az_j = (np.ascontiguousarray(rpm[:, j:j + 1]), np.ascontiguousarray(az[:, j:j + 1])) \
                 if per_step else (rpm, az)
-            if thrust_guard and per_step and j > 0:
-                w_thrust = self._thrust_weight(eta[:, j], nu[:, j], rpm_j[:, 0], az_j[:, 0], wind[:, 0])
+            if wind_per_step:
+                wind_s = np.ascontiguousarray(wind[:, j])
+            if thrust_guard and (per_step or wind_per_step) and j > 0:
+                w_thrust = self._thrust_weight(eta[:, j], nu[:, j], rpm_j[:, 0], az_j[:, 0], wind_s)
             # physics: one public model step with the estimator's extra acceleration, and the
             # model's acceleration at the new state (the nets' inputs)
             rpm_s, az_s = np.ascontiguousarray(rpm_j[:, 0]), np.ascontiguousarray(az_j[:, 0])
@@ -697,7 +740,7 @@ class HybridPredictor:
             if use_cmd:
                 jp = max(j - 1, 0) if per_step else 0
                 feats[:, :, 9:] = command_feature_columns(
-                    nu_1, eta_1[:, 2], rpm_j[:, 0], rpm[:, jp], az_j[:, 0], az[:, jp], wind[:, 0], dt_s,
+                    nu_1, eta_1[:, 2], rpm_j[:, 0], rpm[:, jp], az_j[:, 0], az[:, jp], wind_s, dt_s,
                     scales["rpm_scale"], scales["angle_channel"])
             X = feats[..., fidx]
             r = ens.predict_members(X) if nets else np.zeros((E, S, 3))     # (E, S, 3)

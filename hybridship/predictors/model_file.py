@@ -15,6 +15,7 @@ from pathlib import Path
 import numpy as np
 
 from ..fileio import atomic_write
+from ..forecast_inputs.wind import WindForecast
 from ..residual.calibration import CalibrationConfig, SpreadCalibration
 from ..residual.ensemble import EnsembleConfig, MLPEnsemble
 from ..residual.environment import EnvironmentConfig, EnvironmentEstimator
@@ -31,7 +32,7 @@ __all__ = ["MODEL_FORMAT_VERSION", "ModelFileError", "load_model", "model_metada
 #: validated vessel description is embedded in the metadata (``vessel_description``), so a
 #: model loads without its vessel file; 3 added the environment estimator; 2 and earlier
 #: stored only the vessel's name.
-MODEL_FORMAT_VERSION = 6
+MODEL_FORMAT_VERSION = 7
 
 
 class ModelFileError(ValueError):
@@ -102,6 +103,8 @@ def model_metadata(predictor) -> dict:
         "command_regime": None if p.command_regime is None else {
             k: getattr(p.command_regime, k) for k in ("rpm_eps", "froude_lo", "angle_hard_rad", "length_m")},
         "calibrated_commands": sorted(p.calibration),
+        "wind_forecast": {"option": "fit" if p.wind_forecast_option == "fit" else "given",
+                          **asdict(p.wind_forecast)},
         "training_info": p.training_info,
     }
 
@@ -186,6 +189,11 @@ def _read_checked_metadata(data: dict, path: Path) -> dict:
     return meta
 
 
+def _read_wind_forecast(d: dict) -> WindForecast:
+    """The wind forecast the model was fitted with (a fitted one is fixed from then on)."""
+    return WindForecast(**{k: v for k, v in d.items() if k != "option"})
+
+
 def _build_predictor(cls, meta: dict, vessel, path: Path):
     """``(predictor, embedded, state)``: an unfitted ``cls`` with the file's settings, for
     ``vessel`` or else the embedded vessel (``embedded``), and the scalar learned state."""
@@ -205,7 +213,10 @@ def _build_predictor(cls, meta: dict, vessel, path: Path):
                   calibration_config=CalibrationConfig(**meta["calibration_config"]),
                   training=meta["training"], multistep_config=MultiStepConfig(**meta["multistep_config"]),
                   command_guard=meta["command_guard"], hull_correction=meta.get("hull_correction", False),
-                  hull_ridge=meta.get("hull_ridge", 1e-3), hull_fit=meta.get("hull_fit", "one_step"))
+                  hull_ridge=meta.get("hull_ridge", 1e-3), hull_fit=meta.get("hull_fit", "one_step"),
+                  wind_forecast=_read_wind_forecast(meta["wind_forecast"]))
+        if meta["wind_forecast"].get("option") == "fit":
+            obj.wind_forecast_option = "fit"       # a refit chooses again; forecasts use the fitted one
         state = _scalar_state(meta)
     except (KeyError, TypeError, ValueError, AttributeError) as err:
         if isinstance(err, ModelFileError) or "VesselFileError" in type(err).__name__:

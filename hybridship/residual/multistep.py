@@ -131,8 +131,8 @@ class Starts:
         Residual bias at the start (surge/sway in NED).
     rpm, az : ndarray, shape (S, H, K)
         Logged commands of the steps after each start.
-    wind : ndarray, shape (S, 1, 2)
-        Wind held at its start value.
+    wind : ndarray, shape (S, 1, 2) or (S, H, 2)
+        Wind held at its start value, or per step as the forecast's wind forecast gives it.
     truth : ndarray, shape (S, H, 3)
         Measured pose at steps 1..H.
     is_val : ndarray of bool, shape (S,)
@@ -156,8 +156,11 @@ class Starts:
                                                         "truth", "is_val")), self.dt_s)
 
 
-def collect_starts(preps, masks, config: MultiStepConfig, dp_only: bool = True) -> Starts:
+def collect_starts(preps, masks, config: MultiStepConfig, dp_only: bool = True, wind_forecast=None) -> Starts:
     """Start times of the training rollouts from prepared logs.
+
+    The wind of each rollout is what a forecast from that start would use: held, or per
+    step from ``wind_forecast`` (:class:`~hybridship.forecast_inputs.wind.WindForecast`).
 
     ``preps``: :class:`~hybridship.residual.features.PreparedLog` per log; ``masks``: a
     boolean row mask per log (None: every row) of the rows that may be used (start and
@@ -191,7 +194,10 @@ def collect_starts(preps, masks, config: MultiStepConfig, dp_only: bool = True) 
         rows = r[:, None] + np.arange(H)[None, :]
         out["rpm"].append(a.rpm[rows])
         out["az"].append(a.azimuth_rad[rows])
-        out["wind"].append(a.wind[r][:, None])
+        if wind_forecast is None or wind_forecast.held:
+            out["wind"].append(a.wind[r][:, None])
+        else:
+            out["wind"].append(wind_forecast.steps(a.wind, a.time_s, r, a.wind[r], H, dt))
         out["truth"].append(a.eta[rows + 1])
         is_val = np.zeros(r.size, bool)
         n_val = int(round(config.val_fraction * r.size))
@@ -262,7 +268,8 @@ def _full_features(e1, n1, a1, r_prev, s: Starts, j: int, use_cmd: bool, scales:
     if use_cmd:
         jp = max(j - 1, 0)
         cf = command_feature_columns(n1, e1[:, 2], s.rpm[:, j], s.rpm[:, jp], s.az[:, j], s.az[:, jp],
-                                     s.wind[:, 0], s.dt_s, scales["rpm_scale"], scales["angle_channel"], lib=torch)
+                                     s.wind[:, min(j, s.wind.shape[1] - 1)], s.dt_s, scales["rpm_scale"],
+                                     scales["angle_channel"], lib=torch)
         cols.append(cf.expand(E, S, cf.shape[-1]))
     else:
         cols.append(torch.zeros((E, S, len(COMMAND_FEATURES)), dtype=n1.dtype))
@@ -373,7 +380,9 @@ def train_multistep(ensemble, model, starts: Starts, feature_index, config: Mult
         w = np.ones(H) if config.lead_weighting == "uniform" else np.arange(1, H + 1, dtype=float)
         w = w / w.sum()
         for j in range(H):
-            y = PhysicsStep.apply(x, s.rpm[:, j:j + 1], s.az[:, j:j + 1], s.wind, P, dt, substeps, config.fd_step)
+            jw = min(j, s.wind.shape[1] - 1)
+            y = PhysicsStep.apply(x, s.rpm[:, j:j + 1], s.az[:, j:j + 1], s.wind[:, jw:jw + 1], P, dt, substeps,
+                                  config.fd_step)
             e1, n1, a1 = y[:, :3], y[:, 3:6], y[:, 6:9]
             full = _full_features(e1, n1, a1, r_prev, s, j, use_cmd, scales)
             r = _step_residual(params, n_net, full, fidx, ensemble, hull, scale)          # (E, S, 3)
