@@ -445,7 +445,8 @@ class HybridPredictor:
         Parameters
         ----------
         log, start_times_s, horizon_s, commands
-            As in :meth:`DynamicPredictor.forecast` (wind held; commands held or known).
+            As in :meth:`DynamicPredictor.forecast` (commands held or known); the wind
+            follows the model's ``wind_forecast``.
         guard : bool, optional
             Shrink the learned correction outside the training envelope (default: the
             ``guard`` given at construction).
