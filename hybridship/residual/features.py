@@ -49,7 +49,8 @@ from ..logs.io import LogArrays
 #: propeller's rpm over its maximum and its rate [1/s]; the first rotatable actuator's
 #: angle (rudder or azimuth, wrapped to (-pi, pi]) [rad] and its rate [rad/s]; the ship's
 #: velocity through the air in body axes (Fossen's ``u_rw, v_rw``, from the model-predicted
-#: velocities and the wind of the step: logged in training, forecast in a rollout) [m/s]; the drift angle ``atan2(v_hat, |u_hat|)`` [rad].
+#: velocities and the wind of the step: logged in training, forecast in a rollout) [m/s];
+#: the drift angle ``atan2(v_hat, |u_hat|)`` [rad].
 #: The commands are those of the step being predicted, the rates their change over it.
 COMMAND_FEATURES = ("rpm_main_rel", "rpm_main_rate_rel_s", "angle_main_rad", "angle_main_rate_rad_s",
                     "wind_rel_u_m_s", "wind_rel_v_m_s", "drift_angle_rad")
