@@ -33,6 +33,16 @@ def replace_generated(text: str, key: str, body: str) -> str:
     return pat.sub(lambda m: m.group(1) + body + m.group(2), text)
 
 
+def _wind_text(hybrid) -> str:
+    """How the fitted hybrid forecasts the wind (from its ``training_info``)."""
+    info = hybrid.training_info.get("wind_forecast")
+    if not info or info["held"]:
+        return "held at its start value"
+    return (f"a gust decaying to the {info['mean_window_s']:g}-s mean with {info['time_constant_s']:g} s "
+            f"(fitted on the training runs' wind: {info['error_m_s']:.3f} m/s mean error over "
+            f"{info['horizon_s']:g} s against {info['held_error_m_s']:.3f} m/s held)")
+
+
 def main(argv=None) -> int:
     import torch
 
@@ -98,7 +108,8 @@ def main(argv=None) -> int:
                  + (f" (multi-step horizon {cfg.multistep.horizon_s:g} s, {cfg.multistep.iterations} iterations of "
                     f"{cfg.multistep.batch_starts} starts)" if cfg.training == "multi_step" else "")
                  + f"; command-regime guard {'on' if cfg.command_guard else 'off'}; spread calibrated on the last "
-                 f"{cfg.calibration.fraction:.0%} of each training run; {cfg.ensemble.n_members} members, seed "
+                 f"{cfg.calibration.fraction:.0%} of each training run; wind forecast "
+                 f"{_wind_text(res.predictors['hybrid'])}; {cfg.ensemble.n_members} members, seed "
                  f"{cfg.ensemble.seed}. Training took {res.timings_s['fit_hybrid']:.0f} s (wall time, one thread, "
                  "on a shared machine).\n")
         text = replace_generated(text, "setup", setup)

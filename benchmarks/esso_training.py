@@ -44,13 +44,15 @@ ROOT = Path(__file__).resolve().parents[1]
 
 def variants(cfg, names):
     """Unfitted hybrids by variant name."""
+    from hybridship.forecast_inputs.wind import HELD_WIND
     from hybridship.predictors import HybridPredictor
     from hybridship.residual.features import ALL_FEATURES
 
     from hybridship.residual.multistep import MultiStepConfig
 
     # a fixed base, whatever the benchmark's defaults are now: the six model-predicted
-    # velocities and accelerations, one-step training, MultiStepConfig() and no command guard
+    # velocities and accelerations, one-step training, MultiStepConfig(), no command guard
+    # and the wind held
     base_rc = replace(cfg.residual, features=ALL_FEATURES[:6])
     out = {}
     for name in names:
@@ -85,8 +87,7 @@ def variants(cfg, names):
             kw["hull_fit"] = "multi_step" if "+hullms" in name else "one_step"
         if ms:
             kw["multistep_config"] = replace(MultiStepConfig(), **ms)
-        if "+wind" in name:
-            kw["wind_forecast"] = "fit"
+        kw["wind_forecast"] = "fit" if "+wind" in name else HELD_WIND
         if "+cmd" in name:
             extra = tuple(f for f in ALL_FEATURES[9:] if f not in base_rc.features)
             kw["residual_config"] = replace(base_rc, features=tuple(base_rc.features) + extra)

@@ -1,7 +1,9 @@
 """The wind over a forecast (hybridship.forecast_inputs.wind): held, or a gust decaying to the recent mean.
 
-Checked against hand values (the decay law, vector means through north), for causality,
-for missing samples, and for identification: on a synthetic first-order gust process of
+Checked against hand values (the decay law, vector means through north), for causality
+(also through a forecast, with a sensor gap the log fills from later samples), for
+missing samples, for the rollout (a constant per-step wind is the held wind), and for
+identification: on a synthetic first-order gust process of
 known time constant, the fit picks a time constant near it and beats the held wind; on a
 steady wind it keeps the held wind. A hybrid fitted with ``wind_forecast="fit"`` carries
 the chosen forecast in its model file.
@@ -13,8 +15,10 @@ import numpy as np
 import pytest
 
 from hybridship.forecast_inputs.wind import HELD_WIND, WindForecast, fit_wind_forecast
-from hybridship.predictors import DynamicPredictor, HybridPredictor
+from hybridship.predictors import DynamicPredictor, HybridPredictor, as_log_arrays
+from hybridship.predictors.forecast_setup import _forecast_setup
 from hybridship.residual.ensemble import EnsembleConfig
+from hybridship.residual.multistep import MultiStepConfig
 from hybridship.sim.synthetic import physics_log
 
 
@@ -76,17 +80,21 @@ def test_the_forecast_uses_no_sample_after_its_start():
     np.testing.assert_array_equal(a, wf.steps(w2, t, np.array([200]), w2[[200]], 30, 1.0))
 
 
-def test_missing_wind_samples_are_skipped_and_an_empty_window_holds():
+def test_unlogged_wind_samples_are_skipped_and_an_empty_window_holds():
     t = np.arange(100.0)
     w = _wind(np.where(np.arange(100) % 2 == 0, 4.0, 8.0), np.zeros(100))
-    w[np.arange(100) % 2 == 1] = np.nan               # only the 4 m/s samples remain
+    logged = np.arange(100) % 2 == 0                  # the 8 m/s samples were filled in by the log
     wf = WindForecast(mean_window_s=50.0, time_constant_s=0.0)
-    out = wf.steps(w, t, np.array([98]), np.array([[6.0, 0.0]]), 3, 1.0)
+    out = wf.steps(w, t, np.array([98]), np.array([[6.0, 0.0]]), 3, 1.0, logged=logged)
     np.testing.assert_allclose(out[0, 1:, 0], 4.0)
-    w[:] = np.nan
-    held = wf.steps(w, t, np.array([98]), np.array([[6.0, 0.1]]), 3, 1.0)
+    w[1::2] = np.nan                                  # NaN samples count as missing too
+    np.testing.assert_allclose(wf.steps(w, t, np.array([98]), np.array([[6.0, 0.0]]), 3, 1.0)[0, 1:, 0], 4.0)
+    held = wf.steps(w, t, np.array([98]), np.array([[6.0, 0.1]]), 3, 1.0, logged=np.zeros(100, bool))
     np.testing.assert_allclose(held[0], [[6.0, 0.1]] * 3)
-    assert np.isfinite(held).all()
+    hold = wf.steps(w, t, np.array([98, 98]), np.array([[6.0, 0.1], [6.0, 0.1]]), 3, 1.0,
+                    hold=np.array([True, False]))
+    np.testing.assert_allclose(hold[0], [[6.0, 0.1]] * 3)
+    assert not np.allclose(hold[1], hold[0])
 
 
 def _gusty_log(tau_s: float, n: int = 6000, seed: int = 0):
@@ -112,17 +120,22 @@ def test_the_fit_finds_the_gust_time_constant_and_beats_the_held_wind():
 def test_a_steady_wind_keeps_the_held_forecast():
     t = np.arange(2000.0)
     wf, scores = fit_wind_forecast([_Log(t, _wind(7.0, np.full(2000, 1.0)))], 30.0)
-    assert wf == HELD_WIND
+    assert wf == HELD_WIND                            # round-off differences do not count
     assert scores["n_starts"] > 100
 
 
 def test_the_fit_reads_only_the_rows_it_is_given():
     log = _gusty_log(20.0, n=3000)
     bad = _Log(log.time_s, log.wind.copy())
-    bad.wind[2000:] = [[25.0, 3.0]]                    # beyond the end it may use
-    a = fit_wind_forecast([log], 30.0, ends=[2000])
-    b = fit_wind_forecast([bad], 30.0, ends=[2000])
+    bad.wind[2000:] = [[25.0, 3.0]]                    # rows it may not use
+    mask = np.arange(3000) < 2000
+    a = fit_wind_forecast([log], 30.0, masks=[mask])
+    b = fit_wind_forecast([bad], 30.0, masks=[mask])
     assert a == b
+    gap = mask.copy()
+    gap[:5] = False                                   # a few unusable rows at the start cost nothing
+    wf, scores = fit_wind_forecast([log], 30.0, masks=[gap])
+    assert scores["n_starts"] >= a[1]["n_starts"] - 1 and wf == a[0]
 
 
 def test_bad_settings_are_refused_with_the_field_name():
@@ -136,17 +149,30 @@ def test_bad_settings_are_refused_with_the_field_name():
         DynamicPredictor("gunnerus", wind_forecast="fit")
 
 
-def test_a_hybrid_fits_the_wind_forecast_and_carries_it_in_its_model_file(model, tmp_path):
-    log = physics_log(model, seed=3, duration_s=1500.0, t_shutdown_s=None)
+def _gusty_physics_log(model, seed=3, duration_s=1500.0, **kw):
+    log = physics_log(model, seed=seed, duration_s=duration_s, t_shutdown_s=None, **kw)
     rng = np.random.default_rng(1)
     g = np.zeros(len(log))
     for k in range(1, len(g)):
         g[k] = 0.95 * g[k - 1] + 0.6 * rng.normal()
     log["wind_speed_m_s"] = 8.0 + g                   # a gusty logged wind
-    tiny = EnsembleConfig(n_members=2, hidden=8, max_epochs=10, patience=5, seed=0)
-    hp = HybridPredictor(model.vessel, ensemble_config=tiny, wind_forecast="fit").fit([log])
+    return log
+
+
+TINY = EnsembleConfig(n_members=2, hidden=8, max_epochs=10, patience=5, seed=0)
+
+
+@pytest.fixture(scope="module")
+def gusty(model):
+    """(log, hybrid fitted with wind_forecast="fit") on a gusty logged wind."""
+    log = _gusty_physics_log(model)
+    return log, HybridPredictor(model.vessel, ensemble_config=TINY, wind_forecast="fit").fit([log])
+
+
+def test_a_hybrid_fits_the_wind_forecast_and_carries_it_in_its_model_file(gusty, tmp_path):
+    log, hp = gusty
     info = hp.training_info["wind_forecast"]
-    assert not hp.wind_forecast.held
+    assert not hp.wind_forecast.held and not info["held"]
     assert info["error_m_s"] < info["held_error_m_s"]
     q = HybridPredictor.load(hp.save(tmp_path / "m.npz"))
     assert q.wind_forecast == hp.wind_forecast and q.wind_forecast_option == "fit"
@@ -156,6 +182,107 @@ def test_a_hybrid_fits_the_wind_forecast_and_carries_it_in_its_model_file(model,
     held = HybridPredictor.load(hp.save(tmp_path / "h.npz"))
     held.wind_forecast = HELD_WIND
     assert not np.allclose(held.forecast(log, starts, 60.0).eta, a.eta)     # the wind forecast is used
-    dyn = DynamicPredictor(model.vessel)
-    np.testing.assert_array_equal(dyn.forecast(log, starts, 60.0).eta,
-                                  DynamicPredictor(model.vessel, wind_forecast=HELD_WIND).forecast(log, starts, 60.0).eta)
+
+
+def test_a_given_wind_forecast_is_kept_and_stored_as_given(model, tmp_path):
+    log = _gusty_physics_log(model, duration_s=600.0)
+    wf = WindForecast(mean_window_s=60.0, time_constant_s=10.0)
+    hp = HybridPredictor(model.vessel, ensemble_config=TINY, wind_forecast=wf).fit([log])
+    assert hp.wind_forecast == wf and "wind_forecast" not in hp.training_info
+    q = HybridPredictor.load(hp.save(tmp_path / "g.npz"))
+    assert q.wind_forecast == wf and q.wind_forecast_option == wf
+
+
+def test_a_constant_wind_per_step_is_the_held_wind(gusty):
+    """The rollout reads the wind of each step; the same wind at every step is the held wind
+    (guards included)."""
+    log, hp = gusty
+    st = _forecast_setup(hp.model, hp.residual_config, log, [1200.0, 1300.0], 30.0)      # commands held
+    S, H = st.idx.size, st.H
+    held = st.wind[:, :1]
+    # commands in the thrust guard's ramp, where its weight follows the state step by step
+    for k in np.linspace(0.02, 1.0, 50):
+        rpm = np.ascontiguousarray(st.rpm * k)
+        w = hp._thrust_weight(st.eta0, st.nu0, rpm[:, 0], st.az[:, 0], held[:, 0])
+        if np.all((w > 0.2) & (w < 0.8)):
+            break
+    else:
+        pytest.fail("no command level in the thrust guard's ramp")
+    args = (st.eta0, st.nu0, np.zeros((S, 3)), np.zeros((S, 3)), rpm, st.az)
+    a = hp.rollout(*args, held, H, st.dt, guard=True, substeps=st.substeps)
+    b = hp.rollout(*args, np.ascontiguousarray(np.repeat(held, H, axis=1)), H, st.dt, guard=True,
+                   substeps=st.substeps)
+    np.testing.assert_allclose(a[0], b[0], rtol=0, atol=1e-12)
+    np.testing.assert_array_equal(a[3], b[3])
+
+
+def test_forecasts_use_no_wind_after_their_start_and_hold_a_dropped_wind(model):
+    log = _gusty_physics_log(model, duration_s=900.0)
+    wf = WindForecast(mean_window_s=120.0, time_constant_s=10.0)
+    p = DynamicPredictor(model.vessel, wind_forecast=wf)
+    start = 600.0
+    later = log.copy()
+    later.loc[later.time_s > start, "wind_speed_m_s"] += 10.0
+    np.testing.assert_array_equal(p.forecast(log, [start], 60.0).eta, p.forecast(later, [start], 60.0).eta)
+    # no wind logged before 620 s: the log fills it from later samples, the forecast must not use them
+    gap = log.copy()
+    gap.loc[gap.time_s < 620.0, "wind_speed_m_s"] = np.nan
+    gap2 = gap.copy()
+    gap2.loc[gap2.time_s >= 620.0, "wind_speed_m_s"] += 10.0
+    st = _forecast_setup(p.model, p.residual_config, gap, [start], 60.0, wind_forecast=wf)
+    assert st.flags["wind_dropped"][0]
+    np.testing.assert_array_equal(st.wind[0, :, 0], 0.0)                  # forecast without wind, as flagged
+    np.testing.assert_array_equal(p.forecast(gap, [start], 60.0).eta, p.forecast(gap2, [start], 60.0).eta)
+    # the sensor dropped 10 s before the start: flagged "forecast without wind", and so it is
+    dropped = log.copy()
+    dropped.loc[dropped.time_s > 590.0, "wind_speed_m_s"] = np.nan
+    st = _forecast_setup(p.model, p.residual_config, dropped, [start], 60.0, wind_forecast=wf)
+    assert st.flags["wind_dropped"][0]
+    np.testing.assert_array_equal(st.wind[0, :, 0], 0.0)
+
+
+def test_the_mean_skips_the_samples_the_log_filled_over_a_gap(model):
+    log = _gusty_physics_log(model, duration_s=900.0)
+    log["wind_dir_deg"] = 30.0
+    log["wind_speed_m_s"] = np.where(log.time_s < 590.0, 5.0, 15.0)
+    log.loc[(log.time_s > 500.0) & (log.time_s < 590.0), "wind_speed_m_s"] = np.nan   # filled with 5 m/s by the log
+    wf = WindForecast(mean_window_s=120.0, time_constant_s=0.0)
+    st = _forecast_setup(model, DynamicPredictor(model.vessel).residual_config, log, [600.0], 10.0, wind_forecast=wf)
+    t = log.time_s.to_numpy()
+    logged = (t > 480.0) & (t <= 600.0) & np.isfinite(log.wind_speed_m_s.to_numpy())
+    expect = log.wind_speed_m_s.to_numpy()[logged].mean()                  # 5 m/s before the gap, 15 after
+    assert st.wind[0, 1, 0] == pytest.approx(expect)
+    assert st.wind[0, 0, 0] == pytest.approx(15.0)
+
+
+def test_the_physics_baseline_holds_the_wind_whatever_its_history(model):
+    log = _gusty_physics_log(model, duration_s=900.0)
+    other = log.copy()
+    other.loc[other.time_s < 590.0, "wind_speed_m_s"] = 2.0                # another history, same start window
+    start = [600.0]
+    d = DynamicPredictor(model.vessel)
+    np.testing.assert_array_equal(d.forecast(log, start, 60.0).eta, d.forecast(other, start, 60.0).eta)
+    f = DynamicPredictor(model.vessel, wind_forecast=WindForecast(mean_window_s=120.0, time_constant_s=10.0))
+    assert not np.allclose(f.forecast(log, start, 60.0).eta, f.forecast(other, start, 60.0).eta)
+
+
+def test_multi_step_training_rolls_out_with_the_forecast_wind(model, gusty):
+    log, hp = gusty
+    ms = MultiStepConfig(horizon_s=10.0, iterations=2, batch_starts=8, start_every_s=20.0, val_every=1,
+                         max_val_starts=8)
+    q = HybridPredictor(model.vessel, ensemble_config=TINY, training="multi_step", multistep_config=ms,
+                        wind_forecast=hp.wind_forecast)
+    q.fit([log])
+    starts = q._multistep_starts([as_log_arrays(log, model.vessel)], None, True)
+    assert starts.wind.shape[1] == 10                 # per step, not held
+    assert q.training_info["multi_step"]["iterations"] == 2
+    assert np.isfinite(q.forecast(log, [1200.0], 10.0, commands="known").eta).all()
+
+
+def test_a_forecast_wind_beyond_the_valid_range_is_clipped_and_flagged(model):
+    log = _gusty_physics_log(model, duration_s=900.0)
+    log["wind_speed_m_s"] = np.where(log.time_s < 560.0, 75.0, 45.0)      # a storm before, 45 m/s at the start
+    wf = WindForecast(mean_window_s=120.0, time_constant_s=5.0)
+    st = _forecast_setup(model, DynamicPredictor(model.vessel).residual_config, log, [600.0], 30.0, wind_forecast=wf)
+    assert st.wind[0, :, 0].max() == pytest.approx(100.0 * 0.514444, rel=1e-3)     # the envelope's 100 kn
+    assert st.flags["input_clipped"][0]

@@ -17,7 +17,9 @@ the measured ones at high frequency. ``time_constant_s = None`` is the paper's h
 logs by the error of the wind forecast itself (the mean distance between forecast and
 logged wind vectors over the forecast horizon): a property of the site's wind, found
 without looking at any ship forecast. Directions are averaged as vectors, so a wind that
-turns through north is handled. Everything here uses rows up to the start only (causal).
+turns through north is handled. Each forecast uses logged wind samples up to its start
+only (causal; samples the log filled in over a sensor gap do not count), and a start
+whose window has no logged wind keeps its start value.
 """
 
 from __future__ import annotations
@@ -34,6 +36,12 @@ __all__ = ["HELD_WIND", "WindForecast", "fit_wind_forecast"]
 #: Candidate mean windows [s] and gust time constants [s] of :func:`fit_wind_forecast`
 #: (``None`` is the held wind, always a candidate).
 MEAN_WINDOWS_S = (30.0, 60.0, 120.0, 300.0, 600.0)
+#: Longest mean window [s]: a forecast reads at least this much log before its earliest
+#: start (:data:`hybridship.predictors.forecast_setup.FORECAST_HISTORY_S`).
+MAX_MEAN_WINDOW_S = 1800.0
+#: Relative improvement over the held wind that :func:`fit_wind_forecast` asks for (below
+#: it, differences are noise and the paper's held wind is kept).
+MIN_IMPROVEMENT = 0.01
 TIME_CONSTANTS_S = (0.0, 2.0, 5.0, 10.0, 20.0, 30.0, 60.0, 120.0, None)
 
 
@@ -48,10 +56,11 @@ class WindForecast:
         level a gust decays to).
     time_constant_s : float or None
         Decay time of the start's deviation from that mean [s]; None holds the start
-        value over the whole horizon (the paper's scheme), 0 uses the mean at once.
+        value over the whole horizon (the paper's scheme); 0 keeps the start value for
+        the first step and uses the mean from the second on.
     """
 
-    mean_window_s: Annotated[Float, Field(gt=0)] = 120.0
+    mean_window_s: Annotated[Float, Field(gt=0, le=MAX_MEAN_WINDOW_S)] = 120.0
     time_constant_s: Annotated[Float, Field(ge=0)] | None = None
 
     @property
@@ -60,22 +69,29 @@ class WindForecast:
         return self.time_constant_s is None
 
     def steps(self, wind: np.ndarray, time_s: np.ndarray, rows: np.ndarray, start_wind: np.ndarray,
-              n_steps: int, dt_s: float) -> np.ndarray:
+              n_steps: int, dt_s: float, *, logged=None, hold=None) -> np.ndarray:
         """The wind ``[speed_m_s, dir_rad]`` at the ``n_steps`` steps of forecasts started at ``rows``.
 
         Parameters
         ----------
         wind : ndarray, shape (N, 2)
-            The log's true wind, speed [m/s] and direction [rad] (NaN where missing).
+            The log's true wind, speed [m/s] and direction it comes from [rad].
         time_s : ndarray, shape (N,)
-            The log's sample times [s].
+            The log's sample times [s], increasing.
         rows : ndarray of int, shape (S,)
             Start rows.
         start_wind : ndarray, shape (S, 2)
             The wind at each start as the forecast takes it (the start window's value).
         n_steps : int
+            Steps of the forecast.
         dt_s : float
             Forecast step [s].
+        logged : ndarray of bool, shape (N,), optional
+            Rows whose wind was logged (``LogArrays.wind_logged``); rows the log filled in
+            over a gap do not enter the mean. Default: every finite row.
+        hold : ndarray of bool, shape (S,), optional
+            Starts that keep their start value (for example a start flagged
+            ``wind_dropped``, which forecasts without wind).
 
         Returns
         -------
@@ -85,9 +101,12 @@ class WindForecast:
         start_wind = np.asarray(start_wind, dtype=float)
         if self.held:
             return np.ascontiguousarray(start_wind[:, None])
-        mean = _trailing_mean_vector(wind, time_s, np.asarray(rows, dtype=int), self.mean_window_s)
+        mean = _trailing_mean_vector(wind, time_s, np.asarray(rows, dtype=int), self.mean_window_s, logged)
         w0 = _to_vector(start_wind)
-        mean = np.where(np.isfinite(mean), mean, w0)           # no valid wind in the window: hold
+        keep = ~np.isfinite(mean).all(axis=1)                  # no logged wind in the window: hold
+        if hold is not None:
+            keep |= np.asarray(hold, dtype=bool)
+        mean[keep] = w0[keep]
         decay = _decay(np.arange(n_steps) * dt_s, self.time_constant_s)
         return np.ascontiguousarray(_from_vector(mean[:, None] + (w0 - mean)[:, None] * decay[None, :, None]))
 
@@ -97,6 +116,7 @@ HELD_WIND = WindForecast()
 
 
 def _decay(lead_s: np.ndarray, time_constant_s) -> np.ndarray:
+    """Share of the start's gust left at each lead time [s]: 1 held, ``exp(-lead / T_g)``."""
     if time_constant_s is None:
         return np.ones_like(lead_s, dtype=float)
     if time_constant_s == 0:
@@ -110,14 +130,18 @@ def _to_vector(wind: np.ndarray) -> np.ndarray:
 
 
 def _from_vector(vec: np.ndarray) -> np.ndarray:
+    """The wind vector (..., 2) [m/s] -> ``[speed_m_s, dir_rad]`` (..., 2)."""
     return np.stack([np.hypot(vec[..., 0], vec[..., 1]), np.arctan2(vec[..., 1], vec[..., 0])], axis=-1)
 
 
-def _trailing_mean_vector(wind: np.ndarray, time_s: np.ndarray, rows: np.ndarray, window_s: float) -> np.ndarray:
-    """Mean wind vector over the samples in ``(t_row - window_s, t_row]`` of each row, NaNs
-    skipped; NaN where the window holds no valid sample. (S, 2)."""
+def _trailing_mean_vector(wind: np.ndarray, time_s: np.ndarray, rows: np.ndarray, window_s: float,
+                          logged=None) -> np.ndarray:
+    """Mean wind vector [m/s] over the logged samples in ``(t_row - window_s, t_row]`` of each
+    row; NaN where the window holds none. (S, 2)."""
     vec = _to_vector(np.asarray(wind, dtype=float))
     ok = np.isfinite(vec).all(axis=1)
+    if logged is not None:
+        ok &= np.asarray(logged, dtype=bool)
     cs = np.concatenate([np.zeros((1, 2)), np.cumsum(np.where(ok[:, None], vec, 0.0), axis=0)])
     cn = np.concatenate([[0], np.cumsum(ok)])
     first = np.searchsorted(time_s, time_s[rows] - window_s, side="right")
@@ -126,25 +150,34 @@ def _trailing_mean_vector(wind: np.ndarray, time_s: np.ndarray, rows: np.ndarray
         return (cs[rows + 1] - cs[first]) / count[:, None]
 
 
-def fit_wind_forecast(logs, horizon_s: float, *, ends=None, start_every_s: float = 10.0,
+def fit_wind_forecast(logs, horizon_s: float, *, masks=None, start_every_s: float = 10.0,
                       mean_windows_s=MEAN_WINDOWS_S, time_constants_s=TIME_CONSTANTS_S):
     """Choose the wind forecast that best predicts the logged wind over ``horizon_s``.
 
-    From starts every ``start_every_s`` in each log (with the horizon inside the log and a
-    valid wind at the start; the mean uses the history there is, as a forecast does), every candidate
-    ``(mean_window_s, time_constant_s)`` forecasts the wind vector from the start sample;
-    the score is the mean distance [m/s] between forecast and logged vectors over the
-    steps of the horizon. The held wind is always a candidate and wins ties.
+    From starts every ``start_every_s`` in each log (the start and every step of the
+    horizon logged, usable and in one gap-free segment; the mean uses the logged, usable
+    history there is, as a forecast does), every candidate ``(mean_window_s,
+    time_constant_s)`` forecasts the wind vector from the start sample; the score is the
+    mean distance [m/s] between forecast and logged vectors over the steps of the horizon.
+    The held wind is always a candidate; another is chosen only when it beats the held
+    wind's score by more than ``MIN_IMPROVEMENT`` (relative).
 
     Parameters
     ----------
     logs : sequence of LogArrays
-        (only ``time_s`` and ``wind`` are read).
+        Only ``time_s``, ``wind`` and, where present, ``wind_logged`` and ``segment_id``
+        are read.
     horizon_s : float
         Forecast horizon [s].
-    ends : sequence of int, optional
-        Per log, the number of leading rows that may be used (for example up to the part
-        held back for calibration); default all.
+    masks : sequence of (ndarray of bool or None), optional
+        Per log, the rows that may be used (for example station keeping before the part
+        held back for calibration); default every row.
+    start_every_s : float
+        Spacing of the start times [s].
+    mean_windows_s : sequence of float
+        Candidate mean windows [s] (each at most ``MAX_MEAN_WINDOW_S``).
+    time_constants_s : sequence of (float or None)
+        Candidate gust decay times [s]; None (held) is added when missing.
 
     Returns
     -------
@@ -158,28 +191,36 @@ def fit_wind_forecast(logs, horizon_s: float, *, ends=None, start_every_s: float
     taus = tuple(None if t is None else float(t) for t in time_constants_s)
     if None not in taus:
         taus += (None,)
-    ends = [None] * len(logs) if ends is None else list(ends)
-    for a, end in zip(logs, ends):
-        t = np.asarray(a.time_s, dtype=float)[:end]
-        wind = np.asarray(a.wind, dtype=float)[:end]
-        if t.size < 3:
+    masks = [None] * len(logs) if masks is None else list(masks)
+    for a, mask in zip(logs, masks):
+        t = np.asarray(a.time_s, dtype=float)
+        n = t.size
+        if n < 3:
             continue
+        wind = np.asarray(a.wind, dtype=float)
+        vec = _to_vector(wind)
+        ok = np.isfinite(vec).all(axis=1)
+        if getattr(a, "wind_logged", None) is not None:
+            ok &= np.asarray(a.wind_logged, dtype=bool)
+        if mask is not None:
+            ok &= np.asarray(mask, dtype=bool)
+        seg = getattr(a, "segment_id", None)
+        seg = np.zeros(n, dtype=int) if seg is None else np.asarray(seg)
         dt = float(np.median(np.diff(t)))
         H = int(round(horizon_s / dt))
-        rows = np.arange(1, t.size - H, max(1, int(round(start_every_s / dt))))
-        vec = _to_vector(wind)
+        rows = np.arange(1, n - H, max(1, int(round(start_every_s / dt))))
         if rows.size == 0:
             continue
-        fut = vec[rows[:, None] + np.arange(1, H + 1)[None, :]]             # (S, H, 2)
-        ok = np.isfinite(vec[rows]).all(axis=1) & np.isfinite(fut).all(axis=(1, 2))
-        rows, fut = rows[ok], fut[ok]
+        bad = np.concatenate([[0], np.cumsum(~ok)])
+        rows = rows[((bad[rows + H + 1] - bad[rows]) == 0) & (seg[rows + H] == seg[rows])]
         if rows.size == 0:
             continue
         n_starts += rows.size
+        fut = vec[rows[:, None] + np.arange(1, H + 1)[None, :]]             # (S, H, 2)
         w0 = vec[rows]
         lead = np.arange(1, H + 1) * dt
         for w in windows:
-            mean = _trailing_mean_vector(wind, t, rows, w)
+            mean = _trailing_mean_vector(wind, t, rows, w, ok)
             mean = np.where(np.isfinite(mean), mean, w0)
             for tau in taus:
                 pred = mean[:, None] + (w0 - mean)[:, None] * _decay(lead, tau)[None, :, None]
@@ -191,5 +232,6 @@ def fit_wind_forecast(logs, horizon_s: float, *, ends=None, start_every_s: float
     scores = {k: s / c for k, (s, c) in sums.items()}
     held = min(v for (w, tau), v in scores.items() if tau is None)
     best = min(scores, key=scores.get)
-    out = HELD_WIND if scores[best] >= held else WindForecast(mean_window_s=best[0], time_constant_s=best[1])
+    better = scores[best] < (1.0 - MIN_IMPROVEMENT) * held
+    out = WindForecast(mean_window_s=best[0], time_constant_s=best[1]) if better else HELD_WIND
     return out, {**scores, "n_starts": n_starts}

@@ -163,7 +163,8 @@ def _forecast_setup(model, config: ResidualConfig, log, start_times_s, horizon_s
     if commands not in COMMAND_MODES:
         raise ValueError(f"commands: expected one of {COMMAND_MODES}, got {commands!r}")
     arrays = ingest(log, model.vessel, purpose="forecast",
-                    time_range_s=_forecast_time_range(start_times_s, horizon_s, history_s))
+                    time_range_s=_forecast_time_range(start_times_s, horizon_s,
+                                                      max(history_s, wind_forecast.mean_window_s)))
     idx = start_indices(arrays, start_times_s)
     dt = arrays.dt_s
     H = int(round(horizon_s / dt))
@@ -171,15 +172,19 @@ def _forecast_setup(model, config: ResidualConfig, log, start_times_s, horizon_s
     rpm, az, wind = _held_inputs(arrays, idx, stop_after_failure=stop_after_failure, wind=sw.wind)
     if commands == "known":
         rpm, az = _known_command_steps(arrays, idx, H, rpm[:, 0], az[:, 0], stop_after_failure)
+    # the wind of every step: held (S, 1, 2) or forecast (S, H, 2); a start without wind
+    # (sensor dropped) keeps its start value
+    wind = wind_forecast.steps(arrays.wind, arrays.time_s, idx, wind[:, 0], H, dt, logged=arrays.wind_logged,
+                               hold=sw.flags.get(FaultFlags.WIND_DROPPED))
     chk = check_or_clip_inputs(model.vessel, eta=sw.eta0, nu=sw.nu0, rpm=rpm, azimuth_rad=az,
-                               wind=wind[:, 0], dt_s=dt)
+                               wind=wind, dt_s=dt)
     flags = {name: np.zeros(len(idx), dtype=bool) for name in FaultFlags.ALL}
     flags.update({k: np.asarray(v, dtype=bool) for k, v in sw.flags.items()})
     flags[FaultFlags.INPUT_CLIPPED] = np.asarray(chk.clipped, dtype=bool)
     notes = tuple(sw.notes) if len(sw.notes) == len(idx) else ("",) * len(idx)
-    wind = wind_forecast.steps(arrays.wind, arrays.time_s, idx, chk.wind, H, dt)
     return _Setup(arrays, idx, dt, H, chk.eta, chk.nu, np.ascontiguousarray(chk.rpm),
-                  np.ascontiguousarray(chk.azimuth_rad), wind, int(chk.substeps), flags, notes)
+                  np.ascontiguousarray(chk.azimuth_rad), np.ascontiguousarray(chk.wind), int(chk.substeps),
+                  flags, notes)
 
 def _check_row_stride(row_stride) -> int:
     if isinstance(row_stride, bool) or not isinstance(row_stride, (int, np.integer)) or row_stride < 1:

@@ -272,20 +272,22 @@ class HybridPredictor:
     def _fit_wind_forecast(self, logs, cuts, cal: CalibrationConfig, dp_only: bool):
         """With ``wind_forecast="fit"``: the wind forecast that best predicts the training
         logs' own wind over ``cal.horizon_s`` (:func:`~hybridship.forecast_inputs.wind.fit_wind_forecast`),
-        from the part of each log before the calibration cut and, with ``dp_only``, before
-        its first sample off station keeping (the nets' own rows)."""
+        from the rows before each log's calibration cut and, with ``dp_only``, in station
+        keeping (the nets' own rows). Returns what ``training_info["wind_forecast"]`` records."""
         if self.wind_forecast_option != "fit":
             return None
-        ends = []
+        masks = []
         for a, cut in zip(logs, cuts):
-            off = np.flatnonzero(a.dp_active == 0) if dp_only else np.array([], dtype=int)
-            ends.append(min(int(cut), int(off[0]) if off.size else len(a)))
-        self.wind_forecast, scores = fit_wind_forecast(logs, cal.horizon_s, ends=ends)
-        held = min((v for k, v in scores.items() if k != "n_starts" and k[1] is None), default=float("nan"))
-        best = scores.get((self.wind_forecast.mean_window_s, self.wind_forecast.time_constant_s), held)
-        return {"mean_window_s": self.wind_forecast.mean_window_s,
-                "time_constant_s": self.wind_forecast.time_constant_s,
-                "error_m_s": best, "held_error_m_s": held, "n_starts": scores["n_starts"], "horizon_s": cal.horizon_s}
+            m = np.arange(len(a)) < cut
+            masks.append(m & (a.dp_active != 0) if dp_only else m)
+        self.wind_forecast, scores = fit_wind_forecast(logs, cal.horizon_s, masks=masks)
+        held = [v for k, v in scores.items() if k != "n_starts" and k[1] is None]
+        wf = self.wind_forecast
+        return {"held": wf.held, "mean_window_s": None if wf.held else wf.mean_window_s,
+                "time_constant_s": wf.time_constant_s,
+                "error_m_s": None if wf.held else scores[(wf.mean_window_s, wf.time_constant_s)],
+                "held_error_m_s": min(held) if held else None, "n_starts": scores["n_starts"],
+                "horizon_s": cal.horizon_s}
 
     def _fit_nets(self, logs, *, dp_only, progress, stride, row_masks):
         X, Y, seg = self.training_data(logs, dp_only=dp_only, row_masks=row_masks)
@@ -727,7 +729,7 @@ class HybridPredictor:
                 if per_step else (rpm, az)
             if wind_per_step:
                 wind_s = np.ascontiguousarray(wind[:, j])
-            if thrust_guard and (per_step or wind_per_step) and j > 0:
+            if thrust_guard and per_step and j > 0:
                 w_thrust = self._thrust_weight(eta[:, j], nu[:, j], rpm_j[:, 0], az_j[:, 0], wind_s)
             # physics: one public model step with the estimator's extra acceleration, and the
             # model's acceleration at the new state (the nets' inputs)

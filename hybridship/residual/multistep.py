@@ -25,12 +25,15 @@ ensemble mean, the members move together and keep the spread of the one-step bag
 from __future__ import annotations
 
 from dataclasses import dataclass, replace
-from typing import Annotated, Literal
+from typing import TYPE_CHECKING, Annotated, Literal
 
 import numpy as np
 from pydantic import Field, model_validator
 
 from hybridship.config import Float, Int, config_dataclass
+
+if TYPE_CHECKING:
+    from hybridship.forecast_inputs.wind import WindForecast
 
 
 @config_dataclass(frozen=True)
@@ -156,7 +159,8 @@ class Starts:
                                                         "truth", "is_val")), self.dt_s)
 
 
-def collect_starts(preps, masks, config: MultiStepConfig, dp_only: bool = True, wind_forecast=None) -> Starts:
+def collect_starts(preps, masks, config: MultiStepConfig, dp_only: bool = True,
+                   wind_forecast: "WindForecast | None" = None) -> Starts:
     """Start times of the training rollouts from prepared logs.
 
     The wind of each rollout is what a forecast from that start would use: held, or per
@@ -197,7 +201,7 @@ def collect_starts(preps, masks, config: MultiStepConfig, dp_only: bool = True, 
         if wind_forecast is None or wind_forecast.held:
             out["wind"].append(a.wind[r][:, None])
         else:
-            out["wind"].append(wind_forecast.steps(a.wind, a.time_s, r, a.wind[r], H, dt))
+            out["wind"].append(wind_forecast.steps(a.wind, a.time_s, r, a.wind[r], H, dt, logged=a.wind_logged))
         out["truth"].append(a.eta[rows + 1])
         is_val = np.zeros(r.size, bool)
         n_val = int(round(config.val_fraction * r.size))
