@@ -1,4 +1,5 @@
-"""Kinematics: rotation about z, body <-> NED transforms, angle wrapping, flat-earth positions.
+"""Kinematics: rotation about z, body <-> NED transforms, angle wrapping, flat-earth positions,
+and flows (wind, current) between ``[speed, direction]`` and vector form.
 
 Conventions (Fossen 2021, ch. 2):
 
@@ -149,3 +150,21 @@ def north_east_to_latlon(north_m, east_m, lat0_deg, lon0_deg):
     lat = lat0 + np.asarray(north_m, dtype=float) / r_m
     lon = lon0 + np.asarray(east_m, dtype=float) / (r_n * np.cos(lat0))
     return np.degrees(lat), np.degrees(wrap_pi(lon))
+
+
+def speed_dir_to_vector(speed_dir):
+    """A flow ``[speed, dir_rad]`` (..., 2) -> its vector ``[speed cos dir, speed sin dir]`` (..., 2).
+
+    The direction keeps its own convention (wind: where it comes from; current: where it
+    goes to); in NED, ``[north, east]`` components. Averaging flows as vectors handles a
+    direction that turns through north.
+    """
+    a = np.asarray(speed_dir, dtype=float)
+    return np.stack([a[..., 0] * np.cos(a[..., 1]), a[..., 0] * np.sin(a[..., 1])], axis=-1)
+
+
+def vector_to_speed_dir(vec):
+    """A flow vector (..., 2) -> ``[speed, dir_rad]`` (..., 2), direction in (-pi, pi]
+    (the inverse of :func:`speed_dir_to_vector`)."""
+    v = np.asarray(vec, dtype=float)
+    return np.stack([np.hypot(v[..., 0], v[..., 1]), np.arctan2(v[..., 1], v[..., 0])], axis=-1)

@@ -286,3 +286,17 @@ def test_a_forecast_wind_beyond_the_valid_range_is_clipped_and_flagged(model):
     st = _forecast_setup(model, DynamicPredictor(model.vessel).residual_config, log, [600.0], 30.0, wind_forecast=wf)
     assert st.wind[0, :, 0].max() == pytest.approx(100.0 * 0.514444, rel=1e-3)     # the envelope's 100 kn
     assert st.flags["input_clipped"][0]
+
+
+def test_flow_vectors_round_trip_and_point_where_the_direction_says():
+    from hypothesis import given, strategies as st
+    from hybridship.frames import speed_dir_to_vector, vector_to_speed_dir
+
+    np.testing.assert_allclose(speed_dir_to_vector([[2.0, np.pi / 2]]), [[0.0, 2.0]], atol=1e-15)  # east
+
+    @given(st.floats(0.01, 80.0), st.floats(-np.pi + 1e-9, np.pi))
+    def round_trip(speed, d):
+        back = vector_to_speed_dir(speed_dir_to_vector([speed, d]))
+        assert back[0] == pytest.approx(speed) and back[1] == pytest.approx(d, abs=1e-9)
+
+    round_trip()

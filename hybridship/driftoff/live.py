@@ -28,6 +28,7 @@ from dataclasses import dataclass
 import numpy as np
 import pandas as pd
 
+from ..frames import vector_to_speed_dir
 from ..logs.io import LogArrays, log_to_arrays
 from ..residual.features import ResidualConfig, prepare_log
 from . import engine, spread
@@ -221,7 +222,7 @@ def blackout_now(estimate: EnvironmentEstimate, vessel="gunnerus", settings: Dri
         if c.shape[0] == 0 or not np.all(np.isfinite(c)):
             raise ValueError("estimate.current_members_ned_m_s: expected finite (M, 2) [north, east] m/s")
         c = c[np.arange(N) % c.shape[0]]
-        cur = np.column_stack([np.hypot(c[:, 0], c[:, 1]), np.arctan2(c[:, 1], c[:, 0])])  # speed, dir TO
+        cur = vector_to_speed_dir(c)                                   # speed, dir TO
     nu0 = np.zeros(3) if start_at_rest else estimate.nu
     t_reach, exc, _ = engine.run_kernel(
         np.full(N, estimate.eta[2]), model.arrays, stack, np.broadcast_to(az, (N, K)), np.broadcast_to(rpm, (N, K)),

@@ -30,6 +30,7 @@ import numpy as np
 from pydantic import Field
 
 from hybridship.config import Float, config_dataclass
+from hybridship.frames import speed_dir_to_vector, vector_to_speed_dir
 
 __all__ = ["HELD_WIND", "WindForecast", "fit_wind_forecast"]
 
@@ -102,13 +103,13 @@ class WindForecast:
         if self.held:
             return np.ascontiguousarray(start_wind[:, None])
         mean = _trailing_mean_vector(wind, time_s, np.asarray(rows, dtype=int), self.mean_window_s, logged)
-        w0 = _to_vector(start_wind)
+        w0 = speed_dir_to_vector(start_wind)
         keep = ~np.isfinite(mean).all(axis=1)                  # no logged wind in the window: hold
         if hold is not None:
             keep |= np.asarray(hold, dtype=bool)
         mean[keep] = w0[keep]
         decay = _decay(np.arange(n_steps) * dt_s, self.time_constant_s)
-        return np.ascontiguousarray(_from_vector(mean[:, None] + (w0 - mean)[:, None] * decay[None, :, None]))
+        return np.ascontiguousarray(vector_to_speed_dir(mean[:, None] + (w0 - mean)[:, None] * decay[None, :, None]))
 
 
 #: The paper's scheme: the wind held at its start value.
@@ -124,21 +125,11 @@ def _decay(lead_s: np.ndarray, time_constant_s) -> np.ndarray:
     return np.exp(-lead_s / time_constant_s)
 
 
-def _to_vector(wind: np.ndarray) -> np.ndarray:
-    """``[speed, dir]`` (..., 2) -> the wind vector (..., 2) [m/s] (the direction's own frame)."""
-    return np.stack([wind[..., 0] * np.cos(wind[..., 1]), wind[..., 0] * np.sin(wind[..., 1])], axis=-1)
-
-
-def _from_vector(vec: np.ndarray) -> np.ndarray:
-    """The wind vector (..., 2) [m/s] -> ``[speed_m_s, dir_rad]`` (..., 2)."""
-    return np.stack([np.hypot(vec[..., 0], vec[..., 1]), np.arctan2(vec[..., 1], vec[..., 0])], axis=-1)
-
-
 def _trailing_mean_vector(wind: np.ndarray, time_s: np.ndarray, rows: np.ndarray, window_s: float,
                           logged=None) -> np.ndarray:
     """Mean wind vector [m/s] over the logged samples in ``(t_row - window_s, t_row]`` of each
     row; NaN where the window holds none. (S, 2)."""
-    vec = _to_vector(np.asarray(wind, dtype=float))
+    vec = speed_dir_to_vector(np.asarray(wind, dtype=float))
     ok = np.isfinite(vec).all(axis=1)
     if logged is not None:
         ok &= np.asarray(logged, dtype=bool)
@@ -198,7 +189,7 @@ def fit_wind_forecast(logs, horizon_s: float, *, masks=None, start_every_s: floa
         if n < 3:
             continue
         wind = np.asarray(a.wind, dtype=float)
-        vec = _to_vector(wind)
+        vec = speed_dir_to_vector(wind)
         ok = np.isfinite(vec).all(axis=1)
         if getattr(a, "wind_logged", None) is not None:
             ok &= np.asarray(a.wind_logged, dtype=bool)

@@ -27,7 +27,8 @@ from ..residual.multistep import MultiStepConfig
 __all__ = ["MODEL_FORMAT_VERSION", "ModelFileError", "load_model", "model_metadata", "save_model"]
 
 #: Version of the model-file format written by :func:`save_model` (:meth:`HybridPredictor.save`).
-#: 7: the wind forecast (``wind_forecast``: the fitted gust decay, or held); 6: the environment estimator's thrust-model error per thruster (its prior has one entry
+#: 7: the wind forecast (``wind_forecast``: the fitted gust decay, or held); 6: the
+#: environment estimator's thrust-model error per thruster (its prior has one entry
 #: per thruster); 5: the spread calibration, the nets' training mode and the command regime; 4: the
 #: validated vessel description is embedded in the metadata (``vessel_description``), so a
 #: model loads without its vessel file; 3 added the environment estimator; 2 and earlier

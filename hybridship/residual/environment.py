@@ -65,6 +65,7 @@ import numpy as np
 import pandas as pd
 from pydantic import BaseModel, ConfigDict, Field
 
+from ..frames import vector_to_speed_dir
 from . import environment_kernel as kernel
 
 #: Forward-difference steps of the filter's Jacobian, per state (SI units, radians).
@@ -171,7 +172,7 @@ class EnvironmentEstimate:
     def current_speed_dir(self) -> np.ndarray:
         """Current as the model takes it: ``[speed_m_s, dir_to_rad]``, (S, 2)."""
         c = self.x[:, CUR]
-        return np.column_stack([np.hypot(c[:, 0], c[:, 1]), np.arctan2(c[:, 1], c[:, 0])])
+        return vector_to_speed_dir(c)
 
     @property
     def load_accel(self) -> np.ndarray:
@@ -241,8 +242,7 @@ def thrust_error_accel(model, thrust_error_model, eta, nu, rpm, az, wind, curren
 
 def current_input(v_c_ned: np.ndarray) -> np.ndarray:
     """NED current velocity (..., 2) -> the model's ``[speed_m_s, dir_to_rad]`` (..., 2)."""
-    return np.stack([np.hypot(v_c_ned[..., 0], v_c_ned[..., 1]),
-                     np.arctan2(v_c_ned[..., 1], v_c_ned[..., 0])], axis=-1)
+    return vector_to_speed_dir(v_c_ned)
 
 
 def external_accel(psi_rad, load_ned, theta, a_thr) -> np.ndarray:

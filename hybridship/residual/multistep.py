@@ -25,15 +25,14 @@ ensemble mean, the members move together and keep the spread of the one-step bag
 from __future__ import annotations
 
 from dataclasses import dataclass, replace
-from typing import TYPE_CHECKING, Annotated, Literal
+from typing import Annotated, Literal
 
 import numpy as np
 from pydantic import Field, model_validator
 
 from hybridship.config import Float, Int, config_dataclass
 
-if TYPE_CHECKING:
-    from hybridship.forecast_inputs.wind import WindForecast
+from hybridship.forecast_inputs.wind import HELD_WIND, WindForecast
 
 
 @config_dataclass(frozen=True)
@@ -160,7 +159,7 @@ class Starts:
 
 
 def collect_starts(preps, masks, config: MultiStepConfig, dp_only: bool = True,
-                   wind_forecast: "WindForecast | None" = None) -> Starts:
+                   wind_forecast: WindForecast | None = None) -> Starts:
     """Start times of the training rollouts from prepared logs.
 
     The wind of each rollout is what a forecast from that start would use: held, or per
@@ -198,10 +197,8 @@ def collect_starts(preps, masks, config: MultiStepConfig, dp_only: bool = True,
         rows = r[:, None] + np.arange(H)[None, :]
         out["rpm"].append(a.rpm[rows])
         out["az"].append(a.azimuth_rad[rows])
-        if wind_forecast is None or wind_forecast.held:
-            out["wind"].append(a.wind[r][:, None])
-        else:
-            out["wind"].append(wind_forecast.steps(a.wind, a.time_s, r, a.wind[r], H, dt, logged=a.wind_logged))
+        wf = wind_forecast if wind_forecast is not None else HELD_WIND
+        out["wind"].append(wf.steps(a.wind, a.time_s, r, a.wind[r], H, dt, logged=a.wind_logged))
         out["truth"].append(a.eta[rows + 1])
         is_val = np.zeros(r.size, bool)
         n_val = int(round(config.val_fraction * r.size))
