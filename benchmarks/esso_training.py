@@ -15,7 +15,8 @@ Variants share the ensemble size, seed, calibration and features (the six model-
 velocities and accelerations) unless their name says otherwise:
 ``one_step`` / ``multi_step`` (training mode), ``_h<s>``, ``_b<n>``, ``_i<n>``, ``_v<n>``
 (multi-step horizon, batch of starts, iterations, validation starts; otherwise
-``MultiStepConfig()``), ``+cmd`` (all command-aware features added),
+``MultiStepConfig()``), ``_m<n>`` / ``_sd<n>`` (ensemble members / seed; otherwise the
+benchmark's), ``+cmd`` (all command-aware features added),
 ``_abs`` (absolute-error loss), ``_lead`` (loss weighted by lead time), ``_hl<m>`` (heading
 length of the loss), ``_c<s>`` (curriculum from a ``<s>``-second horizon),
 ``+rate`` (only the command rates added), ``+cg`` (command-regime guard; off otherwise, whatever
@@ -87,6 +88,10 @@ def variants(cfg, names):
             kw["hull_fit"] = "multi_step" if "+hullms" in name else "one_step"
         if ms:
             kw["multistep_config"] = replace(MultiStepConfig(), **ms)
+        for key, field in (("m", "n_members"), ("sd", "seed")):
+            m = re.search(rf"_{key}(\d+)", name)
+            if m:
+                kw["ensemble_config"] = replace(kw["ensemble_config"], **{field: int(m.group(1))})
         kw["wind_forecast"] = "fit" if "+wind" in name else HELD_WIND
         if "+cmd" in name:
             extra = tuple(f for f in ALL_FEATURES[9:] if f not in base_rc.features)

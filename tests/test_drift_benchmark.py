@@ -56,6 +56,42 @@ def test_tables_have_the_papers_layout_and_physics_is_exact_on_its_own_logs(tiny
     table = (tmp_path / "out" / "tables.md").read_text()
     assert "| hybrid_nets_unguarded | north_m |" in table and "/" in table.split("| hybrid | north_m |")[1].split("\n")[0]
     assert res.table2.shape == (18, 4)
+    # per log: the same cells for each failure, whose mean over the logs is the pooled cell
+    # (every log has the same number of starts)
+    per = pd.read_csv(tmp_path / "out" / "errors_per_log.csv")
+    assert list(per.columns) == ["model", "log", "state", "window", "horizon_s", "mae"]
+    assert set(per.log) == {"physics_1.csv", "physics_2.csv"} and len(per) == 2 * len(errors)
+    pooled = per.groupby(["model", "state", "window", "horizon_s"]).mae.mean()
+    np.testing.assert_allclose(pooled.loc[errors.set_index(["model", "state", "window", "horizon_s"]).index],
+                               errors.mae, rtol=1e-5)   # the csv keeps 6 digits
+    assert per.groupby(["model", "state", "window", "horizon_s"]).mae.nunique().max() == 2   # logs differ
+    section = table.split("### Per failure: `hybrid` as a ratio to `dynamic` at 60 s")[1]
+    rows = [r for r in section.split("\n") if r.startswith("| physics_")]
+    assert len(rows) == 2 and all(r.count("/") == 3 for r in rows), rows
+    _check_group_script(tmp_path / "out", per, errors)
+
+
+def _check_group_script(out, per, errors):
+    """benchmarks/drift_groups.py: a group of one log gives that log's ratio, a group of all
+    logs the pooled table's; bad groups are refused with a message."""
+    import importlib.util
+    from pathlib import Path
+
+    path = Path(__file__).resolve().parents[1] / "benchmarks" / "drift_groups.py"
+    spec = importlib.util.spec_from_file_location("drift_groups", path)
+    mod = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(mod)
+    t = mod.group_ratios(per, {"one": ["physics_1*"], "all": ["physics_*"]}).set_index(["group", "state"])
+    at = lambda df, m, s, w: float(df[(df.model == m) & (df.state == s) & (df.window == w)  # noqa: E731
+                                      & (df.horizon_s == 60)].mae.iloc[0])
+    one = per[per.log == "physics_1.csv"]
+    for state in ("north_m", "yaw_deg"):
+        np.testing.assert_allclose(t.loc[("one", state), 20], at(one, "hybrid", state, 20) / at(one, "dynamic", state, 20))
+        np.testing.assert_allclose(t.loc[("all", state), 5], at(errors, "hybrid", state, 5) / at(errors, "dynamic", state, 5),
+                                   rtol=1e-5)
+    assert mod.main([str(out), "--group", "one=physics_1*", "--group", "all=*"]) == 0
+    assert mod.main([str(out), "--group", "none=calm_*"]) == 2
+    assert mod.main([str(out), "--group", "nameonly"]) == 2
 
 
 def test_benchmark_is_deterministic_and_the_cli_reports_bad_folders(tiny_folder, tmp_path, capsys):

@@ -6,6 +6,9 @@ samples after the shutdown of every log in ``test``, ``horizon_s`` ahead. The ou
 
 * ``errors.csv``: ``model,state,window,horizon_s,mae`` (``state`` in ``north_m, east_m,
   yaw_deg``; ``window`` 5 or 20 intervals), one row per cell of the paper's Table 2;
+* ``errors_per_log.csv``: ``model,log,state,window,horizon_s,mae``: the same cells for
+  each test log (failure) alone, so that a mean over logs can be taken apart (for
+  example calm against rough weather);
 * ``coverage.csv``: ``model,horizon_s,sigma,coverage`` for the ensemble models: the share
   of north and east errors within 1 and 2 standard deviations of the ensemble; with two
   or more test logs also ``<model>_loo_calibrated``: the spread scaled, per horizon, by the
@@ -16,7 +19,8 @@ samples after the shutdown of every log in ``test``, ``horizon_s`` ahead. The ou
   after one failure share one outcome, so the number of failures sets how much a
   coverage figure can say;
 * ``tables.md``: Table 2 (cells "first-5/first-20"), Table 3 (% error reduction of the
-  hybrids relative to the dynamic model), coverage and wall times;
+  hybrids relative to the dynamic model), coverage, the hybrid's error as a ratio to the
+  dynamic model's per failure at the longest horizon, and wall times;
 * ``timing.csv``: training and forecasting wall time per model;
 * ``error_vs_horizon.png`` and ``trajectories.png`` (the paper's Fig. 6: the first five
   forecasts after the failure against the measured track).
@@ -156,11 +160,13 @@ def run_drift_benchmark(train=None, test=None, out_dir="drift-benchmark", *, ves
               for name, per_log in fc.items()}
     windows = tuple(w for w in metrics.WINDOWS if w <= n_intervals) or (n_intervals,)
     long = metrics.error_table(errors, horizons_s=horizons, windows=windows)
+    per_log_long = _per_log_errors(errors, test_names, horizons, windows)
     coverage = _coverage_table(fc, pick, horizons, len(test_arrays))
     intervals = _coverage_intervals(fc, pick, horizons, seed)
 
     outputs = {}
     outputs["errors.csv"] = _write_csv(out / "errors.csv", long)
+    outputs["errors_per_log.csv"] = _write_csv(out / "errors_per_log.csv", per_log_long)
     outputs["coverage.csv"] = _write_csv(out / "coverage.csv", coverage)
     outputs["coverage_intervals.csv"] = _write_csv(out / "coverage_intervals.csv", intervals)
     outputs["timing.csv"] = _write_csv(out / "timing.csv", timing)
@@ -168,7 +174,7 @@ def run_drift_benchmark(train=None, test=None, out_dir="drift-benchmark", *, ves
     table3 = {m: metrics.reduction_table(long, m, windows=windows) for m in TABLE3_MODELS} \
         if len(windows) == 2 else {}
     md = _markdown(table2, table3, coverage, intervals, timing, test_names, len(train_arrays), ens_cfg,
-                   n_intervals)
+                   n_intervals, per_log_long)
     outputs["tables.md"] = atomic_write(out / "tables.md", lambda fh: fh.write(md.encode("utf-8")))
     if plots:
         outputs.update(_plots(out, fc, all_h, test_arrays, test_names))
@@ -348,7 +354,30 @@ def _md_table(df: pd.DataFrame) -> str:
     return markdown_table(df.reset_index())
 
 
-def _markdown(table2, table3, coverage, intervals, timing, test_names, n_train, ens_cfg, n_intervals) -> str:
+def _per_log_errors(errors: dict, test_names, horizons, windows) -> pd.DataFrame:
+    """Table 2's cells for each test log alone: ``model,log,state,window,horizon_s,mae``."""
+    tables = [metrics.error_table({m: [per_log[k]] for m, per_log in errors.items()}, horizons_s=horizons,
+                                  windows=windows).assign(log=name) for k, name in enumerate(test_names)]
+    return pd.concat(tables, ignore_index=True)[["model", "log", "state", "window", "horizon_s", "mae"]]
+
+
+def _per_log_markdown(per_log: pd.DataFrame, model: str = "hybrid", reference: str = "dynamic") -> str:
+    """``model``'s error as a ratio to ``reference``'s for each log, at the longest horizon."""
+    h = per_log.horizon_s.max()
+    d = per_log[per_log.horizon_s == h].pivot_table(index=["log", "state", "window"], columns="model",
+                                                    values="mae", sort=False)
+    ratio = (d[model] / d[reference]).unstack("window")
+    lo, hi = ratio.columns[0], ratio.columns[-1]
+    cells = (ratio[lo].map("{:.2f}".format) + "/" + ratio[hi].map("{:.2f}".format)).unstack("state")
+    cells = cells.reindex(columns=list(metrics.STATES))
+    worse = int((ratio > 1).to_numpy().sum())
+    return (f"\n### Per failure: `{model}` as a ratio to `{reference}` at {h:g} s (first {lo} / first {hi} "
+            f"intervals)\n\nAbove 1: worse than `{reference}` on that failure ({worse} of {ratio.size} cells; "
+            f"errors of every log and cell in `errors_per_log.csv`).\n\n" + _md_table(cells))
+
+
+def _markdown(table2, table3, coverage, intervals, timing, test_names, n_train, ens_cfg, n_intervals,
+              per_log=None) -> str:
     # No top-level heading: the file reads on its own and is also included in the docs pages.
     parts = [f"Drift benchmark. Test logs: {', '.join(test_names)}; trained on {n_train} logs; "
              f"{ens_cfg.n_members}-member ensembles, seed {ens_cfg.seed}; {n_intervals} forecasts after each "
@@ -368,6 +397,9 @@ def _markdown(table2, table3, coverage, intervals, timing, test_names, n_train, 
     parts += [f"\n2-sigma coverage with a 90 % interval that resamples whole failures "
               f"({int(intervals.n_failures.iloc[0])} here; the starts after one failure share one outcome):\n",
               _md_table(ci)]
+    if per_log is not None and per_log.log.nunique() > 1 and {"hybrid", "dynamic"} <= set(per_log.model) \
+            and per_log.window.nunique() > 1:
+        parts.append(_per_log_markdown(per_log))
     parts += ["\n### Wall time [s]\n", _md_table(timing.assign(seconds=timing.seconds.round(2)).set_index("model"))]
     return "\n".join(parts) + "\n"
 

@@ -1,0 +1,84 @@
+"""The drift benchmark's errors by group of failures (for example calm against rough weather).
+
+``hybridship benchmark drift`` pools every failure of its test logs into one table. The
+independent evaluation reports calm and rough weather apart, and a pooled ratio can hide a
+group in which the hybrid is worse than the physics. This script reads the benchmark's
+``errors_per_log.csv`` and prints, for each group of logs (named by shell-style patterns),
+the error of ``--model`` as a ratio to ``--reference`` (first 5 / first 20 intervals), the
+mean over the group's logs as in Table 2::
+
+    python benchmarks/drift_groups.py docs/results/drift-truthsim-dev \\
+        --group "calm=calm_*" --group "rough=dev_*"
+
+Writes nothing; ``--horizon-s`` picks the horizon (default: the longest).
+"""
+
+from __future__ import annotations
+
+import argparse
+import fnmatch
+import sys
+from pathlib import Path
+
+import pandas as pd
+
+
+def group_ratios(per_log: pd.DataFrame, groups: dict, model: str = "hybrid", reference: str = "dynamic",
+                 horizon_s: float | None = None) -> pd.DataFrame:
+    """Rows group x state, columns window: mean error of ``model`` over the group's logs
+    divided by that of ``reference``, at ``horizon_s`` [s] (default the longest)."""
+    h = per_log.horizon_s.max() if horizon_s is None else horizon_s
+    d = per_log[(per_log.horizon_s == h) & per_log.model.isin([model, reference])]
+    rows = []
+    for name, patterns in groups.items():
+        logs = sorted(lg for lg in d.log.unique() if any(fnmatch.fnmatch(lg, p) for p in patterns))
+        if not logs:
+            raise ValueError(f"--group {name}: no log matches {', '.join(patterns)}")
+        m = d[d.log.isin(logs)].groupby(["state", "window", "model"]).mae.mean().unstack("model")
+        r = (m[model] / m[reference]).unstack("window")
+        rows.append(r.assign(group=name, logs=len(logs)).reset_index())
+    return pd.concat(rows, ignore_index=True)
+
+
+def main(argv=None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("results", type=Path, help="a drift benchmark's output folder (with errors_per_log.csv)")
+    ap.add_argument("--group", action="append", required=True,
+                    help="NAME=PATTERN[,PATTERN...]: the logs of one group (repeat for each group)")
+    ap.add_argument("--model", default="hybrid")
+    ap.add_argument("--reference", default="dynamic")
+    ap.add_argument("--horizon-s", type=float, default=None)
+    args = ap.parse_args(argv)
+    path = args.results / "errors_per_log.csv"
+    if not path.is_file():
+        print(f"error: {path}: not found; run `hybridship benchmark drift --out {args.results}` first",
+              file=sys.stderr)
+        return 2
+    groups = {}
+    for g in args.group:
+        name, sep, pats = g.partition("=")
+        if not sep or not name or not pats:
+            print(f"error: --group {g!r}: expected NAME=PATTERN[,PATTERN...]", file=sys.stderr)
+            return 2
+        groups[name] = pats.split(",")
+    per_log = pd.read_csv(path)
+    try:
+        t = group_ratios(per_log, groups, args.model, args.reference, args.horizon_s)
+    except ValueError as e:
+        print(f"error: {e}", file=sys.stderr)
+        return 2
+    h = per_log.horizon_s.max() if args.horizon_s is None else args.horizon_s
+    lo, hi = sorted(per_log.window.unique())[0], sorted(per_log.window.unique())[-1]
+    t["ratio"] = t[lo].map("{:.2f}".format) + "/" + t[hi].map("{:.2f}".format)
+    out = t.pivot_table(index=["group", "logs"], columns="state", values="ratio", aggfunc="first", sort=False)
+    out = out.reindex(columns=[c for c in ("north_m", "east_m", "yaw_deg") if c in out.columns])
+    print(f"`{args.model}` / `{args.reference}` at {h:g} s, first {lo} / first {hi} intervals "
+          f"(mean over each group's logs):\n")
+    from hybridship.fileio import markdown_table
+
+    print(markdown_table(out.reset_index()))
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
