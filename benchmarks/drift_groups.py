@@ -10,7 +10,8 @@ mean over the group's logs as in Table 2::
     python benchmarks/drift_groups.py docs/results/drift-truthsim-dev \\
         --group "calm=calm_*" --group "rough=dev_*"
 
-Writes nothing; ``--horizon-s`` picks the horizon (default: the longest).
+``--out FILE`` also writes the table as Markdown; ``--horizon-s`` picks the horizon
+(default: the longest).
 """
 
 from __future__ import annotations
@@ -48,6 +49,7 @@ def main(argv=None) -> int:
     ap.add_argument("--model", default="hybrid")
     ap.add_argument("--reference", default="dynamic")
     ap.add_argument("--horizon-s", type=float, default=None)
+    ap.add_argument("--out", type=Path, default=None, help="also write the table to this Markdown file")
     args = ap.parse_args(argv)
     path = args.results / "errors_per_log.csv"
     if not path.is_file():
@@ -72,11 +74,13 @@ def main(argv=None) -> int:
     t["ratio"] = t[lo].map("{:.2f}".format) + "/" + t[hi].map("{:.2f}".format)
     out = t.pivot_table(index=["group", "logs"], columns="state", values="ratio", aggfunc="first", sort=False)
     out = out.reindex(columns=[c for c in ("north_m", "east_m", "yaw_deg") if c in out.columns])
-    print(f"`{args.model}` / `{args.reference}` at {h:g} s, first {lo} / first {hi} intervals "
-          f"(mean over each group's logs):\n")
-    from hybridship.fileio import markdown_table
+    from hybridship.fileio import atomic_write, markdown_table
 
-    print(markdown_table(out.reset_index()))
+    text = (f"`{args.model}` / `{args.reference}` at {h:g} s, first {lo} / first {hi} intervals "
+            f"(mean over each group's logs):\n\n" + markdown_table(out.reset_index()) + "\n")
+    print(text, end="")
+    if args.out is not None:
+        atomic_write(args.out, lambda fh: fh.write(text.encode("utf-8")))
     return 0
 
 

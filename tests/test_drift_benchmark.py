@@ -89,7 +89,8 @@ def _check_group_script(out, per, errors):
         np.testing.assert_allclose(t.loc[("one", state), 20], at(one, "hybrid", state, 20) / at(one, "dynamic", state, 20))
         np.testing.assert_allclose(t.loc[("all", state), 5], at(errors, "hybrid", state, 5) / at(errors, "dynamic", state, 5),
                                    rtol=1e-5)
-    assert mod.main([str(out), "--group", "one=physics_1*", "--group", "all=*"]) == 0
+    assert mod.main([str(out), "--group", "one=physics_1*", "--group", "all=*", "--out", str(out / "g.md")]) == 0
+    assert "| one | 1 |" in (out / "g.md").read_text()
     assert mod.main([str(out), "--group", "none=calm_*"]) == 2
     assert mod.main([str(out), "--group", "nameonly"]) == 2
 
