@@ -21,6 +21,7 @@ import fnmatch
 import sys
 from pathlib import Path
 
+import numpy as np
 import pandas as pd
 
 
@@ -28,7 +29,16 @@ def group_ratios(per_log: pd.DataFrame, groups: dict, model: str = "hybrid", ref
                  horizon_s: float | None = None) -> pd.DataFrame:
     """Rows group x state, columns window: mean error of ``model`` over the group's logs
     divided by that of ``reference``, at ``horizon_s`` [s] (default the longest)."""
+    missing = {"model", "log", "state", "window", "horizon_s", "mae"} - set(per_log.columns)
+    if missing:
+        raise ValueError(f"errors_per_log.csv: columns {sorted(missing)} missing")
+    for field, name in (("--model", model), ("--reference", reference)):
+        if name not in set(per_log.model):
+            raise ValueError(f"{field} {name!r}: not in the results (models: {', '.join(dict.fromkeys(per_log.model))})")
     h = per_log.horizon_s.max() if horizon_s is None else horizon_s
+    if h not in set(per_log.horizon_s):
+        raise ValueError(f"--horizon-s {h:g}: not in the results (horizons: "
+                         f"{', '.join(f'{x:g}' for x in sorted(per_log.horizon_s.unique()))} s)")
     d = per_log[(per_log.horizon_s == h) & per_log.model.isin([model, reference])]
     rows = []
     for name, patterns in groups.items():
@@ -62,7 +72,10 @@ def main(argv=None) -> int:
         if not sep or not name or not pats:
             print(f"error: --group {g!r}: expected NAME=PATTERN[,PATTERN...]", file=sys.stderr)
             return 2
-        groups[name] = pats.split(",")
+        if name in groups:
+            print(f"error: --group {name!r}: given twice", file=sys.stderr)
+            return 2
+        groups[name] = [q.strip() for q in pats.split(",") if q.strip()]
     per_log = pd.read_csv(path)
     try:
         t = group_ratios(per_log, groups, args.model, args.reference, args.horizon_s)
@@ -71,12 +84,14 @@ def main(argv=None) -> int:
         return 2
     h = per_log.horizon_s.max() if args.horizon_s is None else args.horizon_s
     lo, hi = sorted(per_log.window.unique())[0], sorted(per_log.window.unique())[-1]
-    t["ratio"] = t[lo].map("{:.2f}".format) + "/" + t[hi].map("{:.2f}".format)
+    fmt = lambda x: f"{x:.2f}" if np.isfinite(x) else "n/a"  # noqa: E731  (a zero or missing reference error)
+    t["ratio"] = t[lo].map(fmt) + ("" if lo == hi else "/" + t[hi].map(fmt))
     out = t.pivot_table(index=["group", "logs"], columns="state", values="ratio", aggfunc="first", sort=False)
     out = out.reindex(columns=[c for c in ("north_m", "east_m", "yaw_deg") if c in out.columns])
     from hybridship.fileio import atomic_write, markdown_table
 
-    text = (f"`{args.model}` / `{args.reference}` at {h:g} s, first {lo} / first {hi} intervals "
+    windows = f"first {lo}" if lo == hi else f"first {lo} / first {hi}"
+    text = (f"`{args.model}` / `{args.reference}` at {h:g} s, {windows} intervals "
             f"(mean over each group's logs):\n\n" + markdown_table(out.reset_index()) + "\n")
     print(text, end="")
     if args.out is not None:

@@ -89,9 +89,11 @@ def variants(cfg, names):
         if ms:
             kw["multistep_config"] = replace(MultiStepConfig(), **ms)
         for key, field in (("m", "n_members"), ("sd", "seed")):
-            m = re.search(rf"_{key}(\d+)", name)
-            if m:
-                kw["ensemble_config"] = replace(kw["ensemble_config"], **{field: int(m.group(1))})
+            found = re.findall(rf"_{key}(\d+)(?=_|\+|$)", name)
+            if len(found) > 1 or re.search(rf"_{key}\d+[^\d_+]", name):
+                raise SystemExit(f"error: variant {name!r}: _{key}<n> needs one whole number, once")
+            if found:
+                kw["ensemble_config"] = replace(kw["ensemble_config"], **{field: int(found[0])})
         kw["wind_forecast"] = "fit" if "+wind" in name else HELD_WIND
         if "+cmd" in name:
             extra = tuple(f for f in ALL_FEATURES[9:] if f not in base_rc.features)

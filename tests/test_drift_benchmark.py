@@ -93,6 +93,36 @@ def _check_group_script(out, per, errors):
     assert "| one | 1 |" in (out / "g.md").read_text()
     assert mod.main([str(out), "--group", "none=calm_*"]) == 2
     assert mod.main([str(out), "--group", "nameonly"]) == 2
+    assert mod.main([str(out), "--group", "a=physics_1*", "--group", "a=physics_2*"]) == 2
+    for kw, argv, field in (({"horizon_s": 50.0}, ["--horizon-s", "50"], "--horizon-s 50"),
+                            ({"model": "nope"}, ["--model", "nope"], "--model 'nope'"),
+                            ({"reference": "nope"}, ["--reference", "nope"], "--reference 'nope'")):
+        with pytest.raises(ValueError, match=field):
+            mod.group_ratios(per, {"all": ["*"]}, **kw)
+        assert mod.main([str(out), "--group", "all=*", *argv]) == 2
+    # spaces after the commas of a pattern list are not part of the patterns
+    t2 = mod.group_ratios(per, {"both": [q.strip() for q in "physics_1*, physics_2*".split(",")]})
+    np.testing.assert_allclose(t2[20].to_numpy(), t.loc["all", 20].to_numpy())
+
+
+def test_logs_of_one_name_stay_apart_and_one_log_has_no_per_failure_table(tmp_path):
+    """Two files of one name in two folders are two failures in the per-log outputs, not
+    one averaged; with a single test log the per-failure table says why it is missing."""
+    model = DynamicModel("gunnerus")
+    paths = []
+    for seed in (1, 2):
+        (tmp_path / f"f{seed}").mkdir()
+        paths.append(tmp_path / f"f{seed}" / "same.csv")
+        write_log(physics_log(model, seed=seed), paths[-1])
+    tiny = EnsembleConfig(n_members=2, max_epochs=5, patience=5, seed=0)
+    run_drift_benchmark(paths, None, tmp_path / "two", ensemble_config=tiny, plots=False, progress=False,
+                        calibration_scenarios=0)
+    per = pd.read_csv(tmp_path / "two" / "errors_per_log.csv")
+    assert sorted(per.log.unique()) == ["same.csv#0", "same.csv#1"]
+    assert "| same.csv#1 |" in (tmp_path / "two" / "tables.md").read_text()
+    run_drift_benchmark(paths[:1], None, tmp_path / "one", ensemble_config=tiny, plots=False, progress=False,
+                        calibration_scenarios=0)
+    assert "No per-failure table" in (tmp_path / "one" / "tables.md").read_text()
 
 
 def test_benchmark_is_deterministic_and_the_cli_reports_bad_folders(tiny_folder, tmp_path, capsys):

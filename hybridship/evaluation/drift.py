@@ -20,7 +20,8 @@ samples after the shutdown of every log in ``test``, ``horizon_s`` ahead. The ou
   coverage figure can say;
 * ``tables.md``: Table 2 (cells "first-5/first-20"), Table 3 (% error reduction of the
   hybrids relative to the dynamic model), coverage, the hybrid's error as a ratio to the
-  dynamic model's per failure at the longest horizon, and wall times;
+  dynamic model's per failure at the longest horizon (with two or more test logs and both
+  windows), and wall times;
 * ``timing.csv``: training and forecasting wall time per model;
 * ``error_vs_horizon.png`` and ``trajectories.png`` (the paper's Fig. 6: the first five
   forecasts after the failure against the measured track).
@@ -343,7 +344,10 @@ def _logs(spec):
         files = log_files(Path(spec))
         return list(files), [f.name for f in files]
     items = list(spec)
-    return items, [getattr(x, "name", f"log{i}") for i, x in enumerate(items)]
+    names = [str(getattr(x, "name", f"log{i}")) for i, x in enumerate(items)]
+    # per-log outputs are keyed by name: two logs of one name (files of one name in two
+    # folders) get their position appended rather than being merged
+    return items, [f"{n}#{i}" if names.count(n) > 1 else n for i, n in enumerate(names)]
 
 
 def _write_csv(path: Path, df: pd.DataFrame) -> Path:
@@ -368,12 +372,16 @@ def _per_log_markdown(per_log: pd.DataFrame, model: str = "hybrid", reference: s
                                                     values="mae", sort=False)
     ratio = (d[model] / d[reference]).unstack("window")
     lo, hi = ratio.columns[0], ratio.columns[-1]
-    cells = (ratio[lo].map("{:.2f}".format) + "/" + ratio[hi].map("{:.2f}".format)).unstack("state")
-    cells = cells.reindex(columns=list(metrics.STATES))
-    worse = int((ratio > 1).to_numpy().sum())
+    fmt = lambda x: f"{x:.2f}" if np.isfinite(x) else "n/a"  # noqa: E731  (a zero or missing reference error)
+    cells = (ratio[lo].map(fmt) + "/" + ratio[hi].map(fmt)).unstack("state")
+    cells = cells.reindex(index=list(dict.fromkeys(per_log.log)), columns=list(metrics.STATES))
+    finite = np.isfinite(ratio.to_numpy())
+    worse = int((ratio.to_numpy()[finite] > 1).sum())
+    na = "" if finite.all() else f"; {int((~finite).sum())} without a ratio (n/a)"
     return (f"\n### Per failure: `{model}` as a ratio to `{reference}` at {h:g} s (first {lo} / first {hi} "
-            f"intervals)\n\nAbove 1: worse than `{reference}` on that failure ({worse} of {ratio.size} cells; "
-            f"errors of every log and cell in `errors_per_log.csv`).\n\n" + _md_table(cells))
+            f"intervals)\n\nAbove 1: worse than `{reference}` on that failure ({worse} of {int(finite.sum())} "
+            f"log/state/window ratios{na}; errors of every log and cell in `errors_per_log.csv`).\n\n"
+            + _md_table(cells))
 
 
 def _markdown(table2, table3, coverage, intervals, timing, test_names, n_train, ens_cfg, n_intervals,
@@ -400,6 +408,9 @@ def _markdown(table2, table3, coverage, intervals, timing, test_names, n_train, 
     if per_log is not None and per_log.log.nunique() > 1 and {"hybrid", "dynamic"} <= set(per_log.model) \
             and per_log.window.nunique() > 1:
         parts.append(_per_log_markdown(per_log))
+    elif per_log is not None:
+        parts.append("\n(No per-failure table: it needs two or more test logs and both windows; the cells of "
+                     "each log are in `errors_per_log.csv`.)\n")
     parts += ["\n### Wall time [s]\n", _md_table(timing.assign(seconds=timing.seconds.round(2)).set_index("model"))]
     return "\n".join(parts) + "\n"
 
