@@ -21,34 +21,41 @@ import fnmatch
 import sys
 from pathlib import Path
 
-import numpy as np
 import pandas as pd
+
+
+def group_logs(per_log: pd.DataFrame, groups: dict) -> dict:
+    """Group name -> the logs of ``per_log`` that match any of its shell-style patterns."""
+    out = {}
+    for name, patterns in groups.items():
+        logs = [lg for lg in dict.fromkeys(per_log.log) if any(fnmatch.fnmatch(lg, p) for p in patterns)]
+        if not logs:
+            raise ValueError(f"--group {name}: no log matches {', '.join(patterns)}")
+        out[name] = logs
+    return out
 
 
 def group_ratios(per_log: pd.DataFrame, groups: dict, model: str = "hybrid", reference: str = "dynamic",
                  horizon_s: float | None = None) -> pd.DataFrame:
-    """Rows group x state, columns window: mean error of ``model`` over the group's logs
-    divided by that of ``reference``, at ``horizon_s`` [s] (default the longest)."""
+    """Rows ``(group, state)``, columns window: mean error of ``model`` over the group's logs
+    divided by that of ``reference``, at ``horizon_s`` [s] (default the longest): the
+    benchmark's per-failure ratio (:func:`hybridship.evaluation.drift.ratio_table`) with
+    each group's logs averaged into one, as Table 2 averages all of them."""
+    from hybridship.evaluation.drift import ratio_table
+
     missing = {"model", "log", "state", "window", "horizon_s", "mae"} - set(per_log.columns)
     if missing:
         raise ValueError(f"errors_per_log.csv: columns {sorted(missing)} missing")
     for field, name in (("--model", model), ("--reference", reference)):
         if name not in set(per_log.model):
             raise ValueError(f"{field} {name!r}: not in the results (models: {', '.join(dict.fromkeys(per_log.model))})")
-    h = per_log.horizon_s.max() if horizon_s is None else horizon_s
-    if h not in set(per_log.horizon_s):
-        raise ValueError(f"--horizon-s {h:g}: not in the results (horizons: "
+    if horizon_s is not None and horizon_s not in set(per_log.horizon_s):
+        raise ValueError(f"--horizon-s {horizon_s:g}: not in the results (horizons: "
                          f"{', '.join(f'{x:g}' for x in sorted(per_log.horizon_s.unique()))} s)")
-    d = per_log[(per_log.horizon_s == h) & per_log.model.isin([model, reference])]
-    rows = []
-    for name, patterns in groups.items():
-        logs = sorted(lg for lg in d.log.unique() if any(fnmatch.fnmatch(lg, p) for p in patterns))
-        if not logs:
-            raise ValueError(f"--group {name}: no log matches {', '.join(patterns)}")
-        m = d[d.log.isin(logs)].groupby(["state", "window", "model"]).mae.mean().unstack("model")
-        r = (m[model] / m[reference]).unstack("window")
-        rows.append(r.assign(group=name, logs=len(logs)).reset_index())
-    return pd.concat(rows, ignore_index=True)
+    means = [per_log[per_log.log.isin(logs)].groupby(["model", "state", "window", "horizon_s"], as_index=False)
+             .mae.mean().assign(log=name) for name, logs in group_logs(per_log, groups).items()]
+    ratio = ratio_table(pd.concat(means, ignore_index=True), model, reference, horizon_s)
+    return ratio.rename_axis(index=["group", "state"])
 
 
 def main(argv=None) -> int:
@@ -79,20 +86,20 @@ def main(argv=None) -> int:
     per_log = pd.read_csv(path)
     try:
         t = group_ratios(per_log, groups, args.model, args.reference, args.horizon_s)
+        counts = {k: len(v) for k, v in group_logs(per_log, groups).items()}
     except ValueError as e:
         print(f"error: {e}", file=sys.stderr)
         return 2
-    h = per_log.horizon_s.max() if args.horizon_s is None else args.horizon_s
-    lo, hi = sorted(per_log.window.unique())[0], sorted(per_log.window.unique())[-1]
-    fmt = lambda x: f"{x:.2f}" if np.isfinite(x) else "n/a"  # noqa: E731  (a zero or missing reference error)
-    t["ratio"] = t[lo].map(fmt) + ("" if lo == hi else "/" + t[hi].map(fmt))
-    out = t.pivot_table(index=["group", "logs"], columns="state", values="ratio", aggfunc="first", sort=False)
-    out = out.reindex(columns=[c for c in ("north_m", "east_m", "yaw_deg") if c in out.columns])
+    from hybridship.evaluation.drift import ratio_cells
     from hybridship.fileio import atomic_write, markdown_table
 
+    cells = ratio_cells(t.rename_axis(index=["log", "state"]))
+    cells.insert(0, "logs", [counts[g] for g in cells.index])
+    h = per_log.horizon_s.max() if args.horizon_s is None else args.horizon_s
+    lo, hi = t.columns[0], t.columns[-1]
     windows = f"first {lo}" if lo == hi else f"first {lo} / first {hi}"
     text = (f"`{args.model}` / `{args.reference}` at {h:g} s, {windows} intervals "
-            f"(mean over each group's logs):\n\n" + markdown_table(out.reset_index()) + "\n")
+            f"(mean over each group's logs):\n\n" + markdown_table(cells.rename_axis("group").reset_index()) + "\n")
     print(text, end="")
     if args.out is not None:
         atomic_write(args.out, lambda fh: fh.write(text.encode("utf-8")))

@@ -36,13 +36,14 @@ ROOT = Path(__file__).resolve().parents[1]
 
 def trailing_wind(wind: np.ndarray, n: int) -> np.ndarray:
     """Causal mean over ``n`` samples of the wind vector; ``wind`` (N, 2): speed [m/s], direction [rad]."""
-    x, y = wind[:, 0] * np.cos(wind[:, 1]), wind[:, 0] * np.sin(wind[:, 1])
+    from hybridship.frames import speed_dir_to_vector, vector_to_speed_dir
+
+    vec = speed_dir_to_vector(wind)
 
     def mean(z):
         return np.convolve(np.r_[np.full(n - 1, z[0]), z], np.ones(n) / n, mode="valid")
 
-    X, Y = mean(x), mean(y)
-    return np.column_stack([np.hypot(X, Y), np.arctan2(Y, X)])
+    return vector_to_speed_dir(np.column_stack([mean(vec[:, 0]), mean(vec[:, 1])]))
 
 
 def _future_wind_predictor():

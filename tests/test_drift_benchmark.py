@@ -81,7 +81,7 @@ def _check_group_script(out, per, errors):
     spec = importlib.util.spec_from_file_location("drift_groups", path)
     mod = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(mod)
-    t = mod.group_ratios(per, {"one": ["physics_1*"], "all": ["physics_*"]}).set_index(["group", "state"])
+    t = mod.group_ratios(per, {"one": ["physics_1*"], "all": ["physics_*"]})
     at = lambda df, m, s, w: float(df[(df.model == m) & (df.state == s) & (df.window == w)  # noqa: E731
                                       & (df.horizon_s == 60)].mae.iloc[0])
     one = per[per.log == "physics_1.csv"]
@@ -165,3 +165,27 @@ def test_a_failure_is_never_scored_with_a_spread_calibrated_on_it(tmp_path):
     hp3 = HybridPredictor(model.vessel, ensemble_config=TINY).fit(logs[:3])
     _, none = _calibrate_after_stop(hp3, logs[:3], True, 0, 0, 20, 60.0, lambda m: None)
     assert none is None and "after_stop" not in hp3.calibration
+
+
+def test_ratio_table_keeps_log_order_and_marks_ratios_without_a_reference():
+    """The per-failure ratio: hybrid / dynamic per log and state at the longest horizon, logs
+    in their order; a zero reference error gives n/a, not a number or a silent inf."""
+    from hybridship.evaluation.drift import _per_log_markdown, ratio_cells, ratio_table
+
+    rows = []
+    for log, (hyb, dyn) in {"b_log": (1.0, 2.0), "a_log": (3.0, 0.0)}.items():
+        for state in ("north_m", "east_m", "yaw_deg"):
+            for window in (5, 20):
+                for h, scale in ((30.0, 0.5), (60.0, 1.0)):
+                    rows += [dict(model="hybrid", log=log, state=state, window=window, horizon_s=h, mae=hyb * scale),
+                             dict(model="dynamic", log=log, state=state, window=window, horizon_s=h, mae=dyn * scale)]
+    per = pd.DataFrame(rows)
+    r = ratio_table(per)
+    assert list(dict.fromkeys(r.index.get_level_values("log"))) == ["b_log", "a_log"]
+    np.testing.assert_allclose(r.loc[("b_log", "yaw_deg")].to_numpy(), [0.5, 0.5])
+    assert np.isinf(r.loc[("a_log", "north_m")]).all()
+    cells = ratio_cells(r)
+    assert cells.loc["b_log", "east_m"] == "0.50/0.50" and cells.loc["a_log", "east_m"] == "n/a"
+    assert ratio_cells(r[[5]]).loc["b_log", "north_m"] == "0.50"          # one window: one number
+    md = _per_log_markdown(per)
+    assert "(0 of 6 log/state/window ratios; 6 without a ratio (n/a)" in md

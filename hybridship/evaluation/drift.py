@@ -365,23 +365,45 @@ def _per_log_errors(errors: dict, test_names, horizons, windows) -> pd.DataFrame
     return pd.concat(tables, ignore_index=True)[["model", "log", "state", "window", "horizon_s", "mae"]]
 
 
-def _per_log_markdown(per_log: pd.DataFrame, model: str = "hybrid", reference: str = "dynamic") -> str:
-    """``model``'s error as a ratio to ``reference``'s for each log, at the longest horizon."""
-    h = per_log.horizon_s.max()
+def ratio_table(per_log: pd.DataFrame, model: str = "hybrid", reference: str = "dynamic",
+                horizon_s: float | None = None) -> pd.DataFrame:
+    """``model``'s error as a ratio to ``reference``'s for each log of an ``errors_per_log.csv``
+    table, at ``horizon_s`` [s] (default: the longest).
+
+    Returns a frame indexed by ``(log, state)`` (logs in their order) with one column per
+    window (number of intervals); NaN or inf where the reference error is zero or missing.
+    Averaging the rows of several logs into one ``log`` first gives the ratio of a group.
+    """
+    h = per_log.horizon_s.max() if horizon_s is None else horizon_s
     d = per_log[per_log.horizon_s == h].pivot_table(index=["log", "state", "window"], columns="model",
                                                     values="mae", sort=False)
     ratio = (d[model] / d[reference]).unstack("window")
+    return ratio.reindex(pd.MultiIndex.from_product([list(dict.fromkeys(per_log.log)), list(metrics.STATES)],
+                                                    names=["log", "state"])).dropna(how="all")
+
+
+def ratio_cells(ratio: pd.DataFrame) -> pd.DataFrame:
+    """A :func:`ratio_table` as text cells ``"first/last window"`` (one window: one number;
+    ``n/a`` without a finite ratio), rows log, columns state."""
+    fmt = lambda x: f"{x:.2f}" if np.isfinite(x) else "n/a"  # noqa: E731
     lo, hi = ratio.columns[0], ratio.columns[-1]
-    fmt = lambda x: f"{x:.2f}" if np.isfinite(x) else "n/a"  # noqa: E731  (a zero or missing reference error)
-    cells = (ratio[lo].map(fmt) + "/" + ratio[hi].map(fmt)).unstack("state")
-    cells = cells.reindex(index=list(dict.fromkeys(per_log.log)), columns=list(metrics.STATES))
+    text = ratio[lo].map(fmt) if lo == hi else (ratio[lo].map(fmt) + "/" + ratio[hi].map(fmt)).replace("n/a/n/a", "n/a")
+    cells = text.unstack("state")
+    return cells.reindex(index=list(dict.fromkeys(ratio.index.get_level_values("log"))),
+                         columns=[s for s in metrics.STATES if s in cells.columns])
+
+
+def _per_log_markdown(per_log: pd.DataFrame, model: str = "hybrid", reference: str = "dynamic") -> str:
+    """``model``'s error as a ratio to ``reference``'s for each log, at the longest horizon."""
+    ratio = ratio_table(per_log, model, reference)
+    lo, hi = ratio.columns[0], ratio.columns[-1]
     finite = np.isfinite(ratio.to_numpy())
     worse = int((ratio.to_numpy()[finite] > 1).sum())
     na = "" if finite.all() else f"; {int((~finite).sum())} without a ratio (n/a)"
-    return (f"\n### Per failure: `{model}` as a ratio to `{reference}` at {h:g} s (first {lo} / first {hi} "
-            f"intervals)\n\nAbove 1: worse than `{reference}` on that failure ({worse} of {int(finite.sum())} "
-            f"log/state/window ratios{na}; errors of every log and cell in `errors_per_log.csv`).\n\n"
-            + _md_table(cells))
+    return (f"\n### Per failure: `{model}` as a ratio to `{reference}` at {per_log.horizon_s.max():g} s "
+            f"(first {lo} / first {hi} intervals)\n\nAbove 1: worse than `{reference}` on that failure ({worse} of "
+            f"{int(finite.sum())} log/state/window ratios{na}; errors of every log and cell in "
+            f"`errors_per_log.csv`).\n\n" + _md_table(ratio_cells(ratio)))
 
 
 def _markdown(table2, table3, coverage, intervals, timing, test_names, n_train, ens_cfg, n_intervals,

@@ -31,7 +31,6 @@ import numpy as np
 from pydantic import Field, model_validator
 
 from hybridship.config import Float, Int, config_dataclass
-
 from hybridship.forecast_inputs.wind import HELD_WIND, WindForecast
 
 
