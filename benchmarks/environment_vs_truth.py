@@ -15,11 +15,21 @@ columns used:
 The estimated load is a force ``M b`` (M with added mass), the estimated thrust error
 ``M T theta`` at each row's logged state and commands. Windows: ``dp`` = the last 300 s
 before the failure, ``drift`` = 60..300 s after it (the estimate at each row uses the rows
-up to it only). Writes ``environment_vs_truth.csv``/``.md`` and ``environment_vs_truth.png``.
+up to it only); ``heading_change_deg`` is the true heading's mean over the window less its
+value at the failure (the ship turns while the environment's yaw moment, which depends on
+the heading relative to waves and wind, changes); ``load_yaw_kNm_est_at_failure`` is the
+estimated yaw load at the last row of station keeping (what a forecast started at the
+failure holds; the same in both windows). Writes ``environment_vs_truth.csv``/``.md``
+and ``environment_vs_truth.png``.
 
-Example::
+``--scenarios N --seed S`` reads the own simulator's DP-loss scenarios ``S .. S+N-1``
+(:func:`hybridship.sim.scenario.embedded_scenarios`, the drift benchmark's own scenarios)
+instead of truthsim-dev; their logs carry the same truth columns.
+
+Examples::
 
     python benchmarks/environment_vs_truth.py --out docs/results/environment-vs-truth
+    python benchmarks/environment_vs_truth.py --scenarios 20 --seed 100 --out docs/results/environment-vs-truth-own-20
 """
 
 from __future__ import annotations
@@ -56,19 +66,66 @@ def _truth(df, model, a):
     return cur, load, thr_t - parts[:, 1]
 
 
+def _logs(args):
+    """``(name, DataFrame)`` of every log: the own simulator's scenarios with ``--scenarios``,
+    else the files of ``--data``."""
+    if args.scenarios:
+        from hybridship.sim.scenario import embedded_scenarios
+
+        return [(s.name, s.log) for s in embedded_scenarios(args.scenarios, args.seed)]
+    return [(f.name, pd.read_csv(f)) for f in log_files(args.data)]
+
+
+def heading_change_deg(heading_deg: np.ndarray, i0: int, rows: np.ndarray) -> float:
+    """Mean heading over ``rows`` less the heading at row ``i0`` [deg], through north
+    (the heading unwrapped)."""
+    psi = np.unwrap(np.radians(np.asarray(heading_deg, dtype=float)))
+    return float(np.degrees(psi[rows].mean() - psi[i0]))
+
+
+def yaw_summary(table: pd.DataFrame) -> str:
+    """Medians over the logs of the yaw load's truth and of the estimate's error [kN m]: in
+    station keeping, in the drift with the online estimate, and in the drift with the
+    estimate at the failure held (what a forecast started at the failure holds)."""
+    dp = table[table.window == "dp"].set_index("log")
+    drift = table[table.window == "drift"].set_index("log")
+
+    def med(x):
+        return float(np.median(np.abs(x)))
+
+    rows = [("station keeping (dp)", dp.heading_change_deg, dp.load_yaw_kNm_true,
+             dp.load_yaw_kNm_est - dp.load_yaw_kNm_true),
+            ("drift, online estimate", drift.heading_change_deg, drift.load_yaw_kNm_true,
+             drift.load_yaw_kNm_est - drift.load_yaw_kNm_true),
+            ("drift, estimate at the failure held", drift.heading_change_deg, drift.load_yaw_kNm_true,
+             drift.load_yaw_kNm_est_at_failure - drift.load_yaw_kNm_true)]
+    out = pd.DataFrame([{"window, estimate": name, "heading change [deg]": med(h), "true yaw load [kNm]": med(t),
+                         "yaw-load error [kNm]": med(e)} for name, h, t, e in rows])
+    return (f"Medians over the {len(dp)} logs of the absolute values:\n\n" + markdown_table(out.round(1)))
+
+
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--out", type=Path, required=True)
-    ap.add_argument("--data", type=Path, default=TRUTHSIM)
+    ap.add_argument("--data", type=Path, default=None, help="folder of logs with truth columns (default truthsim-dev)")
+    ap.add_argument("--scenarios", type=int, default=0,
+                    help="use this many of the own simulator's DP-loss scenarios (1-20) instead of --data")
+    ap.add_argument("--seed", type=int, default=100, help="seed of the first scenario with --scenarios")
     args = ap.parse_args(argv)
-    if not args.data.is_dir():
+    if not 0 <= args.scenarios <= 20:
+        ap.error(f"--scenarios: expected 1-20 (or 0 to read --data), got {args.scenarios}")
+    if args.seed < 0:
+        ap.error(f"--seed: expected a non-negative integer, got {args.seed}")
+    if args.scenarios and args.data is not None:
+        ap.error("--data and --scenarios: give one source of logs, not both")
+    args.data = TRUTHSIM if args.data is None else args.data
+    if not args.scenarios and not args.data.is_dir():
         print(f"{args.data}: not found (the truthsim-dev data set is needed)", file=sys.stderr)
         return 2
     model = DynamicModel("gunnerus")
     M = model.mass_matrix
     rows, series = [], []
-    for f in log_files(args.data):
-        df = pd.read_csv(f)
+    for name, df in _logs(args):
         a = as_log_arrays(df, model.vessel)
         i0 = shutdown_index(a)
         first = max(0, i0 - 1800)
@@ -86,14 +143,17 @@ def main(argv=None) -> int:
         # the estimated thrust error as a force, at the logged states and commands of each row
         thr_e = est.thrust_error_accel(model, a.eta[r], np.nan_to_num(a.nu[r]), np.nan_to_num(a.rpm[r]),
                                        np.nan_to_num(a.azimuth_rad[r]), np.nan_to_num(a.wind[r])) @ M.T
-        series.append((f.name, a.time_s[r] - a.time_s[i0], load_e, load_t[r], cur_e, cur_t[r]))
+        series.append((name, a.time_s[r] - a.time_s[i0], load_e, load_t[r], cur_e, cur_t[r]))
+        at_failure = int(np.searchsorted(r, i0 - 1))       # the estimate a forecast at the failure starts from
         for win, sel in (("dp", (r >= i0 - 300) & (r < i0)), ("drift", (r >= i0 + 60) & (r <= i0 + 300))):
             rows.append({
-                "log": f.name, "window": win,
+                "log": name, "window": win,
+                "heading_change_deg": heading_change_deg(df.truth_heading_deg.to_numpy(), i0, r[sel]),
                 "current_m_s_est": cur_e[sel, 0].mean(), "current_m_s_true": cur_t[r][sel, 0].mean(),
                 "load_north_kN_est": load_e[sel, 0].mean() / 1e3, "load_north_kN_true": load_t[r][sel, 0].mean() / 1e3,
                 "load_east_kN_est": load_e[sel, 1].mean() / 1e3, "load_east_kN_true": load_t[r][sel, 1].mean() / 1e3,
                 "load_yaw_kNm_est": load_e[sel, 2].mean() / 1e3, "load_yaw_kNm_true": load_t[r][sel, 2].mean() / 1e3,
+                "load_yaw_kNm_est_at_failure": load_e[at_failure, 2] / 1e3,
                 "thrust_error_x_kN_est": thr_e[sel, 0].mean() / 1e3, "thrust_error_x_kN_true": thr_t[r][sel, 0].mean() / 1e3,
                 "thrust_error_y_kN_est": thr_e[sel, 1].mean() / 1e3, "thrust_error_y_kN_true": thr_t[r][sel, 1].mean() / 1e3,
                 "thrust_error_n_kNm_est": thr_e[sel, 2].mean() / 1e3,
@@ -103,7 +163,7 @@ def main(argv=None) -> int:
     args.out.mkdir(parents=True, exist_ok=True)
     atomic_write(args.out / "environment_vs_truth.csv",
                  lambda fh: fh.write(table.to_csv(index=False, float_format="%.4g").encode("utf-8")))
-    md = [markdown_table(table.round(2))]
+    md = [markdown_table(table.round(2)), "", yaw_summary(table)]
     atomic_write(args.out / "environment_vs_truth.md", lambda fh: fh.write(("\n".join(md) + "\n").encode("utf-8")))
     _plot(args.out / "environment_vs_truth.png", series)
     print("\n".join(md))
@@ -133,7 +193,8 @@ def _plot(path, series):
     np.atleast_2d(axes)[0, 0].legend(fontsize=7)
     np.atleast_2d(axes)[0, 2].legend(fontsize=7)
     fig.tight_layout()
-    atomic_write(path, lambda fh: fig.savefig(fh, format="png", dpi=100))
+    # many logs make a tall figure: a lower resolution keeps the file small
+    atomic_write(path, lambda fh: fig.savefig(fh, format="png", dpi=100 if len(series) <= 8 else 60))
     plt.close(fig)
 
 

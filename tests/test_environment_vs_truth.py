@@ -1,0 +1,70 @@
+"""benchmarks/environment_vs_truth.py: the estimate against the simulator's truth on the own scenarios."""
+
+from __future__ import annotations
+
+import importlib.util
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+import pytest
+
+
+@pytest.fixture(scope="module")
+def evt():
+    path = Path(__file__).resolve().parents[1] / "benchmarks" / "environment_vs_truth.py"
+    spec = importlib.util.spec_from_file_location("environment_vs_truth", path)
+    mod = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(mod)
+    return mod
+
+
+def test_yaw_summary_medians(evt):
+    """The held row compares the estimate at the failure with the drift's truth, log by log
+    (the drift rows in another order than the station-keeping rows)."""
+    table = pd.DataFrame({
+        "log": ["a", "b", "c", "c", "a", "b"],
+        "window": ["dp"] * 3 + ["drift"] * 3,
+        "heading_change_deg": [0.1, -0.2, 0.0, 10.0, 40.0, -60.0],
+        "load_yaw_kNm_true": [10.0, 2.0, -3.0, 1.0, -5.0, 2.0],
+        "load_yaw_kNm_est": [11.0, 1.0, -3.5, 1.0, 0.0, 4.0],
+        "load_yaw_kNm_est_at_failure": [11.0, 1.0, -3.5, -3.5, 11.0, 1.0],
+    })
+    md = evt.yaw_summary(table)
+    rows = {line.split(" | ")[0].strip("| "): [float(v) for v in line.strip(" |").split(" | ")[1:]]
+            for line in md.splitlines()[4:]}
+    # headings 0.1, 0.2, 0; truths 10, 2, 3; errors 1, 1, 0.5
+    assert rows["station keeping (dp)"] == [0.1, 3.0, 1.0]
+    assert rows["drift, online estimate"] == [40.0, 2.0, 2.0]          # errors 5, 2, 0
+    assert rows["drift, estimate at the failure held"] == [40.0, 2.0, 4.5]   # 16, 1, 4.5
+    assert "Medians over the 3 logs" in md
+
+
+def test_own_scenarios_written(evt, tmp_path):
+    """--scenarios reads the own simulator's logs: one row per window, the ship has not turned
+    on station, and the summary is written."""
+    assert evt.main(["--scenarios", "1", "--seed", "100", "--out", str(tmp_path)]) == 0
+    table = pd.read_csv(tmp_path / "environment_vs_truth.csv")
+    assert list(table.window) == ["dp", "drift"] and set(table.log) == {"embedded_seed0100"}
+    assert abs(table.heading_change_deg[0]) < 5.0
+    assert np.isfinite(table.drop(columns=["log", "window"]).to_numpy()).all()
+    md = (tmp_path / "environment_vs_truth.md").read_text()
+    assert "drift, estimate at the failure held" in md
+    assert (tmp_path / "environment_vs_truth.png").stat().st_size > 0
+
+
+def test_heading_change_through_north(evt):
+    """359 -> 1 deg is a turn of 2 deg, not of -358."""
+    heading = np.array([358.0, 359.0, 359.5, 0.5, 1.0, 1.5])
+    assert evt.heading_change_deg(heading, 2, np.array([3, 4, 5])) == pytest.approx(1.5)
+    assert evt.heading_change_deg(heading[::-1], 2, np.array([3, 4, 5])) == pytest.approx(-5.0 / 3.0)
+
+
+@pytest.mark.parametrize("argv, message", [(["--scenarios", "21"], "--scenarios: expected 1-20"),
+                                           (["--scenarios", "1", "--seed", "-1"], "--seed: expected a non-negative"),
+                                           (["--scenarios", "1", "--data", "x"], "give one source of logs")])
+def test_bad_arguments(evt, tmp_path, capsys, argv, message):
+    with pytest.raises(SystemExit) as e:
+        evt.main(argv + ["--out", str(tmp_path)])
+    assert e.value.code == 2
+    assert message in capsys.readouterr().err
