@@ -19,8 +19,8 @@ Examples::
 
     python benchmarks/estimator_variants.py --out docs/results/estimator-variants
     python benchmarks/estimator_variants.py --data own --only default held_wind physics_wind_forecast \
-        current_prior_0.1 current_prior_0.3 yaw_load_prior_3e-5 yaw_load_prior_1e-4 restart_yaw_at_stop \
-        per_dof mean_bias --out docs/results/estimator-variants-own-20
+        current_prior_0.1 current_prior_0.3 yaw_load_prior_3e-5 yaw_load_prior_1e-4 yaw_load_walk_1e-5 \
+        yaw_load_walk_1e-4 restart_yaw_at_stop per_dof mean_bias --out docs/results/estimator-variants-own-20
     python benchmarks/estimator_variants.py --data own --own-seed 200 --only default held_wind \
         physics_wind_forecast yaw_load_prior_3e-5 yaw_load_prior_1e-4 --out docs/results/estimator-variants-own-20-seed200
 """
@@ -57,6 +57,10 @@ VARIANTS = {
                             "yaw-load prior 1e-4 rad/s2"),
     "yaw_load_prior_3e-4": ({"environment_config": C(load_yaw_prior_rad_s2=3e-4)},
                             "yaw-load prior 3e-4 rad/s2"),
+    "yaw_load_walk_1e-5": ({"environment_config": C(load_yaw_walk_rad_s2=1e-5)},
+                           "yaw-load random walk 1e-5 rad/s2/sqrt(s) instead of 1e-6 (follows the drift's yaw faster)"),
+    "yaw_load_walk_1e-4": ({"environment_config": C(load_yaw_walk_rad_s2=1e-4)},
+                           "yaw-load random walk 1e-4 rad/s2/sqrt(s)"),
     "restart_yaw_at_stop": ({"environment_config": C(reset_yaw_load_at_stop=True, yaw_load_kept_at_stop=0.0)},
                             "yaw environment restarted from zero at the stop"),
     "thrust_error_walk": ({"environment_config": C(thrust_error_walk=2e-3)},
