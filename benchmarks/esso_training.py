@@ -24,7 +24,8 @@ the benchmark default), ``+hull`` / ``+hullms`` (the linear hull correction befo
 identified on the one-step residual / by a free-run fit), ``_th`` (the hull correction tuned
 with the nets in multi-step training), ``+refit`` (after calibrating, the nets refitted on all
 the training rows, ``CalibrationConfig.refit``), ``+wind`` (the wind forecast fitted on the
-training runs' wind, ``wind_forecast="fit"``; held otherwise).
+training runs' wind, ``wind_forecast="fit"``; held otherwise), ``+mirror`` (every fitting run
+also trained on mirrored port to starboard, :func:`mirror_log`: a symmetry prior for the nets).
 Writes ``errors.csv`` and ``coverage.csv`` (the manoeuvre benchmark's columns) and
 ``timing.csv`` (training seconds), and prints the distance and heading tables with
 commands known.
@@ -41,6 +42,36 @@ from pathlib import Path
 import numpy as np
 
 ROOT = Path(__file__).resolve().parents[1]
+
+
+def mirror_log(a, vessel):
+    """The log ``a`` (LogArrays) of ``vessel`` mirrored port to starboard about the body x axis.
+
+    East, heading, sway, yaw rate, every angle command and the wind's direction change
+    sign; north, surge and propeller speeds stay. That is the ship's motion seen in a
+    mirror only when every actuator lies on the centre line and every fixed thruster
+    pushes fore or aft (one off the line, or a tunnel thruster, would change sides or
+    direction), so other vessels are refused. The hull and a rudder with equal flow
+    straightening on both sides are mirror-symmetric; the Esso model's MMG rudder is not
+    quite (gamma_R 0.395 / 0.640, the single screw's swirl), so a mirrored run is that of
+    a symmetric ship, the assumption the variant tests.
+    """
+    import dataclasses
+
+    for act in list(vessel.thrusters) + list(vessel.rudders):
+        if act.y_m != 0.0:
+            raise ValueError(f"mirror_log: {act.name}: y_m must be 0 (on the centre line) to mirror, "
+                             f"got {act.y_m:g} m")
+    for th in vessel.thrusters:
+        if th.type == "tunnel" or (th.type == "fixed" and th.angle_deg % 180.0 != 0.0):
+            raise ValueError(f"mirror_log: {th.name}: a thruster must push fore or aft or be an azimuth "
+                             f"thruster to mirror, got type {th.type!r}"
+                             + (f" at angle_deg {th.angle_deg:g}" if th.type == "fixed" else ""))
+    eta, nu, wind = a.eta.copy(), a.nu.copy(), a.wind.copy()
+    eta[:, 1:] *= -1.0
+    nu[:, 1:] *= -1.0
+    wind[:, 1] *= -1.0
+    return dataclasses.replace(a, eta=eta, nu=nu, azimuth_rad=-a.azimuth_rad, wind=wind)
 
 
 def variants(cfg, names):
@@ -174,7 +205,10 @@ def main(argv=None) -> int:
             p = models[name] = with_command_guard(models[name[:-3]], [r.arrays for r in fit_runs],
                                                   cfg.train_row_stride)
         elif name != "dynamic":
-            p.fit([r.arrays for r in fit_runs], row_stride=cfg.train_row_stride)
+            logs = [r.arrays for r in fit_runs]
+            if "+mirror" in name:
+                logs += [mirror_log(a, v) for a in logs]
+            p.fit(logs, row_stride=cfg.train_row_stride)
         timing.append({"model": name, "train_s": time.perf_counter() - t0})
         print(f"{name}: trained in {timing[-1]['train_s']:.0f} s", flush=True)
         for mode in modes:

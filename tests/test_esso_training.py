@@ -1,0 +1,78 @@
+"""benchmarks/esso_training.py: the mirrored log of the ``+mirror`` variant."""
+
+from __future__ import annotations
+
+import importlib.util
+import math
+import tomllib
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from hybridship.logs.ingest import ingest
+from hybridship.physics.model import DynamicModel
+from hybridship.predictors import DynamicPredictor
+from hybridship.sim.synthetic import physics_log
+from hybridship.vessel import load_vessel, packaged_vessel_text, vessel_from_dict
+
+
+@pytest.fixture(scope="module")
+def et():
+    path = Path(__file__).resolve().parents[1] / "benchmarks" / "esso_training.py"
+    spec = importlib.util.spec_from_file_location("esso_training", path)
+    mod = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(mod)
+    return mod
+
+
+@pytest.fixture(scope="module")
+def symmetric_esso():
+    """The Esso model with equal flow straightening on both sides (port/starboard symmetric)."""
+    d = tomllib.loads(packaged_vessel_text("esso_osaka_model"))
+    d["rudders"][0]["flow_straightening_pos"] = d["rudders"][0]["flow_straightening_neg"]
+    return vessel_from_dict(d, "symmetric.toml")
+
+
+@pytest.fixture(scope="module")
+def manoeuvre(symmetric_esso):
+    """A noise-free 10-Hz log of random rudder and propeller commands with a side wind."""
+    log = physics_log(DynamicModel(symmetric_esso), duration_s=120.0, t_shutdown_s=None, dt_s=0.1,
+                      seed=3, wind=(1.5, math.radians(60.0)), hold_s=(5.0, 15.0), rpm_scale=0.5)
+    return ingest(log, symmetric_esso, purpose="fit")
+
+
+def test_mirroring_twice_gives_the_log_back_and_keeps_the_input(et, manoeuvre, symmetric_esso):
+    before = manoeuvre.eta.copy()
+    m = et.mirror_log(manoeuvre, symmetric_esso)
+    assert np.array_equal(manoeuvre.eta, before)
+    np.testing.assert_array_equal(m.eta[:, 0], manoeuvre.eta[:, 0])
+    np.testing.assert_array_equal(m.eta[:, 1:], -manoeuvre.eta[:, 1:])
+    np.testing.assert_array_equal(m.rpm, manoeuvre.rpm)
+    mm = et.mirror_log(m, symmetric_esso)
+    for field in ("eta", "nu", "azimuth_rad", "wind", "rpm"):
+        np.testing.assert_array_equal(getattr(mm, field), getattr(manoeuvre, field))
+
+
+def test_a_symmetric_ship_forecasts_the_mirrored_log_as_the_mirror_of_its_forecast(et, manoeuvre,
+                                                                                 symmetric_esso):
+    """Physics invariant: for a port/starboard symmetric vessel, forecasting the mirrored log
+    gives the mirrored forecast (the wind's direction, rudder and motion all flip)."""
+    p = DynamicPredictor(symmetric_esso)
+    starts = manoeuvre.time_s[[100, 400, 800]]
+    f = p.forecast(manoeuvre, starts, horizon_s=20.0, commands="known")
+    g = p.forecast(et.mirror_log(manoeuvre, symmetric_esso), starts, horizon_s=20.0, commands="known")
+    assert np.ptp(f.eta[..., 2]) > 0.1  # the forecasts turn, so the check has teeth
+    np.testing.assert_allclose(g.eta[..., 0], f.eta[..., 0], atol=1e-9)
+    np.testing.assert_allclose(g.eta[..., 1:], -f.eta[..., 1:], atol=1e-9)
+    # the packaged model's rudder is not symmetric (MMG gamma_R 0.395 / 0.640): the mirror
+    # is then an assumption, not an identity
+    q = DynamicPredictor(load_vessel("esso_osaka_model"))
+    fq = q.forecast(manoeuvre, starts, horizon_s=20.0, commands="known")
+    gq = q.forecast(et.mirror_log(manoeuvre, symmetric_esso), starts, horizon_s=20.0, commands="known")
+    assert np.abs(gq.eta[..., 1] + fq.eta[..., 1]).max() > 1e-3
+
+
+def test_a_vessel_that_changes_in_the_mirror_is_refused(et, manoeuvre):
+    with pytest.raises(ValueError, match=r"mirror_log: port: y_m must be 0"):
+        et.mirror_log(manoeuvre, load_vessel("gunnerus"))
