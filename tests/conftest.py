@@ -19,6 +19,16 @@ ROOT = Path(__file__).resolve().parents[1]
 SHARED_DATA = ROOT.parent / "shared" / "data"
 
 
+def load_benchmark(name: str):
+    """The script ``benchmarks/<name>.py`` as a module (the scripts are not a package)."""
+    import importlib.util
+
+    spec = importlib.util.spec_from_file_location(name, ROOT / "benchmarks" / f"{name}.py")
+    mod = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(mod)
+    return mod
+
+
 def shared_data_path(*parts: str) -> Path:
     """``../shared/data/<parts>`` (the path may not exist)."""
     return SHARED_DATA.joinpath(*parts)

@@ -74,13 +74,9 @@ def test_tables_have_the_papers_layout_and_physics_is_exact_on_its_own_logs(tiny
 def _check_group_script(out, per, errors):
     """benchmarks/drift_groups.py: a group of one log gives that log's ratio, a group of all
     logs the pooled table's; bad groups are refused with a message."""
-    import importlib.util
-    from pathlib import Path
+    from conftest import load_benchmark
 
-    path = Path(__file__).resolve().parents[1] / "benchmarks" / "drift_groups.py"
-    spec = importlib.util.spec_from_file_location("drift_groups", path)
-    mod = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(mod)
+    mod = load_benchmark("drift_groups")
     t = mod.group_ratios(per, {"one": ["physics_1*"], "all": ["physics_*"]})
     at = lambda df, m, s, w: float(df[(df.model == m) & (df.state == s) & (df.window == w)  # noqa: E731
                                       & (df.horizon_s == 60)].mae.iloc[0])

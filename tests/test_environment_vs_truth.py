@@ -2,21 +2,16 @@
 
 from __future__ import annotations
 
-import importlib.util
-from pathlib import Path
-
 import numpy as np
 import pandas as pd
 import pytest
 
+from conftest import load_benchmark
+
 
 @pytest.fixture(scope="module")
 def evt():
-    path = Path(__file__).resolve().parents[1] / "benchmarks" / "environment_vs_truth.py"
-    spec = importlib.util.spec_from_file_location("environment_vs_truth", path)
-    mod = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(mod)
-    return mod
+    return load_benchmark("environment_vs_truth")
 
 
 def test_yaw_summary_medians(evt):

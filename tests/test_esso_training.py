@@ -2,10 +2,8 @@
 
 from __future__ import annotations
 
-import importlib.util
 import math
 import tomllib
-from pathlib import Path
 
 import numpy as np
 import pytest
@@ -16,14 +14,12 @@ from hybridship.predictors import DynamicPredictor
 from hybridship.sim.synthetic import physics_log
 from hybridship.vessel import load_vessel, packaged_vessel_text, vessel_from_dict
 
+from conftest import load_benchmark
+
 
 @pytest.fixture(scope="module")
 def et():
-    path = Path(__file__).resolve().parents[1] / "benchmarks" / "esso_training.py"
-    spec = importlib.util.spec_from_file_location("esso_training", path)
-    mod = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(mod)
-    return mod
+    return load_benchmark("esso_training")
 
 
 @pytest.fixture(scope="module")

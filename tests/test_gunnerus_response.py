@@ -6,13 +6,13 @@ tests depend only on the library; the last test runs the script itself (tables o
 
 from __future__ import annotations
 
-import importlib.util
 import math
-from pathlib import Path
 
 import numpy as np
 import pytest
 from scipy.optimize import brentq
+
+from conftest import load_benchmark
 
 
 KNOT = 1852.0 / 3600.0
@@ -126,10 +126,7 @@ def test_beam_wind_drift_is_a_few_percent_to_leeward(model, dir_from):
 
 
 def test_benchmark_script_runs(capsys):
-    path = Path(__file__).resolve().parents[1] / "benchmarks" / "gunnerus_response.py"
-    spec = importlib.util.spec_from_file_location("gunnerus_response", path)
-    mod = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(mod)
+    mod = load_benchmark("gunnerus_response")
     assert mod.main(["--no-plot"]) == 0
     text = capsys.readouterr().out
     assert "Speed at max rpm (217)" in text
