@@ -1,0 +1,155 @@
+"""The default hybrid's forecasts during station keeping, leave one log out: errors and spread.
+
+The drift benchmark scores forecasts after a failure; this one scores the forecasts a DP
+operator gets while the vessel is still station keeping (commands held at the start, the
+``forecast`` default). For every log the default :class:`~hybridship.predictors.HybridPredictor`
+is fitted on the other logs (its spread calibrated on their held-back station keeping, as
+``fit`` does) and forecasts from a start every ``--every-s`` seconds of the log's own
+station keeping, from the end of the hybrid's history window (``history_s``: the
+estimator's 30 min, so that every start has all of it) to the last start whose forecast
+ends before the failure. Reported per log and lead time:
+
+* the mean distance [m] and heading [deg] errors of the hybrid, of the same model with the
+  nets off (physics + environment estimator) and of the physics alone;
+* the share of north and east errors within 1 and 2 calibrated standard deviations (a
+  calibrated Gaussian band covers 0.683 and 0.954), the errors' RMS, and the median
+  calibrated and raw (ensemble) spreads [m].
+
+Writes ``errors.csv`` (``model,log,lead_s,distance_m,heading_deg``), ``spread.csv``
+(``log,lead_s,coverage_1sigma,coverage_2sigma,rms_error_m,median_std_m,median_raw_std_m``,
+with a ``log = all`` row pooling the starts of every log) and ``station_keeping.md``.
+
+Example::
+
+    python benchmarks/station_keeping_coverage.py --out docs/results/station-keeping-truthsim-dev
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+
+from hybridship.evaluation.drift import log_files
+from hybridship.fileio import atomic_write, markdown_table
+from hybridship.frames import wrap_pi
+from hybridship.logs.ingest import ingest
+from hybridship.predictors import DynamicPredictor, HybridPredictor
+from hybridship.residual.calibration import coverage_of
+from hybridship.vessel import load_vessel
+
+TRUTHSIM = Path(__file__).resolve().parents[1].parent / "shared" / "data" / "truthsim-dev" / "logs"
+REPORT_LEADS_S = (15.0, 60.0)
+
+
+def station_keeping_starts(a, every_s: float, horizon_s: float, history_s: float) -> np.ndarray:
+    """Start times [s] every ``every_s`` from ``history_s`` into the log, each with
+    ``horizon_s`` of station keeping after it (none of the forecast reaches the failure)."""
+    off = np.flatnonzero(a.dp_active == 0)
+    t_end = a.time_s[off[0]] if off.size else a.time_s[-1]
+    starts = np.arange(a.time_s[0] + history_s, t_end - horizon_s - a.dt_s / 2, every_s)
+    rows = np.searchsorted(a.time_s, starts)
+    return a.time_s[rows[rows < len(a)]]
+
+
+def score_log(hybrid, physics, a, starts, horizon_s: float):
+    """Errors and spreads of one log's forecasts: ``(errors, abs_err_ne, std, raw_std)`` with
+    ``errors`` a dict model -> (distance (S, H+1) [m], heading (S, H+1) [rad]) and the north
+    and east absolute errors and spreads stacked on the first axis, (2 S, H+1) [m]."""
+    forecasts = {"hybrid": hybrid.forecast(a, starts, horizon_s=horizon_s),
+                 "hybrid_nets_off": hybrid.forecast(a, starts, horizon_s=horizon_s, nets=False),
+                 "dynamic": physics.forecast(a, starts, horizon_s=horizon_s)}
+    raw = hybrid.forecast(a, starts, horizon_s=horizon_s, calibrated=False).eta_std
+    f = forecasts["hybrid"]
+    rows = np.searchsorted(a.time_s, f.start_time_s[:, None] + f.lead_s[None, :])
+    truth = a.eta[rows]
+    errors = {}
+    for name, g in forecasts.items():
+        d = g.eta - truth
+        errors[name] = (np.hypot(d[..., 0], d[..., 1]), np.abs(wrap_pi(d[..., 2])))
+    d = f.eta - truth
+    abs_ne = np.concatenate([np.abs(d[..., 0]), np.abs(d[..., 1])])
+    std = np.concatenate([f.eta_std[..., 0], f.eta_std[..., 1]])
+    raw_std = np.concatenate([raw[..., 0], raw[..., 1]])
+    return errors, abs_ne, std, raw_std, f.lead_s
+
+
+def spread_rows(log: str, lead_s, abs_ne, std, raw_std, leads=REPORT_LEADS_S) -> list[dict]:
+    """Coverage, RMS error and median spreads at ``leads`` [s] for one log (or pooled)."""
+    cov = coverage_of(abs_ne, std)
+    out = []
+    for L in leads:
+        j = int(np.argmin(np.abs(lead_s - L)))
+        out.append({"log": log, "lead_s": float(lead_s[j]), "coverage_1sigma": cov[j, 0],
+                    "coverage_2sigma": cov[j, 1], "rms_error_m": float(np.sqrt(np.mean(abs_ne[:, j] ** 2))),
+                    "median_std_m": float(np.median(std[:, j])), "median_raw_std_m": float(np.median(raw_std[:, j]))})
+    return out
+
+
+def run(logs: dict, vessel, every_s: float, horizon_s: float, hybrid_factory=None):
+    """Leave-one-log-out scores of ``logs`` (name -> LogArrays): ``(errors, spread)`` DataFrames."""
+    hybrid_factory = hybrid_factory or (lambda: HybridPredictor(vessel))
+    physics = DynamicPredictor(vessel)
+    err_rows, spread, pooled = [], [], []
+    for name, a in logs.items():
+        hybrid = hybrid_factory()
+        hybrid.fit([b for k, b in logs.items() if k != name])
+        starts = station_keeping_starts(a, every_s, horizon_s, hybrid.history_s)
+        if starts.size == 0:
+            raise ValueError(f"{name}: no station keeping of {horizon_s:g} s after {hybrid.history_s:g} s of history")
+        errors, abs_ne, std, raw_std, lead_s = score_log(hybrid, physics, a, starts, horizon_s)
+        for model, (dist, hdg) in errors.items():
+            for L in REPORT_LEADS_S:
+                j = int(np.argmin(np.abs(lead_s - L)))
+                err_rows.append({"model": model, "log": name, "lead_s": float(lead_s[j]),
+                                 "distance_m": float(dist[:, j].mean()),
+                                 "heading_deg": float(np.degrees(hdg[:, j].mean())), "n_starts": int(starts.size)})
+        spread += spread_rows(name, lead_s, abs_ne, std, raw_std)
+        pooled.append((abs_ne, std, raw_std))
+        print(f"{name}: {starts.size} starts", flush=True)
+    spread += spread_rows("all", lead_s, *(np.concatenate(x) for x in zip(*pooled)))
+    return pd.DataFrame(err_rows), pd.DataFrame(spread)
+
+
+def main(argv=None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--data", type=Path, default=TRUTHSIM, help="folder of logs (default: truthsim-dev)")
+    ap.add_argument("--vessel", default="gunnerus")
+    ap.add_argument("--every-s", type=float, default=20.0, help="spacing of start times [s]")
+    ap.add_argument("--horizon-s", type=float, default=60.0)
+    ap.add_argument("--out", type=Path, required=True)
+    args = ap.parse_args(argv)
+    if not args.data.is_dir():
+        print(f"skipped: {args.data} not found (the shared data sets are not in the repository)", file=sys.stderr)
+        return 0
+    for flag, val in (("--every-s", args.every_s), ("--horizon-s", args.horizon_s)):
+        if not val > 0:
+            print(f"error: {flag}: must be > 0 s, got {val:g}", file=sys.stderr)
+            return 2
+    vessel = load_vessel(args.vessel)
+    files = log_files(args.data)
+    if len(files) < 2:
+        print(f"error: --data: leave one out needs at least 2 logs, found {len(files)} in {args.data}",
+              file=sys.stderr)
+        return 2
+    logs = {f.name: ingest(f, vessel, purpose="fit") for f in files}
+    errors, spread = run(logs, vessel, args.every_s, args.horizon_s)
+    args.out.mkdir(parents=True, exist_ok=True)
+    for fname, df in (("errors.csv", errors), ("spread.csv", spread)):
+        atomic_write(args.out / fname, lambda fh, df=df: fh.write(df.to_csv(index=False).encode()))
+    pooled_err = errors.groupby(["model", "lead_s"], sort=False)[["distance_m", "heading_deg"]].mean().reset_index()
+    md = (f"{len(logs)} logs of `{args.data.parent.name}/{args.data.name}`, leave one log out; starts every "
+          f"{args.every_s:g} s of station keeping, commands held, {args.horizon_s:g}-s forecasts.\n\n"
+          f"**Mean errors** (the logs' means averaged)\n\n"
+          + markdown_table(pooled_err.round(3)) + "\n\n**Spread of the hybrid** (north and east)\n\n"
+          + markdown_table(spread.round(3)) + "\n")
+    atomic_write(args.out / "station_keeping.md", lambda fh: fh.write(md.encode()))
+    print(md)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,79 @@
+"""benchmarks/station_keeping_coverage.py: leave-one-log-out forecasts during station keeping."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from hybridship.logs.ingest import ingest
+from hybridship.physics.model import DynamicModel
+from hybridship.predictors import HybridPredictor
+from hybridship.residual.calibration import CalibrationConfig
+from hybridship.residual.ensemble import EnsembleConfig
+from hybridship.sim.synthetic import physics_log
+
+from conftest import load_benchmark
+
+TINY = EnsembleConfig(n_members=2, max_epochs=5, patience=5, seed=1)
+
+
+@pytest.fixture(scope="module")
+def skc():
+    return load_benchmark("station_keeping_coverage")
+
+
+@pytest.fixture(scope="module")
+def logs():
+    m = DynamicModel("gunnerus")
+    return m.vessel, {f"log{s}": ingest(physics_log(m, seed=s, duration_s=2100.0, t_shutdown_s=1950.0,
+                                                    current=(0.2, 1.0)), m.vessel, purpose="fit")
+                      for s in (3, 4, 5)}
+
+
+def test_starts_leave_the_whole_forecast_in_station_keeping(skc, logs):
+    a = logs[1]["log3"]
+    st = skc.station_keeping_starts(a, 20.0, 60.0, 120.0)
+    assert st[0] == pytest.approx(120.0) and np.all(np.diff(st) == pytest.approx(20.0))
+    assert st[-1] + 60.0 < 1950.0 <= st[-1] + 60.0 + 20.0      # the last one that ends before the failure
+    assert skc.station_keeping_starts(a, 20.0, 1900.0, 120.0).size == 0
+
+
+def test_spread_rows_count_the_band_and_pool_north_and_east(skc):
+    lead = np.array([0.0, 15.0, 60.0])
+    abs_ne = np.array([[0.0, 0.5, 1.5], [0.0, 1.5, 3.0], [0.0, 2.5, 0.5], [0.0, 0.2, 2.5]])
+    std = np.ones_like(abs_ne)
+    rows = skc.spread_rows("x", lead, abs_ne, std, 10 * std)
+    assert [r["lead_s"] for r in rows] == [15.0, 60.0]
+    assert rows[0]["coverage_1sigma"] == 0.5 and rows[0]["coverage_2sigma"] == 0.75
+    assert rows[1]["coverage_1sigma"] == 0.25 and rows[1]["coverage_2sigma"] == 0.5
+    assert rows[1]["rms_error_m"] == pytest.approx(np.sqrt(np.mean(abs_ne[:, 2] ** 2)))
+    assert rows[1]["median_raw_std_m"] == 10.0
+
+
+def test_run_scores_every_log_with_a_model_fitted_on_the_others(skc, logs, monkeypatch):
+    vessel, arrays = logs
+    fitted_on = []
+    real_fit = HybridPredictor.fit
+
+    def fit(self, training_logs, **kw):
+        fitted_on.append({id(b) for b in training_logs})
+        return real_fit(self, training_logs, **kw)
+
+    monkeypatch.setattr(HybridPredictor, "fit", fit)
+    make = lambda: HybridPredictor(vessel, ensemble_config=TINY,  # noqa: E731
+                                   calibration_config=CalibrationConfig(horizon_s=30.0, max_starts=100))
+    errors, spread = skc.run(arrays, vessel, 100.0, 30.0, hybrid_factory=make)
+    assert [ids for ids in fitted_on] == [{id(b) for k, b in arrays.items() if k != name} for name in arrays]
+    assert set(errors.model) == {"hybrid", "hybrid_nets_off", "dynamic"}
+    assert list(spread.log.unique()) == ["log3", "log4", "log5", "all"]
+    assert spread[["coverage_1sigma", "coverage_2sigma"]].stack().between(0, 1).all()
+    assert (spread.coverage_2sigma >= spread.coverage_1sigma).all()
+    assert np.isfinite(errors[["distance_m", "heading_deg"]].to_numpy()).all()
+
+
+def test_bad_arguments_are_refused(skc, tmp_path, capsys):
+    assert skc.main(["--data", str(tmp_path / "nowhere"), "--out", str(tmp_path / "o")]) == 0
+    assert "skipped" in capsys.readouterr().err
+    (tmp_path / "d").mkdir()
+    assert skc.main(["--data", str(tmp_path / "d"), "--every-s", "0", "--out", str(tmp_path / "o")]) == 2
+    assert "--every-s" in capsys.readouterr().err
