@@ -19,9 +19,15 @@ Writes ``errors.csv`` (``model,log,lead_s,distance_m,heading_deg``), ``spread.cs
 (``log,lead_s,coverage_1sigma,coverage_2sigma,rms_error_m,median_std_m,median_raw_std_m``,
 with a ``log = all`` row pooling the starts of every log) and ``station_keeping.md``.
 
-Example::
+``--spread-exponent`` sets :attr:`~hybridship.residual.calibration.CalibrationConfig.spread_exponent`
+(default 1, the ``fit`` default; ``likelihood`` chooses it per lead time on the held-back
+part).
+
+Examples::
 
     python benchmarks/station_keeping_coverage.py --out docs/results/station-keeping-truthsim-dev
+    python benchmarks/station_keeping_coverage.py --spread-exponent likelihood \
+        --out docs/results/station-keeping-truthsim-dev-likelihood
 """
 
 from __future__ import annotations
@@ -38,7 +44,7 @@ from hybridship.fileio import atomic_write, markdown_table
 from hybridship.frames import wrap_pi
 from hybridship.logs.ingest import ingest
 from hybridship.predictors import DynamicPredictor, HybridPredictor
-from hybridship.residual.calibration import coverage_of
+from hybridship.residual.calibration import CalibrationConfig, coverage_of
 from hybridship.vessel import load_vessel
 
 TRUTHSIM = Path(__file__).resolve().parents[1].parent / "shared" / "data" / "truthsim-dev" / "logs"
@@ -120,6 +126,8 @@ def main(argv=None) -> int:
     ap.add_argument("--vessel", default="gunnerus")
     ap.add_argument("--every-s", type=float, default=20.0, help="spacing of start times [s]")
     ap.add_argument("--horizon-s", type=float, default=60.0)
+    ap.add_argument("--spread-exponent", default="1",
+                    help="exponent of the raw spread in the calibrated one: a number in [0, 1] or 'likelihood'")
     ap.add_argument("--out", type=Path, required=True)
     args = ap.parse_args(argv)
     if not args.data.is_dir():
@@ -129,20 +137,33 @@ def main(argv=None) -> int:
         if not val > 0:
             print(f"error: {flag}: must be > 0 s, got {val:g}", file=sys.stderr)
             return 2
+    try:
+        exponent = args.spread_exponent if args.spread_exponent == "likelihood" else float(args.spread_exponent)
+        calibration = CalibrationConfig(spread_exponent=exponent)
+    except ValueError:
+        print(f"error: --spread-exponent: must be a number in [0, 1] or 'likelihood', got {args.spread_exponent!r}",
+              file=sys.stderr)
+        return 2
     vessel = load_vessel(args.vessel)
-    files = log_files(args.data)
+    try:
+        files = log_files(args.data)
+    except ValueError as err:
+        print(f"error: --data: {err}", file=sys.stderr)
+        return 2
     if len(files) < 2:
         print(f"error: --data: leave one out needs at least 2 logs, found {len(files)} in {args.data}",
               file=sys.stderr)
         return 2
     logs = {f.name: ingest(f, vessel, purpose="fit") for f in files}
-    errors, spread = run(logs, vessel, args.every_s, args.horizon_s)
+    errors, spread = run(logs, vessel, args.every_s, args.horizon_s,
+                         hybrid_factory=lambda: HybridPredictor(vessel, calibration_config=calibration))
     args.out.mkdir(parents=True, exist_ok=True)
     for fname, df in (("errors.csv", errors), ("spread.csv", spread)):
         atomic_write(args.out / fname, lambda fh, df=df: fh.write(df.to_csv(index=False).encode()))
     pooled_err = errors.groupby(["model", "lead_s"], sort=False)[["distance_m", "heading_deg"]].mean().reset_index()
     md = (f"{len(logs)} logs of `{args.data.parent.name}/{args.data.name}`, leave one log out; starts every "
-          f"{args.every_s:g} s of station keeping, commands held, {args.horizon_s:g}-s forecasts.\n\n"
+          f"{args.every_s:g} s of station keeping, commands held, {args.horizon_s:g}-s forecasts; spread "
+          f"exponent {calibration.spread_exponent}.\n\n"
           f"**Mean errors** (the logs' means averaged)\n\n"
           + markdown_table(pooled_err.round(3)) + "\n\n**Spread of the hybrid** (north and east)\n\n"
           + markdown_table(spread.round(3)) + "\n")

@@ -77,3 +77,7 @@ def test_bad_arguments_are_refused(skc, tmp_path, capsys):
     (tmp_path / "d").mkdir()
     assert skc.main(["--data", str(tmp_path / "d"), "--every-s", "0", "--out", str(tmp_path / "o")]) == 2
     assert "--every-s" in capsys.readouterr().err
+    assert skc.main(["--data", str(tmp_path / "d"), "--spread-exponent", "2", "--out", str(tmp_path / "o")]) == 2
+    assert "--spread-exponent" in capsys.readouterr().err
+    assert skc.main(["--data", str(tmp_path / "d"), "--out", str(tmp_path / "o")]) == 2
+    assert "--data" in capsys.readouterr().err

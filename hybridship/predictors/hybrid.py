@@ -425,7 +425,7 @@ class HybridPredictor:
             hdg_s.append(fc.eta_std[:, 1:, 2])
             lead = fc.lead_s[1:] if lead is None or fc.lead_s.size - 1 < lead.size else lead
         Hm = lead.size
-        kw = dict(sigma=cal.sigma, coverage=cal.coverage, floor_quantile=cal.floor_quantile)
+        kw = cal.fit_kwargs
         n = sum(x.shape[0] for x in hdg_e)
         if n < 10:
             return None, n
@@ -801,7 +801,7 @@ def after_stop_scales(errors: list, cal: CalibrationConfig) -> dict:
     e = np.concatenate([x[0] for x in errors])
     sd = np.concatenate([x[1] for x in errors])
     lead = errors[0][2]
-    kw = dict(sigma=cal.sigma, coverage=cal.coverage, floor_quantile=cal.floor_quantile)
+    kw = cal.fit_kwargs
     pos = fit_spread_scale(np.concatenate([e[..., 0], e[..., 1]]), np.concatenate([sd[..., 0], sd[..., 1]]),
                            lead, **kw)
     return {"position": pos, "heading": fit_spread_scale(e[..., 2], sd[..., 2], lead, **kw)}

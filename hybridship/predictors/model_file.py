@@ -27,13 +27,13 @@ from ..residual.multistep import MultiStepConfig
 __all__ = ["MODEL_FORMAT_VERSION", "ModelFileError", "load_model", "model_metadata", "save_model"]
 
 #: Version of the model-file format written by :func:`save_model` (:meth:`HybridPredictor.save`).
-#: 7: the wind forecast (``wind_forecast``: the fitted gust decay, or held); 6: the
+#: 8: the spread calibration's exponent per lead time (a fourth row of ``cal_*``); 7: the wind forecast (``wind_forecast``: the fitted gust decay, or held); 6: the
 #: environment estimator's thrust-model error per thruster (its prior has one entry
 #: per thruster); 5: the spread calibration, the nets' training mode and the command regime; 4: the
 #: validated vessel description is embedded in the metadata (``vessel_description``), so a
 #: model loads without its vessel file; 3 added the environment estimator; 2 and earlier
 #: stored only the vessel's name.
-MODEL_FORMAT_VERSION = 7
+MODEL_FORMAT_VERSION = 8
 
 
 class ModelFileError(ValueError):
@@ -125,7 +125,7 @@ def save_model(predictor, path) -> Path:
         arrays.update(p.hull.arrays())
     for mode, c in p.calibration.items():
         for what, sc in c.items():
-            arrays[f"cal_{mode}_{what}"] = np.stack([sc.lead_s, sc.scale, sc.floor])
+            arrays[f"cal_{mode}_{what}"] = np.stack([sc.lead_s, sc.scale, sc.floor, sc.exponent])
     meta_d = model_metadata(p)
     meta_d["content_sha256"] = _content_hash(arrays)
     meta = json.dumps(meta_d, sort_keys=True)
@@ -303,9 +303,9 @@ def _read_calibration(data: dict, modes) -> dict:
         calibration[mode] = {}
         for what in ("position", "heading"):
             a = np.asarray(data[f"cal_{mode}_{what}"], dtype=float)
-            if a.ndim != 2 or a.shape[0] != 3:
-                raise ValueError(f"cal_{mode}_{what} has shape {a.shape}, expected (3, H)")
-            calibration[mode][what] = SpreadCalibration(a[0], a[1], a[2])
+            if a.ndim != 2 or a.shape[0] != 4:
+                raise ValueError(f"cal_{mode}_{what} has shape {a.shape}, expected (4, H)")
+            calibration[mode][what] = SpreadCalibration(a[0], a[1], a[2], a[3])
     return calibration
 
 

@@ -15,6 +15,14 @@ held-back spreads: where the guard has shrunk the correction the members agree a
 spread goes to zero while the physics still errs, and a scale on a zero spread is no
 spread at all.
 
+Optionally (``CalibrationConfig.spread_exponent``) the raw spread enters with an exponent
+``b(h)`` in [0, 1], ``s_cal = k(h) max(s, s_floor)^b(h)``, chosen per lead time from a grid
+by the Gaussian likelihood of the held-back errors (each ``b`` with its own conformal
+``k``): 1 (the default) trusts the members' disagreement as a measure of the error, 0 gives
+every start the same band. Where the disagreement varies far more than the errors do (as in
+station keeping in some weathers), a smaller exponent keeps the ranking of the starts and
+narrows the band where it was too wide.
+
 Why one scale per horizon and not a full set of conformal quantiles: the forecast reports
 a standard deviation (and Gaussian quantiles from it), the scale is one number per lead
 time that is easy to store and to check, and it keeps the ensemble's ranking of starts
@@ -72,6 +80,10 @@ class CalibrationConfig:
         included) and keep the scale. Off by default: the scale is then exact for the
         nets that are shipped (a refit model is a little better than the one calibrated,
         so its band would be a little wide), and training costs half.
+    spread_exponent : float in [0, 1] or "likelihood"
+        Exponent of the raw spread in the calibrated one (module docstring): 1 (default)
+        scales the members' spread; ``"likelihood"`` chooses it per lead time on the
+        held-back errors, from :data:`EXPONENT_GRID`.
     after_stop_min_failures : int
         With at least this many DP failures in the training logs (a thrust stop followed by
         ``horizon_s`` of drift after each of 20 start times), :meth:`fit` also calibrates
@@ -89,7 +101,23 @@ class CalibrationConfig:
     coverage: Annotated[Float, Field(gt=0, lt=1)] = GAUSS_COVERAGE[2.0]
     floor_quantile: Annotated[Float, Field(ge=0, lt=0.5)] = 0.1
     refit: bool = False
+    spread_exponent: float | str = 1.0
     after_stop_min_failures: Annotated[Int, Field(ge=0)] = 3
+
+    @property
+    def fit_kwargs(self) -> dict:
+        """The keywords of :func:`fit_spread_scale` that this configuration sets."""
+        return dict(sigma=self.sigma, coverage=self.coverage, floor_quantile=self.floor_quantile,
+                    exponent=self.spread_exponent)
+
+    @field_validator("spread_exponent", mode="before")
+    @classmethod
+    def _exponent(cls, v):
+        if v == "likelihood":
+            return v
+        if isinstance(v, (int, float)) and not isinstance(v, bool) and 0 <= v <= 1:
+            return float(v)
+        raise ValueError(f"must be a number in [0, 1] or 'likelihood', got {v!r}")
 
     @field_validator("commands")
     @classmethod
@@ -114,36 +142,50 @@ class SpreadCalibration:
         Multiplier of the (floored) raw spread.
     floor : ndarray, shape (H,)
         Lower bound of the raw spread, in its unit.
+    exponent : ndarray, shape (H,), optional
+        Exponent of the (floored) raw spread, in [0, 1]; default ones (the spread scaled).
+        With an exponent below 1 the scale carries the unit to the power ``1 - exponent``.
     """
 
     lead_s: _NonNegVector
     scale: _NonNegVector
     floor: _NonNegVector
+    exponent: _NonNegVector | None = None
 
     @model_validator(mode="after")
     def _aligned(self):
         n = self.lead_s.size
-        if n == 0 or self.scale.size != n or self.floor.size != n:
-            raise ValueError(f"lead_s: lead_s, scale and floor need one equal non-zero length, "
-                             f"got {self.lead_s.size}, {self.scale.size}, {self.floor.size}")
+        if self.exponent is None:
+            self.exponent = np.ones(n)
+        if n == 0 or self.scale.size != n or self.floor.size != n or self.exponent.size != n:
+            raise ValueError(f"lead_s: lead_s, scale, floor and exponent need one equal non-zero length, "
+                             f"got {self.lead_s.size}, {self.scale.size}, {self.floor.size}, {self.exponent.size}")
+        if np.any(self.exponent > 1):
+            raise ValueError("exponent: must be in [0, 1]")
         if np.any(np.diff(self.lead_s) <= 0):
             raise ValueError("lead_s: must increase")
         return self
 
     def apply(self, std: np.ndarray, lead_s: np.ndarray) -> np.ndarray:
-        """Calibrated spread ``scale(h) * max(std, floor(h))``.
+        """Calibrated spread ``scale(h) * max(std, floor(h)) ** exponent(h)``.
 
         ``std`` has the lead time on its last axis, matching ``lead_s`` [s] (held constant
         beyond the calibrated leads); lead 0 (the start) is returned unchanged.
         """
         k = np.interp(lead_s, self.lead_s, self.scale)
         f = np.interp(lead_s, self.lead_s, self.floor)
-        out = k * np.maximum(std, f)
+        b = np.interp(lead_s, self.lead_s, self.exponent)
+        out = k * np.maximum(std, f) ** b
         return np.where(np.asarray(lead_s) > 0, out, std)
 
 
+#: Exponents tried by ``fit_spread_scale(..., exponent="likelihood")``.
+EXPONENT_GRID = np.linspace(0.0, 1.0, 11)
+
+
 def fit_spread_scale(abs_err, std, lead_s, *, sigma: float = 2.0, coverage: float = GAUSS_COVERAGE[2.0],
-                     floor_quantile: float = 0.1, min_samples: int = 20) -> SpreadCalibration:
+                     floor_quantile: float = 0.1, min_samples: int = 20,
+                     exponent: float | str = 1.0) -> SpreadCalibration:
     """Fit a per-lead-time spread scale from held-back forecasts.
 
     Parameters
@@ -160,12 +202,16 @@ def fit_spread_scale(abs_err, std, lead_s, *, sigma: float = 2.0, coverage: floa
         The spread floor at each lead is this quantile of ``std`` there.
     min_samples : int
         Fewest finite samples per lead time.
+    exponent : float in [0, 1] or "likelihood"
+        Exponent ``b`` of the floored raw spread; ``"likelihood"``: per lead time the one of
+        :data:`EXPONENT_GRID` whose calibrated spread gives the held-back errors the largest
+        Gaussian likelihood.
 
     Returns
     -------
     SpreadCalibration
         ``scale[h]`` is the split-conformal quantile (finite-sample level
-        ``ceil((n + 1) coverage) / n``) of ``abs_err / max(std, floor)`` divided by ``sigma``.
+        ``ceil((n + 1) coverage) / n``) of ``abs_err / max(std, floor) ** b`` divided by ``sigma``.
     """
     e = np.asarray(abs_err, dtype=float)
     s = np.asarray(std, dtype=float)
@@ -177,21 +223,34 @@ def fit_spread_scale(abs_err, std, lead_s, *, sigma: float = 2.0, coverage: floa
         raise ValueError("fit_spread_scale: need sigma > 0, 0 < coverage < 1, 0 <= floor_quantile < 0.5")
     if np.any(e < 0):
         raise ValueError("fit_spread_scale: abs_err must be >= 0 (absolute errors)")
+    if exponent == "likelihood":
+        grid = EXPONENT_GRID
+    elif isinstance(exponent, (int, float)) and 0 <= exponent <= 1:
+        grid = np.array([float(exponent)])
+    else:
+        raise ValueError(f"fit_spread_scale: exponent must be in [0, 1] or 'likelihood', got {exponent!r}")
     H = lead.size
-    scale = np.empty(H)
-    floor = np.empty(H)
+    scale, floor, expo = np.empty(H), np.empty(H), np.empty(H)
     tiny = 1e-12
     for h in range(H):
         ok = np.isfinite(e[:, h]) & np.isfinite(s[:, h])
         n = int(ok.sum())
         if n < min_samples:
             raise ValueError(f"fit_spread_scale: {n} finite samples at lead {lead[h]:g} s; need {min_samples}")
-        sh = s[ok, h]
+        eh, sh = e[ok, h], s[ok, h]
         floor[h] = max(float(np.quantile(sh, floor_quantile)), tiny)
-        z = e[ok, h] / np.maximum(sh, floor[h])
         level = min(1.0, np.ceil((n + 1) * coverage) / n)
-        scale[h] = float(np.quantile(z, level, method="higher")) / sigma
-    return SpreadCalibration(lead, scale, floor)
+        best = None
+        for b in grid:
+            base = np.maximum(sh, floor[h]) ** b
+            k = float(np.quantile(eh / base, level, method="higher")) / sigma
+            # Gaussian negative log-likelihood of the held-back errors under this spread
+            sd = max(k, tiny) * base
+            nll = float(np.mean(np.log(sd) + 0.5 * (eh / sd) ** 2))
+            if best is None or nll < best[0]:
+                best = (nll, k, b)
+        _, scale[h], expo[h] = best
+    return SpreadCalibration(lead, scale, floor, expo)
 
 
 def coverage_of(abs_err, std, sigmas=(1.0, 2.0)) -> np.ndarray:
