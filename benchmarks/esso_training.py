@@ -51,10 +51,11 @@ def mirror_log(a, vessel):
     sign; north, surge and propeller speeds stay. That is the ship's motion seen in a
     mirror only when every actuator lies on the centre line and every fixed thruster
     pushes fore or aft (one off the line, or a tunnel thruster, would change sides or
-    direction), so other vessels are refused. The hull and a rudder with equal flow
-    straightening on both sides are mirror-symmetric; the Esso model's MMG rudder is not
-    quite (gamma_R 0.395 / 0.640, the single screw's swirl), so a mirrored run is that of
-    a symmetric ship, the assumption the variant tests.
+    direction); such vessels are refused. The rest is assumed, not checked: a hull
+    without coupling between surge and sway or yaw, wind coefficients symmetric about
+    the centre line, and rudders with equal flow straightening on both sides. The Esso
+    model's MMG rudder is not quite symmetric (gamma_R 0.395 / 0.640, the single screw's
+    swirl), so a mirrored run is that of a symmetric ship, the assumption the variant tests.
     """
     import dataclasses
 
@@ -198,17 +199,17 @@ def main(argv=None) -> int:
         # the same nets with the command-regime guard fitted afterwards (no retraining)
         models = {k: models[k] for k in models} | {f"{k}+cg": None for k in models
                                                    if k != "dynamic" and "+cg" not in k}
+    def training_logs(name):
+        logs = [r.arrays for r in fit_runs]
+        return logs + [mirror_log(a, v) for a in logs] if "+mirror" in name else logs
+
     per, per_z, timing = {}, {}, []
     for name, p in models.items():
         t0 = time.perf_counter()
         if p is None:
-            p = models[name] = with_command_guard(models[name[:-3]], [r.arrays for r in fit_runs],
-                                                  cfg.train_row_stride)
+            p = models[name] = with_command_guard(models[name[:-3]], training_logs(name), cfg.train_row_stride)
         elif name != "dynamic":
-            logs = [r.arrays for r in fit_runs]
-            if "+mirror" in name:
-                logs += [mirror_log(a, v) for a in logs]
-            p.fit(logs, row_stride=cfg.train_row_stride)
+            p.fit(training_logs(name), row_stride=cfg.train_row_stride)
         timing.append({"model": name, "train_s": time.perf_counter() - t0})
         print(f"{name}: trained in {timing[-1]['train_s']:.0f} s", flush=True)
         for mode in modes:

@@ -74,8 +74,33 @@ def test_likelihood_exponent_follows_how_much_the_spread_says_about_the_error():
     np.testing.assert_allclose(cal.apply(np.array([[0.0, 0.25, 4.0]]).T, np.array([1.0]))[:, 0], [2.0, 2.0, 4.0])
     with pytest.raises(ValueError, match="exponent"):
         fit_spread_scale(noise, raw, lead, exponent=2.0)
-    with pytest.raises(ValueError, match="exponent"):
+    with pytest.raises(ValueError, match="exponent: must be one value in"):
         SpreadCalibration([1.0], [2.0], [1.0], [1.5])
+    with pytest.raises(ValueError, match="exponent: must be one value in"):
+        SpreadCalibration([1.0, 2.0], [2.0, 2.0], [1.0, 1.0], [0.5, 1.0])
+    with pytest.raises(ValueError, match=r"lead_s: .*exponent 1"):
+        SpreadCalibration([1.0, 2.0], [2.0, 2.0], [1.0, 1.0], [0.5])
+    # a spread that is not finite stays as it is, whatever the exponent
+    assert np.isnan(flat.apply(np.array([[np.nan, np.nan]]), lead)).all()
+
+
+def test_exponent_one_is_the_plain_conformal_scale():
+    """The default reproduces ``k = quantile(|e| / max(s, floor)) / sigma`` and ``k max(s, floor)``
+    exactly (the option must leave the default's numbers bit for bit)."""
+    rng = np.random.default_rng(4)
+    s = rng.uniform(0.0, 2.0, (500, 3))
+    e = np.abs(rng.normal(0.0, 1.0 + s))
+    lead = np.array([1.0, 2.0, 4.0])
+    cal = fit_spread_scale(e, s, lead)
+    n = 500
+    level = min(1.0, np.ceil((n + 1) * 0.9544997361036416) / n)
+    for h in range(3):
+        f = max(float(np.quantile(s[:, h], 0.1)), 1e-12)
+        assert cal.floor[h] == f
+        assert cal.scale[h] == float(np.quantile(e[:, h] / np.maximum(s[:, h], f), level, method="higher")) / 2.0
+    x = np.array([0.0, 1.0, 1.5, 4.0, 9.0])
+    k, f = np.interp(x, lead, cal.scale), np.interp(x, lead, cal.floor)
+    np.testing.assert_array_equal(cal.apply(np.ones((2, 5)), x)[:, 1:], (k * np.maximum(1.0, f))[None, 1:].repeat(2, 0))
 
 
 @pytest.mark.parametrize("kw, field", [(dict(fraction=0.7), "fraction"), (dict(commands=("later",)), "commands"),

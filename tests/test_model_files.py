@@ -121,13 +121,44 @@ def test_missing_file_is_a_model_file_error(tmp_path):
 def test_incompatible_format_version_is_refused(saved, tmp_path):
     for version in (0, 99, "1", None):
         p = _rewrite(saved, tmp_path, meta_change=lambda m: m.update(format_version=version), name=f"v{version}.npz")
-        _refused(p, rf"model format version {version} is not supported \(this hybridship reads version \d+\)")
+        _refused(p, rf"model format version {version} is not supported \(this hybridship reads version \d+, and \d+ without the spread exponent\)")
 
 
 def test_an_older_format_says_retrain(saved, tmp_path):
-    for old in (2, 3, 5):
+    for old in (2, 3, 5, 6):
         p = _rewrite(saved, tmp_path, meta_change=lambda m: m.update(format_version=old), name=f"v{old}.npz")
         _refused(p, rf"written by an older hybridship \(format {old}\).*retrain with `hybridship train`")
+
+
+def test_a_version_7_file_reads_as_spread_exponent_1(saved, model, tmp_path):
+    """Version 7 had no spread exponent: its three-row calibration arrays read as exponent 1,
+    and the forecast is the same; a version-8 file with three rows is refused."""
+    import copy
+
+    from hybridship.residual.calibration import SpreadCalibration
+
+    hp = copy.deepcopy(saved[0])                 # with a calibration of scale 2 and floor 0.1
+    cal = SpreadCalibration([1.0, 60.0], [2.0, 2.0], [0.1, 0.1])
+    hp.calibration = {"held": {"position": cal, "heading": cal}}
+    saved = (hp, hp.save(tmp_path / "calibrated.npz"), None)
+    log = physics_log(model, seed=2, duration_s=300.0, t_shutdown_s=None, current=(0.2, 1.0))
+
+    def drop_exponent(arrays):
+        for k in [k for k in arrays if k.startswith("cal_")]:
+            arrays[k] = arrays[k][:3]
+
+    def as_v7(meta):
+        meta["format_version"] = 7
+        meta["calibration_config"].pop("spread_exponent")
+
+    p7 = _rewrite(saved, tmp_path, meta_change=as_v7, array_change=drop_exponent, restamp=True, name="v7.npz")
+    back = HybridPredictor.load(p7)
+    assert back.calibration and all(c.exponent.tolist() == [1.0] * c.lead_s.size
+                                    for d in back.calibration.values() for c in d.values())
+    starts = [150.0]
+    np.testing.assert_array_equal(back.forecast(log, starts, 20.0).eta_std, hp.forecast(log, starts, 20.0).eta_std)
+    p8 = _rewrite(saved, tmp_path, array_change=drop_exponent, restamp=True, name="v8_3rows.npz")
+    _refused(p8, r"expected \(4, H\)")
 
 
 def test_the_model_file_carries_its_vessel(saved, model, tmp_path):

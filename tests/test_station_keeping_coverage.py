@@ -66,14 +66,47 @@ def test_run_scores_every_log_with_a_model_fitted_on_the_others(skc, logs, monke
     assert [ids for ids in fitted_on] == [{id(b) for k, b in arrays.items() if k != name} for name in arrays]
     assert set(errors.model) == {"hybrid", "hybrid_nets_off", "dynamic"}
     assert list(spread.log.unique()) == ["log3", "log4", "log5", "all"]
-    assert spread[["coverage_1sigma", "coverage_2sigma"]].stack().between(0, 1).all()
-    assert (spread.coverage_2sigma >= spread.coverage_1sigma).all()
     assert np.isfinite(errors[["distance_m", "heading_deg"]].to_numpy()).all()
+    assert (spread[spread.log != "all"].spread_exponent == 1.0).all()       # the default
+    # the pooled row weighs each log by its starts
+    n = errors[errors.model == "hybrid"].drop_duplicates("log").set_index("log").n_starts
+    for lead, g in spread.groupby("lead_s"):
+        per_log = g[g.log != "all"].set_index("log")
+        pooled = (per_log.coverage_2sigma * n).sum() / n.sum()
+        assert g[g.log == "all"].coverage_2sigma.item() == pytest.approx(pooled)
 
 
-def test_bad_arguments_are_refused(skc, tmp_path, capsys):
+class _Stub:
+    """Forecasts the logged track plus 1 m north and 2 m east, spread 1 m (raw 10 m)."""
+
+    def forecast(self, a, starts, horizon_s, nets=True, calibrated=True):
+        from hybridship.predictors.result import ForecastResult
+
+        lead = np.arange(int(horizon_s / a.dt_s) + 1) * a.dt_s
+        rows = np.searchsorted(a.time_s, np.asarray(starts)[:, None] + lead[None, :])
+        eta = a.eta[rows] + np.array([1.0, 2.0, 0.0])
+        std = np.full(eta.shape, 1.0 if calibrated else 10.0)
+        return ForecastResult(np.asarray(starts), lead, eta, np.zeros_like(eta), std)
+
+
+def test_score_log_aligns_the_truth_and_pools_north_and_east(skc, logs):
+    a = logs[1]["log3"]
+    errors, abs_ne, std, raw, lead = skc.score_log(_Stub(), _Stub(), a, np.array([100.0, 200.0]), 30.0)
+    np.testing.assert_allclose(errors["hybrid"][0], np.sqrt(5.0))
+    np.testing.assert_allclose(errors["hybrid"][1], 0.0)
+    np.testing.assert_allclose(abs_ne[:2], 1.0)
+    np.testing.assert_allclose(abs_ne[2:], 2.0)
+    row = skc.spread_rows("log3", lead, abs_ne, std, raw)[1]
+    assert row["coverage_1sigma"] == 0.5 and row["coverage_2sigma"] == 1.0
+    assert row["median_std_m"] == 1.0 and row["median_raw_std_m"] == 10.0
+
+
+def test_bad_arguments_are_refused(skc, tmp_path, capsys, monkeypatch):
+    monkeypatch.setattr(skc, "TRUTHSIM", tmp_path / "nowhere")
     assert skc.main(["--data", str(tmp_path / "nowhere"), "--out", str(tmp_path / "o")]) == 0
     assert "skipped" in capsys.readouterr().err
+    assert skc.main(["--data", str(tmp_path / "misspelt"), "--out", str(tmp_path / "o")]) == 2
+    assert "--data" in capsys.readouterr().err
     (tmp_path / "d").mkdir()
     assert skc.main(["--data", str(tmp_path / "d"), "--every-s", "0", "--out", str(tmp_path / "o")]) == 2
     assert "--every-s" in capsys.readouterr().err
@@ -81,3 +114,5 @@ def test_bad_arguments_are_refused(skc, tmp_path, capsys):
     assert "--spread-exponent" in capsys.readouterr().err
     assert skc.main(["--data", str(tmp_path / "d"), "--out", str(tmp_path / "o")]) == 2
     assert "--data" in capsys.readouterr().err
+    assert skc.main(["--data", str(tmp_path / "d"), "--vessel", "no_such_ship", "--out", str(tmp_path / "o")]) == 2
+    assert "--vessel" in capsys.readouterr().err

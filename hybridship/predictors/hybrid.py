@@ -612,7 +612,8 @@ class HybridPredictor:
         horizon_s : float
             Longest calibrated lead time [s].
         cal : CalibrationConfig, optional
-            ``sigma``, ``coverage`` and ``floor_quantile`` of the fit (default: the model's).
+            Settings of the fit (`CalibrationConfig.fit_kwargs`: sigma, coverage, floor quantile and spread
+            exponent; default: the model's).
         """
         self._check_fitted()
         cal = self.calibration_config if cal is None else cal

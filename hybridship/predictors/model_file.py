@@ -34,6 +34,9 @@ __all__ = ["MODEL_FORMAT_VERSION", "ModelFileError", "load_model", "model_metada
 #: model loads without its vessel file; 3 added the environment estimator; 2 and earlier
 #: stored only the vessel's name.
 MODEL_FORMAT_VERSION = 8
+#: Versions :func:`load_model` reads: a version-7 file is a version-8 one without the spread
+#: exponent (three rows per ``cal_*`` array), read as exponent 1, which is what it was fitted with.
+READABLE_MODEL_FORMAT_VERSIONS = (7, 8)
 
 
 class ModelFileError(ValueError):
@@ -175,14 +178,16 @@ def _read_checked_metadata(data: dict, path: Path) -> dict:
     if meta.get("format") != "hybridship-model":
         raise ModelFileError(f"{path}: not a hybridship model file")
     version = meta.get("format_version")
-    if version != MODEL_FORMAT_VERSION:
+    if version not in READABLE_MODEL_FORMAT_VERSIONS or isinstance(version, bool):
+        oldest = READABLE_MODEL_FORMAT_VERSIONS[0]
         older = (f": written by an older hybridship (format {version}); retrain with `hybridship train` "
                  f"(or HybridPredictor.fit) to write a version-{MODEL_FORMAT_VERSION} file, which carries "
                  f"its vessel, its environment estimator and its spread calibration"
-                 if isinstance(version, int) and not isinstance(version, bool) and 1 <= version < MODEL_FORMAT_VERSION
+                 if isinstance(version, int) and not isinstance(version, bool) and 1 <= version < oldest
                  else "")
         raise ModelFileError(f"{path}: model format version {version} is not supported "
-                             f"(this hybridship reads version {MODEL_FORMAT_VERSION}){older}")
+                             f"(this hybridship reads version {MODEL_FORMAT_VERSION}, and {READABLE_MODEL_FORMAT_VERSIONS[0]} "
+                             f"without the spread exponent){older}")
     content = {k: v for k, v in data.items() if k != "metadata_json"}
     if meta.get("content_sha256") != _content_hash(content):
         raise ModelFileError(f"{path}: content checksum does not match the metadata: the file was "
@@ -219,6 +224,7 @@ def _build_predictor(cls, meta: dict, vessel, path: Path):
         if meta["wind_forecast"].get("option") == "fit":
             obj.wind_forecast_option = "fit"       # a refit chooses again; forecasts use the fitted one
         state = _scalar_state(meta)
+        state["format_version"] = meta["format_version"]
     except (KeyError, TypeError, ValueError, AttributeError) as err:
         if isinstance(err, ModelFileError) or "VesselFileError" in type(err).__name__:
             raise
@@ -255,7 +261,7 @@ def _restore_learned_state(obj, data: dict, state: dict, path: Path) -> None:
     of ``obj`` from the file's arrays (shapes and values checked)."""
     try:
         ens, guard, thrust_regime = _read_nets(data, len(obj.residual_config.features), state)
-        calibration = _read_calibration(data, state["calibrated_commands"])
+        calibration = _read_calibration(data, state["calibrated_commands"], rows=3 if state["format_version"] == 7 else 4)
         _check_finite(ens, guard, thrust_regime)
         hull = (HullCorrection.from_arrays(data, obj.model.vessel.particulars.L_pp_m, obj.hull_ridge)
                 if state["has_hull"] else None)
@@ -296,16 +302,17 @@ def _check_finite(ens, guard, thrust_regime) -> None:
             raise ValueError(f"{name} contains NaN or inf")
 
 
-def _read_calibration(data: dict, modes) -> dict:
-    """Command mode -> {"position", "heading"} :class:`SpreadCalibration` from the arrays."""
+def _read_calibration(data: dict, modes, rows: int = 4) -> dict:
+    """Command mode -> {"position", "heading"} :class:`SpreadCalibration` from the arrays
+    (``rows`` 4: lead, scale, floor, exponent; 3: without the exponent, a version-7 file)."""
     calibration = {}
     for mode in modes:
         calibration[mode] = {}
         for what in ("position", "heading"):
             a = np.asarray(data[f"cal_{mode}_{what}"], dtype=float)
-            if a.ndim != 2 or a.shape[0] != 4:
-                raise ValueError(f"cal_{mode}_{what} has shape {a.shape}, expected (4, H)")
-            calibration[mode][what] = SpreadCalibration(a[0], a[1], a[2], a[3])
+            if a.ndim != 2 or a.shape[0] != rows:
+                raise ValueError(f"cal_{mode}_{what} has shape {a.shape}, expected ({rows}, H)")
+            calibration[mode][what] = SpreadCalibration(*a)
     return calibration
 
 

@@ -16,12 +16,15 @@ spread goes to zero while the physics still errs, and a scale on a zero spread i
 spread at all.
 
 Optionally (``CalibrationConfig.spread_exponent``) the raw spread enters with an exponent
-``b(h)`` in [0, 1], ``s_cal = k(h) max(s, s_floor)^b(h)``, chosen per lead time from a grid
-by the Gaussian likelihood of the held-back errors (each ``b`` with its own conformal
-``k``): 1 (the default) trusts the members' disagreement as a measure of the error, 0 gives
-every start the same band. Where the disagreement varies far more than the errors do (as in
-station keeping in some weathers), a smaller exponent keeps the ranking of the starts and
-narrows the band where it was too wide.
+``b`` in [0, 1], ``s_cal = k(h) max(s, s_floor)^b``: 1 (the default) trusts the members'
+disagreement as a measure of the error, 0 gives every start the same band, and values in
+between keep the ranking of the starts while narrowing the band where the members
+disagree most. ``"likelihood"`` chooses ``b`` from a grid by the Gaussian likelihood of the
+held-back errors over all lead times (one ``b`` per calibration, so that ``k``, in the
+spread's unit to the power ``1 - b``, interpolates between leads), each ``b`` with its own
+conformal ``k``. The same held-back errors choose ``b`` and fit ``k``, so the finite-sample
+level of the conformal quantile holds only approximately then (one of 11 candidates is
+picked).
 
 Why one scale per horizon and not a full set of conformal quantiles: the forecast reports
 a standard deviation (and Gaussian quantiles from it), the scale is one number per lead
@@ -35,6 +38,7 @@ forecaster (the hybrid on manoeuvres, the drift forecasts) can use them.
 
 from __future__ import annotations
 
+import numbers
 from typing import Annotated, Literal
 
 import numpy as np
@@ -82,8 +86,9 @@ class CalibrationConfig:
         so its band would be a little wide), and training costs half.
     spread_exponent : float in [0, 1] or "likelihood"
         Exponent of the raw spread in the calibrated one (module docstring): 1 (default)
-        scales the members' spread; ``"likelihood"`` chooses it per lead time on the
-        held-back errors, from :data:`EXPONENT_GRID`.
+        scales the members' spread; ``"likelihood"`` chooses it on the held-back errors,
+        from :data:`EXPONENT_GRID`. It applies to the station-keeping (or manoeuvre)
+        calibration and to the calibration after a failure alike.
     after_stop_min_failures : int
         With at least this many DP failures in the training logs (a thrust stop followed by
         ``horizon_s`` of drift after each of 20 start times), :meth:`fit` also calibrates
@@ -113,9 +118,9 @@ class CalibrationConfig:
     @field_validator("spread_exponent", mode="before")
     @classmethod
     def _exponent(cls, v):
-        if v == "likelihood":
+        if isinstance(v, str) and v == "likelihood":
             return v
-        if isinstance(v, (int, float)) and not isinstance(v, bool) and 0 <= v <= 1:
+        if isinstance(v, numbers.Real) and not isinstance(v, bool) and 0 <= v <= 1:
             return float(v)
         raise ValueError(f"must be a number in [0, 1] or 'likelihood', got {v!r}")
 
@@ -143,8 +148,9 @@ class SpreadCalibration:
     floor : ndarray, shape (H,)
         Lower bound of the raw spread, in its unit.
     exponent : ndarray, shape (H,), optional
-        Exponent of the (floored) raw spread, in [0, 1]; default ones (the spread scaled).
-        With an exponent below 1 the scale carries the unit to the power ``1 - exponent``.
+        Exponent of the (floored) raw spread, in [0, 1], the same at every lead; default ones
+        (the spread scaled). With an exponent below 1 the scale carries the unit to the power
+        ``1 - exponent``.
     """
 
     lead_s: _NonNegVector
@@ -157,11 +163,12 @@ class SpreadCalibration:
         n = self.lead_s.size
         if self.exponent is None:
             self.exponent = np.ones(n)
-        if n == 0 or self.scale.size != n or self.floor.size != n or self.exponent.size != n:
-            raise ValueError(f"lead_s: lead_s, scale, floor and exponent need one equal non-zero length, "
-                             f"got {self.lead_s.size}, {self.scale.size}, {self.floor.size}, {self.exponent.size}")
-        if np.any(self.exponent > 1):
-            raise ValueError("exponent: must be in [0, 1]")
+        sizes = {"scale": self.scale.size, "floor": self.floor.size, "exponent": self.exponent.size}
+        if n == 0 or any(v != n for v in sizes.values()):
+            bad = ", ".join(f"{k} {v}" for k, v in sizes.items() if v != n)
+            raise ValueError(f"lead_s: scale, floor and exponent need the non-zero length of lead_s ({n}), got {bad}")
+        if np.any(self.exponent > 1) or np.ptp(self.exponent) > 0:
+            raise ValueError(f"exponent: must be one value in [0, 1] at every lead, got {self.exponent.tolist()}")
         if np.any(np.diff(self.lead_s) <= 0):
             raise ValueError("lead_s: must increase")
         return self
@@ -170,13 +177,13 @@ class SpreadCalibration:
         """Calibrated spread ``scale(h) * max(std, floor(h)) ** exponent(h)``.
 
         ``std`` has the lead time on its last axis, matching ``lead_s`` [s] (held constant
-        beyond the calibrated leads); lead 0 (the start) is returned unchanged.
+        beyond the calibrated leads); lead 0 (the start) and a spread that is not finite are
+        returned unchanged.
         """
         k = np.interp(lead_s, self.lead_s, self.scale)
         f = np.interp(lead_s, self.lead_s, self.floor)
-        b = np.interp(lead_s, self.lead_s, self.exponent)
-        out = k * np.maximum(std, f) ** b
-        return np.where(np.asarray(lead_s) > 0, out, std)
+        out = k * np.maximum(std, f) ** self.exponent[0]
+        return np.where((np.asarray(lead_s) > 0) & np.isfinite(std), out, std)
 
 
 #: Exponents tried by ``fit_spread_scale(..., exponent="likelihood")``.
@@ -203,9 +210,9 @@ def fit_spread_scale(abs_err, std, lead_s, *, sigma: float = 2.0, coverage: floa
     min_samples : int
         Fewest finite samples per lead time.
     exponent : float in [0, 1] or "likelihood"
-        Exponent ``b`` of the floored raw spread; ``"likelihood"``: per lead time the one of
-        :data:`EXPONENT_GRID` whose calibrated spread gives the held-back errors the largest
-        Gaussian likelihood.
+        Exponent ``b`` of the floored raw spread; ``"likelihood"``: the one of
+        :data:`EXPONENT_GRID` whose calibrated spreads give the held-back errors the largest
+        Gaussian likelihood, summed over the lead times.
 
     Returns
     -------
@@ -223,34 +230,37 @@ def fit_spread_scale(abs_err, std, lead_s, *, sigma: float = 2.0, coverage: floa
         raise ValueError("fit_spread_scale: need sigma > 0, 0 < coverage < 1, 0 <= floor_quantile < 0.5")
     if np.any(e < 0):
         raise ValueError("fit_spread_scale: abs_err must be >= 0 (absolute errors)")
-    if exponent == "likelihood":
+    if isinstance(exponent, str) and exponent == "likelihood":
         grid = EXPONENT_GRID
-    elif isinstance(exponent, (int, float)) and 0 <= exponent <= 1:
+    elif isinstance(exponent, numbers.Real) and not isinstance(exponent, bool) and 0 <= exponent <= 1:
         grid = np.array([float(exponent)])
     else:
-        raise ValueError(f"fit_spread_scale: exponent must be in [0, 1] or 'likelihood', got {exponent!r}")
+        raise ValueError(f"fit_spread_scale: exponent must be a number in [0, 1] or 'likelihood', got {exponent!r}")
     H = lead.size
-    scale, floor, expo = np.empty(H), np.empty(H), np.empty(H)
+    floor = np.empty(H)
     tiny = 1e-12
+    samples = []
     for h in range(H):
         ok = np.isfinite(e[:, h]) & np.isfinite(s[:, h])
         n = int(ok.sum())
         if n < min_samples:
             raise ValueError(f"fit_spread_scale: {n} finite samples at lead {lead[h]:g} s; need {min_samples}")
-        eh, sh = e[ok, h], s[ok, h]
-        floor[h] = max(float(np.quantile(sh, floor_quantile)), tiny)
-        level = min(1.0, np.ceil((n + 1) * coverage) / n)
-        best = None
-        for b in grid:
-            base = np.maximum(sh, floor[h]) ** b
-            k = float(np.quantile(eh / base, level, method="higher")) / sigma
+        floor[h] = max(float(np.quantile(s[ok, h], floor_quantile)), tiny)
+        samples.append((e[ok, h], np.maximum(s[ok, h], floor[h]), min(1.0, np.ceil((n + 1) * coverage) / n)))
+    best = None
+    for b in grid:
+        scale = np.empty(H)
+        nll = 0.0
+        for h, (eh, sh, level) in enumerate(samples):
+            base = sh ** b
+            scale[h] = float(np.quantile(eh / base, level, method="higher")) / sigma
             # Gaussian negative log-likelihood of the held-back errors under this spread
-            sd = max(k, tiny) * base
-            nll = float(np.mean(np.log(sd) + 0.5 * (eh / sd) ** 2))
-            if best is None or nll < best[0]:
-                best = (nll, k, b)
-        _, scale[h], expo[h] = best
-    return SpreadCalibration(lead, scale, floor, expo)
+            sd = max(scale[h], tiny) * base
+            nll += float(np.mean(np.log(sd) + 0.5 * (eh / sd) ** 2))
+        if best is None or nll < best[0]:
+            best = (nll, scale, b)
+    _, scale, b = best
+    return SpreadCalibration(lead, scale, floor, np.full(H, b))
 
 
 def coverage_of(abs_err, std, sigmas=(1.0, 2.0)) -> np.ndarray:
