@@ -10,7 +10,8 @@ estimator's 30 min, so that every start has all of it) to the last start whose f
 ends before the failure. Reported per log and lead time:
 
 * the mean distance [m] and heading [deg] errors of the hybrid, of the same model with the
-  nets off (physics + environment estimator) and of the physics alone;
+  nets off (physics + environment estimator), of the physics alone and of dead reckoning,
+  at 15, 30, 45 and 60 s, and how many log x lead cells the hybrid is worse than each;
 * the share of north and east errors within 1 and 2 calibrated standard deviations (a
   calibrated Gaussian band covers 0.683 and 0.954), the errors' RMS, and the median
   calibrated and raw (ensemble) spreads [m].
@@ -47,12 +48,18 @@ from hybridship.evaluation.drift import log_files
 from hybridship.fileio import atomic_write, markdown_table
 from hybridship.frames import wrap_pi
 from hybridship.logs.ingest import ingest
-from hybridship.predictors import DynamicPredictor, HybridPredictor
+from hybridship.predictors import DeadReckoning, DynamicPredictor, HybridPredictor
 from hybridship.residual.calibration import CalibrationConfig, coverage_of
 from hybridship.vessel import load_vessel
 
 TRUTHSIM = Path(__file__).resolve().parents[1].parent / "shared" / "data" / "truthsim-dev" / "logs"
-REPORT_LEADS_S = (15.0, 60.0)
+REPORT_LEADS_S = (15.0, 30.0, 45.0, 60.0)     # errors
+SPREAD_LEADS_S = (15.0, 60.0)                 # coverage and spreads
+
+
+def _lead_columns(lead_s, leads) -> list[int]:
+    """Indices of ``lead_s`` [s] nearest to each of ``leads`` within the horizon."""
+    return [int(np.argmin(np.abs(lead_s - L))) for L in leads if L <= lead_s[-1] + 1e-9]
 
 
 class NoStationKeeping(ValueError):
@@ -70,13 +77,15 @@ def station_keeping_starts(a, every_s: float, horizon_s: float, history_s: float
     return t[t + horizon_s < t_end]
 
 
-def score_log(hybrid, physics, a, starts, horizon_s: float):
-    """Errors and spreads of one log's forecasts: ``(errors, abs_err_ne, std, raw_std)`` with
-    ``errors`` a dict model -> (distance (S, H+1) [m], heading (S, H+1) [rad]) and the north
-    and east absolute errors and spreads stacked on the first axis, (2 S, H+1) [m]."""
+def score_log(hybrid, references: dict, a, starts, horizon_s: float):
+    """Errors and spreads of one log's forecasts: ``(errors, abs_err_ne, std, raw_std, lead_s)``
+    with ``errors`` a dict model -> (distance (S, H+1) [m], heading (S, H+1) [rad]) for the
+    hybrid, the hybrid with its nets off and each of ``references`` (name -> predictor), the
+    hybrid's north and east absolute errors and spreads stacked on the first axis, (2 S,
+    H+1) [m], and the lead times (H+1,) [s]."""
     forecasts = {"hybrid": hybrid.forecast(a, starts, horizon_s=horizon_s),
-                 "hybrid_nets_off": hybrid.forecast(a, starts, horizon_s=horizon_s, nets=False),
-                 "dynamic": physics.forecast(a, starts, horizon_s=horizon_s)}
+                 "hybrid_nets_off": hybrid.forecast(a, starts, horizon_s=horizon_s, nets=False)}
+    forecasts |= {name: p.forecast(a, starts, horizon_s=horizon_s) for name, p in references.items()}
     raw = hybrid.forecast(a, starts, horizon_s=horizon_s, calibrated=False).eta_std
     f = forecasts["hybrid"]
     rows = np.searchsorted(a.time_s, f.start_time_s[:, None] + f.lead_s[None, :])
@@ -92,12 +101,11 @@ def score_log(hybrid, physics, a, starts, horizon_s: float):
     return errors, abs_ne, std, raw_std, f.lead_s
 
 
-def spread_rows(log: str, lead_s, abs_ne, std, raw_std, leads=REPORT_LEADS_S) -> list[dict]:
+def spread_rows(log: str, lead_s, abs_ne, std, raw_std, leads=SPREAD_LEADS_S) -> list[dict]:
     """Coverage, RMS error and median spreads at ``leads`` [s] for one log (or pooled)."""
     cov = coverage_of(abs_ne, std)
     out = []
-    for L in leads:
-        j = int(np.argmin(np.abs(lead_s - L)))
+    for j in _lead_columns(lead_s, leads):
         out.append({"log": log, "lead_s": float(lead_s[j]), "coverage_1sigma": cov[j, 0],
                     "coverage_2sigma": cov[j, 1], "rms_error_m": float(np.sqrt(np.mean(abs_ne[:, j] ** 2))),
                     "median_std_m": float(np.median(std[:, j])), "median_raw_std_m": float(np.median(raw_std[:, j]))})
@@ -107,7 +115,7 @@ def spread_rows(log: str, lead_s, abs_ne, std, raw_std, leads=REPORT_LEADS_S) ->
 def run(logs: dict, vessel, every_s: float, horizon_s: float, hybrid_factory=None):
     """Leave-one-log-out scores of ``logs`` (name -> LogArrays): ``(errors, spread)`` DataFrames."""
     hybrid_factory = hybrid_factory or (lambda: HybridPredictor(vessel))
-    physics = DynamicPredictor(vessel)
+    references = {"dynamic": DynamicPredictor(vessel), "dead_reckoning": DeadReckoning(vessel)}
     err_rows, spread, pooled = [], [], []
     for name, a in logs.items():
         hybrid = hybrid_factory()
@@ -116,19 +124,26 @@ def run(logs: dict, vessel, every_s: float, horizon_s: float, hybrid_factory=Non
         if starts.size == 0:
             raise NoStationKeeping(f"{name}: no station keeping of {horizon_s:g} s after the hybrid's "
                                    f"{hybrid.history_s:g} s of history")
-        errors, abs_ne, std, raw_std, lead_s = score_log(hybrid, physics, a, starts, horizon_s)
+        errors, abs_ne, std, raw_std, lead_s = score_log(hybrid, references, a, starts, horizon_s)
         for model, (dist, hdg) in errors.items():
-            for L in REPORT_LEADS_S:
-                j = int(np.argmin(np.abs(lead_s - L)))
+            for j in _lead_columns(lead_s, REPORT_LEADS_S):
                 err_rows.append({"model": model, "log": name, "lead_s": float(lead_s[j]),
                                  "distance_m": float(dist[:, j].mean()),
                                  "heading_deg": float(np.degrees(hdg[:, j].mean())), "n_starts": int(starts.size)})
-        exponent = hybrid.calibration["held"]["position"].exponent[0] if "held" in hybrid.calibration else np.nan
-        spread += [r | {"spread_exponent": float(exponent)} for r in spread_rows(name, lead_s, abs_ne, std, raw_std)]
+        exponent = hybrid.calibration["held"]["position"].exponent if "held" in hybrid.calibration else np.nan
+        spread += [r | {"spread_exponent": exponent} for r in spread_rows(name, lead_s, abs_ne, std, raw_std)]
         pooled.append((abs_ne, std, raw_std))
         print(f"{name}: {starts.size} starts", flush=True)
     spread += spread_rows("all", lead_s, *(np.concatenate(x) for x in zip(*pooled)))
     return pd.DataFrame(err_rows), pd.DataFrame(spread)
+
+
+def worse_cells(errors: pd.DataFrame) -> dict:
+    """Reference model -> the number of log x lead x state (distance, heading) cells of
+    ``errors`` where the hybrid's mean error is larger than that model's."""
+    e = errors.set_index(["model", "log", "lead_s"])[["distance_m", "heading_deg"]]
+    h = e.loc["hybrid"]
+    return {m: int((h > e.loc[m]).to_numpy().sum()) for m in dict.fromkeys(errors.model) if m != "hybrid"}
 
 
 def main(argv=None) -> int:
@@ -184,11 +199,15 @@ def main(argv=None) -> int:
     for fname, df in (("errors.csv", errors), ("spread.csv", spread)):
         atomic_write(args.out / fname, lambda fh, df=df: fh.write(df.to_csv(index=False).encode()))
     pooled_err = errors.groupby(["model", "lead_s"], sort=False)[["distance_m", "heading_deg"]].mean().reset_index()
+    worse = worse_cells(errors)
     md = (f"{len(logs)} logs of `{args.data.parent.name}/{args.data.name}`, leave one log out; starts every "
           f"{args.every_s:g} s of station keeping, commands held, {args.horizon_s:g}-s forecasts; spread "
           f"exponent {calibration.spread_exponent}.\n\n"
           f"**Mean errors** (the logs' means averaged)\n\n"
-          + markdown_table(pooled_err.round(3)) + "\n\n**Spread of the hybrid** (north and east; the `all` rows "
+          + markdown_table(pooled_err.round(3)) + "\n\nCells (log x lead x distance/heading, of "
+          f"{2 * int((errors.model == 'hybrid').sum())}) where the hybrid's mean error is larger than: "
+          + ", ".join(f"{m} {n}" for m, n in worse.items()) + "."
+          + "\n\n**Spread of the hybrid** (north and east; the `all` rows "
           "pool the starts of every log)\n\n"
           + markdown_table(spread.round(3)) + "\n")
     atomic_write(args.out / "station_keeping.md", lambda fh: fh.write(md.encode()))

@@ -64,7 +64,7 @@ def test_run_scores_every_log_with_a_model_fitted_on_the_others(skc, logs, monke
                                    calibration_config=CalibrationConfig(horizon_s=30.0, max_starts=100))
     errors, spread = skc.run(arrays, vessel, 100.0, 30.0, hybrid_factory=make)
     assert [ids for ids in fitted_on] == [{id(b) for k, b in arrays.items() if k != name} for name in arrays]
-    assert set(errors.model) == {"hybrid", "hybrid_nets_off", "dynamic"}
+    assert set(errors.model) == {"hybrid", "hybrid_nets_off", "dynamic", "dead_reckoning"}
     assert list(spread.log.unique()) == ["log3", "log4", "log5", "all"]
     assert np.isfinite(errors[["distance_m", "heading_deg"]].to_numpy()).all()
     assert (spread[spread.log != "all"].spread_exponent == 1.0).all()       # the default
@@ -91,14 +91,24 @@ class _Stub:
 
 def test_score_log_aligns_the_truth_and_pools_north_and_east(skc, logs):
     a = logs[1]["log3"]
-    errors, abs_ne, std, raw, lead = skc.score_log(_Stub(), _Stub(), a, np.array([100.0, 200.0]), 30.0)
+    errors, abs_ne, std, raw, lead = skc.score_log(_Stub(), {"dynamic": _Stub()}, a, np.array([100.0, 200.0]), 30.0)
+    assert set(errors) == {"hybrid", "hybrid_nets_off", "dynamic"}
     np.testing.assert_allclose(errors["hybrid"][0], np.sqrt(5.0))
     np.testing.assert_allclose(errors["hybrid"][1], 0.0)
     np.testing.assert_allclose(abs_ne[:2], 1.0)
     np.testing.assert_allclose(abs_ne[2:], 2.0)
-    row = skc.spread_rows("log3", lead, abs_ne, std, raw)[1]
+    (row,) = skc.spread_rows("log3", lead, abs_ne, std, raw)      # 60 s is beyond this 30-s horizon
     assert row["coverage_1sigma"] == 0.5 and row["coverage_2sigma"] == 1.0
     assert row["median_std_m"] == 1.0 and row["median_raw_std_m"] == 10.0
+
+
+def test_worse_cells_count_each_state_where_the_hybrid_errs_more(skc):
+    import pandas as pd
+
+    errors = pd.DataFrame({"model": ["hybrid", "hybrid", "dynamic", "dynamic", "dead_reckoning", "dead_reckoning"],
+                           "log": ["a", "b"] * 3, "lead_s": [60.0] * 6,
+                           "distance_m": [1.0, 2.0, 0.5, 3.0, 2.0, 2.0], "heading_deg": [1.0, 1.0, 2.0, 0.5, 1.0, 3.0]})
+    assert skc.worse_cells(errors) == {"dynamic": 2, "dead_reckoning": 0}
 
 
 def test_bad_arguments_are_refused(skc, tmp_path, capsys, monkeypatch):

@@ -27,7 +27,8 @@ from ..residual.multistep import MultiStepConfig
 __all__ = ["MODEL_FORMAT_VERSION", "ModelFileError", "load_model", "model_metadata", "save_model"]
 
 #: Version of the model-file format written by :func:`save_model` (:meth:`HybridPredictor.save`).
-#: 8: the spread calibration's exponent per lead time (a fourth row of ``cal_*``); 7: the wind forecast (``wind_forecast``: the fitted gust decay, or held); 6: the
+#: 8: the spread calibration's exponent (a fourth row of ``cal_*``, the value at every lead); 7: the
+#: wind forecast (``wind_forecast``: the fitted gust decay, or held); 6: the
 #: environment estimator's thrust-model error per thruster (its prior has one entry
 #: per thruster); 5: the spread calibration, the nets' training mode and the command regime; 4: the
 #: validated vessel description is embedded in the metadata (``vessel_description``), so a
@@ -128,7 +129,8 @@ def save_model(predictor, path) -> Path:
         arrays.update(p.hull.arrays())
     for mode, c in p.calibration.items():
         for what, sc in c.items():
-            arrays[f"cal_{mode}_{what}"] = np.stack([sc.lead_s, sc.scale, sc.floor, sc.exponent])
+            arrays[f"cal_{mode}_{what}"] = np.stack([sc.lead_s, sc.scale, sc.floor,
+                                                     np.full(sc.lead_s.size, sc.exponent)])
     meta_d = model_metadata(p)
     meta_d["content_sha256"] = _content_hash(arrays)
     meta = json.dumps(meta_d, sort_keys=True)
@@ -310,9 +312,14 @@ def _read_calibration(data: dict, modes, rows: int = 4) -> dict:
         calibration[mode] = {}
         for what in ("position", "heading"):
             a = np.asarray(data[f"cal_{mode}_{what}"], dtype=float)
-            if a.ndim != 2 or a.shape[0] != rows:
+            if a.ndim != 2 or a.shape[0] != rows or a.shape[1] == 0:
                 raise ValueError(f"cal_{mode}_{what} has shape {a.shape}, expected ({rows}, H)")
-            calibration[mode][what] = SpreadCalibration(*a)
+            exponent = 1.0
+            if rows == 4:
+                if np.ptp(a[3]) > 0:
+                    raise ValueError(f"cal_{mode}_{what}: the exponent row must hold one value")
+                exponent = float(a[3, 0])
+            calibration[mode][what] = SpreadCalibration(a[0], a[1], a[2], exponent)
     return calibration
 
 

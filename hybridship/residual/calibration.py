@@ -118,11 +118,7 @@ class CalibrationConfig:
     @field_validator("spread_exponent", mode="before")
     @classmethod
     def _exponent(cls, v):
-        if isinstance(v, str) and v == "likelihood":
-            return v
-        if isinstance(v, numbers.Real) and not isinstance(v, bool) and 0 <= v <= 1:
-            return float(v)
-        raise ValueError(f"must be a number in [0, 1] or 'likelihood', got {v!r}")
+        return _checked_exponent(v)
 
     @field_validator("commands")
     @classmethod
@@ -147,34 +143,29 @@ class SpreadCalibration:
         Multiplier of the (floored) raw spread.
     floor : ndarray, shape (H,)
         Lower bound of the raw spread, in its unit.
-    exponent : ndarray, shape (H,), optional
-        Exponent of the (floored) raw spread, in [0, 1], the same at every lead; default ones
-        (the spread scaled). With an exponent below 1 the scale carries the unit to the power
+    exponent : float
+        Exponent of the (floored) raw spread, in [0, 1], one for every lead; default 1 (the
+        spread scaled). Below 1 the scale carries the spread's unit to the power
         ``1 - exponent``.
     """
 
     lead_s: _NonNegVector
     scale: _NonNegVector
     floor: _NonNegVector
-    exponent: _NonNegVector | None = None
+    exponent: Annotated[Float, Field(ge=0, le=1)] = 1.0
 
     @model_validator(mode="after")
     def _aligned(self):
         n = self.lead_s.size
-        if self.exponent is None:
-            self.exponent = np.ones(n)
-        sizes = {"scale": self.scale.size, "floor": self.floor.size, "exponent": self.exponent.size}
-        if n == 0 or any(v != n for v in sizes.values()):
-            bad = ", ".join(f"{k} {v}" for k, v in sizes.items() if v != n)
-            raise ValueError(f"lead_s: scale, floor and exponent need the non-zero length of lead_s ({n}), got {bad}")
-        if np.any(self.exponent > 1) or np.ptp(self.exponent) > 0:
-            raise ValueError(f"exponent: must be one value in [0, 1] at every lead, got {self.exponent.tolist()}")
+        if n == 0 or self.scale.size != n or self.floor.size != n:
+            raise ValueError(f"lead_s: lead_s, scale and floor need one equal non-zero length, "
+                             f"got {self.lead_s.size}, {self.scale.size}, {self.floor.size}")
         if np.any(np.diff(self.lead_s) <= 0):
             raise ValueError("lead_s: must increase")
         return self
 
     def apply(self, std: np.ndarray, lead_s: np.ndarray) -> np.ndarray:
-        """Calibrated spread ``scale(h) * max(std, floor(h)) ** exponent(h)``.
+        """Calibrated spread ``scale(h) * max(std, floor(h)) ** exponent``.
 
         ``std`` has the lead time on its last axis, matching ``lead_s`` [s] (held constant
         beyond the calibrated leads); lead 0 (the start) and a spread that is not finite are
@@ -182,12 +173,21 @@ class SpreadCalibration:
         """
         k = np.interp(lead_s, self.lead_s, self.scale)
         f = np.interp(lead_s, self.lead_s, self.floor)
-        out = k * np.maximum(std, f) ** self.exponent[0]
+        out = k * np.maximum(std, f) ** self.exponent
         return np.where((np.asarray(lead_s) > 0) & np.isfinite(std), out, std)
 
 
 #: Exponents tried by ``fit_spread_scale(..., exponent="likelihood")``.
 EXPONENT_GRID = np.linspace(0.0, 1.0, 11)
+
+
+def _checked_exponent(v):
+    """``v`` as a float in [0, 1], or ``"likelihood"``; ValueError saying what was expected."""
+    if isinstance(v, str) and v == "likelihood":
+        return v
+    if isinstance(v, numbers.Real) and not isinstance(v, bool) and 0 <= v <= 1:
+        return float(v)
+    raise ValueError(f"must be a number in [0, 1] or 'likelihood', got {v!r}")
 
 
 def fit_spread_scale(abs_err, std, lead_s, *, sigma: float = 2.0, coverage: float = GAUSS_COVERAGE[2.0],
@@ -230,12 +230,11 @@ def fit_spread_scale(abs_err, std, lead_s, *, sigma: float = 2.0, coverage: floa
         raise ValueError("fit_spread_scale: need sigma > 0, 0 < coverage < 1, 0 <= floor_quantile < 0.5")
     if np.any(e < 0):
         raise ValueError("fit_spread_scale: abs_err must be >= 0 (absolute errors)")
-    if isinstance(exponent, str) and exponent == "likelihood":
-        grid = EXPONENT_GRID
-    elif isinstance(exponent, numbers.Real) and not isinstance(exponent, bool) and 0 <= exponent <= 1:
-        grid = np.array([float(exponent)])
-    else:
-        raise ValueError(f"fit_spread_scale: exponent must be a number in [0, 1] or 'likelihood', got {exponent!r}")
+    try:
+        exponent = _checked_exponent(exponent)
+    except ValueError as err:
+        raise ValueError(f"fit_spread_scale: exponent {err}") from None
+    grid = EXPONENT_GRID if exponent == "likelihood" else np.array([exponent])
     H = lead.size
     floor = np.empty(H)
     tiny = 1e-12
@@ -260,7 +259,7 @@ def fit_spread_scale(abs_err, std, lead_s, *, sigma: float = 2.0, coverage: floa
         if best is None or nll < best[0]:
             best = (nll, scale, b)
     _, scale, b = best
-    return SpreadCalibration(lead, scale, floor, np.full(H, b))
+    return SpreadCalibration(lead, scale, floor, float(b))
 
 
 def coverage_of(abs_err, std, sigmas=(1.0, 2.0)) -> np.ndarray:
