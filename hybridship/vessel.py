@@ -145,6 +145,13 @@ class NonlinearDamping(_Strict):
     C_A(nu_r) already represents, times |u_r| (see :func:`hybridship.physics.hull.clarke1983_lift`).
     ``lift = "mmg"`` takes the same four derivatives from the ``[damping.nonlinear.mmg]``
     table (MMG standard-method normalisation, :class:`MMGLinearDerivatives`).
+
+    ``lift_speed`` says which speed the lift terms grow with. ``"abs"`` (default): |u_r|, so
+    the sway damping stays dissipative astern and the hull's lift moment keeps its sign
+    while the Munk moment of C_A reverses (a hull going astern is the less stable one).
+    ``"signed"``: u_r, the form of Abkowitz-type polynomial models identified ahead
+    (``N_uv u v``, as in Hassani et al. 2015 for RV Gunnerus), in which every lift term
+    reverses astern. The two agree for u_r >= 0.
     """
 
     method: Literal["crossflow", "quadratic", "none"]
@@ -159,6 +166,8 @@ class NonlinearDamping(_Strict):
     d_rr: float = Field(0.0, ge=0)
     lift: Literal["clarke1983", "mmg", "none"] = Field(
         "none", description="speed-proportional sway/yaw terms |u_r| [v_r, r] (Clarke et al. 1983 or MMG)")
+    lift_speed: Literal["abs", "signed"] = Field(
+        "abs", description="speed the lift terms grow with: |u_r| (dissipative astern) or u_r (Abkowitz form)")
     surge_resistance: Literal["ittc1957", "explicit"] = Field(
         "ittc1957", description="crossflow method: surge resistance from the ITTC line or from d_uu alone")
     mmg: Optional[MMGLinearDerivatives] = None

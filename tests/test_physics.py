@@ -132,6 +132,32 @@ def test_hull_damping_dissipates(gunnerus):
     assert np.all(power < 0)
 
 
+def test_lift_speed_signed_reverses_only_the_lift_astern():
+    """``lift_speed = "signed"`` equals the default ahead; astern the lift force reverses:
+    the hull force changes by exactly ``2 |u_r| D_lift [v_r, r]`` in sway and yaw."""
+    d = gunnerus_dict()
+    d["wind"] = {"method": "none"}
+    m_abs = model_from(d)
+    d["damping"]["nonlinear"]["lift_speed"] = "signed"
+    m_sig = model_from(d)
+    assert np.any(m_abs.arrays.d_lift[:4] != 0) and np.all(m_abs.arrays.d_lift[4:] == 0)
+    np.testing.assert_array_equal(m_sig.arrays.d_lift[4:], m_abs.arrays.d_lift[:4])
+    rng = np.random.default_rng(3)
+    nu = rng.normal(scale=[1.0, 0.5, 0.02], size=(100, 3))
+    nu[:50, 0] = np.abs(nu[:50, 0])
+    nu[50:, 0] = -np.abs(nu[50:, 0]) - 0.01
+    eta = np.zeros((100, 3))
+    _, p_abs, _ = m_abs.acceleration(eta, nu, return_parts=True)
+    _, p_sig, _ = m_sig.acceleration(eta, nu, return_parts=True)
+    h = TAU_PARTS.index("hull")
+    np.testing.assert_array_equal(p_sig[:50, h], p_abs[:50, h])
+    dl = m_abs.arrays.d_lift
+    lift = np.column_stack([dl[0] * nu[50:, 1] + dl[1] * nu[50:, 2], dl[2] * nu[50:, 1] + dl[3] * nu[50:, 2]])
+    np.testing.assert_allclose(p_sig[50:, h, 1:] - p_abs[50:, h, 1:], 2 * np.abs(nu[50:, :1]) * lift,
+                               rtol=1e-9, atol=1e-6)
+    np.testing.assert_array_equal(p_sig[50:, h, 0], p_abs[50:, h, 0])
+
+
 # ----------------------------------------------------------------------------- thrusters
 
 
@@ -335,6 +361,7 @@ def test_gunnerus_coefficients_close_to_published_original_hull():
     (lambda d: d.__setitem__("format_version", 99), "format_version"),
     (lambda d: d["particulars"].__setitem__("L_pp_m", "long"), "particulars.L_pp_m"),
     (lambda d: d["thrusters"][2].__setitem__("name", "port"), "duplicate"),
+    (lambda d: d["damping"]["nonlinear"].__setitem__("lift_speed", "sign"), "damping.nonlinear.lift_speed"),
 ])
 def test_invalid_vessel_files_name_the_field(edit, field):
     d = copy.deepcopy(gunnerus_dict())

@@ -80,7 +80,7 @@ def scaled_arrays(P: ModelArrays, scales: VesselScales) -> StackedArrays:
     d_lin = P.d_lin[None] * np.asarray(scales.linear_damping, float)[:, :, None]
     nd = np.asarray(scales.nonlinear_damping, float)
     d_quad = P.d_quad[None] * nd
-    d_lift = P.d_lift[None] * nd[:, [1, 1, 2, 2]]
+    d_lift = P.d_lift[None] * nd[:, [1, 1, 2, 2, 1, 1, 2, 2]]
     strip_w = P.strip_w[None] * nd[:, 1:2]
     thr = np.repeat(P.thr[None], n, axis=0)
     th = np.asarray(scales.thrust, float)[:, None]

@@ -271,8 +271,9 @@ def hull_forces_scalar(u, v, r, ur, vr, m, xg, m_a, d_lin, d_quad, d_lift, strip
 
     ``out = -C_RB(nu) nu - C_A(nu_r) nu_r - D nu_r - D_n(nu_r) nu_r`` [N, N, N m].
     ``d_quad = [d_uu, d_vv, d_rr]`` are positive quadratic coefficients (force
-    ``-d |x| x``); ``d_lift = [d_vv, d_vr, d_rv, d_rr]`` speed-proportional terms (force
-    ``-|u_r| D_lift [v_r, r]``); ``strip_x, strip_w`` the cross-flow drag strips (may be empty).
+    ``-d |x| x``); ``d_lift`` (8,) speed-proportional terms ``[d_vv, d_vr, d_rv, d_rr]`` per
+    unit |u_r| and then per unit u_r (force ``-|u_r| D_lift [v_r, r] - u_r D'_lift [v_r, r]``);
+    ``strip_x, strip_w`` the cross-flow drag strips (may be empty).
     """
     rr = r  # irrotational current: relative yaw rate equals yaw rate
     # C_RB(nu) nu
@@ -293,8 +294,8 @@ def hull_forces_scalar(u, v, r, ur, vr, m, xg, m_a, d_lin, d_quad, d_lift, strip
     dn1 = d_quad[1] * abs(vr) * vr
     dn2 = d_quad[2] * abs(rr) * rr
     au = abs(ur)
-    dn1 += au * (d_lift[0] * vr + d_lift[1] * rr)
-    dn2 += au * (d_lift[2] * vr + d_lift[3] * rr)
+    dn1 += au * (d_lift[0] * vr + d_lift[1] * rr) + ur * (d_lift[4] * vr + d_lift[5] * rr)
+    dn2 += au * (d_lift[2] * vr + d_lift[3] * rr) + ur * (d_lift[6] * vr + d_lift[7] * rr)
     for i in range(strip_x.shape[0]):
         vx = vr + strip_x[i] * rr
         f = strip_w[i] * abs(vx) * vx

@@ -65,8 +65,10 @@ class ModelArrays(NamedTuple):
         Linear damping D.
     d_quad : ndarray, shape (3,)
         Quadratic damping ``[d_uu, d_vv, d_rr]`` (force ``-d |x| x``).
-    d_lift : ndarray, shape (4,)
-        Speed-proportional sway/yaw damping per unit |u_r| (see ``hull.clarke1983_lift``).
+    d_lift : ndarray, shape (8,)
+        Speed-proportional sway/yaw damping ``[d_vv, d_vr, d_rv, d_rr]`` per unit |u_r|, then
+        the same four per unit u_r (see ``hull.clarke1983_lift``); the vessel's ``lift_speed``
+        fills one half and leaves the other zero.
     strip_x, strip_w : ndarray, shape (n,)
         Cross-flow drag strip positions [m] and weights [kg/m^2].
     thr : ndarray, shape (K, 8)
@@ -163,14 +165,16 @@ def build_model_arrays(vessel, *, true_vessel: bool = False) -> ModelArrays:
         strip_x, strip_w = hull.crossflow_strips(p.L_pp_m, p.T_m, cd, nl.strips, rho)
     elif nl.method == "none":
         d_quad[:] = 0.0
-    d_lift = np.zeros(4)
+    lift = np.zeros(4)
     if nl.lift == "clarke1983":
         derivs = hull.clarke1983_derivatives(p.L_pp_m, p.B_m, p.T_m, p.C_B, rho)
-        d_lift = hull.clarke1983_lift(derivs, sum(mass_matrices(vessel)) - M_RB) * nd_s[[1, 1, 2, 2]]
+        lift = hull.clarke1983_lift(derivs, sum(mass_matrices(vessel)) - M_RB) * nd_s[[1, 1, 2, 2]]
     elif nl.lift == "mmg":
         g = nl.mmg
-        d_lift = hull.mmg_lift(g.Y_v, g.Y_r, g.N_v, g.N_r, p.L_pp_m, p.T_m, sum(mass_matrices(vessel)) - M_RB,
-                               rho) * nd_s[[1, 1, 2, 2]]
+        lift = hull.mmg_lift(g.Y_v, g.Y_r, g.N_v, g.N_r, p.L_pp_m, p.T_m, sum(mass_matrices(vessel)) - M_RB,
+                             rho) * nd_s[[1, 1, 2, 2]]
+    d_lift = np.zeros(8)
+    d_lift[slice(4, 8) if nl.lift_speed == "signed" else slice(0, 4)] = lift
     # Sway and yaw cross-flow share strips; scale sway via the weights and yaw on top
     # through d_rr so that both factors act independently to first order.
     d_quad = d_quad * nd_s
