@@ -415,7 +415,21 @@ def fingerprint(vessel: Vessel) -> str:
     import hashlib
     import json
 
-    return hashlib.sha256(json.dumps(vessel.model_dump(mode="json"), sort_keys=True).encode()).hexdigest()[:16]
+    d = vessel.model_dump(mode="json")
+    # fields added after fingerprints were first recorded are left out at their default, so
+    # that model files and checked logs written before still match the same vessel
+    for path, default in _LATER_FIELDS:
+        *parents, key = path
+        node = d
+        for p in parents:
+            node = node[p]
+        if node.get(key) == default:
+            del node[key]
+    return hashlib.sha256(json.dumps(d, sort_keys=True).encode()).hexdigest()[:16]
+
+
+#: (path in the description, default) of fields added after fingerprints were first recorded.
+_LATER_FIELDS = ((("damping", "nonlinear", "lift_speed"), "abs"),)
 
 
 def vessel_from_dict(data: dict, source: str = "vessel") -> Vessel:

@@ -160,6 +160,23 @@ def test_a_version_7_file_reads_as_spread_exponent_1(saved, model, tmp_path):
     _refused(p8, r"expected \(4, H\)")
 
 
+def test_files_written_before_a_vessel_field_was_added_still_load(saved, tmp_path):
+    """A vessel field added later (``lift_speed``) at its default leaves the fingerprint as it
+    was, so a file whose embedded description lacks it loads; the packaged vessels keep the
+    fingerprints files recorded before the field existed; a non-default value changes it."""
+    from hybridship.vessel import Vessel, fingerprint, load_vessel
+
+    def before(m):
+        del m["vessel_description"]["damping"]["nonlinear"]["lift_speed"]
+    p = _rewrite(saved, tmp_path, meta_change=before, name="before_lift_speed.npz")
+    assert HybridPredictor.load(p).model.vessel == saved[0].model.vessel
+    assert [fingerprint(load_vessel(n)) for n in ("gunnerus", "esso_osaka_model")] == \
+        ["b61e6889e81e74fa", "6649ecc0be379c86"]
+    d = load_vessel("gunnerus").model_dump()
+    d["damping"]["nonlinear"]["lift_speed"] = "signed"
+    assert fingerprint(Vessel.model_validate(d)) != "b61e6889e81e74fa"
+
+
 def test_the_model_file_carries_its_vessel(saved, model, tmp_path):
     hp, path, _ = saved
     meta = _meta(_arrays(path))
