@@ -74,8 +74,11 @@ def test_forecast_spread_after_a_failure_includes_the_held_load(model, drift_log
     """Starts after the failure get the held-load term on top of the ensemble's spread (it can
     be switched off); starts during station keeping do not; the term uses no sample after
     the start."""
-    on = HybridPredictor(model.vessel, ensemble_config=TINY).fit([drift_log], dp_only=True)
-    off = HybridPredictor(model.vessel, ensemble_config=TINY,
+    from hybridship.residual.calibration import CalibrationConfig
+
+    ens = CalibrationConfig(station_keeping_spread="ensemble")      # the members' spread on station
+    on = HybridPredictor(model.vessel, ensemble_config=TINY, calibration_config=ens).fit([drift_log], dp_only=True)
+    off = HybridPredictor(model.vessel, ensemble_config=TINY, calibration_config=ens,
                           environment_config=EnvironmentConfig(held_load_window_s=0.0)).fit([drift_log], dp_only=True)
     starts = [1100.0, 1205.0]
     f_on = on.forecast(drift_log, starts, 60.0, calibrated=False)
@@ -87,3 +90,50 @@ def test_forecast_spread_after_a_failure_includes_the_held_load(model, drift_log
     later.loc[later.time_s > 1205.0, ["north_m", "east_m"]] += 100.0
     f_later = on.forecast(later, [1205.0], 60.0, calibrated=False)
     np.testing.assert_allclose(f_later.eta_std[0], f_on.eta_std[1])
+
+
+def test_station_keeping_spread_held_load_option(model, drift_log, tmp_path):
+    """With ``station_keeping_spread="held_load"`` a start during station keeping reports
+    ``held_load_spread`` of the load's variability over the window before it (computed here
+    from the filter directly), uses no sample after the start, and starts after the failure
+    and the mean forecast are as with the default; the option survives the model file."""
+    from hybridship.residual.calibration import CalibrationConfig
+
+    assert CalibrationConfig().station_keeping_spread == "held_load"          # the default
+    held = HybridPredictor(model.vessel, ensemble_config=TINY).fit([drift_log], dp_only=True)
+    base = HybridPredictor(model.vessel, ensemble_config=TINY,
+                           calibration_config=CalibrationConfig(station_keeping_spread="ensemble")
+                           ).fit([drift_log], dp_only=True)
+    starts = [900.0, 1100.0, 1205.0]
+    f = held.forecast(drift_log, starts, 60.0, calibrated=False)
+    g = base.forecast(drift_log, starts, 60.0, calibrated=False)
+    np.testing.assert_allclose(f.eta, g.eta)
+    np.testing.assert_allclose(f.eta_std[2], g.eta_std[2])               # after the failure: unchanged
+    a = as_log_arrays(drift_log, model.vessel)
+    c = held.environment_config
+    for k, t in enumerate(starts[:2]):
+        i = int(np.searchsorted(a.time_s, t))
+        rows = held_load_rows(a.dp_active, i, 1, int(c.held_load_window_s))
+        est = held._run_estimator(a, np.array([i]), rows)[1]
+        sb = unexplained_load_std(held.model, a, est, int(c.held_load_block_s))
+        np.testing.assert_allclose(f.eta_std[k], held_load_spread(sb[None], f.lead_s)[0], rtol=1e-9)
+        assert np.all(f.eta_std[k, -1] > 0)
+    later = drift_log.copy()
+    later.loc[later.time_s > 1100.0, ["north_m", "east_m"]] += 100.0
+    np.testing.assert_allclose(held.forecast(later, [1100.0], 60.0, calibrated=False).eta_std[0], f.eta_std[1])
+    assert held.calibration["held"]["position"].scale.size > 0                 # calibrated on that spread
+    off = HybridPredictor(model.vessel, ensemble_config=TINY,      # no held-load window: the members' spread
+                          environment_config=EnvironmentConfig(held_load_window_s=0.0)).fit([drift_log], dp_only=True)
+    no_window = off.forecast(drift_log, starts[:1], 60.0, calibrated=False).eta_std[0]
+    np.testing.assert_allclose(no_window, g.eta_std[0])
+    path = held.save(tmp_path / "m.npz")
+    back = HybridPredictor.load(path)
+    assert back.calibration_config.station_keeping_spread == "held_load"
+    np.testing.assert_allclose(back.forecast(drift_log, starts, 60.0).eta_std, held.forecast(drift_log, starts, 60.0).eta_std)
+
+
+def test_station_keeping_spread_is_validated():
+    from hybridship.residual.calibration import CalibrationConfig
+
+    with pytest.raises(ValueError, match="station_keeping_spread"):
+        CalibrationConfig(station_keeping_spread="weather")

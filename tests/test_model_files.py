@@ -177,6 +177,16 @@ def test_files_written_before_a_vessel_field_was_added_still_load(saved, tmp_pat
     assert fingerprint(Vessel.model_validate(d)) != "b61e6889e81e74fa"
 
 
+def test_a_file_from_before_the_station_keeping_spread_option_reads_as_ensemble(saved, tmp_path):
+    """Files written before ``CalibrationConfig.station_keeping_spread`` were calibrated on the
+    members' spread: they read as ``"ensemble"``, not as today's default."""
+    def before(m):
+        m["calibration_config"].pop("station_keeping_spread")
+    back = HybridPredictor.load(_rewrite(saved, tmp_path, meta_change=before, name="before_sk_spread.npz"))
+    assert back.calibration_config.station_keeping_spread == "ensemble"
+    assert HybridPredictor.load(saved[1]).calibration_config.station_keeping_spread == "held_load"
+
+
 def test_the_model_file_carries_its_vessel(saved, model, tmp_path):
     hp, path, _ = saved
     meta = _meta(_arrays(path))

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import numpy as np
+import pandas as pd
 import pytest
 
 from hybridship.logs.ingest import ingest
@@ -91,7 +92,8 @@ class _Stub:
 
 def test_score_log_aligns_the_truth_and_pools_north_and_east(skc, logs):
     a = logs[1]["log3"]
-    errors, abs_ne, std, raw, lead = skc.score_log(_Stub(), {"dynamic": _Stub()}, a, np.array([100.0, 200.0]), 30.0)
+    errors, abs_ne, std, raw, lead, abs_h, std_h = skc.score_log(_Stub(), {"dynamic": _Stub()}, a,
+                                                                 np.array([100.0, 200.0]), 30.0)
     assert set(errors) == {"hybrid", "hybrid_nets_off", "dynamic"}
     np.testing.assert_allclose(errors["hybrid"][0], np.sqrt(5.0))
     np.testing.assert_allclose(errors["hybrid"][1], 0.0)
@@ -100,6 +102,9 @@ def test_score_log_aligns_the_truth_and_pools_north_and_east(skc, logs):
     (row,) = skc.spread_rows("log3", lead, abs_ne, std, raw)      # 60 s is beyond this 30-s horizon
     assert row["coverage_1sigma"] == 0.5 and row["coverage_2sigma"] == 1.0
     assert row["median_std_m"] == 1.0 and row["median_raw_std_m"] == 10.0
+    np.testing.assert_allclose(abs_h, 0.0)
+    (row,) = skc.spread_rows("log3", lead, abs_ne, std, raw, abs_hdg=abs_h + 1.5, std_hdg=std_h)
+    assert row["heading_coverage_1sigma"] == 0.0 and row["heading_coverage_2sigma"] == 1.0
 
 
 def test_worse_cells_count_each_state_where_the_hybrid_errs_more(skc):
@@ -109,6 +114,15 @@ def test_worse_cells_count_each_state_where_the_hybrid_errs_more(skc):
                            "log": ["a", "b"] * 3, "lead_s": [60.0] * 6,
                            "distance_m": [1.0, 2.0, 0.5, 3.0, 2.0, 2.0], "heading_deg": [1.0, 1.0, 2.0, 0.5, 1.0, 3.0]})
     assert skc.worse_cells(errors) == {"dynamic": 2, "dead_reckoning": 0}
+
+
+def test_nominal_distance_averages_the_per_log_rows(skc):
+    spread = pd.DataFrame({"log": ["a", "a", "b", "all"], "coverage_1sigma": [0.683, 0.583, 0.883, 0.0],
+                           "coverage_2sigma": [0.954, 1.0, 0.9, 0.0]})
+    d = skc.nominal_distance(spread)
+    assert d[1] == pytest.approx((0.0003 + 0.0997 + 0.2003) / 3, abs=1e-3)
+    assert d[2] == pytest.approx((0.0005 + 0.0455 + 0.0545) / 3, abs=1e-3)
+    assert "3 log x lead" in skc.nominal_distance_line(spread)
 
 
 def test_bad_arguments_are_refused(skc, tmp_path, capsys, monkeypatch):
@@ -126,3 +140,28 @@ def test_bad_arguments_are_refused(skc, tmp_path, capsys, monkeypatch):
     assert "--data" in capsys.readouterr().err
     assert skc.main(["--data", str(tmp_path / "d"), "--vessel", "no_such_ship", "--out", str(tmp_path / "o")]) == 2
     assert "--vessel" in capsys.readouterr().err
+    with pytest.raises(SystemExit):
+        skc.main(["--station-keeping-spread", "weather", "--out", str(tmp_path / "o")])
+    assert "--station-keeping-spread" in capsys.readouterr().err
+
+
+@pytest.mark.parametrize("argv, want", [([], CalibrationConfig().station_keeping_spread),
+                                        (["--station-keeping-spread", "ensemble"], "ensemble")])
+def test_the_spread_flag_defaults_to_the_calibration_default(skc, tmp_path, monkeypatch, argv, want):
+    m = DynamicModel("gunnerus")
+    (tmp_path / "d").mkdir()
+    for s in (3, 4):
+        physics_log(m, seed=s, duration_s=300.0, t_shutdown_s=250.0).to_csv(tmp_path / "d" / f"l{s}.csv", index=False)
+    seen = []
+
+    class Stop(Exception):
+        pass
+
+    def fake_run(logs, vessel, every_s, horizon_s, hybrid_factory):
+        seen.append(hybrid_factory().calibration_config.station_keeping_spread)
+        raise Stop
+
+    monkeypatch.setattr(skc, "run", fake_run)
+    with pytest.raises(Stop):
+        skc.main(["--data", str(tmp_path / "d"), "--out", str(tmp_path / "o"), *argv])
+    assert seen == [want]

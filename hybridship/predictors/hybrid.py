@@ -479,9 +479,12 @@ class HybridPredictor:
                                          current=current, accel_ext=acc_ext, nets=nets,
                                          nets_weight=self._after_stop_weight(st, nets_after_stop))
         after_stop = st.arrays.dp_active[st.idx] == 0
-        if sigma_b is not None and np.any(sigma_b):
-            # the load held over the forecast varies as it did in the station keeping before
-            std = np.sqrt(std ** 2 + held_load_spread(sigma_b, np.arange(st.H + 1) * st.dt) ** 2)
+        if sigma_b is not None and (np.any(sigma_b) or self._held_load_on_station):
+            # the load held over the forecast varies as it did in the station keeping before;
+            # during station keeping that variability is the spread itself (with the option)
+            held = held_load_spread(sigma_b, np.arange(st.H + 1) * st.dt)
+            on_station = ~after_stop & self._held_load_on_station
+            std = np.where(on_station[:, None, None], held, np.sqrt(std ** 2 + held ** 2))
         flags = dict(st.flags)
         if wgt is not None:
             flags[FaultFlags.OUT_OF_ENVELOPE] = np.any(wgt < 1.0, axis=1)
@@ -520,12 +523,13 @@ class HybridPredictor:
         return max(0, int(idx.min()) - int(round(self.environment_window_s / dt)))
 
     def _run_estimator(self, arrays, idx, extra_rows=None):
-        """The filter's estimates at the start rows ``idx`` and, when given, also at
-        ``extra_rows`` (rows at or after the filter's first row) from the same run."""
+        """The filter's estimates at the start rows ``idx`` and, when given, also at those of
+        ``extra_rows`` (rows at or after the filter's first row) that it can estimate (not
+        before the log's first valid position), from the same run."""
         first = self._filter_first_row(arrays, idx)
         if extra_rows is None:
             return self.estimator.run(arrays, idx, first_row=first)
-        est = self.estimator.run(arrays, np.concatenate([idx, extra_rows]), first_row=first)
+        est = self.estimator.run(arrays, np.concatenate([idx, extra_rows]), first_row=first, required=len(idx))
         return est.take(slice(0, len(idx))), est.take(slice(len(idx), None))
 
     def _estimated_start(self, st, n_members: int):
@@ -546,30 +550,41 @@ class HybridPredictor:
         acc_ext = np.ascontiguousarray(a_err[:, None, :])
         return eta0, nu0, np.zeros_like(eta0), draws[..., 2:5], current, acc_ext, sigma_b
 
+    @property
+    def _held_load_on_station(self) -> bool:
+        """Whether starts during station keeping report the held-load spread
+        (``CalibrationConfig.station_keeping_spread``)."""
+        return (self.calibration_config.station_keeping_spread == "held_load" and self.environment == "estimator"
+                and self.environment_config.held_load_window_s > 0)
+
     def _estimate_with_held_load(self, st):
-        """The estimates at the start rows and, per start after a failure, the held-load
-        variability (S, 3) of the station keeping before it (one filter run for both)."""
+        """The estimates at the start rows and the held-load variability (S, 3) of the
+        station keeping before each start after a failure, and before each start during
+        station keeping when :attr:`_held_load_on_station` (one filter run for all)."""
         c = self.environment_config
         sigma_b = np.zeros((len(st.idx), 3))
-        after = (st.arrays.dp_active[st.idx] == 0) & self.stop_after_failure
-        if c.held_load_window_s == 0 or not np.any(after):
+        on = st.arrays.dp_active[st.idx] != 0
+        wanted = (~on & self.stop_after_failure) | (on & self._held_load_on_station)
+        if c.held_load_window_s == 0 or not np.any(wanted):
             return self._run_estimator(st.arrays, st.idx), sigma_b
         dt = st.arrays.dt_s
         step = max(1, int(round(c.filter_step_s / dt)))
         first = self._filter_first_row(st.arrays, st.idx)
-        windows = {}        # starts after the same stop share one window: (rows, starts)
-        for k in np.flatnonzero(after):
+        windows = {}        # starts with the same window (after one stop) share it: (rows, starts)
+        for k in np.flatnonzero(wanted):
             rows = held_load_rows(st.arrays.dp_active, int(st.idx[k]), step, int(round(c.held_load_window_s / dt)))
             rows = rows[rows >= first]
             windows.setdefault(tuple(rows[[0, -1]]) if rows.size else (), (rows, []))[1].append(k)
         windows = list(windows.values())
-        est, est_w = self._run_estimator(st.arrays, st.idx, np.concatenate([w[0] for w in windows]))
+        # overlapping windows of starts during station keeping: filter each row once
+        all_rows = np.unique(np.concatenate([w[0] for w in windows]))
+        est, est_w = self._run_estimator(st.arrays, st.idx, all_rows)
         block = max(1, int(round(c.held_load_block_s / (step * dt))))
-        ends = np.cumsum([w[0].size for w in windows])
-        for (rows, starts), end in zip(windows, ends):
+        for rows, starts in windows:
+            rows = rows[np.isin(rows, est_w.rows)]          # not before the log's first valid position
             if rows.size:
-                sigma_b[starts] = unexplained_load_std(self.model, st.arrays, est_w.take(slice(end - rows.size, end)),
-                                                       block)
+                sigma_b[starts] = unexplained_load_std(self.model, st.arrays,
+                                                       est_w.take(np.searchsorted(est_w.rows, rows)), block)
         return est, sigma_b
 
     def _calibrated_forecast_std(self, std, lead_s, commands, after_stop):

@@ -218,7 +218,9 @@ def _build_predictor(cls, meta: dict, vessel, path: Path):
                   environment_config=EnvironmentConfig(**meta["environment_config"]),
                   environment_window_s=meta["environment_window_s"],
                   nets_after_stop=meta["nets_after_stop"],
-                  calibration_config=CalibrationConfig(**meta["calibration_config"]),
+                  # files written before the option calibrated the members' spread
+                  calibration_config=CalibrationConfig(**{"station_keeping_spread": "ensemble",
+                                                          **meta["calibration_config"]}),
                   training=meta["training"], multistep_config=MultiStepConfig(**meta["multistep_config"]),
                   command_guard=meta["command_guard"], hull_correction=meta.get("hull_correction", False),
                   hull_ridge=meta.get("hull_ridge", 1e-3), hull_fit=meta.get("hull_fit", "one_step"),

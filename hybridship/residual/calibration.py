@@ -89,6 +89,18 @@ class CalibrationConfig:
         scales the members' spread; ``"likelihood"`` chooses it on the held-back errors,
         from :data:`EXPONENT_GRID`. It applies to the station-keeping (or manoeuvre)
         calibration and to the calibration after a failure alike.
+    station_keeping_spread : {"held_load", "ensemble"}
+        The raw spread that is calibrated for forecasts starting during station keeping
+        (with the environment estimator and ``held_load_window_s > 0``; otherwise the
+        members' spread). ``"held_load"`` (default): the spread ``0.5 sigma_b t^2`` of the
+        load's variability over the station keeping before the start
+        (:func:`~hybridship.residual.load_variability.held_load_spread`, the term the spread
+        after a failure adds), which grows with the weather the ship is in;
+        ``forecast(..., calibrated=False)`` then reports that spread for such starts.
+        ``"ensemble"``: the members' spread, which, amplified by each member's own previous
+        residual, does not rank the weathers (measured in ``docs/concepts/residual.md``).
+        Model files written before this option read as ``"ensemble"``, what they were
+        calibrated on.
     after_stop_min_failures : int
         With at least this many DP failures in the training logs (a thrust stop followed by
         ``horizon_s`` of drift after each of 20 start times), :meth:`fit` also calibrates
@@ -107,6 +119,7 @@ class CalibrationConfig:
     floor_quantile: Annotated[Float, Field(ge=0, lt=0.5)] = 0.1
     refit: bool = False
     spread_exponent: float | str = 1.0
+    station_keeping_spread: Literal["held_load", "ensemble"] = "held_load"
     after_stop_min_failures: Annotated[Int, Field(ge=0)] = 3
 
     @property

@@ -444,7 +444,7 @@ class EnvironmentEstimator:
                                      self.model.arrays, kernel._workspace(self.model.arrays))
         return x, P
 
-    def run(self, arrays, rows=None, *, first_row: int = 0) -> EnvironmentEstimate:
+    def run(self, arrays, rows=None, *, first_row: int = 0, required=None) -> EnvironmentEstimate:
         """Filter the log from ``first_row`` and return the estimates at ``rows`` (default: all).
 
         The estimate at row ``i`` uses the samples ``first_row .. i`` only (causal). A gap
@@ -461,6 +461,10 @@ class EnvironmentEstimator:
             Rows at which to report (sorted or not); all rows >= ``first_row`` by default.
         first_row : int
             Row at which the filter starts (its prior applies there).
+        required : int, optional
+            Only the first ``required`` of ``rows`` must have an estimate; later rows before
+            the first valid position and heading are left out of the result (default: all
+            rows are required).
         """
         n = len(arrays.time_s)
         rows = np.arange(first_row, n) if rows is None else np.asarray(rows, dtype=int)
@@ -474,10 +478,12 @@ class EnvironmentEstimator:
         for c in np.unique(rows % m):       # one pass per grid through the requested rows
             grid = np.arange(first_row + (c - first_row) % m, last + 1, m)
             self._filter(arrays, grid, set(int(r) for r in rows if r % m == c), inputs, out_x, out_P)
-        miss = [int(r) for r in rows if int(r) not in out_P]
+        n_req = rows.size if required is None else int(required)
+        miss = [int(r) for r in rows[:n_req] if int(r) not in out_P]
         if miss:
             raise ValueError(f"log: no valid position/heading at or before row {miss[0]} "
                              f"(time {arrays.time_s[miss[0]]:g} s) to start the environment estimate")
+        rows = rows[np.array([int(r) in out_P for r in rows], dtype=bool)] if rows.size > n_req else rows
         return EnvironmentEstimate(rows, arrays.time_s[rows], np.stack([out_x[int(r)] for r in rows]),
                                    np.stack([out_P[int(r)] for r in rows]), self.config.thrust_error_model)
 
