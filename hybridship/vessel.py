@@ -415,9 +415,15 @@ def fingerprint(vessel: Vessel) -> str:
     import hashlib
     import json
 
+    return hashlib.sha256(json.dumps(portable_description(vessel), sort_keys=True).encode()).hexdigest()[:16]
+
+
+def portable_description(vessel: Vessel) -> dict:
+    """The validated description as JSON-ready data, without the fields added after model
+    files and checked logs first recorded vessels, where they are at their default: the
+    fingerprint of such a vessel is the one recorded before, and a model file that embeds
+    it can be read by a hybridship from before those fields."""
     d = vessel.model_dump(mode="json")
-    # fields added after fingerprints were first recorded are left out at their default, so
-    # that model files and checked logs written before still match the same vessel
     for path, default in _LATER_FIELDS:
         *parents, key = path
         node = d
@@ -425,7 +431,7 @@ def fingerprint(vessel: Vessel) -> str:
             node = node[p]
         if node.get(key) == default:
             del node[key]
-    return hashlib.sha256(json.dumps(d, sort_keys=True).encode()).hexdigest()[:16]
+    return d
 
 
 #: (path in the description, default) of fields added after fingerprints were first recorded.

@@ -218,3 +218,17 @@ def test_a_failure_needs_station_keeping_before_it_and_enough_drift_after_it(mod
     assert has_drift(a, 20, 60.0) and has_drift(a, 20, 180.0) and not has_drift(a, 20, 182.0)
     manoeuvring = log.assign(dp_active=0)          # never on station: no failure to calibrate on
     assert not has_drift(as_log_arrays(manoeuvring, model.vessel), 20, 60.0)
+
+
+def test_run_leaves_out_optional_rows_before_the_first_valid_position(model):
+    """``required`` rows must have an estimate (else the clear error); later rows that come
+    before the log's first valid position are left out."""
+    from hybridship.logs.ingest import ingest
+
+    log = physics_log(model, duration_s=300.0, t_shutdown_s=None, seed=4)
+    log.loc[0, ["north_m", "u_m_s"]] = np.nan                # a missing first sample (as a forecast reads it)
+    a = ingest(log, model.vessel, purpose="forecast")
+    est = EnvironmentEstimator(model).run(a, np.array([200, 0, 60, 120]), required=1)
+    assert list(est.rows) == [200, 60, 120]
+    with pytest.raises(ValueError, match="no valid position/heading at or before row 0"):
+        EnvironmentEstimator(model).run(a, np.array([200, 0]), required=2)

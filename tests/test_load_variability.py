@@ -121,7 +121,16 @@ def test_station_keeping_spread_held_load_option(model, drift_log, tmp_path):
     later = drift_log.copy()
     later.loc[later.time_s > 1100.0, ["north_m", "east_m"]] += 100.0
     np.testing.assert_allclose(held.forecast(later, [1100.0], 60.0, calibrated=False).eta_std[0], f.eta_std[1])
-    assert held.calibration["held"]["position"].scale.size > 0                 # calibrated on that spread
+    cal_pos = held.calibration["held"]["position"]                             # calibrated on that spread
+    np.testing.assert_allclose(held.forecast(drift_log, starts[:1], 60.0).eta_std[0, :, 0],
+                               cal_pos.apply(f.eta_std[0, :, 0], f.lead_s))
+    early = held.forecast(drift_log, [40.0], 60.0, calibrated=False).eta_std[0]     # < 3 blocks before it
+    np.testing.assert_allclose(early, base.forecast(drift_log, [40.0], 60.0, calibrated=False).eta_std[0])
+    assert np.all(early[1:, :2] > 0)                                          # the members' spread, not zero
+    over = HybridPredictor(model.vessel, ensemble_config=TINY).fit(
+        [drift_log], dp_only=True, calibration=CalibrationConfig(station_keeping_spread="ensemble"))
+    assert over.calibration_config.station_keeping_spread == "ensemble"       # fit's override is what forecasts use
+    np.testing.assert_allclose(over.forecast(drift_log, starts[:1], 60.0, calibrated=False).eta_std, g.eta_std[:1])
     off = HybridPredictor(model.vessel, ensemble_config=TINY,      # no held-load window: the members' spread
                           environment_config=EnvironmentConfig(held_load_window_s=0.0)).fit([drift_log], dp_only=True)
     no_window = off.forecast(drift_log, starts[:1], 60.0, calibrated=False).eta_std[0]

@@ -42,7 +42,7 @@ class StackedArrays(NamedTuple):
     m_a: np.ndarray       # (N, 3, 3)
     d_lin: np.ndarray     # (N, 3, 3)
     d_quad: np.ndarray    # (N, 3)
-    d_lift: np.ndarray    # (N, 4)
+    d_lift: np.ndarray    # (N, 8)
     strip_w: np.ndarray   # (N, n_strips)
     thr: np.ndarray       # (N, K, 8)
     wind_p: np.ndarray    # (N, 4)

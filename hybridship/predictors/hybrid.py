@@ -222,7 +222,8 @@ class HybridPredictor:
         calibration : CalibrationConfig, optional
             Overrides the ``calibration_config`` given at construction (for example
             ``CalibrationConfig(commands=("known",))`` for a manoeuvring model, or
-            ``fraction=0`` for none).
+            ``fraction=0`` for none) and becomes the model's ``calibration_config``, so that
+            forecasts (and the model file) use the spread it was calibrated on.
 
         Notes
         -----
@@ -241,6 +242,7 @@ class HybridPredictor:
         cal = self.calibration_config if calibration is None else calibration
         if not isinstance(cal, CalibrationConfig):
             raise TypeError(f"calibration: expected a CalibrationConfig, got {type(cal).__name__}")
+        self.calibration_config = cal
         logs = [as_log_arrays(log, self.model.vessel) for log in logs]
         self.estimator = EnvironmentEstimator(self.model, self.environment_config)
         if self.environment == "estimator":
@@ -459,7 +461,10 @@ class HybridPredictor:
             Override the model's ``nets_after_stop`` for this call.
         calibrated : bool
             Report the calibrated spread (the default, when :meth:`fit` calibrated the
-            mode ``commands``); False gives the raw ensemble spread.
+            mode ``commands``); False gives the raw spread: the members' (with the
+            estimator's posterior and, after a failure, the held load's), or for a start
+            during station keeping the held load's alone
+            (``CalibrationConfig.station_keeping_spread``).
         """
         self._check_fitted()
         st = _forecast_setup(self.model, self.residual_config, log, start_times_s, horizon_s,
@@ -479,11 +484,12 @@ class HybridPredictor:
                                          current=current, accel_ext=acc_ext, nets=nets,
                                          nets_weight=self._after_stop_weight(st, nets_after_stop))
         after_stop = st.arrays.dp_active[st.idx] == 0
-        if sigma_b is not None and (np.any(sigma_b) or self._held_load_on_station):
+        if sigma_b is not None and np.any(sigma_b):
             # the load held over the forecast varies as it did in the station keeping before;
-            # during station keeping that variability is the spread itself (with the option)
+            # during station keeping that variability is the spread itself (the default), where
+            # there was enough station keeping to measure it (else the members' spread)
             held = held_load_spread(sigma_b, np.arange(st.H + 1) * st.dt)
-            on_station = ~after_stop & self._held_load_on_station
+            on_station = ~after_stop & self._held_load_on_station & np.any(sigma_b > 0, axis=1)
             std = np.where(on_station[:, None, None], held, np.sqrt(std ** 2 + held ** 2))
         flags = dict(st.flags)
         if wgt is not None:
@@ -539,8 +545,9 @@ class HybridPredictor:
         members' loads (E, S, 3) (surge/sway in NED, member 0 the mean), the mean current
         ``(S, 1, 2)``, the thrust-error acceleration of the start's commands ``(S, 1, 3)``
         (body; 0 once the thrusters have stopped) and the held-load variability ``(S, 3)``
-        of :mod:`hybridship.residual.load_variability` (zeros for starts during station
-        keeping, or when ``held_load_window_s`` is 0).
+        of :mod:`hybridship.residual.load_variability` (zeros when ``held_load_window_s``
+        is 0, for starts during station keeping unless :attr:`_held_load_on_station`, and
+        where fewer than three blocks of station keeping precede the start).
         """
         est, sigma_b = self._estimate_with_held_load(st)
         eta0, nu0 = est.x[:, 0:3].copy(), est.x[:, 3:6].copy()
@@ -572,7 +579,10 @@ class HybridPredictor:
         first = self._filter_first_row(st.arrays, st.idx)
         windows = {}        # starts with the same window (after one stop) share it: (rows, starts)
         for k in np.flatnonzero(wanted):
-            rows = held_load_rows(st.arrays.dp_active, int(st.idx[k]), step, int(round(c.held_load_window_s / dt)))
+            # on station the window ends on the start's own filter grid (one filter pass on a
+            # 10-Hz log); after a stop, at the last station-keeping row
+            end = int(st.idx[k]) - (step - 1 if on[k] else 0)
+            rows = held_load_rows(st.arrays.dp_active, end, step, int(round(c.held_load_window_s / dt)))
             rows = rows[rows >= first]
             windows.setdefault(tuple(rows[[0, -1]]) if rows.size else (), (rows, []))[1].append(k)
         windows = list(windows.values())

@@ -81,12 +81,14 @@ def _vessel_fingerprint(vessel) -> str:
 def model_metadata(predictor) -> dict:
     """The JSON metadata of a fitted :class:`~hybridship.predictors.hybrid.HybridPredictor`:
     settings, the embedded vessel and its fingerprint, the scalar learned state."""
+    from ..vessel import portable_description
+
     p = predictor
     v = p.model.vessel
     return {
         "format": "hybridship-model", "format_version": MODEL_FORMAT_VERSION,
         "kind": "HybridPredictor", "vessel": v.name,
-        "vessel_description": v.model_dump(mode="json"),
+        "vessel_description": portable_description(v),
         "vessel_fingerprint": _vessel_fingerprint(v),
         "features": list(p.residual_config.features),
         "residual_config": asdict(p.residual_config),

@@ -444,7 +444,7 @@ class EnvironmentEstimator:
                                      self.model.arrays, kernel._workspace(self.model.arrays))
         return x, P
 
-    def run(self, arrays, rows=None, *, first_row: int = 0, required=None) -> EnvironmentEstimate:
+    def run(self, arrays, rows=None, *, first_row: int = 0, required: int | None = None) -> EnvironmentEstimate:
         """Filter the log from ``first_row`` and return the estimates at ``rows`` (default: all).
 
         The estimate at row ``i`` uses the samples ``first_row .. i`` only (causal). A gap
