@@ -43,6 +43,7 @@ import pandas as pd
 from hybridship.evaluation import metrics
 from hybridship.evaluation.drift import log_files
 from hybridship.fileio import atomic_write, markdown_table
+from hybridship.frames import ned_to_body
 from hybridship.physics.model import DynamicModel
 from hybridship.predictors import DynamicPredictor, HybridPredictor, as_log_arrays
 from hybridship.residual.ensemble import EnsembleConfig
@@ -114,8 +115,8 @@ def astern_shares(logs: list[pd.DataFrame]) -> str:
         psi = np.radians(x.heading_deg.to_numpy(float)[drift])
         c = x.truth_current_speed_mps.to_numpy(float)[drift]
         beta = np.radians(x.truth_current_dir_to_deg.to_numpy(float)[drift])
-        u_r = u - c * np.cos(beta - psi)            # the current's surge component in the body frame
-        return u, u_r
+        v_c = np.column_stack([c * np.cos(beta), c * np.sin(beta), np.zeros_like(c)])   # NED [m/s]
+        return u, u - ned_to_body(v_c, psi)[:, 0]
     per = [shares(x) for x in logs]
     u, u_r = (np.concatenate(z) for z in zip(*per))
     each = ", ".join(f"{np.mean(a < 0):.2f}/{np.mean(b < 0):.2f}" for a, b in per)

@@ -31,6 +31,10 @@ def test_pmm_derivatives_on_the_mmg_basis(tmp_path):
     assert d["Y_r"] == pytest.approx(2700.0 / (q * 100))
     assert d["N_v"] == pytest.approx((13800.0 - 400.0 + 100.0) / (q * 100))     # the Munk moment included
     assert d["N_r"] == pytest.approx((-1350000.0 + 20.0) / (q * 1000))
+    # a lift moment that exactly cancels the Munk moment (N_uv = -(Y_vdot - X_udot)) leaves no
+    # net u v moment: N'_v = 0, whatever the sign conventions of the parts
+    pd.DataFrame([r if r["parameter"] != "Nuv" else r | {"value": "300.0"} for r in rows]).to_csv(f, index=False)
+    assert hlc.pmm_mmg_derivatives(f)["N_v"] == pytest.approx(0.0, abs=1e-15)
 
 
 def test_with_lift_changes_only_the_lift_and_leaves_the_vessel_alone():
