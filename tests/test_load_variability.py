@@ -63,6 +63,48 @@ def test_held_load_spread_grows_with_the_square_of_the_lead():
     np.testing.assert_allclose(s[0, 2, 2], 0.5 * 1e-4 * 400.0)
 
 
+def _reference_sigma_b(acc, nu, t, block):
+    """sigma_b of one window by its definition: reshape into blocks ending at the window's
+    end, velocity change between block ends less the block's mean model acceleration."""
+    nb = len(t) // block
+    if nb < 3:
+        return np.zeros(3)
+    keep = slice(len(t) - nb * block, None)
+    acc, nu, t = acc[keep].reshape(nb, block, 3), nu[keep].reshape(nb, block, 3), t[keep].reshape(nb, block)
+    missed = np.diff(nu[:, -1], axis=0) / np.diff(t[:, -1])[:, None] - acc[1:].mean(axis=1)
+    return missed.std(axis=0, ddof=1)
+
+
+def test_batched_windows_equal_each_window_by_its_definition(model, drift_log):
+    """Overlapping windows of every length (fewer than three blocks give zeros), evaluated in
+    one batch, equal each window's block statistics computed on its own."""
+    from hybridship.residual.environment import current_input, external_accel, thrust_error_accel
+    from hybridship.residual.environment import CUR, LOAD, THR
+    from hybridship.residual.load_variability import unexplained_load_std_windows
+
+    a = as_log_arrays(drift_log, model.vessel)
+    rows = np.arange(100, 1190, 1)
+    est = EnvironmentEstimator(model).run(a, rows, first_row=0)
+    rng = np.random.default_rng(0)
+    stop = rng.integers(20, len(rows) + 1, 40)
+    first = np.maximum(0, stop - rng.integers(1, 700, 40))
+    block = 30
+    got = unexplained_load_std_windows(model, a, est, first, stop, block)
+    x = est.x
+    ext = external_accel(x[:, 2], x[:, LOAD], 0.0, 0.0) + thrust_error_accel(
+        model, est.thrust_error_model, x[:, 0:3], x[:, 3:6], a.rpm[rows], a.azimuth_rad[rows], a.wind[rows],
+        x[:, CUR], x[:, THR])
+    acc = model.acceleration(x[:, 0:3], x[:, 3:6], rpm=a.rpm[rows], azimuth_rad=a.azimuth_rad[rows],
+                             wind=a.wind[rows], current=current_input(x[:, CUR]), accel_ext=ext)
+    for k in range(len(stop)):
+        w = slice(first[k], stop[k])
+        np.testing.assert_allclose(got[k], _reference_sigma_b(acc[w], x[w, 3:6], a.time_s[rows][w], block),
+                                   rtol=1e-9, atol=1e-15)
+    assert np.any((stop - first) // block < 3) and np.all(got[(stop - first) // block < 3] == 0)
+    assert np.all(got[(stop - first) // block >= 3] > 0)
+    np.testing.assert_allclose(unexplained_load_std(model, a, est.take(slice(first[0], stop[0])), block), got[0])
+
+
 @pytest.fixture(scope="module")
 def drift_log(model):
     n = 1500

@@ -24,7 +24,7 @@ from ..physics.model import DynamicModel
 from ..residual.calibration import CalibrationConfig, fit_spread_scale
 from ..residual.ensemble import EnsembleConfig, MLPEnsemble, fit_ensemble
 from ..residual.features import COMMAND_FEATURES, ResidualConfig, command_feature_columns, command_scales, prepare_log
-from ..residual.load_variability import held_load_rows, held_load_spread, unexplained_load_std
+from ..residual.load_variability import held_load_rows, held_load_spread, unexplained_load_std_windows
 from ..residual.environment import (EnvironmentConfig, EnvironmentEstimator, current_input,
                                     environment_accel)
 from ..residual.multistep import MultiStepConfig, collect_starts, train_multistep
@@ -590,11 +590,20 @@ class HybridPredictor:
         all_rows = np.unique(np.concatenate([w[0] for w in windows]))
         est, est_w = self._run_estimator(st.arrays, st.idx, all_rows)
         block = max(1, int(round(c.held_load_block_s / (step * dt))))
+        # a window is a run of consecutive estimates on its own filter grid (the last row's
+        # residue modulo the step): batch all windows of one grid
+        by_grid = {}
         for rows, starts in windows:
             rows = rows[np.isin(rows, est_w.rows)]          # not before the log's first valid position
             if rows.size:
-                sigma_b[starts] = unexplained_load_std(self.model, st.arrays,
-                                                       est_w.take(np.searchsorted(est_w.rows, rows)), block)
+                by_grid.setdefault(int(rows[-1]) % step, []).append((rows, starts))
+        for grid, group in by_grid.items():
+            on_grid = est_w.take(np.flatnonzero(est_w.rows % step == grid))
+            first = np.searchsorted(on_grid.rows, [rows[0] for rows, _ in group])
+            stop = np.searchsorted(on_grid.rows, [rows[-1] for rows, _ in group]) + 1
+            sb = unexplained_load_std_windows(self.model, st.arrays, on_grid, first, stop, block)
+            for (_, starts), s_k in zip(group, sb):
+                sigma_b[starts] = s_k
         return est, sigma_b
 
     def _calibrated_forecast_std(self, std, lead_s, commands, after_stop):

@@ -27,7 +27,8 @@ import numpy as np
 
 from .environment import CUR, LOAD, THR, current_input, external_accel, thrust_error_accel
 
-__all__ = ["held_load_rows", "unexplained_load_std", "held_load_std_ned", "held_load_spread"]
+__all__ = ["held_load_rows", "unexplained_load_std", "unexplained_load_std_windows", "held_load_std_ned",
+           "held_load_spread"]
 
 
 def held_load_rows(dp_active: np.ndarray, start: int, step: int, window_rows: int) -> np.ndarray:
@@ -62,24 +63,64 @@ def unexplained_load_std(model, arrays, estimate, block_rows: int) -> np.ndarray
     ndarray, shape (3,)
         ``[surge_m_s2, sway_m_s2, yaw_rad_s2]``; zeros with fewer than three blocks.
     """
+    n = len(estimate.rows)
+    return unexplained_load_std_windows(model, arrays, estimate, np.array([0]), np.array([n]), block_rows)[0]
+
+
+def unexplained_load_std_windows(model, arrays, estimate, first, stop, block_rows: int) -> np.ndarray:
+    """:func:`unexplained_load_std` of many windows of one run of estimates, batched.
+
+    The model's acceleration is evaluated once per estimate, and each window's block means
+    come from cumulative sums, so overlapping windows (a start every few seconds during
+    station keeping, each with its own ten minutes) cost little more than one.
+
+    Parameters
+    ----------
+    model, arrays : as :func:`unexplained_load_std`
+    estimate : EnvironmentEstimate
+        Estimates at increasing rows on one filter grid.
+    first, stop : array of int, shape (K,)
+        Window ``k`` is the estimates ``first[k]:stop[k]`` (consecutive positions in
+        ``estimate``; each one a window of :func:`held_load_rows`).
+    block_rows : int
+        Estimates per block; blocks end at each window's last estimate.
+
+    Returns
+    -------
+    ndarray, shape (K, 3)
+        ``[surge_m_s2, sway_m_s2, yaw_rad_s2]`` per window; zeros where a window holds
+        fewer than three blocks.
+    """
+    first, stop = np.asarray(first, dtype=int), np.asarray(stop, dtype=int)
+    out = np.zeros((len(first), 3))
+    n_blocks = (stop - first) // block_rows
+    use = n_blocks >= 3
+    if not np.any(use):
+        return out
     x, rows = estimate.x, estimate.rows
-    n_blocks = len(rows) // block_rows
-    if n_blocks < 3:
-        return np.zeros(3)
-    x = x[len(rows) - n_blocks * block_rows:]
-    rows = rows[len(rows) - n_blocks * block_rows:]
     eta, nu = x[:, 0:3], x[:, 3:6]
     ext = external_accel(eta[:, 2], x[:, LOAD], 0.0, 0.0) + thrust_error_accel(
         model, estimate.thrust_error_model, eta, nu, arrays.rpm[rows], arrays.azimuth_rad[rows],
         arrays.wind[rows], x[:, CUR], x[:, THR])
     acc = model.acceleration(eta, nu, rpm=arrays.rpm[rows], azimuth_rad=arrays.azimuth_rad[rows],
                              wind=arrays.wind[rows], current=current_input(x[:, CUR]), accel_ext=ext)
-    t = arrays.time_s[rows].reshape(n_blocks, block_rows)
-    nu_b = nu.reshape(n_blocks, block_rows, 3)
+    cum = np.concatenate([np.zeros((1, 3)), np.cumsum(acc, axis=0)])
+    t = arrays.time_s[rows]
+    nb = n_blocks[use]
+    m = np.arange(nb.max() - 1)                         # block pairs counted back from the window's end
+    valid = m[None, :] < (nb - 1)[:, None]              # (K', B-1)
+    end = (stop[use] - 1)[:, None] - block_rows * m[None, :]     # last estimate of the later block
+    end = np.where(valid, end, stop[use][:, None] - 1)  # padding: any valid position, masked below
+    prev = np.where(valid, end - block_rows, end)
     # a block's velocity change from the previous block's end, less the model's mean acceleration
-    dnu = np.diff(nu_b[:, -1], axis=0) / np.diff(t[:, -1])[:, None]
-    missed = dnu - acc.reshape(n_blocks, block_rows, 3)[1:].mean(axis=1)
-    return missed.std(axis=0, ddof=1)
+    dt = np.where(valid, t[end] - t[prev], 1.0)
+    dnu = (nu[end] - nu[prev]) / dt[..., None]
+    mean_acc = (cum[end + 1] - cum[end + 1 - block_rows]) / block_rows
+    missed = np.where(valid[..., None], dnu - mean_acc, 0.0)
+    k = valid.sum(axis=1)[:, None]
+    mu = missed.sum(axis=1) / k
+    out[use] = np.sqrt((np.where(valid[..., None], missed - mu[:, None, :], 0.0) ** 2).sum(axis=1) / (k - 1))
+    return out
 
 
 def held_load_std_ned(sigma_b: np.ndarray) -> np.ndarray:
