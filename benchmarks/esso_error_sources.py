@@ -18,6 +18,15 @@ validation runs with the physics alone (commands known) under changed inputs:
 * ``wind_future``: the logged wind of every step after the start (non-causal: how much of
   the physics' error the wind's unknown future makes).
 
+With ``--hybrid`` the benchmark's hybrid (:func:`~hybridship.evaluation.manoeuvre.make_predictors`,
+calibrated over 30 s) is also fitted on the fitting runs (about 3 min) and scored as
+``hybrid`` (its fitted wind forecast), ``hybrid_wind_future`` (the same nets fed the
+logged wind of every step after the start: how much of the hybrid's own error the wind's
+unknown future makes) and ``hybrid_wind_sampled`` (causal: the mean of 8 forecasts, each
+with the wind forecast plus the error path of the wind forecast from a random start of the
+fitting runs, heading averaged on the circle: whether averaging over plausible wind
+futures, rather than forecasting at the expected wind, lowers the error).
+
 Writes ``errors.csv`` (the manoeuvre benchmark's columns) and prints the distance and
 heading tables.
 """
@@ -46,34 +55,60 @@ def trailing_wind(wind: np.ndarray, n: int) -> np.ndarray:
     return vector_to_speed_dir(np.column_stack([mean(vec[:, 0]), mean(vec[:, 1])]))
 
 
-def _future_wind_predictor():
-    """The physics fed the logged wind of every step after the start (a non-causal oracle)."""
-    import dataclasses
+def _logged_future_wind():
+    """A wind "forecast" that is the logged wind of every step after the start (a non-causal oracle)."""
+    from hybridship.forecast_inputs.wind import WindForecast
 
-    from hybridship.predictors import DynamicPredictor
-    from hybridship.predictors.forecast_setup import _forecast_setup
-    from hybridship.predictors.result import ForecastResult
+    class LoggedFutureWind(WindForecast):
+        def steps(self, wind, time_s, rows, start_wind, n_steps, dt_s, *, logged=None, hold=None):
+            idx = np.asarray(rows, dtype=int)[:, None] + np.arange(n_steps)[None, :]
+            return np.ascontiguousarray(wind[np.minimum(idx, len(wind) - 1)])
 
-    class FutureWind(DynamicPredictor):
-        name = "wind_future"
+    # a time constant of 0 marks it as not held; the one-sample mean window reads no history
+    return LoggedFutureWind(mean_window_s=0.1, time_constant_s=0.0)
 
-        def forecast(self, log, start_times_s, horizon_s=60.0, *, commands="held"):
-            st = _forecast_setup(self.model, self.residual_config, log, start_times_s, horizon_s,
-                                 self.stop_after_failure, commands)
-            rows = st.idx[:, None] + np.arange(st.H)[None, :]
-            wind = np.ascontiguousarray(st.arrays.wind[np.minimum(rows, len(st.arrays.time_s) - 1)])
-            st = dataclasses.replace(st, wind=wind)
-            res = self.model.rollout(st.eta0, st.nu0, st.H, dt_s=st.dt, substeps=st.substeps, rpm=st.rpm,
-                                     azimuth_rad=st.az, wind=st.wind)
-            return ForecastResult(st.arrays.time_s[st.idx], res.time_s, res.eta, res.nu)
 
-    return FutureWind
+def _sampled_wind(forecast, logs, horizon_steps: int, seed: int = 0, every: int = 20):
+    """The wind forecast ``forecast`` plus, per start, the error path (logged minus forecast
+    wind vector [m/s], (H, 2)) of a random start of ``logs``: one draw of a plausible future."""
+    from hybridship.forecast_inputs.wind import WindForecast
+    from hybridship.frames import speed_dir_to_vector, vector_to_speed_dir
+
+    paths = []
+    for a in logs:
+        rows = np.arange(1, len(a.time_s) - horizon_steps - 1, every)
+        fc = forecast.steps(a.wind, a.time_s, rows, a.wind[rows], horizon_steps, a.dt_s, logged=a.wind_logged)
+        e = speed_dir_to_vector(a.wind[rows[:, None] + np.arange(horizon_steps)[None]]) - speed_dir_to_vector(fc)
+        paths.append(e[np.isfinite(e).all(axis=(1, 2))])
+    paths = np.concatenate(paths)
+    paths[:, 0] = 0.0                    # the first step keeps the start value
+    rng = np.random.default_rng(seed)
+
+    class SampledWind(WindForecast):
+        def steps(self, wind, time_s, rows, start_wind, n_steps, dt_s, *, logged=None, hold=None):
+            base = forecast.steps(wind, time_s, rows, start_wind, n_steps, dt_s, logged=logged, hold=hold)
+            draw = paths[rng.integers(0, len(paths), len(rows)), :n_steps]
+            return np.ascontiguousarray(vector_to_speed_dir(speed_dir_to_vector(base) + draw))
+
+    return SampledWind(mean_window_s=forecast.mean_window_s, time_constant_s=forecast.time_constant_s)
+
+
+def _mean_forecast(predictor, n: int):
+    """A forecaster that averages ``n`` forecasts of ``predictor`` (heading on the circle)."""
+    def forecast(a, start_times_s, horizon_s, **kw):
+        fcs = [predictor.forecast(a, start_times_s, horizon_s=horizon_s, **kw) for _ in range(n)]
+        eta = np.stack([f.eta for f in fcs])
+        mean = eta.mean(axis=0)
+        mean[..., 2] = np.arctan2(np.sin(eta[..., 2]).mean(axis=0), np.cos(eta[..., 2]).mean(axis=0))
+        return dataclasses.replace(fcs[0], eta=mean, eta_std=None)
+
+    return forecast
 
 
 def main(argv=None) -> int:
     from hybridship.datasets.esso_osaka import esso_log_arrays
     from hybridship.evaluation.manoeuvre import (ManoeuvreConfig, Run, error_table, forecast_errors, load_runs,
-                                                 split_runs, start_rows)
+                                                 make_predictors, split_runs, start_rows)
     from hybridship.fileio import atomic_write
     from hybridship.forecast_inputs.wind import fit_wind_forecast
     from hybridship.logs.ingest import ingest
@@ -84,6 +119,9 @@ def main(argv=None) -> int:
     ap.add_argument("--split", type=Path, default=ROOT / "out" / "esso-osaka" / "split",
                     help="the benchmark's split (default out/esso-osaka/split)")
     ap.add_argument("--out", type=Path, default=ROOT / "out" / "esso-error-sources")
+    ap.add_argument("--hybrid", action="store_true",
+                    help="also fit the benchmark's hybrid on the fitting runs and score it with its wind "
+                         "forecast and with the logged future wind")
     args = ap.parse_args(argv)
     if not (args.split / "train").is_dir():
         print(f"error: {args.split / 'train'}: not found; run benchmarks/esso_osaka.py first", file=sys.stderr)
@@ -93,12 +131,13 @@ def main(argv=None) -> int:
     cfg = ManoeuvreConfig()
     runs = load_runs(val_dir, v)
     p = DynamicPredictor(v, residual_config=cfg.residual)
-    FutureWind = _future_wind_predictor()
+    future_wind = _logged_future_wind()
     horizons = (5.0, 10.0, 20.0, 30.0)
     steps = np.array([int(round(h / runs[0].arrays.dt_s)) for h in horizons])
 
-    def score(rr, p=p):
-        return [forecast_errors(lambda a, st, h: p.forecast(a, st, horizon_s=h, commands="known"), r.arrays,
+    def score(rr, p=p, forecast=None):
+        fc = forecast or p.forecast
+        return [forecast_errors(lambda a, st, h: fc(a, st, horizon_s=h, commands="known"), r.arrays,
                                 start_rows(r.arrays, int(steps.max()), cfg.start_every_s), steps) for r in rr]
 
     def with_wind(fn):
@@ -112,10 +151,25 @@ def main(argv=None) -> int:
     wf, _ = fit_wind_forecast([r.arrays for r in load_runs(fit_dir, v)], max(horizons))
     print(f"wind forecast fitted on the fitting runs: {wf}")
     per[("wind_forecast", "known")] = score(runs, DynamicPredictor(v, residual_config=cfg.residual, wind_forecast=wf))
-    per[("wind_future", "known")] = score(runs, FutureWind(v, residual_config=cfg.residual))
+    per[("wind_future", "known")] = score(runs, DynamicPredictor(v, residual_config=cfg.residual,
+                                                                 wind_forecast=future_wind))
     for secs in (10, 30, 60):
         n = int(round(secs / runs[0].arrays.dt_s))
         per[(f"wind_trail{secs}", "known")] = score(with_wind(lambda w, n=n: trailing_wind(w, n)))
+    if args.hybrid:
+        import torch
+
+        torch.set_num_threads(1)
+        cfg = dataclasses.replace(cfg, calibration=dataclasses.replace(cfg.calibration, horizon_s=max(horizons)))
+        fit_logs = [r.arrays for r in load_runs(fit_dir, v)]
+        hyb = make_predictors(v, cfg)["hybrid"].fit(fit_logs, row_stride=cfg.train_row_stride)
+        wf = hyb.wind_forecast
+        print(f"hybrid fitted; its wind forecast: {wf}")
+        per[("hybrid", "known")] = score(runs, hyb)
+        hyb.wind_forecast = future_wind      # the same nets, the wind's future known
+        per[("hybrid_wind_future", "known")] = score(runs, hyb)
+        hyb.wind_forecast = _sampled_wind(wf, fit_logs, int(steps.max()))
+        per[("hybrid_wind_sampled", "known")] = score(runs, forecast=_mean_forecast(hyb, 8))
     errors = error_table(per, runs, horizons)
     atomic_write(args.out / "errors.csv", lambda fh: fh.write(errors.to_csv(index=False).encode()))
     for state in ("distance_m", "heading_deg"):

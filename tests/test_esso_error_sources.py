@@ -1,0 +1,71 @@
+"""benchmarks/esso_error_sources.py: the wind oracles and the mean over sampled wind futures."""
+
+from types import SimpleNamespace
+
+import numpy as np
+import pytest
+
+from conftest import load_benchmark
+from hybridship.forecast_inputs.wind import WindForecast
+from hybridship.frames import speed_dir_to_vector
+from hybridship.predictors.result import ForecastResult
+
+
+@pytest.fixture(scope="module")
+def es():
+    return load_benchmark("esso_error_sources")
+
+
+def _wind_log(n=400, dt=0.1, constant=False, seed=0):
+    rng = np.random.default_rng(seed)
+    speed = np.full(n, 2.0) if constant else 2.0 + np.cumsum(rng.normal(0, 0.05, n))
+    direction = np.full(n, 0.7) if constant else 0.7 + np.cumsum(rng.normal(0, 0.01, n))
+    return SimpleNamespace(time_s=np.arange(n) * dt, wind=np.column_stack([np.abs(speed), direction]),
+                           wind_logged=np.ones(n, bool), dt_s=dt)
+
+
+def test_the_logged_future_wind_is_the_wind_of_each_step_after_the_start(es):
+    a = _wind_log()
+    rows = np.array([3, 10, 395])
+    w = es._logged_future_wind().steps(a.wind, a.time_s, rows, a.wind[rows], 8, a.dt_s)
+    assert w.shape == (3, 8, 2)
+    np.testing.assert_array_equal(w[0], a.wind[3:11])
+    np.testing.assert_array_equal(w[1], a.wind[10:18])
+    np.testing.assert_array_equal(w[2], a.wind[[395, 396, 397, 398, 399, 399, 399, 399]])  # held at the end
+
+
+def test_sampled_wind_adds_the_forecasts_own_error_paths(es):
+    forecast = WindForecast(mean_window_s=5.0, time_constant_s=2.0)
+    rows = np.array([60, 120, 200])
+    # a steady wind: the forecast makes no error, so every sampled future is the forecast
+    calm = _wind_log(constant=True)
+    sampled = es._sampled_wind(forecast, [calm], 30)
+    base = forecast.steps(calm.wind, calm.time_s, rows, calm.wind[rows], 30, calm.dt_s)
+    got = sampled.steps(calm.wind, calm.time_s, rows, calm.wind[rows], 30, calm.dt_s)
+    np.testing.assert_allclose(speed_dir_to_vector(got), speed_dir_to_vector(base), atol=1e-12)
+    # a gusty wind: the futures differ from the forecast after the first step, which keeps the start value
+    gusty = _wind_log(seed=1)
+    sampled = es._sampled_wind(forecast, [gusty], 30)
+    base = forecast.steps(gusty.wind, gusty.time_s, rows, gusty.wind[rows], 30, gusty.dt_s)
+    got = sampled.steps(gusty.wind, gusty.time_s, rows, gusty.wind[rows], 30, gusty.dt_s)
+    np.testing.assert_allclose(speed_dir_to_vector(got[:, 0]), speed_dir_to_vector(base[:, 0]), atol=1e-12)
+    assert np.all(np.abs(speed_dir_to_vector(got[:, 1:]) - speed_dir_to_vector(base[:, 1:])).max(axis=(1, 2)) > 0)
+
+
+def test_the_mean_forecast_averages_the_heading_on_the_circle(es):
+    calls = []
+
+    class Stub:
+        def forecast(self, a, start_times_s, horizon_s, **kw):
+            calls.append(kw)
+            psi = np.radians(179.0 if len(calls) % 2 else -179.0)
+            eta = np.zeros((1, 2, 3))
+            eta[..., 0] = len(calls)            # north 1, 2, 3, 4 m
+            eta[..., 2] = psi
+            return ForecastResult(np.zeros(1), np.arange(2.0), eta, np.zeros((1, 2, 3)), eta_std=np.ones((1, 2, 3)))
+
+    fc = es._mean_forecast(Stub(), 4)(None, [0.0], 1.0, commands="known")
+    assert len(calls) == 4 and all(kw == {"commands": "known"} for kw in calls)
+    np.testing.assert_allclose(fc.eta[..., 0], 2.5)
+    np.testing.assert_allclose(np.abs(fc.eta[..., 2]), np.pi)      # not 0, the arithmetic mean
+    assert fc.eta_std is None
