@@ -36,20 +36,34 @@ def test_the_logged_future_wind_is_the_wind_of_each_step_after_the_start(es):
 
 def test_sampled_wind_adds_the_forecasts_own_error_paths(es):
     forecast = WindForecast(mean_window_s=5.0, time_constant_s=2.0)
-    rows = np.array([60, 120, 200])
-    # a steady wind: the forecast makes no error, so every sampled future is the forecast
-    calm = _wind_log(constant=True)
-    sampled = es._sampled_wind(forecast, [calm], 30)
-    base = forecast.steps(calm.wind, calm.time_s, rows, calm.wind[rows], 30, calm.dt_s)
-    got = sampled.steps(calm.wind, calm.time_s, rows, calm.wind[rows], 30, calm.dt_s)
-    np.testing.assert_allclose(speed_dir_to_vector(got), speed_dir_to_vector(base), atol=1e-12)
-    # a gusty wind: the futures differ from the forecast after the first step, which keeps the start value
+    # one error path, from row 1 (the only start when the spacing exceeds the log): sampled at
+    # that same row, the forecast plus its own error is exactly the wind the log measured
     gusty = _wind_log(seed=1)
-    sampled = es._sampled_wind(forecast, [gusty], 30)
+    sampled = es._sampled_wind(forecast, [gusty], 30, every=10_000)
+    got = sampled.steps(gusty.wind, gusty.time_s, np.array([1, 1]), gusty.wind[[1, 1]], 30, gusty.dt_s)
+    np.testing.assert_allclose(speed_dir_to_vector(got), speed_dir_to_vector(gusty.wind[1:31])[None].repeat(2, 0),
+                               atol=1e-12)
+    # at other starts the drawn error is added to that start's forecast; the first step keeps the start value
+    rows = np.array([60, 120, 200])
     base = forecast.steps(gusty.wind, gusty.time_s, rows, gusty.wind[rows], 30, gusty.dt_s)
     got = sampled.steps(gusty.wind, gusty.time_s, rows, gusty.wind[rows], 30, gusty.dt_s)
+    path = speed_dir_to_vector(gusty.wind[1:31]) - speed_dir_to_vector(
+        forecast.steps(gusty.wind, gusty.time_s, np.array([1]), gusty.wind[[1]], 30, gusty.dt_s))[0]
+    np.testing.assert_allclose(speed_dir_to_vector(got[:, 1:]) - speed_dir_to_vector(base[:, 1:]),
+                               path[None, 1:].repeat(3, 0), atol=1e-12)
     np.testing.assert_allclose(speed_dir_to_vector(got[:, 0]), speed_dir_to_vector(base[:, 0]), atol=1e-12)
-    assert np.all(np.abs(speed_dir_to_vector(got[:, 1:]) - speed_dir_to_vector(base[:, 1:])).max(axis=(1, 2)) > 0)
+
+
+def test_error_paths_only_where_the_log_measured_the_whole_future(es):
+    forecast = WindForecast(mean_window_s=5.0, time_constant_s=2.0)
+    a = _wind_log(n=200, seed=2)
+    assert es._error_paths(forecast, [a], 60, every=1).shape == (138, 60, 2)     # starts 1..138
+    a.segment_id = np.where(np.arange(200) < 100, 0, 1)
+    assert len(es._error_paths(forecast, [a], 60, every=1)) == 40 + 39          # starts 1..40, 100..138
+    a.wind_logged[:150] = False                  # wind filled in before row 150: no whole future
+    assert len(es._error_paths(forecast, [a], 60, every=1)) == 0
+    with pytest.raises(ValueError, match="60 steps of logged wind"):
+        es._sampled_wind(forecast, [a], 60, every=1)
 
 
 def test_the_mean_forecast_averages_the_heading_on_the_circle(es):
