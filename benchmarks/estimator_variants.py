@@ -10,7 +10,9 @@ the wind at its start value instead of the fitted wind forecast
 alone with that fitted wind forecast (what the wind forecast does without the estimator).
 
 Writes ``variants.csv`` and ``variants.md`` (60-s MAE as a ratio to physics alone, first
-5 / first 20 intervals) to ``--out``.
+5 / first 20 intervals) to ``--out``, and ``variants_per_log.csv`` (the same ratio for each
+failure on its own: ``data, variant, log, state, ratio_5, ratio_20``), which shows whether a
+pooled change comes from every failure or from one.
 
 ``--data own`` runs on ``--own-n`` fresh simulated scenarios of our own (seeds from
 ``--own-seed``) instead.
@@ -23,6 +25,8 @@ Examples::
         yaw_load_walk_1e-4 restart_yaw_at_stop per_dof mean_bias --out docs/results/estimator-variants-own-20
     python benchmarks/estimator_variants.py --data own --own-seed 200 --only default held_wind \
         physics_wind_forecast yaw_load_prior_3e-5 yaw_load_prior_1e-4 --out docs/results/estimator-variants-own-20-seed200
+    python benchmarks/estimator_variants.py --data truthsim-dev own --only default tight_thrust_prior \
+        thrust_prior_0.05 wide_thrust_prior --out docs/results/estimator-variants-thrust-prior
 """
 
 from __future__ import annotations
@@ -67,6 +71,8 @@ VARIANTS = {
                           "thrust error a random walk (2e-3 per sqrt(s)) instead of constant"),
     "tight_thrust_prior": ({"environment_config": C(thrust_error_prior_per_thruster=0.1)},
                            "thrust-error prior 0.1 per thruster instead of 0.2"),
+    "thrust_prior_0.05": ({"environment_config": C(thrust_error_prior_per_thruster=0.05)},
+                          "thrust-error prior 0.05 per thruster instead of 0.2"),
     "wide_thrust_prior": ({"environment_config": C(thrust_error_prior_per_thruster=0.4)},
                           "thrust-error prior 0.4 per thruster instead of 0.2"),
     "current_prior_0.1": ({"environment_config": C(current_prior_m_s=0.1)}, "current prior 0.1 m/s instead of 0.02 m/s"),
@@ -94,6 +100,16 @@ def _errors(pred, arrays, **kw):
     return metrics.absolute_errors(p[:, [59]], t[:, [59]])[:, 0]       # (20, 3) at 60 s
 
 
+def per_log_rows(data: str, variant: str, names, errors: np.ndarray, physics: np.ndarray) -> list[dict]:
+    """``variants_per_log.csv`` rows: each failure's 60-s MAE as a ratio to the physics' on the
+    same failure, over the first 5 and the first 20 intervals; ``errors`` and ``physics`` are
+    (logs, 20 intervals, states) absolute errors."""
+    return [{"data": data, "variant": variant, "log": name, "state": state,
+             "ratio_5": errors[k, :5, j].mean() / physics[k, :5, j].mean(),
+             "ratio_20": errors[k, :, j].mean() / physics[k, :, j].mean()}
+            for j, state in enumerate(metrics.STATES) for k, name in enumerate(names)]
+
+
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--out", type=Path, required=True)
@@ -106,18 +122,23 @@ def main(argv=None) -> int:
     args = ap.parse_args(argv)
     from hybridship.sim.scenario import embedded_scenarios
 
-    data = {}
+    data, log_names = {}, {}
     if "embedded" in args.data:
-        data["embedded"] = [s.log for s in embedded_scenarios(3, 0)]
+        scen = embedded_scenarios(3, 0)
+        data["embedded"], log_names["embedded"] = [s.log for s in scen], [s.name for s in scen]
     if "truthsim-dev" in args.data and TRUTHSIM.is_dir():
-        data["truthsim-dev"] = [pd.read_csv(f) for f in log_files(TRUTHSIM)]
+        files = log_files(TRUTHSIM)
+        data["truthsim-dev"] = [pd.read_csv(f) for f in files]
+        log_names["truthsim-dev"] = [f.name.split(".")[0] for f in files]
     elif "truthsim-dev" in args.data:
         print(f"skipping truthsim-dev: {TRUTHSIM} not found", file=sys.stderr)
     if "own" in args.data:
         name = f"own {args.own_seed}-{args.own_seed + args.own_n - 1}"
-        data[name] = [s.log for s in embedded_scenarios(args.own_n, args.own_seed)]
-    rows = []
+        scen = embedded_scenarios(args.own_n, args.own_seed)
+        data[name], log_names[name] = [s.log for s in scen], [s.name for s in scen]
+    rows, per_log = [], []
     for dname, logs in data.items():
+        names = log_names[dname]
         dyn = DynamicPredictor("gunnerus")
         arrays = [as_log_arrays(x, dyn.model.vessel) for x in logs]
         phys = np.stack([_errors(dyn, a) for a in arrays])                       # (L, 20, 3)
@@ -135,10 +156,13 @@ def main(argv=None) -> int:
                 r20 = e[:, :, j].mean() / phys[:, :, j].mean()
                 row[state] = f"{r5:.2f}/{r20:.2f}"
             rows.append(row)
+            per_log += per_log_rows(dname, vname, names, e, phys)
             print(row, flush=True)
     df = pd.DataFrame(rows)
     args.out.mkdir(parents=True, exist_ok=True)
     atomic_write(args.out / "variants.csv", lambda fh: fh.write(df.to_csv(index=False).encode("utf-8")))
+    pl = pd.DataFrame(per_log).round({"ratio_5": 3, "ratio_20": 3})
+    atomic_write(args.out / "variants_per_log.csv", lambda fh: fh.write(pl.to_csv(index=False).encode("utf-8")))
     md = [markdown_table(df)]
     atomic_write(args.out / "variants.md", lambda fh: fh.write(("\n".join(md) + "\n").encode("utf-8")))
     print("\n".join(md))

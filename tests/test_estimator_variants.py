@@ -1,0 +1,23 @@
+"""benchmarks/estimator_variants.py: the per-failure ratios to the physics."""
+
+import numpy as np
+
+from conftest import load_benchmark
+from hybridship.evaluation import metrics
+
+
+def test_per_log_rows_are_each_failures_ratio_to_its_own_physics():
+    ev = load_benchmark("estimator_variants")
+    phys = np.ones((2, 20, 3))
+    phys[1] *= 4.0
+    err = phys.copy()
+    err[0, :5] *= 3.0                 # log a: three times the physics over the first five intervals
+    err[1, :, 2] *= 0.5               # log b: half the physics' heading error throughout
+    rows = ev.per_log_rows("set", "variant", ["a", "b"], err, phys)
+    assert len(rows) == 2 * len(metrics.STATES)
+    got = {(r["log"], r["state"]): (r["ratio_5"], r["ratio_20"]) for r in rows}
+    for state in metrics.STATES:
+        np.testing.assert_allclose(got[("a", state)], (3.0, (5 * 3 + 15) / 20))
+    np.testing.assert_allclose(got[("b", metrics.STATES[2])], (0.5, 0.5))
+    np.testing.assert_allclose(got[("b", metrics.STATES[0])], (1.0, 1.0))
+    assert {r["data"] for r in rows} == {"set"} and {r["variant"] for r in rows} == {"variant"}
