@@ -188,3 +188,16 @@ def test_station_keeping_spread_is_validated():
 
     with pytest.raises(ValueError, match="station_keeping_spread"):
         CalibrationConfig(station_keeping_spread="weather")
+
+
+def test_the_filter_window_must_cover_the_held_load_window():
+    from hybridship.predictors import HybridPredictor
+    from hybridship.residual.environment import EnvironmentConfig
+
+    with pytest.raises(ValueError, match="environment_window_s: must be at least .*held_load_window_s = 600 s"):
+        HybridPredictor("gunnerus", environment_window_s=300.0)
+    # without the held load, or without the estimator, a short window is fine
+    HybridPredictor("gunnerus", environment_window_s=300.0,
+                    environment_config=EnvironmentConfig(held_load_window_s=0.0))
+    HybridPredictor("gunnerus", environment_window_s=300.0, environment="mean")
+    HybridPredictor("gunnerus", environment_window_s=600.0)

@@ -70,7 +70,9 @@ class HybridPredictor:
         ``bias_window_s`` mean residual of station keeping (the scheme before the estimator).
     environment_config : EnvironmentConfig
     environment_window_s : float
-        How far before the earliest start the estimator starts filtering [s].
+        How far before the earliest start the estimator starts filtering [s]; at least
+        ``environment_config.held_load_window_s`` (so that every start's held-load window lies
+        inside the filtered rows, whatever the other starts of the batch).
     nets_after_stop : bool
         Let the nets correct forecasts that start after a failure (``dp_active == 0``).
         Off by default: on drift, the nets did not improve on the environment estimator
@@ -148,6 +150,11 @@ class HybridPredictor:
             raise ValueError(f"environment: expected one of {ENVIRONMENT_SOURCES}, got {environment!r}")
         if not environment_window_s > 0:
             raise ValueError(f"environment_window_s: must be > 0 s, got {environment_window_s}")
+        if environment == "estimator" and environment_window_s < environment_config.held_load_window_s:
+            # a shorter filter window would cut a start's held-load window at the batch's
+            # earliest start, so its spread would depend on the other starts
+            raise ValueError(f"environment_window_s: must be at least environment_config.held_load_window_s = "
+                             f"{environment_config.held_load_window_s:g} s, got {environment_window_s:g}")
         self.environment = environment
         self.environment_config = environment_config
         self.environment_window_s = float(environment_window_s)
