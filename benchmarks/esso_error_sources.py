@@ -113,13 +113,17 @@ def _sampled_wind(forecast, logs, horizon_steps: int, seed: int = 0, every: int 
 
 
 def _mean_forecast(predictor, n: int):
-    """A forecaster that averages ``n`` forecasts of ``predictor`` (heading on the circle)."""
+    """A forecaster that averages ``n`` forecasts of ``predictor`` (heading on the circle),
+    made in one batch: every start time ``n`` times over, each copy with its own draws."""
+    from hybridship.predictors.result import ForecastResult
+
     def forecast(a, start_times_s, horizon_s, **kw):
-        fcs = [predictor.forecast(a, start_times_s, horizon_s=horizon_s, **kw) for _ in range(n)]
-        eta = np.stack([f.eta for f in fcs])
+        st = np.asarray(start_times_s, dtype=float)
+        fc = predictor.forecast(a, np.tile(st, n), horizon_s=horizon_s, **kw)
+        eta = fc.eta.reshape((n, st.size) + fc.eta.shape[1:])
         mean = eta.mean(axis=0)
         mean[..., 2] = np.arctan2(np.sin(eta[..., 2]).mean(axis=0), np.cos(eta[..., 2]).mean(axis=0))
-        return dataclasses.replace(fcs[0], eta=mean, eta_std=None)
+        return ForecastResult(st, fc.lead_s, mean, fc.nu.reshape(eta.shape).mean(axis=0))
 
     return forecast
 

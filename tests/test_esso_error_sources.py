@@ -71,15 +71,20 @@ def test_the_mean_forecast_averages_the_heading_on_the_circle(es):
 
     class Stub:
         def forecast(self, a, start_times_s, horizon_s, **kw):
-            calls.append(kw)
-            psi = np.radians(179.0 if len(calls) % 2 else -179.0)
-            eta = np.zeros((1, 2, 3))
-            eta[..., 0] = len(calls)            # north 1, 2, 3, 4 m
-            eta[..., 2] = psi
-            return ForecastResult(np.zeros(1), np.arange(2.0), eta, np.zeros((1, 2, 3)), eta_std=np.ones((1, 2, 3)))
+            calls.append((np.asarray(start_times_s), kw))
+            S = len(start_times_s)
+            eta = np.zeros((S, 2, 3))
+            copy, start = np.arange(S) // 2, np.arange(S) % 2              # the batch is the starts tiled
+            eta[..., 0] = (copy + 1.0 + 10.0 * start)[:, None]              # north 1..4 m (+10 m for start 1)
+            eta[..., 2] = np.where(copy % 2 == 0, 1.0, -1.0)[:, None] * np.radians(179.0)
+            return ForecastResult(np.asarray(start_times_s), np.arange(2.0), eta, np.zeros((S, 2, 3)),
+                                  eta_std=np.ones((S, 2, 3)))
 
-    fc = es._mean_forecast(Stub(), 4)(None, [0.0], 1.0, commands="known")
-    assert len(calls) == 4 and all(kw == {"commands": "known"} for kw in calls)
-    np.testing.assert_allclose(fc.eta[..., 0], 2.5)
-    np.testing.assert_allclose(np.abs(fc.eta[..., 2]), np.pi)      # not 0, the arithmetic mean
+    fc = es._mean_forecast(Stub(), 4)(None, [0.0, 5.0], 1.0, commands="known")
+    assert len(calls) == 1 and calls[0][1] == {"commands": "known"}       # one batch
+    np.testing.assert_array_equal(calls[0][0], [0.0, 5.0] * 4)
+    np.testing.assert_array_equal(fc.start_time_s, [0.0, 5.0])
+    np.testing.assert_allclose(fc.eta[0, :, 0], 2.5)
+    np.testing.assert_allclose(fc.eta[1, :, 0], 12.5)
+    np.testing.assert_allclose(np.abs(fc.eta[..., 2]), np.pi)     # +-179 deg average to 180, not 0
     assert fc.eta_std is None

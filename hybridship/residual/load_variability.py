@@ -116,10 +116,8 @@ def unexplained_load_std_windows(model, arrays, estimate, first, stop, block_row
     dt = np.where(valid, t[end] - t[prev], 1.0)
     dnu = (nu[end] - nu[prev]) / dt[..., None]
     mean_acc = (cum[end + 1] - cum[end + 1 - block_rows]) / block_rows
-    missed = np.where(valid[..., None], dnu - mean_acc, 0.0)
-    k = valid.sum(axis=1)[:, None]
-    mu = missed.sum(axis=1) / k
-    out[use] = np.sqrt((np.where(valid[..., None], missed - mu[:, None, :], 0.0) ** 2).sum(axis=1) / (k - 1))
+    missed = np.where(valid[..., None], dnu - mean_acc, np.nan)   # padding out of the statistics
+    out[use] = np.nanstd(missed, axis=1, ddof=1)
     return out
 
 
