@@ -25,7 +25,12 @@ logged wind of every step after the start: how much of the hybrid's own error th
 unknown future makes) and ``hybrid_wind_sampled`` (causal: the mean of 8 forecasts, each
 with the wind forecast plus the error path of the wind forecast from a random start of the
 fitting runs, heading averaged on the circle: whether averaging over plausible wind
-futures, rather than forecasting at the expected wind, lowers the error).
+futures, rather than forecasting at the expected wind, lowers the error) and
+``hybrid_error_feedback`` (causal: each forecast corrected by ``alpha (tau / 30 s)^2`` times
+the error that the forecast started 30 s earlier made at its 30-s lead, known at the start,
+turned with the heading since then; ``alpha`` chosen from :data:`FEEDBACK_ALPHAS` on the
+held-back ends of the fitting runs, which the nets did not train on: whether the hybrid's
+error persists from one forecast to the next).
 
 Writes ``errors.csv`` (the manoeuvre benchmark's columns) and prints the distance and
 heading tables.
@@ -128,6 +133,65 @@ def _mean_forecast(predictor, n: int):
     return forecast
 
 
+#: Candidate gains of the error feedback (``hybrid_error_feedback``); 0 is no feedback.
+FEEDBACK_ALPHAS = (0.0, 0.1, 0.2, 0.3, 0.5)
+
+
+def _error_feedback(predictor, alpha: float, lag_s: float = 30.0):
+    """A forecaster that adds to ``predictor``'s forecast ``alpha (tau / lag_s)^2`` times the
+    error of its forecast started ``lag_s`` earlier at lead ``lag_s`` (measured minus forecast
+    north, east and heading at the start, known then), the position error turned by the heading
+    change since that start. Starts with no forecast ``lag_s`` before them in the log keep the
+    plain forecast. The shape ``tau^2`` is that of a constant acceleration error."""
+    from hybridship.frames import wrap_pi
+    from hybridship.predictors.result import ForecastResult
+
+    def forecast(a, start_times_s, horizon_s, **kw):
+        st = np.asarray(start_times_s, dtype=float)
+        fc = predictor.forecast(a, st, horizon_s=horizon_s, **kw)
+        eta = fc.eta.copy()
+        earlier = st - lag_s
+        has = earlier >= a.time_s[0]
+        if alpha and has.any():
+            prev = predictor.forecast(a, earlier[has], horizon_s=lag_s, **kw)
+            rows = np.searchsorted(a.time_s, st[has])
+            err = a.eta[rows] - prev.eta[:, -1]
+            err[:, 2] = wrap_pi(err[:, 2])
+            turn = wrap_pi(a.eta[rows, 2] - prev.eta[:, 0, 2])
+            c, s = np.cos(turn), np.sin(turn)
+            err[:, :2] = np.column_stack([c * err[:, 0] - s * err[:, 1], s * err[:, 0] + c * err[:, 1]])
+            shape = alpha * (fc.lead_s / lag_s) ** 2
+            eta[has] += shape[None, :, None] * err[:, None, :]
+            eta[..., 2] = wrap_pi(eta[..., 2])
+        return ForecastResult(st, fc.lead_s, eta, fc.nu)
+
+    return forecast
+
+
+def _choose_feedback(predictor, logs, steps: np.ndarray, start_every_s: float, lag_s: float = 30.0):
+    """The :data:`FEEDBACK_ALPHAS` gain with the lowest mean distance error at the longest lead,
+    scored on the held-back end of each log (the rows the nets did not train on, starting at
+    least ``lag_s`` into it, so that the earlier forecast is held back too). Returns
+    ``(alpha, {alpha: (distance [m], heading [deg])})``."""
+    from hybridship.evaluation.manoeuvre import forecast_errors
+
+    dp_only = bool(predictor.training_info["calibration"]["dp_only"])
+    scores = {}
+    for alpha in FEEDBACK_ALPHAS:
+        fb = _error_feedback(predictor, alpha, lag_s)
+        errs = []
+        for a in logs:
+            cut = predictor._calibration_cut(a, predictor.calibration_config, dp_only)
+            dt = float(np.median(np.diff(a.time_s)))
+            first = cut + int(round(lag_s / dt))
+            rows = np.arange(first, len(a.time_s) - int(steps.max()), max(1, int(round(start_every_s / dt))))
+            if rows.size:
+                errs.append(forecast_errors(lambda x, st, h: fb(x, st, h, commands="known"), a, rows, steps)[:, -1])
+        e = np.concatenate(errs)
+        scores[alpha] = (float(e[:, 3].mean()), float(e[:, 2].mean()))
+    return min(scores, key=lambda k: scores[k][0]), scores
+
+
 def main(argv=None) -> int:
     from hybridship.datasets.esso_osaka import esso_log_arrays
     from hybridship.evaluation.manoeuvre import (ManoeuvreConfig, Run, error_table, forecast_errors, load_runs,
@@ -193,6 +257,12 @@ def main(argv=None) -> int:
         per[("hybrid_wind_future", "known")] = score(runs, hyb)
         hyb.wind_forecast = _sampled_wind(wf, fit_logs, int(steps.max()))
         per[("hybrid_wind_sampled", "known")] = score(runs, forecast=_mean_forecast(hyb, 8))
+        hyb.wind_forecast = wf
+        alpha, fb_scores = _choose_feedback(hyb, fit_logs, steps, cfg.start_every_s)
+        print("error feedback on the fitting runs' held-back ends (30-s distance [m], heading [deg]): "
+              + ", ".join(f"alpha {k:g}: {d:.3f}, {h:.2f}" for k, (d, h) in fb_scores.items())
+              + f"; chosen {alpha:g}")
+        per[("hybrid_error_feedback", "known")] = score(runs, forecast=_error_feedback(hyb, alpha))
     errors = error_table(per, runs, horizons)
     atomic_write(args.out / "errors.csv", lambda fh: fh.write(errors.to_csv(index=False).encode()))
     for state in ("distance_m", "heading_deg"):

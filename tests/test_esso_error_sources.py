@@ -88,3 +88,30 @@ def test_the_mean_forecast_averages_the_heading_on_the_circle(es):
     np.testing.assert_allclose(fc.eta[1, :, 0], 12.5)
     np.testing.assert_allclose(np.abs(fc.eta[..., 2]), np.pi)     # +-179 deg average to 180, not 0
     assert fc.eta_std is None
+
+
+def test_error_feedback_adds_the_earlier_forecasts_error_turned_with_the_heading(es):
+    t = np.arange(100.0)
+    psi = np.where(t < 40, 0.0, np.pi / 2)
+    a = SimpleNamespace(time_s=t, eta=np.column_stack([t, np.zeros_like(t), psi]))
+    calls = []
+
+    class Hold:  # forecasts that the ship stays where it is at the start
+        def forecast(self, log, start_times_s, horizon_s, **kw):
+            calls.append(kw)
+            rows = np.searchsorted(log.time_s, start_times_s)
+            lead = np.arange(int(horizon_s) + 1.0)
+            eta = np.repeat(log.eta[rows][:, None], lead.size, axis=1)
+            return ForecastResult(np.asarray(start_times_s), lead, eta, np.zeros_like(eta))
+
+    fc = es._error_feedback(Hold(), 0.5, lag_s=30.0)(a, [10.0, 45.0], 30.0, commands="known")
+    assert all(kw == {"commands": "known"} for kw in calls)
+    np.testing.assert_array_equal(fc.eta[0], np.repeat(a.eta[[10]], 31, axis=0))   # no forecast 30 s before
+    # the forecast from 15 s missed 30 m north (and 90 deg); the ship has turned 90 deg since,
+    # so the miss is carried over as 30 m east, growing with lead^2 to alpha x 30 m at 30 s
+    shape = 0.5 * (np.arange(31) / 30.0) ** 2
+    np.testing.assert_allclose(fc.eta[1, :, 0], 45.0, atol=1e-12)
+    np.testing.assert_allclose(fc.eta[1, :, 1], 30.0 * shape, atol=1e-12)
+    np.testing.assert_allclose(fc.eta[1, :, 2], np.pi / 2 * (1 + shape), atol=1e-12)
+    plain = es._error_feedback(Hold(), 0.0)(a, [45.0], 30.0)
+    np.testing.assert_array_equal(plain.eta[0], np.repeat(a.eta[[45]], 31, axis=0))
