@@ -73,36 +73,14 @@ def _logged_future_wind():
     return LoggedFutureWind(mean_window_s=0.1, time_constant_s=0.0)
 
 
-def _error_paths(forecast, logs, horizon_steps: int, every: int = 20) -> np.ndarray:
-    """Error paths of the wind forecast ``forecast``: logged minus forecast wind vector [m/s]
-    over ``horizon_steps`` from a start every ``every`` rows of ``logs`` whose wind was logged
-    over the whole horizon in one segment, (P, H, 2)."""
-    from hybridship.frames import speed_dir_to_vector
-
-    paths = []
-    for a in logs:
-        n = len(a.time_s)
-        rows = np.arange(1, n - horizon_steps - 1, every)
-        # only futures the log really measured: logged wind in one segment over the horizon
-        ok = np.asarray(a.wind_logged, dtype=bool) & np.isfinite(a.wind).all(axis=1)
-        seg = np.asarray(getattr(a, "segment_id", np.zeros(n, dtype=int)))
-        bad = np.concatenate([[0], np.cumsum(~ok)])
-        rows = rows[(bad[rows + horizon_steps] == bad[rows]) & (seg[rows + horizon_steps - 1] == seg[rows])]
-        if rows.size == 0:
-            continue
-        fc = forecast.steps(a.wind, a.time_s, rows, a.wind[rows], horizon_steps, a.dt_s, logged=a.wind_logged)
-        e = speed_dir_to_vector(a.wind[rows[:, None] + np.arange(horizon_steps)[None]]) - speed_dir_to_vector(fc)
-        paths.append(e[np.isfinite(e).all(axis=(1, 2))])
-    return np.concatenate(paths) if paths else np.zeros((0, horizon_steps, 2))
-
-
 def _sampled_wind(forecast, logs, horizon_steps: int, seed: int = 0, every: int = 20):
     """The wind forecast ``forecast`` plus, per start, one of its error paths in ``logs``
-    (:func:`_error_paths`), drawn at random: one draw of a plausible future."""
-    from hybridship.forecast_inputs.wind import WindForecast
+    (:func:`~hybridship.forecast_inputs.wind.wind_error_paths`), drawn at random: one draw
+    of a plausible future."""
+    from hybridship.forecast_inputs.wind import WindForecast, wind_error_paths
     from hybridship.frames import speed_dir_to_vector, vector_to_speed_dir
 
-    paths = _error_paths(forecast, logs, horizon_steps, every)
+    paths = wind_error_paths(forecast, logs, horizon_steps, every=every).copy()
     if len(paths) == 0:
         raise ValueError(f"no start in the logs has {horizon_steps} steps of logged wind after it")
     paths[:, 0] = 0.0                    # the first step keeps the start value

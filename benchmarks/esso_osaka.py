@@ -49,7 +49,7 @@ def main(argv=None) -> int:
     from hybridship.datasets.esso_osaka import RUN_KINDS, default_data_dir
     from hybridship.evaluation.manoeuvre import (COMMAND_MODES, HORIZONS_S, _md_coverage, _md_table, pivot,
                                                  run_manoeuvre_benchmark, split_runs, wins,
-                                                 md_coverage_intervals)
+                                                 md_coverage_intervals, md_spread_by_kind)
 
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--data", type=Path, default=default_data_dir() / "data", help="folder of the published runs")
@@ -99,8 +99,10 @@ def main(argv=None) -> int:
                 lines.append(f"- vs {other}, commands {mode}: hybrid lower in {len(cells)} of {total} cells"
                              + (f"; not in: {', '.join(f'{k} {c}' for k, c in lost)}" if lost else ""))
         text = replace_generated(text, "wins", "\n".join(lines) + "\n")
-        cov = (f"Made by `{command.strip()}` (`coverage.csv`, rows `kind = all`; `coverage_intervals.csv`).\n\n"
-               + _md_coverage(res.coverage) + "\n" + md_coverage_intervals(res.coverage_intervals))
+        cov = (f"Made by `{command.strip()}` (`coverage.csv`, rows `kind = all`; `coverage_intervals.csv`; "
+               f"`sharpness.csv`).\n\n"
+               + _md_coverage(res.coverage) + "\n" + md_coverage_intervals(res.coverage_intervals)
+               + "\n" + md_spread_by_kind(res.coverage, res.sharpness))
         text = replace_generated(text, "coverage", cov)
         cfg = res.config
         setup = (f"Made by `{command.strip()}`. Hybrid: features `{', '.join(cfg.residual.features)}`; "
@@ -108,7 +110,9 @@ def main(argv=None) -> int:
                  + (f" (multi-step horizon {cfg.multistep.horizon_s:g} s, {cfg.multistep.iterations} iterations of "
                     f"{cfg.multistep.batch_starts} starts)" if cfg.training == "multi_step" else "")
                  + f"; command-regime guard {'on' if cfg.command_guard else 'off'}; spread calibrated on the last "
-                 f"{cfg.calibration.fraction:.0%} of each training run; wind forecast "
+                 f"{cfg.calibration.fraction:.0%} of each training run"
+                 + (f", with {cfg.wind_samples} wind futures in it" if cfg.wind_samples else "")
+                 + "; wind forecast "
                  f"{_wind_text(res.predictors['hybrid'])}; {cfg.ensemble.n_members} members, seed "
                  f"{cfg.ensemble.seed}. Training took {res.timings_s['fit_hybrid']:.0f} s (wall time, one thread, "
                  "on a shared machine).\n")

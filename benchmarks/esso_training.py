@@ -20,13 +20,14 @@ benchmark's), ``+cmd`` (all command-aware features added),
 ``_abs`` (absolute-error loss), ``_lead`` (loss weighted by lead time), ``_hl<m>`` (heading
 length of the loss), ``_c<s>`` (curriculum from a ``<s>``-second horizon),
 ``+rate`` (only the command rates added), ``+cg`` (command-regime guard; off otherwise, whatever
-the benchmark default), ``+hull`` / ``+hullms`` (the linear hull correction before the nets,
+the benchmark default), ``+ws`` (with ``--with-wind-spread``: the same nets with 8 wind
+futures in the spread, recalibrated; ``HybridPredictor(wind_samples=8)``), ``+hull`` / ``+hullms`` (the linear hull correction before the nets,
 identified on the one-step residual / by a free-run fit), ``_th`` (the hull correction tuned
 with the nets in multi-step training), ``+refit`` (after calibrating, the nets refitted on all
 the training rows, ``CalibrationConfig.refit``), ``+wind`` (the wind forecast fitted on the
 training runs' wind, ``wind_forecast="fit"``; held otherwise), ``+mirror`` (every fitting run
 also trained on mirrored port to starboard, :func:`mirror_log`: a symmetry prior for the nets).
-Writes ``errors.csv`` and ``coverage.csv`` (the manoeuvre benchmark's columns) and
+Writes ``errors.csv``, ``coverage.csv`` and ``sharpness.csv`` (the manoeuvre benchmark's columns) and
 ``timing.csv`` (training seconds), and prints the distance and heading tables with
 commands known.
 """
@@ -157,13 +158,31 @@ def with_command_guard(p, logs, stride):
     return q
 
 
+def with_wind_spread(p, logs, samples: int = 8):
+    """A copy of the fitted hybrid ``p`` with ``samples`` wind futures in its spread (the wind
+    forecast's error paths on its training rows) and the spread recalibrated: the same nets."""
+    import copy
+
+    q = copy.deepcopy(p)
+    q.wind_samples = samples
+    cal = q.calibration_config
+    cuts = [q._calibration_cut(a, cal, True) for a in logs]
+    q.training_info["wind_spread"] = q._fit_wind_error_paths(logs, cuts, cal, True)
+    q.calibration = {}
+    for mode in cal.commands:
+        fitted, _ = q._calibrate(logs, cuts, cal, True, mode)
+        if fitted is not None:
+            q.calibration[mode] = fitted
+    return q
+
+
 def main(argv=None) -> int:
     import pandas as pd
     import torch
 
     from hybridship.fileio import atomic_write
     from hybridship.evaluation.manoeuvre import (COMMAND_MODES, ManoeuvreConfig, coverage_table, error_table, forecast_errors,
-                                      load_runs, make_predictors, split_runs, start_rows)
+                                      load_runs, make_predictors, sharpness_table, split_runs, start_rows)
     from hybridship.vessel import load_vessel
 
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
@@ -177,6 +196,9 @@ def main(argv=None) -> int:
     ap.add_argument("--horizons-s", default="5,10,20,30")
     ap.add_argument("--with-command-guard", action="store_true",
                     help="also score every variant with the command-regime guard fitted on its nets (suffix +cg)")
+    ap.add_argument("--with-wind-spread", action="store_true",
+                    help="also score every variant with 8 wind futures in its spread, recalibrated, the same nets "
+                         "(suffix +ws)")
     args = ap.parse_args(argv)
     torch.set_num_threads(1)
     if not (args.split / "train").is_dir():
@@ -199,14 +221,19 @@ def main(argv=None) -> int:
         # the same nets with the command-regime guard fitted afterwards (no retraining)
         models = {k: models[k] for k in models} | {f"{k}+cg": None for k in models
                                                    if k != "dynamic" and "+cg" not in k}
+    if args.with_wind_spread:
+        models = models | {f"{k}+ws": None for k in models if k != "dynamic" and "+ws" not in k}
+
     def training_logs(name):
         logs = [r.arrays for r in fit_runs]
         return logs + [mirror_log(a, v) for a in logs] if "+mirror" in name else logs
 
-    per, per_z, timing = {}, {}, []
+    per, per_z, per_sd, timing = {}, {}, {}, []
     for name, p in models.items():
         t0 = time.perf_counter()
-        if p is None:
+        if p is None and name.endswith("+ws"):
+            p = models[name] = with_wind_spread(models[name[:-3]], training_logs(name))
+        elif p is None:
             p = models[name] = with_command_guard(models[name[:-3]], training_logs(name), cfg.train_row_stride)
         elif name != "dynamic":
             p.fit(training_logs(name), row_stride=cfg.train_row_stride)
@@ -214,15 +241,18 @@ def main(argv=None) -> int:
         print(f"{name}: trained in {timing[-1]['train_s']:.0f} s", flush=True)
         for mode in modes:
             res = [forecast_errors(lambda a, st, h: p.forecast(a, st, horizon_s=h, commands=mode), r.arrays,
-                                   start_rows(r.arrays, int(steps.max()), cfg.start_every_s), steps, return_z=True)
+                                   start_rows(r.arrays, int(steps.max()), cfg.start_every_s), steps, return_std=True)
                    for r in val_runs]
-            per[(name, mode)] = [e for e, _ in res]
+            per[(name, mode)] = [e for e, _, _ in res]
             if name != "dynamic":
-                per_z[(name, mode)] = [z for _, z in res]
+                per_z[(name, mode)] = [z for _, z, _ in res]
+                per_sd[(name, mode)] = [sd for _, _, sd in res]
     errors = error_table(per, val_runs, horizons)
     coverage = coverage_table(per_z, val_runs, horizons)
+    sharpness = sharpness_table(per, per_sd, val_runs, horizons)
     args.out.mkdir(parents=True, exist_ok=True)
-    for fname, df in (("errors.csv", errors), ("coverage.csv", coverage), ("timing.csv", pd.DataFrame(timing))):
+    for fname, df in (("errors.csv", errors), ("coverage.csv", coverage), ("sharpness.csv", sharpness),
+                      ("timing.csv", pd.DataFrame(timing))):
         atomic_write(args.out / fname, lambda fh, df=df: fh.write(df.to_csv(index=False).encode()))
     print(f"scored on: {', '.join(r.name for r in val_runs)}")
     for state in ("distance_m", "heading_deg"):
@@ -232,6 +262,9 @@ def main(argv=None) -> int:
     c = coverage[coverage.kind == "all"].pivot_table(index=["commands", "model", "sigma"], columns="horizon_s",
                                                      values="coverage", sort=False)
     print(f"coverage (all kinds):\n{c.round(3).to_string()}")
+    sh = sharpness[sharpness.commands == modes[0]].pivot_table(index=["kind", "model"], columns="horizon_s",
+                                                              values="interval_score_m", sort=False)
+    print(f"2-sigma interval score [m], commands {modes[0]}:\n{sh.round(3).to_string()}")
     print(f"wrote {args.out}")
     return 0
 

@@ -54,14 +54,10 @@ def test_sampled_wind_adds_the_forecasts_own_error_paths(es):
     np.testing.assert_allclose(speed_dir_to_vector(got[:, 0]), speed_dir_to_vector(base[:, 0]), atol=1e-12)
 
 
-def test_error_paths_only_where_the_log_measured_the_whole_future(es):
+def test_sampled_wind_refuses_logs_without_a_whole_measured_future(es):
     forecast = WindForecast(mean_window_s=5.0, time_constant_s=2.0)
     a = _wind_log(n=200, seed=2)
-    assert es._error_paths(forecast, [a], 60, every=1).shape == (138, 60, 2)     # starts 1..138
-    a.segment_id = np.where(np.arange(200) < 100, 0, 1)
-    assert len(es._error_paths(forecast, [a], 60, every=1)) == 40 + 39          # starts 1..40, 100..138
-    a.wind_logged[:150] = False                  # wind filled in before row 150: no whole future
-    assert len(es._error_paths(forecast, [a], 60, every=1)) == 0
+    a.wind_logged[:150] = False
     with pytest.raises(ValueError, match="60 steps of logged wind"):
         es._sampled_wind(forecast, [a], 60, every=1)
 

@@ -305,3 +305,30 @@ def test_a_crash_while_saving_leaves_no_half_written_model(saved, tmp_path, monk
     assert sorted(os.listdir(tmp_path)) == ["m.npz"]      # and no temporary files
     monkeypatch.setattr(np, "savez", real_savez)
     HybridPredictor.load(path)
+
+
+def test_wind_futures_of_the_spread_are_checked_and_older_files_have_none(saved, tmp_path):
+    def as_v8(meta):
+        meta["format_version"] = 8
+        for k in ("wind_samples", "wind_error_dt_s", "has_wind_error_paths"):
+            meta.pop(k)
+    back = HybridPredictor.load(_rewrite(saved, tmp_path, meta_change=as_v8, restamp=True, name="v8.npz"))
+    assert back.wind_samples == 0 and back.wind_error_paths is None
+    # a file that says it adds wind futures to its spread but carries no paths
+    claims = _rewrite(saved, tmp_path, meta_change=lambda m: m.update(wind_samples=4), restamp=True, name="ws.npz")
+    _refused(claims, "wind_samples is 4 but the file has no wind_error_paths")
+
+    def with_paths(meta):
+        meta.update(wind_samples=4, has_wind_error_paths=True)
+
+    def bad_paths(arrays):
+        arrays["wind_error_paths"] = np.full((3, 5, 2), np.nan)
+    _refused(_rewrite(saved, tmp_path, meta_change=with_paths, array_change=bad_paths, restamp=True, name="nan.npz"),
+             "wind_error_paths contains NaN")
+
+    def flat_paths(arrays):
+        arrays["wind_error_paths"] = np.zeros((3, 5))
+    _refused(_rewrite(saved, tmp_path, meta_change=with_paths, array_change=flat_paths, restamp=True,
+                      name="flat.npz"), r"wind_error_paths: expected shape \(P >= 1, L, 2\)")
+    _refused(_rewrite(saved, tmp_path, meta_change=lambda m: m.update(wind_error_dt_s=0.0), restamp=True,
+                      name="dt.npz"), "wind_error_dt_s: expected a step > 0 s")

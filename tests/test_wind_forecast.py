@@ -14,7 +14,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from hybridship.forecast_inputs.wind import HELD_WIND, WindForecast, fit_wind_forecast
+from hybridship.forecast_inputs.wind import HELD_WIND, WindForecast, fit_wind_forecast, wind_error_paths
 from hybridship.predictors import DynamicPredictor, HybridPredictor, as_log_arrays
 from hybridship.predictors.forecast_setup import _forecast_setup
 from hybridship.residual.ensemble import EnsembleConfig
@@ -300,3 +300,66 @@ def test_flow_vectors_round_trip_and_point_where_the_direction_says():
         assert back[0] == pytest.approx(speed) and back[1] == pytest.approx(d, abs=1e-9)
 
     round_trip()
+
+
+def test_error_paths_are_logged_minus_forecast_wind_where_the_log_measured_the_whole_future():
+    forecast = WindForecast(mean_window_s=20.0, time_constant_s=5.0)
+    a = _gusty_log(10.0, n=200, seed=2)
+    a.dt_s, a.wind_logged = 1.0, np.ones(200, bool)
+    paths = wind_error_paths(forecast, [a], 60, every=1)
+    assert paths.shape == (138, 60, 2)                                           # starts 1..138
+    rows = np.array([17])
+    want = _vec(a.wind[17:77]) - _vec(forecast.steps(a.wind, a.time_s, rows, a.wind[rows], 60, 1.0))[0]
+    np.testing.assert_allclose(paths[16], want, atol=1e-12)
+    np.testing.assert_allclose(paths[:, 0], 0.0, atol=1e-12)                   # from the logged start wind
+    held = wind_error_paths(HELD_WIND, [a], 60, every=1)                        # a held forecast broadcasts
+    np.testing.assert_allclose(held[16], _vec(a.wind[17:77]) - _vec(a.wind[17]), atol=1e-12)
+    a.segment_id = np.where(np.arange(200) < 100, 0, 1)
+    assert len(wind_error_paths(forecast, [a], 60, every=1)) == 40 + 39         # starts 1..40, 100..138
+    mask = np.arange(200) < 100
+    assert len(wind_error_paths(forecast, [a], 60, every=1, masks=[mask])) == 40
+    a.wind_logged[:150] = False                  # wind filled in before row 150: no whole future
+    assert wind_error_paths(forecast, [a], 60, every=1).shape == (0, 60, 2)
+
+
+@pytest.fixture(scope="module")
+def wind_spread_model(model):
+    """(log, hybrid fitted with its wind forecast and 6 wind futures in the spread; the mean
+    environment, so that a start on station reports the members' spread, as on a manoeuvre)."""
+    log = _gusty_physics_log(model, seed=4)
+    return log, HybridPredictor(model.vessel, ensemble_config=TINY, environment="mean", wind_forecast="fit",
+                                wind_samples=6).fit([log])
+
+
+def test_wind_futures_widen_the_spread_and_leave_the_forecast(wind_spread_model, tmp_path):
+    log, hp = wind_spread_model
+    info = hp.training_info["wind_spread"]
+    assert info["samples"] == 6 and 0 < info["paths"] == len(hp.wind_error_paths) <= 128
+    starts = [1100.0, 1200.0, 1300.0]
+    with_wind = hp.forecast(log, starts, 60.0, calibrated=False)
+    assert np.array_equal(with_wind.eta_std, hp.forecast(log, starts, 60.0, calibrated=False).eta_std)  # seeded
+    plain = HybridPredictor.load(hp.save(tmp_path / "w.npz"))
+    plain.wind_samples = 0
+    members = plain.forecast(log, starts, 60.0, calibrated=False)
+    np.testing.assert_array_equal(with_wind.eta, members.eta)                 # the forecast is unchanged
+    assert np.all(with_wind.eta_std >= members.eta_std - 1e-12)
+    assert np.all(with_wind.eta_std[:, -1, :2] > members.eta_std[:, -1, :2])  # the wind's future adds spread
+    calm = HybridPredictor.load(tmp_path / "w.npz")
+    calm.wind_error_paths = np.zeros_like(calm.wind_error_paths)             # a wind forecast that never errs
+    np.testing.assert_allclose(calm.forecast(log, starts, 60.0, calibrated=False).eta_std, members.eta_std,
+                               atol=1e-9)
+
+
+def test_wind_futures_are_stored_in_the_model_file(wind_spread_model, tmp_path):
+    log, hp = wind_spread_model
+    q = HybridPredictor.load(hp.save(tmp_path / "w.npz"))
+    assert q.wind_samples == 6 and q.wind_error_dt_s == hp.wind_error_dt_s
+    np.testing.assert_array_equal(q.wind_error_paths, hp.wind_error_paths)
+    a, b = hp.forecast(log, [1200.0], 60.0), q.forecast(log, [1200.0], 60.0)
+    np.testing.assert_array_equal(a.eta_std, b.eta_std)
+
+
+def test_wind_samples_must_be_a_whole_number():
+    for bad in (-1, 2.5, True, "8"):
+        with pytest.raises(ValueError, match="wind_samples: expected a whole number >= 0"):
+            HybridPredictor("gunnerus", wind_samples=bad)

@@ -33,6 +33,7 @@ import pandas as pd
 from ..datasets.esso_osaka import EssoRun, RUN_KINDS, esso_log_arrays, list_runs
 from ..fileio import atomic_write
 from ..frames import wrap_pi
+from ..residual.calibration import GAUSS_COVERAGE
 from ..logs.ingest import ingest
 from ..logs.io import LogArrays
 from ..residual.calibration import CalibrationConfig
@@ -121,6 +122,9 @@ class ManoeuvreConfig:
         (:class:`~hybridship.residual.hull.HullCorrection`).
     hull_fit : {"one_step", "multi_step"}
         How that correction is identified (see :class:`~hybridship.predictors.HybridPredictor`).
+    wind_samples : int
+        Wind futures in the hybrid's spread (:class:`~hybridship.predictors.HybridPredictor`
+        ``wind_samples``; 0: the members' spread alone).
     """
 
     start_every_s: float | None = 1.0
@@ -138,6 +142,7 @@ class ManoeuvreConfig:
     command_guard: bool = True
     hull_correction: bool = False
     hull_fit: str = "one_step"
+    wind_samples: int = 0
 
     @classmethod
     def quick(cls, seed: int = 0) -> "ManoeuvreConfig":
@@ -251,7 +256,7 @@ def make_predictors(vessel, config: ManoeuvreConfig) -> dict[str, object]:
                                   calibration_config=config.calibration,
                                   training=config.training, multistep_config=config.multistep,
                                   command_guard=config.command_guard, hull_correction=config.hull_correction,
-                                  hull_fit=config.hull_fit),
+                                  hull_fit=config.hull_fit, wind_samples=config.wind_samples),
         "dynamic": DynamicPredictor(vessel, residual_config=rc),
         "data_only": DataOnlyPredictor(vessel, ensemble_config=ec, start_average_s=rc.start_average_s),
         "dead_reckoning": DeadReckoning(vessel, start_average_s=rc.start_average_s),
@@ -286,11 +291,12 @@ def start_rows(arrays: LogArrays, horizon_steps: int, start_every_s: float | Non
 
 
 def forecast_errors(forecast: Callable, arrays: LogArrays, rows: np.ndarray, steps: np.ndarray,
-                    return_z: bool = False):
+                    return_z: bool = False, return_std: bool = False):
     """Absolute errors ``(S, n_horizons, 4)``: |x0|, |y0| [m], |heading| [deg], distance [m].
 
     With ``return_z`` also the normalised errors ``|error| / std`` of x0 and y0,
-    ``(S, n_horizons, 2)`` (None when the forecast has no spread).
+    ``(S, n_horizons, 2)`` (None when the forecast has no spread); with ``return_std`` also
+    the reported standard deviations of x0 and y0 [m], ``(S, n_horizons, 2)`` (or None).
     """
     dt = float(np.median(np.diff(arrays.time_s)))
     fc = forecast(arrays, arrays.time_s[rows], float(steps.max() * dt))
@@ -300,13 +306,14 @@ def forecast_errors(forecast: Callable, arrays: LogArrays, rows: np.ndarray, ste
     err[..., :2] = np.abs(pred[..., :2] - truth[..., :2])
     err[..., 2] = np.degrees(np.abs(wrap_pi(pred[..., 2] - truth[..., 2])))
     err[..., 3] = np.hypot(err[..., 0], err[..., 1])
-    if not return_z:
+    if not (return_z or return_std):
         return err
-    z = None
+    z = std = None
     if fc.eta_std is not None:
+        std = fc.eta_std[:, steps, :2]
         with np.errstate(divide="ignore", invalid="ignore"):
-            z = err[..., :2] / fc.eta_std[:, steps, :2]
-    return err, z
+            z = err[..., :2] / std
+    return (err, z, std) if return_std else (err, z)
 
 
 def coverage_table(per_run_z: dict, runs: list[Run], horizons_s, sigmas=(1, 2)) -> pd.DataFrame:
@@ -331,6 +338,40 @@ def coverage_table(per_run_z: dict, runs: list[Run], horizons_s, sigmas=(1, 2)) 
     df = pd.DataFrame(rows, columns=list(COVERAGE_COLUMNS))
     korder = {k: i for i, k in enumerate(RUN_KINDS + ("all",))}
     return df.sort_values(by=["commands", "model", "kind", "sigma", "horizon_s"],
+                          key=lambda c: c.map(korder) if c.name == "kind" else c).reset_index(drop=True)
+
+
+def sharpness_table(per_run: dict, per_run_std: dict, runs: list[Run], horizons_s,
+                    sigma: float = 2.0) -> pd.DataFrame:
+    """``sharpness.csv`` rows: how wide the reported band is, and what it costs, per model,
+    kind (``all`` pools) and command mode: the mean reported standard deviation of x0 and y0
+    [m] and the mean interval score [m] of the +-``sigma`` band (Gneiting & Raftery 2007,
+    eq. 43, with the band's nominal miss rate ``alpha``: ``2 sigma s + (2 / alpha) max(|e| -
+    sigma s, 0)``, lower is better). Coverage says whether a band is honest; the interval
+    score also rewards a narrow one, so two spreads of equal coverage can be compared.
+
+    ``per_run`` maps ``(model, commands)`` to per-run errors ``(S, nh, 4)`` (as
+    :func:`forecast_errors`), ``per_run_std`` to per-run standard deviations ``(S, nh, 2)``.
+    """
+    alpha = 1.0 - GAUSS_COVERAGE[float(sigma)]
+    rows = []
+    for key, sds in per_run_std.items():
+        kinds: dict = {}
+        for run, err, sd in zip(runs, per_run[key], sds):
+            if sd is not None and sd.size:
+                kinds.setdefault(run.kind, []).append((err[..., :2], sd))
+        groups = {k: (np.concatenate([e for e, _ in v]), np.concatenate([d for _, d in v])) for k, v in kinds.items()}
+        if groups:
+            groups["all"] = tuple(np.concatenate([g[i] for g in groups.values()]) for i in (0, 1))
+        for kind, (e, sd) in groups.items():
+            score = 2 * sigma * sd + (2 / alpha) * np.maximum(e - sigma * sd, 0.0)
+            for h, horizon in enumerate(horizons_s):
+                rows.append((key[0], kind, key[1], float(horizon), float(sigma), float(sd[:, h].mean()),
+                             float(score[:, h].mean())))
+    df = pd.DataFrame(rows, columns=["model", "kind", "commands", "horizon_s", "sigma", "mean_std_m",
+                                     "interval_score_m"])
+    korder = {k: i for i, k in enumerate(RUN_KINDS + ("all",))}
+    return df.sort_values(by=["commands", "model", "kind", "horizon_s"],
                           key=lambda c: c.map(korder) if c.name == "kind" else c).reset_index(drop=True)
 
 
@@ -396,6 +437,38 @@ class BenchmarkResult:
     n_starts: dict
     coverage: pd.DataFrame = field(default_factory=lambda: pd.DataFrame(columns=list(COVERAGE_COLUMNS)))
     coverage_intervals: pd.DataFrame = field(default_factory=pd.DataFrame)
+    sharpness: pd.DataFrame = field(default_factory=pd.DataFrame)
+
+
+def _score_runs(predictors: dict, test: list[Run], steps: np.ndarray, start_every_s, timings: dict,
+                progress: bool):
+    """Every predictor's forecasts from the start rows of every test run, in both command
+    modes: per-run errors, normalised errors and standard deviations by ``(model, commands)``
+    (the last two for :data:`SPREAD_MODELS`), and the starts per run. Adds the forecast
+    times to ``timings``."""
+    per_run: dict = {}
+    per_run_z: dict = {}
+    per_run_std: dict = {}
+    n_starts = {}
+    for run in test:
+        rows = start_rows(run.arrays, int(steps.max()), start_every_s)
+        n_starts[run.name] = int(rows.size)
+        for name, p in predictors.items():
+            for mode in COMMAND_MODES:
+                t0 = time.perf_counter()
+                err, z, sd = (None, None, None) if rows.size == 0 else forecast_errors(
+                    lambda a, st, h: p.forecast(a, st, horizon_s=h, commands=mode), run.arrays, rows, steps,
+                    return_std=True)
+                per_run.setdefault((name, mode), []).append(err)
+                if name in SPREAD_MODELS:
+                    per_run_z.setdefault((name, mode), []).append(z)
+                    per_run_std.setdefault((name, mode), []).append(sd)
+                timings[f"forecast_{name}_{mode}"] = timings.get(f"forecast_{name}_{mode}", 0.0) + \
+                    time.perf_counter() - t0
+        if progress:
+            print(f"  {run.name}: {rows.size} starts", flush=True)
+    per_run = {k: v_ for k, v_ in per_run.items() if any(e is not None for e in v_)}
+    return per_run, per_run_z, per_run_std, n_starts
 
 
 def run_manoeuvre_benchmark(vessel, train_dir, test_dir, horizons_s=HORIZONS_S, out_dir="manoeuvre-benchmark",
@@ -414,7 +487,8 @@ def run_manoeuvre_benchmark(vessel, train_dir, test_dir, horizons_s=HORIZONS_S, 
         Forecast horizons [s].
     out_dir : path
         Where ``errors.csv`` (columns :data:`ERROR_COLUMNS`), ``coverage.csv`` (columns
-        :data:`COVERAGE_COLUMNS`, the models with a spread) and ``README.md`` go.
+        :data:`COVERAGE_COLUMNS`, the models with a spread), ``coverage_intervals.csv``,
+        ``sharpness.csv`` (:func:`sharpness_table`) and ``README.md`` go.
     seed : int
         Seed of the ensembles.
     quick : bool
@@ -457,26 +531,8 @@ def run_manoeuvre_benchmark(vessel, train_dir, test_dir, horizons_s=HORIZONS_S, 
         _fit(name, p, train, cfg)
         timings[f"fit_{name}"] = time.perf_counter() - t0
 
-    per_run: dict = {}
-    per_run_z: dict = {}
-    n_starts = {}
-    for run in test:
-        rows = start_rows(run.arrays, int(steps.max()), cfg.start_every_s)
-        n_starts[run.name] = int(rows.size)
-        for name, p in predictors.items():
-            for mode in COMMAND_MODES:
-                t0 = time.perf_counter()
-                err, z = (None, None) if rows.size == 0 else forecast_errors(
-                    lambda a, st, h: p.forecast(a, st, horizon_s=h, commands=mode), run.arrays, rows, steps,
-                    return_z=True)
-                per_run.setdefault((name, mode), []).append(err)
-                if name in SPREAD_MODELS:
-                    per_run_z.setdefault((name, mode), []).append(z)
-                timings[f"forecast_{name}_{mode}"] = timings.get(f"forecast_{name}_{mode}", 0.0) + \
-                    time.perf_counter() - t0
-        if progress:
-            print(f"  {run.name}: {rows.size} starts", flush=True)
-    per_run = {k: v_ for k, v_ in per_run.items() if any(e is not None for e in v_)}
+    per_run, per_run_z, per_run_std, n_starts = _score_runs(predictors, test, steps, cfg.start_every_s, timings,
+                                                            progress)
     errors = error_table(per_run, test, horizons_s)
     coverage = coverage_table({k: v_ for k, v_ in per_run_z.items() if any(z is not None for z in v_)},
                               test, horizons_s)
@@ -487,8 +543,11 @@ def run_manoeuvre_benchmark(vessel, train_dir, test_dir, horizons_s=HORIZONS_S, 
     intervals = coverage_intervals({k: v_ for k, v_ in per_run_z.items() if any(z is not None for z in v_)},
                                    horizons_s)
     atomic_write(out_dir / "coverage_intervals.csv", lambda fh: fh.write(intervals.to_csv(index=False).encode()))
+    sharpness = sharpness_table(per_run, {k: v_ for k, v_ in per_run_std.items() if any(d is not None for d in v_)},
+                                test, horizons_s)
+    atomic_write(out_dir / "sharpness.csv", lambda fh: fh.write(sharpness.to_csv(index=False).encode()))
     result = BenchmarkResult(errors, train, test, predictors, horizons_s, cfg, timings, n_starts, coverage,
-                             intervals)
+                             intervals, sharpness)
     md = markdown_report(result, command=command)
     atomic_write(out_dir / "README.md", lambda fh: fh.write(md.encode()))
     if figures_dir is not None:
@@ -536,6 +595,27 @@ def _md_coverage(coverage: pd.DataFrame, kind: str = "all") -> str:
     lines = ["| " + " | ".join(cols) + " |", "|" + "---|" * len(cols)]
     for (cmd, model, sig), row in tab.iterrows():
         lines.append(f"| {cmd} | {model} | {sig} | " + " | ".join(f"{v:.3f}" for v in row.values) + " |")
+    return "\n".join(lines) + "\n"
+
+
+def md_spread_by_kind(coverage: pd.DataFrame, sharpness: pd.DataFrame, model: str = "hybrid",
+                      commands: str = "known", sigma: int = 2) -> str:
+    """Markdown of one model's spread per kind: the ``sigma`` coverage, the mean reported
+    standard deviation [m] and the interval score [m] (:func:`sharpness_table`) per horizon."""
+    cov = coverage[(coverage.model == model) & (coverage.commands == commands) & (coverage.sigma == sigma)]
+    sh = sharpness[(sharpness.model == model) & (sharpness.commands == commands)]
+    if cov.empty or sh.empty:
+        return "(no rows)\n"
+    horizons = sorted(cov.horizon_s.unique())
+    lines = [f"{model}, commands {commands}: {sigma}-sigma coverage / mean standard deviation [m] / interval "
+             f"score [m], per kind:", "",
+             "| kind | " + " | ".join(f"{h:g} s" for h in horizons) + " |", "|---|" + "---|" * len(horizons)]
+    c = cov.set_index(["kind", "horizon_s"]).coverage
+    m = sh.set_index(["kind", "horizon_s"])
+    for kind in [k for k in RUN_KINDS + ("all",) if k in set(cov.kind) & set(sh.kind)]:
+        cells = [f"{c[(kind, h)]:.3f} / {m.mean_std_m[(kind, h)]:.3f} / {m.interval_score_m[(kind, h)]:.2f}"
+                 for h in horizons]
+        lines.append(f"| {kind} | " + " | ".join(cells) + " |")
     return "\n".join(lines) + "\n"
 
 

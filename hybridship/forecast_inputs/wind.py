@@ -20,6 +20,12 @@ without looking at any ship forecast. Directions are averaged as vectors, so a w
 turns through north is handled. Each forecast uses logged wind samples up to its start
 only (causal; samples the log filled in over a sensor gap do not count), and a start
 whose window has no logged wind keeps its start value.
+
+What the wind forecast gets wrong is measured by :func:`wind_error_paths`: the logged minus
+forecast wind vector along the horizon from starts in training logs. Added to a forecast's
+wind, each such path is one plausible future of the wind; the hybrid's spread can include
+how much its forecast moves over a few of them
+(:class:`~hybridship.predictors.hybrid.HybridPredictor` ``wind_samples``).
 """
 
 from __future__ import annotations
@@ -32,7 +38,7 @@ from pydantic import Field
 from hybridship.config import Float, config_dataclass
 from hybridship.frames import speed_dir_to_vector, vector_to_speed_dir
 
-__all__ = ["HELD_WIND", "WindForecast", "fit_wind_forecast"]
+__all__ = ["HELD_WIND", "WindForecast", "fit_wind_forecast", "wind_error_paths"]
 
 #: Candidate mean windows [s] and gust time constants [s] of :func:`fit_wind_forecast`
 #: (``None`` is the held wind, always a candidate).
@@ -141,6 +147,19 @@ def _trailing_mean_vector(wind: np.ndarray, time_s: np.ndarray, rows: np.ndarray
         return (cs[rows + 1] - cs[first]) / count[:, None]
 
 
+def _usable_wind_rows(a, mask=None):
+    """``(ok, segment_id)`` of log ``a``: rows whose wind is finite, logged (``wind_logged``,
+    where present) and inside ``mask`` (when given), and each row's gap-free segment."""
+    n = len(a.time_s)
+    ok = np.isfinite(speed_dir_to_vector(np.asarray(a.wind, dtype=float))).all(axis=1)
+    if getattr(a, "wind_logged", None) is not None:
+        ok &= np.asarray(a.wind_logged, dtype=bool)
+    if mask is not None:
+        ok &= np.asarray(mask, dtype=bool)
+    seg = getattr(a, "segment_id", None)
+    return ok, (np.zeros(n, dtype=int) if seg is None else np.asarray(seg))
+
+
 def fit_wind_forecast(logs, horizon_s: float, *, masks=None, start_every_s: float = 10.0,
                       mean_windows_s=MEAN_WINDOWS_S, time_constants_s=TIME_CONSTANTS_S):
     """Choose the wind forecast that best predicts the logged wind over ``horizon_s``.
@@ -190,13 +209,7 @@ def fit_wind_forecast(logs, horizon_s: float, *, masks=None, start_every_s: floa
             continue
         wind = np.asarray(a.wind, dtype=float)
         vec = speed_dir_to_vector(wind)
-        ok = np.isfinite(vec).all(axis=1)
-        if getattr(a, "wind_logged", None) is not None:
-            ok &= np.asarray(a.wind_logged, dtype=bool)
-        if mask is not None:
-            ok &= np.asarray(mask, dtype=bool)
-        seg = getattr(a, "segment_id", None)
-        seg = np.zeros(n, dtype=int) if seg is None else np.asarray(seg)
+        ok, seg = _usable_wind_rows(a, mask)
         dt = float(np.median(np.diff(t)))
         H = int(round(horizon_s / dt))
         rows = np.arange(1, n - H, max(1, int(round(start_every_s / dt))))
@@ -226,3 +239,51 @@ def fit_wind_forecast(logs, horizon_s: float, *, masks=None, start_every_s: floa
     better = scores[best] < (1.0 - MIN_IMPROVEMENT) * held
     out = WindForecast(mean_window_s=best[0], time_constant_s=best[1]) if better else HELD_WIND
     return out, {**scores, "n_starts": n_starts}
+
+
+def wind_error_paths(forecast: WindForecast, logs, horizon_steps: int, *, every: int = 20,
+                     masks=None) -> np.ndarray:
+    """What ``forecast`` gets wrong: logged minus forecast true-wind vector [m/s] over
+    ``horizon_steps`` steps, from a start every ``every`` rows of each log.
+
+    Only futures the log really measured are used: the start and every step of the horizon
+    logged (``wind_logged``), finite, inside ``masks`` (when given) and in one gap-free
+    segment. Step ``j`` of a path is the error over ``[j dt, (j + 1) dt)`` after its start,
+    so step 0 is zero (the forecast starts from the logged wind).
+
+    Parameters
+    ----------
+    forecast : WindForecast
+        The wind forecast whose errors are wanted.
+    logs : sequence of LogArrays
+        ``time_s``, ``wind``, ``dt_s`` and, where present, ``wind_logged`` and ``segment_id``
+        are read.
+    horizon_steps : int
+        Steps of each path (log rows).
+    every : int
+        Row spacing of the starts.
+    masks : sequence of (ndarray of bool or None), optional
+        Per log, the rows that may be used (for example those before the part held back
+        for calibration); default every row.
+
+    Returns
+    -------
+    ndarray, shape (P, horizon_steps, 2)
+        North and east components of the error [m/s] (P may be 0).
+    """
+    paths = [np.zeros((0, horizon_steps, 2))]
+    masks = [None] * len(logs) if masks is None else list(masks)
+    for a, mask in zip(logs, masks):
+        n = len(a.time_s)
+        rows = np.arange(1, n - horizon_steps - 1, max(1, int(every)))
+        wind = np.asarray(a.wind, dtype=float)
+        ok, seg = _usable_wind_rows(a, mask)
+        bad = np.concatenate([[0], np.cumsum(~ok)])
+        rows = rows[(bad[rows + horizon_steps] == bad[rows]) & (seg[rows + horizon_steps - 1] == seg[rows])]
+        if rows.size == 0:
+            continue
+        fc = forecast.steps(wind, a.time_s, rows, wind[rows], horizon_steps, a.dt_s,
+                            logged=getattr(a, "wind_logged", None))
+        logged = speed_dir_to_vector(wind[rows[:, None] + np.arange(horizon_steps)[None]])
+        paths.append(np.broadcast_to(logged - speed_dir_to_vector(fc), logged.shape))
+    return np.concatenate(paths)

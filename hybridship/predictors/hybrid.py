@@ -17,8 +17,8 @@ from typing import Iterable
 import numpy as np
 
 from ..forecast_inputs import FaultFlags
-from ..forecast_inputs.wind import HELD_WIND, WindForecast, fit_wind_forecast
-from ..frames import wrap_pi
+from ..forecast_inputs.wind import HELD_WIND, WindForecast, fit_wind_forecast, wind_error_paths
+from ..frames import speed_dir_to_vector, vector_to_speed_dir, wrap_pi
 from ..logs.io import LogArrays
 from ..physics.model import DynamicModel
 from ..residual.calibration import CalibrationConfig, fit_spread_scale
@@ -42,6 +42,12 @@ __all__ = ["AFTER_STOP", "ENVIRONMENT_SOURCES", "HybridPredictor"]
 AFTER_STOP = "after_stop"
 #: Start times after each failure that calibrate the spread after a failure (the paper's 20).
 AFTER_STOP_INTERVALS = 20
+
+#: Most error paths of the wind forecast a model keeps (``wind_samples``; a few hundred kB
+#: in the model file at 10 Hz over 30 s).
+MAX_WIND_ERROR_PATHS = 128
+#: Spacing of the starts the wind forecast's error paths are measured from [s].
+WIND_ERROR_START_EVERY_S = 2.0
 
 #: Where the hybrid's slowly varying environment comes from (see :class:`HybridPredictor`).
 ENVIRONMENT_SOURCES = ("estimator", "mean")
@@ -110,6 +116,17 @@ class HybridPredictor:
         held wind when nothing predicts better. A :class:`~hybridship.forecast_inputs.wind.WindForecast`
         is used as given (``HELD_WIND``: the paper's held wind). Stored in the model file;
         multi-step training and the spread calibration use the same wind forecast.
+    wind_samples : int
+        Wind futures whose effect enters the spread (0, the default: none). With ``N > 0``,
+        :meth:`fit` keeps up to :data:`MAX_WIND_ERROR_PATHS` of the wind forecast's error
+        paths on the training rows (:func:`~hybridship.forecast_inputs.wind.wind_error_paths`,
+        the part held back for calibration excluded), and every forecast is also rolled out
+        ``N`` times, each with the forecast wind plus one path drawn at random (seeded: the
+        same call gives the same spread). The standard deviation of those rollouts about
+        their mean, the forecast's sensitivity to the wind's unknown future, is added in
+        quadrature to the members' spread before the calibration (which is fitted with it).
+        The forecast itself (``eta``) stays the one at the forecast wind. The paths are
+        stored in the model file.
     """
 
     #: Training modes of the nets.
@@ -125,13 +142,20 @@ class HybridPredictor:
                  calibration_config: CalibrationConfig = CalibrationConfig(), training: str = "one_step",
                  multistep_config: MultiStepConfig = MultiStepConfig(), command_guard: bool = False,
                  hull_correction: bool = False, hull_ridge: float = 1e-3, hull_fit: str = "one_step",
-                 wind_forecast: WindForecast | str = "fit"):
+                 wind_forecast: WindForecast | str = "fit", wind_samples: int = 0):
         if not (isinstance(wind_forecast, WindForecast) or wind_forecast == "fit"):
             raise ValueError(f"wind_forecast: expected a WindForecast or 'fit', got {wind_forecast!r}")
         #: as given: a WindForecast, or "fit" (chosen by :meth:`fit` on the training logs' wind)
         self.wind_forecast_option = wind_forecast
         #: the wind forecast the forecasts use (set by :meth:`fit` with "fit")
         self.wind_forecast: WindForecast = wind_forecast if isinstance(wind_forecast, WindForecast) else HELD_WIND
+        if isinstance(wind_samples, bool) or not isinstance(wind_samples, (int, np.integer)) or wind_samples < 0:
+            raise ValueError(f"wind_samples: expected a whole number >= 0, got {wind_samples!r}")
+        self.wind_samples = int(wind_samples)
+        #: error paths of the wind forecast (P, L, 2) [m/s], north/east, set by :meth:`fit`
+        #: with ``wind_samples > 0``; their step is ``wind_error_dt_s``
+        self.wind_error_paths: np.ndarray | None = None
+        self.wind_error_dt_s: float = 1.0
         if training not in self.TRAINING_MODES:
             raise ValueError(f"training: expected one of {self.TRAINING_MODES}, got {training!r}")
         self.training = training
@@ -256,6 +280,7 @@ class HybridPredictor:
             self.estimator.fit(logs, dp_only=dp_only)
         cuts = [self._calibration_cut(a, cal, dp_only) for a in logs]
         wind_info = self._fit_wind_forecast(logs, cuts, cal, dp_only)
+        wind_spread_info = self._fit_wind_error_paths(logs, cuts, cal, dp_only)
         masks = [None if c >= len(a) else (np.arange(len(a)) < c) for a, c in zip(logs, cuts)]
         self._fit_nets(logs, dp_only=dp_only, progress=progress, stride=stride, row_masks=masks)
         self.command_regime = None
@@ -275,6 +300,8 @@ class HybridPredictor:
         self.training_info["calibration"] = cal_info
         if wind_info is not None:
             self.training_info["wind_forecast"] = wind_info
+        if wind_spread_info is not None:
+            self.training_info["wind_spread"] = wind_spread_info
         self._calibrate_after_stop_on_training_logs(logs, cal)
         return self
 
@@ -373,6 +400,56 @@ class HybridPredictor:
         cat = lambda parts: tuple(np.concatenate([p[k] for p in parts]) for k in range(3))  # noqa: E731
         return CommandRegime.fit(cat(tr_in), cat(he_in), np.concatenate(T), np.concatenate(Pm),
                                  length_m=self.model.vessel.particulars.L_pp_m)
+
+    def _fit_wind_error_paths(self, logs, cuts, cal: CalibrationConfig, dp_only: bool):
+        """With ``wind_samples > 0``: up to :data:`MAX_WIND_ERROR_PATHS` error paths of the
+        wind forecast over ``cal.horizon_s``, from the training rows (before each log's
+        calibration cut; station keeping only with ``dp_only``), drawn with the ensemble's seed.
+        Returns what ``training_info["wind_spread"]`` records (None without)."""
+        self.wind_error_paths = None
+        if not self.wind_samples:
+            return None
+        dt = float(np.median(np.diff(logs[0].time_s)))
+        masks = []
+        for a, cut in zip(logs, cuts):
+            m = np.arange(len(a)) < cut
+            masks.append(m & (a.dp_active != 0) if dp_only else m)
+        paths = wind_error_paths(self.wind_forecast, logs, max(2, int(round(cal.horizon_s / dt))),
+                                 every=max(1, int(round(WIND_ERROR_START_EVERY_S / dt))), masks=masks)
+        if len(paths) == 0:
+            raise ValueError(f"wind_samples: no training start has {cal.horizon_s:g} s of logged wind after it "
+                             f"to measure the wind forecast's error on; use wind_samples=0")
+        rng = np.random.default_rng(self.ensemble_config.seed)
+        if len(paths) > MAX_WIND_ERROR_PATHS:
+            paths = paths[np.sort(rng.choice(len(paths), MAX_WIND_ERROR_PATHS, replace=False))]
+        self.wind_error_paths = np.ascontiguousarray(paths, dtype=float)
+        self.wind_error_dt_s = dt
+        return {"samples": self.wind_samples, "paths": int(len(paths)), "horizon_s": cal.horizon_s}
+
+    def _wind_spread(self, st, eta0, nu0, dev0, bias0, current, acc_ext, **rollout_kw) -> np.ndarray:
+        """Standard deviation (S, H+1, 3) [m, m, rad] of ``wind_samples`` rollouts from the
+        same starts, each with the forecast wind plus one drawn error path (the path's last
+        step held beyond its length), about their mean (heading on the circle)."""
+        N, S, H = self.wind_samples, eta0.shape[0], st.H
+        paths = self.wind_error_paths
+        rng = np.random.default_rng(self.ensemble_config.seed)
+        k = np.minimum(np.round(np.arange(H) * st.dt / self.wind_error_dt_s).astype(int), paths.shape[1] - 1)
+        draw = paths[rng.integers(0, len(paths), N * S)][:, k]                      # (N S, H, 2)
+        base = np.broadcast_to(speed_dir_to_vector(st.wind), (S, H, 2))
+        wind = np.ascontiguousarray(vector_to_speed_dir(np.tile(base, (N, 1, 1)) + draw))
+
+        def tile(x):
+            return None if x is None else np.ascontiguousarray(np.tile(x, (N,) + (1,) * (np.ndim(x) - 1)))
+
+        nets_weight = rollout_kw.pop("nets_weight")
+        eta, _, _, _ = self.rollout(tile(eta0), tile(nu0), tile(dev0), np.tile(bias0, (1, N, 1)), tile(st.rpm),
+                                    tile(st.az), wind, H, st.dt, current=tile(current), accel_ext=tile(acc_ext),
+                                    nets_weight=tile(nets_weight), **rollout_kw)
+        eta = eta.reshape(N, S, H + 1, 3)
+        d = eta - eta.mean(axis=0)
+        mean_psi = np.arctan2(np.sin(eta[..., 2]).mean(axis=0), np.cos(eta[..., 2]).mean(axis=0))
+        d[..., 2] = wrap_pi(eta[..., 2] - mean_psi)
+        return np.sqrt((d ** 2).sum(axis=0) / max(N - 1, 1))
 
     @staticmethod
     def _calibration_cut(a: LogArrays, cal: CalibrationConfig, dp_only: bool) -> int:
@@ -486,10 +563,13 @@ class HybridPredictor:
             dev0 = np.array([prep.start_state(int(i))[2] for i in st.idx])
             bias0 = np.stack([prep.bias_members(int(i), E, self.ensemble_config.seed) for i in st.idx], axis=1)
             eta0, nu0, current, acc_ext = st.eta0, st.nu0, None, None
+        rollout_kw = dict(guard=self.use_guard if guard is None else guard, substeps=st.substeps, nets=nets,
+                          nets_weight=self._after_stop_weight(st, nets_after_stop))
         eta, nu, std, wgt = self.rollout(eta0, nu0, dev0, bias0, st.rpm, st.az, st.wind, st.H, st.dt,
-                                         guard=self.use_guard if guard is None else guard, substeps=st.substeps,
-                                         current=current, accel_ext=acc_ext, nets=nets,
-                                         nets_weight=self._after_stop_weight(st, nets_after_stop))
+                                         current=current, accel_ext=acc_ext, **rollout_kw)
+        if self.wind_samples and self.wind_error_paths is not None:
+            # what the wind's unknown future adds: the members do not see it
+            std = np.sqrt(std ** 2 + self._wind_spread(st, eta0, nu0, dev0, bias0, current, acc_ext, **rollout_kw) ** 2)
         after_stop = st.arrays.dp_active[st.idx] == 0
         if sigma_b is not None and np.any(sigma_b):
             # the load held over the forecast varies as it did in the station keeping before;

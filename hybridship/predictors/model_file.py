@@ -27,17 +27,19 @@ from ..residual.multistep import MultiStepConfig
 __all__ = ["MODEL_FORMAT_VERSION", "ModelFileError", "load_model", "model_metadata", "save_model"]
 
 #: Version of the model-file format written by :func:`save_model` (:meth:`HybridPredictor.save`).
-#: 8: the spread calibration's exponent (a fourth row of ``cal_*``, the value at every lead); 7: the
+#: 9: the wind futures of the spread (``wind_samples`` and the wind forecast's error paths,
+#: ``wind_error_paths``); 8: the spread calibration's exponent (a fourth row of ``cal_*``, the value at every lead); 7: the
 #: wind forecast (``wind_forecast``: the fitted gust decay, or held); 6: the
 #: environment estimator's thrust-model error per thruster (its prior has one entry
 #: per thruster); 5: the spread calibration, the nets' training mode and the command regime; 4: the
 #: validated vessel description is embedded in the metadata (``vessel_description``), so a
 #: model loads without its vessel file; 3 added the environment estimator; 2 and earlier
 #: stored only the vessel's name.
-MODEL_FORMAT_VERSION = 8
+MODEL_FORMAT_VERSION = 9
 #: Versions :func:`load_model` reads: a version-7 file is a version-8 one without the spread
-#: exponent (three rows per ``cal_*`` array), read as exponent 1, which is what it was fitted with.
-READABLE_MODEL_FORMAT_VERSIONS = (7, 8)
+#: exponent (three rows per ``cal_*`` array), read as exponent 1, which is what it was fitted with;
+#: versions 7 and 8 have no wind futures in the spread (``wind_samples = 0``, as they were fitted).
+READABLE_MODEL_FORMAT_VERSIONS = (7, 8, 9)
 
 
 class ModelFileError(ValueError):
@@ -112,6 +114,8 @@ def model_metadata(predictor) -> dict:
         "calibrated_commands": sorted(p.calibration),
         "wind_forecast": {"option": "fit" if p.wind_forecast_option == "fit" else "given",
                           **asdict(p.wind_forecast)},
+        "wind_samples": p.wind_samples, "wind_error_dt_s": p.wind_error_dt_s,
+        "has_wind_error_paths": p.wind_error_paths is not None,
         "training_info": p.training_info,
     }
 
@@ -129,6 +133,8 @@ def save_model(predictor, path) -> Path:
         arrays.update(cmd_regime_weights=cr.weights, cmd_regime_n_train=cr.n_train, cmd_regime_n_held=cr.n_held)
     if p.hull is not None:
         arrays.update(p.hull.arrays())
+    if p.wind_error_paths is not None:
+        arrays["wind_error_paths"] = p.wind_error_paths
     for mode, c in p.calibration.items():
         for what, sc in c.items():
             arrays[f"cal_{mode}_{what}"] = np.stack([sc.lead_s, sc.scale, sc.floor,
@@ -226,7 +232,11 @@ def _build_predictor(cls, meta: dict, vessel, path: Path):
                   training=meta["training"], multistep_config=MultiStepConfig(**meta["multistep_config"]),
                   command_guard=meta["command_guard"], hull_correction=meta.get("hull_correction", False),
                   hull_ridge=meta.get("hull_ridge", 1e-3), hull_fit=meta.get("hull_fit", "one_step"),
-                  wind_forecast=_read_wind_forecast(meta["wind_forecast"]))
+                  wind_forecast=_read_wind_forecast(meta["wind_forecast"]),
+                  wind_samples=meta.get("wind_samples", 0))
+        obj.wind_error_dt_s = float(meta.get("wind_error_dt_s", 1.0))
+        if not (np.isfinite(obj.wind_error_dt_s) and obj.wind_error_dt_s > 0):
+            raise ValueError(f"wind_error_dt_s: expected a step > 0 s, got {obj.wind_error_dt_s}")
         if meta["wind_forecast"].get("option") == "fit":
             obj.wind_forecast_option = "fit"       # a refit chooses again; forecasts use the fitted one
         state = _scalar_state(meta)
@@ -249,7 +259,8 @@ def _scalar_state(meta: dict) -> dict:
             "calibrated_commands": list(meta["calibrated_commands"]),
             "fingerprint": meta["vessel_fingerprint"],
             "guard_d0": float(meta["guard"]["d0"]), "guard_scale": float(meta["guard"]["scale"]),
-            "thrust_lo": float(meta["thrust_regime"]["lo"]), "has_hull": bool(meta.get("has_hull", False))}
+            "thrust_lo": float(meta["thrust_regime"]["lo"]), "has_hull": bool(meta.get("has_hull", False)),
+            "has_wind_error_paths": bool(meta.get("has_wind_error_paths", False))}
 
 
 def _check_vessel(obj, meta: dict, fingerprint: str, embedded: bool, path: Path) -> None:
@@ -271,6 +282,7 @@ def _restore_learned_state(obj, data: dict, state: dict, path: Path) -> None:
         _check_finite(ens, guard, thrust_regime)
         hull = (HullCorrection.from_arrays(data, obj.model.vessel.particulars.L_pp_m, obj.hull_ridge)
                 if state["has_hull"] else None)
+        wind_paths = _read_wind_error_paths(data) if state["has_wind_error_paths"] else None
     except (KeyError, ValueError) as err:
         raise ModelFileError(f"{path}: damaged model contents: {err}") from None
     obj.ensemble, obj.guard, obj.thrust_regime = ens, guard, thrust_regime
@@ -284,6 +296,20 @@ def _restore_learned_state(obj, data: dict, state: dict, path: Path) -> None:
     obj.estimator.thrust_error_mean, obj.estimator.thrust_error_std = state["thr_mean"], state["thr_std"]
     obj.calibration = calibration
     obj.command_regime = _read_command_regime(data, state["regime_meta"], path)
+    obj.wind_error_paths = wind_paths
+    if obj.wind_samples and wind_paths is None:
+        raise ModelFileError(f"{path}: damaged model contents: wind_samples is {obj.wind_samples} but the "
+                             f"file has no wind_error_paths")
+
+
+def _read_wind_error_paths(data: dict) -> np.ndarray:
+    """The wind forecast's error paths (P, L, 2) [m/s]; ValueError on a wrong shape or value."""
+    paths = np.asarray(data["wind_error_paths"], dtype=float)
+    if paths.ndim != 3 or paths.shape[0] < 1 or paths.shape[2] != 2:
+        raise ValueError(f"wind_error_paths: expected shape (P >= 1, L, 2), got {paths.shape}")
+    if not np.all(np.isfinite(paths)):
+        raise ValueError("wind_error_paths contains NaN or inf")
+    return paths
 
 
 def _read_nets(data: dict, n_in: int, state: dict):
