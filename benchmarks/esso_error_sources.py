@@ -225,7 +225,9 @@ def main(argv=None) -> int:
         import torch
 
         torch.set_num_threads(1)
-        cfg = dataclasses.replace(cfg, calibration=dataclasses.replace(cfg.calibration, horizon_s=max(horizons)))
+        # the spread is not scored here: no wind futures in it (they leave the forecasts as they are)
+        cfg = dataclasses.replace(cfg, calibration=dataclasses.replace(cfg.calibration, horizon_s=max(horizons)),
+                                  wind_samples=0)
         fit_logs = [r.arrays for r in load_runs(fit_dir, v)]
         hyb = make_predictors(v, cfg)["hybrid"].fit(fit_logs, row_stride=cfg.train_row_stride)
         wf = hyb.wind_forecast
