@@ -258,3 +258,25 @@ def test_grouped_coverage_interval_stays_within_the_groups_coverages():
         assert own.min() - 1e-12 <= lo <= hi <= own.max() + 1e-12
 
     check()
+
+
+def test_sharpness_is_the_band_width_plus_the_penalty_for_misses():
+    """Hand values: a miss by 1 m outside a +-2 sigma band costs (2 / alpha) m on top of its width."""
+    from types import SimpleNamespace
+
+    from hybridship.evaluation.manoeuvre import sharpness_table
+    from hybridship.residual.calibration import GAUSS_COVERAGE
+
+    alpha = 1 - GAUSS_COVERAGE[2.0]
+    err = np.zeros((2, 1, 4))
+    err[0, 0, :2] = [0.5, 3.0]                       # inside; 1 m beyond the band of 2 x 1 m
+    err[1, 0, :2] = [0.0, 0.0]
+    sd = np.ones((2, 1, 2))
+    runs = [SimpleNamespace(kind="zigzag"), SimpleNamespace(kind="berthing")]
+    with pytest.raises(ValueError, match="sigma: expected 1 or 2"):
+        sharpness_table({}, {}, runs, (30.0,), sigma=3.0)
+    t = sharpness_table({("hybrid", "known"): [err[:1], err[1:]]}, {("hybrid", "known"): [sd[:1], sd[1:]]}, runs,
+                        (30.0,))
+    row = t.set_index("kind").loc[["zigzag", "berthing", "all"]]
+    np.testing.assert_allclose(row.mean_std_m, 1.0)
+    np.testing.assert_allclose(row.interval_score_m, [4 + (2 / alpha) / 2, 4.0, 4 + (2 / alpha) / 4])

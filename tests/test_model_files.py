@@ -121,7 +121,7 @@ def test_missing_file_is_a_model_file_error(tmp_path):
 def test_incompatible_format_version_is_refused(saved, tmp_path):
     for version in (0, 99, "1", None):
         p = _rewrite(saved, tmp_path, meta_change=lambda m: m.update(format_version=version), name=f"v{version}.npz")
-        _refused(p, rf"model format version {version} is not supported \(this hybridship reads version \d+, and \d+ without the spread exponent\)")
+        _refused(p, rf"model format version {version} is not supported \(this hybridship reads versions 7, 8, 9\)")
 
 
 def test_an_older_format_says_retrain(saved, tmp_path):
@@ -314,21 +314,26 @@ def test_wind_futures_of_the_spread_are_checked_and_older_files_have_none(saved,
             meta.pop(k)
     back = HybridPredictor.load(_rewrite(saved, tmp_path, meta_change=as_v8, restamp=True, name="v8.npz"))
     assert back.wind_samples == 0 and back.wind_error_paths is None
+    _refused(_rewrite(saved, tmp_path, meta_change=lambda m: m.pop("wind_samples"), restamp=True, name="no_ws.npz"),
+             "damaged model metadata.*wind_samples")
     # a file that says it adds wind futures to its spread but carries no paths
     claims = _rewrite(saved, tmp_path, meta_change=lambda m: m.update(wind_samples=4), restamp=True, name="ws.npz")
-    _refused(claims, "wind_samples is 4 but the file has no wind_error_paths")
+    _refused(claims, "wind_samples is 4 but the file has 0 wind_error_paths")
+    _refused(_rewrite(saved, tmp_path, meta_change=lambda m: m.update(wind_samples=10 ** 12), restamp=True,
+                      name="huge.npz"), "wind_samples: expected a whole number from 0 to 256")
 
     def with_paths(meta):
-        meta.update(wind_samples=4, has_wind_error_paths=True)
+        meta.update(wind_samples=3, has_wind_error_paths=True)
 
-    def bad_paths(arrays):
-        arrays["wind_error_paths"] = np.full((3, 5, 2), np.nan)
-    _refused(_rewrite(saved, tmp_path, meta_change=with_paths, array_change=bad_paths, restamp=True, name="nan.npz"),
-             "wind_error_paths contains NaN")
-
-    def flat_paths(arrays):
-        arrays["wind_error_paths"] = np.zeros((3, 5))
-    _refused(_rewrite(saved, tmp_path, meta_change=with_paths, array_change=flat_paths, restamp=True,
-                      name="flat.npz"), r"wind_error_paths: expected shape \(P >= 1, L, 2\)")
-    _refused(_rewrite(saved, tmp_path, meta_change=lambda m: m.update(wind_error_dt_s=0.0), restamp=True,
-                      name="dt.npz"), "wind_error_dt_s: expected a step > 0 s")
+    for bad, pattern in ((np.full((3, 5, 2), np.nan), "wind_error_paths contains NaN"),
+                         (np.zeros((3, 5)), r"wind_error_paths: expected shape \(N >= 1, L >= 1, 2\)"),
+                         (np.zeros((3, 0, 2)), r"expected shape"),
+                         (np.full((3, 5, 2), 1e300), "a wind error above 100 m/s"),
+                         (np.zeros((3, 5, 2), complex), "expected real numbers")):
+        def put(arrays, bad=bad):
+            arrays["wind_error_paths"] = bad
+        _refused(_rewrite(saved, tmp_path, meta_change=with_paths, array_change=put, restamp=True, name="p.npz"),
+                 pattern)
+    for dt in (0.0, 1e-300, None, "1"):
+        _refused(_rewrite(saved, tmp_path, meta_change=lambda m, dt=dt: m.update(wind_error_dt_s=dt), restamp=True,
+                          name="dt.npz"), "wind_error_dt_s: expected a step from 0.001 to 60 s")

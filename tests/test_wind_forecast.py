@@ -334,20 +334,50 @@ def wind_spread_model(model):
 def test_wind_futures_widen_the_spread_and_leave_the_forecast(wind_spread_model, tmp_path):
     log, hp = wind_spread_model
     info = hp.training_info["wind_spread"]
-    assert info["samples"] == 6 and 0 < info["paths"] == len(hp.wind_error_paths) <= 128
+    assert info["samples"] == 6 == len(hp.wind_error_paths) <= info["candidate_paths"]
     starts = [1100.0, 1200.0, 1300.0]
     with_wind = hp.forecast(log, starts, 60.0, calibrated=False)
     assert np.array_equal(with_wind.eta_std, hp.forecast(log, starts, 60.0, calibrated=False).eta_std)  # seeded
+    alone = hp.forecast(log, starts[1:2], 60.0, calibrated=False)          # whatever else is in the batch
+    np.testing.assert_allclose(alone.eta_std[0], with_wind.eta_std[1], rtol=1e-12, atol=1e-12)
     plain = HybridPredictor.load(hp.save(tmp_path / "w.npz"))
     plain.wind_samples = 0
     members = plain.forecast(log, starts, 60.0, calibrated=False)
     np.testing.assert_array_equal(with_wind.eta, members.eta)                 # the forecast is unchanged
-    assert np.all(with_wind.eta_std >= members.eta_std - 1e-12)
-    assert np.all(with_wind.eta_std[:, -1, :2] > members.eta_std[:, -1, :2])  # the wind's future adds spread
+    # the members' spread and the wind term add in quadrature: the wind term alone, by hand
+    extra = np.sqrt(np.maximum(with_wind.eta_std[:, -1, :2] ** 2 - members.eta_std[:, -1, :2] ** 2, 0.0))
+    manual = []
+    for path in hp.wind_error_paths:
+        shifted = HybridPredictor.load(tmp_path / "w.npz")
+        shifted.wind_samples, shifted.wind_error_paths = 0, None
+        from hybridship.forecast_inputs.wind import WindForecast as _WF
+
+        class Plus(_WF):                  # the forecast wind plus this one path
+            def steps(self, *a, **k):
+                base = hp.wind_forecast.steps(*a, **k)
+                v = _vec(np.broadcast_to(base, (base.shape[0], a[4], 2))) + path[None, :a[4]]
+                return np.stack([np.hypot(v[..., 0], v[..., 1]), np.arctan2(v[..., 1], v[..., 0])], axis=-1)
+        shifted.wind_forecast = Plus(mean_window_s=hp.wind_forecast.mean_window_s,
+                                     time_constant_s=hp.wind_forecast.time_constant_s)
+        manual.append(shifted.forecast(log, starts, 60.0, calibrated=False).eta[:, -1, :2] - members.eta[:, -1, :2])
+    np.testing.assert_allclose(extra, np.sqrt(np.mean(np.square(manual), axis=0)), rtol=1e-6, atol=1e-9)
+    assert np.all(extra > 0)                                                # the wind's future adds spread
     calm = HybridPredictor.load(tmp_path / "w.npz")
     calm.wind_error_paths = np.zeros_like(calm.wind_error_paths)             # a wind forecast that never errs
     np.testing.assert_allclose(calm.forecast(log, starts, 60.0, calibrated=False).eta_std, members.eta_std,
                                atol=1e-9)
+
+
+def test_wind_futures_enter_the_calibration_and_edge_cases(wind_spread_model, model, tmp_path):
+    log, hp = wind_spread_model
+    plain = HybridPredictor(model.vessel, ensemble_config=TINY, environment="mean", wind_forecast="fit").fit([log])
+    np.testing.assert_array_equal(plain.forecast(log, [1200.0], 60.0).eta, hp.forecast(log, [1200.0], 60.0).eta)
+    assert not np.allclose(plain.calibration["held"]["position"].scale, hp.calibration["held"]["position"].scale)
+    short = hp.forecast(log, [1200.0], 0.5)                                # shorter than one step: the start only
+    assert short.eta.shape == (1, 1, 3) and np.all(short.eta_std[:, 0] >= 0)
+    other = log.iloc[::2].reset_index(drop=True)                           # another sample step
+    with pytest.raises(ValueError, match="wind_samples: the training logs have different sample steps"):
+        HybridPredictor(model.vessel, ensemble_config=TINY, environment="mean", wind_samples=2).fit([log, other])
 
 
 def test_wind_futures_are_stored_in_the_model_file(wind_spread_model, tmp_path):
@@ -360,6 +390,6 @@ def test_wind_futures_are_stored_in_the_model_file(wind_spread_model, tmp_path):
 
 
 def test_wind_samples_must_be_a_whole_number():
-    for bad in (-1, 2.5, True, "8"):
-        with pytest.raises(ValueError, match="wind_samples: expected a whole number >= 0"):
+    for bad in (-1, 2.5, True, "8", 257):
+        with pytest.raises(ValueError, match="wind_samples: expected a whole number from 0 to 256"):
             HybridPredictor("gunnerus", wind_samples=bad)

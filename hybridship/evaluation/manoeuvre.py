@@ -33,10 +33,9 @@ import pandas as pd
 from ..datasets.esso_osaka import EssoRun, RUN_KINDS, esso_log_arrays, list_runs
 from ..fileio import atomic_write
 from ..frames import wrap_pi
-from ..residual.calibration import GAUSS_COVERAGE
 from ..logs.ingest import ingest
 from ..logs.io import LogArrays
-from ..residual.calibration import CalibrationConfig
+from ..residual.calibration import GAUSS_COVERAGE, CalibrationConfig
 from ..residual.ensemble import EnsembleConfig
 from ..residual.multistep import MultiStepConfig
 from ..residual.features import ALL_FEATURES, COMMAND_FEATURES, ResidualConfig
@@ -125,8 +124,8 @@ class ManoeuvreConfig:
     wind_samples : int
         Wind futures in the hybrid's spread (:class:`~hybridship.predictors.HybridPredictor`
         ``wind_samples``; 0: the members' spread alone). Default 8: on the validation split
-        the same nets with them gave a 2-sigma band 24 % narrower at 30 s with a coverage of
-        0.980 against 0.974 (interval score 2.68 m against 3.56 m; ``docs/esso-osaka.md``).
+        the same nets with them gave a 2-sigma band 20 % narrower at 30 s with a coverage of
+        0.991 against 0.974 (interval score 2.75 m against 3.56 m; ``docs/esso-osaka.md``).
     """
 
     start_every_s: float | None = 1.0
@@ -355,6 +354,8 @@ def sharpness_table(per_run: dict, per_run_std: dict, runs: list[Run], horizons_
     ``per_run`` maps ``(model, commands)`` to per-run errors ``(S, nh, 4)`` (as
     :func:`forecast_errors`), ``per_run_std`` to per-run standard deviations ``(S, nh, 2)``.
     """
+    if float(sigma) not in GAUSS_COVERAGE:
+        raise ValueError(f"sigma: expected 1 or 2 (a band of known nominal coverage), got {sigma!r}")
     alpha = 1.0 - GAUSS_COVERAGE[float(sigma)]
     rows = []
     for key, sds in per_run_std.items():

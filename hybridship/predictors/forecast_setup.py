@@ -173,8 +173,8 @@ def _forecast_setup(model, config: ResidualConfig, log, start_times_s, horizon_s
     if commands == "known":
         rpm, az = _known_command_steps(arrays, idx, H, rpm[:, 0], az[:, 0], stop_after_failure)
     # the wind of every step: held (S, 1, 2) or forecast (S, H, 2); a start without wind
-    # (sensor dropped) keeps its start value
-    wind = wind_forecast.steps(arrays.wind, arrays.time_s, idx, wind[:, 0], H, dt, logged=arrays.wind_logged,
+    # (sensor dropped) keeps its start value; at least the start's step, which the guards read
+    wind = wind_forecast.steps(arrays.wind, arrays.time_s, idx, wind[:, 0], max(H, 1), dt, logged=arrays.wind_logged,
                                hold=sw.flags.get(FaultFlags.WIND_DROPPED))
     chk = check_or_clip_inputs(model.vessel, eta=sw.eta0, nu=sw.nu0, rpm=rpm, azimuth_rad=az,
                                wind=wind, dt_s=dt)

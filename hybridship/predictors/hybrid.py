@@ -43,9 +43,8 @@ AFTER_STOP = "after_stop"
 #: Start times after each failure that calibrate the spread after a failure (the paper's 20).
 AFTER_STOP_INTERVALS = 20
 
-#: Most error paths of the wind forecast a model keeps (``wind_samples``; a few hundred kB
-#: in the model file at 10 Hz over 30 s).
-MAX_WIND_ERROR_PATHS = 128
+#: Most wind futures in the spread (``wind_samples``): each costs one more rollout per forecast.
+MAX_WIND_SAMPLES = 256
 #: Spacing of the starts the wind forecast's error paths are measured from [s].
 WIND_ERROR_START_EVERY_S = 2.0
 
@@ -117,16 +116,18 @@ class HybridPredictor:
         is used as given (``HELD_WIND``: the paper's held wind). Stored in the model file;
         multi-step training and the spread calibration use the same wind forecast.
     wind_samples : int
-        Wind futures whose effect enters the spread (0, the default: none). With ``N > 0``,
-        :meth:`fit` keeps up to :data:`MAX_WIND_ERROR_PATHS` of the wind forecast's error
-        paths on the training rows (:func:`~hybridship.forecast_inputs.wind.wind_error_paths`,
-        the part held back for calibration excluded), and every forecast is also rolled out
-        ``N`` times, each with the forecast wind plus one path drawn at random (seeded: the
-        same call gives the same spread). The standard deviation of those rollouts about
-        their mean, the forecast's sensitivity to the wind's unknown future, is added in
+        Wind futures whose effect enters the spread (0, the default: none; at most
+        :data:`MAX_WIND_SAMPLES`). With ``N > 0``, :meth:`fit` draws ``N`` of the wind
+        forecast's error paths on the training rows
+        (:func:`~hybridship.forecast_inputs.wind.wind_error_paths`, the part held back for
+        calibration excluded; the training logs must share one sample step), and every
+        forecast is also rolled out ``N`` times, each with the forecast wind plus one of those
+        paths (the same paths for every start). The root-mean-square deviation of those
+        rollouts from the forecast, its sensitivity to the wind's unknown future, is added in
         quadrature to the members' spread before the calibration (which is fitted with it).
         The forecast itself (``eta``) stays the one at the forecast wind. The paths are
-        stored in the model file.
+        stored in the model file. During station keeping with the held load's spread
+        (``environment="estimator"``) the term is replaced with the rest of the spread.
     """
 
     #: Training modes of the nets.
@@ -149,8 +150,9 @@ class HybridPredictor:
         self.wind_forecast_option = wind_forecast
         #: the wind forecast the forecasts use (set by :meth:`fit` with "fit")
         self.wind_forecast: WindForecast = wind_forecast if isinstance(wind_forecast, WindForecast) else HELD_WIND
-        if isinstance(wind_samples, bool) or not isinstance(wind_samples, (int, np.integer)) or wind_samples < 0:
-            raise ValueError(f"wind_samples: expected a whole number >= 0, got {wind_samples!r}")
+        if isinstance(wind_samples, bool) or not isinstance(wind_samples, (int, np.integer)) \
+                or not 0 <= wind_samples <= MAX_WIND_SAMPLES:
+            raise ValueError(f"wind_samples: expected a whole number from 0 to {MAX_WIND_SAMPLES}, got {wind_samples!r}")
         self.wind_samples = int(wind_samples)
         #: error paths of the wind forecast (P, L, 2) [m/s], north/east, set by :meth:`fit`
         #: with ``wind_samples > 0``; their step is ``wind_error_dt_s``
@@ -402,39 +404,50 @@ class HybridPredictor:
                                  length_m=self.model.vessel.particulars.L_pp_m)
 
     def _fit_wind_error_paths(self, logs, cuts, cal: CalibrationConfig, dp_only: bool):
-        """With ``wind_samples > 0``: up to :data:`MAX_WIND_ERROR_PATHS` error paths of the
-        wind forecast over ``cal.horizon_s``, from the training rows (before each log's
-        calibration cut; station keeping only with ``dp_only``), drawn with the ensemble's seed.
-        Returns what ``training_info["wind_spread"]`` records (None without)."""
+        """With ``wind_samples = N > 0``: ``N`` error paths of the wind forecast over
+        ``cal.horizon_s``, drawn at random (the ensemble's seed) from those of the training rows
+        (before each log's calibration cut; station keeping only with ``dp_only``).
+
+        Returns
+        -------
+        dict or None
+            What ``training_info["wind_spread"]`` records (None with ``wind_samples = 0``).
+        """
         self.wind_error_paths = None
         if not self.wind_samples:
             return None
-        dt = float(np.median(np.diff(logs[0].time_s)))
+        steps = {round(float(np.median(np.diff(a.time_s))), 9) for a in logs if len(a) > 1}
+        if len(steps) != 1:
+            raise ValueError(f"wind_samples: the training logs have different sample steps {sorted(steps)} s; "
+                             f"resample them to one step or use wind_samples=0")
+        dt = steps.pop()
         masks = []
         for a, cut in zip(logs, cuts):
             m = np.arange(len(a)) < cut
             masks.append(m & (a.dp_active != 0) if dp_only else m)
         paths = wind_error_paths(self.wind_forecast, logs, max(2, int(round(cal.horizon_s / dt))),
                                  every=max(1, int(round(WIND_ERROR_START_EVERY_S / dt))), masks=masks)
-        if len(paths) == 0:
-            raise ValueError(f"wind_samples: no training start has {cal.horizon_s:g} s of logged wind after it "
-                             f"to measure the wind forecast's error on; use wind_samples=0")
-        rng = np.random.default_rng(self.ensemble_config.seed)
-        if len(paths) > MAX_WIND_ERROR_PATHS:
-            paths = paths[np.sort(rng.choice(len(paths), MAX_WIND_ERROR_PATHS, replace=False))]
-        self.wind_error_paths = np.ascontiguousarray(paths, dtype=float)
+        if len(paths) < self.wind_samples:
+            raise ValueError(f"wind_samples: {len(paths)} training start(s) have {cal.horizon_s:g} s of logged wind "
+                             f"after them to measure the wind forecast's error on; need {self.wind_samples} "
+                             f"(or use wind_samples=0)")
+        pick = np.random.default_rng(self.ensemble_config.seed).choice(len(paths), self.wind_samples, replace=False)
+        self.wind_error_paths = np.ascontiguousarray(paths[np.sort(pick)], dtype=float)
         self.wind_error_dt_s = dt
-        return {"samples": self.wind_samples, "paths": int(len(paths)), "horizon_s": cal.horizon_s}
+        return {"samples": self.wind_samples, "candidate_paths": int(len(paths)), "horizon_s": cal.horizon_s}
 
-    def _wind_spread(self, st, eta0, nu0, dev0, bias0, current, acc_ext, **rollout_kw) -> np.ndarray:
-        """Standard deviation (S, H+1, 3) [m, m, rad] of ``wind_samples`` rollouts from the
-        same starts, each with the forecast wind plus one drawn error path (the path's last
-        step held beyond its length), about their mean (heading on the circle)."""
-        N, S, H = self.wind_samples, eta0.shape[0], st.H
+    def _wind_spread(self, st, eta0, nu0, dev0, bias0, current, acc_ext, eta, **rollout_kw) -> np.ndarray:
+        """Root-mean-square deviation (S, H+1, 3) [m, m, rad] from the forecast ``eta`` (at the
+        forecast wind) of the rollouts from the same starts, each with the forecast wind plus
+        one of the stored error paths (the path's last step held beyond its length; heading on
+        the circle). Every start uses the same paths (common random numbers: the starts'
+        spreads differ by how much each forecast answers the wind, not by which futures were
+        drawn, and a start gets the same spread in any batch)."""
         paths = self.wind_error_paths
-        rng = np.random.default_rng(self.ensemble_config.seed)
-        k = np.minimum(np.round(np.arange(H) * st.dt / self.wind_error_dt_s).astype(int), paths.shape[1] - 1)
-        draw = paths[rng.integers(0, len(paths), N * S)][:, k]                      # (N S, H, 2)
+        N, S, H = len(paths), eta0.shape[0], st.H
+        # path step k holds over [k dt_p, (k + 1) dt_p): the forecast step starting at j dt falls in floor(j dt / dt_p)
+        k = np.minimum(np.floor(np.arange(H) * st.dt / self.wind_error_dt_s + 1e-9).astype(int), paths.shape[1] - 1)
+        draw = np.repeat(paths[:, k], S, axis=0)                                    # (N S, H, 2), path-major
         base = np.broadcast_to(speed_dir_to_vector(st.wind), (S, H, 2))
         wind = np.ascontiguousarray(vector_to_speed_dir(np.tile(base, (N, 1, 1)) + draw))
 
@@ -442,14 +455,12 @@ class HybridPredictor:
             return None if x is None else np.ascontiguousarray(np.tile(x, (N,) + (1,) * (np.ndim(x) - 1)))
 
         nets_weight = rollout_kw.pop("nets_weight")
-        eta, _, _, _ = self.rollout(tile(eta0), tile(nu0), tile(dev0), np.tile(bias0, (1, N, 1)), tile(st.rpm),
-                                    tile(st.az), wind, H, st.dt, current=tile(current), accel_ext=tile(acc_ext),
-                                    nets_weight=tile(nets_weight), **rollout_kw)
-        eta = eta.reshape(N, S, H + 1, 3)
-        d = eta - eta.mean(axis=0)
-        mean_psi = np.arctan2(np.sin(eta[..., 2]).mean(axis=0), np.cos(eta[..., 2]).mean(axis=0))
-        d[..., 2] = wrap_pi(eta[..., 2] - mean_psi)
-        return np.sqrt((d ** 2).sum(axis=0) / max(N - 1, 1))
+        eta_w, _, _, _ = self.rollout(tile(eta0), tile(nu0), tile(dev0), np.tile(bias0, (1, N, 1)), tile(st.rpm),
+                                      tile(st.az), wind, H, st.dt, current=tile(current), accel_ext=tile(acc_ext),
+                                      nets_weight=tile(nets_weight), **rollout_kw)
+        d = eta_w.reshape(N, S, H + 1, 3) - eta[None]
+        d[..., 2] = wrap_pi(d[..., 2])
+        return np.sqrt((d ** 2).mean(axis=0))
 
     @staticmethod
     def _calibration_cut(a: LogArrays, cal: CalibrationConfig, dp_only: bool) -> int:
@@ -567,9 +578,10 @@ class HybridPredictor:
                           nets_weight=self._after_stop_weight(st, nets_after_stop))
         eta, nu, std, wgt = self.rollout(eta0, nu0, dev0, bias0, st.rpm, st.az, st.wind, st.H, st.dt,
                                          current=current, accel_ext=acc_ext, **rollout_kw)
-        if self.wind_samples and self.wind_error_paths is not None:
+        if self.wind_samples and self.wind_error_paths is not None and st.H > 0:
             # what the wind's unknown future adds: the members do not see it
-            std = np.sqrt(std ** 2 + self._wind_spread(st, eta0, nu0, dev0, bias0, current, acc_ext, **rollout_kw) ** 2)
+            std = np.sqrt(std ** 2 + self._wind_spread(st, eta0, nu0, dev0, bias0, current, acc_ext, eta,
+                                                       **rollout_kw) ** 2)
         after_stop = st.arrays.dp_active[st.idx] == 0
         if sigma_b is not None and np.any(sigma_b):
             # the load held over the forecast varies as it did in the station keeping before;

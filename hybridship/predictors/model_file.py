@@ -27,8 +27,8 @@ from ..residual.multistep import MultiStepConfig
 __all__ = ["MODEL_FORMAT_VERSION", "ModelFileError", "load_model", "model_metadata", "save_model"]
 
 #: Version of the model-file format written by :func:`save_model` (:meth:`HybridPredictor.save`).
-#: 9: the wind futures of the spread (``wind_samples`` and the wind forecast's error paths,
-#: ``wind_error_paths``); 8: the spread calibration's exponent (a fourth row of ``cal_*``, the value at every lead); 7: the
+#: 9: the wind futures of the spread (``wind_samples`` and the wind forecast's error
+#: paths, ``wind_error_paths``); 8: the spread calibration's exponent (a fourth row of ``cal_*``, the value at every lead); 7: the
 #: wind forecast (``wind_forecast``: the fitted gust decay, or held); 6: the
 #: environment estimator's thrust-model error per thruster (its prior has one entry
 #: per thruster); 5: the spread calibration, the nets' training mode and the command regime; 4: the
@@ -196,8 +196,8 @@ def _read_checked_metadata(data: dict, path: Path) -> dict:
                  if isinstance(version, int) and not isinstance(version, bool) and 1 <= version < oldest
                  else "")
         raise ModelFileError(f"{path}: model format version {version} is not supported "
-                             f"(this hybridship reads version {MODEL_FORMAT_VERSION}, and {READABLE_MODEL_FORMAT_VERSIONS[0]} "
-                             f"without the spread exponent){older}")
+                             f"(this hybridship reads versions "
+                             f"{', '.join(str(v) for v in READABLE_MODEL_FORMAT_VERSIONS)}){older}")
     content = {k: v for k, v in data.items() if k != "metadata_json"}
     if meta.get("content_sha256") != _content_hash(content):
         raise ModelFileError(f"{path}: content checksum does not match the metadata: the file was "
@@ -233,10 +233,9 @@ def _build_predictor(cls, meta: dict, vessel, path: Path):
                   command_guard=meta["command_guard"], hull_correction=meta.get("hull_correction", False),
                   hull_ridge=meta.get("hull_ridge", 1e-3), hull_fit=meta.get("hull_fit", "one_step"),
                   wind_forecast=_read_wind_forecast(meta["wind_forecast"]),
-                  wind_samples=meta.get("wind_samples", 0))
-        obj.wind_error_dt_s = float(meta.get("wind_error_dt_s", 1.0))
-        if not (np.isfinite(obj.wind_error_dt_s) and obj.wind_error_dt_s > 0):
-            raise ValueError(f"wind_error_dt_s: expected a step > 0 s, got {obj.wind_error_dt_s}")
+                  wind_samples=meta["wind_samples"] if meta["format_version"] >= 9 else 0)
+        if meta["format_version"] >= 9:
+            obj.wind_error_dt_s = _checked_wind_error_dt(meta["wind_error_dt_s"])
         if meta["wind_forecast"].get("option") == "fit":
             obj.wind_forecast_option = "fit"       # a refit chooses again; forecasts use the fitted one
         state = _scalar_state(meta)
@@ -246,6 +245,19 @@ def _build_predictor(cls, meta: dict, vessel, path: Path):
             raise
         raise ModelFileError(f"{path}: damaged model metadata ({type(err).__name__}: {err})") from None
     return obj, embedded, state
+
+
+#: Range of the stored wind paths' step [s] and of their values [m/s] that a model file may carry.
+WIND_ERROR_DT_RANGE_S = (1e-3, 60.0)
+MAX_WIND_ERROR_M_S = 100.0
+
+
+def _checked_wind_error_dt(value) -> float:
+    """The wind paths' step [s] from the metadata; ValueError naming the field otherwise."""
+    lo, hi = WIND_ERROR_DT_RANGE_S
+    if isinstance(value, bool) or not isinstance(value, (int, float)) or not lo <= value <= hi:
+        raise ValueError(f"wind_error_dt_s: expected a step from {lo:g} to {hi:g} s, got {value!r}")
+    return float(value)
 
 
 def _scalar_state(meta: dict) -> dict:
@@ -260,7 +272,7 @@ def _scalar_state(meta: dict) -> dict:
             "fingerprint": meta["vessel_fingerprint"],
             "guard_d0": float(meta["guard"]["d0"]), "guard_scale": float(meta["guard"]["scale"]),
             "thrust_lo": float(meta["thrust_regime"]["lo"]), "has_hull": bool(meta.get("has_hull", False)),
-            "has_wind_error_paths": bool(meta.get("has_wind_error_paths", False))}
+            "has_wind_error_paths": bool(meta["has_wind_error_paths"]) if meta["format_version"] >= 9 else False}
 
 
 def _check_vessel(obj, meta: dict, fingerprint: str, embedded: bool, path: Path) -> None:
@@ -296,19 +308,25 @@ def _restore_learned_state(obj, data: dict, state: dict, path: Path) -> None:
     obj.estimator.thrust_error_mean, obj.estimator.thrust_error_std = state["thr_mean"], state["thr_std"]
     obj.calibration = calibration
     obj.command_regime = _read_command_regime(data, state["regime_meta"], path)
-    obj.wind_error_paths = wind_paths
-    if obj.wind_samples and wind_paths is None:
+    n_paths = 0 if wind_paths is None else len(wind_paths)
+    if obj.wind_samples != n_paths:
         raise ModelFileError(f"{path}: damaged model contents: wind_samples is {obj.wind_samples} but the "
-                             f"file has no wind_error_paths")
+                             f"file has {n_paths} wind_error_paths")
+    obj.wind_error_paths = wind_paths
 
 
 def _read_wind_error_paths(data: dict) -> np.ndarray:
-    """The wind forecast's error paths (P, L, 2) [m/s]; ValueError on a wrong shape or value."""
-    paths = np.asarray(data["wind_error_paths"], dtype=float)
-    if paths.ndim != 3 or paths.shape[0] < 1 or paths.shape[2] != 2:
-        raise ValueError(f"wind_error_paths: expected shape (P >= 1, L, 2), got {paths.shape}")
+    """The wind forecast's error paths (N, L, 2) [m/s]; ValueError on a wrong shape, type or value."""
+    raw = data["wind_error_paths"]
+    if raw.dtype.kind != "f":
+        raise ValueError(f"wind_error_paths: expected real numbers, got dtype {raw.dtype}")
+    paths = np.asarray(raw, dtype=float)
+    if paths.ndim != 3 or paths.shape[0] < 1 or paths.shape[1] < 1 or paths.shape[2] != 2:
+        raise ValueError(f"wind_error_paths: expected shape (N >= 1, L >= 1, 2), got {paths.shape}")
     if not np.all(np.isfinite(paths)):
         raise ValueError("wind_error_paths contains NaN or inf")
+    if np.abs(paths).max() > MAX_WIND_ERROR_M_S:
+        raise ValueError(f"wind_error_paths: a wind error above {MAX_WIND_ERROR_M_S:g} m/s")
     return paths
 
 
