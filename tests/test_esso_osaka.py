@@ -237,6 +237,7 @@ def test_manoeuvre_benchmark_writes_the_tables(tmp_path):
     assert list(sh.columns) == ["model", "kind", "commands", "horizon_s", "sigma", "mean_std_m", "interval_score_m"]
     assert set(sh.model) == {"hybrid", "data_only"} and set(sh.kind) == {"berthing", "zigzag", "all"}
     assert (sh.mean_std_m > 0).all() and (sh.interval_score_m >= 4 * sh.mean_std_m - 1e-12).all()
+    assert "interval score [m], per kind" in md and "sharpness.csv" in md
 
 
 def test_benchmark_refuses_the_same_run_in_train_and_test(tmp_path):

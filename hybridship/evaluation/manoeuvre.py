@@ -674,8 +674,10 @@ def markdown_report(result: BenchmarkResult, *, command: str | None = None) -> s
                   _md_coverage(result.coverage), ""]
     if not result.coverage_intervals.empty:
         lines += [md_coverage_intervals(result.coverage_intervals)]
+    if not result.sharpness.empty:
+        lines += ["", md_spread_by_kind(result.coverage, result.sharpness)]
     lines += ["", "All states (x0, y0, heading, distance) are in `errors.csv`; coverage per kind in "
-              "`coverage.csv`.", "", "Cite: " + CITATION, ""]
+              "`coverage.csv`; the band's width and interval score in `sharpness.csv`.", "", "Cite: " + CITATION, ""]
     return "\n".join(lines)
 
 
