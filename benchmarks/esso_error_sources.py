@@ -121,7 +121,7 @@ def _error_feedback(predictor, alpha: float, lag_s: float = 30.0):
     north, east and heading at the start, known then), the position error turned by the heading
     change since that start. Starts with no forecast ``lag_s`` before them in the log keep the
     plain forecast. The shape ``tau^2`` is that of a constant acceleration error."""
-    from hybridship.frames import wrap_pi
+    from hybridship.frames import body_to_ned, wrap_pi
     from hybridship.predictors.result import ForecastResult
 
     def forecast(a, start_times_s, horizon_s, **kw):
@@ -135,9 +135,8 @@ def _error_feedback(predictor, alpha: float, lag_s: float = 30.0):
             rows = np.searchsorted(a.time_s, st[has])
             err = a.eta[rows] - prev.eta[:, -1]
             err[:, 2] = wrap_pi(err[:, 2])
-            turn = wrap_pi(a.eta[rows, 2] - prev.eta[:, 0, 2])
-            c, s = np.cos(turn), np.sin(turn)
-            err[:, :2] = np.column_stack([c * err[:, 0] - s * err[:, 1], s * err[:, 0] + c * err[:, 1]])
+            # the miss seen from the earlier start, turned with the heading since then
+            err = body_to_ned(err, wrap_pi(a.eta[rows, 2] - prev.eta[:, 0, 2]))
             shape = alpha * (fc.lead_s / lag_s) ** 2
             eta[has] += shape[None, :, None] * err[:, None, :]
             eta[..., 2] = wrap_pi(eta[..., 2])

@@ -148,11 +148,7 @@ def with_command_guard(p, logs, stride):
     cuts = [q._calibration_cut(a, cal, True) for a in logs]
     masks = [None if c >= len(a) else (np.arange(len(a)) < c) for a, c in zip(logs, cuts)]
     q.command_regime = q._fit_command_regime(logs, masks, True, stride)
-    q.calibration = {}
-    for mode in cal.commands:
-        fitted, _ = q._calibrate(logs, cuts, cal, True, mode)
-        if fitted is not None:
-            q.calibration[mode] = fitted
+    q._calibrate_modes(logs, cuts, cal, True)
     print("command-regime weights:", np.round(q.command_regime.weights, 2).tolist(),
           "held-back rows:", q.command_regime.n_held.tolist(), flush=True)
     return q
@@ -168,11 +164,7 @@ def with_wind_spread(p, logs, samples: int = 8):
     cal = q.calibration_config
     cuts = [q._calibration_cut(a, cal, True) for a in logs]
     q.training_info["wind_spread"] = q._fit_wind_error_paths(logs, cuts, cal, True)
-    q.calibration = {}
-    for mode in cal.commands:
-        fitted, _ = q._calibrate(logs, cuts, cal, True, mode)
-        if fitted is not None:
-            q.calibration[mode] = fitted
+    q._calibrate_modes(logs, cuts, cal, True)
     return q
 
 

@@ -126,8 +126,8 @@ class HybridPredictor:
         rollouts from the forecast, its sensitivity to the wind's unknown future, is added in
         quadrature to the members' spread before the calibration (which is fitted with it).
         The forecast itself (``eta``) stays the one at the forecast wind. The paths are
-        stored in the model file. During station keeping with the held load's spread
-        (``environment="estimator"``) the term is replaced with the rest of the spread.
+        stored in the model file. A start during station keeping with the held load's
+        spread (``environment="estimator"``) reports that spread alone, without this term.
     """
 
     #: Training modes of the nets.
@@ -154,8 +154,8 @@ class HybridPredictor:
                 or not 0 <= wind_samples <= MAX_WIND_SAMPLES:
             raise ValueError(f"wind_samples: expected a whole number from 0 to {MAX_WIND_SAMPLES}, got {wind_samples!r}")
         self.wind_samples = int(wind_samples)
-        #: error paths of the wind forecast (P, L, 2) [m/s], north/east, set by :meth:`fit`
-        #: with ``wind_samples > 0``; their step is ``wind_error_dt_s``
+        #: the wind forecast's error paths of the spread (wind_samples, L, 2) [m/s], north/east,
+        #: set by :meth:`fit` with ``wind_samples > 0``; their step is ``wind_error_dt_s`` [s]
         self.wind_error_paths: np.ndarray | None = None
         self.wind_error_dt_s: float = 1.0
         if training not in self.TRAINING_MODES:
@@ -292,11 +292,7 @@ class HybridPredictor:
         cal_info = {"fraction": cal.fraction, "commands": list(cal.commands), "horizon_s": cal.horizon_s,
                     "refit": cal.refit, "n_starts": {}, "dp_only": bool(dp_only)}
         if cal.fraction > 0:
-            for mode in cal.commands:
-                fitted, n = self._calibrate(logs, cuts, cal, dp_only, mode)
-                cal_info["n_starts"][mode] = n
-                if fitted is not None:
-                    self.calibration[mode] = fitted
+            cal_info["n_starts"] = self._calibrate_modes(logs, cuts, cal, dp_only)
             if cal.refit:
                 self._fit_nets(logs, dp_only=dp_only, progress=progress, stride=stride, row_masks=None)
         self.training_info["calibration"] = cal_info
@@ -314,11 +310,7 @@ class HybridPredictor:
         keeping (the nets' own rows). Returns what ``training_info["wind_forecast"]`` records."""
         if self.wind_forecast_option != "fit":
             return None
-        masks = []
-        for a, cut in zip(logs, cuts):
-            m = np.arange(len(a)) < cut
-            masks.append(m & (a.dp_active != 0) if dp_only else m)
-        self.wind_forecast, scores = fit_wind_forecast(logs, cal.horizon_s, masks=masks)
+        self.wind_forecast, scores = fit_wind_forecast(logs, cal.horizon_s, masks=_training_masks(logs, cuts, dp_only))
         held = [v for k, v in scores.items() if k != "n_starts" and k[1] is None]
         wf = self.wind_forecast
         return {"held": wf.held, "mean_window_s": None if wf.held else wf.mean_window_s,
@@ -421,12 +413,9 @@ class HybridPredictor:
             raise ValueError(f"wind_samples: the training logs have different sample steps {sorted(steps)} s; "
                              f"resample them to one step or use wind_samples=0")
         dt = steps.pop()
-        masks = []
-        for a, cut in zip(logs, cuts):
-            m = np.arange(len(a)) < cut
-            masks.append(m & (a.dp_active != 0) if dp_only else m)
         paths = wind_error_paths(self.wind_forecast, logs, max(2, int(round(cal.horizon_s / dt))),
-                                 every=max(1, int(round(WIND_ERROR_START_EVERY_S / dt))), masks=masks)
+                                 every=max(1, int(round(WIND_ERROR_START_EVERY_S / dt))),
+                                 masks=_training_masks(logs, cuts, dp_only))
         if len(paths) < self.wind_samples:
             raise ValueError(f"wind_samples: {len(paths)} training start(s) have {cal.horizon_s:g} s of logged wind "
                              f"after them to measure the wind forecast's error on; need {self.wind_samples} "
@@ -489,6 +478,17 @@ class HybridPredictor:
             bad = np.concatenate([[0], np.cumsum(a.dp_active == 0)])
             ok &= (bad[r + H + 1] - bad[r]) == 0
         return r[ok]
+
+    def _calibrate_modes(self, logs, cuts, cal: CalibrationConfig, dp_only: bool) -> dict:
+        """Calibrate the spread of every mode of ``cal.commands`` on the held-back starts
+        (replacing ``self.calibration``); returns the starts used per mode."""
+        self.calibration = {}
+        n_starts = {}
+        for mode in cal.commands:
+            fitted, n_starts[mode] = self._calibrate(logs, cuts, cal, dp_only, mode)
+            if fitted is not None:
+                self.calibration[mode] = fitted
+        return n_starts
 
     def _calibrate(self, logs, cuts, cal: CalibrationConfig, dp_only: bool, mode: str):
         """Calibration of one command mode from held-back starts; (None, 0) without any start."""
@@ -926,6 +926,16 @@ class HybridPredictor:
             vessel that differs from the one the model was trained for.
         """
         return load_model(cls, path, vessel)
+
+
+def _training_masks(logs, cuts, dp_only: bool) -> list:
+    """Per log, its training rows: before its calibration cut and, with ``dp_only``, in
+    station keeping."""
+    masks = []
+    for a, cut in zip(logs, cuts):
+        m = np.arange(len(a)) < cut
+        masks.append(m & (a.dp_active != 0) if dp_only else m)
+    return masks
 
 
 def after_stop_scales(errors: list, cal: CalibrationConfig) -> dict:

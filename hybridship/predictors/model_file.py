@@ -28,8 +28,8 @@ __all__ = ["MODEL_FORMAT_VERSION", "ModelFileError", "load_model", "model_metada
 
 #: Version of the model-file format written by :func:`save_model` (:meth:`HybridPredictor.save`).
 #: 9: the wind futures of the spread (``wind_samples`` and the wind forecast's error
-#: paths, ``wind_error_paths``); 8: the spread calibration's exponent (a fourth row of ``cal_*``, the value at every lead); 7: the
-#: wind forecast (``wind_forecast``: the fitted gust decay, or held); 6: the
+#: paths, ``wind_error_paths``); 8: the spread calibration's exponent (a fourth row of
+#: ``cal_*``, the value at every lead); 7: the wind forecast (``wind_forecast``: the fitted gust decay, or held); 6: the
 #: environment estimator's thrust-model error per thruster (its prior has one entry
 #: per thruster); 5: the spread calibration, the nets' training mode and the command regime; 4: the
 #: validated vessel description is embedded in the metadata (``vessel_description``), so a
