@@ -121,7 +121,7 @@ def test_missing_file_is_a_model_file_error(tmp_path):
 def test_incompatible_format_version_is_refused(saved, tmp_path):
     for version in (0, 99, "1", None):
         p = _rewrite(saved, tmp_path, meta_change=lambda m: m.update(format_version=version), name=f"v{version}.npz")
-        _refused(p, rf"model format version {version} is not supported \(this hybridship reads versions 7, 8, 9\)")
+        _refused(p, rf"model format version {version} is not supported \(this hybridship reads versions 7, 8, 9, 10\)")
 
 
 def test_an_older_format_says_retrain(saved, tmp_path):
@@ -337,3 +337,30 @@ def test_wind_futures_of_the_spread_are_checked_and_older_files_have_none(saved,
     for dt in (0.0, 1e-300, None, "1"):
         _refused(_rewrite(saved, tmp_path, meta_change=lambda m, dt=dt: m.update(wind_error_dt_s=dt), restamp=True,
                           name="dt.npz"), "wind_error_dt_s: expected a step from 0.001 to 60 s")
+
+
+def test_hull_yaw_moment_in_a_drift_is_checked_and_older_files_have_none(saved, tmp_path, model):
+    """The coefficient round-trips; a version-9 file loads without it (as it was fitted); a
+    coefficient outside the candidates, not a number, or a missing key is refused by name."""
+    import copy
+
+    from hybridship.residual.drift_hull import munk_coefficient
+
+    hp = copy.deepcopy(saved[0])
+    hp.drift_yaw_uv_rad_per_m2 = 0.5 * munk_coefficient(model)
+    back = HybridPredictor.load(hp.save(tmp_path / "k.npz"))
+    assert back.drift_yaw_uv_rad_per_m2 == hp.drift_yaw_uv_rad_per_m2 and back.drift_hull
+
+    def as_v9(meta):
+        meta["format_version"] = 9
+        for k in ("drift_hull", "drift_yaw_uv_rad_per_m2"):
+            meta.pop(k)
+    old = HybridPredictor.load(_rewrite(saved, tmp_path, meta_change=as_v9, restamp=True, name="v9.npz"))
+    assert old.drift_yaw_uv_rad_per_m2 == 0.0 and not old.drift_hull
+    for bad in (1.0, float("nan"), "0.001", True, None):
+        _refused(_rewrite(saved, tmp_path, meta_change=lambda m, bad=bad: m.update(drift_yaw_uv_rad_per_m2=bad),
+                          restamp=True, name="k.npz"), r"drift_yaw_uv_rad_per_m2: expected a number from -0\.0112")
+    _refused(_rewrite(saved, tmp_path, meta_change=lambda m: m.update(drift_hull="yes"), restamp=True,
+                      name="flag.npz"), "drift_hull: expected true or false")
+    _refused(_rewrite(saved, tmp_path, meta_change=lambda m: m.pop("drift_yaw_uv_rad_per_m2"), restamp=True,
+                      name="nok.npz"), "damaged model metadata.*drift_yaw_uv_rad_per_m2")

@@ -50,7 +50,8 @@ import pandas as pd
 from . import metrics
 from ..fileio import atomic_write, markdown_table
 from ..predictors import DataOnlyPredictor, DeadReckoning, DynamicPredictor, HybridPredictor, as_log_arrays
-from ..predictors.hybrid import AFTER_STOP, leave_one_out_after_stop_scales
+from ..predictors.hybrid import AFTER_STOP, after_stop_scales
+from ..residual.drift_hull import MIN_FAILURES as DRIFT_HULL_MIN_FAILURES, choose_coefficient, munk_coefficient
 from ..residual.ensemble import EnsembleConfig
 
 #: File endings read as logs from a folder.
@@ -148,13 +149,15 @@ def run_drift_benchmark(train=None, test=None, out_dir="drift-benchmark", *, ves
     test_arrays = [as_log_arrays(x, hybrid.model.vessel) for x in test_logs]
     data_only = DataOnlyPredictor(vessel, ensemble_config=ens_cfg)
     timing = _fit_ensembles({"hybrid": hybrid, "data_only": data_only}, train_arrays, dp_only, say)
+    t_hull, per_log_hull = _drift_hull_per_log(hybrid, test_arrays, test_logs is train_logs, horizon_s, test_names,
+                                               say)
     t_cal, per_log_cal = _calibrate_after_stop(hybrid, test_arrays, test_logs is train_logs, calibration_scenarios,
-                                               seed, n_intervals, horizon_s, say)
-    timing += t_cal
+                                               seed, n_intervals, horizon_s, say, per_log_hull)
+    timing += t_hull + t_cal
     predictors = _benchmark_models(vessel, hybrid, data_only)
 
     fc, all_h, pick, fc_timing = _forecast_after_failures(predictors, test_arrays, n_intervals, horizon_s, horizons,
-                                                          hybrid, per_log_cal)
+                                                          hybrid, per_log_cal, per_log_hull)
     timing = pd.DataFrame(timing + fc_timing)
 
     errors = {name: [metrics.absolute_errors(p[:, pick], t[:, pick]) for p, t, _ in per_log]
@@ -171,6 +174,7 @@ def run_drift_benchmark(train=None, test=None, out_dir="drift-benchmark", *, ves
     outputs["coverage.csv"] = _write_csv(out / "coverage.csv", coverage)
     outputs["coverage_intervals.csv"] = _write_csv(out / "coverage_intervals.csv", intervals)
     outputs["timing.csv"] = _write_csv(out / "timing.csv", timing)
+    outputs["drift_hull.csv"] = _write_csv(out / "drift_hull.csv", _drift_hull_table(hybrid, per_log_hull, test_names))
     table2 = metrics.paper_table(long, windows=windows) if len(windows) == 2 else long
     table3 = {m: metrics.reduction_table(long, m, windows=windows) for m in TABLE3_MODELS} \
         if len(windows) == 2 else {}
@@ -213,15 +217,58 @@ def _fit_ensembles(models: dict, train_arrays, dp_only: bool, say) -> list[dict]
     return timing
 
 
+def _drift_hull_per_log(hybrid, test_arrays, test_is_train: bool, horizon_s: float, names, say):
+    """The hull's yaw coefficient in a drift (:mod:`hybridship.residual.drift_hull`) per test log.
+
+    When the test logs are other logs, the one ``fit`` chose on the training logs' failures
+    applies (returns None). When they are the training logs, that one has seen the drifts it
+    would be scored on: each test log gets the coefficient chosen (and checked) on the
+    *other* logs' failures, or 0 when they are fewer than three. Returns timing rows and the
+    list of :class:`~hybridship.residual.drift_hull.DriftHullChoice` (None entries: 0).
+    """
+    if not test_is_train or not hybrid.drift_hull or hybrid.environment != "estimator":
+        return [], None
+    t0 = time.perf_counter()
+    hybrid.drift_yaw_uv_rad_per_m2 = 0.0                # never a coefficient that saw the scored drifts
+    if len(test_arrays) - 1 < DRIFT_HULL_MIN_FAILURES:
+        say(f"hull's yaw moment in a drift: off (fewer than {DRIFT_HULL_MIN_FAILURES} other failures per test log)")
+        return [], [None] * len(test_arrays)
+    objective = hybrid.drift_hull_objective(test_arrays, horizon_s)
+    munk = munk_coefficient(hybrid.model)
+    choices = [choose_coefficient(objective, munk, exclude=k) for k in range(len(test_arrays))]
+    what = f"choose the hull's yaw moment in a drift on the other {len(test_arrays) - 1} logs' failures, per test log"
+    say(f"{what}: " + ", ".join(f"{n} {c.munk_multiple:g}x Munk{'' if c.adopted else ' (not kept)'}"
+                                 for n, c in zip(names, choices)))
+    return [{"model": "hybrid", "what": what, "seconds": time.perf_counter() - t0}], choices
+
+
+def _drift_hull_table(hybrid, per_log, names) -> pd.DataFrame:
+    """``log,munk_multiple,adopted,coefficient_rad_per_m2,source``: the hull's yaw coefficient
+    in a drift each test log was forecast with."""
+    cols = ["log", "munk_multiple", "adopted", "coefficient_rad_per_m2", "source"]
+    if per_log is None:
+        info = hybrid.training_info.get("drift_hull")
+        return pd.DataFrame([{"log": n, "munk_multiple": None if info is None else info["munk_multiple"],
+                              "adopted": info is not None and info["adopted"],
+                              "coefficient_rad_per_m2": hybrid.drift_yaw_uv_rad_per_m2,
+                              "source": "training logs' failures" if info else "none"} for n in names], columns=cols)
+    return pd.DataFrame([{"log": n, "munk_multiple": None if c is None else c.munk_multiple,
+                          "adopted": c is not None and c.adopted,
+                          "coefficient_rad_per_m2": 0.0 if c is None else c.coefficient_rad_per_m2,
+                          "source": "other logs' failures" if c is not None else "none"}
+                         for n, c in zip(names, per_log)], columns=cols)
+
+
 def _calibrate_after_stop(hybrid, test_arrays, test_is_train: bool, calibration_scenarios: int, seed: int,
-                          n_intervals: int, horizon_s: float, say) -> tuple[list[dict], list | None]:
+                          n_intervals: int, horizon_s: float, say, per_log_hull=None) -> tuple[list[dict], list | None]:
     """The hybrid's spread after a failure, calibrated on the vessel's own failures where the
     training logs have enough of them, else on simulated DP losses (Gunnerus only).
 
     ``fit`` calibrates on the training logs' failures itself (``after_stop_min_failures``);
     when the test logs are the training logs, that calibration has seen the drifts it is
     scored on, so each test log gets one fitted on the *other* logs' failures instead
-    (returned per log; None: one calibration for all). Returns timing rows and that list.
+    (returned per log; None: one calibration for all), from forecasts with the hull's yaw
+    coefficient that log is scored with (``per_log_hull``). Returns timing rows and that list.
     """
     timing, t0 = [], time.perf_counter()
     n_min = hybrid.calibration_config.after_stop_min_failures
@@ -231,9 +278,15 @@ def _calibrate_after_stop(hybrid, test_arrays, test_is_train: bool, calibration_
         say(f"spread after a failure calibrated on the training logs' {n_own} failures")
         return timing, None
     if test_is_train and n_min > 0 and len(test_arrays) - 1 >= n_min:
-        errors = hybrid.after_stop_errors(test_arrays, n_intervals=n_intervals, horizon_s=horizon_s)
-        per_log = leave_one_out_after_stop_scales(errors, hybrid.calibration_config)
-        what = f"calibrate after stop on the other {len(errors) - 1} logs' failures, per test log"
+        coefficients = [hybrid.drift_yaw_uv_rad_per_m2 if c is None else c.coefficient_rad_per_m2
+                        for c in (per_log_hull or [None] * len(test_arrays))]
+        errors, per_log = {}, []
+        for k, value in enumerate(coefficients):
+            if value not in errors:             # the logs' errors with this log's coefficient
+                hybrid.drift_yaw_uv_rad_per_m2 = value
+                errors[value] = hybrid.after_stop_errors(test_arrays, n_intervals=n_intervals, horizon_s=horizon_s)
+            per_log.append(after_stop_scales(errors[value][:k] + errors[value][k + 1:], hybrid.calibration_config))
+        what = f"calibrate after stop on the other {len(test_arrays) - 1} logs' failures, per test log"
         timing.append({"model": "hybrid", "what": what, "seconds": time.perf_counter() - t0})
         say(f"{what} ({timing[-1]['seconds']:.1f} s)")
         return timing, per_log
@@ -260,6 +313,7 @@ def _benchmark_models(vessel, hybrid, data_only) -> dict:
     mean_bias.environment = "mean"
     # its spread after a failure stays raw: the after-stop scale was fitted for the estimator
     mean_bias.calibration = {k: v for k, v in hybrid.calibration.items() if k != "after_stop"}
+    mean_bias.drift_yaw_uv_rad_per_m2 = 0.0      # as before the estimator: nothing learned from failures
     return {"hybrid": (hybrid, {"guard": True}), "hybrid_nets_unguarded": (hybrid, {"guard": False}),
             "hybrid_mean_bias": (mean_bias, {"guard": True}),
             "dynamic": (DynamicPredictor(vessel), {}), "dead_reckoning": (DeadReckoning(vessel), {}),
@@ -267,9 +321,10 @@ def _benchmark_models(vessel, hybrid, data_only) -> dict:
 
 
 def _forecast_after_failures(predictors: dict, test_arrays, n_intervals: int, horizon_s: float, horizons,
-                             hybrid=None, per_log_cal=None):
+                             hybrid=None, per_log_cal=None, per_log_hull=None):
     """Every model's forecasts after the failure of every test log (the ``hybrid`` object with
-    the after-stop calibration ``per_log_cal[k]`` for log ``k`` when given).
+    the after-stop calibration ``per_log_cal[k]`` and the hull's yaw coefficient in a drift of
+    ``per_log_hull[k]`` for log ``k`` when given).
 
     Returns ``fc`` (name -> per log ``(pred, truth, std)``), every lead time ``all_h`` [s], the
     indices ``pick`` of the table's ``horizons`` among them, and timing rows.
@@ -284,6 +339,9 @@ def _forecast_after_failures(predictors: dict, test_arrays, n_intervals: int, ho
         for k, a in enumerate(test_arrays):
             if per_log_cal is not None and pred is hybrid:
                 pred.calibration[AFTER_STOP] = per_log_cal[k]
+            if per_log_hull is not None and pred is hybrid:
+                c = per_log_hull[k]
+                pred.drift_yaw_uv_rad_per_m2 = 0.0 if c is None else c.coefficient_rad_per_m2
             fc[name].append(metrics.drift_forecasts(pred, a, n_intervals=n_intervals, horizons_s=all_h, **kw))
         sec = time.perf_counter() - t0
         timing.append({"model": name, "what": f"forecast {len(test_arrays) * n_intervals} x {horizon_s:g} s",

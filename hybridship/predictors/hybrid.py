@@ -29,6 +29,9 @@ from ..residual.environment import (EnvironmentConfig, EnvironmentEstimator, cur
                                     environment_accel)
 from ..residual.multistep import MultiStepConfig, collect_starts, train_multistep
 from ..residual.guard import CommandRegime, EnvelopeGuard, ThrustRegime
+from ..residual.drift_hull import (MIN_FAILURES as DRIFT_HULL_MIN_FAILURES, MUNK_MULTIPLES,
+                                   START_EVERY_S as DRIFT_HULL_START_EVERY_S, choose_coefficient,
+                                   drift_start_rows, munk_coefficient)
 from ..residual.hull import HullCorrection
 from .after_failure import drift_forecasts, has_drift
 from .forecast_setup import FORECAST_HISTORY_S, _check_row_stride, _forecast_setup, as_log_arrays, start_indices
@@ -128,6 +131,14 @@ class HybridPredictor:
         The forecast itself (``eta``) stays the one at the forecast wind. The paths are
         stored in the model file. A start during station keeping with the held load's
         spread (``environment="estimator"``) reports that spread alone, without this term.
+    drift_hull : bool
+        Learn the hull's yaw moment in a drift from the training logs' failures (the
+        default). With at least three failures in the training logs (``environment =
+        "estimator"``), :meth:`fit` chooses one coefficient ``k`` [rad/m^2] by the heading
+        error of forecasts along those drifts, and forecasts that start after a failure add
+        the yaw acceleration ``k u v``; it is kept only if it lowers the error of a
+        failure left out of the choice (:mod:`hybridship.residual.drift_hull`,
+        ``training_info["drift_hull"]``). Without failures in the training logs nothing changes.
     """
 
     #: Training modes of the nets.
@@ -143,7 +154,7 @@ class HybridPredictor:
                  calibration_config: CalibrationConfig = CalibrationConfig(), training: str = "one_step",
                  multistep_config: MultiStepConfig = MultiStepConfig(), command_guard: bool = False,
                  hull_correction: bool = False, hull_ridge: float = 1e-3, hull_fit: str = "one_step",
-                 wind_forecast: WindForecast | str = "fit", wind_samples: int = 0):
+                 wind_forecast: WindForecast | str = "fit", wind_samples: int = 0, drift_hull: bool = True):
         if not (isinstance(wind_forecast, WindForecast) or wind_forecast == "fit"):
             raise ValueError(f"wind_forecast: expected a WindForecast or 'fit', got {wind_forecast!r}")
         #: as given: a WindForecast, or "fit" (chosen by :meth:`fit` on the training logs' wind)
@@ -158,6 +169,10 @@ class HybridPredictor:
         #: set by :meth:`fit` with ``wind_samples > 0``; their step is ``wind_error_dt_s`` [s]
         self.wind_error_paths: np.ndarray | None = None
         self.wind_error_dt_s: float = 1.0
+        self.drift_hull = bool(drift_hull)
+        #: the hull's yaw acceleration per u v (over ground) in a drift [rad/m^2] (0: none), learned by
+        #: :meth:`fit` from the training logs' failures (:mod:`hybridship.residual.drift_hull`)
+        self.drift_yaw_uv_rad_per_m2: float = 0.0
         if training not in self.TRAINING_MODES:
             raise ValueError(f"training: expected one of {self.TRAINING_MODES}, got {training!r}")
         self.training = training
@@ -288,6 +303,7 @@ class HybridPredictor:
         self.command_regime = None
         if self.command_guard and cal.fraction > 0:
             self.command_regime = self._fit_command_regime(logs, masks, dp_only, stride)
+        drift_hull_info = self._fit_drift_hull(logs, cal.horizon_s)
         self.calibration = {}
         cal_info = {"fraction": cal.fraction, "commands": list(cal.commands), "horizon_s": cal.horizon_s,
                     "refit": cal.refit, "n_starts": {}, "dp_only": bool(dp_only)}
@@ -300,8 +316,61 @@ class HybridPredictor:
             self.training_info["wind_forecast"] = wind_info
         if wind_spread_info is not None:
             self.training_info["wind_spread"] = wind_spread_info
+        if drift_hull_info is not None:
+            self.training_info["drift_hull"] = drift_hull_info
         self._calibrate_after_stop_on_training_logs(logs, cal)
         return self
+
+    def _fit_drift_hull(self, logs, horizon_s: float):
+        """With ``drift_hull`` and at least three failures in the training logs: the hull's yaw
+        coefficient in a drift (:func:`~hybridship.residual.drift_hull.choose_coefficient` on
+        :meth:`drift_hull_objective`). Returns what ``training_info["drift_hull"]`` records
+        (None when nothing was chosen)."""
+        self.drift_yaw_uv_rad_per_m2 = 0.0
+        if not self.drift_hull or self.environment != "estimator":
+            return None
+        failed = [a for a in logs if drift_start_rows(a.dp_active, len(a), int(round(horizon_s / a.dt_s)), 1).size]
+        if len(failed) < DRIFT_HULL_MIN_FAILURES:
+            return None
+        choice = choose_coefficient(self.drift_hull_objective(failed, horizon_s), munk_coefficient(self.model))
+        self.drift_yaw_uv_rad_per_m2 = choice.coefficient_rad_per_m2
+        return {**choice.as_dict(), "horizon_s": float(horizon_s), "start_every_s": DRIFT_HULL_START_EVERY_S}
+
+    def drift_hull_objective(self, logs, horizon_s: float = 60.0) -> np.ndarray:
+        """Mean absolute heading error [rad] (K, L) of forecasts along each log's drift with
+        every candidate coefficient of :data:`~hybridship.residual.drift_hull.MUNK_MULTIPLES`
+        (times the model's Munk coefficient): starts every
+        :data:`~hybridship.residual.drift_hull.START_EVERY_S` from the failure on, each over
+        ``horizon_s`` (errors at every lead). One rollout per log holds every start and
+        candidate. The logs must each have a failure with ``horizon_s`` of drift after it.
+        """
+        self._check_fitted()
+        ks = MUNK_MULTIPLES * munk_coefficient(self.model)
+        out = np.empty((ks.size, 0))
+        for log in logs:
+            a = as_log_arrays(log, self.model.vessel)
+            H = int(round(horizon_s / a.dt_s))
+            rows = drift_start_rows(a.dp_active, len(a), H, int(round(DRIFT_HULL_START_EVERY_S / a.dt_s)))
+            if rows.size == 0:
+                raise ValueError(f"logs: a log without a failure followed by {horizon_s:g} s of drift")
+            st = _forecast_setup(self.model, self.residual_config, a, a.time_s[rows], H * a.dt_s,
+                                 self.stop_after_failure, "held", history_s=self.history_s,
+                                 wind_forecast=self.wind_forecast)
+            eta0, nu0, dev0, bias0, current, acc_ext, _ = self._estimated_start(st, self.ensemble.n_members)
+            K, S = ks.size, rows.size
+            tile = lambda x: np.ascontiguousarray(np.tile(x, (K,) + (1,) * (x.ndim - 1)))  # noqa: E731
+            weight = self._after_stop_weight(st, None)
+            eta, _, _, _ = self.rollout(tile(eta0), tile(nu0), tile(dev0), np.tile(bias0, (1, K, 1)), tile(st.rpm),
+                                        tile(st.az), tile(st.wind), st.H, st.dt, substeps=st.substeps,
+                                        current=tile(current), accel_ext=tile(acc_ext),
+                                        nets_weight=None if weight is None else tile(weight),
+                                        guard=self.use_guard, drift_yaw_uv=np.repeat(ks, S))
+            truth = a.eta[rows[:, None] + np.arange(1, st.H + 1)[None, :], 2]            # (S, H)
+            err = np.abs(wrap_pi(eta[:, 1:, 2].reshape(K, S, st.H) - truth[None]))
+            if not np.isfinite(truth).any():
+                raise ValueError("logs: a drift without a logged heading to score the forecasts on")
+            out = np.column_stack([out, np.nanmean(err, axis=(1, 2))])     # a gap in the log is not scored
+        return out
 
     def _fit_wind_forecast(self, logs, cuts, cal: CalibrationConfig, dp_only: bool):
         """With ``wind_forecast="fit"``: the wind forecast that best predicts the training
@@ -443,10 +512,10 @@ class HybridPredictor:
         def tile(x):
             return None if x is None else np.ascontiguousarray(np.tile(x, (N,) + (1,) * (np.ndim(x) - 1)))
 
-        nets_weight = rollout_kw.pop("nets_weight")
+        per_start = {k: tile(rollout_kw.pop(k)) for k in ("nets_weight", "drift_yaw_uv")}
         eta_w, _, _, _ = self.rollout(tile(eta0), tile(nu0), tile(dev0), np.tile(bias0, (1, N, 1)), tile(st.rpm),
                                       tile(st.az), wind, H, st.dt, current=tile(current), accel_ext=tile(acc_ext),
-                                      nets_weight=tile(nets_weight), **rollout_kw)
+                                      **per_start, **rollout_kw)
         d = eta_w.reshape(N, S, H + 1, 3) - eta[None]
         d[..., 2] = wrap_pi(d[..., 2])
         return np.sqrt((d ** 2).mean(axis=0))
@@ -575,7 +644,8 @@ class HybridPredictor:
             bias0 = np.stack([prep.bias_members(int(i), E, self.ensemble_config.seed) for i in st.idx], axis=1)
             eta0, nu0, current, acc_ext = st.eta0, st.nu0, None, None
         rollout_kw = dict(guard=self.use_guard if guard is None else guard, substeps=st.substeps, nets=nets,
-                          nets_weight=self._after_stop_weight(st, nets_after_stop))
+                          nets_weight=self._after_stop_weight(st, nets_after_stop),
+                          drift_yaw_uv=self._drift_yaw_uv(st))
         eta, nu, std, wgt = self.rollout(eta0, nu0, dev0, bias0, st.rpm, st.az, st.wind, st.H, st.dt,
                                          current=current, accel_ext=acc_ext, **rollout_kw)
         if self.wind_samples and self.wind_error_paths is not None and st.H > 0:
@@ -607,6 +677,13 @@ class HybridPredictor:
         own = (self.environment_window_s if self.environment == "estimator"
                else c.bias_window_s + c.start_residual_window_s + c.deriv_window_s)
         return max(FORECAST_HISTORY_S, float(own))
+
+    def _drift_yaw_uv(self, st):
+        """Per start, the hull's yaw coefficient in a drift [rad/m^2]: the learned one for starts
+        after a failure, 0 before (None when there is none)."""
+        if self.drift_yaw_uv_rad_per_m2 == 0.0 or not self.stop_after_failure:
+            return None
+        return np.where(st.arrays.dp_active[st.idx] == 0, self.drift_yaw_uv_rad_per_m2, 0.0)
 
     def _after_stop_weight(self, st, nets_after_stop):
         """Per start, 0 where the nets must stay off because the start is after a failure."""
@@ -801,12 +878,14 @@ class HybridPredictor:
         return self.thrust_regime.weight(parts[:, 1] @ np.linalg.inv(self.model.mass_matrix).T)
 
     def rollout(self, eta0, nu0, dev0, bias0_ned, rpm, az, wind, n_steps: int, dt_s: float, *, guard: bool = True,
-                substeps: int = 1, current=None, accel_ext=None, nets: bool = True, nets_weight=None):
+                substeps: int = 1, current=None, accel_ext=None, nets: bool = True, nets_weight=None,
+                drift_yaw_uv=None):
         """Batched hybrid rollout from states (S, 3), previous residual deviations (S, 3),
         biases (S, 3) or per member (E, S, 3) (surge/sway in NED), commands held (S, 1, K) or
         per step (S, n_steps, K), wind held (S, 1, 2) or per step (S, n_steps, 2), and optionally a held current
         ``[speed_m_s, dir_to_rad]`` (S, 1, 2) and a body-frame extra acceleration (S, 1, 3)
-        for the physics.
+        for the physics, and optionally per start the hull's yaw coefficient in a drift
+        ``drift_yaw_uv`` (S,) [rad/m^2] (:func:`_with_drift_yaw`).
 
         Every step: the physics advances the ensemble-mean state one step (RK4, through
         :meth:`DynamicModel.step_unchecked` with the extra acceleration ``accel_ext``) and
@@ -893,6 +972,8 @@ class HybridPredictor:
             if nets and self.hull is not None:
                 r = r + (self.hull.predict(feats[0]) * w_start[:, None])[None]
             r_prev = r
+            if drift_yaw_uv is not None:        # after r_prev: not a net output, so not a next-step feature
+                r = _with_drift_yaw(r, nu_1, drift_yaw_uv)
             eta[:, j + 1], nu[:, j + 1], std[:, j + 1] = _corrected_step(eta_1, nu_1, r, bias0_ned, dt_s, d_nu, d_eta)
             _check_finite_step(eta[:, j + 1], nu[:, j + 1], (j + 1) * dt_s)
         return eta, nu, std, (wgt if guard else None)
@@ -956,6 +1037,15 @@ def leave_one_out_after_stop_scales(errors: list, cal: CalibrationConfig) -> lis
     :func:`after_stop_scales` fitted on the *other* logs' failures (so no failure is scored
     with a spread calibrated on it)."""
     return [after_stop_scales(errors[:k] + errors[k + 1:], cal) for k in range(len(errors))]
+
+
+def _with_drift_yaw(r, nu, k):
+    """Members' residuals ``r`` (E, S, 3) plus the hull's yaw acceleration in a drift ``k u v``
+    [rad/s^2] per start (``k`` (S,) [rad/m^2], ``u, v`` [m/s] the body-frame velocity over
+    ground of ``nu`` (S, 3); :mod:`hybridship.residual.drift_hull`)."""
+    out = r.copy()
+    out[..., 2] += k * nu[:, 0] * nu[:, 1]
+    return out
 
 
 def _check_finite_step(eta, nu, lead_s: float):

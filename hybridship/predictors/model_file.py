@@ -27,7 +27,7 @@ from ..residual.multistep import MultiStepConfig
 __all__ = ["MODEL_FORMAT_VERSION", "ModelFileError", "load_model", "model_metadata", "save_model"]
 
 #: Version of the model-file format written by :func:`save_model` (:meth:`HybridPredictor.save`).
-#: 9: the wind futures of the spread (``wind_samples`` and the wind forecast's error
+#: 10: the hull's yaw moment in a drift (``drift_hull``, ``drift_yaw_uv_rad_per_m2``); 9: the wind futures of the spread (``wind_samples`` and the wind forecast's error
 #: paths, ``wind_error_paths``); 8: the spread calibration's exponent (a fourth row of
 #: ``cal_*``, the value at every lead); 7: the wind forecast (``wind_forecast``: the fitted gust decay, or held); 6: the
 #: environment estimator's thrust-model error per thruster (its prior has one entry
@@ -35,11 +35,12 @@ __all__ = ["MODEL_FORMAT_VERSION", "ModelFileError", "load_model", "model_metada
 #: validated vessel description is embedded in the metadata (``vessel_description``), so a
 #: model loads without its vessel file; 3 added the environment estimator; 2 and earlier
 #: stored only the vessel's name.
-MODEL_FORMAT_VERSION = 9
+MODEL_FORMAT_VERSION = 10
 #: Versions :func:`load_model` reads: a version-7 file is a version-8 one without the spread
 #: exponent (three rows per ``cal_*`` array), read as exponent 1, which is what it was fitted with;
-#: versions 7 and 8 have no wind futures in the spread (``wind_samples = 0``, as they were fitted).
-READABLE_MODEL_FORMAT_VERSIONS = (7, 8, 9)
+#: versions 7 and 8 have no wind futures in the spread (``wind_samples = 0``, as they were fitted);
+#: versions 7 to 9 no hull's yaw moment in a drift (``drift_hull`` off, ``k = 0``).
+READABLE_MODEL_FORMAT_VERSIONS = (7, 8, 9, 10)
 
 
 class ModelFileError(ValueError):
@@ -116,6 +117,7 @@ def model_metadata(predictor) -> dict:
                           **asdict(p.wind_forecast)},
         "wind_samples": p.wind_samples, "wind_error_dt_s": p.wind_error_dt_s,
         "has_wind_error_paths": p.wind_error_paths is not None,
+        "drift_hull": p.drift_hull, "drift_yaw_uv_rad_per_m2": p.drift_yaw_uv_rad_per_m2,
         "training_info": p.training_info,
     }
 
@@ -233,9 +235,12 @@ def _build_predictor(cls, meta: dict, vessel, path: Path):
                   command_guard=meta["command_guard"], hull_correction=meta.get("hull_correction", False),
                   hull_ridge=meta.get("hull_ridge", 1e-3), hull_fit=meta.get("hull_fit", "one_step"),
                   wind_forecast=_read_wind_forecast(meta["wind_forecast"]),
-                  wind_samples=meta["wind_samples"] if meta["format_version"] >= 9 else 0)
+                  wind_samples=meta["wind_samples"] if meta["format_version"] >= 9 else 0,
+                  drift_hull=_checked_flag(meta, "drift_hull") if meta["format_version"] >= 10 else False)
         if meta["format_version"] >= 9:
             obj.wind_error_dt_s = _checked_wind_error_dt(meta["wind_error_dt_s"])
+        if meta["format_version"] >= 10:
+            obj.drift_yaw_uv_rad_per_m2 = _checked_drift_yaw(meta["drift_yaw_uv_rad_per_m2"], obj.model)
         if meta["wind_forecast"].get("option") == "fit":
             obj.wind_forecast_option = "fit"       # a refit chooses again; forecasts use the fitted one
         state = _scalar_state(meta)
@@ -257,6 +262,25 @@ def _checked_wind_error_dt(value) -> float:
     lo, hi = WIND_ERROR_DT_RANGE_S
     if isinstance(value, bool) or not isinstance(value, (int, float)) or not lo <= value <= hi:
         raise ValueError(f"wind_error_dt_s: expected a step from {lo:g} to {hi:g} s, got {value!r}")
+    return float(value)
+
+
+def _checked_flag(meta: dict, key: str) -> bool:
+    """A true/false setting from the metadata; ValueError naming the field otherwise."""
+    if not isinstance(meta[key], bool):
+        raise ValueError(f"{key}: expected true or false, got {meta[key]!r}")
+    return meta[key]
+
+
+def _checked_drift_yaw(value, model) -> float:
+    """The hull's yaw coefficient in a drift [rad/m^2]: a finite number within the candidates
+    :func:`~hybridship.residual.drift_hull.choose_coefficient` chooses from."""
+    from ..residual.drift_hull import MUNK_MULTIPLES, munk_coefficient
+
+    bound = float(np.abs(MUNK_MULTIPLES).max() * abs(munk_coefficient(model))) * (1.0 + 1e-9)
+    if isinstance(value, bool) or not isinstance(value, (int, float)) or not abs(value) <= bound:
+        raise ValueError(f"drift_yaw_uv_rad_per_m2: expected a number from {-bound:.6g} to {bound:.6g} "
+                         f"rad/m^2, got {value!r}")
     return float(value)
 
 

@@ -1,0 +1,143 @@
+"""The hull's yaw moment in a drift, learned from the vessel's earlier failures.
+
+A ship on station does not move through the water, so station keeping cannot show how the
+hull answers the relative velocity; after a DP failure the ship drifts, and a hull model that
+answers it wrongly turns the heading forecast away within a minute. On the independent
+simulator's Gunnerus the largest part of that error is a yaw moment that grows with
+``u_r v_r``, the form of the Munk moment of ``C_A(nu_r) nu_r`` (Fossen 2021, sec. 6.3;
+``benchmarks/hull_yaw_residual.py``). A vessel's logs of earlier failures show it.
+
+One coefficient ``k`` [rad/m^2] is learned: forecasts that start after a failure add the yaw
+acceleration ``k u v`` to the physics at every step. ``u, v`` [m/s] are the body-frame
+velocity over ground, not relative to the estimated current: after a failure the
+estimator's current absorbs part of the same hull error, and with it the choice below was
+less consistent from failure to failure (measured in ``docs/results-drift.md``).
+
+``k`` is chosen on the training logs' failures by the forecasts' own error, not by a
+one-step fit (a drift's one-step residual is dominated by the estimator's adaptation and by
+noise): forecasts started every :data:`START_EVERY_S` along each drift are rolled out once
+for every candidate (one batch per log), and ``k`` minimises their mean absolute heading
+error over the horizon (:func:`choose_coefficient`). The candidates are multiples
+:data:`MUNK_MULTIPLES` of the model's own Munk coefficient (:func:`munk_coefficient`), so a
+multiple of 1 cancels the model's Munk moment in yaw.
+
+The coefficient is kept only where it helps out of sample: with one failure left out at a
+time, the coefficient chosen on the others must lower the left-out failure's error on
+average, compared with ``k = 0``; otherwise ``k`` stays 0 (:attr:`DriftHullChoice.adopted`).
+A few failures in different weather give noisy choices, and this check keeps a coefficient
+fitted to one failure's weather out of the forecasts.
+"""
+
+from __future__ import annotations
+
+from dataclasses import asdict, dataclass
+
+import numpy as np
+
+__all__ = ["MIN_FAILURES", "MUNK_MULTIPLES", "START_EVERY_S", "DriftHullChoice", "choose_coefficient",
+           "munk_coefficient", "drift_start_rows"]
+
+#: Candidate coefficients as multiples of the model's Munk coefficient (-2 to 2 in steps of 0.05).
+MUNK_MULTIPLES = np.round(np.linspace(-2.0, 2.0, 81), 6)
+#: Spacing of the forecast starts along each drift that the coefficient is chosen on [s].
+START_EVERY_S = 10.0
+#: Failures the training logs must hold before a coefficient is chosen (the out-of-sample
+#: check needs at least two per left-out failure).
+MIN_FAILURES = 3
+
+
+def munk_coefficient(model) -> float:
+    """``(M_A22 - M_A11) / M_33`` [rad/m^2]: the yaw acceleration per ``u_r v_r`` [(m/s)^2] of the
+    model's Munk moment (added masses ``M_A``, total yaw inertia ``M_33``)."""
+    from ..physics.hull import mass_matrices
+
+    M_RB, M_A = mass_matrices(model.vessel)
+    return float((M_A[1, 1] - M_A[0, 0]) / (M_RB + M_A)[2, 2])
+
+
+def drift_start_rows(dp_active: np.ndarray, n_rows: int, horizon_steps: int, every_steps: int) -> np.ndarray:
+    """Rows of the first drift (from the first ``dp_active == 0`` after station keeping to the
+    next ``dp_active == 1`` or the end), every ``every_steps``, whose next ``horizon_steps``
+    rows are in the same drift (empty without a failure, and for a log that starts with
+    ``dp_active == 0``)."""
+    dp = np.asarray(dp_active)[:n_rows]
+    off = np.flatnonzero(dp == 0)
+    if off.size == 0 or off[0] == 0:
+        return np.zeros(0, int)
+    back_on = np.flatnonzero(dp[off[0]:] != 0)
+    end = int(off[0] + back_on[0]) if back_on.size else n_rows
+    return np.arange(int(off[0]), end - horizon_steps, max(1, int(every_steps)))
+
+
+@dataclass(frozen=True)
+class DriftHullChoice:
+    """The coefficient chosen on a set of failures, and the evidence for it.
+
+    Attributes
+    ----------
+    coefficient_rad_per_m2 : float
+        ``k`` the forecasts use (0 when not adopted).
+    munk_multiple : float
+        The chosen candidate as a multiple of the model's Munk coefficient (before the check).
+    adopted : bool
+        Whether the out-of-sample check kept it.
+    n_failures : int
+        Failures it was chosen on.
+    error_deg : float
+        Mean absolute heading error of the failures' forecasts with the chosen candidate [deg].
+    error_zero_deg : float
+        The same with ``k = 0`` [deg].
+    error_left_out_deg : float or None
+        Mean over failures of the error of the candidate chosen without that failure [deg]
+        (None with fewer than two failures: no check, not adopted).
+    """
+
+    coefficient_rad_per_m2: float
+    munk_multiple: float
+    adopted: bool
+    n_failures: int
+    error_deg: float
+    error_zero_deg: float
+    error_left_out_deg: float | None
+
+    def as_dict(self) -> dict:
+        return asdict(self)
+
+
+def choose_coefficient(objective_rad: np.ndarray, munk_rad_per_m2: float, multiples=MUNK_MULTIPLES,
+                       exclude: int | None = None) -> DriftHullChoice:
+    """Choose ``k`` from the failures' heading errors at every candidate.
+
+    Parameters
+    ----------
+    objective_rad : ndarray, shape (K, L)
+        Mean absolute heading error [rad] of failure ``l``'s forecasts with candidate ``k``.
+    munk_rad_per_m2 : float
+        The model's Munk coefficient (:func:`munk_coefficient`).
+    multiples : array (K,)
+        The candidates as multiples of it (must contain 0).
+    exclude : int, optional
+        A failure (column) not to use: the one a benchmark scores.
+    """
+    obj = np.asarray(objective_rad, dtype=float)
+    multiples = np.asarray(multiples, dtype=float)
+    if obj.ndim != 2 or obj.shape[0] != multiples.size:
+        raise ValueError(f"objective_rad: expected shape ({multiples.size}, n_failures), got {obj.shape}")
+    zero = np.flatnonzero(multiples == 0.0)
+    if zero.size != 1:
+        raise ValueError("multiples: must contain 0 exactly once")
+    used = [j for j in range(obj.shape[1]) if j != exclude]
+    if not used or not np.all(np.isfinite(obj[:, used])):
+        raise ValueError("objective_rad: needs finite errors of at least one failure")
+    best = int(obj[:, used].mean(axis=1).argmin())
+    err_zero = float(obj[zero[0], used].mean())
+    left_out = None
+    if len(used) >= 2:
+        left_out = float(np.mean([obj[int(obj[:, [i for i in used if i != j]].mean(axis=1).argmin()), j]
+                                  for j in used]))
+    adopted = left_out is not None and left_out < err_zero and multiples[best] != 0.0
+    return DriftHullChoice(coefficient_rad_per_m2=float(multiples[best] * munk_rad_per_m2) if adopted else 0.0,
+                           munk_multiple=float(multiples[best]), adopted=bool(adopted), n_failures=len(used),
+                           error_deg=float(np.degrees(obj[best, used].mean())),
+                           error_zero_deg=float(np.degrees(err_zero)),
+                           error_left_out_deg=None if left_out is None else float(np.degrees(left_out)))

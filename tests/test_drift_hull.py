@@ -1,0 +1,153 @@
+"""The hull's yaw moment in a drift, learned from earlier failures (hybridship.residual.drift_hull):
+the choice and its out-of-sample check, identification where the answer is known, where
+forecasts use it, and how the drift benchmark keeps it away from the drifts it scores."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from hybridship.physics.hull import mass_matrices
+from hybridship.physics.model import DynamicModel
+from hybridship.predictors import HybridPredictor, as_log_arrays
+from hybridship.residual.drift_hull import MUNK_MULTIPLES, choose_coefficient, drift_start_rows, munk_coefficient
+from hybridship.residual.ensemble import EnsembleConfig
+from hybridship.sim.synthetic import physics_log
+
+TINY = EnsembleConfig(n_members=3, hidden=8, max_epochs=20, patience=5, seed=0)
+ZERO = int(np.flatnonzero(MUNK_MULTIPLES == 0.0)[0])
+
+
+def _bowl(best: float, depth: float = 1.0) -> np.ndarray:
+    """A failure's heading error [rad] over the candidates, lowest at the multiple ``best``."""
+    return 0.05 + depth * 0.01 * (MUNK_MULTIPLES - best) ** 2
+
+
+@settings(max_examples=30, deadline=None)
+@given(best=st.sampled_from([float(m) for m in MUNK_MULTIPLES if m != 0.0]), n=st.integers(2, 6))
+def test_failures_that_agree_give_their_coefficient(best, n):
+    """Failures whose errors are lowest at the same multiple: that one is chosen and kept."""
+    obj = np.column_stack([_bowl(best, 1.0 + 0.3 * j) for j in range(n)])
+    c = choose_coefficient(obj, 0.005)
+    assert c.adopted and c.munk_multiple == best
+    assert c.coefficient_rad_per_m2 == pytest.approx(best * 0.005)
+    assert c.error_deg < c.error_zero_deg and c.n_failures == n
+
+
+def test_a_choice_that_does_not_carry_over_to_a_left_out_failure_is_not_kept():
+    """Two failures want +1 and one, much more sensitive, wants -1: the pooled choice lowers
+    the in-sample error, but left out in turn each failure gets a coefficient that hurts it
+    more than 0 would, so k stays 0. Excluding a failure leaves it out of the choice."""
+    obj = np.column_stack([_bowl(1.0), _bowl(1.0), _bowl(-1.0, 20.0)])
+    c = choose_coefficient(obj, 0.005)
+    assert c.error_deg < c.error_zero_deg
+    assert not c.adopted and c.coefficient_rad_per_m2 == 0.0 and c.error_left_out_deg > c.error_zero_deg
+    alone = choose_coefficient(obj, 0.005, exclude=2)
+    assert alone.munk_multiple == 1.0 and alone.adopted and alone.n_failures == 2
+    one = choose_coefficient(obj[:, :1], 0.005)
+    assert not one.adopted and one.error_left_out_deg is None     # no failure to check it on
+
+
+def test_bad_objectives_are_refused():
+    with pytest.raises(ValueError, match=r"objective_rad: expected shape \(81, n_failures\)"):
+        choose_coefficient(np.zeros((5, 3)), 0.005)
+    with pytest.raises(ValueError, match="finite errors"):
+        choose_coefficient(np.full((81, 2), np.nan), 0.005)
+    with pytest.raises(ValueError, match="must contain 0"):
+        choose_coefficient(np.zeros((2, 3)), 0.005, multiples=[1.0, 2.0])
+
+
+def test_drift_starts_need_station_keeping_before_the_failure():
+    dp = np.r_[np.ones(100), np.zeros(200)]
+    np.testing.assert_array_equal(drift_start_rows(dp, 300, 60, 10), np.arange(100, 240, 10))
+    assert drift_start_rows(np.zeros(300), 300, 60, 10).size == 0      # a manoeuvring log
+    restarted = np.r_[np.ones(100), np.zeros(100), np.ones(100)]          # DP back on after 100 s
+    np.testing.assert_array_equal(drift_start_rows(restarted, 300, 60, 10), np.arange(100, 140, 10))
+    assert drift_start_rows(np.ones(300), 300, 60, 10).size == 0
+
+
+def _wind_drift_logs(model, sway_added_mass_scale: float, seeds=(20, 21, 22, 23)):
+    """Failures of a ship whose sway added mass is the model's times the scale, under a steady
+    wind the model knows: the only model error after a failure is in the hull."""
+    spec = model.vessel.model_dump()
+    spec["true_vessel"] = {"added_mass_scale": (1.0, sway_added_mass_scale, 1.0)}
+    true = DynamicModel(type(model.vessel).model_validate(spec), true_vessel=True)
+    return [physics_log(true, duration_s=1100, t_shutdown_s=800, seed=s, wind=(12.0, float(s))) for s in seeds]
+
+
+@pytest.fixture(scope="module")
+def heavy_sway(model):
+    """Four failures of a ship with 1.6 times the model's sway added mass, and a hybrid fitted on them."""
+    logs = _wind_drift_logs(model, 1.6)
+    return logs, HybridPredictor(model.vessel, ensemble_config=TINY).fit(logs)
+
+
+@pytest.mark.parametrize("scale", [0.6, 1.6])
+def test_a_sway_added_mass_error_is_learned_as_its_munk_moment(model, scale, heavy_sway):
+    """The true ship's Munk moment in yaw is ``-(s m_22 - m_11) u v / m_33``: against the
+    model's, the forecasts miss ``-(s - 1) m_22 / (m_22 - m_11)`` times the model's Munk
+    coefficient. fit learns that multiple (within 0.25; the sway inertia differs too), keeps
+    it, and it lowers the failures' heading error."""
+    _, M_A = mass_matrices(model.vessel)
+    want = -(scale - 1.0) * M_A[1, 1] / (M_A[1, 1] - M_A[0, 0])
+    hp = heavy_sway[1] if scale == 1.6 else \
+        HybridPredictor(model.vessel, ensemble_config=TINY).fit(_wind_drift_logs(model, scale))
+    info = hp.training_info["drift_hull"]
+    assert info["adopted"] and abs(info["munk_multiple"] - want) < 0.25, (info, want)
+    assert hp.drift_yaw_uv_rad_per_m2 == pytest.approx(info["munk_multiple"] * munk_coefficient(hp.model))
+    assert info["error_deg"] < 0.8 * info["error_zero_deg"] and info["n_failures"] == 4
+
+
+def test_a_hull_without_error_gets_none(model):
+    hp = HybridPredictor(model.vessel, ensemble_config=TINY).fit(_wind_drift_logs(model, 1.0))
+    assert not hp.training_info["drift_hull"]["adopted"] and hp.drift_yaw_uv_rad_per_m2 == 0.0
+
+
+def test_fit_needs_three_failures_and_the_option(model, heavy_sway):
+    logs = heavy_sway[0][:3]
+    two = HybridPredictor(model.vessel, ensemble_config=TINY).fit(logs[:2])
+    off = HybridPredictor(model.vessel, ensemble_config=TINY, drift_hull=False).fit(logs)
+    for hp in (two, off):
+        assert "drift_hull" not in hp.training_info and hp.drift_yaw_uv_rad_per_m2 == 0.0
+    assert HybridPredictor(model.vessel, ensemble_config=TINY).fit(logs).drift_yaw_uv_rad_per_m2 != 0.0
+
+
+def test_only_forecasts_that_start_after_a_failure_use_it(model):
+    """A start during station keeping is forecast as without the coefficient; one after the
+    failure is not; each start gets the same forecast alone and in a batch."""
+    log = _wind_drift_logs(model, 1.6, seeds=(30,))[0]
+    hp = HybridPredictor(model.vessel, ensemble_config=TINY).fit([log])
+    assert hp.drift_yaw_uv_rad_per_m2 == 0.0
+    starts = [700.0, 820.0]
+    before = hp.forecast(log, starts, 60.0)
+    hp.drift_yaw_uv_rad_per_m2 = -0.5 * munk_coefficient(hp.model)
+    after = hp.forecast(log, starts, 60.0)
+    np.testing.assert_array_equal(after.eta[0], before.eta[0])
+    assert np.abs(after.eta[1, -1, 2] - before.eta[1, -1, 2]) > 1e-4
+    np.testing.assert_allclose(hp.forecast(log, starts[1:], 60.0).eta[0], after.eta[1], rtol=0, atol=1e-12)
+
+
+def test_the_drift_benchmark_chooses_it_without_the_scored_failure(model, heavy_sway):
+    """Scored on its own training logs, each failure is forecast with the coefficient chosen
+    on the other failures (never one that saw it); with fewer than three others, with none;
+    scored on other logs, with fit's."""
+    from hybridship.evaluation.drift import _drift_hull_per_log
+
+    import copy
+
+    logs = [as_log_arrays(x, model.vessel) for x in heavy_sway[0]]
+    hp = copy.deepcopy(heavy_sway[1])                 # the benchmark changes the coefficient
+    fitted = hp.drift_yaw_uv_rad_per_m2
+    _, per_log = _drift_hull_per_log(hp, logs, True, 60.0, ["a", "b", "c", "d"], lambda m: None)
+    objective = hp.drift_hull_objective(logs)
+    for k, c in enumerate(per_log):
+        assert c == choose_coefficient(objective, munk_coefficient(hp.model), exclude=k)
+        assert c.n_failures == 3
+    assert hp.drift_yaw_uv_rad_per_m2 == 0.0
+    _, few = _drift_hull_per_log(hp, logs[:3], True, 60.0, ["a", "b", "c"], lambda m: None)
+    assert few == [None, None, None]
+    hp.drift_yaw_uv_rad_per_m2 = fitted
+    _, other = _drift_hull_per_log(hp, logs[:1], False, 60.0, ["a"], lambda m: None)
+    assert other is None and hp.drift_yaw_uv_rad_per_m2 == fitted
