@@ -26,7 +26,8 @@ Protocols:
 * ``sim_pretrain``: trained on the whole logs of ``--sim-scenarios`` drifts simulated by the
   project's own simulator (perturbed true vessel, weather varied by seed) together with the
   DP parts of the test set's own logs (joint training: the ensemble has no warm start, so
-  "pre-training then fine-tuning" is done as one fit on both), tested on the drifts.
+  "pre-training then fine-tuning" is done as one fit on both), tested on the drifts; the
+  hull's yaw moment in a drift is learned from the simulated failures.
 
 Writes ``protocols.csv`` (``data,protocol,model,state,window,horizon_s,mae``) and
 ``protocols.md`` (the 60-s cells as ratios to physics) to ``--out``.

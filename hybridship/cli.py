@@ -336,6 +336,8 @@ def _add_benchmark(sub) -> None:
     d.add_argument("--calibration-scenarios", type=int, default=6,
                    help="simulated DP losses that calibrate the hybrid's spread after a failure when the "
                         "training logs hold too few failures of their own (default 6; 0: none)")
+    d.add_argument("--no-drift-hull", action="store_true",
+                   help="do not learn the hull's yaw moment in a drift from failures (the paper's protocol, strictly)")
     d.add_argument("--no-plots", action="store_true", help="skip the figures")
     d.set_defaults(func=_cmd_benchmark_drift)
     h = bsub.add_parser("hsc", help="high-speed craft: SS, ARX, NARX-ANN and hybrid on simulated sea trials",
@@ -421,7 +423,7 @@ def _cmd_benchmark_drift(args) -> int:
     res = run_drift_benchmark(args.train, args.test, args.out, vessel=vessel, members=args.members,
                               seed=args.seed, n_intervals=args.intervals, dp_only=not args.all_rows,
                               n_scenarios=args.scenarios, plots=not args.no_plots, training=args.training,
-                              calibration_scenarios=args.calibration_scenarios)
+                              calibration_scenarios=args.calibration_scenarios, drift_hull=not args.no_drift_hull)
     print()
     print(res.outputs["tables.md"].read_text())
     return 0

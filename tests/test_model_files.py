@@ -360,6 +360,12 @@ def test_hull_yaw_moment_in_a_drift_is_checked_and_older_files_have_none(saved, 
     for bad in (1.0, float("nan"), "0.001", True, None):
         _refused(_rewrite(saved, tmp_path, meta_change=lambda m, bad=bad: m.update(drift_yaw_uv_rad_per_m2=bad),
                           restamp=True, name="k.npz"), r"drift_yaw_uv_rad_per_m2: expected a number from -0\.0112")
+    _refused(_rewrite(saved, tmp_path, meta_change=lambda m: m.update(drift_yaw_uv_rad_per_m2=0.51 * 0.005619),
+                      restamp=True, name="grid.npz"), "drift_yaw_uv_rad_per_m2: .* is not one of the candidates")
+    k = 0.5 * munk_coefficient(model)
+    for change in ({"drift_hull": False}, {"environment": "mean"}, {"stop_after_failure": False}):
+        _refused(_rewrite(saved, tmp_path, meta_change=lambda m, c=change: m.update(drift_yaw_uv_rad_per_m2=k, **c),
+                          restamp=True, name="use.npz"), "non-zero in a model whose settings do not use it")
     _refused(_rewrite(saved, tmp_path, meta_change=lambda m: m.update(drift_hull="yes"), restamp=True,
                       name="flag.npz"), "drift_hull: expected true or false")
     _refused(_rewrite(saved, tmp_path, meta_change=lambda m: m.pop("drift_yaw_uv_rad_per_m2"), restamp=True,

@@ -51,7 +51,8 @@ from . import metrics
 from ..fileio import atomic_write, markdown_table
 from ..predictors import DataOnlyPredictor, DeadReckoning, DynamicPredictor, HybridPredictor, as_log_arrays
 from ..predictors.hybrid import AFTER_STOP, after_stop_scales
-from ..residual.drift_hull import MIN_FAILURES as DRIFT_HULL_MIN_FAILURES, choose_coefficient, munk_coefficient
+from ..residual.drift_hull import (MIN_FAILURES as DRIFT_HULL_MIN_FAILURES, choose_coefficient, drift_start_rows,
+                                   munk_coefficient)
 from ..residual.ensemble import EnsembleConfig
 
 #: File endings read as logs from a folder.
@@ -101,7 +102,7 @@ def run_drift_benchmark(train=None, test=None, out_dir="drift-benchmark", *, ves
                         members: int = 10, seed: int = 0, n_intervals: int = 20, horizon_s: float = 60.0,
                         dp_only: bool = True, n_scenarios: int = 3, ensemble_config: EnsembleConfig | None = None,
                         plots: bool = True, progress: bool = True, training: str = "one_step",
-                        calibration_scenarios: int = 6) -> DriftBenchmarkResult:
+                        calibration_scenarios: int = 6, drift_hull: bool = True) -> DriftBenchmarkResult:
     """Train, forecast after every failure, and write the tables and figures.
 
     Parameters
@@ -133,6 +134,12 @@ def run_drift_benchmark(train=None, test=None, out_dir="drift-benchmark", *, ves
         ``CalibrationConfig.after_stop_min_failures`` (3) of them: as ``fit`` calibrated on
         them when the test logs are other logs, and per test log on the *other* logs'
         failures (leave one out) when the test logs are the training logs.
+    drift_hull : bool
+        Let the hybrid learn the hull's yaw moment in a drift from failures
+        (:mod:`hybridship.residual.drift_hull`; chosen like the spread after a failure:
+        by ``fit`` on the training logs' failures, or per test log on the other logs'
+        failures when the test logs are the training logs). False: the paper's protocol in
+        the strict sense, nothing learned from any failure.
     """
     def say(msg):
         if progress:
@@ -144,7 +151,7 @@ def run_drift_benchmark(train=None, test=None, out_dir="drift-benchmark", *, ves
     ens_cfg = ensemble_config or EnsembleConfig(n_members=members, seed=seed)
     horizons = tuple(h for h in metrics.HORIZONS_S if h <= horizon_s + 1e-9)
 
-    hybrid = HybridPredictor(vessel, ensemble_config=ens_cfg, training=training)
+    hybrid = HybridPredictor(vessel, ensemble_config=ens_cfg, training=training, drift_hull=drift_hull)
     train_arrays = [as_log_arrays(x, hybrid.model.vessel) for x in train_logs]
     test_arrays = [as_log_arrays(x, hybrid.model.vessel) for x in test_logs]
     data_only = DataOnlyPredictor(vessel, ensemble_config=ens_cfg)
@@ -203,7 +210,28 @@ def _benchmark_logs(train, test, n_scenarios: int, seed: int, say):
             raise ValueError("train: a folder of training logs is needed when test is given")
         train_logs, train_names = _logs(train)
         test_logs, test_names = (train_logs, train_names) if test is None else _logs(test)
+        test_logs, test_names = _same_logs_as_training(train_logs, train_names, test_logs, test_names)
     return train_logs, train_names, test_logs, test_names
+
+
+def _same_logs_as_training(train_logs, train_names, test_logs, test_names):
+    """The training logs themselves when ``test`` names the same files (so every failure is
+    scored leave one out); a ValueError when it shares only some of them (their drifts would
+    be scored with what ``fit`` learned from them). Logs given as data, not files, are not
+    compared."""
+    def key(x):
+        return Path(x).resolve() if isinstance(x, (str, Path)) else None
+
+    train_keys = {key(x) for x in train_logs} - {None}
+    test_keys = [key(x) for x in test_logs]
+    shared = [n for k, n in zip(test_keys, test_names) if k is not None and k in train_keys]
+    if not shared:
+        return test_logs, test_names
+    if len(shared) == len(test_logs) == len(train_logs):
+        return train_logs, train_names
+    raise ValueError(f"test: {len(shared)} of the test logs are also training logs ({', '.join(shared[:5])}"
+                     f"{', ...' if len(shared) > 5 else ''}); give the same folder to score every failure "
+                     f"leave one out, or folders without common logs")
 
 
 def _fit_ensembles(models: dict, train_arrays, dp_only: bool, say) -> list[dict]:
@@ -223,20 +251,25 @@ def _drift_hull_per_log(hybrid, test_arrays, test_is_train: bool, horizon_s: flo
     When the test logs are other logs, the one ``fit`` chose on the training logs' failures
     applies (returns None). When they are the training logs, that one has seen the drifts it
     would be scored on: each test log gets the coefficient chosen (and checked) on the
-    *other* logs' failures, or 0 when they are fewer than three. Returns timing rows and the
-    list of :class:`~hybridship.residual.drift_hull.DriftHullChoice` (None entries: 0).
+    *other* logs' failures whose drift can be scored
+    (:func:`~hybridship.residual.drift_hull.drift_start_rows`), or 0 when they are fewer than
+    three. Returns timing rows and the list of
+    :class:`~hybridship.residual.drift_hull.DriftHullChoice` (None entries: 0).
     """
-    if not test_is_train or not hybrid.drift_hull or hybrid.environment != "estimator":
+    if not (test_is_train and hybrid.drift_hull and hybrid.environment == "estimator" and hybrid.stop_after_failure):
         return [], None
     t0 = time.perf_counter()
     hybrid.drift_yaw_uv_rad_per_m2 = 0.0                # never a coefficient that saw the scored drifts
-    if len(test_arrays) - 1 < DRIFT_HULL_MIN_FAILURES:
+    usable = [k for k, a in enumerate(test_arrays)
+              if drift_start_rows(a.dp_active, a.segment_id, int(round(horizon_s / a.dt_s)), 1).size]
+    if len(usable) - 1 < DRIFT_HULL_MIN_FAILURES:
         say(f"hull's yaw moment in a drift: off (fewer than {DRIFT_HULL_MIN_FAILURES} other failures per test log)")
         return [], [None] * len(test_arrays)
-    objective = hybrid.drift_hull_objective(test_arrays, horizon_s)
+    objective = hybrid.drift_hull_objective([test_arrays[k] for k in usable], horizon_s)
     munk = munk_coefficient(hybrid.model)
-    choices = [choose_coefficient(objective, munk, exclude=k) for k in range(len(test_arrays))]
-    what = f"choose the hull's yaw moment in a drift on the other {len(test_arrays) - 1} logs' failures, per test log"
+    column = {k: i for i, k in enumerate(usable)}
+    choices = [choose_coefficient(objective, munk, exclude=column.get(k)) for k in range(len(test_arrays))]
+    what = f"choose the hull's yaw moment in a drift on the other logs' failures ({len(usable)} in all), per test log"
     say(f"{what}: " + ", ".join(f"{n} {c.munk_multiple:g}x Munk{'' if c.adopted else ' (not kept)'}"
                                  for n, c in zip(names, choices)))
     return [{"model": "hybrid", "what": what, "seconds": time.perf_counter() - t0}], choices
@@ -286,6 +319,7 @@ def _calibrate_after_stop(hybrid, test_arrays, test_is_train: bool, calibration_
                 hybrid.drift_yaw_uv_rad_per_m2 = value
                 errors[value] = hybrid.after_stop_errors(test_arrays, n_intervals=n_intervals, horizon_s=horizon_s)
             per_log.append(after_stop_scales(errors[value][:k] + errors[value][k + 1:], hybrid.calibration_config))
+        hybrid.drift_yaw_uv_rad_per_m2 = 0.0            # each log's own is set when it is forecast
         what = f"calibrate after stop on the other {len(test_arrays) - 1} logs' failures, per test log"
         timing.append({"model": "hybrid", "what": what, "seconds": time.perf_counter() - t0})
         say(f"{what} ({timing[-1]['seconds']:.1f} s)")

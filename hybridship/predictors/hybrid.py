@@ -50,6 +50,8 @@ AFTER_STOP_INTERVALS = 20
 MAX_WIND_SAMPLES = 256
 #: Spacing of the starts the wind forecast's error paths are measured from [s].
 WIND_ERROR_START_EVERY_S = 2.0
+#: Most forecasts rolled out at once when the hull's yaw moment in a drift is chosen (memory).
+DRIFT_HULL_BATCH = 4096
 
 #: Where the hybrid's slowly varying environment comes from (see :class:`HybridPredictor`).
 ENVIRONMENT_SOURCES = ("estimator", "mean")
@@ -327,9 +329,10 @@ class HybridPredictor:
         :meth:`drift_hull_objective`). Returns what ``training_info["drift_hull"]`` records
         (None when nothing was chosen)."""
         self.drift_yaw_uv_rad_per_m2 = 0.0
-        if not self.drift_hull or self.environment != "estimator":
-            return None
-        failed = [a for a in logs if drift_start_rows(a.dp_active, len(a), int(round(horizon_s / a.dt_s)), 1).size]
+        if not self.drift_hull or self.environment != "estimator" or not self.stop_after_failure:
+            return None         # (without stop_after_failure a drift is forecast with the thrust held)
+        failed = [a for a in logs
+                  if drift_start_rows(a.dp_active, a.segment_id, int(round(horizon_s / a.dt_s)), 1).size]
         if len(failed) < DRIFT_HULL_MIN_FAILURES:
             return None
         choice = choose_coefficient(self.drift_hull_objective(failed, horizon_s), munk_coefficient(self.model))
@@ -337,12 +340,25 @@ class HybridPredictor:
         return {**choice.as_dict(), "horizon_s": float(horizon_s), "start_every_s": DRIFT_HULL_START_EVERY_S}
 
     def drift_hull_objective(self, logs, horizon_s: float = 60.0) -> np.ndarray:
-        """Mean absolute heading error [rad] (K, L) of forecasts along each log's drift with
-        every candidate coefficient of :data:`~hybridship.residual.drift_hull.MUNK_MULTIPLES`
-        (times the model's Munk coefficient): starts every
-        :data:`~hybridship.residual.drift_hull.START_EVERY_S` from the failure on, each over
-        ``horizon_s`` (errors at every lead). One rollout per log holds every start and
-        candidate. The logs must each have a failure with ``horizon_s`` of drift after it.
+        """The failures' heading errors with every candidate coefficient of the hull's yaw moment
+        in a drift (:mod:`hybridship.residual.drift_hull`).
+
+        Parameters
+        ----------
+        logs : iterable of path, DataFrame or LogArrays
+            Logs with a failure followed by ``horizon_s`` of drift in one gap-free segment.
+        horizon_s : float
+            Length of each forecast [s].
+
+        Returns
+        -------
+        ndarray, shape (K, L)
+            Mean absolute heading error [rad], over every lead and over starts every
+            :data:`~hybridship.residual.drift_hull.START_EVERY_S` along the log's first drift
+            (:func:`~hybridship.residual.drift_hull.drift_start_rows`), of forecasts with each
+            of the K candidates :data:`~hybridship.residual.drift_hull.MUNK_MULTIPLES` times
+            the model's Munk coefficient. The starts and candidates of a log are rolled out in
+            batches of at most :data:`DRIFT_HULL_BATCH` forecasts.
         """
         self._check_fitted()
         ks = MUNK_MULTIPLES * munk_coefficient(self.model)
@@ -350,27 +366,34 @@ class HybridPredictor:
         for log in logs:
             a = as_log_arrays(log, self.model.vessel)
             H = int(round(horizon_s / a.dt_s))
-            rows = drift_start_rows(a.dp_active, len(a), H, int(round(DRIFT_HULL_START_EVERY_S / a.dt_s)))
+            rows = drift_start_rows(a.dp_active, a.segment_id, H, int(round(DRIFT_HULL_START_EVERY_S / a.dt_s)))
             if rows.size == 0:
-                raise ValueError(f"logs: a log without a failure followed by {horizon_s:g} s of drift")
+                raise ValueError(f"logs: a log without a failure followed by {horizon_s:g} s of drift in one "
+                                 f"gap-free segment")
             st = _forecast_setup(self.model, self.residual_config, a, a.time_s[rows], H * a.dt_s,
                                  self.stop_after_failure, "held", history_s=self.history_s,
                                  wind_forecast=self.wind_forecast)
-            eta0, nu0, dev0, bias0, current, acc_ext, _ = self._estimated_start(st, self.ensemble.n_members)
-            K, S = ks.size, rows.size
-            tile = lambda x: np.ascontiguousarray(np.tile(x, (K,) + (1,) * (x.ndim - 1)))  # noqa: E731
-            weight = self._after_stop_weight(st, None)
-            eta, _, _, _ = self.rollout(tile(eta0), tile(nu0), tile(dev0), np.tile(bias0, (1, K, 1)), tile(st.rpm),
-                                        tile(st.az), tile(st.wind), st.H, st.dt, substeps=st.substeps,
-                                        current=tile(current), accel_ext=tile(acc_ext),
-                                        nets_weight=None if weight is None else tile(weight),
-                                        guard=self.use_guard, drift_yaw_uv=np.repeat(ks, S))
+            start = self._estimated_start(st, self.ensemble.n_members)[:6]
             truth = a.eta[rows[:, None] + np.arange(1, st.H + 1)[None, :], 2]            # (S, H)
-            err = np.abs(wrap_pi(eta[:, 1:, 2].reshape(K, S, st.H) - truth[None]))
-            if not np.isfinite(truth).any():
-                raise ValueError("logs: a drift without a logged heading to score the forecasts on")
-            out = np.column_stack([out, np.nanmean(err, axis=(1, 2))])     # a gap in the log is not scored
+            per_batch = max(1, DRIFT_HULL_BATCH // rows.size)
+            errors = [self._drift_heading_errors(st, start, ks[i:i + per_batch], truth)
+                      for i in range(0, ks.size, per_batch)]
+            out = np.column_stack([out, np.concatenate(errors)])
         return out
+
+    def _drift_heading_errors(self, st, start, ks, truth) -> np.ndarray:
+        """Mean absolute heading error [rad] (K,) of the starts of ``st`` from the estimated
+        ``start`` (eta0, nu0, dev0, bias0, current, acc_ext) with each coefficient ``ks`` (K,),
+        against ``truth`` (S, H) [rad]."""
+        eta0, nu0, dev0, bias0, current, acc_ext = start
+        K, S = ks.size, truth.shape[0]
+        weight = self._after_stop_weight(st, None)
+        eta, _, _, _ = self.rollout(
+            _tile_starts(eta0, K), _tile_starts(nu0, K), _tile_starts(dev0, K), np.tile(bias0, (1, K, 1)),
+            _tile_starts(st.rpm, K), _tile_starts(st.az, K), _tile_starts(st.wind, K), st.H, st.dt,
+            substeps=st.substeps, current=_tile_starts(current, K), accel_ext=_tile_starts(acc_ext, K),
+            nets_weight=_tile_starts(weight, K), guard=self.use_guard, drift_yaw_uv=np.repeat(ks, S))
+        return np.abs(wrap_pi(eta[:, 1:, 2].reshape(K, S, st.H) - truth[None])).mean(axis=(1, 2))
 
     def _fit_wind_forecast(self, logs, cuts, cal: CalibrationConfig, dp_only: bool):
         """With ``wind_forecast="fit"``: the wind forecast that best predicts the training
@@ -510,7 +533,7 @@ class HybridPredictor:
         wind = np.ascontiguousarray(vector_to_speed_dir(np.tile(base, (N, 1, 1)) + draw))
 
         def tile(x):
-            return None if x is None else np.ascontiguousarray(np.tile(x, (N,) + (1,) * (np.ndim(x) - 1)))
+            return _tile_starts(x, N)
 
         per_start = {k: tile(rollout_kw.pop(k)) for k in ("nets_weight", "drift_yaw_uv")}
         eta_w, _, _, _ = self.rollout(tile(eta0), tile(nu0), tile(dev0), np.tile(bias0, (1, N, 1)), tile(st.rpm),
@@ -681,7 +704,7 @@ class HybridPredictor:
     def _drift_yaw_uv(self, st):
         """Per start, the hull's yaw coefficient in a drift [rad/m^2]: the learned one for starts
         after a failure, 0 before (None when there is none)."""
-        if self.drift_yaw_uv_rad_per_m2 == 0.0 or not self.stop_after_failure:
+        if self.drift_yaw_uv_rad_per_m2 == 0.0 or not self.stop_after_failure or self.environment != "estimator":
             return None
         return np.where(st.arrays.dp_active[st.idx] == 0, self.drift_yaw_uv_rad_per_m2, 0.0)
 
@@ -1039,13 +1062,18 @@ def leave_one_out_after_stop_scales(errors: list, cal: CalibrationConfig) -> lis
     return [after_stop_scales(errors[:k] + errors[k + 1:], cal) for k in range(len(errors))]
 
 
-def _with_drift_yaw(r, nu, k):
-    """Members' residuals ``r`` (E, S, 3) plus the hull's yaw acceleration in a drift ``k u v``
-    [rad/s^2] per start (``k`` (S,) [rad/m^2], ``u, v`` [m/s] the body-frame velocity over
-    ground of ``nu`` (S, 3); :mod:`hybridship.residual.drift_hull`)."""
+def _with_drift_yaw(r, nu, coeff_rad_per_m2):
+    """Members' residuals ``r`` (E, S, 3) plus the hull's yaw acceleration in a drift
+    ``coeff u v`` [rad/s^2] per start (``coeff_rad_per_m2`` (S,); ``u, v`` [m/s] the
+    body-frame velocity over ground of ``nu`` (S, 3); :mod:`hybridship.residual.drift_hull`)."""
     out = r.copy()
-    out[..., 2] += k * nu[:, 0] * nu[:, 1]
+    out[..., 2] += coeff_rad_per_m2 * nu[:, 0] * nu[:, 1]
     return out
+
+
+def _tile_starts(x, n: int):
+    """``x`` (S, ...) repeated ``n`` times along the starts, block after block (n S, ...); None stays None."""
+    return None if x is None else np.ascontiguousarray(np.tile(x, (n,) + (1,) * (np.ndim(x) - 1)))
 
 
 def _check_finite_step(eta, nu, lead_s: float):

@@ -27,7 +27,8 @@ from ..residual.multistep import MultiStepConfig
 __all__ = ["MODEL_FORMAT_VERSION", "ModelFileError", "load_model", "model_metadata", "save_model"]
 
 #: Version of the model-file format written by :func:`save_model` (:meth:`HybridPredictor.save`).
-#: 10: the hull's yaw moment in a drift (``drift_hull``, ``drift_yaw_uv_rad_per_m2``); 9: the wind futures of the spread (``wind_samples`` and the wind forecast's error
+#: 10: the hull's yaw moment in a drift (``drift_hull``, ``drift_yaw_uv_rad_per_m2``);
+#: 9: the wind futures of the spread (``wind_samples`` and the wind forecast's error
 #: paths, ``wind_error_paths``); 8: the spread calibration's exponent (a fourth row of
 #: ``cal_*``, the value at every lead); 7: the wind forecast (``wind_forecast``: the fitted gust decay, or held); 6: the
 #: environment estimator's thrust-model error per thruster (its prior has one entry
@@ -240,7 +241,7 @@ def _build_predictor(cls, meta: dict, vessel, path: Path):
         if meta["format_version"] >= 9:
             obj.wind_error_dt_s = _checked_wind_error_dt(meta["wind_error_dt_s"])
         if meta["format_version"] >= 10:
-            obj.drift_yaw_uv_rad_per_m2 = _checked_drift_yaw(meta["drift_yaw_uv_rad_per_m2"], obj.model)
+            obj.drift_yaw_uv_rad_per_m2 = _checked_drift_yaw(meta["drift_yaw_uv_rad_per_m2"], obj)
         if meta["wind_forecast"].get("option") == "fit":
             obj.wind_forecast_option = "fit"       # a refit chooses again; forecasts use the fitted one
         state = _scalar_state(meta)
@@ -272,15 +273,24 @@ def _checked_flag(meta: dict, key: str) -> bool:
     return meta[key]
 
 
-def _checked_drift_yaw(value, model) -> float:
-    """The hull's yaw coefficient in a drift [rad/m^2]: a finite number within the candidates
-    :func:`~hybridship.residual.drift_hull.choose_coefficient` chooses from."""
+def _checked_drift_yaw(value, predictor) -> float:
+    """The hull's yaw coefficient in a drift [rad/m^2]: 0, or one of the candidates
+    :func:`~hybridship.residual.drift_hull.choose_coefficient` chooses from, in a model whose
+    settings use it (``drift_hull``, ``environment = "estimator"``, ``stop_after_failure``)."""
     from ..residual.drift_hull import MUNK_MULTIPLES, munk_coefficient
 
-    bound = float(np.abs(MUNK_MULTIPLES).max() * abs(munk_coefficient(model))) * (1.0 + 1e-9)
-    if isinstance(value, bool) or not isinstance(value, (int, float)) or not abs(value) <= bound:
+    munk = munk_coefficient(predictor.model)
+    bound = float(np.abs(MUNK_MULTIPLES).max() * abs(munk))
+    if isinstance(value, bool) or not isinstance(value, (int, float)) or not abs(value) <= bound * (1 + 1e-9):
         raise ValueError(f"drift_yaw_uv_rad_per_m2: expected a number from {-bound:.6g} to {bound:.6g} "
                          f"rad/m^2, got {value!r}")
+    if value != 0.0:
+        if np.abs(MUNK_MULTIPLES - value / munk).min() > 1e-6:
+            raise ValueError(f"drift_yaw_uv_rad_per_m2: {value!r} is not one of the candidates (multiples of "
+                             f"{MUNK_MULTIPLES[1] - MUNK_MULTIPLES[0]:g} of the Munk coefficient {munk:.6g} rad/m^2)")
+        if not (predictor.drift_hull and predictor.environment == "estimator" and predictor.stop_after_failure):
+            raise ValueError("drift_yaw_uv_rad_per_m2: non-zero in a model whose settings do not use it (needs "
+                             "drift_hull true, environment 'estimator' and stop_after_failure true)")
     return float(value)
 
 

@@ -47,26 +47,46 @@ MIN_FAILURES = 3
 
 
 def munk_coefficient(model) -> float:
-    """``(M_A22 - M_A11) / M_33`` [rad/m^2]: the yaw acceleration per ``u_r v_r`` [(m/s)^2] of the
-    model's Munk moment (added masses ``M_A``, total yaw inertia ``M_33``)."""
+    """``c = (M_A22 - M_A11) / M_33`` [rad/m^2] of a dynamic model (added masses ``M_A``, total
+    yaw inertia ``M_33``).
+
+    The model's Munk moment gives the yaw acceleration ``-c u_r v_r``; a correction
+    ``k u v`` with ``k = c`` cancels it, which is why the candidates are multiples of ``c``.
+    """
     from ..physics.hull import mass_matrices
 
     M_RB, M_A = mass_matrices(model.vessel)
     return float((M_A[1, 1] - M_A[0, 0]) / (M_RB + M_A)[2, 2])
 
 
-def drift_start_rows(dp_active: np.ndarray, n_rows: int, horizon_steps: int, every_steps: int) -> np.ndarray:
-    """Rows of the first drift (from the first ``dp_active == 0`` after station keeping to the
-    next ``dp_active == 1`` or the end), every ``every_steps``, whose next ``horizon_steps``
-    rows are in the same drift (empty without a failure, and for a log that starts with
-    ``dp_active == 0``)."""
-    dp = np.asarray(dp_active)[:n_rows]
+def drift_start_rows(dp_active: np.ndarray, segment_id: np.ndarray, horizon_steps: int,
+                     every_steps: int) -> np.ndarray:
+    """Forecast starts along a log's first drift.
+
+    Parameters
+    ----------
+    dp_active, segment_id : array (N,)
+        The log's station-keeping flag and gap-free segment label.
+    horizon_steps, every_steps : int
+        Rows of log each start needs after it, and the spacing of the starts [rows].
+
+    Returns
+    -------
+    ndarray of int
+        Rows from the first ``dp_active == 0`` after station keeping, every ``every_steps``,
+        whose next ``horizon_steps`` rows are all in that drift (before DP comes back on)
+        and in the failure's gap-free segment; empty without a failure, and for a log that
+        starts with ``dp_active == 0``.
+    """
+    dp = np.asarray(dp_active)
+    seg = np.asarray(segment_id)
     off = np.flatnonzero(dp == 0)
     if off.size == 0 or off[0] == 0:
         return np.zeros(0, int)
-    back_on = np.flatnonzero(dp[off[0]:] != 0)
-    end = int(off[0] + back_on[0]) if back_on.size else n_rows
-    return np.arange(int(off[0]), end - horizon_steps, max(1, int(every_steps)))
+    first = int(off[0])
+    leaves = np.flatnonzero((dp[first:] != 0) | (seg[first:] != seg[first]))
+    end = first + int(leaves[0]) if leaves.size else dp.size      # first row not in this drift
+    return np.arange(first, end - horizon_steps, max(1, int(every_steps)))
 
 
 @dataclass(frozen=True)
@@ -82,7 +102,7 @@ class DriftHullChoice:
     adopted : bool
         Whether the out-of-sample check kept it.
     n_failures : int
-        Failures it was chosen on.
+        Failures it was chosen on (one drift per log: each log's first).
     error_deg : float
         Mean absolute heading error of the failures' forecasts with the chosen candidate [deg].
     error_zero_deg : float
@@ -118,6 +138,13 @@ def choose_coefficient(objective_rad: np.ndarray, munk_rad_per_m2: float, multip
         The candidates as multiples of it (must contain 0).
     exclude : int, optional
         A failure (column) not to use: the one a benchmark scores.
+
+    Returns
+    -------
+    DriftHullChoice
+        The candidate with the lowest mean error over the failures used, kept (non-zero
+        ``coefficient_rad_per_m2``) only if leaving each failure out in turn, the candidate
+        chosen on the others lowers the left-out failures' mean error below that of ``k = 0``.
     """
     obj = np.asarray(objective_rad, dtype=float)
     multiples = np.asarray(multiples, dtype=float)
@@ -126,6 +153,8 @@ def choose_coefficient(objective_rad: np.ndarray, munk_rad_per_m2: float, multip
     zero = np.flatnonzero(multiples == 0.0)
     if zero.size != 1:
         raise ValueError("multiples: must contain 0 exactly once")
+    if exclude is not None and not 0 <= exclude < obj.shape[1]:
+        raise ValueError(f"exclude: expected a failure from 0 to {obj.shape[1] - 1}, got {exclude!r}")
     used = [j for j in range(obj.shape[1]) if j != exclude]
     if not used or not np.all(np.isfinite(obj[:, used])):
         raise ValueError("objective_rad: needs finite errors of at least one failure")
