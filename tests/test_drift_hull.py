@@ -181,6 +181,12 @@ def test_the_drift_benchmark_chooses_it_without_the_scored_failure(model, heavy_
     for k, c in enumerate(per_log):
         assert c == choose_coefficient(objective, munk_coefficient(hp.model), exclude=k)
         assert c.n_failures == 3
+    from hybridship.evaluation.drift import _drift_hull_table
+
+    table = _drift_hull_table(hp, per_log, list("abcd"))        # drift_hull.csv: what each failure got, and why
+    np.testing.assert_array_equal(table.error_left_out_deg, [c.error_left_out_deg for c in per_log])
+    np.testing.assert_array_equal(table.coefficient_rad_per_m2, [c.coefficient_rad_per_m2 for c in per_log])
+    assert list(table.n_failures) == [3] * 4 and set(table.source) == {"other logs' failures"}
     assert hp.drift_yaw_uv_rad_per_m2 == 0.0
     _, few = _drift_hull_per_log(hp, logs[:3], True, 60.0, ["a", "b", "c"], lambda m: None)
     assert few == [None, None, None]

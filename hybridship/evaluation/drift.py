@@ -276,20 +276,27 @@ def _drift_hull_per_log(hybrid, test_arrays, test_is_train: bool, horizon_s: flo
 
 
 def _drift_hull_table(hybrid, per_log, names) -> pd.DataFrame:
-    """``log,munk_multiple,adopted,coefficient_rad_per_m2,source``: the hull's yaw coefficient
-    in a drift each test log was forecast with."""
-    cols = ["log", "munk_multiple", "adopted", "coefficient_rad_per_m2", "source"]
+    """``log,source,munk_multiple,adopted,coefficient_rad_per_m2,n_failures,error_deg,
+    error_zero_deg,error_left_out_deg``: the hull's yaw coefficient in a drift each test log
+    was forecast with, and the evidence it was chosen on (the failures' mean heading errors
+    along their drifts with it, with 0 and left out; see
+    :class:`~hybridship.residual.drift_hull.DriftHullChoice`)."""
+    evidence = ("munk_multiple", "adopted", "n_failures", "error_deg", "error_zero_deg", "error_left_out_deg")
+    cols = ["log", "source", "munk_multiple", "adopted", "coefficient_rad_per_m2", *evidence[2:]]
+
+    def row(name, source, choice: dict | None, coefficient):
+        out = {"log": name, "source": source if choice else "none", "coefficient_rad_per_m2": coefficient}
+        out.update({k: (choice or {}).get(k) for k in evidence})
+        out["adopted"] = bool(out["adopted"])
+        return out
+
     if per_log is None:
         info = hybrid.training_info.get("drift_hull")
-        return pd.DataFrame([{"log": n, "munk_multiple": None if info is None else info["munk_multiple"],
-                              "adopted": info is not None and info["adopted"],
-                              "coefficient_rad_per_m2": hybrid.drift_yaw_uv_rad_per_m2,
-                              "source": "training logs' failures" if info else "none"} for n in names], columns=cols)
-    return pd.DataFrame([{"log": n, "munk_multiple": None if c is None else c.munk_multiple,
-                          "adopted": c is not None and c.adopted,
-                          "coefficient_rad_per_m2": 0.0 if c is None else c.coefficient_rad_per_m2,
-                          "source": "other logs' failures" if c is not None else "none"}
-                         for n, c in zip(names, per_log)], columns=cols)
+        rows = [row(n, "training logs' failures", info, hybrid.drift_yaw_uv_rad_per_m2) for n in names]
+    else:
+        rows = [row(n, "other logs' failures", None if c is None else c.as_dict(),
+                    0.0 if c is None else c.coefficient_rad_per_m2) for n, c in zip(names, per_log)]
+    return pd.DataFrame(rows, columns=cols).astype({"n_failures": "Int64"})
 
 
 def _calibrate_after_stop(hybrid, test_arrays, test_is_train: bool, calibration_scenarios: int, seed: int,
