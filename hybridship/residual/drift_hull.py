@@ -11,12 +11,12 @@ One coefficient ``k`` [rad/m^2] is learned: forecasts that start after a failure
 acceleration ``k u v`` to the physics at every step. ``u, v`` [m/s] are the body-frame
 velocity over ground, not relative to the estimated current: after a failure the
 estimator's current absorbs part of the same hull error, and with it the choice below was
-less consistent from failure to failure (measured in ``docs/results-drift.md``).
+less consistent from failure to failure (``docs/concepts/drift-hull.md``).
 
 ``k`` is chosen on the training logs' failures by the forecasts' own error, not by a
 one-step fit (a drift's one-step residual is dominated by the estimator's adaptation and by
 noise): forecasts started every :data:`START_EVERY_S` along each drift are rolled out once
-for every candidate (one batch per log), and ``k`` minimises their mean absolute heading
+for every candidate (in batches, per log), and ``k`` minimises their mean absolute heading
 error over the horizon (:func:`choose_coefficient`). The candidates are multiples
 :data:`MUNK_MULTIPLES` of the model's own Munk coefficient (:func:`munk_coefficient`), so a
 multiple of 1 cancels the model's Munk moment in yaw.
