@@ -163,6 +163,13 @@ def test_only_forecasts_that_start_after_a_failure_use_it(model):
     np.testing.assert_array_equal(after.eta[0], before.eta[0])
     assert np.abs(after.eta[1, -1, 2] - before.eta[1, -1, 2]) > 1e-4
     np.testing.assert_allclose(hp.forecast(log, starts[1:], 60.0).eta[0], after.eta[1], rtol=0, atol=1e-12)
+    import copy                                  # the 900-s mean environment (hybrid_mean_bias) never uses it
+
+    mean = copy.copy(hp)
+    mean.environment = "mean"
+    with_k = mean.forecast(log, starts, 60.0).eta
+    mean.drift_yaw_uv_rad_per_m2 = 0.0
+    np.testing.assert_array_equal(with_k, mean.forecast(log, starts, 60.0).eta)
 
 
 def test_the_drift_benchmark_chooses_it_without_the_scored_failure(model, heavy_sway):

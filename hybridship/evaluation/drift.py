@@ -256,7 +256,7 @@ def _drift_hull_per_log(hybrid, test_arrays, test_is_train: bool, horizon_s: flo
     three. Returns timing rows and the list of
     :class:`~hybridship.residual.drift_hull.DriftHullChoice` (None entries: 0).
     """
-    if not (test_is_train and hybrid.drift_hull and hybrid.environment == "estimator" and hybrid.stop_after_failure):
+    if not (test_is_train and hybrid.uses_drift_hull):
         return [], None
     t0 = time.perf_counter()
     hybrid.drift_yaw_uv_rad_per_m2 = 0.0                # never a coefficient that saw the scored drifts
@@ -354,7 +354,6 @@ def _benchmark_models(vessel, hybrid, data_only) -> dict:
     mean_bias.environment = "mean"
     # its spread after a failure stays raw: the after-stop scale was fitted for the estimator
     mean_bias.calibration = {k: v for k, v in hybrid.calibration.items() if k != "after_stop"}
-    mean_bias.drift_yaw_uv_rad_per_m2 = 0.0      # as before the estimator: nothing learned from failures
     return {"hybrid": (hybrid, {"guard": True}), "hybrid_nets_unguarded": (hybrid, {"guard": False}),
             "hybrid_mean_bias": (mean_bias, {"guard": True}),
             "dynamic": (DynamicPredictor(vessel), {}), "dead_reckoning": (DeadReckoning(vessel), {}),

@@ -329,8 +329,8 @@ class HybridPredictor:
         :meth:`drift_hull_objective`). Returns what ``training_info["drift_hull"]`` records
         (None when nothing was chosen)."""
         self.drift_yaw_uv_rad_per_m2 = 0.0
-        if not self.drift_hull or self.environment != "estimator" or not self.stop_after_failure:
-            return None         # (without stop_after_failure a drift is forecast with the thrust held)
+        if not self.uses_drift_hull:
+            return None
         failed = [a for a in logs
                   if drift_start_rows(a.dp_active, a.segment_id, int(round(horizon_s / a.dt_s)), 1).size]
         if len(failed) < DRIFT_HULL_MIN_FAILURES:
@@ -701,10 +701,17 @@ class HybridPredictor:
                else c.bias_window_s + c.start_residual_window_s + c.deriv_window_s)
         return max(FORECAST_HISTORY_S, float(own))
 
+    @property
+    def uses_drift_hull(self) -> bool:
+        """Whether the hull's yaw moment in a drift is learned and used: ``drift_hull`` with the
+        environment estimator and ``stop_after_failure`` (without it a drift is forecast with
+        the thrust held, not as a drift)."""
+        return self.drift_hull and self.environment == "estimator" and self.stop_after_failure
+
     def _drift_yaw_uv(self, st):
         """Per start, the hull's yaw coefficient in a drift [rad/m^2]: the learned one for starts
         after a failure, 0 before (None when there is none)."""
-        if self.drift_yaw_uv_rad_per_m2 == 0.0 or not self.stop_after_failure or self.environment != "estimator":
+        if self.drift_yaw_uv_rad_per_m2 == 0.0 or not self.uses_drift_hull:
             return None
         return np.where(st.arrays.dp_active[st.idx] == 0, self.drift_yaw_uv_rad_per_m2, 0.0)
 

@@ -288,7 +288,7 @@ def _checked_drift_yaw(value, predictor) -> float:
         if np.abs(MUNK_MULTIPLES - value / munk).min() > 1e-6:
             raise ValueError(f"drift_yaw_uv_rad_per_m2: {value!r} is not one of the candidates (multiples of "
                              f"{MUNK_MULTIPLES[1] - MUNK_MULTIPLES[0]:g} of the Munk coefficient {munk:.6g} rad/m^2)")
-        if not (predictor.drift_hull and predictor.environment == "estimator" and predictor.stop_after_failure):
+        if not predictor.uses_drift_hull:
             raise ValueError("drift_yaw_uv_rad_per_m2: non-zero in a model whose settings do not use it (needs "
                              "drift_hull true, environment 'estimator' and stop_after_failure true)")
     return float(value)
