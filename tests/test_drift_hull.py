@@ -132,6 +132,38 @@ def test_the_batched_choice_scores_what_forecasts_give(model, heavy_sway):
         assert objective[j] == pytest.approx(np.abs(wrap_pi(fc.eta[:, 1:, 2] - truth)).mean(), rel=1e-12)
 
 
+def test_the_filter_uses_the_coefficient_after_a_failure_so_the_yaw_load_does_not_absorb_it(model, heavy_sway):
+    """Given the true ship's Munk difference, the environment estimator's yaw load moves less
+    during the drift than without it (it no longer takes up the hull's error); before the
+    failure nothing changes. The fitted hybrid's filter uses its own coefficient."""
+    from hybridship.residual.environment import LOAD
+
+    logs, hp = heavy_sway
+    _, M_A = mass_matrices(model.vessel)
+    k = -0.6 * M_A[1, 1] / (M_A[1, 1] - M_A[0, 0]) * munk_coefficient(model)
+    moved = {0.0: [], k: []}
+    for log in logs:
+        a = as_log_arrays(log, model.vessel)
+        i0 = int(np.flatnonzero(a.dp_active == 0)[0])
+        rows = np.array([i0 - 1, i0 + 60, i0 + 120, i0 + 240])
+        yaw_load = {c: hp.estimator.run(a, rows, drift_yaw_uv_rad_per_m2=c).x[:, LOAD.start + 2] for c in moved}
+        assert yaw_load[k][0] == yaw_load[0.0][0]                   # on station: the same filter
+        for c in moved:
+            moved[c].append(np.abs(yaw_load[c][1:] - yaw_load[c][0]))
+    assert np.mean(moved[k]) < 0.5 * np.mean(moved[0.0])
+    a = as_log_arrays(logs[1], model.vessel)
+    rows = np.arange(500, 1000, 7)
+    alone = [hp.estimator.run(a, rows, drift_yaw_uv_rad_per_m2=c) for c in (k, 0.0, -k)]
+    with hp.estimator.sharing_station_keeping():    # the station keeping filtered once: the same estimates
+        for c, e in zip((k, 0.0, -k, k), alone + alone[:1]):
+            shared = hp.estimator.run(a, rows, drift_yaw_uv_rad_per_m2=c)
+            np.testing.assert_array_equal(shared.x, e.x)
+            np.testing.assert_array_equal(shared.P, e.P)
+    assert hp._filter_drift_yaw() == hp.drift_yaw_uv_rad_per_m2 != 0.0
+    with pytest.raises(ValueError, match=r"drift_yaw_uv_rad_per_m2: expected a finite number"):
+        hp.estimator.run(as_log_arrays(logs[0], model.vessel), [10], drift_yaw_uv_rad_per_m2=float("nan"))
+
+
 def test_a_gap_in_a_training_drift_is_not_scored_across(model, heavy_sway):
     """A training log missing 20 s of its drift: fit still chooses, from the drift before the gap."""
     logs = [log.copy() for log in heavy_sway[0][:3]]

@@ -121,7 +121,7 @@ def test_missing_file_is_a_model_file_error(tmp_path):
 def test_incompatible_format_version_is_refused(saved, tmp_path):
     for version in (0, 99, "1", None):
         p = _rewrite(saved, tmp_path, meta_change=lambda m: m.update(format_version=version), name=f"v{version}.npz")
-        _refused(p, rf"model format version {version} is not supported \(this hybridship reads versions 7, 8, 9, 10\)")
+        _refused(p, rf"model format version {version} is not supported \(this hybridship reads versions 7, 8, 9, 10, 11\)")
 
 
 def test_an_older_format_says_retrain(saved, tmp_path):
@@ -357,6 +357,20 @@ def test_hull_yaw_moment_in_a_drift_is_checked_and_older_files_have_none(saved, 
             meta.pop(k)
     old = HybridPredictor.load(_rewrite(saved, tmp_path, meta_change=as_v9, restamp=True, name="v9.npz"))
     assert old.drift_yaw_uv_rad_per_m2 == 0.0 and not old.drift_hull
+    assert back._drift_yaw_in_filter and back._filter_drift_yaw() == hp.drift_yaw_uv_rad_per_m2
+
+    def as_v10(meta):
+        meta["format_version"] = 10
+        meta.pop("drift_yaw_in_filter")
+    # version 10 chose its coefficient with the forecasts alone: the filter keeps not using it
+    v10 = HybridPredictor.load(_rewrite((hp, tmp_path / "k.npz", None), tmp_path, meta_change=as_v10, restamp=True,
+                                        name="v10.npz"))
+    assert v10.drift_yaw_uv_rad_per_m2 == hp.drift_yaw_uv_rad_per_m2 and not v10._drift_yaw_in_filter
+    assert v10._filter_drift_yaw() == 0.0
+    back2 = HybridPredictor.load(v10.save(tmp_path / "v10_resaved.npz"))
+    assert not back2._drift_yaw_in_filter                # and a re-save keeps what it was fitted with
+    _refused(_rewrite(saved, tmp_path, meta_change=lambda m: m.update(drift_yaw_in_filter=1), restamp=True,
+                      name="inf.npz"), "drift_yaw_in_filter: expected true or false")
     for bad in (1.0, float("nan"), "0.001", True, None):
         _refused(_rewrite(saved, tmp_path, meta_change=lambda m, bad=bad: m.update(drift_yaw_uv_rad_per_m2=bad),
                           restamp=True, name="k.npz"), r"drift_yaw_uv_rad_per_m2: expected a number from -0\.0112")

@@ -138,7 +138,8 @@ class HybridPredictor:
         default). With at least three failures in the training logs (``environment =
         "estimator"``), :meth:`fit` chooses one coefficient ``k`` [rad/m^2] by the heading
         error of forecasts along those drifts, and forecasts that start after a failure add
-        the yaw acceleration ``k u v``; it is kept only if it lowers the error of a
+        the yaw acceleration ``k u v`` (the environment estimator, after the failure, too);
+        it is kept only if it lowers the error of a
         failure left out of the choice (:mod:`hybridship.residual.drift_hull`,
         ``training_info["drift_hull"]``). Without failures in the training logs nothing changes.
     """
@@ -175,6 +176,9 @@ class HybridPredictor:
         #: the hull's yaw acceleration per u v (over ground) in a drift [rad/m^2] (0: none), learned by
         #: :meth:`fit` from the training logs' failures (:mod:`hybridship.residual.drift_hull`)
         self.drift_yaw_uv_rad_per_m2: float = 0.0
+        #: whether the environment estimator's process model uses it after a failure too (off
+        #: only for model files of format 10, whose coefficient was chosen without it)
+        self._drift_yaw_in_filter = True
         if training not in self.TRAINING_MODES:
             raise ValueError(f"training: expected one of {self.TRAINING_MODES}, got {training!r}")
         self.training = training
@@ -357,8 +361,9 @@ class HybridPredictor:
             :data:`~hybridship.residual.drift_hull.START_EVERY_S` along the log's first drift
             (:func:`~hybridship.residual.drift_hull.drift_start_rows`), of forecasts with each
             of the K candidates :data:`~hybridship.residual.drift_hull.MUNK_MULTIPLES` times
-            the model's Munk coefficient. The starts and candidates of a log are rolled out in
-            batches of at most :data:`DRIFT_HULL_BATCH` forecasts.
+            the model's Munk coefficient, each from the environment estimator run with that
+            candidate (as the forecasts would run it). The starts and candidates of a log are
+            rolled out in batches of at most :data:`DRIFT_HULL_BATCH` forecasts.
         """
         self._check_fitted()
         ks = MUNK_MULTIPLES * munk_coefficient(self.model)
@@ -373,26 +378,29 @@ class HybridPredictor:
             st = _forecast_setup(self.model, self.residual_config, a, a.time_s[rows], H * a.dt_s,
                                  self.stop_after_failure, "held", history_s=self.history_s,
                                  wind_forecast=self.wind_forecast)
-            start = self._estimated_start(st, self.ensemble.n_members)[:6]
             truth = a.eta[rows[:, None] + np.arange(1, st.H + 1)[None, :], 2]            # (S, H)
             per_batch = max(1, DRIFT_HULL_BATCH // rows.size)
-            errors = [self._drift_heading_errors(st, start, ks[i:i + per_batch], truth)
-                      for i in range(0, ks.size, per_batch)]
+            with self.estimator.sharing_station_keeping():     # filtered once for all candidates
+                errors = [self._drift_heading_errors(st, ks[i:i + per_batch], truth)
+                          for i in range(0, ks.size, per_batch)]
             out = np.column_stack([out, np.concatenate(errors)])
         return out
 
-    def _drift_heading_errors(self, st, start, ks, truth) -> np.ndarray:
-        """Mean absolute heading error [rad] (K,) of the starts of ``st`` from the estimated
-        ``start`` (eta0, nu0, dev0, bias0, current, acc_ext) with each coefficient ``ks`` (K,),
-        against ``truth`` (S, H) [rad]."""
-        eta0, nu0, dev0, bias0, current, acc_ext = start
+    def _drift_heading_errors(self, st, ks, truth) -> np.ndarray:
+        """Mean absolute heading error [rad] (K,) of the starts of ``st`` with each coefficient
+        ``ks`` (K,), against ``truth`` (S, H) [rad]. Each coefficient has its own filter run
+        (the filter uses it after the failure as the forecasts do); the K x S forecasts are
+        rolled out together."""
         K, S = ks.size, truth.shape[0]
+        per_k = [self._estimated_start(st, self.ensemble.n_members, drift_yaw_uv=k)[:6] for k in ks]
+        # block after block, as _tile_starts: starts along axis 0, the members' loads (E, S, 3) along 1
+        eta0, nu0, dev0, bias0, current, acc_ext = (
+            None if z[0] is None else np.concatenate(z, axis=1 if i == 3 else 0) for i, z in enumerate(zip(*per_k)))
         weight = self._after_stop_weight(st, None)
         eta, _, _, _ = self.rollout(
-            _tile_starts(eta0, K), _tile_starts(nu0, K), _tile_starts(dev0, K), np.tile(bias0, (1, K, 1)),
-            _tile_starts(st.rpm, K), _tile_starts(st.az, K), _tile_starts(st.wind, K), st.H, st.dt,
-            substeps=st.substeps, current=_tile_starts(current, K), accel_ext=_tile_starts(acc_ext, K),
-            nets_weight=_tile_starts(weight, K), guard=self.use_guard, drift_yaw_uv=np.repeat(ks, S))
+            eta0, nu0, dev0, bias0, _tile_starts(st.rpm, K), _tile_starts(st.az, K), _tile_starts(st.wind, K), st.H,
+            st.dt, substeps=st.substeps, current=current, accel_ext=acc_ext, nets_weight=_tile_starts(weight, K),
+            guard=self.use_guard, drift_yaw_uv=np.repeat(ks, S))
         return np.abs(wrap_pi(eta[:, 1:, 2].reshape(K, S, st.H) - truth[None])).mean(axis=(1, 2))
 
     def _fit_wind_forecast(self, logs, cuts, cal: CalibrationConfig, dp_only: bool):
@@ -734,18 +742,29 @@ class HybridPredictor:
         dt = float(np.median(np.diff(arrays.time_s)))
         return max(0, int(idx.min()) - int(round(self.environment_window_s / dt)))
 
-    def _run_estimator(self, arrays, idx, extra_rows=None):
+    def _filter_drift_yaw(self) -> float:
+        """The hull's yaw coefficient in a drift [rad/m^2] the filter's process model uses after a
+        failure: the forecasts' own (0 when they use none, and in files of format 10 and older,
+        whose coefficient was chosen with the forecasts alone)."""
+        return self.drift_yaw_uv_rad_per_m2 if self.uses_drift_hull and self._drift_yaw_in_filter else 0.0
+
+    def _run_estimator(self, arrays, idx, extra_rows=None, drift_yaw_uv: float | None = None):
         """The filter's estimates at the start rows ``idx`` and, when given, also at those of
         ``extra_rows`` (rows at or after the filter's first row) that it can estimate (not
-        before the log's first valid position), from the same run."""
+        before the log's first valid position), from the same run. ``drift_yaw_uv``: the
+        filter's coefficient of the hull's yaw moment in a drift (default
+        :meth:`_filter_drift_yaw`)."""
         first = self._filter_first_row(arrays, idx)
+        k = self._filter_drift_yaw() if drift_yaw_uv is None else float(drift_yaw_uv)
         if extra_rows is None:
-            return self.estimator.run(arrays, idx, first_row=first)
-        est = self.estimator.run(arrays, np.concatenate([idx, extra_rows]), first_row=first, required=len(idx))
+            return self.estimator.run(arrays, idx, first_row=first, drift_yaw_uv_rad_per_m2=k)
+        est = self.estimator.run(arrays, np.concatenate([idx, extra_rows]), first_row=first, required=len(idx),
+                                 drift_yaw_uv_rad_per_m2=k)
         return est.take(slice(0, len(idx))), est.take(slice(len(idx), None))
 
-    def _estimated_start(self, st, n_members: int):
-        """Start states and environment from the estimator at every start row.
+    def _estimated_start(self, st, n_members: int, drift_yaw_uv: float | None = None):
+        """Start states and environment from the estimator at every start row (``drift_yaw_uv``:
+        see :meth:`_run_estimator`).
 
         Returns ``eta0, nu0`` (S, 3) (the filtered state), ``dev0`` (S, 3) zeros, the
         members' loads (E, S, 3) (surge/sway in NED, member 0 the mean), the mean current
@@ -755,7 +774,7 @@ class HybridPredictor:
         is 0, for starts during station keeping unless :attr:`_held_load_on_station`, and
         where fewer than three blocks of station keeping precede the start).
         """
-        est, sigma_b = self._estimate_with_held_load(st)
+        est, sigma_b = self._estimate_with_held_load(st, drift_yaw_uv)
         eta0, nu0 = est.x[:, 0:3].copy(), est.x[:, 3:6].copy()
         draws = est.sample_environment(n_members, self.ensemble_config.seed)      # (E, S, 5 + n_theta)
         current = np.ascontiguousarray(current_input(est.current_ned_m_s)[:, None, :])
@@ -770,7 +789,7 @@ class HybridPredictor:
         return (self.calibration_config.station_keeping_spread == "held_load" and self.environment == "estimator"
                 and self.environment_config.held_load_window_s > 0)
 
-    def _estimate_with_held_load(self, st):
+    def _estimate_with_held_load(self, st, drift_yaw_uv: float | None = None):
         """The estimates at the start rows and the held-load variability (S, 3) of the
         station keeping before each start after a failure, and before each start during
         station keeping when :attr:`_held_load_on_station` (one filter run for all)."""
@@ -779,7 +798,7 @@ class HybridPredictor:
         on = st.arrays.dp_active[st.idx] != 0
         wanted = (~on & self.stop_after_failure) | (on & self._held_load_on_station)
         if c.held_load_window_s == 0 or not np.any(wanted):
-            return self._run_estimator(st.arrays, st.idx), sigma_b
+            return self._run_estimator(st.arrays, st.idx, drift_yaw_uv=drift_yaw_uv), sigma_b
         dt = st.arrays.dt_s
         step = max(1, int(round(c.filter_step_s / dt)))
         first = self._filter_first_row(st.arrays, st.idx)
@@ -794,7 +813,7 @@ class HybridPredictor:
         windows = list(windows.values())
         # overlapping windows of starts during station keeping: filter each row once
         all_rows = np.unique(np.concatenate([w[0] for w in windows]))
-        est, est_w = self._run_estimator(st.arrays, st.idx, all_rows)
+        est, est_w = self._run_estimator(st.arrays, st.idx, all_rows, drift_yaw_uv)
         block = max(1, int(round(c.held_load_block_s / (step * dt))))
         # a window is a run of consecutive estimates on its own filter grid (the last row's
         # residue modulo the step): batch all windows of one grid

@@ -27,7 +27,8 @@ from ..residual.multistep import MultiStepConfig
 __all__ = ["MODEL_FORMAT_VERSION", "ModelFileError", "load_model", "model_metadata", "save_model"]
 
 #: Version of the model-file format written by :func:`save_model` (:meth:`HybridPredictor.save`).
-#: 10: the hull's yaw moment in a drift (``drift_hull``, ``drift_yaw_uv_rad_per_m2``);
+#: 11: the environment estimator uses the hull's yaw moment in a drift after a failure too
+#: (``drift_yaw_in_filter``); 10: the hull's yaw moment in a drift (``drift_hull``, ``drift_yaw_uv_rad_per_m2``);
 #: 9: the wind futures of the spread (``wind_samples`` and the wind forecast's error
 #: paths, ``wind_error_paths``); 8: the spread calibration's exponent (a fourth row of
 #: ``cal_*``, the value at every lead); 7: the wind forecast (``wind_forecast``: the fitted gust decay, or held); 6: the
@@ -36,12 +37,14 @@ __all__ = ["MODEL_FORMAT_VERSION", "ModelFileError", "load_model", "model_metada
 #: validated vessel description is embedded in the metadata (``vessel_description``), so a
 #: model loads without its vessel file; 3 added the environment estimator; 2 and earlier
 #: stored only the vessel's name.
-MODEL_FORMAT_VERSION = 10
+MODEL_FORMAT_VERSION = 11
 #: Versions :func:`load_model` reads: a version-7 file is a version-8 one without the spread
 #: exponent (three rows per ``cal_*`` array), read as exponent 1, which is what it was fitted with;
 #: versions 7 and 8 have no wind futures in the spread (``wind_samples = 0``, as they were fitted);
-#: versions 7 to 9 no hull's yaw moment in a drift (``drift_hull`` off, ``k = 0``).
-READABLE_MODEL_FORMAT_VERSIONS = (7, 8, 9, 10)
+#: versions 7 to 9 no hull's yaw moment in a drift (``drift_hull`` off, ``k = 0``); in version 10
+#: only the forecasts use it, not the environment estimator (``drift_yaw_in_filter`` false), as
+#: its coefficient was chosen.
+READABLE_MODEL_FORMAT_VERSIONS = (7, 8, 9, 10, 11)
 
 
 class ModelFileError(ValueError):
@@ -119,6 +122,7 @@ def model_metadata(predictor) -> dict:
         "wind_samples": p.wind_samples, "wind_error_dt_s": p.wind_error_dt_s,
         "has_wind_error_paths": p.wind_error_paths is not None,
         "drift_hull": p.drift_hull, "drift_yaw_uv_rad_per_m2": p.drift_yaw_uv_rad_per_m2,
+        "drift_yaw_in_filter": p._drift_yaw_in_filter,
         "training_info": p.training_info,
     }
 
@@ -242,6 +246,8 @@ def _build_predictor(cls, meta: dict, vessel, path: Path):
             obj.wind_error_dt_s = _checked_wind_error_dt(meta["wind_error_dt_s"])
         if meta["format_version"] >= 10:
             obj.drift_yaw_uv_rad_per_m2 = _checked_drift_yaw(meta["drift_yaw_uv_rad_per_m2"], obj)
+            obj._drift_yaw_in_filter = _checked_flag(meta, "drift_yaw_in_filter") if meta["format_version"] >= 11 \
+                else False
         if meta["wind_forecast"].get("option") == "fit":
             obj.wind_forecast_option = "fit"       # a refit chooses again; forecasts use the fitted one
         state = _scalar_state(meta)

@@ -8,7 +8,9 @@ simulator's Gunnerus the largest part of that error is a yaw moment that grows w
 ``benchmarks/hull_yaw_residual.py``). A vessel's logs of earlier failures show it.
 
 One coefficient ``k`` [rad/m^2] is learned: forecasts that start after a failure add the yaw
-acceleration ``k u v`` to the physics at every step. ``u, v`` [m/s] are the body-frame
+acceleration ``k u v`` to the physics at every step, and the environment estimator's process
+model adds it after the failure too (otherwise its yaw load takes up the same hull error
+during the drift, and a forecast started later in the drift counts it twice). ``u, v`` [m/s] are the body-frame
 velocity over ground, not relative to the estimated current: after a failure the
 estimator's current absorbs part of the same hull error, and with it the choice below was
 less consistent from failure to failure (``docs/concepts/drift-hull.md``).
@@ -16,8 +18,9 @@ less consistent from failure to failure (``docs/concepts/drift-hull.md``).
 ``k`` is chosen on the training logs' failures by the forecasts' own error, not by a
 one-step fit (a drift's one-step residual is dominated by the estimator's adaptation and by
 noise): forecasts started every :data:`START_EVERY_S` along each drift are rolled out once
-for every candidate (in batches, per log), and ``k`` minimises their mean absolute heading
-error over the horizon (:func:`choose_coefficient`). The candidates are multiples
+for every candidate, each from the estimator run with that candidate (the station keeping
+filtered once for all of them), the rollouts in batches per log, and ``k`` minimises their
+mean absolute heading error over the horizon (:func:`choose_coefficient`). The candidates are multiples
 :data:`MUNK_MULTIPLES` of the model's own Munk coefficient (:func:`munk_coefficient`), so a
 multiple of 1 cancels the model's Munk moment in yaw.
 

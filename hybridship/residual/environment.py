@@ -21,7 +21,11 @@ Its state (14) is
 The process model is the project's dynamic model (one RK4 step per sample) with the current
 and with ``accel_ext = R(psi)^T b + T theta`` (``T``: the thrust-error basis, see
 :mod:`.environment_kernel`); the filter loop is compiled there. ``v_c`` and ``b`` are random
-walks, and so is ``theta`` unless ``thrust_error_walk`` is 0.
+walks, and so is ``theta`` unless ``thrust_error_walk`` is 0. While the thrusters are stopped,
+the yaw acceleration ``k u v`` of the hull's yaw moment in a drift (:mod:`.drift_hull`) is
+added when :meth:`EnvironmentEstimator.run` is given ``k``, as the forecasts after a failure
+add it; otherwise the yaw load ``b_yaw`` takes up the hull's error during the drift and the
+forecasts would count it twice.
 
 What the data can separate, and what the filter then does:
 
@@ -58,6 +62,7 @@ All quantities are SI and radians inside.
 
 from __future__ import annotations
 
+from contextlib import contextmanager
 from dataclasses import dataclass
 from typing import Literal
 
@@ -301,6 +306,7 @@ class EnvironmentEstimator:
         self.thrust_error_std = (np.asarray(config.thrust_error_prior, dtype=float)
                                  if config.thrust_error_model == "per_dof"
                                  else np.full(n_theta, config.thrust_error_prior_per_thruster))
+        self._shared_runs = None        # see sharing_station_keeping
 
     # ------------------------------------------------------------------ learning
 
@@ -444,7 +450,8 @@ class EnvironmentEstimator:
                                      self.model.arrays, kernel._workspace(self.model.arrays))
         return x, P
 
-    def run(self, arrays, rows=None, *, first_row: int = 0, required: int | None = None) -> EnvironmentEstimate:
+    def run(self, arrays, rows=None, *, first_row: int = 0, required: int | None = None,
+            drift_yaw_uv_rad_per_m2: float = 0.0) -> EnvironmentEstimate:
         """Filter the log from ``first_row`` and return the estimates at ``rows`` (default: all).
 
         The estimate at row ``i`` uses the samples ``first_row .. i`` only (causal). A gap
@@ -465,7 +472,16 @@ class EnvironmentEstimator:
             Only the first ``required`` of ``rows`` must have an estimate; later rows before
             the first valid position and heading are left out of the result (default: all
             rows are required).
+        drift_yaw_uv_rad_per_m2 : float
+            The hull's yaw moment in a drift, ``k`` [rad/m^2] (:mod:`.drift_hull`): while the
+            thrusters are stopped (``dp_active`` 0) the process model adds the yaw acceleration
+            ``k u v``, as the forecasts after a failure do, so that the yaw load does not
+            absorb it. 0 (default): none.
         """
+        if not (isinstance(drift_yaw_uv_rad_per_m2, (int, float, np.floating)) and not isinstance(
+                drift_yaw_uv_rad_per_m2, bool) and np.isfinite(drift_yaw_uv_rad_per_m2)):
+            raise ValueError(f"drift_yaw_uv_rad_per_m2: expected a finite number [rad/m^2], got "
+                             f"{drift_yaw_uv_rad_per_m2!r}")
         n = len(arrays.time_s)
         rows = np.arange(first_row, n) if rows is None else np.asarray(rows, dtype=int)
         if rows.size and (rows.min() < first_row or rows.max() >= n):
@@ -477,7 +493,8 @@ class EnvironmentEstimator:
         out_x, out_P = {}, {}
         for c in np.unique(rows % m):       # one pass per grid through the requested rows
             grid = np.arange(first_row + (c - first_row) % m, last + 1, m)
-            self._filter(arrays, grid, set(int(r) for r in rows if r % m == c), inputs, out_x, out_P)
+            self._filter(arrays, grid, set(int(r) for r in rows if r % m == c), inputs, out_x, out_P,
+                         float(drift_yaw_uv_rad_per_m2))
         n_req = rows.size if required is None else int(required)
         miss = [int(r) for r in rows[:n_req] if int(r) not in out_P]
         if miss:
@@ -515,14 +532,54 @@ class EnvironmentEstimator:
             "dp": rows(arrays.dp_active[sl].astype(bool)),
         }
 
-    def _filter(self, arrays, grid, want, inputs, out_x, out_P):
+    @contextmanager
+    def sharing_station_keeping(self):
+        """Within this context, runs over the same log and rows that differ only in
+        ``drift_yaw_uv_rad_per_m2`` share the filter up to the failure, where that coefficient
+        starts to act: the station keeping is filtered once, and each run goes on from there
+        (with the same result as a run of its own)."""
+        self._shared_runs = {}
+        try:
+            yield self
+        finally:
+            self._shared_runs = None
+
+    def _filter(self, arrays, grid, want, inputs, out_x, out_P, drift_yaw_uv: float):
         """Run the filter over the rows ``grid`` (increasing), storing the estimates at ``want``."""
         want = sorted(want)
+        stopped = np.flatnonzero(~inputs["dp"][grid])
+        if drift_yaw_uv == 0.0 or self._shared_runs is None or stopped.size == 0:
+            self._filter_grid(arrays, grid, want, inputs, out_x, out_P, drift_yaw_uv)
+            return
+        # the coefficient acts from the first step out of a stopped row on: the estimate at
+        # that row b is the same for every coefficient
+        branch = int(stopped[0])
+        b = int(grid[branch])
+        before = [w for w in want if w <= b]
+        key = (id(arrays), int(grid[0]), int(grid[-1]), b, tuple(before))
+        if key not in self._shared_runs:
+            shared_x, shared_P = {}, {}
+            self._filter_grid(arrays, grid[:branch + 1], sorted(set(before) | {b}), inputs, shared_x, shared_P, 0.0)
+            self._shared_runs[key] = (shared_x, shared_P)
+        shared_x, shared_P = self._shared_runs[key]
+        if b not in shared_x:           # the filter could not start before b: nothing to share
+            self._filter_grid(arrays, grid, want, inputs, out_x, out_P, drift_yaw_uv)
+            return
+        for w in before:
+            if w in shared_x:
+                out_x[w], out_P[w] = shared_x[w], shared_P[w]
+        self._filter_grid(arrays, grid[branch:], [w for w in want if w > b], inputs, out_x, out_P, drift_yaw_uv,
+                          resume=(shared_x[b], shared_P[b]))
+
+    def _filter_grid(self, arrays, grid, want, inputs, out_x, out_P, drift_yaw_uv: float, resume=None):
+        """One run of the compiled filter over ``grid`` (from the estimate ``resume`` at
+        ``grid[0]`` when given), storing the estimates at the sorted rows ``want``."""
         slot = np.full(len(arrays.time_s), -1, dtype=np.int64)
         slot[want] = np.arange(len(want))
         n = len(self.state_names)
         xs, Ps = np.empty((len(want), n)), np.empty((len(want), n, n))
         done = np.zeros(len(want), dtype=np.bool_)
+        x_resume, P_resume = resume if resume is not None else (np.zeros(n), np.zeros((n, n)))
         c = self.config
         kernel.filter_grid(np.ascontiguousarray(grid, dtype=np.int64), slot, arrays.time_s, arrays.segment_id,
                            inputs["z"], inputs["z_ok"], inputs["r_std"], inputs["rpm"], inputs["az"],
@@ -530,7 +587,9 @@ class EnvironmentEstimator:
                            np.asarray(self.thrust_error_mean, float),
                            self._prior_sd(), self._process_noise_base(), _FD_STEP,
                            bool(c.reset_yaw_load_at_stop), float(c.yaw_load_kept_at_stop), self._yaw_std_at_stop(),
-                           float(c.load_yaw_prior_rad_s2), xs, Ps, done)
+                           float(c.load_yaw_prior_rad_s2), drift_yaw_uv, resume is not None,
+                           np.ascontiguousarray(x_resume, dtype=float), np.ascontiguousarray(P_resume, dtype=float),
+                           xs, Ps, done)
         for k, i in enumerate(want):
             if done[k]:
                 out_x[i], out_P[i] = xs[k], Ps[k]

@@ -64,13 +64,14 @@ def _thrust_basis(x, rpm, prep, P, per_thruster, zeros3, thrusts, T):
 
 
 @numba.njit(cache=True)
-def _external_accel(x, T, out):
-    """``R(psi)^T b + T theta``: the filter's extra body-frame acceleration (3,)."""
+def _external_accel(x, T, drift_yaw_uv, out):
+    """``R(psi)^T b + T theta``, plus the hull's yaw moment in a drift ``k u v`` (``drift_yaw_uv``
+    = k [rad/m^2], 0 while the thrusters run): the filter's extra body-frame acceleration (3,)."""
     c, s = math.cos(x[2]), math.sin(x[2])
     bn, be = x[_LOAD], x[_LOAD + 1]
     out[0] = c * bn + s * be
     out[1] = -s * bn + c * be
-    out[2] = x[_LOAD + 2]
+    out[2] = x[_LOAD + 2] + drift_yaw_uv * x[3] * x[4]
     for j in range(T.shape[1]):
         for i in range(3):
             out[i] += T[i, j] * x[_THR + j]
@@ -89,14 +90,14 @@ def _rk4(x, dt, rpm, prep, acc, P, f, work):
 
 
 @numba.njit(cache=True)
-def _transition(x, dt, rpm, az, wind, P, per_thruster, f, work, T, acc):
+def _transition(x, dt, rpm, az, wind, P, per_thruster, drift_yaw_uv, f, work, T, acc):
     """One process-model step of the state ``x`` into ``f``: RK4 of the dynamic model with
     the current and the external acceleration of :func:`_external_accel` (left in ``T`` and
     ``acc``); the environment states are random walks (kept)."""
     prep = work[0]
     _prep_for(x, rpm, az, wind, P, prep)
     _thrust_basis(x, rpm, prep, P, per_thruster, work[1], work[2], T)
-    _external_accel(x, T, acc)
+    _external_accel(x, T, drift_yaw_uv, acc)
     _rk4(x, dt, rpm, prep, acc, P, f, work)
     for i in range(6, x.size):
         f[i] = x[i]
@@ -110,7 +111,7 @@ def _workspace(P):
 
 
 @numba.njit(cache=True)
-def predict(x, Pc, dt, rpm, az, wind, Q, fd_step, P, per_thruster, work):
+def predict(x, Pc, dt, rpm, az, wind, Q, fd_step, P, per_thruster, drift_yaw_uv, work):
     """EKF time update over ``dt`` [s]: the mean through the process model, the covariance
     through its Jacobian ``F``. Returns ``(x, P)`` (new arrays).
 
@@ -126,7 +127,7 @@ def predict(x, Pc, dt, rpm, az, wind, Q, fd_step, P, per_thruster, work):
     f0 = np.empty(n)
     T = np.empty((3, n_theta))
     acc = np.empty(3)
-    _transition(x, dt, rpm, az, wind, P, per_thruster, f0, work, T, acc)
+    _transition(x, dt, rpm, az, wind, P, per_thruster, drift_yaw_uv, f0, work, T, acc)
     F = np.zeros((n, n))
     for j in range(n):
         if j < 2 or j >= _LOAD:
@@ -137,7 +138,7 @@ def predict(x, Pc, dt, rpm, az, wind, Q, fd_step, P, per_thruster, work):
     acc_j = np.empty(3)
     for j in range(2, _LOAD):                   # heading, velocities, current
         xp[j] = x[j] + fd_step[j]
-        _transition(xp, dt, rpm, az, wind, P, per_thruster, fj, work, T_j, acc_j)
+        _transition(xp, dt, rpm, az, wind, P, per_thruster, drift_yaw_uv, fj, work, T_j, acc_j)
         for i in range(n):
             F[i, j] = (fj[i] - f0[i]) / fd_step[j]
         xp[j] = x[j]
@@ -245,14 +246,16 @@ def at_thrust_stop(x, Pc, kept, stop_std, yaw_prior, P, work):
 
 @numba.njit(cache=True)
 def filter_grid(grid, slot, t, seg, z, z_ok, r_std, rpm, az, wind, dp, P, per_thruster, prior_thr, prior_sd, q_base,
-                fd_step, reset_at_stop, kept, stop_std, yaw_prior, out_x, out_P, done):
+                fd_step, reset_at_stop, kept, stop_std, yaw_prior, drift_yaw_uv, resume, x_resume, P_resume,
+                out_x, out_P, done):
     """Run the filter over the log rows ``grid`` (increasing).
 
     At a row ``i`` with ``slot[i] >= 0`` the estimate goes to ``out_x[slot[i]]``,
     ``out_P[slot[i]]`` and ``done[slot[i]]`` is set. A new segment (or a lost estimate)
     restarts the motion states from the measurement and keeps the environment, whose
     covariance grows by the process noise over the gap. Rows whose position or heading is
-    missing cannot start the filter.
+    missing cannot start the filter. With ``resume``, ``x_resume, P_resume`` is the estimate
+    at ``grid[0]`` (of an earlier run) and the filter goes on from there.
     """
     work = _workspace(P)
     n = prior_sd.size
@@ -260,7 +263,14 @@ def filter_grid(grid, slot, t, seg, z, z_ok, r_std, rpm, az, wind, dp, P, per_th
     Pc = np.zeros((n, n))
     started = False
     prev = -1
-    for gi in range(grid.size):
+    if resume:
+        x, Pc, started, prev = x_resume.copy(), P_resume.copy(), True, grid[0]
+        s = slot[prev]
+        if s >= 0:
+            out_x[s] = x
+            out_P[s] = Pc
+            done[s] = True
+    for gi in range(1 if resume else 0, grid.size):
         i = grid[gi]
         finite = True
         for j in range(n):
@@ -290,7 +300,7 @@ def filter_grid(grid, slot, t, seg, z, z_ok, r_std, rpm, az, wind, dp, P, per_th
         else:
             dt = t[i] - t[prev]
             x, Pc = predict(x, Pc, dt, rpm[prev], az[prev], wind[prev], process_noise(dt, q_base), fd_step, P,
-                            per_thruster, work)
+                            per_thruster, 0.0 if dp[prev] else drift_yaw_uv, work)
             x, Pc = update(x, Pc, z[i], z_ok[i], r_std[i])
             if reset_at_stop and dp[prev] and not dp[i]:
                 x, Pc = at_thrust_stop(x, Pc, kept, stop_std, yaw_prior, P, work)
