@@ -22,6 +22,12 @@ estimated yaw load at the last row of station keeping (what a forecast started a
 failure holds; the same in both windows). Writes ``environment_vs_truth.csv``/``.md``
 and ``environment_vs_truth.png``.
 
+``--drift-hull CSV`` gives each log's filter the hull's yaw moment in a drift that a drift
+benchmark chose for it on the *other* logs' failures (its ``drift_hull.csv``; see
+:mod:`hybridship.residual.drift_hull`): after the failure the process model then adds
+``k u v``, as the default hybrid's filter does, instead of leaving the hull's error to the
+yaw load.
+
 ``--scenarios N --seed S`` reads the own simulator's DP-loss scenarios ``S .. S+N-1``
 (:func:`hybridship.sim.scenario.embedded_scenarios`, the drift benchmark's own scenarios)
 instead of truthsim-dev; their logs carry the same truth columns.
@@ -30,6 +36,8 @@ Examples::
 
     python benchmarks/environment_vs_truth.py --out docs/results/environment-vs-truth
     python benchmarks/environment_vs_truth.py --scenarios 20 --seed 100 --out docs/results/environment-vs-truth-own-20
+    python benchmarks/environment_vs_truth.py --drift-hull docs/results/drift-truthsim-dev/drift_hull.csv \
+        --out docs/results/environment-vs-truth-drift-hull
 """
 
 from __future__ import annotations
@@ -111,6 +119,9 @@ def main(argv=None) -> int:
     ap.add_argument("--scenarios", type=int, default=0,
                     help="use this many of the own simulator's DP-loss scenarios (1-20) instead of --data")
     ap.add_argument("--seed", type=int, default=100, help="seed of the first scenario with --scenarios")
+    ap.add_argument("--drift-hull", type=Path, default=None,
+                    help="a drift benchmark's drift_hull.csv: each log's coefficient of the hull's yaw moment in a "
+                         "drift, used by its filter after the failure (default: none)")
     args = ap.parse_args(argv)
     if not 0 <= args.scenarios <= 20:
         ap.error(f"--scenarios: expected 1-20 (or 0 to read --data), got {args.scenarios}")
@@ -124,13 +135,18 @@ def main(argv=None) -> int:
         return 2
     model = DynamicModel("gunnerus")
     M = model.mass_matrix
+    drift_yaw = _drift_hull_coefficients(args.drift_hull) if args.drift_hull is not None else {}
     rows, series = [], []
     for name, df in _logs(args):
         a = as_log_arrays(df, model.vessel)
         i0 = shutdown_index(a)
         first = max(0, i0 - 1800)
         last = min(len(a.time_s) - 1, i0 + 300)
-        est = EnvironmentEstimator(model).run(a, np.arange(first, last + 1), first_row=first)
+        if args.drift_hull is not None and name not in drift_yaw:
+            print(f"--drift-hull {args.drift_hull}: no row for log {name}", file=sys.stderr)
+            return 2
+        est = EnvironmentEstimator(model).run(a, np.arange(first, last + 1), first_row=first,
+                                              drift_yaw_uv_rad_per_m2=drift_yaw.get(name, 0.0))
         cur_t, load_t, thr_t = _truth(df, model, a)
         # estimated load as a force: M b with b rotated to the body frame and back (M is body-fixed)
         psi = est.x[:, 2]
@@ -168,6 +184,13 @@ def main(argv=None) -> int:
     _plot(args.out / "environment_vs_truth.png", series)
     print("\n".join(md))
     return 0
+
+
+def _drift_hull_coefficients(path: Path) -> dict[str, float]:
+    """Log name -> the coefficient of the hull's yaw moment in a drift [rad/m^2] of a drift
+    benchmark's ``drift_hull.csv``."""
+    t = pd.read_csv(path)
+    return dict(zip(t["log"], t["coefficient_rad_per_m2"].astype(float)))
 
 
 def _plot(path, series):

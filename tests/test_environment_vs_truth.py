@@ -63,3 +63,19 @@ def test_bad_arguments(evt, tmp_path, capsys, argv, message):
         evt.main(argv + ["--out", str(tmp_path)])
     assert e.value.code == 2
     assert message in capsys.readouterr().err
+
+
+def test_drift_hull_coefficients_reach_the_filter(evt, tmp_path, capsys):
+    """--drift-hull gives each log's filter its coefficient from a drift benchmark's
+    drift_hull.csv: the station keeping is the same, the drift's yaw load differs; a log
+    without a row is refused by name."""
+    csv = tmp_path / "drift_hull.csv"
+    csv.write_text("log,coefficient_rad_per_m2\nembedded_seed0100,0.004\n")
+    assert evt.main(["--scenarios", "1", "--seed", "100", "--out", str(tmp_path / "k")]) == 0
+    assert evt.main(["--scenarios", "1", "--seed", "100", "--drift-hull", str(csv), "--out", str(tmp_path / "h")]) == 0
+    plain, with_k = (pd.read_csv(tmp_path / d / "environment_vs_truth.csv").set_index("window") for d in "kh")
+    assert plain.loc["dp", "load_yaw_kNm_est"] == with_k.loc["dp", "load_yaw_kNm_est"]
+    assert plain.loc["drift", "load_yaw_kNm_est"] != with_k.loc["drift", "load_yaw_kNm_est"]
+    csv.write_text("log,coefficient_rad_per_m2\nother,0.004\n")
+    assert evt.main(["--scenarios", "1", "--seed", "100", "--drift-hull", str(csv), "--out", str(tmp_path)]) == 2
+    assert "no row for log embedded_seed0100" in capsys.readouterr().err
