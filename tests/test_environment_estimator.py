@@ -94,6 +94,14 @@ def test_estimate_is_causal(model):
     after = EnvironmentEstimator(model).run(as_log_arrays(changed, model.vessel), rows)
     np.testing.assert_array_equal(before.x, after.x)
     np.testing.assert_array_equal(before.P, after.P)
+    # the same with the hull's yaw moment in a drift in the process model, shared or not
+    est = EnvironmentEstimator(model)
+    before = est.run(a, rows, drift_yaw_uv_rad_per_m2=0.004)
+    with est.sharing_station_keeping():
+        est.run(a, rows, drift_yaw_uv_rad_per_m2=0.002)
+        after = est.run(as_log_arrays(changed, model.vessel), rows, drift_yaw_uv_rad_per_m2=0.004)
+    np.testing.assert_array_equal(before.x, after.x)
+    np.testing.assert_array_equal(before.P, after.P)
 
 
 def test_drift_samples_update_the_estimate_online(model):

@@ -557,11 +557,12 @@ class EnvironmentEstimator:
         b = int(grid[branch])
         before = [w for w in want if w <= b]
         key = (id(arrays), int(grid[0]), int(grid[-1]), b, tuple(before))
-        if key not in self._shared_runs:
+        if key not in self._shared_runs or self._shared_runs[key][0] is not arrays:
             shared_x, shared_P = {}, {}
             self._filter_grid(arrays, grid[:branch + 1], sorted(set(before) | {b}), inputs, shared_x, shared_P, 0.0)
-            self._shared_runs[key] = (shared_x, shared_P)
-        shared_x, shared_P = self._shared_runs[key]
+            # the log is kept with its run: its id cannot be reused by another log meanwhile
+            self._shared_runs[key] = (arrays, shared_x, shared_P)
+        _, shared_x, shared_P = self._shared_runs[key]
         if b not in shared_x:           # the filter could not start before b: nothing to share
             self._filter_grid(arrays, grid, want, inputs, out_x, out_P, drift_yaw_uv)
             return
