@@ -135,7 +135,11 @@ def main(argv=None) -> int:
         return 2
     model = DynamicModel("gunnerus")
     M = model.mass_matrix
-    drift_yaw = _drift_hull_coefficients(args.drift_hull) if args.drift_hull is not None else {}
+    try:
+        drift_yaw = _drift_hull_coefficients(args.drift_hull) if args.drift_hull is not None else {}
+    except ValueError as exc:
+        print(exc, file=sys.stderr)
+        return 2
     rows, series = [], []
     for name, df in _logs(args):
         a = as_log_arrays(df, model.vessel)
@@ -189,8 +193,16 @@ def main(argv=None) -> int:
 def _drift_hull_coefficients(path: Path) -> dict[str, float]:
     """Log name -> the coefficient of the hull's yaw moment in a drift [rad/m^2] of a drift
     benchmark's ``drift_hull.csv``."""
-    t = pd.read_csv(path)
-    return dict(zip(t["log"], t["coefficient_rad_per_m2"].astype(float)))
+    try:
+        t = pd.read_csv(path)
+        k = dict(zip(t["log"], pd.to_numeric(t["coefficient_rad_per_m2"], errors="coerce")))
+    except (OSError, ValueError, KeyError) as exc:
+        raise ValueError(f"--drift-hull {path}: expected a drift benchmark's drift_hull.csv with columns log and "
+                         f"coefficient_rad_per_m2 ({type(exc).__name__}: {exc})") from None
+    bad = [name for name, v in k.items() if not np.isfinite(v)]
+    if bad:
+        raise ValueError(f"--drift-hull {path}: coefficient_rad_per_m2 is not a number for log {bad[0]}")
+    return k
 
 
 def _plot(path, series):

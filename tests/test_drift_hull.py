@@ -159,6 +159,9 @@ def test_the_filter_uses_the_coefficient_after_a_failure_so_the_yaw_load_does_no
             shared = hp.estimator.run(a, rows, drift_yaw_uv_rad_per_m2=c)
             np.testing.assert_array_equal(shared.x, e.x)
             np.testing.assert_array_equal(shared.P, e.P)
+        with hp.estimator.sharing_station_keeping():         # nested: the outer context decides
+            pass
+        assert hp.estimator._shared_runs is not None
     assert hp._filter_drift_yaw() == hp.drift_yaw_uv_rad_per_m2 != 0.0
     with pytest.raises(ValueError, match=r"drift_yaw_uv_rad_per_m2: expected a finite number"):
         hp.estimator.run(as_log_arrays(logs[0], model.vessel), [10], drift_yaw_uv_rad_per_m2=float("nan"))

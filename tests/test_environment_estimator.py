@@ -104,6 +104,36 @@ def test_estimate_is_causal(model):
     np.testing.assert_array_equal(before.P, after.P)
 
 
+def test_shared_station_keeping_is_not_shared_across_first_rows(model):
+    """On a 10-Hz log the filter steps every 10th row; two first rows can give the same grid
+    while the wave motion's noise is measured over different spans: a run inside
+    sharing_station_keeping gives what a run of its own does."""
+    log = physics_log(model, duration_s=250, t_shutdown_s=150, dt_s=0.1, seed=8, tau_ext_N=(2000.0, 0.0, 0.0))
+    a = as_log_arrays(log, model.vessel)
+    rows = np.arange(1205, 2400, 10)
+    est = EnvironmentEstimator(model)
+    alone = est.run(a, rows, first_row=3, drift_yaw_uv_rad_per_m2=0.004)
+    with est.sharing_station_keeping():
+        est.run(a, rows, first_row=0, drift_yaw_uv_rad_per_m2=0.002)
+        shared = est.run(a, rows, first_row=3, drift_yaw_uv_rad_per_m2=0.004)
+    np.testing.assert_array_equal(shared.x, alone.x)
+    np.testing.assert_array_equal(shared.P, alone.P)
+    assert est.run(a, rows, drift_yaw_uv_rad_per_m2=np.int64(0)).x.shape[0] == rows.size
+
+
+def test_a_segment_whose_first_row_has_no_position_restarts_at_its_next(model):
+    """After a gap, a new segment whose first row lacks a position restarts at the next row
+    with one (velocities from the measurement), not by predicting across the gap."""
+    log = physics_log(model, duration_s=600, t_shutdown_s=None, seed=9, tau_ext_N=(2000.0, 0.0, 0.0))
+    gap = log.drop(index=range(300, 420)).reset_index(drop=True)
+    gap.loc[300, ["north_m", "east_m"]] = np.nan              # the new segment's first row
+    a = as_log_arrays(gap, model.vessel, purpose="forecast")       # forecasts accept missing positions
+    assert a.segment_id[300] != a.segment_id[299]
+    est = EnvironmentEstimator(model).run(a, [301])
+    np.testing.assert_allclose(est.x[0, 3:6], a.nu[301], atol=1e-9)    # restarted from the measurement
+    assert est.P[0, 0, 0] == pytest.approx(EnvironmentEstimator(model)._prior_sd()[0] ** 2)
+
+
 def test_drift_samples_update_the_estimate_online(model):
     """After the thrusters stop, every new drift sample moves the estimate (and the forecast
     from that start): the estimator keeps running on the drift, and the load's uncertainty

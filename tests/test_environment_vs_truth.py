@@ -79,3 +79,10 @@ def test_drift_hull_coefficients_reach_the_filter(evt, tmp_path, capsys):
     csv.write_text("log,coefficient_rad_per_m2\nother,0.004\n")
     assert evt.main(["--scenarios", "1", "--seed", "100", "--drift-hull", str(csv), "--out", str(tmp_path)]) == 2
     assert "no row for log embedded_seed0100" in capsys.readouterr().err
+    for text, message in (("log,k\nembedded_seed0100,0.004\n", "expected a drift benchmark's drift_hull.csv"),
+                          ("log,coefficient_rad_per_m2\nembedded_seed0100,\n", "is not a number for log")):
+        csv.write_text(text)
+        assert evt.main(["--scenarios", "1", "--drift-hull", str(csv), "--out", str(tmp_path)]) == 2
+        assert message in capsys.readouterr().err
+    assert evt.main(["--scenarios", "1", "--drift-hull", str(tmp_path / "none.csv"), "--out", str(tmp_path)]) == 2
+    assert "expected a drift benchmark's drift_hull.csv" in capsys.readouterr().err

@@ -369,6 +369,9 @@ def test_hull_yaw_moment_in_a_drift_is_checked_and_older_files_have_none(saved, 
     assert v10._filter_drift_yaw() == 0.0
     back2 = HybridPredictor.load(v10.save(tmp_path / "v10_resaved.npz"))
     assert not back2._drift_yaw_in_filter                # and a re-save keeps what it was fitted with
+    # a refit chooses again, and then the filter uses what it chose, as the forecasts do
+    back2.fit([physics_log(model, seed=3, duration_s=300.0, t_shutdown_s=None)])
+    assert back2._drift_yaw_in_filter
     _refused(_rewrite(saved, tmp_path, meta_change=lambda m: m.update(drift_yaw_in_filter=1), restamp=True,
                       name="inf.npz"), "drift_yaw_in_filter: expected true or false")
     for bad in (1.0, float("nan"), "0.001", True, None):

@@ -333,6 +333,7 @@ class HybridPredictor:
         :meth:`drift_hull_objective`). Returns what ``training_info["drift_hull"]`` records
         (None when nothing was chosen)."""
         self.drift_yaw_uv_rad_per_m2 = 0.0
+        self._drift_yaw_in_filter = True        # a refit of a format-10 model chooses as it now forecasts
         if not self.uses_drift_hull:
             return None
         failed = [a for a in logs

@@ -62,6 +62,7 @@ All quantities are SI and radians inside.
 
 from __future__ import annotations
 
+import numbers
 from contextlib import contextmanager
 from dataclasses import dataclass
 from typing import Literal
@@ -478,8 +479,8 @@ class EnvironmentEstimator:
             ``k u v``, as the forecasts after a failure do, so that the yaw load does not
             absorb it. 0 (default): none.
         """
-        if not (isinstance(drift_yaw_uv_rad_per_m2, (int, float, np.floating)) and not isinstance(
-                drift_yaw_uv_rad_per_m2, bool) and np.isfinite(drift_yaw_uv_rad_per_m2)):
+        if not (isinstance(drift_yaw_uv_rad_per_m2, numbers.Real) and not isinstance(drift_yaw_uv_rad_per_m2, bool)
+                and np.isfinite(drift_yaw_uv_rad_per_m2)):
             raise ValueError(f"drift_yaw_uv_rad_per_m2: expected a finite number [rad/m^2], got "
                              f"{drift_yaw_uv_rad_per_m2!r}")
         n = len(arrays.time_s)
@@ -530,14 +531,19 @@ class EnvironmentEstimator:
             "az": rows(model._channels("azimuth_rad", np.nan_to_num(arrays.azimuth_rad[sl]), w, None)[:, 0]),
             "wind": rows(np.nan_to_num(arrays.wind[sl])),
             "dp": rows(arrays.dp_active[sl].astype(bool)),
+            "span": (int(first_row), int(last)),        # what the noise above was measured over
         }
 
     @contextmanager
     def sharing_station_keeping(self):
-        """Within this context, runs over the same log and rows that differ only in
+        """Within this context, runs over the same log, rows and first row that differ only in
         ``drift_yaw_uv_rad_per_m2`` share the filter up to the failure, where that coefficient
         starts to act: the station keeping is filtered once, and each run goes on from there
-        (with the same result as a run of its own)."""
+        (with the same result as a run of its own). The log and the estimator's settings must
+        not change inside the context. Nested, the outermost context decides."""
+        if self._shared_runs is not None:
+            yield self
+            return
         self._shared_runs = {}
         try:
             yield self
@@ -556,7 +562,7 @@ class EnvironmentEstimator:
         branch = int(stopped[0])
         b = int(grid[branch])
         before = [w for w in want if w <= b]
-        key = (id(arrays), int(grid[0]), int(grid[-1]), b, tuple(before))
+        key = (id(arrays), inputs["span"], int(grid[0]), int(grid[-1]), b, tuple(before))
         if key not in self._shared_runs or self._shared_runs[key][0] is not arrays:
             shared_x, shared_P = {}, {}
             self._filter_grid(arrays, grid[:branch + 1], sorted(set(before) | {b}), inputs, shared_x, shared_P, 0.0)

@@ -254,8 +254,11 @@ def filter_grid(grid, slot, t, seg, z, z_ok, r_std, rpm, az, wind, dp, P, per_th
     ``out_P[slot[i]]`` and ``done[slot[i]]`` is set. A new segment (or a lost estimate)
     restarts the motion states from the measurement and keeps the environment, whose
     covariance grows by the process noise over the gap. Rows whose position or heading is
-    missing cannot start the filter. With ``resume``, ``x_resume, P_resume`` is the estimate
-    at ``grid[0]`` (of an earlier run) and the filter goes on from there.
+    missing cannot start the filter: a new segment restarts at its first row with them.
+    While ``dp`` is 0 at a step's first row, the process model adds the hull's yaw
+    acceleration in a drift ``drift_yaw_uv u v`` [rad/s^2]. With ``resume``,
+    ``x_resume, P_resume`` is the estimate at ``grid[0]`` (of an earlier run) and the filter
+    goes on from there.
     """
     work = _workspace(P)
     n = prior_sd.size
@@ -278,7 +281,10 @@ def filter_grid(grid, slot, t, seg, z, z_ok, r_std, rpm, az, wind, dp, P, per_th
                 finite = False
         if not started or seg[i] != seg[prev] or not finite:
             if not (z_ok[i, 0] and z_ok[i, 1] and z_ok[i, 2]):
-                prev = i
+                if not (started and finite):
+                    prev = i
+                # else: prev stays the last filtered row, so the next row with a position
+                # restarts the new segment (not a prediction across the gap)
                 continue
             x0 = np.zeros(n)
             P0 = np.zeros((n, n))
