@@ -490,7 +490,7 @@ class EnvironmentEstimator:
         last = int(rows.max()) if rows.size else first_row
         dt_log = float(np.median(np.diff(arrays.time_s))) if n > 1 else 1.0
         m = max(1, int(round(self.config.filter_step_s / dt_log)))
-        inputs = self._log_inputs(arrays, first_row, last)
+        inputs = self._shared_inputs(arrays, first_row, last)
         out_x, out_P = {}, {}
         for c in np.unique(rows % m):       # one pass per grid through the requested rows
             grid = np.arange(first_row + (c - first_row) % m, last + 1, m)
@@ -549,6 +549,15 @@ class EnvironmentEstimator:
             yield self
         finally:
             self._shared_runs = None
+
+    def _shared_inputs(self, arrays, first_row: int, last: int) -> dict:
+        """:meth:`_log_inputs`, made once per log and span inside :meth:`sharing_station_keeping`."""
+        if self._shared_runs is None:
+            return self._log_inputs(arrays, first_row, last)
+        key = ("inputs", id(arrays), int(first_row), int(last))
+        if key not in self._shared_runs or self._shared_runs[key][0] is not arrays:
+            self._shared_runs[key] = (arrays, self._log_inputs(arrays, first_row, last))
+        return self._shared_runs[key][1]
 
     def _filter(self, arrays, grid, want, inputs, out_x, out_P, drift_yaw_uv: float):
         """Run the filter over the rows ``grid`` (increasing), storing the estimates at ``want``."""
