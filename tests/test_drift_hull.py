@@ -103,13 +103,26 @@ def test_a_sway_added_mass_error_is_learned_as_its_munk_moment(model, scale, hea
     assert info["error_deg"] < 0.8 * info["error_zero_deg"] and info["n_failures"] == 4
 
 
-def test_a_hull_without_error_gets_none(model):
+def _recording_objective(monkeypatch) -> list:
+    """The objectives HybridPredictor.drift_hull_objective returns from now on (computed once, kept)."""
+    seen, original = [], HybridPredictor.drift_hull_objective
+
+    def recorded(self, logs, horizon_s=60.0):
+        seen.append(original(self, logs, horizon_s))
+        return seen[-1]
+
+    monkeypatch.setattr(HybridPredictor, "drift_hull_objective", recorded)
+    return seen
+
+
+def test_a_hull_without_error_gets_none(model, monkeypatch):
     """The model's own hull: the forecasts' heading error is lowest at k = 0 and the fit keeps none."""
     logs = _wind_drift_logs(model, 1.0)
+    seen = _recording_objective(monkeypatch)
     hp = HybridPredictor(model.vessel, ensemble_config=TINY).fit(logs)
     info = hp.training_info["drift_hull"]
     assert not info["adopted"] and hp.drift_yaw_uv_rad_per_m2 == 0.0
-    objective = hp.drift_hull_objective(logs).mean(axis=1)
+    objective = seen[0].mean(axis=1)                    # the one fit chose on
     assert objective.argmin() == ZERO and objective[ZERO] < 0.5 * objective[[ZERO - 10, ZERO + 10]].min()
 
 
@@ -207,7 +220,7 @@ def test_only_forecasts_that_start_after_a_failure_use_it(model):
     np.testing.assert_array_equal(with_k, mean.forecast(log, starts, 60.0).eta)
 
 
-def test_the_drift_benchmark_chooses_it_without_the_scored_failure(model, heavy_sway):
+def test_the_drift_benchmark_chooses_it_without_the_scored_failure(model, heavy_sway, monkeypatch):
     """Scored on its own training logs, each failure is forecast with the coefficient chosen
     on the other failures (never one that saw it); with fewer than three others, with none;
     scored on other logs, with fit's."""
@@ -218,8 +231,10 @@ def test_the_drift_benchmark_chooses_it_without_the_scored_failure(model, heavy_
     logs = [as_log_arrays(x, model.vessel) for x in heavy_sway[0]]
     hp = copy.deepcopy(heavy_sway[1])                 # the benchmark changes the coefficient
     fitted = hp.drift_yaw_uv_rad_per_m2
+    seen = _recording_objective(monkeypatch)
     _, per_log = _drift_hull_per_log(hp, logs, True, 60.0, ["a", "b", "c", "d"], lambda m: None)
-    objective = hp.drift_hull_objective(logs)
+    assert len(seen) == 1 and seen[0].shape[1] == 4     # one objective over all four failures
+    objective = seen[0]
     for k, c in enumerate(per_log):
         assert c == choose_coefficient(objective, munk_coefficient(hp.model), exclude=k)
         assert c.n_failures == 3
