@@ -118,7 +118,10 @@ def test_shared_station_keeping_is_not_shared_across_first_rows(model):
         shared = est.run(a, rows, first_row=3, drift_yaw_uv_rad_per_m2=0.004)
     np.testing.assert_array_equal(shared.x, alone.x)
     np.testing.assert_array_equal(shared.P, alone.P)
-    assert est.run(a, rows, drift_yaw_uv_rad_per_m2=np.int64(0)).x.shape[0] == rows.size
+    # any real number type is a coefficient: an integer 0 is no term, as 0.0 is
+    np.testing.assert_array_equal(est.run(a, rows, drift_yaw_uv_rad_per_m2=np.int64(0)).x,
+                                  est.run(a, rows, drift_yaw_uv_rad_per_m2=0.0).x)
+    assert not np.array_equal(alone.x, est.run(a, rows, first_row=3).x)       # and k = 0.004 is one
 
 
 def test_a_segment_whose_first_row_has_no_position_restarts_at_its_next(model):

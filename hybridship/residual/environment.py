@@ -550,20 +550,33 @@ class EnvironmentEstimator:
         finally:
             self._shared_runs = None
 
+    def _shared(self, key: tuple, arrays, make):
+        """``make()``, made once per ``key`` (which holds ``id(arrays)``) inside
+        :meth:`sharing_station_keeping`; the log is kept with it, so no other log can take its id."""
+        if key not in self._shared_runs:
+            self._shared_runs[key] = (arrays, make())
+        return self._shared_runs[key][1]
+
     def _shared_inputs(self, arrays, first_row: int, last: int) -> dict:
         """:meth:`_log_inputs`, made once per log and span inside :meth:`sharing_station_keeping`."""
         if self._shared_runs is None:
             return self._log_inputs(arrays, first_row, last)
-        key = ("inputs", id(arrays), int(first_row), int(last))
-        if key not in self._shared_runs or self._shared_runs[key][0] is not arrays:
-            self._shared_runs[key] = (arrays, self._log_inputs(arrays, first_row, last))
-        return self._shared_runs[key][1]
+        return self._shared(("inputs", id(arrays), int(first_row), int(last)), arrays,
+                            lambda: self._log_inputs(arrays, first_row, last))
+
+    def _station_keeping_run(self, arrays, grid, want, inputs) -> tuple[dict, dict]:
+        """The estimates at ``want`` (all at or before the last row of ``grid``) of a run
+        without the hull's yaw moment in a drift."""
+        x, P = {}, {}
+        self._filter_grid(arrays, grid, want, inputs, x, P, 0.0)
+        return x, P
 
     def _filter(self, arrays, grid, want, inputs, out_x, out_P, drift_yaw_uv: float):
         """Run the filter over the rows ``grid`` (increasing), storing the estimates at ``want``."""
         want = sorted(want)
-        stopped = np.flatnonzero(~inputs["dp"][grid])
-        if drift_yaw_uv == 0.0 or self._shared_runs is None or stopped.size == 0:
+        stopped = np.flatnonzero(~inputs["dp"][grid]) if drift_yaw_uv != 0.0 and self._shared_runs is not None \
+            else np.zeros(0, dtype=int)
+        if stopped.size == 0:
             self._filter_grid(arrays, grid, want, inputs, out_x, out_P, drift_yaw_uv)
             return
         # the coefficient acts from the first step out of a stopped row on: the estimate at
@@ -571,13 +584,9 @@ class EnvironmentEstimator:
         branch = int(stopped[0])
         b = int(grid[branch])
         before = [w for w in want if w <= b]
-        key = (id(arrays), inputs["span"], int(grid[0]), int(grid[-1]), b, tuple(before))
-        if key not in self._shared_runs or self._shared_runs[key][0] is not arrays:
-            shared_x, shared_P = {}, {}
-            self._filter_grid(arrays, grid[:branch + 1], sorted(set(before) | {b}), inputs, shared_x, shared_P, 0.0)
-            # the log is kept with its run: its id cannot be reused by another log meanwhile
-            self._shared_runs[key] = (arrays, shared_x, shared_P)
-        _, shared_x, shared_P = self._shared_runs[key]
+        shared_x, shared_P = self._shared(
+            (id(arrays), inputs["span"], int(grid[0]), int(grid[-1]), b, tuple(before)), arrays,
+            lambda: self._station_keeping_run(arrays, grid[:branch + 1], sorted(set(before) | {b}), inputs))
         if b not in shared_x:           # the filter could not start before b: nothing to share
             self._filter_grid(arrays, grid, want, inputs, out_x, out_P, drift_yaw_uv)
             return
