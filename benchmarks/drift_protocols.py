@@ -21,8 +21,9 @@ Protocols:
   failures; tested on the held-out log's drift;
 * ``fleet``: leave one log out; trained on the *whole* other logs (their earlier failures
   and drifts included: the nets see the drift regime, the estimator learns the thrust
-  error at their thrust stops, and the hull's yaw moment in a drift is learned from their
-  failures), tested on the held-out log's drift;
+  error at their thrust stops (kept only where it carries over to their failures left out
+  of the learning), and the hull's yaw moment in a drift is learned from their failures),
+  tested on the held-out log's drift;
 * ``sim_pretrain``: trained on the whole logs of ``--sim-scenarios`` drifts simulated by the
   project's own simulator (perturbed true vessel, weather varied by seed) together with the
   DP parts of the test set's own logs (joint training: the ensemble has no warm start, so

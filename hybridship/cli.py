@@ -256,7 +256,33 @@ def _cmd_train(args) -> int:
     hp.fit(files, dp_only=not args.all_rows, progress=sys.stderr.isatty())
     hp.save(args.out)
     print(f"trained on {hp.training_info['n_rows']} samples from {len(files)} logs; wrote {args.out}")
+    for line in _learned_from_failures(hp.training_info):
+        print(line)
     return 0
+
+
+def _learned_from_failures(info: dict) -> list[str]:
+    """What ``fit`` learned from the training logs' failures, and whether it was kept."""
+    lines = []
+    hull = info.get("drift_hull")
+    if hull is not None:
+        kept = "kept" if hull["adopted"] else "not kept"
+        left_out = hull["error_left_out_deg"]
+        lines.append(f"hull's yaw moment in a drift: {hull['munk_multiple']:g} x Munk on {hull['n_failures']} "
+                     f"failures, {kept} (heading {hull['error_deg']:.2f} deg against {hull['error_zero_deg']:.2f} "
+                     f"without; left-out failures {'-' if left_out is None else f'{left_out:.2f}'} deg)")
+    prior = info.get("thrust_error_prior")
+    if prior is not None:
+        mean = ", ".join(f"{m:+.2f}" for m in prior["learned_mean"])
+        if "position_error_m" in prior:
+            (pc, pl), (hc, hl) = prior["position_error_m"], prior["heading_error_deg"]
+            check = (f"left-out failures: position {pl:.3f} m against {pc:.3f} m, heading {hl:.2f} deg "
+                     f"against {hc:.2f} deg with the configured prior")
+        else:
+            check = f"{prior['n_failures']} failures, fewer than the three the check needs"
+        lines.append(f"thrust error learned at the thrust stops ({mean}): {'kept' if prior['kept'] else 'not kept'} "
+                     f"({check})")
+    return lines
 
 
 def _add_forecast(sub) -> None:

@@ -83,3 +83,23 @@ def test_own_vessel_model_forecasts_where_no_vessel_file_is(tmp_path, monkeypatc
     assert rc == 0, capsys.readouterr().err
     df = pd.read_csv(out)
     assert len(df) == 21 and df[["north_m", "east_m", "heading_deg"]].notna().all().all()
+
+
+def test_train_reports_what_it_learned_from_failures():
+    """`hybridship train` prints, after the model file, what fit learned from the training
+    logs' failures and whether each part was kept, with the errors that decided it."""
+    from hybridship.cli import _learned_from_failures
+
+    assert _learned_from_failures({}) == []
+    hull = {"munk_multiple": 0.65, "adopted": True, "n_failures": 6, "error_deg": 2.25, "error_zero_deg": 3.64,
+            "error_left_out_deg": 2.42}
+    prior = {"learned_mean": [0.5, -0.36, -0.24], "kept": False, "n_failures": 6,
+             "position_error_m": [2.111, 2.117], "heading_error_deg": [3.64, 3.72]}
+    hull_line, prior_line = _learned_from_failures({"drift_hull": hull, "thrust_error_prior": prior})
+    assert "0.65 x Munk on 6 failures, kept" in hull_line and "left-out failures 2.42 deg" in hull_line
+    assert "(+0.50, -0.36, -0.24): not kept" in prior_line
+    assert "position 2.117 m against 2.111 m, heading 3.72 deg against 3.64 deg" in prior_line
+    few = _learned_from_failures({"thrust_error_prior": {"learned_mean": [0.1, 0.0, 0.0], "kept": False,
+                                                         "n_failures": 2}})
+    assert few == ["thrust error learned at the thrust stops (+0.10, +0.00, +0.00): not kept "
+                   "(2 failures, fewer than the three the check needs)"]

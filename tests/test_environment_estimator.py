@@ -273,3 +273,67 @@ def test_run_leaves_out_optional_rows_before_the_first_valid_position(model):
     assert list(est.rows) == [200, 60, 120]
     with pytest.raises(ValueError, match="no valid position/heading at or before row 0"):
         EnvironmentEstimator(model).run(a, np.array([200, 0]), required=2)
+
+
+def _tunnel_deficit_logs(model, seeds, *, t_shutdown_s=700.0, duration_s=900.0):
+    """Logs of a true ship whose tunnel thruster delivers 80 % of the model's thrust, each
+    with a thrust stop at ``t_shutdown_s`` followed by a drift."""
+    spec = model.vessel.model_dump()
+    spec["thrusters"][0]["thrust_deduction"] = 0.2          # tunnel: (1 - 0.2) of the model's thrust
+    true_model = DynamicModel(type(model.vessel).model_validate(spec))
+    return [physics_log(true_model, duration_s=duration_s, t_shutdown_s=t_shutdown_s, seed=s, wind=(0.0, 0.0),
+                        rpm_scale=0.5, tau_ext_N=(1500.0, -1000.0, 0.0)) for s in seeds]
+
+
+def test_fit_carries_the_thrust_error_seen_at_stops_into_the_prior(model):
+    """EnvironmentEstimator.fit reads the filter 60 s after every thrust stop of its logs and
+    makes their precision-weighted mean the prior: the tunnel's 20 % deficit on that thruster,
+    the azimuths near 0, with a spread tighter than the configured one; with dp_only, or
+    without a stop, the prior stays as configured."""
+    logs = [as_log_arrays(x, model.vessel) for x in _tunnel_deficit_logs(model, (30, 31))]
+    est = EnvironmentEstimator(model).fit(logs)
+    np.testing.assert_allclose(est.thrust_error_mean, [-0.2, 0.0, 0.0], atol=0.06)
+    assert np.all(est.thrust_error_std < 0.2)
+    no_stop = as_log_arrays(physics_log(model, duration_s=600, t_shutdown_s=None, seed=30), model.vessel)
+    for unchanged in (EnvironmentEstimator(model).fit(logs, dp_only=True), EnvironmentEstimator(model).fit([no_stop])):
+        np.testing.assert_array_equal(unchanged.thrust_error_mean, 0.0)
+        np.testing.assert_array_equal(unchanged.thrust_error_std, 0.2)
+
+
+def test_the_prior_learned_at_stops_is_kept_only_where_it_lowers_both_errors():
+    from hybridship.residual.environment import thrust_error_prior_carries_over as keep
+
+    configured = np.array([[2.0, 0.05], [1.0, 0.02], [3.0, 0.10]])
+    assert keep(configured, configured * 0.9)
+    assert not keep(configured, configured)                             # no gain: not kept
+    assert not keep(configured, configured * [0.5, 1.1])                 # position better, heading worse
+    assert not keep(configured, configured * [1.1, 0.5])
+    assert keep(configured, configured + [[0.5, 0.0], [-0.8, -0.01], [0.0, 0.0]])   # on average, both
+    with pytest.raises(ValueError, match="shape"):
+        keep(configured, configured[:2])
+    with pytest.raises(ValueError, match="finite"):
+        keep(configured, np.where(configured > 2.5, np.nan, configured))
+
+
+def test_hybrid_fit_checks_the_prior_learned_at_stops_on_left_out_failures(model):
+    """fit(dp_only=False) learns the thrust error at the training logs' stops and keeps it only
+    if the failures left out of the learning, one at a time, are forecast better in position
+    and in heading (training_info["thrust_error_prior"]); the estimator then carries the
+    learned prior, else the configured one. With fewer than three failures nothing can be
+    checked and the configured prior is restored; with dp_only nothing is learned."""
+    logs = _tunnel_deficit_logs(model, (32, 33, 34))
+    hp = HybridPredictor(model.vessel, ensemble_config=TINY).fit(logs, dp_only=False)
+    info = hp.training_info["thrust_error_prior"]
+    assert info["n_failures"] == 3
+    pos, head = np.array(info["position_error_m"]), np.array(info["heading_error_deg"])
+    assert info["kept"] == bool(pos[1] < pos[0] and head[1] < head[0])
+    want = info["learned_mean"] if info["kept"] else [0.0, 0.0, 0.0]
+    np.testing.assert_allclose(hp.estimator.thrust_error_mean, want)
+    np.testing.assert_allclose(info["learned_mean"], [-0.2, 0.0, 0.0], atol=0.06)
+
+    two = HybridPredictor(model.vessel, ensemble_config=TINY).fit(logs[:2], dp_only=False)
+    assert two.training_info["thrust_error_prior"]["n_failures"] == 2
+    assert not two.training_info["thrust_error_prior"]["kept"]
+    np.testing.assert_array_equal(two.estimator.thrust_error_mean, 0.0)
+    np.testing.assert_array_equal(two.estimator.thrust_error_std, 0.2)
+    assert "thrust_error_prior" not in HybridPredictor(model.vessel, ensemble_config=TINY).fit(logs).training_info

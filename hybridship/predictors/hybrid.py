@@ -26,7 +26,7 @@ from ..residual.ensemble import EnsembleConfig, MLPEnsemble, fit_ensemble
 from ..residual.features import COMMAND_FEATURES, ResidualConfig, command_feature_columns, command_scales, prepare_log
 from ..residual.load_variability import held_load_rows, held_load_spread, unexplained_load_std_windows
 from ..residual.environment import (EnvironmentConfig, EnvironmentEstimator, current_input,
-                                    environment_accel)
+                                    environment_accel, thrust_error_prior_carries_over)
 from ..residual.multistep import MultiStepConfig, collect_starts, train_multistep
 from ..residual.guard import CommandRegime, EnvelopeGuard, ThrustRegime
 from ..residual.drift_hull import (MIN_FAILURES as DRIFT_HULL_MIN_FAILURES, MUNK_MULTIPLES,
@@ -291,6 +291,10 @@ class HybridPredictor:
         training logs hold at least ``calibration.after_stop_min_failures`` failures with
         enough drift after them: then the spread after a failure is calibrated on those
         (:meth:`calibrate_after_stop`; ``training_info["calibration"]["after_stop"]``).
+        Without ``dp_only`` the environment estimator also learns the thrust-model error at
+        the logs' thrust stops (:meth:`EnvironmentEstimator.fit`), kept only where it carries
+        over to failures left out of the learning (:meth:`_check_thrust_error_prior`,
+        ``training_info["thrust_error_prior"]``).
         """
         stride = _check_row_stride(row_stride)
         cal = self.calibration_config if calibration is None else calibration
@@ -304,6 +308,7 @@ class HybridPredictor:
         cuts = [self._calibration_cut(a, cal, dp_only) for a in logs]
         wind_info = self._fit_wind_forecast(logs, cuts, cal, dp_only)
         wind_spread_info = self._fit_wind_error_paths(logs, cuts, cal, dp_only)
+        prior_info = self._check_thrust_error_prior(logs, cal.horizon_s)
         masks = [None if c >= len(a) else (np.arange(len(a)) < c) for a, c in zip(logs, cuts)]
         self._fit_nets(logs, dp_only=dp_only, progress=progress, stride=stride, row_masks=masks)
         self.command_regime = None
@@ -324,6 +329,8 @@ class HybridPredictor:
             self.training_info["wind_spread"] = wind_spread_info
         if drift_hull_info is not None:
             self.training_info["drift_hull"] = drift_hull_info
+        if prior_info is not None:
+            self.training_info["thrust_error_prior"] = prior_info
         self._calibrate_after_stop_on_training_logs(logs, cal)
         return self
 
@@ -370,22 +377,75 @@ class HybridPredictor:
         ks = MUNK_MULTIPLES * munk_coefficient(self.model)
         out = np.empty((ks.size, 0))
         for log in logs:
-            a = as_log_arrays(log, self.model.vessel)
-            H = int(round(horizon_s / a.dt_s))
-            rows = drift_start_rows(a.dp_active, a.segment_id, H, int(round(DRIFT_HULL_START_EVERY_S / a.dt_s)))
-            if rows.size == 0:
-                raise ValueError(f"logs: a log without a failure followed by {horizon_s:g} s of drift in one "
-                                 f"gap-free segment")
-            st = _forecast_setup(self.model, self.residual_config, a, a.time_s[rows], H * a.dt_s,
-                                 self.stop_after_failure, "held", history_s=self.history_s,
-                                 wind_forecast=self.wind_forecast)
-            truth = a.eta[rows[:, None] + np.arange(1, st.H + 1)[None, :], 2]            # (S, H)
-            per_batch = max(1, DRIFT_HULL_BATCH // rows.size)
+            st, truth = self._drift_starts(log, horizon_s)
+            truth = truth[..., 2]                                                        # (S, H)
+            per_batch = max(1, DRIFT_HULL_BATCH // len(st.idx))
             with self.estimator.sharing_station_keeping():     # filtered once for all candidates
                 errors = [self._drift_heading_errors(st, ks[i:i + per_batch], truth)
                           for i in range(0, ks.size, per_batch)]
             out = np.column_stack([out, np.concatenate(errors)])
         return out
+
+    def _drift_starts(self, log, horizon_s: float):
+        """Forecast setup of the starts every :data:`~hybridship.residual.drift_hull.START_EVERY_S`
+        along a log's first drift (:func:`~hybridship.residual.drift_hull.drift_start_rows`), and
+        the logged ``eta`` (S, H, 3) at every lead after them."""
+        a = as_log_arrays(log, self.model.vessel)
+        H = int(round(horizon_s / a.dt_s))
+        rows = drift_start_rows(a.dp_active, a.segment_id, H, int(round(DRIFT_HULL_START_EVERY_S / a.dt_s)))
+        if rows.size == 0:
+            raise ValueError(f"logs: a log without a failure followed by {horizon_s:g} s of drift in one "
+                             f"gap-free segment")
+        st = _forecast_setup(self.model, self.residual_config, a, a.time_s[rows], H * a.dt_s,
+                             self.stop_after_failure, "held", history_s=self.history_s,
+                             wind_forecast=self.wind_forecast)
+        return st, a.eta[rows[:, None] + np.arange(1, st.H + 1)[None, :]]
+
+    def _check_thrust_error_prior(self, logs, horizon_s: float):
+        """Keep the thrust-model error that :meth:`EnvironmentEstimator.fit` learned at the
+        training logs' thrust stops only where it carries over: with one failure left out at
+        a time, the prior learned at the other logs' stops must lower both the mean position
+        and the mean heading error of the left-out failure's forecasts (starts every
+        :data:`~hybridship.residual.drift_hull.START_EVERY_S` along its drift, ``horizon_s``
+        ahead, physics and estimator as after any failure, without the nets or the hull's yaw
+        moment in a drift) against the configured prior
+        (:func:`~hybridship.residual.environment.thrust_error_prior_carries_over`). With fewer
+        than three such failures nothing can be checked and the configured prior is
+        restored. Returns what ``training_info["thrust_error_prior"]`` records (None when no
+        stop was read: ``dp_only``, or no stop with enough drift after it)."""
+        configured = EnvironmentEstimator(self.model, self.environment_config)
+        learned = self.estimator
+        if (np.array_equal(learned.thrust_error_mean, configured.thrust_error_mean)
+                and np.array_equal(learned.thrust_error_std, configured.thrust_error_std)):
+            return None
+        failed = [k for k, a in enumerate(logs)
+                  if drift_start_rows(a.dp_active, a.segment_id, int(round(horizon_s / a.dt_s)), 1).size]
+        info = {"learned_mean": learned.thrust_error_mean.tolist(), "learned_std": learned.thrust_error_std.tolist(),
+                "n_failures": len(failed), "horizon_s": float(horizon_s), "kept": False}
+        if len(failed) >= DRIFT_HULL_MIN_FAILURES:
+            errors = np.empty((2, len(failed), 2))
+            for j, k in enumerate(failed):
+                others = EnvironmentEstimator(self.model, self.environment_config).fit(
+                    [a for i, a in enumerate(logs) if i != k])
+                for m, estimator in enumerate((configured, others)):
+                    self.estimator = estimator
+                    errors[m, j] = self._drift_errors(logs[k], horizon_s)
+            info.update(position_error_m=errors[:, :, 0].mean(axis=1).tolist(),
+                        heading_error_deg=np.degrees(errors[:, :, 1].mean(axis=1)).tolist(),
+                        kept=thrust_error_prior_carries_over(errors[0], errors[1]))
+        self.estimator = learned if info["kept"] else configured
+        return info
+
+    def _drift_errors(self, log, horizon_s: float) -> np.ndarray:
+        """Mean position error [m] and heading error [rad] of the forecasts along a log's drift
+        (:meth:`_drift_starts`) with the estimator alone: no nets (as after a failure by
+        default) and no hull's yaw moment in a drift."""
+        st, truth = self._drift_starts(log, horizon_s)
+        eta0, nu0, dev0, bias0, current, acc_ext, _ = self._estimated_start(st, 1, drift_yaw_uv=0.0)
+        eta, _, _, _ = self.rollout(eta0, nu0, dev0, bias0, st.rpm, st.az, st.wind, st.H, st.dt, guard=False,
+                                    substeps=st.substeps, current=current, accel_ext=acc_ext, nets=False)
+        d = eta[:, 1:] - truth
+        return np.array([np.hypot(d[..., 0], d[..., 1]).mean(), np.abs(wrap_pi(d[..., 2])).mean()])
 
     def _drift_heading_errors(self, st, ks, truth) -> np.ndarray:
         """Mean absolute heading error [rad] (K,) of the starts of ``st`` with each coefficient
@@ -935,7 +995,7 @@ class HybridPredictor:
         per step (S, n_steps, K), wind held (S, 1, 2) or per step (S, n_steps, 2), and optionally a held current
         ``[speed_m_s, dir_to_rad]`` (S, 1, 2) and a body-frame extra acceleration (S, 1, 3)
         for the physics, and optionally per start the hull's yaw coefficient in a drift
-        ``drift_yaw_uv`` (S,) [rad/m^2] (:func:`_with_drift_yaw`).
+        ``drift_yaw_uv`` (S,) [rad/m^2] (:func:`_with_drift_yaw`). ``nets=False`` needs no ensemble.
 
         Every step: the physics advances the ensemble-mean state one step (RK4, through
         :meth:`DynamicModel.step_unchecked` with the extra acceleration ``accel_ext``) and
@@ -952,7 +1012,7 @@ class HybridPredictor:
         """
         ens = self.ensemble
         S = eta0.shape[0]
-        E = ens.n_members
+        E = ens.n_members if nets else (np.shape(bias0_ned)[0] if np.ndim(bias0_ned) == 3 else 1)
         fidx = self.residual_config.feature_index
         zeros3 = np.zeros((S, 1, 3))
         acc_phys = zeros3 if accel_ext is None else np.ascontiguousarray(accel_ext, dtype=float)

@@ -262,6 +262,27 @@ def external_accel(psi_rad, load_ned, theta, a_thr) -> np.ndarray:
     return out
 
 
+def thrust_error_prior_carries_over(errors_configured, errors_learned) -> bool:
+    """Whether a thrust-error prior learned at thrust stops (:meth:`EnvironmentEstimator.fit`)
+    is kept: on failures left out of the learning, one at a time, it must lower both the
+    mean position error and the mean heading error of the forecasts after the failure,
+    against the configured prior.
+
+    Parameters
+    ----------
+    errors_configured, errors_learned : array, shape (L, 2)
+        Per left-out failure, the mean position error [m] and heading error [rad] of its
+        forecasts with the configured prior, and with the prior learned on the other failures.
+    """
+    c = np.asarray(errors_configured, dtype=float)
+    g = np.asarray(errors_learned, dtype=float)
+    if c.ndim != 2 or c.shape[1] != 2 or c.shape != g.shape or c.shape[0] == 0:
+        raise ValueError(f"errors: expected two arrays of shape (n_failures, 2), got {c.shape} and {g.shape}")
+    if not (np.all(np.isfinite(c)) and np.all(np.isfinite(g))):
+        raise ValueError("errors: must be finite")
+    return bool(np.all(g.mean(axis=0) < c.mean(axis=0)))
+
+
 def environment_accel(model, arrays, estimate: EnvironmentEstimate, nu=None) -> np.ndarray:
     """The acceleration (N, 3) [m/s^2, m/s^2, rad/s^2] that the estimate explains at every row.
 
@@ -334,6 +355,10 @@ class EnvironmentEstimator:
         holds the hull model's yaw error at drift speeds, which the ratio then mistakes for
         environment. With the per-thruster error (the default) the filter needs no such rule:
         it keeps its state at a stop.
+
+        :meth:`hybridship.predictors.HybridPredictor.fit` keeps what is learned here only
+        where it carries over to failures it was not learned on
+        (:func:`thrust_error_prior_carries_over`); otherwise it restores the configured prior.
 
         What a stop does not resolve: the first minute of drift moves the ship too little to
         undo the confusion of the azimuths' error with the wind model's error (module
