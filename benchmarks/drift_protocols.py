@@ -86,7 +86,7 @@ def run(data: str, logs, sim_logs, ens: EnsembleConfig, rows: list, say=print):
         for k in range(len(arrays)):
             train = [a for i, a in enumerate(arrays) if i != k]
             hp = HybridPredictor(vessel, ensemble_config=ens).fit(train, dp_only=dp_only)
-            say(f"  {k}: hull's yaw moment in a drift {hp.training_info.get('drift_hull', 'not fitted')}")
+            _say_learned(say, f"  {k}: ", hp)
             _score(rows, data, protocol, hp, [arrays[k]])
     say(f"[{data}] sim_pretrain protocol: {len(sim_logs)} simulated drifts + own DP parts")
     own_dp = [a for a in arrays]
@@ -95,7 +95,15 @@ def run(data: str, logs, sim_logs, ens: EnsembleConfig, rows: list, say=print):
     # by fitting on the simulated logs whole and on the own logs' DP part (dp_only per log).
     sim_arrays = [as_log_arrays(x, hp.model.vessel) for x in sim_logs]
     hp.fit(sim_arrays + [_dp_part(a) for a in own_dp], dp_only=False)
+    _say_learned(say, "  ", hp)
     _score(rows, data, "sim_pretrain", hp, arrays)
+
+
+def _say_learned(say, prefix: str, hp):
+    """What the fit learned from the training logs' failures, and whether it was kept."""
+    say(f"{prefix}hull's yaw moment in a drift {hp.training_info.get('drift_hull', 'not fitted')}")
+    if "thrust_error_prior" in hp.training_info:
+        say(f"{prefix}thrust error learned at the stops {hp.training_info['thrust_error_prior']}")
 
 
 def _dp_part(a):
