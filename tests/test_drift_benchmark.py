@@ -144,7 +144,7 @@ def test_a_failure_is_never_scored_with_a_spread_calibrated_on_it(tmp_path):
     model = DynamicModel("gunnerus")
     logs = [as_log_arrays(physics_log(model, duration_s=900, t_shutdown_s=700, seed=s, current=(0.2, 1.0 + s),
                                       tau_ext_N=(2000.0, 1000.0, 0.0)), model.vessel) for s in range(4)]
-    hp = HybridPredictor(model.vessel, ensemble_config=TINY).fit(logs)
+    hp = HybridPredictor(model.vessel, ensemble_config=TINY, drift_hull=False).fit(logs)
     assert hp.training_info["calibration"]["after_stop"]["n_logs"] == 4
     _, per_log = _calibrate_after_stop(hp, logs, True, 0, 0, 20, 60.0, lambda m: None)
     errors = hp.after_stop_errors(logs)
@@ -158,7 +158,7 @@ def test_a_failure_is_never_scored_with_a_spread_calibrated_on_it(tmp_path):
     _, none = _calibrate_after_stop(hp, logs[:1], False, 0, 0, 20, 60.0, lambda m: None)
     assert none is None and "after_stop" in hp.calibration
     # three test logs leave two for each: too few, and no simulated losses asked for -> raw
-    hp3 = HybridPredictor(model.vessel, ensemble_config=TINY).fit(logs[:3])
+    hp3 = HybridPredictor(model.vessel, ensemble_config=TINY, drift_hull=False).fit(logs[:3])
     _, none = _calibrate_after_stop(hp3, logs[:3], True, 0, 0, 20, 60.0, lambda m: None)
     assert none is None and "after_stop" not in hp3.calibration
 

@@ -237,17 +237,17 @@ def test_fit_calibrates_the_spread_after_a_failure_on_the_training_logs_own_fail
 
     logs = [physics_log(model, duration_s=1000, t_shutdown_s=800, seed=s, current=(0.2, 2.0),
                         tau_ext_N=(2000.0, 1000.0, 0.0)) for s in (14, 15, 16)]
-    hp = HybridPredictor(model.vessel, ensemble_config=TINY).fit(logs)
+    hp = HybridPredictor(model.vessel, ensemble_config=TINY, drift_hull=False).fit(logs)
     assert "after_stop" in hp.calibration
     info = hp.training_info["calibration"]["after_stop"]
     assert info["n_logs"] == 3 and info["source"] == "the training logs' failures"
-    off = HybridPredictor(model.vessel, ensemble_config=TINY).fit(
+    off = HybridPredictor(model.vessel, ensemble_config=TINY, drift_hull=False).fit(
         logs, calibration=CalibrationConfig(after_stop_min_failures=0))
     assert "after_stop" not in off.calibration
     off.calibrate_after_stop(logs)
     for what in ("position", "heading"):
         np.testing.assert_allclose(off.calibration["after_stop"][what].scale, hp.calibration["after_stop"][what].scale)
-    two = HybridPredictor(model.vessel, ensemble_config=TINY).fit(logs[:2])
+    two = HybridPredictor(model.vessel, ensemble_config=TINY, drift_hull=False).fit(logs[:2])
     assert "after_stop" not in two.calibration
 
 
@@ -322,7 +322,8 @@ def test_hybrid_fit_checks_the_prior_learned_at_stops_on_left_out_failures(model
     learned prior, else the configured one. With fewer than three failures nothing can be
     checked and the configured prior is restored; with dp_only nothing is learned."""
     logs = _tunnel_deficit_logs(model, (32, 33, 34))
-    hp = HybridPredictor(model.vessel, ensemble_config=TINY).fit(logs, dp_only=False)
+    nets = EnsembleConfig(n_members=2, hidden=4, max_epochs=1, patience=1, seed=0)    # nets are off after a failure
+    hp = HybridPredictor(model.vessel, ensemble_config=nets, drift_hull=False).fit(logs, dp_only=False)
     info = hp.training_info["thrust_error_prior"]
     assert info["n_failures"] == 3
     pos, head = np.array(info["position_error_m"]), np.array(info["heading_error_deg"])
@@ -331,9 +332,9 @@ def test_hybrid_fit_checks_the_prior_learned_at_stops_on_left_out_failures(model
     np.testing.assert_allclose(hp.estimator.thrust_error_mean, want)
     np.testing.assert_allclose(info["learned_mean"], [-0.2, 0.0, 0.0], atol=0.06)
 
-    two = HybridPredictor(model.vessel, ensemble_config=TINY).fit(logs[:2], dp_only=False)
+    two = HybridPredictor(model.vessel, ensemble_config=nets, drift_hull=False).fit(logs[:2], dp_only=False)
     assert two.training_info["thrust_error_prior"]["n_failures"] == 2
     assert not two.training_info["thrust_error_prior"]["kept"]
     np.testing.assert_array_equal(two.estimator.thrust_error_mean, 0.0)
     np.testing.assert_array_equal(two.estimator.thrust_error_std, 0.2)
-    assert "thrust_error_prior" not in HybridPredictor(model.vessel, ensemble_config=TINY).fit(logs).training_info
+    assert "thrust_error_prior" not in HybridPredictor(model.vessel, ensemble_config=nets, drift_hull=False).fit(logs).training_info
