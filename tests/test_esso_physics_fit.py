@@ -1,0 +1,42 @@
+"""benchmarks/esso_physics_fit.py: the identified coefficients scale the published ones."""
+
+import tomllib
+
+import numpy as np
+import pytest
+
+from conftest import load_benchmark
+from hybridship.vessel import VesselFileError, load_vessel, vessels_dir
+
+
+@pytest.fixture(scope="module")
+def pf():
+    return load_benchmark("esso_physics_fit")
+
+
+@pytest.fixture(scope="module")
+def base():
+    return tomllib.loads((vessels_dir() / "esso_osaka_model.toml").read_text())
+
+
+def test_zero_factors_give_the_published_vessel(pf, base):
+    assert pf.vessel_with_factors(base, np.zeros(len(pf.COEFFICIENTS))) == load_vessel("esso_osaka_model")
+
+
+def test_each_factor_scales_its_own_coefficient_only(pf, base):
+    theta = np.zeros(len(pf.COEFFICIENTS))
+    theta[pf.COEFFICIENTS.index("thrusters.0.wake_fraction")] = np.log(1.5)
+    theta[pf.COEFFICIENTS.index("damping.nonlinear.mmg.N_r")] = np.log(0.5)
+    v = pf.vessel_with_factors(base, theta)
+    v0 = load_vessel("esso_osaka_model")
+    assert v.thrusters[0].wake_fraction == pytest.approx(1.5 * v0.thrusters[0].wake_fraction)
+    assert v.damping.nonlinear.mmg.N_r == pytest.approx(0.5 * v0.damping.nonlinear.mmg.N_r)
+    assert v.rudders[0] == v0.rudders[0] and v.rigid_body == v0.rigid_body
+    assert base["thrusters"][0]["wake_fraction"] == v0.thrusters[0].wake_fraction   # the parsed file untouched
+
+
+def test_a_factor_outside_the_allowed_range_is_a_vessel_file_error(pf, base):
+    theta = np.zeros(len(pf.COEFFICIENTS))
+    theta[pf.COEFFICIENTS.index("thrusters.0.wake_fraction")] = np.log(3.0)   # wake fraction 1.2
+    with pytest.raises(VesselFileError, match="wake_fraction"):
+        pf.vessel_with_factors(base, theta)
