@@ -8,8 +8,8 @@ splits the benchmark's *training* runs (``out/esso-osaka/split/train``) again, s
 ``benchmarks/esso_error_sources.py`` does (the test runs play no part). On the fitting runs
 it identifies twelve coefficients of ``vessels/esso_osaka_model.toml`` by a free-run fit:
 each is the published value times ``exp(theta)``, and ``theta`` minimises the mean 30-s
-forecast error of the physics alone, ``distance [m] + (L/2) |heading error| [rad]`` with
-L = 3 m, from a start every 5 s with the logged commands and the wind forecast fitted on
+forecast error of the physics alone, ``distance [m] + (L_pp/2) |heading error| [rad]``
+(L_pp = 3 m), from a start every 5 s with the logged commands and the wind forecast fitted on
 the fitting runs (scipy's Powell method, 600 evaluations; the MMG coefficients carrying
 scale effects: wake fraction, flow straightening on both sides, slipstream factor, a_H,
 rudder area, N'_r, Y'_v, the straight-ahead resistance, the yaw radius of gyration and the
@@ -102,6 +102,9 @@ def main(argv=None) -> int:
         return forecast_errors(lambda a, st, h: p.forecast(a, st, horizon_s=h, commands="known"), arrays, rows,
                                steps)
 
+    # the heading error in metres as the multi-step loss weighs it (MultiStepConfig.heading_length_m)
+    half_length_m = 0.5 * v0.particulars.L_pp_m
+
     def objective(theta):
         try:
             v = vessel_with_factors(base, theta)
@@ -109,7 +112,7 @@ def main(argv=None) -> int:
             return 10.0
         p = DynamicPredictor(v, residual_config=cfg.residual, wind_forecast=wf)
         e = np.concatenate([errors(p, a, 5.0)[:, -1] for a in fit_logs])
-        return float(e[:, 3].mean() + 1.5 * np.radians(e[:, 2]).mean())
+        return float(e[:, 3].mean() + half_length_m * np.radians(e[:, 2]).mean())
 
     res = minimize(objective, np.zeros(len(COEFFICIENTS)), method="Powell",
                    options=dict(maxfev=args.evaluations, xtol=0.02, ftol=1e-4))
