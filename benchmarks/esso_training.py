@@ -16,7 +16,8 @@ velocities and accelerations) unless their name says otherwise:
 ``one_step`` / ``multi_step`` (training mode), ``_h<s>``, ``_b<n>``, ``_i<n>``, ``_v<n>``
 (multi-step horizon, batch of starts, iterations, validation starts; otherwise
 ``MultiStepConfig()``), ``_m<n>`` / ``_sd<n>`` (ensemble members / seed; otherwise the
-benchmark's), ``+cmd`` (all command-aware features added),
+benchmark's), ``+cmd`` (all command-aware features added), ``+mem`` / ``+mem<s>`` (the command-memory
+features added, with the default time constant or ``<s>`` seconds),
 ``_abs`` (absolute-error loss), ``_lead`` (loss weighted by lead time), ``_hl<m>`` (heading
 length of the loss), ``_c<s>`` (curriculum from a ``<s>``-second horizon),
 ``+rate`` (only the command rates added), ``+cg`` (command-regime guard; off otherwise, whatever
@@ -80,7 +81,7 @@ def variants(cfg, names):
     """Unfitted hybrids by variant name."""
     from hybridship.forecast_inputs.wind import HELD_WIND
     from hybridship.predictors import HybridPredictor
-    from hybridship.residual.features import ALL_FEATURES
+    from hybridship.residual.features import ALL_FEATURES, COMMAND_FEATURES, MEMORY_FEATURES
 
     from hybridship.residual.multistep import MultiStepConfig
 
@@ -129,11 +130,16 @@ def variants(cfg, names):
                 kw["ensemble_config"] = replace(kw["ensemble_config"], **{field: int(found[0])})
         kw["wind_forecast"] = "fit" if "+wind" in name else HELD_WIND
         if "+cmd" in name:
-            extra = tuple(f for f in ALL_FEATURES[9:] if f not in base_rc.features)
+            extra = tuple(f for f in COMMAND_FEATURES if f not in base_rc.features)
             kw["residual_config"] = replace(base_rc, features=tuple(base_rc.features) + extra)
         if "+rate" in name:
             kw["residual_config"] = replace(base_rc, features=tuple(base_rc.features)
-                                            + tuple(f for f in ALL_FEATURES[9:] if "rate" in f))
+                                            + tuple(f for f in COMMAND_FEATURES if "rate" in f))
+        mem = re.search(r"\+mem(\d+(?:\.\d+)?)?", name)
+        if mem:
+            rc = kw["residual_config"]
+            kw["residual_config"] = replace(rc, features=tuple(rc.features) + MEMORY_FEATURES,
+                                            **({"command_memory_s": float(mem.group(1))} if mem.group(1) else {}))
         out[name] = HybridPredictor("esso_osaka_model", **kw)
     return out
 

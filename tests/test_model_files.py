@@ -19,6 +19,7 @@ import pytest
 
 from hybridship.predictors import HybridPredictor, ModelFileError
 from hybridship.residual.ensemble import EnsembleConfig
+from hybridship.residual.features import ResidualConfig
 from hybridship.sim.synthetic import physics_log
 from hybridship.vessel import vessel_from_dict
 
@@ -121,7 +122,7 @@ def test_missing_file_is_a_model_file_error(tmp_path):
 def test_incompatible_format_version_is_refused(saved, tmp_path):
     for version in (0, 99, "1", None):
         p = _rewrite(saved, tmp_path, meta_change=lambda m: m.update(format_version=version), name=f"v{version}.npz")
-        _refused(p, rf"model format version {version} is not supported \(this hybridship reads versions 7, 8, 9, 10, 11\)")
+        _refused(p, rf"model format version {version} is not supported \(this hybridship reads versions 7, 8, 9, 10, 11, 12\)")
 
 
 def test_an_older_format_says_retrain(saved, tmp_path):
@@ -387,3 +388,17 @@ def test_hull_yaw_moment_in_a_drift_is_checked_and_older_files_have_none(saved, 
                       name="flag.npz"), "drift_hull: expected true or false")
     _refused(_rewrite(saved, tmp_path, meta_change=lambda m: m.pop("drift_yaw_uv_rad_per_m2"), restamp=True,
                       name="nok.npz"), "damaged model metadata.*drift_yaw_uv_rad_per_m2")
+
+
+def test_a_version_11_file_reads_without_command_memory(saved, tmp_path):
+    """Version 11 had no command-memory features: its residual config reads with the default
+    time constant, which its features do not use; a version-12 file without it is damaged."""
+    def as_v11(meta):
+        meta["format_version"] = 11
+        meta["residual_config"].pop("command_memory_s")
+
+    back = HybridPredictor.load(_rewrite(saved, tmp_path, meta_change=as_v11, name="v11.npz"))
+    assert back.residual_config.command_memory_s == ResidualConfig().command_memory_s
+    assert not back.residual_config.uses_memory_features
+    v12 = _rewrite(saved, tmp_path, meta_change=lambda m: m["residual_config"].pop("command_memory_s"), name="v12.npz")
+    _refused(v12, r"damaged model metadata .*command_memory_s")

@@ -9,7 +9,8 @@ from hybridship.physics.model import DynamicModel
 from hybridship.predictors import HybridPredictor, as_log_arrays
 from hybridship.residual.calibration import CalibrationConfig
 from hybridship.residual.ensemble import EnsembleConfig
-from hybridship.residual.features import ALL_FEATURES, COMMAND_FEATURES, PAPER_FEATURES, ResidualConfig, prepare_log
+from hybridship.residual.features import (ALL_FEATURES, COMMAND_FEATURES, MEMORY_FEATURES, PAPER_FEATURES, ResidualConfig,
+                                         prepare_log)
 from hybridship.residual.multistep import MultiStepConfig, _torch_physics_step
 from hybridship.sim.synthetic import physics_log
 
@@ -17,7 +18,8 @@ TINY = EnsembleConfig(n_members=2, hidden=8, max_epochs=20, patience=5, seed=0)
 
 
 def test_feature_names_keep_the_papers_order_and_append_the_command_ones():
-    assert ALL_FEATURES[:9] == PAPER_FEATURES and ALL_FEATURES[9:] == COMMAND_FEATURES
+    assert ALL_FEATURES[:9] == PAPER_FEATURES and ALL_FEATURES[9:16] == COMMAND_FEATURES
+    assert ALL_FEATURES[16:] == MEMORY_FEATURES
     assert ResidualConfig().features == PAPER_FEATURES
 
 
@@ -154,3 +156,61 @@ def test_zero_output_start_begins_at_the_physics_rollout():
     np.testing.assert_allclose(hp.ensemble.predict_members(np.zeros((1, 6))), before)
     with pytest.raises(ValueError, match="output_init"):
         MultiStepConfig(output_init="random")
+
+
+def test_command_memory_is_the_low_pass_minus_the_command():
+    """A step ``dx`` leaves ``-dx exp(-t / T)`` (the low-pass exact for commands held over a
+    step); an azimuth turning through 180 deg is a small step, not a jump of 2 pi."""
+    from hybridship.residual.features import command_memory
+
+    dt, T = 0.1, 10.0
+    steps = np.zeros((2, 50, 2))
+    steps[0, :, 0] = 0.5                                     # rpm steps from 0 to 0.5
+    steps[1, :, 1] = -np.pi + 0.05                            # angle from pi - 0.05 across pi
+    m = command_memory(steps, np.array([[0.0, 0.0], [0.0, np.pi - 0.05]]), np.zeros((2, 2)), dt, T)
+    lead = (np.arange(50) + 1) * dt
+    np.testing.assert_allclose(m[0, :, 0], -0.5 * np.exp(-lead / T), rtol=1e-12)
+    np.testing.assert_allclose(m[1, :, 1], -0.1 * np.exp(-lead / T), rtol=1e-9)
+    # a memory carried in from before the start decays on its own
+    m0 = command_memory(np.zeros((1, 20, 2)), np.zeros((1, 2)), np.array([[0.2, -0.1]]), dt, T)
+    np.testing.assert_allclose(m0[0], np.array([0.2, -0.1]) * np.exp(-lead[:20, None] / T), rtol=1e-12)
+
+
+def test_command_memory_of_a_forecast_matches_the_training_rows(tmp_path):
+    """With the logged commands known, every step of a forecast sees the memory that
+    prepare_log gives the row it predicts (the memory runs on from the log at the start);
+    the model file keeps the time constant; a rollout without the memory is refused."""
+    m = DynamicModel("gunnerus")
+    logs = [physics_log(m, seed=s, duration_s=300.0, t_shutdown_s=None, current=(0.3, 1.0)) for s in (5, 6)]
+    rc = ResidualConfig(features=PAPER_FEATURES[:6] + MEMORY_FEATURES, bias_window_s=0.0, command_memory_s=4.0)
+    hp = HybridPredictor(m.vessel, residual_config=rc, ensemble_config=TINY,
+                         calibration_config=CalibrationConfig(fraction=0.0)).fit(logs)
+    from hybridship.predictors.forecast_setup import _forecast_setup
+    from hybridship.residual.features import command_scales, log_command_memory
+
+    a = as_log_arrays(logs[0], m.vessel)
+    st = _forecast_setup(hp.model, rc, a, [100.0, 201.0], 20.0, commands="known")
+    mem = hp._command_memory(st)
+    prep = prepare_log(m, st.arrays, rc)
+    rows = st.idx[:, None] + np.arange(st.H)[None]
+    assert np.abs(prep.command_memory[rows]).max() > 1e-3            # the commands move
+    np.testing.assert_allclose(mem, prep.command_memory[rows], atol=1e-12)
+    np.testing.assert_allclose(prep.features(rows[:, 0] + 1)[:, 6:], prep.command_memory[rows[:, 0]])
+    back = HybridPredictor.load(hp.save(tmp_path / "m.npz"))
+    assert back.residual_config.command_memory_s == 4.0
+    np.testing.assert_allclose(back.forecast(a, [100.0], 20.0, commands="known").eta,
+                               hp.forecast(a, [100.0], 20.0, commands="known").eta)
+    with pytest.raises(ValueError, match="command_memory"):
+        hp.rollout(st.eta0, st.nu0, np.zeros((2, 3)), np.zeros((2, 3)), st.rpm, st.az, st.wind, st.H, st.dt)
+    assert hp.forecast(a, [100.0], 0.3).eta.shape == (1, 1, 3)          # shorter than one step
+    # after a failure a forecast takes the rpm as 0 while the logged shaft speed runs down:
+    # the memory it carries in from the log is that of the commands it uses
+    failed = physics_log(m, seed=5, duration_s=300.0, t_shutdown_s=200.0)
+    failed.loc[failed.dp_active == 0, "tunnel_rpm"] = 50.0
+    fa = as_log_arrays(failed, m.vessel)
+    st = _forecast_setup(hp.model, rc, fa, [202.0], 20.0, commands="known")
+    stopped, _ = log_command_memory(fa, 1.0, 4.0, **command_scales(m, m.vessel.rotatable), stop_after_failure=True)
+    as_logged, _ = log_command_memory(fa, 1.0, 4.0, **command_scales(m, m.vessel.rotatable))
+    rows = st.idx[0] + np.arange(st.H)
+    np.testing.assert_allclose(hp._command_memory(st)[0], stopped[rows], atol=1e-12)
+    assert np.abs(as_logged[rows] - stopped[rows]).max() > 0.01       # the run-down matters

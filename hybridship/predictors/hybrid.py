@@ -23,7 +23,8 @@ from ..logs.io import LogArrays
 from ..physics.model import DynamicModel
 from ..residual.calibration import CalibrationConfig, fit_spread_scale
 from ..residual.ensemble import EnsembleConfig, MLPEnsemble, fit_ensemble
-from ..residual.features import COMMAND_FEATURES, ResidualConfig, command_feature_columns, command_scales, prepare_log
+from ..residual.features import (ALL_FEATURES, MEMORY_FEATURES, ResidualConfig, command_feature_columns,
+                                 command_memory, command_scales, log_command_memory, prepare_log)
 from ..residual.load_variability import held_load_rows, held_load_spread, unexplained_load_std_windows
 from ..residual.environment import (EnvironmentConfig, EnvironmentEstimator, current_input,
                                     environment_accel, thrust_error_prior_carries_over)
@@ -40,6 +41,8 @@ from .result import ForecastResult
 
 __all__ = ["AFTER_STOP", "ENVIRONMENT_SOURCES", "HybridPredictor"]
 
+#: First column of the command-memory features in the full feature vector.
+_MEMORY_COL = ALL_FEATURES.index(MEMORY_FEATURES[0])
 #: Key of the spread calibration for forecasts that start after a failure
 #: (:meth:`HybridPredictor.calibrate_after_stop`).
 AFTER_STOP = "after_stop"
@@ -461,7 +464,7 @@ class HybridPredictor:
         eta, _, _, _ = self.rollout(
             eta0, nu0, dev0, bias0, _tile_starts(st.rpm, K), _tile_starts(st.az, K), _tile_starts(st.wind, K), st.H,
             st.dt, substeps=st.substeps, current=current, accel_ext=acc_ext, nets_weight=_tile_starts(weight, K),
-            guard=self.use_guard, drift_yaw_uv=np.repeat(ks, S))
+            guard=self.use_guard, drift_yaw_uv=np.repeat(ks, S), command_memory=_tile_starts(self._command_memory(st), K))
         return np.abs(wrap_pi(eta[:, 1:, 2].reshape(K, S, st.H) - truth[None])).mean(axis=(1, 2))
 
     def _fit_wind_forecast(self, logs, cuts, cal: CalibrationConfig, dp_only: bool):
@@ -604,7 +607,7 @@ class HybridPredictor:
         def tile(x):
             return _tile_starts(x, N)
 
-        per_start = {k: tile(rollout_kw.pop(k)) for k in ("nets_weight", "drift_yaw_uv")}
+        per_start = {k: tile(rollout_kw.pop(k)) for k in ("nets_weight", "drift_yaw_uv", "command_memory")}
         eta_w, _, _, _ = self.rollout(tile(eta0), tile(nu0), tile(dev0), np.tile(bias0, (1, N, 1)), tile(st.rpm),
                                       tile(st.az), wind, H, st.dt, current=tile(current), accel_ext=tile(acc_ext),
                                       **per_start, **rollout_kw)
@@ -737,7 +740,7 @@ class HybridPredictor:
             eta0, nu0, current, acc_ext = st.eta0, st.nu0, None, None
         rollout_kw = dict(guard=self.use_guard if guard is None else guard, substeps=st.substeps, nets=nets,
                           nets_weight=self._after_stop_weight(st, nets_after_stop),
-                          drift_yaw_uv=self._drift_yaw_uv(st))
+                          drift_yaw_uv=self._drift_yaw_uv(st), command_memory=self._command_memory(st))
         eta, nu, std, wgt = self.rollout(eta0, nu0, dev0, bias0, st.rpm, st.az, st.wind, st.H, st.dt,
                                          current=current, accel_ext=acc_ext, **rollout_kw)
         if self.wind_samples and self.wind_error_paths is not None and st.H > 0:
@@ -987,15 +990,40 @@ class HybridPredictor:
         _, parts, _ = self.model.acceleration(eta, nu, rpm=rpm, azimuth_rad=az, wind=wind, return_parts=True)
         return self.thrust_regime.weight(parts[:, 1] @ np.linalg.inv(self.model.mass_matrix).T)
 
+    def _command_memory(self, st) -> np.ndarray | None:
+        """The command-memory features (S, H, 2) of the steps of the forecasts of ``st``, from each
+        start's logged memory and the commands the forecast uses (held or known); None when the
+        nets do not use them."""
+        rc = self.residual_config
+        if not rc.uses_memory_features:
+            return None
+        sc = command_scales(self.model, self.model.vessel.rotatable)
+        a, idx, ch = st.arrays, st.idx, sc["angle_channel"]
+
+        def rel(rpm, az):               # (..., K) commands -> (..., 2) [rpm / max rpm, angle_rad]
+            return np.stack([rpm[..., 0] / sc["rpm_scale"], az[..., ch] if ch is not None else 0 * rpm[..., 0]], -1)
+
+        logged, filled = log_command_memory(a, st.dt, rc.command_memory_s, **sc,
+                                            stop_after_failure=self.stop_after_failure)
+        before = np.maximum(idx - 1, 0)
+        first = (idx == 0) | (a.segment_id[before] != a.segment_id[idx])
+        steps = rel(np.broadcast_to(st.rpm, (idx.size, max(st.H, 1), st.rpm.shape[2])),
+                    np.broadcast_to(st.az, (idx.size, max(st.H, 1), st.az.shape[2])))
+        previous = np.where(first[:, None], steps[:, 0], filled[before])
+        memory0 = np.where(first[:, None], 0.0, logged[before])
+        return command_memory(steps, previous, memory0, st.dt, rc.command_memory_s)
+
     def rollout(self, eta0, nu0, dev0, bias0_ned, rpm, az, wind, n_steps: int, dt_s: float, *, guard: bool = True,
                 substeps: int = 1, current=None, accel_ext=None, nets: bool = True, nets_weight=None,
-                drift_yaw_uv=None):
+                drift_yaw_uv=None, command_memory=None):
         """Batched hybrid rollout from states (S, 3), previous residual deviations (S, 3),
         biases (S, 3) or per member (E, S, 3) (surge/sway in NED), commands held (S, 1, K) or
         per step (S, n_steps, K), wind held (S, 1, 2) or per step (S, n_steps, 2), and optionally a held current
         ``[speed_m_s, dir_to_rad]`` (S, 1, 2) and a body-frame extra acceleration (S, 1, 3)
         for the physics, and optionally per start the hull's yaw coefficient in a drift
         ``drift_yaw_uv`` (S,) [rad/m^2] (:func:`_with_drift_yaw`). ``nets=False`` needs no ensemble.
+        ``command_memory`` (S, >= n_steps, 2): the command-memory features of the steps
+        (:meth:`_command_memory`), needed when the nets use them.
 
         Every step: the physics advances the ensemble-mean state one step (RK4, through
         :meth:`DynamicModel.step_unchecked` with the extra acceleration ``accel_ext``) and
@@ -1017,18 +1045,14 @@ class HybridPredictor:
         zeros3 = np.zeros((S, 1, 3))
         acc_phys = zeros3 if accel_ext is None else np.ascontiguousarray(accel_ext, dtype=float)
         current = np.zeros((S, 1, 2)) if current is None else np.ascontiguousarray(current, dtype=float)
-        eta = np.empty((S, n_steps + 1, 3))
-        nu = np.empty((S, n_steps + 1, 3))
-        std = np.zeros((S, n_steps + 1, 3))
+        eta, nu, std = np.empty((S, n_steps + 1, 3)), np.empty((S, n_steps + 1, 3)), np.zeros((S, n_steps + 1, 3))
         wgt = np.ones((S, n_steps + 1))
         eta[:, 0], nu[:, 0] = eta0, nu0
         bias0_ned = np.broadcast_to(bias0_ned, (E, S, 3))
-        per_step = rpm.shape[1] > 1
-        if per_step and (rpm.shape[1] < n_steps or az.shape[1] < n_steps):
-            raise ValueError(f"rpm, az: per-step commands need {n_steps} steps, got {rpm.shape[1]}, {az.shape[1]}")
-        wind_per_step = wind.shape[1] > 1
-        if wind_per_step and wind.shape[1] < n_steps:
-            raise ValueError(f"wind: per-step wind needs {n_steps} steps, got {wind.shape[1]}")
+        use_mem = self.residual_config.uses_memory_features and command_memory is not None
+        per_step, wind_per_step = _check_rollout_steps(rpm, az, wind, command_memory,
+                                                       self.residual_config.uses_memory_features and nets, S, n_steps,
+                                                       self.residual_config.features)
         thrust_guard = guard and self.thrust_regime is not None
         w_thrust = np.ones(S)
         w_start = np.ones(S) if nets_weight is None else np.asarray(nets_weight, dtype=float)
@@ -1037,14 +1061,13 @@ class HybridPredictor:
             w_thrust = self._thrust_weight(eta0, nu0, rpm[:, 0], az[:, 0], wind[:, 0])
             wgt[:, 0] = w_thrust * w_start
         r_prev = np.broadcast_to(dev0, (E, S, 3)).copy()
-        d_nu = np.zeros((E, S, 3))        # member velocity deviations from the mean
-        d_eta = np.zeros((E, S, 3))       # member position deviations (NED)
+        d_nu, d_eta = np.zeros((E, S, 3)), np.zeros((E, S, 3))   # members' velocity and NED position deviations
         model = self.model
         wind_s, current_s, acc_s = (np.ascontiguousarray(np.broadcast_to(a[:, 0], (S, a.shape[-1])))
                                     for a in (wind, current, acc_phys))
         zeros_s = np.zeros((S, 3))
         use_cmd = self.residual_config.uses_command_features
-        feats = np.zeros((E, S, 9 + len(COMMAND_FEATURES)))
+        feats = np.zeros((E, S, len(ALL_FEATURES)))
         cmd_guard = guard and self.command_regime is not None
         scales = command_scales(self.model, self.model.vessel.rotatable)
         for j in range(n_steps):
@@ -1065,9 +1088,11 @@ class HybridPredictor:
             feats[:, :, 6:9] = r_prev
             if use_cmd:
                 jp = max(j - 1, 0) if per_step else 0
-                feats[:, :, 9:] = command_feature_columns(
+                feats[:, :, 9:_MEMORY_COL] = command_feature_columns(
                     nu_1, eta_1[:, 2], rpm_j[:, 0], rpm[:, jp], az_j[:, 0], az[:, jp], wind_s, dt_s,
                     scales["rpm_scale"], scales["angle_channel"])
+            if use_mem:
+                feats[:, :, _MEMORY_COL:] = command_memory[:, j]
             X = feats[..., fidx]
             r = ens.predict_members(X) if nets else np.zeros((E, S, 3))     # (E, S, 3)
             if guard:
@@ -1117,6 +1142,24 @@ class HybridPredictor:
             vessel that differs from the one the model was trained for.
         """
         return load_model(cls, path, vessel)
+
+
+def _check_rollout_steps(rpm, az, wind, command_memory, use_memory: bool, S: int, n_steps: int,
+                         features) -> tuple[bool, bool]:
+    """Whether a rollout's commands and wind are per step (else held), after checking that
+    per-step inputs cover ``n_steps``, and the command memory too when the nets use it."""
+    per_step = rpm.shape[1] > 1
+    if per_step and (rpm.shape[1] < n_steps or az.shape[1] < n_steps):
+        raise ValueError(f"rpm, az: per-step commands need {n_steps} steps, got {rpm.shape[1]}, {az.shape[1]}")
+    wind_per_step = wind.shape[1] > 1
+    if wind_per_step and wind.shape[1] < n_steps:
+        raise ValueError(f"wind: per-step wind needs {n_steps} steps, got {wind.shape[1]}")
+    shape = None if command_memory is None else np.shape(command_memory)
+    if (use_memory and shape is None) or (shape is not None and (
+            len(shape) != 3 or shape[0] != S or shape[1] < n_steps or shape[2] != len(MEMORY_FEATURES))):
+        raise ValueError(f"command_memory: the nets use {features}, which need the command memory of every step, "
+                         f"shape ({S}, {n_steps}, {len(MEMORY_FEATURES)}); got {shape}")
+    return per_step, wind_per_step
 
 
 def _training_masks(logs, cuts, dp_only: bool) -> list:

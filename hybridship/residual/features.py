@@ -39,8 +39,9 @@ from dataclasses import dataclass, field
 from typing import Annotated, Literal
 
 import numpy as np
+import pandas as pd
 from pydantic import Field, field_validator
-from scipy.signal import savgol_coeffs, savgol_filter
+from scipy.signal import lfilter, savgol_coeffs, savgol_filter
 
 from ..config import Float, Int, config_dataclass
 from ..logs.io import LogArrays
@@ -55,10 +56,22 @@ from ..logs.io import LogArrays
 COMMAND_FEATURES = ("rpm_main_rel", "rpm_main_rate_rel_s", "angle_main_rad", "angle_main_rate_rad_s",
                     "wind_rel_u_m_s", "wind_rel_v_m_s", "drift_angle_rad")
 
+#: Optional command-memory features: how the main propeller's rpm (over its maximum) and
+#: the first rotatable actuator's angle [rad] have moved over the last
+#: ``ResidualConfig.command_memory_s``, as the first-order low-pass of the command minus the
+#: command (zero for a command held that long). The state tells the nets how the ship
+#: moves, not how long a command has acted on it (the rudder's history in a zigzag); the
+#: commands are those of the step being predicted, as for :data:`COMMAND_FEATURES`.
+MEMORY_FEATURES = ("rpm_main_memory_rel", "angle_main_memory_rad")
+
+#: Longest time constant of the command memory [s]: a third of the log a forecast reads
+#: before its start (:data:`hybridship.predictors.forecast_setup.FORECAST_HISTORY_S`).
+MAX_COMMAND_MEMORY_S = 600.0
+
 #: Every feature the hybrid can use, in a fixed order. ``_hat`` = model one-step prediction.
 ALL_FEATURES = ("u_hat_m_s", "v_hat_m_s", "r_hat_rad_s",
                 "u_dot_hat_m_s2", "v_dot_hat_m_s2", "r_dot_hat_rad_s2",
-                "res_u_prev_m_s2", "res_v_prev_m_s2", "res_r_prev_rad_s2") + COMMAND_FEATURES
+                "res_u_prev_m_s2", "res_v_prev_m_s2", "res_r_prev_rad_s2") + COMMAND_FEATURES + MEMORY_FEATURES
 
 #: The paper's feature set (sec. 3.3): model-predicted velocities and accelerations plus
 #: the previous residual.
@@ -96,6 +109,11 @@ class ResidualConfig:
         Length of the residual blocks whose means spread the ensemble members'
         biases [s] (the forecast horizon is a good choice: the spread then reflects how much
         a one-minute mean of the unknown force varies around the long mean).
+    command_memory_s : float
+        Time constant of the low-pass behind :data:`MEMORY_FEATURES` [s], at most
+        ``MAX_COMMAND_MEMORY_S`` (a forecast starts the memory at the first row it reads,
+        ``FORECAST_HISTORY_S`` before its start; after a few time constants that start is
+        forgotten).
     """
 
     features: tuple[str, ...] = PAPER_FEATURES
@@ -106,6 +124,7 @@ class ResidualConfig:
     bias_window_s: Annotated[Float, Field(ge=0)] = 900.0
     bias_frame: Literal["ned", "body"] = "ned"
     bias_block_s: Annotated[Float, Field(gt=0)] = 60.0
+    command_memory_s: Annotated[Float, Field(gt=0, le=MAX_COMMAND_MEMORY_S)] = 10.0
 
     @field_validator("features")
     @classmethod
@@ -123,6 +142,11 @@ class ResidualConfig:
     def uses_command_features(self) -> bool:
         """Whether any feature of :data:`COMMAND_FEATURES` is selected."""
         return any(f in COMMAND_FEATURES for f in self.features)
+
+    @property
+    def uses_memory_features(self) -> bool:
+        """Whether any feature of :data:`MEMORY_FEATURES` is selected."""
+        return any(f in MEMORY_FEATURES for f in self.features)
 
 
 def command_feature_columns(nu_hat, psi_rad, rpm, rpm_prev, az, az_prev, wind, dt_s: float,
@@ -159,6 +183,61 @@ def command_feature_columns(nu_hat, psi_rad, rpm, rpm_prev, az, az_prev, wind, d
     vrw = nu_hat[..., 1] + V * lib.sin(d)
     drift = lib.atan2(nu_hat[..., 1], lib.abs(nu_hat[..., 0]))
     return lib.cat([t(cmd, dtype=nu_hat.dtype), lib.stack([urw, vrw, drift], dim=-1)], dim=-1)
+
+
+def command_memory(commands: np.ndarray, previous: np.ndarray, memory0: np.ndarray, dt_s: float,
+                   time_constant_s: float) -> np.ndarray:
+    """The :data:`MEMORY_FEATURES` over steps: low-passed commands minus the commands.
+
+    With ``y`` the first-order low-pass of a command ``x`` (time constant ``T``, exact for a
+    command held over each step), the memory ``m = y - x`` obeys
+    ``m_j = exp(-dt / T) (m_{j-1} - (x_j - x_{j-1}))``: a command that steps by ``dx`` leaves
+    ``-dx exp(-t / T)``. ``m_j`` is the low-pass at the end of step ``j`` (the command ``x_j``
+    held over it) minus ``x_j``: the memory of the step being predicted. Angle increments are
+    wrapped to [-pi, pi), so an azimuth that turns through 180 deg is one small step, not a
+    jump.
+
+    Parameters
+    ----------
+    commands : ndarray, shape (S, n, 2)
+        ``[rpm / max rpm, angle_rad]`` of steps ``0 .. n-1``.
+    previous : ndarray, shape (S, 2)
+        The commands of the step before step 0.
+    memory0 : ndarray, shape (S, 2)
+        The memory at the step before step 0 (zeros: held long enough).
+    dt_s, time_constant_s : float
+        Step and low-pass time constant [s].
+
+    Returns
+    -------
+    ndarray, shape (S, n, 2)
+    """
+    dx = np.diff(np.concatenate([np.asarray(previous, dtype=float)[:, None], commands], axis=1), axis=1)
+    dx[..., 1] = (dx[..., 1] + np.pi) % (2 * np.pi) - np.pi
+    c = np.exp(-dt_s / time_constant_s)
+    # m_j = c m_{j-1} - c dx_j: one first-order recursion along the steps, from memory0
+    return lfilter([-c], [1.0, -c], dx, axis=1, zi=(c * np.asarray(memory0, dtype=float))[:, None, :])[0]
+
+
+def log_command_memory(arrays: LogArrays, dt_s: float, time_constant_s: float, rpm_scale: float,
+                       angle_channel: int | None, stop_after_failure: bool = False) -> tuple[np.ndarray, np.ndarray]:
+    """The :data:`MEMORY_FEATURES` at every row of a log (N, 2), row by row with its own
+    commands: zero at the first row of each segment, a missing command holds the last valid
+    one (0 before the first); row ``i`` is the memory of the step from row ``i`` to ``i + 1``.
+    With ``stop_after_failure`` the rpm is 0 where station keeping is off (``dp_active == 0``),
+    as a forecast takes it. Returns ``(memory, commands)``, the commands as used
+    (N, 2: ``[rpm / max rpm, angle_rad]``)."""
+    cmd = np.zeros((len(arrays.time_s), 2))
+    cmd[:, 0] = arrays.rpm[:, 0] / rpm_scale if arrays.rpm.shape[1] else 0.0
+    if stop_after_failure:
+        cmd[arrays.dp_active == 0, 0] = 0.0
+    if angle_channel is not None:
+        cmd[:, 1] = arrays.azimuth_rad[:, angle_channel]
+    out = np.zeros_like(cmd)
+    for sl in arrays.segments:
+        cmd[sl] = pd.DataFrame(cmd[sl]).ffill().fillna(0.0).to_numpy()
+        out[sl] = command_memory(cmd[None, sl], cmd[sl][:1], np.zeros((1, 2)), dt_s, time_constant_s)[0]
+    return out, cmd
 
 
 def _window(window_s: float, dt_s: float, polyorder: int) -> int:
@@ -221,6 +300,7 @@ class PreparedLog:
     env_body: np.ndarray | None = None
     rpm_scale: float = 1.0
     angle_channel: int | None = None
+    command_memory: np.ndarray | None = None
 
     def bias_body(self, rows: np.ndarray, psi_rad=None) -> np.ndarray:
         """The bias known at ``rows`` (from data up to and including them) in the body frame.
@@ -266,6 +346,10 @@ class PreparedLog:
                                                  a.wind[rows - 1], self.dt_s, self.rpm_scale, self.angle_channel))
         else:
             parts.append(np.zeros((rows.size, len(COMMAND_FEATURES))))
+        if self.config.uses_memory_features:
+            parts.append(self.command_memory[rows - 1])
+        else:
+            parts.append(np.zeros((rows.size, len(MEMORY_FEATURES))))
         return np.concatenate(parts, axis=1)
 
     def trainable_rows(self, mask: np.ndarray | None = None) -> np.ndarray:
@@ -420,10 +504,12 @@ def prepare_log(model, arrays: LogArrays, config: ResidualConfig = ResidualConfi
     nu_hat_c, _ = one_step(nu_c)
     residual = (nu_s - nu_hat) / dt
     residual_c = (nu_c - nu_hat_c) / dt
+    scales = command_scales(model, arrays.rotatable)
+    memory = log_command_memory(arrays, dt, config.command_memory_s, **scales)[0] if config.uses_memory_features else None
     return PreparedLog(arrays=arrays, dt_s=dt, nu_s=nu_s, nu_dot=nu_dot, nu_hat=nu_hat, nu_dot_hat=nu_dot_hat,
                        residual=residual, nu_c=nu_c, residual_c=residual_c,
                        bias_ned=causal_bias(residual_c, arrays, dt, config), thrust_acc=thrust_acc,
-                       config=config, **command_scales(model, arrays.rotatable))
+                       config=config, command_memory=memory, **scales)
 
 
 def command_scales(model, rotatable) -> dict:

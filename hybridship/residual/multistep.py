@@ -139,6 +139,9 @@ class Starts:
     is_val : ndarray of bool, shape (S,)
         Validation starts.
     dt_s : float
+    memory : ndarray, shape (S, H, 2), optional
+        The command-memory features of the steps
+        (:data:`~hybridship.residual.features.MEMORY_FEATURES`; None when not selected).
     """
 
     eta0: np.ndarray
@@ -151,10 +154,12 @@ class Starts:
     truth: np.ndarray
     is_val: np.ndarray
     dt_s: float
+    memory: np.ndarray | None = None
 
     def take(self, idx) -> "Starts":
         return Starts(*(getattr(self, k)[idx] for k in ("eta0", "nu0", "dev0", "bias0", "rpm", "az", "wind",
-                                                        "truth", "is_val")), self.dt_s)
+                                                        "truth", "is_val")), self.dt_s,
+                      None if self.memory is None else self.memory[idx])
 
 
 def collect_starts(preps, masks, config: MultiStepConfig, dp_only: bool = True,
@@ -169,6 +174,7 @@ def collect_starts(preps, masks, config: MultiStepConfig, dp_only: bool = True,
     the whole horizon inside it, in one segment, and station keeping with ``dp_only``).
     """
     out = {k: [] for k in ("eta0", "nu0", "dev0", "bias0", "rpm", "az", "wind", "truth", "is_val")}
+    memory = []
     dts = set()
     for prep, mask in zip(preps, masks):
         a = prep.arrays
@@ -199,6 +205,8 @@ def collect_starts(preps, masks, config: MultiStepConfig, dp_only: bool = True,
         wf = wind_forecast if wind_forecast is not None else HELD_WIND
         out["wind"].append(wf.steps(a.wind, a.time_s, r, a.wind[r], H, dt, logged=a.wind_logged))
         out["truth"].append(a.eta[rows + 1])
+        if prep.command_memory is not None:         # the logged commands are the rollout's
+            memory.append(prep.command_memory[rows])
         is_val = np.zeros(r.size, bool)
         n_val = int(round(config.val_fraction * r.size))
         if n_val > 0 and r.size - n_val >= 1:
@@ -208,7 +216,8 @@ def collect_starts(preps, masks, config: MultiStepConfig, dp_only: bool = True,
         raise ValueError(f"multi-step training: no start time with {config.horizon_s:g} s of usable data after it")
     if len(dts) != 1:
         raise ValueError(f"multi-step training: the logs have different steps {sorted(dts)} s")
-    return Starts(*(np.concatenate(out[k]) for k in out), float(dts.pop()))
+    return Starts(*(np.concatenate(out[k]) for k in out), float(dts.pop()),
+                  np.concatenate(memory) if len(memory) == len(out["eta0"]) else None)
 
 
 def _torch_physics_step():
@@ -258,10 +267,11 @@ def _torch_physics_step():
 def _full_features(e1, n1, a1, r_prev, s: Starts, j: int, use_cmd: bool, scales: dict):
     """Every feature of :data:`~hybridship.residual.features.ALL_FEATURES` at rollout step ``j``
     (torch, (E, S, F)) from the physics step ``e1, n1, a1`` (S, 3) and the members' previous
-    residuals ``r_prev`` (E, S, 3); the command-aware ones are zeros unless ``use_cmd``."""
+    residuals ``r_prev`` (E, S, 3); the command-aware ones are zeros unless ``use_cmd``, the
+    command-memory ones unless the starts carry them."""
     import torch
 
-    from .features import COMMAND_FEATURES, command_feature_columns
+    from .features import COMMAND_FEATURES, MEMORY_FEATURES, command_feature_columns
 
     E, S = r_prev.shape[0], n1.shape[0]
     cols = [n1.expand(E, S, 3), a1.expand(E, S, 3), r_prev]
@@ -273,6 +283,10 @@ def _full_features(e1, n1, a1, r_prev, s: Starts, j: int, use_cmd: bool, scales:
         cols.append(cf.expand(E, S, cf.shape[-1]))
     else:
         cols.append(torch.zeros((E, S, len(COMMAND_FEATURES)), dtype=n1.dtype))
+    if s.memory is not None:
+        cols.append(torch.as_tensor(s.memory[:, j], dtype=n1.dtype).expand(E, S, len(MEMORY_FEATURES)))
+    else:
+        cols.append(torch.zeros((E, S, len(MEMORY_FEATURES)), dtype=n1.dtype))
     return torch.cat(cols, dim=2)
 
 
