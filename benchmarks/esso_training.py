@@ -17,7 +17,8 @@ velocities and accelerations) unless their name says otherwise:
 (multi-step horizon, batch of starts, iterations, validation starts; otherwise
 ``MultiStepConfig()``), ``_m<n>`` / ``_sd<n>`` (ensemble members / seed; otherwise the
 benchmark's), ``+cmd`` (all command-aware features added), ``+mem`` / ``+mem<s>`` (the command-memory
-features added, with the default time constant or ``<s>`` seconds),
+features added, with the default time constant or ``<s>`` seconds; ``+memang`` /
+``+memang<s>``: the angle's alone),
 ``_abs`` (absolute-error loss), ``_lead`` (loss weighted by lead time), ``_hl<m>`` (heading
 length of the loss), ``_c<s>`` (curriculum from a ``<s>``-second horizon),
 ``+rate`` (only the command rates added), ``+cg`` (command-regime guard; off otherwise, whatever
@@ -135,11 +136,12 @@ def variants(cfg, names):
         if "+rate" in name:
             kw["residual_config"] = replace(base_rc, features=tuple(base_rc.features)
                                             + tuple(f for f in COMMAND_FEATURES if "rate" in f))
-        mem = re.search(r"\+mem(\d+(?:\.\d+)?)?", name)
+        mem = re.search(r"\+mem(ang)?(\d+(?:\.\d+)?)?", name)
         if mem:
             rc = kw["residual_config"]
-            kw["residual_config"] = replace(rc, features=tuple(rc.features) + MEMORY_FEATURES,
-                                            **({"command_memory_s": float(mem.group(1))} if mem.group(1) else {}))
+            added = MEMORY_FEATURES[1:] if mem.group(1) else MEMORY_FEATURES
+            kw["residual_config"] = replace(rc, features=tuple(rc.features) + added,
+                                            **({"command_memory_s": float(mem.group(2))} if mem.group(2) else {}))
         out[name] = HybridPredictor("esso_osaka_model", **kw)
     return out
 

@@ -38,7 +38,7 @@ from ..logs.io import LogArrays
 from ..residual.calibration import GAUSS_COVERAGE, CalibrationConfig
 from ..residual.ensemble import EnsembleConfig
 from ..residual.multistep import MultiStepConfig
-from ..residual.features import ALL_FEATURES, COMMAND_FEATURES, ResidualConfig
+from ..residual.features import ALL_FEATURES, COMMAND_FEATURES, MEMORY_FEATURES, ResidualConfig
 from .metrics import grouped_coverage_interval
 
 #: Default forecast horizons [s] (model scale; x 10.4 at full scale).
@@ -89,7 +89,9 @@ class ManoeuvreConfig:
         (:data:`~hybridship.residual.features.COMMAND_FEATURES`) are added: by the paper's
         sec. 3.3 criterion they change within a forecast when the commands are known, and
         on the validation split they lowered the pooled 30-s error of the multi-step hybrid
-        (``benchmarks/esso_training.py``).
+        (``benchmarks/esso_training.py``). So did the command-memory features
+        (:data:`~hybridship.residual.features.MEMORY_FEATURES`, a 10-s low-pass of the rpm
+        and the rudder angle minus their values), for each of three seeds, distance and heading.
     ensemble : EnsembleConfig
         Training of the residual and data-only ensembles.
     train_row_stride : int
@@ -131,7 +133,8 @@ class ManoeuvreConfig:
     start_every_s: float | None = 1.0
     step_s: float | None = None
     residual: ResidualConfig = field(default_factory=lambda: ResidualConfig(
-        features=ALL_FEATURES[:6] + COMMAND_FEATURES, deriv_window_s=2.0, start_average_s=0.1, bias_window_s=0.0))
+        features=ALL_FEATURES[:6] + COMMAND_FEATURES + MEMORY_FEATURES, deriv_window_s=2.0, start_average_s=0.1,
+        bias_window_s=0.0))
     ensemble: EnsembleConfig = field(default_factory=lambda: EnsembleConfig(n_members=8, max_epochs=600))
     train_row_stride: int = 2
     data_only_row_stride: int = 1
