@@ -9,8 +9,8 @@ from hybridship.physics.model import DynamicModel
 from hybridship.predictors import HybridPredictor, as_log_arrays
 from hybridship.residual.calibration import CalibrationConfig
 from hybridship.residual.ensemble import EnsembleConfig
-from hybridship.residual.features import (ALL_FEATURES, COMMAND_FEATURES, MEMORY_FEATURES, PAPER_FEATURES, ResidualConfig,
-                                         prepare_log)
+from hybridship.residual.features import (ALL_FEATURES, COMMAND_FEATURES, MEMORY_FEATURES, PAPER_FEATURES,
+                                         ResidualConfig, prepare_log)
 from hybridship.residual.multistep import MultiStepConfig, _torch_physics_step
 from hybridship.sim.synthetic import physics_log
 

@@ -464,7 +464,8 @@ class HybridPredictor:
         eta, _, _, _ = self.rollout(
             eta0, nu0, dev0, bias0, _tile_starts(st.rpm, K), _tile_starts(st.az, K), _tile_starts(st.wind, K), st.H,
             st.dt, substeps=st.substeps, current=current, accel_ext=acc_ext, nets_weight=_tile_starts(weight, K),
-            guard=self.use_guard, drift_yaw_uv=np.repeat(ks, S), command_memory=_tile_starts(self._command_memory(st), K))
+            guard=self.use_guard, drift_yaw_uv=np.repeat(ks, S),
+            command_memory=_tile_starts(self._command_memory(st), K))
         return np.abs(wrap_pi(eta[:, 1:, 2].reshape(K, S, st.H) - truth[None])).mean(axis=(1, 2))
 
     def _fit_wind_forecast(self, logs, cuts, cal: CalibrationConfig, dp_only: bool):

@@ -505,7 +505,8 @@ def prepare_log(model, arrays: LogArrays, config: ResidualConfig = ResidualConfi
     residual = (nu_s - nu_hat) / dt
     residual_c = (nu_c - nu_hat_c) / dt
     scales = command_scales(model, arrays.rotatable)
-    memory = log_command_memory(arrays, dt, config.command_memory_s, **scales)[0] if config.uses_memory_features else None
+    memory = (log_command_memory(arrays, dt, config.command_memory_s, **scales)[0]
+              if config.uses_memory_features else None)
     return PreparedLog(arrays=arrays, dt_s=dt, nu_s=nu_s, nu_dot=nu_dot, nu_hat=nu_hat, nu_dot_hat=nu_dot_hat,
                        residual=residual, nu_c=nu_c, residual_c=residual_c,
                        bias_ned=causal_bias(residual_c, arrays, dt, config), thrust_acc=thrust_acc,
