@@ -216,8 +216,11 @@ def collect_starts(preps, masks, config: MultiStepConfig, dp_only: bool = True,
         raise ValueError(f"multi-step training: no start time with {config.horizon_s:g} s of usable data after it")
     if len(dts) != 1:
         raise ValueError(f"multi-step training: the logs have different steps {sorted(dts)} s")
+    if memory and len(memory) != len(out["eta0"]):
+        raise ValueError("multi-step training: the logs were prepared with different features "
+                         "(command memory in some, not in others)")
     return Starts(*(np.concatenate(out[k]) for k in out), float(dts.pop()),
-                  np.concatenate(memory) if len(memory) == len(out["eta0"]) else None)
+                  np.concatenate(memory) if memory else None)
 
 
 def _torch_physics_step():
