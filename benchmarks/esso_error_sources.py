@@ -172,7 +172,7 @@ def _choose_feedback(predictor, logs, steps: np.ndarray, start_every_s: float, l
 def main(argv=None) -> int:
     from hybridship.datasets.esso_osaka import esso_log_arrays
     from hybridship.evaluation.manoeuvre import (ManoeuvreConfig, Run, error_table, forecast_errors, load_runs,
-                                                 make_predictors, split_runs, start_rows)
+                                                 make_predictors, start_rows, validation_split)
     from hybridship.fileio import atomic_write
     from hybridship.forecast_inputs.wind import fit_wind_forecast
     from hybridship.logs.ingest import ingest
@@ -187,10 +187,11 @@ def main(argv=None) -> int:
                     help="also fit the benchmark's hybrid on the fitting runs and score it with its wind "
                          "forecast and with the logged future wind")
     args = ap.parse_args(argv)
-    if not (args.split / "train").is_dir():
-        print(f"error: {args.split / 'train'}: not found; run benchmarks/esso_osaka.py first", file=sys.stderr)
+    try:
+        fit_dir, val_dir = validation_split(args.split, args.out / "split")
+    except FileNotFoundError as err:
+        print(f"error: {err}", file=sys.stderr)
         return 2
-    fit_dir, val_dir = split_runs(args.split / "train", args.out / "split", seed=1)
     v = load_vessel("esso_osaka_model")
     cfg = ManoeuvreConfig()
     runs = load_runs(val_dir, v)

@@ -107,7 +107,8 @@ def main(argv=None) -> int:
     import torch
 
     from hybridship.fileio import atomic_write
-    from hybridship.evaluation.manoeuvre import ManoeuvreConfig, error_table, forecast_errors, load_runs, split_runs, start_rows
+    from hybridship.evaluation.manoeuvre import (ManoeuvreConfig, error_table, forecast_errors, load_runs, start_rows,
+                                                 validation_split)
     from hybridship.predictors import DynamicPredictor
     from hybridship.vessel import load_vessel
 
@@ -134,11 +135,12 @@ def main(argv=None) -> int:
                     help="also the permutation importance of every feature of each variant (validation rollouts)")
     args = ap.parse_args(argv)
     torch.set_num_threads(1)
-    if not (args.split / "train").is_dir():
-        print(f"error: {args.split / 'train'}: not found; run benchmarks/esso_osaka.py first", file=sys.stderr)
+    try:
+        fit_dir, val_dir = validation_split(args.split, args.out / "split")
+    except FileNotFoundError as err:
+        print(f"error: {err}", file=sys.stderr)
         return 2
     horizons = tuple(float(h) for h in args.horizons_s.split(","))
-    fit_dir, val_dir = split_runs(args.split / "train", args.out / "split", seed=1)
     v = load_vessel("esso_osaka_model")
     cfg = ManoeuvreConfig()
     cfg = replace(cfg, calibration=replace(cfg.calibration, horizon_s=max(horizons)))

@@ -71,7 +71,7 @@ def main(argv=None) -> int:
     from scipy.optimize import minimize
 
     from hybridship.evaluation.manoeuvre import (ManoeuvreConfig, error_table, forecast_errors, load_runs,
-                                                 make_predictors, split_runs, start_rows)
+                                                 make_predictors, start_rows, validation_split)
     from hybridship.fileio import atomic_write
     from hybridship.forecast_inputs.wind import fit_wind_forecast
     from hybridship.predictors import DynamicPredictor
@@ -83,11 +83,12 @@ def main(argv=None) -> int:
     ap.add_argument("--out", type=Path, default=ROOT / "out" / "esso-physics-fit")
     ap.add_argument("--evaluations", type=int, default=600, help="Powell's function evaluations (default 600)")
     args = ap.parse_args(argv)
-    if not (args.split / "train").is_dir():
-        print(f"error: {args.split / 'train'}: not found; run benchmarks/esso_osaka.py first", file=sys.stderr)
+    try:
+        fit_dir, val_dir = validation_split(args.split, args.out / "split")
+    except FileNotFoundError as err:
+        print(f"error: {err}", file=sys.stderr)
         return 2
     torch.set_num_threads(1)
-    fit_dir, val_dir = split_runs(args.split / "train", args.out / "split", seed=1)
     base = tomllib.loads((vessels_dir() / "esso_osaka_model.toml").read_text())
     cfg = ManoeuvreConfig()
     v0 = vessel_with_factors(base, np.zeros(len(COEFFICIENTS)))

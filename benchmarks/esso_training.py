@@ -182,7 +182,7 @@ def main(argv=None) -> int:
 
     from hybridship.fileio import atomic_write
     from hybridship.evaluation.manoeuvre import (COMMAND_MODES, ManoeuvreConfig, coverage_table, error_table, forecast_errors,
-                                      load_runs, make_predictors, sharpness_table, split_runs, start_rows)
+                                      load_runs, make_predictors, sharpness_table, start_rows, validation_split)
     from hybridship.vessel import load_vessel
 
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
@@ -201,7 +201,7 @@ def main(argv=None) -> int:
                          "(suffix +ws)")
     args = ap.parse_args(argv)
     torch.set_num_threads(1)
-    if not (args.split / "train").is_dir():
+    if not (args.split / "train").is_dir():          # checked before any variant is built
         print(f"error: {args.split / 'train'}: not found; run benchmarks/esso_osaka.py first", file=sys.stderr)
         return 2
     horizons = tuple(float(h) for h in args.horizons_s.split(","))
@@ -209,7 +209,7 @@ def main(argv=None) -> int:
     if args.test_split:
         fit_dir, val_dir = args.split / "train", args.split / "test"
     else:
-        fit_dir, val_dir = split_runs(args.split / "train", args.out / "split", seed=1)
+        fit_dir, val_dir = validation_split(args.split, args.out / "split")
     v = load_vessel("esso_osaka_model")
     cfg = ManoeuvreConfig()
     cfg = replace(cfg, calibration=replace(cfg.calibration, horizon_s=max(horizons)))

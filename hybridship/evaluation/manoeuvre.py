@@ -208,6 +208,23 @@ def load_runs(folder, vessel, *, step_s: float | None = None) -> list[Run]:
     return runs
 
 
+def validation_split(benchmark_split_dir, out_dir, *, seed: int = 1) -> tuple[Path, Path]:
+    """The developers' validation split: the benchmark's training runs
+    (``benchmark_split_dir/train``, made by ``benchmarks/esso_osaka.py``) split again with
+    :func:`split_runs` into fitting runs (``out_dir/train``) and validation runs
+    (``out_dir/test``), so that choices never see the test runs.
+
+    Raises
+    ------
+    FileNotFoundError
+        Naming the missing folder when the benchmark's split has not been made.
+    """
+    train = Path(benchmark_split_dir) / "train"
+    if not train.is_dir():
+        raise FileNotFoundError(f"{train}: not found; run benchmarks/esso_osaka.py first")
+    return split_runs(train, out_dir, seed=seed)
+
+
 def split_runs(data_dir, out_dir, *, test_fraction: float = 0.3, seed: int = 0) -> tuple[Path, Path]:
     """Split the runs of ``data_dir`` into ``out_dir/train`` and ``out_dir/test`` (symbolic links).
 

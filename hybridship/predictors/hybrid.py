@@ -24,7 +24,8 @@ from ..physics.model import DynamicModel
 from ..residual.calibration import CalibrationConfig, fit_spread_scale
 from ..residual.ensemble import EnsembleConfig, MLPEnsemble, fit_ensemble
 from ..residual.features import (ALL_FEATURES, MEMORY_FEATURES, ResidualConfig, command_feature_columns,
-                                 command_memory, command_scales, log_command_memory, prepare_log)
+                                 command_memory, command_pair, command_scales, log_command_memory,
+                                 prepare_log)
 from ..residual.load_variability import held_load_rows, held_load_spread, unexplained_load_std_windows
 from ..residual.environment import (EnvironmentConfig, EnvironmentEstimator, current_input,
                                     environment_accel, thrust_error_prior_carries_over)
@@ -999,17 +1000,13 @@ class HybridPredictor:
         if not rc.uses_memory_features:
             return None
         sc = command_scales(self.model, self.model.vessel.rotatable)
-        a, idx, ch = st.arrays, st.idx, sc["angle_channel"]
-
-        def rel(rpm, az):               # (..., K) commands -> (..., 2) [rpm / max rpm, angle_rad]
-            return np.stack([rpm[..., 0] / sc["rpm_scale"], az[..., ch] if ch is not None else 0 * rpm[..., 0]], -1)
-
+        a, idx, n = st.arrays, st.idx, max(st.H, 1)
         logged, filled = log_command_memory(a, st.dt, rc.command_memory_s, **sc,
                                             stop_after_failure=self.stop_after_failure)
         before = np.maximum(idx - 1, 0)
         first = (idx == 0) | (a.segment_id[before] != a.segment_id[idx])
-        steps = rel(np.broadcast_to(st.rpm, (idx.size, max(st.H, 1), st.rpm.shape[2])),
-                    np.broadcast_to(st.az, (idx.size, max(st.H, 1), st.az.shape[2])))
+        steps = command_pair(np.broadcast_to(st.rpm, (idx.size, n, st.rpm.shape[2])),
+                             np.broadcast_to(st.az, (idx.size, n, st.az.shape[2])), **sc)
         previous = np.where(first[:, None], steps[:, 0], filled[before])
         memory0 = np.where(first[:, None], 0.0, logged[before])
         return command_memory(steps, previous, memory0, st.dt, rc.command_memory_s)

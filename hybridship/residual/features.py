@@ -219,6 +219,18 @@ def command_memory(commands: np.ndarray, previous: np.ndarray, memory0: np.ndarr
     return lfilter([-c], [1.0, -c], dx, axis=1, zi=(c * np.asarray(memory0, dtype=float))[:, None, :])[0]
 
 
+def command_pair(rpm: np.ndarray, azimuth_rad: np.ndarray, rpm_scale: float, angle_channel: int | None) -> np.ndarray:
+    """``[rpm / max rpm, angle_rad]`` (..., 2) of commands ``rpm`` [rpm] and ``azimuth_rad``
+    [rad] (..., K): the main thruster's and the first rotatable actuator's (0 without one),
+    the commands the :data:`MEMORY_FEATURES` remember."""
+    rpm = np.asarray(rpm, dtype=float)
+    out = np.zeros(rpm.shape[:-1] + (2,))
+    out[..., 0] = rpm[..., 0] / rpm_scale
+    if angle_channel is not None:
+        out[..., 1] = np.asarray(azimuth_rad, dtype=float)[..., angle_channel]
+    return out
+
+
 def log_command_memory(arrays: LogArrays, dt_s: float, time_constant_s: float, rpm_scale: float,
                        angle_channel: int | None, stop_after_failure: bool = False) -> tuple[np.ndarray, np.ndarray]:
     """The :data:`MEMORY_FEATURES` at every row of a log (N, 2), row by row with its own
@@ -227,12 +239,9 @@ def log_command_memory(arrays: LogArrays, dt_s: float, time_constant_s: float, r
     With ``stop_after_failure`` the rpm is 0 where station keeping is off (``dp_active == 0``),
     as a forecast takes it. Returns ``(memory, commands)``, the commands as used
     (N, 2: ``[rpm / max rpm, angle_rad]``)."""
-    cmd = np.zeros((len(arrays.time_s), 2))
-    cmd[:, 0] = arrays.rpm[:, 0] / rpm_scale if arrays.rpm.shape[1] else 0.0
+    cmd = command_pair(arrays.rpm, arrays.azimuth_rad, rpm_scale, angle_channel)
     if stop_after_failure:
         cmd[arrays.dp_active == 0, 0] = 0.0
-    if angle_channel is not None:
-        cmd[:, 1] = arrays.azimuth_rad[:, angle_channel]
     out = np.zeros_like(cmd)
     for sl in arrays.segments:
         cmd[sl] = pd.DataFrame(cmd[sl]).ffill().fillna(0.0).to_numpy()
