@@ -43,7 +43,7 @@ What the data can separate, and what the filter then does:
   yaw offset is split between the thrusters' errors and the yaw load by how the allocation
   varies, not by a rule; the yaw load's prior (``load_yaw_prior_rad_s2`` = 1e-3 rad/s^2, the
   order of the wind's yaw moment on the Gunnerus at 10 m/s over its yaw inertia) is wide
-  enough not to decide that split (results are the same from 3e-4 up). At a stop the
+  enough not to decide that split (results change little from 3e-4 up). At a stop the
   filter keeps its state (``reset_yaw_load_at_stop`` False): the thrust-error term
   vanishes with the thrust and the load carries on. What this cannot separate: with a
   wind feed-forward, the thrust follows the wind, so an error of the wind model looks
