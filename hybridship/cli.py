@@ -84,6 +84,17 @@ def parse_seeds(text: str) -> list[int]:
     return seeds
 
 
+def _seed(text: str) -> int:
+    """A ``--seed`` value: a non-negative whole number (argparse names the option)."""
+    try:
+        value = int(text)
+    except ValueError:
+        value = -1
+    if value < 0:
+        raise argparse.ArgumentTypeError(f"expected a non-negative whole number, got {text!r}")
+    return value
+
+
 def _seed_list(text: str) -> list[int]:
     try:
         return parse_seeds(text)
@@ -104,7 +115,7 @@ def _add_simulate(sub) -> None:
                     "sweep (--sweep --seeds, --out-dir).")
     p.add_argument("--vessel", default="gunnerus", help="packaged vessel name or vessel file (default gunnerus)")
     p.add_argument("--scenario", default="dp-loss", choices=_SCENARIOS, help="scenario type (default dp-loss)")
-    p.add_argument("--seed", type=int, help="seed of a single scenario (non-negative)")
+    p.add_argument("--seed", type=_seed, help="seed of a single scenario (non-negative)")
     p.add_argument("--out", type=Path, help="output log of a single scenario: .csv, .csv.gz, .parquet or .pq")
     p.add_argument("--sweep", action="store_true", help="simulate one scenario per seed of --seeds")
     p.add_argument("--seeds", type=_seed_list, help="seeds of a sweep, e.g. 1-10 or 1,3,5-7")
@@ -188,7 +199,7 @@ def _add_demo(sub) -> None:
                        description="Simulate embedded Gunnerus DP-loss scenarios, train the hybrid on their "
                                    "DP parts and print the 15/30/45/60 s drift-error table.")
     p.add_argument("--scenarios", type=int, default=3, help="number of embedded scenarios (default 3)")
-    p.add_argument("--seed", type=int, default=0, help="seed of the first scenario and of training (default 0)")
+    p.add_argument("--seed", type=_seed, default=0, help="seed of the first scenario and of training (default 0)")
     p.add_argument("--members", type=int, default=10, help="ensemble members (default 10)")
     p.set_defaults(func=_cmd_demo)
 
@@ -232,7 +243,7 @@ def _add_train(sub) -> None:
     p.add_argument("--logs", required=True, type=Path, help="folder of logs (*.csv, *.csv.gz, *.parquet)")
     p.add_argument("--out", required=True, type=Path, help="model file to write (.npz)")
     p.add_argument("--members", type=int, default=10)
-    p.add_argument("--seed", type=int, default=0)
+    p.add_argument("--seed", type=_seed, default=0)
     p.add_argument("--all-rows", action="store_true", help="train on every row, not only dp_active == 1")
     p.set_defaults(func=_cmd_train)
 
@@ -321,6 +332,9 @@ def _cmd_forecast(args) -> int:
         raise UsageError(f"{_PROG} forecast: error: {_one_line(exc)}") from None
     if not args.log.is_file():
         raise UsageError(f"{_PROG} forecast: error: --log {args.log}: file not found")
+    if args.out.resolve() == args.log.resolve():
+        raise UsageError(f"{_PROG} forecast: error: --out {args.out}: is the --log file; the forecast would "
+                         f"replace the log, give another path")
     fc = hp.forecast(args.log, args.start_time, args.horizon_s, guard=not args.no_guard, commands=args.commands)
     df = fc.to_frame(quantiles=quantiles)
     atomic_write(args.out, lambda fh: fh.write(df.to_csv(index=False).encode("utf-8")))
@@ -329,12 +343,15 @@ def _cmd_forecast(args) -> int:
     last = df[df.lead_s == df.lead_s.max()]
     for _, row in last.iterrows():
         flags = [name for name in FaultFlags.ALL if name != FaultFlags.OUT_OF_ENVELOPE and bool(row.get(name, False))]
-        ooe = "yes" if bool(row.get(FaultFlags.OUT_OF_ENVELOPE, False)) else "no"
+        if "guard_weight" in df:
+            ooe = "yes" if bool(row.get(FaultFlags.OUT_OF_ENVELOPE, False)) else "no"
+            guard = (f"{FaultFlags.OUT_OF_ENVELOPE}: {ooe} (min guard weight "
+                     f"{df[df.start_time_s == row.start_time_s].guard_weight.min():.2f})")
+        else:
+            guard = "guard off"
         print(f"start {row.start_time_s:g} s -> +{row.lead_s:g} s: north {row.north_m:.1f} m, east {row.east_m:.1f} m, "
               f"heading {row.heading_deg:.1f} deg (1-sigma {row.north_std_m:.1f}/{row.east_std_m:.1f} m); "
-              f"{FaultFlags.OUT_OF_ENVELOPE}: {ooe} (min guard weight "
-              f"{df[df.start_time_s == row.start_time_s].guard_weight.min():.2f}); "
-              f"flags: {', '.join(flags) if flags else 'none'}")
+              f"{guard}; flags: {', '.join(flags) if flags else 'none'}")
     print(f"wrote {args.out}")
     return 0
 
@@ -353,7 +370,7 @@ def _add_benchmark(sub) -> None:
     d.add_argument("--out", type=Path, default=Path("drift-benchmark"), help="output folder (default drift-benchmark)")
     d.add_argument("--vessel", default="gunnerus", help="packaged vessel name or vessel TOML file")
     d.add_argument("--members", type=int, default=10, help="ensemble members (default 10)")
-    d.add_argument("--seed", type=int, default=0, help="seed of scenarios and training (default 0)")
+    d.add_argument("--seed", type=_seed, default=0, help="seed of scenarios and training (default 0)")
     d.add_argument("--intervals", type=int, default=20, help="start times after each failure (default 20)")
     d.add_argument("--scenarios", type=int, default=3, help="embedded scenarios when no folders are given")
     d.add_argument("--all-rows", action="store_true", help="train on every row, not only dp_active == 1")
@@ -371,7 +388,7 @@ def _add_benchmark(sub) -> None:
                                     "NARX-ANN and hybrid models on the training parts and write table.csv "
                                     "(model,sea_state,split,mode,output,R,MAE), table.md and figures to --out.")
     h.add_argument("--out", type=Path, default=Path("hsc-benchmark"), help="output folder (default hsc-benchmark)")
-    h.add_argument("--seed", type=int, default=0, help="seed of the trials and of training (default 0)")
+    h.add_argument("--seed", type=_seed, default=0, help="seed of the trials and of training (default 0)")
     h.add_argument("--quick", action="store_true", help="a small, fast configuration (for tests)")
     h.set_defaults(func=_cmd_benchmark_hsc)
     m = bsub.add_parser("manoeuvre", help="manoeuvring forecasts on free-running runs (e.g. Esso Osaka)",
@@ -385,7 +402,7 @@ def _add_benchmark(sub) -> None:
     m.add_argument("--out", type=Path, default=Path("manoeuvre-benchmark"), help="output folder")
     m.add_argument("--step-s", type=float, default=None,
                    help="forecast and training step [s], a whole multiple of the data's (default: the data's own)")
-    m.add_argument("--seed", type=int, default=0, help="seed of training (default 0)")
+    m.add_argument("--seed", type=_seed, default=0, help="seed of training (default 0)")
     m.add_argument("--quick", action="store_true", help="a small, fast configuration (for tests)")
     m.set_defaults(func=_cmd_benchmark_manoeuvre)
     p.set_defaults(func=_cmd_benchmark_missing)

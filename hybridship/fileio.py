@@ -16,6 +16,8 @@ def atomic_write(path, write: Callable[[BinaryIO], None]) -> Path:
     which case an existing file at ``path`` is left untouched.
     """
     path = Path(path)
+    if path.is_dir():
+        raise IsADirectoryError(f"{path}: is a directory; expected the path of a file to write")
     path.parent.mkdir(parents=True, exist_ok=True)
     tmp = path.with_name(f".{path.name}.{uuid.uuid4().hex}.tmp")
     try:

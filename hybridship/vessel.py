@@ -366,6 +366,17 @@ class Vessel(_Strict):
         if dup:
             raise ValueError(f"rudders: duplicate names {sorted(dup)} (names must differ from each other "
                              "and from the thrusters')")
+        # a position beyond the hull is a typo (1444 for 14.44), not a layout: whatever the
+        # body origin, an actuator lies within L_oa of it along and B of it across
+        L, B = self.particulars.L_oa_m, self.particulars.B_m
+        for kind, acts in (("thrusters", self.thrusters), ("rudders", self.rudders)):
+            for i, a in enumerate(acts):
+                if abs(a.x_m) > L:
+                    raise ValueError(f"{kind}[{i}].x_m: {a.x_m:g} m lies outside the hull (at most "
+                                     f"particulars.L_oa_m = {L:g} m from the body origin)")
+                if abs(a.y_m) > B:
+                    raise ValueError(f"{kind}[{i}].y_m: {a.y_m:g} m lies outside the hull (at most "
+                                     f"particulars.B_m = {B:g} m from the centre line)")
         forward = [t.name for t in self.thrusters if t.type == "fixed" and abs(t.fixed_angle_rad) < 1e-9]
         for i, r in enumerate(self.rudders):
             if r.propeller is not None and r.propeller not in forward:

@@ -30,6 +30,22 @@ def test_train_then_forecast_writes_a_table(log_dir, tmp_path, capsys):
                  "--start-time", "900", "905", "--horizon-s", "30", "--out", str(out)]) == 0
     df = pd.read_csv(out)
     assert len(df) == 2 * 31 and {"north_m", "east_m", "heading_deg", "guard_weight"} <= set(df)
+    # without the guard there is no guard weight to report: the summary says so
+    capsys.readouterr()
+    assert main(["forecast", "--model", str(model), "--log", str(log_dir / "log1.csv.gz"),
+                 "--start-time", "900", "--horizon-s", "30", "--no-guard", "--out", str(tmp_path / "ng.csv")]) == 0
+    assert "guard off" in capsys.readouterr().out
+    assert "guard_weight" not in pd.read_csv(tmp_path / "ng.csv")
+    # the forecast never replaces the log it reads, nor writes onto a folder
+    log_copy = tmp_path / "log1.csv.gz"
+    log_copy.write_bytes((log_dir / "log1.csv.gz").read_bytes())
+    assert main(["forecast", "--model", str(model), "--log", str(log_copy), "--start-time", "900",
+                 "--out", str(log_copy)]) == 2
+    assert "is the --log file" in capsys.readouterr().err
+    assert log_copy.read_bytes() == (log_dir / "log1.csv.gz").read_bytes()
+    assert main(["forecast", "--model", str(model), "--log", str(log_copy), "--start-time", "900",
+                 "--out", str(tmp_path)]) == 1
+    assert "is a directory" in capsys.readouterr().err
 
 
 def test_cli_errors_are_one_line_and_non_zero(log_dir, tmp_path, capsys):

@@ -124,6 +124,33 @@ def test_shared_station_keeping_is_not_shared_across_first_rows(model):
     assert not np.array_equal(alone.x, est.run(a, rows, first_row=3).x)       # and k = 0.004 is one
 
 
+def test_a_position_or_heading_spike_is_gated_and_a_lasting_shift_is_followed(model):
+    """One corrupted position sample (300 m east) or heading sample (90 deg) in the history
+    leaves the later estimate as it is without it (the heading's only through the
+    wave-motion noise level it raises a little); without the gate it does not. A lasting
+    20-m shift of the position (a datum change) is followed once ``max_gated_samples``
+    samples in a row were gated."""
+    log = physics_log(model, duration_s=600, t_shutdown_s=400, seed=6, tau_ext_N=(2000.0, 0.0, 0.0))
+    rows = np.array([390, 450])
+    clean = EnvironmentEstimator(model).run(as_log_arrays(log, model.vessel), rows)
+    ungated_cfg = EnvironmentConfig(innovation_gate_sigma=1e9)
+    clean_ungated = EnvironmentEstimator(model, ungated_cfg).run(as_log_arrays(log, model.vessel), rows)
+    for col, delta in (("east_m", 300.0), ("heading_deg", 90.0)):
+        spiked = log.copy()
+        spiked.loc[300, col] += delta
+        gated = np.abs(EnvironmentEstimator(model).run(as_log_arrays(spiked, model.vessel), rows).x - clean.x)
+        ungated = np.abs(EnvironmentEstimator(model, ungated_cfg).run(
+            as_log_arrays(spiked, model.vessel), rows).x - clean_ungated.x)
+        assert ungated.max() > 0.05, col                               # what the spike does unchecked
+        assert gated.max() < 0.1 * ungated.max(), col
+        if col == "east_m":
+            assert gated.max() < 1e-5
+    shifted = log.copy()
+    shifted.loc[300:, "north_m"] += 20.0
+    est = EnvironmentEstimator(model).run(as_log_arrays(shifted, model.vessel), rows)
+    assert est.x[0, 0] == pytest.approx(shifted.north_m[390], abs=1.0)
+
+
 def test_a_segment_whose_first_row_has_no_position_restarts_at_its_next(model):
     """After a gap, a new segment whose first row lacks a position restarts at the next row
     with one (velocities from the measurement), not by predicting across the gap."""

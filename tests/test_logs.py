@@ -119,6 +119,21 @@ def test_unsupported_extension(tmp_path):
         write_log(circle_log(), tmp_path / "log.txt")
 
 
+def test_unreadable_files_are_refused_naming_the_file(tmp_path):
+    """An empty file, a plain CSV named .csv.gz and a truncated archive: a LogFormatError
+    that names the file, not the parser's traceback; a missing file: FileNotFoundError."""
+    good = tmp_path / "good.csv.gz"
+    write_log(circle_log(), good)
+    cases = {"empty.csv": b"", "plain.csv.gz": b"time_s,north_m\n0,1\n",
+             "truncated.csv.gz": good.read_bytes()[: len(good.read_bytes()) // 2]}
+    for name, data in cases.items():
+        (tmp_path / name).write_bytes(data)
+        with pytest.raises(LogFormatError, match=f"{name}: cannot be read as a"):
+            read_log(tmp_path / name)
+    with pytest.raises(FileNotFoundError, match="missing.csv"):
+        read_log(tmp_path / "missing.csv")
+
+
 # --------------------------------------------------------------------------------------
 # Validation errors name the column
 # --------------------------------------------------------------------------------------

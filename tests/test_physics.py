@@ -362,6 +362,8 @@ def test_gunnerus_coefficients_close_to_published_original_hull():
     (lambda d: d["particulars"].__setitem__("L_pp_m", "long"), "particulars.L_pp_m"),
     (lambda d: d["thrusters"][2].__setitem__("name", "port"), "duplicate"),
     (lambda d: d["damping"]["nonlinear"].__setitem__("lift_speed", "sign"), "damping.nonlinear.lift_speed"),
+    (lambda d: d["thrusters"][0].__setitem__("x_m", 1444.0), r"thrusters\[0\].x_m: 1444 m lies outside the hull"),
+    (lambda d: d["thrusters"][1].__setitem__("y_m", -27.0), r"thrusters\[1\].y_m: -27 m lies outside the hull"),
 ])
 def test_invalid_vessel_files_name_the_field(edit, field):
     d = copy.deepcopy(gunnerus_dict())

@@ -273,3 +273,37 @@ def test_a_diverging_rollout_stops_with_a_clear_error(model, exact_logs):
     hp.ensemble.predict_members = lambda X: np.full((E,) + X.shape[1:-1] + (3,), 1e300)
     with pytest.raises(FloatingPointError, match="diverged at lead"):
         hp.forecast(exact_logs[1], [900.0], 60.0, guard=False)
+
+
+def test_heading_quantiles_stay_beside_the_wrapped_heading():
+    """A band across north: ``heading_deg`` is wrapped to [0, 360) and its quantiles are
+    that heading plus their offsets (358 +- 5 deg reads 353..363, not 353 and 3)."""
+    from hybridship.predictors.result import ForecastResult
+
+    eta = np.zeros((1, 2, 3))
+    eta[0, :, 2] = np.radians([358.0, -2.0 + 720.0])
+    std = np.zeros_like(eta)
+    std[..., 2] = np.radians(5.0) / 1.6448536
+    fc = ForecastResult(np.array([0.0]), np.array([0.0, 1.0]), eta, np.zeros_like(eta), eta_std=std)
+    df = fc.to_frame(quantiles=[0.05, 0.95])
+    np.testing.assert_allclose(df.heading_deg, [358.0, 358.0])
+    np.testing.assert_allclose(df["heading_q0.05_deg"], [353.0, 353.0], atol=1e-6)
+    np.testing.assert_allclose(df["heading_q0.95_deg"], [363.0, 363.0], atol=1e-6)
+
+
+def test_fit_takes_one_log_or_many_and_start_errors_give_the_log_span(model, exact_logs, tmp_path):
+    """One log (a path) is a list of one; something else is refused naming what it got. A
+    start time that is not a sample time is reported with the whole log's span, not the
+    part read for the forecast."""
+    from hybridship.logs.io import write_log
+    from hybridship.predictors.forecast_setup import log_list
+
+    path = tmp_path / "one.csv"
+    write_log(exact_logs[0], path)
+    assert log_list(path) == [path] and log_list(str(path)) == [str(path)]
+    assert log_list([path, path]) == [path, path]
+    with pytest.raises(TypeError, match="logs: expected a log .* got int"):
+        log_list(3)
+    t = exact_logs[0].time_s
+    with pytest.raises(ValueError, match=rf"log spans {t.iloc[0]}\.\.{t.iloc[-1]} s"):
+        DynamicPredictor(model.vessel).forecast(path, [float(t.iloc[0]) + 0.5], 10.0)

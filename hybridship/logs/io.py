@@ -901,10 +901,21 @@ def read_log(
     """
     path = Path(path)
     kind = _container(path)
-    if kind == "parquet":
-        df = pd.read_parquet(path)
-    else:
-        df = pd.read_csv(path, compression="gzip" if kind == "csv.gz" else None)
+    if not path.is_file():
+        raise FileNotFoundError(f"{path}: log file not found")
+    try:
+        if kind == "parquet":
+            df = pd.read_parquet(path)
+        else:
+            df = pd.read_csv(path, compression="gzip" if kind == "csv.gz" else None)
+    except PermissionError:
+        raise
+    except (pd.errors.EmptyDataError, pd.errors.ParserError, EOFError, OSError, UnicodeDecodeError,
+            ValueError) as exc:
+        # a truncated archive, a plain file named .csv.gz, an empty or binary file: name the
+        # file and say what it should be, not the parser's internals
+        raise LogFormatError(f"{path}: cannot be read as a {kind} log file "
+                             f"({type(exc).__name__}: {' '.join(str(exc).split())})") from None
     df = df.reset_index(drop=True)
     if validate:
         _validate(df, channel_names, rotatable, str(path), warn_unknown=True, allow_missing=allow_missing)

@@ -9,7 +9,7 @@ import numpy as np
 from ..physics.model import DynamicModel
 from ..residual.ensemble import EnsembleConfig, MLPEnsemble, fit_ensemble
 from ..residual.features import ResidualConfig
-from .forecast_setup import _check_row_stride, _forecast_setup, as_log_arrays
+from .forecast_setup import _check_row_stride, _forecast_setup, as_log_arrays, log_list
 from .result import ForecastResult
 
 __all__ = ["DataOnlyPredictor"]
@@ -56,7 +56,7 @@ class DataOnlyPredictor:
         ``row_stride``-th usable row (see :meth:`HybridPredictor.fit`)."""
         stride = _check_row_stride(row_stride)
         Xs, Ys, segs = [], [], []
-        for k, log in enumerate(logs):
+        for k, log in enumerate(log_list(logs)):
             a = as_log_arrays(log, self.model.vessel)
             dt = float(np.median(np.diff(a.time_s)))
             seg = a.segment_id

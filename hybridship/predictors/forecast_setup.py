@@ -9,9 +9,11 @@ window through :func:`hybridship.forecast_inputs.assess_start_window` and the in
 
 from __future__ import annotations
 
+import os
 from dataclasses import dataclass
 
 import numpy as np
+import pandas as pd
 
 from ..forecast_inputs import FaultFlags, assess_start_window, check_or_clip_inputs
 from ..forecast_inputs.wind import HELD_WIND, WindForecast
@@ -34,6 +36,24 @@ def as_log_arrays(log, vessel, *, purpose: str = "fit") -> LogArrays:
     """A path, a DataFrame in the log format or LogArrays, through :func:`hybridship.logs.ingest.ingest`
     (re-sorted, checked against ``vessel`` once; ``purpose`` "fit" or "forecast")."""
     return ingest(log, vessel, purpose=purpose)
+
+
+def log_list(logs) -> list:
+    """The training logs as a list: one log (a path, a DataFrame or LogArrays) becomes a list of
+    one; any other iterable is listed.
+
+    Raises
+    ------
+    TypeError
+        Naming what was given, when ``logs`` is neither a log nor an iterable of logs.
+    """
+    if isinstance(logs, (str, os.PathLike, pd.DataFrame, LogArrays)):
+        return [logs]
+    try:
+        return list(logs)
+    except TypeError:
+        raise TypeError(f"logs: expected a log (path, DataFrame or LogArrays) or an iterable of logs, "
+                        f"got {type(logs).__name__}") from None
 
 
 def start_indices(arrays: LogArrays, start_times_s) -> np.ndarray:
@@ -165,7 +185,12 @@ def _forecast_setup(model, config: ResidualConfig, log, start_times_s, horizon_s
     arrays = ingest(log, model.vessel, purpose="forecast",
                     time_range_s=_forecast_time_range(start_times_s, horizon_s,
                                                       max(history_s, wind_forecast.mean_window_s)))
-    idx = start_indices(arrays, start_times_s)
+    try:
+        idx = start_indices(arrays, start_times_s)
+    except ValueError:
+        # say it with the whole log's span, not the window read for the forecast
+        start_indices(ingest(log, model.vessel, purpose="forecast"), start_times_s)
+        raise
     dt = arrays.dt_s
     H = int(round(horizon_s / dt))
     sw = assess_start_window(arrays, idx, config.start_average_s)

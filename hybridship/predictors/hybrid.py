@@ -36,7 +36,8 @@ from ..residual.drift_hull import (MIN_FAILURES as DRIFT_HULL_MIN_FAILURES, MUNK
                                    drift_start_rows, munk_coefficient)
 from ..residual.hull import HullCorrection
 from .after_failure import drift_forecasts, has_drift
-from .forecast_setup import FORECAST_HISTORY_S, _check_row_stride, _forecast_setup, as_log_arrays, start_indices
+from .forecast_setup import (FORECAST_HISTORY_S, _check_row_stride, _forecast_setup, as_log_arrays, log_list,
+                             start_indices)
 from .model_file import load_model, save_model
 from .result import ForecastResult
 
@@ -268,7 +269,7 @@ class HybridPredictor:
 
         Parameters
         ----------
-        logs : iterable of path, DataFrame or LogArrays
+        logs : path, DataFrame or LogArrays, or an iterable of them
         dp_only : bool
             Train only on rows with ``dp_active == 1`` (the part before a failure).
         progress : bool
@@ -305,7 +306,7 @@ class HybridPredictor:
         if not isinstance(cal, CalibrationConfig):
             raise TypeError(f"calibration: expected a CalibrationConfig, got {type(cal).__name__}")
         self.calibration_config = cal
-        logs = [as_log_arrays(log, self.model.vessel) for log in logs]
+        logs = [as_log_arrays(log, self.model.vessel) for log in log_list(logs)]
         self.estimator = EnvironmentEstimator(self.model, self.environment_config)
         if self.environment == "estimator":
             self.estimator.fit(logs, dp_only=dp_only)
@@ -700,7 +701,7 @@ class HybridPredictor:
 
     def _check_fitted(self):
         if self.ensemble is None:
-            raise RuntimeError("HybridPredictor: call fit() or load() before forecast()")
+            raise RuntimeError("HybridPredictor: not fitted; call fit() or load() first")
 
     def forecast(self, log, start_times_s, horizon_s: float = 60.0, *, guard: bool | None = None,
                  commands: str = "held", nets: bool = True, nets_after_stop: bool | None = None,
@@ -955,7 +956,7 @@ class HybridPredictor:
         every lead ``lead_s`` (H,) [s] up to ``horizon_s``; what :meth:`calibrate_after_stop`
         fits (see :func:`after_stop_scales`)."""
         self._check_fitted()
-        arrays = [as_log_arrays(x, self.model.vessel) for x in logs]
+        arrays = [as_log_arrays(x, self.model.vessel) for x in log_list(logs)]
         if not arrays:
             raise ValueError("logs: at least one log with a DP failure is needed")
         out = []

@@ -185,7 +185,12 @@ def _read_arrays(path: Path) -> dict:
     except FileNotFoundError:
         raise ModelFileError(f"{path}: model file not found") from None
     except Exception as err:  # zip/npy parse errors of a damaged file
-        raise ModelFileError(f"{path}: not a readable hybridship model file ({type(err).__name__}: {err})") from None
+        if "pickled" in str(err):
+            # numpy's message suggests loading it unsafely: a model file never holds code
+            why = "not an archive of arrays; numpy could read it only as pickled objects, which hybridship never loads"
+        else:
+            why = f"{type(err).__name__}: {' '.join(str(err).split())}"
+        raise ModelFileError(f"{path}: not a readable hybridship model file ({why})") from None
 
 
 def _read_checked_metadata(data: dict, path: Path) -> dict:

@@ -68,16 +68,19 @@ class ForecastResult:
         """Tidy table: one row per start time and lead time, degrees at this edge.
 
         ``quantiles`` (probabilities) add columns ``north_q<q>_m``, ``east_q<q>_m`` and
-        ``heading_q<q>_deg`` (see :meth:`quantiles`).
+        ``heading_q<q>_deg`` (see :meth:`quantiles`). ``heading_deg`` is wrapped to [0, 360);
+        the heading quantiles are that wrapped heading plus their offsets from it, so a band
+        that crosses north reads, for example, -3 to 7 deg around a heading of 2 deg.
         """
         S, H1, _ = self.eta.shape
+        psi_wrapped = wrap_2pi(self.eta[..., 2])
         cols = {
             "start_time_s": np.repeat(self.start_time_s, H1),
             "lead_s": np.tile(self.lead_s, S),
             "time_s": (self.start_time_s[:, None] + self.lead_s[None, :]).ravel(),
             "north_m": self.eta[..., 0].ravel(),
             "east_m": self.eta[..., 1].ravel(),
-            "heading_deg": np.degrees(wrap_2pi(self.eta[..., 2])).ravel(),
+            "heading_deg": np.degrees(psi_wrapped).ravel(),
             "u_m_s": self.nu[..., 0].ravel(),
             "v_m_s": self.nu[..., 1].ravel(),
             "r_deg_s": np.degrees(self.nu[..., 2]).ravel(),
@@ -91,7 +94,7 @@ class ForecastResult:
             for q, eq in zip(np.atleast_1d(quantiles), Q):
                 cols[f"north_q{q:g}_m"] = eq[..., 0].ravel()
                 cols[f"east_q{q:g}_m"] = eq[..., 1].ravel()
-                cols[f"heading_q{q:g}_deg"] = np.degrees(eq[..., 2]).ravel()
+                cols[f"heading_q{q:g}_deg"] = np.degrees(psi_wrapped + (eq[..., 2] - self.eta[..., 2])).ravel()
         if self.guard_weight is not None:
             cols["guard_weight"] = self.guard_weight.ravel()
         if self.flags is not None:

@@ -163,14 +163,30 @@ def predict(x, Pc, dt, rpm, az, wind, Q, fd_step, P, per_thruster, drift_yaw_uv,
 
 
 @numba.njit(cache=True)
-def update(x, Pc, z, z_ok, r_std):
+def update(x, Pc, z, z_ok, r_std, gate, max_gated, gated):
     """EKF measurement update with the measured components ``z_ok`` (6,) of ``[eta, nu]``.
 
-    The heading innovation is wrapped to (-pi, pi]. Returns ``(x, P)`` (new arrays).
+    The heading innovation is wrapped to (-pi, pi]. A component whose innovation exceeds
+    ``gate`` standard deviations of its predicted spread (``P + r^2``) is an outlier (a
+    position spike, a corrupted sample) and is not used, unless it has been so for
+    ``max_gated`` updates in a row (``gated`` (6,) counts them, updated in place): a lasting
+    shift, such as a datum change, is then followed. Returns ``(x, P)`` (new arrays).
     """
-    idx = np.flatnonzero(z_ok)
-    m = idx.size
     n = x.size
+    use = z_ok.copy()
+    for c in range(6):
+        if not use[c]:
+            continue
+        y = z[c] - x[c]
+        if c == 2:
+            y = (y + math.pi) % (2.0 * math.pi) - math.pi
+        if y * y > gate[c] * gate[c] * (Pc[c, c] + r_std[c] ** 2) and gated[c] < max_gated:
+            use[c] = False
+            gated[c] += 1
+        else:
+            gated[c] = 0
+    idx = np.flatnonzero(use)
+    m = idx.size
     if m == 0:
         return x, Pc
     y = np.empty(m)
@@ -246,8 +262,8 @@ def at_thrust_stop(x, Pc, kept, stop_std, yaw_prior, P, work):
 
 @numba.njit(cache=True)
 def filter_grid(grid, slot, t, seg, z, z_ok, r_std, rpm, az, wind, dp, P, per_thruster, prior_thr, prior_sd, q_base,
-                fd_step, reset_at_stop, kept, stop_std, yaw_prior, drift_yaw_uv, resume, x_resume, P_resume,
-                out_x, out_P, done):
+                fd_step, reset_at_stop, kept, stop_std, yaw_prior, drift_yaw_uv, gate, max_gated, resume, x_resume,
+                P_resume, out_x, out_P, done):
     """Run the filter over the log rows ``grid`` (increasing).
 
     At a row ``i`` with ``slot[i] >= 0`` the estimate goes to ``out_x[slot[i]]``,
@@ -258,9 +274,11 @@ def filter_grid(grid, slot, t, seg, z, z_ok, r_std, rpm, az, wind, dp, P, per_th
     While ``dp`` is 0 at a step's first row, the process model adds the hull's yaw
     acceleration in a drift ``drift_yaw_uv u v`` [rad/s^2]. With ``resume``,
     ``x_resume, P_resume`` is the estimate at ``grid[0]`` (of an earlier run) and the filter
-    goes on from there.
+    goes on from there. Measurements beyond ``gate`` standard deviations are outliers
+    (:func:`update`; ``max_gated`` in a row are followed); a restart resets that count.
     """
     work = _workspace(P)
+    gated = np.zeros(6, dtype=np.int64)
     n = prior_sd.size
     x = np.zeros(n)
     Pc = np.zeros((n, n))
@@ -302,12 +320,13 @@ def filter_grid(grid, slot, t, seg, z, z_ok, r_std, rpm, az, wind, dp, P, per_th
                     for b in range(6, n):
                         P0[a, b] = Pc[a, b] + Qg[a, b]
             x, Pc = x0, P0
+            gated[:] = 0
             started = True
         else:
             dt = t[i] - t[prev]
             x, Pc = predict(x, Pc, dt, rpm[prev], az[prev], wind[prev], process_noise(dt, q_base), fd_step, P,
                             per_thruster, 0.0 if dp[prev] else drift_yaw_uv, work)
-            x, Pc = update(x, Pc, z[i], z_ok[i], r_std[i])
+            x, Pc = update(x, Pc, z[i], z_ok[i], r_std[i], gate, max_gated, gated)
             if reset_at_stop and dp[prev] and not dp[i]:
                 x, Pc = at_thrust_stop(x, Pc, kept, stop_std, yaw_prior, P, work)
         prev = i
