@@ -112,17 +112,18 @@ def yaw_summary(table: pd.DataFrame) -> str:
     return (f"Medians over the {len(dp)} logs of the absolute values:\n\n" + markdown_table(out.round(1)))
 
 
-def main(argv=None) -> int:
-    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+def add_log_source_arguments(ap: argparse.ArgumentParser) -> None:
+    """``--out`` and the logs with truth columns: ``--data`` or ``--scenarios``/``--seed``."""
     ap.add_argument("--out", type=Path, required=True)
     ap.add_argument("--data", type=Path, default=None, help="folder of logs with truth columns (default truthsim-dev)")
     ap.add_argument("--scenarios", type=int, default=0,
                     help="use this many of the own simulator's DP-loss scenarios (1-20) instead of --data")
     ap.add_argument("--seed", type=int, default=100, help="seed of the first scenario with --scenarios")
-    ap.add_argument("--drift-hull", type=Path, default=None,
-                    help="a drift benchmark's drift_hull.csv: each log's coefficient of the hull's yaw moment in a "
-                         "drift, used by its filter after the failure (default: none)")
-    args = ap.parse_args(argv)
+
+
+def check_log_source(ap: argparse.ArgumentParser, args) -> bool:
+    """Check the arguments of :func:`add_log_source_arguments` (``args.data`` defaults to
+    truthsim-dev); False, with a message, when the data set is missing."""
     if not 0 <= args.scenarios <= 20:
         ap.error(f"--scenarios: expected 1-20 (or 0 to read --data), got {args.scenarios}")
     if args.seed < 0:
@@ -132,6 +133,18 @@ def main(argv=None) -> int:
     args.data = TRUTHSIM if args.data is None else args.data
     if not args.scenarios and not args.data.is_dir():
         print(f"{args.data}: not found (the truthsim-dev data set is needed)", file=sys.stderr)
+        return False
+    return True
+
+
+def main(argv=None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    add_log_source_arguments(ap)
+    ap.add_argument("--drift-hull", type=Path, default=None,
+                    help="a drift benchmark's drift_hull.csv: each log's coefficient of the hull's yaw moment in a "
+                         "drift, used by its filter after the failure (default: none)")
+    args = ap.parse_args(argv)
+    if not check_log_source(ap, args):
         return 2
     model = DynamicModel("gunnerus")
     M = model.mass_matrix

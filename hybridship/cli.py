@@ -381,6 +381,9 @@ def _add_benchmark(sub) -> None:
                         "training logs hold too few failures of their own (default 6; 0: none)")
     d.add_argument("--no-drift-hull", action="store_true",
                    help="do not learn the hull's yaw moment in a drift from failures (the paper's protocol, strictly)")
+    d.add_argument("--wave-yaw-load", action="store_true",
+                   help="after a failure, turn the held yaw load with the waves' axis found in the station "
+                        "keeping's wave-frequency motion (EnvironmentConfig.wave_turned_yaw_load)")
     d.add_argument("--no-plots", action="store_true", help="skip the figures")
     d.set_defaults(func=_cmd_benchmark_drift)
     h = bsub.add_parser("hsc", help="high-speed craft: SS, ARX, NARX-ANN and hybrid on simulated sea trials",
@@ -444,6 +447,7 @@ def _cmd_benchmark_missing(args) -> int:
 
 def _cmd_benchmark_drift(args) -> int:
     from .evaluation.drift import log_files, run_drift_benchmark
+    from .residual.environment import EnvironmentConfig
     from .vessel import VesselFileError, load_vessel
 
     if args.members < 1 or args.intervals < 1 or args.scenarios < 1:
@@ -466,7 +470,8 @@ def _cmd_benchmark_drift(args) -> int:
     res = run_drift_benchmark(args.train, args.test, args.out, vessel=vessel, members=args.members,
                               seed=args.seed, n_intervals=args.intervals, dp_only=not args.all_rows,
                               n_scenarios=args.scenarios, plots=not args.no_plots, training=args.training,
-                              calibration_scenarios=args.calibration_scenarios, drift_hull=not args.no_drift_hull)
+                              calibration_scenarios=args.calibration_scenarios, drift_hull=not args.no_drift_hull,
+                              environment_config=EnvironmentConfig(wave_turned_yaw_load=args.wave_yaw_load))
     print()
     print(res.outputs["tables.md"].read_text())
     return 0

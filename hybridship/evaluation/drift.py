@@ -54,6 +54,7 @@ from ..predictors.hybrid import AFTER_STOP, after_stop_scales
 from ..residual.drift_hull import (MIN_FAILURES as DRIFT_HULL_MIN_FAILURES, choose_coefficient, drift_start_rows,
                                    munk_coefficient)
 from ..residual.ensemble import EnsembleConfig
+from ..residual.environment import EnvironmentConfig
 
 #: File endings read as logs from a folder.
 LOG_SUFFIXES = (".csv", ".csv.gz", ".parquet", ".pq")
@@ -102,7 +103,8 @@ def run_drift_benchmark(train=None, test=None, out_dir="drift-benchmark", *, ves
                         members: int = 10, seed: int = 0, n_intervals: int = 20, horizon_s: float = 60.0,
                         dp_only: bool = True, n_scenarios: int = 3, ensemble_config: EnsembleConfig | None = None,
                         plots: bool = True, progress: bool = True, training: str = "one_step",
-                        calibration_scenarios: int = 6, drift_hull: bool = True) -> DriftBenchmarkResult:
+                        calibration_scenarios: int = 6, drift_hull: bool = True,
+                        environment_config: EnvironmentConfig | None = None) -> DriftBenchmarkResult:
     """Train, forecast after every failure, and write the tables and figures.
 
     Parameters
@@ -140,6 +142,8 @@ def run_drift_benchmark(train=None, test=None, out_dir="drift-benchmark", *, ves
         by ``fit`` on the training logs' failures, or per test log on the other logs'
         failures when the test logs are the training logs). False: the paper's protocol in
         the strict sense, nothing learned from any failure.
+    environment_config : EnvironmentConfig or None
+        The hybrid's environment estimator settings (default: ``EnvironmentConfig()``).
     """
     def say(msg):
         if progress:
@@ -151,7 +155,8 @@ def run_drift_benchmark(train=None, test=None, out_dir="drift-benchmark", *, ves
     ens_cfg = ensemble_config or EnsembleConfig(n_members=members, seed=seed)
     horizons = tuple(h for h in metrics.HORIZONS_S if h <= horizon_s + 1e-9)
 
-    hybrid = HybridPredictor(vessel, ensemble_config=ens_cfg, training=training, drift_hull=drift_hull)
+    hybrid = HybridPredictor(vessel, ensemble_config=ens_cfg, training=training, drift_hull=drift_hull,
+                             environment_config=environment_config or EnvironmentConfig())
     train_arrays = [as_log_arrays(x, hybrid.model.vessel) for x in train_logs]
     test_arrays = [as_log_arrays(x, hybrid.model.vessel) for x in test_logs]
     data_only = DataOnlyPredictor(vessel, ensemble_config=ens_cfg)

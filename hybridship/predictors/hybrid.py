@@ -31,6 +31,7 @@ from ..residual.environment import (EnvironmentConfig, EnvironmentEstimator, cur
                                     environment_accel, thrust_error_prior_carries_over)
 from ..residual.multistep import MultiStepConfig, collect_starts, train_multistep
 from ..residual.guard import CommandRegime, EnvelopeGuard, ThrustRegime
+from ..residual.wave_direction import wave_axis, yaw_load_factor
 from ..residual.drift_hull import (MIN_FAILURES as DRIFT_HULL_MIN_FAILURES, MUNK_MULTIPLES,
                                    START_EVERY_S as DRIFT_HULL_START_EVERY_S, choose_coefficient,
                                    drift_start_rows, munk_coefficient)
@@ -448,7 +449,8 @@ class HybridPredictor:
         st, truth = self._drift_starts(log, horizon_s)
         eta0, nu0, dev0, bias0, current, acc_ext, _ = self._estimated_start(st, 1, drift_yaw_uv=0.0)
         eta, _, _, _ = self.rollout(eta0, nu0, dev0, bias0, st.rpm, st.az, st.wind, st.H, st.dt, guard=False,
-                                    substeps=st.substeps, current=current, accel_ext=acc_ext, nets=False)
+                                    substeps=st.substeps, current=current, accel_ext=acc_ext, nets=False,
+                                    wave_axis=self._wave_axes(st))
         d = eta[:, 1:] - truth
         return np.array([np.hypot(d[..., 0], d[..., 1]).mean(), np.abs(wrap_pi(d[..., 2])).mean()])
 
@@ -467,7 +469,7 @@ class HybridPredictor:
             eta0, nu0, dev0, bias0, _tile_starts(st.rpm, K), _tile_starts(st.az, K), _tile_starts(st.wind, K), st.H,
             st.dt, substeps=st.substeps, current=current, accel_ext=acc_ext, nets_weight=_tile_starts(weight, K),
             guard=self.use_guard, drift_yaw_uv=np.repeat(ks, S),
-            command_memory=_tile_starts(self._command_memory(st), K))
+            command_memory=_tile_starts(self._command_memory(st), K), wave_axis=_tile_starts(self._wave_axes(st), K))
         return np.abs(wrap_pi(eta[:, 1:, 2].reshape(K, S, st.H) - truth[None])).mean(axis=(1, 2))
 
     def _fit_wind_forecast(self, logs, cuts, cal: CalibrationConfig, dp_only: bool):
@@ -743,7 +745,8 @@ class HybridPredictor:
             eta0, nu0, current, acc_ext = st.eta0, st.nu0, None, None
         rollout_kw = dict(guard=self.use_guard if guard is None else guard, substeps=st.substeps, nets=nets,
                           nets_weight=self._after_stop_weight(st, nets_after_stop),
-                          drift_yaw_uv=self._drift_yaw_uv(st), command_memory=self._command_memory(st))
+                          drift_yaw_uv=self._drift_yaw_uv(st), command_memory=self._command_memory(st),
+                          wave_axis=self._wave_axes(st))
         eta, nu, std, wgt = self.rollout(eta0, nu0, dev0, bias0, st.rpm, st.az, st.wind, st.H, st.dt,
                                          current=current, accel_ext=acc_ext, **rollout_kw)
         if self.wind_samples and self.wind_error_paths is not None and st.H > 0:
@@ -814,6 +817,34 @@ class HybridPredictor:
         failure: the forecasts' own (0 when they use none, and in files of format 10 and older,
         whose coefficient was chosen with the forecasts alone)."""
         return self.drift_yaw_uv_rad_per_m2 if self.uses_drift_hull and self._drift_yaw_in_filter else 0.0
+
+    def _wave_axes(self, st) -> np.ndarray | None:
+        """Per start after a failure, the waves' axis found in the station keeping before it,
+        ``[axis_ned_rad, sin2_station]`` (S, 2), NaN where there is none (see
+        :mod:`hybridship.residual.wave_direction`); None unless the environment config's
+        ``wave_turned_yaw_load`` is on."""
+        c = self.environment_config
+        if not (c.wave_turned_yaw_load and self.environment == "estimator" and self.stop_after_failure):
+            return None
+        a = st.arrays
+        out = np.full((len(st.idx), 2), np.nan)
+        found = {}
+        for k, i in enumerate(st.idx):
+            on = np.flatnonzero(a.dp_active[:i + 1] != 0)
+            if a.dp_active[i] != 0 or not on.size:
+                continue
+            stop = int(on[-1]) + 1                 # the first row after the station keeping
+            if stop not in found:
+                rows = np.arange(max(0, stop - int(round(c.wave_axis_window_s / a.dt_s)) - 1), stop)
+                rows = rows[(a.segment_id[rows] == a.segment_id[stop - 1]) & (a.dp_active[rows] != 0)]
+                axis = None if rows.size < 2 else wave_axis(
+                    a.time_s[rows], a.eta[rows, 2], a.nu[rows, 0], a.nu[rows, 1], window_s=c.wave_axis_window_s,
+                    min_anisotropy=c.min_wave_anisotropy)
+                # the amplitude is known only where the station keeping's heading gave the shape weight
+                ok = axis is not None and abs(axis.sin2_station) >= c.min_wave_sin2
+                found[stop] = (axis.axis_ned_rad, axis.sin2_station) if ok else (np.nan, np.nan)
+            out[k] = found[stop]
+        return out
 
     def _run_estimator(self, arrays, idx, extra_rows=None, drift_yaw_uv: float | None = None):
         """The filter's estimates at the start rows ``idx`` and, when given, also at those of
@@ -1014,24 +1045,24 @@ class HybridPredictor:
 
     def rollout(self, eta0, nu0, dev0, bias0_ned, rpm, az, wind, n_steps: int, dt_s: float, *, guard: bool = True,
                 substeps: int = 1, current=None, accel_ext=None, nets: bool = True, nets_weight=None,
-                drift_yaw_uv=None, command_memory=None):
-        """Batched hybrid rollout from states (S, 3), previous residual deviations (S, 3),
-        biases (S, 3) or per member (E, S, 3) (surge/sway in NED), commands held (S, 1, K) or
-        per step (S, n_steps, K), wind held (S, 1, 2) or per step (S, n_steps, 2), and optionally a held current
-        ``[speed_m_s, dir_to_rad]`` (S, 1, 2) and a body-frame extra acceleration (S, 1, 3)
-        for the physics, and optionally per start the hull's yaw coefficient in a drift
-        ``drift_yaw_uv`` (S,) [rad/m^2] (:func:`_with_drift_yaw`). ``nets=False`` needs no ensemble.
-        ``command_memory`` (S, >= n_steps, 2): the command-memory features of the steps
-        (:meth:`_command_memory`), needed when the nets use them.
+                drift_yaw_uv=None, command_memory=None, wave_axis=None):
+        """Batched hybrid rollout from states (S, 3), previous residual deviations (S, 3), biases (S, 3)
+        or per member (E, S, 3) (surge/sway in NED), commands held (S, 1, K) or per step (S, n_steps, K),
+        wind held (S, 1, 2) or per step (S, n_steps, 2), and optionally a held current ``[speed_m_s,
+        dir_to_rad]`` (S, 1, 2) and a body-frame extra acceleration (S, 1, 3) for the physics, and
+        optionally per start the hull's yaw coefficient in a drift ``drift_yaw_uv`` (S,) [rad/m^2]
+        (:func:`_with_drift_yaw`). ``nets=False`` needs no ensemble. ``command_memory`` (S, >= n_steps, 2):
+        the command-memory features of the steps (:meth:`_command_memory`), needed when the nets use
+        them. ``wave_axis`` (S, 2): the waves' axis per start (:meth:`_wave_axes`); the held yaw load
+        then turns with them.
 
         Every step: the physics advances the ensemble-mean state one step (RK4, through
-        :meth:`DynamicModel.step_unchecked` with the extra acceleration ``accel_ext``) and
-        predicts the acceleration there; each member predicts its residual deviation from
-        those and its own previous deviation; the residual is the bias (rotated into the
-        current heading) plus the guard-weighted mean deviation. It corrects the mean
-        state, ``nu += dt r``, ``eta += 0.5 dt^2 R(psi) r`` (a constant residual acceleration
-        over the step); members' deviations from the mean residual are integrated the
-        same way to give the spread. Physics runs once per start time, not per member.
+        :meth:`DynamicModel.step_unchecked` with the extra acceleration ``accel_ext``) and predicts the
+        acceleration there; each member predicts its residual deviation from those and its own previous
+        deviation; the residual is the bias (rotated into the current heading) plus the guard-weighted
+        mean deviation. It corrects the mean state, ``nu += dt r``, ``eta += 0.5 dt^2 R(psi) r`` (a
+        constant residual acceleration over the step); members' deviations from the mean residual are
+        integrated the same way to give the spread. Physics runs once per start time, not per member.
 
         Returns
         -------
@@ -1108,7 +1139,8 @@ class HybridPredictor:
             r_prev = r
             if drift_yaw_uv is not None:        # after r_prev: not a net output, so not a next-step feature
                 r = _with_drift_yaw(r, nu_1, drift_yaw_uv)
-            eta[:, j + 1], nu[:, j + 1], std[:, j + 1] = _corrected_step(eta_1, nu_1, r, bias0_ned, dt_s, d_nu, d_eta)
+            eta[:, j + 1], nu[:, j + 1], std[:, j + 1] = _corrected_step(eta_1, nu_1, r, bias0_ned, dt_s, d_nu, d_eta,
+                                                                         wave_axis)
             _check_finite_step(eta[:, j + 1], nu[:, j + 1], (j + 1) * dt_s)
         return eta, nu, std, (wgt if guard else None)
 
@@ -1215,10 +1247,12 @@ def _check_finite_step(eta, nu, lead_s: float):
             f"Retrain without the hull correction, with the guard on, or on data that covers this regime")
 
 
-def _corrected_step(eta_1, nu_1, r, bias0_ned, dt_s: float, d_nu, d_eta):
+def _corrected_step(eta_1, nu_1, r, bias0_ned, dt_s: float, d_nu, d_eta, wave_axis=None):
     """The physics step ``eta_1, nu_1`` (S, 3) corrected by the residual: the members' learned
     deviations ``r`` (E, S, 3) plus the bias ``bias0_ned`` (E, S, 3, surge/sway in NED)
-    rotated into the new heading, as a constant acceleration over the step (``nu += dt r``,
+    rotated into the new heading (its yaw part turned with the waves' axis ``wave_axis``
+    (S, 2) when given: :func:`~hybridship.residual.wave_direction.yaw_load_factor`), as a
+    constant acceleration over the step (``nu += dt r``,
     ``eta += 0.5 dt^2 R(psi) r`` with the members' mean). The members' deviations from that
     mean are integrated the same way into ``d_nu``, ``d_eta`` (E, S, 3, updated in place).
 
@@ -1227,8 +1261,9 @@ def _corrected_step(eta_1, nu_1, r, bias0_ned, dt_s: float, d_nu, d_eta):
     """
     psi = eta_1[:, 2]
     c, s = np.cos(psi), np.sin(psi)
+    yaw = bias0_ned[..., 2] if wave_axis is None else bias0_ned[..., 2] * yaw_load_factor(psi, wave_axis)[None]
     bias_b = np.stack([c * bias0_ned[..., 0] + s * bias0_ned[..., 1],
-                       -s * bias0_ned[..., 0] + c * bias0_ned[..., 1], bias0_ned[..., 2]], axis=-1)
+                       -s * bias0_ned[..., 0] + c * bias0_ned[..., 1], yaw], axis=-1)
     r = r + bias_b
     r_mean = r.mean(axis=0)
     nu = nu_1 + dt_s * r_mean

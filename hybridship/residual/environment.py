@@ -114,6 +114,12 @@ class EnvironmentConfig(BaseModel):
     a spike (at 8 standard deviations, the position and heading gates never close on the
     clean truthsim-dev logs or on 23 scenarios of our own simulator; velocity gates did).
 
+    With ``wave_turned_yaw_load``, forecasts after a failure turn the held yaw load with the
+    waves: their axis comes from the wave-frequency motion of the last ``wave_axis_window_s``
+    of station keeping (where the motion's variance ratio reaches ``min_wave_anisotropy``),
+    and the load follows ``sin(2 beta)`` of the relative wave direction, where the station
+    keeping's ``|sin(2 beta)|`` reaches ``min_wave_sin2`` (:mod:`hybridship.residual.wave_direction`).
+
     ``thrust_error_model`` chooses the structure of ``theta``: ``"per_dof"`` (three
     efficiency factors on the surge, sway and yaw thrust, prior ``thrust_error_prior``) or
     ``"per_thruster"`` (one efficiency factor per thruster, acting through that thruster's
@@ -150,6 +156,10 @@ class EnvironmentConfig(BaseModel):
     held_load_block_s: float = Field(30.0, gt=0.0)
     innovation_gate_sigma: float = Field(8.0, gt=0.0)
     max_gated_samples: int = Field(10, ge=0)
+    wave_turned_yaw_load: bool = False
+    wave_axis_window_s: float = Field(600.0, gt=0.0)
+    min_wave_anisotropy: float = Field(3.0, ge=1.0)
+    min_wave_sin2: float = Field(0.3, gt=0.0, le=1.0)
 
 
 #: The per-DOF structure with its own settings (the default before the per-thruster one):

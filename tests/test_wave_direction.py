@@ -1,0 +1,109 @@
+"""The waves' axis from the wave-frequency motion, and the held yaw load turned with it."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from hybridship.predictors import HybridPredictor, as_log_arrays
+from hybridship.predictors.hybrid import _corrected_step
+from hybridship.residual.ensemble import EnsembleConfig
+from hybridship.residual.environment import EnvironmentConfig
+from hybridship.residual.wave_direction import wave_axis, yaw_load_factor
+from hybridship.sim.synthetic import physics_log
+
+from conftest import load_benchmark
+
+
+def _wave_motion(n: int, rel_deg: float, seed: int = 0, amplitude: float = 0.2, noise: float = 0.01):
+    """Body velocities (u, v) [m/s] of an 8-s wave motion along ``rel_deg`` from the bow, plus noise."""
+    rng = np.random.default_rng(seed)
+    t = np.arange(n, dtype=float)
+    swing = amplitude * np.sin(2 * np.pi * t / 8.0 + rng.uniform(0, 2 * np.pi))
+    rel = np.radians(rel_deg)
+    return t, swing * np.cos(rel) + noise * rng.standard_normal(n), swing * np.sin(rel) + noise * rng.standard_normal(n)
+
+
+@pytest.mark.parametrize("rel_deg, psi_deg", [(30.0, 0.0), (100.0, 250.0), (-60.0, 359.0)])
+def test_the_axis_of_a_wave_motion_is_found_in_ned(rel_deg, psi_deg):
+    """The axis (modulo 180 deg) is the heading plus the motion's direction in the body frame."""
+    t, u, v = _wave_motion(600, rel_deg)
+    psi = np.full(t.size, np.radians(psi_deg))
+    axis = wave_axis(t, psi, u, v)
+    assert axis is not None and axis.anisotropy > 100
+    err = (np.degrees(axis.axis_ned_rad) - (psi_deg + rel_deg) + 90.0) % 180.0 - 90.0
+    assert abs(err) < 1.0
+    assert axis.sin2_station == pytest.approx(np.sin(2 * np.radians(rel_deg)), abs=0.03)
+
+
+def test_no_axis_without_a_directed_wave_motion_or_enough_station_keeping():
+    rng = np.random.default_rng(1)
+    t = np.arange(600, dtype=float)
+    u, v = 0.05 * rng.standard_normal((2, t.size))                    # isotropic: no axis
+    assert wave_axis(t, np.zeros(t.size), u, v) is None
+    t, u, v = _wave_motion(100, 30.0)                                  # under ten of the longest periods
+    assert wave_axis(t, np.zeros(t.size), u, v) is None
+
+
+def test_yaw_load_factor_follows_sin_2_beta_and_holds_without_an_axis():
+    axis = np.array([[np.radians(40.0), np.sin(np.radians(80.0))], [np.nan, np.nan]])
+    psi = np.radians([0.0, 0.0])
+    np.testing.assert_allclose(yaw_load_factor(psi, axis), [1.0, 1.0])            # at the station's heading
+    psi = np.radians([40.0, 40.0])                                                   # head or following seas
+    np.testing.assert_allclose(yaw_load_factor(psi, axis), [0.0, 1.0], atol=1e-12)
+    psi = np.radians([-10.0, 123.0])                                                 # beta 50 deg: sin 100 deg
+    np.testing.assert_allclose(yaw_load_factor(psi, axis)[0], np.sin(np.radians(100.0)) / np.sin(np.radians(80.0)))
+
+
+def test_corrected_step_turns_only_the_yaw_part_of_the_bias():
+    eta1, nu1 = np.array([[0.0, 0.0, np.radians(40.0)]]), np.zeros((1, 3))
+    bias = np.array([[[1e-3, 2e-3, 1e-4]]])
+    axis = np.array([[np.radians(40.0), 0.5]])                                      # the ship now in head seas
+    z = np.zeros((1, 1, 3))
+    held = _corrected_step(eta1, nu1, z, bias, 1.0, np.zeros((1, 1, 3)), np.zeros((1, 1, 3)))
+    turned = _corrected_step(eta1, nu1, z, bias, 1.0, np.zeros((1, 1, 3)), np.zeros((1, 1, 3)), axis)
+    np.testing.assert_allclose(turned[1][:, :2], held[1][:, :2])
+    assert held[1][0, 2] == pytest.approx(1e-4) and turned[1][0, 2] == pytest.approx(0.0, abs=1e-15)
+
+
+def test_the_hybrid_turns_the_held_yaw_load_after_a_failure_only_with_the_option(model):
+    """A log whose station keeping carries a wave motion along a fixed NED axis, 30 deg off
+    the bow at the failure: with the option, forecasts after the failure get the axis (and
+    differ in heading through the yaw load), forecasts during station keeping none; without
+    it, nothing changes."""
+    log = physics_log(model, duration_s=1200, t_shutdown_s=900, seed=4, tau_ext_N=(2000.0, 0.0, 2000.0),
+                      rpm_scale=0.0, wind=(0.0, 0.0))                 # a yaw load; the ship turns slowly
+    psi = np.radians(log.heading_deg.to_numpy())
+    rel = psi[899] + np.radians(30.0) - psi                       # the axis fixed in NED, seen from the bow
+    _, swing, _ = _wave_motion(len(log), 0.0, noise=0.0)
+    log["u_m_s"] += swing * np.cos(rel)
+    log["v_m_s"] += swing * np.sin(rel)
+    a = as_log_arrays(log, model.vessel)
+    tiny = EnsembleConfig(n_members=2, hidden=8, max_epochs=5, patience=2, seed=0)
+    off = HybridPredictor(model.vessel, ensemble_config=tiny).fit([a])
+    on = HybridPredictor(model.vessel, ensemble_config=tiny,
+                         environment_config=EnvironmentConfig(wave_turned_yaw_load=True)).fit([a])
+    starts = [800.0, 905.0]
+    assert off._wave_axes(_setup(off, a, starts)) is None
+    axes = on._wave_axes(_setup(on, a, starts))
+    assert np.isnan(axes[0]).all()                                       # during station keeping
+    psi_fail = a.eta[899, 2]
+    err = (np.degrees(axes[1, 0] - psi_fail) - 30.0 + 90.0) % 180.0 - 90.0
+    d = psi[899] + np.radians(30.0)
+    assert abs(err) < 3.0 and axes[1, 1] == pytest.approx(np.mean(np.sin(2 * (d - psi[600:900]))), abs=0.05)
+    f_off, f_on = off.forecast(a, starts, 60.0), on.forecast(a, starts, 60.0)
+    np.testing.assert_allclose(f_on.eta[0], f_off.eta[0])               # during station keeping: the same
+    assert np.abs(f_on.eta[1, -1, 2] - f_off.eta[1, -1, 2]) > 1e-6      # after the failure: the yaw load turned
+
+
+def _setup(p, a, starts):
+    from hybridship.predictors.forecast_setup import _forecast_setup
+
+    return _forecast_setup(p.model, p.residual_config, a, starts, 60.0, p.stop_after_failure, "held",
+                           history_s=p.history_s, wind_forecast=p.wind_forecast)
+
+
+def test_benchmark_axis_error_is_taken_modulo_180():
+    wd = load_benchmark("wave_direction")
+    assert wd.axis_error_deg(179.0, 1.0) == pytest.approx(-2.0)
+    assert wd.axis_error_deg(10.0, 5.0) == pytest.approx(5.0)
