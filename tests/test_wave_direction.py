@@ -66,7 +66,7 @@ def test_corrected_step_turns_only_the_yaw_part_of_the_bias():
     assert held[1][0, 2] == pytest.approx(1e-4) and turned[1][0, 2] == pytest.approx(0.0, abs=1e-15)
 
 
-def test_the_hybrid_turns_the_held_yaw_load_after_a_failure_only_with_the_option(model):
+def test_the_hybrid_turns_the_held_yaw_load_after_a_failure_only_with_the_option(model, tmp_path):
     """A log whose station keeping carries a wave motion along a fixed NED axis, 30 deg off
     the bow at the failure: with the option, forecasts after the failure get the axis (and
     differ in heading through the yaw load), forecasts during station keeping none; without
@@ -94,6 +94,9 @@ def test_the_hybrid_turns_the_held_yaw_load_after_a_failure_only_with_the_option
     f_off, f_on = off.forecast(a, starts, 60.0), on.forecast(a, starts, 60.0)
     np.testing.assert_allclose(f_on.eta[0], f_off.eta[0])               # during station keeping: the same
     assert np.abs(f_on.eta[1, -1, 2] - f_off.eta[1, -1, 2]) > 1e-6      # after the failure: the yaw load turned
+    back = HybridPredictor.load(on.save(tmp_path / "on.npz"))           # the model file keeps the option
+    assert back.environment_config.wave_turned_yaw_load
+    np.testing.assert_allclose(back.forecast(a, starts, 60.0).eta, f_on.eta)
 
 
 def _setup(p, a, starts):
