@@ -239,6 +239,17 @@ def test_one_missing_wind_sample_holds_the_latest_valid_one(model, log):
     assert sw.wind[0, 0] == df.wind_speed_m_s[T_FAULT - 1]
 
 
+def test_commands_missing_at_the_start_are_flagged_with_the_time_they_are_held_from(model, log):
+    """Commands not logged since well before the start are held (as the log format says), and
+    the start says so: nan_in_window, with the time of the last logged values."""
+    cmd = [c for c in log.columns if c.endswith("_rpm") or c.endswith("_azimuth_deg")]
+    df = log.copy()
+    df.loc[(df.time_s > T_FAULT - 50) & (df.time_s <= T_FAULT), cmd] = np.nan
+    _, sw = _assess(model, df, [float(T_FAULT), float(T_FAULT - 60)])
+    assert sw.flags[F.NAN_IN_WINDOW][0] and not sw.flags[F.NAN_IN_WINDOW][1]
+    assert f"last logged values held, from time_s {T_FAULT - 50:g}" in sw.notes[0]
+
+
 def test_a_log_without_wind_is_not_a_dropped_sensor(model, log):
     _, sw = _assess(model, log.drop(columns=["wind_speed_m_s", "wind_dir_deg"]), [float(T_FAULT)])
     assert not sw.flags[F.WIND_DROPPED][0] and np.all(sw.wind == 0.0)

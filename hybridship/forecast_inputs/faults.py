@@ -310,10 +310,12 @@ class Window:
 def detect_missing_samples(view: LogView, win: Window) -> None:
     """Missing samples in the window.
 
-    Fault: a NaN position, heading, logged velocity or wind sample, or fewer rows than the
-    window holds at the nominal rate (a gap). Evidence: non-finite values; the row count
-    against :attr:`LogView.n_nom`. Flags ``nan_in_window``; nothing to repair: the start
-    values use the valid samples only.
+    Fault: a NaN position, heading, logged velocity, wind or command sample, or fewer rows
+    than the window holds at the nominal rate (a gap). Evidence: non-finite values
+    (:attr:`LogArrays.commands_logged` for the commands); the row count against
+    :attr:`LogView.n_nom`. Flags ``nan_in_window``; nothing to repair: the start values use
+    the valid samples only, and a command missing at the start holds its last logged value
+    (the note says since when).
     """
     a, W = view.arrays, win.rows
     n_missing = max(0, view.n_nom - W.size)
@@ -324,6 +326,11 @@ def detect_missing_samples(view: LogView, win: Window) -> None:
     cols += [name for j, name in enumerate(("u", "v", "r")) if has_col[j] and not a.nu_logged[W, j].all()]
     if a.has_wind and not win.wind_ok.all():
         cols.append("wind")
+    if not a.commands_logged[W].all():
+        logged = np.flatnonzero(a.commands_logged[: win.start + 1])
+        cols.append("commands" if a.commands_logged[win.start] else
+                    "commands (at the start: the last logged values held, "
+                    + (f"from time_s {view.t[logged[-1]]:g})" if logged.size else "none logged: 0)"))
     if cols or n_missing:
         what = f"missing {', '.join(cols)}" if cols else ""
         gap = f"{n_missing} missing sample(s)" if n_missing else ""

@@ -28,10 +28,11 @@ Faults and their behaviour (``FaultFlags`` names the flags):
     such a time. Rows without a finite ``time_s`` cannot be placed and are dropped
     (counted in :attr:`~hybridship.logs.ingest.SortedLog.n_without_time`).
 ``nan_in_window``
-    A missing (NaN) position, heading, logged velocity or wind sample, or a missing sample
-    (fewer rows than ``window_s`` holds at the nominal rate) in the window. The start
+    A missing (NaN) position, heading, logged velocity, wind or command sample, or a missing
+    sample (fewer rows than ``window_s`` holds at the nominal rate) in the window. The start
     values use the valid samples only; the position is the latest valid one, moved to
-    ``t0`` with the window's mean velocity.
+    ``t0`` with the window's mean velocity; commands missing at the start hold their last
+    logged values, and the note says from when.
 ``too_little_valid``
     Fewer than ``ceil(min_valid_fraction * n)`` valid samples of the heading or of a
     velocity component (``n`` = samples the window holds at the nominal rate), or no valid

@@ -1011,6 +1011,10 @@ class LogArrays:
         True where both wind speed and direction were logged (finite) at that row, False
         where ``wind`` holds an earlier value or zeros (a dropped wind sensor). Default:
         ``has_wind`` everywhere.
+    commands_logged : ndarray of bool, shape (N,)
+        True where every command column the log has (``<name>_rpm``, ``<name>_azimuth_deg``)
+        was finite at that row, False where ``rpm`` or ``azimuth_rad`` hold an earlier value
+        (or 0 before the first). Default: True everywhere.
     resorted_time_s : ndarray, shape (M,)
         Times of samples that arrived late, were duplicated or conflicted in the source
         and were re-sorted, dropped or removed by :func:`hybridship.logs.ingest.ingest`
@@ -1038,10 +1042,13 @@ class LogArrays:
     channel_logged: tuple[bool, ...]
     wind_logged: np.ndarray | None = None
     resorted_time_s: np.ndarray | None = None
+    commands_logged: np.ndarray | None = None
 
     def __post_init__(self):
         if self.wind_logged is None:
             object.__setattr__(self, "wind_logged", np.full(self.time_s.shape[0], bool(self.has_wind)))
+        if self.commands_logged is None:
+            object.__setattr__(self, "commands_logged", np.ones(self.time_s.shape[0], dtype=bool))
         if self.resorted_time_s is None:
             object.__setattr__(self, "resorted_time_s", np.zeros(0))
         for v in vars(self).values():
@@ -1217,11 +1224,14 @@ def _frame_to_arrays(df: pd.DataFrame, names: tuple, rot: tuple, resorted_time_s
     rpm = np.zeros((n, k))
     azimuth = np.zeros((n, k))
     logged = []
+    commands_logged = np.ones(n, dtype=bool)
     for j, name in enumerate(names):
         logged.append(f"{name}_rpm" in cols)
         if logged[-1]:
+            commands_logged &= np.isfinite(col(f"{name}_rpm"))
             rpm[:, j] = _held(col(f"{name}_rpm"), 0.0)
         if rot[j] and f"{name}_azimuth_deg" in cols:
+            commands_logged &= np.isfinite(col(f"{name}_azimuth_deg"))
             azimuth[:, j] = np.radians(_held(col(f"{name}_azimuth_deg"), 0.0))
 
     wind = np.zeros((n, 2))
@@ -1255,4 +1265,5 @@ def _frame_to_arrays(df: pd.DataFrame, names: tuple, rot: tuple, resorted_time_s
         channel_logged=tuple(logged),
         wind_logged=wind_logged,
         resorted_time_s=resorted_time_s,
+        commands_logged=commands_logged,
     )
