@@ -94,6 +94,10 @@ def test_the_hybrid_turns_the_held_yaw_load_after_a_failure_only_with_the_option
     f_off, f_on = off.forecast(a, starts, 60.0), on.forecast(a, starts, 60.0)
     np.testing.assert_allclose(f_on.eta[0], f_off.eta[0])               # during station keeping: the same
     assert np.abs(f_on.eta[1, -1, 2] - f_off.eta[1, -1, 2]) > 1e-6      # after the failure: the yaw load turned
+    # with wind futures in the spread, every per-start input is tiled over them
+    on_ws = HybridPredictor(model.vessel, ensemble_config=tiny, wind_samples=2,
+                            environment_config=EnvironmentConfig(wave_turned_yaw_load=True)).fit([a])
+    assert np.isfinite(on_ws.forecast(a, starts, 60.0).eta_std).all()
     back = HybridPredictor.load(on.save(tmp_path / "on.npz"))           # the model file keeps the option
     assert back.environment_config.wave_turned_yaw_load
     np.testing.assert_allclose(back.forecast(a, starts, 60.0).eta, f_on.eta)

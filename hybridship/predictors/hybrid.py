@@ -612,7 +612,8 @@ class HybridPredictor:
         def tile(x):
             return _tile_starts(x, N)
 
-        per_start = {k: tile(rollout_kw.pop(k)) for k in ("nets_weight", "drift_yaw_uv", "command_memory")}
+        per_start = {k: tile(rollout_kw.pop(k))
+                     for k in ("nets_weight", "drift_yaw_uv", "command_memory", "wave_axis")}
         eta_w, _, _, _ = self.rollout(tile(eta0), tile(nu0), tile(dev0), np.tile(bias0, (1, N, 1)), tile(st.rpm),
                                       tile(st.az), wind, H, st.dt, current=tile(current), accel_ext=tile(acc_ext),
                                       **per_start, **rollout_kw)
