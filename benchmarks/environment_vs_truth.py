@@ -193,14 +193,20 @@ def main(argv=None) -> int:
                 "thrust_error_n_kNm_true": thr_t[r][sel, 2].mean() / 1e3,
             })
     table = pd.DataFrame(rows)
-    args.out.mkdir(parents=True, exist_ok=True)
-    atomic_write(args.out / "environment_vs_truth.csv",
-                 lambda fh: fh.write(table.to_csv(index=False, float_format="%.4g").encode("utf-8")))
-    md = [markdown_table(table.round(2)), "", yaw_summary(table)]
-    atomic_write(args.out / "environment_vs_truth.md", lambda fh: fh.write(("\n".join(md) + "\n").encode("utf-8")))
+    write_table(args.out, "environment_vs_truth", table, yaw_summary(table))
     _plot(args.out / "environment_vs_truth.png", series)
-    print("\n".join(md))
     return 0
+
+
+def write_table(out: Path, stem: str, table: pd.DataFrame, summary_md: str) -> None:
+    """``<stem>.csv`` and ``<stem>.md`` (the table, then ``summary_md``) in ``out``, atomically;
+    prints the Markdown."""
+    out.mkdir(parents=True, exist_ok=True)
+    csv = table.to_csv(index=False, float_format="%.4g")
+    atomic_write(out / f"{stem}.csv", lambda fh: fh.write(csv.encode("utf-8")))
+    md = "\n".join([markdown_table(table.round(2)), "", summary_md])
+    atomic_write(out / f"{stem}.md", lambda fh: fh.write((md + "\n").encode("utf-8")))
+    print(md)
 
 
 def _drift_hull_coefficients(path: Path) -> dict[str, float]:

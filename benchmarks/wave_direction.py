@@ -30,7 +30,6 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from hybridship.fileio import atomic_write, markdown_table
 from hybridship.evaluation.metrics import shutdown_index
 from hybridship.physics.model import DynamicModel
 from hybridship.predictors import as_log_arrays
@@ -114,12 +113,7 @@ def main(argv=None) -> int:
         _, load_t, _ = evt._truth(df, model, a)
         rows += log_rows(name, df, a, load_t[:, 2], config)
     table = pd.DataFrame(rows)
-    args.out.mkdir(parents=True, exist_ok=True)
-    atomic_write(args.out / "wave_direction.csv",
-                 lambda fh: fh.write(table.to_csv(index=False, float_format="%.4g").encode("utf-8")))
-    md = [markdown_table(table.round(2)), "", summary(table)]
-    atomic_write(args.out / "wave_direction.md", lambda fh: fh.write(("\n".join(md) + "\n").encode("utf-8")))
-    print("\n".join(md))
+    evt.write_table(args.out, "wave_direction", table, summary(table))
     return 0
 
 
