@@ -412,10 +412,18 @@ def _add_benchmark(sub) -> None:
     p.set_defaults(func=_cmd_benchmark_missing)
 
 
+def _check_out_folder(out: Path, prefix: str) -> None:
+    """Refuse an ``--out`` that exists and is not a folder, before any work is done."""
+    if out.exists() and not out.is_dir():
+        raise UsageError(f"{prefix}: error: --out {out}: exists and is not a folder")
+
+
 def _cmd_benchmark_manoeuvre(args) -> int:
     from dataclasses import replace
 
     from .evaluation.manoeuvre import ManoeuvreConfig, run_manoeuvre_benchmark
+
+    _check_out_folder(args.out, f"{_PROG} benchmark manoeuvre")
 
     try:
         horizons = tuple(float(h) for h in args.horizons_s.split(",") if h.strip())
@@ -453,6 +461,7 @@ def _cmd_benchmark_drift(args) -> int:
 
     if args.members < 1 or args.intervals < 1 or args.scenarios < 1:
         raise UsageError(f"{_PROG} benchmark drift: error: --members, --intervals and --scenarios must be >= 1")
+    _check_out_folder(args.out, f"{_PROG} benchmark drift")
     if not 0 <= args.calibration_scenarios <= 20:
         raise UsageError(f"{_PROG} benchmark drift: error: --calibration-scenarios must be in 0..20, "
                          f"got {args.calibration_scenarios}")

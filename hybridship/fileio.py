@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import os
+import stat
 import uuid
 from pathlib import Path
 from typing import BinaryIO, Callable
@@ -18,6 +19,9 @@ def atomic_write(path, write: Callable[[BinaryIO], None]) -> Path:
     path = Path(path)
     if path.is_dir():
         raise IsADirectoryError(f"{path}: is a directory; expected the path of a file to write")
+    if path.exists() and not path.stat().st_mode & stat.S_IWUSR:
+        # the rename would replace it even so (a directory entry, not the file, is written)
+        raise PermissionError(f"{path}: is read-only; not replaced")
     path.parent.mkdir(parents=True, exist_ok=True)
     tmp = path.with_name(f".{path.name}.{uuid.uuid4().hex}.tmp")
     try:

@@ -199,7 +199,7 @@ def test_weather_table_round_trip_and_errors(tmp_path):
 @pytest.mark.parametrize("kwargs, field", [
     (dict(radii_m=(-1.0,)), "radii_m"), (dict(n_samples=0), "n_samples"), (dict(dt_s=0.0), "dt_s"),
     (dict(reaction_times_s=(500.0,)), "reaction_times_s"), (dict(vessel_spread=float("nan")), "vessel_spread"),
-    (dict(seed=-1), "seed")])
+    (dict(seed=-1), "seed"), (dict(dt_s=20.0), "dt_s")])
 def test_bad_settings_name_the_field(kwargs, field):
     with pytest.raises((ValueError, TypeError), match=field):
         DriftOffSettings(**kwargs)
@@ -210,6 +210,10 @@ def test_bad_weather_names_the_field():
         WeatherState(hs_m=-0.5)
     with pytest.raises(ValueError, match="weather.gust_intensity"):
         WeatherState(gust_intensity=0.9)
+    # beyond the physics' valid inputs and the wave model's sea states the drift would diverge
+    for field, value in (("wind_speed_m_s", 500.0), ("current_speed_m_s", 30.0), ("hs_m", 40.0), ("tp_s", 60.0)):
+        with pytest.raises(ValueError, match=f"weather.{field}"):
+            WeatherState(**{field: value})
     with pytest.raises(ValueError, match="uncertainty.wind_speed_m_s"):
         WeatherUncertainty(wind_speed_m_s=-1.0)
     with pytest.raises(TypeError, match="weather"):
@@ -227,6 +231,13 @@ def test_cli_reports_bad_input_naming_the_option(tmp_path, capsys):
     assert "hs_m" in capsys.readouterr().err
     assert main(["drift-off", "season", "--out", str(tmp_path), "--weather-table", str(tmp_path / "nope.csv")]) == 2
     assert "--weather-table" in capsys.readouterr().err
+    # an --out that is a file is refused before the work, by the benchmarks too
+    a_file = tmp_path / "a_file"
+    a_file.write_text("x")
+    for argv in (["drift-off", "planning", "--samples", "3"], ["benchmark", "drift"],
+                 ["benchmark", "manoeuvre", "--train", str(tmp_path), "--test", str(tmp_path)]):
+        assert main(argv + ["--out", str(a_file)]) == 2, argv
+        assert "exists and is not a folder" in capsys.readouterr().err
 
 
 def test_cli_planning_writes_the_report(tmp_path, capsys):
@@ -264,6 +275,28 @@ def test_live_update_is_fast_and_does_not_touch_the_log():
     assert dt < 1.0, f"live update took {dt:.2f} s"
     assert np.all(np.isfinite(est.accel_ned)) and est.accel_members.shape == (20, 3)
     assert res.t_reach_s.shape == (1, 100, 2) and np.isfinite(res.t_reach_s).mean() > 0.5
+
+
+def test_live_refuses_a_time_without_station_keeping_and_bad_estimates():
+    """A blackout is predicted from station keeping: a log whose last row used is in the drift
+    is refused; an estimate with NaN, missing or absurd fields names the field, never reads
+    as "never reached"."""
+    import dataclasses
+
+    df, i = _failure_log()
+    with pytest.raises(ValueError, match="dp_active is 0"):
+        environment_from_log(df.iloc[: i + 30], "gunnerus")
+    est = environment_from_log(df.iloc[: i + 1], "gunnerus")
+    st = DriftOffSettings(n_samples=3, horizon_s=60.0)
+    for change, field in ((dict(accel_members=np.full((20, 3), np.nan)), "estimate.accel_members"),
+                          (dict(accel_members=np.zeros(3)), "estimate.accel_members"),
+                          (dict(eta=np.array([0.0, np.nan, 0.0])), "estimate.eta"),
+                          (dict(rpm=np.array([100.0])), "estimate.rpm"),
+                          (dict(rpm=np.array([0.0, 1e6, 0.0])), r"rpm\[batch 0, thruster 'port'\]")):
+        with pytest.raises(ValueError, match=field):
+            blackout_now(dataclasses.replace(est, **change), "gunnerus", st)
+    with pytest.raises(TypeError, match="settings"):
+        blackout_now(est, "gunnerus", {"n_samples": 3})
 
 
 def test_live_bad_input_names_the_field():

@@ -114,6 +114,24 @@ def test_write_replaces_existing_file_only_on_success(tmp_path, monkeypatch):
     assert sorted(os.listdir(tmp_path)) == ["log.csv"]
 
 
+def test_read_only_files_and_folders_are_not_replaced(tmp_path):
+    """Every output goes through one atomic write: it refuses a read-only file (a rename
+    would replace it anyway) and a folder, and leaves both as they were."""
+    import stat
+
+    from hybridship.fileio import atomic_write
+
+    kept = tmp_path / "kept.csv"
+    kept.write_bytes(b"precious")
+    kept.chmod(stat.S_IRUSR | stat.S_IRGRP | stat.S_IROTH)
+    with pytest.raises(PermissionError, match="kept.csv: is read-only"):
+        atomic_write(kept, lambda fh: fh.write(b"new"))
+    assert kept.read_bytes() == b"precious"
+    with pytest.raises(IsADirectoryError, match="is a directory"):
+        atomic_write(tmp_path, lambda fh: fh.write(b"new"))
+    assert sorted(x.name for x in tmp_path.iterdir()) == ["kept.csv"]
+
+
 def test_unsupported_extension(tmp_path):
     with pytest.raises(LogFormatError, match="extension"):
         write_log(circle_log(), tmp_path / "log.txt")

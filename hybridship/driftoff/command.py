@@ -132,6 +132,9 @@ def _settings(args, mode):
 
     if not 0.0 < args.quantile < 1.0:
         raise _usage(f"{_PROG} {mode}: error: --quantile must be in (0, 1), got {args.quantile}")
+    if Path(args.out).exists() and not Path(args.out).is_dir():
+        # checked before the work, not when the report is written
+        raise _usage(f"{_PROG} {mode}: error: --out {args.out}: exists and is not a folder")
     names = {"radii_m": "--radii-m", "reaction_times_s": "--reaction-times-s", "n_samples": "--samples",
              "horizon_s": "--horizon-s", "dt_s": "--dt-s", "vessel_spread": "--vessel-spread", "seed": "--seed"}
     try:

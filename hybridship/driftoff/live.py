@@ -28,6 +28,7 @@ from dataclasses import dataclass
 import numpy as np
 import pandas as pd
 
+from ..forecast_inputs.limits import check_or_clip_inputs
 from ..frames import vector_to_speed_dir
 from ..logs.io import LogArrays, log_to_arrays
 from ..residual.features import ResidualConfig, prepare_log
@@ -134,6 +135,9 @@ def environment_from_log(log, vessel="gunnerus", *, window_s: float = 900.0, win
     model = get_model(vessel)
     a = _arrays(log, model, window_s)
     idx = len(a.time_s) - 1
+    if a.dp_active[idx] == 0:
+        raise ValueError(f"log: dp_active is 0 at time_s {a.time_s[idx]:g} (the last row used): a blackout is "
+                         f"predicted from station keeping; give a time while the DP is active")
     current_members = None
     if method == "estimator":
         eta0, nu0, bias0, members, current_members = _estimated(model, a, idx, int(n_members), seed,
@@ -186,6 +190,27 @@ def _estimated(model, a: LogArrays, idx: int, n_members: int, seed: int, config=
     return x[0:3].copy(), x[3:6].copy(), x[LOAD].copy(), loads, draws[:, CUR.start - off:CUR.stop - off].copy()
 
 
+def _check_estimate(estimate: EnvironmentEstimate, n_thrusters: int) -> None:
+    """Shapes and finiteness of the fields :func:`blackout_now` reads (errors name the field)."""
+    shapes = {"eta": (3,), "nu": (3,)}
+    for name, shape in shapes.items():
+        x = np.asarray(getattr(estimate, name), dtype=float)
+        if x.shape != shape or not np.all(np.isfinite(x)):
+            raise ValueError(f"estimate.{name}: expected {shape[0]} finite values, got {x.tolist()!r}")
+    for name in ("rpm", "azimuth_rad"):
+        x = np.asarray(getattr(estimate, name), dtype=float)
+        if x.ndim != 1 or x.size < n_thrusters or not np.all(np.isfinite(x)):
+            raise ValueError(f"estimate.{name}: expected one finite value per command channel (at least "
+                             f"{n_thrusters}, the thrusters), got shape {x.shape}")
+    m = np.asarray(estimate.accel_members, dtype=float)
+    if m.ndim != 2 or m.shape[0] < 1 or m.shape[1] != 3 or not np.all(np.isfinite(m)):
+        raise ValueError(f"estimate.accel_members: expected finite members of shape (M >= 1, 3), got shape "
+                         f"{m.shape}" + ("" if m.ndim != 2 or np.all(np.isfinite(m)) else " with NaN or inf"))
+    for name in ("wind_speed_m_s", "wind_dir_from_rad", "gust_intensity"):
+        if not np.isfinite(float(getattr(estimate, name))):
+            raise ValueError(f"estimate.{name}: expected a finite number, got {getattr(estimate, name)!r}")
+
+
 def blackout_now(estimate: EnvironmentEstimate, vessel="gunnerus", settings: DriftOffSettings | None = None,
                  *, start_at_rest: bool = False) -> DriftOffResult:
     """Monte-Carlo blackouts from the state and environment of ``estimate`` (one heading: now's).
@@ -197,7 +222,16 @@ def blackout_now(estimate: EnvironmentEstimate, vessel="gunnerus", settings: Dri
     if not isinstance(estimate, EnvironmentEstimate):
         raise TypeError(f"estimate: expected an EnvironmentEstimate, got {type(estimate).__name__}")
     st = settings or DriftOffSettings()
+    if not isinstance(st, DriftOffSettings):
+        raise TypeError(f"settings: expected a DriftOffSettings, got {type(st).__name__}")
     model = get_model(vessel)
+    _check_estimate(estimate, len(model.vessel.thrusters))
+    # the logged commands now, as a forecast takes them: beyond twice max_rpm refused (a unit
+    # error), above max_rpm clipped
+    k = len(model.vessel.thrusters)
+    rpm_now = np.zeros(model.n_actuators)
+    rpm_now[:k] = np.asarray(estimate.rpm, dtype=float)[:k]
+    rpm_now = check_or_clip_inputs(model, rpm=rpm_now[None]).rpm[0]
     ves = model.vessel
     N = st.n_samples
     rng = state_rng(st.seed, 0)
@@ -212,7 +246,7 @@ def blackout_now(estimate: EnvironmentEstimate, vessel="gunnerus", settings: Dri
     rpm = np.zeros(K)
     az = np.zeros(K)
     k = len(ves.thrusters)
-    rpm[:k] = estimate.rpm[:k]
+    rpm[:k] = rpm_now[:k]
     az[:k] = estimate.azimuth_rad[:k]
     members = estimate.accel_members
     acc = members[np.arange(N) % members.shape[0]]

@@ -80,7 +80,8 @@ class DriftOffSettings:
     horizon_s : float
         Longest simulated drift [s]; radii not reached by then count as never reached.
     dt_s : float
-        Output step [s] (RK4, inputs held over a step).
+        Output step [s] (RK4, inputs held over a step), at most 1 s (the RK4 step the physics
+        inputs' envelope allows: longer steps diverge in a fast drift).
     rpm_time_constant_s : float
         First-order spin-down time constant of the thrusters [s].
     vessel_spread : float
@@ -95,7 +96,7 @@ class DriftOffSettings:
     reaction_times_s: Annotated[tuple[Annotated[Float, Field(ge=0)], ...], NonEmpty] = (30.0, 60.0)
     n_samples: Annotated[Int, Field(ge=1)] = 100
     horizon_s: Annotated[Float, Field(gt=0)] = 300.0
-    dt_s: Annotated[Float, Field(gt=0)] = 1.0
+    dt_s: Annotated[Float, Field(gt=0, le=1.0)] = 1.0
     rpm_time_constant_s: Annotated[Float, Field(gt=0)] = 1.5
     vessel_spread: Annotated[Float, Field(ge=0)] = 1.0
     n_wave_components: Annotated[Int, Field(ge=1)] = 20

@@ -36,7 +36,7 @@ import pandas as pd
 from pydantic import Field
 
 from ..config import Float, config_dataclass
-from ..forecast_inputs.limits import check_number
+from ..forecast_inputs.limits import Envelope, check_number
 from ..sim import environment as env
 
 __all__ = ["WeatherState", "WeatherUncertainty", "TABLE_COLUMNS", "read_weather_table", "states_to_frame",
@@ -55,6 +55,16 @@ def _check(name, value, lo=None, hi=None, lo_open=False):
     return check_number(name, value, lo=lo, hi=hi, lo_open=lo_open)
 
 
+#: Largest mean wind [m/s] and current [m/s]: the physics inputs' valid range
+#: (:class:`hybridship.forecast_inputs.limits.Envelope`).
+MAX_WIND_M_S = Envelope().wind_speed_max_m_s
+MAX_CURRENT_M_S = Envelope().current_speed_max_m_s
+#: Largest significant wave height [m] and peak period [s] of a weather state: beyond the
+#: sea states the wave and wave-drift models are meant for.
+MAX_HS_M = 20.0
+MAX_TP_S = 30.0
+
+
 @config_dataclass(frozen=True, prefix="weather")
 class WeatherState:
     """Mean weather of one state (SI, radians; directions as in :mod:`hybridship.sim.environment`).
@@ -62,27 +72,30 @@ class WeatherState:
     Attributes
     ----------
     wind_speed_m_s : float
-        Mean 10 m wind speed [m/s].
+        Mean 10 m wind speed [m/s], at most :data:`MAX_WIND_M_S`.
     wind_dir_from_rad : float
         Direction the wind comes FROM [rad], clockwise from north.
     hs_m, tp_s : float
-        Significant wave height [m] and peak period [s] (JONSWAP, gamma 3.3, long-crested).
+        Significant wave height [m] and peak period [s] (JONSWAP, gamma 3.3, long-crested),
+        at most :data:`MAX_HS_M` and :data:`MAX_TP_S`.
     wave_dir_from_rad : float
         Direction the waves come FROM [rad].
     current_speed_m_s : float
-        Current speed [m/s].
+        Current speed [m/s], at most :data:`MAX_CURRENT_M_S`.
     current_dir_to_rad : float
         Direction the current flows TO [rad].
     gust_intensity : float
         Turbulence intensity sigma_U / U [-] in [0, 0.5].
     """
 
-    wind_speed_m_s: _NonNeg = 0.0
+    # upper bounds: the physics inputs' valid range (hybridship.forecast_inputs.limits), and the
+    # sea states the wave model is meant for; beyond them the drift diverges instead of failing
+    wind_speed_m_s: Annotated[Float, Field(ge=0.0, le=MAX_WIND_M_S)] = 0.0
     wind_dir_from_rad: Float = 0.0
-    hs_m: _NonNeg = 0.0
-    tp_s: Annotated[Float, Field(gt=0.0)] = 6.0
+    hs_m: Annotated[Float, Field(ge=0.0, le=MAX_HS_M)] = 0.0
+    tp_s: Annotated[Float, Field(gt=0.0, le=MAX_TP_S)] = 6.0
     wave_dir_from_rad: Float = 0.0
-    current_speed_m_s: _NonNeg = 0.0
+    current_speed_m_s: Annotated[Float, Field(ge=0.0, le=MAX_CURRENT_M_S)] = 0.0
     current_dir_to_rad: Float = 0.0
     gust_intensity: Annotated[Float, Field(ge=0.0, le=0.5)] = 0.1
 
