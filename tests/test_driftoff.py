@@ -287,6 +287,8 @@ def test_live_refuses_a_time_without_station_keeping_and_bad_estimates():
     with pytest.raises(ValueError, match="dp_active is 0"):
         environment_from_log(df.iloc[: i + 30], "gunnerus")
     est = environment_from_log(df.iloc[: i + 1], "gunnerus")
+    assert est.wind_measured and not environment_from_log(
+        df.iloc[: i + 1].drop(columns=["wind_speed_m_s", "wind_dir_deg"]), "gunnerus").wind_measured
     st = DriftOffSettings(n_samples=3, horizon_s=60.0)
     for change, field in ((dict(accel_members=np.full((20, 3), np.nan)), "estimate.accel_members"),
                           (dict(accel_members=np.zeros(3)), "estimate.accel_members"),

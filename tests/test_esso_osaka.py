@@ -254,6 +254,23 @@ def test_benchmark_refuses_the_same_run_in_train_and_test(tmp_path):
         run_manoeuvre_benchmark("esso_osaka_model", train, test, (5,), tmp_path / "out", config=_tiny_config())
 
 
+def test_benchmark_refuses_test_runs_too_short_for_any_start(tmp_path):
+    """A test run shorter than the warm-up plus the longest horizon gives no start: refused
+    before training, not written as empty tables."""
+    import pandas as pd
+
+    from hybridship.evaluation.manoeuvre import run_manoeuvre_benchmark
+
+    train = _link(tmp_path, "train", SMALL_TRAIN[:1])
+    test = tmp_path / "test"
+    short = test / SMALL_TRAIN[1]
+    short.parent.mkdir(parents=True)
+    pd.read_csv(DATA / "data" / SMALL_TRAIN[1]).iloc[:20].to_csv(short, index=False)
+    with pytest.raises(ValueError, match="no start times"):
+        run_manoeuvre_benchmark("esso_osaka_model", train, test, (5,), tmp_path / "out", config=_tiny_config())
+    assert not (tmp_path / "out").exists()
+
+
 def test_known_commands_on_a_real_run(tmp_path):
     """Known commands: equal to held when the commands are constant, to a direct rollout otherwise."""
     from hybridship.datasets.esso_osaka import EssoRun, esso_to_log

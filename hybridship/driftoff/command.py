@@ -92,11 +92,12 @@ def add_parser(sub, parser_class, usage_error=None) -> None:
     a.set_defaults(func=_cmd_planning)
 
     b = dsub.add_parser("live", help="a blackout now, from a station-keeping log",
-                        description="Estimate the environment from the log up to --time-s (wind, 900-s residual "
-                                    "mean) and run blackouts from the state and thruster rpm at that time.")
+                        description="Estimate the environment from the log up to --time-s (mean wind; current "
+                                    "and load from the environment estimator over --window-s) and run blackouts "
+                                    "from the state and thruster rpm at that time.")
     b.add_argument("--log", type=Path, required=True, help="station-keeping log (.csv, .csv.gz, .parquet)")
     b.add_argument("--time-s", type=float, default=None, help="time of the blackout [s] (default: the last row)")
-    b.add_argument("--window-s", type=float, default=900.0, help="residual-mean window [s] (default 900)")
+    b.add_argument("--window-s", type=float, default=900.0, help="log read before --time-s by the environment estimator [s] (default 900)")
     _common(b)
     b.set_defaults(func=_cmd_live)
 
@@ -219,14 +220,26 @@ def _cmd_live(args) -> int:
     dt = time.perf_counter() - t0
     inputs = {"vessel": model.vessel.name, "log": str(args.log), "blackout at [s]": f"{est.time_s:g}",
               "heading [deg]": f"{math.degrees(est.eta[2]) % 360:.1f}",
-              "mean wind": f"{est.wind_speed_m_s:.2f} m/s from {math.degrees(est.wind_dir_from_rad) % 360:.0f} deg, "
-              f"gust intensity {est.gust_intensity:.2f}",
-              "residual mean (N, E) [m/s^2]": f"{est.accel_ned[0]:.4f}, {est.accel_ned[1]:.4f}",
+              "mean wind": (f"{est.wind_speed_m_s:.2f} m/s from {math.degrees(est.wind_dir_from_rad) % 360:.0f} deg, "
+                            f"gust intensity {est.gust_intensity:.2f}") if est.wind_measured else
+                           "no wind measurement in the log's last 120 s: the blackouts run without wind",
+              "estimated current [m/s, to deg]": _current_text(est),
+              "estimated load (N, E) [m/s^2]": f"{est.accel_ned[0]:.4f}, {est.accel_ned[1]:.4f}",
               "update time [s]": f"{dt:.3f}"}
     paths = write_report(res, args.out, title="Drift-off analysis (live: blackout now)", inputs=inputs,
                          quantile=args.quantile, plots=not args.no_plots)
     print(paths["summary.md"].read_text())
     return 0
+
+
+def _current_text(est) -> str:
+    """The estimator's mean current as speed and direction (or why there is none)."""
+    import numpy as np
+
+    if est.current_members_ned_m_s is None:
+        return "inside the load (residual mean)"
+    c = np.asarray(est.current_members_ned_m_s, dtype=float).reshape(-1, 2).mean(axis=0)
+    return f"{float(np.hypot(*c)):.3f} to {math.degrees(math.atan2(c[1], c[0])) % 360:.0f}"
 
 
 def _cmd_season(args) -> int:

@@ -67,6 +67,8 @@ class EnvironmentEstimate:
         Current velocity members ``[north_m_s, east_m_s]`` when an estimator separates the
         current from the other loads (it then acts through the relative velocity); None
         (the residual mean) = the current is inside ``accel_ned``.
+    wind_measured : bool
+        False when the log had no valid wind sample in ``wind_window_s`` (the wind is then 0).
     """
 
     time_s: float
@@ -80,6 +82,7 @@ class EnvironmentEstimate:
     accel_ned: np.ndarray
     accel_members: np.ndarray
     current_members_ned_m_s: np.ndarray | None = None
+    wind_measured: bool = True
 
 
 def _arrays(log, model, window_s: float) -> LogArrays:
@@ -148,7 +151,8 @@ def environment_from_log(log, vessel="gunnerus", *, window_s: float = 900.0, win
         eta0, nu0, _, bias0 = prep.start_state(idx)
     t = a.time_s
     sel = (t >= t[-1] - wind_window_s) & np.isfinite(a.wind).all(1)
-    if a.has_wind and sel.any():
+    wind_measured = bool(a.has_wind and sel.any())
+    if wind_measured:
         ws, wd = a.wind[sel, 0], a.wind[sel, 1]
         vn, ve = np.mean(ws * np.cos(wd)), np.mean(ws * np.sin(wd))
         w_speed, w_dir = float(np.hypot(vn, ve)), float(math.atan2(ve, vn))
@@ -158,7 +162,8 @@ def environment_from_log(log, vessel="gunnerus", *, window_s: float = 900.0, win
     return EnvironmentEstimate(time_s=float(t[-1]), eta=eta0, nu=nu0, rpm=np.nan_to_num(a.rpm[idx]).copy(),
                                azimuth_rad=np.nan_to_num(a.azimuth_rad[idx]).copy(), wind_speed_m_s=w_speed,
                                wind_dir_from_rad=w_dir, gust_intensity=gi, accel_ned=np.asarray(bias0, float),
-                               accel_members=members, current_members_ned_m_s=current_members)
+                               accel_members=members, current_members_ned_m_s=current_members,
+                               wind_measured=wind_measured)
 
 
 def _estimated(model, a: LogArrays, idx: int, n_members: int, seed: int, config=None):

@@ -546,6 +546,10 @@ def run_manoeuvre_benchmark(vessel, train_dir, test_dir, horizons_s=HORIZONS_S, 
     steps = np.array([int(round(h / dt)) for h in horizons_s])
     if np.any(steps < 1):
         raise ValueError(f"horizons_s: every horizon must be at least one step ({dt:g} s)")
+    if not any(start_rows(r.arrays, int(steps.max()), cfg.start_every_s).size for r in test):
+        # checked before training: the tables would be empty
+        raise ValueError(f"test_dir: no start times: every test run is shorter than the 3-s warm-up plus the "
+                         f"longest horizon ({max(horizons_s):g} s)")
 
     predictors = make_predictors(v, cfg)
     timings = {}
