@@ -67,6 +67,20 @@ def _weather(p, table: bool) -> None:
 
 _USAGE_ERROR = ValueError
 
+#: The fields of WeatherState and WeatherUncertainty that the planning options fill (an
+#: uncertainty's direction is checked in radians, so its message names the field too).
+_WEATHER_OPTIONS = {
+    "weather.wind_speed_m_s": "--wind-m-s", "weather.wind_dir_deg": "--wind-dir-deg",
+    "weather.gust_intensity": "--gust-intensity", "weather.hs_m": "--hs-m", "weather.tp_s": "--tp-s",
+    "weather.wave_dir_deg": "--wave-dir-deg", "weather.current_speed_m_s": "--current-m-s",
+    "weather.current_dir_deg": "--current-dir-deg", "uncertainty.wind_speed_m_s": "--wind-std-m-s",
+    "uncertainty.hs_m": "--hs-std-m", "uncertainty.tp_s": "--tp-std-s",
+    "uncertainty.current_speed_m_s": "--current-std-m-s",
+    "uncertainty.wind_dir_rad": "--wind-dir-std-deg (in rad)",
+    "uncertainty.wave_dir_rad": "--wave-dir-std-deg (in rad)",
+    "uncertainty.current_dir_rad": "--current-dir-std-deg (in rad)",
+}
+
 
 def add_parser(sub, parser_class, usage_error=None) -> None:
     """Register ``drift-off`` and its three modes on the subparsers ``sub``.
@@ -174,7 +188,11 @@ def _cmd_planning(args) -> int:
                                math.radians(args.wave_dir_std_deg), args.current_std_m_s,
                                math.radians(args.current_dir_std_deg))
     except (ValueError, TypeError) as exc:
-        raise _usage(f"{_PROG} planning: error: {' '.join(str(exc).split())}") from None
+        msg = " ".join(str(exc).split())
+        field = msg.split(":", 1)[0]
+        if field in _WEATHER_OPTIONS:       # the option the user typed, not the field it fills
+            msg = f"{_WEATHER_OPTIONS[field]}:{msg.split(':', 1)[1]}"
+        raise _usage(f"{_PROG} planning: error: {msg}") from None
     model = _model(args, "planning")
     res = simulate_blackouts(model, w, [math.radians(h) for h in args.headings_deg], uncertainty=u, settings=st)
     inputs = {"vessel": model.vessel.name, "wind": f"{args.wind_m_s:g} +- {args.wind_std_m_s:g} m/s from "
