@@ -414,8 +414,12 @@ def _add_benchmark(sub) -> None:
 
 def _check_out_folder(out: Path, prefix: str) -> None:
     """Refuse an ``--out`` that exists and is not a folder, before any work is done."""
-    if out.exists() and not out.is_dir():
-        raise UsageError(f"{prefix}: error: --out {out}: exists and is not a folder")
+    from .fileio import check_out_folder
+
+    try:
+        check_out_folder(out)
+    except NotADirectoryError as exc:
+        raise UsageError(f"{prefix}: error: --out {exc}") from None
 
 
 def _cmd_benchmark_manoeuvre(args) -> int:

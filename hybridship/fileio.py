@@ -9,6 +9,15 @@ from pathlib import Path
 from typing import BinaryIO, Callable
 
 
+def check_out_folder(path) -> Path:
+    """``path`` as a Path, refused (NotADirectoryError) when it exists and is not a folder: an
+    output folder checked before the work, not when the first file is written."""
+    path = Path(path)
+    if path.exists() and not path.is_dir():
+        raise NotADirectoryError(f"{path}: exists and is not a folder")
+    return path
+
+
 def atomic_write(path, write: Callable[[BinaryIO], None]) -> Path:
     """Write ``path`` through ``write(fh)`` into a temporary file beside it, then rename.
 

@@ -12,6 +12,8 @@ import math
 import sys
 from pathlib import Path
 
+from ..fileio import check_out_folder
+
 __all__ = ["add_parser"]
 
 _PROG = "hybridship drift-off"
@@ -111,7 +113,8 @@ def add_parser(sub, parser_class, usage_error=None) -> None:
                                     "from the state and thruster rpm at that time.")
     b.add_argument("--log", type=Path, required=True, help="station-keeping log (.csv, .csv.gz, .parquet)")
     b.add_argument("--time-s", type=float, default=None, help="time of the blackout [s] (default: the last row)")
-    b.add_argument("--window-s", type=float, default=900.0, help="log read before --time-s by the environment estimator [s] (default 900)")
+    b.add_argument("--window-s", type=float, default=900.0,
+                   help="log read before --time-s by the environment estimator [s] (default 900)")
     _common(b)
     b.set_defaults(func=_cmd_live)
 
@@ -147,9 +150,10 @@ def _settings(args, mode):
 
     if not 0.0 < args.quantile < 1.0:
         raise _usage(f"{_PROG} {mode}: error: --quantile must be in (0, 1), got {args.quantile}")
-    if Path(args.out).exists() and not Path(args.out).is_dir():
-        # checked before the work, not when the report is written
-        raise _usage(f"{_PROG} {mode}: error: --out {args.out}: exists and is not a folder")
+    try:
+        check_out_folder(args.out)
+    except NotADirectoryError as exc:
+        raise _usage(f"{_PROG} {mode}: error: --out {exc}") from None
     names = {"radii_m": "--radii-m", "reaction_times_s": "--reaction-times-s", "n_samples": "--samples",
              "horizon_s": "--horizon-s", "dt_s": "--dt-s", "vessel_spread": "--vessel-spread", "seed": "--seed"}
     try:

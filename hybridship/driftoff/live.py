@@ -250,7 +250,6 @@ def blackout_now(estimate: EnvironmentEstimate, vessel="gunnerus", settings: Dri
     K = model.n_actuators
     rpm = np.zeros(K)
     az = np.zeros(K)
-    k = len(ves.thrusters)
     rpm[:k] = rpm_now[:k]
     az[:k] = estimate.azimuth_rad[:k]
     members = estimate.accel_members

@@ -173,14 +173,13 @@ def update(x, Pc, z, z_ok, r_std, gate, max_gated, gated):
     shift, such as a datum change, is then followed. Returns ``(x, P)`` (new arrays).
     """
     n = x.size
+    innov = z[:6] - x[:6]
+    innov[2] = (innov[2] + math.pi) % (2.0 * math.pi) - math.pi     # hybridship.frames.wrap_pi, compiled
     use = z_ok.copy()
     for c in range(6):
         if not use[c]:
             continue
-        y = z[c] - x[c]
-        if c == 2:
-            y = (y + math.pi) % (2.0 * math.pi) - math.pi
-        if y * y > gate[c] * gate[c] * (Pc[c, c] + r_std[c] ** 2) and gated[c] < max_gated:
+        if innov[c] ** 2 > gate[c] ** 2 * (Pc[c, c] + r_std[c] ** 2) and gated[c] < max_gated:
             use[c] = False
             gated[c] += 1
         else:
@@ -193,9 +192,7 @@ def update(x, Pc, z, z_ok, r_std, gate, max_gated, gated):
     S = np.empty((m, m))
     PHt = np.empty((n, m))
     for a in range(m):
-        y[a] = z[idx[a]] - x[idx[a]]
-        if idx[a] == 2:
-            y[a] = (y[a] + math.pi) % (2.0 * math.pi) - math.pi     # hybridship.frames.wrap_pi, compiled
+        y[a] = innov[idx[a]]
         for b in range(m):
             S[a, b] = Pc[idx[a], idx[b]]
         S[a, a] += r_std[idx[a]] ** 2

@@ -35,6 +35,8 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.signal import butter, sosfiltfilt
 
+from ..frames import body_to_ned
+
 __all__ = ["WaveAxis", "wave_axis", "yaw_load_factor"]
 
 #: Wave periods [s] whose motion gives the axis: above the 1-s sampling's Nyquist limit with
@@ -93,10 +95,11 @@ def wave_axis(time_s: np.ndarray, psi_rad: np.ndarray, u_m_s: np.ndarray, v_m_s:
     if t[-1] - t[0] < 10 * band_s[1] or not 2 * dt < band_s[0]:
         return None
     sos = butter(4, [1.0 / band_s[1], 1.0 / band_s[0]], btype="band", fs=1.0 / dt, output="sos")
-    u, v = (sosfiltfilt(sos, np.nan_to_num(np.asarray(x, dtype=float)[keep])) for x in (u_m_s, v_m_s))
+    uv = np.zeros((t.size, 3))
+    for j, x in enumerate((u_m_s, v_m_s)):
+        uv[:, j] = sosfiltfilt(sos, np.nan_to_num(np.asarray(x, dtype=float)[keep]))
     # into NED at each sample: the waves' axis is fixed there while the ship may turn
-    c, s = np.cos(psi), np.sin(psi)
-    var, vec = np.linalg.eigh(np.cov(np.vstack([c * u - s * v, s * u + c * v])))
+    var, vec = np.linalg.eigh(np.cov(body_to_ned(uv, psi)[:, :2].T))
     if not var[1] > 0 or var[1] < min_anisotropy * max(var[0], 1e-12 * var[1]):
         return None
     recent = t >= t[-1] - average_s
