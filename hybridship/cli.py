@@ -529,7 +529,9 @@ def main(argv=None) -> int:
         print(f"{_PROG}: interrupted", file=sys.stderr)
         return 130
     except (OSError, ValueError, TypeError, FloatingPointError) as exc:
-        cmd = getattr(args, "command", None)
+        # name the whole command, e.g. "hybridship drift-off live" (the subcommand's dest)
+        words = [getattr(args, dest, None) for dest in ("command", "benchmark", "mode")]
+        cmd = " ".join(w for w in words if w)
         print(f"{_PROG}{' ' + cmd if cmd else ''}: error: {_one_line(exc)}", file=sys.stderr)
         return 1
 

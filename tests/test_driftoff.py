@@ -352,3 +352,16 @@ def test_live_current_members_carry_the_vessel_along():
     t50 = r.t_reach_s[0, 0, 1]
     # carried along: reaches 50 m later than a body already moving at 0.5 m/s, but not much later
     assert 100.0 < t50 < 200.0, t50
+
+
+def test_cli_error_names_the_whole_command(monkeypatch, capsys):
+    import hybridship.driftoff.command as command
+    from hybridship.cli import main
+
+    def refuse(args):
+        raise ValueError("rpm: expected at most 200 rpm, got 1e+06")
+
+    monkeypatch.setattr(command, "_cmd_live", refuse)
+    assert main(["drift-off", "live", "--log", "x.csv", "--out", "o"]) == 1
+    err = capsys.readouterr().err
+    assert err.startswith("hybridship drift-off live: error: rpm:"), err

@@ -215,6 +215,17 @@ def test_sweep_writes_logs_and_summary(tmp_path):
     for p in paths:
         read_log(p, **THRUSTERS)
     assert not list((tmp_path / "out").glob(".*tmp"))
+    # a second sweep into the folder adds its rows (and replaces a rewritten log's row)
+    first = summary.set_index("seed")
+    sweep(tmp_path / "out", [4, 5], beaufort=(2, 3), fmt="csv", **TINY)
+    both = pd.read_csv(tmp_path / "out" / "scenarios.csv")
+    assert both["seed"].tolist() == [3, 4, 5]
+    assert both.set_index("seed").loc[3].equals(first.loc[3])
+    (tmp_path / "bad").mkdir()
+    (tmp_path / "bad" / "scenarios.csv").write_text("a,b\n1,2\n")
+    with pytest.raises(ValueError, match="not a sweep summary"):
+        sweep(tmp_path / "bad", [1], **TINY)
+    assert not list((tmp_path / "bad").glob("sim_*"))  # refused before any simulation
     with pytest.raises(ValueError, match="seeds"):
         sweep(tmp_path, [1, 1], **TINY)
     with pytest.raises(ValueError, match="fmt"):

@@ -782,7 +782,9 @@ def sweep(out_dir, seeds: Iterable[int], *, beaufort=(2, 5), fmt: str = "csv.gz"
     list of Path
         The log files, in the order of ``seeds``. ``out_dir / "scenarios.csv"`` (written
         atomically, after all logs) has one row per log: file, seed, the realised
-        conditions (truthsim-dev's column names), and :func:`drift_statistics`.
+        conditions (truthsim-dev's column names), and :func:`drift_statistics`. A sweep
+        into a folder that already has one keeps its rows of other logs (a rewritten log's
+        row is replaced), sorted by seed, so sweeps of several seed ranges add up.
     """
     seeds = [s for s in seeds]
     if not seeds:
@@ -806,6 +808,7 @@ def sweep(out_dir, seeds: Iterable[int], *, beaufort=(2, 5), fmt: str = "csv.gz"
     from hybridship.logs.io import write_log
 
     out = Path(out_dir)
+    earlier = _earlier_summary(out / "scenarios.csv")  # before the work: a damaged file stops it here
     out.mkdir(parents=True, exist_ok=True)
     paths, rows = [], []
     it = configs
@@ -823,8 +826,27 @@ def sweep(out_dir, seeds: Iterable[int], *, beaufort=(2, 5), fmt: str = "csv.gz"
                      "beaufort_lo": cfg.beaufort[0], "beaufort_hi": cfg.beaufort[1],
                      **{k: v for k, v in drift_statistics(df).items() if k != "t_shutdown_s"}})
     summary = pd.DataFrame(rows)
+    if earlier is not None:
+        kept = earlier[~earlier["file"].isin(summary["file"])]
+        summary = pd.concat([kept, summary], ignore_index=True).sort_values("seed", kind="stable")
     atomic_write(out / "scenarios.csv", lambda fh: fh.write(summary.round(4).to_csv(index=False).encode("utf-8")))
     return paths
+
+
+def _earlier_summary(path: Path) -> pd.DataFrame | None:
+    """The rows of an earlier sweep's ``scenarios.csv`` in the same folder (None if there is none)."""
+    if not path.exists():
+        return None
+    try:
+        earlier = pd.read_csv(path)
+    except (OSError, ValueError) as exc:  # pandas' parser errors are ValueErrors
+        raise ValueError(f"{path}: an earlier sweep's summary that cannot be read ({exc}); move it away "
+                         "or sweep into another folder") from None
+    missing = {"file", "seed"} - set(earlier.columns)
+    if missing:
+        raise ValueError(f"{path}: not a sweep summary (no column {', '.join(sorted(missing))}); move it away "
+                         "or sweep into another folder")
+    return earlier
 
 
 # --------------------------------------------------------------------------- embedded set
