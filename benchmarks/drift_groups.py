@@ -21,6 +21,7 @@ import fnmatch
 import sys
 from pathlib import Path
 
+import numpy as np
 import pandas as pd
 
 
@@ -58,6 +59,21 @@ def group_ratios(per_log: pd.DataFrame, groups: dict, model: str = "hybrid", ref
     return ratio.rename_axis(index=["group", "state"])
 
 
+def ratios_above_one(per_log: pd.DataFrame, groups: dict, model: str = "hybrid", reference: str = "dynamic",
+                     horizon_s: float | None = None) -> dict:
+    """Group name -> ``(k, n)``: ``k`` of the group's ``n`` finite per-failure ratios
+    (:func:`hybridship.evaluation.drift.ratio_table`, every log, state and window at
+    ``horizon_s``) are above 1."""
+    from hybridship.evaluation.drift import ratio_table
+
+    out = {}
+    for name, logs in group_logs(per_log, groups).items():
+        r = ratio_table(per_log[per_log.log.isin(logs)], model, reference, horizon_s).to_numpy()
+        r = r[np.isfinite(r)]
+        out[name] = (int((r > 1.0).sum()), int(r.size))
+    return out
+
+
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("results", type=Path, help="a drift benchmark's output folder (with errors_per_log.csv)")
@@ -87,6 +103,7 @@ def main(argv=None) -> int:
     try:
         t = group_ratios(per_log, groups, args.model, args.reference, args.horizon_s)
         counts = {k: len(v) for k, v in group_logs(per_log, groups).items()}
+        above = ratios_above_one(per_log, groups, args.model, args.reference, args.horizon_s)
     except ValueError as e:
         print(f"error: {e}", file=sys.stderr)
         return 2
@@ -95,6 +112,7 @@ def main(argv=None) -> int:
 
     cells = ratio_cells(t.rename_axis(index=["log", "state"]))
     cells.insert(0, "logs", [counts[g] for g in cells.index])
+    cells["ratios above 1"] = [f"{above[g][0]} of {above[g][1]}" for g in cells.index]
     h = per_log.horizon_s.max() if args.horizon_s is None else args.horizon_s
     lo, hi = t.columns[0], t.columns[-1]
     windows = f"first {lo}" if lo == hi else f"first {lo} / first {hi}"

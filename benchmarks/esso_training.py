@@ -20,7 +20,8 @@ benchmark's), ``+cmd`` (all command-aware features added), ``+mem`` / ``+mem<s>`
 features added, with the default time constant or ``<s>`` seconds; ``+memang`` /
 ``+memang<s>``: the angle's alone),
 ``_abs`` (absolute-error loss), ``_lead`` (loss weighted by lead time), ``_hl<m>`` (heading
-length of the loss), ``_c<s>`` (curriculum from a ``<s>``-second horizon),
+length of the loss), ``_c<s>`` (curriculum from a ``<s>``-second horizon), ``_ad<x>`` (the
+weights pulled towards their one-step values, ``MultiStepConfig.anchor_decay``),
 ``+rate`` (only the command rates added), ``+cg`` (command-regime guard; off otherwise, whatever
 the benchmark default), ``+ws`` (with ``--with-wind-spread``: the same nets with 8 wind
 futures in the spread, recalibrated; ``HybridPredictor(wind_samples=8)``), ``+hull`` / ``+hullms`` (the linear hull correction before the nets,
@@ -106,7 +107,7 @@ def variants(cfg, names):
         ms = {}
         for key, field, conv in (("h", "horizon_s", float), ("b", "batch_starts", int), ("i", "iterations", int),
                                  ("v", "max_val_starts", int), ("hl", "heading_length_m", float),
-                                 ("c", "curriculum_start_s", float)):
+                                 ("c", "curriculum_start_s", float), ("ad", "anchor_decay", float)):
             m = re.search(rf"_{key}(\d+(?:\.\d+)?)", name)
             if m:
                 ms[field] = conv(m.group(1))

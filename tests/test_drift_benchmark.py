@@ -87,6 +87,11 @@ def _check_group_script(out, per, errors):
                                    rtol=1e-5)
     assert mod.main([str(out), "--group", "one=physics_1*", "--group", "all=*", "--out", str(out / "g.md")]) == 0
     assert "| one | 1 |" in (out / "g.md").read_text()
+    above = mod.ratios_above_one(per, {"one": ["physics_1*"]})["one"]
+    ratios = [at(one, "hybrid", s, w) / at(one, "dynamic", s, w) for s in ("north_m", "east_m", "yaw_deg")
+              for w in (5, 20)]
+    assert above == (sum(x > 1 for x in ratios), 6)
+    assert f"| {above[0]} of 6 |" in (out / "g.md").read_text()
     assert mod.main([str(out), "--group", "none=calm_*"]) == 2
     assert mod.main([str(out), "--group", "nameonly"]) == 2
     assert mod.main([str(out), "--group", "a=physics_1*", "--group", "a=physics_2*"]) == 2
