@@ -271,6 +271,24 @@ def test_benchmark_refuses_test_runs_too_short_for_any_start(tmp_path):
     assert not (tmp_path / "out").exists()
 
 
+def test_starts_whose_horizon_spans_a_gap_are_not_scored(tmp_path):
+    """A 5-s logger dropout inside a run splits it into segments; no start is scored against
+    the truth of a later time than its horizon (before, a 5-s error could be the 10-s one)."""
+    from hybridship.evaluation.manoeuvre import load_runs, start_rows
+
+    raw = pd.read_csv(DATA / "data" / SMALL_TEST[0])
+    raw.iloc[600:650, :] = np.nan                      # 5 s of empty rows
+    (tmp_path / "gap" / "berthing").mkdir(parents=True)
+    raw.to_csv(tmp_path / "gap" / "berthing" / "berthing_gap.csv", index=False)
+    a = load_runs(tmp_path / "gap", "esso_osaka_model")[0].arrays
+    assert len(np.unique(a.segment_id)) == 2
+    rows = start_rows(a, 50, 1.0)
+    assert rows.size > 0
+    np.testing.assert_allclose(a.time_s[rows + 50] - a.time_s[rows], 5.0, atol=1e-6)
+    t_gap = a.time_s[np.flatnonzero(np.diff(a.segment_id))[0]]
+    assert not np.any((a.time_s[rows] < t_gap) & (a.time_s[rows + 50] > t_gap))
+
+
 def test_known_commands_on_a_real_run(tmp_path):
     """Known commands: equal to held when the commands are constant, to a direct rollout otherwise."""
     from hybridship.datasets.esso_osaka import EssoRun, esso_to_log

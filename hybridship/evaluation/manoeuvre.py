@@ -302,13 +302,25 @@ def _fit(name, predictor, runs: list[Run], config: ManoeuvreConfig):
 
 
 def start_rows(arrays: LogArrays, horizon_steps: int, start_every_s: float | None, warmup_s: float = 3.0):
-    """Start rows: every ``start_every_s`` after a warm-up, leaving ``horizon_steps`` of measurements."""
+    """Start rows: every ``start_every_s`` after a warm-up, leaving ``horizon_steps`` of measurements.
+
+    A start is kept only where its warm-up and its whole horizon lie in one gap-free
+    segment of the log (``segment_id``), so that the measurement ``horizon_steps`` rows later
+    is the one ``horizon_steps`` sample steps later (a gap of missing rows would otherwise
+    score a forecast against the truth of a later time).
+    """
     t = arrays.time_s
     dt = float(np.median(np.diff(t)))
     stride = 1 if start_every_s is None else max(1, int(round(start_every_s / dt)))
     first = int(round(warmup_s / dt))
     last = len(t) - 1 - horizon_steps
-    return np.arange(first, last + 1, stride) if last >= first else np.zeros(0, int)
+    if last < first:
+        return np.zeros(0, int)
+    rows = np.arange(first, last + 1, stride)
+    seg = np.asarray(arrays.segment_id)
+    same = (seg[rows] == seg[rows + horizon_steps]) & (seg[rows - first] == seg[rows])
+    on_time = np.abs(t[rows + horizon_steps] - t[rows] - horizon_steps * dt) <= 0.5 * dt
+    return rows[same & on_time]
 
 
 def forecast_errors(forecast: Callable, arrays: LogArrays, rows: np.ndarray, steps: np.ndarray,
