@@ -30,6 +30,7 @@ drift-off
 from __future__ import annotations
 
 import argparse
+import math
 import sys
 from pathlib import Path
 
@@ -430,17 +431,20 @@ def _cmd_benchmark_manoeuvre(args) -> int:
     _check_out_folder(args.out, f"{_PROG} benchmark manoeuvre")
 
     try:
-        horizons = tuple(float(h) for h in args.horizons_s.split(",") if h.strip())
+        horizons = tuple(float(h) for h in args.horizons_s.split(","))
     except ValueError:
         raise UsageError(f"{_PROG} benchmark manoeuvre: error: --horizons-s: expected numbers like 5,10,20,30, "
                          f"got {args.horizons_s!r}") from None
-    if not horizons or any(not h > 0 for h in horizons):
-        raise UsageError(f"{_PROG} benchmark manoeuvre: error: --horizons-s: horizons must be > 0 s")
+    if not horizons or any(not (0 < h < math.inf) for h in horizons):
+        raise UsageError(f"{_PROG} benchmark manoeuvre: error: --horizons-s: horizons must be finite and > 0 s")
+    if len(set(horizons)) != len(horizons):
+        raise UsageError(f"{_PROG} benchmark manoeuvre: error: --horizons-s: a horizon is given twice "
+                         f"({args.horizons_s})")
     for opt, folder in (("--train", args.train), ("--test", args.test)):
         if not folder.is_dir():
             raise UsageError(f"{_PROG} benchmark manoeuvre: error: {opt} {folder}: not a folder")
-    if args.step_s is not None and not args.step_s > 0:
-        raise UsageError(f"{_PROG} benchmark manoeuvre: error: --step-s must be > 0 s, got {args.step_s}")
+    if args.step_s is not None and not 0 < args.step_s < math.inf:
+        raise UsageError(f"{_PROG} benchmark manoeuvre: error: --step-s must be finite and > 0 s, got {args.step_s}")
     cfg = ManoeuvreConfig.quick(args.seed) if args.quick else ManoeuvreConfig()
     run_manoeuvre_benchmark(args.vessel, args.train, args.test, horizons, args.out, seed=args.seed,
                             config=replace(cfg, step_s=args.step_s), progress=True)

@@ -80,6 +80,16 @@ def test_trailing_empty_rows_dropped_and_bad_files_refused(tmp_path, runs, raws)
     hole.to_csv(tmp_path / "zigzag_hole.csv", index=False)
     with pytest.raises(LogFormatError, match=r"y_position_mid \[m\].*row 5"):
         read_esso_raw(tmp_path / "zigzag_hole.csv")
+    # blank rows before the hole do not shift the row the message names
+    blank = pd.concat([hole.iloc[:2], pd.DataFrame(np.nan, index=range(10), columns=hole.columns), hole.iloc[2:]])
+    blank.to_csv(tmp_path / "zigzag_blank.csv", index=False)
+    with pytest.raises(LogFormatError, match=r"y_position_mid \[m\].*row 15 \(file line 17, t = "):
+        read_esso_raw(tmp_path / "zigzag_blank.csv")
+    # a damaged gzip file gives a LogFormatError naming the file
+    data = (DATA / "data" / SMALL_TRAIN[0]).read_bytes()
+    (tmp_path / "cut.csv.gz").write_bytes(data[: len(data) // 2])
+    with pytest.raises(LogFormatError, match="cut.csv.gz: cannot be read as a gzip-compressed CSV"):
+        read_esso_raw(tmp_path / "cut.csv.gz")
 
 
 def test_log_is_valid_and_in_si_after_conversion(runs, raws):
@@ -252,6 +262,12 @@ def test_benchmark_refuses_the_same_run_in_train_and_test(tmp_path):
     test = _link(tmp_path, "test", SMALL_TRAIN[:1])
     with pytest.raises(ValueError, match="also in train_dir"):
         run_manoeuvre_benchmark("esso_osaka_model", train, test, (5,), tmp_path / "out", config=_tiny_config())
+    copy = tmp_path / "copy" / SMALL_TRAIN[0]
+    copy.parent.mkdir(parents=True)
+    shutil.copy(DATA / "data" / SMALL_TRAIN[0], copy)          # a copy, not a link: another path
+    with pytest.raises(ValueError, match="have the name of a train_dir run"):
+        run_manoeuvre_benchmark("esso_osaka_model", train, tmp_path / "copy", (5,), tmp_path / "out",
+                                config=_tiny_config())
 
 
 def test_benchmark_refuses_test_runs_too_short_for_any_start(tmp_path):
@@ -349,3 +365,16 @@ def test_benchmark_at_a_coarser_step_through_the_cli(tmp_path, capsys):
                  str(tmp_path / "bad"), "--quick", "--step-s", "0.25"]) == 1
     assert "step_s: 0.25 s is not a whole multiple" in capsys.readouterr().err
 
+    # horizons that cannot be scored as labelled are refused before any training
+    for horizons, needle in (("5,5", "given twice"), ("5,,10", "expected numbers"), ("inf", "finite"),
+                             ("5.2", "not a whole number of steps")):
+        extra = ["--step-s", "0.5"] if horizons == "5.2" else []
+        out = tmp_path / "bad-h"
+        assert main(["benchmark", "manoeuvre", "--train", str(train), "--test", str(test), "--out", str(out),
+                     "--quick", "--horizons-s", horizons, *extra]) in (1, 2)
+        err = capsys.readouterr().err
+        assert needle in err and len(err.strip().splitlines()) == 1, err
+        assert not out.exists()
+    assert main(["benchmark", "manoeuvre", "--train", str(train), "--test", str(test), "--out", str(tmp_path / "x"),
+                 "--quick", "--step-s", "inf"]) == 2
+    assert "--step-s must be finite" in capsys.readouterr().err

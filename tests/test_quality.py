@@ -255,6 +255,13 @@ def test_a_log_without_wind_is_not_a_dropped_sensor(model, log):
     assert not sw.flags[F.WIND_DROPPED][0] and np.all(sw.wind == 0.0)
 
 
+def test_a_wind_sensor_dead_over_the_whole_log_is_flagged(model, log):
+    """Wind columns without one valid sample are a dead sensor, not a log without wind."""
+    _, sw = _assess(model, log.assign(wind_speed_m_s=np.nan, wind_dir_deg=np.nan), [float(T_FAULT)])
+    assert sw.flags[F.WIND_DROPPED][0] and np.all(sw.wind == 0.0)
+    assert "no valid sample" in sw.notes[0]
+
+
 def test_first_sample_of_a_log_is_refused(model, log):
     _, sw = _assess(model, log, [0.0, 1.0, 2.0], on_refuse="flag")
     np.testing.assert_array_equal(sw.refused, [True, False, False])

@@ -45,6 +45,7 @@ from __future__ import annotations
 
 import os
 import re
+import zlib
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -111,7 +112,14 @@ def read_esso_raw(path) -> pd.DataFrame:
     name = path.name.lower()
     if not (name.endswith(".csv") or name.endswith(".csv.gz")):
         raise LogFormatError(f"{path}: expected a .csv or .csv.gz file of the Esso Osaka data set")
-    df = pd.read_csv(path, compression="gzip" if name.endswith(".gz") else None)
+    try:
+        df = pd.read_csv(path, compression="gzip" if name.endswith(".gz") else None)
+    except FileNotFoundError:
+        raise
+    except (OSError, EOFError, zlib.error, UnicodeDecodeError, ValueError) as exc:   # damaged or not a CSV
+        raise LogFormatError(f"{path}: cannot be read as a{' gzip-compressed' if name.endswith('.gz') else ''} "
+                             f"CSV file ({type(exc).__name__}: {str(exc).splitlines()[0] if str(exc) else ''})"
+                             ) from None
     cols = [str(c).strip() for c in df.columns]
     if tuple(cols) != ESSO_COLUMNS:
         missing = [c for c in ESSO_COLUMNS if c not in cols]
@@ -121,17 +129,26 @@ def read_esso_raw(path) -> pd.DataFrame:
                              column=(missing or extra or [None])[0])
     df.columns = cols
     df = df.apply(pd.to_numeric, errors="coerce")
-    df = df[~df.isna().all(axis=1)].reset_index(drop=True)
+    df = df[~df.isna().all(axis=1)]     # the index keeps each row's place in the file (data row, from 0)
     bad = df.isna().to_numpy()
     if bad.any():
         i, j = np.argwhere(bad)[0]
-        raise LogFormatError(f"{ESSO_COLUMNS[j]}: missing or non-numeric value at row {i} (in {path})",
-                             column=ESSO_COLUMNS[j], row=int(i))
+        row = int(df.index[i])
+        raise LogFormatError(f"{ESSO_COLUMNS[j]}: missing or non-numeric value at row {row} (file line {row + 2}"
+                             f"{_at_time(df, i)}; in {path})", column=ESSO_COLUMNS[j], row=row)
     t = df["t [s]"].to_numpy()
     if len(t) > 1 and np.any(np.diff(t) <= 0):
         i = int(np.argmax(np.diff(t) <= 0)) + 1
-        raise LogFormatError(f"t [s]: not strictly increasing at row {i} (in {path})", column="t [s]", row=i)
-    return df
+        row = int(df.index[i])
+        raise LogFormatError(f"t [s]: not strictly increasing at row {row} (file line {row + 2}, t = {t[i]:g} s "
+                             f"after {t[i - 1]:g} s; in {path})", column="t [s]", row=row)
+    return df.reset_index(drop=True)
+
+
+def _at_time(df: pd.DataFrame, i: int) -> str:
+    """``", t = ... s"`` of row ``i`` when its time is known."""
+    t = df["t [s]"].iloc[i]
+    return f", t = {t:g} s" if np.isfinite(t) else ""
 
 
 def _channel_names(vessel) -> tuple[str, str]:

@@ -189,6 +189,9 @@ def _decimate(arrays: LogArrays, vessel, step_s: float | None) -> LogArrays:
         raise ValueError(f"step_s: {step_s} s is not a whole multiple of the data step {dt:g} s")
     if k == 1:
         return arrays
+    if 2 * k > len(arrays.time_s):
+        raise ValueError(f"step_s: {step_s:g} s leaves fewer than two samples of a "
+                         f"{arrays.time_s[-1] - arrays.time_s[0]:g}-s run")
     return ingest(arrays.to_frame(derived_velocities=True).iloc[::k], vessel, purpose="fit")
 
 
@@ -545,8 +548,10 @@ def run_manoeuvre_benchmark(vessel, train_dir, test_dir, horizons_s=HORIZONS_S, 
     cfg = config or (ManoeuvreConfig.quick(seed) if quick else ManoeuvreConfig())
     cfg = replace(cfg, ensemble=replace(cfg.ensemble, seed=seed))
     horizons_s = tuple(float(h) for h in horizons_s)
-    if not horizons_s or min(horizons_s) <= 0:
-        raise ValueError(f"horizons_s: need positive horizons, got {horizons_s}")
+    if not horizons_s or not all(0 < h < np.inf for h in horizons_s):
+        raise ValueError(f"horizons_s: need finite positive horizons [s], got {horizons_s}")
+    if len(set(horizons_s)) != len(horizons_s):
+        raise ValueError(f"horizons_s: a horizon is given twice in {horizons_s}")
     cfg = replace(cfg, calibration=replace(cfg.calibration, horizon_s=max(horizons_s)))
     train = load_runs(train_dir, v, step_s=cfg.step_s)
     test = load_runs(test_dir, v, step_s=cfg.step_s)
@@ -554,10 +559,20 @@ def run_manoeuvre_benchmark(vessel, train_dir, test_dir, horizons_s=HORIZONS_S, 
     if both:
         raise ValueError(f"test_dir: {len(both)} run(s) are also in train_dir (e.g. {sorted(both)[0].name}); "
                          "train and test runs must differ")
+    # a copy of a training run under another path would score the nets on what they saw. (Other
+    # pieces of one recording may be split on purpose: published test sets do so.)
+    same = {r.run.name for r in train} & {r.run.name for r in test}
+    if same:
+        raise ValueError(f"test_dir: {len(same)} run(s) have the name of a train_dir run (e.g. {sorted(same)[0]}): "
+                         "a copy of a training run cannot test it; train and test runs must differ")
     dt = float(np.median(np.diff(test[0].arrays.time_s)))
     steps = np.array([int(round(h / dt)) for h in horizons_s])
     if np.any(steps < 1):
         raise ValueError(f"horizons_s: every horizon must be at least one step ({dt:g} s)")
+    for h, k in zip(horizons_s, steps):
+        if abs(k * dt - h) > 1e-6 * max(h, 1.0):    # scored at k steps, it would be labelled h
+            raise ValueError(f"horizons_s: {h:g} s is not a whole number of steps of {dt:g} s "
+                             f"(the nearest are {max(k - 1, 1) * dt:g} and {(k + 1) * dt:g} s)")
     if not any(start_rows(r.arrays, int(steps.max()), cfg.start_every_s).size for r in test):
         # checked before training: the tables would be empty
         raise ValueError(f"test_dir: no start times: every test run is shorter than the 3-s warm-up plus the "
@@ -576,18 +591,18 @@ def run_manoeuvre_benchmark(vessel, train_dir, test_dir, horizons_s=HORIZONS_S, 
     coverage = coverage_table({k: v_ for k, v_ in per_run_z.items() if any(z is not None for z in v_)},
                               test, horizons_s)
 
-    out_dir = Path(out_dir)
-    atomic_write(out_dir / "errors.csv", lambda fh: fh.write(errors.to_csv(index=False).encode()))
-    atomic_write(out_dir / "coverage.csv", lambda fh: fh.write(coverage.to_csv(index=False).encode()))
     intervals = coverage_intervals({k: v_ for k, v_ in per_run_z.items() if any(z is not None for z in v_)},
                                    horizons_s)
-    atomic_write(out_dir / "coverage_intervals.csv", lambda fh: fh.write(intervals.to_csv(index=False).encode()))
     sharpness = sharpness_table(per_run, {k: v_ for k, v_ in per_run_std.items() if any(d is not None for d in v_)},
                                 test, horizons_s)
-    atomic_write(out_dir / "sharpness.csv", lambda fh: fh.write(sharpness.to_csv(index=False).encode()))
     result = BenchmarkResult(errors, train, test, predictors, horizons_s, cfg, timings, n_starts, coverage,
                              intervals, sharpness)
     md = markdown_report(result, command=command)
+    # every table is made before the first is written: a failure leaves no mix of old and new files
+    out_dir = Path(out_dir)
+    for name, table in (("errors.csv", errors), ("coverage.csv", coverage), ("coverage_intervals.csv", intervals),
+                        ("sharpness.csv", sharpness)):
+        atomic_write(out_dir / name, lambda fh, table=table: fh.write(table.to_csv(index=False).encode()))
     atomic_write(out_dir / "README.md", lambda fh: fh.write(md.encode()))
     if figures_dir is not None:
         write_figures(result, figures_dir)

@@ -1015,6 +1015,10 @@ class LogArrays:
         True where every command column the log has (``<name>_rpm``, ``<name>_azimuth_deg``)
         was finite at that row, False where ``rpm`` or ``azimuth_rad`` hold an earlier value
         (or 0 before the first). Default: True everywhere.
+    wind_columns : bool
+        Whether the log had the wind columns, even without one valid sample (a dead wind
+        sensor: ``has_wind`` is then False and a forecast flags ``wind_dropped``). Default:
+        ``has_wind``.
     resorted_time_s : ndarray, shape (M,)
         Times of samples that arrived late, were duplicated or conflicted in the source
         and were re-sorted, dropped or removed by :func:`hybridship.logs.ingest.ingest`
@@ -1043,8 +1047,11 @@ class LogArrays:
     wind_logged: np.ndarray | None = None
     resorted_time_s: np.ndarray | None = None
     commands_logged: np.ndarray | None = None
+    wind_columns: bool = False
 
     def __post_init__(self):
+        if self.has_wind:
+            object.__setattr__(self, "wind_columns", True)
         if self.wind_logged is None:
             object.__setattr__(self, "wind_logged", np.full(self.time_s.shape[0], bool(self.has_wind)))
         if self.commands_logged is None:
@@ -1108,7 +1115,7 @@ class LogArrays:
                 cols[name] = self.nu[:, j] * scale
             elif self.nu_logged[:, j].any():
                 cols[name] = np.where(self.nu_logged[:, j], self.nu[:, j] * scale, np.nan)
-        if self.has_wind:
+        if self.has_wind or self.wind_columns:
             cols["wind_speed_m_s"] = np.where(self.wind_logged, self.wind[:, 0], np.nan)
             cols["wind_dir_deg"] = np.where(self.wind_logged, np.degrees(frames.wrap_2pi(self.wind[:, 1])), np.nan)
         for j, (name, rot) in enumerate(zip(self.channel_names, self.rotatable)):
@@ -1237,7 +1244,8 @@ def _frame_to_arrays(df: pd.DataFrame, names: tuple, rot: tuple, resorted_time_s
     wind = np.zeros((n, 2))
     has_wind = False
     wind_logged = np.zeros(n, dtype=bool)
-    if {"wind_speed_m_s", "wind_dir_deg"} <= cols:
+    wind_columns = {"wind_speed_m_s", "wind_dir_deg"} <= cols
+    if wind_columns:
         speed, direction = col("wind_speed_m_s"), col("wind_dir_deg")
         wind_logged = np.isfinite(speed) & np.isfinite(direction)
         if np.isfinite(speed).any() and np.isfinite(direction).any():
@@ -1266,4 +1274,5 @@ def _frame_to_arrays(df: pd.DataFrame, names: tuple, rot: tuple, resorted_time_s
         wind_logged=wind_logged,
         resorted_time_s=resorted_time_s,
         commands_logged=commands_logged,
+        wind_columns=wind_columns,
     )
