@@ -34,7 +34,8 @@ class VesselFileError(ValueError):
 
 
 class _Strict(BaseModel):
-    model_config = ConfigDict(extra="forbid", frozen=True)
+    # inf and nan are refused at the file: they would surface only as a diverged simulation
+    model_config = ConfigDict(extra="forbid", frozen=True, allow_inf_nan=False)
 
 
 class Particulars(_Strict):
@@ -207,6 +208,13 @@ class Thruster(_Strict):
     def _angle(self):
         if self.type == "fixed" and self.angle_deg is None:
             raise ValueError("type 'fixed' needs angle_deg")
+        from .physics.propeller import available_propellers   # the packaged four-quadrant table
+
+        avail = available_propellers()
+        if not any(s == self.propeller_series and abs(p - self.pitch_ratio) < 1e-6 for s, p in avail):
+            raise ValueError(f"propeller_series/pitch_ratio: no four-quadrant table for {self.propeller_series!r} "
+                             f"at P/D {self.pitch_ratio:g}; available: "
+                             + ", ".join(f"{s} P/D {p:g}" for s, p in avail))
         return self
 
     @property
@@ -282,6 +290,16 @@ class WindTable(_Strict):
     C_X: list[float]
     C_Y: list[float]
     C_N: list[float]
+
+    @model_validator(mode="after")
+    def _same_angles(self):
+        n = len(self.angle_deg)
+        if n < 2 or np.any(np.diff(self.angle_deg) <= 0):
+            raise ValueError(f"angle_deg: need at least two strictly increasing angles [deg], got {self.angle_deg}")
+        for name in ("C_X", "C_Y", "C_N"):
+            if len(getattr(self, name)) != n:
+                raise ValueError(f"{name}: {len(getattr(self, name))} coefficients for the {n} angles of angle_deg")
+        return self
 
 
 class BlendermannParams(_Strict):
@@ -389,7 +407,9 @@ class Vessel(_Strict):
         eig = np.linalg.eigvalsh(0.5 * (M_RB + M_A + (M_RB + M_A).T))
         if not np.all(eig > 0):
             raise ValueError("rigid_body/added_mass: M = M_RB + M_A is not positive definite "
-                             f"(eigenvalues {np.array2string(eig, precision=3)})")
+                             f"(eigenvalues {np.array2string(eig, precision=3)}); masses are in kg and inertias "
+                             "in kg m^2 (a mass in tonnes is 1000 times too small), added-mass terms as "
+                             "Fossen's negative derivatives (X_udot_kg < 0)")
         return self
 
     @property
@@ -499,4 +519,8 @@ def load_vessel(name_or_path: str | Path) -> Vessel:
         data = tomllib.loads(text)
     except tomllib.TOMLDecodeError as err:
         raise VesselFileError(f"{source}: not valid TOML: {err}") from None
+    if data.get("kind") == "planing_craft":
+        raise VesselFileError(f"{source}: a planing-craft file (kind = \"planing_craft\") for the high-speed-craft "
+                              "model (hybridship benchmark hsc; hybridship.hsc.vessel.load_planing_craft), not a "
+                              "3-DOF vessel file")
     return vessel_from_dict(data, source)

@@ -364,6 +364,10 @@ def test_gunnerus_coefficients_close_to_published_original_hull():
     (lambda d: d["damping"]["nonlinear"].__setitem__("lift_speed", "sign"), "damping.nonlinear.lift_speed"),
     (lambda d: d["thrusters"][0].__setitem__("x_m", 1444.0), r"thrusters\[0\].x_m: 1444 m lies outside the hull"),
     (lambda d: d["thrusters"][1].__setitem__("y_m", -27.0), r"thrusters\[1\].y_m: -27 m lies outside the hull"),
+    (lambda d: d["thrusters"][0].__setitem__("propeller_series", "B4-75"), r"thrusters\[0\].*B4-75.*available"),
+    (lambda d: d["rigid_body"].__setitem__("mass_kg", float("inf")), "rigid_body.mass_kg: .*finite"),
+    (lambda d: d["rigid_body"].__setitem__("mass_kg", 500.0), "a mass in tonnes"),
+    (lambda d: d["wind"]["table"].__setitem__("C_X", d["wind"]["table"]["C_X"][:-1]), "C_X: .* coefficients for"),
 ])
 def test_invalid_vessel_files_name_the_field(edit, field):
     d = copy.deepcopy(gunnerus_dict())
@@ -379,3 +383,5 @@ def test_unknown_vessel_and_bad_toml(tmp_path):
     f.write_text("name = [")
     with pytest.raises(VesselFileError, match="not valid TOML"):
         load_vessel(f)
+    with pytest.raises(VesselFileError, match="planing-craft file"):
+        load_vessel("volcano71")
