@@ -85,14 +85,18 @@ def parse_seeds(text: str) -> list[int]:
     return seeds
 
 
+#: Largest ``--seed``: every generator the commands seed (numpy, torch) takes it.
+MAX_SEED = 2**32 - 1
+
+
 def _seed(text: str) -> int:
-    """A ``--seed`` value: a non-negative whole number (argparse names the option)."""
+    """A ``--seed`` value: a whole number in 0..:data:`MAX_SEED` (argparse names the option)."""
     try:
         value = int(text)
     except ValueError:
         value = -1
-    if value < 0:
-        raise argparse.ArgumentTypeError(f"expected a non-negative whole number, got {text!r}")
+    if not 0 <= value <= MAX_SEED:
+        raise argparse.ArgumentTypeError(f"expected a whole number in 0..{MAX_SEED}, got {text!r}")
     return value
 
 
@@ -399,8 +403,11 @@ def _add_benchmark(sub) -> None:
     m = bsub.add_parser("manoeuvre", help="manoeuvring forecasts on free-running runs (e.g. Esso Osaka)",
                         description="Train on the runs in --train, forecast every start time of the runs in "
                                     "--test at the given horizons (future commands known and held) and write "
-                                    "errors.csv (model,kind,state,horizon_s,mae,commands) and Markdown to --out.")
-    m.add_argument("--vessel", default="esso_osaka_model", help="packaged vessel name or vessel TOML file")
+                                    "errors.csv (model,kind,state,horizon_s,mae,commands), coverage.csv "
+                                    "(model,kind,commands,horizon_s,sigma,coverage), coverage_intervals.csv, "
+                                    "sharpness.csv and README.md to --out.")
+    m.add_argument("--vessel", default="esso_osaka_model",
+                   help="packaged vessel name or vessel TOML file (default esso_osaka_model)")
     m.add_argument("--train", required=True, type=Path, help="folder of training runs")
     m.add_argument("--test", required=True, type=Path, help="folder of test runs (never the training runs)")
     m.add_argument("--horizons-s", default="5,10,20,30", help="comma-separated horizons [s] (default 5,10,20,30)")
@@ -454,6 +461,7 @@ def _cmd_benchmark_manoeuvre(args) -> int:
 def _cmd_benchmark_hsc(args) -> int:
     from .hsc.benchmark import run_benchmark
 
+    _check_out_folder(args.out, f"{_PROG} benchmark hsc")
     run_benchmark(args.out, seed=args.seed, quick=args.quick, progress=True)
     return 0
 

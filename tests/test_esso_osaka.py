@@ -361,6 +361,8 @@ def test_benchmark_at_a_coarser_step_through_the_cli(tmp_path, capsys):
         errs[step] = e[(e.model == "dynamic") & (e.kind == "all") & (e.state == "distance_m")
                        & (e.commands == "known")].set_index("horizon_s").mae
     assert np.allclose(errs["0.5"], errs[None], rtol=0.25), errs
+    readme = (tmp_path / "out0.5" / "README.md").read_text()
+    assert "QUICK RUN" in readme and "Seed 0; sample step 0.5 s; 3 ensemble members" in readme
     assert main(["benchmark", "manoeuvre", "--train", str(train), "--test", str(test), "--out",
                  str(tmp_path / "bad"), "--quick", "--step-s", "0.25"]) == 1
     assert "step_s: 0.25 s is not a whole multiple" in capsys.readouterr().err

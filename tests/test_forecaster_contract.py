@@ -151,6 +151,8 @@ def _bad_inputs(log: pd.DataFrame):
     rpm_60x["port_rpm"] *= 60.0
     return [
         ("horizon 0", (log, STARTS, 0.0), {}, ValueError, "horizon_s"),
+        ("horizon inf", (log, STARTS, np.inf), {}, ValueError, "horizon_s"),
+        ("horizon as text", (log, STARTS, "60"), {}, TypeError, "horizon_s"),
         ("unknown command mode", (log, STARTS, HORIZON_S), {"commands": "maybe"}, ValueError, "commands"),
         ("start between samples", (log, [150.5], HORIZON_S), {}, ValueError, "start_times_s"),
         ("start outside the log", (log, [9999.0], HORIZON_S), {}, ValueError, "start_times_s"),

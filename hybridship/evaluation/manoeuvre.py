@@ -705,8 +705,16 @@ def markdown_report(result: BenchmarkResult, *, command: str | None = None) -> s
     """The benchmark's Markdown summary (tables of MAE by kind, model and horizon)."""
     e = result.errors
     lines = ["# Manoeuvring benchmark: Esso Osaka free-running model tests", ""]
+    cfg = result.config
+    seed = cfg.ensemble.seed
+    if cfg == replace(ManoeuvreConfig.quick(seed), step_s=cfg.step_s, calibration=cfg.calibration):
+        lines += ["**QUICK RUN** (`--quick`: a small configuration for smoke tests; these are not the "
+                  "benchmark's figures).", ""]
     if command:
         lines += ["Made by:", "", "```", command, "```", ""]
+    step = "the data's own" if cfg.step_s is None else f"{cfg.step_s:g} s"
+    lines += [f"Seed {seed}; sample step {step}; {cfg.ensemble.n_members} ensemble members; "
+              f"{cfg.training} training.", ""]
     lines += [f"Train runs: {len(result.train)} ({', '.join(sorted({r.kind for r in result.train}))}); "
               f"test runs: {len(result.test)}; start times: {sum(result.n_starts.values())} "
               f"(every {result.config.start_every_s} s); horizons {', '.join(f'{h:g}' for h in result.horizons_s)} s.",
