@@ -395,6 +395,10 @@ class Vessel(_Strict):
                 if abs(a.y_m) > B:
                     raise ValueError(f"{kind}[{i}].y_m: {a.y_m:g} m lies outside the hull (at most "
                                      f"particulars.B_m = {B:g} m from the centre line)")
+        for i, t in enumerate(self.thrusters):
+            if t.diameter_m > B:          # a diameter in mm, not m
+                raise ValueError(f"thrusters[{i}].diameter_m: {t.diameter_m:g} m is wider than the hull "
+                                 f"(particulars.B_m = {B:g} m); diameters are in metres")
         forward = [t.name for t in self.thrusters if t.type == "fixed" and abs(t.fixed_angle_rad) < 1e-9]
         for i, r in enumerate(self.rudders):
             if r.propeller is not None and r.propeller not in forward:

@@ -364,6 +364,7 @@ def test_gunnerus_coefficients_close_to_published_original_hull():
     (lambda d: d["damping"]["nonlinear"].__setitem__("lift_speed", "sign"), "damping.nonlinear.lift_speed"),
     (lambda d: d["thrusters"][0].__setitem__("x_m", 1444.0), r"thrusters\[0\].x_m: 1444 m lies outside the hull"),
     (lambda d: d["thrusters"][1].__setitem__("y_m", -27.0), r"thrusters\[1\].y_m: -27 m lies outside the hull"),
+    (lambda d: d["thrusters"][0].__setitem__("diameter_m", 1900.0), r"thrusters\[0\].diameter_m: 1900 m is wider"),
     (lambda d: d["thrusters"][0].__setitem__("propeller_series", "B4-75"), r"thrusters\[0\].*B4-75.*available"),
     (lambda d: d["rigid_body"].__setitem__("mass_kg", float("inf")), "rigid_body.mass_kg: .*finite"),
     (lambda d: d["rigid_body"].__setitem__("mass_kg", 500.0), "a mass in tonnes"),
