@@ -365,3 +365,16 @@ def test_cli_error_names_the_whole_command(monkeypatch, capsys):
     assert main(["drift-off", "live", "--log", "x.csv", "--out", "o"]) == 1
     err = capsys.readouterr().err
     assert err.startswith("hybridship drift-off live: error: rpm:"), err
+
+
+@pytest.mark.parametrize("seed, ok", [("0", True), ("4294967295", True), ("4294967296", False), ("-1", False)])
+def test_cli_seed_bounds(seed, ok):
+    import argparse
+
+    from hybridship.cli import _seed
+
+    if ok:
+        assert _seed(seed) == int(seed)
+    else:
+        with pytest.raises(argparse.ArgumentTypeError, match="0..4294967295"):
+            _seed(seed)

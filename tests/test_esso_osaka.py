@@ -85,6 +85,11 @@ def test_trailing_empty_rows_dropped_and_bad_files_refused(tmp_path, runs, raws)
     blank.to_csv(tmp_path / "zigzag_blank.csv", index=False)
     with pytest.raises(LogFormatError, match=r"y_position_mid \[m\].*row 15 \(file line 17, t = "):
         read_esso_raw(tmp_path / "zigzag_blank.csv")
+    # truly empty lines count too
+    text = (tmp_path / "zigzag_hole.csv").read_text().splitlines()
+    (tmp_path / "zigzag_empty.csv").write_text("\n".join(text[:3] + ["", "", ""] + text[3:]) + "\n")
+    with pytest.raises(LogFormatError, match=r"y_position_mid \[m\].*row 8 \(file line 10, t = "):
+        read_esso_raw(tmp_path / "zigzag_empty.csv")
     # a damaged gzip file gives a LogFormatError naming the file
     data = (DATA / "data" / SMALL_TRAIN[0]).read_bytes()
     (tmp_path / "cut.csv.gz").write_bytes(data[: len(data) // 2])
@@ -303,6 +308,31 @@ def test_starts_whose_horizon_spans_a_gap_are_not_scored(tmp_path):
     np.testing.assert_allclose(a.time_s[rows + 50] - a.time_s[rows], 5.0, atol=1e-6)
     t_gap = a.time_s[np.flatnonzero(np.diff(a.segment_id))[0]]
     assert not np.any((a.time_s[rows] < t_gap) & (a.time_s[rows + 50] > t_gap))
+    t_after = a.time_s[np.flatnonzero(np.diff(a.segment_id))[0] + 1]       # first sample after the gap
+    assert not np.any((a.time_s[rows] >= t_after) & (a.time_s[rows] < t_after + 3.0 - 1e-9))   # its warm-up
+
+
+def test_a_cut_copy_of_a_training_run_is_reported():
+    from pathlib import Path
+
+    from hybridship.datasets.esso_osaka import EssoRun
+    from hybridship.evaluation.manoeuvre import Run, cut_copies
+
+    def run(name):
+        return Run(EssoRun(Path(name + ".csv"), name, "turning", name), None)
+
+    train = [run("turn_14-Sep-2020_15_58_08"), run("random_06-Aug-2020_16_24_25_1")]
+    test = [run("turn_cut_14-Sep-2020_15_58_08"), run("random_06-Aug-2020_16_24_25_2"), run("turn_cut_x")]
+    assert cut_copies(train, test) == [("turn_cut_14-Sep-2020_15_58_08", "turn_14-Sep-2020_15_58_08")]
+
+
+def test_quick_configuration_is_recognised():
+    from dataclasses import replace
+
+    from hybridship.evaluation.manoeuvre import ManoeuvreConfig, is_quick
+
+    assert is_quick(replace(ManoeuvreConfig.quick(3), step_s=0.5))
+    assert not is_quick(ManoeuvreConfig()) and not is_quick(replace(ManoeuvreConfig(), step_s=0.5))
 
 
 def test_known_commands_on_a_real_run(tmp_path):

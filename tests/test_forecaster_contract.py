@@ -143,6 +143,8 @@ def test_result_shapes_and_forecast_leaves_the_learned_state_alone(kind, fitted,
         assert np.isfinite(f.eta).all() and np.isfinite(f.nu).all()
         assert set(f.flags) == set(FaultFlags.ALL) and all(v.shape == (len(STARTS),) for v in f.flags.values())
         assert len(f.to_frame()) == len(STARTS) * (H + 1)
+    # any real scalar is a horizon (a 0-d array, a numpy float)
+    np.testing.assert_array_equal(p.forecast(test_log, STARTS, np.array(HORIZON_S)).eta, fc.eta)
 
 
 def _bad_inputs(log: pd.DataFrame):
@@ -153,6 +155,7 @@ def _bad_inputs(log: pd.DataFrame):
         ("horizon 0", (log, STARTS, 0.0), {}, ValueError, "horizon_s"),
         ("horizon inf", (log, STARTS, np.inf), {}, ValueError, "horizon_s"),
         ("horizon as text", (log, STARTS, "60"), {}, TypeError, "horizon_s"),
+        ("horizon as a list", (log, STARTS, [60.0]), {}, TypeError, "horizon_s"),
         ("unknown command mode", (log, STARTS, HORIZON_S), {"commands": "maybe"}, ValueError, "commands"),
         ("start between samples", (log, [150.5], HORIZON_S), {}, ValueError, "start_times_s"),
         ("start outside the log", (log, [9999.0], HORIZON_S), {}, ValueError, "start_times_s"),

@@ -113,7 +113,8 @@ def read_esso_raw(path) -> pd.DataFrame:
     if not (name.endswith(".csv") or name.endswith(".csv.gz")):
         raise LogFormatError(f"{path}: expected a .csv or .csv.gz file of the Esso Osaka data set")
     try:
-        df = pd.read_csv(path, compression="gzip" if name.endswith(".gz") else None)
+        # blank lines kept (as empty rows, dropped below) so that row numbers match the file's lines
+        df = pd.read_csv(path, compression="gzip" if name.endswith(".gz") else None, skip_blank_lines=False)
     except FileNotFoundError:
         raise
     except (OSError, EOFError, zlib.error, UnicodeDecodeError, ValueError) as exc:   # damaged or not a CSV

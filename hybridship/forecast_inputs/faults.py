@@ -582,13 +582,14 @@ def detect_dropped_wind(view: LogView, win: Window) -> np.ndarray:
     """The wind to hold over the forecast: the latest valid sample in the window.
 
     Fault: the log has wind columns but no valid wind sample in the window (sensor
-    dropped), or none in the whole log (sensor dead). Evidence: :attr:`LogArrays.wind_logged`. Flags ``wind_dropped``; repair:
+    dropped), or none in all the rows read for the forecast (sensor dead). Evidence: :attr:`LogArrays.wind_logged`. Flags ``wind_dropped``; repair:
     no wind (zeros). Returns ``[speed_m_s, dir_from_rad]``.
     """
     a = view.arrays
     if not a.has_wind:
-        if a.wind_columns:       # the columns are there, but not one valid sample in the whole log
-            win.flag(FaultFlags.WIND_DROPPED, "the log's wind columns hold no valid sample (sensor dead): "
+        if a.wind_columns:       # the columns are there, but not one valid sample in the rows read
+            win.flag(FaultFlags.WIND_DROPPED, "the wind columns hold no valid sample in the rows read for the "
+                                              f"forecast (time_s {a.time_s[0]:g}..{a.time_s[-1]:g}; sensor dead): "
                                               "forecast without wind")
         return np.zeros(2)
     w_rows = win.rows[win.wind_ok]

@@ -1016,9 +1016,9 @@ class LogArrays:
         was finite at that row, False where ``rpm`` or ``azimuth_rad`` hold an earlier value
         (or 0 before the first). Default: True everywhere.
     wind_columns : bool
-        Whether the log had the wind columns, even without one valid sample (a dead wind
-        sensor: ``has_wind`` is then False and a forecast flags ``wind_dropped``). Default:
-        ``has_wind``.
+        Whether the log had the wind columns, even without one valid sample in its rows (a
+        dead wind sensor: ``has_wind`` is then False and a forecast flags ``wind_dropped``).
+        Default: ``has_wind``.
     resorted_time_s : ndarray, shape (M,)
         Times of samples that arrived late, were duplicated or conflicted in the source
         and were re-sorted, dropped or removed by :func:`hybridship.logs.ingest.ingest`

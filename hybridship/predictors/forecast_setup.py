@@ -178,8 +178,13 @@ def _forecast_setup(model, config: ResidualConfig, log, start_times_s, horizon_s
     inputs through :func:`hybridship.forecast_inputs.check_or_clip_inputs` (clipped to the
     documented envelope and flagged).
     """
-    if isinstance(horizon_s, (bool, np.bool_)) or not isinstance(horizon_s, (int, float, np.integer, np.floating)):
+    if isinstance(horizon_s, (str, bytes, bool, np.bool_)) or np.ndim(horizon_s) != 0:
         raise TypeError(f"horizon_s: expected a number of seconds, got {type(horizon_s).__name__} {horizon_s!r}")
+    try:
+        horizon_s = float(horizon_s)
+    except (TypeError, ValueError):
+        raise TypeError(f"horizon_s: expected a number of seconds, got {type(horizon_s).__name__} "
+                        f"{horizon_s!r}") from None
     if not 0 < horizon_s < np.inf:
         raise ValueError(f"horizon_s: must be finite and > 0 s, got {horizon_s}")
     if commands not in COMMAND_MODES:
