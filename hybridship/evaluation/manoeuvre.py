@@ -405,7 +405,7 @@ def sharpness_table(per_run: dict, per_run_std: dict, runs: list[Run], horizons_
         for kind, (e, sd) in groups.items():
             score = 2 * sigma * sd + (2 / alpha) * np.maximum(e - sigma * sd, 0.0)
             for h, horizon in enumerate(horizons_s):
-                rows.append((key[0], kind, key[1], float(horizon), float(sigma), float(sd[:, h].mean()),
+                rows.append((key[0], kind, key[1], float(horizon), int(sigma), float(sd[:, h].mean()),
                              float(score[:, h].mean())))
     df = pd.DataFrame(rows, columns=["model", "kind", "commands", "horizon_s", "sigma", "mean_std_m",
                                      "interval_score_m"])
@@ -426,7 +426,9 @@ def coverage_intervals(per_run_z: dict, horizons_s, sigma: float = 2.0, seed: in
             continue
         hits = np.stack([(z <= sigma).sum(axis=(0, 2)) for z in zs])          # (runs, horizons)
         ci = grouped_coverage_interval(hits, np.array([z.shape[0] * z.shape[2] for z in zs]), seed=seed)
-        rows += [(model, commands, float(h), sigma, *ci[j], len(zs)) for j, h in enumerate(horizons_s)]
+        # sigma written as coverage.csv writes it: an int when it is one
+        sig = int(sigma) if float(sigma).is_integer() else float(sigma)
+        rows += [(model, commands, float(h), sig, *ci[j], len(zs)) for j, h in enumerate(horizons_s)]
     return pd.DataFrame(rows, columns=["model", "commands", "horizon_s", "sigma", "coverage", "low", "high",
                                        "n_runs"])
 
