@@ -268,6 +268,10 @@ def _cmd_train(args) -> int:
     files = [f for f in files if f.name != "scenarios.csv"]
     if not files:
         raise UsageError(f"{_PROG} train: error: --logs {args.logs}: no log files (*.csv, *.csv.gz, *.parquet)")
+    if args.out.suffix.lower() != ".npz":      # also keeps it from replacing a training log
+        raise UsageError(f"{_PROG} train: error: --out {args.out}: expected a .npz model file")
+    if args.out.exists() and not args.out.is_file():
+        raise UsageError(f"{_PROG} train: error: --out {args.out}: exists and is not a file")
     hp = HybridPredictor(vessel, ensemble_config=EnsembleConfig(n_members=args.members, seed=args.seed))
     hp.fit(files, dp_only=not args.all_rows, progress=sys.stderr.isatty())
     hp.save(args.out)
@@ -338,9 +342,15 @@ def _cmd_forecast(args) -> int:
         raise UsageError(f"{_PROG} forecast: error: {_one_line(exc)}") from None
     if not args.log.is_file():
         raise UsageError(f"{_PROG} forecast: error: --log {args.log}: file not found")
-    if args.out.resolve() == args.log.resolve():
-        raise UsageError(f"{_PROG} forecast: error: --out {args.out}: is the --log file; the forecast would "
-                         f"replace the log, give another path")
+    for opt, given in (("--log", args.log), ("--model", args.model)):
+        if args.out.resolve() == given.resolve():
+            raise UsageError(f"{_PROG} forecast: error: --out {args.out}: is the {opt} file; the forecast would "
+                             f"replace it, give another path")
+    if args.out.is_dir():
+        raise UsageError(f"{_PROG} forecast: error: --out {args.out}: is a folder; give a .csv file")
+    if not args.out.name.lower().endswith(".csv"):
+        raise UsageError(f"{_PROG} forecast: error: --out {args.out}: expected a .csv file (the forecast is "
+                         f"written as plain CSV)")
     fc = hp.forecast(args.log, args.start_time, args.horizon_s, guard=not args.no_guard, commands=args.commands)
     df = fc.to_frame(quantiles=quantiles)
     atomic_write(args.out, lambda fh: fh.write(df.to_csv(index=False).encode("utf-8")))

@@ -44,8 +44,23 @@ def test_train_then_forecast_writes_a_table(log_dir, tmp_path, capsys):
     assert "is the --log file" in capsys.readouterr().err
     assert log_copy.read_bytes() == (log_dir / "log1.csv.gz").read_bytes()
     assert main(["forecast", "--model", str(model), "--log", str(log_copy), "--start-time", "900",
-                 "--out", str(tmp_path)]) == 1
-    assert "is a directory" in capsys.readouterr().err
+                 "--out", str(tmp_path)]) == 2
+    assert "is a folder" in capsys.readouterr().err
+    # nor the model it uses, nor writes plain CSV under another extension
+    model_bytes = model.read_bytes()
+    assert main(["forecast", "--model", str(model), "--log", str(log_copy), "--start-time", "900",
+                 "--out", str(model)]) == 2
+    assert "is the --model file" in capsys.readouterr().err and model.read_bytes() == model_bytes
+    assert main(["forecast", "--model", str(model), "--log", str(log_copy), "--start-time", "900",
+                 "--out", str(tmp_path / "fc.csv.gz")]) == 2
+    assert "expected a .csv file" in capsys.readouterr().err
+    # train never replaces a training log with the model
+    logs = tmp_path / "own-logs"
+    logs.mkdir()
+    (logs / "a.csv.gz").write_bytes((log_dir / "log1.csv.gz").read_bytes())
+    assert main(["train", "--logs", str(logs), "--out", str(logs / "a.csv.gz"), "--members", "2"]) == 2
+    assert "expected a .npz model file" in capsys.readouterr().err
+    assert (logs / "a.csv.gz").read_bytes() == (log_dir / "log1.csv.gz").read_bytes()
 
 
 def test_cli_errors_are_one_line_and_non_zero(log_dir, tmp_path, capsys):

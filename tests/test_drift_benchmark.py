@@ -190,3 +190,11 @@ def test_ratio_table_keeps_log_order_and_marks_ratios_without_a_reference():
     assert ratio_cells(r[[5]]).loc["b_log", "north_m"] == "0.50"          # one window: one number
     md = _per_log_markdown(per)
     assert "(0 of 6 log/state/window ratios; 6 without a ratio (n/a)" in md
+
+
+def test_too_few_calibration_forecasts_are_refused_with_the_counts():
+    from hybridship.evaluation.drift import _check_calibration_count
+
+    _check_calibration_count(6, 4, "calibration_scenarios")          # 24 per lead: enough
+    with pytest.raises(ValueError, match=r"n_intervals: 3 forecasts after each of 6 failures .* give 18 per lead"):
+        _check_calibration_count(6, 3, "calibration_scenarios")

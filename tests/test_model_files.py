@@ -45,17 +45,23 @@ def _meta(arrays) -> dict:
 
 
 def _rewrite(saved, tmp_path, *, meta_change=None, array_change=None, name="tampered.npz",
-             restamp=False) -> Path:
+             restamp=False, restamp_metadata=True) -> Path:
     """A copy of the saved model with its metadata and/or arrays changed.
 
     ``restamp`` recomputes the content checksum after the change (a consistently written
-    file with bad contents), so that the checks behind the checksum are reached.
+    file with bad contents), so that the checks behind the checksum are reached;
+    ``restamp_metadata`` (default) does the same for the metadata's own checksum after a
+    metadata change (``test_edited_settings_are_refused`` turns it off).
     """
     _, path, _ = saved
     arrays = _arrays(path)
     if meta_change is not None:
+        from hybridship.predictors.model_file import _metadata_hash
+
         meta = _meta(arrays)
         meta_change(meta)
+        if restamp_metadata and "metadata_sha256" in meta:   # a consistently written file with these settings
+            meta["metadata_sha256"] = _metadata_hash(meta)
         arrays["metadata_json"] = np.frombuffer(json.dumps(meta).encode("utf-8"), dtype=np.uint8)
     if array_change is not None:
         array_change(arrays)
@@ -64,6 +70,10 @@ def _rewrite(saved, tmp_path, *, meta_change=None, array_change=None, name="tamp
 
         meta = _meta(arrays)
         meta["content_sha256"] = _content_hash({k: v for k, v in arrays.items() if k != "metadata_json"})
+        if "metadata_sha256" in meta:
+            from hybridship.predictors.model_file import _metadata_hash
+
+            meta["metadata_sha256"] = _metadata_hash(meta)
         arrays["metadata_json"] = np.frombuffer(json.dumps(meta).encode("utf-8"), dtype=np.uint8)
     out = tmp_path / name
     np.savez(out, **arrays)
@@ -120,9 +130,9 @@ def test_missing_file_is_a_model_file_error(tmp_path):
 
 
 def test_incompatible_format_version_is_refused(saved, tmp_path):
-    for version in (0, 99, "1", None):
+    for version in (0, 99, "1", None, "13", 13.0):
         p = _rewrite(saved, tmp_path, meta_change=lambda m: m.update(format_version=version), name=f"v{version}.npz")
-        _refused(p, rf"model format version {version} is not supported \(this hybridship reads versions 7, 8, 9, 10, 11, 12\)")
+        _refused(p, rf"model format version {version} is not supported \(this hybridship reads versions 7, 8, 9, 10, 11, 12, 13\)")
 
 
 def test_an_older_format_says_retrain(saved, tmp_path):
@@ -403,3 +413,29 @@ def test_a_version_11_file_reads_without_command_memory(saved, tmp_path):
     assert not back.residual_config.uses_memory_features
     v12 = _rewrite(saved, tmp_path, meta_change=lambda m: m["residual_config"].pop("command_memory_s"), name="v12.npz")
     _refused(v12, r"damaged model metadata .*command_memory_s")
+
+
+def test_edited_settings_are_refused(saved, tmp_path):
+    """The metadata carry their own checksum (format 13): reordering the features, or dropping
+    the spread's training information, changed forecasts silently before."""
+    edits = {"features": lambda m: m["residual_config"]["features"].reverse(),
+             "guard": lambda m: m["guard"].update(d0=-1.0),
+             "training_info": lambda m: m.pop("training_info", None)}
+    for name, edit in edits.items():
+        p = _rewrite(saved, tmp_path, meta_change=edit, restamp_metadata=False, name=f"edit-{name}.npz")
+        _refused(p, "metadata checksum does not match")
+
+
+@pytest.mark.parametrize("key, value, message", [
+    ("w0", lambda a: a["w0"].ravel(), "w0: expected shape"),
+    ("x_mean", lambda a: a["x_mean"][:-1], "x_mean: expected"),
+    ("x_std", lambda a: np.zeros_like(a["x_std"]), "x_std: a normalisation scale must be > 0"),
+    ("y_mean", lambda a: np.full_like(a["y_mean"], np.nan), "y_mean: expected 3 finite values"),
+    ("guard_mean", lambda a: a["guard_mean"][:-1], "guard_mean / guard_inv_cov"),
+    ("w1", lambda a: a["w1"].astype(complex), "w1: expected real numbers"),
+])
+def test_consistently_written_bad_arrays_are_refused(saved, tmp_path, key, value, message):
+    def change(arrays):
+        arrays[key] = value(arrays)
+
+    _refused(_rewrite(saved, tmp_path, array_change=change, restamp=True, name=f"bad-{key}.npz"), message)

@@ -27,6 +27,8 @@ from ..residual.multistep import MultiStepConfig
 __all__ = ["MODEL_FORMAT_VERSION", "ModelFileError", "load_model", "model_metadata", "save_model"]
 
 #: Version of the model-file format written by :func:`save_model` (:meth:`HybridPredictor.save`).
+#: 13: the metadata's own checksum (``metadata_sha256``: an edited setting, such as the feature
+#: order or the spread calibration, no longer loads silently);
 #: 12: the command-memory features and their time constant (``residual_config.command_memory_s``);
 #: 11: the environment estimator uses the hull's yaw moment in a drift after a failure too
 #: (``drift_yaw_in_filter``); 10: the hull's yaw moment in a drift (``drift_hull``, ``drift_yaw_uv_rad_per_m2``);
@@ -38,15 +40,15 @@ __all__ = ["MODEL_FORMAT_VERSION", "ModelFileError", "load_model", "model_metada
 #: validated vessel description is embedded in the metadata (``vessel_description``), so a
 #: model loads without its vessel file; 3 added the environment estimator; 2 and earlier
 #: stored only the vessel's name.
-MODEL_FORMAT_VERSION = 12
+MODEL_FORMAT_VERSION = 13
 #: Versions :func:`load_model` reads: a version-7 file is a version-8 one without the spread
 #: exponent (three rows per ``cal_*`` array), read as exponent 1, which is what it was fitted with;
 #: versions 7 and 8 have no wind futures in the spread (``wind_samples = 0``, as they were fitted);
 #: versions 7 to 9 no hull's yaw moment in a drift (``drift_hull`` off, ``k = 0``); in version 10
 #: only the forecasts use it, not the environment estimator (``drift_yaw_in_filter`` false), as
 #: its coefficient was chosen; versions 7 to 11 use no command memory (the time constant is
-#: the default, unused).
-READABLE_MODEL_FORMAT_VERSIONS = (7, 8, 9, 10, 11, 12)
+#: the default, unused); versions 7 to 12 carry no checksum of their metadata.
+READABLE_MODEL_FORMAT_VERSIONS = (7, 8, 9, 10, 11, 12, 13)
 
 
 class ModelFileError(ValueError):
@@ -75,6 +77,14 @@ def _content_hash(arrays: dict) -> str:
         h.update(f"{name}|{a.dtype.str}|{a.shape}|".encode())
         h.update(a.tobytes())
     return h.hexdigest()
+
+
+def _metadata_hash(meta: dict) -> str:
+    """sha256 of the metadata's canonical JSON, without its own checksum (``metadata_sha256``)."""
+    import hashlib
+
+    body = {k: v for k, v in meta.items() if k != "metadata_sha256"}
+    return hashlib.sha256(json.dumps(body, sort_keys=True).encode("utf-8")).hexdigest()
 
 
 def _vessel_fingerprint(vessel) -> str:
@@ -150,6 +160,7 @@ def save_model(predictor, path) -> Path:
                                                      np.full(sc.lead_s.size, sc.exponent)])
     meta_d = model_metadata(p)
     meta_d["content_sha256"] = _content_hash(arrays)
+    meta_d["metadata_sha256"] = _metadata_hash(meta_d)
     meta = json.dumps(meta_d, sort_keys=True)
     arrays["metadata_json"] = np.frombuffer(meta.encode("utf-8"), dtype=np.uint8)
     return atomic_write(path, lambda fh: np.savez(fh, **arrays))
@@ -202,7 +213,7 @@ def _read_checked_metadata(data: dict, path: Path) -> dict:
     if meta.get("format") != "hybridship-model":
         raise ModelFileError(f"{path}: not a hybridship model file")
     version = meta.get("format_version")
-    if version not in READABLE_MODEL_FORMAT_VERSIONS or isinstance(version, bool):
+    if not isinstance(version, int) or version not in READABLE_MODEL_FORMAT_VERSIONS or isinstance(version, bool):
         oldest = READABLE_MODEL_FORMAT_VERSIONS[0]
         older = (f": written by an older hybridship (format {version}); retrain with `hybridship train` "
                  f"(or HybridPredictor.fit) to write a version-{MODEL_FORMAT_VERSION} file, which carries "
@@ -212,6 +223,9 @@ def _read_checked_metadata(data: dict, path: Path) -> dict:
         raise ModelFileError(f"{path}: model format version {version} is not supported "
                              f"(this hybridship reads versions "
                              f"{', '.join(str(v) for v in READABLE_MODEL_FORMAT_VERSIONS)}){older}")
+    if version >= 13 and meta.get("metadata_sha256") != _metadata_hash(meta):
+        raise ModelFileError(f"{path}: metadata checksum does not match: the model's settings were edited "
+                             f"or damaged")
     content = {k: v for k, v in data.items() if k != "metadata_json"}
     if meta.get("content_sha256") != _content_hash(content):
         raise ModelFileError(f"{path}: content checksum does not match the metadata: the file was "
@@ -381,13 +395,33 @@ def _read_wind_error_paths(data: dict) -> np.ndarray:
 
 def _read_nets(data: dict, n_in: int, state: dict):
     """``(MLPEnsemble, EnvelopeGuard, ThrustRegime)`` from the arrays; ValueError on wrong shapes."""
+    for i in range(6):
+        if data[f"w{i}"].dtype.kind not in "fiu":
+            raise ValueError(f"w{i}: expected real numbers, got dtype {data[f'w{i}'].dtype}")
     weights = [np.asarray(data[f"w{i}"], dtype=float) for i in range(6)]
+    if weights[0].ndim != 3:
+        raise ValueError(f"w0: expected shape (members, inputs, hidden), got {weights[0].shape}")
     E, H = weights[0].shape[0], weights[0].shape[2]
     expected = [(E, n_in, H), (E, 1, H), (E, H, H), (E, 1, H), (E, H, 3), (E, 1, 3)]
     if [w.shape for w in weights] != expected:
         raise ValueError(f"weight shapes {[w.shape for w in weights]} do not match {expected}")
-    ens = MLPEnsemble(weights, data["x_mean"], data["x_std"], data["y_mean"], data["y_std"])
-    guard = EnvelopeGuard(data["guard_mean"], data["guard_inv_cov"], state["guard_d0"], state["guard_scale"])
+    norm = {k: np.asarray(data[k], dtype=float) for k in ("x_mean", "x_std", "y_mean", "y_std")}
+    for k, n in (("x_mean", n_in), ("x_std", n_in), ("y_mean", 3), ("y_std", 3)):
+        if norm[k].shape != (n,) or not np.all(np.isfinite(norm[k])):
+            raise ValueError(f"{k}: expected {n} finite values, got shape {norm[k].shape}")
+        if k.endswith("std") and not np.all(norm[k] > 0):
+            raise ValueError(f"{k}: a normalisation scale must be > 0")
+    ens = MLPEnsemble(weights, norm["x_mean"], norm["x_std"], norm["y_mean"], norm["y_std"])
+    g_mean, g_inv = np.asarray(data["guard_mean"], dtype=float), np.asarray(data["guard_inv_cov"], dtype=float)
+    n_g = g_mean.size
+    if g_mean.shape != (n_g,) or g_inv.shape != (n_g, n_g) or not np.all(np.isfinite(g_mean)):
+        raise ValueError(f"guard_mean / guard_inv_cov: expected shapes (n,) and (n, n) with finite values, got "
+                         f"{g_mean.shape} and {g_inv.shape}")
+    for name, v in (("guard.d0", state["guard_d0"]), ("guard.scale", state["guard_scale"]),
+                    ("thrust_regime.lo", state["thrust_lo"])):
+        if not np.all(np.isfinite(np.asarray(v, dtype=float))):
+            raise ValueError(f"{name}: not a finite number")
+    guard = EnvelopeGuard(g_mean, g_inv, state["guard_d0"], state["guard_scale"])
     thrust_regime = ThrustRegime(np.asarray(data["thrust_scale"], dtype=float), state["thrust_lo"])
     return ens, guard, thrust_regime
 
