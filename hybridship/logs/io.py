@@ -306,8 +306,7 @@ def _to_float(df: pd.DataFrame, col: str, source: str, time_s: np.ndarray | None
             return x
         i = int(np.argmax(inf))
         raise LogFormatError(
-            f"{col}: infinite value {x[i]} at {_row_at(time_s, i)}; expected a finite number "
-            f"or an empty cell{_where(source)}",
+            f"{col}: infinite value {x[i]} at {_row_at(time_s, i)}; expected a finite number{_where(source)}",
             column=col, row=i, time_s=None if time_s is None else float(time_s[i]),
         )
     return x
