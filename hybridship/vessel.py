@@ -208,6 +208,10 @@ class Thruster(_Strict):
     def _angle(self):
         if self.type == "fixed" and self.angle_deg is None:
             raise ValueError("type 'fixed' needs angle_deg")
+        return self
+
+    @model_validator(mode="after")
+    def _tabulated_propeller(self):
         from .physics.propeller import available_propellers   # the packaged four-quadrant table
 
         avail = available_propellers()

@@ -132,7 +132,8 @@ def test_missing_file_is_a_model_file_error(tmp_path):
 def test_incompatible_format_version_is_refused(saved, tmp_path):
     for version in (0, 99, "1", None, "13", 13.0):
         p = _rewrite(saved, tmp_path, meta_change=lambda m: m.update(format_version=version), name=f"v{version}.npz")
-        _refused(p, rf"model format version {version} is not supported \(this hybridship reads versions 7, 8, 9, 10, 11, 12, 13\)")
+        _refused(p, rf"model format version {version} is not supported "
+                    rf"\(this hybridship reads versions 7, 8, 9, 10, 11, 12, 13\)")
 
 
 def test_an_older_format_says_retrain(saved, tmp_path):

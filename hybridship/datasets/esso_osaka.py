@@ -307,8 +307,14 @@ def run_kind(path) -> str:
     return kind
 
 
+def uncut_name(stem: str) -> str:
+    """The name of the run ``stem`` is cut from (``<kind>_cut_<stamp>`` -> ``<kind>_<stamp>``;
+    other names unchanged)."""
+    return re.sub(r"^(\w+?)_cut_", r"\1_", stem)
+
+
 def _recording(stem: str) -> str:
-    s = re.sub(r"^(\w+?)_cut_", r"\1_", stem)
+    s = uncut_name(stem)
     return re.sub(r"_\d+$", "", s) if re.search(r"\d{2}_\d{2}_\d{2}_\d+$", s) else s
 
 
@@ -327,7 +333,7 @@ def list_runs(folder, *, include_duplicates: bool = False) -> list[EssoRun]:
     runs = []
     for p in files:
         stem = _stem(p)
-        uncut = re.sub(r"^(\w+?)_cut_", r"\1_", stem)
+        uncut = uncut_name(stem)
         if not include_duplicates and uncut != stem and uncut in stems:
             continue
         runs.append(EssoRun(path=p, name=stem, kind=run_kind(p), recording=_recording(stem)))

@@ -22,7 +22,6 @@ alone (:class:`~hybridship.predictors.DynamicPredictor`), constant-velocity dead
 
 from __future__ import annotations
 
-import re
 import time
 from dataclasses import dataclass, field, replace
 from pathlib import Path
@@ -709,12 +708,11 @@ def cut_copies(train: list[Run], test: list[Run]) -> list[tuple[str, str]]:
     """``(test name, train name)`` pairs that are one run cut and uncut (``<kind>_cut_<stamp>``
     is a truncated copy of ``<kind>_<stamp>`` in the Esso data set). Not refused, only reported:
     a published test set might hold such a pair, and the benchmark must still run on it."""
-    def uncut(name: str) -> str:
-        return re.sub(r"^(\w+?)_cut_", r"\1_", name)
+    from ..datasets.esso_osaka import uncut_name
 
-    by_uncut = {uncut(r.run.name): r.run.name for r in train}
-    return [(r.run.name, by_uncut[uncut(r.run.name)]) for r in test
-            if uncut(r.run.name) in by_uncut and by_uncut[uncut(r.run.name)] != r.run.name]
+    by_uncut = {uncut_name(r.run.name): r.run.name for r in train}
+    return [(r.run.name, by_uncut[uncut_name(r.run.name)]) for r in test
+            if by_uncut.get(uncut_name(r.run.name), r.run.name) != r.run.name]
 
 
 def is_quick(config: ManoeuvreConfig) -> bool:

@@ -582,8 +582,9 @@ def detect_dropped_wind(view: LogView, win: Window) -> np.ndarray:
     """The wind to hold over the forecast: the latest valid sample in the window.
 
     Fault: the log has wind columns but no valid wind sample in the window (sensor
-    dropped), or none in all the rows read for the forecast (sensor dead). Evidence: :attr:`LogArrays.wind_logged`. Flags ``wind_dropped``; repair:
-    no wind (zeros). Returns ``[speed_m_s, dir_from_rad]``.
+    dropped), or none in all the rows read for the forecast (sensor dead). Evidence:
+    :attr:`LogArrays.wind_logged` and :attr:`LogArrays.wind_columns`. Flags ``wind_dropped``;
+    repair: no wind (zeros). Returns ``[speed_m_s, dir_from_rad]``.
     """
     a = view.arrays
     if not a.has_wind:

@@ -203,9 +203,9 @@ def _checked_exponent(v):
     raise ValueError(f"must be a number in [0, 1] or 'likelihood', got {v!r}")
 
 
-
 #: Fewest finite forecast errors per lead that :func:`fit_spread_scale` fits a scale on.
 MIN_CALIBRATION_SAMPLES = 20
+
 
 def fit_spread_scale(abs_err, std, lead_s, *, sigma: float = 2.0, coverage: float = GAUSS_COVERAGE[2.0],
                      floor_quantile: float = 0.1, min_samples: int = MIN_CALIBRATION_SAMPLES,

@@ -96,8 +96,7 @@ def wave_axis(time_s: np.ndarray, psi_rad: np.ndarray, u_m_s: np.ndarray, v_m_s:
         return None
     sos = butter(4, [1.0 / band_s[1], 1.0 / band_s[0]], btype="band", fs=1.0 / dt, output="sos")
     uv = np.zeros((t.size, 3))
-    for j, x in enumerate((u_m_s, v_m_s)):
-        uv[:, j] = sosfiltfilt(sos, np.nan_to_num(np.asarray(x, dtype=float)[keep]))
+    uv[:, :2] = sosfiltfilt(sos, np.nan_to_num(np.column_stack([u_m_s, v_m_s]).astype(float)[keep]), axis=0)
     # into NED at each sample: the waves' axis is fixed there while the ship may turn
     var, vec = np.linalg.eigh(np.cov(body_to_ned(uv, psi)[:, :2].T))
     if not var[1] > 0 or var[1] < min_anisotropy * max(var[0], 1e-12 * var[1]):
