@@ -2,8 +2,8 @@
 
 Each subcommand is two functions: ``_add_<name>(subparsers)`` declares its arguments and
 sets ``func=_cmd_<name>``; ``_cmd_<name>(args) -> int`` runs it. Both are registered in
-:func:`_build_parser`. Input errors are reported as one line on stderr
-(``hybridship <command>: error: <what is wrong>``) with exit status 2; failures while
+:func:`_build_parser`. Input errors are reported on stderr, one line per problem
+(``hybridship <command>: error: <what is wrong>``), with exit status 2; failures while
 running (I/O, bad data) exit with 1. No tracebacks for either.
 
 Commands
@@ -34,13 +34,15 @@ import math
 import sys
 from pathlib import Path
 
+from .messages import problem_lines
+
 __all__ = ["main", "parse_seeds"]
 
 _PROG = "hybridship"
 
 
 class UsageError(Exception):
-    """Bad command-line input; the message is shown as one line, exit status 2."""
+    """Bad command-line input, exit status 2; the message has one line per problem."""
 
 
 class _Parser(argparse.ArgumentParser):
@@ -48,11 +50,6 @@ class _Parser(argparse.ArgumentParser):
 
     def error(self, message):  # noqa: D401 (argparse API)
         raise UsageError(f"{self.prog}: error: {message}")
-
-
-def _one_line(exc: BaseException) -> str:
-    text = " ".join(str(exc).split())
-    return text or type(exc).__name__
 
 
 # --------------------------------------------------------------------------- argument types
@@ -174,7 +171,7 @@ def _cmd_simulate(args) -> int:
         # Validate the settings once before any (long) simulation starts.
         scenario.DPLossConfig(seed=0, beaufort=tuple(args.beaufort), **overrides)
     except (ValueError, TypeError) as exc:
-        raise UsageError(f"{prefix}: error: {_one_line(exc)}") from None
+        raise UsageError(problem_lines(exc, f"{prefix}: error: ")) from None
     progress = sys.stderr.isatty() if args.progress is None else args.progress
 
     if args.sweep:
@@ -261,7 +258,7 @@ def _cmd_train(args) -> int:
     try:
         vessel = load_vessel(args.vessel)
     except VesselFileError as exc:
-        raise UsageError(f"{_PROG} train: error: {_one_line(exc)}") from None
+        raise UsageError(problem_lines(exc, f"{_PROG} train: error: ")) from None
     if not args.logs.is_dir():
         raise UsageError(f"{_PROG} train: error: --logs {args.logs}: not a folder")
     files = sorted(p for p in args.logs.iterdir() if p.name.endswith((".csv", ".csv.gz", ".parquet", ".pq")))
@@ -339,7 +336,7 @@ def _cmd_forecast(args) -> int:
     try:
         hp = HybridPredictor.load(args.model)
     except ModelFileError as exc:
-        raise UsageError(f"{_PROG} forecast: error: {_one_line(exc)}") from None
+        raise UsageError(problem_lines(exc, f"{_PROG} forecast: error: ")) from None
     if not args.log.is_file():
         raise UsageError(f"{_PROG} forecast: error: --log {args.log}: file not found")
     for opt, given in (("--log", args.log), ("--model", args.model)):
@@ -400,7 +397,8 @@ def _add_benchmark(sub) -> None:
     d.add_argument("--wave-yaw-load", action="store_true",
                    help="after a failure, turn the held yaw load with the waves' axis found in the station "
                         "keeping's wave-frequency motion (EnvironmentConfig.wave_turned_yaw_load)")
-    d.add_argument("--no-plots", action="store_true", help="skip the figures")
+    d.add_argument("--no-plots", action="store_true",
+                   help="skip the figures (and remove those of an earlier run from --out)")
     d.set_defaults(func=_cmd_benchmark_drift)
     h = bsub.add_parser("hsc", help="high-speed craft: SS, ARX, NARX-ANN and hybrid on simulated sea trials",
                         description="Simulate Volcano71 sea trials (sea states 1 and 2), identify SS, ARX, "
@@ -498,11 +496,11 @@ def _cmd_benchmark_drift(args) -> int:
             try:
                 log_files(folder)
             except ValueError as exc:
-                raise UsageError(f"{_PROG} benchmark drift: error: {opt} {_one_line(exc)}") from None
+                raise UsageError(problem_lines(exc, f"{_PROG} benchmark drift: error: {opt} ")) from None
     try:
         vessel = load_vessel(args.vessel)
     except VesselFileError as exc:
-        raise UsageError(f"{_PROG} benchmark drift: error: {_one_line(exc)}") from None
+        raise UsageError(problem_lines(exc, f"{_PROG} benchmark drift: error: ")) from None
     res = run_drift_benchmark(args.train, args.test, args.out, vessel=vessel, members=args.members,
                               seed=args.seed, n_intervals=args.intervals, dp_only=not args.all_rows,
                               n_scenarios=args.scenarios, plots=not args.no_plots, training=args.training,
@@ -543,7 +541,7 @@ def main(argv=None) -> int:
             raise UsageError(f"{_PROG}: error: a command is required (try '{_PROG} --help')")
         return int(args.func(args))
     except UsageError as exc:
-        print(_one_line(exc), file=sys.stderr)
+        print(str(exc), file=sys.stderr)
         return 2
     except SystemExit as exc:  # --help / --version from argparse
         return exc.code if isinstance(exc.code, int) else 0
@@ -554,7 +552,7 @@ def main(argv=None) -> int:
         # name the whole command, e.g. "hybridship drift-off live" (the subcommand's dest)
         words = [getattr(args, dest, None) for dest in ("command", "benchmark", "mode")]
         cmd = " ".join(w for w in words if w)
-        print(f"{_PROG}{' ' + cmd if cmd else ''}: error: {_one_line(exc)}", file=sys.stderr)
+        print(problem_lines(exc, f"{_PROG}{' ' + cmd if cmd else ''}: error: "), file=sys.stderr)
         return 1
 
 

@@ -136,10 +136,9 @@ def config_dataclass(cls=None, /, *, frozen: bool = False, arbitrary_types: bool
             try:
                 init(self, *args, **kw)
             except ValidationError as err:
-                msg = format_validation_error(err)
-                if prefix:
-                    msg = "\n".join(f"{prefix}.{line}" for line in msg.split("\n"))
-                raise ValueError(f"{msg} [{dc.__name__}]") from None
+                head = f"{prefix}." if prefix else ""
+                raise ValueError("\n".join(f"{head}{line} [{dc.__name__}]"  # every problem names its class
+                                           for line in format_validation_error(err).split("\n"))) from None
 
         dc.__init__ = __init__
         return dc

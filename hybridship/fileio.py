@@ -45,6 +45,22 @@ def atomic_write(path, write: Callable[[BinaryIO], None]) -> Path:
     return path
 
 
+def remove_stale(folder, names) -> list[Path]:
+    """Remove the files ``names`` from ``folder`` where they exist; return those removed.
+
+    For the outputs a command makes only with some options (a figure switched off): an
+    earlier run's copy left in a reused output folder would sit beside this run's tables
+    as if it belonged to them. Only the command's own file names are passed here.
+    """
+    removed = []
+    for name in names:
+        path = Path(folder) / name
+        if path.is_file():
+            path.unlink()
+            removed.append(path)
+    return removed
+
+
 def markdown_table(df) -> str:
     """A pandas DataFrame (its columns, then its rows as they are) as a Markdown table."""
     head = "| " + " | ".join(str(c) for c in df.columns) + " |"

@@ -26,10 +26,13 @@ def tiny_folder(tmp_path_factory):
 
 
 def test_tables_have_the_papers_layout_and_physics_is_exact_on_its_own_logs(tiny_folder, tmp_path):
+    (tmp_path / "out").mkdir()
+    (tmp_path / "out" / "trajectories.png").write_text("an earlier run's figure")
     res = run_drift_benchmark(tiny_folder, None, tmp_path / "out", ensemble_config=TINY, plots=False,
                               calibration_scenarios=1,
                               progress=False)
     errors = pd.read_csv(tmp_path / "out" / "errors.csv")
+    assert not (tmp_path / "out" / "trajectories.png").exists()  # not beside tables it did not come from
     assert list(errors.columns) == ["model", "state", "window", "horizon_s", "mae"]
     assert set(errors.model) == {"hybrid", "hybrid_nets_unguarded", "hybrid_mean_bias", "dynamic", "dead_reckoning", "data_only"}
     assert set(errors.state) == {"north_m", "east_m", "yaw_deg"}

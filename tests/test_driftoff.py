@@ -244,10 +244,15 @@ def test_cli_planning_writes_the_report(tmp_path, capsys):
     from hybridship.cli import main
 
     out = tmp_path / "plan"
+    out.mkdir()
+    for name in ("polar.png", "notes.txt"):  # an earlier run's figure; a file of the user's
+        (out / name).write_text("earlier")
     assert main(["drift-off", "planning", "--out", str(out), "--samples", "3", "--headings-deg", "0,90",
                  "--horizon-s", "90", "--no-plots"]) == 0
     times = pd.read_csv(out / "times.csv")
     assert len(times) == 2 * 3 and (out / "summary.md").is_file() and (out / "watch.csv").is_file()
+    # no figure of the earlier run beside the new tables; other files untouched
+    assert not (out / "polar.png").exists() and (out / "notes.txt").read_text() == "earlier"
     assert "Time to reach" in capsys.readouterr().out
 
 

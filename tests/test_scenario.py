@@ -289,3 +289,28 @@ def test_cli_bad_input_gives_one_line_and_nonzero(tmp_path, capsys, argv, needle
     assert needle in err and "Traceback" not in err
     assert len(err.strip().splitlines()) == 1
     assert not list(tmp_path.iterdir())
+
+
+def test_cli_prints_each_problem_of_a_vessel_file_on_a_line_of_its_own(tmp_path, capsys):
+    from hybridship.vessel import packaged_vessel_text
+
+    text = packaged_vessel_text("gunnerus")
+    bad = tmp_path / "bad.toml"
+    bad.write_text(text.replace("mass_kg = 574130.0", "mass_kg = -5", 1)
+                   .replace("rho_air_kg_m3 = 1.225", 'rho_air_kg_m3 = "x"', 1))
+    assert bad.read_text() != text
+    rc = main(["simulate", "--vessel", str(bad), "--seed", "1", "--out", str(tmp_path / "x.csv")])
+    lines = capsys.readouterr().err.strip().splitlines()
+    assert rc == 2 and len(lines) == 2
+    assert all(line.startswith("hybridship simulate: error: ") and "bad.toml: " in line for line in lines)
+    assert "rigid_body.mass_kg" in lines[0] and "wind.rho_air_kg_m3" in lines[1]
+    assert not (tmp_path / "x.csv").exists()
+
+
+def test_drift_off_settings_problems_name_their_options_line_by_line(tmp_path, capsys):
+    rc = main(["drift-off", "planning", "--radii-m", "-5", "--samples", "0", "--out", str(tmp_path / "o")])
+    lines = capsys.readouterr().err.strip().splitlines()
+    assert rc == 2 and len(lines) == 2
+    assert lines[0].startswith("hybridship drift-off planning: error: --radii-m: ")
+    assert lines[1].startswith("hybridship drift-off planning: error: --samples: ")
+    assert not (tmp_path / "o").exists()

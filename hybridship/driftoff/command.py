@@ -12,11 +12,22 @@ import math
 import sys
 from pathlib import Path
 
+from ..messages import problem_lines
 from ..fileio import check_out_folder
 
 __all__ = ["add_parser"]
 
 _PROG = "hybridship drift-off"
+
+
+def _options_named(exc: BaseException, head: str, option_of) -> str:
+    """:func:`~hybridship.messages.problem_lines` with each line's leading field (``field: ...``)
+    replaced by ``option_of(field)``."""
+    lines = []
+    for line in problem_lines(exc).splitlines():
+        field, sep, rest = line.partition(":")
+        lines.append(f"{head}{option_of(field)}{sep}{rest}" if sep else f"{head}{line}")
+    return "\n".join(lines)
 
 
 def _floats(text: str) -> list[float]:
@@ -44,7 +55,8 @@ def _common(p, plots: bool = True) -> None:
     p.add_argument("--seed", type=int, default=0, help="seed (default 0)")
     p.add_argument("--out", type=Path, required=True, help="output folder")
     if plots:
-        p.add_argument("--no-plots", action="store_true", help="skip the figures")
+        p.add_argument("--no-plots", action="store_true",
+                       help="skip the figures (and remove those of an earlier run from --out)")
 
 
 def _weather(p, table: bool) -> None:
@@ -161,10 +173,9 @@ def _settings(args, mode):
                                 n_samples=args.samples, horizon_s=args.horizon_s, dt_s=args.dt_s,
                                 vessel_spread=args.vessel_spread, seed=args.seed)
     except (ValueError, TypeError) as exc:
-        msg = " ".join(str(exc).split())
-        field = msg.split(":", 1)[0]
-        option = names.get(field.split("[", 1)[0], field)  # radii_m[0] -> --radii-m
-        raise _usage(f"{_PROG} {mode}: error: {option}: {msg.split(':', 1)[-1].strip()}") from None
+        # radii_m[0] -> --radii-m: the option the user typed, on each problem's line
+        raise _usage(_options_named(exc, f"{_PROG} {mode}: error: ",
+                                    lambda field: names.get(field.split("[", 1)[0], field))) from None
 
 
 def _model(args, mode):
@@ -175,7 +186,7 @@ def _model(args, mode):
     try:
         return get_model(args.vessel)
     except (VesselFileError, ValueError, FileNotFoundError) as exc:
-        raise _usage(f"{_PROG} {mode}: error: --vessel: {' '.join(str(exc).split())}") from None
+        raise _usage(problem_lines(exc, f"{_PROG} {mode}: error: --vessel: ")) from None
 
 
 def _cmd_planning(args) -> int:
@@ -192,11 +203,9 @@ def _cmd_planning(args) -> int:
                                math.radians(args.wave_dir_std_deg), args.current_std_m_s,
                                math.radians(args.current_dir_std_deg))
     except (ValueError, TypeError) as exc:
-        msg = " ".join(str(exc).split())
-        field = msg.split(":", 1)[0]
-        if field in _WEATHER_OPTIONS:       # the option the user typed, not the field it fills
-            msg = f"{_WEATHER_OPTIONS[field]}:{msg.split(':', 1)[1]}"
-        raise _usage(f"{_PROG} planning: error: {msg}") from None
+        # the option the user typed, not the field it fills
+        raise _usage(_options_named(exc, f"{_PROG} planning: error: ",
+                                    lambda field: _WEATHER_OPTIONS.get(field, field))) from None
     model = _model(args, "planning")
     res = simulate_blackouts(model, w, [math.radians(h) for h in args.headings_deg], uncertainty=u, settings=st)
     inputs = {"vessel": model.vessel.name, "wind": f"{args.wind_m_s:g} +- {args.wind_std_m_s:g} m/s from "
@@ -237,7 +246,7 @@ def _cmd_live(args) -> int:
     try:
         est = environment_from_log(df, model, window_s=args.window_s, seed=args.seed)
     except ValueError as exc:
-        raise _usage(f"{_PROG} live: error: {' '.join(str(exc).split())}") from None
+        raise _usage(problem_lines(exc, f"{_PROG} live: error: ")) from None
     res = blackout_now(est, model, st)
     dt = time.perf_counter() - t0
     inputs = {"vessel": model.vessel.name, "log": str(args.log), "blackout at [s]": f"{est.time_s:g}",
@@ -278,7 +287,7 @@ def _cmd_season(args) -> int:
     try:
         states, labels = read_weather_table(args.weather_table)
     except (ValueError, FileNotFoundError) as exc:
-        raise _usage(f"{_PROG} season: error: --weather-table: {' '.join(str(exc).split())}") from None
+        raise _usage(problem_lines(exc, f"{_PROG} season: error: --weather-table: ")) from None
     scheduler = None if args.scheduler.lower() == "none" else args.scheduler
     if scheduler is not None:
         try:

@@ -18,7 +18,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from ..fileio import atomic_write
+from ..fileio import atomic_write, remove_stale
 from .planning import DriftOffResult
 
 __all__ = ["polar_plot", "exceedance_plot", "markdown_table", "write_report", "write_text", "write_frame"]
@@ -100,7 +100,8 @@ def markdown_table(df: pd.DataFrame, digits: int = 2) -> str:
 def write_report(result: DriftOffResult, out_dir, *, title: str = "Drift-off analysis", inputs: dict | None = None,
                  quantile: float = 0.9, plots: bool = True) -> dict:
     """Write ``summary.md``, ``times.csv``, ``watch.csv`` and (with ``plots``) ``polar.png``,
-    ``exceedance.png`` to ``out_dir``; returns the paths by name."""
+    ``exceedance.png`` to ``out_dir``; returns the paths by name. Without ``plots``, the two
+    figures of an earlier run in ``out_dir`` are removed."""
     out = Path(out_dir)
     times, watch = result.summary_frames(quantile)
     paths = {"times.csv": write_frame(out / "times.csv", times), "watch.csv": write_frame(out / "watch.csv", watch)}
@@ -123,5 +124,7 @@ def write_report(result: DriftOffResult, out_dir, *, title: str = "Drift-off ana
         paths["exceedance.png"] = _save_fig(fig, out / "exceedance.png")
         plt.close(fig)
         lines += ["![time to reach vs wind direction](polar.png)", "", "![exceedance curves](exceedance.png)", ""]
+    else:  # no figure of an earlier run beside these tables
+        remove_stale(out, ("polar.png", "exceedance.png"))
     paths["summary.md"] = write_text(out / "summary.md", "\n".join(lines))
     return paths

@@ -48,7 +48,7 @@ import numpy as np
 import pandas as pd
 
 from . import metrics
-from ..fileio import atomic_write, markdown_table
+from ..fileio import atomic_write, markdown_table, remove_stale
 from ..predictors import DataOnlyPredictor, DeadReckoning, DynamicPredictor, HybridPredictor, as_log_arrays
 from ..predictors.hybrid import AFTER_STOP, after_stop_scales
 from ..residual.drift_hull import (MIN_FAILURES as DRIFT_HULL_MIN_FAILURES, choose_coefficient, drift_start_rows,
@@ -193,8 +193,7 @@ def run_drift_benchmark(train=None, test=None, out_dir="drift-benchmark", *, ves
     md = _markdown(table2, table3, coverage, intervals, timing, test_names, len(train_arrays), ens_cfg,
                    n_intervals, per_log_long)
     outputs["tables.md"] = atomic_write(out / "tables.md", lambda fh: fh.write(md.encode("utf-8")))
-    if plots:
-        outputs.update(_plots(out, fc, all_h, test_arrays, test_names))
+    outputs.update(_figures(out, plots, fc, all_h, test_arrays, test_names))
     for k, v in outputs.items():
         say(f"wrote {k}: {v}")
     return DriftBenchmarkResult(long, coverage, timing, table2, table3, outputs)
@@ -553,7 +552,12 @@ def _markdown(table2, table3, coverage, intervals, timing, test_names, n_train, 
     return "\n".join(parts) + "\n"
 
 
-def _plots(out: Path, fc: dict, all_h, test_arrays, test_names) -> dict:
+def _figures(out: Path, plots: bool, fc: dict, all_h, test_arrays, test_names) -> dict:
+    """The figures; without ``plots`` none, and an earlier run's removed from ``out`` (they
+    would sit beside these tables as if they belonged to them)."""
+    if not plots:
+        remove_stale(out, ("error_vs_horizon.png", "trajectories.png"))
+        return {}
     import matplotlib
 
     matplotlib.use("Agg")

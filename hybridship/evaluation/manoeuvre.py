@@ -31,7 +31,7 @@ import numpy as np
 import pandas as pd
 
 from ..datasets.esso_osaka import EssoRun, RUN_KINDS, esso_log_arrays, list_runs
-from ..fileio import atomic_write
+from ..fileio import atomic_write, remove_stale
 from ..frames import wrap_pi
 from ..logs.ingest import ingest
 from ..logs.io import LogArrays
@@ -890,6 +890,8 @@ def write_figures(result: BenchmarkResult, figures_dir) -> list[Path]:
             paths.append(figures_dir / "esso_residual.png")
             _savefig(fig, paths[-1])
             plt.close(fig)
+    if figures_dir / "esso_residual.png" not in paths:  # not an earlier run's residual beside these tracks
+        remove_stale(figures_dir, ("esso_residual.png",))
     return paths
 
 
