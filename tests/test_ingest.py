@@ -153,6 +153,23 @@ def test_a_missing_velocity_at_the_start_of_a_log_does_not_break_a_later_hybrid_
     assert np.isfinite(fc.eta).all()
 
 
+def test_a_whole_log_statistic_is_judged_on_the_whole_log(model, log):
+    """An azimuth thruster whose rpm is negative throughout a short range (DP reversing it
+    for a while) but positive elsewhere passes: the rpm-sign check is a statistic of the
+    whole log, and the range's rows are the whole log's."""
+    reverse = log.copy()
+    window = (reverse.time_s >= 100.0) & (reverse.time_s <= 200.0)
+    reverse.loc[window, "port_rpm"] = -np.abs(reverse.loc[window, "port_rpm"]) - 1.0
+    assert (reverse.loc[~window, "port_rpm"] > 0).any()
+    part = ingest(reverse, model.vessel, purpose="forecast", time_range_s=(100.0, 200.0))
+    whole = ingest(reverse, model.vessel, purpose="forecast")
+    keep = (whole.time_s >= 100.0) & (whole.time_s <= 200.0)
+    np.testing.assert_array_equal(part.rpm, whole.rpm[keep])
+    np.testing.assert_array_equal(part.time_s, whole.time_s[keep])
+    alone = reverse[window].reset_index(drop=True)     # the same rows alone: the check applies
+    assert _message(lambda: ingest(alone, model.vessel, purpose="forecast")).startswith("port_rpm: negative")
+
+
 @pytest.mark.parametrize("environment", ["estimator", "mean"])
 def test_a_forecast_reads_only_its_time_range(log, model, environment):
     """A forecast reads the log from ``history_s`` (+ a margin) before its earliest start to
