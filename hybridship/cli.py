@@ -34,6 +34,7 @@ import math
 import sys
 from pathlib import Path
 
+from .fileio import path_argument
 from .messages import problem_lines
 
 __all__ = ["main", "parse_seeds"]
@@ -118,7 +119,7 @@ def _add_simulate(sub) -> None:
     p.add_argument("--vessel", default="gunnerus", help="packaged vessel name or vessel file (default gunnerus)")
     p.add_argument("--scenario", default="dp-loss", choices=_SCENARIOS, help="scenario type (default dp-loss)")
     p.add_argument("--seed", type=_seed, help="seed of a single scenario (non-negative)")
-    p.add_argument("--out", type=Path, help="output log of a single scenario: .csv, .csv.gz, .parquet or .pq")
+    p.add_argument("--out", type=path_argument, help="output log of a single scenario: .csv, .csv.gz, .parquet or .pq")
     p.add_argument("--sweep", action="store_true", help="simulate one scenario per seed of --seeds")
     p.add_argument("--seeds", type=_seed_list, help="seeds of a sweep, e.g. 1-10 or 1,3,5-7")
     p.add_argument("--out-dir", type=Path, help="output folder of a sweep")
@@ -243,7 +244,7 @@ def _add_train(sub) -> None:
     p = sub.add_parser("train", help="train a hybrid on the DP part of a folder of logs")
     p.add_argument("--vessel", default="gunnerus", help="packaged vessel name or vessel TOML file")
     p.add_argument("--logs", required=True, type=Path, help="folder of logs (*.csv, *.csv.gz, *.parquet)")
-    p.add_argument("--out", required=True, type=Path, help="model file to write (.npz)")
+    p.add_argument("--out", required=True, type=path_argument, help="model file to write (.npz)")
     p.add_argument("--members", type=int, default=10)
     p.add_argument("--seed", type=_seed, default=0)
     p.add_argument("--all-rows", action="store_true", help="train on every row, not only dp_active == 1")
@@ -316,7 +317,7 @@ def _add_forecast(sub) -> None:
     p.add_argument("--quantiles", default="", metavar="Q1,Q2,...",
                    help="also write these quantiles of north, east and heading (probabilities in (0, 1), e.g. "
                         "0.05,0.95), from the calibrated spread")
-    p.add_argument("--out", required=True, type=Path, help="forecast table to write (.csv)")
+    p.add_argument("--out", required=True, type=path_argument, help="forecast table to write (.csv)")
     p.set_defaults(func=_cmd_forecast)
 
 
@@ -380,7 +381,7 @@ def _add_benchmark(sub) -> None:
                                     "to --out. Without --train/--test: the embedded simulated scenarios.")
     d.add_argument("--train", type=Path, help="folder of training logs")
     d.add_argument("--test", type=Path, help="folder of test logs (default: the training logs' drifts)")
-    d.add_argument("--out", type=Path, default=Path("drift-benchmark"), help="output folder (default drift-benchmark)")
+    d.add_argument("--out", type=path_argument, default=Path("drift-benchmark"), help="output folder (default drift-benchmark)")
     d.add_argument("--vessel", default="gunnerus", help="packaged vessel name or vessel TOML file")
     d.add_argument("--members", type=int, default=10, help="ensemble members (default 10)")
     d.add_argument("--seed", type=_seed, default=0, help="seed of scenarios and training (default 0)")
@@ -404,7 +405,7 @@ def _add_benchmark(sub) -> None:
                         description="Simulate Volcano71 sea trials (sea states 1 and 2), identify SS, ARX, "
                                     "NARX-ANN and hybrid models on the training parts and write table.csv "
                                     "(model,sea_state,split,mode,output,R,MAE), table.md and figures to --out.")
-    h.add_argument("--out", type=Path, default=Path("hsc-benchmark"), help="output folder (default hsc-benchmark)")
+    h.add_argument("--out", type=path_argument, default=Path("hsc-benchmark"), help="output folder (default hsc-benchmark)")
     h.add_argument("--seed", type=_seed, default=0, help="seed of the trials and of training (default 0)")
     h.add_argument("--quick", action="store_true", help="a small, fast configuration (for tests)")
     h.set_defaults(func=_cmd_benchmark_hsc)
@@ -419,7 +420,7 @@ def _add_benchmark(sub) -> None:
     m.add_argument("--train", required=True, type=Path, help="folder of training runs")
     m.add_argument("--test", required=True, type=Path, help="folder of test runs (never the training runs)")
     m.add_argument("--horizons-s", default="5,10,20,30", help="comma-separated horizons [s] (default 5,10,20,30)")
-    m.add_argument("--out", type=Path, default=Path("manoeuvre-benchmark"), help="output folder")
+    m.add_argument("--out", type=path_argument, default=Path("manoeuvre-benchmark"), help="output folder")
     m.add_argument("--step-s", type=float, default=None,
                    help="forecast and training step [s], a whole multiple of the data's (default: the data's own)")
     m.add_argument("--seed", type=_seed, default=0, help="seed of training (default 0)")

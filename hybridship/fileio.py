@@ -9,12 +9,28 @@ from pathlib import Path
 from typing import BinaryIO, Callable
 
 
+def path_argument(text: str) -> Path:
+    """A command-line path (argparse ``type=``): refused when empty, which ``Path`` would
+    read as the current folder."""
+    import argparse
+
+    if not str(text).strip():
+        raise argparse.ArgumentTypeError(f"expected a path, got {text!r}")
+    return Path(text)
+
+
 def check_out_folder(path) -> Path:
-    """``path`` as a Path, refused (NotADirectoryError) when it exists and is not a folder: an
-    output folder checked before the work, not when the first file is written."""
+    """``path`` as a Path, refused (NotADirectoryError) when it, or a folder it would be made
+    in, exists and is not a folder: an output folder checked before the work, not when the
+    first file is written."""
     path = Path(path)
     if path.exists() and not path.is_dir():
         raise NotADirectoryError(f"{path}: exists and is not a folder")
+    for parent in path.parents:  # a file on the way would fail only when the first file is written
+        if parent.exists():
+            if not parent.is_dir():
+                raise NotADirectoryError(f"{path}: {parent} exists and is not a folder")
+            break
     return path
 
 

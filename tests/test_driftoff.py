@@ -194,12 +194,43 @@ def test_weather_table_round_trip_and_errors(tmp_path):
         read_weather_table(bad)
     with pytest.raises(ValueError, match="hs_m"):
         read_weather_table(df.drop(columns=["hs_m"]))
+    # above a WeatherState's range: the column, the row and the file's line, not the field's
+    # name inside WeatherState
+    bad = pd.concat([df, df], ignore_index=True)
+    bad.loc[1, "current_m_s"] = 7.0
+    bad.to_csv(path, index=False)
+    with pytest.raises(ValueError, match=r"column 'current_m_s', row 1 \(line 3 of the file\).*\[0, 5\]"):
+        read_weather_table(path)
+    path.write_text("")
+    with pytest.raises(ValueError, match="w.csv: not a readable CSV weather table"):
+        read_weather_table(path)
+
+
+def test_weather_samples_stay_in_the_range_of_a_weather_state():
+    """A wide spread must not draw a storm the models are not meant for (the drift would
+    diverge and be counted as a result)."""
+    from hybridship.driftoff.weather import MAX_CURRENT_M_S, MAX_HS_M, MAX_TP_S, MAX_WIND_M_S, sample_environment
+
+    w = WeatherState(wind_speed_m_s=40.0, hs_m=15.0, tp_s=10.0, current_speed_m_s=4.0)
+    u = WeatherUncertainty(wind_speed_m_s=1e6, hs_m=50.0, tp_s=100.0, current_speed_m_s=100.0)
+    e = sample_environment(w, u, 200, np.random.default_rng(0), duration_s=60.0, dt_s=1.0, n_wave=3)
+    assert e.wind_mean_m_s.max() == MAX_WIND_M_S and e.wind_mean_m_s.min() == 0.0
+    assert e.current[:, 0].max() == MAX_CURRENT_M_S
+    assert np.all(e.waves[1] >= 0) and np.isfinite(e.waves[1]).all()
+    r = simulate_blackouts("gunnerus", WeatherState(hs_m=19.0, tp_s=10.0), [0.0],
+                           uncertainty=WeatherUncertainty(hs_m=50.0, tp_s=100.0),
+                           settings=DriftOffSettings(n_samples=10, horizon_s=60.0, radii_m=(5.0,)))
+    assert np.isfinite(r.excursion_m).all()
+    assert MAX_HS_M == 20.0 and MAX_TP_S == 30.0
 
 
 @pytest.mark.parametrize("kwargs, field", [
     (dict(radii_m=(-1.0,)), "radii_m"), (dict(n_samples=0), "n_samples"), (dict(dt_s=0.0), "dt_s"),
     (dict(reaction_times_s=(500.0,)), "reaction_times_s"), (dict(vessel_spread=float("nan")), "vessel_spread"),
-    (dict(seed=-1), "seed"), (dict(dt_s=20.0), "dt_s")])
+    (dict(seed=-1), "seed"), (dict(dt_s=20.0), "dt_s"), (dict(seed=2**32), "seed"),
+    (dict(radii_m=(3.0, 3.0)), "radii_m: expected each value once"),
+    (dict(reaction_times_s=(30.0, 30.0)), "reaction_times_s: expected each value once"),
+    (dict(horizon_s=60.5), "horizon_s: must be a whole number of dt_s")])
 def test_bad_settings_name_the_field(kwargs, field):
     with pytest.raises((ValueError, TypeError), match=field):
         DriftOffSettings(**kwargs)
@@ -210,6 +241,8 @@ def test_bad_weather_names_the_field():
         WeatherState(hs_m=-0.5)
     with pytest.raises(ValueError, match="weather.gust_intensity"):
         WeatherState(gust_intensity=0.9)
+    with pytest.raises(ValueError, match="weather.tp_s"):  # the samples would run it as 1 s
+        WeatherState(tp_s=0.5)
     # beyond the physics' valid inputs and the wave model's sea states the drift would diverge
     for field, value in (("wind_speed_m_s", 500.0), ("current_speed_m_s", 30.0), ("hs_m", 40.0), ("tp_s", 60.0)):
         with pytest.raises(ValueError, match=f"weather.{field}"):
@@ -238,6 +271,18 @@ def test_cli_reports_bad_input_naming_the_option(tmp_path, capsys):
                  ["benchmark", "manoeuvre", "--train", str(tmp_path), "--test", str(tmp_path)]):
         assert main(argv + ["--out", str(a_file)]) == 2, argv
         assert "exists and is not a folder" in capsys.readouterr().err
+        assert main(argv + ["--out", str(a_file / "sub")]) == 2, argv   # a file on the way
+        assert f"{a_file} exists and is not a folder" in capsys.readouterr().err
+        assert main(argv + ["--out", ""]) == 2, argv                     # not the current folder
+        assert "--out: expected a path, got ''" in capsys.readouterr().err
+    assert main(["drift-off", "planning", "--out", str(tmp_path / "p"), "--headings-deg", "nan"]) == 2
+    assert "--headings-deg: expected finite numbers" in capsys.readouterr().err
+    table = tmp_path / "w.csv"
+    states_to_frame([WeatherState()]).to_csv(table, index=False)
+    assert main(["drift-off", "season", "--weather-table", str(table), "--scheduler", "lcoal",
+                 "--out", str(tmp_path / "s")]) == 2
+    assert "--scheduler: expected 'local', 'none' or a scheduler address" in capsys.readouterr().err
+    assert not (tmp_path / "p").exists() and not (tmp_path / "s").exists()
 
 
 def test_cli_planning_writes_the_report(tmp_path, capsys):
@@ -253,7 +298,15 @@ def test_cli_planning_writes_the_report(tmp_path, capsys):
     assert len(times) == 2 * 3 and (out / "summary.md").is_file() and (out / "watch.csv").is_file()
     # no figure of the earlier run beside the new tables; other files untouched
     assert not (out / "polar.png").exists() and (out / "notes.txt").read_text() == "earlier"
-    assert "Time to reach" in capsys.readouterr().out
+    first = capsys.readouterr().out
+    assert "Time to reach" in first and "| vessel spread | 1 x [true_vessel] |" in first
+    # a vessel file without [true_vessel] factors has no spread to draw, and the summary says so
+    text = (ROOT / "vessels" / "gunnerus.toml").read_text()
+    plain = tmp_path / "plain.toml"
+    plain.write_text(text[:text.index("[true_vessel]")])
+    assert main(["drift-off", "planning", "--vessel", str(plain), "--out", str(out), "--samples", "2",
+                 "--headings-deg", "0", "--horizon-s", "60", "--no-plots"]) == 0
+    assert "| vessel spread | none: the vessel file has no [true_vessel] factors" in (out / "summary.md").read_text()
 
 
 def _failure_log():
@@ -304,6 +357,27 @@ def test_live_refuses_a_time_without_station_keeping_and_bad_estimates():
             blackout_now(dataclasses.replace(est, **change), "gunnerus", st)
     with pytest.raises(TypeError, match="settings"):
         blackout_now(est, "gunnerus", {"n_samples": 3})
+
+
+def test_live_reads_the_log_as_a_forecast_does():
+    """The live estimate takes the log through the forecasts' ingest: a thruster's missing
+    rpm column is refused (not taken as stopped); a dead wind sensor is no wind measurement
+    (not its last value held); the wind's window does not shrink with the estimator's."""
+    from hybridship.logs.io import LogFormatError
+
+    df, i = _failure_log()
+    hist = df.iloc[: i + 1]
+    with pytest.raises(LogFormatError, match="port_rpm"):
+        environment_from_log(hist.drop(columns=["port_rpm"]), "gunnerus")
+    dead = hist.copy()
+    dead.loc[dead.index[-150:], ["wind_speed_m_s", "wind_dir_deg"]] = np.nan
+    assert not environment_from_log(dead, "gunnerus").wind_measured
+    full, short = environment_from_log(hist, "gunnerus"), environment_from_log(hist, "gunnerus", window_s=60.0)
+    assert (short.wind_speed_m_s, short.gust_intensity) == (full.wind_speed_m_s, full.gust_intensity)
+    assert full.gust_intensity > 0
+    for kw in (dict(window_s=2.0), dict(wind_window_s=1.0)):
+        with pytest.raises(ValueError, match=f"{next(iter(kw))}: expected a number of seconds >= "):
+            environment_from_log(hist, "gunnerus", **kw)
 
 
 def test_live_bad_input_names_the_field():

@@ -132,6 +132,22 @@ def test_cli_reference_names_every_command_and_option():
                          f"text and a description for: {missing}")
 
 
+@pytest.mark.skipif(__import__("sys").version_info[:2] != (3, 11),
+                    reason="docs/reference/cli.md holds Python 3.11's argparse layout")
+def test_cli_reference_help_texts_are_the_programs_own(monkeypatch):
+    """Every ``usage:`` block of docs/reference/cli.md is the help its heading's command prints
+    (``COLUMNS=100``), so the page cannot fall behind an option's wording."""
+    monkeypatch.setenv("COLUMNS", "100")
+    page = (DOCS / "reference" / "cli.md").read_text(encoding="utf-8")
+    stale = []
+    for heading, body in re.findall(r"^#+ `hybridship ?([^`]*)`\n(.*?)(?=^#+ `hybridship|\Z)", page,
+                                    flags=re.M | re.S):
+        block = re.search(r"^```text\n(usage:.*?)\n```", body, flags=re.M | re.S)
+        if block is not None and block.group(1) != _help(*heading.split()).rstrip("\n"):
+            stale.append(f"hybridship {heading}")
+    assert not stale, f"docs/reference/cli.md: the help text of {stale} is not the program's; regenerate it"
+
+
 def test_api_reference_covers_every_module():
     """Every top-level module and subpackage of hybridship has a ``::: hybridship.<name>`` entry
     (subpackages render their submodules with ``show_submodules``)."""

@@ -13,7 +13,7 @@ import sys
 from pathlib import Path
 
 from ..messages import problem_lines
-from ..fileio import check_out_folder
+from ..fileio import check_out_folder, path_argument
 
 __all__ = ["add_parser"]
 
@@ -35,6 +35,8 @@ def _floats(text: str) -> list[float]:
         vals = [float(x) for x in str(text).split(",") if x.strip()]
     except ValueError:
         raise argparse.ArgumentTypeError(f"expected comma-separated numbers, got {text!r}") from None
+    if not all(math.isfinite(v) for v in vals):
+        raise argparse.ArgumentTypeError(f"expected finite numbers, got {text!r}")
     if not vals:
         raise argparse.ArgumentTypeError(f"expected at least one number, got {text!r}")
     return vals
@@ -53,7 +55,7 @@ def _common(p, plots: bool = True) -> None:
     p.add_argument("--vessel-spread", type=float, default=1.0,
                    help="multiplier of the vessel file's [true_vessel] spread; 0 = nominal model (default 1)")
     p.add_argument("--seed", type=int, default=0, help="seed (default 0)")
-    p.add_argument("--out", type=Path, required=True, help="output folder")
+    p.add_argument("--out", type=path_argument, required=True, help="output folder")
     if plots:
         p.add_argument("--no-plots", action="store_true",
                        help="skip the figures (and remove those of an earlier run from --out)")
@@ -126,7 +128,7 @@ def add_parser(sub, parser_class, usage_error=None) -> None:
     b.add_argument("--log", type=Path, required=True, help="station-keeping log (.csv, .csv.gz, .parquet)")
     b.add_argument("--time-s", type=float, default=None, help="time of the blackout [s] (default: the last row)")
     b.add_argument("--window-s", type=float, default=900.0,
-                   help="log read before --time-s by the environment estimator [s] (default 900)")
+                   help="log read before --time-s by the environment estimator [s] (default 900, at least 60)")
     _common(b)
     b.set_defaults(func=_cmd_live)
 
@@ -192,6 +194,7 @@ def _model(args, mode):
 def _cmd_planning(args) -> int:
     from .planning import simulate_blackouts
     from .report import write_report
+    from .spread import spread_text
     from .weather import WeatherState, WeatherUncertainty
 
     st = _settings(args, "planning")
@@ -214,7 +217,7 @@ def _cmd_planning(args) -> int:
               f"{args.wind_dir_deg if args.wave_dir_deg is None else args.wave_dir_deg:g} +- "
               f"{args.wave_dir_std_deg:g} deg",
               "current": f"{args.current_m_s:g} +- {args.current_std_m_s:g} m/s to {args.current_dir_deg:g} +- "
-              f"{args.current_dir_std_deg:g} deg", "vessel spread": f"{st.vessel_spread:g} x [true_vessel]",
+              f"{args.current_dir_std_deg:g} deg", "vessel spread": spread_text(model.vessel, st.vessel_spread),
               "seed": st.seed}
     paths = write_report(res, args.out, title="Drift-off analysis (planning)", inputs=inputs, quantile=args.quantile,
                          plots=not args.no_plots)
@@ -289,6 +292,9 @@ def _cmd_season(args) -> int:
     except (ValueError, FileNotFoundError) as exc:
         raise _usage(problem_lines(exc, f"{_PROG} season: error: --weather-table: ")) from None
     scheduler = None if args.scheduler.lower() == "none" else args.scheduler
+    if scheduler is not None and scheduler != "local" and ":" not in scheduler:
+        raise _usage(f"{_PROG} season: error: --scheduler: expected 'local', 'none' or a scheduler address such "
+                     f"as tcp://host:8786, got {args.scheduler!r}")
     if scheduler is not None:
         try:
             require_dask()

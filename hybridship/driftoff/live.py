@@ -16,8 +16,8 @@ and model error), held in NED, with its spread from
 :func:`blackout_now` then runs the Monte-Carlo blackouts from the logged heading,
 velocity, thruster rpm (spinning down) and azimuths, with the measured mean wind and its
 gustiness, the estimated extra acceleration per sample (one bias member each) and
-perturbed vessels. Only the last ``window_s`` of the log are read, so an update costs the
-same at any log length (``benchmarks/driftoff_live.py`` measures it).
+perturbed vessels. Only the last ``window_s`` (and ``wind_window_s``) of the log are read,
+so an update costs the same at any log length (``benchmarks/driftoff_live.py`` measures it).
 """
 
 from __future__ import annotations
@@ -30,12 +30,18 @@ import pandas as pd
 
 from ..forecast_inputs.limits import check_or_clip_inputs
 from ..frames import vector_to_speed_dir
-from ..logs.io import LogArrays, log_to_arrays
+from ..logs.io import LogArrays
 from ..residual.features import ResidualConfig, prepare_log
 from . import engine, spread
 from .planning import DriftOffResult, DriftOffSettings, get_model, hull_array, state_rng
 
-__all__ = ["EnvironmentEstimate", "environment_from_log", "blackout_now"]
+__all__ = ["EnvironmentEstimate", "environment_from_log", "blackout_now", "MIN_WINDOW_S", "MIN_WIND_WINDOW_S"]
+
+#: Shortest log window of the environment estimator [s]: what it reads of the station
+#: keeping (a few seconds would take the last waves' motion for the current and load).
+MIN_WINDOW_S = 60.0
+#: Shortest window of the mean wind and its gustiness [s].
+MIN_WIND_WINDOW_S = 10.0
 
 
 @dataclass(frozen=True)
@@ -86,19 +92,25 @@ class EnvironmentEstimate:
 
 
 def _arrays(log, model, window_s: float) -> LogArrays:
-    ves = model.vessel
+    """The last ``window_s`` of ``log`` through the project's one ingest (``purpose="forecast"``):
+    the same checks as a forecast's, so a log without a thruster's rpm or azimuth column is
+    refused naming the column instead of taken as stopped."""
+    from ..logs.ingest import ingest
+
     if isinstance(log, LogArrays):
-        return log
-    if not isinstance(log, pd.DataFrame):
+        t_end = float(np.nanmax(log.time_s)) if log.time_s.size else 0.0
+    elif isinstance(log, pd.DataFrame):
+        if "time_s" not in log.columns:
+            raise ValueError("log: missing column 'time_s'")
+        if len(log) < 3:
+            raise ValueError(f"log: need at least 3 rows, got {len(log)}")
+        t = pd.to_numeric(log["time_s"], errors="coerce").to_numpy(float)
+        if not np.isfinite(t).any():
+            raise ValueError("log: column 'time_s' has no finite time")
+        t_end = float(np.nanmax(t))
+    else:
         raise TypeError(f"log: expected a pandas DataFrame or LogArrays, got {type(log).__name__}")
-    if "time_s" not in log.columns:
-        raise ValueError("log: missing column 'time_s'")
-    if len(log) < 3:
-        raise ValueError(f"log: need at least 3 rows, got {len(log)}")
-    t = log["time_s"].to_numpy(float)
-    tail = log.iloc[int(np.searchsorted(t, t[-1] - window_s, side="left")):]
-    return log_to_arrays(tail, channel_names=[t.name for t in ves.thrusters],
-                         rotatable=[t.type == "azimuth" for t in ves.thrusters])
+    return ingest(log, model.vessel, purpose="forecast", name="log", time_range_s=(t_end - window_s, t_end))
 
 
 #: How :func:`environment_from_log` estimates the environment.
@@ -113,13 +125,16 @@ def environment_from_log(log, vessel="gunnerus", *, window_s: float = 900.0, win
     Parameters
     ----------
     log : pandas.DataFrame or LogArrays
-        Station-keeping log up to now (project log format); only the last ``window_s``
-        seconds are used. Never modified.
+        Station-keeping log up to now (project log format); only its last ``window_s``
+        and ``wind_window_s`` seconds are read, with a forecast's checks
+        (:func:`hybridship.logs.ingest.ingest`). Never modified.
     vessel : str, Vessel or DynamicModel
     window_s : float
-        Length of the residual-mean window [s] (the bias window of the residual scheme).
+        Log read by the environment estimator, or the residual-mean window [s] (the bias
+        window of the residual scheme); at least :data:`MIN_WINDOW_S`.
     wind_window_s : float
-        Window of the mean wind [s].
+        Window of the mean wind and its gustiness [s], at least :data:`MIN_WIND_WINDOW_S`;
+        only samples the wind sensor logged count (not values held over a gap).
     n_members : int
         Members of the acceleration estimate.
     seed : int
@@ -130,9 +145,9 @@ def environment_from_log(log, vessel="gunnerus", *, window_s: float = 900.0, win
     """
     if method not in METHODS:
         raise ValueError(f"method: expected one of {METHODS}, got {method!r}")
-    for name, v in (("window_s", window_s), ("wind_window_s", wind_window_s)):
-        if not (isinstance(v, (int, float)) and math.isfinite(v) and v > 0):
-            raise ValueError(f"{name}: expected a number > 0 s, got {v!r}")
+    for name, v, least in (("window_s", window_s, MIN_WINDOW_S), ("wind_window_s", wind_window_s, MIN_WIND_WINDOW_S)):
+        if isinstance(v, bool) or not (isinstance(v, (int, float)) and math.isfinite(v) and v >= least):
+            raise ValueError(f"{name}: expected a number of seconds >= {least:g}, got {v!r}")
     if isinstance(n_members, bool) or not isinstance(n_members, (int, np.integer)) or n_members < 1:
         raise ValueError(f"n_members: expected a positive int, got {n_members!r}")
     model = get_model(vessel)
@@ -149,17 +164,19 @@ def environment_from_log(log, vessel="gunnerus", *, window_s: float = 900.0, win
         prep = prepare_log(model, a, ResidualConfig(bias_window_s=float(window_s)))
         members = prep.bias_members(idx, int(n_members), seed=seed)
         eta0, nu0, _, bias0 = prep.start_state(idx)
-    t = a.time_s
-    sel = (t >= t[-1] - wind_window_s) & np.isfinite(a.wind).all(1)
-    wind_measured = bool(a.has_wind and sel.any())
+    # the wind has its own window, whatever the estimator's; only samples the sensor logged
+    # (the reader holds the last value over a gap, which is not a measurement of now)
+    aw = _arrays(log, model, wind_window_s)
+    sel = aw.wind_logged & (aw.time_s >= a.time_s[idx] - wind_window_s)
+    wind_measured = bool(aw.has_wind and sel.any())
     if wind_measured:
-        ws, wd = a.wind[sel, 0], a.wind[sel, 1]
+        ws, wd = aw.wind[sel, 0], aw.wind[sel, 1]
         vn, ve = np.mean(ws * np.cos(wd)), np.mean(ws * np.sin(wd))
         w_speed, w_dir = float(np.hypot(vn, ve)), float(math.atan2(ve, vn))
         gi = float(np.clip(np.std(ws) / w_speed, 0.0, 0.5)) if w_speed > 0 else 0.0
     else:
         w_speed, w_dir, gi = 0.0, 0.0, 0.0
-    return EnvironmentEstimate(time_s=float(t[-1]), eta=eta0, nu=nu0, rpm=np.nan_to_num(a.rpm[idx]).copy(),
+    return EnvironmentEstimate(time_s=float(a.time_s[idx]), eta=eta0, nu=nu0, rpm=np.nan_to_num(a.rpm[idx]).copy(),
                                azimuth_rad=np.nan_to_num(a.azimuth_rad[idx]).copy(), wind_speed_m_s=w_speed,
                                wind_dir_from_rad=w_dir, gust_intensity=gi, accel_ned=np.asarray(bias0, float),
                                accel_members=members, current_members_ned_m_s=current_members,

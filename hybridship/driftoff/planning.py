@@ -72,13 +72,14 @@ class DriftOffSettings:
     Attributes
     ----------
     radii_m : tuple of float
-        Limit radii from the blackout position [m].
+        Limit radii from the blackout position [m], each once.
     reaction_times_s : tuple of float
-        Operator reaction times [s].
+        Operator reaction times [s], each once.
     n_samples : int
         Monte-Carlo samples per heading.
     horizon_s : float
-        Longest simulated drift [s]; radii not reached by then count as never reached.
+        Longest simulated drift [s], a whole number of ``dt_s`` steps; radii not reached by
+        then count as never reached.
     dt_s : float
         Output step [s] (RK4, inputs held over a step), at most 1 s (the RK4 step the physics
         inputs' envelope allows: longer steps diverge in a fast drift).
@@ -89,7 +90,8 @@ class DriftOffSettings:
     n_wave_components, n_gust_harmonics : int
         Wave components and gust harmonics per sample.
     seed : int
-        Seed of the run (each weather state uses ``SeedSequence(seed, spawn_key=(index,))``).
+        Seed of the run, 0 to 2**32 - 1 as in every command (each weather state uses
+        ``SeedSequence(seed, spawn_key=(index,))``).
     """
 
     radii_m: Annotated[tuple[Annotated[Float, Field(gt=0)], ...], NonEmpty] = (3.0, 5.0, 10.0)
@@ -101,7 +103,7 @@ class DriftOffSettings:
     vessel_spread: Annotated[Float, Field(ge=0)] = 1.0
     n_wave_components: Annotated[Int, Field(ge=1)] = 20
     n_gust_harmonics: Annotated[Int, Field(ge=1)] = 20
-    seed: Annotated[Int, Field(ge=0)] = 0
+    seed: Annotated[Int, Field(ge=0, le=2**32 - 1)] = 0
 
     @field_validator("radii_m", "reaction_times_s", mode="before")
     @classmethod
@@ -113,10 +115,21 @@ class DriftOffSettings:
     def _sorted(cls, v):
         return tuple(sorted(v))
 
+    @field_validator("radii_m", "reaction_times_s")
+    @classmethod
+    def _each_once(cls, v):
+        if len(set(v)) != len(v):  # a repeated one would give repeated rows and merged columns
+            raise ValueError(f"expected each value once, got {v!r}")
+        return v
+
     @model_validator(mode="after")
     def _within_horizon(self):
         if self.dt_s > self.horizon_s:
             raise ValueError(f"dt_s: must be <= horizon_s = {self.horizon_s:g}, got {self.dt_s!r}")
+        steps = self.horizon_s / self.dt_s
+        if abs(steps - round(steps)) > 1e-6:
+            raise ValueError(f"horizon_s: must be a whole number of dt_s = {self.dt_s:g} s steps, got "
+                             f"{self.horizon_s!r} (a drift is simulated in whole steps)")
         if max(self.reaction_times_s) > self.horizon_s:
             raise ValueError(f"reaction_times_s: must be <= horizon_s = {self.horizon_s:g}, "
                              f"got {self.reaction_times_s!r}")

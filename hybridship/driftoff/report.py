@@ -29,15 +29,19 @@ def write_text(path, text: str) -> Path:
     return atomic_write(path, lambda fh: fh.write(text.encode("utf-8")))
 
 
+def _csv_bytes(df: pd.DataFrame) -> bytes:
+    return df.to_csv(index=False, float_format="%.6g").encode("utf-8")
+
+
 def write_frame(path, df: pd.DataFrame) -> Path:
     """Write a DataFrame as CSV atomically (no index)."""
-    return write_text(path, df.to_csv(index=False, float_format="%.6g"))
+    return atomic_write(path, lambda fh: fh.write(_csv_bytes(df)))
 
 
-def _save_fig(fig, path) -> Path:
+def _png_bytes(fig) -> bytes:
     buf = io.BytesIO()
-    fig.savefig(buf, format=Path(path).suffix.lstrip(".") or "png", dpi=120, bbox_inches="tight")
-    return atomic_write(path, lambda fh: fh.write(buf.getvalue()))
+    fig.savefig(buf, format="png", dpi=120, bbox_inches="tight")
+    return buf.getvalue()
 
 
 def polar_plot(result: DriftOffResult, ax=None, title: str | None = None):
@@ -100,11 +104,11 @@ def markdown_table(df: pd.DataFrame, digits: int = 2) -> str:
 def write_report(result: DriftOffResult, out_dir, *, title: str = "Drift-off analysis", inputs: dict | None = None,
                  quantile: float = 0.9, plots: bool = True) -> dict:
     """Write ``summary.md``, ``times.csv``, ``watch.csv`` and (with ``plots``) ``polar.png``,
-    ``exceedance.png`` to ``out_dir``; returns the paths by name. Without ``plots``, the two
+    ``exceedance.png`` to ``out_dir``; returns the paths by name. Every file is made before
+    the first is written (a failure leaves no mix of two runs); without ``plots``, the two
     figures of an earlier run in ``out_dir`` are removed."""
     out = Path(out_dir)
     times, watch = result.summary_frames(quantile)
-    paths = {"times.csv": write_frame(out / "times.csv", times), "watch.csv": write_frame(out / "watch.csv", watch)}
     lines = [f"# {title}", ""]
     if inputs:
         lines += ["| input | value |", "|---|---|"] + [f"| {k} | {v} |" for k, v in inputs.items()] + [""]
@@ -114,17 +118,17 @@ def write_report(result: DriftOffResult, out_dir, *, title: str = "Drift-off ana
               markdown_table(times), "",
               f"## Watch circles: excursion up to the reaction time at the {quantile:g} quantile [m]", "",
               markdown_table(watch), ""]
+    contents = {"times.csv": _csv_bytes(times), "watch.csv": _csv_bytes(watch)}
     if plots:
         import matplotlib.pyplot as plt
 
-        fig = polar_plot(result)
-        paths["polar.png"] = _save_fig(fig, out / "polar.png")
-        plt.close(fig)
-        fig = exceedance_plot(result)
-        paths["exceedance.png"] = _save_fig(fig, out / "exceedance.png")
-        plt.close(fig)
+        for name, plot in (("polar.png", polar_plot), ("exceedance.png", exceedance_plot)):
+            fig = plot(result)
+            contents[name] = _png_bytes(fig)
+            plt.close(fig)
         lines += ["![time to reach vs wind direction](polar.png)", "", "![exceedance curves](exceedance.png)", ""]
-    else:  # no figure of an earlier run beside these tables
+    contents["summary.md"] = "\n".join(lines).encode("utf-8")
+    paths = {name: atomic_write(out / name, lambda fh, b=data: fh.write(b)) for name, data in contents.items()}
+    if not plots:  # no figure of an earlier run beside these tables
         remove_stale(out, ("polar.png", "exceedance.png"))
-    paths["summary.md"] = write_text(out / "summary.md", "\n".join(lines))
     return paths

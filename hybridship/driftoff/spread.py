@@ -22,7 +22,7 @@ import numpy as np
 from ..physics.model import ModelArrays
 from ..physics.thrusters import THR_TDED
 
-__all__ = ["VesselScales", "StackedArrays", "draw_scales", "true_vessel_scales", "scaled_arrays"]
+__all__ = ["VesselScales", "StackedArrays", "draw_scales", "true_vessel_scales", "scaled_arrays", "spread_text"]
 
 
 class VesselScales(NamedTuple):
@@ -54,6 +54,16 @@ def true_vessel_scales(vessel, n: int = 1) -> VesselScales:
     rep = lambda v: np.repeat(np.asarray(v, float)[None, :], n, axis=0)  # noqa: E731
     return VesselScales(rep(p.added_mass_scale), rep(p.linear_damping_scale), rep(p.nonlinear_damping_scale),
                         rep(p.wind_coefficient_scale), np.full(n, float(p.thrust_scale)))
+
+
+def spread_text(vessel, spread: float) -> str:
+    """The vessel spread as a report states it; "none" when it draws nothing (spread 0, or
+    a vessel file without ``[true_vessel]`` factors other than 1)."""
+    if spread == 0:
+        return "none (the nominal model)"
+    if all(np.all(np.asarray(f, float) == 1.0) for f in true_vessel_scales(vessel, 1)):
+        return "none: the vessel file has no [true_vessel] factors (every sample is the nominal model)"
+    return f"{spread:g} x [true_vessel]"
 
 
 def draw_scales(vessel, n: int, rng: np.random.Generator, spread: float = 1.0) -> VesselScales:

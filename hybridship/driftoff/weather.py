@@ -2,7 +2,9 @@
 
 A :class:`WeatherState` holds means (SI units and radians inside); a
 :class:`WeatherUncertainty` the standard deviations the Monte-Carlo samples draw from
-(normal, speeds and heights clipped at 0, periods at 1 s). :func:`read_weather_table`
+(normal, clipped to the range a :class:`WeatherState` allows: speeds and heights to
+``[0, max]``, periods to ``[1 s, MAX_TP_S]``, so that a wide spread cannot draw a storm the
+models are not meant for). :func:`read_weather_table`
 reads an hourly hindcast (or any list of states) from CSV; its columns, degrees at this
 edge as everywhere in the project's files:
 
@@ -10,12 +12,12 @@ edge as everywhere in the project's files:
 column              unit      meaning
 ==================  ========  ==============================================================
 ``time``            ISO 8601  optional label of the state (kept as text)
-``wind_speed_m_s``  m/s       mean 10 m wind speed (>= 0)
+``wind_speed_m_s``  m/s       mean 10 m wind speed (0 to :data:`MAX_WIND_M_S`)
 ``wind_dir_deg``    deg       direction the wind comes FROM, clockwise from north
-``hs_m``            m         significant wave height (>= 0; 0 = no waves)
-``tp_s``            s         spectral peak period (> 0)
+``hs_m``            m         significant wave height (0 to 20; 0 = no waves)
+``tp_s``            s         spectral peak period (1 to 30)
 ``wave_dir_deg``    deg       direction the waves come FROM, clockwise from north
-``current_m_s``     m/s       current speed (>= 0)
+``current_m_s``     m/s       current speed (0 to :data:`MAX_CURRENT_M_S`)
 ``current_dir_deg`` deg       direction the current flows TO, clockwise from north
 ``gust_intensity``  -         optional turbulence intensity sigma_U / U in [0, 0.5] (default 0.1)
 ==================  ========  ==============================================================
@@ -63,6 +65,8 @@ MAX_CURRENT_M_S = Envelope().current_speed_max_m_s
 #: sea states the wave and wave-drift models are meant for.
 MAX_HS_M = 20.0
 MAX_TP_S = 30.0
+#: Shortest peak period [s]: shorter waves do not move a ship.
+MIN_TP_S = 1.0
 
 
 @config_dataclass(frozen=True, prefix="weather")
@@ -77,7 +81,7 @@ class WeatherState:
         Direction the wind comes FROM [rad], clockwise from north.
     hs_m, tp_s : float
         Significant wave height [m] and peak period [s] (JONSWAP, gamma 3.3, long-crested),
-        at most :data:`MAX_HS_M` and :data:`MAX_TP_S`.
+        at most :data:`MAX_HS_M`; the period between :data:`MIN_TP_S` and :data:`MAX_TP_S`.
     wave_dir_from_rad : float
         Direction the waves come FROM [rad].
     current_speed_m_s : float
@@ -93,7 +97,7 @@ class WeatherState:
     wind_speed_m_s: Annotated[Float, Field(ge=0.0, le=MAX_WIND_M_S)] = 0.0
     wind_dir_from_rad: Float = 0.0
     hs_m: Annotated[Float, Field(ge=0.0, le=MAX_HS_M)] = 0.0
-    tp_s: Annotated[Float, Field(gt=0.0, le=MAX_TP_S)] = 6.0
+    tp_s: Annotated[Float, Field(ge=MIN_TP_S, le=MAX_TP_S)] = 6.0
     wave_dir_from_rad: Float = 0.0
     current_speed_m_s: Annotated[Float, Field(ge=0.0, le=MAX_CURRENT_M_S)] = 0.0
     current_dir_to_rad: Float = 0.0
@@ -134,6 +138,11 @@ class WeatherUncertainty:
         return cls(1.5, math.radians(15.0), 0.25, 1.0, math.radians(20.0), 0.1, math.radians(30.0))
 
 
+#: The range of each bounded column of a weather table (those of :class:`WeatherState`).
+_TABLE_RANGES = {"wind_speed_m_s": (0.0, MAX_WIND_M_S), "hs_m": (0.0, MAX_HS_M), "tp_s": (MIN_TP_S, MAX_TP_S),
+                 "current_m_s": (0.0, MAX_CURRENT_M_S), "gust_intensity": (0.0, 0.5)}
+
+
 def read_weather_table(path_or_frame) -> tuple[list[WeatherState], list[str]]:
     """Weather states from a CSV file (or DataFrame) with the columns of the module notes.
 
@@ -146,7 +155,11 @@ def read_weather_table(path_or_frame) -> tuple[list[WeatherState], list[str]]:
         src = str(path_or_frame)
         if not Path(src).is_file():
             raise FileNotFoundError(f"weather table: no such file {src!r}")
-        df = pd.read_csv(src)
+        try:
+            df = pd.read_csv(src)
+        except (pd.errors.ParserError, pd.errors.EmptyDataError, UnicodeDecodeError) as exc:
+            raise ValueError(f"{src}: not a readable CSV weather table (expected a header line with "
+                             f"{list(TABLE_COLUMNS)}; {' '.join(str(exc).split())})") from None
     missing = [c for c in TABLE_COLUMNS if c not in df.columns]
     if missing:
         raise ValueError(f"{src}: missing column(s) {missing}; expected {list(TABLE_COLUMNS)} "
@@ -158,17 +171,15 @@ def read_weather_table(path_or_frame) -> tuple[list[WeatherState], list[str]]:
         if c not in df.columns:
             continue
         v = pd.to_numeric(df[c], errors="coerce").to_numpy(float)
-        bad = ~np.isfinite(v)
-        if c in ("wind_speed_m_s", "hs_m", "current_m_s"):
-            bad |= v < 0
-        if c == "tp_s":
-            bad |= ~(v > 0)
-        if c == "gust_intensity":
-            bad |= (v < 0) | (v > 0.5)
+        lo, hi = _TABLE_RANGES.get(c, (-np.inf, np.inf))
+        with np.errstate(invalid="ignore"):
+            bad = ~(np.isfinite(v) & (v >= lo) & (v <= hi))
         if bad.any():
             i = int(np.flatnonzero(bad)[0])
-            raise ValueError(f"{src}: column {c!r}, row {i}: invalid value {df[c].iloc[i]!r} "
-                             f"({int(bad.sum())} bad row(s))")
+            expected = "a finite number" if c not in _TABLE_RANGES else f"a number in [{lo:g}, {hi:g}]"
+            line = "" if isinstance(path_or_frame, pd.DataFrame) else f" (line {i + 2} of the file)"
+            raise ValueError(f"{src}: column {c!r}, row {i}{line}: invalid value "
+                             f"{df[c].iloc[i]!r}, expected {expected} ({int(bad.sum())} bad row(s))")
         cols[c] = v
     gi = cols.get("gust_intensity", np.full(len(df), 0.1))
     states = [WeatherState(cols["wind_speed_m_s"][i], math.radians(cols["wind_dir_deg"][i]), cols["hs_m"][i],
@@ -224,7 +235,8 @@ def sample_environment(state: WeatherState, uncertainty: WeatherUncertainty | No
                        n_wave: int = 20) -> SampledEnvironment:
     """Draw ``n`` environment samples of a weather state (see :class:`SampledEnvironment`).
 
-    Weather means are drawn from ``uncertainty`` (normal); each sample then gets its own
+    Weather means are drawn from ``uncertainty`` (normal, clipped to the range of
+    :class:`WeatherState`); each sample then gets its own
     gust harmonics (Harris shape, log-spaced jittered frequencies between ``1 / duration_s``
     and the Nyquist frequency of ``dt_s``, rescaled to ``gust_intensity * U``) and its own
     random-phase JONSWAP components (:func:`~hybridship.sim.environment.make_wave_components`).
@@ -233,12 +245,13 @@ def sample_environment(state: WeatherState, uncertainty: WeatherUncertainty | No
     u = uncertainty or WeatherUncertainty()
     s = state
     z = rng.standard_normal((n, 7))
-    wind = np.maximum(s.wind_speed_m_s + u.wind_speed_m_s * z[:, 0], 0.0)
+    # clipped to the range a WeatherState allows (beyond it the drift would diverge)
+    wind = np.clip(s.wind_speed_m_s + u.wind_speed_m_s * z[:, 0], 0.0, MAX_WIND_M_S)
     wind_dir = s.wind_dir_from_rad + u.wind_dir_rad * z[:, 1]
-    hs = np.maximum(s.hs_m + u.hs_m * z[:, 2], 0.0)
-    tp = np.maximum(s.tp_s + u.tp_s * z[:, 3], 1.0)
+    hs = np.clip(s.hs_m + u.hs_m * z[:, 2], 0.0, MAX_HS_M)
+    tp = np.clip(s.tp_s + u.tp_s * z[:, 3], MIN_TP_S, MAX_TP_S)
     wave_dir = s.wave_dir_from_rad + u.wave_dir_rad * z[:, 4]
-    cur = np.maximum(s.current_speed_m_s + u.current_speed_m_s * z[:, 5], 0.0)
+    cur = np.clip(s.current_speed_m_s + u.current_speed_m_s * z[:, 5], 0.0, MAX_CURRENT_M_S)
     cur_dir = s.current_dir_to_rad + u.current_dir_rad * z[:, 6]
 
     f_lo = 1.0 / duration_s
