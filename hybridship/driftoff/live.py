@@ -151,7 +151,10 @@ def environment_from_log(log, vessel="gunnerus", *, window_s: float = 900.0, win
     if isinstance(n_members, bool) or not isinstance(n_members, (int, np.integer)) or n_members < 1:
         raise ValueError(f"n_members: expected a positive int, got {n_members!r}")
     model = get_model(vessel)
-    a = _arrays(log, model, window_s)
+    # one read serves both windows: the wind's, and the estimator's rows at its end
+    aw = _arrays(log, model, max(window_s, wind_window_s))
+    a = aw if window_s >= wind_window_s else aw.rows(slice(int(np.searchsorted(
+        aw.time_s, aw.time_s[-1] - window_s, side="left")), None))
     idx = len(a.time_s) - 1
     if a.dp_active[idx] == 0:
         raise ValueError(f"log: dp_active is 0 at time_s {a.time_s[idx]:g} (the last row used): a blackout is "
@@ -166,7 +169,6 @@ def environment_from_log(log, vessel="gunnerus", *, window_s: float = 900.0, win
         eta0, nu0, _, bias0 = prep.start_state(idx)
     # the wind has its own window, whatever the estimator's; only samples the sensor logged
     # (the reader holds the last value over a gap, which is not a measurement of now)
-    aw = _arrays(log, model, wind_window_s)
     sel = aw.wind_logged & (aw.time_s >= a.time_s[idx] - wind_window_s)
     wind_measured = bool(aw.has_wind and sel.any())
     if wind_measured:
