@@ -213,6 +213,23 @@ def test_bad_input_raises_naming_column(case):
     pd.testing.assert_frame_equal(df, before)
 
 
+def test_log_format_messages_point_at_the_likely_cause(tmp_path):
+    """A header written with ', ' or ';' between names, and half a wind measurement: the
+    message says what is wrong, not only what is missing."""
+    df = circle_log()
+    spaced, semi = tmp_path / "spaced.csv", tmp_path / "semi.csv"
+    spaced.write_text(df.to_csv(index=False).replace(",", ", "))
+    df.to_csv(semi, index=False, sep=";", decimal=",")
+    with pytest.raises(LogFormatError, match=r"found ' north_m', which is north_m with spaces around the name"):
+        read_log(spaced)
+    with pytest.raises(LogFormatError, match=r"the header is one name holding ';'"):
+        read_log(semi)
+    for missing in ("wind_dir_deg", "wind_speed_m_s"):
+        with pytest.raises(LogFormatError, match=rf"^{missing}: missing while"):
+            validate_log(df.drop(columns=[missing]), channel_names=THRUSTERS, rotatable=ROTATABLE)
+    validate_log(df.drop(columns=["wind_dir_deg", "wind_speed_m_s"]), channel_names=THRUSTERS, rotatable=ROTATABLE)
+
+
 def test_error_attributes_and_file_name(tmp_path):
     df = circle_log()
     df.loc[7, "north_m"] = np.nan

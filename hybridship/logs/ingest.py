@@ -36,7 +36,8 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from hybridship.logs.io import (REQUIRED_COLUMNS, LogArrays, LogFormatError, _frame_to_arrays, _to_float,
+from hybridship.logs.io import (REQUIRED_COLUMNS, LogArrays, LogFormatError, _check_column_names,
+                                _frame_to_arrays, _to_float,
                                 check_log_against_vessel, read_log)
 
 __all__ = ["PURPOSES", "SortedLog", "ingest", "ingest_with_report", "sort_samples"]
@@ -130,6 +131,7 @@ def sort_samples(df: pd.DataFrame, *, source: str = "log") -> SortedLog:
     if not isinstance(df, pd.DataFrame):
         raise TypeError(f"expected a pandas DataFrame, got {type(df).__name__}")
     if "time_s" not in map(str, df.columns):
+        _check_column_names([str(c) for c in df.columns], source)   # the reader's message, with its hints
         raise LogFormatError(f"time_s: required column missing (required: {', '.join(REQUIRED_COLUMNS)}) "
                              f"(in {source})", column="time_s")
     t = _to_float(df, "time_s", source, None, inf_is_missing=True)

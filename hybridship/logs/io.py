@@ -16,7 +16,9 @@ expected:
 
 * missing required columns (``time_s``, ``north_m``, ``east_m``, ``heading_deg``) or
   duplicated column names; when a column with the same quantity in another unit is
-  present (``heading_rad``, ``time_ms``, ...) the message says so;
+  present (``heading_rad``, ``time_ms``, ...), a name with spaces around it, or a header
+  separated by ``;`` or tabs, the message says so;
+* one of ``wind_speed_m_s`` and ``wind_dir_deg`` without the other;
 * non-numeric values in a known numeric column; infinities anywhere in one;
 * ``time_s`` not finite or not strictly increasing; a median sample spacing outside
   0.01..60 s (``time_s`` in milliseconds?); NaN in a required column (unless
@@ -522,6 +524,11 @@ def _validate(df: pd.DataFrame, channel_names, rotatable, source: str, warn_unkn
         _check_yaw_rate_vs_heading(t, values["heading_deg"], values["r_deg_s"], source)
     if "u_m_s" in values and "v_m_s" in values:
         _check_speed_vs_track(t, values, source)
+    pair = [c for c in ("wind_speed_m_s", "wind_dir_deg") if c in cols]
+    if len(pair) == 1:  # a speed without its direction (or the reverse) is no wind measurement
+        other = ({"wind_speed_m_s", "wind_dir_deg"} - set(pair)).pop()
+        raise LogFormatError(f"{other}: missing while {pair[0]} is logged; the wind needs both (or neither: "
+                             f"a forecast without wind){_where(source)}", column=other)
     ignored = _check_channel_columns(df, cols, t, names, rot, source)
     if ignored and warn_unknown:
         warnings.warn(
@@ -540,9 +547,15 @@ def _check_column_names(cols: list[str], source: str) -> None:
                              column=dup[0])
     missing = [c for c in REQUIRED_COLUMNS if c not in cols]
     if missing:
-        hints = [f"found {c!r}, which looks like {_unit_variant_of(c)} in another unit"
-                 for c in cols if _unit_variant_of(c) in missing]
-        hint = f"; {'; '.join(hints)}: convert it and name it as the format says" if hints else ""
+        one_name = len(cols) == 1 and any(sep in cols[0] for sep in (";", "\t"))
+        units = [f"found {c!r}, which looks like {_unit_variant_of(c)} in another unit"
+                 for c in cols if _unit_variant_of(c) in missing and not one_name]
+        hints = [f"{'; '.join(units)}: convert it and name it as the format says"] if units else []
+        hints += [f"found {c!r}, which is {c.strip()} with spaces around the name (a header written with "
+                  f"', ' between names?)" for c in cols if c != c.strip() and c.strip() in missing][:1]
+        hints += [f"the header is one name holding {sep!r}: the log format separates columns with ',' (and "
+                  f"writes decimals with '.')" for sep in (";", "\t") if len(cols) == 1 and sep in cols[0]][:1]
+        hint = "".join(f"; {h}" for h in hints)
         raise LogFormatError(
             f"{missing[0]}: required column missing (missing: {', '.join(missing)}; required: "
             f"{', '.join(REQUIRED_COLUMNS)}; found: {', '.join(cols) or 'none'}){hint}{_where(source)}",
