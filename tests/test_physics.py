@@ -386,3 +386,21 @@ def test_unknown_vessel_and_bad_toml(tmp_path):
         load_vessel(f)
     with pytest.raises(VesselFileError, match="planing-craft file"):
         load_vessel("volcano71")
+
+
+def test_rollout_refuses_commands_it_is_not_meant_for_and_never_returns_nan():
+    """The public physics API checks what the forecasts check: a unit error in rpm, a rudder
+    angle in degrees, NaN commands; and a rollout that diverges raises instead of
+    returning NaN."""
+    m = DynamicModel("gunnerus")
+    zeros = np.zeros((1, 3))
+    for rpm, match in (([[2e4, 0, 0]], r"rpm: 20000 rpm for thruster 'tunnel' is above 2 x its max_rpm"),
+                       ([[np.nan, 0, 0]], "rpm: contains NaN")):
+        with pytest.raises(ValueError, match=match):
+            m.rollout(zeros, zeros, 5, rpm=rpm, azimuth_rad=[[0, 0, 0]])
+    with pytest.raises(ValueError, match="rudder_rad: 20 rad is beyond 90 deg"):
+        DynamicModel("esso_osaka_model").rollout(zeros, zeros, 5, rudder_rad=[[20.0]])
+    with pytest.raises(FloatingPointError, match="rollout diverged at step"):
+        m.rollout(zeros, [[3.0, 1.0, 0.1]], 20, dt_s=50.0, rpm=[[400, 400, 400]], azimuth_rad=[[0, 0, 0]])
+    ok = m.rollout(zeros, zeros, 20, rpm=[[400, 400, 400]], azimuth_rad=[[0, 0, 0]])   # at max_rpm: fine
+    assert np.isfinite(ok.eta).all()

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import warnings
+
 import numpy as np
 import pytest
 
@@ -77,6 +79,14 @@ def test_save_load_round_trip_gives_identical_forecasts(model, current_logs, tmp
     np.testing.assert_array_equal(a.eta, b.eta)
     np.testing.assert_array_equal(a.eta_std, b.eta_std)
     assert not list(tmp_path.glob(".*tmp"))      # atomic write left no temporary file
+    # the model file knows the rate it was trained at, and says so on a log at another
+    assert hp2.training_info["log_step_s"] == [1.0]
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        hp2.forecast(current_logs[2], starts)
+    with pytest.warns(UserWarning, match=r"log: its step is 2 s, but the model was trained on logs with a step "
+                                         r"of 1 s"):
+        hp2.forecast(current_logs[2].iloc[::2].reset_index(drop=True), [900.0], 30)
 
 
 def test_damaged_or_foreign_model_files_are_refused(model, current_logs, tmp_path):

@@ -49,6 +49,10 @@ WIND_TABLE_SIZE = 721
 #: propellers and rudders), wind, external.
 TAU_PARTS = ("hull", "thrust", "wind", "external")
 
+#: Largest ``|rpm| / max_rpm`` the model accepts (as the forecasts' envelope,
+#: ``Envelope.rpm_refuse_factor``): beyond it a command is a unit error.
+RPM_LIMIT_FACTOR = 2.0
+
 
 class ModelArrays(NamedTuple):
     """Packed parameters read by the compiled kernels (SI units, radians).
@@ -351,9 +355,28 @@ class DynamicModel:
             steps = max(az.shape[1], rud.shape[1])
             az = np.array(np.broadcast_to(az, (B, steps, K + R)))
             az[:, :, K:] = rud
-        return (self._channels("rpm", rpm, B, S), np.ascontiguousarray(az),
-                _as_input("wind", wind, B, S, 2), _as_input("current", current, B, S, 2),
-                _as_input("tau_ext", tau_ext, B, S, 3), _as_input("accel_ext", accel_ext, B, S, 3))
+        ins = (self._channels("rpm", rpm, B, S), np.ascontiguousarray(az),
+               _as_input("wind", wind, B, S, 2), _as_input("current", current, B, S, 2),
+               _as_input("tau_ext", tau_ext, B, S, 3), _as_input("accel_ext", accel_ext, B, S, 3))
+        self._check_commands(ins[0], ins[1])
+        return ins
+
+    def _check_commands(self, rpm, angle_rad):
+        """Refuse commands the model is not meant for (it would return NaN or nonsense):
+        non-finite values, ``|rpm|`` above :data:`RPM_LIMIT_FACTOR` times a thruster's
+        ``max_rpm`` (a unit error), a rudder angle beyond 90 deg (degrees given as radians)."""
+        for name, x in (("rpm", rpm), ("azimuth_rad", angle_rad)):
+            if not np.all(np.isfinite(x)):
+                raise ValueError(f"{name}: contains NaN or inf")
+        K = len(self.vessel.thrusters)
+        peak = np.abs(rpm[..., :K]).reshape(-1, K).max(axis=0) if rpm.size else np.zeros(K)
+        for k in np.flatnonzero(peak > RPM_LIMIT_FACTOR * self.arrays.thr[:K, THR_MAX_RPM]):
+            th = self.vessel.thrusters[k]
+            raise ValueError(f"rpm: {peak[k]:g} rpm for thruster {th.name!r} is above {RPM_LIMIT_FACTOR:g} x its "
+                             f"max_rpm ({th.max_rpm:g}); expected rpm within the vessel file's range")
+        if self.n_rudders and angle_rad.size and np.abs(angle_rad[..., K:]).max() > np.pi / 2:
+            raise ValueError(f"rudder_rad: {np.abs(angle_rad[..., K:]).max():g} rad is beyond 90 deg; expected "
+                             f"a rudder angle in radians")
 
     def acceleration(self, eta, nu, *, rpm=None, azimuth_rad=None, wind=None, current=None,
                      tau_ext=None, accel_ext=None, rudder_rad=None, return_parts: bool = False):
@@ -439,4 +462,8 @@ class DynamicModel:
         nu = np.empty((B, S + 1, 3))
         nu_dot = np.empty((B, S + 1, 3))
         rollout_batch(eta0, nu0, *ins, self.arrays, float(dt_s), S, int(substeps), eta, nu, nu_dot)
+        if not (np.all(np.isfinite(eta)) and np.all(np.isfinite(nu))):
+            b, j = np.argwhere(~np.isfinite(np.concatenate([eta, nu], axis=2)).any(axis=2))[0]
+            raise FloatingPointError(f"rollout diverged at step {j} of batch {b} (dt_s {dt_s:g}, substeps "
+                                     f"{substeps}): inputs beyond the model's valid range, or a step too long")
         return RolloutResult(np.arange(S + 1) * float(dt_s), eta, nu, nu_dot)

@@ -22,7 +22,7 @@ from ..frames import speed_dir_to_vector, vector_to_speed_dir, wrap_pi
 from ..logs.io import LogArrays
 from ..physics.model import DynamicModel
 from ..residual.calibration import CalibrationConfig, fit_spread_scale
-from ..residual.ensemble import EnsembleConfig, MLPEnsemble, fit_ensemble
+from ..residual.ensemble import EnsembleConfig, MLPEnsemble, fit_ensemble, require_training_rows
 from ..residual.features import (ALL_FEATURES, MEMORY_FEATURES, ResidualConfig, command_feature_columns,
                                  command_memory, command_pair, command_scales, log_command_memory,
                                  prepare_log)
@@ -340,6 +340,17 @@ class HybridPredictor:
         self._calibrate_after_stop_on_training_logs(logs, cal)
         return self
 
+    def _warn_other_rate(self, dt_s: float) -> None:
+        """Warn when the log's step is not one the nets were trained at (more than 10 % off):
+        their inputs (rates, filtered derivatives) and the step they correct then differ."""
+        trained = self.training_info.get("log_step_s")  # absent in files from before it was recorded
+        if trained and not 0.9 * min(trained) <= dt_s <= 1.1 * max(trained):
+            import warnings
+
+            warnings.warn(f"log: its step is {dt_s:g} s, but the model was trained on logs with a step of "
+                          f"{', '.join(f'{x:g}' for x in trained)} s; forecasts at another rate are less "
+                          f"accurate: train on logs at this rate", UserWarning, stacklevel=3)
+
     def _fit_drift_hull(self, logs, horizon_s: float):
         """With ``drift_hull`` and at least three failures in the training logs: the hull's yaw
         coefficient in a drift (:func:`~hybridship.residual.drift_hull.choose_coefficient` on
@@ -491,6 +502,7 @@ class HybridPredictor:
     def _fit_nets(self, logs, *, dp_only, progress, stride, row_masks):
         X, Y, seg = self.training_data(logs, dp_only=dp_only, row_masks=row_masks)
         X, Y, seg, thr = X[::stride], Y[::stride], seg[::stride], self._training_thrust_acc[::stride]
+        require_training_rows(X.shape[0], len(logs), dp_only)
         residual_std = Y.std(0).tolist()
         self.hull = None
         starts = None
@@ -511,6 +523,7 @@ class HybridPredictor:
                                        quantile=self.guard_quantile)
         self.thrust_regime = ThrustRegime.fit(thr)
         self.training_info = {"n_rows": int(X.shape[0]), "row_stride": stride,
+                              "log_step_s": sorted({round(float(a.dt_s), 6) for a in logs}),
                               "epochs": self.ensemble.history["epochs"],
                               "best_val_mse": self.ensemble.history["best_val_mse"],
                               "residual_std": residual_std, "training": self.training}
@@ -735,6 +748,7 @@ class HybridPredictor:
         st = _forecast_setup(self.model, self.residual_config, log, start_times_s, horizon_s,
                              self.stop_after_failure, commands, history_s=self.history_s,
                              wind_forecast=self.wind_forecast)
+        self._warn_other_rate(st.arrays.dt_s)
         E = self.ensemble.n_members
         sigma_b = None
         if self.environment == "estimator":
