@@ -32,6 +32,7 @@ from __future__ import annotations
 import argparse
 import math
 import sys
+import warnings
 from pathlib import Path
 
 from .fileio import path_argument
@@ -540,7 +541,11 @@ def main(argv=None) -> int:
         args = parser.parse_args(argv)
         if getattr(args, "func", None) is None:
             raise UsageError(f"{_PROG}: error: a command is required (try '{_PROG} --help')")
-        return int(args.func(args))
+        with warnings.catch_warnings():
+            # a warning in the command's words, not with the library's file and source line
+            warnings.showwarning = lambda message, *_, **__: print(
+                problem_lines(message, f"{_command(args)}: warning: "), file=sys.stderr)
+            return int(args.func(args))
     except UsageError as exc:
         print(str(exc), file=sys.stderr)
         return 2
@@ -550,11 +555,14 @@ def main(argv=None) -> int:
         print(f"{_PROG}: interrupted", file=sys.stderr)
         return 130
     except (OSError, ValueError, TypeError, FloatingPointError) as exc:
-        # name the whole command, e.g. "hybridship drift-off live" (the subcommand's dest)
-        words = [getattr(args, dest, None) for dest in ("command", "benchmark", "mode")]
-        cmd = " ".join(w for w in words if w)
-        print(problem_lines(exc, f"{_PROG}{' ' + cmd if cmd else ''}: error: "), file=sys.stderr)
+        print(problem_lines(exc, f"{_command(args)}: error: "), file=sys.stderr)
         return 1
+
+
+def _command(args) -> str:
+    """The whole command, e.g. "hybridship drift-off live" (the subcommands' dests)."""
+    words = [getattr(args, dest, None) for dest in ("command", "benchmark", "mode")]
+    return " ".join([_PROG] + [w for w in words if w])
 
 
 if __name__ == "__main__":  # pragma: no cover

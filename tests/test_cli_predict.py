@@ -134,3 +134,18 @@ def test_train_reports_what_it_learned_from_failures():
                                                          "n_failures": 2}})
     assert few == ["thrust error learned at the thrust stops (+0.10, +0.00, +0.00): not kept "
                    "(2 failures, fewer than the three the check needs)"]
+
+
+def test_cli_warnings_and_short_logs_speak_the_users_words(log_dir, tmp_path, capsys):
+    """A log-format warning is one line in the command's words (not the library's source
+    line); training data too short names the logs, not an internal function."""
+    df = pd.read_csv(log_dir / "log1.csv.gz")
+    logs = tmp_path / "logs"
+    logs.mkdir()
+    df.assign(extra=1.0).iloc[:25].to_csv(logs / "short.csv", index=False)
+    assert main(["train", "--logs", str(logs), "--out", str(tmp_path / "m.npz"), "--members", "2"]) == 1
+    err = capsys.readouterr().err.strip().splitlines()
+    assert err[0].startswith("hybridship train: warning: ") and "ignoring 1 column(s)" in err[0]
+    assert err[1].startswith("hybridship train: error: logs: ") and "need at least 20" in err[1]
+    assert len(err) == 2 and ".py:" not in "".join(err) and "fit_ensemble" not in err[1]
+    assert not (tmp_path / "m.npz").exists()

@@ -191,12 +191,16 @@ def test_refusal_raises_a_clear_error_by_default(model, log):
                                                r"window \(time_s 298\.\.300\): heading: 1 valid of 3") as info:
         _assess(model, df, [250.0, 300.0])
     assert info.value.start_time_s == 300.0 and list(info.value.refused_start_times_s) == [300.0]
+    # the refusal leads; what led to it follows, without "valid samples used" (nothing was)
+    assert str(info.value).startswith("start time_s 300: refused, too little valid data")
+    assert "missing heading in the window" in str(info.value) and "valid samples used" not in str(info.value)
 
 
 def test_frozen_gnss_refusal_names_the_frozen_sensor(model, log):
     df = _freeze(["north_m", "east_m"], T_FAULT, T_FAULT + 20)(log.copy())
-    with pytest.raises(StartWindowError, match=r"frozen for >= 3 s: position \(the logged speed says the ship "
-                                               r"moved\).*position: no valid sample"):
+    with pytest.raises(StartWindowError, match=r"refused, too little valid data .*position: no valid sample.*"
+                                               r"frozen for >= 3 s: position \(the logged speed says the ship "
+                                               r"moved\)"):
         _assess(model, df, [T_FAULT + 15.0])
 
 

@@ -334,6 +334,7 @@ def detect_missing_samples(view: LogView, win: Window) -> None:
     if cols or n_missing:
         what = f"missing {', '.join(cols)}" if cols else ""
         gap = f"{n_missing} missing sample(s)" if n_missing else ""
+        # the ending is start_window._USED (dropped from the note when the start is refused)
         win.flag(FaultFlags.NAN_IN_WINDOW,
                  f"{'; '.join(x for x in (what, gap) if x)} in the window: valid samples used")
 

@@ -267,6 +267,9 @@ def assess_start_window(
     return result
 
 
+_USED = ": valid samples used"  # the end of detect_missing_samples' note
+
+
 def _assess_start(view: LogView, i: int, settings: WindowSettings):
     """Run the detectors on the window of start row ``i``.
 
@@ -280,6 +283,8 @@ def _assess_start(view: LogView, i: int, settings: WindowSettings):
     detect_heading_wrap(view, win)
     nu_w = rederive_velocities(view, win)
     if detect_too_little_valid(view, win, settings):
+        # the refusal first; the other findings as what led to it (no "valid samples used")
+        win.notes[:] = [win.notes[-1]] + [n.replace(_USED, "") for n in win.notes[:-1]]
         return win, None
     eta0, nu0 = _start_values(view, win, nu_w)
     return win, (eta0, nu0, detect_dropped_wind(view, win))

@@ -7,7 +7,7 @@ from typing import Iterable
 import numpy as np
 
 from ..physics.model import DynamicModel
-from ..residual.ensemble import EnsembleConfig, MLPEnsemble, fit_ensemble
+from ..residual.ensemble import EnsembleConfig, MLPEnsemble, fit_ensemble, require_training_rows
 from ..residual.features import ResidualConfig
 from .forecast_setup import _check_row_stride, _forecast_setup, as_log_arrays, log_list
 from .result import ForecastResult
@@ -56,7 +56,8 @@ class DataOnlyPredictor:
         ``row_stride``-th usable row (see :meth:`HybridPredictor.fit`)."""
         stride = _check_row_stride(row_stride)
         Xs, Ys, segs = [], [], []
-        for k, log in enumerate(log_list(logs)):
+        logs = log_list(logs)
+        for k, log in enumerate(logs):
             a = as_log_arrays(log, self.model.vessel)
             dt = float(np.median(np.diff(a.time_s)))
             seg = a.segment_id
@@ -72,9 +73,8 @@ class DataOnlyPredictor:
                                      a.wind[rows - 1], a.eta[rows - 1, 2], acc_prev))
             Ys.append((a.nu[rows] - a.nu[rows - 1]) / dt)
             segs.append(seg[rows] + 10_000 * k)
-        if not Xs:
-            raise ValueError("fit: no usable training rows in the logs")
-        X, Y, seg = (np.concatenate(z)[::stride] for z in (Xs, Ys, segs))
+        X, Y, seg = (np.concatenate(z)[::stride] if z else np.zeros((0, 1)) for z in (Xs, Ys, segs))
+        require_training_rows(X.shape[0], len(logs), dp_only)
         self.ensemble = fit_ensemble(X, Y, self.ensemble_config, segment_id=seg, progress=progress)
         return self
 

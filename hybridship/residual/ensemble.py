@@ -130,14 +130,27 @@ def _time_ordered_split(segment_id: np.ndarray, val_fraction: float) -> np.ndarr
     return is_val
 
 
+#: Fewest training rows (samples) an ensemble is fitted on.
+MIN_TRAINING_ROWS = 20
+
+
+def require_training_rows(n_rows: int, n_logs: int, dp_only: bool) -> None:
+    """Refuse, in the words of the logs, training data too short for the nets."""
+    if n_rows < MIN_TRAINING_ROWS:
+        which = "station-keeping rows (dp_active = 1) only" if dp_only else "all rows"
+        raise ValueError(f"logs: {n_rows} usable training row(s) in {n_logs} log(s) ({which}, after what is "
+                         f"kept back for calibration); the nets need at least {MIN_TRAINING_ROWS}: give longer "
+                         f"logs" + (" or train on all rows" if dp_only else ""))
+
+
 def _training_rows(X, Y) -> tuple[np.ndarray, np.ndarray]:
     """``X`` (N, n_in) and ``Y`` (N, n_out) as float arrays: N >= 20 finite rows, or an error."""
     X = np.asarray(X, dtype=float)
     Y = np.asarray(Y, dtype=float)
     if X.ndim != 2 or Y.ndim != 2 or X.shape[0] != Y.shape[0]:
         raise ValueError(f"fit_ensemble: X and Y must be (N, n_in) and (N, n_out), got {X.shape} and {Y.shape}")
-    if X.shape[0] < 20:
-        raise ValueError(f"fit_ensemble: need at least 20 training rows, got {X.shape[0]}")
+    if X.shape[0] < MIN_TRAINING_ROWS:
+        raise ValueError(f"fit_ensemble: need at least {MIN_TRAINING_ROWS} training rows, got {X.shape[0]}")
     for name, A in (("X", X), ("Y", Y)):
         if not np.all(np.isfinite(A)):
             raise ValueError(f"fit_ensemble: {name} contains NaN or inf (row {np.argwhere(~np.isfinite(A))[0, 0]})")
