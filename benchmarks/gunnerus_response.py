@@ -35,7 +35,7 @@ from pathlib import Path
 import numpy as np
 from scipy.optimize import brentq
 
-from hybridship.physics.model import DynamicModel
+from hybridship.physics.model import RPM_LIMIT_FACTOR, DynamicModel
 from hybridship.physics.propeller import load_wageningen, thrust_torque
 
 KNOT_M_S = 1852.0 / 3600.0
@@ -130,15 +130,21 @@ def speed_curve(model: DynamicModel, rpms) -> dict:
             "power_per_unit_W": np.array([p["power_per_unit_W"] for p in pts])}
 
 
-def rpm_for_speed(model: DynamicModel, speed_m_s: float, rpm_hi: float = 600.0) -> float:
+def _rpm_hi(model: DynamicModel) -> float:
+    """Upper end of the rpm searches: the largest rpm the model accepts (``RPM_LIMIT_FACTOR``
+    times the azimuths' max_rpm)."""
+    return RPM_LIMIT_FACTOR * model.vessel.thrusters[1].max_rpm
+
+
+def rpm_for_speed(model: DynamicModel, speed_m_s: float, rpm_hi: float | None = None) -> float:
     """Azimuth rpm (both units, angle 0) whose steady speed is ``speed_m_s``."""
-    return brentq(lambda n: steady_speed(model, n) - speed_m_s, 1.0, rpm_hi, xtol=1e-6)
+    return brentq(lambda n: steady_speed(model, n) - speed_m_s, 1.0, rpm_hi or _rpm_hi(model), xtol=1e-6)
 
 
-def rpm_for_power(model: DynamicModel, power_W: float, rpm_hi: float = 600.0) -> float:
+def rpm_for_power(model: DynamicModel, power_W: float, rpm_hi: float | None = None) -> float:
     """Azimuth rpm at which each unit absorbs ``power_W`` in the steady straight run."""
-    return brentq(lambda n: propulsion_point(model, n)["power_per_unit_W"] - power_W, 1.0, rpm_hi,
-                  xtol=1e-6)
+    return brentq(lambda n: propulsion_point(model, n)["power_per_unit_W"] - power_W, 1.0,
+                  rpm_hi or _rpm_hi(model), xtol=1e-6)
 
 
 # --------------------------------------------------------------------------- 2. turning

@@ -502,7 +502,8 @@ class HybridPredictor:
     def _fit_nets(self, logs, *, dp_only, progress, stride, row_masks):
         X, Y, seg = self.training_data(logs, dp_only=dp_only, row_masks=row_masks)
         X, Y, seg, thr = X[::stride], Y[::stride], seg[::stride], self._training_thrust_acc[::stride]
-        require_training_rows(X.shape[0], len(logs), dp_only)
+        require_training_rows(X.shape[0], len(logs), dp_only, held_back=row_masks is not None and any(
+            m is not None for m in row_masks))
         residual_std = Y.std(0).tolist()
         self.hull = None
         starts = None

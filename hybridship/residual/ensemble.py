@@ -134,13 +134,14 @@ def _time_ordered_split(segment_id: np.ndarray, val_fraction: float) -> np.ndarr
 MIN_TRAINING_ROWS = 20
 
 
-def require_training_rows(n_rows: int, n_logs: int, dp_only: bool) -> None:
-    """Refuse, in the words of the logs, training data too short for the nets."""
+def require_training_rows(n_rows: int, n_logs: int, dp_only: bool, held_back: bool = False) -> None:
+    """Refuse, in the words of the logs, training data too short for the nets (``held_back``:
+    part of the logs was kept back for calibration)."""
     if n_rows < MIN_TRAINING_ROWS:
-        which = "station-keeping rows (dp_active = 1) only" if dp_only else "all rows"
-        raise ValueError(f"logs: {n_rows} usable training row(s) in {n_logs} log(s) ({which}, after what is "
-                         f"kept back for calibration); the nets need at least {MIN_TRAINING_ROWS}: give longer "
-                         f"logs" + (" or train on all rows" if dp_only else ""))
+        which = ("station-keeping rows (dp_active = 1) only" if dp_only else "all rows") + \
+            (", after what is kept back for calibration" if held_back else "")
+        raise ValueError(f"logs: {n_rows} usable training row(s) in {n_logs} log(s) ({which}); the nets need at "
+                         f"least {MIN_TRAINING_ROWS}: give longer logs" + (" or train on all rows" if dp_only else ""))
 
 
 def _training_rows(X, Y) -> tuple[np.ndarray, np.ndarray]:
