@@ -180,6 +180,18 @@ def test_bad_inputs_name_the_field(kind, fitted, test_log):
 
 
 @pytest.mark.parametrize("kind", KINDS)
+def test_leads_and_times_are_on_the_grid_of_a_10_hz_log(kind, fitted, model):
+    """The step is the log's (0.1 s), not the median of float differences (0.10000000000000142):
+    200 steps read 20.0 s and every forecast time is one of the log's times."""
+    log = physics_log(model, seed=5, duration_s=200.0, dt_s=0.1, t_shutdown_s=None, current=(0.2, 1.0))
+    log["time_s"] = log.time_s.round(6)                  # as a logger writes them
+    fc = fitted[kind].forecast(log, [150.0, 152.5], HORIZON_S)
+    np.testing.assert_array_equal(fc.lead_s, np.arange(201) / 10)
+    df = fc.to_frame()
+    assert (df.lead_s == HORIZON_S).sum() == 2 and df.time_s.isin(log.time_s).all()
+
+
+@pytest.mark.parametrize("kind", KINDS)
 def test_held_command_forecasts_are_causal(kind, fitted, test_log):
     """Rows after the start (positions, headings, velocities, commands, wind) do not matter."""
     p = fitted[kind]

@@ -112,5 +112,5 @@ class DataOnlyPredictor:
             eta[..., 2] += dt * nu_mid[..., 2]
             nu = nu + dt * acc
             out[:, :, j + 1], out_nu[:, :, j + 1] = eta, nu
-        return ForecastResult(arrays.time_s[idx], np.arange(H + 1) * dt, out.mean(axis=0), out_nu.mean(axis=0),
+        return ForecastResult(arrays.time_s[idx], st.lead_s, out.mean(axis=0), out_nu.mean(axis=0),
                               out.std(axis=0), flags=st.flags, notes=st.notes)

@@ -28,8 +28,7 @@ class DeadReckoning:
     def forecast(self, log, start_times_s, horizon_s: float = 60.0, *, commands: str = "held") -> ForecastResult:
         """Constant-velocity tracks from every start time (``commands`` is checked, then unused)."""
         st = _forecast_setup(self.model, self.config, log, start_times_s, horizon_s, commands=commands)
-        arrays, idx, dt, H, eta0, nu0 = st.arrays, st.idx, st.dt, st.H, st.eta0, st.nu0
-        lead = np.arange(H + 1) * dt
+        arrays, idx, H, eta0, nu0, lead = st.arrays, st.idx, st.H, st.eta0, st.nu0, st.lead_s
         c, s = np.cos(eta0[:, 2]), np.sin(eta0[:, 2])
         vn = c * nu0[:, 0] - s * nu0[:, 1]
         ve = s * nu0[:, 0] + c * nu0[:, 1]

@@ -44,7 +44,10 @@ class DynamicPredictor:
         start_times_s : float or sequence of float
             Sample times of the log [s].
         horizon_s : float
-            Forecast horizon [s]; the step is the log's.
+            Forecast horizon [s], rounded to whole steps of the log's step (the median spacing
+            of its time stamps to the microsecond: lead times ``k * step`` read 0.1, 0.2, ...,
+            60.0 on a 10-Hz log). On a log with jittered time stamps the forecast still runs
+            whole median steps from the start, so its times are nominal and not the log's own.
         commands : {"held", "known"}
             ``held``: commands stay at their start values; ``known``: the logged commands
             of the steps after each start are used (a manoeuvre whose orders are known;
@@ -54,4 +57,4 @@ class DynamicPredictor:
                              self.stop_after_failure, commands, wind_forecast=self.wind_forecast)
         res = self.model.rollout(st.eta0, st.nu0, st.H, dt_s=st.dt, substeps=st.substeps, rpm=st.rpm,
                                  azimuth_rad=st.az, wind=st.wind)
-        return ForecastResult(st.arrays.time_s[st.idx], res.time_s, res.eta, res.nu, flags=st.flags, notes=st.notes)
+        return ForecastResult(st.arrays.time_s[st.idx], st.lead_s, res.eta, res.nu, flags=st.flags, notes=st.notes)

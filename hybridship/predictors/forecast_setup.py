@@ -21,7 +21,7 @@ from ..logs.ingest import ingest
 from ..logs.io import LogArrays
 from ..residual.features import ResidualConfig
 
-__all__ = ["COMMAND_MODES", "FORECAST_HISTORY_S", "as_log_arrays", "start_indices"]
+__all__ = ["COMMAND_MODES", "FORECAST_HISTORY_S", "as_log_arrays", "forecast_step_s", "start_indices"]
 
 #: Seconds of log before the earliest start that a forecast reads (at least): the hybrid's
 #: environment window. Every forecaster reads the same rows, so the start-window checks see
@@ -30,6 +30,11 @@ FORECAST_HISTORY_S = 1800.0
 #: Extra seconds read at both ends of a forecast's time range, so that no filter or
 #: derivative near a start sees the edge of what was read.
 _RANGE_MARGIN_S = 60.0
+#: Decimals [s] a forecast's step is rounded to: the log's time resolution (microseconds).
+#: The median of float differences reads a 10-Hz log's 0.1 s as 0.10000000000000142.
+_STEP_DECIMALS = 6
+#: Decimals [s] lead times are rounded to, so that 600 steps of 0.1 s are 60.0 s.
+_LEAD_DECIMALS = 9
 
 
 def as_log_arrays(log, vessel, *, purpose: str = "fit") -> LogArrays:
@@ -75,6 +80,18 @@ def start_indices(arrays: LogArrays, start_times_s) -> np.ndarray:
     return idx
 
 
+def forecast_step_s(arrays: LogArrays) -> float:
+    """The step of every forecast on ``arrays`` [s]: the median spacing of ``time_s``, rounded
+    to the microsecond (1.0 without two samples).
+
+    On an evenly sampled log this is the log's own step, so lead times and forecast times
+    fall on its grid. On a log with jittered time stamps it is the median step, and a
+    forecast runs whole steps of it from the start: its times are nominal, not the log's.
+    """
+    t = arrays.time_s
+    return round(float(np.median(np.diff(t))), _STEP_DECIMALS) if len(t) > 1 else 1.0
+
+
 def _held_inputs(arrays: LogArrays, idx: np.ndarray, *, stop_after_failure: bool = True, wind=None):
     """Commands and wind at the start rows, shaped (S, 1, width) for the kernels.
 
@@ -108,6 +125,12 @@ class _Setup:
     substeps: int
     flags: dict
     notes: tuple
+
+    @property
+    def lead_s(self) -> np.ndarray:
+        """Lead time of every step, ``k dt`` for k = 0..H [s] (rounded to 1e-9 s, so that the
+        leads read as whole multiples of the step)."""
+        return np.round(np.arange(self.H + 1) * self.dt, _LEAD_DECIMALS)
 
 
 #: Command modes of ``forecast(..., commands=)``.
@@ -177,6 +200,9 @@ def _forecast_setup(model, config: ResidualConfig, log, start_times_s, horizon_s
     window used, faults flagged, a start with too little valid data refused), and the held
     inputs through :func:`hybridship.forecast_inputs.check_or_clip_inputs` (clipped to the
     documented envelope and flagged).
+
+    The step is :func:`forecast_step_s` and the horizon ``H = round(horizon_s / step)``
+    whole steps.
     """
     if isinstance(horizon_s, (str, bytes, bool, np.bool_)) or np.ndim(horizon_s) != 0:
         raise TypeError(f"horizon_s: expected a number of seconds, got {type(horizon_s).__name__} {horizon_s!r}")
@@ -198,7 +224,7 @@ def _forecast_setup(model, config: ResidualConfig, log, start_times_s, horizon_s
         # say it with the whole log's span, not the window read for the forecast
         start_indices(ingest(log, model.vessel, purpose="forecast"), start_times_s)
         raise
-    dt = arrays.dt_s
+    dt = forecast_step_s(arrays)
     H = int(round(horizon_s / dt))
     sw = assess_start_window(arrays, idx, config.start_average_s)
     rpm, az, wind = _held_inputs(arrays, idx, stop_after_failure=stop_after_failure, wind=sw.wind)

@@ -774,15 +774,15 @@ class HybridPredictor:
             # the load held over the forecast varies as it did in the station keeping before;
             # during station keeping that variability is the spread itself (the default), where
             # there was enough station keeping to measure it (else the members' spread)
-            held = held_load_spread(sigma_b, np.arange(st.H + 1) * st.dt)
+            held = held_load_spread(sigma_b, st.lead_s)
             on_station = ~after_stop & self._held_load_on_station & np.any(sigma_b > 0, axis=1)
             std = np.where(on_station[:, None, None], held, np.sqrt(std ** 2 + held ** 2))
         flags = dict(st.flags)
         if wgt is not None:
             flags[FaultFlags.OUT_OF_ENVELOPE] = np.any(wgt < 1.0, axis=1)
         if calibrated:
-            std = self._calibrated_forecast_std(std, np.arange(st.H + 1) * st.dt, commands, after_stop)
-        return ForecastResult(st.arrays.time_s[st.idx], np.arange(st.H + 1) * st.dt, eta, nu, std, wgt,
+            std = self._calibrated_forecast_std(std, st.lead_s, commands, after_stop)
+        return ForecastResult(st.arrays.time_s[st.idx], st.lead_s, eta, nu, std, wgt,
                               flags=flags, notes=st.notes)
 
     @property

@@ -22,7 +22,8 @@ class ForecastResult:
     start_time_s : ndarray, shape (S,)
         Start times [s].
     lead_s : ndarray, shape (H+1,)
-        Time since the start [s].
+        Time since the start [s]: ``k`` steps of the log's step, rounded to 1e-9 s (see
+        :func:`hybridship.predictors.forecast_setup.forecast_step_s`).
     eta : ndarray, shape (S, H+1, 3)
         ``[north_m, east_m, psi_rad]`` (the ensemble mean for the hybrid).
     nu : ndarray, shape (S, H+1, 3)
