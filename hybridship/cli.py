@@ -325,6 +325,7 @@ def _add_forecast(sub) -> None:
 def _cmd_forecast(args) -> int:
     from .fileio import atomic_write
     from .predictors import HybridPredictor, ModelFileError
+    from .predictors.forecast_setup import HorizonError
 
     if not args.horizon_s > 0:
         raise UsageError(f"{_PROG} forecast: error: --horizon-s must be > 0, got {args.horizon_s}")
@@ -350,7 +351,10 @@ def _cmd_forecast(args) -> int:
     if not args.out.name.lower().endswith(".csv"):
         raise UsageError(f"{_PROG} forecast: error: --out {args.out}: expected a .csv file (the forecast is "
                          f"written as plain CSV)")
-    fc = hp.forecast(args.log, args.start_time, args.horizon_s, guard=not args.no_guard, commands=args.commands)
+    try:
+        fc = hp.forecast(args.log, args.start_time, args.horizon_s, guard=not args.no_guard, commands=args.commands)
+    except HorizonError as exc:     # known only once the log's step is read: still a usage error
+        raise UsageError(f"{_PROG} forecast: error: {exc}") from None
     df = fc.to_frame(quantiles=quantiles)
     atomic_write(args.out, lambda fh: fh.write(df.to_csv(index=False).encode("utf-8")))
     from .forecast_inputs import FaultFlags

@@ -72,6 +72,35 @@ def test_cli_errors_are_one_line_and_non_zero(log_dir, tmp_path, capsys):
     assert main(["train", "--logs", str(tmp_path / "nope"), "--out", str(tmp_path / "m.npz")]) == 2
 
 
+def test_forecast_of_a_10_hz_log_is_on_its_grid_and_a_horizon_under_a_step_is_a_usage_error(tmp_path, capsys):
+    """``lead_s == 60`` selects the last row of each start and every ``time_s`` is a log time
+    (the step was the median float difference, 0.10000000000000142 s); ``--horizon-s 0.4``
+    on a 1-Hz log exits 2 with one line (it wrote a forecast of zero steps)."""
+    from hybridship.predictors import HybridPredictor
+    from hybridship.residual.calibration import CalibrationConfig
+    from hybridship.residual.ensemble import EnsembleConfig
+
+    m = DynamicModel("gunnerus")
+    one_hz = physics_log(m, seed=1, duration_s=400.0, t_shutdown_s=None)
+    HybridPredictor(m.vessel, ensemble_config=EnsembleConfig(n_members=2, hidden=8, max_epochs=15, patience=5),
+                    calibration_config=CalibrationConfig(fraction=0.0)).fit([one_hz]).save(tmp_path / "m.npz")
+    write_log(one_hz, tmp_path / "1hz.csv")
+    write_log(physics_log(m, seed=2, duration_s=400.0, dt_s=0.1, t_shutdown_s=None), tmp_path / "10hz.csv")
+    log = pd.read_csv(tmp_path / "10hz.csv")
+    out = tmp_path / "fc.csv"
+    assert main(["forecast", "--model", str(tmp_path / "m.npz"), "--log", str(tmp_path / "10hz.csv"),
+                 "--start-time", "301", "302.5", "--out", str(out)]) == 0
+    df = pd.read_csv(out)
+    assert len(df) == 2 * 601 and (df.lead_s == 60).sum() == 2 and df.lead_s.max() == 60.0
+    assert df.time_s.isin(log.time_s.round(9)).all() and df.time_s.max() == 362.5
+    capsys.readouterr()
+    assert main(["forecast", "--model", str(tmp_path / "m.npz"), "--log", str(tmp_path / "1hz.csv"),
+                 "--start-time", "301", "--horizon-s", "0.4", "--out", str(tmp_path / "short.csv")]) == 2
+    assert capsys.readouterr().err == ("hybridship forecast: error: horizon_s: 0.4 s is shorter than one step of "
+                                       "the log (1 s)\n")
+    assert not (tmp_path / "short.csv").exists()
+
+
 def test_drift_table_layout_and_physics_log_error_near_zero():
     m = DynamicModel("gunnerus")
     arrays = as_log_arrays(physics_log(m, seed=5, duration_s=1100.0, t_shutdown_s=900.0), m.vessel)

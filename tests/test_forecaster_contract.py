@@ -154,6 +154,7 @@ def _bad_inputs(log: pd.DataFrame):
     return [
         ("horizon 0", (log, STARTS, 0.0), {}, ValueError, "horizon_s"),
         ("horizon inf", (log, STARTS, np.inf), {}, ValueError, "horizon_s"),
+        ("horizon under one step", (log, STARTS, 0.4), {}, ValueError, "horizon_s"),
         ("horizon as text", (log, STARTS, "60"), {}, TypeError, "horizon_s"),
         ("horizon as a list", (log, STARTS, [60.0]), {}, TypeError, "horizon_s"),
         ("unknown command mode", (log, STARTS, HORIZON_S), {"commands": "maybe"}, ValueError, "commands"),
@@ -177,6 +178,14 @@ def test_bad_inputs_name_the_field(kind, fitted, test_log):
         with pytest.raises(exc) as err:
             p.forecast(*args, **kw)
         assert re.match(rf"{field}\b", str(err.value)), f"{kind}, {what}: {err.value}"
+
+
+@pytest.mark.parametrize("kind", KINDS)
+def test_a_horizon_under_one_step_is_refused_with_the_logs_step(kind, fitted, test_log):
+    """0.4 s on a 1-Hz log rounds to no step: refused (it gave a forecast of zero steps)."""
+    with pytest.raises(ValueError, match=r"^horizon_s: 0\.4 s is shorter than one step of the log \(1 s\)$"):
+        fitted[kind].forecast(test_log, STARTS, 0.4)
+    assert fitted[kind].forecast(test_log, STARTS, 0.6).lead_s.tolist() == [0.0, 1.0]   # rounds to one step
 
 
 @pytest.mark.parametrize("kind", KINDS)

@@ -202,7 +202,8 @@ def test_command_memory_of_a_forecast_matches_the_training_rows(tmp_path):
                                hp.forecast(a, [100.0], 20.0, commands="known").eta)
     with pytest.raises(ValueError, match="command_memory"):
         hp.rollout(st.eta0, st.nu0, np.zeros((2, 3)), np.zeros((2, 3)), st.rpm, st.az, st.wind, st.H, st.dt)
-    assert hp.forecast(a, [100.0], 0.3).eta.shape == (1, 1, 3)          # shorter than one step
+    with pytest.raises(ValueError, match=r"horizon_s: 0\.3 s is shorter than one step"):
+        hp.forecast(a, [100.0], 0.3)                                      # rounds to no step: refused
     # after a failure a forecast takes the rpm as 0 while the logged shaft speed runs down:
     # the memory it carries in from the log is that of the commands it uses
     failed = physics_log(m, seed=5, duration_s=300.0, t_shutdown_s=200.0)

@@ -373,8 +373,8 @@ def test_wind_futures_enter_the_calibration_and_edge_cases(wind_spread_model, mo
     plain = HybridPredictor(model.vessel, ensemble_config=TINY, environment="mean", wind_forecast="fit").fit([log])
     np.testing.assert_array_equal(plain.forecast(log, [1200.0], 60.0).eta, hp.forecast(log, [1200.0], 60.0).eta)
     assert not np.allclose(plain.calibration["held"]["position"].scale, hp.calibration["held"]["position"].scale)
-    short = hp.forecast(log, [1200.0], 0.5)                                # shorter than one step: the start only
-    assert short.eta.shape == (1, 1, 3) and np.all(short.eta_std[:, 0] >= 0)
+    with pytest.raises(ValueError, match=r"horizon_s: 0\.5 s is shorter than one step of the log \(1 s\)"):
+        hp.forecast(log, [1200.0], 0.5)                                    # rounds to no step: refused
     other = log.iloc[::2].reset_index(drop=True)                           # another sample step
     with pytest.raises(ValueError, match="wind_samples: the training logs have different sample steps"):
         HybridPredictor(model.vessel, ensemble_config=TINY, environment="mean", wind_samples=2).fit([log, other])

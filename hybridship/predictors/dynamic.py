@@ -46,8 +46,9 @@ class DynamicPredictor:
         horizon_s : float
             Forecast horizon [s], rounded to whole steps of the log's step (the median spacing
             of its time stamps to the microsecond: lead times ``k * step`` read 0.1, 0.2, ...,
-            60.0 on a 10-Hz log). On a log with jittered time stamps the forecast still runs
-            whole median steps from the start, so its times are nominal and not the log's own.
+            60.0 on a 10-Hz log); one that rounds to no step is refused (ValueError). On a log
+            with jittered time stamps the forecast still runs whole median steps from the
+            start, so its times are nominal and not the log's own.
         commands : {"held", "known"}
             ``held``: commands stay at their start values; ``known``: the logged commands
             of the steps after each start are used (a manoeuvre whose orders are known;

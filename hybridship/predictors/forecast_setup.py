@@ -21,7 +21,7 @@ from ..logs.ingest import ingest
 from ..logs.io import LogArrays
 from ..residual.features import ResidualConfig
 
-__all__ = ["COMMAND_MODES", "FORECAST_HISTORY_S", "as_log_arrays", "forecast_step_s", "start_indices"]
+__all__ = ["COMMAND_MODES", "FORECAST_HISTORY_S", "HorizonError", "as_log_arrays", "forecast_step_s", "start_indices"]
 
 #: Seconds of log before the earliest start that a forecast reads (at least): the hybrid's
 #: environment window. Every forecaster reads the same rows, so the start-window checks see
@@ -78,6 +78,11 @@ def start_indices(arrays: LogArrays, start_times_s) -> np.ndarray:
         raise ValueError(f"start_times_s: {st[bad][0]} s is not a sample time of the log "
                          f"(log spans {t[0]}..{t[-1]} s, dt {dt:g} s)")
     return idx
+
+
+class HorizonError(ValueError):
+    """A forecast horizon the log's step cannot give (shorter than one step); the command
+    line reports it as a usage error."""
 
 
 def forecast_step_s(arrays: LogArrays) -> float:
@@ -202,7 +207,8 @@ def _forecast_setup(model, config: ResidualConfig, log, start_times_s, horizon_s
     documented envelope and flagged).
 
     The step is :func:`forecast_step_s` and the horizon ``H = round(horizon_s / step)``
-    whole steps.
+    whole steps; a horizon that rounds to no step at all is refused (:class:`HorizonError`,
+    a ValueError naming ``horizon_s`` and the step).
     """
     if isinstance(horizon_s, (str, bytes, bool, np.bool_)) or np.ndim(horizon_s) != 0:
         raise TypeError(f"horizon_s: expected a number of seconds, got {type(horizon_s).__name__} {horizon_s!r}")
@@ -226,6 +232,8 @@ def _forecast_setup(model, config: ResidualConfig, log, start_times_s, horizon_s
         raise
     dt = forecast_step_s(arrays)
     H = int(round(horizon_s / dt))
+    if H < 1:
+        raise HorizonError(f"horizon_s: {horizon_s:g} s is shorter than one step of the log ({dt:g} s)")
     sw = assess_start_window(arrays, idx, config.start_average_s)
     rpm, az, wind = _held_inputs(arrays, idx, stop_after_failure=stop_after_failure, wind=sw.wind)
     if commands == "known":
