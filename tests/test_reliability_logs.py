@@ -118,8 +118,13 @@ def test_missing_required_column_points_at_a_unit_variant(moving_log):
 
 
 def test_optional_column_in_another_unit_is_named_in_the_warning(moving_log):
+    # a wind speed in knots beside the direction: refused (read as no wind it would be calm)
     df = moving_log.rename(columns={"wind_speed_m_s": "wind_speed_kn"})
-    with pytest.warns(LogFormatWarning, match=r"wind_speed_kn \(looks like wind_speed_m_s in another unit"):
+    _refused(df, r"wind_speed_m_s: missing while wind_dir_deg is logged.*found 'wind_speed_kn', which looks like "
+                 r"wind_speed_m_s in another unit")
+    # an optional column alone in another unit is named in the warning
+    df = moving_log.drop(columns=["wind_speed_m_s", "wind_dir_deg"]).rename(columns={"u_m_s": "u_kn"})
+    with pytest.warns(LogFormatWarning, match=r"u_kn \(looks like u_m_s in another unit"):
         validate_log(df, channel_names=THRUSTERS, rotatable=ROTATABLE)
 
 

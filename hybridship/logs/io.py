@@ -527,8 +527,10 @@ def _validate(df: pd.DataFrame, channel_names, rotatable, source: str, warn_unkn
     pair = [c for c in ("wind_speed_m_s", "wind_dir_deg") if c in cols]
     if len(pair) == 1:  # a speed without its direction (or the reverse) is no wind measurement
         other = ({"wind_speed_m_s", "wind_dir_deg"} - set(pair)).pop()
+        unit = "".join(f"; found {c!r}, which looks like {other} in another unit: convert it and name it as "
+                       f"the format says" for c in cols if _unit_variant_of(c) == other)
         raise LogFormatError(f"{other}: missing while {pair[0]} is logged; the wind needs both (or neither: "
-                             f"a forecast without wind){_where(source)}", column=other)
+                             f"a forecast without wind){unit}{_where(source)}", column=other)
     ignored = _check_channel_columns(df, cols, t, names, rot, source)
     if ignored and warn_unknown:
         warnings.warn(
