@@ -236,3 +236,29 @@ def test_dp_wind_feedforward_opposes_wind(model):
     tau_calm = dp.update(np.zeros(3), np.zeros(3))
     _, parts, _ = model.acceleration(np.zeros(3), np.zeros(3), wind=WIND, return_parts=True)
     np.testing.assert_allclose(tau_wind - tau_calm, -parts[0, 2], rtol=1e-12)
+
+
+# --------------------------------------------------------------------------- station keeping (DP capability)
+
+
+def _with_thrusters(vessel, thrusters):
+    return vessel.model_copy(update={"thrusters": thrusters})
+
+
+def test_station_keeping_rank_counts_the_loads_the_thrusters_can_make(model):
+    from hybridship.sim.allocation import check_station_keeping, station_keeping_rank
+
+    v = model.vessel
+    tunnel, port, stbd = v.thrusters
+    stern_tunnel = tunnel.model_copy(update={"name": "stern", "x_m": -10.0})
+    assert station_keeping_rank(v) == 3
+    assert station_keeping_rank(_with_thrusters(v, [port, stbd])) == 3   # differential surge turns the ship
+    assert station_keeping_rank(_with_thrusters(v, [port])) == 2          # one azimuth: sway and yaw coupled
+    assert station_keeping_rank(_with_thrusters(v, [tunnel, stern_tunnel])) == 2
+    assert station_keeping_rank("esso_osaka_model") == 1                  # one screw, one rudder
+    check_station_keeping(v)
+    with pytest.raises(ValueError, match=r"'gunnerus' cannot hold station .* no pure surge force .*rank 2 < 3"):
+        check_station_keeping(_with_thrusters(v, [tunnel, stern_tunnel]))
+    with pytest.raises(ValueError, match=r"'esso_osaka_model' .*propeller: fixed.* no pure sway force or pure yaw "
+                                         r"moment .*rank 1 < 3; rudders are not DP actuators"):
+        check_station_keeping("esso_osaka_model")

@@ -232,6 +232,97 @@ def test_sweep_writes_logs_and_summary(tmp_path):
         sweep(tmp_path, [1], fmt="xlsx", **TINY)
 
 
+def test_sweep_refuses_a_seed_already_there_in_another_format(tmp_path):
+    out = tmp_path / "out"
+    sweep(out, [1], beaufort=(2, 3), fmt="csv.gz", **TINY)
+    before = (out / "scenarios.csv").read_bytes()
+    with pytest.raises(ValueError, match=r"seed 1 has a log there in another format already "
+                                         r"\(.*sim_dp_loss_seed0001\.csv\.gz\)"):
+        sweep(out, [1, 2], beaufort=(2, 3), fmt="parquet", **TINY)
+    # refused before any simulation: nothing new, the summary untouched
+    assert sorted(p.name for p in out.iterdir()) == ["scenarios.csv", "sim_dp_loss_seed0001.csv.gz"]
+    assert (out / "scenarios.csv").read_bytes() == before
+    # the same format is rewritten in place, with one summary row per seed
+    sweep(out, [1], beaufort=(2, 3), fmt="csv.gz", **TINY)
+    assert pd.read_csv(out / "scenarios.csv")["seed"].tolist() == [1]
+    # an old row of a seed whose file is gone is replaced, not kept beside the new one
+    (out / "sim_dp_loss_seed0001.csv.gz").unlink()
+    sweep(out, [1], beaufort=(2, 3), fmt="parquet", **TINY)
+    summary = pd.read_csv(out / "scenarios.csv")
+    assert summary["seed"].tolist() == [1] and summary["file"].tolist() == ["sim_dp_loss_seed0001.parquet"]
+
+
+def test_cli_sweep_in_another_format_names_the_existing_log(tmp_path, capsys):
+    args = ["simulate", "--sweep", "--seeds", "1", "--out-dir", str(tmp_path), "--t-shutdown-s", "120",
+            "--drift-s", "60", "--no-progress"]
+    assert main(args) == 0
+    capsys.readouterr()
+    assert main(args + ["--format", "parquet"]) != 0
+    err = capsys.readouterr().err
+    assert len(err.strip().splitlines()) == 1 and "sim_dp_loss_seed0001.csv.gz" in err
+    assert not list(tmp_path.glob("*.parquet"))
+
+
+def _vessel_file(tmp_path, packaged: str, name: str, rudder: bool = False):
+    """A packaged vessel file renamed, optionally with the Esso model's rudder block added
+    (without its propeller, which Gunnerus does not have: a rudder in the plain wake)."""
+    from hybridship.vessel import packaged_vessel_text
+
+    text = packaged_vessel_text(packaged)
+    text = text.replace(f'name = "{packaged}"', f'name = "{name}"', 1)
+    if rudder:
+        esso = packaged_vessel_text("esso_osaka_model")
+        block = esso[esso.index("[[rudders]]"):esso.index("# Bow and stern tunnel")]
+        block = "\n".join(line for line in block.splitlines() if not line.startswith("propeller ="))
+        text = text.replace("\n[wind]\n", f"\n{block}\n\n[wind]\n", 1)
+    path = tmp_path / f"{name}.toml"
+    path.write_text(text)
+    return path
+
+
+def test_a_vessel_that_cannot_hold_station_is_refused_before_any_work(tmp_path, capsys, monkeypatch):
+    import hybridship.sim.scenario as scenario
+
+    tanker = _vessel_file(tmp_path, "esso_osaka_model", "my_tanker")
+
+    def no_dp(*args, **kwargs):
+        raise AssertionError("the DP system was started")
+
+    monkeypatch.setattr(scenario, "_DPSystem", no_dp)
+    with pytest.raises(ValueError, match="'my_tanker' cannot hold station in surge, sway and yaw"):
+        simulate_dp_loss(DPLossConfig(seed=1, **TINY), vessel=tanker)
+    with pytest.raises(ValueError, match="'my_tanker' cannot hold station"):
+        sweep(tmp_path / "sw", [1], vessel=tanker, **TINY)
+    assert not (tmp_path / "sw").exists()
+    out = tmp_path / "t1.csv"
+    rc = main(["simulate", "--vessel", str(tanker), "--seed", "1", "--t-shutdown-s", "200", "--drift-s", "60",
+               "--out", str(out), "--no-progress"])
+    err = capsys.readouterr().err
+    assert rc != 0 and len(err.strip().splitlines()) == 1
+    assert "hybridship simulate: error: vessel 'my_tanker' cannot hold station" in err and "rank 1 < 3" in err
+    assert not out.exists()
+
+
+def test_a_dp_vessel_with_a_rudder_logs_the_rudder_amidships_and_trains(tmp_path):
+    from hybridship.predictors import HybridPredictor, as_log_arrays
+    from hybridship.residual.ensemble import EnsembleConfig
+    from hybridship.vessel import load_vessel
+
+    vessel = load_vessel(_vessel_file(tmp_path, "gunnerus", "gunnerus_rudder", rudder=True))
+    assert [r.name for r in vessel.rudders] == ["rudder"]
+    df = simulate_dp_loss(DPLossConfig(seed=1, **TINY), vessel=vessel)
+    assert (df["rudder_azimuth_deg"] == 0.0).all()   # the angle the physics held: amidships
+    assert "rudder_rpm" not in df
+    path = tmp_path / "g1.csv"
+    write_log(df, path, channel_names=vessel.channel_names, rotatable=vessel.rotatable)
+    arrays = as_log_arrays(path, vessel)             # what 'train' reads; refused before
+    assert np.all(arrays.azimuth_rad[:, vessel.channel_names.index("rudder")] == 0.0)
+    paths = sweep(tmp_path / "sw", [2], vessel=vessel, fmt="csv", **TINY)
+    cfg = EnsembleConfig(n_members=2, hidden=8, max_epochs=15)
+    hp = HybridPredictor(vessel, ensemble_config=cfg).fit([path, *paths])
+    assert hp.training_info["n_rows"] > 0
+
+
 def test_embedded_scenarios_are_valid_and_copied():
     a = embedded_scenarios(n=3, seed=0)
     assert len(a) == 3 and len({s.name for s in a}) == 3

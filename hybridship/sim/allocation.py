@@ -44,7 +44,7 @@ from hybridship.physics.propeller import load_wageningen, rpm_for_thrust, thrust
 from hybridship.physics.thrusters import configuration_matrix
 
 __all__ = ["AllocationResult", "ThrusterLimits", "ThrustAllocator", "bollard_thrust_limits", "thrust_capacity",
-           "extended_configuration"]
+           "extended_configuration", "station_keeping_rank", "check_station_keeping"]
 
 #: Default time to ramp a shaft from 0 to max_rpm when no rpm rate limit is given [s].
 DEFAULT_RPM_RAMP_TIME_S = 10.0
@@ -140,6 +140,87 @@ def extended_configuration(vessel):
             cols.append(configuration_matrix([t.fixed_angle_rad], [t.x_m], [t.y_m])[:, 0])
             owner.append(i)
     return np.array(cols, dtype=float).T, np.array(owner, dtype=int)
+
+
+#: Relative tolerance of the rank test in :func:`station_keeping_rank` (the matrix entries are O(1)).
+_RANK_RTOL = 1e-9
+
+_DOF_LOADS = ("pure surge force", "pure sway force", "pure yaw moment")
+
+
+def _scaled_configuration(vessel):
+    """``T_e`` with its yaw row divided by ``L_pp``, so that every entry is a dimensionless O(1)
+    number and the rank test does not depend on the vessel's size."""
+    v = _vessel(vessel)
+    T_e, _ = extended_configuration(v)
+    if T_e.size == 0:
+        return np.zeros((3, 0))
+    return T_e / np.array([1.0, 1.0, v.particulars.L_pp_m])[:, None]
+
+
+def _rank(a) -> int:
+    if a.size == 0:
+        return 0
+    s = np.linalg.svd(a, compute_uv=False)
+    return int(np.sum(s > _RANK_RTOL * max(1.0, s[0])))
+
+
+def station_keeping_rank(vessel) -> int:
+    """Number of independent directions of ``[X, Y, N]`` the thrusters can load the hull in.
+
+    The rank of the extended thrust configuration matrix ``T_e``
+    (:func:`extended_configuration`): its columns cover every azimuth angle an azimuth
+    thruster can take (the vessel file sets no sector limits) and each fixed-axis
+    thruster's own axis. Every thruster pushes both ways (:func:`bollard_thrust_limits`
+    refuses a propeller without thrust ahead or astern), so the loads the thrusters can
+    make form a symmetric convex set around zero that spans the column space of ``T_e``.
+    Rank 3 therefore means that every small enough demand in surge, sway and yaw is met
+    exactly; below 3 some direction of load cannot be made at all, however small.
+
+    Parameters
+    ----------
+    vessel : hybridship.vessel.Vessel or str
+        Vessel, or a packaged name or vessel-file path.
+
+    Returns
+    -------
+    int
+        0..3 (3: the thrusters can hold station in surge, sway and yaw).
+
+    Notes
+    -----
+    Rudders do not count: the DP system commands thrusters only, and a rudder makes
+    lift only in a flow. Rank 3 says nothing about capacity, i.e. whether the thrusters
+    are strong enough for a given weather (:func:`thrust_capacity`).
+    """
+    return _rank(_scaled_configuration(vessel))
+
+
+def check_station_keeping(vessel) -> None:
+    """Refuse a vessel whose thrusters cannot hold station in surge, sway and yaw.
+
+    The criterion is :func:`station_keeping_rank` < 3 (a vessel with no thrusters has rank 0).
+
+    Parameters
+    ----------
+    vessel : hybridship.vessel.Vessel or str
+
+    Raises
+    ------
+    ValueError
+        One line naming the vessel, the rank and the loads its thrusters cannot make.
+    """
+    v = _vessel(vessel)
+    T = _scaled_configuration(v)
+    rank = _rank(T)
+    if rank == 3:
+        return
+    # A pure load along one axis is possible iff adding that axis does not raise the rank.
+    missing = [load for j, load in enumerate(_DOF_LOADS) if _rank(np.column_stack([T, np.eye(3)[:, j]])) > rank]
+    kinds = ", ".join(f"{t.name}: {t.type}" for t in v.thrusters) or "none"
+    raise ValueError(f"vessel {v.name!r} cannot hold station in surge, sway and yaw: its thrusters ({kinds}) "
+                     f"make no {' or '.join(missing)} at any azimuth angle (extended thrust configuration "
+                     f"matrix of rank {rank} < 3; rudders are not DP actuators)")
 
 
 @dataclass(frozen=True)

@@ -54,7 +54,7 @@ from hybridship.frames import ned_to_body, wrap_pi
 from hybridship.config import Float, Int, config_dataclass
 from hybridship.physics.model import DynamicModel
 from hybridship.sim import environment as env
-from hybridship.sim.allocation import ThrustAllocator, bollard_thrust_limits
+from hybridship.sim.allocation import ThrustAllocator, bollard_thrust_limits, check_station_keeping
 from hybridship.sim.dp import DPController
 
 __all__ = [
@@ -452,6 +452,7 @@ def _simulate(config: DPLossConfig, vessel, progress: bool):
     K = true_model.n_thrusters
     if K == 0:
         raise ValueError(f"vessel: {ves.name!r} has no thrusters; a DP scenario needs some")
+    check_station_keeping(ves)  # before any work: a DP that cannot hold all three DOF is no DP
     rho = ves.particulars.rho_water_kg_m3
     p = ves.particulars
     hull = env.HullDimensions(L_m=p.L_pp_m, B_m=p.B_m, T_m=p.T_m)
@@ -484,6 +485,9 @@ def _simulate(config: DPLossConfig, vessel, progress: bool):
     rpm = np.zeros(K)
     azimuth = np.array([t.fixed_angle_rad for t in ves.thrusters], float)
     rpm_decay = math.exp(-h / config.rpm_time_constant_s)
+    # The DP commands thrusters only: rudders stay amidships, given explicitly so that
+    # the physics and the log's <rudder>_azimuth_deg columns are the same numbers.
+    rudder = np.zeros(true_model.n_rudders) if true_model.n_rudders else None
     rec = _Record(n_sim // every_log + 1, K)
 
     one = np.empty(1)
@@ -511,7 +515,7 @@ def _simulate(config: DPLossConfig, vessel, progress: bool):
                 i = k // every_log
                 nu_dot, parts, thrusts = true_model.acceleration(eta, nu, rpm=rpm, azimuth_rad=azimuth,
                                                                  wind=wind_k, current=cur_k, tau_ext=tau_wave,
-                                                                 return_parts=True)
+                                                                 rudder_rad=rudder, return_parts=True)
                 rec.eta[i], rec.nu[i], rec.nu_dot[i] = eta, nu, nu_dot[0]
                 rec.parts[i], rec.thrust[i] = parts[0], thrusts[0]
                 rec.rpm[i], rec.az[i], rec.k[i] = rpm, azimuth, k
@@ -520,7 +524,7 @@ def _simulate(config: DPLossConfig, vessel, progress: bool):
             if k == n_sim:
                 break
             e1, n1 = true_model.step(eta, nu, dt_s=h, substeps=1, rpm=rpm, azimuth_rad=azimuth, wind=wind_k,
-                                     current=cur_k, tau_ext=tau_wave)
+                                     current=cur_k, tau_ext=tau_wave, rudder_rad=rudder)
             eta, nu = e1[0], n1[0]
             if not (np.all(np.isfinite(eta)) and np.all(np.isfinite(nu))):
                 raise FloatingPointError(f"simulation diverged at t = {t + h:g} s (seed {config.seed})")
@@ -530,7 +534,7 @@ def _simulate(config: DPLossConfig, vessel, progress: bool):
 
     df = _assemble_log(config, ves, cond, components, raos, rec.k, h, rec.eta, rec.nu, rec.nu_dot, rec.parts,
                        rec.thrust, rec.rpm, rec.az, dict(speed=wind_speed, dir=wind_dir, cur=cur_speed,
-                                                         cur_dir=cur_dir), noise)
+                                                         cur_dir=cur_dir), noise, rudder)
     df.attrs["conditions"] = cond.as_dict()
     df.attrs["seed"] = config.seed
     df.attrs["vessel"] = ves.name
@@ -543,8 +547,9 @@ _DECIMALS = {"pos": 4, "deg": 4, "vel": 5, "acc": 7, "rpm": 3, "load": 2, "frac"
 
 
 def _assemble_log(config, ves, cond, components, raos, rec_k, h, eta, nu, nu_dot, parts, thrust, rpm, az,
-                  envs, noise):
-    """Build the log DataFrame from the recorded LF samples, WF motion and noise."""
+                  envs, noise, rudder=None):
+    """Build the log DataFrame from the recorded LF samples, WF motion and noise (``rudder``:
+    the rudder angles [rad] the physics held through the whole run, or None without rudders)."""
     t = rec_k * h
     pos = eta[:, :2]
     # WF motion along the LF track, vectorised (same function as the DP's measurements).
@@ -577,6 +582,8 @@ def _assemble_log(config, ves, cond, components, raos, rec_k, h, eta, nu, nu_dot
         cols[rpm_col] = np.round(rpm[:, j], 2)
         if az_col is not None:
             cols[az_col] = np.round(deg(wrap_pi(az[:, j])), 2)
+    for r, rud in enumerate(ves.rudders):  # a rudder's angle is logged in its azimuth column
+        cols[f"{rud.name}_azimuth_deg"] = np.full(t.size, np.round(deg(rudder[r]), 2))
     cols["dp_active"] = dp_active
 
     # Ground truth, named like truthsim-dev's columns.
@@ -640,7 +647,9 @@ def simulate_dp_loss(config: DPLossConfig | None = None, vessel="gunnerus", prog
           noise; heading in [0, 360)), ``u_m_s``, ``v_m_s``, ``r_deg_s`` (LF + WF + noise),
           ``wind_speed_m_s``, ``wind_dir_deg`` (true wind + noise), ``<thruster>_rpm``
           (shaft speed feedback), ``<azimuth>_azimuth_deg`` (in [-180, 180)),
-          ``dp_active`` (1 before the shutdown, 0 from the first sample at or after it);
+          ``<rudder>_azimuth_deg`` for each rudder (0: the DP commands thrusters only and
+          the simulated rudders stay amidships), ``dp_active`` (1 before the shutdown, 0
+          from the first sample at or after it);
         * truth (noise-free): ``truth_{north,east}_m``, ``truth_heading_deg``,
           ``truth_{u,v}_mps``, ``truth_r_degps`` (LF + WF), the LF-only
           ``truth_{north,east}_lf_m``, ``truth_heading_lf_deg``,
@@ -660,7 +669,9 @@ def simulate_dp_loss(config: DPLossConfig | None = None, vessel="gunnerus", prog
     Raises
     ------
     ValueError
-        Bad vessel (a :class:`hybridship.vessel.VesselFileError`) or config.
+        Bad vessel (a :class:`hybridship.vessel.VesselFileError`) or config, or a vessel
+        whose thrusters cannot hold station in surge, sway and yaw
+        (:func:`hybridship.sim.allocation.check_station_keeping`), refused before any work.
     """
     config = DPLossConfig() if config is None else config
     if not isinstance(config, DPLossConfig):
@@ -783,8 +794,18 @@ def sweep(out_dir, seeds: Iterable[int], *, beaufort=(2, 5), fmt: str = "csv.gz"
         The log files, in the order of ``seeds``. ``out_dir / "scenarios.csv"`` (written
         atomically, after all logs) has one row per log: file, seed, the realised
         conditions (truthsim-dev's column names), and :func:`drift_statistics`. A sweep
-        into a folder that already has one keeps its rows of other logs (a rewritten log's
-        row is replaced), sorted by seed, so sweeps of several seed ranges add up.
+        into a folder that already has one keeps its rows of other seeds (a rewritten
+        seed's row is replaced: one row per seed), sorted by seed, so sweeps of several
+        seed ranges add up.
+
+    Raises
+    ------
+    ValueError
+        Before any simulation: bad seeds, format or config; a vessel that cannot hold
+        station (:func:`hybridship.sim.allocation.check_station_keeping`); an unreadable
+        ``scenarios.csv``; or a seed whose log is already in ``out_dir`` in another format
+        (the folder would hold the same scenario twice, and training on it would count it
+        twice). A log of the same seed and format is rewritten.
     """
     seeds = [s for s in seeds]
     if not seeds:
@@ -802,12 +823,12 @@ def sweep(out_dir, seeds: Iterable[int], *, beaufort=(2, 5), fmt: str = "csv.gz"
     configs = [DPLossConfig(seed=int(s), beaufort=beaufort, **config_overrides) for s in seeds]  # validate first
     model = DynamicModel(vessel)  # fail early on a bad vessel; reuse the loaded file
     ves = model.vessel
-    names = [t.name for t in ves.thrusters]
-    rotatable = [t.type == "azimuth" for t in ves.thrusters]
+    check_station_keeping(ves)
 
     from hybridship.logs.io import write_log
 
     out = Path(out_dir)
+    _refuse_other_formats(out, seeds, fmt)
     earlier = _earlier_summary(out / "scenarios.csv")  # before the work: a damaged file stops it here
     out.mkdir(parents=True, exist_ok=True)
     paths, rows = [], []
@@ -819,7 +840,7 @@ def sweep(out_dir, seeds: Iterable[int], *, beaufort=(2, 5), fmt: str = "csv.gz"
     for cfg in it:
         df, cond = _simulate(cfg, ves, progress=False)
         path = out / log_file_name(cfg.seed, fmt)
-        write_log(df, path, channel_names=names, rotatable=rotatable)
+        write_log(df, path, channel_names=ves.channel_names, rotatable=ves.rotatable)
         paths.append(path)
         heading_mode = "fixed" if cfg.heading_sp_deg is not None else cfg.heading_mode
         rows.append({"file": path.name, "seed": cfg.seed, **cond.as_dict(), "heading_mode": heading_mode,
@@ -827,10 +848,29 @@ def sweep(out_dir, seeds: Iterable[int], *, beaufort=(2, 5), fmt: str = "csv.gz"
                      **{k: v for k, v in drift_statistics(df).items() if k != "t_shutdown_s"}})
     summary = pd.DataFrame(rows)
     if earlier is not None:
-        kept = earlier[~earlier["file"].isin(summary["file"])]
+        # keyed by seed, not file: a seed rewritten in another format must not keep its old row
+        kept = earlier[~earlier["seed"].isin(summary["seed"]) & ~earlier["file"].isin(summary["file"])]
         summary = pd.concat([kept, summary], ignore_index=True).sort_values("seed", kind="stable")
     atomic_write(out / "scenarios.csv", lambda fh: fh.write(summary.round(4).to_csv(index=False).encode("utf-8")))
     return paths
+
+
+def _refuse_other_formats(out: Path, seeds, fmt: str) -> None:
+    """Refuse seeds whose log already exists in ``out`` in a format other than ``fmt``.
+
+    Refused rather than replaced: the sweep was not asked to delete a file (it may be the
+    only copy someone converted by hand), and the fix is one ``rm`` away.
+    """
+    clashes = [(s, other) for s in seeds for other in LOG_FORMATS
+               if other != fmt and (out / log_file_name(s, other)).exists()]
+    if clashes:
+        shown = ", ".join(str(out / log_file_name(s, other)) for s, other in clashes[:3])
+        more = f" and {len(clashes) - 3} more" if len(clashes) > 3 else ""
+        hit = sorted({s for s, _ in clashes})
+        which = f"seed {hit[0]} has" if len(hit) == 1 else f"{len(hit)} seeds have"
+        raise ValueError(f"out_dir: {which} a log there in another format already ({shown}{more}); a {fmt} copy "
+                         f"as well would be the same scenario twice (trained on twice): remove the old "
+                         f"file(s), sweep in their format, or use another folder")
 
 
 def _earlier_summary(path: Path) -> pd.DataFrame | None:
