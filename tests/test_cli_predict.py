@@ -101,6 +101,41 @@ def test_forecast_of_a_10_hz_log_is_on_its_grid_and_a_horizon_under_a_step_is_a_
     assert not (tmp_path / "short.csv").exists()
 
 
+def test_train_refuses_one_recording_twice(log_dir, tmp_path, capsys):
+    """A log and its copy in another format are one recording: training on both would count it
+    twice (and the leave-one-failure-out choices would see the left-out failure's copy)."""
+    from hybridship.logs.io import read_log
+
+    logs = tmp_path / "logs"
+    logs.mkdir()
+    for name in ("log1.csv.gz", "log2.csv.gz"):
+        (logs / name).write_bytes((log_dir / name).read_bytes())
+    write_log(read_log(log_dir / "log1.csv.gz"), logs / "log1_copy.parquet")
+    model = tmp_path / "m.npz"
+    assert main(["train", "--logs", str(logs), "--out", str(model), "--members", "2"]) == 1
+    err = capsys.readouterr().err.strip()
+    assert err.startswith("hybridship train: error: ") and "\n" not in err
+    assert f"{logs / 'log1_copy.parquet'} has the same samples as {logs / 'log1.csv.gz'}" in err
+    assert not model.exists()
+
+
+def test_fit_compares_samples_not_names():
+    from hybridship.predictors import HybridPredictor
+    from hybridship.predictors.training_logs import samples_digest
+    from hybridship.residual.ensemble import EnsembleConfig
+
+    m = DynamicModel("gunnerus")
+    log = physics_log(m, seed=1, current=(0.2, 2.0))
+    a = as_log_arrays(log, m.vessel)
+    assert samples_digest(a) == samples_digest(as_log_arrays(log.copy(), m.vessel))
+    nudged = log.copy()
+    nudged.loc[10, "north_m"] += 1e-3                 # similar is not identical
+    assert samples_digest(as_log_arrays(nudged, m.vessel)) != samples_digest(a)
+    hp = HybridPredictor(m.vessel, ensemble_config=EnsembleConfig(n_members=2, hidden=8, max_epochs=15))
+    with pytest.raises(ValueError, match=r"logs\[2\] has the same samples as logs\[0\]"):
+        hp.fit([log, nudged, log.copy()])
+
+
 def test_drift_table_layout_and_physics_log_error_near_zero():
     m = DynamicModel("gunnerus")
     arrays = as_log_arrays(physics_log(m, seed=5, duration_s=1100.0, t_shutdown_s=900.0), m.vessel)

@@ -41,6 +41,7 @@ from .forecast_setup import (FORECAST_HISTORY_S, _check_row_stride, _forecast_se
                              start_indices)
 from .model_file import load_model, save_model
 from .result import ForecastResult
+from .training_logs import check_distinct_logs, log_label
 
 __all__ = ["AFTER_STOP", "ENVIRONMENT_SOURCES", "HybridPredictor"]
 
@@ -285,6 +286,13 @@ class HybridPredictor:
             ``fraction=0`` for none) and becomes the model's ``calibration_config``, so that
             forecasts (and the model file) use the spread it was calibrated on.
 
+        Raises
+        ------
+        ValueError
+            A log that breaks the format or does not fit the vessel, or two logs with
+            identical samples (one recording twice, e.g. a CSV and a Parquet copy; see
+            :func:`~hybridship.predictors.training_logs.check_distinct_logs`), before any training.
+
         Notes
         -----
         With ``calibration.fraction > 0`` the last part (in time order) of each log's usable
@@ -307,7 +315,9 @@ class HybridPredictor:
         if not isinstance(cal, CalibrationConfig):
             raise TypeError(f"calibration: expected a CalibrationConfig, got {type(cal).__name__}")
         self.calibration_config = cal
-        logs = [as_log_arrays(log, self.model.vessel) for log in log_list(logs)]
+        given = log_list(logs)
+        logs = [as_log_arrays(log, self.model.vessel) for log in given]
+        check_distinct_logs(logs, [log_label(x, i) for i, x in enumerate(given)])  # before any training
         self.estimator = EnvironmentEstimator(self.model, self.environment_config)
         if self.environment == "estimator":
             self.estimator.fit(logs, dp_only=dp_only)

@@ -1,0 +1,72 @@
+"""Training logs that are one recording twice (a copy in another format, a file copied by hand).
+
+A model trained on a recording twice weighs it twice, and the choices ``fit`` makes by
+leaving one failure out at a time (the hull's yaw moment in a drift, the thrust-error
+prior) would still see the left-out failure in its copy. Copies are recognised by the
+content of the parsed samples, not by their file names or containers: the same samples
+give the same digest whether they were read from CSV, ``.csv.gz`` or Parquet.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import os
+
+import numpy as np
+
+__all__ = ["samples_digest", "check_distinct_logs", "log_label"]
+
+
+def samples_digest(arrays) -> str:
+    """sha256 of a log's parsed samples: times, position and heading, velocities, commands,
+    wind and ``dp_active`` (shape, dtype and bytes of each).
+
+    Parameters
+    ----------
+    arrays : hybridship.logs.io.LogArrays
+
+    Returns
+    -------
+    str
+        64 hex digits; equal only for bit-identical samples (two separate recordings never
+        share their sensor noise, so equal digests mean one recording twice).
+    """
+    h = hashlib.sha256()
+    for name in ("time_s", "eta", "nu", "rpm", "azimuth_rad", "wind", "dp_active"):
+        a = np.ascontiguousarray(getattr(arrays, name))
+        h.update(f"{name}:{a.dtype.str}:{a.shape};".encode())
+        h.update(a.tobytes())
+    return h.hexdigest()
+
+
+def log_label(log, index: int) -> str:
+    """How a message names training log ``index``: its path, else its position ``logs[i]``."""
+    return os.fspath(log) if isinstance(log, (str, os.PathLike)) else f"logs[{index}]"
+
+
+def check_distinct_logs(arrays, labels) -> None:
+    """Refuse training logs with identical samples (:func:`samples_digest`).
+
+    Parameters
+    ----------
+    arrays : sequence of LogArrays
+    labels : sequence of str
+        Names of the logs for the message (file paths where known).
+
+    Raises
+    ------
+    ValueError
+        Naming every pair of identical logs (one line each).
+    """
+    first: dict[str, str] = {}
+    pairs = []
+    for a, label in zip(arrays, labels):
+        key = samples_digest(a)
+        if key in first:
+            pairs.append((first[key], label))
+        else:
+            first[key] = label
+    if pairs:
+        raise ValueError("\n".join(f"logs: {b} has the same samples as {a} (one recording twice would be trained "
+                                   f"on twice); remove one of them" for a, b in pairs))
+
