@@ -149,6 +149,7 @@ def _check_log_path(path: Path, option: str) -> None:
 def _cmd_simulate(args) -> int:
     from hybridship.logs.io import write_log
     from hybridship.sim import scenario
+    from hybridship.sim.allocation import check_station_keeping
     from hybridship.vessel import load_vessel
 
     prefix = f"{_PROG} simulate"
@@ -170,8 +171,9 @@ def _cmd_simulate(args) -> int:
     try:
         vessel = load_vessel(args.vessel)
         overrides = dict(drift_s=args.drift_s, t_shutdown_s=args.t_shutdown_s, heading_mode=args.heading_mode)
-        # Validate the settings once before any (long) simulation starts.
+        # Validate the settings and the vessel once before any (long) simulation starts.
         scenario.DPLossConfig(seed=0, beaufort=tuple(args.beaufort), **overrides)
+        check_station_keeping(vessel)
     except (ValueError, TypeError) as exc:
         raise UsageError(problem_lines(exc, f"{prefix}: error: ")) from None
     progress = sys.stderr.isatty() if args.progress is None else args.progress

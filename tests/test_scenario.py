@@ -298,7 +298,7 @@ def test_a_vessel_that_cannot_hold_station_is_refused_before_any_work(tmp_path, 
     rc = main(["simulate", "--vessel", str(tanker), "--seed", "1", "--t-shutdown-s", "200", "--drift-s", "60",
                "--out", str(out), "--no-progress"])
     err = capsys.readouterr().err
-    assert rc != 0 and len(err.strip().splitlines()) == 1
+    assert rc == 2 and len(err.strip().splitlines()) == 1
     assert "hybridship simulate: error: vessel 'my_tanker' cannot hold station" in err and "rank 1 < 3" in err
     assert not out.exists()
 

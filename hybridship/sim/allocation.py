@@ -159,10 +159,7 @@ def _scaled_configuration(vessel):
 
 
 def _rank(a) -> int:
-    if a.size == 0:
-        return 0
-    s = np.linalg.svd(a, compute_uv=False)
-    return int(np.sum(s > _RANK_RTOL * max(1.0, s[0])))
+    return 0 if a.size == 0 else int(np.linalg.matrix_rank(a, tol=_RANK_RTOL * max(1.0, np.abs(a).max())))
 
 
 def station_keeping_rank(vessel) -> int:
