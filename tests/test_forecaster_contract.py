@@ -189,6 +189,7 @@ def test_a_horizon_under_one_step_is_refused_with_the_logs_step(kind, fitted, te
 
 
 @pytest.mark.parametrize("kind", KINDS)
+@pytest.mark.filterwarnings("ignore:log. its step is 0.1 s:UserWarning")  # the 1-Hz fit, on purpose
 def test_leads_and_times_are_on_the_grid_of_a_10_hz_log(kind, fitted, model):
     """The step is the log's (0.1 s), not the median of float differences (0.10000000000000142):
     200 steps read 20.0 s and every forecast time is one of the log's times."""
