@@ -327,7 +327,7 @@ def _add_forecast(sub) -> None:
 def _cmd_forecast(args) -> int:
     from .fileio import atomic_write
     from .predictors import HybridPredictor, ModelFileError
-    from .predictors.forecast_setup import HorizonError
+    from .predictors.forecast_setup import RequestError
 
     if not args.horizon_s > 0:
         raise UsageError(f"{_PROG} forecast: error: --horizon-s must be > 0, got {args.horizon_s}")
@@ -355,8 +355,8 @@ def _cmd_forecast(args) -> int:
                          f"written as plain CSV)")
     try:
         fc = hp.forecast(args.log, args.start_time, args.horizon_s, guard=not args.no_guard, commands=args.commands)
-    except HorizonError as exc:     # known only once the log's step is read: still a usage error
-        raise UsageError(f"{_PROG} forecast: error: {exc}") from None
+    except RequestError as exc:     # known only once the log is read: still the user's input
+        raise UsageError(problem_lines(exc, f"{_PROG} forecast: error: ")) from None
     df = fc.to_frame(quantiles=quantiles)
     atomic_write(args.out, lambda fh: fh.write(df.to_csv(index=False).encode("utf-8")))
     from .forecast_inputs import FaultFlags

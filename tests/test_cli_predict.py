@@ -72,6 +72,23 @@ def test_cli_errors_are_one_line_and_non_zero(log_dir, tmp_path, capsys):
     assert main(["train", "--logs", str(tmp_path / "nope"), "--out", str(tmp_path / "m.npz")]) == 2
 
 
+def test_a_forecast_request_the_log_cannot_serve_is_a_usage_error(log_dir, tmp_path, capsys):
+    """Start times that are not samples, and known commands beyond the log's end, are the
+    user's input (exit 2), though only the log's contents reveal them."""
+    model = tmp_path / "m.npz"
+    assert main(["train", "--logs", str(log_dir), "--out", str(model), "--members", "2"]) == 0
+    capsys.readouterr()
+    log = log_dir / "log1.csv.gz"
+    end = float(pd.read_csv(log).time_s.iloc[-1])
+    for extra, needle in ((["--start-time", "900.5"], "start_times_s: 900.5 s is not a sample time"),
+                          (["--start-time", f"{end - 10:g}", "--commands", "known"], "commands='known': the log ends")):
+        assert main(["forecast", "--model", str(model), "--log", str(log), "--out", str(tmp_path / "f.csv")]
+                    + extra) == 2
+        err = capsys.readouterr().err.strip()
+        assert err.startswith("hybridship forecast: error: ") and needle in err and "\n" not in err
+    assert not (tmp_path / "f.csv").exists()
+
+
 def test_forecast_of_a_10_hz_log_is_on_its_grid_and_a_horizon_under_a_step_is_a_usage_error(tmp_path, capsys):
     """``lead_s == 60`` selects the last row of each start and every ``time_s`` is a log time
     (the step was the median float difference, 0.10000000000000142 s); ``--horizon-s 0.4``

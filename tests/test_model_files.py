@@ -17,6 +17,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from hybridship.physics.model import DynamicModel
 from hybridship.predictors import HybridPredictor, ModelFileError
 from hybridship.residual.ensemble import EnsembleConfig
 from hybridship.residual.features import ResidualConfig
@@ -260,6 +261,19 @@ def test_another_vessels_model_is_refused(saved, model, tmp_path):
     p = _rewrite(saved, tmp_path, meta_change=lambda m: m.update(vessel_fingerprint="0" * 16), name="fp.npz")
     _refused(p, "trained for vessel 'gunnerus' with other parameters", vessel="gunnerus")
     _refused(p, "embedded description of vessel 'gunnerus' does not match its fingerprint")
+    # a model that learned the hull's yaw moment in a drift (a multiple of its vessel's Munk
+    # coefficient) is refused for another vessel as such, not as damaged metadata
+    from hybridship.residual.drift_hull import MUNK_MULTIPLES, munk_coefficient
+
+    yaw = float(MUNK_MULTIPLES[-1] * munk_coefficient(model))
+    p = _rewrite(saved, tmp_path, meta_change=lambda m: m.update(drift_hull=True, drift_yaw_uv_rad_per_m2=yaw),
+                 name="drift_yaw.npz")
+    assert HybridPredictor.load(p).drift_yaw_uv_rad_per_m2 == yaw
+    d["particulars"]["B_m"] *= 1.1                      # another Munk coefficient too
+    wider = vessel_from_dict(d)
+    assert munk_coefficient(DynamicModel(wider)) != munk_coefficient(model)
+    _refused(p, r"trained for vessel 'gunnerus' with other parameters; refusing to use it with vessel "
+                r"'gunnerus-sister'", vessel=wider)
 
 
 class _Payload:

@@ -21,7 +21,8 @@ from ..logs.ingest import ingest
 from ..logs.io import LogArrays
 from ..residual.features import ResidualConfig
 
-__all__ = ["COMMAND_MODES", "FORECAST_HISTORY_S", "HorizonError", "as_log_arrays", "forecast_step_s", "start_indices"]
+__all__ = ["COMMAND_MODES", "FORECAST_HISTORY_S", "HorizonError", "RequestError", "as_log_arrays", "forecast_step_s",
+           "start_indices"]
 
 #: Seconds of log before the earliest start that a forecast reads (at least): the hybrid's
 #: environment window. Every forecaster reads the same rows, so the start-window checks see
@@ -66,23 +67,28 @@ def start_indices(arrays: LogArrays, start_times_s) -> np.ndarray:
     t = arrays.time_s
     st = np.atleast_1d(np.asarray(start_times_s, dtype=float))
     if st.size == 0:
-        raise ValueError("start_times_s: at least one start time is needed")
+        raise RequestError("start_times_s: at least one start time is needed")
     if not np.all(np.isfinite(st)):
-        raise ValueError("start_times_s: contains NaN or inf")
+        raise RequestError("start_times_s: contains NaN or inf")
     idx = np.clip(np.searchsorted(t, st), 0, len(t) - 1)
     prev = np.clip(idx - 1, 0, len(t) - 1)
     idx = np.where(np.abs(t[prev] - st) < np.abs(t[idx] - st), prev, idx)
     dt = float(np.median(np.diff(t))) if len(t) > 1 else 1.0
     bad = np.abs(t[idx] - st) > 0.25 * dt
     if bad.any():
-        raise ValueError(f"start_times_s: {st[bad][0]} s is not a sample time of the log "
+        raise RequestError(f"start_times_s: {st[bad][0]} s is not a sample time of the log "
                          f"(log spans {t[0]}..{t[-1]} s, dt {dt:g} s)")
     return idx
 
 
-class HorizonError(ValueError):
-    """A forecast horizon the log's step cannot give (shorter than one step); the command
-    line reports it as a usage error."""
+class RequestError(ValueError):
+    """A forecast request the log cannot serve (start times that are not its samples, a
+    horizon shorter than its step, known commands beyond its end): the caller's input, not
+    the data, is wrong, and the command line reports it as a usage error (exit status 2)."""
+
+
+class HorizonError(RequestError):
+    """A forecast horizon the log's step cannot give (shorter than one step)."""
 
 
 def forecast_step_s(arrays: LogArrays) -> float:
@@ -155,7 +161,7 @@ def _known_command_steps(arrays: LogArrays, idx: np.ndarray, H: int, rpm0: np.nd
     last = idx + H - 1
     if np.any(last >= n):
         k = int(np.argmax(last >= n))
-        raise ValueError(f"commands='known': the log ends at {arrays.time_s[-1]:g} s, but the start at "
+        raise RequestError(f"commands='known': the log ends at {arrays.time_s[-1]:g} s, but the start at "
                          f"{arrays.time_s[idx[k]]:g} s needs logged commands for {H} steps after it; "
                          "use commands='held' or an earlier start time")
     rows = idx[:, None] + np.arange(H)[None, :]

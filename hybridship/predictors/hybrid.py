@@ -78,6 +78,10 @@ class HybridPredictor:
         Apply the out-of-envelope guard by default in :meth:`forecast`.
     guard_quantile : float
         Quantile of training Mahalanobis distances where shrinking starts.
+    stop_after_failure : bool
+        Take the thrusters as stopped (rpm 0) in a forecast that starts where station keeping
+        is off (``dp_active == 0``: a power failure), instead of holding the logged rpm (the
+        shaft is still running down, and holding that for a minute would push every forecast).
     environment : {"estimator", "mean"}
         The slowly varying part of the residual. ``"estimator"`` (default): the
         environment estimator (:mod:`hybridship.residual.environment`: current, load and

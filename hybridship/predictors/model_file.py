@@ -174,15 +174,14 @@ def load_model(cls, path, vessel=None):
     code from the file); see :meth:`~hybridship.predictors.hybrid.HybridPredictor.load`.
 
     The steps: read the arrays, check the header (format, version) and the content
-    checksum, build the predictor from its settings and vessel, check the vessel against
-    the fingerprint, then restore the learned state (nets, guard, thrust regime, spread
+    checksum, build the predictor from its settings and vessel (checking the vessel against
+    the fingerprint before any setting that depends on it), then restore the learned state (nets, guard, thrust regime, spread
     calibration, environment prior, command regime).
     """
     path = Path(path)
     data = _read_arrays(path)
     meta = _read_checked_metadata(data, path)
-    obj, embedded, state = _build_predictor(cls, meta, vessel, path)
-    _check_vessel(obj, meta, state["fingerprint"], embedded, path)
+    obj, embedded, state = _build_predictor(cls, meta, vessel, path)   # checks the vessel
     _restore_learned_state(obj, data, state, path)
     obj.training_info = meta.get("training_info", {})
     return obj
@@ -267,6 +266,9 @@ def _build_predictor(cls, meta: dict, vessel, path: Path):
                   drift_hull=_checked_flag(meta, "drift_hull") if meta["format_version"] >= 10 else False)
         if meta["format_version"] >= 9:
             obj.wind_error_dt_s = _checked_wind_error_dt(meta["wind_error_dt_s"])
+        # the vessel first: the drift-yaw candidates below are multiples of this vessel's Munk
+        # coefficient, and another vessel's model must be refused as such
+        _check_vessel(obj, meta, meta["vessel_fingerprint"], embedded, path)
         if meta["format_version"] >= 10:
             obj.drift_yaw_uv_rad_per_m2 = _checked_drift_yaw(meta["drift_yaw_uv_rad_per_m2"], obj)
             obj._drift_yaw_in_filter = _checked_flag(meta, "drift_yaw_in_filter") if meta["format_version"] >= 11 \

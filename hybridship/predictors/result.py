@@ -29,7 +29,9 @@ class ForecastResult:
     nu : ndarray, shape (S, H+1, 3)
         ``[u_m_s, v_m_s, r_rad_s]``.
     eta_std : ndarray, shape (S, H+1, 3), or None
-        Ensemble standard deviation of ``eta`` [m, m, rad].
+        One-sigma spread of ``eta`` [m, m, rad]: for the hybrid the calibrated spread by
+        default (see :meth:`HybridPredictor.forecast`, ``calibrated``), otherwise the
+        ensemble's standard deviation; None for forecasters without a spread.
     guard_weight : ndarray, shape (S, H+1), or None
         The guard's shrink factor applied at each step (0..1).
     flags : dict of str to ndarray of bool, shape (S,), or None
