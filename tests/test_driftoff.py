@@ -222,6 +222,17 @@ def test_weather_samples_stay_in_the_range_of_a_weather_state():
                            settings=DriftOffSettings(n_samples=10, horizon_s=60.0, radii_m=(5.0,)))
     assert np.isfinite(r.excursion_m).all()
     assert MAX_HS_M == 20.0 and MAX_TP_S == 30.0
+    # drawn heights no steeper than waves get (DNV-RP-C205), or than the state itself
+    from hybridship.driftoff.weather import limiting_hs_m
+
+    assert math.isclose(float(limiting_hs_m(8.0)), 9.81 * 64 / (2 * np.pi * 15)) and float(limiting_hs_m(20.0)) > 20.0
+    state = WeatherState(hs_m=2.0, tp_s=10.0)
+    steep = sample_environment(state, WeatherUncertainty(hs_m=50.0, tp_s=100.0), 400, np.random.default_rng(1),
+                               duration_s=60.0, dt_s=1.0, n_wave=20)
+    w, amp = steep.waves[0], steep.waves[1]
+    hs = 4.0 * np.sqrt(0.5 * (amp**2).sum(axis=1))                # the components' Hs, per sample
+    tp = 2 * np.pi / w[np.arange(len(w)), np.argmax(amp, axis=1)]  # about the drawn Tp
+    assert hs.max() > 2.0 and np.all(hs <= 1.5 * limiting_hs_m(tp) + 1e-9)
 
 
 @pytest.mark.parametrize("kwargs, field", [

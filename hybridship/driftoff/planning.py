@@ -271,6 +271,10 @@ def simulate_blackouts(vessel, weather: WeatherState, headings_rad, *, uncertain
         tile(envs.gust_f_hz), tile(envs.gust_amp_m_s), tile(envs.gust_phase_rad), tile(envs.current),
         np.zeros((H * N, 3)), tuple(tile(w) for w in envs.waves), hull_array(ves), st.dt_s, st.n_steps,
         np.asarray(st.radii_m), np.asarray(st.reaction_times_s), keep_tracks)
+    if not np.all(np.isfinite(exc)):  # a diverged drift is no "never reached"
+        raise FloatingPointError(f"weather: {int((~np.isfinite(exc)).any(axis=-1).sum())} of {exc.shape[0]} "
+                                 f"drifts diverged (state index {index}): the weather or its spread is beyond "
+                                 f"what the models are meant for")
     R, Q = len(st.radii_m), len(st.reaction_times_s)
     rel = np.mod(weather.wind_dir_from_rad - psi, 2.0 * np.pi)
     return DriftOffResult(headings_rad=psi, weather_rel_rad=rel, radii_m=np.asarray(st.radii_m),

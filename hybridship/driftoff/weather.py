@@ -3,8 +3,9 @@
 A :class:`WeatherState` holds means (SI units and radians inside); a
 :class:`WeatherUncertainty` the standard deviations the Monte-Carlo samples draw from
 (normal, clipped to the range a :class:`WeatherState` allows: speeds and heights to
-``[0, max]``, periods to ``[1 s, MAX_TP_S]``, so that a wide spread cannot draw a storm the
-models are not meant for). :func:`read_weather_table`
+``[0, max]``, periods to ``[1 s, MAX_TP_S]``, and heights to the limiting steepness of
+:func:`limiting_hs_m`, or the state's own where it is steeper, so that a wide spread
+cannot draw a sea the models are not meant for). :func:`read_weather_table`
 reads an hourly hindcast (or any list of states) from CSV; its columns, degrees at this
 edge as everywhere in the project's files:
 
@@ -42,7 +43,7 @@ from ..forecast_inputs.limits import Envelope, check_number
 from ..sim import environment as env
 
 __all__ = ["WeatherState", "WeatherUncertainty", "TABLE_COLUMNS", "read_weather_table", "states_to_frame",
-           "SampledEnvironment", "sample_environment"]
+           "SampledEnvironment", "sample_environment", "limiting_hs_m"]
 
 #: Required columns of a weather table (see the module notes), and the optional ones.
 TABLE_COLUMNS = ("wind_speed_m_s", "wind_dir_deg", "hs_m", "tp_s", "wave_dir_deg", "current_m_s",
@@ -67,6 +68,14 @@ MAX_HS_M = 20.0
 MAX_TP_S = 30.0
 #: Shortest peak period [s]: shorter waves do not move a ship.
 MIN_TP_S = 1.0
+
+
+def limiting_hs_m(tp_s):
+    """Largest significant wave height [m] at peak period ``tp_s`` [s]: the limiting
+    steepness ``S_p = 2 pi Hs / (g Tp^2)`` of DNV-RP-C205 (sec. 3.5.5), 1/15 for Tp <= 8 s,
+    1/25 for Tp >= 15 s, linear in between."""
+    tp = np.asarray(tp_s, dtype=float)
+    return np.interp(tp, [8.0, 15.0], [1.0 / 15.0, 1.0 / 25.0]) * 9.81 * tp**2 / (2.0 * np.pi)
 
 
 @config_dataclass(frozen=True, prefix="weather")
@@ -248,8 +257,11 @@ def sample_environment(state: WeatherState, uncertainty: WeatherUncertainty | No
     # clipped to the range a WeatherState allows (beyond it the drift would diverge)
     wind = np.clip(s.wind_speed_m_s + u.wind_speed_m_s * z[:, 0], 0.0, MAX_WIND_M_S)
     wind_dir = s.wind_dir_from_rad + u.wind_dir_rad * z[:, 1]
-    hs = np.clip(s.hs_m + u.hs_m * z[:, 2], 0.0, MAX_HS_M)
     tp = np.clip(s.tp_s + u.tp_s * z[:, 3], MIN_TP_S, MAX_TP_S)
+    # and no steeper than waves get (a spread drew Hs 20 m at Tp 2 s, and the drift
+    # diverged), or than the state itself where it is steeper: a spread adds no constraint
+    steepest = max(1.0, s.hs_m / float(limiting_hs_m(s.tp_s)))
+    hs = np.clip(s.hs_m + u.hs_m * z[:, 2], 0.0, np.minimum(MAX_HS_M, steepest * limiting_hs_m(tp)))
     wave_dir = s.wave_dir_from_rad + u.wave_dir_rad * z[:, 4]
     cur = np.clip(s.current_speed_m_s + u.current_speed_m_s * z[:, 5], 0.0, MAX_CURRENT_M_S)
     cur_dir = s.current_dir_to_rad + u.current_dir_rad * z[:, 6]
