@@ -271,7 +271,7 @@ def simulate_blackouts(vessel, weather: WeatherState, headings_rad, *, uncertain
         tile(envs.gust_f_hz), tile(envs.gust_amp_m_s), tile(envs.gust_phase_rad), tile(envs.current),
         np.zeros((H * N, 3)), tuple(tile(w) for w in envs.waves), hull_array(ves), st.dt_s, st.n_steps,
         np.asarray(st.radii_m), np.asarray(st.reaction_times_s), keep_tracks)
-    if not np.all(np.isfinite(exc)):  # a diverged drift is no "never reached"
+    if not np.all(np.isfinite(exc)):  # diverged within the reaction times: no result, not "never reached"
         raise FloatingPointError(f"weather: {int((~np.isfinite(exc)).any(axis=-1).sum())} of {exc.shape[0]} "
                                  f"drifts diverged (state index {index}): the weather or its spread is beyond "
                                  f"what the models are meant for")

@@ -75,7 +75,7 @@ def limiting_hs_m(tp_s):
     steepness ``S_p = 2 pi Hs / (g Tp^2)`` of DNV-RP-C205 (sec. 3.5.5), 1/15 for Tp <= 8 s,
     1/25 for Tp >= 15 s, linear in between."""
     tp = np.asarray(tp_s, dtype=float)
-    return np.interp(tp, [8.0, 15.0], [1.0 / 15.0, 1.0 / 25.0]) * 9.81 * tp**2 / (2.0 * np.pi)
+    return np.interp(tp, [8.0, 15.0], [1.0 / 15.0, 1.0 / 25.0]) * env.G_M_S2 * tp**2 / (2.0 * np.pi)
 
 
 @config_dataclass(frozen=True, prefix="weather")

@@ -307,6 +307,10 @@ class Window:
         self.notes.append(note)
 
 
+#: The end of :func:`detect_missing_samples`' note: the repair, dropped when the start is refused.
+VALID_USED = ": valid samples used"
+
+
 def detect_missing_samples(view: LogView, win: Window) -> None:
     """Missing samples in the window.
 
@@ -334,9 +338,7 @@ def detect_missing_samples(view: LogView, win: Window) -> None:
     if cols or n_missing:
         what = f"missing {', '.join(cols)}" if cols else ""
         gap = f"{n_missing} missing sample(s)" if n_missing else ""
-        # the ending is start_window._USED (dropped from the note when the start is refused)
-        win.flag(FaultFlags.NAN_IN_WINDOW,
-                 f"{'; '.join(x for x in (what, gap) if x)} in the window: valid samples used")
+        win.flag(FaultFlags.NAN_IN_WINDOW, f"{'; '.join(x for x in (what, gap) if x)} in the window{VALID_USED}")
 
 
 def detect_late_samples(view: LogView, win: Window, settings: WindowSettings) -> None:

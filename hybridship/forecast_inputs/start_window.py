@@ -84,7 +84,7 @@ import pandas as pd
 
 from ..logs.ingest import SortedLog, ingest_with_report
 from ..logs.io import LogArrays
-from .faults import (FaultFlags, LogView, StartWindowError, Window, WindowSettings, detect_dropped_wind,
+from .faults import (VALID_USED, FaultFlags, LogView, StartWindowError, Window, WindowSettings, detect_dropped_wind,
                      detect_frozen_channels, detect_heading_wrap, detect_late_samples, detect_missing_samples,
                      detect_position_jumps, detect_too_little_valid, rederive_velocities)
 
@@ -267,9 +267,6 @@ def assess_start_window(
     return result
 
 
-_USED = ": valid samples used"  # the end of detect_missing_samples' note
-
-
 def _assess_start(view: LogView, i: int, settings: WindowSettings):
     """Run the detectors on the window of start row ``i``.
 
@@ -284,7 +281,7 @@ def _assess_start(view: LogView, i: int, settings: WindowSettings):
     nu_w = rederive_velocities(view, win)
     if detect_too_little_valid(view, win, settings):
         # the refusal first; the other findings as what led to it (no "valid samples used")
-        win.notes[:] = [win.notes[-1]] + [n.replace(_USED, "") for n in win.notes[:-1]]
+        win.notes[:] = [win.notes[-1]] + [n.replace(VALID_USED, "") for n in win.notes[:-1]]
         return win, None
     eta0, nu0 = _start_values(view, win, nu_w)
     return win, (eta0, nu0, detect_dropped_wind(view, win))

@@ -73,11 +73,11 @@ def start_indices(arrays: LogArrays, start_times_s) -> np.ndarray:
     idx = np.clip(np.searchsorted(t, st), 0, len(t) - 1)
     prev = np.clip(idx - 1, 0, len(t) - 1)
     idx = np.where(np.abs(t[prev] - st) < np.abs(t[idx] - st), prev, idx)
-    dt = float(np.median(np.diff(t))) if len(t) > 1 else 1.0
+    dt = forecast_step_s(arrays)
     bad = np.abs(t[idx] - st) > 0.25 * dt
     if bad.any():
         raise RequestError(f"start_times_s: {st[bad][0]} s is not a sample time of the log "
-                         f"(log spans {t[0]}..{t[-1]} s, dt {dt:g} s)")
+                           f"(log spans {t[0]}..{t[-1]} s, dt {dt:g} s)")
     return idx
 
 
@@ -162,8 +162,8 @@ def _known_command_steps(arrays: LogArrays, idx: np.ndarray, H: int, rpm0: np.nd
     if np.any(last >= n):
         k = int(np.argmax(last >= n))
         raise RequestError(f"commands='known': the log ends at {arrays.time_s[-1]:g} s, but the start at "
-                         f"{arrays.time_s[idx[k]]:g} s needs logged commands for {H} steps after it; "
-                         "use commands='held' or an earlier start time")
+                           f"{arrays.time_s[idx[k]]:g} s needs logged commands for {H} steps after it; "
+                           "use commands='held' or an earlier start time")
     rows = idx[:, None] + np.arange(H)[None, :]
     rpm, az = arrays.rpm[rows], arrays.azimuth_rad[rows]          # (S, H, K), copies
     rpm[:, 0], az[:, 0] = rpm0, az0

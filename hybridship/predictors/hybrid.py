@@ -763,7 +763,7 @@ class HybridPredictor:
         st = _forecast_setup(self.model, self.residual_config, log, start_times_s, horizon_s,
                              self.stop_after_failure, commands, history_s=self.history_s,
                              wind_forecast=self.wind_forecast)
-        self._warn_other_rate(st.arrays.dt_s)
+        self._warn_other_rate(st.dt)
         E = self.ensemble.n_members
         sigma_b = None
         if self.environment == "estimator":

@@ -175,8 +175,8 @@ def load_model(cls, path, vessel=None):
 
     The steps: read the arrays, check the header (format, version) and the content
     checksum, build the predictor from its settings and vessel (checking the vessel against
-    the fingerprint before any setting that depends on it), then restore the learned state (nets, guard, thrust regime, spread
-    calibration, environment prior, command regime).
+    the fingerprint before any setting that depends on it), then restore the learned state
+    (nets, guard, thrust regime, spread calibration, environment prior, command regime).
     """
     path = Path(path)
     data = _read_arrays(path)
