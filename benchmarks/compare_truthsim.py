@@ -36,7 +36,8 @@ from hybridship.sim.environment import SeaState  # noqa: E402
 from hybridship.sim.scenario import DPLossConfig, drift_statistics, simulate_dp_loss  # noqa: E402
 
 ROOT = Path(__file__).resolve().parents[1]
-TRUTHSIM = Path("/work/shared/data/truthsim-dev")
+#: ``../shared/data/truthsim-dev`` beside the repository (data never go into it).
+TRUTHSIM = ROOT.parent / "shared" / "data" / "truthsim-dev"
 DRIFT_S = 600.0
 
 
@@ -65,6 +66,8 @@ def main(argv=None) -> int:
     ap.add_argument("--work-dir", type=Path, default=None, help="where to write our matched logs (default: temporary)")
     ap.add_argument("--out", type=Path, default=ROOT / "docs" / "figures" / "drift_comparison.png")
     args = ap.parse_args(argv)
+    if not (args.truthsim / "scenarios.csv").is_file():
+        ap.error(f"--truthsim: expected a truthsim-dev folder with scenarios.csv, not found at {args.truthsim}")
 
     summary = pd.read_csv(args.truthsim / "scenarios.csv")
     tmp = None
