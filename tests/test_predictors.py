@@ -87,6 +87,11 @@ def test_save_load_round_trip_gives_identical_forecasts(model, current_logs, tmp
     with pytest.warns(UserWarning, match=r"log: its step is 2 s, but the model was trained on logs with a step "
                                          r"of 1 s"):
         hp2.forecast(current_logs[2].iloc[::2].reset_index(drop=True), [900.0], 30)
+    # and that its logs had wind: a log without wind columns is forecast without the wind's force
+    assert hp2.training_info["trained_with_wind"] is True
+    with pytest.warns(UserWarning, match=r"log: no wind columns \(wind_speed_m_s, wind_dir_deg\), but the model "
+                                         r"was trained on logs with wind"):
+        hp2.forecast(current_logs[2].drop(columns=["wind_speed_m_s", "wind_dir_deg"]), [900.0], 30)
 
 
 def test_damaged_or_foreign_model_files_are_refused(model, current_logs, tmp_path):

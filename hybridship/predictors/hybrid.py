@@ -365,6 +365,18 @@ class HybridPredictor:
                           f"{', '.join(f'{x:g}' for x in trained)} s; forecasts at another rate are less "
                           f"accurate: train on logs at this rate", UserWarning, stacklevel=3)
 
+    def _warn_no_wind(self, arrays) -> None:
+        """Warn when the log has no wind columns but the model was trained on logs with wind:
+        the format makes wind optional, so this is no fault, yet the forecast then leaves out
+        the wind's force, which the nets were never trained to make up for. (Wind columns
+        without a valid sample are a dead sensor, flagged ``wind_dropped`` instead.)"""
+        if self.training_info.get("trained_with_wind") and not arrays.wind_columns:
+            import warnings
+
+            warnings.warn("log: no wind columns (wind_speed_m_s, wind_dir_deg), but the model was trained on "
+                          "logs with wind; the forecast leaves out the wind's force: give the wind columns",
+                          UserWarning, stacklevel=3)
+
     def _fit_drift_hull(self, logs, horizon_s: float):
         """With ``drift_hull`` and at least three failures in the training logs: the hull's yaw
         coefficient in a drift (:func:`~hybridship.residual.drift_hull.choose_coefficient` on
@@ -539,6 +551,7 @@ class HybridPredictor:
         self.thrust_regime = ThrustRegime.fit(thr)
         self.training_info = {"n_rows": int(X.shape[0]), "row_stride": stride,
                               "log_step_s": sorted({round(float(a.dt_s), 6) for a in logs}),
+                              "trained_with_wind": any(a.has_wind for a in logs),
                               "epochs": self.ensemble.history["epochs"],
                               "best_val_mse": self.ensemble.history["best_val_mse"],
                               "residual_std": residual_std, "training": self.training}
@@ -764,6 +777,7 @@ class HybridPredictor:
                              self.stop_after_failure, commands, history_s=self.history_s,
                              wind_forecast=self.wind_forecast)
         self._warn_other_rate(st.dt)
+        self._warn_no_wind(st.arrays)
         E = self.ensemble.n_members
         sigma_b = None
         if self.environment == "estimator":
