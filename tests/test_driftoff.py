@@ -300,14 +300,15 @@ def test_cli_planning_writes_the_report(tmp_path, capsys):
 
     out = tmp_path / "plan"
     out.mkdir()
-    for name in ("polar.png", "notes.txt"):  # an earlier run's figure; a file of the user's
+    for name in ("polar.png", "season.csv", "notes.txt"):  # an earlier run's figure and season; a user's file
         (out / name).write_text("earlier")
     assert main(["drift-off", "planning", "--out", str(out), "--samples", "3", "--headings-deg", "0,90",
                  "--horizon-s", "90", "--no-plots"]) == 0
     times = pd.read_csv(out / "times.csv")
     assert len(times) == 2 * 3 and (out / "summary.md").is_file() and (out / "watch.csv").is_file()
-    # no figure of the earlier run beside the new tables; other files untouched
-    assert not (out / "polar.png").exists() and (out / "notes.txt").read_text() == "earlier"
+    # no figure of the earlier run, nor its season, beside the new tables; other files untouched
+    assert not (out / "polar.png").exists() and not (out / "season.csv").exists()
+    assert (out / "notes.txt").read_text() == "earlier"
     first = capsys.readouterr().out
     assert "Time to reach" in first and "| vessel spread | 1 x [true_vessel] |" in first
     # a vessel file without [true_vessel] factors has no spread to draw, and the summary says so
@@ -404,11 +405,17 @@ def test_cli_season_in_this_process(tmp_path):
     table = tmp_path / "weather.csv"
     states_to_frame(states, ["h0", "h1"]).to_csv(table, index=False)
     out = tmp_path / "season"
+    out.mkdir()
+    for name in ("times.csv", "watch.csv", "notes.txt"):    # an earlier planning report; a user's file
+        (out / name).write_text("earlier")
     assert main(["drift-off", "season", "--weather-table", str(table), "--scheduler", "none", "--samples", "3",
                  "--headings-deg", "0,90", "--horizon-s", "90", "--no-progress", "--out", str(out)]) == 0
     season = pd.read_csv(out / "season.csv")
     assert len(season) == 2 * 2 * 3 and list(season["label"].unique()) == ["h0", "h1"]
     assert (out / "operability.csv").is_file() and (out / "summary.md").is_file()
+    # the planning tables would read as the season's: gone; the user's file untouched
+    assert not (out / "times.csv").exists() and not (out / "watch.csv").exists()
+    assert (out / "notes.txt").read_text() == "earlier"
 
 
 def test_cli_live_on_a_truthsim_log(tmp_path):

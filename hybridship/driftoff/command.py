@@ -277,7 +277,7 @@ def _current_text(est) -> str:
 
 
 def _cmd_season(args) -> int:
-    from .report import markdown_table, write_frame, write_text
+    from .report import markdown_table, write_season_report
     from .season import require_dask, season_sweep
     from .weather import read_weather_table
 
@@ -305,16 +305,13 @@ def _cmd_season(args) -> int:
     res = season_sweep(args.vessel, states, [math.radians(h) for h in args.headings_deg], settings=st,
                        labels=labels, quantile=args.quantile, scheduler=scheduler, n_workers=args.workers,
                        chunk_size=args.chunk_size, progress=progress)
-    out = Path(args.out)
-    write_frame(out / "season.csv", res.to_frame())
     op = res.operability(args.max_p_exceed)
-    write_frame(out / "operability.csv", op)
     n = len(states) * len(args.headings_deg) * st.n_samples
     text = (f"# Drift-off season sweep\n\n{len(states)} weather states x {len(args.headings_deg)} headings x "
             f"{st.n_samples} samples = {n} blackouts of {model.vessel.name} in {res.wall_s:.1f} s "
             f"({n / res.wall_s:.0f} samples/s; scheduler {args.scheduler}).\n\n"
             f"## Share of states with P(exceed) <= {args.max_p_exceed:g}, per heading, radius and reaction time\n\n"
             + markdown_table(op) + "\n")
-    write_text(out / "summary.md", text)
+    write_season_report(Path(args.out), res.to_frame(), op, text)
     print(text)
     return 0

@@ -6,7 +6,12 @@
   line per heading, with the reaction times marked;
 * :func:`write_report`: ``summary.md`` (one page), ``times.csv`` and ``watch.csv``
   (:meth:`~hybridship.driftoff.planning.DriftOffResult.summary_frames`) and the two
-  figures, each written atomically.
+  figures, each written atomically;
+* :func:`write_season_report`: a season sweep's ``summary.md``, ``season.csv`` and
+  ``operability.csv``.
+
+An output folder holds one report: each writer removes the files only the other one makes
+(a season's tables beside a planning summary would read as its own).
 """
 
 from __future__ import annotations
@@ -21,7 +26,12 @@ import pandas as pd
 from ..fileio import atomic_write, remove_stale
 from .planning import DriftOffResult
 
-__all__ = ["polar_plot", "exceedance_plot", "markdown_table", "write_report", "write_text", "write_frame"]
+__all__ = ["polar_plot", "exceedance_plot", "markdown_table", "write_report", "write_season_report", "write_text",
+           "write_frame"]
+
+#: The files only :func:`write_report` makes (planning and live), and only :func:`write_season_report`.
+REPORT_ONLY_FILES = ("times.csv", "watch.csv", "polar.png", "exceedance.png")
+SEASON_ONLY_FILES = ("season.csv", "operability.csv")
 
 
 def write_text(path, text: str) -> Path:
@@ -129,6 +139,18 @@ def write_report(result: DriftOffResult, out_dir, *, title: str = "Drift-off ana
         lines += ["![time to reach vs wind direction](polar.png)", "", "![exceedance curves](exceedance.png)", ""]
     contents["summary.md"] = "\n".join(lines).encode("utf-8")
     paths = {name: atomic_write(out / name, lambda fh, b=data: fh.write(b)) for name, data in contents.items()}
-    if not plots:  # no figure of an earlier run beside these tables
-        remove_stale(out, ("polar.png", "exceedance.png"))
+    # no figure of an earlier run (without plots), nor an earlier season's tables, beside these
+    remove_stale(out, SEASON_ONLY_FILES + (() if plots else ("polar.png", "exceedance.png")))
+    return paths
+
+
+def write_season_report(out_dir, season: pd.DataFrame, operability: pd.DataFrame, summary: str) -> dict:
+    """Write a season sweep's ``season.csv``, ``operability.csv`` and ``summary.md`` to
+    ``out_dir`` (each atomically, all made before the first is written) and remove the files
+    only :func:`write_report` makes; returns the paths by name."""
+    out = Path(out_dir)
+    contents = {"season.csv": _csv_bytes(season), "operability.csv": _csv_bytes(operability),
+                "summary.md": summary.encode("utf-8")}
+    paths = {name: atomic_write(out / name, lambda fh, b=data: fh.write(b)) for name, data in contents.items()}
+    remove_stale(out, REPORT_ONLY_FILES)
     return paths
