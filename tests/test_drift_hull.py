@@ -181,11 +181,12 @@ def test_the_filter_uses_the_coefficient_after_a_failure_so_the_yaw_load_does_no
 
 
 def test_a_gap_in_a_training_drift_is_not_scored_across(model, heavy_sway):
-    """A training log missing 20 s of its drift: fit still chooses, from the drift before the gap."""
+    """A training log missing 20 s of its drift: fit still chooses, from the drift before the
+    gap; three failures are enough to choose."""
     logs = [log.copy() for log in heavy_sway[0][:3]]
     logs[0] = logs[0].drop(index=range(900, 920)).reset_index(drop=True)
     hp = HybridPredictor(model.vessel, ensemble_config=TINY).fit(logs)
-    assert hp.training_info["drift_hull"]["n_failures"] == 3
+    assert hp.training_info["drift_hull"]["n_failures"] == 3 and hp.drift_yaw_uv_rad_per_m2 != 0.0
 
 
 def test_fit_needs_three_failures_and_the_option(model, heavy_sway):
@@ -193,9 +194,8 @@ def test_fit_needs_three_failures_and_the_option(model, heavy_sway):
     two = HybridPredictor(model.vessel, ensemble_config=TINY).fit(logs[:2])
     off = HybridPredictor(model.vessel, ensemble_config=TINY, drift_hull=False).fit(logs)
     held = HybridPredictor(model.vessel, ensemble_config=TINY, stop_after_failure=False).fit(logs)
-    for hp in (two, off, held):
+    for hp in (two, off, held):        # with three failures and the option, it does: the test above
         assert "drift_hull" not in hp.training_info and hp.drift_yaw_uv_rad_per_m2 == 0.0
-    assert HybridPredictor(model.vessel, ensemble_config=TINY).fit(logs).drift_yaw_uv_rad_per_m2 != 0.0
 
 
 def test_only_forecasts_that_start_after_a_failure_use_it(model):
@@ -220,7 +220,24 @@ def test_only_forecasts_that_start_after_a_failure_use_it(model):
     np.testing.assert_array_equal(with_k, mean.forecast(log, starts, 60.0).eta)
 
 
-def test_the_drift_benchmark_chooses_it_without_the_scored_failure(model, heavy_sway, monkeypatch):
+@pytest.fixture(scope="module")
+def left_out_choices(model, heavy_sway):
+    """The drift benchmark's coefficient for each failure of ``heavy_sway`` (chosen on the other
+    failures), computed once for the tests below: the predictor after the choice (the benchmark
+    leaves it at 0), the logs, the objectives computed on the way, and the choices."""
+    import copy
+
+    from hybridship.evaluation.drift import _drift_hull_per_log
+
+    logs = [as_log_arrays(x, model.vessel) for x in heavy_sway[0]]
+    hp = copy.deepcopy(heavy_sway[1])                 # the benchmark changes the coefficient
+    with pytest.MonkeyPatch.context() as mp:
+        seen = _recording_objective(mp)
+        _, per_log = _drift_hull_per_log(hp, logs, True, 60.0, ["a", "b", "c", "d"], lambda m: None)
+    return hp, logs, seen, per_log
+
+
+def test_the_drift_benchmark_chooses_it_without_the_scored_failure(heavy_sway, left_out_choices):
     """Scored on its own training logs, each failure is forecast with the coefficient chosen
     on the other failures (never one that saw it); with fewer than three others, with none;
     scored on other logs, with fit's."""
@@ -228,11 +245,9 @@ def test_the_drift_benchmark_chooses_it_without_the_scored_failure(model, heavy_
 
     import copy
 
-    logs = [as_log_arrays(x, model.vessel) for x in heavy_sway[0]]
-    hp = copy.deepcopy(heavy_sway[1])                 # the benchmark changes the coefficient
-    fitted = hp.drift_yaw_uv_rad_per_m2
-    seen = _recording_objective(monkeypatch)
-    _, per_log = _drift_hull_per_log(hp, logs, True, 60.0, ["a", "b", "c", "d"], lambda m: None)
+    hp, logs, seen, per_log = left_out_choices
+    hp = copy.deepcopy(hp)
+    fitted = heavy_sway[1].drift_yaw_uv_rad_per_m2
     assert len(seen) == 1 and seen[0].shape[1] == 4     # one objective over all four failures
     objective = seen[0]
     for k, c in enumerate(per_log):
@@ -252,17 +267,15 @@ def test_the_drift_benchmark_chooses_it_without_the_scored_failure(model, heavy_
     assert other is None and hp.drift_yaw_uv_rad_per_m2 == fitted
 
 
-def test_the_drift_benchmark_forecasts_each_failure_with_its_own_coefficient(model, heavy_sway):
+def test_the_drift_benchmark_forecasts_each_failure_with_its_own_coefficient(left_out_choices):
     """The benchmark's forecasts of failure k use per_log_hull[k] (and 0 for None), the spread
     after a failure is calibrated on errors with that coefficient, and the model is left at 0."""
     import copy
 
     from hybridship.evaluation import drift
 
-    logs, fitted = heavy_sway
-    arrays = [as_log_arrays(x, model.vessel) for x in logs]
-    hp = copy.deepcopy(fitted)
-    _, per_log = drift._drift_hull_per_log(hp, arrays, True, 60.0, list("abcd"), lambda m: None)
+    hp, arrays, _, per_log = left_out_choices
+    hp, per_log = copy.deepcopy(hp), list(per_log)
     per_log[1] = None
     seen = []
     real = hp.after_stop_errors
