@@ -19,7 +19,8 @@ velocities and accelerations) unless their name says otherwise:
 benchmark's), ``+cmd`` (all command-aware features added), ``+mem`` / ``+mem<s>`` (the command-memory
 features added, with the default time constant or ``<s>`` seconds; ``+memang`` /
 ``+memang<s>``: the angle's alone),
-``_abs`` (absolute-error loss), ``_lead`` (loss weighted by lead time), ``_hl<m>`` (heading
+``_abs`` (absolute-error loss), ``_lead`` (loss weighted by lead time), ``_own`` (each member
+trained on its own rollouts, ``MultiStepConfig.member_loss``), ``_hl<m>`` (heading
 length of the loss), ``_c<s>`` (curriculum from a ``<s>``-second horizon), ``_ad<x>`` (the
 weights pulled towards their one-step values, ``MultiStepConfig.anchor_decay``),
 ``+rate`` (only the command rates added), ``+cg`` (command-regime guard; off otherwise, whatever
@@ -115,6 +116,8 @@ def variants(cfg, names):
             ms["loss"] = "absolute"
         if "_lead" in name:
             ms["lead_weighting"] = "lead"
+        if "_own" in name:
+            ms["member_loss"] = "own"
         if "_th" in name:
             ms["tune_hull"] = True
         if "+refit" in name:

@@ -133,11 +133,9 @@ def test_command_regime_weights_and_model_file(tmp_path):
     np.testing.assert_allclose(back.forecast(logs[0], [150.0], 20.0).guard_weight, fc.guard_weight)
 
 
-def test_zero_output_start_begins_at_the_physics_rollout():
-    """With output_init="zero" the first validation loss is that of the physics alone, and the
-    one-step ensemble passed in is not changed."""
-    from hybridship.residual.hull import HULL_REGRESSORS, HullCorrection
-    from hybridship.residual.multistep import collect_starts, train_multistep
+def _small_multistep_setup():
+    """A one-step hybrid on two short logs, a 5-s multi-step configuration and its starts."""
+    from hybridship.residual.multistep import collect_starts
 
     m = DynamicModel("gunnerus")
     logs = [physics_log(m, seed=s, duration_s=300.0, t_shutdown_s=None, current=(0.3, 1.0)) for s in (5, 6)]
@@ -146,6 +144,16 @@ def test_zero_output_start_begins_at_the_physics_rollout():
                          calibration_config=CalibrationConfig(fraction=0.0)).fit(logs)
     cfg = MultiStepConfig(horizon_s=5.0, iterations=2, batch_starts=8, start_every_s=10.0, val_every=1)
     starts = collect_starts([prepare_log(m, as_log_arrays(x, m.vessel), rc) for x in logs], [None, None], cfg)
+    return m, rc, hp, cfg, starts
+
+
+def test_zero_output_start_begins_at_the_physics_rollout():
+    """With output_init="zero" the first validation loss is that of the physics alone, and the
+    one-step ensemble passed in is not changed."""
+    from hybridship.residual.hull import HULL_REGRESSORS, HullCorrection
+    from hybridship.residual.multistep import train_multistep
+
+    m, rc, hp, cfg, starts = _small_multistep_setup()
     before = hp.ensemble.predict_members(np.zeros((1, 6)))
     _, h0 = train_multistep(hp.ensemble, m, starts, rc.feature_index,
                             MultiStepConfig(**{**cfg.__dict__, "output_init": "zero"}))
@@ -215,3 +223,32 @@ def test_command_memory_of_a_forecast_matches_the_training_rows(tmp_path):
     rows = st.idx[0] + np.arange(st.H)
     np.testing.assert_allclose(hp._command_memory(st)[0], stopped[rows], atol=1e-12)
     assert np.abs(as_logged[rows] - stopped[rows]).max() > 0.01       # the run-down matters
+
+
+
+def test_own_member_loss_trains_each_member_on_its_own_starts():
+    """With member_loss="own" a start is rolled out with one member alone (start k with member
+    k mod E): its error reaches that member's weights only, where the mean's reaches every
+    member's; training runs, and the validation (the weights kept) scores the mean either way."""
+    torch = pytest.importorskip("torch")
+    from hybridship.residual.multistep import _corrected_step, _member_residuals, train_multistep
+
+    rng = np.random.default_rng(0)
+    shapes = [(2, 6, 8), (2, 1, 8), (2, 8, 8), (2, 1, 8), (2, 8, 3), (2, 1, 3)]
+    params = [torch.tensor(rng.normal(0, 0.3, sh), requires_grad=True) for sh in shapes]
+    feats = torch.tensor(rng.normal(size=(2, 1, 6)))            # (E, S, F): one start
+    e1, n1 = torch.tensor([[1.0, 2.0, 0.3]]), torch.tensor([[2.0, 0.1, 0.01]])
+    for member, want in ((None, [True, True]), (torch.tensor([0]), [True, False])):
+        for q in params:
+            q.grad = None
+        r = _member_residuals(params, feats, 0.0, 1.0, 0.0, 1.0)
+        eta, nu = _corrected_step(e1, n1, r, torch.zeros(1, 3), 1.0, member)
+        (eta.sum() + nu.sum()).backward()
+        assert [bool(torch.any(params[0].grad[e] != 0)) for e in range(2)] == want
+    m, rc, hp, cfg, starts = _small_multistep_setup()
+    hist = {k: train_multistep(hp.ensemble, m, starts, rc.feature_index,
+                               MultiStepConfig(**{**cfg.__dict__, "member_loss": k}))[1] for k in ("mean", "own")}
+    assert hist["own"]["val_loss"][0] == hist["mean"]["val_loss"][0]
+    assert np.isfinite(hist["own"]["val_loss"]).all() and hist["own"]["train_loss"] != hist["mean"]["train_loss"]
+    with pytest.raises(ValueError, match="member_loss"):
+        MultiStepConfig(member_loss="each")

@@ -90,6 +90,14 @@ class MultiStepConfig:
         (``HybridPredictor(hull_fit="multi_step")``).
     hull_lr : float
         Learning rate of that fit (its coefficients are in units of the residual's spread).
+    member_loss : {"mean", "own"}
+        What each training rollout is corrected with: the members' mean residual, as a
+        forecast does (``mean``: the ensemble acts as one wide net, and its members may
+        drift apart where only their mean matters), or one member's residual alone
+        (``own``: the batch's starts are dealt out to the members in turn, each rolls out
+        with its own correction, so that every member is a forecaster on its own and their
+        mean averages independent fits). Validation (the kept weights) always scores the
+        mean, as forecasts use it.
     """
 
     horizon_s: Annotated[Float, Field(gt=0)] = 10.0
@@ -111,6 +119,7 @@ class MultiStepConfig:
     output_init: Literal["one_step", "zero"] = "one_step"
     hull_iterations: Annotated[Int, Field(ge=1)] = 100
     hull_lr: Annotated[Float, Field(gt=0)] = 1e-2
+    member_loss: Literal["mean", "own"] = "mean"
 
     @model_validator(mode="after")
     def _curriculum_within_horizon(self):
@@ -315,14 +324,15 @@ def _member_residuals(params, feats, x_mean, x_std, y_mean, y_std):
     return torch.baddbmm(params[5], hdn, params[4]) * y_std + y_mean
 
 
-def _corrected_step(e1, n1, r, bias, dt: float):
-    """The physics step ``(e1, n1)`` corrected by the mean residual ``r`` plus the NED bias
-    ``bias`` (rotated into the body frame), held over the step ``dt`` [s]: ``(eta, nu)`` (torch)."""
+def _corrected_step(e1, n1, r, bias, dt: float, member=None):
+    """The physics step ``(e1, n1)`` corrected by the mean residual ``r`` (E, S, 3) (or, with
+    ``member`` (S,), each start's own member's) plus the NED bias ``bias`` (rotated into the
+    body frame), held over the step ``dt`` [s]: ``(eta, nu)`` (torch)."""
     import torch
 
     c, sn = torch.cos(e1[:, 2]), torch.sin(e1[:, 2])
     rb = torch.stack([c * bias[:, 0] + sn * bias[:, 1], -sn * bias[:, 0] + c * bias[:, 1], bias[:, 2]], 1)
-    rm = r.mean(0) + rb
+    rm = (r.mean(0) if member is None else r[member, torch.arange(r.shape[1])]) + rb
     nu = n1 + dt * rm
     half = 0.5 * dt * dt
     eta = torch.stack([e1[:, 0] + half * (c * rm[:, 0] - sn * rm[:, 1]),
@@ -387,8 +397,10 @@ def train_multistep(ensemble, model, starts: Starts, feature_index, config: Mult
     use_cmd = any(ALL_FEATURES[i] in COMMAND_FEATURES for i in np.asarray(feature_index))
     scales = command_scales(model, model.vessel.rotatable)
 
-    def rollout_loss(s: Starts, H=H):
+    def rollout_loss(s: Starts, H=H, own=False):
         S = s.eta0.shape[0]
+        # with member_loss "own" (training only): start k is rolled out with member k mod E alone
+        member = torch.arange(S) % E if own else None
         x = torch.as_tensor(np.concatenate([s.eta0, s.nu0], axis=1), dtype=dd)
         r_prev = torch.as_tensor(s.dev0, dtype=dd).expand(E, S, 3)
         bias = torch.as_tensor(s.bias0, dtype=dd)
@@ -404,7 +416,7 @@ def train_multistep(ensemble, model, starts: Starts, feature_index, config: Mult
             full = _full_features(e1, n1, a1, r_prev, s, j, use_cmd, scales)
             r = _step_residual(params, n_net, full, fidx, ensemble, hull, scale)          # (E, S, 3)
             r_prev = r
-            eta, nu = _corrected_step(e1, n1, r, bias, dt)
+            eta, nu = _corrected_step(e1, n1, r, bias, dt, member)
             x = torch.cat([eta, nu], 1)
             loss = loss + w[j] * _step_error(eta - truth[:, j], L, config.loss).mean()
         return loss
@@ -426,7 +438,7 @@ def train_multistep(ensemble, model, starts: Starts, feature_index, config: Mult
         for it in bar:
             batch = starts.take(rng.choice(tr, size=min(config.batch_starts, tr.size), replace=False))
             opt.zero_grad()
-            loss = rollout_loss(batch, _curriculum_horizon(config, it, H, dt))
+            loss = rollout_loss(batch, _curriculum_horizon(config, it, H, dt), own=config.member_loss == "own")
             if config.anchor_decay > 0:
                 loss = loss + config.anchor_decay / n_weights * sum(((p - p0) ** 2).sum()
                                                                     for p, p0 in zip(params, params0))
