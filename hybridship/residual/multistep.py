@@ -353,6 +353,13 @@ def _step_error(d, heading_length_m: float, loss: str):
     return torch.sqrt(d[:, 0] ** 2 + d[:, 1] ** 2 + 1e-8) + heading_length_m * torch.sqrt(dpsi ** 2 + 1e-8)
 
 
+def _lead_weights(config: MultiStepConfig, H: int) -> np.ndarray:
+    """Weights (H,) of the steps' errors in the loss, summing to 1: equal, or proportional to
+    the lead (``lead_weighting``)."""
+    w = np.ones(H) if config.lead_weighting == "uniform" else np.arange(1, H + 1, dtype=float)
+    return w / w.sum()
+
+
 def _curriculum_horizon(config: MultiStepConfig, it: int, H: int, dt: float) -> int:
     """Rollout steps of iteration ``it``: the full ``H``, or growing from
     ``curriculum_start_s`` to ``H`` over the first ``curriculum_fraction`` of the iterations."""
@@ -399,15 +406,13 @@ def train_multistep(ensemble, model, starts: Starts, feature_index, config: Mult
 
     def rollout_loss(s: Starts, H=H, own=False):
         S = s.eta0.shape[0]
-        # with member_loss "own" (training only): start k is rolled out with member k mod E alone
-        member = torch.arange(S) % E if own else None
+        member = torch.arange(S) % E if own else None       # "own": start k with member k mod E alone
         x = torch.as_tensor(np.concatenate([s.eta0, s.nu0], axis=1), dtype=dd)
         r_prev = torch.as_tensor(s.dev0, dtype=dd).expand(E, S, 3)
         bias = torch.as_tensor(s.bias0, dtype=dd)
         truth = torch.as_tensor(s.truth, dtype=dd)
         loss = torch.zeros((), dtype=dd)
-        w = np.ones(H) if config.lead_weighting == "uniform" else np.arange(1, H + 1, dtype=float)
-        w = w / w.sum()
+        w = _lead_weights(config, H)
         for j in range(H):
             jw = min(j, s.wind.shape[1] - 1)
             y = PhysicsStep.apply(x, s.rpm[:, j:j + 1], s.az[:, j:j + 1], s.wind[:, jw:jw + 1], P, dt, substeps,
