@@ -95,12 +95,13 @@ def test_a_sway_added_mass_error_is_learned_as_its_munk_moment(model, scale, hea
     and it lowers the failures' heading error."""
     _, M_A = mass_matrices(model.vessel)
     want = -(scale - 1.0) * M_A[1, 1] / (M_A[1, 1] - M_A[0, 0])
+    # the lighter ship from three failures, the fewest fit chooses from
     hp = heavy_sway[1] if scale == 1.6 else \
-        HybridPredictor(model.vessel, ensemble_config=TINY).fit(_wind_drift_logs(model, scale))
+        HybridPredictor(model.vessel, ensemble_config=TINY).fit(_wind_drift_logs(model, scale, (20, 21, 22)))
     info = hp.training_info["drift_hull"]
     assert info["adopted"] and 0.4 <= info["munk_multiple"] / want <= 1.25, (info, want)
     assert hp.drift_yaw_uv_rad_per_m2 == pytest.approx(info["munk_multiple"] * munk_coefficient(hp.model))
-    assert info["error_deg"] < 0.8 * info["error_zero_deg"] and info["n_failures"] == 4
+    assert info["error_deg"] < 0.8 * info["error_zero_deg"] and info["n_failures"] == (4 if scale == 1.6 else 3)
 
 
 def _recording_objective(monkeypatch) -> list:
@@ -116,8 +117,9 @@ def _recording_objective(monkeypatch) -> list:
 
 
 def test_a_hull_without_error_gets_none(model, monkeypatch):
-    """The model's own hull: the forecasts' heading error is lowest at k = 0 and the fit keeps none."""
-    logs = _wind_drift_logs(model, 1.0)
+    """The model's own hull (three failures): the forecasts' heading error is lowest at k = 0 and
+    the fit keeps none."""
+    logs = _wind_drift_logs(model, 1.0, (20, 21, 22))
     seen = _recording_objective(monkeypatch)
     hp = HybridPredictor(model.vessel, ensemble_config=TINY).fit(logs)
     info = hp.training_info["drift_hull"]
