@@ -37,8 +37,8 @@ from ..residual.drift_hull import (MIN_FAILURES as DRIFT_HULL_MIN_FAILURES, MUNK
                                    drift_start_rows, munk_coefficient)
 from ..residual.hull import HullCorrection
 from .after_failure import drift_forecasts, has_drift
-from .forecast_setup import (FORECAST_HISTORY_S, _check_row_stride, _forecast_setup, as_log_arrays, log_list,
-                             start_indices)
+from .forecast_setup import (FORECAST_HISTORY_S, _check_row_stride, _forecast_setup, as_log_arrays, forecast_step_s,
+                             log_list, start_indices)
 from .model_file import load_model, save_model
 from .result import ForecastResult
 from .training_logs import check_distinct_logs, log_label
@@ -550,7 +550,7 @@ class HybridPredictor:
                                        quantile=self.guard_quantile)
         self.thrust_regime = ThrustRegime.fit(thr)
         self.training_info = {"n_rows": int(X.shape[0]), "row_stride": stride,
-                              "log_step_s": sorted({round(float(a.dt_s), 6) for a in logs}),
+                              "log_step_s": sorted({forecast_step_s(a) for a in logs}),
                               "trained_with_wind": any(a.has_wind for a in logs),
                               "epochs": self.ensemble.history["epochs"],
                               "best_val_mse": self.ensemble.history["best_val_mse"],

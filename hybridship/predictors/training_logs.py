@@ -69,4 +69,3 @@ def check_distinct_logs(arrays, labels) -> None:
     if pairs:
         raise ValueError("\n".join(f"logs: {b} has the same samples as {a} (one recording twice would be trained "
                                    f"on twice); remove one of them" for a, b in pairs))
-

@@ -452,7 +452,6 @@ def _simulate(config: DPLossConfig, vessel, progress: bool):
     K = true_model.n_thrusters
     if K == 0:
         raise ValueError(f"vessel: {ves.name!r} has no thrusters; a DP scenario needs some")
-    check_station_keeping(ves)  # before any work: a DP that cannot hold all three DOF is no DP
     rho = ves.particulars.rho_water_kg_m3
     p = ves.particulars
     hull = env.HullDimensions(L_m=p.L_pp_m, B_m=p.B_m, T_m=p.T_m)
@@ -676,6 +675,7 @@ def simulate_dp_loss(config: DPLossConfig | None = None, vessel="gunnerus", prog
     config = DPLossConfig() if config is None else config
     if not isinstance(config, DPLossConfig):
         raise TypeError(f"config: expected a DPLossConfig, got {type(config).__name__}")
+    check_station_keeping(vessel)  # before any work: a DP that cannot hold all three DOF is no DP
     df, _ = _simulate(config, vessel, bool(progress))
     return df
 
