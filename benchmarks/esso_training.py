@@ -14,7 +14,8 @@ comparison on the benchmark's own split (after the choice was made)::
 Variants share the ensemble size, seed, calibration and features (the six model-predicted
 velocities and accelerations) unless their name says otherwise:
 ``one_step`` / ``multi_step`` (training mode), ``_h<s>``, ``_b<n>``, ``_i<n>``, ``_v<n>``
-(multi-step horizon, batch of starts, iterations, validation starts; ``_lr<x>``: Adam's step; otherwise
+(multi-step horizon, batch of starts, iterations, validation starts; ``_lr<x>``: Adam's step;
+``_ema<x>``: the weights' moving average, ``MultiStepConfig.weight_average``; otherwise
 ``MultiStepConfig()``), ``_m<n>`` / ``_sd<n>`` (ensemble members / seed; otherwise the
 benchmark's), ``+cmd`` (all command-aware features added), ``+mem`` / ``+mem<s>`` (the command-memory
 features added, with the default time constant or ``<s>`` seconds; ``+memang`` /
@@ -109,7 +110,7 @@ def variants(cfg, names):
         for key, field, conv in (("h", "horizon_s", float), ("b", "batch_starts", int), ("i", "iterations", int),
                                  ("v", "max_val_starts", int), ("hl", "heading_length_m", float),
                                  ("c", "curriculum_start_s", float), ("ad", "anchor_decay", float),
-                                 ("lr", "lr", float)):
+                                 ("lr", "lr", float), ("ema", "weight_average", float)):
             m = re.search(rf"_{key}(\d+(?:\.\d+)?)", name)
             if m:
                 ms[field] = conv(m.group(1))

@@ -80,10 +80,11 @@ def test_a_vessel_that_changes_in_the_mirror_is_refused(et, manoeuvre):
 def test_variant_names_set_the_multistep_fields(et):
     from hybridship.evaluation.manoeuvre import ManoeuvreConfig
 
-    names = ["multi_step_h30_b64_i100_abs_hl3_ad10_lr0.003_own+cmd", "multi_step_abs+cmd"]
+    names = ["multi_step_h30_b64_i100_abs_hl3_ad10_lr0.003_ema0.9_own+cmd", "multi_step_abs+cmd"]
     hybrid, plain = (et.variants(ManoeuvreConfig(), names)[n] for n in names)
     ms = hybrid.multistep_config
     assert (ms.horizon_s, ms.batch_starts, ms.iterations, ms.loss) == (30.0, 64, 100, "absolute")
     assert (ms.heading_length_m, ms.anchor_decay, ms.lr, ms.member_loss) == (3.0, 10.0, 0.003, "own")
     assert plain.multistep_config.anchor_decay == 0.0 and plain.multistep_config.heading_length_m is None
     assert (plain.multistep_config.lr, plain.multistep_config.member_loss) == (1e-3, "mean")
+    assert (ms.weight_average, plain.multistep_config.weight_average) == (0.9, 0.0)

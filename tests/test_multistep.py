@@ -252,3 +252,34 @@ def test_own_member_loss_trains_each_member_on_its_own_starts():
     assert np.isfinite(hist["own"]["val_loss"]).all() and hist["own"]["train_loss"] != hist["mean"]["train_loss"]
     with pytest.raises(ValueError, match="member_loss"):
         MultiStepConfig(member_loss="each")
+
+
+def test_weight_average_keeps_a_moving_average_and_leaves_the_training_path_alone():
+    """Polyak averaging (MultiStepConfig.weight_average): the average moves by the warm-up
+    decay min(d, (1 + it) / (10 + it)); validation swaps it in and gives the trained weights
+    back; training follows the same path with and without it (same batches, same losses),
+    and only what is validated and kept changes."""
+    torch = pytest.importorskip("torch")
+    from hybridship.residual.multistep import _update_average, _weights_swapped, train_multistep
+
+    p = [torch.tensor([1.0, 3.0])]
+    avg = [torch.tensor([0.0, 0.0])]
+    _update_average(avg, p, 0.9, 0)                      # warm-up: decay 0.1
+    np.testing.assert_allclose(avg[0].numpy(), [0.9, 2.7])
+    _update_average(avg, p, 0.9, 1000)                   # then the decay asked for
+    np.testing.assert_allclose(avg[0].numpy(), [0.9 * 0.9 + 0.1, 0.9 * 2.7 + 0.3])
+    with _weights_swapped(p, avg):
+        np.testing.assert_allclose(p[0].numpy(), avg[0].numpy())
+    np.testing.assert_array_equal(p[0].numpy(), [1.0, 3.0])
+    _update_average(None, p, 0.9, 5)                     # no average: nothing to do
+    m, rc, hp, cfg, starts = _small_multistep_setup()
+    runs = {w: train_multistep(hp.ensemble, m, starts, rc.feature_index,
+                               MultiStepConfig(**{**cfg.__dict__, "weight_average": w, "val_every": 1}))
+            for w in (0.0, 0.8)}
+    (ens0, h0), (ens1, h1) = runs[0.0], runs[0.8]
+    assert h0["train_loss"] == h1["train_loss"] and h0["val_loss"][0] == h1["val_loss"][0]
+    assert h0["val_loss"][1:] != h1["val_loss"][1:]
+    assert h1["best_val_loss"] == min(h1["val_loss"])
+    assert any(not np.array_equal(a, b) for a, b in zip(ens0.weights, ens1.weights))
+    with pytest.raises(ValueError, match="weight_average"):
+        MultiStepConfig(weight_average=1.0)

@@ -24,6 +24,7 @@ ensemble mean, the members move together and keep the spread of the one-step bag
 
 from __future__ import annotations
 
+from contextlib import contextmanager
 from dataclasses import dataclass, replace
 from typing import Annotated, Literal
 
@@ -98,6 +99,11 @@ class MultiStepConfig:
         with its own correction, so that every member is a forecaster on its own and their
         mean averages independent fits). Validation (the kept weights) always scores the
         mean, as forecasts use it.
+    weight_average : float
+        Decay per iteration of an exponential moving average of the weights (Polyak
+        averaging, as in stochastic weight averaging); 0 = none. The average, not the last
+        iterate, is validated and kept: each Adam step follows one small batch of starts,
+        and the average smooths that noise over about ``1 / (1 - weight_average)`` steps.
     """
 
     horizon_s: Annotated[Float, Field(gt=0)] = 10.0
@@ -120,6 +126,7 @@ class MultiStepConfig:
     hull_iterations: Annotated[Int, Field(ge=1)] = 100
     hull_lr: Annotated[Float, Field(gt=0)] = 1e-2
     member_loss: Literal["mean", "own"] = "mean"
+    weight_average: Annotated[Float, Field(ge=0, lt=1)] = 0.0
 
     @model_validator(mode="after")
     def _curriculum_within_horizon(self):
@@ -426,14 +433,13 @@ def train_multistep(ensemble, model, starts: Starts, feature_index, config: Mult
             loss = loss + w[j] * _step_error(eta - truth[:, j], L, config.loss).mean()
         return loss
 
-    params0 = [p.detach().clone() for p in params]
+    params0 = best_params = [p.detach().clone() for p in params]      # neither is changed in place
     n_weights = sum(p.numel() for p in params)
-
     opt = torch.optim.Adam([p for p in params if p.requires_grad], lr=config.lr)
     val_data = starts.take(va)
     with torch.no_grad():
         best = float(rollout_loss(val_data))
-    best_params = [p.detach().clone() for p in params]
+    averaged = [p.detach().clone() for p in params] if config.weight_average > 0 else None
     hist = {"train_loss": [], "val_loss": [best], "iterations": 0, "n_starts": int(tr.size),
             "n_val_starts": int(va.size)}
     threads = torch.get_num_threads()
@@ -449,15 +455,16 @@ def train_multistep(ensemble, model, starts: Starts, feature_index, config: Mult
                                                                     for p, p0 in zip(params, params0))
             loss.backward()
             opt.step()
+            _update_average(averaged, params, config.weight_average, it)
             hist["train_loss"].append(float(loss.detach()))
             hist["iterations"] = it + 1
             if (it + 1) % config.val_every == 0 or it + 1 == config.iterations:
-                with torch.no_grad():
+                with torch.no_grad(), _weights_swapped(params, averaged):
                     v = float(rollout_loss(val_data))
+                    if v < best:
+                        best_params = [p.detach().clone() for p in params]
                 hist["val_loss"].append(v)
-                if v < best:
-                    best = v
-                    best_params = [p.detach().clone() for p in params]
+                best = min(best, v)
                 if progress:
                     bar.set_postfix(train=f"{hist['train_loss'][-1]:.4g}", val=f"{v:.4g}")
     finally:
@@ -470,6 +477,38 @@ def train_multistep(ensemble, model, starts: Starts, feature_index, config: Mult
         return None, hist
     return MLPEnsemble([p.numpy().astype(float) for p in best_params[:n_net]], ensemble.x_mean, ensemble.x_std,
                        ensemble.y_mean, ensemble.y_std, dict(ensemble.history)), hist
+
+
+def _update_average(averaged, params, decay: float, it: int):
+    """Move the moving average ``averaged`` of the weights towards ``params`` (in place; none
+    without an average). The decay is ``min(decay, (1 + it) / (10 + it))``, so that the first
+    iterations do not leave the average near the warm start (as TensorFlow's moving averages
+    do with ``num_updates``)."""
+    if averaged is None:
+        return
+    import torch
+
+    d = min(decay, (1.0 + it) / (10.0 + it))
+    with torch.no_grad():
+        for a, p in zip(averaged, params):
+            a.mul_(d).add_(p.detach(), alpha=1.0 - d)
+
+
+@contextmanager
+def _weights_swapped(params, averaged):
+    """Within the block the tensors ``params`` hold the averaged weights (unchanged without
+    an average); the trained weights come back after it."""
+    if averaged is None:
+        yield
+        return
+    saved = [p.detach().clone() for p in params]
+    for p, a in zip(params, averaged):
+        p.data.copy_(a)
+    try:
+        yield
+    finally:
+        for p, w in zip(params, saved):
+            p.data.copy_(w)
 
 
 def _step_residual(params, n_net: int, full, fidx, ensemble, hull, scale):
