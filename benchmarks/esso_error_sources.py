@@ -30,7 +30,11 @@ futures, rather than forecasting at the expected wind, lowers the error) and
 the error that the forecast started 30 s earlier made at its 30-s lead, known at the start,
 turned with the heading since then; ``alpha`` chosen from :data:`FEEDBACK_ALPHAS` on the
 held-back ends of the fitting runs, which the nets did not train on: whether the hybrid's
-error persists from one forecast to the next).
+error persists from one forecast to the next). With ``--seed-average`` also
+``hybrid_seed1`` (the same hybrid fitted with seed 1, about 5 min more) and
+``hybrid_seed_mean`` (the mean of the two hybrids' forecasts, heading on the circle:
+whether the hybrid's error is the variance of its fit, which averaging independent fits
+would lower, or a bias they share).
 
 Writes ``errors.csv`` (the manoeuvre benchmark's columns) and prints the distance and
 heading tables.
@@ -95,18 +99,22 @@ def _sampled_wind(forecast, logs, horizon_steps: int, seed: int = 0, every: int 
     return SampledWind(mean_window_s=forecast.mean_window_s, time_constant_s=forecast.time_constant_s)
 
 
-def _mean_forecast(predictor, n: int):
-    """A forecaster that averages ``n`` forecasts of ``predictor`` (heading on the circle),
-    made in one batch: every start time ``n`` times over, each copy with its own draws."""
+def _mean_forecast(predictors, n: int = 1):
+    """A forecaster that averages ``n`` forecasts of each of ``predictors`` (one predictor or
+    a list; heading on the circle), each predictor's made in one batch: every start time
+    ``n`` times over, each copy with its own draws."""
     from hybridship.predictors.result import ForecastResult
+
+    predictors = predictors if isinstance(predictors, (list, tuple)) else [predictors]
 
     def forecast(a, start_times_s, horizon_s, **kw):
         st = np.asarray(start_times_s, dtype=float)
-        fc = predictor.forecast(a, np.tile(st, n), horizon_s=horizon_s, **kw)
-        eta = fc.eta.reshape((n, st.size) + fc.eta.shape[1:])
+        fcs = [p.forecast(a, np.tile(st, n), horizon_s=horizon_s, **kw) for p in predictors]
+        eta = np.concatenate([fc.eta.reshape((n, st.size) + fc.eta.shape[1:]) for fc in fcs])
+        nu = np.concatenate([fc.nu.reshape((n, st.size) + fc.nu.shape[1:]) for fc in fcs])
         mean = eta.mean(axis=0)
         mean[..., 2] = np.arctan2(np.sin(eta[..., 2]).mean(axis=0), np.cos(eta[..., 2]).mean(axis=0))
-        return ForecastResult(st, fc.lead_s, mean, fc.nu.reshape(eta.shape).mean(axis=0))
+        return ForecastResult(st, fcs[0].lead_s, mean, nu.mean(axis=0))
 
     return forecast
 
@@ -186,7 +194,12 @@ def main(argv=None) -> int:
     ap.add_argument("--hybrid", action="store_true",
                     help="also fit the benchmark's hybrid on the fitting runs and score it with its wind "
                          "forecast and with the logged future wind")
+    ap.add_argument("--seed-average", action="store_true",
+                    help="with --hybrid: also fit the same hybrid with seed 1 and score it alone and the mean "
+                         "of the two hybrids' forecasts")
     args = ap.parse_args(argv)
+    if args.seed_average and not args.hybrid:
+        ap.error("--seed-average needs --hybrid")
     try:
         fit_dir, val_dir = validation_split(args.split, args.out / "split")
     except FileNotFoundError as err:
@@ -243,6 +256,11 @@ def main(argv=None) -> int:
               + ", ".join(f"alpha {k:g}: {d:.3f}, {h:.2f}" for k, (d, h) in fb_scores.items())
               + f"; chosen {alpha:g}")
         per[("hybrid_error_feedback", "known")] = score(runs, forecast=_error_feedback(hyb, alpha))
+        if args.seed_average:
+            cfg1 = dataclasses.replace(cfg, ensemble=dataclasses.replace(cfg.ensemble, seed=1))
+            hyb1 = make_predictors(v, cfg1)["hybrid"].fit(fit_logs, row_stride=cfg.train_row_stride)
+            per[("hybrid_seed1", "known")] = score(runs, hyb1)
+            per[("hybrid_seed_mean", "known")] = score(runs, forecast=_mean_forecast([hyb, hyb1]))
     errors = error_table(per, runs, horizons)
     atomic_write(args.out / "errors.csv", lambda fh: fh.write(errors.to_csv(index=False).encode()))
     for state in ("distance_m", "heading_deg"):

@@ -86,6 +86,24 @@ def test_the_mean_forecast_averages_the_heading_on_the_circle(es):
     assert fc.eta_std is None
 
 
+def test_the_mean_forecast_of_several_predictors_weighs_each_forecast_once(es):
+    class Const:
+        def __init__(self, north_m, psi_deg):
+            self.north_m, self.psi = north_m, np.radians(psi_deg)
+
+        def forecast(self, a, start_times_s, horizon_s, **kw):
+            S = len(start_times_s)
+            eta = np.zeros((S, 2, 3))
+            eta[..., 0], eta[..., 2] = self.north_m, self.psi
+            return ForecastResult(np.asarray(start_times_s), np.arange(2.0), eta, np.ones((S, 2, 3)))
+
+    fc = es._mean_forecast([Const(1.0, 170.0), Const(4.0, -170.0)])(None, [0.0, 5.0, 9.0], 1.0)
+    assert fc.eta.shape == (3, 2, 3)
+    np.testing.assert_allclose(fc.eta[..., 0], 2.5)
+    np.testing.assert_allclose(np.abs(np.degrees(fc.eta[..., 2])), 180.0)
+    np.testing.assert_allclose(fc.nu, 1.0)
+
+
 def test_error_feedback_adds_the_earlier_forecasts_error_turned_with_the_heading(es):
     t = np.arange(100.0)
     psi = np.where(t < 40, 0.0, np.pi / 2)
