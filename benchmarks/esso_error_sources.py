@@ -31,7 +31,7 @@ the error that the forecast started 30 s earlier made at its 30-s lead, known at
 turned with the heading since then; ``alpha`` chosen from :data:`FEEDBACK_ALPHAS` on the
 held-back ends of the fitting runs, which the nets did not train on: whether the hybrid's
 error persists from one forecast to the next). With ``--seed-average`` also
-``hybrid_seed1`` (the same hybrid fitted with seed 1, about 5 min more) and
+``hybrid_seed1`` (the same hybrid fitted with seed 1: a second fit, as long as the first) and
 ``hybrid_seed_mean`` (the mean of the two hybrids' forecasts, heading on the circle:
 whether the hybrid's error is the variance of its fit, which averaging independent fits
 would lower, or a bias they share).
