@@ -17,6 +17,7 @@ from __future__ import annotations
 
 import dataclasses
 import functools
+from collections.abc import Mapping
 from typing import Annotated
 
 import numpy as np
@@ -144,3 +145,24 @@ def config_dataclass(cls=None, /, *, frozen: bool = False, arbitrary_types: bool
         return dc
 
     return wrap if cls is None else wrap(cls)
+
+
+def as_config(value, cls, name: str):
+    """A settings argument as an instance of the config class ``cls``.
+
+    An instance passes as it is; a mapping becomes ``cls(**value)``, validated (an unknown
+    or misspelt key is refused by name); anything else is a TypeError naming the argument
+    ``name``. For the constructors that take settings objects, so that a dict with a typo
+    fails here and not as an attribute error deep inside training.
+    """
+    if isinstance(value, cls):
+        return value
+    if isinstance(value, Mapping):
+        try:
+            return cls(**value)
+        except ValidationError as err:   # a pydantic model's own, unformatted
+            raise ValueError(f"{name}: {format_validation_error(err)}") from None
+        except (TypeError, ValueError) as err:
+            raise type(err)(f"{name}: {err}") from None
+    raise TypeError(f"{name}: expected an instance of {cls.__name__} (or a dict of its fields), "
+                    f"got {type(value).__name__}")

@@ -83,3 +83,20 @@ def test_arrays_are_copied_not_shared():
     cal = SpreadCalibration(lead, [1.0, 1.0], [0.0, 0.0])
     lead[0] = 5.0
     assert cal.lead_s[0] == 1.0
+
+
+def test_predictors_take_settings_or_dicts_of_them_and_name_a_typo():
+    """A dict of a settings class's fields is validated into it; a misspelt key or another
+    type fails at construction, naming the argument, not later inside training."""
+    from hybridship.predictors import DataOnlyPredictor, HybridPredictor
+
+    h = HybridPredictor("gunnerus", ensemble_config={"n_members": 2}, environment_config={"current_prior_m_s": 0.05})
+    assert h.ensemble_config == EnsembleConfig(n_members=2) and h.environment_config.current_prior_m_s == 0.05
+    with pytest.raises(ValueError, match=r"^ensemble_config: n_membrs: Unexpected keyword"):
+        HybridPredictor("gunnerus", ensemble_config={"n_membrs": 2})
+    with pytest.raises(ValueError, match=r"^environment_config: foo: Extra inputs are not permitted"):
+        HybridPredictor("gunnerus", environment_config={"foo": 1})
+    with pytest.raises(TypeError, match=r"^multistep_config: expected an instance of MultiStepConfig"):
+        HybridPredictor("gunnerus", multistep_config=3)
+    with pytest.raises(ValueError, match=r"^ensemble_config: hidden"):
+        DataOnlyPredictor("gunnerus", ensemble_config={"hidden": [1]})

@@ -499,3 +499,19 @@ def test_the_column_spec_is_the_documented_format():
         assert required == ("yes" if spec.required else "no"), spec.name
     assert REQUIRED_COLUMNS == ("time_s", "north_m", "east_m", "heading_deg")
 
+
+
+def test_datetime_times_and_gzip_named_csv_are_named_for_what_they_are(tmp_path):
+    """time_s as pandas datetimes is not read as nanoseconds (and then blamed on milliseconds);
+    a gzip file named .csv is said to be gzip, not a decoding error."""
+    import gzip
+
+    df = circle_log()
+    stamped = df.assign(time_s=pd.to_datetime(df.time_s, unit="s"))
+    with pytest.raises(LogFormatError, match=r"time_s: datetime64\[\w+\] values; expected plain numbers") as err:
+        validate_log(stamped, channel_names=THRUSTERS, rotatable=ROTATABLE)
+    assert "milliseconds" not in str(err.value)
+    path = tmp_path / "log.csv"
+    path.write_bytes(gzip.compress(df.to_csv(index=False).encode()))
+    with pytest.raises(LogFormatError, match=r"log.csv: is gzip-compressed; name it log.csv.gz"):
+        read_log(path)

@@ -291,6 +291,10 @@ def _to_float(df: pd.DataFrame, col: str, source: str, time_s: np.ndarray | None
     s = df[col]
     if s.dtype == bool:
         return s.to_numpy(dtype=float, copy=True)
+    if pd.api.types.is_datetime64_any_dtype(s) or pd.api.types.is_timedelta64_dtype(s):
+        # pandas would turn these into nanoseconds, and the message would then blame the unit
+        raise LogFormatError(f"{col}: {s.dtype} values; expected plain numbers (seconds for time_s: "
+                             f"convert with (t - t.iloc[0]).dt.total_seconds()){_where(source)}", column=col)
     num = pd.to_numeric(s, errors="coerce")
     bad = num.isna().to_numpy() & s.notna().to_numpy()
     if bad.any():
@@ -917,6 +921,9 @@ def read_log(
     kind = _container(path)
     if not path.is_file():
         raise FileNotFoundError(f"{path}: log file not found")
+    if kind == "csv" and _starts_with(path, b"\x1f\x8b"):
+        raise LogFormatError(f"{path}: is gzip-compressed; name it {path.name}.gz (a .csv.gz log) or "
+                             f"decompress it")
     try:
         if kind == "parquet":
             df = pd.read_parquet(path)
@@ -934,6 +941,15 @@ def read_log(
     if validate:
         _validate(df, channel_names, rotatable, str(path), warn_unknown=True, allow_missing=allow_missing)
     return df
+
+
+def _starts_with(path: Path, magic: bytes) -> bool:
+    """Whether the file's first bytes are ``magic`` (False when it cannot be read)."""
+    try:
+        with open(path, "rb") as fh:
+            return fh.read(len(magic)) == magic
+    except OSError:
+        return False
 
 
 def write_log(

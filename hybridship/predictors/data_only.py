@@ -6,6 +6,7 @@ from typing import Iterable
 
 import numpy as np
 
+from ..config import as_config
 from ..physics.model import DynamicModel
 from ..residual.ensemble import EnsembleConfig, MLPEnsemble, fit_ensemble, require_training_rows
 from ..residual.features import ResidualConfig
@@ -34,7 +35,7 @@ class DataOnlyPredictor:
     def __init__(self, vessel="gunnerus", *, ensemble_config: EnsembleConfig = EnsembleConfig(),
                  start_average_s: float = 3.0, stop_after_failure: bool = True):
         self.model = DynamicModel(vessel)
-        self.ensemble_config = ensemble_config
+        self.ensemble_config = as_config(ensemble_config, EnsembleConfig, "ensemble_config")
         self.config = ResidualConfig(start_average_s=start_average_s)
         self.stop_after_failure = bool(stop_after_failure)
         self.ensemble: MLPEnsemble | None = None

@@ -52,14 +52,19 @@ def log_list(logs) -> list:
     ------
     TypeError
         Naming what was given, when ``logs`` is neither a log nor an iterable of logs.
+    ValueError
+        When the iterable is empty.
     """
     if isinstance(logs, (str, os.PathLike, pd.DataFrame, LogArrays)):
         return [logs]
     try:
-        return list(logs)
+        out = list(logs)
     except TypeError:
         raise TypeError(f"logs: expected a log (path, DataFrame or LogArrays) or an iterable of logs, "
                         f"got {type(logs).__name__}") from None
+    if not out:
+        raise ValueError(f"logs: expected at least one log, got an empty {type(logs).__name__}")
+    return out
 
 
 def start_indices(arrays: LogArrays, start_times_s) -> np.ndarray:
@@ -70,6 +75,11 @@ def start_indices(arrays: LogArrays, start_times_s) -> np.ndarray:
         raise RequestError("start_times_s: at least one start time is needed")
     if not np.all(np.isfinite(st)):
         raise RequestError("start_times_s: contains NaN or inf")
+    if np.unique(st).size < st.size:
+        # a repeated start would come back as a second, identical forecast block
+        u, n = np.unique(st, return_counts=True)
+        raise RequestError(f"start_times_s: each start time at most once; {u[n > 1][0]:g} s is given "
+                           f"{n[n > 1][0]} times")
     idx = np.clip(np.searchsorted(t, st), 0, len(t) - 1)
     prev = np.clip(idx - 1, 0, len(t) - 1)
     idx = np.where(np.abs(t[prev] - st) < np.abs(t[idx] - st), prev, idx)
@@ -172,6 +182,15 @@ def _known_command_steps(arrays: LogArrays, idx: np.ndarray, H: int, rpm0: np.nd
     return _hold_last_valid(rpm), _hold_last_valid(az)
 
 
+def _held_command_notes(arrays: LogArrays, idx: np.ndarray, H: int) -> list[str]:
+    """Per start, a note when commands of its H known steps were not logged (the reader holds
+    the last logged value, :attr:`LogArrays.commands_logged`), "" otherwise."""
+    rows = idx[:, None] + np.arange(1, H)[None, :]
+    missing = (~arrays.commands_logged[rows]).sum(axis=1)
+    return [f"commands known: {n} of {H - 1} future command samples missing, the last valid one held" if n else ""
+            for n in missing]
+
+
 def _hold_last_valid(steps: np.ndarray) -> np.ndarray:
     """Replace NaN entries of ``steps`` (S, H, K) by the last finite value before them in H."""
     pos = np.where(np.isfinite(steps), np.arange(steps.shape[1])[None, :, None], 0)
@@ -242,8 +261,10 @@ def _forecast_setup(model, config: ResidualConfig, log, start_times_s, horizon_s
         raise HorizonError(f"horizon_s: {horizon_s:g} s is shorter than one step of the log ({dt:g} s)")
     sw = assess_start_window(arrays, idx, config.start_average_s)
     rpm, az, wind = _held_inputs(arrays, idx, stop_after_failure=stop_after_failure, wind=sw.wind)
+    extra_notes = [""] * len(idx)
     if commands == "known":
         rpm, az = _known_command_steps(arrays, idx, H, rpm[:, 0], az[:, 0], stop_after_failure)
+        extra_notes = _held_command_notes(arrays, idx, H)
     # the wind of every step: held (S, 1, 2) or forecast (S, H, 2); a start without wind
     # (sensor dropped) keeps its start value; at least the start's step, which the guards read
     wind = wind_forecast.steps(arrays.wind, arrays.time_s, idx, wind[:, 0], max(H, 1), dt, logged=arrays.wind_logged,
@@ -254,6 +275,7 @@ def _forecast_setup(model, config: ResidualConfig, log, start_times_s, horizon_s
     flags.update({k: np.asarray(v, dtype=bool) for k, v in sw.flags.items()})
     flags[FaultFlags.INPUT_CLIPPED] = np.asarray(chk.clipped, dtype=bool)
     notes = tuple(sw.notes) if len(sw.notes) == len(idx) else ("",) * len(idx)
+    notes = tuple("; ".join(n for n in pair if n) for pair in zip(notes, extra_notes))
     return _Setup(arrays, idx, dt, H, chk.eta, chk.nu, np.ascontiguousarray(chk.rpm),
                   np.ascontiguousarray(chk.azimuth_rad), np.ascontiguousarray(chk.wind), int(chk.substeps),
                   flags, notes)

@@ -16,6 +16,7 @@ from typing import Iterable
 
 import numpy as np
 
+from ..config import as_config
 from ..forecast_inputs import FaultFlags
 from ..forecast_inputs.wind import HELD_WIND, WindForecast, fit_wind_forecast, wind_error_paths
 from ..frames import speed_dir_to_vector, vector_to_speed_dir, wrap_pi
@@ -41,7 +42,7 @@ from .forecast_setup import (FORECAST_HISTORY_S, _check_row_stride, _forecast_se
                              log_list, start_indices)
 from .model_file import load_model, save_model
 from .result import ForecastResult
-from .training_logs import check_distinct_logs, log_label
+from .training_logs import check_distinct_logs, check_training_lengths, log_label
 
 __all__ = ["AFTER_STOP", "ENVIRONMENT_SOURCES", "HybridPredictor"]
 
@@ -169,6 +170,12 @@ class HybridPredictor:
                  multistep_config: MultiStepConfig = MultiStepConfig(), command_guard: bool = False,
                  hull_correction: bool = False, hull_ridge: float = 1e-3, hull_fit: str = "one_step",
                  wind_forecast: WindForecast | str = "fit", wind_samples: int = 0, drift_hull: bool = True):
+        # settings objects (or dicts of their fields), validated here once
+        residual_config = as_config(residual_config, ResidualConfig, "residual_config")
+        ensemble_config = as_config(ensemble_config, EnsembleConfig, "ensemble_config")
+        environment_config = as_config(environment_config, EnvironmentConfig, "environment_config")
+        calibration_config = as_config(calibration_config, CalibrationConfig, "calibration_config")
+        multistep_config = as_config(multistep_config, MultiStepConfig, "multistep_config")
         if not (isinstance(wind_forecast, WindForecast) or wind_forecast == "fit"):
             raise ValueError(f"wind_forecast: expected a WindForecast or 'fit', got {wind_forecast!r}")
         #: as given: a WindForecast, or "fit" (chosen by :meth:`fit` on the training logs' wind)
@@ -315,13 +322,14 @@ class HybridPredictor:
         ``training_info["thrust_error_prior"]``).
         """
         stride = _check_row_stride(row_stride)
-        cal = self.calibration_config if calibration is None else calibration
-        if not isinstance(cal, CalibrationConfig):
-            raise TypeError(f"calibration: expected a CalibrationConfig, got {type(cal).__name__}")
+        cal = self.calibration_config if calibration is None else \
+            as_config(calibration, CalibrationConfig, "calibration")
         self.calibration_config = cal
         given = log_list(logs)
         logs = [as_log_arrays(log, self.model.vessel) for log in given]
-        check_distinct_logs(logs, [log_label(x, i) for i, x in enumerate(given)])  # before any training
+        labels = [log_label(x, i) for i, x in enumerate(given)]
+        check_training_lengths(logs, labels)
+        check_distinct_logs(logs, labels)  # before any training
         self.estimator = EnvironmentEstimator(self.model, self.environment_config)
         if self.environment == "estimator":
             self.estimator.fit(logs, dp_only=dp_only)

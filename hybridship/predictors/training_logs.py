@@ -14,7 +14,7 @@ import os
 
 import numpy as np
 
-__all__ = ["samples_digest", "check_distinct_logs", "log_label"]
+__all__ = ["samples_digest", "check_distinct_logs", "check_training_lengths", "log_label"]
 
 
 def samples_digest(arrays) -> str:
@@ -42,6 +42,18 @@ def samples_digest(arrays) -> str:
 def log_label(log, index: int) -> str:
     """How a message names training log ``index``: its path, else its position ``logs[i]``."""
     return os.fspath(log) if isinstance(log, (str, os.PathLike)) else f"logs[{index}]"
+
+
+#: Fewest samples of a training log (the filtered derivatives need a neighbour on each side).
+MIN_TRAINING_SAMPLES = 3
+
+
+def check_training_lengths(arrays, labels) -> None:
+    """Refuse a training log with fewer than :data:`MIN_TRAINING_SAMPLES` samples, naming it."""
+    for a, label in zip(arrays, labels):
+        if len(a.time_s) < MIN_TRAINING_SAMPLES:
+            raise ValueError(f"{label}: a training log needs at least {MIN_TRAINING_SAMPLES} samples, "
+                             f"got {len(a.time_s)}")
 
 
 def check_distinct_logs(arrays, labels) -> None:
