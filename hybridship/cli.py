@@ -273,6 +273,9 @@ def _cmd_train(args) -> int:
         raise UsageError(f"{_PROG} train: error: --out {args.out}: expected a .npz model file")
     if args.out.exists() and not args.out.is_file():
         raise UsageError(f"{_PROG} train: error: --out {args.out}: exists and is not a file")
+    _check_writable(args.out, f"{_PROG} train")
+    if args.members < 1:
+        raise UsageError(f"{_PROG} train: error: --members must be >= 1, got {args.members}")
     hp = HybridPredictor(vessel, ensemble_config=EnsembleConfig(n_members=args.members, seed=args.seed))
     hp.fit(files, dp_only=not args.all_rows, progress=sys.stderr.isatty())
     hp.save(args.out)
@@ -353,6 +356,7 @@ def _cmd_forecast(args) -> int:
     if not args.out.name.lower().endswith(".csv"):
         raise UsageError(f"{_PROG} forecast: error: --out {args.out}: expected a .csv file (the forecast is "
                          f"written as plain CSV)")
+    _check_writable(args.out, f"{_PROG} forecast")
     try:
         fc = hp.forecast(args.log, args.start_time, args.horizon_s, guard=not args.no_guard, commands=args.commands)
     except RequestError as exc:     # known only once the log is read: still the user's input
@@ -436,14 +440,31 @@ def _add_benchmark(sub) -> None:
     p.set_defaults(func=_cmd_benchmark_missing)
 
 
-def _check_out_folder(out: Path, prefix: str) -> None:
-    """Refuse an ``--out`` that exists and is not a folder, before any work is done."""
+def _check_writable(out: Path, prefix: str) -> None:
+    """Refuse an ``--out`` that this process may not write, before any work is done."""
+    from .fileio import check_writable
+
+    try:
+        check_writable(out)
+    except PermissionError as exc:
+        raise UsageError(f"{prefix}: error: --out {exc}") from None
+
+
+def _check_out_folder(out: Path, prefix: str, inputs: dict | None = None) -> None:
+    """Refuse an ``--out`` that exists and is not a folder, that may not be written, or that
+    is one of the input folders ``inputs`` (option -> folder; the tables would land among
+    the logs), before any work is done."""
     from .fileio import check_out_folder
 
     try:
         check_out_folder(out)
     except NotADirectoryError as exc:
         raise UsageError(f"{prefix}: error: --out {exc}") from None
+    _check_writable(out, prefix)
+    for opt, folder in (inputs or {}).items():
+        if folder is not None and out.resolve() == Path(folder).resolve():
+            raise UsageError(f"{prefix}: error: --out {out}: is the {opt} folder; the results would land among "
+                             f"its logs, give another folder")
 
 
 def _cmd_benchmark_manoeuvre(args) -> int:
@@ -451,7 +472,7 @@ def _cmd_benchmark_manoeuvre(args) -> int:
 
     from .evaluation.manoeuvre import ManoeuvreConfig, run_manoeuvre_benchmark
 
-    _check_out_folder(args.out, f"{_PROG} benchmark manoeuvre")
+    _check_out_folder(args.out, f"{_PROG} benchmark manoeuvre", {"--train": args.train, "--test": args.test})
 
     try:
         horizons = tuple(float(h) for h in args.horizons_s.split(","))
@@ -493,7 +514,7 @@ def _cmd_benchmark_drift(args) -> int:
 
     if args.members < 1 or args.intervals < 1 or args.scenarios < 1:
         raise UsageError(f"{_PROG} benchmark drift: error: --members, --intervals and --scenarios must be >= 1")
-    _check_out_folder(args.out, f"{_PROG} benchmark drift")
+    _check_out_folder(args.out, f"{_PROG} benchmark drift", {"--train": args.train, "--test": args.test})
     if not 0 <= args.calibration_scenarios <= 20:
         raise UsageError(f"{_PROG} benchmark drift: error: --calibration-scenarios must be in 0..20, "
                          f"got {args.calibration_scenarios}")

@@ -19,6 +19,17 @@ def path_argument(text: str) -> Path:
     return Path(text)
 
 
+def check_writable(path) -> Path:
+    """``path`` as a Path, refused (PermissionError) when the folder it would be written in
+    exists and does not let this process create files: checked before the work (a model
+    trained for minutes), not when the result is written."""
+    path = Path(path)
+    folder = next((p for p in path.parents if p.exists()), Path("."))
+    if folder.is_dir() and not os.access(folder, os.W_OK | os.X_OK):
+        raise PermissionError(f"{path}: cannot be written (no permission to create files in {folder})")
+    return path
+
+
 def check_out_folder(path) -> Path:
     """``path`` as a Path, refused (NotADirectoryError) when it, or a folder it would be made
     in, exists and is not a folder: an output folder checked before the work, not when the
@@ -47,18 +58,34 @@ def atomic_write(path, write: Callable[[BinaryIO], None]) -> Path:
     if path.exists() and not path.stat().st_mode & stat.S_IWUSR:
         # the rename would replace it even so (a directory entry, not the file, is written)
         raise PermissionError(f"{path}: is read-only; not replaced")
-    path.parent.mkdir(parents=True, exist_ok=True)
     tmp = path.with_name(f".{path.name}.{uuid.uuid4().hex}.tmp")
     try:
+        path.parent.mkdir(parents=True, exist_ok=True)
         with open(tmp, "xb") as fh:  # 'x': never clobber; mode follows the umask
             write(fh)
             fh.flush()
             os.fsync(fh.fileno())
         os.replace(tmp, path)
+    except OSError as err:
+        _discard(tmp)
+        ours = {os.fspath(tmp), os.fspath(path)} | {os.fspath(p) for p in path.parents}
+        if err.filename is not None and os.fspath(err.filename) not in ours:
+            raise   # about another file (one the writer reads), not the one written
+        # the error names the hidden temporary file (or the folder); the user asked for ``path``
+        msg = f"{path}: cannot be written ({err.strerror or err})"
+        raise (type(err)(err.errno, msg) if err.errno is not None else type(err)(msg)) from None
     except BaseException:
-        tmp.unlink(missing_ok=True)
+        _discard(tmp)
         raise
     return path
+
+
+def _discard(tmp: Path) -> None:
+    """Remove a temporary file if it is there; never raise (its folder may not exist, or be a file)."""
+    try:
+        tmp.unlink(missing_ok=True)
+    except OSError:
+        pass
 
 
 def remove_stale(folder, names) -> list[Path]:

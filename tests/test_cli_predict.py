@@ -230,3 +230,33 @@ def test_cli_warnings_and_short_logs_speak_the_users_words(log_dir, tmp_path, ca
     assert err[1].startswith("hybridship train: error: logs: ") and "need at least 20" in err[1]
     assert len(err) == 2 and ".py:" not in "".join(err) and "fit_ensemble" not in err[1]
     assert not (tmp_path / "m.npz").exists()
+
+
+def test_bad_options_are_refused_before_any_work(log_dir, tmp_path, capsys):
+    """--members 0 names the option (exit 2, no model file); a benchmark whose --out is its
+    --train folder is refused before the tables land among the logs."""
+    model = tmp_path / "m.npz"
+    assert main(["train", "--logs", str(log_dir), "--out", str(model), "--members", "0"]) == 2
+    assert "--members must be >= 1, got 0" in capsys.readouterr().err and not model.exists()
+    before = sorted(p.name for p in log_dir.iterdir())
+    assert main(["benchmark", "drift", "--train", str(log_dir), "--out", str(log_dir)]) == 2
+    assert "is the --train folder" in capsys.readouterr().err
+    assert sorted(p.name for p in log_dir.iterdir()) == before
+
+
+def test_forecast_api_names_repeated_starts_and_missing_known_commands(log_dir):
+    """The same start twice is refused by name (not silently forecast twice); known commands
+    with missing samples say so in the start's note."""
+    from hybridship.logs.io import read_log
+    from hybridship.predictors.forecast_setup import RequestError
+
+    df = read_log(log_dir / "log1.csv.gz")
+    p = DynamicPredictor("gunnerus")
+    with pytest.raises(RequestError, match=r"start_times_s: each start time at most once; 900 s is given 2 times"):
+        p.forecast(df, [900.0, 905.0, 900.0], 10.0)
+    gap = df.copy()
+    rpm = [c for c in gap.columns if c.endswith("_rpm")][0]
+    gap.loc[(gap.time_s > 803) & (gap.time_s < 808), rpm] = float("nan")
+    fc = p.forecast(gap, [800.0, 830.0], 20.0, commands="known")
+    assert fc.notes[0].startswith("commands known: 4 of 19 future command samples missing") and fc.notes[1] == ""
+    assert p.forecast(df, [800.0], 20.0, commands="known").notes == ("",)

@@ -454,3 +454,25 @@ def test_consistently_written_bad_arrays_are_refused(saved, tmp_path, key, value
         arrays[key] = value(arrays)
 
     _refused(_rewrite(saved, tmp_path, array_change=change, restamp=True, name=f"bad-{key}.npz"), message)
+
+
+def test_a_model_file_name_and_an_unwritable_place_are_refused_by_name(saved, tmp_path):
+    """save() wants a .npz name (as the CLI does); a place it cannot write names the model
+    file asked for, not the hidden temporary file, and leaves nothing behind."""
+    hp, _, _ = saved
+    with pytest.raises(ValueError, match=r"path: .*model.csv: expected a .npz model file name"):
+        hp.save(tmp_path / "model.csv")
+    blocker = tmp_path / "not_a_folder"
+    blocker.write_text("x")
+    with pytest.raises(OSError, match=r"not_a_folder/sub/m.npz: cannot be written") as err:
+        hp.save(blocker / "sub" / "m.npz")
+    assert ".tmp" not in str(err.value)
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["not_a_folder"]
+
+
+def test_fit_names_an_empty_list_and_a_too_short_log(model):
+    short = physics_log(model, seed=2, duration_s=300.0, t_shutdown_s=None).iloc[:2]
+    with pytest.raises(ValueError, match=r"^logs: expected at least one log, got an empty list"):
+        HybridPredictor(model.vessel, ensemble_config=TINY).fit([])
+    with pytest.raises(ValueError, match=r"^logs\[0\]: a training log needs at least 3 samples, got 2"):
+        HybridPredictor(model.vessel, ensemble_config=TINY).fit([short])

@@ -143,6 +143,8 @@ def save_model(predictor, path) -> Path:
     """Write a fitted hybrid as one ``.npz`` (arrays only, no pickle) with JSON metadata, atomically."""
     p = predictor
     path = Path(path)
+    if path.suffix.lower() != ".npz":
+        raise ValueError(f"path: {path}: expected a .npz model file name")
     e, g = p.ensemble, p.guard
     arrays = {f"w{i}": w for i, w in enumerate(e.weights)}
     arrays.update(x_mean=e.x_mean, x_std=e.x_std, y_mean=e.y_mean, y_std=e.y_std,
