@@ -8,7 +8,9 @@ forecast from every start time (every ``start_every_s``; every sample with
   (a manoeuvring case: the helmsman's orders are known in advance);
 * ``held``: commands held at their values at the start.
 
-The wind is held at its start value in both modes (its future is not known at a start).
+The wind's future is not known at a start: the physics, the data-only ensemble and dead
+reckoning hold the wind at its start value, the hybrid uses its fitted wind forecast (a gust
+decaying to the recent mean).
 Errors: absolute ``x0_m``, ``y0_m`` (earth frame of the pond, used as north/east),
 ``heading_deg`` (wrapped) and the position ``distance_m``, averaged over all start times
 of all test runs of a kind (``kind = all`` pools every start time).

@@ -5,7 +5,9 @@ commands="held")``; the forecast is a :class:`ForecastResult` (arrays, batch-fir
 start times) with a ``to_frame()`` tidy pandas view. Many start times are integrated as
 one batch. ``commands="known"`` feeds the logged future commands to the forecast (a
 manoeuvre whose orders are known); ``"held"`` keeps them at their start values (a DP loss,
-or a forecast whose future orders are unknown). The wind is held in both modes.
+or a forecast whose future orders are unknown). The wind's future is unknown in both
+modes: the hybrid carries it over the forecast with its fitted wind forecast (a gust
+decaying to the recent mean), the other forecasters hold it at its start value.
 
 The hybrid (Skulstad et al. 2022, sec. 3.2) steps the dynamic model one second, asks the
 ensemble for the acceleration residual from the model-predicted velocities,
