@@ -192,7 +192,8 @@ def load_model(cls, path, vessel=None):
 def _read_arrays(path: Path) -> dict:
     """Every array of the ``.npz`` file (``allow_pickle=False``)."""
     try:
-        with np.load(path, allow_pickle=False) as z:
+        # the file opened here, so that it is closed even when numpy fails to parse it
+        with open(path, "rb") as fh, np.load(fh, allow_pickle=False) as z:
             return {k: z[k] for k in z.files}
     except FileNotFoundError:
         raise ModelFileError(f"{path}: model file not found") from None
