@@ -20,7 +20,10 @@ commands known, a start every second:
 
 * ``dynamic``, ``dynamic_fitted``: the physics alone on the published and the identified
   coefficients (the wind held, as the benchmark's physics);
-* ``hybrid``, ``hybrid_fitted``: the hybrid on each.
+* ``hybrid``, ``hybrid_fitted``: the hybrid on each;
+* with ``--average``, ``hybrid_average``: the mean of the two hybrids' forecasts (heading on
+  the circle), a two-model ensemble whose members differ in their physics, not only in
+  their seed (``benchmarks/esso_error_sources.py --seed-average`` is the seed's).
 
 Writes ``theta.csv`` (coefficient, published value, identified value) and ``errors.csv``
 (the manoeuvre benchmark's columns), and prints the tables. About 16 min on one core.
@@ -82,6 +85,8 @@ def main(argv=None) -> int:
                     help="the benchmark's split (default out/esso-osaka/split)")
     ap.add_argument("--out", type=Path, default=ROOT / "out" / "esso-physics-fit")
     ap.add_argument("--evaluations", type=int, default=600, help="Powell's function evaluations (default 600)")
+    ap.add_argument("--average", action="store_true",
+                    help="also score the mean of the forecasts of the hybrids on both physics")
     args = ap.parse_args(argv)
     try:
         fit_dir, val_dir = validation_split(args.split, args.out / "split")
@@ -130,14 +135,22 @@ def main(argv=None) -> int:
     vf = vessel_with_factors(base, res.x)
     cfg = dataclasses.replace(cfg, calibration=dataclasses.replace(cfg.calibration, horizon_s=max(horizons)),
                               wind_samples=0)   # the spread is not scored here
-    per, runs = {}, None
+    per, runs, hybrids = {}, None, []
     for suffix, v in (("", v0), ("_fitted", vf)):
         runs = load_runs(val_dir, v)
         logs = [r.arrays for r in load_runs(fit_dir, v)]
         hyb = make_predictors(v, cfg)["hybrid"].fit(logs, row_stride=cfg.train_row_stride)
+        hybrids.append(hyb)
         for name, p in ((f"dynamic{suffix}", DynamicPredictor(v, residual_config=cfg.residual)),
                         (f"hybrid{suffix}", hyb)):
             per[(name, "known")] = [errors(p, r.arrays, cfg.start_every_s) for r in runs]
+    if args.average:
+        from esso_error_sources import _mean_forecast
+
+        mean = _mean_forecast(hybrids)
+        per[("hybrid_average", "known")] = [
+            forecast_errors(lambda a, st, h: mean(a, st, h, commands="known"), r.arrays,
+                            start_rows(r.arrays, int(steps.max()), cfg.start_every_s), steps) for r in runs]
     table = error_table(per, runs, horizons)
     atomic_write(args.out / "errors.csv", lambda fh: fh.write(table.to_csv(index=False).encode()))
     for state in ("distance_m", "heading_deg"):
