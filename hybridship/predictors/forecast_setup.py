@@ -182,7 +182,7 @@ def _known_command_steps(arrays: LogArrays, idx: np.ndarray, H: int, rpm0: np.nd
     return _hold_last_valid(rpm), _hold_last_valid(az)
 
 
-def _held_command_notes(arrays: LogArrays, idx: np.ndarray, H: int) -> list[str]:
+def _missing_command_notes(arrays: LogArrays, idx: np.ndarray, H: int) -> list[str]:
     """Per start, a note when commands of its H known steps were not logged (the reader holds
     the last logged value, :attr:`LogArrays.commands_logged`), "" otherwise."""
     rows = idx[:, None] + np.arange(1, H)[None, :]
@@ -264,7 +264,7 @@ def _forecast_setup(model, config: ResidualConfig, log, start_times_s, horizon_s
     extra_notes = [""] * len(idx)
     if commands == "known":
         rpm, az = _known_command_steps(arrays, idx, H, rpm[:, 0], az[:, 0], stop_after_failure)
-        extra_notes = _held_command_notes(arrays, idx, H)
+        extra_notes = _missing_command_notes(arrays, idx, H)
     # the wind of every step: held (S, 1, 2) or forecast (S, H, 2); a start without wind
     # (sensor dropped) keeps its start value; at least the start's step, which the guards read
     wind = wind_forecast.steps(arrays.wind, arrays.time_s, idx, wind[:, 0], max(H, 1), dt, logged=arrays.wind_logged,

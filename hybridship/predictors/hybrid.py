@@ -71,6 +71,8 @@ class HybridPredictor:
     Parameters
     ----------
     vessel : Vessel or str
+        The vessel, or a packaged name / vessel file. Every ``*_config`` below takes an
+        instance of its class or a dict of its fields (validated here, a misspelt key named).
     residual_config : ResidualConfig
         Features, derivative filter and start-state windows.
     ensemble_config : EnsembleConfig
