@@ -31,7 +31,9 @@ identified on the one-step residual / by a free-run fit), ``_th`` (the hull corr
 with the nets in multi-step training), ``+refit`` (after calibrating, the nets refitted on all
 the training rows, ``CalibrationConfig.refit``), ``+wind`` (the wind forecast fitted on the
 training runs' wind, ``wind_forecast="fit"``; held otherwise), ``+mirror`` (every fitting run
-also trained on mirrored port to starboard, :func:`mirror_log`: a symmetry prior for the nets).
+also trained on mirrored port to starboard, :func:`mirror_log`: a symmetry prior for the nets),
+``+env`` (the environment estimator in place of the mean residual, its station-keeping
+settings Froude-scaled to the model, :func:`froude_scaled_environment`).
 Writes ``errors.csv``, ``coverage.csv`` and ``sharpness.csv`` (the manoeuvre benchmark's columns) and
 ``timing.csv`` (training seconds), and prints the distance and heading tables with
 commands known.
@@ -81,13 +83,35 @@ def mirror_log(a, vessel):
     return dataclasses.replace(a, eta=eta, nu=nu, azimuth_rad=-a.azimuth_rad, wind=wind)
 
 
+def froude_scaled_environment(vessel, reference="gunnerus"):
+    """The environment estimator's default settings (made for the ``reference`` vessel at full
+    scale) Froude-scaled to ``vessel`` by the ratio of their Lpp: lengths by 1/lambda, speeds
+    and times by 1/sqrt(lambda), accelerations kept, yaw rates by sqrt(lambda), yaw
+    accelerations by lambda; a random walk's intensity [per sqrt(s)] gains lambda^(1/4). The
+    filter steps at 0.3 s on the Esso model (1 s scaled to 0.29 s, rounded to the 10-Hz rows)."""
+    from hybridship.residual.environment import EnvironmentConfig
+    from hybridship.vessel import load_vessel
+
+    lam = load_vessel(reference).particulars.L_pp_m / vessel.particulars.L_pp_m
+    s = np.sqrt(lam)
+    d = EnvironmentConfig()
+    return EnvironmentConfig(
+        position_std_m=d.position_std_m / lam, velocity_std_m_s=d.velocity_std_m_s / s,
+        yaw_rate_std_deg_s=d.yaw_rate_std_deg_s * s, yaw_accel_noise_rad_s2=d.yaw_accel_noise_rad_s2 * lam,
+        current_prior_m_s=d.current_prior_m_s / s, load_yaw_prior_rad_s2=d.load_yaw_prior_rad_s2 * lam,
+        load_walk_m_s2=d.load_walk_m_s2 * np.sqrt(s), load_yaw_walk_rad_s2=d.load_yaw_walk_rad_s2 * lam * np.sqrt(s),
+        wave_window_s=d.wave_window_s / s, variance_window_s=d.variance_window_s / s,
+        filter_step_s=round(d.filter_step_s / s, 1), held_load_window_s=d.held_load_window_s / s,
+        held_load_block_s=d.held_load_block_s / s, wave_axis_window_s=d.wave_axis_window_s / s)
+
+
 def variants(cfg, names):
     """Unfitted hybrids by variant name."""
     from hybridship.forecast_inputs.wind import HELD_WIND
     from hybridship.predictors import HybridPredictor
     from hybridship.residual.features import ALL_FEATURES, COMMAND_FEATURES, MEMORY_FEATURES
-
     from hybridship.residual.multistep import MultiStepConfig
+    from hybridship.vessel import load_vessel
 
     # a fixed base, whatever the benchmark's defaults are now: the six model-predicted
     # velocities and accelerations, one-step training, MultiStepConfig(), no command guard
@@ -148,6 +172,10 @@ def variants(cfg, names):
             added = MEMORY_FEATURES[1:] if mem.group(1) else MEMORY_FEATURES
             kw["residual_config"] = replace(rc, features=tuple(rc.features) + added,
                                             **({"command_memory_s": float(mem.group(2))} if mem.group(2) else {}))
+        if "+env" in name:
+            env = froude_scaled_environment(load_vessel("esso_osaka_model"))
+            kw.update(environment="estimator", environment_config=env,
+                      environment_window_s=3.0 * env.held_load_window_s)
         out[name] = HybridPredictor("esso_osaka_model", **kw)
     return out
 

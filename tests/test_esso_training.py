@@ -88,3 +88,22 @@ def test_variant_names_set_the_multistep_fields(et):
     assert plain.multistep_config.anchor_decay == 0.0 and plain.multistep_config.heading_length_m is None
     assert (plain.multistep_config.lr, plain.multistep_config.member_loss) == (1e-3, "mean")
     assert (ms.weight_average, plain.multistep_config.weight_average) == (0.9, 0.0)
+
+
+def test_the_env_variant_runs_the_estimator_with_froude_scaled_settings(et):
+    """``+env``: the estimator's full-scale settings scaled by Lpp (Froude: speeds by sqrt)."""
+    from hybridship.evaluation.manoeuvre import ManoeuvreConfig
+    from hybridship.residual.environment import EnvironmentConfig
+
+    name = "multi_step_abs+cmd+env"
+    hybrid, plain = (et.variants(ManoeuvreConfig(), [n])[n] for n in (name, "multi_step_abs+cmd"))
+    assert (hybrid.environment, plain.environment) == ("estimator", "mean")
+    d, c = EnvironmentConfig(), hybrid.environment_config
+    lam = load_vessel("gunnerus").particulars.L_pp_m / load_vessel("esso_osaka_model").particulars.L_pp_m
+    assert c.position_std_m == pytest.approx(d.position_std_m / lam)
+    assert c.velocity_std_m_s == pytest.approx(d.velocity_std_m_s / math.sqrt(lam))
+    assert c.yaw_accel_noise_rad_s2 == pytest.approx(d.yaw_accel_noise_rad_s2 * lam)
+    assert (c.accel_noise_m_s2, c.heading_std_deg, c.filter_step_s) == (d.accel_noise_m_s2, d.heading_std_deg, 0.3)
+    assert hybrid.environment_window_s >= c.held_load_window_s
+    same = et.froude_scaled_environment(load_vessel("gunnerus"))
+    assert same == d

@@ -275,8 +275,8 @@ def make_predictors(vessel, config: ManoeuvreConfig) -> dict[str, object]:
     rc, ec = config.residual, config.ensemble
     return {
         # The manoeuvre hybrid keeps the mean residual of its runs as its environment: the
-        # environment estimator is built and verified for station keeping and drift (1 Hz);
-        # on these 10-Hz manoeuvring runs it is not yet measured.
+        # environment estimator is built for station keeping and drift, and on the Esso
+        # validation runs (Froude-scaled) it made the hybrid worse (docs/esso-osaka.md).
         "hybrid": HybridPredictor(vessel, residual_config=rc, ensemble_config=ec,
                                   guard_quantile=config.guard_quantile, environment="mean",
                                   calibration_config=config.calibration,
