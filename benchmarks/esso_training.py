@@ -33,7 +33,8 @@ the training rows, ``CalibrationConfig.refit``), ``+wind`` (the wind forecast fi
 training runs' wind, ``wind_forecast="fit"``; held otherwise), ``+mirror`` (every fitting run
 also trained on mirrored port to starboard, :func:`mirror_log`: a symmetry prior for the nets),
 ``+env`` (the environment estimator in place of the mean residual, its station-keeping
-settings Froude-scaled to the model, :func:`froude_scaled_environment`).
+settings Froude-scaled to the model, :func:`froude_scaled_environment`), ``+prev`` (the
+paper's previous-residual inputs added, the rest of its nine features).
 Writes ``errors.csv``, ``coverage.csv`` and ``sharpness.csv`` (the manoeuvre benchmark's columns) and
 ``timing.csv`` (training seconds), and prints the distance and heading tables with
 commands known.
@@ -105,11 +106,30 @@ def froude_scaled_environment(vessel, reference="gunnerus"):
         held_load_block_s=d.held_load_block_s / s, wave_axis_window_s=d.wave_axis_window_s / s)
 
 
+_UNDERSCORE_TOKEN = r"_(?:(?:hl|h|b|i|v|c|ad|lr|ema)\d+(?:\.\d+)?|(?:m|sd)\d+|abs|lead|own|th)"
+_PLUS_TOKEN = r"\+(?:cmd|cg|wind|mirror|refit|hullms|hull|env|prev|ws|rate|mem(?:ang)?(?:\d+(?:\.\d+)?)?)"
+
+
+def check_variant_name(name: str) -> None:
+    """Refuse a variant name with a token this script does not know (a typo would otherwise run
+    another variant under the name asked for)."""
+    import re
+
+    head = re.match(r"(one_step|multi_step)", name)
+    if head is None:
+        raise SystemExit(f"error: variant {name!r}: must start with one_step or multi_step")
+    rest = name[head.end():]
+    tokens = re.findall(r"[_+][^_+]*", rest)
+    bad = [t for t in tokens if not re.fullmatch(_UNDERSCORE_TOKEN if t[0] == "_" else _PLUS_TOKEN, t)]
+    if bad:
+        raise SystemExit(f"error: variant {name!r}: unknown token(s) {', '.join(bad)} (see the module docstring)")
+
+
 def variants(cfg, names):
     """Unfitted hybrids by variant name."""
     from hybridship.forecast_inputs.wind import HELD_WIND
     from hybridship.predictors import HybridPredictor
-    from hybridship.residual.features import ALL_FEATURES, COMMAND_FEATURES, MEMORY_FEATURES
+    from hybridship.residual.features import ALL_FEATURES, COMMAND_FEATURES, MEMORY_FEATURES, PAPER_FEATURES
     from hybridship.residual.multistep import MultiStepConfig
     from hybridship.vessel import load_vessel
 
@@ -119,6 +139,7 @@ def variants(cfg, names):
     base_rc = replace(cfg.residual, features=ALL_FEATURES[:6])
     out = {}
     for name in names:
+        check_variant_name(name)
         # environment="mean" as in the benchmark (the estimator's default is for station keeping)
         kw = dict(residual_config=base_rc, ensemble_config=cfg.ensemble, guard_quantile=cfg.guard_quantile,
                   environment="mean",
@@ -166,6 +187,9 @@ def variants(cfg, names):
         if "+rate" in name:
             kw["residual_config"] = replace(base_rc, features=tuple(base_rc.features)
                                             + tuple(f for f in COMMAND_FEATURES if "rate" in f))
+        if "+prev" in name:
+            rc = kw["residual_config"]
+            kw["residual_config"] = replace(rc, features=tuple(rc.features) + PAPER_FEATURES[6:])
         mem = re.search(r"\+mem(ang)?(\d+(?:\.\d+)?)?", name)
         if mem:
             rc = kw["residual_config"]

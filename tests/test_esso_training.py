@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+import re
 import tomllib
 
 import numpy as np
@@ -107,3 +108,11 @@ def test_the_env_variant_runs_the_estimator_with_froude_scaled_settings(et):
     assert hybrid.environment_window_s >= c.held_load_window_s
     same = et.froude_scaled_environment(load_vessel("gunnerus"))
     assert same == d
+
+
+def test_a_variant_name_with_an_unknown_token_is_refused(et):
+    for good in ("multi_step_h30_b64_i100_abs+cmd+cg+wind+mem_sd1", "one_step+cmd+memang20", "multi_step_ema0.9_own+prev"):
+        et.check_variant_name(good)
+    for bad, token in (("multi_step_h30+cmdd", "+cmdd"), ("multi_step_abs_sd", "_sd"), ("multistep+cmd", "one_step")):
+        with pytest.raises(SystemExit, match=re.escape(token)):
+            et.check_variant_name(bad)
