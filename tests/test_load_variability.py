@@ -166,9 +166,12 @@ def test_station_keeping_spread_held_load_option(model, drift_log, tmp_path):
     cal_pos = held.calibration["held"]["position"]                             # calibrated on that spread
     np.testing.assert_allclose(held.forecast(drift_log, starts[:1], 60.0).eta_std[0, :, 0],
                                cal_pos.apply(f.eta_std[0, :, 0], f.lead_s))
-    early = held.forecast(drift_log, [40.0], 60.0, calibrated=False).eta_std[0]     # < 3 blocks before it
+    early_fc = held.forecast(drift_log, [40.0, 900.0], 60.0, calibrated=False)       # < 3 blocks before 40 s
+    early = early_fc.eta_std[0]
     np.testing.assert_allclose(early, base.forecast(drift_log, [40.0], 60.0, calibrated=False).eta_std[0])
     assert np.all(early[1:, :2] > 0)                                          # the members' spread, not zero
+    assert "members' spread" in early_fc.notes[0] and "members' spread" not in early_fc.notes[1]  # and says so
+    assert all("members' spread" not in n for n in g.notes)      # the option that asks for the members' spread
     over = HybridPredictor(model.vessel, ensemble_config=TINY).fit(
         [drift_log], dp_only=True, calibration=CalibrationConfig(station_keeping_spread="ensemble"))
     assert over.calibration_config.station_keeping_spread == "ensemble"       # fit's override is what forecasts use

@@ -821,7 +821,21 @@ class HybridPredictor:
         if calibrated:
             std = self._calibrated_forecast_std(std, st.lead_s, commands, after_stop)
         return ForecastResult(st.arrays.time_s[st.idx], st.lead_s, eta, nu, std, wgt,
-                              flags=flags, notes=st.notes)
+                              flags=flags, notes=self._short_station_keeping_notes(st, sigma_b, after_stop))
+
+    def _short_station_keeping_notes(self, st, sigma_b, after_stop) -> tuple:
+        """``st.notes`` with a note on each start during station keeping whose spread could
+        not be the held load's (``CalibrationConfig.station_keeping_spread``) because fewer
+        than three blocks of station keeping precede it (a log that begins shortly before):
+        it then reports the members' spread, which on station is far wider than the error."""
+        if not (self._held_load_on_station and sigma_b is not None and len(st.notes) == len(st.idx)):
+            return st.notes
+        short = ~after_stop & ~np.any(sigma_b > 0, axis=1)
+        block = self.environment_config.held_load_block_s
+        note = (f"spread: fewer than three {block:g}-s blocks of station keeping before the start, so it is "
+                f"the members' spread, far wider on station than the error (start {3 * block:g} s or more "
+                f"into the station keeping for the calibrated one)")
+        return tuple("; ".join(n for n in (old, note if k else "") if n) for old, k in zip(st.notes, short))
 
     @property
     def history_s(self) -> float:
