@@ -139,11 +139,11 @@ def _add_simulate(sub) -> None:
 
 
 def _check_log_path(path: Path, option: str) -> None:
+    """Refuse a log path whose extension no reader or writer knows (a missing folder of an
+    output is made when it is written, as for every ``--out``)."""
     name = path.name.lower()
     if not name.endswith((".csv", ".csv.gz", ".parquet", ".pq")):
         raise UsageError(f"{option} {path}: unsupported extension; use .csv, .csv.gz, .parquet or .pq")
-    if not path.parent.is_dir():
-        raise UsageError(f"{option} {path}: folder {path.parent} does not exist")
 
 
 def _cmd_simulate(args) -> int:
@@ -167,6 +167,7 @@ def _cmd_simulate(args) -> int:
         if args.seed < 0:
             raise UsageError(f"{prefix}: error: --seed must be non-negative, got {args.seed}")
         _check_log_path(args.out, f"{prefix}: error: --out")
+        _check_writable(args.out, prefix)
 
     try:
         vessel = load_vessel(args.vessel)
@@ -248,8 +249,8 @@ def _add_train(sub) -> None:
     p.add_argument("--vessel", default="gunnerus", help="packaged vessel name or vessel TOML file")
     p.add_argument("--logs", required=True, type=Path, help="folder of logs (*.csv, *.csv.gz, *.parquet)")
     p.add_argument("--out", required=True, type=path_argument, help="model file to write (.npz)")
-    p.add_argument("--members", type=int, default=10)
-    p.add_argument("--seed", type=_seed, default=0)
+    p.add_argument("--members", type=int, default=10, help="ensemble members (default 10)")
+    p.add_argument("--seed", type=_seed, default=0, help="seed of the initial weights and bootstrap draws (default 0)")
     p.add_argument("--all-rows", action="store_true", help="train on every row, not only dp_active == 1")
     p.set_defaults(func=_cmd_train)
 
@@ -347,6 +348,7 @@ def _cmd_forecast(args) -> int:
         raise UsageError(problem_lines(exc, f"{_PROG} forecast: error: ")) from None
     if not args.log.is_file():
         raise UsageError(f"{_PROG} forecast: error: --log {args.log}: file not found")
+    _check_log_path(args.log, f"{_PROG} forecast: error: --log")
     for opt, given in (("--log", args.log), ("--model", args.model)):
         if args.out.resolve() == given.resolve():
             raise UsageError(f"{_PROG} forecast: error: --out {args.out}: is the {opt} file; the forecast would "
@@ -360,7 +362,7 @@ def _cmd_forecast(args) -> int:
     try:
         fc = hp.forecast(args.log, args.start_time, args.horizon_s, guard=not args.no_guard, commands=args.commands)
     except RequestError as exc:     # known only once the log is read: still the user's input
-        raise UsageError(problem_lines(exc, f"{_PROG} forecast: error: ")) from None
+        raise UsageError(_in_option_names(problem_lines(exc, f"{_PROG} forecast: error: "))) from None
     df = fc.to_frame(quantiles=quantiles)
     atomic_write(args.out, lambda fh: fh.write(df.to_csv(index=False).encode("utf-8")))
     from .forecast_inputs import FaultFlags
@@ -376,9 +378,23 @@ def _cmd_forecast(args) -> int:
             guard = "guard off"
         print(f"start {row.start_time_s:g} s -> +{row.lead_s:g} s: north {row.north_m:.1f} m, east {row.east_m:.1f} m, "
               f"heading {row.heading_deg:.1f} deg (1-sigma {row.north_std_m:.1f}/{row.east_std_m:.1f} m); "
-              f"{guard}; flags: {', '.join(flags) if flags else 'none'}")
+              f"{guard}; other flags: {', '.join(flags) if flags else 'none'}")
+        if isinstance(row.get("notes"), str) and row["notes"]:
+            print(f"  notes: {row['notes']}")
     print(f"wrote {args.out}")
     return 0
+
+
+#: The forecast's Python arguments as its options are named (errors found once the log is read).
+_FORECAST_OPTIONS = (("start_times_s:", "--start-time:"), ("horizon_s:", "--horizon-s:"),
+                     ("commands='known'", "--commands known"), ("commands='held'", "--commands held"))
+
+
+def _in_option_names(message: str) -> str:
+    """``message`` with the forecast's Python argument names replaced by its options'."""
+    for python_name, option in _FORECAST_OPTIONS:
+        message = message.replace(python_name, option)
+    return message
 
 
 def _add_benchmark(sub) -> None:

@@ -80,13 +80,19 @@ def test_a_forecast_request_the_log_cannot_serve_is_a_usage_error(log_dir, tmp_p
     capsys.readouterr()
     log = log_dir / "log1.csv.gz"
     end = float(pd.read_csv(log).time_s.iloc[-1])
-    for extra, needle in ((["--start-time", "900.5"], "start_times_s: 900.5 s is not a sample time"),
-                          (["--start-time", f"{end - 10:g}", "--commands", "known"], "commands='known': the log ends")):
+    for extra, needle in ((["--start-time", "900.5"], "--start-time: 900.5 s is not a sample time"),
+                          (["--start-time", f"{end - 10:g}", "--commands", "known"], "--commands known: the log ends")):
         assert main(["forecast", "--model", str(model), "--log", str(log), "--out", str(tmp_path / "f.csv")]
                     + extra) == 2
         err = capsys.readouterr().err.strip()
         assert err.startswith("hybridship forecast: error: ") and needle in err and "\n" not in err
+        assert "start_times_s" not in err and "commands='" not in err     # the options' names, not Python's
     assert not (tmp_path / "f.csv").exists()
+    # a log whose extension no reader knows is the user's input too, refused before reading
+    (tmp_path / "ship.toml").write_text("[particulars]\n")
+    assert main(["forecast", "--model", str(model), "--log", str(tmp_path / "ship.toml"), "--start-time", "900",
+                 "--out", str(tmp_path / "f.csv")]) == 2
+    assert "--log" in capsys.readouterr().err and not (tmp_path / "f.csv").exists()
 
 
 def test_forecast_of_a_10_hz_log_is_on_its_grid_and_a_horizon_under_a_step_is_a_usage_error(tmp_path, capsys):
@@ -113,7 +119,7 @@ def test_forecast_of_a_10_hz_log_is_on_its_grid_and_a_horizon_under_a_step_is_a_
     capsys.readouterr()
     assert main(["forecast", "--model", str(tmp_path / "m.npz"), "--log", str(tmp_path / "1hz.csv"),
                  "--start-time", "301", "--horizon-s", "0.4", "--out", str(tmp_path / "short.csv")]) == 2
-    assert capsys.readouterr().err == ("hybridship forecast: error: horizon_s: 0.4 s is shorter than one step of "
+    assert capsys.readouterr().err == ("hybridship forecast: error: --horizon-s: 0.4 s is shorter than one step of "
                                        "the log (1 s)\n")
     assert not (tmp_path / "short.csv").exists()
 

@@ -347,7 +347,7 @@ def test_parse_seeds():
 
 
 def test_cli_simulate_writes_a_readable_log(tmp_path, capsys):
-    out = tmp_path / "sim.csv.gz"
+    out = tmp_path / "new" / "sim.csv.gz"     # a missing folder is made, as for every --out
     rc = main(["simulate", "--vessel", "gunnerus", "--scenario", "dp-loss", "--seed", "5", "--out", str(out),
                "--t-shutdown-s", "120", "--drift-s", "60", "--no-progress"])
     assert rc == 0
