@@ -114,6 +114,8 @@ def run_drift_benchmark(train=None, test=None, out_dir="drift-benchmark", *, ves
         with a ``train`` folder tests on the training logs' drifts.
     out_dir : path
         Folder for the outputs (created).
+    vessel : str or path
+        The logs' packaged vessel name or vessel file (TOML).
     members, seed : int
         Ensemble size and seed of every ensemble model.
     n_intervals : int
@@ -124,18 +126,19 @@ def run_drift_benchmark(train=None, test=None, out_dir="drift-benchmark", *, ves
         Train on the DP part (``dp_active == 1``) only.
     ensemble_config : EnsembleConfig or None
         Overrides ``members``/``seed`` (e.g. fewer epochs in tests).
+    plots, progress : bool
+        Write the figures beside the tables; print what is being done as it runs.
     training : {"one_step", "multi_step"}
         How the hybrid's nets are trained (see :class:`~hybridship.predictors.HybridPredictor`).
     calibration_scenarios : int
         DP losses simulated by the project's simulator (:func:`~hybridship.sim.scenario.embedded_scenarios`,
-        seeds from ``seed + 1000``, never the test scenarios) on which the hybrid's spread
-        after a failure is calibrated (:meth:`~hybridship.predictors.HybridPredictor.calibrate_after_stop`)
-        when the vessel's own failures are too few; 0: none, the raw spread. The simulator
-        is set up for the Gunnerus only: other vessels keep the raw spread. The vessel's own
-        failures are used instead when the training logs have at least
-        ``CalibrationConfig.after_stop_min_failures`` (3) of them: as ``fit`` calibrated on
-        them when the test logs are other logs, and per test log on the *other* logs'
-        failures (leave one out) when the test logs are the training logs.
+        seeds from ``seed + 1000``, never the test scenarios) on which the hybrid's spread after a failure
+        is calibrated (:meth:`~hybridship.predictors.HybridPredictor.calibrate_after_stop`) when the
+        vessel's own failures are too few; 0: none, the raw spread. The simulator is set up for the
+        Gunnerus only: other vessels keep the raw spread. The vessel's own failures are used instead when
+        the training logs have at least ``CalibrationConfig.after_stop_min_failures`` (3) of them: as
+        ``fit`` calibrated on them when the test logs are other logs, and per test log on the *other*
+        logs' failures (leave one out) when the test logs are the training logs.
     drift_hull : bool
         Let the hybrid learn the hull's yaw moment in a drift from failures
         (:mod:`hybridship.residual.drift_hull`; chosen like the spread after a failure:
@@ -180,8 +183,7 @@ def run_drift_benchmark(train=None, test=None, out_dir="drift-benchmark", *, ves
     coverage = _coverage_table(fc, pick, horizons, len(test_arrays))
     intervals = _coverage_intervals(fc, pick, horizons, seed)
 
-    outputs = {}
-    outputs["errors.csv"] = _write_csv(out / "errors.csv", long)
+    outputs = {"errors.csv": _write_csv(out / "errors.csv", long)}
     outputs["errors_per_log.csv"] = _write_csv(out / "errors_per_log.csv", per_log_long)
     outputs["coverage.csv"] = _write_csv(out / "coverage.csv", coverage)
     outputs["coverage_intervals.csv"] = _write_csv(out / "coverage_intervals.csv", intervals)

@@ -541,6 +541,9 @@ def run_manoeuvre_benchmark(vessel, train_dir, test_dir, horizons_s=HORIZONS_S, 
         The command line to quote in the Markdown.
     figures_dir : path, optional
         Also write the figures (``esso_*.png``) there.
+    progress : bool
+        Print each model's training time, the starts of each test run, the pooled distance
+        errors with commands known and the output folder with the total time.
 
     Returns
     -------
@@ -585,10 +588,13 @@ def run_manoeuvre_benchmark(vessel, train_dir, test_dir, horizons_s=HORIZONS_S, 
 
     predictors = make_predictors(v, cfg)
     timings = {}
+    t_start = time.perf_counter()
     for name, p in predictors.items():
         t0 = time.perf_counter()
         _fit(name, p, train, cfg)
         timings[f"fit_{name}"] = time.perf_counter() - t0
+        if progress:
+            print(f"{name}: trained in {timings[f'fit_{name}']:.0f} s on {len(train)} runs", flush=True)
 
     per_run, per_run_z, per_run_std, n_starts = _score_runs(predictors, test, steps, cfg.start_every_s, timings,
                                                             progress)
@@ -602,16 +608,30 @@ def run_manoeuvre_benchmark(vessel, train_dir, test_dir, horizons_s=HORIZONS_S, 
                                 test, horizons_s)
     result = BenchmarkResult(errors, train, test, predictors, horizons_s, cfg, timings, n_starts, coverage,
                              intervals, sharpness)
+    _write_outputs(result, Path(out_dir), command, figures_dir)
+    if progress:
+        _print_summary(errors, out_dir, time.perf_counter() - t_start)
+    return result
+
+
+def _print_summary(errors: pd.DataFrame, out_dir, seconds: float) -> None:
+    """The pooled distance errors with commands known, the output folder and the time taken."""
+    pooled = errors[(errors.kind == "all") & (errors.state == "distance_m") & (errors.commands == "known")]
+    print("pooled distance error [m], commands known:\n"
+          + pooled.pivot_table(index="model", columns="horizon_s", values="mae").round(3).to_string(), flush=True)
+    print(f"wrote {out_dir} ({seconds:.0f} s in all)", flush=True)
+
+
+def _write_outputs(result: BenchmarkResult, out_dir: Path, command: str | None, figures_dir) -> None:
+    """The benchmark's tables, its README and (optionally) its figures."""
     md = markdown_report(result, command=command)
     # every table is made before the first is written: a failure leaves no mix of old and new files
-    out_dir = Path(out_dir)
-    for name, table in (("errors.csv", errors), ("coverage.csv", coverage), ("coverage_intervals.csv", intervals),
-                        ("sharpness.csv", sharpness)):
+    for name, table in (("errors.csv", result.errors), ("coverage.csv", result.coverage),
+                        ("coverage_intervals.csv", result.coverage_intervals), ("sharpness.csv", result.sharpness)):
         atomic_write(out_dir / name, lambda fh, table=table: fh.write(table.to_csv(index=False).encode()))
     atomic_write(out_dir / "README.md", lambda fh: fh.write(md.encode()))
     if figures_dir is not None:
         write_figures(result, figures_dir)
-    return result
 
 
 # --------------------------------------------------------------------------------------

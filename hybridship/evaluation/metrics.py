@@ -36,6 +36,8 @@ def drift_errors(predictor, arrays, *, n_intervals: int = 20, horizons_s=HORIZON
         Number of successive start times from the shutdown.
     horizons_s : sequence of float
         Lead times at which errors are taken [s].
+    **forecast_kw
+        Passed on to ``predictor.forecast`` (for example ``nets=False``).
 
     Returns
     -------
@@ -61,6 +63,8 @@ def coverage(pred: np.ndarray, truth: np.ndarray, std: np.ndarray, sigmas=(1.0, 
     ----------
     pred, truth, std : ndarray, shape (..., n_horizons, 3)
         Pooled over all leading axes and over north and east (heading is not counted).
+    sigmas : sequence of float
+        Band half-widths in standard deviations.
 
     Returns
     -------
