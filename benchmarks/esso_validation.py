@@ -1,7 +1,7 @@
 """Esso Osaka: the hybrid's guard quantile on a validation split of the training runs.
 
-The figures on ``docs/esso-osaka.md`` ("Where the hybrid does not beat the physics")
-come from::
+The validation study of the envelope guard's quantile that ``docs/esso-osaka.md`` cites
+(its "Caveats": a stricter envelope did not fix berthing) comes from::
 
     python benchmarks/esso_validation.py --out out/esso-validation
 

@@ -159,7 +159,8 @@ def _held_turn(raw):
 
 
 def test_published_physics_reproduces_the_steady_turning_rate(runs, raws):
-    """Physics basis (no fitting): steady turn rates within a factor 1.5 of the data's."""
+    """Physics basis (no fitting): the model turns faster than the data in every held turn, by
+    less than a factor 1.5 (the published rudder's yaw moment is too strong at model scale)."""
     model = DynamicModel("esso_osaka_model")
     checked = 0
     for r in (r for r in runs if r.kind == "turning"):
@@ -172,7 +173,7 @@ def test_published_physics_reproduces_the_steady_turning_rate(runs, raws):
         rate_data = np.median(raw["r_angvelo [rad/s]"].to_numpy()[tail])
         res = model.rollout([0, 0, 0], [0.3, 0, 0], 3000, dt_s=0.1, rpm=[60 * n[0], 0], rudder_rad=[d[0]])
         rate_model = res.nu[0, -1, 2]
-        assert 1 / 1.5 < rate_model / rate_data < 1.5, (r.name, rate_model, rate_data)
+        assert 1.0 < rate_model / rate_data < 1.5, (r.name, rate_model, rate_data)
         checked += 1
     assert checked >= 8
 

@@ -111,8 +111,9 @@ class EnvironmentConfig(BaseModel):
     ``max_gated_samples`` in a row of the same channel were: a lasting shift (a datum
     change) is then followed. The logged velocities are not gated: they carry the
     wave-frequency motion, whose innovations in rough seas reach any gate that would catch
-    a spike (at 8 standard deviations, the position and heading gates never close on the
-    clean truthsim-dev logs or on 23 scenarios of our own simulator; velocity gates did).
+    a spike (at 8 standard deviations the position and heading gates did not close on the
+    clean truthsim-dev logs or on scenarios of our own simulator when this was checked;
+    velocity gates did).
 
     With ``wave_turned_yaw_load``, forecasts after a failure turn the held yaw load with the
     waves: their axis comes from the wave-frequency motion of the last ``wave_axis_window_s``
