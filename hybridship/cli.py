@@ -320,7 +320,9 @@ def _add_forecast(sub) -> None:
     p.add_argument("--commands", choices=("held", "known"), default="held",
                    help="held: commands stay at their start values (default); known: use the log's future "
                         "commands (the log must extend --horizon-s past each start)")
-    p.add_argument("--no-guard", action="store_true", help="do not shrink the correction outside the envelope")
+    p.add_argument("--no-guard", action="store_true",
+                   help="do not shrink the correction outside the envelope (after a DP failure the nets stay off "
+                        "all the same)")
     p.add_argument("--quantiles", default="", metavar="Q1,Q2,...",
                    help="also write these quantiles of north, east and heading (probabilities in (0, 1), e.g. "
                         "0.05,0.95), from the calibrated spread")

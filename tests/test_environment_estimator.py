@@ -221,6 +221,10 @@ def test_nets_stay_off_after_a_failure_unless_allowed(model):
     assert not np.allclose(off.eta, on.eta)
     before = hp.forecast(logs[1], [t0 - 100.0], 30.0)          # station keeping: nets on as before
     assert np.any(before.guard_weight[:, 1:] > 0.0)
+    # without the guard the nets stay off after the failure too: the switch is not the guard's
+    unguarded = hp.forecast(logs[1], starts, 30.0, guard=False)
+    np.testing.assert_allclose(unguarded.eta, hp.forecast(logs[1], starts, 30.0, nets=False).eta)
+    assert not np.allclose(hp.forecast(logs[1], starts, 30.0, guard=False, nets_after_stop=True).eta, unguarded.eta)
 
 
 def test_spread_after_a_stop_is_calibrated_on_logs_with_failures(model, tmp_path):

@@ -287,7 +287,7 @@ def test_a_diverging_rollout_stops_with_a_clear_error(model, exact_logs):
     E = hp.ensemble.n_members
     hp.ensemble.predict_members = lambda X: np.full((E,) + X.shape[1:-1] + (3,), 1e300)
     with pytest.raises(FloatingPointError, match="diverged at lead"):
-        hp.forecast(exact_logs[1], [900.0], 60.0, guard=False)
+        hp.forecast(exact_logs[1], [900.0], 60.0, guard=False, nets_after_stop=True)
 
 
 def test_heading_quantiles_stay_beside_the_wrapped_heading():

@@ -270,7 +270,8 @@ fig.tight_layout()
 # here on the held-out log only (one scenario: expect large scatter between scenarios).
 
 # %%
-predictors = {"hybrid": (hybrid, {}), "hybrid_nets_unguarded": (hybrid, {"guard": False}),
+paper_scheme = {"guard": False, "nets_after_stop": True}     # nets unguarded, on after the failure too
+predictors = {"hybrid": (hybrid, {}), "hybrid_nets_unguarded": (hybrid, paper_scheme),
               "dynamic": (DynamicPredictor("gunnerus"), {}), "dead_reckoning": (DeadReckoning("gunnerus"), {})}
 errors = {name: [metrics.drift_errors(p, test, **kw)] for name, (p, kw) in predictors.items()}
 long = metrics.error_table(errors)

@@ -200,7 +200,8 @@ if HAVE_DATA:
 
 # %%
 if HAVE_DATA:
-    predictors = {"hybrid": (hybrid, {}), "hybrid_nets_unguarded": (hybrid, {"guard": False}),
+    paper_scheme = {"guard": False, "nets_after_stop": True}     # nets unguarded, on after the failure too
+    predictors = {"hybrid": (hybrid, {}), "hybrid_nets_unguarded": (hybrid, paper_scheme),
                   "dynamic": (DynamicPredictor("gunnerus"), {}), "dead_reckoning": (DeadReckoning("gunnerus"), {})}
     errors = {name: [metrics.drift_errors(p, test, **kw)] for name, (p, kw) in predictors.items()}
     print(f"{held_out.name}: mean absolute error, first 5 / first 20 forecasts (m, m, deg)")

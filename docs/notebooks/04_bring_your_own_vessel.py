@@ -282,7 +282,8 @@ ax.set(xlabel="east [m]", ylabel="north [m]", title="60-s forecasts after the fa
 ax.legend()
 
 # %%
-predictors = {"hybrid": (hybrid, {}), "hybrid_nets_unguarded": (hybrid, {"guard": False}),
+paper_scheme = {"guard": False, "nets_after_stop": True}     # nets unguarded, on after the failure too
+predictors = {"hybrid": (hybrid, {}), "hybrid_nets_unguarded": (hybrid, paper_scheme),
               "dynamic": (DynamicPredictor(vessel), {}), "dead_reckoning": (DeadReckoning(vessel), {})}
 errors = {name: [metrics.drift_errors(p, test, **kw)] for name, (p, kw) in predictors.items()}
 print("Mean absolute error after the failure, first 5 / first 20 forecasts (m, m, deg):")

@@ -373,7 +373,9 @@ def _benchmark_models(vessel, hybrid, data_only) -> dict:
     mean_bias.environment = "mean"
     # its spread after a failure stays raw: the after-stop scale was fitted for the estimator
     mean_bias.calibration = {k: v for k, v in hybrid.calibration.items() if k != "after_stop"}
-    return {"hybrid": (hybrid, {"guard": True}), "hybrid_nets_unguarded": (hybrid, {"guard": False}),
+    # the paper's scheme: the nets unguarded, and on after the failure too
+    unguarded = {"guard": False, "nets_after_stop": True}
+    return {"hybrid": (hybrid, {"guard": True}), "hybrid_nets_unguarded": (hybrid, unguarded),
             "hybrid_mean_bias": (mean_bias, {"guard": True}),
             "dynamic": (DynamicPredictor(vessel), {}), "dead_reckoning": (DeadReckoning(vessel), {}),
             "data_only": (data_only, {})}

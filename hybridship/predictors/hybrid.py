@@ -1116,13 +1116,13 @@ class HybridPredictor:
                 drift_yaw_uv=None, command_memory=None, wave_axis=None):
         """Batched hybrid rollout from states (S, 3), previous residual deviations (S, 3), biases (S, 3)
         or per member (E, S, 3) (surge/sway in NED), commands held (S, 1, K) or per step (S, n_steps, K),
-        wind held (S, 1, 2) or per step (S, n_steps, 2), and optionally a held current ``[speed_m_s,
-        dir_to_rad]`` (S, 1, 2) and a body-frame extra acceleration (S, 1, 3) for the physics, and
-        optionally per start the hull's yaw coefficient in a drift ``drift_yaw_uv`` (S,) [rad/m^2]
-        (:func:`_with_drift_yaw`). ``nets=False`` needs no ensemble. ``command_memory`` (S, >= n_steps, 2):
-        the command-memory features of the steps (:meth:`_command_memory`), needed when the nets use
-        them. ``wave_axis`` (S, 2): the waves' axis per start (:meth:`_wave_axes`); the held yaw load
-        then turns with them.
+        wind held (S, 1, 2) or per step (S, n_steps, 2), and optionally a held current ``[speed_m_s, dir_to_rad]``
+        (S, 1, 2) and a body-frame extra acceleration (S, 1, 3) for the physics, and optionally per start
+        the hull's yaw coefficient in a drift ``drift_yaw_uv`` (S,) [rad/m^2] (:func:`_with_drift_yaw`).
+        ``nets=False`` needs no ensemble; ``nets_weight`` (S,): 0 where the nets stay off (after a failure),
+        with the guard on or off. ``command_memory`` (S, >= n_steps, 2): the command-memory features of the
+        steps (:meth:`_command_memory`), needed when the nets use them. ``wave_axis`` (S, 2): the waves' axis
+        per start (:meth:`_wave_axes`); the held yaw load then turns with them.
 
         Every step: the physics advances the ensemble-mean state one step (RK4, through
         :meth:`DynamicModel.step_unchecked` with the extra acceleration ``accel_ext``) and predicts the
@@ -1192,16 +1192,16 @@ class HybridPredictor:
             if use_mem:
                 feats[:, :, _MEMORY_COL:] = command_memory[:, j]
             X = feats[..., fidx]
-            r = ens.predict_members(X) if nets else np.zeros((E, S, 3))     # (E, S, 3)
+            r = ens.predict_members(X) * w_start[None, :, None] if nets else np.zeros((E, S, 3))   # (E, S, 3)
             if guard:
                 z = (X.mean(axis=0) - ens.x_mean) / ens.x_std
-                w = self.guard.weight(z) * w_thrust * w_start   # (S,)
+                w = self.guard.weight(z) * w_thrust   # (S,)
                 if cmd_guard:
                     ch = scales["angle_channel"]
                     w = w * self.command_regime.weight(rpm_j[:, 0, 0] / scales["rpm_scale"], nu_1[:, 0],
                                                        az_j[:, 0, ch] if ch is not None else np.zeros(S))
                 r = r * w[None, :, None]
-                wgt[:, j + 1] = w
+                wgt[:, j + 1] = w * w_start
             if nets and self.hull is not None:
                 r = r + (self.hull.predict(feats[0]) * w_start[:, None])[None]
             r_prev = r
