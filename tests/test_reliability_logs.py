@@ -117,6 +117,17 @@ def test_missing_required_column_points_at_a_unit_variant(moving_log):
                  r"in another unit")
 
 
+def test_missing_required_column_suggests_a_misspelt_or_bare_name_and_lists_a_few_columns(moving_log):
+    _refused(moving_log.rename(columns={"north_m": "nort_m"}), r"found 'nort_m': did you mean 'north_m'\?")
+    _refused(moving_log.rename(columns={"heading_deg": "Heading_deg"}),
+             r"found 'Heading_deg': did you mean 'heading_deg'")
+    _refused(moving_log.rename(columns={"heading_deg": "heading"}),
+             r"found 'heading', which may be heading_deg: name it so if it is in degrees, else convert it")
+    wide = moving_log.drop(columns=["north_m"]).assign(**{f"extra_{i}": 0.0 for i in range(30)})
+    err = _refused(wide, r"found: time_s, .*\.\.\. \(\d+ more\)\)")
+    assert "extra_29" not in str(err)
+
+
 def test_optional_column_in_another_unit_is_named_in_the_warning(moving_log):
     # a wind speed in knots beside the direction: refused (read as no wind it would be calm)
     df = moving_log.rename(columns={"wind_speed_m_s": "wind_speed_kn"})

@@ -554,19 +554,42 @@ def _check_column_names(cols: list[str], source: str) -> None:
     missing = [c for c in REQUIRED_COLUMNS if c not in cols]
     if missing:
         one_name = len(cols) == 1 and any(sep in cols[0] for sep in (";", "\t"))
-        units = [f"found {c!r}, which looks like {_unit_variant_of(c)} in another unit"
-                 for c in cols if _unit_variant_of(c) in missing and not one_name]
+        like = {c: _unit_variant_of(c) for c in cols if _unit_variant_of(c) in missing and not one_name}
+        units = [f"found {c!r}, which looks like {f} in another unit" for c, f in like.items()
+                 if c.lower() not in _UNIT_STEMS[f]]
         hints = [f"{'; '.join(units)}: convert it and name it as the format says"] if units else []
+        hints += [f"found {c!r}, which may be {f}: name it so if it is in "
+                  f"{_UNIT_WORDS.get(f.rsplit('_', 1)[-1], 'its unit')}, else convert it"
+                  for c, f in like.items() if c.lower() in _UNIT_STEMS[f]]
+        hints += [f"found {c!r}: did you mean {m!r}?" for m in missing if m not in like.values()
+                  for c in _close_names(m, cols)]
         hints += [f"found {c!r}, which is {c.strip()} with spaces around the name (a header written with "
                   f"', ' between names?)" for c in cols if c != c.strip() and c.strip() in missing][:1]
         hints += [f"the header is one name holding {sep!r}: the log format separates columns with ',' (and "
                   f"writes decimals with '.')" for sep in (";", "\t") if len(cols) == 1 and sep in cols[0]][:1]
         hint = "".join(f"; {h}" for h in hints)
+        shown = ", ".join(cols[:_FOUND_SHOWN]) + (f", ... ({len(cols) - _FOUND_SHOWN} more)"
+                                                  if len(cols) > _FOUND_SHOWN else "")
         raise LogFormatError(
             f"{missing[0]}: required column missing (missing: {', '.join(missing)}; required: "
-            f"{', '.join(REQUIRED_COLUMNS)}; found: {', '.join(cols) or 'none'}){hint}{_where(source)}",
+            f"{', '.join(REQUIRED_COLUMNS)}; found: {shown or 'none'}){hint}{_where(source)}",
             column=missing[0],
         )
+
+
+#: How many of a log's columns a missing-column error lists.
+_FOUND_SHOWN = 12
+#: The unit suffixes of the required columns, in words.
+_UNIT_WORDS = {"s": "seconds", "m": "metres", "deg": "degrees"}
+
+
+def _close_names(name: str, cols: list[str]) -> list[str]:
+    """The columns of ``cols`` that look like a misspelling of the format column ``name``
+    (another case, or one or two letters off; :func:`difflib.get_close_matches`)."""
+    import difflib
+
+    lower = {c.lower(): c for c in cols}
+    return [lower[m] for m in difflib.get_close_matches(name, list(lower), n=1, cutoff=0.8)]
 
 
 def _parse_fixed_columns(df: pd.DataFrame, cols: list[str], t: np.ndarray, source: str,
