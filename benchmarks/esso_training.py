@@ -107,7 +107,7 @@ def froude_scaled_environment(vessel, reference="gunnerus"):
 
 
 _UNDERSCORE_TOKEN = r"_(?:(?:hl|h|b|i|v|c|ad|lr|ema)\d+(?:\.\d+)?|(?:m|sd)\d+|abs|lead|own|th)"
-_PLUS_TOKEN = r"\+(?:cmd|cg|wind|mirror|refit|hullms|hull|env|prev|ws|rate|mem(?:ang)?(?:\d+(?:\.\d+)?)?)"
+_PLUS_TOKEN = r"\+(?:cmd|cg|wind|mirror|refit|hullms|hull|env|prev|rate|mem(?:ang)?(?:\d+(?:\.\d+)?)?)"
 
 
 def check_variant_name(name: str) -> None:
@@ -115,7 +115,7 @@ def check_variant_name(name: str) -> None:
     another variant under the name asked for)."""
     import re
 
-    head = re.match(r"(one_step|multi_step)", name)
+    head = re.match(r"(one_step|multi_step)(?=[_+]|$)", name)
     if head is None:
         raise SystemExit(f"error: variant {name!r}: must start with one_step or multi_step")
     rest = name[head.end():]

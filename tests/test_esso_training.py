@@ -111,8 +111,10 @@ def test_the_env_variant_runs_the_estimator_with_froude_scaled_settings(et):
 
 
 def test_a_variant_name_with_an_unknown_token_is_refused(et):
-    for good in ("multi_step_h30_b64_i100_abs+cmd+cg+wind+mem_sd1", "one_step+cmd+memang20", "multi_step_ema0.9_own+prev"):
+    for good in ("multi_step_h30_b64_i100_abs+cmd+cg+wind+mem_sd1", "one_step+cmd+memang20",
+                 "multi_step_ema0.9_own+prev", "one_step"):
         et.check_variant_name(good)
-    for bad, token in (("multi_step_h30+cmdd", "+cmdd"), ("multi_step_abs_sd", "_sd"), ("multistep+cmd", "one_step")):
+    for bad, token in (("multi_step_h30+cmdd", "+cmdd"), ("multi_step_abs_sd", "_sd"), ("multistep+cmd", "one_step"),
+                       ("one_step2", "one_step"), ("one_step+ws", "+ws")):   # +ws: made by --with-wind-spread
         with pytest.raises(SystemExit, match=re.escape(token)):
             et.check_variant_name(bad)
