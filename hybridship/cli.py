@@ -31,6 +31,7 @@ from __future__ import annotations
 
 import argparse
 import math
+import re
 import sys
 import warnings
 from pathlib import Path
@@ -167,6 +168,7 @@ def _cmd_simulate(args) -> int:
         if args.seed < 0:
             raise UsageError(f"{prefix}: error: --seed must be non-negative, got {args.seed}")
         _check_log_path(args.out, f"{prefix}: error: --out")
+        _check_out_folder(args.out.parent, prefix)      # a file on the way: refused before simulating
         _check_writable(args.out, prefix)
 
     try:
@@ -387,15 +389,16 @@ def _cmd_forecast(args) -> int:
     return 0
 
 
-#: The forecast's Python arguments as its options are named (errors found once the log is read).
-_FORECAST_OPTIONS = (("start_times_s:", "--start-time:"), ("horizon_s:", "--horizon-s:"),
-                     ("commands='known'", "--commands known"), ("commands='held'", "--commands held"))
+#: The forecast's Python arguments (as whole words) as its options are named (errors found once
+#: the log is read).
+_FORECAST_OPTIONS = ((r"start_times_s:", "--start-time:"), (r"horizon_s:", "--horizon-s:"),
+                     (r"commands='known'", "--commands known"), (r"commands='held'", "--commands held"))
 
 
 def _in_option_names(message: str) -> str:
     """``message`` with the forecast's Python argument names replaced by its options'."""
     for python_name, option in _FORECAST_OPTIONS:
-        message = message.replace(python_name, option)
+        message = re.sub(r"(?<![\w.])" + python_name, option, message)
     return message
 
 

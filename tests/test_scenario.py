@@ -354,6 +354,9 @@ def test_cli_simulate_writes_a_readable_log(tmp_path, capsys):
     df = read_log(out, **THRUSTERS)
     assert df["dp_active"].iloc[-1] == 0 and len(df) == df["time_s"].iloc[-1] + 1
     assert "wrote" in capsys.readouterr().out
+    # a file where a folder of --out would be is refused before the simulation
+    assert main(["simulate", "--seed", "5", "--out", str(out / "x.csv"), "--no-progress"]) == 2
+    assert "exists and is not a folder" in capsys.readouterr().err
 
 
 def test_cli_sweep(tmp_path):
