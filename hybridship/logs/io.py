@@ -555,14 +555,15 @@ def _check_column_names(cols: list[str], source: str) -> None:
     if missing:
         one_name = len(cols) == 1 and any(sep in cols[0] for sep in (";", "\t"))
         like = {c: _unit_variant_of(c) for c in cols if _unit_variant_of(c) in missing and not one_name}
+        typo = _misspelt(missing, cols, like)
+        like = {c: f for c, f in like.items() if c not in typo}
         units = [f"found {c!r}, which looks like {f} in another unit" for c, f in like.items()
                  if c.lower() not in _UNIT_STEMS[f]]
         hints = [f"{'; '.join(units)}: convert it and name it as the format says"] if units else []
         hints += [f"found {c!r}, which may be {f}: name it so if it is in "
                   f"{_UNIT_WORDS.get(f.rsplit('_', 1)[-1], 'its unit')}, else convert it"
                   for c, f in like.items() if c.lower() in _UNIT_STEMS[f]]
-        hints += [f"found {c!r}: did you mean {m!r}?" for m in missing if m not in like.values()
-                  for c in _close_names(m, cols)]
+        hints += [f"found {c!r}: did you mean {m!r}?" for c, m in typo.items()]
         hints += [f"found {c!r}, which is {c.strip()} with spaces around the name (a header written with "
                   f"', ' between names?)" for c in cols if c != c.strip() and c.strip() in missing][:1]
         hints += [f"the header is one name holding {sep!r}: the log format separates columns with ',' (and "
@@ -583,13 +584,21 @@ _FOUND_SHOWN = 12
 _UNIT_WORDS = {"s": "seconds", "m": "metres", "deg": "degrees"}
 
 
-def _close_names(name: str, cols: list[str]) -> list[str]:
-    """The columns of ``cols`` that look like a misspelling of the format column ``name``
-    (another case, or one or two letters off; :func:`difflib.get_close_matches`)."""
+def _misspelt(missing: list[str], cols: list[str], unit_variants: dict) -> dict:
+    """Column -> the missing format column it looks like a misspelling of (another case, or a
+    letter or two off; :func:`difflib.get_close_matches`). A column that also looks like the
+    format column in another unit (``unit_variants``, ``heading_rad``) counts only when it is
+    closer still (``heading_dg``), and one that differs by spaces around it is left to that hint."""
     import difflib
 
     lower = {c.lower(): c for c in cols}
-    return [lower[m] for m in difflib.get_close_matches(name, list(lower), n=1, cutoff=0.8)]
+    out = {}
+    for m in missing:
+        for low in difflib.get_close_matches(m, list(lower), n=1, cutoff=0.8):
+            c = lower[low]
+            if c.strip() != m and (c not in unit_variants or difflib.SequenceMatcher(None, low, m).ratio() >= 0.9):
+                out[c] = m
+    return out
 
 
 def _parse_fixed_columns(df: pd.DataFrame, cols: list[str], t: np.ndarray, source: str,
