@@ -170,8 +170,8 @@ def test_station_keeping_spread_held_load_option(model, drift_log, tmp_path):
     early = early_fc.eta_std[0]
     np.testing.assert_allclose(early, base.forecast(drift_log, [40.0], 60.0, calibrated=False).eta_std[0])
     assert np.all(early[1:, :2] > 0)                                          # the members' spread, not zero
-    assert "members' spread" in early_fc.notes[0] and "members' spread" not in early_fc.notes[1]  # and says so
-    assert all("members' spread" not in n for n in g.notes)      # the option that asks for the members' spread
+    assert "from the members'" in early_fc.notes[0] and "from the members'" not in early_fc.notes[1]  # and says so
+    assert all("from the members'" not in n for n in g.notes)      # the option that asks for the members' spread
     over = HybridPredictor(model.vessel, ensemble_config=TINY).fit(
         [drift_log], dp_only=True, calibration=CalibrationConfig(station_keeping_spread="ensemble"))
     assert over.calibration_config.station_keeping_spread == "ensemble"       # fit's override is what forecasts use

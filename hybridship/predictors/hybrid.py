@@ -827,14 +827,15 @@ class HybridPredictor:
         """``st.notes`` with a note on each start during station keeping whose spread could
         not be the held load's (``CalibrationConfig.station_keeping_spread``) because fewer
         than three blocks of station keeping precede it (a log that begins shortly before):
-        it then reports the members' spread, which on station is far wider than the error."""
+        its spread then comes from the members' (scaled by the calibration fitted on the held
+        load's when calibrated), which on station is far wider than the error."""
         if not (self._held_load_on_station and sigma_b is not None and len(st.notes) == len(st.idx)):
             return st.notes
         short = ~after_stop & ~np.any(sigma_b > 0, axis=1)
         block = self.environment_config.held_load_block_s
-        note = (f"spread: fewer than three {block:g}-s blocks of station keeping before the start, so it is "
-                f"the members' spread, far wider on station than the error (start {3 * block:g} s or more "
-                f"into the station keeping for the calibrated one)")
+        note = (f"spread: the held load's needs three {block:g}-s blocks of station keeping before the start and "
+                f"this start has fewer, so its spread comes from the members' and on station is far wider than the "
+                f"error (start {3 * block:g} s or more into the station keeping)")
         return tuple("; ".join(n for n in (old, note if k else "") if n) for old, k in zip(st.notes, short))
 
     @property
