@@ -125,6 +125,45 @@ class EnvironmentConfig(BaseModel):
     efficiency factors on the surge, sway and yaw thrust, prior ``thrust_error_prior``) or
     ``"per_thruster"`` (one efficiency factor per thruster, acting through that thruster's
     lever arm, prior ``thrust_error_prior_per_thruster`` each).
+
+    Attributes
+    ----------
+    position_std_m, heading_std_deg, velocity_std_m_s, yaw_rate_std_deg_s : float
+        Measurement standard deviations of north/east [m], heading [deg], surge/sway speed
+        [m/s] and yaw rate [deg/s]; with ``adaptive_measurement_std`` the floor under the
+        wave-motion estimate (positions keep theirs: a GNSS error is slow, not wave-like).
+    accel_noise_m_s2, yaw_accel_noise_rad_s2 : float
+        Process noise on the surge/sway [m/s^2] and yaw [rad/s^2] accelerations.
+    current_prior_m_s, load_prior_m_s2, load_yaw_prior_rad_s2 : float
+        Prior standard deviations of each current component [m/s] and of the load in
+        north/east [m/s^2] and yaw [rad/s^2] (all with mean 0).
+    current_walk_m_s, load_walk_m_s2, load_yaw_walk_rad_s2, thrust_error_walk : float
+        Random-walk intensities of the current, the load and the thrust errors [unit per
+        sqrt(s)]; 0 keeps the state constant.
+    thrust_error_prior : tuple of 3 float
+        Prior standard deviations of the per-DOF efficiency factors (``"per_dof"``) [-].
+    thrust_error_model : {"per_dof", "per_thruster"}
+        Structure of the thrust errors (above).
+    thrust_error_prior_per_thruster : float
+        Prior standard deviation of each thruster's efficiency factor (``"per_thruster"``) [-].
+    use_velocity : bool
+        Also use the logged surge/sway speeds and yaw rate as measurements (when logged).
+    adaptive_measurement_std : bool
+        Raise each measurement's standard deviation to the spread of its wave-frequency part:
+        the signal less its centred ``wave_window_s`` [s] moving mean, over the
+        ``variance_window_s`` [s] before the row (causal).
+    wave_window_s, variance_window_s : float
+        See ``adaptive_measurement_std`` [s].
+    reset_yaw_load_at_stop, yaw_load_kept_at_stop, yaw_load_std_at_stop : bool, float, float or None
+        The yaw environment at a thrust stop (above).
+    filter_step_s : float
+        Longest filter step [s]: a faster log is filtered on every ``m``-th row.
+    held_load_window_s, held_load_block_s : float
+        Window and block length [s] over which the load's variability is measured (above).
+    innovation_gate_sigma, max_gated_samples : float, int
+        Outlier gate on position and heading (above).
+    wave_turned_yaw_load, wave_axis_window_s, min_wave_anisotropy, min_wave_sin2 : bool, float, float, float
+        The held yaw load turned with the waves after a failure (above; window in [s]).
     """
 
     model_config = ConfigDict(frozen=True, extra="forbid")
