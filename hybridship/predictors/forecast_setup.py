@@ -182,6 +182,11 @@ def _known_command_steps(arrays: LogArrays, idx: np.ndarray, H: int, rpm0: np.nd
     return _hold_last_valid(rpm), _hold_last_valid(az)
 
 
+def join_notes(*per_start) -> tuple:
+    """Per start, the non-empty notes of each sequence joined with "; " (sequences of equal length)."""
+    return tuple("; ".join(n for n in notes if n) for notes in zip(*per_start))
+
+
 def _missing_command_notes(arrays: LogArrays, idx: np.ndarray, H: int) -> list[str]:
     """Per start, a note when commands of its H known steps were not logged (the reader holds
     the last logged value, :attr:`LogArrays.commands_logged`), "" otherwise."""
@@ -275,7 +280,7 @@ def _forecast_setup(model, config: ResidualConfig, log, start_times_s, horizon_s
     flags.update({k: np.asarray(v, dtype=bool) for k, v in sw.flags.items()})
     flags[FaultFlags.INPUT_CLIPPED] = np.asarray(chk.clipped, dtype=bool)
     notes = tuple(sw.notes) if len(sw.notes) == len(idx) else ("",) * len(idx)
-    notes = tuple("; ".join(n for n in pair if n) for pair in zip(notes, extra_notes))
+    notes = join_notes(notes, extra_notes)
     return _Setup(arrays, idx, dt, H, chk.eta, chk.nu, np.ascontiguousarray(chk.rpm),
                   np.ascontiguousarray(chk.azimuth_rad), np.ascontiguousarray(chk.wind), int(chk.substeps),
                   flags, notes)

@@ -39,7 +39,7 @@ from ..residual.drift_hull import (MIN_FAILURES as DRIFT_HULL_MIN_FAILURES, MUNK
 from ..residual.hull import HullCorrection
 from .after_failure import drift_forecasts, has_drift
 from .forecast_setup import (FORECAST_HISTORY_S, _check_row_stride, _forecast_setup, as_log_arrays, forecast_step_s,
-                             log_list, start_indices)
+                             join_notes, log_list, start_indices)
 from .model_file import load_model, save_model
 from .result import ForecastResult
 from .training_logs import check_distinct_logs, check_training_lengths, log_label
@@ -829,14 +829,14 @@ class HybridPredictor:
         than three blocks of station keeping precede it (a log that begins shortly before):
         its spread then comes from the members' (scaled by the calibration fitted on the held
         load's when calibrated), which on station is far wider than the error."""
-        if not (self._held_load_on_station and sigma_b is not None and len(st.notes) == len(st.idx)):
+        if not (self._held_load_on_station and sigma_b is not None):
             return st.notes
         short = ~after_stop & ~np.any(sigma_b > 0, axis=1)
         block = self.environment_config.held_load_block_s
         note = (f"spread: the held load's needs three {block:g}-s blocks of station keeping before the start and "
                 f"this start has fewer, so its spread comes from the members' and on station is far wider than the "
                 f"error (start {3 * block:g} s or more into the station keeping)")
-        return tuple("; ".join(n for n in (old, note if k else "") if n) for old, k in zip(st.notes, short))
+        return join_notes(st.notes, [note if k else "" for k in short])
 
     @property
     def history_s(self) -> float:
