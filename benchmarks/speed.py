@@ -31,7 +31,8 @@ data are absent or with ``--quick``) and ``manoeuvre_training`` (its training mo
 for drift-off analysis
 ``driftoff_samples_per_s`` (Monte-Carlo blackouts per second: 8 headings x 100 samples of
 one weather state, 300 s horizon, all default loads) and ``driftoff_state_s`` (wall time of
-that weather state).
+that weather state); ``environment_filter_ms`` (CPU time of the environment estimator over
+``environment_filter_minutes`` = 30 minutes of a 1-Hz Gunnerus log, reporting at its last row).
 """
 
 from __future__ import annotations
@@ -246,6 +247,28 @@ def manoeuvre_train_speed() -> dict:
         t0 = time.perf_counter()
         _fit("hybrid", hp, runs, cfg)
         return {"manoeuvre_train_s": time.perf_counter() - t0, "manoeuvre_training": cfg.training}
+
+
+def environment_filter_speed(seed: int = 0, minutes: float = 30.0) -> dict:
+    """CPU time of the environment estimator over ``minutes`` of a 1-Hz log (one core).
+
+    The filter runs from the first row to the last and reports the estimate there, as a
+    forecast at the end of a log of that length does (after one warm-up call, which compiles).
+    """
+    from hybridship.logs.ingest import ingest
+    from hybridship.residual.environment import EnvironmentEstimator
+    from hybridship.sim.synthetic import physics_log
+
+    model = DynamicModel("gunnerus")
+    log = physics_log(model, duration_s=minutes * 60.0, dt_s=1.0, t_shutdown_s=None, seed=seed, current=(0.3, 1.0))
+    arrays = ingest(log, model.vessel, purpose="forecast")
+    est = EnvironmentEstimator(model)
+    last = [len(arrays.time_s) - 1]
+    est.run(arrays, last)
+    return {"environment_filter_ms": _cpu_time(lambda: est.run(arrays, last), repeats=5) * 1e3,
+            "environment_filter_minutes": minutes}
+
+
 def driftoff_speed(n_samples: int = 100) -> dict:
     """Time the Monte-Carlo blackouts of one weather state at 8 headings (planning mode)."""
     from hybridship.driftoff.planning import DriftOffSettings, simulate_blackouts
@@ -280,6 +303,7 @@ def main(argv=None) -> int:
     res.update(long_log_speed())
     res.update({"manoeuvre_train_s": None, "manoeuvre_training": None} if args.quick else manoeuvre_train_speed())
     res.update(driftoff_speed(20 if args.quick else 100))
+    res.update(environment_filter_speed())
     if args.json:
         print(json.dumps(res, sort_keys=True))
         return 0
@@ -305,6 +329,8 @@ def main(argv=None) -> int:
     if res["manoeuvre_train_s"] is not None:
         print(f"training the manoeuvre hybrid ({res['manoeuvre_training']}) on the Esso Osaka training runs: "
               f"{res['manoeuvre_train_s']:.0f} s")
+    print(f"environment estimator over {res['environment_filter_minutes']:.0f} min of a 1-Hz log: "
+          f"{res['environment_filter_ms']:.0f} ms")
     print(f"drift-off blackouts (8 headings x samples, 300 s horizon): {res['driftoff_samples_per_s']:,.0f} samples/s, "
           f"{res['driftoff_state_s']:.3f} s per weather state")
     return 0
