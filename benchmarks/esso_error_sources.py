@@ -11,6 +11,10 @@ validation runs with the physics alone (commands known) under changed inputs:
 * ``lead<s>``: the logged ``u`` and ``vm`` shifted ``s`` seconds earlier (they lag the
   positions by about 0.6 s; non-causal, an upper bound of what a better start velocity
   could give);
+* ``r_fit<s>``: the start yaw rate from a quadratic fit of the logged heading over the
+  last ``s`` seconds (causal; its slope at the start) in place of the logged yaw rate, and
+  ``r_heading``: from a centred 4-s Savitzky-Golay fit (non-causal): whether the logged yaw
+  rate, which is not quite the heading's rate, is the right start;
 * ``wind_zero``: no wind; ``wind_trail<s>``: the wind vector averaged over the last ``s``
   seconds (causal) in place of the last sample;
 * ``wind_forecast``: the hybrid's wind forecast (a gust decaying to the recent mean,
@@ -30,7 +34,10 @@ futures, rather than forecasting at the expected wind, lowers the error) and
 the error that the forecast started 30 s earlier made at its 30-s lead, known at the start,
 turned with the heading since then; ``alpha`` chosen from :data:`FEEDBACK_ALPHAS` on the
 held-back ends of the fitting runs, which the nets did not train on: whether the hybrid's
-error persists from one forecast to the next). With ``--seed-average`` also
+error persists from one forecast to the next) and ``hybrid_scaled<w>`` (the physics'
+forecast plus ``w`` times the hybrid's correction to it, heading on the circle, for ``w``
+in :data:`CORRECTION_SCALES`; a diagnostic, not a causal choice: whether the nets correct
+too little or too much). With ``--seed-average`` also
 ``hybrid_seed1`` (the same hybrid fitted with seed 1: a second fit, as long as the first) and
 ``hybrid_seed_mean`` (the mean of the two hybrids' forecasts, heading on the circle:
 whether the hybrid's error is the variance of its fit, which averaging independent fits
@@ -48,6 +55,7 @@ import sys
 from pathlib import Path
 
 import numpy as np
+from scipy.signal import savgol_filter
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -101,17 +109,17 @@ def _sampled_wind(forecast, logs, horizon_steps: int, seed: int = 0, every: int 
 
 def _mean_forecast(predictors, n: int = 1):
     """A forecaster that averages ``n`` forecasts of each of ``predictors`` (one predictor or
-    a list; heading on the circle), each predictor's made in one batch: every start time
-    ``n`` times over, each copy with its own draws."""
+    a list; heading on the circle): ``n`` calls of each predictor, each call with its own
+    draws (a forecast takes each start time once, so the copies cannot share a batch)."""
     from hybridship.predictors.result import ForecastResult
 
     predictors = predictors if isinstance(predictors, (list, tuple)) else [predictors]
 
     def forecast(a, start_times_s, horizon_s, **kw):
         st = np.asarray(start_times_s, dtype=float)
-        fcs = [p.forecast(a, np.tile(st, n), horizon_s=horizon_s, **kw) for p in predictors]
-        eta = np.concatenate([fc.eta.reshape((n, st.size) + fc.eta.shape[1:]) for fc in fcs])
-        nu = np.concatenate([fc.nu.reshape((n, st.size) + fc.nu.shape[1:]) for fc in fcs])
+        fcs = [p.forecast(a, st, horizon_s=horizon_s, **kw) for p in predictors for _ in range(n)]
+        eta = np.stack([fc.eta for fc in fcs])
+        nu = np.stack([fc.nu for fc in fcs])
         mean = eta.mean(axis=0)
         mean[..., 2] = np.arctan2(np.sin(eta[..., 2]).mean(axis=0), np.cos(eta[..., 2]).mean(axis=0))
         return ForecastResult(st, fcs[0].lead_s, mean, nu.mean(axis=0))
@@ -151,6 +159,42 @@ def _error_feedback(predictor, alpha: float, lag_s: float = 30.0):
         return ForecastResult(st, fc.lead_s, eta, fc.nu)
 
     return forecast
+
+
+#: Scales of the hybrid's correction to the physics (``hybrid_scaled<w>``).
+CORRECTION_SCALES = (0.8, 1.2, 1.5)
+
+
+def _scaled_correction(hybrid, physics, scale: float):
+    """A forecaster: ``physics`` plus ``scale`` times (``hybrid`` minus ``physics``), the
+    heading difference wrapped (``scale`` 1 is the hybrid, 0 the physics)."""
+    from hybridship.frames import wrap_pi
+    from hybridship.predictors.result import ForecastResult
+
+    def forecast(a, start_times_s, horizon_s, **kw):
+        h = hybrid.forecast(a, start_times_s, horizon_s=horizon_s, **kw)
+        p = physics.forecast(a, start_times_s, horizon_s=horizon_s, **kw)
+        d = h.eta - p.eta
+        d[..., 2] = wrap_pi(d[..., 2])
+        eta = p.eta + scale * d
+        eta[..., 2] = wrap_pi(eta[..., 2])
+        return ForecastResult(h.start_time_s, h.lead_s, eta, p.nu + scale * (h.nu - p.nu))
+
+    return forecast
+
+
+def heading_fit_rate(time_s: np.ndarray, psi_rad: np.ndarray, window_s: float) -> np.ndarray:
+    """Yaw rate [rad/s] at each row from a quadratic fit of the unwrapped heading over the
+    last ``window_s`` seconds (causal; the fit's slope at the row; the first rows use what
+    there is, at least three samples, else the logged value is kept: NaN)."""
+    psi = np.unwrap(psi_rad)
+    dt = float(np.median(np.diff(time_s)))
+    k = max(3, int(round(window_s / dt)))
+    out = np.full(len(time_s), np.nan)
+    for i in range(2, len(time_s)):
+        lo = max(0, i - k + 1)
+        out[i] = np.polyfit(time_s[lo:i + 1] - time_s[i], psi[lo:i + 1], 2)[1]
+    return out
 
 
 def _choose_feedback(predictor, logs, steps: np.ndarray, start_every_s: float, lag_s: float = 30.0):
@@ -225,6 +269,21 @@ def main(argv=None) -> int:
     for lead in (0.3, 0.6):
         per[(f"lead{lead:g}", "known")] = score([Run(r.run, ingest(esso_log_arrays(r.run.path, v, velocity_lead_s=lead),
                                                                    v, purpose="fit")) for r in runs])
+    def with_yaw_rate(fn):
+        out = []
+        for r in runs:
+            nu = r.arrays.nu.copy()
+            new = fn(r.arrays)
+            ok = np.isfinite(new)
+            nu[ok, 2] = new[ok]
+            out.append(Run(r.run, dataclasses.replace(r.arrays, nu=nu)))
+        return out
+
+    for secs in (2, 4):
+        per[(f"r_fit{secs}", "known")] = score(with_yaw_rate(
+            lambda a, s=secs: heading_fit_rate(a.time_s, a.eta[:, 2], s)))
+    per[("r_heading", "known")] = score(with_yaw_rate(
+        lambda a: savgol_filter(np.unwrap(a.eta[:, 2]), int(round(4.0 / a.dt_s)) + 1, 3, deriv=1, delta=a.dt_s)))
     per[("wind_zero", "known")] = score(with_wind(lambda w: np.column_stack([np.zeros(len(w)), w[:, 1]])))
     wf, _ = fit_wind_forecast([r.arrays for r in load_runs(fit_dir, v)], max(horizons))
     print(f"wind forecast fitted on the fitting runs: {wf}")
@@ -256,6 +315,8 @@ def main(argv=None) -> int:
               + ", ".join(f"alpha {k:g}: {d:.3f}, {h:.2f}" for k, (d, h) in fb_scores.items())
               + f"; chosen {alpha:g}")
         per[("hybrid_error_feedback", "known")] = score(runs, forecast=_error_feedback(hyb, alpha))
+        for w in CORRECTION_SCALES:
+            per[(f"hybrid_scaled{w:g}", "known")] = score(runs, forecast=_scaled_correction(hyb, p, w))
         if args.seed_average:
             cfg1 = dataclasses.replace(cfg, ensemble=dataclasses.replace(cfg.ensemble, seed=1))
             hyb1 = make_predictors(v, cfg1)["hybrid"].fit(fit_logs, row_stride=cfg.train_row_stride)
