@@ -68,22 +68,52 @@ def test_the_mean_forecast_averages_the_heading_on_the_circle(es):
     class Stub:
         def forecast(self, a, start_times_s, horizon_s, **kw):
             calls.append((np.asarray(start_times_s), kw))
+            copy = len(calls) - 1                                           # one call per draw
             S = len(start_times_s)
             eta = np.zeros((S, 2, 3))
-            copy, start = np.arange(S) // 2, np.arange(S) % 2              # the batch is the starts tiled
-            eta[..., 0] = (copy + 1.0 + 10.0 * start)[:, None]              # north 1..4 m (+10 m for start 1)
-            eta[..., 2] = np.where(copy % 2 == 0, 1.0, -1.0)[:, None] * np.radians(179.0)
+            eta[..., 0] = (copy + 1.0 + 10.0 * np.arange(S))[:, None]       # north 1..4 m (+10 m for start 1)
+            eta[..., 2] = (1.0 if copy % 2 == 0 else -1.0) * np.radians(179.0)
             return ForecastResult(np.asarray(start_times_s), np.arange(2.0), eta, np.zeros((S, 2, 3)),
                                   eta_std=np.ones((S, 2, 3)))
 
     fc = es._mean_forecast(Stub(), 4)(None, [0.0, 5.0], 1.0, commands="known")
-    assert len(calls) == 1 and calls[0][1] == {"commands": "known"}       # one batch
-    np.testing.assert_array_equal(calls[0][0], [0.0, 5.0] * 4)
+    assert len(calls) == 4 and all(kw == {"commands": "known"} for _, kw in calls)
+    for st, _ in calls:                           # each start once per call: a forecast refuses repeats
+        np.testing.assert_array_equal(st, [0.0, 5.0])
     np.testing.assert_array_equal(fc.start_time_s, [0.0, 5.0])
     np.testing.assert_allclose(fc.eta[0, :, 0], 2.5)
     np.testing.assert_allclose(fc.eta[1, :, 0], 12.5)
     np.testing.assert_allclose(np.abs(fc.eta[..., 2]), np.pi)     # +-179 deg average to 180, not 0
     assert fc.eta_std is None
+
+
+def test_the_scaled_correction_scales_the_hybrids_difference_from_the_physics(es):
+    class Const:
+        def __init__(self, north_m, psi_deg, u_m_s):
+            self.north_m, self.psi, self.u = north_m, np.radians(psi_deg), u_m_s
+
+        def forecast(self, a, start_times_s, horizon_s, **kw):
+            S = len(start_times_s)
+            eta, nu = np.zeros((S, 2, 3)), np.zeros((S, 2, 3))
+            eta[..., 0], eta[..., 2], nu[..., 0] = self.north_m, self.psi, self.u
+            return ForecastResult(np.asarray(start_times_s), np.arange(2.0), eta, nu)
+
+    hybrid, physics = Const(3.0, -175.0, 2.0), Const(1.0, 175.0, 1.0)     # 10 deg apart across +-180
+    for w, north, psi_deg, u in ((0.0, 1.0, 175.0, 1.0), (1.0, 3.0, -175.0, 2.0), (1.5, 4.0, -170.0, 2.5)):
+        fc = es._scaled_correction(hybrid, physics, w)(None, [0.0, 5.0], 1.0)
+        np.testing.assert_allclose(fc.eta[..., 0], north)
+        np.testing.assert_allclose(np.degrees(fc.eta[..., 2]), psi_deg, atol=1e-9)
+        np.testing.assert_allclose(fc.nu[..., 0], u)
+
+
+def test_the_heading_fit_rate_is_the_slope_of_a_quadratic_heading(es):
+    t = np.arange(0.0, 20.0, 0.1)
+    psi = 0.3 + 0.05 * t - 0.002 * t ** 2                  # [rad]; crosses no wrap
+    r = es.heading_fit_rate(t, psi, 2.0)
+    assert np.isnan(r[:2]).all()                            # fewer than three samples
+    np.testing.assert_allclose(r[2:], 0.05 - 0.004 * t[2:], atol=1e-9)
+    wrapped = np.angle(np.exp(1j * (np.pi - 0.1 + 0.02 * t)))  # through +-pi
+    np.testing.assert_allclose(es.heading_fit_rate(t, wrapped, 2.0)[2:], 0.02, atol=1e-9)
 
 
 def test_the_mean_forecast_of_several_predictors_weighs_each_forecast_once(es):
