@@ -185,8 +185,9 @@ def _scaled_correction(hybrid, physics, scale: float):
 
 def heading_fit_rate(time_s: np.ndarray, psi_rad: np.ndarray, window_s: float) -> np.ndarray:
     """Yaw rate [rad/s] at each row from a quadratic fit of the unwrapped heading over the
-    last ``window_s`` seconds (causal; the fit's slope at the row; the first rows use what
-    there is, at least three samples, else the logged value is kept: NaN)."""
+    last ``window_s`` seconds (causal; the fit's slope at the row). The first rows fit what
+    there is; the first two, with fewer than three samples, are NaN (callers keep the logged
+    yaw rate there)."""
     psi = np.unwrap(psi_rad)
     dt = float(np.median(np.diff(time_s)))
     k = max(3, int(round(window_s / dt)))
@@ -269,6 +270,7 @@ def main(argv=None) -> int:
     for lead in (0.3, 0.6):
         per[(f"lead{lead:g}", "known")] = score([Run(r.run, ingest(esso_log_arrays(r.run.path, v, velocity_lead_s=lead),
                                                                    v, purpose="fit")) for r in runs])
+
     def with_yaw_rate(fn):
         out = []
         for r in runs:
