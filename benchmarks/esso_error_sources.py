@@ -184,17 +184,20 @@ def _scaled_correction(hybrid, physics, scale: float):
 
 
 def heading_fit_rate(time_s: np.ndarray, psi_rad: np.ndarray, window_s: float) -> np.ndarray:
-    """Yaw rate [rad/s] at each row from a quadratic fit of the unwrapped heading over the
-    last ``window_s`` seconds (causal; the fit's slope at the row). The first rows fit what
-    there is; the first two, with fewer than three samples, are NaN (callers keep the logged
-    yaw rate there)."""
+    """Yaw rate [rad/s] at each row from a least-squares quadratic fit of the unwrapped heading
+    over the last ``window_s`` seconds (causal; the fit's slope at the row), on a uniformly
+    sampled log (step: the median spacing of ``time_s`` [s]). It is a fixed filter, the
+    Savitzky-Golay derivative at the window's last point; the first rows, without a whole
+    window behind them, are NaN (callers keep the logged yaw rate there)."""
+    from numpy.lib.stride_tricks import sliding_window_view
+    from scipy.signal import savgol_coeffs
+
     psi = np.unwrap(psi_rad)
     dt = float(np.median(np.diff(time_s)))
     k = max(3, int(round(window_s / dt)))
     out = np.full(len(time_s), np.nan)
-    for i in range(2, len(time_s)):
-        lo = max(0, i - k + 1)
-        out[i] = np.polyfit(time_s[lo:i + 1] - time_s[i], psi[lo:i + 1], 2)[1]
+    if len(psi) >= k:
+        out[k - 1:] = sliding_window_view(psi, k) @ savgol_coeffs(k, 2, deriv=1, delta=dt, pos=k - 1, use="dot")
     return out
 
 

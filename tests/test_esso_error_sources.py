@@ -110,10 +110,14 @@ def test_the_heading_fit_rate_is_the_slope_of_a_quadratic_heading(es):
     t = np.arange(0.0, 20.0, 0.1)
     psi = 0.3 + 0.05 * t - 0.002 * t ** 2                  # [rad]; crosses no wrap
     r = es.heading_fit_rate(t, psi, 2.0)
-    assert np.isnan(r[:2]).all()                            # fewer than three samples
-    np.testing.assert_allclose(r[2:], 0.05 - 0.004 * t[2:], atol=1e-9)
+    assert np.isnan(r[:19]).all()                           # no whole 2-s window (20 samples) behind
+    np.testing.assert_allclose(r[19:], 0.05 - 0.004 * t[19:], atol=1e-9)
     wrapped = np.angle(np.exp(1j * (np.pi - 0.1 + 0.02 * t)))  # through +-pi
-    np.testing.assert_allclose(es.heading_fit_rate(t, wrapped, 2.0)[2:], 0.02, atol=1e-9)
+    np.testing.assert_allclose(es.heading_fit_rate(t, wrapped, 2.0)[19:], 0.02, atol=1e-9)
+    rng = np.random.default_rng(0)                          # a least-squares fit: as np.polyfit's slope
+    noisy = psi + rng.normal(0.0, 0.01, t.size)
+    np.testing.assert_allclose(es.heading_fit_rate(t, noisy, 2.0)[100],
+                               np.polyfit(t[81:101] - t[100], noisy[81:101], 2)[1], rtol=1e-9)
 
 
 def test_the_mean_forecast_of_several_predictors_weighs_each_forecast_once(es):
