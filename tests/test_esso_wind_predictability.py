@@ -1,0 +1,69 @@
+"""benchmarks/esso_wind_predictability.py: the starts, the trailing means and the linear wind predictor."""
+
+from types import SimpleNamespace
+
+import numpy as np
+import pytest
+
+from conftest import load_benchmark
+from hybridship.frames import speed_dir_to_vector
+from hybridship.forecast_inputs.wind import WindForecast
+
+
+@pytest.fixture(scope="module")
+def wp():
+    return load_benchmark("esso_wind_predictability")
+
+
+def _wind_log(n=200, dt=0.5, seed=0):
+    rng = np.random.default_rng(seed)
+    speed = 2.0 + np.abs(np.cumsum(rng.normal(0, 0.1, n)))
+    direction = 0.7 + np.cumsum(rng.normal(0, 0.02, n))
+    return SimpleNamespace(time_s=np.arange(n) * dt, wind=np.column_stack([speed, direction]),
+                           wind_logged=np.ones(n, bool), segment_id=np.zeros(n, int), dt_s=dt)
+
+
+def test_starts_need_logged_wind_over_the_whole_horizon_in_one_segment(wp):
+    a = _wind_log(n=40)
+    a.wind_logged[20] = False
+    a.segment_id[30:] = 1
+    rows = wp.wind_starts(a, 5, 1)
+    # a start at r uses rows r..r+5: none may be row 20, none may cross into segment 1 at row 30
+    assert set(rows) == set(range(1, 15)) | set(range(21, 25)) | set(range(30, 35))
+
+
+def test_trailing_means_are_the_mean_vectors_of_the_samples_before_the_start(wp):
+    a = _wind_log()
+    rows = np.array([10, 50, 199])
+    got = wp.trailing_means(a, rows, (2.0, 10.0))
+    vec = speed_dir_to_vector(a.wind)
+    for i, r in enumerate(rows):
+        # (t_r - window, t_r]: 4 and 20 samples at dt = 0.5 s (fewer at the log's start)
+        np.testing.assert_allclose(got[i, 0], vec[r - 3:r + 1].mean(axis=0), atol=1e-12)
+        np.testing.assert_allclose(got[i, 1], vec[max(0, r - 19):r + 1].mean(axis=0), atol=1e-12)
+
+
+def test_the_linear_fit_recovers_coefficients_shared_by_both_components(wp):
+    rng = np.random.default_rng(1)
+    feats = rng.normal(size=(500, 4, 2))
+    coef = rng.normal(size=(4, 6))
+    targets = np.einsum("sfc,fh->shc", feats, coef)
+    np.testing.assert_allclose(wp.fit_linear(feats, targets, ridge=0.0), coef, atol=1e-10)
+    # noise on one component only does not make the two components' coefficients differ
+    noisy = targets + np.stack([rng.normal(0, 0.1, targets.shape[:2]), np.zeros(targets.shape[:2])], axis=-1)
+    np.testing.assert_allclose(wp.fit_linear(feats, noisy), coef, atol=0.02)
+
+
+def test_forecasts_start_from_the_logged_wind_and_the_gust_matches_the_library(wp):
+    a = _wind_log()
+    gust = WindForecast(mean_window_s=20.0, time_constant_s=5.0)
+    steps = 8
+    (rows, level, feats, future), = wp.sample_starts([a], gust, steps, 10)
+    coef = np.zeros((feats.shape[1], steps))
+    fc = wp.forecasts(a, rows, level, feats, future, gust, coef, steps)
+    vec = speed_dir_to_vector(a.wind)
+    np.testing.assert_allclose(fc["held"], np.broadcast_to(vec[rows][:, None], future.shape), atol=1e-12)
+    np.testing.assert_allclose(fc["linear"], np.broadcast_to(level[:, None], future.shape))  # zero coefficients
+    want = speed_dir_to_vector(gust.steps(a.wind, a.time_s, rows, a.wind[rows], steps + 1, a.dt_s))[:, 1:]
+    np.testing.assert_allclose(fc["gust"], want, atol=1e-12)
+    np.testing.assert_allclose(future, vec[rows[:, None] + np.arange(1, steps + 1)], atol=1e-12)
