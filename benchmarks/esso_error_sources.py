@@ -20,13 +20,18 @@ validation runs with the physics alone (commands known) under changed inputs:
 * ``wind_forecast``: the hybrid's wind forecast (a gust decaying to the recent mean,
   :mod:`hybridship.forecast_inputs.wind`), fitted on the fitting runs' wind (causal);
 * ``wind_future``: the logged wind of every step after the start (non-causal: how much of
-  the physics' error the wind's unknown future makes).
+  the physics' error the wind's unknown future makes);
+* ``wind_future_mean``: the mean of that logged wind over the horizon, held (non-causal: a
+  perfect forecast of the wind's level without its gusts; how much of that error a better
+  forecast of the level could remove).
 
 With ``--hybrid`` the benchmark's hybrid (:func:`~hybridship.evaluation.manoeuvre.make_predictors`,
 calibrated over 30 s) is also fitted on the fitting runs (about 3 min) and scored as
 ``hybrid`` (its fitted wind forecast), ``hybrid_wind_future`` (the same nets fed the
 logged wind of every step after the start: how much of the hybrid's own error the wind's
-unknown future makes) and ``hybrid_wind_sampled`` (causal: the mean of 8 forecasts, each
+unknown future makes), ``hybrid_wind_future_mean`` (the same nets fed the logged mean
+wind over the horizon: how much of that a perfect forecast of the wind's level would take)
+and ``hybrid_wind_sampled`` (causal: the mean of 8 forecasts, each
 with the wind forecast plus the error path of the wind forecast from a random start of the
 fitting runs, heading averaged on the circle: whether averaging over plausible wind
 futures, rather than forecasting at the expected wind, lowers the error) and
@@ -83,6 +88,21 @@ def _logged_future_wind():
 
     # a time constant of 0 marks it as not held; the one-sample mean window reads no history
     return LoggedFutureWind(mean_window_s=0.1, time_constant_s=0.0)
+
+
+def _logged_future_mean_wind():
+    """A wind "forecast" that holds the mean of the logged wind vector over the forecast's
+    steps (a non-causal oracle: a perfect forecast of the wind's level, none of its gusts)."""
+    from hybridship.forecast_inputs.wind import WindForecast
+    from hybridship.frames import speed_dir_to_vector, vector_to_speed_dir
+
+    class LoggedFutureMeanWind(WindForecast):
+        def steps(self, wind, time_s, rows, start_wind, n_steps, dt_s, *, logged=None, hold=None):
+            idx = np.asarray(rows, dtype=int)[:, None] + np.arange(n_steps)[None, :]
+            mean = speed_dir_to_vector(wind[np.minimum(idx, len(wind) - 1)]).mean(axis=1)
+            return np.ascontiguousarray(np.repeat(vector_to_speed_dir(mean)[:, None], n_steps, axis=1))
+
+    return LoggedFutureMeanWind(mean_window_s=0.1, time_constant_s=0.0)
 
 
 def _sampled_wind(forecast, logs, horizon_steps: int, seed: int = 0, every: int = 20):
@@ -295,6 +315,8 @@ def main(argv=None) -> int:
     per[("wind_forecast", "known")] = score(runs, DynamicPredictor(v, residual_config=cfg.residual, wind_forecast=wf))
     per[("wind_future", "known")] = score(runs, DynamicPredictor(v, residual_config=cfg.residual,
                                                                  wind_forecast=future_wind))
+    per[("wind_future_mean", "known")] = score(runs, DynamicPredictor(v, residual_config=cfg.residual,
+                                                                      wind_forecast=_logged_future_mean_wind()))
     for secs in (10, 30, 60):
         n = int(round(secs / runs[0].arrays.dt_s))
         per[(f"wind_trail{secs}", "known")] = score(with_wind(lambda w, n=n: trailing_wind(w, n)))
@@ -312,6 +334,8 @@ def main(argv=None) -> int:
         per[("hybrid", "known")] = score(runs, hyb)
         hyb.wind_forecast = future_wind      # the same nets, the wind's future known
         per[("hybrid_wind_future", "known")] = score(runs, hyb)
+        hyb.wind_forecast = _logged_future_mean_wind()
+        per[("hybrid_wind_future_mean", "known")] = score(runs, hyb)
         hyb.wind_forecast = _sampled_wind(wf, fit_logs, int(steps.max()))
         per[("hybrid_wind_sampled", "known")] = score(runs, forecast=_mean_forecast(hyb, 8))
         hyb.wind_forecast = wf

@@ -34,6 +34,18 @@ def test_the_logged_future_wind_is_the_wind_of_each_step_after_the_start(es):
     np.testing.assert_array_equal(w[2], a.wind[[395, 396, 397, 398, 399, 399, 399, 399]])  # held at the end
 
 
+def test_the_logged_future_mean_wind_holds_the_vector_mean_of_the_steps_after_the_start(es):
+    a = _wind_log()
+    rows = np.array([3, 396])
+    w = es._logged_future_mean_wind().steps(a.wind, a.time_s, rows, a.wind[rows], 8, a.dt_s)
+    assert w.shape == (2, 8, 2)
+    vec = speed_dir_to_vector(a.wind)
+    np.testing.assert_allclose(speed_dir_to_vector(w[0]), np.repeat(vec[3:11].mean(axis=0)[None], 8, 0), atol=1e-12)
+    # at the log's end the last sample stands in for the steps beyond it
+    np.testing.assert_allclose(speed_dir_to_vector(w[1][:1]), vec[[396, 397, 398, 399, 399, 399, 399, 399]].mean(
+        axis=0, keepdims=True), atol=1e-12)
+
+
 def test_sampled_wind_adds_the_forecasts_own_error_paths(es):
     forecast = WindForecast(mean_window_s=5.0, time_constant_s=2.0)
     # one error path, from row 1 (the only start when the spacing exceeds the log): sampled at
