@@ -13,6 +13,7 @@ import numpy as np
 import pandas as pd
 import pytest
 
+from conftest import load_benchmark
 from hybridship.datasets.esso_osaka import (ESSO_COLUMNS, RUN_KINDS, convention_checks, default_data_dir,
                                         esso_log_arrays, list_runs, read_esso_osaka, read_esso_raw, run_kind)
 from hybridship.logs.io import LogFormatError, validate_log
@@ -141,38 +142,22 @@ def test_turning_runs_steady_rate_has_the_sign_of_the_rudder(runs, raws):
         assert np.sign(np.median(rr[tail])) == np.sign(np.median(d[tail])), r.name
 
 
-def _held_turn(raw):
-    """Last half of the longest stretch with the rudder held beyond 15 deg at constant n, or None."""
-    d = raw["delta_rudder [rad]"].to_numpy()
-    n = raw["n_prop [rps]"].to_numpy()
-    key = np.where(np.abs(d) > np.radians(15), np.round(d, 2) * 1000 + np.round(n, 1), np.nan)
-    best, start = (0, 0), 0
-    for i in range(1, len(d) + 1):
-        if i == len(d) or not key[i] == key[start]:
-            if np.isfinite(key[start]) and i - start > best[1] - best[0]:
-                best = (start, i)
-            start = i
-    a, b = best
-    if (b - a) * 0.1 < 120.0:  # less than two minutes held: no steady turn
-        return None
-    return slice((a + b) // 2, b)
-
-
 def test_published_physics_reproduces_the_steady_turning_rate(runs, raws):
     """Physics basis (no fitting): the model turns faster than the data in every held turn, by
-    less than a factor 1.5 (the published rudder's yaw moment is too strong at model scale)."""
+    less than a factor 1.5 (the published rudder's yaw moment is too strong at model scale).
+    The held turns and the model's steady state as ``benchmarks/esso_steady_runs.py`` finds them."""
+    steady = load_benchmark("esso_steady_runs")
     model = DynamicModel("esso_osaka_model")
     checked = 0
     for r in (r for r in runs if r.kind == "turning"):
         raw = raws[r.name]
-        tail = _held_turn(raw)
+        d = raw["delta_rudder [rad]"].to_numpy()
+        n = raw["n_prop [rps]"].to_numpy()
+        tail = steady.held_turn(d, n, 0.1)
         if tail is None:
             continue
-        d = raw["delta_rudder [rad]"].to_numpy()[tail]
-        n = raw["n_prop [rps]"].to_numpy()[tail]
         rate_data = np.median(raw["r_angvelo [rad/s]"].to_numpy()[tail])
-        res = model.rollout([0, 0, 0], [0.3, 0, 0], 3000, dt_s=0.1, rpm=[60 * n[0], 0], rudder_rad=[d[0]])
-        rate_model = res.nu[0, -1, 2]
+        _, rate_model = steady.model_steady_state(model, float(n[tail][0]), float(d[tail][0]))
         assert 1.0 < rate_model / rate_data < 1.5, (r.name, rate_model, rate_data)
         checked += 1
     assert checked >= 8
