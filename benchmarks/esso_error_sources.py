@@ -310,8 +310,10 @@ def main(argv=None) -> int:
     per[("r_heading", "known")] = score(with_yaw_rate(
         lambda a: savgol_filter(np.unwrap(a.eta[:, 2]), int(round(4.0 / a.dt_s)) + 1, 3, deriv=1, delta=a.dt_s)))
     per[("wind_zero", "known")] = score(with_wind(lambda w: np.column_stack([np.zeros(len(w)), w[:, 1]])))
-    wf, _ = fit_wind_forecast([r.arrays for r in load_runs(fit_dir, v)], max(horizons))
-    print(f"wind forecast fitted on the fitting runs: {wf}")
+    wf, wind_scores = fit_wind_forecast([r.arrays for r in load_runs(fit_dir, v)], max(horizons))
+    held = min(e for k, e in wind_scores.items() if k != "n_starts" and k[1] is None)
+    print(f"wind forecast fitted on the fitting runs: {wf}; mean wind error over {max(horizons):g} s "
+          f"{wind_scores.get((wf.mean_window_s, wf.time_constant_s), held):.2f} m/s against {held:.2f} m/s held")
     per[("wind_forecast", "known")] = score(runs, DynamicPredictor(v, residual_config=cfg.residual, wind_forecast=wf))
     per[("wind_future", "known")] = score(runs, DynamicPredictor(v, residual_config=cfg.residual,
                                                                  wind_forecast=future_wind))
