@@ -28,7 +28,10 @@ stand-in for the backward selection of Skulstad et al. sec. 3.3 that needs no re
 ``--hull-fit``) puts the linear hull correction in front of the nets
 (:class:`~hybridship.residual.hull.HullCorrection`), ``--with-command-guard`` also scores
 each variant with the command-regime guard fitted on its nets (``<variant>+cg``), and
-``--save-models`` writes each variant's model file.
+``--save-models`` writes each variant's model file. ``--no-memory`` and ``--held-wind``
+give the benchmark's hybrid as it was before the command-memory features and the wind
+forecast (the screens quoted on the Esso Osaka page were made so). The fine-tuning
+rollouts take the wind as the hybrid's forecasts do (held, or its fitted wind forecast).
 """
 
 from __future__ import annotations
@@ -63,14 +66,14 @@ def parse_variants(spec: str) -> dict:
     return out
 
 
-def one_step_hybrid(cfg, fit_runs, cache: Path):
+def one_step_hybrid(cfg, fit_runs, cache: Path, wind_forecast="fit"):
     """The benchmark's hybrid with one-step nets fitted on ``fit_runs`` (cached as a model file)."""
     from hybridship.predictors import HybridPredictor
 
     p = HybridPredictor("esso_osaka_model", residual_config=cfg.residual, ensemble_config=cfg.ensemble,
                         guard_quantile=cfg.guard_quantile, environment="mean", calibration_config=cfg.calibration,
                         training="one_step", multistep_config=cfg.multistep, command_guard=False,
-                        hull_correction=cfg.hull_correction, hull_fit=cfg.hull_fit)
+                        hull_correction=cfg.hull_correction, hull_fit=cfg.hull_fit, wind_forecast=wind_forecast)
     logs = [r.arrays for r in fit_runs]
     if cache.exists():
         q = HybridPredictor.load(cache)
@@ -95,7 +98,9 @@ def fine_tune(p, logs, ms_cfg, row_stride):
     cuts = [q._calibration_cut(a, cal, True) for a in logs]
     masks = [None if c >= len(a) else (np.arange(len(a)) < c) for a, c in zip(logs, cuts)]
     preps = [prepare_log(q.model, a, q.residual_config) for a in logs]
-    starts = collect_starts(preps, masks, ms_cfg, dp_only=True)
+    # the rollouts take the wind as the hybrid's forecasts do (HybridPredictor.fit does the same)
+    starts = collect_starts(preps, masks, ms_cfg, dp_only=True,
+                            wind_forecast=None if q.wind_forecast.held else q.wind_forecast)
     q.ensemble, hist = train_multistep(q.ensemble, q.model, starts, q.residual_config.feature_index, ms_cfg,
                                        seed=q.ensemble_config.seed, hull=q.hull)
     q.hull = hist.pop("hull", q.hull)
@@ -109,7 +114,9 @@ def main(argv=None) -> int:
     from hybridship.fileio import atomic_write
     from hybridship.evaluation.manoeuvre import (ManoeuvreConfig, error_table, forecast_errors, load_runs, start_rows,
                                                  validation_split)
+    from hybridship.forecast_inputs.wind import HELD_WIND
     from hybridship.predictors import DynamicPredictor
+    from hybridship.residual.features import MEMORY_FEATURES
     from hybridship.vessel import load_vessel
 
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
@@ -127,6 +134,10 @@ def main(argv=None) -> int:
                     help="with --hull: identify the correction by ridge regression or by a free-run fit")
     ap.add_argument("--hull-iterations", type=int, default=None, help="with --hull-fit multi_step: Adam steps")
     ap.add_argument("--drop-features", default="", help="comma-separated features to leave out of the benchmark's")
+    ap.add_argument("--no-memory", action="store_true",
+                    help="without the command-memory features (the benchmark's before they were added)")
+    ap.add_argument("--held-wind", action="store_true",
+                    help="the wind held at its start value in training and forecasts (before the wind forecast)")
     ap.add_argument("--horizons-s", default="5,10,20,30")
     ap.add_argument("--save-models", action="store_true", help="also write each variant's model file to --out")
     ap.add_argument("--with-command-guard", action="store_true",
@@ -154,7 +165,7 @@ def main(argv=None) -> int:
         cfg = replace(cfg, hull_correction=True, hull_fit=args.hull_fit)
         if args.hull_iterations:
             cfg = replace(cfg, multistep=replace(cfg.multistep, hull_iterations=args.hull_iterations))
-    drop = [f for f in args.drop_features.split(",") if f]
+    drop = [f for f in args.drop_features.split(",") if f] + (list(MEMORY_FEATURES) if args.no_memory else [])
     if drop:
         cfg = replace(cfg, residual=replace(cfg.residual, features=tuple(f for f in cfg.residual.features
                                                                          if f not in drop)))
@@ -165,7 +176,9 @@ def main(argv=None) -> int:
                                   f"_h{cfg.ensemble.hidden}_f{len(cfg.residual.features)}"
                                   f"{'_s%d' % cfg.ensemble.seed if cfg.ensemble.seed else ''}"
                                   f"{'_hull_' + cfg.hull_fit if cfg.hull_correction else ''}"
-                                  f"{cfg.multistep.hull_iterations if cfg.hull_fit == 'multi_step' else ''}.npz")
+                                  f"{cfg.multistep.hull_iterations if cfg.hull_fit == 'multi_step' else ''}"
+                                  f"{'_held_wind' if args.held_wind else ''}.npz",
+                                  wind_forecast=HELD_WIND if args.held_wind else "fit")
     print(f"one-step nets: {time.perf_counter() - t0:.0f} s", flush=True)
     dt = float(np.median(np.diff(val_runs[0].arrays.time_s)))
     steps = np.array([int(round(h / dt)) for h in horizons])
