@@ -398,6 +398,25 @@ def test_live_bad_input_names_the_field():
         environment_from_log(pd.DataFrame({"time_s": [0.0, 1.0, 2.0]}), "gunnerus", window_s=-5)
 
 
+def test_cli_refuses_an_out_where_the_report_would_replace_an_input(tmp_path, capsys):
+    from hybridship.cli import main
+
+    folder = tmp_path / "inputs"
+    folder.mkdir()
+    table = folder / "season.csv"                  # season writes season.csv there
+    states_to_frame([WeatherState()]).to_csv(table, index=False)
+    log = folder / "times.csv"                     # live writes times.csv there
+    log.write_text("time_s\n0\n")
+    before = {p: p.read_bytes() for p in (table, log)}
+    assert main(["drift-off", "season", "--weather-table", str(table), "--scheduler", "none",
+                 "--out", str(folder)]) == 2
+    assert "season.csv there is the --weather-table file" in capsys.readouterr().err
+    assert main(["drift-off", "live", "--log", str(log), "--out", str(folder)]) == 2
+    assert "times.csv there is the --log file" in capsys.readouterr().err
+    assert all(p.read_bytes() == b for p, b in before.items())
+    assert sorted(p.name for p in folder.iterdir()) == ["season.csv", "times.csv"]
+
+
 def test_cli_season_in_this_process(tmp_path):
     from hybridship.cli import main
 

@@ -168,6 +168,7 @@ def _settings(args, mode):
         check_out_folder(args.out)
     except NotADirectoryError as exc:
         raise _usage(f"{_PROG} {mode}: error: --out {exc}") from None
+    _refuse_inputs_in_out(args, mode)
     names = {"radii_m": "--radii-m", "reaction_times_s": "--reaction-times-s", "n_samples": "--samples",
              "horizon_s": "--horizon-s", "dt_s": "--dt-s", "vessel_spread": "--vessel-spread", "seed": "--seed"}
     try:
@@ -178,6 +179,23 @@ def _settings(args, mode):
         # radii_m[0] -> --radii-m: the option the user typed, on each problem's line
         raise _usage(_options_named(exc, f"{_PROG} {mode}: error: ",
                                     lambda field: names.get(field.split("[", 1)[0], field))) from None
+
+
+def _refuse_inputs_in_out(args, mode) -> None:
+    """Refuse an ``--out`` where a file this command writes or removes (the report's tables,
+    figures and summary, of any mode) is one of its input files: the user's log, weather
+    table or vessel file would be replaced or deleted."""
+    from .report import REPORT_ONLY_FILES, SEASON_ONLY_FILES
+
+    inputs = {opt: Path(v) for opt, v in (("--log", getattr(args, "log", None)),
+                                          ("--weather-table", getattr(args, "weather_table", None)),
+                                          ("--vessel", args.vessel)) if v is not None and Path(v).is_file()}
+    for name in ("summary.md", *REPORT_ONLY_FILES, *SEASON_ONLY_FILES):
+        target = Path(args.out) / name
+        for opt, given in inputs.items():
+            if target.exists() and target.resolve() == given.resolve():
+                raise _usage(f"{_PROG} {mode}: error: --out {args.out}: the report's {name} there is the {opt} "
+                             f"file; it would be replaced or removed, give another folder")
 
 
 def _model(args, mode):
