@@ -58,6 +58,10 @@ class _Parser(argparse.ArgumentParser):
 # --------------------------------------------------------------------------- argument types
 
 
+#: Most scenarios one sweep may ask for (each is a log of about an hour).
+MAX_SWEEP_SEEDS = 100_000
+
+
 def parse_seeds(text: str) -> list[int]:
     """Parse a seed list such as ``"1-10"``, ``"3"`` or ``"1,4,7-9"`` into ints (in order).
 
@@ -79,6 +83,10 @@ def parse_seeds(text: str) -> list[int]:
             raise ValueError(f"--seeds: {part!r} is not a seed or a range like 1-10") from None
         if a < 0 or b < a:
             raise ValueError(f"--seeds: {part!r} must be a non-negative seed or an increasing range")
+        if b > MAX_SEED:
+            raise ValueError(f"--seeds: {part!r}: seeds are at most {MAX_SEED}")
+        if len(seeds) + b - a + 1 > MAX_SWEEP_SEEDS:
+            raise ValueError(f"--seeds: {text!r} gives more than {MAX_SWEEP_SEEDS} scenarios")
         seeds.extend(range(a, b + 1))
     if len(set(seeds)) != len(seeds):
         raise ValueError(f"--seeds: {text!r} repeats a seed")
@@ -97,6 +105,19 @@ def _seed(text: str) -> int:
         value = -1
     if not 0 <= value <= MAX_SEED:
         raise argparse.ArgumentTypeError(f"expected a whole number in 0..{MAX_SEED}, got {text!r}")
+    return value
+
+
+def _members(text: str) -> int:
+    """A ``--members`` value: a whole number in 1..:data:`~hybridship.residual.ensemble.MAX_MEMBERS`."""
+    from .residual.ensemble import MAX_MEMBERS
+
+    try:
+        value = int(text)
+    except ValueError:
+        value = 0
+    if not 1 <= value <= MAX_MEMBERS:
+        raise argparse.ArgumentTypeError(f"expected a whole number in 1..{MAX_MEMBERS}, got {text!r}")
     return value
 
 
@@ -191,9 +212,12 @@ def _cmd_simulate(args) -> int:
     df = scenario.simulate_dp_loss(cfg, vessel=vessel, progress=progress)
     write_log(df, args.out, channel_names=vessel.channel_names, rotatable=vessel.rotatable)
     stats = scenario.drift_statistics(df)
-    print(f"wrote {args.out}: {len(df)} rows, DP shutdown at {stats['t_shutdown_s']:g} s, "
-          f"drift excursion {stats['drift_excursion_60s_m']:.1f} m after 60 s, "
-          f"mean drift speed {stats['drift_mean_sog_mps']:.2f} m/s")
+    excursion = stats["drift_excursion_60s_m"]
+    excursion = (f"drift excursion {excursion:.1f} m after 60 s" if math.isfinite(excursion)
+                 else "drift shorter than 60 s (no 60-s excursion)")
+    speed = stats["drift_mean_sog_mps"]
+    print(f"wrote {args.out}: {len(df)} rows, DP shutdown at {stats['t_shutdown_s']:g} s, {excursion}"
+          + (f", mean drift speed {speed:.2f} m/s" if math.isfinite(speed) else ""))
     return 0
 
 
@@ -209,7 +233,7 @@ def _add_demo(sub) -> None:
                                    "DP parts and print the 15/30/45/60 s drift-error table.")
     p.add_argument("--scenarios", type=int, default=3, help="number of embedded scenarios (default 3)")
     p.add_argument("--seed", type=_seed, default=0, help="seed of the first scenario and of training (default 0)")
-    p.add_argument("--members", type=int, default=10, help="ensemble members (default 10)")
+    p.add_argument("--members", type=_members, default=10, help="ensemble members (default 10)")
     p.set_defaults(func=_cmd_demo)
 
 
@@ -221,8 +245,8 @@ def _cmd_demo(args) -> int:
     from .residual.ensemble import EnsembleConfig
     from .sim.scenario import embedded_scenarios
 
-    if args.scenarios < 1 or args.members < 1:
-        raise UsageError(f"{_PROG} demo: error: --scenarios and --members must be >= 1")
+    if args.scenarios < 1:
+        raise UsageError(f"{_PROG} demo: error: --scenarios must be >= 1")
     t0 = time.perf_counter()
     scen = embedded_scenarios(args.scenarios, args.seed)
     print(f"simulated {len(scen)} Gunnerus DP-loss scenarios ({time.perf_counter() - t0:.1f} s): "
@@ -251,7 +275,7 @@ def _add_train(sub) -> None:
     p.add_argument("--vessel", default="gunnerus", help="packaged vessel name or vessel TOML file")
     p.add_argument("--logs", required=True, type=Path, help="folder of logs (*.csv, *.csv.gz, *.parquet)")
     p.add_argument("--out", required=True, type=path_argument, help="model file to write (.npz)")
-    p.add_argument("--members", type=int, default=10, help="ensemble members (default 10)")
+    p.add_argument("--members", type=_members, default=10, help="ensemble members (default 10)")
     p.add_argument("--seed", type=_seed, default=0, help="seed of the initial weights and bootstrap draws (default 0)")
     p.add_argument("--all-rows", action="store_true", help="train on every row, not only dp_active == 1")
     p.set_defaults(func=_cmd_train)
@@ -277,8 +301,6 @@ def _cmd_train(args) -> int:
     if args.out.exists() and not args.out.is_file():
         raise UsageError(f"{_PROG} train: error: --out {args.out}: exists and is not a file")
     _check_writable(args.out, f"{_PROG} train")
-    if args.members < 1:
-        raise UsageError(f"{_PROG} train: error: --members must be >= 1, got {args.members}")
     hp = HybridPredictor(vessel, ensemble_config=EnsembleConfig(n_members=args.members, seed=args.seed))
     hp.fit(files, dp_only=not args.all_rows, progress=sys.stderr.isatty())
     hp.save(args.out)
@@ -335,10 +357,11 @@ def _add_forecast(sub) -> None:
 def _cmd_forecast(args) -> int:
     from .fileio import atomic_write
     from .predictors import HybridPredictor, ModelFileError
-    from .predictors.forecast_setup import RequestError
+    from .predictors.forecast_setup import MAX_HORIZON_S, RequestError
 
-    if not args.horizon_s > 0:
-        raise UsageError(f"{_PROG} forecast: error: --horizon-s must be > 0, got {args.horizon_s}")
+    if not 0 < args.horizon_s <= MAX_HORIZON_S:
+        raise UsageError(f"{_PROG} forecast: error: --horizon-s must be > 0 and at most {MAX_HORIZON_S:g} s "
+                         f"(one day), got {args.horizon_s}")
     try:
         quantiles = [float(q) for q in args.quantiles.split(",") if q.strip()]
     except ValueError:
@@ -415,7 +438,7 @@ def _add_benchmark(sub) -> None:
     d.add_argument("--test", type=Path, help="folder of test logs (default: the training logs' drifts)")
     d.add_argument("--out", type=path_argument, default=Path("drift-benchmark"), help="output folder (default drift-benchmark)")
     d.add_argument("--vessel", default="gunnerus", help="packaged vessel name or vessel TOML file")
-    d.add_argument("--members", type=int, default=10, help="ensemble members (default 10)")
+    d.add_argument("--members", type=_members, default=10, help="ensemble members (default 10)")
     d.add_argument("--seed", type=_seed, default=0, help="seed of scenarios and training (default 0)")
     d.add_argument("--intervals", type=int, default=20, help="start times after each failure (default 20)")
     d.add_argument("--scenarios", type=int, default=3, help="embedded scenarios when no folders are given")
@@ -533,8 +556,8 @@ def _cmd_benchmark_drift(args) -> int:
     from .residual.environment import EnvironmentConfig
     from .vessel import VesselFileError, load_vessel
 
-    if args.members < 1 or args.intervals < 1 or args.scenarios < 1:
-        raise UsageError(f"{_PROG} benchmark drift: error: --members, --intervals and --scenarios must be >= 1")
+    if args.intervals < 1 or args.scenarios < 1:
+        raise UsageError(f"{_PROG} benchmark drift: error: --intervals and --scenarios must be >= 1")
     _check_out_folder(args.out, f"{_PROG} benchmark drift", {"--train": args.train, "--test": args.test})
     if not 0 <= args.calibration_scenarios <= 20:
         raise UsageError(f"{_PROG} benchmark drift: error: --calibration-scenarios must be in 0..20, "

@@ -122,6 +122,10 @@ def test_forecast_of_a_10_hz_log_is_on_its_grid_and_a_horizon_under_a_step_is_a_
     assert capsys.readouterr().err == ("hybridship forecast: error: --horizon-s: 0.4 s is shorter than one step of "
                                        "the log (1 s)\n")
     assert not (tmp_path / "short.csv").exists()
+    for horizon in ("inf", "1e9"):              # refused before any array is made for it
+        assert main(["forecast", "--model", str(tmp_path / "m.npz"), "--log", str(tmp_path / "1hz.csv"),
+                     "--start-time", "301", "--horizon-s", horizon, "--out", str(tmp_path / "long.csv")]) == 2
+        assert "--horizon-s must be > 0 and at most 86400 s (one day)" in capsys.readouterr().err
 
 
 def test_train_refuses_one_recording_twice(log_dir, tmp_path, capsys):
@@ -242,8 +246,10 @@ def test_bad_options_are_refused_before_any_work(log_dir, tmp_path, capsys):
     """--members 0 names the option (exit 2, no model file); a benchmark whose --out is its
     --train folder is refused before the tables land among the logs."""
     model = tmp_path / "m.npz"
-    assert main(["train", "--logs", str(log_dir), "--out", str(model), "--members", "0"]) == 2
-    assert "--members must be >= 1, got 0" in capsys.readouterr().err and not model.exists()
+    for members in ("0", "100000000"):
+        assert main(["train", "--logs", str(log_dir), "--out", str(model), "--members", members]) == 2
+        assert f"--members: expected a whole number in 1..1000, got '{members}'" in capsys.readouterr().err
+        assert not model.exists()
     before = sorted(p.name for p in log_dir.iterdir())
     assert main(["benchmark", "drift", "--train", str(log_dir), "--out", str(log_dir)]) == 2
     assert "is the --train folder" in capsys.readouterr().err

@@ -341,9 +341,16 @@ def test_embedded_scenarios_are_valid_and_copied():
 
 def test_parse_seeds():
     assert parse_seeds("1-3,7") == [1, 2, 3, 7]
-    for bad in ("3-1", "a", "1,,2", "1,1"):
+    for bad in ("3-1", "a", "1,,2", "1,1", "0-100000000000", "4294967296", "0-99999,100000-100001"):
         with pytest.raises(ValueError, match="--seeds"):
             parse_seeds(bad)
+
+
+def test_cli_simulate_refuses_phases_longer_than_a_day_before_simulating(tmp_path, capsys):
+    for opt in ("--drift-s", "--t-shutdown-s"):
+        assert main(["simulate", "--seed", "1", "--out", str(tmp_path / "s.csv"), opt, "1e12", "--no-progress"]) == 2
+        assert "less than or equal to 86400" in capsys.readouterr().err
+    assert not (tmp_path / "s.csv").exists()
 
 
 def test_cli_simulate_writes_a_readable_log(tmp_path, capsys):

@@ -28,6 +28,9 @@ __all__ = ["COMMAND_MODES", "FORECAST_HISTORY_S", "HorizonError", "RequestError"
 #: environment window. Every forecaster reads the same rows, so the start-window checks see
 #: the same samples whichever forecaster runs.
 FORECAST_HISTORY_S = 1800.0
+#: Longest forecast horizon [s] (one day): far beyond what the method is for, and a bound
+#: on the memory of the rollout arrays (a horizon of 1e9 s would ask for gigabytes).
+MAX_HORIZON_S = 86400.0
 #: Extra seconds read at both ends of a forecast's time range, so that no filter or
 #: derivative near a start sees the edge of what was read.
 _RANGE_MARGIN_S = 60.0
@@ -247,8 +250,8 @@ def _forecast_setup(model, config: ResidualConfig, log, start_times_s, horizon_s
     except (TypeError, ValueError):
         raise TypeError(f"horizon_s: expected a number of seconds, got {type(horizon_s).__name__} "
                         f"{horizon_s!r}") from None
-    if not 0 < horizon_s < np.inf:
-        raise ValueError(f"horizon_s: must be finite and > 0 s, got {horizon_s}")
+    if not 0 < horizon_s <= MAX_HORIZON_S:
+        raise ValueError(f"horizon_s: must be > 0 and at most {MAX_HORIZON_S:g} s (one day), got {horizon_s}")
     if commands not in COMMAND_MODES:
         raise ValueError(f"commands: expected one of {COMMAND_MODES}, got {commands!r}")
     arrays = ingest(log, model.vessel, purpose="forecast",

@@ -20,6 +20,10 @@ from pydantic import Field
 from hybridship.config import Float, Int, config_dataclass
 
 
+#: Most networks an ensemble may have (a bound on memory and training time).
+MAX_MEMBERS = 1000
+
+
 @config_dataclass(frozen=True)
 class EnsembleConfig:
     """Training configuration of an :class:`MLPEnsemble` (validated on creation).
@@ -27,7 +31,7 @@ class EnsembleConfig:
     Attributes
     ----------
     n_members : int
-        Number of networks E.
+        Number of networks E (at most 1000).
     hidden : int
         Units of each hidden layer (two layers).
     lr : float
@@ -47,8 +51,8 @@ class EnsembleConfig:
         Seed of the initial weights and the bootstrap draws.
     """
 
-    n_members: Annotated[Int, Field(ge=1)] = 10
-    hidden: Annotated[Int, Field(ge=1)] = 20
+    n_members: Annotated[Int, Field(ge=1, le=MAX_MEMBERS)] = 10
+    hidden: Annotated[Int, Field(ge=1, le=10_000)] = 20
     lr: Annotated[Float, Field(gt=0)] = 1e-2
     max_epochs: Annotated[Int, Field(ge=1)] = 800
     patience: Annotated[Int, Field(ge=1)] = 100

@@ -83,6 +83,8 @@ _EPS_S = 1e-9
 
 
 Positive = Annotated[Float, Field(gt=0)]
+#: Longest station-keeping or drift phase of a scenario [s] (one day; a bound on the log's size).
+MAX_PHASE_S = 86400.0
 NonNeg = Annotated[Float, Field(ge=0)]
 
 
@@ -162,14 +164,14 @@ class DPLossConfig:
         Inclusive Beaufort range of the random sea state (ignored when ``sea_state`` is
         given). Default (2, 5): light to fresh breeze.
     t_shutdown_s : float
-        Nominal time of the DP shutdown [s] (default 3000 s = 50 min).
+        Nominal time of the DP shutdown [s] (default 3000 s = 50 min; at most one day).
     t_shutdown_jitter_s : float or None
         The realised shutdown time is ``t_shutdown_s + U(-jitter, +jitter)`` drawn from
         the seed, rounded to a multiple of ``dt_s`` [s]. 0 gives exactly ``t_shutdown_s``;
         None (default) is 4 % of ``t_shutdown_s`` (+-120 s for 50 min, like truthsim-dev).
     drift_s : float
         Duration of the drift after the shutdown [s] (default 900 s; the 600 s drift
-        statistics need at least 600 s).
+        statistics need at least 600 s; at most one day).
     dt_s : float
         Log sampling period [s] (1 Hz, as the log format's nominal rate).
     sim_dt_s : float
@@ -204,9 +206,9 @@ class DPLossConfig:
     seed: Annotated[Int, Field(ge=0)] = 0
     sea_state: env.SeaState | None = None
     beaufort: tuple[Float, Float] = (2.0, 5.0)
-    t_shutdown_s: Positive = 3000.0
+    t_shutdown_s: Annotated[Float, Field(gt=0, le=MAX_PHASE_S)] = 3000.0
     t_shutdown_jitter_s: NonNeg | None = None
-    drift_s: Positive = 900.0
+    drift_s: Annotated[Float, Field(gt=0, le=MAX_PHASE_S)] = 900.0
     dt_s: Positive = 1.0
     sim_dt_s: Annotated[Float, Field(gt=0, le=2.0)] = 0.5
     control_dt_s: Positive = 1.0
