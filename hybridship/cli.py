@@ -181,6 +181,7 @@ def _cmd_simulate(args) -> int:
         if args.seed is not None or args.out is not None:
             raise UsageError(f"{prefix}: error: --seed and --out are for a single scenario; a sweep takes "
                              f"--seeds and --out-dir")
+        _check_out_folder(args.out_dir, prefix, option="--out-dir")
     else:
         if args.seeds is not None or args.out_dir is not None:
             raise UsageError(f"{prefix}: error: --seeds and --out-dir need --sweep")
@@ -484,17 +485,17 @@ def _add_benchmark(sub) -> None:
     p.set_defaults(func=_cmd_benchmark_missing)
 
 
-def _check_writable(out: Path, prefix: str) -> None:
+def _check_writable(out: Path, prefix: str, option: str = "--out") -> None:
     """Refuse an ``--out`` that this process may not write, before any work is done."""
     from .fileio import check_writable
 
     try:
         check_writable(out)
-    except PermissionError as exc:
-        raise UsageError(f"{prefix}: error: --out {exc}") from None
+    except (PermissionError, NotADirectoryError) as exc:
+        raise UsageError(f"{prefix}: error: {option} {exc}") from None
 
 
-def _check_out_folder(out: Path, prefix: str, inputs: dict | None = None) -> None:
+def _check_out_folder(out: Path, prefix: str, inputs: dict | None = None, option: str = "--out") -> None:
     """Refuse an ``--out`` that exists and is not a folder, that may not be written, or that
     is one of the input folders ``inputs`` (option -> folder; the tables would land among
     the logs), before any work is done."""
@@ -503,8 +504,8 @@ def _check_out_folder(out: Path, prefix: str, inputs: dict | None = None) -> Non
     try:
         check_out_folder(out)
     except NotADirectoryError as exc:
-        raise UsageError(f"{prefix}: error: --out {exc}") from None
-    _check_writable(out, prefix)
+        raise UsageError(f"{prefix}: error: {option} {exc}") from None
+    _check_writable(out, prefix, option)
     for opt, folder in (inputs or {}).items():
         if folder is not None and out.resolve() == Path(folder).resolve():
             raise UsageError(f"{prefix}: error: --out {out}: is the {opt} folder; the results would land among "

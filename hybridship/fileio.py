@@ -20,12 +20,15 @@ def path_argument(text: str) -> Path:
 
 
 def check_writable(path) -> Path:
-    """``path`` as a Path, refused (PermissionError) when the folder it would be written in
-    exists and does not let this process create files: checked before the work (a model
-    trained for minutes), not when the result is written."""
+    """``path`` as a Path, refused when the folder it would be written in exists and does
+    not let this process create files (PermissionError) or when a file stands where that
+    folder, or one to be made for it, would be (NotADirectoryError): checked before the
+    work (a model trained for minutes), not when the result is written."""
     path = Path(path)
     folder = next((p for p in path.parents if p.exists()), Path("."))
-    if folder.is_dir() and not os.access(folder, os.W_OK | os.X_OK):
+    if not folder.is_dir():
+        raise NotADirectoryError(f"{path}: {folder} exists and is not a folder")
+    if not os.access(folder, os.W_OK | os.X_OK):
         raise PermissionError(f"{path}: cannot be written (no permission to create files in {folder})")
     return path
 

@@ -246,6 +246,10 @@ def test_bad_options_are_refused_before_any_work(log_dir, tmp_path, capsys):
     """--members 0 names the option (exit 2, no model file); a benchmark whose --out is its
     --train folder is refused before the tables land among the logs."""
     model = tmp_path / "m.npz"
+    a_file = tmp_path / "a_file"
+    a_file.write_text("x")
+    assert main(["train", "--logs", str(log_dir), "--out", str(a_file / "m.npz")]) == 2   # a file on the way
+    assert f"--out {a_file / 'm.npz'}: {a_file} exists and is not a folder" in capsys.readouterr().err
     for members in ("0", "100000000"):
         assert main(["train", "--logs", str(log_dir), "--out", str(model), "--members", members]) == 2
         assert f"--members: expected a whole number in 1..1000, got '{members}'" in capsys.readouterr().err

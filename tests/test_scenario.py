@@ -351,6 +351,11 @@ def test_cli_simulate_refuses_phases_longer_than_a_day_before_simulating(tmp_pat
         assert main(["simulate", "--seed", "1", "--out", str(tmp_path / "s.csv"), opt, "1e12", "--no-progress"]) == 2
         assert "less than or equal to 86400" in capsys.readouterr().err
     assert not (tmp_path / "s.csv").exists()
+    a_file = tmp_path / "a_file"
+    a_file.write_text("x")
+    for out_dir in (a_file, a_file / "sub"):
+        assert main(["simulate", "--sweep", "--seeds", "0-1", "--out-dir", str(out_dir), "--no-progress"]) == 2
+        assert f"--out-dir {out_dir}:" in capsys.readouterr().err
 
 
 def test_cli_simulate_writes_a_readable_log(tmp_path, capsys):
