@@ -200,7 +200,10 @@ def _cmd_simulate(args) -> int:
         scenario.DPLossConfig(seed=0, beaufort=tuple(args.beaufort), **overrides)
         check_station_keeping(vessel)
     except (ValueError, TypeError) as exc:
-        raise UsageError(problem_lines(exc, f"{prefix}: error: ")) from None
+        options = {"drift_s": "--drift-s", "t_shutdown_s": "--t-shutdown-s", "heading_mode": "--heading-mode",
+                   "beaufort": "--beaufort"}
+        raise UsageError(problem_lines(exc, f"{prefix}: error: ",
+                                       lambda field: options.get(field.split("[", 1)[0], field))) from None
     progress = sys.stderr.isatty() if args.progress is None else args.progress
 
     if args.sweep:

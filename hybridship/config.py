@@ -8,7 +8,7 @@ for the cross-field rules. They keep dataclass semantics (positional constructio
 the model files), refuse unknown keywords, NaN and infinity, and raise a plain
 :class:`ValueError` whose message starts with the field name, e.g.::
 
-    ValueError: n_members: Input should be greater than or equal to 1 (got 0) [EnsembleConfig]
+    ValueError: n_members: must be >= 1 (got 0) [EnsembleConfig]
 
 The same formatter words the vessel-file errors (:func:`hybridship.vessel.vessel_from_dict`).
 """
@@ -27,18 +27,44 @@ from pydantic.dataclasses import dataclass as _pydantic_dataclass
 __all__ = ["config_dataclass", "format_validation_error", "Int", "Float", "NonEmpty", "non_empty", "float_array"]
 
 
+#: Plain wording of pydantic's common error types (by ``type``; ``{name}`` from its ``ctx``).
+_PLAIN_MESSAGES = {
+    "greater_than": "must be > {gt}", "greater_than_equal": "must be >= {ge}",
+    "less_than": "must be < {lt}", "less_than_equal": "must be <= {le}",
+    "float_parsing": "expected a number", "float_type": "expected a number",
+    "int_parsing": "expected a whole number", "int_type": "expected a whole number",
+    "int_from_float": "expected a whole number", "finite_number": "expected a finite number",
+    "bool_parsing": "expected true or false", "bool_type": "expected true or false",
+    "string_type": "expected text", "literal_error": "expected {expected}",
+    "extra_forbidden": "not a known field", "unexpected_keyword_argument": "not a known field",
+    "missing": "missing (required)", "missing_argument": "missing (required)",
+}
+
+
+def _plain_message(e: dict) -> str:
+    """``e``'s message in the project's words where its type is a common one, else pydantic's."""
+    template = _PLAIN_MESSAGES.get(e["type"])
+    ctx = {k: (f"{v:g}" if isinstance(v, (int, float)) and not isinstance(v, bool) else v)
+           for k, v in (e.get("ctx") or {}).items()}
+    try:
+        return template.format(**ctx) if template else e["msg"].removeprefix("Value error, ")
+    except (KeyError, ValueError):
+        return e["msg"].removeprefix("Value error, ")
+
+
 def format_validation_error(err: ValidationError, source: str | None = None) -> str:
     """One line per error: ``[source: ]field.path[i]: message (got value)``.
 
-    Errors raised by a model validator (no field location) whose message already starts
-    with the field name are given as they are.
+    Common error types are worded plainly (``must be > 0``, ``expected a number``; see
+    :data:`_PLAIN_MESSAGES`). Errors raised by a model validator (no field location) whose
+    message already starts with the field name are given as they are.
     """
     lines = []
     for e in err.errors():
         loc = ""
         for part in e["loc"]:
             loc += f"[{part}]" if isinstance(part, int) else (f".{part}" if loc else str(part))
-        msg = e["msg"].removeprefix("Value error, ")
+        msg = _plain_message(e)
         got = (f" (got {e['input']!r})" if e["type"] not in ("missing", "value_error")
                and not isinstance(e["input"], dict) else "")
         head = f"{source}: " if source is not None else ""

@@ -6,16 +6,31 @@ Kept free of heavy imports: the command line uses it on every error, and ``hybri
 
 from __future__ import annotations
 
+import re
+
 __all__ = ["problem_lines"]
 
 
-def problem_lines(exc: BaseException, head: str = "") -> str:
+#: The settings class a library message names at the end of a line (``... [DPLossConfig]``):
+#: useful from Python, noise on the command line, where the option is named instead.
+_CLASS_SUFFIX = re.compile(r" \[[A-Z][A-Za-z0-9]*\]$")
+
+
+def problem_lines(exc: BaseException, head: str = "", option_of=None) -> str:
     """``exc``'s message as one line per problem, each starting with ``head``.
 
     A validation error lists every mistake of a file or a settings object on a line of
     its own (:func:`hybridship.config.format_validation_error`); whitespace inside a line
-    is collapsed so that each problem stays one line. The command line prints its errors
-    this way.
+    is collapsed so that each problem stays one line, and the settings class named at its
+    end is dropped. With ``option_of`` (field name -> option), each line's leading field
+    (``field: ...``) is replaced by the option the user typed. The command line prints its
+    errors this way.
     """
-    lines = [" ".join(line.split()) for line in str(exc).splitlines()]
+    lines = [_CLASS_SUFFIX.sub("", " ".join(line.split())) for line in str(exc).splitlines()]
+    if option_of is not None:
+        named = []
+        for line in lines:
+            field, sep, rest = line.partition(":")
+            named.append(f"{option_of(field)}{sep}{rest}" if sep else line)
+        lines = named
     return "\n".join(f"{head}{line}" for line in lines if line) or f"{head}{type(exc).__name__}"

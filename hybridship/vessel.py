@@ -10,7 +10,7 @@ Hydrodynamic coefficients are either given explicitly or derived by a named meth
 ``docs/reference/vessel-file.md`` for every field.
 
 Errors raise :class:`VesselFileError` naming the field, e.g.
-``gunnerus.toml: thrusters[1].diameter_m: Input should be greater than 0 (got -1.9)``.
+``gunnerus.toml: thrusters[1].diameter_m: must be > 0 (got -1.9)``.
 """
 
 from __future__ import annotations

@@ -139,7 +139,7 @@ def test_the_fit_reads_only_the_rows_it_is_given():
 
 
 def test_bad_settings_are_refused_with_the_field_name():
-    with pytest.raises(ValueError, match=r"wind_forecast\.mean_window_s: .*greater than 0"):
+    with pytest.raises(ValueError, match=r"wind_forecast\.mean_window_s: must be > 0"):
         WindForecast(mean_window_s=-5.0)
     with pytest.raises(ValueError, match=r"wind_forecast\.time_constant_s: .*finite"):
         WindForecast(time_constant_s=float("nan"))

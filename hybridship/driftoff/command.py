@@ -20,16 +20,6 @@ __all__ = ["add_parser"]
 _PROG = "hybridship drift-off"
 
 
-def _options_named(exc: BaseException, head: str, option_of) -> str:
-    """:func:`~hybridship.messages.problem_lines` with each line's leading field (``field: ...``)
-    replaced by ``option_of(field)``."""
-    lines = []
-    for line in problem_lines(exc).splitlines():
-        field, sep, rest = line.partition(":")
-        lines.append(f"{head}{option_of(field)}{sep}{rest}" if sep else f"{head}{line}")
-    return "\n".join(lines)
-
-
 def _floats(text: str) -> list[float]:
     try:
         vals = [float(x) for x in str(text).split(",") if x.strip()]
@@ -177,8 +167,8 @@ def _settings(args, mode):
                                 vessel_spread=args.vessel_spread, seed=args.seed)
     except (ValueError, TypeError) as exc:
         # radii_m[0] -> --radii-m: the option the user typed, on each problem's line
-        raise _usage(_options_named(exc, f"{_PROG} {mode}: error: ",
-                                    lambda field: names.get(field.split("[", 1)[0], field))) from None
+        raise _usage(problem_lines(exc, f"{_PROG} {mode}: error: ",
+                                   lambda field: names.get(field.split("[", 1)[0], field))) from None
 
 
 def _refuse_inputs_in_out(args, mode) -> None:
@@ -225,8 +215,8 @@ def _cmd_planning(args) -> int:
                                math.radians(args.current_dir_std_deg))
     except (ValueError, TypeError) as exc:
         # the option the user typed, not the field it fills
-        raise _usage(_options_named(exc, f"{_PROG} planning: error: ",
-                                    lambda field: _WEATHER_OPTIONS.get(field, field))) from None
+        raise _usage(problem_lines(exc, f"{_PROG} planning: error: ",
+                                   lambda field: _WEATHER_OPTIONS.get(field, field))) from None
     model = _model(args, "planning")
     res = simulate_blackouts(model, w, [math.radians(h) for h in args.headings_deg], uncertainty=u, settings=st)
     inputs = {"vessel": model.vessel.name, "wind": f"{args.wind_m_s:g} +- {args.wind_std_m_s:g} m/s from "
