@@ -142,12 +142,16 @@ def test_unreadable_files_are_refused_naming_the_file(tmp_path):
     that names the file, not the parser's traceback; a missing file: FileNotFoundError."""
     good = tmp_path / "good.csv.gz"
     write_log(circle_log(), good)
-    cases = {"empty.csv": b"", "plain.csv.gz": b"time_s,north_m\n0,1\n",
-             "truncated.csv.gz": good.read_bytes()[: len(good.read_bytes()) // 2]}
-    for name, data in cases.items():
+    cases = {"empty.csv": (b"", "the file is empty"),
+             "plain.csv.gz": (b"time_s,north_m\n0,1\n", "not a complete gzip file"),
+             "truncated.csv.gz": (good.read_bytes()[: len(good.read_bytes()) // 2], "not a complete gzip file"),
+             "ragged.csv": (b"time_s\n0\n1,2\n", "line 3 has 2 fields where the lines before it have 1"),
+             "text.parquet": (b"time_s\n0\n", "not a Parquet file")}
+    for name, (data, why) in cases.items():
         (tmp_path / name).write_bytes(data)
-        with pytest.raises(LogFormatError, match=f"{name}: cannot be read as a"):
+        with pytest.raises(LogFormatError, match=f"{name}: cannot be read as a .*{why}") as err:
             read_log(tmp_path / name)
+        assert "Error" not in str(err.value), str(err.value)     # no parser's exception name
     with pytest.raises(FileNotFoundError, match="missing.csv"):
         read_log(tmp_path / "missing.csv")
 

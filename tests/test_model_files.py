@@ -99,7 +99,12 @@ def test_truncated_file_is_refused(saved, tmp_path):
     for cut in (0, 10, len(raw) // 2, len(raw) - 1):
         p = tmp_path / f"cut{cut}.npz"
         p.write_bytes(raw[:cut])
-        _refused(p, rf"{p.name}: not a readable hybridship model file")
+        _refused(p, rf"{p.name}: not a readable hybridship model file \((the file is empty|not an \.npz archive, "
+                    rf"or a damaged one)\)$")
+    npy = tmp_path / "array.npz"                     # a .npy array renamed
+    with open(npy, "wb") as fh:
+        np.save(fh, np.zeros(3))
+    _refused(npy, r"array.npz: not a readable hybridship model file \(a single \.npy array, not the \.npz archive")
 
 
 def test_flipped_bytes_are_refused_or_harmless(saved, tmp_path):

@@ -61,6 +61,7 @@ import dataclasses
 import functools
 import gzip
 import os
+import re
 import warnings
 from collections.abc import Sequence
 from dataclasses import dataclass
@@ -916,6 +917,23 @@ def _container(path: Path) -> str:
     raise LogFormatError(f"{path}: unsupported file extension; expected one of {', '.join(_EXTENSIONS)}")
 
 
+def _read_problem(kind: str, exc: BaseException) -> str:
+    """What the parser's ``exc`` means for a log file, in plain words (not its internals)."""
+    text = " ".join(str(exc).split())
+    fields = re.search(r"Expected (\d+) fields in line (\d+), saw (\d+)", text)
+    if fields:
+        return (f"line {fields.group(2)} has {fields.group(3)} fields where the lines before it have "
+                f"{fields.group(1)}; is the separator a comma?")
+    if isinstance(exc, pd.errors.EmptyDataError):
+        return "the file is empty: no header line"
+    if isinstance(exc, UnicodeDecodeError):
+        return "not text: the file holds binary data"
+    if kind == "parquet":
+        return "not a Parquet file, or a damaged one"
+    if kind == "csv.gz" and isinstance(exc, (EOFError, OSError)):
+        return "not a complete gzip file: damaged or cut short"
+    return f"unreadable: {text}" if text else "unreadable"
+
 def read_log(
     path: str | os.PathLike,
     *,
@@ -967,8 +985,7 @@ def read_log(
             ValueError) as exc:
         # a truncated archive, a plain file named .csv.gz, an empty or binary file: name the
         # file and say what it should be, not the parser's internals
-        raise LogFormatError(f"{path}: cannot be read as a {kind} log file "
-                             f"({type(exc).__name__}: {' '.join(str(exc).split())})") from None
+        raise LogFormatError(f"{path}: cannot be read as a {kind} log file ({_read_problem(kind, exc)})") from None
     df = df.reset_index(drop=True)
     if validate:
         _validate(df, channel_names, rotatable, str(path), warn_unknown=True, allow_missing=allow_missing)

@@ -201,8 +201,12 @@ def _read_arrays(path: Path) -> dict:
         if "pickled" in str(err):
             # numpy's message suggests loading it unsafely: a model file never holds code
             why = "not an archive of arrays; numpy could read it only as pickled objects, which hybridship never loads"
-        else:
-            why = f"{type(err).__name__}: {' '.join(str(err).split())}"
+        elif path.stat().st_size == 0:
+            why = "the file is empty"
+        elif "context manager" in str(err):      # np.load gave one array: a .npy file, renamed
+            why = "a single .npy array, not the .npz archive a model file is"
+        else:                                     # zip or npy structure broken
+            why = "not an .npz archive, or a damaged one"
         raise ModelFileError(f"{path}: not a readable hybridship model file ({why})") from None
 
 
