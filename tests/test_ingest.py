@@ -144,6 +144,22 @@ def test_a_repeated_time_stamp_early_in_a_log_is_repaired_and_flagged(model, log
     assert msg.startswith("time_s: 9 appears at rows 9 and 10 with different values")
 
 
+def test_training_says_which_samples_it_re_sorted_or_dropped(model, log):
+    """A training log whose time runs backwards in places is repaired as a forecast's is, but
+    with a warning that counts what was changed (training data should be clean)."""
+    from hybridship.logs.io import LogFormatWarning
+
+    # a swap and a repeat at the end (both late), and a row without a time
+    messy = pd.concat([log.iloc[:50], log.iloc[[51, 50]], log.iloc[52:], log.iloc[[70]]])
+    messy = messy.reset_index(drop=True)
+    messy.loc[len(messy)] = messy.iloc[0]
+    messy.loc[len(messy) - 1, "time_s"] = np.nan
+    with pytest.warns(LogFormatWarning, match=r"time_s is not strictly increasing: 2 late sample\(s\) re-sorted, "
+                                              r"1 exact duplicate\(s\) dropped, 1 row\(s\) without a finite time_s"):
+        out = ingest(messy, model.vessel, purpose="fit")
+    assert len(out.time_s) == len(log) and np.all(np.diff(out.time_s) > 0)
+
+
 @pytest.mark.parametrize("environment", ["estimator", "mean"])
 def test_a_missing_velocity_at_the_start_of_a_log_does_not_break_a_later_hybrid_forecast(log, model, environment):
     hybrid = HybridPredictor(model.vessel, ensemble_config=TINY, environment=environment).fit([log])

@@ -36,7 +36,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from hybridship.logs.io import (REQUIRED_COLUMNS, LogArrays, LogFormatError, _check_column_names,
+from hybridship.logs.io import (REQUIRED_COLUMNS, LogArrays, LogFormatError, LogFormatWarning, _check_column_names,
                                 _frame_to_arrays, _to_float,
                                 check_log_against_vessel, read_log)
 
@@ -227,11 +227,25 @@ def _from_frame(df: pd.DataFrame, v, purpose: str, source: str) -> tuple[LogArra
     order = sort_samples(df, source=source)
     if purpose == "fit":
         _refuse_conflicts(order, source)
+        if order.changed:    # training data should be clean: say what was repaired
+            _warn_repaired(order, source)
     allow_missing = purpose == "forecast"
     check_log_against_vessel(order.frame, v, source=source, allow_missing=allow_missing)
     arrays = _frame_to_arrays(order.frame, tuple(v.channel_names), tuple(v.rotatable),
                               resorted_time_s=order.affected_time_s)
     return arrays, order
+
+
+def _warn_repaired(order: SortedLog, source: str) -> None:
+    """A LogFormatWarning saying which samples of a training log were re-sorted or dropped."""
+    import warnings
+
+    parts = [f"{n} {what}" for n, what in ((order.late_time_s.size, "late sample(s) re-sorted"),
+                                           (order.duplicate_time_s.size, "exact duplicate(s) dropped"),
+                                           (order.n_without_time, "row(s) without a finite time_s dropped"))
+             if n]
+    warnings.warn(f"{source}: time_s is not strictly increasing: {', '.join(parts)}", LogFormatWarning,
+                  stacklevel=2)
 
 
 def _time_range_frame(df: pd.DataFrame, time_range_s) -> pd.DataFrame:
