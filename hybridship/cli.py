@@ -519,6 +519,7 @@ def _cmd_benchmark_manoeuvre(args) -> int:
     from dataclasses import replace
 
     from .evaluation.manoeuvre import ManoeuvreConfig, run_manoeuvre_benchmark
+    from .vessel import VesselFileError, load_vessel
 
     _check_out_folder(args.out, f"{_PROG} benchmark manoeuvre", {"--train": args.train, "--test": args.test})
 
@@ -537,9 +538,22 @@ def _cmd_benchmark_manoeuvre(args) -> int:
             raise UsageError(f"{_PROG} benchmark manoeuvre: error: {opt} {folder}: not a folder")
     if args.step_s is not None and not 0 < args.step_s < math.inf:
         raise UsageError(f"{_PROG} benchmark manoeuvre: error: --step-s must be finite and > 0 s, got {args.step_s}")
+    try:
+        vessel = load_vessel(args.vessel)
+    except VesselFileError as exc:
+        raise UsageError(problem_lines(exc, f"{_PROG} benchmark manoeuvre: error: ")) from None
     cfg = ManoeuvreConfig.quick(args.seed) if args.quick else ManoeuvreConfig()
-    run_manoeuvre_benchmark(args.vessel, args.train, args.test, horizons, args.out, seed=args.seed,
-                            config=replace(cfg, step_s=args.step_s), progress=True)
+    options = {"horizons_s": "--horizons-s", "step_s": "--step-s", "test_dir": "--test", "train_dir": "--train"}
+    try:
+        run_manoeuvre_benchmark(vessel, args.train, args.test, horizons, args.out, seed=args.seed,
+                                config=replace(cfg, step_s=args.step_s), progress=True)
+    except ValueError as exc:
+        field = str(exc).partition(":")[0]
+        if field not in options:        # a problem of the data, not of the options
+            raise
+        message = re.sub(r"\b(train_dir|test_dir)\b", lambda m: options[m.group(1)], str(exc))
+        raise UsageError(problem_lines(ValueError(message), f"{_PROG} benchmark manoeuvre: error: ",
+                                       lambda f: options.get(f, f))) from None
     return 0
 
 

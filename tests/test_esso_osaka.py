@@ -380,8 +380,8 @@ def test_benchmark_at_a_coarser_step_through_the_cli(tmp_path, capsys):
     readme = (tmp_path / "out0.5" / "README.md").read_text()
     assert "QUICK RUN" in readme and "Seed 0; sample step 0.5 s; 3 ensemble members" in readme
     assert main(["benchmark", "manoeuvre", "--train", str(train), "--test", str(test), "--out",
-                 str(tmp_path / "bad"), "--quick", "--step-s", "0.25"]) == 1
-    assert "step_s: 0.25 s is not a whole multiple" in capsys.readouterr().err
+                 str(tmp_path / "bad"), "--quick", "--step-s", "0.25"]) == 2
+    assert "--step-s: 0.25 s is not a whole multiple" in capsys.readouterr().err
 
     # horizons that cannot be scored as labelled are refused before any training
     for horizons, needle in (("5,5", "given twice"), ("5,,10", "expected numbers"), ("inf", "finite"),
@@ -389,10 +389,16 @@ def test_benchmark_at_a_coarser_step_through_the_cli(tmp_path, capsys):
         extra = ["--step-s", "0.5"] if horizons == "5.2" else []
         out = tmp_path / "bad-h"
         assert main(["benchmark", "manoeuvre", "--train", str(train), "--test", str(test), "--out", str(out),
-                     "--quick", "--horizons-s", horizons, *extra]) in (1, 2)
+                     "--quick", "--horizons-s", horizons, *extra]) == 2
         err = capsys.readouterr().err
         assert needle in err and len(err.strip().splitlines()) == 1, err
-        assert not out.exists()
+        assert "horizons_s" not in err and not out.exists()
+    for argv, needle in ((["--test", str(train)], "run(s) are also in --train"),
+                         (["--test", str(test), "--step-s", "0.15"], "--step-s: 0.15 s is not a whole multiple"),
+                         (["--test", str(test), "--vessel", "no_such_ship"], "vessel 'no_such_ship'")):
+        assert main(["benchmark", "manoeuvre", "--train", str(train), "--out", str(tmp_path / "y"), "--quick",
+                     *argv]) == 2
+        assert needle in capsys.readouterr().err
     assert main(["benchmark", "manoeuvre", "--train", str(train), "--test", str(test), "--out", str(tmp_path / "x"),
                  "--quick", "--step-s", "inf"]) == 2
     assert "--step-s must be finite" in capsys.readouterr().err
