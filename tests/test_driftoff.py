@@ -199,7 +199,12 @@ def test_weather_table_round_trip_and_errors(tmp_path):
     bad = pd.concat([df, df], ignore_index=True)
     bad.loc[1, "current_m_s"] = 7.0
     bad.to_csv(path, index=False)
-    with pytest.raises(ValueError, match=r"column 'current_m_s', row 1 \(line 3 of the file\).*\[0, 5\]"):
+    with pytest.raises(ValueError, match=r"column 'current_m_s', row 1 \(line 3 of the file\): 7.0, expected a "
+                                         r"number in \[0, 5\]"):
+        read_weather_table(path)
+    bad.loc[1, "current_m_s"] = np.nan              # an empty cell
+    bad.to_csv(path, index=False)
+    with pytest.raises(ValueError, match=r"row 1 \(line 3 of the file\): a missing value, expected"):
         read_weather_table(path)
     path.write_text("")
     with pytest.raises(ValueError, match="w.csv: not a readable CSV weather table"):
@@ -396,6 +401,12 @@ def test_live_bad_input_names_the_field():
         environment_from_log([1, 2, 3], "gunnerus")
     with pytest.raises(ValueError, match="window_s"):
         environment_from_log(pd.DataFrame({"time_s": [0.0, 1.0, 2.0]}), "gunnerus", window_s=-5)
+
+
+def test_live_refuses_a_few_seconds_of_log():
+    df, _ = _failure_log()
+    with pytest.raises(ValueError, match=r"log: only 4 s of log up to the blackout .* at least 60 s"):
+        environment_from_log(df.iloc[:5], "gunnerus")
 
 
 def test_cli_refuses_an_out_where_the_report_would_replace_an_input(tmp_path, capsys):

@@ -257,7 +257,8 @@ def _cmd_live(args) -> int:
     try:
         est = environment_from_log(df, model, window_s=args.window_s, seed=args.seed)
     except ValueError as exc:
-        raise _usage(problem_lines(exc, f"{_PROG} live: error: ")) from None
+        raise _usage(problem_lines(exc, f"{_PROG} live: error: ",
+                                   lambda field: {"window_s": "--window-s", "log": "--log"}.get(field, field))) from None
     res = blackout_now(est, model, st)
     dt = time.perf_counter() - t0
     inputs = {"vessel": model.vessel.name, "log": str(args.log), "blackout at [s]": f"{est.time_s:g}",

@@ -156,6 +156,10 @@ def environment_from_log(log, vessel="gunnerus", *, window_s: float = 900.0, win
     a = aw if window_s >= wind_window_s else aw.rows(slice(int(np.searchsorted(
         aw.time_s, aw.time_s[-1] - window_s, side="left")), None))
     idx = len(a.time_s) - 1
+    if a.time_s[idx] - a.time_s[0] < MIN_WINDOW_S:
+        raise ValueError(f"log: only {a.time_s[idx] - a.time_s[0]:g} s of log up to the blackout at time_s "
+                         f"{a.time_s[idx]:g}; the environment estimate needs at least {MIN_WINDOW_S:g} s of "
+                         f"station keeping")
     if a.dp_active[idx] == 0:
         raise ValueError(f"log: dp_active is 0 at time_s {a.time_s[idx]:g} (the last row used): a blackout is "
                          f"predicted from station keeping; give a time while the DP is active")

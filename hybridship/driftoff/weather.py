@@ -187,8 +187,11 @@ def read_weather_table(path_or_frame) -> tuple[list[WeatherState], list[str]]:
             i = int(np.flatnonzero(bad)[0])
             expected = "a finite number" if c not in _TABLE_RANGES else f"a number in [{lo:g}, {hi:g}]"
             line = "" if isinstance(path_or_frame, pd.DataFrame) else f" (line {i + 2} of the file)"
-            raise ValueError(f"{src}: column {c!r}, row {i}{line}: invalid value "
-                             f"{df[c].iloc[i]!r}, expected {expected} ({int(bad.sum())} bad row(s))")
+            raw = df[c].iloc[i]
+            got = ("a missing value" if pd.isna(raw) else
+                   f"{raw.item() if isinstance(raw, np.generic) else raw!r}")    # 99, not np.int64(99)
+            raise ValueError(f"{src}: column {c!r}, row {i}{line}: {got}, expected {expected} "
+                             f"({int(bad.sum())} bad row(s))")
         cols[c] = v
     gi = cols.get("gust_intensity", np.full(len(df), 0.1))
     states = [WeatherState(cols["wind_speed_m_s"][i], math.radians(cols["wind_dir_deg"][i]), cols["hs_m"][i],
