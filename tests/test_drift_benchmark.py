@@ -198,6 +198,7 @@ def test_ratio_table_keeps_log_order_and_marks_ratios_without_a_reference():
 def test_too_few_calibration_forecasts_are_refused_with_the_counts():
     from hybridship.evaluation.drift import _check_calibration_count
 
-    _check_calibration_count(6, 4, "calibration_scenarios")          # 24 per lead: enough
-    with pytest.raises(ValueError, match=r"n_intervals: 3 forecasts after each of 6 failures .* give 18 per lead"):
-        _check_calibration_count(6, 3, "calibration_scenarios")
+    _check_calibration_count(6, 4, "calibration_scenarios", "advice")          # 24 per lead: enough
+    with pytest.raises(ValueError, match=r"n_intervals: 3 forecasts after each of 6 failures .* give 18 per lead"
+                                         r".* to calibrate \(more logs\)"):
+        _check_calibration_count(6, 3, "the other logs' failures", "more logs")

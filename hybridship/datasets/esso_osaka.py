@@ -302,8 +302,9 @@ def run_kind(path) -> str:
         if kind is None and path.parent.name.lower() in RUN_KINDS:
             kind = path.parent.name.lower()
     if kind not in RUN_KINDS:
-        raise ValueError(f"{path}: cannot tell the run kind (manifest, name prefix and folder name give "
-                         f"{kind!r}; expected one of {list(RUN_KINDS)})")
+        raise ValueError(f"{path}: cannot tell the run kind from the manifest, the name's prefix or the folder's "
+                         f"name; expected one of {list(RUN_KINDS)}"
+                         + (f" (got {kind!r})" if kind is not None else ""))
     return kind
 
 

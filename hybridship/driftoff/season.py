@@ -135,7 +135,7 @@ def _client(scheduler, n_workers):
         return dd.Client(str(scheduler)), None
     except (OSError, ValueError, TypeError) as exc:  # dask's own words, with the argument named
         raise OSError(f"scheduler {str(scheduler)!r}: could not connect ({' '.join(str(exc).split())}); "
-                      f"expected 'local', None or a running scheduler's address such as tcp://host:8786") from None
+                      f"expected 'local', no scheduler or a running scheduler's address such as tcp://host:8786") from None
 
 
 def season_sweep(vessel, states, headings_rad, *, uncertainty: WeatherUncertainty | None = None,

@@ -324,7 +324,8 @@ def _calibrate_after_stop(hybrid, test_arrays, test_is_train: bool, calibration_
         say(f"spread after a failure calibrated on the training logs' {n_own} failures")
         return timing, None
     if test_is_train and n_min > 0 and len(test_arrays) - 1 >= n_min:
-        _check_calibration_count(len(test_arrays) - 1, n_intervals, "the other logs' failures")
+        _check_calibration_count(len(test_arrays) - 1, n_intervals, "the other logs' failures",
+                                 "more intervals, or more logs with a failure")
         coefficients = [hybrid.drift_yaw_uv_rad_per_m2 if c is None else c.coefficient_rad_per_m2
                         for c in (per_log_hull or [None] * len(test_arrays))]
         errors, per_log = {}, []
@@ -342,7 +343,8 @@ def _calibrate_after_stop(hybrid, test_arrays, test_is_train: bool, calibration_
     if calibration_scenarios > 0 and hybrid.model.vessel.name == "gunnerus":
         from ..sim.scenario import embedded_scenarios
 
-        _check_calibration_count(int(calibration_scenarios), n_intervals, "calibration_scenarios")
+        _check_calibration_count(int(calibration_scenarios), n_intervals, "calibration_scenarios",
+                                 "more intervals or calibration scenarios, or none for the raw spread")
 
         sims = embedded_scenarios(int(calibration_scenarios), seed + 1000)
         hybrid.calibrate_after_stop([s.log for s in sims], n_intervals=n_intervals, horizon_s=horizon_s)
@@ -355,14 +357,14 @@ def _calibrate_after_stop(hybrid, test_arrays, test_is_train: bool, calibration_
     return timing, None
 
 
-def _check_calibration_count(n_failures: int, n_intervals: int, source: str) -> None:
+def _check_calibration_count(n_failures: int, n_intervals: int, source: str, advice: str) -> None:
     """Refuse (before the calibration's forecasts) too few forecasts per lead to fit a scale on."""
     from ..residual.calibration import MIN_CALIBRATION_SAMPLES
 
     if n_failures * n_intervals < MIN_CALIBRATION_SAMPLES:
         raise ValueError(f"n_intervals: {n_intervals} forecasts after each of {n_failures} failures ({source}) "
                          f"give {n_failures * n_intervals} per lead; the spread after a failure needs at least "
-                         f"{MIN_CALIBRATION_SAMPLES} to calibrate (more intervals, or no calibration scenarios)")
+                         f"{MIN_CALIBRATION_SAMPLES} to calibrate ({advice})")
 
 
 def _benchmark_models(vessel, hybrid, data_only) -> dict:
