@@ -378,7 +378,8 @@ def _cmd_forecast(args) -> int:
     except ModelFileError as exc:
         raise UsageError(problem_lines(exc, f"{_PROG} forecast: error: ")) from None
     if not args.log.is_file():
-        raise UsageError(f"{_PROG} forecast: error: --log {args.log}: file not found")
+        raise UsageError(f"{_PROG} forecast: error: --log {args.log}: "
+                         f"{'is a folder; expected a log file' if args.log.is_dir() else 'file not found'}")
     _check_log_path(args.log, f"{_PROG} forecast: error: --log")
     for opt, given in (("--log", args.log), ("--model", args.model)):
         if args.out.resolve() == given.resolve():

@@ -154,6 +154,9 @@ def test_unreadable_files_are_refused_naming_the_file(tmp_path):
         assert "Error" not in str(err.value), str(err.value)     # no parser's exception name
     with pytest.raises(FileNotFoundError, match="missing.csv"):
         read_log(tmp_path / "missing.csv")
+    (tmp_path / "folder.csv").mkdir()
+    with pytest.raises(IsADirectoryError, match="folder.csv: is a folder; expected a log file"):
+        read_log(tmp_path / "folder.csv")
 
 
 # --------------------------------------------------------------------------------------

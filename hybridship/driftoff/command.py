@@ -246,7 +246,8 @@ def _cmd_live(args) -> int:
     st = _settings(args, "live")
     model = _model(args, "live")
     if not args.log.is_file():
-        raise _usage(f"{_PROG} live: error: --log {args.log}: no such file")
+        raise _usage(f"{_PROG} live: error: --log {args.log}: "
+                     f"{'is a folder; expected a log file' if args.log.is_dir() else 'no such file'}")
     df = read_log(args.log)
     t = df["time_s"].to_numpy(float)
     if args.time_s is not None:
@@ -298,7 +299,7 @@ def _cmd_season(args) -> int:
         raise _usage(f"{_PROG} season: error: --max-p-exceed must be in [0, 1], got {args.max_p_exceed}")
     try:
         states, labels = read_weather_table(args.weather_table)
-    except (ValueError, FileNotFoundError) as exc:
+    except (ValueError, FileNotFoundError, IsADirectoryError) as exc:
         raise _usage(problem_lines(exc, f"{_PROG} season: error: --weather-table: ")) from None
     scheduler = None if args.scheduler.lower() == "none" else args.scheduler
     if scheduler is not None and scheduler != "local" and ":" not in scheduler:

@@ -162,6 +162,8 @@ def read_weather_table(path_or_frame) -> tuple[list[WeatherState], list[str]]:
         df, src = path_or_frame, "weather table"
     else:
         src = str(path_or_frame)
+        if Path(src).is_dir():
+            raise IsADirectoryError(f"weather table: {src!r} is a folder; expected a CSV file")
         if not Path(src).is_file():
             raise FileNotFoundError(f"weather table: no such file {src!r}")
         try:

@@ -969,6 +969,8 @@ def read_log(
     """
     path = Path(path)
     kind = _container(path)
+    if path.is_dir():
+        raise IsADirectoryError(f"{path}: is a folder; expected a log file")
     if not path.is_file():
         raise FileNotFoundError(f"{path}: log file not found")
     if kind == "csv" and _starts_with(path, b"\x1f\x8b"):
