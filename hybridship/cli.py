@@ -628,7 +628,9 @@ def main(argv=None) -> int:
     parser = _build_parser()
     args = None
     try:
-        args = parser.parse_args(argv)
+        args, extra = parser.parse_known_args(argv)
+        if extra:   # named with the command they were given to (argparse names the top level)
+            raise UsageError(f"{_command(args)}: error: unrecognized arguments: {' '.join(extra)}")
         if getattr(args, "func", None) is None:
             raise UsageError(f"{_PROG}: error: a command is required (try '{_PROG} --help')")
         with warnings.catch_warnings():

@@ -491,6 +491,9 @@ def test_cli_error_names_the_whole_command(monkeypatch, capsys):
     assert main(["drift-off", "live", "--log", "x.csv", "--out", "o"]) == 1
     err = capsys.readouterr().err
     assert err.startswith("hybridship drift-off live: error: rpm:"), err
+    # an unknown option is named with the command it was given to
+    assert main(["drift-off", "live", "--log", "x.csv", "--out", "o", "--bogus"]) == 2
+    assert capsys.readouterr().err == "hybridship drift-off live: error: unrecognized arguments: --bogus\n"
 
 
 @pytest.mark.parametrize("seed, ok", [("0", True), ("4294967295", True), ("4294967296", False), ("-1", False)])
