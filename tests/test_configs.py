@@ -36,7 +36,7 @@ BAD = [
     (MotionRAOs, dict(L_m=30.0, B_m=8.0, T_m=3.0, yaw_gain=6.0), "yaw_gain: "),
     (WeatherState, dict(tp_s=0.0), "weather.tp_s: "),
     (WeatherUncertainty, dict(hs_m=-1.0), "uncertainty.hs_m: "),
-    (DriftOffSettings, dict(dt_s=1.0, horizon_s=0.5, reaction_times_s=(0.0,)), "dt_s: must be <= horizon_s"),
+    (DriftOffSettings, dict(dt_s=1.0, horizon_s=0.5, reaction_times_s=(0.0,)), "dt_s: must be <= the horizon"),
     (SeaConditions, dict(n_components=0), "n_components: "),
     (NARXConfig, dict(hidden=()), "hidden: expected at least one value"),
 ]

@@ -245,7 +245,8 @@ def test_weather_samples_stay_in_the_range_of_a_weather_state():
     (dict(seed=-1), "seed"), (dict(dt_s=20.0), "dt_s"), (dict(seed=2**32), "seed"),
     (dict(radii_m=(3.0, 3.0)), "radii_m: expected each value once"),
     (dict(reaction_times_s=(30.0, 30.0)), "reaction_times_s: expected each value once"),
-    (dict(horizon_s=60.5), "horizon_s: must be a whole number of dt_s")])
+    (dict(horizon_s=60.5), "horizon_s: must be a whole number of steps of"),
+    (dict(horizon_s=1e9), "horizon_s: must be <= 86400"), (dict(n_samples=10**9), "n_samples: must be <= 1000000")])
 def test_bad_settings_name_the_field(kwargs, field):
     with pytest.raises((ValueError, TypeError), match=field):
         DriftOffSettings(**kwargs)

@@ -76,10 +76,10 @@ class DriftOffSettings:
     reaction_times_s : tuple of float
         Operator reaction times [s], each once.
     n_samples : int
-        Monte-Carlo samples per heading.
+        Monte-Carlo samples per heading (at most 10^6).
     horizon_s : float
-        Longest simulated drift [s], a whole number of ``dt_s`` steps; radii not reached by
-        then count as never reached.
+        Longest simulated drift [s] (at most one day), a whole number of ``dt_s`` steps;
+        radii not reached by then count as never reached.
     dt_s : float
         Output step [s] (RK4, inputs held over a step), at most 1 s (the RK4 step the physics
         inputs' envelope allows: longer steps diverge in a fast drift).
@@ -96,8 +96,8 @@ class DriftOffSettings:
 
     radii_m: Annotated[tuple[Annotated[Float, Field(gt=0)], ...], NonEmpty] = (3.0, 5.0, 10.0)
     reaction_times_s: Annotated[tuple[Annotated[Float, Field(ge=0)], ...], NonEmpty] = (30.0, 60.0)
-    n_samples: Annotated[Int, Field(ge=1)] = 100
-    horizon_s: Annotated[Float, Field(gt=0)] = 300.0
+    n_samples: Annotated[Int, Field(ge=1, le=1_000_000)] = 100
+    horizon_s: Annotated[Float, Field(gt=0, le=86400.0)] = 300.0
     dt_s: Annotated[Float, Field(gt=0, le=1.0)] = 1.0
     rpm_time_constant_s: Annotated[Float, Field(gt=0)] = 1.5
     vessel_spread: Annotated[Float, Field(ge=0)] = 1.0
@@ -125,14 +125,14 @@ class DriftOffSettings:
     @model_validator(mode="after")
     def _within_horizon(self):
         if self.dt_s > self.horizon_s:
-            raise ValueError(f"dt_s: must be <= horizon_s = {self.horizon_s:g}, got {self.dt_s!r}")
+            raise ValueError(f"dt_s: must be <= the horizon ({self.horizon_s:g} s), got {self.dt_s!r}")
         steps = self.horizon_s / self.dt_s
         if abs(steps - round(steps)) > 1e-6:
-            raise ValueError(f"horizon_s: must be a whole number of dt_s = {self.dt_s:g} s steps, got "
+            raise ValueError(f"horizon_s: must be a whole number of steps of {self.dt_s:g} s, got "
                              f"{self.horizon_s!r} (a drift is simulated in whole steps)")
         if max(self.reaction_times_s) > self.horizon_s:
-            raise ValueError(f"reaction_times_s: must be <= horizon_s = {self.horizon_s:g}, "
-                             f"got {self.reaction_times_s!r}")
+            raise ValueError(f"reaction_times_s: must be <= the horizon ({self.horizon_s:g} s), "
+                             f"got {', '.join(f'{t:g}' for t in self.reaction_times_s)}")
         return self
 
     @property
