@@ -44,7 +44,7 @@ _PLAIN_MESSAGES = {
 def _plain_message(e: dict) -> str:
     """``e``'s message in the project's words where its type is a common one, else pydantic's."""
     template = _PLAIN_MESSAGES.get(e["type"])
-    ctx = {k: (f"{v:g}" if isinstance(v, float) else v) for k, v in (e.get("ctx") or {}).items()}
+    ctx = {k: (f"{v:.10g}" if isinstance(v, float) else v) for k, v in (e.get("ctx") or {}).items()}
     try:
         return template.format(**ctx) if template else e["msg"].removeprefix("Value error, ")
     except (KeyError, ValueError):

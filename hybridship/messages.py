@@ -13,7 +13,9 @@ __all__ = ["problem_lines"]
 
 #: The settings class a library message names at the end of a line (``... [DPLossConfig]``):
 #: useful from Python, noise on the command line, where the option is named instead.
-_CLASS_SUFFIX = re.compile(r" \[[A-Z][A-Za-z0-9]*\]$")
+#: A CamelCase name only (two capitals and a lower-case letter), so that a unit such as
+#: ``[N]`` or ``[kN m]`` at a line's end stays.
+_CLASS_SUFFIX = re.compile(r" \[(?=[A-Za-z0-9]*[a-z])(?=(?:[a-z0-9]*[A-Z]){2})[A-Z][A-Za-z0-9]{3,}\]$")
 
 
 def problem_lines(exc: BaseException, head: str = "", option_of=None) -> str:

@@ -100,3 +100,21 @@ def test_predictors_take_settings_or_dicts_of_them_and_name_a_typo():
         HybridPredictor("gunnerus", multistep_config=3)
     with pytest.raises(ValueError, match=r"^ensemble_config: hidden"):
         DataOnlyPredictor("gunnerus", ensemble_config={"hidden": [1]})
+
+
+def test_command_line_lines_drop_the_settings_class_but_keep_units():
+    from hybridship.messages import problem_lines
+
+    err = ValueError("drift_s: must be > 0 (got -5.0) [DPLossConfig]\nlog: winch_load [N]\nload [kN m]")
+    assert problem_lines(err, "x: ") == "x: drift_s: must be > 0 (got -5.0)\nx: log: winch_load [N]\nx: load [kN m]"
+    assert problem_lines(err, "", lambda f: {"drift_s": "--drift-s"}.get(f, f)).splitlines()[0] == \
+        "--drift-s: must be > 0 (got -5.0)"
+
+
+def test_bounds_in_messages_keep_their_digits():
+    from hybridship.residual.ensemble import EnsembleConfig
+
+    with pytest.raises(ValueError, match=r"n_members: must be <= 1000 \(got 1001\)"):
+        EnsembleConfig(n_members=1001)
+    with pytest.raises(ValueError, match=r"lr: must be > 0 \(got -0.5\)"):
+        EnsembleConfig(lr=-0.5)

@@ -204,11 +204,17 @@ def test_too_few_calibration_forecasts_are_refused_with_the_counts():
         _check_calibration_count(6, 3, "the other logs' failures", "more logs")
 
 
-def test_a_test_log_without_a_failure_is_refused_before_training(tiny_folder, tmp_path):
+def test_a_test_log_without_a_failure_is_refused_before_training(tiny_folder, tmp_path, monkeypatch):
+    from hybridship.predictors import HybridPredictor
+
+    def no_training(*args, **kwargs):
+        raise AssertionError("trained before the test logs were checked")
+
+    monkeypatch.setattr(HybridPredictor, "fit", no_training)
     model = DynamicModel("gunnerus")
     test = tmp_path / "test"
     test.mkdir()
     write_log(physics_log(model, duration_s=300.0, t_shutdown_s=None, seed=3), test / "station_keeping.csv")
     with pytest.raises(ValueError, match=r"test: 1 log\(s\) have no DP failure to score \(station_keeping"):
         run_drift_benchmark(tiny_folder, test, tmp_path / "out", progress=False, plots=False)
-    assert not (tmp_path / "out" / "errors.csv").exists()
+    assert not (tmp_path / "out").exists()

@@ -405,9 +405,13 @@ def test_live_bad_input_names_the_field():
 
 
 def test_live_refuses_a_few_seconds_of_log():
-    df, _ = _failure_log()
+    df, i = _failure_log()
     with pytest.raises(ValueError, match=r"log: only 4 s of log up to the blackout .* at least 60 s"):
         environment_from_log(df.iloc[:5], "gunnerus")
+    # the shortest window on a log whose times do not fall on whole seconds: accepted
+    jittered = df.iloc[: i + 1].assign(time_s=df["time_s"].iloc[: i + 1] + 0.25)
+    jittered.loc[jittered.index[-1], "time_s"] += 0.1
+    environment_from_log(jittered, "gunnerus", window_s=60.0)
 
 
 def test_cli_refuses_an_out_where_the_report_would_replace_an_input(tmp_path, capsys):

@@ -101,6 +101,8 @@ def test_truncated_file_is_refused(saved, tmp_path):
         p.write_bytes(raw[:cut])
         _refused(p, rf"{p.name}: not a readable hybridship model file \((the file is empty|not an \.npz archive, "
                     rf"or a damaged one)\)$")
+    (tmp_path / "folder.npz").mkdir()
+    _refused(tmp_path / "folder.npz", r"folder.npz: is a folder; expected a model file")
     npy = tmp_path / "array.npz"                     # a .npy array renamed
     with open(npy, "wb") as fh:
         np.save(fh, np.zeros(3))

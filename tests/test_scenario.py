@@ -346,7 +346,14 @@ def test_parse_seeds():
             parse_seeds(bad)
 
 
-def test_cli_simulate_refuses_phases_longer_than_a_day_before_simulating(tmp_path, capsys):
+def test_cli_simulate_refuses_phases_longer_than_a_day_before_simulating(tmp_path, capsys, monkeypatch):
+    from hybridship.sim import scenario
+
+    def no_simulation(*args, **kwargs):
+        raise AssertionError("simulated before the options were checked")
+
+    monkeypatch.setattr(scenario, "simulate_dp_loss", no_simulation)
+    monkeypatch.setattr(scenario, "sweep", no_simulation)
     for opt in ("--drift-s", "--t-shutdown-s"):
         assert main(["simulate", "--seed", "1", "--out", str(tmp_path / "s.csv"), opt, "1e12", "--no-progress"]) == 2
         assert f"{opt}: must be <= 86400" in capsys.readouterr().err

@@ -153,16 +153,15 @@ def run_drift_benchmark(train=None, test=None, out_dir="drift-benchmark", *, ves
             print(msg, flush=True)
 
     train_logs, train_names, test_logs, test_names = _benchmark_logs(train, test, n_scenarios, seed, say)
-    out = Path(out_dir)
-    out.mkdir(parents=True, exist_ok=True)
     ens_cfg = ensemble_config or EnsembleConfig(n_members=members, seed=seed)
     horizons = tuple(h for h in metrics.HORIZONS_S if h <= horizon_s + 1e-9)
 
     hybrid = HybridPredictor(vessel, ensemble_config=ens_cfg, training=training, drift_hull=drift_hull,
                              environment_config=environment_config or EnvironmentConfig())
     train_arrays = [as_log_arrays(x, hybrid.model.vessel) for x in train_logs]
-    test_arrays = [as_log_arrays(x, hybrid.model.vessel) for x in test_logs]
-    _check_test_drifts(test_arrays, test_names, n_intervals, horizon_s)
+    test_arrays = _test_arrays(test_logs, test_names, hybrid.model.vessel, n_intervals, horizon_s)
+    out = Path(out_dir)
+    out.mkdir(parents=True, exist_ok=True)
     data_only = DataOnlyPredictor(vessel, ensemble_config=ens_cfg)
     timing = _fit_ensembles({"hybrid": hybrid, "data_only": data_only}, train_arrays, dp_only, say)
     t_hull, per_log_hull = _drift_hull_per_log(hybrid, test_arrays, test_logs is train_logs, horizon_s, test_names,
@@ -241,16 +240,19 @@ def _same_logs_as_training(train_logs, train_names, test_logs, test_names):
                      f"leave one out, or folders without common logs")
 
 
-def _check_test_drifts(test_arrays, test_names, n_intervals: int, horizon_s: float) -> None:
-    """Refuse, before any training, a test log without a failure to score: station keeping,
-    then ``dp_active`` 0, then ``n_intervals`` starts with ``horizon_s`` of drift after each."""
+def _test_arrays(test_logs, test_names, vessel, n_intervals: int, horizon_s: float) -> list:
+    """The test logs as LogArrays, refused (before any training) where a log has no failure to
+    score: station keeping, then ``dp_active`` 0, then ``n_intervals`` starts with
+    ``horizon_s`` of drift after each."""
     from ..predictors.after_failure import has_drift
 
+    test_arrays = [as_log_arrays(x, vessel) for x in test_logs]
     bad = [name for a, name in zip(test_arrays, test_names) if not has_drift(a, n_intervals, horizon_s)]
     if bad:
         raise ValueError(f"test: {len(bad)} log(s) have no DP failure to score ({', '.join(bad[:5])}"
                          f"{', ...' if len(bad) > 5 else ''}): each needs station keeping, then dp_active 0, "
                          f"then {n_intervals} start times with {horizon_s:g} s of drift after each")
+    return test_arrays
 
 
 def _fit_ensembles(models: dict, train_arrays, dp_only: bool, say) -> list[dict]:

@@ -968,9 +968,9 @@ def read_log(
         If the file does not exist.
     """
     path = Path(path)
-    kind = _container(path)
     if path.is_dir():
         raise IsADirectoryError(f"{path}: is a folder; expected a log file")
+    kind = _container(path)
     if not path.is_file():
         raise FileNotFoundError(f"{path}: log file not found")
     if kind == "csv" and _starts_with(path, b"\x1f\x8b"):

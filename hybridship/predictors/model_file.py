@@ -197,6 +197,10 @@ def _read_arrays(path: Path) -> dict:
             return {k: z[k] for k in z.files}
     except FileNotFoundError:
         raise ModelFileError(f"{path}: model file not found") from None
+    except IsADirectoryError:
+        raise ModelFileError(f"{path}: is a folder; expected a model file (.npz)") from None
+    except PermissionError:
+        raise ModelFileError(f"{path}: cannot be read (no permission)") from None
     except Exception as err:  # zip/npy parse errors of a damaged file
         if "pickled" in str(err):
             # numpy's message suggests loading it unsafely: a model file never holds code
