@@ -630,7 +630,11 @@ def main(argv=None) -> int:
     try:
         args, extra = parser.parse_known_args(argv)
         if extra:   # named with the command they were given to (argparse names the top level)
-            raise UsageError(f"{_command(args)}: error: unrecognized arguments: {' '.join(extra)}")
+            words = list(sys.argv[1:] if argv is None else argv)
+            command = getattr(args, "command", None)
+            before = command in words and extra[0] in words and words.index(extra[0]) < words.index(command)
+            raise UsageError(f"{_PROG if before else _command(args)}: error: unrecognized arguments: "
+                             f"{' '.join(extra)}")
         if getattr(args, "func", None) is None:
             raise UsageError(f"{_PROG}: error: a command is required (try '{_PROG} --help')")
         with warnings.catch_warnings():

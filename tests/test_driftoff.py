@@ -499,6 +499,8 @@ def test_cli_error_names_the_whole_command(monkeypatch, capsys):
     # an unknown option is named with the command it was given to
     assert main(["drift-off", "live", "--log", "x.csv", "--out", "o", "--bogus"]) == 2
     assert capsys.readouterr().err == "hybridship drift-off live: error: unrecognized arguments: --bogus\n"
+    assert main(["--bogus", "drift-off", "live", "--log", "x.csv", "--out", "o"]) == 2    # given to the top level
+    assert capsys.readouterr().err == "hybridship: error: unrecognized arguments: --bogus\n"
 
 
 @pytest.mark.parametrize("seed, ok", [("0", True), ("4294967295", True), ("4294967296", False), ("-1", False)])
