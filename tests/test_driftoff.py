@@ -514,3 +514,24 @@ def test_cli_seed_bounds(seed, ok):
     else:
         with pytest.raises(argparse.ArgumentTypeError, match="0..4294967295"):
             _seed(seed)
+
+
+def test_headings_in_degrees_or_repeated_are_refused():
+    w = WeatherState()
+    st = DriftOffSettings(n_samples=2, horizon_s=30.0, reaction_times_s=(10.0,))
+    for headings, why in (([0.0, 90.0, 180.0], "expected radians"), ([0.0, 0.0], "expected each heading once"),
+                          ([0.0, 2 * math.pi], "expected each heading once"), ([], "expected a non-empty")):
+        with pytest.raises(ValueError, match=f"headings: {why}"):
+            simulate_blackouts("gunnerus", w, headings, settings=st)
+    with pytest.raises(ValueError, match="headings: expected radians"):
+        season_sweep("gunnerus", [w], [0.0, 90.0], settings=st, scheduler=None)
+
+
+def test_live_blackout_refuses_a_diverging_drift():
+    import dataclasses
+
+    df, i = _failure_log()
+    est = environment_from_log(df.iloc[: i + 1], "gunnerus")
+    st = DriftOffSettings(n_samples=4, horizon_s=60.0, reaction_times_s=(30.0,))
+    with pytest.raises(FloatingPointError, match="drifts diverged \\(estimate"):
+        blackout_now(dataclasses.replace(est, accel_members=np.full((4, 3), 10.0)), "gunnerus", st)

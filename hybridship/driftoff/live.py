@@ -33,7 +33,7 @@ from ..frames import vector_to_speed_dir
 from ..logs.io import LogArrays
 from ..residual.features import ResidualConfig, prepare_log
 from . import engine, spread
-from .planning import DriftOffResult, DriftOffSettings, get_model, hull_array, state_rng
+from .planning import DriftOffResult, DriftOffSettings, get_model, hull_array, refuse_diverged, state_rng
 
 __all__ = ["EnvironmentEstimate", "environment_from_log", "blackout_now", "MIN_WINDOW_S", "MIN_WIND_WINDOW_S"]
 
@@ -292,6 +292,7 @@ def blackout_now(estimate: EnvironmentEstimate, vessel="gunnerus", settings: Dri
         st.rpm_time_constant_s, False, envs.wind_mean_m_s, envs.wind_dir_from_rad, envs.gust_f_hz,
         envs.gust_amp_m_s, envs.gust_phase_rad, cur, acc, envs.waves, hull_array(ves), st.dt_s,
         st.n_steps, np.asarray(st.radii_m), np.asarray(st.reaction_times_s), nu0=nu0)
+    refuse_diverged(exc, st.reaction_times_s, "estimate: its velocity, load or current")
     psi = np.array([estimate.eta[2]])
     rel = np.mod(estimate.wind_dir_from_rad - psi, 2.0 * np.pi)
     return DriftOffResult(headings_rad=psi, weather_rel_rad=rel, radii_m=np.asarray(st.radii_m),

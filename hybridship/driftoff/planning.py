@@ -218,11 +218,34 @@ class DriftOffResult:
         return times, pd.DataFrame(rows)
 
 
-def _headings(headings_rad):
+def check_headings(headings_rad) -> np.ndarray:
+    """Headings [rad] as a 1-D array, refused when empty, not finite, in degrees or repeated."""
     a = np.atleast_1d(np.asarray(headings_rad, dtype=float))
     if a.ndim != 1 or a.size == 0 or not np.all(np.isfinite(a)):
         raise ValueError(f"headings: expected a non-empty list of finite angles, got {headings_rad!r}")
+    if np.any(np.abs(a) > 2.0 * np.pi + 0.1):
+        raise ValueError(f"headings: expected radians (within +-2 pi), got {a.tolist()} (degrees? convert with "
+                         f"numpy.radians)")
+    if np.unique(np.mod(a, 2.0 * np.pi)).size != a.size:
+        raise ValueError(f"headings: expected each heading once, got {a.tolist()}")
     return a
+
+
+#: Drift speed [m/s] (about 58 kn) beyond which a drift is not a drift but a diverged
+#: integration: no ship drifts off station this fast.
+MAX_DRIFT_SPEED_M_S = 30.0
+
+
+def refuse_diverged(excursion_m: np.ndarray, reaction_times_s, what: str) -> None:
+    """Raise FloatingPointError when a drift diverged within the reaction times (an
+    excursion that is not finite, or farther than :data:`MAX_DRIFT_SPEED_M_S` could carry
+    the ship): no result, not "never reached"."""
+    with np.errstate(invalid="ignore"):
+        bad = ~(excursion_m <= MAX_DRIFT_SPEED_M_S * np.asarray(reaction_times_s, float) + 1.0)
+    if bad.any():
+        n_bad = int(bad.reshape(bad.shape[0], -1).any(axis=-1).sum())
+        raise FloatingPointError(f"{n_bad} of {bad.shape[0]} drifts diverged ({what}): beyond what the models "
+                                 f"are meant for")
 
 
 def simulate_blackouts(vessel, weather: WeatherState, headings_rad, *, uncertainty: WeatherUncertainty | None = None,
@@ -251,7 +274,7 @@ def simulate_blackouts(vessel, weather: WeatherState, headings_rad, *, uncertain
     if uncertainty is not None and not isinstance(uncertainty, WeatherUncertainty):
         raise TypeError(f"uncertainty: expected a WeatherUncertainty or None, got {type(uncertainty).__name__}")
     st = settings or DriftOffSettings()
-    psi = _headings(headings_rad)
+    psi = check_headings(headings_rad)
     model = get_model(vessel)
     ves = model.vessel
     rng = state_rng(st.seed, index)
@@ -271,10 +294,7 @@ def simulate_blackouts(vessel, weather: WeatherState, headings_rad, *, uncertain
         tile(envs.gust_f_hz), tile(envs.gust_amp_m_s), tile(envs.gust_phase_rad), tile(envs.current),
         np.zeros((H * N, 3)), tuple(tile(w) for w in envs.waves), hull_array(ves), st.dt_s, st.n_steps,
         np.asarray(st.radii_m), np.asarray(st.reaction_times_s), keep_tracks)
-    if not np.all(np.isfinite(exc)):  # diverged within the reaction times: no result, not "never reached"
-        raise FloatingPointError(f"weather: {int((~np.isfinite(exc)).any(axis=-1).sum())} of {exc.shape[0]} "
-                                 f"drifts diverged (state index {index}): the weather or its spread is beyond "
-                                 f"what the models are meant for")
+    refuse_diverged(exc, st.reaction_times_s, f"weather: the state of index {index} or its spread")
     R, Q = len(st.radii_m), len(st.reaction_times_s)
     rel = np.mod(weather.wind_dir_from_rad - psi, 2.0 * np.pi)
     return DriftOffResult(headings_rad=psi, weather_rel_rad=rel, radii_m=np.asarray(st.radii_m),

@@ -26,7 +26,7 @@ from dataclasses import dataclass
 import numpy as np
 import pandas as pd
 
-from .planning import DriftOffSettings, simulate_blackouts
+from .planning import DriftOffSettings, check_headings, simulate_blackouts
 from .weather import WeatherState, WeatherUncertainty
 
 __all__ = ["SeasonResult", "run_chunk", "season_sweep", "require_dask"]
@@ -178,7 +178,7 @@ def season_sweep(vessel, states, headings_rad, *, uncertainty: WeatherUncertaint
     if not 0.0 < float(quantile) < 1.0:
         raise ValueError(f"quantile: expected a number in (0, 1), got {quantile!r}")
     st = settings or DriftOffSettings()
-    psi = np.atleast_1d(np.asarray(headings_rad, float))
+    psi = check_headings(headings_rad)
     labels = [str(i) for i in range(len(states))] if labels is None else [str(x) for x in labels]
     if len(labels) != len(states):
         raise ValueError(f"labels: expected {len(states)} labels, got {len(labels)}")
