@@ -9,6 +9,7 @@ window through :func:`hybridship.forecast_inputs.assess_start_window` and the in
 
 from __future__ import annotations
 
+import numbers
 import os
 from dataclasses import dataclass
 
@@ -70,10 +71,36 @@ def log_list(logs) -> list:
     return out
 
 
+def start_times_array(start_times_s) -> np.ndarray:
+    """``start_times_s`` [s] as a 1-D float array: one number or a flat sequence of real
+    numbers (lists, tuples, numpy arrays, pandas Series); text, booleans, nested sequences,
+    mappings, sets and masked entries are refused naming ``start_times_s``."""
+    def refuse(why):
+        return RequestError(f"start_times_s: expected a number or a flat list of numbers of seconds; {why}")
+
+    if start_times_s is None or isinstance(start_times_s, (str, bytes, dict, set, frozenset)):
+        raise refuse(f"got {type(start_times_s).__name__} {start_times_s!r}")
+    if np.ma.isMaskedArray(start_times_s) and np.ma.getmaskarray(start_times_s).any():
+        raise refuse("got a masked array with masked entries")
+    if hasattr(start_times_s, "__next__"):          # a generator or iterator: its values
+        start_times_s = list(start_times_s)
+    try:
+        raw = np.asarray(start_times_s)
+    except (TypeError, ValueError):
+        raise refuse(f"got {type(start_times_s).__name__}") from None
+    if raw.ndim > 1:
+        raise refuse(f"got an array of shape {raw.shape}")
+    real = raw.dtype.kind in "iuf" or (raw.dtype == object and all(
+        isinstance(v, numbers.Real) and not isinstance(v, (bool, np.bool_)) for v in raw.ravel()))
+    if not real:
+        raise refuse(f"got {raw.dtype} values {raw.ravel()[:3].tolist()}")
+    return np.atleast_1d(raw.astype(float))
+
+
 def start_indices(arrays: LogArrays, start_times_s) -> np.ndarray:
     """Row index of each start time; every start time must be a sample time (within dt/4)."""
     t = arrays.time_s
-    st = np.atleast_1d(np.asarray(start_times_s, dtype=float))
+    st = start_times_array(start_times_s)
     if st.size == 0:
         raise RequestError("start_times_s: at least one start time is needed")
     if not np.all(np.isfinite(st)):
@@ -254,6 +281,7 @@ def _forecast_setup(model, config: ResidualConfig, log, start_times_s, horizon_s
         raise ValueError(f"horizon_s: must be > 0 and at most {MAX_HORIZON_S:g} s (one day), got {horizon_s}")
     if commands not in COMMAND_MODES:
         raise ValueError(f"commands: expected one of {COMMAND_MODES}, got {commands!r}")
+    start_times_s = start_times_array(start_times_s)
     arrays = ingest(log, model.vessel, purpose="forecast",
                     time_range_s=_forecast_time_range(start_times_s, horizon_s,
                                                       max(history_s, wind_forecast.mean_window_s)))
