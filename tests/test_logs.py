@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import gzip
 import os
 import warnings
 from pathlib import Path
@@ -154,6 +155,12 @@ def test_unreadable_files_are_refused_naming_the_file(tmp_path):
         assert "Error" not in str(err.value), str(err.value)     # no parser's exception name
     with pytest.raises(FileNotFoundError, match="missing.csv"):
         read_log(tmp_path / "missing.csv")
+    lines = gzip.decompress(good.read_bytes()).decode().splitlines()
+    lines[0] += ",north_m"                         # pandas would read the second one as north_m.1
+    lines[1:] = [line + ",5" for line in lines[1:]]
+    (tmp_path / "dup.csv").write_text("\n".join(lines) + "\n")
+    with pytest.raises(LogFormatError, match=r"north_m: column appears more than once; .*dup.csv"):
+        read_log(tmp_path / "dup.csv")
     (tmp_path / "folder.csv").mkdir()
     with pytest.raises(IsADirectoryError, match="folder.csv: is a folder; expected a log file"):
         read_log(tmp_path / "folder.csv")

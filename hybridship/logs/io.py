@@ -980,7 +980,11 @@ def read_log(
         if kind == "parquet":
             df = pd.read_parquet(path)
         else:
-            df = pd.read_csv(path, compression="gzip" if kind == "csv.gz" else None)
+            compression = "gzip" if kind == "csv.gz" else None
+            df = pd.read_csv(path, compression=compression)
+            # pandas renames a repeated name (north_m, north_m.1): the header as written
+            header = pd.read_csv(path, compression=compression, header=None, nrows=1, dtype=str)
+            names = [str(c) for c in header.iloc[0]] if len(header) else []
     except PermissionError:
         raise
     except (pd.errors.EmptyDataError, pd.errors.ParserError, EOFError, OSError, UnicodeDecodeError,
@@ -988,6 +992,11 @@ def read_log(
         # a truncated archive, a plain file named .csv.gz, an empty or binary file: name the
         # file and say what it should be, not the parser's internals
         raise LogFormatError(f"{path}: cannot be read as a {kind} log file ({_read_problem(kind, exc)})") from None
+    if kind != "parquet":
+        dup = sorted({c for c in names if names.count(c) > 1})
+        if dup:
+            raise LogFormatError(f"{dup[0]}: column appears more than once; column names must be unique"
+                                 f"{_where(str(path))}", column=dup[0])
     df = df.reset_index(drop=True)
     if validate:
         _validate(df, channel_names, rotatable, str(path), warn_unknown=True, allow_missing=allow_missing)
