@@ -118,3 +118,12 @@ def test_bounds_in_messages_keep_their_digits():
         EnsembleConfig(n_members=1001)
     with pytest.raises(ValueError, match=r"lr: must be > 0 \(got -0.5\)"):
         EnsembleConfig(lr=-0.5)
+
+
+def test_the_guard_quantile_is_checked_when_the_hybrid_is_made():
+    from hybridship.predictors import HybridPredictor
+
+    for bad in (2, float("nan"), -1, 0.4, 1.0, "a", True):
+        with pytest.raises(ValueError, match=r"guard_quantile: expected a number in \[0.5, 1\)"):
+            HybridPredictor("gunnerus", guard_quantile=bad)
+    assert HybridPredictor("gunnerus", guard_quantile=0.95).guard_quantile == 0.95

@@ -232,6 +232,9 @@ class HybridPredictor:
         self.residual_config = residual_config
         self.ensemble_config = ensemble_config
         self.use_guard = bool(guard)
+        if isinstance(guard_quantile, (bool, np.bool_)) or not isinstance(guard_quantile, (int, float, np.number)) \
+                or not 0.5 <= float(guard_quantile) < 1.0:
+            raise ValueError(f"guard_quantile: expected a number in [0.5, 1), got {guard_quantile!r}")
         self.guard_quantile = float(guard_quantile)
         self.ensemble: MLPEnsemble | None = None
         self.guard: EnvelopeGuard | None = None
