@@ -322,3 +322,25 @@ def test_fit_takes_one_log_or_many_and_start_errors_give_the_log_span(model, exa
     t = exact_logs[0].time_s
     with pytest.raises(ValueError, match=rf"log spans {t.iloc[0]}\.\.{t.iloc[-1]} s"):
         DynamicPredictor(model.vessel).forecast(path, [float(t.iloc[0]) + 0.5], 10.0)
+
+
+def test_drift_errors_read_a_path_or_dataframe_and_coverage_refuses_mismatched_inputs(tmp_path):
+    from hybridship.evaluation import metrics
+    from hybridship.logs.io import write_log
+    from hybridship.physics.model import DynamicModel
+    from hybridship.predictors import DynamicPredictor
+    from hybridship.sim.synthetic import physics_log
+
+    model = DynamicModel("gunnerus")
+    log = physics_log(model, duration_s=400.0, t_shutdown_s=200.0, seed=2)
+    write_log(log, tmp_path / "log.csv")
+    p = DynamicPredictor("gunnerus")
+    from_frame = metrics.drift_errors(p, log, n_intervals=3)
+    np.testing.assert_array_equal(metrics.drift_errors(p, tmp_path / "log.csv", n_intervals=3), from_frame)
+    a = np.zeros((2, 4, 3))
+    with pytest.raises(ValueError, match="pred, truth, std: expected equal shapes"):
+        metrics.coverage(a, a[:1], np.ones((2, 4, 3)))
+    with pytest.raises(ValueError, match="std: expected finite, non-negative"):
+        metrics.coverage(a, a, np.full((2, 4, 3), np.nan))
+    with pytest.raises(ValueError, match="sigmas: expected positive"):
+        metrics.coverage(a, a, np.ones((2, 4, 3)), sigmas=(-1.0,))

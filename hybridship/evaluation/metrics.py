@@ -31,7 +31,8 @@ def drift_errors(predictor, arrays, *, n_intervals: int = 20, horizons_s=HORIZON
     ----------
     predictor : object
         Any object with a ``forecast(log, start_times_s, horizon_s)`` method.
-    arrays : LogArrays
+    arrays : LogArrays, path or DataFrame
+        The log (a path or DataFrame is read for the predictor's vessel).
     n_intervals : int
         Number of successive start times from the shutdown.
     horizons_s : sequence of float
@@ -71,6 +72,15 @@ def coverage(pred: np.ndarray, truth: np.ndarray, std: np.ndarray, sigmas=(1.0, 
     ndarray, shape (n_horizons, len(sigmas))
         Observed coverage; a calibrated Gaussian forecast gives 0.683 and 0.954 for 1 and 2 sigma.
     """
+    pred, truth, std = (np.asarray(x, dtype=float) for x in (pred, truth, std))
+    if not pred.shape == truth.shape == std.shape or pred.ndim < 2 or pred.shape[-1] != 3:
+        raise ValueError(f"pred, truth, std: expected equal shapes (..., n_horizons, 3), got {pred.shape}, "
+                         f"{truth.shape}, {std.shape}")
+    sig = np.asarray(sigmas, dtype=float)
+    if sig.ndim != 1 or sig.size == 0 or not np.all(np.isfinite(sig) & (sig > 0)):
+        raise ValueError(f"sigmas: expected positive finite band half-widths, got {sigmas!r}")
+    if not np.all(np.isfinite(std[..., :2]) & (std[..., :2] >= 0)):
+        raise ValueError("std: expected finite, non-negative standard deviations")
     err = np.abs(pred - truth)[..., :2]
     s = std[..., :2]
     nh = err.shape[-2]

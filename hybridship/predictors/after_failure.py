@@ -10,6 +10,9 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..logs.ingest import ingest
+from ..logs.io import LogArrays
+
 __all__ = ["HORIZONS_S", "drift_forecasts", "has_drift", "shutdown_index"]
 
 #: The paper's horizons [s].
@@ -39,6 +42,9 @@ def has_drift(arrays, n_intervals: int, horizon_s: float) -> bool:
 def drift_forecasts(predictor, arrays, *, n_intervals: int = 20, horizons_s=HORIZONS_S, **forecast_kw):
     """Forecasts from successive start times after the shutdown of one log, at the horizons.
 
+    ``arrays`` is LogArrays, or a path or DataFrame in the log format (read through
+    :func:`~hybridship.logs.ingest.ingest` for the predictor's vessel, as a forecast reads it).
+
     Returns
     -------
     pred, truth : ndarray, shape (n_intervals, len(horizons_s), 3)
@@ -46,6 +52,11 @@ def drift_forecasts(predictor, arrays, *, n_intervals: int = 20, horizons_s=HORI
     std : ndarray of the same shape, or None
         The forecast's ensemble standard deviation (None for point forecasters).
     """
+    if not isinstance(arrays, LogArrays):          # a path or DataFrame: read as a forecast reads it
+        model = getattr(predictor, "model", None)
+        if model is None:
+            raise TypeError("arrays: expected LogArrays (a path or DataFrame needs a predictor with a vessel model)")
+        arrays = ingest(arrays, model.vessel, purpose="forecast")
     i0 = shutdown_index(arrays)
     dt = float(np.median(np.diff(arrays.time_s)))
     steps = np.array([int(round(h / dt)) for h in horizons_s])
