@@ -535,3 +535,22 @@ def test_live_blackout_refuses_a_diverging_drift():
     st = DriftOffSettings(n_samples=4, horizon_s=60.0, reaction_times_s=(30.0,))
     with pytest.raises(FloatingPointError, match="drifts diverged \\(estimate"):
         blackout_now(dataclasses.replace(est, accel_members=np.full((4, 3), 10.0)), "gunnerus", st)
+
+
+def test_result_queries_and_the_state_index_refuse_values_that_would_read_as_zero():
+    w = WeatherState()
+    st = DriftOffSettings(n_samples=2, horizon_s=30.0, reaction_times_s=(10.0,))
+    res = simulate_blackouts("gunnerus", w, [0.0], settings={"n_samples": 2, "horizon_s": 30.0,
+                                                              "reaction_times_s": (10.0,)})
+    assert res.n_samples == 2                              # settings as a dict of their fields
+    for index in (-1, 1.5, "a", True):
+        with pytest.raises(ValueError, match="index: expected a whole number >= 0"):
+            simulate_blackouts("gunnerus", w, [0.0], settings=st, index=index)
+    with pytest.raises(ValueError, match="time_s: expected finite times >= 0 s"):
+        res.exceedance_curves([-1.0, np.nan])
+    with pytest.raises(ValueError, match="q: expected quantiles in"):
+        res.time_quantiles((2.0,))
+    season = season_sweep("gunnerus", [w], [0.0], settings=st, scheduler=None)
+    for p in (np.nan, 2.0, -1.0):
+        with pytest.raises(ValueError, match="max_p_exceed: expected a probability"):
+            season.operability(p)

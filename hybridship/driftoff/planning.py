@@ -29,7 +29,7 @@ import numpy as np
 import pandas as pd
 from pydantic import Field, field_validator, model_validator
 
-from ..config import Float, Int, NonEmpty, config_dataclass
+from ..config import Float, Int, NonEmpty, as_config, config_dataclass
 from ..physics.model import DynamicModel
 from ..sim import environment as env
 from . import engine, spread
@@ -177,7 +177,10 @@ class DriftOffResult:
 
     def time_quantiles(self, q=(0.1, 0.5, 0.9)) -> np.ndarray:
         """Quantiles of the time to reach each radius, (H, R, len(q)) [s]; ``inf`` where not reached."""
-        return np.moveaxis(np.quantile(self.t_reach_s, np.asarray(q, float), axis=1, method="lower"), 0, -1)
+        qs = np.asarray(q, float)
+        if not np.all((qs >= 0.0) & (qs <= 1.0)):
+            raise ValueError(f"q: expected quantiles in [0, 1], got {q!r}")
+        return np.moveaxis(np.quantile(self.t_reach_s, qs, axis=1, method="lower"), 0, -1)
 
     def p_exceed(self) -> np.ndarray:
         """P(radius exceeded within the reaction time), (H, R, Q)."""
@@ -191,8 +194,10 @@ class DriftOffResult:
         return np.quantile(self.excursion_m, q, axis=1)
 
     def exceedance_curves(self, time_s) -> np.ndarray:
-        """P(T_r <= t) on the times ``time_s`` (T,), shape (H, R, T)."""
-        t = np.asarray(time_s, float)
+        """P(T_r <= t) on the times ``time_s`` (T,) [s], shape (H, R, T)."""
+        t = np.atleast_1d(np.asarray(time_s, float))
+        if t.ndim != 1 or not np.all(np.isfinite(t) & (t >= 0.0)):
+            raise ValueError(f"time_s: expected finite times >= 0 s, got {time_s!r}")
         return (self.t_reach_s[:, :, :, None] <= t[None, None, None, :]).mean(axis=1)
 
     def summary_frames(self, quantile: float = 0.9) -> tuple[pd.DataFrame, pd.DataFrame]:
@@ -273,7 +278,9 @@ def simulate_blackouts(vessel, weather: WeatherState, headings_rad, *, uncertain
         raise TypeError(f"weather: expected a WeatherState, got {type(weather).__name__}")
     if uncertainty is not None and not isinstance(uncertainty, WeatherUncertainty):
         raise TypeError(f"uncertainty: expected a WeatherUncertainty or None, got {type(uncertainty).__name__}")
-    st = settings or DriftOffSettings()
+    st = as_config(settings, DriftOffSettings, "settings") if settings is not None else DriftOffSettings()
+    if isinstance(index, (bool, np.bool_)) or not isinstance(index, (int, np.integer)) or index < 0:
+        raise ValueError(f"index: expected a whole number >= 0 (a weather state's place in a sweep), got {index!r}")
     psi = check_headings(headings_rad)
     model = get_model(vessel)
     ves = model.vessel

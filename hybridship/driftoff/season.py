@@ -113,6 +113,8 @@ class SeasonResult:
 
     def operability(self, max_p_exceed: float = 0.1) -> pd.DataFrame:
         """Per heading, radius and reaction time: the share of states with P(exceed) <= ``max_p_exceed``."""
+        if isinstance(max_p_exceed, bool) or not 0.0 <= float(max_p_exceed) <= 1.0:
+            raise ValueError(f"max_p_exceed: expected a probability in [0, 1], got {max_p_exceed!r}")
         rows = []
         for h, psi in enumerate(self.headings_rad):
             for r, rad in enumerate(self.radii_m):
