@@ -254,6 +254,16 @@ def test_commands_missing_at_the_start_are_flagged_with_the_time_they_are_held_f
     assert f"last logged values held, from time_s {T_FAULT - 50:g}" in sw.notes[0]
 
 
+def test_dp_active_missing_at_the_start_is_flagged_like_a_command(model, log):
+    """A start whose dp_active was not logged holds the last logged state (as for commands)
+    and says so: nan_in_window with the time it is held from."""
+    df = log.assign(dp_active=log["dp_active"].astype(float))
+    df.loc[df.time_s == T_FAULT, "dp_active"] = np.nan
+    _, sw = _assess(model, df, [float(T_FAULT), float(T_FAULT - 60)])
+    assert sw.flags[F.NAN_IN_WINDOW][0] and not sw.flags[F.NAN_IN_WINDOW][1]
+    assert f"last logged values held, from time_s {T_FAULT - 1:g}" in sw.notes[0]
+
+
 def test_a_log_without_wind_is_not_a_dropped_sensor(model, log):
     _, sw = _assess(model, log.drop(columns=["wind_speed_m_s", "wind_dir_deg"]), [float(T_FAULT)])
     assert not sw.flags[F.WIND_DROPPED][0] and np.all(sw.wind == 0.0)

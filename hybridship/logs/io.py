@@ -1102,9 +1102,10 @@ class LogArrays:
         where ``wind`` holds an earlier value or zeros (a dropped wind sensor). Default:
         ``has_wind`` everywhere.
     commands_logged : ndarray of bool, shape (N,)
-        True where every command column the log has (``<name>_rpm``, ``<name>_azimuth_deg``)
-        was finite at that row, False where ``rpm`` or ``azimuth_rad`` hold an earlier value
-        (or 0 before the first). Default: True everywhere.
+        True where every command column the log has (``<name>_rpm``, ``<name>_azimuth_deg``,
+        ``dp_active``) was finite at that row, False where ``rpm``, ``azimuth_rad`` or
+        ``dp_active`` hold an earlier value (or a default before the first). Default: True
+        everywhere.
     wind_columns : bool
         Whether the log had the wind columns, even without one valid sample in its rows (a
         dead wind sensor: ``has_wind`` is then False and a forecast flags ``wind_dropped``).
@@ -1345,6 +1346,7 @@ def _frame_to_arrays(df: pd.DataFrame, names: tuple, rot: tuple, resorted_time_s
 
     dp = np.ones(n, dtype=int)
     if "dp_active" in cols:
+        commands_logged &= np.isfinite(col("dp_active"))    # the DP's state is commanded too
         dp = _held(col("dp_active"), 1.0).astype(int)
 
     return LogArrays(
