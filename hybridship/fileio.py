@@ -19,6 +19,14 @@ def path_argument(text: str) -> Path:
     return Path(text)
 
 
+def as_path(value, name: str = "path") -> Path:
+    """``value`` as a Path, or a TypeError naming ``name`` when it is not a path (None, a
+    DataFrame, a number) rather than os.fspath's own message."""
+    if isinstance(value, (str, os.PathLike)) and str(value):
+        return Path(value)
+    raise TypeError(f"{name}: expected a file path (str or os.PathLike), got {type(value).__name__}")
+
+
 def check_writable(path) -> Path:
     """``path`` as a Path, refused when the folder it would be written in exists and does
     not let this process create files (PermissionError) or when a file stands where that

@@ -15,6 +15,7 @@ Errors raise :class:`VesselFileError` naming the field, e.g.
 
 from __future__ import annotations
 
+import os
 import tomllib
 from importlib import resources
 from pathlib import Path
@@ -514,6 +515,9 @@ def packaged_vessels() -> list[str]:
 
 def load_vessel(name_or_path: str | Path) -> Vessel:
     """Load and validate a vessel by packaged name (``"gunnerus"``) or TOML file path."""
+    if not isinstance(name_or_path, (str, os.PathLike)) or not str(name_or_path):
+        raise TypeError(f"vessel: expected a packaged vessel name or a vessel file path, got "
+                        f"{type(name_or_path).__name__} {name_or_path!r}")
     p = Path(name_or_path)
     if p.suffix == ".toml" or p.exists():
         if not p.is_file():

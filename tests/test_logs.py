@@ -529,3 +529,16 @@ def test_datetime_times_and_gzip_named_csv_are_named_for_what_they_are(tmp_path)
     path.write_bytes(gzip.compress(df.to_csv(index=False).encode()))
     with pytest.raises(LogFormatError, match=r"log.csv: is gzip-compressed; name it log.csv.gz"):
         read_log(path)
+
+
+def test_something_that_is_not_a_path_is_named_as_such():
+    from hybridship.predictors import HybridPredictor
+    from hybridship.vessel import load_vessel
+
+    for call in (lambda: read_log(None), lambda: read_log(pd.DataFrame()), lambda: write_log(circle_log(), None),
+                 lambda: HybridPredictor.load(None)):
+        with pytest.raises(TypeError, match=r"^path: expected a file path \(str or os.PathLike\), got "):
+            call()
+    for call in (lambda: load_vessel(None), lambda: HybridPredictor(None)):
+        with pytest.raises(TypeError, match="^vessel: expected a packaged vessel name or a vessel file path"):
+            call()

@@ -72,7 +72,7 @@ import numpy as np
 import pandas as pd
 
 from hybridship import frames
-from hybridship.fileio import atomic_write
+from hybridship.fileio import as_path, atomic_write
 from hybridship.logs.columns import (COLUMNS, MAX_SAMPLE_SPACING_S, MIN_SAMPLE_SPACING_S, OPTIONAL_COLUMNS,
                                      REQUIRED_COLUMNS, TRUTH_PREFIX, ColumnSpec, channel_column, column_spec)
 from hybridship.logs.preprocess import segment_ids, segmentwise, split_segments
@@ -967,7 +967,7 @@ def read_log(
     FileNotFoundError
         If the file does not exist.
     """
-    path = Path(path)
+    path = as_path(path)
     if path.is_dir():
         raise IsADirectoryError(f"{path}: is a folder; expected a log file")
     kind = _container(path)
@@ -1039,7 +1039,7 @@ def write_log(
     LogFormatError
         If ``df`` breaks the format (nothing is written).
     """
-    path = Path(path)
+    path = as_path(path)
     kind = _container(path)
     _validate(df, channel_names, rotatable, str(path), warn_unknown=True)
     def write(fh):

@@ -14,7 +14,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..fileio import atomic_write
+from ..fileio import as_path, atomic_write
 from ..forecast_inputs.wind import WindForecast
 from ..residual.calibration import CalibrationConfig, SpreadCalibration
 from ..residual.ensemble import EnsembleConfig, MLPEnsemble
@@ -142,7 +142,7 @@ def model_metadata(predictor) -> dict:
 def save_model(predictor, path) -> Path:
     """Write a fitted hybrid as one ``.npz`` (arrays only, no pickle) with JSON metadata, atomically."""
     p = predictor
-    path = Path(path)
+    path = as_path(path)
     if path.suffix.lower() != ".npz":
         raise ValueError(f"path: {path}: expected a .npz model file name")
     e, g = p.ensemble, p.guard
@@ -180,7 +180,7 @@ def load_model(cls, path, vessel=None):
     the fingerprint before any setting that depends on it), then restore the learned state
     (nets, guard, thrust regime, spread calibration, environment prior, command regime).
     """
-    path = Path(path)
+    path = as_path(path)
     data = _read_arrays(path)
     meta = _read_checked_metadata(data, path)
     obj, embedded, state = _build_predictor(cls, meta, vessel, path)   # checks the vessel
