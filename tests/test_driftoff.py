@@ -535,6 +535,9 @@ def test_live_blackout_refuses_a_diverging_drift():
     st = DriftOffSettings(n_samples=4, horizon_s=60.0, reaction_times_s=(30.0,))
     with pytest.raises(FloatingPointError, match="drifts diverged \\(estimate"):
         blackout_now(dataclasses.replace(est, accel_members=np.full((4, 3), 10.0)), "gunnerus", st)
+    assert est.vessel_name == "gunnerus"
+    with pytest.raises(ValueError, match="estimate: made from a log of vessel 'gunnerus', not of 'esso_osaka_model'"):
+        blackout_now(est, "esso_osaka_model", st)
 
 
 def test_result_queries_and_the_state_index_refuse_values_that_would_read_as_zero():

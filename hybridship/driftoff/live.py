@@ -75,6 +75,9 @@ class EnvironmentEstimate:
         (the residual mean) = the current is inside ``accel_ned``.
     wind_measured : bool
         False when the log had no valid wind sample in ``wind_window_s`` (the wind is then 0).
+    vessel_name : str or None
+        The vessel the log was read for; :func:`blackout_now` refuses another vessel
+        (None: not known, not checked).
     """
 
     time_s: float
@@ -89,6 +92,7 @@ class EnvironmentEstimate:
     accel_members: np.ndarray
     current_members_ned_m_s: np.ndarray | None = None
     wind_measured: bool = True
+    vessel_name: str | None = None
 
 
 def _arrays(log, model, window_s: float) -> LogArrays:
@@ -188,7 +192,7 @@ def environment_from_log(log, vessel="gunnerus", *, window_s: float = 900.0, win
                                azimuth_rad=np.nan_to_num(a.azimuth_rad[idx]).copy(), wind_speed_m_s=w_speed,
                                wind_dir_from_rad=w_dir, gust_intensity=gi, accel_ned=np.asarray(bias0, float),
                                accel_members=members, current_members_ned_m_s=current_members,
-                               wind_measured=wind_measured)
+                               wind_measured=wind_measured, vessel_name=model.vessel.name)
 
 
 def _estimated(model, a: LogArrays, idx: int, n_members: int, seed: int, config=None):
@@ -255,6 +259,9 @@ def blackout_now(estimate: EnvironmentEstimate, vessel="gunnerus", settings: Dri
     if not isinstance(st, DriftOffSettings):
         raise TypeError(f"settings: expected a DriftOffSettings, got {type(st).__name__}")
     model = get_model(vessel)
+    if estimate.vessel_name is not None and estimate.vessel_name != model.vessel.name:
+        raise ValueError(f"estimate: made from a log of vessel {estimate.vessel_name!r}, not of "
+                         f"{model.vessel.name!r}; its commands and loads belong to that vessel")
     _check_estimate(estimate, len(model.vessel.thrusters))
     # the logged commands now, as a forecast takes them: beyond twice max_rpm refused (a unit
     # error), above max_rpm clipped
