@@ -542,3 +542,15 @@ def test_something_that_is_not_a_path_is_named_as_such():
     for call in (lambda: load_vessel(None), lambda: HybridPredictor(None)):
         with pytest.raises(TypeError, match="^vessel: expected a packaged vessel name or a vessel file path"):
             call()
+
+
+def test_writing_keeps_an_unknown_column_and_says_readers_ignore_it(tmp_path):
+    from hybridship.logs.io import LogFormatWarning
+
+    df = circle_log().assign(winch_load_kN=1.0)
+    with pytest.warns(LogFormatWarning, match=r"writing, though readers ignore them, 1 column\(s\) not in the log "
+                                              r"format: winch_load_kN"):
+        write_log(df, tmp_path / "log.csv")
+    assert "winch_load_kN" in pd.read_csv(tmp_path / "log.csv").columns        # the user's column kept
+    with pytest.warns(LogFormatWarning, match="ignoring 1 column"):
+        read_log(tmp_path / "log.csv")

@@ -504,7 +504,7 @@ def _check_angle_unit(col: str, t: np.ndarray, x: np.ndarray, source: str, rate=
 
 
 def _validate(df: pd.DataFrame, channel_names, rotatable, source: str, warn_unknown: bool,
-              allow_missing: bool = False) -> None:
+              allow_missing: bool = False, writing: bool = False) -> None:
     """Check ``df`` against the log format (:data:`hybridship.logs.columns.COLUMNS`).
 
     The checks run in this order, so that every message can quote ``time_s``: column
@@ -538,11 +538,10 @@ def _validate(df: pd.DataFrame, channel_names, rotatable, source: str, warn_unkn
                              f"a forecast without wind){unit}{_where(source)}", column=other)
     ignored = _check_channel_columns(df, cols, t, names, rot, source)
     if ignored and warn_unknown:
-        warnings.warn(
-            f"{source}: ignoring {len(ignored)} column(s) not in the log format: {', '.join(ignored)}",
-            LogFormatWarning,
-            stacklevel=3,
-        )
+        # writing keeps the user's columns in the file; reading leaves them out of the arrays
+        what = "writing, though readers ignore them," if writing else "ignoring"
+        warnings.warn(f"{source}: {what} {len(ignored)} column(s) not in the log format: {', '.join(ignored)}",
+                      LogFormatWarning, stacklevel=3)
 
 
 def _check_column_names(cols: list[str], source: str) -> None:
@@ -1041,7 +1040,8 @@ def write_log(
     """
     path = as_path(path)
     kind = _container(path)
-    _validate(df, channel_names, rotatable, str(path), warn_unknown=True)
+    _validate(df, channel_names, rotatable, str(path), warn_unknown=True, writing=True)
+
     def write(fh):
         if kind == "parquet":
             df.to_parquet(fh, index=False)
