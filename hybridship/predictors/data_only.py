@@ -28,6 +28,10 @@ class DataOnlyPredictor:
     Features, in order: ``u, v, r`` [m/s, m/s, rad/s]; each thruster's rpm / max rpm; cos
     and sin of each rotatable thruster's angle; the hull's velocity through the air in the
     body frame [m/s]; the previous acceleration.
+
+    It has no model file (no ``save`` / ``load``, unlike
+    :class:`~hybridship.predictors.HybridPredictor`): a benchmark baseline, fitted again from
+    the logs each time it is compared.
     """
 
     name = "data_only"
