@@ -48,33 +48,14 @@ START_EVERY_S = 1.0
 LEADS_S = (5.0, 10.0, 20.0, 30.0)
 
 
-def wind_starts(a, horizon_steps: int, every: int) -> np.ndarray:
-    """Start rows of log ``a`` whose start and every step of the horizon have logged wind in one segment."""
-    from hybridship.frames import speed_dir_to_vector
-
-    n = len(a.time_s)
-    ok = np.isfinite(speed_dir_to_vector(np.asarray(a.wind, dtype=float))).all(axis=1)
-    if getattr(a, "wind_logged", None) is not None:
-        ok &= np.asarray(a.wind_logged, dtype=bool)
-    seg = np.zeros(n, dtype=int) if getattr(a, "segment_id", None) is None else np.asarray(a.segment_id)
-    rows = np.arange(1, n - horizon_steps, max(1, every))
-    bad = np.concatenate([[0], np.cumsum(~ok)])
-    return rows[((bad[rows + horizon_steps + 1] - bad[rows]) == 0) & (seg[rows + horizon_steps] == seg[rows])]
-
-
 def trailing_means(a, rows: np.ndarray, windows_s) -> np.ndarray:
-    """Causal mean wind vectors [m/s] over each of ``windows_s`` before ``rows``: (S, K, 2).
-
-    Uses the wind forecast's own mean (a forecast with ``time_constant_s=0`` is the start
-    sample at step 0 and the trailing mean from step 1 on).
-    """
-    from hybridship.forecast_inputs.wind import WindForecast
-    from hybridship.frames import speed_dir_to_vector
+    """Causal mean wind vectors [m/s] over each of ``windows_s`` before ``rows``, over the
+    samples the sensor logged (the wind forecast's own mean): (S, K, 2)."""
+    from hybridship.forecast_inputs.wind import trailing_mean_vector
 
     wind = np.asarray(a.wind, dtype=float)
     logged = getattr(a, "wind_logged", None)
-    return np.stack([speed_dir_to_vector(WindForecast(mean_window_s=w, time_constant_s=0.0).steps(
-        wind, a.time_s, rows, wind[rows], 2, a.dt_s, logged=logged)[:, 1]) for w in windows_s], axis=1)
+    return np.stack([trailing_mean_vector(wind, a.time_s, rows, w, logged) for w in windows_s], axis=1)
 
 
 def linear_features(a, rows: np.ndarray, level: np.ndarray) -> np.ndarray:
@@ -95,11 +76,12 @@ def fit_linear(features: np.ndarray, targets: np.ndarray, ridge: float = 1e-6) -
 
 def sample_starts(runs, gust, horizon_steps: int, every: int):
     """Per run: ``(rows, level, features, future)``, the level being the gust forecast's mean [m/s]."""
+    from hybridship.forecast_inputs.wind import wind_starts
     from hybridship.frames import speed_dir_to_vector
 
     out = []
     for a in runs:
-        rows = wind_starts(a, horizon_steps, every)
+        rows, _ = wind_starts(a, horizon_steps, every)
         wind = np.asarray(a.wind, dtype=float)
         level = trailing_means(a, rows, (gust.mean_window_s,))[:, 0]
         level = np.where(np.isfinite(level), level, speed_dir_to_vector(wind[rows]))

@@ -1,4 +1,4 @@
-"""benchmarks/esso_wind_predictability.py: the starts, the trailing means and the linear wind predictor."""
+"""benchmarks/esso_wind_predictability.py: the trailing means and the linear wind predictor."""
 
 from types import SimpleNamespace
 
@@ -21,15 +21,6 @@ def _wind_log(n=200, dt=0.5, seed=0):
     direction = 0.7 + np.cumsum(rng.normal(0, 0.02, n))
     return SimpleNamespace(time_s=np.arange(n) * dt, wind=np.column_stack([speed, direction]),
                            wind_logged=np.ones(n, bool), segment_id=np.zeros(n, int), dt_s=dt)
-
-
-def test_starts_need_logged_wind_over_the_whole_horizon_in_one_segment(wp):
-    a = _wind_log(n=40)
-    a.wind_logged[20] = False
-    a.segment_id[30:] = 1
-    rows = wp.wind_starts(a, 5, 1)
-    # a start at r uses rows r..r+5: none may be row 20, none may cross into segment 1 at row 30
-    assert set(rows) == set(range(1, 15)) | set(range(21, 25)) | set(range(30, 35))
 
 
 def test_trailing_means_are_the_mean_vectors_of_the_samples_before_the_start(wp):

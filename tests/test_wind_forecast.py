@@ -11,10 +11,12 @@ the chosen forecast in its model file.
 
 from __future__ import annotations
 
+from types import SimpleNamespace
+
 import numpy as np
 import pytest
 
-from hybridship.forecast_inputs.wind import HELD_WIND, WindForecast, fit_wind_forecast, wind_error_paths
+from hybridship.forecast_inputs.wind import HELD_WIND, WindForecast, fit_wind_forecast, wind_error_paths, wind_starts
 from hybridship.predictors import DynamicPredictor, HybridPredictor, as_log_arrays
 from hybridship.predictors.forecast_setup import _forecast_setup
 from hybridship.residual.ensemble import EnsembleConfig
@@ -393,3 +395,16 @@ def test_wind_samples_must_be_a_whole_number():
     for bad in (-1, 2.5, True, "8", 257):
         with pytest.raises(ValueError, match="wind_samples: expected a whole number from 0 to 256"):
             HybridPredictor("gunnerus", wind_samples=bad)
+
+
+def test_starts_need_logged_wind_over_the_whole_horizon_in_one_segment():
+    n = 40
+    rng = np.random.default_rng(0)
+    a = SimpleNamespace(time_s=np.arange(n) * 0.5, wind=np.column_stack([2.0 + rng.random(n), np.full(n, 0.7)]),
+                        wind_logged=np.ones(n, bool), segment_id=np.zeros(n, int), dt_s=0.5)
+    a.wind_logged[20] = False
+    a.segment_id[30:] = 1
+    rows, ok = wind_starts(a, 5, 1)
+    # a start at r uses rows r..r+5: none may be row 20, none may cross into segment 1 at row 30
+    assert set(rows) == set(range(1, 15)) | set(range(21, 25)) | set(range(30, 35))
+    assert not ok[20] and ok.sum() == n - 1

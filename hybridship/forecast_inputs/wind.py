@@ -38,7 +38,8 @@ from pydantic import Field
 from hybridship.config import Float, config_dataclass
 from hybridship.frames import speed_dir_to_vector, vector_to_speed_dir
 
-__all__ = ["HELD_WIND", "WindForecast", "fit_wind_forecast", "wind_error_paths"]
+__all__ = ["HELD_WIND", "WindForecast", "fit_wind_forecast", "trailing_mean_vector", "wind_error_paths",
+           "wind_starts"]
 
 #: Candidate mean windows [s] and gust time constants [s] of :func:`fit_wind_forecast`
 #: (``None`` is the held wind, always a candidate).
@@ -108,7 +109,7 @@ class WindForecast:
         start_wind = np.asarray(start_wind, dtype=float)
         if self.held:
             return np.ascontiguousarray(start_wind[:, None])
-        mean = _trailing_mean_vector(wind, time_s, np.asarray(rows, dtype=int), self.mean_window_s, logged)
+        mean = trailing_mean_vector(wind, time_s, np.asarray(rows, dtype=int), self.mean_window_s, logged)
         w0 = speed_dir_to_vector(start_wind)
         keep = ~np.isfinite(mean).all(axis=1)                  # no logged wind in the window: hold
         if hold is not None:
@@ -131,8 +132,8 @@ def _decay(lead_s: np.ndarray, time_constant_s) -> np.ndarray:
     return np.exp(-lead_s / time_constant_s)
 
 
-def _trailing_mean_vector(wind: np.ndarray, time_s: np.ndarray, rows: np.ndarray, window_s: float,
-                          logged=None) -> np.ndarray:
+def trailing_mean_vector(wind: np.ndarray, time_s: np.ndarray, rows: np.ndarray, window_s: float,
+                         logged=None) -> np.ndarray:
     """Mean wind vector [m/s] over the logged samples in ``(t_row - window_s, t_row]`` of each
     row; NaN where the window holds none. (S, 2)."""
     vec = speed_dir_to_vector(np.asarray(wind, dtype=float))
@@ -158,6 +159,16 @@ def _usable_wind_rows(a, mask=None):
         ok &= np.asarray(mask, dtype=bool)
     seg = getattr(a, "segment_id", None)
     return ok, (np.zeros(n, dtype=int) if seg is None else np.asarray(seg))
+
+
+def wind_starts(a, horizon_steps: int, every: int, mask=None) -> tuple[np.ndarray, np.ndarray]:
+    """Start rows of log ``a``, one every ``every`` rows, whose start and ``horizon_steps``
+    following rows all hold usable wind (logged, finite, inside ``mask``) in one gap-free
+    segment; and the usable-row mask itself, shape (N,)."""
+    ok, seg = _usable_wind_rows(a, mask)
+    rows = np.arange(1, len(ok) - horizon_steps, max(1, int(every)))
+    bad = np.concatenate([[0], np.cumsum(~ok)])
+    return rows[((bad[rows + horizon_steps + 1] - bad[rows]) == 0) & (seg[rows + horizon_steps] == seg[rows])], ok
 
 
 def fit_wind_forecast(logs, horizon_s: float, *, masks=None, start_every_s: float = 10.0,
@@ -209,14 +220,9 @@ def fit_wind_forecast(logs, horizon_s: float, *, masks=None, start_every_s: floa
             continue
         wind = np.asarray(a.wind, dtype=float)
         vec = speed_dir_to_vector(wind)
-        ok, seg = _usable_wind_rows(a, mask)
         dt = float(np.median(np.diff(t)))
         H = int(round(horizon_s / dt))
-        rows = np.arange(1, n - H, max(1, int(round(start_every_s / dt))))
-        if rows.size == 0:
-            continue
-        bad = np.concatenate([[0], np.cumsum(~ok)])
-        rows = rows[((bad[rows + H + 1] - bad[rows]) == 0) & (seg[rows + H] == seg[rows])]
+        rows, ok = wind_starts(a, H, int(round(start_every_s / dt)), mask)
         if rows.size == 0:
             continue
         n_starts += rows.size
@@ -224,7 +230,7 @@ def fit_wind_forecast(logs, horizon_s: float, *, masks=None, start_every_s: floa
         w0 = vec[rows]
         lead = np.arange(1, H + 1) * dt
         for w in windows:
-            mean = _trailing_mean_vector(wind, t, rows, w, ok)
+            mean = trailing_mean_vector(wind, t, rows, w, ok)
             mean = np.where(np.isfinite(mean), mean, w0)
             for tau in taus:
                 pred = mean[:, None] + (w0 - mean)[:, None] * _decay(lead, tau)[None, :, None]
