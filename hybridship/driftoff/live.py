@@ -161,8 +161,7 @@ def environment_from_log(log, vessel="gunnerus", *, window_s: float = 900.0, win
         aw.time_s, aw.time_s[-1] - window_s, side="left")), None))
     idx = len(a.time_s) - 1
     # within a step of the minimum: the window's rows start at the first sample inside it
-    step = float(np.median(np.diff(a.time_s))) if idx > 0 else 0.0
-    if idx == 0 or a.time_s[idx] - a.time_s[0] < MIN_WINDOW_S - step:
+    if idx == 0 or a.time_s[idx] - a.time_s[0] < MIN_WINDOW_S - a.dt_s:
         raise ValueError(f"log: only {a.time_s[idx] - a.time_s[0]:g} s of log up to the blackout at time_s "
                          f"{a.time_s[idx]:g}; the environment estimate needs at least {MIN_WINDOW_S:g} s of "
                          f"station keeping")

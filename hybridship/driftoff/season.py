@@ -26,6 +26,7 @@ from dataclasses import dataclass
 import numpy as np
 import pandas as pd
 
+from ..config import as_config
 from .planning import DriftOffSettings, check_headings, simulate_blackouts
 from .weather import WeatherState, WeatherUncertainty
 
@@ -179,7 +180,7 @@ def season_sweep(vessel, states, headings_rad, *, uncertainty: WeatherUncertaint
         raise ValueError(f"n_workers: expected a positive int, got {n_workers!r}")
     if not 0.0 < float(quantile) < 1.0:
         raise ValueError(f"quantile: expected a number in (0, 1), got {quantile!r}")
-    st = settings or DriftOffSettings()
+    st = as_config(settings, DriftOffSettings, "settings") if settings is not None else DriftOffSettings()
     psi = check_headings(headings_rad)
     labels = [str(i) for i in range(len(states))] if labels is None else [str(x) for x in labels]
     if len(labels) != len(states):

@@ -30,6 +30,7 @@ from __future__ import annotations
 
 import math
 import os
+import warnings
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -238,8 +239,6 @@ def _from_frame(df: pd.DataFrame, v, purpose: str, source: str) -> tuple[LogArra
 
 def _warn_repaired(order: SortedLog, source: str) -> None:
     """A LogFormatWarning saying which samples of a training log were re-sorted or dropped."""
-    import warnings
-
     parts = [f"{n} {what}" for n, what in ((order.late_time_s.size, "late sample(s) re-sorted"),
                                            (order.duplicate_time_s.size, "exact duplicate(s) dropped"),
                                            (order.n_without_time, "row(s) without a finite time_s dropped"))

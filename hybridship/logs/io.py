@@ -544,13 +544,18 @@ def _validate(df: pd.DataFrame, channel_names, rotatable, source: str, warn_unkn
                       LogFormatWarning, stacklevel=3)
 
 
-def _check_column_names(cols: list[str], source: str) -> None:
-    """Unique column names, and every required column present (pointing out one that
-    looks like it in another unit, ``heading_rad``)."""
+def _check_unique_names(cols: list[str], source: str) -> None:
+    """Refuse a column name that appears more than once."""
     dup = sorted({c for c in cols if cols.count(c) > 1})
     if dup:
         raise LogFormatError(f"{dup[0]}: column appears more than once; column names must be unique{_where(source)}",
                              column=dup[0])
+
+
+def _check_column_names(cols: list[str], source: str) -> None:
+    """Unique column names, and every required column present (pointing out one that
+    looks like it in another unit, ``heading_rad``)."""
+    _check_unique_names(cols, source)
     missing = [c for c in REQUIRED_COLUMNS if c not in cols]
     if missing:
         one_name = len(cols) == 1 and any(sep in cols[0] for sep in (";", "\t"))
@@ -933,6 +938,7 @@ def _read_problem(kind: str, exc: BaseException) -> str:
         return "not a complete gzip file: damaged or cut short"
     return f"unreadable: {text}" if text else "unreadable"
 
+
 def read_log(
     path: str | os.PathLike,
     *,
@@ -992,10 +998,7 @@ def read_log(
         # file and say what it should be, not the parser's internals
         raise LogFormatError(f"{path}: cannot be read as a {kind} log file ({_read_problem(kind, exc)})") from None
     if kind != "parquet":
-        dup = sorted({c for c in names if names.count(c) > 1})
-        if dup:
-            raise LogFormatError(f"{dup[0]}: column appears more than once; column names must be unique"
-                                 f"{_where(str(path))}", column=dup[0])
+        _check_unique_names(names, str(path))
     df = df.reset_index(drop=True)
     if validate:
         _validate(df, channel_names, rotatable, str(path), warn_unknown=True, allow_missing=allow_missing)

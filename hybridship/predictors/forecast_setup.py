@@ -233,13 +233,10 @@ def _hold_last_valid(steps: np.ndarray) -> np.ndarray:
     return np.take_along_axis(steps, pos, axis=1)
 
 
-def _forecast_time_range(start_times_s, horizon_s: float, history_s: float):
-    """``(first_s, last_s)`` of the log a forecast reads, or None when the starts are not
-    finite numbers (then the start checks report them)."""
-    try:
-        st = np.atleast_1d(np.asarray(start_times_s, dtype=float))
-    except (TypeError, ValueError):
-        return None
+def _forecast_time_range(st: np.ndarray, horizon_s: float, history_s: float):
+    """``(first_s, last_s)`` of the log a forecast reads from the start times ``st`` [s]
+    (:func:`start_times_array`), or None when they are not finite (then the start checks
+    report them)."""
     if st.size == 0 or not np.all(np.isfinite(st)):
         return None
     return (float(st.min()) - history_s - _RANGE_MARGIN_S, float(st.max()) + horizon_s + _RANGE_MARGIN_S)

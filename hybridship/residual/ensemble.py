@@ -33,7 +33,7 @@ class EnsembleConfig:
     n_members : int
         Number of networks E (at most 1000).
     hidden : int
-        Units of each hidden layer (two layers).
+        Units of each hidden layer (two layers; at most 10 000).
     lr : float
         Adam learning rate.
     max_epochs : int
