@@ -324,6 +324,7 @@ def _hsc_bad_inputs(U, Y):
     return [
         ("one_step", "U with 2 columns", (U[:, :2], Y), "U"),
         ("one_step", "U not numeric", ("rpm", Y), "U"),
+        ("one_step", "fewer rows than the model's lags", (U[:2], Y[:2]), "U"),
         ("one_step", "NaN in U", (nan_u, Y), "U"),
         ("one_step", "Y shorter than U", (U, Y[:-1]), "Y"),
         ("one_step", "inf in Y", (U, nan_y), "Y"),
@@ -378,3 +379,12 @@ def test_hsc_deterministic(kind, hsc_fitted, hsc_setup):
     for q in (p, again):
         np.testing.assert_array_equal(p.one_step(U, Y), q.one_step(U, Y))
         np.testing.assert_array_equal(p.free_run(U, Y, N_INIT), q.free_run(U, Y, N_INIT))
+
+
+@pytest.mark.parametrize("kind", HSC_KINDS)
+def test_hsc_refit_forgets_the_earlier_fit(kind, hsc_setup):
+    """Learned state comes from the record fitted, not from what the model was fitted on before."""
+    make, (Ut, Yt), (Uv, Yv) = hsc_setup
+    refitted, fresh = make(kind).fit(Ut, Yt).fit(Uv, Yv), make(kind).fit(Uv, Yv)
+    np.testing.assert_array_equal(refitted.one_step(Ut, Yt), fresh.one_step(Ut, Yt))
+    np.testing.assert_array_equal(refitted.free_run(Ut, Yt, N_INIT), fresh.free_run(Ut, Yt, N_INIT))

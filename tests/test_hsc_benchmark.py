@@ -2,8 +2,9 @@
 
 import numpy as np
 import pandas as pd
+import pytest
 
-from hybridship.hsc.benchmark import COLUMNS, run_benchmark
+from hybridship.hsc.benchmark import COLUMNS, run_benchmark, score_model
 
 
 def test_quick_benchmark_writes_the_table(tmp_path):
@@ -25,4 +26,20 @@ def test_quick_benchmark_writes_the_table(tmp_path):
     assert "Table 1 layout" in md and "Table 2 layout" in md and "hybrid (ours)" in md and "ann (paper)" in md
     for name in ("hsc_speed_trim.png", "hsc_validation_ss1.png", "hsc_validation_ss2.png"):
         assert (tmp_path / name).read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    curves = pd.read_csv(tmp_path / "speed_trim.csv")
+    assert list(curves.columns) == ["boat", "device", "rpm", "speed_kn", "trim_deg"]
+    assert set(curves.boat) == {"nominal", "truth"} and set(curves.device) == {"none", "interceptor", "trim_tab"}
+    assert "Calm-water equilibria" in md
     assert not list(tmp_path.glob(".*.tmp"))                  # atomic writes left nothing behind
+
+
+def test_arguments_checked_before_the_work(tmp_path):
+    with pytest.raises(ValueError, match="^seed"):
+        run_benchmark(tmp_path, seed=-1, quick=True, progress=False)
+    (tmp_path / "a_file").write_text("x")
+    with pytest.raises(NotADirectoryError, match="not a folder"):
+        run_benchmark(tmp_path / "a_file", quick=True, progress=False)
+    with pytest.raises(TypeError, match="^out_dir"):
+        run_benchmark(None, quick=True, progress=False)
+    with pytest.raises(ValueError, match="^mode"):
+        score_model(None, np.zeros((3, 3)), np.zeros((3, 2)), "one-step")

@@ -98,3 +98,13 @@ def test_narx_learns_a_nonlinear_system_and_runs_free():
     for P in (one, free):
         err = np.abs(P[5:] - Y[1005:]).mean(0)
         assert np.all(err < 0.35 * np.abs(Y[1005:] - Y[1005:].mean(0)).mean(0)), err
+
+
+def test_narx_holds_out_at_least_one_row_for_early_stopping():
+    """A held-out share that rounds to no row would have trained on an empty set."""
+    rng = np.random.default_rng(2)
+    U = rng.uniform(-1, 1, (30, 3))
+    Y = np.cumsum(rng.normal(size=(30, 2)), axis=0) * 0.1
+    m = NARXModel(NARXConfig(n_out=2, n_in=2, val_fraction=0.01, max_iter=40, restarts=1)).fit(U, Y)
+    err = np.abs(m.one_step(U, Y)[2:] - Y[2:]).mean()
+    assert np.isfinite(err) and err < np.abs(Y[2:] - Y[2:].mean(0)).mean()

@@ -30,3 +30,8 @@ def test_nonfinite_prediction_scores_nan_and_sizes_checked():
     assert math.isnan(mean_absolute_error([1, 2], [1, np.inf]))
     with pytest.raises(ValueError):
         score([1, 2, 3], [1, 2])
+
+
+def test_nonfinite_measurement_refused():
+    with pytest.raises(ValueError, match="^y_true"):
+        score([1.0, np.nan, 3.0], [1.0, 2.0, 3.0])

@@ -103,3 +103,27 @@ def test_trial_gps_delay_realigned_and_reproducible(craft):
     assert np.std(a.raw.gps_speed_m_s.to_numpy()[:cfg.n_samples] - truth) > 2 * craft.sensors.gps_speed_noise_m_s
     assert a.data.rpm.between(700, 4100).all() and a.data.pwm_pct.between(10, 100).all()
     assert (truth.max() - truth.min()) / KNOT_M_S > 5          # the inputs excite the speed
+
+
+def test_simulator_refuses_bad_arguments_by_name(craft):
+    model = PlaningCraftModel(craft, "interceptor")
+    cases = [
+        (lambda: model.simulate([], []), "rpm_cmd"),
+        (lambda: model.simulate([3000.0, np.nan], [50.0, 50.0]), "rpm_cmd"),
+        (lambda: model.simulate([3000.0], [np.inf]), "pwm_pct"),
+        (lambda: model.simulate([3000.0], [50.0], sample_period_s=0.0), "sample_period_s"),
+        (lambda: model.simulate([3000.0], [50.0], substeps=0), "substeps"),
+        (lambda: model.simulate([3000.0], [50.0], settle_s=-1.0), "settle_s"),
+        (lambda: model.steady_state(np.nan), "rpm"),
+        (lambda: model.steady_state(3000.0, np.nan), "actuator_frac"),
+    ]
+    for call, field in cases:
+        with pytest.raises(ValueError, match=rf"^{field}\b"):
+            call()
+
+
+def test_gps_delay_must_be_whole_samples(craft):
+    data = craft.model_dump()
+    data["sensors"]["gps_delay_s"] = 2.05
+    with pytest.raises(PlaningCraftFileError, match="gps_delay_s"):
+        planing_craft_from_dict(data, "x.toml")

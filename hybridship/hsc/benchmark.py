@@ -7,6 +7,8 @@ training part, scores it on both parts in both modes and writes, atomically, int
 * ``table.csv`` - columns exactly ``model,sea_state,split,mode,output,R,MAE``;
 * ``table.md`` - the paper's Table 1 (R) and Table 2 (MAE) layout, per scoring mode, with
   the paper's numbers beside ours, plus the grey box alone and the fitted parameters;
+* ``speed_trim.csv`` - the calm-water equilibria (:func:`steady_curves`), also tabulated in
+  ``table.md``;
 * ``hsc_speed_trim.png``, ``hsc_validation_ss1.png``, ``hsc_validation_ss2.png``.
 
 Scoring: every record (training or validation part) is scored on its own. The first
@@ -24,7 +26,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from hybridship.fileio import atomic_write
+from hybridship.fileio import as_path, atomic_write, check_out_folder
 from hybridship.residual.ensemble import EnsembleConfig
 
 from .hybrid import GreyBoxTables, HybridModel
@@ -34,7 +36,7 @@ from .simulator import KNOT_M_S, PlaningCraftModel
 from .trials import generate_trial, paper_trial
 from .vessel import load_planing_craft
 
-__all__ = ["run_benchmark", "models_for", "score_model", "PAPER_R", "PAPER_MAE", "COLUMNS", "N_INIT"]
+__all__ = ["run_benchmark", "models_for", "score_model", "steady_curves", "PAPER_R", "PAPER_MAE", "COLUMNS", "N_INIT"]
 
 #: Columns of ``table.csv``.
 COLUMNS = ["model", "sea_state", "split", "mode", "output", "R", "MAE"]
@@ -85,6 +87,8 @@ def _to_table_units(Y):
 
 def score_model(model, U, Y, mode: str, n_init: int = N_INIT):
     """Predictions (table units) and ``{output: (R, MAE)}`` of one model on one record."""
+    if mode not in ("one_step", "free_run"):
+        raise ValueError(f"mode: expected 'one_step' or 'free_run', got {mode!r}")
     P = model.one_step(U, Y) if mode == "one_step" else model.free_run(U, Y, n_init)
     Yt, Pt = _to_table_units(Y)[n_init:], _to_table_units(P)[n_init:]
     return Pt, {o: score(Yt[:, j], Pt[:, j]) for j, o in enumerate(OUTPUTS)}
@@ -125,20 +129,51 @@ def _fig_bytes(fig) -> bytes:
     return buf.getvalue()
 
 
-def _speed_trim_figure(craft, n_rpm: int = 17):
+def steady_curves(craft, n_rpm: int = 17) -> pd.DataFrame:
+    """Calm-water equilibria of the nominal file and the simulated true boat, devices retracted
+    and fully out, from idle to full engine speed.
+
+    Returns
+    -------
+    DataFrame
+        Columns ``boat`` ("nominal" or "truth"), ``device`` ("none", "interceptor",
+        "trim_tab"), ``rpm``, ``speed_kn`` and ``trim_deg``.
+    """
+    rpms = np.linspace(craft.engines.idle_rpm, craft.engines.max_rpm, n_rpm)
+    rows = []
+    for boat, c in (("nominal", craft), ("truth", craft.perturbed())):
+        for device, act, a in (("none", "interceptor", 0.0), ("interceptor", "interceptor", 1.0),
+                               ("trim_tab", "trim_tab", 1.0)):
+            for r, st in zip(rpms, PlaningCraftModel(c, act).steady_curve(rpms, a)):
+                rows.append({"boat": boat, "device": device, "rpm": float(r), "speed_kn": st.speed_kn,
+                             "trim_deg": st.trim_deg})
+    return pd.DataFrame(rows)
+
+
+def _steady_markdown(curves: pd.DataFrame) -> list[str]:
+    """``table.md``'s section of the calm-water equilibria: speed and trim per engine speed,
+    boat and device (the numbers behind ``hsc_speed_trim.png``)."""
+    wide = curves.pivot_table(index="rpm", columns=["boat", "device"], values=["speed_kn", "trim_deg"])
+    cols = [(b, d) for b in ("nominal", "truth") for d in ("none", "interceptor", "trim_tab")]
+    header = ["rpm"] + [f"{b} {d.replace('_', ' ')} kn / deg" for b, d in cols]
+    rows = [[f"{r:.0f}"] + [f"{wide.loc[r, ('speed_kn', b, d)]:.2f} / {wide.loc[r, ('trim_deg', b, d)]:.2f}"
+                            for b, d in cols] for r in wide.index]
+    return ["## Calm-water equilibria (devices retracted: none; fully out: interceptor, trim tab)", "",
+            _markdown_table(header, rows), ""]
+
+
+def _speed_trim_figure(curves: pd.DataFrame):
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    rpms = np.linspace(craft.engines.idle_rpm, craft.engines.max_rpm, n_rpm)
     fig, ax = plt.subplots(1, 2, figsize=(10, 4))
-    for c, label, ls in ((craft, "nominal file", "-"), (craft.perturbed(), "simulated 'true' boat", "--")):
-        for act, a in (("interceptor", 0.0), ("interceptor", 1.0), ("trim_tab", 1.0)):
-            curve = PlaningCraftModel(c, act).steady_curve(rpms, a)
-            v = [s.speed_kn for s in curve]
-            tag = "devices retracted" if a == 0 else f"{act.replace('_', ' ')} full"
-            ax[0].plot(rpms, v, ls, label=f"{label}, {tag}")
-            ax[1].plot(v, [s.trim_deg for s in curve], ls, label=f"{label}, {tag}")
+    for boat, label, ls in (("nominal", "nominal file", "-"), ("truth", "simulated 'true' boat", "--")):
+        for device in ("none", "interceptor", "trim_tab"):
+            c = curves[(curves.boat == boat) & (curves.device == device)]
+            tag = "devices retracted" if device == "none" else f"{device.replace('_', ' ')} full"
+            ax[0].plot(c.rpm, c.speed_kn, ls, label=f"{label}, {tag}")
+            ax[1].plot(c.speed_kn, c.trim_deg, ls, label=f"{label}, {tag}")
     ax[0].set(xlabel="engine speed [rpm]", ylabel="steady speed [kn]", title="Calm-water speed")
     ax[0].axhline(40, color="grey", lw=0.8)
     ax[1].add_patch(plt.Rectangle((15, 2), 25, 4, color="green", alpha=0.1, label="credible range"))
@@ -173,6 +208,13 @@ def _validation_figure(trial, preds, sea_state):
     return data
 
 
+def _checked_arguments(out_dir, seed) -> Path:
+    """The output folder as a Path; ValueError/TypeError naming ``seed`` or ``out_dir``."""
+    if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or seed < 0:
+        raise ValueError(f"seed: expected a non-negative integer, got {seed!r}")
+    return check_out_folder(as_path(out_dir, "out_dir"))
+
+
 def run_benchmark(out_dir, *, seed: int = 0, quick: bool = False, progress: bool = True) -> pd.DataFrame:
     """Run the whole high-speed-craft benchmark and write its table and figures.
 
@@ -193,12 +235,12 @@ def run_benchmark(out_dir, *, seed: int = 0, quick: bool = False, progress: bool
     DataFrame
         The table (columns :data:`COLUMNS`).
     """
+    out = _checked_arguments(out_dir, seed)      # before minutes of work
     try:
         import torch
         torch.set_num_threads(1)
     except ImportError:  # pragma: no cover
         pass
-    out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
     say = print if progress else (lambda *a, **k: None)
     t_start = time.perf_counter()
@@ -258,9 +300,14 @@ def run_benchmark(out_dir, *, seed: int = 0, quick: bool = False, progress: bool
     for s, p in params.items():
         md.append(f"- sea state {s}: " + ", ".join(f"{k} = {v:.3g}" for k, v in p.items()))
     md += [""] + [f"- {e}" for e in extra] + [""]
+    curves = steady_curves(craft, 9 if quick else 17)
+    md += _steady_markdown(curves)
     md_path = atomic_write(out / "table.md", lambda fh: fh.write("\n".join(md).encode()))
     say(f"wrote {md_path}")
-    fig_path = atomic_write(out / "hsc_speed_trim.png", lambda fh: fh.write(_speed_trim_figure(craft, 9 if quick else 17)))
+    curves_path = atomic_write(out / "speed_trim.csv",
+                               lambda fh: fh.write(curves.to_csv(index=False, float_format="%.4f").encode()))
+    say(f"wrote {curves_path}")
+    fig_path = atomic_write(out / "hsc_speed_trim.png", lambda fh: fh.write(_speed_trim_figure(curves)))
     say(f"wrote {fig_path}")
     for s in (1, 2):
         p = atomic_write(out / f"hsc_validation_ss{s}.png",

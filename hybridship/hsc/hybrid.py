@@ -116,6 +116,7 @@ class GreyBox:
         self.tables = tables or GreyBoxTables.from_craft(craft, actuator)
         pm = PlaningCraftModel(craft, actuator)
         self._pwm_to_frac = pm.pwm_to_fraction
+        self.pwm_range_pct = tuple(map(float, pm.pwm_range))
         self.act_step = pm.act_rate * dt_s
         self.mass = pm.m + pm.A11
         self.weight = pm.m * 9.81
@@ -205,7 +206,8 @@ class GreyBox:
         """Fit the parameters to minimise the free-run error of both outputs (each over its spread)."""
         from scipy.optimize import least_squares
 
-        U, Y = np.asarray(U, float), np.asarray(Y, float)
+        U, Y = check_record(U, Y, min_rows=k0 + 2, shape=(3, 2))
+        _check_units(U, Y, self.pwm_range_pct)
         scale = Y[k0:].std(0)
         scale = np.where(scale > 1e-9, scale, 1.0)
 
@@ -214,7 +216,8 @@ class GreyBox:
             r = (sim[k0 + 1:] - Y[k0 + 1:]) / scale
             return np.nan_to_num(r, nan=1e3).ravel()
 
-        sol = least_squares(resid, self.params, bounds=(_LOWER, _UPPER), x_scale="jac",
+        # from the nominal parameters, never from an earlier fit: fit sets the learned state alone
+        sol = least_squares(resid, _NOMINAL, bounds=(_LOWER, _UPPER), x_scale="jac",
                             max_nfev=max_nfev, diff_step=1e-3)
         self.params = sol.x
         self.fit_cost = float(sol.cost)
@@ -222,6 +225,24 @@ class GreyBox:
 
     def parameters(self) -> dict:
         return dict(zip(PARAM_NAMES, map(float, self.params)))
+
+
+#: A planing craft's pitch stays well inside this [rad] (about 29 deg); beyond it the column is degrees.
+_PITCH_LIMIT_RAD = 0.5
+
+
+def _check_units(U, Y, pwm_range_pct) -> None:
+    """Refuse the two unit slips the grey box cannot survive: pitch in degrees (every
+    parameter would end at a bound) and PWM as a fraction (the device would never move)."""
+    pitch = np.abs(Y[:, 1])
+    if pitch.size and pitch.max() > _PITCH_LIMIT_RAD:
+        raise ValueError(f"Y: column 1 (pitch) reaches {pitch.max():.3g}; expected radians (|pitch| below "
+                         f"{_PITCH_LIMIT_RAD} rad); the values look like degrees")
+    pwm_max = float(np.max(U[:, 1])) if U.shape[0] else 0.0
+    lo = pwm_range_pct[0]
+    if 0.0 < pwm_max <= 1.0 < lo:
+        raise ValueError(f"U: column 1 (PWM) lies within 0..{pwm_max:.3g}; expected duty in % (the device "
+                         f"moves from {lo:g} %); the values look like a fraction")
 
 
 def _lags(A, lags):
@@ -278,6 +299,7 @@ class HybridModel:
 
     def fit(self, U, Y, *, progress: bool = False):
         U, Y = check_record(U, Y, min_rows=self.n_init + 10, shape=self.shape)
+        _check_units(U, Y, self.grey.pwm_range_pct)
         k0 = self.n_init
         self.grey.fit(U, Y, k0 - 1)
         sim = self.grey.simulate(U, Y[k0 - 1], k0 - 1)
@@ -291,6 +313,7 @@ class HybridModel:
     def one_step(self, U, Y):
         require_fitted(self, "one_ens")
         U, Y = check_record(U, Y, min_rows=self.n_init + 1, shape=self.shape)
+        _check_units(U, Y, self.grey.pwm_range_pct)
         phys = self.grey.one_step(U, Y)
         out = np.full(Y.shape, np.nan)
         k0 = self.n_init
@@ -301,6 +324,7 @@ class HybridModel:
     def free_run(self, U, Y_init, n_init: int):
         require_fitted(self, "free_ens")
         U, Y_init, n_init = check_free_run(U, Y_init, n_init, self.n_init, self.shape)
+        _check_units(U, Y_init, self.grey.pwm_range_pct)
         sim = self.grey.simulate(U, Y_init[n_init - 1], n_init - 1)
         out = np.full(sim.shape, np.nan)
         mean, _ = self.free_ens.predict(self._free_features(U, sim)[n_init:])
@@ -311,6 +335,7 @@ class HybridModel:
         """The grey box alone (for the documentation's ablation)."""
         require_fitted(self, "free_ens")
         U, Y_init, n_init = check_free_run(U, Y_init, n_init, self.n_init, self.shape)
+        _check_units(U, Y_init, self.grey.pwm_range_pct)
         sim = self.grey.simulate(U, Y_init[n_init - 1], n_init - 1)
         sim[:n_init] = np.nan
         return sim

@@ -151,7 +151,7 @@ class ARXModel:
 
     def one_step(self, U, Y):
         require_fitted(self, "params")
-        U, Y = check_record(U, Y, shape=self.shape)
+        U, Y = check_record(U, Y, min_rows=self.n_init + 1, shape=self.shape)
         Zu, Zy = self.su(U), self.sy(Y)
         Phi, _, p = _arx_matrix(Zu, Zy, self.na, self.nb, self.nk)
         out = np.full(Y.shape, np.nan)
@@ -269,7 +269,7 @@ class StateSpaceModel:
 
     def one_step(self, U, Y):
         require_fitted(self, "params")
-        U, Y = check_record(U, Y, shape=self.shape)
+        U, Y = check_record(U, Y, min_rows=self.n_init + 1, shape=self.shape)
         Zu, Zy = self._u(U), self.sy(Y)
         pred, _ = self._filter(Zu, Zy, U.shape[0])
         out = self.sy.inverse(pred)
@@ -367,7 +367,7 @@ class NARXModel:
         Zu, Zy = self.su(U), self.sy(Y)
         X = self._features(Zu, Zy, self.n_init)
         T = Zy[self.n_init:]
-        n_val = int(round(c.val_fraction * X.shape[0]))
+        n_val = max(1, int(round(c.val_fraction * X.shape[0])))     # early stopping needs a held-out row
         Xt, Tt = torch.as_tensor(X[:-n_val], dtype=torch.float64), torch.as_tensor(T[:-n_val], dtype=torch.float64)
         Xv, Tv = torch.as_tensor(X[-n_val:], dtype=torch.float64), torch.as_tensor(T[-n_val:], dtype=torch.float64)
         threads = torch.get_num_threads()

@@ -19,6 +19,9 @@ def _pair(y_true, y_pred):
         raise ValueError(f"y_true and y_pred differ in size: {a.size} vs {b.size}")
     if a.size < 2:
         raise ValueError("need at least two samples")
+    if not np.all(np.isfinite(a)):
+        # a measurement gap is the caller's to cut out; scored through, it would hide as NaN
+        raise ValueError(f"y_true: {int((~np.isfinite(a)).sum())} NaN or inf value(s); expected finite measurements")
     return a, b
 
 

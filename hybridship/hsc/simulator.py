@@ -382,6 +382,11 @@ class PlaningCraftModel:
         """
         from scipy.optimize import root
 
+        if not (np.isfinite(rpm) and rpm > 0):
+            raise ValueError(f"rpm: expected a positive engine speed [rpm], got {rpm!r}")
+        if not np.isfinite(actuator_frac):
+            raise ValueError(f"actuator_frac: expected a finite fraction, got {actuator_frac!r}")
+
         def resid(v):
             u, z, th = v
             fx, fz, m = self.forces(u, z, 0.0, th, 0.0, rpm, actuator_frac)
@@ -469,8 +474,17 @@ class PlaningCraftModel:
         """
         rpm_cmd = np.asarray(rpm_cmd, float)
         pwm_pct = np.asarray(pwm_pct, float)
-        if rpm_cmd.shape != pwm_pct.shape or rpm_cmd.ndim != 1:
-            raise ValueError("rpm_cmd and pwm_pct must be 1-D arrays of the same length")
+        if rpm_cmd.shape != pwm_pct.shape or rpm_cmd.ndim != 1 or rpm_cmd.size == 0:
+            raise ValueError("rpm_cmd and pwm_pct must be non-empty 1-D arrays of the same length")
+        for name, x in (("rpm_cmd", rpm_cmd), ("pwm_pct", pwm_pct)):
+            if not np.all(np.isfinite(x)):
+                raise ValueError(f"{name}: NaN or inf at sample {int(np.argmax(~np.isfinite(x)))}; expected finite values")
+        if not (np.isfinite(sample_period_s) and sample_period_s > 0):
+            raise ValueError(f"sample_period_s: expected a positive number of seconds, got {sample_period_s!r}")
+        if isinstance(substeps, bool) or not isinstance(substeps, (int, np.integer)) or substeps < 1:
+            raise ValueError(f"substeps: expected an integer >= 1, got {substeps!r}")
+        if not (np.isfinite(settle_s) and settle_s >= 0):
+            raise ValueError(f"settle_s: expected a non-negative number of seconds, got {settle_s!r}")
         rng = np.random.default_rng(rng) if not isinstance(rng, np.random.Generator) else rng
         wave = self.make_wave_function(sea, rng)
         n_settle = int(round(settle_s / sample_period_s))

@@ -170,6 +170,15 @@ class Sensors(_Strict):
     imu_acc_noise_m_s2: float = Field(ge=0)
     rpm_noise: float = Field(ge=0)
 
+    @model_validator(mode="after")
+    def _whole_delay(self):
+        # the delay shifts the record by whole samples; another value would be rounded silently
+        k = self.gps_delay_s / self.sample_period_s
+        if abs(k - round(k)) > 1e-9 * max(1.0, k):
+            raise ValueError(f"gps_delay_s ({self.gps_delay_s:g} s) must be a whole number of samples of "
+                             f"sample_period_s ({self.sample_period_s:g} s)")
+        return self
+
 
 class TruthPerturbation(_Strict):
     """Factors and offsets from the nominal file to the simulator's "true" boat."""
