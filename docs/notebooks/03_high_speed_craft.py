@@ -23,6 +23,7 @@
 
 # %%
 import os
+import shutil
 import tempfile
 
 import matplotlib.pyplot as plt
@@ -71,3 +72,7 @@ print(free_val.pivot_table(index=["sea_state", "model"], columns="output", value
 assert set(table["model"]) == {"ss", "arx", "ann", "hybrid"}
 assert np.isfinite(table[["R", "MAE"]].to_numpy()).all()
 print("outputs in", out)
+
+# %%
+# The benchmark's files were for this notebook only: remove them (comment out to keep them).
+shutil.rmtree(out)

@@ -28,6 +28,7 @@
 
 # %%
 import os
+import shutil
 import tempfile
 import time
 from pathlib import Path
@@ -288,3 +289,7 @@ predictors = {"hybrid": (hybrid, {}), "hybrid_nets_unguarded": (hybrid, paper_sc
 errors = {name: [metrics.drift_errors(p, test, **kw)] for name, (p, kw) in predictors.items()}
 print("Mean absolute error after the failure, first 5 / first 20 forecasts (m, m, deg):")
 print(metrics.paper_table(metrics.error_table(errors)).to_string())
+
+# %%
+# The vessel file, logs and model were for this notebook only: remove them (comment out to keep them).
+shutil.rmtree(WORK)
