@@ -99,8 +99,11 @@ def test_truncated_file_is_refused(saved, tmp_path):
     for cut in (0, 10, len(raw) // 2, len(raw) - 1):
         p = tmp_path / f"cut{cut}.npz"
         p.write_bytes(raw[:cut])
-        _refused(p, rf"{p.name}: not a readable hybridship model file \((the file is empty|not an \.npz archive, "
-                    rf"or a damaged one)\)$")
+        _refused(p, rf"{p.name}: not a readable hybridship model file \((the file is empty|a damaged \.npz "
+                    rf"archive)\)$")
+    text = tmp_path / "log_as_model.npz"              # a text file (a log) given as the model
+    text.write_text("time_s,north_m\n0,0\n")
+    _refused(text, r"log_as_model.npz: not a readable hybridship model file \(not an \.npz archive \(a text")
     (tmp_path / "folder.npz").mkdir()
     _refused(tmp_path / "folder.npz", r"folder.npz: is a folder; expected a model file")
     npy = tmp_path / "array.npz"                     # a .npy array renamed
@@ -308,8 +311,9 @@ def test_loading_never_executes_code_from_the_file(saved, tmp_path):
     # 3. a plain pickle file named like a model
     r = tmp_path / "plain_pickle.npz"
     r.write_bytes(pickle.dumps(_Payload()))
-    for f in (p, q, r):
-        with pytest.raises(ModelFileError, match=f.name) as info:
+    for f, what in ((p, "an archive holding pickled objects"), (q, "an archive holding pickled objects"),
+                    (r, "a pickle file")):
+        with pytest.raises(ModelFileError, match=f"{f.name}: not a readable hybridship model file \\({what}") as info:
             HybridPredictor.load(f)
         assert "unsafely" not in str(info.value)       # never advises loading it anyway
     assert not marker.exists()
@@ -463,6 +467,63 @@ def test_consistently_written_bad_arrays_are_refused(saved, tmp_path, key, value
     _refused(_rewrite(saved, tmp_path, array_change=change, restamp=True, name=f"bad-{key}.npz"), message)
 
 
+@pytest.mark.parametrize("key, value, message", [
+    ("thrust_scale", lambda a: a["thrust_scale"][:2], "thrust_scale: expected 3 positive numbers"),
+    ("thrust_scale", lambda a: np.array(["a", "b", "c"]), "thrust_scale: expected 3 positive numbers"),
+    ("guard_mean", lambda a: np.zeros(3), r"guard_mean / guard_inv_cov: expected shapes \(\d+,\)"),
+    ("w3", None, "damaged model contents: w3 is missing"),
+])
+def test_consistently_written_arrays_are_checked_against_the_model(saved, tmp_path, key, value, message):
+    """Arrays of the wrong size for the model's features and axes were loaded, and the
+    forecast failed later with numpy's broadcasting message."""
+    def change(arrays):
+        if value is None:
+            del arrays[key]
+        else:
+            arrays[key] = value(arrays)
+            if key == "guard_mean":
+                arrays["guard_inv_cov"] = np.eye(3)
+
+    _refused(_rewrite(saved, tmp_path, array_change=change, restamp=True, name=f"size-{key}.npz"), message)
+
+
+@pytest.mark.parametrize("name, edit, message", [
+    ("training_info", lambda m: m.update(training_info="junk"), "training_info: expected a table"),
+    ("log_step", lambda m: m["training_info"].update(log_step_s=5), "training_info.log_step_s"),
+    ("calibration", lambda m: m["training_info"].update(calibration="x"), "training_info.calibration"),
+    ("use_guard", lambda m: m.update(use_guard="no"), "use_guard: expected true or false"),
+    ("nets_after_stop", lambda m: m.update(nets_after_stop=2), "nets_after_stop: expected true or false"),
+    ("window", lambda m: m.update(environment_window_s="x"), "environment_window_s: expected a number"),
+    ("guard_scale", lambda m: m["guard"].update(scale=0), r"guard.scale: expected a number > 0"),
+    ("guard_d0", lambda m: m["guard"].update(d0=-1.0), r"guard.d0: expected a number >= 0"),
+    ("guard_list", lambda m: m.update(guard=[1, 2]), "guard: expected a table"),
+    ("wind_forecast", lambda m: m.update(wind_forecast=None), "wind_forecast: expected a table"),
+    ("calibrated_commands", lambda m: m.update(calibrated_commands=None), "calibrated_commands: expected a list"),
+    ("env_config", lambda m: m["environment_config"].update(position_std_m=float("nan")),
+     r"position_std_m: (?!.*pydantic)"),
+    ("missing", lambda m: m.pop("environment"), r"environment: missing"),
+])
+def test_consistently_written_bad_settings_are_refused_by_name(saved, tmp_path, name, edit, message):
+    """Settings of the wrong type in a re-sealed file: refused naming the field, never with a
+    Python or pydantic message (a JSON list for a table crashed the CLI with a traceback)."""
+    _refused(_rewrite(saved, tmp_path, meta_change=edit, restamp=True, name=f"set-{name}.npz"),
+             rf"damaged model metadata \(.*{message}")
+
+
+def test_metadata_that_is_not_a_table_is_refused(saved, tmp_path):
+    def change(arrays):
+        arrays["metadata_json"] = np.frombuffer(b"[1, 2, 3]", dtype=np.uint8)
+
+    _refused(_rewrite(saved, tmp_path, array_change=change, name="list.npz"), "not a hybridship model file")
+
+
+def test_a_bad_vessel_argument_is_not_blamed_on_the_file(saved):
+    _, path, _ = saved
+    with pytest.raises(TypeError, match="^vessel") as err:
+        HybridPredictor.load(path, vessel=123)
+    assert "damaged" not in str(err.value)
+
+
 def test_a_model_file_name_and_an_unwritable_place_are_refused_by_name(saved, tmp_path):
     """save() wants a .npz name (as the CLI does); a place it cannot write names the model
     file asked for, not the hidden temporary file, and leaves nothing behind."""
@@ -471,7 +532,7 @@ def test_a_model_file_name_and_an_unwritable_place_are_refused_by_name(saved, tm
         hp.save(tmp_path / "model.csv")
     blocker = tmp_path / "not_a_folder"
     blocker.write_text("x")
-    with pytest.raises(OSError, match=r"not_a_folder/sub/m.npz: cannot be written") as err:
+    with pytest.raises(OSError, match=r"not_a_folder/sub/m.npz: .*not_a_folder exists and is not a folder") as err:
         hp.save(blocker / "sub" / "m.npz")
     assert ".tmp" not in str(err.value)
     assert sorted(p.name for p in tmp_path.iterdir()) == ["not_a_folder"]

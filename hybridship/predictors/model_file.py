@@ -185,8 +185,28 @@ def load_model(cls, path, vessel=None):
     meta = _read_checked_metadata(data, path)
     obj, embedded, state = _build_predictor(cls, meta, vessel, path)   # checks the vessel
     _restore_learned_state(obj, data, state, path)
-    obj.training_info = meta.get("training_info", {})
+    try:
+        obj.training_info = _checked_training_info(meta.get("training_info", {}))
+    except ValueError as err:
+        raise ModelFileError(f"{path}: damaged model metadata ({err})") from None
     return obj
+
+
+def _checked_training_info(info) -> dict:
+    """``training_info``: a record of the fit, of which forecasts read three entries; each
+    checked for what they read (ValueError naming the entry otherwise)."""
+    if not isinstance(info, dict):
+        raise ValueError(f"training_info: expected a table of entries, got {type(info).__name__}")
+    steps = info.get("log_step_s")
+    if steps is not None and not (isinstance(steps, list) and steps and all(
+            isinstance(x, (int, float)) and not isinstance(x, bool) and x > 0 for x in steps)):
+        raise ValueError(f"training_info.log_step_s: expected a list of positive steps [s], got {steps!r}")
+    if not isinstance(info.get("trained_with_wind", False), bool):
+        raise ValueError("training_info.trained_with_wind: expected true or false")
+    calibration = info.get("calibration", {})
+    if not isinstance(calibration, dict) or not isinstance(calibration.get("dp_only", False), bool):
+        raise ValueError("training_info.calibration: expected a table whose dp_only is true or false")
+    return info
 
 
 def _read_arrays(path: Path) -> dict:
@@ -202,16 +222,24 @@ def _read_arrays(path: Path) -> dict:
     except PermissionError:
         raise ModelFileError(f"{path}: cannot be read (no permission)") from None
     except Exception as err:  # zip/npy parse errors of a damaged file
-        if "pickled" in str(err):
-            # numpy's message suggests loading it unsafely: a model file never holds code
-            why = "not an archive of arrays; numpy could read it only as pickled objects, which hybridship never loads"
-        elif path.stat().st_size == 0:
-            why = "the file is empty"
-        elif "context manager" in str(err):      # np.load gave one array: a .npy file, renamed
-            why = "a single .npy array, not the .npz archive a model file is"
-        else:                                     # zip or npy structure broken
-            why = "not an .npz archive, or a damaged one"
-        raise ModelFileError(f"{path}: not a readable hybridship model file ({why})") from None
+        raise ModelFileError(f"{path}: not a readable hybridship model file ({_why_unreadable(path, err)})") from None
+
+
+def _why_unreadable(path: Path, err: Exception) -> str:
+    """What the file is instead of a model file, from its first bytes (numpy's own message
+    suggests loading pickles, which a model file never needs)."""
+    with open(path, "rb") as fh:
+        head = fh.read(8)
+    if not head:
+        return "the file is empty"
+    if head.startswith(b"PK"):
+        return ("an archive holding pickled objects, which hybridship never loads (they could run code)"
+                if "pickle" in str(err) or "Object arrays" in str(err) else "a damaged .npz archive")
+    if head.startswith(b"\x93NUMPY"):
+        return "a single .npy array, not the .npz archive a model file is"
+    if head.startswith(b"\x80"):
+        return "a pickle file, which hybridship never loads (it could run code)"
+    return "not an .npz archive (a text or other file)"
 
 
 def _read_checked_metadata(data: dict, path: Path) -> dict:
@@ -220,7 +248,7 @@ def _read_checked_metadata(data: dict, path: Path) -> dict:
         meta = json.loads(bytes(data["metadata_json"]).decode("utf-8"))
     except Exception:
         raise ModelFileError(f"{path}: metadata missing or damaged") from None
-    if meta.get("format") != "hybridship-model":
+    if not isinstance(meta, dict) or meta.get("format") != "hybridship-model":
         raise ModelFileError(f"{path}: not a hybridship model file")
     version = meta.get("format_version")
     if not isinstance(version, int) or version not in READABLE_MODEL_FORMAT_VERSIONS or isinstance(version, bool):
@@ -245,12 +273,21 @@ def _read_checked_metadata(data: dict, path: Path) -> dict:
 
 def _read_wind_forecast(d: dict) -> WindForecast:
     """The wind forecast the model was fitted with (a fitted one is fixed from then on)."""
+    if not isinstance(d, dict) or d.get("option", "given") not in ("fit", "given"):
+        raise ValueError(f"wind_forecast: expected a table of settings with option 'fit' or 'given', got {d!r}")
     return WindForecast(**{k: v for k, v in d.items() if k != "option"})
 
 
 def _build_predictor(cls, meta: dict, vessel, path: Path):
     """``(predictor, embedded, state)``: an unfitted ``cls`` with the file's settings, for
     ``vessel`` or else the embedded vessel (``embedded``), and the scalar learned state."""
+    from pydantic import ValidationError
+
+    from ..config import format_validation_error
+    from ..vessel import Vessel, load_vessel
+
+    if vessel is not None and not isinstance(vessel, Vessel):
+        vessel = load_vessel(vessel)        # the caller's argument: its errors are not the file's
     try:
         if meta["format_version"] >= 12 and "command_memory_s" not in meta["residual_config"]:
             raise KeyError("residual_config.command_memory_s")     # older files read the default, unused
@@ -260,12 +297,13 @@ def _build_predictor(cls, meta: dict, vessel, path: Path):
         if embedded:
             vessel = _embedded_vessel(meta["vessel_description"], path)
         obj = cls(vessel, residual_config=residual_config,
-                  ensemble_config=EnsembleConfig(**meta["ensemble_config"]), guard=meta["use_guard"],
-                  guard_quantile=meta["guard_quantile"], stop_after_failure=meta["stop_after_failure"],
+                  ensemble_config=EnsembleConfig(**meta["ensemble_config"]), guard=_checked_flag(meta, "use_guard"),
+                  guard_quantile=meta["guard_quantile"],
+                  stop_after_failure=_checked_flag(meta, "stop_after_failure"),
                   environment=meta["environment"],
                   environment_config=EnvironmentConfig(**meta["environment_config"]),
-                  environment_window_s=meta["environment_window_s"],
-                  nets_after_stop=meta["nets_after_stop"],
+                  environment_window_s=_checked_number(meta, "environment_window_s"),
+                  nets_after_stop=_checked_flag(meta, "nets_after_stop"),
                   # files written before the option calibrated the members' spread
                   calibration_config=CalibrationConfig(**{"station_keeping_spread": "ensemble",
                                                           **meta["calibration_config"]}),
@@ -288,10 +326,14 @@ def _build_predictor(cls, meta: dict, vessel, path: Path):
             obj.wind_forecast_option = "fit"       # a refit chooses again; forecasts use the fitted one
         state = _scalar_state(meta)
         state["format_version"] = meta["format_version"]
-    except (KeyError, TypeError, ValueError, AttributeError) as err:
+    except ValidationError as err:
+        raise ModelFileError(f"{path}: damaged model metadata ({format_validation_error(err)})") from None
+    except KeyError as err:
+        raise ModelFileError(f"{path}: damaged model metadata ({err.args[0]}: missing)") from None
+    except (TypeError, ValueError, AttributeError) as err:
         if isinstance(err, ModelFileError) or "VesselFileError" in type(err).__name__:
             raise
-        raise ModelFileError(f"{path}: damaged model metadata ({type(err).__name__}: {err})") from None
+        raise ModelFileError(f"{path}: damaged model metadata ({err})") from None
     return obj, embedded, state
 
 
@@ -305,6 +347,14 @@ def _checked_wind_error_dt(value) -> float:
     lo, hi = WIND_ERROR_DT_RANGE_S
     if isinstance(value, bool) or not isinstance(value, (int, float)) or not lo <= value <= hi:
         raise ValueError(f"wind_error_dt_s: expected a step from {lo:g} to {hi:g} s, got {value!r}")
+    return float(value)
+
+
+def _checked_number(meta: dict, key: str) -> float:
+    """A finite number from the metadata; ValueError naming the field otherwise."""
+    value = meta[key]
+    if isinstance(value, bool) or not isinstance(value, (int, float)) or not np.isfinite(value):
+        raise ValueError(f"{key}: expected a number, got {value!r}")
     return float(value)
 
 
@@ -343,12 +393,26 @@ def _scalar_state(meta: dict) -> dict:
     thr_std = np.asarray(meta["thrust_error_prior"]["std"], dtype=float).ravel()
     if thr_mean.shape != thr_std.shape or not (np.all(np.isfinite(thr_mean)) and np.all(thr_std > 0)):
         raise ValueError("thrust_error_prior: expected finite means and positive spreads")
-    return {"thr_mean": thr_mean, "thr_std": thr_std, "regime_meta": meta["command_regime"],
-            "calibrated_commands": list(meta["calibrated_commands"]),
-            "fingerprint": meta["vessel_fingerprint"],
+    modes = meta["calibrated_commands"]
+    if not isinstance(modes, list) or not all(isinstance(m, str) for m in modes):
+        raise ValueError(f"calibrated_commands: expected a list of command modes, got {modes!r}")
+    regime = meta["command_regime"]
+    if regime is not None and not isinstance(regime, dict):
+        raise ValueError(f"command_regime: expected a table of settings or null, got {regime!r}")
+    for key, table, entry, lo in (("guard.d0", meta["guard"], "d0", 0.0), ("guard.scale", meta["guard"], "scale", None),
+                                  ("thrust_regime.lo", meta["thrust_regime"], "lo", 0.0)):
+        if not isinstance(table, dict):
+            raise ValueError(f"{key.split('.')[0]}: expected a table of settings, got {table!r}")
+        v = _checked_number(table, entry)
+        if (v < lo) if lo is not None else not v > 0:
+            raise ValueError(f"{key}: expected a number {'>= 0' if lo is not None else '> 0'}, got {v!r}")
+    return {"thr_mean": thr_mean, "thr_std": thr_std, "regime_meta": regime,
+            "calibrated_commands": modes, "fingerprint": meta["vessel_fingerprint"],
             "guard_d0": float(meta["guard"]["d0"]), "guard_scale": float(meta["guard"]["scale"]),
-            "thrust_lo": float(meta["thrust_regime"]["lo"]), "has_hull": bool(meta.get("has_hull", False)),
-            "has_wind_error_paths": bool(meta["has_wind_error_paths"]) if meta["format_version"] >= 9 else False}
+            "thrust_lo": float(meta["thrust_regime"]["lo"]), "has_hull": _checked_flag(meta, "has_hull")
+            if "has_hull" in meta else False,
+            "has_wind_error_paths": _checked_flag(meta, "has_wind_error_paths") if meta["format_version"] >= 9
+            else False}
 
 
 def _check_vessel(obj, meta: dict, fingerprint: str, embedded: bool, path: Path) -> None:
@@ -371,7 +435,9 @@ def _restore_learned_state(obj, data: dict, state: dict, path: Path) -> None:
         hull = (HullCorrection.from_arrays(data, obj.model.vessel.particulars.L_pp_m, obj.hull_ridge)
                 if state["has_hull"] else None)
         wind_paths = _read_wind_error_paths(data) if state["has_wind_error_paths"] else None
-    except (KeyError, ValueError) as err:
+    except KeyError as err:
+        raise ModelFileError(f"{path}: damaged model contents: {err.args[0]} is missing") from None
+    except ValueError as err:
         raise ModelFileError(f"{path}: damaged model contents: {err}") from None
     obj.ensemble, obj.guard, obj.thrust_regime = ens, guard, thrust_regime
     obj.hull = hull
@@ -426,16 +492,20 @@ def _read_nets(data: dict, n_in: int, state: dict):
             raise ValueError(f"{k}: a normalisation scale must be > 0")
     ens = MLPEnsemble(weights, norm["x_mean"], norm["x_std"], norm["y_mean"], norm["y_std"])
     g_mean, g_inv = np.asarray(data["guard_mean"], dtype=float), np.asarray(data["guard_inv_cov"], dtype=float)
-    n_g = g_mean.size
-    if g_mean.shape != (n_g,) or g_inv.shape != (n_g, n_g) or not np.all(np.isfinite(g_mean)):
-        raise ValueError(f"guard_mean / guard_inv_cov: expected shapes (n,) and (n, n) with finite values, got "
-                         f"{g_mean.shape} and {g_inv.shape}")
+    # the guard's envelope is over the nets' normalised inputs: one entry per feature
+    if g_mean.shape != (n_in,) or g_inv.shape != (n_in, n_in) or not np.all(np.isfinite(g_mean)):
+        raise ValueError(f"guard_mean / guard_inv_cov: expected shapes ({n_in},) and ({n_in}, {n_in}) (one per "
+                         f"feature) with finite values, got {g_mean.shape} and {g_inv.shape}")
     for name, v in (("guard.d0", state["guard_d0"]), ("guard.scale", state["guard_scale"]),
                     ("thrust_regime.lo", state["thrust_lo"])):
         if not np.all(np.isfinite(np.asarray(v, dtype=float))):
             raise ValueError(f"{name}: not a finite number")
     guard = EnvelopeGuard(g_mean, g_inv, state["guard_d0"], state["guard_scale"])
-    thrust_regime = ThrustRegime(np.asarray(data["thrust_scale"], dtype=float), state["thrust_lo"])
+    scale = data["thrust_scale"]
+    if scale.dtype.kind not in "fiu" or scale.shape != (3,) or not np.all(np.asarray(scale, dtype=float) > 0):
+        raise ValueError(f"thrust_scale: expected 3 positive numbers (surge, sway, yaw), got dtype {scale.dtype} "
+                         f"and shape {scale.shape}")
+    thrust_regime = ThrustRegime(np.asarray(scale, dtype=float), state["thrust_lo"])
     return ens, guard, thrust_regime
 
 
@@ -471,11 +541,26 @@ def _read_command_regime(data: dict, regime_meta, path: Path):
     """The :class:`CommandRegime` stored with the model, or None when it has none."""
     if regime_meta is None:
         return None
+    settings = ("rpm_eps", "froude_lo", "angle_hard_rad", "length_m")
     try:
-        w = np.asarray(data["cmd_regime_weights"], dtype=float)
-        if w.shape != (CommandRegime.N_REGIMES,) or not np.all((w >= 0) & (w <= 1)):
-            raise ValueError(f"cmd_regime_weights: expected {CommandRegime.N_REGIMES} weights in [0, 1]")
-        return CommandRegime(w, np.asarray(data["cmd_regime_n_train"]),
-                             np.asarray(data["cmd_regime_n_held"]), **regime_meta)
-    except (KeyError, TypeError, ValueError) as err:
+        if sorted(regime_meta) != sorted(settings):
+            raise ValueError(f"command_regime: expected the settings {', '.join(settings)}, got "
+                             f"{', '.join(map(str, regime_meta))}")
+        for key in settings:
+            v = regime_meta[key]
+            if isinstance(v, bool) or not isinstance(v, (int, float)) or not (np.isfinite(v) and v >= 0):
+                raise ValueError(f"command_regime.{key}: expected a number >= 0, got {v!r}")
+        n = CommandRegime.N_REGIMES
+        w = data["cmd_regime_weights"]
+        if w.dtype.kind not in "fiu" or w.shape != (n,) or not np.all((w >= 0) & (w <= 1)):
+            raise ValueError(f"cmd_regime_weights: expected {n} weights in [0, 1]")
+        counts = {k: data[f"cmd_regime_{k}"] for k in ("n_train", "n_held")}
+        for k, c in counts.items():
+            if c.dtype.kind not in "iu" or c.shape != (n,) or np.any(c < 0):
+                raise ValueError(f"cmd_regime_{k}: expected {n} counts (whole numbers >= 0), got dtype "
+                                 f"{c.dtype} and shape {c.shape}")
+        return CommandRegime(np.asarray(w, dtype=float), counts["n_train"], counts["n_held"], **regime_meta)
+    except KeyError as err:
+        raise ModelFileError(f"{path}: damaged model contents: {err.args[0]} is missing") from None
+    except ValueError as err:
         raise ModelFileError(f"{path}: damaged model contents: {err}") from None
