@@ -358,6 +358,17 @@ def _add_forecast(sub) -> None:
     p.set_defaults(func=_cmd_forecast)
 
 
+def _is_forecast_table(path: Path) -> bool:
+    """Whether ``path`` starts as a table written by ``forecast`` does (an earlier forecast,
+    which a new one may replace), or is empty."""
+    try:
+        with open(path, "rb") as fh:
+            head = fh.read(64)
+    except OSError:
+        return False
+    return head == b"" or head.startswith(b"start_time_s,lead_s,time_s,")
+
+
 def _cmd_forecast(args) -> int:
     from .fileio import atomic_write
     from .predictors import HybridPredictor, ModelFileError
@@ -366,13 +377,15 @@ def _cmd_forecast(args) -> int:
     if not 0 < args.horizon_s <= MAX_HORIZON_S:
         raise UsageError(f"{_PROG} forecast: error: --horizon-s must be > 0 and at most {MAX_HORIZON_S:g} s "
                          f"(one day), got {args.horizon_s}")
+    from .predictors.result import checked_quantiles
+
     try:
         quantiles = [float(q) for q in args.quantiles.split(",") if q.strip()]
+        if quantiles:
+            checked_quantiles(quantiles)
     except ValueError:
-        quantiles = [float("nan")]
-    if not all(0.0 < q < 1.0 for q in quantiles):
-        raise UsageError(f"{_PROG} forecast: error: --quantiles: expected comma-separated probabilities in "
-                         f"(0, 1), e.g. 0.05,0.95; got {args.quantiles!r}")
+        raise UsageError(f"{_PROG} forecast: error: --quantiles: expected comma-separated distinct probabilities "
+                         f"in (0, 1), e.g. 0.05,0.95; got {args.quantiles!r}") from None
     try:
         hp = HybridPredictor.load(args.model)
     except ModelFileError as exc:
@@ -390,6 +403,9 @@ def _cmd_forecast(args) -> int:
     if not args.out.name.lower().endswith(".csv"):
         raise UsageError(f"{_PROG} forecast: error: --out {args.out}: expected a .csv file (the forecast is "
                          f"written as plain CSV)")
+    if args.out.is_file() and not _is_forecast_table(args.out):
+        raise UsageError(f"{_PROG} forecast: error: --out {args.out}: exists and is not a forecast table (another "
+                         f"log or table would be lost); give another path or remove it")
     _check_writable(args.out, f"{_PROG} forecast")
     try:
         fc = hp.forecast(args.log, args.start_time, args.horizon_s, guard=not args.no_guard, commands=args.commands)

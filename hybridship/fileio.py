@@ -24,6 +24,8 @@ def as_path(value, name: str = "path") -> Path:
     DataFrame, a number) rather than os.fspath's own message."""
     if isinstance(value, (str, os.PathLike)) and str(value):
         return Path(value)
+    if isinstance(value, (str, os.PathLike)):
+        raise ValueError(f"{name}: expected a file path, got an empty one")
     raise TypeError(f"{name}: expected a file path (str or os.PathLike), got {type(value).__name__}")
 
 
@@ -66,6 +68,7 @@ def atomic_write(path, write: Callable[[BinaryIO], None]) -> Path:
     path = Path(path)
     if path.is_dir():
         raise IsADirectoryError(f"{path}: is a directory; expected the path of a file to write")
+    check_writable(path)        # a file where a folder should be is named as such
     if path.exists() and not path.stat().st_mode & stat.S_IWUSR:
         # the rename would replace it even so (a directory entry, not the file, is written)
         raise PermissionError(f"{path}: is read-only; not replaced")
@@ -83,8 +86,9 @@ def atomic_write(path, write: Callable[[BinaryIO], None]) -> Path:
         if err.filename is not None and os.fspath(err.filename) not in ours:
             raise   # about another file (one the writer reads), not the one written
         # the error names the hidden temporary file (or the folder); the user asked for ``path``
-        msg = f"{path}: cannot be written ({err.strerror or err})"
-        raise (type(err)(err.errno, msg) if err.errno is not None else type(err)(msg)) from None
+        exc = type(err)(f"{path}: cannot be written ({err.strerror or err})")
+        exc.errno = err.errno       # kept for callers, out of the message ("[Errno 2] ...")
+        raise exc from None
     except BaseException:
         _discard(tmp)
         raise

@@ -174,6 +174,32 @@ def test_cli_forecast_quantiles(fitted, tmp_path, capsys):
     assert main(["forecast", "--model", str(model), "--log", str(tmp_path / "log.csv.gz"), "--start-time", "300",
                  "--quantiles", "0.05,1.5", "--out", str(out)]) == 2
     assert "--quantiles" in capsys.readouterr().err
+    # probabilities that differ only past the sixth digit keep a column each; a repeat is refused
+    assert main(["forecast", "--model", str(model), "--log", str(tmp_path / "log.csv.gz"), "--start-time", "300",
+                 "--horizon-s", "5", "--quantiles", "0.1000001,0.1000002,0.9999999", "--out", str(out)]) == 0
+    assert {"north_q0.1000001_m", "north_q0.1000002_m", "north_q0.9999999_m"} <= set(pd.read_csv(out).columns)
+    assert main(["forecast", "--model", str(model), "--log", str(tmp_path / "log.csv.gz"), "--start-time", "300",
+                 "--quantiles", "0.5,0.5", "--out", str(out)]) == 2
+    assert "--quantiles" in capsys.readouterr().err
+    # another file (here a log) at --out is not replaced by a forecast
+    other = tmp_path / "other_log.csv"
+    write_log(logs[1], other)
+    before = other.read_bytes()
+    assert main(["forecast", "--model", str(model), "--log", str(tmp_path / "log.csv.gz"), "--start-time", "300",
+                 "--out", str(other)]) == 2
+    assert "is not a forecast table" in capsys.readouterr().err and other.read_bytes() == before
+
+
+def test_forecast_options_and_quantiles_are_checked(fitted):
+    hp, logs = fitted
+    fc = hp.forecast(logs[0], [300.0], 10.0)
+    for bad in (["a"], "0.5", [[0.1]], [0.5, 0.5], 1.0):
+        with pytest.raises(ValueError, match="^quantiles"):
+            fc.to_frame(quantiles=bad)
+    assert "north_q0.5_m" in fc.to_frame(quantiles=0.5)
+    for name, bad in (("guard", "no"), ("nets", "False"), ("calibrated", "false"), ("nets_after_stop", 1)):
+        with pytest.raises(TypeError, match=f"^{name}: expected True or False"):
+            hp.forecast(logs[0], [300.0], 10.0, **{name: bad})
 
 
 def test_station_keeping_calibration_leaves_a_drift_start_raw():

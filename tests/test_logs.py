@@ -147,7 +147,8 @@ def test_unreadable_files_are_refused_naming_the_file(tmp_path):
              "plain.csv.gz": (b"time_s,north_m\n0,1\n", "not a complete gzip file"),
              "truncated.csv.gz": (good.read_bytes()[: len(good.read_bytes()) // 2], "not a complete gzip file"),
              "ragged.csv": (b"time_s\n0\n1,2\n", "line 3 has 2 fields where the lines before it have 1"),
-             "text.parquet": (b"time_s\n0\n", "not a Parquet file")}
+             "text.parquet": (b"time_s\n0\n", "not a Parquet file"),
+             "quote.csv": (b"time_s,north_m\n0,1\n1,\"2\n2,3\n", r"a quote \(\"\) opened in data row \d+ is never closed")}
     for name, (data, why) in cases.items():
         (tmp_path / name).write_bytes(data)
         with pytest.raises(LogFormatError, match=f"{name}: cannot be read as a .*{why}") as err:

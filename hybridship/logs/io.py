@@ -928,6 +928,10 @@ def _read_problem(kind: str, exc: BaseException) -> str:
     if fields:
         return (f"line {fields.group(2)} has {fields.group(3)} fields where the lines before it have "
                 f"{fields.group(1)}; is the separator a comma?")
+    quote = re.search(r"EOF inside string starting at row (\d+)", text)
+    if quote:
+        return (f"a quote (\") opened in data row {quote.group(1)} is never closed, so the rest of the file "
+                f"reads as one text cell")
     if isinstance(exc, pd.errors.EmptyDataError):
         return "the file is empty: no header line"
     if isinstance(exc, UnicodeDecodeError):

@@ -786,6 +786,11 @@ class HybridPredictor:
             (``CalibrationConfig.station_keeping_spread``).
         """
         self._check_fitted()
+        for name, value, optional in (("guard", guard, True), ("nets", nets, False),
+                                      ("nets_after_stop", nets_after_stop, True), ("calibrated", calibrated, False)):
+            # a text 'no' or 'false' is truthy: refused rather than read as True
+            if not (isinstance(value, (bool, np.bool_)) or (optional and value is None)):
+                raise TypeError(f"{name}: expected True or False{' or None' if optional else ''}, got {value!r}")
         st = _forecast_setup(self.model, self.residual_config, log, start_times_s, horizon_s,
                              self.stop_after_failure, commands, history_s=self.history_s,
                              wind_forecast=self.wind_forecast)

@@ -13,6 +13,27 @@ from ..frames import wrap_2pi
 __all__ = ["ForecastResult"]
 
 
+def quantile_label(q: float) -> str:
+    """The probability as written in a quantile column's name: its shortest exact decimal
+    (``0.05``, ``0.9999999``), so that distinct probabilities never share a column."""
+    return np.format_float_positional(float(q), trim="-")
+
+
+def checked_quantiles(q) -> np.ndarray:
+    """``q`` as a 1-D array of distinct probabilities in (0, 1); ValueError naming
+    ``quantiles`` otherwise (a number, or a list of them)."""
+    try:
+        arr = np.atleast_1d(np.asarray(q, dtype=float))
+    except (TypeError, ValueError):
+        raise ValueError(f"quantiles: expected probabilities in (0, 1) (a number or a list), got {q!r}") from None
+    if isinstance(q, (str, bytes)) or arr.ndim != 1 or arr.size == 0 or not np.all((arr > 0) & (arr < 1)):
+        raise ValueError(f"quantiles: expected probabilities in (0, 1) (a number or a list), got {q!r}")
+    labels = [quantile_label(x) for x in arr]
+    if len(set(labels)) != len(labels):
+        raise ValueError(f"quantiles: each probability once, got {', '.join(labels)}")
+    return arr
+
+
 @dataclass
 class ForecastResult:
     """Forecasts from S start times over H steps (index 0 = the start).
@@ -59,9 +80,7 @@ class ForecastResult:
         """
         from scipy.stats import norm
 
-        q = np.atleast_1d(np.asarray(q, dtype=float))
-        if q.size == 0 or not np.all((q > 0) & (q < 1)):
-            raise ValueError(f"quantiles: expected probabilities in (0, 1), got {q.tolist()}")
+        q = checked_quantiles(q)
         if self.eta_std is None:
             raise ValueError("quantiles: this forecast has no spread (eta_std is None)")
         z = norm.ppf(q)[:, None, None, None]
@@ -92,12 +111,13 @@ class ForecastResult:
             cols["north_std_m"] = self.eta_std[..., 0].ravel()
             cols["east_std_m"] = self.eta_std[..., 1].ravel()
             cols["heading_std_deg"] = np.degrees(self.eta_std[..., 2]).ravel()
-        if len(quantiles):
+        if np.size(quantiles):
             Q = self.quantiles(quantiles)
-            for q, eq in zip(np.atleast_1d(quantiles), Q):
-                cols[f"north_q{q:g}_m"] = eq[..., 0].ravel()
-                cols[f"east_q{q:g}_m"] = eq[..., 1].ravel()
-                cols[f"heading_q{q:g}_deg"] = np.degrees(psi_wrapped + (eq[..., 2] - self.eta[..., 2])).ravel()
+            for q, eq in zip(checked_quantiles(quantiles), Q):
+                label = quantile_label(q)
+                cols[f"north_q{label}_m"] = eq[..., 0].ravel()
+                cols[f"east_q{label}_m"] = eq[..., 1].ravel()
+                cols[f"heading_q{label}_deg"] = np.degrees(psi_wrapped + (eq[..., 2] - self.eta[..., 2])).ravel()
         if self.guard_weight is not None:
             cols["guard_weight"] = self.guard_weight.ravel()
         if self.flags is not None:
