@@ -388,3 +388,21 @@ def test_hsc_refit_forgets_the_earlier_fit(kind, hsc_setup):
     refitted, fresh = make(kind).fit(Ut, Yt).fit(Uv, Yv), make(kind).fit(Uv, Yv)
     np.testing.assert_array_equal(refitted.one_step(Ut, Yt), fresh.one_step(Ut, Yt))
     np.testing.assert_array_equal(refitted.free_run(Ut, Yt, N_INIT), fresh.free_run(Ut, Yt, N_INIT))
+
+
+def test_hsc_hybrid_refuses_pitch_in_degrees_and_pwm_as_a_fraction(hsc_fitted, hsc_setup):
+    """The grey box interprets units: pitch in degrees drove every parameter to a bound, and
+    PWM as a 0..1 fraction left the trim device still."""
+    make, (Ut, Yt), (U, Y) = hsc_setup
+    hybrid = hsc_fitted["hybrid"]
+    Y_deg = Y.copy()
+    Y_deg[:, 1] = np.degrees(Y[:, 1])
+    U_frac = U.copy()
+    U_frac[:, 1] = U[:, 1] / 100.0
+    for call in (lambda: hybrid.one_step(U, Y_deg), lambda: hybrid.free_run(U, Y_deg, N_INIT),
+                 lambda: make("hybrid").fit(Ut, np.column_stack([Yt[:, 0], np.degrees(Yt[:, 1])]))):
+        with pytest.raises(ValueError, match=r"^Y: column 1 \(pitch\) .* look like degrees"):
+            call()
+    for call in (lambda: hybrid.one_step(U_frac, Y), lambda: hybrid.free_run(U_frac, Y, N_INIT)):
+        with pytest.raises(ValueError, match=r"^U: column 1 \(PWM\) .* look like a fraction"):
+            call()
