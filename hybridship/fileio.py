@@ -103,6 +103,75 @@ def _discard(tmp: Path) -> None:
         pass
 
 
+#: The record, in an output folder, of the files hybridship commands wrote there.
+OUTPUTS_RECORD = ".hybridship-outputs.json"
+
+
+def _recorded_outputs(folder: Path) -> set[str]:
+    try:
+        import json
+
+        names = json.loads((folder / OUTPUTS_RECORD).read_text(encoding="utf-8"))
+        return {str(n) for n in names} if isinstance(names, list) else set()
+    except (OSError, ValueError):
+        return set()
+
+
+def check_output_files(folder, written, removed=(), ours=None) -> None:
+    """Refuse, before any work, output files that would replace or remove a file a hybridship
+    command did not write (FileExistsError) or a read-only one (PermissionError); see
+    :func:`write_output_files` for ``ours``."""
+    folder = Path(folder)
+    recorded = _recorded_outputs(folder)
+    for name in [*written, *removed]:
+        path = folder / name
+        if not path.is_file():
+            continue
+        if name not in recorded and not (ours is not None and ours(name, path)):
+            raise FileExistsError(f"{path}: exists and was not written by hybridship; it would be "
+                                  f"{'replaced' if name in written else 'removed'}: give another output folder "
+                                  f"or move it")
+        if not path.stat().st_mode & stat.S_IWUSR:
+            raise PermissionError(f"{path}: is read-only; nothing was written (give another output folder)")
+
+
+def write_output_files(folder, contents: dict, *, stale=(), ours=None) -> dict:
+    """Write a command's files into ``folder`` and remove its ``stale`` ones (those only other
+    options make), without losing a file the user put there.
+
+    Before anything is written, every file to be replaced or removed must be one a
+    hybridship command wrote (listed in the folder's :data:`OUTPUTS_RECORD`, or, for a
+    folder from before that record, accepted by ``ours(name, path)``) and writable;
+    otherwise FileExistsError or PermissionError names it and nothing changes. Each file is
+    then written atomically (:func:`atomic_write`) and the record updated.
+
+    Parameters
+    ----------
+    folder : path
+        The output folder (created).
+    contents : dict
+        File name -> bytes.
+    stale : iterable of str
+        File names removed where present.
+    ours : callable, optional
+        ``ours(name, path) -> bool`` for files not in the record.
+
+    Returns
+    -------
+    dict
+        File name -> path written.
+    """
+    import json
+
+    folder = Path(folder)
+    check_output_files(folder, contents, stale, ours)
+    paths = {name: atomic_write(folder / name, lambda fh, b=data: fh.write(b)) for name, data in contents.items()}
+    remove_stale(folder, stale)
+    record = sorted((_recorded_outputs(folder) - set(stale)) | set(contents))
+    atomic_write(folder / OUTPUTS_RECORD, lambda fh: fh.write(json.dumps(record).encode("utf-8")))
+    return paths
+
+
 def remove_stale(folder, names) -> list[Path]:
     """Remove the files ``names`` from ``folder`` where they exist; return those removed.
 

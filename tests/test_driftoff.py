@@ -173,7 +173,13 @@ def test_season_single_process_equals_cluster():
     with LocalCluster(n_workers=2, threads_per_worker=1, processes=False, dashboard_address=":0") as cluster, \
             Client(cluster) as client:
         many = season_sweep("gunnerus", states, psi, settings=st, chunk_size=3, scheduler=client, progress=False)
+        assert client.status == "running"                  # the caller's client is left to the caller
+        # by the scheduler's address: the client made for it is closed afterwards
+        by_address = season_sweep("gunnerus", states[:2], psi, settings=st, scheduler=cluster.scheduler_address,
+                                  progress=False)
+        assert len(cluster.scheduler.clients) == 2         # the test's own, and the scheduler's bookkeeping one
     pd.testing.assert_frame_equal(one.to_frame(), many.to_frame(), check_exact=True)
+    np.testing.assert_array_equal(by_address.p_exceed, one.p_exceed[:2])
     # and the same as the states run one by one
     r3 = simulate_blackouts("gunnerus", states[3], psi, settings=st, index=3)
     np.testing.assert_array_equal(one.p_exceed[3], r3.p_exceed())
@@ -245,6 +251,7 @@ def test_weather_samples_stay_in_the_range_of_a_weather_state():
     (dict(seed=-1), "seed"), (dict(dt_s=20.0), "dt_s"), (dict(seed=2**32), "seed"),
     (dict(radii_m=(3.0, 3.0)), "radii_m: expected each value once"),
     (dict(reaction_times_s=(30.0, 30.0)), "reaction_times_s: expected each value once"),
+    (dict(reaction_times_s=(30.0, 30.00001)), "reaction_times_s: expected each value once"),
     (dict(horizon_s=60.5), "horizon_s: must be a whole number of steps of"),
     (dict(horizon_s=1e9), "horizon_s: must be <= 86400"), (dict(n_samples=10**9), "n_samples: must be <= 1000000")])
 def test_bad_settings_name_the_field(kwargs, field):
@@ -265,6 +272,11 @@ def test_bad_weather_names_the_field():
             WeatherState(**{field: value})
     with pytest.raises(ValueError, match="uncertainty.wind_speed_m_s"):
         WeatherUncertainty(wind_speed_m_s=-1.0)
+    # directions in degrees where radians are expected: refused, not wrapped or read as a huge spread
+    with pytest.raises(ValueError, match=r"weather.wind_dir_from_rad: expected radians within \+-2 pi, got 400"):
+        WeatherState(wind_dir_from_rad=400.0)
+    with pytest.raises(ValueError, match="uncertainty.wind_dir_rad: expected a spread in radians from 0 to pi"):
+        WeatherUncertainty(wind_dir_rad=30.0)
     with pytest.raises(TypeError, match="weather"):
         simulate_blackouts("gunnerus", {"wind": 3}, [0.0])
     with pytest.raises(ValueError, match="headings"):
@@ -293,6 +305,13 @@ def test_cli_reports_bad_input_naming_the_option(tmp_path, capsys):
         assert "--out: expected a path, got ''" in capsys.readouterr().err
     assert main(["drift-off", "planning", "--out", str(tmp_path / "p"), "--headings-deg", "nan"]) == 2
     assert "--headings-deg: expected finite numbers" in capsys.readouterr().err
+    # degree options are judged in degrees, naming the option (not radians, nor numpy.radians)
+    for opts, message in ((["--headings-deg", "400"], "--headings-deg: expected headings from -360 to 360 deg"),
+                          (["--headings-deg", "0,360"], "--headings-deg: expected each heading once"),
+                          (["--wind-dir-std-deg", "-5"], "--wind-dir-std-deg: expected a spread from 0 to 180 deg")):
+        assert main(["drift-off", "planning", "--samples", "3", "--out", str(tmp_path / "p")] + opts) == 2
+        err = capsys.readouterr().err
+        assert message in err and "radians" not in err, err
     table = tmp_path / "w.csv"
     states_to_frame([WeatherState()]).to_csv(table, index=False)
     assert main(["drift-off", "season", "--weather-table", str(table), "--scheduler", "lcoal",
@@ -308,6 +327,7 @@ def test_cli_planning_writes_the_report(tmp_path, capsys):
     out.mkdir()
     for name in ("polar.png", "season.csv", "notes.txt"):  # an earlier run's figure and season; a user's file
         (out / name).write_text("earlier")
+    (out / ".hybridship-outputs.json").write_text('["polar.png", "season.csv"]')   # as the earlier run left it
     assert main(["drift-off", "planning", "--out", str(out), "--samples", "3", "--headings-deg", "0,90",
                  "--horizon-s", "90", "--no-plots"]) == 0
     times = pd.read_csv(out / "times.csv")
@@ -443,6 +463,7 @@ def test_cli_season_in_this_process(tmp_path):
     out.mkdir()
     for name in ("times.csv", "watch.csv", "notes.txt"):    # an earlier planning report; a user's file
         (out / name).write_text("earlier")
+    (out / ".hybridship-outputs.json").write_text('["times.csv", "watch.csv"]')
     assert main(["drift-off", "season", "--weather-table", str(table), "--scheduler", "none", "--samples", "3",
                  "--headings-deg", "0,90", "--horizon-s", "90", "--no-progress", "--out", str(out)]) == 0
     season = pd.read_csv(out / "season.csv")
@@ -540,6 +561,45 @@ def test_live_blackout_refuses_a_diverging_drift():
         blackout_now(est, "esso_osaka_model", st)
 
 
+def test_the_report_never_replaces_or_removes_a_file_of_the_users(tmp_path, capsys):
+    """A weather table named season.csv and notes named summary.md in --out were deleted and
+    overwritten; now refused before the work, and an earlier report (with or without the
+    folder's record of its files) is still replaced, read-only files refused up front."""
+    from hybridship.cli import main
+
+    run = ["drift-off", "planning", "--samples", "3", "--headings-deg", "0", "--horizon-s", "60", "--no-plots"]
+    out = tmp_path / "mine"
+    out.mkdir()
+    (out / "season.csv").write_text("time,wind_speed_m_s\n0,10\n")
+    (out / "summary.md").write_text("my notes")
+    assert main(run + ["--out", str(out)]) == 2
+    assert "summary.md: exists and was not written by hybridship" in capsys.readouterr().err
+    (out / "summary.md").unlink()
+    assert main(run + ["--out", str(out)]) == 2
+    assert "season.csv: exists and was not written by hybridship; it would be removed" in capsys.readouterr().err
+    assert (out / "season.csv").read_text() == "time,wind_speed_m_s\n0,10\n"
+    report = tmp_path / "report"
+    assert main(run + ["--out", str(report)]) == 0
+    (report / ".hybridship-outputs.json").unlink()          # a report from before the record
+    assert main(run + ["--out", str(report), "--seed", "3"]) == 0
+    before = (report / "times.csv").read_bytes()
+    (report / "watch.csv").chmod(0o444)
+    assert main(run + ["--out", str(report), "--seed", "4"]) == 2
+    assert "watch.csv: is read-only" in capsys.readouterr().err and (report / "times.csv").read_bytes() == before
+
+
+def test_a_drift_that_diverges_after_the_reaction_times_is_refused_too():
+    """A spinning start state blows the drift up within seconds, after the 1-s reaction time:
+    its samples "reached" every radius on the way and were counted as results."""
+    from hybridship.driftoff.live import EnvironmentEstimate
+
+    est = EnvironmentEstimate(0.0, np.zeros(3), np.array([0.0, 0.0, 2.0]), np.zeros(3), np.zeros(3), 10.0, 0.0,
+                              0.1, np.zeros(3), np.zeros((1, 3)))
+    st = DriftOffSettings(n_samples=20, radii_m=(5.0, 50.0, 500.0, 5000.0), reaction_times_s=(1.0,), horizon_s=300.0)
+    with pytest.raises(FloatingPointError, match="drifts diverged"):
+        blackout_now(est, "gunnerus", st)
+
+
 def test_result_queries_and_the_state_index_refuse_values_that_would_read_as_zero():
     w = WeatherState()
     st = DriftOffSettings(n_samples=2, horizon_s=30.0, reaction_times_s=(10.0,))
@@ -553,6 +613,13 @@ def test_result_queries_and_the_state_index_refuse_values_that_would_read_as_zer
         res.exceedance_curves([-1.0, np.nan])
     with pytest.raises(ValueError, match="q: expected quantiles in"):
         res.time_quantiles((2.0,))
+    # the 0.9 quantile of 7 samples of which one never reached is "never" (6/7 < 0.9), and
+    # with 10 samples the 10th smallest, as the inverse of the samples' distribution
+    import dataclasses
+    seven = dataclasses.replace(res, t_reach_s=np.array([10.0, 20, 30, 40, 50, 60, np.inf])[None, :, None])
+    np.testing.assert_array_equal(seven.time_quantiles((0.5, 0.9))[0, 0], [40.0, np.inf])
+    ten = dataclasses.replace(res, t_reach_s=np.arange(1.0, 11.0)[None, :, None])
+    np.testing.assert_array_equal(ten.time_quantiles((0.1, 0.5, 0.9))[0, 0], [1.0, 5.0, 9.0])
     season = season_sweep("gunnerus", [w], [0.0], settings=st, scheduler=None)
     for p in (np.nan, 2.0, -1.0):
         with pytest.raises(ValueError, match="max_p_exceed: expected a probability"):

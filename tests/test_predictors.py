@@ -344,3 +344,17 @@ def test_drift_errors_read_a_path_or_dataframe_and_coverage_refuses_mismatched_i
         metrics.coverage(a, a, np.full((2, 4, 3), np.nan))
     with pytest.raises(ValueError, match="sigmas: expected positive"):
         metrics.coverage(a, a, np.ones((2, 4, 3)), sigmas=(-1.0,))
+    nan_pred = a.copy()
+    nan_pred[0, 1, 0] = np.nan
+    with pytest.raises(ValueError, match="^pred: NaN or inf"):          # not counted as a miss
+        metrics.coverage(nan_pred, a, np.ones((2, 4, 3)))
+    g = np.zeros((2, 2, 1, 3))
+    for args, kw, field in (((nan_pred[:, :, None], a[:, :, None], np.ones((2, 4, 1, 3))), {}, "pred"),
+                            ((g, g, -np.ones_like(g)), {}, "std"), ((g, g, np.ones_like(g)), {"sigma": -2.0}, "sigma"),
+                            ((g, g, np.ones((1, 3))), {}, "pred, truth, std")):
+        with pytest.raises(ValueError, match=f"^{field}"):
+            metrics.coverage_interval(*args, **kw)
+    with pytest.raises(ValueError, match="windows: 20 intervals asked, but errors\\['m'\\] has 3"):
+        metrics.error_table({"m": [from_frame]})
+    with pytest.raises(ValueError, match="NaN or inf errors"):
+        metrics.error_table({"m": [np.full_like(from_frame, np.nan)]}, windows=(1, 3))

@@ -225,7 +225,7 @@ def _record_passages(r, r_prev, m_prev, m, t0, dt, radii, t_react, reached, done
 def _kernel(psi0, P, m_inv, m_a, d_lin, d_quad, d_lift, strip_w, thr, wind_p,
             az, rpm0, tau_rpm_s, balance, wind_mean, wind_dir, gust_f, gust_a, gust_ph,
             cur, acc_ned, nu0, wave_w, wave_a, wave_ph, wave_dir, hull, dt, n_steps, radii, t_react,
-            t_reach, r_react, track):
+            max_speed, t_reach, r_react, track):
     B = psi0.shape[0]
     n_r = radii.shape[0]
     n_q = t_react.shape[0]
@@ -293,7 +293,14 @@ def _kernel(psi0, P, m_inv, m_a, d_lin, d_quad, d_lift, strip_w, thr, wind_p,
                                            t_reach[b], r_react[b])
             r_prev = r
             m_prev = m
-            if not (np.isfinite(x[0]) and np.isfinite(x[1])):
+            if not (r <= max_speed * t1 + 1.0):
+                # diverged (or NaN): farther than any drift could carry the ship; no result,
+                # whether or not the radii were "reached" on the way
+                for i in range(n_r):
+                    t_reach[b, i] = np.nan
+                for q in range(n_q):
+                    r_react[b, q] = np.nan
+                    done_q[q] = True
                 break
             if all_reached and t1 >= t_need and not keep:
                 break
@@ -302,11 +309,18 @@ def _kernel(psi0, P, m_inv, m_a, d_lin, d_quad, d_lift, strip_w, thr, wind_p,
                 r_react[b, q] = m_prev   # reaction time beyond the horizon
 
 
+#: Drift speed [m/s] (about 58 kn) beyond which a drift is not a drift but a diverged
+#: integration (no ship drifts off station this fast): a sample whose excursion outruns it
+#: (or turns NaN) at any time within the horizon gives no result.
+MAX_DRIFT_SPEED_M_S = 30.0
+
+
 def run_kernel(psi0, P, stack, az, rpm0, tau_rpm_s, balance, wind_mean, wind_dir, gust_f, gust_a, gust_ph,
                cur, acc_ned, waves, hull, dt_s, n_steps, radii_m, t_react_s, keep_tracks=False, nu0=None):
     """Call the compiled kernel on contiguous float arrays (``nu0`` (B, 3): start velocities, default rest).
 
-    Returns ``(t_reach_s (B, R), excursion_m (B, Q), track (B, n_steps + 1, 3) or None)``.
+    Returns ``(t_reach_s (B, R), excursion_m (B, Q), track (B, n_steps + 1, 3) or None)``; a
+    sample that diverged within the horizon (:data:`MAX_DRIFT_SPEED_M_S`) has NaN in both.
     """
     B = int(np.shape(psi0)[0])
     f = lambda a: np.ascontiguousarray(a, dtype=float)  # noqa: E731
@@ -317,5 +331,5 @@ def run_kernel(psi0, P, stack, az, rpm0, tau_rpm_s, balance, wind_mean, wind_dir
             f(stack.strip_w), f(stack.thr), f(stack.wind_p), f(az), f(rpm0), float(tau_rpm_s), bool(balance),
             f(wind_mean), f(wind_dir), f(gust_f), f(gust_a), f(gust_ph), f(cur), f(acc_ned),
             f(np.zeros((B, 3)) if nu0 is None else np.broadcast_to(nu0, (B, 3))), f(waves[0]), f(waves[1]), f(waves[2]), f(waves[3]), f(hull), float(dt_s), int(n_steps),
-            f(radii_m), f(t_react_s), t_reach, r_react, track)
+            f(radii_m), f(t_react_s), float(MAX_DRIFT_SPEED_M_S), t_reach, r_react, track)
     return t_reach, r_react, (track if keep_tracks else None)

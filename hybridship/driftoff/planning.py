@@ -118,8 +118,10 @@ class DriftOffSettings:
     @field_validator("radii_m", "reaction_times_s")
     @classmethod
     def _each_once(cls, v):
-        if len(set(v)) != len(v):  # a repeated one would give repeated rows and merged columns
-            raise ValueError(f"expected each value once, got {v!r}")
+        # a repeated one (or two that print alike in the tables' column names and rows, 30 and
+        # 30.00001) would give repeated rows and merged columns
+        if len({f"{x:g}" for x in v}) != len(v):
+            raise ValueError(f"expected each value once (as printed to 6 digits), got {', '.join(map(repr, v))}")
         return v
 
     @model_validator(mode="after")
@@ -176,11 +178,16 @@ class DriftOffResult:
         return int(self.t_reach_s.shape[1])
 
     def time_quantiles(self, q=(0.1, 0.5, 0.9)) -> np.ndarray:
-        """Quantiles of the time to reach each radius, (H, R, len(q)) [s]; ``inf`` where not reached."""
+        """Quantiles of the time to reach each radius, (H, R, len(q)) [s]; ``inf`` where not reached.
+
+        The inverse of the samples' distribution (the smallest time by which a share ``q``
+        of the samples reached the radius), so a quantile is finite only when that share did
+        reach it: with 7 samples of which 6 reached, the 0.9 quantile is ``inf`` ("never").
+        """
         qs = np.asarray(q, float)
         if not np.all((qs >= 0.0) & (qs <= 1.0)):
             raise ValueError(f"q: expected quantiles in [0, 1], got {q!r}")
-        return np.moveaxis(np.quantile(self.t_reach_s, qs, axis=1, method="lower"), 0, -1)
+        return np.moveaxis(np.quantile(self.t_reach_s, qs, axis=1, method="inverted_cdf"), 0, -1)
 
     def p_exceed(self) -> np.ndarray:
         """P(radius exceeded within the reaction time), (H, R, Q)."""
@@ -236,17 +243,13 @@ def check_headings(headings_rad) -> np.ndarray:
     return a
 
 
-#: Drift speed [m/s] (about 58 kn) beyond which a drift is not a drift but a diverged
-#: integration: no ship drifts off station this fast.
-MAX_DRIFT_SPEED_M_S = 30.0
-
-
 def refuse_diverged(excursion_m: np.ndarray, reaction_times_s, what: str) -> None:
-    """Raise FloatingPointError when a drift diverged within the reaction times (an
-    excursion that is not finite, or farther than :data:`MAX_DRIFT_SPEED_M_S` could carry
-    the ship): no result, not "never reached"."""
+    """Raise FloatingPointError when a drift diverged (the kernel marks a sample whose
+    excursion outran :data:`~hybridship.driftoff.engine.MAX_DRIFT_SPEED_M_S` or turned NaN at
+    any time within the horizon with a NaN excursion; an excursion beyond it up to a
+    reaction time is refused too): no result, not "never reached"."""
     with np.errstate(invalid="ignore"):
-        bad = ~(excursion_m <= MAX_DRIFT_SPEED_M_S * np.asarray(reaction_times_s, float) + 1.0)
+        bad = ~(excursion_m <= engine.MAX_DRIFT_SPEED_M_S * np.asarray(reaction_times_s, float) + 1.0)
     if bad.any():
         n_bad = int(bad.reshape(bad.shape[0], -1).any(axis=-1).sum())
         raise FloatingPointError(f"{n_bad} of {bad.shape[0]} drifts diverged ({what}): beyond what the models "

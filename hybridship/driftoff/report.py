@@ -23,7 +23,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from ..fileio import atomic_write, remove_stale
+from ..fileio import atomic_write, write_output_files
 from .planning import DriftOffResult
 
 __all__ = ["polar_plot", "exceedance_plot", "markdown_table", "write_report", "write_season_report", "write_text",
@@ -138,10 +138,9 @@ def write_report(result: DriftOffResult, out_dir, *, title: str = "Drift-off ana
             plt.close(fig)
         lines += ["![time to reach vs wind direction](polar.png)", "", "![exceedance curves](exceedance.png)", ""]
     contents["summary.md"] = "\n".join(lines).encode("utf-8")
-    paths = {name: atomic_write(out / name, lambda fh, b=data: fh.write(b)) for name, data in contents.items()}
     # no figure of an earlier run (without plots), nor an earlier season's tables, beside these
-    remove_stale(out, SEASON_ONLY_FILES + (() if plots else ("polar.png", "exceedance.png")))
-    return paths
+    return write_output_files(out, contents, stale=SEASON_ONLY_FILES + (() if plots else ("polar.png", "exceedance.png")),
+                              ours=earlier_report)
 
 
 def write_season_report(out_dir, season: pd.DataFrame, operability: pd.DataFrame, summary: str) -> dict:
@@ -151,6 +150,22 @@ def write_season_report(out_dir, season: pd.DataFrame, operability: pd.DataFrame
     out = Path(out_dir)
     contents = {"season.csv": _csv_bytes(season), "operability.csv": _csv_bytes(operability),
                 "summary.md": summary.encode("utf-8")}
-    paths = {name: atomic_write(out / name, lambda fh, b=data: fh.write(b)) for name, data in contents.items()}
-    remove_stale(out, REPORT_ONLY_FILES)
-    return paths
+    return write_output_files(out, contents, stale=REPORT_ONLY_FILES, ours=earlier_report)
+
+
+def earlier_report(name: str, path: Path) -> bool:
+    """Whether ``path`` is a drift-off report's file written before output folders kept a
+    record of their files: its tables' and summary's first bytes, or a figure beside
+    such a summary."""
+    heads = {"times.csv": b"heading_deg,", "watch.csv": b"heading_deg,", "season.csv": b"state,",
+             "operability.csv": b"heading_deg,", "summary.md": b"# "}
+    def starts(p: Path, head: bytes) -> bool:
+        try:
+            with open(p, "rb") as fh:
+                return fh.read(len(head)) == head
+        except OSError:
+            return False
+    if name.endswith(".png"):
+        return starts(path, b"\x89PNG") and starts(path.with_name("summary.md"), b"# ") and \
+            (path.with_name("times.csv").is_file() or path.with_name("season.csv").is_file())
+    return name in heads and starts(path, heads[name]) and (name != "summary.md" or b"drift" in path.read_bytes()[:200].lower())

@@ -208,8 +208,9 @@ def season_sweep(vessel, states, headings_rad, *, uncertainty: WeatherUncertaint
                     parts.append(out)
                     bar.update(len(out["index"]))
             finally:
-                if cluster is not None:
+                if client is not scheduler:      # made here (for "local" or an address): closed here
                     client.close()
+                if cluster is not None:
                     cluster.close()
     finally:
         bar.close()

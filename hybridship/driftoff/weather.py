@@ -36,7 +36,7 @@ from pathlib import Path
 
 import numpy as np
 import pandas as pd
-from pydantic import Field
+from pydantic import AfterValidator, Field
 
 from ..config import Float, config_dataclass
 from ..forecast_inputs.limits import Envelope, check_number
@@ -52,6 +52,22 @@ OPTIONAL_COLUMNS = ("time", "gust_intensity")
 
 
 _NonNeg = Annotated[Float, Field(ge=0.0)]
+def _direction(v: float) -> float:
+    if abs(v) > 2.0 * math.pi + 0.1:
+        raise ValueError(f"expected radians within +-2 pi, got {v!r} (degrees? convert with math.radians)")
+    return v
+
+
+def _direction_std(v: float) -> float:
+    if not 0.0 <= v <= math.pi:
+        raise ValueError(f"expected a spread in radians from 0 to pi, got {v!r} (degrees? convert with "
+                         f"math.radians; beyond pi every direction is as likely)")
+    return v
+
+
+#: A direction [rad], and the spread of one: a value in degrees is refused, not wrapped.
+_Direction = Annotated[Float, AfterValidator(_direction)]
+_DirectionStd = Annotated[Float, AfterValidator(_direction_std)]
 
 
 def _check(name, value, lo=None, hi=None, lo_open=False):
@@ -104,12 +120,12 @@ class WeatherState:
     # upper bounds: the physics inputs' valid range (hybridship.forecast_inputs.limits), and the
     # sea states the wave model is meant for; beyond them the drift diverges instead of failing
     wind_speed_m_s: Annotated[Float, Field(ge=0.0, le=MAX_WIND_M_S)] = 0.0
-    wind_dir_from_rad: Float = 0.0
+    wind_dir_from_rad: _Direction = 0.0
     hs_m: Annotated[Float, Field(ge=0.0, le=MAX_HS_M)] = 0.0
     tp_s: Annotated[Float, Field(ge=MIN_TP_S, le=MAX_TP_S)] = 6.0
-    wave_dir_from_rad: Float = 0.0
+    wave_dir_from_rad: _Direction = 0.0
     current_speed_m_s: Annotated[Float, Field(ge=0.0, le=MAX_CURRENT_M_S)] = 0.0
-    current_dir_to_rad: Float = 0.0
+    current_dir_to_rad: _Direction = 0.0
     gust_intensity: Annotated[Float, Field(ge=0.0, le=0.5)] = 0.1
 
     @classmethod
@@ -134,12 +150,12 @@ class WeatherUncertainty:
     """
 
     wind_speed_m_s: _NonNeg = 0.0
-    wind_dir_rad: _NonNeg = 0.0
+    wind_dir_rad: _DirectionStd = 0.0
     hs_m: _NonNeg = 0.0
     tp_s: _NonNeg = 0.0
-    wave_dir_rad: _NonNeg = 0.0
+    wave_dir_rad: _DirectionStd = 0.0
     current_speed_m_s: _NonNeg = 0.0
-    current_dir_rad: _NonNeg = 0.0
+    current_dir_rad: _DirectionStd = 0.0
 
     @classmethod
     def typical(cls) -> "WeatherUncertainty":

@@ -57,6 +57,22 @@ def absolute_errors(pred: np.ndarray, truth: np.ndarray) -> np.ndarray:
     return err
 
 
+def _checked_forecasts(pred, truth, std, min_ndim: int = 2):
+    """``pred, truth, std`` as float arrays of one shape ``(..., n_horizons, 3)`` with finite
+    north and east and finite, non-negative spreads; ValueError naming the argument otherwise
+    (a NaN would count as a miss, a mismatched shape broadcast silently)."""
+    pred, truth, std = (np.asarray(x, dtype=float) for x in (pred, truth, std))
+    if not pred.shape == truth.shape == std.shape or pred.ndim < min_ndim or pred.shape[-1] != 3:
+        raise ValueError(f"pred, truth, std: expected equal shapes (..., n_horizons, 3), got {pred.shape}, "
+                         f"{truth.shape}, {std.shape}")
+    for name, a in (("pred", pred), ("truth", truth)):
+        if not np.all(np.isfinite(a[..., :2])):
+            raise ValueError(f"{name}: NaN or inf in north or east; leave such forecasts out before scoring")
+    if not np.all(np.isfinite(std[..., :2]) & (std[..., :2] >= 0)):
+        raise ValueError("std: expected finite, non-negative standard deviations")
+    return pred, truth, std
+
+
 def coverage(pred: np.ndarray, truth: np.ndarray, std: np.ndarray, sigmas=(1.0, 2.0)) -> np.ndarray:
     """Fraction of north and east errors within ``k`` standard deviations.
 
@@ -72,15 +88,10 @@ def coverage(pred: np.ndarray, truth: np.ndarray, std: np.ndarray, sigmas=(1.0, 
     ndarray, shape (n_horizons, len(sigmas))
         Observed coverage; a calibrated Gaussian forecast gives 0.683 and 0.954 for 1 and 2 sigma.
     """
-    pred, truth, std = (np.asarray(x, dtype=float) for x in (pred, truth, std))
-    if not pred.shape == truth.shape == std.shape or pred.ndim < 2 or pred.shape[-1] != 3:
-        raise ValueError(f"pred, truth, std: expected equal shapes (..., n_horizons, 3), got {pred.shape}, "
-                         f"{truth.shape}, {std.shape}")
+    pred, truth, std = _checked_forecasts(pred, truth, std)
     sig = np.asarray(sigmas, dtype=float)
     if sig.ndim != 1 or sig.size == 0 or not np.all(np.isfinite(sig) & (sig > 0)):
         raise ValueError(f"sigmas: expected positive finite band half-widths, got {sigmas!r}")
-    if not np.all(np.isfinite(std[..., :2]) & (std[..., :2] >= 0)):
-        raise ValueError("std: expected finite, non-negative standard deviations")
     err = np.abs(pred - truth)[..., :2]
     s = std[..., :2]
     nh = err.shape[-2]
@@ -117,6 +128,9 @@ def coverage_interval(pred: np.ndarray, truth: np.ndarray, std: np.ndarray, sigm
         ``coverage, low, high`` per horizon; ``low`` and ``high`` are NaN with fewer than two
         groups.
     """
+    pred, truth, std = _checked_forecasts(pred, truth, std, min_ndim=3)
+    if not (np.isfinite(sigma) and sigma > 0):
+        raise ValueError(f"sigma: expected a positive finite band half-width, got {sigma!r}")
     inside = np.abs(pred - truth)[..., :2] <= sigma * std[..., :2]       # (G, ..., nh, 2)
     inside = np.moveaxis(inside, -2, 1).reshape(inside.shape[0], inside.shape[-2], -1)
     return grouped_coverage_interval(inside.sum(axis=2), np.full(inside.shape[0], inside.shape[2]),
@@ -163,6 +177,11 @@ def error_table(errors: dict, *, horizons_s=HORIZONS_S, windows=WINDOWS) -> pd.D
     rows = []
     for model, per_log in errors.items():
         E = np.stack(per_log)                                   # (L, S, nh, 3)
+        if not np.all(np.isfinite(E)):
+            raise ValueError(f"errors[{model!r}]: NaN or inf errors; leave such forecasts out before the table")
+        if max(windows) > E.shape[1]:
+            raise ValueError(f"windows: {max(windows)} intervals asked, but errors[{model!r}] has {E.shape[1]} "
+                             f"per log (a mean over fewer would be labelled as over {max(windows)})")
         for w in windows:
             m = E[:, :w].mean(axis=(0, 1))                      # (nh, 3)
             for k, state in enumerate(STATES):
