@@ -163,6 +163,9 @@ class NonlinearDamping(_Strict):
     speed_ref_m_s: float = Field(5.0, gt=0, description="speed at which C_F is frozen [m/s]")
     cd_2d: Optional[float] = Field(None, gt=0, description="2-D cross-flow drag coefficient; default Hoerner(B, T)")
     strips: int = Field(20, ge=2, le=200)
+    strips_x_aft_m: Optional[float] = Field(
+        None, description="x of the strips' aft end (the AP) from the body origin [m]; default -L_pp/2, the "
+                          "hull centred on the origin")
     d_uu: float = Field(0.0, ge=0)
     d_vv: float = Field(0.0, ge=0)
     d_rr: float = Field(0.0, ge=0)
@@ -475,7 +478,8 @@ def portable_description(vessel: Vessel) -> dict:
 
 
 #: (path in the description, default) of fields added after fingerprints were first recorded.
-_LATER_FIELDS = ((("damping", "nonlinear", "lift_speed"), "abs"),)
+_LATER_FIELDS = ((("damping", "nonlinear", "lift_speed"), "abs"),
+                 (("damping", "nonlinear", "strips_x_aft_m"), None))
 
 
 def vessel_from_dict(data: dict, source: str = "vessel") -> Vessel:

@@ -166,7 +166,7 @@ def build_model_arrays(vessel, *, true_vessel: bool = False) -> ModelArrays:
             d_quad[0] += hull.surge_quadratic_resistance(nl.wetted_surface_m2, p.L_pp_m, nl.speed_ref_m_s,
                                                          nl.form_factor_k, nl.C_R, rho)
         cd = nl.cd_2d if nl.cd_2d is not None else hull.hoerner_cd(p.B_m, p.T_m)
-        strip_x, strip_w = hull.crossflow_strips(p.L_pp_m, p.T_m, cd, nl.strips, rho)
+        strip_x, strip_w = hull.crossflow_strips(p.L_pp_m, p.T_m, cd, nl.strips, rho, x_aft_m=nl.strips_x_aft_m)
     elif nl.method == "none":
         d_quad[:] = 0.0
     lift = np.zeros(4)
