@@ -415,7 +415,21 @@ class Vessel(_Strict):
         # Imported here: numba (behind physics) is only needed once a vessel is validated.
         from .physics.hull import mass_matrices
 
+        part = self.particulars
+        displacement_kg = part.rho_water_kg_m3 * part.C_B * part.L_pp_m * part.B_m * part.T_m
+        ratio = self.rigid_body.mass_kg / displacement_kg
+        if not 0.5 <= ratio <= 2.0:
+            raise ValueError(f"rigid_body.mass_kg: {self.rigid_body.mass_kg:g} kg is {ratio:.3g} times the "
+                             f"displacement rho C_B L_pp B T = {displacement_kg:.4g} kg; expected 0.5-2 times "
+                             f"(a mass in tonnes is 1000 times too small)")
         M_RB, M_A = mass_matrices(self)
+        eig_a = np.linalg.eigvalsh(0.5 * (M_A + M_A.T))
+        if not np.all(eig_a > 0):
+            # Fossen (2021, ch. 6): M_A = M_A^T > 0; an indefinite one stores negative energy
+            raise ValueError("added_mass: M_A is not positive definite (eigenvalues "
+                             f"{np.array2string(eig_a, precision=3)}): the sway-yaw coupling (Y_rdot, N_vdot) is "
+                             "too large for Y_vdot and N_rdot; Clarke's regressions (method 'clarke1983') leave "
+                             "their hull range for beamy hulls: give method 'explicit' with a measured coupling")
         eig = np.linalg.eigvalsh(0.5 * (M_RB + M_A + (M_RB + M_A).T))
         if not np.all(eig > 0):
             raise ValueError("rigid_body/added_mass: M = M_RB + M_A is not positive definite "

@@ -593,11 +593,14 @@ def test_a_drift_that_diverges_after_the_reaction_times_is_refused_too():
     its samples "reached" every radius on the way and were counted as results."""
     from hybridship.driftoff.live import EnvironmentEstimate
 
-    est = EnvironmentEstimate(0.0, np.zeros(3), np.array([0.0, 0.0, 2.0]), np.zeros(3), np.zeros(3), 10.0, 0.0,
+    est = EnvironmentEstimate(0.0, np.zeros(3), np.array([0.0, 0.0, 3.0]), np.zeros(3), np.zeros(3), 10.0, 0.0,
                               0.1, np.zeros(3), np.zeros((1, 3)))
     st = DriftOffSettings(n_samples=20, radii_m=(5.0, 50.0, 500.0, 5000.0), reaction_times_s=(1.0,), horizon_s=300.0)
+    up_to_reaction = blackout_now(est, "gunnerus", DriftOffSettings(n_samples=20, radii_m=(5.0,), reaction_times_s=(1.0,),
+                                                                    horizon_s=1.0))
+    assert np.all(up_to_reaction.excursion_m < 31.0)      # nothing wrong yet at the reaction time ...
     with pytest.raises(FloatingPointError, match="drifts diverged"):
-        blackout_now(est, "gunnerus", st)
+        blackout_now(est, "gunnerus", st)                  # ... the blow-up comes after it
 
 
 def test_result_queries_and_the_state_index_refuse_values_that_would_read_as_zero():

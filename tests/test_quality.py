@@ -129,11 +129,11 @@ FAULTS = {
     "missing sample": fault(_drop([T]), F.NAN_IN_WINDOW, window(T - 1, T) - {T - 1, T}),
     "two missing samples": fault(_drop([T, T + 1]), F.NAN_IN_WINDOW, window(T, T + 1) - {T, T + 1},
                                  refused={T + 2}),
-    # detected once frozen for 3 s while the logged speed (0.68 m/s here) moved the ship
-    # 2 m, i.e. from 303; refused until live positions return at 321 (an unconfirmed jump
-    # at 321 itself); before 303 the error is at most 2 m (the documented bound)
-    "frozen gnss": fault(_freeze(["north_m", "east_m"], T, T + 20), F.FROZEN_SENSOR, range(T + 3, T + 23),
-                         refused=range(T + 3, T + 22), pos_tol=2.0, span=T + 23),
+    # detected once frozen for 3 s while the logged speed (0.30 m/s here) moved the ship
+    # 2 m, i.e. from 307; refused until live positions return at 321 (an unconfirmed jump
+    # at 321 itself); before 307 the error is at most 2 m (the documented bound)
+    "frozen gnss": fault(_freeze(["north_m", "east_m"], T, T + 20), F.FROZEN_SENSOR, range(T + 7, T + 23),
+                         refused=range(T + 7, T + 22), pos_tol=2.0, span=T + 23),
     "frozen gyro": fault(_freeze(["heading_deg"], T, T + 20), F.FROZEN_SENSOR, range(T + 3, T + 23),
                          refused=range(T + 3, T + 22), head_tol=1.5),
     "gnss spike": fault(_shift("north_m", [T], 25.0), F.POSITION_JUMP, window(T, T + 1), pos_tol=0.05),
