@@ -103,6 +103,15 @@ def _discard(tmp: Path) -> None:
         pass
 
 
+def starts_with(path, magic: bytes) -> bool:
+    """Whether the file's first bytes are ``magic`` (False when it cannot be read)."""
+    try:
+        with open(path, "rb") as fh:
+            return fh.read(len(magic)) == magic
+    except OSError:
+        return False
+
+
 #: The record, in an output folder, of the files hybridship commands wrote there.
 OUTPUTS_RECORD = ".hybridship-outputs.json"
 

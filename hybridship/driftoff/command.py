@@ -296,8 +296,8 @@ def _cmd_live(args) -> int:
               "update time [s]": f"{dt:.3f}",
               # the table's band reads as a calibrated 80 % one; on simulated failures it is not
               "spread": "not calibrated: on the independent simulator's failures the actual times fell outside "
-                        "the p10-p90 band more often than 1 in 5, both ways (docs/drift-off.md, live mode); "
-                        "read the band as too narrow"}
+                        "the p10-p90 band more often than 1 in 5 (docs/drift-off.md, live mode); read the band "
+                        "as too narrow"}
     paths = write_report(res, args.out, title="Drift-off analysis (live: blackout now)", inputs=inputs,
                          quantile=args.quantile, plots=not args.no_plots)
     print(paths["summary.md"].read_text())

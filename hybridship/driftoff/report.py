@@ -23,7 +23,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from ..fileio import atomic_write, write_output_files
+from ..fileio import atomic_write, starts_with, write_output_files
 from .planning import DriftOffResult
 
 __all__ = ["polar_plot", "exceedance_plot", "markdown_table", "write_report", "write_season_report", "write_text",
@@ -158,14 +158,8 @@ def earlier_report(name: str, path: Path) -> bool:
     record of their files: its tables' and summary's first bytes, or a figure beside
     such a summary."""
     heads = {"times.csv": b"heading_deg,", "watch.csv": b"heading_deg,", "season.csv": b"state,",
-             "operability.csv": b"heading_deg,", "summary.md": b"# "}
-    def starts(p: Path, head: bytes) -> bool:
-        try:
-            with open(p, "rb") as fh:
-                return fh.read(len(head)) == head
-        except OSError:
-            return False
+             "operability.csv": b"heading_deg,", "summary.md": b"# Drift-off "}
     if name.endswith(".png"):
-        return starts(path, b"\x89PNG") and starts(path.with_name("summary.md"), b"# ") and \
-            (path.with_name("times.csv").is_file() or path.with_name("season.csv").is_file())
-    return name in heads and starts(path, heads[name]) and (name != "summary.md" or b"drift" in path.read_bytes()[:200].lower())
+        return (starts_with(path, b"\x89PNG") and starts_with(path.with_name("summary.md"), heads["summary.md"])
+                and (path.with_name("times.csv").is_file() or path.with_name("season.csv").is_file()))
+    return name in heads and starts_with(path, heads[name])

@@ -72,7 +72,7 @@ import numpy as np
 import pandas as pd
 
 from hybridship import frames
-from hybridship.fileio import as_path, atomic_write
+from hybridship.fileio import as_path, atomic_write, starts_with
 from hybridship.logs.columns import (COLUMNS, MAX_SAMPLE_SPACING_S, MIN_SAMPLE_SPACING_S, OPTIONAL_COLUMNS,
                                      REQUIRED_COLUMNS, TRUTH_PREFIX, ColumnSpec, channel_column, column_spec)
 from hybridship.logs.preprocess import segment_ids, segmentwise, split_segments
@@ -982,7 +982,7 @@ def read_log(
     kind = _container(path)
     if not path.is_file():
         raise FileNotFoundError(f"{path}: log file not found")
-    if kind == "csv" and _starts_with(path, b"\x1f\x8b"):
+    if kind == "csv" and starts_with(path, b"\x1f\x8b"):
         raise LogFormatError(f"{path}: is gzip-compressed; name it {path.name}.gz (a .csv.gz log) or "
                              f"decompress it")
     try:
@@ -1008,14 +1008,6 @@ def read_log(
         _validate(df, channel_names, rotatable, str(path), warn_unknown=True, allow_missing=allow_missing)
     return df
 
-
-def _starts_with(path: Path, magic: bytes) -> bool:
-    """Whether the file's first bytes are ``magic`` (False when it cannot be read)."""
-    try:
-        with open(path, "rb") as fh:
-            return fh.read(len(magic)) == magic
-    except OSError:
-        return False
 
 
 def write_log(
