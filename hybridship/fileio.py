@@ -1,7 +1,9 @@
-"""Atomic file writes: a crash never leaves a half-written log, model or table behind."""
+"""Atomic file writes: a crash never leaves a half-written log, model or table behind, and a
+command's output folder never loses a file the user put there."""
 
 from __future__ import annotations
 
+import json
 import os
 import stat
 import uuid
@@ -118,8 +120,6 @@ OUTPUTS_RECORD = ".hybridship-outputs.json"
 
 def _recorded_outputs(folder: Path) -> set[str]:
     try:
-        import json
-
         names = json.loads((folder / OUTPUTS_RECORD).read_text(encoding="utf-8"))
         return {str(n) for n in names} if isinstance(names, list) else set()
     except (OSError, ValueError):
@@ -170,8 +170,6 @@ def write_output_files(folder, contents: dict, *, stale=(), ours=None) -> dict:
     dict
         File name -> path written.
     """
-    import json
-
     folder = Path(folder)
     check_output_files(folder, contents, stale, ours)
     paths = {name: atomic_write(folder / name, lambda fh, b=data: fh.write(b)) for name, data in contents.items()}
