@@ -397,7 +397,10 @@ def test_gunnerus_coefficients_close_to_published_original_hull():
     (lambda d: d["thrusters"][0].__setitem__("diameter_m", 1900.0), r"thrusters\[0\].diameter_m: 1900 m is wider"),
     (lambda d: d["thrusters"][0].__setitem__("propeller_series", "B4-75"), r"thrusters\[0\].*B4-75.*available"),
     (lambda d: d["rigid_body"].__setitem__("mass_kg", float("inf")), "rigid_body.mass_kg: .*finite"),
-    (lambda d: d["rigid_body"].__setitem__("mass_kg", 500.0), "a mass in tonnes"),
+    (lambda d: d["rigid_body"].__setitem__("mass_kg", 500.0), r"rigid_body.mass_kg: .*a mass in tonnes"),
+    # Clarke's regressions on Gunnerus's beamy hull: an added-mass matrix that stores negative energy
+    (lambda d: d.__setitem__("added_mass", {"method": "clarke1983"}),
+     r"added_mass: M_A is not positive definite .*method 'explicit'"),
     (lambda d: d["wind"]["table"].__setitem__("C_X", d["wind"]["table"]["C_X"][:-1]), "C_X: .* coefficients for"),
 ])
 def test_invalid_vessel_files_name_the_field(edit, field):
