@@ -17,6 +17,7 @@ from __future__ import annotations
 
 import dataclasses
 import functools
+import re
 from collections.abc import Mapping
 from typing import Annotated
 
@@ -67,10 +68,12 @@ def format_validation_error(err: ValidationError, source: str | None = None) -> 
         got = (f" (got {e['input']!r})" if e["type"] not in ("missing", "value_error")
                and not isinstance(e["input"], dict) else "")
         head = f"{source}: " if source is not None else ""
-        if loc or source is not None:
-            lines.append(f"{head}{loc or '<top level>'}: {msg}{got}")
-        else:
-            lines.append(f"{msg}{got}")
+        if loc:
+            lines.append(f"{head}{loc}: {msg}{got}")
+        elif source is not None and not re.match(r"[\w.\[\]/]+: ", msg):
+            lines.append(f"{head}<top level>: {msg}{got}")
+        else:   # a model validator's message that names its field already
+            lines.append(f"{head}{msg}{got}")
     return "\n".join(lines)
 
 

@@ -437,3 +437,11 @@ def test_rollout_refuses_commands_it_is_not_meant_for_and_never_returns_nan():
         m.rollout(zeros, [[3.0, 1.0, 0.1]], 20, dt_s=50.0, rpm=[[400, 400, 400]], azimuth_rad=[[0, 0, 0]])
     ok = m.rollout(zeros, zeros, 20, rpm=[[400, 400, 400]], azimuth_rad=[[0, 0, 0]])   # at max_rpm: fine
     assert np.isfinite(ok.eta).all()
+
+
+def test_a_validator_message_that_names_its_field_is_not_put_under_top_level():
+    d = copy.deepcopy(gunnerus_dict())
+    d["added_mass"] = {"method": "clarke1983"}
+    with pytest.raises(VesselFileError) as err:
+        vessel_from_dict(d, "bad.toml")
+    assert str(err.value).startswith("bad.toml: added_mass: M_A is not positive definite")
