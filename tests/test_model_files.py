@@ -545,3 +545,12 @@ def test_fit_names_an_empty_list_and_a_too_short_log(model):
         HybridPredictor(model.vessel, ensemble_config=TINY).fit([])
     with pytest.raises(ValueError, match=r"^logs\[0\]: a training log needs at least 3 samples, got 2"):
         HybridPredictor(model.vessel, ensemble_config=TINY).fit([short])
+
+
+def test_a_model_that_embeds_an_added_mass_not_positive_definite_says_so(saved, tmp_path):
+    """Gunnerus models trained before 2026-11-29 embed Clarke's sway-yaw coupling, whose
+    added-mass matrix is not positive definite: the file is refused naming it (retrain)."""
+    def clarke(m):
+        m["vessel_description"]["added_mass"] = {"method": "clarke1983"}
+    _refused(_rewrite(saved, tmp_path, meta_change=clarke, name="clarke.npz"),
+             r"the embedded vessel is invalid: .*added_mass: M_A is not positive definite")
