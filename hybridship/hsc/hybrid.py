@@ -299,8 +299,7 @@ class HybridModel:
 
     def fit(self, U, Y, *, progress: bool = False):
         U, Y = check_record(U, Y, min_rows=self.n_init + 10, shape=self.shape)
-        _check_units(U, Y, self.grey.pwm_range_pct)
-        k0 = self.n_init
+        k0 = self.n_init                 # the grey box's fit checks the units
         self.grey.fit(U, Y, k0 - 1)
         sim = self.grey.simulate(U, Y[k0 - 1], k0 - 1)
         X = self._free_features(U, sim)[k0:]

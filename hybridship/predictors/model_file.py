@@ -14,7 +14,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..fileio import as_path, atomic_write
+from ..fileio import as_path, atomic_write, starts_with
 from ..forecast_inputs.wind import WindForecast
 from ..residual.calibration import CalibrationConfig, SpreadCalibration
 from ..residual.ensemble import EnsembleConfig, MLPEnsemble
@@ -228,16 +228,14 @@ def _read_arrays(path: Path) -> dict:
 def _why_unreadable(path: Path, err: Exception) -> str:
     """What the file is instead of a model file, from its first bytes (numpy's own message
     suggests loading pickles, which a model file never needs)."""
-    with open(path, "rb") as fh:
-        head = fh.read(8)
-    if not head:
+    if path.stat().st_size == 0:
         return "the file is empty"
-    if head.startswith(b"PK"):
+    if starts_with(path, b"PK"):
         return ("an archive holding pickled objects, which hybridship never loads (they could run code)"
                 if "pickle" in str(err) or "Object arrays" in str(err) else "a damaged .npz archive")
-    if head.startswith(b"\x93NUMPY"):
+    if starts_with(path, b"\x93NUMPY"):
         return "a single .npy array, not the .npz archive a model file is"
-    if head.startswith(b"\x80"):
+    if starts_with(path, b"\x80"):
         return "a pickle file, which hybridship never loads (it could run code)"
     return "not an .npz archive (a text or other file)"
 
