@@ -4,14 +4,20 @@ After every failure of a set of simulated DP losses, the dynamic model (the proj
 the model's wind) forecasts 60 s ahead from the first 20 samples, starting from the
 simulator's true low-frequency state, and is given one piece of the truth at a time:
 
-* ``model wind``: nothing else (no current, no load);
+* ``model wind``: nothing else (no current, no load), the true wind held at its start value;
+* ``model wind, logged held`` and ``model wind, fitted forecast``: the logged (noisy) wind
+  held at its start value, as the benchmark's physics does, and the hybrid's wind forecast
+  (a gust decaying to the recent mean, :func:`~hybridship.forecast_inputs.wind.fit_wind_forecast`
+  fitted on the set's station keeping) from it;
+* ``model wind, true future``: the model's wind load at the simulator's true wind sample by
+  sample over the forecast (a perfect wind forecast; the model's wind coefficients);
 * ``current in the hull``: the true current, acting through the relative velocity;
 * ``current as a held force``: the force the true current puts on the ship at rest
   (computed with the model's hull over the last 10 minutes of station keeping, its mean
   held in NED), which is all station keeping can show of a current;
 * ``wave drift held``: the mean second-order wave load of the last 10 minutes of station
   keeping (``truth_tau_wave2_*``), held in NED;
-* the two combinations of those, and
+* the two combinations of those, and the first with the true future wind, and
 * ``true loads and current``: the simulator's own wind and wave-drift loads and current
   sample by sample over the forecast (a ceiling: what is left is the hull model's error).
 
@@ -23,9 +29,13 @@ cannot know before the ship drifts.
 
 Writes ``drift_oracles.csv`` and ``drift_oracles.md`` to ``--out``: 60-s mean absolute
 heading error [deg] and the mean of the north and east errors [m], pooled over the first 20
-starts of every failure. Example::
+starts of every failure; and ``drift_oracles_per_log.csv``, the same per failure.
+``--vessel`` replaces the model's vessel file (the simulated scenarios stay those of the
+packaged Gunnerus). Examples::
 
     python benchmarks/drift_oracles.py --out docs/results/drift-oracles
+    python benchmarks/drift_oracles.py --vessel benchmarks/vessel_variants/gunnerus_yaw_damping_x2.toml \
+        --out docs/results/drift-oracles-yaw-damping-x2
 """
 
 from __future__ import annotations
@@ -41,7 +51,9 @@ from scipy.signal import butter, filtfilt
 from hybridship.evaluation.drift import log_files
 from hybridship.fileio import atomic_write, markdown_table
 from hybridship.frames import body_to_ned, ned_to_body, wrap_pi
+from hybridship.forecast_inputs.wind import fit_wind_forecast
 from hybridship.physics.model import DynamicModel
+from hybridship.predictors import as_log_arrays
 from hybridship.sim.scenario import embedded_scenarios
 from hybridship.vessel import load_vessel
 
@@ -60,8 +72,10 @@ def _lf_velocities(d: pd.DataFrame) -> np.ndarray:
                             np.radians(filtfilt(b, a, d.truth_r_degps))])
 
 
-def failure_oracles(model: DynamicModel, d: pd.DataFrame) -> dict:
-    """Heading [deg] and mean north/east [m] absolute errors at 60 s per oracle, for one log."""
+def failure_oracles(model: DynamicModel, d: pd.DataFrame, wind_forecast=None) -> dict:
+    """Heading [deg] and mean north/east [m] absolute errors at 60 s per oracle, for one log;
+    with ``wind_forecast`` (a :class:`~hybridship.forecast_inputs.wind.WindForecast`) also the
+    rows of the logged wind, held and forecast."""
     i0 = int(np.flatnonzero(d.dp_active.to_numpy() == 0)[0])          # the first sample of the drift
     nu = _lf_velocities(d)
     psi = np.unwrap(np.radians(d.truth_heading_lf_deg.to_numpy(float)))
@@ -93,12 +107,23 @@ def failure_oracles(model: DynamicModel, d: pd.DataFrame) -> dict:
         return (float(np.degrees(np.abs(wrap_pi(end[:, 2] - truth[:, 2]))).mean()),
                 float(0.5 * np.abs(end[:, :2] - truth[:, :2]).mean(axis=0).sum()))
 
+    logged = {}
+    if wind_forecast is not None:
+        a = as_log_arrays(d, model.vessel)
+        logged = {"model wind, logged held": run(wind=a.wind[st]),
+                  "model wind, fitted forecast": run(wind=wind_forecast.steps(a.wind, a.time_s, st, a.wind[st],
+                                                                              HORIZON, a.dt_s,
+                                                                              logged=a.wind_logged))}
     return {
         "model wind": run(),
+        **logged,
+        "model wind, true future": run(wind=wind[path]),
         "current in the hull": run(current=current[st]),
         "current as a held force": run(accel_ext=current_force),
         "wave drift held": run(accel_ext=wave_held),
         "current in the hull + wave drift held": run(current=current[st], accel_ext=wave_held),
+        "current in the hull + wave drift held, true future wind": run(wind=wind[path], current=current[st],
+                                                                       accel_ext=wave_held),
         "current as a held force + wave drift held": run(accel_ext=current_force + wave_held),
         "true loads and current": run(wind=None, current=current[path], tau_ext=(tau["wind"] + tau["wave2"])[path]),
     }
@@ -109,17 +134,26 @@ def main(argv=None) -> int:
     ap.add_argument("--out", type=Path, required=True)
     ap.add_argument("--own", type=int, default=20, help="simulated DP losses of our own (default 20)")
     ap.add_argument("--own-seed", type=int, default=100, help="seed of the first (default 100)")
+    ap.add_argument("--vessel", default="gunnerus", help="the model's vessel (name or TOML file; default gunnerus)")
     args = ap.parse_args(argv)
-    model = DynamicModel(load_vessel("gunnerus"))
+    try:
+        model = DynamicModel(load_vessel(args.vessel))
+    except (OSError, ValueError) as exc:
+        print(f"--vessel {args.vessel}: {exc}", file=sys.stderr)
+        return 2
     own = f"own {args.own_seed}-{args.own_seed + args.own - 1}"
-    data = {own: [s.log for s in embedded_scenarios(args.own, args.own_seed)]}
+    data = {own: [(s.name, s.log) for s in embedded_scenarios(args.own, args.own_seed)]}
     if TRUTHSIM.is_dir():
-        data["truthsim-dev"] = [pd.read_csv(f) for f in log_files(TRUTHSIM)]
+        data["truthsim-dev"] = [(f.name, pd.read_csv(f)) for f in log_files(TRUTHSIM)]
     else:
         print(f"skipping truthsim-dev: {TRUTHSIM} not found", file=sys.stderr)
-    rows = []
+    rows, per_log_rows = [], []
     for name, logs in data.items():
-        per_log = [failure_oracles(model, d) for d in logs]
+        arrays = [as_log_arrays(d, model.vessel) for _, d in logs]
+        wind_forecast, _ = fit_wind_forecast(arrays, float(HORIZON), masks=[a.dp_active == 1 for a in arrays])
+        per_log = [failure_oracles(model, d, wind_forecast) for _, d in logs]
+        per_log_rows += [{"data": name, "log": log, "given": k, "heading_deg": v[0], "north_east_m": v[1]}
+                         for (log, _), r in zip(logs, per_log) for k, v in r.items()]
         base = np.mean([r["model wind"] for r in per_log], axis=0)
         for oracle in per_log[0]:
             h, ne = np.mean([r[oracle] for r in per_log], axis=0)
@@ -130,6 +164,8 @@ def main(argv=None) -> int:
     df = pd.DataFrame(rows)
     args.out.mkdir(parents=True, exist_ok=True)
     atomic_write(args.out / "drift_oracles.csv", lambda fh: fh.write(df.to_csv(index=False).encode("utf-8")))
+    per_log_csv = pd.DataFrame(per_log_rows).to_csv(index=False, float_format="%.3f")
+    atomic_write(args.out / "drift_oracles_per_log.csv", lambda fh: fh.write(per_log_csv.encode("utf-8")))
     md = markdown_table(df) + "\n"
     atomic_write(args.out / "drift_oracles.md", lambda fh: fh.write(md.encode("utf-8")))
     print(md)
