@@ -20,7 +20,8 @@ value at the failure (the ship turns while the environment's yaw moment, which d
 the heading relative to waves and wind, changes); ``load_yaw_kNm_est_at_failure`` is the
 estimated yaw load at the last row of station keeping (what a forecast started at the
 failure holds; the same in both windows). Writes ``environment_vs_truth.csv``/``.md``
-and ``environment_vs_truth.png``.
+and ``environment_vs_truth.png``, and each thruster's estimated thrust-error factor at the
+last row of station keeping in ``thrust_error_factors.csv``/``.md``.
 
 ``--drift-hull CSV`` gives each log's filter the hull's yaw moment in a drift that a drift
 benchmark chose for it on the *other* logs' failures (its ``drift_hull.csv``; see
@@ -153,7 +154,8 @@ def main(argv=None) -> int:
     except ValueError as exc:
         print(exc, file=sys.stderr)
         return 2
-    rows, series = [], []
+    rows, series, factors = [], [], []
+    thrusters = [t.name for t in model.vessel.thrusters]
     for name, df in _logs(args):
         a = as_log_arrays(df, model.vessel)
         i0 = shutdown_index(a)
@@ -178,6 +180,8 @@ def main(argv=None) -> int:
                                        np.nan_to_num(a.azimuth_rad[r]), np.nan_to_num(a.wind[r])) @ M.T
         series.append((name, a.time_s[r] - a.time_s[i0], load_e, load_t[r], cur_e, cur_t[r]))
         at_failure = int(np.searchsorted(r, i0 - 1))       # the estimate a forecast at the failure starts from
+        factors.append({"log": name, **{f"thrust_error_{t}": f for t, f in
+                                        zip(thrusters, est.thrust_error[at_failure])}})
         for win, sel in (("dp", (r >= i0 - 300) & (r < i0)), ("drift", (r >= i0 + 60) & (r <= i0 + 300))):
             rows.append({
                 "log": name, "window": win,
@@ -194,6 +198,9 @@ def main(argv=None) -> int:
             })
     table = pd.DataFrame(rows)
     write_table(args.out, "environment_vs_truth", table, yaw_summary(table))
+    write_table(args.out, "thrust_error_factors", pd.DataFrame(factors),
+                "Each thruster's estimated thrust-error factor `theta` at the last row of station keeping "
+                "(it delivers `1 + theta` times the model's thrust).")
     _plot(args.out / "environment_vs_truth.png", series)
     return 0
 

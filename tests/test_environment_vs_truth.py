@@ -46,6 +46,10 @@ def test_own_scenarios_written(evt, tmp_path):
     md = (tmp_path / "environment_vs_truth.md").read_text()
     assert "drift, estimate at the failure held" in md
     assert (tmp_path / "environment_vs_truth.png").stat().st_size > 0
+    factors = pd.read_csv(tmp_path / "thrust_error_factors.csv")
+    # one factor per thruster of the packaged Gunnerus, from the filter's per-thruster state
+    assert list(factors.columns) == ["log", "thrust_error_tunnel", "thrust_error_port", "thrust_error_stbd"]
+    assert list(factors.log) == ["embedded_seed0100"] and factors.iloc[0, 1:].abs().lt(1.0).all()
 
 
 def test_heading_change_through_north(evt):
