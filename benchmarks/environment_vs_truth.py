@@ -155,7 +155,6 @@ def main(argv=None) -> int:
         print(exc, file=sys.stderr)
         return 2
     rows, series, factors = [], [], []
-    thrusters = [t.name for t in model.vessel.thrusters]
     for name, df in _logs(args):
         a = as_log_arrays(df, model.vessel)
         i0 = shutdown_index(a)
@@ -180,8 +179,11 @@ def main(argv=None) -> int:
                                        np.nan_to_num(a.azimuth_rad[r]), np.nan_to_num(a.wind[r])) @ M.T
         series.append((name, a.time_s[r] - a.time_s[i0], load_e, load_t[r], cur_e, cur_t[r]))
         at_failure = int(np.searchsorted(r, i0 - 1))       # the estimate a forecast at the failure starts from
+        # one factor per thruster by default; per DOF [x, y, n] with thrust_error_model="per_dof"
+        parts = ([t.name for t in model.vessel.thrusters] if est.thrust_error_model == "per_thruster"
+                 else ["x", "y", "n"])
         factors.append({"log": name, **{f"thrust_error_{t}": f for t, f in
-                                        zip(thrusters, est.thrust_error[at_failure])}})
+                                        zip(parts, est.thrust_error[at_failure], strict=True)}})
         for win, sel in (("dp", (r >= i0 - 300) & (r < i0)), ("drift", (r >= i0 + 60) & (r <= i0 + 300))):
             rows.append({
                 "log": name, "window": win,

@@ -48,8 +48,8 @@ What the data can separate, and what the filter then does:
   vanishes with the thrust and the load carries on. What this cannot separate: with a
   wind feed-forward, the thrust follows the wind, so an error of the wind model looks
   like an error of the thrusters that answer it (on truthsim-dev the tunnel's error is
-  found, +0.2 to +0.6 as in the simulator, while the azimuths take -0.2 to -0.5 where the
-  simulator's are about -0.06). The per-DOF structure (``thrust_error_model="per_dof"``,
+  found, while the azimuths take what the wind model gets wrong; figures in
+  ``docs/concepts/environment.md``). The per-DOF structure (``thrust_error_model="per_dof"``,
   which was the default, with the yaw environment restarted at a stop) cannot describe
   one thruster's yaw error; ``docs/concepts/environment.md`` compares the two.
 * **Current vs. load.** A ship at rest feels a current as a force; nothing in station-keeping
