@@ -30,6 +30,12 @@ def moving_log(model):
     return physics_log(model, seed=3, duration_s=400.0, t_shutdown_s=None, rpm_scale=0.6)
 
 
+@pytest.fixture(scope="module")
+def drift_log(model):
+    """A log with a DP failure: after it the rpm decay to nearly zero for minutes."""
+    return physics_log(model, seed=4, duration_s=400.0, t_shutdown_s=200.0)
+
+
 def _refused(df, pattern, **kw):
     before = df.copy(deep=True)
     with pytest.raises(LogFormatError, match=pattern) as info:
@@ -197,6 +203,16 @@ def test_rpm_beyond_max_is_refused_as_a_unit_error(model, moving_log):
     err = _vessel_refused(model, df, r"stbd_rpm: value 1000 at row 77 \(time_s 77\) exceeds 1\.25 x max_rpm "
                                      r"\(217 rpm\) of thruster 'stbd' of vessel 'gunnerus'")
     assert (err.column, err.row, err.time_s) == ("stbd_rpm", 77, 77.0)
+
+
+def test_rpm_logged_as_a_fraction_is_refused(model, moving_log, drift_log):
+    """Every thruster's rpm within +-1 over station keeping with thrust is a fraction of
+    max_rpm, not rpm; the decay towards zero after a failure is not counted."""
+    fractions = moving_log.assign(**{f"{t.name}_rpm": moving_log[f"{t.name}_rpm"] / t.max_rpm
+                                     for t in model.vessel.thrusters})
+    _vessel_refused(model, fractions, r"tunnel_rpm: every thruster's rpm is within \+-1 .* not a fraction of max_rpm")
+    check_log_against_vessel(drift_log, model.vessel)
+    assert (drift_log.dp_active == 0).sum() >= 60
 
 
 def test_rpm_sign_convention_is_checked(model, moving_log):

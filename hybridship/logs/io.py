@@ -781,6 +781,9 @@ def check_log_against_vessel(log, vessel, *, source: str | None = None, allow_mi
     * no ``<name>_rpm`` at all while ``dp_active`` is 1 somewhere, or absent (the
       forecast would take a station-keeping vessel as drifting without thrust);
     * a rudder's ``<name>_azimuth_deg`` missing while thruster rpm are logged;
+    * every logged thruster's rpm within +-1 in ``RPM_SIGN_MIN_SAMPLES`` (60) or more samples
+      of station keeping with thrust (for thrusters whose ``max_rpm`` is at least 20): a
+      fraction of ``max_rpm`` or of full thrust logged as rpm;
     * an azimuth thruster whose rpm is negative in at least ``RPM_SIGN_MIN_SAMPLES`` (60)
       samples and never positive: the log format's sign is that of the thrust along the
       thruster axis, and an azimuth thruster turns rather than reverses, so such a log most
@@ -819,6 +822,7 @@ def check_log_against_vessel(log, vessel, *, source: str | None = None, allow_mi
     _check_all_or_no_rpm(v, cols, source)
     _check_rudder_angles_logged(v, cols, source)
     _check_rpm_while_station_keeping(v, df, cols, t, source)
+    _check_rpm_not_fractions(v, df, cols, t, source)
     for th in v.thrusters:
         if column_spec("<thruster>_rpm").for_channel(th.name) in cols:
             _check_thruster_columns(v, th, df, cols, t, source)
@@ -854,6 +858,25 @@ def _check_rudder_angles_logged(v, cols: set, source: str) -> None:
                 f"{col}: missing while thruster rpm are logged; expected the angle of rudder "
                 f"{rud.name!r} of vessel {v.name!r} in degrees (positive to starboard), else the forecast would "
                 f"take it as amidships{_where(source)}", column=col)
+
+
+def _check_rpm_not_fractions(v, df: pd.DataFrame, cols: set, t: np.ndarray, source: str) -> None:
+    """Every logged thruster's rpm within +-1 in ``RPM_SIGN_MIN_SAMPLES`` or more samples of
+    station keeping with thrust: a fraction of ``max_rpm`` (or of full thrust), not rpm. Only
+    station keeping counts: after a failure the rpm decays towards zero."""
+    logged = [(th, c) for th, c in zip(v.thrusters, _rpm_columns(v)) if c in cols]
+    if not logged or min(th.max_rpm for th, _ in logged) < 20.0:
+        return
+    dp = _to_float(df, "dp_active", source, t) == 1.0 if "dp_active" in cols else np.ones(len(df), bool)
+    x = np.column_stack([_to_float(df, c, source, t) for _, c in logged])[dp]
+    with_thrust = np.isfinite(x).all(axis=1) & (x != 0.0).any(axis=1)
+    if with_thrust.sum() >= RPM_SIGN_MIN_SAMPLES and np.nanmax(np.abs(x)) <= 1.0:
+        col = logged[0][1]
+        raise LogFormatError(
+            f"{col}: every thruster's rpm is within +-1 (largest {np.nanmax(np.abs(x)):.3g}) in all "
+            f"{int(with_thrust.sum())} samples of station keeping with thrust; expected rpm (max_rpm of "
+            f"thruster {logged[0][0].name!r} is {logged[0][0].max_rpm:g}), not a fraction of max_rpm or of "
+            f"full thrust{_where(source)}", column=col)
 
 
 def _check_rpm_while_station_keeping(v, df: pd.DataFrame, cols: set, t: np.ndarray, source: str) -> None:
