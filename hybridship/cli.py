@@ -192,6 +192,7 @@ def _cmd_simulate(args) -> int:
         _check_log_path(args.out, f"{prefix}: error: --out")
         _check_out_folder(args.out.parent, prefix)      # a file on the way: refused before simulating
         _check_writable(args.out, prefix)
+        _check_replaceable(args.out, prefix)
 
     try:
         vessel = load_vessel(args.vessel)
@@ -215,6 +216,9 @@ def _cmd_simulate(args) -> int:
     cfg = scenario.DPLossConfig(seed=args.seed, beaufort=tuple(args.beaufort), **overrides)
     df = scenario.simulate_dp_loss(cfg, vessel=vessel, progress=progress)
     write_log(df, args.out, channel_names=vessel.channel_names, rotatable=vessel.rotatable)
+    from .fileio import record_outputs
+
+    record_outputs(args.out.parent, [args.out.name])    # a later simulate may replace it
     stats = scenario.drift_statistics(df)
     excursion = stats["drift_excursion_60s_m"]
     excursion = (f"drift excursion {excursion:.1f} m after 60 s" if math.isfinite(excursion)
@@ -304,6 +308,11 @@ def _cmd_train(args) -> int:
         raise UsageError(f"{_PROG} train: error: --out {args.out}: expected a .npz model file")
     if args.out.exists() and not args.out.is_file():
         raise UsageError(f"{_PROG} train: error: --out {args.out}: exists and is not a file")
+    from .predictors.model_file import is_model_file
+
+    if args.out.is_file() and args.out.stat().st_size and not is_model_file(args.out):
+        raise UsageError(f"{_PROG} train: error: --out {args.out}: exists and is not a hybridship model file "
+                         f"(its arrays would be lost); give another path or remove it")
     _check_writable(args.out, f"{_PROG} train")
     hp = HybridPredictor(vessel, ensemble_config=EnsembleConfig(n_members=args.members, seed=args.seed))
     hp.fit(files, dp_only=not args.all_rows, progress=sys.stderr.isatty())
@@ -505,6 +514,17 @@ def _add_benchmark(sub) -> None:
     p.set_defaults(func=_cmd_benchmark_missing)
 
 
+def _check_replaceable(out: Path, prefix: str, option: str = "--out") -> None:
+    """Refuse an existing file at ``out`` that no hybridship command wrote there (a user's log
+    would be lost): only files in the folder's record of outputs are replaced."""
+    from .fileio import check_output_files
+
+    try:
+        check_output_files(out.parent, [out.name])
+    except (FileExistsError, PermissionError) as exc:
+        raise UsageError(f"{prefix}: error: {option} {exc}") from None
+
+
 def _check_writable(out: Path, prefix: str, option: str = "--out") -> None:
     """Refuse an ``--out`` that this process may not write, before any work is done."""
     from .fileio import check_writable
@@ -535,10 +555,14 @@ def _check_out_folder(out: Path, prefix: str, inputs: dict | None = None, option
 def _cmd_benchmark_manoeuvre(args) -> int:
     from dataclasses import replace
 
-    from .evaluation.manoeuvre import ManoeuvreConfig, run_manoeuvre_benchmark
+    from .evaluation.manoeuvre import ManoeuvreConfig, check_output_folder, run_manoeuvre_benchmark
     from .vessel import VesselFileError, load_vessel
 
     _check_out_folder(args.out, f"{_PROG} benchmark manoeuvre", {"--train": args.train, "--test": args.test})
+    try:
+        check_output_folder(args.out)
+    except (FileExistsError, PermissionError) as exc:
+        raise UsageError(f"{_PROG} benchmark manoeuvre: error: --out {exc}") from None
 
     try:
         horizons = tuple(float(h) for h in args.horizons_s.split(","))
@@ -578,7 +602,10 @@ def _cmd_benchmark_hsc(args) -> int:
     from .hsc.benchmark import run_benchmark
 
     _check_out_folder(args.out, f"{_PROG} benchmark hsc")
-    run_benchmark(args.out, seed=args.seed, quick=args.quick, progress=True)
+    try:
+        run_benchmark(args.out, seed=args.seed, quick=args.quick, progress=True)
+    except (FileExistsError, PermissionError) as exc:   # checked before any work
+        raise UsageError(f"{_PROG} benchmark hsc: error: --out {exc}") from None
     return 0
 
 
@@ -587,13 +614,17 @@ def _cmd_benchmark_missing(args) -> int:
 
 
 def _cmd_benchmark_drift(args) -> int:
-    from .evaluation.drift import log_files, run_drift_benchmark
+    from .evaluation.drift import check_output_folder, log_files, run_drift_benchmark
     from .residual.environment import EnvironmentConfig
     from .vessel import VesselFileError, load_vessel
 
     if args.intervals < 1 or args.scenarios < 1:
         raise UsageError(f"{_PROG} benchmark drift: error: --intervals and --scenarios must be >= 1")
     _check_out_folder(args.out, f"{_PROG} benchmark drift", {"--train": args.train, "--test": args.test})
+    try:
+        check_output_folder(args.out, plots=not args.no_plots)
+    except (FileExistsError, PermissionError) as exc:
+        raise UsageError(f"{_PROG} benchmark drift: error: --out {exc}") from None
     if not 0 <= args.calibration_scenarios <= 20:
         raise UsageError(f"{_PROG} benchmark drift: error: --calibration-scenarios must be in 0..20, "
                          f"got {args.calibration_scenarios}")

@@ -174,9 +174,17 @@ def write_output_files(folder, contents: dict, *, stale=(), ours=None) -> dict:
     check_output_files(folder, contents, stale, ours)
     paths = {name: atomic_write(folder / name, lambda fh, b=data: fh.write(b)) for name, data in contents.items()}
     remove_stale(folder, stale)
-    record = sorted((_recorded_outputs(folder) - set(stale)) | set(contents))
-    atomic_write(folder / OUTPUTS_RECORD, lambda fh: fh.write(json.dumps(record).encode("utf-8")))
+    record_outputs(folder, contents, removed=stale)
     return paths
+
+
+def record_outputs(folder, names, removed=()) -> None:
+    """Add ``names`` (and drop ``removed``) in the folder's record of the files hybridship
+    commands wrote there (:data:`OUTPUTS_RECORD`), for commands that write their files
+    themselves after :func:`check_output_files`."""
+    folder = Path(folder)
+    record = sorted((_recorded_outputs(folder) - set(removed)) | set(names))
+    atomic_write(folder / OUTPUTS_RECORD, lambda fh: fh.write(json.dumps(record).encode("utf-8")))
 
 
 def remove_stale(folder, names) -> list[Path]:

@@ -22,6 +22,25 @@ def log_dir(tmp_path_factory):
     return d
 
 
+def test_train_replaces_a_model_file_but_never_other_arrays(log_dir, tmp_path, capsys):
+    """--out may replace an earlier model file (or an empty file); an .npz of the user's own
+    arrays is refused before training and left as it was."""
+    import numpy as np
+
+    from hybridship.predictors.model_file import is_model_file
+
+    model = tmp_path / "m.npz"
+    argv = ["train", "--logs", str(log_dir), "--members", "2", "--out"]
+    assert main(argv + [str(model)]) == 0 and is_model_file(model)
+    assert main(argv + [str(model)]) == 0
+    mine = tmp_path / "mine.npz"
+    np.savez(mine, a=np.arange(3))
+    before = mine.read_bytes()
+    assert main(argv + [str(mine)]) == 2
+    assert "is not a hybridship model file" in capsys.readouterr().err
+    assert mine.read_bytes() == before and not is_model_file(mine)
+
+
 def test_train_then_forecast_writes_a_table(log_dir, tmp_path, capsys):
     model = tmp_path / "m.npz"
     assert main(["train", "--logs", str(log_dir), "--out", str(model), "--members", "2"]) == 0

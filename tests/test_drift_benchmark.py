@@ -28,6 +28,7 @@ def tiny_folder(tmp_path_factory):
 def test_tables_have_the_papers_layout_and_physics_is_exact_on_its_own_logs(tiny_folder, tmp_path):
     (tmp_path / "out").mkdir()
     (tmp_path / "out" / "trajectories.png").write_text("an earlier run's figure")
+    (tmp_path / "out" / "tables.md").write_text("Drift benchmark. An earlier run's tables\n")
     res = run_drift_benchmark(tiny_folder, None, tmp_path / "out", ensemble_config=TINY, plots=False,
                               calibration_scenarios=1,
                               progress=False)
@@ -139,6 +140,29 @@ def test_benchmark_is_deterministic_and_the_cli_reports_bad_folders(tiny_folder,
     err = capsys.readouterr().err.strip()
     assert err.startswith("hybridship benchmark drift: error: --train") and "not a folder" in err
     assert main(["benchmark"]) == 2
+
+
+def test_benchmark_never_replaces_or_removes_a_users_file(tiny_folder, tmp_path, capsys):
+    """The output folder is checked before any work: a file of the user's under one of the
+    benchmark's names (a table, or a figure that --no-plots would remove) is refused by name
+    and kept; the benchmark's own earlier files are replaced."""
+    out = tmp_path / "out"
+    out.mkdir()
+    (out / "errors.csv").write_text("mine\n")
+    assert main(["benchmark", "drift", "--train", str(tiny_folder), "--out", str(out), "--no-plots"]) == 2
+    err = capsys.readouterr().err
+    assert "--out" in err and "errors.csv" in err and "was not written by hybridship" in err
+    (out / "errors.csv").unlink()
+    (out / "trajectories.png").write_bytes(b"my figure")
+    with pytest.raises(FileExistsError, match="trajectories.png.*removed"):
+        run_drift_benchmark(tiny_folder, None, out, ensemble_config=TINY, plots=False, progress=False,
+                            calibration_scenarios=0)
+    assert (out / "trajectories.png").read_bytes() == b"my figure" and not (out / "errors.csv").exists()
+    (out / "trajectories.png").unlink()
+    for _ in range(2):      # its own files, recorded, are replaced
+        run_drift_benchmark(tiny_folder, None, out, ensemble_config=TINY, plots=False, progress=False,
+                            calibration_scenarios=0)
+    assert (out / "tables.md").read_text().startswith("Drift benchmark")
 
 
 def test_a_failure_is_never_scored_with_a_spread_calibrated_on_it(tmp_path):

@@ -402,3 +402,22 @@ def test_benchmark_at_a_coarser_step_through_the_cli(tmp_path, capsys):
     assert main(["benchmark", "manoeuvre", "--train", str(train), "--test", str(test), "--out", str(tmp_path / "x"),
                  "--quick", "--step-s", "inf"]) == 2
     assert "--step-s must be finite" in capsys.readouterr().err
+
+
+def test_manoeuvre_benchmark_output_folder_keeps_the_users_files(tmp_path, capsys):
+    """The output folder is checked before any work: a README of the user's is refused by
+    name (also from the CLI) and kept; an earlier run's files are recognised by its README."""
+    from hybridship.cli import main
+    from hybridship.evaluation.manoeuvre import check_output_folder
+
+    (tmp_path / "README.md").write_text("# My notes\n")
+    with pytest.raises(FileExistsError, match="README.md.*not written by hybridship"):
+        check_output_folder(tmp_path)
+    runs = tmp_path / "runs"
+    runs.mkdir()
+    assert main(["benchmark", "manoeuvre", "--train", str(runs), "--test", str(runs), "--out", str(tmp_path)]) == 2
+    err = capsys.readouterr().err
+    assert "--out" in err and "README.md" in err and (tmp_path / "README.md").read_text() == "# My notes\n"
+    (tmp_path / "README.md").write_text("# Manoeuvring benchmark: Esso Osaka free-running model tests\n")
+    (tmp_path / "errors.csv").write_text("model,kind\n")
+    check_output_folder(tmp_path)

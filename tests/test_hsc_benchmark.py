@@ -41,5 +41,12 @@ def test_arguments_checked_before_the_work(tmp_path):
         run_benchmark(tmp_path / "a_file", quick=True, progress=False)
     with pytest.raises(TypeError, match="^out_dir"):
         run_benchmark(None, quick=True, progress=False)
+    (tmp_path / "table.md").write_text("my notes")       # a file of the user's: refused, kept
+    with pytest.raises(FileExistsError, match="table.md: exists and was not written by hybridship"):
+        run_benchmark(tmp_path, quick=True, progress=False)
+    assert (tmp_path / "table.md").read_text() == "my notes"
+    from hybridship.cli import main
+
+    assert main(["benchmark", "hsc", "--quick", "--out", str(tmp_path)]) == 2
     with pytest.raises(ValueError, match="^mode"):
         score_model(None, np.zeros((3, 3)), np.zeros((3, 2)), "one-step")

@@ -378,6 +378,20 @@ def test_cli_simulate_writes_a_readable_log(tmp_path, capsys):
     assert "exists and is not a folder" in capsys.readouterr().err
 
 
+def test_cli_simulate_replaces_its_own_log_but_never_a_users_file(tmp_path, capsys):
+    """--out replaces a log an earlier simulate wrote there (the folder's record of outputs),
+    and refuses, before simulating, a file no hybridship command wrote."""
+    argv = ["simulate", "--seed", "5", "--t-shutdown-s", "120", "--drift-s", "30", "--no-progress", "--out"]
+    own = tmp_path / "sim.csv"
+    assert main(argv + [str(own)]) == 0 and main(argv + [str(own)]) == 0
+    mine = tmp_path / "mylog.csv"
+    mine.write_text("time_s,north_m\n0,1\n")
+    assert main(argv + [str(mine)]) == 2
+    err = capsys.readouterr().err
+    assert "--out" in err and "was not written by hybridship" in err
+    assert mine.read_text() == "time_s,north_m\n0,1\n"
+
+
 def test_cli_sweep(tmp_path):
     rc = main(["simulate", "--sweep", "--seeds", "1-2", "--out-dir", str(tmp_path), "--t-shutdown-s", "120",
                "--drift-s", "60", "--format", "parquet", "--no-progress"])

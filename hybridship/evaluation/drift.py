@@ -48,7 +48,7 @@ import numpy as np
 import pandas as pd
 
 from . import metrics
-from ..fileio import atomic_write, markdown_table, remove_stale
+from ..fileio import atomic_write, check_output_files, markdown_table, record_outputs, remove_stale, starts_with
 from ..predictors import DataOnlyPredictor, DeadReckoning, DynamicPredictor, HybridPredictor, as_log_arrays
 from ..predictors.hybrid import AFTER_STOP, after_stop_scales
 from ..residual.drift_hull import (MIN_FAILURES as DRIFT_HULL_MIN_FAILURES, choose_coefficient, drift_start_rows,
@@ -97,6 +97,25 @@ class DriftBenchmarkResult:
     table2: pd.DataFrame
     table3: dict
     outputs: dict
+
+
+#: The benchmark's output files: tables, then the figures (removed when ``plots`` is off).
+TABLE_FILES = ("errors.csv", "errors_per_log.csv", "coverage.csv", "coverage_intervals.csv", "timing.csv",
+               "drift_hull.csv", "tables.md")
+FIGURE_FILES = ("error_vs_horizon.png", "trajectories.png")
+
+
+def check_output_folder(out_dir, plots: bool = True) -> None:
+    """Refuse, before any work, an output folder where the benchmark would replace or remove a
+    file that no hybridship command wrote (FileExistsError) or a read-only one
+    (PermissionError); files of a benchmark run from before folders kept a record of their
+    outputs (its ``tables.md`` beside them) are recognised."""
+    check_output_files(out_dir, TABLE_FILES + (FIGURE_FILES if plots else ()), () if plots else FIGURE_FILES,
+                       ours=_earlier_benchmark_file)
+
+
+def _earlier_benchmark_file(name: str, path: Path) -> bool:
+    return name in TABLE_FILES + FIGURE_FILES and starts_with(path.with_name("tables.md"), b"Drift benchmark")
 
 
 def run_drift_benchmark(train=None, test=None, out_dir="drift-benchmark", *, vessel="gunnerus",
@@ -152,6 +171,7 @@ def run_drift_benchmark(train=None, test=None, out_dir="drift-benchmark", *, ves
         if progress:
             print(msg, flush=True)
 
+    check_output_folder(out_dir, plots)
     train_logs, train_names, test_logs, test_names = _benchmark_logs(train, test, n_scenarios, seed, say)
     ens_cfg = ensemble_config or EnsembleConfig(n_members=members, seed=seed)
     horizons = tuple(h for h in metrics.HORIZONS_S if h <= horizon_s + 1e-9)
@@ -183,12 +203,10 @@ def run_drift_benchmark(train=None, test=None, out_dir="drift-benchmark", *, ves
     coverage = _coverage_table(fc, pick, horizons, len(test_arrays))
     intervals = _coverage_intervals(fc, pick, horizons, seed)
 
-    outputs = {"errors.csv": _write_csv(out / "errors.csv", long)}
-    outputs["errors_per_log.csv"] = _write_csv(out / "errors_per_log.csv", per_log_long)
-    outputs["coverage.csv"] = _write_csv(out / "coverage.csv", coverage)
-    outputs["coverage_intervals.csv"] = _write_csv(out / "coverage_intervals.csv", intervals)
-    outputs["timing.csv"] = _write_csv(out / "timing.csv", timing)
-    outputs["drift_hull.csv"] = _write_csv(out / "drift_hull.csv", _drift_hull_table(hybrid, per_log_hull, test_names))
+    tables = {"errors.csv": long, "errors_per_log.csv": per_log_long, "coverage.csv": coverage,
+              "coverage_intervals.csv": intervals, "timing.csv": timing,
+              "drift_hull.csv": _drift_hull_table(hybrid, per_log_hull, test_names)}
+    outputs = {name: _write_csv(out / name, table) for name, table in tables.items()}
     table2 = metrics.paper_table(long, windows=windows) if len(windows) == 2 else long
     table3 = {m: metrics.reduction_table(long, m, windows=windows) for m in TABLE3_MODELS} \
         if len(windows) == 2 else {}
@@ -196,6 +214,7 @@ def run_drift_benchmark(train=None, test=None, out_dir="drift-benchmark", *, ves
                    n_intervals, per_log_long)
     outputs["tables.md"] = atomic_write(out / "tables.md", lambda fh: fh.write(md.encode("utf-8")))
     outputs.update(_figures(out, plots, fc, all_h, test_arrays, test_names))
+    record_outputs(out, outputs, removed=() if plots else FIGURE_FILES)
     for k, v in outputs.items():
         say(f"wrote {k}: {v}")
     return DriftBenchmarkResult(long, coverage, timing, table2, table3, outputs)
@@ -577,7 +596,7 @@ def _figures(out: Path, plots: bool, fc: dict, all_h, test_arrays, test_names) -
     """The figures; without ``plots`` none, and an earlier run's removed from ``out`` (they
     would sit beside these tables as if they belonged to them)."""
     if not plots:
-        remove_stale(out, ("error_vs_horizon.png", "trajectories.png"))
+        remove_stale(out, FIGURE_FILES)
         return {}
     import matplotlib
 

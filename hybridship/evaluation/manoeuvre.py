@@ -33,7 +33,7 @@ import numpy as np
 import pandas as pd
 
 from ..datasets.esso_osaka import EssoRun, RUN_KINDS, esso_log_arrays, list_runs
-from ..fileio import atomic_write, remove_stale
+from ..fileio import atomic_write, check_output_files, remove_stale, starts_with, write_output_files
 from ..frames import wrap_pi
 from ..logs.ingest import ingest
 from ..logs.io import LogArrays
@@ -560,6 +560,7 @@ def run_manoeuvre_benchmark(vessel, train_dir, test_dir, horizons_s=HORIZONS_S, 
     if len(set(horizons_s)) != len(horizons_s):
         raise ValueError(f"horizons_s: a horizon is given twice in {horizons_s}")
     cfg = replace(cfg, calibration=replace(cfg.calibration, horizon_s=max(horizons_s)))
+    check_output_folder(out_dir)
     train = load_runs(train_dir, v, step_s=cfg.step_s)
     test = load_runs(test_dir, v, step_s=cfg.step_s)
     both = {r.run.path.resolve() for r in train} & {r.run.path.resolve() for r in test}
@@ -622,14 +623,30 @@ def _print_summary(errors: pd.DataFrame, out_dir, seconds: float) -> None:
     print(f"wrote {out_dir} ({seconds:.0f} s in all)", flush=True)
 
 
+#: The benchmark's files in its output folder.
+OUTPUT_FILES = ("errors.csv", "coverage.csv", "coverage_intervals.csv", "sharpness.csv", "README.md")
+
+
+def check_output_folder(out_dir) -> None:
+    """Refuse, before any work, an output folder where the benchmark would replace a file no
+    hybridship command wrote (FileExistsError) or a read-only one (PermissionError); a run's
+    files from before folders kept a record of their outputs (its README beside them) are
+    recognised."""
+    check_output_files(out_dir, OUTPUT_FILES, ours=_earlier_run_file)
+
+
+def _earlier_run_file(name: str, path: Path) -> bool:
+    return name in OUTPUT_FILES and starts_with(path.with_name("README.md"), b"# Manoeuvring benchmark")
+
+
 def _write_outputs(result: BenchmarkResult, out_dir: Path, command: str | None, figures_dir) -> None:
     """The benchmark's tables, its README and (optionally) its figures."""
     md = markdown_report(result, command=command)
-    # every table is made before the first is written: a failure leaves no mix of old and new files
-    for name, table in (("errors.csv", result.errors), ("coverage.csv", result.coverage),
-                        ("coverage_intervals.csv", result.coverage_intervals), ("sharpness.csv", result.sharpness)):
-        atomic_write(out_dir / name, lambda fh, table=table: fh.write(table.to_csv(index=False).encode()))
-    atomic_write(out_dir / "README.md", lambda fh: fh.write(md.encode()))
+    tables = {"errors.csv": result.errors, "coverage.csv": result.coverage,
+              "coverage_intervals.csv": result.coverage_intervals, "sharpness.csv": result.sharpness}
+    # every file is made before the first is written: a failure leaves no mix of old and new files
+    write_output_files(out_dir, {**{name: t.to_csv(index=False).encode() for name, t in tables.items()},
+                                 "README.md": md.encode()}, ours=_earlier_run_file)
     if figures_dir is not None:
         write_figures(result, figures_dir)
 

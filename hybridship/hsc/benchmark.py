@@ -26,7 +26,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from hybridship.fileio import as_path, atomic_write, check_out_folder
+from hybridship.fileio import as_path, atomic_write, check_out_folder, check_output_files, record_outputs, starts_with
 from hybridship.residual.ensemble import EnsembleConfig
 
 from .hybrid import GreyBoxTables, HybridModel
@@ -208,11 +208,22 @@ def _validation_figure(trial, preds, sea_state):
     return data
 
 
+#: The benchmark's files in its output folder.
+OUTPUT_FILES = ("table.csv", "table.md", "speed_trim.csv", "hsc_speed_trim.png", "hsc_validation_ss1.png",
+                "hsc_validation_ss2.png")
+
+
 def _checked_arguments(out_dir, seed) -> Path:
-    """The output folder as a Path; ValueError/TypeError naming ``seed`` or ``out_dir``."""
+    """The output folder as a Path; ValueError/TypeError naming ``seed`` or ``out_dir``;
+    FileExistsError/PermissionError for a file there under one of the benchmark's names that
+    no hybridship command wrote (an earlier run's recognised by its ``table.md``) or that is
+    read-only."""
     if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or seed < 0:
         raise ValueError(f"seed: expected a non-negative integer, got {seed!r}")
-    return check_out_folder(as_path(out_dir, "out_dir"))
+    out = check_out_folder(as_path(out_dir, "out_dir"))
+    check_output_files(out, OUTPUT_FILES, ours=lambda name, path: starts_with(path.with_name("table.md"),
+                                                                              b"# High-speed craft"))
+    return out
 
 
 def run_benchmark(out_dir, *, seed: int = 0, quick: bool = False, progress: bool = True) -> pd.DataFrame:
@@ -313,5 +324,6 @@ def run_benchmark(out_dir, *, seed: int = 0, quick: bool = False, progress: bool
         p = atomic_write(out / f"hsc_validation_ss{s}.png",
                          lambda fh, s=s: fh.write(_validation_figure(trials[s], val_preds[s], s)))
         say(f"wrote {p}")
+    record_outputs(out, OUTPUT_FILES)
     say(f"high-speed-craft benchmark done in {time.perf_counter() - t_start:.0f} s")
     return table

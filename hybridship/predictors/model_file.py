@@ -171,6 +171,17 @@ def save_model(predictor, path) -> Path:
 # --------------------------------------------------------------------------- reading
 
 
+def is_model_file(path) -> bool:
+    """Whether ``path`` is a hybridship model file of any format version (its metadata says
+    so; read without pickles), so that writing a new model there loses nothing else."""
+    try:
+        with open(path, "rb") as fh, np.load(fh, allow_pickle=False) as z:
+            meta = json.loads(bytes(z["metadata_json"]).decode("utf-8")) if "metadata_json" in z.files else None
+    except Exception:  # not an archive, damaged, pickled, unreadable: not a model file
+        return False
+    return isinstance(meta, dict) and meta.get("format") == "hybridship-model"
+
+
 def load_model(cls, path, vessel=None):
     """Load a model file written by :func:`save_model` as an instance of ``cls`` (never executes
     code from the file); see :meth:`~hybridship.predictors.hybrid.HybridPredictor.load`.
