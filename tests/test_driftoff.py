@@ -208,6 +208,15 @@ def test_weather_table_round_trip_and_errors(tmp_path):
     with pytest.raises(ValueError, match=r"column 'current_m_s', row 1 \(line 3 of the file\): 7.0, expected a "
                                          r"number in \[0, 5\]"):
         read_weather_table(path)
+    bad.loc[1, "current_m_s"] = 0.3
+    bad.loc[1, "wind_dir_deg"] = 1000.0               # degrees out of range, named in degrees
+    bad.to_csv(path, index=False)
+    with pytest.raises(ValueError, match=r"column 'wind_dir_deg', row 1 \(line 3 of the file\): 1000.0, expected a "
+                                         r"number in \[-360, 360\]"):
+        read_weather_table(path)
+    with pytest.warns(UserWarning, match="column\\(s\\) gust_intensty not used"):    # a misspelt optional column
+        read_weather_table(df.assign(gust_intensty=0.4))
+    bad.loc[1, "wind_dir_deg"] = 10.0
     bad.loc[1, "current_m_s"] = np.nan              # an empty cell
     bad.to_csv(path, index=False)
     with pytest.raises(ValueError, match=r"row 1 \(line 3 of the file\): a missing value, expected"):
@@ -308,10 +317,12 @@ def test_cli_reports_bad_input_naming_the_option(tmp_path, capsys):
     # degree options are judged in degrees, naming the option (not radians, nor numpy.radians)
     for opts, message in ((["--headings-deg", "400"], "--headings-deg: expected headings from -360 to 360 deg"),
                           (["--headings-deg", "0,360"], "--headings-deg: expected each heading once"),
-                          (["--wind-dir-std-deg", "-5"], "--wind-dir-std-deg: expected a spread from 0 to 180 deg")):
+                          (["--wind-dir-std-deg", "-5"], "--wind-dir-std-deg: expected a spread from 0 to 180 deg"),
+                          (["--wind-dir-deg", "1000"], "--wind-dir-deg: must be <= 360, got 1000"),
+                          (["--current-dir-deg", "-1000"], "--current-dir-deg: must be >= -360, got -1000")):
         assert main(["drift-off", "planning", "--samples", "3", "--out", str(tmp_path / "p")] + opts) == 2
         err = capsys.readouterr().err
-        assert message in err and "radians" not in err, err
+        assert message in err and "radians" not in err and err.count("error:") == 1, err
     table = tmp_path / "w.csv"
     states_to_frame([WeatherState()]).to_csv(table, index=False)
     assert main(["drift-off", "season", "--weather-table", str(table), "--scheduler", "lcoal",

@@ -30,6 +30,7 @@ per-sample arrays the kernel reads (wind with gust harmonics, current, wave comp
 from __future__ import annotations
 
 import math
+import warnings
 from dataclasses import dataclass
 from typing import Annotated
 from pathlib import Path
@@ -132,10 +133,12 @@ class WeatherState:
     def from_degrees(cls, *, wind_speed_m_s=0.0, wind_dir_deg=0.0, hs_m=0.0, tp_s=6.0, wave_dir_deg=None,
                      current_m_s=0.0, current_dir_deg=0.0, gust_intensity=0.1) -> "WeatherState":
         """Build from degrees (the file and CLI edge); waves default to the wind direction."""
-        wave = wind_dir_deg if wave_dir_deg is None else wave_dir_deg
-        return cls(wind_speed_m_s, math.radians(_check("weather.wind_dir_deg", wind_dir_deg)), hs_m, tp_s,
-                   math.radians(_check("weather.wave_dir_deg", wave)), current_m_s,
-                   math.radians(_check("weather.current_dir_deg", current_dir_deg)), gust_intensity)
+        # checked in degrees, as given: a wave direction that defaults to the wind's is not named again
+        wind = _check("weather.wind_dir_deg", wind_dir_deg, lo=-360.0, hi=360.0)
+        wave = wind if wave_dir_deg is None else _check("weather.wave_dir_deg", wave_dir_deg, lo=-360.0, hi=360.0)
+        current = _check("weather.current_dir_deg", current_dir_deg, lo=-360.0, hi=360.0)
+        return cls(wind_speed_m_s, math.radians(wind), hs_m, tp_s, math.radians(wave), current_m_s,
+                   math.radians(current), gust_intensity)
 
 
 @config_dataclass(frozen=True, prefix="uncertainty")
@@ -165,7 +168,8 @@ class WeatherUncertainty:
 
 #: The range of each bounded column of a weather table (those of :class:`WeatherState`).
 _TABLE_RANGES = {"wind_speed_m_s": (0.0, MAX_WIND_M_S), "hs_m": (0.0, MAX_HS_M), "tp_s": (MIN_TP_S, MAX_TP_S),
-                 "current_m_s": (0.0, MAX_CURRENT_M_S), "gust_intensity": (0.0, 0.5)}
+                 "current_m_s": (0.0, MAX_CURRENT_M_S), "gust_intensity": (0.0, 0.5),
+                 **{f"{x}_dir_deg": (-360.0, 360.0) for x in ("wind", "wave", "current")}}
 
 
 def read_weather_table(path_or_frame) -> tuple[list[WeatherState], list[str]]:
@@ -193,6 +197,10 @@ def read_weather_table(path_or_frame) -> tuple[list[WeatherState], list[str]]:
                          f"(optional {list(OPTIONAL_COLUMNS)})")
     if len(df) == 0:
         raise ValueError(f"{src}: no rows")
+    unknown = [str(c) for c in df.columns if c not in TABLE_COLUMNS + OPTIONAL_COLUMNS]
+    if unknown:      # a misspelt optional column would otherwise be replaced by its default unseen
+        warnings.warn(f"{src}: column(s) {', '.join(unknown)} not used; the weather table's columns are "
+                      f"{', '.join(TABLE_COLUMNS + OPTIONAL_COLUMNS)}", UserWarning, stacklevel=2)
     cols = {}
     for c in TABLE_COLUMNS + ("gust_intensity",):
         if c not in df.columns:
