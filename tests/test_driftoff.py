@@ -499,6 +499,26 @@ def test_cli_live_on_a_truthsim_log(tmp_path):
     assert main(["drift-off", "live", "--log", str(files[0]), "--time-s", "1e9", "--out", str(out)]) == 2
 
 
+def test_cli_live_reads_a_log_as_forecast_and_train_do(tmp_path):
+    """Rows out of time order are re-sorted, and a fault after --time-s does not matter: the
+    one ingest checks the rows the estimate uses; the result is that of the clean log."""
+    from hybridship.cli import main
+    from hybridship.logs.io import write_log
+    from hybridship.physics.model import DynamicModel
+    from hybridship.sim.synthetic import physics_log
+
+    df = physics_log(DynamicModel("gunnerus"), seed=2, duration_s=600.0, t_shutdown_s=None)
+    argv = ["drift-off", "live", "--time-s", "500", "--samples", "5", "--radii-m", "5", "--no-plots"]
+    write_log(df, tmp_path / "clean.csv")
+    messy = df.iloc[::-1].copy()
+    messy.loc[messy.time_s > 550, "north_m"] = np.nan
+    messy.to_csv(tmp_path / "messy.csv", index=False)
+    for name in ("clean", "messy"):
+        assert main(argv + ["--log", str(tmp_path / f"{name}.csv"), "--out", str(tmp_path / name)]) == 0
+    pd.testing.assert_frame_equal(pd.read_csv(tmp_path / "clean" / "times.csv"),
+                                  pd.read_csv(tmp_path / "messy" / "times.csv"))
+
+
 def test_live_current_members_carry_the_vessel_along():
     from hybridship.driftoff.live import EnvironmentEstimate
 

@@ -272,12 +272,16 @@ def _cmd_live(args) -> int:
     if not args.log.is_file():
         raise _usage(f"{_PROG} live: error: --log {args.log}: "
                      f"{'is a folder; expected a log file' if args.log.is_dir() else 'no such file'}")
-    df = read_log(args.log)
-    t = df["time_s"].to_numpy(float)
-    if args.time_s is not None:
-        if not (t[0] <= args.time_s <= t[-1]):
-            raise _usage(f"{_PROG} live: error: --time-s {args.time_s:g} is outside the log ({t[0]:g} to {t[-1]:g} s)")
-        df = df.iloc[: int(np.searchsorted(t, args.time_s, side="right"))]
+    # read as forecast and train read a log: the one ingest checks (and re-sorts) the rows it uses
+    df = read_log(args.log, validate=False)
+    if args.time_s is not None and "time_s" in df.columns:
+        import pandas as pd
+
+        t = pd.to_numeric(df["time_s"], errors="coerce").to_numpy(float)
+        first, last = (np.nanmin(t), np.nanmax(t)) if np.isfinite(t).any() else (np.nan, np.nan)
+        if not (first <= args.time_s <= last):
+            raise _usage(f"{_PROG} live: error: --time-s {args.time_s:g} is outside the log ({first:g} to {last:g} s)")
+        df = df[t <= args.time_s]
     t0 = time.perf_counter()
     try:
         est = environment_from_log(df, model, window_s=args.window_s, seed=args.seed)
