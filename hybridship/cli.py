@@ -298,12 +298,12 @@ def _cmd_train(args) -> int:
         vessel = load_vessel(args.vessel)
     except VesselFileError as exc:
         raise UsageError(problem_lines(exc, f"{_PROG} train: error: ")) from None
-    if not args.logs.is_dir():
-        raise UsageError(f"{_PROG} train: error: --logs {args.logs}: not a folder")
-    files = sorted(p for p in args.logs.iterdir() if p.name.endswith((".csv", ".csv.gz", ".parquet", ".pq")))
-    files = [f for f in files if f.name != "scenarios.csv"]
-    if not files:
-        raise UsageError(f"{_PROG} train: error: --logs {args.logs}: no log files (*.csv, *.csv.gz, *.parquet)")
+    from .evaluation.drift import log_files
+
+    try:    # the benchmark's listing: any extension case, no summary or hidden files
+        files = log_files(args.logs)
+    except ValueError as exc:
+        raise UsageError(f"{_PROG} train: error: --logs {exc}") from None
     if args.out.suffix.lower() != ".npz":      # also keeps it from replacing a training log
         raise UsageError(f"{_PROG} train: error: --out {args.out}: expected a .npz model file")
     if args.out.exists() and not args.out.is_file():

@@ -242,3 +242,16 @@ def test_a_test_log_without_a_failure_is_refused_before_training(tiny_folder, tm
     with pytest.raises(ValueError, match=r"test: 1 log\(s\) have no DP failure to score \(station_keeping"):
         run_drift_benchmark(tiny_folder, test, tmp_path / "out", progress=False, plots=False)
     assert not (tmp_path / "out").exists()
+
+
+def test_log_files_take_any_case_and_skip_hidden_and_summary_files(tmp_path):
+    """A folder's logs are found as a single log file is read (extension in any case); the
+    sweep's summary and hidden files (macOS ``._`` companions) are not logs."""
+    from hybridship.evaluation.drift import log_files
+
+    for name in ("A.CSV", "b.csv.gz", "c.Parquet", "._A.CSV", ".hidden.csv", "scenarios.csv", "notes.txt"):
+        (tmp_path / name).write_text("x")
+    (tmp_path / "folder.csv").mkdir()
+    assert [p.name for p in log_files(tmp_path)] == ["A.CSV", "b.csv.gz", "c.Parquet"]
+    with pytest.raises(ValueError, match="no log files"):
+        log_files(tmp_path / "folder.csv")

@@ -77,11 +77,14 @@ PAPER_TABLE2 = {
 
 
 def log_files(folder: Path) -> list[Path]:
-    """Log files in ``folder`` (sorted), skipping a ``scenarios.csv`` summary."""
+    """Log files in ``folder`` (sorted; extensions in any case, as a single log file's are
+    read), skipping a ``scenarios.csv`` summary and hidden files (a ``._a.csv`` that macOS
+    leaves beside ``a.csv`` on a foreign disk is not a log)."""
     folder = Path(folder)
     if not folder.is_dir():
         raise ValueError(f"{folder}: not a folder")
-    files = sorted(p for p in folder.iterdir() if p.name.endswith(LOG_SUFFIXES) and p.name != "scenarios.csv")
+    files = sorted(p for p in folder.iterdir() if p.is_file() and p.name.lower().endswith(LOG_SUFFIXES)
+                   and p.name.lower() != "scenarios.csv" and not p.name.startswith("."))
     if not files:
         raise ValueError(f"{folder}: no log files ({', '.join('*' + s for s in LOG_SUFFIXES)})")
     return files
