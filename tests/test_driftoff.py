@@ -222,8 +222,12 @@ def test_weather_table_round_trip_and_errors(tmp_path):
     with pytest.raises(ValueError, match=r"row 1 \(line 3 of the file\): a missing value, expected"):
         read_weather_table(path)
     path.write_text("")
-    with pytest.raises(ValueError, match="w.csv: not a readable CSV weather table"):
+    with pytest.raises(ValueError, match="w.csv: not a readable CSV weather table .*the file is empty"):
         read_weather_table(path)
+    path.write_bytes(b"PK\x03\x04\xff\xfe\x00binary")
+    with pytest.raises(ValueError, match=r"not text \(a binary file\?\)") as info:
+        read_weather_table(path)
+    assert "codec" not in str(info.value)
 
 
 def test_weather_samples_stay_in_the_range_of_a_weather_state():

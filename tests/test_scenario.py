@@ -226,6 +226,9 @@ def test_sweep_writes_logs_and_summary(tmp_path):
     with pytest.raises(ValueError, match="not a sweep summary"):
         sweep(tmp_path / "bad", [1], **TINY)
     assert not list((tmp_path / "bad").glob("sim_*"))  # refused before any simulation
+    (tmp_path / "bad" / "scenarios.csv").write_text("")
+    with pytest.raises(ValueError, match=r"cannot be read \(it is empty\)"):
+        sweep(tmp_path / "bad", [1], **TINY)
     with pytest.raises(ValueError, match="seeds"):
         sweep(tmp_path, [1, 1], **TINY)
     with pytest.raises(ValueError, match="fmt"):

@@ -189,8 +189,11 @@ def read_weather_table(path_or_frame) -> tuple[list[WeatherState], list[str]]:
         try:
             df = pd.read_csv(src)
         except (pd.errors.ParserError, pd.errors.EmptyDataError, UnicodeDecodeError) as exc:
+            what = ("the file is empty" if isinstance(exc, pd.errors.EmptyDataError) else
+                    "it is not text (a binary file?)" if isinstance(exc, UnicodeDecodeError) else
+                    ' '.join(str(exc).split()))
             raise ValueError(f"{src}: not a readable CSV weather table (expected a header line with "
-                             f"{list(TABLE_COLUMNS)}; {' '.join(str(exc).split())})") from None
+                             f"{list(TABLE_COLUMNS)}; {what})") from None
     missing = [c for c in TABLE_COLUMNS if c not in df.columns]
     if missing:
         raise ValueError(f"{src}: missing column(s) {missing}; expected {list(TABLE_COLUMNS)} "

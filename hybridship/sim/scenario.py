@@ -882,7 +882,9 @@ def _earlier_summary(path: Path) -> pd.DataFrame | None:
     try:
         earlier = pd.read_csv(path)
     except (OSError, ValueError) as exc:  # pandas' parser errors are ValueErrors
-        raise ValueError(f"{path}: an earlier sweep's summary that cannot be read ({exc}); move it away "
+        why = ("it is empty" if isinstance(exc, pd.errors.EmptyDataError) else
+               "it is not text" if isinstance(exc, UnicodeDecodeError) else " ".join(str(exc).split()))
+        raise ValueError(f"{path}: an earlier sweep's summary that cannot be read ({why}); move it away "
                          "or sweep into another folder") from None
     missing = {"file", "seed"} - set(earlier.columns)
     if missing:
