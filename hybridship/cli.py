@@ -194,8 +194,13 @@ def _cmd_simulate(args) -> int:
         _check_writable(args.out, prefix)
         _check_replaceable(args.out, prefix)
 
+    from hybridship.vessel import VesselFileError
+
     try:
         vessel = load_vessel(args.vessel)
+    except VesselFileError as exc:
+        raise UsageError(problem_lines(exc, f"{prefix}: error: --vessel: ")) from None
+    try:
         overrides = dict(drift_s=args.drift_s, t_shutdown_s=args.t_shutdown_s, heading_mode=args.heading_mode)
         # Validate the settings and the vessel once before any (long) simulation starts.
         scenario.DPLossConfig(seed=0, beaufort=tuple(args.beaufort), **overrides)
@@ -297,7 +302,7 @@ def _cmd_train(args) -> int:
     try:
         vessel = load_vessel(args.vessel)
     except VesselFileError as exc:
-        raise UsageError(problem_lines(exc, f"{_PROG} train: error: ")) from None
+        raise UsageError(problem_lines(exc, f"{_PROG} train: error: --vessel: ")) from None
     from .evaluation.drift import log_files
 
     try:    # the benchmark's listing: any extension case, no summary or hidden files
@@ -392,6 +397,8 @@ def _cmd_forecast(args) -> int:
         quantiles = [float(q) for q in args.quantiles.split(",") if q.strip()]
         if quantiles:
             checked_quantiles(quantiles)
+        elif args.quantiles.strip():        # ",,," names no quantile: not the same as leaving it out
+            raise ValueError("no quantile given")
     except ValueError:
         raise UsageError(f"{_PROG} forecast: error: --quantiles: expected comma-separated distinct probabilities "
                          f"in (0, 1), e.g. 0.05,0.95; got {args.quantiles!r}") from None
@@ -582,7 +589,7 @@ def _cmd_benchmark_manoeuvre(args) -> int:
     try:
         vessel = load_vessel(args.vessel)
     except VesselFileError as exc:
-        raise UsageError(problem_lines(exc, f"{_PROG} benchmark manoeuvre: error: ")) from None
+        raise UsageError(problem_lines(exc, f"{_PROG} benchmark manoeuvre: error: --vessel: ")) from None
     cfg = ManoeuvreConfig.quick(args.seed) if args.quick else ManoeuvreConfig()
     options = {"horizons_s": "--horizons-s", "step_s": "--step-s", "test_dir": "--test", "train_dir": "--train"}
     try:
@@ -639,7 +646,7 @@ def _cmd_benchmark_drift(args) -> int:
     try:
         vessel = load_vessel(args.vessel)
     except VesselFileError as exc:
-        raise UsageError(problem_lines(exc, f"{_PROG} benchmark drift: error: ")) from None
+        raise UsageError(problem_lines(exc, f"{_PROG} benchmark drift: error: --vessel: ")) from None
     res = run_drift_benchmark(args.train, args.test, args.out, vessel=vessel, members=args.members,
                               seed=args.seed, n_intervals=args.intervals, dp_only=not args.all_rows,
                               n_scenarios=args.scenarios, plots=not args.no_plots, training=args.training,
