@@ -318,8 +318,7 @@ def run_benchmark(out_dir, *, seed: int = 0, quick: bool = False, progress: bool
     curves_path = atomic_write(out / "speed_trim.csv",
                                lambda fh: fh.write(curves.to_csv(index=False, float_format="%.4f").encode()))
     say(f"wrote {curves_path}")
-    fig_path = atomic_write(out / "hsc_speed_trim.png", lambda fh: fh.write(_speed_trim_figure(curves)))
-    say(f"wrote {fig_path}")
+    say(f"wrote {atomic_write(out / 'hsc_speed_trim.png', lambda fh: fh.write(_speed_trim_figure(curves)))}")
     for s in (1, 2):
         p = atomic_write(out / f"hsc_validation_ss{s}.png",
                          lambda fh, s=s: fh.write(_validation_figure(trials[s], val_preds[s], s)))
