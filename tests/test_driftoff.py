@@ -503,6 +503,24 @@ def test_cli_live_on_a_truthsim_log(tmp_path):
     assert main(["drift-off", "live", "--log", str(files[0]), "--time-s", "1e9", "--out", str(out)]) == 2
 
 
+def test_cli_refuses_an_out_folder_that_holds_logs(tmp_path, capsys):
+    """The report's CSV tables would be read as logs by a later train in that folder: a
+    folder with a log is refused before the work; other CSV files (a weather table) are not logs."""
+    from hybridship.cli import main
+
+    argv = ["drift-off", "planning", "--samples", "3", "--radii-m", "5", "--no-plots", "--out"]
+    logs = tmp_path / "logs"
+    logs.mkdir()
+    (logs / "run1.csv").write_text("time_s,north_m,east_m,heading_deg\n0,0,0,0\n")
+    assert main(argv + [str(logs)]) == 2
+    err = capsys.readouterr().err
+    assert "--out" in err and "holds logs (run1.csv)" in err and not (logs / "times.csv").exists()
+    other = tmp_path / "other"
+    other.mkdir()
+    (other / "hindcast.csv").write_text("wind_speed_m_s,wind_dir_deg\n5,10\n")
+    assert main(argv + [str(other)]) == 0 and (other / "times.csv").is_file()
+
+
 def test_cli_live_reads_a_log_as_forecast_and_train_do(tmp_path):
     """Rows out of time order are re-sorted, and a fault after --time-s does not matter: the
     one ingest checks the rows the estimate uses; the result is that of the clean log."""
