@@ -283,3 +283,20 @@ def test_weight_average_keeps_a_moving_average_and_leaves_the_training_path_alon
     assert any(not np.array_equal(a, b) for a, b in zip(ens0.weights, ens1.weights))
     with pytest.raises(ValueError, match="weight_average"):
         MultiStepConfig(weight_average=1.0)
+
+
+def test_hybrid_rollout_refuses_inputs_with_another_number_of_starts():
+    """The compiled step reads one row per start of every input: commands for fewer starts
+    are refused by name (they used to be read past the array's end), as are bad steps."""
+    hp = HybridPredictor("gunnerus")
+    z, K = np.zeros((2, 3)), hp.model.n_channels
+    held = dict(rpm=np.zeros((2, 1, K)), az=np.zeros((2, 1, K)), wind=np.zeros((2, 1, 2)))
+    eta, _, _, _ = hp.rollout(z, z, z, z, n_steps=5, dt_s=1.0, guard=False, nets=False, **held)
+    assert eta.shape == (2, 6, 3) and np.isfinite(eta).all()
+    for name, shape in (("rpm", (1, 1, K)), ("wind", (1, 1, 2)), ("current", (3, 1, 2))):
+        bad = {**held, name: np.zeros(shape)}
+        with pytest.raises(ValueError, match=f"^{name}: expected one row per start"):
+            hp.rollout(z, z, z, z, n_steps=5, dt_s=1.0, guard=False, nets=False, **bad)
+    for kw, field in ((dict(n_steps=-1, dt_s=1.0), "n_steps"), (dict(n_steps=5, dt_s=0.0), "dt_s")):
+        with pytest.raises(ValueError, match=f"^{field}: "):
+            hp.rollout(z, z, z, z, guard=False, nets=False, **held, **kw)

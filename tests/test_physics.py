@@ -366,6 +366,26 @@ def test_bad_inputs_are_refused_with_the_field_named(gunnerus):
         gunnerus.rollout([0, 0, 0], [0, np.inf, 0], 10)
 
 
+def test_step_broadcasts_one_state_and_refuses_mismatched_batches_and_bad_steps(gunnerus):
+    """The compiled step reads B rows of every state: a batch of the other size is refused
+    (it used to read memory past the array), one state is broadcast as in acceleration, and
+    the step settings are checked as rollout's are."""
+    eta = np.array([[0.0, 0.0, 0.0], [100.0, 100.0, 1.0]])
+    nu = np.array([1.0, 0.5, 0.01])
+    _, nu_next = gunnerus.step(eta, nu)
+    np.testing.assert_array_equal(nu_next[0], nu_next[1])         # heading does not enter the hull's loads
+    np.testing.assert_array_equal(nu_next[0], gunnerus.step(eta[0], nu)[1][0])
+    with pytest.raises(ValueError, match="eta, nu: batches of 2 and 3 states"):
+        gunnerus.step(eta, np.zeros((3, 3)))
+    for kw, field in ((dict(dt_s=np.nan), "dt_s"), (dict(dt_s="1"), "dt_s"), (dict(dt_s=0.0), "dt_s"),
+                      (dict(substeps=0), "substeps"), (dict(substeps=-2), "substeps"), (dict(substeps=1.5), "substeps")):
+        with pytest.raises(ValueError, match=f"^{field}: "):
+            gunnerus.step(eta, nu, **kw)
+    for n_steps in (2.7, "10", 0, True):
+        with pytest.raises(ValueError, match="^n_steps: "):
+            gunnerus.rollout(eta, np.zeros((2, 3)), n_steps)
+
+
 # ----------------------------------------------------------------------------- vessel files
 
 

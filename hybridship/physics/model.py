@@ -125,6 +125,16 @@ def wind_coefficient_curve(vessel):
     return None
 
 
+def check_step(dt_s, substeps) -> None:
+    """Refuse a step length that is not a finite number of seconds > 0, or a substep count
+    that is not a whole number >= 1 (ValueError naming the argument)."""
+    if isinstance(dt_s, bool) or not isinstance(dt_s, (int, float, np.integer, np.floating)) \
+            or not (0.0 < float(dt_s) < np.inf):
+        raise ValueError(f"dt_s: expected a finite step > 0 s, got {dt_s!r}")
+    if isinstance(substeps, bool) or not isinstance(substeps, (int, np.integer)) or substeps < 1:
+        raise ValueError(f"substeps: expected a whole number >= 1, got {substeps!r}")
+
+
 def build_model_arrays(vessel, *, true_vessel: bool = False) -> ModelArrays:
     """Derive every coefficient of a vessel file and pack them for the kernels.
 
@@ -431,16 +441,32 @@ class DynamicModel:
 
     def step(self, eta, nu, *, dt_s: float = 1.0, substeps: int = 1, rpm=None, azimuth_rad=None,
              wind=None, current=None, tau_ext=None, accel_ext=None, rudder_rad=None):
-        """Advance (B, 3) states by one step of ``dt_s`` with held inputs; returns ``(eta, nu)``."""
-        eta = self._state("eta", eta)
-        nu = self._state("nu", nu)
+        """Advance (B, 3) states by one step of ``dt_s`` with held inputs; returns ``(eta, nu)``.
+
+        ``eta`` and ``nu`` are ``(3,)`` or ``(B, 3)``; one state is broadcast against a batch
+        of the other, as in :meth:`acceleration`."""
+        check_step(dt_s, substeps)
+        eta, nu = self._states("eta", eta, "nu", nu)
         B = eta.shape[0]
         ins = [np.ascontiguousarray(a[:, 0]) for a in
                self._inputs(B, None, rpm, azimuth_rad, wind, current, tau_ext, accel_ext, rudder_rad)]
         eta_next = np.empty((B, 3))
         nu_next = np.empty((B, 3))
         step_batch(eta, nu, *ins, self.arrays, float(dt_s), int(substeps), eta_next, nu_next)
+        if not (np.all(np.isfinite(eta_next)) and np.all(np.isfinite(nu_next))):
+            raise FloatingPointError(f"step diverged (dt_s {dt_s:g}, substeps {substeps}): inputs beyond the "
+                                     f"model's valid range, or a step too long")
         return eta_next, nu_next
+
+    def _states(self, name_a, a, name_b, b):
+        """Two (3,) or (B, 3) states checked and broadcast to one batch (refused when both are
+        batches of different sizes)."""
+        a, b = self._state(name_a, a), self._state(name_b, b)
+        if a.shape[0] != b.shape[0] and min(a.shape[0], b.shape[0]) != 1:
+            raise ValueError(f"{name_a}, {name_b}: batches of {a.shape[0]} and {b.shape[0]} states; expected "
+                             f"the same number, or one state for all")
+        B = max(a.shape[0], b.shape[0])
+        return (np.ascontiguousarray(np.broadcast_to(a, (B, 3))), np.ascontiguousarray(np.broadcast_to(b, (B, 3))))
 
     def rollout(self, eta0, nu0, n_steps: int, *, dt_s: float = 1.0, substeps: int = 1, rpm=None,
                 azimuth_rad=None, wind=None, current=None, tau_ext=None, accel_ext=None,
@@ -450,8 +476,9 @@ class DynamicModel:
         Inputs are held at their values (``(width,)`` or ``(B, width)``) or given per step
         (``(B, n_steps, width)``). See the class notes for the inputs.
         """
-        if int(n_steps) < 1 or int(substeps) < 1 or not dt_s > 0:
-            raise ValueError(f"n_steps and substeps must be >= 1 and dt_s > 0, got {n_steps}, {substeps}, {dt_s}")
+        check_step(dt_s, substeps)
+        if isinstance(n_steps, bool) or not isinstance(n_steps, (int, np.integer)) or n_steps < 1:
+            raise ValueError(f"n_steps: expected a whole number of steps >= 1, got {n_steps!r}")
         eta0 = self._state("eta0", eta0)
         nu0 = self._state("nu0", nu0)
         if eta0.shape != nu0.shape:

@@ -21,7 +21,7 @@ from ..forecast_inputs import FaultFlags
 from ..forecast_inputs.wind import HELD_WIND, WindForecast, fit_wind_forecast, wind_error_paths
 from ..frames import speed_dir_to_vector, vector_to_speed_dir, wrap_pi
 from ..logs.io import LogArrays
-from ..physics.model import DynamicModel
+from ..physics.model import DynamicModel, check_step
 from ..residual.calibration import CalibrationConfig, fit_spread_scale
 from ..residual.ensemble import EnsembleConfig, MLPEnsemble, fit_ensemble, require_training_rows
 from ..residual.features import (ALL_FEATURES, MEMORY_FEATURES, ResidualConfig, command_feature_columns,
@@ -1128,10 +1128,10 @@ class HybridPredictor:
         wind held (S, 1, 2) or per step (S, n_steps, 2), and optionally a held current ``[speed_m_s, dir_to_rad]``
         (S, 1, 2) and a body-frame extra acceleration (S, 1, 3) for the physics, and optionally per start
         the hull's yaw coefficient in a drift ``drift_yaw_uv`` (S,) [rad/m^2] (:func:`_with_drift_yaw`).
-        ``nets=False`` needs no ensemble; ``nets_weight`` (S,): 0 where the nets stay off (after a failure),
-        with the guard on or off. ``command_memory`` (S, >= n_steps, 2): the command-memory features of the
-        steps (:meth:`_command_memory`), needed when the nets use them. ``wave_axis`` (S, 2): the waves' axis
-        per start (:meth:`_wave_axes`); the held yaw load then turns with them.
+        ``nets=False`` needs no ensemble; ``nets_weight`` (S,): 0 where the nets stay off (after a failure), with
+        the guard on or off. ``command_memory`` (S, >= n_steps, 2): the command-memory features of the steps
+        (:meth:`_command_memory`), needed when the nets use them. ``wave_axis`` (S, 2): the waves' axis per start
+        (:meth:`_wave_axes`); the held yaw load then turns with them.
 
         Every step: the physics advances the ensemble-mean state one step (RK4, through
         :meth:`DynamicModel.step_unchecked` with the extra acceleration ``accel_ext``) and predicts the
@@ -1146,11 +1146,11 @@ class HybridPredictor:
         eta (S, H+1, 3), nu (S, H+1, 3), eta_std (S, H+1, 3), guard_weight (S, H+1)
         """
         ens = self.ensemble
-        S = eta0.shape[0]
+        _check_rollout_batch(S := eta0.shape[0], n_steps, dt_s, substeps, nu0=nu0, dev0=dev0, rpm=rpm, az=az,
+                             wind=wind, current=current, accel_ext=accel_ext)
         E = ens.n_members if nets else (np.shape(bias0_ned)[0] if np.ndim(bias0_ned) == 3 else 1)
         fidx = self.residual_config.feature_index
-        zeros3 = np.zeros((S, 1, 3))
-        acc_phys = zeros3 if accel_ext is None else np.ascontiguousarray(accel_ext, dtype=float)
+        acc_phys = np.zeros((S, 1, 3)) if accel_ext is None else np.ascontiguousarray(accel_ext, dtype=float)
         current = np.zeros((S, 1, 2)) if current is None else np.ascontiguousarray(current, dtype=float)
         eta, nu, std = np.empty((S, n_steps + 1, 3)), np.empty((S, n_steps + 1, 3)), np.zeros((S, n_steps + 1, 3))
         wgt = np.ones((S, n_steps + 1))
@@ -1250,6 +1250,17 @@ class HybridPredictor:
             vessel that differs from the one the model was trained for.
         """
         return load_model(cls, path, vessel)
+
+
+def _check_rollout_batch(S: int, n_steps, dt_s, substeps, **arrays) -> None:
+    """Every per-start input of a rollout has one row per start (the compiled step reads
+    ``S`` rows of each), and the step settings are valid: ValueError naming the argument."""
+    check_step(dt_s, substeps)
+    if isinstance(n_steps, bool) or not isinstance(n_steps, (int, np.integer)) or n_steps < 1:
+        raise ValueError(f"n_steps: expected a whole number of steps >= 1, got {n_steps!r}")
+    for name, a in arrays.items():
+        if a is not None and (np.ndim(a) < 2 or np.shape(a)[0] != S):
+            raise ValueError(f"{name}: expected one row per start ({S}, ...), got shape {np.shape(a)}")
 
 
 def _check_rollout_steps(rpm, az, wind, command_memory, use_memory: bool, S: int, n_steps: int,
