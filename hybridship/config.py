@@ -22,7 +22,7 @@ from collections.abc import Mapping
 from typing import Annotated
 
 import numpy as np
-from pydantic import AfterValidator, BeforeValidator, ConfigDict, ValidationError
+from pydantic import AfterValidator, BeforeValidator, ConfigDict, Field, ValidationError
 from pydantic.dataclasses import dataclass as _pydantic_dataclass
 
 __all__ = ["config_dataclass", "format_validation_error", "Int", "Float", "NonEmpty", "non_empty", "float_array"]
@@ -92,6 +92,10 @@ def _number(v):
 #: An ``int`` field that refuses ``True``/``False`` (pydantic would read them as 1/0);
 #: numpy integers are accepted.
 Int = Annotated[int, BeforeValidator(_not_bool)]
+
+#: A random seed: a non-negative ``int`` below 2**63 (numpy's and torch's generators both
+#: take it; a negative or larger one used to fail deep inside them).
+Seed = Annotated[int, BeforeValidator(_not_bool), Field(ge=0, lt=2**63)]
 
 def non_empty(v):
     """After-validator of a sequence field: at least one item (``Annotated[tuple[...], AfterValidator(non_empty)]``;

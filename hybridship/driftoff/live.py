@@ -150,10 +150,13 @@ def environment_from_log(log, vessel="gunnerus", *, window_s: float = 900.0, win
     if method not in METHODS:
         raise ValueError(f"method: expected one of {METHODS}, got {method!r}")
     for name, v, least in (("window_s", window_s, MIN_WINDOW_S), ("wind_window_s", wind_window_s, MIN_WIND_WINDOW_S)):
-        if isinstance(v, bool) or not (isinstance(v, (int, float)) and math.isfinite(v) and v >= least):
+        if isinstance(v, bool) or not (isinstance(v, (int, float, np.integer, np.floating)) and math.isfinite(v)
+                                       and v >= least):
             raise ValueError(f"{name}: expected a number of seconds >= {least:g}, got {v!r}")
     if isinstance(n_members, bool) or not isinstance(n_members, (int, np.integer)) or n_members < 1:
         raise ValueError(f"n_members: expected a positive int, got {n_members!r}")
+    if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or seed < 0:
+        raise ValueError(f"seed: expected a non-negative int, got {seed!r}")
     model = get_model(vessel)
     # one read serves both windows: the wind's, and the estimator's rows at its end
     aw = _arrays(log, model, max(window_s, wind_window_s))

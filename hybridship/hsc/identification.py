@@ -33,7 +33,7 @@ from typing import Annotated
 import numpy as np
 from pydantic import Field
 
-from ..config import Float, Int, NonEmpty, config_dataclass
+from ..config import Float, Int, NonEmpty, Seed, config_dataclass
 from .contract import check_free_run, check_record, require_fitted
 
 __all__ = [
@@ -320,7 +320,7 @@ class NARXConfig:
     max_iter: Annotated[Int, Field(ge=1)] = 400
     restarts: Annotated[Int, Field(ge=1)] = 3
     val_fraction: Annotated[Float, Field(gt=0, lt=0.5)] = 0.15
-    seed: Int = 0
+    seed: Seed = 0
 
 
 class _MinMax:

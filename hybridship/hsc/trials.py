@@ -30,7 +30,7 @@ import numpy as np
 import pandas as pd
 from pydantic import Field, model_validator
 
-from ..config import Float, Int, config_dataclass
+from ..config import Float, Int, Seed, config_dataclass
 from .simulator import KNOT_M_S, PlaningCraftModel, SeaConditions, TrueRecord
 from .vessel import PlaningCraft, load_planing_craft
 
@@ -78,7 +78,7 @@ class TrialConfig:
     n_train: Annotated[Int, Field(ge=50)]
     actuator: Literal["interceptor", "trim_tab"]
     sea: SeaConditions
-    seed: Int = 0
+    seed: Seed = 0
     rpm_range: tuple[Float, Float] = (800.0, 4000.0)
     pwm_range_pct: tuple[Float, Float] = (10.0, 100.0)
     hold_s: tuple[Float, Float] = (8.0, 30.0)

@@ -18,6 +18,7 @@ import numpy as np
 
 from ..config import as_config
 from ..forecast_inputs import FaultFlags
+from ..forecast_inputs.limits import check_number
 from ..forecast_inputs.wind import HELD_WIND, WindForecast, fit_wind_forecast, wind_error_paths
 from ..frames import speed_dir_to_vector, vector_to_speed_dir, wrap_pi
 from ..logs.io import LogArrays
@@ -178,6 +179,8 @@ class HybridPredictor:
         environment_config = as_config(environment_config, EnvironmentConfig, "environment_config")
         calibration_config = as_config(calibration_config, CalibrationConfig, "calibration_config")
         multistep_config = as_config(multistep_config, MultiStepConfig, "multistep_config")
+        _check_flags(guard=guard, stop_after_failure=stop_after_failure, nets_after_stop=nets_after_stop,
+                     command_guard=command_guard, hull_correction=hull_correction, drift_hull=drift_hull)
         if not (isinstance(wind_forecast, WindForecast) or wind_forecast == "fit"):
             raise ValueError(f"wind_forecast: expected a WindForecast or 'fit', got {wind_forecast!r}")
         #: as given: a WindForecast, or "fit" (chosen by :meth:`fit` on the training logs' wind)
@@ -204,8 +207,7 @@ class HybridPredictor:
         self.training = training
         self.multistep_config = multistep_config
         self.command_guard = bool(command_guard)
-        if not hull_ridge >= 0:
-            raise ValueError(f"hull_ridge: must be >= 0, got {hull_ridge}")
+        hull_ridge = check_number("hull_ridge", hull_ridge, lo=0.0)
         self.hull_correction = bool(hull_correction)
         self.hull_ridge = float(hull_ridge)
         if hull_fit not in self.TRAINING_MODES:
@@ -215,8 +217,7 @@ class HybridPredictor:
         self.command_regime: CommandRegime | None = None
         if environment not in ENVIRONMENT_SOURCES:
             raise ValueError(f"environment: expected one of {ENVIRONMENT_SOURCES}, got {environment!r}")
-        if not environment_window_s > 0:
-            raise ValueError(f"environment_window_s: must be > 0 s, got {environment_window_s}")
+        environment_window_s = check_number("environment_window_s", environment_window_s, lo=0.0, lo_open=True)
         if environment == "estimator" and environment_window_s < environment_config.held_load_window_s:
             # a shorter filter window would cut a start's held-load window at the batch's
             # earliest start, so its spread would depend on the other starts
@@ -327,6 +328,7 @@ class HybridPredictor:
         ``training_info["thrust_error_prior"]``).
         """
         stride = _check_row_stride(row_stride)
+        _check_flags(dp_only=dp_only, progress=progress)
         cal = self.calibration_config if calibration is None else \
             as_config(calibration, CalibrationConfig, "calibration")
         self.calibration_config = cal
@@ -786,11 +788,8 @@ class HybridPredictor:
             (``CalibrationConfig.station_keeping_spread``).
         """
         self._check_fitted()
-        for name, value, optional in (("guard", guard, True), ("nets", nets, False),
-                                      ("nets_after_stop", nets_after_stop, True), ("calibrated", calibrated, False)):
-            # a text 'no' or 'false' is truthy: refused rather than read as True
-            if not (isinstance(value, (bool, np.bool_)) or (optional and value is None)):
-                raise TypeError(f"{name}: expected True or False{' or None' if optional else ''}, got {value!r}")
+        _check_flags(optional=("guard", "nets_after_stop"), guard=guard, nets=nets, nets_after_stop=nets_after_stop,
+                     calibrated=calibrated)
         st = _forecast_setup(self.model, self.residual_config, log, start_times_s, horizon_s,
                              self.stop_after_failure, commands, history_s=self.history_s,
                              wind_forecast=self.wind_forecast)
@@ -1250,6 +1249,14 @@ class HybridPredictor:
             vessel that differs from the one the model was trained for.
         """
         return load_model(cls, path, vessel)
+
+
+def _check_flags(optional=(), **flags) -> None:
+    """TypeError naming a flag that is not True or False (None where ``optional``): a text
+    'no' or 'false' is truthy and would be read as True."""
+    for name, value in flags.items():
+        if not (isinstance(value, (bool, np.bool_)) or (name in optional and value is None)):
+            raise TypeError(f"{name}: expected True or False{' or None' if name in optional else ''}, got {value!r}")
 
 
 def _check_rollout_batch(S: int, n_steps, dt_s, substeps, **arrays) -> None:

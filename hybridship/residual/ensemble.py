@@ -17,7 +17,7 @@ from typing import Annotated
 import numpy as np
 from pydantic import Field
 
-from hybridship.config import Float, Int, config_dataclass
+from hybridship.config import Float, Int, Seed, config_dataclass
 
 
 #: Most networks an ensemble may have (a bound on memory and training time).
@@ -59,7 +59,7 @@ class EnsembleConfig:
     weight_decay: Annotated[Float, Field(ge=0)] = 1e-5
     val_fraction: Annotated[Float, Field(gt=0, lt=0.9)] = 0.2
     bootstrap: bool = True
-    seed: Int = 0
+    seed: Seed = 0
 
 
 @dataclass

@@ -12,8 +12,29 @@ from __future__ import annotations
 import numpy as np
 import pandas as pd
 
+from ..forecast_inputs.limits import check_number
 from ..frames import wrap_2pi
 from ..physics.model import DynamicModel
+
+
+def _check_arguments(model, duration_s, t_shutdown_s, dt_s, seed, current, wind, hold_s, rpm_scale,
+                     rudder_scale) -> None:
+    """ValueError/TypeError naming the argument of :func:`physics_log` that is out of range."""
+    if not isinstance(model, DynamicModel):
+        raise TypeError(f"model: expected a DynamicModel, got {type(model).__name__} (DynamicModel({model!r})?)")
+    dt = check_number("dt_s", dt_s, lo=0.0, lo_open=True)
+    check_number("duration_s", duration_s, lo=dt)
+    check_number("t_shutdown_s", t_shutdown_s, lo=0.0, allow_none=True)
+    if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or seed < 0:
+        raise ValueError(f"seed: expected a non-negative integer, got {seed!r}")
+    lo, hi = (check_number(f"hold_s[{i}]", h, lo=0.0) for i, h in enumerate(hold_s))
+    if hi < lo:
+        raise ValueError(f"hold_s: expected (min, max) with min <= max, got {tuple(hold_s)}")
+    check_number("rpm_scale", rpm_scale, lo=0.0, hi=1.0)
+    check_number("rudder_scale", rudder_scale, lo=0.0, hi=1.0)
+    for name, pair in (("current", current), ("wind", wind)):     # a direction in radians wraps: any number
+        check_number(f"{name}[0] (speed, m/s)", pair[0], lo=0.0)
+        check_number(f"{name}[1] (direction, rad)", pair[1])
 
 
 def physics_log(model: DynamicModel, *, duration_s: float = 1200.0, t_shutdown_s: float | None = 900.0,
@@ -48,6 +69,7 @@ def physics_log(model: DynamicModel, *, duration_s: float = 1200.0, t_shutdown_s
         Rudder angles (vessels with rudders) are uniform in ``+-rudder_scale * max_angle_deg``,
         logged as ``<rudder>_azimuth_deg`` (the log format's rudder-angle column).
     """
+    _check_arguments(model, duration_s, t_shutdown_s, dt_s, seed, current, wind, hold_s, rpm_scale, rudder_scale)
     rng = np.random.default_rng(seed)
     n = int(round(duration_s / dt_s))
     v = model.vessel

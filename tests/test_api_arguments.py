@@ -1,0 +1,54 @@
+"""Arguments of the public API refused by name where a wrong kind used to pass silently or
+fail deep inside numpy or torch (flags given as text, seeds out of range, synthetic-log settings)."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from hybridship.driftoff.live import environment_from_log
+from hybridship.physics.model import DynamicModel
+from hybridship.predictors import HybridPredictor
+from hybridship.residual.ensemble import EnsembleConfig
+from hybridship.sim.synthetic import physics_log
+
+
+@pytest.mark.parametrize("kw, field", [(dict(guard="no"), "guard"), (dict(drift_hull=1), "drift_hull"),
+                                       (dict(nets_after_stop="False"), "nets_after_stop"),
+                                       (dict(hull_ridge=-1.0), "hull_ridge"),
+                                       (dict(environment_window_s=0.0), "environment_window_s")])
+def test_hybrid_settings_of_the_wrong_kind_are_refused_by_name(kw, field):
+    """A text 'no' is truthy: it used to switch the guard on."""
+    with pytest.raises((TypeError, ValueError), match=f"^{field}: "):
+        HybridPredictor("gunnerus", **kw)
+
+
+def test_fit_flags_are_checked_before_reading_the_logs():
+    with pytest.raises(TypeError, match="^dp_only: expected True or False, got 'no'"):
+        HybridPredictor("gunnerus").fit(["not read"], dp_only="no")
+
+
+@pytest.mark.parametrize("seed, message", [(-1, "must be >= 0"), (2 ** 70, "must be <"), (True, "not a bool")])
+def test_seeds_out_of_the_generators_range_are_refused_at_construction(seed, message):
+    with pytest.raises(ValueError, match=f"seed: .*{message}"):
+        EnsembleConfig(seed=seed)
+
+
+def test_environment_from_log_names_its_seed_and_takes_numpy_numbers():
+    log = physics_log(DynamicModel("gunnerus"), duration_s=1000.0, t_shutdown_s=None, seed=1)
+    with pytest.raises(ValueError, match="^seed: expected a non-negative int, got None"):
+        environment_from_log(log, seed=None)
+    est = environment_from_log(log, window_s=np.int64(900), n_members=2)
+    assert np.isfinite(est.eta).all()
+
+
+@pytest.mark.parametrize("kw, field", [(dict(hold_s=(-10.0, -5.0)), r"hold_s\[0\]"), (dict(dt_s=0.0), "dt_s"),
+                                       (dict(duration_s=-10.0), "duration_s"), (dict(seed=None), "seed"),
+                                       (dict(rpm_scale=-1.0), "rpm_scale"), (dict(hold_s=(5.0, 1.0)), "hold_s"),
+                                       (dict(wind=(-1.0, 0.0)), r"wind\[0\]")])
+def test_synthetic_log_settings_are_checked(kw, field):
+    """A negative hold time used to loop for ever."""
+    with pytest.raises(ValueError, match=f"^{field}"):
+        physics_log(DynamicModel("gunnerus"), **kw)
+    with pytest.raises(TypeError, match="^model: expected a DynamicModel"):
+        physics_log("gunnerus")
