@@ -1049,7 +1049,7 @@ class HybridPredictor:
             exponent; default: the model's).
         """
         self._check_fitted()
-        cal = self.calibration_config if cal is None else cal
+        cal = self.calibration_config if cal is None else as_config(cal, CalibrationConfig, "cal")
         errors = self.after_stop_errors(logs, n_intervals=n_intervals, horizon_s=horizon_s)
         self.calibration[AFTER_STOP] = after_stop_scales(errors, cal)
         self.training_info.setdefault("calibration", {})["after_stop"] = {
@@ -1063,12 +1063,17 @@ class HybridPredictor:
         every lead ``lead_s`` (H,) [s] up to ``horizon_s``; what :meth:`calibrate_after_stop`
         fits (see :func:`after_stop_scales`)."""
         self._check_fitted()
+        if isinstance(n_intervals, bool) or not isinstance(n_intervals, (int, np.integer)) or n_intervals < 1:
+            raise ValueError(f"n_intervals: expected a whole number of forecasts >= 1, got {n_intervals!r}")
+        horizon_s = check_number("horizon_s", horizon_s, lo=0.0, lo_open=True)
         arrays = [as_log_arrays(x, self.model.vessel) for x in log_list(logs)]
         if not arrays:
             raise ValueError("logs: at least one log with a DP failure is needed")
         out = []
         for a in arrays:
             lead = np.arange(1, int(round(horizon_s / a.dt_s)) + 1) * a.dt_s
+            if lead.size == 0:
+                raise ValueError(f"horizon_s: {horizon_s:g} s is shorter than the log's step of {a.dt_s:g} s")
             p, t, sd = drift_forecasts(self, a, n_intervals=n_intervals, horizons_s=tuple(lead), calibrated=False)
             e = np.abs(p - t)
             e[..., 2] = np.abs(wrap_pi(p[..., 2] - t[..., 2]))
