@@ -66,3 +66,21 @@ def test_calibrate_after_stop_names_its_own_arguments():
                       (dict(cal={"sigmaa": 2}), "cal")):
         with pytest.raises((TypeError, ValueError), match=f"^{field}"):
             hp.calibrate_after_stop(logs, **kw)
+
+
+def test_high_speed_craft_models_check_their_settings_at_construction():
+    """Orders, lags and steps are refused by name (they failed in LAPACK, in max() or fitted
+    nonsense); a craft may be given by name, and settings as dicts, as elsewhere."""
+    from hybridship.hsc.hybrid import HybridModel
+    from hybridship.hsc.identification import ARXModel, NARXConfig, NARXModel, StateSpaceModel
+
+    for make, field in ((lambda: StateSpaceModel(0), "order"), (lambda: ARXModel("2", 2), "na"),
+                        (lambda: ARXModel(2, 2.5), "nb"), (lambda: HybridModel("volcano71", "interceptor", acc_lags=-1),
+                                                           "acc_lags"),
+                        (lambda: HybridModel("volcano71", "interceptor", dt_s=-0.1), "dt_s")):
+        with pytest.raises(ValueError, match=f"^{field}: "):
+            make()
+    with pytest.raises(TypeError, match="^craft: expected a PlaningCraft"):
+        HybridModel(3, "interceptor")
+    assert NARXModel({"n_out": 2}).config == NARXConfig(n_out=2)
+    assert HybridModel("volcano71", "interceptor", ensemble={"n_members": 2}).ensemble_config.n_members == 2

@@ -38,15 +38,18 @@ The prediction is the grey box plus the ensemble mean.
 from __future__ import annotations
 
 import math
+import os
 from dataclasses import dataclass
 
 import numpy as np
 
+from hybridship.config import as_config
+from hybridship.forecast_inputs.limits import check_number
 from hybridship.residual.ensemble import EnsembleConfig, fit_ensemble
 
 from .contract import check_free_run, check_record, require_fitted
 from .simulator import PlaningCraftModel
-from .vessel import PlaningCraft
+from .vessel import PlaningCraft, load_planing_craft
 
 __all__ = ["GreyBoxTables", "GreyBox", "HybridModel", "PARAM_NAMES"]
 
@@ -276,8 +279,15 @@ class HybridModel:
 
     def __init__(self, craft: PlaningCraft, actuator: str, *, ensemble: EnsembleConfig = EnsembleConfig(),
                  acc_lags: int = 4, tables: GreyBoxTables | None = None, dt_s: float = 0.1):
+        if isinstance(craft, (str, os.PathLike)):    # a name or file, as load_planing_craft takes
+            craft = load_planing_craft(craft)
+        if not isinstance(craft, PlaningCraft):
+            raise TypeError(f"craft: expected a PlaningCraft (load_planing_craft(...)), got {type(craft).__name__}")
+        check_number("dt_s", dt_s, lo=0.0, lo_open=True)
+        if isinstance(acc_lags, bool) or not isinstance(acc_lags, (int, np.integer)) or acc_lags < 1:
+            raise ValueError(f"acc_lags: expected a whole number of lags >= 1, got {acc_lags!r}")
         self.grey = GreyBox(craft, actuator, tables, dt_s)
-        self.ensemble_config = ensemble
+        self.ensemble_config = as_config(ensemble, EnsembleConfig, "ensemble")
         self.acc_lags = acc_lags
         self.n_init = 2
         self.shape = (3, 2)              # U: rpm, PWM %, heave acceleration; Y: speed, pitch

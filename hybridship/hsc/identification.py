@@ -33,7 +33,7 @@ from typing import Annotated
 import numpy as np
 from pydantic import Field
 
-from ..config import Float, Int, NonEmpty, Seed, config_dataclass
+from ..config import Float, Int, NonEmpty, Seed, as_config, config_dataclass
 from .contract import check_free_run, check_record, require_fitted
 
 __all__ = [
@@ -47,6 +47,14 @@ __all__ = [
     "NARXModel",
 ]
 
+
+
+def _check_orders(**orders) -> None:
+    """ValueError naming a model order that is not a whole number at least its minimum
+    (``name=(value, minimum)``)."""
+    for name, (value, least) in orders.items():
+        if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < least:
+            raise ValueError(f"{name}: expected a whole number >= {least}, got {value!r}")
 
 class _Standardiser:
     """Columns to zero mean and unit standard deviation (training statistics)."""
@@ -135,6 +143,7 @@ class ARXModel:
     name = "arx"
 
     def __init__(self, na: int, nb: int, nk: int = 1):
+        _check_orders(na=(na, 1), nb=(nb, 1), nk=(nk, 0))
         self.na, self.nb, self.nk = na, nb, nk
         self.n_init = max(na, nk + nb - 1)
 
@@ -241,6 +250,7 @@ class StateSpaceModel:
     name = "ss"
 
     def __init__(self, order: int, block_rows: int = 15):
+        _check_orders(order=(order, 1), block_rows=(block_rows, 1))
         self.order, self.block_rows = order, block_rows
         self.n_init = 2
 
@@ -343,7 +353,7 @@ class NARXModel:
     name = "ann"
 
     def __init__(self, config: NARXConfig = NARXConfig()):
-        self.config = config
+        self.config = config = as_config(config, NARXConfig, "config")
         self.n_init = max(config.n_out, config.n_in)
 
     @property
