@@ -84,3 +84,21 @@ def test_high_speed_craft_models_check_their_settings_at_construction():
         HybridModel(3, "interceptor")
     assert NARXModel({"n_out": 2}).config == NARXConfig(n_out=2)
     assert HybridModel("volcano71", "interceptor", ensemble={"n_members": 2}).ensemble_config.n_members == 2
+
+
+def test_physics_inputs_frames_and_channel_names_are_named_in_plain_words():
+    from hybridship.frames import latlon_to_north_east
+    from hybridship.logs.io import validate_log
+
+    m = DynamicModel("gunnerus")
+    with pytest.raises(ValueError, match="^eta: expected numbers, got 'abc'"):
+        m.acceleration("abc", np.zeros(3))
+    with pytest.raises(ValueError, match="^rpm: expected numbers"):
+        m.acceleration(np.zeros(3), np.zeros(3), rpm="x")
+    with pytest.raises(ValueError, match="^eta, nu: batches of 2 and 3 states"):
+        m.acceleration(np.zeros((2, 3)), np.zeros((3, 3)))
+    with pytest.raises(ValueError, match="^lat_deg: a latitude is within"):
+        latlon_to_north_east(95.0, 10.0, 63.0, 10.0)
+    log = physics_log(m, duration_s=60.0, t_shutdown_s=None)
+    with pytest.raises(ValueError, match="^channel_names: expected a sequence of names, got the string 'port'"):
+        validate_log(log, channel_names="port")

@@ -324,6 +324,9 @@ def _check_thruster_args(channel_names, rotatable) -> tuple[tuple[str, ...] | No
         if rotatable is not None:
             raise ValueError("rotatable given without channel_names")
         return None, None
+    if isinstance(channel_names, (str, bytes)):     # one name, not the letters of a name
+        raise ValueError(f"channel_names: expected a sequence of names, got the string {channel_names!r} "
+                         f"(for one channel: [{channel_names!r}])")
     names = tuple(str(n) for n in channel_names)
     if len(set(names)) != len(names):
         raise ValueError(f"channel_names contains duplicates: {names}")

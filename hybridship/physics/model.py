@@ -258,11 +258,19 @@ class RolloutResult(NamedTuple):
 _INPUT_WIDTH = {"wind": 2, "current": 2, "tau_ext": 3, "accel_ext": 3}
 
 
+def _as_float_array(name, value) -> np.ndarray:
+    """``value`` as a float array, or a ValueError naming ``name`` (not numpy's conversion message)."""
+    try:
+        return np.asarray(value, dtype=float)
+    except (TypeError, ValueError):
+        raise ValueError(f"{name}: expected numbers, got {value!r}") from None
+
+
 def _as_input(name, value, B, S, width, default=0.0):
     """Normalise one input to ``(B, S_or_1, width)`` float64 with a clear error on bad shape/NaN."""
     if value is None:
         return np.full((B, 1, width), default)
-    a = np.asarray(value, dtype=float)
+    a = _as_float_array(name, value)
     if a.ndim == 1:
         a = a[None, None, :]
     elif a.ndim == 2:
@@ -338,7 +346,7 @@ class DynamicModel:
         return np.linalg.inv(self.arrays.m_inv)
 
     def _state(self, name, x):
-        a = np.asarray(x, dtype=float)
+        a = _as_float_array(name, x)
         if a.ndim == 1:
             a = a[None, :]
         if a.ndim != 2 or a.shape[1] != 3:
@@ -396,11 +404,8 @@ class DynamicModel:
         (hull C and D terms, actuators incl. rudders, wind, external) and the delivered
         thrusts ``(B, K)`` [N] of the K thrusters.
         """
-        eta = self._state("eta", eta)
-        nu = self._state("nu", nu)
-        B = max(eta.shape[0], nu.shape[0])
-        eta = np.ascontiguousarray(np.broadcast_to(eta, (B, 3)))
-        nu = np.ascontiguousarray(np.broadcast_to(nu, (B, 3)))
+        eta, nu = self._states("eta", eta, "nu", nu)
+        B = eta.shape[0]
         ins = [np.ascontiguousarray(a[:, 0]) for a in
                self._inputs(B, None, rpm, azimuth_rad, wind, current, tau_ext, accel_ext, rudder_rad)]
         nu_dot = np.empty((B, 3))
