@@ -102,3 +102,14 @@ def test_physics_inputs_frames_and_channel_names_are_named_in_plain_words():
     log = physics_log(m, duration_s=60.0, t_shutdown_s=None)
     with pytest.raises(ValueError, match="^channel_names: expected a sequence of names, got the string 'port'"):
         validate_log(log, channel_names="port")
+
+
+def test_season_sweep_quantile_and_labels_are_checked():
+    from hybridship.driftoff.season import season_sweep
+    from hybridship.driftoff.weather import WeatherState
+
+    states = [WeatherState(), WeatherState()]
+    for kw, field in ((dict(quantile=None), "quantile"), (dict(quantile="0.9"), "quantile"),
+                      (dict(labels=["a", "a"]), "labels: expected distinct")):
+        with pytest.raises(ValueError, match=f"^{field}"):
+            season_sweep("gunnerus", states, [0.0], scheduler="none", **kw)

@@ -178,13 +178,17 @@ def season_sweep(vessel, states, headings_rad, *, uncertainty: WeatherUncertaint
         raise ValueError(f"chunk_size: expected a positive int, got {chunk_size!r}")
     if isinstance(n_workers, bool) or not isinstance(n_workers, (int, np.integer)) or n_workers < 1:
         raise ValueError(f"n_workers: expected a positive int, got {n_workers!r}")
-    if not 0.0 < float(quantile) < 1.0:
+    if isinstance(quantile, (bool, str, bytes)) or not isinstance(quantile, (int, float, np.integer, np.floating)) \
+            or not 0.0 < float(quantile) < 1.0:
         raise ValueError(f"quantile: expected a number in (0, 1), got {quantile!r}")
     st = as_config(settings, DriftOffSettings, "settings") if settings is not None else DriftOffSettings()
     psi = check_headings(headings_rad)
     labels = [str(i) for i in range(len(states))] if labels is None else [str(x) for x in labels]
     if len(labels) != len(states):
         raise ValueError(f"labels: expected {len(states)} labels, got {len(labels)}")
+    if len(set(labels)) != len(labels):     # the season table's rows would not say which state they are
+        raise ValueError(f"labels: expected distinct labels (a weather table's time column names each state once), "
+                         f"got {next(x for x in labels if labels.count(x) > 1)!r} more than once")
     chunks = [(states[i:i + chunk_size], list(range(i, min(i + chunk_size, len(states)))))
               for i in range(0, len(states), chunk_size)]
     from tqdm.auto import tqdm
