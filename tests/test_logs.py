@@ -144,7 +144,7 @@ def test_unreadable_files_are_refused_naming_the_file(tmp_path):
     good = tmp_path / "good.csv.gz"
     write_log(circle_log(), good)
     cases = {"empty.csv": (b"", "the file is empty"),
-             "plain.csv.gz": (b"time_s,north_m\n0,1\n", "not a complete gzip file"),
+             "plain.csv.gz": (b"time_s,north_m\n0,1\n", "not gzip-compressed: plain text"),
              "truncated.csv.gz": (good.read_bytes()[: len(good.read_bytes()) // 2], "not a complete gzip file"),
              "ragged.csv": (b"time_s\n0\n1,2\n", "line 3 has 2 fields where the lines before it have 1"),
              "text.parquet": (b"time_s\n0\n", "not a Parquet file"),
@@ -530,6 +530,10 @@ def test_datetime_times_and_gzip_named_csv_are_named_for_what_they_are(tmp_path)
     path.write_bytes(gzip.compress(df.to_csv(index=False).encode()))
     with pytest.raises(LogFormatError, match=r"log.csv: is gzip-compressed; name it log.csv.gz"):
         read_log(path)
+    plain = tmp_path / "plain.csv.gz"       # and the reverse: a plain CSV named .csv.gz
+    df.to_csv(plain, index=False, compression=None)
+    with pytest.raises(LogFormatError, match=r"plain.csv.gz: .*not gzip-compressed: plain text\? name it plain.csv,"):
+        read_log(plain)
 
 
 def test_something_that_is_not_a_path_is_named_as_such():

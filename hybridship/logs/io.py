@@ -1011,6 +1011,9 @@ def read_log(
     if kind == "csv" and starts_with(path, b"\x1f\x8b"):
         raise LogFormatError(f"{path}: is gzip-compressed; name it {path.name}.gz (a .csv.gz log) or "
                              f"decompress it")
+    if kind == "csv.gz" and path.stat().st_size and not starts_with(path, b"\x1f\x8b"):
+        raise LogFormatError(f"{path}: cannot be read as a csv.gz log file (not gzip-compressed: plain text? "
+                             f"name it {path.name[:-3]}, a .csv log, or compress it)")
     try:
         if kind == "parquet":
             df = pd.read_parquet(path)
