@@ -306,6 +306,9 @@ def test_unknown_columns_warn_once_and_are_kept(tmp_path):
     assert "gps_quality" in msgs[0] and "pitch_deg" in msgs[0] and "not rotatable" in msgs[0]
     assert "truth_" not in msgs[0]
     assert {"gps_quality", "pitch_deg", "truth_current_speed_mps"} <= set(back.columns)
+    df.to_csv(path)         # the frame's index saved with it: pandas calls its column "Unnamed: 0"
+    with pytest.warns(LogFormatWarning, match=r"Unnamed: 0 \(a column without a name: an index saved with to_csv\?\)"):
+        read_log(path, channel_names=THRUSTERS, rotatable=ROTATABLE)
 
 
 def test_format_columns_do_not_warn():

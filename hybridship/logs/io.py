@@ -543,7 +543,10 @@ def _validate(df: pd.DataFrame, channel_names, rotatable, source: str, warn_unkn
     if ignored and warn_unknown:
         # writing keeps the user's columns in the file; reading leaves them out of the arrays
         what = "writing, though readers ignore them," if writing else "ignoring"
-        warnings.warn(f"{source}: {what} {len(ignored)} column(s) not in the log format: {', '.join(ignored)}",
+        # pandas names a header-less column "Unnamed: N": most often a DataFrame index saved with the data
+        shown = [f"{c} (a column without a name: an index saved with to_csv?)" if re.fullmatch(r"Unnamed: \d+", c)
+                 else c for c in ignored]
+        warnings.warn(f"{source}: {what} {len(ignored)} column(s) not in the log format: {', '.join(shown)}",
                       LogFormatWarning, stacklevel=3)
 
 
