@@ -40,6 +40,10 @@ def test_environment_from_log_names_its_seed_and_takes_numpy_numbers():
         environment_from_log(log, seed=None)
     est = environment_from_log(log, window_s=np.int64(900), n_members=2)
     assert np.isfinite(est.eta).all()
+    from hybridship.logs.io import LogFormatWarning
+
+    with pytest.warns(LogFormatWarning, match="^my_log.csv: ignoring 1 column"):     # the log named as given
+        environment_from_log(log.assign(extra=1.0), n_members=2, name="my_log.csv")
 
 
 @pytest.mark.parametrize("kw, field", [(dict(hold_s=(-10.0, -5.0)), r"hold_s\[0\]"), (dict(dt_s=0.0), "dt_s"),

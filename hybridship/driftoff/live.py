@@ -95,7 +95,7 @@ class EnvironmentEstimate:
     vessel_name: str | None = None
 
 
-def _arrays(log, model, window_s: float) -> LogArrays:
+def _arrays(log, model, window_s: float, name: str = "log") -> LogArrays:
     """The last ``window_s`` of ``log`` through the project's one ingest (``purpose="forecast"``):
     the same checks as a forecast's, so a log without a thruster's rpm or azimuth column is
     refused naming the column instead of taken as stopped."""
@@ -114,7 +114,7 @@ def _arrays(log, model, window_s: float) -> LogArrays:
         t_end = float(np.nanmax(t))
     else:
         raise TypeError(f"log: expected a pandas DataFrame or LogArrays, got {type(log).__name__}")
-    return ingest(log, model.vessel, purpose="forecast", name="log", time_range_s=(t_end - window_s, t_end))
+    return ingest(log, model.vessel, purpose="forecast", name=name, time_range_s=(t_end - window_s, t_end))
 
 
 #: How :func:`environment_from_log` estimates the environment.
@@ -123,7 +123,7 @@ METHODS = ("estimator", "mean")
 
 def environment_from_log(log, vessel="gunnerus", *, window_s: float = 900.0, wind_window_s: float = 120.0,
                          n_members: int = 20, seed: int = 0, method: str = "estimator",
-                         environment_config=None) -> EnvironmentEstimate:
+                         environment_config=None, name: str = "log") -> EnvironmentEstimate:
     """The environment a blackout at the log's last row would meet (see the module notes).
 
     Parameters
@@ -146,20 +146,22 @@ def environment_from_log(log, vessel="gunnerus", *, window_s: float = 900.0, win
         The environment estimator (default) or the residual mean (see the module notes).
     environment_config : hybridship.residual.environment.EnvironmentConfig, optional
         Settings of the environment estimator (default: its defaults).
+    name : str
+        What messages and warnings call the log (the CLI gives its file's path).
     """
     if method not in METHODS:
         raise ValueError(f"method: expected one of {METHODS}, got {method!r}")
-    for name, v, least in (("window_s", window_s, MIN_WINDOW_S), ("wind_window_s", wind_window_s, MIN_WIND_WINDOW_S)):
+    for arg, v, least in (("window_s", window_s, MIN_WINDOW_S), ("wind_window_s", wind_window_s, MIN_WIND_WINDOW_S)):
         if isinstance(v, bool) or not (isinstance(v, (int, float, np.integer, np.floating)) and math.isfinite(v)
                                        and v >= least):
-            raise ValueError(f"{name}: expected a number of seconds >= {least:g}, got {v!r}")
+            raise ValueError(f"{arg}: expected a number of seconds >= {least:g}, got {v!r}")
     if isinstance(n_members, bool) or not isinstance(n_members, (int, np.integer)) or n_members < 1:
         raise ValueError(f"n_members: expected a positive int, got {n_members!r}")
     if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or seed < 0:
         raise ValueError(f"seed: expected a non-negative int, got {seed!r}")
     model = get_model(vessel)
     # one read serves both windows: the wind's, and the estimator's rows at its end
-    aw = _arrays(log, model, max(window_s, wind_window_s))
+    aw = _arrays(log, model, max(window_s, wind_window_s), name)
     a = aw if window_s >= wind_window_s else aw.rows(slice(int(np.searchsorted(
         aw.time_s, aw.time_s[-1] - window_s, side="left")), None))
     idx = len(a.time_s) - 1
