@@ -126,6 +126,14 @@ def _recorded_outputs(folder: Path) -> set[str]:
         return set()
 
 
+def earlier_run(names, marker: str, head: bytes) -> Callable[[str, Path], bool]:
+    """An ``ours`` for :func:`check_output_files`: the files ``names`` of a command's run from
+    before folders kept a record of their outputs, recognised by the run's ``marker`` file
+    beside them starting with ``head`` (a benchmark's tables or README)."""
+    names = frozenset(names)
+    return lambda name, path: name in names and starts_with(path.with_name(marker), head)
+
+
 def check_output_files(folder, written, removed=(), ours=None) -> None:
     """Refuse, before any work, output files that would replace or remove a file a hybridship
     command did not write (FileExistsError) or a read-only one (PermissionError); see

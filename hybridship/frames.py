@@ -130,7 +130,7 @@ def latlon_to_north_east(lat_deg, lon_deg, lat0_deg, lon0_deg):
     for name, value in (("lat_deg", lat_deg), ("lat0_deg", lat0_deg)):
         with np.errstate(invalid="ignore"):
             if np.any(np.abs(np.asarray(value, dtype=float)) > 90.0):
-                raise ValueError(f"{name}: a latitude is within +-90 deg, got {np.max(np.abs(value)):g} in magnitude "
+                raise ValueError(f"{name}: a latitude is within +-90 deg, got {np.nanmax(np.abs(value)):g} in magnitude "
                                  f"(latitude and longitude swapped?)")
     lat = np.radians(np.asarray(lat_deg, dtype=float))
     lon = np.radians(np.asarray(lon_deg, dtype=float))

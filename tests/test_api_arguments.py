@@ -36,7 +36,7 @@ def test_seeds_out_of_the_generators_range_are_refused_at_construction(seed, mes
 
 def test_environment_from_log_names_its_seed_and_takes_numpy_numbers():
     log = physics_log(DynamicModel("gunnerus"), duration_s=1000.0, t_shutdown_s=None, seed=1)
-    with pytest.raises(ValueError, match="^seed: expected a non-negative int, got None"):
+    with pytest.raises(ValueError, match="^seed: expected a whole number >= 0, got None"):
         environment_from_log(log, seed=None)
     est = environment_from_log(log, window_s=np.int64(900), n_members=2)
     assert np.isfinite(est.eta).all()
@@ -117,3 +117,11 @@ def test_season_sweep_quantile_and_labels_are_checked():
                       (dict(labels=["a", "a"]), "labels: expected distinct")):
         with pytest.raises(ValueError, match=f"^{field}"):
             season_sweep("gunnerus", states, [0.0], scheduler="none", **kw)
+
+
+def test_simulate_blackouts_refuses_a_text_flag():
+    from hybridship.driftoff.planning import simulate_blackouts
+    from hybridship.driftoff.weather import WeatherState
+
+    with pytest.raises(TypeError, match="^keep_tracks: expected True or False, got 'no'"):
+        simulate_blackouts("gunnerus", WeatherState(), [0.0], keep_tracks="no")

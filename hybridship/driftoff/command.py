@@ -208,15 +208,13 @@ def _refuse_inputs_in_out(args, mode) -> None:
 def _looks_like_log(path: Path) -> bool:
     """Whether a file found among logs has the log format's ``time_s`` in its header (a
     weather table does not); Parquet files are taken as logs."""
-    import gzip
+    import pandas as pd
 
     if path.name.lower().endswith((".parquet", ".pq")):
         return True
-    try:
-        opener = gzip.open if path.name.lower().endswith(".gz") else open
-        with opener(path, "rt", encoding="utf-8", errors="replace") as fh:
-            return "time_s" in [c.strip().strip('"') for c in fh.readline().split(",")]
-    except (OSError, EOFError):
+    try:    # the header alone (gzip by extension)
+        return "time_s" in pd.read_csv(path, nrows=0).columns.str.strip()
+    except Exception:      # empty, binary or damaged: not a log to protect
         return False
 
 

@@ -28,7 +28,7 @@ from dataclasses import dataclass
 import numpy as np
 import pandas as pd
 
-from ..forecast_inputs.limits import check_or_clip_inputs
+from ..forecast_inputs.limits import check_or_clip_inputs, check_whole_number
 from ..frames import vector_to_speed_dir
 from ..logs.io import LogArrays
 from ..residual.features import ResidualConfig, prepare_log
@@ -157,8 +157,7 @@ def environment_from_log(log, vessel="gunnerus", *, window_s: float = 900.0, win
             raise ValueError(f"{arg}: expected a number of seconds >= {least:g}, got {v!r}")
     if isinstance(n_members, bool) or not isinstance(n_members, (int, np.integer)) or n_members < 1:
         raise ValueError(f"n_members: expected a positive int, got {n_members!r}")
-    if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or seed < 0:
-        raise ValueError(f"seed: expected a non-negative int, got {seed!r}")
+    check_whole_number("seed", seed)
     model = get_model(vessel)
     # one read serves both windows: the wind's, and the estimator's rows at its end
     aw = _arrays(log, model, max(window_s, wind_window_s), name)

@@ -284,6 +284,8 @@ def simulate_blackouts(vessel, weather: WeatherState, headings_rad, *, uncertain
     st = as_config(settings, DriftOffSettings, "settings") if settings is not None else DriftOffSettings()
     if isinstance(index, (bool, np.bool_)) or not isinstance(index, (int, np.integer)) or index < 0:
         raise ValueError(f"index: expected a whole number >= 0 (a weather state's place in a sweep), got {index!r}")
+    if not isinstance(keep_tracks, (bool, np.bool_)):    # a text "no" is truthy
+        raise TypeError(f"keep_tracks: expected True or False, got {keep_tracks!r}")
     psi = check_headings(headings_rad)
     model = get_model(vessel)
     ves = model.vessel

@@ -178,7 +178,7 @@ def season_sweep(vessel, states, headings_rad, *, uncertainty: WeatherUncertaint
         raise ValueError(f"chunk_size: expected a positive int, got {chunk_size!r}")
     if isinstance(n_workers, bool) or not isinstance(n_workers, (int, np.integer)) or n_workers < 1:
         raise ValueError(f"n_workers: expected a positive int, got {n_workers!r}")
-    if isinstance(quantile, (bool, str, bytes)) or not isinstance(quantile, (int, float, np.integer, np.floating)) \
+    if isinstance(quantile, bool) or not isinstance(quantile, (int, float, np.integer, np.floating)) \
             or not 0.0 < float(quantile) < 1.0:
         raise ValueError(f"quantile: expected a number in (0, 1), got {quantile!r}")
     st = as_config(settings, DriftOffSettings, "settings") if settings is not None else DriftOffSettings()

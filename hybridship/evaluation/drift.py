@@ -48,7 +48,7 @@ import numpy as np
 import pandas as pd
 
 from . import metrics
-from ..fileio import atomic_write, check_output_files, markdown_table, record_outputs, remove_stale, starts_with
+from ..fileio import atomic_write, check_output_files, earlier_run, markdown_table, record_outputs, remove_stale
 from ..predictors import DataOnlyPredictor, DeadReckoning, DynamicPredictor, HybridPredictor, as_log_arrays
 from ..predictors.hybrid import AFTER_STOP, after_stop_scales
 from ..residual.drift_hull import (MIN_FAILURES as DRIFT_HULL_MIN_FAILURES, choose_coefficient, drift_start_rows,
@@ -114,11 +114,7 @@ def check_output_folder(out_dir, plots: bool = True) -> None:
     (PermissionError); files of a benchmark run from before folders kept a record of their
     outputs (its ``tables.md`` beside them) are recognised."""
     check_output_files(out_dir, TABLE_FILES + (FIGURE_FILES if plots else ()), () if plots else FIGURE_FILES,
-                       ours=_earlier_benchmark_file)
-
-
-def _earlier_benchmark_file(name: str, path: Path) -> bool:
-    return name in TABLE_FILES + FIGURE_FILES and starts_with(path.with_name("tables.md"), b"Drift benchmark")
+                       ours=earlier_run(TABLE_FILES + FIGURE_FILES, "tables.md", b"Drift benchmark"))
 
 
 def run_drift_benchmark(train=None, test=None, out_dir="drift-benchmark", *, vessel="gunnerus",

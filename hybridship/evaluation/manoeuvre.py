@@ -33,7 +33,7 @@ import numpy as np
 import pandas as pd
 
 from ..datasets.esso_osaka import EssoRun, RUN_KINDS, esso_log_arrays, list_runs
-from ..fileio import atomic_write, check_output_files, remove_stale, starts_with, write_output_files
+from ..fileio import atomic_write, check_output_files, earlier_run, remove_stale, write_output_files
 from ..frames import wrap_pi
 from ..logs.ingest import ingest
 from ..logs.io import LogArrays
@@ -625,6 +625,8 @@ def _print_summary(errors: pd.DataFrame, out_dir, seconds: float) -> None:
 
 #: The benchmark's files in its output folder.
 OUTPUT_FILES = ("errors.csv", "coverage.csv", "coverage_intervals.csv", "sharpness.csv", "README.md")
+#: A run's files from before output folders kept a record of them: its README beside them.
+_EARLIER_RUN = earlier_run(OUTPUT_FILES, "README.md", b"# Manoeuvring benchmark")
 
 
 def check_output_folder(out_dir) -> None:
@@ -632,11 +634,7 @@ def check_output_folder(out_dir) -> None:
     hybridship command wrote (FileExistsError) or a read-only one (PermissionError); a run's
     files from before folders kept a record of their outputs (its README beside them) are
     recognised."""
-    check_output_files(out_dir, OUTPUT_FILES, ours=_earlier_run_file)
-
-
-def _earlier_run_file(name: str, path: Path) -> bool:
-    return name in OUTPUT_FILES and starts_with(path.with_name("README.md"), b"# Manoeuvring benchmark")
+    check_output_files(out_dir, OUTPUT_FILES, ours=_EARLIER_RUN)
 
 
 def _write_outputs(result: BenchmarkResult, out_dir: Path, command: str | None, figures_dir) -> None:
@@ -646,7 +644,7 @@ def _write_outputs(result: BenchmarkResult, out_dir: Path, command: str | None, 
               "coverage_intervals.csv": result.coverage_intervals, "sharpness.csv": result.sharpness}
     # every file is made before the first is written: a failure leaves no mix of old and new files
     write_output_files(out_dir, {**{name: t.to_csv(index=False).encode() for name, t in tables.items()},
-                                 "README.md": md.encode()}, ours=_earlier_run_file)
+                                 "README.md": md.encode()}, ours=_EARLIER_RUN)
     if figures_dir is not None:
         write_figures(result, figures_dir)
 

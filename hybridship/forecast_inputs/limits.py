@@ -99,6 +99,14 @@ def check_number(name: str, value, *, lo=None, hi=None, lo_open: bool = False, a
     return v
 
 
+def check_whole_number(name: str, value, lo: int = 0) -> int:
+    """``value`` as an ``int`` of at least ``lo`` (numpy integers accepted; bools, floats and
+    text refused), or a ValueError naming ``name`` and what was expected."""
+    if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < lo:
+        raise ValueError(f"{name}: expected a whole number >= {lo}, got {value!r}")
+    return int(value)
+
+
 @dataclass(frozen=True)
 class Envelope:
     """Valid ranges of the physics inputs (see the module table).

@@ -26,7 +26,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from hybridship.fileio import as_path, atomic_write, check_out_folder, check_output_files, record_outputs, starts_with
+from hybridship.fileio import as_path, atomic_write, check_out_folder, check_output_files, earlier_run, record_outputs
 from hybridship.residual.ensemble import EnsembleConfig
 
 from .hybrid import GreyBoxTables, HybridModel
@@ -221,8 +221,7 @@ def _checked_arguments(out_dir, seed) -> Path:
     if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or seed < 0:
         raise ValueError(f"seed: expected a non-negative integer, got {seed!r}")
     out = check_out_folder(as_path(out_dir, "out_dir"))
-    check_output_files(out, OUTPUT_FILES, ours=lambda name, path: starts_with(path.with_name("table.md"),
-                                                                              b"# High-speed craft"))
+    check_output_files(out, OUTPUT_FILES, ours=earlier_run(OUTPUT_FILES, "table.md", b"# High-speed craft"))
     return out
 
 

@@ -44,7 +44,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from hybridship.config import as_config
-from hybridship.forecast_inputs.limits import check_number
+from hybridship.forecast_inputs.limits import check_number, check_whole_number
 from hybridship.residual.ensemble import EnsembleConfig, fit_ensemble
 
 from .contract import check_free_run, check_record, require_fitted
@@ -284,8 +284,7 @@ class HybridModel:
         if not isinstance(craft, PlaningCraft):
             raise TypeError(f"craft: expected a PlaningCraft (load_planing_craft(...)), got {type(craft).__name__}")
         check_number("dt_s", dt_s, lo=0.0, lo_open=True)
-        if isinstance(acc_lags, bool) or not isinstance(acc_lags, (int, np.integer)) or acc_lags < 1:
-            raise ValueError(f"acc_lags: expected a whole number of lags >= 1, got {acc_lags!r}")
+        check_whole_number("acc_lags", acc_lags, 1)
         self.grey = GreyBox(craft, actuator, tables, dt_s)
         self.ensemble_config = as_config(ensemble, EnsembleConfig, "ensemble")
         self.acc_lags = acc_lags

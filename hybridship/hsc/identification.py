@@ -34,6 +34,7 @@ import numpy as np
 from pydantic import Field
 
 from ..config import Float, Int, NonEmpty, Seed, as_config, config_dataclass
+from ..forecast_inputs.limits import check_whole_number
 from .contract import check_free_run, check_record, require_fitted
 
 __all__ = [
@@ -47,14 +48,6 @@ __all__ = [
     "NARXModel",
 ]
 
-
-
-def _check_orders(**orders) -> None:
-    """ValueError naming a model order that is not a whole number at least its minimum
-    (``name=(value, minimum)``)."""
-    for name, (value, least) in orders.items():
-        if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < least:
-            raise ValueError(f"{name}: expected a whole number >= {least}, got {value!r}")
 
 class _Standardiser:
     """Columns to zero mean and unit standard deviation (training statistics)."""
@@ -143,7 +136,7 @@ class ARXModel:
     name = "arx"
 
     def __init__(self, na: int, nb: int, nk: int = 1):
-        _check_orders(na=(na, 1), nb=(nb, 1), nk=(nk, 0))
+        check_whole_number("na", na, 1), check_whole_number("nb", nb, 1), check_whole_number("nk", nk, 0)
         self.na, self.nb, self.nk = na, nb, nk
         self.n_init = max(na, nk + nb - 1)
 
@@ -250,7 +243,7 @@ class StateSpaceModel:
     name = "ss"
 
     def __init__(self, order: int, block_rows: int = 15):
-        _check_orders(order=(order, 1), block_rows=(block_rows, 1))
+        check_whole_number("order", order, 1), check_whole_number("block_rows", block_rows, 1)
         self.order, self.block_rows = order, block_rows
         self.n_init = 2
 

@@ -34,6 +34,7 @@ from typing import NamedTuple
 
 import numpy as np
 
+from ..forecast_inputs.limits import check_whole_number
 from . import hull, wind as wind_curves
 from .hull import mass_matrices  # moved to hull (vessel validation needs it without this module)
 from .integrate import rollout_batch, step_batch
@@ -131,8 +132,7 @@ def check_step(dt_s, substeps) -> None:
     if isinstance(dt_s, bool) or not isinstance(dt_s, (int, float, np.integer, np.floating)) \
             or not (0.0 < float(dt_s) < np.inf):
         raise ValueError(f"dt_s: expected a finite step > 0 s, got {dt_s!r}")
-    if isinstance(substeps, bool) or not isinstance(substeps, (int, np.integer)) or substeps < 1:
-        raise ValueError(f"substeps: expected a whole number >= 1, got {substeps!r}")
+    check_whole_number("substeps", substeps, 1)
 
 
 def build_model_arrays(vessel, *, true_vessel: bool = False) -> ModelArrays:
@@ -482,8 +482,7 @@ class DynamicModel:
         (``(B, n_steps, width)``). See the class notes for the inputs.
         """
         check_step(dt_s, substeps)
-        if isinstance(n_steps, bool) or not isinstance(n_steps, (int, np.integer)) or n_steps < 1:
-            raise ValueError(f"n_steps: expected a whole number of steps >= 1, got {n_steps!r}")
+        check_whole_number("n_steps", n_steps, 1)
         eta0 = self._state("eta0", eta0)
         nu0 = self._state("nu0", nu0)
         if eta0.shape != nu0.shape:

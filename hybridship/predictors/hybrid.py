@@ -18,7 +18,7 @@ import numpy as np
 
 from ..config import as_config
 from ..forecast_inputs import FaultFlags
-from ..forecast_inputs.limits import check_number
+from ..forecast_inputs.limits import check_number, check_whole_number
 from ..forecast_inputs.wind import HELD_WIND, WindForecast, fit_wind_forecast, wind_error_paths
 from ..frames import speed_dir_to_vector, vector_to_speed_dir, wrap_pi
 from ..logs.io import LogArrays
@@ -1063,8 +1063,7 @@ class HybridPredictor:
         every lead ``lead_s`` (H,) [s] up to ``horizon_s``; what :meth:`calibrate_after_stop`
         fits (see :func:`after_stop_scales`)."""
         self._check_fitted()
-        if isinstance(n_intervals, bool) or not isinstance(n_intervals, (int, np.integer)) or n_intervals < 1:
-            raise ValueError(f"n_intervals: expected a whole number of forecasts >= 1, got {n_intervals!r}")
+        check_whole_number("n_intervals", n_intervals, 1)
         horizon_s = check_number("horizon_s", horizon_s, lo=0.0, lo_open=True)
         arrays = [as_log_arrays(x, self.model.vessel) for x in log_list(logs)]
         if not arrays:
@@ -1268,8 +1267,7 @@ def _check_rollout_batch(S: int, n_steps, dt_s, substeps, **arrays) -> None:
     """Every per-start input of a rollout has one row per start (the compiled step reads
     ``S`` rows of each), and the step settings are valid: ValueError naming the argument."""
     check_step(dt_s, substeps)
-    if isinstance(n_steps, bool) or not isinstance(n_steps, (int, np.integer)) or n_steps < 1:
-        raise ValueError(f"n_steps: expected a whole number of steps >= 1, got {n_steps!r}")
+    check_whole_number("n_steps", n_steps, 1)
     for name, a in arrays.items():
         if a is not None and (np.ndim(a) < 2 or np.shape(a)[0] != S):
             raise ValueError(f"{name}: expected one row per start ({S}, ...), got shape {np.shape(a)}")

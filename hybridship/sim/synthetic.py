@@ -12,7 +12,7 @@ from __future__ import annotations
 import numpy as np
 import pandas as pd
 
-from ..forecast_inputs.limits import check_number
+from ..forecast_inputs.limits import check_number, check_whole_number
 from ..frames import wrap_2pi
 from ..physics.model import DynamicModel
 
@@ -25,8 +25,7 @@ def _check_arguments(model, duration_s, t_shutdown_s, dt_s, seed, current, wind,
     dt = check_number("dt_s", dt_s, lo=0.0, lo_open=True)
     check_number("duration_s", duration_s, lo=dt)
     check_number("t_shutdown_s", t_shutdown_s, lo=0.0, allow_none=True)
-    if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or seed < 0:
-        raise ValueError(f"seed: expected a non-negative integer, got {seed!r}")
+    check_whole_number("seed", seed)
     lo, hi = (check_number(f"hold_s[{i}]", h, lo=0.0) for i, h in enumerate(hold_s))
     if hi < lo:
         raise ValueError(f"hold_s: expected (min, max) with min <= max, got {tuple(hold_s)}")
