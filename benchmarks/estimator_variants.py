@@ -27,6 +27,8 @@ Examples::
         physics_wind_forecast yaw_load_prior_3e-5 yaw_load_prior_1e-4 --out docs/results/estimator-variants-own-20-seed200
     python benchmarks/estimator_variants.py --data truthsim-dev own --only default tight_thrust_prior \
         thrust_prior_0.05 wide_thrust_prior --out docs/results/estimator-variants-thrust-prior
+    python benchmarks/estimator_variants.py --data embedded truthsim-dev own --only default \
+        current_at_stop_0.1 current_at_stop_0.3 --out docs/results/estimator-variants-current-at-stop
 """
 
 from __future__ import annotations
@@ -77,6 +79,10 @@ VARIANTS = {
                           "thrust-error prior 0.4 per thruster instead of 0.2"),
     "current_prior_0.1": ({"environment_config": C(current_prior_m_s=0.1)}, "current prior 0.1 m/s instead of 0.02 m/s"),
     "current_prior_0.3": ({"environment_config": C(current_prior_m_s=0.3)}, "current prior 0.3 m/s instead of 0.02 m/s"),
+    "current_at_stop_0.1": ({"environment_config": C(current_std_at_stop_m_s=0.1)},
+                            "current's uncertainty widened by 0.1 m/s along the current-load ridge at the stop"),
+    "current_at_stop_0.3": ({"environment_config": C(current_std_at_stop_m_s=0.3)},
+                            "current's uncertainty widened by 0.3 m/s along the current-load ridge at the stop"),
     "fixed_noise": ({"environment_config": C(adaptive_measurement_std=False)},
                     "no wave-motion noise estimate (configured sensor noise only)"),
     "per_dof": ({"environment_config": C(**PER_DOF)},

@@ -179,6 +179,43 @@ def test_drift_samples_update_the_estimate_online(model):
     assert sd[-1].max() < sd[0].max()
 
 
+def test_current_widened_at_the_stop_keeps_the_estimate_and_lets_the_drift_find_the_current(model):
+    """A 0.3 m/s current alone, station keeping, then a failure. Widened along the
+    current-load ridge at the stop (``current_std_at_stop_m_s``), the estimate at the stop is
+    the default's, with the current's spread raised to the width given, and the hull's
+    acceleration predicted with the current and load (no thrust) stays the same to first
+    order; the drift then brings the current nearer the truth than the default filter, which
+    keeps the split station keeping gave it."""
+    log = physics_log(model, duration_s=1400, t_shutdown_s=1000, seed=7, current=(0.3, 1.0), wind=(0.0, 0.0))
+    a = as_log_arrays(log, model.vessel)
+    i0 = int(np.flatnonzero(a.dp_active == 0)[0])
+    rows = np.array([i0, len(a.time_s) - 1])
+    base = EnvironmentEstimator(model).run(a, rows)
+    wide_est = EnvironmentEstimator(model, EnvironmentConfig(current_std_at_stop_m_s=0.3))
+    wide = wide_est.run(a, rows)
+    np.testing.assert_allclose(wide.x[0], base.x[0])
+    assert np.allclose(np.sqrt(np.diag(wide.P[0])[6:8]), 0.3, rtol=0.01)
+    # along the widened directions the no-thrust acceleration is unchanged to first order,
+    # while the same current change without its paired load change moves it
+    x0 = base.x[0]
+    ridge = np.linalg.eigh(wide.P[0] - base.P[0])[1][:, -2:]
+
+    def accel(x):
+        cur = np.hypot(x[6], x[7]), np.arctan2(x[7], x[6])
+        ext = external_accel(x[2], x[8:11], 0.0, 0.0)
+        return model.acceleration(x[:3], x[3:6], rpm=np.zeros(model.n_channels), current=cur, accel_ext=ext)[0]
+    for k in range(2):
+        step = 0.005 * ridge[:, k] / np.linalg.norm(ridge[6:8, k])     # 0.005 m/s of current
+        current_only = np.where(np.arange(x0.size) < 8, step, 0.0)
+        moved = np.abs(accel(x0 + current_only) - accel(x0)).max()
+        assert moved > 0
+        assert np.abs(accel(x0 + step) - accel(x0)).max() < 0.05 * moved
+    truth = 0.3 * np.array([np.cos(1.0), np.sin(1.0)])
+    err_base = np.linalg.norm(base.current_ned_m_s[1] - truth)
+    err_wide = np.linalg.norm(wide.current_ned_m_s[1] - truth)
+    assert err_wide < 0.8 * err_base
+
+
 def test_hybrid_forecasts_after_a_failure_use_the_drift_samples(model):
     """Forecasts started 1..19 s after the failure use the estimate at their own start: a
     forecast from start k equals the one made from a log cut right after k, and differs from

@@ -156,6 +156,12 @@ class EnvironmentConfig(BaseModel):
         See ``adaptive_measurement_std`` [s].
     reset_yaw_load_at_stop, yaw_load_kept_at_stop, yaw_load_std_at_stop : bool, float, float or None
         The yaw environment at a thrust stop (above).
+    current_std_at_stop_m_s : float
+        At a thrust stop, widen the current's uncertainty by this much [m/s] per NED axis
+        along the ridge on which station keeping cannot tell a current from a load (each
+        current change paired with the load change that keeps the hull's acceleration), so
+        that the drift, in which the ship starts to move through the water, decides the
+        split; the estimate itself does not change at the stop. 0 (default): not.
     filter_step_s : float
         Longest filter step [s]: a faster log is filtered on every ``m``-th row.
     held_load_window_s, held_load_block_s : float
@@ -192,6 +198,7 @@ class EnvironmentConfig(BaseModel):
     filter_step_s: float = Field(1.0, gt=0)
     yaw_load_kept_at_stop: float = Field(0.0, ge=0.0, le=1.0)
     yaw_load_std_at_stop: float | None = Field(None, ge=0.0)
+    current_std_at_stop_m_s: float = Field(0.0, ge=0.0)
     held_load_window_s: float = Field(600.0, ge=0.0)
     held_load_block_s: float = Field(30.0, gt=0.0)
     innovation_gate_sigma: float = Field(8.0, gt=0.0)
@@ -533,13 +540,18 @@ class EnvironmentEstimator:
         holds much of the thrusters' error); its correlations are cut and its variance becomes
         the prior's plus the square of the part not kept (or ``yaw_load_std_at_stop``), so
         the drift samples identify it. The
-        current keeps acting through the hull as the ship starts to move.
+        current keeps acting through the hull as the ship starts to move. With
+        ``current_std_at_stop_m_s`` the current's uncertainty is then widened along the
+        current-load ridge (:func:`hybridship.residual.environment_kernel.current_ridge_at_stop`),
+        as the filter does at a stop.
         """
         c = self.config
+        work = kernel._workspace(self.model.arrays)
         x, P = kernel.at_thrust_stop(np.ascontiguousarray(x, dtype=float), np.ascontiguousarray(P, dtype=float),
                                      float(c.yaw_load_kept_at_stop), self._yaw_std_at_stop(),
-                                     float(c.load_yaw_prior_rad_s2),
-                                     self.model.arrays, kernel._workspace(self.model.arrays))
+                                     float(c.load_yaw_prior_rad_s2), self.model.arrays, work)
+        if c.current_std_at_stop_m_s > 0:
+            x, P = kernel.current_ridge_at_stop(x, P, float(c.current_std_at_stop_m_s), self.model.arrays, work)
         return x, P
 
     def run(self, arrays, rows=None, *, first_row: int = 0, required: int | None = None,
@@ -703,7 +715,8 @@ class EnvironmentEstimator:
                            np.asarray(self.thrust_error_mean, float),
                            self._prior_sd(), self._process_noise_base(), _FD_STEP,
                            bool(c.reset_yaw_load_at_stop), float(c.yaw_load_kept_at_stop), self._yaw_std_at_stop(),
-                           float(c.load_yaw_prior_rad_s2), drift_yaw_uv, self._gate(),
+                           float(c.load_yaw_prior_rad_s2), float(c.current_std_at_stop_m_s), drift_yaw_uv,
+                           self._gate(),
                            int(c.max_gated_samples), resume is not None,
                            np.ascontiguousarray(x_resume, dtype=float), np.ascontiguousarray(P_resume, dtype=float),
                            xs, Ps, done)

@@ -258,8 +258,47 @@ def at_thrust_stop(x, Pc, kept, stop_std, yaw_prior, P, work):
 
 
 @numba.njit(cache=True)
+def _current_response(x, cn, ce, P, work):
+    """Body-frame acceleration (3) [m/s^2, m/s^2, rad/s^2] of the hull at state ``x`` in the
+    current ``(cn, ce)`` [m/s, NED], with no thrust and no wind."""
+    prep, zeros3, thrusts = work[0], work[1], work[2]
+    W = P.thr.shape[0] + P.rud.shape[0]
+    rpm = np.zeros(W)
+    az = np.zeros(W)
+    prepare_inputs(az, 0.0, 0.0, math.hypot(cn, ce), math.atan2(ce, cn), P, prep)
+    out = vessel_rhs(math.cos(x[2]), math.sin(x[2]), x[3], x[4], x[5], rpm, prep, zeros3, zeros3, P, thrusts, 0)
+    return np.array([out[0], out[1], out[2]])
+
+
+@numba.njit(cache=True)
+def current_ridge_at_stop(x, Pc, std, P, work):
+    """Covariance at a thrust stop, widened by ``std`` [m/s] per NED axis of the current
+    along the ridge on which station keeping cannot tell a current from a load (see
+    :meth:`hybridship.residual.environment.EnvironmentEstimator.at_thrust_stop`).
+
+    Each current change comes with the load change that keeps the hull's acceleration at
+    the stop: a body-frame change ``d`` is undone by the NED load ``-R(psi) d``. The mean is
+    unchanged; the drift samples then decide the split.
+    """
+    n = x.size
+    G = np.zeros((n, 2))
+    c, s = math.cos(x[2]), math.sin(x[2])
+    h = 0.01                                    # [m/s], central: the quadratic damping's slope
+    for j in range(2):
+        dn, de = (h, 0.0) if j == 0 else (0.0, h)
+        d = (_current_response(x, x[_CUR] + dn, x[_CUR + 1] + de, P, work)
+             - _current_response(x, x[_CUR] - dn, x[_CUR + 1] - de, P, work)) / (2.0 * h)
+        G[_CUR + j, j] = 1.0
+        G[_LOAD, j] = -(c * d[0] - s * d[1])
+        G[_LOAD + 1, j] = -(s * d[0] + c * d[1])
+        G[_YAW_LOAD, j] = -d[2]
+    Pn = Pc + std * std * (G @ G.T)
+    return x, 0.5 * (Pn + Pn.T)
+
+
+@numba.njit(cache=True)
 def filter_grid(grid, slot, t, seg, z, z_ok, r_std, rpm, az, wind, dp, P, per_thruster, prior_thr, prior_sd, q_base,
-                fd_step, reset_at_stop, kept, stop_std, yaw_prior, drift_yaw_uv, gate, max_gated, resume, x_resume,
+                fd_step, reset_at_stop, kept, stop_std, yaw_prior, current_stop_std, drift_yaw_uv, gate, max_gated, resume, x_resume,
                 P_resume, out_x, out_P, done):
     """Run the filter over the log rows ``grid`` (increasing).
 
@@ -268,6 +307,9 @@ def filter_grid(grid, slot, t, seg, z, z_ok, r_std, rpm, az, wind, dp, P, per_th
     restarts the motion states from the measurement and keeps the environment, whose
     covariance grows by the process noise over the gap. Rows whose position or heading is
     missing cannot start the filter: a new segment restarts at its first row with them.
+    At a thrust stop (``dp`` 1 -> 0) the yaw environment restarts with ``reset_at_stop``
+    (:func:`at_thrust_stop`) and the current's uncertainty widens along the current-load
+    ridge by ``current_stop_std`` [m/s] (:func:`current_ridge_at_stop`; 0: not).
     While ``dp`` is 0 at a step's first row, the process model adds the hull's yaw
     acceleration in a drift ``drift_yaw_uv u v`` [rad/s^2]. With ``resume``,
     ``x_resume, P_resume`` is the estimate at ``grid[0]`` (of an earlier run) and the filter
@@ -324,8 +366,11 @@ def filter_grid(grid, slot, t, seg, z, z_ok, r_std, rpm, az, wind, dp, P, per_th
             x, Pc = predict(x, Pc, dt, rpm[prev], az[prev], wind[prev], process_noise(dt, q_base), fd_step, P,
                             per_thruster, 0.0 if dp[prev] else drift_yaw_uv, work)
             x, Pc = update(x, Pc, z[i], z_ok[i], r_std[i], gate, max_gated, gated)
-            if reset_at_stop and dp[prev] and not dp[i]:
-                x, Pc = at_thrust_stop(x, Pc, kept, stop_std, yaw_prior, P, work)
+            if dp[prev] and not dp[i]:
+                if reset_at_stop:
+                    x, Pc = at_thrust_stop(x, Pc, kept, stop_std, yaw_prior, P, work)
+                if current_stop_std > 0.0:
+                    x, Pc = current_ridge_at_stop(x, Pc, current_stop_std, P, work)
         prev = i
         s = slot[i]
         if s >= 0:
