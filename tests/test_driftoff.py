@@ -423,13 +423,37 @@ def test_live_reads_the_log_as_a_forecast_does():
         environment_from_log(hist.drop(columns=["port_rpm"]), "gunnerus")
     dead = hist.copy()
     dead.loc[dead.index[-150:], ["wind_speed_m_s", "wind_dir_deg"]] = np.nan
-    assert not environment_from_log(dead, "gunnerus").wind_measured
+    with pytest.warns(UserWarning, match="no valid wind sample"):
+        assert not environment_from_log(dead, "gunnerus").wind_measured
     full, short = environment_from_log(hist, "gunnerus"), environment_from_log(hist, "gunnerus", window_s=60.0)
     assert (short.wind_speed_m_s, short.gust_intensity) == (full.wind_speed_m_s, full.gust_intensity)
     assert full.gust_intensity > 0
     for kw in (dict(window_s=2.0), dict(wind_window_s=1.0)):
         with pytest.raises(ValueError, match=f"{next(iter(kw))}: expected a number of seconds >= "):
             environment_from_log(hist, "gunnerus", **kw)
+
+
+def test_live_refuses_empty_commands_and_faulty_sensors_at_the_blackout_row():
+    """An empty command column is not a stopped thruster (nor an active DP): refused naming
+    the column. The blackout row goes through a forecast's start-window checks: a position
+    dropout over the window is refused, a last position missing is bridged, warned, and
+    noted in the estimate."""
+    from hybridship.logs.io import LogFormatWarning
+
+    df, i = _failure_log()
+    hist = df.iloc[: i + 1]
+    for col in ("tunnel_rpm", "port_azimuth_deg", "dp_active"):
+        with pytest.raises(ValueError, match=f"column '{col}' has no value in the last 900 s"):
+            environment_from_log(hist.assign(**{col: np.nan}), "gunnerus")
+    gap = hist.copy()
+    gap.loc[gap.index[-300:], ["north_m", "east_m"]] = np.nan
+    with pytest.raises(ValueError, match="at the blackout row: .*too little valid data.*position"):
+        environment_from_log(gap, "gunnerus")
+    last = hist.copy()
+    last.loc[last.index[-1], "north_m"] = np.nan
+    with pytest.warns(LogFormatWarning, match="at the blackout row .*missing position"):
+        est = environment_from_log(last, "gunnerus")
+    assert "missing position" in est.notes and environment_from_log(hist, "gunnerus").notes == ""
 
 
 def test_live_bad_input_names_the_field():

@@ -321,6 +321,7 @@ def _cmd_live(args) -> int:
                            "no wind measurement in the log's last 120 s: the blackouts run without wind",
               "estimated current [m/s, to deg]": _current_text(est),
               "estimated load (N, E) [m/s^2]": f"{est.accel_ned[0]:.4f}, {est.accel_ned[1]:.4f}",
+              **({"log checks at the blackout row": est.notes} if est.notes else {}),
               "update time [s]": f"{dt:.3f}",
               # the table's band reads as a calibrated 80 % one; on simulated failures it is not
               "spread": "not calibrated: on the independent simulator's failures the actual times fell outside "

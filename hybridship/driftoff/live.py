@@ -78,6 +78,9 @@ class EnvironmentEstimate:
     vessel_name : str or None
         The vessel the log was read for; :func:`blackout_now` refuses another vessel
         (None: not known, not checked).
+    notes : str
+        What the forecast's start-window checks found at the last row (a sensor fault
+        worked around, e.g. a position dropout bridged), "" when nothing; also warned.
     """
 
     time_s: float
@@ -93,12 +96,14 @@ class EnvironmentEstimate:
     current_members_ned_m_s: np.ndarray | None = None
     wind_measured: bool = True
     vessel_name: str | None = None
+    notes: str = ""
 
 
 def _arrays(log, model, window_s: float, name: str = "log") -> LogArrays:
     """The last ``window_s`` of ``log`` through the project's one ingest (``purpose="forecast"``):
     the same checks as a forecast's, so a log without a thruster's rpm or azimuth column is
-    refused naming the column instead of taken as stopped."""
+    refused naming the column instead of taken as stopped, and so is a command column with
+    no value in the window (an empty column is a missing one)."""
     from ..logs.ingest import ingest
 
     if isinstance(log, LogArrays):
@@ -112,9 +117,29 @@ def _arrays(log, model, window_s: float, name: str = "log") -> LogArrays:
         if not np.isfinite(t).any():
             raise ValueError("log: column 'time_s' has no finite time")
         t_end = float(np.nanmax(t))
+        _refuse_empty_commands(log, t >= t_end - window_s, window_s, t_end, name)
     else:
         raise TypeError(f"log: expected a pandas DataFrame or LogArrays, got {type(log).__name__}")
-    return ingest(log, model.vessel, purpose="forecast", name=name, time_range_s=(t_end - window_s, t_end))
+    a = ingest(log, model.vessel, purpose="forecast", name=name, time_range_s=(t_end - window_s, t_end))
+    if not a.commands_logged.any():
+        raise ValueError(f"{name}: no row of the last {window_s:g} s up to time_s {t_end:g} has all its commands "
+                         f"(rpm, azimuths, dp_active) logged; a blackout starts from the logged commands")
+    return a
+
+
+def _refuse_empty_commands(df: pd.DataFrame, inside: np.ndarray, window_s: float, t_end: float, name: str) -> None:
+    """Refuse a command column (``<thruster>_rpm``, ``<thruster>_azimuth_deg``, ``dp_active``)
+    with no value in the rows read: the reader would hold a default (a stopped thruster, DP on)."""
+    from ..logs.columns import channel_column
+
+    for col in df.columns:
+        if col != "dp_active" and channel_column(str(col)) is None:
+            continue
+        values = pd.to_numeric(df.loc[inside, col], errors="coerce").to_numpy(float)
+        if not np.isfinite(values).any():
+            raise ValueError(f"{name}: column {col!r} has no value in the last {window_s:g} s up to time_s "
+                             f"{t_end:g}; an empty command column is not a stopped thruster (nor an active DP): "
+                             f"give a log whose commands are logged in that window")
 
 
 #: How :func:`environment_from_log` estimates the environment.
@@ -172,6 +197,7 @@ def environment_from_log(log, vessel="gunnerus", *, window_s: float = 900.0, win
     if a.dp_active[idx] == 0:
         raise ValueError(f"log: dp_active is 0 at time_s {a.time_s[idx]:g} (the last row used): a blackout is "
                          f"predicted from station keeping; give a time while the DP is active")
+    notes = _start_checks(a, idx, name)
     current_members = None
     if method == "estimator":
         eta0, nu0, bias0, members, current_members = _estimated(model, a, idx, int(n_members), seed,
@@ -195,7 +221,28 @@ def environment_from_log(log, vessel="gunnerus", *, window_s: float = 900.0, win
                                azimuth_rad=np.nan_to_num(a.azimuth_rad[idx]).copy(), wind_speed_m_s=w_speed,
                                wind_dir_from_rad=w_dir, gust_intensity=gi, accel_ned=np.asarray(bias0, float),
                                accel_members=members, current_members_ned_m_s=current_members,
-                               wind_measured=wind_measured, vessel_name=model.vessel.name)
+                               wind_measured=wind_measured, vessel_name=model.vessel.name, notes=notes)
+
+
+def _start_checks(a: LogArrays, idx: int, name: str) -> str:
+    """A forecast's start-window checks at the blackout row: refused with too little valid
+    position, heading or velocity (:class:`~hybridship.forecast_inputs.StartWindowError`), a
+    worked-around fault warned and returned as a note."""
+    import warnings
+
+    from ..forecast_inputs import assess_start_window
+    from ..logs.io import LogFormatWarning
+
+    try:
+        sw = assess_start_window(a, np.array([idx]))
+    except ValueError as exc:
+        raise ValueError(f"{name}: at the blackout row: {exc}") from None
+    note = sw.notes[0] if sw.notes else ""
+    if note and bool(sw.degraded[0]):
+        warnings.warn(f"{name}: at the blackout row (time_s {a.time_s[idx]:g}): {note}", LogFormatWarning,
+                      stacklevel=3)
+        return note
+    return ""
 
 
 def _estimated(model, a: LogArrays, idx: int, n_members: int, seed: int, config=None):
