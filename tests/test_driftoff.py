@@ -221,6 +221,17 @@ def test_weather_table_round_trip_and_errors(tmp_path):
     bad.to_csv(path, index=False)
     with pytest.raises(ValueError, match=r"row 1 \(line 3 of the file\): a missing value, expected"):
         read_weather_table(path)
+    # a sea steeper than waves can be (Hs and Tp swapped): the row and line, both columns
+    bad.loc[1, ["current_m_s", "hs_m", "tp_s"]] = [0.3, 8.0, 3.0]
+    bad.to_csv(path, index=False)
+    with pytest.raises(ValueError, match=r"row 1 \(line 3 of the file\): hs_m 8 m at tp_s 3 s is steeper than "
+                                         r"waves can be"):
+        read_weather_table(path)
+    # one field more than the header in every row: not read with the columns shifted
+    lines = df.to_csv(index=False).splitlines()
+    path.write_text(lines[0] + "\n" + lines[1] + ",99\n")
+    with pytest.raises(ValueError, match="w.csv: line 2 has 10 fields, the header line 9"):
+        read_weather_table(path)
     path.write_text("")
     with pytest.raises(ValueError, match="w.csv: not a readable CSV weather table .*the file is empty"):
         read_weather_table(path)
@@ -228,6 +239,18 @@ def test_weather_table_round_trip_and_errors(tmp_path):
     with pytest.raises(ValueError, match=r"not text \(a binary file\?\)") as info:
         read_weather_table(path)
     assert "codec" not in str(info.value)
+
+
+def test_a_sea_steeper_than_waves_can_be_is_refused():
+    """Beyond the steepness at which a single wave breaks (1/7): refused naming both fields;
+    DNV's limiting steepness, about half of it, is accepted."""
+    from hybridship.driftoff.weather import MAX_HS_M, limiting_hs_m, max_hs_m
+
+    with pytest.raises(ValueError, match=r"weather.hs_m 8 m at tp_s 3 s is steeper than waves can be \(at most 2.01 m"):
+        WeatherState(hs_m=8.0, tp_s=3.0)
+    for tp in (3.0, 6.0, 12.0):
+        WeatherState(hs_m=float(limiting_hs_m(tp)), tp_s=tp)
+        WeatherState(hs_m=min(float(max_hs_m(tp)), MAX_HS_M), tp_s=tp)
 
 
 def test_weather_samples_stay_in_the_range_of_a_weather_state():

@@ -15,7 +15,7 @@ column              unit      meaning
 ``time``            ISO 8601  optional label of the state (kept as text)
 ``wind_speed_m_s``  m/s       mean 10 m wind speed (0 to :data:`MAX_WIND_M_S`)
 ``wind_dir_deg``    deg       direction the wind comes FROM, clockwise from north
-``hs_m``            m         significant wave height (0 to 20; 0 = no waves)
+``hs_m``            m         significant wave height (0 to 20, at most :func:`max_hs_m`)
 ``tp_s``            s         spectral peak period (1 to 30)
 ``wave_dir_deg``    deg       direction the waves come FROM, clockwise from north
 ``current_m_s``     m/s       current speed (0 to :data:`MAX_CURRENT_M_S`)
@@ -37,14 +37,14 @@ from pathlib import Path
 
 import numpy as np
 import pandas as pd
-from pydantic import AfterValidator, Field
+from pydantic import AfterValidator, Field, model_validator
 
 from ..config import Float, config_dataclass
 from ..forecast_inputs.limits import Envelope, check_number
 from ..sim import environment as env
 
 __all__ = ["WeatherState", "WeatherUncertainty", "TABLE_COLUMNS", "read_weather_table", "states_to_frame",
-           "SampledEnvironment", "sample_environment", "limiting_hs_m"]
+           "SampledEnvironment", "sample_environment", "limiting_hs_m", "max_hs_m", "MAX_STEEPNESS"]
 
 #: Required columns of a weather table (see the module notes), and the optional ones.
 TABLE_COLUMNS = ("wind_speed_m_s", "wind_dir_deg", "hs_m", "tp_s", "wave_dir_deg", "current_m_s",
@@ -95,6 +95,18 @@ def limiting_hs_m(tp_s):
     return np.interp(tp, [8.0, 15.0], [1.0 / 15.0, 1.0 / 25.0]) * env.G_M_S2 * tp**2 / (2.0 * np.pi)
 
 
+#: Steepness ``2 pi Hs / (g Tp^2)`` beyond which a sea state is refused: that at which a
+#: single deep-water wave breaks (Miche, 1/7), about twice DNV-RP-C205's limiting steepness
+#: of the significant wave (:func:`limiting_hs_m`), which only clips the samples' spread.
+MAX_STEEPNESS = 1.0 / 7.0
+
+
+def max_hs_m(tp_s):
+    """Largest significant wave height [m] a :class:`WeatherState` accepts at peak period
+    ``tp_s`` [s] (:data:`MAX_STEEPNESS`)."""
+    return MAX_STEEPNESS * env.G_M_S2 * np.asarray(tp_s, dtype=float) ** 2 / (2.0 * np.pi)
+
+
 @config_dataclass(frozen=True, prefix="weather")
 class WeatherState:
     """Mean weather of one state (SI, radians; directions as in :mod:`hybridship.sim.environment`).
@@ -107,7 +119,8 @@ class WeatherState:
         Direction the wind comes FROM [rad], clockwise from north.
     hs_m, tp_s : float
         Significant wave height [m] and peak period [s] (JONSWAP, gamma 3.3, long-crested),
-        at most :data:`MAX_HS_M`; the period between :data:`MIN_TP_S` and :data:`MAX_TP_S`.
+        at most :data:`MAX_HS_M` and no steeper than :data:`MAX_STEEPNESS` (:func:`max_hs_m`);
+        the period between :data:`MIN_TP_S` and :data:`MAX_TP_S`.
     wave_dir_from_rad : float
         Direction the waves come FROM [rad].
     current_speed_m_s : float
@@ -128,6 +141,16 @@ class WeatherState:
     current_speed_m_s: Annotated[Float, Field(ge=0.0, le=MAX_CURRENT_M_S)] = 0.0
     current_dir_to_rad: _Direction = 0.0
     gust_intensity: Annotated[Float, Field(ge=0.0, le=0.5)] = 0.1
+
+    @model_validator(mode="after")
+    def _a_sea_that_can_exist(self):
+        # steeper than a single wave can be before it breaks (Miche, deep water: 1/7) is no
+        # sea state but two columns swapped or a period in another unit
+        if self.hs_m > max_hs_m(self.tp_s):
+            raise ValueError(f"hs_m {self.hs_m:g} m at tp_s {self.tp_s:g} s is steeper than waves can be (at most "
+                             f"{max_hs_m(self.tp_s):.2f} m at that period: 2 pi Hs / (g Tp^2) <= "
+                             f"{MAX_STEEPNESS:.3f}); are hs_m and tp_s swapped, or tp_s in another unit?")
+        return self
 
     @classmethod
     def from_degrees(cls, *, wind_speed_m_s=0.0, wind_dir_deg=0.0, hs_m=0.0, tp_s=6.0, wave_dir_deg=None,
@@ -187,7 +210,14 @@ def read_weather_table(path_or_frame) -> tuple[list[WeatherState], list[str]]:
         if not Path(src).is_file():
             raise FileNotFoundError(f"weather table: no such file {src!r}")
         try:
-            df = pd.read_csv(src)
+            with warnings.catch_warnings():
+                # a row with more fields than the header: pandas would take the first column
+                # as the index and shift every other one (index_col=False), or drop the last
+                warnings.simplefilter("error", pd.errors.ParserWarning)
+                df = pd.read_csv(src, index_col=False)
+        except pd.errors.ParserWarning:
+            raise ValueError(f"{src}: {_field_count_problem(src)}; a weather table's rows have one field per "
+                             f"header column") from None
         except (pd.errors.ParserError, pd.errors.EmptyDataError, UnicodeDecodeError) as exc:
             what = ("the file is empty" if isinstance(exc, pd.errors.EmptyDataError) else
                     "it is not text (a binary file?)" if isinstance(exc, UnicodeDecodeError) else
@@ -223,11 +253,30 @@ def read_weather_table(path_or_frame) -> tuple[list[WeatherState], list[str]]:
                              f"({int(bad.sum())} bad row(s))")
         cols[c] = v
     gi = cols.get("gust_intensity", np.full(len(df), 0.1))
-    states = [WeatherState(cols["wind_speed_m_s"][i], math.radians(cols["wind_dir_deg"][i]), cols["hs_m"][i],
-                           cols["tp_s"][i], math.radians(cols["wave_dir_deg"][i]), cols["current_m_s"][i],
-                           math.radians(cols["current_dir_deg"][i]), gi[i]) for i in range(len(df))]
+    states = []
+    for i in range(len(df)):
+        try:
+            states.append(WeatherState(cols["wind_speed_m_s"][i], math.radians(cols["wind_dir_deg"][i]),
+                                       cols["hs_m"][i], cols["tp_s"][i], math.radians(cols["wave_dir_deg"][i]),
+                                       cols["current_m_s"][i], math.radians(cols["current_dir_deg"][i]), gi[i]))
+        except ValueError as exc:       # a combination of columns (a sea steeper than waves can be)
+            line = "" if isinstance(path_or_frame, pd.DataFrame) else f" (line {i + 2} of the file)"
+            raise ValueError(f"{src}: row {i}{line}: {str(exc).removeprefix('weather.')}") from None
     labels = [str(x) for x in df["time"]] if "time" in df.columns else [str(i) for i in range(len(df))]
     return states, labels
+
+
+def _field_count_problem(src: str) -> str:
+    """Which line of a CSV file first has another number of fields than its header line."""
+    import csv
+
+    with open(src, newline="", encoding="utf-8", errors="replace") as fh:
+        rows = csv.reader(fh)
+        n = len(next(rows, []))
+        for k, row in enumerate(rows, start=2):
+            if row and len(row) != n:
+                return f"line {k} has {len(row)} fields, the header line {n}"
+    return f"a line has another number of fields than the header line ({n})"
 
 
 def states_to_frame(states, labels=None) -> pd.DataFrame:
