@@ -213,8 +213,11 @@ def _cmd_simulate(args) -> int:
     progress = sys.stderr.isatty() if args.progress is None else args.progress
 
     if args.sweep:
-        paths = scenario.sweep(args.out_dir, args.seeds, beaufort=tuple(args.beaufort), fmt=args.format,
-                               vessel=vessel, progress=progress, **overrides)
+        try:
+            paths = scenario.sweep(args.out_dir, args.seeds, beaufort=tuple(args.beaufort), fmt=args.format,
+                                   vessel=vessel, progress=progress, **overrides)
+        except (FileExistsError, PermissionError) as exc:      # checked before any simulation
+            raise UsageError(f"{prefix}: error: --out-dir: {exc}") from None
         print(f"wrote {len(paths)} log(s) and {args.out_dir / 'scenarios.csv'}")
         return 0
 

@@ -243,7 +243,8 @@ def test_sweep_refuses_a_seed_already_there_in_another_format(tmp_path):
                                          r"\(.*sim_dp_loss_seed0001\.csv\.gz\)"):
         sweep(out, [1, 2], beaufort=(2, 3), fmt="parquet", **TINY)
     # refused before any simulation: nothing new, the summary untouched
-    assert sorted(p.name for p in out.iterdir()) == ["scenarios.csv", "sim_dp_loss_seed0001.csv.gz"]
+    assert sorted(p.name for p in out.iterdir() if not p.name.startswith(".")) == [
+        "scenarios.csv", "sim_dp_loss_seed0001.csv.gz"]
     assert (out / "scenarios.csv").read_bytes() == before
     # the same format is rewritten in place, with one summary row per seed
     sweep(out, [1], beaufort=(2, 3), fmt="csv.gz", **TINY)
@@ -253,6 +254,30 @@ def test_sweep_refuses_a_seed_already_there_in_another_format(tmp_path):
     sweep(out, [1], beaufort=(2, 3), fmt="parquet", **TINY)
     summary = pd.read_csv(out / "scenarios.csv")
     assert summary["seed"].tolist() == [1] and summary["file"].tolist() == ["sim_dp_loss_seed0001.parquet"]
+
+
+def test_sweep_never_replaces_a_users_file_and_its_own_stay_replaceable(tmp_path, capsys):
+    """A file of the user's under a log's name is refused before any simulation and left as it
+    was; the sweep's own logs are recorded as they are written, so a single ``simulate`` may
+    replace them, and a sweep folder from before the record is recognised by its summary."""
+    out = tmp_path / "out"
+    out.mkdir()
+    mine = out / "sim_dp_loss_seed0002.csv"
+    mine.write_text("my own log\n")
+    with pytest.raises(FileExistsError, match="sim_dp_loss_seed0002.csv: exists and was not written by hybridship"):
+        sweep(out, [1, 2], beaufort=(2, 3), fmt="csv", **TINY)
+    assert mine.read_text() == "my own log\n" and not (out / "sim_dp_loss_seed0001.csv").exists()
+    mine.unlink()
+    sweep(out, [1], beaufort=(2, 3), fmt="csv", **TINY)
+    assert main(["simulate", "--seed", "1", "--out", str(out / "sim_dp_loss_seed0001.csv"), "--t-shutdown-s", "120",
+                 "--drift-s", "60", "--no-progress"]) == 0
+    (out / ".hybridship-outputs.json").unlink()            # a folder swept before the record
+    sweep(out, [1], beaufort=(2, 3), fmt="csv", **TINY)
+    capsys.readouterr()
+    mine.write_text("my own log\n")
+    assert main(["simulate", "--sweep", "--seeds", "2", "--out-dir", str(out), "--format", "csv",
+                 "--t-shutdown-s", "120", "--drift-s", "60", "--no-progress"]) == 2
+    assert "--out-dir: " in capsys.readouterr().err and mine.read_text() == "my own log\n"
 
 
 def test_cli_sweep_in_another_format_names_the_existing_log(tmp_path, capsys):
@@ -399,8 +424,8 @@ def test_cli_sweep(tmp_path):
     rc = main(["simulate", "--sweep", "--seeds", "1-2", "--out-dir", str(tmp_path), "--t-shutdown-s", "120",
                "--drift-s", "60", "--format", "parquet", "--no-progress"])
     assert rc == 0
-    assert sorted(p.name for p in tmp_path.iterdir()) == ["scenarios.csv", "sim_dp_loss_seed0001.parquet",
-                                                          "sim_dp_loss_seed0002.parquet"]
+    assert sorted(p.name for p in tmp_path.iterdir() if not p.name.startswith(".")) == [
+        "scenarios.csv", "sim_dp_loss_seed0001.parquet", "sim_dp_loss_seed0002.parquet"]
 
 
 @pytest.mark.parametrize("argv, needle", [

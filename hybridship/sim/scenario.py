@@ -45,7 +45,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..fileio import atomic_write
+from ..fileio import atomic_write, check_output_files, record_outputs
 import pandas as pd
 from pydantic import Field, field_validator, model_validator
 from scipy.signal import lfilter
@@ -832,6 +832,11 @@ def sweep(out_dir, seeds: Iterable[int], *, beaufort=(2, 5), fmt: str = "csv.gz"
     out = Path(out_dir)
     _refuse_other_formats(out, seeds, fmt)
     earlier = _earlier_summary(out / "scenarios.csv")  # before the work: a damaged file stops it here
+    # never replace a file of the user's under a log's name; a sweep's own (recorded, or
+    # listed in the folder's scenarios.csv from before the record) are rewritten
+    swept = set() if earlier is None else set(earlier["file"].astype(str))
+    check_output_files(out, [log_file_name(c.seed, fmt) for c in configs] + ["scenarios.csv"],
+                       ours=lambda name, _: name in swept or (name == "scenarios.csv" and earlier is not None))
     out.mkdir(parents=True, exist_ok=True)
     paths, rows = [], []
     it = configs
@@ -843,6 +848,7 @@ def sweep(out_dir, seeds: Iterable[int], *, beaufort=(2, 5), fmt: str = "csv.gz"
         df, cond = _simulate(cfg, ves, progress=False)
         path = out / log_file_name(cfg.seed, fmt)
         write_log(df, path, channel_names=ves.channel_names, rotatable=ves.rotatable)
+        record_outputs(out, [path.name])        # as it is written: an interrupted sweep's logs are ours too
         paths.append(path)
         heading_mode = "fixed" if cfg.heading_sp_deg is not None else cfg.heading_mode
         rows.append({"file": path.name, "seed": cfg.seed, **cond.as_dict(), "heading_mode": heading_mode,
@@ -854,6 +860,7 @@ def sweep(out_dir, seeds: Iterable[int], *, beaufort=(2, 5), fmt: str = "csv.gz"
         kept = earlier[~earlier["seed"].isin(summary["seed"]) & ~earlier["file"].isin(summary["file"])]
         summary = pd.concat([kept, summary], ignore_index=True).sort_values("seed", kind="stable")
     atomic_write(out / "scenarios.csv", lambda fh: fh.write(summary.round(4).to_csv(index=False).encode("utf-8")))
+    record_outputs(out, ["scenarios.csv"])
     return paths
 
 
