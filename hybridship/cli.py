@@ -710,6 +710,12 @@ def main(argv=None) -> int:
     except (OSError, ValueError, TypeError, FloatingPointError) as exc:
         print(problem_lines(exc, f"{_command(args)}: error: "), file=sys.stderr)
         return 1
+    except MemoryError as exc:      # numpy's _ArrayMemoryError, with a traceback, otherwise
+        ours = str(exc) and "Unable to allocate" not in str(exc)       # said in the command's words
+        what = str(exc) if ours else ("the arrays this run needs do not fit in memory; ask for less (fewer "
+                                      "samples, headings, start times or logs)")
+        print(f"{_command(args)}: error: out of memory: {what}", file=sys.stderr)
+        return 1
 
 
 def _command(args) -> str:

@@ -241,6 +241,25 @@ def test_weather_table_round_trip_and_errors(tmp_path):
     assert "codec" not in str(info.value)
 
 
+def test_a_run_too_large_for_memory_says_so_in_the_commands_words(monkeypatch, tmp_path, capsys):
+    """Out of memory: the number of blackouts named and what to ask for instead, not numpy's
+    traceback; and the result keeps its own copy of the headings it was given."""
+    from hybridship.cli import main
+    from hybridship.driftoff import planning
+
+    def no_memory(*args, **kwargs):
+        raise MemoryError("Unable to allocate 80.0 GiB for an array")
+    monkeypatch.setattr(planning, "_blackouts", no_memory)
+    assert main(["drift-off", "planning", "--samples", "1000000", "--no-plots", "--out", str(tmp_path / "o")]) == 1
+    err = capsys.readouterr().err
+    assert "out of memory: settings.n_samples: 1000000 samples x 8 heading(s)" in err and "Traceback" not in err
+    monkeypatch.undo()
+    h = np.array([0.0, 1.0])
+    r = simulate_blackouts("gunnerus", WeatherState(), h, settings=DriftOffSettings(**CALM_FAST))
+    h[0] = 3.0
+    assert r.headings_rad[0] == 0.0
+
+
 def test_a_sea_steeper_than_waves_can_be_is_refused():
     """Beyond the steepness at which a single wave breaks (1/7): refused naming both fields;
     DNV's limiting steepness, about half of it, is accepted."""
@@ -477,6 +496,9 @@ def test_live_refuses_empty_commands_and_faulty_sensors_at_the_blackout_row():
     with pytest.warns(LogFormatWarning, match="at the blackout row .*missing position"):
         est = environment_from_log(last, "gunnerus")
     assert "missing position" in est.notes and environment_from_log(hist, "gunnerus").notes == ""
+    knots = hist.assign(wind_speed_m_s=60.0)
+    with pytest.raises(ValueError, match=r"column 'wind_speed_m_s': the mean wind over the last 120 s .* is 59.8 m/s"):
+        environment_from_log(knots, "gunnerus")
 
 
 def test_live_bad_input_names_the_field():

@@ -34,6 +34,7 @@ from ..logs.io import LogArrays
 from ..residual.features import ResidualConfig, prepare_log
 from . import engine, spread
 from .planning import DriftOffResult, DriftOffSettings, get_model, hull_array, refuse_diverged, state_rng
+from .weather import MAX_WIND_M_S
 
 __all__ = ["EnvironmentEstimate", "environment_from_log", "blackout_now", "MIN_WINDOW_S", "MIN_WIND_WINDOW_S"]
 
@@ -198,14 +199,6 @@ def environment_from_log(log, vessel="gunnerus", *, window_s: float = 900.0, win
         raise ValueError(f"log: dp_active is 0 at time_s {a.time_s[idx]:g} (the last row used): a blackout is "
                          f"predicted from station keeping; give a time while the DP is active")
     notes = _start_checks(a, idx, name)
-    current_members = None
-    if method == "estimator":
-        eta0, nu0, bias0, members, current_members = _estimated(model, a, idx, int(n_members), seed,
-                                                                environment_config)
-    else:
-        prep = prepare_log(model, a, ResidualConfig(bias_window_s=float(window_s)))
-        members = prep.bias_members(idx, int(n_members), seed=seed)
-        eta0, nu0, _, bias0 = prep.start_state(idx)
     # the wind has its own window, whatever the estimator's; only samples the sensor logged
     # (the reader holds the last value over a gap, which is not a measurement of now)
     sel = aw.wind_logged & (aw.time_s >= a.time_s[idx] - wind_window_s)
@@ -215,8 +208,20 @@ def environment_from_log(log, vessel="gunnerus", *, window_s: float = 900.0, win
         vn, ve = np.mean(ws * np.cos(wd)), np.mean(ws * np.sin(wd))
         w_speed, w_dir = float(np.hypot(vn, ve)), float(math.atan2(ve, vn))
         gi = float(np.clip(np.std(ws) / w_speed, 0.0, 0.5)) if w_speed > 0 else 0.0
+        if w_speed > MAX_WIND_M_S:       # before the estimator's work, in the log's words
+            raise ValueError(f"{name}: column 'wind_speed_m_s': the mean wind over the last {wind_window_s:g} s up "
+                             f"to time_s {a.time_s[idx]:g} is {w_speed:.1f} m/s, beyond the {MAX_WIND_M_S:.1f} m/s "
+                             f"the wind model is meant for; the log format expects m/s (knots?)")
     else:
         w_speed, w_dir, gi = 0.0, 0.0, 0.0
+    current_members = None
+    if method == "estimator":
+        eta0, nu0, bias0, members, current_members = _estimated(model, a, idx, int(n_members), seed,
+                                                                environment_config)
+    else:
+        prep = prepare_log(model, a, ResidualConfig(bias_window_s=float(window_s)))
+        members = prep.bias_members(idx, int(n_members), seed=seed)
+        eta0, nu0, _, bias0 = prep.start_state(idx)
     return EnvironmentEstimate(time_s=float(a.time_s[idx]), eta=eta0, nu=nu0, rpm=np.nan_to_num(a.rpm[idx]).copy(),
                                azimuth_rad=np.nan_to_num(a.azimuth_rad[idx]).copy(), wind_speed_m_s=w_speed,
                                wind_dir_from_rad=w_dir, gust_intensity=gi, accel_ned=np.asarray(bias0, float),

@@ -232,7 +232,7 @@ class DriftOffResult:
 
 def check_headings(headings_rad) -> np.ndarray:
     """Headings [rad] as a 1-D array, refused when empty, not finite, in degrees or repeated."""
-    a = np.atleast_1d(np.asarray(headings_rad, dtype=float))
+    a = np.atleast_1d(np.array(headings_rad, dtype=float))     # a copy: the result keeps it
     if a.ndim != 1 or a.size == 0 or not np.all(np.isfinite(a)):
         raise ValueError(f"headings: expected a non-empty list of finite angles, got {headings_rad!r}")
     if np.any(np.abs(a) > 2.0 * np.pi + 0.1):
@@ -288,8 +288,19 @@ def simulate_blackouts(vessel, weather: WeatherState, headings_rad, *, uncertain
         raise TypeError(f"keep_tracks: expected True or False, got {keep_tracks!r}")
     psi = check_headings(headings_rad)
     model = get_model(vessel)
-    ves = model.vessel
     rng = state_rng(st.seed, index)
+    N, H = st.n_samples, psi.size
+    try:
+        return _blackouts(model, weather, uncertainty, st, psi, rng, index, keep_tracks)
+    except MemoryError:
+        raise MemoryError(f"settings.n_samples: {N} samples x {H} heading(s) = {N * H} blackouts at once need more "
+                          f"memory than this machine has; give fewer samples or headings (a season run splits its "
+                          f"states into chunks)") from None
+
+
+def _blackouts(model, weather, uncertainty, st, psi, rng, index: int, keep_tracks: bool) -> "DriftOffResult":
+    """:func:`simulate_blackouts` after its checks: the batch of ``n_samples x headings`` drifts."""
+    ves = model.vessel
     N, H = st.n_samples, psi.size
     scales = spread.draw_scales(ves, N, rng, st.vessel_spread)
     envs = sample_environment(weather, uncertainty, N, rng, duration_s=st.horizon_s, dt_s=st.dt_s,
