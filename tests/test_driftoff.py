@@ -227,6 +227,14 @@ def test_weather_table_round_trip_and_errors(tmp_path):
     with pytest.raises(ValueError, match=r"row 1 \(line 3 of the file\): hs_m 8 m at tp_s 3 s is steeper than "
                                          r"waves can be"):
         read_weather_table(path)
+    # a state without a label of its own: the time column and the line
+    twice = pd.concat([df, df], ignore_index=True)
+    twice.to_csv(path, index=False)
+    with pytest.raises(ValueError, match=r"column 'time', row 1 \(line 3 of the file\): '2024-01-01T00:00' again"):
+        read_weather_table(path)
+    twice.loc[1, "time"] = np.nan
+    with pytest.raises(ValueError, match=r"column 'time', row 1: empty"):
+        read_weather_table(twice)
     # one field more than the header in every row: not read with the columns shifted
     lines = df.to_csv(index=False).splitlines()
     path.write_text(lines[0] + "\n" + lines[1] + ",99\n")
@@ -556,6 +564,16 @@ def test_cli_season_in_this_process(tmp_path):
     # the planning tables would read as the season's: gone; the user's file untouched
     assert not (out / "times.csv").exists() and not (out / "watch.csv").exists()
     assert (out / "notes.txt").read_text() == "earlier"
+
+
+def test_cli_season_workers_only_with_a_local_cluster(tmp_path, capsys):
+    from hybridship.cli import main
+
+    table = tmp_path / "weather.csv"
+    states_to_frame([WeatherState()]).to_csv(table, index=False)
+    assert main(["drift-off", "season", "--weather-table", str(table), "--scheduler", "none", "--workers", "4",
+                 "--out", str(tmp_path / "o")]) == 2
+    assert "--workers 4 is for --scheduler local" in capsys.readouterr().err and not (tmp_path / "o").exists()
 
 
 def test_cli_live_on_a_truthsim_log(tmp_path):

@@ -128,7 +128,8 @@ def add_parser(sub, parser_class, usage_error=None) -> None:
                    help="vessel headings [deg], comma-separated (default every 45 deg)")
     c.add_argument("--scheduler", default="local",
                    help="'local' (LocalCluster), a scheduler address tcp://host:8786, or 'none' (this process)")
-    c.add_argument("--workers", type=int, default=2, help="LocalCluster workers (default 2)")
+    c.add_argument("--workers", type=int, default=None, help="LocalCluster workers (default 2; only with "
+                                                               "--scheduler local)")
     c.add_argument("--chunk-size", type=int, default=24, help="weather states per task (default 24)")
     c.add_argument("--max-p-exceed", type=float, default=0.1,
                    help="a state is operable when P(exceed) <= this (default 0.1)")
@@ -350,8 +351,12 @@ def _cmd_season(args) -> int:
 
     st = _settings(args, "season")
     for opt, v in (("--workers", args.workers), ("--chunk-size", args.chunk_size)):
-        if v < 1:
+        if v is not None and v < 1:
             raise _usage(f"{_PROG} season: error: {opt} must be >= 1, got {v}")
+    if args.scheduler != "local" and args.workers is not None:
+        raise _usage(f"{_PROG} season: error: --workers {args.workers} is for --scheduler local (a LocalCluster); "
+                     f"with --scheduler {args.scheduler} the workers are "
+                     f"{'this process' if args.scheduler == 'none' else 'those of the cluster'}")
     if not 0.0 <= args.max_p_exceed <= 1.0:
         raise _usage(f"{_PROG} season: error: --max-p-exceed must be in [0, 1], got {args.max_p_exceed}")
     try:
@@ -370,7 +375,8 @@ def _cmd_season(args) -> int:
     model = _model(args, "season")
     progress = sys.stderr.isatty() if args.progress is None else args.progress
     res = season_sweep(args.vessel, states, _headings_rad(args, "season"), settings=st,
-                       labels=labels, quantile=args.quantile, scheduler=scheduler, n_workers=args.workers,
+                       labels=labels, quantile=args.quantile, scheduler=scheduler,
+                       n_workers=2 if args.workers is None else args.workers,
                        chunk_size=args.chunk_size, progress=progress)
     op = res.operability(args.max_p_exceed)
     n = len(states) * len(args.headings_deg) * st.n_samples

@@ -262,7 +262,17 @@ def read_weather_table(path_or_frame) -> tuple[list[WeatherState], list[str]]:
         except ValueError as exc:       # a combination of columns (a sea steeper than waves can be)
             line = "" if isinstance(path_or_frame, pd.DataFrame) else f" (line {i + 2} of the file)"
             raise ValueError(f"{src}: row {i}{line}: {str(exc).removeprefix('weather.')}") from None
-    labels = [str(x) for x in df["time"]] if "time" in df.columns else [str(i) for i in range(len(df))]
+    labels = [str(i) for i in range(len(df))]
+    if "time" in df.columns:
+        labels = [str(x) for x in df["time"]]
+        t = df["time"]
+        bad = t.isna() | t.duplicated(keep="first")      # a season table's row must say which state it is
+        if bad.any():
+            i = int(np.flatnonzero(bad.to_numpy())[0])
+            line = "" if isinstance(path_or_frame, pd.DataFrame) else f" (line {i + 2} of the file)"
+            got = "empty" if pd.isna(t.iloc[i]) else f"{labels[i]!r} again (first in row {labels.index(labels[i])})"
+            raise ValueError(f"{src}: column 'time', row {i}{line}: {got}; each state needs a label of its own "
+                             f"(or leave the column out to number the rows)")
     return states, labels
 
 
