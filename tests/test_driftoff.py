@@ -743,6 +743,27 @@ def test_a_drift_that_diverges_after_the_reaction_times_is_refused_too():
         blackout_now(est, "gunnerus", st)                  # ... the blow-up comes after it
 
 
+def test_a_season_state_that_diverges_is_named_by_its_label(monkeypatch):
+    """The sweep stops at a state whose drifts diverge and names it by its label; the chunk
+    returns the error rather than raising it, so a Dask worker does not log a crash."""
+    from hybridship.driftoff import season
+    from hybridship.driftoff.season import run_chunk, season_sweep
+
+    real = season.simulate_blackouts
+
+    def diverging(vessel, state, headings, **kw):
+        if kw["index"] == 1:
+            raise FloatingPointError("3 of 8 drifts diverged (weather: the state of index 1 or its spread)")
+        return real(vessel, state, headings, **kw)
+    monkeypatch.setattr(season, "simulate_blackouts", diverging)
+    st = DriftOffSettings(**CALM_FAST)
+    out = run_chunk("gunnerus", [WeatherState()] * 2, [0, 1], [0.0], None, st, 0.9, ["h0", "h1"])
+    assert out["error"].endswith("(label 'h1')")
+    with pytest.raises(FloatingPointError, match=r"state of index 1 or its spread\) \(label 'h1'\)"):
+        season_sweep("gunnerus", [WeatherState()] * 3, [0.0], settings=st, labels=["h0", "h1", "h2"],
+                     chunk_size=2, progress=False)
+
+
 def test_result_queries_and_the_state_index_refuse_values_that_would_read_as_zero():
     w = WeatherState()
     st = DriftOffSettings(n_samples=2, horizon_s=30.0, reaction_times_s=(10.0,))

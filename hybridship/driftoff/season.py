@@ -45,16 +45,23 @@ def require_dask():
 
 
 def run_chunk(vessel, states, indices, headings_rad, uncertainty, settings: DriftOffSettings,
-              quantile: float) -> dict:
+              quantile: float, labels=None) -> dict:
     """Summaries of consecutive weather states (one Dask task).
 
     Returns arrays keyed by name, first axis = state: ``t_quantiles_s`` (S, H, R, 3) (10, 50,
     90 %), ``p_exceed`` (S, H, R, Q), ``watch_radius_m`` (S, H, Q), ``weather_rel_rad`` (S, H),
-    ``index`` (S,).
+    ``index`` (S,). A state whose drifts diverge gives ``{"index": ..., "error": message}``
+    (naming the state's label from ``labels``, one per state), which :func:`season_sweep`
+    raises: returned, not raised, so that a Dask worker does not log it as a crash.
     """
     tq, pe, wc, rel = [], [], [], []
-    for state, i in zip(states, indices):
-        r = simulate_blackouts(vessel, state, headings_rad, uncertainty=uncertainty, settings=settings, index=int(i))
+    for k, (state, i) in enumerate(zip(states, indices)):
+        try:
+            r = simulate_blackouts(vessel, state, headings_rad, uncertainty=uncertainty, settings=settings,
+                                   index=int(i))
+        except FloatingPointError as exc:
+            label = "" if labels is None else f" (label {labels[k]!r})"
+            return dict(index=np.asarray(indices, int), error=f"{exc}{label}")
         tq.append(r.time_quantiles((0.1, 0.5, 0.9)))
         pe.append(r.p_exceed())
         wc.append(r.watch_circle(quantile))
@@ -191,6 +198,11 @@ def season_sweep(vessel, states, headings_rad, *, uncertainty: WeatherUncertaint
                          f"got {next(x for x in labels if labels.count(x) > 1)!r} more than once")
     chunks = [(states[i:i + chunk_size], list(range(i, min(i + chunk_size, len(states)))))
               for i in range(0, len(states), chunk_size)]
+
+    def collected(out: dict) -> dict:
+        if "error" in out:
+            raise FloatingPointError(out["error"])
+        return out
     from tqdm.auto import tqdm
 
     bar = tqdm(total=len(states), unit="state", desc="drift-off sweep", disable=not progress)
@@ -199,16 +211,18 @@ def season_sweep(vessel, states, headings_rad, *, uncertainty: WeatherUncertaint
     try:
         if scheduler is None:
             for ch, idx in chunks:
-                parts.append(run_chunk(vessel, ch, idx, psi, uncertainty, st, quantile))
+                parts.append(collected(run_chunk(vessel, ch, idx, psi, uncertainty, st, quantile,
+                                                 [labels[i] for i in idx])))
                 bar.update(len(idx))
         else:
             dd = require_dask()
             client, cluster = _client(scheduler, n_workers)
             try:
-                futs = [client.submit(run_chunk, vessel, ch, idx, psi, uncertainty, st, quantile, pure=False)
+                futs = [client.submit(run_chunk, vessel, ch, idx, psi, uncertainty, st, quantile,
+                                      [labels[i] for i in idx], pure=False)
                         for ch, idx in chunks]
                 for fut in dd.as_completed(futs):
-                    out = fut.result()
+                    out = collected(fut.result())
                     parts.append(out)
                     bar.update(len(out["index"]))
             finally:
