@@ -200,6 +200,8 @@ def test_weather_table_round_trip_and_errors(tmp_path):
         read_weather_table(bad)
     with pytest.raises(ValueError, match="hs_m"):
         read_weather_table(df.drop(columns=["hs_m"]))
+    with pytest.raises(ValueError, match="found ' hs_m', which is hs_m with spaces around the name"):
+        read_weather_table(df.rename(columns={"hs_m": " hs_m"}))
     # above a WeatherState's range: the column, the row and the file's line, not the field's
     # name inside WeatherState
     bad = pd.concat([df, df], ignore_index=True)

@@ -226,8 +226,11 @@ def read_weather_table(path_or_frame) -> tuple[list[WeatherState], list[str]]:
                              f"{list(TABLE_COLUMNS)}; {what})") from None
     missing = [c for c in TABLE_COLUMNS if c not in df.columns]
     if missing:
+        spaced = [str(c) for c in df.columns if str(c) != str(c).strip() and str(c).strip() in missing][:1]
+        hint = "".join(f"; found {c!r}, which is {c.strip()} with spaces around the name (a header written with "
+                       f"', ' between names?)" for c in spaced)
         raise ValueError(f"{src}: missing column(s) {missing}; expected {list(TABLE_COLUMNS)} "
-                         f"(optional {list(OPTIONAL_COLUMNS)})")
+                         f"(optional {list(OPTIONAL_COLUMNS)}){hint}")
     if len(df) == 0:
         raise ValueError(f"{src}: no rows")
     unknown = [str(c) for c in df.columns if c not in TABLE_COLUMNS + OPTIONAL_COLUMNS]
