@@ -29,6 +29,8 @@ Examples::
         thrust_prior_0.05 wide_thrust_prior --out docs/results/estimator-variants-thrust-prior
     python benchmarks/estimator_variants.py --data embedded truthsim-dev own --only default \
         current_at_stop_0.1 current_at_stop_0.3 --out docs/results/estimator-variants-current-at-stop
+    python benchmarks/estimator_variants.py --data embedded truthsim-dev own --only default \
+        load_to_current_0.5 load_to_current_1 --out docs/results/estimator-variants-load-to-current
 """
 
 from __future__ import annotations
@@ -81,6 +83,10 @@ VARIANTS = {
     "current_prior_0.3": ({"environment_config": C(current_prior_m_s=0.3)}, "current prior 0.3 m/s instead of 0.02 m/s"),
     "current_at_stop_0.1": ({"environment_config": C(current_std_at_stop_m_s=0.1)},
                             "current's uncertainty widened by 0.1 m/s along the current-load ridge at the stop"),
+    "load_to_current_0.5": ({"environment_config": C(load_to_current_at_stop=0.5)},
+                            "half the NED load re-explained as a current at the stop"),
+    "load_to_current_1": ({"environment_config": C(load_to_current_at_stop=1.0)},
+                          "the whole NED load re-explained as a current at the stop"),
     "current_at_stop_0.3": ({"environment_config": C(current_std_at_stop_m_s=0.3)},
                             "current's uncertainty widened by 0.3 m/s along the current-load ridge at the stop"),
     "fixed_noise": ({"environment_config": C(adaptive_measurement_std=False)},

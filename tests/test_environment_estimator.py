@@ -216,6 +216,35 @@ def test_current_widened_at_the_stop_keeps_the_estimate_and_lets_the_drift_find_
     assert err_wide < 0.8 * err_base
 
 
+def test_load_re_explained_as_a_current_at_the_stop_finds_the_current_that_makes_it(model):
+    """A load equal to the hull's response at rest to a 0.3 m/s current, re-explained as a
+    current at the stop (``load_to_current_at_stop=1``): that current is found and the load
+    left is zero; half of it leaves the current's share at the same acceleration."""
+    from hybridship.residual import environment_kernel as kernel
+
+    est = EnvironmentEstimator(model, EnvironmentConfig(load_to_current_at_stop=1.0))
+    x = np.zeros(len(est.state_names))
+    x[2] = 0.3
+    a_c = model.acceleration(x[:3], x[3:6], rpm=np.zeros(model.n_channels), current=(0.3, 1.2))[0]
+    c, s = np.cos(0.3), np.sin(0.3)
+    x[8:11] = c * a_c[0] - s * a_c[1], s * a_c[0] + c * a_c[1], a_c[2]
+    work = kernel._workspace(model.arrays)
+    x1 = kernel.load_to_current_at_stop(x, 1.0, model.arrays, work)
+    assert np.hypot(*x1[6:8]) == pytest.approx(0.3, abs=1e-4)
+    assert np.arctan2(x1[7], x1[6]) == pytest.approx(1.2, abs=1e-3)
+    assert np.abs(x1[8:11]).max() < 1e-6
+    # the estimator's own stop (live mode) applies it too
+    assert np.hypot(*est.at_thrust_stop(x, np.eye(x.size) * 1e-4)[0][6:8]) == pytest.approx(0.3, abs=1e-4)
+    half = kernel.load_to_current_at_stop(x, 0.5, model.arrays, work)
+
+    def accel(xx):
+        ext = external_accel(xx[2], xx[8:11], 0.0, 0.0)
+        return model.acceleration(xx[:3], xx[3:6], rpm=np.zeros(model.n_channels),
+                                  current=(np.hypot(*xx[6:8]), np.arctan2(xx[7], xx[6])), accel_ext=ext)[0]
+    np.testing.assert_allclose(accel(half), accel(x), atol=1e-9)
+    assert 0.1 < np.hypot(*half[6:8]) < 0.3
+
+
 def test_hybrid_forecasts_after_a_failure_use_the_drift_samples(model):
     """Forecasts started 1..19 s after the failure use the estimate at their own start: a
     forecast from start k equals the one made from a log cut right after k, and differs from

@@ -162,6 +162,12 @@ class EnvironmentConfig(BaseModel):
         current change paired with the load change that keeps the hull's acceleration), so
         that the drift, in which the ship starts to move through the water, decides the
         split; the estimate itself does not change at the stop. 0 (default): not.
+    load_to_current_at_stop : float
+        At a thrust stop, re-explain this fraction of the NED load's surge/sway acceleration
+        as a current (the current whose hull response at the stop adds that much), the load
+        giving up what the current takes over, in yaw too; the acceleration at the stop is
+        unchanged, the drift after it is not (a current carries the ship, a force pushes it).
+        0 (default): the station keeping's split is kept.
     filter_step_s : float
         Longest filter step [s]: a faster log is filtered on every ``m``-th row.
     held_load_window_s, held_load_block_s : float
@@ -199,6 +205,7 @@ class EnvironmentConfig(BaseModel):
     yaw_load_kept_at_stop: float = Field(0.0, ge=0.0, le=1.0)
     yaw_load_std_at_stop: float | None = Field(None, ge=0.0)
     current_std_at_stop_m_s: float = Field(0.0, ge=0.0)
+    load_to_current_at_stop: float = Field(0.0, ge=0.0, le=1.0)
     held_load_window_s: float = Field(600.0, ge=0.0)
     held_load_block_s: float = Field(30.0, gt=0.0)
     innovation_gate_sigma: float = Field(8.0, gt=0.0)
@@ -550,6 +557,8 @@ class EnvironmentEstimator:
         x, P = kernel.at_thrust_stop(np.ascontiguousarray(x, dtype=float), np.ascontiguousarray(P, dtype=float),
                                      float(c.yaw_load_kept_at_stop), self._yaw_std_at_stop(),
                                      float(c.load_yaw_prior_rad_s2), self.model.arrays, work)
+        if c.load_to_current_at_stop > 0:
+            x = kernel.load_to_current_at_stop(x, float(c.load_to_current_at_stop), self.model.arrays, work)
         if c.current_std_at_stop_m_s > 0:
             x, P = kernel.current_ridge_at_stop(x, P, float(c.current_std_at_stop_m_s), self.model.arrays, work)
         return x, P
@@ -715,7 +724,8 @@ class EnvironmentEstimator:
                            np.asarray(self.thrust_error_mean, float),
                            self._prior_sd(), self._process_noise_base(), _FD_STEP,
                            bool(c.reset_yaw_load_at_stop), float(c.yaw_load_kept_at_stop), self._yaw_std_at_stop(),
-                           float(c.load_yaw_prior_rad_s2), float(c.current_std_at_stop_m_s), drift_yaw_uv,
+                           float(c.load_yaw_prior_rad_s2), float(c.current_std_at_stop_m_s),
+                           float(c.load_to_current_at_stop), drift_yaw_uv,
                            self._gate(),
                            int(c.max_gated_samples), resume is not None,
                            np.ascontiguousarray(x_resume, dtype=float), np.ascontiguousarray(P_resume, dtype=float),

@@ -297,8 +297,56 @@ def current_ridge_at_stop(x, Pc, std, P, work):
 
 
 @numba.njit(cache=True)
+def load_to_current_at_stop(x, frac, P, work):
+    """State at a thrust stop with the fraction ``frac`` of the NED load's surge/sway
+    acceleration re-explained as a current (see
+    :meth:`hybridship.residual.environment.EnvironmentEstimator.at_thrust_stop`).
+
+    Newton's method finds the current whose hull response at the stop state adds ``frac``
+    of the load's body-frame acceleration to that of the estimated current (at most 1 m/s;
+    steps of at most 0.1 m/s); the load then gives up what the current took over, in yaw
+    too, so the acceleration at the stop is unchanged.
+    """
+    x = x.copy()
+    c, s = math.cos(x[2]), math.sin(x[2])
+    bn, be = x[_LOAD], x[_LOAD + 1]
+    want0 = frac * (c * bn + s * be)            # R^T b: the load's body-frame acceleration
+    want1 = frac * (-s * bn + c * be)
+    cn0, ce0 = x[_CUR], x[_CUR + 1]
+    a_est = _current_response(x, cn0, ce0, P, work)
+    cn, ce = cn0, ce0
+    h = 0.005
+    for _ in range(50):
+        a = _current_response(x, cn, ce, P, work)
+        r0, r1 = a[0] - a_est[0] - want0, a[1] - a_est[1] - want1
+        if abs(r0) < 1e-7 and abs(r1) < 1e-7:
+            break
+        dn = (_current_response(x, cn + h, ce, P, work) - _current_response(x, cn - h, ce, P, work)) / (2.0 * h)
+        de = (_current_response(x, cn, ce + h, P, work) - _current_response(x, cn, ce - h, P, work)) / (2.0 * h)
+        det = dn[0] * de[1] - de[0] * dn[1]
+        if abs(det) < 1e-12:
+            break
+        sn = -(de[1] * r0 - de[0] * r1) / det
+        se = -(-dn[1] * r0 + dn[0] * r1) / det
+        step = math.hypot(sn, se)
+        if step > 0.1:
+            sn, se = 0.1 * sn / step, 0.1 * se / step
+        cn, ce = cn + sn, ce + se
+        speed = math.hypot(cn, ce)
+        if speed > 1.0:
+            cn, ce = cn / speed, ce / speed
+    d = _current_response(x, cn, ce, P, work) - a_est
+    x[_CUR], x[_CUR + 1] = cn, ce
+    x[_LOAD] -= c * d[0] - s * d[1]
+    x[_LOAD + 1] -= s * d[0] + c * d[1]
+    x[_YAW_LOAD] -= d[2]
+    return x
+
+
+@numba.njit(cache=True)
 def filter_grid(grid, slot, t, seg, z, z_ok, r_std, rpm, az, wind, dp, P, per_thruster, prior_thr, prior_sd, q_base,
-                fd_step, reset_at_stop, kept, stop_std, yaw_prior, current_stop_std, drift_yaw_uv, gate, max_gated, resume, x_resume,
+                fd_step, reset_at_stop, kept, stop_std, yaw_prior, current_stop_std, load_to_current, drift_yaw_uv,
+                gate, max_gated, resume, x_resume,
                 P_resume, out_x, out_P, done):
     """Run the filter over the log rows ``grid`` (increasing).
 
@@ -369,6 +417,8 @@ def filter_grid(grid, slot, t, seg, z, z_ok, r_std, rpm, az, wind, dp, P, per_th
             if dp[prev] and not dp[i]:
                 if reset_at_stop:
                     x, Pc = at_thrust_stop(x, Pc, kept, stop_std, yaw_prior, P, work)
+                if load_to_current > 0.0:
+                    x = load_to_current_at_stop(x, load_to_current, P, work)
                 if current_stop_std > 0.0:
                     x, Pc = current_ridge_at_stop(x, Pc, current_stop_std, P, work)
         prev = i
