@@ -224,20 +224,20 @@ def process_noise(dt, q_base):
 def current_yaw_accel(x, P, work):
     """Yaw acceleration [rad/s^2] of the hull's response to the estimated current at state
     ``x`` (no thrust, no wind): ``a_r(current) - a_r(no current)``."""
-    prep = work[0]
-    zeros3 = work[1]
-    thrusts = work[2]
-    K = P.thr.shape[0]
-    W = K + P.rud.shape[0]
+    return _current_response(x, x[_CUR], x[_CUR + 1], P, work)[2] - _current_response(x, 0.0, 0.0, P, work)[2]
+
+
+@numba.njit(cache=True)
+def _current_response(x, cn, ce, P, work):
+    """Body-frame acceleration (3) [m/s^2, m/s^2, rad/s^2] of the hull at state ``x`` in the
+    current ``(cn, ce)`` [m/s, NED], with no thrust and no wind."""
+    prep, zeros3, thrusts = work[0], work[1], work[2]
+    W = P.thr.shape[0] + P.rud.shape[0]
     rpm = np.zeros(W)
     az = np.zeros(W)
-    c, s = math.cos(x[2]), math.sin(x[2])
-    cn, ce = x[_CUR], x[_CUR + 1]
     prepare_inputs(az, 0.0, 0.0, math.hypot(cn, ce), math.atan2(ce, cn), P, prep)
-    a_c = vessel_rhs(c, s, x[3], x[4], x[5], rpm, prep, zeros3, zeros3, P, thrusts, 0)[2]
-    prepare_inputs(az, 0.0, 0.0, 0.0, 0.0, P, prep)
-    a_0 = vessel_rhs(c, s, x[3], x[4], x[5], rpm, prep, zeros3, zeros3, P, thrusts, 0)[2]
-    return a_c - a_0
+    out = vessel_rhs(math.cos(x[2]), math.sin(x[2]), x[3], x[4], x[5], rpm, prep, zeros3, zeros3, P, thrusts, 0)
+    return np.array([out[0], out[1], out[2]])
 
 
 @numba.njit(cache=True)
@@ -255,19 +255,6 @@ def at_thrust_stop(x, Pc, kept, stop_std, yaw_prior, P, work):
         Pn[i, k] = 0.0
     Pn[k, k] = yaw_prior ** 2 + (stop_std * total) ** 2
     return x, Pn
-
-
-@numba.njit(cache=True)
-def _current_response(x, cn, ce, P, work):
-    """Body-frame acceleration (3) [m/s^2, m/s^2, rad/s^2] of the hull at state ``x`` in the
-    current ``(cn, ce)`` [m/s, NED], with no thrust and no wind."""
-    prep, zeros3, thrusts = work[0], work[1], work[2]
-    W = P.thr.shape[0] + P.rud.shape[0]
-    rpm = np.zeros(W)
-    az = np.zeros(W)
-    prepare_inputs(az, 0.0, 0.0, math.hypot(cn, ce), math.atan2(ce, cn), P, prep)
-    out = vessel_rhs(math.cos(x[2]), math.sin(x[2]), x[3], x[4], x[5], rpm, prep, zeros3, zeros3, P, thrusts, 0)
-    return np.array([out[0], out[1], out[2]])
 
 
 @numba.njit(cache=True)
