@@ -33,6 +33,10 @@ def test_no_environment_never_reaches_any_radius():
     assert np.all(np.isinf(r.t_reach_s))
     assert np.all(r.excursion_m < 1e-9)
     assert np.all(r.p_exceed() == 0.0)
+    from hybridship.driftoff.report import polar_plot
+
+    fig = polar_plot(r)             # says so, instead of an empty plot
+    assert any("no radius reached" in t.get_text() for t in fig.axes[0].texts)
 
 
 def _scipy_time_to_reach(wind_m_s, radii, tau_rpm_s=1.5):
@@ -562,6 +566,7 @@ def test_cli_season_in_this_process(tmp_path):
                  "--headings-deg", "0,90", "--horizon-s", "90", "--no-progress", "--out", str(out)]) == 0
     season = pd.read_csv(out / "season.csv")
     assert len(season) == 2 * 2 * 3 and list(season["label"].unique()) == ["h0", "h1"]
+    assert season["reached_frac"].between(0.0, 1.0).all()
     assert (out / "operability.csv").is_file() and (out / "summary.md").is_file()
     # the planning tables would read as the season's: gone; the user's file untouched
     assert not (out / "times.csv").exists() and not (out / "watch.csv").exists()

@@ -72,7 +72,11 @@ def polar_plot(result: DriftOffResult, ax=None, title: str | None = None):
         line, = ax.plot(closed(th), closed(tq[:, r, 1]), marker="o", label=f"{rad:g} m, median")
         ax.plot(closed(th), closed(tq[:, r, 0]), ls="--", color=line.get_color(), label=f"{rad:g} m, 10 %")
     ax.set_title(title or "time to reach radius [s] vs wind direction off the bow", fontsize=10)
-    ax.legend(loc="lower left", bbox_to_anchor=(1.05, 0.0), fontsize=8)
+    if not np.isfinite(tq).any():       # an empty plot would read as a plotting fault
+        ax.text(0.5, 0.5, f"no radius reached\nwithin {result.horizon_s:g} s\nat any heading",
+                transform=ax.transAxes, ha="center", va="center", fontsize=11)
+    else:
+        ax.legend(loc="lower left", bbox_to_anchor=(1.05, 0.0), fontsize=8)
     return ax.figure
 
 

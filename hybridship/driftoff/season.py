@@ -50,11 +50,11 @@ def run_chunk(vessel, states, indices, headings_rad, uncertainty, settings: Drif
 
     Returns arrays keyed by name, first axis = state: ``t_quantiles_s`` (S, H, R, 3) (10, 50,
     90 %), ``p_exceed`` (S, H, R, Q), ``watch_radius_m`` (S, H, Q), ``weather_rel_rad`` (S, H),
-    ``index`` (S,). A state whose drifts diverge gives ``{"index": ..., "error": message}``
+    ``reached_frac`` (S, H, R: the samples that reach the radius within the horizon), ``index`` (S,). A state whose drifts diverge gives ``{"index": ..., "error": message}``
     (naming the state's label from ``labels``, one per state), which :func:`season_sweep`
     raises: returned, not raised, so that a Dask worker does not log it as a crash.
     """
-    tq, pe, wc, rel = [], [], [], []
+    tq, pe, wc, rel, reached = [], [], [], [], []
     for k, (state, i) in enumerate(zip(states, indices)):
         try:
             r = simulate_blackouts(vessel, state, headings_rad, uncertainty=uncertainty, settings=settings,
@@ -66,8 +66,9 @@ def run_chunk(vessel, states, indices, headings_rad, uncertainty, settings: Drif
         pe.append(r.p_exceed())
         wc.append(r.watch_circle(quantile))
         rel.append(r.weather_rel_rad)
+        reached.append(np.isfinite(r.t_reach_s).mean(axis=1))
     return dict(index=np.asarray(indices, int), t_quantiles_s=np.array(tq), p_exceed=np.array(pe),
-                watch_radius_m=np.array(wc), weather_rel_rad=np.array(rel))
+                watch_radius_m=np.array(wc), weather_rel_rad=np.array(rel), reached_frac=np.array(reached))
 
 
 @dataclass(frozen=True)
@@ -86,6 +87,8 @@ class SeasonResult:
         Wall time of the sweep [s].
     n_samples : int
         Samples per state and heading.
+    reached_frac : ndarray (S, H, R) or None
+        Share of the samples that reach each radius within the horizon.
     """
 
     labels: list
@@ -99,6 +102,7 @@ class SeasonResult:
     weather_rel_rad: np.ndarray
     wall_s: float
     n_samples: int
+    reached_frac: np.ndarray | None = None
 
     def to_frame(self) -> pd.DataFrame:
         """Tidy table: one row per (state, heading, radius); watch radii as columns per reaction time."""
@@ -112,6 +116,8 @@ class SeasonResult:
                            "wind_rel_deg": math.degrees(self.weather_rel_rad[s, h]) % 360.0,
                            "radius_m": self.radii_m[r], "t_p10_s": self.t_quantiles_s[s, h, r, 0],
                            "t_p50_s": self.t_quantiles_s[s, h, r, 1], "t_p90_s": self.t_quantiles_s[s, h, r, 2]}
+                    if self.reached_frac is not None:       # as in a planning report's times.csv
+                        row["reached_frac"] = self.reached_frac[s, h, r]
                     for q, tr in enumerate(self.reaction_times_s):
                         row[f"p_exceed_{tr:g}s"] = self.p_exceed[s, h, r, q]
                     for q, tr in enumerate(self.reaction_times_s):
@@ -239,4 +245,4 @@ def season_sweep(vessel, states, headings_rad, *, uncertainty: WeatherUncertaint
                         reaction_times_s=np.asarray(st.reaction_times_s), quantile=float(quantile),
                         t_quantiles_s=cat["t_quantiles_s"], p_exceed=cat["p_exceed"],
                         watch_radius_m=cat["watch_radius_m"], weather_rel_rad=cat["weather_rel_rad"], wall_s=wall,
-                        n_samples=st.n_samples)
+                        n_samples=st.n_samples, reached_frac=cat["reached_frac"])
