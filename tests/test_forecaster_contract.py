@@ -353,8 +353,9 @@ def test_hsc_predictions_are_causal(kind, hsc_fitted, hsc_setup):
     _, _, (U, Y) = hsc_setup
     p = hsc_fitted[kind]
     U2, Y2 = U.copy(), Y.copy()
-    U2[K_CUT:, 0] *= 0.7                              # engine speed, PWM and measured outputs change
-    U2[K_CUT:, 1] = 100.0 - U2[K_CUT:, 1]
+    U2[K_CUT:, 0] *= 0.7                              # engine speed, PWM, heave acceleration and
+    U2[K_CUT:, 1] = 100.0 - U2[K_CUT:, 1]             # measured outputs change
+    U2[K_CUT:, 2] += 3.0                              # (averaged over the interval ending at y[k])
     Y2[K_CUT:] += (1.0, 0.02)
     one, one2 = p.one_step(U, Y), p.one_step(U2, Y2)
     # (round-off: the state-space model's small matrix products differ in the last bit between arrays)

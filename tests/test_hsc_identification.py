@@ -5,6 +5,7 @@ import pytest
 
 from hybridship.hsc.identification import (ARXModel, NARXConfig, NARXModel, StateSpaceModel, fit_arx,
                                            fit_subspace)
+from hybridship.hsc.vessel import load_planing_craft
 
 
 def _simulate_arx(A, B, U, nk=1):
@@ -78,10 +79,18 @@ def test_state_space_model_free_run_follows_noise_free_system():
     assert np.mean(np.abs(P[20:] - Y[20:])) < 0.05 * np.mean(np.abs(Y))
 
 
-@pytest.mark.parametrize("lags,n_inputs", [((5, 3), 19), ((7, 5), 29)])
-def test_narx_sizes_as_in_the_paper(lags, n_inputs):
-    m = NARXModel(NARXConfig(n_out=lags[0], n_in=lags[1]))
-    assert m.n_inputs == n_inputs
+@pytest.mark.parametrize("sea_state,lags,n_inputs", [(1, (5, 3), 19), (2, (7, 5), 29)])
+def test_narx_sizes_as_in_the_paper(sea_state, lags, n_inputs):
+    """The benchmark's ANN for each sea state has the paper's lags, and the network it fits
+    takes 19 (29) inputs into 5 then 4 hidden neurons (the fitted weights, not a formula)."""
+    from hybridship.hsc.benchmark import models_for
+
+    m = models_for(sea_state, load_planing_craft(), "interceptor", quick=True)["ann"]
+    assert (m.config.n_out, m.config.n_in) == lags
+    rng = np.random.default_rng(0)
+    U, Y = rng.uniform(-1, 1, (300, 3)), rng.uniform(-1, 1, (300, 2))
+    W = NARXModel(NARXConfig(n_out=m.config.n_out, n_in=m.config.n_in, max_iter=5, restarts=1)).fit(U, Y).weights
+    assert [w.shape for w in W if w.ndim == 2] == [(5, n_inputs), (4, 5), (2, 4)]
 
 
 def test_narx_learns_a_nonlinear_system_and_runs_free():

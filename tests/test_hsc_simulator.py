@@ -5,7 +5,7 @@ import math
 import numpy as np
 import pytest
 
-from hybridship.hsc.simulator import KNOT_M_S, PlaningCraftModel, savitsky_planing
+from hybridship.hsc.simulator import KNOT_M_S, PlaningCraftModel, SeaConditions, savitsky_planing
 from hybridship.hsc.trials import generate_trial, paper_trial
 from hybridship.hsc.vessel import PlaningCraftFileError, load_planing_craft, planing_craft_from_dict
 
@@ -116,10 +116,28 @@ def test_simulator_refuses_bad_arguments_by_name(craft):
         (lambda: model.simulate([3000.0], [50.0], settle_s=-1.0), "settle_s"),
         (lambda: model.steady_state(np.nan), "rpm"),
         (lambda: model.steady_state(3000.0, np.nan), "actuator_frac"),
+        (lambda: model.simulate([3000.0, 9000.0], [50.0, 50.0]), "rpm_cmd"),      # overflowed inside before
+        (lambda: model.simulate([3000.0, -500.0], [50.0, 50.0]), "rpm_cmd"),      # accepted silently before
+        (lambda: model.simulate([3000.0], [500.0]), "pwm_pct"),                   # clipped silently before
+        (lambda: SeaConditions(hs_m=0.3, tp_s=3.0), "hs_m"),                      # the model slams there
+        (lambda: SeaConditions(hs_m=0.1, tp_s=0.5, beyond_validity=True), "hs_m"),  # steeper than waves can be
+        (lambda: paper_trial(1, seed=-1), "seed"),
     ]
     for call, field in cases:
         with pytest.raises(ValueError, match=rf"^{field}\b"):
             call()
+    SeaConditions(hs_m=0.3, tp_s=3.0, beyond_validity=True)         # allowed when asked for
+
+
+def test_a_vessel_file_with_nan_or_an_impossible_true_boat_is_refused_by_name(craft):
+    data = craft.model_dump()
+    data["particulars"]["displacement_kg"] = float("inf")
+    with pytest.raises(PlaningCraftFileError, match="particulars.displacement_kg"):
+        planing_craft_from_dict(data, "x.toml")
+    data = craft.model_dump()
+    data["truth_perturbation"]["lcg_offset_m"] = -10.0
+    with pytest.raises(PlaningCraftFileError, match=r"truth_perturbation"):
+        planing_craft_from_dict(data, "x.toml").perturbed()
 
 
 def test_gps_delay_must_be_whole_samples(craft):

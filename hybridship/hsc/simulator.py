@@ -71,7 +71,7 @@ from typing import Annotated
 from typing import Literal
 
 import numpy as np
-from pydantic import Field
+from pydantic import Field, model_validator
 
 from ..config import Float, Int, config_dataclass
 
@@ -160,14 +160,39 @@ def savitsky_planing(speed_m_s: float, tau_rad: float, transom_draft_m: float, b
     return lift, lp, friction, lam
 
 
+#: Largest significant wave height [m] the quasi-static simulator is meant for: the
+#: benchmark's sea state 2. Beyond it the boat slams (pitch swings of 10-30 deg, heave
+#: accelerations of 1-3 g, speed gained in waves): ``python benchmarks/hsc_sea_validity.py``.
+MAX_HS_M = 0.10
+#: Steepness ``2 pi Hs / (g Tp^2)`` beyond which a single wave breaks (Miche, 1/7).
+MAX_STEEPNESS = 1.0 / 7.0
+
+
 @config_dataclass(frozen=True)
 class SeaConditions:
-    """Head-sea irregular waves (JONSWAP); ``hs_m = 0`` gives calm water."""
+    """Head-sea irregular waves (JONSWAP); ``hs_m = 0`` gives calm water.
+
+    Heights above :data:`MAX_HS_M` are refused unless ``beyond_validity`` is set (to study
+    where the quasi-static model fails); a sea steeper than :data:`MAX_STEEPNESS` always.
+    """
 
     hs_m: Annotated[Float, Field(ge=0)] = 0.0
     tp_s: Annotated[Float, Field(gt=0)] = 2.0
     gamma: Annotated[Float, Field(ge=1, le=7)] = 3.3
     n_components: Annotated[Int, Field(ge=1)] = 40
+    beyond_validity: bool = False
+
+    @model_validator(mode="after")
+    def _a_sea_the_model_is_meant_for(self):
+        steepness = 2.0 * math.pi * self.hs_m / (G_M_S2 * self.tp_s ** 2)
+        if steepness > MAX_STEEPNESS:
+            raise ValueError(f"hs_m {self.hs_m:g} m at tp_s {self.tp_s:g} s is steeper than waves can be "
+                             f"(2 pi Hs / (g Tp^2) = {steepness:.2f} > {MAX_STEEPNESS:.3f})")
+        if self.hs_m > MAX_HS_M and not self.beyond_validity:
+            raise ValueError(f"hs_m: {self.hs_m:g} m is above the {MAX_HS_M:g} m the quasi-static planing "
+                             f"simulator is meant for (beyond it the boat slams: docs/hsc.md); set "
+                             f"beyond_validity=True to study that")
+        return self
 
 
 @dataclass(frozen=True)
@@ -479,6 +504,14 @@ class PlaningCraftModel:
         for name, x in (("rpm_cmd", rpm_cmd), ("pwm_pct", pwm_pct)):
             if not np.all(np.isfinite(x)):
                 raise ValueError(f"{name}: NaN or inf at sample {int(np.argmax(~np.isfinite(x)))}; expected finite values")
+        lo, hi = self.rpm_range
+        for name, x, a, b, unit in (("rpm_cmd", rpm_cmd, lo, hi, "rpm (the engine's idle_rpm to max_rpm)"),
+                                    ("pwm_pct", pwm_pct, 0.0, 100.0, "% duty")):
+            bad = (x < a) | (x > b)
+            if bad.any():
+                k = int(np.argmax(bad))
+                raise ValueError(f"{name}: {x[k]:g} at sample {k} ({int(bad.sum())} sample(s) outside); expected "
+                                 f"{a:g} to {b:g} {unit}")
         if not (np.isfinite(sample_period_s) and sample_period_s > 0):
             raise ValueError(f"sample_period_s: expected a positive number of seconds, got {sample_period_s!r}")
         if isinstance(substeps, bool) or not isinstance(substeps, (int, np.integer)) or substeps < 1:

@@ -74,7 +74,7 @@ class TrialConfig:
     """
 
     sea_state: Literal[1, 2]
-    n_samples: Int
+    n_samples: Annotated[Int, Field(ge=51)]        # a training part of at least 50, and a validation part
     n_train: Annotated[Int, Field(ge=50)]
     actuator: Literal["interceptor", "trim_tab"]
     sea: SeaConditions
@@ -115,6 +115,8 @@ def paper_trial(sea_state: int, *, seed: int = 0, scale: float = 1.0) -> TrialCo
         raise ValueError(f"sea_state must be 1 or 2, got {sea_state!r}")
     if not 0 < scale <= 1:
         raise ValueError(f"scale must be in (0, 1], got {scale!r}")
+    if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or seed < 0:
+        raise ValueError(f"seed: expected a whole number >= 0, got {seed!r}")
     n_s, n_t = max(int(round(n * scale)), 200), max(int(round(n_tr * scale)), 130)
     return TrialConfig(sea_state=sea_state, n_samples=n_s, n_train=n_t, actuator=act, sea=sea,
                        seed=seed * 100 + sea_state)

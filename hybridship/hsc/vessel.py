@@ -44,7 +44,8 @@ class PlaningCraftFileError(VesselFileError):
 
 
 class _Strict(BaseModel):
-    model_config = ConfigDict(extra="forbid", frozen=True)
+    # NaN and inf refused in every field: a NaN in the file gave all-NaN trials, no error
+    model_config = ConfigDict(extra="forbid", frozen=True, allow_inf_nan=False)
 
 
 class Particulars(_Strict):
@@ -235,7 +236,11 @@ class PlaningCraft(_Strict):
         data["trim_tabs"]["lift_factor"] *= tp.trim_tab_lift_factor
         data["particulars"]["displacement_kg"] *= tp.displacement_factor
         data["truth_perturbation"] = TruthPerturbation().model_dump()
-        return PlaningCraft.model_validate(data)
+        try:
+            return PlaningCraft.model_validate(data)
+        except ValidationError as err:      # the file's perturbation makes an impossible boat
+            raise PlaningCraftFileError(format_validation_error(err, "truth_perturbation applied to the file")
+                                        + " (check [truth_perturbation])") from None
 
 
 def planing_craft_from_dict(data: dict, source: str = "<dict>") -> PlaningCraft:
