@@ -212,6 +212,11 @@ class Thruster(_Strict):
     def _angle(self):
         if self.type == "fixed" and self.angle_deg is None:
             raise ValueError("type 'fixed' needs angle_deg")
+        if self.type != "fixed" and self.angle_deg is not None:     # it would be ignored
+            direction = ("the body y axis (positive rpm pushes to starboard)" if self.type == "tunnel"
+                         else "its logged azimuth")
+            raise ValueError(f"angle_deg: a {self.type} thruster's direction is {direction}; a thruster fixed "
+                             f"at another angle is type 'fixed' with angle_deg")
         return self
 
     @model_validator(mode="after")
@@ -307,6 +312,14 @@ class WindTable(_Strict):
         for name in ("C_X", "C_Y", "C_N"):
             if len(getattr(self, name)) != n:
                 raise ValueError(f"{name}: {len(getattr(self, name))} coefficients for the {n} angles of angle_deg")
+        # the span and symmetry rules the wind model applies, when the file is read, not at
+        # the first simulation (a table in radians, 0..3.14, is found here)
+        from hybridship.physics.wind import _validate_table
+
+        try:
+            _validate_table(self.angle_deg, self.C_X, self.C_Y, self.C_N, name="table")
+        except ValueError as exc:
+            raise ValueError(str(exc).removeprefix("table.")) from None
         return self
 
 
@@ -392,16 +405,25 @@ class Vessel(_Strict):
         if dup:
             raise ValueError(f"rudders: duplicate names {sorted(dup)} (names must differ from each other "
                              "and from the thrusters')")
-        # a position beyond the hull is a typo (1444 for 14.44), not a layout: whatever the
-        # body origin, an actuator lies within L_oa of it along and B of it across
-        L, B = self.particulars.L_oa_m, self.particulars.B_m
+        # a position beyond the hull is a typo (1444 for 14.44) or a sign or axis mix-up, not a
+        # layout. Along: the hull runs from its aft perpendicular (damping.nonlinear's
+        # strips_x_aft_m, by default -L_pp/2) to the forward one, and overhangs by at most
+        # L_oa - L_pp at either end; across: half the beam from the centre line.
+        part = self.particulars
+        L, B = part.L_oa_m, part.B_m
+        x_ap = self.damping.nonlinear.strips_x_aft_m
+        x_ap = -0.5 * part.L_pp_m if x_ap is None else x_ap
+        overhang = max(L - part.L_pp_m, 0.0)
+        x_lo, x_hi = x_ap - overhang, x_ap + part.L_pp_m + overhang
         for kind, acts in (("thrusters", self.thrusters), ("rudders", self.rudders)):
             for i, a in enumerate(acts):
-                if abs(a.x_m) > L:
-                    raise ValueError(f"{kind}[{i}].x_m: {a.x_m:g} m lies outside the hull (at most "
-                                     f"particulars.L_oa_m = {L:g} m from the body origin)")
-                if abs(a.y_m) > B:
-                    raise ValueError(f"{kind}[{i}].y_m: {a.y_m:g} m lies outside the hull (at most "
+                if not x_lo <= a.x_m <= x_hi:
+                    raise ValueError(f"{kind}[{i}].x_m: {a.x_m:g} m lies outside the hull (from {x_lo:g} to "
+                                     f"{x_hi:g} m from the body origin: the perpendiculars, from "
+                                     f"damping.nonlinear.strips_x_aft_m and particulars.L_pp_m, and the "
+                                     f"overhang L_oa_m - L_pp_m)")
+                if abs(a.y_m) > 0.5 * B:
+                    raise ValueError(f"{kind}[{i}].y_m: {a.y_m:g} m lies outside the hull (at most half of "
                                      f"particulars.B_m = {B:g} m from the centre line)")
         for i, t in enumerate(self.thrusters):
             if t.diameter_m > B:          # a diameter in mm, not m
@@ -540,7 +562,12 @@ def load_vessel(name_or_path: str | Path) -> Vessel:
     if p.suffix == ".toml" or p.exists():
         if not p.is_file():
             raise VesselFileError(f"{p}: vessel file not found")
-        text = p.read_text(encoding="utf-8")
+        try:
+            text = p.read_text(encoding="utf-8")
+        except UnicodeDecodeError:
+            raise VesselFileError(f"{p}: not a vessel file (TOML text) but a binary file; a model file (.npz) "
+                                  f"carries its vessel inside (HybridPredictor.load(path).model.vessel): give "
+                                  f"the vessel's TOML file") from None
         source = p.name
     else:
         text = packaged_vessel_text(str(name_or_path))

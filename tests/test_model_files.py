@@ -267,7 +267,8 @@ def test_another_vessels_model_is_refused(saved, model, tmp_path):
     d["rigid_body"]["mass_kg"] *= 1.2
     other = vessel_from_dict(d)
     _refused(path, r"trained for vessel 'gunnerus' with other parameters; refusing to use it with vessel "
-                   r"'gunnerus-sister'", vessel=other)
+                   r"'gunnerus-sister'; different: name \(trained 'gunnerus', given 'gunnerus-sister'\), "
+                   r"rigid_body.mass_kg \(trained ", vessel=other)
     # a file claiming gunnerus but trained on other parameters (fingerprint mismatch)
     p = _rewrite(saved, tmp_path, meta_change=lambda m: m.update(vessel_fingerprint="0" * 16), name="fp.npz")
     _refused(p, "trained for vessel 'gunnerus' with other parameters", vessel="gunnerus")

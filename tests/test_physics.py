@@ -414,6 +414,10 @@ def test_gunnerus_coefficients_close_to_published_original_hull():
     (lambda d: d["damping"]["nonlinear"].__setitem__("lift_speed", "sign"), "damping.nonlinear.lift_speed"),
     (lambda d: d["thrusters"][0].__setitem__("x_m", 1444.0), r"thrusters\[0\].x_m: 1444 m lies outside the hull"),
     (lambda d: d["thrusters"][1].__setitem__("y_m", -27.0), r"thrusters\[1\].y_m: -27 m lies outside the hull"),
+    # beyond the side (half the beam, 9.6 m on the Gunnerus) and beyond the bow: refused too
+    (lambda d: d["thrusters"][1].__setitem__("y_m", -7.0), r"thrusters\[1\].y_m: -7 m lies outside the hull \(at "
+                                                          r"most half of particulars.B_m"),
+    (lambda d: d["thrusters"][0].__setitem__("x_m", 20.0), r"thrusters\[0\].x_m: 20 m lies outside the hull \(from"),
     (lambda d: d["thrusters"][0].__setitem__("diameter_m", 1900.0), r"thrusters\[0\].diameter_m: 1900 m is wider"),
     (lambda d: d["thrusters"][0].__setitem__("propeller_series", "B4-75"), r"thrusters\[0\].*B4-75.*available"),
     (lambda d: d["rigid_body"].__setitem__("mass_kg", float("inf")), "rigid_body.mass_kg: .*finite"),
@@ -422,6 +426,10 @@ def test_gunnerus_coefficients_close_to_published_original_hull():
     (lambda d: d.__setitem__("added_mass", {"method": "clarke1983"}),
      r"added_mass: M_A is not positive definite .*method 'explicit'"),
     (lambda d: d["wind"]["table"].__setitem__("C_X", d["wind"]["table"]["C_X"][:-1]), "C_X: .* coefficients for"),
+    (lambda d: d["thrusters"][0].__setitem__("angle_deg", -90.0), r"thrusters\[0\]: angle_deg: a tunnel thruster's"),
+    # angles in radians (0..3.14): found when the file is read, not at the first simulation
+    (lambda d: d["wind"]["table"].__setitem__("angle_deg", list(np.radians(d["wind"]["table"]["angle_deg"]))),
+     r"wind.table: angle_deg: must span 0..180"),
 ])
 def test_invalid_vessel_files_name_the_field(edit, field):
     d = copy.deepcopy(gunnerus_dict())
@@ -439,6 +447,10 @@ def test_unknown_vessel_and_bad_toml(tmp_path):
         load_vessel(f)
     with pytest.raises(VesselFileError, match="planing-craft file"):
         load_vessel("volcano71")
+    model_file = tmp_path / "m.npz"                 # a model file given where a vessel file goes
+    model_file.write_bytes(b"PK\x03\x04\x8a\xff binary")
+    with pytest.raises(VesselFileError, match="not a vessel file .* a model file .* carries its vessel"):
+        load_vessel(model_file)
 
 
 def test_rollout_refuses_commands_it_is_not_meant_for_and_never_returns_nan():

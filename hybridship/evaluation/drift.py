@@ -373,7 +373,7 @@ def _calibrate_after_stop(hybrid, test_arrays, test_is_train: bool, calibration_
         say(f"{what} ({timing[-1]['seconds']:.1f} s)")
         return timing, per_log
     hybrid.calibration.pop("after_stop", None)      # never a calibration that saw the scored drifts
-    if calibration_scenarios > 0 and hybrid.model.vessel.name == "gunnerus":
+    if calibration_scenarios > 0 and _is_packaged_gunnerus(hybrid.model.vessel):
         from ..sim.scenario import embedded_scenarios
 
         _check_calibration_count(int(calibration_scenarios), n_intervals, "calibration_scenarios",
@@ -386,8 +386,16 @@ def _calibrate_after_stop(hybrid, test_arrays, test_is_train: bool, calibration_
         say(f"calibrated the hybrid's spread after a failure on {len(sims)} simulated DP losses "
             f"({timing[-1]['seconds']:.1f} s)")
     elif calibration_scenarios > 0:
-        say(f"no simulated DP losses for vessel {hybrid.model.vessel.name!r}: the spread after a failure is raw")
+        say(f"no simulated DP losses for vessel {hybrid.model.vessel.name!r} (they are made for the packaged "
+            f"Gunnerus): the spread after a failure is raw")
     return timing, None
+
+
+def _is_packaged_gunnerus(vessel) -> bool:
+    """The packaged Gunnerus file, by its parameters (a user's file that kept the name is not)."""
+    from ..vessel import fingerprint, load_vessel
+
+    return fingerprint(vessel) == fingerprint(load_vessel("gunnerus"))
 
 
 def _check_calibration_count(n_failures: int, n_intervals: int, source: str, advice: str) -> None:

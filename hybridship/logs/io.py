@@ -822,7 +822,14 @@ def check_log_against_vessel(log, vessel, *, source: str | None = None, allow_mi
     else:
         df = log
     source = source or "log"
-    _validate(df, v.channel_names, v.rotatable, source, warn_unknown=True, allow_missing=allow_missing)
+    try:
+        _validate(df, v.channel_names, v.rotatable, source, warn_unknown=True, allow_missing=allow_missing)
+    except LogFormatError as exc:
+        if "names unknown thruster" not in str(exc):
+            raise
+        # a log of another vessel, read with the default one: say which vessel was used
+        raise LogFormatError(f"{exc}; the vessel used is {v.name!r}: is the log from another vessel? give "
+                             f"its vessel file (--vessel)", column=exc.column) from None
     cols = set(map(str, df.columns))
     t = _to_float(df, "time_s", source, None)
     _check_all_or_no_rpm(v, cols, source)

@@ -431,7 +431,34 @@ def _check_vessel(obj, meta: dict, fingerprint: str, embedded: bool, path: Path)
             raise ModelFileError(f"{path}: the embedded description of vessel {meta['vessel']!r} does not "
                                  f"match its fingerprint: the metadata was edited or damaged")
         raise ModelFileError(f"{path}: trained for vessel {meta['vessel']!r} with other parameters; "
-                             f"refusing to use it with vessel {obj.model.vessel.name!r}")
+                             f"refusing to use it with vessel {obj.model.vessel.name!r}"
+                             f"{_differences(meta.get('vessel_description'), obj.model.vessel)}")
+
+
+def _differences(trained, vessel, shown: int = 5) -> str:
+    """``"; different: a.b (trained 1, given 2), ..."``: the fields of the vessel given that
+    differ from the description the model was trained with ("" when that is not readable)."""
+    from ..vessel import portable_description
+
+    if not isinstance(trained, dict):
+        return ""
+    given = portable_description(vessel)
+    found = []
+
+    def walk(a, b, where):
+        if isinstance(a, dict) and isinstance(b, dict):
+            for k in sorted(set(a) | set(b)):
+                walk(a.get(k), b.get(k), f"{where}.{k}" if where else str(k))
+        elif isinstance(a, list) and isinstance(b, list) and len(a) == len(b):
+            for i, (x, y) in enumerate(zip(a, b)):
+                walk(x, y, f"{where}[{i}]")
+        elif a != b:
+            found.append(f"{where} (trained {a!r}, given {b!r})")
+    walk(trained, given, "")
+    if not found:
+        return ""
+    more = f" and {len(found) - shown} more" if len(found) > shown else ""
+    return "; different: " + ", ".join(found[:shown]) + more
 
 
 def _restore_learned_state(obj, data: dict, state: dict, path: Path) -> None:
