@@ -548,7 +548,9 @@ class EnvironmentEstimator:
         the prior's plus the square of the part not kept (or ``yaw_load_std_at_stop``), so
         the drift samples identify it. The
         current keeps acting through the hull as the ship starts to move. With
-        ``current_std_at_stop_m_s`` the current's uncertainty is then widened along the
+        ``load_to_current_at_stop`` part of the load then becomes a current
+        (:func:`hybridship.residual.environment_kernel.load_to_current_at_stop`), and with
+        ``current_std_at_stop_m_s`` the current's uncertainty is widened along the
         current-load ridge (:func:`hybridship.residual.environment_kernel.current_ridge_at_stop`),
         as the filter does at a stop.
         """

@@ -343,8 +343,9 @@ def filter_grid(grid, slot, t, seg, z, z_ok, r_std, rpm, az, wind, dp, P, per_th
     covariance grows by the process noise over the gap. Rows whose position or heading is
     missing cannot start the filter: a new segment restarts at its first row with them.
     At a thrust stop (``dp`` 1 -> 0) the yaw environment restarts with ``reset_at_stop``
-    (:func:`at_thrust_stop`) and the current's uncertainty widens along the current-load
-    ridge by ``current_stop_std`` [m/s] (:func:`current_ridge_at_stop`; 0: not).
+    (:func:`at_thrust_stop`), the fraction ``load_to_current`` of the load becomes a current
+    (:func:`load_to_current_at_stop`; 0: none) and the current's uncertainty widens along
+    the current-load ridge by ``current_stop_std`` [m/s] (:func:`current_ridge_at_stop`; 0: not).
     While ``dp`` is 0 at a step's first row, the process model adds the hull's yaw
     acceleration in a drift ``drift_yaw_uv u v`` [rad/s^2]. With ``resume``,
     ``x_resume, P_resume`` is the estimate at ``grid[0]`` (of an earlier run) and the filter
