@@ -274,6 +274,26 @@ def test_a_run_too_large_for_memory_says_so_in_the_commands_words(monkeypatch, t
     assert r.headings_rad[0] == 0.0
 
 
+def test_a_beam_storm_beyond_the_thrusters_is_flagged(tmp_path):
+    """Where the mean environment needs more than the thrusters' bollard capacity, the DP was
+    not holding station: flagged per heading, in times.csv and the summary; not in a calm."""
+    from hybridship.driftoff.report import write_report
+    from hybridship.sim.allocation import thrust_capacity
+
+    st = DriftOffSettings(n_samples=8, horizon_s=30.0, radii_m=(5.0,), reaction_times_s=(10.0,))
+    storm = WeatherState.from_degrees(wind_speed_m_s=25.0, wind_dir_deg=90.0, hs_m=3.0, tp_s=9.0, current_m_s=0.5,
+                                      current_dir_deg=90.0)
+    r = simulate_blackouts("gunnerus", storm, np.radians([0.0, 90.0]), settings=st)
+    assert r.over_capacity_frac[0] == 1.0 and r.over_capacity_frac[1] == 0.0     # beam-on, head-on
+    assert thrust_capacity("gunnerus")[1] > 0
+    text = write_report(r, tmp_path / "storm", plots=False)["summary.md"].read_text()
+    assert "DP capacity exceeded before the blackout** at heading(s) 0 deg (100% of the samples)" in text
+    assert pd.read_csv(tmp_path / "storm" / "times.csv")["over_capacity_frac"].tolist() == [1.0, 0.0]
+    calm = simulate_blackouts("gunnerus", WeatherState(wind_speed_m_s=5.0), [0.0], settings=st)
+    assert calm.over_capacity_frac.tolist() == [0.0]
+    assert "DP capacity" not in write_report(calm, tmp_path / "calm", plots=False)["summary.md"].read_text()
+
+
 def test_a_sea_steeper_than_waves_can_be_is_refused():
     """Beyond the steepness at which a single wave breaks (1/7): refused naming both fields;
     DNV's limiting steepness, about half of it, is accepted."""
@@ -566,7 +586,7 @@ def test_cli_season_in_this_process(tmp_path):
                  "--headings-deg", "0,90", "--horizon-s", "90", "--no-progress", "--out", str(out)]) == 0
     season = pd.read_csv(out / "season.csv")
     assert len(season) == 2 * 2 * 3 and list(season["label"].unique()) == ["h0", "h1"]
-    assert season["reached_frac"].between(0.0, 1.0).all()
+    assert season["reached_frac"].between(0.0, 1.0).all() and (season["over_capacity_frac"] == 0.0).all()
     assert (out / "operability.csv").is_file() and (out / "summary.md").is_file()
     # the planning tables would read as the season's: gone; the user's file untouched
     assert not (out / "times.csv").exists() and not (out / "watch.csv").exists()

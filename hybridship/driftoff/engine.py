@@ -225,7 +225,7 @@ def _record_passages(r, r_prev, m_prev, m, t0, dt, radii, t_react, reached, done
 def _kernel(psi0, P, m_inv, m_a, d_lin, d_quad, d_lift, strip_w, thr, wind_p,
             az, rpm0, tau_rpm_s, balance, wind_mean, wind_dir, gust_f, gust_a, gust_ph,
             cur, acc_ned, nu0, wave_w, wave_a, wave_ph, wave_dir, hull, dt, n_steps, radii, t_react,
-            max_speed, t_reach, r_react, track):
+            max_speed, t_reach, r_react, track, hold_out):
     B = psi0.shape[0]
     n_r = radii.shape[0]
     n_q = t_react.shape[0]
@@ -265,6 +265,8 @@ def _kernel(psi0, P, m_inv, m_a, d_lin, d_quad, d_lift, strip_w, thr, wind_p,
         if balance:
             _holding_load(x, m_inv[b], az[b], wind_mean[b], wind_dir[b], cur[b], acc_ned[b], Q, pre, prep,
                           tau_wave, work, rpm_now, zeros_rpm, inv_tau, hold, thrusts, k1, tau_b, acc_b)
+        for i in range(3):
+            hold_out[b, i] = hold[i]
         reached = np.zeros(n_r, dtype=np.bool_)
         done_q = np.zeros(n_q, dtype=np.bool_)
         for i in range(n_r):
@@ -316,11 +318,15 @@ MAX_DRIFT_SPEED_M_S = 30.0
 
 
 def run_kernel(psi0, P, stack, az, rpm0, tau_rpm_s, balance, wind_mean, wind_dir, gust_f, gust_a, gust_ph,
-               cur, acc_ned, waves, hull, dt_s, n_steps, radii_m, t_react_s, keep_tracks=False, nu0=None):
+               cur, acc_ned, waves, hull, dt_s, n_steps, radii_m, t_react_s, keep_tracks=False, nu0=None,
+               holding_load=None):
     """Call the compiled kernel on contiguous float arrays (``nu0`` (B, 3): start velocities, default rest).
 
     Returns ``(t_reach_s (B, R), excursion_m (B, Q), track (B, n_steps + 1, 3) or None)``; a
     sample that diverged within the horizon (:data:`MAX_DRIFT_SPEED_M_S`) has NaN in both.
+    ``holding_load`` (B, 3), when given, receives each sample's holding load at t = 0 in the
+    "balanced" mode ``[X_N, Y_N, N_Nm]`` (body frame; what the thrusters held before the
+    blackout), zeros otherwise.
     """
     B = int(np.shape(psi0)[0])
     f = lambda a: np.ascontiguousarray(a, dtype=float)  # noqa: E731
@@ -331,5 +337,6 @@ def run_kernel(psi0, P, stack, az, rpm0, tau_rpm_s, balance, wind_mean, wind_dir
             f(stack.strip_w), f(stack.thr), f(stack.wind_p), f(az), f(rpm0), float(tau_rpm_s), bool(balance),
             f(wind_mean), f(wind_dir), f(gust_f), f(gust_a), f(gust_ph), f(cur), f(acc_ned),
             f(np.zeros((B, 3)) if nu0 is None else np.broadcast_to(nu0, (B, 3))), f(waves[0]), f(waves[1]), f(waves[2]), f(waves[3]), f(hull), float(dt_s), int(n_steps),
-            f(radii_m), f(t_react_s), float(MAX_DRIFT_SPEED_M_S), t_reach, r_react, track)
+            f(radii_m), f(t_react_s), float(MAX_DRIFT_SPEED_M_S), t_reach, r_react, track,
+            np.empty((B, 3)) if holding_load is None else holding_load)
     return t_reach, r_react, (track if keep_tracks else None)

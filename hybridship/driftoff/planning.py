@@ -162,6 +162,12 @@ class DriftOffResult:
     horizon_s : float
     tracks : ndarray (H, N, S + 1, 3) or None
         ``[north_m, east_m, psi_rad]`` per step when asked for.
+    over_capacity_frac : ndarray (H,) or None
+        Share of the samples whose holding load before the blackout (the mean environment
+        at rest) exceeds the thrusters' bollard capacity in surge, sway or yaw alone
+        (:func:`hybridship.sim.allocation.thrust_capacity`): the DP could not have held
+        station there, so the blackout's start, at rest on station, is optimistic. A load
+        within each capacity alone may still exceed what the thrusters give combined.
     """
 
     headings_rad: np.ndarray
@@ -172,6 +178,7 @@ class DriftOffResult:
     excursion_m: np.ndarray
     horizon_s: float
     tracks: np.ndarray | None = None
+    over_capacity_frac: np.ndarray | None = None
 
     @property
     def n_samples(self) -> int:
@@ -218,6 +225,8 @@ class DriftOffResult:
                        "wind_rel_deg": math.degrees(self.weather_rel_rad[h]) % 360.0, "radius_m": rad,
                        "t_p10_s": tq[h, r, 0], "t_p50_s": tq[h, r, 1], "t_p90_s": tq[h, r, 2],
                        "reached_frac": float(np.isfinite(self.t_reach_s[h, :, r]).mean())}
+                if self.over_capacity_frac is not None:
+                    row["over_capacity_frac"] = float(self.over_capacity_frac[h])
                 for q, tr in enumerate(self.reaction_times_s):
                     row[f"p_exceed_{tr:g}s"] = pe[h, r, q]
                 rows.append(row)
@@ -311,16 +320,34 @@ def _blackouts(model, weather, uncertainty, st, psi, rng, index: int, keep_track
     K = model.n_actuators
     az0 = np.zeros(K)
     az0[: len(ves.thrusters)] = [t.fixed_angle_rad for t in ves.thrusters]
+    hold = np.empty((H * N, 3))
     t_reach, exc, track = engine.run_kernel(
         np.repeat(psi, N), model.arrays, stack_b, np.broadcast_to(az0, (H * N, K)), np.zeros((H * N, K)),
         st.rpm_time_constant_s, True, tile(envs.wind_mean_m_s), tile(envs.wind_dir_from_rad),
         tile(envs.gust_f_hz), tile(envs.gust_amp_m_s), tile(envs.gust_phase_rad), tile(envs.current),
         np.zeros((H * N, 3)), tuple(tile(w) for w in envs.waves), hull_array(ves), st.dt_s, st.n_steps,
-        np.asarray(st.radii_m), np.asarray(st.reaction_times_s), keep_tracks)
+        np.asarray(st.radii_m), np.asarray(st.reaction_times_s), keep_tracks, holding_load=hold)
+    over = (np.abs(hold) > _thrust_capacity(ves)).any(axis=1).reshape(H, N).mean(axis=1)
     refuse_diverged(exc, st.reaction_times_s, f"weather: the state of index {index} or its spread")
     R, Q = len(st.radii_m), len(st.reaction_times_s)
     rel = np.mod(weather.wind_dir_from_rad - psi, 2.0 * np.pi)
     return DriftOffResult(headings_rad=psi, weather_rel_rad=rel, radii_m=np.asarray(st.radii_m),
                           reaction_times_s=np.asarray(st.reaction_times_s), t_reach_s=t_reach.reshape(H, N, R),
                           excursion_m=exc.reshape(H, N, Q), horizon_s=st.n_steps * st.dt_s,
-                          tracks=None if track is None else track.reshape(H, N, st.n_steps + 1, 3))
+                          tracks=None if track is None else track.reshape(H, N, st.n_steps + 1, 3),
+                          over_capacity_frac=over)
+
+
+#: Bollard capacity per vessel fingerprint (an allocation each; a season run asks per state).
+_CAPACITY: dict = {}
+
+
+def _thrust_capacity(vessel) -> np.ndarray:
+    """The thrusters' bollard capacity ``[X_N, Y_N, N_Nm]`` (one allocation per vessel file)."""
+    from hybridship.sim.allocation import thrust_capacity
+    from hybridship.vessel import fingerprint
+
+    key = fingerprint(vessel)
+    if key not in _CAPACITY:
+        _CAPACITY[key] = thrust_capacity(vessel)
+    return _CAPACITY[key]

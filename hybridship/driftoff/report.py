@@ -127,7 +127,9 @@ def write_report(result: DriftOffResult, out_dir, *, title: str = "Drift-off ana
     if inputs:
         lines += ["| input | value |", "|---|---|"] + [f"| {k} | {v} |" for k, v in inputs.items()] + [""]
     lines += [f"{result.n_samples} Monte-Carlo blackouts per heading; horizon {result.horizon_s:g} s "
-              "(\"never\" = not reached within it).", "",
+              "(\"never\" = not reached within it).", ""]
+    lines += _over_capacity_lines(result)
+    lines += [
               "## Time to reach each radius [s] and P(exceeded within the reaction time)", "",
               markdown_table(times), "",
               f"## Watch circles: excursion up to the reaction time at the {quantile:g} quantile [m]", "",
@@ -145,6 +147,19 @@ def write_report(result: DriftOffResult, out_dir, *, title: str = "Drift-off ana
     # no figure of an earlier run (without plots), nor an earlier season's tables, beside these
     return write_output_files(out, contents, stale=SEASON_ONLY_FILES + (() if plots else ("polar.png", "exceedance.png")),
                               ours=earlier_report)
+
+
+def _over_capacity_lines(result: DriftOffResult) -> list[str]:
+    """A warning where the mean environment exceeds the thrusters' capacity (none otherwise)."""
+    frac = result.over_capacity_frac
+    if frac is None or not np.any(frac > 0):
+        return []
+    where = ", ".join(f"{math.degrees(h) % 360:.0f} deg ({f:.0%} of the samples)"
+                      for h, f in zip(result.headings_rad, frac) if f > 0)
+    return [f"**DP capacity exceeded before the blackout** at heading(s) {where}: the mean wind, waves and current "
+            "there need more than the thrusters' bollard force or moment in surge, sway or yaw alone, so the "
+            "vessel would not be holding station when the blackout comes; the times there are optimistic "
+            "(column `over_capacity_frac`).", ""]
 
 
 def write_season_report(out_dir, season: pd.DataFrame, operability: pd.DataFrame, summary: str) -> dict:

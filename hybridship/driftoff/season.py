@@ -50,11 +50,12 @@ def run_chunk(vessel, states, indices, headings_rad, uncertainty, settings: Drif
 
     Returns arrays keyed by name, first axis = state: ``t_quantiles_s`` (S, H, R, 3) (10, 50,
     90 %), ``p_exceed`` (S, H, R, Q), ``watch_radius_m`` (S, H, Q), ``weather_rel_rad`` (S, H),
-    ``reached_frac`` (S, H, R: the samples that reach the radius within the horizon), ``index`` (S,). A state whose drifts diverge gives ``{"index": ..., "error": message}``
+    ``reached_frac`` (S, H, R: the samples that reach the radius within the horizon),
+    ``over_capacity_frac`` (S, H: :attr:`DriftOffResult.over_capacity_frac`), ``index`` (S,). A state whose drifts diverge gives ``{"index": ..., "error": message}``
     (naming the state's label from ``labels``, one per state), which :func:`season_sweep`
     raises: returned, not raised, so that a Dask worker does not log it as a crash.
     """
-    tq, pe, wc, rel, reached = [], [], [], [], []
+    tq, pe, wc, rel, reached, over = [], [], [], [], [], []
     for k, (state, i) in enumerate(zip(states, indices)):
         try:
             r = simulate_blackouts(vessel, state, headings_rad, uncertainty=uncertainty, settings=settings,
@@ -67,8 +68,10 @@ def run_chunk(vessel, states, indices, headings_rad, uncertainty, settings: Drif
         wc.append(r.watch_circle(quantile))
         rel.append(r.weather_rel_rad)
         reached.append(np.isfinite(r.t_reach_s).mean(axis=1))
+        over.append(r.over_capacity_frac)
     return dict(index=np.asarray(indices, int), t_quantiles_s=np.array(tq), p_exceed=np.array(pe),
-                watch_radius_m=np.array(wc), weather_rel_rad=np.array(rel), reached_frac=np.array(reached))
+                watch_radius_m=np.array(wc), weather_rel_rad=np.array(rel), reached_frac=np.array(reached),
+                over_capacity_frac=np.array(over))
 
 
 @dataclass(frozen=True)
@@ -89,6 +92,9 @@ class SeasonResult:
         Samples per state and heading.
     reached_frac : ndarray (S, H, R) or None
         Share of the samples that reach each radius within the horizon.
+    over_capacity_frac : ndarray (S, H) or None
+        Share of the samples over the thrusters' capacity before the blackout
+        (:attr:`~hybridship.driftoff.planning.DriftOffResult.over_capacity_frac`).
     """
 
     labels: list
@@ -103,6 +109,7 @@ class SeasonResult:
     wall_s: float
     n_samples: int
     reached_frac: np.ndarray | None = None
+    over_capacity_frac: np.ndarray | None = None
 
     def to_frame(self) -> pd.DataFrame:
         """Tidy table: one row per (state, heading, radius); watch radii as columns per reaction time."""
@@ -118,6 +125,8 @@ class SeasonResult:
                            "t_p50_s": self.t_quantiles_s[s, h, r, 1], "t_p90_s": self.t_quantiles_s[s, h, r, 2]}
                     if self.reached_frac is not None:       # as in a planning report's times.csv
                         row["reached_frac"] = self.reached_frac[s, h, r]
+                    if self.over_capacity_frac is not None:
+                        row["over_capacity_frac"] = self.over_capacity_frac[s, h]
                     for q, tr in enumerate(self.reaction_times_s):
                         row[f"p_exceed_{tr:g}s"] = self.p_exceed[s, h, r, q]
                     for q, tr in enumerate(self.reaction_times_s):
@@ -245,4 +254,5 @@ def season_sweep(vessel, states, headings_rad, *, uncertainty: WeatherUncertaint
                         reaction_times_s=np.asarray(st.reaction_times_s), quantile=float(quantile),
                         t_quantiles_s=cat["t_quantiles_s"], p_exceed=cat["p_exceed"],
                         watch_radius_m=cat["watch_radius_m"], weather_rel_rad=cat["weather_rel_rad"], wall_s=wall,
-                        n_samples=st.n_samples, reached_frac=cat["reached_frac"])
+                        n_samples=st.n_samples, reached_frac=cat["reached_frac"],
+                        over_capacity_frac=cat["over_capacity_frac"])
