@@ -294,6 +294,10 @@ def _add_train(sub) -> None:
     p.add_argument("--members", type=_members, default=10, help="ensemble members (default 10)")
     p.add_argument("--seed", type=_seed, default=0, help="seed of the initial weights and bootstrap draws (default 0)")
     p.add_argument("--all-rows", action="store_true", help="train on every row, not only dp_active == 1")
+    p.add_argument("--manoeuvre", action="store_true",
+                   help="logs of manoeuvres, not station keeping: train with the settings of 'hybridship benchmark "
+                        "manoeuvre' (multi-step training, the runs' mean residual as environment, the command "
+                        "guard; every row; docs/esso-osaka.md) instead of the station-keeping and drift ones")
     p.set_defaults(func=_cmd_train)
 
 
@@ -322,13 +326,41 @@ def _cmd_train(args) -> int:
         raise UsageError(f"{_PROG} train: error: --out {args.out}: exists and is not a hybridship model file "
                          f"(its arrays would be lost); give another path or remove it")
     _check_writable(args.out, f"{_PROG} train")
-    hp = HybridPredictor(vessel, ensemble_config=EnsembleConfig(n_members=args.members, seed=args.seed))
-    hp.fit(files, dp_only=not args.all_rows, progress=sys.stderr.isatty())
+    if args.manoeuvre:
+        from dataclasses import replace
+
+        from .evaluation.manoeuvre import ManoeuvreConfig, make_predictors
+
+        cfg = ManoeuvreConfig()
+        cfg = replace(cfg, ensemble=replace(cfg.ensemble, n_members=args.members, seed=args.seed))
+        hp = make_predictors(vessel, cfg)["hybrid"]
+        hp.fit(files, row_stride=cfg.train_row_stride, progress=sys.stderr.isatty())
+    else:
+        if not any(_has_column(f, "dp_active") for f in files):
+            print(f"{_PROG} train: note: no log has a dp_active column; trained with the station-keeping and drift "
+                  f"settings (the default). Logs of manoeuvres train with --manoeuvre (docs/esso-osaka.md)",
+                  file=sys.stderr)
+        hp = HybridPredictor(vessel, ensemble_config=EnsembleConfig(n_members=args.members, seed=args.seed))
+        hp.fit(files, dp_only=not args.all_rows, progress=sys.stderr.isatty())
     hp.save(args.out)
     print(f"trained on {hp.training_info['n_rows']} samples from {len(files)} logs; wrote {args.out}")
     for line in _learned_from_failures(hp.training_info):
         print(line)
     return 0
+
+
+def _has_column(path: Path, name: str) -> bool:
+    """Whether a log file's header has the column ``name`` (the header alone is read)."""
+    import pandas as pd
+
+    try:
+        if path.name.lower().endswith((".parquet", ".pq")):
+            import pyarrow.parquet as pq
+
+            return name in pq.read_schema(path).names
+        return name in pd.read_csv(path, nrows=0).columns
+    except (OSError, ValueError):
+        return False            # an unreadable file is refused by the training itself
 
 
 def _learned_from_failures(info: dict) -> list[str]:

@@ -149,6 +149,34 @@ def test_forecast_of_a_10_hz_log_is_on_its_grid_and_a_horizon_under_a_step_is_a_
         assert "--horizon-s must be > 0 and at most 86400 s (one day)" in capsys.readouterr().err
 
 
+def test_train_with_manoeuvre_uses_the_manoeuvre_benchmarks_hybrid(log_dir, tmp_path, monkeypatch, capsys):
+    """--manoeuvre trains the manoeuvre benchmark's hybrid (multi-step, the runs' mean residual,
+    every row at its stride); without it, logs with no dp_active column get a note."""
+    from hybridship.evaluation.manoeuvre import ManoeuvreConfig
+    from hybridship.predictors import HybridPredictor
+
+    seen = {}
+
+    def fit(self, logs, **kw):          # what would be trained, not the minutes of training
+        seen.update(training=self.training, environment=self.environment, kw=kw,
+                    members=self.ensemble_config.n_members)
+        self.training_info = {"n_rows": 1}
+        return self
+    monkeypatch.setattr(HybridPredictor, "fit", fit)
+    monkeypatch.setattr(HybridPredictor, "save", lambda self, path: None)
+    assert main(["train", "--logs", str(log_dir), "--out", str(tmp_path / "m.npz"), "--members", "3",
+                 "--manoeuvre"]) == 0
+    assert seen["training"] == "multi_step" and seen["environment"] == "mean" and seen["members"] == 3
+    assert seen["kw"].get("row_stride") == ManoeuvreConfig().train_row_stride and "dp_only" not in seen["kw"]
+    assert "note" not in capsys.readouterr().err
+    runs = tmp_path / "runs"
+    runs.mkdir()
+    for f in log_dir.iterdir():
+        pd.read_csv(f).drop(columns="dp_active").to_csv(runs / f.name, index=False)
+    assert main(["train", "--logs", str(runs), "--out", str(tmp_path / "d.npz")]) == 0
+    assert seen["training"] == "one_step" and "no log has a dp_active column" in capsys.readouterr().err
+
+
 def test_train_refuses_one_recording_twice(log_dir, tmp_path, capsys):
     """A log and its copy in another format are one recording: training on both would count it
     twice (and the leave-one-failure-out choices would see the left-out failure's copy)."""

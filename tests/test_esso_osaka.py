@@ -48,6 +48,12 @@ def test_runs_kinds_and_duplicates(runs):
         assert r.kind == manifest.loc[manifest.file == r.path.relative_to(DATA).as_posix(), "kind"].item()
     pieces = {r.recording for r in runs if r.name.startswith("random_06-Aug-2020_16_24_25")}
     assert pieces == {"random_06-Aug-2020_16_24_25"}
+    # a run without a piece number keeps its whole stamp (two runs started in one minute
+    # are two recordings)
+    from hybridship.datasets.esso_osaka import _recording
+
+    assert _recording("random_31-Jul-2020_12_29_58") == "random_31-Jul-2020_12_29_58"
+    assert _recording("turn_cut_14-Sep-2020_15_58_08") == "turn_14-Sep-2020_15_58_08"
 
 
 def test_kind_from_name_without_manifest(tmp_path, runs):
@@ -276,6 +282,23 @@ def test_benchmark_refuses_test_runs_too_short_for_any_start(tmp_path):
     with pytest.raises(ValueError, match="no start times"):
         run_manoeuvre_benchmark("esso_osaka_model", train, test, (5,), tmp_path / "out", config=_tiny_config())
     assert not (tmp_path / "out").exists()
+
+
+def test_a_test_run_too_short_for_the_horizon_is_said_to_be_left_out(tmp_path):
+    """A test run shorter than the warm-up plus the longest horizon, beside one that is long
+    enough: warned before the work and marked in README.md, not left out in silence."""
+    import pandas as pd
+
+    from hybridship.evaluation.manoeuvre import run_manoeuvre_benchmark
+
+    train = _link(tmp_path, "train", SMALL_TRAIN[:1])
+    test = _link(tmp_path, "test", SMALL_TEST[1:])
+    short = test / SMALL_TEST[0]
+    short.parent.mkdir(parents=True)
+    pd.read_csv(DATA / "data" / SMALL_TEST[0]).iloc[:60].to_csv(short, index=False)
+    with pytest.warns(UserWarning, match=r"1 test run\(s\) shorter than .* are not scored: berthing_12-Nov-2020"):
+        run_manoeuvre_benchmark("esso_osaka_model", train, test, (5,), tmp_path / "out", config=_tiny_config())
+    assert "(berthing; not scored: shorter than the warm-up" in (tmp_path / "out" / "README.md").read_text()
 
 
 def test_starts_whose_horizon_spans_a_gap_are_not_scored(tmp_path):

@@ -316,7 +316,8 @@ def uncut_name(stem: str) -> str:
 
 def _recording(stem: str) -> str:
     s = uncut_name(stem)
-    return re.sub(r"_\d+$", "", s) if re.search(r"\d{2}_\d{2}_\d{2}_\d+$", s) else s
+    # a piece number follows the whole stamp DD-Mon-YYYY_HH_MM_SS (not the year's last digits)
+    return re.sub(r"_\d+$", "", s) if re.search(r"\d{4}_\d{2}_\d{2}_\d{2}_\d+$", s) else s
 
 
 def list_runs(folder, *, include_duplicates: bool = False) -> list[EssoRun]:

@@ -513,6 +513,45 @@ def _score_runs(predictors: dict, test: list[Run], steps: np.ndarray, start_ever
     return per_run, per_run_z, per_run_std, n_starts
 
 
+def _checked_steps(train: list[Run], test: list[Run], horizons_s: tuple, cfg: ManoeuvreConfig) -> np.ndarray:
+    """The horizons in steps of the test runs, after refusing (before any training) test runs
+    that are training runs, horizons off the step grid and test runs without any start; test
+    runs too short to be scored, or cut copies of training runs, are warned about."""
+    both = {r.run.path.resolve() for r in train} & {r.run.path.resolve() for r in test}
+    if both:
+        raise ValueError(f"test_dir: {len(both)} run(s) are also in train_dir (e.g. {sorted(both)[0].name}); "
+                         "train and test runs must differ")
+    # a copy of a training run under another path would score the nets on what they saw. (Other
+    # pieces of one recording may be split on purpose: published test sets do so.)
+    same = {r.run.name for r in train} & {r.run.name for r in test}
+    if same:
+        raise ValueError(f"test_dir: {len(same)} run(s) have the name of a train_dir run (e.g. {sorted(same)[0]}): "
+                         "a copy of a training run cannot test it; train and test runs must differ")
+    import warnings
+
+    for test_name, train_name in cut_copies(train, test):     # run, but said now (and in README.md)
+        warnings.warn(f"test run {test_name} and training run {train_name} are one run, cut and uncut: its errors "
+                      f"are not out-of-sample", UserWarning, stacklevel=2)
+    dt = float(np.median(np.diff(test[0].arrays.time_s)))
+    steps = np.array([int(round(h / dt)) for h in horizons_s])
+    if np.any(steps < 1):
+        raise ValueError(f"horizons_s: every horizon must be at least one step ({dt:g} s)")
+    for h, k in zip(horizons_s, steps):
+        if abs(k * dt - h) > 1e-6 * max(h, 1.0):    # scored at k steps, it would be labelled h
+            lo, hi = max(int(np.floor(h / dt)), 1), int(np.ceil(h / dt))
+            raise ValueError(f"horizons_s: {h:g} s is not a whole number of steps of {dt:g} s "
+                             f"(the nearest are {lo * dt:g} and {hi * dt:g} s)")
+    if not any(start_rows(r.arrays, int(steps.max()), cfg.start_every_s).size for r in test):
+        # checked before training: the tables would be empty
+        raise ValueError(f"test_dir: no start times: no test run has a gap-free stretch as long as the 3-s "
+                         f"warm-up plus the longest horizon ({max(horizons_s):g} s)")
+    short = [r.run.name for r in test if not start_rows(r.arrays, int(steps.max()), cfg.start_every_s).size]
+    if short:       # left out of every table: said before the work, not only as "0 starts"
+        warnings.warn(f"{len(short)} test run(s) shorter than the 3-s warm-up plus the longest horizon "
+                      f"({max(horizons_s):g} s) are not scored: {', '.join(short)}", UserWarning, stacklevel=2)
+    return steps
+
+
 def run_manoeuvre_benchmark(vessel, train_dir, test_dir, horizons_s=HORIZONS_S, out_dir="manoeuvre-benchmark",
                             seed: int = 0, quick: bool = False, *, config: ManoeuvreConfig | None = None,
                             command: str | None = None, figures_dir=None, progress: bool = False):
@@ -563,29 +602,7 @@ def run_manoeuvre_benchmark(vessel, train_dir, test_dir, horizons_s=HORIZONS_S, 
     check_output_folder(out_dir)
     train = load_runs(train_dir, v, step_s=cfg.step_s)
     test = load_runs(test_dir, v, step_s=cfg.step_s)
-    both = {r.run.path.resolve() for r in train} & {r.run.path.resolve() for r in test}
-    if both:
-        raise ValueError(f"test_dir: {len(both)} run(s) are also in train_dir (e.g. {sorted(both)[0].name}); "
-                         "train and test runs must differ")
-    # a copy of a training run under another path would score the nets on what they saw. (Other
-    # pieces of one recording may be split on purpose: published test sets do so.)
-    same = {r.run.name for r in train} & {r.run.name for r in test}
-    if same:
-        raise ValueError(f"test_dir: {len(same)} run(s) have the name of a train_dir run (e.g. {sorted(same)[0]}): "
-                         "a copy of a training run cannot test it; train and test runs must differ")
-    dt = float(np.median(np.diff(test[0].arrays.time_s)))
-    steps = np.array([int(round(h / dt)) for h in horizons_s])
-    if np.any(steps < 1):
-        raise ValueError(f"horizons_s: every horizon must be at least one step ({dt:g} s)")
-    for h, k in zip(horizons_s, steps):
-        if abs(k * dt - h) > 1e-6 * max(h, 1.0):    # scored at k steps, it would be labelled h
-            lo, hi = max(int(np.floor(h / dt)), 1), int(np.ceil(h / dt))
-            raise ValueError(f"horizons_s: {h:g} s is not a whole number of steps of {dt:g} s "
-                             f"(the nearest are {lo * dt:g} and {hi * dt:g} s)")
-    if not any(start_rows(r.arrays, int(steps.max()), cfg.start_every_s).size for r in test):
-        # checked before training: the tables would be empty
-        raise ValueError(f"test_dir: no start times: no test run has a gap-free stretch as long as the 3-s "
-                         f"warm-up plus the longest horizon ({max(horizons_s):g} s)")
+    steps = _checked_steps(train, test, horizons_s, cfg)
 
     predictors = make_predictors(v, cfg)
     timings = {}
@@ -752,6 +769,11 @@ def cut_copies(train: list[Run], test: list[Run]) -> list[tuple[str, str]]:
             if by_uncut.get(uncut_name(r.run.name), r.run.name) != r.run.name]
 
 
+def _unscored(result, name: str) -> str:
+    """``"; not scored: ..."`` for a test run without a start time (too short), else ""."""
+    return "" if result.n_starts.get(name, 0) else "; not scored: shorter than the warm-up plus the longest horizon"
+
+
 def is_quick(config: ManoeuvreConfig) -> bool:
     """Whether ``config`` is :meth:`ManoeuvreConfig.quick` (whatever its step and calibration horizon)."""
     return config == replace(ManoeuvreConfig.quick(config.ensemble.seed), step_s=config.step_s,
@@ -778,7 +800,8 @@ def markdown_report(result: BenchmarkResult, *, command: str | None = None) -> s
     lines += [f"Train runs: {len(result.train)} ({', '.join(sorted({r.kind for r in result.train}))}); "
               f"test runs: {len(result.test)}; start times: {sum(result.n_starts.values())} "
               f"(every {result.config.start_every_s} s); horizons {', '.join(f'{h:g}' for h in result.horizons_s)} s.",
-              "", "Test runs: " + ", ".join(f"`{r.name}` ({r.kind})" for r in result.test), ""]
+              "", "Test runs: " + ", ".join(f"`{r.name}` ({r.kind}{_unscored(result, r.name)})" for r in result.test),
+              ""]
     for commands in COMMAND_MODES:
         for state, unit in (("distance_m", "m"), ("heading_deg", "deg")):
             lines += [f"## {state.split('_')[0]} error [{unit}], commands {commands}", "",

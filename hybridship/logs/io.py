@@ -579,6 +579,10 @@ def _check_column_names(cols: list[str], source: str) -> None:
                   f"', ' between names?)" for c in cols if c != c.strip() and c.strip() in missing][:1]
         hints += [f"the header is one name holding {sep!r}: the log format separates columns with ',' (and "
                   f"writes decimals with '.')" for sep in (";", "\t") if len(cols) == 1 and sep in cols[0]][:1]
+        if {"psi_hat [rad]", "n_prop [rps]"} <= set(map(str, cols)):    # the raw Esso Osaka FRT layout
+            hints = ["an Esso Osaka free-running test file in its own layout: read it with "
+                     "hybridship.datasets.esso_osaka.read_esso_osaka (it converts to the log format), or give the "
+                     "folder to 'hybridship benchmark manoeuvre'"]
         hint = "".join(f"; {h}" for h in hints)
         shown = ", ".join(cols[:_FOUND_SHOWN]) + (f", ... ({len(cols) - _FOUND_SHOWN} more)"
                                                   if len(cols) > _FOUND_SHOWN else "")

@@ -643,8 +643,10 @@ class HybridPredictor:
                                  masks=_training_masks(logs, cuts, dp_only))
         if len(paths) < self.wind_samples:
             raise ValueError(f"wind_samples: {len(paths)} training start(s) have {cal.horizon_s:g} s of logged wind "
-                             f"after them to measure the wind forecast's error on; need {self.wind_samples} "
-                             f"(or use wind_samples=0)")
+                             f"after them to measure the wind forecast's error on; need {self.wind_samples}: the "
+                             f"training logs are too short for that horizon (the calibration's, the longest "
+                             f"forecast horizon); give longer logs or a shorter horizon, or wind_samples=0 in the "
+                             f"Python API")
         pick = np.random.default_rng(self.ensemble_config.seed).choice(len(paths), self.wind_samples, replace=False)
         self.wind_error_paths = np.ascontiguousarray(paths[np.sort(pick)], dtype=float)
         self.wind_error_dt_s = dt
