@@ -334,7 +334,7 @@ def _cmd_train(args) -> int:
         cfg = ManoeuvreConfig()
         cfg = replace(cfg, ensemble=replace(cfg.ensemble, n_members=args.members, seed=args.seed))
         hp = make_predictors(vessel, cfg)["hybrid"]
-        hp.fit(files, row_stride=cfg.train_row_stride, progress=sys.stderr.isatty())
+        hp.fit(files, dp_only=False, row_stride=cfg.train_row_stride, progress=sys.stderr.isatty())
     else:
         if not any(_has_column(f, "dp_active") for f in files):
             print(f"{_PROG} train: note: no log has a dp_active column; trained with the station-keeping and drift "

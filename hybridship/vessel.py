@@ -406,22 +406,28 @@ class Vessel(_Strict):
             raise ValueError(f"rudders: duplicate names {sorted(dup)} (names must differ from each other "
                              "and from the thrusters')")
         # a position beyond the hull is a typo (1444 for 14.44) or a sign or axis mix-up, not a
-        # layout. Along: the hull runs from its aft perpendicular (damping.nonlinear's
-        # strips_x_aft_m, by default -L_pp/2) to the forward one, and overhangs by at most
-        # L_oa - L_pp at either end; across: half the beam from the centre line.
+        # layout. Along: with damping.nonlinear's strips_x_aft_m (the AP) given, the hull runs
+        # from the AP to the FP and overhangs by at most L_oa - L_pp at either end; without it,
+        # L_oa centred on the CG (x_g_m), give or take 0.05 L_pp (the CG lies near midships).
+        # Across: half the beam.
         part = self.particulars
         L, B = part.L_oa_m, part.B_m
         x_ap = self.damping.nonlinear.strips_x_aft_m
-        x_ap = -0.5 * part.L_pp_m if x_ap is None else x_ap
-        overhang = max(L - part.L_pp_m, 0.0)
-        x_lo, x_hi = x_ap - overhang, x_ap + part.L_pp_m + overhang
+        if x_ap is not None:
+            overhang = max(L - part.L_pp_m, 0.0)
+            x_lo, x_hi = x_ap - overhang, x_ap + part.L_pp_m + overhang
+            where = ("damping.nonlinear.strips_x_aft_m (the AP), particulars.L_pp_m and the overhang "
+                     "L_oa_m - L_pp_m")
+        else:
+            half = 0.5 * L + 0.05 * part.L_pp_m
+            x_lo, x_hi = self.rigid_body.x_g_m - half, self.rigid_body.x_g_m + half
+            where = ("particulars.L_oa_m centred on rigid_body.x_g_m, give or take 0.05 L_pp; with the origin "
+                     "elsewhere, give damping.nonlinear.strips_x_aft_m, the AP")
         for kind, acts in (("thrusters", self.thrusters), ("rudders", self.rudders)):
             for i, a in enumerate(acts):
                 if not x_lo <= a.x_m <= x_hi:
                     raise ValueError(f"{kind}[{i}].x_m: {a.x_m:g} m lies outside the hull (from {x_lo:g} to "
-                                     f"{x_hi:g} m from the body origin: the perpendiculars, from "
-                                     f"damping.nonlinear.strips_x_aft_m and particulars.L_pp_m, and the "
-                                     f"overhang L_oa_m - L_pp_m)")
+                                     f"{x_hi:g} m from the body origin: {where})")
                 if abs(a.y_m) > 0.5 * B:
                     raise ValueError(f"{kind}[{i}].y_m: {a.y_m:g} m lies outside the hull (at most half of "
                                      f"particulars.B_m = {B:g} m from the centre line)")

@@ -521,6 +521,15 @@ def test_live_refuses_empty_commands_and_faulty_sensors_at_the_blackout_row():
     for col in ("tunnel_rpm", "port_azimuth_deg", "dp_active"):
         with pytest.raises(ValueError, match=f"column '{col}' has no value in the last 900 s"):
             environment_from_log(hist.assign(**{col: np.nan}), "gunnerus")
+    # a column the reader ignores (a tunnel has no azimuth) is not checked; commands logged on
+    # different rows are held by the reader, as in a forecast
+    with pytest.warns(UserWarning, match="tunnel_azimuth_deg .thruster 'tunnel' is not rotatable"):
+        environment_from_log(hist.assign(tunnel_azimuth_deg=np.nan), "gunnerus")
+    alternate = hist.copy()
+    alternate.loc[alternate.index[1::2], ["tunnel_rpm", "port_rpm", "stbd_rpm"]] = np.nan
+    alternate.loc[alternate.index[::2], ["port_azimuth_deg", "stbd_azimuth_deg"]] = np.nan
+    with pytest.warns(UserWarning):
+        environment_from_log(alternate, "gunnerus")
     gap = hist.copy()
     gap.loc[gap.index[-300:], ["north_m", "east_m"]] = np.nan
     with pytest.raises(ValueError, match="at the blackout row: .*too little valid data.*position"):

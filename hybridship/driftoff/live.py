@@ -118,24 +118,24 @@ def _arrays(log, model, window_s: float, name: str = "log") -> LogArrays:
         if not np.isfinite(t).any():
             raise ValueError("log: column 'time_s' has no finite time")
         t_end = float(np.nanmax(t))
-        _refuse_empty_commands(log, t >= t_end - window_s, window_s, t_end, name)
+        _refuse_empty_commands(log, t >= t_end - window_s, window_s, t_end, name, model.vessel)
     else:
         raise TypeError(f"log: expected a pandas DataFrame or LogArrays, got {type(log).__name__}")
-    a = ingest(log, model.vessel, purpose="forecast", name=name, time_range_s=(t_end - window_s, t_end))
-    if not a.commands_logged.any():
-        raise ValueError(f"{name}: no row of the last {window_s:g} s up to time_s {t_end:g} has all its commands "
-                         f"(rpm, azimuths, dp_active) logged; a blackout starts from the logged commands")
-    return a
+    return ingest(log, model.vessel, purpose="forecast", name=name, time_range_s=(t_end - window_s, t_end))
 
 
-def _refuse_empty_commands(df: pd.DataFrame, inside: np.ndarray, window_s: float, t_end: float, name: str) -> None:
-    """Refuse a command column (``<thruster>_rpm``, ``<thruster>_azimuth_deg``, ``dp_active``)
-    with no value in the rows read: the reader would hold a default (a stopped thruster, DP on)."""
-    from ..logs.columns import channel_column
-
-    for col in df.columns:
-        if col != "dp_active" and channel_column(str(col)) is None:
-            continue
+def _refuse_empty_commands(df: pd.DataFrame, inside: np.ndarray, window_s: float, t_end: float, name: str,
+                           vessel) -> None:
+    """Refuse a command column of the vessel (a thruster's ``<name>_rpm``, a rotatable
+    channel's ``<name>_azimuth_deg``, ``dp_active``) with no value in the rows read: the reader
+    would hold a default (a stopped thruster, DP on). Columns the reader ignores are not checked."""
+    n_thr = len(vessel.thrusters)
+    columns = ([f"{c}_rpm" for c in vessel.channel_names[:n_thr]]
+               + [f"{c}_azimuth_deg" for c, rot in zip(vessel.channel_names, vessel.rotatable) if rot]
+               + ["dp_active"])
+    for col in columns:
+        if col not in df.columns:
+            continue            # a missing column is the ingest's to refuse, by its own rules
         values = pd.to_numeric(df.loc[inside, col], errors="coerce").to_numpy(float)
         if not np.isfinite(values).any():
             raise ValueError(f"{name}: column {col!r} has no value in the last {window_s:g} s up to time_s "

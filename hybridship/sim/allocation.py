@@ -278,6 +278,9 @@ class ThrustAllocator:
     reverse_hysteresis_rad : float
         An azimuth changes between forward and reversed thrust only when the other choice
         saves more than this much turning [rad].
+    warn_unlimited_slew : bool
+        Warn that azimuths without ``max_azimuth_rate_deg_s`` turn instantly (the simulator's
+        allocation); False for a static use such as :func:`thrust_capacity`.
 
     Notes
     -----
@@ -287,7 +290,7 @@ class ThrustAllocator:
     """
 
     def __init__(self, vessel, *, dt_s: float, rpm_rate_limit_rpm_s=None, weights=None,
-                 reverse_hysteresis_rad: float = math.radians(15.0)):
+                 reverse_hysteresis_rad: float = math.radians(15.0), warn_unlimited_slew: bool = True):
         self.vessel = _vessel(vessel)
         th = self.vessel.thrusters
         K = len(th)
@@ -319,7 +322,7 @@ class ThrustAllocator:
         self.fixed_angle_rad = np.array([t.fixed_angle_rad for t in th], float)
         # Azimuths without a slew limit turn instantly: said, since a real one cannot
         unlimited = [t.name for t in th if t.type == "azimuth" and not t.max_azimuth_rate_deg_s]
-        if unlimited:
+        if unlimited and warn_unlimited_slew:
             import warnings
 
             warnings.warn(f"vessel {self.vessel.name!r}: azimuth thruster(s) {', '.join(unlimited)} have no "
@@ -589,7 +592,7 @@ def thrust_capacity(vessel) -> np.ndarray:
     ndarray, shape (3,)
         ``[X_N, Y_N, N_Nm]``, each > 0 when the vessel can produce that load at all.
     """
-    alloc = ThrustAllocator(vessel, dt_s=1.0)
+    alloc = ThrustAllocator(vessel, dt_s=1.0, warn_unlimited_slew=False)     # a static capacity: no slewing
     big = 1e12
     cap = np.empty(3)
     for k in range(3):
