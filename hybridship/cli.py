@@ -336,7 +336,9 @@ def _cmd_train(args) -> int:
         hp = make_predictors(vessel, cfg)["hybrid"]
         hp.fit(files, dp_only=False, row_stride=cfg.train_row_stride, progress=sys.stderr.isatty())
     else:
-        if not any(_has_column(f, "dp_active") for f in files):
+        from .logs.io import log_header
+
+        if not any("dp_active" in (log_header(f) or ()) for f in files):   # unreadable: refused by fit
             print(f"{_PROG} train: note: no log has a dp_active column; trained with the station-keeping and drift "
                   f"settings (the default). Logs of manoeuvres train with --manoeuvre (docs/esso-osaka.md)",
                   file=sys.stderr)
@@ -347,20 +349,6 @@ def _cmd_train(args) -> int:
     for line in _learned_from_failures(hp.training_info):
         print(line)
     return 0
-
-
-def _has_column(path: Path, name: str) -> bool:
-    """Whether a log file's header has the column ``name`` (the header alone is read)."""
-    import pandas as pd
-
-    try:
-        if path.name.lower().endswith((".parquet", ".pq")):
-            import pyarrow.parquet as pq
-
-            return name in pq.read_schema(path).names
-        return name in pd.read_csv(path, nrows=0).columns
-    except (OSError, ValueError):
-        return False            # an unreadable file is refused by the training itself
 
 
 def _learned_from_failures(info: dict) -> list[str]:

@@ -209,14 +209,12 @@ def _refuse_inputs_in_out(args, mode) -> None:
 def _looks_like_log(path: Path) -> bool:
     """Whether a file found among logs has the log format's ``time_s`` in its header (a
     weather table does not); Parquet files are taken as logs."""
-    import pandas as pd
+    from hybridship.logs.io import log_header
 
     if path.name.lower().endswith((".parquet", ".pq")):
         return True
-    try:    # the header alone (gzip by extension)
-        return "time_s" in pd.read_csv(path, nrows=0).columns.str.strip()
-    except Exception:      # empty, binary or damaged: not a log to protect
-        return False
+    # empty, binary or damaged (no header): not a log to protect
+    return "time_s" in [c.strip() for c in log_header(path) or ()]
 
 
 def _model(args, mode):

@@ -42,6 +42,7 @@ from pydantic import AfterValidator, Field, model_validator
 from ..config import Float, config_dataclass
 from ..forecast_inputs.limits import Envelope, check_number
 from ..sim import environment as env
+from ..sim.environment import MAX_STEEPNESS, max_hs_m
 
 __all__ = ["WeatherState", "WeatherUncertainty", "TABLE_COLUMNS", "read_weather_table", "states_to_frame",
            "SampledEnvironment", "sample_environment", "limiting_hs_m", "max_hs_m", "MAX_STEEPNESS"]
@@ -93,18 +94,6 @@ def limiting_hs_m(tp_s):
     1/25 for Tp >= 15 s, linear in between."""
     tp = np.asarray(tp_s, dtype=float)
     return np.interp(tp, [8.0, 15.0], [1.0 / 15.0, 1.0 / 25.0]) * env.G_M_S2 * tp**2 / (2.0 * np.pi)
-
-
-#: Steepness ``2 pi Hs / (g Tp^2)`` beyond which a sea state is refused: that at which a
-#: single deep-water wave breaks (Miche, 1/7), about twice DNV-RP-C205's limiting steepness
-#: of the significant wave (:func:`limiting_hs_m`), which only clips the samples' spread.
-MAX_STEEPNESS = 1.0 / 7.0
-
-
-def max_hs_m(tp_s):
-    """Largest significant wave height [m] a :class:`WeatherState` accepts at peak period
-    ``tp_s`` [s] (:data:`MAX_STEEPNESS`)."""
-    return MAX_STEEPNESS * env.G_M_S2 * np.asarray(tp_s, dtype=float) ** 2 / (2.0 * np.pi)
 
 
 @config_dataclass(frozen=True, prefix="weather")

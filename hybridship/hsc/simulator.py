@@ -75,7 +75,7 @@ from pydantic import Field, model_validator
 
 from ..config import Float, Int, config_dataclass
 
-from hybridship.sim.environment import G_M_S2, make_wave_components
+from hybridship.sim.environment import G_M_S2, MAX_STEEPNESS, make_wave_components, max_hs_m
 
 from .vessel import PlaningCraft
 
@@ -164,8 +164,6 @@ def savitsky_planing(speed_m_s: float, tau_rad: float, transom_draft_m: float, b
 #: benchmark's sea state 2. Beyond it the boat slams (pitch swings of 10-30 deg, heave
 #: accelerations of 1-3 g, speed gained in waves): ``python benchmarks/hsc_sea_validity.py``.
 MAX_HS_M = 0.10
-#: Steepness ``2 pi Hs / (g Tp^2)`` beyond which a single wave breaks (Miche, 1/7).
-MAX_STEEPNESS = 1.0 / 7.0
 
 
 @config_dataclass(frozen=True)
@@ -184,10 +182,9 @@ class SeaConditions:
 
     @model_validator(mode="after")
     def _a_sea_the_model_is_meant_for(self):
-        steepness = 2.0 * math.pi * self.hs_m / (G_M_S2 * self.tp_s ** 2)
-        if steepness > MAX_STEEPNESS:
-            raise ValueError(f"hs_m {self.hs_m:g} m at tp_s {self.tp_s:g} s is steeper than waves can be "
-                             f"(2 pi Hs / (g Tp^2) = {steepness:.2f} > {MAX_STEEPNESS:.3f})")
+        if self.hs_m > max_hs_m(self.tp_s):
+            raise ValueError(f"hs_m {self.hs_m:g} m at tp_s {self.tp_s:g} s is steeper than waves can be (at most "
+                             f"{max_hs_m(self.tp_s):.2f} m at that period: 2 pi Hs / (g Tp^2) <= {MAX_STEEPNESS:.3f})")
         if self.hs_m > MAX_HS_M and not self.beyond_validity:
             raise ValueError(f"hs_m: {self.hs_m:g} m is above the {MAX_HS_M:g} m the quasi-static planing "
                              f"simulator is meant for (beyond it the boat slams: docs/hsc.md); set "

@@ -92,6 +92,7 @@ __all__ = [
     "speed_scale_vs_track",
     "SpeedScale",
     "check_log_against_vessel",
+    "log_header",
 ]
 
 #: Speed-vs-track check: displacements over this lag [s] are compared ...
@@ -774,6 +775,20 @@ def validate_log(
         Once, listing every column that is neither in the format nor ``truth_*``.
     """
     _validate(df, channel_names, rotatable, source, warn_unknown=True, allow_missing=allow_missing)
+
+
+def log_header(path) -> list[str] | None:
+    """A log file's column names from its header alone (Parquet: its schema), without reading
+    the rows; None when the file cannot be read as a log (empty, binary, damaged)."""
+    path = Path(path)
+    try:
+        if path.name.lower().endswith((".parquet", ".pq")):
+            import pyarrow.parquet as pq
+
+            return [str(c) for c in pq.read_schema(path).names]
+        return [str(c) for c in pd.read_csv(path, nrows=0).columns]    # gzip by extension
+    except Exception:       # any reader's failure: not readable as a log here
+        return None
 
 
 def check_log_against_vessel(log, vessel, *, source: str | None = None, allow_missing: bool = False) -> None:

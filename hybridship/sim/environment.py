@@ -78,12 +78,23 @@ __all__ = [
     "beaufort_wind_speed",
     "beaufort_wave_height",
     "SeaState",
+    "MAX_STEEPNESS",
+    "max_hs_m",
 ]
 
 #: Standard gravity [m/s^2].
 G_M_S2 = 9.81
 #: Sea-water density [kg/m^3].
 RHO_SEAWATER_KG_M3 = 1025.0
+#: Steepness ``2 pi Hs / (g Tp^2)`` beyond which no sea state exists: that at which a single
+#: deep-water wave breaks (Miche, 1/7), about twice DNV-RP-C205's limiting steepness of the
+#: significant wave. A larger Hs is two columns swapped or a period in another unit.
+MAX_STEEPNESS = 1.0 / 7.0
+
+
+def max_hs_m(tp_s):
+    """Largest significant wave height [m] at peak period ``tp_s`` [s] (:data:`MAX_STEEPNESS`)."""
+    return MAX_STEEPNESS * G_M_S2 * np.asarray(tp_s, dtype=float) ** 2 / (2.0 * np.pi)
 
 # Budget of elements (time samples x components) per vectorised block, to bound memory
 # for long, finely sampled records (e.g. 1 h at 100 Hz x 50 components).
