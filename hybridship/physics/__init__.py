@@ -2,3 +2,8 @@
 
 Nothing in this package imports torch.
 """
+
+from .compiled_cache import drop_stale_compiled_kernels
+
+# Every kernel module imports this package first, so this runs before anything compiles.
+drop_stale_compiled_kernels()
