@@ -34,13 +34,17 @@ def wrap_pi(angle_rad):
         The same angles in [-pi, pi) ("smallest signed angle", Fossen's ``ssa``).
     """
     a = np.asarray(angle_rad, dtype=float)
-    return np.mod(a + np.pi, 2.0 * np.pi) - np.pi
+    w = np.mod(a + np.pi, 2.0 * np.pi) - np.pi
+    # np.mod rounds to 2 pi itself for an argument just below a multiple of 2 pi (pi - 1e-16
+    # came back as pi); that end of the interval is open, its angle is -pi
+    return w - 2.0 * np.pi * (w >= np.pi)
 
 
 def wrap_2pi(angle_rad):
     """Wrap angles to [0, 2 pi), the usual range of a compass heading in radians."""
     a = np.asarray(angle_rad, dtype=float)
-    return np.mod(a, 2.0 * np.pi)
+    w = np.mod(a, 2.0 * np.pi)
+    return w - 2.0 * np.pi * (w >= 2.0 * np.pi)  # np.mod(-1e-20, 2 pi) rounds to 2 pi: fold it onto 0
 
 
 def rotation_z(psi_rad):

@@ -63,7 +63,10 @@ def _wrap_gamma(gamma_rad):
     # pi - mod(pi - g, 2 pi) maps onto (-pi, pi] (upper end closed on purpose); angles
     # already in range are passed through bit-exactly so that odd/even symmetry is exact.
     inside = (g > -np.pi) & (g <= np.pi)
-    return np.where(inside, g, np.pi - np.mod(np.pi - g, _TWO_PI))
+    w = np.pi - np.mod(np.pi - g, _TWO_PI)
+    # np.mod rounds to 2 pi for an angle just above pi (pi + 4e-16 came back as -pi, outside
+    # the range): that end is open, its angle is pi
+    return np.where(inside, g, np.where(w <= -np.pi, np.pi, w))
 
 
 def _check_positive(name, value, *, allow_zero=False):
