@@ -113,6 +113,14 @@ class LinearDamping(_Strict):
         else:
             if self.D is None or np.shape(self.D) != (3, 3):
                 raise ValueError("method 'explicit' needs D as a 3x3 matrix")
+            # Fossen (2021, sec. 6.4): damping is dissipative, nu^T D nu >= 0 for every nu; a
+            # symmetric part with a negative eigenvalue feeds energy in (a sign typo: the
+            # derivatives X_u < 0 go in as D = -X_u > 0)
+            eig = np.linalg.eigvalsh(0.5 * (np.asarray(self.D) + np.asarray(self.D).T))
+            if eig.min() < -1e-12 * max(np.abs(eig).max(), 1.0):
+                raise ValueError(f"D: not dissipative (its symmetric part has eigenvalues "
+                                 f"{np.array2string(eig, precision=3)}); D holds positive damping, "
+                                 f"D = -[[X_u, X_v, X_r], ...] (Fossen 2021, sec. 6.4)")
         return self
 
 
