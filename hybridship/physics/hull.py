@@ -161,7 +161,8 @@ def added_mass_matrix(X_udot_kg: float, Y_vdot_kg: float, Y_rdot_kg_m: float,
 
 
 def mass_matrices(vessel, added_mass_scale=(1.0, 1.0, 1.0)):
-    """``(M_RB, M_A)`` for a vessel, with optional per-DOF scaling of the added mass."""
+    """``(M_RB, M_A)`` (3x3 each, [kg, kg m, kg m^2] by row and column DOF) for a vessel, with
+    optional per-DOF scaling of the added mass."""
     p, rb, am = vessel.particulars, vessel.rigid_body, vessel.added_mass
     M_RB = rigid_body_mass(rb.mass_kg, rb.I_z, rb.x_g_m)
     if am.method == "clarke1983":
