@@ -1284,10 +1284,15 @@ def _unwrap_finite(psi_rad: np.ndarray) -> np.ndarray:
     return out
 
 
-def _held(x: np.ndarray, default: float) -> np.ndarray:
+def _held(x: np.ndarray, default: float, *, backwards: bool = True) -> np.ndarray:
     """Fill NaNs by holding the last logged value (a logger logs commands that persist),
-    then the first one backwards, then ``default`` if the column is empty."""
-    return pd.Series(x).ffill().bfill().fillna(default).to_numpy(dtype=float)
+    then (with ``backwards``) the first one backwards, then ``default``.
+
+    Commands are filled without ``backwards``: a command logged after a row was not known
+    at that row, and a held-command forecast must not use it (before the first logged
+    value a command is ``default``, as :attr:`LogArrays.commands_logged` says)."""
+    s = pd.Series(x).ffill()
+    return (s.bfill() if backwards else s).fillna(default).to_numpy(dtype=float)
 
 
 def log_to_arrays(
@@ -1332,7 +1337,9 @@ def log_to_arrays(
     Plain differences amplify position noise; filter with
     :func:`hybridship.logs.preprocess.derivative_by_segment` where that matters. Missing
     values in thruster, wind and ``dp_active`` columns are filled by holding the last
-    logged value (then the first one backwards).
+    logged value; before the first one, wind takes the first logged value (see
+    ``wind_logged``) and commands their default (0 rpm, angle 0, ``dp_active`` 1: causal,
+    see ``commands_logged``).
     """
     names, rot = _check_thruster_args(channel_names, rotatable)
     if names is None or rot is None:
@@ -1384,10 +1391,10 @@ def _frame_to_arrays(df: pd.DataFrame, names: tuple, rot: tuple, resorted_time_s
         logged.append(f"{name}_rpm" in cols)
         if logged[-1]:
             commands_logged &= np.isfinite(col(f"{name}_rpm"))
-            rpm[:, j] = _held(col(f"{name}_rpm"), 0.0)
+            rpm[:, j] = _held(col(f"{name}_rpm"), 0.0, backwards=False)
         if rot[j] and f"{name}_azimuth_deg" in cols:
             commands_logged &= np.isfinite(col(f"{name}_azimuth_deg"))
-            azimuth[:, j] = np.radians(_held(col(f"{name}_azimuth_deg"), 0.0))
+            azimuth[:, j] = np.radians(_held(col(f"{name}_azimuth_deg"), 0.0, backwards=False))
 
     wind = np.zeros((n, 2))
     has_wind = False
@@ -1404,7 +1411,7 @@ def _frame_to_arrays(df: pd.DataFrame, names: tuple, rot: tuple, resorted_time_s
     dp = np.ones(n, dtype=int)
     if "dp_active" in cols:
         commands_logged &= np.isfinite(col("dp_active"))    # the DP's state is commanded too
-        dp = _held(col("dp_active"), 1.0).astype(int)
+        dp = _held(col("dp_active"), 1.0, backwards=False).astype(int)
 
     return LogArrays(
         time_s=t,

@@ -1,0 +1,41 @@
+"""One path for one log: training and forecasting read a log alike, and bad input is named.
+
+The same log goes through :func:`hybridship.logs.ingest.ingest` for ``fit`` and for
+``forecast`` (whole, or the time range a forecast reads); the arrays they see must agree,
+and a held-command forecast must not see commands logged after its start.
+"""
+
+from __future__ import annotations
+
+import warnings
+
+import numpy as np
+import pandas as pd
+import pytest
+
+from hybridship.logs.ingest import ingest
+from hybridship.predictors import DynamicPredictor
+from hybridship.sim.synthetic import physics_log
+
+
+@pytest.fixture(scope="module")
+def log(model):
+    return physics_log(model, seed=5, duration_s=120.0, t_shutdown_s=None)
+
+
+def test_a_command_logged_after_a_start_is_not_held_at_it(model, log):
+    """A command column empty at the log's start: the rows before its first value take the
+    default (0 rpm), not the later value (a forecast from them would use the future)."""
+    late = log.copy()
+    late.loc[late.time_s <= 40.0, "port_rpm"] = np.nan
+    late.loc[late.time_s > 40.0, "port_rpm"] = 150.0
+    for purpose in ("fit", "forecast"):
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            a = ingest(late, model.vessel, purpose=purpose)
+        j = list(a.channel_names).index("port")
+        assert np.all(a.rpm[a.time_s <= 40.0, j] == 0.0) and np.all(a.rpm[a.time_s > 40.0, j] == 150.0)
+    p = DynamicPredictor(model.vessel)
+    whole, cut = p.forecast(late, [30.0], 20.0), p.forecast(late[late.time_s <= 30.0], [30.0], 20.0)
+    np.testing.assert_array_equal(whole.eta, cut.eta)
+    assert "none logged: 0" in whole.notes[0]
