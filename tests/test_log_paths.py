@@ -14,6 +14,7 @@ import pandas as pd
 import pytest
 
 from hybridship.logs.ingest import ingest
+from hybridship.logs.io import LogFormatError
 from hybridship.predictors import DynamicPredictor
 from hybridship.sim.synthetic import physics_log
 
@@ -39,3 +40,17 @@ def test_a_command_logged_after_a_start_is_not_held_at_it(model, log):
     whole, cut = p.forecast(late, [30.0], 20.0), p.forecast(late[late.time_s <= 30.0], [30.0], 20.0)
     np.testing.assert_array_equal(whole.eta, cut.eta)
     assert "none logged: 0" in whole.notes[0]
+
+
+@pytest.mark.parametrize("column", ["wind_dir_deg", "port_azimuth_deg"])
+def test_an_angle_in_centidegrees_is_refused_naming_the_column(model, log, column):
+    """Wind direction and azimuth get the heading's degree range: 100 x degrees (centidegrees)
+    is refused, for training and forecasting alike, not read as many turns."""
+    bad = log.copy()
+    bad[column] = (bad[column] % 360.0 + 100.0) * 100.0
+    for purpose in ("fit", "forecast"):
+        with pytest.raises(LogFormatError, match=rf"^{column}: value .* is outside -360..720 deg; .*centidegrees"):
+            ingest(bad, model.vessel, purpose=purpose)
+    ok = log.copy()
+    ok[column] = ok[column] % 360.0 - 360.0            # any wrap within the range is accepted
+    ingest(ok, model.vessel)

@@ -50,6 +50,9 @@ HEADING_RANGE_DEG = (-360.0, 720.0)
 #: ``|rpm|`` beyond this multiple of a thruster's ``max_rpm`` is a unit error (refused).
 RPM_UNIT_FACTOR = 1.25
 
+#: What an angle column (other than the heading) beyond ``HEADING_RANGE_DEG`` suggests.
+_ANGLE_EXPECTS = "the log format expects degrees (0..360 or -180..180): is it in centidegrees or milliradians?"
+
 #: Placeholder for the command channel (thruster or rudder) in per-channel column names.
 CHANNEL = "<thruster>"
 #: Prefix of simulator ground-truth columns, which readers never interpret.
@@ -184,8 +187,8 @@ COLUMNS: tuple[ColumnSpec, ...] = (
     ColumnSpec("wind_speed_m_s", "m/s", "true wind speed", bound=Bound(0.0, MAX_WIND_SPEED_M_S),
                expects="the log format expects a non-negative true wind speed in m/s (knots?)",
                other_unit_stems=("wind_speed", "windspeed", "wind")),
-    ColumnSpec("wind_dir_deg", "deg", "true direction the wind comes from", angle=True,
-               other_unit_stems=("wind_dir", "wind_direction", "winddir")),
+    ColumnSpec("wind_dir_deg", "deg", "true direction the wind comes from", bound=Bound(*HEADING_RANGE_DEG),
+               expects=_ANGLE_EXPECTS, angle=True, other_unit_stems=("wind_dir", "wind_direction", "winddir")),
     ColumnSpec("dp_active", "", "1 while the station-keeping controller is active", dtype="flag",
                allowed=(0.0, 1.0),
                expects="the log format expects 1 while the station-keeping controller is active, else 0"),
@@ -193,7 +196,7 @@ COLUMNS: tuple[ColumnSpec, ...] = (
                expects="the log format expects the propeller shaft speed in rpm: is it the motor speed before "
                        "the gear, or another unit?"),
     ColumnSpec(f"{CHANNEL}_azimuth_deg", "deg", "azimuth (thruster) or angle (rudder), positive to starboard",
-               angle=True, rotatable_only=True),
+               bound=Bound(*HEADING_RANGE_DEG), expects=_ANGLE_EXPECTS, angle=True, rotatable_only=True),
 )
 
 _BY_NAME = {c.name: c for c in COLUMNS}

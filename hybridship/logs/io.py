@@ -23,7 +23,8 @@ expected:
 * ``time_s`` not finite or not strictly increasing; a median sample spacing outside
   0.01..60 s (``time_s`` in milliseconds?); NaN in a required column (unless
   ``allow_missing``, the forecast-time mode of :mod:`hybridship.forecast_inputs.start_window`);
-* a heading outside -360..720 deg (milliradians, centidegrees?) or one that looks like
+* a heading, ``wind_dir_deg`` or ``<thruster>_azimuth_deg`` outside -360..720 deg
+  (milliradians, centidegrees?); a heading that looks like
   radians (see :func:`heading_looks_like_radians` for the rule); the same radian rule for
   ``wind_dir_deg`` and every ``<thruster>_azimuth_deg``;
 * ``|u_m_s|`` or ``|v_m_s|`` above 30 m/s (knots?), ``|r_deg_s|`` above 60 deg/s
@@ -727,7 +728,11 @@ def _check_channel_columns(df: pd.DataFrame, cols: list[str], t: np.ndarray, nam
         x = _to_float(df, col, source, t)  # numeric, no infinities
         if spec.rotatable_only and rot is not None and not rot[names.index(name)]:
             ignored.append(f"{col} (thruster '{name}' is not rotatable)")
-        elif spec.angle:
+            continue
+        if spec.bound is not None and spec.bound.violated(x).any():
+            raise _limit_error(col, x, spec.bound.violated(x), t, f"{spec.bound.text(spec.unit)}; {spec.expects}",
+                               source)
+        if spec.angle:
             _check_angle_unit(col, t, x, source)
     return ignored
 
