@@ -54,3 +54,10 @@ def test_an_angle_in_centidegrees_is_refused_naming_the_column(model, log, colum
     ok = log.copy()
     ok[column] = ok[column] % 360.0 - 360.0            # any wrap within the range is accepted
     ingest(ok, model.vessel)
+
+
+@pytest.mark.parametrize("bad", ["ab", (np.nan, 10.0), ("0", "x"), (5.0, 1.0), (1.0,), 3.0])
+def test_a_bad_time_range_is_refused_naming_it(model, log, bad):
+    with pytest.raises(ValueError, match=r"^time_range_s: expected \(first_s, last_s\)"):
+        ingest(log, model.vessel, purpose="forecast", time_range_s=bad)
+    assert len(ingest(log, model.vessel, purpose="forecast", time_range_s=(10, 20.0))) == 11

@@ -273,6 +273,19 @@ def _between(arrays: LogArrays, time_range_s) -> LogArrays:
     return out
 
 
+def _time_range(time_range_s) -> tuple[float, float]:
+    """``time_range_s`` as two finite seconds ``first_s <= last_s``; else a ValueError naming it."""
+    try:
+        first, last = (float(x) for x in time_range_s)
+        ok = not isinstance(time_range_s, (str, bytes)) and math.isfinite(first) and math.isfinite(last)
+    except (TypeError, ValueError):
+        ok = False
+    if not ok or first > last:
+        raise ValueError(f"time_range_s: expected (first_s, last_s), two finite numbers of seconds with "
+                         f"first_s <= last_s, got {time_range_s!r}")
+    return first, last
+
+
 def ingest_with_report(source, vessel, *, purpose: str = "fit", name: str | None = None,
                        time_range_s=None) -> tuple[LogArrays, SortedLog | None]:
     """:func:`ingest`, also returning the sort report (None when LogArrays were passed through)."""
@@ -280,8 +293,8 @@ def ingest_with_report(source, vessel, *, purpose: str = "fit", name: str | None
 
     if purpose not in PURPOSES:
         raise ValueError(f"purpose: expected one of {PURPOSES}, got {purpose!r}")
-    if time_range_s is not None and not (len(time_range_s) == 2 and time_range_s[0] <= time_range_s[1]):
-        raise ValueError(f"time_range_s: expected (first_s, last_s) with first_s <= last_s, got {time_range_s!r}")
+    if time_range_s is not None:
+        time_range_s = _time_range(time_range_s)
     v = _vessel(vessel)
     key = (fingerprint(v), purpose)
     if isinstance(source, LogArrays):
