@@ -78,18 +78,18 @@ def format_validation_error(err: ValidationError, source: str | None = None) -> 
 
 
 def _not_bool(v):
-    if isinstance(v, bool):
+    if isinstance(v, (bool, np.bool_)):
         raise ValueError(f"expected an integer, not a bool ({v!r})")
     return v
 
 
 def _number(v):
-    if isinstance(v, (bool, str, bytes)):
+    if isinstance(v, (bool, np.bool_, str, bytes)):
         raise ValueError(f"expected a number, got {v!r}")
     return v
 
 
-#: An ``int`` field that refuses ``True``/``False`` (pydantic would read them as 1/0);
+#: An ``int`` field that refuses ``True``/``False`` (numpy's too; pydantic would read them as 1/0);
 #: numpy integers are accepted.
 Int = Annotated[int, BeforeValidator(_not_bool)]
 

@@ -53,6 +53,7 @@ def test_bad_value_is_a_value_error_starting_with_the_field(cls, kwargs, start):
 
 def test_bools_strings_nan_and_unknown_keywords_are_refused():
     for kwargs, field in [(dict(n_members=True), "n_members"), (dict(lr="0.1"), "lr"),
+                          (dict(n_members=np.True_), "n_members"), (dict(lr=np.True_), "lr"),
                           (dict(lr=float("nan")), "lr"), (dict(weight_decay=np.inf), "weight_decay"),
                           (dict(n_member=3), "n_member")]:
         with pytest.raises(ValueError, match=f"^{field}: "):
