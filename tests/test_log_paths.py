@@ -61,3 +61,12 @@ def test_a_bad_time_range_is_refused_naming_it(model, log, bad):
     with pytest.raises(ValueError, match=r"^time_range_s: expected \(first_s, last_s\)"):
         ingest(log, model.vessel, purpose="forecast", time_range_s=bad)
     assert len(ingest(log, model.vessel, purpose="forecast", time_range_s=(10, 20.0))) == 11
+
+
+@pytest.mark.parametrize("names", [("lat", "lon"), ("latitude_deg", "longitude_deg"), ("Lat [deg]", "Lon [deg]")])
+def test_latitude_and_longitude_instead_of_north_and_east_are_named(model, log, names):
+    geo = log.rename(columns={"north_m": names[0], "east_m": names[1]})
+    for purpose in ("fit", "forecast"):
+        with pytest.raises(LogFormatError, match=r"^north_m: required column missing .*latitude/longitude; the log "
+                                                 r"format expects north_m and east_m in metres"):
+            ingest(geo, model.vessel, purpose=purpose)

@@ -581,6 +581,11 @@ def _check_column_names(cols: list[str], source: str) -> None:
                   f"', ' between names?)" for c in cols if c != c.strip() and c.strip() in missing][:1]
         hints += [f"the header is one name holding {sep!r}: the log format separates columns with ',' (and "
                   f"writes decimals with '.')" for sep in (";", "\t") if len(cols) == 1 and sep in cols[0]][:1]
+        geo = [c for c in cols if _LATLON.fullmatch(c.strip().lower())]
+        if geo and ({"north_m", "east_m"} & set(missing)):
+            hints.append(f"found {', '.join(map(repr, geo))}: positions as latitude/longitude; the log format expects "
+                         f"north_m and east_m in metres in a local north-east frame: convert them (for example "
+                         f"to metres north and east of the first position)")
         if {"psi_hat [rad]", "n_prop [rps]"} <= set(map(str, cols)):    # the raw Esso Osaka FRT layout
             hints = ["an Esso Osaka free-running test file in its own layout: read it with "
                      "hybridship.datasets.esso_osaka.read_esso_osaka (it converts to the log format), or give the "
@@ -595,6 +600,8 @@ def _check_column_names(cols: list[str], source: str) -> None:
         )
 
 
+#: A latitude or longitude column name (positions in geographic coordinates, not metres).
+_LATLON = re.compile(r"(lat|latitude|lon|lng|long|longitude)([ _\[(]*(deg|degrees|rad)?[\])]*)?")
 #: How many of a log's columns a missing-column error lists.
 _FOUND_SHOWN = 12
 #: The unit suffixes of the required columns, in words.
