@@ -14,7 +14,7 @@ import pandas as pd
 import pytest
 
 from hybridship.logs.ingest import ingest
-from hybridship.logs.io import LogFormatError
+from hybridship.logs.io import LogFormatError, read_log
 from hybridship.predictors import DynamicPredictor
 from hybridship.sim.synthetic import physics_log
 
@@ -70,3 +70,15 @@ def test_latitude_and_longitude_instead_of_north_and_east_are_named(model, log, 
         with pytest.raises(LogFormatError, match=r"^north_m: required column missing .*latitude/longitude; the log "
                                                  r"format expects north_m and east_m in metres"):
             ingest(geo, model.vessel, purpose=purpose)
+
+
+def test_text_in_another_encoding_is_not_called_binary(tmp_path, log):
+    csv = log.iloc[:5].to_csv(index=False)
+    cases = {"latin1.csv": ("# Bjørnøya\n" + csv).encode("latin-1"), "utf16.csv": csv.encode("utf-16"),
+             "binary.csv": b"\x00\x01\xff\xfe\x00" * 50}
+    for name, data in cases.items():
+        (tmp_path / name).write_bytes(data)
+    msg = {name: str(pytest.raises(LogFormatError, read_log, tmp_path / name).value) for name in cases}
+    assert "not UTF-8 text (Latin-1 or another encoding?)" in msg["latin1.csv"]
+    assert "UTF-16 text: save the file as UTF-8" in msg["utf16.csv"]
+    assert "binary data" in msg["binary.csv"]

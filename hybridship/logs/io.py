@@ -1002,12 +1002,21 @@ def _read_problem(kind: str, exc: BaseException) -> str:
     if isinstance(exc, pd.errors.EmptyDataError):
         return "the file is empty: no header line"
     if isinstance(exc, UnicodeDecodeError):
-        return "not text: the file holds binary data"
+        return _not_utf8(bytes(exc.object[:4096]))
     if kind == "parquet":
         return "not a Parquet file, or a damaged one"
     if kind == "csv.gz" and isinstance(exc, (EOFError, OSError)):
         return "not a complete gzip file: damaged or cut short"
     return f"unreadable: {text}" if text else "unreadable"
+
+
+def _not_utf8(head: bytes) -> str:
+    """Why bytes that are not UTF-8 are no log: text in another encoding, or binary data."""
+    if head.startswith((b"\xff\xfe", b"\xfe\xff")):
+        return "UTF-16 text: save the file as UTF-8"
+    if b"\x00" in head:
+        return "not text: the file holds binary data"
+    return "not UTF-8 text (Latin-1 or another encoding?): save the file as UTF-8"
 
 
 def read_log(
