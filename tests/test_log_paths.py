@@ -82,3 +82,26 @@ def test_text_in_another_encoding_is_not_called_binary(tmp_path, log):
     assert "not UTF-8 text (Latin-1 or another encoding?)" in msg["latin1.csv"]
     assert "UTF-16 text: save the file as UTF-8" in msg["utf16.csv"]
     assert "binary data" in msg["binary.csv"]
+
+
+def _radian_heading_log(n: int = 2600) -> pd.DataFrame:
+    """A drifting vessel whose heading is logged in radians: it turns in the first minutes
+    (the evidence), then holds about 1 rad (which alone reads as a plausible 1 deg)."""
+    t = np.arange(n, dtype=float)
+    head = np.where(t < 300.0, t / 300.0 * 6.0, 1.0 + 0.1 * np.sin(t / 50.0))
+    return pd.DataFrame({"time_s": t, "north_m": 0.01 * t, "east_m": 0.0, "heading_deg": head, "dp_active": 0})
+
+
+def test_a_forecast_judges_a_columns_unit_on_the_whole_log_as_training_does(model):
+    """The rows a forecast reads may hold no evidence of a unit error that the whole log shows:
+    the forecast refuses the log as training does, with the same message."""
+    df = _radian_heading_log()
+    with pytest.raises(LogFormatError, match="^heading_deg: .*looks like radians") as fit_err:
+        ingest(df, model.vessel, purpose="fit")
+    with pytest.raises(LogFormatError) as window_err:
+        ingest(df, model.vessel, purpose="forecast", time_range_s=(2000.0, 2599.0))
+    assert str(window_err.value) == str(fit_err.value)
+    with pytest.raises(LogFormatError, match="^heading_deg: .*looks like radians"):
+        DynamicPredictor(model.vessel).forecast(df, [2590.0], 5.0)
+    ok = df.assign(heading_deg=np.degrees(df.heading_deg))
+    assert len(ingest(ok, model.vessel, purpose="forecast", time_range_s=(2000.0, 2599.0))) == 600

@@ -39,7 +39,7 @@ import pandas as pd
 
 from hybridship.logs.io import (REQUIRED_COLUMNS, LogArrays, LogFormatError, LogFormatWarning, _check_column_names,
                                 _frame_to_arrays, _to_float,
-                                check_log_against_vessel, read_log)
+                                check_log_against_vessel, check_units_on_whole_log, read_log)
 
 __all__ = ["PURPOSES", "SortedLog", "ingest", "ingest_with_report", "sort_samples"]
 
@@ -304,7 +304,10 @@ def ingest_with_report(source, vessel, *, purpose: str = "fit", name: str | None
         df = read_log(Path(source), validate=False) if not isinstance(source, pd.DataFrame) else source
         where = name or (str(source) if not isinstance(source, pd.DataFrame) else "log")
         try:
-            arrays, order = _from_frame(_time_range_frame(df, time_range_s), v, purpose, where)
+            part = _time_range_frame(df, time_range_s)
+            arrays, order = _from_frame(part, v, purpose, where)
+            if part is not df:      # a column's unit is judged on the whole log, as training judges it
+                check_units_on_whole_log(sort_samples(df, source=where).frame, v, source=where)
         except LogFormatError:
             if time_range_s is None:
                 raise
@@ -341,7 +344,9 @@ def ingest(source, vessel, *, purpose: str = "fit", name: str | None = None, tim
         Keep only the samples with ``first_s <= time_s <= last_s``, before the checks: a
         forecast reads what it uses, so its cost does not grow with the log's length. A
         fault inside the range is reported as the whole log's check would report it (its
-        rows; the whole log's first fault); faults outside it do not matter.
+        rows; the whole log's first fault); faults outside it do not matter, but a column's
+        unit is judged on the whole log (:func:`hybridship.logs.io.check_units_on_whole_log`),
+        so a forecast refuses a unit error that training refuses.
 
     Returns
     -------

@@ -93,6 +93,7 @@ __all__ = [
     "speed_scale_vs_track",
     "SpeedScale",
     "check_log_against_vessel",
+    "check_units_on_whole_log",
     "log_header",
 ]
 
@@ -960,6 +961,12 @@ def _check_thruster_columns(v, th, df: pd.DataFrame, cols: set, t: np.ndarray, s
             f"azimuth thruster and its thrust direction is needed (expected column {az_col} "
             f"in degrees, 0 = forward, positive to starboard){_where(source)}",
             column=az_col)
+    _check_rpm_sign(col, x, t, source)
+
+
+def _check_rpm_sign(col: str, x: np.ndarray, t: np.ndarray, source: str) -> None:
+    """An azimuth thruster's rpm negative in ``RPM_SIGN_MIN_SAMPLES`` samples and never
+    positive: the shaft's rotation direction, not the sign of the thrust."""
     neg = np.isfinite(x) & (x < 0.0)
     pos = np.isfinite(x) & (x > 0.0)
     if neg.sum() >= RPM_SIGN_MIN_SAMPLES and not pos.any():
@@ -970,6 +977,40 @@ def _check_thruster_columns(v, th, df: pd.DataFrame, cols: set, t: np.ndarray, s
             f"the thruster axis: does the column carry the shaft's rotation direction (e.g. a "
             f"counter-rotating propeller) instead?{_where(source)}",
             column=col, row=i, time_s=float(t[i]))
+
+
+def check_units_on_whole_log(df: pd.DataFrame, vessel, *, source: str = "log") -> None:
+    """The judgements of a column's unit or convention that rest on its statistics, on the
+    whole of a sorted log (``time_s`` finite, strictly increasing): an angle in radians
+    (heading, wind direction, azimuths), ``r_deg_s`` against the heading, ``u_m_s``/``v_m_s``
+    against the track, rpm logged as fractions, an azimuth thruster's rpm sign.
+
+    A forecast checks only the rows it reads; the evidence on a column's unit lies anywhere
+    in the log, so these run on the whole log too, and refuse what training refuses, with
+    the same message. Samples that are missing, not numbers or infinite are left out here:
+    such faults outside the rows read do not matter to a forecast.
+    """
+    cols = set(map(str, df.columns))
+    num = pd.DataFrame({c: pd.to_numeric(df[c], errors="coerce") for c in df.columns
+                        if c in cols and not str(c).startswith(TRUTH_PREFIX)}).replace([np.inf, -np.inf], np.nan)
+    t = num["time_s"].to_numpy(dtype=float)
+    values = {c: num[c].to_numpy(dtype=float) for c in REQUIRED_COLUMNS + OPTIONAL_COLUMNS if c in cols}
+    for name in ("heading_deg", "wind_dir_deg"):
+        if name in values:
+            _check_angle_unit(name, t, values[name], source, values.get(column_spec(name).rate_column or ""))
+    for th_name, rot in zip(vessel.channel_names, vessel.rotatable):
+        col = column_spec("<thruster>_azimuth_deg").for_channel(th_name)
+        if rot and col in cols:
+            _check_angle_unit(col, t, num[col].to_numpy(dtype=float), source)
+    if "r_deg_s" in values:
+        _check_yaw_rate_vs_heading(t, values["heading_deg"], values["r_deg_s"], source)
+    if "u_m_s" in values and "v_m_s" in values:
+        _check_speed_vs_track(t, values, source)
+    _check_rpm_not_fractions(vessel, num, cols, t, source)
+    for th in vessel.thrusters:
+        col = column_spec("<thruster>_rpm").for_channel(th.name)
+        if th.type == "azimuth" and col in cols:
+            _check_rpm_sign(col, num[col].to_numpy(dtype=float), t, source)
 
 
 # --------------------------------------------------------------------------------------
