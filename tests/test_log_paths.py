@@ -12,6 +12,8 @@ import warnings
 import numpy as np
 import pandas as pd
 import pytest
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
 
 from hybridship.logs.ingest import ingest
 from hybridship.logs.io import LogFormatError, read_log
@@ -105,3 +107,33 @@ def test_a_forecast_judges_a_columns_unit_on_the_whole_log_as_training_does(mode
         DynamicPredictor(model.vessel).forecast(df, [2590.0], 5.0)
     ok = df.assign(heading_deg=np.degrees(df.heading_deg))
     assert len(ingest(ok, model.vessel, purpose="forecast", time_range_s=(2000.0, 2599.0))) == 600
+
+
+@settings(max_examples=20, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture])
+@given(data=st.data())
+def test_training_and_forecasting_see_the_same_arrays(model, log, data):
+    """Property: with any heading wrap, gaps and missing optional samples, ``fit`` and
+    ``forecast`` read the same arrays, and the rows a forecast reads (``time_range_s``) agree
+    with the whole log's: positions, heading (up to whole turns), segments, logged velocities,
+    and commands and wind once logged in the rows read."""
+    x = log.drop(columns=[c for c in log.columns if c.startswith("truth_")]).iloc[:100].copy()
+    x["port_rpm"] = np.linspace(-80.0, 80.0, len(x))
+    x["heading_deg"] = x["heading_deg"] + data.draw(st.sampled_from([0.0, 200.0, 345.0]))
+    x["heading_deg"] = (x["heading_deg"] % 360.0) - (180.0 if data.draw(st.booleans()) else 0.0)
+    for c in ("u_m_s", "r_deg_s", "port_rpm", "wind_speed_m_s"):
+        x.loc[data.draw(st.lists(st.integers(0, len(x) - 1), max_size=4, unique=True)), c] = np.nan
+    x = x.drop(index=data.draw(st.lists(st.integers(1, len(x) - 2), max_size=4, unique=True))).reset_index(drop=True)
+    a, b = ingest(x, model.vessel, purpose="fit"), ingest(x, model.vessel, purpose="forecast")
+    for f in ("time_s", "eta", "nu", "rpm", "azimuth_rad", "wind", "dp_active", "segment_id", "commands_logged"):
+        np.testing.assert_array_equal(getattr(a, f), getattr(b, f), err_msg=f)
+    lo = data.draw(st.floats(0.0, 60.0))
+    w = ingest(x, model.vessel, purpose="forecast", time_range_s=(lo, lo + 30.0))
+    sl = slice(int(np.searchsorted(a.time_s, w.time_s[0])), int(np.searchsorted(a.time_s, w.time_s[0])) + len(w))
+    np.testing.assert_array_equal(a.time_s[sl], w.time_s)
+    np.testing.assert_array_equal(np.diff(a.segment_id[sl]) != 0, np.diff(w.segment_id) != 0)
+    d = a.eta[sl] - w.eta
+    np.testing.assert_allclose(np.column_stack([d[:, :2], np.angle(np.exp(1j * d[:, 2]))]), 0.0, atol=1e-9)
+    np.testing.assert_array_equal(a.nu[sl][a.nu_logged[sl]], w.nu[w.nu_logged])
+    for f, col in (("rpm", "port_rpm"), ("wind", "wind_speed_m_s")):
+        first = int(np.argmax(np.isfinite(x[col].to_numpy()[sl])))
+        np.testing.assert_array_equal(getattr(a, f)[sl][first:], getattr(w, f)[first:], err_msg=f)
