@@ -452,6 +452,11 @@ def test_edited_settings_are_refused(saved, tmp_path):
     for name, edit in edits.items():
         p = _rewrite(saved, tmp_path, meta_change=edit, restamp_metadata=False, name=f"edit-{name}.npz")
         _refused(p, "metadata checksum does not match")
+    # nor when the version is lowered to one from before the checksum, which it still carries
+    for version in (7, 12):
+        p = _rewrite(saved, tmp_path, meta_change=lambda m: (edits["features"](m), m.update(format_version=version)),
+                     restamp_metadata=False, name=f"edit-as-v{version}.npz")
+        _refused(p, "metadata checksum does not match")
 
 
 @pytest.mark.parametrize("key, value, message", [

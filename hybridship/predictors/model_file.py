@@ -270,7 +270,8 @@ def _read_checked_metadata(data: dict, path: Path) -> dict:
         raise ModelFileError(f"{path}: model format version {version} is not supported "
                              f"(this hybridship reads versions "
                              f"{', '.join(str(v) for v in READABLE_MODEL_FORMAT_VERSIONS)}){older}")
-    if version >= 13 and meta.get("metadata_sha256") != _metadata_hash(meta):
+    # checked whenever present: a version-13 file relabelled as 12 would otherwise skip it
+    if (version >= 13 or "metadata_sha256" in meta) and meta.get("metadata_sha256") != _metadata_hash(meta):
         raise ModelFileError(f"{path}: metadata checksum does not match: the model's settings were edited "
                              f"or damaged")
     content = {k: v for k, v in data.items() if k != "metadata_json"}
