@@ -141,10 +141,14 @@ def test_missing_file_is_a_model_file_error(tmp_path):
 
 
 def test_incompatible_format_version_is_refused(saved, tmp_path):
-    for version in (0, 99, "1", None, "13", 13.0):
+    for version, shown in ((0, "0"), (99, "99"), ("1", '"1"'), (None, "null"), ("13", '"13"'), (13.0, "13.0")):
         p = _rewrite(saved, tmp_path, meta_change=lambda m: m.update(format_version=version), name=f"v{version}.npz")
-        _refused(p, rf"model format version {version} is not supported "
-                    rf"\(this hybridship reads versions 7, 8, 9, 10, 11, 12, 13\)")
+        # as written in the file: the text "13" is not said as 13, which this hybridship reads
+        _refused(p, rf"model format version {shown} is not supported "
+                    rf"\(this hybridship reads versions 7, 8, 9, 10, 11, 12, 13\)"
+                    + (r"; expected a whole number$" if not isinstance(version, int) else ""))
+    p = _rewrite(saved, tmp_path, meta_change=lambda m: m.update(format_version=14), name="v14.npz")
+    _refused(p, r"written by a newer hybridship \(format 14\); upgrade hybridship to read it")
 
 
 def test_an_older_format_says_retrain(saved, tmp_path):

@@ -261,15 +261,18 @@ def _read_checked_metadata(data: dict, path: Path) -> dict:
         raise ModelFileError(f"{path}: not a hybridship model file")
     version = meta.get("format_version")
     if not isinstance(version, int) or version not in READABLE_MODEL_FORMAT_VERSIONS or isinstance(version, bool):
-        oldest = READABLE_MODEL_FORMAT_VERSIONS[0]
-        older = (f": written by an older hybridship (format {version}); retrain with `hybridship train` "
-                 f"(or HybridPredictor.fit) to write a version-{MODEL_FORMAT_VERSION} file, which carries "
-                 f"its vessel, its environment estimator and its spread calibration"
-                 if isinstance(version, int) and not isinstance(version, bool) and 1 <= version < oldest
-                 else "")
-        raise ModelFileError(f"{path}: model format version {version} is not supported "
-                             f"(this hybridship reads versions "
-                             f"{', '.join(str(v) for v in READABLE_MODEL_FORMAT_VERSIONS)}){older}")
+        whole = isinstance(version, int) and not isinstance(version, bool)
+        if whole and 1 <= version < READABLE_MODEL_FORMAT_VERSIONS[0]:
+            why = (f": written by an older hybridship (format {version}); retrain with `hybridship train` "
+                   f"(or HybridPredictor.fit) to write a version-{MODEL_FORMAT_VERSION} file, which carries "
+                   f"its vessel, its environment estimator and its spread calibration")
+        elif whole and version > MODEL_FORMAT_VERSION:
+            why = f": written by a newer hybridship (format {version}); upgrade hybridship to read it"
+        else:       # not a whole number (text "13", 13.0, null): said as written, not as 13
+            why = "" if whole else "; expected a whole number"
+        raise ModelFileError(f"{path}: model format version {version if whole else json.dumps(version)} is not "
+                             f"supported (this hybridship reads versions "
+                             f"{', '.join(str(v) for v in READABLE_MODEL_FORMAT_VERSIONS)}){why}")
     # checked whenever present: a version-13 file relabelled as 12 would otherwise skip it
     if (version >= 13 or "metadata_sha256" in meta) and meta.get("metadata_sha256") != _metadata_hash(meta):
         raise ModelFileError(f"{path}: metadata checksum does not match: the model's settings were edited "
