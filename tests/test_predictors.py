@@ -360,3 +360,19 @@ def test_drift_errors_read_a_path_or_dataframe_and_coverage_refuses_mismatched_i
         metrics.error_table({"m": [from_frame]})
     with pytest.raises(ValueError, match="NaN or inf errors"):
         metrics.error_table({"m": [np.full_like(from_frame, np.nan)]}, windows=(1, 3))
+
+
+def test_a_start_at_a_time_logged_twice_with_different_values_says_so(model, exact_logs):
+    """Both samples of a conflicting duplicate are dropped for a forecast; a start at that time
+    was reported as "not a sample time of the log (log spans ...)", although it is one."""
+    import pandas as pd
+
+    log = exact_logs[0].reset_index(drop=True)
+    k = len(log) // 2
+    extra = log.iloc[[k]].copy()
+    extra["north_m"] += 3.0
+    df = pd.concat([log.iloc[: k + 1], extra, log.iloc[k + 1:]]).reset_index(drop=True)
+    t = float(log.time_s.iloc[k])
+    with pytest.raises(ValueError, match=rf"start_times_s: {t:g} s is logged more than once with different values"):
+        DynamicPredictor(model.vessel).forecast(df, [t], 10.0)
+    DynamicPredictor(model.vessel).forecast(df, [float(log.time_s.iloc[k + 5])], 10.0)    # other starts are fine

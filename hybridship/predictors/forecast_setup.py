@@ -116,7 +116,13 @@ def start_indices(arrays: LogArrays, start_times_s) -> np.ndarray:
     dt = forecast_step_s(arrays)
     bad = np.abs(t[idx] - st) > 0.25 * dt
     if bad.any():
-        raise RequestError(f"start_times_s: {st[bad][0]} s is not a sample time of the log "
+        first = st[bad][0]
+        if np.any(np.abs(arrays.resorted_time_s - first) <= 0.25 * dt):
+            # a time no row keeps among the re-sorted ones: samples logged twice with different values
+            raise RequestError(f"start_times_s: {first:g} s is logged more than once with different values "
+                               f"(a repeated time stamp?), so no sample of that time is used; give another start "
+                               f"time or correct the log")
+        raise RequestError(f"start_times_s: {first} s is not a sample time of the log "
                            f"(log spans {t[0]}..{t[-1]} s, dt {dt:g} s)")
     return idx
 
