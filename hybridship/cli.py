@@ -446,8 +446,12 @@ def _cmd_forecast(args) -> int:
         raise UsageError(f"{_PROG} forecast: error: --out {args.out}: exists and is not a forecast table (another "
                          f"log or table would be lost); give another path or remove it")
     _check_writable(args.out, f"{_PROG} forecast")
+    shown = warnings.showwarning
     try:
-        fc = hp.forecast(args.log, args.start_time, args.horizon_s, guard=not args.no_guard, commands=args.commands)
+        with warnings.catch_warnings():     # a warning naming a Python argument names the option
+            warnings.showwarning = lambda message, *a, **k: shown(_in_option_names(str(message)), *a, **k)
+            fc = hp.forecast(args.log, args.start_time, args.horizon_s, guard=not args.no_guard,
+                             commands=args.commands)
     except RequestError as exc:     # known only once the log is read: still the user's input
         raise UsageError(_in_option_names(problem_lines(exc, f"{_PROG} forecast: error: "))) from None
     df = fc.to_frame(quantiles=quantiles)

@@ -193,6 +193,28 @@ def test_cli_forecast_quantiles(fitted, tmp_path, capsys):
     assert "is not a forecast table" in capsys.readouterr().err and other.read_bytes() == before
 
 
+def test_a_forecast_past_the_calibrated_leads_says_its_spread_is_not_calibrated_there(fitted, tmp_path, capsys):
+    """Beyond the calibration's last lead its scale is held: the spread (and the quantiles)
+    there were reported as calibrated without a word."""
+    import warnings
+
+    from hybridship.cli import main
+    from hybridship.logs.io import write_log
+
+    hp, logs = fitted
+    with pytest.warns(UserWarning, match=r"^horizon_s: the spread is calibrated up to 30 s; beyond, the scale"):
+        hp.forecast(logs[0], [300.0], 40.0)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        hp.forecast(logs[0], [300.0], 30.0)                     # within the calibrated leads
+        hp.forecast(logs[0], [300.0], 40.0, calibrated=False)   # the raw spread claims no calibration
+    write_log(logs[0], tmp_path / "log.csv")
+    assert main(["forecast", "--model", str(hp.save(tmp_path / "m.npz")), "--log", str(tmp_path / "log.csv"),
+                 "--start-time", "300", "--horizon-s", "40", "--out", str(tmp_path / "fc.csv")]) == 0
+    assert capsys.readouterr().err.startswith("hybridship forecast: warning: --horizon-s: the spread is calibrated "
+                                              "up to 30 s")
+
+
 def test_forecast_options_and_quantiles_are_checked(fitted):
     hp, logs = fitted
     fc = hp.forecast(logs[0], [300.0], 10.0)

@@ -1011,17 +1011,35 @@ class HybridPredictor:
         """The spread each start reports: starts after a failure (``after_stop``, (S,)) use the
         ``"after_stop"`` calibration when :meth:`calibrate_after_stop` made one, others the
         calibration of their command mode; where none applies, the raw spread."""
-        out = std
+        out, used = std, []
         if commands in self.calibration:
             out = self.calibrated_std(std, lead_s, commands)
+            used.append(commands)
             if self.training_info.get("calibration", {}).get("dp_only", False) and self.stop_after_failure:
                 # calibrated on station-keeping starts only: a start after a failure (a drift) is
                 # another regime, whose spread keeps the raw ensemble value unless calibrated below
                 out[after_stop] = std[after_stop]
+                used = used if not np.all(after_stop) else []
         if AFTER_STOP in self.calibration and self.stop_after_failure and np.any(after_stop):
             out = out.copy()
             out[after_stop] = self.calibrated_std(std[after_stop], lead_s, AFTER_STOP)
+            used.append(AFTER_STOP)
+        self._warn_beyond_calibration(lead_s, used)
         return out
+
+    def _warn_beyond_calibration(self, lead_s, modes) -> None:
+        """Warn when the forecast runs past the longest lead that a calibration it applied
+        (``modes``) was fitted for: beyond it the scale of that lead is held
+        (:meth:`SpreadCalibration.apply`), so the spread is no longer calibrated there."""
+        if not modes or np.size(lead_s) == 0:
+            return
+        last = min(float(c.lead_s[-1]) for mode in modes for c in self.calibration[mode].values())
+        if float(lead_s[-1]) > last * (1 + 1e-9):
+            import warnings
+
+            warnings.warn(f"horizon_s: the spread is calibrated up to {last:g} s; beyond, the scale fitted at "
+                          f"{last:g} s is held, so the spread (*_std, quantiles) past {last:g} s is not calibrated",
+                          UserWarning, stacklevel=4)
 
     def calibrate_after_stop(self, logs, *, n_intervals: int = 20, horizon_s: float = 60.0,
                              cal: CalibrationConfig | None = None) -> "HybridPredictor":
