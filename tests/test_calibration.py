@@ -237,6 +237,10 @@ def test_station_keeping_calibration_leaves_a_drift_start_raw():
     fc, raw = hp.forecast(logs[0], starts, 30.0), hp.forecast(logs[0], starts, 30.0, calibrated=False)
     assert not np.allclose(fc.eta_std[0, 1:], raw.eta_std[0, 1:])
     np.testing.assert_allclose(fc.eta_std[1], raw.eta_std[1])
+    # ... and says so in that start's note (it was reported as if calibrated, and far too narrow)
+    assert "spread: not calibrated" not in fc.notes[0]
+    assert fc.notes[1].startswith("spread: not calibrated for a start after a failure")
+    assert raw.notes == ("", "")                 # the raw spread asked for claims no calibration
 
 
 # --- coverage with an interval over whole failures ---------------------------------------

@@ -827,10 +827,21 @@ class HybridPredictor:
         flags = dict(st.flags)
         if wgt is not None:
             flags[FaultFlags.OUT_OF_ENVELOPE] = np.any(wgt < 1.0, axis=1)
+        notes = self._short_station_keeping_notes(st, sigma_b, after_stop)
         if calibrated:
-            std = self._calibrated_forecast_std(std, st.lead_s, commands, after_stop)
-        return ForecastResult(st.arrays.time_s[st.idx], st.lead_s, eta, nu, std, wgt,
-                              flags=flags, notes=self._short_station_keeping_notes(st, sigma_b, after_stop))
+            std, raw = self._calibrated_forecast_std(std, st.lead_s, commands, after_stop)
+            notes = join_notes(notes, self._uncalibrated_notes(raw, after_stop, commands))
+        return ForecastResult(st.arrays.time_s[st.idx], st.lead_s, eta, nu, std, wgt, flags=flags, notes=notes)
+
+    def _uncalibrated_notes(self, raw, after_stop, commands) -> list[str]:
+        """Per start, a note when no calibration applied to its spread (``raw``, (S,)), so that
+        it is the raw one although a calibrated spread was asked for; "" otherwise."""
+        n_min = self.calibration_config.after_stop_min_failures
+        after = (f"spread: not calibrated for a start after a failure (training calibrates it on the training "
+                 f"logs' failures when they hold at least {n_min}, HybridPredictor.calibrate_after_stop on other "
+                 f"logs): the raw spread, which may be far narrower than the error")
+        other = f"spread: not calibrated (the model has no calibration for commands {commands!r}): the raw spread"
+        return [(after if a else other) if r else "" for r, a in zip(raw, after_stop)]
 
     def _short_station_keeping_notes(self, st, sigma_b, after_stop) -> tuple:
         """``st.notes`` with a note on each start during station keeping whose spread could
@@ -1010,22 +1021,27 @@ class HybridPredictor:
     def _calibrated_forecast_std(self, std, lead_s, commands, after_stop):
         """The spread each start reports: starts after a failure (``after_stop``, (S,)) use the
         ``"after_stop"`` calibration when :meth:`calibrate_after_stop` made one, others the
-        calibration of their command mode; where none applies, the raw spread."""
+        calibration of their command mode; where none applies, the raw spread. Returns the
+        spread and the (S,) mask of the starts that kept the raw one."""
         out, used = std, []
+        raw = np.ones(len(after_stop), dtype=bool)
         if commands in self.calibration:
             out = self.calibrated_std(std, lead_s, commands)
             used.append(commands)
+            raw[:] = False
             if self.training_info.get("calibration", {}).get("dp_only", False) and self.stop_after_failure:
                 # calibrated on station-keeping starts only: a start after a failure (a drift) is
                 # another regime, whose spread keeps the raw ensemble value unless calibrated below
                 out[after_stop] = std[after_stop]
+                raw[after_stop] = True
                 used = used if not np.all(after_stop) else []
         if AFTER_STOP in self.calibration and self.stop_after_failure and np.any(after_stop):
             out = out.copy()
             out[after_stop] = self.calibrated_std(std[after_stop], lead_s, AFTER_STOP)
+            raw[after_stop] = False
             used.append(AFTER_STOP)
         self._warn_beyond_calibration(lead_s, used)
-        return out
+        return out, raw
 
     def _warn_beyond_calibration(self, lead_s, modes) -> None:
         """Warn when the forecast runs past the longest lead that a calibration it applied
