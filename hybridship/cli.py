@@ -457,6 +457,7 @@ def _cmd_forecast(args) -> int:
     df = fc.to_frame(quantiles=quantiles)
     atomic_write(args.out, lambda fh: fh.write(df.to_csv(index=False).encode("utf-8")))
     from .forecast_inputs import FaultFlags
+    from .predictors.forecast_setup import seconds_text
 
     last = df[df.lead_s == df.lead_s.max()]
     for _, row in last.iterrows():
@@ -467,7 +468,8 @@ def _cmd_forecast(args) -> int:
                      f"{df[df.start_time_s == row.start_time_s].guard_weight.min():.2f})")
         else:
             guard = "guard off"
-        print(f"start {row.start_time_s:g} s -> +{row.lead_s:g} s: north {row.north_m:.1f} m, east {row.east_m:.1f} m, "
+        print(f"start {seconds_text(row.start_time_s)} s -> +{seconds_text(row.lead_s)} s: north {row.north_m:.1f} m, "
+              f"east {row.east_m:.1f} m, "
               f"heading {row.heading_deg:.1f} deg (1-sigma {row.north_std_m:.1f}/{row.east_std_m:.1f} m); "
               f"{guard}; other flags: {', '.join(flags) if flags else 'none'}")
         if isinstance(row.get("notes"), str) and row["notes"]:

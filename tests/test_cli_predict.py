@@ -325,3 +325,27 @@ def test_forecast_api_names_repeated_starts_and_missing_known_commands(log_dir):
     fc = p.forecast(gap, [800.0, 830.0], 20.0, commands="known")
     assert fc.notes[0].startswith("commands known: 4 of 19 future command samples missing") and fc.notes[1] == ""
     assert p.forecast(df, [800.0], 20.0, commands="known").notes == ("",)
+
+
+def test_forecast_on_epoch_time_stamps_names_each_start_exactly(model, tmp_path, capsys):
+    """A log stamped in Unix time: the summary said "start 1.7e+09 s" for every start, and the
+    errors named a start time that way too."""
+    import numpy as np
+
+    from hybridship.predictors import HybridPredictor
+    from hybridship.residual.ensemble import EnsembleConfig
+
+    log = physics_log(model, seed=2, duration_s=300.0, t_shutdown_s=None, current=(0.2, 1.0))
+    tiny = EnsembleConfig(n_members=2, hidden=8, max_epochs=5, patience=2, seed=0)
+    path = HybridPredictor(model.vessel, ensemble_config=tiny).fit([log]).save(tmp_path / "m.npz")
+    t0 = 1_700_000_000.5
+    epoch = log.assign(time_s=log.time_s + t0)
+    write_log(epoch, tmp_path / "epoch.csv")
+    argv = ["forecast", "--model", str(path), "--log", str(tmp_path / "epoch.csv"), "--horizon-s", "10",
+            "--out", str(tmp_path / "fc.csv"), "--start-time"]
+    assert main(argv + [f"{t0 + 200:.1f}", f"{t0 + 210:.1f}"]) == 0
+    out = capsys.readouterr().out
+    assert "start 1700000200.5 s -> +10 s" in out and "start 1700000210.5 s -> +10 s" in out
+    np.testing.assert_allclose(pd.read_csv(tmp_path / "fc.csv").start_time_s.unique(), [t0 + 200, t0 + 210])
+    assert main(argv + [f"{t0 + 200:.1f}", f"{t0 + 200:.1f}"]) == 2
+    assert "1700000200.5 s is given 2 times" in capsys.readouterr().err

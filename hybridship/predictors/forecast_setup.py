@@ -42,6 +42,12 @@ _STEP_DECIMALS = 6
 _LEAD_DECIMALS = 9
 
 
+def seconds_text(t: float) -> str:
+    """A time [s] as written in messages: to the microsecond, without an exponent, so that the
+    epoch times of a log (1.7e9 s) stay distinct ("1700000000.5", not "1.7e+09")."""
+    return np.format_float_positional(round(float(t), _STEP_DECIMALS), trim="-")
+
+
 def as_log_arrays(log, vessel, *, purpose: str = "fit") -> LogArrays:
     """A path, a DataFrame in the log format or LogArrays, through :func:`hybridship.logs.ingest.ingest`
     (re-sorted, checked against ``vessel`` once; ``purpose`` "fit" or "forecast")."""
@@ -108,7 +114,7 @@ def start_indices(arrays: LogArrays, start_times_s) -> np.ndarray:
     if np.unique(st).size < st.size:
         # a repeated start would come back as a second, identical forecast block
         u, n = np.unique(st, return_counts=True)
-        raise RequestError(f"start_times_s: each start time at most once; {u[n > 1][0]:g} s is given "
+        raise RequestError(f"start_times_s: each start time at most once; {seconds_text(u[n > 1][0])} s is given "
                            f"{n[n > 1][0]} times")
     idx = np.clip(np.searchsorted(t, st), 0, len(t) - 1)
     prev = np.clip(idx - 1, 0, len(t) - 1)
@@ -119,7 +125,7 @@ def start_indices(arrays: LogArrays, start_times_s) -> np.ndarray:
         first = st[bad][0]
         if np.any(np.abs(arrays.resorted_time_s - first) <= 0.25 * dt):
             # a time no row keeps among the re-sorted ones: samples logged twice with different values
-            raise RequestError(f"start_times_s: {first:g} s is logged more than once with different values "
+            raise RequestError(f"start_times_s: {seconds_text(first)} s is logged more than once with different values "
                                f"(a repeated time stamp?), so no sample of that time is used; give another start "
                                f"time or correct the log")
         raise RequestError(f"start_times_s: {first} s is not a sample time of the log "
@@ -207,8 +213,8 @@ def _known_command_steps(arrays: LogArrays, idx: np.ndarray, H: int, rpm0: np.nd
     last = idx + H - 1
     if np.any(last >= n):
         k = int(np.argmax(last >= n))
-        raise RequestError(f"commands='known': the log ends at {arrays.time_s[-1]:g} s, but the start at "
-                           f"{arrays.time_s[idx[k]]:g} s needs logged commands for {H} steps after it; "
+        raise RequestError(f"commands='known': the log ends at {seconds_text(arrays.time_s[-1])} s, but the start at "
+                           f"{seconds_text(arrays.time_s[idx[k]])} s needs logged commands for {H} steps after it; "
                            "use commands='held' or an earlier start time")
     rows = idx[:, None] + np.arange(H)[None, :]
     rpm, az = arrays.rpm[rows], arrays.azimuth_rad[rows]          # (S, H, K), copies
