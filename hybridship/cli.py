@@ -457,7 +457,7 @@ def _cmd_forecast(args) -> int:
     df = fc.to_frame(quantiles=quantiles)
     atomic_write(args.out, lambda fh: fh.write(df.to_csv(index=False).encode("utf-8")))
     from .forecast_inputs import FaultFlags
-    from .predictors.forecast_setup import seconds_text
+    from .messages import seconds_text
 
     last = df[df.lead_s == df.lead_s.max()]
     for _, row in last.iterrows():

@@ -8,7 +8,10 @@ from __future__ import annotations
 
 import re
 
-__all__ = ["problem_lines"]
+__all__ = ["problem_lines", "seconds_text"]
+
+#: Decimals of a time in messages: a microsecond, finer than any log's sample spacing.
+TIME_DECIMALS = 6
 
 
 #: The settings class a library message names at the end of a line (``... [DPLossConfig]``):
@@ -36,3 +39,10 @@ def problem_lines(exc: BaseException, head: str = "", option_of=None) -> str:
             named.append(f"{option_of(field)}{sep}{rest}" if sep else line)
         lines = named
     return "\n".join(f"{head}{line}" for line in lines if line) or f"{head}{type(exc).__name__}"
+
+
+def seconds_text(t: float) -> str:
+    """A time [s] as written in messages: to the microsecond, without an exponent, so that the
+    epoch times of a log (1.7e9 s) stay distinct ("1700000000.5", not "1.7e+09")."""
+    text = f"{round(float(t), TIME_DECIMALS):.{TIME_DECIMALS}f}".rstrip("0").rstrip(".")
+    return "0" if text in ("", "-0") else text

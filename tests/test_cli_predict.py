@@ -349,3 +349,13 @@ def test_forecast_on_epoch_time_stamps_names_each_start_exactly(model, tmp_path,
     np.testing.assert_allclose(pd.read_csv(tmp_path / "fc.csv").start_time_s.unique(), [t0 + 200, t0 + 210])
     assert main(argv + [f"{t0 + 200:.1f}", f"{t0 + 200:.1f}"]) == 2
     assert "1700000200.5 s is given 2 times" in capsys.readouterr().err
+
+
+def test_messages_write_epoch_times_in_full():
+    from hybridship.messages import seconds_text
+
+    assert seconds_text(1_700_000_000.5) == "1700000000.5"
+    assert seconds_text(1_700_000_000.0) == "1700000000"
+    assert seconds_text(0.1 + 0.2) == "0.3"
+    assert seconds_text(-0.0000001) == "0"
+    assert seconds_text(-12.25) == "-12.25"

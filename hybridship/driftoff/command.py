@@ -12,8 +12,8 @@ import math
 import sys
 from pathlib import Path
 
-from ..messages import problem_lines
 from ..fileio import check_out_folder, path_argument
+from ..messages import problem_lines, seconds_text
 
 __all__ = ["add_parser"]
 
@@ -303,7 +303,8 @@ def _cmd_live(args) -> int:
         t = pd.to_numeric(df["time_s"], errors="coerce").to_numpy(float)
         first, last = (np.nanmin(t), np.nanmax(t)) if np.isfinite(t).any() else (np.nan, np.nan)
         if not (first <= args.time_s <= last):
-            raise _usage(f"{_PROG} live: error: --time-s {args.time_s:g} is outside the log ({first:g} to {last:g} s)")
+            raise _usage(f"{_PROG} live: error: --time-s {seconds_text(args.time_s)} is outside the log "
+                         f"({seconds_text(first)} to {seconds_text(last)} s)")
         df = df[t <= args.time_s]
     t0 = time.perf_counter()
     try:
@@ -313,7 +314,7 @@ def _cmd_live(args) -> int:
                                    lambda field: {"window_s": "--window-s", "log": "--log"}.get(field, field))) from None
     res = blackout_now(est, model, st)
     dt = time.perf_counter() - t0
-    inputs = {"vessel": model.vessel.name, "log": str(args.log), "blackout at [s]": f"{est.time_s:g}",
+    inputs = {"vessel": model.vessel.name, "log": str(args.log), "blackout at [s]": seconds_text(est.time_s),
               "heading [deg]": f"{math.degrees(est.eta[2]) % 360:.1f}",
               "mean wind": (f"{est.wind_speed_m_s:.2f} m/s from {math.degrees(est.wind_dir_from_rad) % 360:.0f} deg, "
                             f"gust intensity {est.gust_intensity:.2f}") if est.wind_measured else

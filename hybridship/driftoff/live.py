@@ -35,6 +35,7 @@ from ..residual.features import ResidualConfig, prepare_log
 from . import engine, spread
 from .planning import DriftOffResult, DriftOffSettings, get_model, hull_array, refuse_diverged, state_rng
 from .weather import MAX_WIND_M_S
+from ..messages import seconds_text
 
 __all__ = ["EnvironmentEstimate", "environment_from_log", "blackout_now", "MIN_WINDOW_S", "MIN_WIND_WINDOW_S"]
 
@@ -193,11 +194,11 @@ def environment_from_log(log, vessel="gunnerus", *, window_s: float = 900.0, win
     # within a step of the minimum: the window's rows start at the first sample inside it
     if idx == 0 or a.time_s[idx] - a.time_s[0] < MIN_WINDOW_S - a.dt_s:
         raise ValueError(f"log: only {a.time_s[idx] - a.time_s[0]:g} s of log up to the blackout at time_s "
-                         f"{a.time_s[idx]:g}; the environment estimate needs at least {MIN_WINDOW_S:g} s of "
-                         f"station keeping")
+                         f"{seconds_text(a.time_s[idx])}; the environment estimate needs at least "
+                         f"{MIN_WINDOW_S:g} s of station keeping")
     if a.dp_active[idx] == 0:
-        raise ValueError(f"log: dp_active is 0 at time_s {a.time_s[idx]:g} (the last row used): a blackout is "
-                         f"predicted from station keeping; give a time while the DP is active")
+        raise ValueError(f"log: dp_active is 0 at time_s {seconds_text(a.time_s[idx])} (the last row used): a "
+                         f"blackout is predicted from station keeping; give a time while the DP is active")
     notes = _start_checks(a, idx, name)
     # the wind has its own window, whatever the estimator's; only samples the sensor logged
     # (the reader holds the last value over a gap, which is not a measurement of now)
@@ -210,8 +211,9 @@ def environment_from_log(log, vessel="gunnerus", *, window_s: float = 900.0, win
         gi = float(np.clip(np.std(ws) / w_speed, 0.0, 0.5)) if w_speed > 0 else 0.0
         if w_speed > MAX_WIND_M_S:       # before the estimator's work, in the log's words
             raise ValueError(f"{name}: column 'wind_speed_m_s': the mean wind over the last {wind_window_s:g} s up "
-                             f"to time_s {a.time_s[idx]:g} is {w_speed:.1f} m/s, beyond the {MAX_WIND_M_S:.1f} m/s "
-                             f"the wind model is meant for; the log format expects m/s (knots?)")
+                             f"to time_s {seconds_text(a.time_s[idx])} is {w_speed:.1f} m/s, beyond the "
+                             f"{MAX_WIND_M_S:.1f} m/s the wind model is meant for; the log format expects m/s "
+                             f"(knots?)")
     else:
         w_speed, w_dir, gi = 0.0, 0.0, 0.0
     current_members = None
@@ -244,7 +246,7 @@ def _start_checks(a: LogArrays, idx: int, name: str) -> str:
         raise ValueError(f"{name}: at the blackout row: {exc}") from None
     note = sw.notes[0] if sw.notes else ""
     if note and bool(sw.degraded[0]):
-        warnings.warn(f"{name}: at the blackout row (time_s {a.time_s[idx]:g}): {note}", LogFormatWarning,
+        warnings.warn(f"{name}: at the blackout row (time_s {seconds_text(a.time_s[idx])}): {note}", LogFormatWarning,
                       stacklevel=3)
         return note
     return ""

@@ -29,6 +29,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from ..messages import seconds_text
+
 __all__ = [
     "FaultFlags",
     "StartWindowError",
@@ -334,7 +336,7 @@ def detect_missing_samples(view: LogView, win: Window) -> None:
         logged = np.flatnonzero(a.commands_logged[: win.start + 1])
         cols.append("commands" if a.commands_logged[win.start] else
                     "commands (at the start: the last logged values held, "
-                    + (f"from time_s {view.t[logged[-1]]:g})" if logged.size else "none logged: 0)"))
+                    + (f"from time_s {seconds_text(view.t[logged[-1]])})" if logged.size else "none logged: 0)"))
     if cols or n_missing:
         what = f"missing {', '.join(cols)}" if cols else ""
         gap = f"{n_missing} missing sample(s)" if n_missing else ""
@@ -514,7 +516,7 @@ def detect_position_jumps(view: LogView, win: Window, settings: WindowSettings) 
         win.shift_from = max(lasting)
     win.flag(FaultFlags.POSITION_JUMP,
              f"position jump of more than {settings.jump_m:g} m at time_s "
-             f"{', '.join(f'{view.t[int(r)]:g}' for r in in_w)}: "
+             f"{', '.join(seconds_text(view.t[int(r)]) for r in in_w)}: "
              f"{'outlier(s) dropped' if bad_pos else 'lasting shift, new positions used'}")
 
 
@@ -575,9 +577,9 @@ def detect_too_little_valid(view: LogView, win: Window, settings: WindowSettings
     if short:
         t = view.t
         win.flag(FaultFlags.TOO_LITTLE_VALID,
-                 f"too little valid data in the {settings.window_s:g}-s window (time_s {t[win.lo]:g}.."
-                 f"{t[win.start]:g}): {'; '.join(short)}; need at least {view.n_min} valid sample(s) of each "
-                 "and one position")
+                 f"too little valid data in the {settings.window_s:g}-s window (time_s {seconds_text(t[win.lo])}.."
+                 f"{seconds_text(t[win.start])}): {'; '.join(short)}; need at least {view.n_min} valid "
+                 "sample(s) of each and one position")
     return bool(short)
 
 
@@ -592,9 +594,9 @@ def detect_dropped_wind(view: LogView, win: Window) -> np.ndarray:
     a = view.arrays
     if not a.has_wind:
         if a.wind_columns:       # the columns are there, but not one valid sample in the rows read
+            span = f"{seconds_text(a.time_s[0])}..{seconds_text(a.time_s[-1])}"
             win.flag(FaultFlags.WIND_DROPPED, "the wind columns hold no valid sample in the rows read for the "
-                                              f"forecast (time_s {a.time_s[0]:g}..{a.time_s[-1]:g}; sensor dead): "
-                                              "forecast without wind")
+                                              f"forecast (time_s {span}; sensor dead): forecast without wind")
         return np.zeros(2)
     w_rows = win.rows[win.wind_ok]
     if w_rows.size:

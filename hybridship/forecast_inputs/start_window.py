@@ -84,6 +84,7 @@ import pandas as pd
 
 from ..logs.ingest import SortedLog, ingest_with_report
 from ..logs.io import LogArrays
+from ..messages import seconds_text
 from .faults import (VALID_USED, FaultFlags, LogView, StartWindowError, Window, WindowSettings, detect_dropped_wind,
                      detect_frozen_channels, detect_heading_wrap, detect_late_samples, detect_missing_samples,
                      detect_position_jumps, detect_too_little_valid, rederive_velocities)
@@ -298,7 +299,7 @@ def _start_values(view: LogView, win: Window, nu_w: np.ndarray) -> tuple[np.ndar
     if last != win.start:
         c, s = math.cos(psi0), math.sin(psi0)
         p0 += (t[win.start] - t[last]) * np.array([c * nu0[0] - s * nu0[1], s * nu0[0] + c * nu0[1]])
-        win.notes.append(f"position from time_s {t[last]:g} moved to the start with the mean velocity")
+        win.notes.append(f"position from time_s {seconds_text(t[last])} moved to the start with the mean velocity")
     return np.array([p0[0], p0[1], psi0]), nu0
 
 
@@ -311,5 +312,5 @@ def _refusal(result: StartWindow) -> StartWindowError:
     more = (f" ({int(refused.sum())} of {refused.size} starts refused, at time_s "
             f"{', '.join(f'{x:g}' for x in t_refused[:5])}{', ...' if refused.sum() > 5 else ''})")
     t0 = result.start_time_s[k]
-    return StartWindowError(f"start time_s {t0:g}: refused, {reason}{more if refused.sum() > 1 else ''}",
+    return StartWindowError(f"start time_s {seconds_text(t0)}: refused, {reason}{more if refused.sum() > 1 else ''}",
                             start_time_s=float(t0), reason=reason, refused_start_times_s=t_refused)

@@ -40,6 +40,7 @@ import pandas as pd
 from hybridship.logs.io import (REQUIRED_COLUMNS, LogArrays, LogFormatError, LogFormatWarning, _check_column_names,
                                 _frame_to_arrays, _to_float,
                                 check_log_against_vessel, check_units_on_whole_log, read_log)
+from hybridship.messages import seconds_text
 
 __all__ = ["PURPOSES", "SortedLog", "ingest", "ingest_with_report", "sort_samples"]
 
@@ -185,7 +186,7 @@ def _refuse_conflicts(order: SortedLog, source: str) -> None:
         t = float(order.conflicting_time_s[0])
         r0, r1 = (int(r) for r in order.conflicting_rows[0])
         raise LogFormatError(
-            f"time_s: {t:g} appears at rows {r0} and {r1} with different values (a repeated time stamp?); "
+            f"time_s: {seconds_text(t)} appears at rows {r0} and {r1} with different values (a repeated time stamp?); "
             f"training needs one sample per time: remove or correct one of them "
             f"({order.conflicting_time_s.size} such time(s) in all) (in {source})",
             column="time_s", row=r1, time_s=t)

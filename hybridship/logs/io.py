@@ -77,6 +77,7 @@ from hybridship.fileio import as_path, atomic_write, starts_with
 from hybridship.logs.columns import (COLUMNS, MAX_SAMPLE_SPACING_S, MIN_SAMPLE_SPACING_S, OPTIONAL_COLUMNS,
                                      REQUIRED_COLUMNS, TRUTH_PREFIX, ColumnSpec, channel_column, column_spec)
 from hybridship.logs.preprocess import segment_ids, segmentwise, split_segments
+from hybridship.messages import seconds_text
 
 __all__ = [
     "REQUIRED_COLUMNS",
@@ -283,7 +284,7 @@ def _where(source: str) -> str:
 def _row_at(time_s: np.ndarray | None, i: int) -> str:
     if time_s is None or not np.isfinite(time_s[i]):
         return f"row {i}"
-    return f"row {i} (time_s {time_s[i]:g})"
+    return f"row {i} (time_s {seconds_text(time_s[i])})"
 
 
 def _to_float(df: pd.DataFrame, col: str, source: str, time_s: np.ndarray | None,
@@ -482,8 +483,8 @@ def _check_time(t: np.ndarray, source: str) -> None:
     if not_incr.any():
         i = int(np.argmax(not_incr)) + 1
         raise LogFormatError(
-            f"time_s: not strictly increasing at row {i} (time_s {t[i]:g} after {t[i - 1]:g}); expected "
-            f"strictly increasing times{_where(source)}",
+            f"time_s: not strictly increasing at row {i} (time_s {seconds_text(t[i])} after "
+            f"{seconds_text(t[i - 1])}); expected strictly increasing times{_where(source)}",
             column="time_s", row=i, time_s=float(t[i]),
         )
     if t.size >= 2:
@@ -491,8 +492,8 @@ def _check_time(t: np.ndarray, source: str) -> None:
         if not MIN_SAMPLE_SPACING_S <= med <= MAX_SAMPLE_SPACING_S:
             hint = "milliseconds" if med > MAX_SAMPLE_SPACING_S else "minutes or hours"
             raise LogFormatError(
-                f"time_s: median sample spacing {med:g} between time_s {t[0]:g} and {t[-1]:g}; the log "
-                f"format expects seconds (nominal 1 Hz; spacing {MIN_SAMPLE_SPACING_S:g}..{MAX_SAMPLE_SPACING_S:g} s "
+                f"time_s: median sample spacing {med:g} between time_s {seconds_text(t[0])} and "
+                f"{seconds_text(t[-1])}; the log format expects seconds (nominal 1 Hz; spacing {MIN_SAMPLE_SPACING_S:g}..{MAX_SAMPLE_SPACING_S:g} s "
                 f"accepted): is time_s in {hint}?{_where(source)}",
                 column="time_s",
             )
@@ -504,7 +505,8 @@ def _check_angle_unit(col: str, t: np.ndarray, x: np.ndarray, source: str, rate=
         ok = np.isfinite(x)
         raise LogFormatError(
             f"{col}: values span {np.min(x[ok]):.2f}..{np.max(x[ok]):.2f}, which looks like radians ({reason}); "
-            f"the log format expects degrees (column {col}; rows with time_s {t[0]:g}..{t[-1]:g}){_where(source)}",
+            f"the log format expects degrees (column {col}; rows with time_s "
+            f"{seconds_text(t[0])}..{seconds_text(t[-1])}){_where(source)}",
             column=col,
         )
 
@@ -675,7 +677,7 @@ def _check_yaw_rate_vs_heading(t: np.ndarray, h: np.ndarray, r: np.ndarray, sour
     if ev is None:
         return
     corr, k = ev
-    span = f"between time_s {t[0]:g} and {t[-1]:g}"
+    span = f"between time_s {seconds_text(t[0])} and {seconds_text(t[-1])}"
     if corr <= -0.3:
         raise LogFormatError(
             f"r_deg_s: has the opposite sign of the rate of change of heading_deg {span} "
@@ -704,8 +706,8 @@ def _check_speed_vs_track(t: np.ndarray, values: dict[str, np.ndarray], source: 
             and not 1.0 / _SPEED_SCALE_SPLIT <= sc.scale <= _SPEED_SCALE_SPLIT):
         raise LogFormatError(
             f"u_m_s, v_m_s: the logged speed is {sc.scale:.3g} times the speed of the track "
-            f"(north_m, east_m) over {SPEED_CHECK_LAG_S:g}-s windows between time_s {sc.time_span_s[0]:g} "
-            f"and {sc.time_span_s[1]:g} (correlation {sc.correlation:.2f}); expected 1 for m/s "
+            f"(north_m, east_m) over {SPEED_CHECK_LAG_S:g}-s windows between time_s {seconds_text(sc.time_span_s[0])} "
+            f"and {seconds_text(sc.time_span_s[1])} (correlation {sc.correlation:.2f}); expected 1 for m/s "
             f"({KNOTS_PER_M_S:.2f} would be knots, {KM_H_PER_M_S:g} km/h): {_speed_unit_guess(sc.scale)}"
             f"{_where(source)}",
             column="u_m_s")

@@ -20,6 +20,7 @@ from ..forecast_inputs import FaultFlags, assess_start_window, check_or_clip_inp
 from ..forecast_inputs.wind import HELD_WIND, WindForecast
 from ..logs.ingest import ingest
 from ..logs.io import LogArrays
+from ..messages import TIME_DECIMALS, seconds_text
 from ..residual.features import ResidualConfig
 
 __all__ = ["COMMAND_MODES", "FORECAST_HISTORY_S", "HorizonError", "RequestError", "as_log_arrays", "forecast_step_s",
@@ -37,15 +38,9 @@ MAX_HORIZON_S = 86400.0
 _RANGE_MARGIN_S = 60.0
 #: Decimals [s] a forecast's step is rounded to: the log's time resolution (microseconds).
 #: The median of float differences reads a 10-Hz log's 0.1 s as 0.10000000000000142.
-_STEP_DECIMALS = 6
+_STEP_DECIMALS = TIME_DECIMALS
 #: Decimals [s] lead times are rounded to, so that 600 steps of 0.1 s are 60.0 s.
 _LEAD_DECIMALS = 9
-
-
-def seconds_text(t: float) -> str:
-    """A time [s] as written in messages: to the microsecond, without an exponent, so that the
-    epoch times of a log (1.7e9 s) stay distinct ("1700000000.5", not "1.7e+09")."""
-    return np.format_float_positional(round(float(t), _STEP_DECIMALS), trim="-")
 
 
 def as_log_arrays(log, vessel, *, purpose: str = "fit") -> LogArrays:

@@ -72,6 +72,7 @@ import pandas as pd
 from pydantic import BaseModel, ConfigDict, Field
 
 from ..frames import vector_to_speed_dir
+from ..messages import seconds_text
 from . import environment_kernel as kernel
 
 #: Forward-difference steps of the filter's Jacobian, per state (SI units, radians).
@@ -614,7 +615,7 @@ class EnvironmentEstimator:
         miss = [int(r) for r in rows[:n_req] if int(r) not in out_P]
         if miss:
             raise ValueError(f"log: no valid position/heading at or before row {miss[0]} "
-                             f"(time {arrays.time_s[miss[0]]:g} s) to start the environment estimate")
+                             f"(time {seconds_text(arrays.time_s[miss[0]])} s) to start the environment estimate")
         rows = rows[np.array([int(r) in out_P for r in rows], dtype=bool)] if rows.size > n_req else rows
         return EnvironmentEstimate(rows, arrays.time_s[rows], np.stack([out_x[int(r)] for r in rows]),
                                    np.stack([out_P[int(r)] for r in rows]), self.config.thrust_error_model)
