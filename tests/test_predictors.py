@@ -376,3 +376,16 @@ def test_a_start_at_a_time_logged_twice_with_different_values_says_so(model, exa
     with pytest.raises(ValueError, match=rf"start_times_s: {t:g} s is logged more than once with different values"):
         DynamicPredictor(model.vessel).forecast(df, [t], 10.0)
     DynamicPredictor(model.vessel).forecast(df, [float(log.time_s.iloc[k + 5])], 10.0)    # other starts are fine
+
+
+def test_a_start_value_out_of_range_is_named_by_its_start_time(model, exact_logs):
+    """A start state beyond the physics' envelope comes from the log: the error names the start
+    time and the column, not the batch element of the integrator's input array."""
+    from hybridship.forecast_inputs import InputRangeError
+
+    log = exact_logs[0].reset_index(drop=True)
+    starts = [float(log.time_s.iloc[len(log) // 2 + j]) for j in (0, 5)]
+    df = log.copy()
+    df.loc[df.time_s > starts[0], "north_m"] = 1e9      # a unit error after the first start
+    with pytest.raises(InputRangeError, match=rf"^log: start time_s {starts[1]:g}: eta\[north_m\]: 1e\+09 is outside"):
+        DynamicPredictor(model.vessel).forecast(df, starts, 10.0)

@@ -11,12 +11,13 @@ from __future__ import annotations
 
 import numbers
 import os
+import re
 from dataclasses import dataclass
 
 import numpy as np
 import pandas as pd
 
-from ..forecast_inputs import FaultFlags, assess_start_window, check_or_clip_inputs
+from ..forecast_inputs import FaultFlags, InputRangeError, assess_start_window, check_or_clip_inputs
 from ..forecast_inputs.wind import HELD_WIND, WindForecast
 from ..logs.ingest import ingest
 from ..logs.io import LogArrays
@@ -41,6 +42,16 @@ _RANGE_MARGIN_S = 60.0
 _STEP_DECIMALS = TIME_DECIMALS
 #: Decimals [s] lead times are rounded to, so that 600 steps of 0.1 s are 60.0 s.
 _LEAD_DECIMALS = 9
+
+
+def _in_log_terms(exc: InputRangeError, start_times_s: np.ndarray) -> InputRangeError:
+    """A physics input out of range, said of the log: the value is the log's (the start state
+    or an input held or read from it), so the start time names it, not the batch element."""
+    k = exc.index[0] if len(exc.index) >= 2 and exc.index[0] < len(start_times_s) else None
+    text = re.sub(r"\[batch \d+, ", "[", str(exc)).replace(" (hybridship.forecast_inputs.limits)", "")
+    where = f"start time_s {seconds_text(start_times_s[k])}: " if k is not None else ""
+    return InputRangeError(f"log: {where}{text} (a value the forecast takes from the log: a unit error?)",
+                           field=exc.field, index=exc.index, value=exc.value, valid=exc.valid)
 
 
 def as_log_arrays(log, vessel, *, purpose: str = "fit") -> LogArrays:
@@ -309,8 +320,11 @@ def _forecast_setup(model, config: ResidualConfig, log, start_times_s, horizon_s
     # (sensor dropped) keeps its start value; at least the start's step, which the guards read
     wind = wind_forecast.steps(arrays.wind, arrays.time_s, idx, wind[:, 0], max(H, 1), dt, logged=arrays.wind_logged,
                                hold=sw.flags.get(FaultFlags.WIND_DROPPED))
-    chk = check_or_clip_inputs(model.vessel, eta=sw.eta0, nu=sw.nu0, rpm=rpm, azimuth_rad=az,
-                               wind=wind, dt_s=dt)
+    try:
+        chk = check_or_clip_inputs(model.vessel, eta=sw.eta0, nu=sw.nu0, rpm=rpm, azimuth_rad=az,
+                                   wind=wind, dt_s=dt)
+    except InputRangeError as exc:
+        raise _in_log_terms(exc, arrays.time_s[idx]) from None
     flags = {name: np.zeros(len(idx), dtype=bool) for name in FaultFlags.ALL}
     flags.update({k: np.asarray(v, dtype=bool) for k, v in sw.flags.items()})
     flags[FaultFlags.INPUT_CLIPPED] = np.asarray(chk.clipped, dtype=bool)
