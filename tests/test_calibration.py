@@ -135,14 +135,16 @@ def test_fit_holds_back_the_end_and_forecasts_carry_the_calibrated_spread(fitted
     assert hp.training_info["calibration"]["n_starts"]["held"] >= 50
     starts = [300.0, 350.0]
     raw = hp.forecast(logs[0], starts, 40.0, calibrated=False)
-    fc = hp.forecast(logs[0], starts, 40.0)
+    with pytest.warns(UserWarning, match="calibrated up to 30 s"):   # 40 s runs past the calibrated leads
+        fc = hp.forecast(logs[0], starts, 40.0)
     np.testing.assert_allclose(fc.eta, raw.eta)
     expected = hp.calibration["held"]["position"].apply(raw.eta_std[..., 0], raw.lead_s)
     np.testing.assert_allclose(fc.eta_std[..., 0], expected)
     assert not np.allclose(fc.eta_std[:, 1:], raw.eta_std[:, 1:])
     # round trip through the model file keeps the scales
     back = HybridPredictor.load(hp.save(tmp_path / "m.npz"))
-    np.testing.assert_allclose(back.forecast(logs[0], starts, 40.0).eta_std, fc.eta_std)
+    with pytest.warns(UserWarning, match="calibrated up to 30 s"):
+        np.testing.assert_allclose(back.forecast(logs[0], starts, 40.0).eta_std, fc.eta_std)
     assert back.calibration_config == hp.calibration_config
     # ... and their exponents
     import copy
@@ -151,7 +153,9 @@ def test_fit_holds_back_the_end_and_forecasts_carry_the_calibrated_spread(fitted
     hq.calibration["held"]["position"] = SpreadCalibration(c.lead_s, c.scale, c.floor, 0.3)
     back = HybridPredictor.load(hq.save(tmp_path / "m3.npz"))
     assert back.calibration["held"]["position"].exponent == 0.3
-    np.testing.assert_allclose(back.forecast(logs[0], starts, 40.0).eta_std, hq.forecast(logs[0], starts, 40.0).eta_std)
+    with pytest.warns(UserWarning, match="calibrated up to 30 s"):
+        np.testing.assert_allclose(back.forecast(logs[0], starts, 40.0).eta_std,
+                                   hq.forecast(logs[0], starts, 40.0).eta_std)
     # quantiles come from the calibrated spread
     q = fc.quantiles([0.05, 0.95])
     np.testing.assert_allclose(q[1] - q[0], 2 * 1.6448536 * fc.eta_std, rtol=1e-6)
