@@ -231,10 +231,14 @@ for k, name in enumerate(("surge", "sway", "yaw")):
 # ## 6. Forecast the drift after the DP loss
 #
 # Forecasts start at the shutdown and every 10 s after it, each 60 s long, all in one
-# batch. The hybrid's `eta_std` is the spread of the ensemble members' integrated
-# residuals; the bands are +-2 sigma. The guard (on by default) shrinks the learned
-# correction when the inputs leave the training envelope; `guard_weight` reports by how
-# much (see [the guard](../../concepts/guard/)).
+# batch. The hybrid's `eta_std` is its calibrated one-sigma spread: after a failure, the
+# members' spread and the estimator's posterior plus the load's variability in the station
+# keeping before it, scaled per lead time on the training logs' own failures when they
+# hold at least three (see [the hybrid predictor](../../hybrid/)); the bands are +-2 sigma.
+# Nets trained on station keeping are switched off once the thrusters stop, so after the
+# failure `guard_weight` is 0 and the forecast is the physics with the estimated
+# environment (see [the guard](../../concepts/guard/)); the table in section 7 shows the
+# nets on, unguarded, beside it.
 
 # %%
 test = as_log_arrays(test_log, model.vessel)
