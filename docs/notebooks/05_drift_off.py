@@ -90,8 +90,11 @@ watch.pivot(index="heading_deg", columns="reaction_time_s", values="watch_radius
 # ## 3. Live mode: a blackout now
 #
 # A simulated station-keeping log (`simulate_dp_loss`), cut just before its DP failure. The
-# environment comes from the log only: the measured wind and the 900-s mean of the
-# residual acceleration the model does not explain (current, wave drift, model error).
+# environment comes from the log only: the mean measured wind and its gustiness over the
+# last 120 s, and the [environment estimator](../../concepts/environment/) run over the last
+# 900 s (the current, acting through the relative velocity, and the load, with members
+# drawn from its posterior). `environment_from_log(..., method="mean")` uses the 900-s mean
+# of the residual acceleration the model does not explain instead.
 
 # %%
 cfg = DPLossConfig(seed=5, t_shutdown_s=1200.0 if SMALL else 2400.0, drift_s=300.0)
