@@ -33,9 +33,8 @@ def test_there_are_notebooks():
     assert NOTEBOOKS, f"no notebooks found in {DOCS / 'notebooks'}"
 
 
-@pytest.mark.slow
-@pytest.mark.parametrize("path", NOTEBOOKS, ids=[p.stem for p in NOTEBOOKS])
-def test_notebook_runs_in_small_configuration(path, tmp_path, monkeypatch):
+def _execute(path, tmp_path, monkeypatch, truthsim_dev):
+    """Run the notebook at ``path`` small, in a fresh kernel working in ``tmp_path``; its stream output."""
     if _MISSING:
         pytest.skip(f"executing notebooks needs {', '.join(_MISSING)} (pip install -e '.[test]')")
     import jupytext
@@ -45,12 +44,28 @@ def test_notebook_runs_in_small_configuration(path, tmp_path, monkeypatch):
     monkeypatch.setenv("MPLBACKEND", "Agg")           # no figure rendering: faster, no display
     # the kernel imports the hybridship beside this test, not another installed copy
     monkeypatch.setenv("PYTHONPATH", os.pathsep.join(filter(None, [str(ROOT), os.environ.get("PYTHONPATH")])))
-    if TRUTHSIM_DEV.is_dir():
-        monkeypatch.setenv("HYBRIDSHIP_TRUTHSIM_DEV", str(TRUTHSIM_DEV))
+    if truthsim_dev is not None:
+        monkeypatch.setenv("HYBRIDSHIP_TRUTHSIM_DEV", str(truthsim_dev))
     nb = jupytext.read(path)
     client = nbclient.NotebookClient(nb, timeout=600, kernel_name="python3",
                                      resources={"metadata": {"path": str(tmp_path)}})
     client.execute()                                  # raises CellExecutionError with the traceback
+    return "".join(out.get("text", "") for cell in nb.cells if cell.cell_type == "code"
+                   for out in cell.get("outputs", []) if out.get("output_type") == "stream")
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("path", NOTEBOOKS, ids=[p.stem for p in NOTEBOOKS])
+def test_notebook_runs_in_small_configuration(path, tmp_path, monkeypatch):
+    _execute(path, tmp_path, monkeypatch, TRUTHSIM_DEV if TRUTHSIM_DEV.is_dir() else None)
+
+
+@pytest.mark.slow
+def test_truthsim_dev_notebook_without_the_data_says_where_it_looked(tmp_path, monkeypatch):
+    absent = tmp_path / "no-truthsim-dev"
+    out = _execute(DOCS / "notebooks" / "02_truthsim_dev.py", tmp_path, monkeypatch, absent)
+    assert f"SKIPPED: the shared truthsim-dev data set was not found (no logs/*.csv.gz in {absent}" in out
+    assert "trained" not in out
 
 
 def test_every_notebook_is_in_the_site_navigation():

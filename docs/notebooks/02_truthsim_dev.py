@@ -23,10 +23,13 @@
 # 4. forecasts the drift of a held-out case and plots it with uncertainty bands;
 # 5. prints the 15/30/45/60 s error table of the held-out case.
 #
-# The data set is not part of the repository. The notebook looks for it in
-# `$HYBRIDSHIP_TRUTHSIM_DEV`, then in `shared/data/truthsim-dev` beside any parent folder
-# of the working directory (a checkout next to `shared/`). `HYBRIDSHIP_SMALL=1` trains on
-# one log, cut to the last 15 min of station keeping, with a small ensemble.
+# The data set is not part of the repository. The notebook reads it from
+# `$HYBRIDSHIP_TRUTHSIM_DEV` when that is set (and only there); otherwise from
+# `../shared/data/truthsim-dev` beside the checkout that hybridship is imported from, as
+# the tests do, or from `shared/data/truthsim-dev` beside any parent folder of the working
+# directory. Without it the notebook prints where it looked and skips the rest.
+# `HYBRIDSHIP_SMALL=1` trains on one log, cut to the last 15 min of station keeping, with a
+# small ensemble.
 
 # %%
 import os
@@ -38,6 +41,7 @@ import numpy as np
 import pandas as pd
 import torch
 
+import hybridship
 from hybridship.evaluation import metrics
 from hybridship.logs.io import read_log
 from hybridship.predictors import DeadReckoning, DynamicPredictor, HybridPredictor, as_log_arrays
@@ -52,13 +56,19 @@ MEMBERS = 3 if SMALL else 10
 MAX_EPOCHS = 150 if SMALL else 800
 
 
+def truthsim_dev_candidates():
+    """Where the truthsim-dev folder may be, in the order they are tried."""
+    env = os.environ.get("HYBRIDSHIP_TRUTHSIM_DEV")
+    if env:
+        return [Path(env)]
+    checkout = Path(hybridship.__file__).resolve().parents[1]     # the repository root
+    here = Path.cwd().resolve()
+    return list(dict.fromkeys(p / "shared" / "data" / "truthsim-dev" for p in (checkout.parent, here, *here.parents)))
+
+
 def find_truthsim_dev():
     """The truthsim-dev folder, or None."""
-    env = os.environ.get("HYBRIDSHIP_TRUTHSIM_DEV")
-    candidates = [Path(env)] if env else []
-    here = Path.cwd().resolve()
-    candidates += [p / "shared" / "data" / "truthsim-dev" for p in (here, *here.parents)]
-    for c in candidates:
+    for c in truthsim_dev_candidates():
         if (c / "logs").is_dir() and any((c / "logs").glob("*.csv.gz")):
             return c
     return None
@@ -67,9 +77,10 @@ def find_truthsim_dev():
 DATA = find_truthsim_dev()
 HAVE_DATA = DATA is not None
 if not HAVE_DATA:
-    print("SKIPPED: the shared truthsim-dev data set was not found (set HYBRIDSHIP_TRUTHSIM_DEV to its "
-          "folder, or work in a checkout beside shared/data/truthsim-dev). The rest of this notebook "
-          "does nothing.")
+    looked = truthsim_dev_candidates()
+    print(f"SKIPPED: the shared truthsim-dev data set was not found (no logs/*.csv.gz in {looked[0]}"
+          f"{' or beside the working directory' if len(looked) > 1 else ''}; set HYBRIDSHIP_TRUTHSIM_DEV to "
+          "its folder). The rest of this notebook does nothing.")
 else:
     print(f"data set: {DATA}")
 
