@@ -290,6 +290,17 @@ errors = {name: [metrics.drift_errors(p, test, **kw)] for name, (p, kw) in predi
 print("Mean absolute error after the failure, first 5 / first 20 forecasts (m, m, deg):")
 print(metrics.paper_table(metrics.error_table(errors)).to_string())
 
+# %% [markdown]
+# Read the table before trusting the hybrid. On these logs it does not beat the physics
+# alone: at the default size (not `HYBRIDSHIP_SMALL=1`) `hybrid` is worse than `dynamic`
+# in every cell. After the failure its nets are off (they were trained on the rows with
+# `dp_active == 1`, under thrust), so its forecast is the physics plus the current and load that the
+# [environment estimator](../../concepts/environment/) inferred from the logs before the
+# failure. The estimator is built for a ship holding station; here the ship was manoeuvring
+# under random commands, with both a current and a load unknown, and what it inferred
+# makes the drift worse. `dynamic` and `dead_reckoning` are in the table for exactly this
+# check on your own logs.
+
 # %%
 # The vessel file, logs and model were for this notebook only: remove them (comment out to keep them).
 shutil.rmtree(WORK)
