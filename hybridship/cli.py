@@ -497,7 +497,8 @@ def _add_benchmark(sub) -> None:
     bsub = p.add_subparsers(dest="benchmark", metavar="BENCHMARK", parser_class=_Parser)
     d = bsub.add_parser("drift", help="the paper's 15/30/45/60 s drift-error tables after a DP failure",
                         description="Train on --train (DP parts), forecast after every failure in --test, and "
-                                    "write errors.csv, errors_per_log.csv, coverage.csv, coverage_intervals.csv, drift_hull.csv, "
+                                    "write errors.csv, errors_per_log.csv, coverage.csv, coverage_intervals.csv, "
+                                    "coverage_heading.csv, drift_hull.csv, "
                                     "timing.csv, tables.md and figures "
                                     "to --out. Without --train/--test: the embedded simulated scenarios.")
     d.add_argument("--train", type=Path, help="folder of training logs")

@@ -49,6 +49,11 @@ def test_tables_have_the_papers_layout_and_physics_is_exact_on_its_own_logs(tiny
     ci = ci.set_index(["model", "horizon_s"])
     np.testing.assert_allclose(ci.coverage, two.loc[ci.index], atol=1e-6)
     assert set(ci.index.get_level_values(0)) >= {"hybrid", "data_only"}
+    hc = pd.read_csv(tmp_path / "out" / "coverage_heading.csv")
+    assert list(hc.columns) == ["model", "horizon_s", "sigma", "coverage", "low", "high", "n_failures"]
+    assert set(hc.sigma) == {1.0, 2.0} and hc.coverage.between(0, 1).all()
+    h = hc.set_index(["model", "horizon_s", "sigma"]).coverage
+    assert (h.xs(2.0, level="sigma") >= h.xs(1.0, level="sigma")).all()      # a wider band covers at least as much
     dyn = errors[errors.model == "dynamic"]
     # the log was made by the same model: only the 3-s start average separates them
     assert dyn[dyn.state != "yaw_deg"].mae.max() < 0.15, dyn

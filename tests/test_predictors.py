@@ -389,3 +389,26 @@ def test_a_start_value_out_of_range_is_named_by_its_start_time(model, exact_logs
     df.loc[df.time_s > starts[0], "north_m"] = 1e9      # a unit error after the first start
     with pytest.raises(InputRangeError, match=rf"^log: start time_s {starts[1]:g}: eta\[north_m\]: 1e\+09 is outside"):
         DynamicPredictor(model.vessel).forecast(df, starts, 10.0)
+
+
+def test_heading_coverage_counts_the_wrapped_heading_error_against_its_own_spread():
+    from hybridship.evaluation import metrics
+
+    truth = np.zeros((2, 1, 4, 3))
+    truth[..., 2] = np.pi - 0.01                       # just short of +-180 deg
+    pred = truth.copy()
+    pred[0, ..., 2] = -np.pi + 0.01                    # 0.02 rad away across the wrap, not 2 pi - 0.02
+    pred[1, ..., 2] = truth[1, ..., 2] - 0.5
+    pred[..., :2] = 100.0                              # position far outside its band: not counted here
+    std = np.full_like(truth, 0.1)
+    cov = metrics.coverage(pred, truth, std, state="heading")
+    np.testing.assert_allclose(cov, 0.5)               # one of two inside at 1 and at 2 sigma
+    np.testing.assert_allclose(metrics.coverage(pred, truth, std), 0.0)
+    ci = metrics.coverage_interval(pred, truth, std, 2.0, state="heading", n_resamples=200)
+    np.testing.assert_allclose(ci[:, 0], 0.5)
+    with pytest.raises(ValueError, match="state: expected one of"):
+        metrics.coverage(pred, truth, std, state="yaw")
+    bad = std.copy()
+    bad[0, 0, 0, 2] = np.nan
+    with pytest.raises(ValueError, match="heading standard deviations"):
+        metrics.coverage(pred, truth, bad, state="heading")

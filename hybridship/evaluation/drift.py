@@ -18,6 +18,9 @@ samples after the shutdown of every log in ``test``, ``horizon_s`` ahead. The ou
   whole failures (:func:`~hybridship.evaluation.metrics.coverage_interval`): the starts
   after one failure share one outcome, so the number of failures sets how much a
   coverage figure can say;
+* ``coverage_heading.csv``: ``model,horizon_s,sigma,coverage,low,high,n_failures``: the
+  same for the heading's spread alone (heading errors wrapped to +-180 deg), at 1 and 2
+  sigma, with the interval over failures;
 * ``tables.md``: Table 2 (cells "first-5/first-20"), Table 3 (% error reduction of the
   hybrids relative to the dynamic model), coverage, the hybrid's error as a ratio to the
   dynamic model's per failure at the longest horizon (with two or more test logs and both
@@ -103,8 +106,8 @@ class DriftBenchmarkResult:
 
 
 #: The benchmark's output files: tables, then the figures (removed when ``plots`` is off).
-TABLE_FILES = ("errors.csv", "errors_per_log.csv", "coverage.csv", "coverage_intervals.csv", "timing.csv",
-               "drift_hull.csv", "tables.md")
+TABLE_FILES = ("errors.csv", "errors_per_log.csv", "coverage.csv", "coverage_intervals.csv", "coverage_heading.csv",
+               "timing.csv", "drift_hull.csv", "tables.md")
 FIGURE_FILES = ("error_vs_horizon.png", "trajectories.png")
 
 
@@ -201,16 +204,18 @@ def run_drift_benchmark(train=None, test=None, out_dir="drift-benchmark", *, ves
     per_log_long = _per_log_errors(errors, test_names, horizons, windows)
     coverage = _coverage_table(fc, pick, horizons, len(test_arrays))
     intervals = _coverage_intervals(fc, pick, horizons, seed)
+    heading_cov = pd.concat([_coverage_intervals(fc, pick, horizons, seed, sigma=k, state="heading")
+                             for k in (1.0, 2.0)], ignore_index=True)
 
     tables = {"errors.csv": long, "errors_per_log.csv": per_log_long, "coverage.csv": coverage,
-              "coverage_intervals.csv": intervals, "timing.csv": timing,
+              "coverage_intervals.csv": intervals, "coverage_heading.csv": heading_cov, "timing.csv": timing,
               "drift_hull.csv": _drift_hull_table(hybrid, per_log_hull, test_names)}
     outputs = {name: _write_csv(out / name, table) for name, table in tables.items()}
     table2 = metrics.paper_table(long, windows=windows) if len(windows) == 2 else long
     table3 = {m: metrics.reduction_table(long, m, windows=windows) for m in TABLE3_MODELS} \
         if len(windows) == 2 else {}
     md = _markdown(table2, table3, coverage, intervals, timing, test_names, len(train_arrays), ens_cfg,
-                   n_intervals, per_log_long)
+                   n_intervals, per_log_long, heading_cov)
     outputs["tables.md"] = atomic_write(out / "tables.md", lambda fh: fh.write(md.encode("utf-8")))
     outputs.update(_figures(out, plots, fc, all_h, test_arrays, test_names))
     record_outputs(out, outputs, removed=() if plots else FIGURE_FILES)
@@ -469,14 +474,16 @@ def _coverage_table(fc: dict, pick, horizons, n_logs: int) -> pd.DataFrame:
     return pd.DataFrame(cov_rows)
 
 
-def _coverage_intervals(fc: dict, pick, horizons, seed: int, sigma: float = 2.0) -> pd.DataFrame:
-    """2-sigma coverage of the ensemble models with a 90 % interval over the failures (one per log)."""
+def _coverage_intervals(fc: dict, pick, horizons, seed: int, sigma: float = 2.0,
+                        state: str = "position") -> pd.DataFrame:
+    """Coverage at ``sigma`` (default 2) of the ensemble models' spread of ``state`` (north and
+    east pooled, or the heading) with a 90 % interval over the failures (one per log)."""
     rows = []
     for name in ENSEMBLE_MODELS:
         P = np.stack([p[:, pick] for p, _, _ in fc[name]])
         T = np.stack([t[:, pick] for _, t, _ in fc[name]])
         S = np.stack([s[:, pick] for _, _, s in fc[name]])
-        ci = metrics.coverage_interval(P, T, S, sigma, seed=seed)
+        ci = metrics.coverage_interval(P, T, S, sigma, seed=seed, state=state)
         rows += [{"model": name, "horizon_s": h, "sigma": sigma, "coverage": ci[j, 0], "low": ci[j, 1],
                   "high": ci[j, 2], "n_failures": P.shape[0]} for j, h in enumerate(horizons)]
     return pd.DataFrame(rows)
@@ -569,7 +576,7 @@ def _per_log_markdown(per_log: pd.DataFrame, model: str = "hybrid", reference: s
 
 
 def _markdown(table2, table3, coverage, intervals, timing, test_names, n_train, ens_cfg, n_intervals,
-              per_log=None) -> str:
+              per_log=None, heading_cov=None) -> str:
     # No top-level heading: the file reads on its own and is also included in the docs pages.
     parts = [f"Drift benchmark. Test logs: {', '.join(test_names)}; trained on {n_train} logs; "
              f"{ens_cfg.n_members}-member ensembles, seed {ens_cfg.seed}; {n_intervals} forecasts after each "
@@ -589,6 +596,8 @@ def _markdown(table2, table3, coverage, intervals, timing, test_names, n_train, 
     parts += [f"\n2-sigma coverage with a 90 % interval that resamples whole failures "
               f"({int(intervals.n_failures.iloc[0])} here; the starts after one failure share one outcome):\n",
               _md_table(ci)]
+    if heading_cov is not None:
+        parts.append(_heading_coverage_markdown(heading_cov))
     if per_log is not None and per_log.log.nunique() > 1 and {"hybrid", "dynamic"} <= set(per_log.model) \
             and per_log.window.nunique() > 1:
         parts.append(_per_log_markdown(per_log))
@@ -597,6 +606,16 @@ def _markdown(table2, table3, coverage, intervals, timing, test_names, n_train, 
                      "each log are in `errors_per_log.csv`.)\n")
     parts += ["\n### Wall time [s]\n", _md_table(timing.assign(seconds=timing.seconds.round(2)).set_index("model"))]
     return "\n".join(parts) + "\n"
+
+
+def _heading_coverage_markdown(heading_cov: pd.DataFrame) -> str:
+    """The heading's coverage at 1 and 2 sigma, each with its interval over the failures."""
+    hc = heading_cov.assign(cell=[f"{c:.2f} [{lo:.2f}, {hi:.2f}]" for c, lo, hi in
+                                  zip(heading_cov.coverage, heading_cov.low, heading_cov.high)])
+    hc = hc.pivot_table(index=["model", "sigma"], columns="horizon_s", values="cell", aggfunc="first")
+    hc.columns = [f"{c:g} s" for c in hc.columns]
+    return ("\n### Coverage of the ensemble's heading spread\n\nThe heading's errors (wrapped to +-180 deg) "
+            "against its own spread, with the same 90 % interval over the failures:\n\n" + _md_table(hc))
 
 
 def _figures(out: Path, plots: bool, fc: dict, all_h, test_arrays, test_names) -> dict:

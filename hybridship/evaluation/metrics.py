@@ -20,8 +20,8 @@ WINDOWS = (5, 20)
 STATES = ("north_m", "east_m", "yaw_deg")
 
 __all__ = ["HORIZONS_S", "WINDOWS", "STATES", "drift_forecasts", "shutdown_index", "drift_errors",
-           "absolute_errors", "coverage", "coverage_interval", "grouped_coverage_interval", "error_table",
-           "paper_table", "reduction_table"]
+           "absolute_errors", "COVERAGE_STATES", "coverage", "coverage_interval", "grouped_coverage_interval",
+           "error_table", "paper_table", "reduction_table"]
 
 
 def drift_errors(predictor, arrays, *, n_intervals: int = 20, horizons_s=HORIZONS_S, **forecast_kw) -> np.ndarray:
@@ -73,15 +73,37 @@ def _checked_forecasts(pred, truth, std, min_ndim: int = 2):
     return pred, truth, std
 
 
-def coverage(pred: np.ndarray, truth: np.ndarray, std: np.ndarray, sigmas=(1.0, 2.0)) -> np.ndarray:
-    """Fraction of north and east errors within ``k`` standard deviations.
+#: What a coverage counts: the north and east errors pooled, or the heading's alone.
+COVERAGE_STATES = ("position", "heading")
+
+
+def _band_errors(pred: np.ndarray, truth: np.ndarray, std: np.ndarray, state: str):
+    """``(|error|, std)``, shape ``(..., n_horizons, k)``, of the components ``state`` counts:
+    north and east [m] (k = 2), or the heading [rad] wrapped to +-pi (k = 1)."""
+    if state == "position":
+        return np.abs(pred - truth)[..., :2], std[..., :2]
+    if state != "heading":
+        raise ValueError(f"state: expected one of {COVERAGE_STATES}, got {state!r}")
+    for name, a in (("pred", pred), ("truth", truth)):
+        if not np.all(np.isfinite(a[..., 2])):
+            raise ValueError(f"{name}: NaN or inf in the heading; leave such forecasts out before scoring")
+    if not np.all(np.isfinite(std[..., 2]) & (std[..., 2] >= 0)):
+        raise ValueError("std: expected finite, non-negative heading standard deviations")
+    return np.abs(wrap_pi(pred[..., 2:] - truth[..., 2:])), std[..., 2:]
+
+
+def coverage(pred: np.ndarray, truth: np.ndarray, std: np.ndarray, sigmas=(1.0, 2.0), *,
+             state: str = "position") -> np.ndarray:
+    """Fraction of errors within ``k`` standard deviations.
 
     Parameters
     ----------
     pred, truth, std : ndarray, shape (..., n_horizons, 3)
-        Pooled over all leading axes and over north and east (heading is not counted).
+        North [m], east [m] and heading [rad]; pooled over all leading axes.
     sigmas : sequence of float
         Band half-widths in standard deviations.
+    state : {"position", "heading"}
+        Count the north and east errors pooled (default), or the heading's (wrapped) alone.
 
     Returns
     -------
@@ -92,8 +114,7 @@ def coverage(pred: np.ndarray, truth: np.ndarray, std: np.ndarray, sigmas=(1.0, 
     sig = np.asarray(sigmas, dtype=float)
     if sig.ndim != 1 or sig.size == 0 or not np.all(np.isfinite(sig) & (sig > 0)):
         raise ValueError(f"sigmas: expected positive finite band half-widths, got {sigmas!r}")
-    err = np.abs(pred - truth)[..., :2]
-    s = std[..., :2]
+    err, s = _band_errors(pred, truth, std, state)
     nh = err.shape[-2]
     e = np.moveaxis(err, -2, 0).reshape(nh, -1)
     s = np.moveaxis(s, -2, 0).reshape(nh, -1)
@@ -101,19 +122,20 @@ def coverage(pred: np.ndarray, truth: np.ndarray, std: np.ndarray, sigmas=(1.0, 
 
 
 def coverage_interval(pred: np.ndarray, truth: np.ndarray, std: np.ndarray, sigma: float = 2.0, *,
-                      confidence: float = 0.90, n_resamples: int = 4000, seed: int = 0) -> np.ndarray:
+                      confidence: float = 0.90, n_resamples: int = 4000, seed: int = 0,
+                      state: str = "position") -> np.ndarray:
     """Coverage at ``sigma`` with a bootstrap interval that resamples whole failures.
 
     Forecasts started one second apart after one failure share most of their future, so
     their errors are nearly one draw: a coverage pooled over six failures rests on about
     six independent outcomes per component, not on hundreds of starts. The interval
-    resamples the failures (the first axis), with all their starts and both components
+    resamples the failures (the first axis), with all their starts and components
     (percentile bootstrap, :func:`scipy.stats.bootstrap`).
 
     Parameters
     ----------
     pred, truth, std : ndarray, shape (G, ..., n_horizons, 3)
-        One group per failure (log) on the first axis; north and east are counted.
+        One group per failure (log) on the first axis.
     sigma : float
         Width of the band in standard deviations.
     confidence : float
@@ -121,6 +143,8 @@ def coverage_interval(pred: np.ndarray, truth: np.ndarray, std: np.ndarray, sigm
     n_resamples : int
     seed : int
         Seed of the resampling (the same call gives the same interval).
+    state : {"position", "heading"}
+        As in :func:`coverage`.
 
     Returns
     -------
@@ -131,7 +155,8 @@ def coverage_interval(pred: np.ndarray, truth: np.ndarray, std: np.ndarray, sigm
     pred, truth, std = _checked_forecasts(pred, truth, std, min_ndim=3)
     if not (np.isfinite(sigma) and sigma > 0):
         raise ValueError(f"sigma: expected a positive finite band half-width, got {sigma!r}")
-    inside = np.abs(pred - truth)[..., :2] <= sigma * std[..., :2]       # (G, ..., nh, 2)
+    err, s = _band_errors(pred, truth, std, state)
+    inside = err <= sigma * s                                            # (G, ..., nh, k)
     inside = np.moveaxis(inside, -2, 1).reshape(inside.shape[0], inside.shape[-2], -1)
     return grouped_coverage_interval(inside.sum(axis=2), np.full(inside.shape[0], inside.shape[2]),
                                      confidence=confidence, n_resamples=n_resamples, seed=seed)
