@@ -536,7 +536,8 @@ def _add_benchmark(sub) -> None:
                                     "--test at the given horizons (future commands known and held) and write "
                                     "errors.csv (model,kind,state,horizon_s,mae,commands), coverage.csv "
                                     "(model,kind,commands,horizon_s,sigma,coverage), coverage_intervals.csv, "
-                                    "sharpness.csv and README.md to --out.")
+                                    "coverage_heading.csv (the heading's spread), sharpness.csv and README.md to "
+                                    "--out.")
     m.add_argument("--vessel", default="esso_osaka_model",
                    help="packaged vessel name or vessel TOML file (default esso_osaka_model)")
     m.add_argument("--train", required=True, type=Path, help="folder of training runs")

@@ -239,6 +239,13 @@ def test_manoeuvre_benchmark_writes_the_tables(tmp_path):
     np.testing.assert_allclose(ci.set_index(["model", "commands", "horizon_s"]).coverage, pooled.loc[
         ci.set_index(["model", "commands", "horizon_s"]).index])
     assert "resamples whole runs" in md
+    # coverage_heading.csv: the heading's errors against its own spread, same layout
+    ch = pd.read_csv(tmp_path / "out" / "coverage_heading.csv")
+    assert tuple(ch.columns) == COVERAGE_COLUMNS and set(ch.model) == {"hybrid", "data_only"}
+    hp = ch.pivot_table(index=["model", "kind", "commands", "horizon_s"], columns="sigma", values="coverage")
+    assert ch.coverage.between(0, 1).all() and (hp[2] >= hp[1]).all()
+    assert not np.allclose(hp.to_numpy(), piv.loc[hp.index].to_numpy())    # not the position's figures again
+    assert "heading spread coverage" in md
     # sharpness.csv: the band's mean width and interval score, same models, kinds and modes
     sh = pd.read_csv(tmp_path / "out" / "sharpness.csv")
     assert list(sh.columns) == ["model", "kind", "commands", "horizon_s", "sigma", "mean_std_m", "interval_score_m"]

@@ -202,10 +202,7 @@ def run_drift_benchmark(train=None, test=None, out_dir="drift-benchmark", *, ves
     windows = tuple(w for w in metrics.WINDOWS if w <= n_intervals) or (n_intervals,)
     long = metrics.error_table(errors, horizons_s=horizons, windows=windows)
     per_log_long = _per_log_errors(errors, test_names, horizons, windows)
-    coverage = _coverage_table(fc, pick, horizons, len(test_arrays))
-    intervals = _coverage_intervals(fc, pick, horizons, seed)
-    heading_cov = pd.concat([_coverage_intervals(fc, pick, horizons, seed, sigma=k, state="heading")
-                             for k in (1.0, 2.0)], ignore_index=True)
+    coverage, intervals, heading_cov = _coverage_tables(fc, pick, horizons, len(test_arrays), seed)
 
     tables = {"errors.csv": long, "errors_per_log.csv": per_log_long, "coverage.csv": coverage,
               "coverage_intervals.csv": intervals, "coverage_heading.csv": heading_cov, "timing.csv": timing,
@@ -456,6 +453,14 @@ def _forecast_after_failures(predictors: dict, test_arrays, n_intervals: int, ho
         timing.append({"model": name, "what": f"forecast {len(test_arrays) * n_intervals} x {horizon_s:g} s",
                        "seconds": sec})
     return fc, all_h, pick, timing
+
+
+def _coverage_tables(fc: dict, pick, horizons, n_logs: int, seed: int):
+    """``coverage.csv``, ``coverage_intervals.csv`` and ``coverage_heading.csv`` (the heading
+    at 1 and 2 sigma, each with its interval over the failures)."""
+    heading = pd.concat([_coverage_intervals(fc, pick, horizons, seed, sigma=k, state="heading")
+                         for k in (1.0, 2.0)], ignore_index=True)
+    return _coverage_table(fc, pick, horizons, n_logs), _coverage_intervals(fc, pick, horizons, seed), heading
 
 
 def _coverage_table(fc: dict, pick, horizons, n_logs: int) -> pd.DataFrame:

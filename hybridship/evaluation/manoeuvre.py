@@ -329,12 +329,13 @@ def start_rows(arrays: LogArrays, horizon_steps: int, start_every_s: float | Non
 
 
 def forecast_errors(forecast: Callable, arrays: LogArrays, rows: np.ndarray, steps: np.ndarray,
-                    return_z: bool = False, return_std: bool = False):
+                    return_z: bool = False, return_std: bool = False, heading_z: bool = False):
     """Absolute errors ``(S, n_horizons, 4)``: |x0|, |y0| [m], |heading| [deg], distance [m].
 
     With ``return_z`` also the normalised errors ``|error| / std`` of x0 and y0,
-    ``(S, n_horizons, 2)`` (None when the forecast has no spread); with ``return_std`` also
-    the reported standard deviations of x0 and y0 [m], ``(S, n_horizons, 2)`` (or None).
+    ``(S, n_horizons, 2)`` (None when the forecast has no spread), and with ``heading_z`` a
+    third column, the heading's (wrapped error over its own spread); with ``return_std``
+    also the reported standard deviations of x0 and y0 [m], ``(S, n_horizons, 2)`` (or None).
     """
     dt = float(np.median(np.diff(arrays.time_s)))
     fc = forecast(arrays, arrays.time_s[rows], float(steps.max() * dt))
@@ -351,21 +352,38 @@ def forecast_errors(forecast: Callable, arrays: LogArrays, rows: np.ndarray, ste
         std = fc.eta_std[:, steps, :2]
         with np.errstate(divide="ignore", invalid="ignore"):
             z = err[..., :2] / std
+            if heading_z:
+                z = np.concatenate([z, (np.radians(err[..., 2]) / fc.eta_std[:, steps, 2])[..., None]], axis=-1)
     return (err, z, std) if return_std else (err, z)
 
 
-def coverage_table(per_run_z: dict, runs: list[Run], horizons_s, sigmas=(1, 2)) -> pd.DataFrame:
-    """``coverage.csv`` rows: the share of x0 and y0 errors (pooled) within ``sigma`` reported
-    standard deviations, per model, kind (``all`` pools) and command mode.
+def _state_z(z: np.ndarray, state: str) -> np.ndarray:
+    """The normalised errors a coverage of ``state`` counts: x0 and y0, or the heading's
+    (the third column of :func:`forecast_errors` with ``heading_z``)."""
+    if state == "position":
+        return z[..., :2]
+    if state == "heading" and z.shape[-1] == 3:
+        return z[..., 2:]
+    raise ValueError(f"state: expected 'position', or 'heading' with heading errors (z of 3 columns), got {state!r} "
+                     f"and {z.shape[-1]} columns")
 
-    ``per_run_z`` maps ``(model, commands)`` to per-run normalised errors ``(S, nh, 2)``.
+
+def coverage_table(per_run_z: dict, runs: list[Run], horizons_s, sigmas=(1, 2),
+                   state: str = "position") -> pd.DataFrame:
+    """``coverage.csv`` rows: the share of x0 and y0 errors (pooled) within ``sigma`` reported
+    standard deviations, per model, kind (``all`` pools) and command mode; with
+    ``state="heading"`` the heading's errors against its own spread instead
+    (``coverage_heading.csv``).
+
+    ``per_run_z`` maps ``(model, commands)`` to per-run normalised errors ``(S, nh, 2)``
+    (``(S, nh, 3)`` for the heading: :func:`forecast_errors` with ``heading_z``).
     """
     rows = []
     for (model, commands), zs in per_run_z.items():
         kinds = {}
         for run, z in zip(runs, zs):
             if z is not None and z.size:
-                kinds.setdefault(run.kind, []).append(z)
+                kinds.setdefault(run.kind, []).append(_state_z(z, state))
         groups = {k: np.concatenate(v) for k, v in kinds.items()}
         if groups:
             groups["all"] = np.concatenate(list(groups.values()))
@@ -415,14 +433,15 @@ def sharpness_table(per_run: dict, per_run_std: dict, runs: list[Run], horizons_
                           key=lambda c: c.map(korder) if c.name == "kind" else c).reset_index(drop=True)
 
 
-def coverage_intervals(per_run_z: dict, horizons_s, sigma: float = 2.0, seed: int = 0) -> pd.DataFrame:
+def coverage_intervals(per_run_z: dict, horizons_s, sigma: float = 2.0, seed: int = 0,
+                       state: str = "position") -> pd.DataFrame:
     """``coverage_intervals.csv`` rows: the pooled coverage at ``sigma`` (all kinds) with a 90 %
     bootstrap interval that resamples whole runs
     (:func:`~hybridship.evaluation.metrics.grouped_coverage_interval`): the starts of one run
     share its conditions, so the number of runs, not of starts, sets what a coverage can say."""
     rows = []
     for (model, commands), zs in per_run_z.items():
-        zs = [z for z in zs if z is not None and z.size]
+        zs = [_state_z(z, state) for z in zs if z is not None and z.size]
         if not zs:
             continue
         hits = np.stack([(z <= sigma).sum(axis=(0, 2)) for z in zs])          # (runs, horizons)
@@ -480,6 +499,7 @@ class BenchmarkResult:
     coverage: pd.DataFrame = field(default_factory=lambda: pd.DataFrame(columns=list(COVERAGE_COLUMNS)))
     coverage_intervals: pd.DataFrame = field(default_factory=pd.DataFrame)
     sharpness: pd.DataFrame = field(default_factory=pd.DataFrame)
+    coverage_heading: pd.DataFrame = field(default_factory=lambda: pd.DataFrame(columns=list(COVERAGE_COLUMNS)))
 
 
 def _score_runs(predictors: dict, test: list[Run], steps: np.ndarray, start_every_s, timings: dict,
@@ -500,7 +520,7 @@ def _score_runs(predictors: dict, test: list[Run], steps: np.ndarray, start_ever
                 t0 = time.perf_counter()
                 err, z, sd = (None, None, None) if rows.size == 0 else forecast_errors(
                     lambda a, st, h: p.forecast(a, st, horizon_s=h, commands=mode), run.arrays, rows, steps,
-                    return_std=True)
+                    return_std=True, heading_z=True)
                 per_run.setdefault((name, mode), []).append(err)
                 if name in SPREAD_MODELS:
                     per_run_z.setdefault((name, mode), []).append(z)
@@ -622,10 +642,12 @@ def run_manoeuvre_benchmark(vessel, train_dir, test_dir, horizons_s=HORIZONS_S, 
 
     intervals = coverage_intervals({k: v_ for k, v_ in per_run_z.items() if any(z is not None for z in v_)},
                                    horizons_s)
+    heading = coverage_table({k: v_ for k, v_ in per_run_z.items() if any(z is not None for z in v_)},
+                             test, horizons_s, state="heading")
     sharpness = sharpness_table(per_run, {k: v_ for k, v_ in per_run_std.items() if any(d is not None for d in v_)},
                                 test, horizons_s)
     result = BenchmarkResult(errors, train, test, predictors, horizons_s, cfg, timings, n_starts, coverage,
-                             intervals, sharpness)
+                             intervals, sharpness, heading)
     _write_outputs(result, Path(out_dir), command, figures_dir)
     if progress:
         _print_summary(errors, out_dir, time.perf_counter() - t_start)
@@ -641,7 +663,8 @@ def _print_summary(errors: pd.DataFrame, out_dir, seconds: float) -> None:
 
 
 #: The benchmark's files in its output folder.
-OUTPUT_FILES = ("errors.csv", "coverage.csv", "coverage_intervals.csv", "sharpness.csv", "README.md")
+OUTPUT_FILES = ("errors.csv", "coverage.csv", "coverage_intervals.csv", "coverage_heading.csv", "sharpness.csv",
+                "README.md")
 #: A run's files from before output folders kept a record of them: its README beside them.
 _EARLIER_RUN = earlier_run(OUTPUT_FILES, "README.md", b"# Manoeuvring benchmark")
 
@@ -658,7 +681,8 @@ def _write_outputs(result: BenchmarkResult, out_dir: Path, command: str | None, 
     """The benchmark's tables, its README and (optionally) its figures."""
     md = markdown_report(result, command=command)
     tables = {"errors.csv": result.errors, "coverage.csv": result.coverage,
-              "coverage_intervals.csv": result.coverage_intervals, "sharpness.csv": result.sharpness}
+              "coverage_intervals.csv": result.coverage_intervals, "coverage_heading.csv": result.coverage_heading,
+              "sharpness.csv": result.sharpness}
     # every file is made before the first is written: a failure leaves no mix of old and new files
     write_output_files(out_dir, {**{name: t.to_csv(index=False).encode() for name, t in tables.items()},
                                  "README.md": md.encode()}, ours=_EARLIER_RUN)
@@ -816,6 +840,9 @@ def markdown_report(result: BenchmarkResult, *, command: str | None = None) -> s
                   _md_coverage(result.coverage), ""]
     if not result.coverage_intervals.empty:
         lines += [md_coverage_intervals(result.coverage_intervals)]
+    if not result.coverage_heading.empty:
+        lines += ["", "## heading spread coverage (the heading's error within 1 / 2 of its reported standard "
+                  "deviations, all kinds)", "", _md_coverage(result.coverage_heading), ""]
     if not result.sharpness.empty:
         lines += ["", md_spread_by_kind(result.coverage, result.sharpness)]
     lines += ["", "All states (x0, y0, heading, distance) are in `errors.csv`; coverage per kind in "
