@@ -102,7 +102,9 @@ def main(argv=None) -> int:
         cov = (f"Made by `{command.strip()}` (`coverage.csv`, rows `kind = all`; `coverage_intervals.csv`; "
                f"`sharpness.csv`).\n\n"
                + _md_coverage(res.coverage) + "\n" + md_coverage_intervals(res.coverage_intervals)
-               + "\n" + md_spread_by_kind(res.coverage, res.sharpness))
+               + "\n" + md_spread_by_kind(res.coverage, res.sharpness)
+               + "\nThe heading's errors against its own spread (`coverage_heading.csv`, rows `kind = all`):\n\n"
+               + _md_coverage(res.coverage_heading))
         text = replace_generated(text, "coverage", cov)
         cfg = res.config
         setup = (f"Made by `{command.strip()}`. Hybrid: features `{', '.join(cfg.residual.features)}`; "
