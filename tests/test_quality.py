@@ -9,6 +9,8 @@ start's values are finite and close to the fault-free ones).
 
 from __future__ import annotations
 
+import dataclasses
+
 import numpy as np
 import pandas as pd
 import pytest
@@ -139,6 +141,16 @@ FAULTS = {
     "gnss spike": fault(_shift("north_m", [T], 25.0), F.POSITION_JUMP, window(T, T + 1), pos_tol=0.05),
     "gnss datum shift": fault(_shift("north_m", slice(T, None), 25.0), F.POSITION_JUMP, window(T, T),
                               pos_tol=25.05),
+    # a heading spike (60 deg, one sample): dropped; flagged while the spike is in the window
+    "gyro spike": fault(_shift("heading_deg", [T], 60.0), F.HEADING_JUMP, window(T, T)),
+    # a lasting heading shift: unconfirmed (dropped) at T, then the new headings are used;
+    # flagged while the shift lies within lookback_s (10 s) before the window
+    "gyro shift": fault(_shift("heading_deg", slice(T, None), 60.0), F.HEADING_JUMP, range(T, T + 14),
+                        head_tol=61.0),
+    # away for five samples and back: a lasting shift until the return (at T + 5 the return
+    # into the start row leaves one valid heading: refused), then the excursion is dropped
+    "gyro excursion": fault(_shift("heading_deg", slice(T, T + 4), 60.0), F.HEADING_JUMP, range(T, T + 7),
+                            refused={T + 5}, head_tol=61.0),
     "wind sensor dropped": fault(_nan(["wind_speed_m_s", "wind_dir_deg"], list(range(T, T + 30))),
                                  F.WIND_DROPPED, range(T + 2, T + 30), span=T + 31),
     # the flag marks the windows holding the late arrivals: 300 in the first case, 300..305
@@ -228,12 +240,60 @@ def test_gnss_spike_without_logged_velocities_is_rederived(model, log):
 def test_heading_wrap_in_the_window_averages_unwrapped(model, log):
     df = log.copy()
     df.loc[T_FAULT - 2: T_FAULT, "heading_deg"] = [359.0, 0.0, 1.0]
-    df.loc[T_FAULT - 12: T_FAULT - 3, "heading_deg"] = 359.0
-    df.loc[T_FAULT + 1: T_FAULT + 10, "heading_deg"] = 1.0
+    df.loc[: T_FAULT - 3, "heading_deg"] = 359.0           # no other turn: no heading jump into the wrap
+    df.loc[T_FAULT + 1:, "heading_deg"] = 1.0
     df = df.drop(columns="r_deg_s")
     _, sw = _assess(model, df, [float(T_FAULT)])
-    assert sw.flags[F.HEADING_WRAPPED][0] and not sw.degraded[0]
+    assert sw.flags[F.HEADING_WRAPPED][0] and not sw.degraded[0] and not sw.flags[F.HEADING_JUMP][0]
     assert abs(np.degrees(sw.eta0[0, 2]) % 360.0 - 0.0) < 1e-9 or abs(np.degrees(sw.eta0[0, 2]) % 360.0 - 360) < 1e-9
+
+
+def test_heading_wrap_with_a_logged_yaw_rate_is_no_heading_jump(model, log):
+    """A heading crossing 0/360 and then +-180 deg while the logged yaw rate turns the ship:
+    no jump, also when the heading handed to the check is wrapped (not unwrapped)."""
+    df = log.copy()
+    r = np.where(df.time_s >= 200, 3.0, 0.0)                       # deg/s: through 0 at 300, 180 at 360
+    df["r_deg_s"] += r
+    df["heading_deg"] = (df.heading_deg - df.heading_deg[300] + np.cumsum(r) - r[:301].sum()) % 360.0
+    starts = np.arange(280.0, 380.0)
+    arrays, sw = _assess(model, df, starts)
+    assert sw.flags[F.HEADING_WRAPPED].any() and not sw.flags[F.HEADING_JUMP].any()
+    wrapped = dataclasses.replace(arrays, eta=np.column_stack([arrays.eta[:, :2], np.radians(df.heading_deg)]))
+    assert np.ptp(np.diff(wrapped.eta[280:380, 2])) > 6.0          # holds the 2 pi steps
+    sw = assess_start_window(wrapped, arrays.time_s.searchsorted(starts), 3.0)
+    assert not sw.flags[F.HEADING_JUMP].any()
+
+
+@pytest.mark.parametrize("logged_r", [True, False])
+def test_a_fast_real_turn_is_no_heading_jump(model, log, logged_r):
+    """A 14 deg/s turn (beyond any Gunnerus turn; within the envelope's 17 deg/s) steps 14 deg
+    per sample: explained by the logged yaw rate from its onset, and without it by the median
+    step rate once the turn fills most of the history (its onset is then flagged: documented)."""
+    df = log.copy()
+    r = np.clip((df.time_s.to_numpy() - 200.0) * 7.0, 0.0, 14.0)   # ramps up over 2 s at 200 s
+    df["r_deg_s"] += r
+    df["heading_deg"] = (df.heading_deg + np.concatenate([[0.0], np.cumsum(0.5 * (r[1:] + r[:-1]))])) % 360.0
+    if not logged_r:
+        df = df.drop(columns="r_deg_s")
+    starts = np.arange(200.0, 300.0) if logged_r else np.arange(240.0, 300.0)
+    _, sw = _assess(model, df, starts)
+    assert not sw.flags[F.HEADING_JUMP].any(), sw.notes[int(np.argmax(sw.flags[F.HEADING_JUMP]))]
+    if not logged_r:
+        _, onset = _assess(model, df, [203.0], on_refuse="flag")
+        assert onset.flags[F.HEADING_JUMP][0]
+
+
+def test_heading_jump_note_names_the_times_and_the_repair(model, log):
+    df = _shift("heading_deg", [T_FAULT], 60.0)(log.copy())
+    _, sw = _assess(model, df, [T_FAULT + 1.0])
+    assert sw.flags[F.HEADING_JUMP][0] and sw.degraded[0]
+    assert sw.notes[0] == ("heading jump of more than 10 deg (not explained by the yaw rate) at time_s 300, 301: "
+                           "outlier(s) dropped (time_s 300)")
+    _, sw = _assess(model, df, [T_FAULT + 1.0], heading_jump_deg=70.0)
+    assert not sw.flags[F.HEADING_JUMP][0]
+    for bad in (0.0, -1.0, 180.0, np.nan):
+        with pytest.raises(ValueError, match="heading_jump_deg must be > 0 and < 180"):
+            _assess(model, df, [T_FAULT + 1.0], heading_jump_deg=bad)
 
 
 def test_one_missing_wind_sample_holds_the_latest_valid_one(model, log):

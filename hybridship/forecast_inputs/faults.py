@@ -16,10 +16,11 @@ order, which the notes follow:
 2. :func:`detect_late_samples` (``late_or_out_of_order``),
 3. :func:`detect_frozen_channels` (``frozen_sensor``),
 4. :func:`detect_position_jumps` (``position_jump``),
-5. :func:`detect_heading_wrap` (``heading_wrapped``, informational),
-6. :func:`rederive_velocities` (the repair of frozen or jump-spoilt velocities),
-7. :func:`detect_too_little_valid` (``too_little_valid``: the start is refused),
-8. :func:`detect_dropped_wind` (``wind_dropped``).
+5. :func:`detect_heading_jumps` (``heading_jump``),
+6. :func:`detect_heading_wrap` (``heading_wrapped``, informational),
+7. :func:`rederive_velocities` (the repair of frozen or jump-spoilt velocities),
+8. :func:`detect_too_little_valid` (``too_little_valid``: the start is refused),
+9. :func:`detect_dropped_wind` (``wind_dropped``).
 """
 
 from __future__ import annotations
@@ -42,6 +43,7 @@ __all__ = [
     "detect_late_samples",
     "detect_frozen_channels",
     "detect_position_jumps",
+    "detect_heading_jumps",
     "detect_heading_wrap",
     "rederive_velocities",
     "detect_too_little_valid",
@@ -66,13 +68,14 @@ class FaultFlags:
     TOO_LITTLE_VALID = "too_little_valid"
     FROZEN_SENSOR = "frozen_sensor"
     POSITION_JUMP = "position_jump"
+    HEADING_JUMP = "heading_jump"
     HEADING_WRAPPED = "heading_wrapped"
     WIND_DROPPED = "wind_dropped"
     LATE_OR_OUT_OF_ORDER = "late_or_out_of_order"
     INPUT_CLIPPED = "input_clipped"
     OUT_OF_ENVELOPE = "out_of_envelope"
 
-    START_WINDOW = (NAN_IN_WINDOW, TOO_LITTLE_VALID, FROZEN_SENSOR, POSITION_JUMP, HEADING_WRAPPED,
+    START_WINDOW = (NAN_IN_WINDOW, TOO_LITTLE_VALID, FROZEN_SENSOR, POSITION_JUMP, HEADING_JUMP, HEADING_WRAPPED,
                     WIND_DROPPED, LATE_OR_OUT_OF_ORDER)
     ALL = START_WINDOW + (INPUT_CLIPPED, OUT_OF_ENVELOPE)
     INFORMATIONAL = (HEADING_WRAPPED,)
@@ -188,16 +191,25 @@ class WindowSettings:
     jump_m: float = 5.0
     lookback_s: float = 10.0
     min_valid_fraction: float = 0.5
+    heading_jump_deg: float = 10.0
 
     def __post_init__(self):
         if (not self.window_s > 0 or not self.frozen_s > 0 or not self.jump_m > 0
                 or not 0 < self.min_valid_fraction <= 1):
             raise ValueError("window_s, frozen_s and jump_m must be > 0 and min_valid_fraction in (0, 1]")
+        if not 0 < self.heading_jump_deg < 180:
+            raise ValueError(f"heading_jump_deg must be > 0 and < 180 (a step is at most 180 deg), "
+                             f"got {self.heading_jump_deg!r}")
 
     @property
     def frozen_turn_rad(self) -> float:
         """``frozen_turn_deg`` [rad]."""
         return math.radians(self.frozen_turn_deg)
+
+    @property
+    def heading_jump_rad(self) -> float:
+        """``heading_jump_deg`` [rad]."""
+        return math.radians(self.heading_jump_deg)
 
 
 @dataclass(frozen=True, eq=False)
@@ -520,6 +532,115 @@ def detect_position_jumps(view: LogView, win: Window, settings: WindowSettings) 
              f"{'outlier(s) dropped' if bad_pos else 'lasting shift, new positions used'}")
 
 
+def _heading_jump_rows(view: LogView, win: Window, settings: WindowSettings) -> tuple[np.ndarray, np.ndarray]:
+    """Rows ending a heading step that the yaw rate does not explain within
+    ``heading_jump_deg``, and each one's error [rad] (signed).
+
+    A step ends where the heading value changes and goes from the previous value (the first
+    row of the bit-identical run before, within the span below, so that live headings
+    returning after a frozen gyro step from where it froze; a repeat is no step) and is the smallest signed angle between the two (a wrap across 0/360 or +-180
+    deg is no step). The yaw rate is the logged ``r`` where every row of the step has it
+    (trapezoid integral), else the median rate of the consecutive steps (a derived ``r``
+    holds the jump itself). Steps end from ``3 * lookback_s`` before the window up to the start (three
+    times the span of :func:`_jump_rows`: an excursion is told from two lasting shifts
+    while its jump away lies in that span, which holds one up to ``2 * lookback_s`` long
+    for as long as its return is named).
+    """
+    a, t, psi = view.arrays, view.t, view.psi
+    lb = int(np.searchsorted(t, t[win.start] - settings.window_s - 3 * settings.lookback_s, side="left"))
+    rows = np.arange(max(lb, 1), win.start + 1)
+    if not rows.size:
+        return rows, np.zeros(0)
+    prev = np.maximum(view.head_runs[0][rows - 1], rows[0] - 1)   # step r goes from row prev to r
+    same = (a.segment_id[rows] == a.segment_id[prev]) & np.isfinite(psi[rows]) & np.isfinite(psi[prev])
+    same &= view.head_runs[0][rows] == rows                  # a repeat is no step (frozen: detected apart)
+    steps = _wrap_pi(psi[rows] - psi[prev])
+    span = np.arange(int(prev.min()), win.start + 1)          # the yaw rate's turn over every step
+    r_ok = a.nu_logged[span, 2] & np.isfinite(view.nu[span, 2])
+    r = np.where(r_ok, view.nu[span, 2], 0.0)
+    turn = np.concatenate([[0.0], np.cumsum(0.5 * (r[1:] + r[:-1]) * np.diff(t[span]))])
+    n_ok = np.concatenate([[0], np.cumsum(r_ok)])
+    k0, k1 = prev - span[0], rows - span[0]
+    logged = n_ok[k1 + 1] - n_ok[k0] == k1 - k0 + 1
+    dts = t[rows] - t[prev]
+    fin = (a.segment_id[rows] == a.segment_id[rows - 1]) & np.isfinite(psi[rows]) & np.isfinite(psi[rows - 1])
+    rates = _wrap_pi(psi[rows] - psi[rows - 1])[fin] / (t[rows] - t[rows - 1])[fin]
+    r_med = float(np.median(rates)) if rates.size else 0.0
+    err = _wrap_pi(steps - np.where(logged, turn[k1] - turn[k0], r_med * dts))
+    jump = same & (np.abs(err) > settings.heading_jump_rad)
+    return rows[jump], err[jump]
+
+
+def _heading_outliers(jump_rows: np.ndarray, err: np.ndarray, start: int, tol: float) -> tuple[set, list, list]:
+    """Rows of excursions (a jump away and one back that undoes it within ``tol`` [rad]: the
+    rows in between, one for a spike) and of an unconfirmed jump into the start row; and
+    the remaining jumps but one into the start row (lasting shifts), and the excursions as
+    ``(jump away, jump back)`` rows: ``(bad rows, lasting, excursions)``."""
+    bad, open_jumps, excursions = set(), [], []
+    for r, e in zip(jump_rows.tolist(), err.tolist()):
+        if open_jumps and abs(open_jumps[-1][1] + e) <= tol:        # back from the last jump away
+            r0 = open_jumps.pop()[0]
+            bad.update(range(r0, r))
+            excursions.append((r0, r))
+        else:
+            open_jumps.append((r, e))
+    lasting = [r for r, _ in open_jumps if r != start]
+    if any(r == start for r, _ in open_jumps):                       # unconfirmed: treated as a spike
+        bad.add(start)
+    return bad, lasting, excursions
+
+
+def detect_heading_jumps(view: LogView, win: Window, settings: WindowSettings) -> None:
+    """Heading steps the yaw rate does not explain.
+
+    Fault: a step between consecutive valid headings (the smallest signed angle, so a wrap
+    across 0/360 or +-180 deg is no step) off by more than ``heading_jump_deg`` from what
+    the yaw rate explains. Evidence: see :func:`_heading_jump_rows`; a jump away and one
+    back that undoes it is an excursion (a spike when one sample long), a jump into the
+    start row cannot yet be told from a lasting shift, anything else is a lasting shift.
+    Flags ``heading_jump`` when a jump ends in the window, an excursion reaches into it, or
+    a lasting shift ended in the ``lookback_s`` before it (the window then holds only
+    shifted headings). Repair: excursion (and unconfirmed) headings are invalid, a yaw rate
+    derived across any jump is derived again, and after a lasting shift only the new
+    headings count.
+    """
+    jump_end, err = _heading_jump_rows(view, win, settings)
+    if not jump_end.size:
+        return
+    W, t = win.rows, view.t
+    bad, lasting, excursions = _heading_outliers(jump_end, err, win.start, settings.heading_jump_rad)
+    first = int(np.searchsorted(t, t[win.start] - settings.window_s - settings.lookback_s, side="left"))
+    lasting = [r for r in lasting if r >= first]   # shifts more than lookback_s before the window are history
+    bad_w = sorted(r for r in bad if r >= win.lo)
+    named = set(lasting) | ({win.start} if win.start in bad else set())
+    named |= {r for pair in excursions if pair[1] > win.lo for r in pair}
+    if not named:                                  # excursions wholly before the window
+        return
+    for r in bad_w:
+        win.head_ok &= W != r
+    touched = {r for j in jump_end.tolist() for r in (j - 1, j)} | {r for b in bad for r in (b - 1, b, b + 1)}
+    hit = ~view.arrays.nu_logged[W, 2] & np.isin(W, list(touched))
+    if hit.any():                                  # a derived r next to a jump holds the jump
+        win.vel_ok[:, 2] &= ~hit
+        win.vel_replace[2] = True
+    done = []
+    if bad_w:
+        done.append(f"outlier(s) dropped (time_s {_rows_text(t, bad_w)})")
+    if lasting:
+        win.head_ok &= W >= max(lasting)
+        done.append(f"lasting shift, headings from time_s {seconds_text(t[max(lasting)])} used")
+    win.flag(FaultFlags.HEADING_JUMP,
+             f"heading jump of more than {settings.heading_jump_deg:g} deg (not explained by the yaw rate) at "
+             f"time_s {', '.join(seconds_text(t[r]) for r in sorted(named))}: {'; '.join(done)}")
+
+
+def _rows_text(t: np.ndarray, rows: list) -> str:
+    """The times of ``rows`` (sorted): ``a..b`` for three or more consecutive rows, else a list."""
+    if len(rows) > 2 and rows[-1] - rows[0] == len(rows) - 1:
+        return f"{seconds_text(t[rows[0]])}..{seconds_text(t[rows[-1]])}"
+    return ", ".join(seconds_text(t[r]) for r in rows)
+
+
 def detect_heading_wrap(view: LogView, win: Window) -> None:
     """The heading crossing 0/360 deg (or +-180 deg) in the window.
 
@@ -629,6 +750,11 @@ def _trapz(y: np.ndarray, x: np.ndarray, axis: int = 0) -> np.ndarray:
     y = np.moveaxis(np.asarray(y, dtype=float), axis, 0)
     h = np.diff(np.asarray(x, dtype=float))
     return np.tensordot(h, 0.5 * (y[1:] + y[:-1]), axes=(0, 0))
+
+
+def _wrap_pi(x: np.ndarray) -> np.ndarray:
+    """Angles [rad] wrapped to [-pi, pi): the smallest signed angle."""
+    return (np.asarray(x, dtype=float) + np.pi) % (2.0 * np.pi) - np.pi
 
 
 def _ned(vel_body: np.ndarray, psi: np.ndarray) -> np.ndarray:

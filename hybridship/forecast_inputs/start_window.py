@@ -61,6 +61,16 @@ Faults and their behaviour (``FaultFlags`` names the flags):
     spike) is invalid; a jump into the start sample is treated the same way (it cannot yet
     be told from a lasting shift); after a lasting shift (a datum change) the new
     positions are valid. Velocities derived from positions across a jump are invalid.
+``heading_jump``
+    A step between consecutive valid headings (the smallest signed angle: a wrap across
+    0/360 or +-180 deg is no step) that differs from what the yaw rate explains (the logged
+    ``r_deg_s`` where both ends have it, else the median step rate of the recent history)
+    by more than ``heading_jump_deg``. A heading that jumps away and back (a spike, or an
+    excursion of several samples) is invalid; a jump into the start sample is treated the
+    same way (it cannot yet be told from a lasting shift); after a lasting shift only the
+    new headings are valid, and the flag stays set while the shift lies within
+    ``lookback_s`` before the window. A yaw rate derived from headings across a jump is
+    derived again. A real turn, however fast, is explained by its yaw rate and not flagged.
 ``heading_wrapped``
     The heading crosses 0/360 deg (or +-180 deg) in the window. Informational: the average
     is taken over the unwrapped heading, so the start heading is right (359, 0, 1 deg
@@ -86,8 +96,8 @@ from ..logs.ingest import SortedLog, ingest_with_report
 from ..logs.io import LogArrays
 from ..messages import seconds_text
 from .faults import (VALID_USED, FaultFlags, LogView, StartWindowError, Window, WindowSettings, detect_dropped_wind,
-                     detect_frozen_channels, detect_heading_wrap, detect_late_samples, detect_missing_samples,
-                     detect_position_jumps, detect_too_little_valid, rederive_velocities)
+                     detect_frozen_channels, detect_heading_jumps, detect_heading_wrap, detect_late_samples,
+                     detect_missing_samples, detect_position_jumps, detect_too_little_valid, rederive_velocities)
 
 __all__ = [
     "StartWindow",
@@ -194,6 +204,7 @@ def assess_start_window(
     jump_m: float = 5.0,
     lookback_s: float = 10.0,
     min_valid_fraction: float = 0.5,
+    heading_jump_deg: float = 10.0,
     on_refuse: str = "raise",
 ) -> StartWindow:
     """Validate the start window of each forecast start and compute its start values.
@@ -228,6 +239,16 @@ def assess_start_window(
     min_valid_fraction : float, default 0.5
         Fraction of the window's nominal samples that must be valid (heading and each
         velocity component); at least one valid position is always needed.
+    heading_jump_deg : float, default 10.0
+        Heading step error [deg] beyond which a step is a jump (``0 < heading_jump_deg <
+        180``). With a logged yaw rate a real turn's step is explained to within the yaw
+        acceleration's effect over one sample, well under 1 deg at 1 Hz (at most 1.0 deg in
+        the packaged Gunnerus scenarios and the truthsim-dev logs, whose yaw rates reach
+        4 deg/s); without it the reference is the median step rate, which at the onset of a
+        turn leaves up to ``|r| * dt`` unexplained: 10 deg covers yaw rates up to 10 deg/s at
+        1 Hz, more than twice the Gunnerus's fastest. A log sampled slower than 1 Hz without
+        ``r_deg_s`` may need a larger value; a gyro or compass fault (a wrong heading source,
+        a spike) is typically tens of degrees.
     on_refuse : {"raise", "flag"}
         Raise :class:`StartWindowError` for a refused start, or return it flagged with
         NaN start values.
@@ -244,7 +265,7 @@ def assess_start_window(
     if on_refuse not in ("raise", "flag"):
         raise ValueError(f"on_refuse must be 'raise' or 'flag', got {on_refuse!r}")
     settings = WindowSettings(window_s, frozen_s, frozen_motion_m, frozen_turn_deg, jump_m, lookback_s,
-                              min_valid_fraction)
+                              min_valid_fraction, heading_jump_deg)
     idx = np.atleast_1d(np.asarray(idx, dtype=int))
     n = len(arrays)
     if np.any((idx < 0) | (idx >= n)):
@@ -278,6 +299,7 @@ def _assess_start(view: LogView, i: int, settings: WindowSettings):
     detect_late_samples(view, win, settings)
     detect_frozen_channels(view, win, settings)
     detect_position_jumps(view, win, settings)
+    detect_heading_jumps(view, win, settings)
     detect_heading_wrap(view, win)
     nu_w = rederive_velocities(view, win)
     if detect_too_little_valid(view, win, settings):
