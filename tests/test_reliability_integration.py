@@ -169,3 +169,25 @@ def test_model_file_with_damaged_metadata_is_a_model_file_error(hybrid, tmp_path
         np.savez(tmp_path / "t.npz", **arrays)
         with pytest.raises(ModelFileError):
             HybridPredictor.load(tmp_path / "t.npz")
+
+
+def test_a_heading_jump_names_the_heading_each_predictor_starts_from(model, log, hybrid):
+    """The review's case: the heading jumps 280 deg (to the equivalent of -80 deg) for eleven
+    samples up to and past the start. Both forecasts carry heading_jump; the dynamic model
+    starts from the new headings, as the flag's note says; the hybrid's environment estimator
+    leaves the jumped samples out, and its note names the heading it starts from."""
+    bad = log.copy()
+    k = int(START)
+    bad.loc[k - 5: k + 5, "heading_deg"] += 280.0
+    dyn = DynamicPredictor(model.vessel).forecast(bad, [START], 10.0)
+    hyb = hybrid.forecast(bad, [START], 10.0)
+    for fc in (dyn, hyb):
+        assert fc.flags[F.HEADING_JUMP][0], fc.notes[0]
+        assert f"heading jump of more than 10 deg (not explained by the yaw rate) at time_s {k - 5}: lasting shift, " \
+               f"headings from time_s {k - 5} used" in fc.notes[0]
+    dyn_start, hyb_start = dyn.to_frame().heading_deg[0], hyb.to_frame().heading_deg[0]
+    assert abs((dyn_start - log.heading_deg[k] - 280.0 + 180.0) % 360.0 - 180.0) < 5.0    # the new headings
+    assert "estimator" not in dyn.notes[0]
+    assert abs((hyb_start - log.heading_deg[k] + 180.0) % 360.0 - 180.0) < 5.0            # not the jumped ones
+    assert (f"heading: starts from the environment estimator's {hyb_start:.1f} deg (the start window's: "
+            f"{dyn_start:.1f} deg)") in hyb.notes[0]

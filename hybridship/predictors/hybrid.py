@@ -828,6 +828,8 @@ class HybridPredictor:
         if wgt is not None:
             flags[FaultFlags.OUT_OF_ENVELOPE] = np.any(wgt < 1.0, axis=1)
         notes = self._short_station_keeping_notes(st, sigma_b, after_stop)
+        if self.environment == "estimator":
+            notes = join_notes(notes, _estimator_heading_notes(st, eta0))
         if calibrated:
             std, raw = self._calibrated_forecast_std(std, st.lead_s, commands, after_stop)
             notes = join_notes(notes, self._uncalibrated_notes(raw, after_stop, commands))
@@ -1412,3 +1414,14 @@ def _corrected_step(eta_1, nu_1, r, bias0_ned, dt_s: float, d_nu, d_eta, wave_ax
     d_eta[..., 2] += dt_s * v_mid[..., 2]
     d_nu += dt_s * dr
     return eta, nu, d_eta.std(axis=0)
+
+
+def _estimator_heading_notes(st, eta0: np.ndarray) -> list[str]:
+    """Per start flagged ``heading_jump``, a note naming the heading this forecast starts from:
+    the environment estimator's filtered one (its outlier gate leaves out headings that
+    jump, up to ``max_gated_samples`` in a row), which can differ from the start window's
+    that the flag's note describes; "" for the other starts."""
+    jumped = st.flags[FaultFlags.HEADING_JUMP]
+    own, window = (np.round(np.degrees(psi[:, 2]), 1) % 360.0 for psi in (eta0, st.eta0))
+    return [f"heading: starts from the environment estimator's {h:.1f} deg (the start window's: {w:.1f} deg)"
+            if j else "" for j, h, w in zip(jumped, own, window)]
