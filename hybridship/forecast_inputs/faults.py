@@ -536,15 +536,16 @@ def _heading_jump_rows(view: LogView, win: Window, settings: WindowSettings) -> 
     """Rows ending a heading step that the yaw rate does not explain within
     ``heading_jump_deg``, and each one's error [rad] (signed).
 
-    A step ends where the heading value changes and goes from the previous value (the first
-    row of the bit-identical run before, within the span below, so that live headings
-    returning after a frozen gyro step from where it froze; a repeat is no step) and is the smallest signed angle between the two (a wrap across 0/360 or +-180
-    deg is no step). The yaw rate is the logged ``r`` where every row of the step has it
-    (trapezoid integral), else the median rate of the consecutive steps (a derived ``r``
-    holds the jump itself). Steps end from ``3 * lookback_s`` before the window up to the start (three
-    times the span of :func:`_jump_rows`: an excursion is told from two lasting shifts
-    while its jump away lies in that span, which holds one up to ``2 * lookback_s`` long
-    for as long as its return is named).
+    A step ends where the heading value changes and goes from the previous value (the
+    first row of the bit-identical run before, within the span below, so that live
+    headings returning after a frozen gyro step from where it froze; a repeat is no step).
+    It is the smallest signed angle between the two (a wrap across 0/360 or +-180 deg is no
+    step). The yaw rate's turn is the logged ``r`` integrated (trapezoid) where every row
+    of the step has it, else the median rate of the consecutive steps times the step's
+    time (a derived ``r`` holds the jump itself). Steps end from ``3 * lookback_s`` before
+    the window up to the start (three times the span of :func:`_jump_rows`: an excursion
+    is told from two lasting shifts while its jump away lies in that span, which holds one
+    up to ``2 * lookback_s`` long for as long as its return is named).
     """
     a, t, psi = view.arrays, view.t, view.psi
     lb = int(np.searchsorted(t, t[win.start] - settings.window_s - 3 * settings.lookback_s, side="left"))
