@@ -346,9 +346,22 @@ def _cmd_train(args) -> int:
         hp.fit(files, dp_only=not args.all_rows, progress=sys.stderr.isatty())
     hp.save(args.out)
     print(f"trained on {hp.training_info['n_rows']} samples from {len(files)} logs; wrote {args.out}")
-    for line in _learned_from_failures(hp.training_info):
+    for line in _learned_from_failures(hp.training_info) + _after_stop_spread(hp):
         print(line)
     return 0
+
+
+def _after_stop_spread(hp) -> list[str]:
+    """Whether the spread of forecasts after a failure is calibrated, and on what."""
+    if not hp.stop_after_failure or hp.environment != "estimator":
+        return []
+    info = hp.training_info.get("calibration", {}).get("after_stop")
+    if info is not None:
+        return [f"spread after a failure: calibrated on {info['n_logs']} failures of the training logs "
+                f"({info['n_starts']} starts; few failures give a rough scale)"]
+    n_min = hp.calibration_config.after_stop_min_failures
+    return [f"spread after a failure: not calibrated (the training logs hold fewer than {n_min} failures with a "
+            f"drift to calibrate on); forecasts after a failure report the raw spread and say so"]
 
 
 def _learned_from_failures(info: dict) -> list[str]:

@@ -44,6 +44,8 @@ def test_train_replaces_a_model_file_but_never_other_arrays(log_dir, tmp_path, c
 def test_train_then_forecast_writes_a_table(log_dir, tmp_path, capsys):
     model = tmp_path / "m.npz"
     assert main(["train", "--logs", str(log_dir), "--out", str(model), "--members", "2"]) == 0
+    # two logs hold fewer failures than the after-failure calibration needs: train says so
+    assert "spread after a failure: not calibrated (the training logs hold fewer than 3" in capsys.readouterr().out
     out = tmp_path / "fc.csv"
     assert main(["forecast", "--model", str(model), "--log", str(log_dir / "log1.csv.gz"),
                  "--start-time", "900", "905", "--horizon-s", "30", "--out", str(out)]) == 0
@@ -359,3 +361,15 @@ def test_messages_write_epoch_times_in_full():
     assert seconds_text(0.1 + 0.2) == "0.3"
     assert seconds_text(-0.0000001) == "0"
     assert seconds_text(-12.25) == "-12.25"
+
+
+def test_train_says_on_how_many_failures_the_after_failure_spread_is_calibrated():
+    from types import SimpleNamespace
+
+    from hybridship.cli import _after_stop_spread
+
+    hp = SimpleNamespace(stop_after_failure=True, environment="estimator",
+                         training_info={"calibration": {"after_stop": {"n_logs": 4, "n_starts": 80}}})
+    assert _after_stop_spread(hp) == ["spread after a failure: calibrated on 4 failures of the training logs "
+                                      "(80 starts; few failures give a rough scale)"]
+    assert _after_stop_spread(SimpleNamespace(stop_after_failure=True, environment="mean", training_info={})) == []
