@@ -30,10 +30,12 @@ from hybridship.sim.environment import (
     harris_spectrum,
     jonswap_spectrum,
     make_wave_components,
+    max_hs_m,
     mean_drift_loads,
     wave_drift_loads,
     wave_frequency_motion,
 )
+from hybridship.sim.scenario import DPLossConfig
 
 GUNNERUS = dict(L_m=33.9, B_m=9.6, T_m=2.5)
 RHO, G = 1025.0, 9.81
@@ -386,6 +388,18 @@ def test_sea_state_validation_names_field(field, value):
     kwargs[field] = value
     with pytest.raises(ValueError, match=field):
         SeaState(**kwargs)
+
+
+@pytest.mark.parametrize("hs_m, tp_s", [(7.0, 1.5), (2.0, 0.5), (8.0, 6.0 / 60.0)])
+def test_sea_state_steeper_than_waves_can_be_is_refused(hs_m, tp_s):
+    # e.g. Hs and Tp swapped, or Tp in minutes: the simulator drove the ship off at metres per second
+    with pytest.raises(ValueError, match="hs_m .* tp_s .* steeper than waves can be"):
+        SeaState(hs_m=hs_m, tp_s=tp_s, wave_dir_from_rad=0.0, wind_speed_m_s=8.0, wind_dir_from_rad=0.0)
+    with pytest.raises(ValueError, match="sea_state.*steeper"):
+        DPLossConfig(sea_state=dict(hs_m=hs_m, tp_s=tp_s, wave_dir_from_rad=0.0, wind_speed_m_s=8.0,
+                                    wind_dir_from_rad=0.0))
+    SeaState(hs_m=0.9 * float(max_hs_m(tp_s)), tp_s=tp_s, wave_dir_from_rad=0.0, wind_speed_m_s=8.0,
+             wind_dir_from_rad=0.0)
 
 
 def test_sea_state_random_is_consistent_and_deterministic():

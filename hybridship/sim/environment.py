@@ -1072,6 +1072,16 @@ class SeaState:
     current_dir_to_rad: Float = 0.0
     gamma: Annotated[Float, Field(ge=1.0, le=7.0)] = 3.3
 
+    @model_validator(mode="after")
+    def _a_sea_that_can_exist(self):
+        # steeper than a single wave can be before it breaks is no sea state (the simulator
+        # would drive the ship off at metres per second on DP), but two fields swapped
+        if self.hs_m > max_hs_m(self.tp_s):
+            raise ValueError(f"hs_m {self.hs_m:g} m at tp_s {self.tp_s:g} s is steeper than waves can be (at most "
+                             f"{float(max_hs_m(self.tp_s)):.2f} m at that period: 2 pi Hs / (g Tp^2) <= "
+                             f"{MAX_STEEPNESS:.3f}); are hs_m and tp_s swapped, or tp_s in another unit?")
+        return self
+
     @classmethod
     def random(cls, rng, beaufort=(2, 5), *, hs_fetch_factor=(0.5, 1.0), tp_coefficient=(4.0, 6.0),
                wave_spread_rad=math.radians(30.0), current_speed_m_s=(0.05, 0.4),
