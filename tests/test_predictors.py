@@ -7,6 +7,7 @@ import warnings
 import numpy as np
 import pytest
 
+from hybridship.frames import wrap_pi
 from hybridship.logs.io import LogFormatError
 from hybridship.predictors import (DeadReckoning, DynamicPredictor, HybridPredictor, ModelFileError,
                                    as_log_arrays)
@@ -412,3 +413,19 @@ def test_heading_coverage_counts_the_wrapped_heading_error_against_its_own_sprea
     bad[0, 0, 0, 2] = np.nan
     with pytest.raises(ValueError, match="heading standard deviations"):
         metrics.coverage(pred, truth, bad, state="heading")
+
+
+def test_mean_environment_spread_does_not_depend_on_the_other_starts(model):
+    """With environment 'mean' the members' biases are drawn per start: a start's spread is
+    the same alone and in a batch whose earliest start moves the window of log read."""
+    tiny = EnsembleConfig(n_members=3, hidden=8, max_epochs=15, patience=5, seed=0)
+    train = physics_log(model, seed=2, duration_s=400.0, t_shutdown_s=None, current=(0.2, 1.0))
+    long = physics_log(model, seed=7, duration_s=2500.0, t_shutdown_s=None, current=(0.2, 1.0))
+    hp = HybridPredictor(model.vessel, ensemble_config=tiny, environment="mean").fit([train])
+    both = hp.forecast(long, [300.0, 2400.0], 30.0, calibrated=False)
+    alone = hp.forecast(long, [2400.0], 30.0, calibrated=False)
+    np.testing.assert_allclose(both.eta[1, :, :2], alone.eta[0, :, :2], rtol=0, atol=1e-9)
+    # the heading is unwrapped from the first row read, so it may differ by whole turns
+    np.testing.assert_allclose(wrap_pi(both.eta[1, :, 2] - alone.eta[0, :, 2]), 0.0, rtol=0, atol=1e-9)
+    np.testing.assert_allclose(both.eta_std[1], alone.eta_std[0], rtol=0, atol=1e-12)
+

@@ -381,7 +381,10 @@ class PreparedLog:
         randomly drawn ``bias_block_s`` block of the bias window and the mean over all
         drawn blocks: the members' spread is the variability of a block-long mean of the
         unknown force, which the one-minute forecast inherits. Zeros offsets when the
-        window holds less than two blocks. Deterministic for a given ``seed`` and row.
+        window holds less than two blocks. Deterministic for a given ``seed`` and start
+        time (the draws are keyed by the row's time, not its index: a forecast reads a
+        window of the log that depends on its earliest start, and a start's members must
+        not depend on the other starts of the batch).
         """
         bias = self.bias_ned[idx] if np.isfinite(self.bias_ned[idx]).all() else np.zeros(3)
         out = np.broadcast_to(bias, (n_members, 3)).copy()
@@ -396,7 +399,7 @@ class PreparedLog:
         nb = max(1, int(round(self.config.bias_block_s / self.dt_s)))
         if v.shape[0] < 2 * nb:
             return out
-        rng = np.random.default_rng([seed, idx])
+        rng = np.random.default_rng([seed, int(np.float64(a.time_s[idx]).view(np.uint64))])
         starts = rng.integers(0, v.shape[0] - nb + 1, size=n_members)
         cs = np.vstack([np.zeros((1, 3)), np.cumsum(v, axis=0)])
         means = (cs[starts + nb] - cs[starts]) / nb
