@@ -429,3 +429,14 @@ def test_mean_environment_spread_does_not_depend_on_the_other_starts(model):
     np.testing.assert_allclose(wrap_pi(both.eta[1, :, 2] - alone.eta[0, :, 2]), 0.0, rtol=0, atol=1e-9)
     np.testing.assert_allclose(both.eta_std[1], alone.eta_std[0], rtol=0, atol=1e-12)
 
+
+def test_training_features_that_are_all_constant_are_named(model):
+    """A feature set that does not vary in the training rows (the azimuths never turned)
+    is refused by name, not with a singular-matrix error from the guard."""
+    tiny = EnsembleConfig(n_members=2, hidden=8, max_epochs=15, patience=5, seed=0)
+    log = physics_log(model, seed=2, duration_s=400.0, t_shutdown_s=None)
+    log["port_azimuth_deg"] = 30.0
+    log["stbd_azimuth_deg"] = 30.0
+    hp = HybridPredictor(model.vessel, ensemble_config=tiny, residual_config={"features": ("angle_main_rad",)})
+    with pytest.raises(ValueError, match=r"features: .*angle_main_rad.* constant"):
+        hp.fit([log])

@@ -545,6 +545,10 @@ class HybridPredictor:
         X, Y, seg, thr = X[::stride], Y[::stride], seg[::stride], self._training_thrust_acc[::stride]
         require_training_rows(X.shape[0], len(logs), dp_only, held_back=row_masks is not None and any(
             m is not None for m in row_masks))
+        if np.all(X.std(0) <= 1e-12):       # nothing to learn from, and the guard's covariance is singular
+            raise ValueError(f"features: every feature of {list(self.residual_config.features)} is constant over "
+                             f"the {X.shape[0]} training rows; choose features that vary in the logs (the "
+                             f"paper's nine, the default)")
         residual_std = Y.std(0).tolist()
         self.hull = None
         starts = None
