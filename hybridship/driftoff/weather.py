@@ -42,7 +42,7 @@ from pydantic import AfterValidator, Field, model_validator
 from ..config import Float, config_dataclass
 from ..forecast_inputs.limits import Envelope, check_number
 from ..sim import environment as env
-from ..sim.environment import MAX_STEEPNESS, max_hs_m
+from ..sim.environment import MAX_STEEPNESS, check_steepness, max_hs_m
 
 __all__ = ["WeatherState", "WeatherUncertainty", "TABLE_COLUMNS", "read_weather_table", "states_to_frame",
            "SampledEnvironment", "sample_environment", "limiting_hs_m", "max_hs_m", "MAX_STEEPNESS"]
@@ -133,12 +133,7 @@ class WeatherState:
 
     @model_validator(mode="after")
     def _a_sea_that_can_exist(self):
-        # steeper than a single wave can be before it breaks (Miche, deep water: 1/7) is no
-        # sea state but two columns swapped or a period in another unit
-        if self.hs_m > max_hs_m(self.tp_s):
-            raise ValueError(f"hs_m {self.hs_m:g} m at tp_s {self.tp_s:g} s is steeper than waves can be (at most "
-                             f"{max_hs_m(self.tp_s):.2f} m at that period: 2 pi Hs / (g Tp^2) <= "
-                             f"{MAX_STEEPNESS:.3f}); are hs_m and tp_s swapped, or tp_s in another unit?")
+        check_steepness(self.hs_m, self.tp_s)     # Miche's breaking limit (deep water: 1/7)
         return self
 
     @classmethod

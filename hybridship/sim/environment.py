@@ -79,6 +79,7 @@ __all__ = [
     "beaufort_wave_height",
     "SeaState",
     "MAX_STEEPNESS",
+    "check_steepness",
     "max_hs_m",
 ]
 
@@ -95,6 +96,15 @@ MAX_STEEPNESS = 1.0 / 7.0
 def max_hs_m(tp_s):
     """Largest significant wave height [m] at peak period ``tp_s`` [s] (:data:`MAX_STEEPNESS`)."""
     return MAX_STEEPNESS * G_M_S2 * np.asarray(tp_s, dtype=float) ** 2 / (2.0 * np.pi)
+
+
+def check_steepness(hs_m: float, tp_s: float) -> None:
+    """Refuse a sea steeper than :data:`MAX_STEEPNESS` (ValueError naming ``hs_m`` and ``tp_s``):
+    no sea state, but two fields swapped or a period in another unit."""
+    if hs_m > max_hs_m(tp_s):
+        raise ValueError(f"hs_m {hs_m:g} m at tp_s {tp_s:g} s is steeper than waves can be (at most "
+                         f"{float(max_hs_m(tp_s)):.2f} m at that period: 2 pi Hs / (g Tp^2) <= "
+                         f"{MAX_STEEPNESS:.3f}); are hs_m and tp_s swapped, or tp_s in another unit?")
 
 # Budget of elements (time samples x components) per vectorised block, to bound memory
 # for long, finely sampled records (e.g. 1 h at 100 Hz x 50 components).
@@ -1074,12 +1084,8 @@ class SeaState:
 
     @model_validator(mode="after")
     def _a_sea_that_can_exist(self):
-        # steeper than a single wave can be before it breaks is no sea state (the simulator
-        # would drive the ship off at metres per second on DP), but two fields swapped
-        if self.hs_m > max_hs_m(self.tp_s):
-            raise ValueError(f"hs_m {self.hs_m:g} m at tp_s {self.tp_s:g} s is steeper than waves can be (at most "
-                             f"{float(max_hs_m(self.tp_s)):.2f} m at that period: 2 pi Hs / (g Tp^2) <= "
-                             f"{MAX_STEEPNESS:.3f}); are hs_m and tp_s swapped, or tp_s in another unit?")
+        # the simulator would drive the ship off at metres per second on DP
+        check_steepness(self.hs_m, self.tp_s)
         return self
 
     @classmethod
