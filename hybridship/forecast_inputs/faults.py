@@ -30,6 +30,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from ..frames import wrap_pi
 from ..messages import seconds_text
 
 __all__ = [
@@ -555,7 +556,7 @@ def _heading_jump_rows(view: LogView, win: Window, settings: WindowSettings) -> 
     prev = np.maximum(view.head_runs[0][rows - 1], rows[0] - 1)   # step r goes from row prev to r
     same = (a.segment_id[rows] == a.segment_id[prev]) & np.isfinite(psi[rows]) & np.isfinite(psi[prev])
     same &= view.head_runs[0][rows] == rows                  # a repeat is no step (frozen: detected apart)
-    steps = _wrap_pi(psi[rows] - psi[prev])
+    steps = wrap_pi(psi[rows] - psi[prev])
     span = np.arange(int(prev.min()), win.start + 1)          # the yaw rate's turn over every step
     r_ok = a.nu_logged[span, 2] & np.isfinite(view.nu[span, 2])
     r = np.where(r_ok, view.nu[span, 2], 0.0)
@@ -565,9 +566,9 @@ def _heading_jump_rows(view: LogView, win: Window, settings: WindowSettings) -> 
     logged = n_ok[k1 + 1] - n_ok[k0] == k1 - k0 + 1
     dts = t[rows] - t[prev]
     fin = (a.segment_id[rows] == a.segment_id[rows - 1]) & np.isfinite(psi[rows]) & np.isfinite(psi[rows - 1])
-    rates = _wrap_pi(psi[rows] - psi[rows - 1])[fin] / (t[rows] - t[rows - 1])[fin]
+    rates = wrap_pi(psi[rows] - psi[rows - 1])[fin] / (t[rows] - t[rows - 1])[fin]
     r_med = float(np.median(rates)) if rates.size else 0.0
-    err = _wrap_pi(steps - np.where(logged, turn[k1] - turn[k0], r_med * dts))
+    err = wrap_pi(steps - np.where(logged, turn[k1] - turn[k0], r_med * dts))
     jump = same & (np.abs(err) > settings.heading_jump_rad)
     return rows[jump], err[jump]
 
@@ -751,11 +752,6 @@ def _trapz(y: np.ndarray, x: np.ndarray, axis: int = 0) -> np.ndarray:
     y = np.moveaxis(np.asarray(y, dtype=float), axis, 0)
     h = np.diff(np.asarray(x, dtype=float))
     return np.tensordot(h, 0.5 * (y[1:] + y[:-1]), axes=(0, 0))
-
-
-def _wrap_pi(x: np.ndarray) -> np.ndarray:
-    """Angles [rad] wrapped to [-pi, pi): the smallest signed angle."""
-    return (np.asarray(x, dtype=float) + np.pi) % (2.0 * np.pi) - np.pi
 
 
 def _ned(vel_body: np.ndarray, psi: np.ndarray) -> np.ndarray:

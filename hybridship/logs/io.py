@@ -512,7 +512,7 @@ def _check_angle_unit(col: str, t: np.ndarray, x: np.ndarray, source: str, rate=
 
 
 def _validate(df: pd.DataFrame, channel_names, rotatable, source: str, warn_unknown: bool,
-              allow_missing: bool = False, writing: bool = False) -> None:
+              allow_missing: bool = False, writing: bool = False, vessel_name: str | None = None) -> None:
     """Check ``df`` against the log format (:data:`hybridship.logs.columns.COLUMNS`).
 
     The checks run in this order, so that every message can quote ``time_s``: column
@@ -544,7 +544,7 @@ def _validate(df: pd.DataFrame, channel_names, rotatable, source: str, warn_unkn
                        f"the format says" for c in cols if _unit_variant_of(c) == other)
         raise LogFormatError(f"{other}: missing while {pair[0]} is logged; the wind needs both (or neither: "
                              f"a forecast without wind){unit}{_where(source)}", column=other)
-    ignored = _check_channel_columns(df, cols, t, names, rot, source)
+    ignored = _check_channel_columns(df, cols, t, names, rot, source, vessel_name)
     if ignored and warn_unknown:
         # writing keeps the user's columns in the file; reading leaves them out of the arrays
         what = "writing, though readers ignore them," if writing else "ignoring"
@@ -713,7 +713,8 @@ def _check_speed_vs_track(t: np.ndarray, values: dict[str, np.ndarray], source: 
             column="u_m_s")
 
 
-def _check_channel_columns(df: pd.DataFrame, cols: list[str], t: np.ndarray, names, rot, source: str) -> list[str]:
+def _check_channel_columns(df: pd.DataFrame, cols: list[str], t: np.ndarray, names, rot, source: str,
+                           vessel_name: str | None = None) -> list[str]:
     """The per-channel columns (``<thruster>_rpm``, ``<thruster>_azimuth_deg``), matched by
     pattern: each names a known channel (when ``names`` is given), is numeric, and an angle
     is not in radians. Returns the columns to ignore (unknown names; angles of fixed
@@ -730,9 +731,12 @@ def _check_channel_columns(df: pd.DataFrame, cols: list[str], t: np.ndarray, nam
             continue
         spec, name = match
         if names is not None and name not in names:
+            # a log of another vessel, read with the default one: say which vessel was used
+            other = "" if vessel_name is None else (f"; the vessel used is {vessel_name!r}: is the log from another "
+                                                    f"vessel? give its vessel file (--vessel)")
             raise LogFormatError(
                 f"{col}: names unknown thruster '{name}'; known thrusters: {', '.join(names) or 'none'} "
-                f"(expected columns <thruster>_rpm and <thruster>_azimuth_deg){_where(source)}",
+                f"(expected columns <thruster>_rpm and <thruster>_azimuth_deg){_where(source)}{other}",
                 column=col,
             )
         x = _to_float(df, col, source, t)  # numeric, no infinities
@@ -856,14 +860,8 @@ def check_log_against_vessel(log, vessel, *, source: str | None = None, allow_mi
     else:
         df = log
     source = source or "log"
-    try:
-        _validate(df, v.channel_names, v.rotatable, source, warn_unknown=True, allow_missing=allow_missing)
-    except LogFormatError as exc:
-        if "names unknown thruster" not in str(exc):
-            raise
-        # a log of another vessel, read with the default one: say which vessel was used
-        raise LogFormatError(f"{exc}; the vessel used is {v.name!r}: is the log from another vessel? give "
-                             f"its vessel file (--vessel)", column=exc.column) from None
+    _validate(df, v.channel_names, v.rotatable, source, warn_unknown=True, allow_missing=allow_missing,
+              vessel_name=v.name)
     cols = set(map(str, df.columns))
     t = _to_float(df, "time_s", source, None)
     _check_all_or_no_rpm(v, cols, source)
