@@ -114,14 +114,21 @@ class InputRangeError(ValueError):
     value : float
     valid : str
         The valid range, as text.
+    component : str
+        The component's name (``"north_m"``, ``"thruster 'port'"``; "" when none).
+    problem : str
+        What is wrong with the value (``"outside the valid range"``, ...).
     """
 
-    def __init__(self, message: str, *, field: str, index: tuple, value: float, valid: str):
+    def __init__(self, message: str, *, field: str, index: tuple, value: float, valid: str,
+                 component: str = "", problem: str = "outside the valid range"):
         super().__init__(message)
         self.field = field
         self.index = tuple(int(i) for i in index)
         self.value = float(value)
         self.valid = valid
+        self.component = component
+        self.problem = problem
 
 
 #: Component names of the vector inputs, quoted in messages.
@@ -133,14 +140,17 @@ COMPONENTS = {
 }
 
 
+def _component(index: tuple, components) -> str:
+    return components[index[-1]] if components and index[-1] < len(components) else f"component {index[-1]}"
+
+
 def _where_text(name: str, a: np.ndarray, index: tuple, components) -> str:
     parts = []
     if a.ndim >= 2:
         parts.append(f"batch {index[0]}")
     if a.ndim == 3:
         parts.append(f"step {index[1]}")
-    comp = components[index[-1]] if components and index[-1] < len(components) else f"component {index[-1]}"
-    parts.append(comp)
+    parts.append(_component(index, components))
     return f"{name}[{', '.join(parts)}]"
 
 
@@ -151,10 +161,12 @@ def refuse(name: str, a: np.ndarray, bad: np.ndarray, valid: str, components=Non
     """
     index = np.unravel_index(int(np.argmax(bad)), a.shape)
     value = a[index]
+    problem = why or "outside the valid range"
     raise InputRangeError(
-        f"{_where_text(name, a, index, components)}: {value:g} is {why or 'outside the valid range'}; "
+        f"{_where_text(name, a, index, components)}: {value:g} is {problem}; "
         f"valid: {valid} (hybridship.forecast_inputs.limits)",
-        field=name, index=index, value=value, valid=valid)
+        field=name, index=index, value=value, valid=valid, component=_component(index, components),
+        problem=problem)
 
 
 def batch_mask(a: np.ndarray, bad: np.ndarray, batch: int) -> np.ndarray:

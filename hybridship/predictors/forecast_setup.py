@@ -11,7 +11,6 @@ from __future__ import annotations
 
 import numbers
 import os
-import re
 from dataclasses import dataclass
 
 import numpy as np
@@ -47,11 +46,13 @@ _LEAD_DECIMALS = 9
 def _in_log_terms(exc: InputRangeError, start_times_s: np.ndarray) -> InputRangeError:
     """A physics input out of range, said of the log: the value is the log's (the start state
     or an input held or read from it), so the start time names it, not the batch element."""
-    k = exc.index[0] if len(exc.index) >= 2 and exc.index[0] < len(start_times_s) else None
-    text = re.sub(r"\[batch \d+, ", "[", str(exc)).replace(" (hybridship.forecast_inputs.limits)", "")
-    where = f"start time_s {seconds_text(start_times_s[k])}: " if k is not None else ""
-    return InputRangeError(f"log: {where}{text} (a value the forecast takes from the log: a unit error?)",
-                           field=exc.field, index=exc.index, value=exc.value, valid=exc.valid)
+    if not exc.component or len(exc.index) < 2 or exc.index[0] >= len(start_times_s):
+        return exc      # not one start's value (e.g. the step): the message stands as it is
+    step = f", step {exc.index[1]}" if len(exc.index) == 3 else ""
+    return InputRangeError(f"log: start time_s {seconds_text(start_times_s[exc.index[0]])}: {exc.field}"
+                           f"[{exc.component}{step}]: {exc.value:g} is {exc.problem}; valid: {exc.valid} (a value "
+                           f"the forecast takes from the log: a unit error?)", field=exc.field, index=exc.index,
+                           value=exc.value, valid=exc.valid, component=exc.component, problem=exc.problem)
 
 
 def as_log_arrays(log, vessel, *, purpose: str = "fit") -> LogArrays:
