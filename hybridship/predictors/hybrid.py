@@ -1029,24 +1029,21 @@ class HybridPredictor:
         ``"after_stop"`` calibration when :meth:`calibrate_after_stop` made one, others the
         calibration of their command mode; where none applies, the raw spread. Returns the
         spread and the (S,) mask of the starts that kept the raw one."""
-        out, used = std, []
-        raw = np.ones(len(after_stop), dtype=bool)
+        out, applied = std, {}          # calibration -> (S,) mask of the starts it calibrated
         if commands in self.calibration:
             out = self.calibrated_std(std, lead_s, commands)
-            used.append(commands)
-            raw[:] = False
+            applied[commands] = np.ones(len(after_stop), dtype=bool)
             if self.training_info.get("calibration", {}).get("dp_only", False) and self.stop_after_failure:
                 # calibrated on station-keeping starts only: a start after a failure (a drift) is
                 # another regime, whose spread keeps the raw ensemble value unless calibrated below
                 out[after_stop] = std[after_stop]
-                raw[after_stop] = True
-                used = used if not np.all(after_stop) else []
+                applied[commands] = ~after_stop
         if AFTER_STOP in self.calibration and self.stop_after_failure and np.any(after_stop):
             out = out.copy()
             out[after_stop] = self.calibrated_std(std[after_stop], lead_s, AFTER_STOP)
-            raw[after_stop] = False
-            used.append(AFTER_STOP)
-        self._warn_beyond_calibration(lead_s, used)
+            applied[AFTER_STOP] = after_stop
+        self._warn_beyond_calibration(lead_s, [mode for mode, m in applied.items() if m.any()])
+        raw = ~np.any(list(applied.values()), axis=0) if applied else np.ones(len(after_stop), dtype=bool)
         return out, raw
 
     def _warn_beyond_calibration(self, lead_s, modes) -> None:
