@@ -5,8 +5,8 @@ operator gets while the vessel is still station keeping (commands held at the st
 ``forecast`` default). For every log the default :class:`~hybridship.predictors.HybridPredictor`
 is fitted on the other logs (its spread calibrated on their held-back station keeping, as
 ``fit`` does) and forecasts from a start every ``--every-s`` seconds of the log's own
-station keeping, from the end of the hybrid's history window (``history_s``: the
-estimator's 30 min, so that every start has all of it) to the last start whose forecast
+station keeping, from the end of the hybrid's warm-up (``warm_up_s``: the estimator's
+30 min, so that every start's filter has run at least that long) to the last start whose forecast
 ends before the failure. Reported per log and lead time:
 
 * the mean distance [m] and heading [deg] errors of the hybrid, of the same model with the
@@ -74,12 +74,12 @@ class NoStationKeeping(ValueError):
     """A log without a start whose forecast fits in its station keeping."""
 
 
-def station_keeping_starts(a, every_s: float, horizon_s: float, history_s: float) -> np.ndarray:
-    """Start times [s] every ``every_s`` from ``history_s`` into the log, each with
+def station_keeping_starts(a, every_s: float, horizon_s: float, warm_up_s: float) -> np.ndarray:
+    """Start times [s] every ``every_s`` from ``warm_up_s`` into the log, each with
     ``horizon_s`` of station keeping after it (none of the forecast reaches the failure)."""
     off = np.flatnonzero(a.dp_active == 0)
     t_end = a.time_s[off[0]] if off.size else a.time_s[-1]
-    starts = np.arange(a.time_s[0] + history_s, t_end - horizon_s - a.dt_s / 2, every_s)
+    starts = np.arange(a.time_s[0] + warm_up_s, t_end - horizon_s - a.dt_s / 2, every_s)
     rows = np.unique(np.searchsorted(a.time_s, starts))
     t = a.time_s[rows[rows < len(a)]]            # on samples: a start moved past a gap is checked again
     return t[t + horizon_s < t_end]
@@ -135,10 +135,10 @@ def run(logs: dict, vessel, every_s: float, horizon_s: float, hybrid_factory=Non
     for name, a in logs.items():
         hybrid = hybrid_factory()
         hybrid.fit([b for k, b in logs.items() if k != name])
-        starts = station_keeping_starts(a, every_s, horizon_s, hybrid.history_s)
+        starts = station_keeping_starts(a, every_s, horizon_s, hybrid.warm_up_s)
         if starts.size == 0:
             raise NoStationKeeping(f"{name}: no station keeping of {horizon_s:g} s after the hybrid's "
-                                   f"{hybrid.history_s:g} s of history")
+                                   f"{hybrid.warm_up_s:g} s of warm-up")
         errors, abs_ne, std, raw_std, lead_s, abs_hdg, std_hdg = score_log(hybrid, references, a, starts, horizon_s)
         for model, (dist, hdg) in errors.items():
             for j in _lead_columns(lead_s, REPORT_LEADS_S):

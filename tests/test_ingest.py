@@ -193,9 +193,9 @@ def test_a_forecast_reads_only_its_time_range(log, model, environment):
     absurd rpm 1500 s before the start) changes nothing, and a fault inside it is refused
     with the row and time the whole log's check names."""
     hybrid = HybridPredictor(model.vessel, ensemble_config=TINY, environment=environment).fit([log])
-    long = physics_log(model, seed=7, duration_s=4000.0, t_shutdown_s=None, current=(0.2, 1.0))
-    start = [3900.0, 3910.0]
-    assert 3900.0 - hybrid.history_s - 60.0 > 1000.0
+    long = physics_log(model, seed=7, duration_s=5500.0, t_shutdown_s=None, current=(0.2, 1.0))
+    start = [5400.0, 5410.0]
+    assert 5400.0 - hybrid.history_s - 60.0 > 1000.0
     ref = hybrid.forecast(long, start, 30)
     bad = long.copy()
     bad.loc[bad.time_s < 1000.0, "north_m"] = np.nan
@@ -204,6 +204,6 @@ def test_a_forecast_reads_only_its_time_range(log, model, environment):
     np.testing.assert_array_equal(fc.eta, ref.eta)
     np.testing.assert_array_equal(fc.eta_std, ref.eta_std)
     inside = long.copy()
-    inside.loc[3000, "port_rpm"] = 60 * 217.0
+    inside.loc[4000, "port_rpm"] = 60 * 217.0
     msg = _message(lambda: hybrid.forecast(inside, start, 30))
-    assert msg.startswith("port_rpm") and "row 3000" in msg, msg
+    assert msg.startswith("port_rpm") and "row 4000" in msg, msg

@@ -26,9 +26,9 @@ from ..residual.features import ResidualConfig
 __all__ = ["COMMAND_MODES", "FORECAST_HISTORY_S", "HorizonError", "RequestError", "as_log_arrays", "forecast_step_s",
            "start_indices"]
 
-#: Seconds of log before the earliest start that a forecast reads (at least): the hybrid's
-#: environment window. Every forecaster reads the same rows, so the start-window checks see
-#: the same samples whichever forecaster runs.
+#: Seconds of log before the earliest start that a forecast reads (at least; the hybrid reads
+#: more where its environment estimator needs it, see ``HybridPredictor.history_s``). The
+#: start-window checks read far less, so they see the same samples whichever forecaster runs.
 FORECAST_HISTORY_S = 1800.0
 #: Longest forecast horizon [s] (one day): far beyond what the method is for, and a bound
 #: on the memory of the rollout arrays (a horizon of 1e9 s would ask for gigabytes).

@@ -29,7 +29,7 @@ from ..residual.features import (ALL_FEATURES, MEMORY_FEATURES, ResidualConfig, 
                                  command_memory, command_pair, command_scales, log_command_memory,
                                  prepare_log)
 from ..residual.load_variability import held_load_rows, held_load_spread, unexplained_load_std_windows
-from ..residual.environment import (EnvironmentConfig, EnvironmentEstimator, current_input,
+from ..residual.environment import (EnvironmentConfig, EnvironmentEstimate, EnvironmentEstimator, current_input,
                                     environment_accel, thrust_error_prior_carries_over)
 from ..residual.multistep import MultiStepConfig, collect_starts, train_multistep
 from ..residual.guard import CommandRegime, EnvelopeGuard, ThrustRegime
@@ -95,9 +95,11 @@ class HybridPredictor:
         ``bias_window_s`` mean residual of station keeping (the scheme before the estimator).
     environment_config : EnvironmentConfig
     environment_window_s : float
-        How far before the earliest start the estimator starts filtering [s]; at least
+        The estimator's window ``W`` [s]: a start's filter starts at the last whole multiple of
+        ``W`` of log time at least ``W`` before it (it reads between ``W`` and ``2 W`` of log,
+        whatever the other starts of the batch); at least
         ``environment_config.held_load_window_s`` (so that every start's held-load window lies
-        inside the filtered rows, whatever the other starts of the batch).
+        inside the filtered rows).
     nets_after_stop : bool
         Let the nets correct forecasts that start after a failure (``dp_active == 0``).
         Off by default: on drift, the nets did not improve on the environment estimator
@@ -219,8 +221,7 @@ class HybridPredictor:
             raise ValueError(f"environment: expected one of {ENVIRONMENT_SOURCES}, got {environment!r}")
         environment_window_s = check_number("environment_window_s", environment_window_s, lo=0.0, lo_open=True)
         if environment == "estimator" and environment_window_s < environment_config.held_load_window_s:
-            # a shorter filter window would cut a start's held-load window at the batch's
-            # earliest start, so its spread would depend on the other starts
+            # a shorter filter window could cut a start's held-load window at the filter's first row
             raise ValueError(f"environment_window_s: must be at least environment_config.held_load_window_s = "
                              f"{environment_config.held_load_window_s:g} s, got {environment_window_s:g}")
         self.environment = environment
@@ -865,14 +866,22 @@ class HybridPredictor:
         return join_notes(st.notes, [note if k else "" for k in short])
 
     @property
-    def history_s(self) -> float:
-        """Seconds of log before the earliest start that :meth:`forecast` reads [s]: the
-        estimator's window, or the mean residual's windows, and at least
-        :data:`~hybridship.predictors.forecast_setup.FORECAST_HISTORY_S`."""
+    def warm_up_s(self) -> float:
+        """Seconds of log a start needs before it to have its environment from a full window
+        [s]: the estimator's window (its filter then reads at least that much, see
+        :meth:`_filter_groups`), or the mean residual's windows."""
         c = self.residual_config
-        own = (self.environment_window_s if self.environment == "estimator"
-               else c.bias_window_s + c.start_residual_window_s + c.deriv_window_s)
-        return max(FORECAST_HISTORY_S, float(own))
+        return float(self.environment_window_s if self.environment == "estimator"
+                     else c.bias_window_s + c.start_residual_window_s + c.deriv_window_s)
+
+    @property
+    def history_s(self) -> float:
+        """Seconds of log before the earliest start that :meth:`forecast` reads [s]: two of
+        the estimator's windows (its filter starts up to that far back, see
+        :meth:`_filter_groups`), or the mean residual's windows, and at least
+        :data:`~hybridship.predictors.forecast_setup.FORECAST_HISTORY_S`."""
+        own = 2.0 * self.warm_up_s if self.environment == "estimator" else self.warm_up_s
+        return max(FORECAST_HISTORY_S, own)
 
     @property
     def uses_drift_hull(self) -> bool:
@@ -902,10 +911,21 @@ class HybridPredictor:
         arrays = as_log_arrays(log, self.model.vessel)
         return self._run_estimator(arrays, start_indices(arrays, start_times_s))
 
-    def _filter_first_row(self, arrays, idx) -> int:
-        """Row at which the filter starts: ``environment_window_s`` before the earliest start."""
-        dt = float(np.median(np.diff(arrays.time_s)))
-        return max(0, int(idx.min()) - int(round(self.environment_window_s / dt)))
+    def _filter_groups(self, arrays, idx) -> list[tuple[int, np.ndarray]]:
+        """The starts ``idx`` (rows) by the row at which their filter starts: ``[(first_row,
+        positions in idx), ...]``.
+
+        A start's filter starts at the last whole multiple of ``environment_window_s`` of log
+        time that lies at least ``environment_window_s`` before it (so it has filtered between
+        one and two windows of log, and never before the log's first row). Its estimate
+        therefore depends on the log and its own start time only, not on the other starts
+        of the batch or on how much log before them was read; starts with the same first
+        row share one filter run.
+        """
+        w = self.environment_window_s
+        anchors_s = (np.floor(arrays.time_s[idx] / w) - 1.0) * w
+        first = np.searchsorted(arrays.time_s, anchors_s - 1e-9 * w, side="left")
+        return [(int(f), np.flatnonzero(first == f)) for f in np.unique(first)]
 
     def _filter_drift_yaw(self) -> float:
         """The hull's yaw coefficient in a drift [rad/m^2] the filter's process model uses after a
@@ -941,17 +961,21 @@ class HybridPredictor:
             out[k] = found[stop]
         return out
 
-    def _run_estimator(self, arrays, idx, extra_rows=None, drift_yaw_uv: float | None = None):
-        """The filter's estimates at the start rows ``idx`` and, when given, also at those of
-        ``extra_rows`` (rows at or after the filter's first row) that it can estimate (not
-        before the log's first valid position), from the same run. ``drift_yaw_uv``: the
-        filter's coefficient of the hull's yaw moment in a drift (default
-        :meth:`_filter_drift_yaw`)."""
-        first = self._filter_first_row(arrays, idx)
+    def _run_estimator(self, arrays, idx, extra_rows=None, drift_yaw_uv: float | None = None, first_row=None):
+        """The filter's estimates at the start rows ``idx`` (one run per group of
+        :meth:`_filter_groups`) and, when given, also at those of ``extra_rows`` that it can
+        estimate (not before the log's first valid position), from the same run, which then
+        starts at ``first_row`` (default: that of the starts, which must share one).
+        ``drift_yaw_uv``: the filter's
+        coefficient of the hull's yaw moment in a drift (default :meth:`_filter_drift_yaw`)."""
         k = self._filter_drift_yaw() if drift_yaw_uv is None else float(drift_yaw_uv)
+        if extra_rows is not None and first_row is None:
+            (first_row, _), = self._filter_groups(arrays, idx)      # the starts of one group
         if extra_rows is None:
-            return self.estimator.run(arrays, idx, first_row=first, drift_yaw_uv_rad_per_m2=k)
-        est = self.estimator.run(arrays, np.concatenate([idx, extra_rows]), first_row=first, required=len(idx),
+            groups = self._filter_groups(arrays, idx)
+            parts = [self.estimator.run(arrays, idx[pos], first_row=f, drift_yaw_uv_rad_per_m2=k) for f, pos in groups]
+            return EnvironmentEstimate.concatenate(parts, np.argsort(np.concatenate([pos for _, pos in groups])))
+        est = self.estimator.run(arrays, np.concatenate([idx, extra_rows]), first_row=first_row, required=len(idx),
                                  drift_yaw_uv_rad_per_m2=k)
         return est.take(slice(0, len(idx))), est.take(slice(len(idx), None))
 
@@ -985,28 +1009,43 @@ class HybridPredictor:
     def _estimate_with_held_load(self, st, drift_yaw_uv: float | None = None):
         """The estimates at the start rows and the held-load variability (S, 3) of the
         station keeping before each start after a failure, and before each start during
-        station keeping when :attr:`_held_load_on_station` (one filter run for all)."""
+        station keeping when :attr:`_held_load_on_station` (one filter run per group of
+        :meth:`_filter_groups`, for its starts and their windows)."""
         c = self.environment_config
         sigma_b = np.zeros((len(st.idx), 3))
         on = st.arrays.dp_active[st.idx] != 0
         wanted = (~on & self.stop_after_failure) | (on & self._held_load_on_station)
         if c.held_load_window_s == 0 or not np.any(wanted):
             return self._run_estimator(st.arrays, st.idx, drift_yaw_uv=drift_yaw_uv), sigma_b
+        groups = self._filter_groups(st.arrays, st.idx)
+        parts = []
+        for first, pos in groups:
+            est, sigma_b[pos] = self._held_load_group(st, pos, first, wanted[pos], on[pos], drift_yaw_uv)
+            parts.append(est)
+        return EnvironmentEstimate.concatenate(parts, np.argsort(np.concatenate([pos for _, pos in groups]))), sigma_b
+
+    def _held_load_group(self, st, pos, first: int, wanted, on, drift_yaw_uv):
+        """:meth:`_estimate_with_held_load` for the starts ``st.idx[pos]``, whose filter starts
+        at ``first``: their estimates and held-load variability (len(pos), 3)."""
+        c = self.environment_config
+        idx = st.idx[pos]
+        sigma_b = np.zeros((len(idx), 3))
+        if not np.any(wanted):
+            return self._run_estimator(st.arrays, idx, drift_yaw_uv=drift_yaw_uv), sigma_b
         dt = st.arrays.dt_s
         step = max(1, int(round(c.filter_step_s / dt)))
-        first = self._filter_first_row(st.arrays, st.idx)
         windows = {}        # starts with the same window (after one stop) share it: (rows, starts)
         for k in np.flatnonzero(wanted):
             # on station the window ends on the start's own filter grid (one filter pass on a
             # 10-Hz log); after a stop, at the last station-keeping row
-            end = int(st.idx[k]) - (step - 1 if on[k] else 0)
+            end = int(idx[k]) - (step - 1 if on[k] else 0)
             rows = held_load_rows(st.arrays.dp_active, end, step, int(round(c.held_load_window_s / dt)))
             rows = rows[rows >= first]
             windows.setdefault(tuple(rows[[0, -1]]) if rows.size else (), (rows, []))[1].append(k)
         windows = list(windows.values())
         # overlapping windows of starts during station keeping: filter each row once
         all_rows = np.unique(np.concatenate([w[0] for w in windows]))
-        est, est_w = self._run_estimator(st.arrays, st.idx, all_rows, drift_yaw_uv)
+        est, est_w = self._run_estimator(st.arrays, idx, all_rows, drift_yaw_uv, first_row=first)
         block = max(1, int(round(c.held_load_block_s / (step * dt))))
         # a window is a run of consecutive estimates on its own filter grid (the last row's
         # residue modulo the step): batch all windows of one grid

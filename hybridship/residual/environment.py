@@ -278,13 +278,21 @@ class EnvironmentEstimate:
         return EnvironmentEstimate(self.rows[which], self.time_s[which], self.x[which], self.P[which],
                                    self.thrust_error_model)
 
+    @classmethod
+    def concatenate(cls, parts: list["EnvironmentEstimate"], order=None) -> "EnvironmentEstimate":
+        """The estimates of ``parts`` one after another, then taken at ``order`` (an index array
+        into the concatenation; default: as they come)."""
+        est = cls(*(np.concatenate([getattr(p, f) for p in parts]) for f in ("rows", "time_s", "x", "P")),
+                  parts[0].thrust_error_model)
+        return est if order is None else est.take(np.asarray(order, dtype=int))
+
     def sample_environment(self, n: int, seed: int = 0) -> np.ndarray:
         """Draws of ``[v_c (2), b (3), theta (n_theta)]`` from the posterior, shape (n, S, 5 + n_theta).
 
         The draws are centred: their mean is the posterior mean whatever ``n``, so an
         ensemble forecast's mean does not depend on the sampling.
-        Deterministic for a given ``seed`` and row: a start's draws do not depend on which
-        other starts are forecast with it.
+        Deterministic for a given ``seed`` and start time: a start's draws do not depend on
+        which other starts are forecast with it, nor on how much log before it was read.
         """
         S, m = self.x.shape[0], self.x.shape[1] - ENV.start
         out = np.broadcast_to(self.x[:, ENV], (n, S, m)).copy()
@@ -292,8 +300,9 @@ class EnvironmentEstimate:
             return out
         Pe = self.P[:, ENV, ENV]
         L = np.linalg.cholesky(Pe + 1e-18 * np.eye(m))                  # (S, m, m)
-        z = np.stack([np.random.default_rng([seed, int(r)]).standard_normal((n - 1, m)) for r in self.rows],
-                     axis=1)                                             # (n - 1, S, m)
+        # keyed by the start time's bits, not its row, which moves with the rows a forecast reads
+        z = np.stack([np.random.default_rng([seed, int(np.float64(t).view(np.uint64))]).standard_normal((n - 1, m))
+                      for t in self.time_s], axis=1)                     # (n - 1, S, m)
         dev = np.concatenate([np.zeros((1, S, m)), np.einsum("sij,nsj->nsi", L, z)])
         return out + dev - dev.mean(axis=0)     # centred: the members' mean is the posterior mean
 
