@@ -173,6 +173,13 @@ class EnvironmentConfig(BaseModel):
         Longest filter step [s]: a faster log is filtered on every ``m``-th row.
     held_load_window_s, held_load_block_s : float
         Window and block length [s] over which the load's variability is measured (above).
+    settle_s : float
+        For this long [s] after the filter starts (and after a gap restarts the motion
+        states from the measurement), the measurements settle the motion states only and
+        leave the environment as it was (the cross-covariance is cut before each update):
+        otherwise the start-up transient of motion states started from one sample moves
+        the current-load split, which station keeping cannot correct afterwards, so that an
+        estimate depends on where its filter started. 0: no settling.
     innovation_gate_sigma, max_gated_samples : float, int
         Outlier gate on position and heading (above).
     wave_turned_yaw_load, wave_axis_window_s, min_wave_anisotropy, min_wave_sin2 : bool, float, float, float
@@ -209,6 +216,7 @@ class EnvironmentConfig(BaseModel):
     load_to_current_at_stop: float = Field(0.0, ge=0.0, le=1.0)
     held_load_window_s: float = Field(600.0, ge=0.0)
     held_load_block_s: float = Field(30.0, gt=0.0)
+    settle_s: float = Field(0.0, ge=0.0)
     innovation_gate_sigma: float = Field(8.0, gt=0.0)
     max_gated_samples: int = Field(10, ge=0)
     wave_turned_yaw_load: bool = False
@@ -688,12 +696,12 @@ class EnvironmentEstimator:
         return self._shared(("inputs", id(arrays), int(first_row), int(last)), arrays,
                             lambda: self._log_inputs(arrays, first_row, last))
 
-    def _station_keeping_run(self, arrays, grid, want, inputs) -> tuple[dict, dict]:
+    def _station_keeping_run(self, arrays, grid, want, inputs) -> tuple[dict, dict, float]:
         """The estimates at ``want`` (all at or before the last row of ``grid``) of a run
-        without the hull's yaw moment in a drift."""
+        without the hull's yaw moment in a drift, and the time until which it settles."""
         x, P = {}, {}
-        self._filter_grid(arrays, grid, want, inputs, x, P, 0.0)
-        return x, P
+        settle_until = self._filter_grid(arrays, grid, want, inputs, x, P, 0.0)
+        return x, P, settle_until
 
     def _filter(self, arrays, grid, want, inputs, out_x, out_P, drift_yaw_uv: float):
         """Run the filter over the rows ``grid`` (increasing), storing the estimates at ``want``."""
@@ -708,7 +716,7 @@ class EnvironmentEstimator:
         branch = int(stopped[0])
         b = int(grid[branch])
         before = [w for w in want if w <= b]
-        shared_x, shared_P = self._shared(
+        shared_x, shared_P, settle_until = self._shared(
             (id(arrays), inputs["span"], int(grid[0]), int(grid[-1]), b, tuple(before)), arrays,
             lambda: self._station_keeping_run(arrays, grid[:branch + 1], sorted(set(before) | {b}), inputs))
         if b not in shared_x:           # the filter could not start before b: nothing to share
@@ -718,17 +726,19 @@ class EnvironmentEstimator:
             if w in shared_x:
                 out_x[w], out_P[w] = shared_x[w], shared_P[w]
         self._filter_grid(arrays, grid[branch:], [w for w in want if w > b], inputs, out_x, out_P, drift_yaw_uv,
-                          resume=(shared_x[b], shared_P[b]))
+                          resume=(shared_x[b], shared_P[b], settle_until))
 
-    def _filter_grid(self, arrays, grid, want, inputs, out_x, out_P, drift_yaw_uv: float, resume=None):
-        """One run of the compiled filter over ``grid`` (from the estimate ``resume`` at
-        ``grid[0]`` when given), storing the estimates at the sorted rows ``want``."""
+    def _filter_grid(self, arrays, grid, want, inputs, out_x, out_P, drift_yaw_uv: float, resume=None) -> float:
+        """One run of the compiled filter over ``grid`` (from the estimate and settling time
+        ``resume = (x, P, settle_until_s)`` at ``grid[0]`` when given), storing the estimates
+        at the sorted rows ``want``; returns the time [s] until which the run settles."""
         slot = np.full(len(arrays.time_s), -1, dtype=np.int64)
         slot[want] = np.arange(len(want))
         n = len(self.state_names)
         xs, Ps = np.empty((len(want), n)), np.empty((len(want), n, n))
         done = np.zeros(len(want), dtype=np.bool_)
-        x_resume, P_resume = resume if resume is not None else (np.zeros(n), np.zeros((n, n)))
+        x_resume, P_resume, settle_until = resume if resume is not None else (np.zeros(n), np.zeros((n, n)), 0.0)
+        settle_io = np.array([settle_until], dtype=float)
         c = self.config
         kernel.filter_grid(np.ascontiguousarray(grid, dtype=np.int64), slot, arrays.time_s, arrays.segment_id,
                            inputs["z"], inputs["z_ok"], inputs["r_std"], inputs["rpm"], inputs["az"],
@@ -739,9 +749,10 @@ class EnvironmentEstimator:
                            float(c.load_yaw_prior_rad_s2), float(c.current_std_at_stop_m_s),
                            float(c.load_to_current_at_stop), drift_yaw_uv,
                            self._gate(),
-                           int(c.max_gated_samples), resume is not None,
+                           int(c.max_gated_samples), float(c.settle_s), resume is not None,
                            np.ascontiguousarray(x_resume, dtype=float), np.ascontiguousarray(P_resume, dtype=float),
-                           xs, Ps, done)
+                           settle_io, xs, Ps, done)
         for k, i in enumerate(want):
             if done[k]:
                 out_x[i], out_P[i] = xs[k], Ps[k]
+        return float(settle_io[0])

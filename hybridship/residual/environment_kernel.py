@@ -333,8 +333,8 @@ def load_to_current_at_stop(x, frac, P, work):
 @numba.njit(cache=True)
 def filter_grid(grid, slot, t, seg, z, z_ok, r_std, rpm, az, wind, dp, P, per_thruster, prior_thr, prior_sd, q_base,
                 fd_step, reset_at_stop, kept, stop_std, yaw_prior, current_stop_std, load_to_current, drift_yaw_uv,
-                gate, max_gated, resume, x_resume,
-                P_resume, out_x, out_P, done):
+                gate, max_gated, settle_s, resume, x_resume,
+                P_resume, settle_io, out_x, out_P, done):
     """Run the filter over the log rows ``grid`` (increasing).
 
     At a row ``i`` with ``slot[i] >= 0`` the estimate goes to ``out_x[slot[i]]``,
@@ -351,6 +351,12 @@ def filter_grid(grid, slot, t, seg, z, z_ok, r_std, rpm, az, wind, dp, P, per_th
     ``x_resume, P_resume`` is the estimate at ``grid[0]`` (of an earlier run) and the filter
     goes on from there. Measurements beyond ``gate`` standard deviations are outliers
     (:func:`update`; ``max_gated`` in a row are followed); a restart resets that count.
+    For ``settle_s`` [s] after each (re)start of the motion states, the covariance between
+    them and the environment is cut before every update, so that the measurements settle
+    the motion states and leave the environment as it was: the start-up transient (motion
+    states started from one noisy sample) would otherwise leave its mark on the split
+    between current and load, which station keeping cannot correct. ``settle_io[0]`` holds
+    the time [s] until which a run settles: read with ``resume``, written at the end.
     """
     work = _workspace(P)
     gated = np.zeros(6, dtype=np.int64)
@@ -359,8 +365,10 @@ def filter_grid(grid, slot, t, seg, z, z_ok, r_std, rpm, az, wind, dp, P, per_th
     Pc = np.zeros((n, n))
     started = False
     prev = -1
+    settle_until = -math.inf
     if resume:
         x, Pc, started, prev = x_resume.copy(), P_resume.copy(), True, grid[0]
+        settle_until = settle_io[0]
         s = slot[prev]
         if s >= 0:
             out_x[s] = x
@@ -397,10 +405,16 @@ def filter_grid(grid, slot, t, seg, z, z_ok, r_std, rpm, az, wind, dp, P, per_th
             x, Pc = x0, P0
             gated[:] = 0
             started = True
+            settle_until = t[i] + settle_s
         else:
             dt = t[i] - t[prev]
             x, Pc = predict(x, Pc, dt, rpm[prev], az[prev], wind[prev], process_noise(dt, q_base), fd_step, P,
                             per_thruster, 0.0 if dp[prev] else drift_yaw_uv, work)
+            if t[i] <= settle_until:
+                for a in range(6):
+                    for b in range(6, n):
+                        Pc[a, b] = 0.0
+                        Pc[b, a] = 0.0
             x, Pc = update(x, Pc, z[i], z_ok[i], r_std[i], gate, max_gated, gated)
             if dp[prev] and not dp[i]:
                 if reset_at_stop:
@@ -415,6 +429,7 @@ def filter_grid(grid, slot, t, seg, z, z_ok, r_std, rpm, az, wind, dp, P, per_th
             out_x[s] = x
             out_P[s] = Pc
             done[s] = True
+    settle_io[0] = settle_until
 
 
 @numba.njit(cache=True)
