@@ -1,15 +1,16 @@
 """How much a drift forecast depends on where its environment filter started.
 
 A hybrid forecast with the environment estimator starts its filter at the last whole
-multiple of ``environment_window_s`` (30 min) of log time at least one window before the
-start (:meth:`hybridship.predictors.HybridPredictor._filter_groups`), so a start's forecast
-does not depend on the other starts of a call. Where the filter starts still matters: its
+multiple of 5 min (:data:`hybridship.predictors.hybrid.FILTER_START_GRID_S`) of log time at
+least ``environment_window_s`` (30 min) before the start
+(:meth:`hybridship.predictors.HybridPredictor._filter_groups`), so a start's forecast does
+not depend on the other starts of a call. Where the filter starts still matters: its
 start-up transient is not entirely forgotten by the start (the current, unobservable
 during station keeping apart from the load, keeps part of it). This script measures that
 part. Each test log is forecast at the drift benchmark's 20 starts after its failure with
-its time axis shifted by ``0, 300, ..., 1500 s`` (every shift moves the filter's first
-row by that much against the data, and nothing else but the members' draws, which are
-keyed by start time); it reports
+its time axis shifted by ``0, 50, ..., 250 s`` (each shift moves the filter's first row
+against the data by that much, or by that much less 300 s, and changes nothing else but
+the members' draws, which are keyed by start time); it reports
 
 * ``error``: the mean absolute error at 60 s over the 20 starts and all logs, per shift;
 * ``spread_across_shifts``: per start, the standard deviation of the 60-s forecast mean
@@ -38,7 +39,7 @@ from hybridship.logs.io import read_log
 from hybridship.predictors import HybridPredictor
 from hybridship.predictors.after_failure import drift_forecasts
 
-SHIFTS_S = (0.0, 300.0, 600.0, 900.0, 1200.0, 1500.0)
+SHIFTS_S = (0.0, 50.0, 100.0, 150.0, 200.0, 250.0)
 STATES = ("north_m", "east_m", "yaw_deg")
 
 

@@ -124,6 +124,38 @@ def test_shared_station_keeping_is_not_shared_across_first_rows(model):
     assert not np.array_equal(alone.x, est.run(a, rows, first_row=3).x)       # and k = 0.004 is one
 
 
+def test_settling_leaves_the_environment_alone_until_the_motion_states_have_settled(model):
+    """With ``settle_s`` the environment keeps its prior for that long after the filter's
+    start and its value at a gap for that long after the restart, then learns; a run that
+    shares the station keeping settles as a run of its own does (even when the failure,
+    where sharing branches, falls inside the settling); 0 changes nothing."""
+    from hybridship.residual.environment import ENV
+
+    log = physics_log(model, duration_s=700, t_shutdown_s=130, seed=6, tau_ext_N=(3000.0, -1000.0, 2e4))
+    gap = log[(log.time_s < 400) | (log.time_s >= 430)].reset_index(drop=True)     # a 30-s gap at 400 s
+    a = as_log_arrays(gap, model.vessel)
+    t = a.time_s
+    settled = EnvironmentEstimator(model, EnvironmentConfig(settle_s=150.0))
+    est = settled.run(a)
+    prior = est.x[0, ENV]
+    inside = (t <= 150.0)
+    np.testing.assert_array_equal(est.x[inside][:, ENV], np.broadcast_to(prior, (inside.sum(), prior.size)))
+    assert np.all(np.abs(est.x[(t > 160.0) & (t < 400.0)][:, ENV][:, 2] - prior[2]) > 0)      # then it learns
+    before_gap = est.x[np.flatnonzero(t < 400.0)[-1], ENV]
+    after = (t >= 430.0) & (t <= 580.0)
+    np.testing.assert_array_equal(est.x[after][:, ENV], np.broadcast_to(before_gap, (after.sum(), prior.size)))
+    assert not np.array_equal(est.x[np.flatnonzero(t > 600.0)[0], ENV], before_gap)
+    rows = np.arange(100, len(t), 13)
+    alone = settled.run(a, rows, drift_yaw_uv_rad_per_m2=0.004)
+    with settled.sharing_station_keeping():
+        settled.run(a, rows, drift_yaw_uv_rad_per_m2=0.002)
+        shared = settled.run(a, rows, drift_yaw_uv_rad_per_m2=0.004)
+    np.testing.assert_array_equal(shared.x, alone.x)
+    np.testing.assert_array_equal(shared.P, alone.P)
+    np.testing.assert_array_equal(EnvironmentEstimator(model, EnvironmentConfig(settle_s=0.0)).run(a).x,
+                                  EnvironmentEstimator(model, EnvironmentConfig()).run(a).x)
+
+
 def test_a_position_or_heading_spike_is_gated_and_a_lasting_shift_is_followed(model):
     """One corrupted position sample (300 m east) or heading sample (90 deg) in the history
     leaves the later estimate as it is without it (the heading's only through the

@@ -432,26 +432,26 @@ def test_mean_environment_spread_does_not_depend_on_the_other_starts(model):
 
 def test_estimator_forecast_does_not_depend_on_the_other_starts_or_the_log_read_before(model):
     """With the environment estimator (the default) a start's forecast, mean and spread, is
-    the same alone, in a batch whose earliest start lies one filter window earlier, and on
-    the log cut to begin one window before the start: its filter starts at a row fixed by
-    its own start time (the last multiple of the window at least one window before it)."""
+    the same alone, in a batch whose earliest start lies far earlier, and on the log cut to
+    begin where its filter starts: that row is fixed by its own start time (the last
+    multiple of 300 s at least one window before it)."""
     tiny = EnsembleConfig(n_members=3, hidden=8, max_epochs=15, patience=5, seed=0)
     train = physics_log(model, seed=2, duration_s=1200.0, t_shutdown_s=900.0, current=(0.2, 1.0))
     long = physics_log(model, seed=7, duration_s=1400.0, t_shutdown_s=1300.0, current=(0.2, 1.0),
                        tau_ext_N=(2e3, -1e3, 5e3))
     hp = HybridPredictor(model.vessel, ensemble_config=tiny, environment_window_s=600.0).fit([train])
-    starts = [500.0, 1199.0, 1200.0, 1310.0]        # windows from 0 s, 0 s, 600 s and 600 s
+    starts = [500.0, 1199.0, 1200.0, 1310.0]        # filters from 0, 300, 600 and 600 s
     both = hp.forecast(long, starts, 30.0)
     for k, t in enumerate(starts):
-        cut = long[long["time_s"] >= (t // 600.0 - 1.0) * 600.0].reset_index(drop=True)
+        cut = long[long["time_s"] >= ((t - 600.0) // 300.0) * 300.0].reset_index(drop=True)
         for log in (long, cut):
             alone = hp.forecast(log, [t], 30.0)
             np.testing.assert_allclose(both.eta[k, :, :2], alone.eta[0, :, :2], rtol=0, atol=1e-9)
             np.testing.assert_allclose(wrap_pi(both.eta[k, :, 2] - alone.eta[0, :, 2]), 0.0, rtol=0, atol=1e-9)
             np.testing.assert_allclose(both.eta_std[k], alone.eta_std[0], rtol=1e-9, atol=1e-12)
-    # the filter's window is the start's: the log from one window before the start decides it
-    early = long[long["time_s"] >= 650.0].reset_index(drop=True)
-    assert not np.allclose(hp.forecast(early, [1310.0], 30.0).eta, both.eta[3:], rtol=0, atol=1e-9)
+    # the filter's start is the start's: the log from after it changes the forecast
+    late = long[long["time_s"] >= 650.0].reset_index(drop=True)
+    assert not np.allclose(hp.forecast(late, [1310.0], 30.0).eta, both.eta[3:], rtol=0, atol=1e-9)
 
 
 def test_training_features_that_are_all_constant_are_named(model):

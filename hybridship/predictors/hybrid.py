@@ -64,6 +64,11 @@ DRIFT_HULL_BATCH = 4096
 
 #: Where the hybrid's slowly varying environment comes from (see :class:`HybridPredictor`).
 ENVIRONMENT_SOURCES = ("estimator", "mean")
+#: Grid of log time [s] on which the environment filter of a forecast starts (the last grid
+#: time at least ``environment_window_s`` before the start): fixed by the start time alone,
+#: so a start's forecast does not depend on the other starts of a call; a start reads at most
+#: this much more than the window.
+FILTER_START_GRID_S = 300.0
 
 
 class HybridPredictor:
@@ -96,8 +101,8 @@ class HybridPredictor:
     environment_config : EnvironmentConfig
     environment_window_s : float
         The estimator's window ``W`` [s]: a start's filter starts at the last whole multiple of
-        ``W`` of log time at least ``W`` before it (it reads between ``W`` and ``2 W`` of log,
-        whatever the other starts of the batch); at least
+        :data:`FILTER_START_GRID_S` (5 min) of log time at least ``W`` before it (it reads
+        between ``W`` and ``W`` + 5 min of log, whatever the other starts of the batch); at least
         ``environment_config.held_load_window_s`` (so that every start's held-load window lies
         inside the filtered rows).
     nets_after_stop : bool
@@ -876,11 +881,11 @@ class HybridPredictor:
 
     @property
     def history_s(self) -> float:
-        """Seconds of log before the earliest start that :meth:`forecast` reads [s]: two of
-        the estimator's windows (its filter starts up to that far back, see
-        :meth:`_filter_groups`), or the mean residual's windows, and at least
+        """Seconds of log before the earliest start that :meth:`forecast` reads [s]: the
+        estimator's window and one step of its start grid (its filter starts up to that far
+        back, see :meth:`_filter_groups`), or the mean residual's windows, and at least
         :data:`~hybridship.predictors.forecast_setup.FORECAST_HISTORY_S`."""
-        own = 2.0 * self.warm_up_s if self.environment == "estimator" else self.warm_up_s
+        own = self.warm_up_s + (FILTER_START_GRID_S if self.environment == "estimator" else 0.0)
         return max(FORECAST_HISTORY_S, own)
 
     @property
@@ -915,16 +920,15 @@ class HybridPredictor:
         """The starts ``idx`` (rows) by the row at which their filter starts: ``[(first_row,
         positions in idx), ...]``.
 
-        A start's filter starts at the last whole multiple of ``environment_window_s`` of log
-        time that lies at least ``environment_window_s`` before it (so it has filtered between
-        one and two windows of log, and never before the log's first row). Its estimate
-        therefore depends on the log and its own start time only, not on the other starts
-        of the batch or on how much log before them was read; starts with the same first
-        row share one filter run.
+        A start's filter starts at the last whole multiple of :data:`FILTER_START_GRID_S` of
+        log time that lies at least ``environment_window_s`` before it (so it has filtered
+        between one window and one window plus the grid step, and never before the log's
+        first row). Its estimate therefore depends on the log and its own start time only,
+        not on the other starts of the batch or on how much log before them was read;
+        starts with the same first row share one filter run.
         """
-        w = self.environment_window_s
-        anchors_s = (np.floor(arrays.time_s[idx] / w) - 1.0) * w
-        first = np.searchsorted(arrays.time_s, anchors_s - 1e-9 * w, side="left")
+        first_s = np.floor((arrays.time_s[idx] - self.environment_window_s) / FILTER_START_GRID_S) * FILTER_START_GRID_S
+        first = np.searchsorted(arrays.time_s, first_s - 1e-6, side="left")
         return [(int(f), np.flatnonzero(first == f)) for f in np.unique(first)]
 
     def _filter_drift_yaw(self) -> float:
