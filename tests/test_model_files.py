@@ -145,10 +145,10 @@ def test_incompatible_format_version_is_refused(saved, tmp_path):
         p = _rewrite(saved, tmp_path, meta_change=lambda m: m.update(format_version=version), name=f"v{version}.npz")
         # as written in the file: the text "13" is not said as 13, which this hybridship reads
         _refused(p, rf"model format version {shown} is not supported "
-                    rf"\(this hybridship reads versions 7, 8, 9, 10, 11, 12, 13\)"
+                    rf"\(this hybridship reads versions 7, 8, 9, 10, 11, 12, 13, 14\)"
                     + (r"; expected a whole number$" if not isinstance(version, int) else ""))
-    p = _rewrite(saved, tmp_path, meta_change=lambda m: m.update(format_version=14), name="v14.npz")
-    _refused(p, r"written by a newer hybridship \(format 14\); upgrade hybridship to read it")
+    p = _rewrite(saved, tmp_path, meta_change=lambda m: m.update(format_version=15), name="v15.npz")
+    _refused(p, r"written by a newer hybridship \(format 15\); upgrade hybridship to read it")
 
 
 def test_an_older_format_says_retrain(saved, tmp_path):
@@ -445,6 +445,19 @@ def test_a_version_11_file_reads_without_command_memory(saved, tmp_path):
     assert not back.residual_config.uses_memory_features
     v12 = _rewrite(saved, tmp_path, meta_change=lambda m: m["residual_config"].pop("command_memory_s"), name="v12.npz")
     _refused(v12, r"damaged model metadata .*command_memory_s")
+
+
+def test_a_version_13_file_reads_without_settling(saved, tmp_path):
+    """Version 13 had no settling of the environment estimator: its config reads with
+    ``settle_s = 0``, as it was fitted; a version-14 file without it is damaged."""
+    def as_v13(meta):
+        meta["format_version"] = 13
+        meta["environment_config"].pop("settle_s")
+
+    back = HybridPredictor.load(_rewrite(saved, tmp_path, meta_change=as_v13, name="v13.npz"))
+    assert back.environment_config.settle_s == 0.0
+    v14 = _rewrite(saved, tmp_path, meta_change=lambda m: m["environment_config"].pop("settle_s"), name="v14.npz")
+    _refused(v14, r"damaged model metadata .*settle_s")
 
 
 def test_edited_settings_are_refused(saved, tmp_path):

@@ -27,6 +27,7 @@ from ..residual.multistep import MultiStepConfig
 __all__ = ["MODEL_FORMAT_VERSION", "ModelFileError", "load_model", "model_metadata", "save_model"]
 
 #: Version of the model-file format written by :func:`save_model` (:meth:`HybridPredictor.save`).
+#: 14: the environment estimator's settling time (``environment_config.settle_s``);
 #: 13: the metadata's own checksum (``metadata_sha256``: an edited setting, such as the feature
 #: order or the spread calibration, no longer loads silently);
 #: 12: the command-memory features and their time constant (``residual_config.command_memory_s``);
@@ -40,15 +41,16 @@ __all__ = ["MODEL_FORMAT_VERSION", "ModelFileError", "load_model", "model_metada
 #: validated vessel description is embedded in the metadata (``vessel_description``), so a
 #: model loads without its vessel file; 3 added the environment estimator; 2 and earlier
 #: stored only the vessel's name.
-MODEL_FORMAT_VERSION = 13
+MODEL_FORMAT_VERSION = 14
 #: Versions :func:`load_model` reads: a version-7 file is a version-8 one without the spread
 #: exponent (three rows per ``cal_*`` array), read as exponent 1, which is what it was fitted with;
 #: versions 7 and 8 have no wind futures in the spread (``wind_samples = 0``, as they were fitted);
 #: versions 7 to 9 no hull's yaw moment in a drift (``drift_hull`` off, ``k = 0``); in version 10
 #: only the forecasts use it, not the environment estimator (``drift_yaw_in_filter`` false), as
 #: its coefficient was chosen; versions 7 to 11 use no command memory (the time constant is
-#: the default, unused); versions 7 to 12 carry no checksum of their metadata.
-READABLE_MODEL_FORMAT_VERSIONS = (7, 8, 9, 10, 11, 12, 13)
+#: the default, unused); versions 7 to 12 carry no checksum of their metadata; versions 7 to
+#: 13 no settling of the environment estimator (``settle_s = 0``, as they were fitted).
+READABLE_MODEL_FORMAT_VERSIONS = (7, 8, 9, 10, 11, 12, 13, 14)
 
 
 class ModelFileError(ValueError):
@@ -304,6 +306,8 @@ def _build_predictor(cls, meta: dict, vessel, path: Path):
     try:
         if meta["format_version"] >= 12 and "command_memory_s" not in meta["residual_config"]:
             raise KeyError("residual_config.command_memory_s")     # older files read the default, unused
+        if meta["format_version"] >= 14 and "settle_s" not in meta["environment_config"]:
+            raise KeyError("environment_config.settle_s")          # older files read 0, as they were fitted
         residual_config = ResidualConfig(**{k: tuple(v) if k == "features" else v
                                             for k, v in meta["residual_config"].items()})
         embedded = vessel is None
