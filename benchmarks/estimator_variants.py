@@ -31,6 +31,8 @@ Examples::
         current_at_stop_0.1 current_at_stop_0.3 --out docs/results/estimator-variants-current-at-stop
     python benchmarks/estimator_variants.py --data embedded truthsim-dev own --only default \
         load_to_current_0.5 load_to_current_1 --out docs/results/estimator-variants-load-to-current
+    python benchmarks/estimator_variants.py --data embedded truthsim-dev own --only default settle_120 settle_300 \
+        current_walk_3e-4 --out docs/results/estimator-variants-filter-start
 """
 
 from __future__ import annotations
@@ -89,6 +91,11 @@ VARIANTS = {
                           "the whole NED load re-explained as a current at the stop"),
     "current_at_stop_0.3": ({"environment_config": C(current_std_at_stop_m_s=0.3)},
                             "current's uncertainty widened by 0.3 m/s along the current-load ridge at the stop"),
+    "settle_120": ({"environment_config": C(settle_s=120.0)},
+                   "the environment left alone for the first 120 s of a filter run, while the motion states settle"),
+    "settle_300": ({"environment_config": C(settle_s=300.0)}, "the same for 300 s"),
+    "current_walk_3e-4": ({"environment_config": C(current_walk_m_s=3e-4)},
+                          "current random walk 3e-4 m/s/sqrt(s) instead of constant (forgets the filter's start)"),
     "fixed_noise": ({"environment_config": C(adaptive_measurement_std=False)},
                     "no wave-motion noise estimate (configured sensor noise only)"),
     "per_dof": ({"environment_config": C(**PER_DOF)},
