@@ -970,8 +970,8 @@ class HybridPredictor:
         :meth:`_filter_groups`) and, when given, also at those of ``extra_rows`` that it can
         estimate (not before the log's first valid position), from the same run, which then
         starts at ``first_row`` (default: that of the starts, which must share one).
-        ``drift_yaw_uv``: the filter's
-        coefficient of the hull's yaw moment in a drift (default :meth:`_filter_drift_yaw`)."""
+        ``drift_yaw_uv``: the filter's coefficient of the hull's yaw moment in a drift
+        (default :meth:`_filter_drift_yaw`)."""
         k = self._filter_drift_yaw() if drift_yaw_uv is None else float(drift_yaw_uv)
         if extra_rows is not None and first_row is None:
             (first_row, _), = self._filter_groups(arrays, idx)      # the starts of one group
