@@ -25,7 +25,8 @@ import numpy as np
 from pydantic import AfterValidator, BeforeValidator, ConfigDict, Field, ValidationError
 from pydantic.dataclasses import dataclass as _pydantic_dataclass
 
-__all__ = ["config_dataclass", "format_validation_error", "Int", "Float", "NonEmpty", "non_empty", "float_array"]
+__all__ = ["config_dataclass", "format_validation_error", "Int", "Float", "NonEmpty", "non_empty", "float_array",
+           "start_time_rng"]
 
 
 #: Plain wording of pydantic's common error types (by ``type``; ``{name}`` from its ``ctx``).
@@ -96,6 +97,14 @@ Int = Annotated[int, BeforeValidator(_not_bool)]
 #: A random seed: a non-negative ``int`` below 2**63 (numpy's and torch's generators both
 #: take it; a negative or larger one used to fail deep inside them).
 Seed = Annotated[int, BeforeValidator(_not_bool), Field(ge=0, lt=2**63)]
+
+
+def start_time_rng(seed: int, time_s: float) -> np.random.Generator:
+    """The random generator of one forecast start, keyed by ``seed`` and the bits of its start
+    time ``time_s`` [s]: a start's draws do not depend on the other starts of a batch, nor on
+    which rows of the log were read (a row index would move with them)."""
+    return np.random.default_rng([int(seed), int(np.float64(time_s).view(np.uint64))])
+
 
 def non_empty(v):
     """After-validator of a sequence field: at least one item (``Annotated[tuple[...], AfterValidator(non_empty)]``;

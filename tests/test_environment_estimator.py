@@ -299,6 +299,10 @@ def test_hybrid_forecasts_after_a_failure_use_the_drift_samples(model):
 def test_config_rejects_bad_values():
     with pytest.raises(ValueError, match="position_std_m"):
         EnvironmentConfig(position_std_m=0.0)
+    # an infinite setting passes a lower bound; it is refused by name, not used
+    for field in ("settle_s", "held_load_window_s", "load_walk_m_s2"):
+        with pytest.raises(ValueError, match=rf"{field}[\s\S]*finite number"):
+            EnvironmentConfig(**{field: float("inf")})
     with pytest.raises(ValueError, match="environment"):
         HybridPredictor("gunnerus", environment="nets")
 

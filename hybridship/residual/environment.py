@@ -71,6 +71,7 @@ import numpy as np
 import pandas as pd
 from pydantic import BaseModel, ConfigDict, Field
 
+from ..config import start_time_rng
 from ..frames import vector_to_speed_dir
 from ..messages import seconds_text
 from . import environment_kernel as kernel
@@ -186,7 +187,7 @@ class EnvironmentConfig(BaseModel):
         The held yaw load turned with the waves after a failure (above; window in [s]).
     """
 
-    model_config = ConfigDict(frozen=True, extra="forbid")
+    model_config = ConfigDict(frozen=True, extra="forbid", allow_inf_nan=False)
 
     position_std_m: float = Field(0.5, gt=0)
     heading_std_deg: float = Field(0.3, gt=0)
@@ -308,9 +309,8 @@ class EnvironmentEstimate:
             return out
         Pe = self.P[:, ENV, ENV]
         L = np.linalg.cholesky(Pe + 1e-18 * np.eye(m))                  # (S, m, m)
-        # keyed by the start time's bits, not its row, which moves with the rows a forecast reads
-        z = np.stack([np.random.default_rng([seed, int(np.float64(t).view(np.uint64))]).standard_normal((n - 1, m))
-                      for t in self.time_s], axis=1)                     # (n - 1, S, m)
+        z = np.stack([start_time_rng(seed, t).standard_normal((n - 1, m)) for t in self.time_s],
+                     axis=1)                                             # (n - 1, S, m)
         dev = np.concatenate([np.zeros((1, S, m)), np.einsum("sij,nsj->nsi", L, z)])
         return out + dev - dev.mean(axis=0)     # centred: the members' mean is the posterior mean
 

@@ -43,7 +43,7 @@ import pandas as pd
 from pydantic import Field, field_validator
 from scipy.signal import lfilter, savgol_coeffs, savgol_filter
 
-from ..config import Float, Int, config_dataclass
+from ..config import Float, Int, config_dataclass, start_time_rng
 from ..logs.io import LogArrays
 
 #: Optional command-aware features (appended after the paper's nine): the main
@@ -399,7 +399,7 @@ class PreparedLog:
         nb = max(1, int(round(self.config.bias_block_s / self.dt_s)))
         if v.shape[0] < 2 * nb:
             return out
-        rng = np.random.default_rng([seed, int(np.float64(a.time_s[idx]).view(np.uint64))])
+        rng = start_time_rng(seed, a.time_s[idx])
         starts = rng.integers(0, v.shape[0] - nb + 1, size=n_members)
         cs = np.vstack([np.zeros((1, 3)), np.cumsum(v, axis=0)])
         means = (cs[starts + nb] - cs[starts]) / nb
