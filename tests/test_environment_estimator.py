@@ -183,6 +183,26 @@ def test_a_position_or_heading_spike_is_gated_and_a_lasting_shift_is_followed(mo
     assert est.x[0, 0] == pytest.approx(shifted.north_m[390], abs=1.0)
 
 
+def test_a_biased_speed_log_does_not_pull_the_estimate_off_the_track(model, monkeypatch):
+    """A speed log reading 1 m/s too much in sway for the last 100 s before a start: the
+    filter leaves the logged u, v out once they disagree with the track (5 m within 30 s,
+    as the start window's ``velocity_mismatch``), so its position stays within 1 m of the
+    clean log's estimate. Trusted, the velocity (0.05 m/s noise against 0.5 m for the
+    position) would pull the estimate metres off the GNSS."""
+    from hybridship.residual import environment
+
+    log = physics_log(model, duration_s=600, t_shutdown_s=None, seed=6, tau_ext_N=(2000.0, 0.0, 0.0))
+    biased = log.copy()
+    biased.loc[400:500, "v_m_s"] += 1.0
+    row = np.array([500])
+    clean = EnvironmentEstimator(model).run(as_log_arrays(log, model.vessel), row)
+    checked = EnvironmentEstimator(model).run(as_log_arrays(biased, model.vessel), row)
+    assert np.hypot(*(checked.x[0, :2] - clean.x[0, :2])) < 1.0
+    monkeypatch.setattr(environment, "TRACK_MISMATCH_M", np.inf)
+    trusted = EnvironmentEstimator(model).run(as_log_arrays(biased, model.vessel), row)
+    assert np.hypot(*(trusted.x[0, :2] - clean.x[0, :2])) > 3.0
+
+
 def test_a_segment_whose_first_row_has_no_position_restarts_at_its_next(model):
     """After a gap, a new segment whose first row lacks a position restarts at the next row
     with one (velocities from the measurement), not by predicting across the gap."""

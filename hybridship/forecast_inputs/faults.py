@@ -15,12 +15,17 @@ order, which the notes follow:
 1. :func:`detect_missing_samples` (``nan_in_window``),
 2. :func:`detect_late_samples` (``late_or_out_of_order``),
 3. :func:`detect_frozen_channels` (``frozen_sensor``),
-4. :func:`detect_position_jumps` (``position_jump``),
-5. :func:`detect_heading_jumps` (``heading_jump``),
-6. :func:`detect_heading_wrap` (``heading_wrapped``, informational),
-7. :func:`rederive_velocities` (the repair of frozen or jump-spoilt velocities),
-8. :func:`detect_too_little_valid` (``too_little_valid``: the start is refused),
-9. :func:`detect_dropped_wind` (``wind_dropped``).
+4. :func:`detect_velocity_mismatch` (``velocity_mismatch``),
+5. :func:`detect_position_jumps` (``position_jump``),
+6. :func:`detect_heading_jumps` (``heading_jump``),
+7. :func:`detect_heading_wrap` (``heading_wrapped``, informational),
+8. :func:`rederive_velocities` (the repair of frozen, mismatched or jump-spoilt velocities),
+9. :func:`detect_too_little_valid` (``too_little_valid``: the start is refused),
+10. :func:`detect_dropped_wind` (``wind_dropped``).
+
+:func:`velocity_track_mismatch_m`, the evidence of ``velocity_mismatch``, is also what the
+environment estimator uses to leave a logged velocity out of its filter
+(:mod:`hybridship.residual.environment`), so that both read a log alike.
 """
 
 from __future__ import annotations
@@ -43,6 +48,8 @@ __all__ = [
     "detect_missing_samples",
     "detect_late_samples",
     "detect_frozen_channels",
+    "velocity_track_mismatch_m",
+    "detect_velocity_mismatch",
     "detect_position_jumps",
     "detect_heading_jumps",
     "detect_heading_wrap",
@@ -50,6 +57,13 @@ __all__ = [
     "detect_too_little_valid",
     "detect_dropped_wind",
 ]
+
+
+#: Trailing window [s] and limit [m] of :func:`velocity_track_mismatch_m` above which a
+#: logged velocity is not trusted (the start window's ``velocity_mismatch``, and the
+#: environment estimator's filter, which then leaves it out).
+TRACK_WINDOW_S = 30.0
+TRACK_MISMATCH_M = 5.0
 
 
 class FaultFlags:
@@ -68,6 +82,7 @@ class FaultFlags:
     NAN_IN_WINDOW = "nan_in_window"
     TOO_LITTLE_VALID = "too_little_valid"
     FROZEN_SENSOR = "frozen_sensor"
+    VELOCITY_MISMATCH = "velocity_mismatch"
     POSITION_JUMP = "position_jump"
     HEADING_JUMP = "heading_jump"
     HEADING_WRAPPED = "heading_wrapped"
@@ -76,8 +91,8 @@ class FaultFlags:
     INPUT_CLIPPED = "input_clipped"
     OUT_OF_ENVELOPE = "out_of_envelope"
 
-    START_WINDOW = (NAN_IN_WINDOW, TOO_LITTLE_VALID, FROZEN_SENSOR, POSITION_JUMP, HEADING_JUMP, HEADING_WRAPPED,
-                    WIND_DROPPED, LATE_OR_OUT_OF_ORDER)
+    START_WINDOW = (NAN_IN_WINDOW, TOO_LITTLE_VALID, FROZEN_SENSOR, VELOCITY_MISMATCH, POSITION_JUMP, HEADING_JUMP,
+                    HEADING_WRAPPED, WIND_DROPPED, LATE_OR_OUT_OF_ORDER)
     ALL = START_WINDOW + (INPUT_CLIPPED, OUT_OF_ENVELOPE)
     INFORMATIONAL = (HEADING_WRAPPED,)
 
@@ -205,11 +220,16 @@ class WindowSettings:
     lookback_s: float = 10.0
     min_valid_fraction: float = 0.5
     heading_jump_deg: float = 10.0
+    track_window_s: float = TRACK_WINDOW_S
+    track_mismatch_m: float = TRACK_MISMATCH_M
 
     def __post_init__(self):
         if (not self.window_s > 0 or not self.frozen_s > 0 or not self.jump_m > 0
                 or not 0 < self.min_valid_fraction <= 1):
             raise ValueError("window_s, frozen_s and jump_m must be > 0 and min_valid_fraction in (0, 1]")
+        if not (self.track_window_s > 0 and self.track_mismatch_m > 0):
+            raise ValueError(f"track_window_s and track_mismatch_m must be > 0, got {self.track_window_s!r} "
+                             f"and {self.track_mismatch_m!r}")
         if not 0 < self.heading_jump_deg < 180:
             raise ValueError(f"heading_jump_deg must be > 0 and < 180 (a step is at most 180 deg), "
                              f"got {self.heading_jump_deg!r}")
@@ -243,6 +263,9 @@ class LogView:
     pos_runs, head_runs, vel_runs
         First and last row of each row's run of bit-identical values (position, heading,
         and each of u, v, r).
+    track_mismatch : ndarray of bool, shape (N,)
+        Rows whose logged u, v disagree with the track (:func:`velocity_track_mismatch_m`
+        above ``track_mismatch_m`` over ``track_window_s``).
     """
 
     arrays: object
@@ -253,6 +276,7 @@ class LogView:
     pos_runs: tuple
     head_runs: tuple
     vel_runs: tuple
+    track_mismatch: np.ndarray
 
     @classmethod
     def build(cls, arrays, settings: WindowSettings, affected_time_s) -> "LogView":
@@ -261,8 +285,10 @@ class LogView:
         dt_nom = float(np.median(np.diff(t))) if len(arrays) > 1 else 1.0
         n_nom = max(1, int(round(settings.window_s / dt_nom)))
         n_min = max(1, math.ceil(settings.min_valid_fraction * n_nom))
+        mismatch = velocity_track_mismatch_m(arrays, settings.track_window_s,
+                                             step_limit_m=settings.jump_m) > settings.track_mismatch_m
         return cls(arrays, dt_nom, n_nom, n_min, np.asarray(affected_time_s), _runs(arrays.eta[:, :2]),
-                   _runs(arrays.eta[:, 2]), tuple(_runs(arrays.nu[:, j]) for j in range(3)))
+                   _runs(arrays.eta[:, 2]), tuple(_runs(arrays.nu[:, j]) for j in range(3)), mismatch)
 
     @property
     def t(self) -> np.ndarray:
@@ -472,13 +498,84 @@ def detect_frozen_channels(view: LogView, win: Window, settings: WindowSettings)
         win.flag(FaultFlags.FROZEN_SENSOR, f"frozen for >= {s.frozen_s:g} s: {'; '.join(found)}")
 
 
+def velocity_track_mismatch_m(arrays, window_s: float, first_row: int = 0, last_row: int | None = None, *,
+                              step_limit_m: float = 5.0) -> np.ndarray:
+    """How far the logged ``u``, ``v`` disagree with the track [m], per row.
+
+    For row ``i`` of ``first_row .. last_row`` (default: to the end), over the steps between
+    consecutive rows of the trailing ``window_s`` seconds: the length of the difference
+    between how the positions moved and how the logged velocity, rotated into NED with the
+    logged heading (trapezoid), says the ship moved. A biased or corrupt velocity log grows
+    it by its bias times the window. So does a heading off by a lasting angle while the
+    ship is under way (a gyro offset that the heading checks accept as a lasting shift):
+    the logged velocity then points the wrong way, and the velocity derived from the track
+    with that heading is the one that moves the forecast along the track. Steps that cannot
+    say anything are left out: those next to a missing position, heading or logged velocity,
+    those whose position repeats bit for bit (a frozen receiver), and those whose position
+    change differs from the velocity's by more than ``step_limit_m``, a position jump (a
+    spike, an excursion, a datum shift) that :func:`detect_position_jumps` and the
+    estimator's outlier gate deal with. The window stays within the row's segment and does
+    not reach before ``first_row``, so the value depends on those rows alone (causal). NaN
+    where the window covers less than half of ``window_s``. The position noise and the
+    wave-frequency motion, which both channels carry, leave it near 1 m or below on clean
+    logs (30 s; GNSS noise 0.5 m).
+
+    Returns
+    -------
+    ndarray, shape (last_row + 1 - first_row,)
+    """
+    last = len(arrays.time_s) - 1 if last_row is None else int(last_row)
+    sl = slice(int(first_row), last + 1)
+    t, pos, psi, nu = arrays.time_s[sl], arrays.eta[sl, :2], arrays.eta[sl, 2], arrays.nu[sl, :2]
+    seg = arrays.segment_id[sl]
+    v_ned = _ned(nu, psi)
+    ok = (np.all(np.isfinite(v_ned), axis=1) & arrays.nu_logged[sl, 0] & arrays.nu_logged[sl, 1]
+          & np.all(np.isfinite(pos), axis=1))
+    moved = pos[1:] - pos[:-1]
+    logged = 0.5 * (v_ned[1:] + v_ned[:-1]) * np.diff(t)[:, None]
+    use = ok[1:] & ok[:-1] & (seg[1:] == seg[:-1]) & np.any(moved != 0.0, axis=1)
+    with np.errstate(invalid="ignore"):
+        use &= np.hypot(*(moved - logged).T) <= step_limit_m
+
+    def summed(steps):
+        return np.concatenate([np.zeros((1, 2)), np.cumsum(np.where(use[:, None], steps, 0.0), axis=0)])
+
+    track, travelled = summed(moved), summed(logged)
+    i = np.arange(t.size)
+    seg_first = np.searchsorted(seg, seg, side="left")           # segment ids increase with the rows
+    j = np.maximum(np.searchsorted(t, t - window_s, side="left"), seg_first)
+    d = np.hypot(*((track[i] - track[j]) - (travelled[i] - travelled[j])).T)
+    return np.where(t[i] - t[j] >= 0.5 * window_s, d, np.nan)
+
+
+def detect_velocity_mismatch(view: LogView, win: Window, settings: WindowSettings) -> None:
+    """Logged velocities that the track contradicts.
+
+    Fault: the logged ``u``, ``v`` (a biased or failed speed log, a wrong lever arm or
+    frame) move the ship differently from the positions. Evidence: over the trailing
+    ``track_window_s`` of a row of the window, the two disagree by more than
+    ``track_mismatch_m`` (:func:`velocity_track_mismatch_m`; not a frozen velocity, which
+    :func:`detect_frozen_channels` reports). Flags ``velocity_mismatch``. Repair: u and v
+    are derived from the track instead, and the position-jump check does not judge the
+    positions by them.
+    """
+    hit = view.track_mismatch[win.rows]
+    if not hit.any() or win.vel_replace[:2].any():
+        return
+    for j in range(2):
+        win.vel_ok[:, j] &= ~hit
+        win.vel_replace[j] = True
+    win.flag(FaultFlags.VELOCITY_MISMATCH,
+             f"u_m_s, v_m_s disagree with the track by more than {settings.track_mismatch_m:g} m over "
+             f"{settings.track_window_s:g} s: derived from the track instead")
+
+
 def _jump_rows(view: LogView, win: Window, settings: WindowSettings) -> np.ndarray:
     """Rows ending a position step (from the row before) that the velocity does not
     explain within ``jump_m``: logged velocities where both ends have them, else the median
     step velocity; steps ending from ``lookback_s`` before the window up to the start."""
     a, t, pos, psi, nu = view.arrays, view.t, view.pos, view.psi, view.nu
-    lb = int(np.searchsorted(t, t[win.start] - settings.window_s - settings.lookback_s, side="left"))
-    rows = np.arange(max(lb, 1), win.start + 1)               # step r goes from row r-1 to r
+    rows = np.arange(_first_step(view, win, settings), win.start + 1)     # step r goes from row r-1 to r
     if not rows.size:
         return rows
     p_ok = np.all(np.isfinite(pos[rows]), axis=1) & np.all(np.isfinite(pos[rows - 1]), axis=1)
@@ -487,12 +584,19 @@ def _jump_rows(view: LogView, win: Window, settings: WindowSettings) -> np.ndarr
     steps = pos[rows] - pos[rows - 1]
     step_v = steps / dts[:, None]
     both_logged = (a.nu_logged[rows, 0] & a.nu_logged[rows, 1]
-                   & a.nu_logged[rows - 1, 0] & a.nu_logged[rows - 1, 1])
+                   & a.nu_logged[rows - 1, 0] & a.nu_logged[rows - 1, 1]
+                   & ~view.track_mismatch[rows] & ~view.track_mismatch[rows - 1])
     v_log = 0.5 * (_ned(nu[rows, :2], psi[rows]) + _ned(nu[rows - 1, :2], psi[rows - 1]))
     v_med = np.median(step_v[same], axis=0) if same.any() else np.zeros(2)
     v_ref = np.where((both_logged & np.all(np.isfinite(v_log), axis=1))[:, None], v_log, v_med)
     err = np.hypot(*(steps - v_ref * dts[:, None]).T)
     return rows[same & (err > settings.jump_m)]
+
+
+def _first_step(view: LogView, win: Window, settings: WindowSettings) -> int:
+    """The first step (row) the position-jump check looks at: ``lookback_s`` before the window."""
+    t = view.t
+    return max(int(np.searchsorted(t, t[win.start] - settings.window_s - settings.lookback_s, side="left")), 1)
 
 
 def _outliers(jump_rows: np.ndarray, start: int) -> set:
@@ -514,16 +618,26 @@ def detect_position_jumps(view: LogView, win: Window, settings: WindowSettings) 
     the velocity explains. Evidence: see :func:`_jump_rows`; a jump away and back is a
     spike, a jump into the start row cannot yet be told from a lasting shift, anything
     else is a lasting shift (a datum change). Flags ``position_jump`` when a jump ends in
-    the window. Repair: spike (and unconfirmed) positions are invalid, velocities derived
-    across any jump are derived again, and after a lasting shift only the new positions
-    count.
+    the window, and while a lasting shift lies within ``lookback_s`` before it (as
+    ``heading_jump`` does): the positions the start follows changed a moment ago, which may
+    yet turn out to be an excursion. Repair: spike (and unconfirmed) positions are invalid,
+    velocities derived across any jump are derived again, and after a lasting shift only
+    the new positions count.
     """
     jump_end = _jump_rows(view, win, settings)
+    bad_pos = _outliers(jump_end, win.start)
+    # a shift at the first step looked at may be the return of a spike before it: not judged
+    first = _first_step(view, win, settings)
+    shifts = [int(r) for r in jump_end if int(r) not in bad_pos and int(r) - 1 not in bad_pos and int(r) > first]
     in_w = jump_end[jump_end >= win.lo]
     if not in_w.size:
+        if shifts:
+            win.flag(FaultFlags.POSITION_JUMP,
+                     f"position jump of more than {settings.jump_m:g} m at time_s "
+                     f"{', '.join(seconds_text(view.t[r]) for r in shifts)}, before the window: lasting shift, "
+                     f"new positions used")
         return
     W = win.rows
-    bad_pos = _outliers(jump_end, win.start)
     for r in bad_pos:
         win.pos_ok &= W != r
     touched = set()                              # derived velocities next to a jump are invalid

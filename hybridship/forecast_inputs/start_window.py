@@ -60,7 +60,18 @@ Faults and their behaviour (``FaultFlags`` names the flags):
     last ``lookback_s``) by more than ``jump_m``. A sample that jumps away and back (a
     spike) is invalid; a jump into the start sample is treated the same way (it cannot yet
     be told from a lasting shift); after a lasting shift (a datum change) the new
-    positions are valid. Velocities derived from positions across a jump are invalid.
+    positions are valid, and the flag stays set while the shift lies within ``lookback_s``
+    before the window (as for ``heading_jump``). Velocities derived from positions across
+    a jump are invalid; logged velocities flagged ``velocity_mismatch`` do not explain steps.
+``velocity_mismatch``
+    The logged ``u``, ``v``, rotated with the heading, disagree with the track by more than
+    ``track_mismatch_m`` (5 m) over the trailing ``track_window_s`` (30 s)
+    (:func:`~hybridship.forecast_inputs.faults.velocity_track_mismatch_m`; position jumps
+    and a frozen receiver are left out of it): a biased or failed speed log, or a heading
+    off by a lasting angle while under way. u and v are derived from the track instead.
+    The environment estimator of a hybrid forecast leaves such samples out of its filter
+    as well, so its start state stays on the track. A bias is found once it has moved the
+    ship 5 m off the track (5 s at 1 m/s); until then it is in the start values.
 ``heading_jump``
     A step between consecutive valid headings (the smallest signed angle: a wrap across
     0/360 or +-180 deg is no step) that differs from what the yaw rate explains (the logged
@@ -95,9 +106,10 @@ import pandas as pd
 from ..logs.ingest import SortedLog, ingest_with_report
 from ..logs.io import LogArrays
 from ..messages import seconds_text
-from .faults import (VALID_USED, FaultFlags, LogView, StartWindowError, Window, WindowSettings, detect_dropped_wind,
-                     detect_frozen_channels, detect_heading_jumps, detect_heading_wrap, detect_late_samples,
-                     detect_missing_samples, detect_position_jumps, detect_too_little_valid, rederive_velocities)
+from .faults import (TRACK_MISMATCH_M, TRACK_WINDOW_S, VALID_USED, FaultFlags, LogView, StartWindowError, Window,
+                     WindowSettings, detect_dropped_wind, detect_frozen_channels, detect_heading_jumps,
+                     detect_heading_wrap, detect_late_samples, detect_missing_samples, detect_position_jumps,
+                     detect_too_little_valid, detect_velocity_mismatch, rederive_velocities)
 
 __all__ = [
     "StartWindow",
@@ -205,6 +217,8 @@ def assess_start_window(
     lookback_s: float = 10.0,
     min_valid_fraction: float = 0.5,
     heading_jump_deg: float = 10.0,
+    track_window_s: float = TRACK_WINDOW_S,
+    track_mismatch_m: float = TRACK_MISMATCH_M,
     on_refuse: str = "raise",
 ) -> StartWindow:
     """Validate the start window of each forecast start and compute its start values.
@@ -249,6 +263,9 @@ def assess_start_window(
         1 Hz, more than twice the Gunnerus's fastest. A log sampled slower than 1 Hz without
         ``r_deg_s`` may need a larger value; a gyro or compass fault (a wrong heading source,
         a spike) is typically tens of degrees.
+    track_window_s, track_mismatch_m : float, default 30.0 and 5.0
+        ``velocity_mismatch`` above ``track_mismatch_m`` [m] over ``track_window_s`` [s] (clean
+        logs of truthsim-dev, the project's simulator and Esso Osaka: at most 1.1 m).
     on_refuse : {"raise", "flag"}
         Raise :class:`StartWindowError` for a refused start, or return it flagged with
         NaN start values.
@@ -265,7 +282,7 @@ def assess_start_window(
     if on_refuse not in ("raise", "flag"):
         raise ValueError(f"on_refuse must be 'raise' or 'flag', got {on_refuse!r}")
     settings = WindowSettings(window_s, frozen_s, frozen_motion_m, frozen_turn_deg, jump_m, lookback_s,
-                              min_valid_fraction, heading_jump_deg)
+                              min_valid_fraction, heading_jump_deg, track_window_s, track_mismatch_m)
     idx = np.atleast_1d(np.asarray(idx, dtype=int))
     n = len(arrays)
     if np.any((idx < 0) | (idx >= n)):
@@ -298,6 +315,7 @@ def _assess_start(view: LogView, i: int, settings: WindowSettings):
     detect_missing_samples(view, win)
     detect_late_samples(view, win, settings)
     detect_frozen_channels(view, win, settings)
+    detect_velocity_mismatch(view, win, settings)
     detect_position_jumps(view, win, settings)
     detect_heading_jumps(view, win, settings)
     detect_heading_wrap(view, win)

@@ -73,6 +73,7 @@ from pydantic import BaseModel, ConfigDict, Field
 
 from ..config import start_time_rng
 from ..frames import vector_to_speed_dir
+from ..forecast_inputs.faults import TRACK_MISMATCH_M, TRACK_WINDOW_S, velocity_track_mismatch_m
 from ..messages import seconds_text
 from . import environment_kernel as kernel
 
@@ -654,6 +655,10 @@ class EnvironmentEstimator:
             return out
 
         nu_ok = np.isfinite(arrays.nu[sl]) & (arrays.nu_logged[sl] if self.config.use_velocity else False)
+        # a logged u, v that the track contradicts (a biased speed log) would pull the filtered
+        # position off the GNSS: left out, as the start window leaves it out
+        nu_ok[:, :2] &= ~(velocity_track_mismatch_m(arrays, TRACK_WINDOW_S, first_row, last)
+                          > TRACK_MISMATCH_M)[:, None]
         return {
             "z": rows(np.column_stack([arrays.eta[sl], arrays.nu[sl]])),
             "z_ok": rows(np.column_stack([np.isfinite(arrays.eta[sl]), nu_ok])),
