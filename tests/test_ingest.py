@@ -8,6 +8,7 @@ than turned into NaN deep inside a forecast.
 
 from __future__ import annotations
 
+from contextlib import nullcontext
 from dataclasses import fields
 
 import numpy as np
@@ -158,6 +159,24 @@ def test_training_says_which_samples_it_re_sorted_or_dropped(model, log):
                                               r"1 exact duplicate\(s\) dropped, 1 row\(s\) without a finite time_s"):
         out = ingest(messy, model.vessel, purpose="fit")
     assert len(out.time_s) == len(log) and np.all(np.diff(out.time_s) > 0)
+
+
+@pytest.mark.parametrize("purpose", ["fit", "forecast"])
+def test_a_log_written_backwards_is_refused_naming_time_s(model, log, purpose):
+    """Re-sorting is for late samples: a log in which most samples come after a later one
+    (written in reverse, or shuffled) is refused naming time_s and its first late sample,
+    rather than re-sorted into another log (whose headings would then contradict its yaw
+    rates). Swapped pairs (every other sample late) are still re-sorted."""
+    for bad in (log.iloc[::-1].reset_index(drop=True), log.sample(frac=1.0, random_state=0).reset_index(drop=True)):
+        with pytest.raises(LogFormatError, match=r"time_s: \d+ of the \d+ samples come after a later one .* runs "
+                                                 r"forward") as e:
+            ingest(bad, model.vessel, purpose=purpose)
+        assert e.value.column == "time_s" and e.value.row >= 1
+    n = len(log) // 2 * 2
+    pairs = log.iloc[np.arange(n).reshape(-1, 2)[:, ::-1].ravel()].reset_index(drop=True)
+    with pytest.warns(Warning) if purpose == "fit" else nullcontext():
+        out = ingest(pairs, model.vessel, purpose=purpose)
+    assert len(out.time_s) == n and np.all(np.diff(out.time_s) > 0)
 
 
 @pytest.mark.parametrize("environment", ["estimator", "mean"])

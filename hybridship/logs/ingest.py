@@ -144,6 +144,16 @@ def sort_samples(df: pd.DataFrame, *, source: str = "log") -> SortedLog:
     # arrived late: earlier than some sample before it in the input
     prev_max = np.maximum.accumulate(np.concatenate(([-np.inf], tt[:-1])))
     late = tt < prev_max
+    if late.sum() > 0.5 * tt.size:
+        # not late samples: re-sorted, a log written backwards or shuffled would be read as
+        # another (its headings against its yaw rates reversed, say)
+        k = int(np.argmax(late))
+        i = int(rows[k])
+        raise LogFormatError(
+            f"time_s: {int(late.sum())} of the {tt.size} samples come after a later one (first at row {i}: "
+            f"{seconds_text(tt[k])} s after {seconds_text(prev_max[k])} s); a log runs forward in time. Late "
+            f"samples are re-sorted, but not a log written in reverse or shuffled order (in {source})",
+            column="time_s", row=i, time_s=float(tt[k]))
     order = np.argsort(tt, kind="stable")
     frame = df.iloc[rows[order]].reset_index(drop=True)
     ts = tt[order]
