@@ -287,8 +287,13 @@ def _cmd_demo(args) -> int:
 
 
 def _add_train(sub) -> None:
-    p = sub.add_parser("train", help="train a hybrid on the DP part of a folder of logs")
-    p.add_argument("--vessel", default="gunnerus", help="packaged vessel name or vessel TOML file")
+    p = sub.add_parser("train", help="train a hybrid on the DP part of a folder of logs",
+                       description="Train a hybrid predictor (physics of --vessel plus a residual ensemble) on "
+                                   "a folder of logs and write it as one model file, which carries the vessel "
+                                   "description: 'hybridship forecast --model' needs no vessel file.")
+    p.add_argument("--vessel", default="gunnerus",
+                   help="packaged vessel name or vessel TOML file of the ship that made the logs (default "
+                        "gunnerus; the physics the nets correct)")
     p.add_argument("--logs", required=True, type=Path, help="folder of logs (*.csv, *.csv.gz, *.parquet)")
     p.add_argument("--out", required=True, type=path_argument, help="model file to write (.npz)")
     p.add_argument("--members", type=_members, default=10, help="ensemble members (default 10)")
@@ -345,7 +350,8 @@ def _cmd_train(args) -> int:
         hp = HybridPredictor(vessel, ensemble_config=EnsembleConfig(n_members=args.members, seed=args.seed))
         hp.fit(files, dp_only=not args.all_rows, progress=sys.stderr.isatty())
     hp.save(args.out)
-    print(f"trained on {hp.training_info['n_rows']} samples from {len(files)} logs; wrote {args.out}")
+    print(f"trained on {hp.training_info['n_rows']} samples from {len(files)} logs with the physics of vessel "
+          f"{vessel.name!r}; wrote {args.out}")
     for line in _learned_from_failures(hp.training_info) + _after_stop_spread(hp):
         print(line)
     return 0
@@ -517,7 +523,7 @@ def _add_benchmark(sub) -> None:
     d.add_argument("--train", type=Path, help="folder of training logs")
     d.add_argument("--test", type=Path, help="folder of test logs (default: the training logs' drifts)")
     d.add_argument("--out", type=path_argument, default=Path("drift-benchmark"), help="output folder (default drift-benchmark)")
-    d.add_argument("--vessel", default="gunnerus", help="packaged vessel name or vessel TOML file")
+    d.add_argument("--vessel", default="gunnerus", help="packaged vessel name or vessel TOML file (default gunnerus)")
     d.add_argument("--members", type=_members, default=10, help="ensemble members (default 10)")
     d.add_argument("--seed", type=_seed, default=0, help="seed of scenarios and training (default 0)")
     d.add_argument("--intervals", type=int, default=20, help="start times after each failure (default 20)")

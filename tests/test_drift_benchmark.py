@@ -260,3 +260,15 @@ def test_log_files_take_any_case_and_skip_hidden_and_summary_files(tmp_path):
     assert [p.name for p in log_files(tmp_path)] == ["A.CSV", "b.csv.gz", "c.Parquet"]
     with pytest.raises(ValueError, match="no log files"):
         log_files(tmp_path / "folder.csv")
+
+
+def test_an_out_folder_that_holds_logs_is_refused(tmp_path, capsys):
+    """The benchmark's CSV tables in a folder of logs would be read as logs by a later train
+    there: refused before any work, naming the log; the folder is left as it was."""
+    logs = tmp_path / "logs"
+    logs.mkdir()
+    (logs / "run1.csv").write_text("time_s,north_m,east_m,heading_deg\n0,0,0,0\n")
+    assert main(["benchmark", "drift", "--no-plots", "--out", str(logs)]) == 2
+    err = capsys.readouterr().err
+    assert "--out" in err and "holds logs (run1.csv)" in err
+    assert sorted(p.name for p in logs.iterdir()) == ["run1.csv"]

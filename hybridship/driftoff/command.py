@@ -193,28 +193,14 @@ def _refuse_inputs_in_out(args, mode) -> None:
         check_output_files(args.out, ("summary.md", *mine), others, ours=earlier_report)
     except OSError as exc:
         raise _usage(f"{_PROG} {mode}: error: --out {exc}") from None
-    from hybridship.evaluation.drift import log_files
+    from hybridship.evaluation.drift import logs_held
 
-    try:    # the report's CSV tables would be taken for logs by train and the benchmarks
-        logs = log_files(args.out) if Path(args.out).is_dir() else []
-    except ValueError:
-        logs = []
-    logs = [f for f in logs if f.name not in (*REPORT_ONLY_FILES, *SEASON_ONLY_FILES) and _looks_like_log(f)]
+    # the report's CSV tables would be taken for logs by train and the benchmarks
+    logs = logs_held(args.out, (*REPORT_ONLY_FILES, *SEASON_ONLY_FILES))
     if logs:
         raise _usage(f"{_PROG} {mode}: error: --out {args.out}: holds logs ({logs[0].name}"
                      f"{f' and {len(logs) - 1} more' if len(logs) > 1 else ''}); the report's CSV tables would be "
                      f"read as logs from there: give a folder of its own")
-
-
-def _looks_like_log(path: Path) -> bool:
-    """Whether a file found among logs has the log format's ``time_s`` in its header (a
-    weather table does not); Parquet files are taken as logs."""
-    from hybridship.logs.io import log_header
-
-    if path.name.lower().endswith((".parquet", ".pq")):
-        return True
-    # empty, binary or damaged (no header): not a log to protect
-    return "time_s" in [c.strip() for c in log_header(path) or ()]
 
 
 def _model(args, mode):

@@ -93,6 +93,30 @@ def log_files(folder: Path) -> list[Path]:
     return files
 
 
+def looks_like_log(path: Path) -> bool:
+    """Whether a file found among logs has the log format's ``time_s`` in its header (a
+    weather table does not); Parquet files are taken as logs."""
+    from ..logs.io import log_header
+
+    if path.name.lower().endswith((".parquet", ".pq")):
+        return True
+    # empty, binary or damaged (no header): not a log to protect
+    return "time_s" in [c.strip() for c in log_header(path) or ()]
+
+
+def logs_held(folder, ours=()) -> list[Path]:
+    """The logs in ``folder`` (none if it is not one), other than the files named ``ours``: a
+    command whose CSV tables went there would have them read as logs by ``hybridship train``
+    and the benchmarks."""
+    if not Path(folder).is_dir():
+        return []
+    try:
+        files = log_files(folder)
+    except ValueError:
+        return []
+    return [f for f in files if f.name not in ours and looks_like_log(f)]
+
+
 @dataclass
 class DriftBenchmarkResult:
     """Everything the benchmark measured (tables as DataFrames, paths of written files)."""
@@ -113,11 +137,16 @@ FIGURE_FILES = ("error_vs_horizon.png", "trajectories.png")
 
 def check_output_folder(out_dir, plots: bool = True) -> None:
     """Refuse, before any work, an output folder where the benchmark would replace or remove a
-    file that no hybridship command wrote (FileExistsError) or a read-only one
-    (PermissionError); files of a benchmark run from before folders kept a record of their
-    outputs (its ``tables.md`` beside them) are recognised."""
+    file that no hybridship command wrote, or one that holds logs (FileExistsError), or a
+    read-only one (PermissionError); files of a benchmark run from before folders kept a
+    record of their outputs (its ``tables.md`` beside them) are recognised."""
     check_output_files(out_dir, TABLE_FILES + (FIGURE_FILES if plots else ()), () if plots else FIGURE_FILES,
                        ours=earlier_run(TABLE_FILES + FIGURE_FILES, "tables.md", b"Drift benchmark"))
+    logs = logs_held(out_dir, TABLE_FILES)
+    if logs:
+        more = f" and {len(logs) - 1} more" if len(logs) > 1 else ""
+        raise FileExistsError(f"{out_dir}: holds logs ({logs[0].name}{more}); the benchmark's CSV tables would be "
+                              f"read as logs from there: give a folder of its own")
 
 
 def run_drift_benchmark(train=None, test=None, out_dir="drift-benchmark", *, vessel="gunnerus",
