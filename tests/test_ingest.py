@@ -8,7 +8,6 @@ than turned into NaN deep inside a forecast.
 
 from __future__ import annotations
 
-from contextlib import nullcontext
 from dataclasses import fields
 
 import numpy as np
@@ -161,22 +160,20 @@ def test_training_says_which_samples_it_re_sorted_or_dropped(model, log):
     assert len(out.time_s) == len(log) and np.all(np.diff(out.time_s) > 0)
 
 
-@pytest.mark.parametrize("purpose", ["fit", "forecast"])
-def test_a_log_written_backwards_is_refused_naming_time_s(model, log, purpose):
-    """Re-sorting is for late samples: a log in which most samples come after a later one
-    (written in reverse, or shuffled) is refused naming time_s and its first late sample,
-    rather than re-sorted into another log (whose headings would then contradict its yaw
-    rates). Swapped pairs (every other sample late) are still re-sorted."""
-    for bad in (log.iloc[::-1].reset_index(drop=True), log.sample(frac=1.0, random_state=0).reset_index(drop=True)):
-        with pytest.raises(LogFormatError, match=r"time_s: \d+ of the \d+ samples come after a later one .* runs "
-                                                 r"forward") as e:
-            ingest(bad, model.vessel, purpose=purpose)
-        assert e.value.column == "time_s" and e.value.row >= 1
-    n = len(log) // 2 * 2
-    pairs = log.iloc[np.arange(n).reshape(-1, 2)[:, ::-1].ravel()].reset_index(drop=True)
-    with pytest.warns(Warning) if purpose == "fit" else nullcontext():
-        out = ingest(pairs, model.vessel, purpose=purpose)
-    assert len(out.time_s) == n and np.all(np.diff(out.time_s) > 0)
+def test_a_time_column_that_runs_backwards_says_the_samples_were_re_sorted(model, log):
+    """A log written backwards is re-sorted into the right log; a time_s column reversed
+    against the other columns cannot be told from it by time alone, and the re-sorted log's
+    yaw rate then contradicts its heading: the refusal also says that most samples were
+    re-sorted, so that the reader does not look for a sign convention only."""
+    out = ingest(log.iloc[::-1].reset_index(drop=True), model.vessel, purpose="forecast")
+    np.testing.assert_array_equal(out.time_s, ingest(log, model.vessel, purpose="forecast").time_s)
+    r = 2.0 * np.sin(log.time_s.to_numpy() / 30.0)                     # a zigzag [deg/s]
+    turning = log.assign(heading_deg=np.mod(10.0 + np.cumsum(r), 360.0), r_deg_s=r)
+    reversed_time = turning.assign(time_s=turning.time_s.to_numpy()[::-1])
+    with pytest.raises(LogFormatError, match=r"r_deg_s: has the opposite sign .*; note: \d+ of the \d+ samples "
+                                             r"came after a later one and were re-sorted by time_s") as e:
+        ingest(reversed_time, model.vessel, purpose="forecast")
+    assert e.value.column == "r_deg_s"
 
 
 @pytest.mark.parametrize("environment", ["estimator", "mean"])

@@ -144,16 +144,6 @@ def sort_samples(df: pd.DataFrame, *, source: str = "log") -> SortedLog:
     # arrived late: earlier than some sample before it in the input
     prev_max = np.maximum.accumulate(np.concatenate(([-np.inf], tt[:-1])))
     late = tt < prev_max
-    if late.sum() > 0.5 * tt.size:
-        # not late samples: re-sorted, a log written backwards or shuffled would be read as
-        # another (its headings against its yaw rates reversed, say)
-        k = int(np.argmax(late))
-        i = int(rows[k])
-        raise LogFormatError(
-            f"time_s: {int(late.sum())} of the {tt.size} samples come after a later one (first at row {i}: "
-            f"{seconds_text(tt[k])} s after {seconds_text(prev_max[k])} s); a log runs forward in time. Late "
-            f"samples are re-sorted, but not a log written in reverse or shuffled order (in {source})",
-            column="time_s", row=i, time_s=float(tt[k]))
     order = np.argsort(tt, kind="stable")
     frame = df.iloc[rows[order]].reset_index(drop=True)
     ts = tt[order]
@@ -242,10 +232,25 @@ def _from_frame(df: pd.DataFrame, v, purpose: str, source: str) -> tuple[LogArra
         if order.changed:    # training data should be clean: say what was repaired
             _warn_repaired(order, source)
     allow_missing = purpose == "forecast"
-    check_log_against_vessel(order.frame, v, source=source, allow_missing=allow_missing)
+    try:
+        check_log_against_vessel(order.frame, v, source=source, allow_missing=allow_missing)
+    except LogFormatError as exc:
+        raise _with_resort_hint(exc, order) from None
     arrays = _frame_to_arrays(order.frame, tuple(v.channel_names), tuple(v.rotatable),
                               resorted_time_s=order.affected_time_s)
     return arrays, order
+
+
+def _with_resort_hint(exc: LogFormatError, order: SortedLog) -> LogFormatError:
+    """``exc``, saying also that most samples were re-sorted when a rate check failed: a
+    ``time_s`` column that runs backwards against the other columns reverses the heading's
+    and the track's rates, and the sort made them look like a sign or unit fault."""
+    if exc.column not in ("r_deg_s", "u_m_s", "v_m_s") or order.late_time_s.size <= 0.5 * len(order.frame):
+        return exc
+    return LogFormatError(f"{exc}; note: {order.late_time_s.size} of the {len(order.frame)} samples came after a "
+                          f"later one and were re-sorted by time_s: if time_s runs backwards against the other "
+                          f"columns, that reverses these rates too", column=exc.column, row=exc.row,
+                          time_s=exc.time_s)
 
 
 def _warn_repaired(order: SortedLog, source: str) -> None:
