@@ -290,7 +290,7 @@ def _add_train(sub) -> None:
     p = sub.add_parser("train", help="train a hybrid on the DP part of a folder of logs",
                        description="Train a hybrid predictor (physics of --vessel plus a residual ensemble) on "
                                    "a folder of logs and write it as one model file, which carries the vessel "
-                                   "description: 'hybridship forecast --model' needs no vessel file.")
+                                   "description: forecasting from it needs no vessel file.")
     p.add_argument("--vessel", default="gunnerus",
                    help="packaged vessel name or vessel TOML file of the ship that made the logs (default "
                         "gunnerus; the physics the nets correct)")

@@ -123,6 +123,17 @@ def test_missing_required_column_points_at_a_unit_variant(moving_log):
                  r"in another unit")
 
 
+def test_a_table_hybridship_wrote_is_not_read_as_a_log(moving_log):
+    """A forecast table (it has time_s, north_m, ... besides start_time_s and lead_s) or a
+    benchmark's table left in a folder of logs is refused as what it is, not for a missing
+    thruster column or time_s."""
+    forecast = moving_log[["time_s", "north_m", "east_m", "heading_deg"]].assign(start_time_s=0.0, lead_s=0.0)
+    _refused(forecast, r"not a log: a forecast table written by 'hybridship forecast' \(its header has lead_s, "
+                       r"start_time_s\); keep such outputs out of a folder of logs")
+    coverage = pd.DataFrame({"model": ["hybrid"], "horizon_s": [60], "sigma": [2], "coverage": [0.95]})
+    _refused(coverage, r"not a log: a table written by a hybridship benchmark")
+
+
 def test_missing_required_column_suggests_a_misspelt_or_bare_name_and_lists_a_few_columns(moving_log):
     _refused(moving_log.rename(columns={"north_m": "nort_m"}), r"found 'nort_m': did you mean 'north_m'\?")
     _refused(moving_log.rename(columns={"heading_deg": "Heading_deg"}),

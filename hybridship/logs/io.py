@@ -563,10 +563,28 @@ def _check_unique_names(cols: list[str], source: str) -> None:
                              column=dup[0])
 
 
+#: Columns of the tables hybridship writes, by which one read as a log is recognised.
+_OUTPUT_COLUMNS = {"start_time_s", "lead_s", "model", "horizon_s", "sigma", "coverage", "mae"}
+
+
+def _hybridship_table(cols: list[str]) -> str:
+    """What a table with these columns is, if hybridship wrote it ("" if it may be a log)."""
+    names = set(map(str, cols))
+    if {"start_time_s", "lead_s"} <= names:
+        return "a forecast table written by 'hybridship forecast'"
+    if "time_s" not in names and {"model", "horizon_s"} <= names:
+        return "a table written by a hybridship benchmark"
+    return ""
+
+
 def _check_column_names(cols: list[str], source: str) -> None:
     """Unique column names, and every required column present (pointing out one that
     looks like it in another unit, ``heading_rad``)."""
     _check_unique_names(cols, source)
+    ours = _hybridship_table(cols)
+    if ours:
+        raise LogFormatError(f"not a log: {ours} (its header has {', '.join(sorted(set(cols) & _OUTPUT_COLUMNS))}); "
+                             f"keep such outputs out of a folder of logs{_where(source)}")
     missing = [c for c in REQUIRED_COLUMNS if c not in cols]
     if missing:
         one_name = len(cols) == 1 and any(sep in cols[0] for sep in (";", "\t"))
