@@ -185,7 +185,7 @@ def test_a_position_or_heading_spike_is_gated_and_a_lasting_shift_is_followed(mo
 
 def test_a_biased_speed_log_does_not_pull_the_estimate_off_the_track(model, monkeypatch):
     """A speed log reading 1 m/s too much in sway for the last 100 s before a start: the
-    filter leaves the logged u, v out once they disagree with the track (5 m within 30 s,
+    filter leaves the logged u, v out once they disagree with the track (8 m within 30 s,
     as the start window's ``velocity_mismatch``), so its position stays within 1 m of the
     clean log's estimate. Trusted, the velocity (0.05 m/s noise against 0.5 m for the
     position) would pull the estimate metres off the GNSS."""

@@ -150,16 +150,16 @@ FAULTS = {
     # a lasting heading shift: unconfirmed (dropped) at T, then the new headings are used;
     # flagged while the shift lies within lookback_s (10 s) before the window. The logged
     # velocity, rotated with the shifted heading, then disagrees with the track (by 0.3 m/s
-    # here): velocity_mismatch once that reaches 5 m over 30 s, from T + 18 on, and u, v
+    # here): velocity_mismatch once that reaches 8 m over 30 s, from T + 29 on, and u, v
     # derived from the track with that heading (which moves the forecast along the track)
     # then differ from the logged ones by up to the ship's speed
     "gyro shift": fault(_shift("heading_deg", slice(T, None), 60.0), F.HEADING_JUMP, range(T, T + 14),
                         head_tol=61.0, span=T + 40, nu_tol=0.35),
     # a speed log biased by 1 m/s in sway from T on (the ship makes 0.3 m/s): detected once
-    # the logged velocity has moved the ship 5 m off the track within 30 s, at T + 5; u and
+    # the logged velocity has moved the ship 8 m off the track within 30 s, at T + 8; u and
     # v are then derived from the track (within 1 mm/s of the fault-free values here,
     # test_a_biased_speed_log_is_replaced_by_the_track); before, the bias is in the start
-    "biased speed log": fault(_shift("v_m_s", slice(T, None), 1.0), F.VELOCITY_MISMATCH, range(T + 5, T + 40),
+    "biased speed log": fault(_shift("v_m_s", slice(T, None), 1.0), F.VELOCITY_MISMATCH, range(T + 8, T + 40),
                               span=T + 40, nu_tol=1.01),
     # away for five samples and back: a lasting shift until the return (at T + 5 the return
     # into the start row leaves one valid heading: refused), then the excursion is dropped
@@ -247,7 +247,7 @@ def test_a_biased_speed_log_is_replaced_by_the_track(model, log):
     track (within 1 mm/s), and the positions are not judged by it (no position jump), also
     at a start 25 s after the bias, whose jump check would otherwise see a step it does
     not explain at every row."""
-    starts = [T_FAULT + 5.0, T_FAULT + 25.0]
+    starts = [T_FAULT + 8.0, T_FAULT + 25.0]
     _, clean = _assess(model, log.copy(), starts)
     _, sw = _assess(model, _shift("v_m_s", slice(T_FAULT, None), 1.0)(log.copy()), starts)
     assert sw.flags[F.VELOCITY_MISMATCH].all() and not sw.flags[F.POSITION_JUMP].any()
@@ -256,9 +256,12 @@ def test_a_biased_speed_log_is_replaced_by_the_track(model, log):
     np.testing.assert_array_equal(sw.eta0, clean.eta0)
 
 
-def test_velocity_track_mismatch_is_causal_and_ignores_position_jumps(model, log):
+def test_velocity_track_mismatch_is_causal_and_ignores_position_faults(model, log):
     """The mismatch at a row depends on the rows before it only; a GNSS spike or datum
-    shift (a step beyond jump_m) and a frozen receiver add nothing to it, a bias does."""
+    shift (a step beyond jump_m), a frozen receiver and a receiver that holds its fix
+    between 1-Hz updates of a 10-Hz log add nothing to it; a bias does, also a bias of
+    several m/s that moves every position step beyond jump_m, and so does a steady turn's
+    exact travel at 0.2 Hz not."""
     a = forecast_log_arrays(log, model.vessel)[0]
     full = velocity_track_mismatch_m(a, 30.0)
     assert np.nanmax(full) < 1.0                                  # clean: noise only
@@ -270,10 +273,23 @@ def test_velocity_track_mismatch_is_causal_and_ignores_position_jumps(model, log
                    _freeze(["north_m", "east_m"], T_FAULT, T_FAULT + 20)):
         faulty = forecast_log_arrays(inject(log.copy()), model.vessel)[0]
         assert np.nanmax(velocity_track_mismatch_m(faulty, 30.0)) < 1.0
-    biased = forecast_log_arrays(_shift("u_m_s", slice(T_FAULT, None), 0.5)(log.copy()), model.vessel)[0]
-    m = velocity_track_mismatch_m(biased, 30.0)
-    np.testing.assert_array_equal(m[:T_FAULT], full[:T_FAULT])
-    assert m[T_FAULT + 29] == pytest.approx(14.5, abs=1.0)      # 0.5 m/s over the 29 s since
+    for bias, at_29_s in ((0.5, 14.5), (6.0, 174.0)):
+        biased = forecast_log_arrays(_shift("u_m_s", slice(T_FAULT, None), bias)(log.copy()), model.vessel)[0]
+        m = velocity_track_mismatch_m(biased, 30.0)
+        np.testing.assert_array_equal(m[:T_FAULT], full[:T_FAULT])
+        assert m[T_FAULT + 29] == pytest.approx(at_29_s, rel=0.05)      # the bias over the 29 s since
+    fast = physics_log(model, seed=3, duration_s=300.0, t_shutdown_s=None, rpm_scale=0.6, dt_s=0.1)
+    held = fast.copy()
+    held[["north_m", "east_m"]] = fast[["north_m", "east_m"]].to_numpy()[np.arange(len(fast)) // 10 * 10]
+    assert np.nanmax(velocity_track_mismatch_m(forecast_log_arrays(held, model.vessel)[0], 30.0)) < 1.0
+    t = np.arange(0.0, 600.0, 5.0)                                    # 0.2 Hz, 12 m/s turning at 5 deg/s
+    psi = np.radians(5.0) * t
+    turning = forecast_log_arrays(pd.DataFrame({
+        "time_s": t, "north_m": 12.0 / np.radians(5.0) * np.sin(psi),
+        "east_m": 12.0 / np.radians(5.0) * (1 - np.cos(psi)),
+        "heading_deg": np.degrees(psi) % 360.0, "u_m_s": 12.0, "v_m_s": 0.0, "r_deg_s": 5.0, "dp_active": 0}),
+        model.vessel)[0]
+    assert np.nanmax(velocity_track_mismatch_m(turning, 30.0)) < 1e-6
 
 
 def test_gnss_spike_without_logged_velocities_is_rederived(model, log):

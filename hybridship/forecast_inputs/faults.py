@@ -63,7 +63,7 @@ __all__ = [
 #: logged velocity is not trusted (the start window's ``velocity_mismatch``, and the
 #: environment estimator's filter, which then leaves it out).
 TRACK_WINDOW_S = 30.0
-TRACK_MISMATCH_M = 5.0
+TRACK_MISMATCH_M = 8.0
 
 
 class FaultFlags:
@@ -285,8 +285,8 @@ class LogView:
         dt_nom = float(np.median(np.diff(t))) if len(arrays) > 1 else 1.0
         n_nom = max(1, int(round(settings.window_s / dt_nom)))
         n_min = max(1, math.ceil(settings.min_valid_fraction * n_nom))
-        mismatch = velocity_track_mismatch_m(arrays, settings.track_window_s,
-                                             step_limit_m=settings.jump_m) > settings.track_mismatch_m
+        mismatch = velocity_track_mismatch_m(arrays, settings.track_window_s, step_limit_m=settings.jump_m,
+                                             frozen_s=settings.frozen_s) > settings.track_mismatch_m
         return cls(arrays, dt_nom, n_nom, n_min, np.asarray(affected_time_s), _runs(arrays.eta[:, :2]),
                    _runs(arrays.eta[:, 2]), tuple(_runs(arrays.nu[:, j]) for j in range(3)), mismatch)
 
@@ -499,53 +499,77 @@ def detect_frozen_channels(view: LogView, win: Window, settings: WindowSettings)
 
 
 def velocity_track_mismatch_m(arrays, window_s: float, first_row: int = 0, last_row: int | None = None, *,
-                              step_limit_m: float = 5.0) -> np.ndarray:
+                              step_limit_m: float = 5.0, frozen_s: float = 3.0) -> np.ndarray:
     """How far the logged ``u``, ``v`` disagree with the track [m], per row.
 
-    For row ``i`` of ``first_row .. last_row`` (default: to the end), over the steps between
-    consecutive rows of the trailing ``window_s`` seconds: the length of the difference
-    between how the positions moved and how the logged velocity, rotated into NED with the
-    logged heading (trapezoid), says the ship moved. A biased or corrupt velocity log grows
-    it by its bias times the window. So does a heading off by a lasting angle while the
-    ship is under way (a gyro offset that the heading checks accept as a lasting shift):
-    the logged velocity then points the wrong way, and the velocity derived from the track
-    with that heading is the one that moves the forecast along the track. Steps that cannot
-    say anything are left out: those next to a missing position, heading or logged velocity,
-    those whose position repeats bit for bit (a frozen receiver), and those whose position
-    change differs from the velocity's by more than ``step_limit_m``, a position jump (a
-    spike, an excursion, a datum shift) that :func:`detect_position_jumps` and the
-    estimator's outlier gate deal with. The window stays within the row's segment and does
-    not reach before ``first_row``, so the value depends on those rows alone (causal). NaN
-    where the window covers less than half of ``window_s``. The position noise and the
-    wave-frequency motion, which both channels carry, leave it near 1 m or below on clean
-    logs (30 s; GNSS noise 0.5 m).
+    For row ``i`` of ``first_row .. last_row`` (default: to the end), with ``j`` the first
+    row of the trailing ``window_s`` seconds: the length of the difference between the
+    position's change from ``j`` to ``i`` and the logged velocity's travel over the same
+    steps, each step rotated into NED with the logged heading (exactly for a steady turn:
+    the mean velocity turned to the mid heading and shortened by ``sinc`` of half the
+    turn). A biased or corrupt velocity log grows it by its bias times the window; so does
+    a heading off by a lasting angle while the ship is under way (the velocity derived from
+    the track with that heading is then the one that moves a forecast along the track).
+    Only the window's end positions enter, so position noise and a receiver that holds its
+    fix between updates do not add up.
+
+    NaN where the window says nothing of the velocity: it covers less than half of
+    ``window_s``; a step in it lacks a logged finite velocity or heading; an end position
+    is missing; a position in it repeats bit for bit for ``frozen_s`` or more (a frozen
+    receiver); or a position in it jumps (a spike, an excursion, a datum shift): its
+    change from the previous valid position, as a mean velocity over the step in the body
+    frame (turned with the headings, exactly for a steady turn), departs from the step
+    before it by more than ``step_limit_m`` over its step. That test reads the positions
+    and headings alone, so a velocity fault, however large, is not taken for a position
+    jump, and a ship in a steady turn makes none at any sample rate. The window stays within the row's segment and does not reach before
+    ``first_row``, so the value depends on those rows alone (causal). Clean logs stay below
+    1 m over 30 s (GNSS noise 0.5 m).
 
     Returns
     -------
     ndarray, shape (last_row + 1 - first_row,)
     """
     last = len(arrays.time_s) - 1 if last_row is None else int(last_row)
-    sl = slice(int(first_row), last + 1)
+    sl = slice(max(int(first_row), 0), last + 1)
     t, pos, psi, nu = arrays.time_s[sl], arrays.eta[sl, :2], arrays.eta[sl, 2], arrays.nu[sl, :2]
+    n = t.size
+    if n == 0:
+        return np.zeros(0)
     seg = arrays.segment_id[sl]
-    v_ned = _ned(nu, psi)
-    ok = (np.all(np.isfinite(v_ned), axis=1) & arrays.nu_logged[sl, 0] & arrays.nu_logged[sl, 1]
-          & np.all(np.isfinite(pos), axis=1))
-    moved = pos[1:] - pos[:-1]
-    logged = 0.5 * (v_ned[1:] + v_ned[:-1]) * np.diff(t)[:, None]
-    use = ok[1:] & ok[:-1] & (seg[1:] == seg[:-1]) & np.any(moved != 0.0, axis=1)
-    with np.errstate(invalid="ignore"):
-        use &= np.hypot(*(moved - logged).T) <= step_limit_m
-
-    def summed(steps):
-        return np.concatenate([np.zeros((1, 2)), np.cumsum(np.where(use[:, None], steps, 0.0), axis=0)])
-
-    track, travelled = summed(moved), summed(logged)
-    i = np.arange(t.size)
-    seg_first = np.searchsorted(seg, seg, side="left")           # segment ids increase with the rows
+    new_seg = np.concatenate([[True], seg[1:] != seg[:-1]])
+    idx = np.arange(n)
+    seg_first = np.maximum.accumulate(np.where(new_seg, idx, 0))
+    # the logged velocity's travel over each step, exact for a steady turn
+    turn = wrap_pi(psi[1:] - psi[:-1])
+    half = 0.5 * turn
+    shrink = np.where(np.abs(half) > 1e-9, np.sin(half) / np.where(half == 0.0, 1.0, half), 1.0)
+    step = _ned(0.5 * (nu[1:] + nu[:-1]), psi[:-1] + half) * (np.diff(t) * shrink)[:, None]
+    logged = arrays.nu_logged[sl, 0] & arrays.nu_logged[sl, 1]
+    step_ok = np.all(np.isfinite(step), axis=1) & logged[1:] & logged[:-1] & ~new_seg[1:]
+    travelled = np.concatenate([np.zeros((1, 2)), np.cumsum(np.where(step_ok[:, None], step, 0.0), axis=0)])
+    n_bad = np.concatenate([[0], np.cumsum(~step_ok)])                 # bad steps ending at rows <= k
+    # position faults, from positions and headings alone: jumps, frozen fixes
+    pos_ok = np.all(np.isfinite(pos), axis=1)
+    valid = np.flatnonzero(pos_ok & np.isfinite(psi))
+    jump = pos_ok & ~np.isfinite(psi)                   # a position without a heading cannot be judged
+    if valid.size > 2:
+        a, b = valid[:-1], valid[1:]
+        dt_ab = t[b] - t[a]
+        half_ab = 0.5 * wrap_pi(psi[b] - psi[a])
+        shrink_ab = np.where(np.abs(half_ab) > 1e-9, np.sin(half_ab) / np.where(half_ab == 0.0, 1.0, half_ab), 1.0)
+        c, s_ = np.cos(psi[a] + half_ab), np.sin(psi[a] + half_ab)
+        moved = (pos[b] - pos[a]) / (dt_ab * shrink_ab)[:, None]
+        body = np.stack([c * moved[:, 0] + s_ * moved[:, 1], -s_ * moved[:, 0] + c * moved[:, 1]], -1)
+        change = np.hypot(*(body[1:] - body[:-1]).T) * dt_ab[1:]
+        jump[b[1:]] |= (seg[a[1:]] == seg[a[:-1]]) & (change > step_limit_m)
+    first, end = _runs(pos)
+    stale = pos_ok & (t[end] - t[first] >= frozen_s - 1e-9)
+    n_jump, n_stale = (np.concatenate([[0], np.cumsum(x)]) for x in (jump, stale))
     j = np.maximum(np.searchsorted(t, t - window_s, side="left"), seg_first)
-    d = np.hypot(*((track[i] - track[j]) - (travelled[i] - travelled[j])).T)
-    return np.where(t[i] - t[j] >= 0.5 * window_s, d, np.nan)
+    d = np.hypot(*((pos - pos[j]) - (travelled - travelled[j])).T)
+    evidence = ((t - t[j] >= 0.5 * window_s) & pos_ok & pos_ok[j] & (n_bad[idx] == n_bad[j])
+                & (n_stale[idx + 1] == n_stale[j]) & (n_jump[idx + 1] == n_jump[j]))
+    return np.where(evidence, d, np.nan)
 
 
 def detect_velocity_mismatch(view: LogView, win: Window, settings: WindowSettings) -> None:

@@ -65,13 +65,15 @@ Faults and their behaviour (``FaultFlags`` names the flags):
     a jump are invalid; logged velocities flagged ``velocity_mismatch`` do not explain steps.
 ``velocity_mismatch``
     The logged ``u``, ``v``, rotated with the heading, disagree with the track by more than
-    ``track_mismatch_m`` (5 m) over the trailing ``track_window_s`` (30 s)
-    (:func:`~hybridship.forecast_inputs.faults.velocity_track_mismatch_m`; position jumps
-    and a frozen receiver are left out of it): a biased or failed speed log, or a heading
-    off by a lasting angle while under way. u and v are derived from the track instead.
-    The environment estimator of a hybrid forecast leaves such samples out of its filter
-    as well, so its start state stays on the track. A bias is found once it has moved the
-    ship 5 m off the track (5 s at 1 m/s); until then it is in the start values.
+    ``track_mismatch_m`` (8 m) over the trailing ``track_window_s`` (30 s)
+    (:func:`~hybridship.forecast_inputs.faults.velocity_track_mismatch_m`; not judged
+    while a position jump or a frozen receiver lies in that window, nor in the first 15 s
+    of a segment): a biased or failed speed log, or a heading off by a lasting angle while
+    under way. u and v are derived from the track instead. The environment estimator of a
+    hybrid forecast leaves such samples out of its filter as well (with the default
+    thresholds), so its start state stays on the track. A bias is found once it has moved
+    the ship 8 m off the track (8 s at 1 m/s; a bias under 0.27 m/s never); until then it
+    is in the start values.
 ``heading_jump``
     A step between consecutive valid headings (the smallest signed angle: a wrap across
     0/360 or +-180 deg is no step) that differs from what the yaw rate explains (the logged
@@ -263,7 +265,7 @@ def assess_start_window(
         1 Hz, more than twice the Gunnerus's fastest. A log sampled slower than 1 Hz without
         ``r_deg_s`` may need a larger value; a gyro or compass fault (a wrong heading source,
         a spike) is typically tens of degrees.
-    track_window_s, track_mismatch_m : float, default 30.0 and 5.0
+    track_window_s, track_mismatch_m : float, default 30.0 and 8.0
         ``velocity_mismatch`` above ``track_mismatch_m`` [m] over ``track_window_s`` [s] (clean
         logs of truthsim-dev, the project's simulator and Esso Osaka: at most 1.1 m).
     on_refuse : {"raise", "flag"}
