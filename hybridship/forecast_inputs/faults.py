@@ -265,7 +265,8 @@ class LogView:
         and each of u, v, r).
     track_mismatch : ndarray of bool, shape (N,)
         Rows whose logged u, v disagree with the track (:func:`velocity_track_mismatch_m`
-        above ``track_mismatch_m`` over ``track_window_s``).
+        above ``track_mismatch_m`` over ``track_window_s``); judged from the row
+        ``first_row`` of :meth:`build` on, False before it.
     """
 
     arrays: object
@@ -279,14 +280,22 @@ class LogView:
     track_mismatch: np.ndarray
 
     @classmethod
-    def build(cls, arrays, settings: WindowSettings, affected_time_s) -> "LogView":
-        """The view of ``arrays``; ``affected_time_s`` from the sort report (or the arrays)."""
+    def build(cls, arrays, settings: WindowSettings, affected_time_s, first_start: int = 0) -> "LogView":
+        """The view of ``arrays``; ``affected_time_s`` from the sort report (or the arrays).
+        ``first_start``: the earliest start row to be assessed (the velocity check is
+        computed only as far back as its windows reach)."""
         t = arrays.time_s
         dt_nom = float(np.median(np.diff(t))) if len(arrays) > 1 else 1.0
         n_nom = max(1, int(round(settings.window_s / dt_nom)))
         n_min = max(1, math.ceil(settings.min_valid_fraction * n_nom))
-        mismatch = velocity_track_mismatch_m(arrays, settings.track_window_s, step_limit_m=settings.jump_m,
-                                             frozen_s=settings.frozen_s) > settings.track_mismatch_m
+        # rows from a second before the earliest start's lookback, less a track window and a
+        # frozen run: what the detectors read is then as on the whole log
+        reach = settings.window_s + settings.lookback_s + settings.track_window_s + settings.frozen_s + 1.0
+        first = int(np.searchsorted(t, t[first_start] - reach, side="left")) if len(t) else 0
+        mismatch = np.zeros(len(t), dtype=bool)
+        mismatch[first:] = velocity_track_mismatch_m(arrays, settings.track_window_s, first,
+                                                     step_limit_m=settings.jump_m,
+                                                     frozen_s=settings.frozen_s) > settings.track_mismatch_m
         return cls(arrays, dt_nom, n_nom, n_min, np.asarray(affected_time_s), _runs(arrays.eta[:, :2]),
                    _runs(arrays.eta[:, 2]), tuple(_runs(arrays.nu[:, j]) for j in range(3)), mismatch)
 
@@ -510,13 +519,14 @@ def velocity_track_mismatch_m(arrays, window_s: float, first_row: int = 0, last_
     turn). A biased or corrupt velocity log grows it by its bias times the window; so does
     a heading off by a lasting angle while the ship is under way (the velocity derived from
     the track with that heading is then the one that moves a forecast along the track).
-    Only the window's end positions enter, so position noise and a receiver that holds its
-    fix between updates do not add up.
+    Only the window's end positions enter, so position noise does not add up; each end is
+    a fresh fix (one that differs from the row before: the window starts at the first such
+    row in it), so a receiver that holds its fix between updates does not count either.
 
     NaN where the window says nothing of the velocity: it covers less than half of
-    ``window_s``; a step in it lacks a logged finite velocity or heading; an end position
-    is missing; a position in it repeats bit for bit for ``frozen_s`` or more (a frozen
-    receiver); or a position in it jumps (a spike, an excursion, a datum shift): its
+    ``window_s``; a step in it lacks a logged finite velocity or heading; the row's
+    position is missing or not a fresh fix; a position in it has repeated bit for bit for
+    ``frozen_s`` or more up to then (a frozen receiver); or a position in it jumps (a spike, an excursion, a datum shift): its
     change from the previous valid position, as a mean velocity over the step in the body
     frame (turned with the headings, exactly for a steady turn), departs from the step
     before it by more than ``step_limit_m`` over its step. That test reads the positions
@@ -562,12 +572,14 @@ def velocity_track_mismatch_m(arrays, window_s: float, first_row: int = 0, last_
         body = np.stack([c * moved[:, 0] + s_ * moved[:, 1], -s_ * moved[:, 0] + c * moved[:, 1]], -1)
         change = np.hypot(*(body[1:] - body[:-1]).T) * dt_ab[1:]
         jump[b[1:]] |= (seg[a[1:]] == seg[a[:-1]]) & (change > step_limit_m)
-    first, end = _runs(pos)
-    stale = pos_ok & (t[end] - t[first] >= frozen_s - 1e-9)
+    run_first, _ = _runs(pos)
+    fresh = pos_ok & ((run_first == idx) | new_seg)
+    stale = pos_ok & (t - t[run_first] >= frozen_s - 1e-9)              # so far: causal
     n_jump, n_stale = (np.concatenate([[0], np.cumsum(x)]) for x in (jump, stale))
-    j = np.maximum(np.searchsorted(t, t - window_s, side="left"), seg_first)
+    next_fresh = np.minimum.accumulate(np.where(fresh, idx, n)[::-1])[::-1]
+    j = np.minimum(next_fresh[np.maximum(np.searchsorted(t, t - window_s, side="left"), seg_first)], idx)
     d = np.hypot(*((pos - pos[j]) - (travelled - travelled[j])).T)
-    evidence = ((t - t[j] >= 0.5 * window_s) & pos_ok & pos_ok[j] & (n_bad[idx] == n_bad[j])
+    evidence = ((t - t[j] >= 0.5 * window_s) & fresh & fresh[j] & (n_bad[idx] == n_bad[j])
                 & (n_stale[idx + 1] == n_stale[j]) & (n_jump[idx + 1] == n_jump[j]))
     return np.where(evidence, d, np.nan)
 

@@ -266,8 +266,7 @@ def assess_start_window(
         ``r_deg_s`` may need a larger value; a gyro or compass fault (a wrong heading source,
         a spike) is typically tens of degrees.
     track_window_s, track_mismatch_m : float, default 30.0 and 8.0
-        ``velocity_mismatch`` above ``track_mismatch_m`` [m] over ``track_window_s`` [s] (clean
-        logs of truthsim-dev, the project's simulator and Esso Osaka: at most 1.1 m).
+        ``velocity_mismatch`` above ``track_mismatch_m`` [m] over ``track_window_s`` [s].
     on_refuse : {"raise", "flag"}
         Raise :class:`StartWindowError` for a refused start, or return it flagged with
         NaN start values.
@@ -289,7 +288,8 @@ def assess_start_window(
     n = len(arrays)
     if np.any((idx < 0) | (idx >= n)):
         raise IndexError(f"idx: start rows must lie in 0..{n - 1}, got {idx[(idx < 0) | (idx >= n)][0]}")
-    view = LogView.build(arrays, settings, order.affected_time_s if order is not None else arrays.resorted_time_s)
+    affected = order.affected_time_s if order is not None else arrays.resorted_time_s
+    view = LogView.build(arrays, settings, affected, int(idx.min()) if idx.size else 0)
     S = idx.size
     out_eta, out_nu, out_wind = np.full((S, 3), np.nan), np.full((S, 3), np.nan), np.zeros((S, 2))
     flags = {k: np.zeros(S, dtype=bool) for k in FaultFlags.START_WINDOW}
