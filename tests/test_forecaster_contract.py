@@ -115,6 +115,29 @@ def test_is_a_forecaster_and_fit_returns_itself(kind, model, train_log):
 
 
 @pytest.mark.parametrize("kind", KINDS)
+def test_a_fit_that_raises_leaves_the_forecaster_as_it_was(kind, model, train_log, test_log, monkeypatch):
+    """A fitted forecaster refitted on other logs by a call that fails at its last step (or
+    on a log that does not exist) keeps its learned state and its forecasts: ``fit`` is all
+    or nothing, so no forecast mixes the new logs' environment with the old nets."""
+    make, learns = KINDS[kind]
+    p = make(model.vessel).fit([train_log])
+    state, before = _learned_state(p), p.forecast(test_log, STARTS, HORIZON_S)
+    with pytest.raises(FileNotFoundError):
+        p.fit([test_log, "/nonexistent/log.csv"])
+    if kind == "hybrid":
+        monkeypatch.setattr(HybridPredictor, "_calibrate_after_stop_on_training_logs",
+                            lambda *a, **k: (_ for _ in ()).throw(RuntimeError("late failure")))
+    elif kind == "data_only":
+        monkeypatch.setattr("hybridship.predictors.data_only.fit_ensemble",
+                            lambda *a, **k: (_ for _ in ()).throw(RuntimeError("late failure")))
+    if learns:
+        with pytest.raises(RuntimeError, match="late failure"):
+            p.fit([test_log])
+    assert _same(_learned_state(p), state)
+    _assert_same_forecast(p.forecast(test_log, STARTS, HORIZON_S), before)
+
+
+@pytest.mark.parametrize("kind", KINDS)
 def test_unfitted(kind, model, test_log):
     make, learns = KINDS[kind]
     p = make(model.vessel)
@@ -159,6 +182,8 @@ def _bad_inputs(log: pd.DataFrame):
         ("horizon as a list", (log, STARTS, [60.0]), {}, TypeError, "horizon_s"),
         ("unknown command mode", (log, STARTS, HORIZON_S), {"commands": "maybe"}, ValueError, "commands"),
         ("start between samples", (log, [150.5], HORIZON_S), {}, ValueError, "start_times_s"),
+        ("two starts on one sample", (log, [150.0, 150.1], HORIZON_S), {}, ValueError, "start_times_s"),
+        ("a batch of gigabytes", (log, np.arange(10.0, 290.0), 86400.0), {}, ValueError, "start_times_s"),
         ("start outside the log", (log, [9999.0], HORIZON_S), {}, ValueError, "start_times_s"),
         ("no start", (log, [], HORIZON_S), {}, ValueError, "start_times_s"),
         ("NaN start", (log, [np.nan], HORIZON_S), {}, ValueError, "start_times_s"),
@@ -407,3 +432,14 @@ def test_hsc_hybrid_refuses_pitch_in_degrees_and_pwm_as_a_fraction(hsc_fitted, h
     for call in (lambda: hybrid.one_step(U_frac, Y), lambda: hybrid.free_run(U_frac, Y, N_INIT)):
         with pytest.raises(ValueError, match=r"^U: column 1 \(PWM\) .* look like a fraction"):
             call()
+
+
+@pytest.mark.parametrize("kind", ["data_only", "hybrid"])
+def test_learners_refuse_a_recording_twice_and_a_flag_that_is_not_a_bool(kind, model, train_log):
+    """Both learners take their training logs alike: one recording given twice is refused
+    (it would weigh twice), and so is dp_only='no' (a text that reads as True)."""
+    make, _ = KINDS[kind]
+    with pytest.raises(ValueError, match=r"logs\[1\].*same samples as logs\[0\]"):
+        make(model.vessel).fit([train_log, train_log.copy()])
+    with pytest.raises(TypeError, match=r"dp_only: expected True or False"):
+        make(model.vessel).fit([train_log], dp_only="no")

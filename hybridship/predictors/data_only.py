@@ -10,7 +10,9 @@ from ..config import as_config
 from ..physics.model import DynamicModel
 from ..residual.ensemble import EnsembleConfig, MLPEnsemble, fit_ensemble, require_training_rows
 from ..residual.features import ResidualConfig
-from .forecast_setup import _check_row_stride, _forecast_setup, as_log_arrays, log_list
+from .forecast_setup import (_check_flags, _check_row_stride, _forecast_setup, as_log_arrays, keeps_state_on_error,
+                             log_list)
+from .training_logs import check_distinct_logs, log_label
 from .result import ForecastResult
 
 __all__ = ["DataOnlyPredictor"]
@@ -55,15 +57,19 @@ class DataOnlyPredictor:
         a = az[..., self._rot]
         return np.concatenate([nu, rpm / self._rpm_scale, np.cos(a), np.sin(a), rel, acc_prev], axis=-1)
 
+    @keeps_state_on_error
     def fit(self, logs: Iterable, *, dp_only: bool = True, progress: bool = False,
             row_stride: int = 1) -> "DataOnlyPredictor":
         """Learn one-step accelerations from logs (by default their DP part only), from every
-        ``row_stride``-th usable row (see :meth:`HybridPredictor.fit`)."""
+        ``row_stride``-th usable row (see :meth:`HybridPredictor.fit`); a call that raises
+        leaves the predictor as it was."""
         stride = _check_row_stride(row_stride)
+        _check_flags(dp_only=dp_only, progress=progress)
         Xs, Ys, segs = [], [], []
-        logs = log_list(logs)
-        for k, log in enumerate(logs):
-            a = as_log_arrays(log, self.model.vessel)
+        given = log_list(logs)
+        arrays = [as_log_arrays(log, self.model.vessel) for log in given]
+        check_distinct_logs(arrays, [log_label(x, i) for i, x in enumerate(given)])
+        for k, a in enumerate(arrays):
             dt = float(np.median(np.diff(a.time_s)))
             seg = a.segment_id
             ok = np.zeros(len(a.time_s), bool)

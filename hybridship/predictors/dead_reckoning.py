@@ -6,7 +6,7 @@ import numpy as np
 
 from ..physics.model import DynamicModel
 from ..residual.features import ResidualConfig
-from .forecast_setup import _forecast_setup
+from .forecast_setup import _forecast_setup, check_log_items
 from .result import ForecastResult
 
 __all__ = ["DeadReckoning"]
@@ -22,7 +22,10 @@ class DeadReckoning:
         self.config = ResidualConfig(start_average_s=start_average_s)
 
     def fit(self, logs=(), **_):
-        """Nothing to learn; returns self."""
+        """Nothing to learn; returns self (the logs, when given, are checked as
+        a fitting predictor would take them: :func:`~.forecast_setup.check_log_items`)."""
+        if not (isinstance(logs, tuple) and logs == ()):
+            check_log_items(logs)
         return self
 
     def forecast(self, log, start_times_s, horizon_s: float = 60.0, *, commands: str = "held") -> ForecastResult:

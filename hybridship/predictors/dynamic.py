@@ -5,7 +5,7 @@ from __future__ import annotations
 from ..forecast_inputs.wind import HELD_WIND, WindForecast
 from ..physics.model import DynamicModel
 from ..residual.features import ResidualConfig
-from .forecast_setup import _forecast_setup
+from .forecast_setup import _forecast_setup, check_log_items
 from .result import ForecastResult
 
 __all__ = ["DynamicPredictor"]
@@ -32,7 +32,10 @@ class DynamicPredictor:
         self.stop_after_failure = bool(stop_after_failure)
 
     def fit(self, logs=(), **_):
-        """The physics has nothing to learn from logs here; returns self."""
+        """The physics has nothing to learn from logs here; returns self (the logs, when given, are checked as
+        a fitting predictor would take them: :func:`~.forecast_setup.check_log_items`)."""
+        if not (isinstance(logs, tuple) and logs == ()):
+            check_log_items(logs)
         return self
 
     def forecast(self, log, start_times_s, horizon_s: float = 60.0, *, commands: str = "held") -> ForecastResult:

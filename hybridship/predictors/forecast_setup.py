@@ -9,6 +9,7 @@ window through :func:`hybridship.forecast_inputs.assess_start_window` and the in
 
 from __future__ import annotations
 
+import functools
 import numbers
 import os
 from dataclasses import dataclass
@@ -33,6 +34,9 @@ FORECAST_HISTORY_S = 1800.0
 #: Longest forecast horizon [s] (one day): far beyond what the method is for, and a bound
 #: on the memory of the rollout arrays (a horizon of 1e9 s would ask for gigabytes).
 MAX_HORIZON_S = 86400.0
+#: Most starts times steps one forecast call takes: each of its state, spread and rate arrays
+#: (and each ensemble member's) holds 3 numbers per point, about 0.5 GB at this bound.
+MAX_FORECAST_POINTS = 20_000_000
 #: Extra seconds read at both ends of a forecast's time range, so that no filter or
 #: derivative near a start sees the edge of what was read.
 _RANGE_MARGIN_S = 60.0
@@ -59,6 +63,48 @@ def as_log_arrays(log, vessel, *, purpose: str = "fit") -> LogArrays:
     """A path, a DataFrame in the log format or LogArrays, through :func:`hybridship.logs.ingest.ingest`
     (re-sorted, checked against ``vessel`` once; ``purpose`` "fit" or "forecast")."""
     return ingest(log, vessel, purpose=purpose)
+
+
+def _check_flags(optional=(), **flags) -> None:
+    """TypeError naming a flag that is not True or False (None where ``optional``): a text
+    'no' or 'false' is truthy and would be read as True."""
+    for name, value in flags.items():
+        if not (isinstance(value, (bool, np.bool_)) or (name in optional and value is None)):
+            raise TypeError(f"{name}: expected True or False{' or None' if name in optional else ''}, got {value!r}")
+
+
+def keeps_state_on_error(fit):
+    """Make ``fit`` all or nothing: a call that raises leaves the predictor as it was.
+
+    ``fit`` sets the learned state step by step (the environment estimator, the wind
+    forecast, the nets, the spread); a failure half-way would leave a model that mixes a
+    new environment with old nets and forecasts with it. Every step rebinds attributes
+    rather than changing the objects they held, so restoring the attributes restores the
+    model."""
+    @functools.wraps(fit)
+    def wrapper(self, *args, **kwargs):
+        before = dict(self.__dict__)
+        try:
+            return fit(self, *args, **kwargs)
+        except BaseException:
+            self.__dict__.clear()
+            self.__dict__.update(before)
+            raise
+    return wrapper
+
+
+def check_log_items(logs) -> list:
+    """The logs of a ``fit`` that reads none (the physics learns nothing), checked as one that
+    reads them would take them: each a path to an existing file, a DataFrame or LogArrays
+    (TypeError / FileNotFoundError naming ``logs``)."""
+    out = log_list(logs)
+    for i, log in enumerate(out):
+        if isinstance(log, (str, os.PathLike)):
+            if not os.path.isfile(log):
+                raise FileNotFoundError(f"logs[{i}]: {os.fspath(log)}: no such file")
+        elif not isinstance(log, (pd.DataFrame, LogArrays)):
+            raise TypeError(f"logs[{i}]: expected a path, DataFrame or LogArrays, got {type(log).__name__}")
+    return out
 
 
 def log_list(logs) -> list:
@@ -137,6 +183,13 @@ def start_indices(arrays: LogArrays, start_times_s) -> np.ndarray:
                                f"time or correct the log")
         raise RequestError(f"start_times_s: {first} s is not a sample time of the log "
                            f"(log spans {t[0]}..{t[-1]} s, dt {dt:g} s)")
+    if np.unique(idx).size < idx.size:
+        # two times within a quarter step of one sample: the same start, twice
+        u, n = np.unique(idx, return_counts=True)
+        same = st[idx == u[n > 1][0]]
+        given = " and ".join(f"{seconds_text(x)} s" for x in same)
+        raise RequestError(f"start_times_s: each start time at most once; {given} fall on one sample "
+                           f"({seconds_text(t[u[n > 1][0]])} s)")
     return idx
 
 
@@ -311,6 +364,10 @@ def _forecast_setup(model, config: ResidualConfig, log, start_times_s, horizon_s
     H = int(round(horizon_s / dt))
     if H < 1:
         raise HorizonError(f"horizon_s: {horizon_s:g} s is shorter than one step of the log ({dt:g} s)")
+    if len(idx) * (H + 1) > MAX_FORECAST_POINTS:
+        raise RequestError(f"start_times_s, horizon_s: {len(idx)} starts x {H + 1} steps is more than "
+                           f"{MAX_FORECAST_POINTS:.0e} forecast points (gigabytes of arrays): forecast the starts "
+                           f"in smaller batches")
     sw = assess_start_window(arrays, idx, config.start_average_s)
     rpm, az, wind = _held_inputs(arrays, idx, stop_after_failure=stop_after_failure, wind=sw.wind)
     extra_notes = [""] * len(idx)

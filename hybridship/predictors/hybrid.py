@@ -39,8 +39,8 @@ from ..residual.drift_hull import (MIN_FAILURES as DRIFT_HULL_MIN_FAILURES, MUNK
                                    drift_start_rows, munk_coefficient)
 from ..residual.hull import HullCorrection
 from .after_failure import drift_forecasts, has_drift
-from .forecast_setup import (FORECAST_HISTORY_S, _check_row_stride, _forecast_setup, as_log_arrays, forecast_step_s,
-                             join_notes, log_list, start_indices)
+from .forecast_setup import (FORECAST_HISTORY_S, _check_flags, _check_row_stride, _forecast_setup, as_log_arrays,
+                             forecast_step_s, join_notes, keeps_state_on_error, log_list, start_indices)
 from .model_file import load_model, save_model
 from .result import ForecastResult
 from .training_logs import check_distinct_logs, check_training_lengths, log_label
@@ -287,6 +287,7 @@ class HybridPredictor:
         self._training_full = np.concatenate(full)
         return np.concatenate(Xs), np.concatenate(Ys), np.concatenate(segs)
 
+    @keeps_state_on_error
     def fit(self, logs: Iterable, *, dp_only: bool = True, progress: bool = False,
             row_stride: int = 1, calibration: CalibrationConfig | None = None) -> "HybridPredictor":
         """Learn the acceleration residual from logs (by default only their DP part), then
@@ -1335,14 +1336,6 @@ class HybridPredictor:
             vessel that differs from the one the model was trained for.
         """
         return load_model(cls, path, vessel)
-
-
-def _check_flags(optional=(), **flags) -> None:
-    """TypeError naming a flag that is not True or False (None where ``optional``): a text
-    'no' or 'false' is truthy and would be read as True."""
-    for name, value in flags.items():
-        if not (isinstance(value, (bool, np.bool_)) or (name in optional and value is None)):
-            raise TypeError(f"{name}: expected True or False{' or None' if name in optional else ''}, got {value!r}")
 
 
 def _check_rollout_batch(S: int, n_steps, dt_s, substeps, **arrays) -> None:
