@@ -203,6 +203,21 @@ def test_a_biased_speed_log_does_not_pull_the_estimate_off_the_track(model, monk
     assert np.hypot(*(trusted.x[0, :2] - clean.x[0, :2])) > 3.0
 
 
+def test_a_biased_speed_log_is_left_out_also_where_the_fix_is_held(model):
+    """A 10-Hz log whose GNSS fix is held for 1 s between updates: the filter, which steps
+    once a second, may read held rows only; the last judgement of the track is carried to
+    them, so the biased velocity is left out there too."""
+    log = physics_log(model, duration_s=600, t_shutdown_s=None, seed=6, tau_ext_N=(2000.0, 0.0, 0.0), dt_s=0.1)
+    held = log.copy()
+    held[["north_m", "east_m"]] = log[["north_m", "east_m"]].to_numpy()[np.arange(len(log)) // 10 * 10]
+    biased = held.copy()
+    biased.loc[4000:5000, "v_m_s"] += 1.0
+    rows = np.array([4995])                                    # on the held rows' grid
+    clean = EnvironmentEstimator(model).run(as_log_arrays(held, model.vessel, purpose="forecast"), rows)
+    checked = EnvironmentEstimator(model).run(as_log_arrays(biased, model.vessel, purpose="forecast"), rows)
+    assert np.hypot(*(checked.x[0, :2] - clean.x[0, :2])) < 1.0
+
+
 def test_a_segment_whose_first_row_has_no_position_restarts_at_its_next(model):
     """After a gap, a new segment whose first row lacks a position restarts at the next row
     with one (velocities from the measurement), not by predicting across the gap."""

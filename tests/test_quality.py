@@ -295,6 +295,25 @@ def test_velocity_track_mismatch_is_causal_and_ignores_position_faults(model, lo
     assert np.nanmax(velocity_track_mismatch_m(turning, 30.0)) < 1e-6
 
 
+def test_a_start_window_does_not_depend_on_the_other_starts_of_the_call(model, log):
+    """The velocity check is computed only as far back as the earliest start's windows reach;
+    faults just before that (a GNSS spike, then an outage, then a biased speed log) give each
+    start the same flags and start values whichever other starts share the call."""
+    faulty = log.copy()
+    s, f0 = T_FAULT, T_FAULT - 47
+    faulty.loc[f0, "north_m"] += 25.0
+    faulty.loc[f0 + 1:f0 + 16, ["north_m", "east_m"]] = np.nan
+    faulty.loc[f0 + 17:, "v_m_s"] += 1.5
+    arrays, order = forecast_log_arrays(faulty, model.vessel)
+    alone = assess_start_window(arrays, arrays.time_s.searchsorted([s]), 3.0, order=order, on_refuse="flag")
+    for others in ([s - 3], [0], [s - 40, s - 20]):
+        rows = arrays.time_s.searchsorted([*others, s])
+        sw = assess_start_window(arrays, rows, 3.0, order=order, on_refuse="flag")
+        assert {k: bool(v[-1]) for k, v in sw.flags.items()} == {k: bool(v[0]) for k, v in alone.flags.items()}
+        np.testing.assert_array_equal(sw.nu0[-1], alone.nu0[0])
+        np.testing.assert_array_equal(sw.eta0[-1], alone.eta0[0])
+
+
 def test_gnss_spike_without_logged_velocities_is_rederived(model, log):
     df = log.drop(columns=["u_m_s", "v_m_s"])
     clean = _assess(model, df, [T_FAULT + 1.0])[1]

@@ -288,10 +288,7 @@ class LogView:
         dt_nom = float(np.median(np.diff(t))) if len(arrays) > 1 else 1.0
         n_nom = max(1, int(round(settings.window_s / dt_nom)))
         n_min = max(1, math.ceil(settings.min_valid_fraction * n_nom))
-        # rows from a second before the earliest start's lookback, less a track window and a
-        # frozen run: what the detectors read is then as on the whole log
-        reach = settings.window_s + settings.lookback_s + settings.track_window_s + settings.frozen_s + 1.0
-        first = int(np.searchsorted(t, t[first_start] - reach, side="left")) if len(t) else 0
+        first = _track_check_first_row(arrays, settings, first_start)
         mismatch = np.zeros(len(t), dtype=bool)
         mismatch[first:] = velocity_track_mismatch_m(arrays, settings.track_window_s, first,
                                                      step_limit_m=settings.jump_m,
@@ -314,6 +311,21 @@ class LogView:
     @property
     def nu(self) -> np.ndarray:
         return self.arrays.nu
+
+
+def _track_check_first_row(arrays, settings: WindowSettings, first_start: int) -> int:
+    """The row from which :func:`velocity_track_mismatch_m` gives, at every row the detectors
+    read for starts from ``first_start`` on, what it gives on the whole log: a second before
+    the earliest lookback, less two track windows (one judged, one carried) and a frozen run
+    (judged by its length so far), and at least the two valid fixes before that (a jump is
+    judged against them)."""
+    t = arrays.time_s
+    if not len(t):
+        return 0
+    reach = settings.window_s + settings.lookback_s + 2.0 * settings.track_window_s + settings.frozen_s + 1.0
+    r0 = int(np.searchsorted(t, t[first_start] - reach, side="left"))
+    valid = np.flatnonzero(np.all(np.isfinite(arrays.eta[:r0]), axis=1))
+    return int(valid[-2]) if valid.size >= 2 else 0
 
 
 @dataclass(eq=False)
@@ -523,17 +535,19 @@ def velocity_track_mismatch_m(arrays, window_s: float, first_row: int = 0, last_
     a fresh fix (one that differs from the row before: the window starts at the first such
     row in it), so a receiver that holds its fix between updates does not count either.
 
-    NaN where the window says nothing of the velocity: it covers less than half of
-    ``window_s``; a step in it lacks a logged finite velocity or heading; the row's
-    position is missing or not a fresh fix; a position in it has repeated bit for bit for
-    ``frozen_s`` or more up to then (a frozen receiver); or a position in it jumps (a spike, an excursion, a datum shift): its
-    change from the previous valid position, as a mean velocity over the step in the body
-    frame (turned with the headings, exactly for a steady turn), departs from the step
-    before it by more than ``step_limit_m`` over its step. That test reads the positions
-    and headings alone, so a velocity fault, however large, is not taken for a position
-    jump, and a ship in a steady turn makes none at any sample rate. The window stays within the row's segment and does not reach before
-    ``first_row``, so the value depends on those rows alone (causal). Clean logs stay below
-    1 m over 30 s (GNSS noise 0.5 m).
+    A row whose window says nothing of the velocity carries the last value of its segment
+    from the past ``window_s`` (NaN if there is none). A window says nothing when it covers
+    less than half of ``window_s``; when a step in it lacks a logged finite velocity or
+    heading; when the row's position is missing or not a fresh fix; when a position in it
+    has repeated bit for bit for ``frozen_s`` or more up to then (a frozen receiver); or
+    when a position in it jumps (a spike, an excursion, a datum shift): its change from the
+    previous valid position, as a mean velocity over the step in the body frame (turned
+    with the headings, exactly for a steady turn), departs from the step before it by more
+    than ``step_limit_m`` over its step. That test reads the positions and headings alone,
+    so a velocity fault, however large, is not taken for a position jump, and a ship in a
+    steady turn makes none at any sample rate. The window stays within the row's segment
+    and does not reach before ``first_row``, so the value depends on those rows alone
+    (causal). Clean logs stay below 1.1 m over 30 s (GNSS noise 0.5 m).
 
     Returns
     -------
@@ -581,7 +595,11 @@ def velocity_track_mismatch_m(arrays, window_s: float, first_row: int = 0, last_
     d = np.hypot(*((pos - pos[j]) - (travelled - travelled[j])).T)
     evidence = ((t - t[j] >= 0.5 * window_s) & fresh & fresh[j] & (n_bad[idx] == n_bad[j])
                 & (n_stale[idx + 1] == n_stale[j]) & (n_jump[idx + 1] == n_jump[j]))
-    return np.where(evidence, d, np.nan)
+    # a row that cannot be judged (a held fix, a jump in its window) carries the segment's
+    # last judgement of the past window_s: the filter may step on held rows only
+    last = np.maximum.accumulate(np.where(evidence, idx, -1))
+    keep = (last >= seg_first) & (t - t[np.maximum(last, 0)] <= window_s)
+    return np.where(keep, d[np.maximum(last, 0)], np.nan)
 
 
 def detect_velocity_mismatch(view: LogView, win: Window, settings: WindowSettings) -> None:

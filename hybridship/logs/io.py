@@ -570,7 +570,7 @@ _OUTPUT_COLUMNS = {"start_time_s", "lead_s", "model", "horizon_s", "sigma", "cov
 def _hybridship_table(cols: list[str]) -> str:
     """What a table with these columns is, if hybridship wrote it ("" if it may be a log)."""
     names = set(map(str, cols))
-    if {"start_time_s", "lead_s"} <= names:
+    if [str(c) for c in cols[:3]] == ["start_time_s", "lead_s", "time_s"]:     # its header, as written
         return "a forecast table written by 'hybridship forecast'"
     if "time_s" not in names and {"model", "horizon_s"} <= names:
         return "a table written by a hybridship benchmark"

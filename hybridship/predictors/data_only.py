@@ -85,7 +85,7 @@ class DataOnlyPredictor:
             Ys.append((a.nu[rows] - a.nu[rows - 1]) / dt)
             segs.append(seg[rows] + 10_000 * k)
         X, Y, seg = (np.concatenate(z)[::stride] if z else np.zeros((0, 1)) for z in (Xs, Ys, segs))
-        require_training_rows(X.shape[0], len(logs), dp_only)
+        require_training_rows(X.shape[0], len(arrays), dp_only)
         self.ensemble = fit_ensemble(X, Y, self.ensemble_config, segment_id=seg, progress=progress)
         return self
 
