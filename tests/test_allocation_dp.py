@@ -95,6 +95,14 @@ def test_saturated_achieves_the_capacity(model):
     assert res.tau_achieved[1] >= cap[1] * (1 - 1e-6)
 
 
+def test_a_direction_without_thrust_has_no_capacity():
+    """A single fixed propeller (the Esso Osaka model) pushes in surge only: its sway and yaw
+    capacity is 0, not the search's bound (the least-squares allocation of a pure sway
+    demand is no force at all, which once passed for the demand met in full)."""
+    cap = thrust_capacity("esso_osaka_model")
+    assert cap[0] > 0 and cap[1] == 0.0 and cap[2] == 0.0
+
+
 def test_azimuth_and_rpm_rate_limits(model):
     dt = 0.5
     alloc = ThrustAllocator(model.vessel, dt_s=dt, rpm_rate_limit_rpm_s=20.0)

@@ -600,7 +600,10 @@ def thrust_capacity(vessel) -> np.ndarray:
         for sgn in (1.0, -1.0):
             tau = np.zeros(3)
             tau[k] = sgn * big
-            _, scale = alloc._solve_extended(tau)
-            vals.append(scale * big)
+            f, scale = alloc._solve_extended(tau)
+            # what the forces give, not what was asked: a direction no thruster acts in gets
+            # the least-squares answer, zero forces, "achieved" at full scale
+            given = float(alloc.T_e[k] @ f)
+            vals.append(scale * big if abs(given - scale * tau[k]) <= 1e-6 * big else max(sgn * given, 0.0))
         cap[k] = min(vals)
     return cap

@@ -228,7 +228,9 @@ class DPController:
         if integral_limit is None:
             from .allocation import thrust_capacity
 
-            integral_limit = thrust_capacity(self.vessel)
+            cap = thrust_capacity(self.vessel)
+            # no thrust in a direction: nothing to wind up against there, the integral is left free
+            integral_limit = np.where(cap > 0.0, cap, 1e12)
         self.integral_limit = _vec3("integral_limit", integral_limit, positive=True)
         self.reference_feedforward = bool(reference_feedforward)
         self.wind_feedforward_gain = float(wind_feedforward_gain)
