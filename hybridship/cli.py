@@ -727,12 +727,31 @@ def _build_parser() -> argparse.ArgumentParser:
     return parser
 
 
+def _negative_values_attached(argv) -> list:
+    """``--opt -90,0`` as ``--opt=-90,0``: argparse takes a word that starts with '-' for an
+    option unless it is a plain negative number, so a list such as ``--headings-deg -90,0``
+    was refused with "expected one argument". No option name starts with '-' and a digit."""
+    words = [str(w) for w in argv]
+    out = []
+    i = 0
+    while i < len(words):
+        w = words[i]
+        if (w.startswith("--") and "=" not in w and i + 1 < len(words)
+                and re.match(r"-[0-9.]", words[i + 1]) and "," in words[i + 1]):
+            out.append(f"{w}={words[i + 1]}")
+            i += 2
+            continue
+        out.append(w)
+        i += 1
+    return out
+
+
 def main(argv=None) -> int:
     """Run the command line ``argv`` (default ``sys.argv[1:]``); returns the exit status."""
     parser = _build_parser()
     args = None
     try:
-        args, extra = parser.parse_known_args(argv)
+        args, extra = parser.parse_known_args(_negative_values_attached(sys.argv[1:] if argv is None else argv))
         if extra:   # named with the command they were given to (argparse names the top level)
             words = list(sys.argv[1:] if argv is None else argv)
             command = getattr(args, "command", None)

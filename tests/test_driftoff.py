@@ -822,3 +822,16 @@ def test_result_queries_and_the_state_index_refuse_values_that_would_read_as_zer
     for p in (np.nan, 2.0, -1.0):
         with pytest.raises(ValueError, match="max_p_exceed: expected a probability"):
             season.operability(p)
+
+
+def test_cli_takes_a_list_that_starts_with_a_negative_value(tmp_path, capsys):
+    """``--headings-deg -90,0`` is a list, not an option: argparse used to refuse it with
+    "expected one argument"; a negative radius gets the option's own message."""
+    from hybridship.cli import main
+
+    argv = ["drift-off", "planning", "--samples", "3", "--radii-m", "5", "--no-plots", "--out"]
+    assert main(argv + [str(tmp_path / "a"), "--headings-deg", "-90,0"]) == 0
+    assert pd.read_csv(tmp_path / "a" / "times.csv").heading_deg.tolist() == [270, 0]
+    assert main(["drift-off", "planning", "--samples", "3", "--no-plots", "--out", str(tmp_path / "b"),
+                 "--radii-m", "-3,5"]) == 2
+    assert "--radii-m: must be > 0" in capsys.readouterr().err
