@@ -835,3 +835,22 @@ def test_cli_takes_a_list_that_starts_with_a_negative_value(tmp_path, capsys):
     assert main(["drift-off", "planning", "--samples", "3", "--no-plots", "--out", str(tmp_path / "b"),
                  "--radii-m", "-3,5"]) == 2
     assert "--radii-m: must be > 0" in capsys.readouterr().err
+
+
+def test_live_summary_does_not_deny_the_wind_it_used(tmp_path):
+    """The wind sensor silent for the last 70 s before the blackout: the estimate takes the
+    mean wind of its own 120-s window and says so; the forecast start window's "no valid
+    wind sample ... forecast without wind" (3 s) is not repeated in its summary."""
+    from hybridship.cli import main
+    from hybridship.logs.io import write_log
+    from hybridship.physics.model import DynamicModel
+    from hybridship.sim.synthetic import physics_log
+
+    df = physics_log(DynamicModel("gunnerus"), seed=2, duration_s=600.0, t_shutdown_s=None)
+    df.loc[df.time_s > 430, ["wind_speed_m_s", "wind_dir_deg"]] = np.nan
+    write_log(df, tmp_path / "log.csv")
+    argv = ["drift-off", "live", "--time-s", "500", "--samples", "3", "--radii-m", "5", "--no-plots",
+            "--log", str(tmp_path / "log.csv"), "--out", str(tmp_path / "out")]
+    assert main(argv) == 0
+    summary = (tmp_path / "out" / "summary.md").read_text()
+    assert "mean wind" in summary and "no valid wind sample" not in summary

@@ -199,11 +199,11 @@ def environment_from_log(log, vessel="gunnerus", *, window_s: float = 900.0, win
     if a.dp_active[idx] == 0:
         raise ValueError(f"log: dp_active is 0 at time_s {seconds_text(a.time_s[idx])} (the last row used): a "
                          f"blackout is predicted from station keeping; give a time while the DP is active")
-    notes = _start_checks(a, idx, name)
     # the wind has its own window, whatever the estimator's; only samples the sensor logged
     # (the reader holds the last value over a gap, which is not a measurement of now)
     sel = aw.wind_logged & (aw.time_s >= a.time_s[idx] - wind_window_s)
     wind_measured = bool(aw.has_wind and sel.any())
+    notes = _start_checks(a, idx, name, wind_measured)
     if wind_measured:
         ws, wd = aw.wind[sel, 0], aw.wind[sel, 1]
         vn, ve = np.mean(ws * np.cos(wd)), np.mean(ws * np.sin(wd))
@@ -231,21 +231,32 @@ def environment_from_log(log, vessel="gunnerus", *, window_s: float = 900.0, win
                                wind_measured=wind_measured, vessel_name=model.vessel.name, notes=notes)
 
 
-def _start_checks(a: LogArrays, idx: int, name: str) -> str:
+#: How the start window's ``wind_dropped`` notes begin (:func:`~hybridship.forecast_inputs.faults.detect_dropped_wind`).
+_WIND_DROPPED_NOTES = ("no valid wind sample in the window", "the wind columns hold no valid sample")
+
+
+def _start_checks(a: LogArrays, idx: int, name: str, wind_measured: bool) -> str:
     """A forecast's start-window checks at the blackout row: refused with too little valid
     position, heading or velocity (:class:`~hybridship.forecast_inputs.StartWindowError`), a
-    worked-around fault warned and returned as a note."""
+    worked-around fault warned and returned as a note. With ``wind_measured`` (the estimate's
+    own, longer wind window has samples) the start window's dropped wind is not one."""
     import warnings
 
-    from ..forecast_inputs import assess_start_window
+    from ..forecast_inputs import FaultFlags, assess_start_window
     from ..logs.io import LogFormatWarning
 
     try:
         sw = assess_start_window(a, np.array([idx]))
     except ValueError as exc:
         raise ValueError(f"{name}: at the blackout row: {exc}") from None
-    note = sw.notes[0] if sw.notes else ""
-    if note and bool(sw.degraded[0]):
+    # with wind in the estimate's own, longer window, the start window's "no valid wind
+    # sample" (3 s) does not apply: the summary says which wind was used
+    ignore = (FaultFlags.WIND_DROPPED,) if wind_measured else ()
+    note = "; ".join(part for part in (sw.notes[0] if sw.notes else "").split("; ")
+                     if part and not (ignore and part.startswith(_WIND_DROPPED_NOTES)))
+    degraded = any(bool(sw.flags[k][0]) for k in FaultFlags.START_WINDOW
+                   if k not in (*ignore, *FaultFlags.INFORMATIONAL))
+    if note and degraded:
         warnings.warn(f"{name}: at the blackout row (time_s {seconds_text(a.time_s[idx])}): {note}", LogFormatWarning,
                       stacklevel=3)
         return note
