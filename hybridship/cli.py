@@ -417,12 +417,14 @@ def _add_forecast(sub) -> None:
 def _is_forecast_table(path: Path) -> bool:
     """Whether ``path`` starts as a table written by ``forecast`` does (an earlier forecast,
     which a new one may replace), or is empty."""
+    from .logs.io import FORECAST_TABLE_HEADER
+
     try:
         with open(path, "rb") as fh:
             head = fh.read(64)
     except OSError:
         return False
-    return head == b"" or head.startswith(b"start_time_s,lead_s,time_s,")
+    return head == b"" or head.startswith(",".join(FORECAST_TABLE_HEADER).encode() + b",")
 
 
 def _cmd_forecast(args) -> int:

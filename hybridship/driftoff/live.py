@@ -231,10 +231,6 @@ def environment_from_log(log, vessel="gunnerus", *, window_s: float = 900.0, win
                                wind_measured=wind_measured, vessel_name=model.vessel.name, notes=notes)
 
 
-#: How the start window's ``wind_dropped`` notes begin (:func:`~hybridship.forecast_inputs.faults.detect_dropped_wind`).
-_WIND_DROPPED_NOTES = ("no valid wind sample in the window", "the wind columns hold no valid sample")
-
-
 def _start_checks(a: LogArrays, idx: int, name: str, wind_measured: bool) -> str:
     """A forecast's start-window checks at the blackout row: refused with too little valid
     position, heading or velocity (:class:`~hybridship.forecast_inputs.StartWindowError`), a
@@ -243,6 +239,7 @@ def _start_checks(a: LogArrays, idx: int, name: str, wind_measured: bool) -> str
     import warnings
 
     from ..forecast_inputs import FaultFlags, assess_start_window
+    from ..forecast_inputs.faults import WIND_DROPPED_NOTES
     from ..logs.io import LogFormatWarning
 
     try:
@@ -253,7 +250,7 @@ def _start_checks(a: LogArrays, idx: int, name: str, wind_measured: bool) -> str
     # sample" (3 s) does not apply: the summary says which wind was used
     ignore = (FaultFlags.WIND_DROPPED,) if wind_measured else ()
     note = "; ".join(part for part in (sw.notes[0] if sw.notes else "").split("; ")
-                     if part and not (ignore and part.startswith(_WIND_DROPPED_NOTES)))
+                     if part and not (ignore and part.startswith(WIND_DROPPED_NOTES)))
     degraded = any(bool(sw.flags[k][0]) for k in FaultFlags.START_WINDOW
                    if k not in (*ignore, *FaultFlags.INFORMATIONAL))
     if note and degraded:

@@ -35,7 +35,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..frames import wrap_pi
+from ..frames import ned_to_body, wrap_pi
 from ..messages import seconds_text
 
 __all__ = [
@@ -64,6 +64,9 @@ __all__ = [
 #: environment estimator's filter, which then leaves it out).
 TRACK_WINDOW_S = 30.0
 TRACK_MISMATCH_M = 8.0
+#: How the notes of ``wind_dropped`` begin (:func:`detect_dropped_wind`): in the window, in
+#: every row read.
+WIND_DROPPED_NOTES = ("no valid wind sample in the window", "the wind columns hold no valid sample")
 
 
 class FaultFlags:
@@ -564,10 +567,8 @@ def velocity_track_mismatch_m(arrays, window_s: float, first_row: int = 0, last_
     idx = np.arange(n)
     seg_first = np.maximum.accumulate(np.where(new_seg, idx, 0))
     # the logged velocity's travel over each step, exact for a steady turn
-    turn = wrap_pi(psi[1:] - psi[:-1])
-    half = 0.5 * turn
-    shrink = np.where(np.abs(half) > 1e-9, np.sin(half) / np.where(half == 0.0, 1.0, half), 1.0)
-    step = _ned(0.5 * (nu[1:] + nu[:-1]), psi[:-1] + half) * (np.diff(t) * shrink)[:, None]
+    mid, shrink = _steady_turn(psi[:-1], psi[1:])
+    step = _ned(0.5 * (nu[1:] + nu[:-1]), mid) * (np.diff(t) * shrink)[:, None]
     logged = arrays.nu_logged[sl, 0] & arrays.nu_logged[sl, 1]
     step_ok = np.all(np.isfinite(step), axis=1) & logged[1:] & logged[:-1] & ~new_seg[1:]
     travelled = np.concatenate([np.zeros((1, 2)), np.cumsum(np.where(step_ok[:, None], step, 0.0), axis=0)])
@@ -579,11 +580,9 @@ def velocity_track_mismatch_m(arrays, window_s: float, first_row: int = 0, last_
     if valid.size > 2:
         a, b = valid[:-1], valid[1:]
         dt_ab = t[b] - t[a]
-        half_ab = 0.5 * wrap_pi(psi[b] - psi[a])
-        shrink_ab = np.where(np.abs(half_ab) > 1e-9, np.sin(half_ab) / np.where(half_ab == 0.0, 1.0, half_ab), 1.0)
-        c, s_ = np.cos(psi[a] + half_ab), np.sin(psi[a] + half_ab)
-        moved = (pos[b] - pos[a]) / (dt_ab * shrink_ab)[:, None]
-        body = np.stack([c * moved[:, 0] + s_ * moved[:, 1], -s_ * moved[:, 0] + c * moved[:, 1]], -1)
+        mid_ab, shrink_ab = _steady_turn(psi[a], psi[b])
+        moved = np.column_stack([(pos[b] - pos[a]) / (dt_ab * shrink_ab)[:, None], np.zeros(a.size)])
+        body = ned_to_body(moved, mid_ab)[:, :2]                         # the mean body velocity of each step
         change = np.hypot(*(body[1:] - body[:-1]).T) * dt_ab[1:]
         jump[b[1:]] |= (seg[a[1:]] == seg[a[:-1]]) & (change > step_limit_m)
     run_first, _ = _runs(pos)
@@ -597,9 +596,17 @@ def velocity_track_mismatch_m(arrays, window_s: float, first_row: int = 0, last_
                 & (n_stale[idx + 1] == n_stale[j]) & (n_jump[idx + 1] == n_jump[j]))
     # a row that cannot be judged (a held fix, a jump in its window) carries the segment's
     # last judgement of the past window_s: the filter may step on held rows only
-    last = np.maximum.accumulate(np.where(evidence, idx, -1))
-    keep = (last >= seg_first) & (t - t[np.maximum(last, 0)] <= window_s)
-    return np.where(keep, d[np.maximum(last, 0)], np.nan)
+    judged = np.maximum.accumulate(np.where(evidence, idx, -1))
+    keep = (judged >= seg_first) & (t - t[np.maximum(judged, 0)] <= window_s)
+    return np.where(keep, d[np.maximum(judged, 0)], np.nan)
+
+
+def _steady_turn(psi0_rad, psi1_rad):
+    """Mid heading [rad] of steps from ``psi0_rad`` to ``psi1_rad`` and ``sinc`` of half their
+    turn: over a steady turn a constant body velocity ``v`` travels ``R(mid) v dt`` times
+    that factor."""
+    half = 0.5 * wrap_pi(psi1_rad - psi0_rad)
+    return psi0_rad + half, np.sinc(half / np.pi)
 
 
 def detect_velocity_mismatch(view: LogView, win: Window, settings: WindowSettings) -> None:
@@ -898,13 +905,13 @@ def detect_dropped_wind(view: LogView, win: Window) -> np.ndarray:
     if not a.has_wind:
         if a.wind_columns:       # the columns are there, but not one valid sample in the rows read
             span = f"{seconds_text(a.time_s[0])}..{seconds_text(a.time_s[-1])}"
-            win.flag(FaultFlags.WIND_DROPPED, "the wind columns hold no valid sample in the rows read for the "
+            win.flag(FaultFlags.WIND_DROPPED, f"{WIND_DROPPED_NOTES[1]} in the rows read for the "
                                               f"forecast (time_s {span}; sensor dead): forecast without wind")
         return np.zeros(2)
     w_rows = win.rows[win.wind_ok]
     if w_rows.size:
         return a.wind[w_rows[-1]]
-    win.flag(FaultFlags.WIND_DROPPED, "no valid wind sample in the window (sensor dropped): forecast without wind")
+    win.flag(FaultFlags.WIND_DROPPED, f"{WIND_DROPPED_NOTES[0]} (sensor dropped): forecast without wind")
     return np.zeros(2)
 
 

@@ -563,6 +563,8 @@ def _check_unique_names(cols: list[str], source: str) -> None:
                              column=dup[0])
 
 
+#: The first columns of a forecast table (``hybridship forecast --out``, ``ForecastResult.to_frame``).
+FORECAST_TABLE_HEADER = ("start_time_s", "lead_s", "time_s")
 #: Columns of the tables hybridship writes, by which one read as a log is recognised.
 _OUTPUT_COLUMNS = {"start_time_s", "lead_s", "model", "horizon_s", "sigma", "coverage", "mae"}
 
@@ -570,7 +572,7 @@ _OUTPUT_COLUMNS = {"start_time_s", "lead_s", "model", "horizon_s", "sigma", "cov
 def _hybridship_table(cols: list[str]) -> str:
     """What a table with these columns is, if hybridship wrote it ("" if it may be a log)."""
     names = set(map(str, cols))
-    if [str(c) for c in cols[:3]] == ["start_time_s", "lead_s", "time_s"]:     # its header, as written
+    if tuple(str(c) for c in cols[:3]) == FORECAST_TABLE_HEADER:
         return "a forecast table written by 'hybridship forecast'"
     if "time_s" not in names and {"model", "horizon_s"} <= names:
         return "a table written by a hybridship benchmark"

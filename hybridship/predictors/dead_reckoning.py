@@ -24,8 +24,7 @@ class DeadReckoning:
     def fit(self, logs=(), **_):
         """Nothing to learn; returns self (the logs, when given, are checked as
         a fitting predictor would take them: :func:`~.forecast_setup.check_log_items`)."""
-        if not (isinstance(logs, tuple) and logs == ()):
-            check_log_items(logs)
+        check_log_items(logs)
         return self
 
     def forecast(self, log, start_times_s, horizon_s: float = 60.0, *, commands: str = "held") -> ForecastResult:

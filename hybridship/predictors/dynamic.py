@@ -32,10 +32,10 @@ class DynamicPredictor:
         self.stop_after_failure = bool(stop_after_failure)
 
     def fit(self, logs=(), **_):
-        """The physics has nothing to learn from logs here; returns self (the logs, when given, are checked as
-        a fitting predictor would take them: :func:`~.forecast_setup.check_log_items`)."""
-        if not (isinstance(logs, tuple) and logs == ()):
-            check_log_items(logs)
+        """The physics has nothing to learn from logs here; returns self (the logs, when
+        given, are checked as a fitting predictor would take them:
+        :func:`~.forecast_setup.check_log_items`)."""
+        check_log_items(logs)
         return self
 
     def forecast(self, log, start_times_s, horizon_s: float = 60.0, *, commands: str = "held") -> ForecastResult:

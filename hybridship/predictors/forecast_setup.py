@@ -96,7 +96,9 @@ def keeps_state_on_error(fit):
 def check_log_items(logs) -> list:
     """The logs of a ``fit`` that reads none (the physics learns nothing), checked as one that
     reads them would take them: each a path to an existing file, a DataFrame or LogArrays
-    (TypeError / FileNotFoundError naming ``logs``)."""
+    (TypeError / FileNotFoundError naming ``logs``); ``()``, nothing given, is no log."""
+    if isinstance(logs, tuple) and logs == ():
+        return []
     out = log_list(logs)
     for i, log in enumerate(out):
         if isinstance(log, (str, os.PathLike)):
