@@ -9,7 +9,8 @@ from hybridship.physics.model import DynamicModel
 from hybridship.predictors import HybridPredictor, as_log_arrays
 from hybridship.residual.calibration import CalibrationConfig
 from hybridship.residual.ensemble import EnsembleConfig
-from hybridship.residual.features import (ALL_FEATURES, COMMAND_FEATURES, MEMORY_FEATURES, PAPER_FEATURES,
+from hybridship.residual.features import (ALL_FEATURES, COMMAND_FEATURES, LOAD_FEATURES, MEMORY_FEATURES,
+                                          PAPER_FEATURES,
                                          ResidualConfig, prepare_log)
 from hybridship.residual.multistep import MultiStepConfig, _torch_physics_step
 from hybridship.sim.synthetic import physics_log
@@ -19,7 +20,7 @@ TINY = EnsembleConfig(n_members=2, hidden=8, max_epochs=20, patience=5, seed=0)
 
 def test_feature_names_keep_the_papers_order_and_append_the_command_ones():
     assert ALL_FEATURES[:9] == PAPER_FEATURES and ALL_FEATURES[9:16] == COMMAND_FEATURES
-    assert ALL_FEATURES[16:] == MEMORY_FEATURES
+    assert ALL_FEATURES[16:18] == MEMORY_FEATURES and ALL_FEATURES[18:] == LOAD_FEATURES
     assert ResidualConfig().features == PAPER_FEATURES
 
 
@@ -34,20 +35,21 @@ def test_physics_step_jacobian_matches_central_differences():
     rpm = rng.uniform(20, 100, (S, 1, 3))
     az = rng.uniform(-1, 1, (S, 1, 3))
     wind = np.column_stack([rng.uniform(0, 10, S), rng.uniform(0, 6, S)])[:, None]
-    x = torch.tensor(x0, requires_grad=True)
-    w = torch.tensor(rng.normal(size=(S, 9)))
-    (step.apply(x, rpm, az, wind, m.arrays, 1.0, 1, 1e-6) * w).sum().backward()
+    for loads, width in ((False, 9), (True, 12)):     # with the actuator loads at the new state too
+        x = torch.tensor(x0, requires_grad=True)
+        w = torch.tensor(rng.normal(size=(S, width)))
+        (step.apply(x, rpm, az, wind, m.arrays, 1.0, 1, 1e-6, loads) * w).sum().backward()
 
-    def f(xx):
-        with torch.no_grad():
-            return float((step.apply(torch.tensor(xx), rpm, az, wind, m.arrays, 1.0, 1, 1e-6) * w).sum())
-    num = np.zeros(6)
-    for k in range(6):
-        hk = 1e-5
-        e = np.zeros_like(x0)
-        e[:, k] = hk
-        num[k] = (f(x0 + e) - f(x0 - e)) / (2 * hk)
-    np.testing.assert_allclose(x.grad.numpy().sum(0), num, rtol=1e-3, atol=1e-6)
+        def f(xx):
+            with torch.no_grad():
+                return float((step.apply(torch.tensor(xx), rpm, az, wind, m.arrays, 1.0, 1, 1e-6, loads) * w).sum())
+        num = np.zeros(6)
+        for k in range(6):
+            hk = 1e-5
+            e = np.zeros_like(x0)
+            e[:, k] = hk
+            num[k] = (f(x0 + e) - f(x0 - e)) / (2 * hk)
+        np.testing.assert_allclose(x.grad.numpy().sum(0), num, rtol=1e-3, atol=1e-6)
 
 
 def test_multi_step_training_lowers_its_own_validation_loss_and_round_trips(tmp_path):
@@ -300,3 +302,37 @@ def test_hybrid_rollout_refuses_inputs_with_another_number_of_starts():
     for kw, field in ((dict(n_steps=-1, dt_s=1.0), "n_steps"), (dict(n_steps=5, dt_s=0.0), "dt_s")):
         with pytest.raises(ValueError, match=f"^{field}: "):
             hp.rollout(z, z, z, z, guard=False, nets=False, **held, **kw)
+
+
+def test_actuator_load_features_agree_between_training_rows_and_both_rollouts():
+    """The actuator-load features (M^-1 tau_thrust at the predicted velocities, the step's
+    commands) are the same in a one-step training row, in the multi-step training's torch
+    rollout and in the forecast's numpy rollout: the first validation loss of multi-step
+    training equals the loss of HybridPredictor.rollout over the same starts."""
+    torch = pytest.importorskip("torch")
+    from hybridship.residual.multistep import _train_val_starts, collect_starts, train_multistep
+
+    m = DynamicModel("gunnerus")
+    logs = [physics_log(m, seed=s, duration_s=300.0, t_shutdown_s=None, current=(0.3, 1.0)) for s in (5, 6)]
+    rc = ResidualConfig(features=PAPER_FEATURES[:6] + LOAD_FEATURES, bias_window_s=0.0)
+    hp = HybridPredictor(m.vessel, residual_config=rc, ensemble_config=TINY,
+                         calibration_config=CalibrationConfig(fraction=0.0)).fit(logs)
+    prep = prepare_log(m, as_log_arrays(logs[0], m.vessel), rc)
+    a, rows = prep.arrays, np.array([40, 41, 150])
+    X = prep.features(rows)[:, 6:]
+    assert np.abs(X).max() > 1e-4 and np.all(np.isfinite(X))        # the thrusters push
+    x = torch.tensor(np.concatenate([a.eta[rows - 1], prep.nu_s[rows - 1]], axis=1))
+    y = _torch_physics_step().apply(x, a.rpm[rows - 1, None], a.azimuth_rad[rows - 1, None], a.wind[rows - 1, None],
+                                    m.arrays, prep.dt_s, 1, 1e-6, True)
+    np.testing.assert_allclose(y[:, 9:].numpy(), X, rtol=1e-9, atol=1e-12)
+    cfg = MultiStepConfig(horizon_s=5.0, iterations=1, batch_starts=8, start_every_s=10.0, val_every=1)
+    starts = collect_starts([prepare_log(m, as_log_arrays(x, m.vessel), rc) for x in logs], [None, None], cfg)
+    _, hist = train_multistep(hp.ensemble, m, starts, rc.feature_index, cfg)
+    s = starts.take(_train_val_starts(starts, cfg.max_val_starts)[1])
+    H = s.truth.shape[1]
+    eta, _, _, _ = hp.rollout(s.eta0, s.nu0, s.dev0, s.bias0, s.rpm, s.az, s.wind, H, s.dt_s, guard=False)
+    d = eta[:, 1:] - s.truth
+    dpsi = np.angle(np.exp(1j * d[..., 2]))
+    L = 0.5 * m.vessel.particulars.L_pp_m
+    np.testing.assert_allclose(hist["val_loss"][0], np.mean(d[..., 0] ** 2 + d[..., 1] ** 2 + (L * dpsi) ** 2),
+                               rtol=1e-9)

@@ -25,9 +25,9 @@ from ..logs.io import LogArrays
 from ..physics.model import DynamicModel, check_step
 from ..residual.calibration import CalibrationConfig, fit_spread_scale
 from ..residual.ensemble import EnsembleConfig, MLPEnsemble, fit_ensemble, require_training_rows
-from ..residual.features import (ALL_FEATURES, MEMORY_FEATURES, ResidualConfig, command_feature_columns,
-                                 command_memory, command_pair, command_scales, log_command_memory,
-                                 prepare_log)
+from ..residual.features import (ALL_FEATURES, LOAD_FEATURES, MEMORY_FEATURES, ResidualConfig, actuator_acceleration,
+                                 command_feature_columns, command_memory, command_pair, command_scales,
+                                 log_command_memory, prepare_log)
 from ..residual.load_variability import held_load_rows, held_load_spread, unexplained_load_std_windows
 from ..residual.environment import (EnvironmentConfig, EnvironmentEstimate, EnvironmentEstimator, current_input,
                                     environment_accel, thrust_error_prior_carries_over)
@@ -49,6 +49,7 @@ __all__ = ["AFTER_STOP", "ENVIRONMENT_SOURCES", "HybridPredictor"]
 
 #: First column of the command-memory features in the full feature vector.
 _MEMORY_COL = ALL_FEATURES.index(MEMORY_FEATURES[0])
+_LOAD_COL = ALL_FEATURES.index(LOAD_FEATURES[0])
 #: Key of the spread calibration for forecasts that start after a failure
 #: (:meth:`HybridPredictor.calibrate_after_stop`).
 AFTER_STOP = "after_stop"
@@ -1260,6 +1261,7 @@ class HybridPredictor:
                                     for a in (wind, current, acc_phys))
         zeros_s = np.zeros((S, 3))
         use_cmd = self.residual_config.uses_command_features
+        use_load = self.residual_config.uses_load_features
         feats = np.zeros((E, S, len(ALL_FEATURES)))
         cmd_guard = guard and self.command_regime is not None
         scales = command_scales(self.model, self.model.vessel.rotatable)
@@ -1275,17 +1277,11 @@ class HybridPredictor:
             rpm_s, az_s = np.ascontiguousarray(rpm_j[:, 0]), np.ascontiguousarray(az_j[:, 0])
             eta_1, nu_1 = model.step_unchecked(np.ascontiguousarray(eta[:, j]), np.ascontiguousarray(nu[:, j]),
                                                rpm_s, az_s, wind_s, current_s, zeros_s, acc_s, dt_s, int(substeps))
-            a_1, _ = model.acceleration_unchecked(eta_1, nu_1, rpm_s, az_s, wind_s, current_s, zeros_s, acc_s)
-            feats[:, :, 0:3] = nu_1
-            feats[:, :, 3:6] = a_1
-            feats[:, :, 6:9] = r_prev
-            if use_cmd:
-                jp = max(j - 1, 0) if per_step else 0
-                feats[:, :, 9:_MEMORY_COL] = command_feature_columns(
-                    nu_1, eta_1[:, 2], rpm_j[:, 0], rpm[:, jp], az_j[:, 0], az[:, jp], wind_s, dt_s,
-                    scales["rpm_scale"], scales["angle_channel"])
-            if use_mem:
-                feats[:, :, _MEMORY_COL:] = command_memory[:, j]
+            a_1, parts_1 = model.acceleration_unchecked(eta_1, nu_1, rpm_s, az_s, wind_s, current_s, zeros_s, acc_s)
+            jp = max(j - 1, 0) if per_step else 0
+            _fill_step_features(feats, eta_1, nu_1, a_1, r_prev, (rpm_j[:, 0], rpm[:, jp], az_j[:, 0], az[:, jp]),
+                                wind_s, dt_s, scales, command_memory[:, j] if use_mem else None,
+                                actuator_acceleration(model.arrays, parts_1) if use_load else None, use_cmd)
             X = feats[..., fidx]
             r = ens.predict_members(X) * w_start[None, :, None] if nets else np.zeros((E, S, 3))   # (E, S, 3)
             if guard:
@@ -1408,6 +1404,25 @@ def _with_drift_yaw(r, nu, coeff_rad_per_m2):
 def _tile_starts(x, n: int):
     """``x`` (S, ...) repeated ``n`` times along the starts, block after block (n S, ...); None stays None."""
     return None if x is None else np.ascontiguousarray(np.tile(x, (n,) + (1,) * (np.ndim(x) - 1)))
+
+
+def _fill_step_features(feats, eta_1, nu_1, a_1, r_prev, commands, wind, dt_s: float, scales: dict, memory,
+                        actuator, use_cmd: bool):
+    """Write one rollout step's features into ``feats`` (E, S, len(ALL_FEATURES)): the
+    model-predicted velocities and accelerations at the new state ``eta_1, nu_1``, the
+    members' previous deviations ``r_prev``, and, when selected, the command-aware ones
+    (``commands``: rpm and angles of the step and of the one before), the command memory
+    (S, 2) and the actuators' acceleration (S, 3); the others stay as they are (zeros)."""
+    feats[:, :, 0:3] = nu_1
+    feats[:, :, 3:6] = a_1
+    feats[:, :, 6:9] = r_prev
+    if use_cmd:
+        feats[:, :, 9:_MEMORY_COL] = command_feature_columns(nu_1, eta_1[:, 2], *commands, wind, dt_s,
+                                                             scales["rpm_scale"], scales["angle_channel"])
+    if memory is not None:
+        feats[:, :, _MEMORY_COL:_LOAD_COL] = memory
+    if actuator is not None:
+        feats[:, :, _LOAD_COL:] = actuator
 
 
 def _check_finite_step(eta, nu, lead_s: float):

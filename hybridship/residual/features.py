@@ -64,6 +64,15 @@ COMMAND_FEATURES = ("rpm_main_rel", "rpm_main_rate_rel_s", "angle_main_rad", "an
 #: commands are those of the step being predicted, as for :data:`COMMAND_FEATURES`.
 MEMORY_FEATURES = ("rpm_main_memory_rel", "angle_main_memory_rad")
 
+#: Optional actuator-load features: the actuators' share of the model-predicted
+#: acceleration, ``M^-1 tau_thrust`` (propellers, thrusters and rudders; Fossen's ``tau``
+#: through the inverse of ``M = M_RB + M_A``), at the model-predicted velocities with the
+#: commands of the step being predicted [m/s^2, m/s^2, rad/s^2]. The physics' rudder and
+#: propeller laws then reach the nets as inputs, so a scale error of those laws (a rudder
+#: moment too strong at model scale) is a near-linear function of them; the other
+#: features would have to rebuild the laws' nonlinearity from speed, rpm and angle.
+LOAD_FEATURES = ("actuator_u_dot_hat_m_s2", "actuator_v_dot_hat_m_s2", "actuator_r_dot_hat_rad_s2")
+
 #: Longest time constant of the command memory [s]: a third of the log a forecast reads
 #: before its start (:data:`hybridship.predictors.forecast_setup.FORECAST_HISTORY_S`).
 MAX_COMMAND_MEMORY_S = 600.0
@@ -71,7 +80,8 @@ MAX_COMMAND_MEMORY_S = 600.0
 #: Every feature the hybrid can use, in a fixed order. ``_hat`` = model one-step prediction.
 ALL_FEATURES = ("u_hat_m_s", "v_hat_m_s", "r_hat_rad_s",
                 "u_dot_hat_m_s2", "v_dot_hat_m_s2", "r_dot_hat_rad_s2",
-                "res_u_prev_m_s2", "res_v_prev_m_s2", "res_r_prev_rad_s2") + COMMAND_FEATURES + MEMORY_FEATURES
+                "res_u_prev_m_s2", "res_v_prev_m_s2", "res_r_prev_rad_s2") + COMMAND_FEATURES + MEMORY_FEATURES \
+    + LOAD_FEATURES
 
 #: The paper's feature set (sec. 3.3): model-predicted velocities and accelerations plus
 #: the previous residual.
@@ -147,6 +157,11 @@ class ResidualConfig:
     def uses_memory_features(self) -> bool:
         """Whether any feature of :data:`MEMORY_FEATURES` is selected."""
         return any(f in MEMORY_FEATURES for f in self.features)
+
+    @property
+    def uses_load_features(self) -> bool:
+        """Whether any feature of :data:`LOAD_FEATURES` is selected."""
+        return any(f in LOAD_FEATURES for f in self.features)
 
 
 def command_feature_columns(nu_hat, psi_rad, rpm, rpm_prev, az, az_prev, wind, dt_s: float,
@@ -292,6 +307,8 @@ class PreparedLog:
     ``thrust_acc[i]`` is ``M^-1 tau_thrust`` [m/s^2, m/s^2, rad/s^2] at the state and
     commands of row ``i - 1`` (the thrusters' share of the model's acceleration; the guard
     uses it to tell the thruster regime of the training data from that of a forecast).
+    ``actuator_hat[i]``, when the config selects :data:`LOAD_FEATURES`, is the same share at
+    the predicted velocities ``nu_hat[i]`` with the commands of row ``i - 1``.
     """
 
     arrays: LogArrays
@@ -310,6 +327,7 @@ class PreparedLog:
     rpm_scale: float = 1.0
     angle_channel: int | None = None
     command_memory: np.ndarray | None = None
+    actuator_hat: np.ndarray | None = None
 
     def bias_body(self, rows: np.ndarray, psi_rad=None) -> np.ndarray:
         """The bias known at ``rows`` (from data up to and including them) in the body frame.
@@ -359,6 +377,10 @@ class PreparedLog:
             parts.append(self.command_memory[rows - 1])
         else:
             parts.append(np.zeros((rows.size, len(MEMORY_FEATURES))))
+        if self.config.uses_load_features:
+            parts.append(self.actuator_hat[rows])
+        else:
+            parts.append(np.zeros((rows.size, len(LOAD_FEATURES))))
         return np.concatenate(parts, axis=1)
 
     def trainable_rows(self, mask: np.ndarray | None = None) -> np.ndarray:
@@ -507,12 +529,18 @@ def prepare_log(model, arrays: LogArrays, config: ResidualConfig = ResidualConfi
     # The thrusters' share of the model acceleration, from row i - 1 (stored at row i).
     _, parts, _ = model.acceleration(eta_in, np.nan_to_num(nu_s), rpm=rpm_in,
                                      azimuth_rad=az_in, wind=wind_in, return_parts=True)
-    a_thr = parts[:, 1] @ np.linalg.inv(model.mass_matrix).T
     thrust_acc = np.full((N, 3), np.nan)
     same_seg = (arrays.segment_id[1:] == arrays.segment_id[:-1]) & inputs_ok[:-1]
-    thrust_acc[1:][same_seg] = a_thr[:-1][same_seg]
+    thrust_acc[1:][same_seg] = actuator_acceleration(model.arrays, parts)[:-1][same_seg]
 
     nu_hat, nu_dot_hat = one_step(nu_s)
+    actuator_hat = None
+    if config.uses_load_features:       # at the predicted velocities of row i, commands of row i - 1
+        _, parts_hat, _ = model.acceleration(eta_in[:-1], np.nan_to_num(nu_hat[1:]), rpm=rpm_in[:-1],
+                                             azimuth_rad=az_in[:-1], wind=wind_in[:-1], return_parts=True)
+        actuator_hat = np.full((N, 3), np.nan)
+        ok = np.isfinite(nu_hat[1:]).all(1)
+        actuator_hat[1:][ok] = actuator_acceleration(model.arrays, parts_hat)[ok]
     nu_hat_c, _ = one_step(nu_c)
     residual = (nu_s - nu_hat) / dt
     residual_c = (nu_c - nu_hat_c) / dt
@@ -522,7 +550,14 @@ def prepare_log(model, arrays: LogArrays, config: ResidualConfig = ResidualConfi
     return PreparedLog(arrays=arrays, dt_s=dt, nu_s=nu_s, nu_dot=nu_dot, nu_hat=nu_hat, nu_dot_hat=nu_dot_hat,
                        residual=residual, nu_c=nu_c, residual_c=residual_c,
                        bias_ned=causal_bias(residual_c, arrays, dt, config), thrust_acc=thrust_acc,
-                       config=config, command_memory=memory, **scales)
+                       config=config, command_memory=memory, actuator_hat=actuator_hat, **scales)
+
+
+def actuator_acceleration(model_arrays, parts, lib=np):
+    """The actuators' share ``M^-1 tau_thrust`` (..., 3) [m/s^2, m/s^2, rad/s^2] of the loads
+    ``parts`` (..., 4, 3) in the order of :data:`hybridship.physics.model.TAU_PARTS`."""
+    m_inv = model_arrays.m_inv if lib is np else lib.as_tensor(model_arrays.m_inv, dtype=parts.dtype)
+    return parts[..., 1, :] @ m_inv.T
 
 
 def command_scales(model, rotatable) -> dict:

@@ -243,13 +243,16 @@ def _torch_physics_step():
     import torch
 
     from ..physics.integrate import rollout_batch
+    from ..physics.rhs import dynamics_batch
+    from .features import actuator_acceleration
 
     class PhysicsStep(torch.autograd.Function):
-        """One RK4 step of the numba kernel, ``x (S, 6) -> (eta1, nu1, nu_dot1) (S, 9)``; the
-        Jacobian with respect to heading and velocities by forward differences."""
+        """One RK4 step of the numba kernel, ``x (S, 6) -> (eta1, nu1, nu_dot1) (S, 9)``, with
+        ``loads`` also the actuators' acceleration at the new state (S, 12); the Jacobian with
+        respect to heading and velocities by forward differences."""
 
         @staticmethod
-        def forward(ctx, x, rpm, az, wind, P, dt, substeps, fd_step):
+        def forward(ctx, x, rpm, az, wind, P, dt, substeps, fd_step, loads=False):
             X = x.detach().numpy()
             S = X.shape[0]
             h = fd_step * np.array([1.0, 1.0, 1.0, 1.0, 1.0, 0.1])
@@ -265,9 +268,18 @@ def _torch_physics_step():
                           np.ascontiguousarray(np.tile(rpm, (5, 1, 1))), np.ascontiguousarray(np.tile(az, (5, 1, 1))),
                           np.ascontiguousarray(np.tile(wind, (5, 1, 1))), np.zeros((B, 1, 2)), z3, z3, P, dt, 1,
                           int(substeps), e1, n1, a1)
-            Y = np.concatenate([e1[:, 1], n1[:, 1], a1[:, 1]], axis=1)          # (5S, 9)
+            Y = [e1[:, 1], n1[:, 1], a1[:, 1]]
+            if loads:       # the step's commands at the new state, as the forecast's features
+                parts = np.empty((B, 4, 3))
+                dynamics_batch(np.ascontiguousarray(e1[:, 1]), np.ascontiguousarray(n1[:, 1]),
+                               np.ascontiguousarray(np.tile(rpm[:, 0], (5, 1))),
+                               np.ascontiguousarray(np.tile(az[:, 0], (5, 1))),
+                               np.ascontiguousarray(np.tile(wind[:, 0], (5, 1))), np.zeros((B, 2)), np.zeros((B, 3)),
+                               np.zeros((B, 3)), P, np.empty((B, 3)), parts, np.empty((B, max(P.thr.shape[0], 1))))
+                Y.append(actuator_acceleration(P, parts))
+            Y = np.concatenate(Y, axis=1)                                       # (5S, 9 or 12)
             Y0 = Y[:S]
-            J = np.zeros((S, 9, 6))
+            J = np.zeros((S, Y.shape[1], 6))
             J[:, 0, 0] = 1.0                                                    # position shifts the pose only
             J[:, 1, 1] = 1.0
             for k, col in enumerate((2, 3, 4, 5)):
@@ -278,19 +290,20 @@ def _torch_physics_step():
         @staticmethod
         def backward(ctx, grad_y):
             (J,) = ctx.saved_tensors
-            return torch.einsum("so,sok->sk", grad_y, J), None, None, None, None, None, None, None
+            return torch.einsum("so,sok->sk", grad_y, J), None, None, None, None, None, None, None, None
 
     return PhysicsStep
 
 
-def _full_features(e1, n1, a1, r_prev, s: Starts, j: int, use_cmd: bool, scales: dict):
+def _full_features(e1, n1, a1, r_prev, s: Starts, j: int, use_cmd: bool, scales: dict, loads=None):
     """Every feature of :data:`~hybridship.residual.features.ALL_FEATURES` at rollout step ``j``
     (torch, (E, S, F)) from the physics step ``e1, n1, a1`` (S, 3) and the members' previous
     residuals ``r_prev`` (E, S, 3); the command-aware ones are zeros unless ``use_cmd``, the
-    command-memory ones unless the starts carry them."""
+    command-memory ones unless the starts carry them, the actuator-load ones unless ``loads``
+    (S, 3) are given."""
     import torch
 
-    from .features import COMMAND_FEATURES, MEMORY_FEATURES, command_feature_columns
+    from .features import COMMAND_FEATURES, LOAD_FEATURES, MEMORY_FEATURES, command_feature_columns
 
     E, S = r_prev.shape[0], n1.shape[0]
     cols = [n1.expand(E, S, 3), a1.expand(E, S, 3), r_prev]
@@ -306,6 +319,8 @@ def _full_features(e1, n1, a1, r_prev, s: Starts, j: int, use_cmd: bool, scales:
         cols.append(torch.as_tensor(s.memory[:, j], dtype=n1.dtype).expand(E, S, len(MEMORY_FEATURES)))
     else:
         cols.append(torch.zeros((E, S, len(MEMORY_FEATURES)), dtype=n1.dtype))
+    cols.append(torch.zeros((E, S, len(LOAD_FEATURES)), dtype=n1.dtype) if loads is None
+                else loads.expand(E, S, len(LOAD_FEATURES)))
     return torch.cat(cols, dim=2)
 
 
@@ -394,7 +409,7 @@ def train_multistep(ensemble, model, starts: Starts, feature_index, config: Mult
     from tqdm.auto import tqdm
 
     from .ensemble import MLPEnsemble
-    from .features import ALL_FEATURES, COMMAND_FEATURES, command_scales
+    from .features import ALL_FEATURES, COMMAND_FEATURES, LOAD_FEATURES, command_scales
 
     PhysicsStep = _torch_physics_step()
     P = model.arrays
@@ -408,7 +423,8 @@ def train_multistep(ensemble, model, starts: Starts, feature_index, config: Mult
     nets = ensemble is not None
     params, n_net, scale, tune_hull = _trainable_params(ensemble, hull, config)
     E = ensemble.n_members if nets else 1
-    use_cmd = any(ALL_FEATURES[i] in COMMAND_FEATURES for i in np.asarray(feature_index))
+    use_cmd, use_load = (any(ALL_FEATURES[i] in group for i in np.asarray(feature_index))
+                         for group in (COMMAND_FEATURES, LOAD_FEATURES))
     scales = command_scales(model, model.vessel.rotatable)
 
     def rollout_loss(s: Starts, H=H, own=False):
@@ -423,11 +439,10 @@ def train_multistep(ensemble, model, starts: Starts, feature_index, config: Mult
         for j in range(H):
             jw = min(j, s.wind.shape[1] - 1)
             y = PhysicsStep.apply(x, s.rpm[:, j:j + 1], s.az[:, j:j + 1], s.wind[:, jw:jw + 1], P, dt, substeps,
-                                  config.fd_step)
+                                  config.fd_step, use_load)
             e1, n1, a1 = y[:, :3], y[:, 3:6], y[:, 6:9]
-            full = _full_features(e1, n1, a1, r_prev, s, j, use_cmd, scales)
-            r = _step_residual(params, n_net, full, fidx, ensemble, hull, scale)          # (E, S, 3)
-            r_prev = r
+            full = _full_features(e1, n1, a1, r_prev, s, j, use_cmd, scales, y[:, 9:12] if use_load else None)
+            r = r_prev = _step_residual(params, n_net, full, fidx, ensemble, hull, scale)     # (E, S, 3)
             eta, nu = _corrected_step(e1, n1, r, bias, dt, member)
             x = torch.cat([eta, nu], 1)
             loss = loss + w[j] * _step_error(eta - truth[:, j], L, config.loss).mean()
