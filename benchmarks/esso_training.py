@@ -34,7 +34,8 @@ training runs' wind, ``wind_forecast="fit"``; held otherwise), ``+mirror`` (ever
 also trained on mirrored port to starboard, :func:`mirror_log`: a symmetry prior for the nets),
 ``+env`` (the environment estimator in place of the mean residual, its station-keeping
 settings Froude-scaled to the model, :func:`froude_scaled_environment`), ``+prev`` (the
-paper's previous-residual inputs added, the rest of its nine features).
+paper's previous-residual inputs added, the rest of its nine features), ``+load`` (the
+actuator-load features added, :data:`~hybridship.residual.features.LOAD_FEATURES`).
 Writes ``errors.csv``, ``coverage.csv`` and ``sharpness.csv`` (the manoeuvre benchmark's columns) and
 ``timing.csv`` (training seconds), and prints the distance and heading tables with
 commands known.
@@ -107,7 +108,7 @@ def froude_scaled_environment(vessel, reference="gunnerus"):
 
 
 _UNDERSCORE_TOKEN = r"_(?:(?:hl|h|b|i|v|c|ad|lr|ema)\d+(?:\.\d+)?|(?:m|sd)\d+|abs|lead|own|th)"
-_PLUS_TOKEN = r"\+(?:cmd|cg|wind|mirror|refit|hullms|hull|env|prev|rate|mem(?:ang)?(?:\d+(?:\.\d+)?)?)"
+_PLUS_TOKEN = r"\+(?:cmd|cg|wind|mirror|refit|hullms|hull|env|prev|rate|load|mem(?:ang)?(?:\d+(?:\.\d+)?)?)"
 
 
 def check_variant_name(name: str) -> None:
@@ -129,7 +130,8 @@ def variants(cfg, names):
     """Unfitted hybrids by variant name."""
     from hybridship.forecast_inputs.wind import HELD_WIND
     from hybridship.predictors import HybridPredictor
-    from hybridship.residual.features import ALL_FEATURES, COMMAND_FEATURES, MEMORY_FEATURES, PAPER_FEATURES
+    from hybridship.residual.features import (ALL_FEATURES, COMMAND_FEATURES, LOAD_FEATURES, MEMORY_FEATURES,
+                                              PAPER_FEATURES)
     from hybridship.residual.multistep import MultiStepConfig
     from hybridship.vessel import load_vessel
 
@@ -196,6 +198,9 @@ def variants(cfg, names):
             added = MEMORY_FEATURES[1:] if mem.group(1) else MEMORY_FEATURES
             kw["residual_config"] = replace(rc, features=tuple(rc.features) + added,
                                             **({"command_memory_s": float(mem.group(2))} if mem.group(2) else {}))
+        if "+load" in name:
+            rc = kw["residual_config"]
+            kw["residual_config"] = replace(rc, features=tuple(rc.features) + LOAD_FEATURES)
         if "+env" in name:
             env = froude_scaled_environment(load_vessel("esso_osaka_model"))
             kw.update(environment="estimator", environment_config=env,
