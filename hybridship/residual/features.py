@@ -531,7 +531,7 @@ def prepare_log(model, arrays: LogArrays, config: ResidualConfig = ResidualConfi
                                      azimuth_rad=az_in, wind=wind_in, return_parts=True)
     thrust_acc = np.full((N, 3), np.nan)
     same_seg = (arrays.segment_id[1:] == arrays.segment_id[:-1]) & inputs_ok[:-1]
-    thrust_acc[1:][same_seg] = actuator_acceleration(model.arrays, parts)[:-1][same_seg]
+    thrust_acc[1:][same_seg] = (parts[:, 1] @ np.linalg.inv(model.mass_matrix).T)[:-1][same_seg]
 
     nu_hat, nu_dot_hat = one_step(nu_s)
     actuator_hat = None
