@@ -304,11 +304,12 @@ def test_hybrid_rollout_refuses_inputs_with_another_number_of_starts():
             hp.rollout(z, z, z, z, guard=False, nets=False, **held, **kw)
 
 
-def test_actuator_load_features_agree_between_training_rows_and_both_rollouts():
+def test_actuator_load_features_agree_between_training_rows_and_both_rollouts(tmp_path):
     """The actuator-load features (M^-1 tau_thrust at the predicted velocities, the step's
     commands) are the same in a one-step training row, in the multi-step training's torch
     rollout and in the forecast's numpy rollout: the first validation loss of multi-step
-    training equals the loss of HybridPredictor.rollout over the same starts."""
+    training equals the loss of HybridPredictor.rollout over the same starts. The model file
+    keeps them."""
     torch = pytest.importorskip("torch")
     from hybridship.residual.multistep import _train_val_starts, collect_starts, train_multistep
 
@@ -336,3 +337,7 @@ def test_actuator_load_features_agree_between_training_rows_and_both_rollouts():
     L = 0.5 * m.vessel.particulars.L_pp_m
     np.testing.assert_allclose(hist["val_loss"][0], np.mean(d[..., 0] ** 2 + d[..., 1] ** 2 + (L * dpsi) ** 2),
                                rtol=1e-9)
+    back = HybridPredictor.load(hp.save(tmp_path / "m.npz"))
+    assert back.residual_config.features == rc.features
+    np.testing.assert_array_equal(back.forecast(a, [100.0], 20.0, commands="known").eta,
+                                  hp.forecast(a, [100.0], 20.0, commands="known").eta)
