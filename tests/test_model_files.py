@@ -145,10 +145,10 @@ def test_incompatible_format_version_is_refused(saved, tmp_path):
         p = _rewrite(saved, tmp_path, meta_change=lambda m: m.update(format_version=version), name=f"v{version}.npz")
         # as written in the file: the text "13" is not said as 13, which this hybridship reads
         _refused(p, rf"model format version {shown} is not supported "
-                    rf"\(this hybridship reads versions 7, 8, 9, 10, 11, 12, 13, 14\)"
+                    rf"\(this hybridship reads versions 7, 8, 9, 10, 11, 12, 13, 14, 15\)"
                     + (r"; expected a whole number$" if not isinstance(version, int) else ""))
-    p = _rewrite(saved, tmp_path, meta_change=lambda m: m.update(format_version=15), name="v15.npz")
-    _refused(p, r"written by a newer hybridship \(format 15\); upgrade hybridship to read it")
+    p = _rewrite(saved, tmp_path, meta_change=lambda m: m.update(format_version=16), name="v16.npz")
+    _refused(p, r"written by a newer hybridship \(format 16\); upgrade hybridship to read it")
 
 
 def test_an_older_format_says_retrain(saved, tmp_path):

@@ -311,6 +311,7 @@ def test_actuator_load_features_agree_between_training_rows_and_both_rollouts(tm
     training equals the loss of HybridPredictor.rollout over the same starts. The model file
     keeps them."""
     torch = pytest.importorskip("torch")
+    from hybridship.residual.features import actuator_acceleration
     from hybridship.residual.multistep import _train_val_starts, collect_starts, train_multistep
 
     m = DynamicModel("gunnerus")
@@ -337,6 +338,24 @@ def test_actuator_load_features_agree_between_training_rows_and_both_rollouts(tm
     L = 0.5 * m.vessel.particulars.L_pp_m
     np.testing.assert_allclose(hist["val_loss"][0], np.mean(d[..., 0] ** 2 + d[..., 1] ** 2 + (L * dpsi) ** 2),
                                rtol=1e-9)
+    # with a current (the environment estimator's) the loads stay those at the velocity over
+    # ground, as the training rows computed them
+    import hybridship.predictors.hybrid as hybrid_module
+
+    seen = []
+
+    def spy(*args):
+        seen.append((args[1].copy(), args[2].copy(), args[5], args[6].copy(), args[10].copy()))
+        return fill(*args)
+    fill = hybrid_module._fill_step_features
+    current = np.tile([[[0.5, 1.0]]], (s.eta0.shape[0], 1, 1))
+    with pytest.MonkeyPatch.context() as mp:
+        mp.setattr(hybrid_module, "_fill_step_features", spy)
+        hp.rollout(s.eta0, s.nu0, s.dev0, s.bias0, s.rpm, s.az, s.wind, 3, s.dt_s, guard=False, current=current)
+    for eta_1, nu_1, (rpm_j, _, az_j, _), wind, actuator in seen:
+        _, parts, _ = m.acceleration(eta_1, nu_1, rpm=rpm_j, azimuth_rad=az_j, wind=wind, return_parts=True)
+        np.testing.assert_allclose(actuator, actuator_acceleration(m.arrays, parts), rtol=1e-12, atol=1e-15)
+    assert len(seen) == 3
     back = HybridPredictor.load(hp.save(tmp_path / "m.npz"))
     assert back.residual_config.features == rc.features
     np.testing.assert_array_equal(back.forecast(a, [100.0], 20.0, commands="known").eta,

@@ -1262,6 +1262,7 @@ class HybridPredictor:
         zeros_s = np.zeros((S, 3))
         use_cmd = self.residual_config.uses_command_features
         use_load = self.residual_config.uses_load_features
+        has_current, zeros_c = bool(np.any(current_s)), np.zeros((S, 2))
         feats = np.zeros((E, S, len(ALL_FEATURES)))
         cmd_guard = guard and self.command_regime is not None
         scales = command_scales(self.model, self.model.vessel.rotatable)
@@ -1278,6 +1279,8 @@ class HybridPredictor:
             eta_1, nu_1 = model.step_unchecked(np.ascontiguousarray(eta[:, j]), np.ascontiguousarray(nu[:, j]),
                                                rpm_s, az_s, wind_s, current_s, zeros_s, acc_s, dt_s, int(substeps))
             a_1, parts_1 = model.acceleration_unchecked(eta_1, nu_1, rpm_s, az_s, wind_s, current_s, zeros_s, acc_s)
+            if use_load and has_current:    # the loads at the velocity over ground, as training saw them
+                _, parts_1 = model.acceleration_unchecked(eta_1, nu_1, rpm_s, az_s, wind_s, zeros_c, zeros_s, acc_s)
             jp = max(j - 1, 0) if per_step else 0
             _fill_step_features(feats, eta_1, nu_1, a_1, r_prev, (rpm_j[:, 0], rpm[:, jp], az_j[:, 0], az[:, jp]),
                                 wind_s, dt_s, scales, command_memory[:, j] if use_mem else None,

@@ -27,6 +27,8 @@ from ..residual.multistep import MultiStepConfig
 __all__ = ["MODEL_FORMAT_VERSION", "ModelFileError", "load_model", "model_metadata", "save_model"]
 
 #: Version of the model-file format written by :func:`save_model` (:meth:`HybridPredictor.save`).
+#: 15: the actuator-load features (``residual_config.features`` may name them, so an older
+#: hybridship says "another version" of such a file instead of "damaged");
 #: 14: the environment estimator's settling time (``environment_config.settle_s``);
 #: 13: the metadata's own checksum (``metadata_sha256``: an edited setting, such as the feature
 #: order or the spread calibration, no longer loads silently);
@@ -41,7 +43,7 @@ __all__ = ["MODEL_FORMAT_VERSION", "ModelFileError", "load_model", "model_metada
 #: validated vessel description is embedded in the metadata (``vessel_description``), so a
 #: model loads without its vessel file; 3 added the environment estimator; 2 and earlier
 #: stored only the vessel's name.
-MODEL_FORMAT_VERSION = 14
+MODEL_FORMAT_VERSION = 15
 #: Versions :func:`load_model` reads: a version-7 file is a version-8 one without the spread
 #: exponent (three rows per ``cal_*`` array), read as exponent 1, which is what it was fitted with;
 #: versions 7 and 8 have no wind futures in the spread (``wind_samples = 0``, as they were fitted);
@@ -49,8 +51,9 @@ MODEL_FORMAT_VERSION = 14
 #: only the forecasts use it, not the environment estimator (``drift_yaw_in_filter`` false), as
 #: its coefficient was chosen; versions 7 to 11 use no command memory (the time constant is
 #: the default, unused); versions 7 to 12 carry no checksum of their metadata; versions 7 to
-#: 13 no settling of the environment estimator (``settle_s = 0``, as they were fitted).
-READABLE_MODEL_FORMAT_VERSIONS = (7, 8, 9, 10, 11, 12, 13, 14)
+#: 13 no settling of the environment estimator (``settle_s = 0``, as they were fitted); versions 7 to
+#: 14 no actuator-load features.
+READABLE_MODEL_FORMAT_VERSIONS = (7, 8, 9, 10, 11, 12, 13, 14, 15)
 
 
 class ModelFileError(ValueError):

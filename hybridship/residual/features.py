@@ -67,7 +67,9 @@ MEMORY_FEATURES = ("rpm_main_memory_rel", "angle_main_memory_rad")
 #: Optional actuator-load features: the actuators' share of the model-predicted
 #: acceleration, ``M^-1 tau_thrust`` (propellers, thrusters and rudders; Fossen's ``tau``
 #: through the inverse of ``M = M_RB + M_A``), at the model-predicted velocities with the
-#: commands of the step being predicted [m/s^2, m/s^2, rad/s^2]. The physics' rudder and
+#: commands of the step being predicted [m/s^2, m/s^2, rad/s^2], without a current (as the
+#: training rows, which do not know one, compute them; a forecast with the environment
+#: estimator's current computes them so too). The physics' rudder and
 #: propeller laws then reach the nets as inputs, so a scale error of those laws (a rudder
 #: moment too strong at model scale) is a near-linear function of them; the other
 #: features would have to rebuild the laws' nonlinearity from speed, rpm and angle.
@@ -526,7 +528,9 @@ def prepare_log(model, arrays: LogArrays, config: ResidualConfig = ResidualConfi
         ndh[1:][same] = res.nu_dot[:-1, 1][same]
         return nh, ndh
 
-    # The thrusters' share of the model acceleration, from row i - 1 (stored at row i).
+    # The thrusters' share of the model acceleration, from row i - 1 (stored at row i); M^-1
+    # inverted here as it always was (actuator_acceleration's m_inv differs at round-off, and
+    # the thrust-regime guard's thresholds come from these values).
     _, parts, _ = model.acceleration(eta_in, np.nan_to_num(nu_s), rpm=rpm_in,
                                      azimuth_rad=az_in, wind=wind_in, return_parts=True)
     thrust_acc = np.full((N, 3), np.nan)
@@ -553,11 +557,10 @@ def prepare_log(model, arrays: LogArrays, config: ResidualConfig = ResidualConfi
                        config=config, command_memory=memory, actuator_hat=actuator_hat, **scales)
 
 
-def actuator_acceleration(model_arrays, parts, lib=np):
+def actuator_acceleration(model_arrays, parts):
     """The actuators' share ``M^-1 tau_thrust`` (..., 3) [m/s^2, m/s^2, rad/s^2] of the loads
     ``parts`` (..., 4, 3) in the order of :data:`hybridship.physics.model.TAU_PARTS`."""
-    m_inv = model_arrays.m_inv if lib is np else lib.as_tensor(model_arrays.m_inv, dtype=parts.dtype)
-    return parts[..., 1, :] @ m_inv.T
+    return parts[..., 1, :] @ model_arrays.m_inv.T
 
 
 def command_scales(model, rotatable) -> dict:
