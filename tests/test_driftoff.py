@@ -854,3 +854,40 @@ def test_live_summary_does_not_deny_the_wind_it_used(tmp_path):
     assert main(argv) == 0
     summary = (tmp_path / "out" / "summary.md").read_text()
     assert "mean wind" in summary and "no valid wind sample" not in summary
+
+
+def test_a_scheduler_address_where_another_service_answers_is_refused_by_name(tmp_path, capsys):
+    """Something that is not a Dask scheduler answering at the address (here a web server's
+    reply) made dask allocate exabytes and the CLI report "out of memory"; it is a failed
+    connection to that scheduler."""
+    pytest.importorskip("distributed")
+    import socket
+    import threading
+
+    from hybridship.cli import main
+
+    srv = socket.socket()
+    srv.bind(("127.0.0.1", 0))
+    srv.listen(4)
+    srv.settimeout(20.0)
+
+    def answer():
+        try:
+            while True:
+                conn, _ = srv.accept()
+                conn.sendall(b"HTTP/1.1 200 OK\r\nContent-Length: 2\r\n\r\nok" * 4)
+                conn.close()
+        except OSError:             # the listening socket closed by the test
+            pass
+    threading.Thread(target=answer, daemon=True).start()
+    address = f"tcp://127.0.0.1:{srv.getsockname()[1]}"
+    table = tmp_path / "w.csv"
+    states_to_frame([WeatherState()]).to_csv(table, index=False)
+    try:
+        assert main(["drift-off", "season", "--weather-table", str(table), "--scheduler", address,
+                     "--out", str(tmp_path / "s")]) != 0
+    finally:
+        srv.close()
+    err = capsys.readouterr().err
+    assert f"scheduler '{address}': could not connect" in err and "memory" not in err, err
+    assert not (tmp_path / "s").exists()

@@ -161,6 +161,10 @@ def _client(scheduler, n_workers):
     except (OSError, ValueError, TypeError) as exc:  # dask's own words, with the argument named
         raise OSError(f"scheduler {str(scheduler)!r}: could not connect ({' '.join(str(exc).split())}); "
                       f"expected 'local', no scheduler or a running scheduler's address such as tcp://host:8786") from None
+    except MemoryError:     # another service answered: dask read its reply's first bytes as a frame's length
+        raise OSError(f"scheduler {str(scheduler)!r}: could not connect (what answers there does not speak Dask's "
+                      f"protocol); expected 'local', no scheduler or a running scheduler's address such as "
+                      f"tcp://host:8786") from None
 
 
 def season_sweep(vessel, states, headings_rad, *, uncertainty: WeatherUncertainty | None = None,
