@@ -51,7 +51,7 @@ import numpy as np
 import pandas as pd
 
 from hybridship.evaluation.drift import log_files
-from hybridship.fileio import atomic_write, markdown_table
+from hybridship.fileio import atomic_write, markdown_table, record_inputs
 from hybridship.frames import body_to_ned
 from hybridship.evaluation.metrics import shutdown_index
 from hybridship.physics.model import DynamicModel
@@ -204,6 +204,8 @@ def main(argv=None) -> int:
                 "Each thruster's estimated thrust-error factor `theta` at the last row of station keeping "
                 "(it delivers `1 + theta` times the model's thrust).")
     _plot(args.out / "environment_vs_truth.png", series)
+    if args.drift_hull is not None:     # made from another committed result: record which
+        record_inputs(args.out / "environment_vs_truth.md", [args.drift_hull])
     return 0
 
 

@@ -3,6 +3,7 @@ command's output folder never loses a file the user put there."""
 
 from __future__ import annotations
 
+import hashlib
 import json
 import os
 import stat
@@ -217,3 +218,15 @@ def markdown_table(df) -> str:
     sep = "| " + " | ".join("---" for _ in df.columns) + " |"
     rows = ["| " + " | ".join(str(v) for v in r) + " |" for r in df.itertuples(index=False)]
     return "\n".join([head, sep, *rows])
+
+
+def record_inputs(output, inputs) -> Path:
+    """Write ``<output>.inputs.json`` beside ``output``: the SHA-256 of every file it was made
+    from, keyed by that file's path relative to ``output``'s folder, so that a check can tell
+    a result whose input (another committed result) has changed since it was made."""
+    output = Path(output)
+    made_from = {Path(os.path.relpath(Path(p).resolve(), output.parent.resolve())).as_posix():
+                 hashlib.sha256(Path(p).read_bytes()).hexdigest() for p in inputs}
+    text = json.dumps({"output": output.name, "made_from": made_from}, indent=1, sort_keys=True) + "\n"
+    target = output.with_name(output.name + ".inputs.json")
+    return atomic_write(target, lambda fh: fh.write(text.encode("utf-8")))
