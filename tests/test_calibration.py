@@ -212,6 +212,19 @@ def test_a_forecast_past_the_calibrated_leads_says_its_spread_is_not_calibrated_
         warnings.simplefilter("error")
         hp.forecast(logs[0], [300.0], 30.0)                     # within the calibrated leads
         hp.forecast(logs[0], [300.0], 40.0, calibrated=False)   # the raw spread claims no calibration
+    # fitted on logs with jittered time stamps, the last lead is 29.97 s for a 30-s horizon:
+    # the same lead as a clean log's 30 s (within half a step), not a lead past the calibration
+    import copy
+    from dataclasses import replace
+
+    jittered = copy.copy(hp)
+    jittered.calibration = {mode: {k: replace(c, lead_s=c.lead_s * (29.97 / c.lead_s[-1])) for k, c in cals.items()}
+                            for mode, cals in hp.calibration.items()}
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        jittered.forecast(logs[0], [300.0], 30.0)
+    with pytest.warns(UserWarning, match="calibrated up to 29.97 s"):
+        jittered.forecast(logs[0], [300.0], 31.0)
     write_log(logs[0], tmp_path / "log.csv")
     assert main(["forecast", "--model", str(hp.save(tmp_path / "m.npz")), "--log", str(tmp_path / "log.csv"),
                  "--start-time", "300", "--horizon-s", "40", "--out", str(tmp_path / "fc.csv")]) == 0

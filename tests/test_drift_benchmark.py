@@ -272,3 +272,32 @@ def test_an_out_folder_that_holds_logs_is_refused(tmp_path, capsys):
     err = capsys.readouterr().err
     assert "--out" in err and "holds logs (run1.csv)" in err
     assert sorted(p.name for p in logs.iterdir()) == ["run1.csv"]
+
+
+def test_the_tables_horizons_are_found_at_any_rate_and_other_steps_refused_before_training(tiny_folder, tmp_path,
+                                                                                         monkeypatch):
+    """At 10 Hz the median step is 0.10000000000002274 s: the lead times k * dt missed 15 s
+    exactly and the benchmark crashed after training ("tuple.index(x): x not in tuple"); a
+    log whose step does not divide the horizons (2 s against 15 s) is refused before training."""
+    from hybridship.evaluation.drift import _forecast_after_failures, _test_arrays
+    from hybridship.predictors import DeadReckoning, HybridPredictor
+
+    model = DynamicModel("gunnerus")
+    fast = physics_log(model, duration_s=240.0, t_shutdown_s=150.0, dt_s=0.1, seed=4)
+    fast["time_s"] += 1000.0 / 3.0          # times whose differences are not exactly 0.1 s
+    a = _test_arrays([fast], ["fast"], model.vessel, 20, 60.0, (15.0, 30.0, 45.0, 60.0))
+    fc, all_h, pick, _ = _forecast_after_failures({"dead_reckoning": (DeadReckoning(model.vessel), {})}, a, 20,
+                                                  60.0, (15.0, 30.0, 45.0, 60.0))
+    assert [all_h[i] for i in pick] == [15.0, 30.0, 45.0, 60.0] and len(all_h) == 600
+
+    def no_training(*args, **kwargs):
+        raise AssertionError("trained before the test logs were checked")
+
+    monkeypatch.setattr(HybridPredictor, "fit", no_training)
+    test = tmp_path / "test"
+    test.mkdir()
+    write_log(physics_log(model, duration_s=400.0, t_shutdown_s=200.0, dt_s=2.0, seed=3), test / "slow.csv")
+    with pytest.raises(ValueError, match=r"test: log slow\.csv has a step of 2 s, and the table's horizons 15, 45 s "
+                                         r"are not whole numbers of it"):
+        run_drift_benchmark(tiny_folder, test, tmp_path / "out", progress=False, plots=False)
+    assert not (tmp_path / "out").exists()

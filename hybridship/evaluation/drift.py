@@ -52,6 +52,7 @@ import pandas as pd
 
 from . import metrics
 from ..fileio import atomic_write, check_output_files, earlier_run, markdown_table, record_outputs, remove_stale
+from ..messages import TIME_DECIMALS
 from ..predictors import DataOnlyPredictor, DeadReckoning, DynamicPredictor, HybridPredictor, as_log_arrays
 from ..predictors.hybrid import AFTER_STOP, after_stop_scales
 from ..residual.drift_hull import (MIN_FAILURES as DRIFT_HULL_MIN_FAILURES, choose_coefficient, drift_start_rows,
@@ -210,7 +211,7 @@ def run_drift_benchmark(train=None, test=None, out_dir="drift-benchmark", *, ves
     hybrid = HybridPredictor(vessel, ensemble_config=ens_cfg, training=training, drift_hull=drift_hull,
                              environment_config=environment_config or EnvironmentConfig())
     train_arrays = [as_log_arrays(x, hybrid.model.vessel) for x in train_logs]
-    test_arrays = _test_arrays(test_logs, test_names, hybrid.model.vessel, n_intervals, horizon_s)
+    test_arrays = _test_arrays(test_logs, test_names, hybrid.model.vessel, n_intervals, horizon_s, horizons)
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
     data_only = DataOnlyPredictor(vessel, ensemble_config=ens_cfg)
@@ -289,13 +290,27 @@ def _same_logs_as_training(train_logs, train_names, test_logs, test_names):
                      f"leave one out, or folders without common logs")
 
 
-def _test_arrays(test_logs, test_names, vessel, n_intervals: int, horizon_s: float) -> list:
+def _log_step_s(a) -> float:
+    """A log's step [s], its median time difference to the log's time resolution (a 10-Hz log's
+    0.1 s, not 0.10000000000002274)."""
+    return round(float(np.median(np.diff(a.time_s))), TIME_DECIMALS)
+
+
+def _test_arrays(test_logs, test_names, vessel, n_intervals: int, horizon_s: float, horizons=()) -> list:
     """The test logs as LogArrays, refused (before any training) where a log has no failure to
     score: station keeping, then ``dp_active`` 0, then ``n_intervals`` starts with
-    ``horizon_s`` of drift after each."""
+    ``horizon_s`` of drift after each; or where a table's horizon is not a whole number of the
+    log's steps (15 s of a 2-s log)."""
     from ..predictors.after_failure import has_drift
 
     test_arrays = [as_log_arrays(x, vessel) for x in test_logs]
+    for a, name in zip(test_arrays, test_names):
+        dt = _log_step_s(a)
+        off = [h for h in horizons if abs(h / dt - round(h / dt)) > 1e-6]
+        if off:
+            raise ValueError(f"test: log {name} has a step of {dt:g} s, and the table's horizons "
+                             f"{', '.join(f'{h:g}' for h in off)} s are not whole numbers of it; "
+                             f"expected logs whose step divides {', '.join(f'{h:g}' for h in horizons)} s")
     bad = [name for a, name in zip(test_arrays, test_names) if not has_drift(a, n_intervals, horizon_s)]
     if bad:
         raise ValueError(f"test: {len(bad)} log(s) have no DP failure to score ({', '.join(bad[:5])}"
@@ -464,9 +479,9 @@ def _forecast_after_failures(predictors: dict, test_arrays, n_intervals: int, ho
     Returns ``fc`` (name -> per log ``(pred, truth, std)``), every lead time ``all_h`` [s], the
     indices ``pick`` of the table's ``horizons`` among them, and timing rows.
     """
-    dt = float(np.median(np.diff(test_arrays[0].time_s)))
-    all_h = tuple(float(k * dt) for k in range(1, int(round(horizon_s / dt)) + 1))
-    pick = [all_h.index(float(h)) for h in horizons]
+    dt = _log_step_s(test_arrays[0])
+    all_h = tuple(round(k * dt, 9) for k in range(1, int(round(horizon_s / dt)) + 1))
+    pick = [int(round(h / dt)) - 1 for h in horizons]       # whole steps (_test_arrays checked)
     fc, timing = {}, []
     for name, (pred, kw) in predictors.items():
         t0 = time.perf_counter()
