@@ -161,7 +161,7 @@ def _long_log_case(seed: int = 0, hours: float = 1.0, rate_hz: float = 10.0, sho
     t_end = float(long.time_s.iloc[-1])
     short = long[long.time_s >= t_end - short_s].reset_index(drop=True)
     hp = HybridPredictor(model.vessel, ensemble_config=EnsembleConfig(max_epochs=30, patience=10, seed=seed))
-    hp.fit([short], row_stride=5)
+    hp.fit([short])         # its 10-Hz rows thinned to 1 s for the residual fit (ResidualConfig.residual_step_s)
     return hp, long, short, [t_end - 20.0, t_end - 10.0]
 
 

@@ -460,6 +460,21 @@ def test_a_version_13_file_reads_without_settling(saved, tmp_path):
     _refused(v14, r"damaged model metadata .*settle_s")
 
 
+def test_a_version_14_file_reads_as_fitted_at_the_logs_own_step(saved, tmp_path):
+    """Version 14 had no ``residual_step_s``: its nets were fitted at the logs' own step, so
+    it reads as None; a version-15 file without it is damaged."""
+    def as_v14(meta):
+        meta["format_version"] = 14
+        meta["residual_config"].pop("residual_step_s")
+
+    assert saved[0].residual_config.residual_step_s == 1.0
+    back = HybridPredictor.load(_rewrite(saved, tmp_path, meta_change=as_v14, name="v14r.npz"))
+    assert back.residual_config.residual_step_s is None
+    v15 = _rewrite(saved, tmp_path, meta_change=lambda m: m["residual_config"].pop("residual_step_s"),
+                   name="v15r.npz")
+    _refused(v15, r"damaged model metadata .*residual_step_s")
+
+
 def test_edited_settings_are_refused(saved, tmp_path):
     """The metadata carry their own checksum (format 13): reordering the features, or dropping
     the spread's training information, changed forecasts silently before."""

@@ -464,3 +464,29 @@ def test_training_features_that_are_all_constant_are_named(model):
     hp = HybridPredictor(model.vessel, ensemble_config=tiny, residual_config={"features": ("angle_main_rad",)})
     with pytest.raises(ValueError, match=r"features: .*angle_main_rad.* constant"):
         hp.fit([log])
+
+
+def test_a_fast_log_is_fitted_on_rows_about_one_second_apart():
+    """A residual is a velocity difference over one step divided by the step, so the noise
+    of a 10-Hz log's velocities reaches the targets ten times larger than at 1 Hz; the nets
+    of the paper's features (which hold the previous residual) then learned it and made
+    station-keeping forecasts worse than the nets off. The one-step fit reads every 10th row
+    (``ResidualConfig.residual_step_s`` = 1 s): targets as quiet as at 1 Hz; a 1-Hz log and
+    ``residual_step_s=None`` keep every row."""
+    from hybridship.physics.model import DynamicModel
+    from hybridship.residual.features import ResidualConfig
+
+    m = DynamicModel("gunnerus")
+    log = physics_log(m, seed=3, duration_s=400.0, dt_s=0.1, t_shutdown_s=None, current=(0.2, 1.0))
+    rng = np.random.default_rng(0)
+    for col, sd in (("u_m_s", 0.01), ("v_m_s", 0.01)):
+        log[col] = log[col] + rng.normal(0.0, sd, len(log))          # a speed log's noise
+    assert ResidualConfig().thinning(0.1) == 10 and ResidualConfig().thinning(1.0) == 1
+    assert ResidualConfig().thinning(2.5) == 1 and ResidualConfig(residual_step_s=None).thinning(0.1) == 1
+    rows, std = {}, {}
+    for step in (1.0, None):
+        hp = HybridPredictor(m.vessel, environment="mean", residual_config=ResidualConfig(residual_step_s=step))
+        X, Y, _ = hp.training_data([log])
+        rows[step], std[step] = X.shape[0], Y[:, :2].std()
+    assert rows[None] > 9 * rows[1.0] > 9 * 300
+    assert std[None] > 5 * std[1.0]                  # the noise / dt of 0.1-s differences, not 1-s ones

@@ -136,7 +136,7 @@ class ManoeuvreConfig:
     step_s: float | None = None
     residual: ResidualConfig = field(default_factory=lambda: ResidualConfig(
         features=ALL_FEATURES[:6] + COMMAND_FEATURES + MEMORY_FEATURES, deriv_window_s=2.0, start_average_s=0.1,
-        bias_window_s=0.0))
+        bias_window_s=0.0, residual_step_s=None))        # 10-Hz rows: smoothed targets, multi-step training
     ensemble: EnsembleConfig = field(default_factory=lambda: EnsembleConfig(n_members=8, max_epochs=600))
     train_row_stride: int = 2
     data_only_row_stride: int = 1

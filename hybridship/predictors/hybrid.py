@@ -266,13 +266,17 @@ class HybridPredictor:
         """
         Xs, Ys, segs, thr, full = [], [], [], [], []
         for k, log in enumerate(logs):
-            arrays = as_log_arrays(log, self.model.vessel)
+            full_rate = as_log_arrays(log, self.model.vessel)
+            every = self.residual_config.thinning(full_rate.dt_s)      # a fast log: its rows about 1 s apart
+            arrays = full_rate.rows(slice(None, None, every)) if every > 1 else full_rate
             prep = prepare_log(self.model, arrays, self.residual_config)
-            if self.environment == "estimator":
-                prep.env_body = environment_accel(self.model, arrays, self.estimator.run(arrays), prep.nu_s)
+            if self.environment == "estimator":         # the estimator runs at the log's rate, as forecasts run it
+                est = self.estimator.run(full_rate)
+                prep.env_body = (environment_accel(self.model, arrays, est, prep.nu_s) if every == 1 else
+                                 environment_accel(self.model, full_rate, est)[::every])
             mask = arrays.dp_active.astype(bool) if dp_only else None
             if row_masks is not None and row_masks[k] is not None:
-                mask = row_masks[k] if mask is None else (mask & row_masks[k])
+                mask = row_masks[k][::every] if mask is None else (mask & row_masks[k][::every])
             rows = prep.trainable_rows(mask)
             if rows.size == 0:
                 continue

@@ -28,7 +28,9 @@ __all__ = ["MODEL_FORMAT_VERSION", "ModelFileError", "load_model", "model_metada
 
 #: Version of the model-file format written by :func:`save_model` (:meth:`HybridPredictor.save`).
 #: 15: the actuator-load features (``residual_config.features`` may name them, so an older
-#: hybridship says "another version" of such a file instead of "damaged");
+#: hybridship says "another version" of such a file instead of "damaged") and the step of the
+#: one-step residual fit (``residual_config.residual_step_s``; older files read None, the
+#: log's own step, as they were fitted);
 #: 14: the environment estimator's settling time (``environment_config.settle_s``);
 #: 13: the metadata's own checksum (``metadata_sha256``: an edited setting, such as the feature
 #: order or the spread calibration, no longer loads silently);
@@ -311,8 +313,11 @@ def _build_predictor(cls, meta: dict, vessel, path: Path):
             raise KeyError("residual_config.command_memory_s")     # older files read the default, unused
         if meta["format_version"] >= 14 and "settle_s" not in meta["environment_config"]:
             raise KeyError("environment_config.settle_s")          # older files read 0, as they were fitted
-        residual_config = ResidualConfig(**{k: tuple(v) if k == "features" else v
-                                            for k, v in meta["residual_config"].items()})
+        if meta["format_version"] >= 15 and "residual_step_s" not in meta["residual_config"]:
+            raise KeyError("residual_config.residual_step_s")
+        residual_config = ResidualConfig(**{"residual_step_s": None,     # older files: fitted at the log's step
+                                            **{k: tuple(v) if k == "features" else v
+                                               for k, v in meta["residual_config"].items()}})
         embedded = vessel is None
         if embedded:
             vessel = _embedded_vessel(meta["vessel_description"], path)

@@ -121,6 +121,15 @@ class ResidualConfig:
         Length of the residual blocks whose means spread the ensemble members'
         biases [s] (the forecast horizon is a good choice: the spread then reflects how much
         a one-minute mean of the unknown force varies around the long mean).
+    residual_step_s : float or None
+        Step of the one-step residual fit [s]: a training log sampled faster is thinned to
+        every ``round(residual_step_s / dt)``-th row before its residual targets and features
+        are formed (forecasts still run at the log's own step). A residual is a velocity
+        difference over one step divided by that step, so its noise grows as the step
+        shrinks; at 10 Hz the nets of the paper's features, which include the previous
+        residual, then learned that noise and made station-keeping forecasts worse than the
+        nets off. None: the log's own step (the manoeuvre benchmark's choice, with smoothed
+        targets and multi-step training).
     command_memory_s : float
         Time constant of the low-pass behind :data:`MEMORY_FEATURES` [s], at most
         ``MAX_COMMAND_MEMORY_S`` (a forecast starts the memory at the first row it reads,
@@ -137,6 +146,7 @@ class ResidualConfig:
     bias_frame: Literal["ned", "body"] = "ned"
     bias_block_s: Annotated[Float, Field(gt=0)] = 60.0
     command_memory_s: Annotated[Float, Field(gt=0, le=MAX_COMMAND_MEMORY_S)] = 10.0
+    residual_step_s: Annotated[Float, Field(gt=0)] | None = 1.0
 
     @field_validator("features")
     @classmethod
@@ -149,6 +159,13 @@ class ResidualConfig:
     @property
     def feature_index(self) -> np.ndarray:
         return np.array([ALL_FEATURES.index(f) for f in self.features])
+
+    def thinning(self, dt_s: float) -> int:
+        """Every how many rows a training log of step ``dt_s`` [s] is read for the one-step
+        residual fit (``residual_step_s``; 1 for a log at or slower than it)."""
+        if self.residual_step_s is None or not dt_s > 0:
+            return 1
+        return max(1, int(round(self.residual_step_s / dt_s)))
 
     @property
     def uses_command_features(self) -> bool:
