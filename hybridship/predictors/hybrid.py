@@ -49,6 +49,7 @@ __all__ = ["AFTER_STOP", "ENVIRONMENT_SOURCES", "HybridPredictor"]
 
 #: First column of the command-memory features in the full feature vector.
 _MEMORY_COL = ALL_FEATURES.index(MEMORY_FEATURES[0])
+#: First column of the actuator-load features (the last ones).
 _LOAD_COL = ALL_FEATURES.index(LOAD_FEATURES[0])
 #: Key of the spread calibration for forecasts that start after a failure
 #: (:meth:`HybridPredictor.calibrate_after_stop`).
