@@ -145,10 +145,10 @@ def test_incompatible_format_version_is_refused(saved, tmp_path):
         p = _rewrite(saved, tmp_path, meta_change=lambda m: m.update(format_version=version), name=f"v{version}.npz")
         # as written in the file: the text "13" is not said as 13, which this hybridship reads
         _refused(p, rf"model format version {shown} is not supported "
-                    rf"\(this hybridship reads versions 7, 8, 9, 10, 11, 12, 13, 14, 15\)"
+                    rf"\(this hybridship reads versions 7, 8, 9, 10, 11, 12, 13, 14, 15, 16\)"
                     + (r"; expected a whole number$" if not isinstance(version, int) else ""))
-    p = _rewrite(saved, tmp_path, meta_change=lambda m: m.update(format_version=16), name="v16.npz")
-    _refused(p, r"written by a newer hybridship \(format 16\); upgrade hybridship to read it")
+    p = _rewrite(saved, tmp_path, meta_change=lambda m: m.update(format_version=17), name="v17.npz")
+    _refused(p, r"written by a newer hybridship \(format 17\); upgrade hybridship to read it")
 
 
 def test_an_older_format_says_retrain(saved, tmp_path):
@@ -460,19 +460,19 @@ def test_a_version_13_file_reads_without_settling(saved, tmp_path):
     _refused(v14, r"damaged model metadata .*settle_s")
 
 
-def test_a_version_14_file_reads_as_fitted_at_the_logs_own_step(saved, tmp_path):
-    """Version 14 had no ``residual_step_s``: its nets were fitted at the logs' own step, so
-    it reads as None; a version-15 file without it is damaged."""
-    def as_v14(meta):
-        meta["format_version"] = 14
+def test_a_version_15_file_reads_as_fitted_at_the_logs_own_step(saved, tmp_path):
+    """Version 15 had no ``residual_step_s``: its nets were fitted at the logs' own step, so
+    it reads as None; a version-16 file without it is damaged."""
+    def as_v15(meta):
+        meta["format_version"] = 15
         meta["residual_config"].pop("residual_step_s")
 
     assert saved[0].residual_config.residual_step_s == 1.0
-    back = HybridPredictor.load(_rewrite(saved, tmp_path, meta_change=as_v14, name="v14r.npz"))
+    back = HybridPredictor.load(_rewrite(saved, tmp_path, meta_change=as_v15, name="v15r.npz"))
     assert back.residual_config.residual_step_s is None
-    v15 = _rewrite(saved, tmp_path, meta_change=lambda m: m["residual_config"].pop("residual_step_s"),
-                   name="v15r.npz")
-    _refused(v15, r"damaged model metadata .*residual_step_s")
+    v16 = _rewrite(saved, tmp_path, meta_change=lambda m: m["residual_config"].pop("residual_step_s"),
+                   name="v16r.npz")
+    _refused(v16, r"damaged model metadata .*residual_step_s")
 
 
 def test_edited_settings_are_refused(saved, tmp_path):

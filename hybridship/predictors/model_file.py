@@ -27,10 +27,10 @@ from ..residual.multistep import MultiStepConfig
 __all__ = ["MODEL_FORMAT_VERSION", "ModelFileError", "load_model", "model_metadata", "save_model"]
 
 #: Version of the model-file format written by :func:`save_model` (:meth:`HybridPredictor.save`).
+#: 16: the step of the one-step residual fit (``residual_config.residual_step_s``; older files
+#: read None, the log's own step, as they were fitted);
 #: 15: the actuator-load features (``residual_config.features`` may name them, so an older
-#: hybridship says "another version" of such a file instead of "damaged") and the step of the
-#: one-step residual fit (``residual_config.residual_step_s``; older files read None, the
-#: log's own step, as they were fitted);
+#: hybridship says "another version" of such a file instead of "damaged");
 #: 14: the environment estimator's settling time (``environment_config.settle_s``);
 #: 13: the metadata's own checksum (``metadata_sha256``: an edited setting, such as the feature
 #: order or the spread calibration, no longer loads silently);
@@ -45,7 +45,7 @@ __all__ = ["MODEL_FORMAT_VERSION", "ModelFileError", "load_model", "model_metada
 #: validated vessel description is embedded in the metadata (``vessel_description``), so a
 #: model loads without its vessel file; 3 added the environment estimator; 2 and earlier
 #: stored only the vessel's name.
-MODEL_FORMAT_VERSION = 15
+MODEL_FORMAT_VERSION = 16
 #: Versions :func:`load_model` reads: a version-7 file is a version-8 one without the spread
 #: exponent (three rows per ``cal_*`` array), read as exponent 1, which is what it was fitted with;
 #: versions 7 and 8 have no wind futures in the spread (``wind_samples = 0``, as they were fitted);
@@ -54,8 +54,9 @@ MODEL_FORMAT_VERSION = 15
 #: its coefficient was chosen; versions 7 to 11 use no command memory (the time constant is
 #: the default, unused); versions 7 to 12 carry no checksum of their metadata; versions 7 to
 #: 13 no settling of the environment estimator (``settle_s = 0``, as they were fitted); versions 7 to
-#: 14 no actuator-load features.
-READABLE_MODEL_FORMAT_VERSIONS = (7, 8, 9, 10, 11, 12, 13, 14, 15)
+#: 14 no actuator-load features; versions 7 to 15 were fitted at the logs' own step
+#: (``residual_step_s = None``).
+READABLE_MODEL_FORMAT_VERSIONS = (7, 8, 9, 10, 11, 12, 13, 14, 15, 16)
 
 
 class ModelFileError(ValueError):
@@ -313,7 +314,7 @@ def _build_predictor(cls, meta: dict, vessel, path: Path):
             raise KeyError("residual_config.command_memory_s")     # older files read the default, unused
         if meta["format_version"] >= 14 and "settle_s" not in meta["environment_config"]:
             raise KeyError("environment_config.settle_s")          # older files read 0, as they were fitted
-        if meta["format_version"] >= 15 and "residual_step_s" not in meta["residual_config"]:
+        if meta["format_version"] >= 16 and "residual_step_s" not in meta["residual_config"]:
             raise KeyError("residual_config.residual_step_s")
         residual_config = ResidualConfig(**{"residual_step_s": None,     # older files: fitted at the log's step
                                             **{k: tuple(v) if k == "features" else v
