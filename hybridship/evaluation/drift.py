@@ -52,8 +52,8 @@ import pandas as pd
 
 from . import metrics
 from ..fileio import atomic_write, check_output_files, earlier_run, markdown_table, record_outputs, remove_stale
-from ..messages import TIME_DECIMALS
 from ..predictors import DataOnlyPredictor, DeadReckoning, DynamicPredictor, HybridPredictor, as_log_arrays
+from ..predictors.forecast_setup import forecast_step_s
 from ..predictors.hybrid import AFTER_STOP, after_stop_scales
 from ..residual.drift_hull import (MIN_FAILURES as DRIFT_HULL_MIN_FAILURES, choose_coefficient, drift_start_rows,
                                    munk_coefficient)
@@ -290,12 +290,6 @@ def _same_logs_as_training(train_logs, train_names, test_logs, test_names):
                      f"leave one out, or folders without common logs")
 
 
-def _log_step_s(a) -> float:
-    """A log's step [s], its median time difference to the log's time resolution (a 10-Hz log's
-    0.1 s, not 0.10000000000002274)."""
-    return round(float(np.median(np.diff(a.time_s))), TIME_DECIMALS)
-
-
 def _test_arrays(test_logs, test_names, vessel, n_intervals: int, horizon_s: float, horizons=()) -> list:
     """The test logs as LogArrays, refused (before any training) where a log has no failure to
     score: station keeping, then ``dp_active`` 0, then ``n_intervals`` starts with
@@ -305,7 +299,7 @@ def _test_arrays(test_logs, test_names, vessel, n_intervals: int, horizon_s: flo
 
     test_arrays = [as_log_arrays(x, vessel) for x in test_logs]
     for a, name in zip(test_arrays, test_names):
-        dt = _log_step_s(a)
+        dt = forecast_step_s(a)         # a 10-Hz log's 0.1 s, not 0.10000000000002274
         off = [h for h in horizons if abs(h / dt - round(h / dt)) > 1e-6]
         if off:
             raise ValueError(f"test: log {name} has a step of {dt:g} s, and the table's horizons "
@@ -479,7 +473,7 @@ def _forecast_after_failures(predictors: dict, test_arrays, n_intervals: int, ho
     Returns ``fc`` (name -> per log ``(pred, truth, std)``), every lead time ``all_h`` [s], the
     indices ``pick`` of the table's ``horizons`` among them, and timing rows.
     """
-    dt = _log_step_s(test_arrays[0])
+    dt = forecast_step_s(test_arrays[0])
     all_h = tuple(round(k * dt, 9) for k in range(1, int(round(horizon_s / dt)) + 1))
     pick = [int(round(h / dt)) - 1 for h in horizons]       # whole steps (_test_arrays checked)
     fc, timing = {}, []

@@ -545,14 +545,12 @@ def prepare_log(model, arrays: LogArrays, config: ResidualConfig = ResidualConfi
         ndh[1:][same] = res.nu_dot[:-1, 1][same]
         return nh, ndh
 
-    # The thrusters' share of the model acceleration, from row i - 1 (stored at row i); M^-1
-    # inverted here as it always was (actuator_acceleration's m_inv differs at round-off, and
-    # the thrust-regime guard's thresholds come from these values).
+    # The thrusters' share of the model acceleration, from row i - 1 (stored at row i).
     _, parts, _ = model.acceleration(eta_in, np.nan_to_num(nu_s), rpm=rpm_in,
                                      azimuth_rad=az_in, wind=wind_in, return_parts=True)
     thrust_acc = np.full((N, 3), np.nan)
     same_seg = (arrays.segment_id[1:] == arrays.segment_id[:-1]) & inputs_ok[:-1]
-    thrust_acc[1:][same_seg] = (parts[:, 1] @ np.linalg.inv(model.mass_matrix).T)[:-1][same_seg]
+    thrust_acc[1:][same_seg] = actuator_acceleration(model.arrays, parts)[:-1][same_seg]
 
     nu_hat, nu_dot_hat = one_step(nu_s)
     actuator_hat = None
