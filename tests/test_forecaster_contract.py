@@ -217,7 +217,17 @@ def test_a_horizon_under_one_step_is_refused_with_the_logs_step(kind, fitted, te
     """0.4 s on a 1-Hz log rounds to no step: refused (it gave a forecast of zero steps)."""
     with pytest.raises(ValueError, match=r"^horizon_s: 0\.4 s is shorter than one step of the log \(1 s\)$"):
         fitted[kind].forecast(test_log, STARTS, 0.4)
-    assert fitted[kind].forecast(test_log, STARTS, 0.6).lead_s.tolist() == [0.0, 1.0]   # rounds to one step
+    assert fitted[kind].forecast(test_log, STARTS, 0.8).lead_s.tolist() == [0.0, 1.0]   # within a quarter step
+
+
+@pytest.mark.parametrize("kind", KINDS)
+def test_a_horizon_off_the_logs_steps_is_refused_with_the_nearest(kind, fitted, test_log):
+    """60.4 s on a 1-Hz log was forecast as 60 s without a word: now refused, as a start time
+    more than a quarter step from a sample is; 60.2 s is within a quarter step and gives 60 steps."""
+    with pytest.raises(ValueError, match=r"^horizon_s: 60\.4 s is not a whole number of the log's steps \(1 s\); "
+                                         r"the nearest is 60 s$"):
+        fitted[kind].forecast(test_log, STARTS, 60.4)
+    assert fitted[kind].forecast(test_log, STARTS, 60.2).lead_s[-1] == 60.0
 
 
 @pytest.mark.parametrize("kind", KINDS)

@@ -202,7 +202,8 @@ class RequestError(ValueError):
 
 
 class HorizonError(RequestError):
-    """A forecast horizon the log's step cannot give (shorter than one step)."""
+    """A forecast horizon the log's step cannot give (shorter than one step, or not within a
+    quarter step of a whole number of steps)."""
 
 
 def forecast_step_s(arrays: LogArrays) -> float:
@@ -338,8 +339,9 @@ def _forecast_setup(model, config: ResidualConfig, log, start_times_s, horizon_s
     documented envelope and flagged).
 
     The step is :func:`forecast_step_s` and the horizon ``H = round(horizon_s / step)``
-    whole steps; a horizon that rounds to no step at all is refused (:class:`HorizonError`,
-    a ValueError naming ``horizon_s`` and the step).
+    whole steps; a horizon that rounds to no step at all, or lies more than a quarter step
+    from a whole number of steps (the tolerance of a start time), is refused
+    (:class:`HorizonError`, a ValueError naming ``horizon_s`` and the step).
     """
     if isinstance(horizon_s, (str, bytes, bool, np.bool_)) or np.ndim(horizon_s) != 0:
         raise TypeError(f"horizon_s: expected a number of seconds, got {type(horizon_s).__name__} {horizon_s!r}")
@@ -366,6 +368,10 @@ def _forecast_setup(model, config: ResidualConfig, log, start_times_s, horizon_s
     H = int(round(horizon_s / dt))
     if H < 1:
         raise HorizonError(f"horizon_s: {horizon_s:g} s is shorter than one step of the log ({dt:g} s)")
+    if abs(H * dt - horizon_s) > 0.25 * dt:
+        # the same tolerance as a start time's: a forecast of 63 s asked as 60 s is not an answer
+        raise HorizonError(f"horizon_s: {horizon_s:g} s is not a whole number of the log's steps ({dt:g} s); "
+                           f"the nearest is {H * dt:g} s")
     if len(idx) * (H + 1) > MAX_FORECAST_POINTS:
         raise RequestError(f"start_times_s, horizon_s: {len(idx)} starts x {H + 1} steps is more than "
                            f"{MAX_FORECAST_POINTS:.0e} forecast points (gigabytes of arrays): forecast the starts "
