@@ -68,7 +68,8 @@ def evaluate(path: Path, settings: DriftOffSettings, repeats: int = 3, method: s
     times = []
     for _ in range(repeats):
         t0 = time.perf_counter()
-        est = environment_from_log(hist, "gunnerus", method=method, environment_config=environment_config)
+        est = environment_from_log(hist, "gunnerus", n_members=settings.n_samples, method=method,
+                                   environment_config=environment_config)
         res = blackout_now(est, "gunnerus", settings)
         times.append(time.perf_counter() - t0)
     t = df["time_s"].to_numpy(float)[b:] - df["time_s"].iloc[b]
@@ -80,7 +81,7 @@ def evaluate(path: Path, settings: DriftOffSettings, repeats: int = 3, method: s
         for r, radius in enumerate(settings.radii_m):
             actual = first_time(t, d, radius)
             pred = res.t_reach_s[0, :, r]
-            q = np.quantile(pred, [0.1, 0.5, 0.9], method="lower")  # inf = not reached
+            q = res.time_quantiles()[0, r]                           # inf = not reached
             rows.append({"log": path.name, "track": track, "radius_m": radius, "actual_s": actual,
                          "pred_p10_s": q[0], "pred_p50_s": q[1], "pred_p90_s": q[2],
                          "percentile": 100.0 * float(np.mean(pred <= actual)),

@@ -101,7 +101,7 @@ cfg = DPLossConfig(seed=5, t_shutdown_s=1200.0 if SMALL else 2400.0, drift_s=300
 log = simulate_dp_loss(cfg)
 b = int(np.flatnonzero(log["dp_active"].to_numpy() == 0)[0])
 t0 = time.perf_counter()
-est = environment_from_log(log.iloc[:b], "gunnerus")
+est = environment_from_log(log.iloc[:b], "gunnerus", n_members=N_SAMPLES)   # one environment draw per sample
 live = blackout_now(est, "gunnerus", DriftOffSettings(n_samples=N_SAMPLES, radii_m=(5.0, 10.0)))
 print(f"live update: {time.perf_counter() - t0:.3f} s")
 d = np.hypot(log["truth_north_lf_m"].to_numpy()[b:] - log["truth_north_lf_m"].iloc[b],
@@ -111,7 +111,7 @@ for r, radius in enumerate(live.radii_m):
     actual = t[np.argmax(d >= radius)] if (d >= radius).any() else np.inf
     pred = live.t_reach_s[0, :, r]
     print(f"{radius:4.0f} m: actual {actual:6.1f} s; predicted 10/50/90 % "
-          f"{np.quantile(pred, [0.1, 0.5, 0.9], method='lower').round(1)} s; "
+          f"{live.time_quantiles()[0, r].round(1)} s; "
           f"actual at the {100 * np.mean(pred <= actual):.0f}th percentile")
 
 # %% [markdown]

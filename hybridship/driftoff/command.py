@@ -294,7 +294,8 @@ def _cmd_live(args) -> int:
         df = df[t <= args.time_s]
     t0 = time.perf_counter()
     try:
-        est = environment_from_log(df, model, window_s=args.window_s, seed=args.seed, name=str(args.log))
+        est = environment_from_log(df, model, window_s=args.window_s, n_members=st.n_samples, seed=args.seed,
+                                   name=str(args.log))
     except ValueError as exc:
         raise _usage(problem_lines(exc, f"{_PROG} live: error: ",
                                    lambda field: {"window_s": "--window-s", "log": "--log"}.get(field, field))) from None

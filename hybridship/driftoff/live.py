@@ -149,7 +149,7 @@ METHODS = ("estimator", "mean")
 
 
 def environment_from_log(log, vessel="gunnerus", *, window_s: float = 900.0, wind_window_s: float = 120.0,
-                         n_members: int = 20, seed: int = 0, method: str = "estimator",
+                         n_members: int = 100, seed: int = 0, method: str = "estimator",
                          environment_config=None, name: str = "log") -> EnvironmentEstimate:
     """The environment a blackout at the log's last row would meet (see the module notes).
 
@@ -167,7 +167,12 @@ def environment_from_log(log, vessel="gunnerus", *, window_s: float = 900.0, win
         Window of the mean wind and its gustiness [s], at least :data:`MIN_WIND_WINDOW_S`;
         only samples the wind sensor logged count (not values held over a gap).
     n_members : int
-        Members of the acceleration estimate.
+        Members of the environment estimate (draws of the load and current from the
+        estimator's posterior, or of the residual mean). Each blackout sample of
+        :func:`blackout_now` takes one member, cycling through them when there are fewer
+        (warned, unless there is one: an environment taken as known):
+        give at least the samples' ``n_samples`` (default 100, as :class:`DriftOffSettings`'s),
+        or the spread of the times rests on fewer independent draws than it has samples.
     seed : int
     method : {"estimator", "mean"}
         The environment estimator (default) or the residual mean (see the module notes).
@@ -350,6 +355,15 @@ def blackout_now(estimate: EnvironmentEstimate, vessel="gunnerus", settings: Dri
     rpm[:k] = rpm_now[:k]
     az[:k] = estimate.azimuth_rad[:k]
     members = estimate.accel_members
+    if 1 < members.shape[0] < N:
+        import warnings
+
+        # the environment's spread dominates a live prediction: N samples cycling through
+        # fewer members have the quantiles of that many draws, not of N (one member is an
+        # environment taken as known, which every sample meets)
+        warnings.warn(f"estimate: {members.shape[0]} environment members for {N} samples: the samples cycle "
+                      f"through them, so the times' spread rests on {members.shape[0]} draws of the environment; "
+                      f"give environment_from_log n_members >= n_samples", UserWarning, stacklevel=2)
     acc = members[np.arange(N) % members.shape[0]]
     cur = np.zeros((N, 2))
     if estimate.current_members_ned_m_s is not None:
