@@ -437,11 +437,36 @@ def test_hsc_hybrid_refuses_pitch_in_degrees_and_pwm_as_a_fraction(hsc_fitted, h
     U_frac[:, 1] = U[:, 1] / 100.0
     for call in (lambda: hybrid.one_step(U, Y_deg), lambda: hybrid.free_run(U, Y_deg, N_INIT),
                  lambda: make("hybrid").fit(Ut, np.column_stack([Yt[:, 0], np.degrees(Yt[:, 1])]))):
-        with pytest.raises(ValueError, match=r"^Y: column 1 \(pitch\) .* look like degrees"):
+        with pytest.raises(ValueError, match=r"^Y(_init)?: column 1 \(pitch\) .* look like degrees"):
             call()
     for call in (lambda: hybrid.one_step(U_frac, Y), lambda: hybrid.free_run(U_frac, Y, N_INIT)):
         with pytest.raises(ValueError, match=r"^U: column 1 \(PWM\) .* look like a fraction"):
             call()
+
+
+def test_hsc_records_no_craft_can_log_are_refused_by_the_hybrid_and_the_scoring(hsc_fitted, hsc_setup):
+    """A negated rpm was forecast at 17-81 kn and 40 000 rpm at 475 kn, PWM over 100 % was
+    clipped and a negative speed taken: the grey box (which knows the craft) and the
+    benchmark's scoring (craft records, whatever the model) refuse them by column; the
+    scoring's n_init is checked in one-step mode too (-5 scored the last 5 rows, 0 gave NaN)."""
+    from hybridship.hsc.benchmark import score_model
+
+    _, _, (U, Y) = hsc_setup
+    hybrid = hsc_fitted["hybrid"]
+    cases = [(U * [-1, 1, 1], Y, r"^U: column 0 \(engine speed \[rpm\]\) is -\d"),
+             (U * [10, 1, 1], Y, r"^U: column 0 \(engine speed\) reaches .* beyond twice the craft's max_rpm"),
+             (U + [0, 100, 0], Y, r"^U: column 1 \(PWM duty \[%\]\) is .* expected in \[0, 100\]"),
+             (U, Y * [-1, 1], r"^Y(_init)?: column 0 \(speed \[m/s\]\) is -")]
+    for u, y, msg in cases:
+        for call in (lambda: hybrid.one_step(u, y), lambda: hybrid.free_run(u, y, N_INIT)):
+            with pytest.raises(ValueError, match=msg):
+                call()
+    for kind in HSC_KINDS:
+        with pytest.raises(ValueError, match=r"^U: column 0 \(engine speed \[rpm\]\)"):
+            score_model(hsc_fitted[kind], U * [-1, 1, 1], Y, "free_run")
+        for n_init in (-5, 0, 1.5, len(U)):
+            with pytest.raises(ValueError, match=r"^n_init: expected"):
+                score_model(hsc_fitted[kind], U, Y, "one_step", n_init=n_init)
 
 
 @pytest.mark.parametrize("kind", ["data_only", "hybrid"])

@@ -116,6 +116,9 @@ def test_simulator_refuses_bad_arguments_by_name(craft):
         (lambda: model.simulate([3000.0], [50.0], settle_s=-1.0), "settle_s"),
         (lambda: model.steady_state(np.nan), "rpm"),
         (lambda: model.steady_state(3000.0, np.nan), "actuator_frac"),
+        (lambda: model.steady_state(3000.0, 5.0), "actuator_frac"),              # an OverflowError before
+        (lambda: model.steady_state(3000.0, -1.0), "actuator_frac"),             # 28.4 kn before
+        (lambda: model.steady_state(1e5), "rpm"),                                # "math domain error" before
         (lambda: model.simulate([3000.0, 9000.0], [50.0, 50.0]), "rpm_cmd"),      # overflowed inside before
         (lambda: model.simulate([3000.0, -500.0], [50.0, 50.0]), "rpm_cmd"),      # accepted silently before
         (lambda: model.simulate([3000.0], [500.0]), "pwm_pct"),                   # clipped silently before

@@ -29,6 +29,7 @@ import pandas as pd
 from hybridship.fileio import as_path, atomic_write, check_out_folder, check_output_files, earlier_run, record_outputs
 from hybridship.residual.ensemble import EnsembleConfig
 
+from .contract import N_INPUTS, N_OUTPUTS, check_n_init, check_physical, check_record
 from .hybrid import GreyBoxTables, HybridModel
 from .identification import ARXModel, NARXConfig, NARXModel, StateSpaceModel
 from .scoring import score
@@ -89,6 +90,9 @@ def score_model(model, U, Y, mode: str, n_init: int = N_INIT):
     """Predictions (table units) and ``{output: (R, MAE)}`` of one model on one record."""
     if mode not in ("one_step", "free_run"):
         raise ValueError(f"mode: expected 'one_step' or 'free_run', got {mode!r}")
+    # the rows scored start at n_init in both modes: a one-step score checks it too
+    n_init = check_n_init(n_init, model.n_init, np.shape(U)[0] if np.ndim(U) else 0)
+    check_physical(*check_record(U, Y, shape=(N_INPUTS, N_OUTPUTS)))   # a craft record, whatever the model
     P = model.one_step(U, Y) if mode == "one_step" else model.free_run(U, Y, n_init)
     Yt, Pt = _to_table_units(Y)[n_init:], _to_table_units(P)[n_init:]
     return Pt, {o: score(Yt[:, j], Pt[:, j]) for j, o in enumerate(OUTPUTS)}

@@ -47,7 +47,7 @@ from hybridship.config import as_config
 from hybridship.forecast_inputs.limits import check_number, check_whole_number
 from hybridship.residual.ensemble import EnsembleConfig, fit_ensemble
 
-from .contract import check_free_run, check_record, require_fitted
+from .contract import check_free_run, check_physical, check_record, require_fitted
 from .simulator import PlaningCraftModel
 from .vessel import PlaningCraft, load_planing_craft
 
@@ -210,7 +210,7 @@ class GreyBox:
         from scipy.optimize import least_squares
 
         U, Y = check_record(U, Y, min_rows=k0 + 2, shape=(3, 2))
-        _check_units(U, Y, self.pwm_range_pct)
+        _check_units(U, Y, self)
         scale = Y[k0:].std(0)
         scale = np.where(scale > 1e-9, scale, 1.0)
 
@@ -234,12 +234,19 @@ class GreyBox:
 _PITCH_LIMIT_RAD = 0.5
 
 
-def _check_units(U, Y, pwm_range_pct) -> None:
-    """Refuse the two unit slips the grey box cannot survive: pitch in degrees (every
-    parameter would end at a bound) and PWM as a fraction (the device would never move)."""
+def _check_units(U, Y, grey: "GreyBox", y_name: str = "Y") -> None:
+    """Refuse the unit slips the grey box cannot survive: pitch in degrees (every parameter
+    would end at a bound), PWM as a fraction (the device would never move) and an engine
+    speed beyond twice the craft's ``max_rpm`` (40 000 rpm was forecast at 475 kn)."""
+    check_physical(U, Y, y_name)
+    pwm_range_pct, hi = grey.pwm_range_pct, 2.0 * grey.craft.engines.max_rpm
+    rpm = U[:, 0]
+    if rpm.size and rpm.max() > hi:
+        raise ValueError(f"U: column 0 (engine speed) reaches {rpm.max():.6g} rpm, beyond twice the craft's "
+                         f"max_rpm ({hi:g}); expected rpm (a unit slip?)")
     pitch = np.abs(Y[:, 1])
     if pitch.size and pitch.max() > _PITCH_LIMIT_RAD:
-        raise ValueError(f"Y: column 1 (pitch) reaches {pitch.max():.3g}; expected radians (|pitch| below "
+        raise ValueError(f"{y_name}: column 1 (pitch) reaches {pitch.max():.3g}; expected radians (|pitch| below "
                          f"{_PITCH_LIMIT_RAD} rad); the values look like degrees")
     pwm_max = float(np.max(U[:, 1])) if U.shape[0] else 0.0
     lo = pwm_range_pct[0]
@@ -321,7 +328,7 @@ class HybridModel:
     def one_step(self, U, Y):
         require_fitted(self, "one_ens")
         U, Y = check_record(U, Y, min_rows=self.n_init + 1, shape=self.shape)
-        _check_units(U, Y, self.grey.pwm_range_pct)
+        _check_units(U, Y, self.grey)
         phys = self.grey.one_step(U, Y)
         out = np.full(Y.shape, np.nan)
         k0 = self.n_init
@@ -332,7 +339,7 @@ class HybridModel:
     def free_run(self, U, Y_init, n_init: int):
         require_fitted(self, "free_ens")
         U, Y_init, n_init = check_free_run(U, Y_init, n_init, self.n_init, self.shape)
-        _check_units(U, Y_init, self.grey.pwm_range_pct)
+        _check_units(U, Y_init, self.grey, "Y_init")
         sim = self.grey.simulate(U, Y_init[n_init - 1], n_init - 1)
         out = np.full(sim.shape, np.nan)
         mean, _ = self.free_ens.predict(self._free_features(U, sim)[n_init:])
@@ -343,7 +350,7 @@ class HybridModel:
         """The grey box alone (for the documentation's ablation)."""
         require_fitted(self, "free_ens")
         U, Y_init, n_init = check_free_run(U, Y_init, n_init, self.n_init, self.shape)
-        _check_units(U, Y_init, self.grey.pwm_range_pct)
+        _check_units(U, Y_init, self.grey, "Y_init")
         sim = self.grey.simulate(U, Y_init[n_init - 1], n_init - 1)
         sim[:n_init] = np.nan
         return sim

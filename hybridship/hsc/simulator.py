@@ -404,10 +404,14 @@ class PlaningCraftModel:
         """
         from scipy.optimize import root
 
-        if not (np.isfinite(rpm) and rpm > 0):
-            raise ValueError(f"rpm: expected a positive engine speed [rpm], got {rpm!r}")
-        if not np.isfinite(actuator_frac):
-            raise ValueError(f"actuator_frac: expected a finite fraction, got {actuator_frac!r}")
+        hi = 2.0 * self.rpm_range[1]
+        if not (np.isfinite(rpm) and 0 < rpm <= hi):
+            # twice max_rpm, as the ship models refuse a unit slip; beyond it the planing
+            # equations leave their domain (a math error, not an equilibrium)
+            raise ValueError(f"rpm: expected a positive engine speed [rpm] up to twice max_rpm ({hi:g}), got {rpm!r}")
+        if not (np.isfinite(actuator_frac) and 0.0 <= actuator_frac <= 1.0):
+            raise ValueError(f"actuator_frac: expected a fraction in [0, 1] (device retracted to fully out), "
+                             f"got {actuator_frac!r}")
 
         def resid(v):
             u, z, th = v
