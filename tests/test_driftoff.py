@@ -463,8 +463,8 @@ def test_live_update_is_fast_and_does_not_touch_the_log():
 
 def test_live_samples_each_draw_their_own_environment_or_are_warned():
     """The environment's spread dominates a live prediction: 500 samples cycling through the
-    20 members of the earlier default had the quantiles of 20 draws (the p90 of one log moved
-    from 187 to 266 s with the members' seed). The default members cover the default samples,
+    20 members of the earlier default had the quantiles of 20 draws. The default members cover
+    the default samples,
     and fewer members than samples are warned."""
     import warnings
 
