@@ -81,6 +81,8 @@ def format_validation_error(err: ValidationError, source: str | None = None) -> 
 def _not_bool(v):
     if isinstance(v, (bool, np.bool_)):
         raise ValueError(f"expected an integer, not a bool ({v!r})")
+    if isinstance(v, (str, bytes)):
+        raise ValueError(f"expected an integer, got {v!r}")
     return v
 
 
@@ -90,8 +92,8 @@ def _number(v):
     return v
 
 
-#: An ``int`` field that refuses ``True``/``False`` (numpy's too; pydantic would read them as 1/0);
-#: numpy integers are accepted.
+#: An ``int`` field that refuses ``True``/``False`` (numpy's too; pydantic would read them as 1/0)
+#: and strings (pydantic would parse ``"2"``); numpy integers are accepted.
 Int = Annotated[int, BeforeValidator(_not_bool)]
 
 #: A random seed: a non-negative ``int`` below 2**63 (numpy's and torch's generators both

@@ -24,7 +24,7 @@ from typing import Literal, Optional
 import numpy as np
 from pydantic import BaseModel, ConfigDict, Field, ValidationError, model_validator
 
-from hybridship.config import format_validation_error
+from hybridship.config import Float, Int, format_validation_error
 
 #: Version of the vessel-file format this code reads.
 VESSEL_FORMAT_VERSION = 1
@@ -35,6 +35,8 @@ class VesselFileError(ValueError):
 
 
 class _Strict(BaseModel):
+    # numbers are Float / Int (hybridship.config): pydantic's own would read TOML's
+    # ``x_m = true`` as 1.0 m and ``mass_kg = "600000"`` as a number
     # inf and nan are refused at the file: they would surface only as a diverged simulation
     model_config = ConfigDict(extra="forbid", frozen=True, allow_inf_nan=False)
 
@@ -42,21 +44,21 @@ class _Strict(BaseModel):
 class Particulars(_Strict):
     """Main particulars [m, -, kg/m^3]."""
 
-    L_oa_m: float = Field(gt=0, description="length overall [m]")
-    L_pp_m: float = Field(gt=0, description="length between perpendiculars [m]")
-    B_m: float = Field(gt=0, description="moulded breadth [m]")
-    T_m: float = Field(gt=0, description="draught [m]")
-    C_B: float = Field(gt=0, le=1, description="block coefficient [-]")
-    rho_water_kg_m3: float = Field(1025.0, gt=900, lt=1100, description="water density [kg/m^3]")
+    L_oa_m: Float = Field(gt=0, description="length overall [m]")
+    L_pp_m: Float = Field(gt=0, description="length between perpendiculars [m]")
+    B_m: Float = Field(gt=0, description="moulded breadth [m]")
+    T_m: Float = Field(gt=0, description="draught [m]")
+    C_B: Float = Field(gt=0, le=1, description="block coefficient [-]")
+    rho_water_kg_m3: Float = Field(1025.0, gt=900, lt=1100, description="water density [kg/m^3]")
 
 
 class RigidBody(_Strict):
     """Mass and yaw inertia about the body origin (the CG when ``x_g_m = 0``)."""
 
-    mass_kg: float = Field(gt=0)
-    I_z_kg_m2: Optional[float] = Field(None, gt=0, description="yaw inertia [kg m^2]")
-    r_z_m: Optional[float] = Field(None, gt=0, description="yaw radius of gyration [m] (I_z = m r_z^2)")
-    x_g_m: float = Field(0.0, description="CG forward of the body origin [m]")
+    mass_kg: Float = Field(gt=0)
+    I_z_kg_m2: Optional[Float] = Field(None, gt=0, description="yaw inertia [kg m^2]")
+    r_z_m: Optional[Float] = Field(None, gt=0, description="yaw radius of gyration [m] (I_z = m r_z^2)")
+    x_g_m: Float = Field(0.0, description="CG forward of the body origin [m]")
 
     @model_validator(mode="after")
     def _one_inertia(self):
@@ -80,11 +82,11 @@ class AddedMass(_Strict):
     """
 
     method: Literal["clarke1983", "explicit"]
-    X_udot_kg: Optional[float] = None
-    Y_vdot_kg: Optional[float] = None
-    Y_rdot_kg_m: Optional[float] = None
-    N_vdot_kg_m: Optional[float] = None
-    N_rdot_kg_m2: Optional[float] = None
+    X_udot_kg: Optional[Float] = None
+    Y_vdot_kg: Optional[Float] = None
+    Y_rdot_kg_m: Optional[Float] = None
+    N_vdot_kg_m: Optional[Float] = None
+    N_rdot_kg_m2: Optional[Float] = None
 
     @model_validator(mode="after")
     def _explicit_complete(self):
@@ -100,10 +102,10 @@ class LinearDamping(_Strict):
     """Linear damping D: ``"time_constants"`` (D_ii = M_ii / T_i) or ``"explicit"`` (3x3 matrix, SI)."""
 
     method: Literal["time_constants", "explicit"]
-    T_surge_s: Optional[float] = Field(None, gt=0)
-    T_sway_s: Optional[float] = Field(None, gt=0)
-    T_yaw_s: Optional[float] = Field(None, gt=0)
-    D: Optional[list[list[float]]] = None
+    T_surge_s: Optional[Float] = Field(None, gt=0)
+    T_sway_s: Optional[Float] = Field(None, gt=0)
+    T_yaw_s: Optional[Float] = Field(None, gt=0)
+    D: Optional[list[list[Float]]] = None
 
     @model_validator(mode="after")
     def _complete(self):
@@ -135,10 +137,10 @@ class MMGLinearDerivatives(_Strict):
     :func:`hybridship.physics.hull.mmg_lift`).
     """
 
-    Y_v: float
-    Y_r: float
-    N_v: float
-    N_r: float
+    Y_v: Float
+    Y_r: Float
+    N_v: Float
+    N_r: Float
 
 
 class NonlinearDamping(_Strict):
@@ -165,18 +167,18 @@ class NonlinearDamping(_Strict):
     """
 
     method: Literal["crossflow", "quadratic", "none"]
-    wetted_surface_m2: Optional[float] = Field(None, gt=0)
-    form_factor_k: float = Field(0.0, ge=0, le=1)
-    C_R: float = Field(0.0, ge=0, le=0.05, description="residuary resistance coefficient [-]")
-    speed_ref_m_s: float = Field(5.0, gt=0, description="speed at which C_F is frozen [m/s]")
-    cd_2d: Optional[float] = Field(None, gt=0, description="2-D cross-flow drag coefficient; default Hoerner(B, T)")
-    strips: int = Field(20, ge=2, le=200)
-    strips_x_aft_m: Optional[float] = Field(
+    wetted_surface_m2: Optional[Float] = Field(None, gt=0)
+    form_factor_k: Float = Field(0.0, ge=0, le=1)
+    C_R: Float = Field(0.0, ge=0, le=0.05, description="residuary resistance coefficient [-]")
+    speed_ref_m_s: Float = Field(5.0, gt=0, description="speed at which C_F is frozen [m/s]")
+    cd_2d: Optional[Float] = Field(None, gt=0, description="2-D cross-flow drag coefficient; default Hoerner(B, T)")
+    strips: Int = Field(20, ge=2, le=200)
+    strips_x_aft_m: Optional[Float] = Field(
         None, description="x of the strips' aft end (the AP) from the body origin [m]; default -L_pp/2, the "
                           "hull centred on the origin")
-    d_uu: float = Field(0.0, ge=0)
-    d_vv: float = Field(0.0, ge=0)
-    d_rr: float = Field(0.0, ge=0)
+    d_uu: Float = Field(0.0, ge=0)
+    d_vv: Float = Field(0.0, ge=0)
+    d_rr: Float = Field(0.0, ge=0)
     lift: Literal["clarke1983", "mmg", "none"] = Field(
         "none", description="speed-proportional sway/yaw terms |u_r| [v_r, r] (Clarke et al. 1983 or MMG)")
     lift_speed: Literal["abs", "signed"] = Field(
@@ -205,16 +207,16 @@ class Thruster(_Strict):
 
     name: str = Field(pattern=r"^[a-z][a-z0-9_]*$")
     type: Literal["tunnel", "azimuth", "fixed"]
-    x_m: float
-    y_m: float = 0.0
-    diameter_m: float = Field(gt=0)
-    max_rpm: float = Field(gt=0)
-    angle_deg: Optional[float] = Field(None, description="fixed thrust direction for type 'fixed' [deg]")
-    wake_fraction: float = Field(0.0, ge=0, lt=1)
-    thrust_deduction: float = Field(0.0, ge=0, lt=1)
+    x_m: Float
+    y_m: Float = 0.0
+    diameter_m: Float = Field(gt=0)
+    max_rpm: Float = Field(gt=0)
+    angle_deg: Optional[Float] = Field(None, description="fixed thrust direction for type 'fixed' [deg]")
+    wake_fraction: Float = Field(0.0, ge=0, lt=1)
+    thrust_deduction: Float = Field(0.0, ge=0, lt=1)
     propeller_series: str = "B4-70"
-    pitch_ratio: float = Field(1.0, gt=0)
-    max_azimuth_rate_deg_s: Optional[float] = Field(None, gt=0)
+    pitch_ratio: Float = Field(1.0, gt=0)
+    max_azimuth_rate_deg_s: Optional[Float] = Field(None, gt=0)
 
     @model_validator(mode="after")
     def _angle(self):
@@ -275,20 +277,20 @@ class Rudder(_Strict):
 
     name: str = Field(pattern=r"^[a-z][a-z0-9_]*$")
     propeller: Optional[str] = Field(None, description="name of the fixed thruster ahead of the rudder")
-    x_m: float = Field(description="rudder position x_R [m] from the body origin (negative aft)")
-    y_m: float = 0.0
-    area_m2: float = Field(gt=0)
-    span_m: float = Field(gt=0)
-    lift_gradient: Optional[float] = Field(None, gt=0, le=2 * np.pi)
-    wake_ratio: float = Field(1.0, gt=0, le=3)
-    slipstream_factor: float = Field(0.5, ge=0, le=2)
-    flow_straightening_neg: float = Field(0.5, ge=0, le=2)
-    flow_straightening_pos: float = Field(0.5, ge=0, le=2)
-    l_R_m: Optional[float] = Field(None, description="default: x_m")
-    steering_resistance_deduction: float = Field(0.0, ge=0, lt=1)
-    hull_force_factor: float = Field(0.0, ge=0, le=2)
-    x_H_m: Optional[float] = Field(None, description="default: x_m")
-    max_angle_deg: float = Field(35.0, gt=0, le=90, description="mechanical limit [deg] (for reference)")
+    x_m: Float = Field(description="rudder position x_R [m] from the body origin (negative aft)")
+    y_m: Float = 0.0
+    area_m2: Float = Field(gt=0)
+    span_m: Float = Field(gt=0)
+    lift_gradient: Optional[Float] = Field(None, gt=0, le=2 * np.pi)
+    wake_ratio: Float = Field(1.0, gt=0, le=3)
+    slipstream_factor: Float = Field(0.5, ge=0, le=2)
+    flow_straightening_neg: Float = Field(0.5, ge=0, le=2)
+    flow_straightening_pos: Float = Field(0.5, ge=0, le=2)
+    l_R_m: Optional[Float] = Field(None, description="default: x_m")
+    steering_resistance_deduction: Float = Field(0.0, ge=0, lt=1)
+    hull_force_factor: Float = Field(0.0, ge=0, le=2)
+    x_H_m: Optional[Float] = Field(None, description="default: x_m")
+    max_angle_deg: Float = Field(35.0, gt=0, le=90, description="mechanical limit [deg] (for reference)")
 
     @property
     def aspect_ratio(self) -> float:
@@ -307,10 +309,10 @@ class Rudder(_Strict):
 class WindTable(_Strict):
     """Tabulated wind coefficients; 0..180 deg means a port/starboard symmetric vessel."""
 
-    angle_deg: list[float]
-    C_X: list[float]
-    C_Y: list[float]
-    C_N: list[float]
+    angle_deg: list[Float]
+    C_X: list[Float]
+    C_Y: list[Float]
+    C_N: list[Float]
 
     @model_validator(mode="after")
     def _same_angles(self):
@@ -333,24 +335,24 @@ class WindTable(_Strict):
 
 class BlendermannParams(_Strict):
     vessel_type: str
-    s_L_m: float = Field(description="centroid of A_L forward of midships [m]")
+    s_L_m: Float = Field(description="centroid of A_L forward of midships [m]")
 
 
 class IsherwoodParams(_Strict):
-    A_SS_m2: float = Field(ge=0)
-    S_m: float = Field(gt=0)
-    C_m: float = Field(gt=0)
-    M: int = Field(ge=0)
+    A_SS_m2: Float = Field(ge=0)
+    S_m: Float = Field(gt=0)
+    C_m: Float = Field(gt=0)
+    M: Int = Field(ge=0)
 
 
 class Wind(_Strict):
     """Wind loads (Skulstad et al. eq. 3)."""
 
     method: Literal["table", "isherwood", "blendermann", "none"]
-    A_F_m2: float = Field(0.0, ge=0, description="frontal projected area [m^2]")
-    A_L_m2: float = Field(0.0, ge=0, description="lateral projected area [m^2]")
-    L_oa_m: Optional[float] = Field(None, gt=0, description="default: particulars.L_oa_m")
-    rho_air_kg_m3: float = Field(1.225, gt=0.9, lt=1.5)
+    A_F_m2: Float = Field(0.0, ge=0, description="frontal projected area [m^2]")
+    A_L_m2: Float = Field(0.0, ge=0, description="lateral projected area [m^2]")
+    L_oa_m: Optional[Float] = Field(None, gt=0, description="default: particulars.L_oa_m")
+    rho_air_kg_m3: Float = Field(1.225, gt=0.9, lt=1.5)
     table: Optional[WindTable] = None
     blendermann: Optional[BlendermannParams] = None
     isherwood: Optional[IsherwoodParams] = None
@@ -367,11 +369,11 @@ class Wind(_Strict):
 class TrueVesselPerturbation(_Strict):
     """How the simulator's "true" vessel differs from the model (scale factors per DOF)."""
 
-    added_mass_scale: tuple[float, float, float] = (1.0, 1.0, 1.0)
-    linear_damping_scale: tuple[float, float, float] = (1.0, 1.0, 1.0)
-    nonlinear_damping_scale: tuple[float, float, float] = (1.0, 1.0, 1.0)
-    wind_coefficient_scale: tuple[float, float, float] = (1.0, 1.0, 1.0)
-    thrust_scale: float = 1.0
+    added_mass_scale: tuple[Float, Float, Float] = (1.0, 1.0, 1.0)
+    linear_damping_scale: tuple[Float, Float, Float] = (1.0, 1.0, 1.0)
+    nonlinear_damping_scale: tuple[Float, Float, Float] = (1.0, 1.0, 1.0)
+    wind_coefficient_scale: tuple[Float, Float, Float] = (1.0, 1.0, 1.0)
+    thrust_scale: Float = 1.0
 
     @model_validator(mode="after")
     def _positive(self):
@@ -387,7 +389,7 @@ class TrueVesselPerturbation(_Strict):
 class Vessel(_Strict):
     """A validated vessel description (see module docstring)."""
 
-    format_version: int
+    format_version: Int
     name: str
     description: str = ""
     particulars: Particulars

@@ -430,6 +430,11 @@ def test_gunnerus_coefficients_close_to_published_original_hull():
     # angles in radians (0..3.14): found when the file is read, not at the first simulation
     (lambda d: d["wind"]["table"].__setitem__("angle_deg", list(np.radians(d["wind"]["table"]["angle_deg"]))),
      r"wind.table: angle_deg: must span 0..180"),
+    # booleans and quoted numbers were read as numbers (x_m = true as 1.0 m), silently
+    (lambda d: d["thrusters"][0].__setitem__("x_m", True), r"thrusters\[0\].x_m: expected a number, got True"),
+    (lambda d: d["rigid_body"].__setitem__("mass_kg", "600000"), r"rigid_body.mass_kg: expected a number, got '600000'"),
+    (lambda d: d.__setitem__("format_version", "1"), r"format_version: expected an integer, got '1'"),
+    (lambda d: d["damping"]["linear"].__setitem__("T_surge_s", "1000"), r"damping.linear.T_surge_s: expected a number"),
 ])
 def test_invalid_vessel_files_name_the_field(edit, field):
     d = copy.deepcopy(gunnerus_dict())

@@ -25,7 +25,7 @@ from typing import Literal
 
 from pydantic import BaseModel, ConfigDict, Field, ValidationError, model_validator
 
-from hybridship.config import format_validation_error
+from hybridship.config import Float, Int, format_validation_error
 from hybridship.vessel import VesselFileError, packaged_vessel_text
 
 __all__ = [
@@ -44,37 +44,38 @@ class PlaningCraftFileError(VesselFileError):
 
 
 class _Strict(BaseModel):
-    # NaN and inf refused in every field: a NaN in the file gave all-NaN trials, no error
+    # NaN and inf refused in every field: a NaN in the file gave all-NaN trials, no error;
+    # numbers are Float / Int (hybridship.config), which refuse booleans and quoted text
     model_config = ConfigDict(extra="forbid", frozen=True, allow_inf_nan=False)
 
 
 class Particulars(_Strict):
     """Main particulars as published (Ertogan et al., Appendix A)."""
 
-    loa_m: float = Field(gt=0, description="length overall [m]")
-    lwl_m: float = Field(gt=0, description="length on the waterline [m]")
-    beam_m: float = Field(gt=0, description="maximum beam [m]")
-    depth_m: float = Field(gt=0, description="moulded depth [m]")
-    displacement_kg: float = Field(gt=0, description="displacement (mass) [kg]")
-    draft_m: float = Field(gt=0, description="draft at rest [m]")
-    gm_m: float = Field(gt=0, description="transverse metacentric height [m]")
-    roll_period_s: float = Field(gt=0, description="natural roll period [s]")
-    rho_water_kg_m3: float = Field(1025.0, gt=900, lt=1100)
-    nu_water_m2_s: float = Field(1.19e-6, gt=0, lt=1e-4, description="kinematic viscosity [m^2/s]")
+    loa_m: Float = Field(gt=0, description="length overall [m]")
+    lwl_m: Float = Field(gt=0, description="length on the waterline [m]")
+    beam_m: Float = Field(gt=0, description="maximum beam [m]")
+    depth_m: Float = Field(gt=0, description="moulded depth [m]")
+    displacement_kg: Float = Field(gt=0, description="displacement (mass) [kg]")
+    draft_m: Float = Field(gt=0, description="draft at rest [m]")
+    gm_m: Float = Field(gt=0, description="transverse metacentric height [m]")
+    roll_period_s: Float = Field(gt=0, description="natural roll period [s]")
+    rho_water_kg_m3: Float = Field(1025.0, gt=900, lt=1100)
+    nu_water_m2_s: Float = Field(1.19e-6, gt=0, lt=1e-4, description="kinematic viscosity [m^2/s]")
 
 
 class Hull(_Strict):
     """Prismatic planing hull for Savitsky's method (all assumed: the paper gives none)."""
 
-    chine_beam_m: float = Field(gt=0, description="mean beam over the chines b [m]")
-    deadrise_deg: float = Field(ge=0, lt=35, description="deadrise angle beta [deg]")
-    lcg_m: float = Field(gt=0, description="CG forward of the transom [m]")
-    vcg_m: float = Field(gt=0, description="CG above the keel [m]")
-    pitch_gyration_radius_m: float = Field(gt=0, description="radius of gyration in pitch [m]")
-    correlation_allowance: float = Field(0.0004, ge=0, le=0.002, description="Delta C_F [-]")
-    added_mass_length_m: float = Field(gt=0, description="wetted length used for the added mass [m]")
-    min_damping_speed_m_s: float = Field(3.0, gt=0, description="speed floor of the U a33 damping [m/s]")
-    friction_factor: float = Field(1.0, gt=0, description="multiplies C_F (fouling); 1 = ITTC-1957")
+    chine_beam_m: Float = Field(gt=0, description="mean beam over the chines b [m]")
+    deadrise_deg: Float = Field(ge=0, lt=35, description="deadrise angle beta [deg]")
+    lcg_m: Float = Field(gt=0, description="CG forward of the transom [m]")
+    vcg_m: Float = Field(gt=0, description="CG above the keel [m]")
+    pitch_gyration_radius_m: Float = Field(gt=0, description="radius of gyration in pitch [m]")
+    correlation_allowance: Float = Field(0.0004, ge=0, le=0.002, description="Delta C_F [-]")
+    added_mass_length_m: Float = Field(gt=0, description="wetted length used for the added mass [m]")
+    min_damping_speed_m_s: Float = Field(3.0, gt=0, description="speed floor of the U a33 damping [m/s]")
+    friction_factor: Float = Field(1.0, gt=0, description="multiplies C_F (fouling); 1 = ITTC-1957")
 
     @property
     def deadrise_rad(self) -> float:
@@ -84,13 +85,13 @@ class Hull(_Strict):
 class DisplacementMode(_Strict):
     """Forces below planing speed; blended into Savitsky's between two speeds."""
 
-    waterplane_area_m2: float = Field(gt=0, description="heave restoring C33 = rho g A_wp")
-    long_metacentric_height_m: float = Field(gt=0, description="pitch restoring C55 = rho g nabla GM_L")
-    hump_speed_kn: float = Field(gt=0, description="speed of the resistance hump [kn]")
-    hump_resistance_ratio: float = Field(gt=0, lt=1, description="R / (m g) at the hump [-]")
-    hump_trim_deg: float = Field(gt=0, lt=15, description="bow-up trim at the hump [deg]")
-    blend_start_kn: float = Field(gt=0, description="below this speed: displacement forces only [kn]")
-    blend_end_kn: float = Field(gt=0, description="above this speed: Savitsky forces only [kn]")
+    waterplane_area_m2: Float = Field(gt=0, description="heave restoring C33 = rho g A_wp")
+    long_metacentric_height_m: Float = Field(gt=0, description="pitch restoring C55 = rho g nabla GM_L")
+    hump_speed_kn: Float = Field(gt=0, description="speed of the resistance hump [kn]")
+    hump_resistance_ratio: Float = Field(gt=0, lt=1, description="R / (m g) at the hump [-]")
+    hump_trim_deg: Float = Field(gt=0, lt=15, description="bow-up trim at the hump [deg]")
+    blend_start_kn: Float = Field(gt=0, description="below this speed: displacement forces only [kn]")
+    blend_end_kn: Float = Field(gt=0, description="above this speed: Savitsky forces only [kn]")
 
     @model_validator(mode="after")
     def _order(self):
@@ -100,11 +101,11 @@ class DisplacementMode(_Strict):
 
 
 class Engines(_Strict):
-    count: int = Field(ge=1, le=4)
-    power_bhp: float = Field(gt=0, description="brake power of each engine [BHP]")
-    idle_rpm: float = Field(gt=0)
-    max_rpm: float = Field(gt=0)
-    time_constant_s: float = Field(gt=0, description="first-order lag of engine speed [s]")
+    count: Int = Field(ge=1, le=4)
+    power_bhp: Float = Field(gt=0, description="brake power of each engine [BHP]")
+    idle_rpm: Float = Field(gt=0)
+    max_rpm: Float = Field(gt=0)
+    time_constant_s: Float = Field(gt=0, description="first-order lag of engine speed [s]")
 
     @model_validator(mode="after")
     def _order(self):
@@ -116,44 +117,44 @@ class Engines(_Strict):
 class Propellers(_Strict):
     """One propeller per engine: ``K_T = K_T0 (1 - J / J0)`` (thrust falls with speed)."""
 
-    diameter_m: float = Field(gt=0)
-    gear_ratio: float = Field(gt=0, description="engine rpm / propeller rpm")
-    kt0: float = Field(gt=0, description="thrust coefficient at J = 0 [-]")
-    j0: float = Field(gt=0, description="advance ratio of zero thrust [-]")
-    wake_fraction: float = Field(0.0, ge=0, lt=0.5)
-    thrust_deduction: float = Field(0.0, ge=0, lt=0.5)
-    x_aft_of_transom_m: float = Field(ge=0, description="propeller aft of the transom [m]")
-    z_below_keel_m: float = Field(description="propeller centre below the keel at the transom [m]")
-    shaft_angle_deg: float = Field(description="thrust line angle to the keel, bow-up positive [deg]")
+    diameter_m: Float = Field(gt=0)
+    gear_ratio: Float = Field(gt=0, description="engine rpm / propeller rpm")
+    kt0: Float = Field(gt=0, description="thrust coefficient at J = 0 [-]")
+    j0: Float = Field(gt=0, description="advance ratio of zero thrust [-]")
+    wake_fraction: Float = Field(0.0, ge=0, lt=0.5)
+    thrust_deduction: Float = Field(0.0, ge=0, lt=0.5)
+    x_aft_of_transom_m: Float = Field(ge=0, description="propeller aft of the transom [m]")
+    z_below_keel_m: Float = Field(description="propeller centre below the keel at the transom [m]")
+    shaft_angle_deg: Float = Field(description="thrust line angle to the keel, bow-up positive [deg]")
 
 
 class Interceptor(_Strict):
     """Interceptor blades: force = C 0.5 rho V^2 (span x stroke) per blade, at the transom."""
 
-    count: int = Field(ge=1, le=4)
-    span_m: float = Field(gt=0)
-    max_stroke_m: float = Field(gt=0)
-    lift_coefficient: float = Field(gt=0, description="lift on span x stroke (tunable) [-]")
-    drag_coefficient: float = Field(ge=0, description="drag on span x stroke [-]")
-    full_stroke_time_s: float = Field(gt=0, description="actuator rate limit: 0 to full stroke [s]")
+    count: Int = Field(ge=1, le=4)
+    span_m: Float = Field(gt=0)
+    max_stroke_m: Float = Field(gt=0)
+    lift_coefficient: Float = Field(gt=0, description="lift on span x stroke (tunable) [-]")
+    drag_coefficient: Float = Field(ge=0, description="drag on span x stroke [-]")
+    full_stroke_time_s: Float = Field(gt=0, description="actuator rate limit: 0 to full stroke [s]")
 
 
 class TrimTabs(_Strict):
     """Trim-tab plates: Savitsky & Brown (1976) flap lift, centre 0.6 b forward of the trailing edge."""
 
-    count: int = Field(ge=1, le=4)
-    span_m: float = Field(gt=0)
-    chord_m: float = Field(gt=0)
-    max_deflection_deg: float = Field(gt=0, le=30)
-    full_travel_time_s: float = Field(gt=0, description="actuator rate limit: 0 to full deflection [s]")
-    lift_factor: float = Field(1.0, gt=0, description="multiplies the Savitsky & Brown flap lift")
+    count: Int = Field(ge=1, le=4)
+    span_m: Float = Field(gt=0)
+    chord_m: Float = Field(gt=0)
+    max_deflection_deg: Float = Field(gt=0, le=30)
+    full_travel_time_s: Float = Field(gt=0, description="actuator rate limit: 0 to full deflection [s]")
+    lift_factor: Float = Field(1.0, gt=0, description="multiplies the Savitsky & Brown flap lift")
 
 
 class Actuation(_Strict):
     """PWM duty cycle [%] -> stroke or deflection fraction: linear between the two duties."""
 
-    pwm_min_pct: float = Field(10.0, ge=0, lt=100)
-    pwm_max_pct: float = Field(100.0, gt=0, le=100)
+    pwm_min_pct: Float = Field(10.0, ge=0, lt=100)
+    pwm_max_pct: Float = Field(100.0, gt=0, le=100)
 
     @model_validator(mode="after")
     def _order(self):
@@ -163,13 +164,13 @@ class Actuation(_Strict):
 
 
 class Sensors(_Strict):
-    sample_period_s: float = Field(gt=0)
-    gps_delay_s: float = Field(ge=0, description="GPS speed latency [s]")
-    gps_speed_noise_m_s: float = Field(ge=0)
-    imu_pitch_noise_deg: float = Field(ge=0)
-    imu_pitch_bias_deg: float = Field(0.0, description="mounting misalignment [deg]")
-    imu_acc_noise_m_s2: float = Field(ge=0)
-    rpm_noise: float = Field(ge=0)
+    sample_period_s: Float = Field(gt=0)
+    gps_delay_s: Float = Field(ge=0, description="GPS speed latency [s]")
+    gps_speed_noise_m_s: Float = Field(ge=0)
+    imu_pitch_noise_deg: Float = Field(ge=0)
+    imu_pitch_bias_deg: Float = Field(0.0, description="mounting misalignment [deg]")
+    imu_acc_noise_m_s2: Float = Field(ge=0)
+    rpm_noise: Float = Field(ge=0)
 
     @model_validator(mode="after")
     def _whole_delay(self):
@@ -184,19 +185,19 @@ class Sensors(_Strict):
 class TruthPerturbation(_Strict):
     """Factors and offsets from the nominal file to the simulator's "true" boat."""
 
-    lcg_offset_m: float = 0.0
-    kt0_factor: float = Field(1.0, gt=0)
-    friction_factor: float = Field(1.0, gt=0, description="hull fouling on C_F")
-    interceptor_lift_factor: float = Field(1.0, gt=0)
-    trim_tab_lift_factor: float = Field(1.0, gt=0)
-    displacement_factor: float = Field(1.0, gt=0, description="fuel, crew and gear on board")
+    lcg_offset_m: Float = 0.0
+    kt0_factor: Float = Field(1.0, gt=0)
+    friction_factor: Float = Field(1.0, gt=0, description="hull fouling on C_F")
+    interceptor_lift_factor: Float = Field(1.0, gt=0)
+    trim_tab_lift_factor: Float = Field(1.0, gt=0)
+    displacement_factor: Float = Field(1.0, gt=0, description="fuel, crew and gear on board")
 
 
 class PlaningCraft(_Strict):
     """A validated planing-craft file."""
 
     kind: Literal["planing_craft"]
-    format_version: int = Field(PLANING_CRAFT_FORMAT_VERSION)
+    format_version: Int = Field(PLANING_CRAFT_FORMAT_VERSION)
     name: str
     description: str = ""
     particulars: Particulars
