@@ -231,6 +231,33 @@ def test_a_segment_whose_first_row_has_no_position_restarts_at_its_next(model):
     assert est.P[0, 0, 0] == pytest.approx(EnvironmentEstimator(model)._prior_sd()[0] ** 2)
 
 
+def test_a_short_gap_is_filtered_across_and_a_long_one_restarts(model):
+    """One missing sample restarted the motion states from the single wave-disturbed sample
+    after it, which moved the filtered velocity and every forecast started a few seconds
+    later, without a flag: a gap up to ``max_bridged_gap_s`` is now predicted across, so the
+    estimate 4 s after it stays near that of the full log; a gap over it restarts; on a
+    gap-free log nothing changes."""
+    from hybridship.sim.scenario import DPLossConfig, simulate_dp_loss
+
+    log = simulate_dp_loss(DPLossConfig(seed=5, t_shutdown_s=900.0, drift_s=60.0))   # waves, noise
+    full = as_log_arrays(log, model.vessel)
+    restart = EnvironmentEstimator(model, EnvironmentConfig(max_bridged_gap_s=0.0))
+    for drop in (496, 596, 696):
+        holed = as_log_arrays(log.drop(index=[drop]).reset_index(drop=True), model.vessel)
+        assert holed.segment_id[drop] != holed.segment_id[drop - 1]
+        t = full.time_s[drop + 4]
+        ref = EnvironmentEstimator(model).run(full, [drop + 4]).x[0, 3:5]
+        row = int(np.flatnonzero(holed.time_s == t)[0])
+        d_bridged = np.abs(EnvironmentEstimator(model).run(holed, [row]).x[0, 3:5] - ref).max()
+        d_restarted = np.abs(restart.run(holed, [row]).x[0, 3:5] - ref).max()
+        assert d_bridged < 0.005 and d_bridged < d_restarted / 3, (drop, d_bridged, d_restarted)
+    # beyond the limit: restarted from the measurement at the first row after the gap
+    long_gap = as_log_arrays(log.drop(index=range(300, 320)).reset_index(drop=True), model.vessel)
+    est = EnvironmentEstimator(model, EnvironmentConfig(max_bridged_gap_s=10.0)).run(long_gap, [300])
+    np.testing.assert_allclose(est.x[0, 3:6], long_gap.nu[300], atol=1e-9)
+    np.testing.assert_array_equal(restart.run(full).x, EnvironmentEstimator(model).run(full).x)
+
+
 def test_drift_samples_update_the_estimate_online(model):
     """After the thrusters stop, every new drift sample moves the estimate (and the forecast
     from that start): the estimator keeps running on the drift, and the load's uncertainty

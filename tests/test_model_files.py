@@ -145,10 +145,10 @@ def test_incompatible_format_version_is_refused(saved, tmp_path):
         p = _rewrite(saved, tmp_path, meta_change=lambda m: m.update(format_version=version), name=f"v{version}.npz")
         # as written in the file: the text "13" is not said as 13, which this hybridship reads
         _refused(p, rf"model format version {shown} is not supported "
-                    rf"\(this hybridship reads versions 7, 8, 9, 10, 11, 12, 13, 14, 15, 16\)"
+                    rf"\(this hybridship reads versions 7, 8, 9, 10, 11, 12, 13, 14, 15, 16, 17\)"
                     + (r"; expected a whole number$" if not isinstance(version, int) else ""))
-    p = _rewrite(saved, tmp_path, meta_change=lambda m: m.update(format_version=17), name="v17.npz")
-    _refused(p, r"written by a newer hybridship \(format 17\); upgrade hybridship to read it")
+    p = _rewrite(saved, tmp_path, meta_change=lambda m: m.update(format_version=18), name="v18.npz")
+    _refused(p, r"written by a newer hybridship \(format 18\); upgrade hybridship to read it")
 
 
 def test_an_older_format_says_retrain(saved, tmp_path):
@@ -473,6 +473,21 @@ def test_a_version_15_file_reads_as_fitted_at_the_logs_own_step(saved, tmp_path)
     v16 = _rewrite(saved, tmp_path, meta_change=lambda m: m["residual_config"].pop("residual_step_s"),
                    name="v16r.npz")
     _refused(v16, r"damaged model metadata .*residual_step_s")
+
+
+def test_a_version_16_file_reads_restarting_the_filter_at_every_gap(saved, tmp_path):
+    """Version 16 restarted the environment estimator at every gap of a log: its config reads
+    with ``max_bridged_gap_s = 0``, as it was fitted; a version-17 file without it is damaged."""
+    def as_v16(meta):
+        meta["format_version"] = 16
+        meta["environment_config"].pop("max_bridged_gap_s")
+
+    assert saved[0].environment_config.max_bridged_gap_s == 10.0
+    back = HybridPredictor.load(_rewrite(saved, tmp_path, meta_change=as_v16, name="v16g.npz"))
+    assert back.environment_config.max_bridged_gap_s == 0.0
+    v17 = _rewrite(saved, tmp_path, meta_change=lambda m: m["environment_config"].pop("max_bridged_gap_s"),
+                   name="v17g.npz")
+    _refused(v17, r"damaged model metadata .*max_bridged_gap_s")
 
 
 def test_edited_settings_are_refused(saved, tmp_path):

@@ -918,9 +918,10 @@ class HybridPredictor:
 
     def environment_estimate(self, log, start_times_s):
         """The environment estimator's state at each start time (causal), see
-        :class:`hybridship.residual.environment.EnvironmentEstimate`."""
+        :class:`hybridship.residual.environment.EnvironmentEstimate`. The log is read as
+        :meth:`forecast` reads it (sensor faults tolerated, format errors refused)."""
         self._check_fitted()
-        arrays = as_log_arrays(log, self.model.vessel)
+        arrays = as_log_arrays(log, self.model.vessel, purpose="forecast")
         return self._run_estimator(arrays, start_indices(arrays, start_times_s))
 
     def _filter_groups(self, arrays, idx) -> list[tuple[int, np.ndarray]]:

@@ -27,6 +27,8 @@ from ..residual.multistep import MultiStepConfig
 __all__ = ["MODEL_FORMAT_VERSION", "ModelFileError", "load_model", "model_metadata", "save_model"]
 
 #: Version of the model-file format written by :func:`save_model` (:meth:`HybridPredictor.save`).
+#: 17: the environment estimator filters across short gaps (``environment_config.max_bridged_gap_s``;
+#: older files read 0, every gap restarting the filter, as they were fitted);
 #: 16: the step of the one-step residual fit (``residual_config.residual_step_s``; older files
 #: read None, the log's own step, as they were fitted);
 #: 15: the actuator-load features (``residual_config.features`` may name them, so an older
@@ -45,7 +47,7 @@ __all__ = ["MODEL_FORMAT_VERSION", "ModelFileError", "load_model", "model_metada
 #: validated vessel description is embedded in the metadata (``vessel_description``), so a
 #: model loads without its vessel file; 3 added the environment estimator; 2 and earlier
 #: stored only the vessel's name.
-MODEL_FORMAT_VERSION = 16
+MODEL_FORMAT_VERSION = 17
 #: Versions :func:`load_model` reads: a version-7 file is a version-8 one without the spread
 #: exponent (three rows per ``cal_*`` array), read as exponent 1, which is what it was fitted with;
 #: versions 7 and 8 have no wind futures in the spread (``wind_samples = 0``, as they were fitted);
@@ -55,8 +57,9 @@ MODEL_FORMAT_VERSION = 16
 #: the default, unused); versions 7 to 12 carry no checksum of their metadata; versions 7 to
 #: 13 no settling of the environment estimator (``settle_s = 0``, as they were fitted); versions 7 to
 #: 14 no actuator-load features; versions 7 to 15 were fitted at the logs' own step
-#: (``residual_step_s = None``).
-READABLE_MODEL_FORMAT_VERSIONS = (7, 8, 9, 10, 11, 12, 13, 14, 15, 16)
+#: (``residual_step_s = None``); versions 7 to 16 restart the environment estimator at every
+#: gap of a log (``max_bridged_gap_s = 0``).
+READABLE_MODEL_FORMAT_VERSIONS = (7, 8, 9, 10, 11, 12, 13, 14, 15, 16, 17)
 
 
 class ModelFileError(ValueError):
@@ -316,6 +319,8 @@ def _build_predictor(cls, meta: dict, vessel, path: Path):
             raise KeyError("environment_config.settle_s")          # older files read 0, as they were fitted
         if meta["format_version"] >= 16 and "residual_step_s" not in meta["residual_config"]:
             raise KeyError("residual_config.residual_step_s")
+        if meta["format_version"] >= 17 and "max_bridged_gap_s" not in meta["environment_config"]:
+            raise KeyError("environment_config.max_bridged_gap_s")
         residual_config = ResidualConfig(**{"residual_step_s": None,     # older files: fitted at the log's step
                                             **{k: tuple(v) if k == "features" else v
                                                for k, v in meta["residual_config"].items()}})
@@ -327,7 +332,8 @@ def _build_predictor(cls, meta: dict, vessel, path: Path):
                   guard_quantile=meta["guard_quantile"],
                   stop_after_failure=_checked_flag(meta, "stop_after_failure"),
                   environment=meta["environment"],
-                  environment_config=EnvironmentConfig(**meta["environment_config"]),
+                  # older files restarted the filter at every gap, as they were fitted
+                  environment_config=EnvironmentConfig(**{"max_bridged_gap_s": 0.0, **meta["environment_config"]}),
                   environment_window_s=_checked_number(meta, "environment_window_s"),
                   nets_after_stop=_checked_flag(meta, "nets_after_stop"),
                   # files written before the option calibrated the members' spread
@@ -539,8 +545,11 @@ def _read_nets(data: dict, n_in: int, state: dict):
         raise ValueError(f"weight shapes {[w.shape for w in weights]} do not match {expected}")
     norm = {k: np.asarray(data[k], dtype=float) for k in ("x_mean", "x_std", "y_mean", "y_std")}
     for k, n in (("x_mean", n_in), ("x_std", n_in), ("y_mean", 3), ("y_std", 3)):
-        if norm[k].shape != (n,) or not np.all(np.isfinite(norm[k])):
+        if norm[k].shape != (n,):
             raise ValueError(f"{k}: expected {n} finite values, got shape {norm[k].shape}")
+        if not np.all(np.isfinite(norm[k])):
+            raise ValueError(f"{k}: expected {n} finite values, got NaN or inf at entry "
+                             f"{int(np.argmax(~np.isfinite(norm[k])))}")
         if k.endswith("std") and not np.all(norm[k] > 0):
             raise ValueError(f"{k}: a normalisation scale must be > 0")
     ens = MLPEnsemble(weights, norm["x_mean"], norm["x_std"], norm["y_mean"], norm["y_std"])

@@ -182,6 +182,14 @@ class EnvironmentConfig(BaseModel):
         otherwise the start-up transient of motion states started from one sample moves
         the current-load split, which station keeping cannot correct afterwards, so that an
         estimate depends on where its filter started. 0: no settling.
+    max_bridged_gap_s : float
+        A gap in the log (a step over 1.5 times the log's own, which starts a new segment) up
+        to this long [s] is filtered across: the process model predicts through it with the
+        commands before it, as a Kalman filter does without measurements, and the samples
+        after it update the estimate. A longer gap restarts the motion states from the
+        measurement. (Restarting at a single missing sample took the velocity from one
+        wave-disturbed sample, and every forecast of the next seconds with it.) 0: every gap
+        restarts.
     innovation_gate_sigma, max_gated_samples : float, int
         Outlier gate on position and heading (above).
     wave_turned_yaw_load, wave_axis_window_s, min_wave_anisotropy, min_wave_sin2 : bool, float, float, float
@@ -219,6 +227,7 @@ class EnvironmentConfig(BaseModel):
     held_load_window_s: float = Field(600.0, ge=0.0)
     held_load_block_s: float = Field(30.0, gt=0.0)
     settle_s: float = Field(0.0, ge=0.0)
+    max_bridged_gap_s: float = Field(10.0, ge=0.0)
     innovation_gate_sigma: float = Field(8.0, gt=0.0)
     max_gated_samples: int = Field(10, ge=0)
     wave_turned_yaw_load: bool = False
@@ -589,8 +598,9 @@ class EnvironmentEstimator:
         """Filter the log from ``first_row`` and return the estimates at ``rows`` (default: all).
 
         The estimate at row ``i`` uses the samples ``first_row .. i`` only (causal). A gap
-        (a new segment) restarts the motion states from the measurement and keeps the
-        environment states, whose uncertainty grows over the gap. On a log sampled faster
+        (a new segment) up to ``max_bridged_gap_s`` is predicted across; a longer one
+        restarts the motion states from the measurement and keeps the environment states,
+        whose uncertainty grows over the gap. On a log sampled faster
         than ``filter_step_s`` the filter steps over every ``m``-th row (commands held over
         the step), on a grid that passes through each requested row; the slow environment
         loses nothing by it and a 10-Hz log costs what a 1-Hz one does.
@@ -621,8 +631,7 @@ class EnvironmentEstimator:
         if rows.size and (rows.min() < first_row or rows.max() >= n):
             raise ValueError(f"rows: must lie in [{first_row}, {n - 1}]")
         last = int(rows.max()) if rows.size else first_row
-        dt_log = float(np.median(np.diff(arrays.time_s))) if n > 1 else 1.0
-        m = max(1, int(round(self.config.filter_step_s / dt_log)))
+        m, _ = self._filter_every(arrays)
         inputs = self._shared_inputs(arrays, first_row, last)
         out_x, out_P = {}, {}
         for c in np.unique(rows % m):       # one pass per grid through the requested rows
@@ -733,6 +742,12 @@ class EnvironmentEstimator:
         self._filter_grid(arrays, grid[branch:], [w for w in want if w > b], inputs, out_x, out_P, drift_yaw_uv,
                           resume=(shared_x[b], shared_P[b], settle_until))
 
+    def _filter_every(self, arrays) -> tuple[int, float]:
+        """``(m, dt_log)``: the filter steps over every ``m``-th row of a log whose step is
+        ``dt_log`` [s] (the median spacing), ``m`` the whole log steps nearest ``filter_step_s``."""
+        dt_log = float(np.median(np.diff(arrays.time_s))) if len(arrays.time_s) > 1 else 1.0
+        return max(1, int(round(self.config.filter_step_s / dt_log))), dt_log
+
     def _filter_grid(self, arrays, grid, want, inputs, out_x, out_P, drift_yaw_uv: float, resume=None) -> float:
         """One run of the compiled filter over ``grid`` (from the estimate and settling time
         ``resume = (x, P, settle_until_s)`` at ``grid[0]`` when given), storing the estimates
@@ -754,7 +769,8 @@ class EnvironmentEstimator:
                            float(c.load_yaw_prior_rad_s2), float(c.current_std_at_stop_m_s),
                            float(c.load_to_current_at_stop), drift_yaw_uv,
                            self._gate(),
-                           int(c.max_gated_samples), float(c.settle_s), resume is not None,
+                           int(c.max_gated_samples), float(c.settle_s), float(c.max_bridged_gap_s),
+                           float(np.prod(self._filter_every(arrays))), resume is not None,
                            np.ascontiguousarray(x_resume, dtype=float), np.ascontiguousarray(P_resume, dtype=float),
                            settle_io, xs, Ps, done)
         for k, i in enumerate(want):

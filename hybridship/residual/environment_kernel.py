@@ -331,17 +331,45 @@ def load_to_current_at_stop(x, frac, P, work):
 
 
 @numba.njit(cache=True)
+def _restarted(z_i, x, Pc, keep_environment, gap_s, prior_thr, prior_sd, q_base):
+    """The state and covariance of a (re)start at a sample ``z_i``: motion states from the
+    measurement (a velocity not logged: 0), the rest from the prior; with
+    ``keep_environment``, the environment of ``x, Pc`` kept, its covariance grown over the
+    gap ``gap_s`` [s]."""
+    n = prior_sd.size
+    x0 = np.zeros(n)
+    P0 = np.zeros((n, n))
+    for j in range(3):
+        x0[j] = z_i[j]
+        x0[3 + j] = z_i[3 + j] if math.isfinite(z_i[3 + j]) else 0.0
+    for j in range(n - _THR):
+        x0[_THR + j] = prior_thr[j]
+    for j in range(n):
+        P0[j, j] = prior_sd[j] ** 2
+    if keep_environment:
+        Qg = process_noise(gap_s, q_base)
+        for a in range(6, n):
+            x0[a] = x[a]
+            for b in range(6, n):
+                P0[a, b] = Pc[a, b] + Qg[a, b]
+    return x0, P0
+
+
+@numba.njit(cache=True)
 def filter_grid(grid, slot, t, seg, z, z_ok, r_std, rpm, az, wind, dp, P, per_thruster, prior_thr, prior_sd, q_base,
                 fd_step, reset_at_stop, kept, stop_std, yaw_prior, current_stop_std, load_to_current, drift_yaw_uv,
-                gate, max_gated, settle_s, resume, x_resume,
+                gate, max_gated, settle_s, max_bridge_s, step_s, resume, x_resume,
                 P_resume, settle_io, out_x, out_P, done):
     """Run the filter over the log rows ``grid`` (increasing).
 
     At a row ``i`` with ``slot[i] >= 0`` the estimate goes to ``out_x[slot[i]]``,
-    ``out_P[slot[i]]`` and ``done[slot[i]]`` is set. A new segment (or a lost estimate)
-    restarts the motion states from the measurement and keeps the environment, whose
-    covariance grows by the process noise over the gap. Rows whose position or heading is
-    missing cannot start the filter: a new segment restarts at its first row with them.
+    ``out_P[slot[i]]`` and ``done[slot[i]]`` is set. A new segment after a gap of at most
+    ``max_bridge_s`` [s] is filtered across: the process model predicts through the gap in
+    about ``step_s``-long steps (the grid's), as without measurements. A longer gap (or a
+    lost estimate) restarts the motion states from the measurement and keeps the
+    environment, whose covariance grows by the process noise over the gap. Rows whose
+    position or heading is missing cannot start the filter: a new segment restarts at its
+    first row with them.
     At a thrust stop (``dp`` 1 -> 0) the yaw environment restarts with ``reset_at_stop``
     (:func:`at_thrust_stop`), the fraction ``load_to_current`` of the load becomes a current
     (:func:`load_to_current_at_stop`; 0: none) and the current's uncertainty widens along
@@ -380,36 +408,26 @@ def filter_grid(grid, slot, t, seg, z, z_ok, r_std, rpm, az, wind, dp, P, per_th
         for j in range(n):
             if not math.isfinite(x[j]):
                 finite = False
-        if not started or seg[i] != seg[prev] or not finite:
+        if not started or not finite or (seg[i] != seg[prev] and t[i] - t[prev] > max_bridge_s):
             if not (z_ok[i, 0] and z_ok[i, 1] and z_ok[i, 2]):
                 if not (started and finite):
                     prev = i
                 # else: prev stays the last filtered row, so the next row with a position
                 # restarts the new segment (not a prediction across the gap)
                 continue
-            x0 = np.zeros(n)
-            P0 = np.zeros((n, n))
-            for j in range(3):
-                x0[j] = z[i, j]
-                x0[3 + j] = z[i, 3 + j] if math.isfinite(z[i, 3 + j]) else 0.0
-            for j in range(n - _THR):
-                x0[_THR + j] = prior_thr[j]
-            for j in range(n):
-                P0[j, j] = prior_sd[j] ** 2
-            if started and finite:                  # keep what is known of the environment
-                Qg = process_noise(max(t[i] - t[prev], 0.0), q_base)
-                for a in range(6, n):
-                    x0[a] = x[a]
-                    for b in range(6, n):
-                        P0[a, b] = Pc[a, b] + Qg[a, b]
-            x, Pc = x0, P0
+            x, Pc = _restarted(z[i], x, Pc, started and finite, max(t[i] - t[prev], 0.0), prior_thr, prior_sd,
+                               q_base)
             gated[:] = 0
             started = True
             settle_until = t[i] + settle_s
         else:
             dt = t[i] - t[prev]
-            x, Pc = predict(x, Pc, dt, rpm[prev], az[prev], wind[prev], process_noise(dt, q_base), fd_step, P,
-                            per_thruster, 0.0 if dp[prev] else drift_yaw_uv, work)
+            # a bridged gap in steps of about the grid's (one step on a gap-free grid)
+            n_sub = max(1, int(round(dt / step_s)))
+            h = dt / n_sub
+            for _ in range(n_sub):
+                x, Pc = predict(x, Pc, h, rpm[prev], az[prev], wind[prev], process_noise(h, q_base), fd_step, P,
+                                per_thruster, 0.0 if dp[prev] else drift_yaw_uv, work)
             if t[i] <= settle_until:
                 for a in range(6):
                     for b in range(6, n):
