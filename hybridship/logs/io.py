@@ -110,6 +110,13 @@ KM_H_PER_M_S = 3.6
 #: The logged speed may differ from the track's by at most this factor either way
 #: (the geometric mean of 1 and 1.94: knots are refused, noise is not).
 _SPEED_SCALE_SPLIT = float(np.sqrt(KNOTS_PER_M_S))
+#: ... and its direction, turned into NED by the logged heading, from the track's by at most
+#: this [deg] (median over windows that moved :data:`SPEED_CHECK_MISFIT_MIN_M` [m] both
+#: ways): a heading and yaw rate both in radians (a heading of 186 deg logged as 3.24, read
+#: as 3.24 deg) pass the angle-unit rules but turn the velocities by up to 180 deg, while
+#: logs in degrees stay within a few degrees (GNSS noise and waves).
+SPEED_CHECK_MAX_MISFIT_DEG = 45.0
+SPEED_CHECK_MISFIT_MIN_M = 2.0
 #: An azimuth thruster negative in at least this many samples and never positive is taken
 #: to log its rotation direction instead of the thrust sign.
 RPM_SIGN_MIN_SAMPLES = 60
@@ -206,7 +213,9 @@ def heading_looks_like_radians(time_s, heading, r_deg_s=None) -> tuple[bool, str
        geometric mean ``sqrt(57.3) = 7.6``, which leaves a factor 7.6 of margin for noise
        either way (the project's logs give 0.5-1 in degrees and 28-55 in radians, also in
        calm DP). This catches a radian heading even when it barely moves, but cannot see a
-       log whose heading AND rate are both in radian units.
+       log whose heading AND rate are both in radian units (the log's validation refuses
+       those by the track instead, when it has ``u_m_s``, ``v_m_s`` and the ship moves:
+       :func:`speed_scale_vs_track`'s ``misfit_deg``).
     4. **Spread.** Otherwise the column is refused if it spans at least 5.5 (315 deg if
        radians, i.e. a turning vessel), and accepted if it spans less.
 
@@ -385,12 +394,18 @@ class SpeedScale(NamedTuple):
         The larger of the two rms displacements [m].
     time_span_s : tuple of float
         First and last ``time_s`` of the samples used.
+    misfit_deg : float
+        Median angle [deg] between the velocities' displacements and the track's, over the
+        windows in which both moved at least :data:`SPEED_CHECK_MISFIT_MIN_M` (about 0
+        when the heading and the velocities describe the track, a turning ship included);
+        NaN with fewer such windows than three lags' worth.
     """
 
     scale: float
     correlation: float
     rms_displacement_m: float
     time_span_s: tuple[float, float]
+    misfit_deg: float = float("nan")
 
 
 def speed_scale_vs_track(time_s, north_m, east_m, heading_deg, u_m_s, v_m_s, *,
@@ -459,7 +474,12 @@ def speed_scale_vs_track(time_s, north_m, east_m, heading_deg, u_m_s, v_m_s, *,
     corr = float(np.abs(np.vdot(zv, zt)) / denom) if denom > 0 else 0.0
     scale = s_v / s_t if s_t > 0 else np.inf
     span = (float(min(u[0] for u in used)), float(max(u[1] for u in used)))
-    return SpeedScale(scale, corr, max(s_v, s_t), span)
+    # direction window by window (a constant offset and a turning ship alike); GNSS noise
+    # stays below the displacement gate
+    moved = (np.abs(zv) >= SPEED_CHECK_MISFIT_MIN_M) & (np.abs(zt) >= SPEED_CHECK_MISFIT_MIN_M)
+    misfit = (float(np.degrees(np.median(np.abs(np.angle(np.conj(zv[moved]) * zt[moved])))))
+              if moved.sum() >= 3 * lag else float("nan"))
+    return SpeedScale(scale, corr, max(s_v, s_t), span, misfit)
 
 
 def _speed_unit_guess(scale: float) -> str:
@@ -731,6 +751,17 @@ def _check_speed_vs_track(t: np.ndarray, values: dict[str, np.ndarray], source: 
             f"({KNOTS_PER_M_S:.2f} would be knots, {KM_H_PER_M_S:g} km/h): {_speed_unit_guess(sc.scale)}"
             f"{_where(source)}",
             column="u_m_s")
+    if sc is not None and sc.misfit_deg > SPEED_CHECK_MAX_MISFIT_DEG:
+        h = values["heading_deg"][np.isfinite(values["heading_deg"])]
+        guess = ("its values lie within +-2 pi: radians (with r_deg_s in rad/s too)?"
+                 if h.size and np.max(np.abs(h)) <= _RAD_LIMIT else
+                 "a heading offset, or u_m_s/v_m_s of another sign convention (x forward, y starboard expected)?")
+        raise LogFormatError(
+            f"heading_deg: u_m_s, v_m_s turned into north/east with heading_deg move {sc.misfit_deg:.0f} deg "
+            f"away from the track (north_m, east_m) (median over {SPEED_CHECK_LAG_S:g}-s windows between time_s "
+            f"{seconds_text(sc.time_span_s[0])} and {seconds_text(sc.time_span_s[1])}); expected about 0 with "
+            f"heading_deg in degrees: {guess}{_where(source)}",
+            column="heading_deg")
 
 
 def _check_channel_columns(df: pd.DataFrame, cols: list[str], t: np.ndarray, names, rot, source: str,
