@@ -409,6 +409,32 @@ def test_cli_reports_bad_input_naming_the_option(tmp_path, capsys):
     assert not (tmp_path / "p").exists() and not (tmp_path / "s").exists()
 
 
+def test_p_exceed_carries_its_exact_binomial_monte_carlo_interval():
+    """P(exceed) from N samples has a sampling error: its interval is scipy's exact
+    (Clopper-Pearson) binomial interval of k in N, 0 and 1 at the ends, and is written beside
+    it in times.csv."""
+    from scipy.stats import binomtest
+
+    from hybridship.driftoff.planning import DriftOffResult
+
+    n = 100
+    t = np.full((1, n, 3), np.inf)
+    t[0, :10, 0] = 5.0                                  # 10 of 100 within 30 s at radius 0
+    t[0, :, 1] = 5.0                                    # all at radius 1; none at radius 2
+    res = DriftOffResult(np.zeros(1), np.zeros(1), np.array([3.0, 5.0, 10.0]), np.array([30.0]), t,
+                         np.zeros((1, n, 1)), 60.0)
+    ci = res.p_exceed_interval(0.95)
+    want = binomtest(10, n).proportion_ci(0.95, method="exact")
+    np.testing.assert_allclose(ci[0, 0, 0], [want.low, want.high], rtol=1e-9)
+    assert ci[0, 0, 0].round(2).tolist() == [0.05, 0.18]
+    assert ci[0, 1, 0, 1] == 1.0 and ci[0, 2, 0, 0] == 0.0
+    np.testing.assert_allclose([ci[0, 1, 0, 0], ci[0, 2, 0, 1]], [0.025 ** (1 / n), 1 - 0.025 ** (1 / n)])
+    times, _ = res.summary_frames()
+    assert times[["p_exceed_30s_ci95_lo", "p_exceed_30s_ci95_hi"]].to_numpy()[0].tolist() == ci[0, 0, 0].tolist()
+    with pytest.raises(ValueError, match=r"^confidence: expected a number in \(0, 1\)"):
+        res.p_exceed_interval(1.0)
+
+
 def test_cli_planning_writes_the_report(tmp_path, capsys):
     from hybridship.cli import main
 

@@ -200,6 +200,28 @@ class DriftOffResult:
         """P(radius exceeded within the reaction time), (H, R, Q)."""
         return (self.t_reach_s[:, :, :, None] <= self.reaction_times_s[None, None, None, :]).mean(axis=1)
 
+    def p_exceed_interval(self, confidence: float = 0.95) -> np.ndarray:
+        """The Monte-Carlo error of :meth:`p_exceed`: exact binomial (Clopper-Pearson)
+        intervals at ``confidence``, (H, R, Q, 2) [lower, upper].
+
+        With ``k`` of ``N`` samples over the radius, ``[B(a/2; k, N-k+1), B(1-a/2; k+1, N-k)]``
+        (``B`` the beta quantile, ``a = 1 - confidence``; 0 and 1 at the ends): the
+        probability the model gives lies in it with at least that confidence. It says how
+        many samples are enough (10 of 100 gives 0.05-0.18), not how good the model is.
+        """
+        from scipy.stats import beta
+
+        c = float(confidence)
+        if isinstance(confidence, bool) or not 0.0 < c < 1.0:
+            raise ValueError(f"confidence: expected a number in (0, 1), got {confidence!r}")
+        n = self.n_samples
+        k = np.rint(self.p_exceed() * n)
+        a = 1.0 - c
+        with np.errstate(invalid="ignore"):
+            lo = np.where(k > 0, beta.ppf(a / 2, np.maximum(k, 1), n - k + 1), 0.0)
+            hi = np.where(k < n, beta.ppf(1 - a / 2, k + 1, np.maximum(n - k, 1)), 1.0)
+        return np.stack([lo, hi], axis=-1)
+
     def watch_circle(self, quantile: float = 0.9) -> np.ndarray:
         """Watch-circle radii (H, Q) [m]: the ``quantile`` of the excursion up to each reaction time."""
         q = float(quantile)
@@ -215,9 +237,12 @@ class DriftOffResult:
         return (self.t_reach_s[:, :, :, None] <= t[None, None, None, :]).mean(axis=1)
 
     def summary_frames(self, quantile: float = 0.9) -> tuple[pd.DataFrame, pd.DataFrame]:
-        """Two tidy tables: time to reach per (heading, radius), and watch circles per (heading, reaction time)."""
+        """Two tidy tables: time to reach per (heading, radius), with P(exceed) and its 95 %
+        Monte-Carlo interval (:meth:`p_exceed_interval`) per reaction time, and watch circles
+        per (heading, reaction time)."""
         tq = self.time_quantiles((0.1, 0.5, 0.9))
         pe = self.p_exceed()
+        ci = self.p_exceed_interval(0.95)
         rows = []
         for h, psi in enumerate(self.headings_rad):
             for r, rad in enumerate(self.radii_m):
@@ -229,6 +254,7 @@ class DriftOffResult:
                     row["over_capacity_frac"] = float(self.over_capacity_frac[h])
                 for q, tr in enumerate(self.reaction_times_s):
                     row[f"p_exceed_{tr:g}s"] = pe[h, r, q]
+                    row[f"p_exceed_{tr:g}s_ci95_lo"], row[f"p_exceed_{tr:g}s_ci95_hi"] = ci[h, r, q]
                 rows.append(row)
         times = pd.DataFrame(rows)
         wc = self.watch_circle(quantile)

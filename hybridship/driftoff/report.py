@@ -127,7 +127,8 @@ def write_report(result: DriftOffResult, out_dir, *, title: str = "Drift-off ana
     if inputs:
         lines += ["| input | value |", "|---|---|"] + [f"| {k} | {v} |" for k, v in inputs.items()] + [""]
     lines += [f"{result.n_samples} Monte-Carlo blackouts per heading; horizon {result.horizon_s:g} s "
-              "(\"never\" = not reached within it).", ""]
+              "(\"never\" = not reached within it). `_ci95_lo`/`_hi`: the exact binomial 95 % interval of each "
+              "P(exceed) from this many samples (their sampling error, not the model's).", ""]
     lines += _over_capacity_lines(result)
     lines += [
               "## Time to reach each radius [s] and P(exceeded within the reaction time)", "",
