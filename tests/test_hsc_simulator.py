@@ -89,9 +89,11 @@ def test_vessel_file_kind_and_field_errors(craft):
 def test_trial_gps_delay_realigned_and_reproducible(craft):
     cfg = paper_trial(2, scale=0.03)
     a = generate_trial(cfg, craft)
-    b = generate_trial(cfg, craft)
+    b = generate_trial(cfg, "volcano71")           # the packaged name, as HybridModel takes it
     pd_equal = np.array_equal(a.data.to_numpy(), b.data.to_numpy())
     assert pd_equal
+    with pytest.raises(TypeError, match="^craft: expected a PlaningCraft"):
+        generate_trial(cfg, 71)
     d = a.delay_samples
     assert d == 20 and len(a.data) == cfg.n_samples and len(a.raw) == cfg.n_samples + d
     truth = a.truth.speed_m_s

@@ -194,7 +194,9 @@ class StateSpaceParameters:
         return np.linalg.eigvals(self.A)
 
     def kalman_gain(self) -> np.ndarray:
-        """Steady-state predictor gain ``K`` from the discrete Riccati equation (zeros if it fails)."""
+        """Steady-state predictor gain ``K`` from the discrete Riccati equation (zeros, the
+        simulation predictor, if it has no solution: warned, as the one-step predictions then
+        run without measurement feedback)."""
         from scipy.linalg import solve_discrete_are
 
         n, ny = self.A.shape[0], self.C.shape[0]
@@ -203,7 +205,12 @@ class StateSpaceParameters:
         try:
             P = solve_discrete_are(self.A.T, self.C.T, Q, R, s=self.S)
             return (self.A @ P @ self.C.T + self.S) @ np.linalg.inv(self.C @ P @ self.C.T + R)
-        except (np.linalg.LinAlgError, ValueError):
+        except (np.linalg.LinAlgError, ValueError) as exc:
+            import warnings
+
+            warnings.warn(f"state-space model: the Riccati equation of the Kalman gain has no solution ({exc}); "
+                          f"one-step predictions run without measurement feedback (K = 0)", RuntimeWarning,
+                          stacklevel=2)
             return np.zeros((n, ny))
 
 
@@ -242,7 +249,7 @@ class StateSpaceModel:
 
     name = "ss"
 
-    def __init__(self, order: int, block_rows: int = 15):
+    def __init__(self, order: int, block_rows: int = 10):
         check_whole_number("order", order, 1), check_whole_number("block_rows", block_rows, 1)
         self.order, self.block_rows = order, block_rows
         self.n_init = 2

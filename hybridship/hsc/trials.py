@@ -23,6 +23,7 @@ and scored on the aligned data; :attr:`TrialData.raw` keeps the log as recorded.
 
 from __future__ import annotations
 
+import os
 from dataclasses import dataclass, field
 from typing import Annotated, Literal
 
@@ -201,19 +202,24 @@ class TrialData:
         return df[list(INPUTS)].to_numpy(float), df[list(OUTPUTS)].to_numpy(float)
 
 
-def generate_trial(config: TrialConfig, craft: PlaningCraft | None = None, *, progress: bool = False) -> TrialData:
+def generate_trial(config: TrialConfig, craft: PlaningCraft | str | os.PathLike | None = None, *,
+                   progress: bool = False) -> TrialData:
     """Simulate one sea trial on the "true" boat (``craft.perturbed()``) and log it.
 
     Parameters
     ----------
     config : TrialConfig
-    craft : PlaningCraft, optional
-        The nominal vessel file (default: packaged ``volcano71``); the simulator runs its
+    craft : PlaningCraft, str or path, optional
+        The nominal vessel file, or its packaged name or path (default: packaged
+        ``volcano71``); the simulator runs its
         :meth:`~hybridship.hsc.vessel.PlaningCraft.perturbed` version.
     progress : bool
         Print a line when done.
     """
-    craft = load_planing_craft() if craft is None else craft
+    if craft is None or isinstance(craft, (str, os.PathLike)):     # a name or file, as load_planing_craft takes
+        craft = load_planing_craft(*(() if craft is None else (craft,)))
+    if not isinstance(craft, PlaningCraft):
+        raise TypeError(f"craft: expected a PlaningCraft, a packaged name or a file, got {type(craft).__name__}")
     sens = craft.sensors
     dt = sens.sample_period_s
     d = int(round(sens.gps_delay_s / dt))
