@@ -235,8 +235,9 @@ def test_log_format_messages_point_at_the_likely_cause(tmp_path):
     spaced, semi = tmp_path / "spaced.csv", tmp_path / "semi.csv"
     spaced.write_text(df.to_csv(index=False).replace(",", ", "))
     df.to_csv(semi, index=False, sep=";", decimal=",")
-    with pytest.raises(LogFormatError, match=r"found ' north_m', which is north_m with spaces around the name"):
+    with pytest.raises(LogFormatError, match=r"found ' north_m', which is north_m with spaces around the name") as err:
         read_log(spaced)
+    assert "another unit" not in str(err.value)          # one hint, not two that disagree
     with pytest.raises(LogFormatError, match=r"the header is one name holding ';'"):
         read_log(semi)
     for missing in ("wind_dir_deg", "wind_speed_m_s"):

@@ -113,10 +113,12 @@ _SPEED_SCALE_SPLIT = float(np.sqrt(KNOTS_PER_M_S))
 #: ... and its direction, turned into NED by the logged heading, from the track's by at most
 #: this [deg] (median over windows that moved :data:`SPEED_CHECK_MISFIT_MIN_M` [m] both
 #: ways): a heading and yaw rate both in radians (a heading of 186 deg logged as 3.24, read
-#: as 3.24 deg) pass the angle-unit rules but turn the velocities by up to 180 deg, while
-#: logs in degrees stay within a few degrees (GNSS noise and waves).
+#: as 3.24 deg) pass the angle-unit rules but turn the velocities by up to 180 deg.
 SPEED_CHECK_MAX_MISFIT_DEG = 45.0
 SPEED_CHECK_MISFIT_MIN_M = 2.0
+#: ... and the heading is refused as radians only when, read as radians, it turns them onto
+#: the track within this [deg]: a unit error fits one reading, a sensor fault neither.
+SPEED_CHECK_RADIANS_FIT_DEG = 15.0
 #: An azimuth thruster negative in at least this many samples and never positive is taken
 #: to log its rotation direction instead of the thrust sign.
 RPM_SIGN_MIN_SAMPLES = 60
@@ -214,8 +216,10 @@ def heading_looks_like_radians(time_s, heading, r_deg_s=None) -> tuple[bool, str
        either way (the project's logs give 0.5-1 in degrees and 28-55 in radians, also in
        calm DP). This catches a radian heading even when it barely moves, but cannot see a
        log whose heading AND rate are both in radian units (the log's validation refuses
-       those by the track instead, when it has ``u_m_s``, ``v_m_s`` and the ship moves:
-       :func:`speed_scale_vs_track`'s ``misfit_deg``).
+       many of those by the track instead, when it has ``u_m_s``, ``v_m_s`` and the ship
+       moves 2 m in 20 s: the heading read as radians turns them onto the track and read
+       as degrees does not, by :func:`speed_scale_vs_track`'s ``misfit_deg``; not a heading
+       that stays within about 45 deg of north, where both readings nearly agree).
     4. **Spread.** Otherwise the column is refused if it spans at least 5.5 (315 deg if
        radians, i.e. a turning vessel), and accepted if it spans less.
 
@@ -396,9 +400,10 @@ class SpeedScale(NamedTuple):
         First and last ``time_s`` of the samples used.
     misfit_deg : float
         Median angle [deg] between the velocities' displacements and the track's, over the
-        windows in which both moved at least :data:`SPEED_CHECK_MISFIT_MIN_M` (about 0
-        when the heading and the velocities describe the track, a turning ship included);
-        NaN with fewer such windows than three lags' worth.
+        windows in which both moved at least :data:`SPEED_CHECK_MISFIT_MIN_M` (near 0 when
+        the heading and the velocities describe the track, a turning ship included, and
+        position noise small against 2 m; tens of degrees on a slow drift with metres of
+        GNSS noise); NaN with fewer such windows than three lags' worth.
     """
 
     scale: float
@@ -610,7 +615,9 @@ def _check_column_names(cols: list[str], source: str) -> None:
     missing = [c for c in REQUIRED_COLUMNS if c not in cols]
     if missing:
         one_name = len(cols) == 1 and any(sep in cols[0] for sep in (";", "\t"))
-        like = {c: _unit_variant_of(c) for c in cols if _unit_variant_of(c) in missing and not one_name}
+        # a name with spaces around it is said as such below, not as another unit
+        like = {c: _unit_variant_of(c) for c in cols if _unit_variant_of(c) in missing and not one_name
+                and c.strip() not in missing}
         typo = _misspelt(missing, cols, like)
         like = {c: f for c, f in like.items() if c not in typo}
         units = [f"found {c!r}, which looks like {f} in another unit" for c, f in like.items()
@@ -738,7 +745,9 @@ def _check_yaw_rate_vs_heading(t: np.ndarray, h: np.ndarray, r: np.ndarray, sour
 
 def _check_speed_vs_track(t: np.ndarray, values: dict[str, np.ndarray], source: str) -> None:
     """``u_m_s``/``v_m_s`` against the motion of the track (:func:`speed_scale_vs_track`):
-    refused when the two agree in shape but not in scale (knots, km/h)."""
+    refused when the two agree in shape but not in scale (knots, km/h); ``heading_deg``
+    refused as radians when, read as radians, it turns them onto the track and read as
+    degrees it does not."""
     sc = speed_scale_vs_track(t, values["north_m"], values["east_m"], values["heading_deg"], values["u_m_s"],
                               values["v_m_s"])
     if (sc is not None and sc.rms_displacement_m >= SPEED_CHECK_MIN_DISPLACEMENT_M
@@ -751,17 +760,22 @@ def _check_speed_vs_track(t: np.ndarray, values: dict[str, np.ndarray], source: 
             f"({KNOTS_PER_M_S:.2f} would be knots, {KM_H_PER_M_S:g} km/h): {_speed_unit_guess(sc.scale)}"
             f"{_where(source)}",
             column="u_m_s")
-    if sc is not None and sc.misfit_deg > SPEED_CHECK_MAX_MISFIT_DEG:
-        h = values["heading_deg"][np.isfinite(values["heading_deg"])]
-        guess = ("its values lie within +-2 pi: radians (with r_deg_s in rad/s too)?"
-                 if h.size and np.max(np.abs(h)) <= _RAD_LIMIT else
-                 "a heading offset, or u_m_s/v_m_s of another sign convention (x forward, y starboard expected)?")
-        raise LogFormatError(
-            f"heading_deg: u_m_s, v_m_s turned into north/east with heading_deg move {sc.misfit_deg:.0f} deg "
-            f"away from the track (north_m, east_m) (median over {SPEED_CHECK_LAG_S:g}-s windows between time_s "
-            f"{seconds_text(sc.time_span_s[0])} and {seconds_text(sc.time_span_s[1])}); expected about 0 with "
-            f"heading_deg in degrees: {guess}{_where(source)}",
-            column="heading_deg")
+    h = values["heading_deg"]
+    if (sc is not None and sc.misfit_deg > SPEED_CHECK_MAX_MISFIT_DEG and np.isfinite(h).any()
+            and np.nanmax(np.abs(h)) <= _RAD_LIMIT):
+        # a unit error, not a sensor fault: read as radians the same heading turns the
+        # velocities onto the track (a fault in part of the log, or GNSS noise on a slow
+        # drift, leaves both readings off the track and is left to the forecasts' flags)
+        as_rad = speed_scale_vs_track(t, values["north_m"], values["east_m"], np.degrees(h), values["u_m_s"],
+                                      values["v_m_s"])
+        if as_rad.misfit_deg <= SPEED_CHECK_RADIANS_FIT_DEG:
+            raise LogFormatError(
+                f"heading_deg: looks like radians (with r_deg_s in rad/s too?): u_m_s, v_m_s turned into "
+                f"north/east with heading_deg as degrees move {sc.misfit_deg:.0f} deg away from the track (north_m, "
+                f"east_m), as radians {as_rad.misfit_deg:.0f} deg (medians over {SPEED_CHECK_LAG_S:g}-s windows "
+                f"between time_s {seconds_text(sc.time_span_s[0])} and {seconds_text(sc.time_span_s[1])}); the log "
+                f"format expects degrees{_where(source)}",
+                column="heading_deg")
 
 
 def _check_channel_columns(df: pd.DataFrame, cols: list[str], t: np.ndarray, names, rot, source: str,
