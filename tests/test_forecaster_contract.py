@@ -230,6 +230,17 @@ def test_a_horizon_off_the_logs_steps_is_refused_with_the_nearest(kind, fitted, 
     assert fitted[kind].forecast(test_log, STARTS, 60.2).lead_s[-1] == 60.0
 
 
+@pytest.mark.parametrize("kind", ["dynamic"])
+def test_a_round_horizon_on_a_jittered_log_is_whole_median_steps(kind, fitted, model):
+    """Time stamps jittered by +-50 ms make the median step 0.998 s, so 120 s is 120.3 of
+    them: within the 0.5 % a jittered step is uncertain by, accepted as 120 steps."""
+    log = physics_log(model, seed=5, duration_s=1500.0, t_shutdown_s=None)
+    log["time_s"] = log.time_s + np.random.default_rng(0).uniform(-0.05, 0.05, len(log))
+    for horizon in (60.0, 120.0, 300.0, 600.0):
+        fc = fitted[kind].forecast(log, [float(log.time_s[800])], horizon)
+        assert abs(fc.lead_s[-1] - horizon) < 0.005 * horizon
+
+
 @pytest.mark.parametrize("kind", KINDS)
 @pytest.mark.filterwarnings("ignore:log. its step is 0.1 s:UserWarning")  # the 1-Hz fit, on purpose
 def test_leads_and_times_are_on_the_grid_of_a_10_hz_log(kind, fitted, model):

@@ -195,6 +195,12 @@ def start_indices(arrays: LogArrays, start_times_s) -> np.ndarray:
     return idx
 
 
+#: A horizon within a quarter step, or this share of itself, of a whole number of steps is
+#: that number of steps: the median step of a log with jittered time stamps is off its
+#: nominal step by a fraction of a percent.
+HORIZON_TOLERANCE = 0.005
+
+
 class RequestError(ValueError):
     """A forecast request the log cannot serve (start times that are not its samples, a
     horizon shorter than its step, known commands beyond its end): the caller's input, not
@@ -203,7 +209,7 @@ class RequestError(ValueError):
 
 class HorizonError(RequestError):
     """A forecast horizon the log's step cannot give (shorter than one step, or not within a
-    quarter step of a whole number of steps)."""
+    quarter step or 0.5 % of a whole number of steps)."""
 
 
 def forecast_step_s(arrays: LogArrays) -> float:
@@ -340,7 +346,8 @@ def _forecast_setup(model, config: ResidualConfig, log, start_times_s, horizon_s
 
     The step is :func:`forecast_step_s` and the horizon ``H = round(horizon_s / step)``
     whole steps; a horizon that rounds to no step at all, or lies more than a quarter step
-    from a whole number of steps (the tolerance of a start time), is refused
+    (the tolerance of a start time) and more than :data:`HORIZON_TOLERANCE` of itself
+    from a whole number of steps, is refused
     (:class:`HorizonError`, a ValueError naming ``horizon_s`` and the step).
     """
     if isinstance(horizon_s, (str, bytes, bool, np.bool_)) or np.ndim(horizon_s) != 0:
@@ -368,8 +375,9 @@ def _forecast_setup(model, config: ResidualConfig, log, start_times_s, horizon_s
     H = int(round(horizon_s / dt))
     if H < 1:
         raise HorizonError(f"horizon_s: {horizon_s:g} s is shorter than one step of the log ({dt:g} s)")
-    if abs(H * dt - horizon_s) > 0.25 * dt:
-        # the same tolerance as a start time's: a forecast of 63 s asked as 60 s is not an answer
+    if abs(H * dt - horizon_s) > max(0.25 * dt, HORIZON_TOLERANCE * horizon_s):
+        # a start time's tolerance, or the median step's own uncertainty on a jittered log
+        # (120 s is 120 steps of 0.9976 s): a forecast of 63 s asked as 60 s is not an answer
         raise HorizonError(f"horizon_s: {horizon_s:g} s is not a whole number of the log's steps ({dt:g} s); "
                            f"the nearest is {H * dt:g} s")
     if len(idx) * (H + 1) > MAX_FORECAST_POINTS:
