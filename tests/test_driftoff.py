@@ -431,8 +431,9 @@ def test_p_exceed_carries_its_exact_binomial_monte_carlo_interval():
     np.testing.assert_allclose([ci[0, 1, 0, 0], ci[0, 2, 0, 1]], [0.025 ** (1 / n), 1 - 0.025 ** (1 / n)])
     times, _ = res.summary_frames()
     assert times[["p_exceed_30s_ci95_lo", "p_exceed_30s_ci95_hi"]].to_numpy()[0].tolist() == ci[0, 0, 0].tolist()
-    with pytest.raises(ValueError, match=r"^confidence: expected a number in \(0, 1\)"):
-        res.p_exceed_interval(1.0)
+    for bad in (1.0, "0.9", True):
+        with pytest.raises(ValueError, match=r"^confidence: expected a number in \(0, 1\)"):
+            res.p_exceed_interval(bad)
 
 
 def test_cli_planning_writes_the_report(tmp_path, capsys):

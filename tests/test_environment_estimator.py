@@ -235,8 +235,8 @@ def test_a_short_gap_is_filtered_across_and_a_long_one_restarts(model):
     """One missing sample restarted the motion states from the single wave-disturbed sample
     after it, which moved the filtered velocity and every forecast started a few seconds
     later, without a flag: a gap up to ``max_bridged_gap_s`` is now predicted across, so the
-    estimate 4 s after it stays near that of the full log; a gap over it restarts; on a
-    gap-free log nothing changes."""
+    estimate 4 s after it stays near that of the full log, its uncertainty grown over the
+    gap; a gap over it restarts."""
     from hybridship.sim.scenario import DPLossConfig, simulate_dp_loss
 
     log = simulate_dp_loss(DPLossConfig(seed=5, t_shutdown_s=900.0, drift_s=60.0))   # waves, noise
@@ -255,7 +255,12 @@ def test_a_short_gap_is_filtered_across_and_a_long_one_restarts(model):
     long_gap = as_log_arrays(log.drop(index=range(300, 320)).reset_index(drop=True), model.vessel)
     est = EnvironmentEstimator(model, EnvironmentConfig(max_bridged_gap_s=10.0)).run(long_gap, [300])
     np.testing.assert_allclose(est.x[0, 3:6], long_gap.nu[300], atol=1e-9)
-    np.testing.assert_array_equal(restart.run(full).x, EnvironmentEstimator(model).run(full).x)
+    # across a bridged 5-s gap the filter predicts without measurements: at the first row
+    # after it the position is less certain than where every sample came
+    short_gap = as_log_arrays(log.drop(index=range(400, 404)).reset_index(drop=True), model.vessel)
+    after = EnvironmentEstimator(model).run(short_gap, [400])
+    assert short_gap.time_s[400] - short_gap.time_s[399] == 5.0
+    assert after.P[0, 0, 0] > 1.2 * EnvironmentEstimator(model).run(full, [404]).P[0, 0, 0]
 
 
 def test_drift_samples_update_the_estimate_online(model):

@@ -21,6 +21,7 @@ sweep is chunked.
 from __future__ import annotations
 
 import math
+import numbers
 from dataclasses import dataclass
 from functools import lru_cache
 from typing import Annotated
@@ -211,9 +212,10 @@ class DriftOffResult:
         """
         from scipy.stats import beta
 
-        c = float(confidence)
-        if isinstance(confidence, bool) or not 0.0 < c < 1.0:
+        if isinstance(confidence, (bool, str, bytes)) or not isinstance(confidence, numbers.Real) \
+                or not 0.0 < float(confidence) < 1.0:
             raise ValueError(f"confidence: expected a number in (0, 1), got {confidence!r}")
+        c = float(confidence)
         n = self.n_samples
         k = np.rint(self.p_exceed() * n)
         a = 1.0 - c

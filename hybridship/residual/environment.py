@@ -184,7 +184,7 @@ class EnvironmentConfig(BaseModel):
         estimate depends on where its filter started. 0: no settling.
     max_bridged_gap_s : float
         A gap in the log (a step over 1.5 times the log's own, which starts a new segment) up
-        to this long [s] is filtered across: the process model predicts through it with the
+        to this long [s] (between the rows the filter steps on; at most 300 s) is filtered across: the process model predicts through it with the
         commands before it, as a Kalman filter does without measurements, and the samples
         after it update the estimate. A longer gap restarts the motion states from the
         measurement. (Restarting at a single missing sample took the velocity from one
@@ -227,7 +227,7 @@ class EnvironmentConfig(BaseModel):
     held_load_window_s: float = Field(600.0, ge=0.0)
     held_load_block_s: float = Field(30.0, gt=0.0)
     settle_s: float = Field(0.0, ge=0.0)
-    max_bridged_gap_s: float = Field(10.0, ge=0.0)
+    max_bridged_gap_s: float = Field(10.0, ge=0.0, le=300.0)
     innovation_gate_sigma: float = Field(8.0, gt=0.0)
     max_gated_samples: int = Field(10, ge=0)
     wave_turned_yaw_load: bool = False
