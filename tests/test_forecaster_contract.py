@@ -64,21 +64,24 @@ def fitted(model, train_log):
     return {kind: make(model.vessel).fit([train_log]) for kind, (make, _) in KINDS.items()}
 
 
-def _learned_state(obj, depth: int = 0) -> list:
-    """Every array and number reachable from a forecaster's attributes (its learned state),
-    in a fixed order; the dynamic model (fixed by the vessel) is left out."""
+def _learned_state(obj, seen=None) -> list:
+    """Every array and number reachable from a forecaster's attributes (its learned state and
+    its model, whose arrays an in-place change could alter), in a fixed order; each object
+    once (shared references and cycles)."""
+    seen = set() if seen is None else seen
     if isinstance(obj, np.ndarray):
         return [obj.copy()]
-    if isinstance(obj, (bool, int, float, str, type(None))):
+    if isinstance(obj, (bool, int, float, str, type(None), np.generic)):
         return [obj]
-    if depth > 4 or type(obj).__name__ == "DynamicModel":
-        return []
+    if id(obj) in seen:
+        return ["<seen>"]
+    seen.add(id(obj))
     if isinstance(obj, dict):
-        return [x for k in sorted(obj, key=str) for x in [k, *_learned_state(obj[k], depth + 1)]]
+        return [x for k in sorted(obj, key=str) for x in [k, *_learned_state(obj[k], seen)]]
     if isinstance(obj, (list, tuple)):
-        return [x for v in obj for x in _learned_state(v, depth + 1)]
+        return [x for v in obj for x in _learned_state(v, seen)]
     if hasattr(obj, "__dict__"):
-        return _learned_state(vars(obj), depth + 1)
+        return [type(obj).__name__, *_learned_state(vars(obj), seen)]
     return [repr(obj)]
 
 
@@ -228,6 +231,38 @@ def test_a_horizon_off_the_logs_steps_is_refused_with_the_nearest(kind, fitted, 
                                          r"the nearest is 60 s$"):
         fitted[kind].forecast(test_log, STARTS, 60.4)
     assert fitted[kind].forecast(test_log, STARTS, 60.2).lead_s[-1] == 60.0
+
+
+@pytest.mark.parametrize("kind", KINDS)
+def test_a_starts_forecast_does_not_depend_on_the_other_starts_of_its_call(kind, fitted, model):
+    """On a log with jittered time stamps the step was the median of the rows a call read,
+    which the other starts decide: a start's leads ended at 59.90 s alone and 59.96 s with a
+    later start beside it. The step is now the whole log's median."""
+    log = physics_log(model, seed=5, duration_s=1500.0, t_shutdown_s=None)
+    log["time_s"] = log.time_s + np.random.default_rng(1).uniform(-0.05, 0.05, len(log))
+    t0, far = float(log.time_s[300]), float(log.time_s[1400])
+    alone, batched = fitted[kind].forecast(log, [t0], 60.0), fitted[kind].forecast(log, [t0, far], 60.0)
+    np.testing.assert_array_equal(alone.lead_s, batched.lead_s)
+    np.testing.assert_allclose(alone.eta[0], batched.eta[0], rtol=0, atol=1e-9)
+
+
+def test_known_commands_are_those_logged_by_each_steps_time(model):
+    """Known commands were taken row by row after the start, so across a gap (or on a log
+    whose rate changes) they ran ahead of the forecast's time; each step now takes the
+    command logged by its time, and the steps without a sample of their own are noted."""
+    from hybridship.predictors import as_log_arrays
+    from hybridship.predictors.forecast_setup import _command_rows, _missing_command_notes
+
+    log = physics_log(model, seed=5, duration_s=300.0, t_shutdown_s=None)
+    holed = as_log_arrays(log.drop(index=range(110, 115)).reset_index(drop=True), model.vessel, purpose="forecast")
+    idx = np.array([100])
+    rows = _command_rows(holed, idx, 30, 1.0)
+    want = [t if not 110 <= t < 115 else 109.0 for t in range(100, 130)]    # held over the gap
+    np.testing.assert_array_equal(holed.time_s[rows[0]], want)
+    assert _missing_command_notes(holed, idx, 30, 1.0) == ["commands known: 5 of 29 future command samples "
+                                                            "missing, the last valid one held"]
+    even = as_log_arrays(log, model.vessel, purpose="forecast")
+    np.testing.assert_array_equal(_command_rows(even, idx, 30, 1.0), idx[:, None] + np.arange(30))
 
 
 @pytest.mark.parametrize("kind", ["dynamic"])
@@ -478,6 +513,21 @@ def test_hsc_records_no_craft_can_log_are_refused_by_the_hybrid_and_the_scoring(
         for n_init in (-5, 0, 1.5, len(U)):
             with pytest.raises(ValueError, match=r"^n_init: expected"):
                 score_model(hsc_fitted[kind], U, Y, "one_step", n_init=n_init)
+
+
+@pytest.mark.parametrize("kind", ["dead_reckoning", "dynamic"])
+def test_non_learners_check_the_learners_fit_options(kind, model, train_log):
+    """Dead reckoning and the physics learn nothing but take the learners' fit options (the
+    benchmarks fit every forecaster alike): a text flag or a bad stride is refused as the
+    learners refuse it, not swallowed by ``**kwargs``, and an unknown option is a TypeError."""
+    make, _ = KINDS[kind]
+    with pytest.raises(TypeError, match=r"dp_only: expected True or False"):
+        make(model.vessel).fit([train_log], dp_only="no")
+    with pytest.raises(ValueError, match=r"row_stride: expected an integer >= 1"):
+        make(model.vessel).fit([train_log], row_stride=0)
+    with pytest.raises(TypeError, match="calibration"):
+        make(model.vessel).fit([train_log], calibration=None)
+    assert make(model.vessel).fit([train_log], dp_only=False, progress=True, row_stride=2) is not None
 
 
 @pytest.mark.parametrize("kind", ["data_only", "hybrid"])

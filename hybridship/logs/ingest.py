@@ -49,6 +49,9 @@ PURPOSES = ("fit", "forecast")
 
 #: Attribute of an ingested LogArrays: (vessel fingerprint, purpose).
 _MARK = "_ingested_for"
+#: Memo on the rows of a log read for a time range: the median step [s] of the whole log, so
+#: that a forecast's step does not depend on which of its rows a call reads.
+WHOLE_LOG_STEP = "_whole_log_step_s"
 
 
 # --------------------------------------------------------------------------------------
@@ -286,7 +289,13 @@ def _between(arrays: LogArrays, time_range_s) -> LogArrays:
         return arrays
     out = arrays.rows(slice(lo, hi))
     object.__setattr__(out, _MARK, getattr(arrays, _MARK, None))
+    object.__setattr__(out, WHOLE_LOG_STEP, getattr(arrays, WHOLE_LOG_STEP, _median_step_s(t)))
     return out
+
+
+def _median_step_s(time_s) -> float | None:
+    """Median spacing [s] of sorted times (None below two samples)."""
+    return float(np.median(np.diff(time_s))) if len(time_s) > 1 else None
 
 
 def _time_range(time_range_s) -> tuple[float, float]:
@@ -323,7 +332,12 @@ def ingest_with_report(source, vessel, *, purpose: str = "fit", name: str | None
             part = _time_range_frame(df, time_range_s)
             arrays, order = _from_frame(part, v, purpose, where)
             if part is not df:      # a column's unit is judged on the whole log, as training judges it
-                check_units_on_whole_log(sort_samples(df, source=where).frame, v, source=where)
+                whole = sort_samples(df, source=where).frame
+                check_units_on_whole_log(whole, v, source=where)
+                if "time_s" in whole.columns:
+                    object.__setattr__(arrays, WHOLE_LOG_STEP,
+                                       _median_step_s(pd.to_numeric(whole["time_s"], errors="coerce").dropna()
+                                                      .to_numpy(float)))
         except LogFormatError:
             if time_range_s is None:
                 raise

@@ -28,8 +28,11 @@ class DataOnlyPredictor:
     forecast is the member mean and the spread their standard deviation.
 
     Features, in order: ``u, v, r`` [m/s, m/s, rad/s]; each thruster's rpm / max rpm; cos
-    and sin of each rotatable thruster's angle; the hull's velocity through the air in the
-    body frame [m/s]; the previous acceleration.
+    and sin of each rotatable thruster's angle; ``u, v`` minus the wind speed along its FROM
+    direction in the body frame, ``V [cos, sin](dir - psi)`` [m/s] (the hull's velocity
+    through the air has the wind term with the other sign; the net, which has ``u, v`` too,
+    can learn either, and the baseline's published figures were made with this one); the
+    previous acceleration.
 
     It has no model file (no ``save`` / ``load``, unlike
     :class:`~hybridship.predictors.HybridPredictor`): a benchmark baseline, fitted again from
@@ -53,7 +56,7 @@ class DataOnlyPredictor:
     def _features(self, nu, rpm, az, wind, psi, acc_prev):
         """Feature rows (..., F) from arrays with matching leading shapes."""
         rel = wind[..., 0:1] * np.stack([np.cos(wind[..., 1] - psi), np.sin(wind[..., 1] - psi)], axis=-1)
-        rel = nu[..., :2] - rel      # the hull's velocity through the air, body axes (wind blows FROM dir)
+        rel = nu[..., :2] - rel      # u, v less the wind along its FROM direction, body axes (see the class notes)
         a = az[..., self._rot]
         return np.concatenate([nu, rpm / self._rpm_scale, np.cos(a), np.sin(a), rel, acc_prev], axis=-1)
 

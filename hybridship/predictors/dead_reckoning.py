@@ -6,7 +6,7 @@ import numpy as np
 
 from ..physics.model import DynamicModel
 from ..residual.features import ResidualConfig
-from .forecast_setup import _forecast_setup, check_log_items
+from .forecast_setup import _check_flags, _check_row_stride, _forecast_setup, check_log_items
 from .result import ForecastResult
 
 __all__ = ["DeadReckoning"]
@@ -21,9 +21,12 @@ class DeadReckoning:
         self.model = DynamicModel(vessel)
         self.config = ResidualConfig(start_average_s=start_average_s)
 
-    def fit(self, logs=(), **_):
-        """Nothing to learn; returns self (the logs, when given, are checked as
-        a fitting predictor would take them: :func:`~.forecast_setup.check_log_items`)."""
+    def fit(self, logs=(), *, dp_only: bool = True, progress: bool = False, row_stride: int = 1):
+        """Nothing to learn; returns self (the logs and the learners' options, when given,
+        are checked as a fitting predictor checks them: :func:`~.forecast_setup.check_log_items`)."""
+        # the learners' options, checked as they check them (a text 'no' is refused, not read as True)
+        _check_flags(dp_only=dp_only, progress=progress)
+        _check_row_stride(row_stride)
         check_log_items(logs)
         return self
 

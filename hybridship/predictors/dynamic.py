@@ -5,7 +5,7 @@ from __future__ import annotations
 from ..forecast_inputs.wind import HELD_WIND, WindForecast
 from ..physics.model import DynamicModel
 from ..residual.features import ResidualConfig
-from .forecast_setup import _forecast_setup, check_log_items
+from .forecast_setup import _check_flags, _check_row_stride, _forecast_setup, check_log_items
 from .result import ForecastResult
 
 __all__ = ["DynamicPredictor"]
@@ -31,10 +31,13 @@ class DynamicPredictor:
         self.residual_config = residual_config
         self.stop_after_failure = bool(stop_after_failure)
 
-    def fit(self, logs=(), **_):
-        """The physics has nothing to learn from logs here; returns self (the logs, when
-        given, are checked as a fitting predictor would take them:
+    def fit(self, logs=(), *, dp_only: bool = True, progress: bool = False, row_stride: int = 1):
+        """The physics has nothing to learn from logs here; returns self (the logs and the
+        learners' options, when given, are checked as a fitting predictor checks them:
         :func:`~.forecast_setup.check_log_items`)."""
+        # the learners' options, checked as they check them (a text 'no' is refused, not read as True)
+        _check_flags(dp_only=dp_only, progress=progress)
+        _check_row_stride(row_stride)
         check_log_items(logs)
         return self
 

@@ -19,7 +19,7 @@ import pandas as pd
 
 from ..forecast_inputs import FaultFlags, InputRangeError, assess_start_window, check_or_clip_inputs
 from ..forecast_inputs.wind import HELD_WIND, WindForecast
-from ..logs.ingest import ingest
+from ..logs.ingest import WHOLE_LOG_STEP, ingest
 from ..logs.io import LogArrays
 from ..messages import TIME_DECIMALS, seconds_text
 from ..residual.features import ResidualConfig
@@ -219,7 +219,13 @@ def forecast_step_s(arrays: LogArrays) -> float:
     On an evenly sampled log this is the log's own step, so lead times and forecast times
     fall on its grid. On a log with jittered time stamps it is the median step, and a
     forecast runs whole steps of it from the start: its times are nominal, not the log's.
+    On the rows of a log read for a time range (:func:`hybridship.logs.ingest.ingest`'s
+    ``time_range_s``) it is the whole log's median step, so that a start's forecast does not
+    depend on the other starts of its call.
     """
+    whole = getattr(arrays, WHOLE_LOG_STEP, None)
+    if whole is not None:       # rows read for a time range: the whole log's step, whatever the range
+        return round(whole, _STEP_DECIMALS)
     t = arrays.time_s
     return round(float(np.median(np.diff(t))), _STEP_DECIMALS) if len(t) > 1 else 1.0
 
@@ -269,23 +275,33 @@ class _Setup:
 COMMAND_MODES = ("held", "known")
 
 
-def _known_command_steps(arrays: LogArrays, idx: np.ndarray, H: int, rpm0: np.ndarray, az0: np.ndarray,
+def _command_rows(arrays: LogArrays, idx: np.ndarray, H: int, dt: float) -> np.ndarray:
+    """Rows (S, H) of the commands in force at each of the H steps after each start row: the
+    last row logged by the step's time (within a quarter step), so that a gap or a change of
+    the log's rate does not shift the commands in time (on an evenly sampled log, the rows
+    ``idx + k``)."""
+    t = arrays.time_s
+    want = t[idx][:, None] + np.arange(H)[None, :] * dt
+    late = want[:, -1] > t[-1] + 0.25 * dt
+    if late.any():
+        k = int(np.argmax(late))
+        raise RequestError(f"commands='known': the log ends at {seconds_text(t[-1])} s, but the start at "
+                           f"{seconds_text(t[idx[k]])} s needs logged commands for {H} steps after it; "
+                           "use commands='held' or an earlier start time")
+    return np.searchsorted(t, want + 0.25 * dt, side="right") - 1
+
+
+def _known_command_steps(arrays: LogArrays, idx: np.ndarray, H: int, dt: float, rpm0: np.ndarray, az0: np.ndarray,
                          stop_after_failure: bool = True):
-    """Logged commands of the H steps after each start row, (S, H, K) each.
+    """Logged commands of the H steps of ``dt`` [s] after each start row, (S, H, K) each.
 
     Step 0 is the start's command as the held mode uses it (``rpm0``, ``az0``, (S, K));
-    a missing (NaN) command later on holds the last valid one (a dropped sample, not a
-    new order). With ``stop_after_failure`` the rpm of steps where ``dp_active == 0`` is
-    0, as in :func:`_held_inputs`.
+    later steps take the command logged by their time (:func:`_command_rows`); a missing
+    (NaN) command holds the last valid one (a dropped sample, not a new order). With
+    ``stop_after_failure`` the rpm of steps where ``dp_active == 0`` is 0, as in
+    :func:`_held_inputs`.
     """
-    n = len(arrays.time_s)
-    last = idx + H - 1
-    if np.any(last >= n):
-        k = int(np.argmax(last >= n))
-        raise RequestError(f"commands='known': the log ends at {seconds_text(arrays.time_s[-1])} s, but the start at "
-                           f"{seconds_text(arrays.time_s[idx[k]])} s needs logged commands for {H} steps after it; "
-                           "use commands='held' or an earlier start time")
-    rows = idx[:, None] + np.arange(H)[None, :]
+    rows = _command_rows(arrays, idx, H, dt)
     rpm, az = arrays.rpm[rows], arrays.azimuth_rad[rows]          # (S, H, K), copies
     rpm[:, 0], az[:, 0] = rpm0, az0
     if stop_after_failure:
@@ -298,11 +314,12 @@ def join_notes(*per_start) -> tuple:
     return tuple("; ".join(n for n in notes if n) for notes in zip(*per_start))
 
 
-def _missing_command_notes(arrays: LogArrays, idx: np.ndarray, H: int) -> list[str]:
+def _missing_command_notes(arrays: LogArrays, idx: np.ndarray, H: int, dt: float) -> list[str]:
     """Per start, a note when commands of its H known steps were not logged (the reader holds
     the last logged value, :attr:`LogArrays.commands_logged`), "" otherwise."""
-    rows = idx[:, None] + np.arange(1, H)[None, :]
-    missing = (~arrays.commands_logged[rows]).sum(axis=1)
+    rows = _command_rows(arrays, idx, H, dt)
+    # a step with no sample of its own (a gap, a slower log) holds the last one too
+    missing = (~arrays.commands_logged[rows[:, 1:]] | (rows[:, 1:] == rows[:, :-1])).sum(axis=1)
     return [f"commands known: {n} of {H - 1} future command samples missing, the last valid one held" if n else ""
             for n in missing]
 
@@ -388,8 +405,8 @@ def _forecast_setup(model, config: ResidualConfig, log, start_times_s, horizon_s
     rpm, az, wind = _held_inputs(arrays, idx, stop_after_failure=stop_after_failure, wind=sw.wind)
     extra_notes = [""] * len(idx)
     if commands == "known":
-        rpm, az = _known_command_steps(arrays, idx, H, rpm[:, 0], az[:, 0], stop_after_failure)
-        extra_notes = _missing_command_notes(arrays, idx, H)
+        rpm, az = _known_command_steps(arrays, idx, H, dt, rpm[:, 0], az[:, 0], stop_after_failure)
+        extra_notes = _missing_command_notes(arrays, idx, H, dt)
     # the wind of every step: held (S, 1, 2) or forecast (S, H, 2); a start without wind
     # (sensor dropped) keeps its start value; at least the start's step, which the guards read
     wind = wind_forecast.steps(arrays.wind, arrays.time_s, idx, wind[:, 0], max(H, 1), dt, logged=arrays.wind_logged,
