@@ -363,8 +363,13 @@ def _after_stop_spread(hp) -> list[str]:
         return []
     info = hp.training_info.get("calibration", {}).get("after_stop")
     if info is not None:
+        within = info.get("starts_within_s", 20.0)
+        late = hp.training_info["calibration"].get("after_stop_late")
+        later = (f"; starts later in a drift on {late['n_logs']} of them ({late['n_starts']} starts)" if late else
+                 f"; starts more than {within:g} s into a drift are not calibrated (the drifts are too short) and "
+                 f"say so")
         return [f"spread after a failure: calibrated on {info['n_logs']} failures of the training logs "
-                f"({info['n_starts']} starts; few failures give a rough scale)"]
+                f"({info['n_starts']} starts within {within:g} s of them; few failures give a rough scale){later}"]
     n_min = hp.calibration_config.after_stop_min_failures
     return [f"spread after a failure: not calibrated (the training logs hold fewer than {n_min} failures with a "
             f"drift to calibrate on); forecasts after a failure report the raw spread and say so"]

@@ -368,8 +368,12 @@ def test_train_says_on_how_many_failures_the_after_failure_spread_is_calibrated(
 
     from hybridship.cli import _after_stop_spread
 
-    hp = SimpleNamespace(stop_after_failure=True, environment="estimator",
-                         training_info={"calibration": {"after_stop": {"n_logs": 4, "n_starts": 80}}})
+    info = {"after_stop": {"n_logs": 4, "n_starts": 80, "starts_within_s": 20.0}}
+    hp = SimpleNamespace(stop_after_failure=True, environment="estimator", training_info={"calibration": info})
     assert _after_stop_spread(hp) == ["spread after a failure: calibrated on 4 failures of the training logs "
-                                      "(80 starts; few failures give a rough scale)"]
+                                      "(80 starts within 20 s of them; few failures give a rough scale); starts "
+                                      "more than 20 s into a drift are not calibrated (the drifts are too short) "
+                                      "and say so"]
+    info["after_stop_late"] = {"n_logs": 3, "n_starts": 120}
+    assert _after_stop_spread(hp)[0].endswith("; starts later in a drift on 3 of them (120 starts)")
     assert _after_stop_spread(SimpleNamespace(stop_after_failure=True, environment="mean", training_info={})) == []

@@ -426,6 +426,25 @@ def test_spread_after_a_stop_is_calibrated_on_logs_with_failures(model, tmp_path
     path = hp.save(tmp_path / "m.npz")
     again = HybridPredictor.load(path).forecast(log, [t0 - 50.0, t0 + 5.0], 60.0)
     np.testing.assert_allclose(again.eta_std, cal.eta_std)
+    # later in the drift the errors grow with its speed: starts from 20 s after the failures on
+    # have a calibration of their own, which a start 100 s into the drift uses
+    import copy
+
+    from hybridship.predictors.hybrid import AFTER_STOP_LATE
+
+    assert AFTER_STOP_LATE in hp.calibration and hp.training_info["calibration"][AFTER_STOP_LATE]["n_logs"] == 3
+    starts = [t0 - 50.0, t0 + 19.0, t0 + 100.0]
+    fc, raw = hp.forecast(log, starts, 60.0), hp.forecast(log, starts, 60.0, calibrated=False)
+    np.testing.assert_allclose(fc.eta_std[2], hp.calibrated_std(raw.eta_std[2:], raw.lead_s, AFTER_STOP_LATE)[0])
+    np.testing.assert_allclose(fc.eta_std[1], hp.calibrated_std(raw.eta_std[1:2], raw.lead_s, "after_stop")[0])
+    assert not any(fc.notes)
+    assert AFTER_STOP_LATE in HybridPredictor.load(path).calibration          # kept in the model file
+    # without it (a model from before, or drifts too short for it) such a start says so
+    early_only = copy.copy(hp)
+    early_only.calibration = {k: v for k, v in hp.calibration.items() if k != AFTER_STOP_LATE}
+    notes = early_only.forecast(log, starts, 60.0).notes
+    assert "within 20 s of a failure" not in notes[0] + notes[1]
+    assert "calibrated on forecasts that start within 20 s of a failure; this one starts 100 s after it" in notes[2]
 
 
 

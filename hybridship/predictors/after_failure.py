@@ -39,11 +39,14 @@ def has_drift(arrays, n_intervals: int, horizon_s: float) -> bool:
     return len(arrays.time_s) - int(off[0]) - int(round(horizon_s / dt)) >= n_intervals
 
 
-def drift_forecasts(predictor, arrays, *, n_intervals: int = 20, horizons_s=HORIZONS_S, **forecast_kw):
+def drift_forecasts(predictor, arrays, *, n_intervals: int | None = 20, horizons_s=HORIZONS_S, first: int = 0,
+                    every: int = 1, **forecast_kw):
     """Forecasts from successive start times after the shutdown of one log, at the horizons.
 
     ``arrays`` is LogArrays, or a path or DataFrame in the log format (read through
     :func:`~hybridship.logs.ingest.ingest` for the predictor's vessel, as a forecast reads it).
+    The starts are the samples ``first, first + every, ...`` after the shutdown's row,
+    ``n_intervals`` of them, or (None) as many as leave the longest horizon in the log.
 
     Returns
     -------
@@ -61,11 +64,12 @@ def drift_forecasts(predictor, arrays, *, n_intervals: int = 20, horizons_s=HORI
     dt = float(np.median(np.diff(arrays.time_s)))
     steps = np.array([int(round(h / dt)) for h in horizons_s])
     H = int(steps.max())
-    n_ok = min(n_intervals, len(arrays.time_s) - H - i0)
-    if n_ok < n_intervals:
-        raise ValueError(f"log: only {max(n_ok, 0)} start times after the shutdown leave {H * dt:g} s of "
-                         f"measurements; {n_intervals} are needed")
-    starts = i0 + np.arange(n_intervals)
+    available = max(0, -(-(len(arrays.time_s) - H - i0 - first) // every))     # starts that leave H steps
+    n = available if n_intervals is None else n_intervals
+    if available < n or n == 0:
+        raise ValueError(f"log: only {available} start times after the shutdown leave {H * dt:g} s of "
+                         f"measurements; {max(n, 1)} are needed")
+    starts = i0 + first + every * np.arange(n)
     fc = predictor.forecast(arrays, arrays.time_s[starts], horizon_s=H * dt, **forecast_kw)
     truth = arrays.eta[starts[:, None] + steps[None, :]]        # (S, nh, 3)
     std = None if fc.eta_std is None else fc.eta_std[:, steps]

@@ -38,14 +38,14 @@ from ..residual.drift_hull import (MIN_FAILURES as DRIFT_HULL_MIN_FAILURES, MUNK
                                    START_EVERY_S as DRIFT_HULL_START_EVERY_S, choose_coefficient,
                                    drift_start_rows, munk_coefficient)
 from ..residual.hull import HullCorrection
-from .after_failure import drift_forecasts, has_drift
+from .after_failure import drift_forecasts, has_drift, shutdown_index
 from .forecast_setup import (FORECAST_HISTORY_S, _check_flags, _check_row_stride, _forecast_setup, as_log_arrays,
                              forecast_step_s, join_notes, keeps_state_on_error, log_list, start_indices)
 from .model_file import load_model, save_model
 from .result import ForecastResult
 from .training_logs import check_distinct_logs, check_training_lengths, log_label
 
-__all__ = ["AFTER_STOP", "ENVIRONMENT_SOURCES", "HybridPredictor"]
+__all__ = ["AFTER_STOP", "AFTER_STOP_LATE", "ENVIRONMENT_SOURCES", "HybridPredictor"]
 
 #: First column of the command-memory features in the full feature vector.
 _MEMORY_COL = ALL_FEATURES.index(MEMORY_FEATURES[0])
@@ -56,6 +56,11 @@ _LOAD_COL = ALL_FEATURES.index(LOAD_FEATURES[0])
 AFTER_STOP = "after_stop"
 #: Start times after each failure that calibrate the spread after a failure (the paper's 20).
 AFTER_STOP_INTERVALS = 20
+#: Key of the spread calibration for forecasts that start later in a drift than those of
+#: :data:`AFTER_STOP`: the drift has gathered speed, and its errors with it.
+AFTER_STOP_LATE = "after_stop_late"
+#: Spacing [s] of the later starts that calibrate :data:`AFTER_STOP_LATE`.
+LATE_START_EVERY_S = 10.0
 
 #: Most wind futures in the spread (``wind_samples``): each costs one more rollout per forecast.
 MAX_WIND_SAMPLES = 256
@@ -848,8 +853,10 @@ class HybridPredictor:
         if self.environment == "estimator":
             notes = join_notes(notes, _estimator_heading_notes(st, eta0))
         if calibrated:
-            std, raw = self._calibrated_forecast_std(std, st.lead_s, commands, after_stop)
-            notes = join_notes(notes, self._uncalibrated_notes(raw, after_stop, commands))
+            late = after_stop & self._late_in_drift(st)[1]
+            std, raw = self._calibrated_forecast_std(std, st.lead_s, commands, after_stop, late)
+            notes = join_notes(notes, self._uncalibrated_notes(raw, after_stop, commands),
+                               self._late_in_drift_notes(st, after_stop & ~raw & late))
         return ForecastResult(st.arrays.time_s[st.idx], st.lead_s, eta, nu, std, wgt, flags=flags, notes=notes)
 
     def _uncalibrated_notes(self, raw, after_stop, commands) -> list[str]:
@@ -861,6 +868,31 @@ class HybridPredictor:
                  f"logs): the raw spread, which may be far narrower than the error")
         other = f"spread: not calibrated (the model has no calibration for commands {commands!r}): the raw spread"
         return [(after if a else other) if r else "" for r, a in zip(raw, after_stop)]
+
+    def _late_in_drift(self, st) -> tuple[np.ndarray, np.ndarray, float]:
+        """Per start: seconds since the failure before it (from the rows read; ``inf`` when
+        none of them had the DP on), whether that is later than the starts the after-failure
+        calibration was fitted on (the first 20 samples after each failure), and their span [s]."""
+        info = self.training_info.get("calibration", {}).get("after_stop", {})
+        within = float(info.get("starts_within_s", AFTER_STOP_INTERVALS * st.dt))
+        t, dp = st.arrays.time_s, st.arrays.dp_active
+        # the failure before each start: the first row after the last one with the DP on
+        last_on = np.maximum.accumulate(np.where(dp != 0, np.arange(len(t)), -1))[st.idx]
+        since = np.where(last_on < 0, np.inf, t[st.idx] - t[np.clip(last_on + 1, 0, len(t) - 1)])
+        return since, since > within + 0.25 * st.dt, within
+
+    def _late_in_drift_notes(self, st, late_uncalibrated) -> list[str]:
+        """Per start, a note when it starts later in a drift than the starts the model's
+        after-failure calibration covers and no calibration of later starts applies (a model
+        whose failures' drifts were too short for one, or a file from before it): there the
+        errors outgrow that band; "" otherwise."""
+        if AFTER_STOP_LATE in self.calibration:
+            return [""] * len(st.idx)
+        since, _, within = self._late_in_drift(st)
+        return [f"spread: calibrated on forecasts that start within {within:g} s of a failure; this one starts "
+                f"{'more than the log read, ' if not np.isfinite(since[k]) else f'{since[k]:.0f} s '}after it, where "
+                f"drift forecasts have erred by several times that band (docs/results-drift.md)"
+                if late_uncalibrated[k] else "" for k in range(len(st.idx))]
 
     def _short_station_keeping_notes(self, st, sigma_b, after_stop) -> tuple:
         """``st.notes`` with a note on each start during station keeping whose spread could
@@ -1075,9 +1107,10 @@ class HybridPredictor:
                 sigma_b[starts] = s_k
         return est, sigma_b
 
-    def _calibrated_forecast_std(self, std, lead_s, commands, after_stop):
+    def _calibrated_forecast_std(self, std, lead_s, commands, after_stop, late=None):
         """The spread each start reports: starts after a failure (``after_stop``, (S,)) use the
-        ``"after_stop"`` calibration when :meth:`calibrate_after_stop` made one, others the
+        ``"after_stop"`` calibration when :meth:`calibrate_after_stop` made one (those later in
+        the drift, ``late``, its ``"after_stop_late"`` one where it made that too), others the
         calibration of their command mode; where none applies, the raw spread. Returns the
         spread and the (S,) mask of the starts that kept the raw one."""
         out, applied = std, {}          # calibration -> (S,) mask of the starts it calibrated
@@ -1093,6 +1126,9 @@ class HybridPredictor:
             out = out.copy()
             out[after_stop] = self.calibrated_std(std[after_stop], lead_s, AFTER_STOP)
             applied[AFTER_STOP] = after_stop
+            if AFTER_STOP_LATE in self.calibration and late is not None and np.any(late):
+                out[late] = self.calibrated_std(std[late], lead_s, AFTER_STOP_LATE)
+                applied[AFTER_STOP_LATE] = late
         self._warn_beyond_calibration(lead_s, [mode for mode, m in applied.items() if m.any()])
         raw = ~np.any(list(applied.values()), axis=0) if applied else np.ones(len(after_stop), dtype=bool)
         return out, raw
@@ -1144,17 +1180,31 @@ class HybridPredictor:
         self._check_fitted()
         cal = self.calibration_config if cal is None else as_config(cal, CalibrationConfig, "cal")
         errors = self.after_stop_errors(logs, n_intervals=n_intervals, horizon_s=horizon_s)
-        self.calibration[AFTER_STOP] = after_stop_scales(errors, cal)
-        self.training_info.setdefault("calibration", {})["after_stop"] = {
+        late = self.after_stop_errors(logs, n_intervals=n_intervals, horizon_s=horizon_s, late=True)
+        calibration = {**self.calibration, AFTER_STOP: after_stop_scales(errors, cal)}
+        info = {**self.training_info.get("calibration", {}), "after_stop": {
             "n_logs": len(errors), "n_starts": int(sum(e.shape[0] for e, _, _ in errors)),
-            "horizon_s": float(errors[0][2][-1])}
+            "horizon_s": float(errors[0][2][-1]),
+            # the starts it was fitted on lie within this long [s] of a failure
+            "starts_within_s": float(n_intervals * errors[0][2][0])}}
+        calibration.pop(AFTER_STOP_LATE, None)
+        info.pop(AFTER_STOP_LATE, None)
+        if late:
+            calibration[AFTER_STOP_LATE] = after_stop_scales(late, cal)
+            info[AFTER_STOP_LATE] = {"n_logs": len(late), "n_starts": int(sum(e.shape[0] for e, _, _ in late)),
+                                     "horizon_s": float(late[0][2][-1])}
+        self.calibration = calibration
+        self.training_info = {**self.training_info, "calibration": info}
         return self
 
-    def after_stop_errors(self, logs, *, n_intervals: int = 20, horizon_s: float = 60.0) -> list:
+    def after_stop_errors(self, logs, *, n_intervals: int = 20, horizon_s: float = 60.0, late: bool = False) -> list:
         """Per log with a failure: the raw (uncalibrated) forecasts' absolute errors and spreads
         after it, ``(err, std, lead_s)`` with ``err, std`` (n_intervals, H, 3) [m, m, rad] at
         every lead ``lead_s`` (H,) [s] up to ``horizon_s``; what :meth:`calibrate_after_stop`
-        fits (see :func:`after_stop_scales`)."""
+        fits (see :func:`after_stop_scales`). With ``late``, the starts every
+        :data:`LATE_START_EVERY_S` after those ``n_intervals`` samples, as many as leave
+        ``horizon_s`` of the failure's gap-free stretch of log (logs whose drift leaves none
+        are left out)."""
         self._check_fitted()
         check_whole_number("n_intervals", n_intervals, 1)
         horizon_s = check_number("horizon_s", horizon_s, lo=0.0, lo_open=True)
@@ -1166,7 +1216,18 @@ class HybridPredictor:
             lead = np.arange(1, int(round(horizon_s / a.dt_s)) + 1) * a.dt_s
             if lead.size == 0:
                 raise ValueError(f"horizon_s: {horizon_s:g} s is shorter than the log's step of {a.dt_s:g} s")
-            p, t, sd = drift_forecasts(self, a, n_intervals=n_intervals, horizons_s=tuple(lead), calibrated=False)
+            if late:
+                # starts every LATE_START_EVERY_S within the failure's gap-free stretch of drift
+                every = max(1, int(round(LATE_START_EVERY_S / a.dt_s)))
+                i0 = shutdown_index(a)
+                end = i0 + int(np.argmax(np.append(a.segment_id[i0:] != a.segment_id[i0], True)))
+                room = end - i0 - n_intervals - lead.size
+                if room <= 0:
+                    continue
+                p, t, sd = drift_forecasts(self, a, n_intervals=-(-room // every), first=n_intervals, every=every,
+                                           horizons_s=tuple(lead), calibrated=False)
+            else:
+                p, t, sd = drift_forecasts(self, a, n_intervals=n_intervals, horizons_s=tuple(lead), calibrated=False)
             e = np.abs(p - t)
             e[..., 2] = np.abs(wrap_pi(p[..., 2] - t[..., 2]))
             out.append((e, sd, lead))

@@ -1,0 +1,116 @@
+"""Spread coverage of forecasts started early and late in a drift, leave one log out.
+
+For each truthsim-dev log: a hybrid with the default settings (``--members`` members, seed 0)
+is fitted on the other five logs (its spread after a failure calibrated, as ``fit`` does, on
+their failures' first 20 samples), then forecasts 60 s ahead on the held-out log from
+
+* ``first 20 s``: the first 20 samples after the failure (the starts the calibration and
+  the drift tables use);
+* ``20 s and later``: every 10 s from 20 s after the failure to the last start with 60 s of
+  log after it.
+
+Later starts are scored twice: with the calibration ``fit`` makes for them on the other
+logs' later starts (``after_stop_late``, the default since 2026-11-29), and with the first
+starts' calibration alone (``after_stop`` only, as before). Prints (and with ``--out``
+writes) per log and pooled, at 60 s: the share of the logged north/east positions (pooled)
+and headings inside the calibrated 2-sigma band, the mean 1-sigma band and the
+root-mean-square error [m], and how many starts carry the note that they lie beyond the
+calibrated starts.
+
+Usage: ``python benchmarks/drift_late_coverage.py [--members N] [--out FILE]`` (about ten
+minutes on one core with the default 10 members); the page's table:
+``--out docs/results/drift-late-coverage/drift_late_coverage.md``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import copy
+import sys
+import warnings
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+
+from hybridship.fileio import atomic_write, markdown_table
+from hybridship.frames import wrap_pi
+from hybridship.predictors import HybridPredictor
+from hybridship.predictors.hybrid import AFTER_STOP_LATE
+from hybridship.residual.ensemble import EnsembleConfig
+
+ROOT = Path(__file__).resolve().parents[1]
+DEFAULT_DATA = ROOT.parent / "shared" / "data" / "truthsim-dev" / "logs"
+HORIZON_S = 60.0
+LATE_EVERY_S = 10.0
+
+
+def starts_after_failure(log: pd.DataFrame) -> dict[str, list[float]]:
+    """The two groups of start times [s] after the log's first failure."""
+    t, dp = log.time_s.to_numpy(float), log.dp_active.to_numpy()
+    b = int(np.argmax(dp == 0))
+    late = np.arange(t[b] + 20.0, t[-1] - HORIZON_S + 1e-9, LATE_EVERY_S)
+    return {"first 20 s": [float(x) for x in t[b:b + 20]], "20 s and later": [float(x) for x in late]}
+
+
+def score(hp, log: pd.DataFrame, starts: list[float]) -> dict:
+    """Coverage, band and error at 60 s of ``hp``'s forecasts from ``starts`` on ``log``."""
+    fc = hp.forecast(log, starts, HORIZON_S)
+    t = np.round(log.time_s.to_numpy(), 6)
+    rows = np.searchsorted(t, np.round(np.asarray(starts) + HORIZON_S, 6))
+    ne = fc.eta[:, -1, :2] - log[["north_m", "east_m"]].to_numpy()[rows]
+    dpsi = np.abs(wrap_pi(fc.eta[:, -1, 2] - np.radians(log.heading_deg.to_numpy()[rows])))
+    sd = fc.eta_std[:, -1, :]
+    return {"starts": len(starts),
+            "north/east in 2 sigma": float(np.mean(np.abs(ne) <= 2 * sd[:, :2])),
+            "heading in 2 sigma": float(np.mean(dpsi <= 2 * sd[:, 2])),
+            "mean 1-sigma [m]": float(sd[:, :2].mean()), "RMS error [m]": float(np.sqrt(np.mean(ne ** 2))),
+            "noted as late": int(sum("within 20 s of a failure" in n for n in fc.notes))}
+
+
+def main(argv=None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--data", type=Path, default=DEFAULT_DATA, help="folder of truthsim-dev logs")
+    ap.add_argument("--members", type=int, default=10, help="ensemble members (default 10, the default)")
+    ap.add_argument("--out", type=Path, default=None, help="also write the table to this Markdown file")
+    args = ap.parse_args(argv)
+    files = sorted(args.data.glob("*.csv.gz")) if args.data.is_dir() else []
+    if not files:
+        print(f"no logs found in {args.data}; nothing to do", file=sys.stderr)
+        return 1
+    logs = {f.name.split("_seed")[0]: pd.read_csv(f) for f in files}
+    rows = []
+    for name, log in logs.items():
+        hp = HybridPredictor("gunnerus", ensemble_config=EnsembleConfig(n_members=args.members, seed=0))
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")         # the logs' fault notes are not the point here
+            hp.fit([other for n, other in logs.items() if n != name])
+            early_only = copy.copy(hp)          # the same fit, without the later starts' calibration
+            early_only.calibration = {k: v for k, v in hp.calibration.items() if k != AFTER_STOP_LATE}
+            groups = starts_after_failure(log)
+            for group, model, starts in (("first 20 s", hp, groups["first 20 s"]),
+                                         ("20 s and later", hp, groups["20 s and later"]),
+                                         ("20 s and later, first starts' calibration", early_only,
+                                          groups["20 s and later"])):
+                rows.append({"log": name, "starts after the failure": group, **score(model, log, starts)})
+                print(rows[-1], flush=True)
+    res = pd.DataFrame(rows)
+    for group, g in res.groupby("starts after the failure", sort=False):
+        w = g["starts"].to_numpy(float)
+        pooled = {"log": "pooled", "starts after the failure": group, "starts": int(w.sum())}
+        for col in ("north/east in 2 sigma", "heading in 2 sigma", "mean 1-sigma [m]"):
+            pooled[col] = float(np.average(g[col], weights=w))
+        pooled["RMS error [m]"] = float(np.sqrt(np.average(g["RMS error [m]"] ** 2, weights=w)))
+        pooled["noted as late"] = int(g["noted as late"].sum())
+        res = pd.concat([res, pd.DataFrame([pooled])], ignore_index=True)
+    res = res.round({"north/east in 2 sigma": 2, "heading in 2 sigma": 2, "mean 1-sigma [m]": 2, "RMS error [m]": 2})
+    text = (f"60-s forecasts after the failure of each truthsim-dev log, the hybrid fitted on the other five "
+            f"({args.members} members); nominal 2-sigma coverage 0.954:\n\n" + markdown_table(res) + "\n")
+    print(text)
+    if args.out is not None:
+        atomic_write(args.out, lambda fh: fh.write(text.encode("utf-8")))
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
