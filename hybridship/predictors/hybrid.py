@@ -879,7 +879,8 @@ class HybridPredictor:
         # the failure before each start: the first row after the last one with the DP on
         last_on = np.maximum.accumulate(np.where(dp != 0, np.arange(len(t)), -1))[st.idx]
         since = np.where(last_on < 0, np.inf, t[st.idx] - t[np.clip(last_on + 1, 0, len(t) - 1)])
-        return since, since > within + 0.25 * st.dt, within
+        # the calibrated starts lie 0 .. within - dt after the failure; the later ones from within on
+        return since, since > within - 0.75 * st.dt, within
 
     def _late_in_drift_notes(self, st, late_uncalibrated) -> list[str]:
         """Per start, a note when it starts later in a drift than the starts the model's
@@ -1152,7 +1153,8 @@ class HybridPredictor:
 
     def calibrate_after_stop(self, logs, *, n_intervals: int = 20, horizon_s: float = 60.0,
                              cal: CalibrationConfig | None = None) -> "HybridPredictor":
-        """Calibrate the spread of forecasts that start after a failure, on logs that contain one.
+        """Calibrate the spread of forecasts that start after a failure, on logs that contain one
+        (and, where their drifts are long enough, of forecasts that start later in a drift).
 
         Station-keeping logs hold no drift, so the spread of a drift forecast cannot be
         calibrated on them. Logs with failures can: the vessel's own earlier ones (a fleet)
@@ -1161,8 +1163,12 @@ class HybridPredictor:
         the first ``n_intervals`` samples after each failure (commands held: rpm 0) give a
         per-lead scale of the spread (:func:`~hybridship.residual.calibration.fit_spread_scale`,
         north and east pooled; heading on its own), kept as ``calibration["after_stop"]``
-        (stored in the model file) and used by every later forecast that starts after a
-        failure. The logs must not be the ones the coverage is then judged on.
+        (stored in the model file) and used by every later forecast that starts within
+        ``n_intervals`` samples of a failure. Forecasts from later starts, every
+        :data:`LATE_START_EVERY_S` to the end of each drift, give ``calibration["after_stop_late"]``
+        the same way, for the starts later in a drift, whose errors grow with its speed (a
+        log whose drift is too short gives none; without any, such starts keep the first
+        one and say so). The logs must not be the ones the coverage is then judged on.
 
         Parameters
         ----------
