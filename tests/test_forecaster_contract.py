@@ -259,8 +259,8 @@ def test_known_commands_are_those_logged_by_each_steps_time(model):
     rows = _command_rows(holed, idx, 30, 1.0)
     want = [t if not 110 <= t < 115 else 109.0 for t in range(100, 130)]    # held over the gap
     np.testing.assert_array_equal(holed.time_s[rows[0]], want)
-    assert _missing_command_notes(holed, idx, 30, 1.0) == ["commands known: 5 of 29 future command samples "
-                                                            "missing, the last valid one held"]
+    assert _missing_command_notes(holed, rows) == ["commands known: 5 of 29 future command samples "
+                                                   "missing, the last valid one held"]
     even = as_log_arrays(log, model.vessel, purpose="forecast")
     np.testing.assert_array_equal(_command_rows(even, idx, 30, 1.0), idx[:, None] + np.arange(30))
 

@@ -291,17 +291,16 @@ def _command_rows(arrays: LogArrays, idx: np.ndarray, H: int, dt: float) -> np.n
     return np.searchsorted(t, want + 0.25 * dt, side="right") - 1
 
 
-def _known_command_steps(arrays: LogArrays, idx: np.ndarray, H: int, dt: float, rpm0: np.ndarray, az0: np.ndarray,
+def _known_command_steps(arrays: LogArrays, rows: np.ndarray, rpm0: np.ndarray, az0: np.ndarray,
                          stop_after_failure: bool = True):
-    """Logged commands of the H steps of ``dt`` [s] after each start row, (S, H, K) each.
+    """Logged commands of the steps after each start, (S, H, K) each, from their rows ``rows``
+    (S, H) (:func:`_command_rows`).
 
     Step 0 is the start's command as the held mode uses it (``rpm0``, ``az0``, (S, K));
-    later steps take the command logged by their time (:func:`_command_rows`); a missing
-    (NaN) command holds the last valid one (a dropped sample, not a new order). With
-    ``stop_after_failure`` the rpm of steps where ``dp_active == 0`` is 0, as in
-    :func:`_held_inputs`.
+    later steps take the command logged by their time; a missing (NaN) command holds the
+    last valid one (a dropped sample, not a new order). With ``stop_after_failure`` the rpm
+    of steps where ``dp_active == 0`` is 0, as in :func:`_held_inputs`.
     """
-    rows = _command_rows(arrays, idx, H, dt)
     rpm, az = arrays.rpm[rows], arrays.azimuth_rad[rows]          # (S, H, K), copies
     rpm[:, 0], az[:, 0] = rpm0, az0
     if stop_after_failure:
@@ -314,10 +313,11 @@ def join_notes(*per_start) -> tuple:
     return tuple("; ".join(n for n in notes if n) for notes in zip(*per_start))
 
 
-def _missing_command_notes(arrays: LogArrays, idx: np.ndarray, H: int, dt: float) -> list[str]:
-    """Per start, a note when commands of its H known steps were not logged (the reader holds
-    the last logged value, :attr:`LogArrays.commands_logged`), "" otherwise."""
-    rows = _command_rows(arrays, idx, H, dt)
+def _missing_command_notes(arrays: LogArrays, rows: np.ndarray) -> list[str]:
+    """Per start, a note when commands of its H known steps (their rows ``rows`` (S, H),
+    :func:`_command_rows`) were not logged (the reader holds the last logged value,
+    :attr:`LogArrays.commands_logged`), "" otherwise."""
+    H = rows.shape[1]
     # a step with no sample of its own (a gap, a slower log) holds the last one too
     missing = (~arrays.commands_logged[rows[:, 1:]] | (rows[:, 1:] == rows[:, :-1])).sum(axis=1)
     return [f"commands known: {n} of {H - 1} future command samples missing, the last valid one held" if n else ""
@@ -405,8 +405,9 @@ def _forecast_setup(model, config: ResidualConfig, log, start_times_s, horizon_s
     rpm, az, wind = _held_inputs(arrays, idx, stop_after_failure=stop_after_failure, wind=sw.wind)
     extra_notes = [""] * len(idx)
     if commands == "known":
-        rpm, az = _known_command_steps(arrays, idx, H, dt, rpm[:, 0], az[:, 0], stop_after_failure)
-        extra_notes = _missing_command_notes(arrays, idx, H, dt)
+        rows = _command_rows(arrays, idx, H, dt)
+        rpm, az = _known_command_steps(arrays, rows, rpm[:, 0], az[:, 0], stop_after_failure)
+        extra_notes = _missing_command_notes(arrays, rows)
     # the wind of every step: held (S, 1, 2) or forecast (S, H, 2); a start without wind
     # (sensor dropped) keeps its start value; at least the start's step, which the guards read
     wind = wind_forecast.steps(arrays.wind, arrays.time_s, idx, wind[:, 0], max(H, 1), dt, logged=arrays.wind_logged,

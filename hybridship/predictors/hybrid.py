@@ -853,10 +853,11 @@ class HybridPredictor:
         if self.environment == "estimator":
             notes = join_notes(notes, _estimator_heading_notes(st, eta0))
         if calibrated:
-            late = after_stop & self._late_in_drift(st)[1]
+            since, late, within = self._late_in_drift(st)
+            late &= after_stop
             std, raw = self._calibrated_forecast_std(std, st.lead_s, commands, after_stop, late)
             notes = join_notes(notes, self._uncalibrated_notes(raw, after_stop, commands),
-                               self._late_in_drift_notes(st, after_stop & ~raw & late))
+                               self._late_in_drift_notes(since, within, late & ~raw))
         return ForecastResult(st.arrays.time_s[st.idx], st.lead_s, eta, nu, std, wgt, flags=flags, notes=notes)
 
     def _uncalibrated_notes(self, raw, after_stop, commands) -> list[str]:
@@ -882,18 +883,18 @@ class HybridPredictor:
         # the calibrated starts lie 0 .. within - dt after the failure; the later ones from within on
         return since, since > within - 0.75 * st.dt, within
 
-    def _late_in_drift_notes(self, st, late_uncalibrated) -> list[str]:
-        """Per start, a note when it starts later in a drift than the starts the model's
-        after-failure calibration covers and no calibration of later starts applies (a model
-        whose failures' drifts were too short for one, or a file from before it): there the
-        errors outgrow that band; "" otherwise."""
+    def _late_in_drift_notes(self, since, within: float, late_uncalibrated) -> list[str]:
+        """Per start, a note when it starts later in a drift (``since`` [s] after the failure,
+        :meth:`_late_in_drift`) than the starts the model's after-failure calibration covers
+        (``within`` [s]) and no calibration of later starts applies (a model whose failures'
+        drifts were too short for one, or a file from before it): there the errors outgrow
+        that band; "" otherwise."""
         if AFTER_STOP_LATE in self.calibration:
-            return [""] * len(st.idx)
-        since, _, within = self._late_in_drift(st)
+            return [""] * len(since)
         return [f"spread: calibrated on forecasts that start within {within:g} s of a failure; this one starts "
                 f"{'more than the log read, ' if not np.isfinite(since[k]) else f'{since[k]:.0f} s '}after it, where "
                 f"drift forecasts have erred by several times that band (docs/results-drift.md)"
-                if late_uncalibrated[k] else "" for k in range(len(st.idx))]
+                if late_uncalibrated[k] else "" for k in range(len(since))]
 
     def _short_station_keeping_notes(self, st, sigma_b, after_stop) -> tuple:
         """``st.notes`` with a note on each start during station keeping whose spread could
