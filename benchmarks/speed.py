@@ -11,6 +11,7 @@ Usage::
     python benchmarks/speed.py --quick    # smaller batches, for CI smoke tests
     python benchmarks/speed.py --long-log           # the long-log forecast cost only (JSON)
     python benchmarks/speed.py --profile-long-log   # cProfile of the long-log forecast only
+    python benchmarks/speed.py --start-windows      # the start-window checks' cost only (JSON)
 
 JSON keys: ``physics_forecasts_per_s`` (at the largest B), ``physics_single_forecast_ms``,
 ``physics_vessel_steps_per_s`` and ``physics_by_batch`` (B -> forecasts/s); for the hybrid
@@ -32,7 +33,10 @@ for drift-off analysis
 ``driftoff_samples_per_s`` (Monte-Carlo blackouts per second: 8 headings x 100 samples of
 one weather state, 300 s horizon, all default loads) and ``driftoff_state_s`` (wall time of
 that weather state); ``environment_filter_ms`` (CPU time of the environment estimator over
-``environment_filter_minutes`` = 30 minutes of a 1-Hz Gunnerus log, reporting at its last row).
+``environment_filter_minutes`` = 30 minutes of a 1-Hz Gunnerus log, reporting at its last row);
+``start_window_ms_per_1000_starts`` (CPU time of the start-window checks over every start of
+a 1-hour 1-Hz log without faults, per 1000 starts) and
+``start_window_detectors_ms_per_1000_starts`` (the same with every start through the detectors).
 """
 
 from __future__ import annotations
@@ -269,6 +273,32 @@ def environment_filter_speed(seed: int = 0, minutes: float = 30.0) -> dict:
             "environment_filter_minutes": minutes}
 
 
+def start_window_speed(seed: int = 0, minutes: float = 60.0) -> dict:
+    """CPU time [ms per 1000 starts] of the start-window checks over every start of a
+    ``minutes``-long 1-Hz log without faults: as a forecast runs them (the quiet starts
+    cleared at once, :mod:`hybridship.forecast_inputs.quiet_starts`), and with every start
+    through the detectors one by one, as before."""
+    from hybridship.forecast_inputs.faults import LogView, WindowSettings
+    from hybridship.forecast_inputs.start_window import _assess_start, assess_start_window
+    from hybridship.logs.ingest import ingest
+    from hybridship.sim.synthetic import physics_log
+
+    model = DynamicModel("gunnerus")
+    log = physics_log(model, duration_s=minutes * 60.0, dt_s=1.0, t_shutdown_s=None, seed=seed, current=(0.3, 1.0))
+    arrays = ingest(log, model.vessel, purpose="forecast")
+    rows = np.arange(3, len(arrays.time_s))          # every start with a full window
+    settings = WindowSettings()
+
+    def one_by_one():
+        view = LogView.build(arrays, settings, arrays.resorted_time_s)
+        for i in rows:
+            _assess_start(view, int(i), settings)
+
+    per_1000 = 1e3 * 1e3 / rows.size
+    return {"start_window_ms_per_1000_starts": _cpu_time(lambda: assess_start_window(arrays, rows)) * per_1000,
+            "start_window_detectors_ms_per_1000_starts": _cpu_time(one_by_one, repeats=1) * per_1000}
+
+
 def driftoff_speed(n_samples: int = 100) -> dict:
     """Time the Monte-Carlo blackouts of one weather state at 8 headings (planning mode)."""
     from hybridship.driftoff.planning import DriftOffSettings, simulate_blackouts
@@ -290,12 +320,17 @@ def main(argv=None) -> int:
                     help="print a cProfile of the long-log hybrid forecast and stop")
     ap.add_argument("--long-log", action="store_true",
                     help="only the cost of a forecast against the length of its log (JSON)")
+    ap.add_argument("--start-windows", action="store_true",
+                    help="only the cost of the start-window checks per start (JSON)")
     args = ap.parse_args(argv)
     if args.profile_long_log:
         profile_long_log()
         return 0
     if args.long_log:
         print(json.dumps(long_log_speed(), sort_keys=True))
+        return 0
+    if args.start_windows:
+        print(json.dumps(start_window_speed(), sort_keys=True))
         return 0
     batches = (1, 100, 1_000) if args.quick else (1, 1_000, 100_000)
     res = physics_speed(batches)
@@ -304,6 +339,7 @@ def main(argv=None) -> int:
     res.update({"manoeuvre_train_s": None, "manoeuvre_training": None} if args.quick else manoeuvre_train_speed())
     res.update(driftoff_speed(20 if args.quick else 100))
     res.update(environment_filter_speed())
+    res.update(start_window_speed(minutes=10.0 if args.quick else 60.0))
     if args.json:
         print(json.dumps(res, sort_keys=True))
         return 0
@@ -331,6 +367,8 @@ def main(argv=None) -> int:
               f"{res['manoeuvre_train_s']:.0f} s")
     print(f"environment estimator over {res['environment_filter_minutes']:.0f} min of a 1-Hz log: "
           f"{res['environment_filter_ms']:.0f} ms")
+    print(f"start-window checks: {res['start_window_ms_per_1000_starts']:.1f} ms per 1000 starts "
+          f"({res['start_window_detectors_ms_per_1000_starts']:.0f} ms with every start through the detectors)")
     print(f"drift-off blackouts (8 headings x samples, 300 s horizon): {res['driftoff_samples_per_s']:,.0f} samples/s, "
           f"{res['driftoff_state_s']:.3f} s per weather state")
     return 0

@@ -211,6 +211,56 @@ def test_fault_replay(model, log, name):
         assert np.all(sw.wind[sw.flags[flag]] == 0.0)   # falls back to no wind
 
 
+
+def _each_start_alone(monkeypatch):
+    """Make assess_start_window clear no start at once: every start goes through the detectors."""
+    from hybridship.forecast_inputs import start_window
+
+    def none_quiet(view, idx, settings):
+        S = idx.size
+        return np.zeros(S, dtype=bool), np.full((S, 3), np.nan), np.full((S, 3), np.nan), np.zeros((S, 2))
+    monkeypatch.setattr(start_window, "quiet_starts", none_quiet)
+
+
+def _assert_same_windows(a, b):
+    for name in ("eta0", "nu0", "wind"):
+        np.testing.assert_array_equal(getattr(a, name), getattr(b, name), err_msg=name)
+    assert {k: v.tolist() for k, v in a.flags.items()} == {k: v.tolist() for k, v in b.flags.items()}
+    assert a.notes == b.notes
+
+
+@pytest.mark.parametrize("variant", ["faults", "no logged velocities", "at rest", "10 Hz"])
+def test_starts_cleared_at_once_get_exactly_what_the_detectors_give(model, log, monkeypatch, variant):
+    """The quiet starts found with array operations (quiet_starts) carry the flags, notes and
+    start values, bit for bit, that the detectors give them one by one: on every injected
+    fault, without logged velocities, at rest (long runs of repeated values) and at 10 Hz
+    (30-sample windows). Most starts of a healthy log are cleared at once."""
+    from hybridship.forecast_inputs.faults import LogView, WindowSettings
+    from hybridship.forecast_inputs.quiet_starts import quiet_starts
+
+    if variant == "faults":
+        logs = [log] + [spec["inject"](log.copy()) for spec in FAULTS.values()]
+    elif variant == "no logged velocities":
+        logs = [_shift("north_m", [T], 25.0)(log.drop(columns=["u_m_s", "v_m_s", "r_deg_s"]))]
+    elif variant == "at rest":
+        logs = [physics_log(model, seed=4, duration_s=200.0, t_shutdown_s=None, rpm_scale=0.0, wind=(0.0, 0.0))]
+    else:
+        logs = [_shift("heading_deg", [1000], 40.0)(physics_log(model, seed=5, duration_s=200.0, dt_s=0.1,
+                                                                t_shutdown_s=None, rpm_scale=0.6))]
+    results = []
+    for df in logs:
+        arrays, order = forecast_log_arrays(df, model.vessel)
+        rows = np.arange(len(arrays))
+        results.append((arrays, rows, order, assess_start_window(arrays, rows, 3.0, order=order, on_refuse="flag")))
+    cleared = [quiet_starts(LogView.build(a, WindowSettings(), o.affected_time_s), r, WindowSettings())[0].mean()
+               for a, r, o, _ in results]
+    with monkeypatch.context() as m:
+        _each_start_alone(m)
+        for arrays, rows, order, at_once in results:
+            _assert_same_windows(at_once, assess_start_window(arrays, rows, 3.0, order=order, on_refuse="flag"))
+    if variant in ("faults", "10 Hz"):     # the fault-free log, and the 10-Hz one but near its jump
+        assert cleared[0] > (0.95 if variant == "faults" else 0.8), cleared[0]
+
 def test_refusal_raises_a_clear_error_by_default(model, log):
     df = _nan(["heading_deg"], [T_FAULT, T_FAULT - 1])(log.copy())
     with pytest.raises(StartWindowError, match=r"start time_s 300: refused, .*too little valid data in the 3-s "

@@ -6,6 +6,8 @@ The log itself is read, re-sorted and validated once, at the boundary, by
 * :mod:`~hybridship.forecast_inputs.start_window`: sensor faults in each start window
   (missing, frozen, jumping, late samples; a dropped wind sensor), the start values
   computed from the valid samples, and a flag per fault;
+  :mod:`~hybridship.forecast_inputs.quiet_starts` clears at once the starts no detector
+  could flag;
 * :mod:`~hybridship.forecast_inputs.limits`: valid ranges of the physics inputs (states,
   wind, current, step), clipped and flagged or refused, with the command checks of
   :mod:`~hybridship.forecast_inputs.commands` (propeller speeds, thruster and rudder angles);

@@ -9,7 +9,9 @@ forecast result (and the CLI) can say what was degraded. The predictors call the
 ``docs/reliability.md`` for the table of faults, behaviours and tests.
 
 :func:`assess_start_window` is a short driver: one named detector per fault (in
-:mod:`hybridship.forecast_inputs.faults`) looks at each start's window in turn.
+:mod:`hybridship.forecast_inputs.faults`) looks at each start's window in turn, after
+:mod:`hybridship.forecast_inputs.quiet_starts` has cleared, for all starts at once, those
+whose window holds nothing any detector could flag (nearly all, on a healthy log).
 
 Pipeline at forecast time::
 
@@ -112,6 +114,7 @@ from .faults import (TRACK_MISMATCH_M, TRACK_WINDOW_S, VALID_USED, FaultFlags, L
                      WindowSettings, detect_dropped_wind, detect_frozen_channels, detect_heading_jumps,
                      detect_heading_wrap, detect_late_samples, detect_missing_samples, detect_position_jumps,
                      detect_too_little_valid, detect_velocity_mismatch, rederive_velocities)
+from .quiet_starts import quiet_starts
 
 __all__ = [
     "StartWindow",
@@ -290,17 +293,17 @@ def assess_start_window(
         raise IndexError(f"idx: start rows must lie in 0..{n - 1}, got {idx[(idx < 0) | (idx >= n)][0]}")
     affected = order.affected_time_s if order is not None else arrays.resorted_time_s
     view = LogView.build(arrays, settings, affected, int(idx.min()) if idx.size else 0)
-    S = idx.size
-    out_eta, out_nu, out_wind = np.full((S, 3), np.nan), np.full((S, 3), np.nan), np.zeros((S, 2))
-    flags = {k: np.zeros(S, dtype=bool) for k in FaultFlags.START_WINDOW}
-    notes = []
-    for k, i in enumerate(idx):
-        win, start = _assess_start(view, int(i), settings)
+    # the starts no detector can flag at once, the others one by one
+    quiet, out_eta, out_nu, out_wind = quiet_starts(view, idx, settings)
+    flags = {k: np.zeros(idx.size, dtype=bool) for k in FaultFlags.START_WINDOW}
+    notes = [""] * idx.size
+    for k in np.flatnonzero(~quiet):
+        win, start = _assess_start(view, int(idx[k]), settings)
         if start is not None:
             out_eta[k], out_nu[k], out_wind[k] = start
         for name in win.flags:
             flags[name][k] = True
-        notes.append("; ".join(win.notes))
+        notes[k] = "; ".join(win.notes)
     result = StartWindow(start_time_s=arrays.time_s[idx].copy(), eta0=out_eta, nu0=out_nu, wind=out_wind,
                          flags=flags, notes=tuple(notes))
     if on_refuse == "raise" and result.refused.any():
