@@ -352,3 +352,24 @@ def test_sharpness_is_the_band_width_plus_the_penalty_for_misses():
     row = t.set_index("kind").loc[["zigzag", "berthing", "all"]]
     np.testing.assert_allclose(row.mean_std_m, 1.0)
     np.testing.assert_allclose(row.interval_score_m, [4 + (2 / alpha) / 2, 4.0, 4 + (2 / alpha) / 4])
+
+
+def test_after_stop_scales_pool_north_and_east_at_the_default_two_sigma_level():
+    from hybridship.predictors.hybrid import after_stop_scales
+    from hybridship.residual.calibration import GAUSS_COVERAGE, CalibrationConfig, fit_spread_scale
+
+    assert CalibrationConfig().fit_kwargs == dict(sigma=2.0, coverage=GAUSS_COVERAGE[2.0], floor_quantile=0.1,
+                                                  exponent=1.0)
+    rng = np.random.default_rng(2)
+    lead = np.array([1.0, 2.0])
+    errors = []
+    for _ in range(3):
+        sd = rng.uniform(0.5, 1.5, (20, 2, 3))
+        e = np.abs(rng.normal(size=(20, 2, 3))) * sd * np.array([1.0, 5.0, 0.1])   # east errs most
+        errors.append((e, sd, lead))
+    got = after_stop_scales(errors, CalibrationConfig())
+    e = np.concatenate([x[0] for x in errors])
+    sd = np.concatenate([x[1] for x in errors])
+    pos = fit_spread_scale(np.concatenate([e[..., 0], e[..., 1]]), np.concatenate([sd[..., 0], sd[..., 1]]), lead)
+    np.testing.assert_array_equal(got["position"].scale, pos.scale)
+    np.testing.assert_array_equal(got["heading"].scale, fit_spread_scale(e[..., 2], sd[..., 2], lead).scale)

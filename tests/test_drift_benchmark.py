@@ -301,3 +301,31 @@ def test_the_tables_horizons_are_found_at_any_rate_and_other_steps_refused_befor
                                          r"are not whole numbers of it"):
         run_drift_benchmark(tiny_folder, test, tmp_path / "out", progress=False, plots=False)
     assert not (tmp_path / "out").exists()
+
+
+def test_loo_calibrated_spread_gives_one_sigma_coverage_on_the_other_logs():
+    from hybridship.evaluation.drift import _loo_calibrated_spread
+
+    rng = np.random.default_rng(1)
+    P = np.abs(rng.normal(size=(3, 200, 2, 3)))
+    P[0] *= 10.0                                      # one log far worse: it must not set its own scale
+    T, S = np.zeros_like(P), np.ones_like(P)
+    Scal = _loo_calibrated_spread(P, T, S, 2)
+    for i in range(3):
+        k = Scal[i, 0, :, 0]                          # (n_horizons,)
+        others = np.delete(P, i, axis=0)[..., :2]
+        cov = (others <= k[None, None, :, None]).mean(axis=(0, 1, 3))
+        np.testing.assert_allclose(cov, 0.6827, atol=0.01)
+
+
+def test_has_drift_accepts_exactly_enough_drift_as_drift_forecasts_does():
+    from hybridship.physics.model import DynamicModel
+    from hybridship.predictors import DynamicPredictor, as_log_arrays
+    from hybridship.predictors.after_failure import drift_forecasts, has_drift
+    from hybridship.sim.synthetic import physics_log
+
+    m = DynamicModel("gunnerus")
+    a = as_log_arrays(physics_log(m, duration_s=1000, t_shutdown_s=800, seed=14), m.vessel)
+    h = float(len(a.time_s) - 1 - 800 - 20 + 1)          # leaves exactly 20 starts
+    drift_forecasts(DynamicPredictor(m.vessel), a, n_intervals=20, horizons_s=(h,))
+    assert has_drift(a, 20, h) and not has_drift(a, 20, h + 1)

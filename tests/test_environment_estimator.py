@@ -562,3 +562,40 @@ def test_hybrid_fit_checks_the_prior_learned_at_stops_on_left_out_failures(model
     np.testing.assert_array_equal(two.estimator.thrust_error_mean, 0.0)
     np.testing.assert_array_equal(two.estimator.thrust_error_std, 0.2)
     assert "thrust_error_prior" not in HybridPredictor(model.vessel, ensemble_config=nets, drift_hull=False).fit(logs).training_info
+
+
+def test_estimate_is_causal_where_the_wave_motion_sets_the_measurement_noise(model):
+    log = physics_log(model, duration_s=900, t_shutdown_s=None, seed=6)
+    rng = np.random.default_rng(0)
+    w = 2 * np.pi / 8.0                                     # 8-s wave yaw, 1 deg amplitude
+    t = log.time_s.to_numpy()
+    log["heading_deg"] = (log.heading_deg + np.sin(w * t)) % 360.0
+    log["r_deg_s"] += w * np.cos(w * t)
+    rows = np.array([420, 600])                             # a later row too: the run reads past 420
+    est = EnvironmentEstimator(model)
+    sd = est._wave_motion_std(as_log_arrays(log, model.vessel), 0, len(log) - 1)
+    assert sd[420, 2] > est._measurement_std()[2]          # the adaptive noise is what the filter uses here
+    before = est.run(as_log_arrays(log, model.vessel), rows)
+    changed = log.copy()
+    changed.loc[421:, "heading_deg"] = (changed.loc[421:, "heading_deg"] + 5.0) % 360.0
+    after = est.run(as_log_arrays(changed, model.vessel), rows)
+    np.testing.assert_array_equal(before.x[0], after.x[0])
+    np.testing.assert_array_equal(before.P[0], after.P[0])
+
+
+def test_after_stop_errors_wrap_the_heading(model, monkeypatch):
+    import hybridship.predictors.hybrid as hybrid
+
+    log = physics_log(model, duration_s=1000, t_shutdown_s=800, seed=14)
+    hp = HybridPredictor(model.vessel)
+    hp.ensemble = object()                                   # only "fitted" is checked
+
+    def fake(pred, a, *, n_intervals, horizons_s, **kw):
+        shape = (n_intervals, len(horizons_s), 3)
+        p, t = np.zeros(shape), np.zeros(shape)
+        p[..., 2], t[..., 2] = np.pi - 0.01, -np.pi + 0.01
+        return p, t, np.ones(shape)
+
+    monkeypatch.setattr(hybrid, "drift_forecasts", fake)
+    (e, _, _), = hp.after_stop_errors([log], n_intervals=3, horizon_s=5.0)
+    np.testing.assert_allclose(e[..., 2], 0.02, atol=1e-12)

@@ -607,3 +607,24 @@ def test_a_model_that_embeds_an_added_mass_not_positive_definite_says_so(saved, 
         m["vessel_description"]["added_mass"] = {"method": "clarke1983"}
     _refused(_rewrite(saved, tmp_path, meta_change=clarke, name="clarke.npz"),
              r"the embedded vessel is invalid: .*added_mass: M_A is not positive definite")
+
+
+def test_a_round_trip_keeps_every_setting_and_the_forecasts_with_the_nets_on(model, tmp_path):
+    from hybridship.predictors.model_file import model_metadata
+
+    logs = [physics_log(model, seed=s, duration_s=600.0, t_shutdown_s=None, current=(0.2, 1.0)) for s in (3, 4)]
+    hp = HybridPredictor(model.vessel, ensemble_config=TINY, hull_ridge=0.01).fit(logs)
+    hp.estimator.thrust_error_mean = hp.estimator.thrust_error_mean + 0.05     # a learned prior
+    back = HybridPredictor.load(hp.save(tmp_path / "m.npz"))
+    as_json = lambda p: json.loads(json.dumps(model_metadata(p), sort_keys=True))  # noqa: E731
+    assert as_json(back) == as_json(hp)
+    # every setting the predictor holds comes back (a field model_metadata forgets is not compared above)
+    for k, v in vars(hp).items():
+        if v is None or isinstance(v, (bool, int, float, str)) or k.endswith("_config") or k == "wind_forecast":
+            assert getattr(back, k) == v, k
+    assert set(back.calibration) == set(hp.calibration)
+    for commands in ("held", "known"):
+        a = hp.forecast(logs[0], [300.0, 350.0], 30.0, commands=commands)
+        b = back.forecast(logs[0], [300.0, 350.0], 30.0, commands=commands)
+        np.testing.assert_array_equal(b.eta, a.eta)
+        np.testing.assert_array_equal(b.eta_std, a.eta_std)
