@@ -599,3 +599,27 @@ def test_after_stop_errors_wrap_the_heading(model, monkeypatch):
     monkeypatch.setattr(hybrid, "drift_forecasts", fake)
     (e, _, _), = hp.after_stop_errors([log], n_intervals=3, horizon_s=5.0)
     np.testing.assert_allclose(e[..., 2], 0.02, atol=1e-12)
+
+
+@pytest.mark.parametrize("settings", [{}, "per_dof", {"load_to_current_at_stop": 0.5, "current_std_at_stop_m_s": 0.1}])
+def test_a_blackout_now_is_what_the_filter_does_at_a_logged_stop(model, settings):
+    """Drift-off live mode's stop (at_thrust_stop) equals the filter's own handling of a
+    logged stop under the same settings: the estimate at the row where the DP stops equals
+    that of the same log with the DP still on at that row, passed through at_thrust_stop.
+    By default that is no change (the filter carries on); per DOF the yaw environment restarts."""
+    from hybridship.residual.environment import PER_DOF
+
+    log = physics_log(model, duration_s=700, t_shutdown_s=600, seed=3, current=(0.2, 1.0))
+    k = int(np.flatnonzero(log.dp_active.to_numpy() == 0)[0])
+    on = log.copy()
+    on.loc[k, "dp_active"] = 1
+    est = EnvironmentEstimator(model, EnvironmentConfig(**(PER_DOF if settings == "per_dof" else settings)))
+    stopped = est.run(as_log_arrays(log, model.vessel), [k])
+    held = est.run(as_log_arrays(on, model.vessel), [k])
+    x, P = est.at_thrust_stop(held.x[0], held.P[0])
+    np.testing.assert_allclose(x, stopped.x[0], rtol=0, atol=1e-12)
+    np.testing.assert_allclose(P, stopped.P[0], rtol=0, atol=1e-15)
+    if settings == {}:
+        np.testing.assert_array_equal(x, held.x[0])
+    else:
+        assert not np.array_equal(x, held.x[0]) or not np.array_equal(P, held.P[0])

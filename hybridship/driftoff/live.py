@@ -4,9 +4,10 @@
 blackout would meet (:class:`EnvironmentEstimate`). By default (``method="estimator"``) it
 runs the environment estimator (:mod:`hybridship.residual.environment`) over the last
 ``window_s`` of the log: the filtered state now, the current (acting through the relative
-velocity) and the load, with members drawn from the estimator's posterior, and the yaw
-environment treated as at a logged thrust stop
-(:meth:`~hybridship.residual.environment.EnvironmentEstimator.at_thrust_stop`).
+velocity) and the load, with members drawn from the estimator's posterior, the estimate
+treated as the filter treats a logged thrust stop under the estimator's settings
+(:meth:`~hybridship.residual.environment.EnvironmentEstimator.at_thrust_stop`: by default
+it carries on; with the per-DOF settings the yaw environment restarts).
 ``method="mean"`` uses the residual scheme's causal bias instead
 (:mod:`hybridship.residual.features`): the mean, over the last 900 s, of the acceleration
 the physics model does not explain while the DP holds position (current, mean wave drift

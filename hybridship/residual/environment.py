@@ -562,15 +562,15 @@ class EnvironmentEstimator:
         return out
 
     def at_thrust_stop(self, x, P):
-        """State and covariance at a thrust stop: the yaw environment's estimate restarts.
+        """State and covariance at a thrust stop, as the filter treats a logged one (where
+        ``dp_active`` goes 1 -> 0) with these settings; for "a blackout now" (drift-off live mode).
 
-        Applied by the filter where ``dp_active`` goes 1 -> 0, and usable for "a blackout
-        now" (drift-off live mode).
-
-        Under station keeping the yaw offset is the small difference of large thruster
-        moments, so the yaw load's estimate is tied to the thrust error by a correlation that
-        no longer applies once the thrusters stop. The total environmental yaw moment
-        (current through the hull plus load) keeps the fraction ``yaw_load_kept_at_stop`` of
+        By default nothing changes: the filter carries on, and the drift samples correct the
+        environment. With ``reset_yaw_load_at_stop`` (:data:`PER_DOF`) the yaw environment's
+        estimate restarts: under station keeping the yaw offset is the small difference of
+        large thruster moments, so the yaw load's estimate is tied to the thrust error by a
+        correlation that no longer applies once the thrusters stop. The total environmental yaw moment
+        (current through the hull plus load) then keeps the fraction ``yaw_load_kept_at_stop`` of
         its station-keeping value (none by default: with the per-DOF thrust error the yaw load
         holds much of the thrusters' error); its correlations are cut and its variance becomes
         the prior's plus the square of the part not kept (or ``yaw_load_std_at_stop``), so
@@ -584,9 +584,10 @@ class EnvironmentEstimator:
         """
         c = self.config
         work = kernel._workspace(self.model.arrays)
-        x, P = kernel.at_thrust_stop(np.ascontiguousarray(x, dtype=float), np.ascontiguousarray(P, dtype=float),
-                                     float(c.yaw_load_kept_at_stop), self._yaw_std_at_stop(),
-                                     float(c.load_yaw_prior_rad_s2), self.model.arrays, work)
+        x, P = np.array(x, dtype=float), np.array(P, dtype=float)
+        if c.reset_yaw_load_at_stop:        # the filter's order at a stop (environment_kernel.filter_grid)
+            x, P = kernel.at_thrust_stop(x, P, float(c.yaw_load_kept_at_stop), self._yaw_std_at_stop(),
+                                         float(c.load_yaw_prior_rad_s2), self.model.arrays, work)
         if c.load_to_current_at_stop > 0:
             x = kernel.load_to_current_at_stop(x, float(c.load_to_current_at_stop), self.model.arrays, work)
         if c.current_std_at_stop_m_s > 0:
