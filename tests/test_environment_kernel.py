@@ -1,0 +1,187 @@
+"""The environment estimator's compiled filter (hybridship.residual.environment_kernel) against
+answers that follow from its documented equations: the process noise, the heading
+innovation through north, the outlier gate's count, the priors' units, a thruster's lever
+arm, the Jacobian, the stop's yaw restart and the posterior draws; and two run-level
+identities (a restart across a long gap, a bridged gap) that hold exactly.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from hybridship.physics.model import DynamicModel
+from hybridship.predictors import as_log_arrays
+from hybridship.residual import environment_kernel as kernel
+from hybridship.residual.environment import ENV, EnvironmentConfig, EnvironmentEstimator, thrust_error_accel
+from hybridship.sim.synthetic import physics_log
+
+
+def test_process_noise_scales_as_documented():
+    """Position noise fixed, velocity std growing with dt, random-walk variance with dt.
+    Kills: random walks with dt^2 (E5), velocity noise with dt (E6); both equal at dt = 1 s."""
+    q = np.arange(1.0, 15.0)
+    Q = kernel.process_noise(4.0, q)
+    want = np.concatenate([q[:3] ** 2, (4.0 * q[3:6]) ** 2, 4.0 * q[6:] ** 2])
+    np.testing.assert_allclose(np.diag(Q), want, rtol=1e-15)
+    assert np.count_nonzero(Q - np.diag(np.diag(Q))) == 0
+
+
+def test_a_restart_after_a_long_gap_grows_the_environment_by_its_random_walk(model):
+    """A 61-s gap (beyond max_bridged_gap_s) restarts the motion states and keeps the
+    environment, whose covariance grows by exactly q^2 * gap. Kills: no growth (E11), growth
+    with gap^2 (E5)."""
+    cfg = EnvironmentConfig(current_walk_m_s=1e-3, load_walk_m_s2=1e-3, load_yaw_walk_rad_s2=1e-5,
+                            thrust_error_walk=1e-3)
+    log = physics_log(model, duration_s=400, t_shutdown_s=None, seed=9, tau_ext_N=(2000.0, 0.0, 0.0))
+    a = as_log_arrays(log.drop(index=range(200, 260)).reset_index(drop=True), model.vessel)
+    gap = a.time_s[200] - a.time_s[199]
+    assert gap == 61.0 and a.segment_id[200] != a.segment_id[199]
+    est = EnvironmentEstimator(model, cfg)
+    e = est.run(a, np.array([199, 200]))
+    q = est._process_noise_base()[ENV]
+    np.testing.assert_allclose(e.P[1][ENV, ENV] - e.P[0][ENV, ENV], np.diag(q**2 * gap), rtol=1e-9, atol=1e-15)
+    np.testing.assert_array_equal(e.x[1][ENV], e.x[0][ENV])
+
+
+def test_a_bridged_gap_is_the_prediction_through_rows_without_measurements(model):
+    """Filtering across a 6-s gap (5 rows missing) equals filtering the full-rate log whose
+    5 rows have no measurement and the commands held: the gap is predicted in 1-s steps.
+    Kills: one step over the whole gap (E10)."""
+    log = physics_log(model, duration_s=400, t_shutdown_s=None, seed=9, tau_ext_N=(2000.0, 0.0, 0.0))
+    meas = ["north_m", "east_m", "heading_deg", "u_m_s", "v_m_s", "r_deg_s"]
+    held = [c for c in log.columns if c not in meas + ["time_s"]]
+    holes = list(range(300, 305))
+    blind = log.copy()
+    blind.loc[holes, held] = log.loc[299, held].to_numpy()
+    blind.loc[holes, meas] = np.nan
+    dropped = blind.drop(index=holes).reset_index(drop=True)
+    cfg = EnvironmentConfig(adaptive_measurement_std=False, use_velocity=False)
+    a_blind = as_log_arrays(blind, model.vessel, purpose="forecast")
+    a_gap = as_log_arrays(dropped, model.vessel, purpose="forecast")
+    assert a_gap.time_s[300] - a_gap.time_s[299] == 6.0 and a_gap.segment_id[300] != a_gap.segment_id[299]
+    want = EnvironmentEstimator(model, cfg).run(a_blind, np.array([305]))
+    got = EnvironmentEstimator(model, cfg).run(a_gap, np.array([300]))
+    np.testing.assert_allclose(got.x, want.x, rtol=1e-9, atol=1e-12)
+    np.testing.assert_allclose(got.P, want.P, rtol=1e-9, atol=1e-15)
+
+
+def _update(x, Pc, z, channel, gate=np.inf, max_gated=10, gated=None):
+    z_ok = np.zeros(6, dtype=np.bool_)
+    z_ok[channel] = True
+    gated = np.zeros(6, dtype=np.int64) if gated is None else gated
+    return kernel.update(x, Pc, z, z_ok, np.full(6, 0.1), np.full(6, gate), max_gated, gated)
+
+
+def test_the_heading_innovation_is_wrapped_through_north():
+    """Filter at 179.4 deg, measured -179.4 deg: 1.2 deg on, the estimate moves up towards
+    180 deg, not 358.8 deg down. Kills: the unwrapped innovation (E7)."""
+    x = np.zeros(14)
+    x[2] = math.pi - 0.01
+    z = np.zeros(6)
+    z[2] = -math.pi + 0.01
+    x1, _ = _update(x, np.eye(14) * 0.01, z, 2, gate=8.0)
+    assert 0.0 < x1[2] - x[2] < 0.02
+
+
+def test_the_gate_lets_the_measurement_in_after_exactly_max_gated_outliers():
+    """With max_gated 3, three outliers in a row are gated and the fourth is used.
+    Kills: an off-by-one in the count (E14)."""
+    x = np.zeros(14)
+    P = np.eye(14) * 0.01
+    z = np.zeros(6)
+    z[0] = 100.0
+    gated = np.zeros(6, dtype=np.int64)
+    for k in range(3):
+        x1, _ = _update(x, P, z, 0, gate=8.0, max_gated=3, gated=gated)
+        np.testing.assert_array_equal(x1, x)
+        assert gated[0] == k + 1
+    x1, _ = _update(x, P, z, 0, gate=8.0, max_gated=3, gated=gated)
+    assert x1[0] > 1.0 and gated[0] == 0
+
+
+def test_prior_standard_deviations_at_the_start_are_in_si_units(model):
+    """At the filter's first row the covariance is the prior: heading and yaw-rate spreads in
+    radians. Kills: the heading prior in degrees (E16)."""
+    c = EnvironmentConfig()
+    log = physics_log(model, duration_s=30, t_shutdown_s=None, seed=1)
+    P0 = EnvironmentEstimator(model, c).run(as_log_arrays(log, model.vessel), np.array([0])).P[0]
+    assert P0[2, 2] == pytest.approx(math.radians(c.heading_std_deg) ** 2, rel=1e-12)
+    assert P0[5, 5] == pytest.approx(math.radians(c.yaw_rate_std_deg_s) ** 2, rel=1e-12)
+    assert P0[0, 0] == pytest.approx(c.position_std_m ** 2, rel=1e-12)
+
+
+def test_one_thrusters_efficiency_error_acts_through_its_own_lever_arm(model):
+    """The port azimuth (y = -2 m) delivering 80 % of the model's thrust: the acceleration
+    it loses is what thrust_error_accel gives for theta_port = -0.2, yaw included. Kills:
+    the lever arm's sign (E4); the tunnel, on the centre line, cannot tell."""
+    spec = model.vessel.model_dump()
+    assert spec["thrusters"][1]["name"] == "port" and spec["thrusters"][1]["y_m"] != 0.0
+    t0 = spec["thrusters"][1].get("thrust_deduction", 0.0)
+    spec["thrusters"][1]["thrust_deduction"] = 1.0 - 0.8 * (1.0 - t0)
+    true = DynamicModel(type(model.vessel).model_validate(spec))
+    eta, nu = np.array([[0.0, 0.0, 0.4]]), np.array([[0.2, -0.1, 0.01]])
+    rpm, az = np.array([[50.0, 120.0, 80.0]]), np.radians([[0.0, 20.0, -35.0]])
+    wind, cur = np.array([[5.0, 1.0]]), np.zeros((1, 2))
+    kw = dict(rpm=rpm, azimuth_rad=az, wind=wind)
+    lost = true.acceleration(eta, nu, **kw) - model.acceleration(eta, nu, **kw)
+    got = thrust_error_accel(model, "per_thruster", eta, nu, rpm, az, wind, cur, np.array([[0.0, -0.2, 0.0]]))
+    assert abs(lost[0, 2]) > 1e-5
+    np.testing.assert_allclose(got, lost, rtol=1e-6, atol=1e-12)
+
+
+def test_predicted_covariance_uses_the_transitions_own_jacobian(model):
+    """predict builds F from the model's structure (load through R(psi)^T, thrust error
+    through T); at a heading of 1 rad it must equal central differences of the transition
+    itself. Kills: the load's columns through R(psi) instead of R(psi)^T (E12)."""
+    P = model.arrays
+    n = 14
+    x = np.array([1.0, 2.0, 1.0, 0.3, -0.1, 0.01, 0.2, -0.1, 0.01, -0.005, 1e-4, 0.05, -0.05, 0.1])
+    rpm, az, wind = np.array([60.0, 100.0, 90.0]), np.radians([0.0, 30.0, -20.0]), np.array([6.0, 0.5])
+    work = kernel._workspace(P)
+    Pc = np.diag(np.linspace(1e-4, 1e-2, n))
+    fd = np.array([1e-3, 1e-3, 1e-5, 1e-4, 1e-4, 1e-6, 1e-3, 1e-3, 1e-5, 1e-5, 1e-7, 1e-4, 1e-4, 1e-4])
+    Q = np.zeros((n, n))
+    _, P1 = kernel.predict(x, Pc, 1.0, rpm, az, wind, Q, fd, P, True, 0.0, work)
+
+    def step(xx):
+        f, T, acc = np.empty(n), np.empty((3, n - 11)), np.empty(3)
+        kernel._transition(xx, 1.0, rpm, az, wind, P, True, 0.0, f, kernel._workspace(P), T, acc)
+        return f
+    F = np.empty((n, n))
+    for j in range(n):
+        h = np.zeros(n)
+        h[j] = fd[j]
+        F[:, j] = (step(x + h) - step(x - h)) / (2 * fd[j])
+    want = F @ Pc @ F.T
+    np.testing.assert_allclose(P1, want, rtol=1e-2, atol=1e-6 * np.abs(want).max())   # forward vs central differences
+
+
+def test_at_a_stop_the_total_yaw_environment_keeps_its_configured_fraction(model):
+    """at_thrust_stop with the yaw restart (reset_yaw_load_at_stop): the yaw load plus the current's yaw acceleration through the hull keeps
+    ``yaw_load_kept_at_stop`` of its value, the yaw load's correlations are cut and its
+    variance is prior^2 + (std * total)^2. Kills: the current's part left out (E9b), the
+    variance without the part not kept (E9c)."""
+    est = EnvironmentEstimator(model, EnvironmentConfig(reset_yaw_load_at_stop=True, yaw_load_kept_at_stop=0.5))
+    work = kernel._workspace(model.arrays)
+    x = np.zeros(len(est.state_names))
+    x[2], x[3:6], x[6:8], x[10] = 0.3, [0.2, 0.1, 0.0], [0.25, 0.3], 2e-4
+    cy = kernel.current_yaw_accel(x, model.arrays, work)
+    assert abs(cy) > 1e-5
+    total = x[10] + cy
+    P = np.full((x.size, x.size), 1e-6) + np.eye(x.size) * 1e-4
+    x1, P1 = est.at_thrust_stop(x, P)
+    assert x1[10] + kernel.current_yaw_accel(x1, model.arrays, work) == pytest.approx(0.5 * total, rel=1e-9)
+    assert P1[10, 10] == pytest.approx(est.config.load_yaw_prior_rad_s2 ** 2 + (0.5 * total) ** 2, rel=1e-12)
+    assert np.all(np.delete(P1[10], 10) == 0.0)
+
+
+def test_posterior_draws_are_centred_on_the_estimate(model):
+    """sample_environment: the members' mean is the posterior mean whatever n. Kills: the
+    centring dropped (E15)."""
+    log = physics_log(model, duration_s=120, t_shutdown_s=None, seed=1)
+    e = EnvironmentEstimator(model).run(as_log_arrays(log, model.vessel), np.array([60, 119]))
+    for n in (3, 7):
+        np.testing.assert_allclose(e.sample_environment(n, seed=4).mean(axis=0), e.x[:, ENV], rtol=0, atol=1e-15)
