@@ -57,7 +57,8 @@ class RigidBody(_Strict):
 
     mass_kg: Float = Field(gt=0)
     I_z_kg_m2: Optional[Float] = Field(None, gt=0, description="yaw inertia [kg m^2]")
-    r_z_m: Optional[Float] = Field(None, gt=0, description="yaw radius of gyration [m] (I_z = m r_z^2)")
+    r_z_m: Optional[Float] = Field(None, gt=0, description="yaw radius of gyration [m] about the centre of "
+                                   "gravity (I_z = m (r_z^2 + x_g^2) about the body origin)")
     x_g_m: Float = Field(0.0, description="CG forward of the body origin [m]")
 
     @model_validator(mode="after")

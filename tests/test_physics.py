@@ -66,6 +66,14 @@ def test_wrap_and_latlon_round_trip():
     assert lat == pytest.approx(63.45, abs=1e-10) and lon == pytest.approx(10.42, abs=1e-10)
 
 
+def test_flow_speed_and_direction_give_north_east_components():
+    """``speed_dir_to_vector``: ``[speed, dir]`` -> ``[north, east] = speed [cos dir, sin dir]`` in NED
+    (dir clockwise from north): a flow at 90 deg is all east, at 0 deg all north, at 180 deg south."""
+    vec = frames.speed_dir_to_vector([[1.0, np.pi / 2], [2.0, 0.0], [3.0, np.pi]])
+    np.testing.assert_allclose(vec, [[0.0, 1.0], [2.0, 0.0], [-3.0, 0.0]], atol=1e-15)
+    np.testing.assert_allclose(frames.vector_to_speed_dir(vec)[:2], [[1.0, np.pi / 2], [2.0, 0.0]], atol=1e-15)
+
+
 # ----------------------------------------------------------------------------- hull
 
 
@@ -188,6 +196,34 @@ def test_lift_speed_signed_reverses_only_the_lift_astern():
     np.testing.assert_array_equal(p_sig[50:, h, 0], p_abs[50:, h, 0])
 
 
+def test_clarke_lift_restores_clarkes_linear_derivatives_at_speed():
+    """``clarke1983_lift``'s identity: at ``u_r = U`` the hydrodynamic sway force and yaw moment
+    ``-C_A(nu_r) nu_r - |u_r| D_lift [v_r, r]`` have Clarke et al.'s (1983) derivatives,
+    ``dY/dv = U Y_v/U``, ``dY/dr = U Y_r/U``, ``dN/dv = U N_v/U``, ``dN/dr = U N_r/U``: checked by
+    central differences of the model's hull load (less the rigid-body ``-C_RB(nu) nu``) with no other
+    damping, so the load is linear in (v, r)."""
+    d = gunnerus_dict()
+    d["damping"] = {"linear": {"method": "explicit", "D": [[0, 0, 0], [0, 0, 0], [0, 0, 0]]},
+                    "nonlinear": {"method": "none", "lift": "clarke1983"}}
+    d["wind"] = {"method": "none"}
+    d["thrusters"] = []
+    m = model_from(d)
+    U, h = 2.0, 0.01
+    nu = np.array([[U, h, 0], [U, -h, 0], [U, 0, h], [U, 0, -h]])
+    _, parts, _ = m.acceleration(np.zeros((4, 3)), nu, rpm=np.zeros((4, 0)), azimuth_rad=np.zeros((4, 0)),
+                                 return_parts=True)
+    rb = m.vessel.rigid_body
+    C_RB = hull.coriolis_rigid_body(nu, rb.mass_kg, rb.x_g_m)
+    hydro = parts[:, TAU_PARTS.index("hull")] + np.einsum("bij,bj->bi", C_RB, nu)
+    d_dv = (hydro[0] - hydro[1]) / (2 * h)
+    d_dr = (hydro[2] - hydro[3]) / (2 * h)
+    p = d["particulars"]
+    c = hull.clarke1983_derivatives(p["L_pp_m"], p["B_m"], p["T_m"], p["C_B"], p["rho_water_kg_m3"])
+    np.testing.assert_allclose([d_dv[1], d_dr[1], d_dv[2], d_dr[2]],
+                               [U * c["Y_v_per_U_kg_m"], U * c["Y_r_per_U_kg"], U * c["N_v_per_U_kg"],
+                                U * c["N_r_per_U_kg_m"]], rtol=1e-9)
+
+
 # ----------------------------------------------------------------------------- thrusters
 
 
@@ -216,6 +252,57 @@ def test_thruster_load_matches_configuration_matrix(gunnerus):
         if n > 0:
             assert f == pytest.approx((1 - t.thrust_deduction) * p.kt0 * 1025 * (n / 60) ** 2 * t.diameter_m**4,
                                       rel=1e-9)
+
+
+def test_each_propeller_sees_the_water_velocity_at_its_own_position(gunnerus):
+    """Turning ship: thruster i delivers ``(1 - t) T(n, V_a)``, T the open-water thrust, at
+    ``V_a = (1 - w) [(u - y r) cos a + (v + x r) sin a]``, the inflow along its axis at its position
+    (x, y) (rigid-body velocity ``[u - y r, v + x r]``), so port and starboard units differ."""
+    u, v, r = 1.5, -0.3, 0.04
+    rpm = np.array([250.0, 150.0, 150.0])
+    az = np.radians([0.0, 25.0, -35.0])
+    _, _, thrusts = gunnerus.acceleration([0, 0, 0], [u, v, r], rpm=rpm, azimuth_rad=az, return_parts=True)
+    d = gunnerus_dict()
+    for k, t in enumerate(d["thrusters"]):
+        a = np.pi / 2 if t["type"] == "tunnel" else az[k]
+        w, ded = t.get("wake_fraction", 0.0), t.get("thrust_deduction", 0.0)   # the file's defaults: 0
+        va = (1 - w) * ((u - t["y_m"] * r) * np.cos(a) + (v + t["x_m"] * r) * np.sin(a))
+        prop = load_wageningen(t.get("propeller_series", "B4-70"), t.get("pitch_ratio", 1.0))
+        T, _ = thrust_torque(rpm[k] / 60.0, va, t["diameter_m"], prop, d["particulars"]["rho_water_kg_m3"])
+        assert thrusts[0, k] == pytest.approx((1 - ded) * T, rel=1e-9), t["name"]
+    assert thrusts[0, 1] != pytest.approx(thrusts[0, 2], rel=1e-3)   # same rpm, different inflow
+
+
+def test_tunnel_thruster_pushes_the_bow_to_starboard_for_positive_rpm(gunnerus):
+    """A tunnel's thrust axis is +y (positive rpm gives starboard thrust): the Gunnerus bow tunnel
+    alone, at rest, gives ``Y = K_T0 rho n^2 D^4 > 0`` (bollard, t = 0), no surge force and
+    ``N = x_tunnel Y`` (the bow turns to starboard)."""
+    d = gunnerus_dict()
+    tun = d["thrusters"][0]
+    n = 300.0 / 60.0
+    _, parts, _ = gunnerus.acceleration([0, 0, 0], [0, 0, 0], rpm=[300.0, 0, 0], azimuth_rad=[0, 0, 0],
+                                        return_parts=True)
+    Y = load_wageningen().kt0 * d["particulars"]["rho_water_kg_m3"] * n**2 * tun["diameter_m"] ** 4   # B4-70
+    np.testing.assert_allclose(parts[0, TAU_PARTS.index("thrust")], [0.0, Y, tun["x_m"] * Y], rtol=1e-9,
+                               atol=1e-9 * Y)
+
+
+def test_fixed_thruster_angle_is_in_degrees_from_ahead_to_starboard():
+    """``angle_deg`` of a ``fixed`` thruster is degrees, 0 forward, 90 starboard: at the tunnel's
+    position, a fixed unit at 90 deg gives the tunnel's load, and one at 180 deg minus the load
+    of one at 0 deg (at rest, where the bollard thrust does not depend on the direction)."""
+    d = gunnerus_dict()
+    kw = dict(rpm=[300.0, 0, 0], azimuth_rad=[0, 0, 0], return_parts=True)
+    thrust = TAU_PARTS.index("thrust")
+    loads = {"tunnel": model_from(d).acceleration([0, 0, 0], [0, 0, 0], **kw)[1][0, thrust]}
+    for angle in (0.0, 90.0, 180.0):
+        d["thrusters"][0].update(type="fixed", angle_deg=angle)
+        loads[angle] = model_from(d).acceleration([0, 0, 0], [0, 0, 0], **kw)[1][0, thrust]
+    T = loads["tunnel"][1]
+    assert T > 0
+    np.testing.assert_allclose(loads[0.0], [T, 0.0, 0.0], rtol=1e-12, atol=1e-9 * T)   # y = 0: no moment
+    np.testing.assert_allclose(loads[90.0], loads["tunnel"], rtol=1e-12, atol=1e-9 * T)
+    np.testing.assert_allclose(loads[180.0], -loads[0.0], rtol=1e-12, atol=1e-9 * T)
 
 
 # ----------------------------------------------------------------------------- propeller
@@ -321,6 +408,51 @@ def test_ship_speed_enters_relative_wind(gunnerus):
     np.testing.assert_allclose(parts[0, 2], 0.0, atol=1e-9)
 
 
+def test_beam_wind_loads_are_the_files_coefficients_times_the_areas(gunnerus):
+    """Eq. 3 for a beam wind from port (gamma = 90 deg): ``[X, Y, N] = q [C_X A_F, C_Y A_L, C_N A_L L]``,
+    ``q = rho_a V^2 / 2``, with the coefficients, areas and moment length of the vessel file."""
+    w = gunnerus_dict()["wind"]
+    i = w["table"]["angle_deg"].index(90)
+    V = 12.0
+    q = 0.5 * w["rho_air_kg_m3"] * V**2
+    _, parts, _ = gunnerus.acceleration([0, 0, 0], [0, 0, 0], wind=[V, np.radians(270)], return_parts=True)
+    expected = [q * w["table"]["C_X"][i] * w["A_F_m2"], q * w["table"]["C_Y"][i] * w["A_L_m2"],
+                q * w["table"]["C_N"][i] * w["A_L_m2"] * w["L_oa_m"]]
+    np.testing.assert_allclose(parts[0, TAU_PARTS.index("wind")], expected, rtol=1e-9)
+
+
+def test_wind_coefficients_between_table_angles_are_interpolated_linearly(gunnerus):
+    """Between the file's 10-deg angles the wind load is ``q A`` times the linear interpolation of
+    the table (mirrored for wind from starboard, gamma < 0: C_X even, C_Y and C_N odd)."""
+    w = gunnerus_dict()["wind"]
+    tab = w["table"]
+    gamma = np.radians([45.3, 117.8, -133.35, 4.1])
+    psi = 0.3
+    V = 10.0
+    B = len(gamma)
+    eta = np.column_stack([np.zeros(B), np.zeros(B), np.full(B, psi)])
+    wind = np.column_stack([np.full(B, V), psi - gamma])     # gamma > 0: wind from port of the bow
+    _, parts, _ = gunnerus.acceleration(eta, np.zeros((B, 3)), wind=wind, return_parts=True)
+    g = np.degrees(np.abs(gamma))
+    s = np.sign(gamma)
+    C = np.column_stack([np.interp(g, tab["angle_deg"], tab["C_X"]), s * np.interp(g, tab["angle_deg"], tab["C_Y"]),
+                         s * np.interp(g, tab["angle_deg"], tab["C_N"])])
+    q = 0.5 * w["rho_air_kg_m3"] * V**2
+    area = np.array([w["A_F_m2"], w["A_L_m2"], w["A_L_m2"] * w["L_oa_m"]])
+    np.testing.assert_allclose(parts[:, TAU_PARTS.index("wind")], q * C * area, rtol=1e-9)
+
+
+def test_wind_acts_on_the_velocity_over_ground_not_through_the_water(gunnerus):
+    """The relative wind is air velocity minus ship velocity over ground (Fossen 2021, sec. 10.1):
+    a ship carried by the current (at rest in the water) in air moving with it feels no wind,
+    although it moves over ground."""
+    psi, speed, to = 0.4, 1.2, np.radians(40.0)
+    nu = frames.ned_to_body([speed * np.cos(to), speed * np.sin(to), 0.0], psi)
+    _, parts, _ = gunnerus.acceleration([0, 0, psi], nu, current=[speed, to], wind=[speed, to + np.pi],
+                                        return_parts=True)              # the wind comes FROM to + pi
+    np.testing.assert_allclose(parts[0, TAU_PARTS.index("wind")], 0.0, atol=1e-9)
+
+
 # ----------------------------------------------------------------------------- integrator
 
 
@@ -384,6 +516,26 @@ def test_step_broadcasts_one_state_and_refuses_mismatched_batches_and_bad_steps(
     for n_steps in (2.7, "10", 0, True):
         with pytest.raises(ValueError, match="^n_steps: "):
             gunnerus.rollout(eta, np.zeros((2, 3)), n_steps)
+
+
+def test_rollout_with_per_step_inputs_equals_chained_steps(gunnerus):
+    """Inputs are held within an output step and change between steps: a rollout whose current,
+    wind, shaft speeds and azimuths change every step equals ``step`` called once per step with
+    that step's inputs."""
+    rng = np.random.default_rng(11)
+    S = 12
+    rpm = rng.uniform(-100, 200, (1, S, 3))
+    az = rng.uniform(-np.pi, np.pi, (1, S, 3))
+    wind = np.stack([rng.uniform(0, 15, (1, S)), rng.uniform(-np.pi, np.pi, (1, S))], axis=-1)
+    current = np.stack([rng.uniform(0, 1.5, (1, S)), rng.uniform(-np.pi, np.pi, (1, S))], axis=-1)
+    eta, nu = np.array([[5.0, -3.0, 0.4]]), np.array([[1.0, 0.2, 0.01]])
+    kw = dict(dt_s=2.0, substeps=2)
+    res = gunnerus.rollout(eta, nu, S, rpm=rpm, azimuth_rad=az, wind=wind, current=current, **kw)
+    for j in range(S):
+        eta, nu = gunnerus.step(eta, nu, rpm=rpm[:, j], azimuth_rad=az[:, j], wind=wind[:, j],
+                                current=current[:, j], **kw)
+        np.testing.assert_allclose(res.eta[:, j + 1], eta, rtol=1e-12, atol=1e-12)
+        np.testing.assert_allclose(res.nu[:, j + 1], nu, rtol=1e-12, atol=1e-14)
 
 
 # ----------------------------------------------------------------------------- vessel files
@@ -482,3 +634,35 @@ def test_a_validator_message_that_names_its_field_is_not_put_under_top_level():
     with pytest.raises(VesselFileError) as err:
         vessel_from_dict(d, "bad.toml")
     assert str(err.value).startswith("bad.toml: added_mass: M_A is not positive definite")
+
+
+def test_yaw_inertia_from_the_radius_of_gyration_includes_the_cg_offset():
+    """``r_z_m`` is the radius of gyration about the CG, so about the body origin (parallel axes)
+    ``I_z = m (r_z^2 + x_g^2)`` (vessel-file reference) and ``M_RB`` has ``m x_g`` off the diagonal
+    (Fossen 2021, eq. 3.44): the Esso Osaka model, CG 0.094 m forward of its origin."""
+    rb = tomllib.loads(packaged_vessel_text("esso_osaka_model"))["rigid_body"]
+    m = DynamicModel("esso_osaka_model")
+    mass, xg = rb["mass_kg"], rb["x_g_m"]
+    assert xg != 0.0
+    np.testing.assert_allclose(m.mass_matrix - m.arrays.m_a,
+                               [[mass, 0, 0], [0, mass, mass * xg], [0, mass * xg, mass * (rb["r_z_m"]**2 + xg**2)]],
+                               rtol=1e-9, atol=1e-9)
+
+
+def test_true_vessel_scales_thrust_and_lift_by_the_files_factors(gunnerus):
+    """``[true_vessel]``: every delivered thrust is ``thrust_scale`` times the model's (bollard:
+    ``s (1 - t) K_T0 rho n^2 D^4``), and the lift terms of the sway equation (d_vv, d_vr) scale
+    with the sway factor, those of the yaw equation (d_rv, d_rr) with the yaw factor of
+    ``nonlinear_damping_scale`` (vessel-file reference)."""
+    d = gunnerus_dict()
+    tv = d["true_vessel"]
+    true = DynamicModel("gunnerus", true_vessel=True)
+    rpm = np.array([300.0, 150.0, 120.0])
+    _, _, thrusts = true.acceleration([0, 0, 0], [0, 0, 0], rpm=rpm, azimuth_rad=[0, 0.5, -1.0], return_parts=True)
+    kt0, rho = load_wageningen().kt0, d["particulars"]["rho_water_kg_m3"]     # B4-70 P/D 1 (the file's default)
+    for k, t in enumerate(d["thrusters"]):
+        bollard = (1 - t.get("thrust_deduction", 0.0)) * kt0 * rho * (rpm[k] / 60) ** 2 * t["diameter_m"] ** 4
+        assert thrusts[0, k] == pytest.approx(tv["thrust_scale"] * bollard, rel=1e-9), t["name"]
+    s = tv["nonlinear_damping_scale"]
+    np.testing.assert_allclose(true.arrays.d_lift[:4], gunnerus.arrays.d_lift[:4] * [s[1], s[1], s[2], s[2]],
+                               rtol=1e-12)

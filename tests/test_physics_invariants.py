@@ -32,17 +32,22 @@ def model_from(d: dict) -> DynamicModel:
     return DynamicModel(vessel_from_dict(d, "test.toml"))
 
 
-def _no_wind(name, **rigid_body):
+def _no_wind(name, nonlinear=None, **rigid_body):
     d = vessel_dict(name)
     d["wind"] = {"method": "none"}
     d["rigid_body"].update(rigid_body)
+    if nonlinear is not None:
+        d["damping"]["nonlinear"] = nonlinear
     return model_from(d)
 
 
 # Wind acts on the velocity over ground, everything else on the velocity through the water:
 # without wind the current may only translate the solution (Galilean invariance).
 NO_WIND = {"gunnerus": _no_wind("gunnerus", x_g_m=1.3),      # off-centre CG: the C_RB(nu) terms too
-           "esso_osaka_model": _no_wind("esso_osaka_model")}  # propeller + rudder
+           "esso_osaka_model": _no_wind("esso_osaka_model"),  # propeller + rudder
+           # explicit quadratic damping -d |x_r| x_r in every DOF (the packaged files use cross-flow strips)
+           "gunnerus_quadratic": _no_wind("gunnerus", {"method": "quadratic", "d_uu": 3000.0, "d_vv": 2.0e4,
+                                                       "d_rr": 2.0e7})}
 
 
 def decoupled_model(linear, nonlinear) -> DynamicModel:

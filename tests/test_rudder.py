@@ -10,6 +10,7 @@ import numpy as np
 import pytest
 
 from hybridship.physics.model import DynamicModel
+from hybridship.physics.propeller import load_wageningen, thrust_torque
 from hybridship.physics.rudder import rudder_forces, rudder_inflow_scalar
 from hybridship.vessel import VesselFileError, packaged_vessel_text, vessel_from_dict
 
@@ -134,6 +135,50 @@ def test_lateral_inflow_loads_an_unmoved_rudder_as_damping(esso):
     # yawing to starboard: the stern moves to port, the rudder resists (moment < 0)
     F = rudder_forces(esso, [0.3, 0.0, 0.02], [0.0], [1.0])[0, 0]
     assert F[2] < 0.0
+
+
+def test_the_rudder_sees_the_open_water_thrust_of_its_propeller(esso):
+    """The slipstream (MMG, Yasukawa & Yoshimura 2015, eqs. 39-41) is set by the propeller's
+    open-water thrust ``T = delivered / (1 - t_P)``, the thrust deduction being a hull force: inside
+    the model the rudder load (actuator load less the propeller's ``[T_d, 0, -y_P T_d]``) equals
+    :func:`rudder_forces` with that thrust."""
+    nu, delta = [0.4, 0.02, 0.03], math.radians(15)
+    _, parts, thrusts = esso.acceleration([0, 0, 0], nu, rpm=[RPM8], rudder_rad=[delta], return_parts=True)
+    prop = esso_dict()["thrusters"][0]
+    T_d = thrusts[0, 0]
+    rudder = parts[0, 1] - [T_d, 0.0, -prop["y_m"] * T_d]
+    expected = rudder_forces(esso, nu, [delta], [T_d / (1 - prop["thrust_deduction"])])[0, 0]
+    np.testing.assert_allclose(rudder, expected, rtol=1e-9, atol=1e-9 * T_d)
+
+
+def test_off_centre_propeller_and_rudder_follow_the_mmg_formulae_while_turning():
+    """An off-centre screw and rudder (y = 0.12 m) on a turning ship, against the module's MMG
+    formulae (Yasukawa & Yoshimura 2015) transcribed here: propeller inflow ``u_P = (1 - w)(u - y_P r)``
+    (the water velocity at the propeller), ``F_N = rho/2 A_R f_alpha U_R^2 sin(delta - atan2(v_R, u_R))``
+    and the yaw moment ``N_R = -(x_R + a_H x_H) F_N cos(delta) - y_R X_R`` of the forces at (x_R, y_R)."""
+    d = esso_dict()
+    d["thrusters"][0]["y_m"] = 0.12
+    d["rudders"][0]["y_m"] = 0.12
+    m = DynamicModel(vessel_from_dict(d, "off_centre.toml"))
+    u, v, r, delta = 0.4, 0.01, 0.05, math.radians(20)
+    _, parts, thrusts = m.acceleration([0, 0, 0], [u, v, r], rpm=[RPM8], rudder_rad=[delta], return_parts=True)
+    pr, rd, rho = m.vessel.thrusters[0], m.vessel.rudders[0], d["particulars"]["rho_water_kg_m3"]
+    u_P = (1 - pr.wake_fraction) * (u - pr.y_m * r)
+    T = thrust_torque(RPM8 / 60, u_P, pr.diameter_m, load_wageningen(pr.propeller_series, pr.pitch_ratio), rho)[0]
+    T_d = (1 - pr.thrust_deduction) * T                               # open-water and delivered thrust
+    assert thrusts[0, 0] == pytest.approx(T_d, rel=1e-9)
+    c_T = 8 * T / (math.pi * rho * pr.diameter_m**2)
+    kappa, eta = rd.slipstream_factor, min(pr.diameter_m / rd.span_m, 1.0)
+    u_jet = (1 - kappa) * u_P + kappa * math.sqrt(u_P**2 + c_T)
+    u_R = rd.wake_ratio * math.sqrt(eta * u_jet**2 + (1 - eta) * u_P**2)
+    lat = v + rd.l_R_m * r
+    v_R = -(rd.flow_straightening_neg if lat > 0 else rd.flow_straightening_pos) * lat
+    F_N = 0.5 * rho * rd.area_m2 * rd.f_alpha * (u_R**2 + v_R**2) * math.sin(delta - math.atan2(v_R, u_R))
+    X_R = -(1 - rd.steering_resistance_deduction) * F_N * math.sin(delta)
+    Y_R = -(1 + rd.hull_force_factor) * F_N * math.cos(delta)
+    N_R = -(rd.x_m + rd.hull_force_factor * rd.x_H_m) * F_N * math.cos(delta) - rd.y_m * X_R
+    expected = np.array([T_d + X_R, Y_R, -pr.y_m * T_d + N_R])      # propeller at 0 deg, then the rudder
+    np.testing.assert_allclose(parts[0, 1], expected, rtol=1e-9)
 
 
 # ----------------------------------------------------------------------------- propeller
