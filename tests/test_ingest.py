@@ -15,7 +15,7 @@ import pandas as pd
 import pytest
 
 from hybridship.evaluation import metrics
-from hybridship.logs.ingest import ingest, ingest_with_report
+from hybridship.logs.ingest import ingest, ingest_with_report, sort_samples
 from hybridship.logs.io import LogArrays, LogFormatError, log_to_arrays
 from hybridship.physics.model import DynamicModel
 from hybridship.predictors import DataOnlyPredictor, DynamicPredictor, HybridPredictor
@@ -223,3 +223,52 @@ def test_a_forecast_reads_only_its_time_range(log, model, environment):
     inside.loc[4000, "port_rpm"] = 60 * 217.0
     msg = _message(lambda: hybrid.forecast(inside, start, 30))
     assert msg.startswith("port_rpm") and "row 4000" in msg, msg
+
+
+def test_sort_samples_names_conflicts_by_their_input_rows_in_input_order():
+    """conflicting_rows are the input positions (rows without a time counted) of the first two
+    samples of a repeated time, in input order: the sort keeps equal times in input order, also
+    in a long log written backwards."""
+    n = 1000
+    df = pd.DataFrame({"time_s": np.arange(n, dtype=float)[::-1], "north_m": np.arange(n, dtype=float)})
+    df.loc[n // 2, "time_s"] = df.loc[n // 2 - 1, "time_s"]        # a repeated stamp, other values
+    order = sort_samples(df)
+    np.testing.assert_array_equal(order.conflicting_rows, [[n // 2 - 1, n // 2]])
+    assert list(order.conflicting_time_s) == [df.loc[n // 2, "time_s"]] and len(order.frame) == n - 2
+    blank = pd.concat([df.iloc[:1].assign(time_s=np.nan), df], ignore_index=True)
+    np.testing.assert_array_equal(sort_samples(blank).conflicting_rows, [[n // 2, n // 2 + 1]])
+
+
+def test_an_exact_duplicate_is_dropped_not_late_and_missing_values_compare_equal():
+    """A sample repeated in order (NaN where the first is NaN) is an exact duplicate: one kept,
+    nothing counted as late or conflicting."""
+    df = pd.DataFrame({"time_s": [0.0, 1.0, 1.0, 2.0], "north_m": [0.0, 1.0, 1.0, 2.0],
+                       "wind_speed_m_s": [np.nan, np.nan, np.nan, 3.0]})
+    order = sort_samples(df)
+    assert order.late_time_s.size == 0 and order.conflicting_time_s.size == 0
+    assert list(order.duplicate_time_s) == [1.0] and list(order.frame.time_s) == [0.0, 1.0, 2.0]
+
+
+def test_arrays_ingested_for_a_forecast_are_checked_again_for_training(model, log):
+    """Arrays ingested for a forecast may hold missing positions; passed to training they are
+    checked again (not passed through) and refused, naming the column and row."""
+    df = log.copy()
+    df.loc[30, "north_m"] = np.nan
+    arrays = ingest(df, model.vessel, purpose="forecast")
+    assert np.isnan(arrays.eta[30, 0]) and ingest(arrays, model.vessel, purpose="forecast") is arrays
+    with pytest.raises(LogFormatError, match=r"north_m: missing or non-finite value \(nan\) at row 30"):
+        ingest(arrays, model.vessel, purpose="fit")
+
+
+@pytest.mark.parametrize("dtype", ["float32", "Float64"])
+def test_an_exact_duplicate_with_a_missing_value_is_one_sample_in_any_float_type(model, dtype):
+    """A repeated row that is identical, a missing value included, is an exact duplicate also
+    when the columns are float32 or pandas' nullable Float64 (whose missing values are not
+    Python floats): one copy is kept, and training does not refuse it as a conflict."""
+    log = physics_log(model, seed=5, duration_s=120.0, t_shutdown_s=None).astype(dtype)
+    log.loc[10, "u_m_s"] = np.nan
+    doubled = pd.concat([log.iloc[:11], log.iloc[[10]], log.iloc[11:]], ignore_index=True)
+    arrays = ingest(doubled, model.vessel, purpose="forecast")
+    assert 10.0 in arrays.time_s and len(arrays.time_s) == len(log)
+    with pytest.warns(UserWarning, match="exact duplicate"):
+        ingest(doubled, model.vessel, purpose="fit")

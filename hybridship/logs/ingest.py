@@ -105,8 +105,8 @@ def _rows_equal(block: pd.DataFrame) -> bool:
         for a, b in zip(first.to_numpy(), row.to_numpy()):
             if a is b:
                 continue
-            a_nan = isinstance(a, float) and math.isnan(a)
-            b_nan = isinstance(b, float) and math.isnan(b)
+            # any missing value (float64, float32, pandas' nullable NA) equals another one
+            a_nan, b_nan = bool(pd.isna(a)), bool(pd.isna(b))
             if a_nan and b_nan:
                 continue
             if a_nan or b_nan or a != b:
