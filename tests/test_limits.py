@@ -57,9 +57,11 @@ def test_inputs_within_range_pass_unchanged():
     (dict(nu=[np.nan, 0, 0]), r"nu\[u_m_s\]: nan is not finite \(a fault, not an extreme\)"),
     (dict(wind=[[5.0, 0.0], [np.inf, 0.0]]), r"wind\[batch 1, speed_m_s\]: inf is not finite"),
     (dict(rpm=[0.0, 500.0, 0.0]), r"rpm\[thruster 'port'\]: 500 is more than 2 x max_rpm \(a unit error\?\)"),
+    (dict(rpm=[0.0, -500.0, 0.0]), r"rpm\[thruster 'port'\]: -500 is more than 2 x max_rpm"),
     (dict(wind=[-1.0, 0.0]), r"wind\[speed_m_s\]: -1 is negative"),
     (dict(current=[-0.5, 0.0]), r"current\[speed_m_s\]: -0.5 is negative"),
     (dict(eta=[[0, 0, 0], [2e7, 0, 0]]), r"eta\[batch 1, north_m\]: 2e\+07 is outside .*\|north_m\|, \|east_m\| <= 1e\+07 m"),
+    (dict(eta=[0, -2e7, 0]), r"eta\[east_m\]: -2e\+07 is outside .*\|east_m\| <= 1e\+07 m"),
     (dict(eta=[0, 0, 1e5]), r"eta\[psi_rad\]: 100000 is outside"),
 ])
 def test_always_refused(kwargs, pattern):
@@ -144,3 +146,14 @@ def test_rudder_channels_clip_the_angle_and_ignore_rpm():
     np.testing.assert_array_equal(c.clipped_fields["azimuth_rad"], [False, True])
     with pytest.raises(InputRangeError, match=r"azimuth_rad\[batch 1, rudder 'rudder'\]: 1.2 is outside"):
         check_or_clip_inputs("esso_osaka_model", mode="refuse", azimuth_rad=[[0.0, 0.3], [0.0, 1.2]])
+
+
+def test_a_rudder_beyond_either_stop_is_clipped_to_it():
+    """The rudder limit is on the angle's magnitude: beyond the port stop (negative) it is
+    clipped to -max_angle and flagged, as beyond the starboard one."""
+    lim = envelope_for("esso_osaka_model").max_angle_rad[1]
+    c = check_or_clip_inputs("esso_osaka_model", azimuth_rad=[[0.0, -1.2], [0.0, -0.3]])
+    np.testing.assert_allclose(c.azimuth_rad[:, 1], [-lim, -0.3])
+    np.testing.assert_array_equal(c.clipped_fields["azimuth_rad"], [True, False])
+    with pytest.raises(InputRangeError, match=r"azimuth_rad\[batch 0, rudder 'rudder'\]: -1.2 is outside"):
+        check_or_clip_inputs("esso_osaka_model", mode="refuse", azimuth_rad=[[0.0, -1.2], [0.0, -0.3]])

@@ -44,6 +44,22 @@ def test_a_command_logged_after_a_start_is_not_held_at_it(model, log):
     assert "none logged: 0" in whole.notes[0]
 
 
+def test_dp_active_logged_after_a_start_is_not_held_at_it(model, log):
+    """dp_active empty at the log's start: the rows before its first value take the default
+    (1, station keeping) and are marked as commands not logged, not the later value."""
+    late = log.assign(dp_active=np.where(log.time_s <= 20.0, np.nan, 0.0))
+    a = ingest(late, model.vessel, purpose="forecast")
+    early = a.time_s <= 20.0
+    assert np.all(a.dp_active[early] == 1) and np.all(a.dp_active[~early] == 0)
+    assert not a.commands_logged[early].any() and a.commands_logged[~early].all()
+
+
+def test_a_time_range_of_one_instant_is_accepted(model, log):
+    """time_range_s = (t, t) is valid (first_s <= last_s): the one sample at t."""
+    a = ingest(log, model.vessel, purpose="forecast", time_range_s=(50.0, 50.0))
+    assert list(a.time_s) == [50.0]
+
+
 @pytest.mark.parametrize("column", ["wind_dir_deg", "port_azimuth_deg"])
 def test_an_angle_in_centidegrees_is_refused_naming_the_column(model, log, column):
     """Wind direction and azimuth get the heading's degree range: 100 x degrees (centidegrees)

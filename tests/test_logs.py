@@ -292,6 +292,16 @@ def test_radian_headings_are_refused():
     assert not heading_looks_like_radians(t, psi_deg, r_deg_s)[0]
 
 
+def test_a_radian_heading_that_wraps_is_refused_even_with_its_rate_in_rad_s():
+    """A radian heading wrapping at 2 pi, logged with its rate in rad/s (which alone would say
+    degrees): the one-sample jump of about 2 pi among small steps decides, and is named."""
+    t = np.arange(120.0)
+    rate = 0.01 + 0.005 * np.sin(t / 10.0)                    # rad/s, logged in r_deg_s
+    psi = np.mod(5.9 + np.concatenate(([0.0], np.cumsum(0.5 * (rate[1:] + rate[:-1])))), 2 * np.pi)
+    is_rad, reason = heading_looks_like_radians(t, psi, rate)
+    assert is_rad and reason.startswith("it jumps by -6.2")
+
+
 # --------------------------------------------------------------------------------------
 # Unknown columns
 # --------------------------------------------------------------------------------------
@@ -420,6 +430,9 @@ def test_split_segments_and_segmentwise_derivative():
     assert [(s.start, s.stop) for s in segs] == [(0, 50), (50, 92)]  # 1.4 s is not a gap
     assert [(s.start, s.stop) for s in split_segments(t, gap_factor=1.3)] == [(0, 50), (50, 91), (91, 92)]
     assert [(s.start, s.stop) for s in split_segments(t, nominal_dt_s=10.0)] == [(0, 92)]
+    # a step of exactly gap_factor nominal periods is not a gap, a longer one is
+    assert split_segments([0.0, 1.0, 2.0, 3.5, 4.5, 5.5]) == [slice(0, 6)]
+    assert split_segments([0.0, 1.0, 2.0, 3.6, 4.6, 5.6]) == [slice(0, 3), slice(3, 6)]
     assert split_segments([]) == [] and split_segments([3.0]) == [slice(0, 1)]
     with pytest.raises(ValueError, match="strictly increasing"):
         split_segments([0.0, 1.0, 1.0])
@@ -519,6 +532,16 @@ def test_the_column_spec_is_the_documented_format():
         assert required == ("yes" if spec.required else "no"), spec.name
     assert REQUIRED_COLUMNS == ("time_s", "north_m", "east_m", "heading_deg")
 
+
+
+def test_a_plausible_range_includes_its_ends():
+    """Bound.violated: a value at the limit is accepted, one beyond it refused, NaN passes."""
+    from hybridship.logs.columns import Bound
+
+    np.testing.assert_array_equal(Bound(hi=30.0, magnitude=True).violated(np.array([30.0, -30.0, 30.5, -30.5, np.nan])),
+                                  [False, False, True, True, False])
+    np.testing.assert_array_equal(Bound(0.0, 80.0).violated(np.array([0.0, 80.0, -0.1, 80.1])),
+                                  [False, False, True, True])
 
 
 def test_datetime_times_and_gzip_named_csv_are_named_for_what_they_are(tmp_path):

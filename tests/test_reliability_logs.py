@@ -71,6 +71,12 @@ def test_positions_in_degrees_are_refused(moving_log):
     _refused(df, r"u_m_s, v_m_s: .*north_m/east_m hardly move: positions in degrees of latitude/longitude\?")
 
 
+def test_positions_in_feet_are_refused_as_too_slow_a_speed(moving_log):
+    """A logged speed well below the track's (0.3 x: north_m, east_m in feet) is refused too."""
+    df = moving_log.assign(north_m=moving_log.north_m / 0.3048, east_m=moving_log.east_m / 0.3048)
+    err = _refused(df, r"u_m_s, v_m_s: the logged speed is 0\.30\d times the speed of the track.*positions in feet\?")
+    assert err.column == "u_m_s"
+
 def test_speed_check_stays_quiet_when_velocities_do_not_describe_the_track(moving_log):
     # A shuffled velocity column has nothing to do with the track: no unit can be
     # inferred, so no unit error is claimed (the check only speaks when shapes agree).
@@ -89,6 +95,14 @@ def test_yaw_rate_sign_convention_is_checked(moving_log):
     _refused(moving_log.assign(r_deg_s=-moving_log.r_deg_s),
              r"r_deg_s: has the opposite sign .*positive clockwise.*counter-clockwise / ENU")
 
+
+
+def test_a_noisy_yaw_rate_with_the_opposite_sign_is_refused(moving_log):
+    """A reversed yaw rate is refused also when sensor noise weakens its correlation with the
+    heading's rate well below -1 (about -0.6 here)."""
+    r = moving_log.r_deg_s.to_numpy()
+    noise = np.random.default_rng(7).normal(0.0, 1.3 * np.std(r), r.size)
+    _refused(moving_log.assign(r_deg_s=-r + noise), r"r_deg_s: has the opposite sign .*\(correlation -0\.[3-8]\d\)")
 
 @pytest.mark.parametrize("scale, hint", [(1000.0 * np.pi / 180.0, "milliradians"), (100.0, "centidegrees")])
 def test_heading_out_of_degree_range_is_refused(moving_log, scale, hint):
@@ -253,6 +267,13 @@ def test_rpm_logged_as_a_fraction_is_refused(model, moving_log, drift_log):
     check_log_against_vessel(drift_log, model.vessel)
     assert (drift_log.dp_active == 0).sum() >= 60
 
+
+def test_rpm_logged_as_a_fraction_reaching_full_thrust_is_refused(model, moving_log):
+    """Fractions of max_rpm that reach full thrust (exactly +-1) are still fractions."""
+    frac = moving_log.assign(**{f"{t.name}_rpm": moving_log[f"{t.name}_rpm"] / moving_log[f"{t.name}_rpm"].abs().max()
+                                for t in model.vessel.thrusters})
+    assert frac[[f"{t.name}_rpm" for t in model.vessel.thrusters]].abs().max().max() == 1.0
+    _vessel_refused(model, frac, r"tunnel_rpm: every thruster's rpm is within \+-1 \(largest 1\)")
 
 def test_rpm_sign_convention_is_checked(model, moving_log):
     df = moving_log.assign(port_rpm=-moving_log.port_rpm.abs() - 1.0)
