@@ -204,3 +204,10 @@ def test_the_filter_window_must_cover_the_held_load_window():
                     environment_config=EnvironmentConfig(held_load_window_s=0.0))
     HybridPredictor("gunnerus", environment_window_s=300.0, environment="mean")
     HybridPredictor("gunnerus", environment_window_s=600.0)
+
+
+def test_held_load_rows_end_before_the_start_during_station_keeping():
+    """A start during station keeping measures the load on the rows before it, not on its own row."""
+    dp = np.ones(100, int)
+    rows = held_load_rows(dp, 60, 1, 30)
+    assert rows.max() == 59 and rows.min() == 30 and rows.size == 30

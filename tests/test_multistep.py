@@ -9,6 +9,7 @@ from hybridship.physics.model import DynamicModel
 from hybridship.predictors import HybridPredictor, as_log_arrays
 from hybridship.residual.calibration import CalibrationConfig
 from hybridship.residual.ensemble import EnsembleConfig
+from hybridship.residual.guard import EnvelopeGuard
 from hybridship.residual.features import (ALL_FEATURES, COMMAND_FEATURES, LOAD_FEATURES, MEMORY_FEATURES,
                                           PAPER_FEATURES,
                                          ResidualConfig, prepare_log)
@@ -360,3 +361,207 @@ def test_actuator_load_features_agree_between_training_rows_and_both_rollouts(tm
     assert back.residual_config.features == rc.features
     np.testing.assert_array_equal(back.forecast(a, [100.0], 20.0, commands="known").eta,
                                   hp.forecast(a, [100.0], 20.0, commands="known").eta)
+
+
+@pytest.fixture(scope="module")
+def small_hybrid():
+    """A one-step hybrid with the paper's and the command features on two short current logs,
+    its residual config and prepared logs."""
+    m = DynamicModel("gunnerus")
+    logs = [physics_log(m, seed=s, duration_s=300.0, t_shutdown_s=None, current=(0.3, 1.0)) for s in (5, 6)]
+    rc = ResidualConfig(features=PAPER_FEATURES + COMMAND_FEATURES[:4], bias_window_s=120.0)
+    hp = HybridPredictor(m.vessel, residual_config=rc, ensemble_config=TINY,
+                         calibration_config=CalibrationConfig(fraction=0.0)).fit(logs)
+    return hp, rc, [prepare_log(m, as_log_arrays(x, m.vessel), rc) for x in logs]
+
+
+def test_training_starts_hold_the_next_poses_and_the_commands_of_their_steps(small_hybrid):
+    """collect_starts: a start at row i is scored on the poses of rows i+1..i+H, driven by the
+    commands of rows i..i+H-1; the last starts of each log are the validation ones."""
+    from hybridship.residual.multistep import collect_starts
+
+    _, _, preps = small_hybrid
+    cfg = MultiStepConfig(horizon_s=5.0, start_every_s=10.0, val_fraction=0.25)
+    s = collect_starts(preps[:1], [None], cfg)
+    a, H = preps[0].arrays, 5
+    idx = np.array([int(np.flatnonzero(a.eta[:, 0] == e[0])[0]) for e in s.eta0])
+    assert np.all(np.diff(idx) == 10)
+    rows = idx[:, None] + np.arange(H)
+    np.testing.assert_array_equal(s.truth, a.eta[rows + 1])
+    np.testing.assert_array_equal(s.rpm, a.rpm[rows])
+    n_val = int(round(0.25 * idx.size))
+    assert n_val > 0 and s.is_val[-n_val:].all() and not s.is_val[:-n_val].any()
+
+
+def test_multi_step_loss_is_the_forecast_rollouts_and_the_best_weights_are_kept(small_hybrid):
+    """With the previous-residual and command features, members and a bias, the torch rollout of
+    multi-step training scores what HybridPredictor.rollout forecasts; with a step size that only
+    makes the nets worse, the warm start is what comes back."""
+    from hybridship.residual.multistep import _train_val_starts, collect_starts, train_multistep
+
+    hp, rc, preps = small_hybrid
+    cfg = MultiStepConfig(horizon_s=5.0, iterations=2, batch_starts=8, start_every_s=10.0, val_every=1, lr=1.0)
+    starts = collect_starts(preps, [None, None], cfg)
+    assert np.abs(starts.bias0).max() > 0 and np.abs(starts.dev0).max() == 0
+    ens, hist = train_multistep(hp.ensemble, hp.model, starts, rc.feature_index, cfg)
+    s = starts.take(_train_val_starts(starts, cfg.max_val_starts)[1])
+    L = 0.5 * hp.model.vessel.particulars.L_pp_m
+
+    def loss():
+        eta, _, _, _ = hp.rollout(s.eta0, s.nu0, s.dev0, s.bias0, s.rpm, s.az, s.wind, 5, s.dt_s, guard=False)
+        d = eta[:, 1:] - s.truth
+        return np.mean(d[..., 0] ** 2 + d[..., 1] ** 2 + (L * np.angle(np.exp(1j * d[..., 2]))) ** 2)
+    np.testing.assert_allclose(hist["val_loss"][0], loss(), rtol=1e-9)
+    assert min(hist["val_loss"][1:]) > hist["val_loss"][0] == hist["best_val_loss"]
+    for w, w0 in zip(ens.weights, hp.ensemble.weights):
+        np.testing.assert_allclose(w, w0, rtol=0, atol=1e-12)
+
+
+def test_nets_weight_zero_leaves_the_physics_with_the_bias(small_hybrid):
+    """nets_weight 0 (after a failure) switches the nets and the hull correction off: the
+    rollout is that without nets, with the same bias."""
+    from hybridship.residual.hull import HULL_REGRESSORS, HullCorrection
+
+    hp, _, preps = small_hybrid
+    a = preps[0].arrays
+    idx = np.array([150, 200])
+    z = np.zeros((2, 3))
+    bias = np.array([[0.002, -0.001, 1e-5], [0.0, 0.003, 0.0]])
+    kw = dict(rpm=a.rpm[idx, None], az=a.azimuth_rad[idx, None], wind=a.wind[idx, None], n_steps=10, dt_s=1.0)
+    P = len(HULL_REGRESSORS)
+    hp.hull, hull = HullCorrection(np.zeros((P, 3)), np.zeros(P), np.ones(P), np.array([0.01, 0.01, 1e-3]),
+                                   30.0), hp.hull
+    try:
+        off = hp.rollout(a.eta[idx], a.nu[idx], z, bias, nets=False, guard=False, **kw)[0]
+        for guard in (False, True):
+            on = hp.rollout(a.eta[idx], a.nu[idx], z, bias, nets_weight=np.zeros(2), guard=guard, **kw)[0]
+            np.testing.assert_allclose(on, off, rtol=0, atol=1e-12)
+        assert np.abs(hp.rollout(a.eta[idx], a.nu[idx], z, bias, guard=False, **kw)[0] - off).max() > 1e-3
+    finally:
+        hp.hull = hull
+
+
+def test_rollout_step_features_get_the_step_and_previous_commands():
+    """Step j's command features see the commands of step j and of step j - 1 (step 0: its own)."""
+    import hybridship.predictors.hybrid as hybrid_module
+
+    hp = HybridPredictor("gunnerus")
+    S, n, K = 2, 4, hp.model.n_channels
+    rpm = np.arange(S * n * K, dtype=float).reshape(S, n, K)
+    az = 0.01 * rpm
+    seen = []
+    fill = hybrid_module._fill_step_features
+
+    def spy(*args):
+        seen.append(args[5])
+        return fill(*args)
+    z = np.zeros((S, 3))
+    with pytest.MonkeyPatch.context() as mp:
+        mp.setattr(hybrid_module, "_fill_step_features", spy)
+        hp.rollout(z, z, z, z, rpm, az, np.zeros((S, 1, 2)), n, 1.0, guard=False, nets=False)
+    for j, (r_j, r_p, a_j, a_p) in enumerate(seen):
+        jp = max(j - 1, 0)
+        for got, want in ((r_j, rpm[:, j]), (r_p, rpm[:, jp]), (a_j, az[:, j]), (a_p, az[:, jp])):
+            np.testing.assert_array_equal(got, want)
+
+
+def test_corrected_step_turns_the_correction_and_bias_with_the_heading_and_spreads_members():
+    """Heading 90 deg: a surge correction moves the ship east, an east bias is a surge
+    acceleration; members' held sway deviations +-b spread the position by 0.5 b t^2."""
+    from hybridship.predictors.hybrid import _corrected_step
+
+    dt, n, a, b, c = 0.5, 6, 0.02, 0.01, 0.03
+    eta_1 = np.array([[10.0, 20.0, np.pi / 2]])
+    nu_1 = np.zeros((1, 3))
+    r = np.array([[[a, b, 0.0]], [[a, -b, 0.0]]])
+    bias = np.broadcast_to([0.0, c, 0.0], (2, 1, 3))
+    d_nu, d_eta = np.zeros((2, 1, 3)), np.zeros((2, 1, 3))
+    eta, nu, std = _corrected_step(eta_1, nu_1, r, bias, dt, d_nu, d_eta)
+    np.testing.assert_allclose(nu[0], [dt * (a + c), 0.0, 0.0], atol=1e-15)
+    np.testing.assert_allclose(eta[0], [10.0, 20.0 + 0.5 * dt ** 2 * (a + c), np.pi / 2], atol=1e-15)
+    for _ in range(n - 1):
+        _, _, std = _corrected_step(eta_1, nu_1, r, bias, dt, d_nu, d_eta)
+    np.testing.assert_allclose(std[0], [0.5 * b * (n * dt) ** 2, 0.0, 0.0], atol=1e-15)
+
+
+def test_lead_weighting_grows_with_the_lead():
+    """lead_weighting="lead" weighs step j's error by j (steps 1..H), normalised to sum 1."""
+    from hybridship.residual.multistep import _lead_weights
+
+    np.testing.assert_allclose(_lead_weights(MultiStepConfig(lead_weighting="lead"), 4), [0.1, 0.2, 0.3, 0.4])
+    np.testing.assert_allclose(_lead_weights(MultiStepConfig(), 4), 0.25)
+
+
+def test_multi_step_gradient_flows_through_the_whole_rollout(small_hybrid):
+    """The gradient that multi-step training hands to Adam is that of the loss of the whole
+    rollout: for the output biases it matches finite differences of HybridPredictor.rollout's
+    loss over the same starts (a gradient cut between steps would see each step's effect only)."""
+    torch = pytest.importorskip("torch")
+    from hybridship.residual.multistep import _train_val_starts, collect_starts, train_multistep
+
+    hp, rc, preps = small_hybrid
+    cfg = MultiStepConfig(horizon_s=5.0, iterations=1, batch_starts=1000, start_every_s=10.0, val_every=1)
+    starts = collect_starts(preps, [None, None], cfg)
+    s = starts.take(_train_val_starts(starts, cfg.max_val_starts)[0])
+    grads = []
+
+    class Spy:
+        def __init__(self, params, lr):
+            self.params = params
+
+        def zero_grad(self):
+            for p in self.params:
+                p.grad = None
+
+        def step(self):
+            grads.append(self.params[5].grad.numpy().copy())
+    with pytest.MonkeyPatch.context() as mp:
+        mp.setattr(torch.optim, "Adam", Spy)
+        train_multistep(hp.ensemble, hp.model, starts, rc.feature_index, cfg)
+    b3 = hp.ensemble.weights[5]
+
+    def loss():
+        eta, _, _, _ = hp.rollout(s.eta0, s.nu0, s.dev0, s.bias0, s.rpm, s.az, s.wind, 5, s.dt_s, guard=False)
+        d = eta[:, 1:] - s.truth
+        L = 0.5 * hp.model.vessel.particulars.L_pp_m
+        return np.mean(d[..., 0] ** 2 + d[..., 1] ** 2 + (L * np.angle(np.exp(1j * d[..., 2]))) ** 2)
+    num = np.zeros_like(b3)
+    h = 1e-5
+    for e, k in np.ndindex(b3.shape[0], b3.shape[2]):
+        b3[e, 0, k] += h
+        up = loss()
+        b3[e, 0, k] -= 2 * h
+        num[e, 0, k] = (up - loss()) / (2 * h)
+        b3[e, 0, k] += h
+    np.testing.assert_allclose(grads[0], num, rtol=1e-4, atol=1e-3 * np.abs(num).max())
+
+
+def test_guard_judges_the_members_mean_features(small_hybrid):
+    """The envelope guard's weight of a step is that of the members' mean feature vector
+    (standardised), times the thrust-regime weight."""
+    import hybridship.predictors.hybrid as hybrid_module
+
+    hp, rc, preps = small_hybrid
+    a = preps[0].arrays
+    idx = np.array([150, 200])
+    dev0 = np.array([[0.01, -0.02, 1e-4], [0.0, 0.01, 0.0]])
+    kw = dict(rpm=a.rpm[idx, None], az=a.azimuth_rad[idx, None], wind=a.wind[idx, None], n_steps=4, dt_s=1.0)
+    seen = []
+    fill = hybrid_module._fill_step_features
+
+    def spy(*args):
+        out = fill(*args)
+        seen.append(args[0][..., rc.feature_index].copy())
+        return out
+    guard, hp.guard = hp.guard, EnvelopeGuard(np.zeros(len(rc.features)), np.eye(len(rc.features)), 0.0, 5.0)
+    try:
+        with pytest.MonkeyPatch.context() as mp:
+            mp.setattr(hybrid_module, "_fill_step_features", spy)
+            _, _, _, w = hp.rollout(a.eta[idx], a.nu[idx], dev0, np.zeros((2, 3)), guard=True, **kw)
+    finally:
+        hp.guard = guard
+    w_thrust = hp._thrust_weight(a.eta[idx], a.nu[idx], a.rpm[idx], a.azimuth_rad[idx], a.wind[idx])
+    assert np.any(seen[2][0] != seen[2][1])                    # the members' features differ
+    for j, X in enumerate(seen):
+        d = np.linalg.norm((X.mean(axis=0) - hp.ensemble.x_mean) / hp.ensemble.x_std, axis=-1)
+        np.testing.assert_allclose(w[:, j + 1], np.exp(-d / 5.0) * w_thrust, rtol=1e-12)

@@ -12,9 +12,9 @@ from hybridship.logs.io import LogFormatError
 from hybridship.predictors import (DeadReckoning, DynamicPredictor, HybridPredictor, ModelFileError,
                                    as_log_arrays)
 from hybridship.residual.calibration import CalibrationConfig
-from hybridship.residual.ensemble import EnsembleConfig, fit_ensemble
-from hybridship.residual.features import prepare_log
-from hybridship.residual.guard import EnvelopeGuard
+from hybridship.residual.ensemble import EnsembleConfig, MLPEnsemble, fit_ensemble
+from hybridship.residual.features import COMMAND_FEATURES, ResidualConfig, prepare_log
+from hybridship.residual.guard import EnvelopeGuard, ThrustRegime
 from hybridship.sim.synthetic import physics_log
 
 SMALL = EnsembleConfig(n_members=4, max_epochs=250, patience=40, seed=1)
@@ -490,3 +490,143 @@ def test_a_fast_log_is_fitted_on_rows_about_one_second_apart():
         rows[step], std[step] = X.shape[0], Y[:, :2].std()
     assert rows[None] > 9 * rows[1.0] > 9 * 300
     assert std[None] > 5 * std[1.0]                  # the noise / dt of 0.1-s differences, not 1-s ones
+
+
+def test_residual_is_the_unknown_load_over_the_mass(model):
+    """On a log with a constant body-frame load the model does not know, the residual target
+    (and its causal twin) is that load's acceleration ``M^-1 tau`` [m/s^2], with its sign."""
+    tau = np.array([2.0e4, -1.0e4, 0.0])
+    log = physics_log(model, seed=4, duration_s=200.0, t_shutdown_s=None, tau_ext_N=tuple(tau))
+    prep = prepare_log(model, as_log_arrays(log, model.vessel), ResidualConfig(bias_window_s=0.0))
+    rows = prep.trainable_rows()
+    want = model.arrays.m_inv @ tau
+    assert np.abs(want[:2]).min() > 1e-3
+    for res in (prep.residual[rows], prep.residual_c[rows]):
+        np.testing.assert_allclose(np.median(res, axis=0)[:2], want[:2], rtol=0.1)
+
+
+def test_previous_residual_feature_is_the_deviation_one_row_earlier(model):
+    """The autoregressive features of row i are the residual deviation of row i - 1 (the
+    residual minus the bias known before it), never row i's own (its target)."""
+    log = physics_log(model, seed=2, duration_s=300.0, t_shutdown_s=None, current=(0.3, 1.0))
+    prep = prepare_log(model, as_log_arrays(log, model.vessel), ResidualConfig(bias_window_s=60.0))
+    rows = prep.trainable_rows()[5:40]
+    X = prep.features(rows)
+    want = prep.residual[rows - 1] - prep.bias_body(rows - 2, prep.arrays.eta[rows - 1, 2])
+    np.testing.assert_allclose(X[:, 6:9], want, rtol=1e-12, atol=1e-15)
+    np.testing.assert_allclose(X[:, 0:3], prep.nu_hat[rows])
+
+
+def test_a_masked_row_removes_the_row_after_it_from_training(model):
+    """A row outside the mask cannot be a target nor supply the previous residual of the next."""
+    log = physics_log(model, seed=2, duration_s=100.0, t_shutdown_s=None)
+    prep = prepare_log(model, as_log_arrays(log, model.vessel), ResidualConfig(bias_window_s=0.0))
+    mask = np.ones(len(log), bool)
+    mask[50] = False
+    rows = prep.trainable_rows(mask)
+    assert 50 not in rows and 51 not in rows and 49 in rows and 52 in rows
+
+
+def test_ensemble_inference_is_the_standardised_mlp_and_its_mean_and_spread():
+    """predict_members is tanh(tanh(z W1 + b1) W2 + b2) W3 + b3 on standardised inputs,
+    de-standardised; predict gives the members' mean and population std (ddof 0)."""
+    rng = np.random.default_rng(0)
+    E, n_in, H, n_out = 3, 2, 4, 3
+    shapes = [(E, n_in, H), (E, 1, H), (E, H, H), (E, 1, H), (E, H, n_out), (E, 1, n_out)]
+    w = [rng.normal(size=sh) for sh in shapes]
+    ens = MLPEnsemble(w, np.array([1.0, -2.0]), np.array([2.0, 0.5]), np.array([10.0, -5.0, 3.0]),
+                      np.array([0.1, 2.0, 4.0]))
+    X = rng.normal(size=(7, n_in))
+    Y = ens.predict_members(X)
+    for e in range(E):
+        z = (X - [1.0, -2.0]) / [2.0, 0.5]
+        h = np.tanh(np.tanh(z @ w[0][e] + w[1][e]) @ w[2][e] + w[3][e])
+        np.testing.assert_allclose(Y[e], (h @ w[4][e] + w[5][e]) * [0.1, 2.0, 4.0] + [10.0, -5.0, 3.0])
+    mean, std = ens.predict(X)
+    np.testing.assert_allclose(mean, Y.mean(axis=0))
+    np.testing.assert_allclose(std, Y.std(axis=0, ddof=0))
+
+
+def _split_data(n=100):
+    rng = np.random.default_rng(5)
+    X = rng.normal(size=(n, 2))
+    X[80:] += 3.0                                  # the validation part (last 20 %) lies elsewhere
+    Y = np.column_stack([np.sin(X[:, 0]), X[:, 1] ** 2])
+    return X, Y
+
+
+def test_ensemble_is_standardised_on_training_rows_and_keeps_its_best_validation_weights():
+    """The normalisation comes from the training rows only (the first 80 % in time, not the
+    validation tail); the weights returned are those of the best validation epoch: their
+    validation MSE is the recorded best."""
+    X, Y = _split_data()
+    cfg = EnsembleConfig(n_members=1, hidden=6, max_epochs=200, patience=10, lr=5e-2, bootstrap=False, seed=2)
+    ens = fit_ensemble(X, Y, cfg)
+    np.testing.assert_allclose(ens.x_mean, X[:80].mean(0))
+    np.testing.assert_allclose(ens.y_std, Y[:80].std(0))
+    assert ens.history["n_train"] == 80 and ens.history["epochs"] < 200   # stopped early
+    Zy = (Y[80:] - ens.y_mean) / ens.y_std
+    val = np.mean(((ens.predict_members(X[80:])[0] - ens.y_mean) / ens.y_std - Zy) ** 2)
+    np.testing.assert_allclose(val, ens.history["best_val_mse"][0], rtol=1e-4)
+    assert val == pytest.approx(min(ens.history["val_mse"]), rel=1e-4)
+
+
+def test_ensemble_fit_is_reproducible_and_the_seed_matters():
+    """Same seed, same weights (bootstrap draws and initial weights); another seed, others."""
+    X, Y = _split_data()
+    cfg = EnsembleConfig(n_members=3, hidden=4, max_epochs=5, patience=5, seed=7)
+    a, b = fit_ensemble(X, Y, cfg), fit_ensemble(X, Y, cfg)
+    c = fit_ensemble(X, Y, EnsembleConfig(**{**cfg.__dict__, "seed": 8}))
+    for wa, wb, wc in zip(a.weights, b.weights, c.weights):
+        np.testing.assert_array_equal(wa, wb)
+    assert not np.array_equal(a.weights[0], c.weights[0])
+
+
+def test_guard_decays_by_e_per_half_edge_distance_beyond_the_edge():
+    """Beyond the edge d0 the weight is exp(-(d - d0) / s) with s = d0 / 2 by default."""
+    rng = np.random.default_rng(1)
+    g = EnvelopeGuard.fit(rng.normal(size=(4000, 2)), quantile=0.95)
+    assert g.scale == pytest.approx(0.5 * g.d0)
+    x = np.zeros((4, 2))
+    x[:, 0] = np.array([0.5, 1.0, 1.5, 2.5]) * g.d0
+    d = g.distance(x)
+    assert d[0] < g.d0 < d[1]
+    np.testing.assert_allclose(g.weight(x), np.exp(-np.maximum(d - g.d0, 0) / (0.5 * g.d0)), rtol=1e-12)
+
+
+def test_thrust_regime_ramps_from_half_the_low_level_to_the_low_level():
+    """The weight is 0 at and below lo / 2, 1 at lo and above, linear between."""
+    rng = np.random.default_rng(0)
+    regime = ThrustRegime.fit(rng.normal([0.02, -0.01, 0.0005], [0.01, 0.01, 0.0003], size=(2000, 3)))
+    levels = regime.lo * np.array([0.25, 0.5, 0.75, 1.0, 2.0])
+    acc = levels[:, None] * np.array([1.0, 0.0, 0.0]) * regime.scale
+    np.testing.assert_allclose(regime.level(acc), levels)
+    np.testing.assert_allclose(regime.weight(acc), [0.0, 0.0, 0.5, 1.0, 1.0], atol=1e-12)
+
+
+def test_command_features_of_a_row_are_those_of_the_step_into_it(model):
+    """Row i is predicted from row i - 1 with the commands of i - 1: at the rows after a command
+    change the rpm feature is the previous row's and the rate the change over (i - 2, i - 1)."""
+    log = physics_log(model, seed=7, duration_s=200.0, t_shutdown_s=None)
+    a = as_log_arrays(log, model.vessel)
+    prep = prepare_log(model, a, ResidualConfig(features=COMMAND_FEATURES[:2], bias_window_s=0.0))
+    changed = np.flatnonzero(np.diff(a.rpm[:, 0]) != 0) + 1       # rpm[k] != rpm[k - 1]
+    rows = np.intersect1d(np.r_[changed, changed + 1], prep.trainable_rows())
+    assert rows.size > 4
+    scale = model.vessel.thrusters[0].max_rpm
+    np.testing.assert_allclose(prep.features(rows), np.column_stack(
+        [a.rpm[rows - 1, 0] / scale, (a.rpm[rows - 1, 0] - a.rpm[rows - 2, 0]) / (scale * prep.dt_s)]))
+
+
+def test_bias_is_the_trailing_mean_of_causal_residuals_turned_to_ned(model):
+    """bias_ned[i] is the mean over the last bias_window_s of the causal residuals with their
+    surge/sway rotated to north/east by the heading at which each was seen."""
+    log = physics_log(model, seed=2, duration_s=300.0, t_shutdown_s=None, current=(0.3, 1.0))
+    prep = prepare_log(model, as_log_arrays(log, model.vessel), ResidualConfig(bias_window_s=60.0))
+    psi, r = prep.arrays.eta[:, 2], prep.residual_c
+    assert np.ptp(psi[100:300]) > 0.5                          # the ship turns
+    for i in (150, 220, 299):
+        k = np.arange(i - 59, i + 1)
+        c, s = np.cos(psi[k]), np.sin(psi[k])
+        ned = np.column_stack([c * r[k, 0] - s * r[k, 1], s * r[k, 0] + c * r[k, 1], r[k, 2]])
+        np.testing.assert_allclose(prep.bias_ned[i], ned.mean(axis=0), rtol=1e-9, atol=1e-15)

@@ -319,7 +319,8 @@ class PreparedLog:
 
     All arrays have N rows (one per sample). Row ``i`` of ``nu_hat``/``nu_dot_hat`` is the
     model's prediction FOR sample ``i`` made from sample ``i - 1`` (NaN where ``i - 1`` is
-    in another segment or does not exist); ``residual[i] = nu_dot[i] - nu_dot_hat[i]``.
+    in another segment or does not exist); ``residual[i] = (nu_s[i] - nu_hat[i]) / dt`` [m/s^2,
+    m/s^2, rad/s^2], the acceleration the model did not explain over the step into row ``i``.
     The ``_c`` arrays are the causal counterparts used at forecast starts.
     ``env_body``, when set, is the environment estimator's acceleration at each row (body
     frame), which then replaces the bias in :meth:`deviation`.
