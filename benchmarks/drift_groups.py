@@ -108,7 +108,7 @@ def main(argv=None) -> int:
         print(f"error: {e}", file=sys.stderr)
         return 2
     from hybridship.evaluation.drift import ratio_cells
-    from hybridship.fileio import atomic_write, markdown_table, record_inputs
+    from hybridship.fileio import markdown_table, record_inputs, write_text
 
     cells = ratio_cells(t.rename_axis(index=["log", "state"]))
     cells.insert(0, "logs", [counts[g] for g in cells.index])
@@ -120,7 +120,7 @@ def main(argv=None) -> int:
             f"(mean over each group's logs):\n\n" + markdown_table(cells.rename_axis("group").reset_index()) + "\n")
     print(text, end="")
     if args.out is not None:
-        atomic_write(args.out, lambda fh: fh.write(text.encode("utf-8")))
+        write_text(args.out, text)
         record_inputs(args.out, [path])
     return 0
 

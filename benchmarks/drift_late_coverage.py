@@ -33,7 +33,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from hybridship.fileio import atomic_write, markdown_table
+from hybridship.fileio import markdown_table, write_text
 from hybridship.frames import wrap_pi
 from hybridship.predictors import HybridPredictor
 from hybridship.predictors.hybrid import AFTER_STOP_LATE
@@ -108,7 +108,7 @@ def main(argv=None) -> int:
             f"({args.members} members); nominal 2-sigma coverage 0.954:\n\n" + markdown_table(res) + "\n")
     print(text)
     if args.out is not None:
-        atomic_write(args.out, lambda fh: fh.write(text.encode("utf-8")))
+        write_text(args.out, text)
     return 0
 
 

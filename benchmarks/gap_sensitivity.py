@@ -23,7 +23,7 @@ from pathlib import Path
 
 import numpy as np
 
-from hybridship.fileio import atomic_write, markdown_table
+from hybridship.fileio import markdown_table, write_text
 from hybridship.frames import wrap_pi
 from hybridship.predictors import HybridPredictor
 from hybridship.residual.ensemble import EnsembleConfig
@@ -76,7 +76,7 @@ def main(argv=None) -> int:
             f"forecast (seed {SEEDS[0]}, not trained on):\n\n" + markdown_table(pd.DataFrame(rows)) + "\n")
     print(text)
     if args.out is not None:
-        atomic_write(args.out, lambda fh: fh.write(text.encode("utf-8")))
+        write_text(args.out, text)
     return 0
 
 

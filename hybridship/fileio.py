@@ -98,6 +98,11 @@ def atomic_write(path, write: Callable[[BinaryIO], None]) -> Path:
     return path
 
 
+def write_text(path, text: str) -> Path:
+    """Write UTF-8 text to ``path`` atomically (:func:`atomic_write`)."""
+    return atomic_write(path, lambda fh: fh.write(text.encode("utf-8")))
+
+
 def _discard(tmp: Path) -> None:
     """Remove a temporary file if it is there; never raise (its folder may not exist, or be a file)."""
     try:
@@ -228,5 +233,4 @@ def record_inputs(output, inputs) -> Path:
     made_from = {Path(os.path.relpath(Path(p).resolve(), output.parent.resolve())).as_posix():
                  hashlib.sha256(Path(p).read_bytes()).hexdigest() for p in inputs}
     text = json.dumps({"output": output.name, "made_from": made_from}, indent=1, sort_keys=True) + "\n"
-    target = output.with_name(output.name + ".inputs.json")
-    return atomic_write(target, lambda fh: fh.write(text.encode("utf-8")))
+    return write_text(output.with_name(output.name + ".inputs.json"), text)

@@ -23,7 +23,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from ..fileio import atomic_write, starts_with, write_output_files
+from ..fileio import atomic_write, starts_with, write_output_files, write_text
 from .planning import DriftOffResult
 
 __all__ = ["polar_plot", "exceedance_plot", "markdown_table", "write_report", "write_season_report", "write_text",
@@ -32,11 +32,6 @@ __all__ = ["polar_plot", "exceedance_plot", "markdown_table", "write_report", "w
 #: The files only :func:`write_report` makes (planning and live), and only :func:`write_season_report`.
 REPORT_ONLY_FILES = ("times.csv", "watch.csv", "polar.png", "exceedance.png")
 SEASON_ONLY_FILES = ("season.csv", "operability.csv")
-
-
-def write_text(path, text: str) -> Path:
-    """Write UTF-8 text atomically."""
-    return atomic_write(path, lambda fh: fh.write(text.encode("utf-8")))
 
 
 def _csv_bytes(df: pd.DataFrame) -> bytes:

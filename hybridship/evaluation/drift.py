@@ -51,7 +51,8 @@ import numpy as np
 import pandas as pd
 
 from . import metrics
-from ..fileio import atomic_write, check_output_files, earlier_run, markdown_table, record_outputs, remove_stale
+from ..fileio import (atomic_write, check_output_files, earlier_run, markdown_table, record_outputs, remove_stale,
+                      write_text)
 from ..predictors import DataOnlyPredictor, DeadReckoning, DynamicPredictor, HybridPredictor, as_log_arrays
 from ..predictors.forecast_setup import forecast_step_s
 from ..predictors.hybrid import AFTER_STOP, AFTER_STOP_LATE, after_stop_scales
@@ -243,7 +244,7 @@ def run_drift_benchmark(train=None, test=None, out_dir="drift-benchmark", *, ves
         if len(windows) == 2 else {}
     md = _markdown(table2, table3, coverage, intervals, timing, test_names, len(train_arrays), ens_cfg,
                    n_intervals, per_log_long, heading_cov)
-    outputs["tables.md"] = atomic_write(out / "tables.md", lambda fh: fh.write(md.encode("utf-8")))
+    outputs["tables.md"] = write_text(out / "tables.md", md)
     outputs.update(_figures(out, plots, fc, all_h, test_arrays, test_names))
     record_outputs(out, outputs, removed=() if plots else FIGURE_FILES)
     for k, v in outputs.items():
