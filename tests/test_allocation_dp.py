@@ -11,10 +11,12 @@ import math
 
 import numpy as np
 import pytest
+from scipy.linalg import null_space
 
 from hybridship.frames import ned_to_body, wrap_pi
 from hybridship.physics.model import DynamicModel
-from hybridship.sim.allocation import ThrustAllocator, bollard_thrust_limits, thrust_capacity
+from hybridship.sim.allocation import (ThrustAllocator, bollard_thrust_limits, extended_configuration,
+                                       thrust_capacity)
 from hybridship.sim.dp import DPController, ReferenceModel, pid_gains
 
 # Body-frame load scale: forces in N, the yaw moment divided by a lever of 10 m.
@@ -42,7 +44,8 @@ FEASIBLE = [
 ]
 
 
-@pytest.mark.parametrize("nu", [[0.0, 0.0, 0.0], [1.0, 0.3, 0.01]], ids=["zero_speed", "moving"])
+@pytest.mark.parametrize("nu", [[0.0, 0.0, 0.0], [1.0, 0.3, 0.01], [0.0, 0.0, 0.1]],
+                         ids=["zero_speed", "moving", "turning"])     # turning: inflow y r, x r at the thrusters
 @pytest.mark.parametrize("tau", FEASIBLE)
 def test_feasible_demand_reproduced_by_physics_model(model, tau, nu):
     alloc = ThrustAllocator(model.vessel, dt_s=0.5)
@@ -57,6 +60,26 @@ def test_feasible_demand_reproduced_by_physics_model(model, tau, nu):
     _, _, thrusts = model.acceleration(np.zeros(3), nu, rpm=res.rpm, azimuth_rad=res.azimuth_rad,
                                        return_parts=True)
     np.testing.assert_allclose(res.thrust_N, thrusts[0], rtol=1e-9, atol=1e-6)
+
+
+@pytest.mark.parametrize("tau", FEASIBLE)
+def test_default_weights_minimise_the_sum_of_squared_utilisations(model, tau):
+    """Default weights ``1 / F_max^2``: the feasible allocation minimises ``sum (f_i / F_max_i)^2``
+    subject to ``T_e f = tau``, so the cost gradient ``f / F_max^2`` has no part along the
+    null space of ``T_e`` (the optimality condition of the least-norm problem)."""
+    T_e, owner = extended_configuration(model.vessel)
+    f_max = bollard_thrust_limits(model.vessel).forward_N[owner]
+    res = ThrustAllocator(model.vessel, dt_s=1.0).allocate(tau, np.zeros(3))
+    f = []
+    for i, t in enumerate(model.vessel.thrusters):      # extended forces from the delivered thrusts
+        if t.type == "azimuth":
+            f += [res.thrust_N[i] * math.cos(res.azimuth_rad[i]), res.thrust_N[i] * math.sin(res.azimuth_rad[i])]
+        else:
+            f.append(res.thrust_N[i])
+    f = np.array(f)
+    np.testing.assert_allclose(T_e @ f / LOAD_SCALE, np.asarray(tau) / LOAD_SCALE, atol=1.0)
+    grad = f / f_max**2
+    assert np.all(np.abs(null_space(T_e).T @ grad) <= 1e-6 * np.linalg.norm(grad))
 
 
 @pytest.mark.parametrize("nu", [[0.0, 0.0, 0.0], [1.0, 0.3, 0.01]], ids=["zero_speed", "moving"])
@@ -93,6 +116,49 @@ def test_saturated_achieves_the_capacity(model):
     res = alloc.allocate([0.0, 1e7, 0.0], np.zeros(3))
     np.testing.assert_allclose(res.tau_achieved / LOAD_SCALE, [0.0, res.tau_achieved[1], 0.0], atol=1.0)
     assert res.tau_achieved[1] >= cap[1] * (1 - 1e-6)
+
+
+@pytest.mark.parametrize("sign", [1.0, -1.0], ids=["positive", "negative"])
+@pytest.mark.parametrize("dof", [0, 1, 2], ids=["surge", "sway", "yaw"])
+def test_demands_just_inside_the_capacity_are_met_in_both_directions(model, dof, sign):
+    """The capacity is the smaller of the two signs, so 98 % of it is feasible either way: met in
+    full (through the null space where the least-norm split overloads a thruster, e.g. the weaker
+    astern tunnel), not scaled down."""
+    cap = thrust_capacity(model.vessel)
+    tau = np.zeros(3)
+    tau[dof] = sign * 0.98 * cap[dof]
+    res = ThrustAllocator(model.vessel, dt_s=1.0).allocate(tau, np.zeros(3))
+    assert res.demand_scale == 1.0
+    load = thruster_load(model, np.zeros(3), res)
+    assert np.all(np.abs(load - tau) / LOAD_SCALE <= 0.01 * cap[dof] / LOAD_SCALE[dof]), (load, tau)
+
+
+def test_an_azimuth_turns_round_rather_than_reverse_beyond_its_astern_thrust(model):
+    """Reversing is the shorter way to thrust astern, but astern a propeller is weaker: a demand
+    beyond the azimuths' astern thrust makes them turn aft (at their slew rate) and then meets it."""
+    lim = bollard_thrust_limits(model.vessel)
+    az = np.array([t.type == "azimuth" for t in model.vessel.thrusters])
+    demand = -0.95 * lim.forward_N[az].sum()
+    assert -demand / az.sum() > lim.reverse_N[az].max()
+    alloc = ThrustAllocator(model.vessel, dt_s=1.0)
+    alloc.allocate([20e3, 0.0, 0.0], np.zeros(3))
+    for _ in range(40):                                     # 180 deg at 10 deg/s takes 18 s
+        res = alloc.allocate([demand, 0.0, 0.0], np.zeros(3))
+    np.testing.assert_allclose(np.cos(res.azimuth_rad[az]), -1.0, atol=1e-6)
+    assert np.all(res.rpm[az] > 0)
+    np.testing.assert_allclose(thruster_load(model, np.zeros(3), res) / LOAD_SCALE, [demand, 0.0, 0.0],
+                               atol=0.01 * abs(demand))
+
+
+def test_bollard_limits_are_what_the_model_delivers_at_full_rpm_ahead_and_astern(model):
+    """``forward_N`` / ``reverse_N``: the delivered (after thrust deduction) force of the physics model
+    at +max_rpm / -max_rpm at rest, each thruster alone."""
+    lim = bollard_thrust_limits(model.vessel)
+    max_rpm = np.array([t.max_rpm for t in model.vessel.thrusters])
+    for sign, expected in ((1.0, lim.forward_N), (-1.0, -lim.reverse_N)):
+        _, _, thrusts = model.acceleration(np.zeros(3), np.zeros(3), rpm=sign * max_rpm,
+                                           azimuth_rad=np.zeros(len(max_rpm)), return_parts=True)
+        np.testing.assert_allclose(thrusts[0], expected, rtol=1e-9)
 
 
 def test_a_direction_without_thrust_has_no_capacity():
@@ -159,6 +225,81 @@ def test_gains_place_poles_from_mass_matrix(model):
     np.testing.assert_allclose(A, np.diag([0.07, 0.07, 0.09]) ** 2, atol=1e-12)
     with pytest.raises(ValueError, match="omega_n_rad_s"):
         pid_gains(model.mass_matrix, (0.07, -1.0, 0.09), 0.9)
+
+
+def test_damping_and_integral_gains_follow_the_pole_placement_rules(model):
+    """``K_d = M diag(2 zeta omega_n)`` and ``K_i = K_p diag(omega_n ki_ratio)`` (module docstring)."""
+    w, z = np.array([0.07, 0.08, 0.09]), np.array([0.9, 0.8, 0.7])
+    g = pid_gains(model.mass_matrix, w, z, ki_ratio=0.1)
+    np.testing.assert_allclose(np.linalg.solve(model.mass_matrix, g.Kd), np.diag(2.0 * z * w), atol=1e-12)
+    np.testing.assert_allclose(np.linalg.solve(model.mass_matrix, g.Ki), np.diag(0.1 * w**3), atol=1e-12)
+
+
+def test_unsaturated_reference_follows_the_critically_damped_third_order_step_response():
+    """With zeta = 1 the filter is ``(s + w)^3``: a step r gives ``r (1 - e^-wt (1 + wt + (wt)^2 / 2))``."""
+    w = 0.05
+    ref = ReferenceModel(w, 1.0, (10.0, 10.0, 1.0))       # limits far above what a 1 m step needs
+    ref.reset(np.zeros(3))
+    target = np.array([1.0, -2.0, 0.3])
+    for k in range(1, 1201):
+        ref.step(target, 0.5)
+        q = w * 0.5 * k
+        expected = target * (1.0 - math.exp(-q) * (1.0 + q + 0.5 * q * q))
+        assert np.all(np.abs(ref.state.eta_d - expected) <= 0.005 * np.abs(target)), (k, ref.state.eta_d, expected)
+
+
+def test_tracking_the_reference_exactly_demands_its_acceleration_in_the_body_frame(model):
+    """On the reference (no error, PD only) the demand is the force that accelerates the hull
+    along it: ``M R(psi)^T eta_d_ddot``; heading east, a northward acceleration is to port."""
+    dp = DPController(model, dt_s=1.0, ki_ratio=0.0)
+    psi = math.pi / 2
+    dp.reset([20.0, 0.0, psi], eta_measured=[0.0, 0.0, psi])
+    for _ in range(40):
+        ref = dp.reference
+        c, s = math.cos(psi), math.sin(psi)
+        to_body = np.array([[c, s, 0.0], [-s, c, 0.0], [0.0, 0.0, 1.0]])
+        tau = dp.update(ref.eta_d, to_body @ ref.eta_dot_d)
+        np.testing.assert_allclose(tau, model.mass_matrix @ to_body @ ref.eta_ddot_d, atol=1e-6)
+    assert tau[1] != 0.0 and abs(ref.eta_ddot_d[0]) > 0.0
+
+
+def test_integral_is_kept_in_ned_and_pushes_back_in_the_body_frame(model):
+    """Heading east, 1 m east of the set-point (an error straight ahead): the integral grows to the
+    east in NED, and the next demand is ``dt K_i`` more astern (opposing the error)."""
+    dt = 1.0
+    dp = DPController(model, dt_s=dt)
+    psi = math.pi / 2
+    dp.reset([0.0, 0.0, psi])
+    eta = np.array([0.0, 1.0, psi])
+    tau1 = dp.update(eta, np.zeros(3))
+    np.testing.assert_allclose(dp.integral_ned, [0.0, dt * dp.gains.Ki[0, 0], 0.0], atol=1e-9)
+    tau2 = dp.update(eta, np.zeros(3))
+    np.testing.assert_allclose(tau2 - tau1, -dt * dp.gains.Ki[:, 0], rtol=1e-9, atol=1e-9)
+    assert tau2[0] < tau1[0]
+
+
+def test_heading_error_across_south_is_the_short_way_round(model):
+    """Set-point 179.5 deg, heading -179.5 deg: 1 deg to starboard of it, the same demand as 1 deg
+    to starboard of north (not a 359 deg error the other way)."""
+    d = math.radians(1.0)
+    taus = []
+    for sp in (math.pi - d / 2, 0.0):
+        dp = DPController(model, dt_s=1.0)
+        dp.reset([0.0, 0.0, sp])
+        taus.append(dp.update([0.0, 0.0, float(wrap_pi(sp + d))], np.zeros(3)))
+    np.testing.assert_allclose(taus[0], taus[1], rtol=1e-9, atol=1e-6)
+    assert taus[0][2] < 0.0                                  # turns back to port
+
+
+def test_integral_windup_is_clamped_at_the_thrust_capacity(model):
+    """A large persistent error cannot wind the integral beyond the pure surge/sway/yaw capacity."""
+    dp = DPController(model, dt_s=1.0)
+    dp.reset([0.0, 0.0, 0.3])
+    for _ in range(1500):                                  # the yaw integral needs about 1000 s to wind up
+        dp.update([40.0, -30.0, 0.5], np.zeros(3))
+    integ_b = ned_to_body(dp.integral_ned, 0.5)
+    assert np.all(np.abs(integ_b) <= thrust_capacity(model.vessel) * (1 + 1e-9))
+    np.testing.assert_allclose(np.abs(integ_b), dp.integral_limit, rtol=1e-9)   # every axis wound up to its stop
 
 
 def test_reference_model_no_overshoot_and_speed_limit():

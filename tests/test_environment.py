@@ -28,6 +28,7 @@ from hybridship.sim.environment import (
     drift_coefficients,
     gust_wind,
     harris_spectrum,
+    jonswap_gamma_dnv,
     jonswap_spectrum,
     make_wave_components,
     max_hs_m,
@@ -59,6 +60,24 @@ def test_jonswap_peak_at_two_pi_over_tp(gamma):
     w = np.linspace(0.2, 5.0, 200_001)
     s = jonswap_spectrum(w, 1.2, tp, gamma)
     assert w[np.argmax(s)] == pytest.approx(2.0 * np.pi / tp, abs=2 * (w[1] - w[0]))
+
+
+@pytest.mark.parametrize("side, sigma", [(-1.0, 0.07), (1.0, 0.09)], ids=["below_peak", "above_peak"])
+def test_jonswap_peak_width_is_0_07_below_and_0_09_above_the_peak(side, sigma):
+    """One width ``sigma wp`` from the peak, JONSWAP / Pierson-Moskowitz (gamma = 1) is
+    ``(1 - 0.287 ln gamma) gamma^exp(-1/2)``, with DNV-RP-C205's sigma 0.07 below and 0.09 above."""
+    tp, gamma = 7.0, 3.3
+    w = 2.0 * np.pi / tp * (1.0 + side * sigma)
+    ratio = jonswap_spectrum(w, 1.0, tp, gamma) / jonswap_spectrum(w, 1.0, tp, 1.0)
+    assert ratio == pytest.approx((1.0 - 0.287 * math.log(gamma)) * gamma ** math.exp(-0.5), rel=1e-9)
+
+
+@pytest.mark.parametrize("ratio, gamma", [(3.0, 5.0), (4.2, math.exp(5.75 - 1.15 * 4.2)), (5.5, 1.0)])
+def test_dnv_peak_enhancement_from_hs_and_tp(ratio, gamma):
+    """DNV-RP-C205 3.5.5.5: gamma = 5 for ``Tp / sqrt(Hs) <= 3.6``, ``exp(5.75 - 1.15 Tp / sqrt(Hs))``
+    up to 5, then 1."""
+    hs = 2.0
+    assert jonswap_gamma_dnv(hs, ratio * math.sqrt(hs)) == pytest.approx(gamma, rel=1e-12)
 
 
 def test_jonswap_zero_for_nonpositive_frequency_and_scales_with_hs_squared():
@@ -190,6 +209,17 @@ def test_drift_coefficient_limits():
     assert np.all(np.abs(drift_coefficients(0.05, np.linspace(-3, 3, 7), h)) < 1e-3 * 0.5 * RHO * G * 33.9)
 
 
+def test_drift_coefficient_between_the_limits_follows_the_energy_flux_above_the_keel():
+    """At ``2 k T = 1`` (half-way between the limits) the beam-sea coefficient is the wall value
+    ``(rho g / 2) c_y L`` times the flux share above the keel ``1 - e^-2kT`` and ``(kB)^2 / (1 + (kB)^2)``."""
+    h = HullDimensions(**GUNNERUS)
+    k = 1.0 / (2.0 * h.T_m)
+    d = drift_coefficients(math.sqrt(k * G), FROM_PORT, h)
+    kb2 = (k * h.B_m) ** 2
+    assert d[1] == pytest.approx(0.5 * RHO * G * h.side_factor * h.L_m * (1.0 - math.exp(-1.0)) * kb2 / (1 + kb2),
+                                 rel=1e-9)
+
+
 def test_mean_drift_scales_with_hs_squared():
     a = mean_drift_loads(0.0, make_wave_components(0.5, 6.0, -1.0, rng=1), GUNNERUS)
     b = mean_drift_loads(0.0, make_wave_components(1.5, 6.0, -1.0, rng=1), GUNNERUS)
@@ -269,6 +299,26 @@ def test_wf_motion_head_seas_only_surge_and_long_waves_follow_particles():
     np.testing.assert_allclose(rao[:, 2], 0.0, atol=1e-6)
 
 
+@pytest.mark.parametrize("psi_deg", [60.0, 135.0, -100.0])
+def test_wf_motion_of_long_crested_waves_is_along_their_direction_at_any_heading(psi_deg):
+    """The hull follows the water's orbital motion, which is along the wave direction in NED
+    whatever the heading (surge and sway share one RAO envelope): waves from the north move
+    the ship north-south only."""
+    wf = make_wave_components(1.0, 6.0, 0.0, rng=3)
+    off = wave_frequency_motion(np.arange(0.0, 300.0, 0.5), np.radians(psi_deg), wf, GUNNERUS)
+    assert off[:, 0].std() > 0.01
+    np.testing.assert_allclose(off[:, 1], 0.0, atol=1e-9)
+
+
+def test_wf_yaw_rao_peaks_at_the_documented_value_for_waves_as_long_as_the_ship():
+    """``psi / A = -yaw_gain k sin(2 beta) H(k L)`` with ``H = 1`` at ``lambda = L``: bow-quartering
+    seas from starboard (beta = 45 deg) give ``-yaw_gain k`` rad/m."""
+    raos = MotionRAOs.from_hull(GUNNERUS)
+    k = 2.0 * np.pi / GUNNERUS["L_m"]
+    rao = raos.amplitudes(math.sqrt(k * G), np.radians(45.0))
+    assert rao[2] == pytest.approx(-raos.yaw_gain * k, rel=1e-9)
+
+
 def test_wf_rates_are_time_derivatives_of_offsets():
     wf = make_wave_components(1.0, 6.0, 2.0, rng=1)
     t = np.arange(0.0, 200.0, 0.01)
@@ -290,6 +340,22 @@ def test_harris_variance_and_davenport_shape():
     assert f[np.argmax(f * davenport_spectrum(f, u))] == pytest.approx(math.sqrt(3.0) * u / 1200.0, rel=0.02)
 
 
+def test_harris_spectrum_has_the_1800_m_length_scale_of_its_formula():
+    """``S(f) = 4 kappa U L / (2 + (f L / U)^2)^(5/6)``, L = 1800 m: its low-frequency plateau
+    ``4 kappa U L / 2^(5/6)`` and the value at ``f L / U = sqrt(2)`` pin L and the 2 of the
+    denominator (the variance, ``6.68 kappa U^2``, does not depend on L)."""
+    u, kappa, length = 10.0, 0.0026, 1800.0
+    s = harris_spectrum(np.array([1e-9, math.sqrt(2.0) * u / length]), u, kappa)
+    np.testing.assert_allclose(s, 4.0 * kappa * u * length / np.array([2.0, 4.0]) ** (5.0 / 6.0), rtol=1e-6)
+
+
+def test_davenport_variance_is_six_kappa_u_squared():
+    """``int S df = 4 kappa U^2 int_0^inf x (1 + x^2)^(-4/3) dx = 4 kappa U^2 * 3/2`` (x = f L / U)."""
+    u, kappa = 10.0, 0.0026
+    var, _ = quad(lambda f: davenport_spectrum(f, u, kappa), 0.0, np.inf, limit=500)
+    assert var == pytest.approx(6.0 * kappa * u**2, rel=1e-3)
+
+
 @pytest.mark.parametrize("spectrum", ["harris", "davenport"])
 def test_gust_mean_and_intensity_match_request(spectrum):
     t = np.arange(0.0, 3600.0, 1.0)
@@ -305,6 +371,25 @@ def test_gust_mean_and_intensity_match_request(spectrum):
     assert np.all(np.abs(np.array(means) / 9.0 - 1.0) < 0.03)
     assert np.all(np.abs(np.array(intensities) / 0.12 - 1.0) < 0.15)
     assert np.mean(intensities) == pytest.approx(0.12, rel=0.05)
+
+
+def test_gusts_carry_energy_down_to_the_record_length():
+    """Gust frequencies start at ``1 / duration``: the variance left after a 10 min moving average is
+    the Harris spectrum's share through that filter, ``int S sinc^2(f W) df / int S df`` over
+    ``[1 / T, 0.5 Hz]`` (about 4 %; random records scatter around it, so half of it is required)."""
+    duration, u, intensity, window = 3600.0, 9.0, 0.12, 600
+    t = np.arange(0.0, duration, 1.0)
+
+    def share(weight):
+        return quad(lambda f: harris_spectrum(f, u) * weight(f), 1.0 / duration, 0.5, limit=500)[0]
+
+    expected = share(lambda f: np.sinc(f * window) ** 2) / share(lambda f: 1.0)
+    got = []
+    for seed in range(6):
+        speed, _ = gust_wind(t, u, 0.0, seed, intensity=intensity)
+        slow = np.convolve(speed - speed.mean(), np.ones(window) / window, "valid")
+        got.append(slow.var() / (intensity * u) ** 2)
+    assert 0.5 * expected < np.mean(got) < 1.5 * expected
 
 
 def test_gust_deterministic_and_seed_dependent():
@@ -416,6 +501,23 @@ def test_sea_state_random_is_consistent_and_deterministic():
     assert SeaState.random(3) != SeaState.random(4)
     with pytest.raises(ValueError, match="beaufort"):
         SeaState.random(1, beaufort=(5, 2))
+
+
+def test_beaufort_wind_speed_falls_in_the_wmo_class_limits():
+    """``0.836 B^1.5`` lies inside the WMO 10 m wind-speed range of each Beaufort class [m/s]."""
+    wmo = [(0.3, 1.5), (1.6, 3.3), (3.4, 5.4), (5.5, 7.9), (8.0, 10.7), (10.8, 13.8), (13.9, 17.1),
+           (17.2, 20.7), (20.8, 24.4), (24.5, 28.4), (28.5, 32.6), (32.7, 40.0)]
+    speeds = beaufort_wind_speed(np.arange(1.0, 13.0))
+    for b, (speed, (lo, hi)) in enumerate(zip(speeds, wmo), start=1):
+        assert lo <= speed <= hi, b
+
+
+def test_random_sea_state_peak_period_scales_with_the_root_of_hs():
+    """``Tp = c sqrt(Hs)`` with ``c`` in ``tp_coefficient`` (s/m^0.5), unless held at the 2 s floor."""
+    for seed in range(30):
+        s = SeaState.random(seed, beaufort=(3, 6), tp_coefficient=(4.0, 6.0))
+        if s.tp_s > 2.0:
+            assert 4.0 - 1e-9 <= s.tp_s / math.sqrt(s.hs_m) <= 6.0 + 1e-9
 
 
 def test_sea_state_hs_grows_with_wind():

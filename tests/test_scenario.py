@@ -14,6 +14,8 @@ import pytest
 
 from hybridship.cli import main, parse_seeds
 from hybridship.logs.io import read_log, validate_log, write_log
+from hybridship.physics.model import DynamicModel
+from hybridship.sim.allocation import bollard_thrust_limits
 from hybridship.sim.environment import SeaState
 from hybridship.sim.scenario import (DPLossConfig, SensorNoise, drift_statistics,
                                      embedded_scenarios, simulate_dp_loss, sweep)
@@ -148,6 +150,93 @@ def test_truth_accelerations_match_velocities(moderate):
         assert np.median(np.abs(fd - a)) < 0.3 * np.std(a)
 
 
+def test_weather_heading_points_the_bow_into_the_wind(moderate):
+    """``heading_mode="weather"``: the heading set-point is the direction the wind comes FROM
+    within +- heading_offset_max_deg (bow to weather, not stern)."""
+    cfg, df = moderate
+    c = df.attrs["conditions"]
+    off = (c["heading_sp_deg"] - c["wind_dir_from_deg"] + 180.0) % 360.0 - 180.0
+    assert abs(off) <= cfg.heading_offset_max_deg + 1e-9
+
+
+def test_shaft_speed_decays_with_its_time_constant_after_the_shutdown(moderate):
+    """With no command the rpm decays as ``exp(-t / rpm_time_constant_s)``: one log step later it
+    is ``exp(-dt_s / tau)`` of what it was (the largest shaft, so the 0.01 rpm rounding is negligible)."""
+    cfg, df = moderate
+    t = df["time_s"].to_numpy()
+    i = int(np.flatnonzero(t == df["truth_t_shutdown_s"].iloc[0])[0])
+    rpm = df[["tunnel_rpm", "port_rpm", "stbd_rpm"]].to_numpy()
+    j = int(np.argmax(np.abs(rpm[i])))
+    assert abs(rpm[i, j]) > 10.0
+    assert rpm[i + 1, j] / rpm[i, j] == pytest.approx(math.exp(-cfg.dt_s / cfg.rpm_time_constant_s), rel=0.01)
+
+
+def test_truth_wave_frequency_velocity_and_acceleration_are_derivatives_of_the_motion(moderate):
+    """The wave-frequency parts (total minus LF) of the truth columns are consistent: body velocity =
+    time derivative of the NED offset turned into the body frame, acceleration = derivative of that
+    velocity (finite differences at 1 Hz, so compared by correlation)."""
+    _, df = moderate
+    t = df["time_s"].to_numpy()
+    psi = np.radians(df["truth_heading_lf_deg"].to_numpy())
+    dn = np.gradient((df["truth_north_m"] - df["truth_north_lf_m"]).to_numpy(), t)
+    de = np.gradient((df["truth_east_m"] - df["truth_east_lf_m"]).to_numpy(), t)
+    body = {"u": np.cos(psi) * dn + np.sin(psi) * de, "v": -np.sin(psi) * dn + np.cos(psi) * de}
+    for ax in ("u", "v"):
+        vel = (df[f"truth_{ax}_mps"] - df[f"truth_{ax}_lf_mps"]).to_numpy()
+        acc = (df[f"truth_{ax}dot_mps2"] - df[f"truth_{ax}dot_lf_mps2"]).to_numpy()
+        assert np.corrcoef(body[ax], vel)[0, 1] > 0.8, ax
+        assert np.corrcoef(np.gradient(vel, t), acc)[0, 1] > 0.8, ax
+
+
+def test_truth_wind_load_is_the_true_models_wind_load_at_the_logged_state(moderate):
+    """``truth_tau_wind_*`` is the wind part of the true vessel's loads at the logged LF state and
+    the logged true wind (FROM direction), and not another part of the load."""
+    _, df = moderate
+    true_model = DynamicModel("gunnerus", true_vessel=True)
+    for r in (10, len(df) // 2, len(df) - 5):
+        row = df.iloc[r]
+        eta = [row["truth_north_lf_m"], row["truth_east_lf_m"], math.radians(row["truth_heading_lf_deg"])]
+        nu = [row["truth_u_lf_mps"], row["truth_v_lf_mps"], math.radians(row["truth_r_lf_degps"])]
+        wind = (row["truth_wind_speed_mps"], math.radians(row["truth_wind_dir_from_deg"]))
+        current = (row["truth_current_speed_mps"], math.radians(row["truth_current_dir_to_deg"]))
+        _, parts, _ = true_model.acceleration(np.array(eta), np.array(nu), wind=wind, current=current,
+                                              return_parts=True)
+        logged = row[["truth_tau_wind_x_N", "truth_tau_wind_y_N", "truth_tau_wind_n_Nm"]].to_numpy(float)
+        np.testing.assert_allclose(logged, parts[0, 2], rtol=1e-3, atol=5.0)
+
+
+def test_thrust_fractions_and_azimuths_reproduce_the_thrust_load(moderate):
+    """``truth_<thruster>_thrust_frac`` is the delivered thrust over that thruster's own bollard
+    thrust ahead: summed along the logged azimuths (the tunnel along its 90 deg axis) they give
+    ``truth_tau_thrust_*``."""
+    _, df = moderate
+    ves = DynamicModel("gunnerus", true_vessel=True).vessel
+    limits = bollard_thrust_limits(ves).forward_N
+    thrust = np.column_stack([df[f"truth_{t.name}_thrust_frac"] * f for t, f in zip(ves.thrusters, limits)])
+    angle = np.column_stack([np.radians(df[f"{t.name}_azimuth_deg"]) if t.type == "azimuth"
+                             else np.full(len(df), t.fixed_angle_rad) for t in ves.thrusters])
+    x, y = np.array([t.x_m for t in ves.thrusters]), np.array([t.y_m for t in ves.thrusters])
+    load = np.column_stack([(thrust * np.cos(angle)).sum(axis=1), (thrust * np.sin(angle)).sum(axis=1),
+                            (thrust * (x * np.sin(angle) - y * np.cos(angle))).sum(axis=1)])
+    logged = df[["truth_tau_thrust_x_N", "truth_tau_thrust_y_N", "truth_tau_thrust_n_Nm"]].to_numpy()
+    np.testing.assert_allclose(load, logged, atol=20.0)
+
+
+def test_wind_feedforward_cancels_a_steady_wind_from_the_start():
+    """Calm sea, no current, steady wind, no noise: from the first seconds (before the integral
+    builds up) the thrusters cancel the wind load, and the ship hardly moves."""
+    sea = SeaState(hs_m=0.0, tp_s=5.0, wave_dir_from_rad=0.0, wind_speed_m_s=12.0, wind_dir_from_rad=math.radians(60),
+                   gust_intensity=0.0, current_speed_m_s=0.0)
+    df = simulate_dp_loss(DPLossConfig(seed=1, sea_state=sea, heading_sp_deg=30.0, t_shutdown_jitter_s=0.0,
+                                       noise=SensorNoise.none(), **TINY))
+    early = df[(df["time_s"] >= 10.0) & (df["time_s"] <= 40.0)]
+    wind = early[["truth_tau_wind_x_N", "truth_tau_wind_y_N", "truth_tau_wind_n_Nm"]].to_numpy().mean(axis=0)
+    thrust = early[["truth_tau_thrust_x_N", "truth_tau_thrust_y_N", "truth_tau_thrust_n_Nm"]].to_numpy().mean(axis=0)
+    assert np.all(np.abs(thrust + wind) <= 0.2 * np.abs(wind)), (thrust, wind)
+    dp = df[df["dp_active"] == 1]
+    assert np.hypot(dp["truth_north_lf_m"], dp["truth_east_lf_m"]).max() < 0.5
+
+
 def test_same_seed_same_log_different_seed_different_log():
     a = simulate_dp_loss(DPLossConfig(seed=21, **TINY))
     b = simulate_dp_loss(DPLossConfig(seed=21, **TINY))
@@ -188,6 +277,25 @@ def test_log_validates_and_round_trips(moderate, tmp_path, ext):
                                "wind_speed_m_s", "wind_dir_deg", "tunnel_rpm", "port_rpm", "port_azimuth_deg",
                                "stbd_rpm", "stbd_azimuth_deg", "dp_active"}
     assert "tunnel_azimuth_deg" not in df.columns
+
+
+def test_drift_statistics_of_a_ship_drifting_east_at_a_known_speed():
+    """A made-up log, still on DP (3 m off only during the start-up, half the DP phase), then
+    drifting due east at 0.1 m/s from t = 100 s: the excursions are 6 m and 60 m, the net speed
+    0.1 m/s, the drift goes TO 90 deg, and the settled DP statistics are zero."""
+    t = np.arange(0.0, 801.0)
+    east = np.where(t < 100.0, 0.0, 0.1 * (t - 100.0))
+    north = np.where(t < 40.0, 3.0, 0.0)
+    log = pd.DataFrame({"time_s": t, "north_m": north, "east_m": east, "heading_deg": 30.0,
+                        "dp_active": (t < 100.0).astype(int)})
+    st = drift_statistics(log)
+    assert st["t_shutdown_s"] == 100.0
+    assert st["drift_excursion_60s_m"] == pytest.approx(6.0)
+    assert st["drift_excursion_600s_m"] == pytest.approx(60.0)
+    assert st["drift_net_speed_mps"] == pytest.approx(0.1)
+    assert st["drift_dir_to_deg"] == pytest.approx(90.0)
+    assert st["drift_dheading_600s_deg"] == pytest.approx(0.0)
+    assert st["dp_pos_max_m"] == 0.0 and st["dp_pos_std_m"] == 0.0
 
 
 def test_drift_statistics_reproduce_truthsim_summary(shared_data):

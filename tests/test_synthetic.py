@@ -1,0 +1,36 @@
+"""Synthetic logs made by the dynamic model itself (hybridship.sim.synthetic) against the log format."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from hybridship.sim.synthetic import physics_log
+
+
+@pytest.fixture(scope="module")
+def log(model):
+    """Five minutes of random commands, power lost at 200 s, in a steady wind from 210 deg."""
+    return physics_log(model, duration_s=300.0, t_shutdown_s=200.0, seed=3, wind=(7.0, math.radians(210.0)))
+
+
+def test_angles_and_rates_are_in_degrees(log):
+    """``heading_deg`` in degrees clockwise from north, ``r_deg_s`` its rate in deg/s, and the wind
+    direction FROM in degrees, as the log format names them."""
+    t = log["time_s"].to_numpy()
+    heading = np.unwrap(np.radians(log["heading_deg"].to_numpy()))
+    rate = np.gradient(np.degrees(heading), t)
+    r = log["r_deg_s"].to_numpy()
+    assert np.abs(r).max() > 0.1                       # the ship turns: the check below means something
+    assert np.median(np.abs(rate - r)) < 0.1 * np.abs(r).std()
+    np.testing.assert_allclose(log["wind_dir_deg"], 210.0)
+
+
+def test_power_is_lost_at_the_shutdown_time(log):
+    """``dp_active`` is 1 before ``t_shutdown_s`` and 0 from the sample at it on; no rpm after it."""
+    t = log["time_s"].to_numpy()
+    np.testing.assert_array_equal(log["dp_active"].to_numpy(), (t < 200.0).astype(int))
+    rpm = log[[c for c in log.columns if c.endswith("_rpm")]].to_numpy()
+    assert np.all(rpm[t >= 200.0] == 0.0) and np.any(rpm[t < 200.0] != 0.0)
