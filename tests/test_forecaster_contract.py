@@ -490,6 +490,29 @@ def test_hsc_hybrid_refuses_pitch_in_degrees_and_pwm_as_a_fraction(hsc_fitted, h
             call()
 
 
+def test_hsc_hybrid_free_runs_name_y_init(hsc_fitted, hsc_setup):
+    """A free run's outputs are ``Y_init``: a bad value there is reported under that name, not ``Y``."""
+    _, _, (U, Y) = hsc_setup
+    hybrid = hsc_fitted["hybrid"]
+    for Y_bad in (np.column_stack([Y[:, 0], np.degrees(Y[:, 1])]), Y * [-1, 1]):
+        for call in (hybrid.free_run, hybrid.grey_free_run):
+            with pytest.raises(ValueError, match=r"^Y_init: column"):
+                call(U, Y_bad, N_INIT)
+
+
+def test_hsc_grey_free_run_starts_from_the_last_initial_row(hsc_fitted, hsc_setup):
+    """The grey box's free run starts from the speed and trim of row ``n_init - 1``: its first prediction
+    is the one-step prediction from that row, and the earlier initial rows do not change the hybrid's."""
+    _, _, (U, Y) = hsc_setup
+    hybrid = hsc_fitted["hybrid"]
+    free = hybrid.grey_free_run(U, Y, N_INIT)
+    assert np.isnan(free[:N_INIT]).all()
+    np.testing.assert_allclose(free[N_INIT], hybrid.grey.one_step(U, Y)[N_INIT], rtol=1e-12)
+    earlier = Y.copy()
+    earlier[:N_INIT - 1] += [1.0, 0.02]
+    np.testing.assert_array_equal(hybrid.free_run(U, earlier, N_INIT), hybrid.free_run(U, Y, N_INIT))
+
+
 def test_hsc_records_no_craft_can_log_are_refused_by_the_hybrid_and_the_scoring(hsc_fitted, hsc_setup):
     """A negated rpm was forecast at 17-81 kn and 40 000 rpm at 475 kn, PWM over 100 % was
     clipped and a negative speed taken: the grey box (which knows the craft) and the

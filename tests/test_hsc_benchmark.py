@@ -4,7 +4,7 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from hybridship.hsc.benchmark import COLUMNS, run_benchmark, score_model
+from hybridship.hsc.benchmark import COLUMNS, PAPER_MAE, PAPER_R, models_for, run_benchmark, score_model
 
 
 def test_quick_benchmark_writes_the_table(tmp_path):
@@ -50,3 +50,57 @@ def test_arguments_checked_before_the_work(tmp_path):
     assert main(["benchmark", "hsc", "--quick", "--out", str(tmp_path)]) == 2
     with pytest.raises(ValueError, match="^mode"):
         score_model(None, np.zeros((3, 3)), np.zeros((3, 2)), "one-step")
+
+
+class _Offset:
+    """A stand-in model predicting the measurement plus 1 m/s and 0.01 rad (NaN in its first rows)."""
+
+    name, n_init = "offset", 2
+
+    def one_step(self, U, Y):
+        P = np.asarray(Y, float) + [1.0, 0.01]
+        P[:self.n_init] = np.nan
+        return P
+
+    def free_run(self, U, Y_init, n_init):
+        return self.one_step(U, Y_init)
+
+
+def test_scores_are_in_knots_and_degrees():
+    """1 m/s is 1 / 0.514444 = 1.94384 kn and 0.01 rad is 0.572958 deg; the rows before n_init are not scored."""
+    t = np.arange(50) * 0.1
+    U = np.column_stack([np.full(50, 3000.0), np.full(50, 50.0), np.zeros(50)])
+    Y = np.column_stack([10.0 + np.sin(t), 0.05 + 0.01 * np.cos(t)])
+    for mode in ("one_step", "free_run"):
+        P, sc = score_model(_Offset(), U, Y, mode, n_init=10)
+        assert P.shape == (40, 2)
+        assert sc["speed_kn"] == pytest.approx((1.0, 1.94384), abs=1e-5)
+        assert sc["pitch_deg"] == pytest.approx((1.0, 0.572958), abs=1e-6)
+
+
+def test_models_have_the_papers_structures():
+    """Sec. 4: state-space orders 4 and 5, ARX321 and ARX531, NARX lags 5/3 and 7/5."""
+    from hybridship.hsc.hybrid import GreyBoxTables
+    from hybridship.hsc.vessel import load_planing_craft
+
+    flat = np.ones((3, 2))
+    tables = GreyBoxTables(0.0, 1.0, np.array([0.0, 0.5, 1.0]), flat, flat)    # not used: nothing is fitted
+    for sea_state, order, arx, lags in ((1, 4, "ARX321", (5, 3)), (2, 5, "ARX531", (7, 5))):
+        for quick in (True, False):
+            m = models_for(sea_state, load_planing_craft(), "interceptor", quick=quick, tables=tables)
+            assert m["ss"].order == order and m["arx"].label == arx
+            assert (m["ann"].config.n_out, m["ann"].config.n_in) == lags
+
+
+def test_the_papers_tables_as_printed():
+    """Tables 1 (R) and 2 (MAE) of the paper, row by row: SS1 speed train/val, SS1 pitch, SS2 speed, SS2 pitch."""
+    table1 = {"ss": (0.93, 0.94, 0.68, 0.57, 0.89, 0.85, 0.73, 0.48),
+              "arx": (0.95, 0.97, 0.75, 0.68, 0.92, 0.93, 0.88, 0.66),
+              "ann": (0.99, 0.99, 0.83, 0.80, 0.99, 0.96, 0.96, 0.87)}
+    table2 = {"ss": (0.94, 0.70, 0.88, 0.78, 1.4, 1.1, 1.2, 0.85),
+              "arx": (0.85, 0.51, 0.75, 0.67, 0.96, 0.88, 0.83, 0.66),
+              "ann": (0.30, 0.32, 0.58, 0.56, 0.52, 0.56, 0.47, 0.45)}
+    for ours, printed in ((PAPER_R, table1), (PAPER_MAE, table2)):
+        for model, row in printed.items():
+            got = [v for s in (1, 2) for o in ("speed_kn", "pitch_deg") for v in ours[(model, s, o)]]
+            assert got == list(row), model

@@ -68,11 +68,18 @@ def test_subspace_reproduces_known_poles():
     np.testing.assert_allclose(got, want, atol=1e-6)
 
 
-def test_state_space_model_free_run_follows_noise_free_system():
+@pytest.fixture(scope="module")
+def noise_free_ss():
+    """(model, U, Y): a state-space model fitted to a noise-free third-order system."""
     A, U, Y = _known_state_space(np.random.default_rng(4), N=1500)
     # the model delays its inputs by one sample: feed it inputs advanced by one
-    m = StateSpaceModel(order=3, block_rows=6).fit(np.vstack([U[1:], U[-1:]]), Y)
-    P = m.free_run(np.vstack([U[1:], U[-1:]]), Y, 20)
+    U1 = np.vstack([U[1:], U[-1:]])
+    return StateSpaceModel(order=3, block_rows=6).fit(U1, Y), U1, Y
+
+
+def test_state_space_model_free_run_follows_noise_free_system(noise_free_ss):
+    m, U1, Y = noise_free_ss
+    P = m.free_run(U1, Y, 20)
     # the error of the 20-sample state estimate dies out with the poles (|z| <= 0.92); what is
     # left is the subspace estimate's own small bias (about 0.1 % here)
     assert np.max(np.abs(P[300:] - Y[300:])) < 5e-3 * np.abs(Y).max()
@@ -117,3 +124,67 @@ def test_narx_holds_out_at_least_one_row_for_early_stopping():
     m = NARXModel(NARXConfig(n_out=2, n_in=2, val_fraction=0.01, max_iter=40, restarts=1)).fit(U, Y)
     err = np.abs(m.one_step(U, Y)[2:] - Y[2:]).mean()
     assert np.isfinite(err) and err < np.abs(Y[2:] - Y[2:].mean(0)).mean()
+
+
+def test_arx_model_free_run_exact_with_several_lags_and_a_longer_delay():
+    """Higher orders (ARX321, as in the paper) and a delay of 2 samples: the lags are taken newest
+    first and the model needs ``max(na, nk + nb - 1)`` initial rows; noise-free data are reproduced."""
+    rng = np.random.default_rng(6)
+    A = np.array([[[0.5, 0.1], [-0.05, 0.3]], [[0.2, 0.0], [0.05, -0.1]], [[-0.1, 0.02], [0.0, 0.05]]])
+    B = np.array([[[1.0, 0.0, 0.3], [0.2, -0.5, 0.1]], [[0.4, 0.1, 0.0], [0.0, 0.3, -0.2]]])
+    U = rng.standard_normal((400, 3))
+    for nk in (1, 2):
+        Y = _simulate_arx(A, B, U, nk=nk)
+        m = ARXModel(3, 2, nk).fit(U, Y)
+        assert m.n_init == 3 and ARXModel(1, 3, nk).n_init == nk + 2
+        np.testing.assert_allclose(m.free_run(U, Y, 10)[10:], Y[10:], atol=1e-8)
+        np.testing.assert_allclose(m.one_step(U, Y)[10:], Y[10:], atol=1e-8)
+
+
+def test_kalman_gain_of_a_scalar_system_by_hand():
+    """``x+ = 0.8 x + w``, ``y = x + v`` with ``Q = 1``, ``R = 1``, ``S = E[w v] = 0.5``: the
+    predictor Riccati equation ``P = a^2 P + Q - (a P + S)^2 / (P + R)`` reduces to
+    ``P^2 + 0.16 P - 0.75 = 0``, and ``K = (a P + S) / (P + R)``."""
+    from hybridship.hsc.identification import StateSpaceParameters
+
+    one = np.ones((1, 1))
+    p = StateSpaceParameters(A=0.8 * one, B=one, C=one, D=0 * one, Q=one, R=one, S=0.5 * one)
+    P = (-0.16 + np.sqrt(0.16 ** 2 + 3.0)) / 2.0                  # 0.7897
+    assert p.kalman_gain()[0, 0] == pytest.approx((0.8 * P + 0.5) / (P + 1.0), rel=1e-6)
+
+
+def test_state_space_one_step_locks_onto_a_noise_free_system(noise_free_ss):
+    """The Kalman predictor's measurement feedback brings the one-step predictions onto the data within
+    25 samples (without it the state error would only die out with the poles, |z| <= 0.92: hundreds)."""
+    m, U1, Y = noise_free_ss
+    P = m.one_step(U1, Y)
+    assert np.max(np.abs(P[25:] - Y[25:])) < 5e-3 * np.abs(Y).max()
+
+
+def test_narx_with_more_input_than_output_lags_starts_after_the_longest():
+    """``n_in > n_out``: the first prediction needs ``n_in`` rows of history."""
+    rng = np.random.default_rng(7)
+    U, Y = rng.uniform(-1, 1, (60, 3)), rng.uniform(-1, 1, (60, 2))
+    m = NARXModel(NARXConfig(n_out=1, n_in=3, max_iter=5, restarts=1)).fit(U, Y)
+    assert m.n_init == 3
+    P = m.one_step(U, Y)
+    assert np.isnan(P[:3]).all() and np.isfinite(P[3:]).all()
+
+
+def test_a_constant_input_column_is_standardised_without_dividing_by_zero():
+    """A record with the trim device held (a constant PWM column) still gives exact ARX predictions."""
+    rng = np.random.default_rng(9)
+    U = rng.standard_normal((300, 3))
+    U[:, 1] = 55.0
+    Y = _simulate_arx(np.array([[[0.6, 0.1], [0.0, 0.4]]]), np.array([[[0.5, 0.0, 0.0], [0.0, 0.0, 0.4]]]), U)
+    m = ARXModel(1, 1, 1).fit(U, Y)
+    np.testing.assert_allclose(m.one_step(U, Y)[5:], Y[5:], atol=1e-8)
+
+
+def test_subspace_block_rows_need_only_cover_the_order_with_all_outputs():
+    """``block_rows * ny >= order``: 2 block rows of 2 outputs identify a third-order system; 1 is refused."""
+    A, U, Y = _known_state_space(np.random.default_rng(3), N=600)
+    p = fit_subspace(U, Y, order=3, block_rows=2)
+    assert p.A.shape == (3, 3)
+    with pytest.raises(ValueError, match="block_rows"):
+        fit_subspace(U, Y, order=3, block_rows=1)

@@ -35,3 +35,9 @@ def test_nonfinite_prediction_scores_nan_and_sizes_checked():
 def test_nonfinite_measurement_refused():
     with pytest.raises(ValueError, match="^y_true"):
         score([1.0, np.nan, 3.0], [1.0, 2.0, 3.0])
+
+
+def test_a_single_sample_is_not_scored():
+    """R needs at least two samples: one is refused rather than scored."""
+    with pytest.raises(ValueError, match="at least two samples"):
+        score([1.0], [1.0])

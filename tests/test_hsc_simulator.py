@@ -5,7 +5,7 @@ import math
 import numpy as np
 import pytest
 
-from hybridship.hsc.simulator import KNOT_M_S, PlaningCraftModel, SeaConditions, savitsky_planing
+from hybridship.hsc.simulator import KNOT_M_S, PlaningCraftModel, SeaConditions, savitsky_planing, smoothstep
 from hybridship.hsc.trials import generate_trial, paper_trial
 from hybridship.hsc.vessel import PlaningCraftFileError, load_planing_craft, planing_craft_from_dict
 
@@ -150,3 +150,281 @@ def test_gps_delay_must_be_whole_samples(craft):
     data["sensors"]["gps_delay_s"] = 2.05
     with pytest.raises(PlaningCraftFileError, match="gps_delay_s"):
         planing_craft_from_dict(data, "x.toml")
+
+
+def test_a_knot_is_one_nautical_mile_an_hour():
+    """1 kn = 1852 m / 3600 s; the steady state's knots and degrees are the SI values converted."""
+    from hybridship.hsc.simulator import SteadyState
+
+    assert KNOT_M_S == pytest.approx(0.514444, abs=1e-6)
+    s = SteadyState(3000.0, 0.0, speed_m_s=20.5778, trim_rad=math.radians(3.5), heave_m=0.0, thrust_n=0.0)
+    assert s.speed_kn == pytest.approx(40.0, abs=1e-3) and s.trim_deg == pytest.approx(3.5)
+
+
+def test_savitsky_planing_follows_the_published_equations_by_hand():
+    """Savitsky (1964) at V = 15 m/s, tau = 4 deg, d = 0.5 m, b = 2.9 m, beta = 20 deg, worked step by step."""
+    b, d, rho, nu = 2.9, 0.5, 1025.0, 1.19e-6
+    tau, beta = math.radians(4.0), math.radians(20.0)
+    lk = d / math.sin(tau)                                          # keel wetted length, 7.1678 m
+    lc = lk - b * math.tan(beta) / (math.pi * math.tan(tau))        # chine wetted length, 2.3630 m
+    lam = (lk + lc) / (2 * b)                                       # mean wetted length / beam
+    assert lam == pytest.approx(1.6432, abs=1e-4)
+    cv = 15.0 / math.sqrt(9.81 * 2.9)                               # speed coefficient, 2.8122
+    cl0 = 4.0 ** 1.1 * (0.0120 * lam ** 0.5 + 0.0055 * lam ** 2.5 / cv ** 2)   # tau in degrees
+    clb = cl0 - 0.0065 * 20.0 * cl0 ** 0.6                          # beta in degrees
+    lp = lam * b * (0.75 - 1 / (5.21 * cv ** 2 / lam ** 2 + 2.39))
+    cl_dyn = 0.0120 * lam ** 0.5 * 4.0 ** 1.1
+    cl_dyn -= 0.0065 * 20.0 * cl_dyn ** 0.6
+    vm = 15.0 * math.sqrt(1 - cl_dyn / (lam * math.cos(tau)))       # mean bottom velocity
+    cf = 0.075 / (math.log10(vm * lam * b / nu) - 2) ** 2 + 0.0004   # ITTC-1957 + Delta C_F
+    lift, got_lp, friction, got_lam = savitsky_planing(15.0, tau, d, b, beta, rho, nu)
+    assert got_lam == pytest.approx(lam, rel=1e-9)
+    assert lift == pytest.approx(0.5 * rho * 15.0 ** 2 * b ** 2 * clb, rel=1e-9)
+    assert got_lp == pytest.approx(lp, rel=1e-9)
+    assert friction == pytest.approx(0.5 * rho * vm ** 2 * lam * b ** 2 * cf / math.cos(beta), rel=1e-9)
+    # the trim is floored at 0.5 deg; a flow angle adds to the trim of the lift coefficient only
+    assert savitsky_planing(15.0, math.radians(0.2), d, b, beta, rho, nu) == \
+        savitsky_planing(15.0, math.radians(0.5), d, b, beta, rho, nu)
+    tilted = savitsky_planing(15.0, tau, d, b, beta, rho, nu, flow_angle_rad=math.radians(1.0))
+    cl0 = 5.0 ** 1.1 * (0.0120 * lam ** 0.5 + 0.0055 * lam ** 2.5 / cv ** 2)
+    assert tilted[0] == pytest.approx(0.5 * rho * 15.0 ** 2 * b ** 2 * (cl0 - 0.13 * cl0 ** 0.6), rel=1e-9)
+    assert tilted[3] == pytest.approx(lam, rel=1e-9)
+
+
+def test_thrust_by_hand_and_zero_at_the_zero_thrust_advance_ratio(craft):
+    """``T = n_eng rho n_p^2 D^4 K_T0 (1 - J / J0) (1 - t)``, ``n_p = rpm / 60 / gear``, ``J = V (1 - w) / (n_p D)``."""
+    model = PlaningCraftModel(craft, "interceptor")
+    pr = craft.propellers
+    n_p = 3000.0 / 60.0 / pr.gear_ratio                            # 33.3 rev/s
+    static = 2 * 1025.0 * n_p ** 2 * pr.diameter_m ** 4 * pr.kt0 * (1 - pr.thrust_deduction)
+    assert model.thrust_n(3000.0, 0.0) == pytest.approx(static, rel=1e-12)
+    v_zero = pr.j0 * n_p * pr.diameter_m / (1 - pr.wake_fraction)   # J = J0: no thrust
+    assert model.thrust_n(3000.0, v_zero) == pytest.approx(0.0, abs=1e-6 * static)
+    assert model.thrust_n(3000.0, 0.5 * v_zero) == pytest.approx(0.5 * static, rel=1e-12)
+
+
+def test_trim_devices_forces_and_levers_by_hand(craft):
+    """Interceptor ``C 0.5 rho V^2 (n span stroke)`` at the transom; trim tabs after Savitsky & Brown
+    (1976): ``0.046 (l_f / b) delta sigma 0.5 rho V^2 b^2``, drag ``0.0052 L (tau + delta)`` (degrees),
+    0.6 b forward of the trailing edge."""
+    q = 0.5 * 1025.0 * 15.0 ** 2
+    ic, tt, h = craft.interceptor, craft.trim_tabs, craft.hull
+    lift, drag, lever = PlaningCraftModel(craft, "interceptor").actuator_forces(15.0, math.radians(3.0), 0.5)
+    area = ic.count * ic.span_m * 0.5 * ic.max_stroke_m
+    assert (lift, drag, lever) == pytest.approx((ic.lift_coefficient * q * area, ic.drag_coefficient * q * area,
+                                                 -h.lcg_m))
+    lift, drag, lever = PlaningCraftModel(craft, "trim_tab").actuator_forces(15.0, math.radians(3.0), 0.5)
+    b, delta = h.chine_beam_m, 0.5 * tt.max_deflection_deg
+    want = 0.046 * (tt.chord_m / b) * delta * (tt.count * tt.span_m / b) * q * b ** 2
+    assert lift == pytest.approx(want, rel=1e-12)
+    assert drag == pytest.approx(0.0052 * want * (3.0 + delta), rel=1e-12)
+    assert lever == pytest.approx(-h.lcg_m - tt.chord_m + 0.6 * b, rel=1e-12)
+
+
+@pytest.fixture(scope="module")
+def step_record(craft):
+    """60 samples (0.1 s) of the nominal craft: engine command 2000 -> 2600 rpm and PWM 10 -> 100 % after the first."""
+    return PlaningCraftModel(craft, "interceptor").simulate(np.r_[2000.0, np.full(59, 2600.0)],
+                                                            np.r_[10.0, np.full(59, 100.0)])
+
+
+def test_engine_speed_follows_a_step_with_its_first_order_lag(craft, step_record):
+    """A step of the rpm command gives ``rpm(t) = cmd + (rpm0 - cmd) exp(-t / time_constant)``."""
+    t = np.arange(1, 60) * 0.1
+    want = 2600.0 - 600.0 * np.exp(-t / craft.engines.time_constant_s)
+    np.testing.assert_allclose(step_record.rpm[1:], want, atol=1e-4)
+    assert step_record.rpm[0] == pytest.approx(2000.0)
+
+
+def test_heave_acceleration_is_up_positive(step_record):
+    """The record's heave acceleration is minus the second derivative of the CG depth (z down)."""
+    rec = step_record
+    acc = -np.diff(rec.heave_m, 2) / 0.1 ** 2                # up positive, centred on samples 1..N-2
+    mean_acc = 0.5 * (rec.heave_acc_m_s2[1:-1] + rec.heave_acc_m_s2[2:])  # each averaged over its sample
+    assert np.ptp(acc) > 0.02                                # the CG rises as the craft speeds up
+    assert np.corrcoef(acc, mean_acc)[0, 1] > 0.99
+
+
+def test_wave_elevation_rate_and_slope_are_those_of_the_surface_met(craft):
+    """``zeta_dot`` is the rate of the elevation met by the craft moving at ``u`` and ``slope`` its
+    gradient forward (head seas, encounter frequency ``omega + k u``): checked by finite differences."""
+    model = PlaningCraftModel(craft, "interceptor")
+    wave = model.make_wave_function(SeaConditions(hs_m=0.1, tp_s=3.0), 3)
+    u, h = 15.0, 1e-5
+    for X0, t0 in ((0.0, 0.0), (37.0, 4.2)):
+        model._t = t0
+        _, zeta_dot, slope = wave(X0, u)
+        z_back = wave(X0 - h, u)[0]
+        z_fwd = wave(X0 + h, u)[0]
+        model._t = t0 + h
+        z_later = wave(X0 + u * h, u)[0]
+        model._t = t0 - h
+        z_earlier = wave(X0 - u * h, u)[0]
+        assert slope == pytest.approx((z_fwd - z_back) / (2 * h), rel=1e-5, abs=1e-9)
+        assert zeta_dot == pytest.approx((z_later - z_earlier) / (2 * h), rel=1e-5, abs=1e-9)
+        assert abs(zeta_dot) > 1e-3
+
+
+def test_pwm_maps_linearly_and_the_device_moves_at_its_rate(craft, step_record):
+    """PWM 10 % -> 0 and 100 % -> 1 (linear between); a full-drive step moves the interceptor
+    ``dt / full_stroke_time`` per sample."""
+    model = PlaningCraftModel(craft, "interceptor")
+    np.testing.assert_allclose(model.pwm_to_fraction([0.0, 10.0, 55.0, 100.0]), [0.0, 0.0, 0.5, 1.0])
+    step = 0.1 / craft.interceptor.full_stroke_time_s
+    np.testing.assert_allclose(step_record.actuator_frac, np.minimum(np.arange(60) * step, 1.0), atol=1e-12)
+
+
+def test_the_true_boat_applies_each_perturbation_once(craft):
+    """``perturbed()`` adds the LCG offset and multiplies the five factors, then clears the perturbation."""
+    tp, t = craft.truth_perturbation, craft.perturbed()
+    assert t.hull.lcg_m == pytest.approx(craft.hull.lcg_m + tp.lcg_offset_m)
+    assert t.propellers.kt0 == pytest.approx(craft.propellers.kt0 * tp.kt0_factor)
+    assert t.hull.friction_factor == pytest.approx(craft.hull.friction_factor * tp.friction_factor)
+    assert t.interceptor.lift_coefficient == pytest.approx(craft.interceptor.lift_coefficient
+                                                           * tp.interceptor_lift_factor)
+    assert t.trim_tabs.lift_factor == pytest.approx(craft.trim_tabs.lift_factor * tp.trim_tab_lift_factor)
+    assert t.mass_kg == pytest.approx(craft.mass_kg * tp.displacement_factor)
+    assert t.perturbed() == t                                    # nothing left to apply
+
+
+@pytest.mark.parametrize("section,field,value", [("hull", "lcg_m", 9.5), ("hull", "chine_beam_m", 3.4)])
+def test_a_hull_outside_the_main_particulars_is_refused(craft, section, field, value):
+    """The CG must lie within the waterline length (9.4 m) and the chine beam within the beam (3.3 m)."""
+    data = craft.model_dump()
+    data[section][field] = value
+    with pytest.raises(PlaningCraftFileError, match=f"{section}.{field}"):
+        planing_craft_from_dict(data, "x.toml")
+
+
+def test_the_blend_is_a_c1_smooth_cubic():
+    """``3 t^2 - 2 t^3`` between the two speeds: 0 and 1 outside, 5/32 at a quarter, flat at both ends."""
+    assert smoothstep(6.0, 7.0, 13.0) == 0.0 and smoothstep(14.0, 7.0, 13.0) == 1.0
+    assert smoothstep(8.5, 7.0, 13.0) == pytest.approx(5 / 32)
+    assert smoothstep(11.5, 7.0, 13.0) == pytest.approx(27 / 32)
+    h = 1e-4
+    for x in (7.0, 13.0):
+        assert abs(smoothstep(x + h, 7.0, 13.0) - smoothstep(x - h, 7.0, 13.0)) < 1e-6
+
+
+def test_trials_have_the_papers_sizes_the_imu_bias_in_radians_and_the_speed_realigned(craft):
+    """Sec. 4 of the paper: 3150 samples (2050 training) in sea state 1, 13580 (8600) in sea state 2;
+    the logged pitch is the true pitch plus the vessel file's mounting bias and noise, given in degrees,
+    and the GPS speed re-aligned to the sample it was measured at."""
+    assert (paper_trial(1).n_samples, paper_trial(1).n_train) == (3150, 2050)
+    assert (paper_trial(2).n_samples, paper_trial(2).n_train) == (13580, 8600)
+    trial = generate_trial(paper_trial(1, scale=0.03), craft)
+    err = trial.data.pitch_rad.to_numpy() - trial.truth.pitch_rad
+    s = craft.sensors
+    assert np.mean(err) == pytest.approx(math.radians(s.imu_pitch_bias_deg), abs=4 * math.radians(0.1) / 14)
+    assert np.std(err) == pytest.approx(math.radians(s.imu_pitch_noise_deg), rel=0.2)
+    # the re-aligned speed's error is noise alone: a sample off would leave minus the speed change in it
+    change = np.diff(trial.truth.speed_m_s)
+    err = trial.data.speed_m_s.to_numpy()[1:] - trial.truth.speed_m_s[1:]
+    assert np.std(change) > s.gps_speed_noise_m_s and abs(err @ change / (change @ change)) < 0.3
+
+
+def _tilted_drives(craft, shaft_deg=4.0):
+    data = craft.model_dump()
+    data["propellers"]["shaft_angle_deg"] = shaft_deg
+    return planing_craft_from_dict(data)
+
+
+@pytest.mark.parametrize("zeta,slope", [(0.0, 0.0), (0.05, 0.02)])
+def test_planing_forces_and_moment_from_their_points_of_application(craft, zeta, slope):
+    """Steady planing (w = q = 0, 15 m/s, trim 4 deg): each force where the module notes put it, summed
+    with ``M = z_F F_x - x_F F_z`` (body axes, x forward, z down) and turned to earth axes with gravity.
+    A sea surface (elevation ``zeta`` up at mid wetted length, rising forward with ``slope``) raises the
+    transom immersion by its height at the transom and lowers the trim seen by the bottom by the slope."""
+    c = _tilted_drives(craft)
+    model = PlaningCraftModel(c, "interceptor")
+    h, pr, u, z, th, rpm = c.hull, c.propellers, 15.0, -0.45, math.radians(4.0), 3000.0
+    lcg, vcg, b = h.lcg_m, h.vcg_m, h.chine_beam_m
+    x_mid = -lcg + h.added_mass_length_m / 2                         # mid wetted length
+    d = z + vcg * math.cos(th) + lcg * math.sin(th) + zeta + slope * (-lcg - x_mid)   # keel depth at the transom
+    tau = th - slope
+    lift, lp, fric, _ = savitsky_planing(u, tau, d, b, h.deadrise_rad, 1025.0, 1.19e-6, h.correlation_allowance)
+    assert lift > 0 and d > 0
+    la, da, xa = model.actuator_forces(u, tau, 0.5)
+    T, eps = model.thrust_n(rpm, u), math.radians(4.0)
+    a = vcg - b * math.tan(h.deadrise_rad) / 4                       # friction line below the CG
+    x_prop, z_prop = -lcg - pr.x_aft_of_transom_m, vcg + pr.z_below_keel_m
+    forces = [((lp - lcg, vcg), (0.0, -lift / math.cos(tau))),      # normal force on the bottom
+              ((0.0, a), (-fric, 0.0)),                               # friction along the keel
+              ((x_prop, z_prop), (T * math.cos(eps), -T * math.sin(eps))),   # thrust line, bow-up
+              ((xa, vcg), (-da, -la))]                               # the device at the transom
+    fxb = sum(f[0] for _, f in forces)
+    fzb = sum(f[1] for _, f in forces)
+    moment = sum(p[1] * f[0] - p[0] * f[1] for p, f in forces)
+    mg = c.mass_kg * 9.81
+    fx, fz, m = model.forces(u, z, 0.0, th, 0.0, rpm, 0.5, zeta=zeta, slope=slope)
+    assert fx == pytest.approx(fxb * math.cos(th) + fzb * math.sin(th), rel=1e-9)
+    assert fz == pytest.approx(-fxb * math.sin(th) + fzb * math.cos(th) + mg, rel=1e-9)
+    assert m == pytest.approx(moment, rel=1e-9)
+
+
+def test_heave_and_pitch_damping_and_added_mass_of_a_hull_clear_of_the_water(craft):
+    """Out of the water (no Savitsky forces) at 15 m/s only the 2D+t terms change with ``w`` and ``q``:
+    transom force ``-U a33 v_T`` (``v_T = w + lcg q``) with its moment, and ``U (A33 w - S1 q)`` of the
+    sections ahead; the accelerations divide by mass plus ``A33 = a33 L`` and ``I55 + A55``."""
+    model = PlaningCraftModel(craft, "interceptor")
+    h, u = craft.hull, 15.0
+    a33 = 1025.0 * math.pi / 2 * (h.chine_beam_m / 2) ** 2           # wedge added mass per metre
+    L, lcg = h.added_mass_length_m, h.lcg_m
+    xT = -lcg
+    A33, S1 = a33 * L, a33 * ((xT + L) ** 2 - xT ** 2) / 2
+    A55 = a33 * ((xT + L) ** 3 - xT ** 3) / 3
+    base = np.array(model.forces(u, -1.0, 0.0, 0.0, 0.0, 3000.0, 0.0))
+    for w, q in ((0.2, 0.0), (0.0, 0.1)):
+        got = np.array(model.forces(u, -1.0, w, 0.0, q, 3000.0, 0.0)) - base
+        f_transom = -u * a33 * (w + lcg * q)
+        np.testing.assert_allclose(got, [0.0, f_transom, lcg * f_transom + u * (A33 * w - S1 * q)], atol=1e-6)
+    y = [0.0, u, -1.0, 0.2, 0.0, 0.1, 3000.0]
+    fx, fz, m = model.forces(u, -1.0, 0.2, 0.0, 0.1, 3000.0, 0.0)
+    dy = model.derivatives(y, 3000.0, 0.0)
+    I55 = craft.mass_kg * h.pitch_gyration_radius_m ** 2
+    assert dy[3] == pytest.approx(fz / (craft.mass_kg + A33)) and dy[5] == pytest.approx(m / (I55 + A55))
+    assert dy[1] == pytest.approx(fx / (1.05 * craft.mass_kg))
+
+
+def test_below_planing_speed_only_the_displacement_model_acts(craft):
+    """At 3 m/s (under ``blend_start_kn``), floating at its draft and at the dynamic trim
+    ``hump_trim (V / V_hump)^2``: buoyancy balances the weight, no pitch restoring moment is left, and
+    the resistance is ``hump_resistance_ratio m g (V / V_hump)^2``."""
+    model = PlaningCraftModel(craft, "interceptor")
+    dm, u, rpm = craft.displacement_mode, 3.0, 1200.0
+    ratio = (u / (dm.hump_speed_kn * KNOT_M_S)) ** 2
+    th = math.radians(dm.hump_trim_deg) * ratio
+    z = craft.particulars.draft_m - craft.hull.vcg_m * math.cos(th)
+    T = model.thrust_n(rpm, u)
+    fx, fz, m = model.forces(u, z, 0.0, th, 0.0, rpm, 0.0)
+    assert fx == pytest.approx(T * math.cos(th) - dm.hump_resistance_ratio * craft.mass_kg * 9.81 * ratio, rel=1e-9)
+    assert fz == pytest.approx(-T * math.sin(th), rel=1e-9)
+    assert m == pytest.approx((craft.hull.vcg_m + craft.propellers.z_below_keel_m) * T, rel=1e-9)
+
+
+def test_the_documented_limits_of_engine_speed_and_wave_height(craft):
+    """Equilibria up to twice ``max_rpm`` (8000 rpm); waves up to ``MAX_HS_M`` = 0.1 m unless asked for."""
+    model = PlaningCraftModel(craft, "interceptor")
+    for call, field in ((lambda: model.steady_state(8000.5), "rpm"), (lambda: SeaConditions(hs_m=0.11), "hs_m")):
+        with pytest.raises(ValueError, match=rf"^{field}\b"):
+            call()
+    assert SeaConditions(hs_m=0.1).hs_m == 0.1 and SeaConditions(hs_m=0.11, beyond_validity=True).hs_m == 0.11
+
+
+def test_waves_are_averaged_over_the_wetted_length(craft):
+    """One wave component seen by a 4 m planing surface has ``|sinc(k L / 2)| = |sin(k L / 2) / (k L / 2)|``
+    of the amplitude seen at a point; ``omega`` and ``k`` follow from the elevation, its rate and slope."""
+    data = craft.model_dump()
+    data["hull"]["added_mass_length_m"] = 1e-3
+    point = PlaningCraftModel(planing_craft_from_dict(data), "interceptor")
+    model = PlaningCraftModel(craft, "interceptor")
+    sea = SeaConditions(hs_m=0.05, tp_s=6.0, n_components=1)
+    amp = []
+    for m in (model, point):
+        m._t = 0.3
+        zeta, zeta_dot, slope = m.make_wave_function(sea, 5)(0.0, 0.0)     # at rest: zeta_dot / slope = g / omega
+        omega = 9.81 * slope / zeta_dot
+        k = omega ** 2 / 9.81
+        amp.append(math.hypot(zeta, slope / k))
+    x = k * craft.hull.added_mass_length_m / 2
+    assert 0.5 < amp[0] / amp[1] == pytest.approx(abs(math.sin(x) / x), rel=1e-6)

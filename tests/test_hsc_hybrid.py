@@ -1,0 +1,112 @@
+"""The grey box of the hybrid surge/pitch model: propeller law, device rate, first-order pitch, unit checks."""
+
+import numpy as np
+import pytest
+
+from hybridship.hsc.hybrid import GreyBox, GreyBoxTables, HybridModel
+from hybridship.hsc.simulator import PlaningCraftModel
+from hybridship.hsc.vessel import load_planing_craft
+
+#: Running trim of the hand-made tables [rad] for the device retracted, half and fully out.
+TRIMS = (0.05, 0.04, 0.03)
+
+
+@pytest.fixture(scope="module")
+def craft():
+    return load_planing_craft()
+
+
+@pytest.fixture(scope="module")
+def tables():
+    """Hand-made equilibria: resistance 2 kN + 40 N s/m x V (+1 kN with the device out), trims :data:`TRIMS`."""
+    v = np.arange(0.0, 26.25, 0.25)
+    res = np.array([2000.0 + 40.0 * v + 1000.0 * a for a in (0.0, 0.5, 1.0)])
+    trim = np.array([np.full(v.size, t) for t in TRIMS])
+    return GreyBoxTables(0.0, 0.25, np.array([0.0, 0.5, 1.0]), res, trim)
+
+
+@pytest.fixture(scope="module")
+def grey(craft, tables):
+    return GreyBox(craft, "interceptor", tables)
+
+
+def test_grey_box_thrust_is_the_simulators_propeller_law(craft, grey):
+    """``c1 n^2 - c2 n V`` (n in rpm) is the simulator's thrust, falling with speed to zero at J0."""
+    model = PlaningCraftModel(craft, "interceptor")
+    for rpm, v in ((1000.0, 0.0), (2500.0, 7.5), (4000.0, 20.0)):
+        assert grey.c1 * rpm ** 2 - grey.c2 * rpm * v == pytest.approx(model.thrust_n(rpm, v), rel=1e-12)
+
+
+def test_grey_box_device_moves_at_its_rate_from_the_commands_before_each_sample(craft, grey):
+    """A PWM step 10 -> 100 % at sample 1: the fraction during sample k is ``(k - 1) dt / full_stroke_time``."""
+    a = grey.actuator_fraction(np.r_[10.0, np.full(29, 100.0)])
+    step = 0.1 / craft.interceptor.full_stroke_time_s
+    np.testing.assert_allclose(a, np.r_[0.0, np.minimum(np.arange(29) * step, 1.0)], atol=1e-12)
+
+
+def test_grey_box_pitch_approaches_the_device_trim_exponentially(grey):
+    """At the nominal parameters the pitch tends to the table's trim at the device setting with
+    the 0.5 s time constant: ``theta_k = theta_ss (1 - exp(-k dt / 0.5))``."""
+    U = np.column_stack([np.full(20, 3000.0), np.full(20, 100.0), np.zeros(20)])    # device fully out
+    sim = grey.simulate(U, (15.0, 0.0))
+    k = np.arange(20)
+    np.testing.assert_allclose(sim[:, 1], TRIMS[2] * (1 - np.exp(-k * 0.1 / 0.5)), atol=1e-12)
+    U[:, 1] = 55.0                                                                  # half out
+    assert grey.simulate(U, (15.0, TRIMS[1]))[-1, 1] == pytest.approx(TRIMS[1], abs=1e-12)
+
+
+def test_grey_box_rates_by_hand(craft, grey):
+    """``dV/dt = (T - R) / ((m + A11) p_m)`` with the surge added mass 5 % of the mass, and the
+    trim's thrust-surplus term ``p_thT (T - R) / (m g)``."""
+    p = np.array([1.0, 1.0, 1.0, 1.0, 2.0, 0.0, 1.0, 1.0, 0.5, 0.5])
+    rpm, v = 3000.0, 10.0
+    surplus = PlaningCraftModel(craft, "interceptor").thrust_n(rpm, v) - (2000.0 + 40.0 * v + 1000.0)
+    dv, th_ss, got = grey.rates(v, 0.0, rpm, 1.0, p)
+    m = craft.mass_kg
+    assert got == pytest.approx(surplus, rel=1e-9)
+    assert dv == pytest.approx(surplus / (1.05 * m * 2.0), rel=1e-9)
+    assert th_ss == pytest.approx(TRIMS[2] + 0.5 * surplus / (m * 9.81), rel=1e-9)
+
+
+def _record(n=40):
+    U = np.column_stack([np.linspace(2000.0, 3000.0, n), np.full(n, 60.0), np.zeros(n)])
+    Y = np.column_stack([np.linspace(8.0, 12.0, n), np.full(n, 0.05)])
+    return U, Y
+
+
+@pytest.mark.parametrize("which,col,value,limit,match", [
+    ("U", 0, 8100.0, 8000.0, r"^U: column 0 \(engine speed\) reaches 8100 rpm, beyond twice the craft's max_rpm"),
+    ("Y", 1, 0.6, 0.5, r"^Y: column 1 \(pitch\) reaches 0.6; expected radians"),
+])
+def test_the_hybrid_refuses_rpm_beyond_twice_max_and_pitch_beyond_half_a_radian(craft, tables, which, col, value,
+                                                                                 limit, match):
+    """Twice ``max_rpm`` (8000 rpm) and 0.5 rad are the documented limits of a craft record."""
+    U, Y = _record()
+    A = U if which == "U" else Y
+    A[5, col] = value
+    with pytest.raises(ValueError, match=match):
+        HybridModel(craft, "interceptor", tables=tables).fit(U, Y)
+    A[5, col] = limit
+    GreyBox(craft, "interceptor", tables).fit(U, Y, max_nfev=1)        # at the limit: accepted
+
+
+def test_tables_extend_below_idle_speed_as_v_squared_and_v_to_rest(craft):
+    """Below the idle-speed equilibrium (about 2.1 m/s) the resistance falls as ``V^2`` and the trim as
+    ``V``, both to zero at rest; above the top speed they continue along the last segment."""
+    t = GreyBoxTables.from_craft(craft, "interceptor", n_rpm=3, act=(0.0,), dv_m_s=0.5)
+    v = t.v0_m_s + t.dv_m_s * np.arange(t.resistance_n.shape[1])
+    R, TH = t.resistance_n[0], t.trim_rad[0]
+    assert R[0] == 0.0 and TH[0] == 0.0
+    below = (v > 0) & (v < 2.0)
+    np.testing.assert_allclose(R[below] / v[below] ** 2, R[1] / v[1] ** 2, rtol=1e-12)
+    np.testing.assert_allclose(TH[below] / v[below], TH[1] / v[1], rtol=1e-12)
+    top = v >= 24.0                                    # beyond the speed at 1.05 max_rpm (about 22 m/s)
+    assert np.ptp(np.diff(R[top])) < 1e-9 * R[-1] and np.ptp(np.diff(TH[top])) < 1e-12
+
+
+def test_pwm_given_as_a_fraction_up_to_full_drive_is_refused(craft, tables):
+    """A PWM column of fractions 0.1..1 (1 = full drive, 100 %) is a unit slip: the device starts at 10 %."""
+    U, Y = _record()
+    U[:, 1] = np.linspace(0.1, 1.0, U.shape[0])
+    with pytest.raises(ValueError, match=r"^U: column 1 \(PWM\) lies within 0..1; .* look like a fraction"):
+        HybridModel(craft, "interceptor", tables=tables).fit(U, Y)
