@@ -50,6 +50,16 @@ def test_a_choice_that_does_not_carry_over_to_a_left_out_failure_is_not_kept():
     assert not one.adopted and one.error_left_out_deg is None     # no failure to check it on
 
 
+def test_a_choice_that_only_ties_zero_out_of_sample_is_not_kept():
+    """Kept only if the left-out error is *below* that of ``k = 0``: failure 0 wants +1, failure 1
+    wants -1; pooled, +1 wins (3/16 against 3/8 at 0), but each left out gets the other's
+    choice, 1/2 and 1/4, whose mean 3/8 only equals the error at 0 (binary fractions: exact)."""
+    obj = np.array([[0.5, 0.125], [0.375, 0.375], [0.125, 0.25]])        # rows: multiples -1, 0, 1
+    c = choose_coefficient(obj, 0.005, multiples=[-1.0, 0.0, 1.0])
+    assert c.munk_multiple == 1.0 and c.error_left_out_deg == c.error_zero_deg == pytest.approx(np.degrees(0.375))
+    assert not c.adopted and c.coefficient_rad_per_m2 == 0.0
+
+
 def test_bad_objectives_are_refused():
     with pytest.raises(ValueError, match=r"objective_rad: expected shape \(81, n_failures\)"):
         choose_coefficient(np.zeros((5, 3)), 0.005)
@@ -57,6 +67,29 @@ def test_bad_objectives_are_refused():
         choose_coefficient(np.full((81, 2), np.nan), 0.005)
     with pytest.raises(ValueError, match="must contain 0"):
         choose_coefficient(np.zeros((2, 3)), 0.005, multiples=[1.0, 2.0])
+    with pytest.raises(ValueError, match="must contain 0"):
+        choose_coefficient(np.zeros((3, 3)), 0.005, multiples=[0.0, 1.0, 0.0])
+    for bad in (3, -1):                                      # a failure the objective does not hold
+        with pytest.raises(ValueError, match=r"exclude: expected a failure from 0 to 2"):
+            choose_coefficient(np.zeros((81, 3)), 0.005, exclude=bad)
+
+
+def test_the_coefficient_is_the_added_mass_yaw_moment_per_u_v_of_fossen(model):
+    """``C_A(nu) nu`` in yaw is ``-(Y_vdot - X_udot) u v`` at ``r = 0`` (Fossen 2021, eq. 6.53);
+    moved to the right-hand side and divided by the total yaw inertia ``M_33`` it is the yaw
+    acceleration ``-c u v`` with ``c = (M_A22 - M_A11) / M_33``, positive for a hull longer
+    than wide (the Munk moment turns it broadside to the flow)."""
+    from hybridship.physics.hull import coriolis_added_mass
+
+    M_RB, M_A = mass_matrices(model.vessel)
+    X_udot, Y_vdot = -M_A[0, 0], -M_A[1, 1]
+    u, v = 1.5, -0.4
+    nu = np.array([u, v, 0.0])
+    yaw = (coriolis_added_mass(nu, M_A) @ nu)[2]
+    assert yaw == pytest.approx(-(Y_vdot - X_udot) * u * v, rel=1e-12)
+    c = munk_coefficient(model)
+    assert c > 0
+    assert -yaw / (M_RB + M_A)[2, 2] == pytest.approx(-c * u * v, rel=1e-12)
 
 
 def test_drift_starts_lie_in_the_first_drift_and_its_gap_free_segment():

@@ -99,3 +99,39 @@ def test_free_run_fit_of_the_hull_correction_lowers_its_loss(tmp_path):
     assert HybridPredictor.load(hp.save(tmp_path / "m.npz")).hull_fit == "multi_step"
     with pytest.raises(ValueError, match="hull_fit"):
         HybridPredictor(m.vessel, hull_correction=True, hull_fit="two_step")
+
+
+def test_each_regressor_is_the_product_its_name_says():
+    """Hand values for one feature vector: ``rL`` is r times the ship length, ``n`` the relative
+    rpm, ``d`` the rudder angle, ``urw``, ``vrw`` the relative wind's surge and sway parts."""
+    u, v, r, n, d, urw, vrw, L = -0.7, 0.3, -0.02, -0.4, 0.5, 2.0, -3.0, 30.0
+    full = np.zeros(len(ALL_FEATURES))
+    for name, x in (("u_hat_m_s", u), ("v_hat_m_s", v), ("r_hat_rad_s", r), ("rpm_main_rel", n),
+                    ("angle_main_rad", d), ("wind_rel_u_m_s", urw), ("wind_rel_v_m_s", vrw)):
+        full[ALL_FEATURES.index(name)] = x
+    rl, s = r * L, np.sin(d)
+    want = {"u|u|": u * abs(u), "v|v|": v * abs(v), "rL|rL|": rl * abs(rl), "u v": u * v, "u rL": u * rl,
+            "v rL": v * rl, "|v| rL": abs(v) * rl, "v |rL|": v * abs(rl), "v^2": v * v, "rL^2": rl * rl,
+            "u|u| sin d": u * abs(u) * s, "u n sin d": u * n * s, "n|n| sin d": n * abs(n) * s,
+            "u^2 sin^2 d": u * u * s * s, "n^2 sin^2 d": n * n * s * s, "n|n|": n * abs(n), "u n": u * n,
+            "urw|urw|": urw * abs(urw), "vrw|vrw|": vrw * abs(vrw), "urw vrw": urw * vrw}
+    assert set(want) == set(HULL_REGRESSORS)
+    np.testing.assert_allclose(hull_regressors(full, L), [want[k] for k in HULL_REGRESSORS], rtol=1e-14)
+
+
+def test_the_torch_correction_equals_numpy_and_a_zeroed_one_corrects_nothing():
+    """``predict_torch`` with the fitted ``theta``, offset is ``predict``; ``zeroed`` keeps the
+    standardisation and gives zero; a model file's zero or negative scale is refused."""
+    torch = pytest.importorskip("torch")
+    rng = np.random.default_rng(2)
+    full = _features(rng, 300)
+    h = HullCorrection.fit(full, rng.normal(0, 1e-3, (300, 3)) + np.array([1e-3, -2e-3, 5e-4]), 3.0)
+    got = h.predict_torch(torch.tensor(full), torch.tensor(h.theta), torch.tensor(h.offset)).numpy()
+    np.testing.assert_allclose(got, h.predict(full), rtol=1e-12, atol=1e-15)
+    z = h.zeroed()
+    np.testing.assert_array_equal(z.predict(full), 0.0)
+    np.testing.assert_array_equal(z.phi_std, h.phi_std)
+    arrays = h.arrays()
+    arrays["hull_phi_std"] = np.where(np.arange(len(HULL_REGRESSORS)) == 3, 0.0, arrays["hull_phi_std"])
+    with pytest.raises(ValueError, match="non-positive scale"):
+        HullCorrection.from_arrays(arrays, 3.0, 1e-3)

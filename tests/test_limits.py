@@ -157,3 +157,31 @@ def test_a_rudder_beyond_either_stop_is_clipped_to_it():
     np.testing.assert_array_equal(c.clipped_fields["azimuth_rad"], [True, False])
     with pytest.raises(InputRangeError, match=r"azimuth_rad\[batch 0, rudder 'rudder'\]: -1.2 is outside"):
         check_or_clip_inputs("esso_osaka_model", mode="refuse", azimuth_rad=[[0.0, -1.2], [0.0, -0.3]])
+
+
+def test_commands_exactly_at_their_limits_pass_unflagged():
+    """``max_rpm`` and the rudder's stop are allowed values (the fault is ``|x| > limit``), and
+    ``rpm_refuse_factor x max_rpm`` is still clipped, not refused as a unit error."""
+    env = envelope_for(MODEL)
+    for mode in ("clip", "refuse"):
+        c = check_or_clip_inputs(MODEL, mode=mode, rpm=[MAX_RPM, -MAX_RPM])
+        np.testing.assert_array_equal(c.rpm, [MAX_RPM, -MAX_RPM])
+        assert not c.clipped.any()
+    c = check_or_clip_inputs(MODEL, rpm=env.rpm_refuse_factor * MAX_RPM)
+    np.testing.assert_array_equal(c.rpm, MAX_RPM)
+    assert c.clipped.all()
+    lim = envelope_for("esso_osaka_model").max_angle_rad[1]
+    for mode in ("clip", "refuse"):
+        c = check_or_clip_inputs("esso_osaka_model", mode=mode, azimuth_rad=[[0.0, lim], [0.0, -lim]])
+        np.testing.assert_array_equal(c.azimuth_rad[:, 1], [lim, -lim])
+        assert not c.clipped.any()
+
+
+def test_angles_are_wrapped_before_the_rudder_stop_is_judged():
+    """A rudder angle one turn away from a small one is that angle (not beyond the stop), and a
+    thruster direction comes back in [-pi, pi), the same direction, neither flagged."""
+    c = check_or_clip_inputs("esso_osaka_model", mode="refuse", azimuth_rad=[4.0, 2 * np.pi + 0.1])
+    np.testing.assert_allclose(c.azimuth_rad, [4.0 - 2 * np.pi, 0.1], rtol=1e-12)
+    assert not c.clipped.any()
+    with pytest.raises(ValueError, match="azimuth_rad: width 3 does not match the vessel's 2 command channels"):
+        check_or_clip_inputs("esso_osaka_model", azimuth_rad=[0.0, 0.1, 0.2])

@@ -211,3 +211,12 @@ def test_held_load_rows_end_before_the_start_during_station_keeping():
     dp = np.ones(100, int)
     rows = held_load_rows(dp, 60, 1, 30)
     assert rows.max() == 59 and rows.min() == 30 and rows.size == 30
+
+
+def test_held_load_rows_leave_out_an_earlier_drift_in_the_window():
+    """A window reaching back over an earlier stretch without station keeping keeps only the
+    station-keeping rows: a drift's estimates do not measure the held load."""
+    dp = np.array([1] * 10 + [0] * 10 + [1] * 30 + [0] * 5)
+    rows = held_load_rows(dp, 52, 1, 40)
+    np.testing.assert_array_equal(rows, np.arange(20, 50))
+    np.testing.assert_array_equal(held_load_rows(dp, 52, 3, 40), np.arange(22, 50, 3))

@@ -565,3 +565,65 @@ def test_arguments_are_checked(model, log):
         assess_start_window(arrays, [len(arrays)])
     with pytest.raises(ValueError, match="window_s"):
         assess_start_window(arrays, [5], window_s=0.0)
+
+
+def _at_rest(n: int = 60, **columns) -> pd.DataFrame:
+    """A 1-Hz log of a ship at rest heading north (adrift, no thrust), every value exact; ``columns`` overrides."""
+    df = pd.DataFrame({"time_s": np.arange(float(n)), "north_m": 0.0, "east_m": 0.0, "heading_deg": 0.0,
+                       "u_m_s": 0.0, "v_m_s": 0.0, "r_deg_s": 0.0, "dp_active": 0})
+    for name, values in columns.items():
+        df[name] = values
+    return df
+
+
+def test_a_position_step_of_exactly_jump_m_is_no_jump(model):
+    """The fault is a step the velocity misses by *more than* ``jump_m`` (5 m): a ship at rest whose
+    position steps 5 m north (exact in binary) is not flagged; 5.5 m is."""
+    for step, flagged in ((5.0, False), (5.5, True)):
+        north = np.where(np.arange(60) >= 30, step, 0.0)
+        arrays, order = forecast_log_arrays(_at_rest(north_m=north), model.vessel)
+        sw = assess_start_window(arrays, [31, 45], 3.0, order=order, on_refuse="flag")
+        assert list(sw.flags[F.POSITION_JUMP]) == [flagged, False], step
+
+
+def test_a_fix_is_frozen_once_the_logged_speed_moves_the_ship_frozen_motion_m(model):
+    """Position contradicted by the logged speed *by 2 m or more* (``frozen_motion_m``): 0.5 m/s
+    over rows 20..23 integrates (trapezoid) to exactly 2 m, and the unchanged fix is frozen; over
+    rows 20..22 to 1.5 m, and it is not. The note names the position, and the logged v,
+    bit-identical meanwhile, which the track contradicts by as much."""
+    for last, frozen in ((23, True), (22, False)):
+        u = np.where((np.arange(60) >= 20) & (np.arange(60) <= last), 0.5, 0.0)
+        arrays, order = forecast_log_arrays(_at_rest(u_m_s=u), model.vessel)
+        sw = assess_start_window(arrays, [30], 3.0, order=order, on_refuse="flag")
+        assert ("position (the logged speed says the ship moved)" in sw.notes[0]) == frozen, sw.notes
+        assert ("v_m_s (disagrees with the track)" in sw.notes[0]) == frozen          # v: 0 m/s for 30 s
+
+
+def test_a_frozen_yaw_rate_is_derived_from_the_headings(model):
+    """A ship turning on the spot at 1 deg/s whose logged ``r`` stays at 0: r is frozen (the
+    headings say it turned), and the start's r is the headings' turn over the window's time."""
+    t = np.arange(60.0)
+    arrays, order = forecast_log_arrays(_at_rest(heading_deg=t, r_deg_s=0.0), model.vessel)
+    sw = assess_start_window(arrays, [30], 3.0, order=order, on_refuse="flag")
+    assert sw.flags[F.FROZEN_SENSOR][0] and "r_deg_s" in sw.notes[0]
+    assert sw.nu0[0, 2] == pytest.approx(np.radians(1.0), rel=1e-12)
+
+
+def test_a_heading_excursion_twice_the_lookback_long_is_not_a_lasting_shift(model, log):
+    """A gyro away by 60 deg for 15 s (more than ``lookback_s``, less than twice it) and back:
+    once the return lies before the window, the pair is still seen as one excursion (the span
+    looked at reaches back ``3 lookback_s``), so no start after it is flagged as shifted."""
+    df = _shift("heading_deg", slice(T, T + 14), 60.0)(log.copy())
+    _, sw = _assess(model, df, np.arange(T + 18, T + 30, dtype=float), on_refuse="flag")
+    assert not sw.flags[F.HEADING_JUMP].any()
+
+
+def test_window_settings_accept_their_documented_edges():
+    """``min_valid_fraction`` in (0, 1]: every sample valid may be asked for; ``heading_jump_deg``
+    in (0, 180): a step is at most 180 deg."""
+    from hybridship.forecast_inputs.faults import WindowSettings
+
+    assert WindowSettings(min_valid_fraction=1.0).min_valid_fraction == 1.0
+    for bad in (dict(min_valid_fraction=0.0), dict(min_valid_fraction=1.5), dict(heading_jump_deg=180.0)):
+        with pytest.raises(ValueError):
+            WindowSettings(**bad)

@@ -45,6 +45,28 @@ def test_no_axis_without_a_directed_wave_motion_or_enough_station_keeping():
     assert wave_axis(t, np.zeros(t.size), u, v) is None
 
 
+def test_no_axis_when_the_sampling_cannot_resolve_the_wave_band():
+    """Samples every 2 s put the Nyquist period at 4 s, above the band's shortest (3.5 s): no axis."""
+    t, u, v = _wave_motion(1200, 30.0)
+    assert wave_axis(t[::2], np.zeros(600), u[::2], v[::2]) is None
+    assert wave_axis(t, np.zeros(t.size), u, v) is not None
+
+
+def test_missing_velocity_samples_count_as_zero():
+    """A few NaN velocities (a dropped speed log) leave the axis where it is."""
+    t, u, v = _wave_motion(600, 30.0)
+    u[[100, 250, 251, 400]] = np.nan
+    v[[100, 250, 251, 400]] = np.nan
+    axis = wave_axis(t, np.zeros(t.size), u, v)
+    assert axis is not None and abs(np.degrees(axis.axis_ned_rad) - 30.0) < 1.0
+
+
+def test_a_station_heading_with_no_sin_2_beta_holds_the_load():
+    """``sin2_station = 0`` gives no amplitude: the factor is 1 (held), not a division by zero."""
+    factor = yaw_load_factor(np.radians([10.0, 70.0]), np.array([[np.radians(40.0), 0.0]] * 2))
+    np.testing.assert_array_equal(factor, [1.0, 1.0])
+
+
 def test_yaw_load_factor_follows_sin_2_beta_and_holds_without_an_axis():
     axis = np.array([[np.radians(40.0), np.sin(np.radians(80.0))], [np.nan, np.nan]])
     psi = np.radians([0.0, 0.0])

@@ -408,3 +408,57 @@ def test_starts_need_logged_wind_over_the_whole_horizon_in_one_segment():
     # a start at r uses rows r..r+5: none may be row 20, none may cross into segment 1 at row 30
     assert set(rows) == set(range(1, 15)) | set(range(21, 25)) | set(range(30, 35))
     assert not ok[20] and ok.sum() == n - 1
+
+
+def test_the_fit_scores_a_candidate_by_its_mean_vector_error_at_each_lead():
+    """A candidate's score, by hand: from each start, the forecast at lead ``k dt`` (``k = 1..H``)
+    against the logged wind vector ``k`` rows later, the mean taken over the usable samples
+    in ``(t - window, t]``."""
+    log = _gusty_log(10.0, n=300, seed=3)
+    wf, scores = fit_wind_forecast([log], 10.0, start_every_s=7.0, mean_windows_s=(30.0,), time_constants_s=(4.0,))
+    rows, ok = wind_starts(log, 10, 7)
+    vec, errors = _vec(log.wind), []
+    for r in rows:
+        past = ok & (log.time_s > log.time_s[r] - 30.0) & (log.time_s <= log.time_s[r])
+        mean = vec[past].mean(axis=0)
+        for k in range(1, 11):
+            errors.append(np.hypot(*(mean + (vec[r] - mean) * np.exp(-k / 4.0) - vec[r + k])))
+    assert scores["n_starts"] == len(rows) > 30
+    assert scores[(30.0, 4.0)] == pytest.approx(np.mean(errors), rel=1e-12)
+    assert scores[(30.0, None)] == pytest.approx(np.mean([np.hypot(*(vec[r] - vec[r + k])) for r in rows
+                                                          for k in range(1, 11)]), rel=1e-12)
+
+
+def test_the_held_wind_is_a_candidate_and_a_gain_under_one_percent_keeps_it():
+    """The held wind is scored even when the candidates leave it out, and a decay so slow that
+    it beats the held wind by less than ``MIN_IMPROVEMENT`` (here about 0.4 %) is not chosen."""
+    from hybridship.forecast_inputs.wind import MIN_IMPROVEMENT
+
+    wf, scores = fit_wind_forecast([_gusty_log(20.0, n=3000, seed=1)], 60.0, mean_windows_s=(120.0,),
+                                   time_constants_s=(3000.0,))
+    assert (120.0, None) in scores
+    gain = 1.0 - scores[(120.0, 3000.0)] / scores[(120.0, None)]
+    assert 0.0 < gain < MIN_IMPROVEMENT
+    assert wf == HELD_WIND
+
+
+def test_error_paths_need_every_step_logged_and_use_only_logged_wind_in_the_mean():
+    """A start's path covers rows ``r .. r + H - 1``: one unlogged row removes exactly the starts
+    whose path holds it. Unlogged rows before a start stay out of its forecast's mean."""
+    forecast = WindForecast(mean_window_s=20.0, time_constant_s=5.0)
+    a = _gusty_log(10.0, n=120, seed=4)
+    a.dt_s, a.wind_logged = 1.0, np.ones(120, bool)
+    H = 10
+    every = wind_error_paths(forecast, [a], H, every=1)
+    assert len(every) == 120 - H - 2                                            # starts 1 .. n - H - 2
+    a.wind_logged[60] = False                                                   # in the paths of starts 51..60
+    assert len(wind_error_paths(forecast, [a], H, every=1)) == len(every) - H
+    a.wind_logged[60] = True
+    a.wind_logged[40:50:2] = False                                              # filled in before the start 50
+    a.wind[40:50:2] = [[30.0, 2.5]]
+    paths = wind_error_paths(forecast, [a], H, every=50)                        # starts 1, 51 and 101
+    rows = np.array([51])
+    want = _vec(a.wind[51:61]) - _vec(forecast.steps(a.wind, a.time_s, rows, a.wind[rows], H, 1.0,
+                                                     logged=a.wind_logged))[0]
+    assert len(paths) == 3
+    np.testing.assert_allclose(paths[1], want, atol=1e-12)
