@@ -36,7 +36,7 @@ import sys
 import warnings
 from pathlib import Path
 
-from .fileio import path_argument
+from .fileio import path_argument, vessel_argument
 from .messages import problem_lines
 
 __all__ = ["main", "parse_seeds"]
@@ -139,7 +139,8 @@ def _add_simulate(sub) -> None:
         description="Simulate a vessel on DP that loses power and drifts; write the log(s) in the "
                     "project log format with truth_* columns. One scenario (--seed, --out) or a "
                     "sweep (--sweep --seeds, --out-dir).")
-    p.add_argument("--vessel", default="gunnerus", help="packaged vessel name or vessel file (default gunnerus)")
+    p.add_argument("--vessel", type=vessel_argument, default="gunnerus",
+                   help="packaged vessel name or vessel file (default gunnerus)")
     p.add_argument("--scenario", default="dp-loss", choices=_SCENARIOS, help="scenario type (default dp-loss)")
     p.add_argument("--seed", type=_seed, help="seed of a single scenario (non-negative)")
     p.add_argument("--out", type=path_argument, help="output log of a single scenario: .csv, .csv.gz, .parquet or .pq")
@@ -291,7 +292,7 @@ def _add_train(sub) -> None:
                        description="Train a hybrid predictor (physics of --vessel plus a residual ensemble) on "
                                    "a folder of logs and write it as one model file, which carries the vessel "
                                    "description: forecasting from it needs no vessel file.")
-    p.add_argument("--vessel", default="gunnerus",
+    p.add_argument("--vessel", type=vessel_argument, default="gunnerus",
                    help="packaged vessel name or vessel TOML file of the ship that made the logs (default "
                         "gunnerus; the physics the nets correct)")
     p.add_argument("--logs", required=True, type=Path, help="folder of logs (*.csv, *.csv.gz, *.parquet)")
@@ -530,7 +531,8 @@ def _add_benchmark(sub) -> None:
     d.add_argument("--train", type=Path, help="folder of training logs")
     d.add_argument("--test", type=Path, help="folder of test logs (default: the training logs' drifts)")
     d.add_argument("--out", type=path_argument, default=Path("drift-benchmark"), help="output folder (default drift-benchmark)")
-    d.add_argument("--vessel", default="gunnerus", help="packaged vessel name or vessel TOML file (default gunnerus)")
+    d.add_argument("--vessel", type=vessel_argument, default="gunnerus",
+                   help="packaged vessel name or vessel TOML file (default gunnerus)")
     d.add_argument("--members", type=_members, default=10, help="ensemble members (default 10)")
     d.add_argument("--seed", type=_seed, default=0, help="seed of scenarios and training (default 0)")
     d.add_argument("--intervals", type=int, default=20, help="start times after each failure (default 20)")
@@ -564,7 +566,7 @@ def _add_benchmark(sub) -> None:
                                     "(model,kind,commands,horizon_s,sigma,coverage), coverage_intervals.csv, "
                                     "coverage_heading.csv (the heading's spread), sharpness.csv and README.md to "
                                     "--out.")
-    m.add_argument("--vessel", default="esso_osaka_model",
+    m.add_argument("--vessel", type=vessel_argument, default="esso_osaka_model",
                    help="packaged vessel name or vessel TOML file (default esso_osaka_model)")
     m.add_argument("--train", required=True, type=Path, help="folder of training runs")
     m.add_argument("--test", required=True, type=Path, help="folder of test runs (never the training runs)")

@@ -22,6 +22,16 @@ def path_argument(text: str) -> Path:
     return Path(text)
 
 
+def vessel_argument(text: str) -> str:
+    """A command-line ``--vessel`` (argparse ``type=``): a packaged name or a file path, refused
+    when empty (the library's TypeError would name its Python argument, with exit status 1)."""
+    import argparse
+
+    if not str(text).strip():
+        raise argparse.ArgumentTypeError(f"expected a packaged vessel name or a vessel file, got {text!r}")
+    return text
+
+
 def as_path(value, name: str = "path") -> Path:
     """``value`` as a Path, or a TypeError naming ``name`` when it is not a path (None, a
     DataFrame, a number) rather than os.fspath's own message."""

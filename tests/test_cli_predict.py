@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from pathlib import Path
+
 import pandas as pd
 import pytest
 
@@ -41,7 +43,7 @@ def test_train_replaces_a_model_file_but_never_other_arrays(log_dir, tmp_path, c
     assert mine.read_bytes() == before and not is_model_file(mine)
 
 
-def test_train_then_forecast_writes_a_table(log_dir, tmp_path, capsys):
+def test_train_then_forecast_writes_a_table(log_dir, tmp_path, capsys, monkeypatch):
     model = tmp_path / "m.npz"
     assert main(["train", "--logs", str(log_dir), "--out", str(model), "--members", "2"]) == 0
     # two logs hold fewer failures than the after-failure calibration needs: train says so
@@ -57,6 +59,9 @@ def test_train_then_forecast_writes_a_table(log_dir, tmp_path, capsys):
                  "--start-time", "900", "--horizon-s", "30", "--no-guard", "--out", str(tmp_path / "ng.csv")]) == 0
     assert "guard off" in capsys.readouterr().out
     assert "guard_weight" not in pd.read_csv(tmp_path / "ng.csv")
+    _a_full_disk_keeps_the_earlier_table(monkeypatch, capsys, ["forecast", "--model", str(model), "--log",
+                                                               str(log_dir / "log1.csv.gz"), "--start-time", "910",
+                                                               "--horizon-s", "30", "--out", str(out)])
     # the forecast never replaces the log it reads, nor writes onto a folder
     log_copy = tmp_path / "log1.csv.gz"
     log_copy.write_bytes((log_dir / "log1.csv.gz").read_bytes())
@@ -82,6 +87,48 @@ def test_train_then_forecast_writes_a_table(log_dir, tmp_path, capsys):
     assert main(["train", "--logs", str(logs), "--out", str(logs / "a.csv.gz"), "--members", "2"]) == 2
     assert "expected a .npz model file" in capsys.readouterr().err
     assert (logs / "a.csv.gz").read_bytes() == (log_dir / "log1.csv.gz").read_bytes()
+
+
+def _a_full_disk_keeps_the_earlier_table(monkeypatch, capsys, argv):
+    """The disk fills up after 100 bytes of the new table: the command fails with status 1
+    naming the file, and the earlier table at ``--out`` is whole (written beside it, then
+    renamed), with no partial file left."""
+    import builtins
+    import errno
+    import io
+
+    out = Path(argv[-1])
+    before = out.read_bytes()
+    real_open = builtins.open
+
+    class Full:
+        def __init__(self, fh):
+            self.fh = fh
+
+        def write(self, data):
+            self.fh.write(bytes(data)[:100])
+            raise OSError(errno.ENOSPC, "No space left on device")
+
+        def __getattr__(self, name):
+            return getattr(self.fh, name)
+
+        def __enter__(self):
+            return self
+
+        def __exit__(self, *exc):
+            self.fh.close()
+
+    def full_disk(file, mode="r", *args, **kwargs):
+        fh = real_open(file, mode, *args, **kwargs)
+        return Full(fh) if out.name in str(file) and mode[:1] in "wx" else fh
+    capsys.readouterr()
+    with monkeypatch.context() as m:
+        m.setattr(builtins, "open", full_disk)
+        m.setattr(io, "open", full_disk)
+        assert main(argv) == 1
+    err = capsys.readouterr().err
+    assert f"{out}: cannot be written" in err and "Traceback" not in err, err
+    assert out.read_bytes() == before and sorted(p.name for p in out.parent.glob(f"*{out.name}*")) == [out.name]
 
 
 def test_cli_errors_are_one_line_and_non_zero(log_dir, tmp_path, capsys):

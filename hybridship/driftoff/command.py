@@ -12,7 +12,7 @@ import math
 import sys
 from pathlib import Path
 
-from ..fileio import check_out_folder, path_argument
+from ..fileio import check_out_folder, path_argument, vessel_argument
 from ..messages import problem_lines, seconds_text
 
 __all__ = ["add_parser"]
@@ -33,7 +33,8 @@ def _floats(text: str) -> list[float]:
 
 
 def _common(p, plots: bool = True) -> None:
-    p.add_argument("--vessel", default="gunnerus", help="packaged vessel name or vessel TOML file (default gunnerus)")
+    p.add_argument("--vessel", type=vessel_argument, default="gunnerus",
+                   help="packaged vessel name or vessel TOML file (default gunnerus)")
     p.add_argument("--radii-m", type=_floats, default=[3.0, 5.0, 10.0],
                    help="limit radii [m], comma-separated (default 3,5,10)")
     p.add_argument("--reaction-times-s", type=_floats, default=[30.0, 60.0],

@@ -1,0 +1,130 @@
+"""The drift-off command line: its options reach the computation unchanged (the report is the
+API's on the same inputs), bad options are refused before any work with exit status 2 naming
+the option, and failures while running end in one line with status 1, never a traceback or a
+library's own words."""
+
+from __future__ import annotations
+
+import io
+import math
+
+import numpy as np
+import pandas as pd
+import pytest
+
+from hybridship.cli import main
+from hybridship.driftoff.planning import DriftOffSettings, simulate_blackouts
+from hybridship.driftoff.weather import WeatherState, WeatherUncertainty, states_to_frame
+
+RUN = ["drift-off", "planning", "--samples", "3", "--headings-deg", "0", "--horizon-s", "60", "--no-plots"]
+
+
+def test_planning_report_is_the_apis_result_on_the_same_inputs(tmp_path, capsys):
+    """Every weather, uncertainty and settings option reaches simulate_blackouts (degrees
+    converted, the waves from the wind's direction when not given): times.csv is the API's
+    table for the same state, spread, seed and settings."""
+    out = tmp_path / "plan"
+    assert main(["drift-off", "planning", "--samples", "4", "--headings-deg", "0,90", "--horizon-s", "60",
+                 "--radii-m", "3,6", "--reaction-times-s", "20,40", "--wind-m-s", "11", "--wind-dir-deg", "70",
+                 "--gust-intensity", "0.15", "--hs-m", "1.2", "--tp-s", "7", "--current-m-s", "0.3",
+                 "--current-dir-deg", "200", "--wind-std-m-s", "1.5", "--wind-dir-std-deg", "10", "--hs-std-m", "0.3",
+                 "--tp-std-s", "0.8", "--wave-dir-std-deg", "5", "--current-std-m-s", "0.05",
+                 "--current-dir-std-deg", "20", "--vessel-spread", "0.5", "--seed", "9", "--no-plots",
+                 "--out", str(out)]) == 0
+    capsys.readouterr()
+    w = WeatherState(11.0, math.radians(70.0), 1.2, 7.0, math.radians(70.0), 0.3, math.radians(200.0), 0.15)
+    u = WeatherUncertainty(1.5, math.radians(10.0), 0.3, 0.8, math.radians(5.0), 0.05, math.radians(20.0))
+    st = DriftOffSettings(radii_m=(3.0, 6.0), reaction_times_s=(20.0, 40.0), n_samples=4, horizon_s=60.0,
+                          vessel_spread=0.5, seed=9)
+    times, _ = simulate_blackouts("gunnerus", w, np.radians([0.0, 90.0]), uncertainty=u, settings=st).summary_frames()
+    # the report writes 6 significant digits
+    want = pd.read_csv(io.StringIO(times.to_csv(index=False, float_format="%.6g")))
+    pd.testing.assert_frame_equal(pd.read_csv(out / "times.csv"), want, check_exact=True)
+
+
+@pytest.mark.parametrize("mode, opts, message", [
+    ("planning", ["--quantile", "1.5"], "--quantile must be in (0, 1), got 1.5"),
+    ("planning", ["--vessel", "no_such_vessel.toml"], "--vessel: no_such_vessel.toml: vessel file not found"),
+    ("season", ["--chunk-size", "0"], "--chunk-size must be >= 1, got 0"),
+    ("season", ["--max-p-exceed", "1.5"], "--max-p-exceed must be in [0, 1], got 1.5"),
+])
+def test_a_bad_option_is_refused_by_name_before_any_work(tmp_path, capsys, mode, opts, message):
+    """Exit status 2, one line naming the option as typed, and no --out made: not a library's
+    message about its argument (``quantile:``, ``chunk_size:``) after the sweep has run."""
+    argv = ["drift-off", mode, "--samples", "2", "--horizon-s", "30", "--reaction-times-s", "10"]
+    if mode == "season":
+        table = tmp_path / "w.csv"
+        states_to_frame([WeatherState(wind_speed_m_s=5.0)]).to_csv(table, index=False)
+        argv += ["--weather-table", str(table), "--scheduler", "none", "--no-progress"]
+    assert main(argv + opts + ["--out", str(tmp_path / "o")]) == 2
+    err = capsys.readouterr().err
+    assert err == f"hybridship drift-off {mode}: error: {message}\n", err
+    assert not (tmp_path / "o").exists()
+
+
+def test_the_scheduler_none_is_taken_in_any_case(tmp_path, capsys):
+    """``--scheduler None`` runs in this process, as ``none`` does."""
+    table = tmp_path / "w.csv"
+    states_to_frame([WeatherState(wind_speed_m_s=5.0)]).to_csv(table, index=False)
+    assert main(["drift-off", "season", "--weather-table", str(table), "--scheduler", "None", "--samples", "2",
+                 "--headings-deg", "0", "--horizon-s", "30", "--reaction-times-s", "10", "--no-progress",
+                 "--out", str(tmp_path / "s")]) == 0
+    assert "scheduler None" in capsys.readouterr().out and (tmp_path / "s" / "season.csv").is_file()
+
+
+def test_a_failure_while_running_is_one_line_in_the_commands_words(monkeypatch, tmp_path, capsys):
+    """Drifts that diverge (FloatingPointError) end with status 1 and the message; numpy's own
+    "Unable to allocate ..." is replaced by what to ask for instead. No traceback either way,
+    and nothing written."""
+    from hybridship.driftoff import planning
+
+    def diverged(*args, **kwargs):
+        raise FloatingPointError("2 of 8 drifts diverged (weather: the state of index 0 or its spread)")
+    monkeypatch.setattr(planning, "simulate_blackouts", diverged)
+    assert main(RUN + ["--out", str(tmp_path / "a")]) == 1
+    err = capsys.readouterr().err
+    assert err == "hybridship drift-off planning: error: 2 of 8 drifts diverged (weather: the state of index 0 or " \
+                  "its spread)\n", err
+
+    def no_memory(*args, **kwargs):
+        raise MemoryError("Unable to allocate 80.0 GiB for an array with shape (100000, 300, 3) and data type float64")
+    monkeypatch.setattr(planning, "simulate_blackouts", no_memory)
+    assert main(RUN + ["--out", str(tmp_path / "b")]) == 1
+    err = capsys.readouterr().err
+    assert err.startswith("hybridship drift-off planning: error: out of memory: ") and err.count("\n") == 1, err
+    assert "Unable to allocate" not in err and "fewer samples" in err
+    assert not (tmp_path / "a" / "times.csv").exists() and not (tmp_path / "b" / "times.csv").exists()
+
+    def interrupted(*args, **kwargs):
+        raise KeyboardInterrupt
+    monkeypatch.setattr(planning, "simulate_blackouts", interrupted)       # Ctrl-C: 128 + SIGINT, as a shell
+    assert main(RUN + ["--out", str(tmp_path / "c")]) == 130
+    assert capsys.readouterr().err == "hybridship: interrupted\n"
+
+
+def test_live_blackout_is_at_the_row_of_the_time_given(tmp_path, capsys):
+    """``--time-s 500`` on a 1-Hz log: the blackout is at 500 s, that row included, not at
+    the row before."""
+    from hybridship.logs.io import write_log
+    from hybridship.physics.model import DynamicModel
+    from hybridship.sim.synthetic import physics_log
+
+    write_log(physics_log(DynamicModel("gunnerus"), seed=2, duration_s=600.0, t_shutdown_s=None), tmp_path / "log.csv")
+    assert main(["drift-off", "live", "--time-s", "500", "--samples", "3", "--radii-m", "5", "--no-plots",
+                 "--log", str(tmp_path / "log.csv"), "--out", str(tmp_path / "out")]) == 0
+    capsys.readouterr()
+    assert "| blackout at [s] | 500 |" in (tmp_path / "out" / "summary.md").read_text()
+
+
+@pytest.mark.parametrize("argv", [
+    ["drift-off", "planning", "--out", "o"], ["drift-off", "season", "--out", "o", "--weather-table", "w.csv"],
+    ["simulate", "--seed", "1", "--out", "o.csv"], ["train", "--logs", ".", "--out", "m.npz"],
+    ["benchmark", "drift"], ["benchmark", "manoeuvre", "--train", "a", "--test", "b"]])
+def test_an_empty_vessel_is_refused_as_bad_input(tmp_path, monkeypatch, capsys, argv):
+    """``--vessel ''`` is the user's input: exit status 2 naming the option, not the library's
+    "vessel: expected ..." with the status of a failure while running (1)."""
+    monkeypatch.chdir(tmp_path)
+    assert main(argv + ["--vessel", ""]) == 2
+    err = capsys.readouterr().err
+    assert err.endswith("error: argument --vessel: expected a packaged vessel name or a vessel file, got ''\n"), err
+    assert sorted(p.name for p in tmp_path.iterdir()) == []

@@ -1,0 +1,267 @@
+"""Drift-off numerics against what the docs promise: steps of the horizon, the first passage of a
+radius interpolated on the track, the farthest point as the excursion, the sampled weather (its
+sea, gusts and defaults), the random streams, and the season sweep's per-state numbers."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from hybridship.driftoff import engine
+from hybridship.driftoff.live import EnvironmentEstimate, blackout_now
+from hybridship.driftoff.planning import DriftOffResult, DriftOffSettings, simulate_blackouts, state_rng
+from hybridship.driftoff.season import season_sweep
+from hybridship.driftoff.weather import (WeatherState, WeatherUncertainty, limiting_hs_m, read_weather_table,
+                                         sample_environment, states_to_frame)
+
+BEAM = WeatherState(wind_speed_m_s=12.0, wind_dir_from_rad=math.pi / 2, gust_intensity=0.0)
+
+
+# -- settings ---------------------------------------------------------------------------------
+
+def test_a_horizon_of_whole_steps_is_simulated_in_that_many_steps():
+    """2.1 s in steps of 0.3 s is 7 steps (2.1 / 0.3 is 7.000000000000001 in floating point),
+    not 8: the result's horizon is the one asked for and the track has 8 points."""
+    st = DriftOffSettings(horizon_s=2.1, dt_s=0.3, reaction_times_s=(0.9,), n_samples=1)
+    assert st.n_steps == 7
+    r = simulate_blackouts("gunnerus", BEAM, [0.0], settings=st, keep_tracks=True)
+    assert r.horizon_s == pytest.approx(2.1) and r.tracks.shape == (1, 1, 8, 3)
+
+
+def test_radii_given_in_any_order_are_listed_outward():
+    """The tables and the report's panels read from the smallest radius out."""
+    assert DriftOffSettings(radii_m=(10.0, 3.0, 5.0)).radii_m == (3.0, 5.0, 10.0)
+
+
+def test_a_radius_reached_exactly_at_the_reaction_time_counts_as_exceeded():
+    """P(exceed r within t) is P(T_r <= t): a sample at the radius at the reaction time has
+    exceeded it, in the table and on the exceedance curve alike."""
+    res = DriftOffResult(np.zeros(1), np.zeros(1), np.array([5.0]), np.array([30.0]),
+                         np.array([30.0, 31.0, np.inf, 12.0])[None, :, None], np.zeros((1, 4, 1)), 60.0)
+    assert res.p_exceed()[0, 0, 0] == 0.5
+    np.testing.assert_array_equal(res.exceedance_curves([12.0, 30.0, 31.0])[0, 0], [0.25, 0.5, 0.75])
+
+
+def test_the_tables_give_each_headings_wind_and_each_radius_its_own_share():
+    """times.csv and watch.csv give the wind's direction off the bow of each heading (the
+    result's weather_rel_rad, not the heading), and reached_frac is each radius' own share."""
+    t = np.full((2, 4, 2), np.inf)
+    t[:, :, 0] = 20.0                        # 5 m: every sample; 10 m: one in four
+    t[:, 0, 1] = 50.0
+    res = DriftOffResult(np.radians([0.0, 30.0]), np.radians([90.0, 60.0]), np.array([5.0, 10.0]),
+                         np.array([30.0]), t, np.zeros((2, 4, 1)), 60.0)
+    times, watch = res.summary_frames()
+    assert times["wind_rel_deg"].tolist() == pytest.approx([90.0, 90.0, 60.0, 60.0])
+    assert watch["wind_rel_deg"].tolist() == pytest.approx([90.0, 60.0])
+    assert times["reached_frac"].tolist() == [1.0, 0.25, 1.0, 0.25]
+
+
+def test_thrusters_that_never_spin_down_keep_her_on_station():
+    """The holding load decays with the thrusters' spin-down time constant: with one of 10^6 s
+    the DP's load still balances a steady beam wind after a minute (she stays within 0.5 m);
+    with the default 1.5 s she drifts off."""
+    st = dict(n_samples=1, horizon_s=60.0, radii_m=(3.0,), reaction_times_s=(60.0,), vessel_spread=0.0)
+    held = simulate_blackouts("gunnerus", BEAM, [0.0], settings=DriftOffSettings(rpm_time_constant_s=1e6, **st))
+    lost = simulate_blackouts("gunnerus", BEAM, [0.0], settings=DriftOffSettings(**st))
+    assert held.excursion_m[0, 0, 0] < 0.5 < 3.0 < lost.excursion_m[0, 0, 0]
+
+
+def test_a_spread_of_zero_is_reported_as_the_nominal_model():
+    """The report's vessel spread: "none" when it draws nothing, as for spread 0."""
+    from hybridship.driftoff.planning import get_model
+    from hybridship.driftoff.spread import spread_text
+
+    vessel = get_model("gunnerus").vessel
+    assert spread_text(vessel, 0.0) == "none (the nominal model)"
+    assert spread_text(vessel, 2.0) == "2 x [true_vessel]"
+
+
+# -- random streams ---------------------------------------------------------------------------
+
+def test_each_seed_and_state_index_has_a_stream_of_its_own():
+    """The module notes' SeedSequence(seed, spawn_key=(index,)): run seed 1's first state must
+    not replay run seed 0's second one (as seed + index would)."""
+    draw = lambda seed, index: state_rng(seed, index).standard_normal(4)  # noqa: E731
+    want = np.random.default_rng(np.random.SeedSequence(7, spawn_key=(3,))).standard_normal(4)
+    np.testing.assert_array_equal(draw(7, 3), want)
+    assert not np.array_equal(draw(1, 0), draw(0, 1))
+
+
+# -- the kernel's passages and excursions ---------------------------------------------------------
+
+def test_time_to_reach_is_the_linear_interpolation_of_the_track_between_steps():
+    """First passage of each radius: the step whose end is first at or beyond it, the time
+    interpolated linearly in the distance over that step (module notes of the engine)."""
+    radii = (3.0, 5.0, 10.0)
+    st = DriftOffSettings(n_samples=1, horizon_s=90.0, radii_m=radii, reaction_times_s=(30.0,), vessel_spread=0.0)
+    r = simulate_blackouts("gunnerus", BEAM, [0.0], settings=st, keep_tracks=True)
+    rad = np.hypot(r.tracks[0, 0, :, 0], r.tracks[0, 0, :, 1])
+    for k, radius in enumerate(radii):
+        j = int(np.argmax(rad >= radius))          # first step end at or beyond the radius
+        assert 0 < j and rad[j - 1] < radius
+        want = (j - 1) + (radius - rad[j - 1]) / (rad[j] - rad[j - 1])
+        assert r.t_reach_s[0, 0, k] == pytest.approx(want, rel=1e-9)
+        assert j - 1 < r.t_reach_s[0, 0, k] <= j
+
+
+def test_the_drift_is_integrated_to_fourth_order_in_the_step():
+    """RK4 with the spin-down evaluated at the stage times: in a steady beam wind (inputs
+    constant over a step) halving the step cuts the change of the position at 10 s about 16
+    times (2^4); a stage taken at the wrong time leaves a first-order error (about 2 times)."""
+    ne = []
+    for dt in (1.0, 0.5, 0.25):
+        st = DriftOffSettings(n_samples=1, horizon_s=10.0, dt_s=dt, radii_m=(500.0,), reaction_times_s=(10.0,),
+                              vessel_spread=0.0)
+        ne.append(simulate_blackouts("gunnerus", BEAM, [0.0], settings=st, keep_tracks=True).tracks[0, 0, -1, :2])
+    change = np.linalg.norm(np.diff(ne, axis=0), axis=1)
+    assert change[0] / change[1] > 10.0, change
+
+
+def test_the_excursion_is_the_farthest_point_even_when_the_ship_comes_back():
+    """A ship moving north at 1 m/s at the blackout with a load of 0.05 m/s^2 pushing her south
+    goes out about 9.5 m by 20 s and is back within about 1 m of the start at 40 s: the excursion
+    up to 40 s is the farthest she went, not where she is then."""
+    z3 = np.zeros(3)
+    est = EnvironmentEstimate(time_s=0.0, eta=z3, nu=np.array([1.0, 0.0, 0.0]), rpm=z3, azimuth_rad=z3,
+                              wind_speed_m_s=0.0, wind_dir_from_rad=0.0, gust_intensity=0.0,
+                              accel_ned=np.array([-0.05, 0.0, 0.0]), accel_members=np.array([[-0.05, 0.0, 0.0]]))
+    st = DriftOffSettings(n_samples=1, horizon_s=60.0, radii_m=(5.0,), reaction_times_s=(10.0, 40.0),
+                          vessel_spread=0.0)
+    r = blackout_now(est, "gunnerus", st)
+    exc = r.excursion_m[0, 0]
+    assert r.t_reach_s[0, 0, 0] < 10.0 and exc[0] >= 5.0
+    assert exc[1] > max(exc[0], 9.0)      # 1 m/s against 0.05 m/s^2 turns at most 10 m out
+
+
+def test_keeping_the_tracks_changes_no_number():
+    """Tracks switch the early stop off; the early stop must not cut the excursion up to a
+    reaction time that comes after every radius is reached."""
+    st = DriftOffSettings(n_samples=3, horizon_s=120.0, radii_m=(1.0, 2.0), reaction_times_s=(10.0, 100.0), seed=4)
+    w = WeatherState.from_degrees(wind_speed_m_s=14.0, wind_dir_deg=80.0, hs_m=1.0, tp_s=6.0)
+    fast = simulate_blackouts("gunnerus", w, [0.0], settings=st)
+    kept = simulate_blackouts("gunnerus", w, [0.0], settings=st, keep_tracks=True)
+    assert np.all(fast.t_reach_s < 100.0)             # every radius reached before the last reaction time
+    np.testing.assert_array_equal(fast.t_reach_s, kept.t_reach_s)
+    np.testing.assert_array_equal(fast.excursion_m, kept.excursion_m)
+
+
+# -- the sampled weather ---------------------------------------------------------------------------
+
+def test_a_state_steeper_than_dnvs_limit_is_sampled_at_its_own_height():
+    """Hs 19 m at Tp 10 s is steeper than DNV's limiting steepness (9.2 m) yet a valid state:
+    known exactly, every sample's sea has the state's Hs (4 sqrt(m0) of its components), not
+    the limit's; a spread adds no constraint."""
+    state = WeatherState(hs_m=19.0, tp_s=10.0)
+    assert float(limiting_hs_m(10.0)) < 10.0
+    e = sample_environment(state, None, 3, np.random.default_rng(0), duration_s=60.0, dt_s=1.0, n_wave=20)
+    hs = 4.0 * np.sqrt(0.5 * (e.waves[1] ** 2).sum(axis=1))
+    np.testing.assert_allclose(hs, 19.0, rtol=1e-9)
+
+
+def test_gusts_have_the_states_intensity_within_the_resolved_band():
+    """The gust harmonics lie between 1 / duration and the Nyquist frequency of the step, and
+    their sum has standard deviation gust_intensity x U (a harmonic of amplitude a has
+    variance a^2 / 2): checked on the kernel's own gust speed over a long record too."""
+    state = WeatherState(wind_speed_m_s=10.0, gust_intensity=0.2)
+    e = sample_environment(state, None, 4, np.random.default_rng(3), duration_s=300.0, dt_s=0.5, n_gust=20)
+    assert e.gust_f_hz.min() >= 1.0 / 300.0 and e.gust_f_hz.max() <= 0.5 / 0.5
+    np.testing.assert_allclose(np.sqrt(0.5 * (e.gust_amp_m_s ** 2).sum(axis=1)), 0.2 * 10.0, rtol=1e-12)
+    t = np.arange(0.0, 200_000.0, 0.5)
+    u = [engine._gust_speed(10.0, e.gust_f_hz[0], e.gust_amp_m_s[0], e.gust_phase_rad[0], x) for x in t[::7]]
+    assert np.std(u) == pytest.approx(2.0, rel=0.05)
+    # frequencies in Hz: at t the speed is U + sum a cos(2 pi f t + phase)
+    f, a, ph = e.gust_f_hz[1], e.gust_amp_m_s[1], e.gust_phase_rad[1]
+    for x in (0.0, 13.0, 77.5):
+        assert engine._gust_speed(10.0, f, a, ph, x) == pytest.approx(10.0 + np.sum(a * np.cos(2 * np.pi * f * x + ph)))
+    # and a lull deeper than the mean wind is calm, not a wind from the other side
+    assert engine._gust_speed(1.0, np.array([0.01]), np.array([5.0]), np.array([np.pi]), 0.0) == 0.0
+
+
+def test_the_weathers_draws_are_independent_of_each_other():
+    """Each uncertain quantity has a normal draw of its own: wind speed and direction, current
+    speed and direction are uncorrelated over many samples."""
+    state = WeatherState(wind_speed_m_s=10.0, current_speed_m_s=1.0)
+    unc = WeatherUncertainty(wind_speed_m_s=1.0, wind_dir_rad=0.2, current_speed_m_s=0.1, current_dir_rad=0.2)
+    e = sample_environment(state, unc, 2000, np.random.default_rng(2), duration_s=60.0, dt_s=1.0, n_wave=2)
+    draws = np.column_stack([e.wind_mean_m_s, e.wind_dir_from_rad, e.current[:, 0], e.current[:, 1]])
+    assert np.all(draws.std(axis=0) > 0)
+    c = np.corrcoef(draws, rowvar=False)
+    assert np.max(np.abs(c - np.eye(4))) < 0.1, c
+
+
+def test_drawn_peak_periods_stay_at_or_above_one_second():
+    """A wide period spread is clipped to [1 s, 30 s] (module notes): no sample's components
+    go beyond 3.5 times the peak frequency of a 1-s sea."""
+    e = sample_environment(WeatherState(hs_m=0.2, tp_s=2.0), WeatherUncertainty(tp_s=5.0), 200,
+                           np.random.default_rng(4), duration_s=60.0, dt_s=1.0, n_wave=10)
+    waves = e.waves[1].sum(axis=1) > 0
+    assert waves.sum() > 50 and e.waves[0][waves].max() <= 3.5 * 2.0 * np.pi / 1.0
+
+
+def test_a_weather_table_without_gusts_takes_the_documented_intensity():
+    """The optional gust_intensity column defaults to 0.1, as a WeatherState does."""
+    df = states_to_frame([WeatherState(wind_speed_m_s=5.0)]).drop(columns=["gust_intensity"])
+    states, _ = read_weather_table(df)
+    assert states[0].gust_intensity == WeatherState().gust_intensity == 0.1
+
+
+# -- season sweeps ------------------------------------------------------------------------------------
+
+def _two_states():
+    return [WeatherState.from_degrees(wind_speed_m_s=u, wind_dir_deg=70.0, hs_m=0.5, tp_s=5.0) for u in (5.0, 13.0)]
+
+
+def test_season_numbers_are_each_states_own_planning_numbers():
+    """Per state and heading the sweep's reached share, P(exceed) and watch circle (at the
+    quantile asked for, in the column of its reaction time) are those of simulate_blackouts on
+    that state with its index and the sweep's uncertainty, and the operability's median 10 %
+    time is over the states' 10 % times; two headings, three samples, so a mixed-up axis shows."""
+    states = _two_states()
+    st = DriftOffSettings(n_samples=3, horizon_s=60.0, radii_m=(3.0, 20.0), reaction_times_s=(20.0, 60.0), seed=5)
+    psi = np.radians([0.0, 90.0])
+    unc = WeatherUncertainty(wind_speed_m_s=1.0)
+    sw = season_sweep("gunnerus", states, psi, settings=st, uncertainty=unc, quantile=0.5, progress=False)
+    for i, w in enumerate(states):
+        one = simulate_blackouts("gunnerus", w, psi, settings=st, uncertainty=unc, index=i)
+        np.testing.assert_array_equal(sw.reached_frac[i], np.isfinite(one.t_reach_s).mean(axis=1))
+        np.testing.assert_array_equal(sw.watch_radius_m[i], one.watch_circle(0.5))
+        np.testing.assert_array_equal(sw.p_exceed[i], one.p_exceed())
+    frame = sw.to_frame()
+    assert frame["watch_60s_m"].tolist() == [sw.watch_radius_m[s, h, 1] for s in range(2) for h in range(2)
+                                             for _ in range(2)]
+    op = sw.operability(0.5)
+    first = op[(op.heading_deg == 0.0) & (op.radius_m == 3.0)]["median_t_p10_s"].iloc[0]
+    assert first == np.median(sw.t_quantiles_s[:, 0, 0, 0])
+
+
+class _ReversedClient:
+    """A stand-in Dask client whose tasks finish in the reverse order of submission."""
+
+    class _Done:
+        def __init__(self, value):
+            self.value = value
+
+        def result(self):
+            return self.value
+
+    def submit(self, fn, *args, pure=True):
+        return self._Done(fn(*args))
+
+
+def test_season_rows_follow_the_states_whatever_order_the_chunks_finish(monkeypatch):
+    """Chunks gathered as they complete (last first here): the table is in the states' order."""
+    import types
+
+    from hybridship.driftoff import season
+
+    fake = types.SimpleNamespace(as_completed=lambda futs: list(reversed(futs)))
+    monkeypatch.setattr(season, "require_dask", lambda: fake)
+    states = _two_states() + [WeatherState()]
+    st = DriftOffSettings(n_samples=2, horizon_s=30.0, radii_m=(3.0,), reaction_times_s=(10.0,))
+    here = season_sweep("gunnerus", states, [0.0], settings=st, chunk_size=1, progress=False)
+    there = season_sweep("gunnerus", states, [0.0], settings=st, chunk_size=1, scheduler=_ReversedClient(),
+                         progress=False)
+    np.testing.assert_array_equal(there.watch_radius_m, here.watch_radius_m)
+    assert there.watch_radius_m[1, 0, 0] > there.watch_radius_m[2, 0, 0]    # not all alike
