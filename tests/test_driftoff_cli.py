@@ -45,6 +45,9 @@ def test_planning_report_is_the_apis_result_on_the_same_inputs(tmp_path, capsys)
 @pytest.mark.parametrize("mode, opts, message", [
     ("planning", ["--quantile", "1.5"], "--quantile must be in (0, 1), got 1.5"),
     ("planning", ["--vessel", "no_such_vessel.toml"], "--vessel: no_such_vessel.toml: vessel file not found"),
+    ("planning", ["--hs-m", "3", "--tp-s", "3"],
+     "--hs-m 3 m at --tp-s 3 s is steeper than waves can be (at most 2.01 m at that period: 2 pi Hs / (g Tp^2) <= "
+     "0.143); are --hs-m and --tp-s swapped, or --tp-s in another unit?"),
     ("season", ["--chunk-size", "0"], "--chunk-size must be >= 1, got 0"),
     ("season", ["--max-p-exceed", "1.5"], "--max-p-exceed must be in [0, 1], got 1.5"),
 ])

@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import argparse
 import math
+import re
 import sys
 from pathlib import Path
 
@@ -84,6 +85,14 @@ _WEATHER_OPTIONS = {
     "uncertainty.hs_m": "--hs-std-m", "uncertainty.tp_s": "--tp-std-s",
     "uncertainty.current_speed_m_s": "--current-std-m-s",
 }
+
+
+def _in_option_words(text: str) -> str:
+    """A planning error in the options' words: the fields a check names inside its message (a
+    sea steeper than waves can be names ``hs_m`` and ``tp_s``) become ``--hs-m`` and ``--tp-s``."""
+    for field, option in _WEATHER_OPTIONS.items():
+        text = re.sub(rf"\b{re.escape(field)}\b", option, text)
+    return re.sub(r"(?<![\w.-])(hs_m|tp_s)\b", lambda m: _WEATHER_OPTIONS[f"weather.{m.group(1)}"], text)
 
 
 def add_parser(sub, parser_class, usage_error=None) -> None:
@@ -249,8 +258,8 @@ def _cmd_planning(args) -> int:
                                math.radians(args.current_dir_std_deg))
     except (ValueError, TypeError) as exc:
         # the option the user typed, not the field it fills
-        raise _usage(problem_lines(exc, f"{_PROG} planning: error: ",
-                                   lambda field: _WEATHER_OPTIONS.get(field, field))) from None
+        raise _usage(_in_option_words(problem_lines(exc, f"{_PROG} planning: error: ",
+                                                    lambda field: _WEATHER_OPTIONS.get(field, field)))) from None
     model = _model(args, "planning")
     res = simulate_blackouts(model, w, _headings_rad(args, "planning"), uncertainty=u, settings=st)
     inputs = {"vessel": model.vessel.name, "wind": f"{args.wind_m_s:g} +- {args.wind_std_m_s:g} m/s from "
