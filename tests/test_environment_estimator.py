@@ -265,17 +265,57 @@ def test_a_short_gap_is_filtered_across_and_a_long_one_restarts(model):
 
 def test_drift_samples_update_the_estimate_online(model):
     """After the thrusters stop, every new drift sample moves the estimate (and the forecast
-    from that start): the estimator keeps running on the drift, and the load's uncertainty
-    shrinks as samples arrive."""
+    from that start): the estimator keeps running on the drift. With the station keeping's
+    load walks the load's uncertainty shrinks as samples arrive; with the faster walks after a
+    stop (the default) it grows towards where the walk and the drift samples balance, far
+    below the load's prior."""
     log = physics_log(model, duration_s=1000, t_shutdown_s=800, seed=7, tau_ext_N=(3000.0, 3000.0, 0.0))
     a = as_log_arrays(log, model.vessel)
     i0 = int(np.flatnonzero(a.dp_active == 0)[0])
     rows = i0 + np.arange(1, 20)
-    est = EnvironmentEstimator(model).run(a, rows)
-    steps = np.abs(np.diff(est.x[:, 8:11], axis=0)).max(axis=1)
-    assert np.all(steps > 0)
-    sd = np.sqrt(np.einsum("sii->si", est.P[:, 8:10, 8:10]))
-    assert sd[-1].max() < sd[0].max()
+    default = EnvironmentConfig()
+    on_station = EnvironmentConfig(load_walk_after_stop_m_s2=default.load_walk_m_s2,
+                                   load_yaw_walk_after_stop_rad_s2=default.load_yaw_walk_rad_s2)
+    sds = []
+    for config in (default, on_station):
+        est = EnvironmentEstimator(model, config).run(a, rows)
+        steps = np.abs(np.diff(est.x[:, 8:11], axis=0)).max(axis=1)
+        assert np.all(steps > 0)
+        sds.append(np.sqrt(np.einsum("sii->si", est.P[:, 8:10, 8:10])).max(axis=1))
+    fast, slow = sds
+    assert slow[-1] < slow[0]
+    assert fast[0] < fast[-1] < 0.25 * default.load_prior_m_s2
+
+
+def test_a_load_that_changes_in_the_drift_is_followed_with_the_after_stop_walks(model):
+    """The environment load changes 60 s after a failure (as it does when a drifting ship turns
+    to the weather). The filter's load walks while the thrusters are stopped
+    (``load_walk_after_stop_*``) let it follow: three minutes later the estimated load (in the
+    body frame) is within 25 % of the new one, and less than half as far from it as with the
+    station-keeping walks. Before the stop the two filters are the same to the bit: only
+    stopped steps use the after-stop walks."""
+    t_stop, dt = 900.0, 1.0
+    n = int(1200 / dt)
+    tau = np.tile([3000.0, 0.0, 0.0], (n, 1))
+    tau[int((t_stop + 60.0) / dt):] = [-2000.0, 2500.0, 0.0]
+    log = physics_log(model, duration_s=1200, t_shutdown_s=t_stop, seed=7, tau_ext_N=tau, wind=(0.0, 0.0))
+    a = as_log_arrays(log, model.vessel)
+    i0 = int(np.flatnonzero(a.dp_active == 0)[0])
+    rows = np.array([i0 - 1, i0 + 240])
+    default = EnvironmentConfig()
+    on_station = EnvironmentConfig(load_walk_after_stop_m_s2=default.load_walk_m_s2,
+                                   load_yaw_walk_after_stop_rad_s2=default.load_yaw_walk_rad_s2)
+    new, old = (EnvironmentEstimator(model, c).run(a, rows) for c in (default, on_station))
+    np.testing.assert_array_equal(new.x[0], old.x[0])
+    np.testing.assert_array_equal(new.P[0], old.P[0])
+    want = (model.arrays.m_inv @ tau[-1])[:2]
+
+    def miss(est):
+        load = external_accel(est.x[1:, 2], est.load_accel[1:], np.zeros((1, 3)), np.zeros((1, 3)))[0, :2]
+        return np.linalg.norm(load - want)
+
+    assert miss(new) < 0.25 * np.linalg.norm(want)
+    assert miss(new) < 0.5 * miss(old)
 
 
 def test_current_widened_at_the_stop_keeps_the_estimate_and_lets_the_drift_find_the_current(model):

@@ -145,10 +145,10 @@ def test_incompatible_format_version_is_refused(saved, tmp_path):
         p = _rewrite(saved, tmp_path, meta_change=lambda m: m.update(format_version=version), name=f"v{version}.npz")
         # as written in the file: the text "13" is not said as 13, which this hybridship reads
         _refused(p, rf"model format version {shown} is not supported "
-                    rf"\(this hybridship reads versions 7, 8, 9, 10, 11, 12, 13, 14, 15, 16, 17\)"
+                    rf"\(this hybridship reads versions 7, 8, 9, 10, 11, 12, 13, 14, 15, 16, 17, 18\)"
                     + (r"; expected a whole number$" if not isinstance(version, int) else ""))
-    p = _rewrite(saved, tmp_path, meta_change=lambda m: m.update(format_version=18), name="v18.npz")
-    _refused(p, r"written by a newer hybridship \(format 18\); upgrade hybridship to read it")
+    p = _rewrite(saved, tmp_path, meta_change=lambda m: m.update(format_version=19), name="v19.npz")
+    _refused(p, r"written by a newer hybridship \(format 19\); upgrade hybridship to read it")
 
 
 def test_an_older_format_says_retrain(saved, tmp_path):
@@ -488,6 +488,32 @@ def test_a_version_16_file_reads_restarting_the_filter_at_every_gap(saved, tmp_p
     v17 = _rewrite(saved, tmp_path, meta_change=lambda m: m["environment_config"].pop("max_bridged_gap_s"),
                    name="v17g.npz")
     _refused(v17, r"damaged model metadata .*max_bridged_gap_s")
+
+
+def test_a_version_17_file_filters_a_drift_with_the_station_keeping_walks(saved, tmp_path):
+    """Version 17 filtered a drift with the load's station-keeping random walks: its config
+    reads with the after-stop walks equal to those, as it was fitted (also when the file set
+    its own station-keeping walks); a version-18 file without them is damaged."""
+    def as_v17(meta, own_walks=False):
+        meta["format_version"] = 17
+        env = meta["environment_config"]
+        env.pop("load_walk_after_stop_m_s2")
+        env.pop("load_yaw_walk_after_stop_rad_s2")
+        if own_walks:
+            env.update(load_walk_m_s2=5e-5, load_yaw_walk_rad_s2=2e-6)
+
+    c = saved[0].environment_config
+    assert (c.load_walk_after_stop_m_s2, c.load_yaw_walk_after_stop_rad_s2) != (c.load_walk_m_s2,
+                                                                               c.load_yaw_walk_rad_s2)
+    back = HybridPredictor.load(_rewrite(saved, tmp_path, meta_change=as_v17, name="v17w.npz")).environment_config
+    assert (back.load_walk_after_stop_m_s2, back.load_yaw_walk_after_stop_rad_s2) == (c.load_walk_m_s2,
+                                                                                     c.load_yaw_walk_rad_s2)
+    own = HybridPredictor.load(_rewrite(saved, tmp_path, meta_change=lambda m: as_v17(m, own_walks=True),
+                                        name="v17o.npz")).environment_config
+    assert (own.load_walk_after_stop_m_s2, own.load_yaw_walk_after_stop_rad_s2) == (5e-5, 2e-6)
+    for field in ("load_walk_after_stop_m_s2", "load_yaw_walk_after_stop_rad_s2"):
+        v18 = _rewrite(saved, tmp_path, meta_change=lambda m: m["environment_config"].pop(field), name=f"v18{field}.npz")
+        _refused(v18, rf"damaged model metadata .*{field}")
 
 
 def test_edited_settings_are_refused(saved, tmp_path):

@@ -27,6 +27,9 @@ from ..residual.multistep import MultiStepConfig
 __all__ = ["MODEL_FORMAT_VERSION", "ModelFileError", "load_model", "model_metadata", "save_model"]
 
 #: Version of the model-file format written by :func:`save_model` (:meth:`HybridPredictor.save`).
+#: 18: the environment load's random walks while the thrusters are stopped
+#: (``environment_config.load_walk_after_stop_m_s2``, ``load_yaw_walk_after_stop_rad_s2``;
+#: older files read the station-keeping walks, as they were fitted);
 #: 17: the environment estimator filters across short gaps (``environment_config.max_bridged_gap_s``;
 #: older files read 0, every gap restarting the filter, as they were fitted);
 #: 16: the step of the one-step residual fit (``residual_config.residual_step_s``; older files
@@ -47,7 +50,7 @@ __all__ = ["MODEL_FORMAT_VERSION", "ModelFileError", "load_model", "model_metada
 #: validated vessel description is embedded in the metadata (``vessel_description``), so a
 #: model loads without its vessel file; 3 added the environment estimator; 2 and earlier
 #: stored only the vessel's name.
-MODEL_FORMAT_VERSION = 17
+MODEL_FORMAT_VERSION = 18
 #: Versions :func:`load_model` reads: a version-7 file is a version-8 one without the spread
 #: exponent (three rows per ``cal_*`` array), read as exponent 1, which is what it was fitted with;
 #: versions 7 and 8 have no wind futures in the spread (``wind_samples = 0``, as they were fitted);
@@ -58,8 +61,9 @@ MODEL_FORMAT_VERSION = 17
 #: 13 no settling of the environment estimator (``settle_s = 0``, as they were fitted); versions 7 to
 #: 14 no actuator-load features; versions 7 to 15 were fitted at the logs' own step
 #: (``residual_step_s = None``); versions 7 to 16 restart the environment estimator at every
-#: gap of a log (``max_bridged_gap_s = 0``).
-READABLE_MODEL_FORMAT_VERSIONS = (7, 8, 9, 10, 11, 12, 13, 14, 15, 16, 17)
+#: gap of a log (``max_bridged_gap_s = 0``); versions 7 to 17 filter a drift with the station
+#: keeping's load walks.
+READABLE_MODEL_FORMAT_VERSIONS = (7, 8, 9, 10, 11, 12, 13, 14, 15, 16, 17, 18)
 
 
 class ModelFileError(ValueError):
@@ -321,6 +325,13 @@ def _build_predictor(cls, meta: dict, vessel, path: Path):
             raise KeyError("residual_config.residual_step_s")
         if meta["format_version"] >= 17 and "max_bridged_gap_s" not in meta["environment_config"]:
             raise KeyError("environment_config.max_bridged_gap_s")
+        env = meta["environment_config"]
+        for after_stop, on_station in (("load_walk_after_stop_m_s2", "load_walk_m_s2"),
+                                       ("load_yaw_walk_after_stop_rad_s2", "load_yaw_walk_rad_s2")):
+            if meta["format_version"] >= 18 and after_stop not in env:
+                raise KeyError(f"environment_config.{after_stop}")
+            # older files filtered a drift with the station keeping's walks, as they were fitted
+            env = {after_stop: env.get(on_station, EnvironmentConfig.model_fields[on_station].default), **env}
         residual_config = ResidualConfig(**{"residual_step_s": None,     # older files: fitted at the log's step
                                             **{k: tuple(v) if k == "features" else v
                                                for k, v in meta["residual_config"].items()}})
@@ -333,7 +344,7 @@ def _build_predictor(cls, meta: dict, vessel, path: Path):
                   stop_after_failure=_checked_flag(meta, "stop_after_failure"),
                   environment=meta["environment"],
                   # older files restarted the filter at every gap, as they were fitted
-                  environment_config=EnvironmentConfig(**{"max_bridged_gap_s": 0.0, **meta["environment_config"]}),
+                  environment_config=EnvironmentConfig(**{"max_bridged_gap_s": 0.0, **env}),
                   environment_window_s=_checked_number(meta, "environment_window_s"),
                   nets_after_stop=_checked_flag(meta, "nets_after_stop"),
                   # files written before the option calibrated the members' spread

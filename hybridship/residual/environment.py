@@ -21,7 +21,9 @@ Its state (14) is
 The process model is the project's dynamic model (one RK4 step per sample) with the current
 and with ``accel_ext = R(psi)^T b + T theta`` (``T``: the thrust-error basis, see
 :mod:`.environment_kernel`); the filter loop is compiled there. ``v_c`` and ``b`` are random
-walks, and so is ``theta`` unless ``thrust_error_walk`` is 0. While the thrusters are stopped,
+walks, and so is ``theta`` unless ``thrust_error_walk`` is 0; while the thrusters are stopped
+the load walks faster (``load_walk_after_stop_m_s2``, ``load_yaw_walk_after_stop_rad_s2``: a
+drifting ship turns and moves relative to the weather). While the thrusters are stopped,
 the yaw acceleration ``k u v`` of the hull's yaw moment in a drift (:mod:`.drift_hull`) is
 added when :meth:`EnvironmentEstimator.run` is given ``k``, as the forecasts after a failure
 add it; otherwise the yaw load ``b_yaw`` takes up the hull's error during the drift and the
@@ -143,6 +145,15 @@ class EnvironmentConfig(BaseModel):
     current_walk_m_s, load_walk_m_s2, load_yaw_walk_rad_s2, thrust_error_walk : float
         Random-walk intensities of the current, the load and the thrust errors [unit per
         sqrt(s)]; 0 keeps the state constant.
+    load_walk_after_stop_m_s2, load_yaw_walk_after_stop_rad_s2 : float
+        The load's random-walk intensities while the thrusters are stopped [m/s^2 and
+        rad/s^2 per sqrt(s)], in place of ``load_walk_m_s2`` and ``load_yaw_walk_rad_s2``.
+        A drifting ship turns and moves relative to the waves, the wind and the current,
+        so its environment load changes within a minute, while on station it changes
+        slowly. With the station-keeping walks the filter kept the station keeping's load
+        through the whole drift, and forecasts started later in a drift held it
+        (``benchmarks/drift_late_starts.py``). Equal to the station-keeping walks: the
+        filter before 2026-11-30 (model files of format 17 and older).
     thrust_error_prior : tuple of 3 float
         Prior standard deviations of the per-DOF efficiency factors (``"per_dof"``) [-].
     thrust_error_model : {"per_dof", "per_thruster"}
@@ -214,6 +225,8 @@ class EnvironmentConfig(BaseModel):
     thrust_error_model: Literal["per_dof", "per_thruster"] = "per_thruster"
     thrust_error_prior_per_thruster: float = Field(0.2, gt=0)
     thrust_error_walk: float = Field(0.0, ge=0)
+    load_walk_after_stop_m_s2: float = Field(3e-4, ge=0)
+    load_yaw_walk_after_stop_rad_s2: float = Field(1e-5, ge=0)
     use_velocity: bool = True
     adaptive_measurement_std: bool = True
     wave_window_s: float = Field(30.0, gt=0)
@@ -510,12 +523,16 @@ class EnvironmentEstimator:
                                [c.current_prior_m_s] * 2, [c.load_prior_m_s2] * 2, [c.load_yaw_prior_rad_s2],
                                self.thrust_error_std])
 
-    def _process_noise_base(self) -> np.ndarray:
+    def _process_noise_base(self, stopped: bool = False) -> np.ndarray:
         """Process-noise intensities (14,) that :func:`.environment_kernel.process_noise` scales by
-        the step: position [m], velocity per second [m/s^2, rad/s^2], random walks per sqrt(s)."""
+        the step: position [m], velocity per second [m/s^2, rad/s^2], random walks per sqrt(s);
+        with ``stopped``, those of a step while the thrusters are stopped (the load's walks
+        ``load_walk_after_stop_m_s2``, ``load_yaw_walk_after_stop_rad_s2``)."""
         c = self.config
+        load, yaw = ((c.load_walk_after_stop_m_s2, c.load_yaw_walk_after_stop_rad_s2) if stopped
+                     else (c.load_walk_m_s2, c.load_yaw_walk_rad_s2))
         return np.concatenate([[1e-6] * 3, [c.accel_noise_m_s2] * 2, [c.yaw_accel_noise_rad_s2],
-                               [c.current_walk_m_s] * 2, [c.load_walk_m_s2] * 2, [c.load_yaw_walk_rad_s2],
+                               [c.current_walk_m_s] * 2, [load] * 2, [yaw],
                                [c.thrust_error_walk] * len(self.thrust_error_mean)])
 
     def _yaw_std_at_stop(self) -> float:
@@ -765,7 +782,8 @@ class EnvironmentEstimator:
                            inputs["z"], inputs["z_ok"], inputs["r_std"], inputs["rpm"], inputs["az"],
                            inputs["wind"], inputs["dp"], self.model.arrays, c.thrust_error_model == "per_thruster",
                            np.asarray(self.thrust_error_mean, float),
-                           self._prior_sd(), self._process_noise_base(), _FD_STEP,
+                           self._prior_sd(), self._process_noise_base(), self._process_noise_base(stopped=True),
+                           _FD_STEP,
                            bool(c.reset_yaw_load_at_stop), float(c.yaw_load_kept_at_stop), self._yaw_std_at_stop(),
                            float(c.load_yaw_prior_rad_s2), float(c.current_std_at_stop_m_s),
                            float(c.load_to_current_at_stop), drift_yaw_uv,

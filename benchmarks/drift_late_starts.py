@@ -1,0 +1,162 @@
+"""Forecasts started later in a drift: the environment load's random walks after a failure, measured.
+
+The drift tables score the first 20 starts after each failure. A user forecasting through a
+drift also starts forecasts later, when the ship has turned and gathered speed and its
+environment load has changed. This benchmark scores both, with the protocol of
+``benchmarks/estimator_variants.py``: trained on the DP parts of all logs of a set, nets off
+(``forecast(nets=False)``: physics + environment estimator), no hull's yaw moment in a
+drift, each row changing one setting of the default
+:class:`~hybridship.residual.environment.EnvironmentConfig`:
+
+* ``first 5/20``: the 60-s mean absolute error over the first 5 / first 20 starts after each
+  failure as a ratio to the physics alone (as the drift tables and the estimator variants);
+* ``later``: the 60-s mean absolute error of starts every 10 s from 20 s after each failure
+  to the last start with 60 s of log after it [m, deg], and its ratio to the physics alone
+  and to dead reckoning on the same starts (rows ``physics`` and ``dead_reckoning`` give
+  their own errors).
+
+Writes ``late_starts.csv``, ``late_starts.md`` and ``late_starts_per_log.csv`` (the later
+starts' 60-s error of every failure, per variant, state and predictor) to ``--out``.
+
+Example (about 15 min on the 2-core machine)::
+
+    python benchmarks/drift_late_starts.py --data embedded truthsim-dev own --out docs/results/drift-late-starts
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+
+from hybridship.evaluation import metrics
+from hybridship.evaluation.drift import log_files
+from hybridship.fileio import markdown_table, write_text
+from hybridship.predictors import DeadReckoning, DynamicPredictor, HybridPredictor, as_log_arrays
+from hybridship.predictors.hybrid import AFTER_STOP_INTERVALS, LATE_START_EVERY_S
+from hybridship.residual.ensemble import EnsembleConfig
+from hybridship.residual.environment import EnvironmentConfig
+
+TRUTHSIM = Path(__file__).resolve().parents[1].parent / "shared" / "data" / "truthsim-dev" / "logs"
+HORIZON_S = 60.0
+C = EnvironmentConfig
+_ON_STATION = dict(load_walk_after_stop_m_s2=C().load_walk_m_s2, load_yaw_walk_after_stop_rad_s2=C().load_yaw_walk_rad_s2)
+#: name -> (EnvironmentConfig fields, what the row shows)
+VARIANTS = {
+    "default": ({}, f"the default: load walks after a stop {C().load_walk_after_stop_m_s2:g} m/s2 and "
+                    f"{C().load_yaw_walk_after_stop_rad_s2:g} rad/s2 per sqrt(s)"),
+    "station_keeping_walks": (_ON_STATION, "the station keeping's load walks through the drift too "
+                                           "(the filter before 2026-11-30)"),
+    "ned_1e-4": ({**_ON_STATION, "load_walk_after_stop_m_s2": 1e-4}, "north/east load walk 1e-4 after a stop"),
+    "ned_3e-4": ({**_ON_STATION, "load_walk_after_stop_m_s2": 3e-4}, "north/east load walk 3e-4 after a stop"),
+    "ned_1e-3": ({**_ON_STATION, "load_walk_after_stop_m_s2": 1e-3}, "north/east load walk 1e-3 after a stop"),
+    "yaw_1e-5": ({**_ON_STATION, "load_yaw_walk_after_stop_rad_s2": 1e-5}, "yaw load walk 1e-5 after a stop"),
+    "ned_1e-4_yaw_1e-5": (dict(load_walk_after_stop_m_s2=1e-4, load_yaw_walk_after_stop_rad_s2=1e-5),
+                          "both: 1e-4 and 1e-5"),
+    "ned_1e-3_yaw_1e-5": (dict(load_walk_after_stop_m_s2=1e-3, load_yaw_walk_after_stop_rad_s2=1e-5),
+                          "both: 1e-3 and 1e-5"),
+    "ned_3e-4_yaw_3e-6": (dict(load_walk_after_stop_m_s2=3e-4, load_yaw_walk_after_stop_rad_s2=3e-6),
+                          "both: 3e-4 and 3e-6"),
+    "ned_3e-4_yaw_3e-5": (dict(load_walk_after_stop_m_s2=3e-4, load_yaw_walk_after_stop_rad_s2=3e-5),
+                          "both: 3e-4 and 3e-5"),
+}
+TINY = EnsembleConfig(n_members=2, hidden=4, max_epochs=1, patience=1, seed=0)
+STATES = ("north_m", "east_m", "yaw_deg")
+
+
+def drift_errors(pred, arrays, **forecast_kw) -> dict[str, np.ndarray]:
+    """60-s absolute errors (starts, 3) [m, m, deg] of ``pred`` on one log: ``"first"``, the first
+    20 starts after its failure; ``"later"``, starts every 10 s from 20 s after it to the last
+    start with 60 s of log after it."""
+    dt = float(np.median(np.diff(arrays.time_s)))
+    out = {}
+    for group, kw in (("first", dict(n_intervals=AFTER_STOP_INTERVALS)),
+                      ("later", dict(n_intervals=None, first=AFTER_STOP_INTERVALS,
+                                     every=max(1, int(round(LATE_START_EVERY_S / dt)))))):
+        p, t, _ = metrics.drift_forecasts(pred, arrays, horizons_s=(HORIZON_S,), **kw, **forecast_kw)
+        out[group] = metrics.absolute_errors(p, t)[:, 0]
+    return out
+
+
+def table_row(data: str, variant: str, what: str, err: list, phys: list, dr: list) -> dict:
+    """One row: per state, the first 5/20 starts' ratio to the physics and the later starts'
+    mean error with its ratios to the physics and dead reckoning (lists of :func:`drift_errors`
+    per log; the first-start means are over failures, as the drift tables')."""
+    row = {"data": data, "variant": variant, "what": what}
+    for j, state in enumerate(STATES):
+        if err is not phys:
+            r5 = np.mean([e["first"][:5, j].mean() for e in err]) / np.mean([e["first"][:5, j].mean() for e in phys])
+            r20 = np.mean([e["first"][:, j].mean() for e in err]) / np.mean([e["first"][:, j].mean() for e in phys])
+            row[f"{state} first 5/20 (x physics)"] = f"{r5:.2f}/{r20:.2f}"
+        else:
+            row[f"{state} first 5/20 (x physics)"] = ""
+        late = [np.concatenate([e["later"][:, j] for e in x]).mean() for x in (err, phys, dr)]
+        row[f"{state} later (x physics, x DR)"] = f"{late[0]:.2f} ({late[0] / late[1]:.2f}, {late[0] / late[2]:.2f})"
+    return row
+
+
+def _data_sets(names: list[str], own_n: int, own_seed: int) -> dict:
+    from hybridship.sim.scenario import embedded_scenarios
+
+    data = {}
+    if "embedded" in names:
+        scen = embedded_scenarios(3, 0)
+        data["embedded"] = ([s.log for s in scen], [s.name for s in scen])
+    if "truthsim-dev" in names:
+        if TRUTHSIM.is_dir():
+            files = log_files(TRUTHSIM)
+            data["truthsim-dev"] = ([pd.read_csv(f) for f in files], [f.name.split(".")[0] for f in files])
+        else:
+            print(f"skipping truthsim-dev: {TRUTHSIM} not found", file=sys.stderr)
+    if "own" in names:
+        scen = embedded_scenarios(own_n, own_seed)
+        data[f"own {own_seed}-{own_seed + own_n - 1}"] = ([s.log for s in scen], [s.name for s in scen])
+    return data
+
+
+def main(argv=None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap.add_argument("--out", type=Path, required=True)
+    ap.add_argument("--only", nargs="+", choices=list(VARIANTS), default=list(VARIANTS),
+                    help="the variants to run (default: all)")
+    ap.add_argument("--data", nargs="+", choices=("embedded", "truthsim-dev", "own"),
+                    default=("embedded", "truthsim-dev"), help="data sets (default: embedded truthsim-dev)")
+    ap.add_argument("--own-n", type=int, default=20, help="scenarios of the 'own' set (default 20)")
+    ap.add_argument("--own-seed", type=int, default=100, help="seed of its first scenario (default 100)")
+    args = ap.parse_args(argv)
+    rows, per_log = [], []
+    for dname, (logs, names) in _data_sets(args.data, args.own_n, args.own_seed).items():
+        dyn, dr = DynamicPredictor("gunnerus").fit(), DeadReckoning("gunnerus").fit()
+        arrays = [as_log_arrays(x, dyn.model.vessel) for x in logs]
+        base = {"physics": [drift_errors(dyn, a) for a in arrays],
+                "dead_reckoning": [drift_errors(dr, a) for a in arrays]}
+        results = dict(base)
+        for vname in args.only:
+            t0 = time.perf_counter()
+            fields, what = VARIANTS[vname]
+            hp = HybridPredictor("gunnerus", ensemble_config=TINY, drift_hull=False,
+                                 environment_config=C(**fields)).fit(arrays, dp_only=True)
+            results[vname] = [drift_errors(hp, a, nets=False) for a in arrays]
+            rows.append(table_row(dname, vname, what, results[vname], base["physics"], base["dead_reckoning"]))
+            print(rows[-1], f"({time.perf_counter() - t0:.0f} s)", flush=True)
+        for ref, what in (("physics", "the physics alone"), ("dead_reckoning", "constant velocity")):
+            rows.append(table_row(dname, ref, what, base[ref], base["physics"], base["dead_reckoning"]))
+        per_log += [{"data": dname, "predictor": name, "log": log, "state": state,
+                     "later_mae": float(e["later"][:, j].mean()), "later_starts": int(e["later"].shape[0])}
+                    for name, errs in results.items() for log, e in zip(names, errs) for j, state in enumerate(STATES)]
+    df = pd.DataFrame(rows)
+    args.out.mkdir(parents=True, exist_ok=True)
+    write_text(args.out / "late_starts.csv", df.to_csv(index=False))
+    write_text(args.out / "late_starts_per_log.csv", pd.DataFrame(per_log).round({"later_mae": 3}).to_csv(index=False))
+    md = markdown_table(df) + "\n"
+    write_text(args.out / "late_starts.md", md)
+    print(md)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
