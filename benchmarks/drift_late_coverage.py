@@ -15,11 +15,15 @@ starts' calibration alone (``after_stop`` only, as before). Prints (and with ``-
 writes) per log and pooled, at 60 s: the share of the logged north/east positions (pooled)
 and headings inside the calibrated 2-sigma band, the mean 1-sigma band and the
 root-mean-square error [m], and how many starts carry the note that they lie beyond the
-calibrated starts.
+calibrated starts. A second table gives the later starts' 60-s mean absolute errors in north,
+east [m] and heading [deg] for the hybrid, the physics alone and dead reckoning (pooled: the
+mean over all later starts).
 
-Usage: ``python benchmarks/drift_late_coverage.py [--members N] [--out FILE]`` (about ten
-minutes on one core with the default 10 members); the page's table:
-``--out docs/results/drift-late-coverage/drift_late_coverage.md``.
+Usage: ``python benchmarks/drift_late_coverage.py [--members N] [--station-keeping-walks] [--out FILE]``
+(about ten minutes on one core with the default 10 members); the page's table:
+``--out docs/results/drift-late-coverage/drift_late_coverage.md``, and with the estimator
+before 2026-11-30 (the station keeping's load walks through the drift too)
+``--station-keeping-walks --out docs/results/drift-late-coverage/station_keeping_walks.md``.
 """
 
 from __future__ import annotations
@@ -35,9 +39,10 @@ import pandas as pd
 
 from hybridship.fileio import markdown_table, write_text
 from hybridship.frames import wrap_pi
-from hybridship.predictors import HybridPredictor
+from hybridship.predictors import DeadReckoning, DynamicPredictor, HybridPredictor
 from hybridship.predictors.hybrid import AFTER_STOP_LATE
 from hybridship.residual.ensemble import EnsembleConfig
+from hybridship.residual.environment import EnvironmentConfig
 
 ROOT = Path(__file__).resolve().parents[1]
 DEFAULT_DATA = ROOT.parent / "shared" / "data" / "truthsim-dev" / "logs"
@@ -68,20 +73,61 @@ def score(hp, log: pd.DataFrame, starts: list[float]) -> dict:
             "noted as late": int(sum("within 20 s of a failure" in n for n in fc.notes))}
 
 
+def _environment_config(station_keeping_walks: bool) -> EnvironmentConfig:
+    """The default estimator's settings, or with the station keeping's load walks after a stop too."""
+    c = EnvironmentConfig()
+    if not station_keeping_walks:
+        return c
+    return EnvironmentConfig(load_walk_after_stop_m_s2=c.load_walk_m_s2,
+                             load_yaw_walk_after_stop_rad_s2=c.load_yaw_walk_rad_s2)
+
+
+def late_errors(models: dict, log: pd.DataFrame, starts: list[float]) -> dict:
+    """The 60-s absolute errors (starts, 3) [m, m, deg] of each of ``models`` (name -> predictor)
+    from ``starts`` on ``log``: north, east and the wrapped heading."""
+    t = np.round(log.time_s.to_numpy(), 6)
+    rows = np.searchsorted(t, np.round(np.asarray(starts) + HORIZON_S, 6))
+    truth = log[["north_m", "east_m"]].to_numpy()[rows]
+    psi = np.radians(log.heading_deg.to_numpy()[rows])
+    out = {}
+    for name, model in models.items():
+        eta = model.forecast(log, starts, HORIZON_S).eta[:, -1]
+        out[name] = np.column_stack([np.abs(eta[:, :2] - truth), np.degrees(np.abs(wrap_pi(eta[:, 2] - psi)))])
+    return out
+
+
+def error_table(errors: dict) -> pd.DataFrame:
+    """Per log (and pooled over all starts) the mean of :func:`late_errors`: columns
+    ``<model> north_m / east_m / yaw_deg``."""
+    names = list(next(iter(errors.values())))
+    pooled = {m: np.concatenate([e[m] for e in errors.values()]) for m in names}
+    rows = []
+    for log, errs in {**errors, "pooled": pooled}.items():
+        row = {"log": log, "starts": len(errs[names[0]])}
+        for m in names:
+            row[f"{m} north/east/heading"] = "/".join(f"{x:.2f}" for x in errs[m].mean(axis=0))
+        rows.append(row)
+    return pd.DataFrame(rows)
+
+
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--data", type=Path, default=DEFAULT_DATA, help="folder of truthsim-dev logs")
     ap.add_argument("--members", type=int, default=10, help="ensemble members (default 10, the default)")
     ap.add_argument("--out", type=Path, default=None, help="also write the table to this Markdown file")
+    ap.add_argument("--station-keeping-walks", action="store_true",
+                    help="filter the drift with the station keeping's load walks (the estimator before 2026-11-30)")
     args = ap.parse_args(argv)
     files = sorted(args.data.glob("*.csv.gz")) if args.data.is_dir() else []
     if not files:
         print(f"no logs found in {args.data}; nothing to do", file=sys.stderr)
         return 1
     logs = {f.name.split("_seed")[0]: pd.read_csv(f) for f in files}
-    rows = []
+    rows, errors = [], {}
+    baselines = {"physics": DynamicPredictor("gunnerus").fit(), "dead_reckoning": DeadReckoning("gunnerus").fit()}
     for name, log in logs.items():
-        hp = HybridPredictor("gunnerus", ensemble_config=EnsembleConfig(n_members=args.members, seed=0))
+        hp = HybridPredictor("gunnerus", ensemble_config=EnsembleConfig(n_members=args.members, seed=0),
+                             environment_config=_environment_config(args.station_keeping_walks))
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")         # the logs' fault notes are not the point here
             hp.fit([other for n, other in logs.items() if n != name])
@@ -94,6 +140,7 @@ def main(argv=None) -> int:
                                           groups["20 s and later"])):
                 rows.append({"log": name, "starts after the failure": group, **score(model, log, starts)})
                 print(rows[-1], flush=True)
+            errors[name] = late_errors({"hybrid": hp, **baselines}, log, groups["20 s and later"])
     res = pd.DataFrame(rows)
     for group, g in res.groupby("starts after the failure", sort=False):
         w = g["starts"].to_numpy(float)
@@ -105,7 +152,9 @@ def main(argv=None) -> int:
         res = pd.concat([res, pd.DataFrame([pooled])], ignore_index=True)
     res = res.round({"north/east in 2 sigma": 2, "heading in 2 sigma": 2, "mean 1-sigma [m]": 2, "RMS error [m]": 2})
     text = (f"60-s forecasts after the failure of each truthsim-dev log, the hybrid fitted on the other five "
-            f"({args.members} members); nominal 2-sigma coverage 0.954:\n\n" + markdown_table(res) + "\n")
+            f"({args.members} members); nominal 2-sigma coverage 0.954:\n\n" + markdown_table(res) + "\n\n"
+            "Mean absolute 60-s error of the starts 20 s and later after the failure, north / east [m] / "
+            "heading [deg]:\n\n" + markdown_table(error_table(errors)) + "\n")
     print(text)
     if args.out is not None:
         write_text(args.out, text)
