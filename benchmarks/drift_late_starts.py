@@ -44,7 +44,8 @@ from hybridship.residual.environment import EnvironmentConfig
 TRUTHSIM = Path(__file__).resolve().parents[1].parent / "shared" / "data" / "truthsim-dev" / "logs"
 HORIZON_S = 60.0
 C = EnvironmentConfig
-_ON_STATION = dict(load_walk_after_stop_m_s2=C().load_walk_m_s2, load_yaw_walk_after_stop_rad_s2=C().load_yaw_walk_rad_s2)
+_ON_STATION = dict(load_walk_after_stop_m_s2=C().load_walk_m_s2,
+                   load_yaw_walk_after_stop_rad_s2=C().load_yaw_walk_rad_s2)
 #: name -> (EnvironmentConfig fields, what the row shows)
 VARIANTS = {
     "default": ({}, f"the default: load walks after a stop {C().load_walk_after_stop_m_s2:g} m/s2 and "

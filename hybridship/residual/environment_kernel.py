@@ -357,8 +357,8 @@ def _restarted(z_i, x, Pc, keep_environment, gap_s, prior_thr, prior_sd, q_base)
 
 @numba.njit(cache=True)
 def filter_grid(grid, slot, t, seg, z, z_ok, r_std, rpm, az, wind, dp, P, per_thruster, prior_thr, prior_sd, q_base,
-                q_base_stopped, fd_step, reset_at_stop, kept, stop_std, yaw_prior, current_stop_std, load_to_current, drift_yaw_uv,
-                gate, max_gated, settle_s, max_bridge_s, step_s, resume, x_resume,
+                q_base_stopped, fd_step, reset_at_stop, kept, stop_std, yaw_prior, current_stop_std, load_to_current,
+                drift_yaw_uv, gate, max_gated, settle_s, max_bridge_s, step_s, resume, x_resume,
                 P_resume, settle_io, out_x, out_P, done):
     """Run the filter over the log rows ``grid`` (increasing).
 
@@ -376,7 +376,8 @@ def filter_grid(grid, slot, t, seg, z, z_ok, r_std, rpm, az, wind, dp, P, per_th
     the current-load ridge by ``current_stop_std`` [m/s] (:func:`current_ridge_at_stop`; 0: not).
     While ``dp`` is 0 at a step's first row, the process model adds the hull's yaw
     acceleration in a drift ``drift_yaw_uv u v`` [rad/s^2], and its noise intensities are
-    ``q_base_stopped`` instead of ``q_base`` (the environment of a drifting ship changes faster). With ``resume``,
+    ``q_base_stopped`` instead of ``q_base`` (the environment of a drifting ship changes
+    faster). With ``resume``,
     ``x_resume, P_resume`` is the estimate at ``grid[0]`` (of an earlier run) and the filter
     goes on from there. Measurements beyond ``gate`` standard deviations are outliers
     (:func:`update`; ``max_gated`` in a row are followed); a restart resets that count.
