@@ -102,6 +102,8 @@ def froude_scaled_environment(vessel, reference="gunnerus"):
         yaw_rate_std_deg_s=d.yaw_rate_std_deg_s * s, yaw_accel_noise_rad_s2=d.yaw_accel_noise_rad_s2 * lam,
         current_prior_m_s=d.current_prior_m_s / s, load_yaw_prior_rad_s2=d.load_yaw_prior_rad_s2 * lam,
         load_walk_m_s2=d.load_walk_m_s2 * np.sqrt(s), load_yaw_walk_rad_s2=d.load_yaw_walk_rad_s2 * lam * np.sqrt(s),
+        load_walk_after_stop_m_s2=d.load_walk_after_stop_m_s2 * np.sqrt(s),
+        load_yaw_walk_after_stop_rad_s2=d.load_yaw_walk_after_stop_rad_s2 * lam * np.sqrt(s),
         wave_window_s=d.wave_window_s / s, variance_window_s=d.variance_window_s / s,
         filter_step_s=round(d.filter_step_s / s, 1), held_load_window_s=d.held_load_window_s / s,
         held_load_block_s=d.held_load_block_s / s, wave_axis_window_s=d.wave_axis_window_s / s)

@@ -318,6 +318,25 @@ def test_a_load_that_changes_in_the_drift_is_followed_with_the_after_stop_walks(
     assert miss(new) < 0.5 * miss(old)
 
 
+
+def test_a_long_gap_in_a_drift_grows_the_load_with_the_after_stop_walks(model):
+    """A gap in a drift longer than ``max_bridged_gap_s`` restarts the motion states and keeps
+    the environment, its covariance grown over the gap: with the after-stop walks, as across a
+    bridged gap, not the station keeping's (an 11-s gap then left the load less uncertain
+    than a bridged 9-s one)."""
+    log = physics_log(model, duration_s=1000, t_shutdown_s=800, seed=7, tau_ext_N=(3000.0, 3000.0, 0.0))
+    i0 = int(np.flatnonzero(as_log_arrays(log, model.vessel).dp_active == 0)[0])
+    lo = i0 + 60
+    a = as_log_arrays(log.drop(index=range(lo, lo + 59)).reset_index(drop=True), model.vessel)
+    gap = a.time_s[lo] - a.time_s[lo - 1]
+    assert a.dp_active[lo - 1] == 0 and gap > EnvironmentConfig().max_bridged_gap_s
+    c = EnvironmentConfig()
+    est = EnvironmentEstimator(model, c).run(a, [lo - 1, lo])
+    np.testing.assert_allclose(est.x[1, 3:6], a.nu[lo], atol=1e-9)        # restarted
+    grown = np.diag(est.P[1])[8:11] - np.diag(est.P[0])[8:11]
+    want = np.array([c.load_walk_after_stop_m_s2] * 2 + [c.load_yaw_walk_after_stop_rad_s2]) ** 2 * gap
+    np.testing.assert_allclose(grown, want, rtol=1e-6)
+
 def test_current_widened_at_the_stop_keeps_the_estimate_and_lets_the_drift_find_the_current(model):
     """A 0.3 m/s current alone, station keeping, then a failure. Widened along the
     current-load ridge at the stop (``current_std_at_stop_m_s``), the estimate at the stop is

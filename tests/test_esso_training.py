@@ -104,6 +104,12 @@ def test_the_env_variant_runs_the_estimator_with_froude_scaled_settings(et):
     assert c.position_std_m == pytest.approx(d.position_std_m / lam)
     assert c.velocity_std_m_s == pytest.approx(d.velocity_std_m_s / math.sqrt(lam))
     assert c.yaw_accel_noise_rad_s2 == pytest.approx(d.yaw_accel_noise_rad_s2 * lam)
+    # the load's walks after a stop scale as the station keeping's (a random walk gains lambda^(1/4)),
+    # so they stay faster than those on station
+    for after_stop, on_station in (("load_walk_after_stop_m_s2", "load_walk_m_s2"),
+                                   ("load_yaw_walk_after_stop_rad_s2", "load_yaw_walk_rad_s2")):
+        assert getattr(c, after_stop) / getattr(c, on_station) == pytest.approx(
+            getattr(d, after_stop) / getattr(d, on_station))
     assert (c.accel_noise_m_s2, c.heading_std_deg, c.filter_step_s) == (d.accel_noise_m_s2, d.heading_std_deg, 0.3)
     assert hybrid.environment_window_s >= c.held_load_window_s
     same = et.froude_scaled_environment(load_vessel("gunnerus"))

@@ -367,7 +367,8 @@ def filter_grid(grid, slot, t, seg, z, z_ok, r_std, rpm, az, wind, dp, P, per_th
     ``max_bridge_s`` [s] is filtered across: the process model predicts through the gap in
     about ``step_s``-long steps (the grid's), as without measurements. A longer gap (or a
     lost estimate) restarts the motion states from the measurement and keeps the
-    environment, whose covariance grows by the process noise over the gap. Rows whose
+    environment, whose covariance grows by the process noise over the gap (``q_base_stopped``
+    when the thrusters were stopped at the last filtered row, as across a bridged gap). Rows whose
     position or heading is missing cannot start the filter: a new segment restarts at its
     first row with them.
     At a thrust stop (``dp`` 1 -> 0) the yaw environment restarts with ``reset_at_stop``
@@ -417,8 +418,10 @@ def filter_grid(grid, slot, t, seg, z, z_ok, r_std, rpm, az, wind, dp, P, per_th
                 # else: prev stays the last filtered row, so the next row with a position
                 # restarts the new segment (not a prediction across the gap)
                 continue
-            x, Pc = _restarted(z[i], x, Pc, started and finite, max(t[i] - t[prev], 0.0), prior_thr, prior_sd,
-                               q_base)
+            # the environment walks over the gap as across a bridged one: stopped or not at the last row
+            keep = started and finite
+            x, Pc = _restarted(z[i], x, Pc, keep, max(t[i] - t[prev], 0.0), prior_thr, prior_sd,
+                               q_base if not keep or dp[prev] else q_base_stopped)
             gated[:] = 0
             started = True
             settle_until = t[i] + settle_s
