@@ -58,11 +58,22 @@ def starts_after_failure(log: pd.DataFrame) -> dict[str, list[float]]:
     return {"first 20 s": [float(x) for x in t[b:b + 20]], "20 s and later": [float(x) for x in late]}
 
 
+def truth_rows(log: pd.DataFrame, starts: list[float]) -> np.ndarray:
+    """The rows of ``log`` logged 60 s after each of ``starts`` [s]; a start without one (a gap
+    in the log there) is refused rather than scored against a later row."""
+    t = np.round(log.time_s.to_numpy(), 6)
+    want = np.round(np.asarray(starts, dtype=float) + HORIZON_S, 6)
+    rows = np.minimum(np.searchsorted(t, want), len(t) - 1)
+    missing = t[rows] != want
+    if missing.any():
+        raise ValueError(f"log: no sample at {want[missing][0]:g} s, {HORIZON_S:g} s after a start")
+    return rows
+
+
 def score(hp, log: pd.DataFrame, starts: list[float]) -> dict:
     """Coverage, band and error at 60 s of ``hp``'s forecasts from ``starts`` on ``log``."""
     fc = hp.forecast(log, starts, HORIZON_S)
-    t = np.round(log.time_s.to_numpy(), 6)
-    rows = np.searchsorted(t, np.round(np.asarray(starts) + HORIZON_S, 6))
+    rows = truth_rows(log, starts)
     ne = fc.eta[:, -1, :2] - log[["north_m", "east_m"]].to_numpy()[rows]
     dpsi = np.abs(wrap_pi(fc.eta[:, -1, 2] - np.radians(log.heading_deg.to_numpy()[rows])))
     sd = fc.eta_std[:, -1, :]
@@ -85,8 +96,7 @@ def _environment_config(station_keeping_walks: bool) -> EnvironmentConfig:
 def late_errors(models: dict, log: pd.DataFrame, starts: list[float]) -> dict:
     """The 60-s absolute errors (starts, 3) [m, m, deg] of each of ``models`` (name -> predictor)
     from ``starts`` on ``log``: north, east and the wrapped heading."""
-    t = np.round(log.time_s.to_numpy(), 6)
-    rows = np.searchsorted(t, np.round(np.asarray(starts) + HORIZON_S, 6))
+    rows = truth_rows(log, starts)
     truth = log[["north_m", "east_m"]].to_numpy()[rows]
     psi = np.radians(log.heading_deg.to_numpy()[rows])
     out = {}

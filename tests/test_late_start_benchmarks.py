@@ -42,3 +42,15 @@ def test_the_late_coverage_error_table_pools_every_start():
     assert got.loc["pooled", "hybrid north/east/heading"] == "3.00/4.00/5.00"
     assert got.loc["pooled", "physics north/east/heading"] == f"{8 / 3:.2f}/{8 / 3:.2f}/{8 / 3:.2f}"
     assert isinstance(table, pd.DataFrame)
+
+
+def test_the_late_coverage_truth_is_the_sample_60_s_after_each_start():
+    """The truth rows are those logged 60 s after the starts; a gap there is refused, not scored
+    against a later sample."""
+    import pytest
+
+    lc = load_benchmark("drift_late_coverage")
+    log = pd.DataFrame({"time_s": np.arange(0.0, 200.0)})
+    np.testing.assert_array_equal(lc.truth_rows(log, [10.0, 100.0]), [70, 160])
+    with pytest.raises(ValueError, match="no sample at 160 s"):
+        lc.truth_rows(log.drop(index=160).reset_index(drop=True), [10.0, 100.0])
