@@ -37,7 +37,10 @@ def wrap_pi(angle_rad):
     w = np.mod(a + np.pi, 2.0 * np.pi) - np.pi
     # np.mod rounds to 2 pi itself for an argument just below a multiple of 2 pi (pi - 1e-16
     # came back as pi); that end of the interval is open, its angle is -pi
-    return w - 2.0 * np.pi * (w >= np.pi)
+    w = w - 2.0 * np.pi * (w >= np.pi)
+    # an angle already in range is returned as it is: the round trip through + pi, mod and
+    # - pi can move it by a rounding step (a rudder at its 35-deg stop came back beyond it)
+    return np.where((a >= -np.pi) & (a < np.pi), a, w)[()]
 
 
 def wrap_2pi(angle_rad):

@@ -317,10 +317,14 @@ EDGES = [np.nextafter(-np.pi, -4), -np.pi, np.nextafter(np.pi, 4), np.pi, -3 * n
 @given(a=st.one_of(st.sampled_from(EDGES), st.floats(-1e3, 1e3)))
 def test_wrapped_angles_lie_in_their_half_open_ranges_and_keep_the_angle(a):
     """wrap_pi in [-pi, pi), wrap_2pi in [0, 2 pi), the wind curves' angle in (-pi, pi], each the
-    same direction as the input (np.mod alone returned pi, 2 pi and -pi at the edges)."""
+    same direction as the input (np.mod alone returned pi, 2 pi and -pi at the edges); wrap_pi
+    returns an angle already in its range unchanged."""
     for w, lo_ok, hi_ok in ((frames.wrap_pi(a), lambda w: w >= -np.pi, lambda w: w < np.pi),
                             (frames.wrap_2pi(a), lambda w: w >= 0.0, lambda w: w < 2 * np.pi)):
         assert lo_ok(w) and hi_ok(w), (a, w)
+    # an angle already in range comes back exactly (not moved by the wrap's rounding)
+    if -np.pi <= a < np.pi:
+        assert frames.wrap_pi(a) == a, a
         # same direction: cos and sin agree to the rounding of a (|a| <= 1e3: 1e-13 rad)
         assert abs(np.cos(w) - np.cos(a)) < 1e-12 and abs(np.sin(w) - np.sin(a)) < 1e-12
     g = wind._wrap_gamma(a)                         # the wind curves' wrap: (-pi, pi]

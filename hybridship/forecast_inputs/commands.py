@@ -80,8 +80,7 @@ def wrap_and_clip_angles(azimuth_rad: np.ndarray, env, clip: bool, batch: int):
     clipped : ndarray of bool, shape (B,), or None
         Where something was clipped; None when the envelope has no angle limits.
     """
-    x = np.asarray(azimuth_rad, dtype=float)
-    a = np.where((x >= -np.pi) & (x < np.pi), x, wrap_pi(x))    # wrapping an angle in range may move it by an ulp
+    a = wrap_pi(azimuth_rad)
     if not env.max_angle_rad:
         return a, None
     lim = np.asarray(env.max_angle_rad, dtype=float)
