@@ -382,10 +382,12 @@ def _learned_from_failures(info: dict) -> list[str]:
     hull = info.get("drift_hull")
     if hull is not None:
         kept = "kept" if hull["adopted"] else "not kept"
-        left_out = hull["error_left_out_deg"]
+        left_out, p = hull["error_left_out_deg"], hull.get("p_value")     # no p in files before 2026-11-30
+        test = "" if p is None else (f", {hull['n_left_out_gains']} of {hull['n_failures']} better, "
+                                     f"signed-rank p = {p:.3g}")
         lines.append(f"hull's yaw moment in a drift: {hull['munk_multiple']:g} x Munk on {hull['n_failures']} "
                      f"failures, {kept} (heading {hull['error_deg']:.2f} deg against {hull['error_zero_deg']:.2f} "
-                     f"without; left-out failures {'-' if left_out is None else f'{left_out:.2f}'} deg)")
+                     f"without; left-out failures {'-' if left_out is None else f'{left_out:.2f}'} deg{test})")
     prior = info.get("thrust_error_prior")
     if prior is not None:
         mean = ", ".join(f"{m:+.2f}" for m in prior["learned_mean"])

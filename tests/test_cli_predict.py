@@ -316,7 +316,11 @@ def test_train_reports_what_it_learned_from_failures():
     prior = {"learned_mean": [0.5, -0.36, -0.24], "kept": False, "n_failures": 6,
              "position_error_m": [2.111, 2.117], "heading_error_deg": [3.64, 3.72]}
     hull_line, prior_line = _learned_from_failures({"drift_hull": hull, "thrust_error_prior": prior})
-    assert "0.65 x Munk on 6 failures, kept" in hull_line and "left-out failures 2.42 deg" in hull_line
+    assert "0.65 x Munk on 6 failures, kept" in hull_line and "left-out failures 2.42 deg)" in hull_line
+    tested, = _learned_from_failures({"drift_hull": {**hull, "adopted": False, "n_left_out_gains": 3,
+                                                     "p_value": 0.2188}})
+    assert tested.endswith("not kept (heading 2.25 deg against 3.64 without; left-out failures 2.42 deg, "
+                           "3 of 6 better, signed-rank p = 0.219)")
     assert "(+0.50, -0.36, -0.24): not kept" in prior_line
     assert "position 2.117 m against 2.111 m, heading 3.72 deg against 3.64 deg" in prior_line
     few = _learned_from_failures({"thrust_error_prior": {"learned_mean": [0.1, 0.0, 0.0], "kept": False,

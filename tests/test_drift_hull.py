@@ -12,7 +12,8 @@ from hypothesis import strategies as st
 from hybridship.physics.hull import mass_matrices
 from hybridship.physics.model import DynamicModel
 from hybridship.predictors import HybridPredictor, as_log_arrays
-from hybridship.residual.drift_hull import MUNK_MULTIPLES, choose_coefficient, drift_start_rows, munk_coefficient
+from hybridship.residual.drift_hull import (KEEP_P_VALUE, MIN_FAILURES, MUNK_MULTIPLES, choose_coefficient,
+                                            drift_start_rows, munk_coefficient)
 from hybridship.residual.ensemble import EnsembleConfig
 from hybridship.sim.synthetic import physics_log
 
@@ -26,14 +27,32 @@ def _bowl(best: float, depth: float = 1.0) -> np.ndarray:
 
 
 @settings(max_examples=30, deadline=None)
-@given(best=st.sampled_from([float(m) for m in MUNK_MULTIPLES if m != 0.0]), n=st.integers(2, 6))
-def test_failures_that_agree_give_their_coefficient(best, n):
-    """Failures whose errors are lowest at the same multiple: that one is chosen and kept."""
+@given(best=st.sampled_from([float(m) for m in MUNK_MULTIPLES if m != 0.0]), n=st.integers(2, 8))
+def test_failures_that_agree_give_their_coefficient_from_five_on(best, n):
+    """Failures whose errors are lowest at the same multiple: that one is chosen, and every
+    left-out failure gains, so the signed-rank test gives 2**-n. It is kept from five
+    failures on (1/32 < 0.05); four that agree (1/16) are too few to tell from chance."""
     obj = np.column_stack([_bowl(best, 1.0 + 0.3 * j) for j in range(n)])
     c = choose_coefficient(obj, 0.005)
-    assert c.adopted and c.munk_multiple == best
-    assert c.coefficient_rad_per_m2 == pytest.approx(best * 0.005)
+    assert c.munk_multiple == best and c.n_left_out_gains == n
+    assert c.p_value == pytest.approx(2.0 ** -n)
+    assert c.adopted == (n >= MIN_FAILURES) == (c.p_value < KEEP_P_VALUE)
+    assert c.coefficient_rad_per_m2 == (pytest.approx(best * 0.005) if n >= MIN_FAILURES else 0.0)
     assert c.error_deg < c.error_zero_deg and c.n_failures == n
+
+
+def test_a_mean_gain_that_half_the_failures_pay_for_is_not_kept():
+    """Twenty failures, as on our own twenty of 2026-11-30: eleven gain a little from +1 and
+    nine lose a little more each. Every fold chooses +1, and the left-out failures' mean error
+    is below that of k = 0 (the check before the signed-rank test kept it), but the gains
+    are no more often or larger than the losses, so it is not kept."""
+    gain, loss = 0.01, 0.011
+    e0 = 0.05 + 0.001 * np.arange(20)
+    obj = np.vstack([e0 + 0.1, e0, e0 - np.r_[np.full(11, gain), np.full(9, -loss)]])     # rows: -1, 0, +1
+    c = choose_coefficient(obj, 0.005, multiples=[-1.0, 0.0, 1.0])
+    assert c.munk_multiple == 1.0 and c.error_left_out_deg < c.error_zero_deg
+    assert c.n_left_out_gains == 11 and c.p_value > 0.5
+    assert not c.adopted and c.coefficient_rad_per_m2 == 0.0
 
 
 def test_a_choice_that_does_not_carry_over_to_a_left_out_failure_is_not_kept():
@@ -45,9 +64,10 @@ def test_a_choice_that_does_not_carry_over_to_a_left_out_failure_is_not_kept():
     assert c.error_deg < c.error_zero_deg
     assert not c.adopted and c.coefficient_rad_per_m2 == 0.0 and c.error_left_out_deg > c.error_zero_deg
     alone = choose_coefficient(obj, 0.005, exclude=2)
-    assert alone.munk_multiple == 1.0 and alone.adopted and alone.n_failures == 2
+    assert alone.munk_multiple == 1.0 and alone.n_failures == 2 and alone.n_left_out_gains == 2
+    assert not alone.adopted and alone.p_value == 0.25                  # two that agree are too few
     one = choose_coefficient(obj[:, :1], 0.005)
-    assert not one.adopted and one.error_left_out_deg is None     # no failure to check it on
+    assert not one.adopted and one.error_left_out_deg is None and one.p_value is None    # no failure to check it on
 
 
 def test_a_choice_that_only_ties_zero_out_of_sample_is_not_kept():
@@ -103,7 +123,7 @@ def test_drift_starts_lie_in_the_first_drift_and_its_gap_free_segment():
     np.testing.assert_array_equal(drift_start_rows(dp, gap, 60, 10), np.arange(100, 120, 10))
 
 
-def _wind_drift_logs(model, sway_added_mass_scale: float, seeds=(20, 21, 22, 23)):
+def _wind_drift_logs(model, sway_added_mass_scale: float, seeds=(20, 21, 22, 23, 24, 25)):
     """Failures of a ship whose sway added mass is the model's times the scale, under a steady
     wind the model knows: the only model error after a failure is in the hull."""
     spec = model.vessel.model_dump()
@@ -114,7 +134,8 @@ def _wind_drift_logs(model, sway_added_mass_scale: float, seeds=(20, 21, 22, 23)
 
 @pytest.fixture(scope="module")
 def heavy_sway(model):
-    """Four failures of a ship with 1.6 times the model's sway added mass, and a hybrid fitted on them."""
+    """Six failures of a ship with 1.6 times the model's sway added mass, and a hybrid fitted on them
+    (the drift benchmark needs five others per scored failure)."""
     logs = _wind_drift_logs(model, 1.6)
     return logs, HybridPredictor(model.vessel, ensemble_config=TINY).fit(logs)
 
@@ -128,13 +149,14 @@ def test_a_sway_added_mass_error_is_learned_as_its_munk_moment(model, scale, hea
     and it lowers the failures' heading error."""
     _, M_A = mass_matrices(model.vessel)
     want = -(scale - 1.0) * M_A[1, 1] / (M_A[1, 1] - M_A[0, 0])
-    # the lighter ship from three failures, the fewest fit chooses from
+    # the lighter ship from five failures, the fewest fit chooses from
     hp = heavy_sway[1] if scale == 1.6 else \
-        HybridPredictor(model.vessel, ensemble_config=TINY).fit(_wind_drift_logs(model, scale, (20, 21, 22)))
+        HybridPredictor(model.vessel, ensemble_config=TINY).fit(_wind_drift_logs(model, scale, (20, 21, 22, 23, 24)))
     info = hp.training_info["drift_hull"]
     assert info["adopted"] and 0.4 <= info["munk_multiple"] / want <= 1.25, (info, want)
     assert hp.drift_yaw_uv_rad_per_m2 == pytest.approx(info["munk_multiple"] * munk_coefficient(hp.model))
-    assert info["error_deg"] < 0.8 * info["error_zero_deg"] and info["n_failures"] == (4 if scale == 1.6 else 3)
+    assert info["error_deg"] < 0.8 * info["error_zero_deg"] and info["n_failures"] == (6 if scale == 1.6 else 5)
+    assert info["n_left_out_gains"] == info["n_failures"] and info["p_value"] < KEEP_P_VALUE
 
 
 def _recording_objective(monkeypatch) -> list:
@@ -150,9 +172,9 @@ def _recording_objective(monkeypatch) -> list:
 
 
 def test_a_hull_without_error_gets_none(model, monkeypatch):
-    """The model's own hull (three failures): the forecasts' heading error is lowest at k = 0 and
+    """The model's own hull (five failures): the forecasts' heading error is lowest at k = 0 and
     the fit keeps none."""
-    logs = _wind_drift_logs(model, 1.0, (20, 21, 22))
+    logs = _wind_drift_logs(model, 1.0, (20, 21, 22, 23, 24))
     seen = _recording_objective(monkeypatch)
     hp = HybridPredictor(model.vessel, ensemble_config=TINY).fit(logs)
     info = hp.training_info["drift_hull"]
@@ -217,19 +239,19 @@ def test_the_filter_uses_the_coefficient_after_a_failure_so_the_yaw_load_does_no
 
 def test_a_gap_in_a_training_drift_is_not_scored_across(model, heavy_sway):
     """A training log missing 20 s of its drift: fit still chooses, from the drift before the
-    gap; three failures are enough to choose."""
-    logs = [log.copy() for log in heavy_sway[0][:3]]
+    gap; five failures are enough to choose."""
+    logs = [log.copy() for log in heavy_sway[0][:5]]
     logs[0] = logs[0].drop(index=range(900, 920)).reset_index(drop=True)
     hp = HybridPredictor(model.vessel, ensemble_config=TINY).fit(logs)
-    assert hp.training_info["drift_hull"]["n_failures"] == 3 and hp.drift_yaw_uv_rad_per_m2 != 0.0
+    assert hp.training_info["drift_hull"]["n_failures"] == 5 and hp.drift_yaw_uv_rad_per_m2 != 0.0
 
 
-def test_fit_needs_three_failures_and_the_option(model, heavy_sway):
-    logs = heavy_sway[0][:3]
-    two = HybridPredictor(model.vessel, ensemble_config=TINY).fit(logs[:2])
+def test_fit_needs_five_failures_and_the_option(model, heavy_sway):
+    logs = heavy_sway[0][:5]
+    four = HybridPredictor(model.vessel, ensemble_config=TINY).fit(logs[:4])
     off = HybridPredictor(model.vessel, ensemble_config=TINY, drift_hull=False).fit(logs)
     held = HybridPredictor(model.vessel, ensemble_config=TINY, stop_after_failure=False).fit(logs)
-    for hp in (two, off, held):        # with three failures and the option, it does: the test above
+    for hp in (four, off, held):        # with five failures and the option, it does: the tests above
         assert "drift_hull" not in hp.training_info and hp.drift_yaw_uv_rad_per_m2 == 0.0
 
 
@@ -268,13 +290,13 @@ def left_out_choices(model, heavy_sway):
     hp = copy.deepcopy(heavy_sway[1])                 # the benchmark changes the coefficient
     with pytest.MonkeyPatch.context() as mp:
         seen = _recording_objective(mp)
-        _, per_log = _drift_hull_per_log(hp, logs, True, 60.0, ["a", "b", "c", "d"], lambda m: None)
+        _, per_log = _drift_hull_per_log(hp, logs, True, 60.0, list("abcdef"), lambda m: None)
     return hp, logs, seen, per_log
 
 
 def test_the_drift_benchmark_chooses_it_without_the_scored_failure(heavy_sway, left_out_choices):
     """Scored on its own training logs, each failure is forecast with the coefficient chosen
-    on the other failures (never one that saw it); with fewer than three others, with none;
+    on the other failures (never one that saw it); with fewer than five others, with none;
     scored on other logs, with fit's."""
     from hybridship.evaluation.drift import _drift_hull_per_log
 
@@ -283,20 +305,21 @@ def test_the_drift_benchmark_chooses_it_without_the_scored_failure(heavy_sway, l
     hp, logs, seen, per_log = left_out_choices
     hp = copy.deepcopy(hp)
     fitted = heavy_sway[1].drift_yaw_uv_rad_per_m2
-    assert len(seen) == 1 and seen[0].shape[1] == 4     # one objective over all four failures
+    assert len(seen) == 1 and seen[0].shape[1] == 6     # one objective over all six failures
     objective = seen[0]
     for k, c in enumerate(per_log):
         assert c == choose_coefficient(objective, munk_coefficient(hp.model), exclude=k)
-        assert c.n_failures == 3
+        assert c.n_failures == 5 and c.adopted
     from hybridship.evaluation.drift import _drift_hull_table
 
-    table = _drift_hull_table(hp, per_log, list("abcd"))        # drift_hull.csv: what each failure got, and why
+    table = _drift_hull_table(hp, per_log, list("abcdef"))      # drift_hull.csv: what each failure got, and why
     np.testing.assert_array_equal(table.error_left_out_deg, [c.error_left_out_deg for c in per_log])
     np.testing.assert_array_equal(table.coefficient_rad_per_m2, [c.coefficient_rad_per_m2 for c in per_log])
-    assert list(table.n_failures) == [3] * 4 and set(table.source) == {"other logs' failures"}
+    np.testing.assert_array_equal(table.p_value, [c.p_value for c in per_log])
+    assert list(table.n_failures) == [5] * 6 and set(table.source) == {"other logs' failures"}
     assert hp.drift_yaw_uv_rad_per_m2 == 0.0
-    _, few = _drift_hull_per_log(hp, logs[:3], True, 60.0, ["a", "b", "c"], lambda m: None)
-    assert few == [None, None, None]
+    _, few = _drift_hull_per_log(hp, logs[:5], True, 60.0, list("abcde"), lambda m: None)
+    assert few == [None] * 5
     hp.drift_yaw_uv_rad_per_m2 = fitted
     _, other = _drift_hull_per_log(hp, logs[:1], False, 60.0, ["a"], lambda m: None)
     assert other is None and hp.drift_yaw_uv_rad_per_m2 == fitted
@@ -324,7 +347,7 @@ def test_the_drift_benchmark_forecasts_each_failure_with_its_own_coefficient(lef
     assert hp.drift_yaw_uv_rad_per_m2 == 0.0
     want = [0.0 if c is None else c.coefficient_rad_per_m2 for c in per_log]
     assert want[1] == 0.0 and sum(w != 0.0 for w in want) >= 2          # the wiring is tested with both
-    assert sorted(set(seen)) == sorted(set(want)) and len(per_log_cal) == 4
+    assert sorted(set(seen)) == sorted(set(want)) and len(per_log_cal) == 6
     fc, _, pick, _ = drift._forecast_after_failures({"hybrid": (hp, {})}, arrays, 20, 60.0, (60,), hp,
                                                     per_log_cal, per_log)
     for k, a in enumerate(arrays):

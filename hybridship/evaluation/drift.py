@@ -333,7 +333,7 @@ def _drift_hull_per_log(hybrid, test_arrays, test_is_train: bool, horizon_s: flo
     would be scored on: each test log gets the coefficient chosen (and checked) on the
     *other* logs' failures whose drift can be scored
     (:func:`~hybridship.residual.drift_hull.drift_start_rows`), or 0 when they are fewer than
-    three. Returns timing rows and the list of
+    :data:`~hybridship.residual.drift_hull.MIN_FAILURES`. Returns timing rows and the list of
     :class:`~hybridship.residual.drift_hull.DriftHullChoice` (None entries: 0).
     """
     if not (test_is_train and hybrid.uses_drift_hull):
@@ -357,11 +357,13 @@ def _drift_hull_per_log(hybrid, test_arrays, test_is_train: bool, horizon_s: flo
 
 def _drift_hull_table(hybrid, per_log, names) -> pd.DataFrame:
     """``log,source,munk_multiple,adopted,coefficient_rad_per_m2,n_failures,error_deg,
-    error_zero_deg,error_left_out_deg``: the hull's yaw coefficient in a drift each test log
-    was forecast with, and the evidence it was chosen on (the failures' mean heading errors
-    along their drifts with it, with 0 and left out; see
+    error_zero_deg,error_left_out_deg,n_left_out_gains,p_value``: the hull's yaw coefficient in
+    a drift each test log was forecast with, and the evidence it was chosen on (the failures'
+    mean heading errors along their drifts with it, with 0 and left out, the left-out
+    failures it helped and the signed-rank test's p-value; see
     :class:`~hybridship.residual.drift_hull.DriftHullChoice`)."""
-    evidence = ("munk_multiple", "adopted", "n_failures", "error_deg", "error_zero_deg", "error_left_out_deg")
+    evidence = ("munk_multiple", "adopted", "n_failures", "error_deg", "error_zero_deg", "error_left_out_deg",
+                "n_left_out_gains", "p_value")
     cols = ["log", "source", "munk_multiple", "adopted", "coefficient_rad_per_m2", *evidence[2:]]
 
     def row(name, source, choice: dict | None, coefficient):
@@ -376,7 +378,8 @@ def _drift_hull_table(hybrid, per_log, names) -> pd.DataFrame:
     else:
         rows = [row(n, "other logs' failures", None if c is None else c.as_dict(),
                     0.0 if c is None else c.coefficient_rad_per_m2) for n, c in zip(names, per_log)]
-    return pd.DataFrame(rows, columns=cols).astype({"n_failures": "Int64"})
+    return pd.DataFrame(rows, columns=cols).astype({"n_failures": "Int64", "n_left_out_gains": "Int64",
+                                                    "p_value": float})
 
 
 def _calibrate_after_stop(hybrid, test_arrays, test_is_train: bool, calibration_scenarios: int, seed: int,

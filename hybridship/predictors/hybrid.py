@@ -69,6 +69,10 @@ WIND_ERROR_START_EVERY_S = 2.0
 #: Most forecasts rolled out at once when the hull's yaw moment in a drift is chosen (memory).
 DRIFT_HULL_BATCH = 4096
 
+#: Failures the training logs must hold before the thrust-error prior learned at their stops is
+#: checked (leave one out needs at least two others to learn from).
+THRUST_PRIOR_MIN_FAILURES = 3
+
 #: Where the hybrid's slowly varying environment comes from (see :class:`HybridPredictor`).
 ENVIRONMENT_SOURCES = ("estimator", "mean")
 #: Grid of log time [s] on which the environment filter of a forecast starts (the last grid
@@ -164,13 +168,13 @@ class HybridPredictor:
         spread (``environment="estimator"``) reports that spread alone, without this term.
     drift_hull : bool
         Learn the hull's yaw moment in a drift from the training logs' failures (the
-        default). With at least three failures in the training logs (``environment =
+        default). With at least five failures in the training logs (``environment =
         "estimator"``), :meth:`fit` chooses one coefficient ``k`` [rad/m^2] by the heading
         error of forecasts along those drifts, and forecasts that start after a failure add
         the yaw acceleration ``k u v`` (the environment estimator, after the failure, too);
-        it is kept only if it lowers the error of a
-        failure left out of the choice (:mod:`hybridship.residual.drift_hull`,
-        ``training_info["drift_hull"]``). Without failures in the training logs nothing changes.
+        it is kept only if it measurably lowers the error of failures left out of the choice
+        (a one-sided signed-rank test at 5 %; :mod:`hybridship.residual.drift_hull`,
+        ``training_info["drift_hull"]``). With fewer failures nothing changes.
     """
 
     #: Training modes of the nets.
@@ -411,7 +415,8 @@ class HybridPredictor:
                           UserWarning, stacklevel=3)
 
     def _fit_drift_hull(self, logs, horizon_s: float):
-        """With ``drift_hull`` and at least three failures in the training logs: the hull's yaw
+        """With ``drift_hull`` and at least :data:`~hybridship.residual.drift_hull.MIN_FAILURES`
+        failures in the training logs: the hull's yaw
         coefficient in a drift (:func:`~hybridship.residual.drift_hull.choose_coefficient` on
         :meth:`drift_hull_objective`). Returns what ``training_info["drift_hull"]`` records
         (None when nothing was chosen)."""
@@ -498,7 +503,7 @@ class HybridPredictor:
                   if drift_start_rows(a.dp_active, a.segment_id, int(round(horizon_s / a.dt_s)), 1).size]
         info = {"learned_mean": learned.thrust_error_mean.tolist(), "learned_std": learned.thrust_error_std.tolist(),
                 "n_failures": len(failed), "horizon_s": float(horizon_s), "kept": False}
-        if len(failed) >= DRIFT_HULL_MIN_FAILURES:
+        if len(failed) >= THRUST_PRIOR_MIN_FAILURES:
             errors = np.empty((2, len(failed), 2))
             for j, k in enumerate(failed):
                 others = EnvironmentEstimator(self.model, self.environment_config).fit(

@@ -24,11 +24,14 @@ mean absolute heading error over the horizon (:func:`choose_coefficient`). The c
 :data:`MUNK_MULTIPLES` of the model's own Munk coefficient (:func:`munk_coefficient`), so a
 multiple of 1 cancels the model's Munk moment in yaw.
 
-The coefficient is kept only where it helps out of sample: with one failure left out at a
-time, the coefficient chosen on the others must lower the left-out failure's error on
-average, compared with ``k = 0``; otherwise ``k`` stays 0 (:attr:`DriftHullChoice.adopted`).
-A few failures in different weather give noisy choices, and this check keeps a coefficient
-fitted to one failure's weather out of the forecasts.
+The coefficient is kept only where it measurably helps out of sample: with one failure
+left out at a time, the coefficient chosen on the others must lower the left-out failures'
+error on average, compared with ``k = 0``, and the per-failure gains must pass a one-sided
+Wilcoxon signed-rank test at :data:`KEEP_P_VALUE` (``scipy.stats.wilcoxon``); otherwise
+``k`` stays 0 (:attr:`DriftHullChoice.adopted`). A few failures in different weather give
+noisy choices: the mean alone once kept a coefficient that gained 0.3 % on average while
+half the left-out failures lost (``docs/concepts/drift-hull.md``). The test can pass only
+with :data:`MIN_FAILURES` failures or more (all five gaining gives p = 1/32).
 """
 
 from __future__ import annotations
@@ -37,16 +40,19 @@ from dataclasses import asdict, dataclass
 
 import numpy as np
 
-__all__ = ["MIN_FAILURES", "MUNK_MULTIPLES", "START_EVERY_S", "DriftHullChoice", "choose_coefficient",
-           "munk_coefficient", "drift_start_rows"]
+__all__ = ["KEEP_P_VALUE", "MIN_FAILURES", "MUNK_MULTIPLES", "START_EVERY_S", "DriftHullChoice",
+           "choose_coefficient", "munk_coefficient", "drift_start_rows"]
 
 #: Candidate coefficients as multiples of the model's Munk coefficient (-2 to 2 in steps of 0.05).
 MUNK_MULTIPLES = np.round(np.linspace(-2.0, 2.0, 81), 6)
 #: Spacing of the forecast starts along each drift that the coefficient is chosen on [s].
 START_EVERY_S = 10.0
-#: Failures the training logs must hold before a coefficient is chosen (the out-of-sample
-#: check needs at least two per left-out failure).
-MIN_FAILURES = 3
+#: Significance level of the out-of-sample check: the one-sided signed-rank test's p-value of
+#: the left-out failures' gains must be below it.
+KEEP_P_VALUE = 0.05
+#: Failures the training logs must hold before a coefficient is chosen: the fewest whose
+#: left-out gains can pass the check (p = 2**-n when all n gain; 1/16 for four).
+MIN_FAILURES = 5
 
 
 def munk_coefficient(model) -> float:
@@ -113,6 +119,12 @@ class DriftHullChoice:
     error_left_out_deg : float or None
         Mean over failures of the error of the candidate chosen without that failure [deg]
         (None with fewer than two failures: no check, not adopted).
+    p_value : float or None
+        One-sided Wilcoxon signed-rank p-value of the left-out failures' gains (error with
+        ``k = 0`` minus error with the left-out choice; zero gains dropped), None where
+        ``error_left_out_deg`` is; kept only below :data:`KEEP_P_VALUE`.
+    n_left_out_gains : int or None
+        Left-out failures whose error the left-out choice lowered.
     """
 
     coefficient_rad_per_m2: float
@@ -122,6 +134,8 @@ class DriftHullChoice:
     error_deg: float
     error_zero_deg: float
     error_left_out_deg: float | None
+    p_value: float | None = None
+    n_left_out_gains: int | None = None
 
     def as_dict(self) -> dict:
         return asdict(self)
@@ -147,7 +161,8 @@ def choose_coefficient(objective_rad: np.ndarray, munk_rad_per_m2: float, multip
     DriftHullChoice
         The candidate with the lowest mean error over the failures used, kept (non-zero
         ``coefficient_rad_per_m2``) only if leaving each failure out in turn, the candidate
-        chosen on the others lowers the left-out failures' mean error below that of ``k = 0``.
+        chosen on the others lowers the left-out failures' mean error below that of ``k = 0``
+        and their gains pass the signed-rank test at :data:`KEEP_P_VALUE`.
     """
     obj = np.asarray(objective_rad, dtype=float)
     multiples = np.asarray(multiples, dtype=float)
@@ -163,13 +178,29 @@ def choose_coefficient(objective_rad: np.ndarray, munk_rad_per_m2: float, multip
         raise ValueError("objective_rad: needs finite errors of at least one failure")
     best = int(obj[:, used].mean(axis=1).argmin())
     err_zero = float(obj[zero[0], used].mean())
-    left_out = None
+    left_out = p_value = n_gains = None
     if len(used) >= 2:
-        left_out = float(np.mean([obj[int(obj[:, [i for i in used if i != j]].mean(axis=1).argmin()), j]
-                                  for j in used]))
-    adopted = left_out is not None and left_out < err_zero and multiples[best] != 0.0
+        errors = np.array([obj[int(obj[:, [i for i in used if i != j]].mean(axis=1).argmin()), j] for j in used])
+        left_out = float(errors.mean())
+        gains = obj[zero[0], used] - errors
+        n_gains = int(np.sum(gains > 0))
+        p_value = _signed_rank_p(gains)
+    adopted = (left_out is not None and left_out < err_zero and p_value < KEEP_P_VALUE
+               and multiples[best] != 0.0)
     return DriftHullChoice(coefficient_rad_per_m2=float(multiples[best] * munk_rad_per_m2) if adopted else 0.0,
                            munk_multiple=float(multiples[best]), adopted=bool(adopted), n_failures=len(used),
                            error_deg=float(np.degrees(obj[best, used].mean())),
                            error_zero_deg=float(np.degrees(err_zero)),
-                           error_left_out_deg=None if left_out is None else float(np.degrees(left_out)))
+                           error_left_out_deg=None if left_out is None else float(np.degrees(left_out)),
+                           p_value=p_value, n_left_out_gains=n_gains)
+
+
+def _signed_rank_p(gains: np.ndarray) -> float:
+    """One-sided (gains > 0) Wilcoxon signed-rank p-value. A zero gain (a fold whose choice was
+    0) is no evidence either way and is dropped, which leaves fewer failures to pass; 1 when
+    all are 0."""
+    from scipy import stats
+
+    if not np.any(gains):
+        return 1.0
+    return float(stats.wilcoxon(gains, alternative="greater", zero_method="wilcox").pvalue)
