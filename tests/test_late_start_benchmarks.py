@@ -29,13 +29,23 @@ def test_a_late_starts_row_is_the_ratio_of_means_to_the_physics_and_dead_reckoni
     assert ref[f"{ls.STATES[0]} later (x physics, x DR)"] == "13.00 (1.00, 2.00)"
 
 
+def _at_leads(errors_60s, n_leads: int = 4, earlier: float = -1.0) -> np.ndarray:
+    """(starts, 3) errors at 60 s as :func:`late_errors` gives them, (starts, leads, 3): the
+    earlier leads hold ``earlier``, so a table that reads them instead of 60 s shows it."""
+    e = np.asarray(errors_60s, dtype=float)
+    return np.concatenate([np.full((e.shape[0], n_leads - 1, 3), earlier), e[:, None, :]], axis=1)
+
+
 def test_the_late_coverage_error_table_pools_every_start():
-    """Per log the mean of each model's errors; pooled, the mean over all starts of all logs."""
+    """Per log the mean of each model's 60-s errors; pooled, the mean over all starts of all logs."""
     lc = load_benchmark("drift_late_coverage")
-    errors = {"a": {"hybrid": np.array([[1.0, 2.0, 3.0]]), "physics": np.array([[2.0, 2.0, 2.0]])},
-              "b": {"hybrid": np.array([[3.0, 4.0, 5.0], [5.0, 6.0, 7.0]]),
-                    "physics": np.array([[2.0, 2.0, 2.0], [4.0, 4.0, 4.0]])}}
+    errors = {"a": {"hybrid": _at_leads([[1.0, 2.0, 3.0]]), "physics": _at_leads([[2.0, 2.0, 2.0]]),
+                    "hybrid in 2 sigma": np.ones((1, 4, 3), bool)},
+              "b": {"hybrid": _at_leads([[3.0, 4.0, 5.0], [5.0, 6.0, 7.0]]),
+                    "physics": _at_leads([[2.0, 2.0, 2.0], [4.0, 4.0, 4.0]]),
+                    "hybrid in 2 sigma": np.zeros((2, 4, 3), bool)}}
     table = lc.error_table(errors)
+    assert list(table.columns) == ["log", "starts", "hybrid north/east/heading", "physics north/east/heading"]
     assert list(table.log) == ["a", "b", "pooled"] and list(table.starts) == [1, 2, 3]
     got = table.set_index("log")
     assert got.loc["b", "hybrid north/east/heading"] == "4.00/5.00/6.00"
@@ -53,3 +63,50 @@ def test_the_late_coverage_truth_is_the_sample_60_s_after_each_start():
     np.testing.assert_array_equal(lc.truth_rows(log, [10.0, 100.0]), [70, 160])
     with pytest.raises(ValueError, match="no sample at 160 s"):
         lc.truth_rows(log.drop(index=160).reset_index(drop=True), [10.0, 100.0])
+
+
+def test_the_late_coverage_horizon_table_pools_each_lead_and_the_coverage():
+    """Per lead, the mean over all later starts of all logs, and the share inside 2 sigma
+    (north and east together, heading apart)."""
+    lc = load_benchmark("drift_late_coverage")
+    assert lc.HORIZONS_S == (15.0, 30.0, 45.0, 60.0)
+    lead = np.arange(1.0, 5.0)[None, :, None]                       # errors 1, 2, 3, 4 at the four leads
+    inside_a = np.zeros((1, 4, 3), bool)
+    inside_a[0, :, 0] = True                                         # north inside at every lead
+    inside_b = np.zeros((3, 4, 3), bool)
+    inside_b[:, 1, 2] = True                                         # heading inside at 30 s
+    errors = {"a": {"hybrid": np.ones((1, 1, 3)) * lead, "hybrid in 2 sigma": inside_a},
+              "b": {"hybrid": np.full((3, 1, 3), 3.0) * lead, "hybrid in 2 sigma": inside_b}}
+    table = lc.horizon_table(errors).set_index("lead [s]")
+    assert list(table.index) == ["15", "30", "45", "60"]
+    assert table.loc["15", "hybrid north/east/heading"] == "2.50/2.50/2.50"       # (1 + 3 * 3) / 4
+    assert table.loc["60", "hybrid north/east/heading"] == "10.00/10.00/10.00"
+    assert table.loc["15", "hybrid in 2 sigma (north/east, heading)"] == "0.12, 0.00"   # 1 of 8 north/east
+    assert table.loc["30", "hybrid in 2 sigma (north/east, heading)"] == "0.12, 0.75"
+
+
+def test_the_late_coverage_scores_each_lead_against_its_own_sample():
+    """late_errors reads the forecast at 15, 30, 45 and 60 s against the samples logged then,
+    wraps the heading and marks the errors inside twice the spread; a model without a spread
+    gets no coverage entry."""
+    from types import SimpleNamespace
+
+    lc = load_benchmark("drift_late_coverage")
+    t = np.arange(0.0, 200.0)
+    log = pd.DataFrame({"time_s": t, "north_m": t, "east_m": -t, "heading_deg": np.full(200, 179.0)})
+
+    class Constant:
+        def __init__(self, std):
+            self.std = std
+
+        def forecast(self, log_, starts, horizon_s):
+            eta = np.zeros((len(starts), 61, 3))
+            eta[..., 2] = np.radians(-179.0)                         # 2 deg from the logged heading, across the wrap
+            std = None if self.std is None else np.full_like(eta, self.std)
+            return SimpleNamespace(eta=eta, eta_std=std)
+
+    out = lc.late_errors({"hybrid": Constant(20.0), "physics": Constant(None)}, log, [10.0, 100.0])
+    assert set(out) == {"hybrid", "physics", "hybrid in 2 sigma"}
+    np.testing.assert_allclose(out["hybrid"][:, :, 0], [[25, 40, 55, 70], [115, 130, 145, 160]])
+    np.testing.assert_allclose(out["hybrid"][:, :, 2], 2.0)
+    np.testing.assert_array_equal(out["hybrid in 2 sigma"][0, :, 0], [True, True, False, False])    # 25, 40 <= 40
