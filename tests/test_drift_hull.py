@@ -55,6 +55,33 @@ def test_a_mean_gain_that_half_the_failures_pay_for_is_not_kept():
     assert not c.adopted and c.coefficient_rad_per_m2 == 0.0
 
 
+def test_a_fold_that_chooses_zero_is_dropped_from_the_test():
+    """Five failures that all want +1, but the fifth is indifferent to it: its fold's choice
+    gains it nothing (a zero gain), which is dropped, so four gains remain (p = 1/16, not
+    kept), whatever scipy's version (before 1.15 its normal approximation gave 0.034)."""
+    obj = np.array([[3.0, 3.0, 3.0, 3.0, 0.0],                       # rows: multiples -1, 0, +1
+                    [2.0, 2.0, 2.0, 2.0, 1.0],
+                    [1.0, 1.1, 1.2, 1.3, 1.0]])
+    c = choose_coefficient(obj, 0.005, multiples=[-1.0, 0.0, 1.0])
+    assert c.munk_multiple == 1.0 and c.n_failures == 5 and c.n_left_out_gains == 4
+    assert c.p_value == 1 / 16 and not c.adopted
+    flat = choose_coefficient(np.ones((3, 5)), 0.005, multiples=[-1.0, 0.0, 1.0])
+    assert flat.p_value == 1.0 and flat.n_left_out_gains == 0 and not flat.adopted     # all gains 0
+
+
+def test_a_signed_rank_pass_with_a_mean_loss_is_not_kept():
+    """Nine failures gain a little (about g / 2) and the tenth loses much (10 g): the
+    signed-rank test passes (T = 45 of 55, p = 43/1024) but the left-out mean error is above
+    that of k = 0, so k stays 0: both checks are needed."""
+    g = 0.001
+    a = 0.05 + 0.001 * np.arange(10)
+    small = g / 2 * (1 + 0.05 * np.arange(9))                            # distinct: no ties
+    obj = np.vstack([np.r_[a[:9] - small, a[9] - g / 4], a, np.r_[a[:9] - g, a[9] + 10 * g]])   # -1, 0, +1
+    c = choose_coefficient(obj, 0.005, multiples=[-1.0, 0.0, 1.0])
+    assert c.munk_multiple == -1.0 and c.n_left_out_gains == 9 and c.p_value == pytest.approx(43 / 1024)
+    assert c.error_left_out_deg > c.error_zero_deg and not c.adopted
+
+
 def test_a_choice_that_does_not_carry_over_to_a_left_out_failure_is_not_kept():
     """Two failures want +1 and one, much more sensitive, wants -1: the pooled choice lowers
     the in-sample error, but left out in turn each failure gets a coefficient that hurts it

@@ -2,6 +2,7 @@
 
 import numpy as np
 import pandas as pd
+import pytest
 
 from conftest import load_benchmark
 
@@ -110,3 +111,28 @@ def test_the_late_coverage_scores_each_lead_against_its_own_sample():
     np.testing.assert_allclose(out["hybrid"][:, :, 0], [[25, 40, 55, 70], [115, 130, 145, 160]])
     np.testing.assert_allclose(out["hybrid"][:, :, 2], 2.0)
     np.testing.assert_array_equal(out["hybrid in 2 sigma"][0, :, 0], [True, True, False, False])    # 25, 40 <= 40
+
+
+@pytest.mark.parametrize("dt", [1.0, 0.5])
+def test_the_late_coverage_reads_each_lead_from_its_own_forecast_row(dt):
+    """The forecast's row of each lead (lead / step, the start at row 0), on logs of 1 and
+    0.5 s: a model that forecasts north exactly is exact at every lead, and its spread, a
+    third of the lead, gives a 2-sigma band that grows with the row it is read from."""
+    from types import SimpleNamespace
+
+    lc = load_benchmark("drift_late_coverage")
+    t = np.arange(0.0, 200.0, dt)
+    log = pd.DataFrame({"time_s": t, "north_m": t, "east_m": np.zeros_like(t), "heading_deg": np.zeros_like(t)})
+
+    class Exact:
+        def forecast(self, log_, starts, horizon_s):
+            steps = np.arange(int(round(horizon_s / dt)) + 1)
+            eta = np.zeros((len(starts), steps.size, 3))
+            eta[..., 0] = np.asarray(starts)[:, None] + steps * dt          # north = the log's
+            eta[..., 1] = 15.0                                               # east 15 m off
+            return SimpleNamespace(eta=eta, eta_std=np.broadcast_to(steps[None, :, None] * dt / 3.0, eta.shape))
+
+    out = lc.late_errors({"hybrid": Exact()}, log, [10.0, 100.0])
+    np.testing.assert_allclose(out["hybrid"][..., 0], 0.0, atol=1e-9)
+    # east error 15 m against 2 sigma = 2 lead / 3: outside at 15 s, inside from 30 s on
+    np.testing.assert_array_equal(out["hybrid in 2 sigma"][0, :, 1], [False, True, True, True])
