@@ -25,7 +25,7 @@ Example (about 15 min on the 2-core machine)::
 
 from __future__ import annotations
 
-import argparse
+import importlib.util
 import sys
 import time
 from pathlib import Path
@@ -34,14 +34,12 @@ import numpy as np
 import pandas as pd
 
 from hybridship.evaluation import metrics
-from hybridship.evaluation.drift import log_files
 from hybridship.fileio import markdown_table, write_text
 from hybridship.predictors import DeadReckoning, DynamicPredictor, HybridPredictor, as_log_arrays
 from hybridship.predictors.hybrid import AFTER_STOP_INTERVALS, LATE_START_EVERY_S
 from hybridship.residual.ensemble import EnsembleConfig
 from hybridship.residual.environment import EnvironmentConfig
 
-TRUTHSIM = Path(__file__).resolve().parents[1].parent / "shared" / "data" / "truthsim-dev" / "logs"
 HORIZON_S = 60.0
 C = EnvironmentConfig
 _ON_STATION = dict(load_walk_after_stop_m_s2=C().load_walk_m_s2,
@@ -100,37 +98,20 @@ def table_row(data: str, variant: str, what: str, err: list, phys: list, dr: lis
     return row
 
 
-def _data_sets(names: list[str], own_n: int, own_seed: int) -> dict:
-    from hybridship.sim.scenario import embedded_scenarios
-
-    data = {}
-    if "embedded" in names:
-        scen = embedded_scenarios(3, 0)
-        data["embedded"] = ([s.log for s in scen], [s.name for s in scen])
-    if "truthsim-dev" in names:
-        if TRUTHSIM.is_dir():
-            files = log_files(TRUTHSIM)
-            data["truthsim-dev"] = ([pd.read_csv(f) for f in files], [f.name.split(".")[0] for f in files])
-        else:
-            print(f"skipping truthsim-dev: {TRUTHSIM} not found", file=sys.stderr)
-    if "own" in names:
-        scen = embedded_scenarios(own_n, own_seed)
-        data[f"own {own_seed}-{own_seed + own_n - 1}"] = ([s.log for s in scen], [s.name for s in scen])
-    return data
+def _estimator_variants():
+    """The sibling script (benchmarks are not a package): its data sets and shared arguments."""
+    spec = importlib.util.spec_from_file_location("estimator_variants",
+                                                  Path(__file__).with_name("estimator_variants.py"))
+    mod = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(mod)
+    return mod
 
 
 def main(argv=None) -> int:
-    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    ap.add_argument("--out", type=Path, required=True)
-    ap.add_argument("--only", nargs="+", choices=list(VARIANTS), default=list(VARIANTS),
-                    help="the variants to run (default: all)")
-    ap.add_argument("--data", nargs="+", choices=("embedded", "truthsim-dev", "own"),
-                    default=("embedded", "truthsim-dev"), help="data sets (default: embedded truthsim-dev)")
-    ap.add_argument("--own-n", type=int, default=20, help="scenarios of the 'own' set (default 20)")
-    ap.add_argument("--own-seed", type=int, default=100, help="seed of its first scenario (default 100)")
-    args = ap.parse_args(argv)
+    ev = _estimator_variants()
+    args = ev.parse_args(argv, __doc__.split("\n")[0], VARIANTS)
     rows, per_log = [], []
-    for dname, (logs, names) in _data_sets(args.data, args.own_n, args.own_seed).items():
+    for dname, (logs, names) in ev.data_sets(args.data, args.own_n, args.own_seed).items():
         dyn, dr = DynamicPredictor("gunnerus").fit(), DeadReckoning("gunnerus").fit()
         arrays = [as_log_arrays(x, dyn.model.vessel) for x in logs]
         base = {"physics": [drift_errors(dyn, a) for a in arrays],

@@ -129,35 +129,45 @@ def per_log_rows(data: str, variant: str, names, errors: np.ndarray, physics: np
             for j, state in enumerate(metrics.STATES) for k, name in enumerate(names)]
 
 
-def main(argv=None) -> int:
-    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+def parse_args(argv, description: str, variants) -> argparse.Namespace:
+    """The arguments this script and ``drift_late_starts.py`` share: ``--out``, ``--only`` (of
+    ``variants``), ``--data``, ``--own-n`` and ``--own-seed``."""
+    ap = argparse.ArgumentParser(description=description)
     ap.add_argument("--out", type=Path, required=True)
-    ap.add_argument("--only", nargs="+", choices=list(VARIANTS), default=list(VARIANTS),
+    ap.add_argument("--only", nargs="+", choices=list(variants), default=list(variants),
                     help="the variants to run (default: all)")
     ap.add_argument("--data", nargs="+", choices=("embedded", "truthsim-dev", "own"),
                     default=("embedded", "truthsim-dev"), help="data sets (default: embedded truthsim-dev)")
     ap.add_argument("--own-n", type=int, default=20, help="scenarios of the 'own' set (default 20)")
     ap.add_argument("--own-seed", type=int, default=100, help="seed of its first scenario (default 100)")
-    args = ap.parse_args(argv)
+    return ap.parse_args(argv)
+
+
+def data_sets(names, own_n: int, own_seed: int) -> dict:
+    """``{data set: (logs, log names)}`` for ``names`` among ``embedded`` (the three embedded
+    scenarios), ``truthsim-dev`` (skipped with a message when absent) and ``own`` (``own_n``
+    fresh scenarios of our own from seed ``own_seed``), in that order."""
     from hybridship.sim.scenario import embedded_scenarios
 
-    data, log_names = {}, {}
-    if "embedded" in args.data:
+    data = {}
+    if "embedded" in names:
         scen = embedded_scenarios(3, 0)
-        data["embedded"], log_names["embedded"] = [s.log for s in scen], [s.name for s in scen]
-    if "truthsim-dev" in args.data and TRUTHSIM.is_dir():
+        data["embedded"] = ([s.log for s in scen], [s.name for s in scen])
+    if "truthsim-dev" in names and TRUTHSIM.is_dir():
         files = log_files(TRUTHSIM)
-        data["truthsim-dev"] = [pd.read_csv(f) for f in files]
-        log_names["truthsim-dev"] = [f.name.split(".")[0] for f in files]
-    elif "truthsim-dev" in args.data:
+        data["truthsim-dev"] = ([pd.read_csv(f) for f in files], [f.name.split(".")[0] for f in files])
+    elif "truthsim-dev" in names:
         print(f"skipping truthsim-dev: {TRUTHSIM} not found", file=sys.stderr)
-    if "own" in args.data:
-        name = f"own {args.own_seed}-{args.own_seed + args.own_n - 1}"
-        scen = embedded_scenarios(args.own_n, args.own_seed)
-        data[name], log_names[name] = [s.log for s in scen], [s.name for s in scen]
+    if "own" in names:
+        scen = embedded_scenarios(own_n, own_seed)
+        data[f"own {own_seed}-{own_seed + own_n - 1}"] = ([s.log for s in scen], [s.name for s in scen])
+    return data
+
+
+def main(argv=None) -> int:
+    args = parse_args(argv, __doc__.split("\n")[0], VARIANTS)
     rows, per_log = [], []
-    for dname, logs in data.items():
-        names = log_names[dname]
+    for dname, (logs, names) in data_sets(args.data, args.own_n, args.own_seed).items():
         dyn = DynamicPredictor("gunnerus")
         arrays = [as_log_arrays(x, dyn.model.vessel) for x in logs]
         phys = np.stack([_errors(dyn, a) for a in arrays])                       # (L, 20, 3)
