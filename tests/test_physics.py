@@ -374,6 +374,23 @@ def test_rpm_for_thrust_inverts_the_propeller_model_in_every_quadrant():
         rpm_for_thrust([np.nan], [0.0], 1.9, p)
 
 
+def test_rpm_for_thrust_meets_a_small_demand_beyond_the_drag_of_a_propeller_at_rest():
+    """With inflow a propeller at rest already gives a force (its drag); a smaller demand of
+    that sign, or any demand of the other, needs the shaft turned the other way."""
+    p = load_wageningen()
+    D = 1.9
+    for va in (1.0, -1.0, 0.5, -2.0):
+        t_rest, _ = thrust_torque(0.0, va, D, p)
+        t_rest = float(t_rest)
+        # between the rest force and zero, and just past zero on the other side
+        demands = np.array([0.7 * t_rest, 0.3 * t_rest, 0.0, -0.2 * t_rest])
+        rpm = rpm_for_thrust(demands, np.full(4, va), D, p, max_rpm=217.0)
+        t_back, _ = thrust_torque(rpm / 60.0, np.full(4, va), D, p)
+        np.testing.assert_allclose(t_back, demands, atol=1e-6 * abs(t_rest) + 1e-6)
+        # turning against the rest force: the shaft turns the way that opposes it
+        assert np.all(np.sign(rpm) == -np.sign(t_rest))
+
+
 def test_drifting_ship_with_stopped_thrusters_feels_drag(gunnerus):
     """A ship drifting astern with rpm 0 gets a forward (opposing) force from its azimuths."""
     _, parts, thrusts = gunnerus.acceleration([0, 0, 0], [-0.8, 0, 0], rpm=[0, 0, 0], azimuth_rad=[0, 0, 0],

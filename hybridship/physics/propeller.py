@@ -286,9 +286,11 @@ def rpm_for_thrust(thrust_N, va_m_s, diameter_m: float, prop: PropellerCoefficie
                    rho_kg_m3: float = 1025.0, max_rpm: float | None = None):
     """Shaft speed [rpm] that gives a demanded thrust at a given inflow (inverse model).
 
-    Solved by bisection on the monotonic branch of T(n) for fixed V_a (the quadrant with
-    the sign of the demanded thrust), vectorised over the inputs. Demands beyond what
-    ``max_rpm`` can deliver saturate at ``+-max_rpm``.
+    Solved by bisection on the branch of T(n) for fixed V_a whose ends bracket the demand,
+    vectorised over the inputs: the branch with the sign of the demanded thrust, unless
+    the propeller at rest already gives more than the demand in that direction (its drag
+    with inflow), when the shaft turns the other way. Demands beyond what ``max_rpm`` can
+    deliver saturate at ``+-max_rpm``.
 
     Parameters
     ----------
@@ -312,17 +314,24 @@ def rpm_for_thrust(thrust_N, va_m_s, diameter_m: float, prop: PropellerCoefficie
 
 @numba.njit(cache=True)
 def _rpm_for_thrust_flat(thrust_N, va_m_s, diameter_m, rho_kg_m3, coef, rpm_max, out):
-    # T(n) increases with n along the branch in the direction of the demanded thrust, for
-    # any fixed inflow, so bisection on |rpm| is robust in every quadrant.
+    # Bisection on |rpm| between rest and rpm_max, on the branch whose ends bracket the
+    # demand (T(n) is continuous, not monotonic near n = 0, so only the bracket matters).
+    # Normally that is the branch with the sign of the demand. With inflow, a propeller at
+    # rest already gives a force (its drag); when that force is past the demand in the
+    # demand's direction, the shaft must turn the other way to take some of it back.
     for i in range(thrust_N.shape[0]):
         sign = 1.0 if thrust_N[i] >= 0.0 else -1.0
+        t_rest, _q = thrust_torque_scalar(0.0, va_m_s[i], diameter_m, rho_kg_m3, coef)
+        turn = -sign if sign * t_rest > sign * thrust_N[i] else sign
         lo = 0.0
         hi = rpm_max
         for _ in range(50):
             mid = 0.5 * (lo + hi)
-            t_mid, _q = thrust_torque_scalar(sign * mid / 60.0, va_m_s[i], diameter_m, rho_kg_m3, coef)
-            if sign * t_mid < sign * thrust_N[i]:
+            t_mid, _q = thrust_torque_scalar(turn * mid / 60.0, va_m_s[i], diameter_m, rho_kg_m3, coef)
+            # on the demand's own branch the thrust is below the demand near rest; on the
+            # other branch it is above it
+            if turn * t_mid < turn * thrust_N[i]:
                 lo = mid
             else:
                 hi = mid
-        out[i] = sign * 0.5 * (lo + hi)
+        out[i] = turn * 0.5 * (lo + hi)
