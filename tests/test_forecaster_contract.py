@@ -310,6 +310,24 @@ def test_held_command_forecasts_are_causal(kind, fitted, test_log):
     _assert_same_forecast(p.forecast(test_log, [t0], HORIZON_S), p.forecast(test_log[~after], [t0], HORIZON_S))
 
 
+
+@pytest.mark.parametrize("kind", KINDS)
+def test_forecasts_from_derived_velocities_are_causal(kind, fitted, test_log):
+    """A log without velocity columns, or with a logged velocity missing at the start: the
+    velocities the log derives are central differences, and at the start row they must not
+    read the sample after it. The forecast equals that of the log cut at the start."""
+    p = fitted[kind]
+    t0 = 150.0
+    for df in (test_log.drop(columns=["u_m_s", "v_m_s", "r_deg_s"]), test_log.copy()):
+        df.loc[df.time_s == t0, [c for c in ("u_m_s", "r_deg_s") if c in df]] = np.nan
+        later = df.copy()
+        later.loc[later.time_s > t0, ["north_m", "east_m"]] += 3.0
+        cut = p.forecast(df[df.time_s <= t0], [t0], HORIZON_S)
+        for other in (df, later):
+            fc = p.forecast(other, [t0], HORIZON_S)
+            np.testing.assert_allclose(fc.eta, cut.eta, rtol=0, atol=1e-9)
+            np.testing.assert_allclose(fc.nu, cut.nu, rtol=0, atol=1e-12)
+
 @pytest.mark.parametrize("kind", KINDS)
 def test_deterministic(kind, model, fitted, train_log, test_log):
     p = fitted[kind]

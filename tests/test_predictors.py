@@ -327,6 +327,20 @@ def test_fit_takes_one_log_or_many_and_start_errors_give_the_log_span(model, exa
         DynamicPredictor(model.vessel).forecast(path, [float(t.iloc[0]) + 0.5], 10.0)
 
 
+
+def test_a_start_that_is_no_sample_is_a_request_error_despite_a_fault_outside_the_rows_read(model, exact_logs):
+    """A format fault far from the start does not matter to a forecast (the rows read are
+    fine); a start time that is not a sample time is then still the request's error
+    (RequestError, a usage error on the command line), not the distant row's."""
+    from hybridship.predictors.forecast_setup import RequestError
+
+    bad = exact_logs[0].copy()
+    bad.loc[len(bad) - 5, "wind_speed_m_s"] = -3.0          # refused by the format check, 1000 s later
+    dyn = DynamicPredictor(model.vessel)
+    assert np.isfinite(dyn.forecast(bad, [100.0], 30.0).eta).all()
+    with pytest.raises(RequestError, match="100.5 s is not a sample time"):
+        dyn.forecast(bad, [100.5], 30.0)
+
 def test_drift_errors_read_a_path_or_dataframe_and_coverage_refuses_mismatched_inputs(tmp_path):
     from hybridship.evaluation import metrics
     from hybridship.logs.io import write_log

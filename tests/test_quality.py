@@ -627,3 +627,21 @@ def test_window_settings_accept_their_documented_edges():
     for bad in (dict(min_valid_fraction=0.0), dict(min_valid_fraction=1.5), dict(heading_jump_deg=180.0)):
         with pytest.raises(ValueError):
             WindowSettings(**bad)
+
+
+@pytest.mark.parametrize("drop", [["u_m_s", "v_m_s", "r_deg_s"], []])
+def test_derived_start_velocities_do_not_read_the_sample_after_the_start(model, log, drop):
+    """Velocities the log derives (no column, or a logged sample missing at the start) are
+    central differences; at the start row they would read the next position and heading.
+    The start values are those of the log cut at the start, whatever follows it."""
+    df = log.drop(columns=drop)
+    if not drop:                                           # a dropped speed-log and gyro-rate sample at the start
+        df.loc[T_FAULT, ["u_m_s", "r_deg_s"]] = np.nan
+    later = df.copy()
+    later.loc[T_FAULT + 1:, ["north_m", "east_m"]] += 3.0
+    later.loc[T_FAULT + 1:, "heading_deg"] = (later.loc[T_FAULT + 1:, "heading_deg"] + 5.0) % 360.0
+    cut = _assess(model, df.loc[:T_FAULT], [float(T_FAULT)])[1]
+    for other in (df, later):
+        sw = _assess(model, other, [float(T_FAULT)])[1]
+        np.testing.assert_allclose(sw.nu0, cut.nu0, rtol=0, atol=1e-12)
+        np.testing.assert_allclose(sw.eta0, cut.eta0, rtol=0, atol=1e-12)

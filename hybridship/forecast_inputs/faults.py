@@ -54,6 +54,8 @@ __all__ = [
     "detect_heading_jumps",
     "detect_heading_wrap",
     "rederive_velocities",
+    "start_row_nu",
+    "window_nu",
     "detect_too_little_valid",
     "detect_dropped_wind",
 ]
@@ -331,6 +333,34 @@ def _track_check_first_row(arrays, settings: WindowSettings, first_start: int) -
     return int(valid[-2]) if valid.size >= 2 else 0
 
 
+def start_row_nu(arrays, rows) -> np.ndarray:
+    """``nu`` at forecast start rows ``rows`` (S,) as a log that ends there gives it, (S, 3).
+
+    The log's derived (not logged) velocities are central differences
+    (:func:`numpy.gradient`), so at a start row they read the sample after the start, which
+    a forecast may not use. Here they are the one-sided difference to the row before (NaN
+    at a segment's first row); logged components stay as logged.
+    """
+    i = np.asarray(rows, dtype=int).ravel()
+    t, pos, psi = arrays.time_s, arrays.eta[:, :2], arrays.eta[:, 2]
+    p = np.maximum(i - 1, 0)
+    same = (i > 0) & (arrays.segment_id[p] == arrays.segment_id[i])
+    with np.errstate(invalid="ignore", divide="ignore"):
+        dt = np.where(same, t[i] - t[p], np.nan)
+        rates = np.column_stack([(pos[i] - pos[p]) / dt[:, None], (psi[i] - psi[p]) / dt])
+    return np.where(arrays.nu_logged[i], arrays.nu[i], ned_to_body(rates, psi[i]))
+
+
+def window_nu(view: LogView, W: np.ndarray) -> np.ndarray:
+    """``nu`` of start windows ``W`` (rows, shape (..., w), the start row last), a copy whose
+    start row is :func:`start_row_nu` (it does not read the sample after the start).
+    Returns shape (..., w, 3)."""
+    nu = view.nu[W].copy()
+    last = nu[..., -1, :]
+    nu[..., -1, :] = start_row_nu(view.arrays, np.asarray(W)[..., -1]).reshape(last.shape)
+    return nu
+
+
 @dataclass(eq=False)
 class Window:
     """One forecast start's window and what is valid in it (the detectors update it).
@@ -375,7 +405,7 @@ class Window:
         lo = min(int(np.searchsorted(t, t[i] - window_s + 0.5 * view.dt_nom, side="left")), i)
         W = np.arange(lo, i + 1)
         return cls(start=i, lo=lo, rows=W, pos_ok=np.all(np.isfinite(view.pos[W]), axis=1),
-                   head_ok=np.isfinite(view.psi[W]), vel_ok=np.isfinite(view.nu[W]),
+                   head_ok=np.isfinite(view.psi[W]), vel_ok=np.isfinite(window_nu(view, W)),
                    wind_ok=view.arrays.wind_logged[W], vel_replace=np.zeros(3, dtype=bool), shift_from=lo)
 
     def flag(self, name: str, note: str) -> None:
@@ -851,7 +881,7 @@ def rederive_velocities(view: LogView, win: Window) -> np.ndarray:
     points of the valid headings. Those components become valid. Returns (w, 3).
     """
     t, pos, psi, W = view.t, view.pos, view.psi, win.rows
-    nu_w = view.nu[W].copy()
+    nu_w = window_nu(view, W)
     if win.vel_replace[:2].any() and win.head_ok.any():
         ok_rows = W[win.pos_ok & (W >= win.shift_from)]
         if ok_rows.size >= 2:

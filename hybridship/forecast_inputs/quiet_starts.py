@@ -33,7 +33,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..frames import wrap_pi
-from .faults import LogView, WindowSettings, _ned
+from .faults import LogView, WindowSettings, _ned, window_nu
 
 __all__ = ["quiet_starts"]
 
@@ -170,11 +170,14 @@ def quiet_starts(view: LogView, idx: np.ndarray, settings: WindowSettings):
     ok = _windows_valid(view, span, lo, idx, settings) & _not_frozen(view, span, lo, settings)
     ok &= _steps_explained(view, span, first, idx, settings) & _turns_explained(view, span, lb, idx, settings)
     ok &= _no_wrap(view, W)
+    # the start row's derived velocities look back only (window_nu); where they cannot, the detectors judge
+    nu_w = window_nu(view, W)
+    ok &= np.all(np.isfinite(nu_w[:, -1]), axis=1)
     quiet[quiet] = ok
-    q, W = idx[ok], W[ok]
+    q, W, nu_w = idx[ok], W[ok], nu_w[ok]
     # the means as the detectors' path takes them: over a contiguous row of samples each
     eta0[quiet] = np.column_stack([view.pos[q], np.mean(np.ascontiguousarray(view.psi[W]), axis=1)])
-    nu0[quiet] = np.column_stack([np.mean(np.ascontiguousarray(view.nu[W, j]), axis=1) for j in range(3)])
+    nu0[quiet] = np.column_stack([np.mean(np.ascontiguousarray(nu_w[..., j]), axis=1) for j in range(3)])
     if a.has_wind:
         wind[quiet] = a.wind[q]
     return quiet, eta0, nu0, wind

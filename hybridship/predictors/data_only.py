@@ -7,6 +7,7 @@ from typing import Iterable
 import numpy as np
 
 from ..config import as_config
+from ..forecast_inputs.faults import start_row_nu
 from ..physics.model import DynamicModel
 from ..residual.ensemble import EnsembleConfig, MLPEnsemble, fit_ensemble, require_training_rows
 from ..residual.features import ResidualConfig
@@ -104,7 +105,9 @@ class DataOnlyPredictor:
         n_avg = max(1, int(round(self.config.start_average_s / dt)))
         lo = np.maximum(idx - n_avg, 0)
         same = arrays.segment_id[lo] == arrays.segment_id[idx]
-        acc0 = np.where(same[:, None], (arrays.nu[idx] - arrays.nu[lo]) / (np.maximum(idx - lo, 1) * dt)[:, None], 0.0)
+        # the start row's velocity as a log ending there gives it: a derived one must not read the next sample
+        nu_start = start_row_nu(arrays, idx)
+        acc0 = np.where(same[:, None], (nu_start - arrays.nu[lo]) / (np.maximum(idx - lo, 1) * dt)[:, None], 0.0)
         acc0 = np.nan_to_num(acc0)      # a missing sample at either end: start from zero acceleration
         E, S = self.ensemble.n_members, len(idx)
         eta = np.broadcast_to(eta0, (E, S, 3)).copy()

@@ -384,9 +384,14 @@ def _forecast_setup(model, config: ResidualConfig, log, start_times_s, horizon_s
                                                       max(history_s, wind_forecast.mean_window_s)))
     try:
         idx = start_indices(arrays, start_times_s)
-    except ValueError:
+    except ValueError as exc:
         # say it with the whole log's span, not the window read for the forecast
-        start_indices(ingest(log, model.vessel, purpose="forecast"), start_times_s)
+        try:
+            whole = ingest(log, model.vessel, purpose="forecast")
+        except ValueError:
+            # a fault outside the rows read does not matter to a forecast: the request's error stands
+            raise exc from None
+        start_indices(whole, start_times_s)
         raise
     dt = forecast_step_s(arrays)
     H = int(round(horizon_s / dt))
