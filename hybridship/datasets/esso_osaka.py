@@ -179,17 +179,27 @@ def esso_to_log(raw: pd.DataFrame, *, vessel=None, velocity_lead_s: float = 0.0)
     velocity_lead_s : float
         Shift u and vm this much earlier (they lag the positions by about 0.6 s); the last
         rows are then held. Default 0: as logged, causal.
+
+    Raises
+    ------
+    ValueError
+        If ``velocity_lead_s`` is negative or not finite.
     """
+    lead = float(velocity_lead_s)
+    if not 0.0 <= lead < np.inf:
+        # a negative lead was ignored without a word, NaN and inf failed inside numpy
+        raise ValueError(f"velocity_lead_s: expected a finite time >= 0 s (u and vm shifted earlier), "
+                         f"got {velocity_lead_s!r}")
     prop, rud = _channel_names(vessel)
     t = raw["t [s]"].to_numpy(float)
     u = raw["u_velo [m/s]"].to_numpy(float)
     v = raw["vm_velo [m/s]"].to_numpy(float)
-    if velocity_lead_s:
+    if lead and len(t) > 1:
         dt = float(np.median(np.diff(t)))
-        k = int(round(velocity_lead_s / dt))
-        if k > 0:
-            u = np.concatenate([u[k:], np.repeat(u[-1], k)])
-            v = np.concatenate([v[k:], np.repeat(v[-1], k)])
+        k = int(round(lead / dt))
+        # row i takes row i + k, the last row held (also for a lead longer than the run)
+        src = np.minimum(np.arange(len(t)) + k, len(t) - 1)
+        u, v = u[src], v[src]
     return pd.DataFrame({
         "time_s": t,
         "north_m": raw["x_position_mid [m]"].to_numpy(float),
@@ -325,12 +335,24 @@ def list_runs(folder, *, include_duplicates: bool = False) -> list[EssoRun]:
 
     A ``<kind>_cut_<stamp>`` file is a truncated copy of ``<kind>_<stamp>`` in this data set
     and is skipped when that file is present too, unless ``include_duplicates``.
+
+    Raises
+    ------
+    ValueError
+        If two files hold one run name (``x.csv`` beside ``x.csv.gz``, or one name in two
+        sub-folders): the run would count twice.
     """
     folder = Path(folder)
     if not folder.is_dir():
         raise FileNotFoundError(f"{folder}: run folder not found")
     files = sorted({p for pat in ("*.csv", "*.csv.gz") for p in folder.rglob(pat)
-                    if p.name != "MANIFEST.csv"}, key=lambda p: _stem(p))
+                    if p.name != "MANIFEST.csv"}, key=lambda p: (_stem(p), str(p)))
+    for a, b in zip(files, files[1:]):
+        if _stem(a) == _stem(b):
+            # twice the weight in training, its starts twice in the test tables (and one
+            # entry of the starts per run name)
+            raise ValueError(f"{folder}: run {_stem(a)} has two files ({a.relative_to(folder)} and "
+                             f"{b.relative_to(folder)}); keep one")
     stems = {_stem(p) for p in files}
     runs = []
     for p in files:
@@ -354,7 +376,8 @@ def convention_checks(raw: pd.DataFrame, *, diff_s: float = 1.0, lag_s: float = 
     -------
     dict
         * ``rms_north_m_s``, ``rms_east_m_s``: rms of the ``diff_s`` central-difference
-          position rates minus ``R(psi) [u, vm]`` (u, vm taken ``lag_s`` later, their lag);
+          position rates minus ``R(psi) [u, vm]`` (u, vm taken ``lag_s`` later, their lag;
+          a negative ``lag_s`` takes them earlier);
         * ``rms_north_flipped_psi_m_s``, ``rms_east_flipped_psi_m_s``: the same with psi's
           sign flipped (should be much larger);
         * ``rms_v_m_s``, ``rms_v_flipped_m_s``: the sway velocity from the position rates
@@ -373,7 +396,9 @@ def convention_checks(raw: pd.DataFrame, *, diff_s: float = 1.0, lag_s: float = 
     u, vm = raw["u_velo [m/s]"].to_numpy(float), raw["vm_velo [m/s]"].to_numpy(float)
     r = raw["r_angvelo [rad/s]"].to_numpy(float)
     n = len(t)
-    i = np.arange(k, n - k - lag)
+    # rows whose differences (i +- k) and lagged velocities (i + lag) all lie in the run; a
+    # negative lag (earlier velocities) indexed past the end before
+    i = np.arange(k + max(0, -lag), n - k - max(0, lag))
     xd = (x[i + k] - x[i - k]) / (t[i + k] - t[i - k])
     yd = (y[i + k] - y[i - k]) / (t[i + k] - t[i - k])
     c, s = np.cos(psi[i]), np.sin(psi[i])

@@ -236,9 +236,36 @@ def split_runs(data_dir, out_dir, *, test_fraction: float = 0.3, seed: int = 0) 
     Whole recordings go to one side (the pieces of one long random recording stay
     together); per kind, ``round(test_fraction * recordings)`` (at least one) recordings,
     drawn with ``seed``, are test runs. The data are linked, never copied.
+
+    Links and folders left in ``out_dir/train`` and ``out_dir/test`` by an earlier split are
+    removed first.
+
+    Raises
+    ------
+    ValueError
+        If ``test_fraction`` is not in (0, 1), or ``out_dir/train`` or ``out_dir/test`` is,
+        holds or lies inside ``data_dir`` (clearing it would remove the runs being split).
+    FileExistsError
+        If ``out_dir/train`` or ``out_dir/test`` holds a file that is not a link (not made
+        by a split; kept).
     """
     data_dir, out_dir = Path(data_dir), Path(out_dir)
+    if not 0.0 < float(test_fraction) < 1.0:      # NaN too; > 1 failed inside numpy's choice
+        raise ValueError(f"test_fraction: expected a share of the recordings between 0 and 1 (exclusive), "
+                         f"got {test_fraction!r}")
     runs = list_runs(data_dir)
+    data_real = data_dir.resolve()
+    for d in (out_dir / "train", out_dir / "test"):
+        d_real = d.resolve()
+        if d_real == data_real or data_real in d_real.parents or d_real in data_real.parents:
+            # validation_split(d, d) replaced the benchmark's links by links to themselves
+            raise ValueError(f"out_dir: {d} is, holds or lies inside data_dir {data_dir}; clearing it for the "
+                             f"split would remove the runs being split: give another out_dir")
+        if d.exists():
+            mine = [p for p in d.rglob("*") if not p.is_symlink() and p.is_file()]
+            if mine:
+                raise FileExistsError(f"out_dir: {mine[0]} is a file, not a link of an earlier split; a split "
+                                      f"would remove it: move it or give another out_dir")
     rng = np.random.default_rng(seed)
     test = set()
     for kind in RUN_KINDS:
@@ -336,9 +363,19 @@ def forecast_errors(forecast: Callable, arrays: LogArrays, rows: np.ndarray, ste
     ``(S, n_horizons, 2)`` (None when the forecast has no spread), and with ``heading_z`` a
     third column, the heading's (wrapped error over its own spread); with ``return_std``
     also the reported standard deviations of x0 and y0 [m], ``(S, n_horizons, 2)`` (or None).
+
+    Raises
+    ------
+    ValueError
+        Naming the first start time whose forecast (or, when asked for, its spread) is NaN
+        or infinite at a scored step: such a start would make every pooled mean NaN, or
+        count as a miss of the band, without a word.
     """
     dt = float(np.median(np.diff(arrays.time_s)))
     fc = forecast(arrays, arrays.time_s[rows], float(steps.max() * dt))
+    _check_finite(fc.eta[:, steps], arrays.time_s[rows], "forecast")
+    if (return_z or return_std) and fc.eta_std is not None:     # the spreads that are read: x0, y0 (+ heading)
+        _check_finite(fc.eta_std[:, steps, :3 if heading_z else 2], arrays.time_s[rows], "forecast spread (eta_std)")
     pred = fc.eta[:, steps]
     truth = arrays.eta[rows[:, None] + steps[None, :]]
     err = np.empty(pred.shape[:2] + (4,))
@@ -355,6 +392,14 @@ def forecast_errors(forecast: Callable, arrays: LogArrays, rows: np.ndarray, ste
             if heading_z:
                 z = np.concatenate([z, (np.radians(err[..., 2]) / fc.eta_std[:, steps, 2])[..., None]], axis=-1)
     return (err, z, std) if return_std else (err, z)
+
+
+def _check_finite(x: np.ndarray, start_times_s: np.ndarray, what: str) -> None:
+    """ValueError naming the first start whose values ``x`` (S, n_horizons, k) are not all finite."""
+    bad = ~np.isfinite(x).all(axis=(1, 2))
+    if bad.any():
+        raise ValueError(f"{what}: NaN or inf from the start time_s {start_times_s[bad][0]:g} s "
+                         f"({int(bad.sum())} of {bad.size} starts); leave such starts out before scoring")
 
 
 def _state_z(z: np.ndarray, state: str) -> np.ndarray:
@@ -798,6 +843,11 @@ def _unscored(result, name: str) -> str:
     return "" if result.n_starts.get(name, 0) else "; not scored: shorter than the warm-up plus the longest horizon"
 
 
+def _start_spacing(start_every_s) -> str:
+    """``"every 1.0 s"``, or ``"every sample"`` for ``start_every_s=None`` (not "every None s")."""
+    return "every sample" if start_every_s is None else f"every {start_every_s} s"
+
+
 def is_quick(config: ManoeuvreConfig) -> bool:
     """Whether ``config`` is :meth:`ManoeuvreConfig.quick` (whatever its step and calibration horizon)."""
     return config == replace(ManoeuvreConfig.quick(config.ensemble.seed), step_s=config.step_s,
@@ -823,7 +873,8 @@ def markdown_report(result: BenchmarkResult, *, command: str | None = None) -> s
                   "(the data set's README): its errors are not out-of-sample.", ""]
     lines += [f"Train runs: {len(result.train)} ({', '.join(sorted({r.kind for r in result.train}))}); "
               f"test runs: {len(result.test)}; start times: {sum(result.n_starts.values())} "
-              f"(every {result.config.start_every_s} s); horizons {', '.join(f'{h:g}' for h in result.horizons_s)} s.",
+              f"({_start_spacing(result.config.start_every_s)}); "
+              f"horizons {', '.join(f'{h:g}' for h in result.horizons_s)} s.",
               "", "Test runs: " + ", ".join(f"`{r.name}` ({r.kind}{_unscored(result, r.name)})" for r in result.test),
               ""]
     for commands in COMMAND_MODES:

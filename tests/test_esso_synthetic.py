@@ -1,0 +1,206 @@
+"""Esso Osaka loader and manoeuvre benchmark helpers on synthetic runs (no data needed).
+
+The files here are made in the data set's layout (:data:`~hybridship.datasets.esso_osaka.ESSO_COLUMNS`,
+10 Hz); the real runs are tested in ``test_esso_osaka.py`` (skipped without them).
+"""
+
+from __future__ import annotations
+
+import os
+from types import SimpleNamespace
+
+import numpy as np
+import pandas as pd
+import pytest
+
+from hybridship.datasets.esso_osaka import ESSO_COLUMNS, convention_checks, esso_to_log, list_runs
+
+
+def _raw(n: int = 300, dt_s: float = 0.1) -> pd.DataFrame:
+    """A straight run at 0.3 m/s along x0, heading 0, 10 rps, no rudder, 1 m/s of wind."""
+    t = np.arange(n) * dt_s
+    raw = pd.DataFrame({c: np.zeros(n) for c in ESSO_COLUMNS})
+    raw["t [s]"] = t
+    raw["x_position_mid [m]"] = 0.3 * t
+    raw["u_velo [m/s]"] = 0.3 + 0.01 * np.sin(t)       # varies, so a shift shows
+    raw["n_prop [rps]"] = 10.0
+    raw["wind_velo_true [m/s]"] = 1.0
+    return raw
+
+
+# ------------------------------------------------------------------------- esso_to_log
+
+
+def test_velocity_lead_longer_than_the_run_holds_the_last_value():
+    raw = _raw(5)
+    log = esso_to_log(raw, velocity_lead_s=1.0)          # 10 steps on a 5-row run
+    assert len(log) == 5
+    np.testing.assert_allclose(log.u_m_s, raw["u_velo [m/s]"].iloc[-1])
+    # shorter leads: the rows k later, the last held (as before)
+    log = esso_to_log(_raw(50), velocity_lead_s=0.6)
+    u = _raw(50)["u_velo [m/s]"].to_numpy()
+    np.testing.assert_allclose(log.u_m_s, np.concatenate([u[6:], np.repeat(u[-1], 6)]))
+
+
+@pytest.mark.parametrize("lead", [-0.6, float("nan"), float("inf")])
+def test_a_velocity_lead_that_is_not_a_finite_non_negative_time_is_refused(lead):
+    with pytest.raises(ValueError, match="velocity_lead_s"):
+        esso_to_log(_raw(50), velocity_lead_s=lead)
+
+
+def test_a_one_row_run_with_a_velocity_lead():
+    log = esso_to_log(_raw(1), velocity_lead_s=0.6)
+    assert len(log) == 1 and log.u_m_s.iloc[0] == pytest.approx(0.3)
+
+
+# ------------------------------------------------------------------------- convention_checks
+
+
+@pytest.mark.filterwarnings("ignore:invalid value:RuntimeWarning")     # no yaw: its correlations are NaN
+def test_convention_checks_take_a_negative_lag():
+    """A lag scan on both sides of zero: a negative lag compares with earlier velocities
+    (it failed with an IndexError); positive lags give what they gave."""
+    raw = _raw(600)
+    neg = convention_checks(raw, lag_s=-0.6)
+    assert all(np.isfinite(v) for k, v in neg.items() if k.startswith("rms_"))
+    assert neg["rms_north_m_s"] < 0.02
+    pos = convention_checks(raw, lag_s=0.6)
+    # the same rows as before the change: i in [k, n - k - lag)
+    t = raw["t [s]"].to_numpy()
+    x = raw["x_position_mid [m]"].to_numpy()
+    u = raw["u_velo [m/s]"].to_numpy()
+    i = np.arange(5, 600 - 5 - 6)
+    xd = (x[i + 5] - x[i - 5]) / (t[i + 5] - t[i - 5])
+    assert pos["rms_north_m_s"] == pytest.approx(np.sqrt(np.mean((xd - u[i + 6]) ** 2)), rel=1e-12)
+
+
+# ------------------------------------------------------------------------- list_runs
+
+
+def _write_runs(folder, names):
+    folder.mkdir(parents=True, exist_ok=True)
+    for name in names:
+        _raw(100).to_csv(folder / name, index=False)
+
+
+def test_two_files_of_one_run_are_refused(tmp_path):
+    """A run decompressed beside its .csv.gz (or copied to a second folder) would be
+    counted twice: twice the weight in training, its starts twice in the test tables."""
+    _write_runs(tmp_path / "zigzag", ["zigzag_a.csv", "zigzag_b.csv"])
+    _raw(100).to_csv(tmp_path / "zigzag" / "zigzag_a.csv.gz", index=False)
+    with pytest.raises(ValueError, match=r"zigzag_a.*two files"):
+        list_runs(tmp_path)
+    os.remove(tmp_path / "zigzag" / "zigzag_a.csv.gz")
+    assert [r.name for r in list_runs(tmp_path)] == ["zigzag_a", "zigzag_b"]
+
+
+# ------------------------------------------------------------------------- split_runs
+
+
+def _runs_folder(tmp_path):
+    data = tmp_path / "data"
+    _write_runs(data / "zigzag", [f"zigzag_31-Jul-2020_13_0{i}_00.csv" for i in range(4)])
+    _write_runs(data / "turning", [f"turn_14-Sep-2020_15_0{i}_00.csv" for i in range(3)])
+    return data
+
+
+@pytest.mark.parametrize("fraction", [1.5, 1.0, 0.0, -0.2, float("nan")])
+def test_split_refuses_a_test_fraction_outside_0_1(tmp_path, fraction):
+    from hybridship.evaluation.manoeuvre import split_runs
+
+    data = _runs_folder(tmp_path)
+    with pytest.raises(ValueError, match="test_fraction"):
+        split_runs(data, tmp_path / "split", test_fraction=fraction)
+    assert not (tmp_path / "split").exists()
+
+
+def test_split_keeps_the_data_it_splits(tmp_path):
+    """An output folder that is, or holds, the data folder is refused before anything is
+    removed (validation_split(d, d) replaced the benchmark's links by links to themselves),
+    and a file that is not a link is never removed."""
+    from hybridship.evaluation.manoeuvre import split_runs, validation_split
+
+    data = _runs_folder(tmp_path)
+    train, test = split_runs(data, tmp_path / "bench")
+    before = sorted(p.name for p in train.rglob("*.csv"))
+    with pytest.raises(ValueError, match="out_dir"):
+        validation_split(tmp_path / "bench", tmp_path / "bench")
+    assert sorted(p.name for p in train.rglob("*.csv")) == before
+    assert all(p.resolve().parent.parent == data.resolve() for p in train.rglob("*.csv"))
+    with pytest.raises(ValueError, match="out_dir"):
+        split_runs(data, data)                                  # out_dir/train inside the data
+    inner = _runs_folder(tmp_path / "x" / "train")              # out_dir/train holds the data
+    with pytest.raises(ValueError, match="out_dir"):
+        split_runs(inner, tmp_path / "x")
+    assert len(list(inner.rglob("*.csv"))) == 7
+    # a real file in an output folder is the user's: refused, kept
+    (tmp_path / "other" / "train").mkdir(parents=True)
+    (tmp_path / "other" / "train" / "mine.csv").write_text("x\n")
+    with pytest.raises(FileExistsError, match="mine.csv"):
+        split_runs(data, tmp_path / "other")
+    assert (tmp_path / "other" / "train" / "mine.csv").read_text() == "x\n"
+    # a second split into the same folder replaces its own links
+    split_runs(data, tmp_path / "bench", seed=3)
+    links = list((tmp_path / "bench").rglob("*.csv"))
+    assert len(links) == 7 and all(p.is_symlink() and p.resolve().parent.parent == data.resolve() for p in links)
+
+
+# ------------------------------------------------------------------------- errors and coverage
+
+
+def _arrays(n=200, dt=0.1):
+    t = np.arange(n) * dt
+    eta = np.column_stack([0.3 * t, np.zeros(n), np.zeros(n)])
+    return SimpleNamespace(time_s=t, eta=eta, segment_id=np.zeros(n, int))
+
+
+def _forecaster(nan_start=None, nan_std=False):
+    """Perfect forecasts (constant 0.3 m/s north) with a 0.1-m spread; NaN at one start."""
+    def forecast(arrays, starts, horizon_s):
+        H = int(round(horizon_s / 0.1))
+        lead = np.arange(H + 1) * 0.1
+        eta = np.zeros((len(starts), H + 1, 3))
+        eta[..., 0] = 0.3 * (np.asarray(starts)[:, None] + lead[None, :])
+        std = np.full(eta.shape, 0.1)
+        if nan_start is not None:
+            k = int(np.flatnonzero(np.isclose(starts, nan_start))[0])
+            (std if nan_std else eta)[k, 5:] = np.nan
+        return SimpleNamespace(eta=eta, eta_std=std)
+    return forecast
+
+
+def test_forecast_errors_score_the_truth_the_horizon_later():
+    from hybridship.evaluation.manoeuvre import forecast_errors, start_rows
+
+    a = _arrays()
+    rows = start_rows(a, 20, 1.0)
+    err, z = forecast_errors(_forecaster(), a, rows, np.array([10, 20]), return_z=True)
+    assert err.shape == (rows.size, 2, 4) and np.abs(err).max() < 1e-12 and np.abs(z).max() < 1e-9
+
+
+@pytest.mark.parametrize("nan_std", [False, True])
+def test_a_forecast_with_nan_is_refused_naming_its_start(nan_std):
+    """A NaN forecast (or spread) would make the pooled MAE NaN or count as a band miss
+    without a word; it is refused naming the start time."""
+    from hybridship.evaluation.manoeuvre import forecast_errors, start_rows
+
+    a = _arrays()
+    rows = start_rows(a, 20, 1.0)
+    with pytest.raises(ValueError, match=r"start time_s 5 "):
+        forecast_errors(_forecaster(nan_start=5.0, nan_std=nan_std), a, rows, np.array([10, 20]), return_z=True,
+                        heading_z=True)
+    if nan_std:     # without the spread asked for, a NaN spread is not read
+        forecast_errors(_forecaster(nan_start=5.0, nan_std=True), a, rows, np.array([10, 20]))
+
+
+def test_readme_says_every_sample_when_every_sample_starts():
+    from hybridship.evaluation.manoeuvre import BenchmarkResult, ManoeuvreConfig, markdown_report
+
+    from dataclasses import replace
+
+    e = pd.DataFrame(columns=["model", "kind", "state", "horizon_s", "mae", "commands"])
+    res = BenchmarkResult(e, [], [], {}, (5.0,), replace(ManoeuvreConfig(), start_every_s=None), {}, {})
+    md = markdown_report(res)
+    assert "every None" not in md and "(every sample)" in md
+    res = BenchmarkResult(e, [], [], {}, (5.0,), ManoeuvreConfig(), {}, {})
+    assert "(every 1.0 s)" in markdown_report(res)
