@@ -204,3 +204,21 @@ def test_readme_says_every_sample_when_every_sample_starts():
     assert "every None" not in md and "(every sample)" in md
     res = BenchmarkResult(e, [], [], {}, (5.0,), ManoeuvreConfig(), {}, {})
     assert "(every 1.0 s)" in markdown_report(res)
+
+
+@pytest.mark.parametrize("bad, field", [
+    ({"start_every_s": float("nan")}, "start_every_s"), ({"start_every_s": 0.0}, "start_every_s"),
+    ({"step_s": -0.1}, "step_s"), ({"train_row_stride": 0}, "train_row_stride"),
+    ({"data_only_row_stride": 1.5}, "data_only_row_stride"), ({"guard_quantile": 1.0}, "guard_quantile"),
+    ({"training": "free_run"}, "training"), ({"hull_fit": "ridge"}, "hull_fit"), ({"wind_samples": -1}, "wind_samples"),
+])
+def test_manoeuvre_config_refuses_bad_settings_naming_the_field(bad, field):
+    from dataclasses import replace
+
+    from hybridship.evaluation.manoeuvre import ManoeuvreConfig
+
+    with pytest.raises(ValueError, match=rf"^{field}: .*\[ManoeuvreConfig\]"):
+        ManoeuvreConfig(**bad)
+    with pytest.raises(ValueError, match=rf"^{field}: "):
+        replace(ManoeuvreConfig(), **bad)          # replace re-validates
+    assert replace(ManoeuvreConfig(), start_every_s=None).start_every_s is None

@@ -27,11 +27,13 @@ from __future__ import annotations
 import time
 from dataclasses import dataclass, field, replace
 from pathlib import Path
-from typing import Callable
+from typing import Annotated, Callable, Literal
 
 import numpy as np
 import pandas as pd
+from pydantic import Field
 
+from ..config import Float, Int, config_dataclass
 from ..datasets.esso_osaka import EssoRun, RUN_KINDS, esso_log_arrays, list_runs
 from ..fileio import atomic_write, check_output_files, earlier_run, remove_stale, write_output_files
 from ..frames import wrap_pi
@@ -67,9 +69,9 @@ CITATION = (
 )
 
 
-@dataclass(frozen=True)
+@config_dataclass(frozen=True)
 class ManoeuvreConfig:
-    """Settings of the manoeuvring benchmark (chosen before looking at test errors).
+    """Settings of the manoeuvring benchmark (chosen before looking at test errors; validated).
 
     Attributes
     ----------
@@ -132,23 +134,23 @@ class ManoeuvreConfig:
         0.991 against 0.974 (interval score 2.75 m against 3.56 m; ``docs/esso-osaka.md``).
     """
 
-    start_every_s: float | None = 1.0
-    step_s: float | None = None
+    start_every_s: Annotated[Float, Field(gt=0)] | None = 1.0
+    step_s: Annotated[Float, Field(gt=0)] | None = None
     residual: ResidualConfig = field(default_factory=lambda: ResidualConfig(
         features=ALL_FEATURES[:6] + COMMAND_FEATURES + MEMORY_FEATURES, deriv_window_s=2.0, start_average_s=0.1,
         bias_window_s=0.0, residual_step_s=None))        # 10-Hz rows: smoothed targets, multi-step training
     ensemble: EnsembleConfig = field(default_factory=lambda: EnsembleConfig(n_members=8, max_epochs=600))
-    train_row_stride: int = 2
-    data_only_row_stride: int = 1
-    guard_quantile: float = 0.99
+    train_row_stride: Annotated[Int, Field(ge=1)] = 2
+    data_only_row_stride: Annotated[Int, Field(ge=1)] = 1
+    guard_quantile: Annotated[Float, Field(gt=0, lt=1)] = 0.99
     calibration: CalibrationConfig = field(default_factory=lambda: CalibrationConfig(horizon_s=30.0))
-    training: str = "multi_step"
+    training: Literal["one_step", "multi_step"] = "multi_step"
     multistep: MultiStepConfig = field(default_factory=lambda: MultiStepConfig(horizon_s=30.0, batch_starts=64,
                                                                                iterations=100, loss="absolute"))
     command_guard: bool = True
     hull_correction: bool = False
-    hull_fit: str = "one_step"
-    wind_samples: int = 8
+    hull_fit: Literal["one_step", "multi_step"] = "one_step"
+    wind_samples: Annotated[Int, Field(ge=0)] = 8
 
     @classmethod
     def quick(cls, seed: int = 0) -> "ManoeuvreConfig":
