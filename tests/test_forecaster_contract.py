@@ -246,6 +246,53 @@ def test_a_starts_forecast_does_not_depend_on_the_other_starts_of_its_call(kind,
     np.testing.assert_allclose(alone.eta[0], batched.eta[0], rtol=0, atol=1e-9)
 
 
+def _mixed_rate_log(model, slow_s: tuple, duration_s: float):
+    """A 10-Hz log whose samples in ``slow_s`` (first, last) [s] are thinned to 1 Hz."""
+    log = physics_log(model, seed=1, dt_s=0.1, duration_s=duration_s, t_shutdown_s=None)
+    log["time_s"] = log.time_s.round(6)                  # as a logger writes them
+    t = log.time_s.to_numpy()
+    slow = (t >= slow_s[0]) & (t <= slow_s[1])
+    return log[~slow | (t % 1.0 == 0)].reset_index(drop=True)
+
+
+def _start_outcome(predictor, log, starts, k):
+    """Start ``starts[k]``'s forecast (eta, flags) or its refusal (start, reason)."""
+    from hybridship.forecast_inputs import StartWindowError
+
+    try:
+        fc = predictor.forecast(log, starts, 10.0)
+    except StartWindowError as exc:
+        return "refused", exc.start_time_s, exc.reason
+    return "forecast", fc.eta[k], {name: bool(v[k]) for name, v in fc.flags.items()}
+
+
+def _same_outcome(a, b) -> bool:
+    return a[0] == b[0] and all(np.array_equal(x, y) if isinstance(x, np.ndarray) else x == y
+                                for x, y in zip(a[1:], b[1:]))
+
+
+@pytest.mark.parametrize("as_arrays", [False, True])
+def test_a_start_window_on_a_log_whose_rate_changes_does_not_depend_on_the_other_starts(as_arrays, model):
+    """The start-window checks took the log's nominal step from the rows a call read: on a log
+    at 1 Hz to 300 s and 10 Hz after, a start at 250 s was judged at 1 Hz alone (3 of 3
+    samples) and at 10 Hz beside a start at 390 s (3 of 30: refused); on a log at 10 Hz to
+    100 s and 1 Hz after, a start at 90 s averaged 30 samples alone and 25 beside a start
+    at 2400 s. Now every start is judged at the whole log's step, the forecast's own: the
+    1-Hz stretch of a 10-Hz log is missing samples (refused), and the 10-Hz stretch of a
+    1-Hz log is judged with a 1-Hz window."""
+    from hybridship.predictors import as_log_arrays
+
+    dyn = DynamicPredictor(model.vessel)
+    for log, start, other, outcome in ((_mixed_rate_log(model, (0.0, 300.0), 400.0), 250.0, 390.0, "refused"),
+                                       (_mixed_rate_log(model, (100.0, 2500.0), 2500.0), 90.0, 2400.0, "forecast")):
+        if as_arrays:
+            log = as_log_arrays(log, model.vessel, purpose="forecast")
+        alone = _start_outcome(dyn, log, [start], 0)
+        assert _same_outcome(alone, _start_outcome(dyn, log, [start, other], 0)), (start, other)
+        assert _same_outcome(alone, _start_outcome(dyn, log, [other, start], 1)), (start, other)
+        assert alone[0] == outcome, alone
+
+
 def test_known_commands_are_those_logged_by_each_steps_time(model):
     """Known commands were taken row by row after the start, so across a gap (or on a log
     whose rate changes) they ran ahead of the forecast's time; each step now takes the

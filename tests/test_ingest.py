@@ -202,6 +202,27 @@ def test_a_whole_log_statistic_is_judged_on_the_whole_log(model, log):
     assert _message(lambda: ingest(alone, model.vessel, purpose="forecast")).startswith("port_rpm: negative")
 
 
+def test_the_segments_of_the_rows_read_are_the_whole_logs(model):
+    """A gap was a step longer than 1.5 median steps of the rows read, so the rows a call read
+    decided it: on a log at 1 Hz to 300 s and 10 Hz after, the 1-Hz rows from 200 s were one
+    segment when the rows read ended at 305 s (median step 1 s), and each a segment of its own
+    (no velocity derived) when they reached 390 s (0.1 s). The gaps are now judged at the whole
+    log's step (0.1 s), as for LogArrays, which are converted whole."""
+    log = physics_log(model, seed=1, dt_s=0.1, duration_s=400.0, t_shutdown_s=None)
+    log["time_s"] = log.time_s.round(6)
+    log = log[(log.time_s >= 300.0) | (log.time_s % 1.0 == 0)].drop(columns=["u_m_s", "v_m_s", "r_deg_s"])
+    whole = ingest(log, model.vessel, purpose="forecast")
+    for time_range_s in ((200.0, 305.0), (200.0, 390.0)):
+        part = ingest(log, model.vessel, purpose="forecast", time_range_s=time_range_s)
+        rows = (whole.time_s >= time_range_s[0]) & (whole.time_s <= time_range_s[1])
+        np.testing.assert_array_equal(part.time_s, whole.time_s[rows])
+        np.testing.assert_array_equal(np.diff(part.segment_id) != 0, np.diff(whole.segment_id[rows]) != 0)
+        # inside the rows read (np.gradient is one-sided at their ends) the derived velocities
+        # agree, to the rounding of a heading unwrapped from another first sample
+        np.testing.assert_allclose(part.nu[1:-1], whole.nu[rows][1:-1], rtol=1e-9, atol=1e-12)
+        assert np.isnan(part.nu[:100]).all()     # 200..299 s: 1-Hz rows in a 10-Hz log, each a gap
+
+
 @pytest.mark.parametrize("environment", ["estimator", "mean"])
 def test_a_forecast_reads_only_its_time_range(log, model, environment):
     """A forecast reads the log from ``history_s`` (+ a margin) before its earliest start to

@@ -36,6 +36,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..frames import ned_to_body, wrap_pi
+from ..logs.ingest import WHOLE_LOG_STEP
 from ..messages import seconds_text
 
 __all__ = [
@@ -258,7 +259,11 @@ class LogView:
     ----------
     arrays : LogArrays
     dt_nom : float
-        Nominal sample period [s] (median spacing; 1 for a single sample).
+        Nominal sample period [s]: the median spacing of the whole log, also when only some
+        of its rows were read (:func:`hybridship.logs.ingest.ingest`'s ``time_range_s``),
+        so that a start is judged alike whichever other starts share the call; 1 for a
+        single sample. Where the log's rate changes, a stretch logged slower than this
+        holds missing samples.
     n_nom : int
         Samples a full start window holds at the nominal rate.
     n_min : int
@@ -290,7 +295,11 @@ class LogView:
         ``first_start``: the earliest start row to be assessed (the velocity check is
         computed only as far back as its windows reach)."""
         t = arrays.time_s
-        dt_nom = float(np.median(np.diff(t))) if len(arrays) > 1 else 1.0
+        # the step the forecast takes too (forecast_step_s), not the rows read, which the
+        # other starts of the call decide
+        dt_nom = getattr(arrays, WHOLE_LOG_STEP, None)
+        if dt_nom is None:
+            dt_nom = float(np.median(np.diff(t))) if len(arrays) > 1 else 1.0
         n_nom = max(1, int(round(settings.window_s / dt_nom)))
         n_min = max(1, math.ceil(settings.min_valid_fraction * n_nom))
         first = _track_check_first_row(arrays, settings, first_start)

@@ -228,7 +228,10 @@ def _replace_eta(arrays: LogArrays, eta: np.ndarray) -> LogArrays:
     return LogArrays(**kw)
 
 
-def _from_frame(df: pd.DataFrame, v, purpose: str, source: str) -> tuple[LogArrays, SortedLog]:
+def _from_frame(df: pd.DataFrame, v, purpose: str, source: str,
+                gap_step_s: float | None = None) -> tuple[LogArrays, SortedLog]:
+    """Sort, check and convert a log frame; ``gap_step_s``: the nominal step [s] its gaps are
+    judged by (default: its own median step)."""
     order = sort_samples(df, source=source)
     if purpose == "fit":
         _refuse_conflicts(order, source)
@@ -240,7 +243,7 @@ def _from_frame(df: pd.DataFrame, v, purpose: str, source: str) -> tuple[LogArra
     except LogFormatError as exc:
         raise _with_resort_hint(exc, order) from None
     arrays = _frame_to_arrays(order.frame, tuple(v.channel_names), tuple(v.rotatable),
-                              resorted_time_s=order.affected_time_s)
+                              resorted_time_s=order.affected_time_s, gap_step_s=gap_step_s)
     return arrays, order
 
 
@@ -330,14 +333,15 @@ def ingest_with_report(source, vessel, *, purpose: str = "fit", name: str | None
         where = name or (str(source) if not isinstance(source, pd.DataFrame) else "log")
         try:
             part = _time_range_frame(df, time_range_s)
-            arrays, order = _from_frame(part, v, purpose, where)
-            if part is not df:      # a column's unit is judged on the whole log, as training judges it
-                whole = sort_samples(df, source=where).frame
+            whole = sort_samples(df, source=where).frame if part is not df else None
+            # the whole log's step: the gaps of the rows read (their segments) are judged by it,
+            # as on LogArrays converted whole, not by the rows read, which other starts decide
+            whole_step_s = None if whole is None else _median_step_s(
+                pd.to_numeric(whole["time_s"], errors="coerce").dropna().to_numpy(float))
+            arrays, order = _from_frame(part, v, purpose, where, gap_step_s=whole_step_s)
+            if whole is not None:   # a column's unit is judged on the whole log, as training judges it
                 check_units_on_whole_log(whole, v, source=where)
-                if "time_s" in whole.columns:
-                    object.__setattr__(arrays, WHOLE_LOG_STEP,
-                                       _median_step_s(pd.to_numeric(whole["time_s"], errors="coerce").dropna()
-                                                      .to_numpy(float)))
+                object.__setattr__(arrays, WHOLE_LOG_STEP, whole_step_s)
         except LogFormatError:
             if time_range_s is None:
                 raise

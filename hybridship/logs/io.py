@@ -1475,8 +1475,12 @@ def log_to_arrays(
     return _frame_to_arrays(df, names, rot)
 
 
-def _frame_to_arrays(df: pd.DataFrame, names: tuple, rot: tuple, resorted_time_s=None) -> LogArrays:
-    """Convert a validated log frame (see :func:`log_to_arrays`; no checks here)."""
+def _frame_to_arrays(df: pd.DataFrame, names: tuple, rot: tuple, resorted_time_s=None,
+                     gap_step_s: float | None = None) -> LogArrays:
+    """Convert a validated log frame (see :func:`log_to_arrays`; no checks here).
+
+    ``gap_step_s``: the nominal step [s] by which gaps cut the segments (default: the median
+    step of ``df``; the whole log's when ``df`` holds only some of its rows)."""
     cols = set(map(str, df.columns))
 
     def col(name: str) -> np.ndarray:
@@ -1488,7 +1492,7 @@ def _frame_to_arrays(df: pd.DataFrame, names: tuple, rot: tuple, resorted_time_s
 
     t = col("time_s")
     n = t.size
-    segments = split_segments(t)
+    segments = split_segments(t, nominal_dt_s=gap_step_s)
     seg_id = segment_ids(segments, n)
 
     psi = _unwrap_finite(np.radians(col("heading_deg")))
