@@ -395,8 +395,13 @@ def _learned_from_failures(info: dict) -> list[str]:
             (pc, pl), (hc, hl) = prior["position_error_m"], prior["heading_error_deg"]
             check = (f"left-out failures: position {pl:.3f} m against {pc:.3f} m, heading {hl:.2f} deg "
                      f"against {hc:.2f} deg with the configured prior")
+            if "position_p_value" in prior:         # no p in files before 2026-11-30
+                check += (f", signed-rank p = {prior['position_p_value']:.3g} and "
+                          f"{prior['heading_p_value']:.3g}")
         else:
-            check = f"{prior['n_failures']} failures, fewer than the three the check needs"
+            from .predictors.hybrid import THRUST_PRIOR_MIN_FAILURES
+
+            check = f"{prior['n_failures']} failures, fewer than the {THRUST_PRIOR_MIN_FAILURES} the check needs"
         lines.append(f"thrust error learned at the thrust stops ({mean}): {'kept' if prior['kept'] else 'not kept'} "
                      f"({check})")
     return lines

@@ -323,10 +323,14 @@ def test_train_reports_what_it_learned_from_failures():
                            "3 of 6 better, signed-rank p = 0.219)")
     assert "(+0.50, -0.36, -0.24): not kept" in prior_line
     assert "position 2.117 m against 2.111 m, heading 3.72 deg against 3.64 deg" in prior_line
+    assert "signed-rank" not in prior_line                      # a file from before the test
+    tested, = _learned_from_failures({"thrust_error_prior": {**prior, "position_p_value": 0.0312,
+                                                             "heading_p_value": 0.2188}})
+    assert tested.endswith("with the configured prior, signed-rank p = 0.0312 and 0.219)")
     few = _learned_from_failures({"thrust_error_prior": {"learned_mean": [0.1, 0.0, 0.0], "kept": False,
                                                          "n_failures": 2}})
     assert few == ["thrust error learned at the thrust stops (+0.10, +0.00, +0.00): not kept "
-                   "(2 failures, fewer than the three the check needs)"]
+                   "(2 failures, fewer than the 5 the check needs)"]
 
 
 def test_cli_warnings_and_short_logs_speak_the_users_words(log_dir, tmp_path, capsys):

@@ -581,12 +581,22 @@ def test_fit_carries_the_thrust_error_seen_at_stops_into_the_prior(model):
 def test_the_prior_learned_at_stops_is_kept_only_where_it_lowers_both_errors():
     from hybridship.residual.environment import thrust_error_prior_carries_over as keep
 
-    configured = np.array([[2.0, 0.05], [1.0, 0.02], [3.0, 0.10]])
-    assert keep(configured, configured * 0.9)
-    assert not keep(configured, configured)                             # no gain: not kept
-    assert not keep(configured, configured * [0.5, 1.1])                 # position better, heading worse
-    assert not keep(configured, configured * [1.1, 0.5])
-    assert keep(configured, configured + [[0.5, 0.0], [-0.8, -0.01], [0.0, 0.0]])   # on average, both
+    configured = np.array([[2.0, 0.05], [1.0, 0.02], [3.0, 0.10], [1.5, 0.04], [2.5, 0.08], [1.2, 0.03]])
+    kept, p = keep(configured, configured * 0.9)
+    assert kept and p == [1 / 64, 1 / 64]                              # all six gain in both
+    assert not keep(configured, configured)[0]                          # no gain: not kept
+    assert keep(configured, configured)[1] == [1.0, 1.0]
+    assert not keep(configured, configured * [0.5, 1.1])[0]             # position better, heading worse
+    assert not keep(configured, configured * [1.1, 0.5])[0]
+    # both means lower, but carried by two failures: the signed-rank test refuses it
+    two = configured.copy()
+    two[:2] *= 0.5
+    two[2:] *= 1.01
+    assert np.all(two.mean(axis=0) < configured.mean(axis=0))
+    kept, p = keep(configured, two)
+    assert not kept and min(p) > 0.05
+    # three failures can never pass (p >= 1/8), however large their gains
+    assert not keep(configured[:3], configured[:3] * 0.5)[0]
     with pytest.raises(ValueError, match="shape"):
         keep(configured, configured[:2])
     with pytest.raises(ValueError, match="finite"):
@@ -596,30 +606,37 @@ def test_the_prior_learned_at_stops_is_kept_only_where_it_lowers_both_errors():
 def test_hybrid_fit_checks_the_prior_learned_at_stops_on_left_out_failures(model):
     """fit(dp_only=False) learns the thrust error at the training logs' stops and keeps it only
     if the failures left out of the learning, one at a time, are forecast better in position
-    and in heading (training_info["thrust_error_prior"]); the estimator then carries the
-    learned prior, else the configured one. With fewer than three failures nothing can be
-    checked and the configured prior is restored; with dp_only nothing is learned. Here every
-    log's tunnel delivers 80 % of the model's thrust: the prior learned at the stops finds it,
-    and the estimator carries whichever prior the left-out check chose. (Which it chooses is
-    close here: the tunnel stops with the failure, and the learned prior moves these 60-s
-    drift forecasts by millimetres and hundredths of a degree either way.)"""
-    logs = _tunnel_deficit_logs(model, (32, 33, 34))
+    and in heading, in the mean and by a signed-rank test of the per-failure gains
+    (training_info["thrust_error_prior"]); the estimator then carries the learned prior, else
+    the configured one. With fewer than five failures nothing can be checked and the
+    configured prior is restored; with dp_only nothing is learned. Here every log's tunnel
+    delivers 80 % of the model's thrust: the prior learned at the stops finds it, and the
+    estimator carries whichever prior the left-out check chose. (Which it chooses is close
+    here: the tunnel stops with the failure, and the learned prior moves these 60-s drift
+    forecasts by millimetres and hundredths of a degree either way.)"""
+    from hybridship.predictors.hybrid import THRUST_PRIOR_MIN_FAILURES
+    from hybridship.residual.drift_hull import KEEP_P_VALUE
+
+    assert THRUST_PRIOR_MIN_FAILURES == 5
+    logs = _tunnel_deficit_logs(model, (32, 33, 34, 35, 36), duration_s=820.0)
     nets = EnsembleConfig(n_members=2, hidden=4, max_epochs=1, patience=1, seed=0)    # nets are off after a failure
     hp = HybridPredictor(model.vessel, ensemble_config=nets, drift_hull=False).fit(logs, dp_only=False)
     info = hp.training_info["thrust_error_prior"]
-    assert info["n_failures"] == 3
+    assert info["n_failures"] == 5
     pos, head = np.array(info["position_error_m"]), np.array(info["heading_error_deg"])
-    assert info["kept"] == bool(pos[1] < pos[0] and head[1] < head[0])
+    p = max(info["position_p_value"], info["heading_p_value"])
+    assert info["kept"] == bool(pos[1] < pos[0] and head[1] < head[0] and p < KEEP_P_VALUE)
     assert abs(pos[1] - pos[0]) < 0.05 and abs(head[1] - head[0]) < 0.1
     want = info["learned_mean"] if info["kept"] else [0.0, 0.0, 0.0]
     np.testing.assert_allclose(hp.estimator.thrust_error_mean, want)
     np.testing.assert_allclose(info["learned_mean"], [-0.2, 0.0, 0.0], atol=0.06)
 
-    two = HybridPredictor(model.vessel, ensemble_config=nets, drift_hull=False).fit(logs[:2], dp_only=False)
-    assert two.training_info["thrust_error_prior"]["n_failures"] == 2
-    assert not two.training_info["thrust_error_prior"]["kept"]
-    np.testing.assert_array_equal(two.estimator.thrust_error_mean, 0.0)
-    np.testing.assert_array_equal(two.estimator.thrust_error_std, 0.2)
+    few = HybridPredictor(model.vessel, ensemble_config=nets, drift_hull=False).fit(logs[:4], dp_only=False)
+    assert few.training_info["thrust_error_prior"]["n_failures"] == 4
+    assert not few.training_info["thrust_error_prior"]["kept"]
+    assert "position_error_m" not in few.training_info["thrust_error_prior"]       # not checked
+    np.testing.assert_array_equal(few.estimator.thrust_error_mean, 0.0)
+    np.testing.assert_array_equal(few.estimator.thrust_error_std, 0.2)
     assert "thrust_error_prior" not in HybridPredictor(model.vessel, ensemble_config=nets, drift_hull=False).fit(logs).training_info
 
 

@@ -70,8 +70,9 @@ WIND_ERROR_START_EVERY_S = 2.0
 DRIFT_HULL_BATCH = 4096
 
 #: Failures the training logs must hold before the thrust-error prior learned at their stops is
-#: checked (leave one out needs at least two others to learn from).
-THRUST_PRIOR_MIN_FAILURES = 3
+#: checked: the signed-rank test of its left-out gains cannot pass with fewer (as for the hull's
+#: yaw moment in a drift).
+THRUST_PRIOR_MIN_FAILURES = DRIFT_HULL_MIN_FAILURES
 
 #: Where the hybrid's slowly varying environment comes from (see :class:`HybridPredictor`).
 ENVIRONMENT_SOURCES = ("estimator", "mean")
@@ -490,9 +491,10 @@ class HybridPredictor:
         :data:`~hybridship.residual.drift_hull.START_EVERY_S` along its drift, ``horizon_s``
         ahead, physics and estimator as after any failure, without the nets or the hull's yaw
         moment in a drift) against the configured prior
-        (:func:`~hybridship.residual.environment.thrust_error_prior_carries_over`). With fewer
-        than three such failures nothing can be checked and the configured prior is
-        restored. Returns what ``training_info["thrust_error_prior"]`` records (None when no
+        (:func:`~hybridship.residual.environment.thrust_error_prior_carries_over`: both means
+        lower and the per-failure gains through a signed-rank test). With fewer than
+        :data:`THRUST_PRIOR_MIN_FAILURES` such failures nothing can be checked and the
+        configured prior is restored. Returns what ``training_info["thrust_error_prior"]`` records (None when no
         stop was read: ``dp_only``, or no stop with enough drift after it)."""
         configured = EnvironmentEstimator(self.model, self.environment_config)
         learned = self.estimator
@@ -511,9 +513,10 @@ class HybridPredictor:
                 for m, estimator in enumerate((configured, others)):
                     self.estimator = estimator
                     errors[m, j] = self._drift_errors(logs[k], horizon_s)
+            kept, (p_position, p_heading) = thrust_error_prior_carries_over(errors[0], errors[1])
             info.update(position_error_m=errors[:, :, 0].mean(axis=1).tolist(),
                         heading_error_deg=np.degrees(errors[:, :, 1].mean(axis=1)).tolist(),
-                        kept=thrust_error_prior_carries_over(errors[0], errors[1]))
+                        position_p_value=p_position, heading_p_value=p_heading, kept=kept)
         self.estimator = learned if info["kept"] else configured
         return info
 

@@ -184,7 +184,7 @@ def choose_coefficient(objective_rad: np.ndarray, munk_rad_per_m2: float, multip
         left_out = float(errors.mean())
         gains = obj[zero[0], used] - errors
         n_gains = int(np.sum(gains > 0))
-        p_value = _signed_rank_p(gains)
+        p_value = signed_rank_p(gains)
     adopted = (left_out is not None and left_out < err_zero and p_value < KEEP_P_VALUE
                and multiples[best] != 0.0)
     return DriftHullChoice(coefficient_rad_per_m2=float(multiples[best] * munk_rad_per_m2) if adopted else 0.0,
@@ -195,7 +195,7 @@ def choose_coefficient(objective_rad: np.ndarray, munk_rad_per_m2: float, multip
                            p_value=p_value, n_left_out_gains=n_gains)
 
 
-def _signed_rank_p(gains: np.ndarray) -> float:
+def signed_rank_p(gains: np.ndarray) -> float:
     """One-sided (gains > 0) Wilcoxon signed-rank p-value. A zero gain (a fold whose choice was
     0) is no evidence either way and is dropped, which leaves fewer failures to pass; 1 when
     all are 0.

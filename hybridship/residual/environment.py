@@ -78,6 +78,7 @@ from ..frames import vector_to_speed_dir
 from ..forecast_inputs.faults import TRACK_MISMATCH_M, TRACK_WINDOW_S, velocity_track_mismatch_m
 from ..messages import seconds_text
 from . import environment_kernel as kernel
+from .drift_hull import KEEP_P_VALUE, signed_rank_p
 
 #: Forward-difference steps of the filter's Jacobian, per state (SI units, radians).
 _FD_STEP = np.array([1e-3, 1e-3, 1e-5, 1e-4, 1e-4, 1e-6, 1e-3, 1e-3, 1e-5, 1e-5, 1e-7])
@@ -378,17 +379,26 @@ def external_accel(psi_rad, load_ned, theta, a_thr) -> np.ndarray:
     return out
 
 
-def thrust_error_prior_carries_over(errors_configured, errors_learned) -> bool:
+def thrust_error_prior_carries_over(errors_configured, errors_learned) -> tuple[bool, list[float]]:
     """Whether a thrust-error prior learned at thrust stops (:meth:`EnvironmentEstimator.fit`)
     is kept: on failures left out of the learning, one at a time, it must lower both the
     mean position error and the mean heading error of the forecasts after the failure,
-    against the configured prior.
+    against the configured prior, and the per-failure gains in each must pass a one-sided
+    Wilcoxon signed-rank test at :data:`~hybridship.residual.drift_hull.KEEP_P_VALUE`, the
+    rule of the hull's yaw moment in a drift (a mean gain carried by one or two failures is
+    not kept; with fewer than five failures none can pass).
 
     Parameters
     ----------
     errors_configured, errors_learned : array, shape (L, 2)
         Per left-out failure, the mean position error [m] and heading error [rad] of its
         forecasts with the configured prior, and with the prior learned on the other failures.
+
+    Returns
+    -------
+    kept : bool
+    p_values : list of float
+        The signed-rank p-values of the position and of the heading gains.
     """
     c = np.asarray(errors_configured, dtype=float)
     g = np.asarray(errors_learned, dtype=float)
@@ -396,7 +406,9 @@ def thrust_error_prior_carries_over(errors_configured, errors_learned) -> bool:
         raise ValueError(f"errors: expected two arrays of shape (n_failures, 2), got {c.shape} and {g.shape}")
     if not (np.all(np.isfinite(c)) and np.all(np.isfinite(g))):
         raise ValueError("errors: must be finite")
-    return bool(np.all(g.mean(axis=0) < c.mean(axis=0)))
+    p_values = [signed_rank_p(c[:, j] - g[:, j]) for j in range(2)]
+    kept = bool(np.all(g.mean(axis=0) < c.mean(axis=0)) and max(p_values) < KEEP_P_VALUE)
+    return kept, p_values
 
 
 def environment_accel(model, arrays, estimate: EnvironmentEstimate, nu=None) -> np.ndarray:
