@@ -365,8 +365,12 @@ def window_nu(view: LogView, W: np.ndarray) -> np.ndarray:
     start row is :func:`start_row_nu` (it does not read the sample after the start).
     Returns shape (..., w, 3)."""
     nu = view.nu[W].copy()
+    starts = np.asarray(W)[..., -1]
+    if view.arrays.nu_logged[starts].all():
+        # as logged, nothing derived: the detectors' path costs no more than before
+        return nu
     last = nu[..., -1, :]
-    nu[..., -1, :] = start_row_nu(view.arrays, np.asarray(W)[..., -1]).reshape(last.shape)
+    nu[..., -1, :] = start_row_nu(view.arrays, starts).reshape(last.shape)
     return nu
 
 
