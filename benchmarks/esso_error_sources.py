@@ -46,7 +46,13 @@ too little or too much). With ``--seed-average`` also
 ``hybrid_seed1`` (the same hybrid fitted with seed 1: a second fit, as long as the first) and
 ``hybrid_seed_mean`` (the mean of the two hybrids' forecasts, heading on the circle:
 whether the hybrid's error is the variance of its fit, which averaging independent fits
-would lower, or a bias they share).
+would lower, or a bias they share). With ``--structure-average`` also hybrids of another
+structure, each alone and averaged with the benchmark's forecast by forecast (heading on
+the circle): ``hybrid_one_step`` (the nets without the multi-step fine-tuning) and
+``hybrid_hull`` (the linear MMG-structured hull correction before the nets, fitted free-run
+and tuned with them: ``hull_correction``, ``hull_fit="multi_step"``, ``tune_hull``), and
+``hybrid_mean_one_step`` and ``hybrid_mean_hull``: whether models whose errors differ more
+than two seeds' do average to a lower error.
 
 Writes ``errors.csv`` (the manoeuvre benchmark's columns) and prints the distance and
 heading tables.
@@ -265,9 +271,12 @@ def main(argv=None) -> int:
     ap.add_argument("--seed-average", action="store_true",
                     help="with --hybrid: also fit the same hybrid with seed 1 and score it alone and the mean "
                          "of the two hybrids' forecasts")
+    ap.add_argument("--structure-average", action="store_true",
+                    help="with --hybrid: also fit the one-step hybrid and the hybrid with the free-run hull "
+                         "correction, and score each alone and averaged with the benchmark's hybrid")
     args = ap.parse_args(argv)
-    if args.seed_average and not args.hybrid:
-        ap.error("--seed-average needs --hybrid")
+    if (args.seed_average or args.structure_average) and not args.hybrid:
+        ap.error("--seed-average and --structure-average need --hybrid")
     try:
         fit_dir, val_dir = validation_split(args.split, args.out / "split")
     except FileNotFoundError as err:
@@ -353,6 +362,14 @@ def main(argv=None) -> int:
             hyb1 = make_predictors(v, cfg1)["hybrid"].fit(fit_logs, row_stride=cfg.train_row_stride)
             per[("hybrid_seed1", "known")] = score(runs, hyb1)
             per[("hybrid_seed_mean", "known")] = score(runs, forecast=_mean_forecast([hyb, hyb1]))
+        if args.structure_average:
+            others = {"one_step": dataclasses.replace(cfg, training="one_step"),
+                      "hull": dataclasses.replace(cfg, hull_correction=True, hull_fit="multi_step",
+                                                  multistep=dataclasses.replace(cfg.multistep, tune_hull=True))}
+            for name, other_cfg in others.items():
+                other = make_predictors(v, other_cfg)["hybrid"].fit(fit_logs, row_stride=cfg.train_row_stride)
+                per[(f"hybrid_{name}", "known")] = score(runs, other)
+                per[(f"hybrid_mean_{name}", "known")] = score(runs, forecast=_mean_forecast([hyb, other]))
     errors = error_table(per, runs, horizons)
     atomic_write(args.out / "errors.csv", lambda fh: fh.write(errors.to_csv(index=False).encode()))
     for state in ("distance_m", "heading_deg"):
