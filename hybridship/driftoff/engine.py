@@ -313,7 +313,9 @@ def _kernel(psi0, P, m_inv, m_a, d_lin, d_quad, d_lift, strip_w, thr, wind_p,
 
 #: Drift speed [m/s] (about 58 kn) beyond which a drift is not a drift but a diverged
 #: integration (no ship drifts off station this fast): a sample whose excursion outruns it
-#: (or turns NaN) at any time within the horizon gives no result.
+#: (or turns NaN) while it is integrated gives no result. A sample stops once it has passed
+#: every radius and reaction time (unless the tracks are kept), so a blow-up after that is
+#: not seen: checking every sample to the horizon would cost several times the run.
 MAX_DRIFT_SPEED_M_S = 30.0
 
 
@@ -323,7 +325,8 @@ def run_kernel(psi0, P, stack, az, rpm0, tau_rpm_s, balance, wind_mean, wind_dir
     """Call the compiled kernel on contiguous float arrays (``nu0`` (B, 3): start velocities, default rest).
 
     Returns ``(t_reach_s (B, R), excursion_m (B, Q), track (B, n_steps + 1, 3) or None)``; a
-    sample that diverged within the horizon (:data:`MAX_DRIFT_SPEED_M_S`) has NaN in both.
+    sample that diverged while it was integrated (:data:`MAX_DRIFT_SPEED_M_S`; up to its
+    early stop, or to the horizon with ``keep_tracks``) has NaN in both.
     ``holding_load`` (B, 3), when given, receives each sample's holding load at t = 0 in the
     "balanced" mode ``[X_N, Y_N, N_Nm]`` (body frame; what the thrusters held before the
     blackout), zeros otherwise.

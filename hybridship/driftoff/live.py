@@ -314,6 +314,14 @@ def _check_estimate(estimate: EnvironmentEstimate, n_thrusters: int) -> None:
     for name in ("wind_speed_m_s", "wind_dir_from_rad", "gust_intensity"):
         if not np.isfinite(float(getattr(estimate, name))):
             raise ValueError(f"estimate.{name}: expected a finite number, got {getattr(estimate, name)!r}")
+    # the ranges of the WeatherState the blackouts build from them, in the estimate's names
+    for name, lo, hi, what in (("wind_speed_m_s", 0.0, MAX_WIND_M_S, "m/s"),
+                               ("wind_dir_from_rad", -2.0 * math.pi - 0.1, 2.0 * math.pi + 0.1, "rad"),
+                               ("gust_intensity", 0.0, 0.5, "")):
+        v = float(getattr(estimate, name))
+        if not lo <= v <= hi:
+            raise ValueError(f"estimate.{name}: expected a number from {lo:.4g} to {hi:.4g}{' ' + what if what else ''}"
+                             f", got {v!r}" + (" (degrees? convert with math.radians)" if what == "rad" else ""))
 
 
 def blackout_now(estimate: EnvironmentEstimate, vessel="gunnerus", settings: DriftOffSettings | None = None,
@@ -355,7 +363,7 @@ def blackout_now(estimate: EnvironmentEstimate, vessel="gunnerus", settings: Dri
     az = np.zeros(K)
     rpm[:k] = rpm_now[:k]
     az[:k] = estimate.azimuth_rad[:k]
-    members = estimate.accel_members
+    members = np.asarray(estimate.accel_members, dtype=float)      # checked above as array-like
     if 1 < members.shape[0] < N:
         import warnings
 

@@ -186,16 +186,18 @@ class DriftOffResult:
         return int(self.t_reach_s.shape[1])
 
     def time_quantiles(self, q=(0.1, 0.5, 0.9)) -> np.ndarray:
-        """Quantiles of the time to reach each radius, (H, R, len(q)) [s]; ``inf`` where not reached.
+        """Quantiles of the time to reach each radius, (H, R, len(q)) [s], or (H, R) for a single
+        number ``q``; ``inf`` where not reached.
 
         The inverse of the samples' distribution (the smallest time by which a share ``q``
         of the samples reached the radius), so a quantile is finite only when that share did
         reach it: with 7 samples of which 6 reached, the 0.9 quantile is ``inf`` ("never").
         """
         qs = np.asarray(q, float)
-        if not np.all((qs >= 0.0) & (qs <= 1.0)):
+        if qs.ndim > 1 or not np.all((qs >= 0.0) & (qs <= 1.0)):
             raise ValueError(f"q: expected quantiles in [0, 1], got {q!r}")
-        return np.moveaxis(np.quantile(self.t_reach_s, qs, axis=1, method="inverted_cdf"), 0, -1)
+        out = np.quantile(self.t_reach_s, qs, axis=1, method="inverted_cdf")
+        return out if qs.ndim == 0 else np.moveaxis(out, 0, -1)     # a single q has no axis to move
 
     def p_exceed(self) -> np.ndarray:
         """P(radius exceeded within the reaction time), (H, R, Q)."""
@@ -282,9 +284,9 @@ def check_headings(headings_rad) -> np.ndarray:
 
 def refuse_diverged(excursion_m: np.ndarray, reaction_times_s, what: str) -> None:
     """Raise FloatingPointError when a drift diverged (the kernel marks a sample whose
-    excursion outran :data:`~hybridship.driftoff.engine.MAX_DRIFT_SPEED_M_S` or turned NaN at
-    any time within the horizon with a NaN excursion; an excursion beyond it up to a
-    reaction time is refused too): no result, not "never reached"."""
+    excursion outran :data:`~hybridship.driftoff.engine.MAX_DRIFT_SPEED_M_S` or turned NaN
+    while it was integrated, up to its early stop, with a NaN excursion; an excursion beyond
+    it up to a reaction time is refused too): no result, not "never reached"."""
     with np.errstate(invalid="ignore"):
         bad = ~(excursion_m <= engine.MAX_DRIFT_SPEED_M_S * np.asarray(reaction_times_s, float) + 1.0)
     if bad.any():

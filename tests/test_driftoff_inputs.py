@@ -1,0 +1,53 @@
+"""Drift-off: a scalar quantile keeps the (heading, radius) axes; a live estimate's bad wind
+fields are refused under their own names, and its members may be any array-like."""
+
+from __future__ import annotations
+
+import dataclasses
+
+import numpy as np
+import pytest
+
+from hybridship.driftoff.live import EnvironmentEstimate, blackout_now
+from hybridship.driftoff.planning import DriftOffSettings, simulate_blackouts
+from hybridship.driftoff.weather import WeatherState
+
+Z3 = np.zeros(3)
+ESTIMATE = EnvironmentEstimate(time_s=0.0, eta=Z3, nu=Z3, rpm=Z3, azimuth_rad=Z3, wind_speed_m_s=10.0,
+                               wind_dir_from_rad=0.0, gust_intensity=0.1, accel_ned=Z3,
+                               accel_members=np.zeros((1, 3)))
+SMALL = DriftOffSettings(n_samples=3, horizon_s=30.0, radii_m=(1.0, 2.0), reaction_times_s=(10.0,))
+
+
+def test_a_single_quantile_is_given_per_heading_and_radius():
+    """``time_quantiles(0.5)`` is the median per (heading, radius), shape (H, R): the same
+    numbers as ``time_quantiles((0.5,))[..., 0]``, not their transpose (R, H)."""
+    w = WeatherState.from_degrees(wind_speed_m_s=14.0, wind_dir_deg=80.0, hs_m=1.0, tp_s=6.0)
+    r = simulate_blackouts("gunnerus", w, np.radians([0.0, 45.0, 90.0]), settings=SMALL)
+    assert r.t_reach_s.shape == (3, 3, 2)
+    np.testing.assert_array_equal(r.time_quantiles(0.5), r.time_quantiles((0.5,))[..., 0])
+    with pytest.raises(ValueError, match="q: expected"):
+        r.time_quantiles([[0.1, 0.5]])
+
+
+@pytest.mark.parametrize("change, field", [
+    (dict(wind_speed_m_s=80.0), "estimate.wind_speed_m_s"),
+    (dict(wind_speed_m_s=-1.0), "estimate.wind_speed_m_s"),
+    (dict(gust_intensity=0.9), "estimate.gust_intensity"),
+    (dict(wind_dir_from_rad=200.0), "estimate.wind_dir_from_rad"),
+])
+def test_live_bad_wind_of_an_estimate_names_the_estimates_field(change, field):
+    """Not ``weather.wind_speed_m_s ... [WeatherState]``, a class the caller never built."""
+    with pytest.raises(ValueError, match=rf"^{field}: ") as info:
+        blackout_now(dataclasses.replace(ESTIMATE, **change), "gunnerus", SMALL)
+    assert "WeatherState" not in str(info.value)
+
+
+def test_live_members_given_as_lists_are_taken_as_arrays():
+    """_check_estimate accepts any array-like; the blackouts then read it as an array too
+    (it raised AttributeError: 'list' object has no attribute 'shape')."""
+    as_list = blackout_now(dataclasses.replace(ESTIMATE, accel_members=[[0.0, 0.0, 0.0]], nu=[0.0, 0.0, 0.0]),
+                           "gunnerus", SMALL)
+    as_array = blackout_now(ESTIMATE, "gunnerus", SMALL)
+    np.testing.assert_array_equal(as_list.t_reach_s, as_array.t_reach_s)
+    np.testing.assert_array_equal(as_list.excursion_m, as_array.excursion_m)
