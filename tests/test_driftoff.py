@@ -867,7 +867,7 @@ def test_result_queries_and_the_state_index_refuse_values_that_would_read_as_zer
     ten = dataclasses.replace(res, t_reach_s=np.arange(1.0, 11.0)[None, :, None])
     np.testing.assert_array_equal(ten.time_quantiles((0.1, 0.5, 0.9))[0, 0], [1.0, 5.0, 9.0])
     season = season_sweep("gunnerus", [w], [0.0], settings=st, scheduler=None)
-    for p in (np.nan, 2.0, -1.0):
+    for p in (np.nan, 2.0, -1.0, None, "0.1", True):
         with pytest.raises(ValueError, match="max_p_exceed: expected a probability"):
             season.operability(p)
 

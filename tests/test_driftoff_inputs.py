@@ -51,3 +51,28 @@ def test_live_members_given_as_lists_are_taken_as_arrays():
     as_array = blackout_now(ESTIMATE, "gunnerus", SMALL)
     np.testing.assert_array_equal(as_list.t_reach_s, as_array.t_reach_s)
     np.testing.assert_array_equal(as_list.excursion_m, as_array.excursion_m)
+
+
+def test_a_local_cluster_is_closed_when_its_client_cannot_start(monkeypatch):
+    """``scheduler="local"``: if the Client on the new LocalCluster fails, the cluster (its
+    worker processes) is closed before the error goes on."""
+    from types import SimpleNamespace
+
+    import hybridship.driftoff.season as season
+
+    closed = []
+
+    class Cluster:
+        def __init__(self, **kw):
+            pass
+
+        def close(self):
+            closed.append(True)
+
+    def client(cluster):
+        raise OSError("no client")
+
+    monkeypatch.setattr(season, "require_dask", lambda: SimpleNamespace(LocalCluster=Cluster, Client=client))
+    with pytest.raises(OSError, match="no client"):
+        season._client("local", 2)
+    assert closed == [True]

@@ -20,6 +20,7 @@ Dask is an optional extra: ``pip install -e ".[cluster]"``.
 from __future__ import annotations
 
 import math
+import numbers
 import time
 from dataclasses import dataclass
 
@@ -136,7 +137,8 @@ class SeasonResult:
 
     def operability(self, max_p_exceed: float = 0.1) -> pd.DataFrame:
         """Per heading, radius and reaction time: the share of states with P(exceed) <= ``max_p_exceed``."""
-        if isinstance(max_p_exceed, bool) or not 0.0 <= float(max_p_exceed) <= 1.0:
+        if (isinstance(max_p_exceed, bool) or not isinstance(max_p_exceed, numbers.Real)
+                or not 0.0 <= float(max_p_exceed) <= 1.0):
             raise ValueError(f"max_p_exceed: expected a probability in [0, 1], got {max_p_exceed!r}")
         rows = []
         for h, psi in enumerate(self.headings_rad):
@@ -153,7 +155,11 @@ def _client(scheduler, n_workers):
     if scheduler == "local":
         cluster = dd.LocalCluster(n_workers=int(n_workers), threads_per_worker=1, processes=True,
                                   dashboard_address=":0", env={"OMP_NUM_THREADS": "1", "MKL_NUM_THREADS": "1"})
-        return dd.Client(cluster), cluster
+        try:
+            return dd.Client(cluster), cluster
+        except BaseException:
+            cluster.close()     # its worker processes would outlive the failed call
+            raise
     if hasattr(scheduler, "submit"):      # a Client given by the caller
         return scheduler, None
     try:
