@@ -494,8 +494,9 @@ class HybridPredictor:
         (:func:`~hybridship.residual.environment.thrust_error_prior_carries_over`: both means
         lower and the per-failure gains through a signed-rank test). With fewer than
         :data:`THRUST_PRIOR_MIN_FAILURES` such failures nothing can be checked and the
-        configured prior is restored. Returns what ``training_info["thrust_error_prior"]`` records (None when no
-        stop was read: ``dp_only``, or no stop with enough drift after it)."""
+        configured prior is restored. Returns what ``training_info["thrust_error_prior"]``
+        records (None when no stop was read: ``dp_only``, or no stop with enough drift
+        after it)."""
         configured = EnvironmentEstimator(self.model, self.environment_config)
         learned = self.estimator
         if (np.array_equal(learned.thrust_error_mean, configured.thrust_error_mean)
