@@ -25,10 +25,8 @@ Example (about 15 min on the 2-core machine)::
 
 from __future__ import annotations
 
-import importlib.util
 import sys
 import time
-from pathlib import Path
 
 import numpy as np
 import pandas as pd
@@ -39,6 +37,8 @@ from hybridship.predictors import DeadReckoning, DynamicPredictor, HybridPredict
 from hybridship.predictors.hybrid import AFTER_STOP_INTERVALS, LATE_START_EVERY_S
 from hybridship.residual.ensemble import EnsembleConfig
 from hybridship.residual.environment import EnvironmentConfig
+
+from _siblings import sibling  # benchmarks/ is on sys.path when a script runs
 
 HORIZON_S = 60.0
 C = EnvironmentConfig
@@ -98,17 +98,8 @@ def table_row(data: str, variant: str, what: str, err: list, phys: list, dr: lis
     return row
 
 
-def _estimator_variants():
-    """The sibling script (benchmarks are not a package): its data sets and shared arguments."""
-    spec = importlib.util.spec_from_file_location("estimator_variants",
-                                                  Path(__file__).with_name("estimator_variants.py"))
-    mod = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(mod)
-    return mod
-
-
 def main(argv=None) -> int:
-    ev = _estimator_variants()
+    ev = sibling("estimator_variants")         # its data sets and shared arguments
     args = ev.parse_args(argv, __doc__.split("\n")[0], VARIANTS)
     rows, per_log = [], []
     for dname, (logs, names) in ev.data_sets(args.data, args.own_n, args.own_seed).items():

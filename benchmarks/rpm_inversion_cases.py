@@ -15,7 +15,6 @@ Usage: ``python benchmarks/rpm_inversion_cases.py [--out FILE]`` (about 5 min on
 from __future__ import annotations
 
 import argparse
-import importlib.util
 import sys
 from pathlib import Path
 
@@ -27,7 +26,7 @@ from hybridship.physics.propeller import thrust_torque
 from hybridship.sim.scenario import DPLossConfig, _simulate, embedded_scenarios, simulate_dp_loss
 from hybridship.vessel import load_vessel
 
-HERE = Path(__file__).resolve().parent
+from _siblings import sibling  # benchmarks/ is on sys.path when a script runs
 
 
 def _counting(counts: dict):
@@ -49,20 +48,13 @@ def _counting(counts: dict):
     return wrapped
 
 
-def _seeds_of(script: str):
-    spec = importlib.util.spec_from_file_location(script, HERE / f"{script}.py")
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    return module
-
-
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--out", type=Path, default=None, help="also write the table to this Markdown file")
     args = ap.parse_args(argv)
     gunnerus = load_vessel("gunnerus")
-    rates = _seeds_of("sample_rates")
-    gaps = _seeds_of("gap_sensitivity")
+    rates = sibling("sample_rates")             # their seeds, as those scripts simulate them
+    gaps = sibling("gap_sensitivity")
     sets = {
         "embedded, seeds 0-2": lambda: embedded_scenarios(3, 0),
         "embedded, seeds 100-119": lambda: embedded_scenarios(20, 100),

@@ -23,9 +23,7 @@ Writes ``wave_direction.csv`` and ``wave_direction.md``::
 from __future__ import annotations
 
 import argparse
-import importlib.util
 import sys
-from pathlib import Path
 
 import numpy as np
 import pandas as pd
@@ -36,16 +34,9 @@ from hybridship.predictors import as_log_arrays
 from hybridship.residual.environment import EnvironmentConfig
 from hybridship.residual.wave_direction import wave_axis, yaw_load_factor
 
+from _siblings import sibling  # benchmarks/ is on sys.path when a script runs
+
 WINDOWS_S = ((0.0, 80.0), (60.0, 300.0))
-
-
-def _environment_vs_truth():
-    """The sibling script (benchmarks are not a package): its truth loads and log sources."""
-    spec = importlib.util.spec_from_file_location("environment_vs_truth",
-                                                  Path(__file__).with_name("environment_vs_truth.py"))
-    mod = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(mod)
-    return mod
 
 
 def axis_error_deg(axis_rel_deg: float, true_rel_deg: float) -> float:
@@ -99,7 +90,7 @@ def summary(table: pd.DataFrame) -> str:
 
 
 def main(argv=None) -> int:
-    evt = _environment_vs_truth()
+    evt = sibling("environment_vs_truth")      # its truth loads and log sources
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     evt.add_log_source_arguments(ap)
     args = ap.parse_args(argv)

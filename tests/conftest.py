@@ -22,7 +22,10 @@ SHARED_DATA = ROOT.parent / "shared" / "data"
 def load_benchmark(name: str):
     """The script ``benchmarks/<name>.py`` as a module (the scripts are not a package)."""
     import importlib.util
+    import sys
 
+    if str(ROOT / "benchmarks") not in sys.path:       # as when the script runs: its siblings import
+        sys.path.append(str(ROOT / "benchmarks"))
     spec = importlib.util.spec_from_file_location(name, ROOT / "benchmarks" / f"{name}.py")
     mod = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(mod)

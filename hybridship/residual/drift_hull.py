@@ -41,7 +41,7 @@ from dataclasses import asdict, dataclass
 import numpy as np
 
 __all__ = ["KEEP_P_VALUE", "MIN_FAILURES", "MUNK_MULTIPLES", "START_EVERY_S", "DriftHullChoice",
-           "choose_coefficient", "munk_coefficient", "drift_start_rows"]
+           "choose_coefficient", "gain_carries_over", "signed_rank_p", "munk_coefficient", "drift_start_rows"]
 
 #: Candidate coefficients as multiples of the model's Munk coefficient (-2 to 2 in steps of 0.05).
 MUNK_MULTIPLES = np.round(np.linspace(-2.0, 2.0, 81), 6)
@@ -179,20 +179,30 @@ def choose_coefficient(objective_rad: np.ndarray, munk_rad_per_m2: float, multip
     best = int(obj[:, used].mean(axis=1).argmin())
     err_zero = float(obj[zero[0], used].mean())
     left_out = p_value = n_gains = None
+    carries_over = False
     if len(used) >= 2:
         errors = np.array([obj[int(obj[:, [i for i in used if i != j]].mean(axis=1).argmin()), j] for j in used])
         left_out = float(errors.mean())
-        gains = obj[zero[0], used] - errors
-        n_gains = int(np.sum(gains > 0))
-        p_value = signed_rank_p(gains)
-    adopted = (left_out is not None and left_out < err_zero and p_value < KEEP_P_VALUE
-               and multiples[best] != 0.0)
+        n_gains = int(np.sum(obj[zero[0], used] > errors))
+        carries_over, p_value = gain_carries_over(obj[zero[0], used], errors)
+    adopted = carries_over and multiples[best] != 0.0
     return DriftHullChoice(coefficient_rad_per_m2=float(multiples[best] * munk_rad_per_m2) if adopted else 0.0,
                            munk_multiple=float(multiples[best]), adopted=bool(adopted), n_failures=len(used),
                            error_deg=float(np.degrees(obj[best, used].mean())),
                            error_zero_deg=float(np.degrees(err_zero)),
                            error_left_out_deg=None if left_out is None else float(np.degrees(left_out)),
                            p_value=p_value, n_left_out_gains=n_gains)
+
+
+def gain_carries_over(errors_without, errors_with) -> tuple[bool, float]:
+    """The out-of-sample rule for what ``fit`` learns from failures (this coefficient, and the
+    thrust-error prior of :func:`hybridship.residual.environment.thrust_error_prior_carries_over`):
+    with it, the left-out failures' errors ``errors_with`` (L,) must be lower than
+    ``errors_without`` (L,) on average, and their gains must pass the one-sided signed-rank
+    test at :data:`KEEP_P_VALUE`. Returns whether it carries over and the p-value."""
+    without, with_ = np.asarray(errors_without, dtype=float), np.asarray(errors_with, dtype=float)
+    p_value = signed_rank_p(without - with_)
+    return bool(with_.mean() < without.mean() and p_value < KEEP_P_VALUE), p_value
 
 
 def signed_rank_p(gains: np.ndarray) -> float:

@@ -78,7 +78,7 @@ from ..frames import vector_to_speed_dir
 from ..forecast_inputs.faults import TRACK_MISMATCH_M, TRACK_WINDOW_S, velocity_track_mismatch_m
 from ..messages import seconds_text
 from . import environment_kernel as kernel
-from .drift_hull import KEEP_P_VALUE, signed_rank_p
+from .drift_hull import gain_carries_over
 
 #: Forward-difference steps of the filter's Jacobian, per state (SI units, radians).
 _FD_STEP = np.array([1e-3, 1e-3, 1e-5, 1e-4, 1e-4, 1e-6, 1e-3, 1e-3, 1e-5, 1e-5, 1e-7])
@@ -406,9 +406,9 @@ def thrust_error_prior_carries_over(errors_configured, errors_learned) -> tuple[
         raise ValueError(f"errors: expected two arrays of shape (n_failures, 2), got {c.shape} and {g.shape}")
     if not (np.all(np.isfinite(c)) and np.all(np.isfinite(g))):
         raise ValueError("errors: must be finite")
-    p_values = [signed_rank_p(c[:, j] - g[:, j]) for j in range(2)]
-    kept = bool(np.all(g.mean(axis=0) < c.mean(axis=0)) and max(p_values) < KEEP_P_VALUE)
-    return kept, p_values
+    (kept_position, p_position), (kept_heading, p_heading) = (gain_carries_over(c[:, j], g[:, j])
+                                                               for j in range(2))
+    return kept_position and kept_heading, [p_position, p_heading]
 
 
 def environment_accel(model, arrays, estimate: EnvironmentEstimate, nu=None) -> np.ndarray:
