@@ -343,7 +343,8 @@ def _track_check_first_row(arrays, settings: WindowSettings, first_start: int) -
 
 
 def start_row_nu(arrays, rows) -> np.ndarray:
-    """``nu`` at forecast start rows ``rows`` (S,) as a log that ends there gives it, (S, 3).
+    """``nu`` [m/s, m/s, rad/s] at forecast start rows ``rows`` (S,) as a log that ends there
+    gives it, (S, 3).
 
     The log's derived (not logged) velocities are central differences
     (:func:`numpy.gradient`), so at a start row they read the sample after the start, which
