@@ -206,6 +206,14 @@ def test_weather_table_round_trip_and_errors(tmp_path):
         read_weather_table(df.drop(columns=["hs_m"]))
     with pytest.raises(ValueError, match="found ' hs_m', which is hs_m with spaces around the name"):
         read_weather_table(df.rename(columns={"hs_m": " hs_m"}))
+    # a column in another unit, and a header separated by ';', pointed out as the log reader does
+    with pytest.raises(ValueError, match=r"missing column\(s\) \['wind_speed_m_s', 'current_dir_deg'\].*found "
+                                         r"'wind_speed_kn', which looks like wind_speed_m_s in another unit.*found "
+                                         r"'current_dir_rad', which looks like current_dir_deg"):
+        read_weather_table(df.rename(columns={"wind_speed_m_s": "wind_speed_kn", "current_dir_deg": "current_dir_rad"}))
+    df.to_csv(path, index=False, sep=";")
+    with pytest.raises(ValueError, match="the header is one name holding ';': the weather table separates columns"):
+        read_weather_table(path)
     # above a WeatherState's range: the column, the row and the file's line, not the field's
     # name inside WeatherState
     bad = pd.concat([df, df], ignore_index=True)

@@ -51,6 +51,19 @@ __all__ = ["WeatherState", "WeatherUncertainty", "TABLE_COLUMNS", "read_weather_
 TABLE_COLUMNS = ("wind_speed_m_s", "wind_dir_deg", "hs_m", "tp_s", "wave_dir_deg", "current_m_s",
                  "current_dir_deg")
 OPTIONAL_COLUMNS = ("time", "gust_intensity")
+#: Each column's name without its unit, to point out one logged in another unit (``wind_speed_kn``).
+_COLUMN_STEMS = {"wind_speed_m_s": "wind_speed", "wind_dir_deg": "wind_dir", "hs_m": "hs", "tp_s": "tp",
+                 "wave_dir_deg": "wave_dir", "current_m_s": "current", "current_dir_deg": "current_dir"}
+
+
+def _table_column_of(name: str) -> str | None:
+    """The table column that ``name`` looks like in another unit (``wind_speed_kn`` ->
+    ``wind_speed_m_s``): its stem, or the stem and a unit; the longest stem wins; else None."""
+    c = name.strip().lower()
+    if c in TABLE_COLUMNS or c in OPTIONAL_COLUMNS:
+        return None
+    found = [(len(stem), col) for col, stem in _COLUMN_STEMS.items() if c == stem or c.startswith(stem + "_")]
+    return max(found)[1] if found else None
 
 
 _NonNeg = Annotated[Float, Field(ge=0.0)]
@@ -210,9 +223,15 @@ def read_weather_table(path_or_frame) -> tuple[list[WeatherState], list[str]]:
                              f"{list(TABLE_COLUMNS)}; {what})") from None
     missing = [c for c in TABLE_COLUMNS if c not in df.columns]
     if missing:
-        spaced = [str(c) for c in df.columns if str(c) != str(c).strip() and str(c).strip() in missing][:1]
+        cols = [str(c) for c in df.columns]
+        spaced = [c for c in cols if c != c.strip() and c.strip() in missing][:1]
         hint = "".join(f"; found {c!r}, which is {c.strip()} with spaces around the name (a header written with "
                        f"', ' between names?)" for c in spaced)
+        hint += "".join(f"; found {c!r}, which looks like {_table_column_of(c)} in another unit: convert it and "
+                        f"name it {_table_column_of(c)}" for c in cols if _table_column_of(c) in missing)
+        hint += "".join([f"; the header is one name holding {sep!r}: the weather table separates columns with "
+                         f"',' (and writes decimals with '.')" for sep in (";", "\t")
+                         if len(cols) == 1 and sep in cols[0]][:1])
         raise ValueError(f"{src}: missing column(s) {missing}; expected {list(TABLE_COLUMNS)} "
                          f"(optional {list(OPTIONAL_COLUMNS)}){hint}")
     if len(df) == 0:
