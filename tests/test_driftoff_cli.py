@@ -131,3 +131,18 @@ def test_an_empty_vessel_is_refused_as_bad_input(tmp_path, monkeypatch, capsys, 
     err = capsys.readouterr().err
     assert err.endswith("error: argument --vessel: expected a packaged vessel name or a vessel file, got ''\n"), err
     assert sorted(p.name for p in tmp_path.iterdir()) == []
+
+
+def test_live_and_forecast_end_alike_on_a_log_without_a_required_column(tmp_path, capsys):
+    """Review: a log without ``heading_deg`` ended ``drift-off live`` with status 2 (a bad
+    option) and ``forecast`` with 1 (bad data); live now ends with 1 too, naming the column."""
+    from hybridship.physics.model import DynamicModel
+    from hybridship.sim.synthetic import physics_log
+
+    log = tmp_path / "log.csv"
+    physics_log(DynamicModel("gunnerus"), seed=2, duration_s=200.0, t_shutdown_s=None).drop(
+        columns=["heading_deg"]).to_csv(log, index=False)
+    assert main(["drift-off", "live", "--log", str(log), "--out", str(tmp_path / "out"), "--no-plots"]) == 1
+    err = capsys.readouterr().err
+    assert err.startswith("hybridship drift-off live: error: heading_deg: required column missing")
+    assert "Traceback" not in err

@@ -315,6 +315,18 @@ def test_refusal_raises_a_clear_error_by_default(model, log):
     assert "missing heading in the window" in str(info.value) and "valid samples used" not in str(info.value)
 
 
+def test_a_start_at_the_logs_beginning_is_refused_saying_so(model, log):
+    """Review: a start within one window of the log's first sample was refused for too
+    little valid data without saying why there was too little."""
+    with pytest.raises(StartWindowError, match=r"start time_s 0: refused, too little valid data .*the window "
+                                               r"reaches back before the log's first sample \(time_s 0\): start "
+                                               r"later"):
+        _assess(model, log, [0.0])
+    with pytest.raises(StartWindowError) as info:      # a fault later in a log: no such hint
+        _assess(model, _nan(["heading_deg"], [T_FAULT, T_FAULT - 1])(log.copy()), [300.0])
+    assert "first sample" not in str(info.value)
+
+
 def test_frozen_gnss_refusal_names_the_frozen_sensor(model, log):
     df = _freeze(["north_m", "east_m"], T_FAULT, T_FAULT + 20)(log.copy())
     with pytest.raises(StartWindowError, match=r"refused, too little valid data .*position: no valid sample.*"

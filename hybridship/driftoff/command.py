@@ -281,7 +281,7 @@ def _cmd_live(args) -> int:
 
     import numpy as np
 
-    from hybridship.logs.io import read_log
+    from hybridship.logs.io import LogFormatError, read_log
 
     from .live import blackout_now, environment_from_log
     from .report import write_report
@@ -306,6 +306,8 @@ def _cmd_live(args) -> int:
     try:
         est = environment_from_log(df, model, window_s=args.window_s, n_members=st.n_samples, seed=args.seed,
                                    name=str(args.log))
+    except LogFormatError:
+        raise                   # the log's content, not the request: exit 1, as forecast and train
     except ValueError as exc:
         raise _usage(problem_lines(exc, f"{_PROG} live: error: ",
                                    lambda field: {"window_s": "--window-s", "log": "--log"}.get(field, field))) from None

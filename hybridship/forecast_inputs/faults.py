@@ -930,10 +930,13 @@ def detect_too_little_valid(view: LogView, win: Window, settings: WindowSettings
         short.insert(0, "position: no valid sample")
     if short:
         t = view.t
+        # a start within one window of the log's first sample: say so, the usual cause
+        early = ("" if win.lo > 0 or t[win.start] - t[0] >= settings.window_s else
+                 f"; the window reaches back before the log's first sample (time_s {seconds_text(t[0])}): start later")
         win.flag(FaultFlags.TOO_LITTLE_VALID,
                  f"too little valid data in the {settings.window_s:g}-s window (time_s {seconds_text(t[win.lo])}.."
                  f"{seconds_text(t[win.start])}): {'; '.join(short)}; need at least {view.n_min} valid "
-                 "sample(s) of each and one position")
+                 f"sample(s) of each and one position{early}")
     return bool(short)
 
 
