@@ -342,9 +342,12 @@ def _cmd_train(args) -> int:
         hp = make_predictors(vessel, cfg)["hybrid"]
         hp.fit(files, dp_only=False, row_stride=cfg.train_row_stride, progress=sys.stderr.isatty())
     else:
-        from .logs.io import log_header
+        from .logs.io import REQUIRED_COLUMNS, log_header, output_table_kind
 
-        if not any("dp_active" in (log_header(f) or ()) for f in files):   # unreadable: refused by fit
+        headers = [log_header(f) or [] for f in files]          # unreadable: refused by fit
+        # only what may be a log (the rest is refused by fit, saying why)
+        logs = [h for h in headers if set(REQUIRED_COLUMNS) <= set(h) and not output_table_kind(h)]
+        if logs and not any("dp_active" in h for h in logs):
             print(f"{_PROG} train: note: no log has a dp_active column; trained with the station-keeping and drift "
                   f"settings (the default). Logs of manoeuvres train with --manoeuvre (docs/esso-osaka.md)",
                   file=sys.stderr)
@@ -408,7 +411,10 @@ def _learned_from_failures(info: dict) -> list[str]:
 
 
 def _add_forecast(sub) -> None:
-    p = sub.add_parser("forecast", help="forecast from one or more start times of a log")
+    p = sub.add_parser("forecast", help="forecast from one or more start times of a log",
+                       description="Forecast the vessel's motion from each --start-time of --log with a model "
+                                   "file from 'hybridship train' (the vessel comes from the model file), and "
+                                   "write the forecast table with its spread and fault flags to --out.")
     p.add_argument("--model", required=True, type=Path, help="model file from 'hybridship train'")
     p.add_argument("--log", required=True, type=Path, help="log file")
     p.add_argument("--start-time", required=True, type=float, nargs="+", help="start time(s) [s] (sample times)")
@@ -713,11 +719,20 @@ def _cmd_benchmark_drift(args) -> int:
         vessel = load_vessel(args.vessel)
     except VesselFileError as exc:
         raise UsageError(problem_lines(exc, f"{_PROG} benchmark drift: error: --vessel: ")) from None
-    res = run_drift_benchmark(args.train, args.test, args.out, vessel=vessel, members=args.members,
-                              seed=args.seed, n_intervals=args.intervals, dp_only=not args.all_rows,
-                              n_scenarios=args.scenarios, plots=not args.no_plots, training=args.training,
-                              calibration_scenarios=args.calibration_scenarios, drift_hull=not args.no_drift_hull,
-                              environment_config=EnvironmentConfig(wave_turned_yaw_load=args.wave_yaw_load))
+    try:
+        res = run_drift_benchmark(args.train, args.test, args.out, vessel=vessel, members=args.members,
+                                  seed=args.seed, n_intervals=args.intervals, dp_only=not args.all_rows,
+                                  n_scenarios=args.scenarios, plots=not args.no_plots, training=args.training,
+                                  calibration_scenarios=args.calibration_scenarios,
+                                  drift_hull=not args.no_drift_hull,
+                                  environment_config=EnvironmentConfig(wave_turned_yaw_load=args.wave_yaw_load))
+    except ValueError as exc:
+        if not str(exc).startswith(("test: ", "train: ")):
+            raise
+        # the folders' logs do not fit the request (no failure to score, a test log trained on): still the input
+        option = {"test": "--test", "train": "--train"}
+        raise UsageError(problem_lines(exc, f"{_PROG} benchmark drift: error: ",
+                                       lambda field: option.get(field, field))) from None
     print()
     print(res.outputs["tables.md"].read_text())
     return 0
@@ -733,6 +748,9 @@ def _build_parser() -> argparse.ArgumentParser:
     """The top-level parser with every subcommand registered."""
     parser = _Parser(prog=_PROG, description="Ship drift forecasting with a 3-DOF Fossen model and "
                                                "neural residuals.")
+    from . import __version__
+
+    parser.add_argument("--version", action="version", version=f"{_PROG} {__version__}")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND", parser_class=_Parser)
     _add_simulate(sub)
     _add_demo(sub)

@@ -366,6 +366,30 @@ def test_bad_options_are_refused_before_any_work(log_dir, tmp_path, capsys):
     assert sorted(p.name for p in log_dir.iterdir()) == before
 
 
+def test_version(capsys):
+    import hybridship
+
+    assert main(["--version"]) == 0
+    assert capsys.readouterr().out == f"hybridship {hybridship.__version__}\n"
+
+
+def test_train_on_a_folder_holding_only_a_forecast_table_says_what_it_is(tmp_path, capsys):
+    """Review: a forecast table (two starts share their times) was refused for a repeated
+    time stamp, after a note on manoeuvre logs that did not apply; it is refused as a
+    forecast table, without the note."""
+    import pandas as pd
+
+    rows = [{"start_time_s": s, "lead_s": k, "time_s": s + k, "north_m": 0.0, "east_m": 0.0, "heading_deg": 0.0}
+            for s in (10.0, 20.0) for k in range(30)]
+    folder = tmp_path / "outputs"
+    folder.mkdir()
+    pd.DataFrame(rows).to_csv(folder / "forecast.csv", index=False)
+    assert main(["train", "--logs", str(folder), "--out", str(tmp_path / "m.npz")]) == 1
+    err = capsys.readouterr().err
+    assert "not a log: a forecast table written by 'hybridship forecast'" in err
+    assert "note:" not in err and "appears at rows" not in err
+
+
 def test_forecast_api_names_repeated_starts_and_missing_known_commands(log_dir):
     """The same start twice is refused by name (not silently forecast twice); known commands
     with missing samples say so in the start's note."""

@@ -233,7 +233,7 @@ def test_too_few_calibration_forecasts_are_refused_with_the_counts():
         _check_calibration_count(6, 3, "the other logs' failures", "more logs")
 
 
-def test_a_test_log_without_a_failure_is_refused_before_training(tiny_folder, tmp_path, monkeypatch):
+def test_a_test_log_without_a_failure_is_refused_before_training(tiny_folder, tmp_path, monkeypatch, capsys):
     from hybridship.predictors import HybridPredictor
 
     def no_training(*args, **kwargs):
@@ -247,6 +247,10 @@ def test_a_test_log_without_a_failure_is_refused_before_training(tiny_folder, tm
     with pytest.raises(ValueError, match=r"test: 1 log\(s\) have no DP failure to score \(station_keeping"):
         run_drift_benchmark(tiny_folder, test, tmp_path / "out", progress=False, plots=False)
     assert not (tmp_path / "out").exists()
+    # the command line names its option (it said "test:"), as for other input the logs reveal
+    assert main(["benchmark", "drift", "--train", str(tiny_folder), "--test", str(test), "--out",
+                 str(tmp_path / "out"), "--no-plots"]) == 2
+    assert capsys.readouterr().err.startswith("hybridship benchmark drift: error: --test: 1 log(s) have no DP failure")
 
 
 def test_log_files_take_any_case_and_skip_hidden_and_summary_files(tmp_path):

@@ -160,6 +160,22 @@ def test_training_says_which_samples_it_re_sorted_or_dropped(model, log):
     assert len(out.time_s) == len(log) and np.all(np.diff(out.time_s) > 0)
 
 
+def test_a_forecast_says_which_samples_it_removed_outside_its_start_window(model, log, hybrid):
+    """Review: a time column that jumps back removed the repeated times from a forecast's
+    log without a word (the flags see only the start window, the estimator the half hour
+    before it); it now warns as training does, counting the conflicting times."""
+    from hybridship.logs.io import LogFormatWarning
+
+    back = pd.concat([log.iloc[:150], log.iloc[150:].assign(time_s=log.time_s.iloc[150:] - 20.0)])
+    back = back.reset_index(drop=True)                     # times 130-149 logged twice, other values
+    before = back.copy()
+    with pytest.warns(LogFormatWarning, match=r"20 time\(s\) logged more than once with different values, "
+                                              r"all their samples removed"):
+        fc = hybrid.forecast(back, [250.0], 20)
+    assert not fc.flags[FaultFlags.LATE_OR_OUT_OF_ORDER].any()   # far from the start window
+    pd.testing.assert_frame_equal(back, before)                 # the caller's frame is not touched
+
+
 def test_a_time_column_that_runs_backwards_says_the_samples_were_re_sorted(model, log):
     """A log written backwards is re-sorted into the right log; a time_s column reversed
     against the other columns cannot be told from it by time alone, and the re-sorted log's

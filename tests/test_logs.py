@@ -209,11 +209,12 @@ BAD_CASES = {
     "inf rpm": (_set("port_rpm", 6, np.inf), r"port_rpm: infinite value inf at row 6"),
     "unknown thruster rpm": (
         lambda df: df.assign(bow2_rpm=0.0),
-        r"bow2_rpm: names unknown thruster 'bow2'; known thrusters: tunnel, port, stbd",
+        r"bow2_rpm: names unknown thruster or rudder 'bow2'; the vessel's thrusters and rudders: tunnel, "
+        r"port, stbd",
     ),
     "unknown thruster azimuth": (
         lambda df: df.rename(columns={"stbd_azimuth_deg": "sb_azimuth_deg"}),
-        r"sb_azimuth_deg: names unknown thruster 'sb'",
+        r"sb_azimuth_deg: names unknown thruster or rudder 'sb'",
     ),
 }
 

@@ -246,8 +246,9 @@ def _vessel_refused(model, df, pattern):
 
 def test_channel_names_must_match_the_vessel(model, moving_log):
     _vessel_refused(model, moving_log.rename(columns={"port_rpm": "ps_rpm"}),
-                    r"ps_rpm: names unknown thruster 'ps'; known thrusters: tunnel, port, stbd .*the vessel "
-                    r"used is 'gunnerus': is the log from another vessel\? give its vessel file")
+                    r"ps_rpm: names unknown thruster or rudder 'ps'; the vessel's thrusters and rudders: tunnel, port, "
+                    r"stbd .*the vessel "
+                    r"used is 'gunnerus': is the log from another vessel\? use its vessel file")
 
 
 def test_rpm_beyond_max_is_refused_as_a_unit_error(model, moving_log):

@@ -39,7 +39,7 @@ import pandas as pd
 
 from hybridship.logs.io import (REQUIRED_COLUMNS, LogArrays, LogFormatError, LogFormatWarning, _check_column_names,
                                 _frame_to_arrays, _to_float,
-                                check_log_against_vessel, check_units_on_whole_log, read_log)
+                                check_log_against_vessel, check_units_on_whole_log, output_table_kind, read_log)
 from hybridship.messages import seconds_text
 
 __all__ = ["PURPOSES", "SortedLog", "ingest", "ingest_with_report", "sort_samples"]
@@ -135,8 +135,11 @@ def sort_samples(df: pd.DataFrame, *, source: str = "log") -> SortedLog:
     """
     if not isinstance(df, pd.DataFrame):
         raise TypeError(f"expected a pandas DataFrame, got {type(df).__name__}")
-    if "time_s" not in map(str, df.columns):
-        _check_column_names([str(c) for c in df.columns], source)   # the reader's message, with its hints
+    cols = [str(c) for c in df.columns]
+    if "time_s" not in cols or output_table_kind(cols):
+        # the reader's message, with its hints; a table that hybridship wrote (a forecast's
+        # repeats its times) is not a log, whatever its times say
+        _check_column_names(cols, source)
         raise LogFormatError(f"time_s: required column missing (required: {', '.join(REQUIRED_COLUMNS)}) "
                              f"(in {source})", column="time_s")
     t = _to_float(df, "time_s", source, None, inf_is_missing=True)
@@ -235,8 +238,10 @@ def _from_frame(df: pd.DataFrame, v, purpose: str, source: str,
     order = sort_samples(df, source=source)
     if purpose == "fit":
         _refuse_conflicts(order, source)
-        if order.changed:    # training data should be clean: say what was repaired
-            _warn_repaired(order, source)
+    if order.changed:
+        # say what was repaired: a forecast's flags see only its start window, while the
+        # environment estimator reads the half hour before it
+        _warn_repaired(order, source)
     allow_missing = purpose == "forecast"
     try:
         check_log_against_vessel(order.frame, v, source=source, allow_missing=allow_missing)
@@ -260,9 +265,12 @@ def _with_resort_hint(exc: LogFormatError, order: SortedLog) -> LogFormatError:
 
 
 def _warn_repaired(order: SortedLog, source: str) -> None:
-    """A LogFormatWarning saying which samples of a training log were re-sorted or dropped."""
+    """A LogFormatWarning saying which samples of a log were re-sorted or dropped."""
     parts = [f"{n} {what}" for n, what in ((order.late_time_s.size, "late sample(s) re-sorted"),
                                            (order.duplicate_time_s.size, "exact duplicate(s) dropped"),
+                                           (order.conflicting_time_s.size,
+                                            "time(s) logged more than once with different values, all their "
+                                            "samples removed"),
                                            (order.n_without_time, "row(s) without a finite time_s dropped"))
              if n]
     warnings.warn(f"{source}: time_s is not strictly increasing: {', '.join(parts)}", LogFormatWarning,

@@ -96,6 +96,7 @@ __all__ = [
     "check_log_against_vessel",
     "check_units_on_whole_log",
     "log_header",
+    "output_table_kind",
 ]
 
 #: Speed-vs-track check: displacements over this lag [s] are compared ...
@@ -594,7 +595,7 @@ FORECAST_TABLE_HEADER = ("start_time_s", "lead_s", "time_s")
 _OUTPUT_COLUMNS = {"start_time_s", "lead_s", "model", "horizon_s", "sigma", "coverage", "mae"}
 
 
-def _hybridship_table(cols: list[str]) -> str:
+def output_table_kind(cols: list[str]) -> str:
     """What a table with these columns is, if hybridship wrote it ("" if it may be a log)."""
     names = set(map(str, cols))
     if tuple(str(c) for c in cols[:3]) == FORECAST_TABLE_HEADER:
@@ -608,7 +609,7 @@ def _check_column_names(cols: list[str], source: str) -> None:
     """Unique column names, and every required column present (pointing out one that
     looks like it in another unit, ``heading_rad``)."""
     _check_unique_names(cols, source)
-    ours = _hybridship_table(cols)
+    ours = output_table_kind(cols)
     if ours:
         raise LogFormatError(f"not a log: {ours} (its header has {', '.join(sorted(set(cols) & _OUTPUT_COLUMNS))}); "
                              f"keep such outputs out of a folder of logs{_where(source)}")
@@ -798,10 +799,13 @@ def _check_channel_columns(df: pd.DataFrame, cols: list[str], t: np.ndarray, nam
         if names is not None and name not in names:
             # a log of another vessel, read with the default one: say which vessel was used
             other = "" if vessel_name is None else (f"; the vessel used is {vessel_name!r}: is the log from another "
-                                                    f"vessel? give its vessel file (--vessel)")
+                                                    f"vessel? use its vessel file (--vessel, where a command takes "
+                                                    f"one) or a model trained on that vessel's logs")
             raise LogFormatError(
-                f"{col}: names unknown thruster '{name}'; known thrusters: {', '.join(names) or 'none'} "
-                f"(expected columns <thruster>_rpm and <thruster>_azimuth_deg){_where(source)}{other}",
+                f"{col}: names unknown thruster or rudder '{name}'; the vessel's thrusters and rudders: "
+                f"{', '.join(names) or 'none'} "
+                f"(expected columns <thruster>_rpm, <thruster>_azimuth_deg and <rudder>_azimuth_deg){_where(source)}"
+                f"{other}",
                 column=col,
             )
         x = _to_float(df, col, source, t)  # numeric, no infinities
