@@ -207,6 +207,9 @@ BAD_CASES = {
     "wind huge": (_set("wind_speed_m_s", 8, 95.0), r"wind_speed_m_s: value 95"),
     "dp_active 2": (_set("dp_active", 11, 2.0), r"dp_active: value 2 at row 11"),
     "inf rpm": (_set("port_rpm", 6, np.inf), r"port_rpm: infinite value inf at row 6"),
+    # review: read as 0/1 and as the real part (pandas' ComplexWarning only)
+    "bool north": (lambda df: df.assign(north_m=df.north_m > 0), r"north_m: True/False values; expected numbers"),
+    "complex north": (lambda df: df.assign(north_m=df.north_m + 50j), r"north_m: complex values; expected real"),
     "unknown thruster rpm": (
         lambda df: df.assign(bow2_rpm=0.0),
         r"bow2_rpm: names unknown thruster or rudder 'bow2'; the vessel's thrusters and rudders: tunnel, "

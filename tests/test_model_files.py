@@ -94,6 +94,30 @@ def test_round_trip_still_loads(saved):
     assert path.read_bytes() == raw                  # loading never writes
 
 
+def test_save_never_replaces_a_file_that_is_not_a_model(saved, tmp_path):
+    """Review: ``save`` replaced a user's own archive or file under the model's name (the
+    command line refused it, the API did not); a model file, or an empty file, is replaced."""
+    hp, path, raw = saved
+    mine = tmp_path / "mine.npz"
+    np.savez(mine, important=np.arange(5))
+    notes = tmp_path / "notes.npz"
+    notes.write_text("x")
+    for p in (mine, notes):
+        before = p.read_bytes()
+        with pytest.raises(ValueError, match=r"path: .*exists and is not a hybridship model file"):
+            hp.save(p)
+        assert p.read_bytes() == before
+    (tmp_path / "folder.npz").mkdir()
+    with pytest.raises(ValueError, match="exists and is not a file"):
+        hp.save(tmp_path / "folder.npz")
+    again = tmp_path / "model.npz"
+    again.write_bytes(raw)                               # an earlier model: replaced
+    hp.save(again)
+    (tmp_path / "empty.npz").write_bytes(b"")
+    hp.save(tmp_path / "empty.npz")
+    assert HybridPredictor.load(tmp_path / "empty.npz") is not None
+
+
 def test_truncated_file_is_refused(saved, tmp_path):
     _, _, raw = saved
     for cut in (0, 10, len(raw) // 2, len(raw) - 1):

@@ -244,6 +244,24 @@ def _vessel_refused(model, df, pattern):
     return info.value
 
 
+def test_a_repeated_time_s_or_a_two_level_header_is_refused_by_fit_and_forecast(model, moving_log):
+    """Review: a second ``time_s`` column reached pandas in fit and forecast ("arg must be a
+    list, tuple, 1-d array, or Series"), and a MultiIndex header pandas' to_numeric."""
+    from hybridship.logs.ingest import ingest
+
+    twice = pd.concat([moving_log, moving_log[["time_s"]]], axis=1)
+    levels = moving_log.set_axis(pd.MultiIndex.from_tuples([(c, "") for c in moving_log.columns]), axis=1)
+    for df, pattern in ((twice, r"time_s: column appears more than once"),
+                        (levels, r"columns: expected one row of column names, got 2 levels")):
+        before = df.copy(deep=True)
+        for purpose in ("fit", "forecast"):
+            with pytest.raises(LogFormatError, match=pattern):
+                ingest(df, model.vessel, purpose=purpose)
+            with pytest.raises(LogFormatError, match=pattern):
+                ingest(df, model.vessel, purpose=purpose, time_range_s=(10.0, 50.0))
+        pd.testing.assert_frame_equal(df, before)
+
+
 def test_channel_names_must_match_the_vessel(model, moving_log):
     _vessel_refused(model, moving_log.rename(columns={"port_rpm": "ps_rpm"}),
                     r"ps_rpm: names unknown thruster or rudder 'ps'; the vessel's thrusters and rudders: tunnel, port, "
@@ -325,6 +343,15 @@ def test_no_function_modifies_the_callers_data(model, moving_log, tmp_path):
     np.testing.assert_array_equal(arr3.eta, eta)
     assert not np.shares_memory(arr.eta, df["north_m"].to_numpy())
     assert arr2.eta.flags.writeable is False
+    # LogArrays built from the caller's arrays hold read-only views: the caller's stay writeable
+    # (review: they were frozen in place)
+    from dataclasses import fields
+
+    mine = {f.name: getattr(arr3, f.name).copy() if isinstance(getattr(arr3, f.name), np.ndarray)
+            else getattr(arr3, f.name) for f in fields(arr3)}
+    built = type(arr3)(**mine)
+    assert all(v.flags.writeable for v in mine.values() if isinstance(v, np.ndarray))
+    assert built.eta.flags.writeable is False and np.shares_memory(built.eta, mine["eta"])
 
 
 def test_read_log_without_validation_returns_the_raw_frame(tmp_path, moving_log):

@@ -38,6 +38,7 @@ import numpy as np
 import pandas as pd
 
 from hybridship.logs.io import (REQUIRED_COLUMNS, LogArrays, LogFormatError, LogFormatWarning, _check_column_names,
+                                _check_unique_names,
                                 _frame_to_arrays, _to_float,
                                 check_log_against_vessel, check_units_on_whole_log, output_table_kind, read_log)
 from hybridship.messages import seconds_text
@@ -277,6 +278,15 @@ def _warn_repaired(order: SortedLog, source: str) -> None:
                   stacklevel=2)
 
 
+def _check_header(df: pd.DataFrame, source: str) -> None:
+    """One row of column names, each once: what every later step indexes by (a repeated
+    ``time_s`` would otherwise reach pandas as a frame where a column is expected)."""
+    if isinstance(df.columns, pd.MultiIndex):
+        raise LogFormatError(f"columns: expected one row of column names, got {df.columns.nlevels} levels (a "
+                             f"MultiIndex); flatten them to the log format's names (in {source})", column="columns")
+    _check_unique_names([str(c) for c in df.columns], source)
+
+
 def _time_range_frame(df: pd.DataFrame, time_range_s) -> pd.DataFrame:
     """The rows of ``df`` whose ``time_s`` lies in ``time_range_s`` (rows whose time is not a
     number are kept, so that the checks still report them; with no row in the range, all)."""
@@ -339,6 +349,7 @@ def ingest_with_report(source, vessel, *, purpose: str = "fit", name: str | None
     elif isinstance(source, (str, os.PathLike, pd.DataFrame)):
         df = read_log(Path(source), validate=False) if not isinstance(source, pd.DataFrame) else source
         where = name or (str(source) if not isinstance(source, pd.DataFrame) else "log")
+        _check_header(df, where)
         try:
             part = _time_range_frame(df, time_range_s)
             whole = sort_samples(df, source=where).frame if part is not df else None

@@ -308,8 +308,12 @@ def _to_float(df: pd.DataFrame, col: str, source: str, time_s: np.ndarray | None
     Infinities are errors too, unless ``inf_is_missing`` (then they become NaN).
     """
     s = df[col]
-    if s.dtype == bool:
-        return s.to_numpy(dtype=float, copy=True)
+    if pd.api.types.is_bool_dtype(s):
+        if col == "dp_active":                  # a flag column: True/False is 1/0
+            return s.to_numpy(dtype=float, copy=True, na_value=np.nan)
+        raise LogFormatError(f"{col}: True/False values; expected numbers{_where(source)}", column=col)
+    if pd.api.types.is_complex_dtype(s):        # pandas would drop the imaginary part with a warning
+        raise LogFormatError(f"{col}: complex values; expected real numbers{_where(source)}", column=col)
     if pd.api.types.is_datetime64_any_dtype(s) or pd.api.types.is_timedelta64_dtype(s):
         # pandas would turn these into nanoseconds, and the message would then blame the unit
         raise LogFormatError(f"{col}: {s.dtype} values; expected plain numbers (seconds for time_s: "
@@ -1337,9 +1341,12 @@ class LogArrays:
             object.__setattr__(self, "commands_logged", np.ones(self.time_s.shape[0], dtype=bool))
         if self.resorted_time_s is None:
             object.__setattr__(self, "resorted_time_s", np.zeros(0))
-        for v in vars(self).values():
-            if isinstance(v, np.ndarray):
+        for name, v in list(vars(self).items()):
+            if isinstance(v, np.ndarray) and v.flags.writeable:
+                # a read-only view: the caller's own array stays writeable
+                v = v.view()
                 v.flags.writeable = False
+                object.__setattr__(self, name, v)
 
     def __len__(self) -> int:
         return int(self.time_s.shape[0])

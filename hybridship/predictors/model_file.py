@@ -160,6 +160,12 @@ def save_model(predictor, path) -> Path:
     path = as_path(path)
     if path.suffix.lower() != ".npz":
         raise ValueError(f"path: {path}: expected a .npz model file name")
+    if path.exists() and not path.is_file():
+        raise ValueError(f"path: {path}: exists and is not a file")
+    if path.is_file() and path.stat().st_size and not is_model_file(path):
+        # a user's own archive or file under that name: never replaced (as 'hybridship train --out')
+        raise ValueError(f"path: {path}: exists and is not a hybridship model file (it would be lost); give "
+                         f"another path or remove it")
     e, g = p.ensemble, p.guard
     arrays = {f"w{i}": w for i, w in enumerate(e.weights)}
     arrays.update(x_mean=e.x_mean, x_std=e.x_std, y_mean=e.y_mean, y_std=e.y_std,
