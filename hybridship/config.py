@@ -25,7 +25,7 @@ import numpy as np
 from pydantic import AfterValidator, BeforeValidator, ConfigDict, Field, ValidationError
 from pydantic.dataclasses import dataclass as _pydantic_dataclass
 
-__all__ = ["config_dataclass", "format_validation_error", "Int", "Float", "NonEmpty", "non_empty", "float_array",
+__all__ = ["check_flags", "config_dataclass", "format_validation_error", "Int", "Float", "NonEmpty", "non_empty", "float_array",
            "start_time_rng"]
 
 
@@ -99,6 +99,14 @@ Int = Annotated[int, BeforeValidator(_not_bool)]
 #: A random seed: a non-negative ``int`` below 2**63 (numpy's and torch's generators both
 #: take it; a negative or larger one used to fail deep inside them).
 Seed = Annotated[int, BeforeValidator(_not_bool), Field(ge=0, lt=2**63)]
+
+
+def check_flags(optional=(), **flags) -> None:
+    """TypeError naming a flag that is not True or False (None where ``optional``): a text
+    'no' or 'false' is truthy and would be read as True."""
+    for name, value in flags.items():
+        if not (isinstance(value, (bool, np.bool_)) or (name in optional and value is None)):
+            raise TypeError(f"{name}: expected True or False{' or None' if name in optional else ''}, got {value!r}")
 
 
 def start_time_rng(seed: int, time_s: float) -> np.random.Generator:

@@ -8,7 +8,7 @@ import pytest
 
 from hybridship.driftoff.live import environment_from_log
 from hybridship.physics.model import DynamicModel
-from hybridship.predictors import HybridPredictor
+from hybridship.predictors import DataOnlyPredictor, DynamicPredictor, HybridPredictor
 from hybridship.residual.ensemble import EnsembleConfig
 from hybridship.sim.synthetic import physics_log
 
@@ -21,6 +21,28 @@ def test_hybrid_settings_of_the_wrong_kind_are_refused_by_name(kw, field):
     """A text 'no' is truthy: it used to switch the guard on."""
     with pytest.raises((TypeError, ValueError), match=f"^{field}: "):
         HybridPredictor("gunnerus", **kw)
+
+
+@pytest.mark.parametrize("make, field", [
+    (lambda: DynamicPredictor(stop_after_failure="no"), "stop_after_failure"),
+    (lambda: DataOnlyPredictor(stop_after_failure="false"), "stop_after_failure"),
+    (lambda: DynamicModel("gunnerus", true_vessel="no"), "true_vessel"),
+    (lambda: DynamicModel("gunnerus").acceleration(np.zeros(3), np.zeros(3), return_parts="no"), "return_parts")])
+def test_text_flags_of_the_physics_and_the_plain_predictors_are_refused(make, field):
+    """Review: these read a text 'no' as True (the perturbed "true" vessel, for one)."""
+    with pytest.raises(TypeError, match=f"^{field}: expected True or False, got "):
+        make()
+
+
+def test_settings_given_as_a_dict_are_taken_as_the_config_class():
+    """Review: ``DynamicPredictor(residual_config={...})`` failed at forecast time with an
+    AttributeError; a dict is validated as the class's fields, as elsewhere."""
+    from hybridship.residual.features import ResidualConfig
+
+    p = DynamicPredictor(residual_config={"start_average_s": 5.0})
+    assert isinstance(p.residual_config, ResidualConfig) and p.residual_config.start_average_s == 5.0
+    with pytest.raises(TypeError, match="^residual_config: expected an instance of ResidualConfig"):
+        DynamicPredictor(residual_config=None)
 
 
 def test_fit_flags_are_checked_before_reading_the_logs():
@@ -125,3 +147,18 @@ def test_simulate_blackouts_refuses_a_text_flag():
 
     with pytest.raises(TypeError, match="^keep_tracks: expected True or False, got 'no'"):
         simulate_blackouts("gunnerus", WeatherState(), [0.0], keep_tracks="no")
+
+
+def test_after_stop_errors_and_the_drift_hull_objective_bound_their_horizon_and_flags():
+    """Review: ``calibrate_after_stop(horizon_s=1e9)`` built the leads before any check and was
+    killed for memory; ``drift_hull_objective(horizon_s=nan)`` said "cannot convert float NaN
+    to integer"; ``late="no"`` was read as True."""
+    log = physics_log(DynamicModel("gunnerus"), duration_s=300.0, t_shutdown_s=None, seed=1)
+    hp = HybridPredictor("gunnerus", ensemble_config=EnsembleConfig(n_members=2, hidden=8, max_epochs=3)).fit([log])
+    for call in (lambda: hp.after_stop_errors([log], horizon_s=1e9),
+                 lambda: hp.calibrate_after_stop([log], horizon_s=1e9),
+                 lambda: hp.drift_hull_objective([log], horizon_s=float("nan"))):
+        with pytest.raises(ValueError, match="^horizon_s: "):
+            call()
+    with pytest.raises(TypeError, match="^late: expected True or False, got 'no'"):
+        hp.after_stop_errors([log], late="no")

@@ -303,6 +303,19 @@ def test_hybrid_rollout_refuses_inputs_with_another_number_of_starts():
     for kw, field in ((dict(n_steps=-1, dt_s=1.0), "n_steps"), (dict(n_steps=5, dt_s=0.0), "dt_s")):
         with pytest.raises(ValueError, match=f"^{field}: "):
             hp.rollout(z, z, z, z, guard=False, nets=False, **held, **kw)
+    # review: start states as lists, of another width or with NaN reached numpy or a message
+    # to retrain; an unfitted hybrid's nets, an AttributeError
+    eta, _, _, _ = hp.rollout(z.tolist(), z, z, z, n_steps=5, dt_s=1.0, guard=False, nets=False, **held)
+    np.testing.assert_allclose(eta, 0.0, atol=1e-12)
+    nan = np.full((2, 3), np.nan)
+    for args, match in (((np.zeros((2, 4)), z, z, z), r"^eta0: expected shape \(S, 3\), got \(2, 4\)"),
+                        ((z, z, nan, z), "^dev0: contains NaN"),
+                        ((z, z, z, np.zeros((7, 2, 3, 1))), r"^bias0_ned: expected shape \(S, 3\) or \(E, S, 3\)"),
+                        ((z, ["a"] * 2, z, z), r"^nu0: expected numbers")):
+        with pytest.raises(ValueError, match=match):
+            hp.rollout(*args, n_steps=5, dt_s=1.0, guard=False, nets=False, **held)
+    with pytest.raises(RuntimeError):
+        hp.rollout(z, z, z, z, n_steps=5, dt_s=1.0, guard=False, nets=True, **held)
 
 
 def test_actuator_load_features_agree_between_training_rows_and_both_rollouts(tmp_path):

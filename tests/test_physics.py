@@ -643,6 +643,13 @@ def test_rollout_refuses_commands_it_is_not_meant_for_and_never_returns_nan():
         m.rollout(zeros, [[3.0, 1.0, 0.1]], 20, dt_s=50.0, rpm=[[400, 400, 400]], azimuth_rad=[[0, 0, 0]])
     ok = m.rollout(zeros, zeros, 20, rpm=[[400, 400, 400]], azimuth_rad=[[0, 0, 0]])   # at max_rpm: fine
     assert np.isfinite(ok.eta).all()
+    # review: acceleration returned NaN for velocities beyond the model's range, and took
+    # per-step commands, using the first step alone
+    with pytest.raises(FloatingPointError, match="acceleration: not finite for these inputs"):
+        m.acceleration(np.zeros(3), [1e155, 1e155, 0.0])
+    for call in (m.acceleration, m.step):
+        with pytest.raises(ValueError, match=r"rpm: expected shape \(3,\), \(B, 3\) with B = 1, got \(1, 5, 3\)"):
+            call(np.zeros(3), np.zeros(3), rpm=np.zeros((1, 5, 3)))
 
 
 def test_a_validator_message_that_names_its_field_is_not_put_under_top_level():

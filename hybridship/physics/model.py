@@ -34,6 +34,7 @@ from typing import NamedTuple
 
 import numpy as np
 
+from ..config import check_flags
 from ..forecast_inputs.limits import check_whole_number
 from . import hull, wind as wind_curves
 from .hull import mass_matrices  # moved to hull (vessel validation needs it without this module)
@@ -275,7 +276,9 @@ def _as_input(name, value, B, S, width, default=0.0):
         a = a[None, None, :]
     elif a.ndim == 2:
         a = a[:, None, :]
-    if a.ndim != 3 or a.shape[-1] != width or a.shape[0] not in (1, B) or (S is not None and a.shape[1] not in (1, S)):
+    # per-step inputs (B, S, width) only where there are steps (a rollout); elsewhere one step
+    steps_ok = a.ndim == 3 and (a.shape[1] == 1 if S is None else a.shape[1] in (1, S))
+    if a.ndim != 3 or a.shape[-1] != width or a.shape[0] not in (1, B) or not steps_ok:
         steps = f" or (B, {S}, {width})" if S is not None else ""
         raise ValueError(f"{name}: expected shape ({width},), (B, {width}){steps} with B = {B}, got {np.shape(value)}")
     if not np.all(np.isfinite(a)):
@@ -316,6 +319,7 @@ class DynamicModel:
     def __init__(self, vessel, *, true_vessel: bool = False):
         from ..vessel import Vessel, load_vessel
 
+        check_flags(true_vessel=true_vessel)
         self.vessel = vessel if isinstance(vessel, Vessel) else load_vessel(vessel)
         self.true_vessel = bool(true_vessel)
         self.arrays = build_model_arrays(self.vessel, true_vessel=self.true_vessel)
@@ -404,6 +408,7 @@ class DynamicModel:
         (hull C and D terms, actuators incl. rudders, wind, external) and the delivered
         thrusts ``(B, K)`` [N] of the K thrusters.
         """
+        check_flags(return_parts=return_parts)
         eta, nu = self._states("eta", eta, "nu", nu)
         B = eta.shape[0]
         ins = [np.ascontiguousarray(a[:, 0]) for a in
@@ -413,6 +418,9 @@ class DynamicModel:
         K = len(self.vessel.thrusters)
         thrusts = np.empty((B, max(K, 1)))
         dynamics_batch(eta, nu, *ins, self.arrays, nu_dot, parts, thrusts)
+        if not np.all(np.isfinite(nu_dot)):         # as step() refuses a diverged step: never a silent NaN
+            raise FloatingPointError("acceleration: not finite for these inputs: velocities, wind or loads beyond "
+                                     "the model's valid range")
         if return_parts:
             return nu_dot, parts, thrusts[:, :K]
         return nu_dot

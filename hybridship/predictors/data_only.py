@@ -47,6 +47,7 @@ class DataOnlyPredictor:
         self.model = DynamicModel(vessel)
         self.ensemble_config = as_config(ensemble_config, EnsembleConfig, "ensemble_config")
         self.config = ResidualConfig(start_average_s=start_average_s)
+        _check_flags(stop_after_failure=stop_after_failure)
         self.stop_after_failure = bool(stop_after_failure)
         self.ensemble: MLPEnsemble | None = None
         # one scale per command channel: thrusters by their max rpm, rudders (no rpm) by 1

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from ..config import as_config
 from ..forecast_inputs.wind import HELD_WIND, WindForecast
 from ..physics.model import DynamicModel
 from ..residual.features import ResidualConfig
@@ -28,7 +29,8 @@ class DynamicPredictor:
             raise TypeError(f"wind_forecast: expected a WindForecast, got {type(wind_forecast).__name__}")
         self.wind_forecast = wind_forecast
         self.model = DynamicModel(vessel)
-        self.residual_config = residual_config
+        self.residual_config = as_config(residual_config, ResidualConfig, "residual_config")
+        _check_flags(stop_after_failure=stop_after_failure)
         self.stop_after_failure = bool(stop_after_failure)
 
     def fit(self, logs=(), *, dp_only: bool = True, progress: bool = False, row_stride: int = 1):

@@ -17,6 +17,7 @@ from dataclasses import dataclass
 import numpy as np
 import pandas as pd
 
+from ..config import check_flags as _check_flags  # noqa: F401 (the predictors import it from here)
 from ..forecast_inputs import FaultFlags, InputRangeError, assess_start_window, check_or_clip_inputs
 from ..forecast_inputs.wind import HELD_WIND, WindForecast
 from ..logs.ingest import WHOLE_LOG_STEP, ingest
@@ -63,14 +64,6 @@ def as_log_arrays(log, vessel, *, purpose: str = "fit") -> LogArrays:
     """A path, a DataFrame in the log format or LogArrays, through :func:`hybridship.logs.ingest.ingest`
     (re-sorted, checked against ``vessel`` once; ``purpose`` "fit" or "forecast")."""
     return ingest(log, vessel, purpose=purpose)
-
-
-def _check_flags(optional=(), **flags) -> None:
-    """TypeError naming a flag that is not True or False (None where ``optional``): a text
-    'no' or 'false' is truthy and would be read as True."""
-    for name, value in flags.items():
-        if not (isinstance(value, (bool, np.bool_)) or (name in optional and value is None)):
-            raise TypeError(f"{name}: expected True or False{' or None' if name in optional else ''}, got {value!r}")
 
 
 def keeps_state_on_error(fit):

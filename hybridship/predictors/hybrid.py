@@ -39,8 +39,8 @@ from ..residual.drift_hull import (MIN_FAILURES as DRIFT_HULL_MIN_FAILURES, MUNK
                                    drift_start_rows, munk_coefficient)
 from ..residual.hull import HullCorrection
 from .after_failure import drift_forecasts, has_drift, shutdown_index
-from .forecast_setup import (FORECAST_HISTORY_S, _check_flags, _check_row_stride, _forecast_setup, as_log_arrays,
-                             forecast_step_s, join_notes, keeps_state_on_error, log_list, start_indices)
+from .forecast_setup import (FORECAST_HISTORY_S, MAX_HORIZON_S, _check_flags, _check_row_stride, _forecast_setup,
+                             as_log_arrays, forecast_step_s, join_notes, keeps_state_on_error, log_list, start_indices)
 from .model_file import load_model, save_model
 from .result import ForecastResult
 from .training_logs import check_distinct_logs, check_training_lengths, log_label
@@ -456,6 +456,7 @@ class HybridPredictor:
             rolled out in batches of at most :data:`DRIFT_HULL_BATCH` forecasts.
         """
         self._check_fitted()
+        horizon_s = check_number("horizon_s", horizon_s, lo=0.0, hi=MAX_HORIZON_S, lo_open=True)
         ks = MUNK_MULTIPLES * munk_coefficient(self.model)
         out = np.empty((ks.size, 0))
         for log in logs:
@@ -1223,7 +1224,8 @@ class HybridPredictor:
         are left out)."""
         self._check_fitted()
         check_whole_number("n_intervals", n_intervals, 1)
-        horizon_s = check_number("horizon_s", horizon_s, lo=0.0, lo_open=True)
+        horizon_s = check_number("horizon_s", horizon_s, lo=0.0, hi=MAX_HORIZON_S, lo_open=True)
+        _check_flags(late=late)
         arrays = [as_log_arrays(x, self.model.vessel) for x in log_list(logs)]
         if not arrays:
             raise ValueError("logs: at least one log with a DP failure is needed")
@@ -1262,6 +1264,8 @@ class HybridPredictor:
 
     def calibrated_std(self, std: np.ndarray, lead_s: np.ndarray, commands: str) -> np.ndarray:
         """Raw ensemble spread (S, H+1, 3) at lead times (H+1,) [s] -> calibrated spread."""
+        if commands not in self.calibration:
+            raise ValueError(f"commands: expected one of {sorted(self.calibration)}, got {commands!r}")
         c = self.calibration[commands]
         out = np.empty_like(std)
         out[..., 0] = c["position"].apply(std[..., 0], lead_s)
@@ -1318,6 +1322,7 @@ class HybridPredictor:
         -------
         eta (S, H+1, 3), nu (S, H+1, 3), eta_std (S, H+1, 3), guard_weight (S, H+1)
         """
+        eta0, nu0, dev0, bias0_ned = _rollout_start(eta0, nu0, dev0, bias0_ned, self._check_fitted if nets else None)
         ens = self.ensemble
         _check_rollout_batch(S := eta0.shape[0], n_steps, dt_s, substeps, nu0=nu0, dev0=dev0, rpm=rpm, az=az,
                              wind=wind, current=current, accel_ext=accel_ext)
@@ -1421,6 +1426,27 @@ class HybridPredictor:
             vessel that differs from the one the model was trained for.
         """
         return load_model(cls, path, vessel)
+
+
+def _rollout_start(eta0, nu0, dev0, bias0_ned, check_fitted=None):
+    """A rollout's start states ``eta0, nu0`` and deviations ``dev0`` as finite (S, 3) float
+    arrays and the biases (S, 3) or (E, S, 3); else a ValueError naming the argument
+    (``check_fitted`` first, when given: the nets need a fitted ensemble)."""
+    if check_fitted is not None:
+        check_fitted()
+    out = []
+    for name, a in (("eta0", eta0), ("nu0", nu0), ("dev0", dev0), ("bias0_ned", bias0_ned)):
+        shapes = "(S, 3) or (E, S, 3)" if name == "bias0_ned" else "(S, 3)"
+        try:
+            a = np.asarray(a, dtype=float)
+        except (TypeError, ValueError):
+            raise ValueError(f"{name}: expected numbers of shape {shapes}") from None
+        if a.ndim not in ((2, 3) if name == "bias0_ned" else (2,)) or a.shape[-1] != 3:
+            raise ValueError(f"{name}: expected shape {shapes}, got {a.shape}")
+        if not np.all(np.isfinite(a)):
+            raise ValueError(f"{name}: contains NaN or inf")
+        out.append(a)
+    return out
 
 
 def _check_rollout_batch(S: int, n_steps, dt_s, substeps, **arrays) -> None:
