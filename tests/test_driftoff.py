@@ -189,6 +189,21 @@ def test_season_single_process_equals_cluster():
     np.testing.assert_array_equal(one.p_exceed[3], r3.p_exceed())
 
 
+def test_a_season_of_one_state_given_alone_is_a_sweep_of_one():
+    """``season_sweep(states=state)`` failed with "'WeatherState' object is not iterable": one
+    state is taken as a list of one (as simulate_blackouts takes it); what is neither a state
+    nor an ordered collection of them is refused naming ``states``."""
+    w = WeatherState(wind_speed_m_s=8.0)
+    st = DriftOffSettings(n_samples=2, horizon_s=30.0, reaction_times_s=(10.0,))
+    one = season_sweep("gunnerus", w, [0.0], settings=st, progress=False)
+    np.testing.assert_array_equal(one.p_exceed, season_sweep("gunnerus", [w], [0.0], settings=st,
+                                                             progress=False).p_exceed)
+    assert one.labels == ["0"]
+    for states in ({w}, None, 3.0, {"a": w}):
+        with pytest.raises(TypeError, match=r"^states: expected a WeatherState or a list of them"):
+            season_sweep("gunnerus", states, [0.0], settings=st, progress=False)
+
+
 def test_weather_table_round_trip_and_errors(tmp_path):
     states = [WeatherState.from_degrees(wind_speed_m_s=5.0, wind_dir_deg=10.0, hs_m=1.0, tp_s=7.0, wave_dir_deg=20.0,
                                         current_m_s=0.3, current_dir_deg=200.0)]
@@ -263,6 +278,21 @@ def test_weather_table_round_trip_and_errors(tmp_path):
     assert "codec" not in str(info.value)
 
 
+def test_a_weather_table_with_a_repeated_column_is_refused_naming_it(tmp_path):
+    """A DataFrame with ``hs_m`` twice failed in pandas' to_numeric words; a CSV file's second
+    ``hs_m`` (renamed ``hs_m.1`` by pandas) was only warned about as unused."""
+    df = states_to_frame([WeatherState(wind_speed_m_s=5.0)])
+    twice = pd.concat([df, df[["hs_m"]]], axis=1)
+    before = twice.copy()
+    with pytest.raises(ValueError, match=r"^weather table: column 'hs_m' appears more than once"):
+        read_weather_table(twice)
+    pd.testing.assert_frame_equal(twice, before)
+    path = tmp_path / "w.csv"
+    twice.to_csv(path, index=False)
+    with pytest.raises(ValueError, match=r"w.csv: column 'hs_m' appears more than once"):
+        read_weather_table(path)
+
+
 def test_a_run_too_large_for_memory_says_so_in_the_commands_words(monkeypatch, tmp_path, capsys):
     """Out of memory: the number of blackouts named and what to ask for instead, not numpy's
     traceback; and the result keeps its own copy of the headings it was given."""
@@ -275,6 +305,12 @@ def test_a_run_too_large_for_memory_says_so_in_the_commands_words(monkeypatch, t
     assert main(["drift-off", "planning", "--samples", "1000000", "--no-plots", "--out", str(tmp_path / "o")]) == 1
     err = capsys.readouterr().err
     assert "out of memory: settings.n_samples: 1000000 samples x 8 heading(s)" in err and "Traceback" not in err
+    # what each blackout holds is named too: the samples are not always what fills the memory
+    with pytest.raises(MemoryError, match=r"^settings.n_samples: 2 samples x 1 heading\(s\) = 2 blackouts at once, "
+                                          r"each with 1000 wave components and 20 gust harmonics, .*"
+                                          r"settings.n_wave_components"):
+        simulate_blackouts("gunnerus", WeatherState(), [0.0], settings=dict(CALM_FAST, n_samples=2,
+                                                                            n_wave_components=1000))
     monkeypatch.undo()
     h = np.array([0.0, 1.0])
     r = simulate_blackouts("gunnerus", WeatherState(), h, settings=DriftOffSettings(**CALM_FAST))
@@ -348,7 +384,11 @@ def test_weather_samples_stay_in_the_range_of_a_weather_state():
     (dict(reaction_times_s=(30.0, 30.0)), "reaction_times_s: expected each value once"),
     (dict(reaction_times_s=(30.0, 30.00001)), "reaction_times_s: expected each value once"),
     (dict(horizon_s=60.5), "horizon_s: must be a whole number of steps of"),
-    (dict(horizon_s=1e9), "horizon_s: must be <= 86400"), (dict(n_samples=10**9), "n_samples: must be <= 1000000")])
+    (dict(horizon_s=1e9), "horizon_s: must be <= 86400"), (dict(n_samples=10**9), "n_samples: must be <= 1000000"),
+    # beyond them: a MemoryError blaming n_samples, or overflow warnings and numpy's LinAlgError
+    (dict(n_wave_components=10**12), "n_wave_components: must be <= 1000"),
+    (dict(n_gust_harmonics=10**12), "n_gust_harmonics: must be <= 1000"),
+    (dict(vessel_spread=1e9), "vessel_spread: must be <= 5")])
 def test_bad_settings_name_the_field(kwargs, field):
     with pytest.raises((ValueError, TypeError), match=field):
         DriftOffSettings(**kwargs)
@@ -538,7 +578,7 @@ def test_live_refuses_a_time_without_station_keeping_and_bad_estimates():
         with pytest.raises(ValueError, match=field):
             blackout_now(dataclasses.replace(est, **change), "gunnerus", st)
     with pytest.raises(TypeError, match="settings"):
-        blackout_now(est, "gunnerus", {"n_samples": 3})
+        blackout_now(est, "gunnerus", [3])
 
 
 def test_live_reads_the_log_as_a_forecast_does():
@@ -603,6 +643,54 @@ def test_live_bad_input_names_the_field():
         environment_from_log([1, 2, 3], "gunnerus")
     with pytest.raises(ValueError, match="window_s"):
         environment_from_log(pd.DataFrame({"time_s": [0.0, 1.0, 2.0]}), "gunnerus", window_s=-5)
+    # refused before the log is read (it was numpy's "Unable to allocate 21.8 TiB", after the work)
+    with pytest.raises(ValueError, match=r"^n_members: expected a whole number from 1 to 1000000"):
+        environment_from_log(pd.DataFrame({"time_s": [0.0, 1.0, 2.0]}), "gunnerus", n_members=10**12)
+
+
+def _still_estimate(**change):
+    """An estimate of a still vessel in a 5 m/s wind (no log needed)."""
+    from hybridship.driftoff.live import EnvironmentEstimate
+
+    return EnvironmentEstimate(0.0, np.zeros(3), np.array([0.1, 0.0, 0.0]), np.zeros(3), np.zeros(3), 5.0, 0.0, 0.1,
+                               np.zeros(3), np.zeros((1, 3)), vessel_name="gunnerus", **change)
+
+
+def test_live_refuses_a_start_at_rest_that_is_not_true_or_false():
+    """``start_at_rest="no"`` was read as True (a text is truthy)."""
+    est, st = _still_estimate(), DriftOffSettings(n_samples=2, horizon_s=30.0, reaction_times_s=(10.0,))
+    for flag in ("no", "False", 0, None):
+        with pytest.raises(TypeError, match=r"^start_at_rest: expected True or False, got"):
+            blackout_now(est, "gunnerus", st, start_at_rest=flag)
+    np.testing.assert_array_equal(blackout_now(est, "gunnerus", st, start_at_rest=np.bool_(True)).excursion_m,
+                                  blackout_now(est, "gunnerus", st, start_at_rest=True).excursion_m)
+
+
+def test_live_takes_settings_and_the_estimators_config_as_dicts():
+    """As simulate_blackouts does: ``settings={"n_samples": 4}`` was a TypeError and
+    ``environment_config={...}`` an AttributeError deep in the estimator; a misspelt key is
+    refused naming the argument and the field, before the log is read."""
+    from hybridship.residual.environment import EnvironmentConfig
+
+    est = _still_estimate()
+    kw = dict(n_samples=3, horizon_s=30.0, reaction_times_s=(10.0,))
+    np.testing.assert_array_equal(blackout_now(est, "gunnerus", kw).excursion_m,
+                                  blackout_now(est, "gunnerus", DriftOffSettings(**kw)).excursion_m)
+    assert blackout_now(est, "gunnerus", {}).n_samples == DriftOffSettings().n_samples   # as simulate_blackouts
+    with pytest.raises(ValueError, match=r"^settings: n_sample: not a known field"):
+        blackout_now(est, "gunnerus", {"n_sample": 3})
+    with pytest.raises(TypeError, match=r"^settings: expected an instance of DriftOffSettings"):
+        blackout_now(est, "gunnerus", "fast")
+    tiny = pd.DataFrame({"time_s": [0.0, 1.0, 2.0]})
+    with pytest.raises(ValueError, match=r"^environment_config: filter_stepp_s: not a known field"):
+        environment_from_log(tiny, "gunnerus", environment_config={"filter_stepp_s": 1.0})
+    with pytest.raises(TypeError, match=r"^environment_config: expected an instance of EnvironmentConfig"):
+        environment_from_log(tiny, "gunnerus", environment_config="default")
+    df, i = _failure_log()
+    hist = df.iloc[: i + 1]
+    by_dict = environment_from_log(hist, "gunnerus", environment_config={"held_load_window_s": 0.0})
+    by_config = environment_from_log(hist, "gunnerus", environment_config=EnvironmentConfig(held_load_window_s=0.0))
+    np.testing.assert_array_equal(by_dict.accel_members, by_config.accel_members)
 
 
 def test_live_refuses_a_few_seconds_of_log():
@@ -778,6 +866,24 @@ def test_headings_in_degrees_or_repeated_are_refused():
         season_sweep("gunnerus", [w], [0.0, 90.0], settings=st, scheduler=None)
 
 
+def test_headings_that_are_not_numbers_in_order_are_refused_by_name():
+    """A set, a generator or a complex number failed in float()'s words; "0" and [True] were
+    read as 0 and 1 rad. Numbers in a list, tuple or array are taken, as a copy."""
+    from hybridship.driftoff.planning import check_headings
+
+    for headings in ({0.0, 1.0}, (h for h in [0.0]), 1j, [1j], "0", b"0", ["0", "1"], [True], True,
+                     np.array([True]), {"a": 1.0}, None):
+        with pytest.raises(TypeError, match=r"^headings: expected a number or a list of numbers \(angles in radians"):
+            check_headings(headings)
+    for ok in (0.5, np.float32(0.5), [0, 1], (0.0, np.int64(1)), pd.Series([0.0, 1.0])):
+        assert check_headings(ok).dtype == float
+    given = np.array([0.0, 1.0])
+    check_headings(given)[0] = 3.0
+    assert given[0] == 0.0
+    with pytest.raises(TypeError, match="^headings: "):
+        simulate_blackouts("gunnerus", WeatherState(), {0.0, 1.0})
+
+
 def test_live_blackout_refuses_a_diverging_drift():
     import dataclasses
 
@@ -878,6 +984,49 @@ def test_result_queries_and_the_state_index_refuse_values_that_would_read_as_zer
     for p in (np.nan, 2.0, -1.0, None, "0.1", True):
         with pytest.raises(ValueError, match="max_p_exceed: expected a probability"):
             season.operability(p)
+
+
+def test_result_queries_refuse_text_and_lists_where_numbers_go():
+    """``time_quantiles("a")``, ``exceedance_curves("abc")`` and ``summary_frames("x")`` failed
+    with "could not convert string to float", ``watch_circle([0.5, 0.9])`` in float()'s words,
+    and ``watch_circle("0.9")`` was taken."""
+    res = simulate_blackouts("gunnerus", WeatherState(wind_speed_m_s=8.0), [0.0],
+                             settings=DriftOffSettings(n_samples=2, horizon_s=30.0, reaction_times_s=(10.0,)))
+    for q in ("a", "0.5", True, [True, 0.5], {0.5}):
+        with pytest.raises(ValueError, match=r"^q: expected quantiles in \[0, 1\]"):
+            res.time_quantiles(q)
+    for t in ("abc", "10", True, [10.0, "20"]):
+        with pytest.raises(ValueError, match=r"^time_s: expected finite times >= 0 s"):
+            res.exceedance_curves(t)
+    for quantile in ("x", "0.9", [0.5, 0.9], None):
+        with pytest.raises(ValueError, match=r"^quantile: expected a number in \(0, 1\)"):
+            res.watch_circle(quantile)
+        with pytest.raises(ValueError, match=r"^quantile: expected a number in \(0, 1\)"):
+            res.summary_frames(quantile)
+    np.testing.assert_array_equal(res.watch_circle(np.float64(0.5)), res.watch_circle(0.5))
+    assert res.exceedance_curves(np.arange(3)).shape == (1, 3, 3)
+
+
+def test_report_arguments_are_refused_by_name(tmp_path):
+    """``write_report(r, None)`` failed in os' words, ``inputs="x"`` with an AttributeError and
+    ``plots="no"`` drew the figures; nothing is written."""
+    from hybridship.driftoff.report import write_report, write_season_report
+
+    res = simulate_blackouts("gunnerus", WeatherState(wind_speed_m_s=8.0), [0.0],
+                             settings=DriftOffSettings(n_samples=2, horizon_s=30.0, reaction_times_s=(10.0,)))
+    out = tmp_path / "d"
+    for args, kwargs, message in (((res, None), {}, "out_dir: expected a file path"), ((res, out), dict(inputs="x"),
+                                  "inputs: expected a dict"), ((res, out), dict(plots="no"), "plots: expected True or "
+                                  "False"), ((res, out), dict(title=None), "title: expected text"),
+                                  (({}, out), {}, "result: expected a DriftOffResult")):
+        with pytest.raises(TypeError, match=f"^{message}"):
+            write_report(*args, **kwargs)
+    with pytest.raises(ValueError, match="^out_dir: expected a file path, got an empty one"):
+        write_report(res, "", plots=False)
+    with pytest.raises(TypeError, match="^out_dir: "):
+        write_season_report(None, pd.DataFrame(), pd.DataFrame(), "")
+    assert not out.exists()
+    assert write_report(res, str(out), inputs={"vessel": "gunnerus"}, plots=False)["summary.md"].is_file()
 
 
 def test_cli_takes_a_list_that_starts_with_a_negative_value(tmp_path, capsys):

@@ -29,12 +29,13 @@ from dataclasses import dataclass
 import numpy as np
 import pandas as pd
 
+from ..config import as_config
 from ..forecast_inputs.limits import check_or_clip_inputs, check_whole_number
 from ..frames import vector_to_speed_dir
 from ..logs.io import LogArrays
 from ..residual.features import ResidualConfig, prepare_log
 from . import engine, spread
-from .planning import DriftOffResult, DriftOffSettings, get_model, hull_array, refuse_diverged, state_rng
+from .planning import MAX_SAMPLES, DriftOffResult, DriftOffSettings, get_model, hull_array, refuse_diverged, state_rng
 from .weather import MAX_WIND_M_S
 from ..messages import seconds_text
 
@@ -173,12 +174,14 @@ def environment_from_log(log, vessel="gunnerus", *, window_s: float = 900.0, win
         :func:`blackout_now` takes one member, cycling through them when there are fewer
         (warned, unless there is one: an environment taken as known):
         give at least the samples' ``n_samples`` (default 100, as :class:`DriftOffSettings`'s),
-        or the spread of the times rests on fewer independent draws than it has samples.
+        or the spread of the times rests on fewer independent draws than it has samples. At
+        most :data:`~hybridship.driftoff.planning.MAX_SAMPLES` (10^6), the most samples:
+        members beyond the samples are never used, and each costs memory.
     seed : int
     method : {"estimator", "mean"}
         The environment estimator (default) or the residual mean (see the module notes).
-    environment_config : hybridship.residual.environment.EnvironmentConfig, optional
-        Settings of the environment estimator (default: its defaults).
+    environment_config : hybridship.residual.environment.EnvironmentConfig or dict, optional
+        Settings of the environment estimator, or a dict of its fields (default: its defaults).
     name : str
         What messages and warnings call the log (the CLI gives its file's path).
     """
@@ -188,9 +191,14 @@ def environment_from_log(log, vessel="gunnerus", *, window_s: float = 900.0, win
         if isinstance(v, bool) or not (isinstance(v, (int, float, np.integer, np.floating)) and math.isfinite(v)
                                        and v >= least):
             raise ValueError(f"{arg}: expected a number of seconds >= {least:g}, got {v!r}")
-    if isinstance(n_members, bool) or not isinstance(n_members, (int, np.integer)) or n_members < 1:
-        raise ValueError(f"n_members: expected a positive int, got {n_members!r}")
+    if isinstance(n_members, bool) or not isinstance(n_members, (int, np.integer)) or not 1 <= n_members <= MAX_SAMPLES:
+        raise ValueError(f"n_members: expected a whole number from 1 to {MAX_SAMPLES} (the most samples a "
+                         f"blackout runs, one member each), got {n_members!r}")
     check_whole_number("seed", seed)
+    if environment_config is not None:
+        from ..residual.environment import EnvironmentConfig
+
+        environment_config = as_config(environment_config, EnvironmentConfig, "environment_config")
     model = get_model(vessel)
     # one read serves both windows: the wind's, and the estimator's rows at its end
     aw = _arrays(log, model, max(window_s, wind_window_s), name)
@@ -331,12 +339,24 @@ def blackout_now(estimate: EnvironmentEstimate, vessel="gunnerus", settings: Dri
     The spin-down starts from the logged rpm and azimuths (no holding load); each sample
     draws a perturbed vessel, gust harmonics of the measured gustiness and one member of
     the acceleration estimate (cycled). Distances are measured from the position now.
+
+    Parameters
+    ----------
+    estimate : EnvironmentEstimate
+        From :func:`environment_from_log`.
+    vessel : str, Vessel or DynamicModel
+        The vessel of the log (nominal model; samples perturb it).
+    settings : DriftOffSettings or dict, optional
+        Numerical settings, or a dict of their fields (as
+        :func:`~hybridship.driftoff.planning.simulate_blackouts` takes them).
+    start_at_rest : bool
+        Start the drift at rest instead of at the estimate's velocity.
     """
     if not isinstance(estimate, EnvironmentEstimate):
         raise TypeError(f"estimate: expected an EnvironmentEstimate, got {type(estimate).__name__}")
-    st = settings or DriftOffSettings()
-    if not isinstance(st, DriftOffSettings):
-        raise TypeError(f"settings: expected a DriftOffSettings, got {type(st).__name__}")
+    st = as_config(settings, DriftOffSettings, "settings") if settings is not None else DriftOffSettings()
+    if not isinstance(start_at_rest, (bool, np.bool_)):    # a text "no" is truthy
+        raise TypeError(f"start_at_rest: expected True or False, got {start_at_rest!r}")
     model = get_model(vessel)
     if estimate.vessel_name is not None and estimate.vessel_name != model.vessel.name:
         raise ValueError(f"estimate: made from a log of vessel {estimate.vessel_name!r}, not of "

@@ -22,6 +22,7 @@ from __future__ import annotations
 
 import math
 import numbers
+from collections.abc import Sequence
 from dataclasses import dataclass
 from functools import lru_cache
 from typing import Annotated
@@ -37,6 +38,17 @@ from . import engine, spread
 from .weather import WeatherState, WeatherUncertainty, sample_environment
 
 __all__ = ["DriftOffSettings", "DriftOffResult", "simulate_blackouts", "state_rng", "get_model", "hull_array"]
+
+#: Most Monte-Carlo samples per heading (:attr:`DriftOffSettings.n_samples`); also the most
+#: environment members a live estimate needs (each sample takes one).
+MAX_SAMPLES = 1_000_000
+#: Most wave components and gust harmonics per sample: the simulator uses 50 and 200; each
+#: one is evaluated for every sample at every step (time and memory grow with it).
+MAX_COMPONENTS = 1000
+#: Largest vessel spread: at 5 a one-sigma draw of Gunnerus already has 3.7 times its linear
+#: surge damping; beyond, the draws are no ship an identification would give and their
+#: drifts diverge (at 1e9 the factors overflow).
+MAX_VESSEL_SPREAD = 5.0
 
 
 @lru_cache(maxsize=8)
@@ -66,6 +78,21 @@ def state_rng(seed: int, index: int = 0) -> np.random.Generator:
     return np.random.default_rng(np.random.SeedSequence(int(seed), spawn_key=(int(index),)))
 
 
+def _reals(value) -> np.ndarray | None:
+    """``value`` (a number, or a list, tuple or array of numbers) as a float array of its own,
+    or None when it is something else: numpy would read text ("0.9"), bools and complex
+    numbers as numbers or fail in its own words, and a set or generator has no order."""
+    if isinstance(value, (np.ndarray, pd.Series)) and value.dtype.kind in "iuf":
+        return np.array(value, dtype=float)
+    if isinstance(value, (str, bytes, bool, np.bool_)) or not isinstance(
+            value, (numbers.Real, Sequence, np.ndarray, pd.Series, pd.Index)):
+        return None
+    items = np.array(value, dtype=object)
+    if not all(isinstance(x, numbers.Real) and not isinstance(x, (bool, np.bool_)) for x in items.flat):
+        return None
+    return items.astype(float)
+
+
 @config_dataclass(frozen=True)
 class DriftOffSettings:
     """Numerical settings of a drift-off study (validated; errors name the field).
@@ -77,7 +104,7 @@ class DriftOffSettings:
     reaction_times_s : tuple of float
         Operator reaction times [s], each once.
     n_samples : int
-        Monte-Carlo samples per heading (at most 10^6).
+        Monte-Carlo samples per heading (at most :data:`MAX_SAMPLES`, 10^6).
     horizon_s : float
         Longest simulated drift [s] (at most one day), a whole number of ``dt_s`` steps;
         radii not reached by then count as never reached.
@@ -87,9 +114,12 @@ class DriftOffSettings:
     rpm_time_constant_s : float
         First-order spin-down time constant of the thrusters [s].
     vessel_spread : float
-        Multiplier of the ``[true_vessel]`` spread (0 = nominal model, see :mod:`.spread`).
+        Multiplier of the ``[true_vessel]`` spread (0 = nominal model, see :mod:`.spread`), at
+        most :data:`MAX_VESSEL_SPREAD` (5): beyond, the drawn vessels are no ship and their
+        drifts diverge.
     n_wave_components, n_gust_harmonics : int
-        Wave components and gust harmonics per sample.
+        Wave components and gust harmonics per sample, at most :data:`MAX_COMPONENTS` (1000;
+        the simulator uses 50 and 200): each costs every sample at every step, in time and memory.
     seed : int
         Seed of the run, 0 to 2**32 - 1 as in every command (each weather state uses
         ``SeedSequence(seed, spawn_key=(index,))``).
@@ -97,13 +127,13 @@ class DriftOffSettings:
 
     radii_m: Annotated[tuple[Annotated[Float, Field(gt=0)], ...], NonEmpty] = (3.0, 5.0, 10.0)
     reaction_times_s: Annotated[tuple[Annotated[Float, Field(ge=0)], ...], NonEmpty] = (30.0, 60.0)
-    n_samples: Annotated[Int, Field(ge=1, le=1_000_000)] = 100
+    n_samples: Annotated[Int, Field(ge=1, le=MAX_SAMPLES)] = 100
     horizon_s: Annotated[Float, Field(gt=0, le=86400.0)] = 300.0
     dt_s: Annotated[Float, Field(gt=0, le=1.0)] = 1.0
     rpm_time_constant_s: Annotated[Float, Field(gt=0)] = 1.5
-    vessel_spread: Annotated[Float, Field(ge=0)] = 1.0
-    n_wave_components: Annotated[Int, Field(ge=1)] = 20
-    n_gust_harmonics: Annotated[Int, Field(ge=1)] = 20
+    vessel_spread: Annotated[Float, Field(ge=0, le=MAX_VESSEL_SPREAD)] = 1.0
+    n_wave_components: Annotated[Int, Field(ge=1, le=MAX_COMPONENTS)] = 20
+    n_gust_harmonics: Annotated[Int, Field(ge=1, le=MAX_COMPONENTS)] = 20
     seed: Annotated[Int, Field(ge=0, le=2**32 - 1)] = 0
 
     @field_validator("radii_m", "reaction_times_s", mode="before")
@@ -193,8 +223,8 @@ class DriftOffResult:
         of the samples reached the radius), so a quantile is finite only when that share did
         reach it: with 7 samples of which 6 reached, the 0.9 quantile is ``inf`` ("never").
         """
-        qs = np.asarray(q, float)
-        if qs.ndim > 1 or not np.all((qs >= 0.0) & (qs <= 1.0)):
+        qs = _reals(q)
+        if qs is None or qs.ndim > 1 or not np.all((qs >= 0.0) & (qs <= 1.0)):
             raise ValueError(f"q: expected quantiles in [0, 1], got {q!r}")
         out = np.quantile(self.t_reach_s, qs, axis=1, method="inverted_cdf")
         return out if qs.ndim == 0 else np.moveaxis(out, 0, -1)     # a single q has no axis to move
@@ -228,22 +258,24 @@ class DriftOffResult:
 
     def watch_circle(self, quantile: float = 0.9) -> np.ndarray:
         """Watch-circle radii (H, Q) [m]: the ``quantile`` of the excursion up to each reaction time."""
-        q = float(quantile)
-        if not 0.0 < q < 1.0:
+        if isinstance(quantile, (bool, np.bool_)) or not isinstance(quantile, numbers.Real) \
+                or not 0.0 < float(quantile) < 1.0:        # "0.9" and True are not quantiles
             raise ValueError(f"quantile: expected a number in (0, 1), got {quantile!r}")
-        return np.quantile(self.excursion_m, q, axis=1)
+        return np.quantile(self.excursion_m, float(quantile), axis=1)
 
     def exceedance_curves(self, time_s) -> np.ndarray:
         """P(T_r <= t) on the times ``time_s`` (T,) [s], shape (H, R, T)."""
-        t = np.atleast_1d(np.asarray(time_s, float))
-        if t.ndim != 1 or not np.all(np.isfinite(t) & (t >= 0.0)):
+        t = _reals(time_s)
+        if t is None or np.ndim(t) > 1 or not np.all(np.isfinite(t) & (t >= 0.0)):
             raise ValueError(f"time_s: expected finite times >= 0 s, got {time_s!r}")
+        t = np.atleast_1d(t)
         return (self.t_reach_s[:, :, :, None] <= t[None, None, None, :]).mean(axis=1)
 
     def summary_frames(self, quantile: float = 0.9) -> tuple[pd.DataFrame, pd.DataFrame]:
         """Two tidy tables: time to reach per (heading, radius), with P(exceed) and its 95 %
         Monte-Carlo interval (:meth:`p_exceed_interval`) per reaction time, and watch circles
         per (heading, reaction time)."""
+        wc = self.watch_circle(quantile)        # first: checks ``quantile`` before the tables' work
         tq = self.time_quantiles((0.1, 0.5, 0.9))
         pe = self.p_exceed()
         ci = self.p_exceed_interval(0.95)
@@ -261,7 +293,6 @@ class DriftOffResult:
                     row[f"p_exceed_{tr:g}s_ci95_lo"], row[f"p_exceed_{tr:g}s_ci95_hi"] = ci[h, r, q]
                 rows.append(row)
         times = pd.DataFrame(rows)
-        wc = self.watch_circle(quantile)
         rows = [{"heading_deg": math.degrees(psi) % 360.0,
                  "wind_rel_deg": math.degrees(self.weather_rel_rad[h]) % 360.0, "reaction_time_s": tr,
                  "quantile": quantile, "watch_radius_m": wc[h, q]}
@@ -270,8 +301,14 @@ class DriftOffResult:
 
 
 def check_headings(headings_rad) -> np.ndarray:
-    """Headings [rad] as a 1-D array, refused when empty, not finite, in degrees or repeated."""
-    a = np.atleast_1d(np.array(headings_rad, dtype=float))     # a copy: the result keeps it
+    """Headings [rad] as a 1-D array (a copy: the result keeps it), refused when empty, not
+    finite, in degrees or repeated, and, as a TypeError, when not a number or a list, tuple or
+    array of numbers (text and bools would read as angles; a set has no order)."""
+    a = _reals(headings_rad)
+    if a is None:
+        raise TypeError(f"headings: expected a number or a list of numbers (angles in radians, in order), got "
+                        f"{type(headings_rad).__name__} {headings_rad!r}")
+    a = np.atleast_1d(a)
     if a.ndim != 1 or a.size == 0 or not np.all(np.isfinite(a)):
         raise ValueError(f"headings: expected a non-empty list of finite angles, got {headings_rad!r}")
     if np.any(np.abs(a) > 2.0 * np.pi + 0.1):
@@ -332,9 +369,14 @@ def simulate_blackouts(vessel, weather: WeatherState, headings_rad, *, uncertain
     try:
         return _blackouts(model, weather, uncertainty, st, psi, rng, index, keep_tracks)
     except MemoryError:
-        raise MemoryError(f"settings.n_samples: {N} samples x {H} heading(s) = {N * H} blackouts at once need more "
-                          f"memory than this machine has; give fewer samples or headings (a season run splits its "
-                          f"states into chunks)") from None
+        # each blackout holds its wave components, gust harmonics (and track): named, as they
+        # may weigh more than the samples' count
+        each = f"{st.n_wave_components} wave components and {st.n_gust_harmonics} gust harmonics" + (
+            f" and a track of {st.n_steps} steps (keep_tracks)" if keep_tracks else "")
+        raise MemoryError(f"settings.n_samples: {N} samples x {H} heading(s) = {N * H} blackouts at once, each with "
+                          f"{each}, need more memory than this machine has; give fewer samples or headings, or "
+                          f"fewer settings.n_wave_components or n_gust_harmonics (a season run splits its states "
+                          f"into chunks)") from None
 
 
 def _blackouts(model, weather, uncertainty, st, psi, rng, index: int, keep_tracks: bool) -> "DriftOffResult":

@@ -18,12 +18,13 @@ from __future__ import annotations
 
 import io
 import math
+from collections.abc import Mapping
 from pathlib import Path
 
 import numpy as np
 import pandas as pd
 
-from ..fileio import atomic_write, starts_with, write_output_files, write_text
+from ..fileio import as_path, atomic_write, starts_with, write_output_files, write_text
 from .planning import DriftOffResult
 
 __all__ = ["polar_plot", "exceedance_plot", "markdown_table", "write_report", "write_season_report", "write_text",
@@ -115,8 +116,31 @@ def write_report(result: DriftOffResult, out_dir, *, title: str = "Drift-off ana
     """Write ``summary.md``, ``times.csv``, ``watch.csv`` and (with ``plots``) ``polar.png``,
     ``exceedance.png`` to ``out_dir``; returns the paths by name. Every file is made before
     the first is written (a failure leaves no mix of two runs); without ``plots``, the two
-    figures of an earlier run in ``out_dir`` are removed."""
-    out = Path(out_dir)
+    figures of an earlier run in ``out_dir`` are removed.
+
+    Parameters
+    ----------
+    result : DriftOffResult
+    out_dir : str or os.PathLike
+        The output folder (made if missing).
+    title : str
+        The summary's heading.
+    inputs : dict, optional
+        Input names and values, listed as a table in the summary.
+    quantile : float
+        Watch-circle quantile, in (0, 1).
+    plots : bool
+        Write the two figures.
+    """
+    if not isinstance(result, DriftOffResult):
+        raise TypeError(f"result: expected a DriftOffResult, got {type(result).__name__}")
+    out = as_path(out_dir, "out_dir")
+    if not isinstance(title, str):
+        raise TypeError(f"title: expected text, got {type(title).__name__}")
+    if inputs is not None and not isinstance(inputs, Mapping):
+        raise TypeError(f"inputs: expected a dict of input names and values (or None), got {type(inputs).__name__}")
+    if not isinstance(plots, (bool, np.bool_)):    # a text "no" is truthy
+        raise TypeError(f"plots: expected True or False, got {plots!r}")
     times, watch = result.summary_frames(quantile)
     lines = [f"# {title}", ""]
     if inputs:
@@ -162,7 +186,7 @@ def write_season_report(out_dir, season: pd.DataFrame, operability: pd.DataFrame
     """Write a season sweep's ``season.csv``, ``operability.csv`` and ``summary.md`` to
     ``out_dir`` (each atomically, all made before the first is written) and remove the files
     only :func:`write_report` makes; returns the paths by name."""
-    out = Path(out_dir)
+    out = as_path(out_dir, "out_dir")
     contents = {"season.csv": _csv_bytes(season), "operability.csv": _csv_bytes(operability),
                 "summary.md": summary.encode("utf-8")}
     return write_output_files(out, contents, stale=REPORT_ONLY_FILES, ours=earlier_report)

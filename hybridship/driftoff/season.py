@@ -22,6 +22,7 @@ from __future__ import annotations
 import math
 import numbers
 import time
+from collections.abc import Iterable, Mapping, Set
 from dataclasses import dataclass
 
 import numpy as np
@@ -182,7 +183,8 @@ def season_sweep(vessel, states, headings_rad, *, uncertainty: WeatherUncertaint
     ----------
     vessel : str or Vessel
         Packaged vessel name or vessel-file path (sent to the workers), or a Vessel.
-    states : sequence of WeatherState
+    states : WeatherState or sequence of WeatherState
+        The weather states in order; one state is a sweep of one.
     headings_rad : array_like (H,)
     uncertainty : WeatherUncertainty, optional
         Applied to every state.
@@ -200,6 +202,10 @@ def season_sweep(vessel, states, headings_rad, *, uncertainty: WeatherUncertaint
     progress : bool
         Show a tqdm progress bar over the states.
     """
+    if isinstance(states, WeatherState):
+        states = [states]          # one state, as simulate_blackouts takes it: a sweep of one
+    elif isinstance(states, (Set, Mapping)) or not isinstance(states, Iterable):   # a set has no order for the labels
+        raise TypeError(f"states: expected a WeatherState or a list of them, got {type(states).__name__}")
     states = list(states)
     if not states:
         raise ValueError("states: expected at least one weather state")

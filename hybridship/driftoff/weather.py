@@ -200,6 +200,7 @@ def read_weather_table(path_or_frame) -> tuple[list[WeatherState], list[str]]:
     """
     if isinstance(path_or_frame, pd.DataFrame):
         df, src = path_or_frame, "weather table"
+        names = [str(c) for c in df.columns]
     else:
         src = str(path_or_frame)
         if Path(src).is_dir():
@@ -221,6 +222,12 @@ def read_weather_table(path_or_frame) -> tuple[list[WeatherState], list[str]]:
                     ' '.join(str(exc).split()))
             raise ValueError(f"{src}: not a readable CSV weather table (expected a header line with "
                              f"{list(TABLE_COLUMNS)}; {what})") from None
+        # pandas renames a repeated name (hs_m, hs_m.1): the header as written
+        header = pd.read_csv(src, header=None, nrows=1, dtype=str, keep_default_na=False)
+        names = [str(c) for c in header.iloc[0]] if len(header) else []
+    dup = next((c for c in names if c.strip() and names.count(c) > 1), None)
+    if dup is not None:     # which of the two would be read is pandas' choice, not the user's
+        raise ValueError(f"{src}: column {dup!r} appears more than once; a weather table names each column once")
     missing = [c for c in TABLE_COLUMNS if c not in df.columns]
     if missing:
         cols = [str(c) for c in df.columns]
