@@ -614,10 +614,12 @@ def _check_writable(out: Path, prefix: str, option: str = "--out") -> None:
         raise UsageError(f"{prefix}: error: {option} {exc}") from None
 
 
-def _check_out_folder(out: Path, prefix: str, inputs: dict | None = None, option: str = "--out") -> None:
+def _check_out_folder(out: Path, prefix: str, inputs: dict | None = None, option: str = "--out",
+                      searched_below: bool = False) -> None:
     """Refuse an ``--out`` that exists and is not a folder, that may not be written, or that
     is one of the input folders ``inputs`` (option -> folder; the tables would land among
-    the logs), before any work is done."""
+    the logs), or, with ``searched_below`` (inputs read with their sub-folders), lies inside
+    one, before any work is done."""
     from .fileio import check_out_folder
 
     try:
@@ -629,6 +631,10 @@ def _check_out_folder(out: Path, prefix: str, inputs: dict | None = None, option
         if folder is not None and out.resolve() == Path(folder).resolve():
             raise UsageError(f"{prefix}: error: --out {out}: is the {opt} folder; the results would land among "
                              f"its logs, give another folder")
+        if searched_below and folder is not None and Path(folder).resolve() in out.resolve().parents:
+            # its tables would be read as runs by the next run on that folder
+            raise UsageError(f"{prefix}: error: --out {out}: lies inside the {opt} folder, whose sub-folders are "
+                             f"read for runs; give a folder outside it")
 
 
 def _cmd_benchmark_manoeuvre(args) -> int:
@@ -637,7 +643,8 @@ def _cmd_benchmark_manoeuvre(args) -> int:
     from .evaluation.manoeuvre import ManoeuvreConfig, check_output_folder, run_manoeuvre_benchmark
     from .vessel import VesselFileError, load_vessel
 
-    _check_out_folder(args.out, f"{_PROG} benchmark manoeuvre", {"--train": args.train, "--test": args.test})
+    _check_out_folder(args.out, f"{_PROG} benchmark manoeuvre", {"--train": args.train, "--test": args.test},
+                      searched_below=True)
     try:
         check_output_folder(args.out)
     except (FileExistsError, PermissionError) as exc:

@@ -222,3 +222,79 @@ def test_manoeuvre_config_refuses_bad_settings_naming_the_field(bad, field):
     with pytest.raises(ValueError, match=rf"^{field}: "):
         replace(ManoeuvreConfig(), **bad)          # replace re-validates
     assert replace(ManoeuvreConfig(), start_every_s=None).start_every_s is None
+
+
+# ------------------------------------------------------------------------- a review's findings
+
+
+def test_a_renamed_copy_of_a_training_run_or_test_runs_at_two_rates_are_refused(tmp_path):
+    """A training run copied under another name was scored as a test run (the check compared
+    paths and names); a 5-Hz run beside 10-Hz ones was scored at twice the labelled horizons;
+    a one-row run ended in "cannot convert float NaN to integer"."""
+    from hybridship.evaluation.manoeuvre import ManoeuvreConfig, _checked_steps, load_runs
+
+    _write_runs(tmp_path / "train", ["zigzag_31-Jul-2020_13_00_00.csv"])
+    raw = _raw(100)
+    raw["x_position_mid [m]"] += 1.0                      # another recording
+    (tmp_path / "test").mkdir()
+    raw.to_csv(tmp_path / "test" / "zigzag_31-Jul-2020_14_00_00.csv", index=False)
+    train = load_runs(tmp_path / "train", "esso_osaka_model")
+    cfg = ManoeuvreConfig.quick(0)
+    assert list(_checked_steps(train, load_runs(tmp_path / "test", "esso_osaka_model"), (1.0, 2.0), cfg)) == [10, 20]
+    _raw(100).to_csv(tmp_path / "test" / "zigzag_31-Jul-2020_99_99_99.csv", index=False)    # a renamed copy
+    with pytest.raises(ValueError, match=r"test_dir: 1 run\(s\) hold the samples of a train_dir run .*"
+                                         r"zigzag_31-Jul-2020_99_99_99 is training run zigzag_31-Jul-2020_13_00_00"):
+        _checked_steps(train, load_runs(tmp_path / "test", "esso_osaka_model"), (1.0, 2.0), cfg)
+    (tmp_path / "test" / "zigzag_31-Jul-2020_99_99_99.csv").unlink()
+    _raw(50, dt_s=0.2).to_csv(tmp_path / "test" / "zigzag_31-Jul-2020_15_00_00.csv", index=False)
+    with pytest.raises(ValueError, match=r"test_dir: the test runs have different sample steps .*0\.2 s"):
+        _checked_steps(train, load_runs(tmp_path / "test", "esso_osaka_model"), (1.0, 2.0), cfg)
+
+
+def test_start_rows_and_the_split_check_their_arguments(tmp_path):
+    from hybridship.evaluation.manoeuvre import load_runs, split_runs, start_rows
+
+    a = _arrays()
+    for kw, field in ((dict(horizon_steps=0), "horizon_steps"), (dict(start_every_s=0.0), "start_every_s"),
+                      (dict(start_every_s=float("nan")), "start_every_s"), (dict(warmup_s=-3.0), "warmup_s")):
+        args = {"horizon_steps": 20, "start_every_s": 1.0, **kw}
+        with pytest.raises((TypeError, ValueError), match=f"^{field}: "):
+            start_rows(a, **args)
+    assert start_rows(_arrays(n=1), 20, 1.0).size == 0           # one row: no start, no NaN
+    (tmp_path / "empty").mkdir()
+    with pytest.raises(ValueError, match="^data_dir: .* holds no runs"):
+        split_runs(tmp_path / "empty", tmp_path / "split")
+    data = _runs_folder(tmp_path)
+    with pytest.raises(ValueError, match="^seed: "):
+        split_runs(data, tmp_path / "split", seed=-1)
+    (tmp_path / "a_file").write_text("x")
+    with pytest.raises(ValueError, match="^out_dir: .* is a file"):
+        split_runs(data, tmp_path / "a_file")
+    with pytest.raises(ValueError, match="^step_s: "):
+        load_runs(data, "esso_osaka_model", step_s=float("nan"))
+
+
+def test_esso_to_log_names_a_missing_column_and_a_lead_that_is_not_a_number():
+    from hybridship.logs.io import LogFormatError
+
+    with pytest.raises(LogFormatError, match=r"^u_velo \[m/s\]: missing from the raw run"):
+        esso_to_log(_raw(50).drop(columns=["u_velo [m/s]"]))
+    for lead in ("a", True):
+        with pytest.raises(TypeError, match="^velocity_lead_s: expected a number"):
+            esso_to_log(_raw(50), velocity_lead_s=lead)
+
+
+def test_the_manoeuvre_benchmark_refuses_an_out_inside_its_inputs_and_a_text_quick(tmp_path, capsys):
+    """Its tables inside --test were read as runs by the next run ("cannot tell the run
+    kind"); ``quick="no"`` ran the quick configuration."""
+    from hybridship.cli import main
+    from hybridship.evaluation.manoeuvre import run_manoeuvre_benchmark
+
+    data = _runs_folder(tmp_path)
+    assert main(["benchmark", "manoeuvre", "--train", str(data / "zigzag"), "--test", str(data / "turning"),
+                 "--out", str(data / "turning" / "results")]) == 2
+    assert "lies inside the --test folder" in capsys.readouterr().err
+    assert not (data / "turning" / "results").exists()
+    with pytest.raises(TypeError, match="^quick: expected True or False"):
+        run_manoeuvre_benchmark("esso_osaka_model", data / "zigzag", data / "turning", out_dir=tmp_path / "o",
+                                quick="no")

@@ -52,6 +52,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
+from ..forecast_inputs.limits import check_number
 from ..logs.io import LogArrays, LogFormatError, log_to_arrays, validate_log
 
 __all__ = [
@@ -185,11 +186,15 @@ def esso_to_log(raw: pd.DataFrame, *, vessel=None, velocity_lead_s: float = 0.0)
     ValueError
         If ``velocity_lead_s`` is negative or not finite.
     """
-    lead = float(velocity_lead_s)
-    if not 0.0 <= lead < np.inf:
-        # a negative lead was ignored without a word, NaN and inf failed inside numpy
-        raise ValueError(f"velocity_lead_s: expected a finite time >= 0 s (u and vm shifted earlier), "
-                         f"got {velocity_lead_s!r}")
+    # a negative lead was ignored without a word, NaN and inf failed inside numpy; text and
+    # True were read as numbers
+    lead = check_number("velocity_lead_s", velocity_lead_s, lo=0.0)
+    if not isinstance(raw, pd.DataFrame):
+        raise TypeError(f"raw: expected a DataFrame of a raw run (read_esso_raw), got {type(raw).__name__}")
+    missing = [c for c in ESSO_COLUMNS if c not in raw.columns]
+    if missing:
+        raise LogFormatError(f"{missing[0]}: missing from the raw run (missing: {missing}; expected the columns "
+                             f"of read_esso_raw, {list(ESSO_COLUMNS)})", column=missing[0])
     prop, rud = _channel_names(vessel)
     t = raw["t [s]"].to_numpy(float)
     u = raw["u_velo [m/s]"].to_numpy(float)

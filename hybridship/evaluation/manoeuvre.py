@@ -33,12 +33,14 @@ import numpy as np
 import pandas as pd
 from pydantic import Field
 
-from ..config import Float, Int, config_dataclass
+from ..config import Float, Int, check_flags, config_dataclass
 from ..datasets.esso_osaka import EssoRun, RUN_KINDS, esso_log_arrays, list_runs
 from ..fileio import atomic_write, check_output_files, earlier_run, remove_stale, write_output_files
+from ..forecast_inputs.limits import check_number, check_whole_number
 from ..frames import wrap_pi
 from ..logs.ingest import ingest
 from ..logs.io import LogArrays
+from ..predictors.training_logs import samples_digest
 from ..residual.calibration import GAUSS_COVERAGE, CalibrationConfig
 from ..residual.ensemble import EnsembleConfig
 from ..residual.multistep import MultiStepConfig
@@ -208,6 +210,8 @@ def load_runs(folder, vessel, *, step_s: float | None = None) -> list[Run]:
     from ..vessel import Vessel, load_vessel
 
     vessel = vessel if isinstance(vessel, Vessel) else load_vessel(vessel)
+    if step_s is not None:
+        check_number("step_s", step_s, lo=0.0, lo_open=True)
     runs = [Run(r, ingest(_decimate(esso_log_arrays(r.path, vessel), vessel, step_s), vessel, purpose="fit"))
             for r in list_runs(folder)]
     if not runs:
@@ -255,7 +259,12 @@ def split_runs(data_dir, out_dir, *, test_fraction: float = 0.3, seed: int = 0) 
     if not 0.0 < float(test_fraction) < 1.0:      # NaN too; > 1 failed inside numpy's choice
         raise ValueError(f"test_fraction: expected a share of the recordings between 0 and 1 (exclusive), "
                          f"got {test_fraction!r}")
+    check_whole_number("seed", seed)
+    if out_dir.exists() and not out_dir.is_dir():
+        raise ValueError(f"out_dir: {out_dir} is a file; expected a folder for the split")
     runs = list_runs(data_dir)
+    if not runs:
+        raise ValueError(f"data_dir: {data_dir} holds no runs to split")
     data_real = data_dir.resolve()
     for d in (out_dir / "train", out_dir / "test"):
         d_real = d.resolve()
@@ -343,7 +352,13 @@ def start_rows(arrays: LogArrays, horizon_steps: int, start_every_s: float | Non
     is the one ``horizon_steps`` sample steps later (a gap of missing rows would otherwise
     score a forecast against the truth of a later time).
     """
+    check_whole_number("horizon_steps", horizon_steps, 1)
+    if start_every_s is not None:
+        check_number("start_every_s", start_every_s, lo=0.0, lo_open=True)
+    check_number("warmup_s", warmup_s, lo=0.0)
     t = arrays.time_s
+    if len(t) < 2:                      # no step to start from
+        return np.zeros(0, int)
     dt = float(np.median(np.diff(t)))
     stride = 1 if start_every_s is None else max(1, int(round(start_every_s / dt)))
     first = int(round(warmup_s / dt))
@@ -580,6 +595,22 @@ def _score_runs(predictors: dict, test: list[Run], steps: np.ndarray, start_ever
     return per_run, per_run_z, per_run_std, n_starts
 
 
+def _test_step_s(test: list[Run]) -> float:
+    """The test runs' one sample step [s]: the horizons are counted in it, so runs at another
+    rate would be scored at other horizons under the same labels (refused, naming them)."""
+    steps = {r.name: float(np.median(np.diff(r.arrays.time_s))) for r in test if len(r.arrays.time_s) > 1}
+    if not steps:
+        raise ValueError("test_dir: no test run has two samples")
+    dt = next(iter(steps.values()))
+    other = {name: s for name, s in steps.items() if abs(s - dt) > 1e-6 * dt}
+    if other:
+        name, s = next(iter(other.items()))
+        raise ValueError(f"test_dir: the test runs have different sample steps ({next(iter(steps))}: {dt:g} s, "
+                         f"{name}: {s:g} s); the horizons are counted in steps of one rate: resample them to "
+                         f"one rate (load_runs' step_s)")
+    return dt
+
+
 def _checked_steps(train: list[Run], test: list[Run], horizons_s: tuple, cfg: ManoeuvreConfig) -> np.ndarray:
     """The horizons in steps of the test runs, after refusing (before any training) test runs
     that are training runs, horizons off the step grid and test runs without any start; test
@@ -599,7 +630,13 @@ def _checked_steps(train: list[Run], test: list[Run], horizons_s: tuple, cfg: Ma
     for test_name, train_name in cut_copies(train, test):     # run, but said now (and in README.md)
         warnings.warn(f"test run {test_name} and training run {train_name} are one run, cut and uncut: its errors "
                       f"are not out-of-sample", UserWarning, stacklevel=2)
-    dt = float(np.median(np.diff(test[0].arrays.time_s)))
+    # the same samples under another name (a copy renamed): equal digests of the parsed samples
+    trained = {samples_digest(r.arrays): r.name for r in train}
+    copies = [(r.name, trained[d]) for r in test if (d := samples_digest(r.arrays)) in trained]
+    if copies:
+        raise ValueError(f"test_dir: {len(copies)} run(s) hold the samples of a train_dir run (e.g. test run "
+                         f"{copies[0][0]} is training run {copies[0][1]}): a copy of a training run cannot test it")
+    dt = _test_step_s(test)
     steps = np.array([int(round(h / dt)) for h in horizons_s])
     if np.any(steps < 1):
         raise ValueError(f"horizons_s: every horizon must be at least one step ({dt:g} s)")
@@ -658,6 +695,7 @@ def run_manoeuvre_benchmark(vessel, train_dir, test_dir, horizons_s=HORIZONS_S, 
     from ..vessel import Vessel, load_vessel
 
     v = vessel if isinstance(vessel, Vessel) else load_vessel(vessel)
+    check_flags(quick=quick, progress=progress)
     cfg = config or (ManoeuvreConfig.quick(seed) if quick else ManoeuvreConfig())
     cfg = replace(cfg, ensemble=replace(cfg.ensemble, seed=seed))
     horizons_s = tuple(float(h) for h in horizons_s)
