@@ -5,7 +5,8 @@ Runs a child process twice on a copy of the package in a temporary folder: first
 copy's compiled-kernel cache emptied (the kernels are compiled), then with the cache the
 first run wrote (the kernels are loaded). Each child prints a digest of a 300-step physics
 rollout (``DynamicModel.rollout``), one acceleration and one step, for the Gunnerus and
-for the Esso Osaka model (which has a rudder). Equal digests: the bits do not depend on
+for the Esso Osaka model (which has a rudder), and of a simulated DP-loss log (seed 0, 10
+minutes of DP, 5 of drift). Equal digests: the bits do not depend on
 the cache. Prints per vessel ``same`` or ``differ`` per quantity, and the rollouts' largest
 difference.
 
@@ -43,6 +44,11 @@ for name, rpm, az, dt in (("gunnerus", [[100.0, 100.0, 100.0]], [[0.0, 0.3, -0.3
     s = m.step(eta, nu, dt_s=dt, rpm=rpm, azimuth_rad=az, wind=[[8.0, 1.0]])
     print(name, digest(r.eta), digest(a), digest(s[0]))
     np.save(f"{sys.argv[1]}_{name}.npy", r.eta)
+
+from hybridship.sim.scenario import DPLossConfig, simulate_dp_loss
+log = simulate_dp_loss(DPLossConfig(seed=0, t_shutdown_s=600.0, drift_s=300.0))
+print("simulator", digest(log.select_dtypes("number").to_numpy(float)), "-", "-")
+np.save(f"{sys.argv[1]}_simulator.npy", log.select_dtypes("number").to_numpy(float))
 """
 
 
@@ -61,6 +67,9 @@ def main() -> int:
         for a, b in zip(compiled, loaded):
             same = ["same" if x == y else "differ" for x, y in zip(a[1:], b[1:])]
             gap = np.abs(np.load(copy / f"compiled_{a[0]}.npy") - np.load(copy / f"loaded_{a[0]}.npy")).max()
+            if a[0] == "simulator":
+                print(f"simulator: log {same[0]} (largest difference {gap:.1e}; compiled {a[1]}, loaded {b[1]})")
+                continue
             print(f"{a[0]}: rollout {same[0]} (largest difference {gap:.1e} m or rad), acceleration {same[1]}, "
                   f"step {same[2]} (compiled {' '.join(a[1:])}; loaded {' '.join(b[1:])})")
     return 0
