@@ -52,6 +52,14 @@ def test_arguments_checked_before_the_work(tmp_path):
         score_model(None, np.zeros((3, 3)), np.zeros((3, 2)), "one-step")
 
 
+def test_text_flags_are_refused(tmp_path):
+    """``quick="no"`` ran the quick configuration (a text is truthy)."""
+    (tmp_path / "table.md").write_text("my notes")    # stops a run that got past the flags (before the fix)
+    for flag in ("quick", "progress"):
+        with pytest.raises(TypeError, match=f"^{flag}: expected True or False, got 'no'"):
+            run_benchmark(tmp_path, **{"quick": True, "progress": False, flag: "no"})
+
+
 class _Offset:
     """A stand-in model predicting the measurement plus 1 m/s and 0.01 rad (NaN in its first rows)."""
 
@@ -76,6 +84,18 @@ def test_scores_are_in_knots_and_degrees():
         assert P.shape == (40, 2)
         assert sc["speed_kn"] == pytest.approx((1.0, 1.94384), abs=1e-5)
         assert sc["pitch_deg"] == pytest.approx((1.0, 0.572958), abs=1e-6)
+
+
+def test_n_init_leaves_two_rows_to_score():
+    """R needs two scored rows: ``n_init = N - 1`` is refused naming ``n_init`` (the scores' own
+    "need at least two samples" named nothing)."""
+    t = np.arange(50) * 0.1
+    U = np.column_stack([np.full(50, 3000.0), np.full(50, 50.0), np.zeros(50)])
+    Y = np.column_stack([10.0 + np.sin(t), 0.05 + 0.01 * np.cos(t)])
+    with pytest.raises(ValueError, match=r"^n_init: expected at most 48 \(two rows of U left to score\), got 49"):
+        score_model(_Offset(), U, Y, "one_step", n_init=49)
+    P, _ = score_model(_Offset(), U, Y, "free_run", n_init=48)
+    assert P.shape == (2, 2)
 
 
 def test_models_have_the_papers_structures():

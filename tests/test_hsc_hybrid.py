@@ -110,3 +110,40 @@ def test_pwm_given_as_a_fraction_up_to_full_drive_is_refused(craft, tables):
     U[:, 1] = np.linspace(0.1, 1.0, U.shape[0])
     with pytest.raises(ValueError, match=r"^U: column 1 \(PWM\) lies within 0..1; .* look like a fraction"):
         HybridModel(craft, "interceptor", tables=tables).fit(U, Y)
+
+
+@pytest.mark.parametrize("call,name", [
+    (lambda g, U, Y: g.simulate(np.where(np.arange(40)[:, None] == 3, np.nan, U), Y[0]), "U"),
+    (lambda g, U, Y: g.simulate(U, (np.nan, 0.05)), "y0"),
+    (lambda g, U, Y: g.one_step(U, np.where(np.arange(40)[:, None] == 3, np.nan, Y)), "Y"),
+    (lambda g, U, Y: g.simulate(U, Y[0], k0=10 ** 6), "k0"),         # an IndexError before
+    (lambda g, U, Y: g.simulate(U, Y[0], k0=-3), "k0"),              # counted from the end before
+    (lambda g, U, Y: g.simulate(U, Y[0], k0=1.5), "k0"),
+    (lambda g, U, Y: g.fit(U, Y, k0=-1, max_nfev=1), "k0"),          # fitted from Y[-1] before
+    (lambda g, U, Y: g.fit(U, Y, k0=39, max_nfev=1), "k0"),          # no row after k0 to fit
+])
+def test_grey_box_refuses_nan_and_k0_out_of_range_by_name(grey, call, name):
+    """NaN inputs gave "cannot convert float NaN to integer"."""
+    U, Y = _record()
+    with pytest.raises(ValueError, match=rf"^{name}: "):
+        call(grey, U, Y)
+
+
+def test_grey_box_k0_at_the_ends_of_the_record(grey):
+    U, Y = _record()
+    sim = grey.simulate(U, Y[39], k0=39)
+    np.testing.assert_array_equal(sim, np.tile(Y[39], (40, 1)))
+    GreyBox(grey.craft, "interceptor", grey.tables).fit(U, Y, k0=38, max_nfev=1)
+
+
+def test_tables_of_the_other_trim_device_are_refused(craft, tables):
+    """Tables carry the device they were computed for; interceptor tables with trim tabs were accepted."""
+    t = GreyBoxTables.from_craft(craft, "interceptor", n_rpm=3, act=(0.0,))
+    assert t.actuator == "interceptor"
+    with pytest.raises(ValueError, match=r"^tables: computed for the 'interceptor' actuator, expected .* 'trim_tab'"):
+        HybridModel(craft, "trim_tab", tables=t)
+    with pytest.raises(TypeError, match=r"^tables: expected GreyBoxTables"):
+        GreyBox(craft, "interceptor", {"act": [0.0]})
+    HybridModel(craft, "interceptor", tables=t)
+    assert tables.actuator is None
+    HybridModel(craft, "trim_tab", tables=tables)           # hand-made tables: the device is unknown

@@ -35,6 +35,23 @@ def test_arx_recovers_known_mimo_coefficients():
     np.testing.assert_allclose(p.c, 0.0, atol=1e-9)
 
 
+@pytest.mark.parametrize("args,name", [
+    ({"Y": np.nan}, "Y"), ({"U": np.inf}, "U"),              # LinAlgError and LAPACK's DLASCL on stderr before
+    ({"na": 1.5}, "na"), ({"nb": 0}, "nb"), ({"nk": True}, "nk"),
+])
+def test_fit_arx_refuses_nonfinite_data_and_non_integer_orders_by_name(args, name):
+    rng = np.random.default_rng(3)
+    U, Y = rng.standard_normal((60, 3)), rng.standard_normal((60, 2))
+    kw = {"U": U, "Y": Y, "na": 2, "nb": 2, "nk": 1}
+    for key, value in args.items():
+        if key in ("U", "Y"):
+            kw[key][7, 1] = value
+        else:
+            kw[key] = value
+    with pytest.raises(ValueError, match=rf"^{name}: "):
+        fit_arx(**kw)
+
+
 def test_arx_model_modes_exact_on_noise_free_data():
     rng = np.random.default_rng(2)
     A = np.array([[[0.6, 0.1], [0.0, 0.4]]])

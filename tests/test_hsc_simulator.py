@@ -1,12 +1,13 @@
 """Planing-craft simulator and vessel file: steady speed/trim in the documented credible range."""
 
+import dataclasses
 import math
 
 import numpy as np
 import pytest
 
 from hybridship.hsc.simulator import KNOT_M_S, PlaningCraftModel, SeaConditions, savitsky_planing, smoothstep
-from hybridship.hsc.trials import generate_trial, paper_trial
+from hybridship.hsc.trials import TrialConfig, generate_trial, input_schedule, paper_trial
 from hybridship.hsc.vessel import PlaningCraftFileError, load_planing_craft, planing_craft_from_dict
 
 RPMS = np.linspace(800, 4000, 9)
@@ -105,6 +106,34 @@ def test_trial_gps_delay_realigned_and_reproducible(craft):
     assert np.std(a.raw.gps_speed_m_s.to_numpy()[:cfg.n_samples] - truth) > 2 * craft.sensors.gps_speed_noise_m_s
     assert a.data.rpm.between(700, 4100).all() and a.data.pwm_pct.between(10, 100).all()
     assert (truth.max() - truth.min()) / KNOT_M_S > 5          # the inputs excite the speed
+
+
+class _StuckGuard:
+    """A random generator that raises after many draws: a schedule that stops advancing fails instead of hanging."""
+
+    def __init__(self):
+        self.rng, self.draws = np.random.default_rng(0), 0
+
+    def __getattr__(self, name):
+        self.draws += 1
+        if self.draws > 100_000:
+            raise RuntimeError("input_schedule no longer advances")
+        return getattr(self.rng, name)
+
+
+def test_a_pwm_period_shorter_than_two_samples_is_refused(craft):
+    """A half period below one sample (0.1 s) made no progress: input_schedule and generate_trial hung."""
+    cfg = TrialConfig(sea_state=1, n_samples=300, n_train=200, actuator="interceptor", sea=SeaConditions(),
+                      pwm_period_s=(0.1, 0.19))
+    with pytest.raises(ValueError, match=r"^pwm_period_s: expected a shortest period of at least two samples"):
+        input_schedule(cfg, 300, 0.1, _StuckGuard())
+    with pytest.raises(ValueError, match=r"^pwm_period_s"):
+        generate_trial(cfg, craft)                 # refused before the simulation
+    with pytest.raises(ValueError, match=r"^dt_s"):
+        input_schedule(cfg, 300, 0.0, _StuckGuard())
+    # two samples exactly: the duty switches between its high and low halves at every sample
+    _, pwm = input_schedule(dataclasses.replace(cfg, pwm_period_s=(0.2, 0.2)), 300, 0.1, _StuckGuard())
+    assert np.all(np.diff(pwm >= 55.0))
 
 
 def test_simulator_refuses_bad_arguments_by_name(craft):

@@ -26,6 +26,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
+from hybridship.config import check_flags
 from hybridship.fileio import as_path, atomic_write, check_out_folder, check_output_files, earlier_run, record_outputs
 from hybridship.residual.ensemble import EnsembleConfig
 
@@ -91,7 +92,10 @@ def score_model(model, U, Y, mode: str, n_init: int = N_INIT):
     if mode not in ("one_step", "free_run"):
         raise ValueError(f"mode: expected 'one_step' or 'free_run', got {mode!r}")
     # the rows scored start at n_init in both modes: a one-step score checks it too
-    n_init = check_n_init(n_init, model.n_init, np.shape(U)[0] if np.ndim(U) else 0)
+    n_rows = np.shape(U)[0] if np.ndim(U) else 0
+    n_init = check_n_init(n_init, model.n_init, n_rows)
+    if n_rows - n_init < 2:         # R needs two scored rows; scoring's own error did not name n_init
+        raise ValueError(f"n_init: expected at most {n_rows - 2} (two rows of U left to score), got {n_init}")
     check_physical(*check_record(U, Y, shape=(N_INPUTS, N_OUTPUTS)))   # a craft record, whatever the model
     P = model.one_step(U, Y) if mode == "one_step" else model.free_run(U, Y, n_init)
     Yt, Pt = _to_table_units(Y)[n_init:], _to_table_units(P)[n_init:]
@@ -217,11 +221,12 @@ OUTPUT_FILES = ("table.csv", "table.md", "speed_trim.csv", "hsc_speed_trim.png",
                 "hsc_validation_ss2.png")
 
 
-def _checked_arguments(out_dir, seed) -> Path:
-    """The output folder as a Path; ValueError/TypeError naming ``seed`` or ``out_dir``;
+def _checked_arguments(out_dir, seed, quick, progress) -> Path:
+    """The output folder as a Path; ValueError/TypeError naming ``seed``, ``out_dir`` or a flag;
     FileExistsError/PermissionError for a file there under one of the benchmark's names that
     no hybridship command wrote (an earlier run's recognised by its ``table.md``) or that is
     read-only."""
+    check_flags(quick=quick, progress=progress)      # quick="no" ran the quick configuration
     if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or seed < 0:
         raise ValueError(f"seed: expected a non-negative integer, got {seed!r}")
     out = check_out_folder(as_path(out_dir, "out_dir"))
@@ -249,7 +254,7 @@ def run_benchmark(out_dir, *, seed: int = 0, quick: bool = False, progress: bool
     DataFrame
         The table (columns :data:`COLUMNS`).
     """
-    out = _checked_arguments(out_dir, seed)      # before minutes of work
+    out = _checked_arguments(out_dir, seed, quick, progress)      # before minutes of work
     try:
         import torch
         torch.set_num_threads(1)

@@ -47,7 +47,7 @@ from hybridship.config import as_config
 from hybridship.forecast_inputs.limits import check_number, check_whole_number
 from hybridship.residual.ensemble import EnsembleConfig, fit_ensemble
 
-from .contract import check_free_run, check_physical, check_record, require_fitted
+from .contract import _finite, _matrix, check_free_run, check_physical, check_record, require_fitted
 from .simulator import PlaningCraftModel
 from .vessel import PlaningCraft, load_planing_craft
 
@@ -74,6 +74,9 @@ class GreyBoxTables:
         Resistance at the equilibrium (= thrust) [N].
     trim_rad : ndarray, shape (na, nv)
         Running trim [rad].
+    actuator : {"interceptor", "trim_tab"} or None
+        The trim device the equilibria were computed for (set by :meth:`from_craft`; None,
+        unknown, for hand-made tables). :class:`GreyBox` refuses tables of another device.
     """
 
     v0_m_s: float
@@ -81,6 +84,7 @@ class GreyBoxTables:
     act: np.ndarray
     resistance_n: np.ndarray
     trim_rad: np.ndarray
+    actuator: str | None = None
 
     @classmethod
     def from_craft(cls, craft: PlaningCraft, actuator: str, *, n_rpm: int = 25,
@@ -108,7 +112,7 @@ class GreyBoxTables:
             tt[above] = th[-1] + (th[-1] - th[-2]) / (v[-1] - v[-2]) * (grid[above] - v[-1])
             R.append(rr)
             TH.append(tt)
-        return cls(float(grid[0]), float(dv_m_s), np.asarray(act, float), np.array(R), np.array(TH))
+        return cls(float(grid[0]), float(dv_m_s), np.asarray(act, float), np.array(R), np.array(TH), actuator)
 
 
 class GreyBox:
@@ -116,8 +120,15 @@ class GreyBox:
 
     def __init__(self, craft: PlaningCraft, actuator: str, tables: GreyBoxTables | None = None, dt_s: float = 0.1):
         self.craft, self.actuator, self.dt = craft, actuator, dt_s
+        pm = PlaningCraftModel(craft, actuator)         # checks the actuator before the tables are judged by it
+        if tables is not None and not isinstance(tables, GreyBoxTables):
+            raise TypeError(f"tables: expected GreyBoxTables (GreyBoxTables.from_craft(...)), "
+                            f"got {type(tables).__name__}")
+        if tables is not None and tables.actuator not in (None, actuator):
+            # the other device's resistance and trim changes, accepted without a word before
+            raise ValueError(f"tables: computed for the {tables.actuator!r} actuator, expected tables for {actuator!r} "
+                             f"(GreyBoxTables.from_craft(craft, {actuator!r}))")
         self.tables = tables or GreyBoxTables.from_craft(craft, actuator)
-        pm = PlaningCraftModel(craft, actuator)
         self._pwm_to_frac = pm.pwm_to_fraction
         self.pwm_range_pct = tuple(map(float, pm.pwm_range))
         self.act_step = pm.act_rate * dt_s
@@ -173,9 +184,28 @@ class GreyBox:
     # -------------------------------------------------------------- runs
 
     def simulate(self, U, y0, k0: int = 0, p=None):
-        """Free run from ``y0 = (V, theta)`` at sample ``k0``; returns ``(N, 2)`` (held at ``y0`` before ``k0``)."""
+        """Free run from ``y0 = (V, theta)`` at sample ``k0``; returns ``(N, 2)`` (held at ``y0`` before ``k0``).
+
+        Raises
+        ------
+        ValueError
+            Naming the argument: ``U`` not a finite (N, 3) record, ``y0`` not two finite
+            numbers, ``k0`` not a whole number in ``[0, N)``.
+        """
+        U = _matrix("U", U, 3)
+        _finite("U", U)
+        try:
+            y = np.array(y0, dtype=float)
+        except (TypeError, ValueError):
+            y = None
+        if y is None or y.shape != (2,) or not np.isfinite(y).all():
+            raise ValueError(f"y0: expected (speed m/s, pitch rad), two finite numbers, got {y0!r}")
+        k0 = _check_k0(k0, U.shape[0], 0)
+        return self._simulate(U, y, k0, p)
+
+    def _simulate(self, U, y0, k0, p=None):
+        """:meth:`simulate` on checked arguments (the fit calls it at every step)."""
         p = self.params if p is None else p
-        U = np.asarray(U, float)
         a = self.actuator_fraction(U[:, 1])
         rpm = U[:, 0]
         N = U.shape[0]
@@ -193,9 +223,18 @@ class GreyBox:
         return out
 
     def one_step(self, U, Y, p=None):
-        """One-step predictions ``y_hat[k]`` from the measured ``Y[k-1]`` (row 0 is NaN)."""
+        """One-step predictions ``y_hat[k]`` from the measured ``Y[k-1]`` (row 0 is NaN).
+
+        Raises
+        ------
+        ValueError
+            Naming ``U`` or ``Y``: not finite (N, 3) and (N, 2) records of two or more rows.
+        """
+        return self._one_step(*check_record(U, Y, shape=(3, 2)), p)
+
+    def _one_step(self, U, Y, p=None):
+        """:meth:`one_step` on checked arguments."""
         p = self.params if p is None else p
-        U, Y = np.asarray(U, float), np.asarray(Y, float)
         a = self.actuator_fraction(U[:, 1])
         decay = math.exp(-self.dt / max(p[9], 1e-3))
         out = np.full(Y.shape, np.nan)
@@ -206,16 +245,21 @@ class GreyBox:
         return out
 
     def fit(self, U, Y, k0: int = 0, *, max_nfev: int = 60):
-        """Fit the parameters to minimise the free-run error of both outputs (each over its spread)."""
+        """Fit the parameters to minimise the free-run error of both outputs (each over its spread).
+
+        The free runs start from the measured ``Y[k0]``; ``k0`` is a whole number with at least
+        one row after it (a ValueError naming it otherwise: ``k0 = -1`` started from the last row).
+        """
         from scipy.optimize import least_squares
 
-        U, Y = check_record(U, Y, min_rows=k0 + 2, shape=(3, 2))
+        U, Y = check_record(U, Y, shape=(3, 2))
+        k0 = _check_k0(k0, U.shape[0], 1)
         _check_units(U, Y, self)
         scale = Y[k0:].std(0)
         scale = np.where(scale > 1e-9, scale, 1.0)
 
         def resid(p):
-            sim = self.simulate(U, Y[k0], k0, p)
+            sim = self._simulate(U, Y[k0], k0, p)
             r = (sim[k0 + 1:] - Y[k0 + 1:]) / scale
             return np.nan_to_num(r, nan=1e3).ravel()
 
@@ -228,6 +272,16 @@ class GreyBox:
 
     def parameters(self) -> dict:
         return dict(zip(PARAM_NAMES, map(float, self.params)))
+
+
+def _check_k0(k0, n_rows: int, after: int) -> int:
+    """``k0`` as an int with ``after`` rows of ``U`` after it (before: a negative ``k0`` counted
+    from the end, a large one was an IndexError)."""
+    k0 = check_whole_number("k0", k0, 0)
+    if k0 > n_rows - 1 - after:
+        raise ValueError(f"k0: expected 0 <= k0 <= {n_rows - 1 - after} (U has {n_rows} rows"
+                         f"{f', {after} needed after k0' if after else ''}), got {k0}")
+    return k0
 
 
 #: A planing craft's pitch stays well inside this [rad] (about 29 deg); beyond it the column is degrees.
@@ -317,10 +371,10 @@ class HybridModel:
         U, Y = check_record(U, Y, min_rows=self.n_init + 10, shape=self.shape)
         k0 = self.n_init                 # the grey box's fit checks the units
         self.grey.fit(U, Y, k0 - 1)
-        sim = self.grey.simulate(U, Y[k0 - 1], k0 - 1)
+        sim = self.grey._simulate(U, Y[k0 - 1], k0 - 1)
         X = self._free_features(U, sim)[k0:]
         self.free_ens = fit_ensemble(X, (Y - sim)[k0:], self.ensemble_config, progress=progress)
-        phys = self.grey.one_step(U, Y)
+        phys = self.grey._one_step(U, Y)
         X1 = self._one_features(U, Y, phys)[k0:]
         self.one_ens = fit_ensemble(X1, (Y - phys)[k0:], self.ensemble_config, progress=progress)
         return self
@@ -329,7 +383,7 @@ class HybridModel:
         require_fitted(self, "one_ens")
         U, Y = check_record(U, Y, min_rows=self.n_init + 1, shape=self.shape)
         _check_units(U, Y, self.grey)
-        phys = self.grey.one_step(U, Y)
+        phys = self.grey._one_step(U, Y)
         out = np.full(Y.shape, np.nan)
         k0 = self.n_init
         mean, _ = self.one_ens.predict(self._one_features(U, Y, phys)[k0:])
@@ -340,7 +394,7 @@ class HybridModel:
         require_fitted(self, "free_ens")
         U, Y_init, n_init = check_free_run(U, Y_init, n_init, self.n_init, self.shape)
         _check_units(U, Y_init, self.grey, "Y_init")
-        sim = self.grey.simulate(U, Y_init[n_init - 1], n_init - 1)
+        sim = self.grey._simulate(U, Y_init[n_init - 1], n_init - 1)
         out = np.full(sim.shape, np.nan)
         mean, _ = self.free_ens.predict(self._free_features(U, sim)[n_init:])
         out[n_init:] = sim[n_init:] + mean
@@ -351,6 +405,6 @@ class HybridModel:
         require_fitted(self, "free_ens")
         U, Y_init, n_init = check_free_run(U, Y_init, n_init, self.n_init, self.shape)
         _check_units(U, Y_init, self.grey, "Y_init")
-        sim = self.grey.simulate(U, Y_init[n_init - 1], n_init - 1)
+        sim = self.grey._simulate(U, Y_init[n_init - 1], n_init - 1)
         sim[:n_init] = np.nan
         return sim

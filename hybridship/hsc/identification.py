@@ -118,10 +118,21 @@ def fit_arx(U, Y, na: int, nb: int, nk: int = 1) -> ARXParameters:
     na, nb, nk : int
         Output order, input order and input delay (MATLAB's ``arx(data, [na nb nk])`` with
         the same orders in every entry).
+
+    Raises
+    ------
+    ValueError
+        Naming the argument: an order that is not a whole number (``na``, ``nb`` >= 1,
+        ``nk`` >= 0), or ``U``/``Y`` not finite 2-D arrays of the same rows, at least
+        ``max(na, nk + nb - 1) + 2`` of them (NaN reached LAPACK before).
     """
-    U, Y = np.asarray(U, float), np.asarray(Y, float)
-    if na < 1 or nb < 1 or nk < 0:
-        raise ValueError(f"fit_arx: need na >= 1, nb >= 1, nk >= 0, got {na}, {nb}, {nk}")
+    na, nb, nk = check_whole_number("na", na, 1), check_whole_number("nb", nb, 1), check_whole_number("nk", nk, 0)
+    U, Y = check_record(U, Y, min_rows=max(na, nk + nb - 1) + 2)      # as ARXModel.fit
+    return _fit_arx(U, Y, na, nb, nk)
+
+
+def _fit_arx(U, Y, na, nb, nk) -> ARXParameters:
+    """:func:`fit_arx` on checked arguments."""
     Phi, T, _ = _arx_matrix(U, Y, na, nb, nk)
     theta, *_ = np.linalg.lstsq(Phi, T, rcond=None)
     ny, nu = Y.shape[1], U.shape[1]
@@ -148,7 +159,7 @@ class ARXModel:
         U, Y = check_record(U, Y, min_rows=self.n_init + 2)
         self.shape = (U.shape[1], Y.shape[1])             # (inputs, outputs) of the predictions
         self.su, self.sy = _Standardiser(U), _Standardiser(Y)
-        self.params = fit_arx(self.su(U), self.sy(Y), self.na, self.nb, self.nk)
+        self.params = _fit_arx(self.su(U), self.sy(Y), self.na, self.nb, self.nk)   # checked above
         return self
 
     def one_step(self, U, Y):

@@ -32,6 +32,7 @@ import pandas as pd
 from pydantic import Field, model_validator
 
 from ..config import Float, Int, Seed, config_dataclass
+from ..forecast_inputs.limits import check_number
 from .simulator import KNOT_M_S, PlaningCraftModel, SeaConditions, TrueRecord
 from .vessel import PlaningCraft, load_planing_craft
 
@@ -130,7 +131,18 @@ def input_schedule(config: TrialConfig, n: int, dt_s: float, rng: np.random.Gene
     random levels spread over the whole range (a new level is at least a quarter of the
     range away from the last one, so every stretch of the record sees large changes);
     the PWM duty switches between random high and low levels with a random period.
+
+    Raises
+    ------
+    ValueError
+        ``dt_s`` not positive, or ``config.pwm_period_s`` shorter than two steps (a
+        half period, the time a PWM level is held, would round to no sample).
     """
+    dt_s = check_number("dt_s", dt_s, lo=0.0, lo_open=True)
+    # the step is the craft's, unknown to TrialConfig: a half period rounding to 0 samples never advanced
+    if int(config.pwm_period_s[0] / 2 / dt_s) < 1:
+        raise ValueError(f"pwm_period_s: expected a shortest period of at least two samples (2 x {dt_s:g} s), "
+                         f"got {config.pwm_period_s}")
     lo, hi = config.rpm_range
     rpm = np.empty(n)
     level = lo + 0.3 * (hi - lo) * rng.random()
