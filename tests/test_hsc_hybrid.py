@@ -147,3 +147,19 @@ def test_tables_of_the_other_trim_device_are_refused(craft, tables):
     HybridModel(craft, "interceptor", tables=t)
     assert tables.actuator is None
     HybridModel(craft, "trim_tab", tables=tables)           # hand-made tables: the device is unknown
+
+
+def test_text_flags_and_a_bad_step_are_refused_by_name():
+    """Review: ``generate_trial(progress="no")`` and ``HybridModel.fit(progress="no")`` took
+    the text as True; ``GreyBox(dt_s=0)`` was accepted."""
+    from hybridship.hsc.simulator import SeaConditions
+    from hybridship.hsc.trials import TrialConfig, generate_trial
+
+    craft = load_planing_craft()
+    with pytest.raises(ValueError, match="^dt_s: "):
+        GreyBox(craft, "interceptor", dt_s=0.0)
+    with pytest.raises(TypeError, match="^progress: expected True or False"):
+        generate_trial(TrialConfig(sea_state=1, n_samples=300, n_train=200, actuator="interceptor",
+                                   sea=SeaConditions()), craft, progress="no")
+    with pytest.raises(TypeError, match="^progress: expected True or False"):
+        HybridModel(craft, "interceptor").fit(np.zeros((60, 3)), np.zeros((60, 2)), progress="no")

@@ -205,3 +205,16 @@ def test_subspace_block_rows_need_only_cover_the_order_with_all_outputs():
     assert p.A.shape == (3, 3)
     with pytest.raises(ValueError, match="block_rows"):
         fit_subspace(U, Y, order=3, block_rows=1)
+
+
+def test_fit_subspace_names_nan_data_and_bad_orders():
+    """Review: NaN reached nfoursid ("Output data cannot contain nulls")."""
+    from hybridship.hsc.identification import fit_subspace
+
+    rng = np.random.default_rng(4)
+    U, Y = rng.standard_normal((80, 3)), rng.standard_normal((80, 2))
+    Y[5, 0] = np.nan
+    with pytest.raises(ValueError, match="^Y: "):
+        fit_subspace(U, Y, order=2)
+    with pytest.raises((TypeError, ValueError), match="^order: "):
+        fit_subspace(U, np.nan_to_num(Y), order=0)

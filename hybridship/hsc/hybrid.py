@@ -43,7 +43,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from hybridship.config import as_config
+from hybridship.config import as_config, check_flags
 from hybridship.forecast_inputs.limits import check_number, check_whole_number
 from hybridship.residual.ensemble import EnsembleConfig, fit_ensemble
 
@@ -119,7 +119,8 @@ class GreyBox:
     """The grey-box surge/pitch model of one craft and trim device (see the module docstring)."""
 
     def __init__(self, craft: PlaningCraft, actuator: str, tables: GreyBoxTables | None = None, dt_s: float = 0.1):
-        self.craft, self.actuator, self.dt = craft, actuator, dt_s
+        self.craft, self.actuator = craft, actuator
+        self.dt = check_number("dt_s", dt_s, lo=0.0, lo_open=True)
         pm = PlaningCraftModel(craft, actuator)         # checks the actuator before the tables are judged by it
         if tables is not None and not isinstance(tables, GreyBoxTables):
             raise TypeError(f"tables: expected GreyBoxTables (GreyBoxTables.from_craft(...)), "
@@ -368,6 +369,7 @@ class HybridModel:
         return np.hstack([_lags(Y, [1, 2]), phys, self._input_features(U, a)])
 
     def fit(self, U, Y, *, progress: bool = False):
+        check_flags(progress=progress)
         U, Y = check_record(U, Y, min_rows=self.n_init + 10, shape=self.shape)
         k0 = self.n_init                 # the grey box's fit checks the units
         self.grey.fit(U, Y, k0 - 1)

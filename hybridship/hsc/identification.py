@@ -240,7 +240,9 @@ def fit_subspace(U, Y, order: int, block_rows: int = 10) -> StateSpaceParameters
     import pandas as pd
     from nfoursid.nfoursid import NFourSID
 
-    U, Y = np.asarray(U, float), np.asarray(Y, float)
+    U, Y = check_record(U, Y)          # finite, named (nfoursid's own words otherwise)
+    check_whole_number("order", order, 1)
+    check_whole_number("block_rows", block_rows, 1)
     if block_rows * Y.shape[1] < order:
         raise ValueError(f"fit_subspace: block_rows * ny = {block_rows * Y.shape[1]} < order {order}")
     ucols = [f"u{i}" for i in range(U.shape[1])]

@@ -31,7 +31,7 @@ import numpy as np
 import pandas as pd
 from pydantic import Field, model_validator
 
-from ..config import Float, Int, Seed, config_dataclass
+from ..config import Float, Int, Seed, check_flags, config_dataclass
 from ..forecast_inputs.limits import check_number
 from .simulator import KNOT_M_S, PlaningCraftModel, SeaConditions, TrueRecord
 from .vessel import PlaningCraft, load_planing_craft
@@ -228,6 +228,7 @@ def generate_trial(config: TrialConfig, craft: PlaningCraft | str | os.PathLike 
     progress : bool
         Print a line when done.
     """
+    check_flags(progress=progress)
     if craft is None or isinstance(craft, (str, os.PathLike)):     # a name or file, as load_planing_craft takes
         craft = load_planing_craft(*(() if craft is None else (craft,)))
     if not isinstance(craft, PlaningCraft):
