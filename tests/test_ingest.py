@@ -8,6 +8,8 @@ than turned into NaN deep inside a forecast.
 
 from __future__ import annotations
 
+import warnings
+
 from dataclasses import fields
 
 import numpy as np
@@ -174,6 +176,11 @@ def test_a_forecast_says_which_samples_it_removed_outside_its_start_window(model
         fc = hybrid.forecast(back, [250.0], 20)
     assert not fc.flags[FaultFlags.LATE_OR_OUT_OF_ORDER].any()   # far from the start window
     pd.testing.assert_frame_equal(back, before)                 # the caller's frame is not touched
+    # blank rows at the end (a spreadsheet export) hold no sample: no warning at forecast time
+    blank = pd.concat([log, pd.DataFrame(np.nan, index=[0, 1], columns=log.columns)], ignore_index=True)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", LogFormatWarning)
+        hybrid.forecast(blank, [250.0], 20)
 
 
 def test_a_time_column_that_runs_backwards_says_the_samples_were_re_sorted(model, log):

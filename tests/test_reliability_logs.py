@@ -343,15 +343,15 @@ def test_no_function_modifies_the_callers_data(model, moving_log, tmp_path):
     np.testing.assert_array_equal(arr3.eta, eta)
     assert not np.shares_memory(arr.eta, df["north_m"].to_numpy())
     assert arr2.eta.flags.writeable is False
-    # LogArrays built from the caller's arrays hold read-only views: the caller's stay writeable
-    # (review: they were frozen in place)
+    # LogArrays built from the caller's arrays hold read-only copies: the caller's stay writeable
+    # (review: they were frozen in place), and a change to them cannot reach checked data
     from dataclasses import fields
 
     mine = {f.name: getattr(arr3, f.name).copy() if isinstance(getattr(arr3, f.name), np.ndarray)
             else getattr(arr3, f.name) for f in fields(arr3)}
     built = type(arr3)(**mine)
     assert all(v.flags.writeable for v in mine.values() if isinstance(v, np.ndarray))
-    assert built.eta.flags.writeable is False and np.shares_memory(built.eta, mine["eta"])
+    assert built.eta.flags.writeable is False and not np.shares_memory(built.eta, mine["eta"])
 
 
 def test_read_log_without_validation_returns_the_raw_frame(tmp_path, moving_log):

@@ -167,6 +167,12 @@ def _channel_names(vessel) -> tuple[str, str]:
     return props[0], v.rudders[0].name
 
 
+#: The raw columns :func:`esso_to_log` reads (the relative wind it does not).
+_CONVERTED_COLUMNS = ("t [s]", "x_position_mid [m]", "y_position_mid [m]", "psi_hat [rad]", "u_velo [m/s]",
+                      "vm_velo [m/s]", "r_angvelo [rad/s]", "wind_velo_true [m/s]", "wind_dir_true [rad]",
+                      "n_prop [rps]", "delta_rudder [rad]")
+
+
 def esso_to_log(raw: pd.DataFrame, *, vessel=None, velocity_lead_s: float = 0.0) -> pd.DataFrame:
     """Convert a raw run (:func:`read_esso_raw`) into a log-format DataFrame (10 Hz, as logged).
 
@@ -186,15 +192,15 @@ def esso_to_log(raw: pd.DataFrame, *, vessel=None, velocity_lead_s: float = 0.0)
     ValueError
         If ``velocity_lead_s`` is negative or not finite.
     """
-    # a negative lead was ignored without a word, NaN and inf failed inside numpy; text and
-    # True were read as numbers
+    # a negative lead was ignored without a word, NaN and inf failed inside numpy, True was
+    # read as 1 s
     lead = check_number("velocity_lead_s", velocity_lead_s, lo=0.0)
     if not isinstance(raw, pd.DataFrame):
         raise TypeError(f"raw: expected a DataFrame of a raw run (read_esso_raw), got {type(raw).__name__}")
-    missing = [c for c in ESSO_COLUMNS if c not in raw.columns]
-    if missing:
-        raise LogFormatError(f"{missing[0]}: missing from the raw run (missing: {missing}; expected the columns "
-                             f"of read_esso_raw, {list(ESSO_COLUMNS)})", column=missing[0])
+    missing = [c for c in _CONVERTED_COLUMNS if c not in raw.columns]
+    if missing:     # (a KeyError before)
+        raise LogFormatError(f"{missing[0]}: missing from the raw run (missing: {missing}; the conversion reads "
+                             f"{list(_CONVERTED_COLUMNS)} of read_esso_raw's columns)", column=missing[0])
     prop, rud = _channel_names(vessel)
     t = raw["t [s]"].to_numpy(float)
     u = raw["u_velo [m/s]"].to_numpy(float)

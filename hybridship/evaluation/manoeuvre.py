@@ -211,7 +211,7 @@ def load_runs(folder, vessel, *, step_s: float | None = None) -> list[Run]:
 
     vessel = vessel if isinstance(vessel, Vessel) else load_vessel(vessel)
     if step_s is not None:
-        check_number("step_s", step_s, lo=0.0, lo_open=True)
+        step_s = check_number("step_s", step_s, lo=0.0, lo_open=True)
     runs = [Run(r, ingest(_decimate(esso_log_arrays(r.path, vessel), vessel, step_s), vessel, purpose="fit"))
             for r in list_runs(folder)]
     if not runs:
@@ -352,10 +352,10 @@ def start_rows(arrays: LogArrays, horizon_steps: int, start_every_s: float | Non
     is the one ``horizon_steps`` sample steps later (a gap of missing rows would otherwise
     score a forecast against the truth of a later time).
     """
-    check_whole_number("horizon_steps", horizon_steps, 1)
+    horizon_steps = check_whole_number("horizon_steps", horizon_steps, 1)
     if start_every_s is not None:
-        check_number("start_every_s", start_every_s, lo=0.0, lo_open=True)
-    check_number("warmup_s", warmup_s, lo=0.0)
+        start_every_s = check_number("start_every_s", start_every_s, lo=0.0, lo_open=True)
+    warmup_s = check_number("warmup_s", warmup_s, lo=0.0)
     t = arrays.time_s
     if len(t) < 2:                      # no step to start from
         return np.zeros(0, int)

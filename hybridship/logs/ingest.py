@@ -239,9 +239,10 @@ def _from_frame(df: pd.DataFrame, v, purpose: str, source: str,
     order = sort_samples(df, source=source)
     if purpose == "fit":
         _refuse_conflicts(order, source)
-    if order.changed:
+    if order.affected_time_s.size or (purpose == "fit" and order.n_without_time):
         # say what was repaired: a forecast's flags see only its start window, while the
-        # environment estimator reads the half hour before it
+        # environment estimator reads the half hour before it (rows without any time, such
+        # as the blank rows at the end of a spreadsheet export, hold no sample to lose)
         _warn_repaired(order, source)
     allow_missing = purpose == "forecast"
     try:

@@ -1343,8 +1343,9 @@ class LogArrays:
             object.__setattr__(self, "resorted_time_s", np.zeros(0))
         for name, v in list(vars(self).items()):
             if isinstance(v, np.ndarray) and v.flags.writeable:
-                # a read-only view: the caller's own array stays writeable
-                v = v.view()
+                # a read-only copy: the caller's own array stays writeable, and what a check
+                # (ingest's memo) has seen cannot change under it
+                v = v.copy()
                 v.flags.writeable = False
                 object.__setattr__(self, name, v)
 
