@@ -25,7 +25,7 @@ import numpy as np
 from pydantic import AfterValidator, BeforeValidator, ConfigDict, Field, ValidationError
 from pydantic.dataclasses import dataclass as _pydantic_dataclass
 
-__all__ = ["check_flags", "config_dataclass", "format_validation_error", "Int", "Float", "NonEmpty", "non_empty", "float_array",
+__all__ = ["check_flags", "real_array", "config_dataclass", "format_validation_error", "Int", "Float", "NonEmpty", "non_empty", "float_array",
            "start_time_rng"]
 
 
@@ -99,6 +99,19 @@ Int = Annotated[int, BeforeValidator(_not_bool)]
 #: A random seed: a non-negative ``int`` below 2**63 (numpy's and torch's generators both
 #: take it; a negative or larger one used to fail deep inside them).
 Seed = Annotated[int, BeforeValidator(_not_bool), Field(ge=0, lt=2**63)]
+
+
+def real_array(name: str, a) -> np.ndarray:
+    """``a`` as a float array, or a TypeError naming ``name``: text and complex numbers are
+    refused (numpy would parse ``"1.5"``, drop an imaginary part with only a warning, or fail
+    in its own words)."""
+    arr = np.asarray(a)
+    if arr.dtype.kind in "USc":
+        raise TypeError(f"{name}: expected an array of real numbers, got dtype {arr.dtype}")
+    try:
+        return arr.astype(float, copy=False)
+    except (TypeError, ValueError):
+        raise TypeError(f"{name}: expected an array of real numbers, got {type(a).__name__}") from None
 
 
 def check_flags(optional=(), **flags) -> None:

@@ -8,6 +8,7 @@ import json
 import os
 import stat
 import uuid
+from collections.abc import Mapping
 from pathlib import Path
 from typing import BinaryIO, Callable
 
@@ -77,8 +78,19 @@ def atomic_write(path, write: Callable[[BinaryIO], None]) -> Path:
     The temporary file is created exclusively in the same directory (so ``os.replace`` is
     atomic), flushed and fsynced before the rename, and removed if anything fails, in
     which case an existing file at ``path`` is left untouched.
+
+    Raises
+    ------
+    TypeError, ValueError
+        ``path`` is not a file path (None, a number, an empty text, which ``Path`` reads as
+        the current folder), or ``write`` is not callable.
+    OSError
+        ``path`` cannot be written (a folder, read-only, a file where its folder would be),
+        naming ``path``.
     """
-    path = Path(path)
+    path = as_path(path, "path")
+    if not callable(write):
+        raise TypeError(f"write: expected a function that writes to a binary file, got {type(write).__name__}")
     if path.is_dir():
         raise IsADirectoryError(f"{path}: is a directory; expected the path of a file to write")
     check_writable(path)        # a file where a folder should be is named as such
@@ -109,7 +121,10 @@ def atomic_write(path, write: Callable[[BinaryIO], None]) -> Path:
 
 
 def write_text(path, text: str) -> Path:
-    """Write UTF-8 text to ``path`` atomically (:func:`atomic_write`)."""
+    """Write UTF-8 text to ``path`` atomically (:func:`atomic_write`); TypeError naming
+    ``text`` when it is not a str (bytes or None failed inside the writer, as an AttributeError)."""
+    if not isinstance(text, str):
+        raise TypeError(f"text: expected a str, got {type(text).__name__}")
     return atomic_write(path, lambda fh: fh.write(text.encode("utf-8")))
 
 
@@ -194,7 +209,16 @@ def write_output_files(folder, contents: dict, *, stale=(), ours=None) -> dict:
     dict
         File name -> path written.
     """
-    folder = Path(folder)
+    folder = as_path(folder, "folder")
+    # checked before any file is written: a str content failed in the writer, after the
+    # folder was made and the files before it were written
+    if not isinstance(contents, Mapping):
+        raise TypeError(f"contents: expected a dict of file name -> bytes, got {type(contents).__name__}")
+    for name, data in contents.items():
+        if not isinstance(name, str) or not name or not isinstance(data, (bytes, bytearray, memoryview)):
+            raise TypeError(f"contents: expected file name -> bytes, got {name!r} -> {type(data).__name__}")
+    if isinstance(stale, (str, bytes)):
+        raise TypeError(f"stale: expected a list of file names, got {stale!r}")
     check_output_files(folder, contents, stale, ours)
     paths = {name: atomic_write(folder / name, lambda fh, b=data: fh.write(b)) for name, data in contents.items()}
     remove_stale(folder, stale)
@@ -239,7 +263,14 @@ def record_inputs(output, inputs) -> Path:
     """Write ``<output>.inputs.json`` beside ``output``: the SHA-256 of every file it was made
     from, keyed by that file's path relative to ``output``'s folder, so that a check can tell
     a result whose input (another committed result) has changed since it was made."""
-    output = Path(output)
+    output = as_path(output, "output")
+    if isinstance(inputs, (str, bytes, os.PathLike)):
+        # a lone path would be read character by character, as files named "a", "/", ...
+        raise TypeError(f"inputs: expected a list of file paths, got the single path {inputs!r}")
+    inputs = [as_path(p, "inputs") for p in inputs]
+    missing = [str(p) for p in inputs if not p.is_file()]
+    if missing:
+        raise FileNotFoundError(f"inputs: not a file: {', '.join(missing)}")
     made_from = {Path(os.path.relpath(Path(p).resolve(), output.parent.resolve())).as_posix():
                  hashlib.sha256(Path(p).read_bytes()).hexdigest() for p in inputs}
     text = json.dumps({"output": output.name, "made_from": made_from}, indent=1, sort_keys=True) + "\n"

@@ -22,7 +22,7 @@ from pathlib import Path
 from typing import Literal, Optional
 
 import numpy as np
-from pydantic import BaseModel, ConfigDict, Field, ValidationError, model_validator
+from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_validator, model_validator
 
 from hybridship.config import Float, Int, format_validation_error
 
@@ -107,6 +107,17 @@ class LinearDamping(_Strict):
     T_sway_s: Optional[Float] = Field(None, gt=0)
     T_yaw_s: Optional[Float] = Field(None, gt=0)
     D: Optional[list[list[Float]]] = None
+
+    @field_validator("D", mode="before")
+    @classmethod
+    def _three_by_three(cls, v):
+        # checked before the numbers: a ragged or text D reached numpy ("setting an array
+        # element with a sequence ...") or pydantic's "Input should be a valid list"
+        rows = (list, tuple)
+        if v is not None and not (isinstance(v, rows) and len(v) == 3
+                                  and all(isinstance(r, rows) and len(r) == 3 for r in v)):
+            raise ValueError(f"expected a 3x3 matrix (three rows of three numbers), got {v!r}")
+        return v
 
     @model_validator(mode="after")
     def _complete(self):
@@ -337,6 +348,18 @@ class WindTable(_Strict):
 class BlendermannParams(_Strict):
     vessel_type: str
     s_L_m: Float = Field(description="centroid of A_L forward of midships [m]")
+
+    @field_validator("vessel_type")
+    @classmethod
+    def _known_type(cls, v):
+        # when the file is read, not at the first model built from it (a message without the file)
+        from hybridship.physics.wind import _blendermann_params
+
+        try:
+            _blendermann_params(v)
+        except ValueError as exc:
+            raise ValueError(str(exc).removeprefix("vessel_type: ")) from None
+        return v
 
 
 class IsherwoodParams(_Strict):

@@ -117,6 +117,22 @@ def test_fit_spread_scale_refuses_bad_shapes_and_negative_errors():
         fit_spread_scale(np.ones((5, 1)), np.ones((5, 1)), [1.0])
 
 
+def test_fit_spread_scale_refuses_negative_spreads_and_bad_settings_by_name():
+    e, s = np.ones((30, 1)), np.ones((30, 1))
+    # before: a negative spread fell to the 1e-12 floor and gave a scale of 1e12, silently
+    with pytest.raises(ValueError, match="std must be >= 0"):
+        fit_spread_scale(e, -s, [1.0])
+    # before: "'>' not supported between instances of 'NoneType' and 'int'", an IndexError
+    with pytest.raises(TypeError, match="sigma: expected a number"):
+        fit_spread_scale(e, s, [1.0], sigma=None)
+    with pytest.raises(ValueError, match="coverage: must be < 1"):
+        fit_spread_scale(e, s, [1.0], coverage=1.5)
+    with pytest.raises(ValueError, match="min_samples: expected a whole number >= 1"):
+        fit_spread_scale(e[:0], s[:0], [1.0], min_samples=0)
+    with pytest.raises(TypeError, match="abs_err: expected an array of real numbers"):
+        fit_spread_scale([["a"]] * 30, s, [1.0])
+
+
 @pytest.fixture(scope="module")
 def fitted():
     m = DynamicModel("gunnerus")

@@ -133,6 +133,35 @@ def test_read_only_files_and_folders_are_not_replaced(tmp_path):
     assert sorted(x.name for x in tmp_path.iterdir()) == ["kept.csv"]
 
 
+
+def test_file_writers_refuse_what_is_not_a_path_or_bytes_before_writing(tmp_path, monkeypatch):
+    """Before: os' "expected str, bytes or os.PathLike object", an empty path read as the current
+    folder, an AttributeError for bytes given as text, a folder made before a str content
+    failed in the writer, and a lone input path read as files named by its characters."""
+    from hybridship.fileio import atomic_write, record_inputs, write_output_files, write_text
+
+    monkeypatch.chdir(tmp_path)
+    for bad, err, match in ((None, TypeError, "path: expected a file path"), (3, TypeError, "path: expected a file path"),
+                            ("", ValueError, "path: expected a file path, got an empty one")):
+        with pytest.raises(err, match=match):
+            atomic_write(bad, lambda fh: fh.write(b"x"))
+    with pytest.raises(TypeError, match="write: expected a function"):
+        atomic_write("a.txt", b"x")
+    for bad in (b"x", None):
+        with pytest.raises(TypeError, match="text: expected a str"):
+            write_text("a.txt", bad)
+    with pytest.raises(TypeError, match="contents: expected file name -> bytes, got 'b.csv' -> str"):
+        write_output_files("out", {"a.csv": b"1", "b.csv": "2"})
+    with pytest.raises(TypeError, match="contents: expected a dict"):
+        write_output_files("out", ["a.csv"])
+    (tmp_path / "in.csv").write_bytes(b"1")
+    with pytest.raises(TypeError, match="inputs: expected a list of file paths, got the single path"):
+        record_inputs("o.md", "in.csv")
+    with pytest.raises(FileNotFoundError, match="inputs: not a file: nope.csv"):
+        record_inputs("o.md", ["in.csv", "nope.csv"])
+    assert sorted(x.name for x in tmp_path.iterdir()) == ["in.csv"]      # nothing written, no folder made
+    assert write_text("a.txt", "ok").read_text() == "ok"
+
 def test_unsupported_extension(tmp_path):
     with pytest.raises(LogFormatError, match="extension"):
         write_log(circle_log(), tmp_path / "log.txt")

@@ -604,6 +604,15 @@ def test_gunnerus_coefficients_close_to_published_original_hull():
     (lambda d: d["rigid_body"].__setitem__("mass_kg", "600000"), r"rigid_body.mass_kg: expected a number, got '600000'"),
     (lambda d: d.__setitem__("format_version", "1"), r"format_version: expected an integer, got '1'"),
     (lambda d: d["damping"]["linear"].__setitem__("T_surge_s", "1000"), r"damping.linear.T_surge_s: expected a number"),
+    # a ragged or text D: numpy's "setting an array element with a sequence", pydantic's "valid list"
+    (lambda d: d["damping"].__setitem__("linear", {"method": "explicit", "D": [[1e4, 0, 0], [0, 1e4]]}),
+     r"damping.linear.D: expected a 3x3 matrix"),
+    (lambda d: d["damping"].__setitem__("linear", {"method": "explicit", "D": "diag(1e4)"}),
+     r"damping.linear.D: expected a 3x3 matrix"),
+    # an unknown Blendermann type was accepted here and refused only when a model was built
+    (lambda d: d.__setitem__("wind", {"method": "blendermann", "A_F_m2": 81.0, "A_L_m2": 180.0,
+                                      "blendermann": {"vessel_type": "trawler", "s_L_m": 0.0}}),
+     r"bad.toml: wind.blendermann.vessel_type: unknown Blendermann vessel type 'trawler'; valid names"),
 ])
 def test_invalid_vessel_files_name_the_field(edit, field):
     d = copy.deepcopy(gunnerus_dict())

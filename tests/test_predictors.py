@@ -157,6 +157,36 @@ def test_ensemble_fits_a_known_function_and_members_disagree_off_data():
     assert std_far.mean() > 5 * std.mean()       # spread grows outside the data
 
 
+
+def test_ensemble_arguments_are_refused_by_name_and_settings_may_be_a_dict():
+    rng = np.random.default_rng(0)
+    X, Y = rng.normal(size=(40, 3)), rng.normal(size=(40, 2))
+    tiny = {"n_members": 2, "hidden": 4, "max_epochs": 3}
+    ens = fit_ensemble(X, Y, tiny)                   # before: AttributeError 'dict' ... 'val_fraction'
+    assert ens.n_members == 2
+    with pytest.raises(TypeError, match="config: expected an instance of EnsembleConfig"):
+        fit_ensemble(X, Y, None)
+    # before: a segment_id for 5 rows trained on those 5 rows only, NaN made each row a segment
+    with pytest.raises(ValueError, match=r"segment_id: expected one per row of X \(40,\), got shape \(5,\)"):
+        fit_ensemble(X, Y, tiny, segment_id=np.zeros(5, int))
+    with pytest.raises(TypeError, match="segment_id: expected whole numbers"):
+        fit_ensemble(X, Y, tiny, segment_id=np.full(40, np.nan))
+    with pytest.raises(TypeError, match="progress: expected True or False"):
+        fit_ensemble(X, Y, tiny, progress="no")      # before: a text "no" showed the bar
+    # before: numpy's "could not convert string to float", a net with no input, complex parts dropped
+    with pytest.raises(TypeError, match="X: expected an array of real numbers"):
+        fit_ensemble([["a"] * 3] * 40, Y, tiny)
+    with pytest.raises(ValueError, match=r"n_in, n_out >= 1, got \(40, 0\)"):
+        fit_ensemble(X[:, :0], Y, tiny)
+    with pytest.raises(TypeError, match="Y: expected an array of real numbers, got dtype complex"):
+        fit_ensemble(X, Y + 1j, tiny)
+    # before: numpy's broadcast messages, or a 1-D row read as (E, n_out) members' outputs
+    for bad in (np.zeros((5, 4)), np.zeros(3), np.zeros((3, 5, 3))):
+        with pytest.raises(ValueError, match=r"X: expected shape \(N, 3\) or \(2, N, 3\).*got " + str(bad.shape)
+                           .replace("(", r"\(").replace(")", r"\)")):
+            ens.predict_members(bad)
+    assert ens.predict(X[:4])[0].shape == (4, 2) and ens.predict_members(np.zeros((2, 4, 3))).shape == (2, 4, 2)
+
 def test_guard_is_one_inside_and_shrinks_outside():
     rng = np.random.default_rng(1)
     X = rng.normal(size=(2000, 3))
@@ -308,6 +338,26 @@ def test_heading_quantiles_stay_beside_the_wrapped_heading():
     np.testing.assert_allclose(df["heading_q0.05_deg"], [353.0, 353.0], atol=1e-6)
     np.testing.assert_allclose(df["heading_q0.95_deg"], [363.0, 363.0], atol=1e-6)
 
+
+
+def test_a_forecast_result_of_mismatched_parts_is_refused_when_made_not_in_to_frame():
+    """Before: pandas' "All arrays must be of the same length" from ``to_frame``, a KeyError for a
+    missing flag, and an AttributeError for lists."""
+    from hybridship.forecast_inputs import FaultFlags
+    from hybridship.predictors.result import ForecastResult
+
+    t, lead, eta = np.array([0.0, 10.0]), np.arange(3.0), np.zeros((2, 3, 3))
+    with pytest.raises(ValueError, match=r"notes: expected one note per start time \(2\), got 1"):
+        ForecastResult(t, lead, eta, eta, notes=("",))
+    with pytest.raises(ValueError, match=r"flags: expected one flag per start time \(2,\).*missing \['nan_in_window'"):
+        ForecastResult(t, lead, eta, eta, flags={})
+    with pytest.raises(ValueError, match=r"eta_std: expected shape \(2, 3, 3\).*got \(2, 3\)"):
+        ForecastResult(t, lead, eta, eta, eta_std=np.zeros((2, 3)))
+    with pytest.raises(ValueError, match=r"nu: expected shape \(2, 3, 3\)"):
+        ForecastResult(t, lead, eta, eta[:1])
+    flags = {k: np.zeros(2, bool) for k in FaultFlags.ALL}
+    fc = ForecastResult(t.tolist(), lead.tolist(), eta.tolist(), eta, flags=flags, notes=["", "x"])
+    assert fc.to_frame().shape[0] == 6 and list(fc.to_frame()["notes"][::3]) == ["", "x"]
 
 def test_fit_takes_one_log_or_many_and_start_errors_give_the_log_span(model, exact_logs, tmp_path):
     """One log (a path) is a list of one; something else is refused naming what it got. A

@@ -151,6 +151,32 @@ def test_bad_settings_are_refused_with_the_field_name():
         DynamicPredictor("gunnerus", wind_forecast="fit")
 
 
+
+def test_fit_wind_forecast_refuses_bad_arguments_by_name():
+    t = np.arange(600.0)
+    log = _Log(t, _wind(8.0 + np.sin(t / 30.0), np.ones_like(t)))
+    # before: numpy's "cannot convert float NaN to integer", a ZeroDivisionError, an IndexError
+    for bad in (float("nan"), 0.0, -5.0, None):
+        with pytest.raises((TypeError, ValueError), match="horizon_s: "):
+            fit_wind_forecast([log], bad)
+    with pytest.raises(ValueError, match="start_every_s: "):
+        fit_wind_forecast([log], 60.0, start_every_s=float("nan"))
+    # before: "60" was read as the windows 6 s and 0 s, 5000 s and a negative decay time accepted
+    with pytest.raises(TypeError, match="mean_windows_s: expected a sequence"):
+        fit_wind_forecast([log], 60.0, mean_windows_s="60")
+    with pytest.raises(ValueError, match=r"mean_windows_s\[0\]: must be <= 1800"):
+        fit_wind_forecast([log], 60.0, mean_windows_s=(5000.0,))
+    with pytest.raises(ValueError, match="mean_windows_s: expected at least one"):
+        fit_wind_forecast([log], 60.0, mean_windows_s=())
+    with pytest.raises(ValueError, match=r"time_constants_s\[1\]: must be >= 0"):
+        fit_wind_forecast([log], 60.0, time_constants_s=(5.0, -5.0))
+    # before: the second log, without a mask, was silently left out of the fit
+    with pytest.raises(ValueError, match=r"masks: expected one per log \(2\), got 1"):
+        fit_wind_forecast([log, log], 60.0, masks=[None])
+    with pytest.raises(ValueError, match=r"masks: expected one flag per row of the log \(600\)"):
+        fit_wind_forecast([log], 60.0, masks=[np.ones(5, bool)])
+    fit_wind_forecast([log], 60, mean_windows_s=[60], time_constants_s=[None, 10])   # lists and ints are fine
+
 def _gusty_physics_log(model, seed=3, duration_s=1500.0, **kw):
     log = physics_log(model, seed=seed, duration_s=duration_s, t_shutdown_s=None, **kw)
     rng = np.random.default_rng(1)

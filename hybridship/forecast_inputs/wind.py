@@ -36,6 +36,7 @@ import numpy as np
 from pydantic import Field
 
 from hybridship.config import Float, config_dataclass
+from hybridship.forecast_inputs.limits import check_number
 from hybridship.frames import speed_dir_to_vector, vector_to_speed_dir
 
 __all__ = ["HELD_WIND", "WindForecast", "fit_wind_forecast", "trailing_mean_vector", "wind_error_paths",
@@ -156,7 +157,10 @@ def _usable_wind_rows(a, mask=None):
     if getattr(a, "wind_logged", None) is not None:
         ok &= np.asarray(a.wind_logged, dtype=bool)
     if mask is not None:
-        ok &= np.asarray(mask, dtype=bool)
+        mask = np.asarray(mask, dtype=bool)
+        if mask.shape != (n,):
+            raise ValueError(f"masks: expected one flag per row of the log ({n}), got shape {mask.shape}")
+        ok &= mask
     seg = getattr(a, "segment_id", None)
     return ok, (np.zeros(n, dtype=int) if seg is None else np.asarray(seg))
 
@@ -205,14 +209,30 @@ def fit_wind_forecast(logs, horizon_s: float, *, masks=None, start_every_s: floa
     forecast : WindForecast
     scores : dict
         ``{(mean_window_s, time_constant_s): mean error [m/s]}`` and ``"n_starts"``.
+
+    Raises
+    ------
+    TypeError, ValueError
+        An argument that is not what is described above, naming it (a horizon or spacing
+        that is not a positive number, a candidate out of range, one mask too few).
     """
-    sums: dict = {}
-    n_starts = 0
-    windows = tuple(float(w) for w in mean_windows_s)
-    taus = tuple(None if t is None else float(t) for t in time_constants_s)
+    horizon_s = check_number("horizon_s", horizon_s, lo=0, lo_open=True)
+    start_every_s = check_number("start_every_s", start_every_s, lo=0, lo_open=True)
+    windows = tuple(check_number(f"mean_windows_s[{i}]", w, lo=0, lo_open=True, hi=MAX_MEAN_WINDOW_S)
+                    for i, w in enumerate(_candidates("mean_windows_s", mean_windows_s)))
+    if not windows:
+        raise ValueError("mean_windows_s: expected at least one mean window [s], got none")
+    taus = tuple(check_number(f"time_constants_s[{i}]", t, lo=0, allow_none=True)
+                 for i, t in enumerate(_candidates("time_constants_s", time_constants_s)))
     if None not in taus:
         taus += (None,)
+    logs = list(logs)
     masks = [None] * len(logs) if masks is None else list(masks)
+    if len(masks) != len(logs):
+        # zip would drop the logs without a mask, unseen
+        raise ValueError(f"masks: expected one per log ({len(logs)}), got {len(masks)}")
+    sums: dict = {}
+    n_starts = 0
     for a, mask in zip(logs, masks):
         t = np.asarray(a.time_s, dtype=float)
         n = t.size
@@ -245,6 +265,14 @@ def fit_wind_forecast(logs, horizon_s: float, *, masks=None, start_every_s: floa
     better = scores[best] < (1.0 - MIN_IMPROVEMENT) * held
     out = WindForecast(mean_window_s=best[0], time_constant_s=best[1]) if better else HELD_WIND
     return out, {**scores, "n_starts": n_starts}
+
+
+def _candidates(name: str, values) -> tuple:
+    """``values`` as a tuple of candidates, or a TypeError naming ``name``: a lone number or a
+    text (whose characters a loop would read as candidates, "60" as 6 and 0 s) is refused."""
+    if isinstance(values, (str, bytes)) or not np.iterable(values):
+        raise TypeError(f"{name}: expected a sequence of candidate times [s], got {values!r}")
+    return tuple(values)
 
 
 def wind_error_paths(forecast: WindForecast, logs, horizon_steps: int, *, every: int = 20,

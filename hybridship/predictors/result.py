@@ -61,6 +61,12 @@ class ForecastResult:
         shrunk by the guard).
     notes : tuple of str, length S, or None
         What was done about each start's faults ("" when clean).
+
+    Raises
+    ------
+    TypeError, ValueError
+        On construction, parts that do not fit together (an array of another shape than
+        its start and lead times give, a flag missing, a note per start too few), naming it.
     """
 
     start_time_s: np.ndarray
@@ -71,6 +77,38 @@ class ForecastResult:
     guard_weight: np.ndarray | None = None
     flags: dict | None = None
     notes: tuple | None = None
+
+    def __post_init__(self):
+        # checked once here: a mismatch surfaced only in to_frame, as pandas' "All arrays must
+        # be of the same length", an AttributeError for lists or a KeyError for a missing flag
+        for name in ("start_time_s", "lead_s", "eta", "nu", "eta_std", "guard_weight"):
+            value = getattr(self, name)
+            if value is None and name in ("eta_std", "guard_weight"):
+                continue
+            arr = np.asarray(value)
+            if arr.dtype.kind not in "iuf":
+                raise TypeError(f"ForecastResult: {name}: expected an array of real numbers, got dtype {arr.dtype}")
+            setattr(self, name, arr)
+        S, H1 = self.start_time_s.size, self.lead_s.size
+        if self.start_time_s.ndim != 1 or self.lead_s.ndim != 1:
+            raise ValueError(f"ForecastResult: start_time_s and lead_s: expected 1-D arrays, got shapes "
+                             f"{self.start_time_s.shape} and {self.lead_s.shape}")
+        shapes = {"eta": (S, H1, 3), "nu": (S, H1, 3), "eta_std": (S, H1, 3), "guard_weight": (S, H1)}
+        for name, shape in shapes.items():
+            value = getattr(self, name)
+            if value is not None and value.shape != shape:
+                raise ValueError(f"ForecastResult: {name}: expected shape {shape} (S = {S} start times, "
+                                 f"H+1 = {H1} lead times), got {value.shape}")
+        if self.flags is not None:
+            missing = [k for k in FaultFlags.ALL if k not in self.flags]
+            bad = [k for k in FaultFlags.ALL if k in self.flags and np.shape(self.flags[k]) != (S,)]
+            if missing or bad:
+                raise ValueError(f"ForecastResult: flags: expected one flag per start time ({S},) for each of "
+                                 f"{', '.join(FaultFlags.ALL)}; missing {missing or 'none'}, of another shape "
+                                 f"{bad or 'none'}")
+        if self.notes is not None and (isinstance(self.notes, str) or len(self.notes) != S):
+            got = repr(self.notes) if isinstance(self.notes, str) else len(self.notes)
+            raise ValueError(f"ForecastResult: notes: expected one note per start time ({S}), got {got}")
 
     def quantiles(self, q) -> np.ndarray:
         """Gaussian quantiles of ``eta`` from ``eta_std``: shape (len(q), S, H+1, 3) [m, m, rad].

@@ -44,7 +44,8 @@ from typing import Annotated, Literal
 import numpy as np
 from pydantic import Field, field_validator, model_validator
 
-from hybridship.config import Float, Int, NonEmpty, config_dataclass, float_array
+from hybridship.config import Float, Int, NonEmpty, config_dataclass, float_array, real_array
+from hybridship.forecast_inputs.limits import check_number, check_whole_number
 
 #: Two-sided coverage of +-1 and +-2 standard deviations of a Gaussian.
 GAUSS_COVERAGE = {1.0: 0.6826894921370859, 2.0: 0.9544997361036416}
@@ -236,17 +237,33 @@ def fit_spread_scale(abs_err, std, lead_s, *, sigma: float = 2.0, coverage: floa
     SpreadCalibration
         ``scale[h]`` is the split-conformal quantile (finite-sample level
         ``ceil((n + 1) coverage) / n``) of ``abs_err / max(std, floor) ** b`` divided by ``sigma``.
+
+    Raises
+    ------
+    TypeError, ValueError
+        An argument of the wrong kind, shape or range (text, negative errors or spreads,
+        fewer than ``min_samples`` finite samples at a lead), naming it.
     """
-    e = np.asarray(abs_err, dtype=float)
-    s = np.asarray(std, dtype=float)
-    lead = np.asarray(lead_s, dtype=float).ravel()
+    e, s, lead = (real_array(f"fit_spread_scale: {name}", a)
+                  for name, a in (("abs_err", abs_err), ("std", std), ("lead_s", lead_s)))
+    lead = lead.ravel()
     if e.ndim != 2 or e.shape != s.shape or e.shape[1] != lead.size:
         raise ValueError(f"fit_spread_scale: abs_err and std must be (N, H) with H = len(lead_s); got "
                          f"{e.shape}, {s.shape}, {lead.size}")
-    if not (sigma > 0 and 0 < coverage < 1 and 0 <= floor_quantile < 0.5):
-        raise ValueError("fit_spread_scale: need sigma > 0, 0 < coverage < 1, 0 <= floor_quantile < 0.5")
+    sigma = check_number("fit_spread_scale: sigma", sigma, lo=0, lo_open=True)
+    coverage = check_number("fit_spread_scale: coverage", coverage, lo=0, lo_open=True)
+    if coverage >= 1:
+        raise ValueError(f"fit_spread_scale: coverage: must be < 1, got {coverage!r}")
+    floor_quantile = check_number("fit_spread_scale: floor_quantile", floor_quantile, lo=0)
+    if floor_quantile >= 0.5:
+        raise ValueError(f"fit_spread_scale: floor_quantile: must be < 0.5, got {floor_quantile!r}")
+    # 0 would let a lead without a single sample through to an empty quantile (IndexError)
+    min_samples = check_whole_number("fit_spread_scale: min_samples", min_samples, lo=1)
     if np.any(e < 0):
         raise ValueError("fit_spread_scale: abs_err must be >= 0 (absolute errors)")
+    if np.any(s < 0):
+        # a negative spread fell to the 1e-12 floor and came out as a scale of about 1e12
+        raise ValueError("fit_spread_scale: std must be >= 0 (standard deviations)")
     try:
         exponent = _checked_exponent(exponent)
     except ValueError as err:

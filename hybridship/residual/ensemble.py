@@ -17,7 +17,7 @@ from typing import Annotated
 import numpy as np
 from pydantic import Field
 
-from hybridship.config import Float, Int, Seed, config_dataclass
+from hybridship.config import Float, Int, Seed, as_config, check_flags, config_dataclass, real_array
 
 
 #: Most networks an ensemble may have (a bound on memory and training time).
@@ -107,8 +107,17 @@ class MLPEnsemble:
         Returns
         -------
         ndarray, shape (E, N, n_out)
+
+        Raises
+        ------
+        TypeError, ValueError
+            ``X`` is not numbers, or not of one of the shapes above.
         """
-        X = np.asarray(X, dtype=float)
+        X = real_array("X", X)
+        if X.ndim not in (2, 3) or X.shape[-1] != self.n_in or (X.ndim == 3 and X.shape[0] != self.n_members):
+            # numpy would broadcast a wrong width into its own message, or a 1-D row into (E, n_out)
+            raise ValueError(f"X: expected shape (N, {self.n_in}) or ({self.n_members}, N, {self.n_in}) "
+                             f"({self.n_in} inputs, {self.n_members} members), got {X.shape}")
         Z = (X - self.x_mean) / self.x_std
         if Z.ndim == 2:
             Z = Z[None]
@@ -150,16 +159,31 @@ def require_training_rows(n_rows: int, n_logs: int, dp_only: bool, held_back: bo
 
 def _training_rows(X, Y) -> tuple[np.ndarray, np.ndarray]:
     """``X`` (N, n_in) and ``Y`` (N, n_out) as float arrays: N >= 20 finite rows, or an error."""
-    X = np.asarray(X, dtype=float)
-    Y = np.asarray(Y, dtype=float)
-    if X.ndim != 2 or Y.ndim != 2 or X.shape[0] != Y.shape[0]:
-        raise ValueError(f"fit_ensemble: X and Y must be (N, n_in) and (N, n_out), got {X.shape} and {Y.shape}")
+    X = real_array("fit_ensemble: X", X)
+    Y = real_array("fit_ensemble: Y", Y)
+    if (X.ndim != 2 or Y.ndim != 2 or X.shape[0] != Y.shape[0]
+            or X.shape[1] == 0 or Y.shape[1] == 0):
+        raise ValueError(f"fit_ensemble: X and Y must be (N, n_in) and (N, n_out) with n_in, n_out >= 1, "
+                         f"got {X.shape} and {Y.shape}")
     if X.shape[0] < MIN_TRAINING_ROWS:
         raise ValueError(f"fit_ensemble: need at least {MIN_TRAINING_ROWS} training rows, got {X.shape[0]}")
     for name, A in (("X", X), ("Y", Y)):
         if not np.all(np.isfinite(A)):
             raise ValueError(f"fit_ensemble: {name} contains NaN or inf (row {np.argwhere(~np.isfinite(A))[0, 0]})")
     return X, Y
+
+
+def _segment_ids(segment_id, n_rows: int) -> np.ndarray:
+    """``segment_id`` as one whole number per training row, or an error naming it: a shorter
+    array would split (and train on) only its first rows, and NaN would make each row a segment."""
+    seg = np.asarray(segment_id)
+    if seg.dtype.kind not in "iub" and not (seg.dtype.kind == "f" and np.all(np.isfinite(seg))
+                                             and np.all(seg == np.round(seg))):
+        raise TypeError(f"fit_ensemble: segment_id: expected whole numbers, one per row, got dtype {seg.dtype}"
+                        + (" with NaN, inf or fractions" if seg.dtype.kind == "f" else ""))
+    if seg.shape != (n_rows,):
+        raise ValueError(f"fit_ensemble: segment_id: expected one per row of X ({n_rows},), got shape {seg.shape}")
+    return seg
 
 
 def _standardise(A: np.ndarray, rows: np.ndarray):
@@ -209,17 +233,31 @@ def fit_ensemble(X: np.ndarray, Y: np.ndarray, config: EnsembleConfig = Ensemble
     ----------
     X, Y : ndarray
         Finite training rows in time order.
-    config : EnsembleConfig
+    config : EnsembleConfig or dict
+        Training settings (a dict of its fields is validated into one).
     segment_id : ndarray of int, optional
         Segment (or log) of each row; the split is made within each segment.
     progress : bool
         Show a tqdm progress bar.
+
+    Returns
+    -------
+    MLPEnsemble
+
+    Raises
+    ------
+    TypeError, ValueError
+        An argument of the wrong kind or shape (text or complex rows, no input or output
+        column, a ``segment_id`` not one whole number per row, a flag that is not a bool),
+        naming it.
     """
     import torch
     from tqdm.auto import tqdm
 
+    config = as_config(config, EnsembleConfig, "config")
+    check_flags(progress=progress)
     X, Y = _training_rows(X, Y)
-    seg = np.zeros(X.shape[0], int) if segment_id is None else np.asarray(segment_id)
+    seg = np.zeros(X.shape[0], int) if segment_id is None else _segment_ids(segment_id, X.shape[0])
     is_val = _time_ordered_split(seg, config.val_fraction)
     tr, va = np.flatnonzero(~is_val), np.flatnonzero(is_val)
     if va.size == 0:
