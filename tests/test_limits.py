@@ -185,3 +185,13 @@ def test_angles_are_wrapped_before_the_rudder_stop_is_judged():
     assert not c.clipped.any()
     with pytest.raises(ValueError, match="azimuth_rad: width 3 does not match the vessel's 2 command channels"):
         check_or_clip_inputs("esso_osaka_model", azimuth_rad=[0.0, 0.1, 0.2])
+
+
+@pytest.mark.parametrize("value", ["60", b"60", True, np.bool_(True)])
+def test_check_number_refuses_text_and_bools(value):
+    """Review: ``float()`` read "60" (and True) as numbers, so a text setting passed every check."""
+    from hybridship.forecast_inputs.limits import check_number
+
+    with pytest.raises(TypeError, match="^horizon_s: expected a number, got "):
+        check_number("horizon_s", value)
+    assert check_number("horizon_s", np.float32(60.0)) == 60.0 and check_number("horizon_s", np.int64(60)) == 60.0

@@ -84,7 +84,7 @@ def check_number(name: str, value, *, lo=None, hi=None, lo_open: bool = False, a
     otherwise). ``allow_none`` passes None through."""
     if value is None and allow_none:
         return None
-    if isinstance(value, bool):
+    if isinstance(value, (bool, np.bool_, str, bytes)):     # float() would read "60" and True as numbers
         raise TypeError(f"{name}: expected a number, got {value!r}")
     try:
         v = float(value)
