@@ -25,7 +25,7 @@ import numpy as np
 from pydantic import AfterValidator, BeforeValidator, ConfigDict, Field, ValidationError
 from pydantic.dataclasses import dataclass as _pydantic_dataclass
 
-__all__ = ["check_flags", "real_array", "config_dataclass", "format_validation_error", "Int", "Float", "NonEmpty", "non_empty", "float_array",
+__all__ = ["Bool", "check_flags", "real_array", "config_dataclass", "format_validation_error", "Int", "Float", "NonEmpty", "non_empty", "float_array",
            "start_time_rng"]
 
 
@@ -95,6 +95,17 @@ def _number(v):
 #: An ``int`` field that refuses ``True``/``False`` (numpy's too; pydantic would read them as 1/0)
 #: and strings (pydantic would parse ``"2"``); numpy integers are accepted.
 Int = Annotated[int, BeforeValidator(_not_bool)]
+
+def _bool_only(v):
+    if isinstance(v, np.bool_):
+        return bool(v)
+    if not isinstance(v, bool):
+        raise ValueError(f"expected True or False, got {v!r}")
+    return v
+
+
+#: A ``bool`` field that refuses text and numbers (pydantic would read ``"no"`` and ``1``).
+Bool = Annotated[bool, BeforeValidator(_bool_only)]
 
 #: A random seed: a non-negative ``int`` below 2**63 (numpy's and torch's generators both
 #: take it; a negative or larger one used to fail deep inside them).

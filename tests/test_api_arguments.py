@@ -9,7 +9,10 @@ import pytest
 from hybridship.driftoff.live import environment_from_log
 from hybridship.physics.model import DynamicModel
 from hybridship.predictors import DataOnlyPredictor, DynamicPredictor, HybridPredictor
+from hybridship.residual.calibration import CalibrationConfig
 from hybridship.residual.ensemble import EnsembleConfig
+from hybridship.residual.environment import EnvironmentConfig
+from hybridship.residual.multistep import MultiStepConfig
 from hybridship.sim.synthetic import physics_log
 
 
@@ -162,3 +165,14 @@ def test_after_stop_errors_and_the_drift_hull_objective_bound_their_horizon_and_
             call()
     with pytest.raises(TypeError, match="^late: expected True or False, got 'no'"):
         hp.after_stop_errors([log], late="no")
+
+
+@pytest.mark.parametrize("cls, field", [(EnsembleConfig, "bootstrap"), (CalibrationConfig, "refit"),
+                                        (MultiStepConfig, "tune_hull"), (EnvironmentConfig, "use_velocity")])
+def test_settings_flags_refuse_text_and_numbers(cls, field):
+    """Review: pydantic read "no" as False and 1 as True in the settings' flags; the settings
+    refuse them, as the functions' flags do (numpy's bools are taken)."""
+    for bad in ("no", 1):
+        with pytest.raises(ValueError, match=f"(?s){field}.*expected True or False, got"):
+            cls(**{field: bad})
+    assert getattr(cls(**{field: np.bool_(False)}), field) is False

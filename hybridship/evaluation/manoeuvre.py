@@ -33,7 +33,7 @@ import numpy as np
 import pandas as pd
 from pydantic import Field
 
-from ..config import Float, Int, check_flags, config_dataclass
+from ..config import Bool, Float, Int, check_flags, config_dataclass
 from ..datasets.esso_osaka import EssoRun, RUN_KINDS, esso_log_arrays, list_runs
 from ..fileio import atomic_write, check_output_files, earlier_run, remove_stale, write_output_files
 from ..forecast_inputs.limits import check_number, check_whole_number
@@ -149,8 +149,8 @@ class ManoeuvreConfig:
     training: Literal["one_step", "multi_step"] = "multi_step"
     multistep: MultiStepConfig = field(default_factory=lambda: MultiStepConfig(horizon_s=30.0, batch_starts=64,
                                                                                iterations=100, loss="absolute"))
-    command_guard: bool = True
-    hull_correction: bool = False
+    command_guard: Bool = True
+    hull_correction: Bool = False
     hull_fit: Literal["one_step", "multi_step"] = "one_step"
     wind_samples: Annotated[Int, Field(ge=0)] = 8
 

@@ -44,7 +44,7 @@ from typing import Annotated, Literal
 import numpy as np
 from pydantic import Field, field_validator, model_validator
 
-from hybridship.config import Float, Int, NonEmpty, config_dataclass, float_array, real_array
+from hybridship.config import Bool, Float, Int, NonEmpty, config_dataclass, float_array, real_array
 from hybridship.forecast_inputs.limits import check_number, check_whole_number
 
 #: Two-sided coverage of +-1 and +-2 standard deviations of a Gaussian.
@@ -118,7 +118,7 @@ class CalibrationConfig:
     sigma: Annotated[Float, Field(gt=0)] = 2.0
     coverage: Annotated[Float, Field(gt=0, lt=1)] = GAUSS_COVERAGE[2.0]
     floor_quantile: Annotated[Float, Field(ge=0, lt=0.5)] = 0.1
-    refit: bool = False
+    refit: Bool = False
     spread_exponent: float | str = 1.0
     station_keeping_spread: Literal["held_load", "ensemble"] = "held_load"
     after_stop_min_failures: Annotated[Int, Field(ge=0)] = 3

@@ -17,7 +17,7 @@ from typing import Annotated
 import numpy as np
 from pydantic import Field
 
-from hybridship.config import Float, Int, Seed, as_config, check_flags, config_dataclass, real_array
+from hybridship.config import Bool, Float, Int, Seed, as_config, check_flags, config_dataclass, real_array
 
 
 #: Most networks an ensemble may have (a bound on memory and training time).
@@ -58,7 +58,7 @@ class EnsembleConfig:
     patience: Annotated[Int, Field(ge=1)] = 100
     weight_decay: Annotated[Float, Field(ge=0)] = 1e-5
     val_fraction: Annotated[Float, Field(gt=0, lt=0.9)] = 0.2
-    bootstrap: bool = True
+    bootstrap: Bool = True
     seed: Seed = 0
 
 

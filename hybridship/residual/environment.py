@@ -73,7 +73,7 @@ import numpy as np
 import pandas as pd
 from pydantic import BaseModel, ConfigDict, Field
 
-from ..config import start_time_rng
+from ..config import Bool, start_time_rng
 from ..frames import vector_to_speed_dir
 from ..forecast_inputs.faults import TRACK_MISMATCH_M, TRACK_WINDOW_S, velocity_track_mismatch_m
 from ..messages import seconds_text
@@ -228,11 +228,11 @@ class EnvironmentConfig(BaseModel):
     thrust_error_walk: float = Field(0.0, ge=0)
     load_walk_after_stop_m_s2: float = Field(3e-4, ge=0)
     load_yaw_walk_after_stop_rad_s2: float = Field(1e-5, ge=0)
-    use_velocity: bool = True
-    adaptive_measurement_std: bool = True
+    use_velocity: Bool = True
+    adaptive_measurement_std: Bool = True
     wave_window_s: float = Field(30.0, gt=0)
     variance_window_s: float = Field(600.0, gt=0)
-    reset_yaw_load_at_stop: bool = False
+    reset_yaw_load_at_stop: Bool = False
     filter_step_s: float = Field(1.0, gt=0)
     yaw_load_kept_at_stop: float = Field(0.0, ge=0.0, le=1.0)
     yaw_load_std_at_stop: float | None = Field(None, ge=0.0)
@@ -244,7 +244,7 @@ class EnvironmentConfig(BaseModel):
     max_bridged_gap_s: float = Field(10.0, ge=0.0, le=300.0)
     innovation_gate_sigma: float = Field(8.0, gt=0.0)
     max_gated_samples: int = Field(10, ge=0)
-    wave_turned_yaw_load: bool = False
+    wave_turned_yaw_load: Bool = False
     wave_axis_window_s: float = Field(600.0, gt=0.0)
     min_wave_anisotropy: float = Field(3.0, ge=1.0)
     min_wave_sin2: float = Field(0.3, gt=0.0, le=1.0)

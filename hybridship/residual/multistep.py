@@ -31,7 +31,7 @@ from typing import Annotated, Literal
 import numpy as np
 from pydantic import Field, model_validator
 
-from hybridship.config import Float, Int, config_dataclass
+from hybridship.config import Bool, Float, Int, config_dataclass
 from hybridship.forecast_inputs.wind import HELD_WIND, WindForecast
 
 
@@ -121,7 +121,7 @@ class MultiStepConfig:
     curriculum_start_s: Annotated[Float, Field(gt=0)] | None = None
     curriculum_fraction: Annotated[Float, Field(gt=0, le=1)] = 0.5
     anchor_decay: Annotated[Float, Field(ge=0)] = 0.0
-    tune_hull: bool = False
+    tune_hull: Bool = False
     output_init: Literal["one_step", "zero"] = "one_step"
     hull_iterations: Annotated[Int, Field(ge=1)] = 100
     hull_lr: Annotated[Float, Field(gt=0)] = 1e-2
