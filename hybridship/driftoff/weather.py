@@ -40,6 +40,7 @@ import pandas as pd
 from pydantic import AfterValidator, Field, model_validator
 
 from ..config import Float, config_dataclass
+from ..logs.io import unit_variant
 from ..forecast_inputs.limits import Envelope, check_number
 from ..sim import environment as env
 from ..sim.environment import MAX_STEEPNESS, check_steepness, max_hs_m
@@ -52,18 +53,15 @@ TABLE_COLUMNS = ("wind_speed_m_s", "wind_dir_deg", "hs_m", "tp_s", "wave_dir_deg
                  "current_dir_deg")
 OPTIONAL_COLUMNS = ("time", "gust_intensity")
 #: Each column's name without its unit, to point out one logged in another unit (``wind_speed_kn``).
-_COLUMN_STEMS = {"wind_speed_m_s": "wind_speed", "wind_dir_deg": "wind_dir", "hs_m": "hs", "tp_s": "tp",
-                 "wave_dir_deg": "wave_dir", "current_m_s": "current", "current_dir_deg": "current_dir"}
+_COLUMN_STEMS = {"wind_speed_m_s": ("wind_speed",), "wind_dir_deg": ("wind_dir",), "hs_m": ("hs",),
+                 "tp_s": ("tp",), "wave_dir_deg": ("wave_dir",), "current_m_s": ("current",),
+                 "current_dir_deg": ("current_dir",)}
 
 
 def _table_column_of(name: str) -> str | None:
     """The table column that ``name`` looks like in another unit (``wind_speed_kn`` ->
-    ``wind_speed_m_s``): its stem, or the stem and a unit; the longest stem wins; else None."""
-    c = name.strip().lower()
-    if c in TABLE_COLUMNS or c in OPTIONAL_COLUMNS:
-        return None
-    found = [(len(stem), col) for col, stem in _COLUMN_STEMS.items() if c == stem or c.startswith(stem + "_")]
-    return max(found)[1] if found else None
+    ``wind_speed_m_s``), by the log reader's rule (:func:`hybridship.logs.io.unit_variant`)."""
+    return unit_variant(name.strip(), _COLUMN_STEMS, TABLE_COLUMNS + OPTIONAL_COLUMNS)
 
 
 _NonNeg = Annotated[Float, Field(ge=0.0)]

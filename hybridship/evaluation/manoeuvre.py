@@ -598,7 +598,7 @@ def _score_runs(predictors: dict, test: list[Run], steps: np.ndarray, start_ever
 def _test_step_s(test: list[Run]) -> float:
     """The test runs' one sample step [s]: the horizons are counted in it, so runs at another
     rate would be scored at other horizons under the same labels (refused, naming them)."""
-    steps = {r.name: float(np.median(np.diff(r.arrays.time_s))) for r in test if len(r.arrays.time_s) > 1}
+    steps = {r.name: r.arrays.dt_s for r in test if len(r.arrays) > 1}
     if not steps:
         raise ValueError("test_dir: no test run has two samples")
     dt = next(iter(steps.values()))

@@ -374,18 +374,25 @@ def _limit_error(col: str, x: np.ndarray, bad: np.ndarray, t: np.ndarray, expect
 _UNIT_STEMS = {c.name: c.other_unit_stems for c in COLUMNS if c.other_unit_stems}
 
 
-def _unit_variant_of(col: str) -> str | None:
-    """The format column that ``col`` looks like in another unit (``heading_rad`` ->
-    ``heading_deg``): ``col`` is a stem or ``<stem>_<unit>``, longest stem wins; else None."""
+def unit_variant(col: str, stems: dict, known=()) -> str | None:
+    """The column of ``stems`` (column -> its names without a unit) that ``col`` looks like in
+    another unit (``heading_rad`` -> ``heading_deg``): ``col`` is a stem or ``<stem>_<unit>``,
+    the longest stem wins; None for a name in ``known`` (or a stem itself in ``stems``) or no
+    match. The log reader and the weather table point out such columns with it."""
     c = col.lower()
-    if c in _UNIT_STEMS or c in REQUIRED_COLUMNS or c in OPTIONAL_COLUMNS:
+    if c in stems or c in known:
         return None
     best, best_len = None, -1
-    for fmt, stems in _UNIT_STEMS.items():
-        for stem in stems:
+    for fmt, fmt_stems in stems.items():
+        for stem in fmt_stems:
             if (c == stem or c.startswith(stem + "_")) and len(stem) > best_len:
                 best, best_len = fmt, len(stem)
     return best
+
+
+def _unit_variant_of(col: str) -> str | None:
+    """The log-format column that ``col`` looks like in another unit (:func:`unit_variant`)."""
+    return unit_variant(col, _UNIT_STEMS, REQUIRED_COLUMNS + OPTIONAL_COLUMNS)
 
 
 class SpeedScale(NamedTuple):

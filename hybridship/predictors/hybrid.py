@@ -16,7 +16,7 @@ from typing import Iterable
 
 import numpy as np
 
-from ..config import as_config
+from ..config import as_config, real_array
 from ..forecast_inputs import FaultFlags
 from ..forecast_inputs.limits import check_number, check_whole_number
 from ..forecast_inputs.wind import HELD_WIND, WindForecast, fit_wind_forecast, wind_error_paths
@@ -1437,10 +1437,7 @@ def _rollout_start(eta0, nu0, dev0, bias0_ned, check_fitted=None):
     out = []
     for name, a in (("eta0", eta0), ("nu0", nu0), ("dev0", dev0), ("bias0_ned", bias0_ned)):
         shapes = "(S, 3) or (E, S, 3)" if name == "bias0_ned" else "(S, 3)"
-        try:
-            a = np.asarray(a, dtype=float)
-        except (TypeError, ValueError):
-            raise ValueError(f"{name}: expected numbers of shape {shapes}") from None
+        a = real_array(name, a)
         if a.ndim not in ((2, 3) if name == "bias0_ned" else (2,)) or a.shape[-1] != 3:
             raise ValueError(f"{name}: expected shape {shapes}, got {a.shape}")
         if not np.all(np.isfinite(a)):
