@@ -37,7 +37,8 @@ _PLAIN_MESSAGES = {
     "int_parsing": "expected a whole number", "int_type": "expected a whole number",
     "int_from_float": "expected a whole number", "finite_number": "expected a finite number",
     "bool_parsing": "expected true or false", "bool_type": "expected true or false",
-    "string_type": "expected text", "literal_error": "expected {expected}",
+    "string_type": "expected text", "string_pattern_mismatch": "expected text matching {pattern}",
+    "literal_error": "expected {expected}",
     "extra_forbidden": "not a known field", "unexpected_keyword_argument": "not a known field",
     "missing": "missing (required)", "missing_argument": "missing (required)",
 }

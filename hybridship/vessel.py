@@ -414,7 +414,7 @@ class Vessel(_Strict):
     """A validated vessel description (see module docstring)."""
 
     format_version: Int
-    name: str
+    name: str = Field(description="shown in messages, tables and model files")
     description: str = ""
     particulars: Particulars
     rigid_body: RigidBody
@@ -424,6 +424,13 @@ class Vessel(_Strict):
     rudders: list[Rudder] = Field(default_factory=list)
     wind: Wind
     true_vessel: TrueVesselPerturbation = TrueVesselPerturbation()
+
+    @field_validator("name")
+    @classmethod
+    def _named(cls, v: str) -> str:
+        if not v.strip():
+            raise ValueError("must not be empty (it names the vessel in messages, tables and model files)")
+        return v
 
     @model_validator(mode="after")
     def _consistent(self):

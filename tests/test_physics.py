@@ -613,6 +613,10 @@ def test_gunnerus_coefficients_close_to_published_original_hull():
     (lambda d: d.__setitem__("wind", {"method": "blendermann", "A_F_m2": 81.0, "A_L_m2": 180.0,
                                       "blendermann": {"vessel_type": "trawler", "s_L_m": 0.0}}),
      r"bad.toml: wind.blendermann.vessel_type: unknown Blendermann vessel type 'trawler'; valid names"),
+    # an empty name was accepted and then named nothing in messages and model files
+    (lambda d: d.__setitem__("name", "  "), r"bad.toml: name: must not be empty"),
+    (lambda d: d["thrusters"][0].__setitem__("name", "Bow 1"),
+     r"thrusters\[0\].name: expected text matching \^\[a-z\]"),
 ])
 def test_invalid_vessel_files_name_the_field(edit, field):
     d = copy.deepcopy(gunnerus_dict())
