@@ -389,3 +389,57 @@ def test_after_stop_scales_pool_north_and_east_at_the_default_two_sigma_level():
     pos = fit_spread_scale(np.concatenate([e[..., 0], e[..., 1]]), np.concatenate([sd[..., 0], sd[..., 1]]), lead)
     np.testing.assert_array_equal(got["position"].scale, pos.scale)
     np.testing.assert_array_equal(got["heading"].scale, fit_spread_scale(e[..., 2], sd[..., 2], lead).scale)
+
+
+def test_after_stop_scales_pool_logs_of_different_steps_at_equal_lead_times():
+    """A 10-Hz log's errors at 0.1..2 s were pooled with a 1-Hz log's at 1..20 s, column by
+    column: the 1-Hz lead times are kept, and the 10-Hz log gives its errors at those times."""
+    from hybridship.predictors.hybrid import after_stop_scales
+
+    rng = np.random.default_rng(3)
+    coarse, fine = np.arange(1, 21) * 1.0, np.arange(1, 201) * 0.1
+    errors = []
+    for lead in (coarse, fine, coarse):
+        sd = np.ones((30, lead.size, 3))
+        errors.append((np.abs(rng.normal(size=sd.shape)) * lead[None, :, None], sd, lead))   # errors grow with lead
+    got = after_stop_scales(errors, CalibrationConfig())
+    on_coarse = [(e[:, 9::10] if e.shape[1] == 200 else e, s[:, :20], coarse) for e, s, _ in errors]
+    want = after_stop_scales(on_coarse, CalibrationConfig())
+    np.testing.assert_array_equal(got["position"].lead_s, coarse)
+    np.testing.assert_array_equal(got["position"].scale, want["position"].scale)
+    np.testing.assert_array_equal(got["heading"].scale, want["heading"].scale)
+
+
+def test_apply_and_coverage_of_refuse_text_bad_shapes_and_silent_nans_by_name():
+    cal = SpreadCalibration([1.0, 2.0], [2.0, 3.0], [0.1, 0.1])
+    lead = np.array([1.0, 2.0])
+    # before: numpy's "ufunc 'maximum' did not contain a loop with signature matching types"
+    with pytest.raises(TypeError, match="apply: std: expected an array of real numbers"):
+        cal.apply(["a", "b"], lead)
+    with pytest.raises(TypeError, match="apply: lead_s: expected an array of real numbers"):
+        cal.apply([1.0, 2.0], ["1", "2"])
+    with pytest.raises(ValueError, match="apply: std: expected the lead time on the last axis"):
+        cal.apply(np.ones((1, 2)), np.array([1.0, 2.0, 3.0]))
+    with pytest.raises(ValueError, match="apply: lead_s: expected a 1-D array of finite lead times"):
+        cal.apply([1.0, 1.0], [1.0, np.nan])        # before: the raw spread came back, uncalibrated
+    with pytest.raises(ValueError, match="apply: std: expected standard deviations >= 0"):
+        cal.apply([-1.0, 1.0], lead)                # before: floored to a positive spread
+    np.testing.assert_allclose(cal.apply([1.0, np.nan], lead), [2.0, np.nan])   # a NaN passes as documented
+    # before: "could not convert string to float" or text "1" read as 1
+    with pytest.raises(TypeError, match="coverage_of: abs_err: expected an array of real numbers"):
+        coverage_of([["a"]], [[1.0]])
+    with pytest.raises(TypeError, match="coverage_of: std: expected an array of real numbers"):
+        coverage_of([[1.0]], [["1"]])
+    with pytest.raises(TypeError, match="coverage_of: sigmas: expected an array of real numbers"):
+        coverage_of([[1.0]], [[1.0]], ("a",))
+    # before: broadcast silently, an AxisError, a NaN coverage with a warning, or a NaN counted as a miss
+    for e, s in (([[1.0, 2.0]], [[1.0]]), ([1.0, 2.0], [1.0, 1.0]), (np.zeros((0, 2)), np.zeros((0, 2)))):
+        with pytest.raises(ValueError, match="coverage_of: abs_err and std: expected one shape"):
+            coverage_of(e, s)
+    with pytest.raises(ValueError, match="coverage_of: abs_err: NaN or inf"):
+        coverage_of([[np.nan]], [[1.0]])
+    with pytest.raises(ValueError, match="coverage_of: std: expected values >= 0"):
+        coverage_of([[1.0]], [[-1.0]])
+    with pytest.raises(ValueError, match="coverage_of: sigmas: expected a list"):
+        coverage_of([[1.0]], [[1.0]], 2.0)
+    np.testing.assert_allclose(coverage_of([[0.5, 3.0], [1.5, 1.0]], np.ones((2, 2))), [[0.5, 1.0], [0.5, 0.5]])

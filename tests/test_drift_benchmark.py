@@ -333,3 +333,21 @@ def test_has_drift_accepts_exactly_enough_drift_as_drift_forecasts_does():
     h = float(len(a.time_s) - 1 - 800 - 20 + 1)          # leaves exactly 20 starts
     drift_forecasts(DynamicPredictor(m.vessel), a, n_intervals=20, horizons_s=(h,))
     assert has_drift(a, 20, h) and not has_drift(a, 20, h + 1)
+
+
+def test_training_logs_given_again_as_data_are_scored_leave_one_out():
+    """Paths name a log, DataFrames and LogArrays do not: the same list of DataFrames as
+    ``train`` and ``test`` was taken as other logs (the list is copied), and their failures were
+    scored with the spread calibrated on them. Their samples say they are the training logs."""
+    from hybridship.evaluation.drift import _benchmark_logs, _same_samples
+    from hybridship.predictors import as_log_arrays
+
+    model = DynamicModel("gunnerus")
+    dfs = [physics_log(model, duration_s=300, t_shutdown_s=200, seed=s) for s in (1, 2, 3)]
+    train, _, test, names = _benchmark_logs(dfs[:2], dfs[:2], 3, 0, lambda m: None)
+    assert test is not train                             # what the identity test saw
+    arrays = [as_log_arrays(x, model.vessel) for x in dfs]
+    assert _same_samples(arrays[:2], arrays[1::-1], ["b", "a"])
+    assert not _same_samples(arrays[:2], arrays[2:], ["c"])
+    with pytest.raises(ValueError, match=r"test: 1 of the test logs hold the samples of training logs \(b\)"):
+        _same_samples(arrays[:2], arrays[1:], ["b", "c"])

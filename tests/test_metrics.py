@@ -52,3 +52,66 @@ def test_coverage_interval_uses_its_sigma():
         k = {1.0: 0, 2.0: 1}[sigma]
         np.testing.assert_allclose(metrics.coverage_interval(pred, truth, std, sigma, n_resamples=100)[:, 0],
                                    metrics.coverage(pred, truth, std)[:, k])
+
+
+def test_grouped_interval_resamples_groups_not_rows_and_is_seeded():
+    """The interval depends on the groups' coverages, not on how many rows each holds (rows
+    of one failure share one outcome), and the same seed gives the same interval."""
+    cov = np.array([1.0, 0.9, 0.6, 1.0, 0.8])[:, None]
+    small = metrics.grouped_coverage_interval(cov * 10, np.full(5, 10), n_resamples=500, seed=3)
+    large = metrics.grouped_coverage_interval(cov * 1000, np.full(5, 1000), n_resamples=500, seed=3)
+    np.testing.assert_allclose(small, large)
+    assert small[0, 1] < 0.8 < 0.95 < small[0, 2]          # five groups: a wide interval
+    np.testing.assert_array_equal(small, metrics.grouped_coverage_interval(cov * 10, np.full(5, 10),
+                                                                           n_resamples=500, seed=3))
+    assert np.isnan(metrics.grouped_coverage_interval(cov[:1] * 10, [10])[0, 1:]).all()
+
+
+def test_coverage_functions_refuse_bad_input_by_name():
+    import pytest
+
+    with pytest.raises(ValueError, match="hits, counts: expected shapes"):
+        metrics.grouped_coverage_interval(np.zeros((0, 2)), np.zeros(0))      # before: NaN with a warning
+    with pytest.raises(ValueError, match="hits, counts: expected shapes"):
+        metrics.grouped_coverage_interval(np.ones((3, 2)), np.ones(2))       # before: numpy's broadcast error
+    with pytest.raises(ValueError, match="hits, counts: expected counts > 0"):
+        metrics.grouped_coverage_interval(np.full((2, 1), 5.0), [4, 10])
+    with pytest.raises(TypeError, match="hits: expected an array of real numbers"):
+        metrics.grouped_coverage_interval([["1"], ["2"]], [2, 2])
+    with pytest.raises(ValueError, match="confidence: must be < 1"):
+        metrics.grouped_coverage_interval(np.ones((2, 1)), [2, 2], confidence=90)
+    with pytest.raises(ValueError, match="n_resamples: expected a whole number"):
+        metrics.grouped_coverage_interval(np.ones((2, 1)), [2, 2], n_resamples=10.5)
+    x = np.zeros((2, 3, 1, 3))
+    with pytest.raises(TypeError, match="sigma: expected a number"):
+        metrics.coverage_interval(x, x, x, "2")          # before: numpy's "ufunc 'isfinite' not supported"
+    with pytest.raises(TypeError, match="pred: expected an array of real numbers"):
+        metrics.coverage(x.astype(str), x, x)            # before: text read as numbers
+    with pytest.raises(TypeError, match="sigmas: expected an array of real numbers"):
+        metrics.coverage(x, x, x, sigmas=("a",))
+
+
+def test_drift_forecasts_refuse_a_horizon_across_a_gap():
+    """The truth is taken by rows: with 10 s of rows missing after the shutdown, the 15-s
+    forecast was scored against the measurement at 25 s. Such starts are refused, and a log
+    whose drift has too few gap-free starts has no drift to score."""
+    import pytest
+
+    from hybridship.physics.model import DynamicModel
+    from hybridship.predictors import DeadReckoning, as_log_arrays
+    from hybridship.predictors.after_failure import has_drift
+    from hybridship.sim.synthetic import physics_log
+
+    m = DynamicModel("gunnerus")
+    log = physics_log(m, seed=3, duration_s=330.0, t_shutdown_s=200.0)
+    whole = as_log_arrays(log, m.vessel)
+    holed = as_log_arrays(log[~log.time_s.between(205.5, 215.0)].reset_index(drop=True), m.vessel)
+    dr = DeadReckoning(m.vessel)
+    assert has_drift(whole, 20, 60.0) and not has_drift(holed, 20, 60.0)
+    pred, truth, _ = metrics.drift_forecasts(dr, whole, n_intervals=3, horizons_s=(15, 30))
+    np.testing.assert_array_equal(truth[0], whole.eta[[215, 230]])
+    with pytest.raises(ValueError, match="only 0 start times .* before the gap at time_s 205 s"):
+        metrics.drift_forecasts(dr, holed, n_intervals=3, horizons_s=(15, 30))
+    # the starts before the gap whose horizon ends before it are still scored
+    p, t, _ = metrics.drift_forecasts(dr, holed, n_intervals=2, horizons_s=(1, 2))
+    np.testing.assert_array_equal(t[:, 1], whole.eta[[202, 203]])

@@ -213,6 +213,7 @@ def run_drift_benchmark(train=None, test=None, out_dir="drift-benchmark", *, ves
                              environment_config=environment_config or EnvironmentConfig())
     train_arrays = [as_log_arrays(x, hybrid.model.vessel) for x in train_logs]
     test_arrays = _test_arrays(test_logs, test_names, hybrid.model.vessel, n_intervals, horizon_s, horizons)
+    test_logs = train_logs if _same_samples(train_arrays, test_arrays, test_names) else test_logs   # given again
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
     data_only = DataOnlyPredictor(vessel, ensemble_config=ens_cfg)
@@ -291,6 +292,26 @@ def _same_logs_as_training(train_logs, train_names, test_logs, test_names):
                      f"leave one out, or folders without common logs")
 
 
+def _same_samples(train_arrays, test_arrays, test_names) -> bool:
+    """Whether the test logs hold the samples of the training logs, all of them (then every
+    failure is scored leave one out, as for the same folder); a ValueError when only some do.
+    Catches what comparing paths cannot: logs given as DataFrames or LogArrays (a list is
+    copied, so the same list twice was two), or copies under other names, whose failures
+    would be scored with the spread calibrated and the hull coefficient chosen on them."""
+    from ..predictors.training_logs import samples_digest
+
+    trained = [samples_digest(a) for a in train_arrays]
+    tested = [samples_digest(a) for a in test_arrays]
+    shared = [n for d, n in zip(tested, test_names) if d in set(trained)]
+    if not shared:
+        return False
+    if sorted(tested) == sorted(trained):
+        return True
+    raise ValueError(f"test: {len(shared)} of the test logs hold the samples of training logs ({', '.join(shared[:5])}"
+                     f"{', ...' if len(shared) > 5 else ''}); give the same logs to score every failure leave one "
+                     f"out, or test logs that are not training logs")
+
+
 def _test_arrays(test_logs, test_names, vessel, n_intervals: int, horizon_s: float, horizons=()) -> list:
     """The test logs as LogArrays, refused (before any training) where a log has no failure to
     score: station keeping, then ``dp_active`` 0, then ``n_intervals`` starts with
@@ -310,7 +331,8 @@ def _test_arrays(test_logs, test_names, vessel, n_intervals: int, horizon_s: flo
     if bad:
         raise ValueError(f"test: {len(bad)} log(s) have no DP failure to score ({', '.join(bad[:5])}"
                          f"{', ...' if len(bad) > 5 else ''}): each needs station keeping, then dp_active 0, "
-                         f"then {n_intervals} start times with {horizon_s:g} s of drift after each")
+                         f"then {n_intervals} start times with {horizon_s:g} s of drift after each, before any gap in "
+                         f"the log's time stamps")
     return test_arrays
 
 

@@ -12,6 +12,8 @@ import numpy as np
 import pandas as pd
 from scipy import stats
 
+from ..config import real_array
+from ..forecast_inputs.limits import check_number, check_whole_number
 from ..frames import wrap_pi
 from ..predictors.after_failure import HORIZONS_S, drift_forecasts, shutdown_index
 
@@ -61,7 +63,7 @@ def _checked_forecasts(pred, truth, std, min_ndim: int = 2):
     """``pred, truth, std`` as float arrays of one shape ``(..., n_horizons, 3)`` with finite
     north and east and finite, non-negative spreads; ValueError naming the argument otherwise
     (a NaN would count as a miss, a mismatched shape broadcast silently)."""
-    pred, truth, std = (np.asarray(x, dtype=float) for x in (pred, truth, std))
+    pred, truth, std = (real_array(name, x) for name, x in (("pred", pred), ("truth", truth), ("std", std)))
     if not pred.shape == truth.shape == std.shape or pred.ndim < min_ndim or pred.shape[-1] != 3:
         raise ValueError(f"pred, truth, std: expected equal shapes (..., n_horizons, 3), got {pred.shape}, "
                          f"{truth.shape}, {std.shape}")
@@ -111,14 +113,14 @@ def coverage(pred: np.ndarray, truth: np.ndarray, std: np.ndarray, sigmas=(1.0, 
         Observed coverage; a calibrated Gaussian forecast gives 0.683 and 0.954 for 1 and 2 sigma.
     """
     pred, truth, std = _checked_forecasts(pred, truth, std)
-    sig = np.asarray(sigmas, dtype=float)
+    sig = real_array("sigmas", sigmas)
     if sig.ndim != 1 or sig.size == 0 or not np.all(np.isfinite(sig) & (sig > 0)):
         raise ValueError(f"sigmas: expected positive finite band half-widths, got {sigmas!r}")
     err, s = _band_errors(pred, truth, std, state)
     nh = err.shape[-2]
     e = np.moveaxis(err, -2, 0).reshape(nh, -1)
     s = np.moveaxis(s, -2, 0).reshape(nh, -1)
-    return np.stack([(e <= k * s).mean(axis=1) for k in sigmas], axis=1)
+    return np.stack([(e <= k * s).mean(axis=1) for k in sig], axis=1)
 
 
 def coverage_interval(pred: np.ndarray, truth: np.ndarray, std: np.ndarray, sigma: float = 2.0, *,
@@ -153,8 +155,7 @@ def coverage_interval(pred: np.ndarray, truth: np.ndarray, std: np.ndarray, sigm
         groups.
     """
     pred, truth, std = _checked_forecasts(pred, truth, std, min_ndim=3)
-    if not (np.isfinite(sigma) and sigma > 0):
-        raise ValueError(f"sigma: expected a positive finite band half-width, got {sigma!r}")
+    sigma = check_number("sigma", sigma, lo=0.0, lo_open=True)
     err, s = _band_errors(pred, truth, std, state)
     inside = err <= sigma * s                                            # (G, ..., nh, k)
     inside = np.moveaxis(inside, -2, 1).reshape(inside.shape[0], inside.shape[-2], -1)
@@ -179,9 +180,26 @@ def grouped_coverage_interval(hits: np.ndarray, counts: np.ndarray, *, confidenc
     -------
     ndarray, shape (n_horizons, 3)
         ``coverage, low, high``; ``low`` and ``high`` NaN with fewer than two groups.
+
+    Raises
+    ------
+    TypeError, ValueError
+        Text instead of numbers, ``hits`` not (G, n_horizons) with G >= 1 or ``counts`` not
+        (G,), a count not > 0, hits outside ``0 .. count``, or a bad ``confidence``,
+        ``n_resamples`` or ``seed``, naming the argument (an empty group list gave NaN).
     """
-    hits = np.asarray(hits, dtype=float)
-    counts = np.broadcast_to(np.asarray(counts, dtype=float)[:, None], hits.shape)
+    hits, counts = real_array("hits", hits), real_array("counts", counts)
+    if hits.ndim != 2 or hits.shape[0] == 0 or counts.shape != hits.shape[:1]:
+        raise ValueError(f"hits, counts: expected shapes (G, n_horizons) and (G,) with G >= 1 groups, got "
+                         f"{hits.shape} and {counts.shape}")
+    if not (np.all(np.isfinite(counts) & (counts > 0)) and np.all((hits >= 0) & (hits <= counts[:, None]))):
+        raise ValueError("hits, counts: expected counts > 0 and 0 <= hits <= count in every group")
+    confidence = check_number("confidence", confidence, lo=0.0, lo_open=True)
+    if confidence >= 1:
+        raise ValueError(f"confidence: must be < 1, got {confidence!r}")
+    n_resamples = check_whole_number("n_resamples", n_resamples, lo=1)
+    seed = check_whole_number("seed", seed)
+    counts = np.broadcast_to(counts[:, None], hits.shape)
     cov = hits.sum(axis=0) / counts.sum(axis=0)
     out = np.column_stack([cov, np.full_like(cov, np.nan), np.full_like(cov, np.nan)])
     if hits.shape[0] < 2:

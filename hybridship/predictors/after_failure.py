@@ -27,16 +27,24 @@ def shutdown_index(arrays) -> int:
     return int(off[0])
 
 
+def _gap_free_end(arrays, i0: int) -> int:
+    """First row after ``i0`` that is not in ``i0``'s gap-free segment (``len`` without a gap):
+    a measurement ``k`` rows after a start is ``k`` steps later only before it."""
+    seg = np.asarray(arrays.segment_id)
+    later = np.flatnonzero(seg[i0:] != seg[i0])
+    return i0 + int(later[0]) if later.size else len(seg)
+
+
 def has_drift(arrays, n_intervals: int, horizon_s: float) -> bool:
     """Whether a log has a DP failure (station keeping, then ``dp_active`` 0) followed by enough
     drift for :func:`drift_forecasts` (``n_intervals`` starts, each with ``horizon_s`` of
-    measurements after it). A log without station keeping before its first ``dp_active`` 0
-    (a manoeuvring log) has none."""
+    measurements after it in the failure's gap-free segment). A log without station keeping
+    before its first ``dp_active`` 0 (a manoeuvring log) has none."""
     off = np.flatnonzero(arrays.dp_active == 0)
     if off.size == 0 or off[0] == 0 or len(arrays.time_s) < 2:
         return False
     dt = float(np.median(np.diff(arrays.time_s)))
-    return len(arrays.time_s) - int(off[0]) - int(round(horizon_s / dt)) >= n_intervals
+    return _gap_free_end(arrays, int(off[0])) - int(off[0]) - int(round(horizon_s / dt)) >= n_intervals
 
 
 def drift_forecasts(predictor, arrays, *, n_intervals: int | None = 20, horizons_s=HORIZONS_S, first: int = 0,
@@ -46,7 +54,10 @@ def drift_forecasts(predictor, arrays, *, n_intervals: int | None = 20, horizons
     ``arrays`` is LogArrays, or a path or DataFrame in the log format (read through
     :func:`~hybridship.logs.ingest.ingest` for the predictor's vessel, as a forecast reads it).
     The starts are the samples ``first, first + every, ...`` after the shutdown's row,
-    ``n_intervals`` of them, or (None) as many as leave the longest horizon in the log.
+    ``n_intervals`` of them, or (None) as many as leave the longest horizon in the log. The
+    truth is taken by rows, so every start and its horizon must lie in the shutdown's gap-free
+    segment (a gap of missing rows would pair a forecast with a later measurement): starts
+    that would reach past a gap are refused.
 
     Returns
     -------
@@ -64,11 +75,13 @@ def drift_forecasts(predictor, arrays, *, n_intervals: int | None = 20, horizons
     dt = float(np.median(np.diff(arrays.time_s)))
     steps = np.array([int(round(h / dt)) for h in horizons_s])
     H = int(steps.max())
-    available = max(0, -(-(len(arrays.time_s) - H - i0 - first) // every))     # starts that leave H steps
+    end = _gap_free_end(arrays, i0)
+    available = max(0, -(-(end - H - i0 - first) // every))     # starts that leave H steps before a gap
     n = available if n_intervals is None else n_intervals
     if available < n or n == 0:
+        gap = "" if end == len(arrays.time_s) else f" before the gap at time_s {arrays.time_s[end - 1]:g} s"
         raise ValueError(f"log: only {available} start times after the shutdown leave {H * dt:g} s of "
-                         f"measurements; {max(n, 1)} are needed")
+                         f"measurements{gap}; {max(n, 1)} are needed")
     starts = i0 + first + every * np.arange(n)
     fc = predictor.forecast(arrays, arrays.time_s[starts], horizon_s=H * dt, **forecast_kw)
     truth = arrays.eta[starts[:, None] + steps[None, :]]        # (S, nh, 3)

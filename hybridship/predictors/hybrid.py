@@ -764,7 +764,7 @@ class HybridPredictor:
         total = sum(c.size for c in cand)
         if total == 0:
             return None, 0
-        pos_e, pos_s, hdg_e, hdg_s, lead = [], [], [], [], None
+        pos_e, pos_s, hdg_e, hdg_s, leads = [], [], [], [], []
         for a, rows in zip(logs, cand):
             if rows.size == 0:
                 continue
@@ -776,17 +776,17 @@ class HybridPredictor:
             H = fc.eta.shape[1] - 1
             truth = a.eta[rows[:, None] + np.arange(1, H + 1)[None, :]]          # (S, H, 3)
             e = np.abs(fc.eta[:, 1:] - truth)
-            pos_e += [e[..., 0], e[..., 1]]
-            pos_s += [fc.eta_std[:, 1:, 0], fc.eta_std[:, 1:, 1]]
+            pos_e.append(np.concatenate([e[..., 0], e[..., 1]]))               # north and east pooled
+            pos_s.append(np.concatenate([fc.eta_std[:, 1:, 0], fc.eta_std[:, 1:, 1]]))
             hdg_e.append(np.abs(wrap_pi(fc.eta[:, 1:, 2] - truth[..., 2])))
             hdg_s.append(fc.eta_std[:, 1:, 2])
-            lead = fc.lead_s[1:] if lead is None or fc.lead_s.size - 1 < lead.size else lead
-        Hm = lead.size
+            leads.append(fc.lead_s[1:])
+        lead, cols = _common_leads(leads)
         kw = cal.fit_kwargs
         n = sum(x.shape[0] for x in hdg_e)
         if n < 10:
             return None, n
-        cat = lambda xs: np.concatenate([x[:, :Hm] for x in xs])  # noqa: E731
+        cat = lambda xs: np.concatenate([x[:, c] for x, c in zip(xs, cols)])  # noqa: E731
         return ({"position": fit_spread_scale(cat(pos_e), cat(pos_s), lead, min_samples=10, **kw),
                  "heading": fit_spread_scale(cat(hdg_e), cat(hdg_s), lead, min_samples=10, **kw)}, n)
 
@@ -1484,13 +1484,23 @@ def _training_masks(logs, cuts, dp_only: bool) -> list:
     return masks
 
 
+def _common_leads(leads: list) -> tuple[np.ndarray, list]:
+    """The lead times [s] on which calibration errors of several logs are pooled, and per log
+    the columns of its own leads nearest to them: those of the log with the fewest (the
+    coarsest step). On logs of one step every log keeps its own columns; on logs of
+    different steps a column of the 10-Hz log is not pooled with the 1-Hz log's column of the
+    same index, ten times later."""
+    lead = min(leads, key=len)
+    return lead, [np.abs(np.asarray(x)[None, :] - lead[:, None]).argmin(axis=1) for x in leads]
+
+
 def after_stop_scales(errors: list, cal: CalibrationConfig) -> dict:
     """The spread calibration after a failure from :meth:`HybridPredictor.after_stop_errors`
     of some logs: a per-lead scale (:func:`~hybridship.residual.calibration.fit_spread_scale`)
     for the position (north and east pooled) and for the heading."""
-    e = np.concatenate([x[0] for x in errors])
-    sd = np.concatenate([x[1] for x in errors])
-    lead = errors[0][2]
+    lead, cols = _common_leads([x[2] for x in errors])
+    e = np.concatenate([x[0][:, c] for x, c in zip(errors, cols)])
+    sd = np.concatenate([x[1][:, c] for x, c in zip(errors, cols)])
     kw = cal.fit_kwargs
     pos = fit_spread_scale(np.concatenate([e[..., 0], e[..., 1]]), np.concatenate([sd[..., 0], sd[..., 1]]),
                            lead, **kw)

@@ -114,7 +114,11 @@ class ForecastResult:
         """Gaussian quantiles of ``eta`` from ``eta_std``: shape (len(q), S, H+1, 3) [m, m, rad].
 
         With a calibrated spread (the hybrid's default) these are the calibrated bands;
-        ``q`` are probabilities in (0, 1).
+        ``q`` are probabilities in (0, 1). The calibration fits one level (by default that
+        95.45 % of the absolute errors lie within 2 standard deviations: the quantiles 0.02275
+        and 0.97725); the bands at other levels follow from the Gaussian shape, not from the
+        held-back errors (with heavy-tailed errors the 1-sigma band covers more than 68 %),
+        and a one-sided quantile assumes errors symmetric about the forecast.
         """
         from scipy.stats import norm
 

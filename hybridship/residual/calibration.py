@@ -184,11 +184,28 @@ class SpreadCalibration:
         ``std`` has the lead time on its last axis, matching ``lead_s`` [s] (held constant
         beyond the calibrated leads); lead 0 (the start) and a spread that is not finite are
         returned unchanged.
+
+        Raises
+        ------
+        TypeError, ValueError
+            ``std`` or ``lead_s`` not real numbers (text), a negative spread, lead times that
+            are not finite and >= 0, or a last axis of ``std`` other than ``len(lead_s)``, naming
+            the argument.
         """
+        std = real_array("SpreadCalibration.apply: std", std)
+        lead_s = real_array("SpreadCalibration.apply: lead_s", lead_s)
+        if lead_s.ndim != 1 or not np.all(np.isfinite(lead_s) & (lead_s >= 0)):
+            raise ValueError(f"SpreadCalibration.apply: lead_s: expected a 1-D array of finite lead times >= 0 [s], "
+                             f"got shape {lead_s.shape}")
+        if std.ndim == 0 or std.shape[-1] != lead_s.size:
+            raise ValueError(f"SpreadCalibration.apply: std: expected the lead time on the last axis, of length "
+                             f"len(lead_s) = {lead_s.size}; got shape {std.shape}")
+        if np.any(std < 0):         # a NaN is passed on unchanged; a negative spread was floored silently
+            raise ValueError("SpreadCalibration.apply: std: expected standard deviations >= 0")
         k = np.interp(lead_s, self.lead_s, self.scale)
         f = np.interp(lead_s, self.lead_s, self.floor)
         out = k * np.maximum(std, f) ** self.exponent
-        return np.where((np.asarray(lead_s) > 0) & np.isfinite(std), out, std)
+        return np.where((lead_s > 0) & np.isfinite(std), out, std)
 
 
 #: Exponents tried by ``fit_spread_scale(..., exponent="likelihood")``.
@@ -297,7 +314,27 @@ def fit_spread_scale(abs_err, std, lead_s, *, sigma: float = 2.0, coverage: floa
 
 
 def coverage_of(abs_err, std, sigmas=(1.0, 2.0)) -> np.ndarray:
-    """Share of samples with ``abs_err <= k * std`` per lead time, (H, len(sigmas)); inputs (N, H)."""
-    e = np.asarray(abs_err, dtype=float)
-    s = np.asarray(std, dtype=float)
-    return np.stack([(e <= k * s).mean(axis=0) for k in sigmas], axis=1)
+    """Share of samples with ``abs_err <= k * std`` per lead time, (H, len(sigmas)); inputs (N, H).
+
+    Raises
+    ------
+    TypeError, ValueError
+        Text instead of numbers, ``abs_err`` and ``std`` not of one shape (N, H) with N >= 1,
+        a NaN or infinite value (it would count as a miss without a word: leave such samples
+        out first), a negative error or spread, or ``sigmas`` not positive finite band
+        half-widths, naming the argument.
+    """
+    e = real_array("coverage_of: abs_err", abs_err)
+    s = real_array("coverage_of: std", std)
+    if e.ndim != 2 or e.shape != s.shape or e.shape[0] == 0:
+        raise ValueError(f"coverage_of: abs_err and std: expected one shape (N, H) with N >= 1; got {e.shape} "
+                         f"and {s.shape}")
+    for name, a in (("abs_err", e), ("std", s)):
+        if not np.all(np.isfinite(a)):
+            raise ValueError(f"coverage_of: {name}: NaN or inf; leave such samples out before counting")
+        if np.any(a < 0):
+            raise ValueError(f"coverage_of: {name}: expected values >= 0")
+    k = real_array("coverage_of: sigmas", sigmas)
+    if k.ndim != 1 or k.size == 0 or not np.all(np.isfinite(k) & (k > 0)):
+        raise ValueError(f"coverage_of: sigmas: expected a list of positive finite band half-widths, got {sigmas!r}")
+    return np.stack([(e <= x * s).mean(axis=0) for x in k], axis=1)
