@@ -176,7 +176,7 @@ def speed_dir_to_vector(speed_dir):
 
 
 def vector_to_speed_dir(vec):
-    """A flow vector (..., 2) -> ``[speed, dir_rad]`` (..., 2), direction in (-pi, pi]
-    (the inverse of :func:`speed_dir_to_vector`)."""
+    """A flow vector (..., 2) -> ``[speed, dir_rad]`` (..., 2), direction in [-pi, pi] (``arctan2``:
+    -pi for a vector pointing south with east component -0.0), the inverse of :func:`speed_dir_to_vector`."""
     v = np.asarray(vec, dtype=float)
     return np.stack([np.hypot(v[..., 0], v[..., 1]), np.arctan2(v[..., 1], v[..., 0])], axis=-1)

@@ -51,6 +51,15 @@ class Particulars(_Strict):
     C_B: Float = Field(gt=0, le=1, description="block coefficient [-]")
     rho_water_kg_m3: Float = Field(1025.0, gt=900, lt=1100, description="water density [kg/m^3]")
 
+    @model_validator(mode="after")
+    def _overall_not_shorter(self):
+        # L_oa sets the wind moment (and the hull's extent for the actuator positions): the two
+        # lengths swapped passed silently
+        if self.L_oa_m < self.L_pp_m:
+            raise ValueError(f"L_oa_m: {self.L_oa_m:g} m is shorter than L_pp_m = {self.L_pp_m:g} m; the length "
+                             f"overall includes the overhangs beyond the perpendiculars (L_oa_m >= L_pp_m)")
+        return self
+
 
 class RigidBody(_Strict):
     """Mass and yaw inertia about the body origin (the CG when ``x_g_m = 0``)."""

@@ -470,6 +470,31 @@ def test_wind_acts_on_the_velocity_over_ground_not_through_the_water(gunnerus):
     np.testing.assert_allclose(parts[0, TAU_PARTS.index("wind")], 0.0, atol=1e-9)
 
 
+@pytest.mark.parametrize("name", ["gunnerus", "esso_osaka_model"])
+def test_compiled_wind_load_is_eq_3_at_any_heading_velocity_and_wind(name):
+    """The compiled kernel's wind load against eq. 3 evaluated with the numpy reference
+    (``wind.relative_wind`` and the vessel's coefficient curve, not the kernel's table) at random
+    headings, velocities over ground (sway and yaw rate too) and winds: a table vessel (exact at
+    the 0.5-deg table, which holds the file's 10-deg nodes) and a Blendermann one (the kernel
+    interpolates the smooth curve linearly between 0.5-deg samples: observed 5e-5 of the largest load)."""
+    from hybridship.physics.model import wind_coefficient_curve
+    from hybridship.physics.wind import relative_wind
+
+    m = DynamicModel(name)
+    rng = np.random.default_rng(5)
+    B = 300
+    eta = np.column_stack([np.zeros((B, 2)), rng.uniform(-7, 7, B)])
+    nu = rng.normal(scale=[3.0, 1.0, 0.05], size=(B, 3))
+    wind = np.column_stack([rng.uniform(0, 20, B), rng.uniform(-7, 7, B)])
+    _, parts, _ = m.acceleration(eta, nu, wind=wind, return_parts=True)
+    V, gamma = relative_wind(wind[:, 0], wind[:, 1], eta[:, 2], nu[:, 0], nu[:, 1])
+    w = m.vessel.wind
+    area = np.array([w.A_F_m2, w.A_L_m2, w.A_L_m2 * (w.L_oa_m or m.vessel.particulars.L_oa_m)])
+    expected = 0.5 * w.rho_air_kg_m3 * V[:, None] ** 2 * np.column_stack(wind_coefficient_curve(m.vessel)(gamma)) * area
+    tol = (1e-12 if w.method == "table" else 2e-4) * np.abs(expected).max(axis=0)
+    np.testing.assert_array_less(np.abs(parts[:, TAU_PARTS.index("wind")] - expected), np.broadcast_to(tol, (B, 3)))
+
+
 # ----------------------------------------------------------------------------- integrator
 
 
@@ -513,6 +538,42 @@ def test_bad_inputs_are_refused_with_the_field_named(gunnerus):
         gunnerus.acceleration([0, 0, 0], [0, 0, 0], wind=[np.nan, 0])
     with pytest.raises(ValueError, match="nu0"):
         gunnerus.rollout([0, 0, 0], [0, np.inf, 0], 10)
+
+
+def test_negative_wind_or_current_speeds_are_refused(gunnerus):
+    """A flow's direction says which way it goes; a negative speed silently turned it round (a
+    -10 m/s north wind pushed the ship ahead, as a south wind)."""
+    for kw, match in ((dict(wind=[-10.0, 0.0]), r"^wind: speed -10 m/s is negative; expected \[speed_m_s >= 0, "
+                                                 r"dir_from_rad\]"),
+                      (dict(current=[[0.5, 0.0], [-0.5, 1.0]]), r"^current: speed -0.5 m/s is negative; expected "
+                                                                r"\[speed_m_s >= 0, dir_to_rad\]")):
+        for call in (gunnerus.acceleration, gunnerus.step):
+            with pytest.raises(ValueError, match=match):
+                call(np.zeros((2, 3)), np.zeros((2, 3)), **kw)
+        with pytest.raises(ValueError, match=match):
+            gunnerus.rollout(np.zeros((2, 3)), np.zeros((2, 3)), 3, **kw)
+    gunnerus.acceleration([0, 0, 0], [0, 0, 0], wind=[0.0, 0.0], current=[0.0, 0.0])      # calm: fine
+
+
+def test_propeller_functions_refuse_what_their_kernels_cannot_compute():
+    """The compiled propeller kernels assume finite numbers and positive sizes: a NaN shaft speed
+    or inflow came back as 0 N, a zero diameter as ZeroDivisionError, a negative water density or
+    rpm bound as a silently wrong shaft speed."""
+    p = load_wageningen()
+    for args, match in (((np.nan, 1.0, 1.9), "^n_rps: contains NaN"), ((1.0, [0.0, np.nan], 1.9), "^va_m_s: contains"),
+                        ((1.0, 1.0, 0.0), "^diameter_m: must be a finite number > 0"),
+                        ((1.0, 1.0, np.nan), "^diameter_m: must be")):
+        with pytest.raises(ValueError, match=match):
+            thrust_torque(*args, p)
+    with pytest.raises(ValueError, match="^rho_kg_m3: must be a finite number > 0, got -1025"):
+        thrust_torque(1.0, 1.0, 1.9, p, rho_kg_m3=-1025.0)
+    for kw, match in ((dict(diameter_m=0.0), "^diameter_m: "), (dict(diameter_m=-1.9), "^diameter_m: "),
+                      (dict(rho_kg_m3=np.nan), "^rho_kg_m3: "), (dict(max_rpm=-100.0), "^max_rpm: must be")):
+        args = dict(diameter_m=1.9, prop=p) | kw
+        with pytest.raises(ValueError, match=match):
+            rpm_for_thrust(1e4, 0.0, **args)
+    with pytest.raises(ValueError, match=r"^alpha_rad, x_m, y_m: expected one entry per thruster"):
+        configuration_matrix([0.0, 1.0], [1.0, 2.0, 3.0], [0.0, 0.0, 0.0])
 
 
 def test_step_broadcasts_one_state_and_refuses_mismatched_batches_and_bad_steps(gunnerus):
@@ -571,6 +632,9 @@ def test_gunnerus_coefficients_close_to_published_original_hull():
 
 @pytest.mark.parametrize("edit, field", [
     (lambda d: d["particulars"].pop("B_m"), "particulars.B_m"),
+    # L_oa and L_pp swapped: the wind moment's default length would be the shorter one
+    (lambda d: d["particulars"].update(L_oa_m=33.9, L_pp_m=36.25), r"particulars: L_oa_m: 33.9 m is shorter than "
+                                                                  r"L_pp_m = 36.25 m"),
     (lambda d: d["thrusters"][1].__setitem__("diameter_m", -1.9), r"thrusters\[1\].diameter_m"),
     (lambda d: d.__setitem__("added_mass", {"method": "explicit", "X_udot_kg": 1e7, "Y_vdot_kg": -1e5,
                                             "Y_rdot_kg_m": 0, "N_vdot_kg_m": 0, "N_rdot_kg_m2": -1e6}),

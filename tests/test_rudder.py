@@ -116,6 +116,20 @@ def test_reproduces_the_mmg_standard_formulae_ahead(esso):
     np.testing.assert_allclose(F, [XR, YR, NR], rtol=2e-3)
 
 
+def test_rudder_forces_refuses_bad_shapes_and_non_finite_inputs_naming_them(esso):
+    """numpy's broadcasting and indexing messages, and a silent NaN load, became named errors."""
+    for args, match in ((([0.3, 0, 0], [0.1, 0.2]), r"^delta_rad: expected shape \(1,\) or \(1, 1\), got \(2,\)"),
+                        (([0.3, 0], [0.1]), r"^nu_r: expected shape \(3,\) or \(B, 3\), got \(2,\)"),
+                        (([np.nan, 0, 0], [0.1]), "^nu_r: contains NaN"),
+                        (([0.3, 0, 0], [0.1], [np.inf]), "^thrust_open_N: contains NaN"),
+                        (([0.3, 0, 0], "ten"), "^delta_rad: expected numbers")):
+        with pytest.raises(ValueError, match=match):
+            rudder_forces(esso, *args)
+    # one angle for every rudder and a batch of states: as before
+    np.testing.assert_array_equal(rudder_forces(esso, [[0.3, 0, 0], [0.2, 0, 0]], 0.2)[:, 0],
+                                  rudder_forces(esso, [[0.3, 0, 0], [0.2, 0, 0]], [[0.2], [0.2]])[:, 0])
+
+
 def test_inflow_is_continuous_through_zero_and_astern_reverses_the_rudder(esso):
     args = (0.08, 1000.0, 1.09, 0.5, 0.66)
     for T in (0.0, 2.0):

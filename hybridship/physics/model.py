@@ -76,7 +76,7 @@ class ModelArrays(NamedTuple):
         the same four per unit u_r (see ``hull.clarke1983_lift``); the vessel's ``lift_speed``
         fills one half and leaves the other zero.
     strip_x, strip_w : ndarray, shape (n,)
-        Cross-flow drag strip positions [m] and weights [kg/m^2].
+        Cross-flow drag strip positions [m] and weights [kg/m] (``0.5 rho T C_d dx``).
     thr : ndarray, shape (K, 8)
         Thruster parameters (columns ``THR_*`` of :mod:`.thrusters`).
     thr_coef : ndarray, shape (K, 4, N)
@@ -286,6 +286,16 @@ def _as_input(name, value, B, S, width, default=0.0):
     return np.ascontiguousarray(np.broadcast_to(a, (B,) + a.shape[1:]))
 
 
+def _check_flow_speeds(**flows) -> None:
+    """Refuse a negative wind or current speed (ValueError naming the input): the direction
+    carries the way the flow goes, and a negative speed silently turned the flow round."""
+    convention = {"wind": "dir_from_rad", "current": "dir_to_rad"}
+    for name, flow in flows.items():
+        if flow.size and flow[..., 0].min() < 0.0:
+            raise ValueError(f"{name}: speed {flow[..., 0].min():g} m/s is negative; expected "
+                             f"[speed_m_s >= 0, {convention[name]}]")
+
+
 class DynamicModel:
     """Physics-only 3-DOF model of one vessel (eq. 1-3), batched over vessels.
 
@@ -310,8 +320,8 @@ class DynamicModel:
       the ship to starboard); width K + R, or K (rudders then at 0 or from ``rudder_rad``);
     * ``rudder_rad``: rudder angles [rad], width R; when given they replace the rudder
       columns of ``azimuth_rad``;
-    * ``wind``: ``[speed_m_s, dir_from_rad]`` true wind (direction it comes FROM);
-    * ``current``: ``[speed_m_s, dir_to_rad]`` (direction it flows TO), NED;
+    * ``wind``: ``[speed_m_s, dir_from_rad]`` true wind (direction it comes FROM), speed >= 0;
+    * ``current``: ``[speed_m_s, dir_to_rad]`` (direction it flows TO), NED, speed >= 0;
     * ``tau_ext``: extra body-frame load ``[X_N, Y_N, N_Nm]``;
     * ``accel_ext``: extra acceleration ``[m/s^2, m/s^2, rad/s^2]`` added to nu_dot.
     """
@@ -346,7 +356,7 @@ class DynamicModel:
 
     @property
     def mass_matrix(self) -> np.ndarray:
-        """M = M_RB + M_A (3x3) [kg, kg, kg m^2]."""
+        """M = M_RB + M_A (3x3) [kg, kg m, kg m^2] by row and column DOF (surge, sway, yaw)."""
         return np.linalg.inv(self.arrays.m_inv)
 
     def _state(self, name, x):
@@ -381,6 +391,7 @@ class DynamicModel:
                _as_input("wind", wind, B, S, 2), _as_input("current", current, B, S, 2),
                _as_input("tau_ext", tau_ext, B, S, 3), _as_input("accel_ext", accel_ext, B, S, 3))
         self._check_commands(ins[0], ins[1])
+        _check_flow_speeds(wind=ins[2], current=ins[3])
         return ins
 
     def _check_commands(self, rpm, angle_rad):

@@ -260,13 +260,30 @@ def thrust_torque(n_rps, va_m_s, diameter_m: float, prop: PropellerCoefficients,
     rho_kg_m3 : float
         Water density [kg/m^3].
     """
-    if not diameter_m > 0:
-        raise ValueError(f"diameter_m: must be > 0, got {diameter_m}")
+    _check_propeller_scalars(diameter_m, rho_kg_m3)
     n, va = np.broadcast_arrays(np.asarray(n_rps, float), np.asarray(va_m_s, float))
+    # the compiled kernel assumes finite numbers: a NaN shaft speed or inflow came back as 0 N
+    for name, x in (("n_rps", n), ("va_m_s", va)):
+        if not np.all(np.isfinite(x)):
+            raise ValueError(f"{name}: contains NaN or inf")
     out = np.empty((n.size, 2))
     _thrust_torque_flat(np.ascontiguousarray(n.ravel()), np.ascontiguousarray(va.ravel()),
                         float(diameter_m), float(rho_kg_m3), prop.coef, out)
     return out[:, 0].reshape(n.shape), out[:, 1].reshape(n.shape)
+
+
+def _check_propeller_scalars(diameter_m, rho_kg_m3, max_rpm=None) -> None:
+    """Refuse a diameter, water density or rpm bound that is not a finite number > 0 (the
+    kernels divided by them silently, or by zero)."""
+    for name, value in (("diameter_m", diameter_m), ("rho_kg_m3", rho_kg_m3), ("max_rpm", max_rpm)):
+        if name == "max_rpm" and value is None:
+            continue
+        try:
+            ok = 0.0 < float(value) < np.inf
+        except (TypeError, ValueError):
+            ok = False
+        if not ok:
+            raise ValueError(f"{name}: must be a finite number > 0, got {value!r}")
 
 
 def kt_kq(J, prop: PropellerCoefficients):
@@ -302,6 +319,7 @@ def rpm_for_thrust(thrust_N, va_m_s, diameter_m: float, prop: PropellerCoefficie
     max_rpm : float, optional
         Upper bound of |rpm|; default 3000 / D (a generous tip-speed bound).
     """
+    _check_propeller_scalars(diameter_m, rho_kg_m3, max_rpm)
     T, va = np.broadcast_arrays(np.asarray(thrust_N, float), np.asarray(va_m_s, float))
     if not np.all(np.isfinite(T)) or not np.all(np.isfinite(va)):
         raise ValueError("rpm_for_thrust: thrust_N and va_m_s must be finite")

@@ -163,6 +163,24 @@ def _rudder_batch(nu_r, delta, thrust_open, u_p, dia, rho, rud, out):
             out[b, j, 2] = n
 
 
+def _finite_rows(name, value, B, width):
+    """``value`` as finite floats ``(B, width)`` from ``(width,)`` or ``(B, width)`` (B = None: any
+    batch), or a ValueError naming the argument (not numpy's broadcasting or conversion message)."""
+    try:
+        a = np.asarray(value, dtype=float)
+    except (TypeError, ValueError):
+        raise ValueError(f"{name}: expected numbers, got {value!r}") from None
+    batch = "B" if B is None else str(B)
+    if a.ndim == 0 and B is not None:       # one number for every rudder
+        a = np.full(width, float(a))
+    if a.ndim not in (1, 2) or a.shape[-1] != width or (B is not None and a.ndim == 2 and a.shape[0] not in (1, B)):
+        raise ValueError(f"{name}: expected shape ({width},) or ({batch}, {width}), got {a.shape}")
+    if not np.all(np.isfinite(a)):
+        raise ValueError(f"{name}: contains NaN or inf")
+    a = np.atleast_2d(a)
+    return a if B is None else np.broadcast_to(a, (B, width))
+
+
 def rudder_forces(model, nu_r, delta_rad, thrust_open_N=None):
     """Load of each rudder of a model for given states, angles and propeller thrusts (numpy API).
 
@@ -186,10 +204,10 @@ def rudder_forces(model, nu_r, delta_rad, thrust_open_N=None):
     P = model.arrays
     rud, thr = P.rud, P.thr
     R = rud.shape[0]
-    nu_r = np.atleast_2d(np.asarray(nu_r, float))
+    nu_r = _finite_rows("nu_r", nu_r, None, 3)
     B = nu_r.shape[0]
-    delta = np.ascontiguousarray(np.broadcast_to(np.asarray(delta_rad, float), (B, R)))
-    t_open = np.zeros((B, R)) if thrust_open_N is None else np.broadcast_to(np.asarray(thrust_open_N, float), (B, R))
+    delta = np.ascontiguousarray(_finite_rows("delta_rad", delta_rad, B, R))
+    t_open = np.zeros((B, R)) if thrust_open_N is None else _finite_rows("thrust_open_N", thrust_open_N, B, R)
     p = rud[:, RUD_PROP].astype(int)
     has = p >= 0
     u_p = nu_r[:, :1] - rud[None, :, RUD_Y] * nu_r[:, 2:3]

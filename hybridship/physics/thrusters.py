@@ -49,6 +49,11 @@ def configuration_matrix(alpha_rad, x_m, y_m):
     a = np.asarray(alpha_rad, dtype=float)
     x = np.asarray(x_m, dtype=float)
     y = np.asarray(y_m, dtype=float)
+    try:
+        np.broadcast_shapes(a.shape, x.shape, y.shape)
+    except ValueError:
+        raise ValueError(f"alpha_rad, x_m, y_m: expected one entry per thruster, got shapes {a.shape}, {x.shape} "
+                         f"and {y.shape}") from None
     c, s = np.cos(a), np.sin(a)
     return np.stack([c, s, x * s - y * c], axis=-2)
 
