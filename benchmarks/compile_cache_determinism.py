@@ -58,22 +58,30 @@ def _run(copy: Path, tag: str) -> list[list[str]]:
     return [line.split() for line in out.stdout.splitlines()]
 
 
-def main() -> int:
+def compiled_and_loaded() -> tuple[list[list[str]], list[list[str]], dict[str, float]]:
+    """Digest rows (name, digests...) of the child run that compiles the kernels and of the one
+    that loads them, and per case the largest difference between the two runs' arrays."""
     with tempfile.TemporaryDirectory() as tmp:
         copy = Path(tmp)
         shutil.copytree(ROOT / "hybridship", copy / "hybridship",
                         ignore=shutil.ignore_patterns("*.nbi", "*.nbc", "compiled-kernels.sha256"))
         compiled, loaded = _run(copy, "compiled"), _run(copy, "loaded")
-        for a, b in zip(compiled, loaded):
-            same = ["same" if x == y else "differ" for x, y in zip(a[1:], b[1:])]
-            gap = np.abs(np.load(copy / f"compiled_{a[0]}.npy") - np.load(copy / f"loaded_{a[0]}.npy")).max()
-            if a[0] == "simulator":
-                print(f"simulator: log {same[0]} (largest difference {gap:.1e}; compiled {a[1]}, loaded {b[1]})")
-                continue
-            print(f"{a[0]}: rollout {same[0]} (largest difference {gap:.1e} m or rad), acceleration {same[1]}, "
-                  f"step {same[2]} (compiled {' '.join(a[1:])}; loaded {' '.join(b[1:])})")
-    return 0
+        gaps = {a[0]: float(np.abs(np.load(copy / f"compiled_{a[0]}.npy") - np.load(copy / f"loaded_{a[0]}.npy")).max())
+                for a in compiled}
+    return compiled, loaded, gaps
 
+
+def main() -> int:
+    compiled, loaded, gaps = compiled_and_loaded()
+    for a, b in zip(compiled, loaded):
+        same = ["same" if x == y else "differ" for x, y in zip(a[1:], b[1:])]
+        gap = gaps[a[0]]
+        if a[0] == "simulator":
+            print(f"simulator: log {same[0]} (largest difference {gap:.1e}; compiled {a[1]}, loaded {b[1]})")
+            continue
+        print(f"{a[0]}: rollout {same[0]} (largest difference {gap:.1e} m or rad), acceleration {same[1]}, "
+              f"step {same[2]} (compiled {' '.join(a[1:])}; loaded {' '.join(b[1:])})")
+    return 0
 
 if __name__ == "__main__":
     sys.exit(main())

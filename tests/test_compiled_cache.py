@@ -59,3 +59,15 @@ def test_the_package_s_kernel_modules_are_all_covered():
     names = {p.relative_to(p.parents[1]).as_posix() for p in kernel_source_files()}
     assert {"physics/hull.py", "physics/rhs.py", "physics/integrate.py", "residual/environment_kernel.py",
             "driftoff/engine.py"} <= names
+
+
+def test_compiling_the_kernels_or_loading_them_from_the_cache_gives_the_same_bits():
+    """A rollout of the Esso Osaka model (rudder kernels with fused multiply-add) differed in
+    its last bits between a run that compiled the kernels and one that loaded them; the same
+    command must give the same table either way (``benchmarks/compile_cache_determinism.py``)."""
+    from conftest import load_benchmark
+
+    compiled, loaded, gaps = load_benchmark("compile_cache_determinism").compiled_and_loaded()
+    assert [row[0] for row in compiled] == ["gunnerus", "esso_osaka_model", "simulator"]
+    assert compiled == loaded, gaps
+    assert max(gaps.values()) == 0.0
