@@ -88,11 +88,16 @@ def test_exponent_one_is_the_plain_conformal_scale():
     lead = np.array([1.0, 2.0, 4.0])
     cal = fit_spread_scale(e, s, lead)
     n = 500
-    level = min(1.0, np.ceil((n + 1) * 0.9544997361036416) / n)
+    k = int(np.ceil((n + 1) * 0.9544997361036416))         # 479: the 479-th smallest of 500
     for h in range(3):
         f = max(float(np.quantile(s[:, h], 0.1)), 1e-12)
         assert cal.floor[h] == f
-        assert cal.scale[h] == float(np.quantile(e[:, h] / np.maximum(s[:, h], f), level, method="higher")) / 2.0
+        assert cal.scale[h] == float(np.sort(e[:, h] / np.maximum(s[:, h], f))[k - 1]) / 2.0
+    # on 1..n the k-th smallest, k = ceil((n + 1) 0.9): not the (k + 1)-th
+    for n in (20, 50, 1000):
+        got = fit_spread_scale(np.arange(1.0, n + 1)[:, None], np.ones((n, 1)), [1.0], sigma=1.0, coverage=0.9,
+                               floor_quantile=0.0)
+        assert got.scale[0] == min(n, np.ceil((n + 1) * 0.9))
     x = np.array([0.0, 1.0, 1.5, 4.0, 9.0])
     k, f = np.interp(x, lead, cal.scale), np.interp(x, lead, cal.floor)
     np.testing.assert_array_equal(cal.apply(np.ones((2, 5)), x)[:, 1:], (k * np.maximum(1.0, f))[None, 1:].repeat(2, 0))

@@ -252,8 +252,10 @@ def fit_spread_scale(abs_err, std, lead_s, *, sigma: float = 2.0, coverage: floa
     Returns
     -------
     SpreadCalibration
-        ``scale[h]`` is the split-conformal quantile (finite-sample level
-        ``ceil((n + 1) coverage) / n``) of ``abs_err / max(std, floor) ** b`` divided by ``sigma``.
+        ``scale[h]`` is the split-conformal quantile (the ``k``-th smallest of the ``n``
+        finite samples, ``k = min(n, ceil((n + 1) coverage))``) of ``abs_err / max(std, floor) ** b``
+        divided by ``sigma``. With fewer than ``coverage / (1 - coverage)`` samples (21 at
+        95.45 %) ``k`` is ``n``, the largest, which holds only ``n / (n + 1)``.
 
     Raises
     ------
@@ -296,14 +298,16 @@ def fit_spread_scale(abs_err, std, lead_s, *, sigma: float = 2.0, coverage: floa
         if n < min_samples:
             raise ValueError(f"fit_spread_scale: {n} finite samples at lead {lead[h]:g} s; need {min_samples}")
         floor[h] = max(float(np.quantile(s[ok, h], floor_quantile)), tiny)
-        samples.append((e[ok, h], np.maximum(s[ok, h], floor[h]), min(1.0, np.ceil((n + 1) * coverage) / n)))
+        # the k-th smallest of n, k = ceil((n + 1) coverage): the split-conformal quantile
+        # (np.quantile(x, k / n, method="higher") is the (k + 1)-th: one order statistic too high)
+        samples.append((e[ok, h], np.maximum(s[ok, h], floor[h]), min(n, int(np.ceil((n + 1) * coverage)))))
     best = None
     for b in grid:
         scale = np.empty(H)
         nll = 0.0
-        for h, (eh, sh, level) in enumerate(samples):
+        for h, (eh, sh, k) in enumerate(samples):
             base = sh ** b
-            scale[h] = float(np.quantile(eh / base, level, method="higher")) / sigma
+            scale[h] = float(np.partition(eh / base, k - 1)[k - 1]) / sigma
             # Gaussian negative log-likelihood of the held-back errors under this spread
             sd = max(scale[h], tiny) * base
             nll += float(np.mean(np.log(sd) + 0.5 * (eh / sd) ** 2))
