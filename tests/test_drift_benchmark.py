@@ -351,3 +351,25 @@ def test_training_logs_given_again_as_data_are_scored_leave_one_out():
     assert not _same_samples(arrays[:2], arrays[2:], ["c"])
     with pytest.raises(ValueError, match=r"test: 1 of the test logs hold the samples of training logs \(b\)"):
         _same_samples(arrays[:2], arrays[1:], ["b", "c"])
+
+
+def test_the_unguarded_row_keeps_its_raw_spread_after_a_failure():
+    """The after-stop scale is fitted on forecasts with the nets off after a failure: the row
+    with the nets on after it (the paper's scheme) is not rescaled by it."""
+    from hybridship.evaluation.drift import _benchmark_models
+    from hybridship.predictors import HybridPredictor, as_log_arrays
+    from hybridship.predictors.after_failure import shutdown_index
+
+    model = DynamicModel("gunnerus")
+    logs = [as_log_arrays(physics_log(model, duration_s=900, t_shutdown_s=700, seed=s, current=(0.2, 1.0 + s),
+                                      tau_ext_N=(2000.0, 1000.0, 0.0)), model.vessel) for s in range(4)]
+    hp = HybridPredictor(model.vessel, ensemble_config=TINY, drift_hull=False).fit(logs)
+    assert "after_stop" in hp.calibration
+    pred, kw = _benchmark_models(model.vessel, hp, None)["hybrid_nets_unguarded"]
+    starts = logs[0].time_s[shutdown_index(logs[0]) + np.arange(3)]
+    row = pred.forecast(logs[0], starts, 30.0, **kw)
+    calibrated = hp.forecast(logs[0], starts, 30.0, guard=False, nets_after_stop=True)
+    raw = hp.forecast(logs[0], starts, 30.0, guard=False, nets_after_stop=True, calibrated=False)
+    np.testing.assert_array_equal(row.eta, calibrated.eta)
+    np.testing.assert_array_equal(row.eta_std, raw.eta_std)
+    assert not np.allclose(row.eta_std[:, 1:], calibrated.eta_std[:, 1:])
