@@ -207,6 +207,11 @@ def test_allocator_validation_names_the_field(model):
         ThrustAllocator(model.vessel, dt_s=1.0, weights=[1.0, 2.0])
     with pytest.raises(ValueError, match="rpm_rate_limit_rpm_s"):
         ThrustAllocator(model.vessel, dt_s=1.0, rpm_rate_limit_rpm_s=-1.0)
+    for bad in ("1", None, True):
+        with pytest.raises(ValueError, match="dt_s"):
+            ThrustAllocator(model.vessel, dt_s=bad)
+        with pytest.raises(ValueError, match="dt_s"):
+            DPController(model, dt_s=bad)
     alloc = ThrustAllocator(model.vessel, dt_s=1.0)
     with pytest.raises(ValueError, match="tau_desired_N"):
         alloc.allocate([1.0, 2.0], np.zeros(3))

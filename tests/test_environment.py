@@ -434,6 +434,11 @@ def test_current_correlation_time_and_velocity_components():
     lag = 60
     rho = np.corrcoef(x[:-lag], x[lag:])[0, 1]
     assert rho == pytest.approx(math.exp(-1.0), abs=0.05)
+    # and the current itself: its speed and direction wander with tau_s
+    speed, direction = current_series(np.arange(0.0, 200_000.0, 10.0), 1.0, 0.0, np.random.default_rng(1),
+                                      speed_var=0.1, dir_var_rad=0.1, tau_s=600.0)
+    for series in (speed, np.angle(np.exp(1j * direction))):
+        assert np.corrcoef(series[:-lag], series[lag:])[0, 1] == pytest.approx(math.exp(-1.0), abs=0.05)
     np.testing.assert_allclose(current_velocity_ned(2.0, np.pi / 2), [0.0, 2.0], atol=1e-12)  # flowing east
 
 
@@ -535,3 +540,23 @@ def test_sea_state_helpers_produce_series():
     assert s.wind(t, 1)[0].shape == t.shape
     assert s.current(t, 1)[0].shape == t.shape
     assert GUNNERUS_HULL.L_m == 33.9
+
+
+@pytest.mark.parametrize("call, error, match", [
+    (lambda: make_wave_components(1.0, 6.0, 0.0, 1, omega_range_factor=(0.5,)), ValueError,
+     r"omega_range_factor must be a \(lo, hi\) pair"),
+    (lambda: make_wave_components(1.0, 6.0, 0.0, 1, omega_range_factor=None), TypeError, "omega_range_factor"),
+    (lambda: gust_wind(np.arange(10.0), 5.0, 0.0, 1, n_harmonics=True), ValueError, "n_harmonics"),
+    (lambda: SeaState.random(1, beaufort="25"), ValueError, "beaufort must be a"),
+    (lambda: SeaState.random(1, hs_fetch_factor=(0.5,)), ValueError, "hs_fetch_factor"),
+    (lambda: SeaState.random(1, tp_coefficient=(4.0, float("inf"))), ValueError, r"tp_coefficient\[1\]"),
+    (lambda: SeaState.random(1, wave_spread_rad=float("nan")), ValueError, "wave_spread_rad"),
+    (lambda: beaufort_wind_speed(float("nan")), ValueError, "beaufort"),
+    (lambda: beaufort_wave_height([1.0, float("nan")]), ValueError, "beaufort"),
+], ids=["band_short", "band_none", "harmonics_bool", "beaufort_text", "fetch_short", "tp_inf", "spread_nan",
+        "wind_nan", "wave_nan"])
+def test_bad_arguments_are_refused_naming_them(call, error, match):
+    """A pair given as one number or a text, a bool for a count, a NaN Beaufort number: refused
+    with the argument's name, not numpy's unpacking message or a NaN result."""
+    with pytest.raises(error, match=match):
+        call()

@@ -298,6 +298,24 @@ def test_drift_statistics_of_a_ship_drifting_east_at_a_known_speed():
     assert st["dp_pos_max_m"] == 0.0 and st["dp_pos_std_m"] == 0.0
 
 
+def test_drift_statistics_refuses_what_it_cannot_summarise():
+    """A log without its time or track, or a settling time that is not a number of seconds, is
+    refused naming it (not a KeyError, nor NaN statistics from a NaN settling time)."""
+    t = np.arange(0.0, 200.0)
+    log = pd.DataFrame({"time_s": t, "north_m": 0.0, "east_m": 0.0, "heading_deg": 10.0,
+                        "dp_active": (t < 100.0).astype(int)})
+    assert drift_statistics(log, dp_settle_s=20)["dp_pos_std_m"] == 0.0
+    with pytest.raises(ValueError, match="missing column.*time_s"):
+        drift_statistics(log.drop(columns="time_s"))
+    with pytest.raises(ValueError, match="missing column.*heading_deg"):
+        drift_statistics(log.drop(columns="heading_deg"))
+    for bad in (float("nan"), -1.0, "600"):
+        with pytest.raises(ValueError, match="dp_settle_s"):
+            drift_statistics(log, dp_settle_s=bad)
+    with pytest.raises(TypeError, match="log: expected a pandas DataFrame"):
+        drift_statistics(log.to_dict())
+
+
 def test_drift_statistics_reproduce_truthsim_summary(shared_data):
     truthsim = shared_data("truthsim-dev")
     summary = pd.read_csv(shared_data("truthsim-dev", "scenarios.csv")).iloc[0]
@@ -468,7 +486,7 @@ def test_embedded_scenarios_are_valid_and_copied():
     a[0].log.loc[0, "north_m"] = 1e3
     b = embedded_scenarios(n=3, seed=0)
     assert b[0].log.loc[0, "north_m"] != 1e3
-    with pytest.raises(ValueError, match="n"):
+    with pytest.raises(ValueError, match=r"^n: expected an int in 1\.\.20"):
         embedded_scenarios(n=0)
 
 

@@ -34,3 +34,11 @@ def test_power_is_lost_at_the_shutdown_time(log):
     np.testing.assert_array_equal(log["dp_active"].to_numpy(), (t < 200.0).astype(int))
     rpm = log[[c for c in log.columns if c.endswith("_rpm")]].to_numpy()
     assert np.all(rpm[t >= 200.0] == 0.0) and np.any(rpm[t < 200.0] != 0.0)
+
+
+@pytest.mark.parametrize("kwargs, match", [(dict(current=(0.3,)), "current: expected a pair"),
+                                           (dict(wind=5.0), "wind: expected a pair"),
+                                           (dict(hold_s=(10.0,)), "hold_s: expected a pair")])
+def test_pairs_of_the_wrong_length_are_refused_naming_them(model, kwargs, match):
+    with pytest.raises(ValueError, match=match):
+        physics_log(model, duration_s=20.0, **kwargs)

@@ -296,7 +296,8 @@ class ThrustAllocator:
         K = len(th)
         if K == 0:
             raise ValueError("vessel.thrusters: the vessel has no thrusters to allocate to")
-        if not (np.isfinite(dt_s) and dt_s > 0):
+        if isinstance(dt_s, (bool, np.bool_)) or not isinstance(dt_s, (int, float, np.integer, np.floating)) \
+                or not (np.isfinite(dt_s) and dt_s > 0):
             raise ValueError(f"dt_s: must be finite and > 0, got {dt_s!r}")
         if not (np.isfinite(reverse_hysteresis_rad) and 0 <= reverse_hysteresis_rad < math.pi):
             raise ValueError(f"reverse_hysteresis_rad: must be in [0, pi), got {reverse_hysteresis_rad!r}")

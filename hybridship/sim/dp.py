@@ -213,7 +213,8 @@ class DPController:
                  wind_feedforward_gain: float = 1.0):
         self.model = vessel if isinstance(vessel, DynamicModel) else DynamicModel(vessel)
         self.vessel = self.model.vessel
-        if not (np.isfinite(dt_s) and dt_s > 0):
+        if isinstance(dt_s, (bool, np.bool_)) or not isinstance(dt_s, (int, float, np.integer, np.floating)) \
+                or not (np.isfinite(dt_s) and dt_s > 0):
             raise ValueError(f"dt_s: must be finite and > 0, got {dt_s!r}")
         if not (np.isfinite(wind_feedforward_gain) and 0 <= wind_feedforward_gain <= 2):
             raise ValueError(f"wind_feedforward_gain: must be in [0, 2], got {wind_feedforward_gain!r}")

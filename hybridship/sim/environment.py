@@ -150,6 +150,20 @@ def _in_range(name, value, lo, hi, *, lo_open=False, hi_open=False):
     return v
 
 
+def _pair(name, value):
+    """``value`` as two finite floats ``(lo, hi)``, or an error naming ``name`` (a text such as
+    ``"25"`` would otherwise pass as the pair of its characters)."""
+    if isinstance(value, (str, bytes)):
+        raise TypeError(f"{name} must be a (lo, hi) pair of numbers, got {value!r}")
+    try:
+        items = list(value)
+    except TypeError:
+        raise TypeError(f"{name} must be a (lo, hi) pair of numbers, got {value!r}") from None
+    if len(items) != 2:
+        raise ValueError(f"{name} must be a (lo, hi) pair of numbers, got {value!r}")
+    return tuple(_finite_scalar(f"{name}[{i}]", x) for i, x in enumerate(items))
+
+
 _Pos = Annotated[Float, Field(gt=0.0)]
 _NonNeg = Annotated[Float, Field(ge=0.0)]
 _MaybeNaN = Annotated[float, Field(allow_inf_nan=True)]  # nan = unknown
@@ -435,8 +449,8 @@ def make_wave_components(hs_m, tp_s, wave_dir_from_rad, rng, n_components=50, sp
     if not isinstance(n_components, (int, np.integer)) or isinstance(n_components, bool) or n_components < 1:
         raise ValueError(f"n_components must be a positive int, got {n_components!r}")
     n = int(n_components)
-    lo_f, hi_f = (float(x) for x in omega_range_factor)
-    if not (0.0 < lo_f < 1.0 < hi_f and math.isfinite(hi_f)):
+    lo_f, hi_f = _pair("omega_range_factor", omega_range_factor)
+    if not 0.0 < lo_f < 1.0 < hi_f:
         raise ValueError(f"omega_range_factor must satisfy 0 < lo < 1 < hi, got {omega_range_factor!r}")
     if spreading is not None:
         spreading = _positive("spreading", spreading)
@@ -944,7 +958,7 @@ def gust_wind(time_s, mean_speed_m_s, mean_dir_from_rad, rng, intensity=0.1, *, 
     rng = _as_rng(rng)
     if spectrum not in ("harris", "davenport"):
         raise ValueError(f"spectrum must be 'harris' or 'davenport', got {spectrum!r}")
-    if not isinstance(n_harmonics, (int, np.integer)) or n_harmonics < 1:
+    if not isinstance(n_harmonics, (int, np.integer)) or isinstance(n_harmonics, bool) or n_harmonics < 1:
         raise ValueError(f"n_harmonics must be a positive int, got {n_harmonics!r}")
     f_max = _positive("f_max_hz", f_max_hz)
     sd_dir = _positive("dir_std_rad", dir_std_rad, allow_zero=True)
@@ -1033,16 +1047,16 @@ _BEAUFORT_HS_M = np.array([0.0, 0.1, 0.2, 0.6, 1.0, 2.0, 3.0, 4.0, 5.5, 7.0, 9.0
 def beaufort_wind_speed(beaufort):
     """Mean 10 m wind speed [m/s] for a (fractional) Beaufort number: ``0.836 B^1.5`` (WMO)."""
     b = np.asarray(beaufort, dtype=float)
-    if np.any(b < 0.0) or np.any(b > 12.5):
-        raise ValueError("beaufort must be in [0, 12.5]")
+    if not np.all((b >= 0.0) & (b <= 12.5)):        # NaN too
+        raise ValueError(f"beaufort must be in [0, 12.5], got {beaufort!r}")
     return 0.836 * b**1.5
 
 
 def beaufort_wave_height(beaufort):
     """WMO probable (open-sea) wave height [m] for a (fractional) Beaufort number, interpolated."""
     b = np.asarray(beaufort, dtype=float)
-    if np.any(b < 0.0) or np.any(b > 12.5):
-        raise ValueError("beaufort must be in [0, 12.5]")
+    if not np.all((b >= 0.0) & (b <= 12.5)):        # NaN too
+        raise ValueError(f"beaufort must be in [0, 12.5], got {beaufort!r}")
     return np.interp(b, np.arange(13.0), _BEAUFORT_HS_M)
 
 
@@ -1114,16 +1128,17 @@ class SeaState:
         """
         rng = _as_rng(rng)
         try:
-            b_lo, b_hi = (float(b) for b in beaufort)
-        except (TypeError, ValueError):
-            raise ValueError(f"beaufort must be a (lo, hi) pair, got {beaufort!r}") from None
+            b_lo, b_hi = _pair("beaufort", beaufort)
+        except TypeError as exc:
+            raise ValueError(str(exc)) from None
         if not (0.0 <= b_lo <= b_hi <= 12.0):
             raise ValueError(f"beaufort must satisfy 0 <= lo <= hi <= 12, got {beaufort!r}")
         for name, pair in (("hs_fetch_factor", hs_fetch_factor), ("tp_coefficient", tp_coefficient),
                            ("current_speed_m_s", current_speed_m_s), ("gust_intensity", gust_intensity)):
-            lo, hi = (float(x) for x in pair)
-            if not (0.0 <= lo <= hi and math.isfinite(hi)):
+            lo, hi = _pair(name, pair)
+            if not 0.0 <= lo <= hi:
                 raise ValueError(f"{name} must be a (lo, hi) range with 0 <= lo <= hi, got {pair!r}")
+        _in_range("wave_spread_rad", wave_spread_rad, 0.0, math.pi)
         b = rng.uniform(max(0.0, b_lo - 0.5), b_hi + 0.5)
         wind = float(beaufort_wind_speed(b))
         wind_dir = rng.uniform(0.0, 2.0 * np.pi)

@@ -695,6 +695,22 @@ def _shutdown_time(log: pd.DataFrame) -> float:
     raise ValueError("log: cannot find the shutdown (no truth_t_shutdown_s and dp_active never 0)")
 
 
+def _check_statistics_input(log, dp_settle_s) -> None:
+    """Refuse what :func:`drift_statistics` cannot summarise, naming the argument or column."""
+    if not isinstance(log, pd.DataFrame):
+        raise TypeError(f"log: expected a pandas DataFrame (see hybridship.logs.io.read_log), got "
+                        f"{type(log).__name__}")
+    track = (("truth_north_lf_m", "truth_east_lf_m", "truth_heading_lf_deg") if "truth_north_lf_m" in log.columns
+             else ("north_m", "east_m", "heading_deg"))
+    missing = [c for c in ("time_s", *track) if c not in log.columns]
+    if missing:
+        raise ValueError(f"log: missing column(s) {', '.join(missing)}; the statistics need time_s and the track "
+                         f"{', '.join(track)}")
+    if isinstance(dp_settle_s, bool) or not isinstance(dp_settle_s, (int, float, np.integer, np.floating)) \
+            or not math.isfinite(dp_settle_s) or dp_settle_s < 0:
+        raise ValueError(f"dp_settle_s: expected a finite number of seconds >= 0, got {dp_settle_s!r}")
+
+
 def drift_statistics(log: pd.DataFrame, *, dp_settle_s: float = 600.0) -> dict:
     """Drift and station-keeping statistics of one DP-loss log.
 
@@ -721,6 +737,7 @@ def drift_statistics(log: pd.DataFrame, *, dp_settle_s: float = 600.0) -> dict:
         ``sqrt(var(north) + var(east))`` on DP after the start-up; ``dp_pos_max_m``:
         largest distance from the set-point (origin) there; ``dp_heading_std_deg``.
     """
+    _check_statistics_input(log, dp_settle_s)
     t = log["time_s"].to_numpy(float)
     lf = "truth_north_lf_m" in log.columns
     n = log["truth_north_lf_m" if lf else "north_m"].to_numpy(float)

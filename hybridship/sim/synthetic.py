@@ -26,6 +26,10 @@ def _check_arguments(model, duration_s, t_shutdown_s, dt_s, seed, current, wind,
     check_number("duration_s", duration_s, lo=dt)
     check_number("t_shutdown_s", t_shutdown_s, lo=0.0, allow_none=True)
     check_whole_number("seed", seed)
+    for name, pair, expected in (("hold_s", hold_s, "(min, max) [s]"), ("current", current, "(speed_m_s, dir_to_rad)"),
+                                 ("wind", wind, "(speed_m_s, dir_from_rad)")):
+        if isinstance(pair, (str, bytes)) or np.ndim(pair) != 1 or len(pair) != 2:
+            raise ValueError(f"{name}: expected a pair {expected}, got {pair!r}")
     lo, hi = (check_number(f"hold_s[{i}]", h, lo=0.0) for i, h in enumerate(hold_s))
     if hi < lo:
         raise ValueError(f"hold_s: expected (min, max) with min <= max, got {tuple(hold_s)}")
