@@ -65,6 +65,9 @@ def compiled_and_loaded() -> tuple[list[list[str]], list[list[str]], dict[str, f
         copy = Path(tmp)
         shutil.copytree(ROOT / "hybridship", copy / "hybridship",
                         ignore=shutil.ignore_patterns("*.nbi", "*.nbc", "compiled-kernels.sha256"))
+        # the packaged vessel files, where a source tree keeps them (an installed hybridship
+        # maps them as hybridship.vessels, which the copy on PYTHONPATH does not have)
+        shutil.copytree(ROOT / "vessels", copy / "vessels")
         compiled, loaded = _run(copy, "compiled"), _run(copy, "loaded")
         gaps = {a[0]: float(np.abs(np.load(copy / f"compiled_{a[0]}.npy") - np.load(copy / f"loaded_{a[0]}.npy")).max())
                 for a in compiled}
