@@ -448,3 +448,22 @@ def test_apply_and_coverage_of_refuse_text_bad_shapes_and_silent_nans_by_name():
     with pytest.raises(ValueError, match="coverage_of: sigmas: expected a list"):
         coverage_of([[1.0]], [[1.0]], 2.0)
     np.testing.assert_allclose(coverage_of([[0.5, 3.0], [1.5, 1.0]], np.ones((2, 2))), [[0.5, 1.0], [0.5, 0.5]])
+
+
+def test_after_stop_window_does_not_depend_on_the_order_of_logs_of_different_steps(fitted, monkeypatch):
+    """The window of starts the after-stop calibration was fitted on (``starts_within_s``,
+    which decides which forecast starts count as late) and its horizon came from the first
+    log: 2 s or 20 s for the same 10-Hz and 1-Hz failures, by their order."""
+    import copy
+
+    rng = np.random.default_rng(5)
+    coarse, fine = np.arange(1, 61) * 1.0, np.arange(1, 601) * 0.1
+    errs = [(np.abs(rng.normal(size=(20, lead.size, 3))), np.ones((20, lead.size, 3)), lead) for lead in (fine, coarse)]
+    infos = []
+    for order in (errs, errs[::-1]):
+        hp = copy.deepcopy(fitted[0] if isinstance(fitted, tuple) else fitted)
+        monkeypatch.setattr(hp, "after_stop_errors", lambda logs, late=False, **kw: [] if late else order)
+        hp.calibrate_after_stop([None, None])
+        infos.append(hp.training_info["calibration"]["after_stop"])
+    assert infos[0] == infos[1]
+    assert infos[0]["starts_within_s"] == 20.0 and infos[0]["horizon_s"] == 60.0

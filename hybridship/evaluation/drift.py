@@ -30,12 +30,13 @@ samples after the shutdown of every log in ``test``, ``horizon_s`` ahead. The ou
   forecasts after the failure against the measured track).
 
 Models: ``hybrid`` (the default :class:`~hybridship.predictors.HybridPredictor`: physics,
-the environment estimator and the guarded nets), ``hybrid_nets_unguarded`` (the same
-model with the guard off: the nets always on, as in the paper; its spread raw, since the
-spread after a failure is calibrated on forecasts with the nets off), ``hybrid_mean_bias``
-(the same nets with the 900-s mean residual in place of the estimator, the default before
-the estimator; its spread after a failure raw too), ``dynamic``, ``dead_reckoning`` and ``data_only`` (an ensemble of the same
-size and architecture predicting the whole acceleration without physics).
+the environment estimator and the guarded nets), ``hybrid_nets_unguarded`` (the same model
+with the guard off: the nets always on, as in the paper; its spread raw, since the spread
+after a failure is calibrated on forecasts with the nets off), ``hybrid_mean_bias`` (the
+same nets with the 900-s mean residual in place of the estimator, the default before the
+estimator; its spread after a failure raw too with the default ``dp_only`` calibration),
+``dynamic``, ``dead_reckoning`` and ``data_only`` (an ensemble of the same size and
+architecture predicting the whole acceleration without physics).
 
 With no folders it runs on the embedded simulated scenarios (train on their DP parts,
 test on their drifts, as the paper did with its one failure).

@@ -1199,17 +1199,20 @@ class HybridPredictor:
         errors = self.after_stop_errors(logs, n_intervals=n_intervals, horizon_s=horizon_s)
         late = self.after_stop_errors(logs, n_intervals=n_intervals, horizon_s=horizon_s, late=True)
         calibration = {**self.calibration, AFTER_STOP: after_stop_scales(errors, cal)}
+        # the pooled lead times are the coarsest log's (logs of other steps are pooled at them),
+        # so the window and horizon do not depend on the logs' order
+        lead, _ = _common_leads([x[2] for x in errors])
         info = {**self.training_info.get("calibration", {}), "after_stop": {
             "n_logs": len(errors), "n_starts": int(sum(e.shape[0] for e, _, _ in errors)),
-            "horizon_s": float(errors[0][2][-1]),
+            "horizon_s": float(lead[-1]),
             # the starts it was fitted on lie within this long [s] of a failure
-            "starts_within_s": float(n_intervals * errors[0][2][0])}}
+            "starts_within_s": float(n_intervals * lead[0])}}
         calibration.pop(AFTER_STOP_LATE, None)
         info.pop(AFTER_STOP_LATE, None)
         if late:
             calibration[AFTER_STOP_LATE] = after_stop_scales(late, cal)
             info[AFTER_STOP_LATE] = {"n_logs": len(late), "n_starts": int(sum(e.shape[0] for e, _, _ in late)),
-                                     "horizon_s": float(late[0][2][-1])}
+                                     "horizon_s": float(_common_leads([x[2] for x in late])[0][-1])}
         self.calibration = calibration
         self.training_info = {**self.training_info, "calibration": info}
         return self
