@@ -121,10 +121,11 @@ def test_rudder_forces_refuses_bad_shapes_and_non_finite_inputs_naming_them(esso
     for args, match in ((([0.3, 0, 0], [0.1, 0.2]), r"^delta_rad: expected shape \(1,\) or \(1, 1\), got \(2,\)"),
                         (([0.3, 0], [0.1]), r"^nu_r: expected shape \(3,\) or \(B, 3\), got \(2,\)"),
                         (([np.nan, 0, 0], [0.1]), "^nu_r: contains NaN"),
-                        (([0.3, 0, 0], [0.1], [np.inf]), "^thrust_open_N: contains NaN"),
-                        (([0.3, 0, 0], "ten"), "^delta_rad: expected numbers")):
+                        (([0.3, 0, 0], [0.1], [np.inf]), "^thrust_open_N: contains NaN")):
         with pytest.raises(ValueError, match=match):
             rudder_forces(esso, *args)
+    with pytest.raises(TypeError, match="^delta_rad: expected an array of real numbers"):
+        rudder_forces(esso, [0.3, 0, 0], "ten")
     # one angle for every rudder and a batch of states: as before
     np.testing.assert_array_equal(rudder_forces(esso, [[0.3, 0, 0], [0.2, 0, 0]], 0.2)[:, 0],
                                   rudder_forces(esso, [[0.3, 0, 0], [0.2, 0, 0]], [[0.2], [0.2]])[:, 0])

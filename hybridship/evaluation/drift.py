@@ -304,7 +304,8 @@ def _same_samples(train_arrays, test_arrays, test_names) -> bool:
 
     trained = [samples_digest(a) for a in train_arrays]
     tested = [samples_digest(a) for a in test_arrays]
-    shared = [n for d, n in zip(tested, test_names) if d in set(trained)]
+    trained_set = set(trained)
+    shared = [n for d, n in zip(tested, test_names) if d in trained_set]
     if not shared:
         return False
     if sorted(tested) == sorted(trained):

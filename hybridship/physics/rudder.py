@@ -54,6 +54,7 @@ import math
 import numba
 import numpy as np
 
+from ..config import real_array
 from .thrusters import THR_D, THR_TDED, THR_WAKE, THR_Y
 
 #: Column layout of the packed rudder parameter array ``rud (R, 14)``.
@@ -172,10 +173,7 @@ def _rudder_batch(nu_r, delta, thrust_open, u_p, dia, rho, rud, out):
 def _finite_rows(name, value, B, width):
     """``value`` as finite floats ``(B, width)`` from ``(width,)`` or ``(B, width)`` (B = None: any
     batch), or a ValueError naming the argument (not numpy's broadcasting or conversion message)."""
-    try:
-        a = np.asarray(value, dtype=float)
-    except (TypeError, ValueError):
-        raise ValueError(f"{name}: expected numbers, got {value!r}") from None
+    a = real_array(name, value)
     batch = "B" if B is None else str(B)
     if a.ndim == 0 and B is not None:       # one number for every rudder
         a = np.full(width, float(a))

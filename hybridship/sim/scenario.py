@@ -52,6 +52,7 @@ from scipy.signal import lfilter
 
 from hybridship.frames import ned_to_body, wrap_pi
 from hybridship.config import Float, Int, config_dataclass
+from hybridship.forecast_inputs.limits import check_number
 from hybridship.physics.model import DynamicModel
 from hybridship.sim import environment as env
 from hybridship.sim.allocation import ThrustAllocator, bollard_thrust_limits, check_station_keeping
@@ -706,9 +707,7 @@ def _check_statistics_input(log, dp_settle_s) -> None:
     if missing:
         raise ValueError(f"log: missing column(s) {', '.join(missing)}; the statistics need time_s and the track "
                          f"{', '.join(track)}")
-    if isinstance(dp_settle_s, bool) or not isinstance(dp_settle_s, (int, float, np.integer, np.floating)) \
-            or not math.isfinite(dp_settle_s) or dp_settle_s < 0:
-        raise ValueError(f"dp_settle_s: expected a finite number of seconds >= 0, got {dp_settle_s!r}")
+    check_number("dp_settle_s", dp_settle_s, lo=0.0)
 
 
 def drift_statistics(log: pd.DataFrame, *, dp_settle_s: float = 600.0) -> dict:
