@@ -125,6 +125,28 @@ def test_a_forecast_judges_a_columns_unit_on_the_whole_log_as_training_does(mode
     assert len(ingest(ok, model.vessel, purpose="forecast", time_range_s=(2000.0, 2599.0))) == 600
 
 
+def test_a_unit_fault_in_the_rows_read_is_judged_once_on_the_whole_log(model):
+    """A forecast leaves the statistical unit checks of the rows it reads to the whole log's
+    check (not made twice): a log in knots throughout is still refused with training's
+    message, and ``check_log_against_vessel(unit_statistics=False)`` leaves out exactly those
+    judgements."""
+    from hybridship.logs.io import check_log_against_vessel
+
+    t = np.arange(2600, dtype=float)
+    df = pd.DataFrame({"time_s": t, "north_m": 0.5 * t, "east_m": 0.0, "heading_deg": 0.0,
+                       "u_m_s": 0.5 * 1.943844, "v_m_s": 0.0, "dp_active": 0})
+    with pytest.raises(LogFormatError, match=r"^u_m_s, v_m_s: the logged speed is 1.94 times") as fit_err:
+        ingest(df, model.vessel, purpose="fit")
+    with pytest.raises(LogFormatError) as window_err:
+        ingest(df, model.vessel, purpose="forecast", time_range_s=(2000.0, 2599.0))
+    assert str(window_err.value) == str(fit_err.value)
+    with pytest.raises(LogFormatError, match=r"^u_m_s, v_m_s: the logged speed"):
+        check_log_against_vessel(df, model.vessel)
+    check_log_against_vessel(df, model.vessel, unit_statistics=False)
+    with pytest.raises(LogFormatError, match=r"^north_m: missing"):     # the other checks stay
+        check_log_against_vessel(df.assign(north_m=np.nan), model.vessel, unit_statistics=False)
+
+
 @settings(max_examples=20, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture])
 @given(data=st.data())
 def test_training_and_forecasting_see_the_same_arrays(model, log, data):

@@ -233,9 +233,10 @@ def _replace_eta(arrays: LogArrays, eta: np.ndarray) -> LogArrays:
 
 
 def _from_frame(df: pd.DataFrame, v, purpose: str, source: str,
-                gap_step_s: float | None = None) -> tuple[LogArrays, SortedLog]:
+                gap_step_s: float | None = None, unit_statistics: bool = True) -> tuple[LogArrays, SortedLog]:
     """Sort, check and convert a log frame; ``gap_step_s``: the nominal step [s] its gaps are
-    judged by (default: its own median step)."""
+    judged by (default: its own median step); without ``unit_statistics`` the judgements of
+    a column's unit are left to the caller's check of the whole log."""
     order = sort_samples(df, source=source)
     if purpose == "fit":
         _refuse_conflicts(order, source)
@@ -246,7 +247,8 @@ def _from_frame(df: pd.DataFrame, v, purpose: str, source: str,
         _warn_repaired(order, source)
     allow_missing = purpose == "forecast"
     try:
-        check_log_against_vessel(order.frame, v, source=source, allow_missing=allow_missing)
+        check_log_against_vessel(order.frame, v, source=source, allow_missing=allow_missing,
+                                 unit_statistics=unit_statistics)
     except LogFormatError as exc:
         raise _with_resort_hint(exc, order) from None
     arrays = _frame_to_arrays(order.frame, tuple(v.channel_names), tuple(v.rotatable),
@@ -358,8 +360,11 @@ def ingest_with_report(source, vessel, *, purpose: str = "fit", name: str | None
             # as on LogArrays converted whole, not by the rows read, which other starts decide
             whole_step_s = None if whole is None else _median_step_s(
                 pd.to_numeric(whole["time_s"], errors="coerce").dropna().to_numpy(float))
-            arrays, order = _from_frame(part, v, purpose, where, gap_step_s=whole_step_s)
-            if whole is not None:   # a column's unit is judged on the whole log, as training judges it
+            # a column's unit is judged on the whole log, as training judges it, and not again
+            # on the rows read: the whole log's judgement is the one that counts
+            arrays, order = _from_frame(part, v, purpose, where, gap_step_s=whole_step_s,
+                                        unit_statistics=whole is None)
+            if whole is not None:
                 check_units_on_whole_log(whole, v, source=where)
                 object.__setattr__(arrays, WHOLE_LOG_STEP, whole_step_s)
         except LogFormatError:

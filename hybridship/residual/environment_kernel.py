@@ -90,12 +90,14 @@ def _rk4(x, dt, rpm, prep, acc, P, f, work):
 
 
 @numba.njit(cache=True)
-def _transition(x, dt, rpm, az, wind, P, per_thruster, drift_yaw_uv, f, work, T, acc):
+def _transition(x, dt, rpm, az, wind, P, per_thruster, drift_yaw_uv, f, work, T, acc, prep_ready=False):
     """One process-model step of the state ``x`` into ``f``: RK4 of the dynamic model with
     the current and the external acceleration of :func:`_external_accel` (left in ``T`` and
-    ``acc``); the environment states are random walks (kept)."""
+    ``acc``); the environment states are random walks (kept). With ``prep_ready``,
+    ``work[0]`` already holds the prepared inputs of ``x``'s current."""
     prep = work[0]
-    _prep_for(x, rpm, az, wind, P, prep)
+    if not prep_ready:
+        _prep_for(x, rpm, az, wind, P, prep)
     _thrust_basis(x, rpm, prep, P, per_thruster, work[1], work[2], T)
     _external_accel(x, T, drift_yaw_uv, acc)
     _rk4(x, dt, rpm, prep, acc, P, f, work)
@@ -132,18 +134,10 @@ def predict(x, Pc, dt, rpm, az, wind, Q, fd_step, P, per_thruster, drift_yaw_uv,
     for j in range(n):
         if j < 2 or j >= _LOAD:
             F[j, j] = 1.0
-    xp = x.copy()
     fj = np.empty(n)
-    T_j = np.empty((3, n_theta))
     acc_j = np.empty(3)
-    for j in range(2, _LOAD):                   # heading, velocities, current
-        xp[j] = x[j] + fd_step[j]
-        _transition(xp, dt, rpm, az, wind, P, per_thruster, drift_yaw_uv, fj, work, T_j, acc_j)
-        for i in range(n):
-            F[i, j] = (fj[i] - f0[i]) / fd_step[j]
-        xp[j] = x[j]
     # sensitivity G (6, 3) of the step to the held acceleration, with the nominal inputs
-    _prep_for(x, rpm, az, wind, P, work[0])
+    # (work[0] holds those of x until the current is perturbed below)
     G = np.empty((6, 3))
     for d in range(3):
         h = fd_step[_LOAD + d]
@@ -152,6 +146,16 @@ def predict(x, Pc, dt, rpm, az, wind, Q, fd_step, P, per_thruster, drift_yaw_uv,
         _rk4(x, dt, rpm, work[0], acc_j, P, fj, work)
         for i in range(6):
             G[i, d] = (fj[i] - f0[i]) / h
+    xp = x.copy()
+    T_j = np.empty((3, n_theta))
+    for j in range(2, _LOAD):                   # heading, velocities, current
+        xp[j] = x[j] + fd_step[j]
+        # the prepared inputs depend on the current alone: those of x serve the heading
+        # and the velocities
+        _transition(xp, dt, rpm, az, wind, P, per_thruster, drift_yaw_uv, fj, work, T_j, acc_j, j < _CUR)
+        for i in range(n):
+            F[i, j] = (fj[i] - f0[i]) / fd_step[j]
+        xp[j] = x[j]
     c, s = math.cos(x[2]), math.sin(x[2])
     for i in range(6):
         F[i, _LOAD] = c * G[i, 0] - s * G[i, 1]          # d acc / d b = R(psi)^T
