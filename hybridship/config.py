@@ -17,6 +17,7 @@ from __future__ import annotations
 
 import dataclasses
 import functools
+import math
 import re
 from collections.abc import Mapping
 from typing import Annotated
@@ -25,7 +26,7 @@ import numpy as np
 from pydantic import AfterValidator, BeforeValidator, ConfigDict, Field, ValidationError
 from pydantic.dataclasses import dataclass as _pydantic_dataclass
 
-__all__ = ["Bool", "check_flags", "real_array", "config_dataclass", "format_validation_error", "Int", "Float", "NonEmpty", "non_empty", "float_array",
+__all__ = ["Bool", "check_flags", "check_number", "check_whole_number", "real_array", "config_dataclass", "format_validation_error", "Int", "Float", "NonEmpty", "non_empty", "float_array",
            "start_time_rng"]
 
 
@@ -242,3 +243,32 @@ def as_config(value, cls, name: str):
             raise type(err)(f"{name}: {err}") from None
     raise TypeError(f"{name}: expected an instance of {cls.__name__} (or a dict of its fields), "
                     f"got {type(value).__name__}")
+
+
+def check_number(name: str, value, *, lo=None, hi=None, lo_open: bool = False, allow_none: bool = False):
+    """``value`` as a finite float within ``[lo, hi]`` (``(lo, hi]`` with ``lo_open``), or an
+    error naming ``name`` and what was expected (TypeError for a non-number, ValueError
+    otherwise). ``allow_none`` passes None through."""
+    if value is None and allow_none:
+        return None
+    if isinstance(value, (bool, np.bool_, str, bytes)):     # float() would read "60" and True as numbers
+        raise TypeError(f"{name}: expected a number, got {value!r}")
+    try:
+        v = float(value)
+    except (TypeError, ValueError):
+        raise TypeError(f"{name}: expected a number, got {value!r}") from None
+    if not math.isfinite(v):
+        raise ValueError(f"{name}: must be finite, got {value!r}")
+    if lo is not None and (v <= lo if lo_open else v < lo):
+        raise ValueError(f"{name}: must be {'>' if lo_open else '>='} {lo:g}, got {value!r}")
+    if hi is not None and v > hi:
+        raise ValueError(f"{name}: must be <= {hi:g}, got {value!r}")
+    return v
+
+
+def check_whole_number(name: str, value, lo: int = 0) -> int:
+    """``value`` as an ``int`` of at least ``lo`` (numpy integers accepted; bools, floats and
+    text refused), or a ValueError naming ``name`` and what was expected."""
+    if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < lo:
+        raise ValueError(f"{name}: expected a whole number >= {lo}, got {value!r}")
+    return int(value)

@@ -190,7 +190,7 @@ def test_angles_are_wrapped_before_the_rudder_stop_is_judged():
 @pytest.mark.parametrize("value", ["60", b"60", True, np.bool_(True)])
 def test_check_number_refuses_text_and_bools(value):
     """Review: ``float()`` read "60" (and True) as numbers, so a text setting passed every check."""
-    from hybridship.forecast_inputs.limits import check_number
+    from hybridship.config import check_number
 
     with pytest.raises(TypeError, match="^horizon_s: expected a number, got "):
         check_number("horizon_s", value)

@@ -561,11 +561,11 @@ def test_propeller_functions_refuse_what_their_kernels_cannot_compute():
     rpm bound as a silently wrong shaft speed."""
     p = load_wageningen()
     for args, match in (((np.nan, 1.0, 1.9), "^n_rps: contains NaN"), ((1.0, [0.0, np.nan], 1.9), "^va_m_s: contains"),
-                        ((1.0, 1.0, 0.0), "^diameter_m: must be a finite number > 0"),
+                        ((1.0, 1.0, 0.0), "^diameter_m: must be > 0"),
                         ((1.0, 1.0, np.nan), "^diameter_m: must be")):
         with pytest.raises(ValueError, match=match):
             thrust_torque(*args, p)
-    with pytest.raises(ValueError, match="^rho_kg_m3: must be a finite number > 0, got -1025"):
+    with pytest.raises(ValueError, match="^rho_kg_m3: must be > 0, got -1025"):
         thrust_torque(1.0, 1.0, 1.9, p, rho_kg_m3=-1025.0)
     for kw, match in ((dict(diameter_m=0.0), "^diameter_m: "), (dict(diameter_m=-1.9), "^diameter_m: "),
                       (dict(rho_kg_m3=np.nan), "^rho_kg_m3: "), (dict(max_rpm=-100.0), "^max_rpm: must be")):

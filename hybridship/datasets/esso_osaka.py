@@ -52,7 +52,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from ..forecast_inputs.limits import check_number
+from ..config import check_number
 from ..logs.io import LogArrays, LogFormatError, log_to_arrays, validate_log
 
 __all__ = [

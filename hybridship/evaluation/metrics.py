@@ -13,7 +13,7 @@ import pandas as pd
 from scipy import stats
 
 from ..config import real_array
-from ..forecast_inputs.limits import check_number, check_whole_number
+from ..config import check_number, check_whole_number
 from ..frames import wrap_pi
 from ..predictors.after_failure import HORIZONS_S, drift_forecasts, shutdown_index
 

@@ -16,12 +16,12 @@ The log itself is read, re-sorted and validated once, at the boundary, by
   decays to the recent mean (:class:`~hybridship.forecast_inputs.wind.WindForecast`).
 """
 
+from hybridship.config import check_number
 from hybridship.forecast_inputs.faults import FaultFlags, InputRangeError, StartWindowError
 from hybridship.forecast_inputs.limits import (
     KNOT_M_S,
     CheckedInputs,
     Envelope,
-    check_number,
     check_or_clip_inputs,
     envelope_for,
 )

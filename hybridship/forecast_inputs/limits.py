@@ -65,7 +65,6 @@ __all__ = [
     "envelope_for",
     "CheckedInputs",
     "check_or_clip_inputs",
-    "check_number",
     "refuse_non_finite",
     "refuse_far_states",
     "clip_velocities",
@@ -76,35 +75,6 @@ __all__ = [
 
 #: One knot [m/s].
 KNOT_M_S = 1852.0 / 3600.0
-
-
-def check_number(name: str, value, *, lo=None, hi=None, lo_open: bool = False, allow_none: bool = False):
-    """``value`` as a finite float within ``[lo, hi]`` (``(lo, hi]`` with ``lo_open``), or an
-    error naming ``name`` and what was expected (TypeError for a non-number, ValueError
-    otherwise). ``allow_none`` passes None through."""
-    if value is None and allow_none:
-        return None
-    if isinstance(value, (bool, np.bool_, str, bytes)):     # float() would read "60" and True as numbers
-        raise TypeError(f"{name}: expected a number, got {value!r}")
-    try:
-        v = float(value)
-    except (TypeError, ValueError):
-        raise TypeError(f"{name}: expected a number, got {value!r}") from None
-    if not math.isfinite(v):
-        raise ValueError(f"{name}: must be finite, got {value!r}")
-    if lo is not None and (v <= lo if lo_open else v < lo):
-        raise ValueError(f"{name}: must be {'>' if lo_open else '>='} {lo:g}, got {value!r}")
-    if hi is not None and v > hi:
-        raise ValueError(f"{name}: must be <= {hi:g}, got {value!r}")
-    return v
-
-
-def check_whole_number(name: str, value, lo: int = 0) -> int:
-    """``value`` as an ``int`` of at least ``lo`` (numpy integers accepted; bools, floats and
-    text refused), or a ValueError naming ``name`` and what was expected."""
-    if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < lo:
-        raise ValueError(f"{name}: expected a whole number >= {lo}, got {value!r}")
-    return int(value)
 
 
 @dataclass(frozen=True)

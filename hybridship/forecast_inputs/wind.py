@@ -36,7 +36,7 @@ import numpy as np
 from pydantic import Field
 
 from hybridship.config import Float, config_dataclass
-from hybridship.forecast_inputs.limits import check_number
+from hybridship.config import check_number
 from hybridship.frames import speed_dir_to_vector, vector_to_speed_dir
 
 __all__ = ["HELD_WIND", "WindForecast", "fit_wind_forecast", "trailing_mean_vector", "wind_error_paths",

@@ -34,7 +34,7 @@ import numpy as np
 from pydantic import Field
 
 from ..config import Float, Int, NonEmpty, Seed, as_config, config_dataclass
-from ..forecast_inputs.limits import check_whole_number
+from ..config import check_whole_number
 from .contract import check_free_run, check_record, require_fitted
 
 __all__ = [

@@ -32,7 +32,7 @@ import pandas as pd
 from pydantic import Field, model_validator
 
 from ..config import Float, Int, Seed, check_flags, config_dataclass
-from ..forecast_inputs.limits import check_number
+from ..config import check_number
 from .simulator import KNOT_M_S, PlaningCraftModel, SeaConditions, TrueRecord
 from .vessel import PlaningCraft, load_planing_craft
 

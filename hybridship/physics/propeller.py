@@ -44,6 +44,8 @@ import numba
 import numpy as np
 import pandas as pd
 
+from ..config import check_number
+
 _TABLE_FILE = "wageningen_b_series_4q.csv"
 
 
@@ -275,15 +277,9 @@ def thrust_torque(n_rps, va_m_s, diameter_m: float, prop: PropellerCoefficients,
 def _check_propeller_scalars(diameter_m, rho_kg_m3, max_rpm=None) -> None:
     """Refuse a diameter, water density or rpm bound that is not a finite number > 0 (the
     kernels divided by them silently, or by zero)."""
-    for name, value in (("diameter_m", diameter_m), ("rho_kg_m3", rho_kg_m3), ("max_rpm", max_rpm)):
-        if name == "max_rpm" and value is None:
-            continue
-        try:
-            ok = 0.0 < float(value) < np.inf
-        except (TypeError, ValueError):
-            ok = False
-        if not ok:
-            raise ValueError(f"{name}: must be a finite number > 0, got {value!r}")
+    check_number("diameter_m", diameter_m, lo=0.0, lo_open=True)
+    check_number("rho_kg_m3", rho_kg_m3, lo=0.0, lo_open=True)
+    check_number("max_rpm", max_rpm, lo=0.0, lo_open=True, allow_none=True)
 
 
 def kt_kq(J, prop: PropellerCoefficients):

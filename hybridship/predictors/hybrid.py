@@ -18,7 +18,7 @@ import numpy as np
 
 from ..config import as_config, real_array
 from ..forecast_inputs import FaultFlags
-from ..forecast_inputs.limits import check_number, check_whole_number
+from ..config import check_number, check_whole_number
 from ..forecast_inputs.wind import HELD_WIND, WindForecast, fit_wind_forecast, wind_error_paths
 from ..frames import speed_dir_to_vector, vector_to_speed_dir, wrap_pi
 from ..logs.io import LogArrays

@@ -12,7 +12,7 @@ from __future__ import annotations
 import numpy as np
 import pandas as pd
 
-from ..forecast_inputs.limits import check_number, check_whole_number
+from ..config import check_number, check_whole_number
 from ..frames import wrap_2pi
 from ..physics.model import DynamicModel
 
