@@ -8,7 +8,8 @@ It splits the runs of ``../shared/data/esso-osaka-frt/data`` into train and test
 (symbolic links, whole recordings per side, seed 0; the data are never copied), runs
 :func:`hybridship.evaluation.manoeuvre.run_manoeuvre_benchmark` on them, writes ``errors.csv`` and
 ``README.md`` to ``--out``, the figures ``docs/figures/esso_*.png``, and replaces the
-generated tables between the ``<!-- generated:... -->`` markers of ``docs/esso-osaka.md``.
+generated tables between the ``<!-- generated:... -->`` markers of ``docs/esso-osaka.md``,
+and copies the result files (:data:`RESULT_FILES`) to ``docs/results/esso-osaka``.
 With ``--quick`` it makes a smoke run (small ensembles, starts every 5 s) and leaves the
 docs alone unless ``--docs`` is given.
 """
@@ -23,6 +24,8 @@ import time
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
+#: The benchmark's result files that the full run copies to ``docs/results/esso-osaka``.
+RESULT_FILES = ("errors.csv", "coverage.csv", "coverage_heading.csv", "coverage_intervals.csv", "sharpness.csv")
 
 
 def replace_generated(text: str, key: str, body: str) -> str:
@@ -47,6 +50,7 @@ def main(argv=None) -> int:
     import torch
 
     from hybridship.datasets.esso_osaka import RUN_KINDS, default_data_dir
+    from hybridship.fileio import atomic_write
     from hybridship.evaluation.manoeuvre import (COMMAND_MODES, HORIZONS_S, _md_coverage, _md_table, pivot,
                                                  run_manoeuvre_benchmark, split_runs, wins,
                                                  md_coverage_intervals, md_spread_by_kind)
@@ -121,6 +125,12 @@ def main(argv=None) -> int:
         text = replace_generated(text, "setup", setup)
         page.write_text(text, encoding="utf-8")
         print(f"updated {page.relative_to(ROOT)}")
+        # the tables' files beside the page, so that every figure quoted on it can be traced
+        # (the split's links to the data stay in --out)
+        results = ROOT / "docs" / "results" / "esso-osaka"
+        for name in RESULT_FILES:
+            atomic_write(results / name, lambda fh, src=args.out / name: fh.write(src.read_bytes()))
+        print(f"copied {', '.join(RESULT_FILES)} to {results.relative_to(ROOT)}")
     return 0
 
 
