@@ -45,15 +45,19 @@ def as_path(value, name: str = "path") -> Path:
 
 def check_writable(path) -> Path:
     """``path`` as a Path, refused when the folder it would be written in exists and does
-    not let this process create files (PermissionError) or when a file stands where that
-    folder, or one to be made for it, would be (NotADirectoryError): checked before the
-    work (a model trained for minutes), not when the result is written."""
+    not let this process create files, or when ``path`` is a read-only file
+    (PermissionError), or when a file stands where that folder, or one to be made for it,
+    would be (NotADirectoryError): checked before the work (a model trained for minutes),
+    not when the result is written."""
     path = Path(path)
     folder = next((p for p in path.parents if p.exists()), Path("."))
     if not folder.is_dir():
         raise NotADirectoryError(f"{path}: {folder} exists and is not a folder")
     if not os.access(folder, os.W_OK | os.X_OK):
         raise PermissionError(f"{path}: cannot be written (no permission to create files in {folder})")
+    if path.is_file() and not path.stat().st_mode & stat.S_IWUSR:
+        # the rename would replace it even so (a directory entry, not the file, is written)
+        raise PermissionError(f"{path}: is read-only; not replaced")
     return path
 
 
@@ -93,10 +97,7 @@ def atomic_write(path, write: Callable[[BinaryIO], None]) -> Path:
         raise TypeError(f"write: expected a function that writes to a binary file, got {type(write).__name__}")
     if path.is_dir():
         raise IsADirectoryError(f"{path}: is a directory; expected the path of a file to write")
-    check_writable(path)        # a file where a folder should be is named as such
-    if path.exists() and not path.stat().st_mode & stat.S_IWUSR:
-        # the rename would replace it even so (a directory entry, not the file, is written)
-        raise PermissionError(f"{path}: is read-only; not replaced")
+    check_writable(path)        # a file where a folder should be is named as such; a read-only file
     tmp = path.with_name(f".{path.name}.{uuid.uuid4().hex}.tmp")
     try:
         path.parent.mkdir(parents=True, exist_ok=True)

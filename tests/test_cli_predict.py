@@ -456,3 +456,40 @@ def test_train_says_on_how_many_failures_the_after_failure_spread_is_calibrated(
     info["after_stop_late"] = {"n_logs": 3, "n_starts": 120}
     assert _after_stop_spread(hp)[0].endswith("; starts later in a drift on 3 of them (120 starts)")
     assert _after_stop_spread(SimpleNamespace(stop_after_failure=True, environment="mean", training_info={})) == []
+
+
+def test_a_read_only_out_is_refused_before_training_or_forecasting(log_dir, tmp_path, capsys, monkeypatch):
+    """A read-only --out (an earlier model or forecast table the user protected) is a usage
+    error named with its option before any work: train refused it only once the model had
+    been trained, forecast once the forecast had been made (exit 1, without the option)."""
+    import stat
+
+    import numpy as np
+
+    from hybridship.predictors import HybridPredictor
+
+    model = tmp_path / "m.npz"
+    assert main(["train", "--logs", str(log_dir), "--out", str(model), "--members", "1"]) == 0
+    kept = tmp_path / "kept.npz"
+    kept.write_bytes(model.read_bytes())
+    kept.chmod(stat.S_IRUSR | stat.S_IRGRP | stat.S_IROTH)
+    table = tmp_path / "kept.csv"
+    table.write_bytes(b"")
+    table.chmod(stat.S_IRUSR | stat.S_IRGRP | stat.S_IROTH)
+    capsys.readouterr()
+
+    def no_work(*args, **kwargs):
+        raise AssertionError("the work started before --out was checked")
+
+    monkeypatch.setattr(HybridPredictor, "fit", no_work)
+    monkeypatch.setattr(HybridPredictor, "forecast", no_work)
+    before = kept.read_bytes()
+    assert main(["train", "--logs", str(log_dir), "--out", str(kept), "--members", "1"]) == 2
+    assert f"hybridship train: error: --out {kept}: is read-only" in capsys.readouterr().err
+    assert kept.read_bytes() == before
+    log = sorted(log_dir.iterdir())[0]
+    t0 = float(np.floor(pd.read_csv(log).time_s.iloc[200]))
+    assert main(["forecast", "--model", str(model), "--log", str(log), "--start-time", f"{t0:g}",
+                 "--horizon-s", "5", "--out", str(table)]) == 2
+    assert f"hybridship forecast: error: --out {table}: is read-only" in capsys.readouterr().err
+    assert table.read_bytes() == b""

@@ -120,6 +120,11 @@ SPEED_CHECK_MISFIT_MIN_M = 2.0
 #: ... and the heading is refused as radians only when, read as radians, it turns them onto
 #: the track within this [deg]: a unit error fits one reading, a sensor fault neither.
 SPEED_CHECK_RADIANS_FIT_DEG = 15.0
+#: ... and north/east are refused as swapped, or u or v as of the other sign, when the velocities
+#: leave the track by more than this [deg] and, read that way, follow it within
+#: :data:`SPEED_CHECK_RADIANS_FIT_DEG` (how far a mirrored frame turns them depends on the course:
+#: under 45 deg on many drifts).
+SPEED_CHECK_CONVENTION_MISFIT_DEG = 30.0
 #: An azimuth thruster negative in at least this many samples and never positive is taken
 #: to log its rotation direction instead of the thrust sign.
 RPM_SIGN_MIN_SAMPLES = 60
@@ -765,7 +770,8 @@ def _check_speed_vs_track(t: np.ndarray, values: dict[str, np.ndarray], source: 
     """``u_m_s``/``v_m_s`` against the motion of the track (:func:`speed_scale_vs_track`):
     refused when the two agree in shape but not in scale (knots, km/h); ``heading_deg``
     refused as radians when, read as radians, it turns them onto the track and read as
-    degrees it does not."""
+    degrees it does not; likewise north/east swapped (an ENU frame) and ``u_m_s`` or
+    ``v_m_s`` with the opposite sign."""
     sc = speed_scale_vs_track(t, values["north_m"], values["east_m"], values["heading_deg"], values["u_m_s"],
                               values["v_m_s"])
     if (sc is not None and sc.rms_displacement_m >= SPEED_CHECK_MIN_DISPLACEMENT_M
@@ -794,6 +800,24 @@ def _check_speed_vs_track(t: np.ndarray, values: dict[str, np.ndarray], source: 
                 f"between time_s {seconds_text(sc.time_span_s[0])} and {seconds_text(sc.time_span_s[1])}); the log "
                 f"format expects degrees{_where(source)}",
                 column="heading_deg")
+    if sc is not None and sc.misfit_deg > SPEED_CHECK_CONVENTION_MISFIT_DEG:
+        # a frame or sign convention, not a sensor fault: read the other way, the velocities
+        # follow the track (the start window's velocity check cannot see this on a slow drift)
+        n, e, u, v = (values[c] for c in ("north_m", "east_m", "u_m_s", "v_m_s"))
+        for column, other, expected in (
+                ("north_m, east_m", (e, n, u, v), "north_m the northward and east_m the eastward position (NED): "
+                                                  "are they swapped (an east/north or ENU frame)?"),
+                ("u_m_s", (n, e, -u, v), "u_m_s positive forward: is its sign reversed?"),
+                ("v_m_s", (n, e, u, -v), "v_m_s positive to starboard: is its sign reversed (positive to port)?")):
+            alt = speed_scale_vs_track(t, other[0], other[1], h, other[2], other[3])
+            if alt is not None and alt.misfit_deg <= SPEED_CHECK_RADIANS_FIT_DEG:
+                raise LogFormatError(
+                    f"{column}: u_m_s, v_m_s turned into north/east with heading_deg move {sc.misfit_deg:.0f} deg "
+                    f"away from the track (north_m, east_m), but {alt.misfit_deg:.0f} deg with {column} read the "
+                    f"other way (medians over {SPEED_CHECK_LAG_S:g}-s windows between time_s "
+                    f"{seconds_text(sc.time_span_s[0])} and {seconds_text(sc.time_span_s[1])}); the log format "
+                    f"expects {expected}{_where(source)}",
+                    column=column.split(",")[0])
 
 
 def _check_channel_columns(df: pd.DataFrame, cols: list[str], t: np.ndarray, names, rot, source: str,
