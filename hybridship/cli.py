@@ -419,7 +419,7 @@ def _add_forecast(sub) -> None:
     p.add_argument("--log", required=True, type=Path, help="log file")
     p.add_argument("--start-time", required=True, type=float, nargs="+", help="start time(s) [s] (sample times)")
     p.add_argument("--horizon-s", type=float, default=60.0,
-                   help="forecast horizon [s], in whole steps of the log (rounded; default 60)")
+                   help="forecast horizon [s], a whole number of the log's steps (default 60)")
     p.add_argument("--commands", choices=("held", "known"), default="held",
                    help="held: commands stay at their start values (default); known: use the log's future "
                         "commands (the log must extend --horizon-s past each start)")

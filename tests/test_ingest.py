@@ -181,6 +181,11 @@ def test_a_forecast_says_which_samples_it_removed_outside_its_start_window(model
     with warnings.catch_warnings():
         warnings.simplefilter("error", LogFormatWarning)
         hybrid.forecast(blank, [250.0], 20)
+    # a sample whose time is missing is lost: said at forecast time too (it was dropped silently)
+    lost = log.copy()
+    lost.loc[100, "time_s"] = np.nan
+    with pytest.warns(LogFormatWarning, match=r"1 row\(s\) without a finite time_s dropped"):
+        hybrid.forecast(lost, [250.0], 20)
 
 
 def test_a_time_column_that_runs_backwards_says_the_samples_were_re_sorted(model, log):

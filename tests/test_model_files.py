@@ -565,6 +565,9 @@ def test_edited_settings_are_refused(saved, tmp_path):
     ("y_mean", lambda a: np.full_like(a["y_mean"], np.nan), "y_mean: expected 3 finite values"),
     ("guard_mean", lambda a: a["guard_mean"][:-1], "guard_mean / guard_inv_cov"),
     ("w1", lambda a: a["w1"].astype(complex), "w1: expected real numbers"),
+    # text in a normalisation or guard array: named, not numpy's "could not convert string to float"
+    ("x_mean", lambda a: a["x_mean"].astype(str), "x_mean: expected real numbers, got dtype <U"),
+    ("guard_inv_cov", lambda a: a["guard_inv_cov"].astype(str), "guard_inv_cov: expected real numbers"),
 ])
 def test_consistently_written_bad_arrays_are_refused(saved, tmp_path, key, value, message):
     def change(arrays):
@@ -575,7 +578,7 @@ def test_consistently_written_bad_arrays_are_refused(saved, tmp_path, key, value
 
 @pytest.mark.parametrize("key, value, message", [
     ("thrust_scale", lambda a: a["thrust_scale"][:2], "thrust_scale: expected 3 positive numbers"),
-    ("thrust_scale", lambda a: np.array(["a", "b", "c"]), "thrust_scale: expected 3 positive numbers"),
+    ("thrust_scale", lambda a: np.array(["a", "b", "c"]), "thrust_scale: expected real numbers, got dtype <U1"),
     ("guard_mean", lambda a: np.zeros(3), r"guard_mean / guard_inv_cov: expected shapes \(\d+,\)"),
     ("w3", None, "damaged model contents: w3 is missing"),
 ])

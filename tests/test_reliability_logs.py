@@ -7,6 +7,7 @@ one, and what was expected (or which unit mix-up it looks like).
 
 from __future__ import annotations
 
+import re
 import warnings
 
 import numpy as np
@@ -317,6 +318,26 @@ def test_rpm_logged_as_a_fraction_reaching_full_thrust_is_refused(model, moving_
                                 for t in model.vessel.thrusters})
     assert frac[[f"{t.name}_rpm" for t in model.vessel.thrusters]].abs().max().max() == 1.0
     _vessel_refused(model, frac, r"tunnel_rpm: every thruster's rpm is within \+-1 \(largest 1\)")
+
+def test_some_thrusters_rpm_logged_as_fractions_are_warned_about(model, moving_log):
+    """Port and stbd logged as fractions of max_rpm, the tunnel in rpm: the all-thrusters rule
+    cannot see it (the tunnel exceeds 1), and a 60-s forecast after a failure went wrong
+    without a word. Each such thruster is named in a warning (a stopped thruster's sensor
+    noise looks the same, so it is not refused); the clean log warns of nothing."""
+    df = moving_log.assign(**{f"{t.name}_rpm": moving_log[f"{t.name}_rpm"] / t.max_rpm
+                              for t in model.vessel.thrusters if t.name != "tunnel"})
+    assert df.tunnel_rpm.abs().max() > 1.0
+    with pytest.warns(LogFormatWarning) as record:
+        check_log_against_vessel(df, model.vessel)
+    said = [str(w.message) for w in record if issubclass(w.category, LogFormatWarning)]
+    for name in ("port", "stbd"):
+        assert any(re.match(rf"{name}_rpm: within \+-1 \(largest 0\.\d+\) in all \d+ of its non-zero samples "
+                            rf"of station keeping, while tunnel_rpm reaches .*a fraction of max_rpm\?", m)
+                   for m in said), said
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", LogFormatWarning)
+        check_log_against_vessel(moving_log, model.vessel)
+
 
 def test_rpm_sign_convention_is_checked(model, moving_log):
     df = moving_log.assign(port_rpm=-moving_log.port_rpm.abs() - 1.0)

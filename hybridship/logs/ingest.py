@@ -79,6 +79,8 @@ class SortedLog:
         Input rows (0-based positions) of the first two samples of each conflicting time.
     n_without_time : int
         Rows dropped because ``time_s`` was missing or not finite.
+    n_without_time_with_data : int
+        Those of them that held a value in another column (a sample lost, not a blank row).
     """
 
     frame: pd.DataFrame
@@ -87,6 +89,7 @@ class SortedLog:
     conflicting_time_s: np.ndarray
     n_without_time: int
     conflicting_rows: np.ndarray = field(default_factory=lambda: np.zeros((0, 2), dtype=int))
+    n_without_time_with_data: int = 0
 
     @property
     def affected_time_s(self) -> np.ndarray:
@@ -146,6 +149,8 @@ def sort_samples(df: pd.DataFrame, *, source: str = "log") -> SortedLog:
     t = _to_float(df, "time_s", source, None, inf_is_missing=True)
     has_time = np.isfinite(t)
     n_without = int((~has_time).sum())
+    with_data = int(df.iloc[np.flatnonzero(~has_time)].drop(columns="time_s").notna().any(axis=1).sum()) \
+        if n_without else 0
     rows = np.flatnonzero(has_time)
     tt = t[rows]
     # arrived late: earlier than some sample before it in the input
@@ -173,7 +178,8 @@ def sort_samples(df: pd.DataFrame, *, source: str = "log") -> SortedLog:
         frame = frame.drop(index=drop).reset_index(drop=True)
     return SortedLog(frame=frame, late_time_s=np.unique(tt[late]), duplicate_time_s=np.asarray(duplicate, float),
                      conflicting_time_s=np.asarray(conflicting, float), n_without_time=n_without,
-                     conflicting_rows=np.asarray(conflicting_rows, dtype=int).reshape(-1, 2))
+                     conflicting_rows=np.asarray(conflicting_rows, dtype=int).reshape(-1, 2),
+                     n_without_time_with_data=with_data)
 
 
 # --------------------------------------------------------------------------------------
@@ -240,10 +246,10 @@ def _from_frame(df: pd.DataFrame, v, purpose: str, source: str,
     order = sort_samples(df, source=source)
     if purpose == "fit":
         _refuse_conflicts(order, source)
-    if order.affected_time_s.size or (purpose == "fit" and order.n_without_time):
+    if order.affected_time_s.size or (purpose == "fit" and order.n_without_time) or order.n_without_time_with_data:
         # say what was repaired: a forecast's flags see only its start window, while the
-        # environment estimator reads the half hour before it (rows without any time, such
-        # as the blank rows at the end of a spreadsheet export, hold no sample to lose)
+        # environment estimator reads the half hour before it (rows without any value at
+        # all, such as the blank rows at the end of a spreadsheet export, hold no sample to lose)
         _warn_repaired(order, source)
     allow_missing = purpose == "forecast"
     try:

@@ -1041,6 +1041,26 @@ def _check_rpm_not_fractions(v, column, cols: set, n_rows: int, source: str) -> 
             f"{int(with_thrust.sum())} samples of station keeping with thrust; expected rpm (max_rpm of "
             f"thruster {logged[0][0].name!r} is {logged[0][0].max_rpm:g}), not a fraction of max_rpm or of "
             f"full thrust{_where(source)}", column=col)
+    _warn_some_rpm_fractions(logged, x, source)
+
+
+def _warn_some_rpm_fractions(logged, x: np.ndarray, source: str) -> None:
+    """A LogFormatWarning for each thruster whose rpm stays within +-1 in ``RPM_SIGN_MIN_SAMPLES``
+    or more of its non-zero samples of station keeping (``x``, one column per thruster of
+    ``logged``) while another thruster's reaches more: a fraction of ``max_rpm`` logged
+    for some thrusters only. A warning, not a refusal: a stopped thruster whose sensor reads
+    noise looks the same."""
+    big = np.nanmax(np.abs(np.where(np.isfinite(x), x, 0.0)), axis=0, initial=0.0)
+    for k, (th, col) in enumerate(logged):
+        on = np.isfinite(x[:, k]) & (x[:, k] != 0.0)
+        other = int(np.argmax(np.where(np.arange(len(logged)) == k, -1.0, big)))
+        if on.sum() >= RPM_SIGN_MIN_SAMPLES and big[k] <= 1.0 and big[other] > 1.0:
+            warnings.warn(
+                f"{col}: within +-1 (largest {big[k]:.3g}) in all {int(on.sum())} of its non-zero samples of "
+                f"station keeping, while {logged[other][1]} reaches {big[other]:.4g} rpm; expected rpm (max_rpm "
+                f"of thruster {th.name!r} is {th.max_rpm:g}): a fraction of max_rpm? (a stopped thruster whose "
+                f"sensor reads noise looks the same; the values are used as rpm){_where(source)}",
+                LogFormatWarning, stacklevel=4)
 
 
 def _check_rpm_while_station_keeping(v, df: pd.DataFrame, cols: set, t: np.ndarray, source: str) -> None:

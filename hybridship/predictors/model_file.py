@@ -548,19 +548,24 @@ def _read_wind_error_paths(data: dict) -> np.ndarray:
     return paths
 
 
+def _real_array(data: dict, key: str) -> np.ndarray:
+    """The stored array ``key`` as floats; ValueError naming it when it holds no real numbers
+    (text, objects), instead of numpy's conversion message."""
+    if data[key].dtype.kind not in "fiu":
+        raise ValueError(f"{key}: expected real numbers, got dtype {data[key].dtype}")
+    return np.asarray(data[key], dtype=float)
+
+
 def _read_nets(data: dict, n_in: int, state: dict):
     """``(MLPEnsemble, EnvelopeGuard, ThrustRegime)`` from the arrays; ValueError on wrong shapes."""
-    for i in range(6):
-        if data[f"w{i}"].dtype.kind not in "fiu":
-            raise ValueError(f"w{i}: expected real numbers, got dtype {data[f'w{i}'].dtype}")
-    weights = [np.asarray(data[f"w{i}"], dtype=float) for i in range(6)]
+    weights = [_real_array(data, f"w{i}") for i in range(6)]
     if weights[0].ndim != 3:
         raise ValueError(f"w0: expected shape (members, inputs, hidden), got {weights[0].shape}")
     E, H = weights[0].shape[0], weights[0].shape[2]
     expected = [(E, n_in, H), (E, 1, H), (E, H, H), (E, 1, H), (E, H, 3), (E, 1, 3)]
     if [w.shape for w in weights] != expected:
         raise ValueError(f"weight shapes {[w.shape for w in weights]} do not match {expected}")
-    norm = {k: np.asarray(data[k], dtype=float) for k in ("x_mean", "x_std", "y_mean", "y_std")}
+    norm = {k: _real_array(data, k) for k in ("x_mean", "x_std", "y_mean", "y_std")}
     for k, n in (("x_mean", n_in), ("x_std", n_in), ("y_mean", 3), ("y_std", 3)):
         if norm[k].shape != (n,):
             raise ValueError(f"{k}: expected {n} finite values, got shape {norm[k].shape}")
@@ -570,7 +575,7 @@ def _read_nets(data: dict, n_in: int, state: dict):
         if k.endswith("std") and not np.all(norm[k] > 0):
             raise ValueError(f"{k}: a normalisation scale must be > 0")
     ens = MLPEnsemble(weights, norm["x_mean"], norm["x_std"], norm["y_mean"], norm["y_std"])
-    g_mean, g_inv = np.asarray(data["guard_mean"], dtype=float), np.asarray(data["guard_inv_cov"], dtype=float)
+    g_mean, g_inv = _real_array(data, "guard_mean"), _real_array(data, "guard_inv_cov")
     # the guard's envelope is over the nets' normalised inputs: one entry per feature
     if g_mean.shape != (n_in,) or g_inv.shape != (n_in, n_in) or not np.all(np.isfinite(g_mean)):
         raise ValueError(f"guard_mean / guard_inv_cov: expected shapes ({n_in},) and ({n_in}, {n_in}) (one per "
@@ -580,11 +585,10 @@ def _read_nets(data: dict, n_in: int, state: dict):
         if not np.all(np.isfinite(np.asarray(v, dtype=float))):
             raise ValueError(f"{name}: not a finite number")
     guard = EnvelopeGuard(g_mean, g_inv, state["guard_d0"], state["guard_scale"])
-    scale = data["thrust_scale"]
-    if scale.dtype.kind not in "fiu" or scale.shape != (3,) or not np.all(np.asarray(scale, dtype=float) > 0):
-        raise ValueError(f"thrust_scale: expected 3 positive numbers (surge, sway, yaw), got dtype {scale.dtype} "
-                         f"and shape {scale.shape}")
-    thrust_regime = ThrustRegime(np.asarray(scale, dtype=float), state["thrust_lo"])
+    scale = _real_array(data, "thrust_scale")
+    if scale.shape != (3,) or not np.all(scale > 0):
+        raise ValueError(f"thrust_scale: expected 3 positive numbers (surge, sway, yaw), got shape {scale.shape}")
+    thrust_regime = ThrustRegime(scale, state["thrust_lo"])
     return ens, guard, thrust_regime
 
 
