@@ -55,6 +55,17 @@ def test_watch_circle_is_the_upper_quantile_of_the_excursion():
     assert res.watch_circle(0.5)[0, 0] == pytest.approx(50.0)
 
 
+@pytest.mark.parametrize("n", [7, 15, 25, 101])
+def test_at_least_the_watch_circles_share_of_the_samples_stays_inside_it(n):
+    """An interpolated quantile (numpy's default) put the 0.9 watch circle of 7 samples between
+    the 6th and 7th excursion: 6 of 7 (86 %) inside a circle said to hold 90 %."""
+    exc = np.arange(1.0, n + 1.0)
+    for q in (0.5, 0.9, 0.95):
+        w = _result(np.full(n, np.inf), excursion=exc).watch_circle(q)[0, 0]
+        assert np.mean(exc <= w) >= q
+        assert np.mean(exc < w) < q            # and the smallest such circle
+
+
 def test_operability_counts_a_p_exceed_equal_to_the_limit_as_operable():
     """Kills: operability with ``<`` instead of the documented ``<=`` (Se4)."""
     pe = np.array([0.1, 0.2]).reshape(2, 1, 1, 1)

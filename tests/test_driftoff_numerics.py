@@ -265,3 +265,20 @@ def test_season_rows_follow_the_states_whatever_order_the_chunks_finish(monkeypa
                          progress=False)
     np.testing.assert_array_equal(there.watch_radius_m, here.watch_radius_m)
     assert there.watch_radius_m[1, 0, 0] > there.watch_radius_m[2, 0, 0]    # not all alike
+
+
+def test_the_capacity_flag_takes_the_thrusters_capacity_in_the_loads_own_direction():
+    """Gunnerus' thrusters give about 64 kN to starboard but 52 kN to port. A 24 m/s beam wind
+    needs about 54 kN of holding force: within capacity when it blows from starboard (the
+    thrusters push to starboard), beyond it from port. The flag compared every load with the
+    smaller of the two signs and called both over capacity."""
+    from hybridship.sim.allocation import thrust_capacity, thrust_capacity_by_sign
+
+    both = thrust_capacity_by_sign("gunnerus")
+    np.testing.assert_array_equal(thrust_capacity("gunnerus"), both.min(axis=0))
+    assert both[0, 1] > 1.1 * both[1, 1]
+    st = DriftOffSettings(n_samples=1, horizon_s=10.0, radii_m=(100.0,), reaction_times_s=(10.0,), vessel_spread=0.0)
+    frac = {d: simulate_blackouts("gunnerus", WeatherState.from_degrees(wind_speed_m_s=24.0, wind_dir_deg=d,
+                                                                         gust_intensity=0.0), [0.0],
+                                  settings=st).over_capacity_frac[0] for d in (90.0, 270.0)}
+    assert frac == {90.0: 0.0, 270.0: 1.0}

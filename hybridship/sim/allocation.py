@@ -44,6 +44,7 @@ from hybridship.physics.propeller import load_wageningen, rpm_for_thrust, thrust
 from hybridship.physics.thrusters import configuration_matrix
 
 __all__ = ["AllocationResult", "ThrusterLimits", "ThrustAllocator", "bollard_thrust_limits", "thrust_capacity",
+           "thrust_capacity_by_sign",
            "extended_configuration", "station_keeping_rank", "check_station_keeping"]
 
 #: Default time to ramp a shaft from 0 to max_rpm when no rpm rate limit is given [s].
@@ -580,8 +581,8 @@ class ThrustAllocator:
 def thrust_capacity(vessel) -> np.ndarray:
     """Largest pure surge force, sway force and yaw moment the thrusters give at the bollard.
 
-    Each is the smaller of the two signs, with the other two components held at zero
-    (direction-preserving limit of :class:`ThrustAllocator`).
+    Each is the smaller of the two signs (:func:`thrust_capacity_by_sign`), with the other
+    two components held at zero (direction-preserving limit of :class:`ThrustAllocator`).
 
     Parameters
     ----------
@@ -593,18 +594,29 @@ def thrust_capacity(vessel) -> np.ndarray:
     ndarray, shape (3,)
         ``[X_N, Y_N, N_Nm]``, each > 0 when the vessel can produce that load at all.
     """
+    return thrust_capacity_by_sign(vessel).min(axis=0)
+
+
+def thrust_capacity_by_sign(vessel) -> np.ndarray:
+    """:func:`thrust_capacity` for each sign: row 0 the largest positive surge force, sway
+    force and yaw moment, row 1 the largest negative ones (as magnitudes), each with the
+    other two components held at zero.
+
+    Returns
+    -------
+    ndarray, shape (2, 3)
+        ``[[X_N, Y_N, N_Nm] towards +, [X_N, Y_N, N_Nm] towards -]``, each >= 0.
+    """
     alloc = ThrustAllocator(vessel, dt_s=1.0, warn_unlimited_slew=False)     # a static capacity: no slewing
     big = 1e12
-    cap = np.empty(3)
+    cap = np.empty((2, 3))
     for k in range(3):
-        vals = []
-        for sgn in (1.0, -1.0):
+        for i, sgn in enumerate((1.0, -1.0)):
             tau = np.zeros(3)
             tau[k] = sgn * big
             f, scale = alloc._solve_extended(tau)
             # what the forces give, not what was asked: a direction no thruster acts in gets
             # the least-squares answer, zero forces, "achieved" at full scale
             given = float(alloc.T_e[k] @ f)
-            vals.append(scale * big if abs(given - scale * tau[k]) <= 1e-6 * big else max(sgn * given, 0.0))
-        cap[k] = min(vals)
+            cap[i, k] = scale * big if abs(given - scale * tau[k]) <= 1e-6 * big else max(sgn * given, 0.0)
     return cap
