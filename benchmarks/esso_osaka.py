@@ -25,7 +25,8 @@ from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
 #: The benchmark's result files that the full run copies to ``docs/results/esso-osaka``.
-RESULT_FILES = ("errors.csv", "coverage.csv", "coverage_heading.csv", "coverage_intervals.csv", "sharpness.csv")
+RESULT_FILES = ("README.md", "errors.csv", "coverage.csv", "coverage_heading.csv", "coverage_intervals.csv",
+                "sharpness.csv")
 
 
 def replace_generated(text: str, key: str, body: str) -> str:
