@@ -93,7 +93,7 @@ def test_the_hybrid_refuses_rpm_beyond_twice_max_and_pitch_beyond_half_a_radian(
 def test_tables_extend_below_idle_speed_as_v_squared_and_v_to_rest(craft):
     """Below the idle-speed equilibrium (about 2.1 m/s) the resistance falls as ``V^2`` and the trim as
     ``V``, both to zero at rest; above the top speed they continue along the last segment."""
-    t = GreyBoxTables.from_craft(craft, "interceptor", n_rpm=3, act=(0.0,), dv_m_s=0.5)
+    t = GreyBoxTables.from_craft(craft, "interceptor", n_rpm=3, act=(0.0, 1.0), dv_m_s=0.5)
     v = t.v0_m_s + t.dv_m_s * np.arange(t.resistance_n.shape[1])
     R, TH = t.resistance_n[0], t.trim_rad[0]
     assert R[0] == 0.0 and TH[0] == 0.0
@@ -138,7 +138,7 @@ def test_grey_box_k0_at_the_ends_of_the_record(grey):
 
 def test_tables_of_the_other_trim_device_are_refused(craft, tables):
     """Tables carry the device they were computed for; interceptor tables with trim tabs were accepted."""
-    t = GreyBoxTables.from_craft(craft, "interceptor", n_rpm=3, act=(0.0,))
+    t = GreyBoxTables.from_craft(craft, "interceptor", n_rpm=3, act=(0.0, 1.0))
     assert t.actuator == "interceptor"
     with pytest.raises(ValueError, match=r"^tables: computed for the 'interceptor' actuator, expected .* 'trim_tab'"):
         HybridModel(craft, "trim_tab", tables=t)
@@ -163,3 +163,54 @@ def test_text_flags_and_a_bad_step_are_refused_by_name():
                                    sea=SeaConditions()), craft, progress="no")
     with pytest.raises(TypeError, match="^progress: expected True or False"):
         HybridModel(craft, "interceptor").fit(np.zeros((60, 3)), np.zeros((60, 2)), progress="no")
+
+
+def test_tables_with_more_actuator_rows_are_interpolated_over_all_of_them(craft):
+    """Review: the lookup used only the first three rows of ``tables.act``: with five rows
+    (0, 0.25, ..., 1) the device's effect stopped growing at 0.5 out (its third row)."""
+    v = np.arange(0.0, 26.25, 0.25)
+    act = np.array([0.0, 0.25, 0.5, 0.75, 1.0])
+    res = np.array([2000.0 + 40.0 * v + 1000.0 * a for a in act])
+    trim = np.array([np.full(v.size, 0.05 - 0.02 * a) for a in act])
+    grey = GreyBox(craft, "interceptor", GreyBoxTables(0.0, 0.25, act, res, trim))
+    for a in (0.0, 0.1, 0.5, 0.6, 0.75, 0.9, 1.0):
+        base, r = grey._lookup(grey._R, 10.0, a)
+        assert base == pytest.approx(2400.0) and r == pytest.approx(2400.0 + 1000.0 * a)
+        assert grey._lookup(grey._TH, 10.0, a)[1] == pytest.approx(0.05 - 0.02 * a)
+
+
+@pytest.mark.parametrize("act", [(0.0,), (0.5, 1.0), (0.0, 1.0, 0.5), (0.0, 1.5), (0.0, float("nan"))])
+def test_actuator_rows_that_cannot_be_interpolated_are_refused_by_name(craft, act):
+    """One row (an IndexError at the first lookup), a first row that is not the retracted device
+    (the base of the device's changes), unsorted rows or fractions beyond 1 are refused."""
+    with pytest.raises(ValueError, match="^act: "):
+        GreyBoxTables.from_craft(craft, "interceptor", n_rpm=3, act=act)
+    v = np.arange(0.0, 1.0, 0.25)
+    t = GreyBoxTables(0.0, 0.25, np.array(act), np.ones((len(act), v.size)), np.zeros((len(act), v.size)))
+    with pytest.raises(ValueError, match="^tables.act: "):
+        GreyBox(craft, "interceptor", t)
+
+
+def test_table_grid_arguments_are_refused_by_name(craft):
+    """``n_rpm=1`` was an IndexError, ``dv_m_s=0`` a ZeroDivisionError."""
+    with pytest.raises(ValueError, match="^n_rpm: "):
+        GreyBoxTables.from_craft(craft, "interceptor", n_rpm=1)
+    with pytest.raises(ValueError, match="^dv_m_s: "):
+        GreyBoxTables.from_craft(craft, "interceptor", n_rpm=3, dv_m_s=0.0)
+
+
+def test_the_grey_box_steps_at_the_crafts_sample_period(craft, tables):
+    """Review: the step defaulted to 0.1 s whatever the craft's sample period: on a craft logged
+    at 0.2 s the grey box (and the hybrid) integrated half the time per sample."""
+    from hybridship.hsc.vessel import planing_craft_from_dict
+
+    d = craft.model_dump()
+    d["sensors"]["sample_period_s"] = 0.2
+    slow = planing_craft_from_dict(d)
+    assert GreyBox(craft, "interceptor", tables).dt == 0.1
+    assert GreyBox(slow, "interceptor", tables).dt == 0.2
+    assert GreyBox(slow, "interceptor", tables, dt_s=0.1).dt == 0.1
+    assert HybridModel(slow, "interceptor", tables=tables).grey.dt == 0.2
+    # the device's rate limit per sample follows: full stroke in 2 s = 10 samples of 0.2 s
+    a = GreyBox(slow, "interceptor", tables).actuator_fraction(np.r_[10.0, np.full(14, 100.0)])
+    np.testing.assert_allclose(a[1:12], np.minimum(np.arange(11) * 0.2 / craft.interceptor.full_stroke_time_s, 1.0))

@@ -37,6 +37,7 @@ The prediction is the grey box plus the ensemble mean.
 
 from __future__ import annotations
 
+import bisect
 import math
 import os
 from dataclasses import dataclass
@@ -89,6 +90,9 @@ class GreyBoxTables:
     @classmethod
     def from_craft(cls, craft: PlaningCraft, actuator: str, *, n_rpm: int = 25,
                    act=(0.0, 0.5, 1.0), dv_m_s: float = 0.25) -> "GreyBoxTables":
+        n_rpm = check_whole_number("n_rpm", n_rpm, 2)       # the extrapolation above the top needs two
+        dv_m_s = check_number("dv_m_s", dv_m_s, lo=0.0, lo_open=True)
+        _check_act_rows(act)
         model = PlaningCraftModel(craft, actuator)
         lo, hi = craft.engines.idle_rpm, craft.engines.max_rpm
         rpms = np.linspace(lo, hi * 1.05, n_rpm)
@@ -118,9 +122,13 @@ class GreyBoxTables:
 class GreyBox:
     """The grey-box surge/pitch model of one craft and trim device (see the module docstring)."""
 
-    def __init__(self, craft: PlaningCraft, actuator: str, tables: GreyBoxTables | None = None, dt_s: float = 0.1):
+    def __init__(self, craft: PlaningCraft, actuator: str, tables: GreyBoxTables | None = None,
+                 dt_s: float | None = None):
         self.craft, self.actuator = craft, actuator
-        self.dt = check_number("dt_s", dt_s, lo=0.0, lo_open=True)
+        # the step of the records: by default the craft's sample period (a fixed 0.1 s ran the
+        # dynamics at half speed on a craft logged at 0.2 s)
+        dt_s = craft.sensors.sample_period_s if dt_s is None else dt_s
+        self.dt = dt_s = check_number("dt_s", dt_s, lo=0.0, lo_open=True)
         pm = PlaningCraftModel(craft, actuator)         # checks the actuator before the tables are judged by it
         if tables is not None and not isinstance(tables, GreyBoxTables):
             raise TypeError(f"tables: expected GreyBoxTables (GreyBoxTables.from_craft(...)), "
@@ -129,6 +137,12 @@ class GreyBox:
             # the other device's resistance and trim changes, accepted without a word before
             raise ValueError(f"tables: computed for the {tables.actuator!r} actuator, expected tables for {actuator!r} "
                              f"(GreyBoxTables.from_craft(craft, {actuator!r}))")
+        if tables is not None:
+            _check_act_rows(tables.act, "tables.act")
+            for name in ("resistance_n", "trim_rad"):
+                if np.shape(getattr(tables, name))[0] != len(tables.act):
+                    raise ValueError(f"tables.{name}: expected one row per actuator fraction of tables.act "
+                                     f"({len(tables.act)}), got {np.shape(getattr(tables, name))[0]}")
         self.tables = tables or GreyBoxTables.from_craft(craft, actuator)
         self._pwm_to_frac = pm.pwm_to_fraction
         self.pwm_range_pct = tuple(map(float, pm.pwm_range))
@@ -144,6 +158,7 @@ class GreyBox:
         self._nv = t.resistance_n.shape[1]
         self._R = [list(r) for r in t.resistance_n]
         self._TH = [list(r) for r in t.trim_rad]
+        self._act = [float(x) for x in t.act]
 
     # -------------------------------------------------------------- pieces
 
@@ -162,8 +177,10 @@ class GreyBox:
         f = (v - t.v0_m_s) / t.dv_m_s
         i = min(max(int(f), 0), self._nv - 2)
         w = min(max(f - i, 0.0), 1.0) if f < self._nv - 1 else f - i
-        rows = t.act
-        j = 0 if a <= rows[1] else 1
+        rows = self._act
+        # the interval of the actuator rows holding a (any number of rows; only the first
+        # three were used before, so a finer grid stopped at its third row)
+        j = min(max(bisect.bisect_left(rows, a) - 1, 0), len(rows) - 2)     # a on a row: the interval below it, as before
         wa = min(max((a - rows[j]) / (rows[j + 1] - rows[j]), 0.0), 1.0)
         r0 = table[j][i] + w * (table[j][i + 1] - table[j][i])
         r1 = table[j + 1][i] + w * (table[j + 1][i + 1] - table[j + 1][i])
@@ -275,6 +292,19 @@ class GreyBox:
         return dict(zip(PARAM_NAMES, map(float, self.params)))
 
 
+def _check_act_rows(act, name: str = "act") -> None:
+    """Actuator fractions of the table rows: at least two, finite, strictly increasing in [0, 1],
+    the first 0 (the device retracted: the base the device's changes are taken from)."""
+    try:
+        a = np.asarray(act, dtype=float)
+    except (TypeError, ValueError):
+        raise ValueError(f"{name}: expected actuator fractions, got {act!r}") from None
+    if a.ndim != 1 or a.size < 2 or not np.all(np.isfinite(a)) or a[0] != 0.0 or a[-1] > 1.0 \
+            or np.any(np.diff(a) <= 0):
+        raise ValueError(f"{name}: expected two or more increasing fractions from 0 (retracted) up to at most 1, "
+                         f"got {act!r}")
+
+
 def _check_k0(k0, n_rows: int, after: int) -> int:
     """``k0`` as an int with ``after`` rows of ``U`` after it (before: a negative ``k0`` counted
     from the end, a large one was an IndexError)."""
@@ -335,17 +365,19 @@ class HybridModel:
         Lags of the heave acceleration in the residual features.
     tables : GreyBoxTables, optional
         Pre-computed equilibria (they depend only on the craft and device).
+    dt_s : float, optional
+        Sample period of the records [s]; default the craft's ``sensors.sample_period_s``.
     """
 
     name = "hybrid"
 
     def __init__(self, craft: PlaningCraft, actuator: str, *, ensemble: EnsembleConfig = EnsembleConfig(),
-                 acc_lags: int = 4, tables: GreyBoxTables | None = None, dt_s: float = 0.1):
+                 acc_lags: int = 4, tables: GreyBoxTables | None = None, dt_s: float | None = None):
         if isinstance(craft, (str, os.PathLike)):    # a name or file, as load_planing_craft takes
             craft = load_planing_craft(craft)
         if not isinstance(craft, PlaningCraft):
             raise TypeError(f"craft: expected a PlaningCraft (load_planing_craft(...)), got {type(craft).__name__}")
-        check_number("dt_s", dt_s, lo=0.0, lo_open=True)
+        check_number("dt_s", dt_s, lo=0.0, lo_open=True, allow_none=True)    # None: the craft's sample period
         check_whole_number("acc_lags", acc_lags, 1)
         self.grey = GreyBox(craft, actuator, tables, dt_s)
         self.ensemble_config = as_config(ensemble, EnsembleConfig, "ensemble")
