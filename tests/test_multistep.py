@@ -122,6 +122,9 @@ def test_command_regime_weights_and_model_file(tmp_path):
     k_ahead, k_astern_low = cr.regime(0.5, 0.8, 0.0), cr.regime(-0.5, 0.01, 0.0)
     assert cr.weights[k_ahead] > 0.9 and cr.weights[k_astern_low] == 0.0
     assert cr.weights[cr.regime(-0.5, 0.8, 0.5)] == 0.0          # never seen at all
+    # an angle is judged on the circle: 350 deg is -10 deg (not hard over), 200 deg is -160 deg (hard over)
+    assert cr.regime(0.5, 0.8, np.radians(350.0)) == cr.regime(0.5, 0.8, np.radians(-10.0))
+    assert cr.regime(0.5, 0.8, np.radians(200.0)) == cr.regime(0.5, 0.8, np.radians(-160.0))
     np.testing.assert_allclose(cr.weight(np.array([0.5, -0.5]), np.array([0.8, 0.01]), np.zeros(2)),
                                cr.weights[[k_ahead, k_astern_low]])
 
@@ -135,6 +138,35 @@ def test_command_regime_weights_and_model_file(tmp_path):
     fc = hp.forecast(logs[0], [150.0], 20.0)
     np.testing.assert_allclose(back.forecast(logs[0], [150.0], 20.0).guard_weight, fc.guard_weight)
 
+
+
+def test_command_regime_is_fitted_on_the_deviations_the_nets_learned(monkeypatch):
+    """With the environment estimator (the default) the nets learn the residual less the
+    estimator's environment; the command regime must score them on that same deviation of the
+    held-back rows, with the same inputs, not on the mean-residual one."""
+    from hybridship.residual import guard
+
+    m = DynamicModel("gunnerus")
+    t = np.arange(800)
+    load = np.column_stack([2e4 * np.sin(2 * np.pi * t / 300), 1.5e4 * np.cos(2 * np.pi * t / 250),
+                            5e4 * np.sin(2 * np.pi * t / 400)])
+    logs = [as_log_arrays(physics_log(m, seed=s, duration_s=800.0, t_shutdown_s=None, current=(0.3, 1.0),
+                                      tau_ext_N=load), m.vessel) for s in (8, 9)]
+    seen = {}
+    fit = guard.CommandRegime.fit.__func__
+
+    def spy(cls, train_cmd, held_cmd, held_target, held_pred, **kw):
+        seen.update(target=np.asarray(held_target), pred=np.asarray(held_pred))
+        return fit(cls, train_cmd, held_cmd, held_target, held_pred, **kw)
+
+    monkeypatch.setattr(guard.CommandRegime, "fit", classmethod(spy))
+    cal = CalibrationConfig(fraction=0.3, horizon_s=20.0, max_starts=30)
+    hp = HybridPredictor(m.vessel, ensemble_config=TINY, command_guard=True, calibration_config=cal,
+                         environment_window_s=600.0).fit(logs)
+    held = [np.arange(len(a)) >= hp._calibration_cut(a, cal, True) for a in logs]
+    X, Y, _ = hp.training_data(logs, row_masks=held)
+    np.testing.assert_allclose(seen["target"], Y / hp.ensemble.y_std)
+    np.testing.assert_allclose(seen["pred"], hp.ensemble.predict(X)[0] / hp.ensemble.y_std)
 
 def _small_multistep_setup():
     """A one-step hybrid on two short logs, a 5-s multi-step configuration and its starts."""

@@ -277,14 +277,8 @@ class HybridPredictor:
         """
         Xs, Ys, segs, thr, full = [], [], [], [], []
         for k, log in enumerate(logs):
-            full_rate = as_log_arrays(log, self.model.vessel)
-            every = self.residual_config.thinning(full_rate.dt_s)      # a fast log: its rows about 1 s apart
-            arrays = full_rate.rows(slice(None, None, every)) if every > 1 else full_rate
-            prep = prepare_log(self.model, arrays, self.residual_config)
-            if self.environment == "estimator":         # the estimator runs at the log's rate, as forecasts run it
-                est = self.estimator.run(full_rate)
-                prep.env_body = (environment_accel(self.model, arrays, est, prep.nu_s) if every == 1 else
-                                 environment_accel(self.model, full_rate, est)[::every])
+            prep, every = self._training_prep(log)
+            arrays = prep.arrays
             mask = arrays.dp_active.astype(bool) if dp_only else None
             if row_masks is not None and row_masks[k] is not None:
                 mask = row_masks[k][::every] if mask is None else (mask & row_masks[k][::every])
@@ -302,6 +296,20 @@ class HybridPredictor:
         self._training_thrust_acc = np.concatenate(thr)
         self._training_full = np.concatenate(full)
         return np.concatenate(Xs), np.concatenate(Ys), np.concatenate(segs)
+
+    def _training_prep(self, log):
+        """A training log prepared as the nets learn from it: ``(prep, every)``, the rows every
+        ``every``-th (:meth:`ResidualConfig.thinning`) and, with ``environment="estimator"``,
+        the estimator's environment as the one the deviations are taken from."""
+        full_rate = as_log_arrays(log, self.model.vessel)
+        every = self.residual_config.thinning(full_rate.dt_s)      # a fast log: its rows about 1 s apart
+        arrays = full_rate.rows(slice(None, None, every)) if every > 1 else full_rate
+        prep = prepare_log(self.model, arrays, self.residual_config)
+        if self.environment == "estimator":         # the estimator runs at the log's rate, as forecasts run it
+            est = self.estimator.run(full_rate)
+            prep.env_body = (environment_accel(self.model, arrays, est, prep.nu_s) if every == 1 else
+                             environment_accel(self.model, full_rate, est)[::every])
+        return prep, every
 
     @keeps_state_on_error
     def fit(self, logs: Iterable, *, dp_only: bool = True, progress: bool = False,
@@ -629,10 +637,13 @@ class HybridPredictor:
         return a.rpm[rows - 1, 0] / sc["rpm_scale"], prep.nu_hat[rows, 0], ang
 
     def _fit_command_regime(self, logs, masks, dp_only, stride) -> CommandRegime | None:
-        """Command-regime weights from the held-back rows (see :class:`CommandRegime`)."""
+        """Command-regime weights from the held-back rows (see :class:`CommandRegime`), whose
+        targets and features are those the nets were trained on (:meth:`_training_prep`)."""
         tr_in, he_in, T, Pm = [], [], [], []
-        for a, m in zip(logs, masks):
-            prep = prepare_log(self.model, a, self.residual_config)
+        for log, m in zip(logs, masks):
+            prep, every = self._training_prep(log)
+            a = prep.arrays
+            m = None if m is None else np.asarray(m, dtype=bool)[::every]
             dp = a.dp_active.astype(bool) if dp_only else np.ones(len(a), bool)
             held = dp & ~m if m is not None else np.zeros(len(a), bool)
             rows_t = prep.trainable_rows(dp & m if m is not None else dp)[::stride]

@@ -20,6 +20,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..frames import wrap_pi
+
 
 @dataclass
 class EnvelopeGuard:
@@ -140,7 +142,8 @@ class CommandRegime:
 
     * propeller: ahead (rpm / max rpm > ``rpm_eps``), stopped, astern (< ``-rpm_eps``);
     * speed: low (Froude number of ``|u|`` below ``froude_lo``) or not;
-    * first rotatable actuator (rudder): hard over (``|angle| > angle_hard_rad``) or not;
+    * first rotatable actuator (rudder): hard over (``|angle| > angle_hard_rad``, the angle
+      wrapped to [-pi, pi)) or not;
 
     and each regime has a weight in [0, 1]: the least-squares scale of the nets' mean
     one-step prediction onto the measured residual deviation on rows the nets were not
@@ -174,7 +177,8 @@ class CommandRegime:
         rpm_rel = np.asarray(rpm_rel, dtype=float)
         prop = np.where(rpm_rel > self.rpm_eps, 0, np.where(rpm_rel < -self.rpm_eps, 2, 1))
         low = np.abs(np.asarray(u_m_s, dtype=float)) < self.froude_lo * np.sqrt(9.81 * self.length_m)
-        hard = np.abs(np.asarray(angle_rad, dtype=float)) > self.angle_hard_rad
+        # on the circle: an azimuth logged as 350 deg is the one logged as -10 deg
+        hard = np.abs(wrap_pi(np.asarray(angle_rad, dtype=float))) > self.angle_hard_rad
         return prop * 4 + low.astype(int) * 2 + hard.astype(int)
 
     def weight(self, rpm_rel, u_m_s, angle_rad) -> np.ndarray:
