@@ -694,3 +694,17 @@ def test_bias_is_the_trailing_mean_of_causal_residuals_turned_to_ned(model):
         c, s = np.cos(psi[k]), np.sin(psi[k])
         ned = np.column_stack([c * r[k, 0] - s * r[k, 1], s * r[k, 0] + c * r[k, 1], r[k, 2]])
         np.testing.assert_allclose(prep.bias_ned[i], ned.mean(axis=0), rtol=1e-9, atol=1e-15)
+
+
+def test_a_start_residual_window_is_refused_where_it_would_be_ignored():
+    """With the environment estimator every forecast starts its autoregressive input at zero
+    (the estimator's state is the start), so a ResidualConfig.start_residual_window_s above 0
+    was accepted and silently dropped; it is refused there and used with the mean residual."""
+    from hybridship.predictors import HybridPredictor
+    from hybridship.residual.features import ResidualConfig
+
+    cfg = ResidualConfig(start_residual_window_s=10.0)
+    with pytest.raises(ValueError, match=r"^residual_config.start_residual_window_s: must be 0 with "
+                                         r"environment='estimator'"):
+        HybridPredictor("gunnerus", residual_config=cfg)
+    HybridPredictor("gunnerus", residual_config=cfg, environment="mean")

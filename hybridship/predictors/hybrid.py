@@ -237,6 +237,11 @@ class HybridPredictor:
         if environment not in ENVIRONMENT_SOURCES:
             raise ValueError(f"environment: expected one of {ENVIRONMENT_SOURCES}, got {environment!r}")
         environment_window_s = check_number("environment_window_s", environment_window_s, lo=0.0, lo_open=True)
+        if environment == "estimator" and residual_config.start_residual_window_s > 0:
+            # the estimator's state starts every forecast: its autoregressive input starts at zero
+            raise ValueError(f"residual_config.start_residual_window_s: must be 0 with environment='estimator' "
+                             f"(the estimator's state starts the forecasts; a recent residual mean applies only "
+                             f"with environment='mean'), got {residual_config.start_residual_window_s:g}")
         if environment == "estimator" and environment_window_s < environment_config.held_load_window_s:
             # a shorter filter window could cut a start's held-load window at the filter's first row
             raise ValueError(f"environment_window_s: must be at least environment_config.held_load_window_s = "

@@ -111,7 +111,9 @@ class ResidualConfig:
     start_residual_window_s : float
         Window of the causal residual average that starts the
         autoregressive input [s]; 0 starts it at zero deviation (the bias already holds the
-        recent mean, and a short window at a failure mixes in the thrusters' run-down).
+        recent mean, and a short window at a failure mixes in the thrusters' run-down). Used
+        with the mean-residual environment only; a hybrid with the environment estimator
+        refuses a value above 0.
     bias_window_s : float
         Window of the causal residual mean used as the bias [s]; 0 = no bias
         (the paper's scheme).
