@@ -124,6 +124,25 @@ def test_shared_station_keeping_is_not_shared_across_first_rows(model):
     assert not np.array_equal(alone.x, est.run(a, rows, first_row=3).x)       # and k = 0.004 is one
 
 
+def test_shared_station_keeping_carries_the_outlier_count_across_the_failure(model):
+    """A position spike that starts before the failure and lasts past it: a run inside
+    sharing_station_keeping goes on from the failure with the outliers counted so far, so
+    it lets the spike in where a run of its own does (after max_gated_samples in a row),
+    not ten samples later (it gave a north 39 m apart)."""
+    log = physics_log(model, duration_s=600, t_shutdown_s=400, seed=6, tau_ext_N=(2000.0, 0.0, 0.0))
+    log.loc[395:410, "north_m"] += 300.0
+    a = as_log_arrays(log, model.vessel, purpose="forecast")
+    assert a.dp_active[399] == 1 and a.dp_active[400] == 0
+    rows = np.array([420, 500])
+    est = EnvironmentEstimator(model)
+    alone = est.run(a, rows, drift_yaw_uv_rad_per_m2=0.004)
+    with est.sharing_station_keeping():
+        est.run(a, rows, drift_yaw_uv_rad_per_m2=0.002)
+        shared = est.run(a, rows, drift_yaw_uv_rad_per_m2=0.004)
+    np.testing.assert_array_equal(shared.x, alone.x)
+    np.testing.assert_array_equal(shared.P, alone.P)
+
+
 def test_settling_leaves_the_environment_alone_until_the_motion_states_have_settled(model):
     """With ``settle_s`` the environment keeps its prior for that long after the filter's
     start and its value at a gap for that long after the restart, then learns; a run that
@@ -285,6 +304,26 @@ def test_drift_samples_update_the_estimate_online(model):
     fast, slow = sds
     assert slow[-1] < slow[0]
     assert fast[0] < fast[-1] < 0.25 * default.load_prior_m_s2
+
+
+def test_thrust_the_log_stops_recording_after_a_failure_is_not_held_in_the_drift(model):
+    """A log whose rpm columns stop at the power failure (the thrusters' feedback dies with
+    it): the log's reader holds the last rpm, the station keeping's. The filter takes no
+    thrust there, as the forecasts do, so its drift estimates are those of the log that
+    recorded the stopped thrusters (0 rpm); with the held rpm the process model pushed the
+    drifting ship and the load took up the difference (about 5e-3 m/s^2 after 100 s on truthsim-dev,
+    forecasts started then off by metres)."""
+    log = physics_log(model, duration_s=600, t_shutdown_s=400, seed=6, tau_ext_N=(2000.0, 0.0, 0.0))
+    stopped = log["dp_active"] == 0
+    rpm_cols = [c for c in log.columns if c.endswith("_rpm")]
+    assert stopped.any() and (log.loc[stopped, rpm_cols] == 0.0).all().all()
+    lost = log.copy()
+    lost.loc[stopped, rpm_cols] = np.nan
+    rows = np.array([390, 450, 550])
+    clean = EnvironmentEstimator(model).run(as_log_arrays(log, model.vessel, purpose="forecast"), rows)
+    got = EnvironmentEstimator(model).run(as_log_arrays(lost, model.vessel, purpose="forecast"), rows)
+    np.testing.assert_array_equal(got.x, clean.x)
+    np.testing.assert_array_equal(got.P, clean.P)
 
 
 def test_a_load_that_changes_in_the_drift_is_followed_with_the_after_stop_walks(model):

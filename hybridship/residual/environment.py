@@ -698,15 +698,21 @@ class EnvironmentEstimator:
         # position off the GNSS: left out, as the start window leaves it out
         nu_ok[:, :2] &= ~(velocity_track_mismatch_m(arrays, TRACK_WINDOW_S, first_row, last)
                           > TRACK_MISMATCH_M)[:, None]
+        dp = arrays.dp_active[sl].astype(bool)
+        rpm = np.nan_to_num(arrays.rpm[sl])
+        # after a failure, commands the log no longer records are not held at their last
+        # (station-keeping) rpm: that thrust would push the drift in the process model, and
+        # the load would take up its difference, while the forecasts take no thrust there
+        rpm[~dp & ~arrays.commands_logged[sl]] = 0.0
         return {
             "z": rows(np.column_stack([arrays.eta[sl], arrays.nu[sl]])),
             "z_ok": rows(np.column_stack([np.isfinite(arrays.eta[sl]), nu_ok])),
             "r_std": r_std,
             # command channels padded to the model's width once (thrusters, then rudders)
-            "rpm": rows(model._channels("rpm", np.nan_to_num(arrays.rpm[sl]), w, None)[:, 0]),
+            "rpm": rows(model._channels("rpm", rpm, w, None)[:, 0]),
             "az": rows(model._channels("azimuth_rad", np.nan_to_num(arrays.azimuth_rad[sl]), w, None)[:, 0]),
             "wind": rows(np.nan_to_num(arrays.wind[sl])),
-            "dp": rows(arrays.dp_active[sl].astype(bool)),
+            "dp": rows(dp),
             "span": (int(first_row), int(last)),        # what the noise above was measured over
         }
 
@@ -740,12 +746,13 @@ class EnvironmentEstimator:
         return self._shared(("inputs", id(arrays), int(first_row), int(last)), arrays,
                             lambda: self._log_inputs(arrays, first_row, last))
 
-    def _station_keeping_run(self, arrays, grid, want, inputs) -> tuple[dict, dict, float]:
+    def _station_keeping_run(self, arrays, grid, want, inputs) -> tuple[dict, dict, tuple]:
         """The estimates at ``want`` (all at or before the last row of ``grid``) of a run
-        without the hull's yaw moment in a drift, and the time until which it settles."""
+        without the hull's yaw moment in a drift, and the loop state it ends with (see
+        :meth:`_filter_grid`)."""
         x, P = {}, {}
-        settle_until = self._filter_grid(arrays, grid, want, inputs, x, P, 0.0)
-        return x, P, settle_until
+        end = self._filter_grid(arrays, grid, want, inputs, x, P, 0.0)
+        return x, P, end
 
     def _filter(self, arrays, grid, want, inputs, out_x, out_P, drift_yaw_uv: float):
         """Run the filter over the rows ``grid`` (increasing), storing the estimates at ``want``."""
@@ -760,7 +767,7 @@ class EnvironmentEstimator:
         branch = int(stopped[0])
         b = int(grid[branch])
         before = [w for w in want if w <= b]
-        shared_x, shared_P, settle_until = self._shared(
+        shared_x, shared_P, end = self._shared(
             (id(arrays), inputs["span"], int(grid[0]), int(grid[-1]), b, tuple(before)), arrays,
             lambda: self._station_keeping_run(arrays, grid[:branch + 1], sorted(set(before) | {b}), inputs))
         if b not in shared_x:           # the filter could not start before b: nothing to share
@@ -770,7 +777,7 @@ class EnvironmentEstimator:
             if w in shared_x:
                 out_x[w], out_P[w] = shared_x[w], shared_P[w]
         self._filter_grid(arrays, grid[branch:], [w for w in want if w > b], inputs, out_x, out_P, drift_yaw_uv,
-                          resume=(shared_x[b], shared_P[b], settle_until))
+                          resume=(shared_x[b], shared_P[b], *end))
 
     def _filter_every(self, arrays) -> tuple[int, float]:
         """``(m, dt_log)``: the filter steps over every ``m``-th row of a log whose step is
@@ -778,17 +785,20 @@ class EnvironmentEstimator:
         dt_log = float(np.median(np.diff(arrays.time_s))) if len(arrays.time_s) > 1 else 1.0
         return max(1, int(round(self.config.filter_step_s / dt_log))), dt_log
 
-    def _filter_grid(self, arrays, grid, want, inputs, out_x, out_P, drift_yaw_uv: float, resume=None) -> float:
-        """One run of the compiled filter over ``grid`` (from the estimate and settling time
-        ``resume = (x, P, settle_until_s)`` at ``grid[0]`` when given), storing the estimates
-        at the sorted rows ``want``; returns the time [s] until which the run settles."""
+    def _filter_grid(self, arrays, grid, want, inputs, out_x, out_P, drift_yaw_uv: float, resume=None) -> tuple:
+        """One run of the compiled filter over ``grid`` (from the estimate, settling time and
+        outlier counts ``resume = (x, P, settle_until_s, gated)`` at ``grid[0]`` when given),
+        storing the estimates at the sorted rows ``want``; returns ``(settle_until_s, gated)``
+        at its last row, what a run resumed there needs."""
         slot = np.full(len(arrays.time_s), -1, dtype=np.int64)
         slot[want] = np.arange(len(want))
         n = len(self.state_names)
         xs, Ps = np.empty((len(want), n)), np.empty((len(want), n, n))
         done = np.zeros(len(want), dtype=np.bool_)
-        x_resume, P_resume, settle_until = resume if resume is not None else (np.zeros(n), np.zeros((n, n)), 0.0)
+        x_resume, P_resume, settle_until, gated = resume if resume is not None else (
+            np.zeros(n), np.zeros((n, n)), 0.0, np.zeros(6, dtype=np.int64))
         settle_io = np.array([settle_until], dtype=float)
+        gated_io = np.array(gated, dtype=np.int64)
         c = self.config
         kernel.filter_grid(np.ascontiguousarray(grid, dtype=np.int64), slot, arrays.time_s, arrays.segment_id,
                            inputs["z"], inputs["z_ok"], inputs["r_std"], inputs["rpm"], inputs["az"],
@@ -803,8 +813,8 @@ class EnvironmentEstimator:
                            int(c.max_gated_samples), float(c.settle_s), float(c.max_bridged_gap_s),
                            float(np.prod(self._filter_every(arrays))), resume is not None,
                            np.ascontiguousarray(x_resume, dtype=float), np.ascontiguousarray(P_resume, dtype=float),
-                           settle_io, xs, Ps, done)
+                           settle_io, gated_io, xs, Ps, done)
         for k, i in enumerate(want):
             if done[k]:
                 out_x[i], out_P[i] = xs[k], Ps[k]
-        return float(settle_io[0])
+        return float(settle_io[0]), gated_io.copy()

@@ -363,7 +363,7 @@ def _restarted(z_i, x, Pc, keep_environment, gap_s, prior_thr, prior_sd, q_base)
 def filter_grid(grid, slot, t, seg, z, z_ok, r_std, rpm, az, wind, dp, P, per_thruster, prior_thr, prior_sd, q_base,
                 q_base_stopped, fd_step, reset_at_stop, kept, stop_std, yaw_prior, current_stop_std, load_to_current,
                 drift_yaw_uv, gate, max_gated, settle_s, max_bridge_s, step_s, resume, x_resume,
-                P_resume, settle_io, out_x, out_P, done):
+                P_resume, settle_io, gated_io, out_x, out_P, done):
     """Run the filter over the log rows ``grid`` (increasing).
 
     At a row ``i`` with ``slot[i] >= 0`` the estimate goes to ``out_x[slot[i]]``,
@@ -391,7 +391,9 @@ def filter_grid(grid, slot, t, seg, z, z_ok, r_std, rpm, az, wind, dp, P, per_th
     the motion states and leave the environment as it was: the start-up transient (motion
     states started from one noisy sample) would otherwise leave its mark on the split
     between current and load, which station keeping cannot correct. ``settle_io[0]`` holds
-    the time [s] until which a run settles: read with ``resume``, written at the end.
+    the time [s] until which a run settles and ``gated_io`` (6,) the count of outliers in a
+    row per channel (:func:`update`): read with ``resume``, written at the end, so that a
+    resumed run gates as the run it continues would have.
     """
     work = _workspace(P)
     gated = np.zeros(6, dtype=np.int64)
@@ -404,6 +406,7 @@ def filter_grid(grid, slot, t, seg, z, z_ok, r_std, rpm, az, wind, dp, P, per_th
     if resume:
         x, Pc, started, prev = x_resume.copy(), P_resume.copy(), True, grid[0]
         settle_until = settle_io[0]
+        gated[:] = gated_io
         s = slot[prev]
         if s >= 0:
             out_x[s] = x
@@ -458,6 +461,7 @@ def filter_grid(grid, slot, t, seg, z, z_ok, r_std, rpm, az, wind, dp, P, per_th
             out_P[s] = Pc
             done[s] = True
     settle_io[0] = settle_until
+    gated_io[:] = gated
 
 
 @numba.njit(cache=True)
