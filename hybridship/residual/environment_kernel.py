@@ -398,11 +398,8 @@ def filter_grid(grid, slot, t, seg, z, z_ok, r_std, rpm, az, wind, dp, P, per_th
     work = _workspace(P)
     gated = np.zeros(6, dtype=np.int64)
     n = prior_sd.size
-    x = np.zeros(n)
-    Pc = np.zeros((n, n))
-    started = False
-    prev = -1
-    settle_until = -math.inf
+    x, Pc = np.zeros(n), np.zeros((n, n))
+    started, prev, settle_until = False, -1, -math.inf
     if resume:
         x, Pc, started, prev = x_resume.copy(), P_resume.copy(), True, grid[0]
         settle_until = settle_io[0]
