@@ -738,3 +738,29 @@ def test_a_blackout_now_is_what_the_filter_does_at_a_logged_stop(model, settings
         np.testing.assert_array_equal(x, held.x[0])
     else:
         assert not np.array_equal(x, held.x[0]) or not np.array_equal(P, held.P[0])
+
+
+def test_with_known_commands_the_thrust_error_follows_each_steps_commands(model):
+    """The estimated thrust-model error acts on the thrust that is delivered. With the logged
+    commands known it was computed from the start's commands and held over the horizon, so a
+    failure inside the horizon kept pushing the ship with an error of thrust that no longer
+    existed; it now follows each step's commands: as held while they are the start's,
+    nearly 0 once the thrusters have stopped."""
+    from hybridship.predictors.forecast_setup import _forecast_setup
+
+    log = as_log_arrays(_tunnel_deficit_logs(model, (37,), t_shutdown_s=400.0, duration_s=480.0)[0], model.vessel)
+    hp = HybridPredictor(model.vessel, ensemble_config=EnsembleConfig(n_members=2, max_epochs=3, seed=0)).fit([log])
+    known = _forecast_setup(hp.model, hp.residual_config, log, [390.0], 30.0, hp.stop_after_failure, "known",
+                            history_s=hp.history_s)
+    held = _forecast_setup(hp.model, hp.residual_config, log, [390.0], 30.0, hp.stop_after_failure, "held",
+                           history_s=hp.history_s)
+    acc_known, acc_held = hp._estimated_start(known, 2)[5], hp._estimated_start(held, 2)[5]
+    assert acc_held.shape == (1, 1, 3) and acc_known.shape == (1, known.H, 3)
+    assert np.abs(acc_held).max() > 0.0
+    stopped = np.all(known.rpm[0, :known.H] == 0.0, axis=-1)
+    same = np.all(known.rpm[0, :known.H] == held.rpm[0, 0], axis=-1) & np.all(
+        known.az[0, :known.H] == held.az[0, 0], axis=-1)
+    assert stopped.any() and same[0]
+    # stopped: only the idle propellers' drag is left for the error to act on
+    assert np.abs(acc_known[0, stopped]).max() < 0.1 * np.abs(acc_held).max()
+    np.testing.assert_allclose(acc_known[0, same], np.broadcast_to(acc_held[0, 0], (same.sum(), 3)), rtol=1e-12)

@@ -1057,8 +1057,9 @@ class HybridPredictor:
 
         Returns ``eta0, nu0`` (S, 3) (the filtered state), ``dev0`` (S, 3) zeros, the
         members' loads (E, S, 3) (surge/sway in NED, member 0 the mean), the mean current
-        ``(S, 1, 2)``, the thrust-error acceleration of the start's commands ``(S, 1, 3)``
-        (body; 0 once the thrusters have stopped) and the held-load variability ``(S, 3)``
+        ``(S, 1, 2)``, the thrust-error acceleration of the commands, ``(S, 1, 3)`` with held
+        commands and ``(S, H, 3)`` with the logged commands of every step (body; at the
+        start's state; 0 where the thrusters have stopped) and the held-load variability ``(S, 3)``
         of :mod:`hybridship.residual.load_variability` (zeros when ``held_load_window_s``
         is 0, for starts during station keeping unless :attr:`_held_load_on_station`, and
         where fewer than three blocks of station keeping precede the start).
@@ -1067,8 +1068,13 @@ class HybridPredictor:
         eta0, nu0 = est.x[:, 0:3].copy(), est.x[:, 3:6].copy()
         draws = est.sample_environment(n_members, self.ensemble_config.seed)      # (E, S, 5 + n_theta)
         current = np.ascontiguousarray(current_input(est.current_ned_m_s)[:, None, :])
-        a_err = est.thrust_error_accel(self.model, eta0, nu0, st.rpm[:, 0], st.az[:, 0], st.wind[:, 0])
-        acc_ext = np.ascontiguousarray(a_err[:, None, :])
+        # the thrust error acts on the thrust of each step's commands: with the logged commands
+        # known it follows them (and ends with a failure inside the horizon)
+        n_cmd = st.rpm.shape[1]
+        acc_ext = np.empty((eta0.shape[0], n_cmd, 3))
+        for j in range(n_cmd):
+            acc_ext[:, j] = est.thrust_error_accel(self.model, eta0, nu0, st.rpm[:, j], st.az[:, j],
+                                                   st.wind[:, min(j, st.wind.shape[1] - 1)])
         return eta0, nu0, np.zeros_like(eta0), draws[..., 2:5], current, acc_ext, sigma_b
 
     @property
@@ -1322,7 +1328,7 @@ class HybridPredictor:
         """Batched hybrid rollout from states (S, 3), previous residual deviations (S, 3), biases (S, 3)
         or per member (E, S, 3) (surge/sway in NED), commands held (S, 1, K) or per step (S, n_steps, K),
         wind held (S, 1, 2) or per step (S, n_steps, 2), and optionally a held current ``[speed_m_s, dir_to_rad]``
-        (S, 1, 2) and a body-frame extra acceleration (S, 1, 3) for the physics, and optionally per start
+        (S, 1, 2) and a body-frame extra acceleration (S, 1 or n_steps, 3) for the physics, and optionally per start
         the hull's yaw coefficient in a drift ``drift_yaw_uv`` (S,) [rad/m^2] (:func:`_with_drift_yaw`).
         ``nets=False`` needs no ensemble; ``nets_weight`` (S,): 0 where the nets stay off (after a failure), with
         the guard on or off. ``command_memory`` (S, >= n_steps, 2): the command-memory features of the steps
@@ -1369,7 +1375,7 @@ class HybridPredictor:
         model = self.model
         wind_s, current_s, acc_s = (np.ascontiguousarray(np.broadcast_to(a[:, 0], (S, a.shape[-1])))
                                     for a in (wind, current, acc_phys))
-        zeros_s = np.zeros((S, 3))
+        acc_per_step, zeros_s = _per_step("accel_ext", acc_phys, n_steps), np.zeros((S, 3))
         use_cmd = self.residual_config.uses_command_features
         use_load = self.residual_config.uses_load_features
         has_current, zeros_c = bool(np.any(current_s)), np.zeros((S, 2))
@@ -1381,6 +1387,7 @@ class HybridPredictor:
                 if per_step else (rpm, az)
             if wind_per_step:
                 wind_s = np.ascontiguousarray(wind[:, j])
+            acc_s = np.ascontiguousarray(acc_phys[:, j]) if acc_per_step else acc_s
             if thrust_guard and per_step and j > 0:
                 w_thrust = self._thrust_weight(eta[:, j], nu[:, j], rpm_j[:, 0], az_j[:, 0], wind_s)
             # physics: one public model step with the estimator's extra acceleration, and the
@@ -1473,6 +1480,13 @@ def _check_rollout_batch(S: int, n_steps, dt_s, substeps, **arrays) -> None:
     for name, a in arrays.items():
         if a is not None and (np.ndim(a) < 2 or np.shape(a)[0] != S):
             raise ValueError(f"{name}: expected one row per start ({S}, ...), got shape {np.shape(a)}")
+
+
+def _per_step(name: str, a: np.ndarray, n_steps: int) -> bool:
+    """Whether a rollout input ``a`` (S, 1 or >= n_steps, ...) is per step, else held."""
+    if 1 < a.shape[1] < n_steps:
+        raise ValueError(f"{name}: a per-step input needs {n_steps} steps, got {a.shape[1]}")
+    return a.shape[1] > 1
 
 
 def _check_rollout_steps(rpm, az, wind, command_memory, use_memory: bool, S: int, n_steps: int,
