@@ -29,8 +29,7 @@ from dataclasses import dataclass
 import numpy as np
 import pandas as pd
 
-from ..config import as_config
-from ..config import check_whole_number
+from ..config import as_config, check_whole_number
 from ..forecast_inputs.limits import check_or_clip_inputs
 from ..frames import vector_to_speed_dir
 from ..logs.io import LogArrays

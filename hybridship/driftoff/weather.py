@@ -39,9 +39,8 @@ import numpy as np
 import pandas as pd
 from pydantic import AfterValidator, Field, model_validator
 
-from ..config import Float, config_dataclass
+from ..config import Float, check_number, config_dataclass
 from ..logs.io import unit_variant
-from ..config import check_number
 from ..forecast_inputs.limits import Envelope
 from ..sim import environment as env
 from ..sim.environment import MAX_STEEPNESS, check_steepness, max_hs_m

@@ -33,10 +33,9 @@ import numpy as np
 import pandas as pd
 from pydantic import Field
 
-from ..config import Bool, Float, Int, check_flags, config_dataclass
+from ..config import Bool, Float, Int, check_flags, check_number, check_whole_number, config_dataclass
 from ..datasets.esso_osaka import EssoRun, RUN_KINDS, esso_log_arrays, list_runs
 from ..fileio import atomic_write, check_output_files, earlier_run, remove_stale, write_output_files
-from ..config import check_number, check_whole_number
 from ..frames import wrap_pi
 from ..logs.ingest import ingest
 from ..logs.io import LogArrays

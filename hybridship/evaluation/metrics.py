@@ -12,8 +12,7 @@ import numpy as np
 import pandas as pd
 from scipy import stats
 
-from ..config import real_array
-from ..config import check_number, check_whole_number
+from ..config import check_number, check_whole_number, real_array
 from ..frames import wrap_pi
 from ..predictors.after_failure import HORIZONS_S, drift_forecasts, shutdown_index
 

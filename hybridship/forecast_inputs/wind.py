@@ -35,8 +35,7 @@ from typing import Annotated
 import numpy as np
 from pydantic import Field
 
-from hybridship.config import Float, config_dataclass
-from hybridship.config import check_number
+from hybridship.config import Float, check_number, config_dataclass
 from hybridship.frames import speed_dir_to_vector, vector_to_speed_dir
 
 __all__ = ["HELD_WIND", "WindForecast", "fit_wind_forecast", "trailing_mean_vector", "wind_error_paths",

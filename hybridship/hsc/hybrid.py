@@ -44,8 +44,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from hybridship.config import as_config, check_flags
-from hybridship.config import check_number, check_whole_number
+from hybridship.config import as_config, check_flags, check_number, check_whole_number
 from hybridship.residual.ensemble import EnsembleConfig, fit_ensemble
 
 from .contract import _finite, _matrix, check_free_run, check_physical, check_record, require_fitted

@@ -33,8 +33,7 @@ from typing import Annotated
 import numpy as np
 from pydantic import Field
 
-from ..config import Float, Int, NonEmpty, Seed, as_config, config_dataclass
-from ..config import check_whole_number
+from ..config import Float, Int, NonEmpty, Seed, as_config, check_whole_number, config_dataclass
 from .contract import check_free_run, check_record, require_fitted
 
 __all__ = [

@@ -31,8 +31,7 @@ import numpy as np
 import pandas as pd
 from pydantic import Field, model_validator
 
-from ..config import Float, Int, Seed, check_flags, config_dataclass
-from ..config import check_number
+from ..config import Float, Int, Seed, check_flags, check_number, config_dataclass
 from .simulator import KNOT_M_S, PlaningCraftModel, SeaConditions, TrueRecord
 from .vessel import PlaningCraft, load_planing_craft
 

@@ -34,8 +34,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-from ..config import check_flags
-from ..config import check_whole_number
+from ..config import check_flags, check_whole_number
 from . import hull, wind as wind_curves
 from .hull import mass_matrices  # moved to hull (vessel validation needs it without this module)
 from .integrate import rollout_batch, step_batch

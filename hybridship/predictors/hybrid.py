@@ -16,9 +16,8 @@ from typing import Iterable
 
 import numpy as np
 
-from ..config import as_config, real_array
+from ..config import as_config, check_number, check_whole_number, real_array
 from ..forecast_inputs import FaultFlags
-from ..config import check_number, check_whole_number
 from ..forecast_inputs.wind import HELD_WIND, WindForecast, fit_wind_forecast, wind_error_paths
 from ..frames import speed_dir_to_vector, vector_to_speed_dir, wrap_pi
 from ..logs.io import LogArrays
@@ -1059,7 +1058,8 @@ class HybridPredictor:
         members' loads (E, S, 3) (surge/sway in NED, member 0 the mean), the mean current
         ``(S, 1, 2)``, the thrust-error acceleration of the commands, ``(S, 1, 3)`` with held
         commands and ``(S, H, 3)`` with the logged commands of every step (body; at the
-        start's state; 0 where the thrusters have stopped) and the held-load variability ``(S, 3)``
+        start's state; near 0 where the thrusters have stopped: an idle propeller's drag
+        only) and the held-load variability ``(S, 3)``
         of :mod:`hybridship.residual.load_variability` (zeros when ``held_load_window_s``
         is 0, for starts during station keeping unless :attr:`_held_load_on_station`, and
         where fewer than three blocks of station keeping precede the start).

@@ -44,8 +44,8 @@ from typing import Annotated, Literal
 import numpy as np
 from pydantic import Field, field_validator, model_validator
 
-from hybridship.config import Bool, Float, Int, NonEmpty, config_dataclass, float_array, real_array
-from hybridship.config import check_number, check_whole_number
+from hybridship.config import (Bool, Float, Int, NonEmpty, check_number,
+                               check_whole_number, config_dataclass, float_array, real_array)
 
 #: Two-sided coverage of +-1 and +-2 standard deviations of a Gaussian.
 GAUSS_COVERAGE = {1.0: 0.6826894921370859, 2.0: 0.9544997361036416}

@@ -51,8 +51,7 @@ from pydantic import Field, field_validator, model_validator
 from scipy.signal import lfilter
 
 from hybridship.frames import ned_to_body, wrap_pi
-from hybridship.config import Float, Int, config_dataclass
-from hybridship.config import check_number
+from hybridship.config import Float, Int, check_number, config_dataclass
 from hybridship.physics.model import DynamicModel
 from hybridship.sim import environment as env
 from hybridship.sim.allocation import ThrustAllocator, bollard_thrust_limits, check_station_keeping
