@@ -44,7 +44,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from hybridship.config import as_config, check_flags, check_number, check_whole_number
+from hybridship.config import as_config, check_flags, check_number, check_whole_number, real_array
 from hybridship.residual.ensemble import EnsembleConfig, fit_ensemble
 
 from .contract import _finite, _matrix, check_free_run, check_physical, check_record, require_fitted
@@ -294,10 +294,7 @@ class GreyBox:
 def _check_act_rows(act, name: str = "act") -> None:
     """Actuator fractions of the table rows: at least two, finite, strictly increasing in [0, 1],
     the first 0 (the device retracted: the base the device's changes are taken from)."""
-    try:
-        a = np.asarray(act, dtype=float)
-    except (TypeError, ValueError):
-        raise ValueError(f"{name}: expected actuator fractions, got {act!r}") from None
+    a = real_array(name, act)
     if a.ndim != 1 or a.size < 2 or not np.all(np.isfinite(a)) or a[0] != 0.0 or a[-1] > 1.0 \
             or np.any(np.diff(a) <= 0):
         raise ValueError(f"{name}: expected two or more increasing fractions from 0 (retracted) up to at most 1, "

@@ -1050,7 +1050,7 @@ def _warn_some_rpm_fractions(logged, x: np.ndarray, source: str) -> None:
     ``logged``) while another thruster's reaches more: a fraction of ``max_rpm`` logged
     for some thrusters only. A warning, not a refusal: a stopped thruster whose sensor reads
     noise looks the same."""
-    big = np.nanmax(np.abs(np.where(np.isfinite(x), x, 0.0)), axis=0, initial=0.0)
+    big = np.abs(np.where(np.isfinite(x), x, 0.0)).max(axis=0, initial=0.0)      # largest |rpm| per thruster
     for k, (th, col) in enumerate(logged):
         on = np.isfinite(x[:, k]) & (x[:, k] != 0.0)
         other = int(np.argmax(np.where(np.arange(len(logged)) == k, -1.0, big)))

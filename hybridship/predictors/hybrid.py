@@ -29,7 +29,7 @@ from ..residual.features import (ALL_FEATURES, LOAD_FEATURES, MEMORY_FEATURES, R
                                  log_command_memory, prepare_log)
 from ..residual.load_variability import held_load_rows, held_load_spread, unexplained_load_std_windows
 from ..residual.environment import (EnvironmentConfig, EnvironmentEstimate, EnvironmentEstimator, current_input,
-                                    environment_accel, thrust_error_prior_carries_over)
+                                    environment_accel, thrust_error_accel, thrust_error_prior_carries_over)
 from ..residual.multistep import MultiStepConfig, collect_starts, train_multistep
 from ..residual.guard import CommandRegime, EnvelopeGuard, ThrustRegime
 from ..residual.wave_direction import wave_axis, yaw_load_factor
@@ -1070,11 +1070,16 @@ class HybridPredictor:
         current = np.ascontiguousarray(current_input(est.current_ned_m_s)[:, None, :])
         # the thrust error acts on the thrust of each step's commands: with the logged commands
         # known it follows them (and ends with a failure inside the horizon)
-        n_cmd = st.rpm.shape[1]
-        acc_ext = np.empty((eta0.shape[0], n_cmd, 3))
-        for j in range(n_cmd):
-            acc_ext[:, j] = est.thrust_error_accel(self.model, eta0, nu0, st.rpm[:, j], st.az[:, j],
-                                                   st.wind[:, min(j, st.wind.shape[1] - 1)])
+        S, n_cmd = eta0.shape[0], st.rpm.shape[1]
+        wind = st.wind[:, np.minimum(np.arange(n_cmd), st.wind.shape[1] - 1)]      # (S, n_cmd, 2)
+
+        def steps(a):           # a start's value for each of its steps, starts after one another
+            return np.repeat(a, n_cmd, axis=0)
+
+        acc_ext = thrust_error_accel(self.model, est.thrust_error_model, steps(eta0), steps(nu0),
+                                     st.rpm.reshape(S * n_cmd, -1), st.az.reshape(S * n_cmd, -1),
+                                     wind.reshape(S * n_cmd, -1), steps(est.current_ned_m_s),
+                                     steps(est.thrust_error)).reshape(S, n_cmd, 3)
         return eta0, nu0, np.zeros_like(eta0), draws[..., 2:5], current, acc_ext, sigma_b
 
     @property
