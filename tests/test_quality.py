@@ -361,6 +361,18 @@ def test_a_biased_speed_log_is_replaced_by_the_track(model, log):
     np.testing.assert_array_equal(sw.eta0, clean.eta0)
 
 
+def test_a_biased_speed_log_stays_found_across_a_gap(model, log):
+    """A gap of a few samples starts a new segment, whose first half window cannot judge
+    the speed log on its own: the judgement from before the gap is carried (within the
+    track window), so a start 5 s after the gap does not take the 1-m/s bias back."""
+    biased = _shift("v_m_s", slice(T_FAULT, None), 1.0)(log.copy())
+    gap = list(range(T_FAULT + 40, T_FAULT + 43))
+    start = [float(T_FAULT + 48)]
+    _, clean = _assess(model, log.drop(index=gap), start)
+    _, sw = _assess(model, biased.drop(index=gap), start)
+    assert sw.flags[F.VELOCITY_MISMATCH].all()
+    np.testing.assert_allclose(sw.nu0, clean.nu0, atol=1e-3)
+
 def test_velocity_track_mismatch_is_causal_and_ignores_position_faults(model, log):
     """The mismatch at a row depends on the rows before it only; a GNSS spike or datum
     shift (a step beyond jump_m), a frozen receiver and a receiver that holds its fix

@@ -582,8 +582,8 @@ def velocity_track_mismatch_m(arrays, window_s: float, first_row: int = 0, last_
     a fresh fix (one that differs from the row before: the window starts at the first such
     row in it), so a receiver that holds its fix between updates does not count either.
 
-    A row whose window says nothing of the velocity carries the last value of its segment
-    from the past ``window_s`` (NaN if there is none). A window says nothing when it covers
+    A row whose window says nothing of the velocity carries the last value from the past
+    ``window_s``, also from before a gap (NaN if there is none). A window says nothing when it covers
     less than half of ``window_s``; when a step in it lacks a logged finite velocity or
     heading; when the row's position is missing or not a fresh fix; when a position in it
     has repeated bit for bit for ``frozen_s`` or more up to then (a frozen receiver); or
@@ -638,10 +638,11 @@ def velocity_track_mismatch_m(arrays, window_s: float, first_row: int = 0, last_
     d = np.hypot(*((pos - pos[j]) - (travelled - travelled[j])).T)
     evidence = ((t - t[j] >= 0.5 * window_s) & fresh & fresh[j] & (n_bad[idx] == n_bad[j])
                 & (n_stale[idx + 1] == n_stale[j]) & (n_jump[idx + 1] == n_jump[j]))
-    # a row that cannot be judged (a held fix, a jump in its window) carries the segment's
-    # last judgement of the past window_s: the filter may step on held rows only
+    # a row that cannot be judged (a held fix, a jump in its window, the first half window
+    # after a gap) carries the last judgement of the past window_s, also from before a gap:
+    # a speed log's bias outlasts a few missing samples
     judged = np.maximum.accumulate(np.where(evidence, idx, -1))
-    keep = (judged >= seg_first) & (t - t[np.maximum(judged, 0)] <= window_s)
+    keep = (judged >= 0) & (t - t[np.maximum(judged, 0)] <= window_s)
     return np.where(keep, d[np.maximum(judged, 0)], np.nan)
 
 

@@ -70,7 +70,8 @@ Faults and their behaviour (``FaultFlags`` names the flags):
     ``track_mismatch_m`` (8 m) over the trailing ``track_window_s`` (30 s)
     (:func:`~hybridship.forecast_inputs.faults.velocity_track_mismatch_m`; not judged
     while a position jump or a frozen receiver lies in that window, nor in the first 15 s
-    of a segment): a biased or failed speed log, or a heading off by a lasting angle while
+    of a segment, where the judgement of the past 30 s, also from before a gap, is
+    carried): a biased or failed speed log, or a heading off by a lasting angle while
     under way. u and v are derived from the track instead. The environment estimator of a
     hybrid forecast leaves such samples out of its filter as well (with the default
     thresholds), so its start state stays on the track. A bias is found once it has moved
