@@ -161,6 +161,23 @@ def test_simulator_refuses_bad_arguments_by_name(craft):
         with pytest.raises(ValueError, match=rf"^{field}\b"):
             call()
     SeaConditions(hs_m=0.3, tp_s=3.0, beyond_validity=True)         # allowed when asked for
+    with pytest.raises(ValueError, match=r"^hs_m\b"):                  # a mapping is read as SeaConditions
+        model.simulate([3000.0], [50.0], sea={"hs_m": -1.0})
+    with pytest.raises(TypeError, match=r"^sea: expected SeaConditions"):  # an AttributeError inside before
+        model.simulate([3000.0], [50.0], sea=0.1)
+    as_mapping = model.simulate([3000.0] * 5, [50.0] * 5, sea={"hs_m": 0.05, "tp_s": 1.5}, rng=1)
+    np.testing.assert_array_equal(
+        as_mapping.speed_m_s, model.simulate([3000.0] * 5, [50.0] * 5, sea=SeaConditions(hs_m=0.05, tp_s=1.5), rng=1).speed_m_s)
+
+
+def test_a_trial_rpm_range_outside_the_engine_is_refused_by_name(craft):
+    """The trial's engine-speed range is checked against the craft's engine before simulating
+    (before: the simulator refused ``rpm_cmd``, a name the caller never gave, and only when
+    the schedule happened to reach beyond the engine)."""
+    cfg = TrialConfig(sea_state=1, n_samples=300, n_train=200, actuator="interceptor", sea=SeaConditions(),
+                      rpm_range=(craft.engines.idle_rpm, craft.engines.max_rpm + 500.0))
+    with pytest.raises(ValueError, match=r"^rpm_range: expected within the craft's engine range"):
+        generate_trial(cfg, craft)
 
 
 def test_a_vessel_file_with_nan_or_an_impossible_true_boat_is_refused_by_name(craft):

@@ -66,6 +66,7 @@ Sources
 from __future__ import annotations
 
 import math
+from collections.abc import Mapping
 from dataclasses import dataclass
 from typing import Annotated
 from typing import Literal
@@ -487,7 +488,8 @@ class PlaningCraftModel:
             Output sampling period [s].
         substeps : int
             RK4 steps per sample.
-        sea : SeaConditions
+        sea : SeaConditions or mapping
+            The waves; a mapping is read as :class:`SeaConditions` fields.
         rng : numpy.random.Generator or int
             Seed of the wave phases.
         settle_s : float
@@ -519,6 +521,10 @@ class PlaningCraftModel:
             raise ValueError(f"substeps: expected an integer >= 1, got {substeps!r}")
         if not (np.isfinite(settle_s) and settle_s >= 0):
             raise ValueError(f"settle_s: expected a non-negative number of seconds, got {settle_s!r}")
+        if isinstance(sea, Mapping):
+            sea = SeaConditions(**sea)
+        elif not isinstance(sea, SeaConditions):
+            raise TypeError(f"sea: expected SeaConditions or a mapping of its fields, got {type(sea).__name__}")
         rng = np.random.default_rng(rng) if not isinstance(rng, np.random.Generator) else rng
         wave = self.make_wave_function(sea, rng)
         n_settle = int(round(settle_s / sample_period_s))

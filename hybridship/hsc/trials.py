@@ -61,7 +61,8 @@ class TrialConfig:
     seed : int
         Seed of the input schedule, the waves and the sensor noise.
     rpm_range : tuple of float
-        Engine-speed command range (min, max) [rpm].
+        Engine-speed command range (min, max) [rpm]; within the craft's engine range
+        (``idle_rpm`` to ``max_rpm``), which :func:`generate_trial` checks.
     pwm_range_pct : tuple of float
         PWM duty range (min, max) [%].
     hold_s : tuple of float
@@ -232,6 +233,10 @@ def generate_trial(config: TrialConfig, craft: PlaningCraft | str | os.PathLike 
         craft = load_planing_craft(*(() if craft is None else (craft,)))
     if not isinstance(craft, PlaningCraft):
         raise TypeError(f"craft: expected a PlaningCraft, a packaged name or a file, got {type(craft).__name__}")
+    eng = craft.engines
+    if not eng.idle_rpm <= config.rpm_range[0] < config.rpm_range[1] <= eng.max_rpm:
+        raise ValueError(f"rpm_range: expected within the craft's engine range, idle_rpm {eng.idle_rpm:g} to "
+                         f"max_rpm {eng.max_rpm:g} rpm, got {config.rpm_range}")
     sens = craft.sensors
     dt = sens.sample_period_s
     d = int(round(sens.gps_delay_s / dt))
