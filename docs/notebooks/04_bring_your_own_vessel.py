@@ -292,8 +292,9 @@ print(metrics.paper_table(metrics.error_table(errors)).to_string())
 
 # %% [markdown]
 # Read the table before trusting the hybrid. On these logs it does not beat the physics
-# alone: at the default size (not `HYBRIDSHIP_SMALL=1`) `hybrid` is worse than `dynamic`
-# in every cell. After the failure its nets are off (they were trained on the rows with
+# alone in position: at the default size (not `HYBRIDSHIP_SMALL=1`) `hybrid` is worse than
+# `dynamic` in every north and east cell (in heading it is worse at 15 s and better at 45
+# and 60 s). After the failure its nets are off (they were trained on the rows with
 # `dp_active == 1`, under thrust), so its forecast is the physics plus the current and load that the
 # [environment estimator](../../concepts/environment/) inferred from the logs before the
 # failure. The estimator is built for a ship holding station; here the ship was manoeuvring
