@@ -115,3 +115,32 @@ def test_drift_forecasts_refuse_a_horizon_across_a_gap():
     # the starts before the gap whose horizon ends before it are still scored
     p, t, _ = metrics.drift_forecasts(dr, holed, n_intervals=2, horizons_s=(1, 2))
     np.testing.assert_array_equal(t[:, 1], whole.eta[[202, 203]])
+
+
+def test_drift_forecasts_end_where_dp_comes_back_on():
+    """A drift ends where DP comes back on, as drift_start_rows bounds it: with DP on again
+    10 s after the failure, the 20 "drift" starts were scored (10 of them with DP on, every
+    60-s horizon across DP thrust) and the log counted as having a drift to score."""
+    import pytest
+
+    from hybridship.physics.model import DynamicModel
+    from hybridship.predictors import DeadReckoning, as_log_arrays
+    from hybridship.predictors.after_failure import drift_end, has_drift
+    from hybridship.sim.synthetic import physics_log
+
+    m = DynamicModel("gunnerus")
+    log = physics_log(m, seed=3, duration_s=330.0, t_shutdown_s=200.0)
+    whole = as_log_arrays(log, m.vessel)
+    back = log.copy()
+    back.loc[back.time_s >= 230.0, "dp_active"] = 1
+    back = as_log_arrays(back, m.vessel)
+    assert drift_end(whole, 200) == len(whole.time_s) and drift_end(back, 200) == 230
+    assert has_drift(whole, 20, 60.0) and not has_drift(back, 20, 60.0)
+    dr = DeadReckoning(m.vessel)
+    with pytest.raises(ValueError, match="only 0 start times .* before DP comes back on at time_s 230 s"):
+        metrics.drift_forecasts(dr, back, n_intervals=20, horizons_s=(15, 60))
+    # starts whose horizon ends before DP is back are scored as before
+    p, t, _ = metrics.drift_forecasts(dr, back, n_intervals=15, horizons_s=(15,))
+    p0, t0, _ = metrics.drift_forecasts(dr, whole, n_intervals=15, horizons_s=(15,))
+    np.testing.assert_array_equal(p, p0)
+    np.testing.assert_array_equal(t, t0)

@@ -334,8 +334,8 @@ def _test_arrays(test_logs, test_names, vessel, n_intervals: int, horizon_s: flo
     if bad:
         raise ValueError(f"test: {len(bad)} log(s) have no DP failure to score ({', '.join(bad[:5])}"
                          f"{', ...' if len(bad) > 5 else ''}): each needs station keeping, then dp_active 0, "
-                         f"then {n_intervals} start times with {horizon_s:g} s of drift after each, before any gap in "
-                         f"the log's time stamps")
+                         f"then {n_intervals} start times with {horizon_s:g} s of drift after each, before DP comes "
+                         f"back on and before any gap in the log's time stamps")
     return test_arrays
 
 

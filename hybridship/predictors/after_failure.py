@@ -13,7 +13,7 @@ import numpy as np
 from ..logs.ingest import ingest
 from ..logs.io import LogArrays
 
-__all__ = ["HORIZONS_S", "drift_forecasts", "has_drift", "shutdown_index"]
+__all__ = ["HORIZONS_S", "drift_end", "drift_forecasts", "has_drift", "shutdown_index"]
 
 #: The paper's horizons [s].
 HORIZONS_S = (15, 30, 45, 60)
@@ -35,16 +35,27 @@ def _gap_free_end(arrays, i0: int) -> int:
     return i0 + int(later[0]) if later.size else len(seg)
 
 
+def drift_end(arrays, i0: int) -> int:
+    """First row after the failure at ``i0`` that is not in its drift: the first row with
+    ``dp_active`` on again or outside ``i0``'s gap-free segment (``len`` without either), as
+    :func:`~hybridship.residual.drift_hull.drift_start_rows` bounds a drift. A forecast held at
+    the failure's rpm 0 is not a drift forecast once DP thrust is back in the measured track."""
+    end = _gap_free_end(arrays, i0)
+    back = np.flatnonzero(np.asarray(arrays.dp_active[i0:end]) != 0)
+    return i0 + int(back[0]) if back.size else end
+
+
 def has_drift(arrays, n_intervals: int, horizon_s: float) -> bool:
     """Whether a log has a DP failure (station keeping, then ``dp_active`` 0) followed by enough
     drift for :func:`drift_forecasts` (``n_intervals`` starts, each with ``horizon_s`` of
-    measurements after it in the failure's gap-free segment). A log without station keeping
-    before its first ``dp_active`` 0 (a manoeuvring log) has none."""
+    measurements after it in the failure's gap-free segment, before DP comes back on: see
+    :func:`drift_end`). A log without station keeping before its first ``dp_active`` 0 (a
+    manoeuvring log) has none."""
     off = np.flatnonzero(arrays.dp_active == 0)
     if off.size == 0 or off[0] == 0 or len(arrays.time_s) < 2:
         return False
     dt = float(np.median(np.diff(arrays.time_s)))
-    return _gap_free_end(arrays, int(off[0])) - int(off[0]) - int(round(horizon_s / dt)) >= n_intervals
+    return drift_end(arrays, int(off[0])) - int(off[0]) - int(round(horizon_s / dt)) >= n_intervals
 
 
 def drift_forecasts(predictor, arrays, *, n_intervals: int | None = 20, horizons_s=HORIZONS_S, first: int = 0,
@@ -56,8 +67,8 @@ def drift_forecasts(predictor, arrays, *, n_intervals: int | None = 20, horizons
     The starts are the samples ``first, first + every, ...`` after the shutdown's row,
     ``n_intervals`` of them, or (None) as many as leave the longest horizon in the log. The
     truth is taken by rows, so every start and its horizon must lie in the shutdown's gap-free
-    segment (a gap of missing rows would pair a forecast with a later measurement): starts
-    that would reach past a gap are refused.
+    segment (a gap of missing rows would pair a forecast with a later measurement) and before
+    DP comes back on (:func:`drift_end`): starts that would reach past either are refused.
 
     Returns
     -------
@@ -75,11 +86,13 @@ def drift_forecasts(predictor, arrays, *, n_intervals: int | None = 20, horizons
     dt = float(np.median(np.diff(arrays.time_s)))
     steps = np.array([int(round(h / dt)) for h in horizons_s])
     H = int(steps.max())
-    end = _gap_free_end(arrays, i0)
+    end = drift_end(arrays, i0)
     available = max(0, -(-(end - H - i0 - first) // every))     # starts that leave H steps before a gap
     n = available if n_intervals is None else n_intervals
     if available < n or n == 0:
-        gap = "" if end == len(arrays.time_s) else f" before the gap at time_s {arrays.time_s[end - 1]:g} s"
+        gap = "" if end == len(arrays.time_s) else (
+            f" before the gap at time_s {arrays.time_s[end - 1]:g} s" if end == _gap_free_end(arrays, i0)
+            else f" before DP comes back on at time_s {arrays.time_s[end]:g} s")
         raise ValueError(f"log: only {available} start times after the shutdown leave {H * dt:g} s of "
                          f"measurements{gap}; {max(n, 1)} are needed")
     starts = i0 + first + every * np.arange(n)

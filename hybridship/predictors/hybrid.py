@@ -37,7 +37,7 @@ from ..residual.drift_hull import (MIN_FAILURES as DRIFT_HULL_MIN_FAILURES, MUNK
                                    START_EVERY_S as DRIFT_HULL_START_EVERY_S, choose_coefficient,
                                    drift_start_rows, munk_coefficient)
 from ..residual.hull import HullCorrection
-from .after_failure import drift_forecasts, has_drift, shutdown_index
+from .after_failure import drift_end, drift_forecasts, has_drift, shutdown_index
 from .forecast_setup import (FORECAST_HISTORY_S, MAX_HORIZON_S, _check_flags, _check_row_stride, _forecast_setup,
                              as_log_arrays, forecast_step_s, join_notes, keeps_state_on_error, log_list, start_indices)
 from .model_file import load_model, save_model
@@ -1268,7 +1268,7 @@ class HybridPredictor:
                 # starts every LATE_START_EVERY_S within the failure's gap-free stretch of drift
                 every = max(1, int(round(LATE_START_EVERY_S / a.dt_s)))
                 i0 = shutdown_index(a)
-                end = i0 + int(np.argmax(np.append(a.segment_id[i0:] != a.segment_id[i0], True)))
+                end = drift_end(a, i0)          # before a gap, and before DP comes back on
                 room = end - i0 - n_intervals - lead.size
                 if room <= 0:
                     continue
