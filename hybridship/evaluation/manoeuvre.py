@@ -725,7 +725,7 @@ def run_manoeuvre_benchmark(vessel, train_dir, test_dir, horizons_s=HORIZONS_S, 
                               test, horizons_s)
 
     intervals = coverage_intervals({k: v_ for k, v_ in per_run_z.items() if any(z is not None for z in v_)},
-                                   horizons_s)
+                                   horizons_s, seed=cfg.ensemble.seed)
     heading = coverage_table({k: v_ for k, v_ in per_run_z.items() if any(z is not None for z in v_)},
                              test, horizons_s, state="heading")
     sharpness = sharpness_table(per_run, {k: v_ for k, v_ in per_run_std.items() if any(d is not None for d in v_)},
