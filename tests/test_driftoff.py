@@ -293,6 +293,23 @@ def test_a_weather_table_with_a_repeated_column_is_refused_naming_it(tmp_path):
         read_weather_table(path)
 
 
+def test_a_weather_table_with_directions_in_radians_is_warned_about():
+    """200 directions drawn over a turn in radians were read as 0-6.3 deg without a word;
+    the same directions in degrees, and a short table, are read as they are."""
+    import warnings
+
+    rng = np.random.default_rng(0)
+    rad = states_to_frame([WeatherState(wind_speed_m_s=5.0, wind_dir_from_rad=a)
+                           for a in rng.uniform(0, 2 * np.pi, 200)])
+    rad["wind_dir_deg"] = np.radians(rad["wind_dir_deg"])
+    with pytest.warns(UserWarning, match="column 'wind_dir_deg' spans .* looks like radians"):
+        read_weather_table(rad)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        read_weather_table(rad.assign(wind_dir_deg=np.degrees(rad["wind_dir_deg"])))
+        read_weather_table(rad.iloc[:10])
+
+
 def test_a_run_too_large_for_memory_says_so_in_the_commands_words(monkeypatch, tmp_path, capsys):
     """Out of memory: the number of blackouts named and what to ask for instead, not numpy's
     traceback; and the result keeps its own copy of the headings it was given."""
@@ -389,7 +406,10 @@ def test_weather_samples_stay_in_the_range_of_a_weather_state():
     # beyond them: a MemoryError blaming n_samples, or overflow warnings and numpy's LinAlgError
     (dict(n_wave_components=10**12), "n_wave_components: must be <= 1000"),
     (dict(n_gust_harmonics=10**12), "n_gust_harmonics: must be <= 1000"),
-    (dict(vessel_spread=1e9), "vessel_spread: must be <= 5")])
+    (dict(vessel_spread=1e9), "vessel_spread: must be <= 5"),
+    # 3e8 steps per sample were accepted: days of computing for one command
+    (dict(dt_s=1e-6), "dt_s: expected at least 0.00347222 s"),
+    (dict(horizon_s=86400.0, dt_s=0.5), "dt_s: expected at least 1 s")])
 def test_bad_settings_name_the_field(kwargs, field):
     with pytest.raises((ValueError, TypeError), match=field):
         DriftOffSettings(**kwargs)

@@ -5,13 +5,18 @@ sea, gusts and defaults), the random streams, and the season sweep's per-state n
 from __future__ import annotations
 
 import math
+import os
+import subprocess
+import sys
+from pathlib import Path
 
 import numpy as np
 import pytest
 
 from hybridship.driftoff import engine
 from hybridship.driftoff.live import EnvironmentEstimate, blackout_now
-from hybridship.driftoff.planning import DriftOffResult, DriftOffSettings, simulate_blackouts, state_rng
+from hybridship.driftoff.planning import (DriftOffResult, DriftOffSettings, check_headings, simulate_blackouts,
+                                          state_rng)
 from hybridship.driftoff.season import season_sweep
 from hybridship.driftoff.weather import (WeatherState, WeatherUncertainty, limiting_hs_m, read_weather_table,
                                          sample_environment, states_to_frame)
@@ -28,6 +33,15 @@ def test_a_horizon_of_whole_steps_is_simulated_in_that_many_steps():
     assert st.n_steps == 7
     r = simulate_blackouts("gunnerus", BEAM, [0.0], settings=st, keep_tracks=True)
     assert r.horizon_s == pytest.approx(2.1) and r.tracks.shape == (1, 1, 8, 3)
+
+
+@pytest.mark.parametrize("deg", [(30.0, -330.0), (100.0, -260.0), (0.0, -1e-15)])
+def test_one_heading_given_twice_a_turn_apart_is_refused(deg):
+    """30 and -330 deg are one heading, as 0 and 360 are (the command line says so); in radians
+    their remainders of 2 pi differ in the last bits, and both were run, giving repeated rows."""
+    with pytest.raises(ValueError, match="headings: expected each heading once"):
+        check_headings(np.radians(deg))
+    assert check_headings(np.radians([0.0, 1e-3, 359.999])).size == 3
 
 
 def test_radii_given_in_any_order_are_listed_outward():
@@ -133,6 +147,20 @@ def test_the_excursion_is_the_farthest_point_even_when_the_ship_comes_back():
     exc = r.excursion_m[0, 0]
     assert r.t_reach_s[0, 0, 0] < 10.0 and exc[0] >= 5.0
     assert exc[1] > max(exc[0], 9.0)      # 1 m/s against 0.05 m/s^2 turns at most 10 m out
+
+
+def test_the_excursion_up_to_a_reaction_time_agrees_with_the_passage_times():
+    """The farthest point up to a reaction time inside a step is the farthest before the step or
+    the track interpolated in it (as the passage times are): 10 m so far, back at 5 m when the
+    step starts and out at 12 m when it ends, the track is at 8.5 m halfway, so the excursion
+    up to then is 10 m, and 11 m is first passed later in the step (it was 11 m, "reached"
+    before the radius was)."""
+    reached, done = np.zeros(1, dtype=bool), np.zeros(1, dtype=bool)
+    t_reach, exc = np.full(1, np.inf), np.zeros(1)
+    engine._record_passages(12.0, 5.0, 10.0, 0.0, 1.0, np.array([11.0]), np.array([0.5]), reached, done,
+                            t_reach, exc)
+    assert t_reach[0] == pytest.approx(6.0 / 7.0) and t_reach[0] > 0.5
+    assert exc[0] == 10.0
 
 
 def test_keeping_the_tracks_changes_no_number():
@@ -282,3 +310,27 @@ def test_the_capacity_flag_takes_the_thrusters_capacity_in_the_loads_own_directi
                                                                          gust_intensity=0.0), [0.0],
                                   settings=st).over_capacity_frac[0] for d in (90.0, 270.0)}
     assert frac == {90.0: 0.0, 270.0: 1.0}
+
+
+_FRESH_OR_CACHED = """
+import hashlib, numpy as np
+from hybridship.driftoff.planning import DriftOffSettings, simulate_blackouts
+from hybridship.driftoff.weather import WeatherState, WeatherUncertainty
+w = WeatherState.from_degrees(wind_speed_m_s=8, wind_dir_deg=30, hs_m=2.0, tp_s=8, current_m_s=0.2,
+                              current_dir_deg=200)
+r = simulate_blackouts("gunnerus", w, np.radians([0.0, 90.0]), uncertainty=WeatherUncertainty.typical(),
+                       settings=DriftOffSettings(n_samples=40, reaction_times_s=(15.5, 60.3)))
+print(hashlib.sha1(r.t_reach_s.tobytes() + r.excursion_m.tobytes()).hexdigest())
+"""
+
+
+def test_one_seed_gives_the_same_bits_from_a_fresh_kernel_and_from_the_cached_one(tmp_path):
+    """Two processes with an empty kernel cache: the first compiles the drift-off kernels, the
+    second reads them from the cache. With LLVM free to fuse multiply-adds ("contract"), the
+    two gave times 1e-13 s apart, so a table could differ between a first run and the next,
+    or between a cluster's workers."""
+    root = Path(__file__).resolve().parents[1]
+    env = dict(os.environ, NUMBA_CACHE_DIR=str(tmp_path), PYTHONPATH=str(root))
+    runs = [subprocess.run([sys.executable, "-c", _FRESH_OR_CACHED], env=env, capture_output=True, text=True,
+                           check=True).stdout.strip() for _ in range(2)]
+    assert len(runs[0]) == 40 and runs[0] == runs[1]

@@ -45,8 +45,14 @@ HULL_FIELDS = ("L_m", "B_m", "T_m", "bow_factor", "side_factor", "yaw_lever_fact
 _WP_W, _WP_KX, _WP_KE, _WP_CCHI, _WP_SCHI, _WP_PH, _WP_AX, _WP_AY, _WP_AN, _WP_MX, _WP_MY, _WP_MN = range(12)
 _WP_NCOL = 12
 
+# No "nnan"/"ninf": the kernel tests for unreached radii and diverged states. No "contract":
+# whether LLVM fuses a multiply-add into one rounding differed between a kernel compiled in
+# the process and the same kernel read from the on-disk cache, so one seed gave results
+# 1e-13 apart in two processes (and on a cluster's workers).
+_KERNEL_MATH = {"nsz", "arcp", "afn", "reassoc"}
 
-@numba.njit(cache=True, fastmath=True)
+
+@numba.njit(cache=True, fastmath=_KERNEL_MATH)
 def _wave_prep(w, a, ph, chi, hull, pre):
     """Per-component constants of the drift loads of one ship into ``pre`` (n, ``_WP_NCOL``).
 
@@ -81,7 +87,7 @@ def _wave_prep(w, a, ph, chi, hull, pre):
         pre[j, _WP_AN] = math.sqrt(abs(a2 * cn * L * fy))
 
 
-@numba.njit(cache=True, fastmath=True)
+@numba.njit(cache=True, fastmath=_KERNEL_MATH)
 def _wave_eval(t, n, e, psi, pre, mean_only, out, work):
     """Newman geometric slowly varying drift (or its mean) at time ``t``, position ``(n, e)``
     and heading ``psi``, body frame, into ``out[3]`` (``work``: a (4, 3) buffer)."""
@@ -119,7 +125,7 @@ def _wave_eval(t, n, e, psi, pre, mean_only, out, work):
             out[c] = work[0, c] ** 2 + work[1, c] ** 2 - work[2, c] ** 2 - work[3, c] ** 2
 
 
-@numba.njit(cache=True, fastmath=True)
+@numba.njit(cache=True, fastmath=_KERNEL_MATH)
 def _wave_drift(t, n, e, psi, w, a, ph, chi, hull, mean_only, out):
     """Newman geometric slowly varying drift (or its mean) of one ship, body frame, into ``out[3]``.
 
@@ -132,7 +138,7 @@ def _wave_drift(t, n, e, psi, w, a, ph, chi, hull, mean_only, out):
     _wave_eval(t, n, e, psi, pre, mean_only, out, np.zeros((4, 3)))
 
 
-@numba.njit(cache=True, fastmath=True)
+@numba.njit(cache=True, fastmath=_KERNEL_MATH)
 def _deriv(x, t, rpm0, rpm_now, inv_tau, prep, tau_wave, hold, acc_ned, Q, thrusts, k, tau, acc):
     """State derivative of one ship at time ``t`` (spin-down evaluated at ``t``); ``tau``, ``acc`` are (3,) buffers."""
     c = math.cos(x[2])
@@ -153,10 +159,6 @@ def _deriv(x, t, rpm0, rpm_now, inv_tau, prep, tau_wave, hold, acc_ned, Q, thrus
     k[3] = out[0]
     k[4] = out[1]
     k[5] = out[2]
-
-
-# No "nnan"/"ninf" here: the kernel tests for unreached radii and diverged states.
-_KERNEL_MATH = {"nsz", "arcp", "contract", "afn", "reassoc"}
 
 
 @numba.njit(cache=True, fastmath=_KERNEL_MATH)
@@ -201,7 +203,7 @@ def _rk4_step(x, t0, dt, rpm0, rpm_now, inv_tau, prep, tau_wave, hold, acc_ned, 
 
 
 @numba.njit(cache=True, fastmath=_KERNEL_MATH)
-def _record_passages(r, r_prev, m_prev, m, t0, dt, radii, t_react, reached, done_q, t_reach, r_react):
+def _record_passages(r, r_prev, m_prev, t0, dt, radii, t_react, reached, done_q, t_reach, r_react):
     """First passage of each radius (interpolated in the step) and the largest excursion up to each
     reaction time, for one sample's step from ``t0`` to ``t0 + dt``; returns whether every radius is reached."""
     t1 = t0 + dt
@@ -217,7 +219,9 @@ def _record_passages(r, r_prev, m_prev, m, t0, dt, radii, t_react, reached, done
         if not done_q[q] and t1 >= t_react[q]:
             done_q[q] = True
             f = (t_react[q] - t0) / dt
-            r_react[q] = m_prev + f * (m - m_prev)   # max excursion up to t_react
+            # max excursion up to t_react: the farthest before the step, or the track interpolated
+            # in it (as the passage times are), whichever is farther
+            r_react[q] = max(m_prev, r_prev + f * (r - r_prev))
     return all_reached
 
 
@@ -291,7 +295,7 @@ def _kernel(psi0, P, m_inv, m_a, d_lin, d_quad, d_lift, strip_w, thr, wind_p,
             if keep:
                 for i in range(3):
                     track[b, j + 1, i] = x[i]
-            all_reached = _record_passages(r, r_prev, m_prev, m, t0, dt, radii, t_react, reached, done_q,
+            all_reached = _record_passages(r, r_prev, m_prev, t0, dt, radii, t_react, reached, done_q,
                                            t_reach[b], r_react[b])
             r_prev = r
             m_prev = m

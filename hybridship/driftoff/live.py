@@ -59,7 +59,8 @@ class EnvironmentEstimate:
     eta : ndarray (3,)
         ``[north_m, east_m, psi_rad]`` now.
     nu : ndarray (3,)
-        ``[u_m_s, v_m_s, r_rad_s]`` now (mean of the last 3 s).
+        ``[u_m_s, v_m_s, r_rad_s]`` now: the environment estimator's filtered velocity, or
+        (``method="mean"``) the mean of the last 3 s.
     rpm, azimuth_rad : ndarray (K,) or (K + R,)
         Commands now per command channel: the K thrusters' rpm and azimuths [rad] (and,
         when the estimate comes from LogArrays of a vessel with rudders, the R rudders'

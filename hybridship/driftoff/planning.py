@@ -49,6 +49,9 @@ MAX_COMPONENTS = 1000
 #: surge damping; beyond, the draws are no ship an identification would give and their
 #: drifts diverge (at 1e9 the factors overflow).
 MAX_VESSEL_SPREAD = 5.0
+#: Most steps of one drift (:attr:`DriftOffSettings.horizon_s` over ``dt_s``): one day at 1 s.
+#: Each step is taken by every sample; a tiny ``dt_s`` would otherwise make a run of days.
+MAX_STEPS = 86_400
 
 
 @lru_cache(maxsize=8)
@@ -110,7 +113,8 @@ class DriftOffSettings:
         radii not reached by then count as never reached.
     dt_s : float
         Output step [s] (RK4, inputs held over a step), at most 1 s (the RK4 step the physics
-        inputs' envelope allows: longer steps diverge in a fast drift).
+        inputs' envelope allows: longer steps diverge in a fast drift), and at least
+        ``horizon_s`` / :data:`MAX_STEPS`.
     rpm_time_constant_s : float
         First-order spin-down time constant of the thrusters [s].
     vessel_spread : float
@@ -160,6 +164,9 @@ class DriftOffSettings:
         if self.dt_s > self.horizon_s:
             raise ValueError(f"dt_s: must be <= the horizon ({self.horizon_s:g} s), got {self.dt_s!r}")
         steps = self.horizon_s / self.dt_s
+        if steps > MAX_STEPS + 1e-6:
+            raise ValueError(f"dt_s: expected at least {self.horizon_s / MAX_STEPS:g} s ({MAX_STEPS} steps over "
+                             f"the {self.horizon_s:g}-s horizon at most), got {self.dt_s!r}")
         if abs(steps - round(steps)) > 1e-6:
             raise ValueError(f"horizon_s: must be a whole number of steps of {self.dt_s:g} s, got "
                              f"{self.horizon_s!r} (a drift is simulated in whole steps)")
@@ -319,7 +326,9 @@ def check_headings(headings_rad) -> np.ndarray:
     if np.any(np.abs(a) > 2.0 * np.pi + 0.1):
         raise ValueError(f"headings: expected radians (within +-2 pi), got {a.tolist()} (degrees? convert with "
                          f"numpy.radians)")
-    if np.unique(np.mod(a, 2.0 * np.pi)).size != a.size:
+    # on the circle: 30 and -330 deg are one heading, whose float remainders differ in the last bits
+    w = np.sort(np.mod(a, 2.0 * np.pi))
+    if np.min(np.diff(np.append(w, w[0] + 2.0 * np.pi))) < 1e-9:
         raise ValueError(f"headings: expected each heading once, got {a.tolist()}")
     return a
 

@@ -263,6 +263,7 @@ def read_weather_table(path_or_frame) -> tuple[list[WeatherState], list[str]]:
             raise ValueError(f"{src}: column {c!r}, row {i}{line}: {got}, expected {expected} "
                              f"({int(bad.sum())} bad row(s))")
         cols[c] = v
+    _warn_directions_like_radians(cols, src)
     gi = cols.get("gust_intensity", np.full(len(df), 0.1))
     states = []
     for i in range(len(df)):
@@ -285,6 +286,17 @@ def read_weather_table(path_or_frame) -> tuple[list[WeatherState], list[str]]:
             raise ValueError(f"{src}: column 'time', row {i}{line}: {got}; each state needs a label of its own "
                              f"(or leave the column out to number the rows)")
     return states, labels
+
+
+def _warn_directions_like_radians(cols: dict, src: str) -> None:
+    """Warn when a direction column of 20 rows or more lies within one turn in radians yet
+    spreads over most of it (the spread rule of the logs' angles): read as degrees, every
+    direction would be squeezed into the first 6.3 deg."""
+    for c in ("wind_dir_deg", "wave_dir_deg", "current_dir_deg"):
+        v = cols[c]
+        if v.size >= 20 and v.min() >= 0.0 and v.max() <= 2.0 * math.pi + 1e-6 and np.ptp(v) >= 5.5:
+            warnings.warn(f"{src}: column {c!r} spans {v.min():.2f} to {v.max():.2f}, which looks like radians; "
+                          f"the table expects degrees (convert with numpy.degrees)", UserWarning, stacklevel=3)
 
 
 def _field_count_problem(src: str) -> str:
