@@ -203,6 +203,26 @@ def test_a_position_or_heading_spike_is_gated_and_a_lasting_shift_is_followed(mo
     assert est.x[0, 0] == pytest.approx(shifted.north_m[390], abs=1.0)
 
 
+def test_a_shift_that_outlasts_the_gate_restarts_its_component_and_leaves_the_environment(model):
+    """A position offset that outlasts ``max_gated_samples`` (a 30-sample excursion of 300 m,
+    or a lasting datum shift) restarts the position at the measurement. Before, the sample
+    that ended the gating went through a Kalman update, whose gain put most of the 300 m into
+    the velocities and the load: minutes later the north load was still off by 1e-3 m/s^2
+    and more, and a lasting shift was followed only after about two minutes."""
+    log = physics_log(model, duration_s=900, t_shutdown_s=None, seed=6, tau_ext_N=(2000.0, 0.0, 0.0))
+    rows = np.array([300, 340, 400, 600, 899])
+    clean = EnvironmentEstimator(model).run(as_log_arrays(log, model.vessel, purpose="forecast"), rows)
+    for length in (30, None):                           # an excursion, then a lasting shift
+        shifted = log.copy()
+        shifted.loc[250:(None if length is None else 250 + length - 1), "north_m"] += 300.0
+        est = EnvironmentEstimator(model).run(as_log_arrays(shifted, model.vessel, purpose="forecast"), rows)
+        # (the gated samples still count in the wave-motion noise level: not bit for bit)
+        np.testing.assert_allclose(est.x[:, 3:6], clean.x[:, 3:6], atol=1e-3)      # before: 0.03-0.08 m/s
+        np.testing.assert_allclose(est.x[:, 8:11], clean.x[:, 8:11], atol=1e-5)    # load; before: 1e-3-2e-2
+        offset = 300.0 if length is None else 0.0
+        np.testing.assert_allclose(est.x[:, 0], clean.x[:, 0] + offset, atol=0.01)
+
+
 def test_a_biased_speed_log_does_not_pull_the_estimate_off_the_track(model, monkeypatch):
     """A speed log reading 1 m/s too much in sway for the last 100 s before a start: the
     filter leaves the logged u, v out once they disagree with the track (8 m within 30 s,

@@ -174,24 +174,40 @@ def update(x, Pc, z, z_ok, r_std, gate, max_gated, gated):
     ``gate`` standard deviations of its predicted spread (``P + r^2``) is an outlier (a
     position spike, a corrupted sample) and is not used, unless it has been so for
     ``max_gated`` updates in a row (``gated`` (6,) counts them, updated in place): a lasting
-    shift, such as a datum change, is then followed. Returns ``(x, P)`` (new arrays).
+    shift, such as a datum change, is then followed by restarting that component at the
+    measurement (its variance ``r^2``, no covariance with the rest), not by a Kalman update,
+    which would put the shift into the velocities and the environment. Returns ``(x, P)``
+    (new arrays).
     """
-    n = x.size
     innov = z[:6] - x[:6]
     innov[2] = (innov[2] + math.pi) % (2.0 * math.pi) - math.pi     # hybridship.frames.wrap_pi, compiled
     use = z_ok.copy()
+    shift = np.zeros(6, dtype=np.bool_)
     for c in range(6):
         if not use[c]:
             continue
-        if innov[c] ** 2 > gate[c] ** 2 * (Pc[c, c] + r_std[c] ** 2) and gated[c] < max_gated:
+        if innov[c] ** 2 > gate[c] ** 2 * (Pc[c, c] + r_std[c] ** 2):
             use[c] = False
-            gated[c] += 1
+            shift[c] = gated[c] >= max_gated
+            gated[c] = 0 if shift[c] else gated[c] + 1
         else:
             gated[c] = 0
     idx = np.flatnonzero(use)
-    m = idx.size
-    if m == 0:
-        return x, Pc
+    x_new, P_new = _kalman_update(x, Pc, innov, idx, r_std) if idx.size else (x, Pc)
+    if shift.any():
+        x_new, P_new = x_new.copy(), P_new.copy()
+        for c in np.flatnonzero(shift):
+            x_new[c] = x[c] + innov[c]          # the measurement (the heading's turn kept)
+            P_new[c, :] = 0.0
+            P_new[:, c] = 0.0
+            P_new[c, c] = r_std[c] ** 2
+    return x_new, P_new
+
+
+@numba.njit(cache=True)
+def _kalman_update(x, Pc, innov, idx, r_std):
+    """The Kalman update with the innovations of the components ``idx``."""
+    n, m = x.size, idx.size
     y = np.empty(m)
     S = np.empty((m, m))
     PHt = np.empty((n, m))
