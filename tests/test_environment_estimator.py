@@ -785,3 +785,31 @@ def test_with_known_commands_the_thrust_error_follows_each_steps_commands(model)
     # stopped: only the idle propellers' drag is left for the error to act on
     assert np.abs(acc_known[0, stopped]).max() < 0.1 * np.abs(acc_held).max()
     np.testing.assert_allclose(acc_known[0, same], np.broadcast_to(acc_held[0, 0], (same.sum(), 3)), rtol=1e-12)
+
+
+def test_the_gate_stops_a_jump_and_follows_an_innovation_that_grows_without_one():
+    """The outlier gate of the update: a heading innovation beyond the gate that jumped there
+    from the sample before is not used, nor are the ones after it while they stay beyond it;
+    after ``max_gated`` in a row the heading restarts at the measurement. The same innovation
+    reached by steps within the gate (a drifting ship turning faster than the model) is used:
+    before, it was gated too and the filter ran open-loop while the turn went on."""
+    from hybridship.residual.environment_kernel import update
+
+    x, P = np.zeros(6), np.diag(np.full(6, 1e-4))
+    z_ok = np.array([False, False, True, False, False, False])
+    r_std, gate = np.full(6, 0.01), np.array([8.0, 8.0, 8.0, np.inf, np.inf, np.inf])
+    bound = 8.0 * np.sqrt(2e-4)                                  # 0.113 rad
+    z = np.zeros(6)
+    z[2] = 1.2 * bound
+    grown = np.zeros((2, 6))
+    grown[1, 2] = 0.9 * bound                                    # the innovation of the sample before
+    x_grown, _ = update(x, P, z, z_ok, r_std, gate, 2, grown)
+    assert x_grown[2] > 0.0 and grown[0, 2] == 0                 # used
+    jumped = np.zeros((2, 6))
+    for k in range(2):                                           # a jump, then one more beyond the gate
+        x_jumped, P_jumped = update(x, P, z, z_ok, r_std, gate, 2, jumped)
+        np.testing.assert_array_equal(x_jumped, x)               # not used
+        assert jumped[0, 2] == k + 1
+    x_shift, P_shift = update(x, P, z, z_ok, r_std, gate, 2, jumped)
+    assert x_shift[2] == pytest.approx(z[2], abs=1e-15) and P_shift[2, 2] == pytest.approx(1e-4) and jumped[0, 2] == 0
+    np.testing.assert_array_equal(x_shift[[0, 1, 3, 4, 5]], 0.0)  # nothing else moved

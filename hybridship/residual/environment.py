@@ -112,14 +112,16 @@ class EnvironmentConfig(BaseModel):
     after it (:mod:`hybridship.residual.load_variability`; a window of 0 switches it off).
 
     A position or heading measurement whose innovation exceeds ``innovation_gate_sigma``
-    standard deviations of its predicted spread is an outlier and is not used (a GNSS spike
-    in the history of a forecast would otherwise throw the estimate off), unless
-    ``max_gated_samples`` in a row of the same channel were: a lasting shift (a datum
-    change) is then followed. The logged velocities are not gated: they carry the
-    wave-frequency motion, whose innovations in rough seas reach any gate that would catch
-    a spike (at 8 standard deviations the position and heading gates did not close on the
-    clean truthsim-dev logs or on scenarios of our own simulator when this was checked;
-    velocity gates did).
+    standard deviations of its predicted spread, and jumped there from the innovation of the
+    sample before, is an outlier and is not used (a GNSS spike in the history of a forecast
+    would otherwise throw the estimate off); so are the samples after it whose innovation
+    stays beyond the gate, until ``max_gated_samples`` in a row of the same channel were: a
+    lasting shift (a datum change) is then followed by restarting that channel at the
+    measurement, which leaves the velocities and the environment as they were. An
+    innovation that grows past the gate without a jump (a drifting ship turning faster
+    than the model predicts) is the ship's motion, and is used. The logged velocities are
+    not gated: they carry the wave-frequency motion, whose innovations in rough seas reach
+    any gate that would catch a spike.
 
     With ``wave_turned_yaw_load``, forecasts after a failure turn the held yaw load with the
     waves: their axis comes from the wave-frequency motion of the last ``wave_axis_window_s``
@@ -787,18 +789,18 @@ class EnvironmentEstimator:
 
     def _filter_grid(self, arrays, grid, want, inputs, out_x, out_P, drift_yaw_uv: float, resume=None) -> tuple:
         """One run of the compiled filter over ``grid`` (from the estimate, settling time and
-        outlier counts ``resume = (x, P, settle_until_s, gated)`` at ``grid[0]`` when given),
-        storing the estimates at the sorted rows ``want``; returns ``(settle_until_s, gated)``
+        outlier gate's state ``resume = (x, P, settle_until_s, gate_state)`` at ``grid[0]`` when
+        given), storing the estimates at the sorted rows ``want``; returns ``(settle_until_s, gate_state)``
         at its last row, what a run resumed there needs."""
         slot = np.full(len(arrays.time_s), -1, dtype=np.int64)
         slot[want] = np.arange(len(want))
         n = len(self.state_names)
         xs, Ps = np.empty((len(want), n)), np.empty((len(want), n, n))
         done = np.zeros(len(want), dtype=np.bool_)
-        x_resume, P_resume, settle_until, gated = resume if resume is not None else (
-            np.zeros(n), np.zeros((n, n)), 0.0, np.zeros(6, dtype=np.int64))
+        x_resume, P_resume, settle_until, gate_state = resume if resume is not None else (
+            np.zeros(n), np.zeros((n, n)), 0.0, np.zeros((2, 6)))
         settle_io = np.array([settle_until], dtype=float)
-        gated_io = np.array(gated, dtype=np.int64)
+        gate_io = np.array(gate_state, dtype=float)
         c = self.config
         kernel.filter_grid(np.ascontiguousarray(grid, dtype=np.int64), slot, arrays.time_s, arrays.segment_id,
                            inputs["z"], inputs["z_ok"], inputs["r_std"], inputs["rpm"], inputs["az"],
@@ -813,8 +815,8 @@ class EnvironmentEstimator:
                            int(c.max_gated_samples), float(c.settle_s), float(c.max_bridged_gap_s),
                            float(np.prod(self._filter_every(arrays))), resume is not None,
                            np.ascontiguousarray(x_resume, dtype=float), np.ascontiguousarray(P_resume, dtype=float),
-                           settle_io, gated_io, xs, Ps, done)
+                           settle_io, gate_io, xs, Ps, done)
         for k, i in enumerate(want):
             if done[k]:
                 out_x[i], out_P[i] = xs[k], Ps[k]
-        return float(settle_io[0]), gated_io.copy()
+        return float(settle_io[0]), gate_io.copy()

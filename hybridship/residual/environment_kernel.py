@@ -167,17 +167,21 @@ def predict(x, Pc, dt, rpm, az, wind, Q, fd_step, P, per_thruster, drift_yaw_uv,
 
 
 @numba.njit(cache=True)
-def update(x, Pc, z, z_ok, r_std, gate, max_gated, gated):
+def update(x, Pc, z, z_ok, r_std, gate, max_gated, gate_state):
     """EKF measurement update with the measured components ``z_ok`` (6,) of ``[eta, nu]``.
 
     The heading innovation is wrapped to (-pi, pi]. A component whose innovation exceeds
-    ``gate`` standard deviations of its predicted spread (``P + r^2``) is an outlier (a
-    position spike, a corrupted sample) and is not used, unless it has been so for
-    ``max_gated`` updates in a row (``gated`` (6,) counts them, updated in place): a lasting
-    shift, such as a datum change, is then followed by restarting that component at the
-    measurement (its variance ``r^2``, no covariance with the rest), not by a Kalman update,
-    which would put the shift into the velocities and the environment. Returns ``(x, P)``
-    (new arrays).
+    ``gate`` standard deviations of its predicted spread (``P + r^2``) and jumped there, by
+    as much, from its innovation at the sample before, is an outlier (a position spike, a
+    corrupted sample, a datum change) and is not used; so are the samples after it while
+    their innovation stays beyond the gate, until ``max_gated`` were in a row. A lasting
+    shift is then followed by restarting that component at the measurement (its variance
+    ``r^2``, no covariance with the rest), not by a Kalman update, which would put the shift
+    into the velocities and the environment. An innovation that grows past the gate without
+    a jump is the ship's own motion outrunning the model (a drifting ship's turn): it is
+    used, so the filter follows it. ``gate_state`` (2, 6), updated in place, holds per
+    component the outliers in a row and the innovation at its last measured sample.
+    Returns ``(x, P)`` (new arrays).
     """
     innov = z[:6] - x[:6]
     innov[2] = (innov[2] + math.pi) % (2.0 * math.pi) - math.pi     # hybridship.frames.wrap_pi, compiled
@@ -186,12 +190,17 @@ def update(x, Pc, z, z_ok, r_std, gate, max_gated, gated):
     for c in range(6):
         if not use[c]:
             continue
-        if innov[c] ** 2 > gate[c] ** 2 * (Pc[c, c] + r_std[c] ** 2):
+        bound = gate[c] ** 2 * (Pc[c, c] + r_std[c] ** 2)
+        step = innov[c] - gate_state[1, c]
+        if c == 2:
+            step = (step + math.pi) % (2.0 * math.pi) - math.pi
+        if innov[c] ** 2 > bound and (gate_state[0, c] > 0 or step ** 2 > bound):
             use[c] = False
-            shift[c] = gated[c] >= max_gated
-            gated[c] = 0 if shift[c] else gated[c] + 1
+            shift[c] = gate_state[0, c] >= max_gated
+            gate_state[0, c] = 0 if shift[c] else gate_state[0, c] + 1
         else:
-            gated[c] = 0
+            gate_state[0, c] = 0
+        gate_state[1, c] = 0.0 if shift[c] else innov[c]
     idx = np.flatnonzero(use)
     x_new, P_new = _kalman_update(x, Pc, innov, idx, r_std) if idx.size else (x, Pc)
     if shift.any():
@@ -379,7 +388,7 @@ def _restarted(z_i, x, Pc, keep_environment, gap_s, prior_thr, prior_sd, q_base)
 def filter_grid(grid, slot, t, seg, z, z_ok, r_std, rpm, az, wind, dp, P, per_thruster, prior_thr, prior_sd, q_base,
                 q_base_stopped, fd_step, reset_at_stop, kept, stop_std, yaw_prior, current_stop_std, load_to_current,
                 drift_yaw_uv, gate, max_gated, settle_s, max_bridge_s, step_s, resume, x_resume,
-                P_resume, settle_io, gated_io, out_x, out_P, done):
+                P_resume, settle_io, gate_io, out_x, out_P, done):
     """Run the filter over the log rows ``grid`` (increasing).
 
     At a row ``i`` with ``slot[i] >= 0`` the estimate goes to ``out_x[slot[i]]``,
@@ -407,19 +416,19 @@ def filter_grid(grid, slot, t, seg, z, z_ok, r_std, rpm, az, wind, dp, P, per_th
     the motion states and leave the environment as it was: the start-up transient (motion
     states started from one noisy sample) would otherwise leave its mark on the split
     between current and load, which station keeping cannot correct. ``settle_io[0]`` holds
-    the time [s] until which a run settles and ``gated_io`` (6,) the count of outliers in a
-    row per channel (:func:`update`): read with ``resume``, written at the end, so that a
-    resumed run gates as the run it continues would have.
+    the time [s] until which a run settles and ``gate_io`` (2, 6) the gate's state per channel
+    (:func:`update`: outliers in a row, last innovation): read with ``resume``, written at
+    the end, so that a resumed run gates as the run it continues would have.
     """
     work = _workspace(P)
-    gated = np.zeros(6, dtype=np.int64)
+    gate_state = np.zeros((2, 6))
     n = prior_sd.size
     x, Pc = np.zeros(n), np.zeros((n, n))
     started, prev, settle_until = False, -1, -math.inf
     if resume:
         x, Pc, started, prev = x_resume.copy(), P_resume.copy(), True, grid[0]
         settle_until = settle_io[0]
-        gated[:] = gated_io
+        gate_state[:] = gate_io
         s = slot[prev]
         if s >= 0:
             out_x[s] = x
@@ -442,7 +451,7 @@ def filter_grid(grid, slot, t, seg, z, z_ok, r_std, rpm, az, wind, dp, P, per_th
             keep = started and finite
             x, Pc = _restarted(z[i], x, Pc, keep, max(t[i] - t[prev], 0.0), prior_thr, prior_sd,
                                q_base if not keep or dp[prev] else q_base_stopped)
-            gated[:] = 0
+            gate_state[:] = 0.0
             started = True
             settle_until = t[i] + settle_s
         else:
@@ -459,7 +468,7 @@ def filter_grid(grid, slot, t, seg, z, z_ok, r_std, rpm, az, wind, dp, P, per_th
                     for b in range(6, n):
                         Pc[a, b] = 0.0
                         Pc[b, a] = 0.0
-            x, Pc = update(x, Pc, z[i], z_ok[i], r_std[i], gate, max_gated, gated)
+            x, Pc = update(x, Pc, z[i], z_ok[i], r_std[i], gate, max_gated, gate_state)
             if dp[prev] and not dp[i]:
                 if reset_at_stop:
                     x, Pc = at_thrust_stop(x, Pc, kept, stop_std, yaw_prior, P, work)
@@ -474,7 +483,7 @@ def filter_grid(grid, slot, t, seg, z, z_ok, r_std, rpm, az, wind, dp, P, per_th
             out_P[s] = Pc
             done[s] = True
     settle_io[0] = settle_until
-    gated_io[:] = gated
+    gate_io[:] = gate_state
 
 
 @numba.njit(cache=True)
