@@ -68,11 +68,11 @@ def test_a_bridged_gap_is_the_prediction_through_rows_without_measurements(model
     np.testing.assert_allclose(got.P, want.P, rtol=1e-9, atol=1e-15)
 
 
-def _update(x, Pc, z, channel, gate=np.inf, max_gated=10, gated=None):
+def _update(x, Pc, z, channel, gate=np.inf, max_gated=10, gate_state=None):
     z_ok = np.zeros(6, dtype=np.bool_)
     z_ok[channel] = True
-    gated = np.zeros(6, dtype=np.int64) if gated is None else gated
-    return kernel.update(x, Pc, z, z_ok, np.full(6, 0.1), np.full(6, gate), max_gated, gated)
+    gate_state = np.zeros((2, 6)) if gate_state is None else gate_state
+    return kernel.update(x, Pc, z, z_ok, np.full(6, 0.1), np.full(6, gate), max_gated, gate_state)
 
 
 def test_the_heading_innovation_is_wrapped_through_north():
@@ -87,19 +87,19 @@ def test_the_heading_innovation_is_wrapped_through_north():
 
 
 def test_the_gate_lets_the_measurement_in_after_exactly_max_gated_outliers():
-    """With max_gated 3, three outliers in a row are gated and the fourth is used.
-    Kills: an off-by-one in the count (E14)."""
+    """With max_gated 3, three outliers in a row are gated and the fourth restarts the
+    channel at the measurement. Kills: an off-by-one in the count (E14)."""
     x = np.zeros(14)
     P = np.eye(14) * 0.01
     z = np.zeros(6)
     z[0] = 100.0
-    gated = np.zeros(6, dtype=np.int64)
+    gate_state = np.zeros((2, 6))
     for k in range(3):
-        x1, _ = _update(x, P, z, 0, gate=8.0, max_gated=3, gated=gated)
+        x1, _ = _update(x, P, z, 0, gate=8.0, max_gated=3, gate_state=gate_state)
         np.testing.assert_array_equal(x1, x)
-        assert gated[0] == k + 1
-    x1, _ = _update(x, P, z, 0, gate=8.0, max_gated=3, gated=gated)
-    assert x1[0] > 1.0 and gated[0] == 0
+        assert gate_state[0, 0] == k + 1
+    x1, _ = _update(x, P, z, 0, gate=8.0, max_gated=3, gate_state=gate_state)
+    assert x1[0] == 100.0 and gate_state[0, 0] == 0
 
 
 def test_prior_standard_deviations_at_the_start_are_in_si_units(model):
