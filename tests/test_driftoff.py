@@ -602,6 +602,20 @@ def test_live_refuses_a_time_without_station_keeping_and_bad_estimates():
         blackout_now(est, "gunnerus", [3])
 
 
+def test_live_mean_wind_is_the_mean_speed_towards_the_mean_direction():
+    """A steady 10 m/s whose direction swings 30 deg either side of north, 20 s each way:
+    the mean wind is 10 m/s from north, with no gusts. The vector mean's length, used
+    before, read 8.66 m/s (10 cos 30 deg)."""
+    df, i = _failure_log()
+    hist = df.iloc[: i + 1].copy()
+    n = len(hist)
+    hist["wind_speed_m_s"] = 10.0
+    hist["wind_dir_deg"] = np.where((np.arange(n) // 20) % 2 == 0, 30.0, 330.0)
+    est = environment_from_log(hist, "gunnerus")
+    assert est.wind_speed_m_s == pytest.approx(10.0, abs=1e-12)
+    assert abs(np.degrees(est.wind_dir_from_rad)) < 1.0 and est.gust_intensity == 0.0
+
+
 def test_live_reads_the_log_as_a_forecast_does():
     """The live estimate takes the log through the forecasts' ingest: a thruster's missing
     rpm column is refused (not taken as stopped); a dead wind sensor is no wind measurement
@@ -655,7 +669,7 @@ def test_live_refuses_empty_commands_and_faulty_sensors_at_the_blackout_row():
         est = environment_from_log(last, "gunnerus")
     assert "missing position" in est.notes and environment_from_log(hist, "gunnerus").notes == ""
     knots = hist.assign(wind_speed_m_s=60.0)
-    with pytest.raises(ValueError, match=r"column 'wind_speed_m_s': the mean wind over the last 120 s .* is 59.8 m/s"):
+    with pytest.raises(ValueError, match=r"column 'wind_speed_m_s': the mean wind over the last 120 s .* is 60.0 m/s"):
         environment_from_log(knots, "gunnerus")
 
 

@@ -221,8 +221,12 @@ def environment_from_log(log, vessel="gunnerus", *, window_s: float = 900.0, win
     notes = _start_checks(a, idx, name, wind_measured)
     if wind_measured:
         ws, wd = aw.wind[sel, 0], aw.wind[sel, 1]
+        # the mean speed is the speed's mean (as the gust intensity's denominator is, and as
+        # a 10-min mean wind is defined); the direction is the mean velocity's, so that
+        # 350 and 10 deg average to north. The vector mean's length reads low whenever the
+        # direction wavers.
         vn, ve = np.mean(ws * np.cos(wd)), np.mean(ws * np.sin(wd))
-        w_speed, w_dir = float(np.hypot(vn, ve)), float(math.atan2(ve, vn))
+        w_speed, w_dir = float(np.mean(ws)), float(math.atan2(ve, vn))
         gi = float(np.clip(np.std(ws) / w_speed, 0.0, 0.5)) if w_speed > 0 else 0.0
         if w_speed > MAX_WIND_M_S:       # before the estimator's work, in the log's words
             raise ValueError(f"{name}: column 'wind_speed_m_s': the mean wind over the last {wind_window_s:g} s up "
