@@ -12,6 +12,12 @@ from __future__ import annotations
 from pathlib import Path
 
 import pytest
+from hypothesis import settings as hypothesis_settings
+
+# The property tests draw the same examples on every run (a failure is one any run can
+# reproduce, and the suite cannot turn red by chance); per-test settings add to this.
+hypothesis_settings.register_profile("hybridship", derandomize=True)
+hypothesis_settings.load_profile("hybridship")
 
 #: The repository root (the folder holding ``hybridship/`` and ``tests/``).
 ROOT = Path(__file__).resolve().parents[1]

@@ -335,20 +335,22 @@ def test_grouped_coverage_interval_stays_within_the_groups_coverages():
     """Property: for any groups (sizes, hits), the pooled coverage is the hits over the counts,
     and the interval is ordered and never leaves the range of the groups' own coverages (a
     resample's coverage is a count-weighted mean of them)."""
-    from hypothesis import given, settings
+    from hypothesis import example, given, settings
     from hypothesis import strategies as st
 
     from hybridship.evaluation import metrics
 
     @settings(max_examples=40, deadline=None)
     @given(st.lists(st.tuples(st.integers(1, 50), st.floats(0.0, 1.0)), min_size=2, max_size=12))
+    @example([(43, 0.125), (43, 0.125)])               # found by a random run: lo above hi by one ulp
     def check(groups):
         counts = np.array([n for n, _ in groups])
         hits = np.array([[round(f * n)] for n, f in groups], dtype=float)
         cov, lo, hi = metrics.grouped_coverage_interval(hits, counts, n_resamples=500)[0]
         np.testing.assert_allclose(cov, hits.sum() / counts.sum())
         own = hits[:, 0] / counts
-        assert own.min() - 1e-12 <= lo <= hi <= own.max() + 1e-12
+        # (groups of one coverage: the quantiles of a constant differ in the last bit)
+        assert own.min() - 1e-12 <= lo <= hi + 1e-12 and hi <= own.max() + 1e-12
 
     check()
 
