@@ -40,7 +40,7 @@ import pandas as pd
 from pydantic import AfterValidator, Field, model_validator
 
 from ..config import Float, check_number, config_dataclass
-from ..logs.io import unit_variant
+from ..logs.io import RAD_SPREAD_LIMIT, unit_variant
 from ..forecast_inputs.limits import Envelope
 from ..sim import environment as env
 from ..sim.environment import MAX_STEEPNESS, check_steepness, max_hs_m
@@ -294,7 +294,8 @@ def _warn_directions_like_radians(cols: dict, src: str) -> None:
     direction would be squeezed into the first 6.3 deg."""
     for c in ("wind_dir_deg", "wave_dir_deg", "current_dir_deg"):
         v = cols[c]
-        if v.size >= 20 and v.min() >= 0.0 and v.max() <= 2.0 * math.pi + 1e-6 and np.ptp(v) >= 5.5:
+        within_a_turn = v.min() >= 0.0 and v.max() <= 2.0 * math.pi + 1e-6
+        if v.size >= 20 and within_a_turn and np.ptp(v) >= RAD_SPREAD_LIMIT:
             warnings.warn(f"{src}: column {c!r} spans {v.min():.2f} to {v.max():.2f}, which looks like radians; "
                           f"the table expects degrees (convert with numpy.degrees)", UserWarning, stacklevel=3)
 

@@ -165,7 +165,7 @@ class LogFormatWarning(UserWarning):
 _RAD_LIMIT = 2.0 * np.pi + 0.1
 #: Without other evidence, a heading confined to +-(2 pi + 0.1) that spans at least this
 #: much (315 deg if radians, most of a turn) is taken to be radians.
-_RAD_SPREAD_LIMIT = 5.5
+RAD_SPREAD_LIMIT = 5.5
 #: Ratio std(r_deg_s) / std(heading rate) splitting degrees (~1) from radians (~57.3).
 _RATE_SCALE_SPLIT = float(np.sqrt(180.0 / np.pi))
 
@@ -283,7 +283,7 @@ def heading_looks_like_radians(time_s, heading, r_deg_s=None) -> tuple[bool, str
                 return False, f"r_deg_s is {k:.2f} times its rate of change, as for degrees"
 
     spread = float(np.ptp(h_ok))
-    if spread >= _RAD_SPREAD_LIMIT:
+    if spread >= RAD_SPREAD_LIMIT:
         return True, (
             f"all values lie within +-2 pi yet span {spread:.2f} (a turn of "
             f"{np.degrees(spread):.0f} deg if radians, only {spread:.1f} deg if degrees)"

@@ -167,6 +167,12 @@ def predict(x, Pc, dt, rpm, az, wind, Q, fd_step, P, per_thruster, drift_yaw_uv,
 
 
 @numba.njit(cache=True)
+def _wrap_pi(angle_rad):
+    """An angle wrapped to [-pi, pi) [rad]: :func:`hybridship.frames.wrap_pi`, compiled."""
+    return (angle_rad + math.pi) % (2.0 * math.pi) - math.pi
+
+
+@numba.njit(cache=True)
 def update(x, Pc, z, z_ok, r_std, gate, max_gated, gate_state):
     """EKF measurement update with the measured components ``z_ok`` (6,) of ``[eta, nu]``.
 
@@ -184,7 +190,7 @@ def update(x, Pc, z, z_ok, r_std, gate, max_gated, gate_state):
     Returns ``(x, P)`` (new arrays).
     """
     innov = z[:6] - x[:6]
-    innov[2] = (innov[2] + math.pi) % (2.0 * math.pi) - math.pi     # hybridship.frames.wrap_pi, compiled
+    innov[2] = _wrap_pi(innov[2])
     use = z_ok.copy()
     shift = np.zeros(6, dtype=np.bool_)
     for c in range(6):
@@ -193,7 +199,7 @@ def update(x, Pc, z, z_ok, r_std, gate, max_gated, gate_state):
         bound = gate[c] ** 2 * (Pc[c, c] + r_std[c] ** 2)
         step = innov[c] - gate_state[1, c]
         if c == 2:
-            step = (step + math.pi) % (2.0 * math.pi) - math.pi
+            step = _wrap_pi(step)
         if innov[c] ** 2 > bound and (gate_state[0, c] > 0 or step ** 2 > bound):
             use[c] = False
             shift[c] = gate_state[0, c] >= max_gated
