@@ -373,3 +373,15 @@ def test_the_unguarded_row_keeps_its_raw_spread_after_a_failure():
     np.testing.assert_array_equal(row.eta, calibrated.eta)
     np.testing.assert_array_equal(row.eta_std, raw.eta_std)
     assert not np.allclose(row.eta_std[:, 1:], calibrated.eta_std[:, 1:])
+
+
+def test_coverage_tables_round_one_coverage_alike():
+    """117 of 120 outcomes inside the band is 0.975 as a float just below it: the coverage
+    table and the table with the interval print it alike (pandas' round gave 0.98, the
+    interval's format 0.97)."""
+    from hybridship.evaluation.drift import _coverage_markdown
+
+    cov = pd.DataFrame(dict(model="hybrid", sigma=[1, 2], horizon_s=60.0, coverage=[0.525, 117 / 120]))
+    md = _coverage_markdown(cov)
+    assert f"{117 / 120:.2f}" == "0.97"                        # the interval table's cell
+    assert "| hybrid | 2 | 0.97 |" in md and "| hybrid | 1 | 0.53 |" in md
