@@ -144,3 +144,12 @@ def test_drift_forecasts_end_where_dp_comes_back_on():
     p0, t0, _ = metrics.drift_forecasts(dr, whole, n_intervals=15, horizons_s=(15,))
     np.testing.assert_array_equal(p, p0)
     np.testing.assert_array_equal(t, t0)
+
+
+def test_grouped_interval_over_three_groups_stays_within_their_own_coverages():
+    """The documented limit of few groups: the interval never leaves the groups' range."""
+    from hybridship.evaluation.metrics import grouped_coverage_interval
+
+    hits, counts = np.array([[18.0], [19.0], [20.0]]), np.array([20.0, 20.0, 20.0])
+    cov, lo, hi = grouped_coverage_interval(hits, counts)[0]
+    assert np.isclose(cov, 0.95) and 0.9 <= lo <= cov <= hi <= 1.0

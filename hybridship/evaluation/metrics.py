@@ -180,6 +180,13 @@ def grouped_coverage_interval(hits: np.ndarray, counts: np.ndarray, *, confidenc
     ndarray, shape (n_horizons, 3)
         ``coverage, low, high``; ``low`` and ``high`` NaN with fewer than two groups.
 
+    Notes
+    -----
+    With few groups the interval is narrower than its confidence claims: a resample of G
+    groups takes at most ``C(2G - 1, G)`` distinct values (10 for three), all within the
+    range of the groups' own coverages, so it cannot show how a fourth group might differ.
+    Read an interval over fewer than about ten groups as a lower bound on the uncertainty.
+
     Raises
     ------
     TypeError, ValueError
