@@ -119,6 +119,34 @@ def test_log_is_valid_and_in_si_after_conversion(runs, raws):
     assert (a.rpm[:, 0] < 0).any()  # random runs include astern
 
 
+def test_the_converted_log_follows_the_log_format_conventions(runs, raws):
+    """The loader's output read in the log format's terms (NED, body x forward and y starboard,
+    clockwise heading and yaw rate, wind FROM, rpm, rudder positive turning to starboard)
+    reproduces the raw run's own relations: the track, the apparent wind, the turn and the
+    propeller's push."""
+    from hybridship import frames
+
+    r = next(r for r in runs if r.name == "random_03-Aug-2020_11_04_37")
+    raw, a = raws[r.name], esso_log_arrays(r.path)
+    # body velocities turned into NED follow the track (u, v logged 0.6 s late, README)
+    lag, k = 6, 5
+    vel = frames.body_to_ned(np.column_stack([a.nu[:, :2], np.zeros(len(a))]), a.eta[:, 2])[:, :2]
+    track = (a.eta[2 * k:, :2] - a.eta[:-2 * k, :2]) / (a.time_s[2 * k:] - a.time_s[:-2 * k])[:, None]
+    err = track[:-lag] - vel[k + lag:-k]
+    assert np.sqrt(np.mean(err ** 2)) < 0.03
+    # the true wind (speed, direction FROM, clockwise from north) seen from the moving ship
+    blow = -frames.speed_dir_to_vector(a.wind)                       # the way it blows, NED
+    body = frames.ned_to_body(np.column_stack([blow, np.zeros(len(a))]), a.eta[:, 2])[:, :2] - a.nu[:, :2]
+    ua, ga = raw["wind_velo_relative_mid [m/s]"].to_numpy(), raw["wind_dir_relative_mid [rad]"].to_numpy()
+    apparent = -ua[:, None] * np.column_stack([np.cos(ga), np.sin(ga)])   # from the bow towards starboard
+    assert np.sqrt(np.mean(np.sum((body - apparent) ** 2, axis=1))) < 0.01
+    # positive rudder angle turns to starboard (r > 0 five seconds later); positive rpm drives ahead
+    d5 = 50
+    assert np.corrcoef(a.azimuth_rad[:-d5, 1], a.nu[d5:, 2])[0, 1] > 0.2
+    held = np.lib.stride_tricks.sliding_window_view(a.rpm[:, 0], 200).min(axis=1) > 300.0   # 5 rev/s for 20 s
+    assert held.sum() > 100 and np.mean(a.nu[199:, 0][held] > 0) > 0.99
+
+
 def test_sign_conventions_hold_in_every_run(runs, raws):
     for r in runs:
         c = convention_checks(raws[r.name])

@@ -21,8 +21,10 @@ from hybridship.logs.ingest import ingest, ingest_with_report, sort_samples
 from hybridship.logs.io import LogArrays, LogFormatError, log_to_arrays
 from hybridship.physics.model import DynamicModel
 from hybridship.predictors import DataOnlyPredictor, DynamicPredictor, HybridPredictor
+from hybridship.predictors.forecast_setup import FORECAST_HISTORY_S
 from hybridship.forecast_inputs import FaultFlags, StartWindowError
 from hybridship.residual.ensemble import EnsembleConfig
+from hybridship.residual.features import prepare_log
 from hybridship.sim.synthetic import physics_log
 
 TINY = EnsembleConfig(n_members=2, hidden=8, max_epochs=15, patience=5, seed=0)
@@ -321,3 +323,55 @@ def test_an_exact_duplicate_with_a_missing_value_is_one_sample_in_any_float_type
     assert 10.0 in arrays.time_s and len(arrays.time_s) == len(log)
     with pytest.warns(UserWarning, match="exact duplicate"):
         ingest(doubled, model.vessel, purpose="fit")
+
+
+def test_training_refuses_a_command_column_without_any_value(model, log):
+    """A dead channel exported as an empty column was trained on as a stopped thruster (or a
+    centred azimuth): training refuses it as it refuses the column missing; a forecast keeps
+    it, for its start-window flags."""
+    for col, says in (("port_rpm", "port_rpm: without a value in any row while tunnel_rpm, stbd_rpm are logged"),
+                      ("port_azimuth_deg", "port_azimuth_deg: without a value in any row while port_rpm is logged")):
+        dead = log.assign(**{col: np.nan})
+        with pytest.raises(LogFormatError, match=says):
+            ingest(dead, model.vessel, purpose="fit")
+        assert not ingest(dead, model.vessel, purpose="forecast").commands_logged.any()
+    dead = log.assign(tunnel_rpm=np.nan, port_rpm=np.nan, stbd_rpm=np.nan)
+    with pytest.raises(LogFormatError, match="tunnel_rpm: no thruster rpm values .* while dp_active is 1 at row 0"):
+        ingest(dead, model.vessel, purpose="fit")
+    with pytest.raises(LogFormatError, match="tunnel_rpm: no thruster rpm values .* while dp_active is absent"):
+        ingest(dead.assign(dp_active=np.nan), model.vessel, purpose="fit")      # read as 1, as when absent
+    # a drift without thrust may carry empty rpm columns, as it may leave them out
+    ingest(dead.assign(dp_active=0), model.vessel, purpose="fit")
+
+
+def test_fit_and_forecast_read_a_log_into_the_same_arrays_and_features(model, log, hybrid, tmp_path):
+    """Training reads a whole log; a forecast reads the rows around its starts from a file: the
+    rows both read carry the same samples, derived velocities, segments and residual
+    features (away from the edges of what the forecast read, where a derivative is one-sided)."""
+    df = log.drop(columns=["u_m_s", "v_m_s", "r_deg_s"]).drop(index=range(150, 153))     # derived nu, a gap
+    df["heading_deg"] = (df["heading_deg"] + 170.0) % 360.0 - 180.0                        # the other wrap
+    path = tmp_path / "log.csv.gz"
+    df.iloc[::-1].to_csv(path, index=False)                                                # late rows too
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", UserWarning)
+        fit = ingest(df, model.vessel, purpose="fit")
+        part = ingest(path, model.vessel, purpose="forecast", time_range_s=(100.0, 250.0))
+    rows = np.searchsorted(fit.time_s, part.time_s)
+    np.testing.assert_array_equal(fit.time_s[rows], part.time_s)
+    inner = slice(1, -1)
+    for name in ("eta", "nu", "nu_logged", "rpm", "azimuth_rad", "wind", "dp_active"):
+        np.testing.assert_allclose(getattr(part, name)[inner], getattr(fit, name)[rows][inner], rtol=0, atol=1e-9,
+                                   err_msg=name)
+    cut = np.flatnonzero(np.diff(part.segment_id)) + 1
+    np.testing.assert_array_equal(cut, np.flatnonzero(np.diff(fit.segment_id[rows])) + 1)
+    assert part.time_s[cut].tolist() == [153.0]
+    # the nets' inputs: a forecast reads FORECAST_HISTORY_S before its start (the bias is a
+    # causal mean over bias_window_s of it), here all of this short log, and stops short of its end
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", UserWarning)
+        part = ingest(path, model.vessel, purpose="forecast", time_range_s=(0.0, 250.0))
+    assert FORECAST_HISTORY_S >= hybrid.residual_config.bias_window_s
+    cfg = hybrid.residual_config
+    k = np.arange(5, len(part) - 2)
+    np.testing.assert_allclose(prepare_log(model, part, cfg).full_features(k),
+                               prepare_log(model, fit, cfg).full_features(k), rtol=1e-9, atol=1e-12)

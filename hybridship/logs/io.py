@@ -231,9 +231,10 @@ def heading_looks_like_radians(time_s, heading, r_deg_s=None) -> tuple[bool, str
 
     So a log whose headings all lie in 0..3 deg is accepted (spread 3 < 5.5, no wrap
     jumps), and a turning log spanning 0..6.28 is refused (wrap jumps or spread). The
-    known blind spot: a degree log held within +-3.2 deg of north in the -180..180
-    convention for a whole recording and without ``r_deg_s`` is refused as radians;
-    logging ``r_deg_s`` resolves it.
+    known blind spot: a degree log that stays within +-6.28 deg of north in the -180..180
+    convention for a whole recording, yet spans 5.5 deg or more (say -3 to +3 deg), and
+    has no ``r_deg_s`` is refused as radians; logging ``r_deg_s``, or the heading as
+    0..360 deg, resolves it.
 
     Parameters
     ----------
@@ -936,6 +937,10 @@ def check_log_against_vessel(log, vessel, *, source: str | None = None, allow_mi
     * no ``<name>_rpm`` at all while ``dp_active`` is 1 somewhere, or absent (the
       forecast would take a station-keeping vessel as drifting without thrust);
     * a rudder's ``<name>_azimuth_deg`` missing while thruster rpm are logged;
+    * without ``allow_missing`` (training), a thruster or rudder column (or ``dp_active``)
+      that holds no value in any row counts as missing in the rules above (a dead channel
+      exported as an empty column would otherwise be trained on as a stopped thruster or a
+      centred rudder);
     * every logged thruster's rpm within +-1 in ``RPM_SIGN_MIN_SAMPLES`` (60) or more samples
       of station keeping with thrust (for thrusters whose ``max_rpm`` is at least 20): a
       fraction of ``max_rpm`` or of full thrust logged as rpm;
@@ -979,16 +984,34 @@ def check_log_against_vessel(log, vessel, *, source: str | None = None, allow_mi
     source = source or "log"
     _validate(df, v.channel_names, v.rotatable, source, warn_unknown=True, allow_missing=allow_missing,
               vessel_name=v.name, unit_statistics=unit_statistics)
-    cols = set(map(str, df.columns))
     t = _to_float(df, "time_s", source, None)
-    _check_all_or_no_rpm(v, cols, source)
-    _check_rudder_angles_logged(v, cols, source)
-    _check_rpm_while_station_keeping(v, df, cols, t, source)
+    # a command column without one value logs nothing: in training it counts as absent (its
+    # thruster would be taken as stopped, its angle as 0); a forecast judges it per start
+    blank = set() if allow_missing else _blank_channel_columns(v, df, t, source)
+    cols = set(map(str, df.columns)) - blank
+    _check_all_or_no_rpm(v, cols, source, blank)
+    _check_rudder_angles_logged(v, cols, source, blank)
+    _check_rpm_while_station_keeping(v, df, cols, t, source, blank)
     if unit_statistics:
         _check_rpm_not_fractions(v, lambda c: _to_float(df, c, source, t), cols, len(df), source)
     for th in v.thrusters:
         if column_spec("<thruster>_rpm").for_channel(th.name) in cols:
-            _check_thruster_columns(v, th, df, cols, t, source, rpm_sign=unit_statistics)
+            _check_thruster_columns(v, th, df, cols, t, source, rpm_sign=unit_statistics, blank=blank)
+
+
+def _blank_channel_columns(v, df: pd.DataFrame, t: np.ndarray, source: str) -> set[str]:
+    """The vessel's command columns (``<name>_rpm``, ``<name>_azimuth_deg``, ``dp_active``)
+    that are in ``df`` without a single finite value (a dead channel exported as an empty
+    column; an empty ``dp_active`` is read as its default, 1, as an absent one)."""
+    names = [column_spec(s).for_channel(c) for c in v.channel_names for s in ("<thruster>_rpm",
+                                                                             "<thruster>_azimuth_deg")]
+    names.append("dp_active")
+    return {c for c in names if c in df.columns and not np.isfinite(_to_float(df, c, source, t)).any()}
+
+
+def _absent(col: str, blank: set) -> str:
+    """How a required command column is absent, for messages."""
+    return "without a value in any row" if col in blank else "missing"
 
 
 def _rpm_columns(v) -> list[str]:
@@ -996,29 +1019,29 @@ def _rpm_columns(v) -> list[str]:
     return [column_spec("<thruster>_rpm").for_channel(th.name) for th in v.thrusters]
 
 
-def _check_all_or_no_rpm(v, cols: set, source: str) -> None:
-    """Some thrusters' rpm logged and others' not: the forecast would take the missing
-    ones as stopped."""
+def _check_all_or_no_rpm(v, cols: set, source: str, blank: set = frozenset()) -> None:
+    """Some thrusters' rpm logged and others' not (absent, or in ``blank``: no value): the
+    forecast would take the missing ones as stopped."""
     rpm_cols = _rpm_columns(v)
     miss = [c for c in rpm_cols if c not in cols]
     have = [c for c in rpm_cols if c in cols]
     if have and miss:
         raise LogFormatError(
-            f"{miss[0]}: missing while {', '.join(have)} are logged; expected the rpm of every thruster"
-            f" of vessel {v.name!r} ({', '.join(rpm_cols)}), else the forecast would take "
+            f"{miss[0]}: {_absent(miss[0], blank)} while {', '.join(have)} are logged; expected the rpm of every "
+            f"thruster of vessel {v.name!r} ({', '.join(rpm_cols)}), else the forecast would take "
             f"{', '.join(miss)} as stopped{_where(source)}", column=miss[0])
 
 
-def _check_rudder_angles_logged(v, cols: set, source: str) -> None:
-    """A rudder's angle missing while thruster rpm are logged: the forecast would take the
-    rudder as amidships."""
+def _check_rudder_angles_logged(v, cols: set, source: str, blank: set = frozenset()) -> None:
+    """A rudder's angle missing (or in ``blank``: no value) while thruster rpm are logged:
+    the forecast would take the rudder as amidships."""
     if not any(c in cols for c in _rpm_columns(v)):
         return
     for rud in getattr(v, "rudders", None) or []:
         col = column_spec("<thruster>_azimuth_deg").for_channel(rud.name)
         if col not in cols:
             raise LogFormatError(
-                f"{col}: missing while thruster rpm are logged; expected the angle of rudder "
+                f"{col}: {_absent(col, blank)} while thruster rpm are logged; expected the angle of rudder "
                 f"{rud.name!r} of vessel {v.name!r} in degrees (positive to starboard), else the forecast would "
                 f"take it as amidships{_where(source)}", column=col)
 
@@ -1063,28 +1086,31 @@ def _warn_some_rpm_fractions(logged, x: np.ndarray, source: str) -> None:
                 LogFormatWarning, stacklevel=4)
 
 
-def _check_rpm_while_station_keeping(v, df: pd.DataFrame, cols: set, t: np.ndarray, source: str) -> None:
-    """No thruster rpm at all while ``dp_active`` is 1 somewhere, or absent (taken as 1):
-    the forecast would take a station-keeping vessel as drifting without thrust."""
+def _check_rpm_while_station_keeping(v, df: pd.DataFrame, cols: set, t: np.ndarray, source: str,
+                                     blank: set = frozenset()) -> None:
+    """No thruster rpm at all (absent, or in ``blank``: no value) while ``dp_active`` is 1
+    somewhere, or absent (taken as 1): the forecast would take a station-keeping vessel as
+    drifting without thrust."""
     rpm_cols = _rpm_columns(v)
     if not rpm_cols or any(c in cols for c in rpm_cols):
         return
     dp = _to_float(df, "dp_active", source, t) if "dp_active" in cols else None
     if dp is None or np.any(dp == 1.0):
         i = 0 if dp is None else int(np.argmax(dp == 1.0))
+        what = "columns" if not blank & set(rpm_cols) else "values (the columns hold no value in any row)"
         raise LogFormatError(
-            f"{rpm_cols[0]}: no thruster rpm columns while dp_active is "
+            f"{rpm_cols[0]}: no thruster rpm {what} while dp_active is "
             f"{'absent (taken as 1)' if dp is None else f'1 at {_row_at(t, i)}'}; expected "
             f"{', '.join(rpm_cols)} for vessel {v.name!r}, or dp_active = 0 for a vessel "
             f"drifting without thrust{_where(source)}", column=rpm_cols[0])
 
 
 def _check_thruster_columns(v, th, df: pd.DataFrame, cols: set, t: np.ndarray, source: str,
-                            rpm_sign: bool = True) -> None:
+                            rpm_sign: bool = True, blank: set = frozenset()) -> None:
     """A logged thruster's rpm within its spec's bound on the vessel's ``max_rpm``; an
     azimuth thruster's angle logged with it, and (with ``rpm_sign``) its rpm sign that of
     the thrust (not the shaft's rotation direction: negative in ``RPM_SIGN_MIN_SAMPLES``
-    samples and never positive)."""
+    samples and never positive); ``blank``: columns without a value, named so when missing."""
     spec = column_spec("<thruster>_rpm")
     col = spec.for_channel(th.name)
     x = _to_float(df, col, source, t)
@@ -1097,8 +1123,8 @@ def _check_thruster_columns(v, th, df: pd.DataFrame, cols: set, t: np.ndarray, s
     az_col = column_spec("<thruster>_azimuth_deg").for_channel(th.name)
     if az_col not in cols:
         raise LogFormatError(
-            f"{az_col}: missing while {col} is logged; thruster {th.name!r} of vessel {v.name!r} is an "
-            f"azimuth thruster and its thrust direction is needed (expected column {az_col} "
+            f"{az_col}: {_absent(az_col, blank)} while {col} is logged; thruster {th.name!r} of vessel {v.name!r} "
+            f"is an azimuth thruster and its thrust direction is needed (expected column {az_col} "
             f"in degrees, 0 = forward, positive to starboard){_where(source)}",
             column=az_col)
     if rpm_sign:
