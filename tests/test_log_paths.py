@@ -175,3 +175,21 @@ def test_training_and_forecasting_see_the_same_arrays(model, log, data):
     for f, col in (("rpm", "port_rpm"), ("wind", "wind_speed_m_s")):
         first = int(np.argmax(np.isfinite(x[col].to_numpy()[sl])))
         np.testing.assert_array_equal(getattr(a, f)[sl][first:], getattr(w, f)[first:], err_msg=f)
+
+
+def test_rows_before_a_command_is_first_logged_are_not_trained_on(model, log):
+    """The nets never learn from the rows whose commands are the default of an empty cell
+    (a thruster taken as stopped while it ran): only rows with every command logged at i
+    and i - 1 are trainable."""
+    from hybridship.residual.features import prepare_log
+
+    late = log.copy()
+    late.loc[late.time_s <= 40.0, "port_rpm"] = np.nan
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        a = ingest(late, model.vessel, purpose="fit")
+        whole = ingest(log, model.vessel, purpose="fit")
+    rows = prepare_log(model, a).trainable_rows()
+    assert rows.size and a.time_s[rows].min() > 41.0
+    np.testing.assert_array_equal(rows, [r for r in prepare_log(model, whole).trainable_rows()
+                                         if a.time_s[r] > 41.0])

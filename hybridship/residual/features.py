@@ -406,8 +406,10 @@ class PreparedLog:
         return np.concatenate(parts, axis=1)
 
     def trainable_rows(self, mask: np.ndarray | None = None) -> np.ndarray:
-        """Rows i whose target and features are all defined (i - 1 and i - 2 in i's segment)."""
-        ok = np.isfinite(self.residual).all(1) & np.isfinite(self.thrust_acc).all(1)
+        """Rows i whose target and features are all defined (i - 1 and i - 2 in i's segment),
+        with every command logged at i and i - 1 (before a command's first logged value the
+        arrays hold a stopped thruster or a centred rudder, which the ship did not have)."""
+        ok = np.isfinite(self.residual).all(1) & np.isfinite(self.thrust_acc).all(1) & self.arrays.commands_logged
         ok[1:] &= ok[:-1]
         ok[0] = False
         okb = np.isfinite(self.bias_ned if self.env_body is None else self.env_body).all(1)
