@@ -114,7 +114,7 @@ def test_the_scaled_correction_scales_the_hybrids_difference_from_the_physics(es
     for w, north, psi_deg, u in ((0.0, 1.0, 175.0, 1.0), (1.0, 3.0, -175.0, 2.0), (1.5, 4.0, -170.0, 2.5)):
         fc = es._scaled_correction(hybrid, physics, w)(None, [0.0, 5.0], 1.0)
         np.testing.assert_allclose(fc.eta[..., 0], north)
-        np.testing.assert_allclose(np.degrees(fc.eta[..., 2]), psi_deg, atol=1e-9)
+        np.testing.assert_allclose((np.degrees(fc.eta[..., 2]) - psi_deg + 180.0) % 360.0 - 180.0, 0.0, atol=1e-9)
         np.testing.assert_allclose(fc.nu[..., 0], u)
 
 

@@ -246,6 +246,20 @@ def test_a_starts_forecast_does_not_depend_on_the_other_starts_of_its_call(kind,
     np.testing.assert_allclose(alone.eta[0], batched.eta[0], rtol=0, atol=1e-9)
 
 
+@pytest.mark.parametrize("kind", KINDS)
+def test_a_starts_heading_does_not_depend_on_where_its_call_began_reading(kind, fitted, model):
+    """The log's heading is unwrapped from where a call begins to read it, so a start after
+    the heading crossed north read a turn lower beside an earlier start than alone; each
+    forecast's heading now starts in [0, 2 pi), whatever the other starts."""
+    log = physics_log(model, seed=5, duration_s=1500.0, t_shutdown_s=None)
+    psi = np.unwrap(np.radians(log.heading_deg.to_numpy()))
+    late = int(np.flatnonzero(psi < np.radians(-30.0))[0]) + 60      # well past north, from 17 deg
+    t0, early = float(log.time_s[late]), float(log.time_s[100])
+    alone, batched = fitted[kind].forecast(log, [t0], 60.0), fitted[kind].forecast(log, [early, t0], 60.0)
+    np.testing.assert_allclose(alone.eta[0], batched.eta[1], rtol=0, atol=1e-9)
+    assert 0.0 <= alone.eta[0, 0, 2] < 2 * np.pi and 0.0 <= batched.eta[0, 0, 2] < 2 * np.pi
+
+
 def _mixed_rate_log(model, slow_s: tuple, duration_s: float):
     """A 10-Hz log whose samples in ``slow_s`` (first, last) [s] are thinned to 1 Hz."""
     log = physics_log(model, seed=1, dt_s=0.1, duration_s=duration_s, t_shutdown_s=None)

@@ -46,7 +46,10 @@ class ForecastResult:
         Time since the start [s]: ``k`` steps of the log's step, rounded to 1e-9 s (see
         :func:`hybridship.predictors.forecast_setup.forecast_step_s`).
     eta : ndarray, shape (S, H+1, 3)
-        ``[north_m, east_m, psi_rad]`` (the ensemble mean for the hybrid).
+        ``[north_m, east_m, psi_rad]`` (the ensemble mean for the hybrid). ``psi_rad`` runs
+        continuously along each forecast, on the branch where the start's heading lies in
+        [0, 2 pi): a start's forecast does not depend on the other starts of the call (the
+        log's unwrapped heading, whose branch depends on where the read began, does).
     nu : ndarray, shape (S, H+1, 3)
         ``[u_m_s, v_m_s, r_rad_s]``.
     eta_std : ndarray, shape (S, H+1, 3), or None
@@ -89,6 +92,7 @@ class ForecastResult:
             if arr.dtype.kind not in "iuf":
                 raise TypeError(f"ForecastResult: {name}: expected an array of real numbers, got dtype {arr.dtype}")
             setattr(self, name, arr)
+        self.eta = _on_start_branch(self.eta)
         S, H1 = self.start_time_s.size, self.lead_s.size
         if self.start_time_s.ndim != 1 or self.lead_s.ndim != 1:
             raise ValueError(f"ForecastResult: start_time_s and lead_s: expected 1-D arrays, got shapes "
@@ -168,3 +172,18 @@ class ForecastResult:
         if self.notes is not None:
             cols["notes"] = np.repeat(np.asarray(self.notes, dtype=object), H1)
         return pd.DataFrame(cols)
+
+
+def _on_start_branch(eta: np.ndarray) -> np.ndarray:
+    """``eta`` with each forecast's heading shifted by whole turns so that its start lies in
+    [0, 2 pi) (a copy; shapes other than (S, H+1, 3), or a NaN start, are left alone)."""
+    if eta.ndim != 3 or eta.shape[-1] != 3 or eta.shape[1] == 0:
+        return eta
+    psi0 = eta[:, 0, 2]
+    turns = np.where(np.isfinite(psi0), np.floor((psi0 - wrap_2pi(psi0)) / (2.0 * np.pi) + 0.5), 0.0)
+    if not turns.any():
+        return eta
+    out = np.array(eta, dtype=float)
+    out[..., 2] -= 2.0 * np.pi * turns[:, None]
+    return out
+
