@@ -551,6 +551,34 @@ def test_hsc_refit_forgets_the_earlier_fit(kind, hsc_setup):
     np.testing.assert_array_equal(refitted.free_run(Ut, Yt, N_INIT), fresh.free_run(Ut, Yt, N_INIT))
 
 
+#: A step of each surge/pitch model's fit after its first ones, made to fail.
+HSC_LATE_STEP = {"ss": "hybridship.hsc.identification.fit_subspace",
+                 "arx": "hybridship.hsc.identification._fit_arx",
+                 "ann": "torch.optim.LBFGS",
+                 "hybrid": "hybridship.hsc.hybrid.fit_ensemble"}
+
+
+@pytest.mark.parametrize("kind", HSC_KINDS)
+def test_hsc_a_fit_that_raises_leaves_the_model_as_it_was(kind, hsc_setup, monkeypatch):
+    """A fitted model refitted on another record by a call that fails at a late step keeps its
+    learned state and its predictions: ``fit`` is all or nothing (the hybrid kept the new grey
+    box with the old ensembles; the identified models the new scalers with the old coefficients)."""
+    make, (Ut, Yt), (Uv, Yv) = hsc_setup
+    p = make(kind).fit(Ut, Yt)
+    state, one, free = _learned_state(p), p.one_step(Uv, Yv), p.free_run(Uv, Yv, N_INIT)
+
+    def late_failure(*args, **kwargs):
+        raise RuntimeError("late failure")
+
+    with monkeypatch.context() as m:
+        m.setattr(HSC_LATE_STEP[kind], late_failure)
+        with pytest.raises(RuntimeError, match="late failure"):
+            p.fit(Uv, Yv)
+    assert _same(_learned_state(p), state)
+    np.testing.assert_array_equal(p.one_step(Uv, Yv), one)
+    np.testing.assert_array_equal(p.free_run(Uv, Yv, N_INIT), free)
+
+
 def test_hsc_hybrid_refuses_pitch_in_degrees_and_pwm_as_a_fraction(hsc_fitted, hsc_setup):
     """The grey box interprets units: pitch in degrees drove every parameter to a bound, and
     PWM as a 0..1 fraction left the trim device still."""

@@ -214,3 +214,18 @@ def test_the_grey_box_steps_at_the_crafts_sample_period(craft, tables):
     # the device's rate limit per sample follows: full stroke in 2 s = 10 samples of 0.2 s
     a = GreyBox(slow, "interceptor", tables).actuator_fraction(np.r_[10.0, np.full(14, 100.0)])
     np.testing.assert_allclose(a[1:12], np.minimum(np.arange(11) * 0.2 / craft.interceptor.full_stroke_time_s, 1.0))
+
+
+def test_a_record_too_short_for_the_residual_ensembles_is_refused_by_name_and_changes_nothing(craft, tables):
+    """A 14-row record passed the hybrid's own check and failed in the ensemble's fit ("fit_ensemble:
+    need at least 20 training rows"), after the grey box had taken the new record's parameters."""
+    from hybridship.hsc.trials import generate_trial, paper_trial
+
+    trial = generate_trial(paper_trial(1, scale=0.05), craft)
+    U, Y = trial.arrays("train")
+    hybrid = HybridModel(craft, "interceptor", tables=tables, ensemble={"n_members": 2, "max_epochs": 5})
+    hybrid.fit(U, Y)
+    before = hybrid.grey.parameters()
+    with pytest.raises(ValueError, match=r"^U: need at least 22 rows, got 14"):
+        hybrid.fit(U[40:54], Y[40:54])
+    assert hybrid.grey.parameters() == before

@@ -170,6 +170,29 @@ def test_simulator_refuses_bad_arguments_by_name(craft):
         as_mapping.speed_m_s, model.simulate([3000.0] * 5, [50.0] * 5, sea=SeaConditions(hs_m=0.05, tp_s=1.5), rng=1).speed_m_s)
 
 
+def test_arguments_of_the_wrong_type_are_refused_by_name(craft):
+    """A vessel name for the craft or a text for the trial's config was an AttributeError, a text
+    for rpm, the sample period or the settling time a numpy TypeError naming nothing, a text scale
+    a comparison TypeError, and ``paper_trial(True)`` gave sea state 1."""
+    model = PlaningCraftModel(craft, "interceptor")
+    cases = [
+        (lambda: PlaningCraftModel("volcano71"), TypeError, "craft"),
+        (lambda: generate_trial("sea state 1", craft), TypeError, "config"),
+        (lambda: model.steady_state("3000"), TypeError, "rpm"),
+        (lambda: model.steady_state(True), TypeError, "rpm"),
+        (lambda: model.steady_state(3000.0, "0.5"), TypeError, "actuator_frac"),
+        (lambda: model.simulate([3000.0], [50.0], sample_period_s="0.1"), TypeError, "sample_period_s"),
+        (lambda: model.simulate([3000.0], [50.0], settle_s=None), TypeError, "settle_s"),
+        (lambda: paper_trial(True), ValueError, "sea_state"),
+        (lambda: paper_trial(1, scale="0.5"), TypeError, "scale"),
+        (lambda: paper_trial(1, scale=1.5), ValueError, "scale"),
+    ]
+    for call, error, field in cases:
+        with pytest.raises(error, match=rf"^{field}\b"):
+            call()
+    assert model.steady_state(np.float32(3000.0)).speed_m_s == pytest.approx(model.steady_state(3000).speed_m_s)
+
+
 def test_a_trial_rpm_range_outside_the_engine_is_refused_by_name(craft):
     """The trial's engine-speed range is checked against the craft's engine before simulating
     (before: the simulator refused ``rpm_cmd``, a name the caller never gave, and only when

@@ -9,7 +9,8 @@ rate. :class:`SurgePitchModel` is their contract, checked by
 they carry over:
 
 * ``fit(U, Y)`` learns from a record and returns the model itself; learned state is set by
-  ``fit`` only, never by a prediction.
+  ``fit`` only, never by a prediction, and all or nothing: a fit that raises leaves the
+  model as it was.
 * ``one_step(U, Y)`` predicts ``y[k]`` from the measured outputs and the inputs up to
   ``k - 1``; ``free_run(U, Y_init, n_init)`` simulates from the inputs, the first
   ``n_init`` rows of ``Y_init`` being the initial conditions (no later measured output

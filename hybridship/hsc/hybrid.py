@@ -38,6 +38,7 @@ The prediction is the grey box plus the ensemble mean.
 from __future__ import annotations
 
 import bisect
+import copy
 import math
 import os
 from dataclasses import dataclass
@@ -45,7 +46,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from hybridship.config import as_config, check_flags, check_number, check_whole_number, real_array
-from hybridship.residual.ensemble import EnsembleConfig, fit_ensemble
+from hybridship.residual.ensemble import MIN_TRAINING_ROWS, EnsembleConfig, fit_ensemble
 
 from .contract import _finite, _matrix, check_free_run, check_physical, check_record, require_fitted
 from .simulator import PlaningCraftModel
@@ -397,16 +398,30 @@ class HybridModel:
         return np.hstack([_lags(Y, [1, 2]), phys, self._input_features(U, a)])
 
     def fit(self, U, Y, *, progress: bool = False):
+        """Fit the grey box, then the two residual ensembles, on one record; returns self.
+
+        All or nothing: the grey box and the ensembles are fitted on the side and replace the
+        learned state together, so a fit that raises leaves the model as it was (a refit that
+        failed in the ensemble kept the new grey box with the old ensembles).
+
+        Raises
+        ------
+        ValueError
+            Naming ``U`` or ``Y``: not finite (N, 3) and (N, 2) records of at least
+            ``n_init`` + 20 rows (the ensembles' fewest training rows), or values no craft
+            record holds.
+        """
         check_flags(progress=progress)
-        U, Y = check_record(U, Y, min_rows=self.n_init + 10, shape=self.shape)
+        U, Y = check_record(U, Y, min_rows=self.n_init + MIN_TRAINING_ROWS, shape=self.shape)
         k0 = self.n_init                 # the grey box's fit checks the units
-        self.grey.fit(U, Y, k0 - 1)
-        sim = self.grey._simulate(U, Y[k0 - 1], k0 - 1)
+        grey = copy.copy(self.grey).fit(U, Y, k0 - 1)     # fit assigns new parameters, shared tables stay
+        sim = grey._simulate(U, Y[k0 - 1], k0 - 1)
         X = self._free_features(U, sim)[k0:]
-        self.free_ens = fit_ensemble(X, (Y - sim)[k0:], self.ensemble_config, progress=progress)
-        phys = self.grey._one_step(U, Y)
+        free_ens = fit_ensemble(X, (Y - sim)[k0:], self.ensemble_config, progress=progress)
+        phys = grey._one_step(U, Y)
         X1 = self._one_features(U, Y, phys)[k0:]
-        self.one_ens = fit_ensemble(X1, (Y - phys)[k0:], self.ensemble_config, progress=progress)
+        one_ens = fit_ensemble(X1, (Y - phys)[k0:], self.ensemble_config, progress=progress)
+        self.grey, self.free_ens, self.one_ens = grey, free_ens, one_ens
         return self
 
     def one_step(self, U, Y):

@@ -155,10 +155,13 @@ class ARXModel:
         return f"ARX{self.na}{self.nb}{self.nk}"
 
     def fit(self, U, Y):
+        """Least squares on one record; returns self. All or nothing: the scalers and the
+        coefficients replace the learned state together, so a fit that raises leaves it as it was."""
         U, Y = check_record(U, Y, min_rows=self.n_init + 2)
+        su, sy = _Standardiser(U), _Standardiser(Y)
+        params = _fit_arx(su(U), sy(Y), self.na, self.nb, self.nk)   # checked above
         self.shape = (U.shape[1], Y.shape[1])             # (inputs, outputs) of the predictions
-        self.su, self.sy = _Standardiser(U), _Standardiser(Y)
-        self.params = _fit_arx(self.su(U), self.sy(Y), self.na, self.nb, self.nk)   # checked above
+        self.su, self.sy, self.params = su, sy, params
         return self
 
     def one_step(self, U, Y):
@@ -266,16 +269,20 @@ class StateSpaceModel:
         self.order, self.block_rows = order, block_rows
         self.n_init = 2
 
-    def _u(self, U):
-        Z = self.su(U)
+    def _u(self, U, su=None):
+        Z = (self.su if su is None else su)(U)
         return np.vstack([Z[:1], Z[:-1]])            # u[k-1] (the first sample repeated)
 
     def fit(self, U, Y):
+        """Subspace identification on one record; returns self. All or nothing: the scalers, the
+        matrices and the Kalman gain replace the learned state together, so a fit that raises
+        leaves it as it was."""
         U, Y = check_record(U, Y, min_rows=2 * self.block_rows + 2)
+        su, sy = _Standardiser(U), _Standardiser(Y)
+        params = fit_subspace(self._u(U, su), sy(Y), self.order, self.block_rows)
+        K = params.kalman_gain()
         self.shape = (U.shape[1], Y.shape[1])             # (inputs, outputs) of the predictions
-        self.su, self.sy = _Standardiser(U), _Standardiser(Y)
-        self.params = fit_subspace(self._u(U), self.sy(Y), self.order, self.block_rows)
-        self.K = self.params.kalman_gain()
+        self.su, self.sy, self.params, self.K = su, sy, params, K
         return self
 
     def _filter(self, Zu, Zy, n_steps):
@@ -384,9 +391,9 @@ class NARXModel:
 
         c = self.config
         U, Y = check_record(U, Y, min_rows=self.n_init + 10)
-        self.shape = (U.shape[1], Y.shape[1])             # (inputs, outputs) of the predictions
-        self.su, self.sy = _MinMax(U), _MinMax(Y)
-        Zu, Zy = self.su(U), self.sy(Y)
+        # all or nothing: the scalers and the weights replace the learned state together at the end
+        su, sy = _MinMax(U), _MinMax(Y)
+        Zu, Zy = su(U), sy(Y)
         X = self._features(Zu, Zy, self.n_init)
         T = Zy[self.n_init:]
         n_val = max(1, int(round(c.val_fraction * X.shape[0])))     # early stopping needs a held-out row
@@ -430,6 +437,8 @@ class NARXModel:
                     best, best_state = r_best, r_state
         finally:
             torch.set_num_threads(threads)
+        self.shape = (U.shape[1], Y.shape[1])             # (inputs, outputs) of the predictions
+        self.su, self.sy = su, sy
         self.weights = [p.numpy().copy() for p in best_state]
         self.val_mse = best
         return self

@@ -74,7 +74,7 @@ from typing import Literal
 import numpy as np
 from pydantic import Field, model_validator
 
-from ..config import Float, Int, config_dataclass
+from ..config import Float, Int, check_number, config_dataclass
 
 from hybridship.sim.environment import G_M_S2, MAX_STEEPNESS, make_wave_components, max_hs_m
 
@@ -251,6 +251,8 @@ class PlaningCraftModel:
     """
 
     def __init__(self, craft: PlaningCraft, actuator: Actuator = "interceptor"):
+        if not isinstance(craft, PlaningCraft):       # an AttributeError on .particulars before
+            raise TypeError(f"craft: expected a PlaningCraft (load_planing_craft(...)), got {type(craft).__name__}")
         if actuator not in ("interceptor", "trim_tab"):
             raise ValueError(f"actuator must be 'interceptor' or 'trim_tab', got {actuator!r}")
         self.craft = craft
@@ -406,6 +408,10 @@ class PlaningCraftModel:
         from scipy.optimize import root
 
         hi = 2.0 * self.rpm_range[1]
+        for name, x in (("rpm", rpm), ("actuator_frac", actuator_frac)):
+            # a text was a TypeError from numpy that named no argument, True a speed of 1 rpm
+            if isinstance(x, (bool, np.bool_)) or not isinstance(x, (int, float, np.integer, np.floating)):
+                raise TypeError(f"{name}: expected a number, got {x!r}")
         if not (np.isfinite(rpm) and 0 < rpm <= hi):
             # twice max_rpm, as the ship models refuse a unit slip; beyond it the planing
             # equations leave their domain (a math error, not an equilibrium)
@@ -515,12 +521,11 @@ class PlaningCraftModel:
                 k = int(np.argmax(bad))
                 raise ValueError(f"{name}: {x[k]:g} at sample {k} ({int(bad.sum())} sample(s) outside); expected "
                                  f"{a:g} to {b:g} {unit}")
-        if not (np.isfinite(sample_period_s) and sample_period_s > 0):
-            raise ValueError(f"sample_period_s: expected a positive number of seconds, got {sample_period_s!r}")
+        # a text or None was a TypeError from numpy that named no argument
+        sample_period_s = check_number("sample_period_s", sample_period_s, lo=0.0, lo_open=True)
         if isinstance(substeps, bool) or not isinstance(substeps, (int, np.integer)) or substeps < 1:
             raise ValueError(f"substeps: expected an integer >= 1, got {substeps!r}")
-        if not (np.isfinite(settle_s) and settle_s >= 0):
-            raise ValueError(f"settle_s: expected a non-negative number of seconds, got {settle_s!r}")
+        settle_s = check_number("settle_s", settle_s, lo=0.0)
         if isinstance(sea, Mapping):
             sea = SeaConditions(**sea)
         elif not isinstance(sea, SeaConditions):

@@ -109,14 +109,15 @@ class TrialConfig:
 
 def paper_trial(sea_state: int, *, seed: int = 0, scale: float = 1.0) -> TrialConfig:
     """The paper's trial for sea state 1 or 2; ``scale < 1`` shortens it (quick runs, tests)."""
+    if isinstance(sea_state, (bool, np.bool_)):       # True == 1 gave sea state 1
+        raise ValueError(f"sea_state: expected 1 or 2, got {sea_state!r}")
     if sea_state == 1:
         n, n_tr, act, sea = 3150, 2050, "interceptor", SeaConditions(hs_m=0.05, tp_s=1.5)
     elif sea_state == 2:
         n, n_tr, act, sea = 13580, 8600, "trim_tab", SeaConditions(hs_m=0.10, tp_s=3.0)
     else:
-        raise ValueError(f"sea_state must be 1 or 2, got {sea_state!r}")
-    if not 0 < scale <= 1:
-        raise ValueError(f"scale must be in (0, 1], got {scale!r}")
+        raise ValueError(f"sea_state: expected 1 or 2, got {sea_state!r}")
+    scale = check_number("scale", scale, lo=0.0, lo_open=True, hi=1.0)      # a text was a TypeError unnamed
     if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or seed < 0:
         raise ValueError(f"seed: expected a whole number >= 0, got {seed!r}")
     n_s, n_t = max(int(round(n * scale)), 200), max(int(round(n_tr * scale)), 130)
@@ -229,6 +230,8 @@ def generate_trial(config: TrialConfig, craft: PlaningCraft | str | os.PathLike 
         Print a line when done.
     """
     check_flags(progress=progress)
+    if not isinstance(config, TrialConfig):          # an AttributeError on .rpm_range before
+        raise TypeError(f"config: expected a TrialConfig (paper_trial(...)), got {type(config).__name__}")
     if craft is None or isinstance(craft, (str, os.PathLike)):     # a name or file, as load_planing_craft takes
         craft = load_planing_craft(*(() if craft is None else (craft,)))
     if not isinstance(craft, PlaningCraft):
