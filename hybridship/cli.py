@@ -4,7 +4,8 @@ Each subcommand is two functions: ``_add_<name>(subparsers)`` declares its argum
 sets ``func=_cmd_<name>``; ``_cmd_<name>(args) -> int`` runs it. Both are registered in
 :func:`_build_parser`. Input errors are reported on stderr, one line per problem
 (``hybridship <command>: error: <what is wrong>``), with exit status 2; failures while
-running (I/O, bad data) exit with 1. No tracebacks for either.
+running (I/O, bad data) exit with 1. No tracebacks for either. Output into a pipe whose
+reader has left (``| head``) stops quietly with 141.
 
 Commands
 --------
@@ -295,7 +296,7 @@ def _add_train(sub) -> None:
     p.add_argument("--vessel", type=vessel_argument, default="gunnerus",
                    help="packaged vessel name or vessel TOML file of the ship that made the logs (default "
                         "gunnerus; the physics the nets correct)")
-    p.add_argument("--logs", required=True, type=Path, help="folder of logs (*.csv, *.csv.gz, *.parquet)")
+    p.add_argument("--logs", required=True, type=Path, help="folder of logs (*.csv, *.csv.gz, *.parquet, *.pq)")
     p.add_argument("--out", required=True, type=path_argument, help="model file to write (.npz)")
     p.add_argument("--members", type=_members, default=10, help="ensemble members (default 10)")
     p.add_argument("--seed", type=_seed, default=0, help="seed of the initial weights and bootstrap draws (default 0)")
@@ -814,6 +815,11 @@ def main(argv=None) -> int:
     except KeyboardInterrupt:
         print(f"{_PROG}: interrupted", file=sys.stderr)
         return 130
+    except BrokenPipeError:
+        # the reader of the output left (``| head``): stop quietly, as other tools do, not with
+        # "error: [Errno 32] Broken pipe"; the output files were written before the printing
+        _discard_stdout()
+        return 141
     except (OSError, ValueError, TypeError, FloatingPointError) as exc:
         print(problem_lines(exc, f"{_command(args)}: error: "), file=sys.stderr)
         return 1
@@ -823,6 +829,17 @@ def main(argv=None) -> int:
                                       "samples, headings, start times or logs)")
         print(f"{_command(args)}: error: out of memory: {what}", file=sys.stderr)
         return 1
+
+
+def _discard_stdout() -> None:
+    """Send what is left on stdout to the null device, so that the interpreter's flush at exit
+    does not fail on the closed pipe again (a stdout without a file descriptor is left as is)."""
+    import os
+
+    try:
+        os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
+    except (AttributeError, OSError, ValueError):
+        pass
 
 
 def _command(args) -> str:

@@ -490,6 +490,12 @@ class Vessel(_Strict):
             if r.propeller is not None and r.propeller not in forward:
                 raise ValueError(f"rudders[{i}].propeller: {r.propeller!r} is not a thruster of type 'fixed' "
                                  f"with angle_deg = 0 (candidates: {forward or 'none'})")
+            x_p = next((t.x_m for t in self.thrusters if t.name == r.propeller), None)
+            if x_p is not None and r.x_m >= x_p:
+                # ahead of its propeller: out of the slipstream, and a sign slip turns the ship the other way
+                raise ValueError(f"rudders[{i}].x_m: {r.x_m:g} m is not aft of its propeller {r.propeller!r} "
+                                 f"(x_m = {x_p:g} m); the rudder sits in the propeller's slipstream, and x is "
+                                 f"positive forward")
         # Imported here: numba (behind physics) is only needed once a vessel is validated.
         from .physics.hull import mass_matrices
 
@@ -500,6 +506,9 @@ class Vessel(_Strict):
             raise ValueError(f"rigid_body.mass_kg: {self.rigid_body.mass_kg:g} kg is {ratio:.3g} times the "
                              f"displacement rho C_B L_pp B T = {displacement_kg:.4g} kg; expected 0.5-2 times "
                              f"(a mass in tonnes is 1000 times too small)")
+        inertia = _yaw_inertia_problem(self.rigid_body, part)
+        if inertia is not None:
+            raise ValueError(inertia)
         M_RB, M_A = mass_matrices(self)
         eig_a = np.linalg.eigvalsh(0.5 * (M_A + M_A.T))
         if not np.all(eig_a > 0):
@@ -539,6 +548,51 @@ class Vessel(_Strict):
     def n_actuators(self) -> int:
         """Number of command channels (width of the ``rpm`` and ``azimuth_rad`` arrays)."""
         return len(self.thrusters) + len(self.rudders)
+
+
+#: Smallest plausible yaw radius of gyration about the CG, as a fraction of L_pp (ships give
+#: 0.2-0.3, a uniform box 0.29); as the mass's 0.5-2 times the displacement, a unit check.
+MIN_YAW_RADIUS_PER_LPP = 0.1
+
+
+def _yaw_inertia_problem(rb: RigidBody, part: Particulars) -> str | None:
+    """What is wrong with the yaw inertia, or None.
+
+    The radius of gyration about the CG, ``r_z`` (given, or ``sqrt(I_z / m - x_g^2)`` from
+    ``I_z`` about the origin), is at most ``0.5 sqrt(L_oa^2 + B^2)``: the variance of a mass
+    within an interval is at most a quarter of its width squared (Popoviciu's inequality),
+    in x over L_oa and in y over B. Below :data:`MIN_YAW_RADIUS_PER_LPP` L_pp it is a unit
+    slip (an inertia in t m^2). Both passed before: ``r_z_m = 84.75`` for 8.475 m gave a
+    yaw inertia 100 times too large, with no message.
+
+    Parameters
+    ----------
+    rb : RigidBody
+    part : Particulars
+
+    Returns
+    -------
+    str or None
+        The message, naming the field given (``rigid_body.r_z_m`` or ``rigid_body.I_z_kg_m2``).
+    """
+    r2 = rb.I_z / rb.mass_kg - rb.x_g_m**2          # r_z^2 about the CG
+    if rb.r_z_m is not None:
+        what = f"rigid_body.r_z_m: a radius of gyration of {rb.r_z_m:g} m"
+    elif r2 > 0:
+        what = f"rigid_body.I_z_kg_m2: {rb.I_z_kg_m2:g} kg m^2 gives a radius of gyration of {np.sqrt(r2):.4g} m"
+    else:
+        what = (f"rigid_body.I_z_kg_m2: {rb.I_z_kg_m2:g} kg m^2 is below m x_g^2 = {rb.mass_kg * rb.x_g_m**2:.4g} "
+                f"kg m^2 (I_z is about the origin) and gives no radius of gyration")
+    r_max = 0.5 * float(np.hypot(part.L_oa_m, part.B_m))
+    r_min = MIN_YAW_RADIUS_PER_LPP * part.L_pp_m
+    typical = f"ships give 0.2-0.3 L_pp, {0.25 * part.L_pp_m:.4g} m at 0.25"
+    if r2 > r_max**2:
+        return (f"{what}, more than 0.5 sqrt(L_oa_m^2 + B_m^2) = {r_max:.4g} m, which no mass within the hull "
+                f"reaches ({typical})")
+    if r2 < r_min**2:
+        return (f"{what}, less than {MIN_YAW_RADIUS_PER_LPP:g} L_pp = {r_min:.4g} m ({typical}; an inertia in "
+                f"t m^2 is 1000 times too small)")
+    return None
 
 
 def fingerprint(vessel: Vessel) -> str:

@@ -131,6 +131,35 @@ def _a_full_disk_keeps_the_earlier_table(monkeypatch, capsys, argv):
     assert out.read_bytes() == before and sorted(p.name for p in out.parent.glob(f"*{out.name}*")) == [out.name]
 
 
+def test_train_help_names_every_log_extension_it_reads(capsys):
+    """``--logs`` reads .pq files too; its help left them out."""
+    from hybridship.logs.io import _EXTENSIONS
+
+    assert main(["train", "--help"]) == 0
+    help_text = " ".join(capsys.readouterr().out.split())
+    assert all(f"*{ext}" in help_text for ext in _EXTENSIONS), help_text
+
+
+def test_output_into_a_closed_pipe_stops_quietly(capsys, monkeypatch):
+    """``hybridship ... | head -1``: the reader leaves, the next print fails; that ended with
+    "error: [Errno 32] Broken pipe" and status 1, as if the command had failed."""
+    class ClosedPipe:
+        def write(self, text):
+            raise BrokenPipeError(32, "Broken pipe")
+
+        def flush(self):
+            pass
+
+    def demo(args):                                 # a command that prints its result
+        print("start 400 s -> +60 s: ...")
+        return 0
+
+    monkeypatch.setattr("hybridship.cli._cmd_demo", demo)
+    monkeypatch.setattr("sys.stdout", ClosedPipe())
+    assert main(["demo"]) == 141
+    assert capsys.readouterr().err == ""
+
+
 def test_cli_errors_are_one_line_and_non_zero(log_dir, tmp_path, capsys):
     assert main(["forecast", "--model", str(tmp_path / "missing.npz"), "--log", str(log_dir / "log1.csv.gz"),
                  "--start-time", "900", "--out", str(tmp_path / "x.csv")]) == 2

@@ -68,6 +68,30 @@ def test_fit_and_forecast_refuse_the_same_log_with_the_same_message(model, log, 
         assert msg.startswith("port_rpm: ") and "exceeds 1.25 x max_rpm" in msg
 
 
+@pytest.mark.parametrize("learner", [HybridPredictor, DataOnlyPredictor])
+def test_a_fault_in_one_of_several_training_frames_names_which(model, log, learner):
+    """Several DataFrames: the message names the faulty one by its place, as a path names its
+    file; it said "(in log)", which does not tell logs[0] from logs[1]."""
+    bad = log.copy()
+    bad.loc[100, "north_m"] = np.nan
+    msg = _message(lambda: learner(model.vessel, ensemble_config=TINY).fit([log, bad]))
+    assert msg.startswith("north_m: ") and msg.endswith("(in logs[1])"), msg
+    assert bad["north_m"].isna().sum() == 1 and log["north_m"].notna().all()     # neither was changed
+
+
+def test_a_start_time_outside_the_log_gives_the_logs_warnings_once(model, log, hybrid, tmp_path):
+    """The whole log is read again to say its span in the error; its warnings (a column not in
+    the format) were given twice."""
+    path = tmp_path / "indexed.csv"
+    log.to_csv(path)                                # with pandas' index: "Unnamed: 0"
+    with warnings.catch_warnings(record=True) as seen:
+        warnings.simplefilter("always")
+        with pytest.raises(ValueError, match=r"start_times_s: 9999.0 s is not a sample time of the log"):
+            hybrid.forecast(path, [100.0, 9999.0], 10)
+    unknown = [w for w in seen if "not in the log format: Unnamed: 0" in str(w.message)]
+    assert len(unknown) == 1, [str(w.message) for w in seen]
+
+
 def test_log_arrays_get_the_vessel_checks_and_the_sorting(model, log):
     names, rot = model.vessel.channel_names, model.vessel.rotatable
     drift = physics_log(model, seed=4, duration_s=300.0, t_shutdown_s=200.0)

@@ -196,6 +196,26 @@ def test_unreadable_files_are_refused_naming_the_file(tmp_path):
         read_log(tmp_path / "folder.csv")
 
 
+def test_a_csv_cut_short_in_its_last_line_leaves_that_row_out_and_says_so(tmp_path):
+    """A file cut mid-line (still being written, a copy interrupted): pandas filled the short
+    row with NaN and read its cut value as a number (wind from 3 deg for 336.45), silently.
+    A complete last line without a line end is a whole sample and is kept."""
+    path = tmp_path / "log.csv"
+    write_log(circle_log(), path)
+    text = path.read_text()
+    last = text.splitlines()[-1]
+    cut = text[: len(text) - len(last) - 1 + last.index(",", last.index(",") + 1) + 3]
+    path.write_text(cut)
+    with pytest.warns(LogFormatWarning, match=r"log.csv: the last line has 3 of the header's \d+ fields and no "
+                                              r"line end: cut short .*its row \(row 119\) is left out"):
+        df = read_log(path, channel_names=THRUSTERS, rotatable=ROTATABLE)
+    assert len(df) == 119 and df.notna().all().all()
+    path.write_text(text.rstrip("\n"))
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        assert len(read_log(path, channel_names=THRUSTERS, rotatable=ROTATABLE)) == 120
+
+
 # --------------------------------------------------------------------------------------
 # Validation errors name the column
 # --------------------------------------------------------------------------------------

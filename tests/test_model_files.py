@@ -12,6 +12,7 @@ from __future__ import annotations
 import json
 import os
 import pickle
+import re
 from pathlib import Path
 
 import numpy as np
@@ -175,6 +176,17 @@ def test_incompatible_format_version_is_refused(saved, tmp_path):
                     + (r"; expected a whole number$" if not isinstance(version, int) else ""))
     p = _rewrite(saved, tmp_path, meta_change=lambda m: m.update(format_version=19), name="v19.npz")
     _refused(p, r"written by a newer hybridship \(format 19\); upgrade hybridship to read it")
+
+
+def test_the_cli_reference_names_the_formats_that_load():
+    """docs/reference/cli.md says which older model files still load; it said 7 to 16 once
+    this hybridship read 17 as well."""
+    from hybridship.predictors.model_file import MODEL_FORMAT_VERSION, READABLE_MODEL_FORMAT_VERSIONS
+
+    page = (Path(__file__).parents[1] / "docs" / "reference" / "cli.md").read_text(encoding="utf-8")
+    said = [tuple(int(v) for v in m) for m in re.findall(r"Model files of formats (\d+) to (\d+)", page)]
+    older = [v for v in READABLE_MODEL_FORMAT_VERSIONS if v != MODEL_FORMAT_VERSION]
+    assert said == [(min(older), max(older))], said
 
 
 def test_an_older_format_says_retrain(saved, tmp_path):

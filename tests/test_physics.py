@@ -655,6 +655,13 @@ def test_gunnerus_coefficients_close_to_published_original_hull():
     (lambda d: d["thrusters"][0].__setitem__("propeller_series", "B4-75"), r"thrusters\[0\].*B4-75.*available"),
     (lambda d: d["rigid_body"].__setitem__("mass_kg", float("inf")), "rigid_body.mass_kg: .*finite"),
     (lambda d: d["rigid_body"].__setitem__("mass_kg", 500.0), r"rigid_body.mass_kg: .*a mass in tonnes"),
+    # a yaw inertia no mass within the hull gives (a slipped decimal point), or one in t m^2: accepted
+    (lambda d: d["rigid_body"].__setitem__("r_z_m", 84.75), r"rigid_body.r_z_m: .*84.75 m, more than "
+                                                           r"0.5 sqrt\(L_oa_m\^2 \+ B_m\^2\) = 18.75 m"),
+    (lambda d: d["rigid_body"].update(r_z_m=None, I_z_kg_m2=574130.0 * 8.475**2 / 1000),  # kg m^2 / 1000
+     r"rigid_body.I_z_kg_m2: .*radius of gyration of 0.268 m, less than 0.1 L_pp .*t m\^2"),
+    (lambda d: d["rigid_body"].update(r_z_m=None, I_z_kg_m2=1e6, x_g_m=2.0),
+     r"rigid_body.I_z_kg_m2: .*is below m x_g\^2"),
     # Clarke's regressions on Gunnerus's beamy hull: an added-mass matrix that stores negative energy
     (lambda d: d.__setitem__("added_mass", {"method": "clarke1983"}),
      r"added_mass: M_A is not positive definite .*method 'explicit'"),

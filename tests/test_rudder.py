@@ -250,6 +250,11 @@ def test_channels_and_errors(esso):
         DynamicModel("gunnerus").acceleration([0, 0, 0], [0, 0, 0], rudder_rad=[0.1])
     with pytest.raises(ValueError, match="rpm"):
         esso.acceleration([0, 0, 0], [0.3, 0, 0], rpm=[RPM8, 0.0, 0.0])
+    # a rudder angle in degrees among azimuth_rad's channels: named as the argument given, not rudder_rad
+    with pytest.raises(ValueError, match=r"^azimuth_rad\[\.\.\., 1:\] \(the rudder angles\): 20 rad is beyond 90 deg"):
+        esso.rollout([0, 0, 0], [0.3, 0, 0], 5, rpm=[RPM8, 0.0], azimuth_rad=[0.0, 20.0])
+    with pytest.raises(ValueError, match=r"^rudder_rad: 20 rad is beyond 90 deg"):
+        esso.rollout([0, 0, 0], [0.3, 0, 0], 5, rpm=[RPM8], rudder_rad=[20.0])
 
 
 @pytest.mark.parametrize("edit, field", [
@@ -258,6 +263,9 @@ def test_channels_and_errors(esso):
     (lambda d: d["rudders"][0].__setitem__("name", "propeller"), "rudders: duplicate"),
     (lambda d: d["thrusters"][0].__setitem__("angle_deg", 90.0), r"rudders\[0\].propeller"),
     (lambda d: d["damping"]["nonlinear"].pop("mmg"), "lift 'mmg'"),
+    # x measured aft as positive (a sign slip): a rudder ahead of its propeller was accepted
+    (lambda d: d["rudders"][0].__setitem__("x_m", 1.5), r"rudders\[0\].x_m: 1.5 m is not aft of its propeller "
+                                                       r"'propeller' \(x_m = -1.44 m\)"),
 ])
 def test_invalid_rudder_files_name_the_field(edit, field):
     d = copy.deepcopy(esso_dict())

@@ -205,7 +205,8 @@ def _refuse_conflicts(order: SortedLog, source: str) -> None:
             column="time_s", row=r1, time_s=t)
 
 
-def _from_arrays(arrays: LogArrays, v, purpose: str, key) -> tuple[LogArrays, SortedLog | None]:
+def _from_arrays(arrays: LogArrays, v, purpose: str, key,
+                 where: str = "LogArrays") -> tuple[LogArrays, SortedLog | None]:
     """Check LogArrays through their frame view; keep the caller's arrays when nothing moved."""
     mark = getattr(arrays, _MARK, None)
     if mark is not None and mark[0] == key[0] and (mark[1] == purpose or mark[1] == "fit"):
@@ -214,8 +215,8 @@ def _from_arrays(arrays: LogArrays, v, purpose: str, key) -> tuple[LogArrays, So
         raise LogFormatError(
             f"channel_names: the arrays carry command channels {list(arrays.channel_names)} (rotatable "
             f"{list(arrays.rotatable)}), vessel {v.name!r} has {list(v.channel_names)} (rotatable "
-            f"{list(v.rotatable)}); build them for this vessel (in LogArrays)", column="channel_names")
-    out, order = _from_frame(arrays.to_frame(), v, purpose, "LogArrays")
+            f"{list(v.rotatable)}); build them for this vessel (in {where})", column="channel_names")
+    out, order = _from_frame(arrays.to_frame(), v, purpose, where)
     if not order.changed and len(out) == len(arrays):
         out = arrays                                   # checked; the caller's values, unchanged
     else:
@@ -353,7 +354,7 @@ def ingest_with_report(source, vessel, *, purpose: str = "fit", name: str | None
     v = _vessel(vessel)
     key = (fingerprint(v), purpose)
     if isinstance(source, LogArrays):
-        arrays, order = _from_arrays(source, v, purpose, key)
+        arrays, order = _from_arrays(source, v, purpose, key, name or "LogArrays")
         arrays = _between(arrays, time_range_s)
     elif isinstance(source, (str, os.PathLike, pd.DataFrame)):
         df = read_log(Path(source), validate=False) if not isinstance(source, pd.DataFrame) else source

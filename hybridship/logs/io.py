@@ -1234,6 +1234,35 @@ def _not_utf8(head: bytes) -> str:
     return "not UTF-8 text (Latin-1 or another encoding?): save the file as UTF-8"
 
 
+#: Bytes read from a CSV log's end to find its last line (:func:`_cut_short_last_line`).
+_TAIL_BYTES = 65536
+
+
+def _cut_short_last_line(path: Path, n_fields: int) -> int | None:
+    """The number of fields of a plain CSV file's last line when it was cut short, else None.
+
+    Cut short: the file does not end with a line end and its last line has fewer fields than
+    the header's ``n_fields``. pandas fills such a row's missing fields with NaN and reads its
+    last, cut value as a number ("3" of "336.45"); a writer of the log format writes every
+    field (empty cells for missing values), so a short last line is a file still being
+    written or a copy interrupted. Only the file's last :data:`_TAIL_BYTES` are read.
+    """
+    import csv
+
+    with open(path, "rb") as fh:
+        size = fh.seek(0, os.SEEK_END)
+        fh.seek(max(0, size - _TAIL_BYTES))
+        tail = fh.read()
+    if not tail or tail.endswith(b"\n"):
+        return None
+    cut = tail.rfind(b"\n")
+    if cut < 0 and size > len(tail):
+        return None                         # a line longer than the tail: not judged
+    last = tail[cut + 1:].decode("utf-8", errors="replace")
+    fields = next(csv.reader([last]), [])
+    return len(fields) if len(fields) < n_fields else None
+
+
 def read_log(
     path: str | os.PathLike,
     *,
@@ -1297,6 +1326,13 @@ def read_log(
         raise LogFormatError(f"{path}: cannot be read as a {kind} log file ({_read_problem(kind, exc)})") from None
     if kind != "parquet":
         _check_unique_names(names, str(path))
+    if kind == "csv" and len(df):
+        got = _cut_short_last_line(path, len(names))
+        if got is not None:
+            warnings.warn(f"{path}: the last line has {got} of the header's {len(names)} fields and no line end: "
+                          f"cut short (a file still being written, or a copy interrupted); its row (row "
+                          f"{len(df) - 1}) is left out", LogFormatWarning, stacklevel=2)
+            df = df.iloc[:-1]
     df = df.reset_index(drop=True)
     if validate:
         _validate(df, channel_names, rotatable, str(path), warn_unknown=True, allow_missing=allow_missing)

@@ -389,14 +389,17 @@ class DynamicModel:
         ins = (self._channels("rpm", rpm, B, S), np.ascontiguousarray(az),
                _as_input("wind", wind, B, S, 2), _as_input("current", current, B, S, 2),
                _as_input("tau_ext", tau_ext, B, S, 3), _as_input("accel_ext", accel_ext, B, S, 3))
-        self._check_commands(ins[0], ins[1])
+        # a rudder angle given among the channels of azimuth_rad is named there, not as rudder_rad
+        self._check_commands(ins[0], ins[1], "rudder_rad" if rudder_rad is not None else
+                             f"azimuth_rad[..., {K}:] (the rudder angles)")
         _check_flow_speeds(wind=ins[2], current=ins[3])
         return ins
 
-    def _check_commands(self, rpm, angle_rad):
+    def _check_commands(self, rpm, angle_rad, rudder_field: str = "rudder_rad"):
         """Refuse commands the model is not meant for (it would return NaN or nonsense):
         non-finite values, ``|rpm|`` above :data:`RPM_LIMIT_FACTOR` times a thruster's
-        ``max_rpm`` (a unit error), a rudder angle beyond 90 deg (degrees given as radians)."""
+        ``max_rpm`` (a unit error), a rudder angle beyond 90 deg (degrees given as radians),
+        named as ``rudder_field`` (the argument that carried the rudder angles)."""
         for name, x in (("rpm", rpm), ("azimuth_rad", angle_rad)):
             if not np.all(np.isfinite(x)):
                 raise ValueError(f"{name}: contains NaN or inf")
@@ -407,7 +410,7 @@ class DynamicModel:
             raise ValueError(f"rpm: {peak[k]:g} rpm for thruster {th.name!r} is above {RPM_LIMIT_FACTOR:g} x its "
                              f"max_rpm ({th.max_rpm:g}); expected rpm within the vessel file's range")
         if self.n_rudders and angle_rad.size and np.abs(angle_rad[..., K:]).max() > np.pi / 2:
-            raise ValueError(f"rudder_rad: {np.abs(angle_rad[..., K:]).max():g} rad is beyond 90 deg; expected "
+            raise ValueError(f"{rudder_field}: {np.abs(angle_rad[..., K:]).max():g} rad is beyond 90 deg; expected "
                              f"a rudder angle in radians")
 
     def acceleration(self, eta, nu, *, rpm=None, azimuth_rad=None, wind=None, current=None,

@@ -11,9 +11,9 @@ from ..forecast_inputs.faults import start_row_nu
 from ..physics.model import DynamicModel
 from ..residual.ensemble import EnsembleConfig, MLPEnsemble, fit_ensemble, require_training_rows
 from ..residual.features import ResidualConfig
-from .forecast_setup import (_check_flags, _check_row_stride, _forecast_setup, as_log_arrays, keeps_state_on_error,
+from .forecast_setup import (_check_flags, _check_row_stride, _forecast_setup, keeps_state_on_error,
                              log_list)
-from .training_logs import check_distinct_logs, log_label
+from .training_logs import check_distinct_logs, read_training_logs
 from .result import ForecastResult
 
 __all__ = ["DataOnlyPredictor"]
@@ -72,8 +72,8 @@ class DataOnlyPredictor:
         _check_flags(dp_only=dp_only, progress=progress)
         Xs, Ys, segs = [], [], []
         given = log_list(logs)
-        arrays = [as_log_arrays(log, self.model.vessel) for log in given]
-        check_distinct_logs(arrays, [log_label(x, i) for i, x in enumerate(given)])
+        arrays, labels = read_training_logs(given, self.model.vessel)
+        check_distinct_logs(arrays, labels)
         for k, a in enumerate(arrays):
             dt = float(np.median(np.diff(a.time_s)))
             seg = a.segment_id

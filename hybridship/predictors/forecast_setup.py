@@ -12,6 +12,7 @@ from __future__ import annotations
 import functools
 import numbers
 import os
+import warnings
 from dataclasses import dataclass
 
 import numpy as np
@@ -380,7 +381,9 @@ def _forecast_setup(model, config: ResidualConfig, log, start_times_s, horizon_s
     except ValueError as exc:
         # say it with the whole log's span, not the window read for the forecast
         try:
-            whole = ingest(log, model.vessel, purpose="forecast")
+            with warnings.catch_warnings():     # the first read gave its warnings (unknown columns) once
+                warnings.simplefilter("ignore")
+                whole = ingest(log, model.vessel, purpose="forecast")
         except ValueError:
             # a fault outside the rows read does not matter to a forecast: the request's error stands
             raise exc from None

@@ -42,7 +42,7 @@ from .forecast_setup import (FORECAST_HISTORY_S, MAX_HORIZON_S, _check_flags, _c
                              as_log_arrays, forecast_step_s, join_notes, keeps_state_on_error, log_list, start_indices)
 from .model_file import load_model, save_model
 from .result import ForecastResult
-from .training_logs import check_distinct_logs, check_training_lengths, log_label
+from .training_logs import check_distinct_logs, check_training_lengths, read_training_logs
 
 __all__ = ["AFTER_STOP", "AFTER_STOP_LATE", "ENVIRONMENT_SOURCES", "HybridPredictor"]
 
@@ -368,8 +368,7 @@ class HybridPredictor:
             as_config(calibration, CalibrationConfig, "calibration")
         self.calibration_config = cal
         given = log_list(logs)
-        logs = [as_log_arrays(log, self.model.vessel) for log in given]
-        labels = [log_label(x, i) for i, x in enumerate(given)]
+        logs, labels = read_training_logs(given, self.model.vessel)
         check_training_lengths(logs, labels)
         check_distinct_logs(logs, labels)  # before any training
         self.estimator = EnvironmentEstimator(self.model, self.environment_config)

@@ -14,7 +14,7 @@ import os
 
 import numpy as np
 
-__all__ = ["samples_digest", "check_distinct_logs", "check_training_lengths", "log_label"]
+__all__ = ["samples_digest", "check_distinct_logs", "check_training_lengths", "log_label", "read_training_logs"]
 
 
 def samples_digest(arrays) -> str:
@@ -42,6 +42,32 @@ def samples_digest(arrays) -> str:
 def log_label(log, index: int) -> str:
     """How a message names training log ``index``: its path, else its position ``logs[i]``."""
     return os.fspath(log) if isinstance(log, (str, os.PathLike)) else f"logs[{index}]"
+
+
+def read_training_logs(given, vessel) -> tuple[list, list[str]]:
+    """The training logs ``given`` (paths, DataFrames or LogArrays) through
+    :func:`hybridship.logs.ingest.ingest`, and their labels (:func:`log_label`).
+
+    A fault in one of several DataFrames is named by its place, ``logs[i]``, not as "log",
+    which would not say which of them; a lone log is named as a forecast names it, so that
+    fit and forecast refuse it with the same message.
+
+    Parameters
+    ----------
+    given : list
+        The logs, as :func:`hybridship.predictors.forecast_setup.log_list` returns them.
+    vessel : hybridship.vessel.Vessel
+
+    Returns
+    -------
+    arrays : list of LogArrays
+    labels : list of str
+    """
+    from ..logs.ingest import ingest
+
+    labels = [log_label(x, i) for i, x in enumerate(given)]
+    names = labels if len(given) > 1 else [None] * len(given)
+    return [ingest(x, vessel, purpose="fit", name=n) for x, n in zip(given, names)], labels
 
 
 #: Fewest samples of a training log (the filtered derivatives need a neighbour on each side).
