@@ -8,7 +8,11 @@ from hybridship.hsc.benchmark import COLUMNS, PAPER_MAE, PAPER_R, models_for, ru
 
 
 def test_quick_benchmark_writes_the_table(tmp_path):
+    import torch
+
+    threads = torch.get_num_threads()
     table = run_benchmark(tmp_path, seed=0, quick=True, progress=False)
+    assert torch.get_num_threads() == threads             # one thread for the run only
     on_disk = pd.read_csv(tmp_path / "table.csv")
     assert list(on_disk.columns) == COLUMNS == ["model", "sea_state", "split", "mode", "output", "R", "MAE"]
     assert len(on_disk) == len(table) == 4 * 2 * 2 * 2 * 2

@@ -19,6 +19,7 @@ box's starting speed and trim) and are left out of both modes' scores.
 
 from __future__ import annotations
 
+import contextlib
 import io
 import time
 from pathlib import Path
@@ -255,11 +256,29 @@ def run_benchmark(out_dir, *, seed: int = 0, quick: bool = False, progress: bool
         The table (columns :data:`COLUMNS`).
     """
     out = _checked_arguments(out_dir, seed, quick, progress)      # before minutes of work
+    with _one_torch_thread():
+        return _run(out, seed, quick, progress)
+
+
+@contextlib.contextmanager
+def _one_torch_thread():
+    """Torch on one thread while the benchmark runs (its timings and results are of one
+    thread), and the caller's thread count back afterwards, also after an error."""
     try:
         import torch
-        torch.set_num_threads(1)
     except ImportError:  # pragma: no cover
-        pass
+        yield
+        return
+    before = torch.get_num_threads()
+    torch.set_num_threads(1)
+    try:
+        yield
+    finally:
+        torch.set_num_threads(before)
+
+
+def _run(out: Path, seed: int, quick: bool, progress: bool) -> pd.DataFrame:
+    """:func:`run_benchmark` after its arguments were checked."""
     out.mkdir(parents=True, exist_ok=True)
     say = print if progress else (lambda *a, **k: None)
     t_start = time.perf_counter()
