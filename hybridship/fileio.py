@@ -76,6 +76,19 @@ def check_out_folder(path) -> Path:
     return path
 
 
+def make_out_folder(path) -> Path:
+    """Make the output folder ``path`` (and its parents); an OSError names it.
+
+    ``Path.mkdir`` names only the first folder it could not make ("No such file or
+    directory: '/proc/x'"), not the output folder the user gave."""
+    path = Path(path)
+    try:
+        path.mkdir(parents=True, exist_ok=True)
+    except OSError as err:
+        raise type(err)(f"{path}: cannot make the output folder ({err.strerror or err})") from None
+    return path
+
+
 def atomic_write(path, write: Callable[[BinaryIO], None]) -> Path:
     """Write ``path`` through ``write(fh)`` into a temporary file beside it, then rename.
 

@@ -640,3 +640,14 @@ def test_writing_keeps_an_unknown_column_and_says_readers_ignore_it(tmp_path):
     assert "winch_load_kN" in pd.read_csv(tmp_path / "log.csv").columns        # the user's column kept
     with pytest.warns(LogFormatWarning, match="ignoring 1 column"):
         read_log(tmp_path / "log.csv")
+
+
+def test_an_output_folder_that_cannot_be_made_is_named(tmp_path):
+    """Path.mkdir named only the first folder it could not make, not the output folder given."""
+    from hybridship.fileio import make_out_folder
+
+    blocker = tmp_path / "a_file"
+    blocker.write_text("x")
+    with pytest.raises(OSError, match=r"a_file/out: cannot make the output folder \("):
+        make_out_folder(blocker / "out")
+    assert make_out_folder(tmp_path / "new" / "out").is_dir()

@@ -53,8 +53,8 @@ import numpy as np
 import pandas as pd
 
 from . import metrics
-from ..fileio import (atomic_write, check_output_files, earlier_run, markdown_table, record_outputs, remove_stale,
-                      write_text)
+from ..fileio import (atomic_write, check_output_files, earlier_run, make_out_folder, markdown_table, record_outputs,
+                      remove_stale, write_text)
 from ..predictors import DataOnlyPredictor, DeadReckoning, DynamicPredictor, HybridPredictor, as_log_arrays
 from ..predictors.forecast_setup import forecast_step_s
 from ..predictors.hybrid import AFTER_STOP, AFTER_STOP_LATE, after_stop_scales
@@ -216,8 +216,7 @@ def run_drift_benchmark(train=None, test=None, out_dir="drift-benchmark", *, ves
     train_arrays = [as_log_arrays(x, hybrid.model.vessel) for x in train_logs]
     test_arrays = _test_arrays(test_logs, test_names, hybrid.model.vessel, n_intervals, horizon_s, horizons)
     test_logs = train_logs if _same_samples(train_arrays, test_arrays, test_names) else test_logs   # given again
-    out = Path(out_dir)
-    out.mkdir(parents=True, exist_ok=True)
+    out = make_out_folder(out_dir)
     data_only = DataOnlyPredictor(vessel, ensemble_config=ens_cfg)
     timing = _fit_ensembles({"hybrid": hybrid, "data_only": data_only}, train_arrays, dp_only, say)
     t_hull, per_log_hull = _drift_hull_per_log(hybrid, test_arrays, test_logs is train_logs, horizon_s, test_names,

@@ -28,7 +28,8 @@ import numpy as np
 import pandas as pd
 
 from hybridship.config import check_flags
-from hybridship.fileio import as_path, atomic_write, check_out_folder, check_output_files, earlier_run, record_outputs
+from hybridship.fileio import (as_path, atomic_write, check_out_folder, check_output_files, earlier_run,
+                               make_out_folder, record_outputs)
 from hybridship.residual.ensemble import EnsembleConfig
 
 from .contract import N_INPUTS, N_OUTPUTS, check_n_init, check_physical, check_record
@@ -279,7 +280,7 @@ def _one_torch_thread():
 
 def _run(out: Path, seed: int, quick: bool, progress: bool) -> pd.DataFrame:
     """:func:`run_benchmark` after its arguments were checked."""
-    out.mkdir(parents=True, exist_ok=True)
+    make_out_folder(out)
     say = print if progress else (lambda *a, **k: None)
     t_start = time.perf_counter()
     craft = load_planing_craft()

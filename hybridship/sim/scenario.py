@@ -45,7 +45,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..fileio import atomic_write, check_output_files, record_outputs
+from ..fileio import atomic_write, check_output_files, make_out_folder, record_outputs
 import pandas as pd
 from pydantic import Field, field_validator, model_validator
 from scipy.signal import lfilter
@@ -852,7 +852,7 @@ def sweep(out_dir, seeds: Iterable[int], *, beaufort=(2, 5), fmt: str = "csv.gz"
     swept = set() if earlier is None else set(earlier["file"].astype(str))
     check_output_files(out, [log_file_name(c.seed, fmt) for c in configs] + ["scenarios.csv"],
                        ours=lambda name, _: name in swept or (name == "scenarios.csv" and earlier is not None))
-    out.mkdir(parents=True, exist_ok=True)
+    make_out_folder(out)
     paths, rows = [], []
     it = configs
     if progress:
