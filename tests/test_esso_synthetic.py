@@ -178,6 +178,23 @@ def test_forecast_errors_score_the_truth_the_horizon_later():
     assert err.shape == (rows.size, 2, 4) and np.abs(err).max() < 1e-12 and np.abs(z).max() < 1e-9
 
 
+def test_an_exact_forecast_without_spread_is_inside_its_band_and_an_error_without_one_outside():
+    from hybridship.evaluation.manoeuvre import forecast_errors, start_rows
+
+    a = _arrays()
+    rows = start_rows(a, 20, 1.0)
+
+    def no_spread(arrays, starts, horizon_s, **kw):
+        fc = _forecaster()(arrays, starts, horizon_s, **kw)
+        fc.eta_std[:] = 0.0
+        fc.eta[1, :, 0] += 0.5                         # one start off by 0.5 m in x0
+        return fc
+
+    _, z = forecast_errors(no_spread, a, rows, np.array([10, 20]), return_z=True, heading_z=True)
+    assert z.shape == (rows.size, 2, 3) and np.all(np.isinf(z[1, :, 0]))
+    assert np.all(np.delete(z, 1, axis=0) == 0.0) and np.all(z[1, :, 1:] == 0.0)
+
+
 @pytest.mark.parametrize("nan_std", [False, True])
 def test_a_forecast_with_nan_is_refused_naming_its_start(nan_std):
     """A NaN forecast (or spread) would make the pooled MAE NaN or count as a band miss

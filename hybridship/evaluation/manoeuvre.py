@@ -403,10 +403,12 @@ def forecast_errors(forecast: Callable, arrays: LogArrays, rows: np.ndarray, ste
     z = std = None
     if fc.eta_std is not None:
         std = fc.eta_std[:, steps, :2]
+        e = err[..., :2] if not heading_z else np.concatenate([err[..., :2], np.radians(err[..., 2:3])], axis=-1)
+        sd = fc.eta_std[:, steps, :e.shape[-1]]
         with np.errstate(divide="ignore", invalid="ignore"):
-            z = err[..., :2] / std
-            if heading_z:
-                z = np.concatenate([z, (np.radians(err[..., 2]) / fc.eta_std[:, steps, 2])[..., None]], axis=-1)
+            # an exact forecast with no spread is inside its band (0/0 was NaN, a miss); an
+            # error with no spread is outside it (inf)
+            z = np.where(e == 0.0, 0.0, e / sd)
     return (err, z, std) if return_std else (err, z)
 
 
