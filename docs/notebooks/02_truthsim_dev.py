@@ -202,7 +202,7 @@ if HAVE_DATA:
                            label="hybrid +-2 sigma" if s == 0 else None)
             a.plot(tt, fc_dyn.eta[s, :, j], "C1--", label="dynamic model" if s == 0 else None)
         a.axvline(test.time_s[i0], color="k", ls=":", lw=0.8)
-        a.set(xlabel="time [s]", ylabel=name, title=f"{held_out.name}: {name}")
+        a.set(xlabel="time [s]", ylabel=f"{name[:-2]} [m]", title=f"{held_out.name}: {name[:-2]}")
         a.legend(fontsize=8)
     fig.tight_layout()
 

@@ -156,7 +156,7 @@ wind_coefficient_scale = [1.0, 1.1, 1.2]
 thrust_scale = 0.95
 """
 vessel_file = WORK / "supply_vessel.toml"
-vessel_file.write_text(VESSEL_TOML)
+_ = vessel_file.write_text(VESSEL_TOML)
 
 # %% [markdown]
 # ## 2. Validate it
