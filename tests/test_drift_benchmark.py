@@ -253,6 +253,35 @@ def test_a_test_log_without_a_failure_is_refused_before_training(tiny_folder, tm
     assert capsys.readouterr().err.startswith("hybridship benchmark drift: error: --test: 1 log(s) have no DP failure")
 
 
+def test_every_row_on_the_training_logs_own_drifts_is_refused_before_training(tiny_folder, tmp_path, monkeypatch,
+                                                                              capsys):
+    """Training on every row (``dp_only=False``, ``--all-rows``) puts the drift after each failure
+    into the nets' rows, the wind forecast's and the held-back calibration's: scored on those
+    same drifts (no ``--test``, the same logs again, or the embedded scenarios), it is refused
+    before any training; with other test logs it runs as before."""
+    from hybridship.predictors import DataOnlyPredictor, HybridPredictor
+
+    def no_training(*args, **kwargs):
+        raise AssertionError("trained on the drifts it would score")
+
+    monkeypatch.setattr(HybridPredictor, "fit", no_training)
+    monkeypatch.setattr(DataOnlyPredictor, "fit", no_training)
+    model = DynamicModel("gunnerus")
+    dfs = [physics_log(model, duration_s=300, t_shutdown_s=200, seed=s) for s in (1, 2)]
+    for train, test in ((tiny_folder, None), (tiny_folder, tiny_folder), (dfs, list(dfs))):
+        with pytest.raises(ValueError, match=r"^test: the test logs are the training logs, and training on every "
+                                             r"row \(dp_only=False, --all-rows\)"):
+            run_drift_benchmark(train, test, tmp_path / "out", dp_only=False, progress=False, plots=False)
+    assert not (tmp_path / "out").exists()
+    assert main(["benchmark", "drift", "--train", str(tiny_folder), "--all-rows", "--out", str(tmp_path / "out"),
+                 "--no-plots"]) == 2
+    assert capsys.readouterr().err.startswith("hybridship benchmark drift: error: --test: the test logs are the "
+                                              "training logs")
+    # other test logs: trained (on every row of the training logs) as before
+    with pytest.raises(AssertionError, match="trained on the drifts"):
+        run_drift_benchmark(tiny_folder, dfs[:1], tmp_path / "out", dp_only=False, progress=False, plots=False)
+
+
 def test_log_files_take_any_case_and_skip_hidden_and_summary_files(tmp_path):
     """A folder's logs are found as a single log file is read (extension in any case); the
     sweep's summary and hidden files (macOS ``._`` companions) are not logs."""
@@ -385,3 +414,113 @@ def test_coverage_tables_round_one_coverage_alike():
     md = _coverage_markdown(cov)
     assert f"{117 / 120:.2f}" == "0.97"                        # the interval table's cell
     assert "| hybrid | 2 | 0.97 |" in md and "| hybrid | 1 | 0.53 |" in md
+
+
+def _failure_logs(model, seeds, duration_s=600.0, t_shutdown_s=450.0) -> list:
+    """Logs with a DP failure followed by ``duration_s - t_shutdown_s`` of drift (150 s: enough
+    for 20 starts 60 s ahead and for the later starts' calibration), each in its own current
+    and load."""
+    return [physics_log(model, duration_s=duration_s, t_shutdown_s=t_shutdown_s, seed=s, current=(0.2, 1.0 + s),
+                        tau_ext_N=(2000.0, 1000.0 * (s % 3 - 1), 0.0)) for s in seeds]
+
+
+def _changed_after(log: pd.DataFrame, t_s: float, seed: int = 0) -> pd.DataFrame:
+    """``log`` with every measured column changed after ``t_s`` [s]: positions, heading,
+    velocities, commands and wind moved at random, and the DP switched back on."""
+    out = log.copy()
+    after = out.time_s > t_s
+    rng = np.random.default_rng(seed)
+    for col in ("north_m", "east_m", "u_m_s", "v_m_s", "r_deg_s", "wind_speed_m_s", "heading_deg", "wind_dir_deg"):
+        out.loc[after, col] = out.loc[after, col] + rng.normal(0.0, 3.0, int(after.sum()))
+    for col in [c for c in out.columns if c.endswith(("_rpm", "_azimuth_deg"))]:
+        out.loc[after, col] = -0.5 * out.loc[after, col]
+    out.loc[after, "wind_speed_m_s"] = out.loc[after, "wind_speed_m_s"].abs()
+    out.loc[after, ["heading_deg", "wind_dir_deg"]] %= 360.0
+    out.loc[after, "dp_active"] = 1
+    return out
+
+
+def test_every_models_forecast_after_a_failure_reads_no_sample_after_its_start():
+    """Causality of what the drift benchmark scores: for every model of the table (the hybrid
+    with a hull's yaw moment in a drift and its spread calibrated after a failure, unguarded,
+    with the mean residual, the physics, dead reckoning and the data-only ensemble), the
+    forecast from a start after the failure, the estimator's online update over the drift up
+    to it included, is bit for bit the same when every sample after the start changes (the
+    DP even back on) and when the log ends at the start."""
+    from hybridship.evaluation.drift import _benchmark_models
+    from hybridship.predictors import DataOnlyPredictor, HybridPredictor
+    from hybridship.residual.drift_hull import munk_coefficient
+
+    model = DynamicModel("gunnerus")
+    logs = _failure_logs(model, (1, 2, 3, 4))
+    hp = HybridPredictor(model.vessel, ensemble_config=TINY).fit(logs[:3])
+    assert {"after_stop", "after_stop_late"} <= set(hp.calibration)
+    hp.drift_yaw_uv_rad_per_m2 = 0.5 * munk_coefficient(hp.model)      # as fit may choose with five failures
+    data_only = DataOnlyPredictor(model.vessel, ensemble_config=TINY).fit(logs[:3])
+    test = logs[3]
+    i0 = int(np.flatnonzero(test.dp_active.to_numpy() == 0)[0])
+    for k in (0, 7, 19):                        # the first and the last start the tables score
+        t = float(test.time_s[i0 + k])
+        changed, cut = _changed_after(test, t, seed=k), test[test.time_s <= t]
+        for name, (pred, kw) in _benchmark_models(model.vessel, hp, data_only).items():
+            base = pred.forecast(test, [t], 60.0, **kw)
+            for other in (changed, cut):
+                fc = pred.forecast(other, [t], 60.0, **kw)
+                np.testing.assert_array_equal(fc.eta, base.eta, err_msg=f"{name}, start {k}")
+                np.testing.assert_array_equal(fc.nu, base.nu, err_msg=f"{name}, start {k}")
+                if base.eta_std is not None:
+                    np.testing.assert_array_equal(fc.eta_std, base.eta_std, err_msg=f"{name}, start {k}")
+
+
+def test_a_test_logs_drift_changes_nothing_the_benchmark_learns(tmp_path, monkeypatch):
+    """With test logs other than the training logs, what the benchmark learns (the nets, the
+    station-keeping and after-failure spread calibrations, the hull's yaw coefficient, the
+    wind forecast) comes from the training logs alone: the test log's drift changed, every
+    model forecasts a probe log exactly as before, while the scored errors move. Changing a
+    training log's drift changes the probe (the after-failure calibration learns from it)."""
+    from hybridship.evaluation import drift
+
+    model = DynamicModel("gunnerus")
+    # five failures (fit chooses the hull's yaw moment too), with shorter drifts (a shorter choice)
+    train = _failure_logs(model, (1, 2, 3, 4, 5), 560.0, 430.0)
+    test, probe = _failure_logs(model, (6, 7), 560.0, 430.0)
+    i0 = int(np.flatnonzero(test.dp_active.to_numpy() == 0)[0])
+    starts = probe.time_s.to_numpy()[[300, 429, 435, 450]]        # two on station, two in the drift
+    seen, original = [], drift._forecast_after_failures
+
+    def probed(predictors, *args, **kwargs):
+        hybrid = predictors["hybrid"][0]
+        seen.append({"coefficient": hybrid.drift_yaw_uv_rad_per_m2, "per_log": args[-2:],
+                     "hull": hybrid.training_info["drift_hull"],
+                     "wind": hybrid.wind_forecast, **{name: pred.forecast(probe, starts, 60.0, **kw)
+                                                      for name, (pred, kw) in predictors.items()}})
+        return original(predictors, *args, **kwargs)
+
+    monkeypatch.setattr(drift, "_forecast_after_failures", probed)
+
+    def run(train_logs, test_log, out):
+        return pd.read_csv(run_drift_benchmark(train_logs, [test_log], tmp_path / out, ensemble_config=TINY,
+                                               plots=False, progress=False, calibration_scenarios=0
+                                               ).outputs["errors.csv"])
+
+    errors = run(train, test, "a")
+    changed = test.copy()
+    after = changed.time_s > changed.time_s[i0]
+    changed.loc[after, ["north_m", "east_m"]] += np.outer(np.arange(int(after.sum())), [0.05, -0.03])
+    assert not errors.equals(run(train, changed, "b"))
+    first, second = seen
+    assert first["per_log"] == second["per_log"] == (None, None)       # no per-log choice: fit's stands
+    for key, value in first.items():
+        if hasattr(value, "eta"):
+            for field in ("eta", "nu", "eta_std"):
+                np.testing.assert_array_equal(getattr(value, field), getattr(second[key], field), err_msg=key)
+        else:
+            assert value == second[key], key
+    # the probe sees what is learned from failures: a training log's drift changed moves it
+    moved = list(train)
+    moved[0] = moved[0].copy()
+    after = moved[0].time_s > moved[0].time_s[i0]
+    moved[0].loc[after, ["north_m", "east_m"]] += np.outer(np.arange(int(after.sum())), [0.05, -0.03])
+    run(moved, test, "c")
+    assert not np.array_equal(seen[2]["hybrid"].eta_std, first["hybrid"].eta_std)
+    np.testing.assert_array_equal(seen[2]["hybrid"].eta[:2], first["hybrid"].eta[:2])     # on station: no

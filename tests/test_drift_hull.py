@@ -400,3 +400,34 @@ def test_the_drift_benchmark_refuses_test_logs_that_are_partly_training_logs(tmp
         _benchmark_logs(files[:2], [files[1], tmp_path / "other.csv"], 3, 0, print)
     other = [tmp_path / "a.csv"]
     assert _benchmark_logs(files, other, 3, 0, print)[2] == other
+
+
+def test_the_drift_benchmark_chooses_for_a_failure_without_reading_its_drift(model, heavy_sway, left_out_choices):
+    """Proof by change, scored on the training logs: failure k's drift (every sample after its
+    shutdown) moved, the hull's yaw coefficient and the spread after a failure that k is scored
+    with stay exactly as they were, while those of the other failures, chosen with k's drift
+    among theirs, move."""
+    import copy
+
+    from hybridship.evaluation.drift import _calibrate_after_stop, _drift_hull_per_log
+
+    hp, logs, _, per_log = left_out_choices
+    k = 2
+    frame = heavy_sway[0][k].copy()
+    after = frame.dp_active.to_numpy() == 0
+    frame.loc[after, "heading_deg"] = (frame.loc[after, "heading_deg"]
+                                       + 0.2 * np.arange(int(after.sum()))) % 360.0
+    frame.loc[after, ["north_m", "east_m"]] += np.outer(np.arange(int(after.sum())), [0.04, -0.02])
+    changed = list(logs)
+    changed[k] = as_log_arrays(frame, model.vessel)
+    hull = per_log                                      # chosen on the logs as logged (the fixture)
+    _, cal = _calibrate_after_stop(copy.deepcopy(hp), logs, True, 0, 0, 20, 60.0, lambda m: None, hull)
+    hp_changed = copy.deepcopy(hp)
+    _, hull_changed = _drift_hull_per_log(hp_changed, changed, True, 60.0, list("abcdef"), lambda m: None)
+    _, cal_changed = _calibrate_after_stop(hp_changed, changed, True, 0, 0, 20, 60.0, lambda m: None, hull_changed)
+    assert hull_changed[k] == hull[k]
+    for part in ("position", "heading"):
+        np.testing.assert_array_equal(cal_changed[k][part].scale, cal[k][part].scale)
+    others = [j for j in range(len(logs)) if j != k]
+    assert all(hull_changed[j] != hull[j] for j in others)
+    assert all(not np.array_equal(cal_changed[j]["heading"].scale, cal[j]["heading"].scale) for j in others)

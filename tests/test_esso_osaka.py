@@ -479,3 +479,87 @@ def test_manoeuvre_benchmark_output_folder_keeps_the_users_files(tmp_path, capsy
     (tmp_path / "README.md").write_text("# Manoeuvring benchmark: Esso Osaka free-running model tests\n")
     (tmp_path / "errors.csv").write_text("model,kind\n")
     check_output_folder(tmp_path)
+
+
+def _changed_raw(raw: pd.DataFrame, after_s: float, columns, seed: int = 0) -> pd.DataFrame:
+    """A raw run with ``columns`` moved at random after ``after_s`` [s], each by a fifth of its
+    spread over the run (so that the run stays plausible)."""
+    out = raw.copy()
+    later = out["t [s]"] > after_s
+    rng = np.random.default_rng(seed)
+    for col in columns:
+        out.loc[later, col] = out.loc[later, col] + rng.normal(0.0, 0.2 * out[col].std(), int(later.sum()))
+    out["wind_velo_true [m/s]"] = out["wind_velo_true [m/s]"].abs()
+    return out
+
+
+def test_manoeuvre_forecasts_read_no_state_or_wind_after_their_start_and_only_the_horizons_commands():
+    """What the manoeuvre benchmark scores, for every model in both command modes (the hybrid as
+    configured: command and memory features, command guard, wind forecast and wind futures):
+    positions, heading, velocities and wind after the start changed, the forecast is bit for bit
+    the same; commands beyond the horizon changed, too; commands within it changed, the forecast
+    with the commands known moves and the one with them held does not."""
+    from hybridship.datasets.esso_osaka import EssoRun, esso_to_log
+    from hybridship.evaluation.manoeuvre import Run, _fit, make_predictors
+    from hybridship.logs.ingest import ingest
+    from hybridship.vessel import load_vessel
+
+    v = load_vessel("esso_osaka_model")
+    cfg = _tiny_config()
+    preds = make_predictors(v, cfg)
+    train = [Run(EssoRun(DATA, f, "x", f), esso_log_arrays(DATA / "data" / f, v)) for f in SMALL_TRAIN]
+    for name, p in preds.items():
+        _fit(name, p, train, cfg)
+    assert preds["hybrid"].command_regime is not None and preds["hybrid"].wind_error_paths is not None
+    raw = read_esso_raw(DATA / "data" / SMALL_TEST[1])
+    states = [c for c in ESSO_COLUMNS if c not in ("t [s]", "n_prop [rps]", "delta_rudder [rad]")]
+    commands = ["n_prop [rps]", "delta_rudder [rad]"]
+
+    def arrays(r):              # as the benchmark reads a test run
+        return ingest(esso_log_arrays(esso_to_log(r), v), v, purpose="fit")
+
+    base, horizon = arrays(raw), 10.0
+    for t in base.time_s[[40, 600]]:
+        cases = {"states": (arrays(_changed_raw(raw, t, states)), True),
+                 "commands beyond the horizon": (arrays(_changed_raw(raw, t + horizon, commands)), True),
+                 "commands": (arrays(_changed_raw(raw, t, commands)), False)}
+        for name, p in preds.items():
+            for mode in ("known", "held"):
+                fc = p.forecast(base, [t], horizon_s=horizon, commands=mode)
+                for case, (log, same) in cases.items():
+                    other = p.forecast(log, [t], horizon_s=horizon, commands=mode)
+                    equal = np.array_equal(fc.eta, other.eta) and (
+                        fc.eta_std is None or np.array_equal(fc.eta_std, other.eta_std))
+                    assert equal == (same or mode == "held" or name == "dead_reckoning"), (name, mode, case, t)
+
+
+def test_the_manoeuvre_benchmark_learns_nothing_from_its_test_runs(tmp_path):
+    """The same training runs and a test run whose motion and wind are changed: every fitted
+    model (nets, held-back calibration, guards, wind forecast and its error paths) forecasts a
+    probe run exactly as before, while the scored errors move."""
+    from hybridship.evaluation.manoeuvre import run_manoeuvre_benchmark
+
+    train = _link(tmp_path, "train", SMALL_TRAIN)
+    raw = read_esso_raw(DATA / "data" / SMALL_TEST[1])
+    moved = raw.copy()                  # the whole run moved smoothly (no jump a start window would refuse)
+    moved["x_position_mid [m]"] += 0.02 * moved["t [s]"]
+    moved["psi_hat [rad]"] += 0.05
+    for col in ("u_velo [m/s]", "vm_velo [m/s]", "r_angvelo [rad/s]", "wind_velo_true [m/s]"):
+        moved[col] *= 1.1
+    probe = esso_log_arrays(DATA / "data" / SMALL_TEST[0])
+    starts = probe.time_s[[50, 400]]
+    seen = []
+    for name, r in (("as logged", raw), ("moved", moved)):
+        test = tmp_path / name / "zigzag"
+        test.mkdir(parents=True)
+        r.to_csv(test / SMALL_TEST[1].split("/")[1], index=False)
+        res = run_manoeuvre_benchmark("esso_osaka_model", train, tmp_path / name, (5,), tmp_path / f"out {name}",
+                                      config=_tiny_config())
+        seen.append((res.errors, {(m, mode): p.forecast(probe, starts, horizon_s=5.0, commands=mode)
+                                  for m, p in res.predictors.items() for mode in ("known", "held")}))
+    (errors, probed), (errors_moved, probed_moved) = seen
+    assert not np.allclose(errors.mae, errors_moved.mae)
+    for key, fc in probed.items():
+        np.testing.assert_array_equal(fc.eta, probed_moved[key].eta, err_msg=str(key))
+        if fc.eta_std is not None:
+            np.testing.assert_array_equal(fc.eta_std, probed_moved[key].eta_std, err_msg=str(key))

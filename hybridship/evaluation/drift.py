@@ -177,7 +177,8 @@ def run_drift_benchmark(train=None, test=None, out_dir="drift-benchmark", *, ves
     horizon_s : float
         Forecast length [s]; the table's horizons are 15, 30, 45, 60 s within it.
     dp_only : bool
-        Train on the DP part (``dp_active == 1``) only.
+        Train on the DP part (``dp_active == 1``) only. False (every row) is refused when the
+        test logs are the training logs: every model would learn from the drifts it is scored on.
     ensemble_config : EnsembleConfig or None
         Overrides ``members``/``seed`` (e.g. fewer epochs in tests).
     plots, progress : bool
@@ -216,6 +217,7 @@ def run_drift_benchmark(train=None, test=None, out_dir="drift-benchmark", *, ves
     train_arrays = [as_log_arrays(x, hybrid.model.vessel) for x in train_logs]
     test_arrays = _test_arrays(test_logs, test_names, hybrid.model.vessel, n_intervals, horizon_s, horizons)
     test_logs = train_logs if _same_samples(train_arrays, test_arrays, test_names) else test_logs   # given again
+    _check_rows_not_scored(dp_only, test_logs is train_logs)
     out = make_out_folder(out_dir)
     data_only = DataOnlyPredictor(vessel, ensemble_config=ens_cfg)
     timing = _fit_ensembles({"hybrid": hybrid, "data_only": data_only}, train_arrays, dp_only, say)
@@ -312,6 +314,31 @@ def _same_samples(train_arrays, test_arrays, test_names) -> bool:
     raise ValueError(f"test: {len(shared)} of the test logs hold the samples of training logs ({', '.join(shared[:5])}"
                      f"{', ...' if len(shared) > 5 else ''}); give the same logs to score every failure leave one "
                      f"out, or test logs that are not training logs")
+
+
+def _check_rows_not_scored(dp_only: bool, test_is_train: bool) -> None:
+    """Refuse (before any training) to train on every row when the test logs are the training
+    logs (no ``test``, the same logs again, or the embedded scenarios).
+
+    Parameters
+    ----------
+    dp_only : bool
+        The benchmark's ``dp_only``: False trains on every row, the drift after each failure too.
+    test_is_train : bool
+        Whether the failures scored are those of the training logs.
+
+    Raises
+    ------
+    ValueError
+        With ``dp_only`` False on the training logs' own drifts: the nets, the data-only
+        ensemble, the wind forecast, the thrust-error prior and the held-back calibration
+        would all learn from the drifts that are then scored (only the spread after a failure
+        and the hull's yaw moment are chosen leave one out).
+    """
+    if not dp_only and test_is_train:
+        raise ValueError("test: the test logs are the training logs, and training on every row (dp_only=False, "
+                         "--all-rows) would learn from the drifts that are scored; give test logs other than the "
+                         "training logs, or train on the station-keeping parts")
 
 
 def _test_arrays(test_logs, test_names, vessel, n_intervals: int, horizon_s: float, horizons=()) -> list:
