@@ -567,6 +567,21 @@ def test_spread_after_a_stop_is_calibrated_on_logs_with_failures(model, tmp_path
 
 
 
+def test_drifts_too_short_for_enough_later_starts_fit_without_their_calibration(model):
+    """Three failures whose drifts last 110 s leave 3 later starts each (12 samples per lead
+    pooled with the first starts' logs): fit raised fit_spread_scale's "12 finite samples at
+    lead 1 s; need 20". It now fits the first starts' calibration only, and a start later in
+    such a drift says that its band is the first starts'."""
+    from hybridship.predictors.hybrid import AFTER_STOP, AFTER_STOP_LATE
+
+    logs = [physics_log(model, seed=s, duration_s=1200.0, t_shutdown_s=1090.0, current=(0.2, 1.0)) for s in (1, 2, 3)]
+    hp = HybridPredictor(model.vessel, ensemble_config=TINY).fit(logs)
+    assert AFTER_STOP in hp.calibration and AFTER_STOP_LATE not in hp.calibration
+    assert AFTER_STOP_LATE not in hp.training_info["calibration"]
+    note = hp.forecast(logs[0], [1090.0 + 30.0], 60.0).notes[0]
+    assert "calibrated on forecasts that start within 20 s of a failure; this one starts 30 s after it" in note
+
+
 def test_fit_calibrates_the_spread_after_a_failure_on_the_training_logs_own_failures(model):
     """With three failures in the training logs, fit calibrates the spread after a failure on
     them (the scale calibrate_after_stop gives on the same logs); with two, or with the

@@ -22,7 +22,7 @@ from ..forecast_inputs.wind import HELD_WIND, WindForecast, fit_wind_forecast, w
 from ..frames import speed_dir_to_vector, vector_to_speed_dir, wrap_pi
 from ..logs.io import LogArrays
 from ..physics.model import DynamicModel, check_step
-from ..residual.calibration import CalibrationConfig, fit_spread_scale
+from ..residual.calibration import MIN_CALIBRATION_SAMPLES, CalibrationConfig, fit_spread_scale
 from ..residual.ensemble import EnsembleConfig, MLPEnsemble, fit_ensemble, require_training_rows
 from ..residual.features import (ALL_FEATURES, LOAD_FEATURES, MEMORY_FEATURES, ResidualConfig, actuator_acceleration,
                                  command_feature_columns, command_memory, command_pair, command_scales,
@@ -1235,7 +1235,9 @@ class HybridPredictor:
             "starts_within_s": float(n_intervals * lead[0])}}
         calibration.pop(AFTER_STOP_LATE, None)
         info.pop(AFTER_STOP_LATE, None)
-        if late:
+        # drifts too short for enough later starts (three logs of 110 s gave 12 per lead, and
+        # fit raised): no calibration of later starts, whose forecasts then say so in a note
+        if late and _fewest_finite_starts(late) >= MIN_CALIBRATION_SAMPLES:
             calibration[AFTER_STOP_LATE] = after_stop_scales(late, cal)
             info[AFTER_STOP_LATE] = {"n_logs": len(late), "n_starts": int(sum(e.shape[0] for e, _, _ in late)),
                                      "horizon_s": float(_common_leads([x[2] for x in late])[0][-1])}
@@ -1529,6 +1531,17 @@ def _common_leads(leads: list) -> tuple[np.ndarray, list]:
     same index, ten times later."""
     lead = min(leads, key=len)
     return lead, [np.abs(np.asarray(x)[None, :] - lead[:, None]).argmin(axis=1) for x in leads]
+
+
+def _fewest_finite_starts(errors: list) -> int:
+    """The fewest starts with a finite heading error and spread at any pooled lead of
+    :meth:`HybridPredictor.after_stop_errors`' ``errors`` (the heading's scale, fitted on
+    one sample per start, needs the most)."""
+    lead, cols = _common_leads([x[2] for x in errors])
+    n = np.zeros(lead.size, dtype=int)
+    for (e, sd, _), c in zip(errors, cols):
+        n += (np.isfinite(e[:, c, 2]) & np.isfinite(sd[:, c, 2])).sum(axis=0)
+    return int(n.min())
 
 
 def after_stop_scales(errors: list, cal: CalibrationConfig) -> dict:
