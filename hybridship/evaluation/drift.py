@@ -243,9 +243,8 @@ def run_drift_benchmark(train=None, test=None, out_dir="drift-benchmark", *, ves
               "coverage_intervals.csv": intervals, "coverage_heading.csv": heading_cov, "timing.csv": timing,
               "drift_hull.csv": _drift_hull_table(hybrid, per_log_hull, test_names)}
     outputs = {name: _write_csv(out / name, table) for name, table in tables.items()}
-    table2 = metrics.paper_table(long, windows=windows) if len(windows) == 2 else long
-    table3 = {m: metrics.reduction_table(long, m, windows=windows) for m in TABLE3_MODELS} \
-        if len(windows) == 2 else {}
+    table2, table3 = ((metrics.paper_table(long, windows=windows), {m: metrics.reduction_table(
+        long, m, windows=windows) for m in TABLE3_MODELS}) if len(windows) == 2 else (long, {}))
     md = _markdown(table2, table3, coverage, intervals, timing, test_names, len(train_arrays), ens_cfg,
                    n_intervals, per_log_long, heading_cov)
     outputs["tables.md"] = write_text(out / "tables.md", md)
