@@ -287,7 +287,7 @@ class Rudder(_Strict):
     span_m : rudder span [H_R]; sets eta = D_P / H_R and the aspect ratio H_R^2 / A_R.
     lift_gradient : normal-force gradient [f_alpha, 1/rad]; default Fujii's
         ``6.13 Lambda / (Lambda + 2.25)`` from the aspect ratio Lambda.
-    wake_ratio : (1 - w_R) / (1 - w_P) [epsilon].
+    wake_ratio : (1 - w_R) / (1 - w_P) [epsilon]; for a rudder without a propeller, 1 - w_R.
     slipstream_factor : propeller slipstream amplification at the rudder [kappa].
     flow_straightening_neg, flow_straightening_pos : [gamma_R] for beta_R < 0 and > 0.
     l_R_m : effective longitudinal position in the flow-straightening angle [l_R = l'_R L].
