@@ -8,7 +8,7 @@ import pytest
 from hybridship.physics.model import DynamicModel
 from hybridship.predictors import HybridPredictor, as_log_arrays
 from hybridship.residual.ensemble import EnsembleConfig
-from hybridship.residual.environment import EnvironmentConfig, EnvironmentEstimator, external_accel
+from hybridship.residual.environment import ENV, EnvironmentConfig, EnvironmentEstimator, external_accel
 from hybridship.sim.synthetic import physics_log
 
 TINY = EnsembleConfig(n_members=3, hidden=8, max_epochs=20, patience=5, seed=0)
@@ -22,18 +22,25 @@ def _last(est_obj, log, model):
 def test_constant_force_alone_is_identified_as_a_load(model):
     """A constant surge load on a ship with idle thrusters (so she keeps her heading and the
     load is constant in NED too), no current: the estimated load, rotated into the body frame,
-    equals M^-1 tau within 10 %, and nothing is put into current or thrust error."""
+    equals M^-1 tau within 10 %, and nothing is put into current or thrust error.
+
+    With the default current prior (0.02 m/s) a current could not take the load; with one of
+    0.5 m/s it could, and the drift through the water must still leave it near zero (a filter
+    that explains the ship's motion by a current carrying her fails here). With the thrusters
+    idle the thrust error has nothing to act on: that split is checked where the thrust varies
+    (the deficit tests below)."""
     tau = np.array([4000.0, 0.0, 0.0])
     log = physics_log(model, duration_s=600, t_shutdown_s=None, seed=3, tau_ext_N=tau, wind=(0.0, 0.0),
                       rpm_scale=0.0)
-    est = _last(EnvironmentEstimator(model), log, model)
-    psi = est.x[0, 2]
-    load_body = external_accel(np.array([psi]), est.load_accel, np.zeros((1, 3)), np.zeros((1, 3)))[0]
     want = model.arrays.m_inv @ tau
-    assert abs(load_body[0] - want[0]) < 0.1 * want[0]
-    assert abs(load_body[1]) < 0.3 * want[0]
-    assert np.abs(est.current_ned_m_s).max() < 0.05          # not mistaken for a current
-    assert np.abs(est.thrust_error).max() < 0.05               # nor for thrust error
+    for current_prior in (EnvironmentConfig().current_prior_m_s, 0.5):
+        est = _last(EnvironmentEstimator(model, EnvironmentConfig(current_prior_m_s=current_prior)), log, model)
+        psi = est.x[0, 2]
+        load_body = external_accel(np.array([psi]), est.load_accel, np.zeros((1, 3)), np.zeros((1, 3)))[0]
+        assert abs(load_body[0] - want[0]) < 0.1 * want[0]
+        assert abs(load_body[1]) < 0.3 * want[0]
+        assert np.abs(est.current_ned_m_s).max() < 0.02          # not mistaken for a current
+        assert np.abs(est.thrust_error).max() < 0.05               # nor for thrust error
 
 
 def test_current_alone_is_identified_as_a_current(model):
@@ -49,21 +56,25 @@ def test_current_alone_is_identified_as_a_current(model):
     assert abs(speed - 0.3) < 0.05
     assert abs(np.degrees(np.angle(np.exp(1j * (direction - 1.0))))) < 15.0
     assert np.abs(est.load_accel[0, :2]).max() < 2e-3
+    assert np.abs(est.thrust_error).max() < 0.1               # nor taken for a thrust error
 
 
 def test_twenty_percent_thrust_deficit_is_identified(model):
     """The true ship delivers 80 % of the model's thrust; commands vary independently of the
-    (absent) environment, so the per-DOF thrust error in surge and sway is found near -0.2."""
+    (absent) environment, so the thrust error is found near -0.2 in every factor, per degree
+    of freedom and per thruster, and neither the load nor the current takes the deficit."""
     spec = model.vessel.model_dump()
     spec["true_vessel"] = {"thrust_scale": 0.8}
     true_model = DynamicModel(type(model.vessel).model_validate(spec), true_vessel=True)
     log = physics_log(true_model, duration_s=1500, t_shutdown_s=None, seed=5, wind=(0.0, 0.0), rpm_scale=0.5)
-    est = _last(EnvironmentEstimator(model), log, model)
-    np.testing.assert_allclose(est.thrust_error[0, :2], [-0.2, -0.2], atol=0.05)
-    # one factor per thruster finds the same deficit on every thruster
-    est = _last(EnvironmentEstimator(model, EnvironmentConfig(thrust_error_model="per_thruster")), log, model)
-    np.testing.assert_allclose(est.thrust_error[0], [-0.2, -0.2, -0.2], atol=0.05)
-    assert np.abs(est.load_accel[0, :2]).max() < 2e-3
+    for structure in ("per_dof", "per_thruster"):
+        est = _last(EnvironmentEstimator(model, EnvironmentConfig(thrust_error_model=structure)), log, model)
+        assert est.thrust_error_model == structure and est.thrust_error.shape == (1, 3)
+        np.testing.assert_allclose(est.thrust_error[0], [-0.2, -0.2, -0.2], atol=0.05)
+        # a filter that put the deficit into the load leaves 4e-4 m/s^2, 1e-4 rad/s^2 there
+        assert np.abs(est.load_accel[0, :2]).max() < 1e-4
+        assert np.abs(est.load_accel[0, 2]) < 2e-5
+        assert np.abs(est.current_ned_m_s).max() < 0.01
 
 
 def test_a_deficit_of_one_thruster_is_found_on_that_thruster(model):
@@ -347,6 +358,33 @@ def test_thrust_the_log_stops_recording_after_a_failure_is_not_held_in_the_drift
     np.testing.assert_array_equal(got.P, clean.P)
 
 
+def test_commands_missing_while_the_thrusters_run_teach_the_environment_nothing(model):
+    """A minute of station keeping whose rpm the log does not record: the log's reader holds
+    the last logged rpm, a guess of the thrust. The filter's motion states follow the
+    measurements through it and the environment estimate stays as it was (bit for bit);
+    at the failure, 740 s later, it is within half a posterior standard deviation of the
+    complete log's. Learning from the held rpm had moved the current and a thruster's error
+    by 0.8 to 1.6 standard deviations there."""
+    log = physics_log(model, duration_s=1500, t_shutdown_s=1300, seed=12, tau_ext_N=(3000.0, -2000.0, 3000.0),
+                      current=(0.2, 1.0))
+    rng = np.random.default_rng(0)
+    for column, sd in (("north_m", 0.3), ("east_m", 0.3), ("heading_deg", 0.2), ("u_m_s", 0.03), ("v_m_s", 0.03),
+                       ("r_deg_s", 0.05)):
+        log[column] += rng.normal(0.0, sd, len(log))
+    rpm_cols = [c for c in log.columns if c.endswith("_rpm")]
+    lost = log.copy()
+    lost.loc[500:560, rpm_cols] = np.nan
+    a = as_log_arrays(lost, model.vessel, purpose="forecast")
+    assert not a.commands_logged[500:561].any() and a.dp_active[500:562].all()
+    failure = int(np.flatnonzero(a.dp_active == 0)[0]) - 1
+    got = EnvironmentEstimator(model).run(a, np.array([500, 561, failure]))
+    np.testing.assert_array_equal(got.x[1, ENV], got.x[0, ENV])      # nothing learned from the guess
+    assert np.abs(got.x[1, :2] - a.eta[561, :2]).max() < 1.5          # the motion follows the fixes
+    clean = EnvironmentEstimator(model).run(as_log_arrays(log, model.vessel, purpose="forecast"), np.array([failure]))
+    sd = np.sqrt(np.diag(clean.P[0])[ENV])
+    assert np.all(np.abs(got.x[2, ENV] - clean.x[0, ENV]) < 0.5 * sd)
+
+
 def test_a_load_that_changes_in_the_drift_is_followed_with_the_after_stop_walks(model):
     """The environment load changes 60 s after a failure (as it does when a drifting ship turns
     to the weather). The filter's load walks while the thrusters are stopped
@@ -480,6 +518,38 @@ def test_hybrid_forecasts_after_a_failure_use_the_drift_samples(model):
     np.testing.assert_allclose(again.eta[0], full.eta[k], atol=1e-9)
     est = hp.environment_estimate(test, starts)
     assert not np.allclose(est.load_accel[0], est.load_accel[-1])
+
+
+def test_every_forecast_after_a_failure_reads_its_drift_up_to_its_start_and_nothing_after(model):
+    """For each start 1..19 s after the failure: changing every measured channel after the
+    start (positions, heading, velocities, wind; some positions missing) leaves its forecast
+    and spread bit for bit; moving the drift's positions between the failure and the start by
+    0.5 m moves the forecast, and withholding the drift samples changes the environment the
+    forecast starts from (the estimate at the start is not the station keeping's held)."""
+    logs = [physics_log(model, duration_s=1100, t_shutdown_s=900, seed=s, tau_ext_N=(3000.0, -2000.0, 0.0))
+            for s in (8, 9)]
+    hp = HybridPredictor(model.vessel, ensemble_config=TINY).fit(logs[:1])
+    test = logs[1]
+    t0 = float(test.time_s[np.flatnonzero(test.dp_active.to_numpy() == 0)[0]])
+    starts = t0 + np.arange(1, 20)
+    full = hp.forecast(test, starts, 60.0)
+    env = hp.environment_estimate(test, starts).x[:, ENV]
+    measured = ["north_m", "east_m", "heading_deg", "u_m_s", "v_m_s", "r_deg_s", "wind_speed_m_s", "wind_dir_deg"]
+    for k, start in enumerate(starts):
+        later = test.copy()
+        after = later.time_s > start
+        later.loc[after, measured] = later.loc[after, measured].to_numpy() * 1.5 + 7.0
+        later.loc[after & (later.index % 4 == 0), ["north_m", "east_m"]] = np.nan
+        alone = hp.forecast(later, [start], 60.0)
+        np.testing.assert_array_equal(alone.eta[0], full.eta[k])
+        np.testing.assert_array_equal(alone.eta_std[0], full.eta_std[k])
+        drift = (test.time_s >= t0) & (test.time_s < start)
+        moved = test.copy()
+        moved.loc[drift, "north_m"] += 0.5
+        assert np.abs(hp.forecast(moved, [start], 60.0).eta[0] - full.eta[k]).max() > 1e-4
+        blind = test.copy()
+        blind.loc[drift, measured[:6]] = np.nan
+        assert np.abs(hp.environment_estimate(blind, [start]).x[0, ENV] - env[k]).max() > 1e-6
 
 
 def test_config_rejects_bad_values():

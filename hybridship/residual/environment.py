@@ -83,8 +83,9 @@ from .drift_hull import gain_carries_over
 #: Forward-difference steps of the filter's Jacobian, per state (SI units, radians).
 _FD_STEP = np.array([1e-3, 1e-3, 1e-5, 1e-4, 1e-4, 1e-6, 1e-3, 1e-3, 1e-5, 1e-5, 1e-7])
 
-#: State layout of the filter with one thrust-model error per degree of freedom (the
-#: default); :func:`state_names` gives the layout for any setting.
+#: State layout of the filter with one thrust-model error per degree of freedom
+#: (``"per_dof"``; the default is one per thruster): :func:`state_names` gives the layout
+#: for any setting.
 STATE_NAMES = ("north_m", "east_m", "psi_rad", "u_m_s", "v_m_s", "r_rad_s",
                "current_north_m_s", "current_east_m_s",
                "load_north_m_s2", "load_east_m_s2", "load_yaw_rad_s2",
@@ -268,10 +269,12 @@ class EnvironmentEstimate:
     rows : ndarray of int, shape (S,)
         Log rows of the estimates.
     time_s : ndarray, shape (S,)
-    x : ndarray, shape (S, 14)
-        State means in the order of :data:`STATE_NAMES` (SI, radians).
-    P : ndarray, shape (S, 14, 14)
+    x : ndarray, shape (S, 11 + n_theta)
+        State means in the order of :func:`state_names` (SI, radians).
+    P : ndarray, shape (S, 11 + n_theta, 11 + n_theta)
         State covariances.
+    thrust_error_model : {"per_dof", "per_thruster"}
+        Structure of the thrust errors ``x[:, 11:]``.
     """
 
     rows: np.ndarray
@@ -530,7 +533,7 @@ class EnvironmentEstimator:
     # ------------------------------------------------------------------ filtering
 
     def _prior_sd(self) -> np.ndarray:
-        """Prior standard deviations of the 14 states at a filter start (SI, radians)."""
+        """Prior standard deviations of the states at a filter start (SI, radians)."""
         c = self.config
         return np.concatenate([[c.position_std_m] * 2, [np.radians(c.heading_std_deg)],
                                [c.velocity_std_m_s] * 2, [np.radians(c.yaw_rate_std_deg_s)],
@@ -538,7 +541,7 @@ class EnvironmentEstimator:
                                self.thrust_error_std])
 
     def _process_noise_base(self, stopped: bool = False) -> np.ndarray:
-        """Process-noise intensities (14,) that :func:`.environment_kernel.process_noise` scales by
+        """Process-noise intensities (11 + n_theta,) that :func:`.environment_kernel.process_noise` scales by
         the step: position [m], velocity per second [m/s^2, rad/s^2], random walks per sqrt(s);
         with ``stopped``, those of a step while the thrusters are stopped (the load's walks
         ``load_walk_after_stop_m_s2``, ``load_yaw_walk_after_stop_rad_s2``)."""
@@ -715,6 +718,9 @@ class EnvironmentEstimator:
             "az": rows(model._channels("azimuth_rad", np.nan_to_num(arrays.azimuth_rad[sl]), w, None)[:, 0]),
             "wind": rows(np.nan_to_num(arrays.wind[sl])),
             "dp": rows(dp),
+            # while the thrusters run, a row whose commands are not logged holds the last
+            # logged ones: its thrust is a guess, from which the environment learns nothing
+            "cmd_known": rows(arrays.commands_logged[sl] | ~dp),
             "span": (int(first_row), int(last)),        # what the noise above was measured over
         }
 
@@ -804,7 +810,8 @@ class EnvironmentEstimator:
         c = self.config
         kernel.filter_grid(np.ascontiguousarray(grid, dtype=np.int64), slot, arrays.time_s, arrays.segment_id,
                            inputs["z"], inputs["z_ok"], inputs["r_std"], inputs["rpm"], inputs["az"],
-                           inputs["wind"], inputs["dp"], self.model.arrays, c.thrust_error_model == "per_thruster",
+                           inputs["wind"], inputs["dp"], inputs["cmd_known"], self.model.arrays,
+                           c.thrust_error_model == "per_thruster",
                            np.asarray(self.thrust_error_mean, float),
                            self._prior_sd(), self._process_noise_base(), self._process_noise_base(stopped=True),
                            _FD_STEP,

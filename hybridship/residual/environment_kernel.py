@@ -391,9 +391,20 @@ def _restarted(z_i, x, Pc, keep_environment, gap_s, prior_thr, prior_sd, q_base)
 
 
 @numba.njit(cache=True)
-def filter_grid(grid, slot, t, seg, z, z_ok, r_std, rpm, az, wind, dp, P, per_thruster, prior_thr, prior_sd, q_base,
-                q_base_stopped, fd_step, reset_at_stop, kept, stop_std, yaw_prior, current_stop_std, load_to_current,
-                drift_yaw_uv, gate, max_gated, settle_s, max_bridge_s, step_s, resume, x_resume,
+def _cut_motion_environment(Pc):
+    """Cut the covariance between the motion states and the environment (in place): the
+    next update then moves the motion states alone."""
+    n = Pc.shape[0]
+    for a in range(6):
+        for b in range(6, n):
+            Pc[a, b] = 0.0
+            Pc[b, a] = 0.0
+
+
+@numba.njit(cache=True)
+def filter_grid(grid, slot, t, seg, z, z_ok, r_std, rpm, az, wind, dp, cmd_known, P, per_thruster, prior_thr,
+                prior_sd, q_base, q_base_stopped, fd_step, reset_at_stop, kept, stop_std, yaw_prior, current_stop_std,
+                load_to_current, drift_yaw_uv, gate, max_gated, settle_s, max_bridge_s, step_s, resume, x_resume,
                 P_resume, settle_io, gate_io, out_x, out_P, done):
     """Run the filter over the log rows ``grid`` (increasing).
 
@@ -421,7 +432,10 @@ def filter_grid(grid, slot, t, seg, z, z_ok, r_std, rpm, az, wind, dp, P, per_th
     them and the environment is cut before every update, so that the measurements settle
     the motion states and leave the environment as it was: the start-up transient (motion
     states started from one noisy sample) would otherwise leave its mark on the split
-    between current and load, which station keeping cannot correct. ``settle_io[0]`` holds
+    between current and load, which station keeping cannot correct. So it is after a step
+    from a row whose commands the log does not record while the thrusters run (``cmd_known``
+    False; the reader held the last logged ones): its thrust is a guess, whose error the
+    environment would otherwise take up. ``settle_io[0]`` holds
     the time [s] until which a run settles and ``gate_io`` (2, 6) the gate's state per channel
     (:func:`update`: outliers in a row, last innovation): read with ``resume``, written at
     the end, so that a resumed run gates as the run it continues would have.
@@ -469,11 +483,8 @@ def filter_grid(grid, slot, t, seg, z, z_ok, r_std, rpm, az, wind, dp, P, per_th
                 q = process_noise(h, q_base if dp[prev] else q_base_stopped)
                 x, Pc = predict(x, Pc, h, rpm[prev], az[prev], wind[prev], q, fd_step, P, per_thruster,
                                 0.0 if dp[prev] else drift_yaw_uv, work)
-            if t[i] <= settle_until:
-                for a in range(6):
-                    for b in range(6, n):
-                        Pc[a, b] = 0.0
-                        Pc[b, a] = 0.0
+            if t[i] <= settle_until or not cmd_known[prev]:
+                _cut_motion_environment(Pc)
             x, Pc = update(x, Pc, z[i], z_ok[i], r_std[i], gate, max_gated, gate_state)
             if dp[prev] and not dp[i]:
                 if reset_at_stop:
