@@ -562,6 +562,9 @@ def _add_benchmark(sub) -> None:
     d.add_argument("--wave-yaw-load", action="store_true",
                    help="after a failure, turn the held yaw load with the waves' axis found in the station "
                         "keeping's wave-frequency motion (EnvironmentConfig.wave_turned_yaw_load)")
+    d.add_argument("--load-model", choices=("acceleration", "force"), default="acceleration",
+                   help="the environment estimator's slowly varying load: an acceleration fixed in NED "
+                        "(default) or a NED force and yaw moment (EnvironmentConfig.load_model)")
     d.add_argument("--no-plots", action="store_true",
                    help="skip the figures (and remove those of an earlier run from --out)")
     d.set_defaults(func=_cmd_benchmark_drift)
@@ -733,7 +736,8 @@ def _cmd_benchmark_drift(args) -> int:
                                   n_scenarios=args.scenarios, plots=not args.no_plots, training=args.training,
                                   calibration_scenarios=args.calibration_scenarios,
                                   drift_hull=not args.no_drift_hull,
-                                  environment_config=EnvironmentConfig(wave_turned_yaw_load=args.wave_yaw_load))
+                                  environment_config=EnvironmentConfig(wave_turned_yaw_load=args.wave_yaw_load,
+                                                                       load_model=args.load_model))
     except ValueError as exc:
         if not str(exc).startswith(("test: ", "train: ")):
             raise

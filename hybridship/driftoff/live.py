@@ -305,7 +305,20 @@ def _estimated(model, a: LogArrays, idx: int, n_members: int, seed: int, config=
                                        max(1, int(round(c.held_load_block_s / (step * a.dt_s)))))
         z = np.random.default_rng([seed, 7]).standard_normal((n_members, 3))
         loads += (z - z.mean(axis=0)) * held_load_std_ned(sigma_b)
-    return x[0:3].copy(), x[3:6].copy(), x[LOAD].copy(), loads, draws[:, CUR.start - off:CUR.stop - off].copy()
+    load = x[LOAD].copy()
+    if est.load_map is not None:
+        # a force (load_model "force"): the drift-off simulation takes a NED acceleration,
+        # here that of the force at the heading of the stop (it does not follow the turn)
+        load, loads = (_force_as_ned_accel(v, x[2], est.load_map) for v in (load, loads))
+    return x[0:3].copy(), x[3:6].copy(), load, loads, draws[:, CUR.start - off:CUR.stop - off].copy()
+
+
+def _force_as_ned_accel(load, psi_rad: float, load_map) -> np.ndarray:
+    """The NED acceleration (..., 3) of the estimator's force load (..., 3) at the heading ``psi_rad``."""
+    from ..residual.environment import external_accel
+    body = external_accel(np.full(np.shape(load)[:-1], psi_rad), np.asarray(load, float), 0.0, 0.0, load_map)
+    c, s = np.cos(psi_rad), np.sin(psi_rad)
+    return np.stack([c * body[..., 0] - s * body[..., 1], s * body[..., 0] + c * body[..., 1], body[..., 2]], axis=-1)
 
 
 def _check_estimate(estimate: EnvironmentEstimate, n_thrusters: int) -> None:

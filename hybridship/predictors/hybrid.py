@@ -1328,6 +1328,12 @@ class HybridPredictor:
         memory0 = np.where(first[:, None], 0.0, logged[before])
         return command_memory(steps, previous, memory0, st.dt, rc.command_memory_s)
 
+    @property
+    def _load_map(self):
+        """``A`` of the estimator's load when it is a NED force (``EnvironmentConfig.load_model``
+        "force"; its body acceleration at a heading is ``A [R(psi)^T b_ne; b_yaw]``), else None."""
+        return self.estimator.load_map if self.environment == "estimator" and self.estimator is not None else None
+
     def rollout(self, eta0, nu0, dev0, bias0_ned, rpm, az, wind, n_steps: int, dt_s: float, *, guard: bool = True,
                 substeps: int = 1, current=None, accel_ext=None, nets: bool = True, nets_weight=None,
                 drift_yaw_uv=None, command_memory=None, wave_axis=None):
@@ -1425,7 +1431,7 @@ class HybridPredictor:
             if drift_yaw_uv is not None:        # after r_prev: not a net output, so not a next-step feature
                 r = _with_drift_yaw(r, nu_1, drift_yaw_uv)
             eta[:, j + 1], nu[:, j + 1], std[:, j + 1] = _corrected_step(eta_1, nu_1, r, bias0_ned, dt_s, d_nu, d_eta,
-                                                                         wave_axis)
+                                                                         wave_axis, self._load_map)
             _check_finite_step(eta[:, j + 1], nu[:, j + 1], (j + 1) * dt_s)
         return eta, nu, std, (wgt if guard else None)
 
@@ -1607,11 +1613,13 @@ def _check_finite_step(eta, nu, lead_s: float):
             f"Retrain without the hull correction, with the guard on, or on data that covers this regime")
 
 
-def _corrected_step(eta_1, nu_1, r, bias0_ned, dt_s: float, d_nu, d_eta, wave_axis=None):
+def _corrected_step(eta_1, nu_1, r, bias0_ned, dt_s: float, d_nu, d_eta, wave_axis=None, load_map=None):
     """The physics step ``eta_1, nu_1`` (S, 3) corrected by the residual: the members' learned
     deviations ``r`` (E, S, 3) plus the bias ``bias0_ned`` (E, S, 3, surge/sway in NED)
     rotated into the new heading (its yaw part turned with the waves' axis ``wave_axis``
-    (S, 2) when given: :func:`~hybridship.residual.wave_direction.yaw_load_factor`), as a
+    (S, 2) when given: :func:`~hybridship.residual.wave_direction.yaw_load_factor`; with
+    ``load_map`` ``A``, a force: ``A`` times the rotated bias, see
+    :func:`~hybridship.residual.environment.load_map`), as a
     constant acceleration over the step (``nu += dt r``,
     ``eta += 0.5 dt^2 R(psi) r`` with the members' mean). The members' deviations from that
     mean are integrated the same way into ``d_nu``, ``d_eta`` (E, S, 3, updated in place).
@@ -1624,6 +1632,8 @@ def _corrected_step(eta_1, nu_1, r, bias0_ned, dt_s: float, d_nu, d_eta, wave_ax
     yaw = bias0_ned[..., 2] if wave_axis is None else bias0_ned[..., 2] * yaw_load_factor(psi, wave_axis)[None]
     bias_b = np.stack([c * bias0_ned[..., 0] + s * bias0_ned[..., 1],
                        -s * bias0_ned[..., 0] + c * bias0_ned[..., 1], yaw], axis=-1)
+    if load_map is not None:
+        bias_b = bias_b @ load_map.T
     r = r + bias_b
     r_mean = r.mean(axis=0)
     nu = nu_1 + dt_s * r_mean

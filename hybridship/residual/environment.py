@@ -71,7 +71,7 @@ from typing import Literal
 
 import numpy as np
 import pandas as pd
-from pydantic import BaseModel, ConfigDict, Field
+from pydantic import BaseModel, ConfigDict, Field, model_validator
 
 from ..config import Bool, start_time_rng
 from ..frames import vector_to_speed_dir
@@ -93,6 +93,7 @@ STATE_NAMES = ("north_m", "east_m", "psi_rad", "u_m_s", "v_m_s", "r_rad_s",
 ENV = slice(6, None)        # the environment part: current, load, thrust error
 CUR, LOAD, THR = slice(6, 8), slice(8, 11), slice(11, None)
 THRUST_ERROR_MODELS = ("per_dof", "per_thruster")
+LOAD_MODELS = ("acceleration", "force")
 
 
 class EnvironmentConfig(BaseModel):
@@ -130,6 +131,17 @@ class EnvironmentConfig(BaseModel):
     and the load follows ``sin(2 beta)`` of the relative wave direction, where the station
     keeping's ``|sin(2 beta)|`` reaches ``min_wave_sin2`` (:mod:`hybridship.residual.wave_direction`).
 
+    ``load_model`` chooses what the slowly varying load ``b`` is: ``"acceleration"`` (the
+    default) an acceleration fixed in NED, ``accel = [R(psi)^T b_ne; b_yaw]``; ``"force"`` a
+    force fixed in NED and a yaw moment, ``accel = M^-1 [R(psi)^T F; N]``, with the state kept
+    in acceleration units by a reference mass and inertia: ``F = m_ref b_ne``, ``N = I_ref
+    b_yaw``, ``m_ref = 2 / (M^-1_uu + M^-1_vv)``, ``I_ref = 1 / M^-1_rr`` (:func:`load_map`). A
+    fixed force then gives a turning ship a body acceleration that changes with the heading
+    (the surge and sway masses differ) and a yaw acceleration through ``M^-1``'s sway-yaw
+    coupling. The stop options that move the load (``reset_yaw_load_at_stop``,
+    ``load_to_current_at_stop``, ``current_std_at_stop_m_s``) take it as an acceleration and
+    are not available with ``"force"``.
+
     ``thrust_error_model`` chooses the structure of ``theta``: ``"per_dof"`` (three
     efficiency factors on the surge, sway and yaw thrust, prior ``thrust_error_prior``) or
     ``"per_thruster"`` (one efficiency factor per thruster, acting through that thruster's
@@ -162,6 +174,8 @@ class EnvironmentConfig(BaseModel):
         Prior standard deviations of the per-DOF efficiency factors (``"per_dof"``) [-].
     thrust_error_model : {"per_dof", "per_thruster"}
         Structure of the thrust errors (above).
+    load_model : {"acceleration", "force"}
+        What the load ``b`` is (above).
     thrust_error_prior_per_thruster : float
         Prior standard deviation of each thruster's efficiency factor (``"per_thruster"``) [-].
     use_velocity : bool
@@ -251,6 +265,15 @@ class EnvironmentConfig(BaseModel):
     wave_axis_window_s: float = Field(600.0, gt=0.0)
     min_wave_anisotropy: float = Field(3.0, ge=1.0)
     min_wave_sin2: float = Field(0.3, gt=0.0, le=1.0)
+    load_model: Literal["acceleration", "force"] = "acceleration"
+
+    @model_validator(mode="after")
+    def _force_without_stop_options(self):
+        if self.load_model == "force" and (self.reset_yaw_load_at_stop or self.load_to_current_at_stop > 0
+                                           or self.current_std_at_stop_m_s > 0):
+            raise ValueError("load_model='force': reset_yaw_load_at_stop, load_to_current_at_stop and "
+                             "current_std_at_stop_m_s take the load as an acceleration; leave them off")
+        return self
 
 
 #: The per-DOF structure with its own settings (the default before the per-thruster one):
@@ -275,6 +298,9 @@ class EnvironmentEstimate:
         State covariances.
     thrust_error_model : {"per_dof", "per_thruster"}
         Structure of the thrust errors ``x[:, 11:]``.
+    load_map : ndarray (3, 3) or None
+        With the load a force (``load_model="force"``), ``A`` of :func:`load_map`: the load's
+        body acceleration is ``A [R(psi)^T b_ne; b_yaw]``; None: the load is an acceleration.
     """
 
     rows: np.ndarray
@@ -282,6 +308,7 @@ class EnvironmentEstimate:
     x: np.ndarray
     P: np.ndarray
     thrust_error_model: str = "per_dof"
+    load_map: np.ndarray | None = None
 
     @property
     def current_ned_m_s(self) -> np.ndarray:
@@ -296,7 +323,8 @@ class EnvironmentEstimate:
 
     @property
     def load_accel(self) -> np.ndarray:
-        """Environmental load ``[north_m_s2, east_m_s2, yaw_rad_s2]``, (S, 3)."""
+        """Environmental load ``[north_m_s2, east_m_s2, yaw_rad_s2]``, (S, 3) (with
+        :attr:`load_map`, a NED force and yaw moment per reference mass and inertia)."""
         return self.x[:, LOAD]
 
     @property
@@ -314,14 +342,14 @@ class EnvironmentEstimate:
     def take(self, which) -> "EnvironmentEstimate":
         """The estimates at ``which`` (a slice or an index array into :attr:`rows`)."""
         return EnvironmentEstimate(self.rows[which], self.time_s[which], self.x[which], self.P[which],
-                                   self.thrust_error_model)
+                                   self.thrust_error_model, self.load_map)
 
     @classmethod
     def concatenate(cls, parts: list["EnvironmentEstimate"], order=None) -> "EnvironmentEstimate":
         """The estimates of ``parts`` one after another, then taken at ``order`` (an index array
         into the concatenation; default: as they come)."""
         est = cls(*(np.concatenate([getattr(p, f) for p in parts]) for f in ("rows", "time_s", "x", "P")),
-                  parts[0].thrust_error_model)
+                  parts[0].thrust_error_model, parts[0].load_map)
         return est if order is None else est.take(np.asarray(order, dtype=int))
 
     def sample_environment(self, n: int, seed: int = 0) -> np.ndarray:
@@ -373,11 +401,29 @@ def current_input(v_c_ned: np.ndarray) -> np.ndarray:
     return vector_to_speed_dir(v_c_ned)
 
 
-def external_accel(psi_rad, load_ned, theta, a_thr) -> np.ndarray:
+def load_map(model, load_model: str):
+    """``A = M^-1 diag(m_ref, m_ref, I_ref)`` (3, 3) of a load that is a force
+    (``load_model="force"``), with ``m_ref = 2 / (M^-1_uu + M^-1_vv)`` and ``I_ref = 1 / M^-1_rr``:
+    the load's body acceleration is ``A [R(psi)^T b_ne; b_yaw]``. None for ``"acceleration"``."""
+    if load_model == "acceleration":
+        return None
+    if load_model != "force":
+        raise ValueError(f"load_model: expected one of {LOAD_MODELS}, got {load_model!r}")
+    mi = np.asarray(model.arrays.m_inv, dtype=float)
+    m_ref = 2.0 / (mi[0, 0] + mi[1, 1])
+    return np.ascontiguousarray(mi @ np.diag([m_ref, m_ref, 1.0 / mi[2, 2]]))
+
+
+def external_accel(psi_rad, load_ned, theta, a_thr, load_map=None) -> np.ndarray:
     """``R(psi)^T b + theta * a_thr``: the estimator's extra body-frame acceleration (..., 3)
-    (per-DOF thrust error; ``theta = 0`` gives the load alone)."""
+    (per-DOF thrust error; ``theta = 0`` gives the load alone). With ``load_map`` ``A`` (the
+    load a force, :func:`load_map`): ``A [R(psi)^T b_ne; b_yaw] + theta * a_thr``."""
     c, s = np.cos(psi_rad), np.sin(psi_rad)
     out = np.zeros(np.shape(load_ned)) + theta * np.asarray(a_thr)
+    if load_map is not None:
+        body = np.stack([c * load_ned[..., 0] + s * load_ned[..., 1], -s * load_ned[..., 0] + c * load_ned[..., 1],
+                         load_ned[..., 2]], axis=-1)
+        return out + body @ np.asarray(load_map).T
     out[..., 0] += c * load_ned[..., 0] + s * load_ned[..., 1]
     out[..., 1] += -s * load_ned[..., 0] + c * load_ned[..., 1]
     out[..., 2] += load_ned[..., 2]
@@ -432,7 +478,7 @@ def environment_accel(model, arrays, estimate: EnvironmentEstimate, nu=None) -> 
     x[estimate.rows] = estimate.x
     ok = np.isfinite(x).all(1)
     xe = np.nan_to_num(x)
-    acc = external_accel(eta[:, 2], xe[:, LOAD], 0.0, 0.0) + thrust_error_accel(
+    acc = external_accel(eta[:, 2], xe[:, LOAD], 0.0, 0.0, estimate.load_map) + thrust_error_accel(
         model, estimate.thrust_error_model, eta, nu, rpm, az, wind, xe[:, CUR], xe[:, THR])
     a_env = model.acceleration(eta, nu, rpm=rpm, azimuth_rad=az, wind=wind,
                                current=current_input(xe[:, CUR]), accel_ext=acc)
@@ -462,6 +508,8 @@ class EnvironmentEstimator:
                                  if config.thrust_error_model == "per_dof"
                                  else np.full(n_theta, config.thrust_error_prior_per_thruster))
         self._shared_runs = None        # see sharing_station_keeping
+        #: ``A`` of :func:`load_map` with the load a force; None with the load an acceleration.
+        self.load_map = load_map(model, config.load_model)
 
     # ------------------------------------------------------------------ learning
 
@@ -680,7 +728,8 @@ class EnvironmentEstimator:
                              f"(time {seconds_text(arrays.time_s[miss[0]])} s) to start the environment estimate")
         rows = rows[np.array([int(r) in out_P for r in rows], dtype=bool)] if rows.size > n_req else rows
         return EnvironmentEstimate(rows, arrays.time_s[rows], np.stack([out_x[int(r)] for r in rows]),
-                                   np.stack([out_P[int(r)] for r in rows]), self.config.thrust_error_model)
+                                   np.stack([out_P[int(r)] for r in rows]), self.config.thrust_error_model,
+                                   self.load_map)
 
     def _log_inputs(self, arrays, first_row: int, last: int) -> dict:
         """Measurements, their noise and the model's inputs at the rows ``first_row .. last`` (zero elsewhere)."""
@@ -822,7 +871,8 @@ class EnvironmentEstimator:
                            int(c.max_gated_samples), float(c.settle_s), float(c.max_bridged_gap_s),
                            float(np.prod(self._filter_every(arrays))), resume is not None,
                            np.ascontiguousarray(x_resume, dtype=float), np.ascontiguousarray(P_resume, dtype=float),
-                           settle_io, gate_io, xs, Ps, done)
+                           settle_io, gate_io, xs, Ps, done,
+                           np.zeros((0, 3)) if self.load_map is None else self.load_map)
         for k, i in enumerate(want):
             if done[k]:
                 out_x[i], out_P[i] = xs[k], Ps[k]

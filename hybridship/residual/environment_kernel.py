@@ -64,14 +64,25 @@ def _thrust_basis(x, rpm, prep, P, per_thruster, zeros3, thrusts, T):
 
 
 @numba.njit(cache=True)
-def _external_accel(x, T, drift_yaw_uv, out):
+def _external_accel(x, T, drift_yaw_uv, load_map, out):
     """``R(psi)^T b + T theta``, plus the hull's yaw moment in a drift ``k u v`` (``drift_yaw_uv``
-    = k [rad/m^2], 0 while the thrusters run): the filter's extra body-frame acceleration (3,)."""
+    = k [rad/m^2], 0 while the thrusters run): the filter's extra body-frame acceleration (3,).
+
+    ``load_map`` (3, 3) makes the load a force: ``A [R(psi)^T b_ne; b_yaw]`` in place of
+    ``[R(psi)^T b_ne; b_yaw]`` (``A = M^-1 diag(m_ref, m_ref, I_ref)``, the load a NED force and
+    a yaw moment per reference mass and inertia); an empty (0, 3) map: the load is an
+    acceleration (the default)."""
     c, s = math.cos(x[2]), math.sin(x[2])
     bn, be = x[_LOAD], x[_LOAD + 1]
-    out[0] = c * bn + s * be
-    out[1] = -s * bn + c * be
-    out[2] = x[_LOAD + 2] + drift_yaw_uv * x[3] * x[4]
+    if load_map.shape[0] == 0:
+        out[0] = c * bn + s * be
+        out[1] = -s * bn + c * be
+        out[2] = x[_LOAD + 2] + drift_yaw_uv * x[3] * x[4]
+    else:
+        fu, fv, fr = c * bn + s * be, -s * bn + c * be, x[_LOAD + 2]
+        for i in range(3):
+            out[i] = load_map[i, 0] * fu + load_map[i, 1] * fv + load_map[i, 2] * fr
+        out[2] += drift_yaw_uv * x[3] * x[4]
     for j in range(T.shape[1]):
         for i in range(3):
             out[i] += T[i, j] * x[_THR + j]
@@ -90,7 +101,7 @@ def _rk4(x, dt, rpm, prep, acc, P, f, work):
 
 
 @numba.njit(cache=True)
-def _transition(x, dt, rpm, az, wind, P, per_thruster, drift_yaw_uv, f, work, T, acc, prep_ready=False):
+def _transition(x, dt, rpm, az, wind, P, per_thruster, drift_yaw_uv, load_map, f, work, T, acc, prep_ready=False):
     """One process-model step of the state ``x`` into ``f``: RK4 of the dynamic model with
     the current and the external acceleration of :func:`_external_accel` (left in ``T`` and
     ``acc``); the environment states are random walks (kept). With ``prep_ready``,
@@ -99,7 +110,7 @@ def _transition(x, dt, rpm, az, wind, P, per_thruster, drift_yaw_uv, f, work, T,
     if not prep_ready:
         _prep_for(x, rpm, az, wind, P, prep)
     _thrust_basis(x, rpm, prep, P, per_thruster, work[1], work[2], T)
-    _external_accel(x, T, drift_yaw_uv, acc)
+    _external_accel(x, T, drift_yaw_uv, load_map, acc)
     _rk4(x, dt, rpm, prep, acc, P, f, work)
     for i in range(6, x.size):
         f[i] = x[i]
@@ -113,7 +124,7 @@ def _workspace(P):
 
 
 @numba.njit(cache=True)
-def predict(x, Pc, dt, rpm, az, wind, Q, fd_step, P, per_thruster, drift_yaw_uv, work):
+def predict(x, Pc, dt, rpm, az, wind, Q, fd_step, P, per_thruster, drift_yaw_uv, load_map, work):
     """EKF time update over ``dt`` [s]: the mean through the process model, the covariance
     through its Jacobian ``F``. Returns ``(x, P)`` (new arrays).
 
@@ -122,14 +133,15 @@ def predict(x, Pc, dt, rpm, az, wind, Q, fd_step, P, per_thruster, drift_yaw_uv,
     structure, which saves most of the model steps: position does not enter the dynamics
     (unit columns); the load ``b`` and the thrust error ``theta`` enter only through the
     held external acceleration ``acc = R(psi)^T b + T theta``, so their columns are the
-    step's sensitivity to ``acc`` (three differences) times ``R(psi)^T`` and ``T``.
+    step's sensitivity to ``acc`` (three differences) times ``R(psi)^T`` and ``T`` (with a
+    force ``load_map`` ``A``: ``A blockdiag(R(psi)^T, 1)``, see :func:`_external_accel`).
     """
     n = x.size
     n_theta = n - _THR
     f0 = np.empty(n)
     T = np.empty((3, n_theta))
     acc = np.empty(3)
-    _transition(x, dt, rpm, az, wind, P, per_thruster, drift_yaw_uv, f0, work, T, acc)
+    _transition(x, dt, rpm, az, wind, P, per_thruster, drift_yaw_uv, load_map, f0, work, T, acc)
     F = np.zeros((n, n))
     for j in range(n):
         if j < 2 or j >= _LOAD:
@@ -152,15 +164,22 @@ def predict(x, Pc, dt, rpm, az, wind, Q, fd_step, P, per_thruster, drift_yaw_uv,
         xp[j] = x[j] + fd_step[j]
         # the prepared inputs depend on the current alone: those of x serve the heading
         # and the velocities
-        _transition(xp, dt, rpm, az, wind, P, per_thruster, drift_yaw_uv, fj, work, T_j, acc_j, j < _CUR)
+        _transition(xp, dt, rpm, az, wind, P, per_thruster, drift_yaw_uv, load_map, fj, work, T_j, acc_j, j < _CUR)
         for i in range(n):
             F[i, j] = (fj[i] - f0[i]) / fd_step[j]
         xp[j] = x[j]
     c, s = math.cos(x[2]), math.sin(x[2])
+    GA = G
+    if load_map.shape[0] != 0:                  # a force: d acc / d b = A blockdiag(R(psi)^T, 1)
+        GA = np.zeros((6, 3))
+        for i in range(6):
+            for k in range(3):
+                for d in range(3):
+                    GA[i, k] += G[i, d] * load_map[d, k]
     for i in range(6):
-        F[i, _LOAD] = c * G[i, 0] - s * G[i, 1]          # d acc / d b = R(psi)^T
-        F[i, _LOAD + 1] = s * G[i, 0] + c * G[i, 1]
-        F[i, _LOAD + 2] = G[i, 2]
+        F[i, _LOAD] = c * GA[i, 0] - s * GA[i, 1]        # d acc / d b = R(psi)^T
+        F[i, _LOAD + 1] = s * GA[i, 0] + c * GA[i, 1]
+        F[i, _LOAD + 2] = GA[i, 2]
         for j in range(n_theta):                         # d acc / d theta = T
             F[i, _THR + j] = G[i, 0] * T[0, j] + G[i, 1] * T[1, j] + G[i, 2] * T[2, j]
     return f0, F @ Pc @ F.T + Q
@@ -405,7 +424,7 @@ def _cut_motion_environment(Pc):
 def filter_grid(grid, slot, t, seg, z, z_ok, r_std, rpm, az, wind, dp, cmd_known, P, per_thruster, prior_thr,
                 prior_sd, q_base, q_base_stopped, fd_step, reset_at_stop, kept, stop_std, yaw_prior, current_stop_std,
                 load_to_current, drift_yaw_uv, gate, max_gated, settle_s, max_bridge_s, step_s, resume, x_resume,
-                P_resume, settle_io, gate_io, out_x, out_P, done):
+                P_resume, settle_io, gate_io, out_x, out_P, done, load_map):
     """Run the filter over the log rows ``grid`` (increasing).
 
     At a row ``i`` with ``slot[i] >= 0`` the estimate goes to ``out_x[slot[i]]``,
@@ -482,7 +501,7 @@ def filter_grid(grid, slot, t, seg, z, z_ok, r_std, rpm, az, wind, dp, cmd_known
             for _ in range(n_sub):
                 q = process_noise(h, q_base if dp[prev] else q_base_stopped)
                 x, Pc = predict(x, Pc, h, rpm[prev], az[prev], wind[prev], q, fd_step, P, per_thruster,
-                                0.0 if dp[prev] else drift_yaw_uv, work)
+                                0.0 if dp[prev] else drift_yaw_uv, load_map, work)
             if t[i] <= settle_until or not cmd_known[prev]:
                 _cut_motion_environment(Pc)
             x, Pc = update(x, Pc, z[i], z_ok[i], r_std[i], gate, max_gated, gate_state)

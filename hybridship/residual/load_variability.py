@@ -99,7 +99,7 @@ def unexplained_load_std_windows(model, arrays, estimate, first, stop, block_row
         return out
     x, rows = estimate.x, estimate.rows
     eta, nu = x[:, 0:3], x[:, 3:6]
-    ext = external_accel(eta[:, 2], x[:, LOAD], 0.0, 0.0) + thrust_error_accel(
+    ext = external_accel(eta[:, 2], x[:, LOAD], 0.0, 0.0, estimate.load_map) + thrust_error_accel(
         model, estimate.thrust_error_model, eta, nu, arrays.rpm[rows], arrays.azimuth_rad[rows],
         arrays.wind[rows], x[:, CUR], x[:, THR])
     acc = model.acceleration(eta, nu, rpm=arrays.rpm[rows], azimuth_rad=arrays.azimuth_rad[rows],
