@@ -25,6 +25,37 @@ ROOT = Path(__file__).resolve().parents[1]
 SHARED_DATA = ROOT.parent / "shared" / "data"
 
 
+def vessel_dict(name: str) -> dict:
+    """A packaged vessel file as a dict (to edit before :func:`model_from`)."""
+    import tomllib
+
+    from hybridship.vessel import packaged_vessel_text
+
+    return tomllib.loads(packaged_vessel_text(name))
+
+
+def model_from(d: dict):
+    """The dynamic model of a vessel dict (validated as a vessel file would be)."""
+    from hybridship.physics.model import DynamicModel
+    from hybridship.vessel import vessel_from_dict
+
+    return DynamicModel(vessel_from_dict(d, "test.toml"))
+
+
+def decoupled_model(linear: dict, nonlinear: dict):
+    """Gunnerus's masses with the CG at the origin and no sway-yaw added-mass coupling, no
+    actuators and no wind, with the damping ``linear`` and ``nonlinear``: a pure surge, sway
+    (r = 0) or yaw (u = v = 0) motion has no Coriolis load and stays in its DOF, so its free
+    decay has a closed form."""
+    d = vessel_dict("gunnerus")
+    d["rigid_body"]["x_g_m"] = 0.0
+    d["added_mass"].update(Y_rdot_kg_m=0.0, N_vdot_kg_m=0.0)
+    d["damping"] = {"linear": linear, "nonlinear": nonlinear}
+    d["thrusters"] = []
+    d["wind"] = {"method": "none"}
+    return model_from(d)
+
+
 def load_benchmark(name: str):
     """The script ``benchmarks/<name>.py`` as a module (the scripts are not a package)."""
     import importlib.util

@@ -501,17 +501,24 @@ def test_load_re_explained_as_a_current_at_the_stop_finds_the_current_that_makes
     assert 0.1 < np.hypot(*half[6:8]) < 0.3
 
 
-def test_hybrid_forecasts_after_a_failure_use_the_drift_samples(model):
-    """Forecasts started 1..19 s after the failure use the estimate at their own start: a
-    forecast from start k equals the one made from a log cut right after k, and differs from
-    the one made without the drift samples since the failure."""
+@pytest.fixture(scope="module")
+def drift_forecasts(model):
+    """A hybrid fitted on one log's station keeping, and its forecasts from the 1..19 s after
+    another log's failure: ``(hp, test_log, t_failure_s, starts_s, forecast)``."""
     logs = [physics_log(model, duration_s=1100, t_shutdown_s=900, seed=s, tau_ext_N=(3000.0, -2000.0, 0.0))
             for s in (8, 9)]
     hp = HybridPredictor(model.vessel, ensemble_config=TINY).fit(logs[:1])
     test = logs[1]
     t0 = float(test.time_s[np.flatnonzero(test.dp_active.to_numpy() == 0)[0]])
     starts = t0 + np.arange(1, 20)
-    full = hp.forecast(test, starts, 60.0)
+    return hp, test, t0, starts, hp.forecast(test, starts, 60.0)
+
+
+def test_hybrid_forecasts_after_a_failure_use_the_drift_samples(drift_forecasts):
+    """Forecasts started 1..19 s after the failure use the estimate at their own start: a
+    forecast from start k equals the one made from a log cut right after k, and differs from
+    the one made without the drift samples since the failure."""
+    hp, test, t0, starts, full = drift_forecasts
     k = 10
     cut = test[test.time_s <= starts[k] + 60.0].reset_index(drop=True)
     again = hp.forecast(cut, [starts[k]], 60.0)
@@ -520,19 +527,13 @@ def test_hybrid_forecasts_after_a_failure_use_the_drift_samples(model):
     assert not np.allclose(est.load_accel[0], est.load_accel[-1])
 
 
-def test_every_forecast_after_a_failure_reads_its_drift_up_to_its_start_and_nothing_after(model):
+def test_every_forecast_after_a_failure_reads_its_drift_up_to_its_start_and_nothing_after(drift_forecasts):
     """For each start 1..19 s after the failure: changing every measured channel after the
     start (positions, heading, velocities, wind; some positions missing) leaves its forecast
     and spread bit for bit; moving the drift's positions between the failure and the start by
     0.5 m moves the forecast, and withholding the drift samples changes the environment the
     forecast starts from (the estimate at the start is not the station keeping's held)."""
-    logs = [physics_log(model, duration_s=1100, t_shutdown_s=900, seed=s, tau_ext_N=(3000.0, -2000.0, 0.0))
-            for s in (8, 9)]
-    hp = HybridPredictor(model.vessel, ensemble_config=TINY).fit(logs[:1])
-    test = logs[1]
-    t0 = float(test.time_s[np.flatnonzero(test.dp_active.to_numpy() == 0)[0]])
-    starts = t0 + np.arange(1, 20)
-    full = hp.forecast(test, starts, 60.0)
+    hp, test, t0, starts, full = drift_forecasts
     env = hp.environment_estimate(test, starts).x[:, ENV]
     measured = ["north_m", "east_m", "heading_deg", "u_m_s", "v_m_s", "r_deg_s", "wind_speed_m_s", "wind_dir_deg"]
     for k, start in enumerate(starts):

@@ -5,7 +5,6 @@ steady speed) and batching; the published-value checks are in ``test_physics_pub
 from __future__ import annotations
 
 import copy
-import tomllib
 
 import numpy as np
 import pytest
@@ -19,17 +18,11 @@ from hybridship.physics.model import TAU_PARTS, DynamicModel
 from hybridship.physics.propeller import load_wageningen, thrust_torque
 from hybridship.physics import wind
 from hybridship.physics.wind import relative_wind
-from hybridship.vessel import VesselFileError, packaged_vessel_text, vessel_from_dict
+from hybridship.vessel import VesselFileError, vessel_from_dict
+
+from conftest import decoupled_model, model_from, vessel_dict
 
 HULL = TAU_PARTS.index("hull")
-
-
-def vessel_dict(name: str) -> dict:
-    return tomllib.loads(packaged_vessel_text(name))
-
-
-def model_from(d: dict) -> DynamicModel:
-    return DynamicModel(vessel_from_dict(d, "test.toml"))
 
 
 def _no_wind(name, nonlinear=None, **rigid_body):
@@ -48,19 +41,6 @@ NO_WIND = {"gunnerus": _no_wind("gunnerus", x_g_m=1.3),      # off-centre CG: th
            # explicit quadratic damping -d |x_r| x_r in every DOF (the packaged files use cross-flow strips)
            "gunnerus_quadratic": _no_wind("gunnerus", {"method": "quadratic", "d_uu": 3000.0, "d_vv": 2.0e4,
                                                        "d_rr": 2.0e7})}
-
-
-def decoupled_model(linear, nonlinear) -> DynamicModel:
-    """Gunnerus's masses with the CG at the origin and no sway-yaw added-mass coupling, no
-    actuators and no wind: a pure sway (r = 0) or pure yaw (u = v = 0) motion has no
-    Coriolis load and stays in its DOF, so its free decay has a closed form."""
-    d = vessel_dict("gunnerus")
-    d["rigid_body"]["x_g_m"] = 0.0
-    d["added_mass"].update(Y_rdot_kg_m=0.0, N_vdot_kg_m=0.0)
-    d["damping"] = {"linear": linear, "nonlinear": nonlinear}
-    d["thrusters"] = []
-    d["wind"] = {"method": "none"}
-    return model_from(d)
 
 
 # ----------------------------------------------------------------------------- current

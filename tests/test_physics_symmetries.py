@@ -9,34 +9,14 @@ current's Galilean invariance are in ``test_physics_invariants.py``."""
 from __future__ import annotations
 
 import math
-import tomllib
 
 import numpy as np
 import pytest
 
 from hybridship import frames
 from hybridship.physics.model import DynamicModel
-from hybridship.vessel import packaged_vessel_text, vessel_from_dict
 
-
-def vessel_dict(name: str) -> dict:
-    return tomllib.loads(packaged_vessel_text(name))
-
-
-def model_from(d: dict) -> DynamicModel:
-    return DynamicModel(vessel_from_dict(d, "test.toml"))
-
-
-def decoupled(linear: dict, nonlinear: dict) -> DynamicModel:
-    """Gunnerus's masses, CG at the origin, no sway-yaw added-mass coupling, no actuators, no
-    wind: a motion in one DOF (u alone, v alone, r alone) has no Coriolis load and stays there."""
-    d = vessel_dict("gunnerus")
-    d["rigid_body"]["x_g_m"] = 0.0
-    d["added_mass"].update(Y_rdot_kg_m=0.0, N_vdot_kg_m=0.0)
-    d["damping"] = {"linear": linear, "nonlinear": nonlinear}
-    d["thrusters"] = []
-    d["wind"] = {"method": "none"}
-    return model_from(d)
+from conftest import decoupled_model, model_from, vessel_dict
 
 
 LIN = {"method": "time_constants", "T_surge_s": 200.0, "T_sway_s": 100.0, "T_yaw_s": 50.0}
@@ -50,7 +30,7 @@ def test_linear_plus_quadratic_free_decay_has_its_closed_form():
     """``M x_dot = -d_l x - d_q |x| x`` (a = d_l / M, b = d_q / M) has, for either sign of x_0,
     ``x(t) = a x_0 e^(-a t) / (a + b |x_0| (1 - e^(-a t)))`` and the travelled distance
     ``sgn(x_0) ln(1 + b |x_0| (1 - e^(-a t)) / a) / b``; in surge, sway and yaw alike."""
-    m = decoupled(LIN, QUAD)
+    m = decoupled_model(LIN, QUAD)
     M = np.diag(m.mass_matrix)
     d_l = np.diag(m.arrays.d_lin)
     d_q = m.arrays.d_quad
@@ -75,7 +55,7 @@ def test_linear_plus_quadratic_free_decay_has_its_closed_form():
 def test_a_constant_load_gives_the_steady_velocity_of_the_damping_balance(sign):
     """A constant external load tau in one DOF: ``d_l x* + d_q |x*| x* = tau``, so
     ``x* = sgn(tau) (-d_l + sqrt(d_l^2 + 4 d_q |tau|)) / (2 d_q)``, and the acceleration is 0 there."""
-    m = decoupled(LIN, QUAD)
+    m = decoupled_model(LIN, QUAD)
     d_l = np.diag(m.arrays.d_lin)
     d_q = m.arrays.d_quad
     for i, load in enumerate((2.0e4, 1.0e4, 5.0e5)):

@@ -31,7 +31,7 @@ import pandas as pd
 
 from ..config import as_config, check_whole_number
 from ..forecast_inputs.limits import check_or_clip_inputs
-from ..frames import vector_to_speed_dir
+from ..frames import body_to_ned, vector_to_speed_dir
 from ..logs.io import LogArrays
 from ..residual.features import ResidualConfig, prepare_log
 from . import engine, spread
@@ -316,9 +316,7 @@ def _estimated(model, a: LogArrays, idx: int, n_members: int, seed: int, config=
 def _force_as_ned_accel(load, psi_rad: float, load_map) -> np.ndarray:
     """The NED acceleration (..., 3) of the estimator's force load (..., 3) at the heading ``psi_rad``."""
     from ..residual.environment import external_accel
-    body = external_accel(np.full(np.shape(load)[:-1], psi_rad), np.asarray(load, float), 0.0, 0.0, load_map)
-    c, s = np.cos(psi_rad), np.sin(psi_rad)
-    return np.stack([c * body[..., 0] - s * body[..., 1], s * body[..., 0] + c * body[..., 1], body[..., 2]], axis=-1)
+    return body_to_ned(external_accel(psi_rad, np.asarray(load, float), 0.0, 0.0, load_map), psi_rad)
 
 
 def _check_estimate(estimate: EnvironmentEstimate, n_thrusters: int) -> None:

@@ -74,7 +74,7 @@ import pandas as pd
 from pydantic import BaseModel, ConfigDict, Field, model_validator
 
 from ..config import Bool, start_time_rng
-from ..frames import vector_to_speed_dir
+from ..frames import ned_to_body, vector_to_speed_dir
 from ..forecast_inputs.faults import TRACK_MISMATCH_M, TRACK_WINDOW_S, velocity_track_mismatch_m
 from ..messages import seconds_text
 from . import environment_kernel as kernel
@@ -421,9 +421,7 @@ def external_accel(psi_rad, load_ned, theta, a_thr, load_map=None) -> np.ndarray
     c, s = np.cos(psi_rad), np.sin(psi_rad)
     out = np.zeros(np.shape(load_ned)) + theta * np.asarray(a_thr)
     if load_map is not None:
-        body = np.stack([c * load_ned[..., 0] + s * load_ned[..., 1], -s * load_ned[..., 0] + c * load_ned[..., 1],
-                         load_ned[..., 2]], axis=-1)
-        return out + body @ np.asarray(load_map).T
+        return out + ned_to_body(load_ned, psi_rad) @ np.asarray(load_map).T
     out[..., 0] += c * load_ned[..., 0] + s * load_ned[..., 1]
     out[..., 1] += -s * load_ned[..., 0] + c * load_ned[..., 1]
     out[..., 2] += load_ned[..., 2]
