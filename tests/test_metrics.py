@@ -31,6 +31,25 @@ def test_paper_and_reduction_tables_put_first_5_before_first_20():
     long = pd.DataFrame(rows)
     assert metrics.paper_table(long).loc[("hybrid", "north_m"), "60 s"] == "1.00/3.00"
     assert metrics.reduction_table(long, "hybrid").loc["east_m", "60 s"] == "50/25"
+    assert metrics.ratio_table(long, "hybrid").loc["yaw_deg", "60 s"] == "0.50/0.75"
+
+
+def test_every_committed_drift_table_states_its_ratio_from_its_own_errors():
+    """The `hybrid`/`dynamic` ratios quoted in the docs are each folder's tables.md, and that
+    block and Table 3 are what its errors.csv gives (a re-rendered block cannot drift)."""
+    from pathlib import Path
+
+    from hybridship.evaluation.drift import ratio_markdown
+
+    folders = [p.parent for p in sorted((Path(__file__).resolve().parents[1] / "docs" / "results").glob(
+        "drift-*/tables.md")) if "### Table 3: % error reduction of `hybrid` relative" in p.read_text()]
+    assert len(folders) >= 3
+    for folder in folders:
+        long = pd.read_csv(folder / "errors.csv")
+        text = (folder / "tables.md").read_text()
+        assert ratio_markdown(metrics.ratio_table(long, "hybrid")) in text, folder.name
+        red = metrics.reduction_table(long, "hybrid")
+        assert "| 60 s |" in text and f"| yaw_deg | {' | '.join(red.loc['yaw_deg'])} |" in text, folder.name
 
 
 def test_coverage_counts_north_and_east_and_the_band_edge():

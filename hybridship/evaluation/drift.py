@@ -245,8 +245,9 @@ def run_drift_benchmark(train=None, test=None, out_dir="drift-benchmark", *, ves
     outputs = {name: _write_csv(out / name, table) for name, table in tables.items()}
     table2, table3 = ((metrics.paper_table(long, windows=windows), {m: metrics.reduction_table(
         long, m, windows=windows) for m in TABLE3_MODELS}) if len(windows) == 2 else (long, {}))
+    ratio = metrics.ratio_table(long, "hybrid", windows=windows) if len(windows) == 2 else None
     md = _markdown(table2, table3, coverage, intervals, timing, test_names, len(train_arrays), ens_cfg,
-                   n_intervals, per_log_long, heading_cov)
+                   n_intervals, per_log_long, heading_cov, ratio)
     outputs["tables.md"] = write_text(out / "tables.md", md)
     outputs.update(_figures(out, plots, fc, all_h, test_arrays, test_names))
     record_outputs(out, outputs, removed=() if plots else FIGURE_FILES)
@@ -678,7 +679,7 @@ def _per_log_markdown(per_log: pd.DataFrame, model: str = "hybrid", reference: s
 
 
 def _markdown(table2, table3, coverage, intervals, timing, test_names, n_train, ens_cfg, n_intervals,
-              per_log=None, heading_cov=None) -> str:
+              per_log=None, heading_cov=None, ratio=None) -> str:
     # No top-level heading: the file reads on its own and is also included in the docs pages.
     parts = [f"Drift benchmark. Test logs: {', '.join(test_names)}; trained on {n_train} logs; "
              f"{ens_cfg.n_members}-member ensembles, seed {ens_cfg.seed}; {n_intervals} forecasts after each "
@@ -687,6 +688,8 @@ def _markdown(table2, table3, coverage, intervals, timing, test_names, n_train, 
              _md_table(table2)]
     for m, t in table3.items():
         parts += [f"\n### Table 3: % error reduction of `{m}` relative to `dynamic` (5/20)\n", _md_table(t)]
+    if ratio is not None:
+        parts.append(ratio_markdown(ratio))
     parts.append(_coverage_markdown(coverage))
     ci = intervals.assign(cell=[f"{c:.2f} [{lo:.2f}, {hi:.2f}]" for c, lo, hi in
                                 zip(intervals.coverage, intervals.low, intervals.high)])
@@ -705,6 +708,12 @@ def _markdown(table2, table3, coverage, intervals, timing, test_names, n_train, 
                      "each log are in `errors_per_log.csv`.)\n")
     parts += ["\n### Wall time [s]\n", _md_table(timing.assign(seconds=timing.seconds.round(2)).set_index("model"))]
     return "\n".join(parts) + "\n"
+
+
+def ratio_markdown(ratio: pd.DataFrame) -> str:
+    """``tables.md``'s block of :func:`~hybridship.evaluation.metrics.ratio_table` for ``hybrid``."""
+    return ("\n### `hybrid` as a ratio to `dynamic` (5/20)\n\nMean absolute error of `hybrid` over that of "
+            "`dynamic` on the same starts; below 1 is better than the physics alone.\n\n" + _md_table(ratio))
 
 
 def _coverage_markdown(coverage: pd.DataFrame) -> str:

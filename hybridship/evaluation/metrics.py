@@ -252,10 +252,23 @@ def paper_table(long: pd.DataFrame, *, windows=WINDOWS) -> pd.DataFrame:
 
 def reduction_table(long: pd.DataFrame, model: str, reference: str = "dynamic", *, windows=WINDOWS) -> pd.DataFrame:
     """The paper's Table 3: % error reduction of ``model`` relative to ``reference``, "5/20"."""
-    def pct(w):
+    return _two_window_cells(long, model, reference, windows,
+                             lambda r: (100.0 * (1.0 - r)).round().astype(int).astype(str))
+
+
+def ratio_table(long: pd.DataFrame, model: str, reference: str = "dynamic", *, windows=WINDOWS) -> pd.DataFrame:
+    """The mean absolute error of ``model`` over that of ``reference``, to two decimals, "5/20"
+    (below 1: better than the reference; Table 3's reduction is 100 (1 - ratio) %)."""
+    return _two_window_cells(long, model, reference, windows, lambda r: r.map(lambda x: f"{x:.2f}"))
+
+
+def _two_window_cells(long: pd.DataFrame, model: str, reference: str, windows, fmt) -> pd.DataFrame:
+    """``fmt`` of the error ratio ``model / reference`` per state and horizon, the two windows
+    as "a/b" (states as rows, horizons as columns)."""
+    def cell(w):
         s = long[long.window == w].set_index(["model", "state", "horizon_s"])["mae"]
-        return (100.0 * (1.0 - s[model] / s[reference])).round().astype(int)
+        return fmt(s[model] / s[reference])
     lo, hi = windows
-    cells = (pct(lo).astype(str) + "/" + pct(hi).astype(str)).unstack("horizon_s")
+    cells = (cell(lo) + "/" + cell(hi)).unstack("horizon_s")
     cells.columns = [f"{c:g} s" for c in cells.columns]
     return cells.reindex(list(STATES))
