@@ -43,6 +43,7 @@ import pandas as pd
 from hybridship.driftoff.spread import draw_scales
 from hybridship.evaluation import metrics
 from hybridship.evaluation.drift import log_files
+from hybridship.fileio import write_text
 from hybridship.predictors import AFTER_STOP, HybridPredictor, as_log_arrays
 from hybridship.predictors.hybrid import leave_one_out_after_stop_scales
 from hybridship.residual.ensemble import EnsembleConfig
@@ -99,7 +100,16 @@ def main(argv=None) -> int:
                     help="also score this many fresh scenarios of our own (seeds 100 on; default 0)")
     ap.add_argument("--held-load-window-s", type=float, default=EnvironmentConfig().held_load_window_s,
                     help="station keeping read for the held-load term of the spread [s] (0: no such term)")
+    ap.add_argument("--out", type=Path, default=None,
+                    help="also write the table, headed by its command, to this Markdown file")
     args = ap.parse_args(argv)
+    lines = [f"Command: `python benchmarks/after_stop_calibration.py {' '.join(argv if argv is not None else sys.argv[1:])}`",
+             ""]
+
+    def say(line: str) -> None:
+        print(line, flush=True)
+        lines.append(line)
+
     cfg = EnvironmentConfig(**(PER_DOF if args.thrust_error_model == "per_dof" else {}),
                             held_load_window_s=args.held_load_window_s)
     cal = calibration_logs(args.n, args.seed, args.beaufort, args.dp_s, args.vessel_spread, args.heading_mode) \
@@ -114,10 +124,12 @@ def main(argv=None) -> int:
     source = (f"{args.n} simulated DP losses, Beaufort {args.beaufort[0]:g}-{args.beaufort[1]:g}, "
               f"{args.dp_s:g} s of DP, hull spread {args.vessel_spread:g}" if args.source == "simulated"
               else "each log on the data set's other failures (leave one out)")
-    print(f"calibration: {source}; thrust error {args.thrust_error_model}; "
-          f"held-load window {args.held_load_window_s:g} s")
-    print("| data | sigma | " + " | ".join(f"{h:g} s" for h in HORIZONS_S) + " |")
-    print("| --- | --- | " + " | ".join("---" for _ in HORIZONS_S) + " |")
+    say(f"calibration: {source}; thrust error {args.thrust_error_model}; "
+        f"held-load window {args.held_load_window_s:g} s; coverage of the north/east errors of the first 20 "
+        f"starts after each failure, with a 90 % interval that resamples whole failures")
+    say("")
+    say("| data | sigma | " + " | ".join(f"{h:g} s" for h in HORIZONS_S) + " |")
+    say("| --- | --- | " + " | ".join("---" for _ in HORIZONS_S) + " |")
     for name, logs in data.items():
         arrays = [as_log_arrays(x, "gunnerus") for x in logs]
         # scored on the training logs' own drifts: nothing is learned from them (drift_hull off)
@@ -127,14 +139,17 @@ def main(argv=None) -> int:
             hp.calibrate_after_stop(cal)
             fc = [metrics.drift_forecasts(hp, a, n_intervals=20, horizons_s=HORIZONS_S) for a in arrays]
         elif len(arrays) < 3:
-            print(f"| {name} | | too few failures ({len(arrays)}) to leave one out |")
+            say(f"| {name} | | too few failures ({len(arrays)}) to leave one out |")
             continue
         else:
             fc = _leave_one_out(hp, arrays)
         P, T, S = (np.stack([f[i] for f in fc]) for i in range(3))       # (logs, starts, horizons, 3)
         for k in (1, 2):
             ci = metrics.coverage_interval(P, T, S, k, seed=args.seed)
-            print(f"| {name} | {k} | " + " | ".join(f"{c:.2f} [{lo:.2f}, {hi:.2f}]" for c, lo, hi in ci) + " |")
+            say(f"| {name} | {k} | " + " | ".join(f"{c:.2f} [{lo:.2f}, {hi:.2f}]" for c, lo, hi in ci) + " |")
+    if args.out is not None:
+        args.out.parent.mkdir(parents=True, exist_ok=True)
+        write_text(args.out, "\n".join(lines) + "\n")
     return 0
 
 
