@@ -72,19 +72,23 @@ def main(argv=None) -> int:
     model = DynamicModel("gunnerus")
     df = pd.concat([drift_residual(model, pd.read_csv(f), args.cutoff_hz) for f in files], ignore_index=True)
     y = df.res_r.to_numpy()
-    rows = []
+    rows, munk_fits = [], []
     for cols in (["u_r v_r"], ["abs(v_r) v_r"], ["r"], ["v_r"], ["u_r v_r", "abs(v_r) v_r", "r", "v_r"]):
         X = np.column_stack([df[c].to_numpy() for c in cols] + [np.ones(len(df))])
         coef, *_ = np.linalg.lstsq(X, y, rcond=None)
         r2 = 1.0 - np.var(y - X @ coef) / np.var(y)
         rows.append({"terms": " + ".join(cols), "coefficients": ", ".join(f"{c:.3g}" for c in coef[:-1]),
                      "R^2": f"{r2:.2f}"})
+        if cols[0] == "u_r v_r":
+            munk_fits.append(("alone" if len(cols) == 1 else "with the other terms", coef[0]))
     M, m_a = model.mass_matrix, model.arrays.m_a
+    munk = (m_a[1, 1] - m_a[0, 0]) / M[2, 2]
     lines = [f"{len(files)} truthsim-dev logs, {len(df)} drift samples: the yaw-acceleration residual of the hull "
              f"model given the simulator's motion, current and loads [rad/s^2], regressed on hull terms.", "",
              markdown_table(pd.DataFrame(rows)), "",
              f"The model's Munk coefficient (m_22 - m_11) / m_33 (added masses): "
-             f"{(m_a[1, 1] - m_a[0, 0]) / M[2, 2]:.3g} rad/s^2 per (m/s)^2."]
+             f"{munk:.3g} rad/s^2 per (m/s)^2. The u_r v_r coefficient as a multiple of it: "
+             + "; ".join(f"{c / munk:.2f} {how}" for how, c in munk_fits) + "."]
     text = "\n".join(lines) + "\n"
     args.out.mkdir(parents=True, exist_ok=True)
     atomic_write(args.out / "hull_yaw_residual.md", lambda fh: fh.write(text.encode("utf-8")))
