@@ -66,7 +66,7 @@ def test_tables_have_the_papers_layout_and_physics_is_exact_on_its_own_logs(tiny
     table = (tmp_path / "out" / "tables.md").read_text()
     assert "| hybrid_nets_unguarded | north_m |" in table and "/" in table.split("| hybrid | north_m |")[1].split("\n")[0]
     assert res.table2.shape == (18, 4)
-    assert ratio_markdown(metrics.ratio_table(errors, "hybrid")) in table      # the targets' form, printed
+    assert ratio_markdown(metrics.pooled_ratio_table(errors, "hybrid")) in table      # the targets' form, printed
     # per log: the same cells for each failure, whose mean over the logs is the pooled cell
     # (every log has the same number of starts)
     per = pd.read_csv(tmp_path / "out" / "errors_per_log.csv")

@@ -31,7 +31,7 @@ def test_paper_and_reduction_tables_put_first_5_before_first_20():
     long = pd.DataFrame(rows)
     assert metrics.paper_table(long).loc[("hybrid", "north_m"), "60 s"] == "1.00/3.00"
     assert metrics.reduction_table(long, "hybrid").loc["east_m", "60 s"] == "50/25"
-    assert metrics.ratio_table(long, "hybrid").loc["yaw_deg", "60 s"] == "0.50/0.75"
+    assert metrics.pooled_ratio_table(long, "hybrid").loc["yaw_deg", "60 s"] == "0.50/0.75"
 
 
 def test_every_committed_drift_table_states_its_ratio_from_its_own_errors():
@@ -47,7 +47,7 @@ def test_every_committed_drift_table_states_its_ratio_from_its_own_errors():
     for folder in folders:
         long = pd.read_csv(folder / "errors.csv")
         text = (folder / "tables.md").read_text()
-        assert ratio_markdown(metrics.ratio_table(long, "hybrid")) in text, folder.name
+        assert ratio_markdown(metrics.pooled_ratio_table(long, "hybrid")) in text, folder.name
         red = metrics.reduction_table(long, "hybrid")
         assert "| 60 s |" in text and f"| yaw_deg | {' | '.join(red.loc['yaw_deg'])} |" in text, folder.name
 

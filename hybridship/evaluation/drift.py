@@ -243,11 +243,9 @@ def run_drift_benchmark(train=None, test=None, out_dir="drift-benchmark", *, ves
               "coverage_intervals.csv": intervals, "coverage_heading.csv": heading_cov, "timing.csv": timing,
               "drift_hull.csv": _drift_hull_table(hybrid, per_log_hull, test_names)}
     outputs = {name: _write_csv(out / name, table) for name, table in tables.items()}
-    table2, table3 = ((metrics.paper_table(long, windows=windows), {m: metrics.reduction_table(
-        long, m, windows=windows) for m in TABLE3_MODELS}) if len(windows) == 2 else (long, {}))
-    ratio = metrics.ratio_table(long, "hybrid", windows=windows) if len(windows) == 2 else None
-    md = _markdown(table2, table3, coverage, intervals, timing, test_names, len(train_arrays), ens_cfg,
-                   n_intervals, per_log_long, heading_cov, ratio)
+    table2, table3, ratio = _paper_tables(long, windows)
+    md = _markdown(table2, table3, ratio, coverage, intervals, timing, test_names, len(train_arrays), ens_cfg,
+                   n_intervals, per_log_long, heading_cov)
     outputs["tables.md"] = write_text(out / "tables.md", md)
     outputs.update(_figures(out, plots, fc, all_h, test_arrays, test_names))
     record_outputs(out, outputs, removed=() if plots else FIGURE_FILES)
@@ -678,8 +676,19 @@ def _per_log_markdown(per_log: pd.DataFrame, model: str = "hybrid", reference: s
             f"`errors_per_log.csv`).\n\n" + _md_table(ratio_cells(ratio)))
 
 
-def _markdown(table2, table3, coverage, intervals, timing, test_names, n_train, ens_cfg, n_intervals,
-              per_log=None, heading_cov=None, ratio=None) -> str:
+def _paper_tables(long: pd.DataFrame, windows) -> tuple:
+    """``(table2, table3, ratio)``: the paper's Table 2, its Table 3 per model of
+    :data:`TABLE3_MODELS` and the hybrid's ratio to the physics; with one window, the long
+    table, no Table 3 and no ratio."""
+    if len(windows) != 2:
+        return long, {}, None
+    return (metrics.paper_table(long, windows=windows),
+            {m: metrics.reduction_table(long, m, windows=windows) for m in TABLE3_MODELS},
+            metrics.pooled_ratio_table(long, "hybrid", windows=windows))
+
+
+def _markdown(table2, table3, ratio, coverage, intervals, timing, test_names, n_train, ens_cfg, n_intervals,
+              per_log=None, heading_cov=None) -> str:
     # No top-level heading: the file reads on its own and is also included in the docs pages.
     parts = [f"Drift benchmark. Test logs: {', '.join(test_names)}; trained on {n_train} logs; "
              f"{ens_cfg.n_members}-member ensembles, seed {ens_cfg.seed}; {n_intervals} forecasts after each "
@@ -711,7 +720,7 @@ def _markdown(table2, table3, coverage, intervals, timing, test_names, n_train, 
 
 
 def ratio_markdown(ratio: pd.DataFrame) -> str:
-    """``tables.md``'s block of :func:`~hybridship.evaluation.metrics.ratio_table` for ``hybrid``."""
+    """``tables.md``'s block of :func:`~hybridship.evaluation.metrics.pooled_ratio_table` for ``hybrid``."""
     return ("\n### `hybrid` as a ratio to `dynamic` (5/20)\n\nMean absolute error of `hybrid` over that of "
             "`dynamic` on the same starts; below 1 is better than the physics alone.\n\n" + _md_table(ratio))
 

@@ -22,7 +22,7 @@ STATES = ("north_m", "east_m", "yaw_deg")
 
 __all__ = ["HORIZONS_S", "WINDOWS", "STATES", "drift_forecasts", "shutdown_index", "drift_errors",
            "absolute_errors", "COVERAGE_STATES", "coverage", "coverage_interval", "grouped_coverage_interval",
-           "error_table", "paper_table", "reduction_table"]
+           "error_table", "paper_table", "reduction_table", "pooled_ratio_table"]
 
 
 def drift_errors(predictor, arrays, *, n_intervals: int = 20, horizons_s=HORIZONS_S, **forecast_kw) -> np.ndarray:
@@ -256,8 +256,9 @@ def reduction_table(long: pd.DataFrame, model: str, reference: str = "dynamic", 
                              lambda r: (100.0 * (1.0 - r)).round().astype(int).astype(str))
 
 
-def ratio_table(long: pd.DataFrame, model: str, reference: str = "dynamic", *, windows=WINDOWS) -> pd.DataFrame:
-    """The mean absolute error of ``model`` over that of ``reference``, to two decimals, "5/20"
+def pooled_ratio_table(long: pd.DataFrame, model: str, reference: str = "dynamic", *,
+                       windows=WINDOWS) -> pd.DataFrame:
+    """The mean absolute error (pooled over the logs) of ``model`` over that of ``reference``, to two decimals, "5/20"
     (below 1: better than the reference; Table 3's reduction is 100 (1 - ratio) %)."""
     return _two_window_cells(long, model, reference, windows, lambda r: r.map(lambda x: f"{x:.2f}"))
 
