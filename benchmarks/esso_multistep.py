@@ -241,11 +241,13 @@ def main(argv=None) -> int:
 
 
 def with_command_regime(q, logs, stride):
-    """Fit the command-regime guard of the fine-tuned hybrid ``q`` on the held-back end of its logs (in place)."""
+    """Fit the command-regime guard of the fine-tuned hybrid ``q`` on the held-back end of its logs (in place),
+    on the rows before the spread calibration's as :meth:`HybridPredictor.fit` does."""
     cal = q.calibration_config
     cuts = [q._calibration_cut(a, cal, True) for a in logs]
     masks = [None if c >= len(a) else (np.arange(len(a)) < c) for a, c in zip(logs, cuts)]
-    q.command_regime = q._fit_command_regime(logs, masks, True, stride)
+    splits = [q._calibration_split(a, c, cal, True) for a, c in zip(logs, cuts)]
+    q.command_regime = q._fit_command_regime(logs, masks, True, stride, ends=splits)
 
 
 def permutation_importance(p, score, horizons, runs, seed: int = 0):

@@ -163,10 +163,45 @@ def test_command_regime_is_fitted_on_the_deviations_the_nets_learned(monkeypatch
     cal = CalibrationConfig(fraction=0.3, horizon_s=20.0, max_starts=30)
     hp = HybridPredictor(m.vessel, ensemble_config=TINY, command_guard=True, calibration_config=cal,
                          environment_window_s=600.0).fit(logs)
-    held = [np.arange(len(a)) >= hp._calibration_cut(a, cal, True) for a in logs]
+    held = [(np.arange(len(a)) >= lo) & (np.arange(len(a)) < hi)
+            for a, (lo, hi) in zip(logs, hp.training_info["calibration"]["command_regime_rows"])]
     X, Y, _ = hp.training_data(logs, row_masks=held)
     np.testing.assert_allclose(seen["target"], Y / hp.ensemble.y_std)
     np.testing.assert_allclose(seen["pred"], hp.ensemble.predict(X)[0] / hp.ensemble.y_std)
+
+
+def test_command_regime_weights_are_chosen_before_the_spread_calibration_starts(monkeypatch):
+    """With the command guard, a log's held-back rows are split in time order: the regime
+    weights read only rows before the first start of the spread calibration, whose forecasts
+    (starts and horizons) lie after them; the model records both row ranges. Without the
+    split the weights were chosen on the very rows that calibrated the spread."""
+    m = DynamicModel("gunnerus")
+    log = as_log_arrays(physics_log(m, seed=8, duration_s=800.0, t_shutdown_s=None, current=(0.3, 1.0)), m.vessel)
+    regime_t_s, start_t_s = [], []
+    regime_inputs, forecast = HybridPredictor._regime_inputs, HybridPredictor.forecast
+
+    def spy_inputs(self, prep, rows):      # a regime row's target is read at the row itself
+        regime_t_s.extend(prep.arrays.time_s[rows])
+        return regime_inputs(self, prep, rows)
+
+    def spy_forecast(self, log, start_times_s, *args, **kw):       # in fit: the calibration's forecasts
+        start_t_s.extend(np.atleast_1d(start_times_s))
+        return forecast(self, log, start_times_s, *args, **kw)
+
+    monkeypatch.setattr(HybridPredictor, "_regime_inputs", spy_inputs)
+    monkeypatch.setattr(HybridPredictor, "forecast", spy_forecast)
+    cal = CalibrationConfig(fraction=0.3, horizon_s=20.0, max_starts=40)
+    hp = HybridPredictor(m.vessel, ensemble_config=TINY, command_guard=True, calibration_config=cal,
+                         environment_window_s=600.0).fit([log])
+    assert max(regime_t_s) < min(start_t_s)            # disjoint, in time order
+    info = hp.training_info["calibration"]
+    assert min(info["n_starts"].values()) >= 10 and set(hp.calibration) == {"held", "known"}
+    assert hp.command_regime is not None and hp.command_regime.n_held.sum() > 0
+    [(first, split)], [(split_again, end)] = info["command_regime_rows"], info["calibration_rows"]
+    assert first == hp._calibration_cut(log, cal, True) < split == split_again < end == len(log)
+    assert max(regime_t_s) < log.time_s[split] <= min(start_t_s)
+    assert max(start_t_s) + cal.horizon_s <= log.time_s[-1]
+
 
 def _small_multistep_setup():
     """A one-step hybrid on two short logs, a 5-s multi-step configuration and its starts."""

@@ -134,6 +134,10 @@ class HybridPredictor:
     command_guard : bool
         Also fit a :class:`~hybridship.residual.guard.CommandRegime` on the held-back
         calibration rows (needs ``calibration_config.fraction > 0``) and apply it with the guard.
+        Each log's held-back rows are then split in time order: the rows before the middle
+        one of its calibration starts choose the regime weights, the later half of the starts
+        (with their horizons) calibrates the spread (:meth:`_calibration_split`;
+        ``training_info["calibration"]`` records the rows of each).
     hull_correction : bool
         Before the nets, fit a linear-in-parameters, MMG-structured correction of the
         acceleration (:class:`~hybridship.residual.hull.HullCorrection`, ridge regression on
@@ -352,8 +356,10 @@ class HybridPredictor:
         ``calibration.commands`` modes over ``calibration.horizon_s``, give the per-lead
         scale of the spread (:func:`hybridship.residual.calibration.fit_spread_scale`,
         north and east pooled for the position, the heading on its own). Every later
-        forecast's ``eta_std`` is calibrated with it. With ``dp_only`` the nets never see a
-        failure, so a forecast that starts after one keeps the raw spread, unless the
+        forecast's ``eta_std`` is calibrated with it. With ``command_guard`` the earlier part of
+        the held-back rows chooses the command-regime weights and only the later half of the
+        starts calibrates the spread (:meth:`_fit_command_guard`). With ``dp_only`` the nets
+        never see a failure, so a forecast that starts after one keeps the raw spread, unless the
         training logs hold at least ``calibration.after_stop_min_failures`` failures with
         enough drift after them: then the spread after a failure is calibrated on those
         (:meth:`calibrate_after_stop`; ``training_info["calibration"]["after_stop"]``).
@@ -380,15 +386,13 @@ class HybridPredictor:
         prior_info = self._check_thrust_error_prior(logs, cal.horizon_s)
         masks = [None if c >= len(a) else (np.arange(len(a)) < c) for a, c in zip(logs, cuts)]
         self._fit_nets(logs, dp_only=dp_only, progress=progress, stride=stride, row_masks=masks)
-        self.command_regime = None
-        if self.command_guard and cal.fraction > 0:
-            self.command_regime = self._fit_command_regime(logs, masks, dp_only, stride)
+        cal_cuts, split_info = self._fit_command_guard(logs, cuts, masks, cal, dp_only, stride)
         drift_hull_info = self._fit_drift_hull(logs, cal.horizon_s)
         self.calibration = {}
         cal_info = {"fraction": cal.fraction, "commands": list(cal.commands), "horizon_s": cal.horizon_s,
-                    "refit": cal.refit, "n_starts": {}, "dp_only": bool(dp_only)}
+                    "refit": cal.refit, "n_starts": {}, "dp_only": bool(dp_only), **split_info}
         if cal.fraction > 0:
-            cal_info["n_starts"] = self._calibrate_modes(logs, cuts, cal, dp_only)
+            cal_info["n_starts"] = self._calibrate_modes(logs, cal_cuts, cal, dp_only)
             if cal.refit:
                 self._fit_nets(logs, dp_only=dp_only, progress=progress, stride=stride, row_masks=None)
         self.training_info["calibration"] = cal_info
@@ -639,16 +643,57 @@ class HybridPredictor:
         ang = a.azimuth_rad[rows - 1, sc["angle_channel"]] if sc["angle_channel"] is not None else np.zeros(rows.size)
         return a.rpm[rows - 1, 0] / sc["rpm_scale"], prep.nu_hat[rows, 0], ang
 
-    def _fit_command_regime(self, logs, masks, dp_only, stride) -> CommandRegime | None:
-        """Command-regime weights from the held-back rows (see :class:`CommandRegime`), whose
+    def _fit_command_guard(self, logs, cuts, masks, cal: CalibrationConfig, dp_only: bool, stride: int):
+        """With ``command_guard`` (and a held-back part): split each log's held-back rows in two
+        in time order (:meth:`_calibration_split`), fit the command-regime weights on the first
+        part and leave the second to the spread calibration, so that the spread is calibrated
+        on rows that chose nothing. Sets ``self.command_regime``.
+
+        Returns
+        -------
+        cal_cuts : list of int
+            Per log, the first row the spread calibration may start from (``cuts`` without the guard).
+        info : dict
+            What ``training_info["calibration"]`` records of the split (empty without the guard):
+            per log, the half-open row ranges ``[first, end)`` of the regime weights' rows and of
+            the calibration's starts and horizons (with ``dp_only``, their station-keeping rows).
+        """
+        self.command_regime = None
+        if not (self.command_guard and cal.fraction > 0):
+            return cuts, {}
+        splits = [self._calibration_split(a, c, cal, dp_only) for a, c in zip(logs, cuts)]
+        self.command_regime = self._fit_command_regime(logs, masks, dp_only, stride, ends=splits)
+        return splits, {"command_regime_rows": [[int(c), int(s)] for c, s in zip(cuts, splits)],
+                        "calibration_rows": [[int(s), len(a)] for a, s in zip(logs, splits)]}
+
+    def _calibration_split(self, a: LogArrays, cut: int, cal: CalibrationConfig, dp_only: bool) -> int:
+        """Where the command guard splits log ``a``'s held-back rows (from ``cut``): at the middle
+        one of the calibration's start rows (:meth:`_calibration_starts`). The calibration keeps
+        the later half of its starts, whose horizons lie after the split, and the regime weights
+        get every held-back row before it. Halving the starts rather than the rows keeps the
+        short logs in the calibration: a held-back part shorter than two horizons would leave
+        none of its starts after the middle row. ``len(a)`` when the log has no start (its
+        held-back rows then all go to the weights)."""
+        if cut >= len(a):
+            return len(a)
+        dt = float(np.median(np.diff(a.time_s)))
+        starts = self._calibration_starts(a, cut, int(round(cal.horizon_s / dt)), dp_only)
+        return int(starts[starts.size // 2]) if starts.size else len(a)
+
+    def _fit_command_regime(self, logs, masks, dp_only, stride, ends=None) -> CommandRegime | None:
+        """Command-regime weights from the held-back rows before ``ends`` (per log, the first row
+        that calibrates the spread; None: all held-back rows), see :class:`CommandRegime`; their
         targets and features are those the nets were trained on (:meth:`_training_prep`)."""
         tr_in, he_in, T, Pm = [], [], [], []
-        for log, m in zip(logs, masks):
+        for k, (log, m) in enumerate(zip(logs, masks)):
             prep, every = self._training_prep(log)
             a = prep.arrays
+            held = None if m is None else ~np.asarray(m, dtype=bool)
+            if held is not None and ends is not None:
+                held &= np.arange(held.size) < ends[k]
             m = None if m is None else np.asarray(m, dtype=bool)[::every]
             dp = a.dp_active.astype(bool) if dp_only else np.ones(len(a), bool)
-            held = dp & ~m if m is not None else np.zeros(len(a), bool)
+            held = dp & held[::every] if held is not None else np.zeros(len(a), bool)
             rows_t = prep.trainable_rows(dp & m if m is not None else dp)[::stride]
             rows_h = prep.trainable_rows(held)
             if rows_t.size:
