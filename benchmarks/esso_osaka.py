@@ -54,7 +54,7 @@ def main(argv=None) -> int:
     from hybridship.fileio import atomic_write
     from hybridship.evaluation.manoeuvre import (COMMAND_MODES, HORIZONS_S, _md_coverage, _md_table, pivot,
                                                  run_manoeuvre_benchmark, split_runs, wins,
-                                                 md_coverage_intervals, md_spread_by_kind)
+                                                 md_coverage_intervals, md_ratio_to_physics, md_spread_by_kind)
 
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--data", type=Path, default=default_data_dir() / "data", help="folder of the published runs")
@@ -107,6 +107,9 @@ def main(argv=None) -> int:
                 lines.append(f"- vs {other}, commands {mode}: hybrid lower in {len(cells)} of {total} cells"
                              + (f"; not in: {', '.join(f'{k} {c}' for k, c in lost)}" if lost else ""))
         text = replace_generated(text, "wins", "\n".join(lines) + "\n")
+        text = replace_generated(text, "ratio", f"Made by `{command.strip()}` (`errors.csv`, commands known): the "
+                                 "hybrid's error over the physics', distance / heading.\n\n"
+                                 + md_ratio_to_physics(e, "known"))
         cov = (f"Made by `{command.strip()}` (`coverage.csv`, rows `kind = all`; `coverage_intervals.csv`; "
                f"`sharpness.csv`).\n\n"
                + _md_coverage(res.coverage) + "\n" + md_coverage_intervals(res.coverage_intervals)

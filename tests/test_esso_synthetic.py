@@ -315,3 +315,32 @@ def test_the_manoeuvre_benchmark_refuses_an_out_inside_its_inputs_and_a_text_qui
     with pytest.raises(TypeError, match="^quick: expected True or False"):
         run_manoeuvre_benchmark("esso_osaka_model", data / "zigzag", data / "turning", out_dir=tmp_path / "o",
                                 quick="no")
+
+
+def test_ratio_to_physics_is_distance_and_heading_over_the_physics():
+    from hybridship.evaluation.manoeuvre import md_ratio_to_physics
+
+    rows = [{"model": m, "kind": k, "state": st, "horizon_s": 30.0, "mae": v, "commands": "known"}
+            for k in ("turning", "all") for m, f in (("hybrid", 1.0), ("dynamic", 2.0))
+            for st, v in (("distance_m", 0.3 * f), ("heading_deg", 5.0 * (f if m == "dynamic" else 1.5)))]
+    md = md_ratio_to_physics(pd.DataFrame(rows), "known")
+    assert "| turning | 0.50 / 0.75 |" in md and "| all | 0.50 / 0.75 |" in md
+    assert md_ratio_to_physics(pd.DataFrame(rows), "held") == "(no rows)\n"
+
+
+def test_the_committed_esso_results_state_their_ratio_from_their_errors():
+    """The ratios docs/esso-osaka.md quotes are its generated block and the results README's
+    section, both what markdown_report makes of the committed errors.csv."""
+    from pathlib import Path
+
+    from hybridship.evaluation.manoeuvre import BenchmarkResult, ManoeuvreConfig, markdown_report, md_ratio_to_physics
+
+    docs = Path(__file__).resolve().parents[1] / "docs"
+    e = pd.read_csv(docs / "results" / "esso-osaka" / "errors.csv")
+    block = md_ratio_to_physics(e, "known")
+    assert "| all |" in block
+    page = (docs / "esso-osaka.md").read_text()
+    assert "<!-- generated:ratio -->" in page and block in page.split("<!-- generated:ratio -->")[1]
+    md = markdown_report(BenchmarkResult(e, [], [], {}, (5.0, 10.0, 20.0, 30.0), ManoeuvreConfig(), {}, {}))
+    section = md[md.index("## hybrid as a ratio to dynamic"):md.index("\n\nAll states")]     # no coverage here
+    assert section in (docs / "results" / "esso-osaka" / "README.md").read_text()

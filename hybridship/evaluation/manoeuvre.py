@@ -868,6 +868,26 @@ def wins(errors: pd.DataFrame, model: str, other: str, state: str = "distance_m"
     return cells, total
 
 
+def md_ratio_to_physics(errors: pd.DataFrame, commands: str = "known", model: str = "hybrid",
+                        reference: str = "dynamic") -> str:
+    """Markdown of ``model``'s mean error as a ratio to ``reference``'s, per kind and horizon,
+    as "distance / heading" (two decimals; below 1: better than the physics alone), the form
+    of the targets; "(no rows)" when either model is missing."""
+    dist, head = pivot(errors, "distance_m", commands), pivot(errors, "heading_deg", commands)
+    if dist.empty or head.empty:
+        return "(no rows)\n"
+    kinds = [k for k in dist.index.get_level_values(0).unique()
+             if {(k, model), (k, reference)} <= set(dist.index) and {(k, model), (k, reference)} <= set(head.index)]
+    if not kinds:
+        return "(no rows)\n"
+    lines = ["| kind | " + " | ".join(dist.columns) + " |", "|" + "---|" * (len(dist.columns) + 1)]
+    for k in kinds:
+        cells = [f"{dist.loc[(k, model), c] / dist.loc[(k, reference), c]:.2f} / "
+                 f"{head.loc[(k, model), c] / head.loc[(k, reference), c]:.2f}" for c in dist.columns]
+        lines.append(f"| {k} | " + " | ".join(cells) + " |")
+    return "\n".join(lines) + "\n"
+
+
 def cut_copies(train: list[Run], test: list[Run]) -> list[tuple[str, str]]:
     """``(test name, train name)`` pairs that are one run cut and uncut (``<kind>_cut_<stamp>``
     is a truncated copy of ``<kind>_<stamp>`` in the Esso data set). Not refused, only reported:
@@ -927,6 +947,8 @@ def markdown_report(result: BenchmarkResult, *, command: str | None = None) -> s
         if total:
             lines.append(f"- hybrid below {other} (distance, known commands): {len(cells)} of {total} "
                          "kind x horizon cells")
+    lines += ["", "## hybrid as a ratio to dynamic, commands known (distance / heading)", "",
+              md_ratio_to_physics(e, "known").rstrip("\n")]
     if not result.coverage.empty:
         lines += ["", "## spread coverage (x0 and y0 within 1 / 2 reported standard deviations, all kinds)", "",
                   _md_coverage(result.coverage), ""]
