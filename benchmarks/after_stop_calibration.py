@@ -103,8 +103,8 @@ def main(argv=None) -> int:
     ap.add_argument("--out", type=Path, default=None,
                     help="also write the table, headed by its command, to this Markdown file")
     args = ap.parse_args(argv)
-    lines = [f"Command: `python benchmarks/after_stop_calibration.py {' '.join(argv if argv is not None else sys.argv[1:])}`",
-             ""]
+    given = argv if argv is not None else sys.argv[1:]
+    lines = [f"Command: `python benchmarks/after_stop_calibration.py {' '.join(given)}`", ""]
 
     def say(line: str) -> None:
         print(line, flush=True)

@@ -258,8 +258,9 @@ def reduction_table(long: pd.DataFrame, model: str, reference: str = "dynamic", 
 
 def pooled_ratio_table(long: pd.DataFrame, model: str, reference: str = "dynamic", *,
                        windows=WINDOWS) -> pd.DataFrame:
-    """The mean absolute error (pooled over the logs) of ``model`` over that of ``reference``, to two decimals, "5/20"
-    (below 1: better than the reference; Table 3's reduction is 100 (1 - ratio) %)."""
+    """The mean absolute error (pooled over the logs) of ``model`` over that of ``reference``,
+    to two decimals, "5/20" (below 1: better than the reference; Table 3's reduction is
+    100 (1 - ratio) %)."""
     return _two_window_cells(long, model, reference, windows, lambda r: r.map(lambda x: f"{x:.2f}"))
 
 

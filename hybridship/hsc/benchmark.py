@@ -160,8 +160,8 @@ def comparisons(table: pd.DataFrame, grey: pd.DataFrame) -> list[str]:
         rows.append([m] + [f"{x:.1f}" for x in r])
         spans.append(f"{m} {min(r):.1f}-{max(r):.1f}")
     out = ["### The paper's MAE over ours, one step ahead", "",
-           *snippet("one-step-ratio", [_markdown_table(header, rows), "", "Range per model: " + "; ".join(spans) + "."]),
-           ""]
+           *snippet("one-step-ratio", [_markdown_table(header, rows), "",
+                                       "Range per model: " + "; ".join(spans) + "."]), ""]
     g = grey.set_index(["sea_state", "output", "split"])["MAE"]
     removed = [[f"{s}", o, _fmt(g[(s, o, "validation")]), _fmt(t[("hybrid", s, o, "validation", "free_run")]),
                 f"{1 - t[('hybrid', s, o, 'validation', 'free_run')] / g[(s, o, 'validation')]:.2f}"]
@@ -182,7 +182,8 @@ def comparisons(table: pd.DataFrame, grey: pd.DataFrame) -> list[str]:
     narrow = min(margins, key=lambda m: m[0])      # the first in table order on a tie
     out += ["### The hybrid against the identified models (free run, validation MAE)", "",
             *snippet("hybrid-vs-identified", [
-                _markdown_table(["sea state", "output", "hybrid", "ss", "arx", "ann", "best other", "margin"], rows), "",
+                _markdown_table(["sea state", "output", "hybrid", "ss", "arx", "ann", "best other", "margin"],
+                                rows), "",
                 f"Target (hybrid at most the ANN's and below SS's and ARX's in every sea state and output): "
                 f"{'met' if met else 'not met'}. Narrowest margin: sea state {narrow[1]} {narrow[2]}, "
                 f"{narrow[0]:.2f} against {narrow[3]}."]), ""]
