@@ -242,12 +242,12 @@ def main(argv=None) -> int:
 
 def with_command_regime(q, logs, stride):
     """Fit the command-regime guard of the fine-tuned hybrid ``q`` on the held-back end of its logs (in place),
-    on the rows before the spread calibration's as :meth:`HybridPredictor.fit` does."""
+    on the rows before those of the spread calibration as :meth:`HybridPredictor.fit` splits them (the
+    spread itself is not recalibrated here: the screen scores errors only)."""
     cal = q.calibration_config
     cuts = [q._calibration_cut(a, cal, True) for a in logs]
     masks = [None if c >= len(a) else (np.arange(len(a)) < c) for a, c in zip(logs, cuts)]
-    splits = [q._calibration_split(a, c, cal, True) for a, c in zip(logs, cuts)]
-    q.command_regime = q._fit_command_regime(logs, masks, True, stride, ends=splits)
+    q._fit_command_guard(logs, cuts, masks, cal, True, stride)
 
 
 def permutation_importance(p, score, horizons, runs, seed: int = 0):

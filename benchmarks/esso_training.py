@@ -220,10 +220,12 @@ def with_command_guard(p, logs, stride):
     cal = q.calibration_config
     cuts = [q._calibration_cut(a, cal, True) for a in logs]
     masks = [None if c >= len(a) else (np.arange(len(a)) < c) for a, c in zip(logs, cuts)]
-    cal_cuts, _ = q._fit_command_guard(logs, cuts, masks, cal, True, stride)   # as fit splits the held-back rows
-    q._calibrate_modes(logs, cal_cuts, cal, True)
-    print("command-regime weights:", np.round(q.command_regime.weights, 2).tolist(),
-          "held-back rows:", q.command_regime.n_held.tolist(), flush=True)
+    cal_cuts, split_info = q._fit_command_guard(logs, cuts, masks, cal, True, stride)   # as fit splits them
+    q.training_info["calibration"] = {**q.training_info.get("calibration", {}), **split_info,
+                                      "n_starts": q._calibrate_modes(logs, cal_cuts, cal, True)}
+    if q.command_regime is not None:
+        print("command-regime weights:", np.round(q.command_regime.weights, 2).tolist(),
+              "held-back rows:", q.command_regime.n_held.tolist(), flush=True)
     return q
 
 
@@ -238,7 +240,7 @@ def with_wind_spread(p, logs, samples: int = 8):
     cuts = [q._calibration_cut(a, cal, True) for a in logs]
     q.training_info["wind_spread"] = q._fit_wind_error_paths(logs, cuts, cal, True)
     if q.command_guard:         # as fit: the spread on the held-back rows after those of the regime weights
-        cuts = [q._calibration_split(a, c, cal, True) for a, c in zip(logs, cuts)]
+        cuts = q._calibration_splits(logs, cuts, cal, True) or cuts
     q._calibrate_modes(logs, cuts, cal, True)
     return q
 

@@ -203,6 +203,27 @@ def test_command_regime_weights_are_chosen_before_the_spread_calibration_starts(
     assert max(start_t_s) + cal.horizon_s <= log.time_s[-1]
 
 
+def test_too_few_calibration_starts_to_split_are_shared_and_said(monkeypatch):
+    """Halving the calibration starts of a short held-back part would leave the spread
+    uncalibrated: the weights and the spread then share the held-back rows, with a warning and
+    a record; without the guard, a mode left uncalibrated is said too."""
+    m = DynamicModel("gunnerus")
+    logs = [as_log_arrays(physics_log(m, seed=s, duration_s=d, t_shutdown_s=None, current=(0.3, 1.0)), m.vessel)
+            for s, d in ((8, 800.0), (9, 400.0))]
+    few = CalibrationConfig(fraction=1e-4, horizon_s=60.0, max_starts=40)      # 1.1 horizons held back: 12 starts
+    with pytest.warns(UserWarning, match="too few to split between the command-regime weights and the spread"):
+        hp = HybridPredictor(m.vessel, ensemble_config=TINY, command_guard=True, calibration_config=few,
+                             environment_window_s=600.0).fit(logs)
+    info = hp.training_info["calibration"]
+    assert info["command_regime_split"] is False and "calibration_rows" not in info
+    assert set(hp.calibration) == {"held", "known"} and min(info["n_starts"].values()) >= 10
+    fewer = CalibrationConfig(fraction=1e-4, horizon_s=60.0, max_starts=40, start_every_s=20.0)
+    with pytest.warns(UserWarning, match="is not calibrated: .* its forecasts keep the ensemble's raw spread"):
+        hp = HybridPredictor(m.vessel, ensemble_config=TINY, calibration_config=fewer,
+                             environment_window_s=600.0).fit(logs)
+    assert hp.calibration == {}
+
+
 def _small_multistep_setup():
     """A one-step hybrid on two short logs, a 5-s multi-step configuration and its starts."""
     from hybridship.residual.multistep import collect_starts

@@ -60,6 +60,8 @@ AFTER_STOP_INTERVALS = 20
 AFTER_STOP_LATE = "after_stop_late"
 #: Spacing [s] of the later starts that calibrate :data:`AFTER_STOP_LATE`.
 LATE_START_EVERY_S = 10.0
+#: Fewest held-back starts (pooled over the logs) that calibrate the spread of a command mode.
+MIN_CALIBRATION_STARTS = 10
 
 #: Most wind futures in the spread (``wind_samples``): each costs one more rollout per forecast.
 MAX_WIND_SAMPLES = 256
@@ -661,23 +663,49 @@ class HybridPredictor:
         self.command_regime = None
         if not (self.command_guard and cal.fraction > 0):
             return cuts, {}
-        splits = [self._calibration_split(a, c, cal, dp_only) for a, c in zip(logs, cuts)]
+        splits = self._calibration_splits(logs, cuts, cal, dp_only)
+        if splits is None:
+            self.command_regime = self._fit_command_regime(logs, masks, dp_only, stride)
+            return cuts, {"command_regime_split": False}
         self.command_regime = self._fit_command_regime(logs, masks, dp_only, stride, ends=splits)
-        return splits, {"command_regime_rows": [[int(c), int(s)] for c, s in zip(cuts, splits)],
+        return splits, {"command_regime_split": True,
+                        "command_regime_rows": [[int(c), int(s)] for c, s in zip(cuts, splits)],
                         "calibration_rows": [[int(s), len(a)] for a, s in zip(logs, splits)]}
 
-    def _calibration_split(self, a: LogArrays, cut: int, cal: CalibrationConfig, dp_only: bool) -> int:
-        """Where the command guard splits log ``a``'s held-back rows (from ``cut``): at the middle
-        one of the calibration's start rows (:meth:`_calibration_starts`). The calibration keeps
+    def _calibration_splits(self, logs, cuts, cal: CalibrationConfig, dp_only: bool) -> list[int] | None:
+        """Per log, the row where the command guard splits the held-back rows from ``cuts`` on
+        (:meth:`_calibration_split`); None, with a warning, when the later halves of the logs'
+        calibration starts would hold fewer than :data:`MIN_CALIBRATION_STARTS` together (the
+        spread would go uncalibrated): the weights and the spread then share the held-back rows."""
+        starts = [self._calibration_start_rows(a, c, cal, dp_only) for a, c in zip(logs, cuts)]
+        if sum(r.size - r.size // 2 for r in starts) >= MIN_CALIBRATION_STARTS:
+            return [self._calibration_split(a, r) for a, r in zip(logs, starts)]
+        import warnings
+
+        warnings.warn(f"fit: the held-back rows give {sum(r.size for r in starts)} calibration starts, too few to "
+                      f"split between the command-regime weights and the spread (the later half must hold "
+                      f"{MIN_CALIBRATION_STARTS}): both use all of them; hold back more "
+                      f"(calibration_config.fraction) for a spread calibrated on rows that chose nothing",
+                      UserWarning, stacklevel=4)
+        return None
+
+    def _calibration_start_rows(self, a: LogArrays, cut: int, cal: CalibrationConfig, dp_only: bool) -> np.ndarray:
+        """The rows from ``cut`` on where a calibration forecast of ``cal.horizon_s`` can start
+        (:meth:`_calibration_starts` at the log's median step), before any thinning."""
+        if cut >= len(a):
+            return np.zeros(0, int)
+        dt = float(np.median(np.diff(a.time_s)))
+        return self._calibration_starts(a, cut, int(round(cal.horizon_s / dt)), dp_only)
+
+    @staticmethod
+    def _calibration_split(a: LogArrays, starts: np.ndarray) -> int:
+        """Where the command guard splits log ``a``'s held-back rows: at the middle one of its
+        calibration start rows ``starts`` (:meth:`_calibration_start_rows`). The calibration keeps
         the later half of its starts, whose horizons lie after the split, and the regime weights
         get every held-back row before it. Halving the starts rather than the rows keeps the
         short logs in the calibration: a held-back part shorter than two horizons would leave
         none of its starts after the middle row. ``len(a)`` when the log has no start (its
         held-back rows then all go to the weights)."""
-        if cut >= len(a):
-            return len(a)
-        dt = float(np.median(np.diff(a.time_s)))
-        starts = self._calibration_starts(a, cut, int(round(cal.horizon_s / dt)), dp_only)
         return int(starts[starts.size // 2]) if starts.size else len(a)
 
     def _fit_command_regime(self, logs, masks, dp_only, stride, ends=None) -> CommandRegime | None:
@@ -807,19 +835,20 @@ class HybridPredictor:
             fitted, n_starts[mode] = self._calibrate(logs, cuts, cal, dp_only, mode)
             if fitted is not None:
                 self.calibration[mode] = fitted
+            else:
+                import warnings
+
+                warnings.warn(f"fit: the spread with commands {mode!r} is not calibrated: {n_starts[mode]} held-back "
+                              f"starts, {MIN_CALIBRATION_STARTS} needed; its forecasts keep the ensemble's raw "
+                              f"spread (hold back more with calibration_config.fraction, or use longer logs)",
+                              UserWarning, stacklevel=3)
         return n_starts
 
     def _calibrate(self, logs, cuts, cal: CalibrationConfig, dp_only: bool, mode: str):
         """Calibration of one command mode from held-back starts; (None, 0) without any start."""
         from ..frames import wrap_pi
 
-        cand = []
-        for a, cut in zip(logs, cuts):
-            if cut >= len(a):
-                cand.append(np.zeros(0, int))
-                continue
-            dt = float(np.median(np.diff(a.time_s)))
-            cand.append(self._calibration_starts(a, cut, int(round(cal.horizon_s / dt)), dp_only))
+        cand = [self._calibration_start_rows(a, cut, cal, dp_only) for a, cut in zip(logs, cuts)]
         total = sum(c.size for c in cand)
         if total == 0:
             return None, 0
@@ -843,11 +872,12 @@ class HybridPredictor:
         lead, cols = _common_leads(leads)
         kw = cal.fit_kwargs
         n = sum(x.shape[0] for x in hdg_e)
-        if n < 10:
+        if n < MIN_CALIBRATION_STARTS:
             return None, n
         cat = lambda xs: np.concatenate([x[:, c] for x, c in zip(xs, cols)])  # noqa: E731
-        return ({"position": fit_spread_scale(cat(pos_e), cat(pos_s), lead, min_samples=10, **kw),
-                 "heading": fit_spread_scale(cat(hdg_e), cat(hdg_s), lead, min_samples=10, **kw)}, n)
+        return ({"position": fit_spread_scale(cat(pos_e), cat(pos_s), lead, min_samples=MIN_CALIBRATION_STARTS, **kw),
+                 "heading": fit_spread_scale(cat(hdg_e), cat(hdg_s), lead, min_samples=MIN_CALIBRATION_STARTS,
+                                             **kw)}, n)
 
     # ------------------------------------------------------------------ forecasting
 
