@@ -127,8 +127,8 @@ def main(argv=None) -> int:
             + (" --thrust-error-model per_dof" if cfg is not None else "") + "`\n\n"
             f"{len(files)} logs, {args.samples} samples per prediction; update time (environment estimate + "
             f"blackouts) median {res.update_s.median():.3f} s, max {res.update_s.max():.3f} s.\n"
-            f"Truth-track actual times inside the predicted 10-90 % band: {inside} of {len(lf)} (log x radius), "
-            f"{100 * inside / len(lf):.0f} %.\n\n" + markdown_table(res.drop(columns=["update_s"]), digits=1) + "\n")
+            f"Truth-track actual times inside the predicted 10-90 % band: {inside} of {len(lf)} (log x radius)"
+            + (f", {100 * inside / len(lf):.0f} %" if len(lf) else "") + ".\n\n" + markdown_table(res.drop(columns=["update_s"]), digits=1) + "\n")
     write_text(args.out / "tables.md", text)
     print(text)
     return 0

@@ -881,10 +881,13 @@ def md_ratio_to_physics(errors: pd.DataFrame, commands: str = "known", model: st
     if not kinds:
         return "(no rows)\n"
     lines = ["| kind | " + " | ".join(dist.columns) + " |", "|" + "---|" * (len(dist.columns) + 1)]
+    def ratio(tab, k, c):           # "n/a" where the reference error is zero
+        r = tab.loc[(k, model), c] / tab.loc[(k, reference), c] if tab.loc[(k, reference), c] > 0 else np.nan
+        return f"{r:.2f}" if np.isfinite(r) else "n/a"
+
     for k in kinds:
-        cells = [f"{dist.loc[(k, model), c] / dist.loc[(k, reference), c]:.2f} / "
-                 f"{head.loc[(k, model), c] / head.loc[(k, reference), c]:.2f}" for c in dist.columns]
-        lines.append(f"| {k} | " + " | ".join(cells) + " |")
+        lines.append(f"| {k} | " + " | ".join(f"{ratio(dist, k, c)} / {ratio(head, k, c)}" for c in dist.columns)
+                     + " |")
     return "\n".join(lines) + "\n"
 
 

@@ -252,8 +252,9 @@ def paper_table(long: pd.DataFrame, *, windows=WINDOWS) -> pd.DataFrame:
 
 def reduction_table(long: pd.DataFrame, model: str, reference: str = "dynamic", *, windows=WINDOWS) -> pd.DataFrame:
     """The paper's Table 3: % error reduction of ``model`` relative to ``reference``, "5/20"."""
-    return _two_window_cells(long, model, reference, windows,
-                             lambda r: (100.0 * (1.0 - r)).round().astype(int).astype(str))
+    def pct(r):
+        return (100.0 * (1.0 - r)).map(lambda x: str(int(round(x))) if np.isfinite(x) else "n/a")
+    return _two_window_cells(long, model, reference, windows, pct)
 
 
 def pooled_ratio_table(long: pd.DataFrame, model: str, reference: str = "dynamic", *,
@@ -261,12 +262,14 @@ def pooled_ratio_table(long: pd.DataFrame, model: str, reference: str = "dynamic
     """The mean absolute error (pooled over the logs) of ``model`` over that of ``reference``,
     to two decimals, "5/20" (below 1: better than the reference; Table 3's reduction is
     100 (1 - ratio) %)."""
-    return _two_window_cells(long, model, reference, windows, lambda r: r.map(lambda x: f"{x:.2f}"))
+    return _two_window_cells(long, model, reference, windows,
+                             lambda r: r.map(lambda x: f"{x:.2f}" if np.isfinite(x) else "n/a"))
 
 
 def _two_window_cells(long: pd.DataFrame, model: str, reference: str, windows, fmt) -> pd.DataFrame:
     """``fmt`` of the error ratio ``model / reference`` per state and horizon, the two windows
-    as "a/b" (states as rows, horizons as columns)."""
+    as "a/b" (states as rows, horizons as columns); a zero reference error gives a
+    non-finite ratio, which ``fmt`` prints as "n/a"."""
     def cell(w):
         s = long[long.window == w].set_index(["model", "state", "horizon_s"])["mae"]
         return fmt(s[model] / s[reference])

@@ -174,11 +174,12 @@ def comparisons(table: pd.DataFrame, grey: pd.DataFrame) -> list[str]:
     for s in (1, 2):
         for o in OUTPUTS:
             val = {m: t[(m, s, o, "validation", "free_run")] for m in ("hybrid", *others)}
-            best = min(others, key=val.get)
+            best = min(others, key=lambda m: val[m] if np.isfinite(val[m]) else np.inf)   # a diverged run last
             margin = 1 - val["hybrid"] / val[best]
             met &= bool(val["hybrid"] <= val["ann"] and val["hybrid"] < min(val["ss"], val["arx"]))
             margins.append((margin, s, o, best))
-            rows.append([f"{s}", o] + [f"{val[m]:.3f}" for m in ("hybrid", *others)] + [best, f"{margin:.2f}"])
+            rows.append([f"{s}", o] + [f"{val[m]:.3f}" if np.isfinite(val[m]) else "n/a" for m in ("hybrid", *others)]
+                        + [best, _fmt(margin)])
     narrow = min(margins, key=lambda m: m[0])      # the first in table order on a tie
     out += ["### The hybrid against the identified models (free run, validation MAE)", "",
             *snippet("hybrid-vs-identified", [
