@@ -95,8 +95,7 @@ def fine_tune(p, logs, ms_cfg, row_stride):
     q.multistep_config = ms_cfg
     q.training = "multi_step"
     cal = q.calibration_config
-    cuts = [q._calibration_cut(a, cal, True) for a in logs]
-    masks = [None if c >= len(a) else (np.arange(len(a)) < c) for a, c in zip(logs, cuts)]
+    cuts, masks = q._held_back(logs, cal, True)
     preps = [prepare_log(q.model, a, q.residual_config) for a in logs]
     # the rollouts take the wind as the hybrid's forecasts do (HybridPredictor.fit does the same)
     starts = collect_starts(preps, masks, ms_cfg, dp_only=True,
@@ -245,8 +244,7 @@ def with_command_regime(q, logs, stride):
     on the rows before those of the spread calibration as :meth:`HybridPredictor.fit` splits them (the
     spread itself is not recalibrated here: the screen scores errors only)."""
     cal = q.calibration_config
-    cuts = [q._calibration_cut(a, cal, True) for a in logs]
-    masks = [None if c >= len(a) else (np.arange(len(a)) < c) for a, c in zip(logs, cuts)]
+    cuts, masks = q._held_back(logs, cal, True)
     q._fit_command_guard(logs, cuts, masks, cal, True, stride)
 
 

@@ -218,8 +218,7 @@ def with_command_guard(p, logs, stride):
     q = copy.deepcopy(p)
     q.command_guard = True
     cal = q.calibration_config
-    cuts = [q._calibration_cut(a, cal, True) for a in logs]
-    masks = [None if c >= len(a) else (np.arange(len(a)) < c) for a, c in zip(logs, cuts)]
+    cuts, masks = q._held_back(logs, cal, True)
     cal_cuts, split_info = q._fit_command_guard(logs, cuts, masks, cal, True, stride)   # as fit splits them
     q.training_info["calibration"] = {**q.training_info.get("calibration", {}), **split_info,
                                       "n_starts": q._calibrate_modes(logs, cal_cuts, cal, True)}

@@ -382,11 +382,10 @@ class HybridPredictor:
         self.estimator = EnvironmentEstimator(self.model, self.environment_config)
         if self.environment == "estimator":
             self.estimator.fit(logs, dp_only=dp_only)
-        cuts = [self._calibration_cut(a, cal, dp_only) for a in logs]
+        cuts, masks = self._held_back(logs, cal, dp_only)
         wind_info = self._fit_wind_forecast(logs, cuts, cal, dp_only)
         wind_spread_info = self._fit_wind_error_paths(logs, cuts, cal, dp_only)
         prior_info = self._check_thrust_error_prior(logs, cal.horizon_s)
-        masks = [None if c >= len(a) else (np.arange(len(a)) < c) for a, c in zip(logs, cuts)]
         self._fit_nets(logs, dp_only=dp_only, progress=progress, stride=stride, row_masks=masks)
         cal_cuts, split_info = self._fit_command_guard(logs, cuts, masks, cal, dp_only, stride)
         drift_hull_info = self._fit_drift_hull(logs, cal.horizon_s)
@@ -811,6 +810,13 @@ class HybridPredictor:
         n_cal = max(int(round(cal.fraction * usable.size)), int(np.ceil(1.1 * cal.horizon_s / dt)))
         n_cal = min(n_cal, usable.size // 2)
         return int(usable[-n_cal]) if n_cal > 0 else n
+
+    @staticmethod
+    def _held_back(logs, cal: CalibrationConfig, dp_only: bool) -> tuple[list[int], list]:
+        """Per log, the first held-back row (:meth:`_calibration_cut`) and the mask of the rows
+        before it that train the nets (None where nothing is held back)."""
+        cuts = [HybridPredictor._calibration_cut(a, cal, dp_only) for a in logs]
+        return cuts, [None if c >= len(a) else (np.arange(len(a)) < c) for a, c in zip(logs, cuts)]
 
     def _calibration_starts(self, a: LogArrays, cut: int, H: int, dp_only: bool) -> np.ndarray:
         """Rows >= ``cut`` whose next H rows are in the same segment (and station keeping with ``dp_only``)."""
