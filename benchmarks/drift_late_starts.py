@@ -98,6 +98,30 @@ def table_row(data: str, variant: str, what: str, err: list, phys: list, dr: lis
     return row
 
 
+#: The data sets the default's load walks were chosen on (truthsim-dev played no part).
+CHOICE_SETS = ("embedded", "own 100-119")
+
+
+def later_ratio_sum(row: pd.Series) -> float:
+    """The sum of a row's later-start ratios to the physics (north, east, heading), as printed
+    to two decimals in its ``later (x physics, x DR)`` cells."""
+    return sum(float(row[c].split("(")[1].split(",")[0]) for c in row.index if c.endswith("later (x physics, x DR)"))
+
+
+def choice_summary(df: pd.DataFrame, choice_sets=CHOICE_SETS) -> str:
+    """Markdown of the criterion the default was chosen by: per variant, the sum of the later
+    starts' three ratios to the physics on each data set and over ``choice_sets`` (the
+    smallest sum over those wins; the other sets played no part)."""
+    rows = df[~df.variant.isin(["physics", "dead_reckoning"])]
+    sums = rows.assign(s=rows.apply(later_ratio_sum, axis=1)).pivot_table(index="variant", columns="data", values="s",
+                                                                         sort=False)
+    sets = [c for c in choice_sets if c in sums.columns]
+    if sets:
+        sums[" + ".join(sets)] = sums[sets].sum(axis=1, skipna=False)
+    table = sums.map(lambda x: f"{x:.2f}" if np.isfinite(x) else "").reset_index()
+    return markdown_table(table.rename(columns={"variant": "variant (sum of the later starts' 3 ratios to physics)"}))
+
+
 def main(argv=None) -> int:
     ev = sibling("estimator_variants")         # its data sets and shared arguments
     args = ev.parse_args(argv, __doc__.split("\n")[0], VARIANTS)
@@ -125,7 +149,7 @@ def main(argv=None) -> int:
     args.out.mkdir(parents=True, exist_ok=True)
     write_text(args.out / "late_starts.csv", df.to_csv(index=False))
     write_text(args.out / "late_starts_per_log.csv", pd.DataFrame(per_log).round({"later_mae": 3}).to_csv(index=False))
-    md = markdown_table(df) + "\n"
+    md = markdown_table(df) + "\n\n" + choice_summary(df) + "\n"
     write_text(args.out / "late_starts.md", md)
     print(md)
     return 0

@@ -37,6 +37,27 @@ def _at_leads(errors_60s, n_leads: int = 4, earlier: float = -1.0) -> np.ndarray
     return np.concatenate([np.full((e.shape[0], n_leads - 1, 3), earlier), e[:, None, :]], axis=1)
 
 
+def test_the_choice_summary_sums_the_later_ratios_per_set_and_over_the_choice_sets():
+    """The default's load walks were chosen by the smallest sum of the later starts' three
+    ratios to the physics over our own two sets; the table prints that sum, and the committed
+    table is what the committed rows give."""
+    from pathlib import Path
+
+    from hybridship.fileio import markdown_table
+
+    ls = load_benchmark("drift_late_starts")
+    phys = [_errors(2.0, 4.0)]
+    rows = [ls.table_row(d, v, "", [_errors(2.0, later)], phys, phys)
+            for d in ("embedded", "truthsim-dev", "own 100-119") for v, later in (("a", 2.0), ("b", 1.0))]
+    rows += [ls.table_row("embedded", "physics", "", phys, phys, phys)]
+    md = ls.choice_summary(pd.DataFrame(rows))
+    assert "| a | 1.50 | 1.50 | 1.50 | 3.00 |" in md and "| b | 0.75 | 0.75 | 0.75 | 1.50 |" in md
+    assert "physics" not in md.split("\n", 2)[2]
+    folder = Path(__file__).resolve().parents[1] / "docs" / "results" / "drift-late-starts"
+    df = pd.read_csv(folder / "late_starts.csv", keep_default_na=False)
+    assert (folder / "late_starts.md").read_text() == markdown_table(df) + "\n\n" + ls.choice_summary(df) + "\n"
+
+
 def test_the_late_coverage_error_table_pools_every_start():
     """Per log the mean of each model's 60-s errors; pooled, the mean over all starts of all logs."""
     lc = load_benchmark("drift_late_coverage")
