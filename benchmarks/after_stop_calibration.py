@@ -29,11 +29,16 @@ Examples::
     python benchmarks/after_stop_calibration.py --n 8 --heading-mode mixed
     python benchmarks/after_stop_calibration.py --n 8 --vessel-spread 1 --beaufort 3 7 --dp-s 1800
     python benchmarks/after_stop_calibration.py --own 20 --source own
+    python benchmarks/after_stop_calibration.py --out docs/results/after-stop-calibration/default.md
+
+``--out FILE`` also writes the printed table, headed by its command, to a Markdown file (the
+runs the docs quote are in ``docs/results/after-stop-calibration``).
 """
 
 from __future__ import annotations
 
 import argparse
+import shlex
 import sys
 from pathlib import Path
 
@@ -104,7 +109,7 @@ def main(argv=None) -> int:
                     help="also write the table, headed by its command, to this Markdown file")
     args = ap.parse_args(argv)
     given = argv if argv is not None else sys.argv[1:]
-    lines = [f"Command: `python benchmarks/after_stop_calibration.py {' '.join(given)}`", ""]
+    lines = [f"Command: `python benchmarks/after_stop_calibration.py {shlex.join(given)}`", ""]
 
     def say(line: str) -> None:
         print(line, flush=True)
