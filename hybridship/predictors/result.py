@@ -186,4 +186,3 @@ def _on_start_branch(eta: np.ndarray) -> np.ndarray:
     out = np.array(eta, dtype=float)
     out[..., 2] -= 2.0 * np.pi * turns[:, None]
     return out
-
