@@ -26,12 +26,18 @@ every second of the validation runs with:
 
 Writes ``errors.csv`` (``predictor,kind,lead_s,error_m_s,n_starts``: the mean distance
 between forecast and logged wind vectors [m/s], over every step of the horizon for
-``lead_s = all``) and prints the table.
+``lead_s = all``) and ``tables.md`` (the tables it prints) to ``--out``, and copies the two
+to ``--results`` when given (the folder ``--out`` also holds the split's links to the data,
+which stay out of the repository)::
+
+    python benchmarks/esso_wind_predictability.py --out out/esso-wind-predictability \
+        --results docs/results/esso-wind-predictability
 """
 
 from __future__ import annotations
 
 import argparse
+import shlex
 import sys
 from pathlib import Path
 
@@ -105,11 +111,15 @@ def forecasts(a, rows, level, feats, future, gust, coef, horizon_steps: int) -> 
             "future_mean": np.broadcast_to(future.mean(axis=1, keepdims=True), future.shape)}
 
 
+def _f3(x: float) -> str:
+    return f"{x:.3f}"
+
+
 def main(argv=None) -> int:
     import pandas as pd
 
     from hybridship.evaluation.manoeuvre import load_runs, validation_split
-    from hybridship.fileio import atomic_write
+    from hybridship.fileio import atomic_write, markdown_table
     from hybridship.forecast_inputs.wind import fit_wind_forecast
     from hybridship.vessel import load_vessel
 
@@ -117,6 +127,7 @@ def main(argv=None) -> int:
     ap.add_argument("--split", type=Path, default=ROOT / "out" / "esso-osaka" / "split",
                     help="the benchmark's split (default out/esso-osaka/split)")
     ap.add_argument("--out", type=Path, default=ROOT / "out" / "esso-wind-predictability")
+    ap.add_argument("--results", type=Path, help="also copy errors.csv and tables.md here (no data)")
     args = ap.parse_args(argv)
     try:
         fit_dir, val_dir = validation_split(args.split, args.out / "split")
@@ -150,13 +161,26 @@ def main(argv=None) -> int:
     args.out.mkdir(parents=True, exist_ok=True)
     atomic_write(args.out / "errors.csv", lambda fh: fh.write(out.to_csv(index=False, float_format="%.4f").encode()))
     wide = out[out["lead_s"] == "all"].pivot(index="predictor", columns="kind", values="error_m_s")
-    print("mean wind-vector error over the 30-s horizon [m/s], validation runs:")
-    print(wide.loc[["held", "gust", "linear", "future_mean"]].round(3).to_string())
     by_lead = out[out["kind"] == "all"].pivot(index="predictor", columns="lead_s", values="error_m_s")
-    print("pooled, by lead time [s]:")
-    print(by_lead.loc[["held", "gust", "linear", "future_mean"], ["all", *leads]].round(3).to_string())
-    print(f"linear coefficients at 10/30 s (start, trailing {', '.join(f'{s:g}' for s in TRAILING_S)} s):")
-    print(np.round(coef[:, [leads["10"], leads["30"]]].T, 3))
+    order = ["held", "gust", "linear", "future_mean"]
+    md = [f"Command: `{shlex.join(['python', 'benchmarks/esso_wind_predictability.py', *sys.argv[1:]])}`", "",
+          f"Gust forecast fitted on the fitting runs: `{gust}`.", "",
+          "Mean wind-vector error over the 30-s horizon [m/s], validation runs, by kind:", "",
+          markdown_table(wide.loc[order].map(_f3).reset_index()), "",
+          "Pooled, by lead time [s] (`all`: every step of the horizon):", "",
+          markdown_table(by_lead.loc[order, ["all", *leads]].map(_f3).reset_index()), "",
+          f"Linear predictor's coefficients at 10 and 30 s (start sample, trailing means over "
+          f"{', '.join(f'{s:g}' for s in TRAILING_S)} s):", "",
+          markdown_table(pd.DataFrame(coef[:, [leads["10"], leads["30"]]].T,
+                                      columns=["start", *(f"{s:g} s" for s in TRAILING_S)]).map(_f3)
+                         .assign(lead_s=["10", "30"]).set_index("lead_s").reset_index())]
+    text = "\n".join(md) + "\n"
+    atomic_write(args.out / "tables.md", lambda fh: fh.write(text.encode()))
+    if args.results is not None:
+        args.results.mkdir(parents=True, exist_ok=True)
+        for name in ("errors.csv", "tables.md"):
+            atomic_write(args.results / name, lambda fh, src=args.out / name: fh.write(src.read_bytes()))
+    print(text)
     return 0
 
 
