@@ -54,14 +54,21 @@ and tuned with them: ``hull_correction``, ``hull_fit="multi_step"``, ``tune_hull
 ``hybrid_mean_one_step`` and ``hybrid_mean_hull``: whether models whose errors differ more
 than two seeds' do average to a lower error.
 
-Writes ``errors.csv`` (the manoeuvre benchmark's columns) and prints the distance and
-heading tables.
+Writes ``errors.csv`` (the manoeuvre benchmark's columns) and ``tables.md`` (:func:`tables`:
+the pooled errors, each row as a ratio to the physics, per kind at 30 s, and the share of
+the 30-s error that the wind's future makes) to ``--out`` and prints them; ``--results``
+also copies the two there (``--out`` holds the split's links to the data, which stay out
+of the repository). The committed run::
+
+    python benchmarks/esso_error_sources.py --hybrid --seed-average --structure-average \
+        --out out/esso-error-sources --results docs/results/esso-error-sources
 """
 
 from __future__ import annotations
 
 import argparse
 import dataclasses
+import shlex
 import sys
 from pathlib import Path
 
@@ -251,6 +258,57 @@ def _choose_feedback(predictor, logs, steps: np.ndarray, start_every_s: float, l
     return min(scores, key=lambda k: scores[k][0]), scores
 
 
+#: Pairs (model, the same model fed the logged future wind) whose 30-s errors give the
+#: share of the error that the wind's unknown future makes.
+WIND_SHARES = (("as_logged", "wind_future", "wind_future_mean"),
+               ("hybrid", "hybrid_wind_future", "hybrid_wind_future_mean"))
+
+
+def tables(errors, command: str) -> str:
+    """``tables.md``: the pooled errors at every horizon with the 30-s ratios to the physics
+    (``as_logged``), the 30-s distance per kind as a ratio to the physics of the same runs,
+    and the share of the 30-s error that the logged future wind, and its mean held, remove."""
+    import pandas as pd
+
+    from hybridship.fileio import markdown_table
+
+    e = errors[errors["commands"] == "known"]
+    at30 = e[e["horizon_s"] == 30.0].pivot_table(index="model", columns=["state", "kind"], values="mae", sort=False)
+    models = list(dict.fromkeys(e["model"]))
+    pooled = e[e["kind"] == "all"].pivot_table(index="model", columns=["state", "horizon_s"], values="mae",
+                                               sort=False).loc[models]
+    ref = at30.loc["as_logged"]
+    rows = [[m, *(f"{pooled.loc[m, ('distance_m', h)]:.3f}" for h in (5.0, 10.0, 20.0, 30.0)),
+             f"{pooled.loc[m, ('heading_deg', 30.0)]:.2f}",
+             f"{at30.loc[m, ('distance_m', 'all')] / ref[('distance_m', 'all')]:.2f}",
+             f"{at30.loc[m, ('heading_deg', 'all')] / ref[('heading_deg', 'all')]:.2f}"] for m in models]
+    pooled_md = markdown_table(pd.DataFrame(rows, columns=["model", "5 s (m)", "10 s (m)", "20 s (m)", "30 s (m)",
+                                                           "heading 30 s (deg)", "30-s distance / physics",
+                                                           "30-s heading / physics"]))
+    kinds = [k for k in dict.fromkeys(e["kind"]) if k != "all"]
+    per_kind = pd.DataFrame([[m, *(f"{at30.loc[m, ('distance_m', k)] / ref[('distance_m', k)]:.2f}" for k in kinds)]
+                             for m in models], columns=["model", *kinds])
+    physics = pd.DataFrame([["as_logged (m)", *(f"{ref[('distance_m', k)]:.3f}" for k in kinds)]],
+                           columns=["model", *kinds])
+    shares = []
+    for base, future, level in WIND_SHARES:
+        if base in at30.index and future in at30.index:
+            for state in ("distance_m", "heading_deg"):
+                b, f, lv = (at30.loc[x, (state, "all")] for x in (base, future, level))
+                shares.append([base, state, f"{1.0 - f / b:.0%}", f"{1.0 - lv / b:.0%}", f"{(b - lv) / (b - f):.0%}"])
+    share_md = markdown_table(pd.DataFrame(shares, columns=[
+        "model", "state", "removed by the logged future wind", "removed by its 30-s mean held",
+        "the mean's part of the future wind's gain"]))
+    md = [f"Command: `{command}`", "", "Validation runs, logged commands known. Pooled mean distance error, the "
+          "heading error at 30 s, and the 30-s errors as ratios to the physics with the logged wind (`as_logged`):",
+          "", pooled_md, "", "30-s distance per kind as a ratio to `as_logged` on the same runs:", "",
+          markdown_table(pd.concat([physics, per_kind], ignore_index=True)), "",
+          "Share of the 30-s error (pooled) that the wind's future makes: the fraction removed when the "
+          "same model is fed the logged future wind (non-causal), or the logged mean of that wind over the "
+          "horizon held (non-causal: the wind's level known, not its gusts):", "", share_md]
+    return "\n".join(md) + "\n"
+
+
 def main(argv=None) -> int:
     from hybridship.datasets.esso_osaka import esso_log_arrays
     from hybridship.evaluation.manoeuvre import (ManoeuvreConfig, Run, error_table, forecast_errors, load_runs,
@@ -274,6 +332,7 @@ def main(argv=None) -> int:
     ap.add_argument("--structure-average", action="store_true",
                     help="with --hybrid: also fit the one-step hybrid and the hybrid with the free-run hull "
                          "correction, and score each alone and averaged with the benchmark's hybrid")
+    ap.add_argument("--results", type=Path, help="also copy errors.csv and tables.md here (no data)")
     args = ap.parse_args(argv)
     if (args.seed_average or args.structure_average) and not args.hybrid:
         ap.error("--seed-average and --structure-average need --hybrid")
@@ -371,12 +430,16 @@ def main(argv=None) -> int:
                 per[(f"hybrid_{name}", "known")] = score(runs, other)
                 per[(f"hybrid_mean_{name}", "known")] = score(runs, forecast=_mean_forecast([hyb, other]))
     errors = error_table(per, runs, horizons)
+    command = shlex.join(["python", "benchmarks/esso_error_sources.py", *(sys.argv[1:] if argv is None else argv)])
+    text = tables(errors, command)
     atomic_write(args.out / "errors.csv", lambda fh: fh.write(errors.to_csv(index=False).encode()))
-    for state in ("distance_m", "heading_deg"):
-        d = errors[errors.state == state].pivot_table(index=["kind", "model"], columns="horizon_s", values="mae",
-                                                      sort=False)
-        print(f"{state}:\n{d.round(3).to_string()}")
-    print(f"wrote {args.out / 'errors.csv'}")
+    atomic_write(args.out / "tables.md", lambda fh: fh.write(text.encode()))
+    if args.results is not None:
+        args.results.mkdir(parents=True, exist_ok=True)
+        for name in ("errors.csv", "tables.md"):
+            atomic_write(args.results / name, lambda fh, src=args.out / name: fh.write(src.read_bytes()))
+    print(text)
+    print(f"wrote {args.out / 'errors.csv'} and tables.md")
     return 0
 
 

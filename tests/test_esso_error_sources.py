@@ -175,3 +175,29 @@ def test_error_feedback_adds_the_earlier_forecasts_error_turned_with_the_heading
     np.testing.assert_allclose(fc.eta[1, :, 2], np.pi / 2 * (1 + shape), atol=1e-12)
     plain = es._error_feedback(Hold(), 0.0)(a, [45.0], 30.0)
     np.testing.assert_array_equal(plain.eta[0], np.repeat(a.eta[[45]], 31, axis=0))
+
+
+def test_tables_give_ratios_to_the_physics_and_the_wind_futures_share(es):
+    import pandas as pd
+
+    rows = []
+    # physics 0.5 m / 10 deg pooled; the future wind takes 0.1 m / 3 deg, its mean held 0.05 m / 1 deg
+    for model, d, h in (("as_logged", 0.5, 10.0), ("wind_future", 0.4, 7.0), ("wind_future_mean", 0.45, 9.0)):
+        for kind, f in (("random", 1.0), ("zigzag", 2.0), ("all", 1.5)):
+            for horizon in (5.0, 10.0, 20.0, 30.0):
+                scale = horizon / 30.0 * (f if model != "wind_future" or kind != "zigzag" else 1.0)
+                rows += [(model, kind, "distance_m", horizon, d * scale, "known"),
+                         (model, kind, "heading_deg", horizon, h * scale, "known"),
+                         (model, kind, "distance_m", horizon, 99.0, "held")]
+    text = es.tables(pd.DataFrame(rows, columns=["model", "kind", "state", "horizon_s", "mae", "commands"]), "cmd")
+    assert text.startswith("Command: `cmd`")
+    lines = text.splitlines()
+    pooled = next(x for x in lines if x.startswith("| wind_future |"))
+    # 30-s pooled distance 0.4 * 1.5, heading 7 * 1.5; ratios 0.8 and 0.7 to the physics
+    assert pooled == "| wind_future | 0.100 | 0.200 | 0.400 | 0.600 | 10.50 | 0.80 | 0.70 |"
+    # per kind: zigzag's future-wind distance is 0.4 against the physics' 1.0 there
+    per_kind = [x for x in lines if x.startswith("| wind_future |")][1]
+    assert per_kind == "| wind_future | 0.80 | 0.40 |"
+    assert "| as_logged | distance_m | 20% | 10% | 50% |" in lines
+    assert "| as_logged | heading_deg | 30% | 10% | 33% |" in lines
+    assert "99" not in text                    # the commands-held rows play no part
