@@ -310,6 +310,7 @@ def tables(errors, command: str) -> str:
 
 
 def main(argv=None) -> int:
+    from _results import publish
     from hybridship.datasets.esso_osaka import esso_log_arrays
     from hybridship.evaluation.manoeuvre import (ManoeuvreConfig, Run, error_table, forecast_errors, load_runs,
                                                  make_predictors, start_rows, validation_split)
@@ -434,10 +435,7 @@ def main(argv=None) -> int:
     text = tables(errors, command)
     atomic_write(args.out / "errors.csv", lambda fh: fh.write(errors.to_csv(index=False).encode()))
     atomic_write(args.out / "tables.md", lambda fh: fh.write(text.encode()))
-    if args.results is not None:
-        args.results.mkdir(parents=True, exist_ok=True)
-        for name in ("errors.csv", "tables.md"):
-            atomic_write(args.results / name, lambda fh, src=args.out / name: fh.write(src.read_bytes()))
+    publish(args.out, args.results, ("errors.csv", "tables.md"))
     print(text)
     print(f"wrote {args.out / 'errors.csv'} and tables.md")
     return 0

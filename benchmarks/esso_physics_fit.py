@@ -25,8 +25,14 @@ commands known, a start every second:
   the circle), a two-model ensemble whose members differ in their physics, not only in
   their seed (``benchmarks/esso_error_sources.py --seed-average`` is the seed's).
 
-Writes ``theta.csv`` (coefficient, published value, identified value) and ``errors.csv``
-(the manoeuvre benchmark's columns), and prints the tables. About 16 min on one core.
+Writes ``theta.csv`` (coefficient, published value, identified value), ``errors.csv`` (the
+manoeuvre benchmark's columns) and ``tables.md`` (the fit's objective, the 30-s errors per
+kind, pooled ratios to ``dynamic``) to ``--out`` and prints them; ``--results`` also copies
+the three there (``--out`` holds the split's links to the data, which stay out of the
+repository). About 16 min on one core, twice that with ``--average``. The committed run::
+
+    python benchmarks/esso_physics_fit.py --average --out out/esso-physics-fit \
+        --results docs/results/esso-physics-fit
 """
 
 from __future__ import annotations
@@ -34,6 +40,7 @@ from __future__ import annotations
 import argparse
 import copy
 import dataclasses
+import shlex
 import sys
 import tomllib
 from pathlib import Path
@@ -73,6 +80,7 @@ def main(argv=None) -> int:
     import torch
     from scipy.optimize import minimize
 
+    from _results import kind_table, publish
     from hybridship.evaluation.manoeuvre import (ManoeuvreConfig, error_table, forecast_errors, load_runs,
                                                  make_predictors, start_rows, validation_split)
     from hybridship.fileio import atomic_write
@@ -87,6 +95,7 @@ def main(argv=None) -> int:
     ap.add_argument("--evaluations", type=int, default=600, help="Powell's function evaluations (default 600)")
     ap.add_argument("--average", action="store_true",
                     help="also score the mean of the forecasts of the hybrids on both physics")
+    ap.add_argument("--results", type=Path, help="also copy theta.csv, errors.csv and tables.md here (no data)")
     args = ap.parse_args(argv)
     try:
         fit_dir, val_dir = validation_split(args.split, args.out / "split")
@@ -122,8 +131,10 @@ def main(argv=None) -> int:
 
     res = minimize(objective, np.zeros(len(COEFFICIENTS)), method="Powell",
                    options=dict(maxfev=args.evaluations, xtol=0.02, ftol=1e-4))
-    print(f"free-run fit on the fitting runs: objective {objective(np.zeros(len(COEFFICIENTS))):.4f} -> "
-          f"{res.fun:.4f} ({res.nfev} evaluations)")
+    start = objective(np.zeros(len(COEFFICIENTS)))
+    fit_line = (f"Free-run fit on the fitting runs: objective {start:.4f} -> {res.fun:.4f} "
+                f"({1.0 - res.fun / start:.0%} lower; {res.nfev} evaluations).")
+    print(fit_line)
     rows = []
     for path, t in zip(COEFFICIENTS, res.x):
         node, key = _node(base, path)
@@ -153,11 +164,14 @@ def main(argv=None) -> int:
                             start_rows(r.arrays, int(steps.max()), cfg.start_every_s), steps) for r in runs]
     table = error_table(per, runs, horizons)
     atomic_write(args.out / "errors.csv", lambda fh: fh.write(table.to_csv(index=False).encode()))
-    for state in ("distance_m", "heading_deg"):
-        d = table[table.state == state].pivot_table(index=["kind", "model"], columns="horizon_s", values="mae",
-                                                    sort=False)
-        print(f"{state}:\n{d.round(3).to_string()}")
-    print(f"wrote {args.out / 'errors.csv'}")
+    command = shlex.join(["python", "benchmarks/esso_physics_fit.py", *(sys.argv[1:] if argv is None else argv)])
+    md = [f"Command: `{command}`", "", fit_line, "", "Identified coefficients in `theta.csv`. Validation runs, "
+          "logged commands known: 30-s distance [m] / heading [deg] per kind and pooled, and the pooled ratios "
+          "to the physics on the published coefficients (`dynamic`):", "", kind_table(table, "dynamic")]
+    text = "\n".join(md) + "\n"
+    atomic_write(args.out / "tables.md", lambda fh: fh.write(text.encode()))
+    publish(args.out, args.results, ("theta.csv", "errors.csv", "tables.md"))
+    print(text)
     return 0
 
 

@@ -118,6 +118,7 @@ def _f3(x: float) -> str:
 def main(argv=None) -> int:
     import pandas as pd
 
+    from _results import publish
     from hybridship.evaluation.manoeuvre import load_runs, validation_split
     from hybridship.fileio import atomic_write, markdown_table
     from hybridship.forecast_inputs.wind import fit_wind_forecast
@@ -176,10 +177,7 @@ def main(argv=None) -> int:
                          .assign(lead_s=["10", "30"]).set_index("lead_s").reset_index())]
     text = "\n".join(md) + "\n"
     atomic_write(args.out / "tables.md", lambda fh: fh.write(text.encode()))
-    if args.results is not None:
-        args.results.mkdir(parents=True, exist_ok=True)
-        for name in ("errors.csv", "tables.md"):
-            atomic_write(args.results / name, lambda fh, src=args.out / name: fh.write(src.read_bytes()))
+    publish(args.out, args.results, ("errors.csv", "tables.md"))
     print(text)
     return 0
 

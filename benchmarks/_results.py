@@ -1,0 +1,40 @@
+"""Result tables shared by the Esso Osaka screening scripts.
+
+The scripts keep their working files under ``--out`` (the validation split there links to
+the data, which stays out of the repository); :func:`publish` copies the result files
+alone to a committed folder (``--results``).
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+
+def publish(out_dir: Path, results_dir: Path | None, names) -> None:
+    """Copy ``names`` from ``out_dir`` to ``results_dir`` (atomically; nothing when it is None)."""
+    from hybridship.fileio import atomic_write
+
+    if results_dir is None:
+        return
+    results_dir.mkdir(parents=True, exist_ok=True)
+    for name in names:
+        atomic_write(results_dir / name, lambda fh, src=out_dir / name: fh.write(src.read_bytes()))
+
+
+def kind_table(errors, reference: str, horizon_s: float = 30.0) -> str:
+    """Markdown table of every model's distance [m] and heading [deg] error at ``horizon_s``
+    per kind and pooled (logged commands known), with the pooled ratios to ``reference``."""
+    import pandas as pd
+
+    from hybridship.fileio import markdown_table
+
+    e = errors[(errors["commands"] == "known") & (errors["horizon_s"] == horizon_s)]
+    t = e.pivot_table(index="model", columns=["state", "kind"], values="mae", sort=False)
+    kinds = list(dict.fromkeys(e["kind"]))
+    rows = []
+    for model in dict.fromkeys(e["model"]):
+        rows.append([model, *(f"{t.loc[model, ('distance_m', k)]:.3f} / {t.loc[model, ('heading_deg', k)]:.2f}"
+                              for k in kinds),
+                     f"{t.loc[model, ('distance_m', 'all')] / t.loc[reference, ('distance_m', 'all')]:.2f} / "
+                     f"{t.loc[model, ('heading_deg', 'all')] / t.loc[reference, ('heading_deg', 'all')]:.2f}"])
+    return markdown_table(pd.DataFrame(rows, columns=["model", *kinds, f"pooled / {reference}"]))

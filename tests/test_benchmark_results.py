@@ -1,0 +1,35 @@
+"""benchmarks/_results.py: the screening scripts' committed tables."""
+
+import pandas as pd
+
+from conftest import load_benchmark
+
+
+def _errors():
+    rows = []
+    for model, d, h in (("dynamic", 0.5, 10.0), ("hybrid", 0.4, 6.0)):
+        for kind, f in (("random", 1.0), ("zigzag", 3.0), ("all", 2.0)):
+            for horizon in (10.0, 30.0):
+                rows += [(model, kind, "distance_m", horizon, d * f * horizon / 30.0, "known"),
+                         (model, kind, "heading_deg", horizon, h * f * horizon / 30.0, "known"),
+                         (model, kind, "distance_m", horizon, 99.0, "held")]
+    return pd.DataFrame(rows, columns=["model", "kind", "state", "horizon_s", "mae", "commands"])
+
+
+def test_kind_table_gives_30_s_errors_per_kind_and_pooled_ratios():
+    table = load_benchmark("_results").kind_table(_errors(), "dynamic").splitlines()
+    assert table[0] == "| model | random | zigzag | all | pooled / dynamic |"
+    assert table[2] == "| dynamic | 0.500 / 10.00 | 1.500 / 30.00 | 1.000 / 20.00 | 1.00 / 1.00 |"
+    assert table[3] == "| hybrid | 0.400 / 6.00 | 1.200 / 18.00 | 0.800 / 12.00 | 0.80 / 0.60 |"
+
+
+def test_publish_copies_the_named_files_only(tmp_path):
+    results = load_benchmark("_results")
+    out = tmp_path / "out"
+    (out / "split").mkdir(parents=True)
+    (out / "errors.csv").write_text("a\n")
+    (out / "tables.md").write_text("b\n")
+    results.publish(out, None, ("errors.csv",))           # nothing without a folder
+    results.publish(out, tmp_path / "docs", ("errors.csv", "tables.md"))
+    assert sorted(p.name for p in (tmp_path / "docs").iterdir()) == ["errors.csv", "tables.md"]
+    assert (tmp_path / "docs" / "tables.md").read_text() == "b\n"
