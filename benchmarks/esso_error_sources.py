@@ -258,6 +258,30 @@ def _choose_feedback(predictor, logs, steps: np.ndarray, start_every_s: float, l
     return min(scores, key=lambda k: scores[k][0]), scores
 
 
+def _tables_only(out: Path, results: Path | None) -> int:
+    """Render ``out/tables.md`` again from ``out/errors.csv``, with the command of the run that
+    wrote them (its first line), so that a change of the tables needs no new run."""
+    import pandas as pd
+
+    from _results import publish
+    from hybridship.fileio import atomic_write
+
+    try:
+        errors = pd.read_csv(out / "errors.csv")
+        first = (out / "tables.md").read_text().splitlines()[0]
+    except (FileNotFoundError, IndexError) as err:
+        print(f"error: --tables-only needs the errors.csv and tables.md of a run in {out}: {err}", file=sys.stderr)
+        return 2
+    if not (first.startswith("Command: `") and first.endswith("`")):
+        print(f"error: {out / 'tables.md'}: its first line is not the run's command", file=sys.stderr)
+        return 2
+    text = tables(errors, first[len("Command: `"):-1])
+    atomic_write(out / "tables.md", lambda fh: fh.write(text.encode()))
+    publish(out, results, ("errors.csv", "tables.md"))
+    print(text)
+    return 0
+
+
 #: Pairs (model, the same model fed the logged future wind) whose 30-s errors give the
 #: share of the error that the wind's unknown future makes.
 WIND_SHARES = (("as_logged", "wind_future", "wind_future_mean"),
@@ -267,9 +291,11 @@ WIND_SHARES = (("as_logged", "wind_future", "wind_future_mean"),
 def tables(errors, command: str) -> str:
     """``tables.md``: the pooled errors at every horizon with the 30-s ratios to the physics
     (``as_logged``), the 30-s distance per kind as a ratio to the physics of the same runs,
-    and the share of the 30-s error that the logged future wind, and its mean held, remove."""
+    the 30-s errors per kind, and the share of the 30-s error that the logged future wind,
+    and its mean held, remove."""
     import pandas as pd
 
+    from _results import kind_table
     from hybridship.fileio import markdown_table
 
     e = errors[errors["commands"] == "known"]
@@ -303,6 +329,8 @@ def tables(errors, command: str) -> str:
           "heading error at 30 s, and the 30-s errors as ratios to the physics with the logged wind (`as_logged`):",
           "", pooled_md, "", "30-s distance per kind as a ratio to `as_logged` on the same runs:", "",
           markdown_table(pd.concat([physics, per_kind], ignore_index=True)), "",
+          "30-s distance [m] / heading [deg] per kind and pooled, with the pooled ratios to `as_logged`:", "",
+          kind_table(errors, "as_logged"), "",
           "Share of the 30-s error (pooled) that the wind's future makes: the fraction removed when the "
           "same model is fed the logged future wind (non-causal), or the logged mean of that wind over the "
           "horizon held (non-causal: the wind's level known, not its gusts):", "", share_md]
@@ -334,9 +362,14 @@ def main(argv=None) -> int:
                     help="with --hybrid: also fit the one-step hybrid and the hybrid with the free-run hull "
                          "correction, and score each alone and averaged with the benchmark's hybrid")
     ap.add_argument("--results", type=Path, help="also copy errors.csv and tables.md here (no data)")
+    ap.add_argument("--tables-only", action="store_true",
+                    help="write tables.md again from --out's errors.csv (and copy both to --results), "
+                         "keeping the command line it records; nothing is forecast")
     args = ap.parse_args(argv)
     if (args.seed_average or args.structure_average) and not args.hybrid:
         ap.error("--seed-average and --structure-average need --hybrid")
+    if args.tables_only:
+        return _tables_only(args.out, args.results)
     try:
         fit_dir, val_dir = validation_split(args.split, args.out / "split")
     except FileNotFoundError as err:

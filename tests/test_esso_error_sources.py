@@ -201,3 +201,19 @@ def test_tables_give_ratios_to_the_physics_and_the_wind_futures_share(es):
     assert "| as_logged | distance_m | 20% | 10% | 50% |" in lines
     assert "| as_logged | heading_deg | 30% | 10% | 33% |" in lines
     assert "99" not in text                    # the commands-held rows play no part
+
+
+def test_tables_only_renders_the_run_again_with_its_command(es, tmp_path):
+    import pandas as pd
+
+    rows = [(m, k, s, h, v, "known") for m, v in (("as_logged", 1.0), ("hybrid", 0.5))
+            for k in ("random", "all") for s in ("distance_m", "heading_deg") for h in (5.0, 10.0, 20.0, 30.0)]
+    pd.DataFrame(rows, columns=["model", "kind", "state", "horizon_s", "mae", "commands"]).to_csv(
+        tmp_path / "errors.csv", index=False)
+    (tmp_path / "tables.md").write_text("Command: `python benchmarks/esso_error_sources.py --hybrid`\nold\n")
+    assert es.main(["--tables-only", "--out", str(tmp_path), "--results", str(tmp_path / "docs")]) == 0
+    text = (tmp_path / "docs" / "tables.md").read_text()
+    assert text.startswith("Command: `python benchmarks/esso_error_sources.py --hybrid`\n") and "old" not in text
+    assert "| hybrid | 0.500 / 0.50 | 0.500 / 0.50 | 0.50 / 0.50 |" in text
+    (tmp_path / "tables.md").write_text("something else\n")
+    assert es.main(["--tables-only", "--out", str(tmp_path)]) == 2
