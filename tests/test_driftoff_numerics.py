@@ -18,6 +18,8 @@ from hybridship.driftoff.live import EnvironmentEstimate, blackout_now
 from hybridship.driftoff.planning import (DriftOffResult, DriftOffSettings, check_headings, simulate_blackouts,
                                           state_rng)
 from hybridship.driftoff.season import season_sweep
+from hybridship.frames import wrap_2pi
+from hybridship.sim.environment import make_wave_components
 from hybridship.driftoff.weather import (WeatherState, WeatherUncertainty, limiting_hs_m, read_weather_table,
                                          sample_environment, states_to_frame)
 
@@ -186,6 +188,81 @@ def test_a_state_steeper_than_dnvs_limit_is_sampled_at_its_own_height():
     e = sample_environment(state, None, 3, np.random.default_rng(0), duration_s=60.0, dt_s=1.0, n_wave=20)
     hs = 4.0 * np.sqrt(0.5 * (e.waves[1] ** 2).sum(axis=1))
     np.testing.assert_allclose(hs, 19.0, rtol=1e-9)
+
+
+def _before_the_waves(seed, n, n_gust):
+    """A generator of ``seed`` after the draws sample_environment makes before its waves, in
+    its documented order (the weather's normal deviates (n, 7), the gusts' jitter and phases
+    (n, n_gust) each), and those deviates."""
+    rng = np.random.default_rng(seed)
+    z = rng.standard_normal((n, 7))
+    rng.uniform(0.0, 1.0, (n, n_gust))
+    rng.uniform(0.0, 2.0 * np.pi, (n, n_gust))
+    return rng, z
+
+
+def test_every_sample_has_a_sea_of_its_own_height_in_bins_of_its_own_period():
+    """With Hs, Tp and the wave direction uncertain, each sample's components have its drawn
+    Hs exactly (4 sqrt(m0)), a calm (Hs clipped to 0) zero amplitudes, one frequency inside
+    each of the n equal bins on [0.5, 3.5] times its own peak frequency, jittered over the
+    bin, and its own direction. Kills: one Tp or Hs for all samples, bins of the state's
+    period, a lost normalisation, calm samples with waves."""
+    state = WeatherState(hs_m=0.6, tp_s=9.0, wave_dir_from_rad=2.0)
+    unc = WeatherUncertainty(hs_m=0.5, tp_s=1.5, wave_dir_rad=0.3)
+    n, n_gust, n_wave = 400, 7, 12
+    e = sample_environment(state, unc, n, np.random.default_rng(5), duration_s=60.0, dt_s=1.0, n_gust=n_gust,
+                           n_wave=n_wave)
+    _, z = _before_the_waves(5, n, n_gust)
+    tp = np.clip(9.0 + 1.5 * z[:, 3], 1.0, 30.0)
+    hs = np.maximum(0.6 + 0.5 * z[:, 2], 0.0)
+    assert np.all(hs <= limiting_hs_m(tp))          # no steepness clip: these are the drawn heights
+    w, a, _, d = e.waves
+    calm = hs == 0.0
+    assert 20 < calm.sum() < n / 2 and np.ptp(tp) > 5.0
+    np.testing.assert_allclose(4.0 * np.sqrt(0.5 * np.sum(a**2, axis=1)), hs, rtol=1e-12, atol=0.0)
+    assert np.all(a[calm] == 0.0) and np.all(a[~calm] > 0.0)
+    edges = np.linspace(0.5, 3.5, n_wave + 1) * (2.0 * np.pi / tp)[:, None]
+    where = (w - edges[:, :-1]) / np.diff(edges, axis=1)     # place in its own bin, 0 to 1
+    assert np.all(where > -1e-9) and np.all(where < 1.0 + 1e-9)
+    assert where.std() == pytest.approx(math.sqrt(1.0 / 12.0), rel=0.05)     # uniform over the bin
+    np.testing.assert_array_equal(d, np.repeat(wrap_2pi(2.0 + 0.3 * z[:, 4])[:, None], n_wave, axis=1))
+
+
+def test_the_sampled_seas_are_make_wave_components_seas_for_the_same_jitter():
+    """Each sample's sea is the one make_wave_components draws with its defaults (gamma 3.3,
+    jittered bins on [0.5, 3.5] omega_p, long-crested, Hs normalised) from the same jitter:
+    drawn for all samples at once after the gusts, the jitter (n, n_wave) then the phases
+    (n, n_wave), as the docstring says. Frequencies and directions bit for bit, amplitudes to
+    rounding (powers of an array and of a scalar may differ in the last bit)."""
+    state = WeatherState(hs_m=1.8, tp_s=7.5, wave_dir_from_rad=-1.0)
+    n, n_gust, n_wave = 6, 5, 16
+    e = sample_environment(state, None, n, np.random.default_rng(8), duration_s=60.0, dt_s=1.0, n_gust=n_gust,
+                           n_wave=n_wave)
+    rng, _ = _before_the_waves(8, n, n_gust)
+    at_the_waves = rng.bit_generator.state
+    rng.uniform(0.0, 1.0, (n, n_wave))
+    np.testing.assert_array_equal(e.waves[2], rng.uniform(0.0, 2.0 * np.pi, (n, n_wave)))
+    for i in range(n):
+        g = np.random.default_rng(0)
+        g.bit_generator.state = at_the_waves
+        g.bit_generator.advance(i * n_wave)           # make_wave_components' first draw: row i of the jitter
+        wf = make_wave_components(state.hs_m, state.tp_s, state.wave_dir_from_rad, g, n_wave)
+        np.testing.assert_array_equal(e.waves[0][i], wf.omega_rad_s)
+        np.testing.assert_allclose(e.waves[1][i], wf.amplitude_m, rtol=1e-12, atol=0.0)
+        np.testing.assert_array_equal(e.waves[3][i], wf.dir_from_rad)
+
+
+def test_a_seed_gives_the_same_samples():
+    """The same seed, the same arrays bit for bit (weather, gusts, waves); another seed, others."""
+    state = WeatherState(wind_speed_m_s=9.0, hs_m=1.5, tp_s=7.0, current_speed_m_s=0.3)
+    draw = lambda seed: sample_environment(state, WeatherUncertainty.typical(), 30,  # noqa: E731
+                                           np.random.default_rng(seed), duration_s=120.0, dt_s=0.5, n_wave=9)
+    a, b, c = draw(11), draw(11), draw(12)
+    arrays = lambda e: [e.wind_mean_m_s, e.wind_dir_from_rad, e.gust_f_hz, e.gust_amp_m_s,  # noqa: E731
+                        e.gust_phase_rad, e.current, *e.waves]
+    for x, y, other in zip(arrays(a), arrays(b), arrays(c)):
+        np.testing.assert_array_equal(x, y)
+        assert not np.array_equal(x, other)
 
 
 def test_gusts_have_the_states_intensity_within_the_resolved_band():

@@ -20,6 +20,8 @@ from hybridship.sim.environment import (
     SeaState,
     WaveField,
     _gauss_markov,
+    _jittered_components,
+    _jonswap,
     beaufort_wave_height,
     beaufort_wind_speed,
     current_series,
@@ -127,6 +129,47 @@ def test_components_reproduce_hs_and_are_not_periodic(method):
     # Elevation of a 3 h record: 4 * std = Hs.
     t = np.arange(0.0, 3 * 3600.0, 0.5)
     assert 4.0 * wf.elevation(t).std() == pytest.approx(1.3, rel=0.05)
+
+
+def test_the_batched_spectrum_is_the_scalar_one_per_row():
+    """The one JONSWAP kernel, given a peak period per row (and frequencies at or below 0),
+    gives each row the public scalar function's values: the batch uses the same formula."""
+    tp = np.array([1.0, 4.4, 9.0, 17.0, 30.0])
+    w = np.outer(2.0 * np.pi / tp, np.linspace(-0.5, 4.0, 46))          # each row around its own peak
+    batch = _jonswap(w, 1.0, tp[:, None], 3.3)
+    in_band = w >= 0.5 * (2.0 * np.pi / tp)[:, None]
+    assert batch.shape == w.shape and np.all(batch[w <= 0.0] == 0.0) and np.all(batch[in_band] > 0.0)
+    for i in range(tp.size):
+        np.testing.assert_allclose(batch[i], jonswap_spectrum(w[i], 1.0, tp[i], 3.3), rtol=1e-13, atol=0.0)
+    # and Hs and gamma broadcast too
+    np.testing.assert_allclose(_jonswap(w[2], np.array([[0.5], [2.0]]), tp[2], np.array([[1.0], [7.0]])),
+                               [jonswap_spectrum(w[2], 0.5, tp[2], 1.0), jonswap_spectrum(w[2], 2.0, tp[2], 7.0)],
+                               rtol=1e-13, atol=0.0)
+
+
+@pytest.mark.parametrize("normalize_hs", [True, False])
+def test_batched_jittered_seas_are_make_wave_components_seas_for_the_same_jitter(normalize_hs):
+    """Seas built at once (each its own Hs and Tp, a calm among them) equal those of
+    make_wave_components one by one, given the jitter each seed draws: frequencies and bin
+    widths bit for bit, amplitudes to rounding (a power of an array may differ in the last bit
+    from that of a scalar)."""
+    hs = np.array([1.3, 0.0, 4.0, 0.2, 2.5])
+    tp = np.array([7.0, 6.0, 11.5, 2.2, 16.0])
+    n = 24
+    u = np.stack([np.random.default_rng(10 + i).uniform(0.0, 1.0, n) for i in range(hs.size)])
+    omega, d_omega, amp = _jittered_components(hs, tp, 3.3, u, (0.5, 3.5), normalize_hs)
+    assert omega.shape == d_omega.shape == amp.shape == (hs.size, n)
+    for i in range(hs.size):
+        wf = make_wave_components(hs[i], tp[i], 0.0, 10 + i, n, normalize_hs=normalize_hs)
+        np.testing.assert_array_equal(omega[i], wf.omega_rad_s)
+        np.testing.assert_array_equal(d_omega[i], wf.d_omega_rad_s)
+        np.testing.assert_allclose(amp[i], wf.amplitude_m, rtol=1e-12, atol=0.0)
+    assert np.all(amp[1] == 0.0) and np.all(amp[[0, 2, 3, 4]] > 0.0)
+    hs_components = 4.0 * np.sqrt(0.5 * np.sum(amp**2, axis=1))
+    if normalize_hs:
+        np.testing.assert_allclose(hs_components, hs, rtol=1e-13, atol=0.0)
+    else:       # about Hs (24 jittered frequencies), not exactly
+        assert np.all(np.abs(hs_components - hs) <= 0.1 * hs) and np.all(np.abs(hs_components - hs)[hs > 0] > 1e-6)
 
 
 def test_equal_energy_components_have_equal_amplitudes():

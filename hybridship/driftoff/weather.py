@@ -40,6 +40,7 @@ import pandas as pd
 from pydantic import AfterValidator, Field, model_validator
 
 from ..config import Float, check_number, config_dataclass
+from ..frames import wrap_2pi
 from ..logs.io import RAD_SPREAD_LIMIT, unit_variant
 from ..forecast_inputs.limits import Envelope
 from ..sim import environment as env
@@ -337,7 +338,8 @@ class SampledEnvironment:
     current : ndarray (N, 2)
         ``[speed_m_s, dir_to_rad]``.
     waves : tuple of 4 ndarrays (N, n_wave)
-        Component frequency [rad/s], amplitude [m], phase [rad], direction from [rad].
+        Component frequency [rad/s], amplitude [m], phase [rad], direction from [rad]
+        (a sample with Hs = 0 has zero amplitudes).
     """
 
     wind_mean_m_s: np.ndarray
@@ -347,6 +349,12 @@ class SampledEnvironment:
     gust_phase_rad: np.ndarray
     current: np.ndarray
     waves: tuple
+
+
+#: JONSWAP peak enhancement [-] and frequency band [x omega_p] of the sampled seas: those of
+#: :func:`~hybridship.sim.environment.make_wave_components` by default (a test holds them equal).
+_WAVE_GAMMA = 3.3
+_WAVE_BAND = (0.5, 3.5)
 
 
 def _harris_shape(f_hz, u_m_s, length_scale_m=1800.0):
@@ -363,8 +371,34 @@ def sample_environment(state: WeatherState, uncertainty: WeatherUncertainty | No
     :class:`WeatherState`); each sample then gets its own
     gust harmonics (Harris shape, log-spaced jittered frequencies between ``1 / duration_s``
     and the Nyquist frequency of ``dt_s``, rescaled to ``gust_intensity * U``) and its own
-    random-phase JONSWAP components (:func:`~hybridship.sim.environment.make_wave_components`).
-    The order of draws is fixed, so a seed gives the same samples.
+    random-phase JONSWAP components, drawn as
+    :func:`~hybridship.sim.environment.make_wave_components` draws one sea with its defaults
+    (long-crested from the sample's wave direction, gamma 3.3, ``n_wave`` equal bins on
+    [0.5, 3.5] times the sample's own peak frequency with one jittered frequency in each,
+    amplitudes rescaled to the sample's Hs exactly; a sample with Hs = 0 has zero amplitudes).
+
+    All samples are drawn at once from ``rng``, in a fixed order: the weather's normal
+    deviates (n, 7), the gust frequencies' jitter and phases (n, n_gust) each, then the
+    wave frequencies' jitter and phases (n, n_wave) each; so a seed gives the same samples.
+
+    Parameters
+    ----------
+    state : WeatherState
+        The weather's means.
+    uncertainty : WeatherUncertainty or None
+        Standard deviations of the means (None: known exactly).
+    n : int
+        Number of samples.
+    rng : numpy.random.Generator
+        Random source.
+    duration_s, dt_s : float
+        Length [s] and time step [s] of the drift the gusts must resolve.
+    n_gust, n_wave : int
+        Gust harmonics and wave components per sample.
+
+    Returns
+    -------
+    SampledEnvironment
     """
     u = uncertainty or WeatherUncertainty()
     s = state
@@ -390,13 +424,10 @@ def sample_environment(state: WeatherState, uncertainty: WeatherUncertainty | No
     amp = np.sqrt(2.0 * _harris_shape(freq, u_ref) * np.diff(edges))
     amp *= (s.gust_intensity * wind)[:, None] / np.sqrt(0.5 * np.sum(amp**2, axis=1, keepdims=True))
 
-    ww = np.ones((n, n_wave))
-    wa = np.zeros((n, n_wave))
-    wp = np.zeros((n, n_wave))
-    wd = np.zeros((n, n_wave))
-    seeds = rng.integers(0, 2**63 - 1, n)
-    for i in range(n):
-        if hs[i] > 0.0:
-            c = env.make_wave_components(hs[i], tp[i], wave_dir[i], np.random.default_rng(seeds[i]), n_wave)
-            ww[i], wa[i], wp[i], wd[i] = c.omega_rad_s, c.amplitude_m, c.phase_rad, c.dir_from_rad
-    return SampledEnvironment(wind, wind_dir, freq, amp, phase, np.column_stack([cur, cur_dir]), (ww, wa, wp, wd))
+    # make_wave_components' defaults (jittered, long-crested, gamma 3.3), all samples at once
+    u_wave = rng.uniform(0.0, 1.0, (n, n_wave))
+    wave_phase = rng.uniform(0.0, 2.0 * np.pi, (n, n_wave))
+    ww, _, wa = env._jittered_components(hs, tp, _WAVE_GAMMA, u_wave, _WAVE_BAND)
+    wd = np.repeat(wrap_2pi(wave_dir)[:, None], n_wave, axis=1)
+    return SampledEnvironment(wind, wind_dir, freq, amp, phase, np.column_stack([cur, cur_dir]),
+                              (ww, wa, wave_phase, wd))

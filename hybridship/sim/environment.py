@@ -257,11 +257,41 @@ def jonswap_spectrum(omega_rad_s, hs_m, tp_s, gamma=3.3):
     hs = _positive("hs_m", hs_m, allow_zero=True)
     tp = _positive("tp_s", tp_s)
     g = _in_range("gamma", gamma, 1.0, 7.0)
+    return _jonswap(omega_rad_s, hs, tp, g)
+
+
+def _jonswap(omega_rad_s, hs_m, tp_s, gamma):
+    """The JONSWAP spectrum of :func:`jonswap_spectrum` [m^2 s/rad], unchecked and broadcasting.
+
+    The one implementation of the formula: :func:`jonswap_spectrum` calls it with scalars,
+    the batched components of :func:`_jittered_components` with one peak period per sea.
+
+    Parameters
+    ----------
+    omega_rad_s : array_like
+        Wave frequencies [rad/s]; ``S = 0`` for ``omega <= 0``.
+    hs_m, tp_s, gamma : float or ndarray
+        Significant wave height [m], peak period [s] and peak-enhancement factor [-], each a
+        scalar or an array that broadcasts against ``omega_rad_s`` (e.g. tp_s of shape (m, 1)
+        against frequencies (m, n)). A scalar stays a scalar, so that one sea's powers are
+        those of a scalar: numpy's power of an array can differ from a scalar's in the last
+        bit, and :func:`make_wave_components` keeps its outputs for a seed.
+
+    Returns
+    -------
+    ndarray
+        Spectral density [m^2 s/rad], the broadcast shape.
+    """
     w = np.asarray(omega_rad_s, dtype=float)
-    wp = 2.0 * np.pi / tp
-    out = np.zeros(w.shape)
-    pos = w > 0.0
-    wq = w[pos]
+    shape = np.broadcast_shapes(w.shape, np.shape(hs_m), np.shape(tp_s), np.shape(gamma))
+    pos = np.broadcast_to(w > 0.0, shape)
+
+    def at_pos(x):      # the values where omega > 0, an array's broadcast (a scalar stays one)
+        return np.broadcast_to(x, shape)[pos] if np.ndim(x) else x
+
+    wq, hs, g = at_pos(w), at_pos(hs_m), at_pos(gamma)
+    wp = at_pos(2.0 * np.pi / tp_s)
+    out = np.zeros(shape)
     s_pm = (5.0 / 16.0) * hs**2 * wp**4 * wq**-5.0 * np.exp(-1.25 * (wq / wp) ** -4.0)
     sigma = np.where(wq <= wp, 0.07, 0.09)
     peak = g ** np.exp(-0.5 * ((wq - wp) / (sigma * wp)) ** 2)
@@ -390,6 +420,73 @@ def _spreading_directions(mean_dir_rad, n_exp, size, rng):
     return mean_dir_rad + np.interp(rng.uniform(0.0, 1.0, size), cdf, grid)
 
 
+def _scale_to_hs(amp_1m, hs_m, normalize_hs):
+    """Amplitudes [m] of seas of height ``hs_m`` from those of 1 m (``S ~ Hs^2``, so a calm of
+    Hs = 0 is valid and has zero amplitudes).
+
+    Parameters
+    ----------
+    amp_1m : ndarray (..., n)
+        Component amplitudes [m] of each sea at Hs = 1 m, the last axis the components.
+    hs_m : float or ndarray (..., 1)
+        Significant wave height [m] (>= 0) of each sea, broadcasting against ``amp_1m``.
+    normalize_hs : bool
+        Rescale each sea with Hs > 0 so that ``4 sqrt(sum A_j^2 / 2)`` equals its Hs exactly.
+
+    Returns
+    -------
+    ndarray
+        Amplitudes [m], the shape of ``amp_1m``.
+    """
+    amp = amp_1m * hs_m
+    if normalize_hs:
+        root_m0 = np.sqrt(0.5 * np.sum(amp**2, axis=-1, keepdims=True))
+        with np.errstate(divide="ignore", invalid="ignore"):       # a calm's 0 / 0, not used
+            amp = amp * np.where(np.asarray(hs_m) > 0.0, hs_m / (4.0 * root_m0), 1.0)
+    return amp
+
+
+def _jittered_components(hs_m, tp_s, gamma, u, omega_range_factor=(0.5, 3.5), normalize_hs=True):
+    """Frequencies, bin widths and amplitudes of JONSWAP seas, jittered, batched.
+
+    The ``method="jittered"`` discretisation of :func:`make_wave_components`, which calls it
+    for one sea (and adds phases and directions), and
+    :func:`hybridship.driftoff.weather.sample_environment` for many at once:
+    ``n`` equal-width bins on ``omega_range_factor * omega_p`` (each sea its own
+    ``omega_p = 2 pi / tp_s``), one frequency a fraction ``u`` into each bin, and amplitudes
+    ``sqrt(2 S(omega) d_omega)`` (:func:`_jonswap`; :func:`_scale_to_hs`). Unchecked: the
+    callers check their arguments.
+
+    Parameters
+    ----------
+    hs_m, tp_s : float or ndarray (m,)
+        Significant wave height [m] (>= 0) and peak period [s] (> 0) of each sea.
+    gamma : float
+        JONSWAP peak-enhancement factor [-].
+    u : ndarray (n,) or (m, n)
+        Where each frequency lies in its bin, in [0, 1): (n,) for one sea, (m, n) for m.
+    omega_range_factor : (float, float)
+        Frequency band relative to each sea's peak frequency.
+    normalize_hs : bool
+        Rescale each sea's amplitudes to its Hs exactly (:func:`_scale_to_hs`).
+
+    Returns
+    -------
+    omega_rad_s, d_omega_rad_s, amplitude_m : ndarray, each the shape of ``u``
+        Component frequencies [rad/s], bin widths [rad/s] and amplitudes [m].
+    """
+    def per_sea(x):     # one value per row of u (a scalar stays one: the single sea's bits)
+        return x if np.ndim(x) == 0 else np.asarray(x, dtype=float)[..., None]
+
+    lo_f, hi_f = omega_range_factor
+    wp = 2.0 * np.pi / (tp_s if np.ndim(tp_s) == 0 else np.asarray(tp_s, dtype=float))
+    edges = np.linspace(lo_f * wp, hi_f * wp, u.shape[-1] + 1, axis=-1)
+    d_omega = np.diff(edges, axis=-1)
+    omega = edges[..., :-1] + u * d_omega
+    amp_1m = np.sqrt(2.0 * _jonswap(omega, 1.0, per_sea(tp_s), gamma) * d_omega)
+    return omega, d_omega, _scale_to_hs(amp_1m, per_sea(hs_m), normalize_hs)
+
+
 def make_wave_components(hs_m, tp_s, wave_dir_from_rad, rng, n_components=50, spreading=None, *,
                          gamma=3.3, omega_range_factor=(0.5, 3.5), method="jittered",
                          normalize_hs=True, g_m_s2=G_M_S2) -> WaveField:
@@ -454,31 +551,22 @@ def make_wave_components(hs_m, tp_s, wave_dir_from_rad, rng, n_components=50, sp
         raise ValueError(f"omega_range_factor must satisfy 0 < lo < 1 < hi, got {omega_range_factor!r}")
     if spreading is not None:
         spreading = _positive("spreading", spreading)
-    wp = 2.0 * np.pi / tp
-    w_lo, w_hi = lo_f * wp, hi_f * wp
+    if method not in ("jittered", "equal_energy"):
+        raise ValueError(f"method must be 'jittered' or 'equal_energy', got {method!r}")
     u = rng.uniform(0.0, 1.0, n)
     phase = rng.uniform(0.0, 2.0 * np.pi, n)
 
-    # Amplitudes for Hs = 1 m, scaled by Hs below (S ~ Hs^2), so that Hs = 0 is a valid calm.
     if method == "jittered":
-        edges = np.linspace(w_lo, w_hi, n + 1)
-        omega = edges[:-1] + u * np.diff(edges)
-        d_omega = np.diff(edges)
-        amp = np.sqrt(2.0 * jonswap_spectrum(omega, 1.0, tp, gam) * d_omega)
-    elif method == "equal_energy":
-        grid = np.linspace(w_lo, w_hi, 4001)
-        s = jonswap_spectrum(grid, 1.0, tp, gam)
+        omega, d_omega, amp = _jittered_components(hs, tp, gam, u, (lo_f, hi_f), normalize_hs)
+    else:
+        wp = 2.0 * np.pi / tp
+        grid = np.linspace(lo_f * wp, hi_f * wp, 4001)
+        s = _jonswap(grid, 1.0, tp, gam)
         cum = np.concatenate([[0.0], np.cumsum(0.5 * (s[1:] + s[:-1]) * np.diff(grid))])
         edges = np.interp(np.linspace(0.0, cum[-1], n + 1), cum, grid)
         omega = edges[:-1] + u * np.diff(edges)
         d_omega = np.diff(edges)
-        amp = np.full(n, math.sqrt(2.0 * cum[-1] / n))
-    else:
-        raise ValueError(f"method must be 'jittered' or 'equal_energy', got {method!r}")
-
-    amp *= hs
-    if normalize_hs and hs > 0.0:
-        amp *= hs / (4.0 * math.sqrt(0.5 * np.sum(amp**2)))
+        amp = _scale_to_hs(np.full(n, math.sqrt(2.0 * cum[-1] / n)), hs, normalize_hs)
 
     if spreading is None:
         dirs = np.full(n, chi)
