@@ -144,6 +144,10 @@ def main(argv=None) -> int:
             f"Machine: {os.cpu_count()} logical cores, 1-min load average at the end {os.getloadavg()[0]:.1f} "
             f"(above the core count = other jobs competed for the cores).\n\n"
             + markdown_table(res, digits=1) + "\n")
+    spaced = lambda x: f"{x:,.0f}".replace(",", " ")  # noqa: E731  (1 058, as the docs write numbers)
+    text += (f"The cluster's {spaced(len(states))} states x {psi.size} headings x {args.samples} samples = "
+             f"{spaced(len(states) * psi.size * args.samples)} blackouts took {spaced(many.wall_s)} s "
+             f"({many.wall_s / 60:.0f} min).\n")
     write_text(args.out / "tables.md", text)
     print(text)
     return 0 if equal else 1
