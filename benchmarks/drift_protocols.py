@@ -30,8 +30,11 @@ Protocols:
   "pre-training then fine-tuning" is done as one fit on both), tested on the drifts; the
   hull's yaw moment in a drift is learned from the simulated failures.
 
-Writes ``protocols.csv`` (``data,protocol,model,state,window,horizon_s,mae``) and
-``protocols.md`` (the 60-s cells as ratios to physics) to ``--out``.
+Writes ``protocols.csv`` (``data,protocol,model,state,window,horizon_s,mae``),
+``protocols.md`` (the 60-s cells as ratios to physics) and ``decisions.md`` (per fit: the
+fold's held-out log, and what ``fit`` learned from the training logs' failures and whether
+it kept it, as ``training_info`` records it: the hull's yaw moment in a drift and the thrust
+error at the thrust stops; then per data set how many fits kept each) to ``--out``.
 
 Example::
 
@@ -51,6 +54,8 @@ from hybridship.evaluation import metrics
 from hybridship.evaluation.drift import log_files
 from hybridship.fileio import atomic_write, markdown_table
 from hybridship.predictors import DynamicPredictor, HybridPredictor, as_log_arrays
+from hybridship.predictors.hybrid import THRUST_PRIOR_MIN_FAILURES
+from hybridship.residual.drift_hull import MIN_FAILURES as DRIFT_HULL_MIN_FAILURES
 from hybridship.residual.ensemble import EnsembleConfig
 
 TRUTHSIM = Path(__file__).resolve().parents[1].parent / "shared" / "data" / "truthsim-dev" / "logs"
@@ -75,11 +80,36 @@ def _score(rows, data, protocol, hybrid, tests):
         rows.append(long)
 
 
-def run(data: str, logs, sim_logs, ens: EnsembleConfig, rows: list, say=print):
+def run(data: str, logs, sim_logs, ens: EnsembleConfig, rows: list, say=print, names=None,
+        decisions: list | None = None):
+    """Fit and score the four protocols on one data set.
+
+    Parameters
+    ----------
+    data : str
+        Name of the data set (the ``data`` column).
+    logs : list of DataFrame
+        Its logs, each with a failure.
+    sim_logs : list of DataFrame
+        The simulated logs of ``sim_pretrain``.
+    ens : EnsembleConfig
+        The nets' ensemble.
+    rows : list
+        Receives the error tables (long format, one DataFrame per fit and model).
+    say : callable
+        Progress and what each fit learned from the training logs' failures.
+    names : list of str, optional
+        The logs' names, for the held-out log of each fold (default: their indices).
+    decisions : list, optional
+        Receives one :func:`decision` per fit, in the order of the fits.
+    """
     vessel = "gunnerus"
+    names = [str(k) for k in range(len(logs))] if names is None else list(names)
+    decisions = [] if decisions is None else decisions
     arrays = [as_log_arrays(x, HybridPredictor(vessel).model.vessel) for x in logs]
     say(f"[{data}] paper protocol: train on the DP parts of {len(arrays)} logs")
     hp = HybridPredictor(vessel, ensemble_config=ens, drift_hull=False).fit(arrays, dp_only=True)
+    decisions.append(decision(data, "paper", "all", hp))
     _score(rows, data, "paper", hp, arrays)
     for protocol, dp_only in (("fleet_default", True), ("fleet", False)):
         say(f"[{data}] {protocol} protocol: leave one log out, train on the other logs (dp_only={dp_only})")
@@ -87,6 +117,7 @@ def run(data: str, logs, sim_logs, ens: EnsembleConfig, rows: list, say=print):
             train = [a for i, a in enumerate(arrays) if i != k]
             hp = HybridPredictor(vessel, ensemble_config=ens).fit(train, dp_only=dp_only)
             _say_learned(say, f"  {k}: ", hp)
+            decisions.append(decision(data, protocol, names[k], hp))
             _score(rows, data, protocol, hp, [arrays[k]])
     say(f"[{data}] sim_pretrain protocol: {len(sim_logs)} simulated drifts + own DP parts")
     own_dp = [a for a in arrays]
@@ -96,6 +127,7 @@ def run(data: str, logs, sim_logs, ens: EnsembleConfig, rows: list, say=print):
     sim_arrays = [as_log_arrays(x, hp.model.vessel) for x in sim_logs]
     hp.fit(sim_arrays + [_dp_part(a) for a in own_dp], dp_only=False)
     _say_learned(say, "  ", hp)
+    decisions.append(decision(data, "sim_pretrain", "all", hp))
     _score(rows, data, "sim_pretrain", hp, arrays)
 
 
@@ -106,15 +138,73 @@ def _say_learned(say, prefix: str, hp):
         say(f"{prefix}thrust error learned at the stops {hp.training_info['thrust_error_prior']}")
 
 
-def _dp_part(a):
-    """The rows of a log before its first shutdown (LogArrays)."""
-    from dataclasses import replace
+def decision(data: str, protocol: str, test_log: str, hp) -> dict:
+    """What a fit learned from its training logs' failures: the fit's ``training_info``
+    entries ``drift_hull`` and ``thrust_error_prior`` (None where absent), whether the hull's
+    yaw moment in a drift was on (``uses_drift_hull``) and whether only the DP parts were
+    read; ``test_log`` is the log it is scored on (``all``: every log of the set)."""
+    info = hp.training_info
+    return {"data": data, "protocol": protocol, "test_log": test_log, "drift_hull_on": bool(hp.uses_drift_hull),
+            "dp_only": bool(info.get("calibration", {}).get("dp_only", False)),
+            "drift_hull": info.get("drift_hull"), "thrust_error_prior": info.get("thrust_error_prior")}
 
+
+def _hull_cell(d: dict) -> str:
+    """The hull's yaw moment in a drift of a :func:`decision`, as one table cell."""
+    hull = d["drift_hull"]
+    if hull is None:
+        return "off (`drift_hull=False`)" if not d["drift_hull_on"] else \
+            f"not chosen (fewer than {DRIFT_HULL_MIN_FAILURES} failures)"
+    cell = (f"{hull['munk_multiple']:g} x Munk on {hull['n_failures']} failures, "
+            f"{'kept' if hull['adopted'] else 'not kept'}: heading {hull['error_zero_deg']:.2f} deg without it, "
+            f"{hull['error_deg']:.2f} with it, ")
+    if hull["error_left_out_deg"] is None:
+        return cell + "no left-out check"
+    cell += f"{hull['error_left_out_deg']:.2f} with it chosen on the others (left out)"
+    if hull.get("p_value") is not None:
+        cell += f", {hull['n_left_out_gains']} of {hull['n_failures']} better, signed-rank p = {hull['p_value']:.3g}"
+    return cell
+
+
+def _thrust_cell(d: dict) -> str:
+    """The thrust error learned at the thrust stops of a :func:`decision`, as one table cell."""
+    prior = d["thrust_error_prior"]
+    if prior is None:
+        return "not learned (DP parts only)" if d["dp_only"] else "not learned (no thrust stop read)"
+    mean = ", ".join(f"{m:+.2f}" for m in prior["learned_mean"])
+    cell = f"{'kept' if prior['kept'] else 'not kept'}: learned ({mean}) with {prior['n_failures']} failures; "
+    if "position_error_m" not in prior:
+        return cell + f"fewer than the {THRUST_PRIOR_MIN_FAILURES} the check needs"
+    (pc, pl), (hc, hl) = prior["position_error_m"], prior["heading_error_deg"]
+    return cell + (f"left-out failures: position {pl:.3f} m against {pc:.3f} m, heading {hl:.2f} deg against "
+                   f"{hc:.2f} deg with the configured prior, signed-rank p = {prior['position_p_value']:.3g} "
+                   f"and {prior['heading_p_value']:.3g}")
+
+
+def decisions_markdown(decisions: list) -> str:
+    """The :func:`decision` of every fit as a Markdown table, then per data set how many fits
+    kept the thrust error learned at the stops and the hull's yaw moment in a drift."""
+    tab = pd.DataFrame([{"data": d["data"], "protocol": d["protocol"], "fold: test log": d["test_log"],
+                         "hull's yaw moment in a drift": _hull_cell(d),
+                         "thrust error learned at the thrust stops": _thrust_cell(d)} for d in decisions])
+    md = ["What each fit learned from its training logs' failures, and whether it kept it "
+          "(`training_info`; `all`: one fit, scored on every log of the set).", "", markdown_table(tab), ""]
+    for data in dict.fromkeys(d["data"] for d in decisions):
+        mine = [d for d in decisions if d["data"] == data]
+        prior = [d["thrust_error_prior"] for d in mine if d["thrust_error_prior"] is not None]
+        hull = [d["drift_hull"] for d in mine if d["drift_hull"] is not None]
+        md.append(f"* {data}: thrust error kept in {sum(p['kept'] for p in prior)} of {len(prior)} fits that "
+                  f"learned it; hull's yaw moment in a drift kept in {sum(h['adopted'] for h in hull)} of "
+                  f"{len(hull)} fits that chose one.")
+    return "\n".join(md) + "\n"
+
+
+def _dp_part(a):
+    """The rows of a log before its first shutdown (LogArrays; every per-row array cut,
+    :meth:`~hybridship.logs.io.LogArrays.rows`)."""
     off = np.flatnonzero(a.dp_active == 0)
     end = int(off[0]) if off.size else len(a.time_s)
-    cut = {f: getattr(a, f)[:end] for f in ("time_s", "eta", "nu", "nu_logged", "rpm", "azimuth_rad", "wind",
-                                              "dp_active", "segment_id", "wind_logged")}
-    return replace(a, **cut)
+    return a.rows(slice(0, end))
 
 
 def ratio_table(df: pd.DataFrame) -> pd.DataFrame:
@@ -145,12 +235,17 @@ def main(argv=None) -> int:
     ens = EnsembleConfig(n_members=args.members, seed=args.seed)
     sim_logs = [s.log for s in embedded_scenarios(args.sim_scenarios, args.seed + 1000)]
     rows: list = []
+    decisions: list = []
     if TRUTHSIM.is_dir():
-        run("truthsim-dev", [pd.read_csv(f) for f in log_files(TRUTHSIM)], sim_logs, ens, rows)
+        files = log_files(TRUTHSIM)
+        run("truthsim-dev", [pd.read_csv(f) for f in files], sim_logs, ens, rows, names=[f.name for f in files],
+            decisions=decisions)
     else:
         print(f"skipping truthsim-dev: {TRUTHSIM} not found", file=sys.stderr)
     if args.embedded:
-        run("embedded", [s.log for s in embedded_scenarios(args.embedded, args.seed)], sim_logs, ens, rows)
+        scen = embedded_scenarios(args.embedded, args.seed)
+        run("embedded", [s.log for s in scen], sim_logs, ens, rows, names=[s.name for s in scen],
+            decisions=decisions)
     df = pd.concat(rows, ignore_index=True)
     args.out.mkdir(parents=True, exist_ok=True)
     atomic_write(args.out / "protocols.csv",
@@ -160,7 +255,10 @@ def main(argv=None) -> int:
           "Mean absolute error at 60 s as a ratio to physics alone, first 5 / first 20 intervals "
           "(below 1: better than physics).", "", markdown_table(tab)]
     atomic_write(args.out / "protocols.md", lambda fh: fh.write(("\n".join(md) + "\n").encode("utf-8")))
+    dec = decisions_markdown(decisions)
+    atomic_write(args.out / "decisions.md", lambda fh: fh.write(dec.encode("utf-8")))
     print("\n".join(md))
+    print(dec, end="")
     return 0
 
 

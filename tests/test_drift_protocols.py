@@ -1,0 +1,67 @@
+"""benchmarks/drift_protocols.py: its decisions file on hand-made ``training_info``."""
+
+from types import SimpleNamespace
+
+import numpy as np
+
+from conftest import load_benchmark
+from hybridship.residual.drift_hull import MUNK_MULTIPLES, choose_coefficient
+
+
+def _fit(drift_hull=None, thrust_error_prior=None, dp_only=False, uses_drift_hull=True):
+    """A fitted predictor as :func:`decision` reads it."""
+    info = {"calibration": {"dp_only": dp_only}}
+    if drift_hull is not None:
+        info["drift_hull"] = drift_hull
+    if thrust_error_prior is not None:
+        info["thrust_error_prior"] = thrust_error_prior
+    return SimpleNamespace(training_info=info, uses_drift_hull=uses_drift_hull)
+
+
+def test_the_decisions_file_has_a_row_per_fit_and_counts_what_was_kept(tmp_path):
+    dp = load_benchmark("drift_protocols")
+    # the hull's yaw moment as fit records it: 0 x Munk worst everywhere, so a non-zero one is kept
+    obj = np.tile(np.abs(MUNK_MULTIPLES - 0.65)[:, None], (1, 5)) + np.linspace(0.0, 0.01, 5)
+    kept_hull = {**choose_coefficient(obj, 0.005).as_dict(), "horizon_s": 60.0, "start_every_s": 10.0}
+    assert kept_hull["adopted"]
+    checked = {"learned_mean": [0.48, -0.09, -0.14], "learned_std": [0.1, 0.1, 0.2], "n_failures": 5,
+               "horizon_s": 60.0, "kept": False, "position_error_m": [1.433, 1.4334],
+               "heading_error_deg": [1.96, 2.0], "position_p_value": 0.5, "heading_p_value": 0.7}
+    few = {"learned_mean": [0.1, 0.0, 0.0], "learned_std": [0.1, 0.1, 0.2], "n_failures": 2, "horizon_s": 60.0,
+           "kept": False}
+    decisions = [dp.decision("a", "paper", "all", _fit(dp_only=True, uses_drift_hull=False)),
+                 dp.decision("a", "fleet_default", "log0", _fit(kept_hull, dp_only=True)),
+                 dp.decision("a", "fleet", "log0", _fit(kept_hull, checked)),
+                 dp.decision("b", "fleet", "s0", _fit(None, few)),
+                 dp.decision("b", "sim_pretrain", "all", _fit(None, {**few, "kept": True}))]
+    text = dp.decisions_markdown(decisions)
+    lines = text.splitlines()
+    rows = [x for x in lines if x.startswith("| ") and not x.startswith("| ---")]
+    assert len(rows) == 1 + len(decisions)                 # header, then one row per fit
+    assert rows[1].startswith("| a | paper | all | off (`drift_hull=False`) | not learned (DP parts only) |")
+    assert "0.65 x Munk on 5 failures, kept: heading " in rows[2]
+    assert "with it chosen on the others (left out), 5 of 5 better, signed-rank p = 0.0312" in rows[2]
+    assert "not kept: learned (+0.48, -0.09, -0.14) with 5 failures" in rows[3]
+    assert "position 1.433 m against 1.433 m, heading 2.00 deg against 1.96 deg" in rows[3]
+    assert "not chosen (fewer than 5 failures)" in rows[4] and "fewer than the 5 the check needs" in rows[4]
+    assert lines[-2:] == [
+        "* a: thrust error kept in 0 of 1 fits that learned it; hull's yaw moment in a drift kept in 2 of 2 "
+        "fits that chose one.",
+        "* b: thrust error kept in 1 of 2 fits that learned it; hull's yaw moment in a drift kept in 0 of 0 "
+        "fits that chose one."]
+    assert text.endswith(".\n")
+
+
+def test_the_dp_part_cuts_every_per_row_array_before_the_first_shutdown():
+    """``sim_pretrain`` trains on the own logs' DP parts: every per-row array (``commands_logged``
+    too, which the nets' rows read) ends at the first row with the DP off."""
+    from hybridship.predictors import HybridPredictor, as_log_arrays
+    from hybridship.sim.scenario import embedded_scenarios
+
+    dp = load_benchmark("drift_protocols")
+    a = as_log_arrays(embedded_scenarios(1, 0)[0].log, HybridPredictor("gunnerus").model.vessel)
+    end = int(np.flatnonzero(a.dp_active == 0)[0])
+    b = dp._dp_part(a)
+    assert len(b) == end and b.dp_active.all()
+    for name in ("time_s", "eta", "rpm", "dp_active", "segment_id", "wind_logged", "commands_logged"):
+        np.testing.assert_array_equal(getattr(b, name), getattr(a, name)[:end])
