@@ -219,9 +219,9 @@ def with_command_guard(p, logs, stride):
     q.command_guard = True
     cal = q.calibration_config
     cuts, masks = q._held_back(logs, cal, True)
-    cal_cuts, split_info = q._fit_command_guard(logs, cuts, masks, cal, True, stride)   # as fit splits them
+    folds, split_info = q._fit_command_guard(logs, cuts, masks, cal, True, stride)   # as fit cross-fits them
     q.training_info["calibration"] = {**q.training_info.get("calibration", {}), **split_info,
-                                      "n_starts": q._calibrate_modes(logs, cal_cuts, cal, True)}
+                                      "n_starts": q._calibrate_modes(logs, folds, cal, True)}
     if q.command_regime is not None:
         print("command-regime weights:", np.round(q.command_regime.weights, 2).tolist(),
               "held-back rows:", q.command_regime.n_held.tolist(), flush=True)
@@ -236,11 +236,11 @@ def with_wind_spread(p, logs, samples: int = 8):
     q = copy.deepcopy(p)
     q.wind_samples = samples
     cal = q.calibration_config
-    cuts = [q._calibration_cut(a, cal, True) for a in logs]
+    cuts, masks = q._held_back(logs, cal, True)
     q.training_info["wind_spread"] = q._fit_wind_error_paths(logs, cuts, cal, True)
-    if q.command_guard:         # as fit: the spread on the held-back rows after those of the regime weights
-        cuts = q._calibration_splits(logs, cuts, cal, True) or cuts
-    q._calibrate_modes(logs, cuts, cal, True)
+    # as fit: with the command guard, each part's starts with the weights of the other part
+    folds, _ = q._fit_command_guard(logs, cuts, masks, cal, True, q.training_info["row_stride"])
+    q._calibrate_modes(logs, folds, cal, True)
     return q
 
 

@@ -163,44 +163,59 @@ def test_command_regime_is_fitted_on_the_deviations_the_nets_learned(monkeypatch
     cal = CalibrationConfig(fraction=0.3, horizon_s=20.0, max_starts=30)
     hp = HybridPredictor(m.vessel, ensemble_config=TINY, command_guard=True, calibration_config=cal,
                          environment_window_s=600.0).fit(logs)
-    held = [(np.arange(len(a)) >= lo) & (np.arange(len(a)) < hi)
-            for a, (lo, hi) in zip(logs, hp.training_info["calibration"]["command_regime_rows"])]
+    # the last fit is the model's own weights: on every held-back row (the parts' weights come first)
+    held = [np.arange(len(a)) >= hp._calibration_cut(a, cal, True) for a in logs]
     X, Y, _ = hp.training_data(logs, row_masks=held)
     np.testing.assert_allclose(seen["target"], Y / hp.ensemble.y_std)
     np.testing.assert_allclose(seen["pred"], hp.ensemble.predict(X)[0] / hp.ensemble.y_std)
 
 
-def test_command_regime_weights_are_chosen_before_the_spread_calibration_starts(monkeypatch):
-    """With the command guard, a log's held-back rows are split in time order: the regime
-    weights read only rows before the first start of the spread calibration, whose forecasts
-    (starts and horizons) lie after them; the model records both row ranges. Without the
-    split the weights were chosen on the very rows that calibrated the spread."""
+def test_command_regime_spread_is_cross_fitted_on_rows_that_chose_none_of_its_weights(monkeypatch):
+    """With the command guard, a log's held-back rows are split in time order; weights are
+    fitted on each part alone, and every calibration forecast (start and horizon) lies in the
+    part whose weights it does not use. The model keeps the weights of all held-back rows,
+    and records the two parts."""
     m = DynamicModel("gunnerus")
     log = as_log_arrays(physics_log(m, seed=8, duration_s=800.0, t_shutdown_s=None, current=(0.3, 1.0)), m.vessel)
-    regime_t_s, start_t_s = [], []
-    regime_inputs, forecast = HybridPredictor._regime_inputs, HybridPredictor.forecast
+    read, fitted, used = [], {}, []
+    regime_inputs, fit_regime, forecast = (HybridPredictor._regime_inputs, HybridPredictor._fit_command_regime,
+                                           HybridPredictor.forecast)
 
     def spy_inputs(self, prep, rows):      # a regime row's target is read at the row itself
-        regime_t_s.extend(prep.arrays.time_s[rows])
+        read.extend(prep.arrays.time_s[rows])
         return regime_inputs(self, prep, rows)
 
+    def spy_fit(self, *args, **kw):
+        read.clear()
+        regime = fit_regime(self, *args, **kw)
+        fitted[id(regime)] = np.array(read)           # the training rows' inputs, then the held-back rows'
+        return regime
+
     def spy_forecast(self, log, start_times_s, *args, **kw):       # in fit: the calibration's forecasts
-        start_t_s.extend(np.atleast_1d(start_times_s))
+        used.append((id(self.command_regime), np.atleast_1d(start_times_s).copy()))
         return forecast(self, log, start_times_s, *args, **kw)
 
     monkeypatch.setattr(HybridPredictor, "_regime_inputs", spy_inputs)
+    monkeypatch.setattr(HybridPredictor, "_fit_command_regime", spy_fit)
     monkeypatch.setattr(HybridPredictor, "forecast", spy_forecast)
     cal = CalibrationConfig(fraction=0.3, horizon_s=20.0, max_starts=40)
     hp = HybridPredictor(m.vessel, ensemble_config=TINY, command_guard=True, calibration_config=cal,
                          environment_window_s=600.0).fit([log])
-    assert max(regime_t_s) < min(start_t_s)            # disjoint, in time order
     info = hp.training_info["calibration"]
-    assert min(info["n_starts"].values()) >= 10 and set(hp.calibration) == {"held", "known"}
-    assert hp.command_regime is not None and hp.command_regime.n_held.sum() > 0
-    [(first, split)], [(split_again, end)] = info["command_regime_rows"], info["calibration_rows"]
+    [[(first, split), (split_again, end)]] = info["cross_fit_rows"]
     assert first == hp._calibration_cut(log, cal, True) < split == split_again < end == len(log)
-    assert max(regime_t_s) < log.time_s[split] <= min(start_t_s)
-    assert max(start_t_s) + cal.horizon_s <= log.time_s[-1]
+    assert min(info["n_starts"].values()) >= 10 and set(hp.calibration) == {"held", "known"}
+    fitted = {k: (t[t >= log.time_s[first]].min(), t[t >= log.time_s[first]].max()) for k, t in fitted.items()}
+    lo, hi = fitted[id(hp.command_regime)]             # the model's weights: every held-back row
+    assert lo < log.time_s[split] < hi and hp.command_regime.n_held.sum() > 0
+    regimes = {k for k, _ in used}
+    assert len(regimes) == 2 and id(hp.command_regime) not in regimes
+    for key, starts in used:
+        r_lo, r_hi = fitted[key]
+        # the forecasts of a fold lie wholly before or wholly after the rows of its weights
+        assert (starts.max() + cal.horizon_s < r_lo) or (starts.min() > r_hi)
+    early = [s for k, s in used if fitted[k][0] >= log.time_s[split]]
+    assert early and max(np.concatenate(early)) + cal.horizon_s < log.time_s[split]
 
 
 def test_too_few_calibration_starts_to_split_are_shared_and_said(monkeypatch):
@@ -215,7 +230,7 @@ def test_too_few_calibration_starts_to_split_are_shared_and_said(monkeypatch):
         hp = HybridPredictor(m.vessel, ensemble_config=TINY, command_guard=True, calibration_config=few,
                              environment_window_s=600.0).fit(logs)
     info = hp.training_info["calibration"]
-    assert info["command_regime_split"] is False and "calibration_rows" not in info
+    assert info["command_regime_split"] is False and "cross_fit_rows" not in info
     assert set(hp.calibration) == {"held", "known"} and min(info["n_starts"].values()) >= 10
     fewer = CalibrationConfig(fraction=1e-4, horizon_s=60.0, max_starts=40, start_every_s=20.0)
     with pytest.warns(UserWarning, match="is not calibrated: .* its forecasts keep the ensemble's raw spread"):

@@ -136,10 +136,11 @@ class HybridPredictor:
     command_guard : bool
         Also fit a :class:`~hybridship.residual.guard.CommandRegime` on the held-back
         calibration rows (needs ``calibration_config.fraction > 0``) and apply it with the guard.
-        Each log's held-back rows are then split in time order: the rows before the middle
-        one of its calibration starts choose the regime weights, the later half of the starts
-        (with their horizons) calibrates the spread (:meth:`_calibration_split`;
-        ``training_info["calibration"]`` records the rows of each).
+        The spread is then cross-fitted: each log's held-back rows are split in two in time
+        order at the middle one of its calibration starts (:meth:`_calibration_split`), and
+        the calibration forecasts starting in one part use weights fitted on the other
+        (``training_info["calibration"]["cross_fit_rows"]`` records the parts); the model keeps
+        the weights of all held-back rows.
     hull_correction : bool
         Before the nets, fit a linear-in-parameters, MMG-structured correction of the
         acceleration (:class:`~hybridship.residual.hull.HullCorrection`, ridge regression on
@@ -358,9 +359,9 @@ class HybridPredictor:
         ``calibration.commands`` modes over ``calibration.horizon_s``, give the per-lead
         scale of the spread (:func:`hybridship.residual.calibration.fit_spread_scale`,
         north and east pooled for the position, the heading on its own). Every later
-        forecast's ``eta_std`` is calibrated with it. With ``command_guard`` the earlier part of
-        the held-back rows chooses the command-regime weights and only the later half of the
-        starts calibrates the spread (:meth:`_fit_command_guard`). With ``dp_only`` the nets
+        forecast's ``eta_std`` is calibrated with it. With ``command_guard`` the held-back rows
+        also choose the command-regime weights, and each calibration forecast uses weights
+        chosen on the part of them it does not lie in (:meth:`_fit_command_guard`). With ``dp_only`` the nets
         never see a failure, so a forecast that starts after one keeps the raw spread, unless the
         training logs hold at least ``calibration.after_stop_min_failures`` failures with
         enough drift after them: then the spread after a failure is calibrated on those
@@ -387,13 +388,13 @@ class HybridPredictor:
         wind_spread_info = self._fit_wind_error_paths(logs, cuts, cal, dp_only)
         prior_info = self._check_thrust_error_prior(logs, cal.horizon_s)
         self._fit_nets(logs, dp_only=dp_only, progress=progress, stride=stride, row_masks=masks)
-        cal_cuts, split_info = self._fit_command_guard(logs, cuts, masks, cal, dp_only, stride)
+        folds, split_info = self._fit_command_guard(logs, cuts, masks, cal, dp_only, stride)
         drift_hull_info = self._fit_drift_hull(logs, cal.horizon_s)
         self.calibration = {}
         cal_info = {"fraction": cal.fraction, "commands": list(cal.commands), "horizon_s": cal.horizon_s,
                     "refit": cal.refit, "n_starts": {}, "dp_only": bool(dp_only), **split_info}
         if cal.fraction > 0:
-            cal_info["n_starts"] = self._calibrate_modes(logs, cal_cuts, cal, dp_only)
+            cal_info["n_starts"] = self._calibrate_modes(logs, folds, cal, dp_only)
             if cal.refit:
                 self._fit_nets(logs, dp_only=dp_only, progress=progress, stride=stride, row_masks=None)
         self.training_info["calibration"] = cal_info
@@ -645,31 +646,44 @@ class HybridPredictor:
         return a.rpm[rows - 1, 0] / sc["rpm_scale"], prep.nu_hat[rows, 0], ang
 
     def _fit_command_guard(self, logs, cuts, masks, cal: CalibrationConfig, dp_only: bool, stride: int):
-        """With ``command_guard`` (and a held-back part): split each log's held-back rows in two
-        in time order (:meth:`_calibration_split`), fit the command-regime weights on the first
-        part and leave the second to the spread calibration, so that the spread is calibrated
-        on rows that chose nothing. Sets ``self.command_regime``.
+        """With ``command_guard`` (and a held-back part): fit the command-regime weights on all
+        held-back rows (``self.command_regime``) and cross-fit the spread's calibration: each
+        log's held-back rows are split in two in time order (:meth:`_calibration_split`),
+        weights are fitted on each part alone, and the calibration forecasts starting in one
+        part (with their horizons) use the weights of the other, so that the spread is
+        calibrated on rows that chose none of the weights in its forecasts.
 
         Returns
         -------
-        cal_cuts : list of int
-            Per log, the first row the spread calibration may start from (``cuts`` without the guard).
+        folds : list of (CommandRegime or None, list of ndarray)
+            The calibration's folds (:meth:`_calibrate`): the weights its forecasts use and,
+            per log, its start rows; one fold of ``self.command_regime`` and every held-back
+            start without the split.
         info : dict
             What ``training_info["calibration"]`` records of the split (empty without the guard):
-            per log, the half-open row ranges ``[first, end)`` of the regime weights' rows and of
-            the calibration's starts and horizons (with ``dp_only``, their station-keeping rows).
+            per log, the half-open row ranges ``[first, end)`` of the two parts (with
+            ``dp_only``, their station-keeping rows).
         """
         self.command_regime = None
         if not (self.command_guard and cal.fraction > 0):
-            return cuts, {}
+            return self._calibration_folds(logs, cuts, cal, dp_only), {}
         splits = self._calibration_splits(logs, cuts, cal, dp_only)
         if splits is None:
             self.command_regime = self._fit_command_regime(logs, masks, dp_only, stride)
-            return cuts, {"command_regime_split": False}
-        self.command_regime = self._fit_command_regime(logs, masks, dp_only, stride, ends=splits)
-        return splits, {"command_regime_split": True,
-                        "command_regime_rows": [[int(c), int(s)] for c, s in zip(cuts, splits)],
-                        "calibration_rows": [[int(s), len(a)] for a, s in zip(logs, splits)]}
+            return self._calibration_folds(logs, cuts, cal, dp_only), {"command_regime_split": False}
+        early = self._fit_command_regime(logs, masks, dp_only, stride, ranges=[(0, s) for s in splits])
+        late = self._fit_command_regime(logs, masks, dp_only, stride, ranges=[(s, len(a)) for a, s in zip(logs, splits)])
+        self.command_regime = self._fit_command_regime(logs, masks, dp_only, stride)
+        starts = [self._calibration_start_rows(a, c, cal, dp_only) for a, c in zip(logs, cuts)]
+        steps = [int(round(cal.horizon_s / float(np.median(np.diff(a.time_s))))) if len(a) > 1 else 0 for a in logs]
+        folds = [(early, [r[r >= s] for r, s in zip(starts, splits)]),
+                 (late, [r[r + h < s] for r, s, h in zip(starts, splits, steps)])]
+        return folds, {"command_regime_split": True,
+                       "cross_fit_rows": [[[int(c), int(s)], [int(s), len(a)]] for a, c, s in zip(logs, cuts, splits)]}
+
+    def _calibration_folds(self, logs, cuts, cal: CalibrationConfig, dp_only: bool) -> list:
+        """One calibration fold: the model's own weights and every held-back start from ``cuts``."""
+        return [(self.command_regime, [self._calibration_start_rows(a, c, cal, dp_only) for a, c in zip(logs, cuts)])]
 
     def _calibration_splits(self, logs, cuts, cal: CalibrationConfig, dp_only: bool) -> list[int] | None:
         """Per log, the row where the command guard splits the held-back rows from ``cuts`` on
@@ -707,17 +721,17 @@ class HybridPredictor:
         held-back rows then all go to the weights)."""
         return int(starts[starts.size // 2]) if starts.size else len(a)
 
-    def _fit_command_regime(self, logs, masks, dp_only, stride, ends=None) -> CommandRegime | None:
-        """Command-regime weights from the held-back rows before ``ends`` (per log, the first row
-        that calibrates the spread; None: all held-back rows), see :class:`CommandRegime`; their
+    def _fit_command_regime(self, logs, masks, dp_only, stride, ranges=None) -> CommandRegime | None:
+        """Command-regime weights from the held-back rows in ``ranges`` (per log, a half-open
+        row range ``(first, end)``; None: all held-back rows), see :class:`CommandRegime`; their
         targets and features are those the nets were trained on (:meth:`_training_prep`)."""
         tr_in, he_in, T, Pm = [], [], [], []
         for k, (log, m) in enumerate(zip(logs, masks)):
             prep, every = self._training_prep(log)
             a = prep.arrays
             held = None if m is None else ~np.asarray(m, dtype=bool)
-            if held is not None and ends is not None:
-                held &= np.arange(held.size) < ends[k]
+            if held is not None and ranges is not None:
+                held &= (np.arange(held.size) >= ranges[k][0]) & (np.arange(held.size) < ranges[k][1])
             m = None if m is None else np.asarray(m, dtype=bool)[::every]
             dp = a.dp_active.astype(bool) if dp_only else np.ones(len(a), bool)
             held = dp & held[::every] if held is not None else np.zeros(len(a), bool)
@@ -832,13 +846,14 @@ class HybridPredictor:
             ok &= (bad[r + H + 1] - bad[r]) == 0
         return r[ok]
 
-    def _calibrate_modes(self, logs, cuts, cal: CalibrationConfig, dp_only: bool) -> dict:
-        """Calibrate the spread of every mode of ``cal.commands`` on the held-back starts
-        (replacing ``self.calibration``); returns the starts used per mode."""
+    def _calibrate_modes(self, logs, folds, cal: CalibrationConfig, dp_only: bool) -> dict:
+        """Calibrate the spread of every mode of ``cal.commands`` on the held-back starts of
+        ``folds`` (:meth:`_fit_command_guard`; replacing ``self.calibration``); returns the
+        starts used per mode."""
         self.calibration = {}
         n_starts = {}
         for mode in cal.commands:
-            fitted, n_starts[mode] = self._calibrate(logs, cuts, cal, dp_only, mode)
+            fitted, n_starts[mode] = self._calibrate(logs, folds, cal, dp_only, mode)
             if fitted is not None:
                 self.calibration[mode] = fitted
             else:
@@ -850,31 +865,36 @@ class HybridPredictor:
                               UserWarning, stacklevel=3)
         return n_starts
 
-    def _calibrate(self, logs, cuts, cal: CalibrationConfig, dp_only: bool, mode: str):
-        """Calibration of one command mode from held-back starts; (None, 0) without any start."""
+    def _calibrate(self, logs, folds, cal: CalibrationConfig, dp_only: bool, mode: str):
+        """Calibration of one command mode from the held-back starts of ``folds`` (each fold's
+        forecasts with its own command-regime weights); (None, 0) without any start."""
         from ..frames import wrap_pi
 
-        cand = [self._calibration_start_rows(a, cut, cal, dp_only) for a, cut in zip(logs, cuts)]
-        total = sum(c.size for c in cand)
+        total = sum(r.size for _, rows in folds for r in rows)
         if total == 0:
             return None, 0
         pos_e, pos_s, hdg_e, hdg_s, leads = [], [], [], [], []
-        for a, rows in zip(logs, cand):
-            if rows.size == 0:
-                continue
-            dt = float(np.median(np.diff(a.time_s)))
-            every = max(1, int(np.ceil(total / cal.max_starts))) if cal.start_every_s is None \
-                else max(1, int(round(cal.start_every_s / dt)))
-            rows = rows[::every]
-            fc = self.forecast(a, a.time_s[rows], cal.horizon_s, commands=mode, calibrated=False)
-            H = fc.eta.shape[1] - 1
-            truth = a.eta[rows[:, None] + np.arange(1, H + 1)[None, :]]          # (S, H, 3)
-            e = np.abs(fc.eta[:, 1:] - truth)
-            pos_e.append(np.concatenate([e[..., 0], e[..., 1]]))               # north and east pooled
-            pos_s.append(np.concatenate([fc.eta_std[:, 1:, 0], fc.eta_std[:, 1:, 1]]))
-            hdg_e.append(np.abs(wrap_pi(fc.eta[:, 1:, 2] - truth[..., 2])))
-            hdg_s.append(fc.eta_std[:, 1:, 2])
-            leads.append(fc.lead_s[1:])
+        final = self.command_regime
+        try:
+            for regime, a, rows in ((g, a, r) for g, rows_ in folds for a, r in zip(logs, rows_)):
+                if rows.size == 0:
+                    continue
+                self.command_regime = regime
+                dt = float(np.median(np.diff(a.time_s)))
+                every = max(1, int(np.ceil(total / cal.max_starts))) if cal.start_every_s is None \
+                    else max(1, int(round(cal.start_every_s / dt)))
+                rows = rows[::every]
+                fc = self.forecast(a, a.time_s[rows], cal.horizon_s, commands=mode, calibrated=False)
+                H = fc.eta.shape[1] - 1
+                truth = a.eta[rows[:, None] + np.arange(1, H + 1)[None, :]]          # (S, H, 3)
+                e = np.abs(fc.eta[:, 1:] - truth)
+                pos_e.append(np.concatenate([e[..., 0], e[..., 1]]))               # north and east pooled
+                pos_s.append(np.concatenate([fc.eta_std[:, 1:, 0], fc.eta_std[:, 1:, 1]]))
+                hdg_e.append(np.abs(wrap_pi(fc.eta[:, 1:, 2] - truth[..., 2])))
+                hdg_s.append(fc.eta_std[:, 1:, 2])
+                leads.append(fc.lead_s[1:])
+        finally:
+            self.command_regime = final
         lead, cols = _common_leads(leads)
         kw = cal.fit_kwargs
         n = sum(x.shape[0] for x in hdg_e)
