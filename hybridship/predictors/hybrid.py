@@ -672,7 +672,8 @@ class HybridPredictor:
             self.command_regime = self._fit_command_regime(logs, masks, dp_only, stride)
             return self._calibration_folds(logs, cuts, cal, dp_only), {"command_regime_split": False}
         early = self._fit_command_regime(logs, masks, dp_only, stride, ranges=[(0, s) for s in splits])
-        late = self._fit_command_regime(logs, masks, dp_only, stride, ranges=[(s, len(a)) for a, s in zip(logs, splits)])
+        late = self._fit_command_regime(logs, masks, dp_only, stride,
+                                        ranges=[(s, len(a)) for a, s in zip(logs, splits)])
         self.command_regime = self._fit_command_regime(logs, masks, dp_only, stride)
         starts = [self._calibration_start_rows(a, c, cal, dp_only) for a, c in zip(logs, cuts)]
         steps = [int(round(cal.horizon_s / float(np.median(np.diff(a.time_s))))) if len(a) > 1 else 0 for a in logs]
