@@ -241,8 +241,8 @@ def main(argv=None) -> int:
 
 def with_command_regime(q, logs, stride):
     """Fit the command-regime guard of the fine-tuned hybrid ``q`` on the held-back end of its logs (in place),
-    on the rows before those of the spread calibration as :meth:`HybridPredictor.fit` splits them (the
-    spread itself is not recalibrated here: the screen scores errors only)."""
+    as :meth:`HybridPredictor.fit` does (the weights of all the held-back rows; the spread itself is not
+    recalibrated here: the screen scores errors only)."""
     cal = q.calibration_config
     cuts, masks = q._held_back(logs, cal, True)
     q._fit_command_guard(logs, cuts, masks, cal, True, stride)

@@ -220,7 +220,9 @@ def with_command_guard(p, logs, stride):
     cal = q.calibration_config
     cuts, masks = q._held_back(logs, cal, True)
     folds, split_info = q._fit_command_guard(logs, cuts, masks, cal, True, stride)   # as fit cross-fits them
-    q.training_info["calibration"] = {**q.training_info.get("calibration", {}), **split_info,
+    old = {k: v for k, v in q.training_info.get("calibration", {}).items()
+           if k not in ("command_regime_split", "cross_fit_rows")}
+    q.training_info["calibration"] = {**old, **split_info,
                                       "n_starts": q._calibrate_modes(logs, folds, cal, True)}
     if q.command_regime is not None:
         print("command-regime weights:", np.round(q.command_regime.weights, 2).tolist(),

@@ -195,14 +195,26 @@ def test_command_regime_spread_is_cross_fitted_on_rows_that_chose_none_of_its_we
         used.append((id(self.command_regime), np.atleast_1d(start_times_s).copy()))
         return forecast(self, log, start_times_s, *args, **kw)
 
+    guard_fit, returned = HybridPredictor._fit_command_guard, []
+
+    def spy_guard(self, *args, **kw):
+        returned.append(guard_fit(self, *args, **kw))
+        return returned[-1]
+
     monkeypatch.setattr(HybridPredictor, "_regime_inputs", spy_inputs)
     monkeypatch.setattr(HybridPredictor, "_fit_command_regime", spy_fit)
     monkeypatch.setattr(HybridPredictor, "forecast", spy_forecast)
+    monkeypatch.setattr(HybridPredictor, "_fit_command_guard", spy_guard)
     cal = CalibrationConfig(fraction=0.3, horizon_s=20.0, max_starts=40)
     hp = HybridPredictor(m.vessel, ensemble_config=TINY, command_guard=True, calibration_config=cal,
                          environment_window_s=600.0).fit([log])
     info = hp.training_info["calibration"]
     [[(first, split), (split_again, end)]] = info["cross_fit_rows"]
+    # the folds before thinning: the later starts from the split on, the earlier ones whose
+    # 20-row horizon (1-s steps) ends before it, each with the other part's weights
+    [((w_late_starts, [late_starts]), (w_early_starts, [early_starts]))] = [folds for folds, _ in returned]
+    assert late_starts.min() == split and early_starts.size and early_starts.max() + 20 == split - 1
+    assert len({id(w_late_starts), id(w_early_starts), id(hp.command_regime)}) == 3
     assert first == hp._calibration_cut(log, cal, True) < split == split_again < end == len(log)
     assert min(info["n_starts"].values()) >= 10 and set(hp.calibration) == {"held", "known"}
     fitted = {k: (t[t >= log.time_s[first]].min(), t[t >= log.time_s[first]].max()) for k, t in fitted.items()}
@@ -218,6 +230,27 @@ def test_command_regime_spread_is_cross_fitted_on_rows_that_chose_none_of_its_we
     assert early and max(np.concatenate(early)) + cal.horizon_s < log.time_s[split]
 
 
+def test_a_part_without_weights_is_not_cross_fitted_and_said(monkeypatch):
+    """When one part of the held-back rows gives no command-regime weights, its fold would be
+    calibrated without any: fit does not cross-fit, says so and records it."""
+    m = DynamicModel("gunnerus")
+    log = as_log_arrays(physics_log(m, seed=8, duration_s=800.0, t_shutdown_s=None, current=(0.3, 1.0)), m.vessel)
+    fit_regime = HybridPredictor._fit_command_regime
+
+    def no_early(self, logs, masks, dp_only, stride, ranges=None):
+        return None if ranges is not None and ranges[0][0] == 0 else fit_regime(self, logs, masks, dp_only, stride,
+                                                                                ranges)
+
+    monkeypatch.setattr(HybridPredictor, "_fit_command_regime", no_early)
+    cal = CalibrationConfig(fraction=0.3, horizon_s=20.0, max_starts=40)
+    with pytest.warns(UserWarning, match="cannot be cross-fitted"):
+        hp = HybridPredictor(m.vessel, ensemble_config=TINY, command_guard=True, calibration_config=cal,
+                             environment_window_s=600.0).fit([log])
+    info = hp.training_info["calibration"]
+    assert info["command_regime_split"] is False and "cross_fit_rows" not in info
+    assert hp.command_regime is not None and set(hp.calibration) == {"held", "known"}
+
+
 def test_too_few_calibration_starts_to_split_are_shared_and_said(monkeypatch):
     """Halving the calibration starts of a short held-back part would leave the spread
     uncalibrated: the weights and the spread then share the held-back rows, with a warning and
@@ -226,7 +259,7 @@ def test_too_few_calibration_starts_to_split_are_shared_and_said(monkeypatch):
     logs = [as_log_arrays(physics_log(m, seed=s, duration_s=d, t_shutdown_s=None, current=(0.3, 1.0)), m.vessel)
             for s, d in ((8, 800.0), (9, 400.0))]
     few = CalibrationConfig(fraction=1e-4, horizon_s=60.0, max_starts=40)      # 1.1 horizons held back: 12 starts
-    with pytest.warns(UserWarning, match="too few to split between the command-regime weights and the spread"):
+    with pytest.warns(UserWarning, match="too few to cross-fit the spread against the command-regime weights"):
         hp = HybridPredictor(m.vessel, ensemble_config=TINY, command_guard=True, calibration_config=few,
                              environment_window_s=600.0).fit(logs)
     info = hp.training_info["calibration"]

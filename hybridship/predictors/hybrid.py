@@ -675,6 +675,15 @@ class HybridPredictor:
         late = self._fit_command_regime(logs, masks, dp_only, stride,
                                         ranges=[(s, len(a)) for a, s in zip(logs, splits)])
         self.command_regime = self._fit_command_regime(logs, masks, dp_only, stride)
+        if early is None or late is None:
+            # a part without a trainable row would calibrate its fold without any weights
+            import warnings
+
+            warnings.warn("fit: one part of the held-back rows has no row the command-regime weights can be "
+                          "fitted on, so the spread cannot be cross-fitted; the weights and the spread share "
+                          "the held-back rows (hold back more with calibration_config.fraction)",
+                          UserWarning, stacklevel=3)
+            return self._calibration_folds(logs, cuts, cal, dp_only), {"command_regime_split": False}
         starts = [self._calibration_start_rows(a, c, cal, dp_only) for a, c in zip(logs, cuts)]
         steps = [int(round(cal.horizon_s / float(np.median(np.diff(a.time_s))))) if len(a) > 1 else 0 for a in logs]
         folds = [(early, [r[r >= s] for r, s in zip(starts, splits)]),
@@ -697,9 +706,9 @@ class HybridPredictor:
         import warnings
 
         warnings.warn(f"fit: the held-back rows give {sum(r.size for r in starts)} calibration starts, too few to "
-                      f"split between the command-regime weights and the spread (the later half must hold "
-                      f"{MIN_CALIBRATION_STARTS}): both use all of them; hold back more "
-                      f"(calibration_config.fraction) for a spread calibrated on rows that chose nothing",
+                      f"cross-fit the spread against the command-regime weights (the later half must hold "
+                      f"{MIN_CALIBRATION_STARTS}): the weights and the spread share them; hold back more "
+                      f"(calibration_config.fraction) for a spread calibrated on rows that chose none of its weights",
                       UserWarning, stacklevel=4)
         return None
 
@@ -714,12 +723,14 @@ class HybridPredictor:
     @staticmethod
     def _calibration_split(a: LogArrays, starts: np.ndarray) -> int:
         """Where the command guard splits log ``a``'s held-back rows: at the middle one of its
-        calibration start rows ``starts`` (:meth:`_calibration_start_rows`). The calibration keeps
-        the later half of its starts, whose horizons lie after the split, and the regime weights
-        get every held-back row before it. Halving the starts rather than the rows keeps the
-        short logs in the calibration: a held-back part shorter than two horizons would leave
-        none of its starts after the middle row. ``len(a)`` when the log has no start (its
-        held-back rows then all go to the weights)."""
+        calibration start rows ``starts`` (:meth:`_calibration_start_rows`). The later half of
+        its starts is calibrated with the weights of the rows before the split, the earlier
+        starts whose horizons end before it with the weights of the rows after it
+        (:meth:`_fit_command_guard`). Halving the starts rather than the rows keeps the short
+        logs in the calibration: a held-back part shorter than two horizons would leave none
+        of its starts after the middle row (its earlier part, shorter than a horizon, then
+        calibrates nothing). ``len(a)`` when the log has no start (its held-back rows then
+        all go to the earlier part)."""
         return int(starts[starts.size // 2]) if starts.size else len(a)
 
     def _fit_command_regime(self, logs, masks, dp_only, stride, ranges=None) -> CommandRegime | None:
