@@ -1,13 +1,21 @@
 """Result tables shared by the Esso Osaka screening scripts.
 
-The scripts keep their working files under ``--out`` (the validation split there links to
+:func:`command_line` is the command a result records. The scripts keep their working files under ``--out`` (the validation split there links to
 the data, which stays out of the repository); :func:`publish` copies the result files
 alone to a committed folder (``--results``).
 """
 
 from __future__ import annotations
 
+import shlex
+import sys
 from pathlib import Path
+
+
+def command_line(script: str, argv=None) -> str:
+    """The command that ran ``benchmarks/<script>`` with ``argv`` (None: this process's
+    arguments), quoted as a shell would need it, for a result's first line."""
+    return shlex.join(["python", f"benchmarks/{script}", *(sys.argv[1:] if argv is None else argv)])
 
 
 def publish(out_dir: Path, results_dir: Path | None, names) -> None:

@@ -38,13 +38,13 @@ runs the docs quote are in ``docs/results/after-stop-calibration``).
 from __future__ import annotations
 
 import argparse
-import shlex
 import sys
 from pathlib import Path
 
 import numpy as np
 import pandas as pd
 
+from _results import command_line
 from hybridship.driftoff.spread import draw_scales
 from hybridship.evaluation import metrics
 from hybridship.evaluation.drift import log_files
@@ -108,8 +108,7 @@ def main(argv=None) -> int:
     ap.add_argument("--out", type=Path, default=None,
                     help="also write the table, headed by its command, to this Markdown file")
     args = ap.parse_args(argv)
-    given = argv if argv is not None else sys.argv[1:]
-    lines = [f"Command: `python benchmarks/after_stop_calibration.py {shlex.join(given)}`", ""]
+    lines = [f"Command: `{command_line('after_stop_calibration.py', argv)}`", ""]
 
     def say(line: str) -> None:
         print(line, flush=True)

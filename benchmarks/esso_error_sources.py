@@ -68,7 +68,6 @@ from __future__ import annotations
 
 import argparse
 import dataclasses
-import shlex
 import sys
 from pathlib import Path
 
@@ -338,7 +337,7 @@ def tables(errors, command: str) -> str:
 
 
 def main(argv=None) -> int:
-    from _results import publish
+    from _results import command_line, publish
     from hybridship.datasets.esso_osaka import esso_log_arrays
     from hybridship.evaluation.manoeuvre import (ManoeuvreConfig, Run, error_table, forecast_errors, load_runs,
                                                  make_predictors, start_rows, validation_split)
@@ -464,7 +463,7 @@ def main(argv=None) -> int:
                 per[(f"hybrid_{name}", "known")] = score(runs, other)
                 per[(f"hybrid_mean_{name}", "known")] = score(runs, forecast=_mean_forecast([hyb, other]))
     errors = error_table(per, runs, horizons)
-    command = shlex.join(["python", "benchmarks/esso_error_sources.py", *(sys.argv[1:] if argv is None else argv)])
+    command = command_line("esso_error_sources.py", argv)
     text = tables(errors, command)
     atomic_write(args.out / "errors.csv", lambda fh: fh.write(errors.to_csv(index=False).encode()))
     atomic_write(args.out / "tables.md", lambda fh: fh.write(text.encode()))

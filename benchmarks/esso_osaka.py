@@ -18,7 +18,6 @@ from __future__ import annotations
 
 import argparse
 import re
-import shlex
 import sys
 import time
 from pathlib import Path
@@ -50,6 +49,7 @@ def _wind_text(hybrid) -> str:
 def main(argv=None) -> int:
     import torch
 
+    from _results import command_line
     from hybridship.datasets.esso_osaka import RUN_KINDS, default_data_dir
     from hybridship.fileio import atomic_write
     from hybridship.evaluation.manoeuvre import (COMMAND_MODES, HORIZONS_S, _md_coverage, _md_table, pivot,
@@ -72,13 +72,13 @@ def main(argv=None) -> int:
         print(f"error: {args.data}: data folder not found (see ../shared/data/esso-osaka-frt/README.md)",
               file=sys.stderr)
         return 2
-    command = "python benchmarks/esso_osaka.py " + " ".join(shlex.quote(a) for a in (argv or sys.argv[1:]))
+    command = command_line("esso_osaka.py", argv)
     train_dir, test_dir = split_runs(args.data, args.out / "split", test_fraction=args.test_fraction,
                                      seed=args.split_seed)
     docs = (not args.quick) or args.docs
     t0 = time.perf_counter()
     res = run_manoeuvre_benchmark("esso_osaka_model", train_dir, test_dir, HORIZONS_S, args.out, seed=args.seed,
-                                  quick=args.quick, command=command.strip(),
+                                  quick=args.quick, command=command,
                                   figures_dir=(ROOT / "docs" / "figures") if docs else None, progress=True)
     print(f"benchmark: {time.perf_counter() - t0:.0f} s; {args.out / 'errors.csv'}")
     if docs:
@@ -90,7 +90,7 @@ def main(argv=None) -> int:
         text = replace_generated(text, "runs", runs)
         for mode in COMMAND_MODES:
             for state, digits in (("distance_m", 3), ("heading_deg", 2)):
-                body = f"Made by `{command.strip()}` (`errors.csv`, rows `state = {state}`, " \
+                body = f"Made by `{command}` (`errors.csv`, rows `state = {state}`, " \
                        f"`commands = {mode}`).\n\n" + _md_table(pivot(e, state, mode), digits)
                 text = replace_generated(text, f"{state}-{mode}", body)
         lines = []
@@ -107,10 +107,10 @@ def main(argv=None) -> int:
                 lines.append(f"- vs {other}, commands {mode}: hybrid lower in {len(cells)} of {total} cells"
                              + (f"; not in: {', '.join(f'{k} {c}' for k, c in lost)}" if lost else ""))
         text = replace_generated(text, "wins", "\n".join(lines) + "\n")
-        text = replace_generated(text, "ratio", f"Made by `{command.strip()}` (`errors.csv`, commands known): the "
+        text = replace_generated(text, "ratio", f"Made by `{command}` (`errors.csv`, commands known): the "
                                  "hybrid's error over the physics', distance / heading.\n\n"
                                  + md_ratio_to_physics(e, "known"))
-        cov = (f"Made by `{command.strip()}` (`coverage.csv`, rows `kind = all`; `coverage_intervals.csv`; "
+        cov = (f"Made by `{command}` (`coverage.csv`, rows `kind = all`; `coverage_intervals.csv`; "
                f"`sharpness.csv`).\n\n"
                + _md_coverage(res.coverage) + "\n" + md_coverage_intervals(res.coverage_intervals)
                + "\n" + md_spread_by_kind(res.coverage, res.sharpness)
@@ -118,7 +118,7 @@ def main(argv=None) -> int:
                + _md_coverage(res.coverage_heading))
         text = replace_generated(text, "coverage", cov)
         cfg = res.config
-        setup = (f"Made by `{command.strip()}`. Hybrid: features `{', '.join(cfg.residual.features)}`; "
+        setup = (f"Made by `{command}`. Hybrid: features `{', '.join(cfg.residual.features)}`; "
                  f"training `{cfg.training}`"
                  + (f" (multi-step horizon {cfg.multistep.horizon_s:g} s, {cfg.multistep.iterations} iterations of "
                     f"{cfg.multistep.batch_starts} starts)" if cfg.training == "multi_step" else "")

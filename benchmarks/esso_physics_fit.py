@@ -40,7 +40,6 @@ from __future__ import annotations
 import argparse
 import copy
 import dataclasses
-import shlex
 import sys
 import tomllib
 from pathlib import Path
@@ -80,7 +79,7 @@ def main(argv=None) -> int:
     import torch
     from scipy.optimize import minimize
 
-    from _results import kind_table, publish
+    from _results import command_line, kind_table, publish
     from hybridship.evaluation.manoeuvre import (ManoeuvreConfig, error_table, forecast_errors, load_runs,
                                                  make_predictors, start_rows, validation_split)
     from hybridship.fileio import atomic_write
@@ -164,7 +163,7 @@ def main(argv=None) -> int:
                             start_rows(r.arrays, int(steps.max()), cfg.start_every_s), steps) for r in runs]
     table = error_table(per, runs, horizons)
     atomic_write(args.out / "errors.csv", lambda fh: fh.write(table.to_csv(index=False).encode()))
-    command = shlex.join(["python", "benchmarks/esso_physics_fit.py", *(sys.argv[1:] if argv is None else argv)])
+    command = command_line("esso_physics_fit.py", argv)
     md = [f"Command: `{command}`", "", fit_line, "", "Identified coefficients in `theta.csv`. Validation runs, "
           "logged commands known: 30-s distance [m] / heading [deg] per kind and pooled, and the pooled ratios "
           "to the physics on the published coefficients (`dynamic`):", "", kind_table(table, "dynamic")]

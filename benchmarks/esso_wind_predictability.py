@@ -37,7 +37,6 @@ which stay out of the repository)::
 from __future__ import annotations
 
 import argparse
-import shlex
 import sys
 from pathlib import Path
 
@@ -118,7 +117,7 @@ def _f3(x: float) -> str:
 def main(argv=None) -> int:
     import pandas as pd
 
-    from _results import publish
+    from _results import command_line, publish
     from hybridship.evaluation.manoeuvre import load_runs, validation_split
     from hybridship.fileio import atomic_write, markdown_table
     from hybridship.forecast_inputs.wind import fit_wind_forecast
@@ -164,7 +163,7 @@ def main(argv=None) -> int:
     wide = out[out["lead_s"] == "all"].pivot(index="predictor", columns="kind", values="error_m_s")
     by_lead = out[out["kind"] == "all"].pivot(index="predictor", columns="lead_s", values="error_m_s")
     order = ["held", "gust", "linear", "future_mean"]
-    md = [f"Command: `{shlex.join(['python', 'benchmarks/esso_wind_predictability.py', *sys.argv[1:]])}`", "",
+    md = [f"Command: `{command_line('esso_wind_predictability.py', argv)}`", "",
           f"Gust forecast fitted on the fitting runs: `{gust}`.", "",
           "Mean wind-vector error over the 30-s horizon [m/s], validation runs, by kind:", "",
           markdown_table(wide.loc[order].map(_f3).reset_index()), "",

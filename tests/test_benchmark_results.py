@@ -33,3 +33,9 @@ def test_publish_copies_the_named_files_only(tmp_path):
     results.publish(out, tmp_path / "docs", ("errors.csv", "tables.md"))
     assert sorted(p.name for p in (tmp_path / "docs").iterdir()) == ["errors.csv", "tables.md"]
     assert (tmp_path / "docs" / "tables.md").read_text() == "b\n"
+
+
+def test_command_line_quotes_the_arguments_a_shell_would_split():
+    results = load_benchmark("_results")
+    assert results.command_line("x.py", ["--out", "out/a b", "--n", "3"]) == "python benchmarks/x.py --out 'out/a b' --n 3"
+    assert results.command_line("x.py", []) == "python benchmarks/x.py"       # no trailing space

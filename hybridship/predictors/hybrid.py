@@ -685,9 +685,8 @@ class HybridPredictor:
                           UserWarning, stacklevel=3)
             return self._calibration_folds(logs, cuts, cal, dp_only), {"command_regime_split": False}
         starts = [self._calibration_start_rows(a, c, cal, dp_only) for a, c in zip(logs, cuts)]
-        steps = [int(round(cal.horizon_s / float(np.median(np.diff(a.time_s))))) if len(a) > 1 else 0 for a in logs]
         folds = [(early, [r[r >= s] for r, s in zip(starts, splits)]),
-                 (late, [r[r + h < s] for r, s, h in zip(starts, splits, steps)])]
+                 (late, [r[r + self._horizon_rows(a, cal) < s] for a, r, s in zip(logs, starts, splits)])]
         return folds, {"command_regime_split": True,
                        "cross_fit_rows": [[[int(c), int(s)], [int(s), len(a)]] for a, c, s in zip(logs, cuts, splits)]}
 
@@ -717,8 +716,12 @@ class HybridPredictor:
         (:meth:`_calibration_starts` at the log's median step), before any thinning."""
         if cut >= len(a):
             return np.zeros(0, int)
-        dt = float(np.median(np.diff(a.time_s)))
-        return self._calibration_starts(a, cut, int(round(cal.horizon_s / dt)), dp_only)
+        return self._calibration_starts(a, cut, self._horizon_rows(a, cal), dp_only)
+
+    @staticmethod
+    def _horizon_rows(a: LogArrays, cal: CalibrationConfig) -> int:
+        """Rows in the calibration horizon ``cal.horizon_s`` at log ``a``'s median step (0 for one row)."""
+        return int(round(cal.horizon_s / float(np.median(np.diff(a.time_s))))) if len(a) > 1 else 0
 
     @staticmethod
     def _calibration_split(a: LogArrays, starts: np.ndarray) -> int:
