@@ -193,10 +193,15 @@ def decisions_markdown(decisions: list) -> str:
         mine = [d for d in decisions if d["data"] == data]
         prior = [d["thrust_error_prior"] for d in mine if d["thrust_error_prior"] is not None]
         hull = [d["drift_hull"] for d in mine if d["drift_hull"] is not None]
-        md.append(f"* {data}: thrust error kept in {sum(p['kept'] for p in prior)} of {len(prior)} fits that "
+        md.append(f"* {data}: thrust error kept in {sum(p['kept'] for p in prior)} of {_fits(len(prior))} that "
                   f"learned it; hull's yaw moment in a drift kept in {sum(h['adopted'] for h in hull)} of "
-                  f"{len(hull)} fits that chose one.")
+                  f"{_fits(len(hull))} that chose one.")
     return "\n".join(md) + "\n"
+
+
+def _fits(n: int) -> str:
+    """``"1 fit"``, ``"2 fits"``."""
+    return f"{n} fit" if n == 1 else f"{n} fits"
 
 
 def _dp_part(a):

@@ -45,7 +45,7 @@ def test_the_decisions_file_has_a_row_per_fit_and_counts_what_was_kept(tmp_path)
     assert "position 1.433 m against 1.433 m, heading 2.00 deg against 1.96 deg" in rows[3]
     assert "not chosen (fewer than 5 failures)" in rows[4] and "fewer than the 5 the check needs" in rows[4]
     assert lines[-2:] == [
-        "* a: thrust error kept in 0 of 1 fits that learned it; hull's yaw moment in a drift kept in 2 of 2 "
+        "* a: thrust error kept in 0 of 1 fit that learned it; hull's yaw moment in a drift kept in 2 of 2 "
         "fits that chose one.",
         "* b: thrust error kept in 1 of 2 fits that learned it; hull's yaw moment in a drift kept in 0 of 0 "
         "fits that chose one."]
