@@ -64,6 +64,7 @@ def test_tables_have_the_papers_layout_and_physics_is_exact_on_its_own_logs(tiny
     at60 = lambda df: df[(df.horizon_s == 60) & df.state.isin(pos)].mae.to_numpy()  # noqa: E731
     assert np.all(at60(dyn) < 0.25 * at60(dr)), (at60(dyn), at60(dr))
     table = (tmp_path / "out" / "tables.md").read_text()
+    assert "### Table 2: mean absolute error (first 5 / first 20 intervals)" in table
     assert "| hybrid_nets_unguarded | north_m |" in table and "/" in table.split("| hybrid | north_m |")[1].split("\n")[0]
     assert res.table2.shape == (18, 4)
     assert ratio_markdown(metrics.pooled_ratio_table(errors, "hybrid")) in table      # the targets' form, printed
@@ -135,6 +136,11 @@ def test_logs_of_one_name_stay_apart_and_one_log_has_no_per_failure_table(tmp_pa
     run_drift_benchmark(paths[:1], None, tmp_path / "one", ensemble_config=tiny, plots=False, progress=False,
                         calibration_scenarios=0)
     assert "No per-failure table" in (tmp_path / "one" / "tables.md").read_text()
+    # fewer than 20 forecasts after a failure: one window, and Table 2's title says which
+    run_drift_benchmark(paths, None, tmp_path / "short", ensemble_config=tiny, plots=False, progress=False,
+                        calibration_scenarios=0, n_intervals=10)
+    short = (tmp_path / "short" / "tables.md").read_text()
+    assert "### Table 2: mean absolute error (first 5 intervals)" in short and "first 20" not in short
 
 
 def test_benchmark_is_deterministic_and_the_cli_reports_bad_folders(tiny_folder, tmp_path, capsys):

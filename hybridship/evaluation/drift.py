@@ -245,7 +245,7 @@ def run_drift_benchmark(train=None, test=None, out_dir="drift-benchmark", *, ves
     outputs = {name: _write_csv(out / name, table) for name, table in tables.items()}
     table2, table3, ratio = _paper_tables(long, windows)
     md = _markdown(table2, table3, ratio, coverage, intervals, timing, test_names, len(train_arrays), ens_cfg,
-                   n_intervals, per_log_long, heading_cov)
+                   n_intervals, windows, per_log_long, heading_cov)
     outputs["tables.md"] = write_text(out / "tables.md", md)
     outputs.update(_figures(out, plots, fc, all_h, test_arrays, test_names))
     record_outputs(out, outputs, removed=() if plots else FIGURE_FILES)
@@ -688,12 +688,13 @@ def _paper_tables(long: pd.DataFrame, windows) -> tuple:
 
 
 def _markdown(table2, table3, ratio, coverage, intervals, timing, test_names, n_train, ens_cfg, n_intervals,
-              per_log=None, heading_cov=None) -> str:
+              windows, per_log=None, heading_cov=None) -> str:
     # No top-level heading: the file reads on its own and is also included in the docs pages.
     parts = [f"Drift benchmark. Test logs: {', '.join(test_names)}; trained on {n_train} logs; "
              f"{ens_cfg.n_members}-member ensembles, seed {ens_cfg.seed}; {n_intervals} forecasts after each "
              f"failure.\n",
-             "### Table 2: mean absolute error (first 5 / first 20 intervals)\n\nNorth and east in m, yaw in deg.\n",
+             f"### Table 2: mean absolute error ({' / '.join(f'first {w}' for w in windows)} intervals)\n\n"
+             "North and east in m, yaw in deg.\n",
              _md_table(table2)]
     for m, t in table3.items():
         parts += [f"\n### Table 3: % error reduction of `{m}` relative to `dynamic` (5/20)\n", _md_table(t)]
