@@ -644,10 +644,18 @@ def main(argv=None) -> int:
     ap.add_argument("--out", type=Path, default=Path(__file__).resolve().parents[1] / "docs" / "figures",
                     help="folder for gunnerus_response.png (default: docs/figures of the repository)")
     ap.add_argument("--no-plot", action="store_true", help="print the tables only")
+    ap.add_argument("--tables", type=Path, default=None,
+                    help="also write the printed tables to this Markdown file (atomically)")
     args = ap.parse_args(argv)
     model = DynamicModel("gunnerus")
     out = run(model)
-    print(report(out, model))
+    text = report(out, model)
+    print(text)
+    if args.tables is not None:
+        from hybridship.fileio import write_text
+
+        args.tables.parent.mkdir(parents=True, exist_ok=True)
+        write_text(args.tables, text + "\n")
     if not args.no_plot:
         path = args.out / "gunnerus_response.png"
         plot(out, model, path)
