@@ -13,7 +13,8 @@ Usage::
     python benchmarks/compare_truthsim.py
     python benchmarks/compare_truthsim.py --work-dir /tmp/matched   # keep our logs
 
-Prints a Markdown table and writes ``docs/figures/drift_comparison.png``.
+Prints a Markdown table (also to ``--tables``, for the docs) and writes
+``docs/figures/drift_comparison.png`` (``--out``).
 """
 
 from __future__ import annotations
@@ -31,6 +32,7 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 import pandas as pd  # noqa: E402
 
+from hybridship.fileio import write_text  # noqa: E402
 from hybridship.logs.io import read_log, write_log  # noqa: E402
 from hybridship.sim.environment import SeaState  # noqa: E402
 from hybridship.sim.scenario import DPLossConfig, drift_statistics, simulate_dp_loss  # noqa: E402
@@ -60,11 +62,41 @@ def excursion_curve(df: pd.DataFrame) -> tuple[np.ndarray, np.ndarray, np.ndarra
     return df["time_s"].to_numpy()[sel] - t_sd, n - n[0], e - e[0]
 
 
+def comparison_markdown(res: pd.DataFrame) -> str:
+    """The printed comparison: per scenario our drift statistics / truthsim-dev's, the median
+    ratios, and the 600-s drift direction's difference [deg]."""
+    def pair(r, key, fmt):
+        return f"{format(r[key + '|ours'], fmt)} / {format(r[key + '|truthsim'], fmt)}"
+
+    lines = ["Our simulator / truthsim-dev in matched conditions (drift statistics of the LF track; "
+             "excursion = distance from the position at the shutdown):\n",
+             "| scenario | wind m/s | Hs m | Tp s | current m/s | excursion 60 s [m] | excursion 600 s [m] "
+             "| mean drift SOG [m/s] | heading change 600 s [deg] | DP position std [m] |",
+             "|---|---|---|---|---|---|---|---|---|---|"]
+    for _, r in res.iterrows():
+        lines.append(f"| {r['scenario']} | {r['wind']:.1f} | {r['hs']:.2f} | {r['tp']:.1f} | {r['cur']:.2f} "
+                     f"| {pair(r, 'drift_excursion_60s_m', '.1f')} | {pair(r, 'drift_excursion_600s_m', '.0f')} "
+                     f"| {pair(r, 'drift_mean_sog_mps', '.2f')} | {pair(r, 'drift_dheading_600s_deg', '.0f')} "
+                     f"| {pair(r, 'dp_pos_std_m', '.2f')} |")
+    ratio = {k: res[f"{k}|ours"] / res[f"{k}|truthsim"] for k in
+             ("drift_excursion_60s_m", "drift_excursion_600s_m", "drift_mean_sog_mps", "dp_pos_std_m")}
+    lines.append(f"| **ratio ours/truthsim (median)** | | | | | {ratio['drift_excursion_60s_m'].median():.2f} "
+                 f"| {ratio['drift_excursion_600s_m'].median():.2f} | {ratio['drift_mean_sog_mps'].median():.2f} | "
+                 f"| {ratio['dp_pos_std_m'].median():.2f} |")
+    ang = [(r["drift_dir_to_deg|ours"] - r["drift_dir_to_deg|truthsim"] + 180.0) % 360.0 - 180.0
+           for _, r in res.iterrows()]
+    lines.append("\nDirection of the 600 s net drift, ours minus truthsim [deg]: "
+                 + ", ".join(f"{a:+.0f}" for a in ang))
+    return "\n".join(lines)
+
+
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--truthsim", type=Path, default=TRUTHSIM, help="truthsim-dev folder")
     ap.add_argument("--work-dir", type=Path, default=None, help="where to write our matched logs (default: temporary)")
     ap.add_argument("--out", type=Path, default=ROOT / "docs" / "figures" / "drift_comparison.png")
+    ap.add_argument("--tables", type=Path, default=None,
+                    help="also write the printed comparison to this Markdown file (atomically)")
     args = ap.parse_args(argv)
     if not (args.truthsim / "scenarios.csv").is_file():
         ap.error(f"--truthsim: expected a truthsim-dev folder with scenarios.csv, not found at {args.truthsim}")
@@ -95,31 +127,11 @@ def main(argv=None) -> int:
         tmp.cleanup()
     res = pd.DataFrame(rows)
 
-    # ---- Markdown table
-    def pair(r, key, fmt):
-        return f"{format(r[key + '|ours'], fmt)} / {format(r[key + '|truthsim'], fmt)}"
-
-    print("Our simulator / truthsim-dev in matched conditions (drift statistics of the LF track; "
-          "excursion = distance from the position at the shutdown):\n")
-    print("| scenario | wind m/s | Hs m | Tp s | current m/s | excursion 60 s [m] | excursion 600 s [m] "
-          "| mean drift SOG [m/s] | heading change 600 s [deg] | DP position std [m] |")
-    print("|---|---|---|---|---|---|---|---|---|---|")
-    for _, r in res.iterrows():
-        print(f"| {r['scenario']} | {r['wind']:.1f} | {r['hs']:.2f} | {r['tp']:.1f} | {r['cur']:.2f} "
-              f"| {pair(r, 'drift_excursion_60s_m', '.1f')} | {pair(r, 'drift_excursion_600s_m', '.0f')} "
-              f"| {pair(r, 'drift_mean_sog_mps', '.2f')} | {pair(r, 'drift_dheading_600s_deg', '.0f')} "
-              f"| {pair(r, 'dp_pos_std_m', '.2f')} |")
-    ratio = {k: res[f"{k}|ours"] / res[f"{k}|truthsim"] for k in
-             ("drift_excursion_60s_m", "drift_excursion_600s_m", "drift_mean_sog_mps", "dp_pos_std_m")}
-    print(f"| **ratio ours/truthsim (median)** | | | | | {ratio['drift_excursion_60s_m'].median():.2f} "
-          f"| {ratio['drift_excursion_600s_m'].median():.2f} | {ratio['drift_mean_sog_mps'].median():.2f} | "
-          f"| {ratio['dp_pos_std_m'].median():.2f} |")
-    ang = []
-    for _, r in res.iterrows():
-        d = (r["drift_dir_to_deg|ours"] - r["drift_dir_to_deg|truthsim"] + 180.0) % 360.0 - 180.0
-        ang.append(d)
-    print("\nDirection of the 600 s net drift, ours minus truthsim [deg]: "
-          + ", ".join(f"{a:+.0f}" for a in ang))
+    text = comparison_markdown(res)
+    print(text)
+    if args.tables is not None:
+        args.tables.parent.mkdir(parents=True, exist_ok=True)
+        write_text(args.tables, text + "\n")
 
     # ---- figure
     fig, axes = plt.subplots(1, 3, figsize=(16, 5.4), constrained_layout=True)

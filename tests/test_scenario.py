@@ -599,3 +599,22 @@ def test_drift_off_settings_problems_name_their_options_line_by_line(tmp_path, c
     assert lines[0].startswith("hybridship drift-off planning: error: --radii-m: ")
     assert lines[1].startswith("hybridship drift-off planning: error: --samples: ")
     assert not (tmp_path / "o").exists()
+
+
+def test_compare_truthsim_table_pairs_ours_with_theirs_and_wraps_the_drift_direction():
+    """The simulator page's comparison table (benchmarks/compare_truthsim.py): ours / theirs
+    per cell, the median ratio over the scenarios, and direction differences within +-180 deg."""
+    from conftest import load_benchmark
+
+    keys = ("drift_excursion_60s_m", "drift_excursion_600s_m", "drift_mean_sog_mps", "drift_dheading_600s_deg",
+            "dp_pos_std_m", "drift_dir_to_deg")
+    rows = []
+    for k, (ours, theirs, d_ours, d_theirs) in enumerate([(2.0, 1.0, 350.0, 10.0), (3.0, 1.0, 10.0, 350.0),
+                                                           (1.0, 1.0, 90.0, 80.0)]):
+        rows.append(dict(scenario=f"s{k}", wind=5.0, hs=1.0, tp=6.0, cur=0.2,
+                         **{f"{key}|ours": ours for key in keys}, **{f"{key}|truthsim": theirs for key in keys}))
+        rows[-1].update({"drift_dir_to_deg|ours": d_ours, "drift_dir_to_deg|truthsim": d_theirs})
+    text = load_benchmark("compare_truthsim").comparison_markdown(pd.DataFrame(rows))
+    assert "| s0 | 5.0 | 1.00 | 6.0 | 0.20 | 2.0 / 1.0 | 2 / 1 | 2.00 / 1.00 | 2 / 1 | 2.00 / 1.00 |" in text
+    assert "| **ratio ours/truthsim (median)** | | | | | 2.00 | 2.00 | 2.00 | | 2.00 |" in text
+    assert text.endswith("ours minus truthsim [deg]: -20, +20, +10")
