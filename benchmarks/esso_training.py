@@ -36,9 +36,16 @@ also trained on mirrored port to starboard, :func:`mirror_log`: a symmetry prior
 settings Froude-scaled to the model, :func:`froude_scaled_environment`), ``+prev`` (the
 paper's previous-residual inputs added, the rest of its nine features), ``+load`` (the
 actuator-load features added, :data:`~hybridship.residual.features.LOAD_FEATURES`).
-Writes ``errors.csv``, ``coverage.csv`` and ``sharpness.csv`` (the manoeuvre benchmark's columns) and
-``timing.csv`` (training seconds), and prints the distance and heading tables with
-commands known.
+Writes ``errors.csv``, ``coverage.csv`` and ``sharpness.csv`` (the manoeuvre benchmark's columns),
+``timing.csv`` (training seconds) and ``tables.md`` (:func:`tables`: the command, the pooled
+errors with commands known and the 30-s errors per kind), and prints the distance and
+heading tables. ``--results`` also copies the five there (``--out`` holds the split's links
+to the data, which stay out of the repository); ``--tables-only`` writes ``tables.md``
+again from ``--out``'s ``errors.csv``, keeping the command it records. The committed runs::
+
+    python benchmarks/esso_training.py --out out/esso-env-val --commands known \
+        --variants "multi_step_h30_b64_i100_abs+cmd+cg+wind+mem,multi_step_h30_b64_i100_abs+cmd+cg+wind+mem+env,\
+one_step+cmd+cg+wind+mem,one_step+cmd+cg+wind+mem+env" --results docs/results/esso-environment-estimator
 """
 
 from __future__ import annotations
@@ -246,10 +253,90 @@ def with_wind_spread(p, logs, samples: int = 8):
     return q
 
 
+#: Files a run writes to ``--out`` and ``--results`` copies.
+RESULT_FILES = ("errors.csv", "coverage.csv", "sharpness.csv", "timing.csv", "tables.md")
+
+
+def cells_below(errors, model: str, reference: str = "dynamic") -> str:
+    """``"n/total"``: the kind x horizon cells (commands known, distance) where ``model``'s
+    mean error is below ``reference``'s."""
+    e = errors[(errors["commands"] == "known") & (errors["state"] == "distance_m") & (errors["kind"] != "all")]
+    t = e.pivot_table(index=["kind", "horizon_s"], columns="model", values="mae", sort=False)
+    return f"{int((t[model] < t[reference]).sum())}/{len(t)}"
+
+
+def tables(errors, command: str) -> str:
+    """``tables.md``: the command that made ``errors``, the pooled distance error at every
+    horizon and the 30-s heading error per model with the kind x horizon cells below the
+    physics (``dynamic``), and the 30-s errors per kind with the pooled ratios to the
+    physics; logged commands known."""
+    import pandas as pd
+
+    from _results import kind_table
+    from hybridship.fileio import markdown_table
+
+    e = errors[(errors["commands"] == "known") & (errors["kind"] == "all")]
+    if e.empty:
+        return f"Command: `{command}`\n\nNo rows with the logged commands known (see errors.csv).\n"
+    pooled = e.pivot_table(index="model", columns=["state", "horizon_s"], values="mae", sort=False)
+    horizons = sorted(e["horizon_s"].unique())
+    rows = [[m, *(f"{pooled.loc[m, ('distance_m', h)]:.3f}" for h in horizons),
+             f"{pooled.loc[m, ('heading_deg', horizons[-1])]:.2f}",
+             "" if m == "dynamic" else cells_below(errors, m)] for m in dict.fromkeys(e["model"])]
+    pooled_md = markdown_table(pd.DataFrame(rows, columns=[
+        "model", *(f"{h:g} s (m)" for h in horizons), f"heading {horizons[-1]:g} s (deg)",
+        "cells below physics"]))
+    md = [f"Command: `{command}`", "", "Validation runs (or the test runs with `--test-split`), logged commands "
+          "known. Pooled mean distance error at every horizon, the heading error at the last, and the kind x "
+          "horizon cells where the distance error is below the physics (`dynamic`):", "", pooled_md, "",
+          "30-s distance [m] / heading [deg] per kind and pooled, with the pooled ratios to the physics:", "",
+          kind_table(errors, "dynamic")]
+    return "\n".join(md) + "\n"
+
+
+def tables_only(out: Path, results: Path | None) -> int:
+    """Render ``out/tables.md`` again from ``out/errors.csv``, with the command of the run that
+    wrote them (its first line), and copy the result files to ``results``; no new run."""
+    import pandas as pd
+
+    from _results import publish
+    from hybridship.fileio import atomic_write
+
+    try:
+        errors = pd.read_csv(out / "errors.csv")
+        first = (out / "tables.md").read_text().splitlines()[0]
+    except (FileNotFoundError, IndexError) as err:
+        print(f"error: --tables-only needs the errors.csv and tables.md of a run in {out}: {err}", file=sys.stderr)
+        return 2
+    if not (first.startswith("Command: `") and first.endswith("`")):
+        print(f"error: {out / 'tables.md'}: its first line is not the run's command", file=sys.stderr)
+        return 2
+    text = tables(errors, first[len("Command: `"):-1])
+    atomic_write(out / "tables.md", lambda fh: fh.write(text.encode()))
+    publish(out, results, [n for n in RESULT_FILES if (out / n).exists()])
+    print(text)
+    return 0
+
+
+def print_tables(errors, coverage, sharpness, modes) -> None:
+    """Print the distance and heading errors per kind, the 2-sigma coverage and the interval score."""
+    for state in ("distance_m", "heading_deg"):
+        d = errors[errors.state == state].pivot_table(index=["commands", "kind", "model"], columns="horizon_s",
+                                                      values="mae", sort=False)
+        print(f"{state}:\n{d.round(3).to_string()}")
+    c = coverage[coverage.kind == "all"].pivot_table(index=["commands", "model", "sigma"], columns="horizon_s",
+                                                     values="coverage", sort=False)
+    print(f"coverage (all kinds):\n{c.round(3).to_string()}")
+    sh = sharpness[sharpness.commands == modes[0]].pivot_table(index=["kind", "model"], columns="horizon_s",
+                                                              values="interval_score_m", sort=False)
+    print(f"2-sigma interval score [m], commands {modes[0]}:\n{sh.round(3).to_string()}")
+
+
 def main(argv=None) -> int:
     import pandas as pd
     import torch
 
+    from _results import command_line, publish
     from hybridship.fileio import atomic_write
     from hybridship.evaluation.manoeuvre import (COMMAND_MODES, ManoeuvreConfig, coverage_table, error_table, forecast_errors,
                                       load_runs, make_predictors, sharpness_table, start_rows, validation_split)
@@ -269,7 +356,13 @@ def main(argv=None) -> int:
     ap.add_argument("--with-wind-spread", action="store_true",
                     help="also score every variant with 8 wind futures in its spread, recalibrated, the same nets "
                          "(suffix +ws)")
+    ap.add_argument("--results", type=Path, help="also copy the result files (no data) here: " + ", ".join(RESULT_FILES))
+    ap.add_argument("--tables-only", action="store_true",
+                    help="write tables.md again from --out's errors.csv (and copy the result files to --results), "
+                         "keeping the command line it records; nothing is trained")
     args = ap.parse_args(argv)
+    if args.tables_only:
+        return tables_only(args.out, args.results)
     torch.set_num_threads(1)
     if not (args.split / "train").is_dir():          # checked before any variant is built
         print(f"error: {args.split / 'train'}: not found; run benchmarks/esso_osaka.py first", file=sys.stderr)
@@ -321,20 +414,15 @@ def main(argv=None) -> int:
     coverage = coverage_table(per_z, val_runs, horizons)
     sharpness = sharpness_table(per, per_sd, val_runs, horizons)
     args.out.mkdir(parents=True, exist_ok=True)
+    text = tables(errors, command_line("esso_training.py", argv))
     for fname, df in (("errors.csv", errors), ("coverage.csv", coverage), ("sharpness.csv", sharpness),
                       ("timing.csv", pd.DataFrame(timing))):
         atomic_write(args.out / fname, lambda fh, df=df: fh.write(df.to_csv(index=False).encode()))
+    atomic_write(args.out / "tables.md", lambda fh: fh.write(text.encode()))
+    publish(args.out, args.results, RESULT_FILES)
     print(f"scored on: {', '.join(r.name for r in val_runs)}")
-    for state in ("distance_m", "heading_deg"):
-        d = errors[errors.state == state].pivot_table(index=["commands", "kind", "model"], columns="horizon_s",
-                                                      values="mae", sort=False)
-        print(f"{state}:\n{d.round(3).to_string()}")
-    c = coverage[coverage.kind == "all"].pivot_table(index=["commands", "model", "sigma"], columns="horizon_s",
-                                                     values="coverage", sort=False)
-    print(f"coverage (all kinds):\n{c.round(3).to_string()}")
-    sh = sharpness[sharpness.commands == modes[0]].pivot_table(index=["kind", "model"], columns="horizon_s",
-                                                              values="interval_score_m", sort=False)
-    print(f"2-sigma interval score [m], commands {modes[0]}:\n{sh.round(3).to_string()}")
+    print_tables(errors, coverage, sharpness, modes)
+    print(text)
     print(f"wrote {args.out}")
     return 0
 

@@ -126,3 +126,43 @@ def test_a_variant_name_with_an_unknown_token_is_refused(et):
                        ("one_step2", "one_step"), ("one_step+ws", "+ws")):   # +ws: made by --with-wind-spread
         with pytest.raises(SystemExit, match=re.escape(token)):
             et.check_variant_name(bad)
+
+
+def _errors(models=(("dynamic", 0.5, 10.0), ("hybrid", 0.4, 6.0))):
+    """A small errors table: two kinds and the pooled rows, two horizons, a commands-held row."""
+    import pandas as pd
+
+    rows = []
+    for model, d, h in models:
+        for kind, f in (("random", 1.0), ("zigzag", 3.0), ("all", 2.0)):
+            for horizon in (10.0, 30.0):
+                rows += [(model, kind, "distance_m", horizon, d * f * horizon / 30.0, "known"),
+                         (model, kind, "heading_deg", horizon, h * f * horizon / 30.0, "known"),
+                         (model, kind, "distance_m", horizon, 99.0, "held")]
+    return pd.DataFrame(rows, columns=["model", "kind", "state", "horizon_s", "mae", "commands"])
+
+
+def test_tables_give_the_pooled_errors_the_cells_below_the_physics_and_the_kinds(et):
+    # the hybrid is below the physics everywhere except zigzag at 30 s
+    e = _errors()
+    e.loc[(e.model == "hybrid") & (e.kind == "zigzag") & (e.horizon_s == 30.0) & (e.state == "distance_m")
+          & (e.commands == "known"), "mae"] = 2.0
+    assert et.cells_below(e, "hybrid") == "3/4"
+    lines = et.tables(e, "python benchmarks/esso_training.py --variants a").splitlines()
+    assert lines[0] == "Command: `python benchmarks/esso_training.py --variants a`"
+    assert "| hybrid | 0.267 | 0.800 | 12.00 | 3/4 |" in lines
+    assert "| dynamic | 0.333 | 1.000 | 20.00 |  |" in lines
+    assert "| hybrid | 0.400 / 6.00 | 2.000 / 18.00 | 0.800 / 12.00 | 0.80 / 0.60 |" in lines
+    assert not any("99" in x for x in lines)            # the commands-held rows play no part
+
+
+def test_tables_only_renders_the_run_again_with_its_command(et, tmp_path):
+    _errors().to_csv(tmp_path / "errors.csv", index=False)
+    (tmp_path / "timing.csv").write_text("model,train_s\nhybrid,1.0\n")
+    (tmp_path / "tables.md").write_text("Command: `python benchmarks/esso_training.py --variants a`\nold\n")
+    assert et.main(["--tables-only", "--out", str(tmp_path), "--results", str(tmp_path / "docs")]) == 0
+    text = (tmp_path / "docs" / "tables.md").read_text()
+    assert text.startswith("Command: `python benchmarks/esso_training.py --variants a`\n") and "old" not in text
+    assert sorted(p.name for p in (tmp_path / "docs").iterdir()) == ["errors.csv", "tables.md", "timing.csv"]
+    (tmp_path / "tables.md").write_text("something else\n")
+    assert et.main(["--tables-only", "--out", str(tmp_path)]) == 2
