@@ -32,6 +32,18 @@ each variant with the command-regime guard fitted on its nets (``<variant>+cg``)
 give the benchmark's hybrid as it was before the command-memory features and the wind
 forecast (the screens quoted on the Esso Osaka page were made so). The fine-tuning
 rollouts take the wind as the hybrid's forecasts do (held, or its fitted wind forecast).
+
+Also writes ``tables.md`` (:func:`tables`: the command, the pooled 30-s figures of every
+row of this run and its 30-s errors per kind); ``--results`` copies ``errors.csv``,
+``variants.csv`` and ``tables.md`` to a committed folder (``--out`` holds the split's links to
+the data and the cached nets, which stay out of the repository) and then needs an ``--out``
+without an earlier run's ``errors.csv``, so that the copies come from this command alone.
+``--tables-only`` writes ``tables.md`` again from ``--out``'s files, keeping its command.
+The committed screens, one folder per command under ``docs/results/esso-multistep-screening``::
+
+    python benchmarks/esso_multistep.py --no-memory --held-wind --out out/esso-ms-default \
+        --variants "abs:loss='absolute';abs_hor40:loss='absolute',horizon_s=40.0;abs_b128:loss='absolute',\
+batch_starts=128" --results docs/results/esso-multistep-screening/default
 """
 
 from __future__ import annotations
@@ -86,6 +98,15 @@ def one_step_hybrid(cfg, fit_runs, cache: Path, wind_forecast="fit"):
     return p, logs
 
 
+def cache_file(out: Path, cfg, held_wind: bool) -> Path:
+    """The model file in ``out`` that caches the one-step nets of ``cfg`` (named by what changes them)."""
+    return out / (f"one_step_m{cfg.ensemble.n_members}_h{cfg.ensemble.hidden}_f{len(cfg.residual.features)}"
+                  f"{'_s%d' % cfg.ensemble.seed if cfg.ensemble.seed else ''}"
+                  f"{'_hull_' + cfg.hull_fit if cfg.hull_correction else ''}"
+                  f"{cfg.multistep.hull_iterations if cfg.hull_fit == 'multi_step' else ''}"
+                  f"{'_held_wind' if held_wind else ''}.npz")
+
+
 def fine_tune(p, logs, ms_cfg, row_stride):
     """A copy of the one-step hybrid ``p`` with its nets fine-tuned by ``ms_cfg``; (copy, history)."""
     from hybridship.residual.features import prepare_log
@@ -106,18 +127,106 @@ def fine_tune(p, logs, ms_cfg, row_stride):
     return q, hist
 
 
-def main(argv=None) -> int:
+#: Files ``--results`` copies from ``--out``.
+RESULT_FILES = ("errors.csv", "variants.csv", "tables.md")
+
+
+def tables(errors, table, command: str) -> str:
+    """``tables.md``: the command that made ``errors`` and ``table`` (the rows of :func:`summary`),
+    every row's pooled 30-s distance and heading with their ratios to the physics and the
+    kind x horizon cells below it, and the 30-s errors per kind (validation runs, logged
+    commands known)."""
+    from _results import kind_table
+    from hybridship.fileio import markdown_table
+
+    cols = ["variant", "settings", "dist30_m", "head30_deg", "dist_ratio", "head_ratio", "cells_below", "train_s"]
+    md = [f"Command: `{command}`", "", "Validation runs, logged commands known, raw spread. Pooled 30-s distance "
+          "[m] and heading [deg] error, their ratios to the physics (`dynamic`), the kind x horizon cells where "
+          "the distance error is below the physics, and the fine-tuning's seconds (`+cg`: the same nets with the "
+          "command-regime guard fitted on them):", "", markdown_table(table[cols]), "",
+          "30-s distance [m] / heading [deg] per kind and pooled, with the pooled ratios to the physics:", "",
+          kind_table(errors, "dynamic")]
+    return "\n".join(md) + "\n"
+
+
+def tables_only(out: Path, results: Path | None) -> int:
+    """Render ``out/tables.md`` again from ``out/errors.csv`` and ``out/variants.csv``, with the
+    command of the run that wrote them (its first line), and copy them to ``results``; no new run."""
     import pandas as pd
-    import torch
 
+    from _results import publish
     from hybridship.fileio import atomic_write
-    from hybridship.evaluation.manoeuvre import (ManoeuvreConfig, error_table, forecast_errors, load_runs, start_rows,
-                                                 validation_split)
-    from hybridship.forecast_inputs.wind import HELD_WIND
-    from hybridship.predictors import DynamicPredictor
-    from hybridship.residual.features import MEMORY_FEATURES
-    from hybridship.vessel import load_vessel
 
+    try:
+        errors, table = pd.read_csv(out / "errors.csv"), pd.read_csv(out / "variants.csv")
+        first = (out / "tables.md").read_text().splitlines()[0]
+    except (FileNotFoundError, IndexError) as err:
+        print(f"error: --tables-only needs the result files and tables.md of a run in {out}: {err}",
+              file=sys.stderr)
+        return 2
+    if not (first.startswith("Command: `") and first.endswith("`")):
+        print(f"error: {out / 'tables.md'}: its first line is not the run's command", file=sys.stderr)
+        return 2
+    text = tables(errors, table, first[len("Command: `"):-1])
+    atomic_write(out / "tables.md", lambda fh: fh.write(text.encode()))
+    publish(out, results, RESULT_FILES)
+    print(text)
+    return 0
+
+
+def screening_config(args, horizons):
+    """The benchmark's :class:`~hybridship.evaluation.manoeuvre.ManoeuvreConfig` with the
+    command line's changes of the nets, the hull correction and the features."""
+    from hybridship.evaluation.manoeuvre import ManoeuvreConfig
+    from hybridship.residual.features import MEMORY_FEATURES
+
+    cfg = ManoeuvreConfig()
+    cfg = replace(cfg, calibration=replace(cfg.calibration, horizon_s=max(horizons)))
+    if args.members:
+        cfg = replace(cfg, ensemble=replace(cfg.ensemble, n_members=args.members))
+    if args.seed is not None:
+        cfg = replace(cfg, ensemble=replace(cfg.ensemble, seed=args.seed))
+    if args.hidden:
+        cfg = replace(cfg, ensemble=replace(cfg.ensemble, hidden=args.hidden))
+    if args.hull:
+        cfg = replace(cfg, hull_correction=True, hull_fit=args.hull_fit)
+        if args.hull_iterations:
+            cfg = replace(cfg, multistep=replace(cfg.multistep, hull_iterations=args.hull_iterations))
+    drop = [f for f in args.drop_features.split(",") if f] + (list(MEMORY_FEATURES) if args.no_memory else [])
+    if drop:
+        cfg = replace(cfg, residual=replace(cfg.residual, features=tuple(f for f in cfg.residual.features
+                                                                         if f not in drop)))
+    return cfg
+
+
+def write_outputs(out: Path, results: Path | None, run_errors, rows, command: str):
+    """Write ``errors.csv`` and ``variants.csv`` to ``out`` (keeping earlier variants of the same
+    ``out``: the same split and one-step nets), ``tables.md`` of this run's rows alone, and copy the
+    three to ``results``; the merged (errors, variants) tables."""
+    import pandas as pd
+
+    from _results import publish
+    from hybridship.fileio import atomic_write
+
+    errors = run_errors
+    if (out / "errors.csv").exists():
+        old = pd.read_csv(out / "errors.csv")
+        errors = pd.concat([old[~old.model.isin(errors.model.unique())], errors], ignore_index=True)
+    atomic_write(out / "errors.csv", lambda fh: fh.write(errors.to_csv(index=False).encode()))
+    table = run_table = pd.DataFrame(rows)
+    if (out / "variants.csv").exists():
+        oldv = pd.read_csv(out / "variants.csv")
+        table = pd.concat([oldv[~oldv.variant.isin(table.variant)], table], ignore_index=True)
+    atomic_write(out / "variants.csv", lambda fh: fh.write(table.to_csv(index=False).encode()))
+    text = tables(run_errors, run_table, command)
+    atomic_write(out / "tables.md", lambda fh: fh.write(text.encode()))
+    publish(out, results, RESULT_FILES)
+    print(text)
+    return errors, table
+
+
+def parse_args(argv=None) -> argparse.Namespace:
+    """The command line (``argv``; None: this process's arguments)."""
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--split", type=Path, default=ROOT / "out" / "esso-osaka" / "split",
                     help="the benchmark's split (default out/esso-osaka/split)")
@@ -143,7 +252,30 @@ def main(argv=None) -> int:
                     help="also score each variant with the command-regime guard fitted on its nets (suffix +cg)")
     ap.add_argument("--permutation", action="store_true",
                     help="also the permutation importance of every feature of each variant (validation rollouts)")
-    args = ap.parse_args(argv)
+    ap.add_argument("--results", type=Path, help="also copy errors.csv, variants.csv and tables.md here (no data)")
+    ap.add_argument("--tables-only", action="store_true",
+                    help="write tables.md again from --out's files (and copy them to --results), keeping the "
+                         "command line it records; nothing is trained")
+    return ap.parse_args(argv)
+
+
+def main(argv=None) -> int:
+    import torch
+
+    from _results import command_line
+    from hybridship.evaluation.manoeuvre import error_table, forecast_errors, load_runs, start_rows, validation_split
+    from hybridship.fileio import atomic_write
+    from hybridship.forecast_inputs.wind import HELD_WIND
+    from hybridship.predictors import DynamicPredictor
+    from hybridship.vessel import load_vessel
+
+    args = parse_args(argv)
+    if args.tables_only:
+        return tables_only(args.out, args.results)
+    if args.results is not None and (args.out / "errors.csv").exists():
+        print(f"error: --results: {args.out} holds an earlier run's errors.csv; use a new --out so that the "
+              "copied files come from this command alone", file=sys.stderr)
+        return 2
     torch.set_num_threads(1)
     try:
         fit_dir, val_dir = validation_split(args.split, args.out / "split")
@@ -152,31 +284,11 @@ def main(argv=None) -> int:
         return 2
     horizons = tuple(float(h) for h in args.horizons_s.split(","))
     v = load_vessel("esso_osaka_model")
-    cfg = ManoeuvreConfig()
-    cfg = replace(cfg, calibration=replace(cfg.calibration, horizon_s=max(horizons)))
-    if args.members:
-        cfg = replace(cfg, ensemble=replace(cfg.ensemble, n_members=args.members))
-    if args.seed is not None:
-        cfg = replace(cfg, ensemble=replace(cfg.ensemble, seed=args.seed))
-    if args.hidden:
-        cfg = replace(cfg, ensemble=replace(cfg.ensemble, hidden=args.hidden))
-    if args.hull:
-        cfg = replace(cfg, hull_correction=True, hull_fit=args.hull_fit)
-        if args.hull_iterations:
-            cfg = replace(cfg, multistep=replace(cfg.multistep, hull_iterations=args.hull_iterations))
-    drop = [f for f in args.drop_features.split(",") if f] + (list(MEMORY_FEATURES) if args.no_memory else [])
-    if drop:
-        cfg = replace(cfg, residual=replace(cfg.residual, features=tuple(f for f in cfg.residual.features
-                                                                         if f not in drop)))
+    cfg = screening_config(args, horizons)
     fit_runs, val_runs = load_runs(fit_dir, v), load_runs(val_dir, v)
     args.out.mkdir(parents=True, exist_ok=True)
     t0 = time.perf_counter()
-    base, logs = one_step_hybrid(cfg, fit_runs, args.out / f"one_step_m{cfg.ensemble.n_members}"
-                                  f"_h{cfg.ensemble.hidden}_f{len(cfg.residual.features)}"
-                                  f"{'_s%d' % cfg.ensemble.seed if cfg.ensemble.seed else ''}"
-                                  f"{'_hull_' + cfg.hull_fit if cfg.hull_correction else ''}"
-                                  f"{cfg.multistep.hull_iterations if cfg.hull_fit == 'multi_step' else ''}"
-                                  f"{'_held_wind' if args.held_wind else ''}.npz",
+    base, logs = one_step_hybrid(cfg, fit_runs, cache_file(args.out, cfg, args.held_wind),
                                   wind_forecast=HELD_WIND if args.held_wind else "fit")
     print(f"one-step nets: {time.perf_counter() - t0:.0f} s", flush=True)
     dt = float(np.median(np.diff(val_runs[0].arrays.time_s)))
@@ -197,8 +309,6 @@ def main(argv=None) -> int:
         z.ensemble.y_mean = np.zeros(3)
         per[("hull_only", "known")] = score(z)
     rows = []
-    prev = args.out / "errors.csv"
-    old = pd.read_csv(prev) if prev.exists() else None
     for name, kw in parse_variants(args.variants).items():
         ms = replace(cfg.multistep, **kw)
         t0 = time.perf_counter()
@@ -221,21 +331,12 @@ def main(argv=None) -> int:
             imp = permutation_importance(q, score, horizons, val_runs)
             atomic_write(args.out / f"importance_{name}.csv", lambda fh: fh.write(imp.to_csv(index=False).encode()))
             print(imp.round(4).to_string(), flush=True)
-    errors = error_table(per, val_runs, horizons)
-    if old is not None:  # keep earlier variants of the same --out (same split, same one-step nets)
-        errors = pd.concat([old[~old.model.isin(errors.model.unique())], errors], ignore_index=True)
-    atomic_write(args.out / "errors.csv", lambda fh: fh.write(errors.to_csv(index=False).encode()))
-    rows = [summary(errors, m, 0.0, {}, {}) for m in ("one_step", "hull_only") if (m, "known") in per] + rows
-    vf = args.out / "variants.csv"
-    table = pd.DataFrame(rows)
-    if vf.exists():
-        oldv = pd.read_csv(vf)
-        table = pd.concat([oldv[~oldv.variant.isin(table.variant)], table], ignore_index=True)
-    atomic_write(vf, lambda fh: fh.write(table.to_csv(index=False).encode()))
+    run_errors = error_table(per, val_runs, horizons)
+    rows = [summary(run_errors, m, 0.0, {}, {}) for m in ("one_step", "hull_only") if (m, "known") in per] + rows
+    errors, table = write_outputs(args.out, args.results, run_errors, rows, command_line("esso_multistep.py", argv))
     d = errors[(errors.state == "distance_m")].pivot_table(index=["kind", "model"], columns="horizon_s",
                                                            values="mae", sort=False)
-    print(d.round(3).to_string())
-    print(table.drop(columns=["history"]).to_string())
+    print(d.round(3).to_string(), table.drop(columns=["history"]).to_string(), sep="\n")
     return 0
 
 

@@ -1,0 +1,51 @@
+"""benchmarks/esso_multistep.py: its committed tables."""
+
+from __future__ import annotations
+
+import pandas as pd
+import pytest
+
+from conftest import load_benchmark
+
+
+@pytest.fixture(scope="module")
+def em():
+    return load_benchmark("esso_multistep")
+
+
+def _errors():
+    rows = []
+    for model, d, h in (("dynamic", 0.5, 10.0), ("abs", 0.4, 6.0)):
+        for kind, f in (("random", 1.0), ("zigzag", 3.0), ("all", 2.0)):
+            for horizon in (10.0, 30.0):
+                rows += [(model, kind, "distance_m", horizon, d * f * horizon / 30.0, "known"),
+                         (model, kind, "heading_deg", horizon, h * f * horizon / 30.0, "known")]
+    return pd.DataFrame(rows, columns=["model", "kind", "state", "horizon_s", "mae", "commands"])
+
+
+def test_the_summary_and_the_tables_give_each_rows_pooled_30_s_figures(em):
+    e = _errors()
+    row = em.summary(e, "abs", 12.0, {}, {"loss": "absolute"})
+    assert (row["dist30_m"], row["head30_deg"], row["dist_ratio"], row["cells_below"]) == (0.8, 12.0, 0.8, "4/4")
+    lines = em.tables(e, pd.DataFrame([row]), "python benchmarks/esso_multistep.py --variants abs:").splitlines()
+    assert lines[0] == "Command: `python benchmarks/esso_multistep.py --variants abs:`"
+    assert '| abs | {"loss": "absolute"} | 0.8 | 12.0 | 0.8 | 0.6 | 4/4 | 12.0 |' in lines
+    assert "| abs | 0.400 / 6.00 | 1.200 / 18.00 | 0.800 / 12.00 | 0.80 / 0.60 |" in lines
+
+
+def test_results_need_an_out_without_an_earlier_run(em, tmp_path, capsys):
+    (tmp_path / "errors.csv").write_text("model\n")
+    assert em.main(["--out", str(tmp_path), "--results", str(tmp_path / "docs")]) == 2
+    assert "earlier run's errors.csv" in capsys.readouterr().err
+    assert not (tmp_path / "docs").exists()
+
+
+def test_tables_only_renders_the_run_again_with_its_command(em, tmp_path):
+    e = _errors()
+    e.to_csv(tmp_path / "errors.csv", index=False)
+    pd.DataFrame([em.summary(e, "abs", 12.0, {}, {})]).to_csv(tmp_path / "variants.csv", index=False)
+    (tmp_path / "tables.md").write_text("Command: `python benchmarks/esso_multistep.py --seed 1`\nold\n")
+    assert em.main(["--tables-only", "--out", str(tmp_path), "--results", str(tmp_path / "docs")]) == 0
+    text = (tmp_path / "docs" / "tables.md").read_text()
+    assert text.startswith("Command: `python benchmarks/esso_multistep.py --seed 1`\n") and "old" not in text
+    assert sorted(p.name for p in (tmp_path / "docs").iterdir()) == ["errors.csv", "tables.md", "variants.csv"]
