@@ -326,7 +326,7 @@ def main(argv=None) -> int:
             e = error_table(per, val_runs, horizons)
             rows.append(summary(e, name + "+cg", secs, hist, kw))
             print(json.dumps(rows[-1]), flush=True)
-            q.command_regime = None
+            q.command_regime, q.command_guard = None, False
         if args.permutation:
             imp = permutation_importance(q, score, horizons, val_runs)
             atomic_write(args.out / f"importance_{name}.csv", lambda fh: fh.write(imp.to_csv(index=False).encode()))
@@ -343,10 +343,14 @@ def main(argv=None) -> int:
 def with_command_regime(q, logs, stride):
     """Fit the command-regime guard of the fine-tuned hybrid ``q`` on the held-back end of its logs (in place),
     as :meth:`HybridPredictor.fit` does (the weights of all the held-back rows; the spread itself is not
-    recalibrated here: the screen scores errors only)."""
+    recalibrated here: the screen scores errors only). Sets ``q.command_guard``, without which the fit
+    leaves the weights out; the caller turns both off again."""
     cal = q.calibration_config
     cuts, masks = q._held_back(logs, cal, True)
+    q.command_guard = True
     q._fit_command_guard(logs, cuts, masks, cal, True, stride)
+    if q.command_regime is None:
+        raise RuntimeError("with_command_regime: no command-regime weights were fitted")
 
 
 def permutation_importance(p, score, horizons, runs, seed: int = 0):

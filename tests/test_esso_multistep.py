@@ -49,3 +49,25 @@ def test_tables_only_renders_the_run_again_with_its_command(em, tmp_path):
     text = (tmp_path / "docs" / "tables.md").read_text()
     assert text.startswith("Command: `python benchmarks/esso_multistep.py --seed 1`\n") and "old" not in text
     assert sorted(p.name for p in (tmp_path / "docs").iterdir()) == ["errors.csv", "tables.md", "variants.csv"]
+
+
+def test_the_command_regime_is_fitted_on_a_hybrid_built_without_the_guard(em):
+    """The fit leaves the weights out unless ``command_guard`` is set (as HybridPredictor's does):
+    the screen's ``+cg`` rows would otherwise score the nets without the guard."""
+    from types import SimpleNamespace
+
+    class Hybrid(SimpleNamespace):
+        def _held_back(self, logs, cal, dp_only):
+            return [len(a) for a in logs], [None for _ in logs]
+
+        def _fit_command_guard(self, logs, cuts, masks, cal, dp_only, stride):
+            self.command_regime = "weights" if self.command_guard else None
+            return [], {}
+
+    q = Hybrid(calibration_config=None, command_guard=False, command_regime=None)
+    em.with_command_regime(q, [[0, 1]], 1)
+    assert q.command_guard and q.command_regime == "weights"
+    q.command_guard, q.command_regime = False, None
+    q._fit_command_guard = lambda *a: None           # a fit that finds no weights is not a +cg row
+    with pytest.raises(RuntimeError, match="no command-regime weights"):
+        em.with_command_regime(q, [[0, 1]], 1)
