@@ -29,6 +29,32 @@ def publish(out_dir: Path, results_dir: Path | None, names) -> None:
         atomic_write(results_dir / name, lambda fh, src=out_dir / name: fh.write(src.read_bytes()))
 
 
+def tables_again(out_dir: Path, results_dir: Path | None, csv_names, render, names) -> int:
+    """``--tables-only``: render ``out_dir/tables.md`` again, without a new run, as
+    ``render(*frames, command)`` from the run's ``csv_names`` and the command its first line
+    records, and :func:`publish` those of ``names`` that exist. Returns the exit code: 2, with
+    a message, when the run's files are missing or the first line is not a command."""
+    import pandas as pd
+
+    from hybridship.fileio import write_text
+
+    try:
+        frames = [pd.read_csv(out_dir / name) for name in csv_names]
+        first = (out_dir / "tables.md").read_text().splitlines()[0]
+    except (FileNotFoundError, IndexError) as err:
+        print(f"error: --tables-only needs {', '.join(csv_names)} and tables.md of a run in {out_dir}: {err}",
+              file=sys.stderr)
+        return 2
+    if not (first.startswith("Command: `") and first.endswith("`")):
+        print(f"error: {out_dir / 'tables.md'}: its first line is not the run's command", file=sys.stderr)
+        return 2
+    text = render(*frames, first[len("Command: `"):-1])
+    write_text(out_dir / "tables.md", text)
+    publish(out_dir, results_dir, [name for name in names if (out_dir / name).exists()])
+    print(text)
+    return 0
+
+
 def kind_table(errors, reference: str, horizon_s: float = 30.0) -> str:
     """Markdown table of every model's distance [m] and heading [deg] error at ``horizon_s``
     per kind and pooled (logged commands known), with the pooled ratios to ``reference``."""

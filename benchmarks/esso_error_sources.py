@@ -260,25 +260,9 @@ def _choose_feedback(predictor, logs, steps: np.ndarray, start_every_s: float, l
 def _tables_only(out: Path, results: Path | None) -> int:
     """Render ``out/tables.md`` again from ``out/errors.csv``, with the command of the run that
     wrote them (its first line), so that a change of the tables needs no new run."""
-    import pandas as pd
+    from _results import tables_again
 
-    from _results import publish
-    from hybridship.fileio import atomic_write
-
-    try:
-        errors = pd.read_csv(out / "errors.csv")
-        first = (out / "tables.md").read_text().splitlines()[0]
-    except (FileNotFoundError, IndexError) as err:
-        print(f"error: --tables-only needs the errors.csv and tables.md of a run in {out}: {err}", file=sys.stderr)
-        return 2
-    if not (first.startswith("Command: `") and first.endswith("`")):
-        print(f"error: {out / 'tables.md'}: its first line is not the run's command", file=sys.stderr)
-        return 2
-    text = tables(errors, first[len("Command: `"):-1])
-    atomic_write(out / "tables.md", lambda fh: fh.write(text.encode()))
-    publish(out, results, ("errors.csv", "tables.md"))
-    print(text)
-    return 0
+    return tables_again(out, results, ["errors.csv"], tables, ("errors.csv", "tables.md"))
 
 
 #: Pairs (model, the same model fed the logged future wind) whose 30-s errors give the

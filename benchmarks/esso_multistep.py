@@ -152,26 +152,9 @@ def tables(errors, table, command: str) -> str:
 def tables_only(out: Path, results: Path | None) -> int:
     """Render ``out/tables.md`` again from ``out/errors.csv`` and ``out/variants.csv``, with the
     command of the run that wrote them (its first line), and copy them to ``results``; no new run."""
-    import pandas as pd
+    from _results import tables_again
 
-    from _results import publish
-    from hybridship.fileio import atomic_write
-
-    try:
-        errors, table = pd.read_csv(out / "errors.csv"), pd.read_csv(out / "variants.csv")
-        first = (out / "tables.md").read_text().splitlines()[0]
-    except (FileNotFoundError, IndexError) as err:
-        print(f"error: --tables-only needs the result files and tables.md of a run in {out}: {err}",
-              file=sys.stderr)
-        return 2
-    if not (first.startswith("Command: `") and first.endswith("`")):
-        print(f"error: {out / 'tables.md'}: its first line is not the run's command", file=sys.stderr)
-        return 2
-    text = tables(errors, table, first[len("Command: `"):-1])
-    atomic_write(out / "tables.md", lambda fh: fh.write(text.encode()))
-    publish(out, results, RESULT_FILES)
-    print(text)
-    return 0
+    return tables_again(out, results, ["errors.csv", "variants.csv"], tables, RESULT_FILES)
 
 
 def screening_config(args, horizons):

@@ -297,25 +297,9 @@ def tables(errors, command: str) -> str:
 def tables_only(out: Path, results: Path | None) -> int:
     """Render ``out/tables.md`` again from ``out/errors.csv``, with the command of the run that
     wrote them (its first line), and copy the result files to ``results``; no new run."""
-    import pandas as pd
+    from _results import tables_again
 
-    from _results import publish
-    from hybridship.fileio import atomic_write
-
-    try:
-        errors = pd.read_csv(out / "errors.csv")
-        first = (out / "tables.md").read_text().splitlines()[0]
-    except (FileNotFoundError, IndexError) as err:
-        print(f"error: --tables-only needs the errors.csv and tables.md of a run in {out}: {err}", file=sys.stderr)
-        return 2
-    if not (first.startswith("Command: `") and first.endswith("`")):
-        print(f"error: {out / 'tables.md'}: its first line is not the run's command", file=sys.stderr)
-        return 2
-    text = tables(errors, first[len("Command: `"):-1])
-    atomic_write(out / "tables.md", lambda fh: fh.write(text.encode()))
-    publish(out, results, [n for n in RESULT_FILES if (out / n).exists()])
-    print(text)
-    return 0
+    return tables_again(out, results, ["errors.csv"], tables, RESULT_FILES)
 
 
 def print_tables(errors, coverage, sharpness, modes) -> None:
