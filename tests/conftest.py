@@ -69,6 +69,24 @@ def load_benchmark(name: str):
     return mod
 
 
+def screening_errors(models=(("dynamic", 0.5, 10.0), ("hybrid", 0.4, 6.0)), held: bool = True):
+    """A small errors table of the Esso screening scripts (``model,kind,state,horizon_s,mae,commands``):
+    per model (name, 30-s distance [m], 30-s heading [deg]) two kinds and the pooled rows
+    (``all``, twice the first kind's), horizons 10 and 30 s, growing linearly; with ``held``
+    a commands-held distance of 99 m that no table of commands known may show."""
+    import pandas as pd
+
+    rows = []
+    for model, d, h in models:
+        for kind, f in (("random", 1.0), ("zigzag", 3.0), ("all", 2.0)):
+            for horizon in (10.0, 30.0):
+                rows += [(model, kind, "distance_m", horizon, d * f * horizon / 30.0, "known"),
+                         (model, kind, "heading_deg", horizon, h * f * horizon / 30.0, "known")]
+                if held:
+                    rows.append((model, kind, "distance_m", horizon, 99.0, "held"))
+    return pd.DataFrame(rows, columns=["model", "kind", "state", "horizon_s", "mae", "commands"])
+
+
 def shared_data_path(*parts: str) -> Path:
     """``../shared/data/<parts>`` (the path may not exist)."""
     return SHARED_DATA.joinpath(*parts)

@@ -1,23 +1,10 @@
 """benchmarks/_results.py: the screening scripts' committed tables."""
 
-import pandas as pd
-
-from conftest import load_benchmark
-
-
-def _errors():
-    rows = []
-    for model, d, h in (("dynamic", 0.5, 10.0), ("hybrid", 0.4, 6.0)):
-        for kind, f in (("random", 1.0), ("zigzag", 3.0), ("all", 2.0)):
-            for horizon in (10.0, 30.0):
-                rows += [(model, kind, "distance_m", horizon, d * f * horizon / 30.0, "known"),
-                         (model, kind, "heading_deg", horizon, h * f * horizon / 30.0, "known"),
-                         (model, kind, "distance_m", horizon, 99.0, "held")]
-    return pd.DataFrame(rows, columns=["model", "kind", "state", "horizon_s", "mae", "commands"])
+from conftest import load_benchmark, screening_errors
 
 
 def test_kind_table_gives_30_s_errors_per_kind_and_pooled_ratios():
-    table = load_benchmark("_results").kind_table(_errors(), "dynamic").splitlines()
+    table = load_benchmark("_results").kind_table(screening_errors(), "dynamic").splitlines()
     assert table[0] == "| model | random | zigzag | all | pooled / dynamic |"
     assert table[2] == "| dynamic | 0.500 / 10.00 | 1.500 / 30.00 | 1.000 / 20.00 | 1.00 / 1.00 |"
     assert table[3] == "| hybrid | 0.400 / 6.00 | 1.200 / 18.00 | 0.800 / 12.00 | 0.80 / 0.60 |"

@@ -5,7 +5,7 @@ from __future__ import annotations
 import pandas as pd
 import pytest
 
-from conftest import load_benchmark
+from conftest import load_benchmark, screening_errors
 
 
 @pytest.fixture(scope="module")
@@ -13,18 +13,8 @@ def em():
     return load_benchmark("esso_multistep")
 
 
-def _errors():
-    rows = []
-    for model, d, h in (("dynamic", 0.5, 10.0), ("abs", 0.4, 6.0)):
-        for kind, f in (("random", 1.0), ("zigzag", 3.0), ("all", 2.0)):
-            for horizon in (10.0, 30.0):
-                rows += [(model, kind, "distance_m", horizon, d * f * horizon / 30.0, "known"),
-                         (model, kind, "heading_deg", horizon, h * f * horizon / 30.0, "known")]
-    return pd.DataFrame(rows, columns=["model", "kind", "state", "horizon_s", "mae", "commands"])
-
-
 def test_the_summary_and_the_tables_give_each_rows_pooled_30_s_figures(em):
-    e = _errors()
+    e = screening_errors((("dynamic", 0.5, 10.0), ("abs", 0.4, 6.0)), held=False)
     row = em.summary(e, "abs", 12.0, {}, {"loss": "absolute"})
     assert (row["dist30_m"], row["head30_deg"], row["dist_ratio"], row["cells_below"]) == (0.8, 12.0, 0.8, "4/4")
     lines = em.tables(e, pd.DataFrame([row]), "python benchmarks/esso_multistep.py --variants abs:").splitlines()
@@ -41,7 +31,7 @@ def test_results_need_an_out_without_an_earlier_run(em, tmp_path, capsys):
 
 
 def test_tables_only_renders_the_run_again_with_its_command(em, tmp_path):
-    e = _errors()
+    e = screening_errors((("dynamic", 0.5, 10.0), ("abs", 0.4, 6.0)), held=False)
     e.to_csv(tmp_path / "errors.csv", index=False)
     pd.DataFrame([em.summary(e, "abs", 12.0, {}, {})]).to_csv(tmp_path / "variants.csv", index=False)
     (tmp_path / "tables.md").write_text("Command: `python benchmarks/esso_multistep.py --seed 1`\nold\n")

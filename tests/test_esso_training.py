@@ -15,7 +15,7 @@ from hybridship.predictors import DynamicPredictor
 from hybridship.sim.synthetic import physics_log
 from hybridship.vessel import load_vessel, packaged_vessel_text, vessel_from_dict
 
-from conftest import load_benchmark
+from conftest import load_benchmark, screening_errors
 
 
 @pytest.fixture(scope="module")
@@ -128,23 +128,9 @@ def test_a_variant_name_with_an_unknown_token_is_refused(et):
             et.check_variant_name(bad)
 
 
-def _errors(models=(("dynamic", 0.5, 10.0), ("hybrid", 0.4, 6.0))):
-    """A small errors table: two kinds and the pooled rows, two horizons, a commands-held row."""
-    import pandas as pd
-
-    rows = []
-    for model, d, h in models:
-        for kind, f in (("random", 1.0), ("zigzag", 3.0), ("all", 2.0)):
-            for horizon in (10.0, 30.0):
-                rows += [(model, kind, "distance_m", horizon, d * f * horizon / 30.0, "known"),
-                         (model, kind, "heading_deg", horizon, h * f * horizon / 30.0, "known"),
-                         (model, kind, "distance_m", horizon, 99.0, "held")]
-    return pd.DataFrame(rows, columns=["model", "kind", "state", "horizon_s", "mae", "commands"])
-
-
 def test_tables_give_the_pooled_errors_the_cells_below_the_physics_and_the_kinds(et):
     # the hybrid is below the physics everywhere except zigzag at 30 s
-    e = _errors()
+    e = screening_errors()
     e.loc[(e.model == "hybrid") & (e.kind == "zigzag") & (e.horizon_s == 30.0) & (e.state == "distance_m")
           & (e.commands == "known"), "mae"] = 2.0
     assert et.cells_below(e, "hybrid") == "3/4"
@@ -157,7 +143,7 @@ def test_tables_give_the_pooled_errors_the_cells_below_the_physics_and_the_kinds
 
 
 def test_tables_only_renders_the_run_again_with_its_command(et, tmp_path):
-    _errors().to_csv(tmp_path / "errors.csv", index=False)
+    screening_errors().to_csv(tmp_path / "errors.csv", index=False)
     (tmp_path / "timing.csv").write_text("model,train_s\nhybrid,1.0\n")
     (tmp_path / "tables.md").write_text("Command: `python benchmarks/esso_training.py --variants a`\nold\n")
     assert et.main(["--tables-only", "--out", str(tmp_path), "--results", str(tmp_path / "docs")]) == 0
