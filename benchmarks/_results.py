@@ -55,6 +55,14 @@ def tables_again(out_dir: Path, results_dir: Path | None, csv_names, render, nam
     return 0
 
 
+def cells_below(errors, model: str, reference: str = "dynamic") -> str:
+    """``"n/total"``: the kind x horizon cells (commands known, distance) where ``model``'s
+    mean error is below ``reference``'s."""
+    e = errors[(errors["commands"] == "known") & (errors["state"] == "distance_m") & (errors["kind"] != "all")]
+    t = e.pivot_table(index=["kind", "horizon_s"], columns="model", values="mae", sort=False)
+    return f"{int((t[model] < t[reference]).sum())}/{len(t)}"
+
+
 def kind_table(errors, reference: str, horizon_s: float = 30.0) -> str:
     """Markdown table of every model's distance [m] and heading [deg] error at ``horizon_s``
     per kind and pooled (logged commands known), with the pooled ratios to ``reference``."""

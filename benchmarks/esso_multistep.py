@@ -375,22 +375,16 @@ def permutation_importance(p, score, horizons, runs, seed: int = 0):
 
 def summary(e, name, secs, hist, kw) -> dict:
     """Pooled 30-s figures of one variant against the physics (validation runs)."""
-    def mae(model, state, kind="all", h=None):
-        s = e[(e.model == model) & (e.state == state) & (e.kind == kind)]
-        return float(s[s.horizon_s == (h or s.horizon_s.max())].mae.iloc[0])
+    from _results import cells_below
 
-    cells = 0
-    total = 0
-    for kind in e.kind.unique():
-        if kind == "all":
-            continue
-        for h in e.horizon_s.unique():
-            total += 1
-            cells += mae(name, "distance_m", kind, h) < mae("dynamic", "distance_m", kind, h)
+    def mae(model, state):
+        s = e[(e.model == model) & (e.state == state) & (e.kind == "all")]
+        return float(s[s.horizon_s == s.horizon_s.max()].mae.iloc[0])
+
     d, hd = mae(name, "distance_m"), mae(name, "heading_deg")
     return {"variant": name, "settings": json.dumps(kw), "dist30_m": round(d, 4), "head30_deg": round(hd, 3),
             "dist_ratio": round(d / mae("dynamic", "distance_m"), 3),
-            "head_ratio": round(hd / mae("dynamic", "heading_deg"), 3), "cells_below": f"{cells}/{total}",
+            "head_ratio": round(hd / mae("dynamic", "heading_deg"), 3), "cells_below": cells_below(e, name),
             "train_s": round(secs, 1),
             "history": json.dumps({k: hist[k] for k in ("iterations", "best_val_loss") if k in hist}
                                   | {"val_loss": [round(x, 5) for x in hist.get("val_loss", [])]})}

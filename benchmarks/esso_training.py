@@ -257,14 +257,6 @@ def with_wind_spread(p, logs, samples: int = 8):
 RESULT_FILES = ("errors.csv", "coverage.csv", "sharpness.csv", "timing.csv", "tables.md")
 
 
-def cells_below(errors, model: str, reference: str = "dynamic") -> str:
-    """``"n/total"``: the kind x horizon cells (commands known, distance) where ``model``'s
-    mean error is below ``reference``'s."""
-    e = errors[(errors["commands"] == "known") & (errors["state"] == "distance_m") & (errors["kind"] != "all")]
-    t = e.pivot_table(index=["kind", "horizon_s"], columns="model", values="mae", sort=False)
-    return f"{int((t[model] < t[reference]).sum())}/{len(t)}"
-
-
 def tables(errors, command: str) -> str:
     """``tables.md``: the command that made ``errors``, the pooled distance error at every
     horizon and the 30-s heading error per model with the kind x horizon cells below the
@@ -272,7 +264,7 @@ def tables(errors, command: str) -> str:
     physics; logged commands known."""
     import pandas as pd
 
-    from _results import kind_table
+    from _results import cells_below, kind_table
     from hybridship.fileio import markdown_table
 
     e = errors[(errors["commands"] == "known") & (errors["kind"] == "all")]

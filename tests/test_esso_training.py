@@ -133,7 +133,7 @@ def test_tables_give_the_pooled_errors_the_cells_below_the_physics_and_the_kinds
     e = screening_errors()
     e.loc[(e.model == "hybrid") & (e.kind == "zigzag") & (e.horizon_s == 30.0) & (e.state == "distance_m")
           & (e.commands == "known"), "mae"] = 2.0
-    assert et.cells_below(e, "hybrid") == "3/4"
+    assert load_benchmark("_results").cells_below(e, "hybrid") == "3/4"
     lines = et.tables(e, "python benchmarks/esso_training.py --variants a").splitlines()
     assert lines[0] == "Command: `python benchmarks/esso_training.py --variants a`"
     assert "| hybrid | 0.267 | 0.800 | 12.00 | 3/4 |" in lines
