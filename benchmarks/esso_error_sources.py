@@ -233,26 +233,35 @@ def heading_fit_rate(time_s: np.ndarray, psi_rad: np.ndarray, window_s: float) -
     return out
 
 
+def held_back_errors(predictor, logs, steps: np.ndarray, start_every_s: float, make, skip_s: float = 0.0):
+    """The errors ``(S, n_horizons, 4)`` (:func:`~hybridship.evaluation.manoeuvre.forecast_errors`,
+    logged commands known) of the forecaster ``make(arrays, cut)`` on the held-back end of
+    each of ``logs`` (the rows from ``cut``, which the nets did not train on; the first start
+    ``skip_s`` after it), one start every ``start_every_s``."""
+    from hybridship.evaluation.manoeuvre import forecast_errors
+
+    dp_only = bool(predictor.training_info["calibration"]["dp_only"])
+    errs = []
+    for a in logs:
+        cut = predictor._calibration_cut(a, predictor.calibration_config, dp_only)
+        dt = float(np.median(np.diff(a.time_s)))
+        first = cut + int(round(skip_s / dt))
+        rows = np.arange(first, len(a.time_s) - int(steps.max()), max(1, int(round(start_every_s / dt))))
+        if rows.size:
+            fc = make(a, cut)
+            errs.append(forecast_errors(lambda x, st, h: fc(x, st, h, commands="known"), a, rows, steps))
+    return np.concatenate(errs)
+
+
 def _choose_feedback(predictor, logs, steps: np.ndarray, start_every_s: float, lag_s: float = 30.0):
     """The :data:`FEEDBACK_ALPHAS` gain with the lowest mean distance error at the longest lead,
     scored on the held-back end of each log (the rows the nets did not train on, starting at
     least ``lag_s`` into it, so that the earlier forecast is held back too). Returns
     ``(alpha, {alpha: (distance [m], heading [deg])})``."""
-    from hybridship.evaluation.manoeuvre import forecast_errors
-
-    dp_only = bool(predictor.training_info["calibration"]["dp_only"])
     scores = {}
     for alpha in FEEDBACK_ALPHAS:
         fb = _error_feedback(predictor, alpha, lag_s)
-        errs = []
-        for a in logs:
-            cut = predictor._calibration_cut(a, predictor.calibration_config, dp_only)
-            dt = float(np.median(np.diff(a.time_s)))
-            first = cut + int(round(lag_s / dt))
-            rows = np.arange(first, len(a.time_s) - int(steps.max()), max(1, int(round(start_every_s / dt))))
-            if rows.size:
-                errs.append(forecast_errors(lambda x, st, h: fb(x, st, h, commands="known"), a, rows, steps)[:, -1])
-        e = np.concatenate(errs)
+        e = held_back_errors(predictor, logs, steps, start_every_s, lambda a, cut: fb, lag_s)[:, -1]
         scores[alpha] = (float(e[:, 3].mean()), float(e[:, 2].mean()))
     return min(scores, key=lambda k: scores[k][0]), scores
 
