@@ -77,8 +77,8 @@ DOFS = ("u", "v", "r")
 
 def one_step_errors(hybrid, arrays) -> np.ndarray:
     """The nets' one-step error (N, 3) at every row of ``arrays``: the residual deviation
-    they are trained on minus the ensemble's mean output from the logged features (NaN at
-    rows without a target)."""
+    they are trained on minus the ensemble's mean output from the logged features, in body
+    axes [m/s^2, m/s^2, rad/s^2] (NaN at rows without a target)."""
     from hybridship.residual.features import prepare_log
 
     prep = prepare_log(hybrid.model, arrays, hybrid.residual_config)
@@ -213,11 +213,16 @@ def observer_forecast(hybrid, tau_s, gain, decay: bool, first_row: int = 0):
             m = shifted(ewma(err, a.segment_id, dt, tau), a.segment_id, int(round(KNOWN_AFTER_S / dt)))[rows]
             c[:, taus == tau] = np.nan_to_num(gains * m)[:, taus == tau]
         ens = hybrid.ensemble
-        hybrid.ensemble = _CorrectedEnsemble(ens, c, dt, taus if decay else None)
+        corrected = hybrid.ensemble = _CorrectedEnsemble(ens, c, dt, taus if decay else None)
         try:
-            return hybrid.forecast(a, st, horizon_s=horizon_s, **kw)
+            out = hybrid.forecast(a, st, horizon_s=horizon_s, **kw)
         finally:
             hybrid.ensemble = ens
+        # the decay counts calls: the rollout must have asked the nets once a step
+        if corrected._step != int(round(horizon_s / dt)):
+            raise RuntimeError(f"the rollout called the nets {corrected._step} times for "
+                               f"{int(round(horizon_s / dt))} steps")
+        return out
 
     return forecast
 
@@ -272,7 +277,8 @@ def _variants(hyb, fit_logs, steps, start_every_s):
 
 
 def persistence(errors, dt_s: float) -> "pd.DataFrame":
-    """The diagnostic's table: per DOF, the one-step error's RMS, its autocorrelation at
+    """The diagnostic's table: per DOF, the one-step error's RMS and mean (columns ``rms``,
+    ``mean``, ``rms_30s_mean``: m/s^2 for u and v, rad/s^2 for r), its autocorrelation at
     :data:`LAGS_S`, and per time constant the fractions of :func:`explained` (the next row
     from the mean up to that row and up to :data:`KNOWN_AFTER_S` before it; the rest with
     the latter)."""
