@@ -14,7 +14,7 @@ its 2-sigma coverage and the targets it misses:
   heading, never worse than the physics in any state, horizon (15-60 s) or window, and a
   2-sigma band that covers 0.90-0.98 of the north/east errors at 60 s. Rows: the embedded
   scenarios, truthsim-dev (whole, and its calm and rough failures apart, as the
-  independent evaluation reports them), our own twenty and twenty calm scenarios, and the
+  independent evaluation reports them), our own two sets of twenty and twenty calm scenarios, and the
   fleet protocol on the first two.
 * **Manoeuvres of the Esso Osaka** (the manoeuvring issue): the benchmark's hybrid against
   the physics on the developers' test split with the logged commands known, below the
@@ -59,6 +59,8 @@ DRIFT_SETS = (
     ("truthsim-dev, rough", "drift-truthsim-dev", ("dev_*",), "the same run, its rough failures"),
     ("own twenty (seeds 100-119)", "drift-own-20", None,
      "hybridship benchmark drift --scenarios 20 --seed 100 --out docs/results/drift-own-20"),
+    ("own twenty more (seeds 200-219)", "drift-own-20-seed200", None,
+     "hybridship benchmark drift --scenarios 20 --seed 200 --no-plots --out docs/results/drift-own-20-seed200"),
     ("own twenty calm (seeds 500-519)", "drift-own-calm-20", None,
      "hybridship benchmark drift --train calm-20 --out docs/results/drift-own-calm-20 --no-plots"),
 )
