@@ -22,7 +22,8 @@ multi-step history) and prints them.
 
 ``--permutation`` also writes ``importance_<variant>.csv``: the rise of the pooled 30-s
 errors when one feature is permuted across the starts at every rollout step (a documented
-stand-in for the backward selection of Skulstad et al. sec. 3.3 that needs no retraining);
+stand-in for the backward selection of Skulstad et al. sec. 3.3 that needs no retraining;
+``tables.md`` then shows it, and ``--results`` copies it too);
 ``--drop-features`` retrains without the named features to confirm a removal, and
 ``--hidden`` / ``--members`` / ``--seed`` change the nets (screening only). ``--hull`` (with
 ``--hull-fit``) puts the linear hull correction in front of the nets
@@ -131,11 +132,17 @@ def fine_tune(p, logs, ms_cfg, row_stride):
 RESULT_FILES = ("errors.csv", "variants.csv", "tables.md")
 
 
-def tables(errors, table, command: str) -> str:
+def importance_name(variant: str) -> str:
+    """The file of ``variant``'s permutation importance (``--permutation``) in ``--out``."""
+    return f"importance_{variant}.csv"
+
+
+def tables(errors, table, command: str, importance: dict | None = None) -> str:
     """``tables.md``: the command that made ``errors`` and ``table`` (the rows of :func:`summary`),
     every row's pooled 30-s distance and heading with their ratios to the physics and the
     kind x horizon cells below it, and the 30-s errors per kind (validation runs, logged
-    commands known)."""
+    commands known); then each variant's permutation importance in ``importance`` (variant:
+    the frame of :func:`permutation_importance`), if any."""
     from _results import kind_table
     from hybridship.fileio import markdown_table
 
@@ -146,15 +153,30 @@ def tables(errors, table, command: str) -> str:
           "command-regime guard fitted on them):", "", markdown_table(table[cols]), "",
           "30-s distance [m] / heading [deg] per kind and pooled, with the pooled ratios to the physics:", "",
           kind_table(errors, "dynamic")]
+    for name, imp in (importance or {}).items():
+        imp = imp.assign(dist30_m=imp.dist30_m.round(4), head30_deg=imp.head30_deg.round(3),
+                         d_dist30_m=imp.d_dist30_m.round(4), d_head30_deg=imp.d_head30_deg.round(3))
+        md += ["", f"Permutation importance of `{name}` (`{importance_name(name)}`): the pooled 30-s distance [m] "
+               "and heading [deg] error with one feature permuted across the starts at every rollout step "
+               "(guard off), and their rise over the row `(none)` (nothing permuted):", "", markdown_table(imp)]
     return "\n".join(md) + "\n"
 
 
 def tables_only(out: Path, results: Path | None) -> int:
     """Render ``out/tables.md`` again from ``out/errors.csv`` and ``out/variants.csv``, with the
     command of the run that wrote them (its first line), and copy them to ``results``; no new run."""
+    import pandas as pd
+
     from _results import tables_again
 
-    return tables_again(out, results, ["errors.csv", "variants.csv"], tables, RESULT_FILES)
+    try:
+        names = [importance_name(v) for v in pd.read_csv(out / "variants.csv").variant]
+    except FileNotFoundError:
+        names = []   # tables_again says what is missing
+    found = [n for n in names if (out / n).exists()]
+    importance = {n[len("importance_"):-len(".csv")]: pd.read_csv(out / n) for n in found}
+    return tables_again(out, results, ["errors.csv", "variants.csv"],
+                        lambda e, t, command: tables(e, t, command, importance), RESULT_FILES + tuple(found))
 
 
 def screening_config(args, horizons):
@@ -182,10 +204,11 @@ def screening_config(args, horizons):
     return cfg
 
 
-def write_outputs(out: Path, results: Path | None, run_errors, rows, command: str):
+def write_outputs(out: Path, results: Path | None, run_errors, rows, command: str, importance: dict | None = None):
     """Write ``errors.csv`` and ``variants.csv`` to ``out`` (keeping earlier variants of the same
-    ``out``: the same split and one-step nets), ``tables.md`` of this run's rows alone, and copy the
-    three to ``results``; the merged (errors, variants) tables."""
+    ``out``: the same split and one-step nets), ``tables.md`` of this run's rows alone (and of its
+    permutation importance, ``importance``: variant -> frame, written to ``out`` already), and copy
+    the three and the importance files to ``results``; the merged (errors, variants) tables."""
     import pandas as pd
 
     from _results import publish
@@ -201,9 +224,9 @@ def write_outputs(out: Path, results: Path | None, run_errors, rows, command: st
         oldv = pd.read_csv(out / "variants.csv")
         table = pd.concat([oldv[~oldv.variant.isin(table.variant)], table], ignore_index=True)
     atomic_write(out / "variants.csv", lambda fh: fh.write(table.to_csv(index=False).encode()))
-    text = tables(run_errors, run_table, command)
+    text = tables(run_errors, run_table, command, importance)
     atomic_write(out / "tables.md", lambda fh: fh.write(text.encode()))
-    publish(out, results, RESULT_FILES)
+    publish(out, results, RESULT_FILES + tuple(importance_name(v) for v in (importance or {})))
     print(text)
     return errors, table
 
@@ -291,7 +314,7 @@ def main(argv=None) -> int:
         z.ensemble.weights[5][:] = 0.0
         z.ensemble.y_mean = np.zeros(3)
         per[("hull_only", "known")] = score(z)
-    rows = []
+    rows, importance = [], {}
     for name, kw in parse_variants(args.variants).items():
         ms = replace(cfg.multistep, **kw)
         t0 = time.perf_counter()
@@ -311,12 +334,13 @@ def main(argv=None) -> int:
             print(json.dumps(rows[-1]), flush=True)
             q.command_regime, q.command_guard = None, False
         if args.permutation:
-            imp = permutation_importance(q, score, horizons, val_runs)
-            atomic_write(args.out / f"importance_{name}.csv", lambda fh: fh.write(imp.to_csv(index=False).encode()))
+            imp = importance[name] = permutation_importance(q, score, horizons, val_runs)
+            atomic_write(args.out / importance_name(name), lambda fh: fh.write(imp.to_csv(index=False).encode()))
             print(imp.round(4).to_string(), flush=True)
     run_errors = error_table(per, val_runs, horizons)
     rows = [summary(run_errors, m, 0.0, {}, {}) for m in ("one_step", "hull_only") if (m, "known") in per] + rows
-    errors, table = write_outputs(args.out, args.results, run_errors, rows, command_line("esso_multistep.py", argv))
+    errors, table = write_outputs(args.out, args.results, run_errors, rows, command_line("esso_multistep.py", argv),
+                                  importance)
     d = errors[(errors.state == "distance_m")].pivot_table(index=["kind", "model"], columns="horizon_s",
                                                            values="mae", sort=False)
     print(d.round(3).to_string(), table.drop(columns=["history"]).to_string(), sep="\n")

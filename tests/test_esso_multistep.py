@@ -41,6 +41,26 @@ def test_tables_only_renders_the_run_again_with_its_command(em, tmp_path):
     assert sorted(p.name for p in (tmp_path / "docs").iterdir()) == ["errors.csv", "tables.md", "variants.csv"]
 
 
+def test_the_permutation_importance_is_in_the_tables_and_the_results(em, tmp_path):
+    """``--permutation``'s files are results too: ``tables.md`` shows them and ``--results`` copies them."""
+    e = screening_errors((("dynamic", 0.5, 10.0), ("abs", 0.4, 6.0)), held=False)
+    e.to_csv(tmp_path / "errors.csv", index=False)
+    pd.DataFrame([em.summary(e, "abs", 12.0, {}, {})]).to_csv(tmp_path / "variants.csv", index=False)
+    imp = pd.DataFrame([{"feature": "(none)", "dist30_m": 0.8, "head30_deg": 12.0, "d_dist30_m": 0.0,
+                         "d_head30_deg": 0.0},
+                        {"feature": "r_hat_rad_s", "dist30_m": 0.89512, "head30_deg": 17.9004,
+                         "d_dist30_m": 0.09512, "d_head30_deg": 5.9004}])
+    lines = em.tables(e, pd.read_csv(tmp_path / "variants.csv"), "c", {"abs": imp}).splitlines()
+    assert "| r_hat_rad_s | 0.8951 | 17.9 | 0.0951 | 5.9 |" in lines
+    assert any(line.startswith("Permutation importance of `abs` (`importance_abs.csv`)") for line in lines)
+    imp.to_csv(tmp_path / "importance_abs.csv", index=False)
+    (tmp_path / "tables.md").write_text("Command: `python benchmarks/esso_multistep.py --permutation`\n")
+    assert em.main(["--tables-only", "--out", str(tmp_path), "--results", str(tmp_path / "docs")]) == 0
+    assert sorted(p.name for p in (tmp_path / "docs").iterdir()) == ["errors.csv", "importance_abs.csv",
+                                                                      "tables.md", "variants.csv"]
+    assert "| r_hat_rad_s | 0.8951 | 17.9 | 0.0951 | 5.9 |" in (tmp_path / "docs" / "tables.md").read_text()
+
+
 def test_the_command_regime_is_fitted_on_a_hybrid_built_without_the_guard(em):
     """The fit leaves the weights out unless ``command_guard`` is set (as HybridPredictor's does):
     the screen's ``+cg`` rows would otherwise score the nets without the guard."""
