@@ -66,6 +66,34 @@ def test_manoeuvre_targets(ts):
     assert st["missed"] == ["every cell", "distance", "heading", "coverage"] and st["below"] == 1
 
 
+def test_manoeuvre_targets_read_their_own_rows(ts):
+    """Only the hybrid's and the physics' rows of the command mode count, the heading ratio is
+    the heading's, and the coverage is the one at 10 and 30 s, not at 5 or 20 s."""
+    errors, cov = _esso(0.6)
+    errors.loc[(errors.model == "hybrid") & (errors.state == "heading_deg") & (errors.kind == "all")
+               & (errors.horizon_s == 30.0), "mae"] = 0.75
+    other = errors.assign(commands="held", mae=errors.mae * 3)
+    dr = errors[errors.model == "dynamic"].assign(model="dead_reckoning", mae=0.1)
+    cov.loc[cov.horizon_s.isin([5.0, 20.0]), "coverage"] = 0.5
+    cov = pd.concat([cov, cov.assign(sigma=1, coverage=0.99), cov.assign(commands="held", coverage=0.5)])
+    st = ts.manoeuvre_status(pd.concat([errors, other, dr]), cov, "known")
+    assert st["ratios"] == {"distance_m": pytest.approx(0.6), "heading_deg": pytest.approx(0.75)}
+    assert st["missed"] == ["heading"] and st["below"] == 20 and st["coverage"] == {10.0: 0.95, 30.0: 0.95}
+
+
+@pytest.mark.parametrize("change", ["nan", "cell", "model"])
+def test_a_result_that_cannot_be_judged_is_an_error_naming_it(ts, change):
+    e = _drift_errors(lambda s, w, h: 0.3)
+    hybrid_15 = (e.model == "hybrid") & (e.horizon_s == 15)
+    e = {"nan": e.assign(mae=e.mae.where(~hybrid_15)), "cell": e[~hybrid_15],
+         "model": e[e.model != "hybrid"]}[change]
+    with pytest.raises(ValueError, match="some/errors.csv: "):
+        ts.drift_status(e, 0.95, "some/errors.csv")
+    errors, cov = _esso(0.6)
+    with pytest.raises(ValueError, match="cov.csv: 0 rows .* at 10 s"):
+        ts.manoeuvre_status(errors, cov[cov.horizon_s != 10.0], "known", "err.csv", "cov.csv")
+
+
 def test_the_committed_page_is_the_scripts_output_of_the_committed_results(ts):
     page = ts.RESULTS / "targets.md"
     text, inputs = ts.render()
@@ -73,6 +101,46 @@ def test_the_committed_page_is_the_scripts_output_of_the_committed_results(ts):
         "docs/results/targets.md is not what benchmarks/target_status.py makes of the committed "
         "results: run `python benchmarks/target_status.py --out docs/results/targets.md`")
     assert all(p.is_relative_to(ts.RESULTS) for p in inputs)
+
+
+def _copy_inputs(ts, tmp_path):
+    """The committed files the page is made of, copied under ``tmp_path``."""
+    _, inputs = ts.render()
+    for p in inputs:
+        (tmp_path / p.relative_to(ts.RESULTS)).parent.mkdir(parents=True, exist_ok=True)
+        (tmp_path / p.relative_to(ts.RESULTS)).write_bytes(p.read_bytes())
+    return tmp_path
+
+
+def _row(text, label):
+    return next(line for line in text.splitlines() if line.startswith(f"| {label} |"))
+
+
+def test_the_drift_coverage_is_the_hybrids_at_2_sigma_and_60_s(ts, tmp_path):
+    results = _copy_inputs(ts, tmp_path)
+    path = results / "drift-embedded" / "coverage.csv"
+    cov = pd.read_csv(path)
+    others = ~((cov.model == "hybrid") & (cov.sigma == 2) & (cov.horizon_s == 60))
+    cov.loc[others, "coverage"] = 0.5                        # no other row may count
+    cov.to_csv(path, index=False)
+    assert "| 0.958 | none |" in _row(ts.render(results)[0], "embedded")
+    cov.loc[~others, "coverage"] = 0.99
+    cov.to_csv(path, index=False)
+    assert _row(ts.render(results)[0], "embedded").endswith("| 0.990 | coverage |")
+    cov[others].to_csv(path, index=False)                    # not measured is an error, not "n/a"
+    assert ts.main(["--results", str(results)]) == 2
+
+
+def test_the_protocol_rows_are_the_mean_over_their_folds(ts, tmp_path):
+    """``protocols.csv`` holds one row per held-out log in the fleet protocol: the row is
+    their mean, and the physics' rows are named ``physics`` there."""
+    text = ts.render()[0]
+    p = pd.read_csv(ts.RESULTS / "drift-protocols" / "protocols.csv")
+    sel = p[(p.data == "truthsim-dev") & (p.protocol == "fleet") & (p.state == "yaw_deg") & (p.horizon_s == 60)]
+    m = sel.groupby(["model", "window"]).mae.mean()
+    want = "/".join(f"{m[('hybrid', w)] / m[('physics', w)]:.2f}" for w in (5, 20))
+    assert _row(text, "truthsim-dev, fleet protocol").split(" | ")[4] == want
+    assert "heading (5), heading (20)" in _row(text, "truthsim-dev, paper protocol (strict)")
 
 
 def test_a_missing_result_is_a_clear_error(ts, tmp_path, capsys):
