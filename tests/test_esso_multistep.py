@@ -81,3 +81,22 @@ def test_the_command_regime_is_fitted_on_a_hybrid_built_without_the_guard(em):
     q._fit_command_guard = lambda *a: None           # a fit that finds no weights is not a +cg row
     with pytest.raises(RuntimeError, match="no command-regime weights"):
         em.with_command_regime(q, [[0, 1]], 1)
+
+
+def test_a_runs_permutation_importance_is_published_with_its_tables(em, tmp_path, capsys):
+    """The run's own path (not ``--tables-only``): ``write_outputs`` shows the importance in
+    ``tables.md`` and copies its file to ``--results``; without it, no importance file."""
+    e = screening_errors((("dynamic", 0.5, 10.0), ("abs", 0.4, 6.0)), held=False)
+    row = em.summary(e, "abs", 12.0, {}, {})
+    imp = pd.DataFrame([{"feature": "(none)", "dist30_m": 0.8, "head30_deg": 12.0, "d_dist30_m": 0.0,
+                         "d_head30_deg": 0.0}])
+    out, docs = tmp_path / "out", tmp_path / "docs"
+    out.mkdir()
+    imp.to_csv(out / em.importance_name("abs"), index=False)
+    em.write_outputs(out, docs, e, [row], "c", {"abs": imp})
+    assert sorted(p.name for p in docs.iterdir()) == ["errors.csv", "importance_abs.csv", "tables.md",
+                                                      "variants.csv"]
+    assert "Permutation importance of `abs` (`importance_abs.csv`)" in (docs / "tables.md").read_text()
+    (tmp_path / "out2").mkdir()
+    em.write_outputs(tmp_path / "out2", tmp_path / "docs2", e, [row], "c")
+    assert sorted(p.name for p in (tmp_path / "docs2").iterdir()) == ["errors.csv", "tables.md", "variants.csv"]
