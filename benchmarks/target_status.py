@@ -37,7 +37,6 @@ passes.
 from __future__ import annotations
 
 import argparse
-import fnmatch
 import sys
 from pathlib import Path
 
@@ -144,9 +143,10 @@ def drift_status(errors: pd.DataFrame, coverage_2sigma: float | None, source: st
 def _group_errors(per_log: pd.DataFrame, patterns) -> tuple:
     """The mean of ``per_log``'s errors over the logs matching ``patterns`` (the weather
     groups' ratio, as ``drift_groups.py`` makes it) and the number of those logs."""
-    logs = [lg for lg in dict.fromkeys(per_log.log) if any(fnmatch.fnmatch(lg, p) for p in patterns)]
-    if not logs:
-        raise ValueError(f"no log matches {', '.join(patterns)}")
+    from drift_groups import group_logs
+
+    name = ",".join(patterns)
+    logs = group_logs(per_log, {name: list(patterns)})[name]
     sel = per_log[per_log.log.isin(logs)]
     return sel.groupby(["model", "state", "window", "horizon_s"], as_index=False).mae.mean(), len(logs)
 

@@ -100,7 +100,7 @@ def test_the_committed_page_is_the_scripts_output_of_the_committed_results(ts):
     assert page.read_text(encoding="utf-8") == text, (
         "docs/results/targets.md is not what benchmarks/target_status.py makes of the committed "
         "results: run `python benchmarks/target_status.py --out docs/results/targets.md`")
-    assert all(p.is_relative_to(ts.RESULTS) for p in inputs)
+    assert {p.name for p in inputs} >= {"errors.csv", "coverage.csv", "errors_per_log.csv", "protocols.csv"}
 
 
 def _copy_inputs(ts, tmp_path):
@@ -140,7 +140,6 @@ def test_the_protocol_rows_are_the_mean_over_their_folds(ts, tmp_path):
     m = sel.groupby(["model", "window"]).mae.mean()
     want = "/".join(f"{m[('hybrid', w)] / m[('physics', w)]:.2f}" for w in (5, 20))
     assert _row(text, "truthsim-dev, fleet protocol").split(" | ")[4] == want
-    assert "heading (5), heading (20)" in _row(text, "truthsim-dev, paper protocol (strict)")
 
 
 def test_a_missing_result_is_a_clear_error(ts, tmp_path, capsys):
