@@ -841,6 +841,27 @@ def test_cli_live_reads_a_log_as_forecast_and_train_do(tmp_path):
                                   pd.read_csv(tmp_path / "messy" / "times.csv"))
 
 
+def test_cli_live_refuses_a_time_in_a_gap_of_the_log(tmp_path, capsys):
+    """A --time-s with no sample within 1.5 steps before it (in a gap of the log) is refused
+    naming --time-s and the samples around the gap; before, the blackout silently started
+    from the last sample before the gap, a state 19 s old. A time between two samples is
+    the earlier sample, as before."""
+    from hybridship.cli import main
+    from hybridship.physics.model import DynamicModel
+    from hybridship.sim.synthetic import physics_log
+
+    df = physics_log(DynamicModel("gunnerus"), seed=2, duration_s=600.0, t_shutdown_s=None)
+    df[(df.time_s < 481) | (df.time_s > 510)].to_csv(tmp_path / "gap.csv", index=False)
+    argv = ["drift-off", "live", "--log", str(tmp_path / "gap.csv"), "--samples", "3", "--radii-m", "5",
+            "--no-plots", "--out"]
+    assert main(argv + [str(tmp_path / "in_gap"), "--time-s", "500"]) == 2
+    err = capsys.readouterr().err
+    assert "--time-s 500" in err and "a gap of the log" in err and "480 s" in err and "511 s" in err, err
+    assert not (tmp_path / "in_gap").exists()
+    assert main(argv + [str(tmp_path / "between"), "--time-s", "450.5"]) == 0
+    assert "| blackout at [s] | 450 |" in capsys.readouterr().out
+
+
 def test_live_current_members_carry_the_vessel_along():
     from hybridship.driftoff.live import EnvironmentEstimate
 

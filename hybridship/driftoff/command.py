@@ -301,6 +301,7 @@ def _cmd_live(args) -> int:
         if not (first <= args.time_s <= last):
             raise _usage(f"{_PROG} live: error: --time-s {seconds_text(args.time_s)} is outside the log "
                          f"({seconds_text(first)} to {seconds_text(last)} s)")
+        _refuse_a_time_in_a_gap(t, args.time_s)
         df = df[t <= args.time_s]
     t0 = time.perf_counter()
     try:
@@ -330,6 +331,33 @@ def _cmd_live(args) -> int:
                          quantile=args.quantile, plots=not args.no_plots)
     print(paths["summary.md"].read_text())
     return 0
+
+
+def _refuse_a_time_in_a_gap(t, time_s: float) -> None:
+    """Refuse a ``--time-s`` in a gap of the log: the blackout starts from the last sample at or
+    before it, which must lie within 1.5 of the log's median steps (the gap rule of the
+    estimator's segments), not from a state logged before the gap.
+
+    Parameters
+    ----------
+    t : ndarray
+        The log's ``time_s`` column [s], in file order, NaN where a row has no time.
+    time_s : float
+        ``--time-s`` [s], within the log's first and last time.
+    """
+    import numpy as np
+
+    times = np.unique(t[np.isfinite(t)])
+    if times.size < 2:
+        return                  # too short for a step: the estimate refuses it by its own rule
+    step = float(np.median(np.diff(times)))
+    i = int(np.searchsorted(times, time_s, side="right")) - 1
+    if time_s - times[i] > 1.5 * step:
+        raise _usage(f"{_PROG} live: error: --time-s {seconds_text(time_s)} falls in a gap of the log: no sample "
+                     f"from {seconds_text(times[i])} s to {seconds_text(times[i + 1])} s (the log's step is "
+                     f"{seconds_text(step)} s), so the blackout would start from the state of "
+                     f"{seconds_text(time_s - times[i])} s before it; give {seconds_text(times[i])} s or a time from "
+                     f"{seconds_text(times[i + 1])} s on")
 
 
 def _current_text(est) -> str:
