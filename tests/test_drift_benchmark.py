@@ -141,6 +141,9 @@ def test_logs_of_one_name_stay_apart_and_one_log_has_no_per_failure_table(tmp_pa
                         calibration_scenarios=0, n_intervals=10)
     short = (tmp_path / "short" / "tables.md").read_text()
     assert "### Table 2: mean absolute error (first 5 intervals)" in short and "first 20" not in short
+    # in the paper's layout, one two-decimal cell per horizon (it was the long table, with its
+    # index and every digit)
+    assert "| model | state | 15 s | 30 s | 45 s | 60 s |" in short and "| index |" not in short
 
 
 def test_benchmark_is_deterministic_and_the_cli_reports_bad_folders(tiny_folder, tmp_path, capsys):

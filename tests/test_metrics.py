@@ -38,6 +38,18 @@ def test_paper_and_reduction_tables_put_first_5_before_first_20():
     assert metrics.pooled_ratio_table(zero, "hybrid").loc["east_m", "60 s"] == "n/a/n/a"
 
 
+def test_paper_table_with_one_window_has_one_cell_per_horizon():
+    """Fewer than 20 forecasts after a failure leave one window: Table 2 keeps its layout,
+    one two-decimal error per cell (it was refused by ``paper_table``, so the benchmark wrote
+    the long table, with its index and every digit)."""
+    rows = [dict(model=m, state=s, window=3, horizon_s=h, mae=v + h / 1000.0)
+            for m, v in {"hybrid": 1.0, "dynamic": 2.0}.items() for s in metrics.STATES for h in (15, 60)]
+    table = metrics.paper_table(pd.DataFrame(rows), windows=(3,))
+    assert list(table.columns) == ["15 s", "60 s"]
+    assert table.loc[("dynamic", "yaw_deg"), "60 s"] == "2.06"
+    assert list(table.index) == [(m, s) for m in ("hybrid", "dynamic") for s in metrics.STATES]
+
+
 def test_every_committed_drift_table_states_its_ratio_from_its_own_errors():
     """The `hybrid`/`dynamic` ratios quoted in the docs are each folder's tables.md, and that
     block and Table 3 are what its errors.csv gives (a re-rendered block cannot drift)."""
