@@ -135,7 +135,10 @@ def test_logs_of_one_name_stay_apart_and_one_log_has_no_per_failure_table(tmp_pa
     assert "| same.csv#1 |" in (tmp_path / "two" / "tables.md").read_text()
     run_drift_benchmark(paths[:1], None, tmp_path / "one", ensemble_config=tiny, plots=False, progress=False,
                         calibration_scenarios=0)
-    assert "No per-failure table" in (tmp_path / "one" / "tables.md").read_text()
+    one = (tmp_path / "one" / "tables.md").read_text()
+    assert "No per-failure table" in one
+    # one failure has no interval over the failures: said so, not "[nan, nan]"
+    assert "nan" not in one and "[n/a]" in one
     # fewer than 20 forecasts after a failure: one window, and Table 2's title says which
     run_drift_benchmark(paths, None, tmp_path / "short", ensemble_config=tiny, plots=False, progress=False,
                         calibration_scenarios=0, n_intervals=10)

@@ -701,7 +701,7 @@ def _markdown(table2, table3, ratio, coverage, intervals, timing, test_names, n_
     if ratio is not None:
         parts.append(ratio_markdown(ratio))
     parts.append(_coverage_markdown(coverage))
-    ci = intervals.assign(cell=[f"{c:.2f} [{lo:.2f}, {hi:.2f}]" for c, lo, hi in
+    ci = intervals.assign(cell=[_interval_cell(c, lo, hi) for c, lo, hi in
                                 zip(intervals.coverage, intervals.low, intervals.high)])
     ci = ci.pivot_table(index="model", columns="horizon_s", values="cell", aggfunc="first")
     ci.columns = [f"{c:g} s" for c in ci.columns]
@@ -736,9 +736,17 @@ def _coverage_markdown(coverage: pd.DataFrame) -> str:
             "covers 0.683 (1 sigma) and 0.954 (2 sigma).\n\n" + _md_table(cov.map(lambda x: round(x, 2))))
 
 
+def _interval_cell(coverage: float, low: float, high: float) -> str:
+    """A coverage with its interval over the failures, "0.95 [0.90, 1.00]", or "0.95 [n/a]" where
+    there is no interval (one failure: nothing to resample)."""
+    if np.isfinite(low) and np.isfinite(high):
+        return f"{coverage:.2f} [{low:.2f}, {high:.2f}]"
+    return f"{coverage:.2f} [n/a]"
+
+
 def _heading_coverage_markdown(heading_cov: pd.DataFrame) -> str:
     """The heading's coverage at 1 and 2 sigma, each with its interval over the failures."""
-    hc = heading_cov.assign(cell=[f"{c:.2f} [{lo:.2f}, {hi:.2f}]" for c, lo, hi in
+    hc = heading_cov.assign(cell=[_interval_cell(c, lo, hi) for c, lo, hi in
                                   zip(heading_cov.coverage, heading_cov.low, heading_cov.high)])
     hc = hc.pivot_table(index=["model", "sigma"], columns="horizon_s", values="cell", aggfunc="first")
     hc.columns = [f"{c:g} s" for c in hc.columns]
