@@ -114,6 +114,17 @@ def test_importing_the_package_loads_no_heavy_dependency():
     assert out.stdout.strip() == ""
 
 
+def test_python_m_hybridship_runs_the_command_line():
+    """``python -m hybridship`` is the ``hybridship`` command (for an environment whose scripts
+    folder is not on the PATH); it was "No module named hybridship.__main__"."""
+    out = subprocess.run([sys.executable, "-m", "hybridship", "--version"], capture_output=True, text=True,
+                         cwd=ROOT)
+    assert out.returncode == 0, out.stderr
+    assert out.stdout.startswith("hybridship "), out.stdout
+    bad = subprocess.run([sys.executable, "-m", "hybridship", "train"], capture_output=True, text=True, cwd=ROOT)
+    assert bad.returncode == 2 and bad.stderr.startswith("hybridship train: error:"), bad.stderr
+
+
 def test_an_unknown_name_is_an_attribute_error():
     import pytest
 
