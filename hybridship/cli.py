@@ -550,7 +550,7 @@ def _add_benchmark(sub) -> None:
     d.add_argument("--members", type=_members, default=10, help="ensemble members (default 10)")
     d.add_argument("--seed", type=_seed, default=0, help="seed of scenarios and training (default 0)")
     d.add_argument("--intervals", type=int, default=20, help="start times after each failure (default 20)")
-    d.add_argument("--scenarios", type=int, default=3, help="embedded scenarios when no folders are given")
+    d.add_argument("--scenarios", type=int, default=3, help="embedded scenarios when no folders are given (default 3)")
     d.add_argument("--all-rows", action="store_true", help="train on every row, not only dp_active == 1")
     d.add_argument("--training", choices=("one_step", "multi_step"), default="one_step",
                    help="how the hybrid's nets are trained (default one_step)")
@@ -588,7 +588,8 @@ def _add_benchmark(sub) -> None:
     m.add_argument("--train", required=True, type=Path, help="folder of training runs")
     m.add_argument("--test", required=True, type=Path, help="folder of test runs (never the training runs)")
     m.add_argument("--horizons-s", default="5,10,20,30", help="comma-separated horizons [s] (default 5,10,20,30)")
-    m.add_argument("--out", type=path_argument, default=Path("manoeuvre-benchmark"), help="output folder")
+    m.add_argument("--out", type=path_argument, default=Path("manoeuvre-benchmark"),
+                   help="output folder (default manoeuvre-benchmark)")
     m.add_argument("--step-s", type=float, default=None,
                    help="forecast and training step [s], a whole multiple of the data's (default: the data's own)")
     m.add_argument("--seed", type=_seed, default=0, help="seed of training (default 0)")

@@ -140,6 +140,29 @@ def test_train_help_names_every_log_extension_it_reads(capsys):
     assert all(f"*{ext}" in help_text for ext in _EXTENSIONS), help_text
 
 
+def test_every_option_with_a_default_says_it_in_its_help():
+    """An option that takes a value unless given one says which in its help ("(default ...)"):
+    ``benchmark drift --scenarios``, ``benchmark manoeuvre --out`` and ``drift-off season
+    --scheduler`` did not (3, manoeuvre-benchmark and a LocalCluster)."""
+    import argparse
+
+    from hybridship.cli import _build_parser
+
+    silent = []
+
+    def walk(parser, words):
+        for action in parser._actions:
+            if isinstance(action, argparse._SubParsersAction):
+                for name, sub in action.choices.items():
+                    walk(sub, words + [name])
+            elif (action.option_strings and action.default not in (None, False, "", argparse.SUPPRESS)
+                  and "default" not in (action.help or "")):
+                silent.append(f"{' '.join(words)} {action.option_strings[-1]} (default {action.default})")
+
+    walk(_build_parser(), ["hybridship"])
+    assert not silent, silent
+
+
 def test_output_into_a_closed_pipe_stops_quietly(capsys, monkeypatch):
     """``hybridship ... | head -1``: the reader leaves, the next print fails; that ended with
     "error: [Errno 32] Broken pipe" and status 1, as if the command had failed."""

@@ -137,7 +137,8 @@ def add_parser(sub, parser_class, usage_error=None) -> None:
     c.add_argument("--headings-deg", type=_floats, default=[0, 45, 90, 135, 180, 225, 270, 315],
                    help="vessel headings [deg], comma-separated (default every 45 deg)")
     c.add_argument("--scheduler", default="local",
-                   help="'local' (LocalCluster), a scheduler address tcp://host:8786, or 'none' (this process)")
+                   help="'local' (a LocalCluster; default), a scheduler address tcp://host:8786, or 'none' "
+                        "(this process)")
     c.add_argument("--workers", type=int, default=None, help="LocalCluster workers (default 2; only with "
                                                                "--scheduler local)")
     c.add_argument("--chunk-size", type=int, default=24, help="weather states per task (default 24)")
