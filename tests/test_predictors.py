@@ -95,6 +95,20 @@ def test_save_load_round_trip_gives_identical_forecasts(model, current_logs, tmp
         hp2.forecast(current_logs[2].drop(columns=["wind_speed_m_s", "wind_dir_deg"]), [900.0], 30)
 
 
+def test_training_logs_with_and_without_wind_are_named_once_at_fit(model, current_logs):
+    """A training log without wind columns beside logs with them is warned about by name, once,
+    in the words of training; before, the calibration's own forecasts on it warned "log: ...
+    the forecast leaves out the wind's force" (twice, naming no log, as if forecasting)."""
+    logs = [current_logs[0], current_logs[1].drop(columns=["wind_speed_m_s", "wind_dir_deg"])]
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        HybridPredictor(model.vessel, ensemble_config=SMALL).fit(logs)
+    texts = [str(w.message) for w in caught if "wind" in str(w.message)]
+    assert len(texts) == 1, texts
+    assert texts[0].startswith("logs[1]: no wind columns (wind_speed_m_s, wind_dir_deg)") and "logs[0]" in texts[0]
+    assert "forecast" not in texts[0]
+
+
 def test_damaged_or_foreign_model_files_are_refused(model, current_logs, tmp_path):
     hp = HybridPredictor(model.vessel, ensemble_config=SMALL).fit(current_logs[:1])
     path = hp.save(tmp_path / "m.npz")

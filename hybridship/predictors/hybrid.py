@@ -10,6 +10,7 @@ position uncertainty.
 
 from __future__ import annotations
 
+import warnings
 from dataclasses import replace
 from pathlib import Path
 from typing import Iterable
@@ -42,7 +43,8 @@ from .forecast_setup import (FORECAST_HISTORY_S, MAX_HORIZON_S, _check_flags, _c
                              as_log_arrays, forecast_step_s, join_notes, keeps_state_on_error, log_list, start_indices)
 from .model_file import load_model, save_model
 from .result import ForecastResult
-from .training_logs import check_distinct_logs, check_training_lengths, read_training_logs
+from .training_logs import (NO_WIND_FORECAST_WARNING, check_distinct_logs, check_training_lengths,
+                            read_training_logs, warn_logs_without_wind)
 
 __all__ = ["AFTER_STOP", "AFTER_STOP_LATE", "ENVIRONMENT_SOURCES", "HybridPredictor"]
 
@@ -380,6 +382,7 @@ class HybridPredictor:
         logs, labels = read_training_logs(given, self.model.vessel)
         check_training_lengths(logs, labels)
         check_distinct_logs(logs, labels)  # before any training
+        warn_logs_without_wind(logs, labels)
         self.estimator = EnvironmentEstimator(self.model, self.environment_config)
         if self.environment == "estimator":
             self.estimator.fit(logs, dp_only=dp_only)
@@ -393,10 +396,13 @@ class HybridPredictor:
         self.calibration = {}
         cal_info = {"fraction": cal.fraction, "commands": list(cal.commands), "horizon_s": cal.horizon_s,
                     "refit": cal.refit, "n_starts": {}, "dp_only": bool(dp_only), **split_info}
-        if cal.fraction > 0:
-            cal_info["n_starts"] = self._calibrate_modes(logs, folds, cal, dp_only)
-            if cal.refit:
-                self._fit_nets(logs, dp_only=dp_only, progress=progress, stride=stride, row_masks=None)
+        with warnings.catch_warnings():
+            # said once per training log above, not by each calibration forecast on it
+            warnings.filterwarnings("ignore", message=NO_WIND_FORECAST_WARNING)
+            if cal.fraction > 0:
+                cal_info["n_starts"] = self._calibrate_modes(logs, folds, cal, dp_only)
+                if cal.refit:
+                    self._fit_nets(logs, dp_only=dp_only, progress=progress, stride=stride, row_masks=None)
         self.training_info["calibration"] = cal_info
         if wind_info is not None:
             self.training_info["wind_forecast"] = wind_info
@@ -406,7 +412,9 @@ class HybridPredictor:
             self.training_info["drift_hull"] = drift_hull_info
         if prior_info is not None:
             self.training_info["thrust_error_prior"] = prior_info
-        self._calibrate_after_stop_on_training_logs(logs, cal)
+        with warnings.catch_warnings():
+            warnings.filterwarnings("ignore", message=NO_WIND_FORECAST_WARNING)
+            self._calibrate_after_stop_on_training_logs(logs, cal)
         return self
 
     def _warn_other_rate(self, dt_s: float) -> None:
@@ -428,8 +436,8 @@ class HybridPredictor:
         if self.training_info.get("trained_with_wind") and not arrays.wind_columns:
             import warnings
 
-            warnings.warn("log: no wind columns (wind_speed_m_s, wind_dir_deg), but the model was trained on "
-                          "logs with wind; the forecast leaves out the wind's force: give the wind columns",
+            warnings.warn(f"{NO_WIND_FORECAST_WARNING} (wind_speed_m_s, wind_dir_deg), but the model was trained "
+                          "on logs with wind; the forecast leaves out the wind's force: give the wind columns",
                           UserWarning, stacklevel=3)
 
     def _fit_drift_hull(self, logs, horizon_s: float):

@@ -14,7 +14,12 @@ import os
 
 import numpy as np
 
-__all__ = ["samples_digest", "check_distinct_logs", "check_training_lengths", "log_label", "read_training_logs"]
+__all__ = ["samples_digest", "check_distinct_logs", "check_training_lengths", "log_label", "read_training_logs",
+           "warn_logs_without_wind", "NO_WIND_FORECAST_WARNING"]
+
+#: The start of a forecast's warning on a log without wind columns for a model trained with
+#: wind (:meth:`HybridPredictor.forecast`); ``fit`` says it once per training log instead.
+NO_WIND_FORECAST_WARNING = "log: no wind columns"
 
 
 def samples_digest(arrays) -> str:
@@ -80,6 +85,31 @@ def check_training_lengths(arrays, labels) -> None:
         if len(a.time_s) < MIN_TRAINING_SAMPLES:
             raise ValueError(f"{label}: a training log needs at least {MIN_TRAINING_SAMPLES} samples, "
                              f"got {len(a.time_s)}")
+
+
+def warn_logs_without_wind(arrays, labels) -> None:
+    """Warn, naming them, about training logs without wind columns beside logs with them.
+
+    Their wind is read as none, so the nets learn the wind's force there as part of the
+    residual, unlike on the others (the format makes wind optional, so this is no fault).
+
+    Parameters
+    ----------
+    arrays : sequence of LogArrays
+    labels : sequence of str
+        Names of the logs for the message (file paths where known).
+    """
+    import warnings
+
+    with_wind = [label for a, label in zip(arrays, labels) if a.wind_columns]
+    if not with_wind:
+        return
+    for a, label in zip(arrays, labels):
+        if not a.wind_columns:
+            warnings.warn(f"{label}: no wind columns (wind_speed_m_s, wind_dir_deg), while {with_wind[0]}"
+                          f"{' and others have' if len(with_wind) > 1 else ' has'} them: its wind is taken as "
+                          f"none, so the nets learn the wind's force there as part of the residual; give its "
+                          f"wind columns or train without it", UserWarning, stacklevel=3)
 
 
 def check_distinct_logs(arrays, labels) -> None:
