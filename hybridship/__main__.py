@@ -5,4 +5,5 @@ import sys
 
 from .cli import main
 
-sys.exit(main())
+if __name__ == "__main__":  # importing the module (an API listing, a doc build) must not run the CLI
+    sys.exit(main())
