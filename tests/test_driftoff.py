@@ -787,6 +787,10 @@ def test_cli_season_workers_only_with_a_local_cluster(tmp_path, capsys):
     assert main(["drift-off", "season", "--weather-table", str(table), "--scheduler", "none", "--workers", "4",
                  "--out", str(tmp_path / "o")]) == 2
     assert "--workers 4 is for --scheduler local" in capsys.readouterr().err and not (tmp_path / "o").exists()
+    # the keyword in another case is the same keyword: this process, not "the cluster"
+    assert main(["drift-off", "season", "--weather-table", str(table), "--scheduler", "None", "--workers", "4",
+                 "--out", str(tmp_path / "o")]) == 2
+    assert "the workers are this process" in capsys.readouterr().err
 
 
 def test_cli_live_on_a_truthsim_log(tmp_path):

@@ -380,17 +380,19 @@ def _cmd_season(args) -> int:
     for opt, v in (("--workers", args.workers), ("--chunk-size", args.chunk_size)):
         if v is not None and v < 1:
             raise _usage(f"{_PROG} season: error: {opt} must be >= 1, got {v}")
-    if args.scheduler != "local" and args.workers is not None:
+    # the two keywords in any case ('None', 'LOCAL'); an address as given
+    keyword = args.scheduler.lower() if args.scheduler.lower() in ("local", "none") else args.scheduler
+    if keyword != "local" and args.workers is not None:
         raise _usage(f"{_PROG} season: error: --workers {args.workers} is for --scheduler local (a LocalCluster); "
                      f"with --scheduler {args.scheduler} the workers are "
-                     f"{'this process' if args.scheduler == 'none' else 'those of the cluster'}")
+                     f"{'this process' if keyword == 'none' else 'those of the cluster'}")
     if not 0.0 <= args.max_p_exceed <= 1.0:
         raise _usage(f"{_PROG} season: error: --max-p-exceed must be in [0, 1], got {args.max_p_exceed}")
     try:
         states, labels = read_weather_table(args.weather_table)
     except (ValueError, FileNotFoundError, IsADirectoryError) as exc:
         raise _usage(problem_lines(exc, f"{_PROG} season: error: --weather-table: ")) from None
-    scheduler = None if args.scheduler.lower() == "none" else args.scheduler
+    scheduler = None if keyword == "none" else keyword
     if scheduler is not None and scheduler != "local" and ":" not in scheduler:
         raise _usage(f"{_PROG} season: error: --scheduler: expected 'local', 'none' or a scheduler address such "
                      f"as tcp://host:8786, got {args.scheduler!r}")
