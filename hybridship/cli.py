@@ -458,11 +458,12 @@ def _cmd_forecast(args) -> int:
     from .predictors.result import checked_quantiles
 
     try:
-        quantiles = [float(q) for q in args.quantiles.split(",") if q.strip()]
+        parts = args.quantiles.split(",")
+        if args.quantiles.strip() and not all(q.strip() for q in parts):
+            raise ValueError("an empty item")   # ",,," or "0.05,,0.95": not the same as leaving it out
+        quantiles = [float(q) for q in parts if q.strip()]
         if quantiles:
             checked_quantiles(quantiles)
-        elif args.quantiles.strip():        # ",,," names no quantile: not the same as leaving it out
-            raise ValueError("no quantile given")
     except ValueError:
         raise UsageError(f"{_PROG} forecast: error: --quantiles: expected comma-separated distinct probabilities "
                          f"in (0, 1), e.g. 0.05,0.95; got {args.quantiles!r}") from None

@@ -209,6 +209,9 @@ def test_cli_forecast_quantiles(fitted, tmp_path, capsys):
     assert main(["forecast", "--model", str(model), "--log", str(tmp_path / "log.csv.gz"), "--start-time", "300",
                  "--quantiles", ",,,", "--out", str(out)]) == 2     # commas alone name no quantile
     assert "--quantiles" in capsys.readouterr().err
+    assert main(["forecast", "--model", str(model), "--log", str(tmp_path / "log.csv.gz"), "--start-time", "300",
+                 "--quantiles", "0.05,,0.95", "--out", str(out)]) == 2  # a quantile left out, not skipped
+    assert "--quantiles" in capsys.readouterr().err
     # another file (here a log) at --out is not replaced by a forecast
     other = tmp_path / "other_log.csv"
     write_log(logs[1], other)

@@ -444,6 +444,9 @@ def test_cli_reports_bad_input_naming_the_option(tmp_path, capsys):
 
     assert main(["drift-off", "planning", "--out", str(tmp_path), "--radii-m", "-3"]) == 2
     assert "--radii-m" in capsys.readouterr().err
+    for typo in ("3,,10", "3,5,"):      # a number left out is refused, not skipped
+        assert main(["drift-off", "planning", "--out", str(tmp_path), "--radii-m", typo]) == 2
+        assert "--radii-m" in (err := capsys.readouterr().err) and "an empty item" in err, err
     assert main(["drift-off", "planning", "--out", str(tmp_path), "--hs-m", "-1"]) == 2
     assert "--hs-m:" in capsys.readouterr().err
     assert main(["drift-off", "season", "--out", str(tmp_path), "--weather-table", str(tmp_path / "nope.csv")]) == 2

@@ -22,8 +22,11 @@ _PROG = "hybridship drift-off"
 
 
 def _floats(text: str) -> list[float]:
+    parts = str(text).split(",")
+    if len(parts) > 1 and not all(x.strip() for x in parts):    # "3,,5" or "3,5,": a number left out?
+        raise argparse.ArgumentTypeError(f"expected comma-separated numbers, got {text!r} (an empty item)")
     try:
-        vals = [float(x) for x in str(text).split(",") if x.strip()]
+        vals = [float(x) for x in parts if x.strip()]
     except ValueError:
         raise argparse.ArgumentTypeError(f"expected comma-separated numbers, got {text!r}") from None
     if not all(math.isfinite(v) for v in vals):
