@@ -68,6 +68,20 @@ def test_dead_reckoning_is_exact_for_constant_velocity(model):
     # no forces at all: the ship stays at rest, and dead reckoning predicts exactly that
     e = _errors_60s(DeadReckoning(model.vessel), log, np.array([100, 200]))
     assert np.all(e < 1e-9)
+    # a ship at rest has no velocity to carry: on a straight track at 1.5 m/s ahead and 0.4 m/s
+    # to port, heading 060, the body velocity is rotated into north/east (its transpose, or a
+    # position held, misses by tens of metres in a minute)
+    t = log.time_s.to_numpy()
+    psi, u, v = np.radians(60.0), 1.5, -0.4
+    vn, ve = np.cos(psi) * u - np.sin(psi) * v, np.sin(psi) * u + np.cos(psi) * v
+    moving = log.assign(north_m=100.0 + vn * t, east_m=-50.0 + ve * t, heading_deg=60.0, u_m_s=u, v_m_s=v,
+                        r_deg_s=0.0)
+    starts = np.array([100, 200])
+    fc = DeadReckoning(model.vessel).forecast(moving, starts, 60)
+    truth = moving[["north_m", "east_m"]].to_numpy()[starts[:, None] + np.arange(61)]
+    np.testing.assert_allclose(fc.eta[..., :2], truth, rtol=0, atol=1e-9)
+    np.testing.assert_allclose(fc.eta[..., 2], psi, rtol=0, atol=1e-12)
+    np.testing.assert_allclose(fc.nu, np.broadcast_to([u, v, 0.0], fc.nu.shape), rtol=0, atol=1e-12)
 
 
 def test_save_load_round_trip_gives_identical_forecasts(model, current_logs, tmp_path):
