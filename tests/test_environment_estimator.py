@@ -606,7 +606,11 @@ def test_spread_after_a_stop_is_calibrated_on_logs_with_failures(model, tmp_path
         a = as_log_arrays(log, model.vessel)
         p, t, sd = metrics.drift_forecasts(hp, a, n_intervals=20, horizons_s=tuple(range(1, 61)))
         cov.append(np.abs(p - t)[..., :2] <= 2.0 * sd[..., :2])
-    assert np.concatenate(cov).mean(axis=(0, 2)).min() >= 0.95
+    per_lead = np.concatenate(cov).mean(axis=(0, 2))          # 3 logs x 20 starts x north/east: 120 a lead
+    assert per_lead.min() >= 0.95
+    # and not more: the split-conformal scale covers k = ceil(121 x 0.9545) = 116 of them (0.967) at
+    # most; a scale one order statistic too high covers 117, one twice too wide all 120
+    assert per_lead.max() <= 0.97
     log = cal_logs[0]
     t0 = float(log.time_s[np.flatnonzero(log.dp_active.to_numpy() == 0)[0]])
     raw = hp.forecast(log, [t0 - 50.0, t0 + 5.0], 60.0, calibrated=False)
