@@ -62,7 +62,13 @@ def test_multi_step_training_lowers_its_own_validation_loss_and_round_trips(tmp_
     hp = HybridPredictor(m.vessel, residual_config=rc, ensemble_config=TINY, training="multi_step",
                          multistep_config=cfg, calibration_config=CalibrationConfig(fraction=0.0)).fit(logs)
     info = hp.training_info["multi_step"]
-    assert info["iterations"] == 12 and info["best_val_loss"] <= info["val_loss"][0]
+    assert info["iterations"] == 12 and info["best_val_loss"] == min(info["val_loss"])
+    # best <= the first held for any training (the first validation is the warm start's), so
+    # the fine-tuning must lower the held-out rollout loss itself. The one-step warm start is
+    # not a minimum of the rollout loss and lr = 3e-3 is small, so the loss falls steadily
+    # (6.6 % over the 12 iterations here); 2 % leaves a clear margin, and a training that does
+    # not step, or climbs the loss, misses it.
+    assert info["val_loss"][-1] < 0.98 * info["val_loss"][0]
     back = HybridPredictor.load(hp.save(tmp_path / "m.npz"))
     assert back.training == "multi_step" and back.residual_config.features == rc.features
     a = as_log_arrays(logs[0], m.vessel)
