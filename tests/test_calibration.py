@@ -154,6 +154,25 @@ def test_fit_holds_back_the_end_and_forecasts_carry_the_calibrated_spread(fitted
     # the held-back 20 % are not trained on
     assert hp.training_info["n_rows"] < 0.85 * uncal.training_info["n_rows"]
     assert hp.training_info["calibration"]["n_starts"]["held"] >= 50
+    # ... proof by change (the row count alone passed a fit that trained on the held-back end
+    # and not on the start): each log moved from its held-back end on gives the same nets bit
+    # for bit, and other scales
+    from hybridship.predictors import as_log_arrays
+
+    dp_only = hp.training_info["calibration"]["dp_only"]
+    cuts = [hp._calibration_cut(as_log_arrays(x, hp.model.vessel), hp.calibration_config, dp_only) for x in logs]
+    assert all(0.75 * len(x) < c < len(x) for x, c in zip(logs, cuts))          # the last part in time
+    moved = []
+    for x, c in zip(logs, cuts):
+        x = x.copy()
+        late = np.arange(len(x)) >= c
+        x.loc[late, "north_m"] += 0.05 * np.arange(late.sum())
+        x.loc[late, "heading_deg"] = (x.loc[late, "heading_deg"] + 0.1 * np.arange(late.sum())) % 360.0
+        moved.append(x)
+    hm = HybridPredictor(hp.model.vessel, ensemble_config=TINY, calibration_config=hp.calibration_config).fit(moved)
+    for w, w_moved in zip(hp.ensemble.weights, hm.ensemble.weights):
+        np.testing.assert_array_equal(w_moved, w)
+    assert not np.allclose(hm.calibration["held"]["position"].scale, hp.calibration["held"]["position"].scale)
     starts = [300.0, 350.0]
     raw = hp.forecast(logs[0], starts, 40.0, calibrated=False)
     with pytest.warns(UserWarning, match="calibrated up to 30 s"):   # 40 s runs past the calibrated leads
