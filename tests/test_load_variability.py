@@ -128,6 +128,15 @@ def test_forecast_spread_after_a_failure_includes_the_held_load(model, drift_log
     np.testing.assert_allclose(f_on.eta, f_off.eta)                      # the mean is untouched
     np.testing.assert_allclose(f_on.eta_std[0], f_off.eta_std[0])         # during station keeping
     assert np.all(f_on.eta_std[1, -1, :2] > 1.2 * f_off.eta_std[1, -1, :2])
+    # "on top" is the independent sum sqrt(s^2 + held^2), held from the station keeping
+    # before the failure (computed here from the filter directly); a plain sum s + held, or a
+    # held term of the wrong window, also passed the bound above
+    a = as_log_arrays(drift_log, model.vessel)
+    i = int(np.searchsorted(a.time_s, starts[1]))
+    c = on.environment_config
+    est = on._run_estimator(a, np.array([i]), held_load_rows(a.dp_active, i, 1, int(c.held_load_window_s)))[1]
+    held = held_load_spread(unexplained_load_std(on.model, a, est, int(c.held_load_block_s))[None], f_on.lead_s)[0]
+    np.testing.assert_allclose(f_on.eta_std[1], np.sqrt(f_off.eta_std[1] ** 2 + held ** 2), rtol=1e-9)
     later = drift_log.copy()
     later.loc[later.time_s > 1205.0, ["north_m", "east_m"]] += 100.0
     f_later = on.forecast(later, [1205.0], 60.0, calibrated=False)
