@@ -422,8 +422,6 @@ class HybridPredictor:
         their inputs (rates, filtered derivatives) and the step they correct then differ."""
         trained = self.training_info.get("log_step_s")  # absent in files from before it was recorded
         if trained and not 0.9 * min(trained) <= dt_s <= 1.1 * max(trained):
-            import warnings
-
             warnings.warn(f"log: its step is {dt_s:g} s, but the model was trained on logs with a step of "
                           f"{', '.join(f'{x:g}' for x in trained)} s; forecasts at another rate are less "
                           f"accurate: train on logs at this rate", UserWarning, stacklevel=3)
@@ -434,8 +432,6 @@ class HybridPredictor:
         the wind's force, which the nets were never trained to make up for. (Wind columns
         without a valid sample are a dead sensor, flagged ``wind_dropped`` instead.)"""
         if self.training_info.get("trained_with_wind") and not arrays.wind_columns:
-            import warnings
-
             warnings.warn(f"{NO_WIND_FORECAST_WARNING} (wind_speed_m_s, wind_dir_deg), but the model was trained "
                           "on logs with wind; the forecast leaves out the wind's force: give the wind columns",
                           UserWarning, stacklevel=3)
@@ -685,8 +681,6 @@ class HybridPredictor:
         self.command_regime = self._fit_command_regime(logs, masks, dp_only, stride)
         if early is None or late is None:
             # a part without a trainable row would calibrate its fold without any weights
-            import warnings
-
             warnings.warn("fit: one part of the held-back rows has no row the command-regime weights can be "
                           "fitted on, so the spread cannot be cross-fitted; the weights and the spread share "
                           "the held-back rows (hold back more with calibration_config.fraction)",
@@ -710,8 +704,6 @@ class HybridPredictor:
         starts = [self._calibration_start_rows(a, c, cal, dp_only) for a, c in zip(logs, cuts)]
         if sum(r.size - r.size // 2 for r in starts) >= MIN_CALIBRATION_STARTS:
             return [self._calibration_split(a, r) for a, r in zip(logs, starts)]
-        import warnings
-
         warnings.warn(f"fit: the held-back rows give {sum(r.size for r in starts)} calibration starts, too few to "
                       f"cross-fit the spread against the command-regime weights (the later half must hold "
                       f"{MIN_CALIBRATION_STARTS}): the weights and the spread share them; hold back more "
@@ -880,8 +872,6 @@ class HybridPredictor:
             if fitted is not None:
                 self.calibration[mode] = fitted
             else:
-                import warnings
-
                 warnings.warn(f"fit: the spread with commands {mode!r} is not calibrated: {n_starts[mode]} held-back "
                               f"starts, {MIN_CALIBRATION_STARTS} needed; its forecasts keep the ensemble's raw "
                               f"spread (hold back more with calibration_config.fraction, or use longer logs)",
@@ -1306,8 +1296,6 @@ class HybridPredictor:
         # time stamps ends at 59.95 s for a 60-s horizon
         half_step = 0.5 * float(lead_s[1] - lead_s[0]) if np.size(lead_s) > 1 else 0.0
         if float(lead_s[-1]) > last + half_step + 1e-9 * last:
-            import warnings
-
             warnings.warn(f"horizon_s: the spread is calibrated up to {last:g} s; beyond, the scale fitted at "
                           f"{last:g} s is held, so the spread (*_std, quantiles) past {last:g} s is not calibrated",
                           UserWarning, stacklevel=4)
