@@ -144,13 +144,20 @@ def test_kernel_wave_drift_matches_the_simulator():
 
 
 def test_same_seed_same_result_and_index_selects_the_stream():
+    import dataclasses
+
     st = DriftOffSettings(n_samples=5, horizon_s=90.0, seed=7)
     w = WeatherState.from_degrees(wind_speed_m_s=8.0, hs_m=0.8, tp_s=6.0, current_m_s=0.2, current_dir_deg=90.0)
     a = simulate_blackouts("gunnerus", w, [0.3], settings=st, index=4)
     b = simulate_blackouts("gunnerus", w, [0.3], settings=st, index=4)
     c = simulate_blackouts("gunnerus", w, [0.3], settings=st, index=5)
     np.testing.assert_array_equal(a.t_reach_s, b.t_reach_s)
+    np.testing.assert_array_equal(a.excursion_m, b.excursion_m)
     assert not np.array_equal(a.excursion_m, c.excursion_m)
+    # the seed selects the stream too: another seed, same index, other draws (the spread and
+    # the sampled sea make every sample's excursion differ)
+    d = simulate_blackouts("gunnerus", w, [0.3], settings=dataclasses.replace(st, seed=8), index=4)
+    assert not np.array_equal(a.excursion_m, d.excursion_m)
 
 
 def test_weather_uncertainty_widens_the_distribution():
