@@ -249,14 +249,28 @@ def test_same_seed_same_log_different_seed_different_log():
 
 
 def test_given_sea_state_and_heading_are_used():
-    sea = SeaState(hs_m=0.8, tp_s=6.0, wave_dir_from_rad=math.radians(90), wind_speed_m_s=8.0,
-                   wind_dir_from_rad=math.radians(80), current_speed_m_s=0.2, current_dir_to_rad=math.radians(200))
-    df = simulate_dp_loss(DPLossConfig(seed=1, sea_state=sea, heading_sp_deg=100.0, t_shutdown_jitter_s=0.0, **TINY))
+    """The given sea state drives the simulation, not only the log's truth_hs_m / truth_tp_s
+    labels: the second-order wave load the physics took (truth_tau_wave2_*) is there, pushes
+    her aft in waves 10 deg off the bow, and scales with Hs^2 (at the first row, where both
+    runs are at the same state with the same seed's sea, exactly 4 times for twice the Hs)."""
+    waves = ["truth_tau_wave2_x_N", "truth_tau_wave2_y_N", "truth_tau_wave2_n_Nm"]
+    runs = {}
+    for hs in (0.8, 1.6):
+        sea = SeaState(hs_m=hs, tp_s=6.0, wave_dir_from_rad=math.radians(90), wind_speed_m_s=8.0,
+                       wind_dir_from_rad=math.radians(80), current_speed_m_s=0.2,
+                       current_dir_to_rad=math.radians(200))
+        runs[hs] = simulate_dp_loss(DPLossConfig(seed=1, sea_state=sea, heading_sp_deg=100.0,
+                                                 t_shutdown_jitter_s=0.0, **TINY))
+    df = runs[0.8]
     assert df["truth_hs_m"].iloc[0] == pytest.approx(0.8)
     assert df["truth_tp_s"].iloc[0] == pytest.approx(6.0)
     assert df["truth_heading_sp_deg"].iloc[0] == pytest.approx(100.0)
     assert df["truth_t_shutdown_s"].iloc[0] == 120.0
     assert df["truth_wind_speed_mps"].mean() == pytest.approx(8.0, rel=0.15)
+    first = df[waves].iloc[0].to_numpy()
+    assert np.all(np.abs(first) > 50.0), first          # hundreds of N (N m): well above the log's rounding
+    assert df["truth_tau_wave2_x_N"].mean() < 0.0        # near head seas: the mean drift is astern
+    np.testing.assert_allclose(runs[1.6][waves].iloc[0].to_numpy(), 4.0 * first, rtol=1e-3)
 
 
 # --------------------------------------------------------------------------- log format
