@@ -156,19 +156,29 @@ def test_model_file_with_changed_weights_is_refused(hybrid, tmp_path):
 
 
 def test_model_file_with_damaged_metadata_is_a_model_file_error(hybrid, tmp_path):
-    """Missing or unexpected metadata keys must give ModelFileError, not KeyError/TypeError."""
+    """Missing or unexpected metadata keys must give ModelFileError, not KeyError/TypeError.
+
+    The metadata carries its own checksum, which refuses any edit before a key is read: the
+    edited metadata is restamped (a consistently written file with these contents), so that
+    the key checks behind the checksum are what is tested; unstamped, the checksum says so."""
+    from hybridship.predictors.model_file import _metadata_hash
+
     path = hybrid.save(tmp_path / "m.npz")
     with np.load(path, allow_pickle=False) as z:
         arrays = {k: z[k] for k in z.files}
     meta = json.loads(bytes(arrays["metadata_json"]).decode())
+    assert "metadata_sha256" in meta
     for change in (lambda m: m.pop("residual_config"), lambda m: m["residual_config"].update(evil=1),
                    lambda m: m.update(guard=None)):
         m = json.loads(json.dumps(meta))
         change(m)
-        arrays["metadata_json"] = np.frombuffer(json.dumps(m).encode(), dtype=np.uint8)
-        np.savez(tmp_path / "t.npz", **arrays)
-        with pytest.raises(ModelFileError):
-            HybridPredictor.load(tmp_path / "t.npz")
+        for restamp, message in ((False, "metadata checksum does not match"), (True, "damaged model metadata")):
+            if restamp:
+                m["metadata_sha256"] = _metadata_hash(m)
+            arrays["metadata_json"] = np.frombuffer(json.dumps(m).encode(), dtype=np.uint8)
+            np.savez(tmp_path / "t.npz", **arrays)
+            with pytest.raises(ModelFileError, match=message):
+                HybridPredictor.load(tmp_path / "t.npz")
 
 
 def test_a_heading_jump_names_the_heading_each_predictor_starts_from(model, log, hybrid):
