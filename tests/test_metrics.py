@@ -101,6 +101,10 @@ def test_grouped_interval_resamples_groups_not_rows_and_is_seeded():
     assert small[0, 1] < 0.8 < 0.95 < small[0, 2]          # five groups: a wide interval
     np.testing.assert_array_equal(small, metrics.grouped_coverage_interval(cov * 10, np.full(5, 10),
                                                                            n_resamples=500, seed=3))
+    # and the seed is what draws the resamples: another seed, another interval (the point
+    # estimate is the pooled coverage whatever the seed)
+    other = metrics.grouped_coverage_interval(cov * 10, np.full(5, 10), n_resamples=500, seed=4)
+    assert other[0, 0] == small[0, 0] and not np.array_equal(other[0, 1:], small[0, 1:])
     assert np.isnan(metrics.grouped_coverage_interval(cov[:1] * 10, [10])[0, 1:]).all()
 
 
