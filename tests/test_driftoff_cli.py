@@ -51,9 +51,16 @@ def test_planning_report_is_the_apis_result_on_the_same_inputs(tmp_path, capsys)
     ("season", ["--chunk-size", "0"], "--chunk-size must be >= 1, got 0"),
     ("season", ["--max-p-exceed", "1.5"], "--max-p-exceed must be in [0, 1], got 1.5"),
 ])
-def test_a_bad_option_is_refused_by_name_before_any_work(tmp_path, capsys, mode, opts, message):
+def test_a_bad_option_is_refused_by_name_before_any_work(tmp_path, monkeypatch, capsys, mode, opts, message):
     """Exit status 2, one line naming the option as typed, and no --out made: not a library's
     message about its argument (``quantile:``, ``chunk_size:``) after the sweep has run."""
+    from hybridship.driftoff import planning, season
+
+    def no_work(*args, **kwargs):          # the run is tiny: only this tells "before" from "after"
+        raise AssertionError("the drifts were simulated before the option was checked")
+
+    monkeypatch.setattr(planning, "simulate_blackouts", no_work)
+    monkeypatch.setattr(season, "season_sweep", no_work)
     argv = ["drift-off", mode, "--samples", "2", "--horizon-s", "30", "--reaction-times-s", "10"]
     if mode == "season":
         table = tmp_path / "w.csv"
