@@ -10,13 +10,16 @@ def test_kind_table_gives_30_s_errors_per_kind_and_pooled_ratios():
     assert table[3] == "| hybrid | 0.400 / 6.00 | 1.200 / 18.00 | 0.800 / 12.00 | 0.80 / 0.60 |"
 
 
-def test_publish_copies_the_named_files_only(tmp_path):
+def test_publish_copies_the_named_files_only(tmp_path, monkeypatch):
     results = load_benchmark("_results")
     out = tmp_path / "out"
     (out / "split").mkdir(parents=True)
     (out / "errors.csv").write_text("a\n")
     (out / "tables.md").write_text("b\n")
+    monkeypatch.chdir(tmp_path)                           # a relative default folder would land here
     results.publish(out, None, ("errors.csv",))           # nothing without a folder
+    assert sorted(p.relative_to(tmp_path).as_posix() for p in tmp_path.rglob("*")) == [
+        "out", "out/errors.csv", "out/split", "out/tables.md"]
     results.publish(out, tmp_path / "docs", ("errors.csv", "tables.md"))
     assert sorted(p.name for p in (tmp_path / "docs").iterdir()) == ["errors.csv", "tables.md"]
     assert (tmp_path / "docs" / "tables.md").read_text() == "b\n"
