@@ -1,12 +1,13 @@
 """benchmarks/esso_physics_fit.py: the identified coefficients scale the published ones."""
 
+import copy
 import tomllib
 
 import numpy as np
 import pytest
 
 from conftest import load_benchmark
-from hybridship.vessel import VesselFileError, load_vessel, vessels_dir
+from hybridship.vessel import VesselFileError, load_vessel, vessel_from_dict, vessels_dir
 
 
 @pytest.fixture(scope="module")
@@ -32,6 +33,12 @@ def test_each_factor_scales_its_own_coefficient_only(pf, base):
     assert v.thrusters[0].wake_fraction == pytest.approx(1.5 * v0.thrusters[0].wake_fraction)
     assert v.damping.nonlinear.mmg.N_r == pytest.approx(0.5 * v0.damping.nonlinear.mmg.N_r)
     assert v.rudders[0] == v0.rudders[0] and v.rigid_body == v0.rigid_body
+    # every other coefficient (the other damping terms, the wind areas, ...) as published: the
+    # vessel file with just these two values scaled by hand
+    d = copy.deepcopy(base)
+    d["thrusters"][0]["wake_fraction"] *= 1.5
+    d["damping"]["nonlinear"]["mmg"]["N_r"] *= 0.5
+    assert v == vessel_from_dict(d)
     assert base["thrusters"][0]["wake_fraction"] == v0.thrusters[0].wake_fraction   # the parsed file untouched
 
 
