@@ -124,7 +124,7 @@ angles = st.floats(min_value=-1e3, max_value=1e3, allow_nan=False, allow_infinit
        wind=st.tuples(st.floats(0.0, 1e4), angles),
        current=st.tuples(st.floats(0.0, 1e3), angles),
        dt_s=st.sampled_from([0.1, 0.5, 1.0, 2.0]))
-def test_any_finite_input_is_refused_or_clipped_to_a_finite_forecast(nu, rpm_factor, az, wind, current, dt_s):
+def test_any_finite_input_within_the_refusal_bounds_is_clipped_to_a_finite_forecast(nu, rpm_factor, az, wind, current, dt_s):
     rpm = np.asarray(rpm_factor) * MAX_RPM
     # Every input drawn is finite, speeds are >= 0 and |rpm| <= 2 x max_rpm (rpm_refuse_factor):
     # nothing here is a fault that clip mode refuses, so each example must be clipped and rolled
