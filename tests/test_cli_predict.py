@@ -192,6 +192,8 @@ def test_cli_errors_are_one_line_and_non_zero(log_dir, tmp_path, capsys):
     assert main(["train", "--vessel", "no_such_ship", "--logs", str(log_dir), "--out", str(tmp_path / "m.npz")]) == 2
     assert "train: error: --vessel: " in capsys.readouterr().err     # the option named, whatever the file's fault
     assert main(["train", "--logs", str(tmp_path / "nope"), "--out", str(tmp_path / "m.npz")]) == 2
+    err = capsys.readouterr().err.strip()
+    assert err.startswith("hybridship train: error: --logs ") and "not a folder" in err and "\n" not in err, err
 
 
 def test_a_forecast_request_the_log_cannot_serve_is_a_usage_error(log_dir, tmp_path, capsys):

@@ -803,7 +803,7 @@ def test_cli_season_workers_only_with_a_local_cluster(tmp_path, capsys):
     assert "the workers are this process" in capsys.readouterr().err
 
 
-def test_cli_live_on_a_truthsim_log(tmp_path):
+def test_cli_live_on_a_truthsim_log(tmp_path, capsys):
     files = sorted(TRUTHSIM_DEV.glob("dev_*.csv.gz")) if TRUTHSIM_DEV.is_dir() else []
     if not files:
         pytest.skip(f"truthsim-dev logs not found under {TRUTHSIM_DEV}")
@@ -814,7 +814,9 @@ def test_cli_live_on_a_truthsim_log(tmp_path):
                  "--radii-m", "5,10", "--no-plots", "--out", str(out)]) == 0
     times = pd.read_csv(out / "times.csv")
     assert len(times) == 2
+    capsys.readouterr()
     assert main(["drift-off", "live", "--log", str(files[0]), "--time-s", "1e9", "--out", str(out)]) == 2
+    assert "--time-s 1000000000 is outside the log" in capsys.readouterr().err
 
 
 def test_cli_refuses_an_out_folder_that_holds_logs(tmp_path, capsys):
