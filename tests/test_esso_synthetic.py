@@ -178,6 +178,35 @@ def test_forecast_errors_score_the_truth_the_horizon_later():
     assert err.shape == (rows.size, 2, 4) and np.abs(err).max() < 1e-12 and np.abs(z).max() < 1e-9
 
 
+def test_forecast_errors_are_the_absolute_misses_in_metres_and_degrees_and_over_their_spreads():
+    """A forecast off by a known amount, growing with the lead (0.03 m north and -0.04 m east
+    per step, so 0.05 m of distance per step) and 0.1 rad in heading across +-180 deg: by hand,
+    the errors at steps 10 and 20 are 0.3/0.4/5.73 deg/0.5 m and 0.6/0.8/5.73 deg/1.0 m, and
+    over the spreads (0.1 m, 0.2 m, 0.05 rad) 3/2/2 and 6/4/2. A perfect forecast (the test
+    above) gives zeros whatever the formulas; these values need the right ones."""
+    from hybridship.evaluation.manoeuvre import forecast_errors, start_rows
+
+    a = _arrays()
+    a.eta[:, 2] = np.pi - 0.05                         # the truth's heading, just short of 180 deg
+
+    def off(arrays, starts, horizon_s):
+        fc = _forecaster()(arrays, starts, horizon_s)
+        k = np.arange(fc.eta.shape[1])
+        fc.eta[..., 0] += 0.03 * k
+        fc.eta[..., 1] -= 0.04 * k
+        fc.eta[..., 2] = -np.pi + 0.05                 # 0.1 rad to port of the truth, across the wrap
+        fc.eta_std[..., 1], fc.eta_std[..., 2] = 0.2, 0.05
+        return fc
+
+    rows = start_rows(a, 20, 1.0)
+    err, z, std = forecast_errors(off, a, rows, np.array([10, 20]), return_z=True, return_std=True, heading_z=True)
+    heading = np.degrees(0.1)
+    np.testing.assert_allclose(err, np.broadcast_to([[0.3, 0.4, heading, 0.5], [0.6, 0.8, heading, 1.0]],
+                                                    err.shape), atol=1e-9)
+    np.testing.assert_allclose(z, np.broadcast_to([[3.0, 2.0, 2.0], [6.0, 4.0, 2.0]], z.shape), atol=1e-9)
+    np.testing.assert_allclose(std, np.broadcast_to([0.1, 0.2], std.shape))
+
+
 def test_an_exact_forecast_without_spread_is_inside_its_band_and_an_error_without_one_outside():
     from hybridship.evaluation.manoeuvre import forecast_errors, start_rows
 
