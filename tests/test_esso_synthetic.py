@@ -119,6 +119,34 @@ def test_split_refuses_a_test_fraction_outside_0_1(tmp_path, fraction):
     assert not (tmp_path / "split").exists()
 
 
+def test_split_puts_whole_recordings_per_kind_on_one_side(tmp_path):
+    """Per kind, round(0.3 x recordings), at least one, are test runs (zigzag 4 -> 1, turning
+    3 -> 1, random 5 -> 2), every run on exactly one side, the pieces of one recording
+    together, and the same seed draws the same split. (The other split tests only count the
+    links, which a split putting every run in train, or keeping one kind's test runs, passes.)"""
+    from hybridship.evaluation.manoeuvre import split_runs
+
+    data = _runs_folder(tmp_path)
+    _write_runs(data / "random", [f"random_01-Aug-2020_10_0{i}_00_{p}.csv" for i in range(5) for p in (1, 2)])
+
+    def sides(seed, out):
+        train, test = split_runs(data, tmp_path / out, seed=seed)
+        return ({p.name.removesuffix(".csv") for p in train.rglob("*.csv")},
+                {p.name.removesuffix(".csv") for p in test.rglob("*.csv")})
+
+    train, test = sides(0, "a")
+    assert not train & test and len(train | test) == 17
+    for kind, n_test in (("zigzag", 1), ("turn", 1), ("random", 2)):
+        recs = {n.rsplit("_", 1)[0] if kind == "random" else n for n in test if n.startswith(kind)}
+        assert len(recs) == n_test, (kind, sorted(test))
+    for n in test | train:                                   # a recording's two pieces on one side
+        if n.startswith("random"):
+            other = n[:-1] + ("2" if n.endswith("1") else "1")
+            assert (n in test) == (other in test)
+    assert sides(0, "b") == (train, test)
+    assert any(sides(s, f"s{s}")[1] != test for s in range(1, 6))     # the seed draws
+
+
 def test_split_keeps_the_data_it_splits(tmp_path):
     """An output folder that is, or holds, the data folder is refused before anything is
     removed (validation_split(d, d) replaced the benchmark's links by links to themselves),
