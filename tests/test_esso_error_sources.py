@@ -85,8 +85,8 @@ def test_the_mean_forecast_averages_the_heading_on_the_circle(es):
             eta = np.zeros((S, 2, 3))
             eta[..., 0] = (copy + 1.0 + 10.0 * np.arange(S))[:, None]       # north 1..4 m (+10 m for start 1)
             eta[..., 2] = (1.0 if copy % 2 == 0 else -1.0) * np.radians(179.0)
-            return ForecastResult(np.asarray(start_times_s), np.arange(2.0), eta, np.zeros((S, 2, 3)),
-                                  eta_std=np.ones((S, 2, 3)))
+            nu = np.full((S, 2, 3), copy + 1.0)                             # surge etc. 1..4 m/s
+            return ForecastResult(np.asarray(start_times_s), np.arange(2.0), eta, nu, eta_std=np.ones((S, 2, 3)))
 
     fc = es._mean_forecast(Stub(), 4)(None, [0.0, 5.0], 1.0, commands="known")
     assert len(calls) == 4 and all(kw == {"commands": "known"} for _, kw in calls)
@@ -96,6 +96,7 @@ def test_the_mean_forecast_averages_the_heading_on_the_circle(es):
     np.testing.assert_allclose(fc.eta[0, :, 0], 2.5)
     np.testing.assert_allclose(fc.eta[1, :, 0], 12.5)
     np.testing.assert_allclose(np.abs(fc.eta[..., 2]), np.pi)     # +-179 deg average to 180, not 0
+    np.testing.assert_allclose(fc.nu, 2.5)                         # the velocities are averaged too
     assert fc.eta_std is None
 
 
@@ -141,13 +142,13 @@ def test_the_mean_forecast_of_several_predictors_weighs_each_forecast_once(es):
             S = len(start_times_s)
             eta = np.zeros((S, 2, 3))
             eta[..., 0], eta[..., 2] = self.north_m, self.psi
-            return ForecastResult(np.asarray(start_times_s), np.arange(2.0), eta, np.ones((S, 2, 3)))
+            return ForecastResult(np.asarray(start_times_s), np.arange(2.0), eta, np.full((S, 2, 3), self.north_m))
 
     fc = es._mean_forecast([Const(1.0, 170.0), Const(4.0, -170.0)])(None, [0.0, 5.0, 9.0], 1.0)
     assert fc.eta.shape == (3, 2, 3)
     np.testing.assert_allclose(fc.eta[..., 0], 2.5)
     np.testing.assert_allclose(np.abs(np.degrees(fc.eta[..., 2])), 180.0)
-    np.testing.assert_allclose(fc.nu, 1.0)
+    np.testing.assert_allclose(fc.nu, 2.5)                  # velocities 1 and 4: their mean, not the first's
 
 
 def test_error_feedback_adds_the_earlier_forecasts_error_turned_with_the_heading(es):
