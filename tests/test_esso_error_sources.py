@@ -66,6 +66,33 @@ def test_sampled_wind_adds_the_forecasts_own_error_paths(es):
     np.testing.assert_allclose(speed_dir_to_vector(got[:, 0]), speed_dir_to_vector(base[:, 0]), atol=1e-12)
 
 
+def test_sampled_wind_draws_a_path_per_start_and_new_paths_at_each_call(es):
+    """The mean over sampled wind futures calls the forecast once per draw: each call must draw
+    again (a generator seeded anew at every call would give every copy the same future, and the
+    mean would be one draw), and each start its own path, one of the forecast's error paths
+    (with one path, as above, any drawing passes)."""
+    from hybridship.forecast_inputs.wind import wind_error_paths
+
+    forecast = WindForecast(mean_window_s=5.0, time_constant_s=2.0)
+    gusty = _wind_log(seed=1)
+    paths = wind_error_paths(forecast, [gusty], 30, every=20)
+    paths[:, 0] = 0.0
+    assert len(paths) > 10
+    sampled = es._sampled_wind(forecast, [gusty], 30, every=20)
+    rows = np.arange(50, 250, 25)
+    base = speed_dir_to_vector(forecast.steps(gusty.wind, gusty.time_s, rows, gusty.wind[rows], 30, gusty.dt_s))
+    drawn = []
+    for _ in range(2):
+        got = sampled.steps(gusty.wind, gusty.time_s, rows, gusty.wind[rows], 30, gusty.dt_s)
+        d = speed_dir_to_vector(got) - base
+        # which path each start drew: the one it matches to round-off
+        miss = np.abs(d[:, None] - paths[None]).max(axis=(2, 3))
+        assert np.all(miss.min(axis=1) < 1e-9)
+        drawn.append(miss.argmin(axis=1))
+    assert len(set(drawn[0])) > 1                           # the starts of one call draw apart
+    assert not np.array_equal(drawn[0], drawn[1])           # and the next call draws again
+
+
 def test_sampled_wind_refuses_logs_without_a_whole_measured_future(es):
     forecast = WindForecast(mean_window_s=5.0, time_constant_s=2.0)
     a = _wind_log(n=200, seed=2)
