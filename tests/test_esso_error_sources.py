@@ -46,6 +46,20 @@ def test_the_logged_future_mean_wind_holds_the_vector_mean_of_the_steps_after_th
         axis=0, keepdims=True), atol=1e-12)
 
 
+def test_the_trailing_wind_is_the_causal_vector_mean_of_the_last_samples(es):
+    """``wind_trail<s>``: by hand, a step from 2 to 6 m/s averages over the last 3 samples
+    (the first held before the log starts, no later sample read), and directions 350 and
+    10 deg average through north (a mean of the angles would point south)."""
+    w = np.column_stack([[2.0, 2.0, 2.0, 6.0, 6.0, 6.0, 6.0], np.full(7, 0.4)])
+    out = es.trailing_wind(w, 3)
+    np.testing.assert_allclose(out[:, 0], [2.0, 2.0, 2.0, 10.0 / 3, 14.0 / 3, 6.0, 6.0], rtol=1e-12)
+    np.testing.assert_allclose(out[:, 1], 0.4, rtol=1e-12)
+    gusty = np.column_stack([np.full(6, 8.0), np.radians([350.0, 10.0] * 3)])
+    out = es.trailing_wind(gusty, 2)
+    np.testing.assert_allclose(out[1:, 0], 8.0 * np.cos(np.radians(10.0)), rtol=1e-12)
+    np.testing.assert_allclose(out[1:, 1], 0.0, atol=1e-12)
+
+
 def test_sampled_wind_adds_the_forecasts_own_error_paths(es):
     forecast = WindForecast(mean_window_s=5.0, time_constant_s=2.0)
     # one error path, from row 1 (the only start when the spacing exceeds the log): sampled at
