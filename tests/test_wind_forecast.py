@@ -372,8 +372,9 @@ def test_wind_futures_widen_the_spread_and_leave_the_forecast(wind_spread_model,
     plain.wind_samples = 0
     members = plain.forecast(log, starts, 60.0, calibrated=False)
     np.testing.assert_array_equal(with_wind.eta, members.eta)                 # the forecast is unchanged
-    # the members' spread and the wind term add in quadrature: the wind term alone, by hand
-    extra = np.sqrt(np.maximum(with_wind.eta_std[:, -1, :2] ** 2 - members.eta_std[:, -1, :2] ** 2, 0.0))
+    # the members' spread and the wind term add in quadrature: the wind term alone, by hand, at
+    # every lead and in heading too (the rollouts' heading on the circle)
+    extra = np.sqrt(np.maximum(with_wind.eta_std ** 2 - members.eta_std ** 2, 0.0))
     manual = []
     for path in hp.wind_error_paths:
         shifted = HybridPredictor.load(tmp_path / "w.npz")
@@ -387,9 +388,11 @@ def test_wind_futures_widen_the_spread_and_leave_the_forecast(wind_spread_model,
                 return np.stack([np.hypot(v[..., 0], v[..., 1]), np.arctan2(v[..., 1], v[..., 0])], axis=-1)
         shifted.wind_forecast = Plus(mean_window_s=hp.wind_forecast.mean_window_s,
                                      time_constant_s=hp.wind_forecast.time_constant_s)
-        manual.append(shifted.forecast(log, starts, 60.0, calibrated=False).eta[:, -1, :2] - members.eta[:, -1, :2])
+        d = shifted.forecast(log, starts, 60.0, calibrated=False).eta - members.eta
+        d[..., 2] = np.angle(np.exp(1j * d[..., 2]))
+        manual.append(d)
     np.testing.assert_allclose(extra, np.sqrt(np.mean(np.square(manual), axis=0)), rtol=1e-6, atol=1e-9)
-    assert np.all(extra > 0)                                                # the wind's future adds spread
+    assert np.all(extra[:, -1] > 0)                                         # the wind's future adds spread
     calm = HybridPredictor.load(tmp_path / "w.npz")
     calm.wind_error_paths = np.zeros_like(calm.wind_error_paths)             # a wind forecast that never errs
     np.testing.assert_allclose(calm.forecast(log, starts, 60.0, calibrated=False).eta_std, members.eta_std,
