@@ -411,6 +411,25 @@ def test_wind_futures_enter_the_calibration_and_edge_cases(wind_spread_model, mo
         HybridPredictor(model.vessel, ensemble_config=TINY, environment="mean", wind_samples=2).fit([log, other])
 
 
+def test_wind_futures_are_error_paths_of_the_training_rows_only(wind_spread_model, model):
+    """The paths are drawn from the wind forecast's error paths on the rows before the
+    calibration cut (the held-back end stays unseen, as for the nets): the candidates are
+    those paths, one start every 2 s, fewer than over the whole log, and every stored path is
+    one of them. (The fit's own record, ``samples <= candidate_paths``, holds either way.)"""
+    log, hp = wind_spread_model
+    a = as_log_arrays(log, model.vessel)
+    cal = hp.calibration_config
+    cut = HybridPredictor._calibration_cut(a, cal, bool(hp.training_info["calibration"]["dp_only"]))
+    assert 0 < cut < len(a)
+    dt = hp.wind_error_dt_s
+    H, every = int(round(cal.horizon_s / dt)), int(round(2.0 / dt))
+    candidates = wind_error_paths(hp.wind_forecast, [a], H, every=every, masks=[np.arange(len(a)) < cut])
+    assert hp.training_info["wind_spread"]["candidate_paths"] == len(candidates)
+    assert len(wind_error_paths(hp.wind_forecast, [a], H, every=every)) > len(candidates)
+    for path in hp.wind_error_paths:
+        assert np.abs(candidates - path[None]).max(axis=(1, 2)).min() < 1e-12
+
+
 def test_wind_futures_are_stored_in_the_model_file(wind_spread_model, tmp_path):
     log, hp = wind_spread_model
     q = HybridPredictor.load(hp.save(tmp_path / "w.npz"))
