@@ -202,6 +202,21 @@ def _forecaster(nan_start=None, nan_std=False):
     return forecast
 
 
+def test_start_rows_by_hand():
+    """20 s at 10 Hz, 2-s horizon: starts from 3 s (the warm-up) every 1 s while 2 s of
+    truth remain (rows 30, 40, ..., 170), or every row; with a new segment from row 100, none
+    whose horizon crosses into it (rows <= 79) or whose warm-up lies before it (rows < 130).
+    The other tests only read whatever rows start_rows gives."""
+    from hybridship.evaluation.manoeuvre import start_rows
+
+    a = _arrays()
+    np.testing.assert_array_equal(start_rows(a, 20, 1.0), np.arange(30, 171, 10))
+    np.testing.assert_array_equal(start_rows(a, 20, None), np.arange(30, 180))
+    np.testing.assert_array_equal(start_rows(a, 20, 1.0, warmup_s=0.0), np.arange(0, 171, 10))
+    a.segment_id = np.where(np.arange(200) < 100, 0, 1)
+    np.testing.assert_array_equal(start_rows(a, 20, 1.0), [30, 40, 50, 60, 70, 130, 140, 150, 160, 170])
+
+
 def test_forecast_errors_score_the_truth_the_horizon_later():
     from hybridship.evaluation.manoeuvre import forecast_errors, start_rows
 
