@@ -219,6 +219,43 @@ def test_error_feedback_adds_the_earlier_forecasts_error_turned_with_the_heading
     np.testing.assert_array_equal(plain.eta[0], np.repeat(a.eta[[45]], 31, axis=0))
 
 
+def test_the_feedback_gain_is_chosen_on_the_held_back_starts_by_the_longest_lead(es):
+    """A ship accelerating at 0.02 m/s^2 north, forecast at its start velocity: every forecast
+    misses by 0.01 tau^2 m (9 m at 30 s), and the feedback adds alpha times that same miss, so
+    by hand the 30-s distance error is 9 (1 - alpha) m, heading 0, and the largest gain (0.5)
+    wins. The starts are the held-back rows from the cut plus 30 s (rows 230, 235, ..., 265
+    of a 300-s log cut at row 200), while 30 s of truth remain."""
+    t = np.arange(300.0)
+    a = SimpleNamespace(time_s=t, eta=np.column_stack([0.01 * t ** 2, np.zeros_like(t), np.zeros_like(t)]))
+    plain_starts = []
+
+    class ConstantVelocity:
+        training_info = {"calibration": {"dp_only": False}}
+        calibration_config = None
+
+        @staticmethod
+        def _calibration_cut(log, cal, dp_only):
+            return 200
+
+        def forecast(self, log, start_times_s, horizon_s, **kw):
+            st = np.asarray(start_times_s, dtype=float)
+            if horizon_s > 30.0 - 1e-9 and st.min() >= 230.0:     # the scored forecasts, not the earlier ones
+                plain_starts.append(st)
+            lead = np.arange(int(round(horizon_s)) + 1.0)
+            eta = np.zeros((st.size, lead.size, 3))
+            eta[..., 0] = 0.01 * st[:, None] ** 2 + 0.02 * st[:, None] * lead[None]
+            return ForecastResult(st, lead, eta, np.zeros_like(eta))
+
+    alpha, scores = es._choose_feedback(ConstantVelocity(), [a], np.array([10, 30]), 5.0)
+    assert alpha == 0.5
+    assert set(scores) == set(es.FEEDBACK_ALPHAS)
+    for k, (distance, heading) in scores.items():
+        assert distance == pytest.approx(9.0 * (1.0 - k), abs=1e-9) and heading == pytest.approx(0.0, abs=1e-9)
+    assert len(plain_starts) == len(es.FEEDBACK_ALPHAS)
+    for st in plain_starts:
+        np.testing.assert_array_equal(st, t[230:270:5])
+
+
 def test_tables_give_ratios_to_the_physics_and_the_wind_futures_share(es):
     import pandas as pd
 
