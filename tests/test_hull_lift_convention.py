@@ -51,8 +51,11 @@ def test_with_lift_changes_only_the_lift_and_leaves_the_vessel_alone():
     assert hlc.with_lift(v, "abs").model_dump() == before
 
 
-def test_missing_data_is_a_clear_skip(tmp_path, monkeypatch, capsys):
-    monkeypatch.setattr(hlc, "TRUTHSIM", tmp_path / "nope")
+@pytest.mark.parametrize("missing", ["TRUTHSIM", "REFERENCE"])
+def test_missing_data_is_a_clear_skip(tmp_path, monkeypatch, capsys, missing):
+    """Either input missing (the simulator's logs or the published derivatives) is a skip,
+    not a traceback half-way through the run."""
+    monkeypatch.setattr(hlc, missing, tmp_path / "nope")
     assert hlc.main(["--out", str(tmp_path / "out")]) == 0
     assert "skipping" in capsys.readouterr().err
     assert not (tmp_path / "out").exists()
