@@ -411,6 +411,38 @@ def test_wind_futures_enter_the_calibration_and_edge_cases(wind_spread_model, mo
         HybridPredictor(model.vessel, ensemble_config=TINY, environment="mean", wind_samples=2).fit([log, other])
 
 
+def test_wind_futures_follow_the_paths_time_on_a_log_at_another_step(wind_spread_model, tmp_path):
+    """The paths have the training logs' 1-s step; on a 2-s log, forecast step j (at 2 j s)
+    takes path step 2 j, not j. By hand: the forecasts with the wind plus every other sample
+    of each path give the wind term (a path read step for step would reach only 30 s into
+    its 60 s)."""
+    log, hp = wind_spread_model
+    coarse = log.iloc[::2].reset_index(drop=True)
+    starts = [1100.0, 1300.0]
+    with pytest.warns(UserWarning, match="step is 2 s"):
+        with_wind = hp.forecast(coarse, starts, 60.0, calibrated=False)
+        plain = HybridPredictor.load(hp.save(tmp_path / "w.npz"))
+        plain.wind_samples = 0
+        members = plain.forecast(coarse, starts, 60.0, calibrated=False)
+        manual = []
+        for path in hp.wind_error_paths[:, ::2]:
+            shifted = HybridPredictor.load(tmp_path / "w.npz")
+            shifted.wind_samples, shifted.wind_error_paths = 0, None
+
+            class Plus(WindForecast):                  # the forecast wind plus every other step of the path
+                def steps(self, *a, **k):
+                    base = hp.wind_forecast.steps(*a, **k)
+                    v = _vec(np.broadcast_to(base, (base.shape[0], a[4], 2))) + path[None, :a[4]]
+                    return np.stack([np.hypot(v[..., 0], v[..., 1]), np.arctan2(v[..., 1], v[..., 0])], axis=-1)
+            shifted.wind_forecast = Plus(mean_window_s=hp.wind_forecast.mean_window_s,
+                                         time_constant_s=hp.wind_forecast.time_constant_s)
+            d = shifted.forecast(coarse, starts, 60.0, calibrated=False).eta - members.eta
+            d[..., 2] = np.angle(np.exp(1j * d[..., 2]))
+            manual.append(d)
+    extra = np.sqrt(np.maximum(with_wind.eta_std ** 2 - members.eta_std ** 2, 0.0))
+    np.testing.assert_allclose(extra, np.sqrt(np.mean(np.square(manual), axis=0)), rtol=1e-6, atol=1e-9)
+
+
 def test_wind_futures_are_error_paths_of_the_training_rows_only(wind_spread_model, model):
     """The paths are drawn from the wind forecast's error paths on the rows before the
     calibration cut (the held-back end stays unseen, as for the nets): the candidates are
