@@ -287,6 +287,33 @@ def test_a_forecast_with_nan_is_refused_naming_its_start(nan_std):
         forecast_errors(_forecaster(nan_start=5.0, nan_std=True), a, rows, np.array([10, 20]))
 
 
+def test_the_tables_pool_the_starts_of_every_run_by_hand():
+    """errors.csv and coverage.csv from two zigzag runs (1 and 2 starts) and a turning run
+    (1 start): per kind the mean over its starts, and ``all`` over the four starts (not the
+    mean of the kinds' means), for each state and horizon in its own column; a run without
+    a spread counts in no coverage. (The benchmark test on the real runs checks only that
+    these figures are finite, ordered and pooled between the kinds.)"""
+    from hybridship.evaluation.manoeuvre import Run, coverage_table, error_table
+
+    runs = [Run(SimpleNamespace(kind=k, name=n), None) for k, n in (("zigzag", "z1"), ("turning", "t1"),
+                                                                       ("zigzag", "z2"), ("zigzag", "z3"))]
+    state = np.array([1.0, 2.0, 30.0, 100.0])                # x0, y0, heading, distance: apart
+    horizon = np.array([1.0, 10.0])[:, None]                  # the 10-s errors 10 times the 5-s ones
+    start = lambda f: f * horizon * state[None]               # noqa: E731  (one start's errors (2, 4))
+    errs = [np.stack([start(1.0)]), np.stack([start(4.0)]), np.stack([start(2.0), start(3.0)]), np.zeros((0, 2, 4))]
+    e = error_table({("hybrid", "known"): errs}, runs, (5.0, 10.0)).set_index(["kind", "state", "horizon_s"]).mae
+    for kind, f in (("zigzag", 2.0), ("turning", 4.0), ("all", 2.5)):     # all: (1 + 4 + 2 + 3) / 4
+        for j, s in enumerate(("x0_m", "y0_m", "heading_deg", "distance_m")):
+            assert e[(kind, s, 5.0)] == pytest.approx(f * state[j]) and e[(kind, s, 10.0)] == pytest.approx(
+                10 * f * state[j])
+    # coverage: z of x0 and y0 pooled; zigzag {0.5, 1.5 | 0.5, 2.5 | 3, 0.2}, turning {0.9, 1.1}
+    zs = [np.array([[[0.5, 1.5]]]), np.array([[[0.9, 1.1]]]), np.array([[[0.5, 2.5]], [[3.0, 0.2]]]), None]
+    c = coverage_table({("hybrid", "known"): zs}, runs, (5.0,)).set_index(["kind", "sigma"]).coverage
+    assert c[("zigzag", 1)] == pytest.approx(3 / 6) and c[("zigzag", 2)] == pytest.approx(4 / 6)
+    assert c[("turning", 1)] == pytest.approx(1 / 2) and c[("turning", 2)] == pytest.approx(1.0)
+    assert c[("all", 1)] == pytest.approx(4 / 8) and c[("all", 2)] == pytest.approx(6 / 8)
+
+
 def test_readme_says_every_sample_when_every_sample_starts():
     from hybridship.evaluation.manoeuvre import BenchmarkResult, ManoeuvreConfig, markdown_report
 
