@@ -7,8 +7,13 @@ from hybridship.evaluation import metrics
 
 
 def test_per_log_rows_are_each_failures_ratio_to_its_own_physics():
+    """Each ratio is a ratio of means over the intervals (not a mean of ratios), of the same
+    failure, state and intervals: the physics' errors differ by state (1, 2, 3 times) and
+    double after the fifth interval, so a ratio read against another state's, another
+    failure's or all 20 intervals' physics differs."""
     ev = load_benchmark("estimator_variants")
-    phys = np.ones((2, 20, 3))
+    phys = np.ones((2, 20, 3)) * np.array([1.0, 2.0, 3.0])
+    phys[:, 5:] *= 2.0
     phys[1] *= 4.0
     err = phys.copy()
     err[0, :5] *= 3.0                 # log a: three times the physics over the first five intervals
@@ -17,7 +22,9 @@ def test_per_log_rows_are_each_failures_ratio_to_its_own_physics():
     assert len(rows) == 2 * len(metrics.STATES)
     got = {(r["log"], r["state"]): (r["ratio_5"], r["ratio_20"]) for r in rows}
     for state in metrics.STATES:
-        np.testing.assert_allclose(got[("a", state)], (3.0, (5 * 3 + 15) / 20))
+        # first 20, per unit of the state's physics: (5 * 3 + 15 * 2) / (5 * 1 + 15 * 2)
+        np.testing.assert_allclose(got[("a", state)], (3.0, 45.0 / 35.0))
     np.testing.assert_allclose(got[("b", metrics.STATES[2])], (0.5, 0.5))
     np.testing.assert_allclose(got[("b", metrics.STATES[0])], (1.0, 1.0))
+    np.testing.assert_allclose(got[("b", metrics.STATES[1])], (1.0, 1.0))
     assert {r["data"] for r in rows} == {"set"} and {r["variant"] for r in rows} == {"variant"}
