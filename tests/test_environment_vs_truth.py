@@ -7,6 +7,10 @@ import pandas as pd
 import pytest
 
 from conftest import load_benchmark
+from hybridship.physics.model import DynamicModel
+from hybridship.predictors import as_log_arrays
+from hybridship.sim.scenario import embedded_scenarios
+from hybridship.sim.synthetic import physics_log
 
 
 @pytest.fixture(scope="module")
@@ -43,6 +47,17 @@ def test_own_scenarios_written(evt, tmp_path):
     assert list(table.window) == ["dp", "drift"] and set(table.log) == {"embedded_seed0100"}
     assert abs(table.heading_change_deg[0]) < 5.0
     assert np.isfinite(table.drop(columns=["log", "window"]).to_numpy()).all()
+    # the windows, from the log itself: the last 300 s before the failure and 60..300 s after it
+    log = embedded_scenarios(1, 100)[0].log
+    i0 = int(np.flatnonzero(log.dp_active.to_numpy() == 0)[0])
+    heading = np.degrees(np.unwrap(np.radians(log.truth_heading_deg.to_numpy())))
+    for k, rows in enumerate((np.arange(i0 - 300, i0), np.arange(i0 + 60, i0 + 301))):
+        assert table.heading_change_deg[k] == pytest.approx(heading[rows].mean() - heading[i0], rel=1e-3, abs=1e-3)
+        assert table.current_m_s_true[k] == pytest.approx(log.truth_current_speed_mps.to_numpy()[rows].mean(),
+                                                          rel=1e-3)
+    assert abs(table.heading_change_deg[1]) > 5.0                  # the drift turns: a window off by 60 s shows
+    # the estimate at the failure is one value, held through both windows
+    assert table.load_yaw_kNm_est_at_failure[0] == table.load_yaw_kNm_est_at_failure[1]
     md = (tmp_path / "environment_vs_truth.md").read_text()
     assert "drift, estimate at the failure held" in md
     assert (tmp_path / "environment_vs_truth.png").stat().st_size > 0
@@ -57,6 +72,37 @@ def test_heading_change_through_north(evt):
     heading = np.array([358.0, 359.0, 359.5, 0.5, 1.0, 1.5])
     assert evt.heading_change_deg(heading, 2, np.array([3, 4, 5])) == pytest.approx(1.5)
     assert evt.heading_change_deg(heading[::-1], 2, np.array([3, 4, 5])) == pytest.approx(-5.0 / 3.0)
+
+
+def test_truth_is_the_simulators_loads_less_the_models(evt):
+    """_truth: the current as (speed, direction to [rad]); the load the estimator stands for,
+    the wave drift plus the wind model's error (the logged wind load less the model's at the
+    logged wind), rotated to NED; and the thrust model's error, the logged thrust load less the
+    model's at the logged commands, left in the body frame. On a moving, turning ship with
+    wind and changing commands, so that a wrong sign, part or frame shows."""
+    m = DynamicModel("gunnerus")
+    df = physics_log(m, seed=3, duration_s=200.0, t_shutdown_s=150.0)
+    rng = np.random.default_rng(0)
+    logged = {part: rng.normal(0.0, 1.0, (len(df), 3)) * [2e4, 1e4, 1e5] for part in ("wave2", "wind", "thrust")}
+    df = df.assign(truth_current_speed_mps=0.3, truth_current_dir_to_deg=200.0,
+                   **{f"truth_tau_{part}_{c}": v[:, j] for part, v in logged.items()
+                      for j, c in enumerate(("x_N", "y_N", "n_Nm"))})
+    a = as_log_arrays(df, m.vessel)
+    cur, load, thrust_error = evt._truth(df, m, a)
+
+    # the model's loads by part (hull, actuators, wind, external) at the logged states and inputs
+    _, parts, _ = m.acceleration(a.eta, np.nan_to_num(a.nu), rpm=a.rpm, azimuth_rad=a.azimuth_rad, wind=a.wind,
+                                 return_parts=True)
+    wind_model, thrust_model = parts[:, 2], parts[:, 1]
+    assert np.abs(wind_model[:, :2]).max() > 1e3 and np.abs(thrust_model[:100, :2]).max() > 1e3   # both matter
+    psi = a.eta[:, 2]
+    assert np.ptp(np.degrees(np.unwrap(psi))) > 5.0                               # the rotation turns
+    body = logged["wave2"] + logged["wind"] - wind_model
+    c, s = np.cos(psi), np.sin(psi)
+    ned = np.column_stack([c * body[:, 0] - s * body[:, 1], s * body[:, 0] + c * body[:, 1], body[:, 2]])
+    np.testing.assert_allclose(load, ned, rtol=1e-9, atol=1e-6)
+    np.testing.assert_allclose(thrust_error, logged["thrust"] - thrust_model, rtol=1e-9, atol=1e-6)
+    np.testing.assert_allclose(cur, np.tile([0.3, np.radians(200.0)], (len(df), 1)))
 
 
 @pytest.mark.parametrize("argv, message", [(["--scenarios", "21"], "--scenarios: expected 1-20"),
