@@ -8,6 +8,7 @@ import pytest
 
 from conftest import load_benchmark
 from hybridship.forecast_inputs.wind import WindForecast
+from hybridship.frames import ned_to_body, wrap_pi
 from hybridship.physics.model import DynamicModel
 from hybridship.sim.scenario import embedded_scenarios
 from hybridship.vessel import load_vessel
@@ -34,6 +35,70 @@ def test_truth_given_to_the_model_that_made_it(oracles, scenario_log):
     assert all(np.isfinite(v).all() and min(v) >= 0 for v in rows.values())
     assert rows["true loads and current"][0] < 0.5 * rows["model wind"][0]
     assert "model wind, logged held" not in oracles.failure_oracles(model, scenario_log)
+
+
+def _model_made_drift(oracles, model, wind_speed_mps):
+    """A drift log whose truth is ``model`` itself, stepped one second at a time with the
+    commands at zero: in a current of 0.4 m/s to 060 deg, the wind ``wind_speed_mps`` (one value
+    per row) from 200 deg, and a wave-drift acceleration constant in NED (logged as the body
+    force that gives it at each row's heading); no wind load is logged beyond the model's. The
+    ship turns through north (heading logged in [0, 360)). Returns the log and the true states
+    (eta, nu), each (rows, 3)."""
+    n_dp = 30
+    n = n_dp + oracles.N_STARTS + oracles.HORIZON
+    wave_ned = np.array([4e-3, -3e-3, 2e-5])                     # [m/s2, m/s2, rad/s2]
+    current = np.array([[0.4, np.radians(60.0)]])
+    wind = np.column_stack([wind_speed_mps, np.full(n, np.radians(200.0))])
+    zeros = np.zeros((1, model.n_channels))
+    eta, nu = np.zeros((n, 3)), np.zeros((n, 3))
+    eta[0], nu[0] = [0.0, 0.0, np.radians(340.0)], [0.3, -0.1, 0.01]
+    for k in range(n - 1):
+        step = model.rollout(eta[k:k + 1], nu[k:k + 1], 1, rpm=zeros, azimuth_rad=zeros, wind=wind[k:k + 1],
+                             current=current, accel_ext=ned_to_body(wave_ned, eta[k:k + 1, 2]))
+        eta[k + 1], nu[k + 1] = step.eta[0, -1], step.nu[0, -1]
+    wave_force = ned_to_body(wave_ned, eta[:, 2]) @ model.mass_matrix.T
+    log = pd.DataFrame({
+        "dp_active": (np.arange(n) < n_dp).astype(int),
+        "truth_north_lf_m": eta[:, 0], "truth_east_lf_m": eta[:, 1],
+        "truth_heading_lf_deg": np.degrees(eta[:, 2]) % 360,
+        "truth_u_lf_mps": nu[:, 0], "truth_v_lf_mps": nu[:, 1], "truth_r_lf_degps": np.degrees(nu[:, 2]),
+        "truth_current_speed_mps": 0.4, "truth_current_dir_to_deg": 60.0,
+        "truth_wind_speed_mps": wind_speed_mps, "truth_wind_dir_from_deg": 200.0,
+        **{f"truth_tau_wind_{c}": 0.0 for c in oracles.DOFS},
+        **{f"truth_tau_wave2_{c}": wave_force[:, j] for j, c in enumerate(oracles.DOFS)}})
+    return log, eta, nu
+
+
+def test_oracles_given_all_the_truth_are_exact_on_a_drift_the_model_made(oracles):
+    """Where the model made the drift, the rows that give it every part of the truth it was
+    made with (current in the hull, the wave drift held in NED, the wind as it was) forecast it
+    exactly, and a row without one of them does not; the model wind row is the 60-s error of
+    the bare model from each true start, in degrees and the mean of north's and east's [m]."""
+    model = DynamicModel(load_vessel("gunnerus"))
+    n = 30 + oracles.N_STARTS + oracles.HORIZON
+    calm_log, eta, nu = _model_made_drift(oracles, model, np.zeros(n))
+    calm = oracles.failure_oracles(model, calm_log)
+    assert np.ptp(eta[:, 2]) > np.radians(30.0)                  # the held wave drift turns with the ship
+    for given in ("current in the hull + wave drift held", "current in the hull + wave drift held, true future wind",
+                  "true loads and current"):
+        np.testing.assert_allclose(calm[given], (0.0, 0.0), atol=1e-6, err_msg=given)
+    for given in ("model wind", "current in the hull", "wave drift held"):
+        assert min(calm[given]) > 0.01, given
+
+    # the bare model from each of the 20 true starts after the failure, against the truth 60 s on
+    st = 30 + np.arange(oracles.N_STARTS)
+    zeros = np.zeros((st.size, model.n_channels))
+    end = model.rollout(eta[st], nu[st], oracles.HORIZON, rpm=zeros, azimuth_rad=zeros).eta[:, -1]
+    truth = eta[st + oracles.HORIZON]
+    heading_deg = np.degrees(np.abs(wrap_pi(end[:, 2] - truth[:, 2]))).mean()
+    north_east_m = (np.abs(end[:, 0] - truth[:, 0]).mean() + np.abs(end[:, 1] - truth[:, 1]).mean()) / 2
+    np.testing.assert_allclose(calm["model wind"], (heading_deg, north_east_m), rtol=1e-6)
+
+    # a wind that rises from 4 to 14 m/s: only the row with its true future stays exact
+    windy = oracles.failure_oracles(model, _model_made_drift(oracles, model, np.linspace(4.0, 14.0, n))[0])
+    np.testing.assert_allclose(windy["current in the hull + wave drift held, true future wind"], (0.0, 0.0),
+                               atol=1e-6)
+    assert min(windy["current in the hull + wave drift held"]) > 0.01
 
 
 def test_yaw_damping_variant_and_bad_vessel(oracles, tmp_path, capsys):
