@@ -116,9 +116,16 @@ def test_yaw_damping_variant_and_bad_vessel(oracles, tmp_path, capsys):
 
 
 def test_per_log_table_written(oracles, tmp_path, monkeypatch):
-    """One row per log and oracle beside the pooled table."""
+    """One row per log and oracle beside the pooled table; of one log, the pooled rows are
+    its own errors (to the tables' 2 decimals) and their ratios to its model wind row."""
     monkeypatch.setattr(oracles, "TRUTHSIM", tmp_path / "absent")
     assert oracles.main(["--own", "1", "--own-seed", "100", "--out", str(tmp_path)]) == 0
     per_log = pd.read_csv(tmp_path / "drift_oracles_per_log.csv")
     pooled = pd.read_csv(tmp_path / "drift_oracles.csv")
     assert set(per_log.log) == {"embedded_seed0100"} and len(per_log) == len(pooled)
+    per_log, pooled = per_log.set_index("given"), pooled.set_index("given")
+    assert list(per_log.index) == list(pooled.index)
+    for col, ratio in (("heading_deg", "heading_ratio"), ("north_east_m", "north_east_ratio")):
+        np.testing.assert_allclose(pooled[col], per_log[col], atol=0.006, err_msg=col)
+        np.testing.assert_allclose(pooled[ratio], per_log[col] / per_log.loc["model wind", col], atol=0.01,
+                                   err_msg=ratio)
