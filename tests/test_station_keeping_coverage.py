@@ -78,33 +78,69 @@ def test_run_scores_every_log_with_a_model_fitted_on_the_others(skc, logs, monke
 
 
 class _Stub:
-    """Forecasts the logged track plus 1 m north and 2 m east, spread 1 m (raw 10 m)."""
+    """Forecasts the logged track plus ``north`` m north (``north_nets_off`` with the nets off)
+    and 2 m east, its heading 0.02 rad to port written as 2 pi - 0.02 rad more than the logged
+    one; spread 1 m (raw 10 m)."""
+
+    def __init__(self, north=1.0, north_nets_off=3.0):
+        self.north, self.north_nets_off = north, north_nets_off
 
     def forecast(self, a, starts, horizon_s, nets=True, calibrated=True):
         from hybridship.predictors.result import ForecastResult
 
         lead = np.arange(int(horizon_s / a.dt_s) + 1) * a.dt_s
         rows = np.searchsorted(a.time_s, np.asarray(starts)[:, None] + lead[None, :])
-        eta = a.eta[rows] + np.array([1.0, 2.0, 0.0])
+        eta = a.eta[rows] + np.array([self.north if nets else self.north_nets_off, 2.0, 2 * np.pi - 0.02])
         std = np.full(eta.shape, 1.0 if calibrated else 10.0)
         return ForecastResult(np.asarray(starts), lead, eta, np.zeros_like(eta), std)
 
 
 def test_score_log_aligns_the_truth_and_pools_north_and_east(skc, logs):
+    """The hybrid's errors with and without its nets, the heading's wrapped, and the north and
+    east errors and spreads of the calibrated forecast with the nets on."""
     a = logs[1]["log3"]
-    errors, abs_ne, std, raw, lead, abs_h, std_h = skc.score_log(_Stub(), {"dynamic": _Stub()}, a,
+    errors, abs_ne, std, raw, lead, abs_h, std_h = skc.score_log(_Stub(), {"dynamic": _Stub(north=4.0)}, a,
                                                                  np.array([100.0, 200.0]), 30.0)
     assert set(errors) == {"hybrid", "hybrid_nets_off", "dynamic"}
     np.testing.assert_allclose(errors["hybrid"][0], np.sqrt(5.0))
-    np.testing.assert_allclose(errors["hybrid"][1], 0.0)
+    np.testing.assert_allclose(errors["hybrid"][1], 0.02)
+    np.testing.assert_allclose(errors["hybrid_nets_off"][0], np.sqrt(13.0))
+    np.testing.assert_allclose(errors["dynamic"][0], np.sqrt(20.0))
     np.testing.assert_allclose(abs_ne[:2], 1.0)
     np.testing.assert_allclose(abs_ne[2:], 2.0)
     (row,) = skc.spread_rows("log3", lead, abs_ne, std, raw)      # 60 s is beyond this 30-s horizon
     assert row["coverage_1sigma"] == 0.5 and row["coverage_2sigma"] == 1.0
     assert row["median_std_m"] == 1.0 and row["median_raw_std_m"] == 10.0
-    np.testing.assert_allclose(abs_h, 0.0)
+    np.testing.assert_allclose(abs_h, 0.02)
     (row,) = skc.spread_rows("log3", lead, abs_ne, std, raw, abs_hdg=abs_h + 1.5, std_hdg=std_h)
     assert row["heading_coverage_1sigma"] == 0.0 and row["heading_coverage_2sigma"] == 1.0
+
+
+def test_run_reports_each_models_mean_errors_in_metres_and_degrees(skc, logs, monkeypatch):
+    """run's error rows, with stand-ins for every model: each model's own mean errors at 15,
+    30, 45 and 60 s, the heading in degrees, the starts counted (every 100 s from the 120-s
+    warm-up to 1820 s, the last whose 60 s end before the failure at 1950 s), and no spread
+    exponent for a model without a station-keeping calibration."""
+    vessel, arrays = logs
+
+    class Fitted(_Stub):
+        warm_up_s = 120.0
+        calibration = {}
+
+        def fit(self, training_logs):
+            return self
+
+    monkeypatch.setattr(skc, "DynamicPredictor", lambda v: _Stub(north=4.0))
+    monkeypatch.setattr(skc, "DeadReckoning", lambda v: _Stub(north=0.0))
+    errors, spread = skc.run(arrays, vessel, 100.0, 60.0, hybrid_factory=Fitted)
+    assert set(errors.n_starts) == {18}
+    for model, distance in (("hybrid", np.sqrt(5.0)), ("hybrid_nets_off", np.sqrt(13.0)),
+                            ("dynamic", np.sqrt(20.0)), ("dead_reckoning", 2.0)):
+        rows = errors[errors.model == model]
+        assert list(rows.lead_s) == [15.0, 30.0, 45.0, 60.0] * 3, model
+        np.testing.assert_allclose(rows.distance_m, distance, err_msg=model)
+        np.testing.assert_allclose(rows.heading_deg, np.degrees(0.02), err_msg=model)
+    assert spread.spread_exponent.isna().all()
 
 
 def test_worse_cells_count_each_state_where_the_hybrid_errs_more(skc):
