@@ -7,24 +7,28 @@ import pytest
 from conftest import load_benchmark
 
 
-def _errors(first: float, later: float, n_later: int = 4) -> dict:
-    """:func:`drift_errors`-shaped errors: 20 first starts and ``n_later`` later ones, every state the same."""
-    return {"first": np.full((20, 3), first), "later": np.full((n_later, 3), later)}
+def _errors(first: float, later: float, n_later: int = 4, per_state=(1.0, 1.0, 1.0)) -> dict:
+    """:func:`drift_errors`-shaped errors: 20 first starts and ``n_later`` later ones, each state
+    ``per_state`` times the value (by default every state the same)."""
+    scale = np.asarray(per_state, dtype=float)
+    return {"first": np.full((20, 3), first) * scale, "later": np.full((n_later, 3), later) * scale}
 
 
 def test_a_late_starts_row_is_the_ratio_of_means_to_the_physics_and_dead_reckoning():
     """First 5/20 starts as a ratio of the means over failures to the physics'; the later starts
     pooled over all of them (a failure with more later starts weighs more), with their ratios."""
     ls = load_benchmark("drift_late_starts")
-    err = [_errors(1.0, 2.0, n_later=1), _errors(3.0, 8.0, n_later=3)]      # later pooled: (2 + 3 * 8) / 4 = 6.5
+    per_state = (1.0, 2.0, 4.0)          # the variant's errors differ by state, the references' do not
+    err = [_errors(1.0, 2.0, n_later=1, per_state=per_state),
+           _errors(3.0, 8.0, n_later=3, per_state=per_state)]               # later pooled: (2 + 3 * 8) / 4 = 6.5
     err[0]["first"][:5] = 0.0                                                # first 5: (0 + 3) / 2 = 1.5
     phys = [_errors(2.0, 13.0, n_later=1), _errors(2.0, 13.0, n_later=3)]
     dr = [_errors(4.0, 6.5, n_later=1), _errors(4.0, 6.5, n_later=3)]
     row = ls.table_row("set", "v", "what", err, phys, dr)
-    for state in ls.STATES:
+    for state, f in zip(ls.STATES, per_state, strict=True):
         # first 20: ((15 * 1) / 20 + 3) / 2 = 1.875 over 2
-        assert row[f"{state} first 5/20 (x physics)"] == f"{1.5 / 2:.2f}/{1.875 / 2:.2f}"
-        assert row[f"{state} later (x physics, x DR)"] == "6.50 (0.50, 1.00)"
+        assert row[f"{state} first 5/20 (x physics)"] == f"{f * 1.5 / 2:.2f}/{f * 1.875 / 2:.2f}"
+        assert row[f"{state} later (x physics, x DR)"] == f"{f * 6.5:.2f} ({f * 0.5:.2f}, {f * 1.0:.2f})"
     ref = ls.table_row("set", "physics", "what", phys, phys, dr)
     assert ref[f"{ls.STATES[0]} first 5/20 (x physics)"] == ""
     assert ref[f"{ls.STATES[0]} later (x physics, x DR)"] == "13.00 (1.00, 2.00)"
