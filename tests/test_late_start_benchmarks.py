@@ -62,6 +62,49 @@ def test_the_choice_summary_sums_the_later_ratios_per_set_and_over_the_choice_se
     assert (folder / "late_starts.md").read_text() == markdown_table(df) + "\n\n" + ls.choice_summary(df) + "\n"
 
 
+def test_the_late_coverage_starts_are_the_first_20_samples_and_every_10_s_from_20_s_on():
+    """After the failure at 50 s of a log that ends at 200 s: its first 20 samples, and every 10 s
+    from 70 s to 140 s, the last start with its 60 s in the log."""
+    lc = load_benchmark("drift_late_coverage")
+    t = np.arange(0.0, 201.0)
+    log = pd.DataFrame({"time_s": t, "dp_active": (t < 50.0).astype(int)})
+    starts = lc.starts_after_failure(log)
+    assert starts["first 20 s"] == list(np.arange(50.0, 70.0))
+    assert starts["20 s and later"] == list(np.arange(70.0, 141.0, 10.0))
+
+
+def test_the_late_coverage_score_reads_the_60_s_forecast_against_the_log():
+    """score: at 60 s, the share of north/east errors (pooled) and of wrapped heading errors
+    inside 2 sigma, the mean north/east 1-sigma band, the RMS north/east error and the starts
+    noted as beyond the calibrated ones."""
+    from types import SimpleNamespace
+
+    lc = load_benchmark("drift_late_coverage")
+    t = np.arange(0.0, 200.0)
+    log = pd.DataFrame({"time_s": t, "north_m": t, "east_m": -t, "heading_deg": np.full(200, 179.0)})
+
+    class Stub:
+        def forecast(self, log_, starts, horizon_s):
+            eta = np.zeros((2, 61, 3))
+            std = np.zeros((2, 61, 3))
+            end = np.asarray(starts) + 60.0
+            eta[:, -1, 0] = end + [3.0, -1.0]                    # north errors 3, -1
+            eta[:, -1, 1] = -end + [1.0, 5.0]                    # east errors 1, 5
+            eta[:, -1, 2] = np.radians(-179.0)                   # 2 deg from the logged heading, across the wrap
+            std[:, -1] = [[2.0, 2.4, np.radians(1.5)], [2.0, 2.4, np.radians(0.5)]]
+            return SimpleNamespace(eta=eta, eta_std=std,
+                                   notes=("forecast starts within 20 s of a failure: beyond the calibrated starts",
+                                          "a gap in the log"))
+
+    got = lc.score(Stub(), log, [10.0, 100.0])
+    assert got["starts"] == 2
+    assert got["north/east in 2 sigma"] == pytest.approx(0.75)         # 3 <= 4, 1 <= 4, 1 <= 4.8, not 5
+    assert got["heading in 2 sigma"] == pytest.approx(0.5)             # 2 deg <= 3 deg, not <= 1 deg
+    assert got["mean 1-sigma [m]"] == pytest.approx(2.2)
+    assert got["RMS error [m]"] == pytest.approx(3.0)                  # sqrt((9 + 1 + 1 + 25) / 4)
+    assert got["noted as late"] == 1
+
+
 def test_the_late_coverage_error_table_pools_every_start():
     """Per log the mean of each model's 60-s errors; pooled, the mean over all starts of all logs."""
     lc = load_benchmark("drift_late_coverage")
