@@ -17,6 +17,11 @@ simulator's true low-frequency state, and is given one piece of the truth at a t
   held in NED), which is all station keeping can show of a current;
 * ``wave drift held``: the mean second-order wave load of the last 10 minutes of station
   keeping (``truth_tau_wave2_*``), held in NED;
+* both held rows hold the load as the estimator's default load model does: its
+  acceleration ``M^-1 tau`` turned into NED at the window's headings, averaged, and turned
+  back along the path (not the force held in NED, whose body acceleration would change by
+  up to +-18 % with a turn on the Gunnerus and gain a yaw part through ``M^-1``'s sway-yaw
+  coupling; ``load_model="force"`` in :mod:`hybridship.residual.environment`);
 * the two combinations of those, and the first with the true future wind, and
 * ``true loads and current``: the simulator's own wind and wave-drift loads and current
   sample by sample over the forecast (a ceiling: what is left is the hull model's error).
