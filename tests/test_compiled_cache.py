@@ -2,9 +2,14 @@
 
 from __future__ import annotations
 
+import os
+import shutil
+import subprocess
+import sys
 from pathlib import Path
 
 from hybridship.physics.compiled_cache import (
+    PACKAGE_DIR,
     STAMP_NAME,
     drop_stale_compiled_kernels,
     kernel_source_files,
@@ -53,6 +58,63 @@ def test_a_user_cache_dir_is_left_alone(tmp_path, monkeypatch):
     monkeypatch.setenv("NUMBA_CACHE_DIR", str(tmp_path / "elsewhere"))
     assert not drop_stale_compiled_kernels(pkg)
     assert _cache_files(pkg) == ["hull.f-3.py311.nbi"]
+
+
+#: Cache files numba would write beside two kernel modules in two folders: the hull's, and the
+#: drift-off engine's, which calls the hull kernels from another file and folder.
+_PLANTED = ("physics/__pycache__/hull.hull_forces_scalar-41.py311.nbi",
+            "physics/__pycache__/hull.hull_forces_scalar-41.py311.1.nbc",
+            "driftoff/__pycache__/engine._kernel-218.py311.nbi",
+            "driftoff/__pycache__/engine._kernel-218.py311.1.nbc")
+
+
+def _import_the_physics(pkg: Path) -> None:
+    """Import ``hybridship.physics`` from the copy ``pkg`` in a fresh process, with numba's
+    default in-tree cache (what every kernel module imports first)."""
+    env = {k: v for k, v in os.environ.items() if k != "NUMBA_CACHE_DIR"}
+    env["PYTHONPATH"] = str(pkg.parent)
+    out = subprocess.run([sys.executable, "-c", "import hybridship.physics as p; print(p.__file__)"],
+                         cwd=pkg.parent, env=env, capture_output=True, text=True, check=True).stdout
+    assert Path(out.strip()).is_relative_to(pkg), out       # the copy, not the installed package
+
+
+def _plant(pkg: Path) -> None:
+    for name in _PLANTED:
+        (pkg / name).parent.mkdir(parents=True, exist_ok=True)
+        (pkg / name).write_bytes(b"compiled")
+
+
+def _still_cached(pkg: Path) -> list[str]:
+    return [name for name in _PLANTED if (pkg / name).exists()]
+
+
+def test_importing_the_package_drops_a_cache_made_stale_by_another_kernel_file(tmp_path):
+    """The real package, imported as a user would after a ``git pull`` that changed the hull
+    kernels only: the engine's cached kernel (its own file unchanged, another folder) must go
+    too, and a cache whose sources did not change must be kept and read, not dropped at every
+    start. Kills: the call at the physics package's import removed, a stamp that never
+    matches (each process would compile every kernel anew), the drop confined to one folder."""
+    pkg = tmp_path / "hybridship"
+    shutil.copytree(PACKAGE_DIR, pkg, ignore=shutil.ignore_patterns("__pycache__"))
+    _plant(pkg)
+    _import_the_physics(pkg)
+    assert _still_cached(pkg) == []                 # no stamp yet: caches of unknown sources
+    assert (pkg / "__pycache__" / STAMP_NAME).is_file()
+
+    _plant(pkg)
+    _import_the_physics(pkg)
+    assert _still_cached(pkg) == list(_PLANTED)     # nothing changed: the cache is kept
+    _import_the_physics(pkg)
+    assert _still_cached(pkg) == list(_PLANTED)
+
+    with open(pkg / "physics" / "hull.py", "a", encoding="utf-8") as fh:
+        fh.write("\n# an edit of the hull kernels' file alone\n")
+    _import_the_physics(pkg)
+    assert _still_cached(pkg) == []                 # every kernel module's cache, in every folder
+
+    _plant(pkg)                                     # numba caches the new kernels: kept from now on
+    _import_the_physics(pkg)
+    assert _still_cached(pkg) == list(_PLANTED)
 
 
 def test_the_package_s_kernel_modules_are_all_covered():
