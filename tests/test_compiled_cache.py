@@ -123,13 +123,31 @@ def test_the_package_s_kernel_modules_are_all_covered():
             "driftoff/engine.py"} <= names
 
 
-def test_compiling_the_kernels_or_loading_them_from_the_cache_gives_the_same_bits():
+def test_compiling_the_kernels_or_loading_them_from_the_cache_gives_the_same_bits(monkeypatch):
     """A rollout of the Esso Osaka model (rudder kernels with fused multiply-add) differed in
     its last bits between a run that compiled the kernels and one that loaded them; the same
-    command must give the same table either way (``benchmarks/compile_cache_determinism.py``)."""
+    command must give the same table either way (``benchmarks/compile_cache_determinism.py``).
+    Equal bits say nothing unless the second run did load: the first run must have written
+    the kernels' cache files, and the second left every one as it was (none dropped,
+    recompiled or rewritten), or both runs compiled."""
     from conftest import load_benchmark
 
-    compiled, loaded, gaps = load_benchmark("compile_cache_determinism").compiled_and_loaded()
+    bench = load_benchmark("compile_cache_determinism")
+    run, cached = bench._run, []
+
+    def run_then_list_the_cache(copy, tag):
+        rows = run(copy, tag)
+        cached.append({p.relative_to(copy).as_posix(): (p.stat().st_mtime_ns, p.read_bytes())
+                       for p in sorted(copy.rglob("*.nb[ic]"))})
+        return rows
+
+    monkeypatch.setattr(bench, "_run", run_then_list_the_cache)
+    compiled, loaded, gaps = bench.compiled_and_loaded()
+    written = {name.split("-")[0] for name in cached[0]}
+    assert {f"hybridship/physics/__pycache__/{kernel}" for kernel in (
+        "integrate.rollout_batch", "rhs.dynamics_batch", "rudder.rudder_forces_scalar")} <= written, sorted(written)
+    assert cached[1].keys() == cached[0].keys()
+    assert [name for name in cached[0] if cached[1][name] != cached[0][name]] == []
     assert [row[0] for row in compiled] == ["gunnerus", "esso_osaka_model", "simulator"]
     assert compiled == loaded, gaps
     assert max(gaps.values()) == 0.0
