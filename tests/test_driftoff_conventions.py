@@ -85,13 +85,18 @@ def test_wind_direction_off_the_bow():
     np.testing.assert_allclose(np.degrees(r.weather_rel_rad), [90.0, 60.0])
 
 
-def test_weather_table_round_trip_keeps_every_direction():
+def test_weather_table_round_trip_keeps_every_field():
     """Kills: the wind direction read from the wave column (W3); the existing round trip
-    checks the wave direction only."""
+    checks the wave direction only. Every field goes through, each with a value of its own
+    (none the default): an optional gust_intensity column left unread gave the default 0.1,
+    which a state with the default did not show."""
     s = [WeatherState.from_degrees(wind_speed_m_s=5.0, wind_dir_deg=10.0, hs_m=1.0, tp_s=7.0, wave_dir_deg=20.0,
-                                   current_m_s=0.3, current_dir_deg=200.0)]
+                                   current_m_s=0.3, current_dir_deg=200.0, gust_intensity=0.25)]
     back, _ = read_weather_table(states_to_frame(s))
-    for f in ("wind_dir_from_rad", "wave_dir_from_rad", "current_dir_to_rad", "wind_speed_m_s", "current_speed_m_s"):
+    fields = [f.name for f in dataclasses.fields(WeatherState)]
+    assert len(fields) == 8 and len({getattr(s[0], f) for f in fields}) == 8
+    assert all(getattr(s[0], f) != getattr(WeatherState(), f) for f in fields)
+    for f in fields:
         assert math.isclose(getattr(back[0], f), getattr(s[0], f), abs_tol=1e-12), f
 
 
