@@ -63,8 +63,14 @@ def test_environment_from_log_names_its_seed_and_takes_numpy_numbers():
     log = physics_log(DynamicModel("gunnerus"), duration_s=1000.0, t_shutdown_s=None, seed=1)
     with pytest.raises(ValueError, match="^seed: expected a whole number >= 0, got None"):
         environment_from_log(log, seed=None)
-    est = environment_from_log(log, window_s=np.int64(900), n_members=2)
-    assert np.isfinite(est.eta).all()
+    # a numpy integer is taken as the number it is: the estimate of the same window given as a
+    # float, not the default 900 s window's (a window left unused passed with np.int64(900))
+    est = environment_from_log(log, window_s=np.int64(600), n_members=2)
+    same = environment_from_log(log, window_s=600.0, n_members=2)
+    default = environment_from_log(log, n_members=2)
+    np.testing.assert_array_equal(est.accel_members, same.accel_members)
+    np.testing.assert_array_equal(est.current_members_ned_m_s, same.current_members_ned_m_s)
+    assert np.isfinite(est.accel_members).all() and not np.array_equal(est.accel_members, default.accel_members)
     from hybridship.logs.io import LogFormatWarning
 
     with pytest.warns(LogFormatWarning, match="^my_log.csv: ignoring 1 column"):     # the log named as given
