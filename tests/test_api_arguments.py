@@ -89,13 +89,20 @@ def test_synthetic_log_settings_are_checked(kw, field):
         physics_log("gunnerus")
 
 
-def test_calibrate_after_stop_names_its_own_arguments():
-    """Its settings are checked before any forecast, and a settings dict is taken as the
-    constructor takes one."""
+def test_calibrate_after_stop_names_its_own_arguments(monkeypatch):
+    """Its settings are checked before any forecast (a forecast fails the test: a bad ``cal``
+    checked only after the logs' forecasts was refused by name all the same), and a
+    settings dict is taken as the constructor takes one."""
+    from hybridship.predictors import hybrid
+
     hp = HybridPredictor("gunnerus", ensemble_config=EnsembleConfig(n_members=2, max_epochs=2, seed=0))
     model = DynamicModel("gunnerus")
     logs = [physics_log(model, duration_s=700.0, t_shutdown_s=500.0, seed=s) for s in (1, 2)]
     hp.fit(logs)
+
+    def no_forecast_yet(*args, **kwargs):
+        raise RuntimeError("a forecast ran before the arguments were checked")
+    monkeypatch.setattr(hybrid, "drift_forecasts", no_forecast_yet)
     for kw, field in ((dict(n_intervals=0), "n_intervals"), (dict(n_intervals=2.5), "n_intervals"),
                       (dict(horizon_s=0.0), "horizon_s"), (dict(horizon_s=0.4), "horizon_s"),
                       (dict(cal={"sigmaa": 2}), "cal")):
