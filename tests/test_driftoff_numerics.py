@@ -109,17 +109,20 @@ def test_each_seed_and_state_index_has_a_stream_of_its_own():
 
 def test_time_to_reach_is_the_linear_interpolation_of_the_track_between_steps():
     """First passage of each radius: the step whose end is first at or beyond it, the time
-    interpolated linearly in the distance over that step (module notes of the engine)."""
-    radii = (3.0, 5.0, 10.0)
-    st = DriftOffSettings(n_samples=1, horizon_s=90.0, radii_m=radii, reaction_times_s=(30.0,), vessel_spread=0.0)
+    interpolated linearly in the distance over that step (module notes of the engine). In
+    steps of 0.5 s, so that a time counted in steps (or a fraction not scaled by the step)
+    shows."""
+    radii, dt = (3.0, 5.0, 10.0), 0.5
+    st = DriftOffSettings(n_samples=1, horizon_s=90.0, dt_s=dt, radii_m=radii, reaction_times_s=(30.0,),
+                          vessel_spread=0.0)
     r = simulate_blackouts("gunnerus", BEAM, [0.0], settings=st, keep_tracks=True)
     rad = np.hypot(r.tracks[0, 0, :, 0], r.tracks[0, 0, :, 1])
     for k, radius in enumerate(radii):
         j = int(np.argmax(rad >= radius))          # first step end at or beyond the radius
         assert 0 < j and rad[j - 1] < radius
-        want = (j - 1) + (radius - rad[j - 1]) / (rad[j] - rad[j - 1])
+        want = dt * ((j - 1) + (radius - rad[j - 1]) / (rad[j] - rad[j - 1]))
         assert r.t_reach_s[0, 0, k] == pytest.approx(want, rel=1e-9)
-        assert j - 1 < r.t_reach_s[0, 0, k] <= j
+        assert dt * (j - 1) < r.t_reach_s[0, 0, k] <= dt * j
 
 
 def test_the_drift_is_integrated_to_fourth_order_in_the_step():
@@ -156,13 +159,25 @@ def test_the_excursion_up_to_a_reaction_time_agrees_with_the_passage_times():
     the track interpolated in it (as the passage times are): 10 m so far, back at 5 m when the
     step starts and out at 12 m when it ends, the track is at 8.5 m halfway, so the excursion
     up to then is 10 m, and 11 m is first passed later in the step (it was 11 m, "reached"
-    before the radius was)."""
-    reached, done = np.zeros(1, dtype=bool), np.zeros(1, dtype=bool)
-    t_reach, exc = np.full(1, np.inf), np.zeros(1)
-    engine._record_passages(12.0, 5.0, 10.0, 0.0, 1.0, np.array([11.0]), np.array([0.5]), reached, done,
-                            t_reach, exc)
-    assert t_reach[0] == pytest.approx(6.0 / 7.0) and t_reach[0] > 0.5
-    assert exc[0] == 10.0
+    before the radius was). The step is 0.5 s from 3 s, not 1 s from 0: fractions of it
+    taken as seconds, or times counted from 0, show."""
+    def step(farthest_before, radius, t0=3.0, dt=0.5):
+        """The step from ``t0`` to ``t0 + dt`` (5 m to 12 m), reaction time halfway through it."""
+        reached, done = np.zeros(1, dtype=bool), np.zeros(1, dtype=bool)
+        t_reach, exc = np.full(1, np.inf), np.zeros(1)
+        engine._record_passages(12.0, 5.0, farthest_before, t0, dt, np.array([radius]), np.array([t0 + 0.5 * dt]),
+                                reached, done, t_reach, exc)
+        assert reached[0] and done[0]
+        return t_reach[0], exc[0]
+
+    t_reach, exc = step(10.0, 11.0)
+    assert t_reach == pytest.approx(3.0 + 0.5 * 6.0 / 7.0) and t_reach > 3.25
+    assert exc == 10.0
+    # the step is 0.5 s long, starting at 3 s: the passage of 7 m is 2/7 of it in, and with
+    # 6 m the farthest before, the track halfway (8.5 m) is the excursion
+    t_reach, exc = step(6.0, 7.0)
+    assert t_reach == pytest.approx(3.0 + 0.5 * 2.0 / 7.0)
+    assert exc == pytest.approx(8.5)
 
 
 def test_keeping_the_tracks_changes_no_number():
