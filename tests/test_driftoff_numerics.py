@@ -84,6 +84,28 @@ def test_thrusters_that_never_spin_down_keep_her_on_station():
     assert held.excursion_m[0, 0, 0] < 0.5 < 3.0 < lost.excursion_m[0, 0, 0]
 
 
+def test_the_holding_load_fades_as_the_thrust_does_with_the_square_of_the_rpm():
+    """At the blackout the holding load H cancels the environment (M a_env = -H at rest) and
+    then fades as the thrust, (rpm / rpm0)^2 = exp(-2 t / tau) (engine notes): the net
+    acceleration is a_env (1 - exp(-2 t / tau)), and while she barely moves (no damping yet)
+    she is at a_env g(t), g(t) = t^2 / 2 - tau t / 2 + tau^2 (1 - exp(-2 t / tau)) / 4,
+    after t; a_env from the model's own acceleration at rest in the same wind, thrusters
+    off. A load fading as the rpm (exp(-t / tau)) leaves her about half as far."""
+    from hybridship.driftoff.planning import get_model
+
+    model = get_model("gunnerus")
+    az = [t.fixed_angle_rad for t in model.vessel.thrusters]
+    a_env = model.acceleration(np.zeros(3), np.zeros(3), rpm=np.zeros(len(az)), azimuth_rad=az,
+                               wind=[BEAM.wind_speed_m_s, BEAM.wind_dir_from_rad])[0]
+    assert a_env[1] < -0.01                           # a beam wind from starboard pushes her to port
+    t, tau = 1.0, 10.0
+    st = DriftOffSettings(n_samples=1, horizon_s=t, dt_s=0.05, radii_m=(100.0,), reaction_times_s=(t,),
+                          vessel_spread=0.0, rpm_time_constant_s=tau)
+    end = simulate_blackouts("gunnerus", BEAM, [0.0], settings=st, keep_tracks=True).tracks[0, 0, -1]
+    g = t**2 / 2.0 - tau * t / 2.0 + tau**2 * (1.0 - math.exp(-2.0 * t / tau)) / 4.0
+    np.testing.assert_allclose(end, a_env * g, rtol=0.02)      # north, east (heading 0: surge, sway), heading
+
+
 def test_a_spread_of_zero_is_reported_as_the_nominal_model():
     """The report's vessel spread: "none" when it draws nothing, as for spread 0."""
     from hybridship.driftoff.planning import get_model
