@@ -146,15 +146,22 @@ def test_physics_inputs_frames_and_channel_names_are_named_in_plain_words():
         validate_log(log, channel_names="port")
 
 
-def test_season_sweep_quantile_and_labels_are_checked():
+def test_season_sweep_quantile_and_labels_are_checked(monkeypatch):
+    """Before any state is simulated (a simulation fails the test): without the sweep's own
+    check, a bad quantile was refused by the first state's watch circle, in the same words,
+    after that state's blackouts had run."""
+    from hybridship.driftoff import season
     from hybridship.driftoff.season import season_sweep
     from hybridship.driftoff.weather import WeatherState
 
+    def no_simulation_yet(*args, **kwargs):
+        raise RuntimeError("a state was simulated before the arguments were checked")
+    monkeypatch.setattr(season, "simulate_blackouts", no_simulation_yet)
     states = [WeatherState(), WeatherState()]
     for kw, field in ((dict(quantile=None), "quantile"), (dict(quantile="0.9"), "quantile"),
                       (dict(labels=["a", "a"]), "labels: expected distinct")):
         with pytest.raises(ValueError, match=f"^{field}"):
-            season_sweep("gunnerus", states, [0.0], scheduler="none", **kw)
+            season_sweep("gunnerus", states, [0.0], progress=False, **kw)   # in this process
 
 
 def test_simulate_blackouts_refuses_a_text_flag():
