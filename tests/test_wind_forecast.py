@@ -375,13 +375,24 @@ def test_wind_futures_widen_the_spread_and_leave_the_forecast(wind_spread_model,
     # the members' spread and the wind term add in quadrature: the wind term alone, by hand, at
     # every lead and in heading too (the rollouts' heading on the circle)
     extra = np.sqrt(np.maximum(with_wind.eta_std ** 2 - members.eta_std ** 2, 0.0))
-    manual = []
-    for path in hp.wind_error_paths:
-        shifted = HybridPredictor.load(tmp_path / "w.npz")
-        shifted.wind_samples, shifted.wind_error_paths = 0, None
-        from hybridship.forecast_inputs.wind import WindForecast as _WF
+    manual = _wind_term_by_hand(hp, tmp_path / "w.npz", log, starts, members, hp.wind_error_paths)
+    np.testing.assert_allclose(extra, manual, rtol=1e-6, atol=1e-9)
+    assert np.all(extra[:, -1] > 0)                                         # the wind's future adds spread
+    calm = HybridPredictor.load(tmp_path / "w.npz")
+    calm.wind_error_paths = np.zeros_like(calm.wind_error_paths)             # a wind forecast that never errs
+    np.testing.assert_allclose(calm.forecast(log, starts, 60.0, calibrated=False).eta_std, members.eta_std,
+                               atol=1e-9)
 
-        class Plus(_WF):                  # the forecast wind plus this one path
+
+def _wind_term_by_hand(hp, saved, log, starts, members, paths):
+    """The wind futures' spread by hand: the RMS over ``paths`` of how far the members' mean
+    forecast moves when the forecast wind gets one path added (heading on the circle)."""
+    manual = []
+    for path in paths:
+        shifted = HybridPredictor.load(saved)
+        shifted.wind_samples, shifted.wind_error_paths = 0, None
+
+        class Plus(WindForecast):                  # the forecast wind plus this one path
             def steps(self, *a, **k):
                 base = hp.wind_forecast.steps(*a, **k)
                 v = _vec(np.broadcast_to(base, (base.shape[0], a[4], 2))) + path[None, :a[4]]
@@ -391,12 +402,7 @@ def test_wind_futures_widen_the_spread_and_leave_the_forecast(wind_spread_model,
         d = shifted.forecast(log, starts, 60.0, calibrated=False).eta - members.eta
         d[..., 2] = np.angle(np.exp(1j * d[..., 2]))
         manual.append(d)
-    np.testing.assert_allclose(extra, np.sqrt(np.mean(np.square(manual), axis=0)), rtol=1e-6, atol=1e-9)
-    assert np.all(extra[:, -1] > 0)                                         # the wind's future adds spread
-    calm = HybridPredictor.load(tmp_path / "w.npz")
-    calm.wind_error_paths = np.zeros_like(calm.wind_error_paths)             # a wind forecast that never errs
-    np.testing.assert_allclose(calm.forecast(log, starts, 60.0, calibrated=False).eta_std, members.eta_std,
-                               atol=1e-9)
+    return np.sqrt(np.mean(np.square(manual), axis=0))
 
 
 def test_wind_futures_enter_the_calibration_and_edge_cases(wind_spread_model, model, tmp_path):
@@ -424,23 +430,10 @@ def test_wind_futures_follow_the_paths_time_on_a_log_at_another_step(wind_spread
         plain = HybridPredictor.load(hp.save(tmp_path / "w.npz"))
         plain.wind_samples = 0
         members = plain.forecast(coarse, starts, 60.0, calibrated=False)
-        manual = []
-        for path in hp.wind_error_paths[:, ::2]:
-            shifted = HybridPredictor.load(tmp_path / "w.npz")
-            shifted.wind_samples, shifted.wind_error_paths = 0, None
-
-            class Plus(WindForecast):                  # the forecast wind plus every other step of the path
-                def steps(self, *a, **k):
-                    base = hp.wind_forecast.steps(*a, **k)
-                    v = _vec(np.broadcast_to(base, (base.shape[0], a[4], 2))) + path[None, :a[4]]
-                    return np.stack([np.hypot(v[..., 0], v[..., 1]), np.arctan2(v[..., 1], v[..., 0])], axis=-1)
-            shifted.wind_forecast = Plus(mean_window_s=hp.wind_forecast.mean_window_s,
-                                         time_constant_s=hp.wind_forecast.time_constant_s)
-            d = shifted.forecast(coarse, starts, 60.0, calibrated=False).eta - members.eta
-            d[..., 2] = np.angle(np.exp(1j * d[..., 2]))
-            manual.append(d)
+        # every other step of each path: the paths' 1-s time on the 2-s log
+        manual = _wind_term_by_hand(hp, tmp_path / "w.npz", coarse, starts, members, hp.wind_error_paths[:, ::2])
     extra = np.sqrt(np.maximum(with_wind.eta_std ** 2 - members.eta_std ** 2, 0.0))
-    np.testing.assert_allclose(extra, np.sqrt(np.mean(np.square(manual), axis=0)), rtol=1e-6, atol=1e-9)
+    np.testing.assert_allclose(extra, manual, rtol=1e-6, atol=1e-9)
 
 
 def test_wind_futures_are_error_paths_of_the_training_rows_only(wind_spread_model, model):
