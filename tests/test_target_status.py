@@ -81,6 +81,21 @@ def test_manoeuvre_targets_read_their_own_rows(ts):
     assert st["missed"] == ["heading"] and st["below"] == 20 and st["coverage"] == {10.0: 0.95, 30.0: 0.95}
 
 
+@pytest.mark.parametrize("coverage", [0.90, 0.98])
+def test_the_targets_edges_are_judged_as_stated(ts, coverage):
+    """The targets as the module states them, at their edges: a hybrid *equal* to the physics
+    is not worse than it (``never worse``), but not *below* it in an Esso cell (``below the
+    physics'``); a coverage of exactly 0.90 or 0.98 is in the band (``covers 0.90-0.98``)."""
+    st = ts.drift_status(_drift_errors(lambda s, w, h: 1.0 if h == 15 else 0.3), coverage)
+    assert st["worse"] == 0 and st["missed"] == []
+    errors, cov = _esso(0.6, coverage=coverage)
+    tie = (errors.model == "hybrid") & (errors.kind == "random") & (errors.state == "distance_m") \
+        & (errors.horizon_s == 5.0)
+    errors.loc[tie, "mae"] = 1.0                                   # the physics' 1.0: a tie, not below
+    st = ts.manoeuvre_status(errors, cov, "known")
+    assert st["below"] == 19 and st["missed"] == ["every cell"]
+
+
 @pytest.mark.parametrize("change", ["nan", "cell", "model"])
 def test_a_result_that_cannot_be_judged_is_an_error_naming_it(ts, change):
     e = _drift_errors(lambda s, w, h: 0.3)
