@@ -27,13 +27,17 @@ def test_the_decisions_file_has_a_row_per_fit_and_counts_what_was_kept(tmp_path)
     checked = {"learned_mean": [0.48, -0.09, -0.14], "learned_std": [0.1, 0.1, 0.2], "n_failures": 5,
                "horizon_s": 60.0, "kept": False, "position_error_m": [1.433, 1.4334],
                "heading_error_deg": [1.96, 2.0], "position_p_value": 0.5, "heading_p_value": 0.7}
+    # a hull's yaw moment chosen on too few failures to pass the left-out check: chosen, not kept
+    obj3 = np.tile(np.abs(MUNK_MULTIPLES - 0.65)[:, None], (1, 3)) + np.linspace(0.0, 0.01, 3)
+    unkept_hull = {**choose_coefficient(obj3, 0.005).as_dict(), "horizon_s": 60.0, "start_every_s": 10.0}
+    assert not unkept_hull["adopted"]
     few = {"learned_mean": [0.1, 0.0, 0.0], "learned_std": [0.1, 0.1, 0.2], "n_failures": 2, "horizon_s": 60.0,
            "kept": False}
     decisions = [dp.decision("a", "paper", "all", _fit(dp_only=True, uses_drift_hull=False)),
                  dp.decision("a", "fleet_default", "log0", _fit(kept_hull, dp_only=True)),
                  dp.decision("a", "fleet", "log0", _fit(kept_hull, checked)),
                  dp.decision("b", "fleet", "s0", _fit(None, few)),
-                 dp.decision("b", "sim_pretrain", "all", _fit(None, {**few, "kept": True}))]
+                 dp.decision("b", "sim_pretrain", "all", _fit(unkept_hull, {**few, "kept": True}))]
     text = dp.decisions_markdown(decisions)
     lines = text.splitlines()
     rows = [x for x in lines if x.startswith("| ") and not x.startswith("| ---")]
@@ -44,11 +48,12 @@ def test_the_decisions_file_has_a_row_per_fit_and_counts_what_was_kept(tmp_path)
     assert "not kept: learned (+0.48, -0.09, -0.14) with 5 failures" in rows[3]
     assert "position 1.433 m against 1.433 m, heading 2.00 deg against 1.96 deg" in rows[3]
     assert "not chosen (fewer than 5 failures)" in rows[4] and "fewer than the 5 the check needs" in rows[4]
+    assert "0.65 x Munk on 3 failures, not kept: heading " in rows[5]
     assert lines[-2:] == [
         "* a: thrust error kept in 0 of 1 fit that learned it; hull's yaw moment in a drift kept in 2 of 2 "
         "fits that chose one.",
-        "* b: thrust error kept in 1 of 2 fits that learned it; hull's yaw moment in a drift kept in 0 of 0 "
-        "fits that chose one."]
+        "* b: thrust error kept in 1 of 2 fits that learned it; hull's yaw moment in a drift kept in 0 of 1 "
+        "fit that chose one."]                             # counts the kept, not the chosen
     assert text.endswith(".\n")
 
 
