@@ -28,6 +28,24 @@ def test_angles_and_rates_are_in_degrees(log):
     np.testing.assert_allclose(log["wind_dir_deg"], 210.0)
 
 
+def test_velocities_are_in_the_body_frame_and_the_truth_accelerations_are_their_rates(log):
+    """``u_m_s``/``v_m_s`` turned into NED with the heading are the positions' rates, and the
+    ``truth_*_dot`` columns are the rates of ``u``, ``v`` and ``r`` in the units their names
+    give (``rad/s2`` for the yaw, where ``r_deg_s`` is in deg/s)."""
+    t = log["time_s"].to_numpy()
+    psi = np.radians(log["heading_deg"].to_numpy())
+    u, v = log["u_m_s"].to_numpy(), log["v_m_s"].to_numpy()
+    r = np.radians(log["r_deg_s"].to_numpy())
+    pairs = [(np.gradient(log["north_m"].to_numpy(), t), u * np.cos(psi) - v * np.sin(psi)),
+             (np.gradient(log["east_m"].to_numpy(), t), u * np.sin(psi) + v * np.cos(psi)),
+             (np.gradient(u, t), log["truth_u_dot_m_s2"].to_numpy()),
+             (np.gradient(v, t), log["truth_v_dot_m_s2"].to_numpy()),
+             (np.gradient(r, t), log["truth_r_dot_rad_s2"].to_numpy())]
+    for numeric, logged in pairs:
+        assert logged.std() > 0                         # moving: the check below means something
+        assert np.median(np.abs(numeric - logged)) < 0.05 * logged.std()
+
+
 def test_power_is_lost_at_the_shutdown_time(log):
     """``dp_active`` is 1 before ``t_shutdown_s`` and 0 from the sample at it on; no rpm after it."""
     t = log["time_s"].to_numpy()
