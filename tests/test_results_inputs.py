@@ -23,6 +23,8 @@ def test_some_result_records_its_inputs():
 def test_a_derived_result_was_made_from_the_committed_inputs(record):
     meta = json.loads(record.read_text(encoding="utf-8"))
     assert (record.parent / meta["output"]).is_file(), f"{record}: its output {meta['output']} is missing"
+    # a record naming no input would pass below whatever changed upstream
+    assert meta["made_from"], f"{record}: names no input, so it cannot tell when its output is stale"
     for rel, sha in meta["made_from"].items():
         path = record.parent / rel
         assert path.is_file(), f"{record}: input {rel} is missing"
