@@ -98,14 +98,20 @@ def test_yaw_load_factor_follows_sin_2_beta_and_holds_without_an_axis():
 
 
 def test_corrected_step_turns_only_the_yaw_part_of_the_bias():
-    eta1, nu1 = np.array([[0.0, 0.0, np.radians(40.0)]]), np.zeros((1, 3))
-    bias = np.array([[[1e-3, 2e-3, 1e-4]]])
-    axis = np.array([[np.radians(40.0), 0.5]])                                      # the ship now in head seas
-    z = np.zeros((1, 1, 3))
-    held = _corrected_step(eta1, nu1, z, bias, 1.0, np.zeros((1, 1, 3)), np.zeros((1, 1, 3)))
-    turned = _corrected_step(eta1, nu1, z, bias, 1.0, np.zeros((1, 1, 3)), np.zeros((1, 1, 3)), axis)
+    """Two starts at heading 40 deg: one now in head seas (factor 0), one 30 deg the other
+    side of the waves, where the load changes sign and grows: ``sin(-60 deg) / 0.5``."""
+    eta1, nu1 = np.array([[0.0, 0.0, np.radians(40.0)]] * 2), np.zeros((2, 3))
+    bias = np.array([[[1e-3, 2e-3, 1e-4]] * 2])
+    axis = np.array([[np.radians(40.0), 0.5], [np.radians(10.0), 0.5]])
+    z = np.zeros((1, 2, 3))
+    held = _corrected_step(eta1, nu1, z, bias, 1.0, np.zeros((1, 2, 3)), np.zeros((1, 2, 3)))
+    turned = _corrected_step(eta1, nu1, z, bias, 1.0, np.zeros((1, 2, 3)), np.zeros((1, 2, 3)), axis)
     np.testing.assert_allclose(turned[1][:, :2], held[1][:, :2])
-    assert held[1][0, 2] == pytest.approx(1e-4) and turned[1][0, 2] == pytest.approx(0.0, abs=1e-15)
+    np.testing.assert_allclose(turned[0][:, :2], held[0][:, :2])
+    np.testing.assert_allclose(held[1][:, 2], 1e-4)
+    assert turned[1][0, 2] == pytest.approx(0.0, abs=1e-15)
+    assert turned[1][1, 2] == pytest.approx(1e-4 * np.sin(np.radians(-60.0)) / 0.5)      # -1.73 x held
+    assert turned[0][1, 2] - eta1[1, 2] == pytest.approx(0.5 * turned[1][1, 2])             # eta += dt^2 / 2 r
 
 
 def test_the_hybrid_turns_the_held_yaw_load_after_a_failure_only_with_the_option(model, tmp_path):
