@@ -65,6 +65,16 @@ def test_no_axis_without_a_directed_wave_motion_or_enough_station_keeping():
     assert wave_axis(t, np.zeros(t.size), u, v) is None
 
 
+def test_only_the_last_window_s_gives_the_axis():
+    """A sea along 100 deg ten minutes ago is left out: the last ``window_s`` moves along 30 deg."""
+    t, u_old, v_old = _wave_motion(1200, 100.0, seed=2)
+    _, u_new, v_new = _wave_motion(1200, 30.0, seed=3)
+    old = t < 600.0
+    u, v = np.where(old, u_old, u_new), np.where(old, v_old, v_new)
+    axis = wave_axis(t, np.zeros(t.size), u, v, window_s=500.0)
+    assert axis is not None and abs(np.degrees(axis.axis_ned_rad) - 30.0) < 1.0
+
+
 def test_no_axis_when_the_sampling_cannot_resolve_the_wave_band():
     """Samples every 2 s put the Nyquist period at 4 s, above the band's shortest (3.5 s): no axis."""
     t, u, v = _wave_motion(1200, 30.0)
