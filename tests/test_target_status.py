@@ -96,12 +96,13 @@ def test_the_targets_edges_are_judged_as_stated(ts, coverage):
     assert st["below"] == 19 and st["missed"] == ["every cell"]
 
 
-@pytest.mark.parametrize("change", ["nan", "cell", "model"])
+@pytest.mark.parametrize("change", ["nan", "zero", "cell", "model"])
 def test_a_result_that_cannot_be_judged_is_an_error_naming_it(ts, change):
     e = _drift_errors(lambda s, w, h: 0.3)
     hybrid_15 = (e.model == "hybrid") & (e.horizon_s == 15)
-    e = {"nan": e.assign(mae=e.mae.where(~hybrid_15)), "cell": e[~hybrid_15],
-         "model": e[e.model != "hybrid"]}[change]
+    e = {"nan": e.assign(mae=e.mae.where(~hybrid_15)),
+         "zero": e.assign(mae=e.mae.where(~hybrid_15, 0.0)),      # a ratio of 0 would meet every target
+         "cell": e[~hybrid_15], "model": e[e.model != "hybrid"]}[change]
     with pytest.raises(ValueError, match="some/errors.csv: "):
         ts.drift_status(e, 0.95, "some/errors.csv")
     errors, cov = _esso(0.6)
