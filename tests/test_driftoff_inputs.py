@@ -46,11 +46,16 @@ def test_live_bad_wind_of_an_estimate_names_the_estimates_field(change, field):
 def test_live_members_given_as_lists_are_taken_as_arrays():
     """_check_estimate accepts any array-like; the blackouts then read it as an array too
     (it raised AttributeError: 'list' object has no attribute 'shape')."""
-    as_list = blackout_now(dataclasses.replace(ESTIMATE, accel_members=[[0.0, 0.0, 0.0]], nu=[0.0, 0.0, 0.0]),
-                           "gunnerus", SMALL)
-    as_array = blackout_now(ESTIMATE, "gunnerus", SMALL)
+    members, nu = [[2e-3, -1e-3, 1e-5]], [0.1, 0.05, 0.002]          # not zeros: read, not replaced
+    as_list = blackout_now(dataclasses.replace(ESTIMATE, accel_members=members, nu=nu), "gunnerus", SMALL)
+    as_array = blackout_now(dataclasses.replace(ESTIMATE, accel_members=np.array(members), nu=np.array(nu)),
+                            "gunnerus", SMALL)
     np.testing.assert_array_equal(as_list.t_reach_s, as_array.t_reach_s)
     np.testing.assert_array_equal(as_list.excursion_m, as_array.excursion_m)
+    for change in (dict(accel_members=np.zeros((1, 3))), dict(nu=Z3)):   # each of them moves the ship
+        zero = blackout_now(dataclasses.replace(ESTIMATE, **{"accel_members": np.array(members),
+                                                             "nu": np.array(nu), **change}), "gunnerus", SMALL)
+        assert not np.allclose(zero.excursion_m, as_list.excursion_m)
 
 
 def test_a_local_cluster_is_closed_when_its_client_cannot_start(monkeypatch):
