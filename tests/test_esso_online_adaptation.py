@@ -81,3 +81,87 @@ def test_the_choice_table_has_a_column_per_gain_and_names_the_lowest_distance(oa
     md = oa._choice_md(pd.DataFrame(rows, columns=["decay", "dof", "tau_s", "gain", "distance_m", "heading_deg"]))
     assert "| held | all | 10 | 0.4500 / 9.300 | 0.4400 / 9.000 | 0.4600 / 9.000 |" in md
     assert md.endswith("Chosen (lowest distance): held, all: tau 10 s, gain 0.5.")
+
+
+def _weighted_mean_by_hand(err, seg, dt_s, tau_s, i):
+    """The weighted mean of the finite rows of row ``i``'s segment up to ``i``: weight
+    ``(1 - a)^(i - j)`` on row ``j``, ``a = 1 - exp(-dt / tau)`` (NaN without such a row)."""
+    q = np.exp(-dt_s / tau_s)
+    js = [j for j in range(i + 1) if seg[j] == seg[i] and np.isfinite(err[j]).all()]
+    if not js:
+        return np.full(3, np.nan)
+    w = q ** (i - np.array(js, float))
+    return (w[:, None] * err[js]).sum(0) / w.sum()
+
+
+def test_explained_and_autocorrelation_match_a_row_by_row_count(oa):
+    """Every fraction of :func:`explained` (and the pooled autocorrelation) against a plain loop
+    over the rows, on two logs with two segments and missing rows: the mean is the one known
+    ``delay`` rows before the row (in its segment), each future row is in the segment too."""
+    rng = np.random.default_rng(4)
+    logs = []
+    for n, cut in ((70, 30), (45, 20)):
+        e = 0.3 + np.cumsum(rng.normal(size=(n, 3)), axis=0) * 0.2 + rng.normal(size=(n, 3))
+        e[[7, cut + 3]] = np.nan
+        logs.append((e, (np.arange(n) >= cut).astype(int)))
+    dt, tau, delay, horizon = 0.5, 2.0, 3, 4
+    got = oa.explained(logs, dt, tau, delay, horizon)
+
+    nxt, fut, mean = [], [], []         # pairs (next row, mean) and (future rows, mean)
+    for e, seg in logs:
+        n = len(e)
+        for i in range(n):
+            if i - delay < 0 or seg[i - delay] != seg[i]:
+                continue
+            m = _weighted_mean_by_hand(e, seg, dt, tau, i - delay)
+            if not np.isfinite(m).all():
+                continue
+            if i + 1 < n and seg[i + 1] == seg[i] and np.isfinite(e[i + 1]).all():
+                nxt.append((e[i + 1], m))
+            rows = np.arange(i + 1, i + horizon + 1)
+            if rows[-1] < n and (seg[rows] == seg[i]).all() and np.isfinite(e[rows]).all():
+                fut.append((e[rows], m))
+    e1 = np.array([p for p, _ in nxt])
+    m1 = np.array([m for _, m in nxt])
+    f = np.array([p for p, _ in fut])                                # (starts, H, 3)
+    m = np.array([m for _, m in fut])                                # (starts, 3)
+    fbar = f.mean(1)
+    em, mm = (f * m[:, None]).sum((0, 1)), horizon * (m ** 2).sum(0)
+    want = {"next": 1 - ((e1 - m1) ** 2).sum(0) / (e1 ** 2).sum(0),
+            "ahead": 1 - ((f - m[:, None]) ** 2).sum((0, 1)) / (f ** 2).sum((0, 1)),
+            "ahead_best": em ** 2 / (mm * (f ** 2).sum((0, 1))), "gain": em / mm,
+            "mean": 1 - ((fbar - m) ** 2).sum(0) / (fbar ** 2).sum(0),
+            "mean_best": (fbar * m).sum(0) ** 2 / ((m ** 2).sum(0) * (fbar ** 2).sum(0)),
+            "mean_rms": np.sqrt((fbar ** 2).mean(0))}
+    assert sorted(got) == sorted(want)
+    for key in want:
+        np.testing.assert_allclose(got[key], want[key], rtol=1e-10, err_msg=key)
+
+    c = np.array([0.1, -0.2, 0.3])
+    num, a2, b2 = np.zeros(3), np.zeros(3), np.zeros(3)
+    for e, seg in logs:
+        for i in range(len(e) - 2):                     # lag 2: pairs (i, i + 2) in one segment
+            if seg[i] == seg[i + 2] and np.isfinite(e[[i, i + 2]]).all():
+                num += (e[i] - c) * (e[i + 2] - c)
+                a2 += (e[i] - c) ** 2
+                b2 += (e[i + 2] - c) ** 2
+    np.testing.assert_allclose(oa.autocorrelation(logs, np.array([2]), c)[0], num / np.sqrt(a2 * b2), rtol=1e-10)
+
+
+def test_the_correction_is_added_to_each_members_own_output_per_dof(oa):
+    """The members' outputs are kept (the correction is added, not substituted) and each DOF
+    decays with its own time constant."""
+    members = np.arange(2 * 2 * 3, dtype=float).reshape(2, 2, 3)
+
+    class Ens:
+        n_members = 2
+
+        def predict_members(self, X):
+            return members
+
+    c = np.array([[1.0, 2.0, 3.0], [0.0, 0.5, -1.0]])
+    decay = np.array([1.0, 2.0, 4.0])
+    ens = oa._CorrectedEnsemble(Ens(), c, 0.5, decay)
+    for step in range(3):
+        want = members + np.exp(-0.5 * step / decay) * c[None]
+        np.testing.assert_allclose(ens.predict_members(np.zeros((2, 2, 4))), want)
