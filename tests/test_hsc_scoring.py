@@ -28,8 +28,11 @@ def test_r_is_scale_free_and_signed():
 
 def test_nonfinite_prediction_scores_nan_and_sizes_checked():
     assert math.isnan(mean_absolute_error([1, 2], [1, np.inf]))
-    with pytest.raises(ValueError):
+    with pytest.raises(ValueError, match="differ in size: 3 vs 2"):
         score([1, 2, 3], [1, 2])
+    # a single prediction would broadcast against every measurement: refused by its size too
+    with pytest.raises(ValueError, match="differ in size: 3 vs 1"):
+        score([1, 2, 3], [2.0])
 
 
 def test_nonfinite_measurement_refused():
