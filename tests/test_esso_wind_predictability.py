@@ -58,3 +58,34 @@ def test_forecasts_start_from_the_logged_wind_and_the_gust_matches_the_library(w
     want = speed_dir_to_vector(gust.steps(a.wind, a.time_s, rows, a.wind[rows], steps + 1, a.dt_s))[:, 1:]
     np.testing.assert_allclose(fc["gust"], want, atol=1e-12)
     np.testing.assert_allclose(future, vec[rows[:, None] + np.arange(1, steps + 1)], atol=1e-12)
+
+
+def test_the_linear_forecast_weights_the_start_and_the_trailing_means_and_the_bound_is_the_future_mean(wp):
+    """Non-zero coefficients pick out the features: a 1 on the start sample's deviation forecasts
+    the start sample, a 1 on the 3-s mean's deviation that mean (over the logged samples only,
+    as is the level, the mean over the gust forecast's 20 s); ``future_mean`` is the mean of the
+    next ``steps`` logged vectors."""
+    a = _wind_log()
+    a.wind_logged[[28, 29, 38, 58]] = False              # inside the trailing windows of some starts
+    gust = WindForecast(mean_window_s=20.0, time_constant_s=5.0)
+    steps = 4
+    (rows, level, feats, future), = wp.sample_starts([a], gust, steps, 10)
+    vec = speed_dir_to_vector(a.wind)
+
+    def logged_mean(r, n):                               # the logged samples among the last n rows
+        idx = [j for j in range(max(0, r - n + 1), r + 1) if a.wind_logged[j]]
+        return vec[idx].mean(axis=0)
+
+    np.testing.assert_allclose(level, [logged_mean(r, 40) for r in rows], atol=1e-12)
+    assert set(rows) >= {31, 41, 61}                      # starts whose windows lose samples
+    coef = np.zeros((feats.shape[1], steps))
+    coef[0, 0] = 1.0                                     # lead 1: the start sample
+    coef[1 + wp.TRAILING_S.index(3.0), 1] = 1.0          # lead 2: the 3-s mean (6 samples)
+    coef[0, 2] = 0.5                                     # lead 3: half way from the level to the start
+    fc = wp.forecasts(a, rows, level, feats, future, gust, coef, steps)
+    np.testing.assert_allclose(fc["linear"][:, 0], vec[rows], atol=1e-12)
+    np.testing.assert_allclose(fc["linear"][:, 1], [logged_mean(r, 6) for r in rows], atol=1e-12)
+    np.testing.assert_allclose(fc["linear"][:, 2], 0.5 * (vec[rows] + level), atol=1e-12)
+    np.testing.assert_allclose(fc["linear"][:, 3], level, atol=1e-12)
+    want = np.mean([vec[rows + k] for k in range(1, steps + 1)], axis=0)
+    np.testing.assert_allclose(fc["future_mean"], np.broadcast_to(want[:, None], future.shape), atol=1e-12)
