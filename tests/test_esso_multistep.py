@@ -100,3 +100,30 @@ def test_a_runs_permutation_importance_is_published_with_its_tables(em, tmp_path
     (tmp_path / "out2").mkdir()
     em.write_outputs(tmp_path / "out2", tmp_path / "docs2", e, [row], "c")
     assert sorted(p.name for p in (tmp_path / "docs2").iterdir()) == ["errors.csv", "tables.md", "variants.csv"]
+
+
+def test_a_later_run_in_the_same_out_keeps_the_earlier_variants_and_replaces_its_own(em, tmp_path, capsys):
+    """``write_outputs`` merges ``errors.csv`` and ``variants.csv`` with an earlier run's in the same
+    ``--out``: other variants stay, a variant (or the physics) run again replaces its old rows, and
+    ``tables.md`` shows this run's rows alone."""
+    out = tmp_path / "out"
+    out.mkdir()
+    first = screening_errors((("dynamic", 0.5, 10.0), ("abs", 0.4, 6.0)), held=False)
+    em.write_outputs(out, None, first, [em.summary(first, "abs", 1.0, {}, {})], "c1")
+    second = screening_errors((("dynamic", 0.5, 10.0), ("huber", 0.3, 5.0)), held=False)
+    em.write_outputs(out, None, second, [em.summary(second, "huber", 2.0, {}, {})], "c2")
+    again = screening_errors((("dynamic", 0.5, 10.0), ("abs", 0.25, 4.0)), held=False)
+    errors, table = em.write_outputs(out, None, again, [em.summary(again, "abs", 3.0, {}, {})], "c3")
+    capsys.readouterr()
+
+    variants = pd.read_csv(out / "variants.csv")
+    assert sorted(variants.variant) == ["abs", "huber"]
+    assert variants.set_index("variant").dist30_m.to_dict() == {"abs": 0.5, "huber": 0.6}   # 0.25 (0.3) x 2, pooled
+    saved = pd.read_csv(out / "errors.csv")
+    per_model = len(first) // 2
+    assert saved.model.value_counts().to_dict() == {"dynamic": per_model, "abs": per_model, "huber": per_model}
+    pooled30 = saved[(saved.kind == "all") & (saved.horizon_s == 30.0) & (saved.state == "distance_m")]
+    assert pooled30.set_index("model").mae.to_dict() == {"dynamic": 1.0, "abs": 0.5, "huber": 0.6}
+    assert len(errors) == len(saved) and sorted(table.variant) == ["abs", "huber"]
+    text = (out / "tables.md").read_text()
+    assert text.startswith("Command: `c3`") and "huber" not in text
