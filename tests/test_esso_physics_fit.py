@@ -47,3 +47,19 @@ def test_a_factor_outside_the_allowed_range_is_a_vessel_file_error(pf, base):
     theta[pf.COEFFICIENTS.index("thrusters.0.wake_fraction")] = np.log(3.0)   # wake fraction 1.2
     with pytest.raises(VesselFileError, match="wake_fraction"):
         pf.vessel_with_factors(base, theta)
+
+
+def test_every_coefficient_takes_its_own_factor_at_once(pf, base):
+    """All the factors set together, each different: every coefficient of the parsed vessel (read
+    by its path through the vessel's attributes, not the file's dictionary) is the published one
+    times its own factor, none skipped or paired with another's."""
+    def attribute(vessel, path):
+        for key in path.split("."):
+            vessel = vessel[int(key)] if key.isdigit() else getattr(vessel, key)
+        return vessel
+
+    factors = 1.0 + 0.01 * np.arange(1, len(pf.COEFFICIENTS) + 1)
+    v = pf.vessel_with_factors(base, np.log(factors))
+    v0 = load_vessel("esso_osaka_model")
+    for path, f in zip(pf.COEFFICIENTS, factors):
+        assert attribute(v, path) == pytest.approx(f * attribute(v0, path), rel=1e-12), path
