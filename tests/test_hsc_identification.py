@@ -218,3 +218,25 @@ def test_fit_subspace_names_nan_data_and_bad_orders():
         fit_subspace(U, Y, order=2)
     with pytest.raises((TypeError, ValueError), match="^order: "):
         fit_subspace(U, np.nan_to_num(Y), order=0)
+
+
+@pytest.mark.parametrize("make", [lambda: ARXModel(3, 2, 2), lambda: ARXModel(1, 2, 0),
+                                  lambda: StateSpaceModel(order=3, block_rows=6),
+                                  lambda: NARXModel(NARXConfig(n_out=2, n_in=3, max_iter=20, restarts=1))],
+                         ids=["ARX322", "ARX120", "ss", "ann"])
+def test_a_free_run_is_the_one_step_predictor_fed_its_own_predictions(make):
+    """On noisy data (where neither mode is exact): the free run from ``n_init`` rows equals the
+    one-step predictions of a record whose rows from ``n_init`` on are the free run's own output
+    (the state-space predictor's innovations are then zero). The two modes build their regressors
+    separately; a lag taken in the wrong order or the wrong delay in one of them breaks this."""
+    rng = np.random.default_rng(11)
+    U = rng.standard_normal((200, 3))
+    Y = _simulate_arx(np.array([[[0.6, 0.1], [0.0, 0.4]]]), np.array([[[0.5, 0.2, -0.3], [0.1, 0.3, 0.4]]]), U)
+    Y += 0.3 * rng.standard_normal(Y.shape)
+    m = make().fit(U, Y)
+    n = m.n_init + 4
+    free = m.free_run(U, Y[:n], n)
+    fed = np.vstack([Y[:n], free[n:]])
+    np.testing.assert_allclose(m.one_step(U, fed)[n:], free[n:], rtol=1e-9, atol=1e-9)
+    assert np.isnan(free[:n]).all()
+    assert np.abs(m.one_step(U, Y)[n + 5:] - free[n + 5:]).max() > 1e-3     # the data's noise does matter
