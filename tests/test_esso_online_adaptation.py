@@ -165,3 +165,54 @@ def test_the_correction_is_added_to_each_members_own_output_per_dof(oa):
     for step in range(3):
         want = members + np.exp(-0.5 * step / decay) * c[None]
         np.testing.assert_allclose(ens.predict_members(np.zeros((2, 2, 4))), want)
+
+
+def test_the_observer_adds_the_mean_of_the_errors_known_a_second_before_each_start(oa, monkeypatch):
+    """:func:`observer_forecast` with a stand-in hybrid whose rollout returns the nets' output at
+    each step: every start gets ``gain`` times the weighted mean of the one-step errors from
+    ``first_row`` up to :data:`KNOWN_AFTER_S` (2 rows at 0.5 s) before it, in its segment (none
+    when that row is in the previous segment), held or decaying per DOF; gain 0 is the hybrid."""
+    from types import SimpleNamespace
+
+    dt, n = 0.5, 40
+    seg = (np.arange(n) >= 20).astype(int)
+    err = np.random.default_rng(5).normal(size=(n, 3)) + 1.0
+    monkeypatch.setattr(oa, "one_step_errors", lambda hybrid, a: err.copy())
+
+    class Ens:
+        n_members = 1
+
+        def predict_members(self, X):
+            return np.zeros((1, X.shape[1], 3))
+
+    class Hybrid:
+        ensemble = Ens()
+
+        def forecast(self, a, st, horizon_s):
+            return np.stack([self.ensemble.predict_members(np.zeros((1, len(st), 4)))[0]
+                             for _ in range(int(round(horizon_s / dt)))], axis=1)     # (S, steps, 3)
+
+    hyb, plain = Hybrid(), Hybrid.ensemble
+    a = SimpleNamespace(time_s=np.arange(n) * dt, segment_id=seg)
+    rows = np.array([10, 25, 21])                         # row 21: 2 rows before is in segment 0
+    first_row = 4
+    known = np.where(np.arange(n)[:, None] >= first_row, err, np.nan)
+
+    def expected(tau):
+        out = np.zeros((rows.size, 3))
+        for i, r in enumerate(rows):
+            if seg[r - 2] == seg[r]:
+                out[i] = _weighted_mean_by_hand(known, seg, dt, tau, r - 2)
+        return out
+
+    held = oa.observer_forecast(hyb, 1.0, 0.5, False, first_row)(a, rows * dt, 2.0)
+    assert held.shape == (3, 4, 3) and hyb.ensemble is plain
+    np.testing.assert_allclose(held, np.broadcast_to(0.5 * expected(1.0)[:, None], held.shape), rtol=1e-12)
+    assert np.all(held[2] == 0.0)
+
+    taus, gains = np.array([1.0, 2.0, 4.0]), np.array([0.5, 0.0, 2.0])
+    decaying = oa.observer_forecast(hyb, taus, gains, True, first_row)(a, rows * dt, 2.0)
+    c = np.column_stack([gains[d] * expected(taus[d])[:, d] for d in range(3)])
+    lead = np.exp(-np.arange(4)[:, None] * dt / taus)                       # (steps, 3)
+    np.testing.assert_allclose(decaying, c[:, None] * lead[None], rtol=1e-12)
+    assert np.all(oa.observer_forecast(hyb, 1.0, 0.0, False)(a, rows * dt, 2.0) == 0.0)
