@@ -216,3 +216,35 @@ def test_the_observer_adds_the_mean_of_the_errors_known_a_second_before_each_sta
     lead = np.exp(-np.arange(4)[:, None] * dt / taus)                       # (steps, 3)
     np.testing.assert_allclose(decaying, c[:, None] * lead[None], rtol=1e-12)
     assert np.all(oa.observer_forecast(hyb, 1.0, 0.0, False)(a, rows * dt, 2.0) == 0.0)
+
+
+def test_the_persistence_table_takes_its_lags_and_delays_in_seconds(oa):
+    """At 0.5 s a row, :func:`persistence`'s lag of 1 s is 2 rows, the known mean is the one up to
+    2 rows before, the horizon 60 rows; its RMS and mean skip the missing rows."""
+    rng = np.random.default_rng(6)
+    logs = []
+    for n in (300, 260):
+        e = np.zeros((n, 3))
+        for i in range(1, n):
+            e[i] = 0.8 * e[i - 1] + rng.normal(size=3)
+        e += 0.5
+        e[[3, 150]] = np.nan
+        logs.append((e, np.zeros(n, int)))
+    dt = 0.5
+    table = oa.persistence(logs, dt)
+    assert list(table.tau_s) == [t for t in oa.TAUS_S for _ in oa.DOFS]
+    row = table[table.tau_s == oa.TAUS_S[0]].set_index("dof")
+    ok = np.concatenate([e[np.isfinite(e).all(1)] for e, _ in logs])
+    np.testing.assert_allclose(row["mean"], ok.mean(0), rtol=1e-12)
+    np.testing.assert_allclose(row["rms"], np.sqrt((ok ** 2).mean(0)), rtol=1e-12)
+    x = [e - ok.mean(0) for e, _ in logs]
+    pairs = np.concatenate([np.stack([xi[:-2], xi[2:]]) for xi in x], axis=1)     # (2, pairs, 3): lag 2 rows
+    pairs = pairs[:, np.isfinite(pairs).all(axis=(0, 2))]
+    acf1 = (pairs[0] * pairs[1]).sum(0) / np.sqrt((pairs[0] ** 2).sum(0) * (pairs[1] ** 2).sum(0))
+    np.testing.assert_allclose(row["acf_1s"], acf1, rtol=1e-10)
+    tau = oa.TAUS_S[0]
+    for col, key, delay, horizon in (("next_from_last", "next", 0, 1), ("next_known", "next", 2, 60),
+                                     ("ahead_30s", "ahead", 2, 60), ("mean_30s", "mean", 2, 60),
+                                     ("best_gain", "gain", 2, 60), ("rms_30s_mean", "mean_rms", 2, 60)):
+        np.testing.assert_allclose(row[col], oa.explained(logs, dt, tau, delay, horizon)[key], rtol=1e-12,
+                                   err_msg=col)
