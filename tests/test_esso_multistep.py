@@ -127,3 +127,24 @@ def test_a_later_run_in_the_same_out_keeps_the_earlier_variants_and_replaces_its
     assert len(errors) == len(saved) and sorted(table.variant) == ["abs", "huber"]
     text = (out / "tables.md").read_text()
     assert text.startswith("Command: `c3`") and "huber" not in text
+
+
+def test_every_setting_that_changes_the_one_step_nets_has_its_own_cache_file(em, tmp_path):
+    """The one-step nets are read back from ``cache_file`` when it exists (only the features and
+    the hull correction are checked on loading): members, seed, hidden units, hull correction and
+    its fit, the features and the held wind must each name a different file, and the screening
+    config must carry the command line's settings."""
+    from hybridship.residual.features import MEMORY_FEATURES
+
+    argvs = ([], ["--members", "3"], ["--seed", "7"], ["--hidden", "32"], ["--hull"],
+             ["--hull", "--hull-fit", "multi_step"], ["--hull", "--hull-fit", "multi_step", "--hull-iterations", "50"],
+             ["--no-memory"])
+    cfgs = [em.screening_config(em.parse_args(argv), (5.0, 30.0)) for argv in argvs]
+    names = [em.cache_file(tmp_path, c, False).name for c in cfgs] + [em.cache_file(tmp_path, cfgs[0], True).name]
+    assert len(set(names)) == len(names), names
+    assert all(c.calibration.horizon_s == 30.0 for c in cfgs)
+    members, seed, hidden, hull, multi, iters, no_memory = cfgs[1:]
+    assert (members.ensemble.n_members, seed.ensemble.seed, hidden.ensemble.hidden) == (3, 7, 32)
+    assert hull.hull_correction and hull.hull_fit == "one_step" and multi.hull_fit == "multi_step"
+    assert iters.multistep.hull_iterations == 50
+    assert set(cfgs[0].residual.features) - set(no_memory.residual.features) == set(MEMORY_FEATURES) != set()
