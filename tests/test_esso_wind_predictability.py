@@ -89,3 +89,14 @@ def test_the_linear_forecast_weights_the_start_and_the_trailing_means_and_the_bo
     np.testing.assert_allclose(fc["linear"][:, 3], level, atol=1e-12)
     want = np.mean([vec[rows + k] for k in range(1, steps + 1)], axis=0)
     np.testing.assert_allclose(fc["future_mean"], np.broadcast_to(want[:, None], future.shape), atol=1e-12)
+
+
+def test_the_ridge_is_relative_to_the_mean_diagonal_of_the_gram_matrix(wp):
+    """Orthogonal features with ``X^T X = 4 I`` (both components stacked): the ridge adds
+    ``ridge * 4`` to the diagonal, so ``ridge = 1`` halves the least-squares coefficients."""
+    one = np.array([[1.0, 0.0], [0.0, 1.0], [1.0, 0.0], [0.0, 1.0]])
+    feats = np.stack([one, one], axis=-1)                          # (S=4, F=2, 2)
+    coef = np.array([[1.0, -2.0, 0.5], [3.0, 0.0, -1.0]])          # (F, H=3)
+    targets = np.einsum("sfc,fh->shc", feats, coef)
+    np.testing.assert_allclose(wp.fit_linear(feats, targets, ridge=1.0), coef / 2, atol=1e-12)
+    np.testing.assert_allclose(wp.fit_linear(feats, targets, ridge=0.25), coef / 1.25, atol=1e-12)
