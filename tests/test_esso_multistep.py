@@ -148,3 +148,11 @@ def test_every_setting_that_changes_the_one_step_nets_has_its_own_cache_file(em,
     assert hull.hull_correction and hull.hull_fit == "one_step" and multi.hull_fit == "multi_step"
     assert iters.multistep.hull_iterations == 50
     assert set(cfgs[0].residual.features) - set(no_memory.residual.features) == set(MEMORY_FEATURES) != set()
+
+
+def test_variants_parse_into_python_values_with_strings_as_they_are(em):
+    """``--variants``: each field's value is a Python literal (a number) where it is one, else
+    the text; empty parts and fields are skipped."""
+    got = em.parse_variants("abs: loss=absolute, lr = 1e-3 ,steps=5;base:; ")
+    assert got == {"abs": {"loss": "absolute", "lr": 0.001, "steps": 5}, "base": {}}
+    assert type(got["abs"]["lr"]) is float
