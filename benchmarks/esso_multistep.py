@@ -398,11 +398,12 @@ def permutation_importance(p, score, horizons, runs, seed: int = 0):
 
 
 def summary(e, name, secs, hist, kw) -> dict:
-    """Pooled 30-s figures of one variant against the physics (validation runs)."""
+    """Pooled 30-s figures of one variant against the physics (validation runs, logged
+    commands known, as :func:`_results.cells_below` counts them)."""
     from _results import cells_below
 
     def mae(model, state):
-        s = e[(e.model == model) & (e.state == state) & (e.kind == "all")]
+        s = e[(e.model == model) & (e.state == state) & (e.kind == "all") & (e.commands == "known")]
         return float(s[s.horizon_s == s.horizon_s.max()].mae.iloc[0])
 
     d, hd = mae(name, "distance_m"), mae(name, "heading_deg")

@@ -23,6 +23,14 @@ def test_the_summary_and_the_tables_give_each_rows_pooled_30_s_figures(em):
     assert "| abs | 0.400 / 6.00 | 1.200 / 18.00 | 0.800 / 12.00 | 0.80 / 0.60 |" in lines
 
 
+def test_the_summary_reads_the_commands_known_rows_whatever_their_order(em):
+    """A table with commands-held rows too (99 m), those first: the summary's figures are the
+    known rows' (0.8 m pooled, 0.8 x the physics), not the first row it meets."""
+    e = screening_errors((("dynamic", 0.5, 10.0), ("abs", 0.4, 6.0)), held=True)
+    row = em.summary(e.iloc[::-1].reset_index(drop=True), "abs", 12.0, {}, {})
+    assert (row["dist30_m"], row["dist_ratio"], row["cells_below"]) == (0.8, 0.8, "4/4")
+
+
 def test_results_need_an_out_without_an_earlier_run(em, tmp_path, capsys):
     (tmp_path / "errors.csv").write_text("model\n")
     assert em.main(["--out", str(tmp_path), "--results", str(tmp_path / "docs")]) == 2
