@@ -64,19 +64,35 @@ ROOT = Path(__file__).resolve().parents[1]
 
 
 def parse_variants(spec: str) -> dict:
-    """``"a:x=1,y=2;b:"`` -> ``{"a": {"x": 1, "y": 2}, "b": {}}``."""
+    """``"a:x=1,y=2;b:"`` -> ``{"a": {"x": 1, "y": 2}, "b": {}}``; a value may be any Python
+    literal (``steps=(5, 10)``), and an unquoted word is taken as text."""
     out = {}
     for part in filter(None, (s.strip() for s in spec.split(";"))):
         name, _, fields = part.partition(":")
-        kw = {}
-        for item in filter(None, (f.strip() for f in fields.split(","))):
-            k, _, v = item.partition("=")
-            try:
-                kw[k.strip()] = ast.literal_eval(v.strip())
-            except (ValueError, SyntaxError):
-                kw[k.strip()] = v.strip()
-        out[name.strip()] = kw
+        out[name.strip()] = _literal_fields(fields) or _text_fields(fields)
     return out
+
+
+def _literal_fields(fields: str) -> dict | None:
+    """``x=1, y=(2, 3)`` as keyword arguments of literals (commas inside brackets kept);
+    None when a value is not a literal."""
+    try:
+        call = ast.parse(f"f({fields})", mode="eval").body
+        return {kw.arg: ast.literal_eval(kw.value) for kw in call.keywords} if not call.args else None
+    except (ValueError, SyntaxError):
+        return None
+
+
+def _text_fields(fields: str) -> dict:
+    """``x=1, loss=absolute``: fields split at every comma, each value a literal where it is one."""
+    kw = {}
+    for item in filter(None, (f.strip() for f in fields.split(","))):
+        k, _, v = item.partition("=")
+        try:
+            kw[k.strip()] = ast.literal_eval(v.strip())
+        except (ValueError, SyntaxError):
+            kw[k.strip()] = v.strip()
+    return kw
 
 
 def one_step_hybrid(cfg, fit_runs, cache: Path, wind_forecast="fit"):

@@ -164,3 +164,6 @@ def test_variants_parse_into_python_values_with_strings_as_they_are(em):
     got = em.parse_variants("abs: loss=absolute, lr = 1e-3 ,steps=5;base:; ")
     assert got == {"abs": {"loss": "absolute", "lr": 0.001, "steps": 5}, "base": {}}
     assert type(got["abs"]["lr"]) is float
+    # a bracketed value keeps its commas (a tuple, not two broken fields)
+    got = em.parse_variants("m:steps=(5, 10), loss='absolute';n:tags=['a', 'b']")
+    assert got == {"m": {"steps": (5, 10), "loss": "absolute"}, "n": {"tags": ["a", "b"]}}
