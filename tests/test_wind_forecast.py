@@ -17,6 +17,7 @@ import numpy as np
 import pytest
 
 from hybridship.forecast_inputs.wind import HELD_WIND, WindForecast, fit_wind_forecast, wind_error_paths, wind_starts
+from hybridship.frames import vector_to_speed_dir, wrap_pi
 from hybridship.predictors import DynamicPredictor, HybridPredictor, as_log_arrays
 from hybridship.predictors.forecast_setup import _forecast_setup
 from hybridship.residual.ensemble import EnsembleConfig
@@ -395,12 +396,11 @@ def _wind_term_by_hand(hp, saved, log, starts, members, paths):
         class Plus(WindForecast):                  # the forecast wind plus this one path
             def steps(self, *a, **k):
                 base = hp.wind_forecast.steps(*a, **k)
-                v = _vec(np.broadcast_to(base, (base.shape[0], a[4], 2))) + path[None, :a[4]]
-                return np.stack([np.hypot(v[..., 0], v[..., 1]), np.arctan2(v[..., 1], v[..., 0])], axis=-1)
+                return vector_to_speed_dir(_vec(np.broadcast_to(base, (base.shape[0], a[4], 2))) + path[None, :a[4]])
         shifted.wind_forecast = Plus(mean_window_s=hp.wind_forecast.mean_window_s,
                                      time_constant_s=hp.wind_forecast.time_constant_s)
         d = shifted.forecast(log, starts, 60.0, calibrated=False).eta - members.eta
-        d[..., 2] = np.angle(np.exp(1j * d[..., 2]))
+        d[..., 2] = wrap_pi(d[..., 2])
         manual.append(d)
     return np.sqrt(np.mean(np.square(manual), axis=0))
 
