@@ -70,3 +70,16 @@ def test_the_dp_part_cuts_every_per_row_array_before_the_first_shutdown():
     assert len(b) == end and b.dp_active.all()
     for name in ("time_s", "eta", "rpm", "dp_active", "segment_id", "wind_logged", "commands_logged"):
         np.testing.assert_array_equal(getattr(b, name), getattr(a, name)[:end])
+
+
+def test_a_hull_chosen_on_one_failure_and_a_fit_without_a_thrust_stop_say_so():
+    """With one failure there is nothing to leave out, and a fit that read the drifts but
+    found no thrust stop learned no thrust error: both cells say which, not the DP-only text."""
+    dp = load_benchmark("drift_protocols")
+    obj = np.abs(MUNK_MULTIPLES - 0.65)[:, None]           # one failure, best at 0.65 x Munk
+    hull = {**choose_coefficient(obj, 0.005).as_dict(), "horizon_s": 60.0, "start_every_s": 10.0}
+    row = [x for x in dp.decisions_markdown([dp.decision("c", "fleet", "s1", _fit(hull))]).splitlines()
+           if x.startswith("| c ")]
+    # 0.65 rad of heading error without the moment, none with it
+    assert row == [f"| c | fleet | s1 | 0.65 x Munk on 1 failures, not kept: heading {np.degrees(0.65):.2f} deg "
+                   "without it, 0.00 with it, no left-out check | not learned (no thrust stop read) |"]
