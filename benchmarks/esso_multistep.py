@@ -74,11 +74,12 @@ def parse_variants(spec: str) -> dict:
 
 
 def _literal_fields(fields: str) -> dict | None:
-    """``x=1, y=(2, 3)`` as keyword arguments of literals (commas inside brackets kept);
-    None when a value is not a literal."""
+    """``x=1, y=(2, 3), loss=absolute`` as keyword arguments of literals (commas inside
+    brackets kept), an unquoted word as its text; None when a value is neither."""
     try:
         call = ast.parse(f"f({fields})", mode="eval").body
-        return {kw.arg: ast.literal_eval(kw.value) for kw in call.keywords} if not call.args else None
+        return {kw.arg: kw.value.id if isinstance(kw.value, ast.Name) else ast.literal_eval(kw.value)
+                for kw in call.keywords} if not call.args else None
     except (ValueError, SyntaxError):
         return None
 

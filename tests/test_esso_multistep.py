@@ -167,3 +167,5 @@ def test_variants_parse_into_python_values_with_strings_as_they_are(em):
     # a bracketed value keeps its commas (a tuple, not two broken fields)
     got = em.parse_variants("m:steps=(5, 10), loss='absolute';n:tags=['a', 'b']")
     assert got == {"m": {"steps": (5, 10), "loss": "absolute"}, "n": {"tags": ["a", "b"]}}
+    # ... beside an unquoted word, which stays text
+    assert em.parse_variants("m:steps=(5, 10), loss=absolute") == {"m": {"steps": (5, 10), "loss": "absolute"}}
