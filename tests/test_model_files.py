@@ -225,6 +225,27 @@ def test_a_version_7_file_reads_as_spread_exponent_1(saved, model, tmp_path):
     _refused(p8, r"expected \(4, H\)")
 
 
+def test_a_calibration_whose_exponent_row_varies_is_refused(saved, tmp_path):
+    """The fourth row of a ``cal_*`` array repeats one exponent; a row that varies (a damaged
+    or hand-made file) is refused by name, not read as its first entry."""
+    import copy
+
+    from hybridship.residual.calibration import SpreadCalibration
+
+    hp = copy.deepcopy(saved[0])
+    cal = SpreadCalibration([1.0, 60.0], [2.0, 2.0], [0.1, 0.1])
+    hp.calibration = {"held": {"position": cal, "heading": cal}}
+    calibrated = (hp, hp.save(tmp_path / "calibrated.npz"), None)
+
+    def two_exponents(arrays):
+        a = arrays["cal_held_heading"].copy()
+        a[3] = [1.0, 0.5]
+        arrays["cal_held_heading"] = a
+
+    _refused(_rewrite(calibrated, tmp_path, array_change=two_exponents, restamp=True, name="exponents.npz"),
+             r"damaged model contents: cal_held_heading: the exponent row must hold one value")
+
+
 def test_files_written_before_a_vessel_field_was_added_still_load(saved, tmp_path):
     """A vessel field added later (``lift_speed``) at its default leaves the fingerprint as it
     was, so a file whose embedded description lacks it loads; the packaged vessels keep the
@@ -580,6 +601,9 @@ def test_edited_settings_are_refused(saved, tmp_path):
     # text in a normalisation or guard array: named, not numpy's "could not convert string to float"
     ("x_mean", lambda a: a["x_mean"].astype(str), "x_mean: expected real numbers, got dtype <U"),
     ("guard_inv_cov", lambda a: a["guard_inv_cov"].astype(str), "guard_inv_cov: expected real numbers"),
+    # NaN or inf of the right shape, which only the finiteness check after the shape checks sees
+    ("guard_inv_cov", lambda a: np.full_like(a["guard_inv_cov"], np.nan), "guard_inv_cov contains NaN or inf"),
+    ("thrust_scale", lambda a: np.full_like(a["thrust_scale"], np.inf), "thrust_scale contains NaN or inf"),
 ])
 def test_consistently_written_bad_arrays_are_refused(saved, tmp_path, key, value, message):
     def change(arrays):
@@ -623,6 +647,12 @@ def test_consistently_written_arrays_are_checked_against_the_model(saved, tmp_pa
     ("env_config", lambda m: m["environment_config"].update(position_std_m=float("nan")),
      r"position_std_m: (?!.*pydantic)"),
     ("missing", lambda m: m.pop("environment"), r"environment: missing"),
+    ("thrust_prior_std", lambda m: m["thrust_error_prior"].update(std=[0.0] * len(m["thrust_error_prior"]["std"])),
+     "thrust_error_prior: expected finite means and positive spreads"),
+    ("thrust_prior_size", lambda m: m["thrust_error_prior"].update(mean=m["thrust_error_prior"]["mean"][:-1],
+                                                                   std=m["thrust_error_prior"]["std"][:-1]),
+     r"thrust_error_prior: expected \d+ entries, one per"),
+    ("thrust_lo", lambda m: m["thrust_regime"].update(lo=-1.0), r"thrust_regime.lo: expected a number >= 0"),
 ])
 def test_consistently_written_bad_settings_are_refused_by_name(saved, tmp_path, name, edit, message):
     """Settings of the wrong type in a re-sealed file: refused naming the field, never with a
