@@ -53,8 +53,31 @@ def test_train_then_forecast_writes_a_table(log_dir, tmp_path, capsys, monkeypat
                  "--start-time", "900", "905", "--horizon-s", "30", "--out", str(out)]) == 0
     df = pd.read_csv(out)
     assert len(df) == 2 * 31 and {"north_m", "east_m", "heading_deg", "guard_weight"} <= set(df)
+    # the table and the summary hold the model's forecast: the same one through the API, read
+    # from its arrays (not through the table writer), each column and each start where it belongs
+    import numpy as np
+
+    from hybridship.logs.io import read_log
+    from hybridship.predictors import HybridPredictor
+
+    fc = HybridPredictor.load(model).forecast(read_log(log_dir / "log1.csv.gz"), [900.0, 905.0], 30.0)
+    lead = np.arange(31.0)
+    np.testing.assert_array_equal(df.start_time_s, np.repeat([900.0, 905.0], 31))
+    np.testing.assert_array_equal(df.lead_s, np.tile(lead, 2))
+    np.testing.assert_array_equal(df.time_s, np.concatenate([900.0 + lead, 905.0 + lead]))
+    heading_deg = np.degrees(np.mod(fc.eta[..., 2], 2 * np.pi))
+    for column, expected in (("north_m", fc.eta[..., 0]), ("east_m", fc.eta[..., 1]), ("heading_deg", heading_deg),
+                             ("north_std_m", fc.eta_std[..., 0]), ("east_std_m", fc.eta_std[..., 1]),
+                             ("guard_weight", fc.guard_weight)):
+        np.testing.assert_allclose(df[column], expected.ravel(), rtol=1e-12, atol=1e-12, err_msg=column)
+    assert np.ptp(fc.eta[:, -1, 0]) > 0 or np.ptp(fc.eta[:, -1, 1]) > 0     # the two starts differ
+    printed = capsys.readouterr().out
+    for i, start in enumerate((900, 905)):
+        north, east, _ = fc.eta[i, -1]
+        assert (f"start {start} s -> +30 s: north {north:.1f} m, east {east:.1f} m, "
+                f"heading {heading_deg[i, -1]:.1f} deg (1-sigma {fc.eta_std[i, -1, 0]:.1f}/"
+                f"{fc.eta_std[i, -1, 1]:.1f} m)") in printed, printed
     # without the guard there is no guard weight to report: the summary says so
-    capsys.readouterr()
     assert main(["forecast", "--model", str(model), "--log", str(log_dir / "log1.csv.gz"),
                  "--start-time", "900", "--horizon-s", "30", "--no-guard", "--out", str(tmp_path / "ng.csv")]) == 0
     assert "guard off" in capsys.readouterr().out
