@@ -403,9 +403,18 @@ def test_derived_velocities_on_circle_match_analytic():
 
 def test_logged_velocities_are_used_and_converted():
     df = circle_log(60)
+    # logged values a little off the track's (a log's own sensors): taken as logged, not the
+    # velocities derived from the track, which on this circle are U, V and R within 1e-3
+    t = df.time_s.to_numpy()
+    df["u_m_s"] += 0.02 * np.cos(t / 7.0)
+    df["v_m_s"] -= 0.02 * np.sin(t / 5.0)
+    df["r_deg_s"] += 0.02 * np.sin(t / 3.0)
     df.loc[10, "u_m_s"] = np.nan  # a missing sample is derived instead
     arr = log_to_arrays(df, channel_names=THRUSTERS, rotatable=ROTATABLE)
-    np.testing.assert_allclose(arr.nu[:, 2], np.radians(R_DEG_S))
+    np.testing.assert_allclose(arr.nu[:, 2], np.radians(df.r_deg_s), rtol=1e-12)
+    np.testing.assert_allclose(arr.nu[:, 1], df.v_m_s, rtol=1e-12)
+    logged_u = np.arange(60) != 10
+    np.testing.assert_allclose(arr.nu[logged_u, 0], df.u_m_s[logged_u], rtol=1e-12)
     assert arr.nu_logged[:, 1:].all() and arr.nu_logged.sum() == 3 * 60 - 1
     assert not arr.nu_logged[10, 0]
     np.testing.assert_allclose(arr.nu[10, 0], U_M_S, atol=1e-3)
@@ -413,16 +422,20 @@ def test_logged_velocities_are_used_and_converted():
 
 def test_log_to_arrays_commands_wind_and_defaults():
     df = circle_log(40)
+    df.loc[4, "port_rpm"], df.loc[8, "port_rpm"] = 100.0, 140.0   # the values either side of a gap differ
     df.loc[5:7, "port_rpm"] = np.nan
     arr = log_to_arrays(df, channel_names=THRUSTERS, rotatable=ROTATABLE)
     n = len(df)
     assert arr.eta.shape == arr.nu.shape == (n, 3)
     assert arr.rpm.shape == arr.azimuth_rad.shape == (n, 3)
     np.testing.assert_allclose(arr.rpm[:, 0], df["tunnel_rpm"])
-    np.testing.assert_allclose(arr.rpm[5:8, 1], 120.0)  # held over the missing samples
+    # the last logged value held over the missing samples: not the next one, nor between them
+    np.testing.assert_allclose(arr.rpm[4:9, 1], [100.0, 100.0, 100.0, 100.0, 140.0])
+    np.testing.assert_allclose(arr.rpm[:, 2], df["stbd_rpm"])
     np.testing.assert_allclose(arr.azimuth_rad[:, 0], 0.0)  # tunnel: fixed
     np.testing.assert_allclose(arr.azimuth_rad[:, 1:], np.radians([[-30.0, 30.0]] * n))
     assert arr.has_wind
+    np.testing.assert_allclose(arr.wind[:, 0], df["wind_speed_m_s"])   # m/s as logged
     np.testing.assert_allclose(arr.wind[:, 1], np.radians(45.0))
     np.testing.assert_array_equal(arr.dp_active, df["dp_active"])
     np.testing.assert_array_equal(arr.segment_id, 0)
