@@ -29,12 +29,17 @@ def test_train_replaces_a_model_file_but_never_other_arrays(log_dir, tmp_path, c
     arrays is refused before training and left as it was."""
     import numpy as np
 
+    from hybridship.predictors import HybridPredictor
     from hybridship.predictors.model_file import is_model_file
 
     model = tmp_path / "m.npz"
     argv = ["train", "--logs", str(log_dir), "--members", "2", "--out"]
-    assert main(argv + [str(model)]) == 0 and is_model_file(model)
+    assert main(argv[:-2] + ["1", "--out", str(model)]) == 0 and is_model_file(model)
     assert main(argv + [str(model)]) == 0
+    assert HybridPredictor.load(model).ensemble_config.n_members == 2      # the earlier model replaced
+    empty = tmp_path / "empty.npz"
+    empty.write_bytes(b"")
+    assert main(argv[:-2] + ["1", "--out", str(empty)]) == 0 and is_model_file(empty)
     mine = tmp_path / "mine.npz"
     np.savez(mine, a=np.arange(3))
     before = mine.read_bytes()
