@@ -28,16 +28,19 @@ def log(model):
 
 def test_a_command_logged_after_a_start_is_not_held_at_it(model, log):
     """A command column empty at the log's start: the rows before its first value take the
-    default (0 rpm), not the later value (a forecast from them would use the future)."""
+    default (0 rpm, angle 0), not the later value (a forecast from them would use the future)."""
     late = log.copy()
-    late.loc[late.time_s <= 40.0, "port_rpm"] = np.nan
+    late.loc[late.time_s <= 40.0, ["port_rpm", "port_azimuth_deg"]] = np.nan
     late.loc[late.time_s > 40.0, "port_rpm"] = 150.0
+    late.loc[late.time_s > 40.0, "port_azimuth_deg"] = 30.0
     for purpose in ("fit", "forecast"):
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
             a = ingest(late, model.vessel, purpose=purpose)
         j = list(a.channel_names).index("port")
         assert np.all(a.rpm[a.time_s <= 40.0, j] == 0.0) and np.all(a.rpm[a.time_s > 40.0, j] == 150.0)
+        assert np.all(a.azimuth_rad[a.time_s <= 40.0, j] == 0.0)
+        np.testing.assert_allclose(a.azimuth_rad[a.time_s > 40.0, j], np.radians(30.0))
     p = DynamicPredictor(model.vessel)
     whole, cut = p.forecast(late, [30.0], 20.0), p.forecast(late[late.time_s <= 30.0], [30.0], 20.0)
     np.testing.assert_array_equal(whole.eta, cut.eta)
