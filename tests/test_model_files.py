@@ -661,6 +661,39 @@ def test_consistently_written_bad_settings_are_refused_by_name(saved, tmp_path, 
              rf"damaged model metadata \(.*{message}")
 
 
+def test_the_command_regime_round_trips_and_a_damaged_one_is_refused_by_name(saved, tmp_path):
+    """A model with a command regime (``command_guard``) keeps its weights, row counts and
+    boundaries; weights outside [0, 1], counts that are not whole numbers >= 0, a boundary
+    below 0 or a missing setting are refused naming the array or setting."""
+    import copy
+
+    from hybridship.residual.guard import CommandRegime
+
+    hp = copy.deepcopy(saved[0])
+    n = CommandRegime.N_REGIMES
+    hp.command_regime = CommandRegime(np.linspace(0.0, 1.0, n), np.arange(n), np.arange(n)[::-1] + 100,
+                                      rpm_eps=0.07, froude_lo=0.04, angle_hard_rad=0.3, length_m=36.25)
+    with_regime = (hp, hp.save(tmp_path / "regime.npz"), None)
+    back = HybridPredictor.load(with_regime[1]).command_regime
+    for name in ("weights", "n_train", "n_held"):
+        np.testing.assert_array_equal(getattr(back, name), getattr(hp.command_regime, name), err_msg=name)
+    assert (back.rpm_eps, back.froude_lo, back.angle_hard_rad, back.length_m) == (0.07, 0.04, 0.3, 36.25)
+    cases = [({"array_change": lambda a: a.update(cmd_regime_weights=np.full(n, 1.5))},
+              r"cmd_regime_weights: expected 12 weights in \[0, 1\]"),
+             ({"array_change": lambda a: a.update(cmd_regime_n_held=a["cmd_regime_n_held"] - 200)},
+              r"cmd_regime_n_held: expected 12 counts \(whole numbers >= 0\)"),
+             ({"array_change": lambda a: a.update(cmd_regime_n_train=a["cmd_regime_n_train"] + 0.5)},
+              r"cmd_regime_n_train: expected 12 counts \(whole numbers >= 0\), got dtype float64"),
+             ({"array_change": lambda a: a.pop("cmd_regime_n_held")}, "cmd_regime_n_held is missing"),
+             ({"meta_change": lambda m: m["command_regime"].update(froude_lo=-0.1)},
+              r"command_regime.froude_lo: expected a number >= 0"),
+             ({"meta_change": lambda m: m["command_regime"].pop("length_m")},
+              "command_regime: expected the settings rpm_eps, froude_lo, angle_hard_rad, length_m")]
+    for i, (change, message) in enumerate(cases):
+        _refused(_rewrite(with_regime, tmp_path, restamp=True, name=f"regime{i}.npz", **change),
+                 rf"damaged model contents: {message}")
+
+
 def test_metadata_that_is_not_a_table_is_refused(saved, tmp_path):
     def change(arrays):
         arrays["metadata_json"] = np.frombuffer(b"[1, 2, 3]", dtype=np.uint8)
