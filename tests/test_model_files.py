@@ -653,6 +653,9 @@ def test_consistently_written_arrays_are_checked_against_the_model(saved, tmp_pa
                                                                    std=m["thrust_error_prior"]["std"][:-1]),
      r"thrust_error_prior: expected \d+ entries, one per"),
     ("thrust_lo", lambda m: m["thrust_regime"].update(lo=-1.0), r"thrust_regime.lo: expected a number >= 0"),
+    ("trained_with_wind", lambda m: m["training_info"].update(trained_with_wind="yes"),
+     "training_info.trained_with_wind: expected true or false"),
+    ("command_regime_list", lambda m: m.update(command_regime=[0.05]), "command_regime: expected a table"),
 ])
 def test_consistently_written_bad_settings_are_refused_by_name(saved, tmp_path, name, edit, message):
     """Settings of the wrong type in a re-sealed file: refused naming the field, never with a
