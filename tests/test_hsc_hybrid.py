@@ -68,6 +68,27 @@ def test_grey_box_rates_by_hand(craft, grey):
     assert th_ss == pytest.approx(TRIMS[2] + 0.5 * surplus / (m * 9.81), rel=1e-9)
 
 
+def test_grey_box_rates_give_each_parameter_its_own_term(craft, grey):
+    """Every parameter different from 1 and from the others, the device half out: a parameter
+    dropped (``p_th0`` is 0 at nominal) or two swapped (``p_R``/``p_aR``, ``p_ths``/``p_ath``,
+    ``p_T``/``p_J``) changes the rates. The propeller's two terms come from the simulator's
+    thrust at rest and at speed, the resistance and trim from the hand-made tables."""
+    p_T, p_J, p_R, p_aR, p_m, p_th0, p_ths, p_ath, p_thT = 1.2, 0.8, 1.1, 0.7, 2.0, 0.01, 0.9, 1.3, 0.5
+    p = np.array([p_T, p_J, p_R, p_aR, p_m, p_th0, p_ths, p_ath, p_thT, 0.5])
+    rpm, v, a = 3000.0, 10.0, 0.5
+    model = PlaningCraftModel(craft, "interceptor")
+    t_rest = model.thrust_n(rpm, 0.0)                         # c1 n^2
+    t_speed = t_rest - model.thrust_n(rpm, v)                 # c2 n V
+    R0, dR = 2000.0 + 40.0 * v, 1000.0 * a                    # retracted, and the device's change
+    th0, dth = TRIMS[0], TRIMS[1] - TRIMS[0]
+    surplus = p_T * (t_rest - p_J * t_speed) - (p_R * R0 + p_aR * dR)
+    m = craft.mass_kg
+    dv, th_ss, got = grey.rates(v, 0.0, rpm, a, p)
+    assert got == pytest.approx(surplus, rel=1e-9)
+    assert dv == pytest.approx(surplus / (1.05 * m * p_m), rel=1e-9)
+    assert th_ss == pytest.approx(p_th0 + p_ths * th0 + p_ath * dth + p_thT * surplus / (m * 9.81), rel=1e-9)
+
+
 def _record(n=40):
     U = np.column_stack([np.linspace(2000.0, 3000.0, n), np.full(n, 60.0), np.zeros(n)])
     Y = np.column_stack([np.linspace(8.0, 12.0, n), np.full(n, 0.05)])
