@@ -89,6 +89,29 @@ def test_grey_box_rates_give_each_parameter_its_own_term(craft, grey):
     assert th_ss == pytest.approx(p_th0 + p_ths * th0 + p_ath * dth + p_thT * surplus / (m * 9.81), rel=1e-9)
 
 
+def test_grey_box_one_step_by_hand_from_the_measured_outputs_and_inputs_before(craft, grey):
+    """One step at the nominal parameters: ``V[k] = V[k-1] + dt (T - R) / (1.05 m)`` and the pitch
+    relaxes from the measured ``theta[k-1]`` towards the table's trim, everything at ``k-1`` (engine
+    speed, device fraction, measured outputs); the device moves at its rate after a PWM step at
+    sample 1 (see the rate test above). A free run is the one-step predictor fed its own outputs."""
+    n = 12
+    model = PlaningCraftModel(craft, "interceptor")
+    U = np.column_stack([np.linspace(2000.0, 3500.0, n), np.r_[10.0, np.full(n - 1, 100.0)], np.zeros(n)])
+    Y = np.column_stack([np.linspace(9.0, 13.0, n) + 0.3 * np.sin(np.arange(n)),
+                         0.04 + 0.01 * np.cos(np.arange(n))])
+    a = np.r_[0.0, np.minimum(np.arange(n - 1) * 0.1 / craft.interceptor.full_stroke_time_s, 1.0)]
+    got = grey.one_step(U, Y)
+    assert np.isnan(got[0]).all()
+    for k in range(1, n):
+        v, th, rpm, ak = Y[k - 1, 0], Y[k - 1, 1], U[k - 1, 0], a[k - 1]
+        surplus = model.thrust_n(rpm, v) - (2000.0 + 40.0 * v + 1000.0 * ak)
+        th_ss = TRIMS[0] + (TRIMS[2] - TRIMS[0]) * ak
+        assert got[k, 0] == pytest.approx(v + 0.1 * surplus / (1.05 * craft.mass_kg), rel=1e-12)
+        assert got[k, 1] == pytest.approx(th_ss + (th - th_ss) * np.exp(-0.1 / 0.5), rel=1e-12)
+    sim = grey.simulate(U, Y[0])
+    np.testing.assert_allclose(grey.one_step(U, sim)[1:], sim[1:], rtol=1e-12)
+
+
 def _record(n=40):
     U = np.column_stack([np.linspace(2000.0, 3000.0, n), np.full(n, 60.0), np.zeros(n)])
     Y = np.column_stack([np.linspace(8.0, 12.0, n), np.full(n, 0.05)])
