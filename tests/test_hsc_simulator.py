@@ -312,6 +312,8 @@ def test_heave_acceleration_is_up_positive(step_record):
     mean_acc = 0.5 * (rec.heave_acc_m_s2[1:-1] + rec.heave_acc_m_s2[2:])  # each averaged over its sample
     assert np.ptp(acc) > 0.02                                # the CG rises as the craft speeds up
     assert np.corrcoef(acc, mean_acc)[0, 1] > 0.99
+    # the size too, not only the sign and shape: a factor (e.g. the sub-steps' sum not averaged) is caught
+    np.testing.assert_allclose(mean_acc, acc, atol=0.05 * np.ptp(acc))
 
 
 def test_wave_elevation_rate_and_slope_are_those_of_the_surface_met(craft):
