@@ -45,6 +45,19 @@ def test_running_trim_2_to_6_deg_between_15_and_40_kn(curve):
     assert trims[-1] < trims[0]
 
 
+@pytest.mark.parametrize("rpm,frac", [(1500.0, 0.0), (3000.0, 0.5), (4000.0, 1.0)])
+def test_a_steady_state_is_an_equilibrium_of_the_forces_with_the_thrust_at_its_speed(craft, rpm, frac):
+    """At the returned speed, heave and trim (no heave or pitch rate) the surge and heave forces and
+    the pitch moment vanish, and the recorded thrust is the propeller's at that speed (the grey box's
+    tables take it as the resistance)."""
+    model = PlaningCraftModel(craft, "interceptor")
+    s = model.steady_state(rpm, frac)
+    forces = model.forces(s.speed_m_s, s.heave_m, 0.0, s.trim_rad, 0.0, rpm, frac)
+    np.testing.assert_allclose(forces, 0.0, atol=1e-6 * craft.mass_kg * 9.81)
+    assert s.thrust_n == pytest.approx(model.thrust_n(rpm, s.speed_m_s), rel=1e-12)
+    assert (s.rpm, s.actuator_frac) == (rpm, frac)
+
+
 def test_interceptor_and_tabs_lower_the_trim(craft):
     for act in ("interceptor", "trim_tab"):
         m = PlaningCraftModel(craft, act)
