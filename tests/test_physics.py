@@ -62,6 +62,14 @@ def test_wrap_and_latlon_round_trip():
     n, e = frames.latlon_to_north_east(63.44 + 0.01, 10.40 + 0.02, 63.44, 10.40)
     assert n == pytest.approx(1113.6, rel=2e-3)  # 0.01 deg latitude ~ 1.11 km
     assert e == pytest.approx(2 * 1113.2 * np.cos(np.radians(63.44)), rel=3e-3)
+    # exactly: the WGS-84 meridian and prime-vertical radii at the reference latitude (Fossen 2021,
+    # sec. 2.5.2); the rough figures above also pass a spherical earth of 6371 km
+    a, f = 6378137.0, 1 / 298.257223563
+    e2, s2 = f * (2 - f), np.sin(np.radians(63.44)) ** 2
+    r_n = a / np.sqrt(1 - e2 * s2)
+    r_m = a * (1 - e2) / (1 - e2 * s2) ** 1.5
+    assert n == pytest.approx(np.radians(0.01) * r_m, rel=1e-9)
+    assert e == pytest.approx(np.radians(0.02) * r_n * np.cos(np.radians(63.44)), rel=1e-9)
     lat, lon = frames.north_east_to_latlon(n, e, 63.44, 10.40)
     assert lat == pytest.approx(63.45, abs=1e-10) and lon == pytest.approx(10.42, abs=1e-10)
 
