@@ -24,6 +24,22 @@ def test_error_table_cells_are_means_over_logs_and_the_first_w_intervals():
     np.testing.assert_allclose(mae.loc[(20, "yaw_deg")], 1.5 * k.mean())
 
 
+def test_error_table_keeps_each_state_and_horizon_in_its_own_cell():
+    """Errors that differ by state (x1, x10, x100) and by horizon (x1, x2): every cell is its own
+    state's and horizon's mean (with one horizon and equal states above, a cell read from the
+    first horizon or the first state could not be told apart)."""
+    k = np.arange(20.0) ** 2
+    E = k[:, None, None] * np.array([1.0, 2.0])[None, :, None] * np.array([1.0, 10.0, 100.0])[None, None, :]
+    long = metrics.error_table({"m": [E]}, horizons_s=(15, 60))
+    mae = long.set_index(["window", "state", "horizon_s"]).mae
+    assert len(mae) == 2 * 3 * 2
+    for w in (5, 20):
+        for i, state in enumerate(metrics.STATES):
+            for j, h in enumerate((15, 60)):
+                np.testing.assert_allclose(mae.loc[(w, state, h)], k[:w].mean() * (1, 2)[j] * (1, 10, 100)[i],
+                                           err_msg=f"{w} {state} {h}")
+
+
 def test_paper_and_reduction_tables_put_first_5_before_first_20():
     rows = [dict(model=m, state=s, window=w, horizon_s=60, mae=v)
             for m, vals in {"hybrid": {5: 1.0, 20: 3.0}, "dynamic": {5: 2.0, 20: 4.0}}.items()
