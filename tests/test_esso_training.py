@@ -12,6 +12,7 @@ import pytest
 from hybridship.logs.ingest import ingest
 from hybridship.physics.model import DynamicModel
 from hybridship.predictors import DynamicPredictor
+from hybridship.residual.environment import EnvironmentConfig
 from hybridship.sim.synthetic import physics_log
 from hybridship.vessel import load_vessel, packaged_vessel_text, vessel_from_dict
 
@@ -116,6 +117,31 @@ def test_the_env_variant_runs_the_estimator_with_froude_scaled_settings(et):
     assert hybrid.environment_window_s >= c.held_load_window_s
     same = et.froude_scaled_environment(load_vessel("gunnerus"))
     assert same == d
+
+
+#: Froude power of lambda (the ratio of the Lpp) each scaled estimator setting takes from full scale to the
+#: model: lengths lambda^-1, speeds and times lambda^-1/2, yaw rates lambda^1/2, yaw accelerations lambda;
+#: a random walk's intensity [per sqrt(s)] gains lambda^1/4 on top of its quantity's power.
+FROUDE_POWERS = {"position_std_m": -1.0, "velocity_std_m_s": -0.5, "current_prior_m_s": -0.5,
+                 "yaw_rate_std_deg_s": 0.5, "yaw_accel_noise_rad_s2": 1.0, "load_yaw_prior_rad_s2": 1.0,
+                 "load_walk_m_s2": 0.25, "load_walk_after_stop_m_s2": 0.25,                 # accelerations: 0
+                 "load_yaw_walk_rad_s2": 1.25, "load_yaw_walk_after_stop_rad_s2": 1.25,
+                 "wave_window_s": -0.5, "variance_window_s": -0.5, "held_load_window_s": -0.5,
+                 "held_load_block_s": -0.5, "wave_axis_window_s": -0.5}
+
+
+def test_the_env_variant_scales_every_dimensional_setting_by_its_froude_power(et):
+    """Each scaled setting against the Froude law of its units (the test above checks three of them
+    and the ratios of the walks, which a walk scaled wrongly on and after a stop alike keeps)."""
+    d, c = EnvironmentConfig(), et.froude_scaled_environment(load_vessel("esso_osaka_model"))
+    lam = load_vessel("gunnerus").particulars.L_pp_m / load_vessel("esso_osaka_model").particulars.L_pp_m
+    assert lam > 10                                     # a 3 m model of a 36 m ship: every power matters
+    for name, power in FROUDE_POWERS.items():
+        assert getattr(c, name) == pytest.approx(getattr(d, name) * lam ** power, rel=1e-12), name
+    # accelerations and angles are kept; the filter's step is the scaled 1 s on the 10-Hz rows
+    assert (c.load_prior_m_s2, c.accel_noise_m_s2, c.heading_std_deg) == (d.load_prior_m_s2, d.accel_noise_m_s2,
+                                                                          d.heading_std_deg)
+    assert c.filter_step_s == round(d.filter_step_s / math.sqrt(lam), 1) == 0.3
 
 
 def test_a_variant_name_with_an_unknown_token_is_refused(et):
