@@ -118,6 +118,48 @@ def _record(n=40):
     return U, Y
 
 
+class _Residual:
+    """A stand-in for a fitted residual ensemble: ``offset + X @ W`` with a spread of zero
+    (``W`` None: the offset alone), so the hybrid's predictions can be checked without training."""
+
+    def __init__(self, offset, W=None):
+        self.offset, self.W = np.asarray(offset, float), W
+
+    def predict(self, X):
+        mean = np.broadcast_to(self.offset, (X.shape[0], 2)).copy()
+        if self.W is not None:
+            mean += X @ self.W[:X.shape[1]]
+        return mean, np.zeros_like(mean)
+
+
+def _hybrid_with(tables, craft, free, one):
+    h = HybridModel(craft, "interceptor", tables=tables)
+    h.free_ens, h.one_ens = free, one
+    return h
+
+
+def _varied_record(n=40, seed=0):
+    rng = np.random.default_rng(seed)
+    U = np.column_stack([rng.uniform(2000.0, 3500.0, n), rng.uniform(20.0, 90.0, n), rng.normal(0.0, 0.3, n)])
+    Y = np.column_stack([rng.uniform(8.0, 12.0, n), rng.uniform(0.02, 0.06, n)])
+    return U, Y
+
+
+def test_the_hybrid_is_the_grey_box_plus_the_residual_mean(craft, tables):
+    """Free run: the grey box's free run from ``Y_init[n_init - 1]`` plus the free-run residual;
+    one step: the grey box's one-step prediction plus the one-step residual (none before ``n_init``)."""
+    U, Y = _varied_record()
+    h = _hybrid_with(tables, craft, _Residual([0.5, 0.01]), _Residual([-0.25, 0.002]))
+    grey = h.grey.simulate(U, Y[4], k0=4)
+    free = h.free_run(U, Y[:5], 5)
+    assert np.isnan(free[:5]).all()
+    np.testing.assert_allclose(free[5:], grey[5:] + [0.5, 0.01], rtol=1e-12)
+    np.testing.assert_allclose(h.grey_free_run(U, Y[:5], 5)[5:], grey[5:], rtol=1e-12)
+    one = h.one_step(U, Y)
+    assert np.isnan(one[:2]).all()
+    np.testing.assert_allclose(one[2:], h.grey.one_step(U, Y)[2:] + [-0.25, 0.002], rtol=1e-12)
+
+
 @pytest.mark.parametrize("which,col,value,limit,match", [
     ("U", 0, 8100.0, 8000.0, r"^U: column 0 \(engine speed\) reaches 8100 rpm, beyond twice the craft's max_rpm"),
     ("Y", 1, 0.6, 0.5, r"^Y: column 1 \(pitch\) reaches 0.6; expected radians"),
