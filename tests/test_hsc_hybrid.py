@@ -160,6 +160,33 @@ def test_the_hybrid_is_the_grey_box_plus_the_residual_mean(craft, tables):
     np.testing.assert_allclose(one[2:], h.grey.one_step(U, Y)[2:] + [-0.25, 0.002], rtol=1e-12)
 
 
+def test_the_hybrids_residual_reads_nothing_after_the_sample_it_predicts(craft, tables):
+    """With a residual that weighs every feature, the prediction of sample ``k`` is unchanged when
+    the inputs from ``k`` on (free run), or the inputs and outputs from ``k`` on (one step), change;
+    it changes with the inputs just before ``k`` (so the check has teeth)."""
+    U, Y = _varied_record()
+    rng = np.random.default_rng(1)
+    W = rng.normal(0.0, 1e-4, (64, 2))
+    h = _hybrid_with(tables, craft, _Residual([0.0, 0.0], W), _Residual([0.0, 0.0], W))
+    k = 20
+    U2, Y2 = _varied_record(seed=2)
+    later_U = np.vstack([U[:k], U2[k:]])
+    later_Y = np.vstack([Y[:k], Y2[k:]])
+    free = h.free_run(U, Y[:5], 5)
+    np.testing.assert_array_equal(h.free_run(later_U, Y[:5], 5)[:k + 1], free[:k + 1])
+    one = h.one_step(U, Y)
+    np.testing.assert_array_equal(h.one_step(later_U, later_Y)[:k + 1], one[:k + 1])
+    # teeth: each input column, and the measured outputs, changed just before k moves the prediction of k
+    for col in range(3):
+        before = U.copy()
+        before[k - 1, col] = U2[k - 1, col]
+        assert np.abs(h.free_run(before, Y[:5], 5)[k] - free[k]).max() > 1e-9, col
+        assert np.abs(h.one_step(before, Y)[k] - one[k]).max() > 1e-9, col
+    Yb = Y.copy()
+    Yb[k - 1] = Y2[k - 1]
+    assert np.abs(h.one_step(U, Yb)[k] - one[k]).max() > 1e-9
+
+
 @pytest.mark.parametrize("which,col,value,limit,match", [
     ("U", 0, 8100.0, 8000.0, r"^U: column 0 \(engine speed\) reaches 8100 rpm, beyond twice the craft's max_rpm"),
     ("Y", 1, 0.6, 0.5, r"^Y: column 1 \(pitch\) reaches 0.6; expected radians"),
