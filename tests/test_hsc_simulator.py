@@ -318,6 +318,22 @@ def test_engine_speed_follows_a_step_with_its_first_order_lag(craft, step_record
     assert step_record.rpm[0] == pytest.approx(2000.0)
 
 
+def test_settling_is_the_record_of_the_first_commands_held_before_it_with_its_samples_dropped(craft):
+    """``settle_s = 0.3`` (three samples of 0.1 s; 0.3 / 0.1 is 2.9999... in floating point) runs the
+    first commands for 0.3 s first: the record is the tail of one with those samples prepended, in a
+    sea, so the waves met keep their time too; its clock and commands start at the record's first."""
+    model = PlaningCraftModel(craft, "interceptor")
+    rpm, pwm = np.r_[2000.0, np.full(9, 2600.0)], np.r_[10.0, np.full(9, 100.0)]
+    sea = SeaConditions(hs_m=0.05, tp_s=2.0)
+    settled = model.simulate(rpm, pwm, sea=sea, rng=4, settle_s=0.3)
+    longer = model.simulate(np.r_[np.full(3, rpm[0]), rpm], np.r_[np.full(3, pwm[0]), pwm], sea=sea, rng=4)
+    for name in ("speed_m_s", "heave_m", "pitch_rad", "rpm", "actuator_frac", "heave_acc_m_s2", "wave_elevation_m"):
+        np.testing.assert_array_equal(getattr(settled, name), getattr(longer, name)[3:], err_msg=name)
+    np.testing.assert_allclose(settled.time_s, np.arange(10) * 0.1)
+    np.testing.assert_array_equal(settled.rpm_cmd, rpm)
+    np.testing.assert_array_equal(settled.pwm_pct, pwm)
+
+
 def test_heave_acceleration_is_up_positive(step_record):
     """The record's heave acceleration is minus the second derivative of the CG depth (z down)."""
     rec = step_record
