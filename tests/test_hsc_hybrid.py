@@ -217,6 +217,26 @@ def test_tables_extend_below_idle_speed_as_v_squared_and_v_to_rest(craft):
     assert np.ptp(np.diff(R[top])) < 1e-9 * R[-1] and np.ptp(np.diff(TH[top])) < 1e-12
 
 
+def test_every_table_row_holds_the_equilibria_of_its_own_device_setting(craft):
+    """Between the idle and the top equilibrium each row is its device setting's calm-water
+    equilibria (thrust = resistance, running trim), linearly interpolated in speed; the device
+    out changes both (the test above reads the retracted row alone)."""
+    model = PlaningCraftModel(craft, "interceptor")
+    t = GreyBoxTables.from_craft(craft, "interceptor", n_rpm=3, act=(0.0, 1.0), dv_m_s=0.5)
+    v = t.v0_m_s + t.dv_m_s * np.arange(t.resistance_n.shape[1])
+    rpms = np.linspace(craft.engines.idle_rpm, 1.05 * craft.engines.max_rpm, 3)
+    for row, a in enumerate((0.0, 1.0)):
+        eq = model.steady_curve(rpms, a)
+        speed = np.array([s.speed_m_s for s in eq])
+        thrust = [model.thrust_n(r, s.speed_m_s) for r, s in zip(rpms, eq)]      # = resistance there
+        inside = (v >= speed[0]) & (v <= speed[-1])
+        assert inside.sum() > 10
+        np.testing.assert_allclose(t.resistance_n[row, inside], np.interp(v[inside], speed, thrust), rtol=1e-6)
+        np.testing.assert_allclose(t.trim_rad[row, inside], np.interp(v[inside], speed, [s.trim_rad for s in eq]),
+                                   rtol=1e-6)
+    assert np.abs(t.trim_rad[1] - t.trim_rad[0]).max() > 1e-3
+
+
 def test_pwm_given_as_a_fraction_up_to_full_drive_is_refused(craft, tables):
     """A PWM column of fractions 0.1..1 (1 = full drive, 100 %) is a unit slip: the device starts at 10 %."""
     U, Y = _record()
