@@ -116,16 +116,50 @@ def test_multi_step_loss_options_train_round_trip_and_are_validated(tmp_path):
 
 
 def test_command_features_in_training_rows_match_the_rollout():
-    """The rollout computes the command features of a step as prepare_log does for a row."""
+    """The rollout computes the command features of a step as prepare_log does for a row:
+    every one of the seven columns, by hand, for a row predicted from row i - 1 with its
+    commands (the rates over i - 2 -> i - 1, angles wrapped) and its heading."""
     m = DynamicModel("gunnerus")
     log = physics_log(m, seed=7, duration_s=200.0, t_shutdown_s=None)
+    log["port_azimuth_deg"] += 360.0                 # the angle comes as logged, 2 pi too far round
     a = as_log_arrays(log, m.vessel)
     rc = ResidualConfig(features=COMMAND_FEATURES, bias_window_s=0.0, deriv_window_s=0.0)
     prep = prepare_log(m, a, rc)
-    rows = np.array([50, 51, 120])
+    # the commands step at rows 28 -> 29 and 63 -> 64 (from 2.35 to -1.54 rad at the first:
+    # the short way round is +2.40 rad); 51 and 120 hold theirs
+    rows = np.array([30, 51, 65, 120])
     X = prep.features(rows)
-    assert X.shape == (3, len(COMMAND_FEATURES)) and np.all(np.isfinite(X))
-    np.testing.assert_allclose(X[:, 0], a.rpm[rows - 1, 0] / m.vessel.thrusters[0].max_rpm)
+    assert X.shape == (4, len(COMMAND_FEATURES)) and np.all(np.isfinite(X))
+    n_max, ch, dt = m.vessel.thrusters[0].max_rpm, int(np.flatnonzero(m.vessel.rotatable)[0]), 1.0
+    np.testing.assert_allclose(X[:, 0], a.rpm[rows - 1, 0] / n_max)
+    np.testing.assert_allclose(X[:, 1], (a.rpm[rows - 1, 0] - a.rpm[rows - 2, 0]) / (n_max * dt))
+    assert X[0, 1] != 0.0 and X[1, 1] == 0.0
+    ang = np.angle(np.exp(1j * a.azimuth_rad[rows - 1, ch]))
+    d_ang = np.angle(np.exp(1j * (a.azimuth_rad[rows - 1, ch] - a.azimuth_rad[rows - 2, ch])))
+    assert np.abs(ang - a.azimuth_rad[rows - 1, ch]).min() > 6.0 and 2.3 < d_ang[0] < 2.5
+    np.testing.assert_allclose(X[:, 2], ang, rtol=1e-12)
+    np.testing.assert_allclose(X[:, 3], d_ang / dt, rtol=1e-12)
+    # the ship's velocity through the air, by another route: the model-predicted velocity turned
+    # into NED with the step's heading, less the wind's velocity (it blows from wind_dir, so it
+    # moves towards wind_dir + pi), turned back into the body axes
+    nu_hat, psi = prep.nu_hat[rows], a.eta[rows - 1, 2]
+    V, beta = a.wind[rows - 1, 0], a.wind[rows - 1, 1]
+    assert np.all(V > 1.0)
+    R = np.array([[np.cos(psi), -np.sin(psi)], [np.sin(psi), np.cos(psi)]]).transpose(2, 0, 1)  # body -> NED
+    wind_ned = -V[:, None] * np.column_stack([np.cos(beta), np.sin(beta)])
+    air_body = np.einsum("sji,sj->si", R, np.einsum("sij,sj->si", R, nu_hat[:, :2]) - wind_ned)
+    np.testing.assert_allclose(X[:, 4:6], air_body, rtol=1e-9, atol=1e-12)
+    # the drift angle: the angle of the velocity off the bow, for a ship going ahead or astern
+    np.testing.assert_allclose(X[:, 6], np.arctan2(nu_hat[:, 1], np.abs(nu_hat[:, 0])), rtol=1e-12)
+    assert np.any(nu_hat[:, 0] < 0) and np.any(nu_hat[:, 1] > 0)
+    # multi-step training's torch rollout computes them with its own code: the same values
+    torch = pytest.importorskip("torch")
+    from hybridship.residual.features import command_feature_columns
+
+    got = command_feature_columns(torch.tensor(nu_hat), torch.tensor(psi), a.rpm[rows - 1], a.rpm[rows - 2],
+                                  a.azimuth_rad[rows - 1], a.azimuth_rad[rows - 2], a.wind[rows - 1], dt, n_max, ch,
+                                  lib=torch)
+    np.testing.assert_allclose(got.numpy(), X, rtol=1e-12, atol=1e-15)
 
 
 def test_command_regime_weights_and_model_file(tmp_path):
