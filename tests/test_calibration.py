@@ -196,11 +196,23 @@ def test_fit_holds_back_the_end_and_forecasts_carry_the_calibrated_spread(fitted
     with pytest.warns(UserWarning, match="calibrated up to 30 s"):
         np.testing.assert_allclose(back.forecast(logs[0], starts, 40.0).eta_std,
                                    hq.forecast(logs[0], starts, 40.0).eta_std)
-    # quantiles come from the calibrated spread
+    # quantiles come from the calibrated spread, about the forecast itself (z(0.95) = 1.6448536)
     q = fc.quantiles([0.05, 0.95])
     np.testing.assert_allclose(q[1] - q[0], 2 * 1.6448536 * fc.eta_std, rtol=1e-6)
+    np.testing.assert_allclose(q[1], fc.eta + 1.6448536 * fc.eta_std, rtol=1e-6, atol=1e-9)
+    np.testing.assert_allclose(q[0], fc.eta - 1.6448536 * fc.eta_std, rtol=1e-6, atol=1e-9)
+    # ... and each column of the table holds its own state's band (start by start, lead by lead)
     df = fc.to_frame(quantiles=[0.05, 0.95])
     assert {"north_q0.05_m", "east_q0.95_m", "heading_q0.95_deg"} <= set(df.columns)
+    row = df.set_index(["start_time_s", "lead_s"]).loc[(350.0, 25.0)]
+    k, j = 1, int(np.flatnonzero(fc.lead_s == 25.0)[0])
+    assert abs(fc.eta[k, j, 0] - fc.eta[k, j, 1]) > 1.0 and fc.eta_std[k, j, 0] > 0  # north and east differ
+    for name, i in (("north", 0), ("east", 1)):
+        assert row[f"{name}_q0.95_m"] == pytest.approx(fc.eta[k, j, i] + 1.6448536 * fc.eta_std[k, j, i], rel=1e-6)
+        assert row[f"{name}_q0.05_m"] == pytest.approx(fc.eta[k, j, i] - 1.6448536 * fc.eta_std[k, j, i], rel=1e-6)
+    half_deg = np.degrees(1.6448536 * fc.eta_std[k, j, 2])
+    assert row["heading_q0.95_deg"] - row["heading_deg"] == pytest.approx(half_deg, rel=1e-6)
+    assert row["heading_deg"] - row["heading_q0.05_deg"] == pytest.approx(half_deg, rel=1e-6)
 
 
 def test_cli_forecast_quantiles(fitted, tmp_path, capsys):
@@ -215,6 +227,14 @@ def test_cli_forecast_quantiles(fitted, tmp_path, capsys):
                  "--horizon-s", "20", "--quantiles", "0.05,0.95", "--out", str(out)]) == 0
     df = pd.read_csv(out)
     assert (df["north_q0.95_m"] >= df["north_q0.05_m"]).all()
+    # the file holds the forecast the model makes (held commands, guard on, calibrated spread)
+    # and its bands: the same numbers as forecast() and to_frame() give for that start
+    want = hp.forecast(logs[0], [300.0], 20.0).to_frame(quantiles=[0.05, 0.95])
+    assert len(df) == len(want) == 21
+    for col in ("north_m", "east_m", "heading_deg", "north_std_m", "east_std_m", "north_q0.05_m", "north_q0.95_m",
+                "east_q0.05_m", "east_q0.95_m", "heading_q0.05_deg", "heading_q0.95_deg"):
+        np.testing.assert_allclose(df[col], want[col], rtol=1e-9, atol=1e-9, err_msg=col)
+    np.testing.assert_allclose(df["east_q0.95_m"] - df["east_m"], 1.6448536 * df["east_std_m"], rtol=1e-6)
     assert main(["forecast", "--model", str(model), "--log", str(tmp_path / "log.csv.gz"), "--start-time", "300",
                  "--quantiles", "0.05,1.5", "--out", str(out)]) == 2
     assert "--quantiles" in capsys.readouterr().err
