@@ -147,6 +147,22 @@ def test_forecast_outputs_are_tidy_and_batched(model, current_logs):
     df = fc.to_frame()
     assert len(df) == 93 and {"north_m", "east_m", "heading_deg", "north_std_m", "guard_weight"} <= set(df)
     assert df["heading_deg"].between(0, 360).all()
+    # one row per start and lead, start after start: each row holds its own start's values at
+    # its own lead, every state in its column, in degrees where the name says so
+    np.testing.assert_array_equal(df.start_time_s, np.repeat([900.0, 901.0, 902.0], 31))
+    np.testing.assert_array_equal(df.lead_s, np.tile(np.arange(31.0), 3))
+    np.testing.assert_array_equal(df.time_s, df.start_time_s + df.lead_s)
+    k, j = 2, 17
+    row = df.iloc[31 * k + j]
+    assert (row.start_time_s, row.lead_s) == (902.0, 17.0)
+    want = {"north_m": fc.eta[k, j, 0], "east_m": fc.eta[k, j, 1],
+            "heading_deg": np.degrees(fc.eta[k, j, 2]) % 360.0, "u_m_s": fc.nu[k, j, 0], "v_m_s": fc.nu[k, j, 1],
+            "r_deg_s": np.degrees(fc.nu[k, j, 2]), "north_std_m": fc.eta_std[k, j, 0],
+            "east_std_m": fc.eta_std[k, j, 1], "heading_std_deg": np.degrees(fc.eta_std[k, j, 2]),
+            "guard_weight": fc.guard_weight[k, j]}
+    for col, value in want.items():
+        assert row[col] == pytest.approx(value, rel=1e-12, abs=1e-12), col
+    assert len({round(float(row[c]), 9) for c in want}) == len(want)          # no two columns alike here
 
 
 def test_bad_logs_and_start_times_name_the_problem(model, current_logs):
