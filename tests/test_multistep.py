@@ -92,7 +92,7 @@ def test_multi_step_loss_options_train_round_trip_and_are_validated(tmp_path):
                          multistep_config=cfg, calibration_config=CalibrationConfig(fraction=0.0)).fit(logs)
     info = hp.training_info["multi_step"]
     assert info["iterations"] == 6 and np.isfinite(info["val_loss"]).all()
-    assert info["best_val_loss"] <= info["val_loss"][0]
+    assert info["best_val_loss"] == min(info["val_loss"])
     assert HybridPredictor.load(hp.save(tmp_path / "m.npz")).multistep_config == cfg
     # the options reach the loss: the warm start's first validation loss under loss="absolute"
     # and lead_weighting="lead" is sum_j (j / 15) mean |error at step j| of the forecast rollout
@@ -100,15 +100,25 @@ def test_multi_step_loss_options_train_round_trip_and_are_validated(tmp_path):
     from hybridship.residual.multistep import _train_val_starts, train_multistep
 
     m, rc, hp, small, starts = _small_multistep_setup()
-    opts = MultiStepConfig(**{**small.__dict__, "loss": "absolute", "lead_weighting": "lead", "iterations": 1})
-    _, hist = train_multistep(hp.ensemble, m, starts, rc.feature_index, opts)
+    opts = MultiStepConfig(**{**small.__dict__, "loss": "absolute", "lead_weighting": "lead", "iterations": 3})
+    ens, hist = train_multistep(hp.ensemble, m, starts, rc.feature_index, opts)
     s = starts.take(_train_val_starts(starts, opts.max_val_starts)[1])
-    eta = hp.rollout(s.eta0, s.nu0, s.dev0, s.bias0, s.rpm, s.az, s.wind, 5, s.dt_s, guard=False)[0]
-    d = eta[:, 1:] - s.truth
-    dpsi = np.angle(np.exp(1j * d[..., 2]))
     L = 0.5 * m.vessel.particulars.L_pp_m
-    err = np.sqrt(d[..., 0] ** 2 + d[..., 1] ** 2 + 1e-8) + L * np.sqrt(dpsi ** 2 + 1e-8)
-    np.testing.assert_allclose(hist["val_loss"][0], err.mean(axis=0) @ (np.arange(1, 6) / 15.0), rtol=1e-9)
+
+    def loss(ensemble):
+        warm, hp.ensemble = hp.ensemble, ensemble
+        try:
+            eta = hp.rollout(s.eta0, s.nu0, s.dev0, s.bias0, s.rpm, s.az, s.wind, 5, s.dt_s, guard=False)[0]
+        finally:
+            hp.ensemble = warm
+        d = eta[:, 1:] - s.truth
+        dpsi = np.angle(np.exp(1j * d[..., 2]))
+        err = np.sqrt(d[..., 0] ** 2 + d[..., 1] ** 2 + 1e-8) + L * np.sqrt(dpsi ** 2 + 1e-8)
+        return err.mean(axis=0) @ (np.arange(1, 6) / 15.0)
+    np.testing.assert_allclose(hist["val_loss"][0], loss(hp.ensemble), rtol=1e-9)
+    # the weights that come back are those of the best validation, and its loss is recorded
+    np.testing.assert_allclose(loss(ens), hist["best_val_loss"], rtol=1e-9)
+    assert hist["best_val_loss"] == min(hist["val_loss"])
     for field, value in (("loss", "l1"), ("lead_weighting", "late"), ("curriculum_start_s", 20.0),
                          ("curriculum_fraction", 0.0), ("anchor_decay", -1.0)):
         with pytest.raises(ValueError, match=field):
