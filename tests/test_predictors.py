@@ -263,6 +263,19 @@ def test_bias_members_are_centred_on_the_bias_and_reproducible(model, current_lo
     np.testing.assert_array_equal(m1, m2)
     np.testing.assert_allclose(m1.mean(axis=0), prep.bias_ned[i], atol=1e-12)
     assert np.all(m1.std(axis=0)[:2] > 0)                      # a spread from the residual blocks
+    # ... and the members differ as 60-s means of the causal residuals (turned to north/east by
+    # the heading each was seen at) over the 900-s window do: m_k = c + (mean of block k) for
+    # one c, each block 60 consecutive usable rows of the window
+    a, r = prep.arrays, prep.residual_c
+    psi = a.eta[:, 2]
+    ned = np.column_stack([np.cos(psi) * r[:, 0] - np.sin(psi) * r[:, 1],
+                           np.sin(psi) * r[:, 0] + np.cos(psi) * r[:, 1], r[:, 2]])
+    assert np.ptp(psi[: i + 1]) > 0.3                          # the turn to NED matters
+    rows = np.arange(max(0, i - 899), i + 1)
+    v = ned[rows][np.isfinite(ned[rows]).all(1) & (a.dp_active[rows] == 1)]
+    blocks = np.array([v[k:k + 60].mean(axis=0) for k in range(len(v) - 59)])
+    fits = [np.abs((m1 - m1[0] + b0)[:, None] - blocks[None]).max(-1).min(-1).max() for b0 in blocks]
+    assert min(fits) < 1e-9 * np.abs(blocks).max()
 
 
 @pytest.mark.slow
