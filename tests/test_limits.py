@@ -34,7 +34,11 @@ def test_extremes_are_clipped_and_flagged_per_batch_element():
     np.testing.assert_allclose(c.rpm[0], [300.0, 100.0, -217.0])
     np.testing.assert_allclose(c.wind[:, 0], [100.0 * KNOT_M_S, 5.0])
     np.testing.assert_allclose(c.current[:, 0], [1.0, 5.0])
-    assert -np.pi <= c.current[1, 1] < np.pi and -np.pi <= c.wind[0, 1] < np.pi
+    # directions wrapped to [-pi, pi) by whole turns, so the same direction (7 rad is 7 - 2 pi,
+    # -7 rad is -7 + 2 pi): a range check alone passed a wrap that turned them half a turn
+    np.testing.assert_allclose(c.wind[:, 1], [7.0 - 2 * np.pi, 1.0], rtol=0, atol=1e-12)
+    np.testing.assert_allclose(c.current[:, 1], [0.0, -7.0 + 2 * np.pi], rtol=0, atol=1e-12)
+    np.testing.assert_array_equal(c.clipped_fields["wind"], [True, False])
     np.testing.assert_allclose(np.cos(c.azimuth_rad), np.cos([4.0, 0.0, -4.0]))   # same direction
     np.testing.assert_array_equal(c.clipped, [True, True])
     np.testing.assert_array_equal(c.clipped_fields["nu"], [True, False])
@@ -108,6 +112,10 @@ def test_extremes_that_overflow_the_integrator_are_finite_after_clipping():
              azimuth_rad=[0.0, 0.0, 0.0])
     c = check_or_clip_inputs(MODEL, **x, dt_s=1.0)
     assert c.clipped.all() and set(k for k, v in c.clipped_fields.items() if v.any()) == {"nu", "rpm", "wind"}
+    # each velocity to its own bound of the table (u 8, v 4 m/s, r 0.3 rad/s): "nu" flagged
+    # by u alone passed a yaw rate clipped to the wrong bound, or not at all
+    np.testing.assert_allclose(c.nu, [8.0, 4.0, 0.3], rtol=0, atol=1e-12)
+    np.testing.assert_allclose(c.rpm, MAX_RPM, rtol=0, atol=1e-12)
     res = MODEL.rollout(c.eta, c.nu, 120, rpm=c.rpm, wind=c.wind, current=c.current, azimuth_rad=c.azimuth_rad)
     assert np.isfinite(res.eta).all() and np.isfinite(res.nu).all()
     assert np.abs(res.nu[..., 0]).max() < 20.0
