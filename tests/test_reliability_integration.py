@@ -17,6 +17,7 @@ Wanted API:
 from __future__ import annotations
 
 import json
+import re
 
 import numpy as np
 import pandas as pd
@@ -127,6 +128,13 @@ def test_hybrid_out_of_envelope_is_a_flag(hybrid, log):
     fc = hybrid.forecast(log, [START], 60)
     assert fc.flags[F.OUT_OF_ENVELOPE][0] == bool(np.any(fc.guard_weight[0] < 1.0))
     assert F.OUT_OF_ENVELOPE in fc.to_frame()
+    # a wind far beyond the training log's (at most a few m/s) leaves the nets' envelope: the
+    # flag is set, as the guard weight says (the clean start alone is in the envelope, so a
+    # flag that is never set passed)
+    assert log.wind_speed_m_s.max() < 20.0
+    windy = hybrid.forecast(log.assign(wind_speed_m_s=40.0), [START], 60)
+    assert windy.guard_weight[0].min() < 0.5
+    assert windy.flags[F.OUT_OF_ENVELOPE][0] and windy.to_frame()[F.OUT_OF_ENVELOPE].all()
 
 
 def test_cli_forecast_prints_and_writes_the_flags(model, log, hybrid, tmp_path, capsys):
@@ -142,6 +150,13 @@ def test_cli_forecast_prints_and_writes_the_flags(model, log, hybrid, tmp_path, 
     assert "wind_dropped" in text and "out_of_envelope" in text
     df = pd.read_csv(out)
     assert set(F.ALL) <= set(df) and df[F.WIND_DROPPED].all()
+    # the printed line says what the written table says (the flag names alone are printed
+    # whatever their values: "out_of_envelope: no" contains "out_of_envelope")
+    ooe = "yes" if df[F.OUT_OF_ENVELOPE].any() else "no"
+    assert f"{F.OUT_OF_ENVELOPE}: {ooe} (min guard weight {df.guard_weight.min():.2f})" in text, text
+    printed = re.search(r"other flags: ([a-z_, ]+)$", text, re.M).group(1).split(", ")
+    assert set(printed) == {name for name in F.ALL if name != F.OUT_OF_ENVELOPE and df[name].any()}, text
+    assert F.WIND_DROPPED in printed
 
 
 def test_model_file_with_changed_weights_is_refused(hybrid, tmp_path):
