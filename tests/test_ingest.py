@@ -110,6 +110,11 @@ def test_log_arrays_get_the_vessel_checks_and_the_sorting(model, log):
     out = ingest(shuffled, model.vessel, purpose="forecast")
     assert np.all(np.diff(out.time_s) > 0) and list(out.resorted_time_s) == [100.0]
     np.testing.assert_allclose(out.eta, good.eta, atol=1e-9)
+    # the caller's heading branch is kept (the frame view wraps headings to 0..360 deg): arrays
+    # whose unwrapped heading is one turn on come back one turn on, not on the frame's branch
+    kw["eta"] = kw["eta"] + [0.0, 0.0, 2 * np.pi]
+    out = ingest(LogArrays(**kw), model.vessel, purpose="forecast")
+    np.testing.assert_allclose(out.eta, good.eta + [0.0, 0.0, 2 * np.pi], atol=1e-9)
     # another vessel's arrays are refused, naming the mismatch
     esso = DynamicModel("esso_osaka_model").vessel
     with pytest.raises(LogFormatError, match="channel_names: .*vessel 'esso_osaka_model'"):
