@@ -55,6 +55,12 @@ def test_inputs_within_range_pass_unchanged():
     assert not c.clipped.any()
     np.testing.assert_array_equal(c.rpm, rpm)
     np.testing.assert_array_equal(c.nu, [5.0, -3.0, 0.2])
+    # every input comes back as given: the heading too, unwrapped (40 rad, six turns on: the
+    # rollout continues from it), and the wind and current already in [-pi, pi)
+    np.testing.assert_array_equal(c.eta, [1e3, -2e3, 40.0])
+    np.testing.assert_array_equal(c.wind, [30.0, 2.0])
+    np.testing.assert_array_equal(c.current, [1.0, 0.5])
+    assert c.substeps == 1 and c.notes == ("",)
 
 
 @pytest.mark.parametrize("kwargs, pattern", [
