@@ -300,6 +300,12 @@ def test_rpm_beyond_max_is_refused_as_a_unit_error(model, moving_log):
     err = _vessel_refused(model, df, r"stbd_rpm: value 1000 at row 77 \(time_s 77\) exceeds 1\.25 x max_rpm "
                                      r"\(217 rpm\) of thruster 'stbd' of vessel 'gunnerus'")
     assert (err.column, err.row, err.time_s) == ("stbd_rpm", 77, 77.0)
+    # the bound is on the magnitude: a thruster reversed at motor rpm is as wrong (an azimuth
+    # thruster may push astern, so a negative value alone is no fault)
+    df.loc[77, "stbd_rpm"] = -1000.0
+    err = _vessel_refused(model, df, r"stbd_rpm: value -1000 at row 77 \(time_s 77\) exceeds 1\.25 x max_rpm "
+                                     r"\(217 rpm\) of thruster 'stbd' of vessel 'gunnerus' in magnitude")
+    assert (err.column, err.row) == ("stbd_rpm", 77)
 
 
 def test_rpm_logged_as_a_fraction_is_refused(model, moving_log, drift_log):
