@@ -176,6 +176,11 @@ def test_time_in_milliseconds_is_refused(moving_log):
     err = _refused(moving_log.assign(time_s=moving_log.time_s * 1000.0),
                    r"time_s: median sample spacing 1000 .*expects seconds.*milliseconds")
     assert err.column == "time_s"
+    # the other side of the accepted spacing: a 1-Hz log's time in hours (1/3600 per sample)
+    # is not called milliseconds
+    err = _refused(moving_log.assign(time_s=moving_log.time_s / 3600.0),
+                   r"time_s: median sample spacing 0\.000277778 .*expects seconds.*is time_s in minutes or hours\?")
+    assert err.column == "time_s"
 
 
 def test_missing_required_column_points_at_a_unit_variant(moving_log):
