@@ -321,6 +321,14 @@ def test_rpm_logged_as_a_fraction_is_refused(model, moving_log, drift_log):
     _vessel_refused(model, fractions, r"tunnel_rpm: every thruster's rpm is within \+-1 .* not a fraction of max_rpm")
     check_log_against_vessel(drift_log, model.vessel)
     assert (drift_log.dp_active == 0).sum() >= 60
+    # the simulated decay reaches exactly 0 rpm (no thrust: never counted), so the drift alone
+    # with its rpm spinning down through +-1 (a sensor's residual reading) is what tells
+    # "station keeping only" from "every sample": not refused, though every value is within +-1
+    drift = drift_log[drift_log.dp_active == 0].reset_index(drop=True)
+    spin_down = 0.9 * np.exp(-(drift.time_s - drift.time_s[0]) / 60.0)
+    drift = drift.assign(**{f"{t.name}_rpm": spin_down for t in model.vessel.thrusters})
+    assert len(drift) >= 60 and (drift[[f"{t.name}_rpm" for t in model.vessel.thrusters]] != 0).all().all()
+    check_log_against_vessel(drift, model.vessel)
 
 
 def test_rpm_logged_as_a_fraction_reaching_full_thrust_is_refused(model, moving_log):
