@@ -365,7 +365,7 @@ def test_rpm_sign_convention_is_checked(model, moving_log):
     check_log_against_vessel(moving_log.assign(tunnel_rpm=-moving_log.tunnel_rpm.abs() - 1.0), model.vessel)
 
 
-def test_incomplete_thruster_logging_is_refused(model, moving_log):
+def test_incomplete_thruster_logging_is_refused(model, moving_log, drift_log):
     _vessel_refused(model, moving_log.drop(columns="stbd_azimuth_deg"),
                     r"stbd_azimuth_deg: missing while stbd_rpm is logged; .*azimuth thruster")
     _vessel_refused(model, moving_log.drop(columns="tunnel_rpm"),
@@ -373,6 +373,12 @@ def test_incomplete_thruster_logging_is_refused(model, moving_log):
     no_rpm = moving_log.drop(columns=[c for c in moving_log if c.endswith(("_rpm", "_azimuth_deg"))])
     _vessel_refused(model, no_rpm, r"tunnel_rpm: no thruster rpm columns while dp_active is 1 at row 0")
     _vessel_refused(model, no_rpm.drop(columns="dp_active"), r"dp_active is absent \(taken as 1\)")
+    # station keeping in part of the log is enough (here rows 30..199, a drift before and after):
+    # the message names its first row
+    part = drift_log.drop(columns=[c for c in drift_log if c.endswith(("_rpm", "_azimuth_deg"))])
+    part.loc[:29, "dp_active"] = 0
+    assert (part.dp_active == 0).sum() > (part.dp_active == 1).sum() > 0
+    _vessel_refused(model, part, r"tunnel_rpm: no thruster rpm columns while dp_active is 1 at row 30 \(time_s 30\)")
 
 
 # ----------------------------------------------------------------------------- no mutation
