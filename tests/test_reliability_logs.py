@@ -92,6 +92,21 @@ def test_yaw_rate_in_rad_s_is_refused(moving_log):
     assert err.column == "r_deg_s"
 
 
+def test_a_yaw_rate_converted_to_deg_s_twice_is_refused():
+    """A slow turn (at most 0.5 deg/s) whose rate was converted from rad/s to deg/s once too
+    often (57.3 x) stays below the 60 deg/s range check: the rate of change of the heading
+    refuses it. (The moving log turns faster, so the range check sees it there first.)"""
+    t = np.arange(400.0)
+    df = pd.DataFrame({"time_s": t, "north_m": 0.5 * t, "east_m": 0.0,
+                       "heading_deg": 100.0 + 20.0 * np.sin(t / 40.0), "r_deg_s": 0.5 * np.cos(t / 40.0),
+                       "dp_active": 0})
+    validate_log(df, channel_names=THRUSTERS, rotatable=ROTATABLE)         # the exact derivative passes
+    twice = df.assign(r_deg_s=np.degrees(df.r_deg_s))
+    assert twice.r_deg_s.abs().max() < 30.0
+    err = _refused(twice, r"r_deg_s: is 57\.3 times the rate of change of heading_deg .*converted from rad/s twice\?")
+    assert err.column == "r_deg_s"
+
+
 def test_yaw_rate_sign_convention_is_checked(moving_log):
     _refused(moving_log.assign(r_deg_s=-moving_log.r_deg_s),
              r"r_deg_s: has the opposite sign .*positive clockwise.*counter-clockwise / ENU")
