@@ -501,10 +501,15 @@ def test_heading_jump_note_names_the_times_and_the_repair(model, log):
 
 
 def test_one_missing_wind_sample_holds_the_latest_valid_one(model, log):
-    df = _nan(["wind_speed_m_s"], [T_FAULT])(log.assign(wind_speed_m_s=np.linspace(5, 10, len(log))))
-    _, sw = _assess(model, df, [float(T_FAULT)])
-    assert sw.flags[F.NAN_IN_WINDOW][0] and not sw.flags[F.WIND_DROPPED][0]
-    assert sw.wind[0, 0] == df.wind_speed_m_s[T_FAULT - 1]
+    """A wind sample is its speed and direction: either missing leaves the latest sample with
+    both (a missing direction alone is not the speed of that row with an older direction)."""
+    windy = log.assign(wind_speed_m_s=np.linspace(5, 10, len(log)), wind_dir_deg=np.linspace(10, 80, len(log)))
+    for col in ("wind_speed_m_s", "wind_dir_deg"):
+        df = _nan([col], [T_FAULT])(windy.copy())
+        _, sw = _assess(model, df, [float(T_FAULT)])
+        assert sw.flags[F.NAN_IN_WINDOW][0] and not sw.flags[F.WIND_DROPPED][0], col
+        latest = [df.wind_speed_m_s[T_FAULT - 1], np.radians(df.wind_dir_deg[T_FAULT - 1])]
+        np.testing.assert_allclose(sw.wind[0], latest, rtol=0, atol=1e-12, err_msg=col)
 
 
 def test_commands_missing_at_the_start_are_flagged_with_the_time_they_are_held_from(model, log):
