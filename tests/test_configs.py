@@ -119,6 +119,12 @@ def test_bounds_in_messages_keep_their_digits():
         EnsembleConfig(n_members=1001)
     with pytest.raises(ValueError, match=r"lr: must be > 0 \(got -0.5\)"):
         EnsembleConfig(lr=-0.5)
+    # each kind of bound in its own words (the table above only checks the field's name):
+    # n_members >= 1, 0 < val_fraction < 0.9, as the fields declare them
+    with pytest.raises(ValueError, match=r"^n_members: must be >= 1 \(got 0\)"):
+        EnsembleConfig(n_members=0)
+    with pytest.raises(ValueError, match=r"^val_fraction: must be < 0.9 \(got 0.95\)"):
+        EnsembleConfig(val_fraction=0.95)
 
 
 def test_the_guard_quantile_is_checked_when_the_hybrid_is_made():
