@@ -224,6 +224,8 @@ def test_a_time_column_that_runs_backwards_says_the_samples_were_re_sorted(model
     against the other columns cannot be told from it by time alone, and the re-sorted log's
     yaw rate then contradicts its heading: the refusal also says that most samples were
     re-sorted, so that the reader does not look for a sign convention only."""
+    from hybridship.logs.io import LogFormatWarning
+
     out = ingest(log.iloc[::-1].reset_index(drop=True), model.vessel, purpose="forecast")
     np.testing.assert_array_equal(out.time_s, ingest(log, model.vessel, purpose="forecast").time_s)
     r = 2.0 * np.sin(log.time_s.to_numpy() / 30.0)                     # a zigzag [deg/s]
@@ -233,6 +235,12 @@ def test_a_time_column_that_runs_backwards_says_the_samples_were_re_sorted(model
                                              r"came after a later one and were re-sorted by time_s") as e:
         ingest(reversed_time, model.vessel, purpose="forecast")
     assert e.value.column == "r_deg_s"
+    # a yaw rate of the other sign in a log with one late sample: the note would mislead
+    # (the time column is fine), so it is not given
+    one_late = turning.assign(r_deg_s=-r).iloc[[*range(50), 51, 50, *range(52, len(turning))]]
+    with pytest.warns(LogFormatWarning, match=r"1 late sample\(s\) re-sorted"):
+        msg = _message(lambda: ingest(one_late, model.vessel, purpose="forecast"))
+    assert msg.startswith("r_deg_s: has the opposite sign") and "re-sorted" not in msg, msg
 
 
 @pytest.mark.parametrize("environment", ["estimator", "mean"])
