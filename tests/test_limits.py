@@ -91,7 +91,25 @@ def test_refuse_mode_refuses_what_clip_mode_clips(kwargs, field_, pattern):
     with pytest.raises(InputRangeError, match=pattern) as info:
         check_or_clip_inputs(MODEL, mode="refuse", **kwargs)
     assert info.value.field == field_
-    check_or_clip_inputs(MODEL, mode="clip", **kwargs)
+    c = check_or_clip_inputs(MODEL, mode="clip", **kwargs)
+    # clip mode clips it to the table's bound (a longer step gets substeps instead, unflagged)
+    if field_ == "dt_s":
+        assert c.substeps == 2 and not c.clipped.any()
+    else:
+        assert c.clipped.all() and c.clipped_fields[field_].all()
+        got, bound = {"nu": lambda: (c.nu[..., 1], 4.0), "rpm": lambda: (c.rpm[2], 217.0),
+                      "wind": lambda: (c.wind[0], 100.0 * KNOT_M_S), "current": lambda: (c.current[0], 5.0)}[field_]()
+        np.testing.assert_allclose(got, bound, rtol=0, atol=1e-12)
+
+
+def test_a_value_out_of_range_at_a_later_step_flags_its_own_batch_element():
+    """Inputs of shape (B, S, width): a value out of range at step 3 of element 1 only is
+    clipped there and flags element 1 alone."""
+    nu = np.zeros((2, 5, 3))
+    nu[1, 3, 1] = -5.0
+    c = check_or_clip_inputs(MODEL, nu=nu)
+    np.testing.assert_array_equal(c.clipped_fields["nu"], [False, True])
+    assert c.nu[1, 3, 1] == -4.0 and np.count_nonzero(c.nu) == 1 and c.notes == ("", "nu clipped to its valid range")
 
 
 def test_large_steps_get_substeps():
