@@ -126,6 +126,25 @@ def test_spread_zero_is_the_nominal_model():
     np.testing.assert_allclose(st.wind_p[2], model.arrays.wind_p)
 
 
+def test_vessel_spread_scales_the_log_normal_spread_of_every_factor():
+    """``factor = exp(spread |ln f_true| z)``: at spread 0.5 the log of each drawn factor has
+    half the file's |ln f_true| as its standard deviation, mean 0, one z per factor and DOF.
+    A spread 0 or 1 alone cannot tell spread from spread**2 (or from the file's factors
+    taken at spread 1 whatever the setting)."""
+    ves = get_model("gunnerus").vessel
+    n = 20000
+    drawn = spread.draw_scales(ves, n, np.random.default_rng(3), 0.5)
+    for name, f_true, f in zip(drawn._fields, spread.true_vessel_scales(ves, 1), drawn):
+        log_f = np.log(f).reshape(n, -1)
+        sigma = 0.5 * np.abs(np.log(f_true[0])).reshape(-1)
+        # the standard error of a standard deviation from 20000 draws is 0.5 %
+        np.testing.assert_allclose(log_f.std(axis=0), sigma, rtol=0.03, err_msg=name)
+        assert np.all(np.abs(log_f.mean(axis=0)) < 0.05 * sigma), name
+        if log_f.shape[1] > 1:                  # the DOFs drawn independently, not one z for all
+            corr = np.corrcoef(log_f.T)[np.triu_indices(log_f.shape[1], 1)]
+            assert np.all(np.abs(corr) < 0.05), (name, corr)
+
+
 def test_kernel_wave_drift_matches_the_simulator():
     comps = env.make_wave_components(1.2, 6.5, 0.7, np.random.default_rng(5), 15)
     ves = get_model("gunnerus").vessel
