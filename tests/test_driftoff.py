@@ -897,6 +897,25 @@ def test_cli_live_refuses_a_time_in_a_gap_of_the_log(tmp_path, capsys):
     assert "| blackout at [s] | 450 |" in capsys.readouterr().out
 
 
+def test_live_vessel_spread_is_the_settings_spread():
+    """A steady beam wind, no gusts, one environment member: the vessel draws are the only
+    randomness, so ``vessel_spread=0`` gives every sample the same drift and the default
+    spread makes them differ (a live prediction that drew at spread 1 whatever the settings
+    said passed every other test)."""
+    from hybridship.driftoff.live import EnvironmentEstimate
+
+    z3 = np.zeros(3)
+    est = EnvironmentEstimate(time_s=0.0, eta=z3, nu=z3, rpm=z3, azimuth_rad=z3, wind_speed_m_s=12.0,
+                              wind_dir_from_rad=math.pi / 2, gust_intensity=0.0, accel_ned=z3,
+                              accel_members=np.zeros((1, 3)))
+    kw = dict(n_samples=4, horizon_s=60.0, radii_m=(5.0,), reaction_times_s=(60.0,))
+    exc = {s: blackout_now(est, "gunnerus", DriftOffSettings(vessel_spread=s, **kw)).excursion_m[0, :, 0]
+           for s in (0.0, 1.0)}
+    assert exc[0.0].max() > 1.0                                 # a drift to compare, not zeros
+    assert np.ptp(exc[0.0]) < 1e-9 * exc[0.0].max(), exc[0.0]
+    assert np.ptp(exc[1.0]) > 1e-3 * exc[1.0].max(), exc[1.0]
+
+
 def test_live_current_members_carry_the_vessel_along():
     from hybridship.driftoff.live import EnvironmentEstimate
 
