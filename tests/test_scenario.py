@@ -312,6 +312,36 @@ def test_drift_statistics_of_a_ship_drifting_east_at_a_known_speed():
     assert st["dp_pos_max_m"] == 0.0 and st["dp_pos_std_m"] == 0.0
 
 
+def test_drift_statistics_of_a_turning_ship_with_a_bent_track():
+    """A made-up log in which every statistic differs from its neighbours' formulas: on DP
+    (after the start-up, t = 100..199 s) east swings as cos(2 pi t / 20 s), north 0, and
+    the heading alternates 359 / 1 deg, so the position spread is sqrt(0.5) m, the largest
+    offset 1 m and the heading spread 1 deg across north. From the shutdown at 200 s she
+    turns 0.05 deg/s through north and drifts 300 s east at 0.1 m/s, then 300 s north at
+    0.05 m/s: 30 m east and 15 m north, a net 33.5 m towards atan2(30, 15) = 63.4 deg, a
+    path of 45 m (mean speed over ground 0.075 m/s, net 0.056 m/s)."""
+    t = np.arange(0.0, 801.0)
+    dp = t < 200.0
+    s = t - 200.0
+    east = np.where(dp, np.cos(2 * np.pi * t / 20.0), 1.0 + 0.1 * np.clip(s, 0.0, 300.0))
+    north = np.where(dp, 0.0, 0.05 * np.clip(s - 300.0, 0.0, 300.0))
+    heading = np.where(dp, np.where(t % 2 == 0, 359.0, 1.0), (359.0 + 0.05 * s) % 360.0)
+    log = pd.DataFrame({"time_s": t, "north_m": north, "east_m": east, "heading_deg": heading,
+                        "dp_active": dp.astype(int)})
+    st = drift_statistics(log)
+    assert st["t_shutdown_s"] == 200.0
+    assert st["drift_excursion_60s_m"] == pytest.approx(6.0)
+    assert st["drift_excursion_600s_m"] == pytest.approx(math.hypot(30.0, 15.0))
+    assert st["drift_net_speed_mps"] == pytest.approx(math.hypot(30.0, 15.0) / 600.0)
+    assert st["drift_dir_to_deg"] == pytest.approx(math.degrees(math.atan2(30.0, 15.0)))
+    assert st["drift_mean_sog_mps"] == pytest.approx(45.0 / 600.0, abs=2e-4)   # the corner's one sample aside
+    assert st["drift_dheading_60s_deg"] == pytest.approx(3.0)                   # through north: not -357
+    assert st["drift_dheading_600s_deg"] == pytest.approx(30.0)
+    assert st["dp_pos_std_m"] == pytest.approx(math.sqrt(0.5))
+    assert st["dp_pos_max_m"] == pytest.approx(1.0)
+    assert st["dp_heading_std_deg"] == pytest.approx(1.0)
+
+
 def test_drift_statistics_refuses_what_it_cannot_summarise():
     """A log without its time or track, or a settling time that is not a number of seconds, is
     refused naming it (not a KeyError, nor NaN statistics from a NaN settling time)."""
