@@ -290,6 +290,41 @@ def test_rudder_without_propeller_and_mixed_actuators():
     assert abs(F[1, 2]) < abs(F[0, 2])  # no slipstream on the auxiliary rudder
 
 
+def test_a_rudder_without_propeller_follows_the_mmg_formulae_in_its_own_inflow():
+    """The auxiliary rudder of the mixed vessel (no propeller, y_R = 0.1 m) on a turning ship,
+    against the MMG formulae transcribed here: no slipstream and no propeller wake, so
+    ``u_R = epsilon (u - y_R r)`` (the water speed at the rudder), and the forces as for any
+    rudder. In the model, the actuator load less the propeller's and the bow tunnel's is the
+    two rudders' load. A turn rate is needed: straight ahead the rudder's own y_R drops out
+    of its inflow."""
+    d = copy.deepcopy(esso_dict())
+    d["thrusters"].append({"name": "bow", "type": "tunnel", "x_m": 1.2, "diameter_m": 0.05, "max_rpm": 3000.0})
+    d["rudders"].append(dict(d["rudders"][0], name="aux", propeller=None, y_m=0.1))
+    d["rudders"][1].pop("propeller")
+    m = DynamicModel(vessel_from_dict(d, "mixed.toml"))
+    u, v, r = 0.3, 0.01, 0.08
+    d_main, d_aux = math.radians(12), math.radians(-20)
+    rd, rho = m.vessel.rudders[1], d["particulars"]["rho_water_kg_m3"]
+    u_R = rd.wake_ratio * (u - rd.y_m * r)
+    lat = v + rd.l_R_m * r
+    v_R = -(rd.flow_straightening_neg if lat > 0 else rd.flow_straightening_pos) * lat
+    F_N = 0.5 * rho * rd.area_m2 * rd.f_alpha * (u_R**2 + v_R**2) * math.sin(d_aux - math.atan2(v_R, u_R))
+    X_R = -(1 - rd.steering_resistance_deduction) * F_N * math.sin(d_aux)
+    aux = [X_R, -(1 + rd.hull_force_factor) * F_N * math.cos(d_aux),
+           -(rd.x_m + rd.hull_force_factor * rd.x_H_m) * F_N * math.cos(d_aux) - rd.y_m * X_R]
+    np.testing.assert_allclose(rudder_forces(m, [u, v, r], [d_main, d_aux], [3.0, 3.0])[0, 1], aux, rtol=1e-9)
+    # the model's kernel: the same aux load beside the main rudder behind its propeller
+    _, parts, thrusts = m.acceleration([0, 0, 0], [u, v, r], rpm=[RPM8, 600.0], rudder_rad=[d_main, d_aux],
+                                       return_parts=True)
+    prop, bow = m.vessel.thrusters
+    T_d, T_bow = thrusts[0]
+    a = bow.fixed_angle_rad
+    rudders = parts[0, 1] - [T_d, 0.0, -prop.y_m * T_d] - T_bow * np.array(
+        [math.cos(a), math.sin(a), bow.x_m * math.sin(a) - bow.y_m * math.cos(a)])
+    main = rudder_forces(m, [u, v, r], [d_main, 0.0], [T_d / (1 - prop.thrust_deduction), 0.0])[0, 0]
+    np.testing.assert_allclose(rudders, main + aux, rtol=1e-9, atol=1e-9 * abs(T_d))
+
+
 def test_physics_log_commands_the_rudder(esso):
     """A synthetic log of a rudder vessel: rudder angles commanded, logged in the rudder's angle
     column, and read back into the rudder channel (a known-command forecast follows the log
