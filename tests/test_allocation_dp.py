@@ -382,14 +382,21 @@ def test_dp_validation_names_the_field(model):
         dp.update(np.zeros(3), np.zeros(3), wind=[1.0, 2.0, 3.0])
 
 
-def test_dp_wind_feedforward_opposes_wind(model):
-    dp = DPController(model, dt_s=1.0, wind_feedforward_gain=1.0)
-    dp.reset(np.zeros(3))
-    tau_wind = dp.update(np.zeros(3), np.zeros(3), wind=WIND)
-    dp.reset(np.zeros(3))
-    tau_calm = dp.update(np.zeros(3), np.zeros(3))
-    _, parts, _ = model.acceleration(np.zeros(3), np.zeros(3), wind=WIND, return_parts=True)
-    np.testing.assert_allclose(tau_wind - tau_calm, -parts[0, 2], rtol=1e-12)
+@pytest.mark.parametrize("gain", [1.0, 0.5, 0.0])
+def test_dp_wind_feedforward_opposes_wind(model, gain):
+    """The feed-forward is ``gain`` times minus the model's wind load at the measured heading
+    and velocity: at 0.5 half of it, at 0 none. At heading 0 and at rest the gain (or the
+    measured state) left out passed unnoticed; here the ship heads 60 deg and moves."""
+    eta, nu = np.array([0.0, 0.0, math.radians(60.0)]), np.array([0.4, -0.1, 0.01])
+    dp = DPController(model, dt_s=1.0, wind_feedforward_gain=gain)
+    dp.reset(eta)
+    tau_wind = dp.update(eta, nu, wind=WIND)
+    dp.reset(eta)
+    tau_calm = dp.update(eta, nu)
+    _, parts, _ = model.acceleration(eta, nu, wind=WIND, return_parts=True)
+    _, parts_at_north, _ = model.acceleration(np.zeros(3), np.zeros(3), wind=WIND, return_parts=True)
+    assert np.all(np.abs(parts[0, 2] - parts_at_north[0, 2]) > 0.1 * np.abs(parts[0, 2]))  # the heading matters
+    np.testing.assert_allclose(tau_wind - tau_calm, -gain * parts[0, 2], rtol=1e-12, atol=1e-9)
 
 
 # --------------------------------------------------------------------------- station keeping (DP capability)
