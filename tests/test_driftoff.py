@@ -916,22 +916,54 @@ def test_live_vessel_spread_is_the_settings_spread():
     assert np.ptp(exc[1.0]) > 1e-3 * exc[1.0].max(), exc[1.0]
 
 
+def _scipy_time_carried_by_current(current, psi0, radii):
+    """Independent adaptive solve of the nominal model's drift from rest with the thrusters
+    stopped, in a constant current ``[speed_m_s, dir_to_rad]`` only."""
+    model = get_model("gunnerus")
+    K = model.n_actuators
+    az = np.array([t.fixed_angle_rad for t in model.vessel.thrusters])
+
+    def rhs(t, x):
+        nd = model.acceleration(x[:3], x[3:], rpm=np.zeros(K), azimuth_rad=az, current=current)[0]
+        c, s = math.cos(x[2]), math.sin(x[2])
+        return [c * x[3] - s * x[4], s * x[3] + c * x[4], x[5], *nd]
+
+    events = []
+    for R in radii:
+        ev = lambda t, x, R=R: math.hypot(x[0], x[1]) - R  # noqa: E731
+        ev.direction = 1
+        events.append(ev)
+    sol = solve_ivp(rhs, (0.0, 300.0), [0.0, 0.0, psi0, 0.0, 0.0, 0.0], method="DOP853", rtol=1e-8, atol=1e-9,
+                    events=events)
+    return np.array([e[0] if len(e) else np.inf for e in sol.t_events])
+
+
 def test_live_current_members_carry_the_vessel_along():
+    """A still ship, no wind, the thrusters stopped: nothing moves her without a current; a
+    current member of 0.5 m/s towards east ([north, east] in NED) carries her as an
+    independent solve of the model in that current does, at headings 0 and 0.6 rad (a
+    current read as coming FROM east, or turned with the heading as if given in the body
+    frame, reaches the radii at other times; at heading 0 a mirror image hides both)."""
     from hybridship.driftoff.live import EnvironmentEstimate
 
     z3 = np.zeros(3)
-    est = EnvironmentEstimate(time_s=0.0, eta=z3, nu=z3, rpm=z3, azimuth_rad=z3, wind_speed_m_s=0.0,
+    az = np.array([t.fixed_angle_rad for t in get_model("gunnerus").vessel.thrusters])
+    est = EnvironmentEstimate(time_s=0.0, eta=z3, nu=z3, rpm=z3, azimuth_rad=az, wind_speed_m_s=0.0,
                               wind_dir_from_rad=0.0, gust_intensity=0.0, accel_ned=z3, accel_members=np.zeros((1, 3)))
-    st = DriftOffSettings(n_samples=2, horizon_s=300.0, radii_m=(5.0, 50.0), reaction_times_s=(300.0,),
+    radii = (5.0, 50.0)
+    st = DriftOffSettings(n_samples=2, horizon_s=300.0, radii_m=radii, reaction_times_s=(300.0,),
                           vessel_spread=0.0)
     assert np.all(np.isinf(blackout_now(est, "gunnerus", st).t_reach_s))
     import dataclasses
 
-    moving = dataclasses.replace(est, current_members_ned_m_s=np.array([[0.0, 0.5]]))   # 0.5 m/s towards east
-    r = blackout_now(moving, "gunnerus", st)
-    t50 = r.t_reach_s[0, 0, 1]
-    # carried along: reaches 50 m later than a body already moving at 0.5 m/s, but not much later
-    assert 100.0 < t50 < 200.0, t50
+    for psi0 in (0.0, 0.6):
+        moving = dataclasses.replace(est, eta=np.array([0.0, 0.0, psi0]),
+                                     current_members_ned_m_s=np.array([[0.0, 0.5]]))   # 0.5 m/s towards east
+        r = blackout_now(moving, "gunnerus", st)
+        expected = _scipy_time_carried_by_current([0.5, math.pi / 2], psi0, radii)
+        assert np.all(np.isfinite(expected)) and 100.0 < expected[1] < 200.0      # carried along, not at once
+        np.testing.assert_allclose(r.t_reach_s[0, :], np.broadcast_to(expected, (2, 2)), rtol=0.01,
+                                   err_msg=f"heading {psi0} rad")
 
 
 def test_cli_error_names_the_whole_command(monkeypatch, capsys):
