@@ -129,10 +129,18 @@ def test_measurements_are_truth_plus_configured_noise(moderate):
 
     assert std("heading_deg", "truth_heading_deg", wrap=True) == pytest.approx(nz.heading_white_deg, rel=0.15)
     assert std("u_m_s", "truth_u_mps") == pytest.approx(nz.uv_white_m_s, rel=0.1)
+    assert std("v_m_s", "truth_v_mps") == pytest.approx(nz.uv_white_m_s, rel=0.1)
     assert std("r_deg_s", "truth_r_degps") == pytest.approx(nz.r_white_deg_s, rel=0.1)
     gnss = math.hypot(nz.gnss_white_m, nz.gnss_markov_m)
     assert std("north_m", "truth_north_m") == pytest.approx(gnss, rel=0.5)  # GM error: few correlation times
+    assert std("east_m", "truth_east_m") == pytest.approx(gnss, rel=0.5)
+    assert std("wind_speed_m_s", "truth_wind_speed_mps") == pytest.approx(nz.wind_speed_white_m_s, rel=0.15)
     assert std("wind_dir_deg", "truth_wind_dir_from_deg", wrap=True) == pytest.approx(nz.wind_dir_white_deg, rel=0.15)
+    # each axis has a noise of its own: u and v (white, ~900 samples: |corr| ~ 0.03) and
+    # north and east (the slow Gauss-Markov part leaves a chance correlation, but not 1)
+    for (a, truth_a), (b, truth_b), most in ((("u_m_s", "truth_u_mps"), ("v_m_s", "truth_v_mps"), 0.15),
+                                             (("north_m", "truth_north_m"), ("east_m", "truth_east_m"), 0.8)):
+        assert abs(np.corrcoef(df[a] - df[truth_a], df[b] - df[truth_b])[0, 1]) < most, (a, b)
     # Wave-frequency motion: total minus LF is present and zero-mean (mm to dm: short
     # waves hardly move a 34 m hull).
     for axis in ("north", "east"):
