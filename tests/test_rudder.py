@@ -143,6 +143,27 @@ def test_inflow_is_continuous_through_zero_and_astern_reverses_the_rudder(esso):
     assert np.sign(ahead[2]) == -np.sign(astern[2]) != 0
 
 
+@pytest.mark.parametrize("u_p, thrust", [(-0.2, 0.0), (-0.2, -3.0), (0.0, 2.0), (-0.2, 2.0), (-0.6, 2.0),
+                                         (0.3, 2.0)])
+def test_inflow_at_the_bollard_and_astern_follows_the_documented_extension(u_p, thrust):
+    """The module's extension of the MMG inflow beyond u > 0, transcribed here: ``c_T = 8 T /
+    (pi rho D^2)`` (0 for a reversing propeller), ``u_jet = u_P + kappa sqrt(c_T)`` astern,
+    ``X = eta u_jet |u_jet| + (1 - eta) u_P |u_P|`` and ``u_R = epsilon sgn(X) sqrt|X|``.
+    The sign tests astern (and continuity at 0) passed with the plain wake's part of X
+    squared without its sign, or the ahead jet formula used astern."""
+    D, rho, eps, kappa, eta = 0.08, 1000.0, 1.09, 0.5, 0.66
+    c_T = 8.0 * max(thrust, 0.0) / (math.pi * rho * D**2)
+    if u_p >= 0.0:
+        u_jet = (1 - kappa) * u_p + kappa * math.sqrt(u_p**2 + c_T)
+    else:
+        u_jet = u_p + kappa * math.sqrt(c_T)
+    X = eta * u_jet * abs(u_jet) + (1 - eta) * u_p * abs(u_p)
+    expected = eps * math.copysign(math.sqrt(abs(X)), X)
+    assert rudder_inflow_scalar(u_p, thrust, D, rho, eps, kappa, eta) == pytest.approx(expected, rel=1e-12)
+    if thrust <= 0.0:                       # no jet: the rudder sees the plain wake, either way
+        assert expected == pytest.approx(eps * u_p, rel=1e-12)
+
+
 def test_lateral_inflow_loads_an_unmoved_rudder_as_damping(esso):
     # the ship sliding to starboard: the rudder at 0 deg pushes the stern back to port
     F = rudder_forces(esso, [0.3, 0.05, 0.0], [0.0], [1.0])[0, 0]
