@@ -515,7 +515,7 @@ def test_hybrid_rollout_refuses_inputs_with_another_number_of_starts():
                         ((z, ["a"] * 2, z, z), r"^nu0: expected an array of real numbers")):
         with pytest.raises((TypeError, ValueError), match=match):
             hp.rollout(*args, n_steps=5, dt_s=1.0, guard=False, nets=False, **held)
-    with pytest.raises(RuntimeError):
+    with pytest.raises(RuntimeError, match=r"^HybridPredictor: not fitted; call fit\(\) or load\(\) first$"):
         hp.rollout(z, z, z, z, n_steps=5, dt_s=1.0, guard=False, nets=True, **held)
 
 
