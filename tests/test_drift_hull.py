@@ -93,6 +93,11 @@ def test_a_choice_that_does_not_carry_over_to_a_left_out_failure_is_not_kept():
     alone = choose_coefficient(obj, 0.005, exclude=2)
     assert alone.munk_multiple == 1.0 and alone.n_failures == 2 and alone.n_left_out_gains == 2
     assert not alone.adopted and alone.p_value == 0.25                  # two that agree are too few
+    # its errors are those of the two failures used (each bowl 0.05 rad at +1 and 0.06 at 0, and
+    # each left out gets the other's +1), not pooled with the excluded one (0.85 at +1, 0.25 at 0)
+    assert alone.error_deg == pytest.approx(np.degrees(0.05), rel=1e-12)
+    assert alone.error_zero_deg == pytest.approx(np.degrees(0.06), rel=1e-12)
+    assert alone.error_left_out_deg == pytest.approx(np.degrees(0.05), rel=1e-12)
     one = choose_coefficient(obj[:, :1], 0.005)
     assert not one.adopted and one.error_left_out_deg is None and one.p_value is None    # no failure to check it on
 
