@@ -153,6 +153,11 @@ def test_drift_starts_lie_in_the_first_drift_and_its_gap_free_segment():
     assert drift_start_rows(np.ones(300), seg, 60, 10).size == 0
     gap = np.r_[np.zeros(180, int), np.ones(120, int)]                    # a gap in the log at row 180
     np.testing.assert_array_equal(drift_start_rows(dp, gap, 60, 10), np.arange(100, 120, 10))
+    # a start every row: the last is the one whose horizon ends on the drift's last row
+    # (299, 199 before DP comes back on, 179 before the gap), not one earlier
+    np.testing.assert_array_equal(drift_start_rows(dp, seg, 60, 1), np.arange(100, 240))
+    np.testing.assert_array_equal(drift_start_rows(restarted, seg, 60, 1), np.arange(100, 140))
+    np.testing.assert_array_equal(drift_start_rows(dp, gap, 60, 1), np.arange(100, 120))
 
 
 def _wind_drift_logs(model, sway_added_mass_scale: float, seeds=(20, 21, 22, 23, 24, 25)):
