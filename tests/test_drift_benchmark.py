@@ -224,15 +224,21 @@ def test_ratio_table_keeps_log_order_and_marks_ratios_without_a_reference():
         for state in ("north_m", "east_m", "yaw_deg"):
             for window in (5, 20):
                 for h, scale in ((30.0, 0.5), (60.0, 1.0)):
-                    rows += [dict(model="hybrid", log=log, state=state, window=window, horizon_s=h, mae=hyb * scale),
+                    # the ratio differs by window (x 1.5 over 20 intervals) and horizon (x 4 at
+                    # 30 s): a table of the wrong horizon, or with its windows swapped, shows
+                    worse = (1.5 if window == 20 else 1.0) * (4.0 if h == 30.0 else 1.0)
+                    rows += [dict(model="hybrid", log=log, state=state, window=window, horizon_s=h,
+                                  mae=hyb * scale * worse),
                              dict(model="dynamic", log=log, state=state, window=window, horizon_s=h, mae=dyn * scale)]
     per = pd.DataFrame(rows)
     r = ratio_table(per)
     assert list(dict.fromkeys(r.index.get_level_values("log"))) == ["b_log", "a_log"]
-    np.testing.assert_allclose(r.loc[("b_log", "yaw_deg")].to_numpy(), [0.5, 0.5])
+    assert list(r.columns) == [5, 20]
+    np.testing.assert_allclose(r.loc[("b_log", "yaw_deg")].to_numpy(), [0.5, 0.75])      # the longest: 60 s
+    np.testing.assert_allclose(ratio_table(per, horizon_s=30.0).loc[("b_log", "yaw_deg")].to_numpy(), [2.0, 3.0])
     assert np.isinf(r.loc[("a_log", "north_m")]).all()
     cells = ratio_cells(r)
-    assert cells.loc["b_log", "east_m"] == "0.50/0.50" and cells.loc["a_log", "east_m"] == "n/a"
+    assert cells.loc["b_log", "east_m"] == "0.50/0.75" and cells.loc["a_log", "east_m"] == "n/a"
     assert ratio_cells(r[[5]]).loc["b_log", "north_m"] == "0.50"          # one window: one number
     md = _per_log_markdown(per)
     assert "(0 of 6 log/state/window ratios; 6 without a ratio (n/a)" in md
