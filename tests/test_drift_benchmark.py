@@ -424,6 +424,46 @@ def test_the_unguarded_row_keeps_its_raw_spread_after_a_failure():
     assert not np.allclose(row.eta_std[:, 1:], calibrated.eta_std[:, 1:])
 
 
+def test_coverage_table_counts_the_raw_and_the_leave_one_out_calibrated_bands():
+    """coverage.csv by hand. Two logs of four starts, spread 1 m, north and east errors at the
+    two leads the table picks: at the first 0.5 m on log 0 and 0.8 m on log 1 (the raw band
+    covers all at 1 and 2 sigma; calibrated on the other log, log 0's spread becomes 0.8 m, which
+    covers, and log 1's 0.5 m, which covers its 0.8 m at 2 sigma only: 1/2 and 1), at the last
+    0.5 m and 1.5 m (raw: 1/2 and 1; calibrated: 1.5 m covers log 0, 0.5 m leaves out log 1 at both:
+    1/2 and 1/2). The lead between them (100 m) is not picked. The data-only model misses by
+    10 m everywhere (raw 0, calibrated to 10 m: 1), the others not at all (1)."""
+    from hybridship.evaluation.drift import ENSEMBLE_MODELS, _coverage_table
+
+    def forecasts(errors_m):
+        """Per log ``(pred, truth, std)`` of four starts whose north/east errors at the three
+        leads are ``errors_m[log]``."""
+        out = []
+        for e in errors_m:
+            p = np.zeros((4, 3, 3))
+            p[..., :2] = np.asarray(e, float)[None, :, None]
+            out.append((p, np.zeros_like(p), np.ones_like(p)))
+        return out
+
+    fc = {name: forecasts([[0.0] * 3, [0.0] * 3]) for name in ENSEMBLE_MODELS}
+    fc["hybrid"] = forecasts([[0.5, 100.0, 0.5], [0.8, 100.0, 1.5]])
+    fc["data_only"] = forecasts([[10.0] * 3, [10.0] * 3])
+    got = _coverage_table(fc, [0, 2], (15, 60), 2).set_index(["model", "horizon_s", "sigma"]).coverage
+    want = {("hybrid", 15, 1): 1.0, ("hybrid", 15, 2): 1.0, ("hybrid", 60, 1): 0.5, ("hybrid", 60, 2): 1.0,
+            ("hybrid_loo_calibrated", 15, 1): 0.5, ("hybrid_loo_calibrated", 15, 2): 1.0,
+            ("hybrid_loo_calibrated", 60, 1): 0.5, ("hybrid_loo_calibrated", 60, 2): 0.5}
+    for h in (15, 60):
+        for sigma in (1, 2):
+            want[("data_only", h, sigma)], want[("data_only_loo_calibrated", h, sigma)] = 0.0, 1.0
+            for name in ("hybrid_nets_unguarded", "hybrid_mean_bias"):
+                want[(name, h, sigma)] = want[(name + "_loo_calibrated", h, sigma)] = 1.0
+    assert sorted(got.index) == sorted(want)
+    for key, value in want.items():
+        assert got[key] == value, key
+    # one log has no other to calibrate on: the raw rows only
+    one = _coverage_table({name: f[:1] for name, f in fc.items()}, [0, 2], (15, 60), 1)
+    assert set(one.model) == set(ENSEMBLE_MODELS)
+
+
 def test_coverage_tables_round_one_coverage_alike():
     """117 of 120 outcomes inside the band is 0.975 as a float just below it: the coverage
     table and the table with the interval print it alike (pandas' round gave 0.98, the
