@@ -722,6 +722,22 @@ def test_fit_carries_the_thrust_error_seen_at_stops_into_the_prior(model):
     est = EnvironmentEstimator(model).fit(logs)
     np.testing.assert_allclose(est.thrust_error_mean, [-0.2, 0.0, 0.0], atol=0.06)
     assert np.all(est.thrust_error_std < 0.2)
+    # by hand from the filter read 60 s after each stop: the precision-weighted mean, and a
+    # spread no smaller than the stops' pooled uncertainty (here it is that: the two stops
+    # agree within it), nor than their scatter
+    theta, prec = [], []
+    for a in logs:
+        stop = int(np.flatnonzero(a.dp_active == 0)[0])
+        at = EnvironmentEstimator(model).run(a, [int(np.searchsorted(a.time_s, a.time_s[stop] + 60.0))])
+        theta.append(at.x[0, 11:])
+        prec.append(1.0 / np.diag(at.P[0])[11:])
+    theta, prec = np.array(theta), np.array(prec)
+    mean = (prec * theta).sum(axis=0) / prec.sum(axis=0)
+    pooled = 1.0 / np.sqrt(prec.sum(axis=0))
+    scatter = np.sqrt((prec * (theta - mean) ** 2).sum(axis=0) / prec.sum(axis=0))
+    assert np.all(scatter < pooled)
+    np.testing.assert_allclose(est.thrust_error_mean, mean, rtol=1e-9)
+    np.testing.assert_allclose(est.thrust_error_std, np.maximum(pooled, scatter), rtol=1e-9)
     no_stop = as_log_arrays(physics_log(model, duration_s=600, t_shutdown_s=None, seed=30), model.vessel)
     for unchanged in (EnvironmentEstimator(model).fit(logs, dp_only=True), EnvironmentEstimator(model).fit([no_stop])):
         np.testing.assert_array_equal(unchanged.thrust_error_mean, 0.0)
