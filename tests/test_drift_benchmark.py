@@ -362,11 +362,15 @@ def test_loo_calibrated_spread_gives_one_sigma_coverage_on_the_other_logs():
     rng = np.random.default_rng(1)
     P = np.abs(rng.normal(size=(3, 200, 2, 3)))
     P[0] *= 10.0                                      # one log far worse: it must not set its own scale
-    T, S = np.zeros_like(P), np.ones_like(P)
+    # spreads that differ from forecast to forecast: the errors count in units of their own
+    # spread, and each forecast's spread is scaled (a spread of 1 everywhere hid both)
+    T, S = np.zeros_like(P), rng.uniform(0.5, 2.0, size=P.shape)
     Scal = _loo_calibrated_spread(P, T, S, 2)
     for i in range(3):
-        k = Scal[i, 0, :, 0]                          # (n_horizons,)
-        others = np.delete(P, i, axis=0)[..., :2]
+        factor = Scal[i] / S[i]                       # one per horizon: every start and state alike
+        np.testing.assert_allclose(factor, np.broadcast_to(factor[:1, :, :1], factor.shape), rtol=1e-12)
+        k = factor[0, :, 0]                           # (n_horizons,)
+        others = np.delete(P / S, i, axis=0)[..., :2]
         cov = (others <= k[None, None, :, None]).mean(axis=(0, 1, 3))
         np.testing.assert_allclose(cov, 0.6827, atol=0.01)
 
