@@ -132,6 +132,10 @@ def test_shared_station_keeping_is_not_shared_across_first_rows(model):
     # any real number type is a coefficient: an integer 0 is no term, as 0.0 is
     np.testing.assert_array_equal(est.run(a, rows, drift_yaw_uv_rad_per_m2=np.int64(0)).x,
                                   est.run(a, rows, drift_yaw_uv_rad_per_m2=0.0).x)
+    # a flag or a text is not one (True would have been taken as 1 rad/m^2): refused by name
+    for bad in (True, "0.004"):
+        with pytest.raises(ValueError, match=r"drift_yaw_uv_rad_per_m2: expected a finite number"):
+            est.run(a, rows, drift_yaw_uv_rad_per_m2=bad)
     assert not np.array_equal(alone.x, est.run(a, rows, first_row=3).x)       # and k = 0.004 is one
 
 
