@@ -435,21 +435,22 @@ def test_coverage_table_counts_the_raw_and_the_leave_one_out_calibrated_bands():
     covers, and log 1's 0.5 m, which covers its 0.8 m at 2 sigma only: 1/2 and 1), at the last
     0.5 m and 1.5 m (raw: 1/2 and 1; calibrated: 1.5 m covers log 0, 0.5 m leaves out log 1 at both:
     1/2 and 1/2). The lead between them (100 m) is not picked. The data-only model misses by
-    10 m everywhere (raw 0, calibrated to 10 m: 1), the others not at all (1)."""
-    from hybridship.evaluation.drift import ENSEMBLE_MODELS, _coverage_table
+    10 m everywhere (raw 0, calibrated to 10 m: 1), the others not at all (1). The heading's
+    table counts the heading's errors."""
+    from hybridship.evaluation.drift import ENSEMBLE_MODELS, _coverage_table, _coverage_tables
 
-    def forecasts(errors_m):
+    def forecasts(errors_m, heading_rad=0.0):
         """Per log ``(pred, truth, std)`` of four starts whose north/east errors at the three
-        leads are ``errors_m[log]``."""
+        leads are ``errors_m[log]``, and the heading's ``heading_rad``."""
         out = []
         for e in errors_m:
-            p = np.zeros((4, 3, 3))
+            p = np.full((4, 3, 3), heading_rad)
             p[..., :2] = np.asarray(e, float)[None, :, None]
             out.append((p, np.zeros_like(p), np.ones_like(p)))
         return out
 
     fc = {name: forecasts([[0.0] * 3, [0.0] * 3]) for name in ENSEMBLE_MODELS}
-    fc["hybrid"] = forecasts([[0.5, 100.0, 0.5], [0.8, 100.0, 1.5]])
+    fc["hybrid"] = forecasts([[0.5, 100.0, 0.5], [0.8, 100.0, 1.5]], heading_rad=1.5)
     fc["data_only"] = forecasts([[10.0] * 3, [10.0] * 3])
     got = _coverage_table(fc, [0, 2], (15, 60), 2).set_index(["model", "horizon_s", "sigma"]).coverage
     want = {("hybrid", 15, 1): 1.0, ("hybrid", 15, 2): 1.0, ("hybrid", 60, 1): 0.5, ("hybrid", 60, 2): 1.0,
@@ -466,6 +467,13 @@ def test_coverage_table_counts_the_raw_and_the_leave_one_out_calibrated_bands():
     # one log has no other to calibrate on: the raw rows only
     one = _coverage_table({name: f[:1] for name, f in fc.items()}, [0, 2], (15, 60), 1)
     assert set(one.model) == set(ENSEMBLE_MODELS)
+    # coverage_heading.csv counts the heading's own errors: the hybrid's miss by 1.5 rad (outside
+    # 1 sigma where its position is inside at the first lead, inside 2), the others' not at all
+    heading = _coverage_tables(fc, [0, 2], (15, 60), 2, 0)[2].set_index(["model", "horizon_s", "sigma"])
+    for name in ENSEMBLE_MODELS:
+        for h in (15, 60):
+            assert heading.coverage[(name, h, 1.0)] == (0.0 if name == "hybrid" else 1.0), (name, h)
+            assert heading.coverage[(name, h, 2.0)] == 1.0 and heading.n_failures[(name, h, 2.0)] == 2
 
 
 def test_coverage_tables_round_one_coverage_alike():
