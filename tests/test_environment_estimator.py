@@ -705,6 +705,12 @@ def test_run_leaves_out_optional_rows_before_the_first_valid_position(model):
     assert list(est.rows) == [200, 60, 120]
     with pytest.raises(ValueError, match="no valid position/heading at or before row 0"):
         EnvironmentEstimator(model).run(a, np.array([200, 0]), required=2)
+    # a row past the log's end, or before the filter's first row, is refused as such (not
+    # taken for a row without a position, nor left to an index error)
+    n = len(a.time_s)
+    for rows, first_row in (([120, n], 0), ([120, 5], 10)):
+        with pytest.raises(ValueError, match=rf"rows: must lie in \[{first_row}, {n - 1}\]"):
+            EnvironmentEstimator(model).run(a, np.array(rows), first_row=first_row, required=1)
 
 
 def _tunnel_deficit_logs(model, seeds, *, t_shutdown_s=700.0, duration_s=900.0):
