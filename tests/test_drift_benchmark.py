@@ -251,6 +251,17 @@ def test_too_few_calibration_forecasts_are_refused_with_the_counts():
     with pytest.raises(ValueError, match=r"n_intervals: 3 forecasts after each of 6 failures .* give 18 per lead"
                                          r".* to calibrate \(more logs\)"):
         _check_calibration_count(6, 3, "the other logs' failures", "more logs")
+    # the limit is the calibration's own: the heading's scale fits on 20 forecasts per lead (one
+    # error each) and not on 19, so 5 x 4 pass the check and 1 x 19 do not
+    from hybridship.residual.calibration import fit_spread_scale
+
+    err, lead = np.abs(np.random.default_rng(0).normal(size=(20, 3))), np.array([15.0, 30.0, 60.0])
+    fit_spread_scale(err, np.ones_like(err), lead)
+    with pytest.raises(ValueError, match="19 finite samples"):
+        fit_spread_scale(err[:19], np.ones((19, 3)), lead)
+    _check_calibration_count(5, 4, "calibration_scenarios", "advice")
+    with pytest.raises(ValueError, match=r"give 19 per lead; the spread after a failure needs at least 20"):
+        _check_calibration_count(1, 19, "calibration_scenarios", "advice")
 
 
 def test_a_test_log_without_a_failure_is_refused_before_training(tiny_folder, tmp_path, monkeypatch, capsys):
