@@ -362,6 +362,28 @@ def test_the_drift_benchmark_chooses_it_without_the_scored_failure(heavy_sway, l
     assert other is None and hp.drift_yaw_uv_rad_per_m2 == fitted
 
 
+def test_the_drift_benchmarks_table_gives_fits_choice_to_every_other_test_log():
+    """Scored on other logs (no per-log choice), drift_hull.csv gives every test log fit's
+    coefficient and fit's evidence, from the training logs' failures; where fit chose none
+    (too few failures, or the option off), "none", 0 and no evidence."""
+    from types import SimpleNamespace
+
+    from hybridship.evaluation.drift import _drift_hull_table
+
+    choice = choose_coefficient(np.column_stack([_bowl(1.0, 1.0 + 0.3 * j) for j in range(5)]), 0.005)
+    info = {**choice.as_dict(), "horizon_s": 60.0, "start_every_s": 10.0}          # as fit records it
+    fitted = SimpleNamespace(training_info={"drift_hull": info}, drift_yaw_uv_rad_per_m2=0.005)
+    table = _drift_hull_table(fitted, None, ["a", "b"])
+    assert list(table.log) == ["a", "b"] and set(table.source) == {"training logs' failures"}
+    assert list(table.coefficient_rad_per_m2) == [0.005, 0.005] and list(table.munk_multiple) == [1.0, 1.0]
+    assert table.adopted.all() and list(table.n_failures) == [5, 5] and list(table.n_left_out_gains) == [5, 5]
+    np.testing.assert_allclose(table.p_value, 1 / 32)
+    np.testing.assert_allclose(table.error_deg, np.degrees(0.05))                  # every bowl at +1
+    none = _drift_hull_table(SimpleNamespace(training_info={}, drift_yaw_uv_rad_per_m2=0.0), None, ["a"])
+    assert list(none.source) == ["none"] and list(none.coefficient_rad_per_m2) == [0.0] and not none.adopted[0]
+    assert none[["munk_multiple", "n_failures", "error_deg", "p_value"]].isna().all().all()
+
+
 def test_the_drift_benchmark_forecasts_each_failure_with_its_own_coefficient(left_out_choices):
     """The benchmark's forecasts of failure k use per_log_hull[k] (and 0 for None), the spread
     after a failure is calibrated on errors with that coefficient, and the model is left at 0."""
