@@ -7,6 +7,7 @@ import pandas as pd
 import pytest
 
 from conftest import load_benchmark
+from hybridship.frames import body_to_ned
 from hybridship.physics.model import DynamicModel
 from hybridship.predictors import as_log_arrays
 from hybridship.sim.scenario import embedded_scenarios
@@ -98,9 +99,7 @@ def test_truth_is_the_simulators_loads_less_the_models(evt):
     psi = a.eta[:, 2]
     assert np.ptp(np.degrees(np.unwrap(psi))) > 5.0                               # the rotation turns
     body = logged["wave2"] + logged["wind"] - wind_model
-    c, s = np.cos(psi), np.sin(psi)
-    ned = np.column_stack([c * body[:, 0] - s * body[:, 1], s * body[:, 0] + c * body[:, 1], body[:, 2]])
-    np.testing.assert_allclose(load, ned, rtol=1e-9, atol=1e-6)
+    np.testing.assert_allclose(load, body_to_ned(body, psi), rtol=1e-9, atol=1e-6)
     np.testing.assert_allclose(thrust_error, logged["thrust"] - thrust_model, rtol=1e-9, atol=1e-6)
     np.testing.assert_allclose(cur, np.tile([0.3, np.radians(200.0)], (len(df), 1)))
 

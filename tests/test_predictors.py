@@ -7,7 +7,7 @@ import warnings
 import numpy as np
 import pytest
 
-from hybridship.frames import wrap_pi
+from hybridship.frames import body_to_ned, wrap_pi
 from hybridship.logs.io import LogFormatError
 from hybridship.predictors import (DeadReckoning, DynamicPredictor, HybridPredictor, ModelFileError,
                                    as_log_arrays)
@@ -268,8 +268,7 @@ def test_bias_members_are_centred_on_the_bias_and_reproducible(model, current_lo
     # one c, each block 60 consecutive usable rows of the window
     a, r = prep.arrays, prep.residual_c
     psi = a.eta[:, 2]
-    ned = np.column_stack([np.cos(psi) * r[:, 0] - np.sin(psi) * r[:, 1],
-                           np.sin(psi) * r[:, 0] + np.cos(psi) * r[:, 1], r[:, 2]])
+    ned = body_to_ned(r, psi)
     assert np.ptp(psi[: i + 1]) > 0.3                          # the turn to NED matters
     rows = np.arange(max(0, i - 899), i + 1)
     v = ned[rows][np.isfinite(ned[rows]).all(1) & (a.dp_active[rows] == 1)]

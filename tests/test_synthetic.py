@@ -7,6 +7,7 @@ import math
 import numpy as np
 import pytest
 
+from hybridship.frames import body_to_ned
 from hybridship.sim.synthetic import physics_log
 
 
@@ -36,8 +37,9 @@ def test_velocities_are_in_the_body_frame_and_the_truth_accelerations_are_their_
     psi = np.radians(log["heading_deg"].to_numpy())
     u, v = log["u_m_s"].to_numpy(), log["v_m_s"].to_numpy()
     r = np.radians(log["r_deg_s"].to_numpy())
-    pairs = [(np.gradient(log["north_m"].to_numpy(), t), u * np.cos(psi) - v * np.sin(psi)),
-             (np.gradient(log["east_m"].to_numpy(), t), u * np.sin(psi) + v * np.cos(psi)),
+    eta_dot = body_to_ned(np.column_stack([u, v, r]), psi)
+    pairs = [(np.gradient(log["north_m"].to_numpy(), t), eta_dot[:, 0]),
+             (np.gradient(log["east_m"].to_numpy(), t), eta_dot[:, 1]),
              (np.gradient(u, t), log["truth_u_dot_m_s2"].to_numpy()),
              (np.gradient(v, t), log["truth_v_dot_m_s2"].to_numpy()),
              (np.gradient(r, t), log["truth_r_dot_rad_s2"].to_numpy())]
