@@ -918,7 +918,9 @@ def test_live_vessel_spread_is_the_settings_spread():
 
 def _scipy_time_carried_by_current(current, psi0, radii):
     """Independent adaptive solve of the nominal model's drift from rest with the thrusters
-    stopped, in a constant current ``[speed_m_s, dir_to_rad]`` only."""
+    stopped, in a constant current ``[speed_m_s, dir_to_rad]`` only, from heading ``psi0``
+    [rad]: the times [s] at which the ship first reaches each of ``radii`` [m] (inf if not
+    within 300 s)."""
     model = get_model("gunnerus")
     K = model.n_actuators
     az = np.array([t.fixed_angle_rad for t in model.vessel.thrusters])
