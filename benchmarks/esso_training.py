@@ -92,28 +92,33 @@ def mirror_log(a, vessel):
     return dataclasses.replace(a, eta=eta, nu=nu, azimuth_rad=-a.azimuth_rad, wind=wind)
 
 
-def froude_scaled_environment(vessel, reference="gunnerus"):
-    """The environment estimator's default settings (made for the ``reference`` vessel at full
-    scale) Froude-scaled to ``vessel`` by the ratio of their Lpp: lengths by 1/lambda, speeds
-    and times by 1/sqrt(lambda), accelerations kept, yaw rates by sqrt(lambda), yaw
-    accelerations by lambda; a random walk's intensity [per sqrt(s)] gains lambda^(1/4). The
-    filter steps at 0.3 s on the Esso model (1 s scaled to 0.29 s, rounded to the 10-Hz rows)."""
+def froude_scaled_environment(vessel, reference="gunnerus", defaults=None):
+    """The environment estimator's settings ``defaults`` (the package's when None; made for the
+    ``reference`` vessel at full scale) Froude-scaled to ``vessel`` by the ratio of their Lpp:
+    lengths by 1/lambda, speeds and times by 1/sqrt(lambda), accelerations kept, yaw rates by
+    sqrt(lambda), yaw accelerations by lambda; a random walk's intensity [per sqrt(s)] gains
+    lambda^(1/4). The filter steps at 0.3 s on the Esso model (1 s scaled to 0.29 s, rounded to
+    the 10-Hz rows). Settings without units (fractions, priors of thrust errors, the outlier
+    gate) are kept."""
     from hybridship.residual.environment import EnvironmentConfig
     from hybridship.vessel import load_vessel
 
     lam = load_vessel(reference).particulars.L_pp_m / vessel.particulars.L_pp_m
     s = np.sqrt(lam)
-    d = EnvironmentConfig()
-    return EnvironmentConfig(
+    d = EnvironmentConfig() if defaults is None else defaults
+    return EnvironmentConfig(**{**d.model_dump(), **dict(
         position_std_m=d.position_std_m / lam, velocity_std_m_s=d.velocity_std_m_s / s,
         yaw_rate_std_deg_s=d.yaw_rate_std_deg_s * s, yaw_accel_noise_rad_s2=d.yaw_accel_noise_rad_s2 * lam,
         current_prior_m_s=d.current_prior_m_s / s, load_yaw_prior_rad_s2=d.load_yaw_prior_rad_s2 * lam,
+        current_walk_m_s=d.current_walk_m_s / np.sqrt(s), current_std_at_stop_m_s=d.current_std_at_stop_m_s / s,
         load_walk_m_s2=d.load_walk_m_s2 * np.sqrt(s), load_yaw_walk_rad_s2=d.load_yaw_walk_rad_s2 * lam * np.sqrt(s),
         load_walk_after_stop_m_s2=d.load_walk_after_stop_m_s2 * np.sqrt(s),
         load_yaw_walk_after_stop_rad_s2=d.load_yaw_walk_after_stop_rad_s2 * lam * np.sqrt(s),
+        thrust_error_walk=d.thrust_error_walk * np.sqrt(s),
         wave_window_s=d.wave_window_s / s, variance_window_s=d.variance_window_s / s,
         filter_step_s=round(d.filter_step_s / s, 1), held_load_window_s=d.held_load_window_s / s,
-        held_load_block_s=d.held_load_block_s / s, wave_axis_window_s=d.wave_axis_window_s / s)
+        held_load_block_s=d.held_load_block_s / s, wave_axis_window_s=d.wave_axis_window_s / s,
+        settle_s=d.settle_s / s, max_bridged_gap_s=d.max_bridged_gap_s / s)})
 
 
 _UNDERSCORE_TOKEN = r"_(?:(?:hl|h|b|i|v|c|ad|lr|ema)\d+(?:\.\d+)?|(?:m|sd)\d+|abs|lead|own|th)"

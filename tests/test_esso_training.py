@@ -127,7 +127,15 @@ FROUDE_POWERS = {"position_std_m": -1.0, "velocity_std_m_s": -0.5, "current_prio
                  "load_walk_m_s2": 0.25, "load_walk_after_stop_m_s2": 0.25,                 # accelerations: 0
                  "load_yaw_walk_rad_s2": 1.25, "load_yaw_walk_after_stop_rad_s2": 1.25,
                  "wave_window_s": -0.5, "variance_window_s": -0.5, "held_load_window_s": -0.5,
-                 "held_load_block_s": -0.5, "wave_axis_window_s": -0.5}
+                 "held_load_block_s": -0.5, "wave_axis_window_s": -0.5, "settle_s": -0.5,
+                 "max_bridged_gap_s": -0.5, "current_std_at_stop_m_s": -0.5, "current_walk_m_s": -0.25,
+                 "thrust_error_walk": 0.25}
+#: Settings the scaling keeps: accelerations, angles, fractions, counts and choices.
+FROUDE_KEPT = {"heading_std_deg", "accel_noise_m_s2", "load_prior_m_s2", "thrust_error_prior", "thrust_error_model",
+               "thrust_error_prior_per_thruster", "use_velocity", "adaptive_measurement_std",
+               "reset_yaw_load_at_stop", "yaw_load_kept_at_stop", "yaw_load_std_at_stop", "load_to_current_at_stop",
+               "innovation_gate_sigma", "max_gated_samples", "wave_turned_yaw_load", "min_wave_anisotropy",
+               "min_wave_sin2", "load_model"}
 
 
 def test_the_env_variant_scales_every_dimensional_setting_by_its_froude_power(et):
@@ -136,8 +144,16 @@ def test_the_env_variant_scales_every_dimensional_setting_by_its_froude_power(et
     d, c = EnvironmentConfig(), et.froude_scaled_environment(load_vessel("esso_osaka_model"))
     lam = load_vessel("gunnerus").particulars.L_pp_m / load_vessel("esso_osaka_model").particulars.L_pp_m
     assert lam > 10                                     # a 3 m model of a 36 m ship: every power matters
+    # every setting is either scaled or kept on purpose (a new time or speed setting must be added)
+    assert set(EnvironmentConfig.model_fields) == set(FROUDE_POWERS) | FROUDE_KEPT | {"filter_step_s"}
+    # settings whose default is 0 are scaled from a non-zero value, so that their power is seen
+    d = d.model_copy(update={"settle_s": 30.0, "current_std_at_stop_m_s": 0.05, "current_walk_m_s": 1e-3,
+                             "thrust_error_walk": 1e-3})
+    c = et.froude_scaled_environment(load_vessel("esso_osaka_model"), defaults=d)
     for name, power in FROUDE_POWERS.items():
         assert getattr(c, name) == pytest.approx(getattr(d, name) * lam ** power, rel=1e-12), name
+    for name in FROUDE_KEPT:
+        assert getattr(c, name) == getattr(d, name), name
     # accelerations and angles are kept; the filter's step is the scaled 1 s on the 10-Hz rows
     assert (c.load_prior_m_s2, c.accel_noise_m_s2, c.heading_std_deg) == (d.load_prior_m_s2, d.accel_noise_m_s2,
                                                                           d.heading_std_deg)
