@@ -266,6 +266,13 @@ def test_tracking_the_reference_exactly_demands_its_acceleration_in_the_body_fra
         tau = dp.update(ref.eta_d, to_body @ ref.eta_dot_d)
         np.testing.assert_allclose(tau, model.mass_matrix @ to_body @ ref.eta_ddot_d, atol=1e-6)
     assert tau[1] != 0.0 and abs(ref.eta_ddot_d[0]) > 0.0
+    # without the feed-forward, the PD loop on the reference demands nothing
+    dp = DPController(model, dt_s=1.0, ki_ratio=0.0, reference_feedforward=False)
+    dp.reset([20.0, 0.0, psi], eta_measured=[0.0, 0.0, psi])
+    for _ in range(40):
+        ref = dp.reference
+        np.testing.assert_allclose(dp.update(ref.eta_d, to_body @ ref.eta_dot_d), 0.0, atol=1e-9)
+    assert abs(ref.eta_ddot_d[0]) > 0.0
 
 
 def test_integral_is_kept_in_ned_and_pushes_back_in_the_body_frame(model):
