@@ -52,7 +52,7 @@ import pandas as pd
 
 from hybridship.evaluation.drift import log_files
 from hybridship.fileio import atomic_write, markdown_table, record_inputs
-from hybridship.frames import body_to_ned
+from hybridship.frames import body_to_ned, ned_to_body
 from hybridship.evaluation.metrics import shutdown_index
 from hybridship.physics.model import DynamicModel
 from hybridship.predictors import as_log_arrays
@@ -168,10 +168,7 @@ def main(argv=None) -> int:
         cur_t, load_t, thr_t = _truth(df, model, a)
         # estimated load as a force: M b with b rotated to the body frame and back (M is body-fixed)
         psi = est.x[:, 2]
-        b = est.load_accel
-        c, s = np.cos(psi), np.sin(psi)
-        b_body = np.column_stack([c * b[:, 0] + s * b[:, 1], -s * b[:, 0] + c * b[:, 1], b[:, 2]])
-        load_e = body_to_ned(b_body @ M.T, psi)
+        load_e = body_to_ned(ned_to_body(est.load_accel, psi) @ M.T, psi)
         cur_e = est.current_speed_dir
         r = np.arange(first, last + 1)
         # the estimated thrust error as a force, at the logged states and commands of each row
