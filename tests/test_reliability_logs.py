@@ -15,6 +15,7 @@ import pandas as pd
 import pytest
 
 from hybridship.forecast_inputs import forecast_log_arrays
+from hybridship.frames import ned_to_body
 from hybridship.logs.ingest import sort_samples
 from hybridship.logs.io import (LogFormatError, LogFormatWarning, check_log_against_vessel, log_to_arrays,
                                 read_log, speed_scale_vs_track, validate_log, write_log)
@@ -89,6 +90,45 @@ def test_speed_check_stays_quiet_when_velocities_do_not_describe_the_track(movin
 def test_yaw_rate_in_rad_s_is_refused(moving_log):
     df = moving_log.assign(r_deg_s=np.radians(moving_log.r_deg_s))
     err = _refused(df, r"r_deg_s: is 0\.01\d+ times the rate of change of heading_deg .*looks like rad/s")
+    assert err.column == "r_deg_s"
+
+
+def _turning_track(t_s, speed_m_s):
+    """A ship heading 100 +- 20 deg (a slow sine) while moving north at ``speed_m_s``, sampled at
+    ``t_s`` [s]: heading, yaw rate [deg/s] and body velocities [m/s] exactly consistent with the track."""
+    psi_deg = 100.0 + 20.0 * np.sin(t_s / 40.0)
+    vel_body = ned_to_body(np.column_stack([np.full_like(t_s, speed_m_s), 0.0 * t_s, 0.0 * t_s]), np.radians(psi_deg))
+    return pd.DataFrame({"time_s": t_s, "north_m": speed_m_s * t_s, "east_m": 0.0, "heading_deg": psi_deg,
+                         "u_m_s": vel_body[:, 0], "v_m_s": vel_body[:, 1], "r_deg_s": 0.5 * np.cos(t_s / 40.0),
+                         "dp_active": 0})
+
+
+@pytest.mark.parametrize("rate_hz, to_unit, unit", [(1.0, 1.0 / 60.0, "minutes"), (50.0, 1e3, "milliseconds")])
+def test_time_in_minutes_or_milliseconds_is_refused_where_the_ship_moves(rate_hz, to_unit, unit):
+    """time_s in minutes at 1 Hz or in milliseconds at 50 Hz (spacings 1/60 and 20, both inside the
+    plausible range): every rate is off by the unit's factor. The yaw rate alone would read as
+    rad/s in minutes (pi/180 is 5 % from 1/60); the speeds, which move the ship along the track
+    only with time_s in seconds, decide that the time column is off."""
+    df = _turning_track(np.arange(0.0, 400.0, 1.0 / rate_hz), speed_m_s=0.5)
+    validate_log(df, channel_names=THRUSTERS, rotatable=ROTATABLE)         # in seconds it passes
+    bad = df.assign(time_s=df.time_s * to_unit)
+    err = _refused(bad, rf"time_s: looks like {unit}: r_deg_s is {re.escape(f'{to_unit:.3g}')} times the rate of "
+                        rf"change of heading_deg .*time_s x {re.escape(f'{1 / to_unit:g}')} \(as seconds\)")
+    assert err.column == "time_s"
+    # without a yaw rate the speed check names the time column: 400 samples in minutes hold no
+    # 20-minute window; in milliseconds the track moves 1000 times too slowly for the speeds
+    what = "no 20-s window of the track" if unit == "minutes" else r"u_m_s, v_m_s are 1e\+03 times the speed"
+    err = _refused(bad.drop(columns="r_deg_s"), rf"time_s: looks like {unit}: {what}")
+    assert err.column == "time_s"
+
+
+def test_time_in_minutes_on_station_is_named_beside_rad_s():
+    """On station the track does not move: the yaw rate alone cannot tell rad/s from minutes, and
+    the message says both."""
+    df = _turning_track(np.arange(400.0), speed_m_s=0.0)
+    validate_log(df, channel_names=THRUSTERS, rotatable=ROTATABLE)
+    err = _refused(df.assign(time_s=df.time_s / 60.0),
+                   r"r_deg_s: is 0\.0167 times .*looks like rad/s.*or, if r_deg_s is in deg/s, time_s is in minutes")
     assert err.column == "r_deg_s"
 
 

@@ -21,7 +21,8 @@ expected:
 * one of ``wind_speed_m_s`` and ``wind_dir_deg`` without the other;
 * non-numeric values in a known numeric column; infinities anywhere in one;
 * ``time_s`` not finite or not strictly increasing; a median sample spacing outside
-  0.01..60 s (``time_s`` in milliseconds?); NaN in a required column (unless
+  0.01..60 s (``time_s`` in milliseconds?); inside it, a ``time_s`` in minutes, hours or
+  milliseconds, by the speeds against the track (below); NaN in a required column (unless
   ``allow_missing``, the forecast-time mode of :mod:`hybridship.forecast_inputs.start_window`);
 * a heading, ``wind_dir_deg`` or ``<thruster>_azimuth_deg`` outside -360..720 deg
   (milliradians, centidegrees?); a heading that looks like
@@ -32,7 +33,9 @@ expected:
 * ``u_m_s``/``v_m_s`` whose speed is not the speed of the track (see
   :func:`speed_scale_vs_track`): knots (1.94 x) and km/h (3.6 x) are named;
 * ``r_deg_s`` that is 1/57.3 of the heading's rate of change (rad/s) or 57.3 x (converted
-  twice), or whose sign is opposite to it (counter-clockwise convention);
+  twice), or whose sign is opposite to it (counter-clockwise convention); the message says
+  that minutes in ``time_s`` give nearly the same 1/60, and when the speeds move the ship
+  along the track only with ``time_s`` read in minutes, ``time_s`` is refused instead;
 * thruster columns (``<name>_rpm``, ``<name>_azimuth_deg``) naming a thruster that is not
   in ``channel_names`` (when given);
 * ``dp_active`` values other than 0/1.
@@ -583,7 +586,7 @@ def _validate(df: pd.DataFrame, channel_names, rotatable, source: str, warn_unkn
     for name, x in values.items():
         _check_column_values(column_spec(name), x, t, source, values, unit_statistics)
     if "r_deg_s" in values and unit_statistics:
-        _check_yaw_rate_vs_heading(t, values["heading_deg"], values["r_deg_s"], source)
+        _check_yaw_rate_vs_heading(t, values, source)
     if "u_m_s" in values and "v_m_s" in values and unit_statistics:
         _check_speed_vs_track(t, values, source)
     pair = [c for c in ("wind_speed_m_s", "wind_dir_deg") if c in cols]
@@ -740,15 +743,20 @@ def _check_column_values(spec: ColumnSpec, x: np.ndarray, t: np.ndarray, source:
         _check_angle_unit(spec.name, t, x, source, values.get(spec.rate_column) if spec.rate_column else None)
 
 
-def _check_yaw_rate_vs_heading(t: np.ndarray, h: np.ndarray, r: np.ndarray, source: str) -> None:
+def _check_yaw_rate_vs_heading(t: np.ndarray, values: dict[str, np.ndarray], source: str) -> None:
     """``r_deg_s`` against the rate of change of ``heading_deg``: refused when its sign is
     reversed (counter-clockwise convention), or its scale says rad/s or deg/s converted
-    twice (see :func:`heading_looks_like_radians` for the correlation and scale rule)."""
-    ev = _rate_evidence(t, h, r, 360.0)
+    twice (see :func:`heading_looks_like_radians` for the correlation and scale rule). When
+    another time unit fits the yaw rate and moves the ship along the track with ``u_m_s`` and
+    ``v_m_s``, ``time_s`` is refused instead (minutes read as seconds make every rate 1/60
+    of the logged one)."""
+    ev = _rate_evidence(t, values["heading_deg"], values["r_deg_s"], 360.0)
     if ev is None:
         return
     corr, k = ev
     span = f"between time_s {seconds_text(t[0])} and {seconds_text(t[-1])}"
+    if corr >= 0.3 and not 1.0 / _RATE_SCALE_SPLIT <= k <= _RATE_SCALE_SPLIT:
+        _check_time_unit_by_rates(t, values, k, span, source)
     if corr <= -0.3:
         raise LogFormatError(
             f"r_deg_s: has the opposite sign of the rate of change of heading_deg {span} "
@@ -758,13 +766,55 @@ def _check_yaw_rate_vs_heading(t: np.ndarray, h: np.ndarray, r: np.ndarray, sour
     if corr >= 0.3 and k < 1.0 / _RATE_SCALE_SPLIT:
         raise LogFormatError(
             f"r_deg_s: is {k:.4f} times the rate of change of heading_deg {span} (about 1 expected "
-            f"for deg/s, 0.0175 for rad/s): looks like rad/s; the log format expects deg/s{_where(source)}",
+            f"for deg/s, 0.0175 for rad/s): looks like rad/s; the log format expects deg/s (or, if r_deg_s is in "
+            f"deg/s, time_s is in minutes: 1/60 is as close){_where(source)}",
             column="r_deg_s")
     if corr >= 0.3 and k > _RATE_SCALE_SPLIT:
         raise LogFormatError(
             f"r_deg_s: is {k:.1f} times the rate of change of heading_deg {span} (about 1 expected "
             f"for deg/s): converted from rad/s twice?; the log format expects deg/s{_where(source)}",
             column="r_deg_s")
+
+
+#: Other time units than seconds, as the factor that turns them into seconds.
+_OTHER_TIME_UNITS = ((60.0, "minutes"), (3600.0, "hours"), (1e-3, "milliseconds"))
+
+
+def _time_unit_by_track(t: np.ndarray, values: dict[str, np.ndarray]) -> tuple[str, float] | None:
+    """The other time unit (and its factor to seconds) under which ``u_m_s``, ``v_m_s`` move the
+    ship along the track (north_m, east_m) as they should, when they do not in seconds; None
+    when no unit does, or the track does not move enough to tell."""
+    if "u_m_s" not in values or "v_m_s" not in values:
+        return None
+    for factor, unit in _OTHER_TIME_UNITS:
+        sc = speed_scale_vs_track(t * factor, values["north_m"], values["east_m"], values["heading_deg"],
+                                  values["u_m_s"], values["v_m_s"])
+        if (sc is not None and sc.rms_displacement_m >= SPEED_CHECK_MIN_DISPLACEMENT_M
+                and sc.correlation >= SPEED_CHECK_MIN_CORRELATION
+                and 1.0 / _SPEED_SCALE_SPLIT <= sc.scale <= _SPEED_SCALE_SPLIT):
+            return unit, factor
+    return None
+
+
+def _time_unit_error(unit: str, factor: float, why: str, source: str) -> LogFormatError:
+    """The refusal of ``time_s`` in ``unit`` (``factor`` to seconds), saying ``why``."""
+    return LogFormatError(
+        f"time_s: looks like {unit}: {why}; with time_s x {factor:g} (as seconds) u_m_s, v_m_s move the ship "
+        f"along the track (north_m, east_m); the log format expects seconds{_where(source)}", column="time_s")
+
+
+def _check_time_unit_by_rates(t: np.ndarray, values: dict[str, np.ndarray], k: float, span: str,
+                              source: str) -> None:
+    """Refuse ``time_s`` when the yaw rate is ``k`` times the heading's rate of change (far
+    from 1) and in another time unit both the yaw rate and the speeds fit: two columns in
+    other units are less likely than one time column. The yaw rate alone cannot tell
+    minutes from rad/s (1/60 and pi/180 are 5 % apart); the speeds along a moving track can."""
+    for factor, unit in _OTHER_TIME_UNITS:
+        if 1.0 / _RATE_SCALE_SPLIT <= k * factor <= _RATE_SCALE_SPLIT:
+            found = _time_unit_by_track(t, values)
+            if found is not None and found[0] == unit:
+                raise _time_unit_error(unit, factor, f"r_deg_s is {k:.3g} times the rate of change of "
+                                       f"heading_deg {span}", source)
 
 
 def _check_speed_vs_track(t: np.ndarray, values: dict[str, np.ndarray], source: str) -> None:
@@ -775,6 +825,13 @@ def _check_speed_vs_track(t: np.ndarray, values: dict[str, np.ndarray], source: 
     ``v_m_s`` with the opposite sign."""
     sc = speed_scale_vs_track(t, values["north_m"], values["east_m"], values["heading_deg"], values["u_m_s"],
                               values["v_m_s"])
+    if sc is None or not 1.0 / _SPEED_SCALE_SPLIT <= sc.scale <= _SPEED_SCALE_SPLIT:
+        # in minutes a short log has no 20-unit window, and a long one gives speeds 1/60 of the track's
+        found = _time_unit_by_track(t, values)
+        if found is not None:
+            what = ("no 20-s window of the track" if sc is None else
+                    f"u_m_s, v_m_s are {sc.scale:.3g} times the speed of the track")
+            raise _time_unit_error(*found, what, source)
     if (sc is not None and sc.rms_displacement_m >= SPEED_CHECK_MIN_DISPLACEMENT_M
             and sc.correlation >= SPEED_CHECK_MIN_CORRELATION
             and not 1.0 / _SPEED_SCALE_SPLIT <= sc.scale <= _SPEED_SCALE_SPLIT):
@@ -1177,7 +1234,7 @@ def check_units_on_whole_log(df: pd.DataFrame, vessel, *, source: str = "log") -
         if rot and col in cols:
             _check_angle_unit(col, t, column(col), source)
     if "r_deg_s" in values:
-        _check_yaw_rate_vs_heading(t, values["heading_deg"], values["r_deg_s"], source)
+        _check_yaw_rate_vs_heading(t, values, source)
     if "u_m_s" in values and "v_m_s" in values:
         _check_speed_vs_track(t, values, source)
     _check_rpm_not_fractions(vessel, column, cols, len(df), source)
