@@ -101,7 +101,10 @@ def test_multi_step_loss_options_train_round_trip_and_are_validated(tmp_path):
     from hybridship.residual.multistep import _train_val_starts, train_multistep
 
     m, rc, hp, small, starts = _small_multistep_setup()
-    opts = MultiStepConfig(**{**small.__dict__, "loss": "absolute", "lead_weighting": "lead", "iterations": 3})
+    # a large step: the validation loss falls, then rises, so that the best weights are neither the
+    # warm start's nor the last ones
+    opts = MultiStepConfig(**{**small.__dict__, "loss": "absolute", "lead_weighting": "lead", "iterations": 4,
+                              "lr": 0.3})
     ens, hist = train_multistep(hp.ensemble, m, starts, rc.feature_index, opts)
     s = starts.take(_train_val_starts(starts, opts.max_val_starts)[1])
     L = 0.5 * m.vessel.particulars.L_pp_m
@@ -120,6 +123,7 @@ def test_multi_step_loss_options_train_round_trip_and_are_validated(tmp_path):
     # the weights that come back are those of the best validation, and its loss is recorded
     np.testing.assert_allclose(loss(ens), hist["best_val_loss"], rtol=1e-9)
     assert hist["best_val_loss"] == min(hist["val_loss"])
+    assert 0 < int(np.argmin(hist["val_loss"])) < len(hist["val_loss"]) - 1
     for field, value in (("loss", "l1"), ("lead_weighting", "late"), ("curriculum_start_s", 20.0),
                          ("curriculum_fraction", 0.0), ("anchor_decay", -1.0)):
         with pytest.raises(ValueError, match=field):
