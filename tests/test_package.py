@@ -5,6 +5,7 @@ from __future__ import annotations
 import ast
 import subprocess
 import sys
+import tomllib
 
 import hybridship
 from conftest import ROOT
@@ -120,7 +121,10 @@ def test_python_m_hybridship_runs_the_command_line():
     out = subprocess.run([sys.executable, "-m", "hybridship", "--version"], capture_output=True, text=True,
                          cwd=ROOT)
     assert out.returncode == 0, out.stderr
-    assert out.stdout.startswith("hybridship "), out.stdout
+    # the version the wheel is built with, read from pyproject.toml (not from the package)
+    version = tomllib.loads((ROOT / "pyproject.toml").read_text(encoding="utf-8"))["project"]["version"]
+    assert out.stdout == f"hybridship {version}\n", out.stdout
+    assert hybridship.__version__ == version
     bad = subprocess.run([sys.executable, "-m", "hybridship", "train"], capture_output=True, text=True, cwd=ROOT)
     assert bad.returncode == 2 and bad.stderr.startswith("hybridship train: error:"), bad.stderr
 
