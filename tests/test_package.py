@@ -108,6 +108,18 @@ def test_public_api_is_importable_from_the_package():
     assert set(hybridship.__all__) <= set(dir(hybridship))
 
 
+def test_dir_lists_the_public_api_before_any_name_is_used():
+    """``dir(hybridship)`` in a fresh interpreter (nothing resolved yet) names all of ``__all__``
+    (what tab completion offers), without importing the modules behind the names."""
+    code = ("import sys, hybridship; names = dir(hybridship); "
+            "print(','.join(sorted(set(hybridship.__all__) - set(names)))); "
+            "print(','.join(m for m in ('numpy', 'pandas', 'torch') if m in sys.modules))")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True, cwd=ROOT)
+    missing, heavy = out.stdout.split("\n")[:2]
+    assert missing == "", f"dir(hybridship) leaves out: {missing}"
+    assert heavy == "", f"dir(hybridship) imported {heavy}"
+
+
 def test_importing_the_package_loads_no_heavy_dependency():
     code = ("import sys, hybridship; print(','.join(m for m in ('numpy', 'pandas', 'numba', 'torch', 'scipy') "
             "if m in sys.modules))")
