@@ -12,9 +12,11 @@ ROOT = Path(__file__).resolve().parents[1]
 def test_package_list_covers_every_subpackage():
     config = tomllib.loads((ROOT / "pyproject.toml").read_text(encoding="utf-8"))["tool"]["setuptools"]
     listed = set(config["packages"])
-    found = {".".join(init.parent.relative_to(ROOT).parts)
-             for init in (ROOT / "hybridship").rglob("__init__.py")
-             if "__pycache__" not in init.parts}
+    # every folder holding a module, also one without an __init__.py (a namespace package imports
+    # from the source tree, but an explicit package list leaves it out of the wheel)
+    found = {".".join(module.parent.relative_to(ROOT).parts)
+             for module in (ROOT / "hybridship").rglob("*.py")
+             if "__pycache__" not in module.parts}
     assert found - listed == set(), f"subpackages missing from pyproject.toml [tool.setuptools] packages: {sorted(found - listed)}"
     for name, folder in config.get("package-dir", {}).items():
         assert name in listed and (ROOT / folder).is_dir(), f"package-dir {name} -> {folder}"
