@@ -97,14 +97,35 @@ def _schema_fields(model, prefix=""):
     return out
 
 
+def _page_sections(page: str) -> dict[str, str]:
+    """Table path ("" for "## Top level", "damping.linear" for ``## `[damping.linear]` ``,
+    "thrusters" for ``## `[[thrusters]]` ``) -> the text of its section of the page."""
+    out = {}
+    for part in re.split(r"^## ", page, flags=re.M)[1:]:
+        title, _, body = part.partition("\n")
+        table = re.fullmatch(r"`\[\[?([\w.]+)\]\]?`", title.strip())
+        if table is not None or title.strip() == "Top level":
+            out[table.group(1) if table else ""] = body
+    return out
+
+
 def test_vessel_file_reference_names_every_field():
+    """Every field is named in the section of its own table (or of the nearest enclosing table
+    with a section): ``x_m`` in the thrusters' table does not describe a rudder's ``x_m``."""
     from hybridship.vessel import Vessel
 
-    page = (DOCS / "reference" / "vessel-file.md").read_text(encoding="utf-8")
-    missing = sorted({path for path, name in _schema_fields(Vessel)
-                      if f"`{name}`" not in page and f"[{name}]" not in page and f"[[{name}]]" not in page
-                      and not re.search(rf"\[[a-z_.]*\.{re.escape(name)}\]", page)})
-    assert not missing, f"docs/reference/vessel-file.md does not describe these vessel-file fields: {missing}"
+    sections = _page_sections((DOCS / "reference" / "vessel-file.md").read_text(encoding="utf-8"))
+    assert {"", "particulars", "thrusters", "rudders", "wind"} <= set(sections), sorted(sections)
+    missing = []
+    for path, name in _schema_fields(Vessel):
+        table = path.rpartition(".")[0]
+        while table not in sections:
+            table = table.rpartition(".")[0]
+        text = sections[table]
+        if (f"`{name}`" not in text and f"[{name}]" not in text and f"[[{name}]]" not in text
+                and not re.search(rf"\[[a-z_.]*\.{re.escape(name)}\]", text)):
+            missing.append(f"{path} (section [{table}])" if table else path)
+    assert not missing, f"docs/reference/vessel-file.md does not describe these vessel-file fields: {sorted(missing)}"
 
 
 def _help(*args) -> str:
