@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import ast
+import inspect
 import subprocess
 import sys
 import tomllib
@@ -105,6 +106,13 @@ def test_public_api_is_importable_from_the_package():
     assert (DynamicModel, HybridPredictor, read_log) == (Model, Hybrid, io_read_log)
     for name in hybridship.__all__:
         assert getattr(hybridship, name) is not None, name
+    # each exported name is the class or function of that name, defined in the package: not a
+    # module (a name such as ``ingest`` is also a submodule's, which an import elsewhere sets
+    # on its package) and not another object
+    for name in set(hybridship.__all__) - {"__version__"}:
+        obj = getattr(hybridship, name)
+        assert inspect.isclass(obj) or inspect.isfunction(obj), f"{name}: {obj!r}"
+        assert obj.__name__ == name and obj.__module__.startswith("hybridship."), f"{name}: {obj!r}"
     assert set(hybridship.__all__) <= set(dir(hybridship))
 
 
