@@ -205,3 +205,22 @@ def test_api_reference_covers_every_module():
     documented = set(re.findall(r"^::: hybridship\.(\w+)", pages, flags=re.M))
     missing = sorted(names - documented)
     assert not missing, f"add `::: hybridship.<name>` entries to docs/reference/api/*.md for: {missing}"
+
+
+def test_api_reference_renders_every_submodule():
+    """Every module of a subpackage is rendered: by ``show_submodules: true`` on the package's
+    entry, by a ``::: hybridship.<package>.<module>`` entry of its own, or, for a module whose
+    names the package re-exports, named in backquotes on the page of the package's entry."""
+    pages = [p.read_text(encoding="utf-8") for p in sorted((DOCS / "reference" / "api").glob("*.md"))]
+    text = "\n".join(pages)
+    missing = []
+    for init in sorted((ROOT / "hybridship").glob("*/__init__.py")):
+        pkg = init.parent.name
+        if pkg in ("data", "vessels") or re.search(
+                rf"^::: hybridship\.{pkg}[ \t]*\n(?:[ \t]+\S.*\n)*?[ \t]+show_submodules: true", text, flags=re.M):
+            continue
+        page = next((t for t in pages if re.search(rf"^::: hybridship\.{pkg}[ \t]*$", t, flags=re.M)), "")
+        missing += [f"hybridship.{pkg}.{mod.stem}" for mod in sorted(init.parent.glob("*.py"))
+                    if mod.stem != "__init__" and f"`{mod.stem}`" not in page
+                    and not re.search(rf"^::: hybridship\.{pkg}\.{mod.stem}[ \t]*$", text, flags=re.M)]
+    assert not missing, f"add `::: hybridship.<package>.<module>` entries to docs/reference/api/*.md for: {missing}"
