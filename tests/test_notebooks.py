@@ -157,6 +157,31 @@ def _subcommands(*prefix) -> list[tuple[str, ...]]:
     return out
 
 
+def _parser_commands(parser, prefix=()) -> list[tuple[str, ...]]:
+    """Every command registered below ``parser`` (depth first), from the parser objects."""
+    import argparse
+
+    out = []
+    for action in parser._actions:
+        if isinstance(action, argparse._SubParsersAction):
+            for name, sub in action.choices.items():
+                out += [(*prefix, name), *_parser_commands(sub, (*prefix, name))]
+    return out
+
+
+def test_every_registered_command_is_listed_in_the_help():
+    """A command registered without a ``help=`` is left out of its parent's ``--help`` (the
+    metavars COMMAND, MODE, ... hide the choices), and so out of the reference page's checks."""
+    from hybridship.cli import _build_parser
+
+    registered = _parser_commands(_build_parser())
+    assert len(registered) >= 10, registered
+    listed = _subcommands()
+    hidden = [" ".join(c) for c in registered if c not in listed]
+    assert not hidden, f"commands registered without help= (not in their parent's --help): {hidden}"
+    assert sorted(listed) == sorted(registered)
+
+
 def test_cli_reference_names_every_command_and_option():
     page = (DOCS / "reference" / "cli.md").read_text(encoding="utf-8")
     commands = _subcommands()
