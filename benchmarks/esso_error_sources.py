@@ -329,17 +329,8 @@ def tables(errors, command: str) -> str:
     return "\n".join(md) + "\n"
 
 
-def main(argv=None) -> int:
-    from _results import command_line, publish
-    from hybridship.datasets.esso_osaka import esso_log_arrays
-    from hybridship.evaluation.manoeuvre import (ManoeuvreConfig, Run, error_table, forecast_errors, load_runs,
-                                                 make_predictors, start_rows, validation_split)
-    from hybridship.fileio import atomic_write
-    from hybridship.forecast_inputs.wind import fit_wind_forecast
-    from hybridship.logs.ingest import ingest
-    from hybridship.predictors import DynamicPredictor
-    from hybridship.vessel import load_vessel
-
+def _arguments(argv):
+    """The command line's arguments."""
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--split", type=Path, default=ROOT / "out" / "esso-osaka" / "split",
                     help="the benchmark's split (default out/esso-osaka/split)")
@@ -360,25 +351,17 @@ def main(argv=None) -> int:
     args = ap.parse_args(argv)
     if (args.seed_average or args.structure_average) and not args.hybrid:
         ap.error("--seed-average and --structure-average need --hybrid")
-    if args.tables_only:
-        return _tables_only(args.out, args.results)
-    try:
-        fit_dir, val_dir = validation_split(args.split, args.out / "split")
-    except FileNotFoundError as err:
-        print(f"error: {err}", file=sys.stderr)
-        return 2
-    v = load_vessel("esso_osaka_model")
-    cfg = ManoeuvreConfig()
-    runs = load_runs(val_dir, v)
-    p = DynamicPredictor(v, residual_config=cfg.residual)
-    future_wind = _logged_future_wind()
-    horizons = (5.0, 10.0, 20.0, 30.0)
-    steps = np.array([int(round(h / runs[0].arrays.dt_s)) for h in horizons])
+    return args
 
-    def score(rr, p=p, forecast=None):
-        fc = forecast or p.forecast
-        return [forecast_errors(lambda a, st, h: fc(a, st, horizon_s=h, commands="known"), r.arrays,
-                                start_rows(r.arrays, int(steps.max()), cfg.start_every_s), steps) for r in rr]
+
+def _physics_scores(runs, v, cfg, fit_dir, score, horizons) -> dict:
+    """The physics' errors per variant of its inputs: the logged velocities led, the yaw rate
+    from the heading, the wind zeroed, forecast, known in advance or trailed."""
+    from hybridship.datasets.esso_osaka import esso_log_arrays
+    from hybridship.evaluation.manoeuvre import Run, load_runs
+    from hybridship.forecast_inputs.wind import fit_wind_forecast
+    from hybridship.logs.ingest import ingest
+    from hybridship.predictors import DynamicPredictor
 
     def with_wind(fn):
         return [Run(r.run, dataclasses.replace(r.arrays, wind=fn(r.arrays.wind))) for r in runs]
@@ -410,51 +393,92 @@ def main(argv=None) -> int:
           f"{wind_scores.get((wf.mean_window_s, wf.time_constant_s), held):.2f} m/s against {held:.2f} m/s held")
     per[("wind_forecast", "known")] = score(runs, DynamicPredictor(v, residual_config=cfg.residual, wind_forecast=wf))
     per[("wind_future", "known")] = score(runs, DynamicPredictor(v, residual_config=cfg.residual,
-                                                                 wind_forecast=future_wind))
+                                                                 wind_forecast=_logged_future_wind()))
     per[("wind_future_mean", "known")] = score(runs, DynamicPredictor(v, residual_config=cfg.residual,
                                                                       wind_forecast=_logged_future_mean_wind()))
     for secs in (10, 30, 60):
         n = int(round(secs / runs[0].arrays.dt_s))
         per[(f"wind_trail{secs}", "known")] = score(with_wind(lambda w, n=n: trailing_wind(w, n)))
-    if args.hybrid:
-        import torch
+    return per
 
-        torch.set_num_threads(1)
-        # the spread is not scored here: no wind futures in it (they leave the forecasts as they are)
-        cfg = dataclasses.replace(cfg, calibration=dataclasses.replace(cfg.calibration, horizon_s=max(horizons)),
-                                  wind_samples=0)
-        fit_logs = [r.arrays for r in load_runs(fit_dir, v)]
-        hyb = make_predictors(v, cfg)["hybrid"].fit(fit_logs, row_stride=cfg.train_row_stride)
-        wf = hyb.wind_forecast
-        print(f"hybrid fitted; its wind forecast: {wf}")
-        per[("hybrid", "known")] = score(runs, hyb)
-        hyb.wind_forecast = future_wind      # the same nets, the wind's future known
-        per[("hybrid_wind_future", "known")] = score(runs, hyb)
-        hyb.wind_forecast = _logged_future_mean_wind()
-        per[("hybrid_wind_future_mean", "known")] = score(runs, hyb)
-        hyb.wind_forecast = _sampled_wind(wf, fit_logs, int(steps.max()))
-        per[("hybrid_wind_sampled", "known")] = score(runs, forecast=_mean_forecast(hyb, 8))
-        hyb.wind_forecast = wf
-        alpha, fb_scores = _choose_feedback(hyb, fit_logs, steps, cfg.start_every_s)
-        print("error feedback on the fitting runs' held-back ends (30-s distance [m], heading [deg]): "
-              + ", ".join(f"alpha {k:g}: {d:.3f}, {h:.2f}" for k, (d, h) in fb_scores.items())
-              + f"; chosen {alpha:g}")
-        per[("hybrid_error_feedback", "known")] = score(runs, forecast=_error_feedback(hyb, alpha))
-        for w in CORRECTION_SCALES:
-            per[(f"hybrid_scaled{w:g}", "known")] = score(runs, forecast=_scaled_correction(hyb, p, w))
-        if args.seed_average:
-            cfg1 = dataclasses.replace(cfg, ensemble=dataclasses.replace(cfg.ensemble, seed=1))
-            hyb1 = make_predictors(v, cfg1)["hybrid"].fit(fit_logs, row_stride=cfg.train_row_stride)
-            per[("hybrid_seed1", "known")] = score(runs, hyb1)
-            per[("hybrid_seed_mean", "known")] = score(runs, forecast=_mean_forecast([hyb, hyb1]))
-        if args.structure_average:
-            others = {"one_step": dataclasses.replace(cfg, training="one_step"),
-                      "hull": dataclasses.replace(cfg, hull_correction=True, hull_fit="multi_step",
-                                                  multistep=dataclasses.replace(cfg.multistep, tune_hull=True))}
-            for name, other_cfg in others.items():
-                other = make_predictors(v, other_cfg)["hybrid"].fit(fit_logs, row_stride=cfg.train_row_stride)
-                per[(f"hybrid_{name}", "known")] = score(runs, other)
-                per[(f"hybrid_mean_{name}", "known")] = score(runs, forecast=_mean_forecast([hyb, other]))
+
+def _hybrid_scores(args, runs, v, cfg, fit_dir, score, steps, horizons, physics) -> dict:
+    """The benchmark's hybrid fitted on the fitting runs, scored with each wind input and each
+    correction of its output (and, as asked, averaged over seeds or structures)."""
+    import torch
+
+    from hybridship.evaluation.manoeuvre import load_runs, make_predictors
+
+    torch.set_num_threads(1)
+    # the spread is not scored here: no wind futures in it (they leave the forecasts as they are)
+    cfg = dataclasses.replace(cfg, calibration=dataclasses.replace(cfg.calibration, horizon_s=max(horizons)),
+                              wind_samples=0)
+    fit_logs = [r.arrays for r in load_runs(fit_dir, v)]
+    hyb = make_predictors(v, cfg)["hybrid"].fit(fit_logs, row_stride=cfg.train_row_stride)
+    wf = hyb.wind_forecast
+    print(f"hybrid fitted; its wind forecast: {wf}")
+    per = {("hybrid", "known"): score(runs, hyb)}
+    hyb.wind_forecast = _logged_future_wind()      # the same nets, the wind's future known
+    per[("hybrid_wind_future", "known")] = score(runs, hyb)
+    hyb.wind_forecast = _logged_future_mean_wind()
+    per[("hybrid_wind_future_mean", "known")] = score(runs, hyb)
+    hyb.wind_forecast = _sampled_wind(wf, fit_logs, int(steps.max()))
+    per[("hybrid_wind_sampled", "known")] = score(runs, forecast=_mean_forecast(hyb, 8))
+    hyb.wind_forecast = wf
+    alpha, fb_scores = _choose_feedback(hyb, fit_logs, steps, cfg.start_every_s)
+    print("error feedback on the fitting runs' held-back ends (30-s distance [m], heading [deg]): "
+          + ", ".join(f"alpha {k:g}: {d:.3f}, {h:.2f}" for k, (d, h) in fb_scores.items())
+          + f"; chosen {alpha:g}")
+    per[("hybrid_error_feedback", "known")] = score(runs, forecast=_error_feedback(hyb, alpha))
+    for w in CORRECTION_SCALES:
+        per[(f"hybrid_scaled{w:g}", "known")] = score(runs, forecast=_scaled_correction(hyb, physics, w))
+    if args.seed_average:
+        cfg1 = dataclasses.replace(cfg, ensemble=dataclasses.replace(cfg.ensemble, seed=1))
+        hyb1 = make_predictors(v, cfg1)["hybrid"].fit(fit_logs, row_stride=cfg.train_row_stride)
+        per[("hybrid_seed1", "known")] = score(runs, hyb1)
+        per[("hybrid_seed_mean", "known")] = score(runs, forecast=_mean_forecast([hyb, hyb1]))
+    if args.structure_average:
+        others = {"one_step": dataclasses.replace(cfg, training="one_step"),
+                  "hull": dataclasses.replace(cfg, hull_correction=True, hull_fit="multi_step",
+                                              multistep=dataclasses.replace(cfg.multistep, tune_hull=True))}
+        for name, other_cfg in others.items():
+            other = make_predictors(v, other_cfg)["hybrid"].fit(fit_logs, row_stride=cfg.train_row_stride)
+            per[(f"hybrid_{name}", "known")] = score(runs, other)
+            per[(f"hybrid_mean_{name}", "known")] = score(runs, forecast=_mean_forecast([hyb, other]))
+    return per
+
+
+def main(argv=None) -> int:
+    from _results import command_line, publish
+    from hybridship.evaluation.manoeuvre import (ManoeuvreConfig, error_table, forecast_errors, load_runs,
+                                                 start_rows, validation_split)
+    from hybridship.fileio import atomic_write
+    from hybridship.predictors import DynamicPredictor
+    from hybridship.vessel import load_vessel
+
+    args = _arguments(argv)
+    if args.tables_only:
+        return _tables_only(args.out, args.results)
+    try:
+        fit_dir, val_dir = validation_split(args.split, args.out / "split")
+    except FileNotFoundError as err:
+        print(f"error: {err}", file=sys.stderr)
+        return 2
+    v = load_vessel("esso_osaka_model")
+    cfg = ManoeuvreConfig()
+    runs = load_runs(val_dir, v)
+    p = DynamicPredictor(v, residual_config=cfg.residual)
+    horizons = (5.0, 10.0, 20.0, 30.0)
+    steps = np.array([int(round(h / runs[0].arrays.dt_s)) for h in horizons])
+
+    def score(rr, p=p, forecast=None):
+        fc = forecast or p.forecast
+        return [forecast_errors(lambda a, st, h: fc(a, st, horizon_s=h, commands="known"), r.arrays,
+                                start_rows(r.arrays, int(steps.max()), cfg.start_every_s), steps) for r in rr]
+
+    per = _physics_scores(runs, v, cfg, fit_dir, score, horizons)
+    if args.hybrid:
+        per.update(_hybrid_scores(args, runs, v, cfg, fit_dir, score, steps, horizons, p))
     errors = error_table(per, runs, horizons)
     command = command_line("esso_error_sources.py", argv)
     text = tables(errors, command)
