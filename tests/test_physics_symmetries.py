@@ -26,14 +26,34 @@ QUAD = {"method": "quadratic", "d_uu": 3000.0, "d_vv": 2.0e4, "d_rr": 2.0e7}
 # ----------------------------------------------------------------------------- closed forms
 
 
+def _decoupled_by_hand() -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The inertia and damping of ``decoupled_model(LIN, QUAD)`` from the Gunnerus file, by hand.
+
+    Returns
+    -------
+    M : ndarray, shape (3,)
+        ``M_ii`` [kg, kg, kg m^2]: ``m - X_udot``, ``m - Y_vdot``, ``m r_z^2 - N_rdot`` (CG at the
+        origin, so ``I_z = m r_z^2``; no sway-yaw coupling).
+    d_l : ndarray, shape (3,)
+        Linear damping ``M_ii / T_i`` [kg/s, kg/s, kg m^2/s] from LIN's time constants.
+    d_q : ndarray, shape (3,)
+        Quadratic damping [kg/m, kg/m, kg m^2] from QUAD.
+    """
+    d = vessel_dict("gunnerus")
+    rb, am = d["rigid_body"], d["added_mass"]
+    assert "I_z_kg_m2" not in rb and am["method"] == "explicit"
+    m = rb["mass_kg"]
+    M = np.array([m - am["X_udot_kg"], m - am["Y_vdot_kg"], m * rb["r_z_m"] ** 2 - am["N_rdot_kg_m2"]])
+    T = np.array([LIN["T_surge_s"], LIN["T_sway_s"], LIN["T_yaw_s"]])
+    return M, M / T, np.array([QUAD["d_uu"], QUAD["d_vv"], QUAD["d_rr"]])
+
+
 def test_linear_plus_quadratic_free_decay_has_its_closed_form():
     """``M x_dot = -d_l x - d_q |x| x`` (a = d_l / M, b = d_q / M) has, for either sign of x_0,
     ``x(t) = a x_0 e^(-a t) / (a + b |x_0| (1 - e^(-a t)))`` and the travelled distance
     ``sgn(x_0) ln(1 + b |x_0| (1 - e^(-a t)) / a) / b``; in surge, sway and yaw alike."""
     m = decoupled_model(LIN, QUAD)
-    M = np.diag(m.mass_matrix)
-    d_l = np.diag(m.arrays.d_lin)
-    d_q = m.arrays.d_quad
+    M, d_l, d_q = _decoupled_by_hand()     # the file's numbers, not the model's arrays
     for i, x0 in enumerate((3.0, 1.0, 0.05)):
         nu0 = np.zeros((2, 3))
         nu0[:, i] = [x0, -x0]
@@ -44,8 +64,9 @@ def test_linear_plus_quadratic_free_decay_has_its_closed_form():
         x = a * x0 * np.exp(-a * t) / (a + b * x0 * decay)
         dist = np.log1p(b * x0 * decay / a) / b
         for k, s in enumerate((1.0, -1.0)):
-            # RK4 with 1 s steps: observed relative error <= 7e-8; a wrong mass, a missing
-            # linear or quadratic term, or a |x| x written x^2 are off by far more
+            # RK4 with 1 s steps: observed relative error <= 7e-8; a wrong mass, a time constant
+            # turned into D_ii with another mass than M_ii, a missing linear or quadratic term, or
+            # a |x| x written x^2 are off by far more
             np.testing.assert_allclose(res.nu[k, :, i], s * x, rtol=1e-6)
             np.testing.assert_allclose(res.eta[k, :, i], s * dist, rtol=1e-6, atol=1e-12)
             np.testing.assert_array_equal(np.delete(res.nu[k], i, axis=1), 0.0)
@@ -56,8 +77,7 @@ def test_a_constant_load_gives_the_steady_velocity_of_the_damping_balance(sign):
     """A constant external load tau in one DOF: ``d_l x* + d_q |x*| x* = tau``, so
     ``x* = sgn(tau) (-d_l + sqrt(d_l^2 + 4 d_q |tau|)) / (2 d_q)``, and the acceleration is 0 there."""
     m = decoupled_model(LIN, QUAD)
-    d_l = np.diag(m.arrays.d_lin)
-    d_q = m.arrays.d_quad
+    _, d_l, d_q = _decoupled_by_hand()
     for i, load in enumerate((2.0e4, 1.0e4, 5.0e5)):
         tau = np.zeros(3)
         tau[i] = sign * load
