@@ -286,7 +286,10 @@ def batches(draw):
                       rpm_frac=rng.uniform(-1, 1, (n, 3)), az=rng.uniform(-np.pi, np.pi, (n, 3)),
                       rudder=rng.uniform(-0.6, 0.6, (n, 1)),
                       wind=np.column_stack([rng.uniform(0, 20, n), rng.uniform(-np.pi, np.pi, n)]),
-                      current=np.column_stack([rng.uniform(0, 1.5, n), rng.uniform(-np.pi, np.pi, n)]))
+                      current=np.column_stack([rng.uniform(0, 1.5, n), rng.uniform(-np.pi, np.pi, n)]),
+                      # external load [N, N, N m] per unit M_ii and external acceleration [m/s^2, rad/s^2]
+                      load_per_M=rng.normal(scale=[0.01, 0.01, 1e-4], size=(n, 3)),
+                      accel=rng.normal(scale=[0.01, 0.01, 1e-4], size=(n, 3)))
 
 
 FULL = {name: DynamicModel(name) for name in ("gunnerus", "esso_osaka_model")}
@@ -297,12 +300,14 @@ FULL = {name: DynamicModel(name) for name in ("gunnerus", "esso_osaka_model")}
 def test_a_batch_is_evaluated_as_its_samples_one_by_one(batch):
     """Batch-first kernels: sample b of a batched acceleration, step and rollout depends on row b
     alone (the rollout's held inputs too: a wind or current read from another row leaves the
-    symmetry tests' rotated and mirrored rollouts alike, so only a one-sample run shows it)."""
+    symmetry tests' rotated and mirrored rollouts alike, so only a one-sample run shows it), its
+    external load and acceleration included."""
     name, x = batch
     m = FULL[name]
     K = m.n_thrusters
     kw = dict(rpm=x["rpm_frac"][:, :K] * [t.max_rpm for t in m.vessel.thrusters], azimuth_rad=x["az"][:, :K],
-              wind=x["wind"], current=x["current"])
+              wind=x["wind"], current=x["current"], tau_ext=x["load_per_M"] * np.diag(m.mass_matrix),
+              accel_ext=x["accel"])
     if m.n_rudders:
         kw["rudder_rad"] = x["rudder"]
     acc, parts, thrusts = m.acceleration(x["eta"], x["nu"], return_parts=True, **kw)
