@@ -173,6 +173,30 @@ def test_result_shapes_and_forecast_leaves_the_learned_state_alone(kind, fitted,
     np.testing.assert_array_equal(p.forecast(test_log, STARTS, np.array(HORIZON_S)).eta, fc.eta)
 
 
+@pytest.mark.parametrize("kind", KINDS)
+def test_lead_0_is_the_logged_state_at_each_start(kind, fitted, test_log):
+    """Index 0 of a forecast is its start: the position logged at the start time and, for the
+    forecasters that start from the 3-s start window, that window's mean heading and velocities
+    (the samples at t0 - 2, t0 - 1 and t0 s of the 1-Hz log), read here from the log's columns
+    in degrees; the hybrid starts from its environment filter's state at the start, which on
+    this noise-free log lies within centimetres and a tenth of a degree of the start's sample."""
+    fc = fitted[kind].forecast(test_log, STARTS, HORIZON_S)
+    for k, t0 in enumerate(STARTS):
+        win = test_log[(test_log.time_s > t0 - 3.0) & (test_log.time_s <= t0)]
+        assert len(win) == 3
+        if kind == "hybrid":
+            rows, atol_m, atol_deg, atol_m_s, atol_deg_s = win.iloc[[-1]], 0.3, 0.5, 0.05, 0.1
+        else:
+            rows, atol_m, atol_deg, atol_m_s, atol_deg_s = win, 1e-9, 1e-9, 1e-12, 1e-9
+        at_t0 = win.iloc[-1]
+        np.testing.assert_allclose(fc.eta[k, 0, :2], [at_t0.north_m, at_t0.east_m], rtol=0, atol=atol_m)
+        heading_deg = np.degrees(np.unwrap(np.radians(rows.heading_deg.to_numpy()))).mean()
+        turn_deg = (np.degrees(fc.eta[k, 0, 2]) - heading_deg + 180.0) % 360.0 - 180.0
+        assert abs(turn_deg) <= atol_deg, (k, turn_deg)
+        np.testing.assert_allclose(fc.nu[k, 0, :2], [rows.u_m_s.mean(), rows.v_m_s.mean()], rtol=0, atol=atol_m_s)
+        np.testing.assert_allclose(np.degrees(fc.nu[k, 0, 2]), rows.r_deg_s.mean(), rtol=0, atol=atol_deg_s)
+
+
 def _bad_inputs(log: pd.DataFrame):
     """(description, call arguments, exception type, message start) of inputs every forecaster refuses."""
     rpm_60x = log.copy()
