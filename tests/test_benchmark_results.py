@@ -10,6 +10,20 @@ def test_kind_table_gives_30_s_errors_per_kind_and_pooled_ratios():
     assert table[3] == "| hybrid | 0.400 / 6.00 | 1.200 / 18.00 | 0.800 / 12.00 | 0.80 / 0.60 |"
 
 
+def test_kind_table_pools_the_ratio_from_the_all_rows_when_the_kinds_ratios_differ():
+    """With the hybrid's zigzag errors 0.75 of the linear table's (0.9 m / 13.5 deg at 30 s) and its
+    pooled rows the mean of its two kinds (equal counts: (0.4 + 0.9) / 2 = 0.65 m, (6 + 13.5) / 2 =
+    9.75 deg), the kinds' ratios to the dynamic model differ (random 0.80 / 0.60, zigzag 0.60 / 0.45)
+    and the pooled one is that of the ``all`` rows: 0.65 / 1.0 and 9.75 / 20 = 0.4875, by hand."""
+    errors = screening_errors()
+    hybrid = errors["model"] == "hybrid"
+    errors.loc[hybrid & (errors["kind"] == "zigzag"), "mae"] *= 0.75
+    errors.loc[hybrid & (errors["kind"] == "all"), "mae"] *= 0.65 / 0.8       # 0.8: the linear table's pooled
+    table = load_benchmark("_results").kind_table(errors, "dynamic").splitlines()
+    assert table[2] == "| dynamic | 0.500 / 10.00 | 1.500 / 30.00 | 1.000 / 20.00 | 1.00 / 1.00 |"
+    assert table[3] == "| hybrid | 0.400 / 6.00 | 0.900 / 13.50 | 0.650 / 9.75 | 0.65 / 0.49 |"
+
+
 def test_publish_copies_the_named_files_only(tmp_path, monkeypatch):
     results = load_benchmark("_results")
     out = tmp_path / "out"
