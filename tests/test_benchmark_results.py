@@ -43,3 +43,10 @@ def test_command_line_quotes_the_arguments_a_shell_would_split():
     results = load_benchmark("_results")
     assert results.command_line("x.py", ["--out", "out/a b", "--n", "3"]) == "python benchmarks/x.py --out 'out/a b' --n 3"
     assert results.command_line("x.py", []) == "python benchmarks/x.py"       # no trailing space
+
+
+def test_command_line_without_argv_records_this_process_arguments_after_the_script(monkeypatch):
+    """``argv=None`` takes ``sys.argv[1:]``: the script as run (``sys.argv[0]``) is not repeated
+    as an argument, and an argument with a space is quoted."""
+    monkeypatch.setattr("sys.argv", ["benchmarks/x.py", "--out", "out/a b", "--quick"])
+    assert load_benchmark("_results").command_line("x.py") == "python benchmarks/x.py --out 'out/a b' --quick"
