@@ -5,6 +5,7 @@ they write)."""
 import re
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -18,11 +19,27 @@ def _first_python_block(page: str, after: str) -> str:
     return m.group(1)
 
 
+def _check_the_rollout_as_the_comments_say(res, eta0, nu0):
+    """``res.eta, res.nu, res.nu_dot  # (B, 61, 3) each``: 60 steps of 1 s after the start, whose
+    row 0 is the start state the example gave (``eta0`` [m, m, rad], ``nu0`` [m/s, m/s, rad/s])."""
+    B = len(eta0)
+    for name in ("eta", "nu", "nu_dot"):
+        assert getattr(res, name).shape == (B, 61, 3), name
+    np.testing.assert_array_equal(res.time_s, np.arange(61.0))
+    np.testing.assert_array_equal(res.eta[:, 0], eta0)
+    np.testing.assert_array_equal(res.nu[:, 0], nu0)
+
+
 @pytest.mark.parametrize("page", sorted(PAGES))
 def test_the_pages_python_example_runs_as_written(page, tmp_path, monkeypatch):
     monkeypatch.chdir(tmp_path)
     namespace = {}
     exec(compile(_first_python_block(page, PAGES[page]), page, "exec"), namespace)   # noqa: S102 (our own docs)
-    assert namespace["res"].eta.shape[1:] == (61, 3)
+    res = namespace["res"]
+    assert res.eta.shape[1:] == (61, 3)
+    _check_the_rollout_as_the_comments_say(res, *((namespace["eta0"], namespace["nu0"]) if page == "README.md"
+                                                  else (namespace["eta"], namespace["nu"])))
+    if page == "docs/concepts/equations.md":      # the page's two calls, at the same start: the same acceleration
+        np.testing.assert_allclose(res.nu_dot[:, 0], namespace["nu_dot"], rtol=1e-9, atol=1e-12)
     if page == "README.md":
         assert (tmp_path / "gunnerus.hybrid.npz").is_file() and namespace["fc"].eta.shape[:2] == (2, 61)
