@@ -365,13 +365,23 @@ def test_a_round_horizon_on_a_jittered_log_is_whole_median_steps(kind, fitted, m
 @pytest.mark.filterwarnings("ignore:log. its step is 0.1 s:UserWarning")  # the 1-Hz fit, on purpose
 def test_leads_and_times_are_on_the_grid_of_a_10_hz_log(kind, fitted, model):
     """The step is the log's (0.1 s), not the median of float differences (0.10000000000000142):
-    200 steps read 20.0 s and every forecast time is one of the log's times."""
+    200 steps read 20.0 s and every forecast time is one of the log's times. The 200 steps
+    are 20 s of motion: the track and the turn over 20 s are those forecast from the same
+    log thinned to 1 Hz (20 steps of 1 s) from 150 s, within 0.5 m and 3 deg (the 3-s start window
+    averages other samples; the ship moves about 3 m in 20 s, 30 m if each 0.1-s step
+    were taken as 1 s)."""
     log = physics_log(model, seed=5, duration_s=200.0, dt_s=0.1, t_shutdown_s=None, current=(0.2, 1.0))
     log["time_s"] = log.time_s.round(6)                  # as a logger writes them
     fc = fitted[kind].forecast(log, [150.0, 152.5], HORIZON_S)
     np.testing.assert_array_equal(fc.lead_s, np.arange(201) / 10)
     df = fc.to_frame()
     assert (df.lead_s == HORIZON_S).sum() == 2 and df.time_s.isin(log.time_s).all()
+    at_1_hz = log[np.isclose(log.time_s, log.time_s.round())].reset_index(drop=True)
+    assert len(at_1_hz) == 201
+    slow = fitted[kind].forecast(at_1_hz, [150.0], HORIZON_S)
+    moved, moved_1_hz = fc.eta[0, -1] - fc.eta[0, 0], slow.eta[0, -1] - slow.eta[0, 0]
+    np.testing.assert_allclose(moved[:2], moved_1_hz[:2], rtol=0, atol=0.5)
+    assert abs(np.degrees(moved[2] - moved_1_hz[2])) <= 3.0, np.degrees(moved[2] - moved_1_hz[2])
 
 
 @pytest.mark.parametrize("kind", KINDS)
