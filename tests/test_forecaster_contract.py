@@ -407,6 +407,22 @@ def test_held_command_forecasts_are_causal(kind, fitted, test_log):
 
 
 @pytest.mark.parametrize("kind", KINDS)
+def test_known_commands_that_stay_as_at_the_start_forecast_as_held_ones(kind, fitted, test_log):
+    """The test log's commands change at 178 s and 216 s and then not before 243 s: from starts
+    at 180 s and 220 s the logged commands of the next 20 s are the start's, so knowing them
+    changes nothing (the same thrust, azimuth angles and wind in the same units, step by step)."""
+    starts = [180.0, 220.0]
+    cols = ["tunnel_rpm", "port_rpm", "port_azimuth_deg", "stbd_rpm", "stbd_azimuth_deg", "dp_active"]
+    for t0 in starts:
+        ahead = test_log[(test_log.time_s >= t0) & (test_log.time_s <= t0 + HORIZON_S)]
+        assert (ahead[cols].nunique() == 1).all() and ahead.port_azimuth_deg.iloc[0] != 0.0, t0
+    held = fitted[kind].forecast(test_log, starts, HORIZON_S)
+    known = fitted[kind].forecast(test_log, starts, HORIZON_S, commands="known")
+    np.testing.assert_allclose(known.eta, held.eta, rtol=0, atol=1e-9)
+    np.testing.assert_allclose(known.nu, held.nu, rtol=0, atol=1e-12)
+
+
+@pytest.mark.parametrize("kind", KINDS)
 def test_forecasts_from_derived_velocities_are_causal(kind, fitted, test_log):
     """A log without velocity columns, or with a logged velocity missing at the start: the
     velocities the log derives are central differences, and at the start row they must not
