@@ -210,3 +210,22 @@ def test_the_target_holds_in_every_cell_and_the_narrowest_margin_is_the_smallest
     assert target + "not met. Narrowest margin: sea state 1 pitch_deg, -0.20 against ann." in md
 
 
+def test_the_papers_layout_puts_each_number_in_its_column():
+    """The Table 1 / 2 layout: ours from the scoring mode asked for, training before validation
+    (the training MAE of ``_table_of`` is twice the validation's, one step ahead a tenth), and
+    the paper's rows as printed (Table 2's ANN row, Table 1's SS row: train, val. per cell)."""
+    from hybridship.hsc.benchmark import paper_layout
+
+    table = _table_of({"ss": 1.0, "arx": 0.8, "ann": 0.5, "hybrid": 0.1})
+    lines = paper_layout(table, "MAE", "free_run").splitlines()
+    assert lines[0] == ("| model | SS1 speed train | SS1 speed val. | SS1 pitch train | SS1 pitch val. | "
+                        "SS2 speed train | SS2 speed val. | SS2 pitch train | SS2 pitch val. |")
+    assert "| ann (ours) | 1.00 | 0.50 | 1.00 | 0.50 | 1.00 | 0.50 | 1.00 | 0.50 |" in lines
+    assert "| ann (paper) | 0.30 | 0.32 | 0.58 | 0.56 | 0.52 | 0.56 | 0.47 | 0.45 |" in lines
+    assert "| hybrid (ours) | 0.20 | 0.10 | 0.20 | 0.10 | 0.20 | 0.10 | 0.20 | 0.10 |" in lines
+    assert not any(x.startswith("| hybrid (paper)") for x in lines)       # the paper has no hybrid
+    lines = paper_layout(table, "MAE", "one_step").splitlines()
+    assert "| ann (ours) | 0.10 | 0.05 | 0.10 | 0.05 | 0.10 | 0.05 | 0.10 | 0.05 |" in lines
+    lines = paper_layout(table, "R", "free_run").splitlines()
+    assert "| ss (ours) | 1.00 | 1.00 | 1.00 | 1.00 | 1.00 | 1.00 | 1.00 | 1.00 |" in lines
+    assert "| ss (paper) | 0.93 | 0.94 | 0.68 | 0.57 | 0.89 | 0.85 | 0.73 | 0.48 |" in lines
