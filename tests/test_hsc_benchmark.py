@@ -229,3 +229,32 @@ def test_the_papers_layout_puts_each_number_in_its_column():
     lines = paper_layout(table, "R", "free_run").splitlines()
     assert "| ss (ours) | 1.00 | 1.00 | 1.00 | 1.00 | 1.00 | 1.00 | 1.00 | 1.00 |" in lines
     assert "| ss (paper) | 0.93 | 0.94 | 0.68 | 0.57 | 0.89 | 0.85 | 0.73 | 0.48 |" in lines
+
+
+class _Held:
+    """A stand-in whose one-step prediction is the measurement and whose free run holds the
+    last measured output of the initial conditions (row ``n_init - 1``) for every row."""
+
+    name, n_init = "held", 2
+
+    def one_step(self, U, Y):
+        return np.asarray(Y, float).copy()
+
+    def free_run(self, U, Y_init, n_init):
+        Y = np.asarray(Y_init, float)
+        return np.repeat(Y[n_init - 1:n_init], len(Y), axis=0)
+
+
+def test_a_free_run_starts_from_the_n_init_given():
+    """A speed ramp of 0.1 m/s per row, free run from the first 10 rows: the held speed is row
+    9's, so the rows 10 to 49 scored are off by 0.1 to 4.0 m/s, 2.05 m/s on average, which is
+    2.05 * 3600 / 1852 kn (a knot is 1852 m per hour); one step ahead the error is 0."""
+    k = np.arange(50.0)
+    U = np.column_stack([np.full(50, 3000.0), np.full(50, 50.0), np.zeros(50)])
+    Y = np.column_stack([10.0 + 0.1 * k, 0.05 + 0.001 * k])
+    P, sc = score_model(_Held(), U, Y, "free_run", n_init=10)
+    assert P.shape == (40, 2)
+    assert sc["speed_kn"][1] == pytest.approx(2.05 * 3600.0 / 1852.0, rel=1e-9)
+    assert sc["pitch_deg"][1] == pytest.approx(np.degrees(0.0205), rel=1e-9)
+    _, sc = score_model(_Held(), U, Y, "one_step", n_init=10)
+    assert sc["speed_kn"] == pytest.approx((1.0, 0.0), abs=1e-12)
