@@ -76,6 +76,12 @@ def test_operability_counts_a_p_exceed_equal_to_the_limit_as_operable():
     assert s.operability(0.1)["operable_frac"].tolist() == [0.5]
 
 
+def test_p_exceed_counts_a_radius_reached_at_the_reaction_time():
+    """Five samples reach the radius at 10, 20, 30 and 40 s and never: within the 30 s
+    reaction time three of five (the one at 30 s included: ``T_r <= t_react``)."""
+    assert _result([10.0, 20.0, 30.0, 40.0, np.inf]).p_exceed()[0, 0, 0] == pytest.approx(0.6)
+
+
 def test_wind_direction_off_the_bow():
     """Kills: weather_rel_rad = psi - wind (P5). Wind from 090 at heading 000 is from
     starboard (90 deg off the bow); at heading 030 it is 60 deg off the bow."""
