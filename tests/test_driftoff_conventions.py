@@ -82,6 +82,22 @@ def test_p_exceed_counts_a_radius_reached_at_the_reaction_time():
     assert _result([10.0, 20.0, 30.0, 40.0, np.inf]).p_exceed()[0, 0, 0] == pytest.approx(0.6)
 
 
+def test_p_exceed_interval_is_the_exact_binomial_one():
+    """Clopper-Pearson by its definition, through the binomial tails (not the beta quantiles):
+    with k of n samples over the radius, P(X >= k) = 2.5 % at the lower bound and
+    P(X <= k) = 2.5 % at the upper one; 0 and 1 where none or all reached it."""
+    from scipy.stats import binom
+
+    t = np.where(np.arange(20) < 6, 10.0, np.inf)         # 6 of 20 within the 30 s
+    lo, hi = _result(t).p_exceed_interval(0.95)[0, 0, 0]
+    assert lo < 0.3 < hi
+    assert binom.sf(5, 20, lo) == pytest.approx(0.025, rel=1e-6)
+    assert binom.cdf(6, 20, hi) == pytest.approx(0.025, rel=1e-6)
+    none, every = (_result(np.full(20, v)).p_exceed_interval(0.95)[0, 0, 0] for v in (np.inf, 10.0))
+    assert none[0] == 0.0 and binom.cdf(0, 20, none[1]) == pytest.approx(0.025, rel=1e-6)
+    assert every[1] == 1.0 and binom.sf(19, 20, every[0]) == pytest.approx(0.025, rel=1e-6)
+
+
 def test_wind_direction_off_the_bow():
     """Kills: weather_rel_rad = psi - wind (P5). Wind from 090 at heading 000 is from
     starboard (90 deg off the bow); at heading 030 it is 60 deg off the bow."""
