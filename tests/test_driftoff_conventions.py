@@ -98,6 +98,17 @@ def test_p_exceed_interval_is_the_exact_binomial_one():
     assert every[1] == 1.0 and binom.sf(19, 20, every[0]) == pytest.approx(0.025, rel=1e-6)
 
 
+def test_operability_median_is_of_the_states_10_percent_times():
+    """Three states whose 10 % times are 10, 40 and 20 s (50 % and 90 % times far above):
+    the median 10 % time is 20 s."""
+    tq = np.array([[10.0, 100.0, 200.0], [40.0, 400.0, 800.0], [20.0, 300.0, 500.0]]).reshape(3, 1, 1, 3)
+    s = SeasonResult(labels=["a", "b", "c"], headings_rad=np.zeros(1), radii_m=np.array([5.0]),
+                     reaction_times_s=np.array([30.0]), quantile=0.9, t_quantiles_s=tq,
+                     p_exceed=np.zeros((3, 1, 1, 1)), watch_radius_m=np.ones((3, 1, 1)),
+                     weather_rel_rad=np.zeros((3, 1)), wall_s=0.0, n_samples=10)
+    assert s.operability(0.1)["median_t_p10_s"].tolist() == [20.0]
+
+
 def test_wind_direction_off_the_bow():
     """Kills: weather_rel_rad = psi - wind (P5). Wind from 090 at heading 000 is from
     starboard (90 deg off the bow); at heading 030 it is 60 deg off the bow."""
