@@ -149,6 +149,15 @@ def test_the_ship_drifts_downwind_and_with_the_current():
     assert cur[1] > 2.0 and abs(cur[0]) < 0.5 * cur[1], cur
 
 
+def test_the_ship_drifts_away_from_where_the_waves_come_from():
+    """Waves FROM north (beam on at heading 090; no wind, no current) push her south: the
+    mean wave drift acts in the direction the waves travel."""
+    st = DriftOffSettings(**NOMINAL)
+    end = simulate_blackouts("gunnerus", WeatherState(hs_m=2.0, tp_s=7.0, wave_dir_from_rad=0.0, gust_intensity=0.0),
+                             [math.pi / 2], settings=st, keep_tracks=True).tracks[0, 0, -1]
+    assert end[0] < -1.0 and abs(end[1]) < 0.5 * abs(end[0]), end
+
+
 def _live(monkeypatch, **change):
     """blackout_now on a hand-made estimate, with the kernel's tracks captured."""
     tracks = []
