@@ -233,6 +233,21 @@ def test_excursion_up_to_a_reaction_time_inside_a_step_is_interpolated():
     assert r.excursion_m[0, 0, 0] == pytest.approx(0.5 * (rad[30] + rad[31]), rel=1e-9)
 
 
+def test_time_to_reach_a_radius_inside_a_step_is_interpolated():
+    """Kills: the passage time taken at the end of the step that crosses the radius. With dt
+    1 s on a steadily growing drift, the time the track's radius reaches 2.5 m, read by
+    linear interpolation between the two track points around it."""
+    st = DriftOffSettings(n_samples=1, horizon_s=60.0, radii_m=(2.5,), reaction_times_s=(30.0,), vessel_spread=0.0)
+    r = simulate_blackouts("gunnerus", WeatherState(wind_speed_m_s=12.0, wind_dir_from_rad=math.pi / 2,
+                                                    gust_intensity=0.0), [0.0], settings=st, keep_tracks=True)
+    rad = np.hypot(r.tracks[0, 0, :, 0], r.tracks[0, 0, :, 1])
+    j = int(np.argmax(rad >= 2.5)) - 1                      # rad[j] < 2.5 <= rad[j + 1]
+    assert j > 0 and rad[j] < 2.5 < rad[j + 1] and rad[j + 1] - rad[j] > 0.05
+    want = j + (2.5 - rad[j]) / (rad[j + 1] - rad[j])      # [s], dt = 1 s
+    assert r.t_reach_s[0, 0, 0] == pytest.approx(want, rel=1e-9)
+    assert not want == pytest.approx(j + 1.0, abs=0.05)       # a passage inside the step, not at its end
+
+
 # -- live estimate from a log ---------------------------------------------------------------
 
 def test_live_estimate_takes_the_wind_direction_and_the_stop_handling_from_the_log():
