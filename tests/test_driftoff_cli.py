@@ -22,9 +22,12 @@ RUN = ["drift-off", "planning", "--samples", "3", "--headings-deg", "0", "--hori
 def test_planning_report_is_the_apis_result_on_the_same_inputs(tmp_path, capsys):
     """Every weather, uncertainty and settings option reaches simulate_blackouts (degrees
     converted, the waves from the wind's direction when not given): times.csv is the API's
-    table for the same state, spread, seed and settings."""
+    table for the same state, spread, seed, step and settings; watch.csv holds the
+    ``--quantile`` 0.5 circles, the 2nd smallest of the 4 samples' excursions (the smallest
+    radius that at least half of them stay inside)."""
     out = tmp_path / "plan"
     assert main(["drift-off", "planning", "--samples", "4", "--headings-deg", "0,90", "--horizon-s", "60",
+                 "--dt-s", "0.5", "--quantile", "0.5",
                  "--radii-m", "3,6", "--reaction-times-s", "20,40", "--wind-m-s", "11", "--wind-dir-deg", "70",
                  "--gust-intensity", "0.15", "--hs-m", "1.2", "--tp-s", "7", "--current-m-s", "0.3",
                  "--current-dir-deg", "200", "--wind-std-m-s", "1.5", "--wind-dir-std-deg", "10", "--hs-std-m", "0.3",
@@ -35,11 +38,17 @@ def test_planning_report_is_the_apis_result_on_the_same_inputs(tmp_path, capsys)
     w = WeatherState(11.0, math.radians(70.0), 1.2, 7.0, math.radians(70.0), 0.3, math.radians(200.0), 0.15)
     u = WeatherUncertainty(1.5, math.radians(10.0), 0.3, 0.8, math.radians(5.0), 0.05, math.radians(20.0))
     st = DriftOffSettings(radii_m=(3.0, 6.0), reaction_times_s=(20.0, 40.0), n_samples=4, horizon_s=60.0,
-                          vessel_spread=0.5, seed=9)
-    times, _ = simulate_blackouts("gunnerus", w, np.radians([0.0, 90.0]), uncertainty=u, settings=st).summary_frames()
+                          dt_s=0.5, vessel_spread=0.5, seed=9)
+    res = simulate_blackouts("gunnerus", w, np.radians([0.0, 90.0]), uncertainty=u, settings=st)
+    times, _ = res.summary_frames()
     # the report writes 6 significant digits
     want = pd.read_csv(io.StringIO(times.to_csv(index=False, float_format="%.6g")))
     pd.testing.assert_frame_equal(pd.read_csv(out / "times.csv"), want, check_exact=True)
+    watch = pd.read_csv(out / "watch.csv")
+    assert watch["quantile"].tolist() == [0.5] * 4
+    second = np.sort(res.excursion_m, axis=1)[:, 1, :]          # (heading, reaction time)
+    assert np.ptp(np.sort(res.excursion_m, axis=1)[:, 1:, :], axis=1).min() > 1e-3     # the 4 differ
+    np.testing.assert_allclose(watch["watch_radius_m"].to_numpy(), second.ravel(), rtol=1e-5)
 
 
 @pytest.mark.parametrize("mode, opts, message", [
