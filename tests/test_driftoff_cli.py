@@ -91,6 +91,20 @@ def test_the_scheduler_none_is_taken_in_any_case(tmp_path, capsys):
     assert "scheduler None" in capsys.readouterr().out and (tmp_path / "s" / "season.csv").is_file()
 
 
+def test_season_operability_is_at_the_max_p_exceed_given(tmp_path, capsys):
+    """``--max-p-exceed 1``: every state is operable (a probability is at most 1), the windy
+    one too, whose P(exceed) is 1 (the default 0.1 would count only the calm one)."""
+    table = tmp_path / "w.csv"
+    states_to_frame([WeatherState(), WeatherState.from_degrees(wind_speed_m_s=15.0, wind_dir_deg=90.0)]).to_csv(
+        table, index=False)
+    assert main(["drift-off", "season", "--weather-table", str(table), "--scheduler", "none", "--samples", "2",
+                 "--headings-deg", "0", "--horizon-s", "30", "--radii-m", "1", "--reaction-times-s", "30",
+                 "--max-p-exceed", "1", "--no-progress", "--out", str(tmp_path / "s")]) == 0
+    capsys.readouterr()
+    assert pd.read_csv(tmp_path / "s" / "season.csv")["p_exceed_30s"].tolist() == [0.0, 1.0]
+    assert pd.read_csv(tmp_path / "s" / "operability.csv")["operable_frac"].tolist() == [1.0]
+
+
 def test_a_failure_while_running_is_one_line_in_the_commands_words(monkeypatch, tmp_path, capsys):
     """Drifts that diverge (FloatingPointError) end with status 1 and the message; numpy's own
     "Unable to allocate ..." is replaced by what to ask for instead. No traceback either way,
