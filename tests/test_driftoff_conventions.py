@@ -82,6 +82,19 @@ def test_p_exceed_counts_a_radius_reached_at_the_reaction_time():
     assert _result([10.0, 20.0, 30.0, 40.0, np.inf]).p_exceed()[0, 0, 0] == pytest.approx(0.6)
 
 
+def test_times_table_has_each_radius_p_exceed_per_reaction_time():
+    """Two radii (3, 6 m) and two reaction times (30, 60 s), four samples reaching 3 m at 10,
+    20, 40 s and never, 6 m at 50, 70 s and never: by hand, 3 m is exceeded by 2 of 4 within
+    30 s and 3 of 4 within 60 s; 6 m by none within 30 s and 1 of 4 within 60 s."""
+    t = np.array([[10.0, 50.0], [20.0, 70.0], [40.0, np.inf], [np.inf, np.inf]])[None]
+    res = DriftOffResult(np.zeros(1), np.zeros(1), np.array([3.0, 6.0]), np.array([30.0, 60.0]), t,
+                         np.zeros((1, 4, 2)), 100.0)
+    times, _ = res.summary_frames()
+    assert times["radius_m"].tolist() == [3.0, 6.0]
+    assert times["p_exceed_30s"].tolist() == [0.5, 0.0]
+    assert times["p_exceed_60s"].tolist() == [0.75, 0.25]
+
+
 def test_p_exceed_interval_is_the_exact_binomial_one():
     """Clopper-Pearson by its definition, through the binomial tails (not the beta quantiles):
     with k of n samples over the radius, P(X >= k) = 2.5 % at the lower bound and
