@@ -135,3 +135,23 @@ def test_the_torch_correction_equals_numpy_and_a_zeroed_one_corrects_nothing():
     arrays["hull_phi_std"] = np.where(np.arange(len(HULL_REGRESSORS)) == 3, 0.0, arrays["hull_phi_std"])
     with pytest.raises(ValueError, match="non-positive scale"):
         HullCorrection.from_arrays(arrays, 3.0, 1e-3)
+
+
+def test_ridge_halves_a_single_live_slope_when_it_equals_the_regressor_variance():
+    """With only ``u`` non-zero the one live regressor is ``u|u|``; its standardised variance is 1,
+    so a ridge of 1 per training row halves the fitted slope about the mean (by hand:
+    ``x = u|u| = -1, 0, 1, 2`` has mean 0.5, and ``Y = a x + b`` is fitted as
+    ``b + 0.5 a + 0.5 a (x - 0.5)``); every other coefficient stays 0."""
+    u = np.array([-1.0, 0.0, 1.0, np.sqrt(2.0)])              # u|u| = -1, 0, 1, 2 [m^2/s^2]
+    full = np.zeros((4, len(ALL_FEATURES)))
+    full[:, ALL_FEATURES.index("u_hat_m_s")] = u
+    a = np.array([0.2, -0.4, 0.06])                           # slopes per DOF
+    b = np.array([1e-3, -2e-3, 5e-4])                         # intercepts [m/s^2, m/s^2, rad/s^2]
+    x = np.array([-1.0, 0.0, 1.0, 2.0])
+    Y = x[:, None] * a + b
+    h = HullCorrection.fit(full, Y, 3.0, ridge=1.0)
+    want = b + np.array([-0.25, 0.25, 0.75, 1.25])[:, None] * a
+    np.testing.assert_allclose(h.predict(full), want, rtol=1e-12, atol=1e-15)
+    assert np.all(h.theta[1:] == 0.0)
+    # with a negligible ridge the fit is exact
+    np.testing.assert_allclose(HullCorrection.fit(full, Y, 3.0, ridge=1e-12).predict(full), Y, rtol=1e-9, atol=1e-12)
