@@ -69,6 +69,21 @@ def test_rollouts_inside_the_envelope_stay_finite(x, dt_s):
     assert np.isfinite(res.eta).all() and np.isfinite(res.nu).all() and np.isfinite(res.nu_dot).all()
 
 
+@settings(max_examples=60, deadline=None)
+@given(x=valid_inputs(), turn_rad=st.floats(-np.pi, np.pi), shift_m=st.floats(-1e4, 1e4))
+def test_accelerations_do_not_change_when_heading_wind_and_current_turn_together(x, turn_rad, shift_m):
+    """The body-frame loads see only the wind and current relative to the heading: turning the
+    heading and both flow directions by the same angle [rad], and moving the ship by
+    ``shift_m`` north and east [m], leaves ``nu_dot`` unchanged."""
+    kw = dict(rpm=x["rpm"], azimuth_rad=x["azimuth_rad"])
+    nu_dot = MODEL.acceleration(x["eta"], x["nu"], wind=x["wind"], current=x["current"], **kw)
+    turn = np.array([0.0, turn_rad])
+    moved = MODEL.acceleration(x["eta"] + np.array([shift_m, shift_m, turn_rad]), x["nu"], wind=x["wind"] + turn,
+                               current=x["current"] + turn, **kw)
+    scale = max(1.0, float(np.abs(nu_dot).max()))
+    np.testing.assert_allclose(moved, nu_dot, rtol=1e-7, atol=1e-9 * scale)
+
+
 vec = hnp.arrays(np.float64, st.tuples(st.integers(1, 6), st.just(3)),
                  elements=st.floats(-1e6, 1e6, allow_nan=False, allow_infinity=False))
 
