@@ -158,3 +158,27 @@ def test_readers_round_trip_random_valid_logs(df):
                 np.testing.assert_array_equal(getattr(arr, field), getattr(ref, field), err_msg=f"{name}: {field}")
         assert sorted(p.name for p in Path(tmp).iterdir()) == ["log.csv", "log.csv.gz", "log.parquet"]
     pd.testing.assert_frame_equal(df, before, check_exact=True)
+
+
+@settings(max_examples=30, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(df=valid_logs())
+def test_log_arrays_hold_random_valid_logs_in_si_units_and_radians(df):
+    """The arrays of a log are its columns in SI units and radians: the heading is unwrapped
+    (its steps [rad] are the trapezoid integral of the logged yaw rate the log was built
+    from, never a 2 pi jump), ``r`` is in rad/s, wind and azimuth directions in radians."""
+    arr = log_to_arrays(df, channel_names=THRUSTERS, rotatable=ROTATABLE)
+    t, r_rad_s = df["time_s"].to_numpy(), np.radians(df["r_deg_s"].to_numpy())
+    np.testing.assert_array_equal(arr.eta[:, :2], df[["north_m", "east_m"]].to_numpy())
+    np.testing.assert_allclose(np.diff(arr.eta[:, 2]), 0.5 * np.diff(t) * (r_rad_s[1:] + r_rad_s[:-1]), atol=1e-9)
+    np.testing.assert_allclose(np.cos(arr.eta[:, 2]), np.cos(np.radians(df["heading_deg"].to_numpy())), atol=1e-12)
+    np.testing.assert_allclose(arr.nu, np.column_stack([df["u_m_s"], df["v_m_s"], r_rad_s]), rtol=1e-15)
+    if "wind_speed_m_s" in df:
+        ok = np.isfinite(df["wind_speed_m_s"].to_numpy())
+        np.testing.assert_array_equal(arr.wind[ok, 0], df["wind_speed_m_s"].to_numpy()[ok])
+        np.testing.assert_allclose(arr.wind[ok, 1], np.radians(df["wind_dir_deg"].to_numpy()[ok]), rtol=1e-15)
+    for j, name in enumerate(THRUSTERS):
+        if f"{name}_rpm" in df:
+            ok = np.isfinite(df[f"{name}_rpm"].to_numpy())
+            np.testing.assert_array_equal(arr.rpm[ok, j], df[f"{name}_rpm"].to_numpy()[ok])
+        if f"{name}_azimuth_deg" in df:
+            np.testing.assert_allclose(arr.azimuth_rad[:, j], np.radians(df[f"{name}_azimuth_deg"]), rtol=1e-15)
