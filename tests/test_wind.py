@@ -362,6 +362,16 @@ def test_coefficient_table_matches_curve(name):
         assert np.max(np.abs(a - b)) < 2e-4
 
 
+def test_coefficient_table_samples_the_number_of_points_asked_for():
+    """``n=361`` is a 1-deg grid from -180 to 180 deg: row 270 is the beam wind from port (90 deg),
+    where the research vessel's Blendermann values are the README's check values."""
+    grid, table = coefficient_table(CURVES["blendermann"], n=361)
+    assert grid.shape == (361,) and table.shape == (361, 3)
+    np.testing.assert_allclose(grid, np.radians(np.arange(-180.0, 181.0, 1.0)), rtol=0, atol=1e-15)
+    for value, printed in zip(table[270], ("0", "0.850", "0.0229")):
+        _assert_rounds_to(value, printed)
+
+
 def test_interpolate_table_keeps_shape_and_propagates_nan():
     _, table = coefficient_table(CURVES["blendermann"], n=361)
     g = np.array([[0.1, np.nan], [np.inf, -2.0]])
