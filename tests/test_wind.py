@@ -80,6 +80,25 @@ def test_isherwood_check_values(gamma_deg, cx, cy, cn):
     _assert_rounds_to(C_N, cn)
 
 
+def test_isherwood_at_130_deg_by_hand_from_the_published_row():
+    """At 130 deg every ship term but ``C/L`` in ``C_X`` enters (the superstructure ratio
+    ``A_SS/A_L``, ``S/L`` and ``L/B`` have zero weight at the 0, 90 and 180-deg check angles):
+    the README's formulas worked by hand with Isherwood's 130-deg row (MSS ``isherwood72.m``)."""
+    s = ISHERWOOD_SHIP
+    L, B = s["L_oa_m"], s["B_m"]
+    terms = np.array([1.0, 2.0 * s["A_L_m2"] / L**2, 2.0 * s["A_F_m2"] / B**2, L / B, s["S_m"] / L, s["C_m"] / L])
+    a_row = [-0.142, 3.58, 0.0, 0.047, -0.700, 0.0]                     # A0..A5, A6 = -0.028 on M
+    b_row = [1.014, 0.0, 0.191, 0.0, -0.280, -0.69]                     # B0..B5, B6 = 0.44 on A_SS/A_L
+    c_row = [-0.0189, 0.0, -0.0488, 0.0101, 0.1128, -0.420]             # C0..C5
+    want_x = -(terms @ a_row - 0.028 * s["M"])
+    want_y = terms @ b_row + 0.44 * s["A_SS_m2"] / s["A_L_m2"]
+    want_n = terms @ c_row
+    assert (want_x, want_y, want_n) == pytest.approx((0.0969, 0.5652, -0.1150), abs=1e-4)   # worked on paper
+    for sign in (1.0, -1.0):
+        C_X, C_Y, C_N = isherwood_coefficients(sign * np.radians(130.0), **ISHERWOOD_SHIP)
+        assert (C_X, C_Y, C_N) == pytest.approx((want_x, sign * want_y, sign * want_n), abs=1e-12)
+
+
 @pytest.mark.parametrize(
     "gamma_deg, cx, cy, cn",
     [
