@@ -155,3 +155,17 @@ def test_ridge_halves_a_single_live_slope_when_it_equals_the_regressor_variance(
     assert np.all(h.theta[1:] == 0.0)
     # with a negligible ridge the fit is exact
     np.testing.assert_allclose(HullCorrection.fit(full, Y, 3.0, ridge=1e-12).predict(full), Y, rtol=1e-9, atol=1e-12)
+
+
+def test_a_regressor_at_creep_speed_is_fitted_like_any_other():
+    """The fit standardises each regressor, so its scale does not matter: a sway speed of about
+    1 mm/s (``v|v|`` near 1e-6 m^2/s^2, as in station keeping) is still a live regressor, and a
+    target proportional to it [m/s^2] is fitted exactly (``v|v|`` and ``v^2`` are the only live ones)."""
+    rng = np.random.default_rng(3)
+    v = rng.normal(0.0, 1e-3, 200)                             # [m/s]
+    full = np.zeros((200, len(ALL_FEATURES)))
+    full[:, ALL_FEATURES.index("v_hat_m_s")] = v
+    Y = np.outer(v * np.abs(v), [0.0, 2e3, -50.0])              # by hand: a pure v|v| load
+    h = HullCorrection.fit(full, Y, 3.0, ridge=1e-12)
+    np.testing.assert_allclose(h.predict(full), Y, rtol=0, atol=1e-9 * np.abs(Y).max())
+    assert np.any(h.theta[HULL_REGRESSORS.index("v|v|")] != 0.0)
