@@ -169,3 +169,18 @@ def test_a_regressor_at_creep_speed_is_fitted_like_any_other():
     h = HullCorrection.fit(full, Y, 3.0, ridge=1e-12)
     np.testing.assert_allclose(h.predict(full), Y, rtol=0, atol=1e-9 * np.abs(Y).max())
     assert np.any(h.theta[HULL_REGRESSORS.index("v|v|")] != 0.0)
+
+
+def test_the_hybrids_hull_ridge_reaches_the_fit():
+    """``hull_ridge`` is the fit's ridge: with ``A = Z^T Z / N + ridge I`` (eigenvalues >= ridge) and
+    each ``|Z^T y / N|`` at most std(y) (Cauchy-Schwarz on unit-variance columns), every DOF's
+    coefficients have norm at most ``sqrt(P) std(y) / ridge``; a ridge of 1e6 leaves them tiny."""
+    m = DynamicModel("gunnerus")
+    logs = [physics_log(m, seed=5, duration_s=200.0, t_shutdown_s=None, current=(0.3, 1.0))]
+    rc = ResidualConfig(features=PAPER_FEATURES[:6], bias_window_s=0.0)
+    hp = HybridPredictor(m.vessel, residual_config=rc, ensemble_config=TINY,
+                         calibration_config=CalibrationConfig(fraction=0.0), hull_correction=True,
+                         hull_ridge=1e6).fit(logs)
+    y_std = np.asarray(hp.training_info["residual_std"])        # [m/s^2, m/s^2, rad/s^2]
+    bound = np.sqrt(len(HULL_REGRESSORS)) * y_std / 1e6
+    assert np.all(np.linalg.norm(hp.hull.theta, axis=0) <= bound * (1.0 + 1e-9))
