@@ -84,6 +84,25 @@ def test_accelerations_do_not_change_when_heading_wind_and_current_turn_together
     np.testing.assert_allclose(moved, nu_dot, rtol=1e-7, atol=1e-9 * scale)
 
 
+@settings(max_examples=40, deadline=None)
+@given(x=valid_inputs(), turn_rad=st.floats(-np.pi, np.pi))
+def test_a_rollout_turned_with_its_wind_and_current_is_the_same_path_turned(x, turn_rad):
+    """Turning the start heading, the wind and the current by ``turn_rad`` [rad] turns the whole
+    20-s path about its start point by that angle [m]; body velocities are unchanged and the
+    heading is shifted by the angle."""
+    kw = dict(rpm=x["rpm"], azimuth_rad=x["azimuth_rad"], dt_s=0.5)
+    turn = np.array([0.0, turn_rad])
+    a = MODEL.rollout(x["eta"], x["nu"], 40, wind=x["wind"], current=x["current"], **kw)
+    b = MODEL.rollout(x["eta"] + np.array([0.0, 0.0, turn_rad]), x["nu"], 40, wind=x["wind"] + turn,
+                      current=x["current"] + turn, **kw)
+    moved = a.eta - a.eta[:, :1]
+    want = frames.body_to_ned(np.concatenate([moved[..., :2], np.zeros(moved.shape[:2] + (1,))], -1), turn_rad)
+    scale = max(1.0, float(np.abs(moved[..., :2]).max()))
+    np.testing.assert_allclose(b.eta[..., :2] - b.eta[:, :1, :2], want[..., :2], rtol=1e-6, atol=1e-7 * scale)
+    np.testing.assert_allclose(b.eta[..., 2] - a.eta[..., 2], turn_rad, rtol=0, atol=1e-7 * max(1.0, abs(turn_rad)))
+    np.testing.assert_allclose(b.nu, a.nu, rtol=1e-6, atol=1e-7 * max(1.0, float(np.abs(a.nu).max())))
+
+
 vec = hnp.arrays(np.float64, st.tuples(st.integers(1, 6), st.just(3)),
                  elements=st.floats(-1e6, 1e6, allow_nan=False, allow_infinity=False))
 
