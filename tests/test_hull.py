@@ -184,3 +184,16 @@ def test_the_hybrids_hull_ridge_reaches_the_fit():
     y_std = np.asarray(hp.training_info["residual_std"])        # [m/s^2, m/s^2, rad/s^2]
     bound = np.sqrt(len(HULL_REGRESSORS)) * y_std / 1e6
     assert np.all(np.linalg.norm(hp.hull.theta, axis=0) <= bound * (1.0 + 1e-9))
+
+
+@pytest.mark.parametrize("key, shape", [("hull_theta", (len(HULL_REGRESSORS), 2)),
+                                        ("hull_theta", (len(HULL_REGRESSORS) - 1, 3)),
+                                        ("hull_phi_mean", (len(HULL_REGRESSORS) + 1,)), ("hull_offset", (2,))])
+def test_a_model_files_hull_arrays_of_the_wrong_shape_are_refused(key, shape):
+    """A model file's ``theta`` must be (P, 3), ``phi_mean``/``phi_std`` (P,) and ``offset`` (3,)
+    with P = 20 regressors; finite arrays of another shape are refused, not read."""
+    full = _features(np.random.default_rng(4), 100)
+    arrays = HullCorrection.fit(full, np.zeros((100, 3)), 3.0).arrays()
+    arrays[key] = np.ones(shape)
+    with pytest.raises(ValueError, match=r"expected theta \(20, 3\)"):
+        HullCorrection.from_arrays(arrays, 3.0, 1e-3)
