@@ -197,3 +197,20 @@ def test_a_model_files_hull_arrays_of_the_wrong_shape_are_refused(key, shape):
     arrays[key] = np.ones(shape)
     with pytest.raises(ValueError, match=r"expected theta \(20, 3\)"):
         HullCorrection.from_arrays(arrays, 3.0, 1e-3)
+
+
+def test_a_zero_ridge_is_least_squares_over_the_regressors_that_vary():
+    """``ridge=0`` (accepted by the hybrid's ``hull_ridge``): without command and wind columns their
+    regressors have no spread and no equation; the fit is ordinary least squares on the others,
+    whose predictions match ``numpy.linalg.lstsq`` on the raw regressors with an intercept."""
+    rng = np.random.default_rng(4)
+    full = _features(rng, 500)
+    full[:, 9:] = 0.0
+    Y = rng.normal(0.0, 1e-2, (500, 3))
+    h = HullCorrection.fit(full, Y, 3.0, ridge=0.0)
+    phi = hull_regressors(full, 3.0)
+    live = phi.std(0) > 0
+    assert 0 < live.sum() < len(HULL_REGRESSORS) and np.all(h.theta[~live] == 0.0)
+    design = np.column_stack([np.ones(500), phi[:, live]])
+    want = design @ np.linalg.lstsq(design, Y, rcond=None)[0]
+    np.testing.assert_allclose(h.predict(full), want, rtol=1e-9, atol=1e-12)

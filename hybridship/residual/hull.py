@@ -91,7 +91,8 @@ class HullCorrection:
 
     @classmethod
     def fit(cls, full: np.ndarray, Y: np.ndarray, length_m: float, ridge: float = 1e-3) -> "HullCorrection":
-        """Ridge regression of targets ``Y`` (N, 3) on the regressors of ``full`` (N, F)."""
+        """Ridge regression of targets ``Y`` (N, 3) on the regressors of ``full`` (N, F); ``ridge``
+        0 is least squares over the regressors that vary."""
         if not np.all(np.isfinite(full)) or not np.all(np.isfinite(Y)):
             raise ValueError("hull correction: features and targets must be finite")
         phi = hull_regressors(full, length_m)
@@ -103,8 +104,14 @@ class HullCorrection:
         Z[:, ~live] = 0.0
         off = Y.mean(0)
         N = Z.shape[0]
-        A = Z.T @ Z / N + ridge * np.eye(Z.shape[1])
-        theta = np.linalg.solve(A, Z.T @ (Y - off) / N)
+        if ridge > 0:
+            A = Z.T @ Z / N + ridge * np.eye(Z.shape[1])
+            theta = np.linalg.solve(A, Z.T @ (Y - off) / N)
+        else:
+            # plain least squares over the live regressors (those without spread have no
+            # equation; collinear ones get the minimum-norm split)
+            theta = np.zeros((Z.shape[1], Y.shape[1]))
+            theta[live] = np.linalg.lstsq(Z[:, live], Y - off, rcond=None)[0]
         theta[~live] = 0.0
         return cls(theta, mean, std, off, float(length_m), float(ridge), np.where(Y.std(0) > 0, Y.std(0), 1.0))
 
