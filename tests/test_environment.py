@@ -252,6 +252,17 @@ def test_drift_coefficient_limits():
     assert np.all(np.abs(drift_coefficients(0.05, np.linspace(-3, 3, 7), h)) < 1e-3 * 0.5 * RHO * G * 33.9)
 
 
+def test_short_wave_drift_at_60_deg_off_the_bow_by_hand():
+    """Short waves 60 deg off the port bow (beta = -60 deg): the wall values scale with the
+    squares ``cos^2 60 = 1/4`` (surge, pushing aft) and ``sin^2 60 = 3/4`` (sway, to
+    starboard), and the sway force acts ``c_n L cos 60 = 0.2 * 33.9 m / 2 = 3.39 m`` forward."""
+    wall = 0.5 * RHO * G                                                # [N/m^3]
+    d = drift_coefficients(20.0, np.radians(-60.0), GUNNERUS)
+    assert d[0] == pytest.approx(-wall * 0.6 * 9.6 * 0.25, rel=1e-3)
+    assert d[1] == pytest.approx(wall * 33.9 * 0.75, rel=1e-3)
+    assert d[2] == pytest.approx(3.39 * d[1], rel=1e-9)
+
+
 def test_drift_coefficient_between_the_limits_follows_the_energy_flux_above_the_keel():
     """At ``2 k T = 1`` (half-way between the limits) the beam-sea coefficient is the wall value
     ``(rho g / 2) c_y L`` times the flux share above the keel ``1 - e^-2kT`` and ``(kB)^2 / (1 + (kB)^2)``."""
