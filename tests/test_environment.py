@@ -178,6 +178,19 @@ def test_equal_energy_components_have_equal_amplitudes():
     np.testing.assert_allclose(wf.amplitude_m, wf.amplitude_m[0])
 
 
+def test_equal_energy_bins_hold_equal_shares_of_the_spectrum():
+    """The bins tile ``[0.5, 3.5] omega_p`` [rad/s], each frequency lies in its own bin, and
+    the JONSWAP area (gamma 5) over every bin (quad) is the same ``m0 / n``."""
+    tp, n = 6.0, 20
+    wp = 2.0 * np.pi / tp
+    wf = make_wave_components(1.0, tp, 0.0, rng=1, n_components=n, method="equal_energy", gamma=5.0)
+    edges = 0.5 * wp + np.concatenate([[0.0], np.cumsum(wf.d_omega_rad_s)])
+    assert edges[-1] == pytest.approx(3.5 * wp, rel=1e-12)
+    assert np.all((edges[:-1] <= wf.omega_rad_s) & (wf.omega_rad_s <= edges[1:]))
+    share = [quad(lambda w: float(jonswap_spectrum(w, 1.0, tp, 5.0)), a, b)[0] for a, b in zip(edges[:-1], edges[1:])]
+    np.testing.assert_allclose(share, np.sum(share) / n, rtol=1e-3)
+
+
 def test_long_crested_and_spread_directions():
     lc = make_wave_components(1.0, 6.0, 0.5, rng=2)
     np.testing.assert_allclose(lc.dir_from_rad, 0.5)
