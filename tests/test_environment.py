@@ -486,10 +486,22 @@ def test_gust_deterministic_and_seed_dependent():
     assert not np.allclose(a[0], c[0])
 
 
+def test_gust_direction_wanders_with_the_requested_spread_and_time_constant():
+    """The direction's wander is Gauss-Markov: standard deviation ``dir_std_rad`` (0.1 rad here,
+    not the 3 deg default) and lag-``dir_tau_s`` autocorrelation ``e^-1`` (120 s, not 300 s)."""
+    t = np.arange(0.0, 200_000.0, 10.0)
+    _, direction = gust_wind(t, 8.0, 1.0, 3, dir_std_rad=0.1, dir_tau_s=120.0)
+    wander = np.angle(np.exp(1j * (direction - 1.0)))                  # [rad]
+    assert wander.std() == pytest.approx(0.1, rel=0.1)
+    lag = 12                                                            # 120 s
+    assert np.corrcoef(wander[:-lag], wander[lag:])[0, 1] == pytest.approx(math.exp(-1.0), abs=0.05)
+
+
 def test_gust_zero_intensity_is_steady_and_validation():
     t = np.arange(0.0, 100.0, 1.0)
-    speed, _ = gust_wind(t, 6.0, 0.0, 1, intensity=0.0, dir_std_rad=0.0)
+    speed, direction = gust_wind(t, 6.0, 0.0, 1, intensity=0.0, dir_std_rad=0.0)
     np.testing.assert_allclose(speed, 6.0)
+    np.testing.assert_array_equal(direction, 0.0)
     with pytest.raises(ValueError, match="mean_speed_m_s"):
         gust_wind(t, -1.0, 0.0, 1)
     with pytest.raises(ValueError, match="intensity"):
