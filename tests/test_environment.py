@@ -14,6 +14,7 @@ import pytest
 from scipy.integrate import quad
 from scipy.stats import kstest
 
+from hybridship.frames import speed_dir_to_vector
 from hybridship.sim.environment import (
     GUNNERUS_HULL,
     HullDimensions,
@@ -224,6 +225,19 @@ def test_waves_propagate_away_from_where_they_come_from():
     c = G / w
     t = np.array([10.0 / c])
     assert wf.elevation(t, position_ne_m=[[-10.0, 0.0]])[0] == pytest.approx(1.0)
+
+
+@pytest.mark.parametrize("dir_from_deg", [90.0, 143.0, -115.0])
+def test_a_crest_travels_away_from_any_direction_it_comes_from(dir_from_deg):
+    """A 1 rad/s component from ``dir_from_deg``: the crest at the origin at t = 0 is 10 m
+    downwave (towards ``dir_from + 180 deg``) 10 m / c later, c = g / omega [m/s], and at
+    once 10 m across its direction, on the same crest line."""
+    chi = np.radians(dir_from_deg)
+    wf = WaveField(omega_rad_s=[1.0], amplitude_m=[1.0], phase_rad=[0.0], dir_from_rad=[chi])
+    downwave = speed_dir_to_vector([10.0, chi + np.pi])               # [north_m, east_m]
+    across = speed_dir_to_vector([10.0, chi + 0.5 * np.pi])
+    assert wf.elevation([10.0 / G], position_ne_m=[downwave])[0] == pytest.approx(1.0, abs=1e-9)
+    assert wf.elevation([0.0], position_ne_m=[across])[0] == pytest.approx(1.0, abs=1e-9)
 
 
 def test_wavefield_validation_names_field():
