@@ -627,6 +627,13 @@ def test_beaufort_wind_speed_falls_in_the_wmo_class_limits():
         assert lo <= speed <= hi, b
 
 
+def test_beaufort_wave_height_is_the_wmo_probable_height():
+    """The WMO probable open-sea wave height [m] of Beaufort 3 to 12, linear in between."""
+    wmo = [0.6, 1.0, 2.0, 3.0, 4.0, 5.5, 7.0, 9.0, 11.5, 14.0]
+    np.testing.assert_allclose(beaufort_wave_height(np.arange(3.0, 13.0)), wmo, rtol=1e-12)
+    assert beaufort_wave_height(4.5) == pytest.approx(1.5, rel=1e-12)
+
+
 def test_random_sea_state_peak_period_scales_with_the_root_of_hs():
     """``Tp = c sqrt(Hs)`` with ``c`` in ``tp_coefficient`` (s/m^0.5), unless held at the 2 s floor."""
     for seed in range(30):
