@@ -642,6 +642,21 @@ def test_random_sea_state_peak_period_scales_with_the_root_of_hs():
             assert 4.0 - 1e-9 <= s.tp_s / math.sqrt(s.hs_m) <= 6.0 + 1e-9
 
 
+def test_random_sea_state_draws_beaufort_half_a_class_wide_and_hs_from_the_fetch_factor():
+    """The Beaufort number behind each draw, ``(U / 0.836)^(2/3)`` from the wind [m/s], covers
+    half a class beyond both ends of ``beaufort=(2, 5)``; Hs is the WMO height at it [m] times
+    a factor in ``hs_fetch_factor``; ``gamma=None`` is DNV's ``exp(5.75 - 1.15 Tp / sqrt(Hs))``
+    clipped to [1, 5]."""
+    numbers = []
+    for seed in range(60):
+        s = SeaState.random(seed, beaufort=(2, 5), hs_fetch_factor=(0.2, 0.3), gamma=None)
+        b = (s.wind_speed_m_s / 0.836) ** (2.0 / 3.0)
+        numbers.append(b)
+        assert 0.2 - 1e-9 <= s.hs_m / beaufort_wave_height(b) <= 0.3 + 1e-9
+        assert s.gamma == pytest.approx(min(5.0, max(1.0, math.exp(5.75 - 1.15 * s.tp_s / math.sqrt(s.hs_m)))))
+    assert min(numbers) < 1.75 and max(numbers) > 5.25
+
+
 def test_sea_state_hs_grows_with_wind():
     calm = [SeaState.random(s, beaufort=(1, 2)).hs_m for s in range(30)]
     rough = [SeaState.random(s, beaufort=(5, 6)).hs_m for s in range(30)]
