@@ -15,6 +15,7 @@ from scipy.integrate import quad
 from scipy.stats import kstest
 
 from hybridship.frames import speed_dir_to_vector
+from hybridship.sim import environment
 from hybridship.sim.environment import (
     GUNNERUS_HULL,
     HullDimensions,
@@ -424,6 +425,32 @@ def test_wf_rates_are_time_derivatives_of_offsets():
     num = np.gradient(off, t, axis=0)
     for col in range(3):
         np.testing.assert_allclose(rate[1:-1, col], num[1:-1, col], atol=2e-3 * np.abs(rate[:, col]).max())
+
+
+def test_long_records_are_evaluated_at_every_sample_across_memory_blocks(monkeypatch):
+    """With memory blocks of 1000 elements (20 samples of 50 components), 107 samples span
+    six blocks, the last one short: elevation equals the sum ``sum A cos(omega t + k x . d +
+    eps)`` written out, and drift loads and wave-frequency motion along a turning, moving track
+    equal those of each sample alone."""
+    monkeypatch.setattr(environment, "_BLOCK_ELEMENTS", 1000)
+    wf = make_wave_components(1.0, 6.0, 0.4, rng=6, spreading=2.0)
+    t = np.arange(107) * 0.5                                            # [s]
+    psi = 0.3 + 0.01 * t                                                # [rad]
+    pos = np.column_stack([0.3 * t, -0.2 * t])                         # [north_m, east_m]
+    k = wf.omega_rad_s**2 / G                                           # [rad/m]
+    along = k * (np.outer(pos[:, 0], np.cos(wf.dir_from_rad)) + np.outer(pos[:, 1], np.sin(wf.dir_from_rad)))
+    direct = np.cos(np.outer(t, wf.omega_rad_s) + along + wf.phase_rad) @ wf.amplitude_m
+    np.testing.assert_allclose(wf.elevation(t, position_ne_m=pos), direct, rtol=0.0, atol=1e-12)
+    drift = wave_drift_loads(t, psi, wf, GUNNERUS, position_ne_m=pos)
+    motion = wave_frequency_motion(t, psi, wf, GUNNERUS, position_ne_m=pos)
+    for i in range(t.size):
+        one = slice(i, i + 1)
+        np.testing.assert_allclose(drift[i],
+                                   wave_drift_loads(t[one], psi[one], wf, GUNNERUS, position_ne_m=pos[one])[0],
+                                   rtol=1e-12, atol=1e-9)
+        np.testing.assert_allclose(motion[i],
+                                   wave_frequency_motion(t[one], psi[one], wf, GUNNERUS, position_ne_m=pos[one])[0],
+                                   rtol=1e-12, atol=1e-14)
 
 
 # --------------------------------------------------------------------------- wind
