@@ -517,6 +517,15 @@ def test_gusts_carry_energy_down_to_the_record_length():
     assert 0.5 * expected < np.mean(got) < 1.5 * expected
 
 
+def test_gusts_of_a_long_record_are_one_series_across_memory_blocks(monkeypatch):
+    """Evaluated in blocks of 5 samples (1000 elements of 200 harmonics), the gust speed [m/s]
+    of a seed is that of one block: every harmonic keeps its phase from the record's start."""
+    t = np.arange(0.0, 600.0, 1.0) + 1000.0
+    whole, _ = gust_wind(t, 8.0, 1.0, 42)
+    monkeypatch.setattr(environment, "_BLOCK_ELEMENTS", 1000)
+    np.testing.assert_allclose(gust_wind(t, 8.0, 1.0, 42)[0], whole, rtol=1e-12, atol=0.0)
+
+
 def test_gust_deterministic_and_seed_dependent():
     t = np.arange(0.0, 600.0, 0.5)
     a = gust_wind(t, 8.0, 1.0, 42)
