@@ -586,6 +586,7 @@ def test_current_correlation_time_and_velocity_components():
     for series in (speed, np.angle(np.exp(1j * direction))):
         assert np.corrcoef(series[:-lag], series[lag:])[0, 1] == pytest.approx(math.exp(-1.0), abs=0.05)
     np.testing.assert_allclose(current_velocity_ned(2.0, np.pi / 2), [0.0, 2.0], atol=1e-12)  # flowing east
+    np.testing.assert_allclose(current_velocity_ned(2.0, np.radians(210.0)), [-math.sqrt(3.0), -1.0], atol=1e-12)
 
 
 def test_gauss_markov_nonuniform_grid_matches_recursion():
