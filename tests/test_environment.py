@@ -639,6 +639,15 @@ def test_sea_state_steeper_than_waves_can_be_is_refused(hs_m, tp_s):
              wind_dir_from_rad=0.0)
 
 
+def test_the_highest_sea_at_a_6_s_peak_is_a_seventh_of_its_wavelength():
+    """Miche's limit: at Tp = 6 s the deep-water wavelength ``g Tp^2 / (2 pi)`` is 56.21 m, a
+    seventh of which, 8.03 m, is the highest Hs accepted."""
+    assert max_hs_m(6.0) == pytest.approx(56.21 / 7.0, rel=1e-3)
+    SeaState(hs_m=8.0, tp_s=6.0, wave_dir_from_rad=0.0, wind_speed_m_s=8.0, wind_dir_from_rad=0.0)
+    with pytest.raises(ValueError, match="steeper than waves can be"):
+        SeaState(hs_m=8.1, tp_s=6.0, wave_dir_from_rad=0.0, wind_speed_m_s=8.0, wind_dir_from_rad=0.0)
+
+
 def test_sea_state_random_is_consistent_and_deterministic():
     lo, hi = beaufort_wind_speed(1.5), beaufort_wind_speed(5.5)
     for seed in range(50):
