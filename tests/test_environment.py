@@ -418,6 +418,17 @@ def test_wf_yaw_rao_peaks_at_the_documented_value_for_waves_as_long_as_the_ship(
     assert rao[2] == pytest.approx(-raos.yaw_gain * k, rel=1e-9)
 
 
+def test_wf_surge_and_sway_raos_for_waves_as_long_as_the_ship_by_hand():
+    """At ``lambda = L`` (k L = 2 pi) the envelope ``exp(-k T / 2) / sqrt(1 + (k l / 2)^2)`` has
+    ``k T / 2 = pi T / L`` and ``k l / 2 = pi`` in head seas (l = L), ``pi B / L`` in beam seas
+    (l = B); sway gain 0.5 halves the beam-sea RAO (waves from port move the hull to starboard)."""
+    k = 2.0 * np.pi / GUNNERUS["L_m"]
+    depth = math.exp(-math.pi * 2.5 / 33.9)
+    raos = MotionRAOs.from_hull(GUNNERUS, sway_gain=0.5).amplitudes(math.sqrt(k * G), [HEAD, FROM_PORT])
+    assert raos[0, 0] == pytest.approx(-depth / math.sqrt(1.0 + math.pi**2), rel=1e-9)
+    assert raos[1, 1] == pytest.approx(0.5 * depth / math.sqrt(1.0 + (math.pi * 9.6 / 33.9) ** 2), rel=1e-9)
+
+
 def test_wf_rates_are_time_derivatives_of_offsets():
     wf = make_wave_components(1.0, 6.0, 2.0, rng=1)
     t = np.arange(0.0, 200.0, 0.01)
