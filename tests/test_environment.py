@@ -175,6 +175,16 @@ def test_batched_jittered_seas_are_make_wave_components_seas_for_the_same_jitter
         assert np.all(np.abs(hs_components - hs) <= 0.1 * hs) and np.all(np.abs(hs_components - hs)[hs > 0] > 1e-6)
 
 
+@pytest.mark.parametrize("method", ["jittered", "equal_energy"])
+def test_components_stay_in_the_requested_band(method):
+    """``omega_range_factor=(0.8, 2.0)`` at Tp = 2 pi s (omega_p = 1 rad/s): the bins tile
+    [0.8, 2.0] rad/s (widths summing to 1.2 rad/s) and every frequency lies in it."""
+    wf = make_wave_components(1.0, 2.0 * np.pi, 0.0, rng=4, n_components=30, method=method,
+                              omega_range_factor=(0.8, 2.0))
+    assert np.sum(wf.d_omega_rad_s) == pytest.approx(1.2, rel=1e-12)
+    assert 0.8 <= wf.omega_rad_s.min() and wf.omega_rad_s.max() <= 2.0
+
+
 def test_equal_energy_components_have_equal_amplitudes():
     wf = make_wave_components(1.0, 6.0, 0.0, rng=1, method="equal_energy")
     np.testing.assert_allclose(wf.amplitude_m, wf.amplitude_m[0])
