@@ -741,6 +741,19 @@ def test_sea_state_helpers_produce_series():
     assert GUNNERUS_HULL.L_m == 33.9
 
 
+def test_sea_state_helpers_pass_on_its_own_gamma_gusts_and_current():
+    """A sea state's helpers are the module functions called with its gamma (1, not the 3.3
+    default), gust intensity (0.2) and current (0.2 m/s to 2 rad)."""
+    s = SeaState(hs_m=1.0, tp_s=6.0, wave_dir_from_rad=0.2, wind_speed_m_s=8.0, wind_dir_from_rad=0.1,
+                 gust_intensity=0.2, current_speed_m_s=0.2, current_dir_to_rad=2.0, gamma=1.0)
+    t = np.arange(0.0, 600.0, 1.0)
+    wf = s.wave_components(1)
+    assert wf.gamma == 1.0
+    np.testing.assert_array_equal(wf.amplitude_m, make_wave_components(1.0, 6.0, 0.2, 1, gamma=1.0).amplitude_m)
+    np.testing.assert_array_equal(s.wind(t, 1)[0], gust_wind(t, 8.0, 0.1, 1, intensity=0.2)[0])
+    np.testing.assert_array_equal(s.current(t, 1)[1], current_series(t, 0.2, 2.0, 1)[1])
+
+
 @pytest.mark.parametrize("call, error, match", [
     (lambda: make_wave_components(1.0, 6.0, 0.0, 1, omega_range_factor=(0.5,)), ValueError,
      r"omega_range_factor must be a \(lo, hi\) pair"),
