@@ -87,6 +87,28 @@ def test_the_heading_innovation_is_wrapped_through_north():
     assert 0.0 < x1[2] - x[2] < 0.02
 
 
+@pytest.mark.parametrize("z0, used", [(1.1, True), (1.2, False)])
+def test_a_position_update_by_hand_and_the_gate_at_eight_standard_deviations(z0, used):
+    """North spread 0.1 m (variance 0.01 m^2), measured with 0.1 m, correlated 0.004 m^2/s with
+    the surge speed: gain 0.01 / 0.02 = 1/2, so a 1.1 m innovation moves north 0.55 m, surge
+    0.004 / 0.02 * 1.1 = 0.22 m/s, and leaves variances 0.005 m^2 and 0.01 - 0.004^2 / 0.02.
+    8 standard deviations of the innovation are 8 sqrt(0.02) = 1.131 m: a first jump of 1.2 m
+    is an outlier and leaves the state and its covariance."""
+    x = np.zeros(14)
+    P = np.eye(14) * 0.01
+    P[0, 3] = P[3, 0] = 0.004
+    z = np.zeros(6)
+    z[0] = z0
+    x1, P1 = _update(x, P, z, 0, gate=8.0)
+    if not used:
+        np.testing.assert_array_equal(x1, x)
+        np.testing.assert_array_equal(P1, P)
+        return
+    np.testing.assert_allclose(x1[[0, 3]], [0.55, 0.22], rtol=1e-12)
+    np.testing.assert_array_equal(np.delete(x1, [0, 3]), 0.0)
+    np.testing.assert_allclose([P1[0, 0], P1[0, 3], P1[3, 3]], [0.005, 0.002, 0.01 - 0.004**2 / 0.02], rtol=1e-12)
+
+
 def test_the_gate_lets_the_measurement_in_after_exactly_max_gated_outliers():
     """With max_gated 3, three outliers in a row are gated and the fourth restarts the
     channel at the measurement. Kills: an off-by-one in the count (E14)."""
