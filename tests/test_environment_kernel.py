@@ -121,8 +121,9 @@ def test_the_gate_lets_the_measurement_in_after_exactly_max_gated_outliers():
         x1, _ = _update(x, P, z, 0, gate=8.0, max_gated=3, gate_state=gate_state)
         np.testing.assert_array_equal(x1, x)
         assert gate_state[0, 0] == k + 1
-    x1, _ = _update(x, P, z, 0, gate=8.0, max_gated=3, gate_state=gate_state)
+    x1, P1 = _update(x, P, z, 0, gate=8.0, max_gated=3, gate_state=gate_state)
     assert x1[0] == 100.0 and gate_state[0, 0] == 0
+    assert P1[0, 0] == pytest.approx(0.1**2, rel=1e-12) and np.all(np.delete(P1[0], 0) == 0.0)    # r^2 alone
 
 
 def test_prior_standard_deviations_at_the_start_are_in_si_units(model):
