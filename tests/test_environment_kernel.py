@@ -45,6 +45,8 @@ def test_a_restart_after_a_long_gap_grows_the_environment_by_its_random_walk(mod
     q = est._process_noise_base()[ENV]
     np.testing.assert_allclose(e.P[1][ENV, ENV] - e.P[0][ENV, ENV], np.diag(q**2 * gap), rtol=1e-9, atol=1e-15)
     np.testing.assert_array_equal(e.x[1][ENV], e.x[0][ENV])
+    # the motion states restart at the row's measurement [m, m, rad, m/s, m/s, rad/s]
+    np.testing.assert_array_equal(e.x[1][:6], np.concatenate([a.eta[200], a.nu[200]]))
 
 
 def test_a_bridged_gap_is_the_prediction_through_rows_without_measurements(model):
