@@ -192,6 +192,8 @@ def _cmd_simulate(args) -> int:
         if args.seed < 0:
             raise UsageError(f"{prefix}: error: --seed must be non-negative, got {args.seed}")
         _check_log_path(args.out, f"{prefix}: error: --out")
+        if args.out.is_dir():       # refused before simulating, not when the log is written
+            raise UsageError(f"{prefix}: error: --out {args.out}: is a folder; expected the log file to write")
         _check_out_folder(args.out.parent, prefix)      # a file on the way: refused before simulating
         _check_writable(args.out, prefix)
         _check_replaceable(args.out, prefix)

@@ -575,6 +575,23 @@ def test_cli_simulate_refuses_phases_longer_than_a_day_before_simulating(tmp_pat
         assert f"--out-dir {out_dir}:" in capsys.readouterr().err
 
 
+def test_cli_simulate_refuses_an_out_that_is_a_folder_before_simulating(tmp_path, capsys, monkeypatch):
+    """A folder at --out was found only when the log was written, after the simulation
+    (half a minute), and reported as a run failure (exit 1)."""
+    from hybridship.sim import scenario
+
+    def no_simulation(*args, **kwargs):
+        raise AssertionError("simulated before the options were checked")
+
+    monkeypatch.setattr(scenario, "simulate_dp_loss", no_simulation)
+    folder = tmp_path / "sim.csv"
+    folder.mkdir()
+    assert main(["simulate", "--seed", "1", "--out", str(folder), "--no-progress"]) == 2
+    assert (f"hybridship simulate: error: --out {folder}: is a folder; expected the log file to write"
+            in capsys.readouterr().err)
+    assert list(folder.iterdir()) == []
+
+
 def test_cli_simulate_writes_a_readable_log(tmp_path, capsys):
     out = tmp_path / "new" / "sim.csv.gz"     # a missing folder is made, as for every --out
     rc = main(["simulate", "--vessel", "gunnerus", "--scenario", "dp-loss", "--seed", "5", "--out", str(out),
