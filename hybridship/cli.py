@@ -147,7 +147,7 @@ def _add_simulate(sub) -> None:
     p.add_argument("--out", type=path_argument, help="output log of a single scenario: .csv, .csv.gz, .parquet or .pq")
     p.add_argument("--sweep", action="store_true", help="simulate one scenario per seed of --seeds")
     p.add_argument("--seeds", type=_seed_list, help="seeds of a sweep, e.g. 1-10 or 1,3,5-7")
-    p.add_argument("--out-dir", type=Path, help="output folder of a sweep")
+    p.add_argument("--out-dir", type=path_argument, help="output folder of a sweep")
     p.add_argument("--format", default="csv.gz", choices=("csv", "csv.gz", "parquet"),
                    help="log format of a sweep (default csv.gz)")
     p.add_argument("--beaufort", type=float, nargs=2, metavar=("LO", "HI"), default=(2.0, 5.0),
@@ -298,7 +298,7 @@ def _add_train(sub) -> None:
     p.add_argument("--vessel", type=vessel_argument, default="gunnerus",
                    help="packaged vessel name or vessel TOML file of the ship that made the logs (default "
                         "gunnerus; the physics the nets correct)")
-    p.add_argument("--logs", required=True, type=Path, help="folder of logs (*.csv, *.csv.gz, *.parquet, *.pq)")
+    p.add_argument("--logs", required=True, type=path_argument, help="folder of logs (*.csv, *.csv.gz, *.parquet, *.pq)")
     p.add_argument("--out", required=True, type=path_argument, help="model file to write (.npz)")
     p.add_argument("--members", type=_members, default=10, help="ensemble members (default 10)")
     p.add_argument("--seed", type=_seed, default=0, help="seed of the initial weights and bootstrap draws (default 0)")
@@ -418,8 +418,8 @@ def _add_forecast(sub) -> None:
                        description="Forecast the vessel's motion from each --start-time of --log with a model "
                                    "file from 'hybridship train' (the vessel comes from the model file), and "
                                    "write the forecast table with its spread and fault flags to --out.")
-    p.add_argument("--model", required=True, type=Path, help="model file from 'hybridship train'")
-    p.add_argument("--log", required=True, type=Path, help="log file")
+    p.add_argument("--model", required=True, type=path_argument, help="model file from 'hybridship train'")
+    p.add_argument("--log", required=True, type=path_argument, help="log file")
     p.add_argument("--start-time", required=True, type=float, nargs="+", help="start time(s) [s] (sample times)")
     p.add_argument("--horizon-s", type=float, default=60.0,
                    help="forecast horizon [s], a whole number of the log's steps (default 60)")
@@ -545,8 +545,8 @@ def _add_benchmark(sub) -> None:
                                     "coverage_heading.csv, drift_hull.csv, "
                                     "timing.csv, tables.md and figures "
                                     "to --out. Without --train/--test: the embedded simulated scenarios.")
-    d.add_argument("--train", type=Path, help="folder of training logs")
-    d.add_argument("--test", type=Path, help="folder of test logs (default: the training logs' drifts)")
+    d.add_argument("--train", type=path_argument, help="folder of training logs")
+    d.add_argument("--test", type=path_argument, help="folder of test logs (default: the training logs' drifts)")
     d.add_argument("--out", type=path_argument, default=Path("drift-benchmark"), help="output folder (default drift-benchmark)")
     d.add_argument("--vessel", type=vessel_argument, default="gunnerus",
                    help="packaged vessel name or vessel TOML file (default gunnerus)")
@@ -588,8 +588,8 @@ def _add_benchmark(sub) -> None:
                                     "--out.")
     m.add_argument("--vessel", type=vessel_argument, default="esso_osaka_model",
                    help="packaged vessel name or vessel TOML file (default esso_osaka_model)")
-    m.add_argument("--train", required=True, type=Path, help="folder of training runs")
-    m.add_argument("--test", required=True, type=Path, help="folder of test runs (never the training runs)")
+    m.add_argument("--train", required=True, type=path_argument, help="folder of training runs")
+    m.add_argument("--test", required=True, type=path_argument, help="folder of test runs (never the training runs)")
     m.add_argument("--horizons-s", default="5,10,20,30", help="comma-separated horizons [s] (default 5,10,20,30)")
     m.add_argument("--out", type=path_argument, default=Path("manoeuvre-benchmark"),
                    help="output folder (default manoeuvre-benchmark)")

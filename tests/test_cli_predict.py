@@ -448,6 +448,25 @@ def test_bad_options_are_refused_before_any_work(log_dir, tmp_path, capsys):
     assert sorted(p.name for p in log_dir.iterdir()) == before
 
 
+def test_an_empty_path_is_refused_not_read_as_the_current_folder(log_dir, tmp_path, capsys, monkeypatch):
+    """An empty --logs, --model, --log, --train, --test or --out-dir was read as the current
+    folder (a sweep written there, the logs found there trained on), as --out is not."""
+    monkeypatch.chdir(tmp_path)
+    logs, out = str(log_dir), str(tmp_path / "o")
+    for option, argv in (
+            ("--out-dir", ["simulate", "--sweep", "--seeds", "1", "--out-dir", "", "--drift-s", "nan"]),
+            ("--logs", ["train", "--logs", "", "--out", str(tmp_path / "m.npz")]),
+            ("--model", ["forecast", "--model", "", "--log", logs, "--start-time", "900", "--out", "f.csv"]),
+            ("--log", ["forecast", "--model", "m.npz", "--log", "", "--start-time", "900", "--out", "f.csv"]),
+            ("--train", ["benchmark", "drift", "--train", "", "--out", out]),
+            ("--test", ["benchmark", "drift", "--train", logs, "--test", "", "--out", out]),
+            ("--train", ["benchmark", "manoeuvre", "--train", "", "--test", logs, "--out", out]),
+            ("--test", ["benchmark", "manoeuvre", "--train", logs, "--test", "", "--out", out])):
+        assert main(argv) == 2, argv
+        assert f"error: argument {option}: expected a path, got ''" in capsys.readouterr().err, argv
+    assert list(tmp_path.iterdir()) == []
+
+
 def test_version(capsys):
     import hybridship
 
