@@ -181,12 +181,15 @@ def earlier_run(names, marker: str, head: bytes) -> Callable[[str, Path], bool]:
 
 def check_output_files(folder, written, removed=(), ours=None) -> None:
     """Refuse, before any work, output files that would replace or remove a file a hybridship
-    command did not write (FileExistsError) or a read-only one (PermissionError); see
-    :func:`write_output_files` for ``ours``."""
-    folder = Path(folder)
+    command did not write, or be written where a folder is (FileExistsError), or a read-only
+    one (PermissionError); see :func:`write_output_files` for ``ours``."""
+    folder, written = Path(folder), list(written)
     recorded = _recorded_outputs(folder)
     for name in [*written, *removed]:
         path = folder / name
+        if name in written and path.is_dir():      # found only when written, after the files before it
+            raise FileExistsError(f"{path}: is a folder, where the file {name} would be written: give another "
+                                  f"output folder or move it")
         if not path.is_file():
             continue
         if name not in recorded and not (ours is not None and ours(name, path)):

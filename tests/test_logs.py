@@ -162,6 +162,22 @@ def test_file_writers_refuse_what_is_not_a_path_or_bytes_before_writing(tmp_path
     assert sorted(x.name for x in tmp_path.iterdir()) == ["in.csv"]      # nothing written, no folder made
     assert write_text("a.txt", "ok").read_text() == "ok"
 
+def test_output_files_are_not_written_where_a_folder_of_that_name_is(tmp_path):
+    """A folder at one of the names was found only when that file was written: the files
+    before it were written and left out of the folder's record (so refused by the next run)."""
+    from hybridship.fileio import check_output_files, write_output_files
+
+    (tmp_path / "b.csv").mkdir()
+    with pytest.raises(FileExistsError, match=r"b\.csv: is a folder, where the file b\.csv would be written"):
+        check_output_files(tmp_path, ["a.csv", "b.csv"])
+    with pytest.raises(FileExistsError, match=r"b\.csv: is a folder"):
+        write_output_files(tmp_path, {"a.csv": b"1", "b.csv": b"2"})
+    assert sorted(x.name for x in tmp_path.iterdir()) == ["b.csv"]      # nothing written
+    check_output_files(tmp_path, ["a.csv"], removed=["b.csv"])      # a folder is never removed: no error
+    assert write_output_files(tmp_path, {"a.csv": b"1"}, stale=["b.csv"])["a.csv"].read_bytes() == b"1"
+    assert (tmp_path / "b.csv").is_dir()
+
+
 def test_unsupported_extension(tmp_path):
     with pytest.raises(LogFormatError, match="extension"):
         write_log(circle_log(), tmp_path / "log.txt")
