@@ -208,7 +208,7 @@ def write_output_files(folder, contents: dict, *, stale=(), ours=None) -> dict:
     hybridship command wrote (listed in the folder's :data:`OUTPUTS_RECORD`, or, for a
     folder from before that record, accepted by ``ours(name, path)``) and writable;
     otherwise FileExistsError or PermissionError names it and nothing changes. Each file is
-    then written atomically (:func:`atomic_write`) and the record updated.
+    then written atomically (:func:`atomic_write`) and added to the record as it is written.
 
     Parameters
     ----------
@@ -237,7 +237,10 @@ def write_output_files(folder, contents: dict, *, stale=(), ours=None) -> dict:
     if isinstance(stale, (str, bytes)):
         raise TypeError(f"stale: expected a list of file names, got {stale!r}")
     check_output_files(folder, contents, stale, ours)
-    paths = {name: atomic_write(folder / name, lambda fh, b=data: fh.write(b)) for name, data in contents.items()}
+    paths = {}
+    for name, data in contents.items():
+        paths[name] = atomic_write(folder / name, lambda fh, b=data: fh.write(b))
+        record_outputs(folder, [name])      # as it is written: an interrupted run's files are ours too
     remove_stale(folder, stale)
     record_outputs(folder, contents, removed=stale)
     return paths

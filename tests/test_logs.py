@@ -178,6 +178,30 @@ def test_output_files_are_not_written_where_a_folder_of_that_name_is(tmp_path):
     assert (tmp_path / "b.csv").is_dir()
 
 
+def test_output_files_written_before_a_failure_are_replaced_by_the_next_run(tmp_path, monkeypatch):
+    """The record of outputs was written after the last file: files written before a failure
+    (a full disk, an interrupt) were left out of it, and the next run refused them as files
+    hybridship did not write."""
+    import errno
+
+    from hybridship import fileio
+
+    real = fileio.atomic_write
+
+    def full_disk_at_b(path, write):
+        if Path(path).name == "b.csv":
+            raise OSError(errno.ENOSPC, f"{path}: cannot be written (No space left on device)")
+        return real(path, write)
+
+    monkeypatch.setattr(fileio, "atomic_write", full_disk_at_b)
+    with pytest.raises(OSError, match="No space left"):
+        fileio.write_output_files(tmp_path, {"a.csv": b"1", "b.csv": b"2"})
+    assert (tmp_path / "a.csv").read_bytes() == b"1"
+    monkeypatch.setattr(fileio, "atomic_write", real)
+    fileio.write_output_files(tmp_path, {"a.csv": b"3", "b.csv": b"4"})
+    assert [(tmp_path / n).read_bytes() for n in ("a.csv", "b.csv")] == [b"3", b"4"]
+
+
 def test_unsupported_extension(tmp_path):
     with pytest.raises(LogFormatError, match="extension"):
         write_log(circle_log(), tmp_path / "log.txt")
