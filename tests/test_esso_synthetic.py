@@ -79,6 +79,23 @@ def test_convention_checks_take_a_negative_lag():
     assert neg["rms_north_m_s"] != pytest.approx(pos["rms_north_m_s"], rel=1e-3)
 
 
+@pytest.mark.filterwarnings("ignore:invalid value:RuntimeWarning")     # no yaw: its correlations are NaN
+@pytest.mark.parametrize("kwargs, field", [({"diff_s": -1.0}, "diff_s"), ({"diff_s": 0.0}, "diff_s"),
+                                           ({"lag_s": float("nan")}, "lag_s"), ({"diff_s": 60.0}, "raw"),
+                                           ({"lag_s": -30.0}, "raw")])
+def test_convention_checks_refuse_a_difference_or_lag_they_cannot_take_by_name(kwargs, field):
+    """A negative or zero ``diff_s`` was read as one step, a NaN ``lag_s`` was numpy's 'cannot
+    convert float NaN to integer', and a difference or lag longer than the run gave NaN for
+    every rms with numpy's warnings about empty slices."""
+    with pytest.raises(ValueError, match=rf"^{field}\b"):
+        convention_checks(_raw(300), **kwargs)
+    with pytest.raises(ValueError, match=r"^raw: 1 row"):
+        convention_checks(_raw(1))
+    # the shortest run that holds one difference: 2 k + lag + 1 rows (k = 5, lag = 6)
+    c = convention_checks(_raw(17), lag_s=0.6)
+    assert c["rms_north_m_s"] == pytest.approx(abs(0.3 - 0.3 - 0.01 * np.sin(1.1)), rel=1e-9)
+
+
 # ------------------------------------------------------------------------- list_runs
 
 

@@ -397,8 +397,18 @@ def convention_checks(raw: pd.DataFrame, *, diff_s: float = 1.0, lag_s: float = 
         * ``corr_delta_r5``: correlation of delta with r 5 s later (> 0: + turns to starboard);
         * ``rms_apparent_wind_m_s``: rms error of the apparent wind rebuilt from the true wind,
           heading and (u, vm) as ``true wind velocity in body axes - (u, vm)``.
+
+    Raises
+    ------
+    ValueError
+        ``diff_s`` not a positive time, ``lag_s`` not finite, or a run too short for one
+        central difference with its lagged velocities (all NaN before, or numpy's error).
     """
+    diff_s = check_number("diff_s", diff_s, lo=0.0, lo_open=True)
+    lag_s = check_number("lag_s", lag_s)
     t = raw["t [s]"].to_numpy(float)
+    if len(t) < 2:
+        raise ValueError(f"raw: {len(t)} row(s); expected a run of several rows")
     dt = float(np.median(np.diff(t)))
     k = max(1, int(round(0.5 * diff_s / dt)))
     lag = int(round(lag_s / dt))
@@ -410,6 +420,9 @@ def convention_checks(raw: pd.DataFrame, *, diff_s: float = 1.0, lag_s: float = 
     # rows whose differences (i +- k) and lagged velocities (i + lag) all lie in the run; a
     # negative lag (earlier velocities) indexed past the end before
     i = np.arange(k + max(0, -lag), n - k - max(0, lag))
+    if i.size == 0:
+        raise ValueError(f"raw: {n} rows hold no central difference over diff_s = {diff_s:g} s with the velocities "
+                         f"lag_s = {lag_s:g} s away; expected a run of at least {(2 * k + abs(lag)) * dt:g} s")
     xd = (x[i + k] - x[i - k]) / (t[i + k] - t[i - k])
     yd = (y[i + k] - y[i - k]) / (t[i + k] - t[i - k])
     c, s = np.cos(psi[i]), np.sin(psi[i])
