@@ -183,6 +183,19 @@ def test_simulator_refuses_bad_arguments_by_name(craft):
         as_mapping.speed_m_s, model.simulate([3000.0] * 5, [50.0] * 5, sea=SeaConditions(hs_m=0.05, tp_s=1.5), rng=1).speed_m_s)
 
 
+def test_a_paper_trial_seed_is_refused_in_the_users_own_numbers():
+    """The trial's seed is ``seed * 100 + sea_state``: a seed of 2**62 was refused as 'seed: must
+    be < 9223372036854775808 (got 461168601842738790401)', a value the caller never gave and
+    below the bound it quoted."""
+    top = (2**63 - 3) // 100
+    for seed in (2**62, top + 1):
+        with pytest.raises(ValueError, match=rf"^seed: expected a whole number from 0 to {top}, got {seed}$"):
+            paper_trial(2, seed=seed)
+    with pytest.raises(ValueError, match=rf"^seed: expected a whole number from 0 to {top}, got np.int64\({2**62}\)"):
+        paper_trial(2, seed=np.int64(2**62))
+    assert paper_trial(2, seed=top).seed == top * 100 + 2 < 2**63       # the largest one is a seed
+
+
 def test_arguments_of_the_wrong_type_are_refused_by_name(craft):
     """A vessel name for the craft or a text for the trial's config was an AttributeError, a text
     for rpm, the sample period or the settling time a numpy TypeError naming nothing, a text scale

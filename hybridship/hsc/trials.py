@@ -107,6 +107,10 @@ class TrialConfig:
         return self.n_samples - self.n_train
 
 
+#: Largest ``seed`` of :func:`paper_trial`: its trials are seeded ``seed * 100 + sea_state``.
+_MAX_TRIAL_SEED = (2**63 - 1 - 2) // 100
+
+
 def paper_trial(sea_state: int, *, seed: int = 0, scale: float = 1.0) -> TrialConfig:
     """The paper's trial for sea state 1 or 2; ``scale < 1`` shortens it (quick runs, tests)."""
     if isinstance(sea_state, (bool, np.bool_)):       # True == 1 gave sea state 1
@@ -118,8 +122,9 @@ def paper_trial(sea_state: int, *, seed: int = 0, scale: float = 1.0) -> TrialCo
     else:
         raise ValueError(f"sea_state: expected 1 or 2, got {sea_state!r}")
     scale = check_number("scale", scale, lo=0.0, lo_open=True, hi=1.0)      # a text was a TypeError unnamed
-    if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or seed < 0:
-        raise ValueError(f"seed: expected a whole number >= 0, got {seed!r}")
+    # the trial's seed is seed * 100 + sea_state, which must stay a seed (below 2**63)
+    if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or not 0 <= seed <= _MAX_TRIAL_SEED:
+        raise ValueError(f"seed: expected a whole number from 0 to {_MAX_TRIAL_SEED}, got {seed!r}")
     n_s, n_t = max(int(round(n * scale)), 200), max(int(round(n_tr * scale)), 130)
     return TrialConfig(sea_state=sea_state, n_samples=n_s, n_train=n_t, actuator=act, sea=sea,
                        seed=seed * 100 + sea_state)
