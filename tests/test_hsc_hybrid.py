@@ -282,6 +282,14 @@ def test_tables_of_the_other_trim_device_are_refused(craft, tables):
     HybridModel(craft, "trim_tab", tables=tables)           # hand-made tables: the device is unknown
 
 
+def test_grey_box_refuses_a_craft_that_is_not_a_planing_craft_by_name(tables):
+    """``GreyBox("volcano71", ...)`` was an AttributeError ('str' object has no attribute
+    'sensors'); HybridModel loads a name, the grey box takes the loaded file, as the simulator."""
+    for craft in ("volcano71", None):
+        with pytest.raises(TypeError, match=r"^craft: expected a PlaningCraft"):
+            GreyBox(craft, "interceptor", tables)
+
+
 def test_text_flags_and_a_bad_step_are_refused_by_name():
     """Review: ``generate_trial(progress="no")`` and ``HybridModel.fit(progress="no")`` took
     the text as True; ``GreyBox(dt_s=0)`` was accepted."""

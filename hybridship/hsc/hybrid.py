@@ -125,11 +125,13 @@ class GreyBox:
     def __init__(self, craft: PlaningCraft, actuator: str, tables: GreyBoxTables | None = None,
                  dt_s: float | None = None):
         self.craft, self.actuator = craft, actuator
+        # checks the craft (a name was an AttributeError on .sensors) and the actuator before the
+        # tables are judged by it
+        pm = PlaningCraftModel(craft, actuator)
         # the step of the records: by default the craft's sample period (a fixed 0.1 s ran the
         # dynamics at half speed on a craft logged at 0.2 s)
         dt_s = craft.sensors.sample_period_s if dt_s is None else dt_s
         self.dt = dt_s = check_number("dt_s", dt_s, lo=0.0, lo_open=True)
-        pm = PlaningCraftModel(craft, actuator)         # checks the actuator before the tables are judged by it
         if tables is not None and not isinstance(tables, GreyBoxTables):
             raise TypeError(f"tables: expected GreyBoxTables (GreyBoxTables.from_craft(...)), "
                             f"got {type(tables).__name__}")
