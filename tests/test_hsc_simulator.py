@@ -4,6 +4,7 @@ import dataclasses
 import math
 
 import numpy as np
+import pandas as pd
 import pytest
 
 from hybridship.hsc.simulator import KNOT_M_S, PlaningCraftModel, SeaConditions, savitsky_planing, smoothstep
@@ -217,6 +218,22 @@ def test_arguments_of_the_wrong_type_are_refused_by_name(craft):
         with pytest.raises(error, match=rf"^{field}\b"):
             call()
     assert model.steady_state(np.float32(3000.0)).speed_m_s == pytest.approx(model.steady_state(3000).speed_m_s)
+
+
+def test_trial_arrays_refuse_an_unknown_part_by_name():
+    """``arrays("val")`` was a KeyError: 'val'; the three parts are the split's rows in order."""
+    from hybridship.hsc.trials import INPUTS, OUTPUTS, TrialData
+
+    cfg = TrialConfig(sea_state=1, n_samples=60, n_train=50, actuator="interceptor", sea=SeaConditions())
+    data = pd.DataFrame({c: np.arange(60.0) + j for j, c in enumerate(("time_s", *OUTPUTS, *INPUTS))})
+    trial = TrialData(config=cfg, raw=data, data=data, truth=None, delay_samples=0)
+    for part in ("val", "Train", None, 1):
+        with pytest.raises(ValueError, match=r"^part: expected 'all', 'train' or 'validation'"):
+            trial.arrays(part)
+    for part, rows in (("all", slice(0, 60)), ("train", slice(0, 50)), ("validation", slice(50, 60))):
+        U, Y = trial.arrays(part)
+        np.testing.assert_array_equal(U[:, 0], np.arange(60.0)[rows] + 3)      # rpm, the fourth column
+        np.testing.assert_array_equal(Y[:, 1], np.arange(60.0)[rows] + 2)      # pitch, the third
 
 
 def test_a_trial_rpm_range_outside_the_engine_is_refused_by_name(craft):

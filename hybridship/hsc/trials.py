@@ -215,8 +215,17 @@ class TrialData:
         return self.data.iloc[self.config.n_train:].reset_index(drop=True)
 
     def arrays(self, part: str = "all"):
-        """``(U, Y)`` arrays, inputs ``(N, 3)`` and outputs ``(N, 2)`` (SI), of ``all``, ``train`` or ``validation``."""
-        df = {"all": self.data, "train": self.train, "validation": self.validation}[part]
+        """``(U, Y)`` arrays, inputs ``(N, 3)`` and outputs ``(N, 2)`` (SI), of ``all``, ``train`` or ``validation``.
+
+        Raises
+        ------
+        ValueError
+            ``part`` not one of the three (a KeyError before).
+        """
+        parts = {"all": lambda: self.data, "train": lambda: self.train, "validation": lambda: self.validation}
+        if not isinstance(part, str) or part not in parts:
+            raise ValueError(f"part: expected 'all', 'train' or 'validation', got {part!r}")
+        df = parts[part]()
         return df[list(INPUTS)].to_numpy(float), df[list(OUTPUTS)].to_numpy(float)
 
 
