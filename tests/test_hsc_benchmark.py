@@ -116,6 +116,15 @@ def test_models_have_the_papers_structures():
             assert (m["ann"].config.n_out, m["ann"].config.n_in) == lags
 
 
+def test_models_for_refuses_a_sea_state_the_paper_has_no_models_for():
+    """Sea state 3 (or 0, or "1") was given sea state 2's structures without a word, True sea state 1's."""
+    from hybridship.hsc.vessel import load_planing_craft
+
+    for sea_state in (3, 0, "1", True, 1.5):
+        with pytest.raises(ValueError, match=rf"^sea_state: expected 1 or 2, got {sea_state!r}$"):
+            models_for(sea_state, load_planing_craft(), "interceptor")
+
+
 def test_the_papers_tables_as_printed():
     """Tables 1 (R) and 2 (MAE) of the paper, row by row: SS1 speed train/val, SS1 pitch, SS2 speed, SS2 pitch."""
     table1 = {"ss": (0.93, 0.94, 0.68, 0.57, 0.89, 0.85, 0.73, 0.48),
