@@ -150,6 +150,18 @@ def test_a_pwm_period_shorter_than_two_samples_is_refused(craft):
     assert np.all(np.diff(pwm >= 55.0))
 
 
+def test_input_schedule_refuses_a_sample_count_that_is_not_a_whole_number_by_name():
+    """``input_schedule(cfg, 300.0, ...)`` was numpy's 'expected a sequence of integers or a single
+    integer', ``n = -1`` its 'negative dimensions are not allowed'; neither named ``n``."""
+    cfg = paper_trial(1, scale=0.1)
+    for n in (300.0, -1, "300", True):
+        with pytest.raises(ValueError, match=r"^n: expected a whole number >= 0"):
+            input_schedule(cfg, n, 0.1, np.random.default_rng(0))
+    rpm, pwm = input_schedule(cfg, np.int64(300), 0.1, np.random.default_rng(0))
+    assert rpm.shape == pwm.shape == (300,)
+    assert [a.size for a in input_schedule(cfg, 0, 0.1, np.random.default_rng(0))] == [0, 0]
+
+
 def test_simulator_refuses_bad_arguments_by_name(craft):
     model = PlaningCraftModel(craft, "interceptor")
     cases = [

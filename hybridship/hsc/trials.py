@@ -31,7 +31,7 @@ import numpy as np
 import pandas as pd
 from pydantic import Field, model_validator
 
-from ..config import Float, Int, Seed, check_flags, check_number, config_dataclass
+from ..config import Float, Int, Seed, check_flags, check_number, check_whole_number, config_dataclass
 from .simulator import KNOT_M_S, PlaningCraftModel, SeaConditions, TrueRecord
 from .vessel import PlaningCraft, load_planing_craft
 
@@ -141,9 +141,11 @@ def input_schedule(config: TrialConfig, n: int, dt_s: float, rng: np.random.Gene
     Raises
     ------
     ValueError
-        ``dt_s`` not positive, or ``config.pwm_period_s`` shorter than two steps (a
-        half period, the time a PWM level is held, would round to no sample).
+        ``n`` not a whole number >= 0, ``dt_s`` not positive, or ``config.pwm_period_s``
+        shorter than two steps (a half period, the time a PWM level is held, would round
+        to no sample).
     """
+    n = check_whole_number("n", n, 0)          # numpy's shape errors named nothing (100.0, -1)
     dt_s = check_number("dt_s", dt_s, lo=0.0, lo_open=True)
     # the step is the craft's, unknown to TrialConfig: a half period rounding to 0 samples never advanced
     if int(config.pwm_period_s[0] / 2 / dt_s) < 1:
