@@ -125,6 +125,23 @@ def test_models_for_refuses_a_sea_state_the_paper_has_no_models_for():
             models_for(sea_state, load_planing_craft(), "interceptor")
 
 
+def test_steady_curves_refuse_a_craft_or_count_they_cannot_use_by_name():
+    """A vessel name was an AttributeError on .engines, ``n_rpm = 0`` an empty table without
+    columns and ``n_rpm = 2.5`` numpy's error; one engine speed is idle."""
+    from hybridship.hsc.benchmark import steady_curves
+    from hybridship.hsc.vessel import load_planing_craft
+
+    craft = load_planing_craft()
+    with pytest.raises(TypeError, match=r"^craft: expected a PlaningCraft"):
+        steady_curves("volcano71", 3)
+    for n in (0, 2.5, -1):
+        with pytest.raises(ValueError, match=r"^n_rpm: expected a whole number >= 1"):
+            steady_curves(craft, n)
+    one = steady_curves(craft, 1)
+    assert list(one.columns) == ["boat", "device", "rpm", "speed_kn", "trim_deg"] and len(one) == 6
+    assert (one.rpm == craft.engines.idle_rpm).all()
+
+
 def test_the_papers_tables_as_printed():
     """Tables 1 (R) and 2 (MAE) of the paper, row by row: SS1 speed train/val, SS1 pitch, SS2 speed, SS2 pitch."""
     table1 = {"ss": (0.93, 0.94, 0.68, 0.57, 0.89, 0.85, 0.73, 0.48),

@@ -27,7 +27,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from hybridship.config import check_flags
+from hybridship.config import check_flags, check_whole_number
 from hybridship.fileio import (as_path, atomic_write, check_out_folder, check_output_files, earlier_run,
                                make_out_folder, record_outputs)
 from hybridship.residual.ensemble import EnsembleConfig
@@ -38,7 +38,7 @@ from .identification import ARXModel, NARXConfig, NARXModel, StateSpaceModel
 from .scoring import score
 from .simulator import KNOT_M_S, PlaningCraftModel
 from .trials import generate_trial, paper_trial
-from .vessel import load_planing_craft
+from .vessel import PlaningCraft, load_planing_craft
 
 __all__ = ["run_benchmark", "models_for", "score_model", "steady_curves", "PAPER_R", "PAPER_MAE", "COLUMNS", "N_INIT"]
 
@@ -209,12 +209,28 @@ def steady_curves(craft, n_rpm: int = 17) -> pd.DataFrame:
     """Calm-water equilibria of the nominal file and the simulated true boat, devices retracted
     and fully out, from idle to full engine speed.
 
+    Parameters
+    ----------
+    craft : PlaningCraft
+        The nominal vessel file (:func:`~hybridship.hsc.vessel.load_planing_craft`).
+    n_rpm : int
+        Engine speeds from ``idle_rpm`` to ``max_rpm`` (at least 1).
+
     Returns
     -------
     DataFrame
         Columns ``boat`` ("nominal" or "truth"), ``device`` ("none", "interceptor",
         "trim_tab"), ``rpm``, ``speed_kn`` and ``trim_deg``.
+
+    Raises
+    ------
+    TypeError, ValueError
+        Naming ``craft`` (not a PlaningCraft: an AttributeError before) or ``n_rpm`` (0 gave an
+        empty table without columns, 2.5 numpy's error).
     """
+    if not isinstance(craft, PlaningCraft):
+        raise TypeError(f"craft: expected a PlaningCraft (load_planing_craft(...)), got {type(craft).__name__}")
+    n_rpm = check_whole_number("n_rpm", n_rpm, 1)
     rpms = np.linspace(craft.engines.idle_rpm, craft.engines.max_rpm, n_rpm)
     rows = []
     for boat, c in (("nominal", craft), ("truth", craft.perturbed())):
