@@ -53,6 +53,26 @@ def test_a_one_row_run_with_a_velocity_lead():
     assert len(log) == 1 and log.u_m_s.iloc[0] == pytest.approx(0.3)
 
 
+def test_esso_log_arrays_read_a_run_from_any_path_object(tmp_path):
+    """A path object other than str or pathlib.Path (os.PathLike, e.g. pytest's py.path) was
+    refused as 'run: expected a path, EssoRun or DataFrame'."""
+    from hybridship.datasets.esso_osaka import esso_log_arrays
+
+    class _Path(os.PathLike):
+        def __init__(self, p):
+            self.p = p
+
+        def __fspath__(self):
+            return str(self.p)
+
+    path = tmp_path / "random_01-Jan-2020_00_00_00.csv"
+    _raw(100).to_csv(path, index=False)
+    got, want = esso_log_arrays(_Path(path)), esso_log_arrays(path)
+    np.testing.assert_array_equal(got.eta, want.eta)
+    np.testing.assert_array_equal(got.rpm, want.rpm)
+    np.testing.assert_array_equal(got.time_s, np.arange(100) * 0.1)
+
+
 # ------------------------------------------------------------------------- convention_checks
 
 

@@ -241,7 +241,7 @@ def esso_log_arrays(run, vessel="esso_osaka_model", *, velocity_lead_s: float = 
     v = vessel if isinstance(vessel, Vessel) else load_vessel(vessel)
     if isinstance(run, EssoRun):
         run = run.path
-    if isinstance(run, (str, Path)):
+    if isinstance(run, (str, os.PathLike)):       # any path object (only str and Path before)
         log = read_esso_osaka(run, vessel=v, velocity_lead_s=velocity_lead_s)
     elif isinstance(run, pd.DataFrame) and "t [s]" in run.columns:
         log = esso_to_log(run, vessel=v, velocity_lead_s=velocity_lead_s)
