@@ -81,3 +81,17 @@ def test_a_local_cluster_is_closed_when_its_client_cannot_start(monkeypatch):
     with pytest.raises(OSError, match="no client"):
         season._client("local", 2)
     assert closed == [True]
+
+
+def test_live_current_members_of_the_wrong_shape_are_refused_by_name():
+    """Current members are ``[north, east]`` pairs, (M, 2): two members of three columns were
+    read as three pairs of other numbers (``reshape(-1, 2)``) and drifted in a current nobody
+    gave; one pair (2,) is still one member."""
+    for bad in (np.array([[0.3, 0.1, 0.0], [0.2, 0.0, 0.0]]), np.zeros((2, 2, 2)), np.zeros(4)):
+        with pytest.raises(ValueError, match=r"^estimate\.current_members_ned_m_s: expected .*\(M, 2\).* got "
+                                             r"shape"):
+            blackout_now(dataclasses.replace(ESTIMATE, current_members_ned_m_s=bad), "gunnerus", SMALL)
+    one = blackout_now(dataclasses.replace(ESTIMATE, current_members_ned_m_s=np.array([0.0, 0.5])), "gunnerus", SMALL)
+    same = blackout_now(dataclasses.replace(ESTIMATE, current_members_ned_m_s=np.array([[0.0, 0.5]])), "gunnerus",
+                        SMALL)
+    np.testing.assert_array_equal(one.excursion_m, same.excursion_m)

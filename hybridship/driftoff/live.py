@@ -412,7 +412,11 @@ def blackout_now(estimate: EnvironmentEstimate, vessel="gunnerus", settings: Dri
     acc = members[np.arange(N) % members.shape[0]]
     cur = np.zeros((N, 2))
     if estimate.current_members_ned_m_s is not None:
-        c = np.asarray(estimate.current_members_ned_m_s, float).reshape(-1, 2)
+        c = np.asarray(estimate.current_members_ned_m_s, float)
+        if c.shape != (2,) and (c.ndim != 2 or c.shape[1] != 2):     # reshaped, (M, 3) would read as other pairs
+            raise ValueError(f"estimate.current_members_ned_m_s: expected (M, 2) [north, east] m/s, got shape "
+                             f"{c.shape}")
+        c = c.reshape(-1, 2)
         if c.shape[0] == 0 or not np.all(np.isfinite(c)):
             raise ValueError("estimate.current_members_ned_m_s: expected finite (M, 2) [north, east] m/s")
         c = c[np.arange(N) % c.shape[0]]
