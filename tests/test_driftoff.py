@@ -1240,3 +1240,13 @@ def test_a_scheduler_address_where_another_service_answers_is_refused_by_name(tm
     err = capsys.readouterr().err
     assert f"scheduler '{address}': could not connect" in err and "memory" not in err, err
     assert not (tmp_path / "s").exists()
+
+
+def test_a_markdown_table_without_decimals_keeps_the_whole_numbers_zeros():
+    """``digits=0`` gives 100 as "100" and 30 as "30" (the trailing zeros of a whole number
+    were stripped as if they were decimals: "1" and "3"); decimals lose their trailing zeros."""
+    from hybridship.driftoff.report import markdown_table
+
+    df = pd.DataFrame({"radius_m": [100.0, 30.0], "t_p50_s": [120.4, np.inf]})
+    assert markdown_table(df, digits=0).splitlines()[2:] == ["| 100 | 120 |", "| 30 | never |"]
+    assert markdown_table(df, digits=2).splitlines()[2:] == ["| 100 | 120.4 |", "| 30 | never |"]

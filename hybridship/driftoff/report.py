@@ -104,7 +104,10 @@ def markdown_table(df: pd.DataFrame, digits: int = 2) -> str:
         if isinstance(v, (float, np.floating)):
             if np.isinf(v):
                 return "never"
-            return f"{v:.{digits}f}".rstrip("0").rstrip(".") if math.isfinite(v) else "-"
+            if not math.isfinite(v):
+                return "-"
+            text = f"{v:.{digits}f}"
+            return text.rstrip("0").rstrip(".") if "." in text else text   # 100, not 1, without decimals
         return str(v)
 
     head = "| " + " | ".join(df.columns) + " |\n|" + "---|" * len(df.columns) + "\n"
