@@ -1250,3 +1250,18 @@ def test_a_markdown_table_without_decimals_keeps_the_whole_numbers_zeros():
     df = pd.DataFrame({"radius_m": [100.0, 30.0], "t_p50_s": [120.4, np.inf]})
     assert markdown_table(df, digits=0).splitlines()[2:] == ["| 100 | 120 |", "| 30 | never |"]
     assert markdown_table(df, digits=2).splitlines()[2:] == ["| 100 | 120.4 |", "| 30 | never |"]
+
+
+def test_a_weather_tables_time_labels_are_kept_as_written(tmp_path):
+    """The ``time`` column is text (docs/drift-off.md: "kept as text"): hours written 0000,
+    0100 are those labels, not the numbers 0 and 100, and 1.10 and 1.1 are two labels (they
+    were read as one number and refused as a repeated label)."""
+    head = "time,wind_speed_m_s,wind_dir_deg,hs_m,tp_s,wave_dir_deg,current_m_s,current_dir_deg\n"
+    row = ",5,0,1,6,0,0.1,0\n"
+    path = tmp_path / "hours.csv"
+    path.write_text(head + "".join(t + row for t in ("0000", "0100", "1.10", "1.1")))
+    states, labels = read_weather_table(path)
+    assert labels == ["0000", "0100", "1.10", "1.1"] and len(states) == 4
+    path.write_text(head + "0000" + row + row)
+    with pytest.raises(ValueError, match=r"column 'time', row 1 \(line 3 of the file\): empty"):
+        read_weather_table(path)

@@ -211,7 +211,8 @@ def read_weather_table(path_or_frame) -> tuple[list[WeatherState], list[str]]:
                 # a row with more fields than the header: pandas would take the first column
                 # as the index and shift every other one (index_col=False), or drop the last
                 warnings.simplefilter("error", pd.errors.ParserWarning)
-                df = pd.read_csv(src, index_col=False)
+                # the labels as written: 0100 is not the number 100, nor 1.10 the same as 1.1
+                df = pd.read_csv(src, index_col=False, dtype={"time": str})
         except pd.errors.ParserWarning:
             raise ValueError(f"{src}: {_field_count_problem(src)}; a weather table's rows have one field per "
                              f"header column") from None
