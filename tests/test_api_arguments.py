@@ -170,6 +170,11 @@ def test_simulate_blackouts_refuses_a_text_flag():
 
     with pytest.raises(TypeError, match="^keep_tracks: expected True or False, got 'no'"):
         simulate_blackouts("gunnerus", WeatherState(), [0.0], keep_tracks="no")
+    from hybridship.driftoff.season import season_sweep
+
+    # a text "no" is truthy: the sweep's progress bar would show
+    with pytest.raises(TypeError, match="^progress: expected True or False, got 'no'"):
+        season_sweep("gunnerus", [WeatherState()], [0.0], progress="no")
 
 
 def test_after_stop_errors_and_the_drift_hull_objective_bound_their_horizon_and_flags():

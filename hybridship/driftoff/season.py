@@ -28,7 +28,7 @@ from dataclasses import dataclass
 import numpy as np
 import pandas as pd
 
-from ..config import as_config
+from ..config import as_config, check_flags
 from .planning import DriftOffSettings, check_headings, simulate_blackouts
 from .weather import WeatherState, WeatherUncertainty
 
@@ -219,6 +219,7 @@ def season_sweep(vessel, states, headings_rad, *, uncertainty: WeatherUncertaint
     if isinstance(quantile, bool) or not isinstance(quantile, (int, float, np.integer, np.floating)) \
             or not 0.0 < float(quantile) < 1.0:
         raise ValueError(f"quantile: expected a number in (0, 1), got {quantile!r}")
+    check_flags(progress=progress)          # a text "no" is truthy and would show the bar
     st = as_config(settings, DriftOffSettings, "settings") if settings is not None else DriftOffSettings()
     psi = check_headings(headings_rad)
     labels = [str(i) for i in range(len(states))] if labels is None else [str(x) for x in labels]
