@@ -163,6 +163,18 @@ def test_an_empty_vessel_is_refused_as_bad_input(tmp_path, monkeypatch, capsys, 
     assert sorted(p.name for p in tmp_path.iterdir()) == []
 
 
+@pytest.mark.parametrize("argv, option", [
+    (["drift-off", "live", "--out", "o", "--log="], "--log"),
+    (["drift-off", "season", "--out", "o", "--weather-table="], "--weather-table")])
+def test_an_empty_input_path_is_refused_not_read_as_the_current_folder(tmp_path, monkeypatch, capsys, argv, option):
+    """An empty path is the current folder to pathlib: refused as bad input (exit 2) naming the option."""
+    monkeypatch.chdir(tmp_path)
+    assert main(argv) == 2
+    err = capsys.readouterr().err
+    assert f"error: argument {option}: expected a path, got ''" in err, err
+    assert sorted(p.name for p in tmp_path.iterdir()) == []
+
+
 def test_live_and_forecast_end_alike_on_a_log_without_a_required_column(tmp_path, capsys):
     """Review: a log without ``heading_deg`` ended ``drift-off live`` with status 2 (a bad
     option) and ``forecast`` with 1 (bad data); live now ends with 1 too, naming the column."""

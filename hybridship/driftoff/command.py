@@ -125,7 +125,7 @@ def add_parser(sub, parser_class, usage_error=None) -> None:
                         description="Estimate the environment from the log up to --time-s (mean wind; current "
                                     "and load from the environment estimator over --window-s) and run blackouts "
                                     "from the state and thruster rpm at that time.")
-    b.add_argument("--log", type=Path, required=True, help="station-keeping log (.csv, .csv.gz, .parquet)")
+    b.add_argument("--log", type=path_argument, required=True, help="station-keeping log (.csv, .csv.gz, .parquet)")
     b.add_argument("--time-s", type=float, default=None, help="time of the blackout [s] (default: the last row)")
     b.add_argument("--window-s", type=float, default=900.0,
                    help="log read before --time-s by the environment estimator [s] (default 900, at least 60)")
@@ -135,7 +135,7 @@ def add_parser(sub, parser_class, usage_error=None) -> None:
     c = dsub.add_parser("season", help="sweep a table of weather states (e.g. hourly hindcast) on Dask",
                         description="Blackouts for every weather state x heading x sample; chunks of states run "
                                     "as Dask futures on a LocalCluster, a given scheduler, or in this process.")
-    c.add_argument("--weather-table", type=Path, required=True,
+    c.add_argument("--weather-table", type=path_argument, required=True,
                    help="CSV of weather states (columns: see docs/drift-off.md)")
     c.add_argument("--headings-deg", type=_floats, default=[0, 45, 90, 135, 180, 225, 270, 315],
                    help="vessel headings [deg], comma-separated (default every 45 deg)")
