@@ -63,6 +63,17 @@ def test_config_defaults():
     assert DPLossConfig(noise={"gnss_white_m": 0.0}).noise.gnss_white_m == 0.0
 
 
+def test_replace_keeps_a_default_jitter_at_4_percent_of_the_new_shutdown_time():
+    """A jitter left at its default is 4 % of the shutdown time the copy has: 240 s at 6000 s,
+    4 s at 100 s (not the original's 120 s, which left no DP before a 100-s shutdown)."""
+    cfg = DPLossConfig()
+    assert cfg.replace(t_shutdown_s=6000.0).t_shutdown_jitter_s == pytest.approx(240.0)
+    assert cfg.replace(t_shutdown_s=100.0).t_shutdown_jitter_s == pytest.approx(4.0)
+    assert cfg.replace(drift_s=600.0).t_shutdown_jitter_s == pytest.approx(120.0)
+    given = DPLossConfig(t_shutdown_jitter_s=50.0)
+    assert given.replace(t_shutdown_s=6000.0).t_shutdown_jitter_s == 50.0
+
+
 # --------------------------------------------------------------------------- physics and timeline
 
 

@@ -241,8 +241,10 @@ class DPLossConfig:
             if not _is_multiple(getattr(self, name), self.sim_dt_s):
                 raise ValueError(f"{name}: must be a whole multiple of sim_dt_s = {self.sim_dt_s:g}, "
                                  f"got {getattr(self, name)!r}")
+        # frozen; remembered as the default so that replace() takes 4 % of the new t_shutdown_s
+        object.__setattr__(self, "_default_jitter", self.t_shutdown_jitter_s is None)
         if self.t_shutdown_jitter_s is None:
-            object.__setattr__(self, "t_shutdown_jitter_s", 0.04 * self.t_shutdown_s)  # frozen
+            object.__setattr__(self, "t_shutdown_jitter_s", 0.04 * self.t_shutdown_s)
         if self.t_shutdown_s - self.t_shutdown_jitter_s < 10.0 * self.control_dt_s:
             raise ValueError(f"t_shutdown_s: t_shutdown_s - t_shutdown_jitter_s must leave at least "
                              f"{10 * self.control_dt_s:g} s of DP, got {self.t_shutdown_s:g} - "
@@ -252,7 +254,10 @@ class DPLossConfig:
         return self
 
     def replace(self, **changes) -> "DPLossConfig":
-        """A copy with some fields changed (validated again)."""
+        """A copy with some fields changed (validated again); a jitter left at its default
+        stays the default, 4 % of the copy's ``t_shutdown_s``."""
+        if getattr(self, "_default_jitter", False):
+            changes.setdefault("t_shutdown_jitter_s", None)
         return dataclasses.replace(self, **changes)
 
 
