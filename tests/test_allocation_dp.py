@@ -329,6 +329,22 @@ def test_reference_model_no_overshoot_and_speed_limit():
     assert math.degrees(wrap_pi(xs[-1, 2] - math.radians(-170))) == pytest.approx(0.0, abs=1e-3)
 
 
+@pytest.mark.parametrize("setpoint, dt_s, field", [
+    ([math.nan, 0.0, 0.0], 1.0, "setpoint_eta"),
+    ([1.0, 0.0], 1.0, "setpoint_eta"),
+    ([0.0, 0.0, 0.0], -5.0, "dt_s"),
+    ([0.0, 0.0, 0.0], math.nan, "dt_s"),
+])
+def test_reference_model_step_refuses_a_bad_setpoint_or_step(setpoint, dt_s, field):
+    """A NaN set-point made the whole reference NaN, and a negative step pushed it away from
+    the set-point (the acceleration 5 s * omega^3 * 10 m the wrong way), without a message."""
+    ref = ReferenceModel(0.05, 1.0, (0.5, 0.5, 0.03))
+    ref.reset([10.0, 0.0, 0.0])
+    with pytest.raises(ValueError, match=field):
+        ref.step(setpoint, dt_s)
+    assert np.all(ref.state.eta_d == [10.0, 0.0, 0.0]) and not np.any(ref.state.eta_ddot_d)
+
+
 DT_S = 1.0
 WIND = np.array([8.0, math.radians(300.0)])     # from WNW: pushes to starboard and yaws
 CURRENT = np.array([0.3, math.radians(60.0)])   # towards ENE

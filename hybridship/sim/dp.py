@@ -43,7 +43,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from hybridship.config import config_dataclass, float_array
+from hybridship.config import check_number, config_dataclass, float_array
 from hybridship.frames import ned_to_body, rotation_z, wrap_pi
 from hybridship.physics.model import DynamicModel
 
@@ -158,8 +158,9 @@ class ReferenceModel:
         return ReferenceState(eta, self.v.copy(), self.a.copy())
 
     def step(self, setpoint_eta, dt_s: float) -> None:
-        """Advance by ``dt_s`` towards ``setpoint_eta`` (held over the step)."""
-        r = np.asarray(setpoint_eta, float).copy()
+        """Advance by ``dt_s`` [s] (> 0) towards ``setpoint_eta`` (3,) [m, m, rad], held over the step."""
+        r = _vec3("setpoint_eta", setpoint_eta)
+        dt_s = check_number("dt_s", dt_s, lo=0.0, lo_open=True)
         r[2] = self.x[2] + float(wrap_pi(r[2] - self.x[2]))  # shortest way round
         w, z = self.omega_rad_s, self.zeta
         n = max(1, math.ceil(dt_s / _REF_SUBSTEP_S))
