@@ -405,6 +405,15 @@ def test_dp_validation_names_the_field(model):
         dp.update(np.zeros(3), np.zeros(3), wind=[1.0, 2.0, 3.0])
 
 
+
+@pytest.mark.parametrize("setting", [dict(wind_feedforward_gain="1"), dict(max_speed_m_s=None),
+                                     dict(max_yaw_rate_rad_s="0.03"), dict(ki_ratio=None)])
+def test_dp_settings_that_are_not_numbers_are_refused_by_name(model, setting):
+    """Text or None reached numpy's isfinite ("ufunc 'isfinite' not supported for the input types")."""
+    (field, _), = setting.items()
+    with pytest.raises(TypeError, match=f"{field}: expected a number"):
+        DPController(model, dt_s=1.0, **setting)
+
 @pytest.mark.parametrize("gain", [1.0, 0.5, 0.0])
 def test_dp_wind_feedforward_opposes_wind(model, gain):
     """The feed-forward is ``gain`` times minus the model's wind load at the measured heading

@@ -108,8 +108,7 @@ def pid_gains(mass_matrix, omega_n_rad_s, zeta, ki_ratio: float = 0.1) -> DPGain
         raise ValueError(f"mass_matrix: expected a finite (3, 3) matrix, got shape {M.shape}")
     w = _vec3("omega_n_rad_s", omega_n_rad_s, positive=True)
     z = _vec3("zeta", zeta, positive=True)
-    if not (np.isfinite(ki_ratio) and ki_ratio >= 0):
-        raise ValueError(f"ki_ratio: must be finite and >= 0, got {ki_ratio!r}")
+    ki_ratio = check_number("ki_ratio", ki_ratio, lo=0.0)
     Kp = M @ np.diag(w**2)
     Kd = M @ np.diag(2.0 * z * w)
     Ki = Kp @ np.diag(w * ki_ratio)
@@ -217,11 +216,9 @@ class DPController:
         if isinstance(dt_s, (bool, np.bool_)) or not isinstance(dt_s, (int, float, np.integer, np.floating)) \
                 or not (np.isfinite(dt_s) and dt_s > 0):
             raise ValueError(f"dt_s: must be finite and > 0, got {dt_s!r}")
-        if not (np.isfinite(wind_feedforward_gain) and 0 <= wind_feedforward_gain <= 2):
-            raise ValueError(f"wind_feedforward_gain: must be in [0, 2], got {wind_feedforward_gain!r}")
+        wind_feedforward_gain = check_number("wind_feedforward_gain", wind_feedforward_gain, lo=0.0, hi=2.0)
         for name, val in (("max_speed_m_s", max_speed_m_s), ("max_yaw_rate_rad_s", max_yaw_rate_rad_s)):
-            if not (np.isfinite(val) and val > 0):
-                raise ValueError(f"{name}: must be finite and > 0, got {val!r}")
+            check_number(name, val, lo=0.0, lo_open=True)
         self.dt_s = float(dt_s)
         self.mass_matrix = self.model.mass_matrix
         self.gains = pid_gains(self.mass_matrix, omega_n_rad_s, zeta, ki_ratio)
