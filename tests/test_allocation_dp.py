@@ -221,6 +221,21 @@ def test_allocator_validation_names_the_field(model):
         alloc.reset(azimuth_rad=[0.0])
 
 
+
+@pytest.mark.parametrize("setting, field", [
+    (dict(reverse_hysteresis_rad=None), "reverse_hysteresis_rad"),
+    (dict(reverse_hysteresis_rad="0.1"), "reverse_hysteresis_rad"),
+    (dict(rpm_rate_limit_rpm_s="fast"), "rpm_rate_limit_rpm_s"),
+    (dict(weights=["1", "1", "1"]), "weights"),
+])
+def test_allocator_settings_that_are_not_numbers_are_refused_by_name(model, setting, field):
+    """They reached numpy: "ufunc 'isfinite' not supported ..." or "could not convert string
+    to float", neither naming the setting; so did a demand given as text."""
+    with pytest.raises(TypeError, match=field):
+        ThrustAllocator(model.vessel, dt_s=1.0, **setting)
+    with pytest.raises(TypeError, match="tau_desired_N"):
+        ThrustAllocator(model.vessel, dt_s=1.0).allocate(["1", "0", "0"], np.zeros(3))
+
 # --------------------------------------------------------------------------- DP
 
 

@@ -39,6 +39,7 @@ import numpy as np
 import scipy.linalg
 import scipy.optimize
 
+from hybridship.config import check_number, real_array
 from hybridship.frames import wrap_pi
 from hybridship.physics.propeller import load_wageningen, rpm_for_thrust, thrust_torque
 from hybridship.physics.thrusters import configuration_matrix
@@ -62,7 +63,7 @@ def _vessel(vessel):
 
 def _vector(name, value, n):
     """``value`` as a finite float array of shape (n,), or ValueError naming ``name``."""
-    a = np.asarray(value, dtype=float)
+    a = real_array(name, value)
     if a.shape != (n,):
         raise ValueError(f"{name}: expected shape ({n},), got {np.shape(value)}")
     if not np.all(np.isfinite(a)):
@@ -300,7 +301,7 @@ class ThrustAllocator:
         if isinstance(dt_s, (bool, np.bool_)) or not isinstance(dt_s, (int, float, np.integer, np.floating)) \
                 or not (np.isfinite(dt_s) and dt_s > 0):
             raise ValueError(f"dt_s: must be finite and > 0, got {dt_s!r}")
-        if not (np.isfinite(reverse_hysteresis_rad) and 0 <= reverse_hysteresis_rad < math.pi):
+        if check_number("reverse_hysteresis_rad", reverse_hysteresis_rad, lo=0.0) >= math.pi:
             raise ValueError(f"reverse_hysteresis_rad: must be in [0, pi), got {reverse_hysteresis_rad!r}")
         self.dt_s = float(dt_s)
         self.reverse_hysteresis_rad = float(reverse_hysteresis_rad)
@@ -310,7 +311,7 @@ class ThrustAllocator:
         if rpm_rate_limit_rpm_s is None:
             rate = self.max_rpm / DEFAULT_RPM_RAMP_TIME_S
         else:
-            rate = np.asarray(rpm_rate_limit_rpm_s, float)
+            rate = real_array("rpm_rate_limit_rpm_s", rpm_rate_limit_rpm_s)
             if rate.ndim == 0:
                 rate = np.full(K, float(rate))
             if rate.shape != (K,):
