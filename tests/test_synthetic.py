@@ -76,3 +76,15 @@ def test_the_logged_commands_replay_the_logged_motion(model, log):
 def test_pairs_of_the_wrong_length_are_refused_naming_them(model, kwargs, match):
     with pytest.raises(ValueError, match=match):
         physics_log(model, duration_s=20.0, **kwargs)
+
+
+@pytest.mark.parametrize("tau, error, match", [
+    ("abc", TypeError, r"tau_ext_N: expected an array of real numbers"),
+    ([1.0, 2.0], ValueError, r"tau_ext_N: expected \(3,\) or \(20, 3\)"),
+    ([np.nan, 0.0, 0.0], ValueError, r"tau_ext_N: contains NaN or inf"),
+])
+def test_a_bad_external_load_is_refused_naming_tau_ext_N(model, tau, error, match):
+    """Before, numpy's "could not convert string to float", or the rollout's "tau_ext" with a
+    batch B the caller never gave."""
+    with pytest.raises(error, match=match):
+        physics_log(model, duration_s=20.0, tau_ext_N=tau)

@@ -12,7 +12,7 @@ from __future__ import annotations
 import numpy as np
 import pandas as pd
 
-from ..config import check_number, check_whole_number
+from ..config import check_number, check_whole_number, real_array
 from ..frames import wrap_2pi
 from ..physics.model import DynamicModel
 
@@ -75,6 +75,7 @@ def physics_log(model: DynamicModel, *, duration_s: float = 1200.0, t_shutdown_s
     _check_arguments(model, duration_s, t_shutdown_s, dt_s, seed, current, wind, hold_s, rpm_scale, rudder_scale)
     rng = np.random.default_rng(seed)
     n = int(round(duration_s / dt_s))
+    tau_ext = _per_step(tau_ext_N, n)
     v = model.vessel
     K, R = len(v.thrusters), len(v.rudders)
     max_rpm = np.array([t.max_rpm for t in v.thrusters])
@@ -100,7 +101,7 @@ def physics_log(model: DynamicModel, *, duration_s: float = 1200.0, t_shutdown_s
     res = model.rollout([0.0, 0.0, 0.3], [0.0, 0.0, 0.0], n, dt_s=dt_s, substeps=4,
                         rpm=rpm[None], azimuth_rad=az[None], rudder_rad=delta[None] if R else None,
                         wind=np.asarray(wind, float),
-                        current=np.asarray(current, float), tau_ext=_per_step(tau_ext_N, n))
+                        current=np.asarray(current, float), tau_ext=tau_ext)
     eta, nu = res.eta[0], res.nu[0]
     # the command logged at a sample is the one applied over the following step
     rpm_log = np.vstack([rpm, np.zeros((1, K)) if t_shutdown_s is not None and time_s[-1] >= t_shutdown_s else rpm[-1:]])
@@ -127,10 +128,11 @@ def physics_log(model: DynamicModel, *, duration_s: float = 1200.0, t_shutdown_s
 
 
 def _per_step(tau_ext_N, n: int) -> np.ndarray:
-    """A constant load (3,) as it is, or a per-step one (n, 3) as the rollout's (1, n, 3)."""
-    tau = np.asarray(tau_ext_N, dtype=float)
-    if tau.ndim == 2:
-        if tau.shape != (n, 3):
-            raise ValueError(f"tau_ext_N: expected (3,) or ({n}, 3) [N, N, Nm], got {tau.shape}")
-        return tau[None]
-    return tau
+    """A constant load (3,) as it is, or a per-step one (n, 3) as the rollout's (1, n, 3);
+    ValueError/TypeError naming ``tau_ext_N`` for another shape, text or a NaN."""
+    tau = real_array("tau_ext_N", tau_ext_N)
+    if tau.shape not in ((3,), (n, 3)):
+        raise ValueError(f"tau_ext_N: expected (3,) or ({n}, 3) [N, N, Nm], got {tau.shape}")
+    if not np.all(np.isfinite(tau)):
+        raise ValueError("tau_ext_N: contains NaN or inf")
+    return tau[None] if tau.ndim == 2 else tau
