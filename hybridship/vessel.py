@@ -100,11 +100,16 @@ class AddedMass(_Strict):
 
     @model_validator(mode="after")
     def _explicit_complete(self):
+        names = ("X_udot_kg", "Y_vdot_kg", "Y_rdot_kg_m", "N_vdot_kg_m", "N_rdot_kg_m2")
         if self.method == "explicit":
-            missing = [k for k in ("X_udot_kg", "Y_vdot_kg", "Y_rdot_kg_m", "N_vdot_kg_m", "N_rdot_kg_m2")
-                       if getattr(self, k) is None]
+            missing = [k for k in names if getattr(self, k) is None]
             if missing:
                 raise ValueError(f"method 'explicit' needs {', '.join(missing)}")
+        else:       # they would be ignored
+            given = [k for k in names if getattr(self, k) is not None]
+            if given:
+                raise ValueError(f"{', '.join(given)}: given with method 'clarke1983', which derives them "
+                                 f"(give method 'explicit' to use them)")
         return self
 
 
@@ -130,10 +135,18 @@ class LinearDamping(_Strict):
 
     @model_validator(mode="after")
     def _complete(self):
+        times = ("T_surge_s", "T_sway_s", "T_yaw_s")
         if self.method == "time_constants":
             if None in (self.T_surge_s, self.T_sway_s, self.T_yaw_s):
                 raise ValueError("method 'time_constants' needs T_surge_s, T_sway_s and T_yaw_s")
+            if self.D is not None:      # it would be ignored
+                raise ValueError("D: given with method 'time_constants', which derives it (D_ii = M_ii / T_i); "
+                                 "give method 'explicit' to use it")
         else:
+            given = [k for k in times if getattr(self, k) is not None]
+            if given:                   # they would be ignored
+                raise ValueError(f"{', '.join(given)}: given with method 'explicit', which does not use "
+                                 f"{'them' if len(given) > 1 else 'it'} (D is the damping)")
             if self.D is None or np.shape(self.D) != (3, 3):
                 raise ValueError("method 'explicit' needs D as a 3x3 matrix")
             # Fossen (2021, sec. 6.4): damping is dissipative, nu^T D nu >= 0 for every nu; a

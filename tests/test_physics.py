@@ -696,6 +696,15 @@ def test_gunnerus_coefficients_close_to_published_original_hull():
     (lambda d: d.__setitem__("name", "  "), r"bad.toml: name: must not be empty"),
     (lambda d: d["thrusters"][0].__setitem__("name", "Bow 1"),
      r"thrusters\[0\].name: expected text matching \^\[a-z\]"),
+    # values the chosen method does not use were accepted and ignored
+    (lambda d: d["added_mass"].__setitem__("method", "clarke1983"),
+     r"bad.toml: added_mass: X_udot_kg, Y_vdot_kg, Y_rdot_kg_m, N_vdot_kg_m, N_rdot_kg_m2: given with method "
+     r"'clarke1983', which derives them"),
+    (lambda d: d["damping"]["linear"].__setitem__("D", [[1e4, 0, 0], [0, 1e4, 0], [0, 0, 1e6]]),
+     r"bad.toml: damping.linear: D: given with method 'time_constants', which derives it"),
+    (lambda d: d["damping"].__setitem__("linear", {"method": "explicit", "D": [[1e4, 0, 0], [0, 1e4, 0], [0, 0, 1e6]],
+                                                   "T_yaw_s": 50.0}),
+     r"bad.toml: damping.linear: T_yaw_s: given with method 'explicit', which does not use it"),
 ])
 def test_invalid_vessel_files_name_the_field(edit, field):
     d = copy.deepcopy(gunnerus_dict())
