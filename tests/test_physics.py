@@ -705,6 +705,8 @@ def test_gunnerus_coefficients_close_to_published_original_hull():
     (lambda d: d["damping"].__setitem__("linear", {"method": "explicit", "D": [[1e4, 0, 0], [0, 1e4, 0], [0, 0, 1e6]],
                                                    "T_yaw_s": 50.0}),
      r"bad.toml: damping.linear: T_yaw_s: given with method 'explicit', which does not use it"),
+    (lambda d: d["damping"].__setitem__("nonlinear", {"method": "none", "d_uu": 5000.0, "d_rr": 1e8}),
+     r"bad.toml: damping.nonlinear: d_uu, d_rr: given with method 'none', which has no nonlinear damping"),
 ])
 def test_invalid_vessel_files_name_the_field(edit, field):
     d = copy.deepcopy(gunnerus_dict())
