@@ -413,6 +413,11 @@ class Wind(_Strict):
             raise ValueError(f"method {self.method!r} needs A_F_m2 > 0 and A_L_m2 > 0")
         if self.method in ("table", "blendermann", "isherwood") and getattr(self, self.method) is None:
             raise ValueError(f"method {self.method!r} needs a [wind.{self.method}] section")
+        unused = [f"[wind.{k}]" for k in ("table", "blendermann", "isherwood")
+                  if k != self.method and getattr(self, k) is not None]
+        if unused:      # it would be ignored
+            raise ValueError(f"{', '.join(unused)}: given with method {self.method!r}, which does not use "
+                             f"{'them' if len(unused) > 1 else 'it'}")
         return self
 
 
