@@ -265,6 +265,9 @@ class Thruster(_Strict):
                          else "its logged azimuth")
             raise ValueError(f"angle_deg: a {self.type} thruster's direction is {direction}; a thruster fixed "
                              f"at another angle is type 'fixed' with angle_deg")
+        if self.type != "azimuth" and self.max_azimuth_rate_deg_s is not None:     # it would be ignored
+            raise ValueError(f"max_azimuth_rate_deg_s: a {self.type} thruster does not turn; the slew rate is "
+                             f"for type 'azimuth'")
         return self
 
     @model_validator(mode="after")

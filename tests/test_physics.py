@@ -709,6 +709,8 @@ def test_gunnerus_coefficients_close_to_published_original_hull():
      r"bad.toml: damping.nonlinear: d_uu, d_rr: given with method 'none', which has no nonlinear damping"),
     (lambda d: d["wind"].update(method="isherwood", isherwood={"A_SS_m2": 60.0, "S_m": 80.0, "C_m": 15.0, "M": 1}),
      r"bad.toml: wind: \[wind.table\]: given with method 'isherwood', which does not use it"),
+    (lambda d: d["thrusters"][0].__setitem__("max_azimuth_rate_deg_s", 10.0),
+     r"bad.toml: thrusters\[0\]: max_azimuth_rate_deg_s: a tunnel thruster does not turn"),
 ])
 def test_invalid_vessel_files_name_the_field(edit, field):
     d = copy.deepcopy(gunnerus_dict())
