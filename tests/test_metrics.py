@@ -24,6 +24,14 @@ def test_error_table_cells_are_means_over_logs_and_the_first_w_intervals():
     np.testing.assert_allclose(mae.loc[(20, "yaw_deg")], 1.5 * k.mean())
 
 
+def test_absolute_errors_of_whole_numbers_keep_the_fraction_of_a_degree():
+    """Positions logged as whole metres are integer arrays: the heading error of 1 rad is
+    57.2958 deg, not the 57 an integer result array truncated it to."""
+    pred = np.array([[[3, 4, 1]]])
+    truth = np.array([[[0, 0, 0]]])
+    np.testing.assert_allclose(metrics.absolute_errors(pred, truth)[0, 0], [3.0, 4.0, 180.0 / np.pi])
+
+
 def test_error_table_keeps_each_state_and_horizon_in_its_own_cell():
     """Errors that differ by state (x1, x10, x100) and by horizon (x1, x2): every cell is its own
     state's and horizon's mean (with one horizon and equal states above, a cell read from the

@@ -53,6 +53,7 @@ def drift_errors(predictor, arrays, *, n_intervals: int = 20, horizons_s=HORIZON
 
 def absolute_errors(pred: np.ndarray, truth: np.ndarray) -> np.ndarray:
     """``|north|, |east| [m]`` and ``|yaw| [deg]`` (heading difference wrapped to +-180 deg)."""
+    pred, truth = real_array("pred", pred), real_array("truth", truth)   # an integer result truncated the degrees
     err = np.abs(pred - truth)
     err[..., 2] = np.degrees(np.abs(wrap_pi(pred[..., 2] - truth[..., 2])))
     return err
