@@ -32,6 +32,22 @@ def test_absolute_errors_of_whole_numbers_keep_the_fraction_of_a_degree():
     np.testing.assert_allclose(metrics.absolute_errors(pred, truth)[0, 0], [3.0, 4.0, 180.0 / np.pi])
 
 
+def test_error_table_refuses_horizons_or_windows_that_do_not_fit_the_errors():
+    """Errors at six lead times labelled with the four default horizons were written as the
+    first four of them under the wrong lead times; a window of 0 gave NaN cells."""
+    import pytest
+
+    E = np.ones((20, 6, 3))
+    with pytest.raises(ValueError, match=r"horizons_s: 4 lead times .* errors\['m'\] has 6"):
+        metrics.error_table({"m": [E]})
+    with pytest.raises(ValueError, match=r"horizons_s: 7 lead times"):
+        metrics.error_table({"m": [E]}, horizons_s=tuple(range(10, 80, 10)))      # before: IndexError
+    with pytest.raises(ValueError, match="windows: expected whole numbers >= 1"):
+        metrics.error_table({"m": [E]}, horizons_s=tuple(range(10, 70, 10)), windows=(0, 20))
+    with pytest.raises(ValueError, match="windows: expected whole numbers >= 1"):
+        metrics.error_table({"m": [E]}, horizons_s=tuple(range(10, 70, 10)), windows=(5.5, 20))
+
+
 def test_error_table_keeps_each_state_and_horizon_in_its_own_cell():
     """Errors that differ by state (x1, x10, x100) and by horizon (x1, x2): every cell is its own
     state's and horizon's mean (with one horizon and equal states above, a cell read from the

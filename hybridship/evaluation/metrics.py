@@ -224,9 +224,14 @@ def error_table(errors: dict, *, horizons_s=HORIZONS_S, windows=WINDOWS) -> pd.D
     ``errors`` maps a model name to a list of :func:`drift_errors` arrays (one per log);
     a cell is the mean over logs and over the first ``window`` intervals.
     """
+    if not all(isinstance(w, (int, np.integer)) and not isinstance(w, bool) and w >= 1 for w in windows):
+        raise ValueError(f"windows: expected whole numbers >= 1 of intervals, got {tuple(windows)!r}")
     rows = []
     for model, per_log in errors.items():
         E = np.stack(per_log)                                   # (L, S, nh, 3)
+        if len(horizons_s) != E.shape[2]:
+            raise ValueError(f"horizons_s: {len(horizons_s)} lead times given, but errors[{model!r}] has "
+                             f"{E.shape[2]} per forecast: pass the horizons_s the errors were taken at")
         if not np.all(np.isfinite(E)):
             raise ValueError(f"errors[{model!r}]: NaN or inf errors; leave such forecasts out before the table")
         if max(windows) > E.shape[1]:
