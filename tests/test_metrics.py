@@ -48,6 +48,20 @@ def test_error_table_refuses_horizons_or_windows_that_do_not_fit_the_errors():
         metrics.error_table({"m": [E]}, horizons_s=tuple(range(10, 70, 10)), windows=(5.5, 20))
 
 
+def test_reduction_and_ratio_tables_name_a_model_that_is_not_in_the_table():
+    import pytest
+
+    rows = [dict(model=m, state=s, window=w, horizon_s=60, mae=1.0)
+            for m in ("hybrid", "dynamic") for s in metrics.STATES for w in (5, 20)]
+    long = pd.DataFrame(rows)
+    with pytest.raises(ValueError, match=r"model: 'hybird' is not in the table; it has \['hybrid', 'dynamic'\]"):
+        metrics.reduction_table(long, "hybird")                                   # before: KeyError
+    with pytest.raises(ValueError, match=r"reference: 'physics' is not in the table"):
+        metrics.pooled_ratio_table(long, "hybrid", "physics")
+    with pytest.raises(ValueError, match=r"windows: expected two windows"):
+        metrics.reduction_table(long, "hybrid", windows=(5,))      # before: "not enough values to unpack"
+
+
 def test_error_table_keeps_each_state_and_horizon_in_its_own_cell():
     """Errors that differ by state (x1, x10, x100) and by horizon (x1, x2): every cell is its own
     state's and horizon's mean (with one horizon and equal states above, a cell read from the

@@ -279,6 +279,12 @@ def _two_window_cells(long: pd.DataFrame, model: str, reference: str, windows, f
     """``fmt`` of the error ratio ``model / reference`` per state and horizon, the two windows
     as "a/b" (states as rows, horizons as columns); a zero reference error gives a
     non-finite ratio, which ``fmt`` prints as "n/a"."""
+    for name, m in (("model", model), ("reference", reference)):
+        if m not in set(long["model"]):
+            raise ValueError(f"{name}: {m!r} is not in the table; it has {list(dict.fromkeys(long['model']))}")
+    if len(windows) != 2:
+        raise ValueError(f"windows: expected two windows (first 5 / first 20), got {tuple(windows)!r}")
+
     def cell(w):
         s = long[long.window == w].set_index(["model", "state", "horizon_s"])["mae"]
         return fmt(s[model] / s[reference])
