@@ -530,6 +530,14 @@ def test_filtered_derivative_axis_and_short_segments():
         filtered_derivative(short, 1.0, method="spline")
 
 
+def test_split_segments_refuses_a_gap_factor_that_is_not_a_number_above_1():
+    """A gap factor below 1 made every step a gap (a segment per sample) and NaN made none."""
+    t = np.arange(10.0)
+    for bad in (-1.0, 0.5, 1.0, np.nan):
+        with pytest.raises(ValueError, match="^split_segments: gap_factor: "):
+            split_segments(t, gap_factor=bad)
+
+
 def test_split_segments_and_segmentwise_derivative():
     t = np.concatenate([np.arange(0.0, 50.0), np.arange(60.0, 100.0), [100.0, 101.4]])
     segs = split_segments(t)

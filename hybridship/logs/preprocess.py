@@ -15,6 +15,8 @@ from collections.abc import Callable, Sequence
 import numpy as np
 from scipy import signal
 
+from hybridship.config import check_number, check_whole_number
+
 __all__ = [
     "split_segments",
     "segment_ids",
@@ -48,7 +50,7 @@ def split_segments(
         Nominal sample period [s]. Default: the median spacing of ``time_s``, which is
         robust to a few gaps (the log format says readers must not assume 1 Hz).
     gap_factor : float, default 1.5
-        A step longer than ``gap_factor * nominal_dt_s`` is a gap (log format spec).
+        A step longer than ``gap_factor * nominal_dt_s`` is a gap (log format spec); > 1.
 
     Returns
     -------
@@ -59,8 +61,10 @@ def split_segments(
     Raises
     ------
     ValueError
-        If ``time_s`` is not one-dimensional, not finite or not strictly increasing.
+        If ``time_s`` is not one-dimensional, not finite or not strictly increasing, or
+        ``gap_factor`` is not a finite number > 1 (below 1 every step would be a gap).
     """
+    gap_factor = check_number("split_segments: gap_factor", gap_factor, lo=1.0, lo_open=True)
     t = np.asarray(time_s, dtype=float)
     if t.ndim != 1:
         raise ValueError(f"time_s must be one-dimensional, got shape {t.shape}")
