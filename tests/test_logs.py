@@ -530,6 +530,21 @@ def test_filtered_derivative_axis_and_short_segments():
         filtered_derivative(short, 1.0, method="spline")
 
 
+def test_filtered_derivative_refuses_a_window_or_order_that_gives_no_derivative():
+    """A window of 0 s raised ZeroDivisionError (butter), NaN numpy's integer conversion, and a
+    negative one was used as the shortest window; a polynomial of order 0 has derivative 0
+    everywhere and a Butterworth filter of order 0 filters nothing: both came back silently."""
+    t = np.arange(40.0)
+    x = t**2
+    for kw, field in (({"method": "butter", "window_s": 0.0}, "window_s"), ({"window_s": np.nan}, "window_s"),
+                      ({"window_s": -5.0}, "window_s"), ({"polyorder": 0}, "polyorder"),
+                      ({"polyorder": 2.5}, "polyorder"),
+                      ({"method": "butter", "cutoff_hz": 0.2, "butter_order": 0}, "butter_order")):
+        with pytest.raises(ValueError, match=f"^filtered_derivative: {field}: "):
+            filtered_derivative(x, 1.0, **kw)
+    np.testing.assert_allclose(filtered_derivative(x, 1.0, polyorder=1)[5:-5], 2 * t[5:-5])
+
+
 def test_split_segments_refuses_a_gap_factor_that_is_not_a_number_above_1():
     """A gap factor below 1 made every step a gap (a segment per sample) and NaN made none."""
     t = np.arange(10.0)

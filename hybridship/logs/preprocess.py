@@ -188,21 +188,27 @@ def filtered_derivative(
     window_s : float, default 5.0
         Savitzky-Golay window length [s]; converted to ``round(window_s / dt_s)``
         samples, raised to the next odd number and to at least ``polyorder + 1``. For
-        ``"butter"`` it sets the default cut-off ``1 / window_s`` [Hz].
+        ``"butter"`` it sets the default cut-off ``1 / window_s`` [Hz]. Finite and > 0 where used.
     polyorder : int, default 2
-        Savitzky-Golay polynomial order.
+        Savitzky-Golay polynomial order, >= 1 (order 0 has derivative 0).
     axis : int, default 0
         Time axis of ``x``.
     cutoff_hz : float, optional
         Butterworth cut-off frequency [Hz] (default ``1 / window_s``); must be below the
         Nyquist frequency ``0.5 / dt_s``.
     butter_order : int, default 4
-        Butterworth filter order.
+        Butterworth filter order, >= 1.
 
     Returns
     -------
     ndarray of float, same shape as ``x``
         ``dx/dt`` in units of ``x`` per second.
+
+    Raises
+    ------
+    ValueError
+        ``dt_s``, ``window_s``, ``cutoff_hz``, or the order of the chosen method out of range,
+        or an unknown ``method``, naming the argument.
 
     Notes
     -----
@@ -217,13 +223,17 @@ def filtered_derivative(
     if not np.isfinite(dt_s) or dt_s <= 0.0:
         raise ValueError(f"dt_s must be finite and > 0, got {dt_s!r}")
     n = x.shape[axis]
+    if method == "savgol" or (method == "butter" and cutoff_hz is None):
+        window_s = check_number("filtered_derivative: window_s", window_s, lo=0.0, lo_open=True)
     if method == "savgol":
+        polyorder = check_whole_number("filtered_derivative: polyorder", polyorder, lo=1)
         window = max(int(round(window_s / dt_s)), polyorder + 1)
         window += 1 - window % 2  # savgol needs an odd window
         if n < window:
             return _gradient(x, dt_s, axis)
         return signal.savgol_filter(x, window, polyorder, deriv=1, delta=dt_s, axis=axis)
     if method == "butter":
+        butter_order = check_whole_number("filtered_derivative: butter_order", butter_order, lo=1)
         fc_hz = 1.0 / window_s if cutoff_hz is None else float(cutoff_hz)
         fs_hz = 1.0 / dt_s
         if not 0.0 < fc_hz < 0.5 * fs_hz:
