@@ -580,6 +580,19 @@ def test_split_segments_and_segmentwise_derivative():
     np.testing.assert_array_equal(segmentwise(lambda a: a, x, [slice(0, 10)])[10:], np.nan)
 
 
+def test_moving_average_start_refuses_a_fractional_row_or_window_and_a_short_segment_id():
+    """A row 2.0 or a window of 2.5 samples failed in slicing ("slice indices must be
+    integers"), a segment label array shorter than ``x`` with numpy's IndexError."""
+    x = np.arange(10.0)
+    with pytest.raises(ValueError, match="^moving_average_start: idx: expected a whole number"):
+        moving_average_start(x, 2.0)
+    with pytest.raises(ValueError, match="^moving_average_start: window_samples: expected a whole number >= 1"):
+        moving_average_start(x, 5, 2.5)
+    with pytest.raises(ValueError, match=r"^moving_average_start: segment_id: expected one label per row \(10,\)"):
+        moving_average_start(x, 5, segment_id=[0, 0, 1])
+    assert moving_average_start(x, np.int64(5), np.int64(2)) == 4.5
+
+
 def test_moving_average_start():
     x = np.column_stack([np.arange(10.0), 10.0 * np.arange(10.0)])
     np.testing.assert_allclose(moving_average_start(x, 5), [4.0, 40.0])

@@ -301,7 +301,7 @@ def moving_average_start(x, idx: int, window_samples: int = 3, *, segment_id=Non
     idx : int
         Start row (negative values count from the end, as in Python indexing).
     window_samples : int, default 3
-        Window length in samples.
+        Window length in samples, >= 1.
     segment_id : array_like of int, shape (N,), optional
         Segment label per row; when given, the window is cut at the start of ``idx``'s
         segment so it never reaches back across a gap.
@@ -311,17 +311,29 @@ def moving_average_start(x, idx: int, window_samples: int = 3, *, segment_id=Non
     ndarray of float, shape ``x.shape[1:]``
         The average. Near the start of the log (or of the segment) the window is shorter:
         only the available samples are averaged.
+
+    Raises
+    ------
+    ValueError
+        ``idx`` or ``window_samples`` not a whole number (``window_samples`` < 1), or
+        ``segment_id`` not one label per row, naming the argument.
+    IndexError
+        ``idx`` outside the rows of ``x``.
     """
     a = np.asarray(x, dtype=float)
     n = a.shape[0]
-    if window_samples < 1:
-        raise ValueError(f"window_samples must be >= 1, got {window_samples}")
+    window_samples = check_whole_number("moving_average_start: window_samples", window_samples, lo=1)
+    if isinstance(idx, bool) or not isinstance(idx, (int, np.integer)):
+        raise ValueError(f"moving_average_start: idx: expected a whole number (a row), got {idx!r}")
     if not -n <= idx < n:
         raise IndexError(f"idx {idx} out of range for {n} samples")
     idx = idx % n
     lo = max(0, idx - window_samples + 1)
     if segment_id is not None:
         sid = np.asarray(segment_id)
+        if sid.shape != (n,):
+            raise ValueError(f"moving_average_start: segment_id: expected one label per row ({n},), "
+                             f"got shape {sid.shape}")
         # First row of idx's segment at or after lo: rows before it belong to earlier segments.
         same = sid[lo : idx + 1] == sid[idx]
         lo += int(np.argmax(same))
