@@ -62,6 +62,23 @@ def test_reduction_and_ratio_tables_name_a_model_that_is_not_in_the_table():
         metrics.reduction_table(long, "hybrid", windows=(5,))      # before: "not enough values to unpack"
 
 
+def test_paper_reduction_and_ratio_tables_name_a_window_that_is_not_in_the_table():
+    """A table of the first 5 and 10 intervals read with the default windows (5, 20): Table 2
+    failed in pandas ("operation 'add' not supported for dtype 'str'"), Table 3 with a bare
+    KeyError of the model's name."""
+    import pytest
+
+    long = metrics.error_table({"dynamic": [np.ones((20, 1, 3))], "hybrid": [np.ones((20, 1, 3))]},
+                               horizons_s=(60,), windows=(5, 10))
+    with pytest.raises(ValueError, match=r"windows: 20 is not in the table; it has windows \[5, 10\]"):
+        metrics.paper_table(long)
+    with pytest.raises(ValueError, match=r"windows: 20 is not in the table"):
+        metrics.reduction_table(long, "hybrid")
+    with pytest.raises(ValueError, match=r"windows: 20 is not in the table"):
+        metrics.pooled_ratio_table(long, "hybrid")
+    assert metrics.reduction_table(long, "hybrid", windows=(5, 10)).loc["east_m", "60 s"] == "0/0"
+
+
 def test_error_table_keeps_each_state_and_horizon_in_its_own_cell():
     """Errors that differ by state (x1, x10, x100) and by horizon (x1, x2): every cell is its own
     state's and horizon's mean (with one horizon and equal states above, a cell read from the

@@ -248,6 +248,7 @@ def error_table(errors: dict, *, horizons_s=HORIZONS_S, windows=WINDOWS) -> pd.D
 def paper_table(long: pd.DataFrame, *, windows=WINDOWS) -> pd.DataFrame:
     """The paper's Table 2 layout: rows model x state, columns horizons, cells "first5/first20"
     (one error per cell with one window, as a benchmark of fewer than 20 intervals has)."""
+    _check_windows(long, windows)
     maes = [long[long.window == w].set_index(["model", "state", "horizon_s"])["mae"].map("{:.2f}".format)
             for w in windows]
     cells = maes[0]
@@ -257,6 +258,14 @@ def paper_table(long: pd.DataFrame, *, windows=WINDOWS) -> pd.DataFrame:
     cells.columns = [f"{c:g} s" for c in cells.columns]
     order = list(dict.fromkeys(long["model"]))
     return cells.reindex(pd.MultiIndex.from_product([order, list(STATES)], names=["model", "state"]))
+
+
+def _check_windows(long: pd.DataFrame, windows) -> None:
+    """ValueError naming a window of ``windows`` [intervals] that the long table has no rows of."""
+    have = sorted(set(long["window"]))
+    for w in windows:
+        if w not in have:
+            raise ValueError(f"windows: {w} is not in the table; it has windows {have}: pass those")
 
 
 def reduction_table(long: pd.DataFrame, model: str, reference: str = "dynamic", *, windows=WINDOWS) -> pd.DataFrame:
@@ -284,6 +293,7 @@ def _two_window_cells(long: pd.DataFrame, model: str, reference: str, windows, f
             raise ValueError(f"{name}: {m!r} is not in the table; it has {list(dict.fromkeys(long['model']))}")
     if len(windows) != 2:
         raise ValueError(f"windows: expected two windows (first 5 / first 20), got {tuple(windows)!r}")
+    _check_windows(long, windows)
 
     def cell(w):
         s = long[long.window == w].set_index(["model", "state", "horizon_s"])["mae"]
