@@ -23,6 +23,10 @@ BAD = [
     (EnsembleConfig, dict(val_fraction=0.95), "val_fraction: "),
     (MultiStepConfig, dict(fd_step=0.1), "fd_step: "),
     (ResidualConfig, dict(features=("nope",)), "features: unknown ['nope']"),
+    # a feature named twice was a second, identical input of the nets; none was called "unknown []"
+    (ResidualConfig, dict(features=("u_hat_m_s", "r_hat_rad_s", "u_hat_m_s")),
+     "features: each at most once, got 'u_hat_m_s' more than once"),
+    (ResidualConfig, dict(features=()), "features: expected at least one of "),
     (ResidualConfig, dict(bias_frame="enu"), "bias_frame: "),
     (CalibrationConfig, dict(commands=("held", "held")), "commands: "),
     (CalibrationConfig, dict(max_starts=5), "max_starts: "),

@@ -100,7 +100,7 @@ class ResidualConfig:
     Attributes
     ----------
     features : tuple of str
-        Names from :data:`ALL_FEATURES`.
+        Names from :data:`ALL_FEATURES`, at least one, each at most once.
     deriv_window_s : float
         Savitzky-Golay window for smoothing the velocities [s]; 0 uses the logged
         velocities as they are (unbiased under white noise, and exact on a model-made log).
@@ -154,8 +154,13 @@ class ResidualConfig:
     @classmethod
     def _known_features(cls, v):
         unknown = [f for f in v if f not in ALL_FEATURES]
-        if unknown or not v:
+        if not v:
+            raise ValueError(f"expected at least one of {list(ALL_FEATURES)}")
+        if unknown:
             raise ValueError(f"unknown {unknown}; choose from {list(ALL_FEATURES)}")
+        twice = [f for i, f in enumerate(v) if f in v[:i]]
+        if twice:       # a second, identical input of the nets
+            raise ValueError(f"each at most once, got {twice[0]!r} more than once")
         return v
 
     @property
