@@ -553,6 +553,17 @@ def test_split_segments_refuses_a_gap_factor_that_is_not_a_number_above_1():
             split_segments(t, gap_factor=bad)
 
 
+def test_split_segments_names_a_nominal_period_that_is_not_a_number():
+    """Text was read as a number ("2" as 2 s) or failed in float()'s words, True was 1 s."""
+    t = np.arange(10.0)
+    for bad in ("a", "2", True):
+        with pytest.raises(TypeError, match="^split_segments: nominal_dt_s: expected a number"):
+            split_segments(t, nominal_dt_s=bad)
+    for bad in (-1.0, 0.0, np.nan):
+        with pytest.raises(ValueError, match="^split_segments: nominal_dt_s: "):
+            split_segments(t, nominal_dt_s=bad)
+
+
 def test_split_segments_and_segmentwise_derivative():
     t = np.concatenate([np.arange(0.0, 50.0), np.arange(60.0, 100.0), [100.0, 101.4]])
     segs = split_segments(t)

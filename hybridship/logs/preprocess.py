@@ -29,7 +29,7 @@ __all__ = [
 
 def _nominal_dt_s(time_s: np.ndarray, nominal_dt_s: float | None) -> float:
     if nominal_dt_s is not None:
-        dt = float(nominal_dt_s)
+        dt = check_number("split_segments: nominal_dt_s", nominal_dt_s, lo=0.0, lo_open=True)
     else:
         dt = float(np.median(np.diff(time_s)))
     if not np.isfinite(dt) or dt <= 0.0:
@@ -62,7 +62,10 @@ def split_segments(
     ------
     ValueError
         If ``time_s`` is not one-dimensional, not finite or not strictly increasing, or
-        ``gap_factor`` is not a finite number > 1 (below 1 every step would be a gap).
+        ``gap_factor`` is not a finite number > 1 (below 1 every step would be a gap), or
+        ``nominal_dt_s`` not a finite number > 0.
+    TypeError
+        ``gap_factor`` or ``nominal_dt_s`` text or a bool, naming it.
     """
     gap_factor = check_number("split_segments: gap_factor", gap_factor, lo=1.0, lo_open=True)
     t = np.asarray(time_s, dtype=float)
