@@ -178,6 +178,15 @@ def test_fit_wind_forecast_refuses_bad_arguments_by_name():
         fit_wind_forecast([log], 60.0, masks=[np.ones(5, bool)])
     fit_wind_forecast([log], 60, mean_windows_s=[60], time_constants_s=[None, 10])   # lists and ints are fine
 
+
+def test_fit_wind_forecast_refuses_a_horizon_shorter_than_half_a_step():
+    t = np.arange(600.0)
+    log = _Log(t, _wind(8.0 + np.sin(t / 30.0), np.ones_like(t)))
+    # before: a ZeroDivisionError (no step of any log to score the candidates on)
+    with pytest.raises(ValueError, match=r"horizon_s: 0.4 s is shorter than half a step of logs\[0\] \(1 s\)"):
+        fit_wind_forecast([log], 0.4)
+    fit_wind_forecast([log], 0.6)                    # rounds to one step of 1 s
+
 def _gusty_physics_log(model, seed=3, duration_s=1500.0, **kw):
     log = physics_log(model, seed=seed, duration_s=duration_s, t_shutdown_s=None, **kw)
     rng = np.random.default_rng(1)

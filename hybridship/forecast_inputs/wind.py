@@ -213,7 +213,8 @@ def fit_wind_forecast(logs, horizon_s: float, *, masks=None, start_every_s: floa
     ------
     TypeError, ValueError
         An argument that is not what is described above, naming it (a horizon or spacing
-        that is not a positive number, a candidate out of range, one mask too few).
+        that is not a positive number, a horizon shorter than half a log's step, a
+        candidate out of range, one mask too few).
     """
     horizon_s = check_number("horizon_s", horizon_s, lo=0, lo_open=True)
     start_every_s = check_number("start_every_s", start_every_s, lo=0, lo_open=True)
@@ -232,7 +233,7 @@ def fit_wind_forecast(logs, horizon_s: float, *, masks=None, start_every_s: floa
         raise ValueError(f"masks: expected one per log ({len(logs)}), got {len(masks)}")
     sums: dict = {}
     n_starts = 0
-    for a, mask in zip(logs, masks):
+    for k, (a, mask) in enumerate(zip(logs, masks)):
         t = np.asarray(a.time_s, dtype=float)
         n = t.size
         if n < 3:
@@ -241,6 +242,9 @@ def fit_wind_forecast(logs, horizon_s: float, *, masks=None, start_every_s: floa
         vec = speed_dir_to_vector(wind)
         dt = float(np.median(np.diff(t)))
         H = int(round(horizon_s / dt))
+        if H < 1:
+            raise ValueError(f"horizon_s: {horizon_s:g} s is shorter than half a step of logs[{k}] ({dt:g} s): "
+                             f"no step of wind to forecast")
         rows, ok = wind_starts(a, H, int(round(start_every_s / dt)), mask)
         if rows.size == 0:
             continue
