@@ -358,6 +358,9 @@ def test_error_paths_are_logged_minus_forecast_wind_where_the_log_measured_the_w
     assert len(wind_error_paths(forecast, [a], 60, every=1, masks=[mask])) == 40
     a.wind_logged[:150] = False                  # wind filled in before row 150: no whole future
     assert wind_error_paths(forecast, [a], 60, every=1).shape == (0, 60, 2)
+    # before: the second log, without a mask, was silently left out of the paths
+    with pytest.raises(ValueError, match=r"masks: expected one per log \(2\), got 1"):
+        wind_error_paths(forecast, [a, a], 60, every=1, masks=[mask])
 
 
 @pytest.fixture(scope="module")

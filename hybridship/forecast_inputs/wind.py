@@ -307,9 +307,17 @@ def wind_error_paths(forecast: WindForecast, logs, horizon_steps: int, *, every:
     -------
     ndarray, shape (P, horizon_steps, 2)
         North and east components of the error [m/s] (P may be 0).
+
+    Raises
+    ------
+    ValueError
+        Naming ``masks`` when they are not one per log.
     """
     paths = [np.zeros((0, horizon_steps, 2))]
     masks = [None] * len(logs) if masks is None else list(masks)
+    if len(masks) != len(logs):
+        # zip would drop the logs without a mask, unseen
+        raise ValueError(f"masks: expected one per log ({len(logs)}), got {len(masks)}")
     for a, mask in zip(logs, masks):
         n = len(a.time_s)
         rows = np.arange(1, n - horizon_steps - 1, max(1, int(every)))
