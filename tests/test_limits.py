@@ -129,6 +129,19 @@ def test_arguments():
     check_or_clip_inputs(envelope=Envelope(), nu=[1.0, 0.0, 0.0])
 
 
+@pytest.mark.parametrize("kwargs, pattern", [
+    (dict(eta=[1.0, 0.0]), r"eta: expected width 3 \(north_m, east_m, psi_rad\), got shape \(2,\)"),
+    (dict(nu=np.zeros((4, 2))), r"nu: expected width 3 \(u_m_s, v_m_s, r_rad_s\), got shape \(4, 2\)"),
+    (dict(wind=[5.0]), r"wind: expected width 2 \(speed_m_s, dir_from_rad\), got shape \(1,\)"),
+    (dict(current=[0.5, 0.0, 1.0]), r"current: expected width 2 \(speed_m_s, dir_to_rad\), got shape \(3,\)"),
+])
+def test_a_state_or_flow_of_the_wrong_width_is_refused_by_name(kwargs, pattern):
+    # before: an IndexError from the column checks ("index 2 is out of bounds"), or a wider
+    # current passed on unchecked
+    with pytest.raises(ValueError, match=pattern):
+        check_or_clip_inputs(MODEL, **kwargs)
+
+
 def test_extremes_that_overflow_the_integrator_are_finite_after_clipping():
     """At |u| 20 m/s, v 8 m/s, full rpm, 51 m/s wind and 5 m/s current the 1-s RK4 rollout
     of Gunnerus overflowed (inf) when the envelope was chosen; clipped, it stays finite."""

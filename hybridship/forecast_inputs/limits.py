@@ -279,14 +279,18 @@ def refuse_non_finite(given: dict) -> None:
     """NaN or inf in any input.
 
     Fault: a missing or overflowed value (a fault, not an extreme: there is nothing to
-    clip it to). Evidence: ``~isfinite``, checked for every input (and its shape) before
-    any range. Refused in every mode.
+    clip it to). Evidence: ``~isfinite``, checked for every input (and its shape, and the
+    width of ``eta``, ``nu``, ``wind`` and ``current``) before any range. Refused in every
+    mode.
     """
     for name, a in given.items():
         if a is None:
             continue
         if a.ndim not in (1, 2, 3):
             raise ValueError(f"{name}: expected shape (width,), (B, width) or (B, S, width), got {a.shape}")
+        if name in COMPONENTS and a.shape[-1] != len(COMPONENTS[name]):
+            raise ValueError(f"{name}: expected width {len(COMPONENTS[name])} ({', '.join(COMPONENTS[name])}), "
+                             f"got shape {a.shape}")
         nonfinite = ~np.isfinite(a)
         if nonfinite.any():
             refuse(name, a, nonfinite, "finite values", COMPONENTS.get(name), "not finite (a fault, not an extreme)")
