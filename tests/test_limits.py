@@ -117,6 +117,14 @@ def test_large_steps_get_substeps():
     assert check_or_clip_inputs(MODEL, dt_s=2.0, substeps=4).substeps == 4
     with pytest.raises(InputRangeError, match="dt_s"):
         check_or_clip_inputs(MODEL, dt_s=-1.0)
+    # before: 1.5 substeps ran as 1 and 2.9 as 2, unseen; None and "1" failed inside int() / isfinite()
+    for bad in (1.5, 2.9, None, "2", True):
+        with pytest.raises(ValueError, match=r"substeps: expected a whole number >= 1, got "):
+            check_or_clip_inputs(MODEL, dt_s=0.5, substeps=bad)
+    for bad in ("1", b"1", True):
+        with pytest.raises(TypeError, match=r"dt_s: expected a number of seconds, got "):
+            check_or_clip_inputs(MODEL, dt_s=bad)
+    assert check_or_clip_inputs(MODEL, dt_s=np.float64(2.0), substeps=np.int64(4)).substeps == 4
 
 
 def test_arguments():

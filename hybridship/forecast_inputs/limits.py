@@ -56,6 +56,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from ..config import check_whole_number
 from ..frames import wrap_pi
 from .commands import clip_rpm, wrap_and_clip_angles
 from .faults import COMPONENTS, InputRangeError, batch_mask, column_mask, refuse
@@ -363,13 +364,14 @@ def rk4_substeps(dt_s: float | None, substeps: int, env: Envelope, clip: bool) -
 
     Fault: an integration step too long for the explicit integrator. Evidence: ``dt_s /
     substeps``. Repair: more substeps (not flagged: the forecast is the same, only finer),
-    or refused with ``mode="refuse"``; a non-positive or non-finite ``dt_s`` is refused.
+    or refused with ``mode="refuse"``; a non-positive or non-finite ``dt_s`` is refused, and so
+    are ``substeps`` that are not a whole number >= 1 and a ``dt_s`` that is not a number.
     """
-    steps = int(substeps)
-    if steps < 1:
-        raise ValueError(f"substeps must be >= 1, got {substeps}")
+    steps = check_whole_number("substeps", substeps, lo=1)
     if dt_s is None:
         return steps
+    if isinstance(dt_s, (bool, np.bool_, str, bytes)):
+        raise TypeError(f"dt_s: expected a number of seconds, got {dt_s!r}")
     if not (math.isfinite(dt_s) and dt_s > 0):
         raise InputRangeError(f"dt_s: {dt_s!r} is not a positive finite step; valid: 0 < dt_s",
                               field="dt_s", index=(), value=float(dt_s), valid="0 < dt_s")
