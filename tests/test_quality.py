@@ -76,6 +76,22 @@ def test_a_ship_at_rest_with_constant_noise_free_values_is_not_frozen(model):
     assert not sw.degraded.any()
 
 
+@pytest.mark.parametrize("bad, pattern", [
+    (dict(frozen_motion_m=0.0), r"frozen_motion_m: must be > 0, got 0.0"),
+    (dict(frozen_motion_m=-1.0), r"frozen_motion_m: must be > 0, got -1.0"),
+    (dict(frozen_turn_deg=-1.0), r"frozen_turn_deg: must be > 0, got -1.0"),
+    (dict(frozen_turn_deg=float("nan")), r"frozen_turn_deg: must be finite"),
+    (dict(lookback_s=-5.0), r"lookback_s: must be >= 0, got -5.0"),
+    (dict(lookback_s=float("nan")), r"lookback_s: must be finite"),
+])
+def test_frozen_thresholds_and_lookback_out_of_range_are_refused_by_name(model, bad, pattern):
+    """Before: a motion or turn threshold of 0 or less refused a ship at rest as frozen ("the
+    logged speed says the ship moved"); NaN, or a negative lookback, turned checks off unseen."""
+    rest = physics_log(model, seed=4, duration_s=200.0, t_shutdown_s=None, rpm_scale=0.0, wind=(0.0, 0.0))
+    with pytest.raises(ValueError, match=pattern):
+        _assess(model, rest, [100.0, 150.0], on_refuse="flag", **bad)
+
+
 # ----------------------------------------------------------------------------- fault injection
 
 def _nan(cols, rows):

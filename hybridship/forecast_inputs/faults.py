@@ -35,6 +35,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from ..config import check_number
 from ..frames import ned_to_body, wrap_pi
 from ..logs.ingest import WHOLE_LOG_STEP
 from ..messages import seconds_text
@@ -239,6 +240,10 @@ class WindowSettings:
         if not 0 < self.heading_jump_deg < 180:
             raise ValueError(f"heading_jump_deg must be > 0 and < 180 (a step is at most 180 deg), "
                              f"got {self.heading_jump_deg!r}")
+        # a threshold of 0 (or less) calls every held value of a ship at rest frozen; NaN never
+        check_number("frozen_motion_m", self.frozen_motion_m, lo=0, lo_open=True)
+        check_number("frozen_turn_deg", self.frozen_turn_deg, lo=0, lo_open=True)
+        check_number("lookback_s", self.lookback_s, lo=0)
 
     @property
     def frozen_turn_rad(self) -> float:

@@ -251,11 +251,11 @@ def assess_start_window(
         position is off by at most about ``max(frozen_motion_m, speed * frozen_s)``).
     frozen_motion_m, frozen_turn_deg : float
         Motion [m] / turn [deg] over the frozen run that the independent channel must show
-        for the run to count as frozen.
+        for the run to count as frozen (> 0: with 0 a ship at rest would count as frozen).
     jump_m : float, default 5.0
         Position step error [m] beyond which a step is a jump.
     lookback_s : float, default 10.0
-        History before the window used for the jump reference velocity [s].
+        History before the window used for the jump reference velocity [s] (>= 0).
     min_valid_fraction : float, default 0.5
         Fraction of the window's nominal samples that must be valid (heading and each
         velocity component); at least one valid position is always needed.
