@@ -610,6 +610,13 @@ def test_arguments_are_checked(model, log):
         assess_start_window(arrays, [len(arrays)])
     with pytest.raises(ValueError, match="window_s"):
         assess_start_window(arrays, [5], window_s=0.0)
+    # before: row 100.7 was read as row 100, and a boolean mask of the starts as rows 0 and 1
+    mask = np.zeros(len(arrays), dtype=bool)
+    mask[[100, 200]] = True
+    for bad in ([100.7], mask, ["100"]):
+        with pytest.raises(TypeError, match="idx: expected start rows as whole numbers"):
+            assess_start_window(arrays, bad)
+    np.testing.assert_array_equal(assess_start_window(arrays, np.array([100.0])).start_time_s, arrays.time_s[[100]])
 
 
 def _at_rest(n: int = 60, **columns) -> pd.DataFrame:

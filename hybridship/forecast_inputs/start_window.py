@@ -238,7 +238,8 @@ def assess_start_window(
     arrays : LogArrays
         The log, e.g. from :func:`forecast_log_arrays` (may hold NaN positions/headings).
     idx : array_like of int, shape (S,)
-        Start rows (e.g. :func:`hybridship.predictors.start_indices`).
+        Start rows (e.g. :func:`hybridship.predictors.start_indices`); fractional rows and
+        boolean masks are refused (TypeError naming ``idx``).
     window_s : float, default 3.0
         Start window [s]: rows with ``t0 - window_s < time_s <= t0`` (half a sample of slack).
     order : SortedLog, optional
@@ -288,10 +289,7 @@ def assess_start_window(
         raise ValueError(f"on_refuse must be 'raise' or 'flag', got {on_refuse!r}")
     settings = WindowSettings(window_s, frozen_s, frozen_motion_m, frozen_turn_deg, jump_m, lookback_s,
                               min_valid_fraction, heading_jump_deg, track_window_s, track_mismatch_m)
-    idx = np.atleast_1d(np.asarray(idx, dtype=int))
-    n = len(arrays)
-    if np.any((idx < 0) | (idx >= n)):
-        raise IndexError(f"idx: start rows must lie in 0..{n - 1}, got {idx[(idx < 0) | (idx >= n)][0]}")
+    idx = _start_rows(idx, len(arrays))
     affected = order.affected_time_s if order is not None else arrays.resorted_time_s
     view = LogView.build(arrays, settings, affected, int(idx.min()) if idx.size else 0)
     # the starts no detector can flag at once, the others one by one
@@ -310,6 +308,19 @@ def assess_start_window(
     if on_refuse == "raise" and result.refused.any():
         raise _refusal(result)
     return result
+
+
+def _start_rows(idx, n: int) -> np.ndarray:
+    """``idx`` as int start rows within ``0..n - 1``: a TypeError for fractions, text or a
+    boolean mask (int() would read row 100.7 as 100 and a mask as rows 0 and 1), an
+    IndexError for rows outside the log, each naming ``idx``."""
+    raw = np.atleast_1d(np.asarray(idx))
+    if raw.size and (raw.dtype.kind not in "iuf" or (raw.dtype.kind == "f" and not np.all(raw == np.round(raw)))):
+        raise TypeError(f"idx: expected start rows as whole numbers, got {raw.dtype} values {raw.ravel()[:3].tolist()}")
+    rows = raw.astype(int)
+    if np.any((rows < 0) | (rows >= n)):
+        raise IndexError(f"idx: start rows must lie in 0..{n - 1}, got {rows[(rows < 0) | (rows >= n)][0]}")
+    return rows
 
 
 def _assess_start(view: LogView, i: int, settings: WindowSettings):
