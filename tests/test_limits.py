@@ -137,6 +137,15 @@ def test_arguments():
     check_or_clip_inputs(envelope=Envelope(), nu=[1.0, 0.0, 0.0])
 
 
+def test_inputs_of_different_batch_sizes_are_refused_by_name():
+    # before: accepted while nothing was clipped, and a bare numpy broadcast error once something was
+    for wind in (np.zeros((2, 2)), np.zeros((2, 2)) + [60.0, 0.0]):
+        with pytest.raises(ValueError, match=r"wind: batch size 2 does not match nu's 3"):
+            check_or_clip_inputs(MODEL, nu=np.zeros((3, 3)), wind=wind)
+    c = check_or_clip_inputs(MODEL, nu=np.zeros((3, 3)), wind=np.zeros((1, 2)) + [60.0, 0.0])  # 1 broadcasts
+    np.testing.assert_array_equal(c.clipped, [True, True, True])
+
+
 @pytest.mark.parametrize("kwargs, pattern", [
     (dict(eta=[1.0, 0.0]), r"eta: expected width 3 \(north_m, east_m, psi_rad\), got shape \(2,\)"),
     (dict(nu=np.zeros((4, 2))), r"nu: expected width 3 \(u_m_s, v_m_s, r_rad_s\), got shape \(4, 2\)"),

@@ -194,8 +194,9 @@ def check_or_clip_inputs(
     """Check physics inputs against their valid ranges; clip (and flag) or refuse.
 
     Inputs have the shapes :class:`~hybridship.physics.model.DynamicModel` accepts:
-    ``(width,)``, ``(B, width)`` or ``(B, S, width)``. None means "not given" (not checked,
-    returned as None). The caller's arrays are never modified.
+    ``(width,)``, ``(B, width)`` or ``(B, S, width)``, one batch size ``B`` (or 1) for all.
+    None means "not given" (not checked, returned as None). The caller's arrays are never
+    modified.
 
     Parameters
     ----------
@@ -234,6 +235,11 @@ def check_or_clip_inputs(
     given = {k: (None if v is None else np.array(v, dtype=float))      # copies: clipped in place
              for k, v in dict(eta=eta, nu=nu, rpm=rpm, azimuth_rad=azimuth_rad, wind=wind, current=current).items()}
     B = max([a.shape[0] for a in given.values() if a is not None and a.ndim >= 2] or [1])
+    for name, a in given.items():
+        if a is not None and a.ndim >= 2 and a.shape[0] not in (1, B):
+            longest = next(k for k, b in given.items() if b is not None and b.ndim >= 2 and b.shape[0] == B)
+            raise ValueError(f"{name}: batch size {a.shape[0]} does not match {longest}'s {B} (expected one "
+                             f"batch size B, or 1, for every batched input)")
 
     refuse_non_finite(given)
     fields: dict[str, np.ndarray] = {}
