@@ -137,6 +137,21 @@ def test_arguments():
     check_or_clip_inputs(envelope=Envelope(), nu=[1.0, 0.0, 0.0])
 
 
+@pytest.mark.parametrize("override, error, pattern", [
+    (dict(surge_max_m_s=-8.0), ValueError, r"surge_max_m_s: must be > 0 \(inf for no bound\), got -8.0"),
+    (dict(yaw_rate_max_rad_s=float("nan")), ValueError, r"yaw_rate_max_rad_s: must be > 0"),
+    (dict(rk4_step_max_s=0.0), ValueError, r"rk4_step_max_s: must be > 0"),
+    (dict(rpm_refuse_factor=0.5), ValueError, r"rpm_refuse_factor: must be >= 1"),
+    (dict(wind_speed_max_m_s="50"), TypeError, r"wind_speed_max_m_s: expected a number, got '50'"),
+])
+def test_an_envelope_bound_that_is_no_bound_is_refused_by_name(override, error, pattern):
+    # before: a surge bound of -8 turned u = 1 m/s into -8 m/s, a NaN bound clipped nothing, a step of 0
+    # was a ZeroDivisionError, a factor of 0.5 refused as unit errors the rpm clip mode clips
+    with pytest.raises(error, match=pattern):
+        envelope_for(MODEL, **override)
+    assert envelope_for(MODEL, wind_speed_max_m_s=np.inf).wind_speed_max_m_s == np.inf
+
+
 def test_inputs_of_different_batch_sizes_are_refused_by_name():
     # before: accepted while nothing was clipped, and a bare numpy broadcast error once something was
     for wind in (np.zeros((2, 2)), np.zeros((2, 2)) + [60.0, 0.0]):

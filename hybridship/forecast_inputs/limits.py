@@ -106,9 +106,14 @@ class Envelope:
         (any direction), a rudder's ``max_angle_deg`` (mechanical limit).
     rpm_refuse_factor : float
         ``|rpm|`` beyond this multiple of ``max_rpm`` is refused even when
-        clipping (a unit error).
+        clipping (a unit error); at least 1.
     rk4_step_max_s : float
         Largest RK4 step ``dt_s / substeps`` [s].
+
+    Raises
+    ------
+    TypeError, ValueError
+        Naming a bound that is not a number, or not > 0 (``inf`` is no bound).
     """
 
     position_max_m: float = 1e7
@@ -123,6 +128,17 @@ class Envelope:
     max_angle_rad: tuple[float, ...] = field(default_factory=tuple)
     rpm_refuse_factor: float = 2.0
     rk4_step_max_s: float = 1.0
+
+    def __post_init__(self):
+        # a bound of 0 or below clips every value to the wrong sign, NaN clips nothing, a step of 0 divides
+        for name in ("position_max_m", "heading_max_rad", "surge_max_m_s", "sway_max_m_s", "yaw_rate_max_rad_s",
+                     "wind_speed_max_m_s", "current_speed_max_m_s", "rk4_step_max_s", "rpm_refuse_factor"):
+            v = getattr(self, name)
+            lo = 1.0 if name == "rpm_refuse_factor" else 0.0
+            if isinstance(v, (bool, np.bool_)) or not isinstance(v, (int, float, np.integer, np.floating)):
+                raise TypeError(f"{name}: expected a number, got {v!r}")
+            if not (v >= lo if name == "rpm_refuse_factor" else v > lo):
+                raise ValueError(f"{name}: must be {'>= 1' if lo else '> 0'} (inf for no bound), got {v!r}")
 
 
 def envelope_for(vessel, **overrides) -> Envelope:
