@@ -402,7 +402,8 @@ def test_interpolate_table_keeps_shape_and_propagates_nan():
 
 
 def test_coefficient_table_rejects_bad_input():
-    with pytest.raises(ValueError, match="n: must be >= 3"):
-        coefficient_table(CURVES["isherwood"], n=2)
+    for n in (2, 3.7, "361"):        # 3.7 was taken as 3 points
+        with pytest.raises(ValueError, match=r"^n: expected a whole number >= 3"):
+            coefficient_table(CURVES["isherwood"], n=n)
     with pytest.raises(ValueError, match="C_Y"):
         coefficient_table(lambda g: (np.zeros_like(g), np.full_like(g, np.nan), np.zeros_like(g)))

@@ -41,6 +41,8 @@ from importlib import resources
 import numpy as np
 import pandas as pd
 
+from ..config import check_whole_number
+
 __all__ = [
     "relative_wind",
     "isherwood_coefficients",
@@ -466,11 +468,9 @@ def coefficient_table(curve_fn, n=721):
     Raises
     ------
     ValueError
-        ``n < 3``, a curve returning the wrong shape, or non-finite values.
+        ``n`` not a whole number >= 3, a curve returning the wrong shape, or non-finite values.
     """
-    n = int(n)
-    if n < 3:
-        raise ValueError(f"n: must be >= 3, got {n}")
+    n = check_whole_number("n", n, lo=3)     # int(3.7) silently made 3 points
     grid = np.linspace(-np.pi, np.pi, n)
     out = curve_fn(grid)
     if len(out) != 3:
