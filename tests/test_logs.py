@@ -576,6 +576,9 @@ def test_split_segments_and_segmentwise_derivative():
     assert split_segments([]) == [] and split_segments([3.0]) == [slice(0, 1)]
     with pytest.raises(ValueError, match="strictly increasing"):
         split_segments([0.0, 1.0, 1.0])
+    for bad in ([np.nan], [0.0, np.inf]):       # one sample as the docstring says, not a segment
+        with pytest.raises(ValueError, match="time_s must be finite"):
+            split_segments(bad)
 
     t = t[:90]  # uniform sampling within each segment, one gap
     x = t.copy()

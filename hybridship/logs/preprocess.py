@@ -74,10 +74,10 @@ def split_segments(
     n = t.size
     if n == 0:
         return []
+    if not np.all(np.isfinite(t)):      # a single sample too
+        raise ValueError("time_s must be finite")
     if n == 1:
         return [slice(0, 1)]
-    if not np.all(np.isfinite(t)):
-        raise ValueError("time_s must be finite")
     dt = np.diff(t)
     if np.any(dt <= 0.0):
         i = int(np.argmax(dt <= 0.0)) + 1
