@@ -48,7 +48,7 @@ from ..logs.io import LogArrays
 
 #: Optional command-aware features (appended after the paper's nine): the main
 #: propeller's rpm over its maximum and its rate [1/s]; the first rotatable actuator's
-#: angle (rudder or azimuth, wrapped to (-pi, pi]) [rad] and its rate [rad/s]; the ship's
+#: angle (rudder or azimuth, wrapped to [-pi, pi)) [rad] and its rate [rad/s]; the ship's
 #: velocity through the air in body axes (Fossen's ``u_rw, v_rw``, from the model-predicted
 #: velocities and the wind of the step: logged in training, forecast in a rollout) [m/s];
 #: the drift angle ``atan2(v_hat, |u_hat|)`` [rad].
