@@ -138,8 +138,9 @@ def test_arguments():
 
 
 @pytest.mark.parametrize("override, error, pattern", [
-    (dict(surge_max_m_s=-8.0), ValueError, r"surge_max_m_s: must be > 0 \(inf for no bound\), got -8.0"),
-    (dict(yaw_rate_max_rad_s=float("nan")), ValueError, r"yaw_rate_max_rad_s: must be > 0"),
+    (dict(surge_max_m_s=-8.0), ValueError, r"surge_max_m_s: must be > 0, got -8.0"),
+    (dict(yaw_rate_max_rad_s=float("nan")), ValueError, r"yaw_rate_max_rad_s: must be finite"),
+    (dict(sway_max_m_s=-np.inf), ValueError, r"sway_max_m_s: must be finite"),
     (dict(rk4_step_max_s=0.0), ValueError, r"rk4_step_max_s: must be > 0"),
     (dict(rpm_refuse_factor=0.5), ValueError, r"rpm_refuse_factor: must be >= 1"),
     (dict(wind_speed_max_m_s="50"), TypeError, r"wind_speed_max_m_s: expected a number, got '50'"),

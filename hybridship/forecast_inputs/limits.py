@@ -56,7 +56,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..config import check_whole_number
+from ..config import check_number, check_whole_number
 from ..frames import wrap_pi
 from .commands import clip_rpm, wrap_and_clip_angles
 from .faults import COMPONENTS, InputRangeError, batch_mask, column_mask, refuse
@@ -113,7 +113,8 @@ class Envelope:
     Raises
     ------
     TypeError, ValueError
-        Naming a bound that is not a number, or not > 0 (``inf`` is no bound).
+        Naming a bound that is not a number, or not finite and > 0 (``inf`` is no bound; the
+        refuse factor at least 1).
     """
 
     position_max_m: float = 1e7
@@ -134,11 +135,8 @@ class Envelope:
         for name in ("position_max_m", "heading_max_rad", "surge_max_m_s", "sway_max_m_s", "yaw_rate_max_rad_s",
                      "wind_speed_max_m_s", "current_speed_max_m_s", "rk4_step_max_s", "rpm_refuse_factor"):
             v = getattr(self, name)
-            lo = 1.0 if name == "rpm_refuse_factor" else 0.0
-            if isinstance(v, (bool, np.bool_)) or not isinstance(v, (int, float, np.integer, np.floating)):
-                raise TypeError(f"{name}: expected a number, got {v!r}")
-            if not (v >= lo if name == "rpm_refuse_factor" else v > lo):
-                raise ValueError(f"{name}: must be {'>= 1' if lo else '> 0'} (inf for no bound), got {v!r}")
+            if not (isinstance(v, float) and v == math.inf):        # inf: no bound
+                check_number(name, v, **(dict(lo=1.0) if name == "rpm_refuse_factor" else dict(lo=0.0, lo_open=True)))
 
 
 def envelope_for(vessel, **overrides) -> Envelope:
