@@ -809,12 +809,9 @@ def _check_time_unit_by_rates(t: np.ndarray, values: dict[str, np.ndarray], k: f
     from 1) and in another time unit both the yaw rate and the speeds fit: two columns in
     other units are less likely than one time column. The yaw rate alone cannot tell
     minutes from rad/s (1/60 and pi/180 are 5 % apart); the speeds along a moving track can."""
-    for factor, unit in _OTHER_TIME_UNITS:
-        if 1.0 / _RATE_SCALE_SPLIT <= k * factor <= _RATE_SCALE_SPLIT:
-            found = _time_unit_by_track(t, values)
-            if found is not None and found[0] == unit:
-                raise _time_unit_error(unit, factor, f"r_deg_s is {k:.3g} times the rate of change of "
-                                       f"heading_deg {span}", source)
+    found = _time_unit_by_track(t, values)
+    if found is not None and 1.0 / _RATE_SCALE_SPLIT <= k * found[1] <= _RATE_SCALE_SPLIT:
+        raise _time_unit_error(*found, f"r_deg_s is {k:.3g} times the rate of change of heading_deg {span}", source)
 
 
 def _check_speed_vs_track(t: np.ndarray, values: dict[str, np.ndarray], source: str) -> None:
