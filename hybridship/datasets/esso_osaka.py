@@ -241,7 +241,7 @@ def esso_log_arrays(run, vessel="esso_osaka_model", *, velocity_lead_s: float = 
     v = vessel if isinstance(vessel, Vessel) else load_vessel(vessel)
     if isinstance(run, EssoRun):
         run = run.path
-    if isinstance(run, (str, os.PathLike)):       # any path object (only str and Path before)
+    if isinstance(run, (str, os.PathLike)):       # any path object
         log = read_esso_osaka(run, vessel=v, velocity_lead_s=velocity_lead_s)
     elif isinstance(run, pd.DataFrame) and "t [s]" in run.columns:
         log = esso_to_log(run, vessel=v, velocity_lead_s=velocity_lead_s)
@@ -402,7 +402,7 @@ def convention_checks(raw: pd.DataFrame, *, diff_s: float = 1.0, lag_s: float = 
     ------
     ValueError
         ``diff_s`` not a positive time, ``lag_s`` not finite, or a run too short for one
-        central difference with its lagged velocities (all NaN before, or numpy's error).
+        central difference with its lagged velocities.
     """
     diff_s = check_number("diff_s", diff_s, lo=0.0, lo_open=True)
     lag_s = check_number("lag_s", lag_s)

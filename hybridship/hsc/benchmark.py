@@ -76,7 +76,7 @@ def models_for(sea_state: int, craft, actuator: str, *, seed: int = 0, quick: bo
     Raises
     ------
     ValueError
-        ``sea_state`` not 1 or 2 (any other was given sea state 2's structures).
+        ``sea_state`` not 1 or 2 (the paper has structures for these two only).
     """
     if isinstance(sea_state, (bool, np.bool_)) or sea_state not in (1, 2):
         raise ValueError(f"sea_state: expected 1 or 2, got {sea_state!r}")
@@ -225,8 +225,7 @@ def steady_curves(craft, n_rpm: int = 17) -> pd.DataFrame:
     Raises
     ------
     TypeError, ValueError
-        Naming ``craft`` (not a PlaningCraft: an AttributeError before) or ``n_rpm`` (0 gave an
-        empty table without columns, 2.5 numpy's error).
+        Naming ``craft`` (not a PlaningCraft) or ``n_rpm`` (not a whole number >= 1).
     """
     if not isinstance(craft, PlaningCraft):
         raise TypeError(f"craft: expected a PlaningCraft (load_planing_craft(...)), got {type(craft).__name__}")

@@ -125,8 +125,8 @@ class GreyBox:
     def __init__(self, craft: PlaningCraft, actuator: str, tables: GreyBoxTables | None = None,
                  dt_s: float | None = None):
         self.craft, self.actuator = craft, actuator
-        # checks the craft (a name was an AttributeError on .sensors) and the actuator before the
-        # tables are judged by it
+        # checks the craft (read for its sensors below) and the actuator before the tables are
+        # judged by it
         pm = PlaningCraftModel(craft, actuator)
         # the step of the records: by default the craft's sample period (a fixed 0.1 s ran the
         # dynamics at half speed on a craft logged at 0.2 s)

@@ -222,7 +222,7 @@ class TrialData:
         Raises
         ------
         ValueError
-            ``part`` not one of the three (a KeyError before).
+            ``part`` not one of the three.
         """
         parts = {"all": lambda: self.data, "train": lambda: self.train, "validation": lambda: self.validation}
         if not isinstance(part, str) or part not in parts:
