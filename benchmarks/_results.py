@@ -29,6 +29,19 @@ def publish(out_dir: Path, results_dir: Path | None, names) -> None:
         atomic_write(results_dir / name, lambda fh, src=out_dir / name: fh.write(src.read_bytes()))
 
 
+def validation_dirs(split_dir: Path, out_dir: Path) -> tuple[Path, Path] | None:
+    """The fitting and validation folders of
+    :func:`hybridship.evaluation.manoeuvre.validation_split`, or None, after its message on
+    stderr, when the benchmark's split has not been made (the script then exits with 2)."""
+    from hybridship.evaluation.manoeuvre import validation_split
+
+    try:
+        return validation_split(split_dir, out_dir)
+    except FileNotFoundError as err:
+        print(f"error: {err}", file=sys.stderr)
+        return None
+
+
 def tables_again(out_dir: Path, results_dir: Path | None, csv_names, render, names) -> int:
     """``--tables-only``: render ``out_dir/tables.md`` again, without a new run, as
     ``render(*frames, command)`` from the run's ``csv_names`` and the command its first line

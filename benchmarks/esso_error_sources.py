@@ -449,9 +449,9 @@ def _hybrid_scores(args, runs, v, cfg, fit_dir, score, steps, horizons, physics)
 
 
 def main(argv=None) -> int:
-    from _results import command_line, publish
+    from _results import command_line, publish, validation_dirs
     from hybridship.evaluation.manoeuvre import (ManoeuvreConfig, error_table, forecast_errors, load_runs,
-                                                 start_rows, validation_split)
+                                                 start_rows)
     from hybridship.fileio import atomic_write
     from hybridship.predictors import DynamicPredictor
     from hybridship.vessel import load_vessel
@@ -459,11 +459,9 @@ def main(argv=None) -> int:
     args = _arguments(argv)
     if args.tables_only:
         return _tables_only(args.out, args.results)
-    try:
-        fit_dir, val_dir = validation_split(args.split, args.out / "split")
-    except FileNotFoundError as err:
-        print(f"error: {err}", file=sys.stderr)
+    if (dirs := validation_dirs(args.split, args.out / "split")) is None:
         return 2
+    fit_dir, val_dir = dirs
     v = load_vessel("esso_osaka_model")
     cfg = ManoeuvreConfig()
     runs = load_runs(val_dir, v)

@@ -285,8 +285,8 @@ def parse_args(argv=None) -> argparse.Namespace:
 def main(argv=None) -> int:
     import torch
 
-    from _results import command_line
-    from hybridship.evaluation.manoeuvre import error_table, forecast_errors, load_runs, start_rows, validation_split
+    from _results import command_line, validation_dirs
+    from hybridship.evaluation.manoeuvre import error_table, forecast_errors, load_runs, start_rows
     from hybridship.fileio import atomic_write
     from hybridship.forecast_inputs.wind import HELD_WIND
     from hybridship.predictors import DynamicPredictor
@@ -300,11 +300,9 @@ def main(argv=None) -> int:
               "copied files come from this command alone", file=sys.stderr)
         return 2
     torch.set_num_threads(1)
-    try:
-        fit_dir, val_dir = validation_split(args.split, args.out / "split")
-    except FileNotFoundError as err:
-        print(f"error: {err}", file=sys.stderr)
+    if (dirs := validation_dirs(args.split, args.out / "split")) is None:
         return 2
+    fit_dir, val_dir = dirs
     horizons = tuple(float(h) for h in args.horizons_s.split(","))
     v = load_vessel("esso_osaka_model")
     cfg = screening_config(args, horizons)

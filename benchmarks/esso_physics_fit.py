@@ -79,9 +79,9 @@ def main(argv=None) -> int:
     import torch
     from scipy.optimize import minimize
 
-    from _results import command_line, kind_table, publish
+    from _results import command_line, kind_table, publish, validation_dirs
     from hybridship.evaluation.manoeuvre import (ManoeuvreConfig, error_table, forecast_errors, load_runs,
-                                                 make_predictors, start_rows, validation_split)
+                                                 make_predictors, start_rows)
     from hybridship.fileio import atomic_write
     from hybridship.forecast_inputs.wind import fit_wind_forecast
     from hybridship.predictors import DynamicPredictor
@@ -96,11 +96,9 @@ def main(argv=None) -> int:
                     help="also score the mean of the forecasts of the hybrids on both physics")
     ap.add_argument("--results", type=Path, help="also copy theta.csv, errors.csv and tables.md here (no data)")
     args = ap.parse_args(argv)
-    try:
-        fit_dir, val_dir = validation_split(args.split, args.out / "split")
-    except FileNotFoundError as err:
-        print(f"error: {err}", file=sys.stderr)
+    if (dirs := validation_dirs(args.split, args.out / "split")) is None:
         return 2
+    fit_dir, val_dir = dirs
     torch.set_num_threads(1)
     base = tomllib.loads((vessels_dir() / "esso_osaka_model.toml").read_text())
     cfg = ManoeuvreConfig()

@@ -317,10 +317,10 @@ def main(argv=None) -> int:
     import pandas as pd
     import torch
 
-    from _results import command_line, publish
+    from _results import command_line, publish, validation_dirs
     from hybridship.fileio import atomic_write
     from hybridship.evaluation.manoeuvre import (COMMAND_MODES, ManoeuvreConfig, coverage_table, error_table, forecast_errors,
-                                      load_runs, make_predictors, sharpness_table, start_rows, validation_split)
+                                      load_runs, make_predictors, sharpness_table, start_rows)
     from hybridship.vessel import load_vessel
 
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
@@ -352,8 +352,10 @@ def main(argv=None) -> int:
     modes = [m for m in args.commands.split(",") if m in COMMAND_MODES]
     if args.test_split:
         fit_dir, val_dir = args.split / "train", args.split / "test"
+    elif (dirs := validation_dirs(args.split, args.out / "split")) is None:
+        return 2
     else:
-        fit_dir, val_dir = validation_split(args.split, args.out / "split")
+        fit_dir, val_dir = dirs
     v = load_vessel("esso_osaka_model")
     cfg = ManoeuvreConfig()
     cfg = replace(cfg, calibration=replace(cfg.calibration, horizon_s=max(horizons)))

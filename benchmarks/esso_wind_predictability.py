@@ -117,8 +117,8 @@ def _f3(x: float) -> str:
 def main(argv=None) -> int:
     import pandas as pd
 
-    from _results import command_line, publish
-    from hybridship.evaluation.manoeuvre import load_runs, validation_split
+    from _results import command_line, publish, validation_dirs
+    from hybridship.evaluation.manoeuvre import load_runs
     from hybridship.fileio import atomic_write, markdown_table
     from hybridship.forecast_inputs.wind import fit_wind_forecast
     from hybridship.vessel import load_vessel
@@ -129,11 +129,9 @@ def main(argv=None) -> int:
     ap.add_argument("--out", type=Path, default=ROOT / "out" / "esso-wind-predictability")
     ap.add_argument("--results", type=Path, help="also copy errors.csv and tables.md here (no data)")
     args = ap.parse_args(argv)
-    try:
-        fit_dir, val_dir = validation_split(args.split, args.out / "split")
-    except FileNotFoundError as err:
-        print(f"error: {err}", file=sys.stderr)
+    if (dirs := validation_dirs(args.split, args.out / "split")) is None:
         return 2
+    fit_dir, val_dir = dirs
     v = load_vessel("esso_osaka_model")
     fit_runs, val_runs = load_runs(fit_dir, v), load_runs(val_dir, v)
     dt = fit_runs[0].arrays.dt_s

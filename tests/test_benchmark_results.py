@@ -1,5 +1,7 @@
 """benchmarks/_results.py: the screening scripts' committed tables."""
 
+import pytest
+
 from conftest import load_benchmark, screening_errors
 
 
@@ -50,3 +52,13 @@ def test_command_line_without_argv_records_this_process_arguments_after_the_scri
     as an argument, and an argument with a space is quoted."""
     monkeypatch.setattr("sys.argv", ["benchmarks/x.py", "--out", "out/a b", "--quick"])
     assert load_benchmark("_results").command_line("x.py") == "python benchmarks/x.py --out 'out/a b' --quick"
+
+
+@pytest.mark.parametrize("script", ["esso_error_sources", "esso_multistep", "esso_online_adaptation",
+                                    "esso_physics_fit", "esso_training", "esso_wind_predictability"])
+def test_a_screening_script_without_the_benchmarks_split_exits_2_naming_the_missing_folder(script, tmp_path,
+                                                                                          capsys):
+    mod = load_benchmark(script)
+    assert mod.main(["--split", str(tmp_path / "nosplit"), "--out", str(tmp_path / "out")]) == 2
+    assert f"{tmp_path / 'nosplit' / 'train'}: not found; run benchmarks/esso_osaka.py first" in capsys.readouterr().err
+    assert not (tmp_path / "out" / "split").exists()
