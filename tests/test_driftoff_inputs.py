@@ -1,5 +1,6 @@
 """Drift-off: a scalar quantile keeps the (heading, radius) axes; a live estimate's bad wind
-fields are refused under their own names, and its members may be any array-like."""
+fields, and fields that are not numbers, are refused under their own names, and its members
+may be any array-like."""
 
 from __future__ import annotations
 
@@ -95,3 +96,20 @@ def test_live_current_members_of_the_wrong_shape_are_refused_by_name():
     same = blackout_now(dataclasses.replace(ESTIMATE, current_members_ned_m_s=np.array([[0.0, 0.5]])), "gunnerus",
                         SMALL)
     np.testing.assert_array_equal(one.excursion_m, same.excursion_m)
+
+
+@pytest.mark.parametrize("change, field", [
+    (dict(wind_speed_m_s="ten"), "wind_speed_m_s"), (dict(wind_speed_m_s="10"), "wind_speed_m_s"),
+    (dict(wind_speed_m_s=None), "wind_speed_m_s"), (dict(gust_intensity=True), "gust_intensity"),
+    (dict(wind_dir_from_rad=[0.0, 1.0]), "wind_dir_from_rad"), (dict(eta=["a", 0.0, 0.0]), "eta"),
+    (dict(nu=None), "nu"), (dict(rpm=["100", "0", "0"]), "rpm"),
+    (dict(accel_members=[["x", 0.0, 0.0]]), "accel_members"),
+    (dict(current_members_ned_m_s=[["a", 1.0]]), "current_members_ned_m_s"),
+])
+def test_live_fields_that_are_not_numbers_are_refused_by_name(change, field):
+    """Text, bools and None in an estimate are refused naming the field, not in numpy's or
+    float()'s words ("could not convert string to float: 'a'"), nor read as numbers ("10", True)."""
+    with pytest.raises(TypeError, match=rf"^estimate\.{field}: expected (a number|an array of numbers), got "):
+        blackout_now(dataclasses.replace(ESTIMATE, **change), "gunnerus", SMALL)
+    with pytest.raises(ValueError, match=r"^estimate\.wind_speed_m_s: must be finite"):
+        blackout_now(dataclasses.replace(ESTIMATE, wind_speed_m_s=float("nan")), "gunnerus", SMALL)

@@ -24,18 +24,20 @@ so an update costs the same at any log length (``benchmarks/driftoff_live.py`` m
 from __future__ import annotations
 
 import math
+import reprlib
 from dataclasses import dataclass
 
 import numpy as np
 import pandas as pd
 
-from ..config import as_config, check_whole_number
+from ..config import as_config, check_number, check_whole_number
 from ..forecast_inputs.limits import check_or_clip_inputs
 from ..frames import body_to_ned, vector_to_speed_dir
 from ..logs.io import LogArrays
 from ..residual.features import ResidualConfig, prepare_log
 from . import engine, spread
-from .planning import MAX_SAMPLES, DriftOffResult, DriftOffSettings, get_model, hull_array, refuse_diverged, state_rng
+from .planning import (MAX_SAMPLES, DriftOffResult, DriftOffSettings, _reals, get_model, hull_array, refuse_diverged,
+                       state_rng)
 from .weather import MAX_WIND_M_S
 from ..messages import seconds_text
 
@@ -319,25 +321,35 @@ def _force_as_ned_accel(load, psi_rad: float, load_map) -> np.ndarray:
     return body_to_ned(external_accel(psi_rad, np.asarray(load, float), 0.0, 0.0, load_map), psi_rad)
 
 
+def _estimate_array(estimate: EnvironmentEstimate, name: str) -> np.ndarray:
+    """Field ``name`` of ``estimate`` as a float array; a TypeError naming the field when it
+    is not numbers (text, bools and None would read as numbers, or fail in numpy's words)."""
+    value = getattr(estimate, name)
+    x = _reals(value)
+    if x is None:
+        raise TypeError(f"estimate.{name}: expected an array of numbers, got {type(value).__name__} "
+                        f"{reprlib.repr(value)}")
+    return x
+
+
 def _check_estimate(estimate: EnvironmentEstimate, n_thrusters: int) -> None:
-    """Shapes and finiteness of the fields :func:`blackout_now` reads (errors name the field)."""
+    """Types, shapes and finiteness of the fields :func:`blackout_now` reads (errors name the field)."""
     shapes = {"eta": (3,), "nu": (3,)}
     for name, shape in shapes.items():
-        x = np.asarray(getattr(estimate, name), dtype=float)
+        x = _estimate_array(estimate, name)
         if x.shape != shape or not np.all(np.isfinite(x)):
             raise ValueError(f"estimate.{name}: expected {shape[0]} finite values, got {x.tolist()!r}")
     for name in ("rpm", "azimuth_rad"):
-        x = np.asarray(getattr(estimate, name), dtype=float)
+        x = _estimate_array(estimate, name)
         if x.ndim != 1 or x.size < n_thrusters or not np.all(np.isfinite(x)):
             raise ValueError(f"estimate.{name}: expected one finite value per command channel (at least "
                              f"{n_thrusters}, the thrusters), got shape {x.shape}")
-    m = np.asarray(estimate.accel_members, dtype=float)
+    m = _estimate_array(estimate, "accel_members")
     if m.ndim != 2 or m.shape[0] < 1 or m.shape[1] != 3 or not np.all(np.isfinite(m)):
         raise ValueError(f"estimate.accel_members: expected finite members of shape (M >= 1, 3), got shape "
                          f"{m.shape}" + ("" if m.ndim != 2 or np.all(np.isfinite(m)) else " with NaN or inf"))
     for name in ("wind_speed_m_s", "wind_dir_from_rad", "gust_intensity"):
-        if not np.isfinite(float(getattr(estimate, name))):
-            raise ValueError(f"estimate.{name}: expected a finite number, got {getattr(estimate, name)!r}")
+        check_number(f"estimate.{name}", getattr(estimate, name))     # text, bools and None refused too
     # the ranges of the WeatherState the blackouts build from them, in the estimate's names
     for name, lo, hi, what in (("wind_speed_m_s", 0.0, MAX_WIND_M_S, "m/s"),
                                ("wind_dir_from_rad", -2.0 * math.pi - 0.1, 2.0 * math.pi + 0.1, "rad"),
@@ -412,7 +424,7 @@ def blackout_now(estimate: EnvironmentEstimate, vessel="gunnerus", settings: Dri
     acc = members[np.arange(N) % members.shape[0]]
     cur = np.zeros((N, 2))
     if estimate.current_members_ned_m_s is not None:
-        c = np.asarray(estimate.current_members_ned_m_s, float)
+        c = _estimate_array(estimate, "current_members_ned_m_s")
         if c.shape != (2,) and (c.ndim != 2 or c.shape[1] != 2):     # reshaped, (M, 3) would read as other pairs
             raise ValueError(f"estimate.current_members_ned_m_s: expected (M, 2) [north, east] m/s, got shape "
                              f"{c.shape}")
