@@ -37,6 +37,17 @@ def test_a_horizon_of_whole_steps_is_simulated_in_that_many_steps():
     assert r.horizon_s == pytest.approx(2.1) and r.tracks.shape == (1, 1, 8, 3)
 
 
+def test_a_horizon_accepted_as_whole_steps_is_simulated_in_that_many_steps_from_either_side():
+    """100 s in steps of 0.333333333 s is 300.0000003 steps, which the settings accept as a
+    whole number (to 1e-6): the drift is 300 steps long, as it is for 299.9999997 steps, not
+    301 steps and a horizon of 100.33 s."""
+    for dt in (0.333333333, 0.333333334):
+        st = DriftOffSettings(horizon_s=100.0, dt_s=dt, reaction_times_s=(30.0,), n_samples=1)
+        assert st.n_steps == 300
+        r = simulate_blackouts("gunnerus", BEAM, [0.0], settings=st, keep_tracks=True)
+        assert r.horizon_s == pytest.approx(100.0, abs=1e-6) and r.tracks.shape == (1, 1, 301, 3)
+
+
 @pytest.mark.parametrize("deg", [(30.0, -330.0), (100.0, -260.0), (0.0, -1e-15)])
 def test_one_heading_given_twice_a_turn_apart_is_refused(deg):
     """30 and -330 deg are one heading, as 0 and 360 are (the command line says so); in radians

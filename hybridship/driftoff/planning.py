@@ -177,7 +177,9 @@ class DriftOffSettings:
 
     @property
     def n_steps(self) -> int:
-        return int(math.ceil(self.horizon_s / self.dt_s - 1e-9))
+        """Steps of ``dt_s`` over the horizon: the whole number the validation found
+        ``horizon_s / dt_s`` to be (to 1e-6), rounded to it from either side."""
+        return int(round(self.horizon_s / self.dt_s))
 
 
 @dataclass(frozen=True)
