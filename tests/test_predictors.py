@@ -241,6 +241,18 @@ def test_guard_is_one_inside_and_shrinks_outside():
     assert w[0] == 1.0 and 0 < w[2] < w[1] < 1.0
 
 
+def test_guard_of_features_mostly_at_their_mean_is_one_there_not_nan():
+    """Training features of which more than the quantile's share lie at their mean give an
+    envelope edge d0 = 0 and the default scale d0 / 2 = 0: the weight on the edge was
+    exp(-0 / 0) = NaN (and NaN corrections); it is 1 there and 0 beyond, and NaN stays NaN."""
+    X = np.zeros((1000, 2))
+    X[:4] = [[1.0, 1.0], [-1.0, -1.0], [1.0, -1.0], [-1.0, 1.0]]
+    g = EnvelopeGuard.fit(X)
+    assert g.d0 == 0.0 and g.scale == 0.0
+    np.testing.assert_array_equal(g.weight(np.array([[0.0, 0.0], [0.5, 0.0]])), [1.0, 0.0])
+    assert np.isnan(g.weight(np.array([[np.nan, 0.0]]))[0])
+
+
 def test_thrust_regime_switches_the_nets_off_when_thrusters_stop():
     from hybridship.residual.guard import ThrustRegime
 

@@ -73,8 +73,10 @@ class EnvelopeGuard:
 
     def weight(self, X: np.ndarray) -> np.ndarray:
         """Shrink factor in (0, 1] for each row of ``X``: 1 inside the envelope."""
-        d = self.distance(X)
-        return np.exp(-np.maximum(d - self.d0, 0.0) / self.scale)
+        excess = np.maximum(self.distance(X) - self.d0, 0.0)
+        # a point envelope (d0 = 0 and the default scale d0 / 2 = 0): 1 on it, 0 beyond, not 0 / 0
+        with np.errstate(divide="ignore", invalid="ignore"):
+            return np.where(excess == 0.0, 1.0, np.exp(-excess / self.scale))
 
 
 @dataclass
