@@ -146,6 +146,15 @@ def test_weather_table_round_trip_keeps_every_field():
         assert math.isclose(getattr(back[0], f), getattr(s[0], f), abs_tol=1e-12), f
 
 
+def test_weather_table_labels_are_one_per_state():
+    """``states_to_frame`` with another number of labels than states is refused naming the
+    labels (it was pandas' "Length of values (1) does not match length of index (2)")."""
+    s = [WeatherState(), WeatherState(wind_speed_m_s=5.0)]
+    with pytest.raises(ValueError, match=r"^labels: expected 2 labels, one per state, got 1"):
+        states_to_frame(s, ["a"])
+    assert states_to_frame(iter(s), ("a", "b"))["time"].tolist() == ["a", "b"]
+
+
 # -- direction conventions of the drift -----------------------------------------------------
 
 def test_the_ship_drifts_downwind_and_with_the_current():

@@ -316,7 +316,13 @@ def _field_count_problem(src: str) -> str:
 
 
 def states_to_frame(states, labels=None) -> pd.DataFrame:
-    """The inverse of :func:`read_weather_table` (degrees at the edge)."""
+    """The inverse of :func:`read_weather_table` (degrees at the edge); ``labels``, when
+    given, one per state (the ``time`` column)."""
+    states = list(states)
+    if labels is not None:
+        labels = list(labels)
+        if len(labels) != len(states):      # pandas would say "Length of values ... index", naming neither
+            raise ValueError(f"labels: expected {len(states)} labels, one per state, got {len(labels)}")
     rows = [{"wind_speed_m_s": s.wind_speed_m_s, "wind_dir_deg": math.degrees(s.wind_dir_from_rad) % 360.0,
              "hs_m": s.hs_m, "tp_s": s.tp_s, "wave_dir_deg": math.degrees(s.wave_dir_from_rad) % 360.0,
              "current_m_s": s.current_speed_m_s, "current_dir_deg": math.degrees(s.current_dir_to_rad) % 360.0,
