@@ -1169,6 +1169,11 @@ def test_report_arguments_are_refused_by_name(tmp_path):
         write_report(res, "", plots=False)
     with pytest.raises(TypeError, match="^out_dir: "):
         write_season_report(None, pd.DataFrame(), pd.DataFrame(), "")
+    # a SeasonResult, a dict or bytes where the tables and the summary go: named, not "no attribute 'to_csv'"
+    for args, name in (((res, pd.DataFrame(), ""), "season"), ((pd.DataFrame(), {"a": [1]}, ""), "operability"),
+                       ((pd.DataFrame(), pd.DataFrame(), b"x"), "summary")):
+        with pytest.raises(TypeError, match=f"^{name}: expected "):
+            write_season_report(out, *args)
     assert not out.exists()
     assert write_report(res, str(out), inputs={"vessel": "gunnerus"}, plots=False)["summary.md"].is_file()
 

@@ -190,6 +190,11 @@ def write_season_report(out_dir, season: pd.DataFrame, operability: pd.DataFrame
     ``out_dir`` (each atomically, all made before the first is written) and remove the files
     only :func:`write_report` makes; returns the paths by name."""
     out = as_path(out_dir, "out_dir")
+    for name, value, kind in (("season", season, pd.DataFrame), ("operability", operability, pd.DataFrame),
+                              ("summary", summary, str)):
+        if not isinstance(value, kind):     # it failed in the writing, with "has no attribute 'to_csv'"
+            raise TypeError(f"{name}: expected {'a pandas DataFrame' if kind is pd.DataFrame else 'text'} (as "
+                            f"SeasonResult.to_frame, .operability and a summary give), got {type(value).__name__}")
     contents = {"season.csv": _csv_bytes(season), "operability.csv": _csv_bytes(operability),
                 "summary.md": summary.encode("utf-8")}
     return write_output_files(out, contents, stale=REPORT_ONLY_FILES, ours=earlier_report)
