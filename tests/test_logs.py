@@ -545,6 +545,24 @@ def test_filtered_derivative_refuses_a_window_or_order_that_gives_no_derivative(
     np.testing.assert_allclose(filtered_derivative(x, 1.0, polyorder=1)[5:-5], 2 * t[5:-5])
 
 
+def test_filtered_derivative_names_a_sample_period_or_cut_off_that_is_not_a_number():
+    """dt_s and cutoff_hz went through float(): text was read as a number ("2" as 2 s), True
+    was 1 s, and None or "a" failed in float()'s words, naming neither argument."""
+    x = np.arange(40.0) ** 2
+    for bad in ("a", "2", True, None):
+        with pytest.raises(TypeError, match="^filtered_derivative: dt_s: expected a number"):
+            filtered_derivative(x, bad)
+        with pytest.raises(TypeError, match="^filtered_derivative: cutoff_hz: expected a number"):
+            filtered_derivative(x, 1.0, method="butter", cutoff_hz="a" if bad is None else bad)
+    for bad in (-1.0, 0.0, np.nan):
+        with pytest.raises(ValueError, match="^filtered_derivative: dt_s: "):
+            filtered_derivative(x, bad)
+    with pytest.raises(ValueError, match="^filtered_derivative: cutoff_hz: "):
+        filtered_derivative(x, 1.0, method="butter", cutoff_hz=np.nan)
+    np.testing.assert_allclose(filtered_derivative(x, 1.0, method="butter", cutoff_hz=0.2),
+                               filtered_derivative(x, 1.0, method="butter", window_s=5.0))
+
+
 def test_split_segments_refuses_a_gap_factor_that_is_not_a_number_above_1():
     """A gap factor below 1 made every step a gap (a segment per sample) and NaN made none."""
     t = np.arange(10.0)

@@ -212,6 +212,8 @@ def filtered_derivative(
     ValueError
         ``dt_s``, ``window_s``, ``cutoff_hz``, or the order of the chosen method out of range,
         or an unknown ``method``, naming the argument.
+    TypeError
+        ``dt_s``, ``window_s`` or ``cutoff_hz`` text or a bool, naming it.
 
     Notes
     -----
@@ -222,9 +224,7 @@ def filtered_derivative(
     segment gives NaN: it carries no rate information.
     """
     x = np.asarray(x, dtype=float)
-    dt_s = float(dt_s)
-    if not np.isfinite(dt_s) or dt_s <= 0.0:
-        raise ValueError(f"dt_s must be finite and > 0, got {dt_s!r}")
+    dt_s = check_number("filtered_derivative: dt_s", dt_s, lo=0.0, lo_open=True)
     n = x.shape[axis]
     if method == "savgol" or (method == "butter" and cutoff_hz is None):
         window_s = check_number("filtered_derivative: window_s", window_s, lo=0.0, lo_open=True)
@@ -237,7 +237,7 @@ def filtered_derivative(
         return signal.savgol_filter(x, window, polyorder, deriv=1, delta=dt_s, axis=axis)
     if method == "butter":
         butter_order = check_whole_number("filtered_derivative: butter_order", butter_order, lo=1)
-        fc_hz = 1.0 / window_s if cutoff_hz is None else float(cutoff_hz)
+        fc_hz = 1.0 / window_s if cutoff_hz is None else check_number("filtered_derivative: cutoff_hz", cutoff_hz)
         fs_hz = 1.0 / dt_s
         if not 0.0 < fc_hz < 0.5 * fs_hz:
             raise ValueError(
