@@ -327,6 +327,18 @@ def test_sort_samples_names_conflicts_by_their_input_rows_in_input_order():
     np.testing.assert_array_equal(sort_samples(blank).conflicting_rows, [[n // 2, n // 2 + 1]])
 
 
+def test_sort_samples_refuses_a_repeated_time_s_or_a_two_level_header_naming_it():
+    """sort_samples took a second ``time_s`` column to pandas ("arg must be a list, tuple,
+    1-d array, or Series") and called a two-level header's time_s missing; ingest refused both."""
+    df = pd.DataFrame({"time_s": [0.0, 1.0], "north_m": 0.0, "east_m": 0.0, "heading_deg": 0.0})
+    twice = pd.concat([df, df[["time_s"]]], axis=1)
+    levels = df.set_axis(pd.MultiIndex.from_tuples([(c, "") for c in df.columns]), axis=1)
+    for bad, pattern in ((twice, r"^time_s: column appears more than once.*\(in my log\)$"),
+                         (levels, r"^columns: expected one row of column names, got 2 levels")):
+        with pytest.raises(LogFormatError, match=pattern):
+            sort_samples(bad, source="my log")
+
+
 def test_an_exact_duplicate_is_dropped_not_late_and_missing_values_compare_equal():
     """A sample repeated in order (NaN where the first is NaN) is an exact duplicate: one kept,
     nothing counted as late or conflicting."""

@@ -135,10 +135,12 @@ def sort_samples(df: pd.DataFrame, *, source: str = "log") -> SortedLog:
     Raises
     ------
     LogFormatError
-        If ``time_s`` is missing or holds non-numeric values.
+        If ``time_s`` is missing or holds non-numeric values, or the header is not one row of
+        unique column names.
     """
     if not isinstance(df, pd.DataFrame):
         raise TypeError(f"expected a pandas DataFrame, got {type(df).__name__}")
+    _check_header(df, source)
     cols = [str(c) for c in df.columns]
     if "time_s" not in cols or output_table_kind(cols):
         # the reader's message, with its hints; a table that hybridship wrote (a forecast's
