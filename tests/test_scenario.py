@@ -18,7 +18,7 @@ from hybridship.physics.model import DynamicModel
 from hybridship.sim.allocation import bollard_thrust_limits
 from hybridship.sim.environment import SeaState
 from hybridship.sim.scenario import (DPLossConfig, SensorNoise, drift_statistics,
-                                     embedded_scenarios, simulate_dp_loss, sweep)
+                                     embedded_scenarios, log_file_name, simulate_dp_loss, sweep)
 
 THRUSTERS = dict(channel_names=["tunnel", "port", "stbd"], rotatable=[False, True, True])
 SHORT = dict(t_shutdown_s=600.0, drift_s=300.0)
@@ -426,6 +426,14 @@ def test_sweep_writes_logs_and_summary(tmp_path):
         sweep(tmp_path, [1, 1], **TINY)
     with pytest.raises(ValueError, match="fmt"):
         sweep(tmp_path, [1], fmt="xlsx", **TINY)
+
+
+def test_log_file_name_refuses_a_seed_that_is_not_a_whole_number_at_least_0():
+    """A seed of 1.5 was truncated to seed 1's file name, -1 gave "seed-001", "7" was read as 7."""
+    assert log_file_name(1) == log_file_name(np.int64(1)) == "sim_dp_loss_seed0001.csv.gz"
+    for bad in (1.5, -1, "7", True):
+        with pytest.raises(ValueError, match="^seed: expected a whole number >= 0"):
+            log_file_name(bad)
 
 
 def test_sweep_refuses_a_seed_already_there_in_another_format(tmp_path):

@@ -51,7 +51,7 @@ from pydantic import Field, field_validator, model_validator
 from scipy.signal import lfilter
 
 from hybridship.frames import ned_to_body, wrap_pi
-from hybridship.config import Float, Int, check_number, config_dataclass
+from hybridship.config import Float, Int, check_number, check_whole_number, config_dataclass
 from hybridship.physics.model import DynamicModel
 from hybridship.sim import environment as env
 from hybridship.sim.allocation import ThrustAllocator, bollard_thrust_limits, check_station_keeping
@@ -784,10 +784,18 @@ def drift_statistics(log: pd.DataFrame, *, dp_settle_s: float = 600.0) -> dict:
 
 
 def log_file_name(seed: int, fmt: str = "csv.gz") -> str:
-    """File name of a sweep's log, e.g. ``sim_dp_loss_seed0001.csv.gz``."""
+    """File name of a sweep's log, e.g. ``sim_dp_loss_seed0001.csv.gz``.
+
+    Raises
+    ------
+    ValueError
+        ``seed`` not a whole number >= 0 (a float or text, a negative number), or an
+        unknown ``fmt``, naming the argument.
+    """
+    seed = check_whole_number("seed", seed)
     if fmt not in LOG_FORMATS:
         raise ValueError(f"fmt: expected one of {', '.join(LOG_FORMATS)}, got {fmt!r}")
-    return f"sim_dp_loss_seed{int(seed):04d}.{fmt}"
+    return f"sim_dp_loss_seed{seed:04d}.{fmt}"
 
 
 def sweep(out_dir, seeds: Iterable[int], *, beaufort=(2, 5), fmt: str = "csv.gz", vessel="gunnerus",
