@@ -182,8 +182,8 @@ def test_training_and_forecasting_see_the_same_arrays(model, log, data):
 
 def test_rows_before_a_command_is_first_logged_are_not_trained_on(model, log):
     """The nets never learn from the rows whose commands are the default of an empty cell
-    (a thruster taken as stopped while it ran): only rows with every command logged at i
-    and i - 1 are trainable."""
+    (a thruster taken as stopped while it ran): only rows with every command logged at i,
+    i - 1 and i - 2 are trainable."""
     from hybridship.residual.features import prepare_log
 
     late = log.copy()
@@ -193,6 +193,27 @@ def test_rows_before_a_command_is_first_logged_are_not_trained_on(model, log):
         a = ingest(late, model.vessel, purpose="fit")
         whole = ingest(log, model.vessel, purpose="fit")
     rows = prepare_log(model, a).trainable_rows()
-    assert rows.size and a.time_s[rows].min() > 41.0
+    assert rows.size and a.time_s[rows].min() > 42.0
     np.testing.assert_array_equal(rows, [r for r in prepare_log(model, whole).trainable_rows()
-                                         if a.time_s[r] > 41.0])
+                                         if a.time_s[r] > 42.0])
+
+
+def test_trainable_rows_have_the_features_of_a_log_with_every_command_logged(model, log):
+    """Every trainable row's features and target are those of the same log with the command
+    logged from its start: the previous residual of the first rows after a command's first
+    value was computed with the stopped thruster of the empty cells (and the command rate
+    jumped from 0), and such a row was trained on."""
+    from hybridship.residual.features import ResidualConfig, prepare_log
+
+    late = log.copy()
+    late.loc[late.time_s <= 40.0, "port_rpm"] = np.nan
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        a = ingest(late, model.vessel, purpose="fit")
+        whole = ingest(log, model.vessel, purpose="fit")
+    cfg = ResidualConfig(bias_window_s=0.0, features=ResidualConfig().features + ("rpm_main_rate_rel_s",))
+    p, w = prepare_log(model, a, cfg), prepare_log(model, whole, cfg)
+    rows = p.trainable_rows()
+    assert rows.size
+    np.testing.assert_allclose(p.features(rows), w.features(rows), rtol=0, atol=1e-12)
+    np.testing.assert_allclose(p.deviation(rows), w.deviation(rows), rtol=0, atol=1e-12)

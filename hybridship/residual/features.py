@@ -412,11 +412,15 @@ class PreparedLog:
 
     def trainable_rows(self, mask: np.ndarray | None = None) -> np.ndarray:
         """Rows i whose target and features are all defined (i - 1 and i - 2 in i's segment),
-        with every command logged at i and i - 1 (before a command's first logged value the
-        arrays hold a stopped thruster or a centred rudder, which the ship did not have)."""
-        ok = np.isfinite(self.residual).all(1) & np.isfinite(self.thrust_acc).all(1) & self.arrays.commands_logged
+        with every command logged at i, i - 1 and i - 2 (the target is the step from i - 1, the
+        previous residual the step from i - 2, the command rate is over the two; before a
+        command's first logged value the arrays hold a stopped thruster or a centred rudder,
+        which the ship did not have)."""
+        logged = self.arrays.commands_logged
+        ok = np.isfinite(self.residual).all(1) & np.isfinite(self.thrust_acc).all(1) & logged
         ok[1:] &= ok[:-1]
         ok[0] = False
+        ok[2:] &= logged[:-2]
         okb = np.isfinite(self.bias_ned if self.env_body is None else self.env_body).all(1)
         ok[2:] &= okb[1:-1] & okb[:-2]
         ok[:2] = False
