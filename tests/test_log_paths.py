@@ -183,7 +183,8 @@ def test_training_and_forecasting_see_the_same_arrays(model, log, data):
 def test_rows_before_a_command_is_first_logged_are_not_trained_on(model, log):
     """The nets never learn from the rows whose commands are the default of an empty cell
     (a thruster taken as stopped while it ran): only rows with every command logged at i,
-    i - 1 and i - 2 are trainable."""
+    i - 1 and i - 2 are trainable, and whose bias (known at i - 2) has a residual of a
+    logged step (here the first at 42 s) in it."""
     from hybridship.residual.features import prepare_log
 
     late = log.copy()
@@ -193,9 +194,9 @@ def test_rows_before_a_command_is_first_logged_are_not_trained_on(model, log):
         a = ingest(late, model.vessel, purpose="fit")
         whole = ingest(log, model.vessel, purpose="fit")
     rows = prepare_log(model, a).trainable_rows()
-    assert rows.size and a.time_s[rows].min() > 42.0
+    assert rows.size and a.time_s[rows].min() > 43.0
     np.testing.assert_array_equal(rows, [r for r in prepare_log(model, whole).trainable_rows()
-                                         if a.time_s[r] > 42.0])
+                                         if a.time_s[r] > 43.0])
 
 
 def test_trainable_rows_have_the_features_of_a_log_with_every_command_logged(model, log):
@@ -217,3 +218,23 @@ def test_trainable_rows_have_the_features_of_a_log_with_every_command_logged(mod
     assert rows.size
     np.testing.assert_allclose(p.features(rows), w.features(rows), rtol=0, atol=1e-12)
     np.testing.assert_allclose(p.deviation(rows), w.deviation(rows), rtol=0, atol=1e-12)
+
+
+def test_the_bias_leaves_out_residuals_of_steps_with_a_command_not_logged(model, log):
+    """The causal bias (the mean residual of the last ``bias_window_s``) of a log the model made
+    is zero where the commands were logged: the residuals of the steps before a command's
+    first value, made with the stopped thruster of the empty cells, are no part of it (they
+    shifted the bias, and the training targets and forecasts with it, for the whole window)."""
+    from hybridship.residual.features import prepare_log
+
+    late = log.copy()
+    late.loc[late.time_s <= 40.0, "port_rpm"] = np.nan
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        a = ingest(late, model.vessel, purpose="fit")
+        whole = ingest(log, model.vessel, purpose="fit")
+    p, w = prepare_log(model, a), prepare_log(model, whole)
+    after = a.time_s > 41.0
+    assert np.abs(w.bias_ned[after]).max() < 1e-6
+    assert np.isfinite(p.bias_ned[after]).all()
+    np.testing.assert_allclose(p.bias_ned[after], 0.0, atol=1e-6)

@@ -602,12 +602,16 @@ def command_scales(model, rotatable) -> dict:
 
 
 def _residual_ned(residual_c: np.ndarray, arrays: LogArrays):
-    """Causal residuals with surge/sway rotated to NED, and the rows the bias may use."""
+    """Causal residuals with surge/sway rotated to NED, and the rows the bias may use: finite,
+    in station keeping, and with every command logged at the row before (the step's commands;
+    before a command's first logged value the arrays hold a stopped thruster or a centred
+    rudder, whose residual is not the environment's)."""
     psi = arrays.eta[:, 2]
     c, s = np.cos(psi), np.sin(psi)
     r = residual_c
     vals = np.column_stack([c * r[:, 0] - s * r[:, 1], s * r[:, 0] + c * r[:, 1], r[:, 2]])
     use = np.isfinite(vals).all(1) & arrays.dp_active.astype(bool)
+    use[1:] &= arrays.commands_logged[:-1]
     return vals, use
 
 
@@ -619,7 +623,8 @@ def causal_bias(residual_c: np.ndarray, arrays: LogArrays, dt_s: float, config: 
     result is stored with surge/sway in NED so that it can be rotated into any heading.
     Rows with no earlier finite residual in their segment are NaN. Only DP rows count
     when the log has them before (a failure does not change the environment estimate
-    for a while, so the bias is frozen at its last station-keeping value).
+    for a while, so the bias is frozen at its last station-keeping value), and only rows
+    whose step's commands were logged (:func:`_residual_ned`).
     """
     N = residual_c.shape[0]
     out = np.full((N, 3), np.nan)
