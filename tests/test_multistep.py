@@ -610,6 +610,27 @@ def test_training_starts_hold_the_next_poses_and_the_commands_of_their_steps(sma
     assert n_val > 0 and s.is_val[-n_val:].all() and not s.is_val[:-n_val].any()
 
 
+def test_training_starts_leave_out_steps_whose_commands_were_not_logged():
+    """A command column empty at a log's start: the rollouts are not driven by the stopped
+    thruster that fills the empty cells (the nets learned to undo a thrust stop the ship
+    never had); the starts are those of the fully logged log whose steps all lie after it."""
+    from hybridship.residual.multistep import collect_starts
+
+    m = DynamicModel("gunnerus")
+    log = physics_log(m, seed=5, duration_s=120.0, t_shutdown_s=None)
+    late = log.copy()
+    late.loc[late.time_s <= 40.0, "port_rpm"] = np.nan
+    cfg = MultiStepConfig(horizon_s=10.0)
+    a = as_log_arrays(late, m.vessel)
+    s, w = (collect_starts([prepare_log(m, x)], [None], cfg) for x in (a, as_log_arrays(log, m.vessel)))
+    assert a.commands_logged[a.time_s > 40.0].all() and not a.commands_logged[a.time_s <= 40.0].any()
+    n = s.eta0.shape[0]
+    assert 0 < n < w.eta0.shape[0]
+    np.testing.assert_array_equal(s.rpm, w.rpm[-n:])
+    np.testing.assert_array_equal(s.truth, w.truth[-n:])
+    np.testing.assert_array_equal(s.eta0, w.eta0[-n:])
+
+
 def test_multi_step_loss_is_the_forecast_rollouts_and_the_best_weights_are_kept(small_hybrid):
     """With the previous-residual and command features, members and a bias, the torch rollout of
     multi-step training scores what HybridPredictor.rollout forecasts; with a step size that only

@@ -187,7 +187,8 @@ def collect_starts(preps, masks, config: MultiStepConfig, dp_only: bool = True,
 
     ``preps``: :class:`~hybridship.residual.features.PreparedLog` per log; ``masks``: a
     boolean row mask per log (None: every row) of the rows that may be used (start and
-    the whole horizon inside it, in one segment, and station keeping with ``dp_only``).
+    the whole horizon inside it, in one segment, with every command logged, and station
+    keeping with ``dp_only``).
     """
     out = {k: [] for k in ("eta0", "nu0", "dev0", "bias0", "rpm", "az", "wind", "truth", "is_val")}
     memory = []
@@ -204,7 +205,7 @@ def collect_starts(preps, masks, config: MultiStepConfig, dp_only: bool = True,
         if dp_only:
             ok &= a.dp_active.astype(bool)
         ok &= np.isfinite(a.eta).all(1) & np.isfinite(a.nu).all(1) & np.isfinite(a.rpm).all(1) \
-            & np.isfinite(a.azimuth_rad).all(1)
+            & np.isfinite(a.azimuth_rad).all(1) & a.commands_logged   # not a default of an empty cell
         bad = np.concatenate([[0], np.cumsum(~ok)])
         r = np.arange(1, n - H, max(1, int(round(config.start_every_s / dt))))
         r = r[((bad[r + H + 1] - bad[r]) == 0) & (a.segment_id[r + H] == a.segment_id[r])]
