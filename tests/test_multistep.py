@@ -631,6 +631,16 @@ def test_training_starts_leave_out_steps_whose_commands_were_not_logged():
     np.testing.assert_array_equal(s.eta0, w.eta0[-n:])
 
 
+def test_a_horizon_shorter_than_half_a_step_is_refused_by_name(small_hybrid):
+    """horizon_s below half the logs' step rounds to rollouts of no step: refused naming it
+    (before: torch's "element 0 of tensors does not require grad" from the first Adam step)."""
+    from hybridship.residual.multistep import collect_starts
+
+    _, _, preps = small_hybrid
+    with pytest.raises(ValueError, match=r"horizon_s: expected at least half the logs' step \(1 s\).*got 0.4 s"):
+        collect_starts(preps, [None, None], MultiStepConfig(horizon_s=0.4))
+
+
 def test_multi_step_loss_is_the_forecast_rollouts_and_the_best_weights_are_kept(small_hybrid):
     """With the previous-residual and command features, members and a bias, the torch rollout of
     multi-step training scores what HybridPredictor.rollout forecasts; with a step size that only

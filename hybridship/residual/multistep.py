@@ -199,6 +199,9 @@ def collect_starts(preps, masks, config: MultiStepConfig, dp_only: bool = True,
         dt = prep.dt_s
         dts.add(round(dt, 9))
         H = int(round(config.horizon_s / dt))
+        if H < 1:       # no step to roll out: the loss would have nothing to differentiate
+            raise ValueError(f"multi-step training: horizon_s: expected at least half the logs' step ({dt:g} s), "
+                             f"one rollout step; got {config.horizon_s:g} s")
         if n <= H + 2:
             continue
         ok = np.ones(n, bool) if mask is None else np.asarray(mask, bool).copy()
