@@ -238,3 +238,19 @@ def test_the_bias_leaves_out_residuals_of_steps_with_a_command_not_logged(model,
     assert np.abs(w.bias_ned[after]).max() < 1e-6
     assert np.isfinite(p.bias_ned[after]).all()
     np.testing.assert_allclose(p.bias_ned[after], 0.0, atol=1e-6)
+
+
+def test_the_start_deviation_leaves_out_residuals_of_steps_with_a_command_not_logged(model, log):
+    """``start_residual_window_s``: the start's previous deviation of a log the model made is
+    zero where the commands were logged, not the residual of a step run with the stopped
+    thruster of a command's empty cells."""
+    from hybridship.residual.features import ResidualConfig, prepare_log
+
+    late = log.copy()
+    late.loc[late.time_s <= 40.0, "port_rpm"] = np.nan
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        a = ingest(late, model.vessel, purpose="fit")
+    p = prepare_log(model, a, ResidualConfig(bias_window_s=0.0, start_residual_window_s=10.0))
+    for t in (41.0, 45.0, 60.0):
+        np.testing.assert_allclose(p.start_state(int(np.flatnonzero(a.time_s == t)[0]))[2], 0.0, atol=1e-6)

@@ -465,7 +465,8 @@ class PreparedLog:
 
         Heading and velocities: mean over the last ``start_average_s`` (the paper's 3-s
         window); position: the sample at ``idx``; deviation: mean causal residual over the
-        last ``start_residual_window_s`` minus the bias (zeros if none is available); bias:
+        last ``start_residual_window_s`` (of the steps whose commands were logged) minus the
+        bias (zeros if none is available); bias:
         the causal bias at ``idx`` (surge/sway in NED, yaw as is).
         """
         a = self.arrays
@@ -479,7 +480,9 @@ class PreparedLog:
         nu0 = a.nu[lo: idx + 1].mean(axis=0)
         lo_r = max(idx - n_res + 1, int(np.flatnonzero(seg == seg[idx])[0]))
         r = self.residual_c[lo_r: idx + 1] if self.config.start_residual_window_s > 0 else np.zeros((0, 3))
-        r = r[np.isfinite(r).all(1)]
+        # a residual counts when its step's commands (the row before) were logged, as in the bias
+        step_logged = a.commands_logged[np.maximum(np.arange(lo_r, lo_r + r.shape[0]) - 1, 0)]
+        r = r[np.isfinite(r).all(1) & step_logged]
         bias0 = self.bias_ned[idx] if np.isfinite(self.bias_ned[idx]).all() else np.zeros(3)
         res0 = r.mean(axis=0) if r.size else None
         c, s = np.cos(eta0[2]), np.sin(eta0[2])
