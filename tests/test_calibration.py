@@ -138,6 +138,22 @@ def test_fit_spread_scale_refuses_negative_spreads_and_bad_settings_by_name():
         fit_spread_scale([["a"]] * 30, s, [1.0])
 
 
+def test_fit_spread_scale_refuses_the_start_as_a_lead_time():
+    """lead_s holds lead times > 0: a forecast's first column (lead 0, no error, no spread)
+    given with the others is refused by name; it made the likelihood choose the exponent 1
+    for errors that do not follow the spread (0 without it) and so moved every scale."""
+    rng = np.random.default_rng(1)
+    lead = np.arange(1.0, 6.0)
+    s = np.abs(rng.normal(1, 0.5, (200, 5))) * lead
+    e = np.abs(rng.normal(0, 1, (200, 5))) * lead
+    assert fit_spread_scale(e, s, lead, exponent="likelihood").exponent == 0.0
+    z = np.zeros((200, 1))
+    with pytest.raises(ValueError, match=r"lead_s: expected finite lead times > 0 \[s\] \(leave out the start"):
+        fit_spread_scale(np.hstack([z, e]), np.hstack([z, s]), np.r_[0.0, lead], exponent="likelihood")
+    with pytest.raises(ValueError, match="lead_s: expected finite lead times > 0"):
+        fit_spread_scale(e, s, [1.0, 2.0, np.nan, 4.0, 5.0])
+
+
 @pytest.fixture(scope="module")
 def fitted():
     m = DynamicModel("gunnerus")

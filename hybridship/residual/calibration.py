@@ -261,7 +261,8 @@ def fit_spread_scale(abs_err, std, lead_s, *, sigma: float = 2.0, coverage: floa
     ------
     TypeError, ValueError
         An argument of the wrong kind, shape or range (text, negative errors or spreads,
-        fewer than ``min_samples`` finite samples at a lead), naming it.
+        a lead time that is not > 0, fewer than ``min_samples`` finite samples at a lead),
+        naming it.
     """
     e, s, lead = (real_array(f"fit_spread_scale: {name}", a)
                   for name, a in (("abs_err", abs_err), ("std", std), ("lead_s", lead_s)))
@@ -269,6 +270,10 @@ def fit_spread_scale(abs_err, std, lead_s, *, sigma: float = 2.0, coverage: floa
     if e.ndim != 2 or e.shape != s.shape or e.shape[1] != lead.size:
         raise ValueError(f"fit_spread_scale: abs_err and std must be (N, H) with H = len(lead_s); got "
                          f"{e.shape}, {s.shape}, {lead.size}")
+    if not np.all(np.isfinite(lead) & (lead > 0)):
+        # the start's column (no error, no spread) chose the exponent and scaled the leads after it
+        raise ValueError(f"fit_spread_scale: lead_s: expected finite lead times > 0 [s] (leave out the start, "
+                         f"lead 0), got {lead.tolist()}")
     sigma = check_number("fit_spread_scale: sigma", sigma, lo=0, lo_open=True)
     coverage = check_number("fit_spread_scale: coverage", coverage, lo=0, lo_open=True)
     if coverage >= 1:
