@@ -284,6 +284,28 @@ def test_a_test_log_without_a_failure_is_refused_before_training(tiny_folder, tm
     assert capsys.readouterr().err.startswith("hybridship benchmark drift: error: --test: 1 log(s) have no DP failure")
 
 
+@pytest.mark.parametrize("kw, message", [
+    ({"n_intervals": 0}, r"^n_intervals: expected a whole number >= 1, got 0"),
+    ({"n_intervals": 2.5}, r"^n_intervals: expected a whole number >= 1, got 2\.5"),
+    ({"horizon_s": 10.0}, r"^horizon_s: must be >= 15, got 10\.0"),
+    ({"horizon_s": float("nan")}, r"^horizon_s: must be finite"),
+    ({"calibration_scenarios": 1.5}, r"^calibration_scenarios: expected a whole number >= 0, got 1\.5"),
+])
+def test_counts_and_the_forecast_length_are_refused_before_training(tiny_folder, tmp_path, monkeypatch, kw, message):
+    """No start after a failure, a fraction of one, a forecast shorter than the table's 15 s
+    (no cell) or NaN failed after the training inside numpy or pandas ("KeyError: ['model',
+    ...] not in index"); a fraction of a calibration scenario was truncated without a word."""
+    from hybridship.predictors import HybridPredictor
+
+    def no_training(*args, **kwargs):
+        raise AssertionError("trained before the arguments were checked")
+
+    monkeypatch.setattr(HybridPredictor, "fit", no_training)
+    with pytest.raises(ValueError, match=message):
+        run_drift_benchmark(tiny_folder, None, tmp_path / "out", progress=False, plots=False, **kw)
+    assert not (tmp_path / "out").exists()
+
+
 def test_every_row_on_the_training_logs_own_drifts_is_refused_before_training(tiny_folder, tmp_path, monkeypatch,
                                                                               capsys):
     """Training on every row (``dp_only=False``, ``--all-rows``) puts the drift after each failure

@@ -53,6 +53,7 @@ import numpy as np
 import pandas as pd
 
 from . import metrics
+from ..config import check_number, check_whole_number
 from ..fileio import (atomic_write, check_output_files, earlier_run, make_out_folder, markdown_table, record_outputs,
                       remove_stale, write_text)
 from ..predictors import DataOnlyPredictor, DeadReckoning, DynamicPredictor, HybridPredictor, as_log_arrays
@@ -175,7 +176,7 @@ def run_drift_benchmark(train=None, test=None, out_dir="drift-benchmark", *, ves
     n_intervals : int
         Successive start times after each shutdown (the paper's 20).
     horizon_s : float
-        Forecast length [s]; the table's horizons are 15, 30, 45, 60 s within it.
+        Forecast length [s], at least 15; the table's horizons are 15, 30, 45, 60 s within it.
     dp_only : bool
         Train on the DP part (``dp_active == 1``) only. False (every row) is refused when the
         test logs are the training logs: every model would learn from the drifts it is scored on.
@@ -207,6 +208,7 @@ def run_drift_benchmark(train=None, test=None, out_dir="drift-benchmark", *, ves
         if progress:
             print(msg, flush=True)
 
+    n_intervals, horizon_s, calibration_scenarios = _checked_lengths(n_intervals, horizon_s, calibration_scenarios)
     check_output_folder(out_dir, plots)
     train_logs, train_names, test_logs, test_names = _benchmark_logs(train, test, n_scenarios, seed, say)
     ens_cfg = ensemble_config or EnsembleConfig(n_members=members, seed=seed)
@@ -252,6 +254,23 @@ def run_drift_benchmark(train=None, test=None, out_dir="drift-benchmark", *, ves
     for k, v in outputs.items():
         say(f"wrote {k}: {v}")
     return DriftBenchmarkResult(long, coverage, timing, table2, table3, outputs)
+
+
+def _checked_lengths(n_intervals, horizon_s, calibration_scenarios) -> tuple[int, float, int]:
+    """``(n_intervals, horizon_s, calibration_scenarios)`` checked before any work.
+
+    Raises
+    ------
+    ValueError, TypeError
+        Naming the argument: ``n_intervals`` not a whole number >= 1, ``horizon_s`` [s] not a
+        finite number of at least the table's shortest horizon (15 s; a shorter one leaves no
+        table cell), ``calibration_scenarios`` not a whole number >= 0. Each failed after the
+        training, inside numpy or pandas, or was truncated without a word.
+    """
+    shortest = min(metrics.HORIZONS_S)
+    return (check_whole_number("n_intervals", n_intervals, 1),
+            check_number("horizon_s", horizon_s, lo=shortest),
+            check_whole_number("calibration_scenarios", calibration_scenarios, 0))
 
 
 def _benchmark_logs(train, test, n_scenarios: int, seed: int, say):
