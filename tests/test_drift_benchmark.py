@@ -184,6 +184,29 @@ def test_benchmark_never_replaces_or_removes_a_users_file(tiny_folder, tmp_path,
     assert (out / "tables.md").read_text().startswith("Drift benchmark")
 
 
+def test_a_run_interrupted_before_its_last_file_leaves_files_a_rerun_replaces(tiny_folder, tmp_path, monkeypatch):
+    """Each file is recorded as the benchmark's as it is written: the record was made after the
+    last file only, and a run interrupted between (Ctrl-C while writing the tables) left its
+    CSV tables unrecorded, so the rerun refused them as a user's files."""
+    from hybridship.evaluation import drift
+    from hybridship.evaluation.drift import check_output_folder
+
+    def interrupted(*args, **kwargs):
+        raise KeyboardInterrupt
+
+    out = tmp_path / "out"
+    with monkeypatch.context() as m:
+        m.setattr(drift, "_markdown", interrupted)
+        with pytest.raises(KeyboardInterrupt):
+            run_drift_benchmark(tiny_folder, None, out, ensemble_config=TINY, plots=False, progress=False,
+                                calibration_scenarios=0)
+    assert (out / "errors.csv").is_file() and not (out / "tables.md").exists()
+    check_output_folder(out, plots=False)       # the interrupted run's files are replaced, not refused
+    run_drift_benchmark(tiny_folder, None, out, ensemble_config=TINY, plots=False, progress=False,
+                        calibration_scenarios=0)
+    assert (out / "tables.md").read_text().startswith("Drift benchmark")
+
+
 def test_a_failure_is_never_scored_with_a_spread_calibrated_on_it(tmp_path):
     """Test logs that are the training logs: with enough failures each log's spread after the
     failure is calibrated on the other logs' failures (leave one out); with too few, on

@@ -248,7 +248,7 @@ def run_drift_benchmark(train=None, test=None, out_dir="drift-benchmark", *, ves
     table2, table3, ratio = _paper_tables(long, windows)
     md = _markdown(table2, table3, ratio, coverage, intervals, timing, test_names, len(train_arrays), ens_cfg,
                    n_intervals, windows, per_log_long, heading_cov)
-    outputs["tables.md"] = write_text(out / "tables.md", md)
+    outputs["tables.md"] = _recorded(write_text(out / "tables.md", md))
     outputs.update(_figures(out, plots, fc, all_h, test_arrays, test_names))
     record_outputs(out, outputs, removed=() if plots else FIGURE_FILES)
     for k, v in outputs.items():
@@ -639,8 +639,17 @@ def _logs(spec):
     return items, [f"{n}#{i}" if names.count(n) > 1 else n for i, n in enumerate(names)]
 
 
+def _recorded(path: Path) -> Path:
+    """``path``, just written, added to its folder's record of hybridship's outputs: a run
+    interrupted before its last file leaves files a rerun may replace, not ones it refuses
+    as a user's."""
+    record_outputs(path.parent, [path.name])
+    return path
+
+
 def _write_csv(path: Path, df: pd.DataFrame) -> Path:
-    return atomic_write(path, lambda fh: fh.write(df.to_csv(index=False, float_format="%.6g").encode("utf-8")))
+    return _recorded(atomic_write(path, lambda fh: fh.write(df.to_csv(index=False, float_format="%.6g")
+                                                            .encode("utf-8"))))
 
 
 def _md_table(df: pd.DataFrame) -> str:
@@ -798,7 +807,7 @@ def _figures(out: Path, plots: bool, fc: dict, all_h, test_arrays, test_names) -
     axes[1].set(xlabel="lead time [s]", ylabel="median position error [m]", title="median over start times")
     axes[0].legend(fontsize=8)
     fig.tight_layout()
-    p1 = atomic_write(out / "error_vs_horizon.png", lambda fh: fig.savefig(fh, format="png", dpi=110))
+    p1 = _recorded(atomic_write(out / "error_vs_horizon.png", lambda fh: fig.savefig(fh, format="png", dpi=110)))
     plt.close(fig)
 
     a = test_arrays[0]
@@ -819,6 +828,6 @@ def _figures(out: Path, plots: bool, fc: dict, all_h, test_arrays, test_names) -
     ax.axis("equal")
     ax.legend(fontsize=8)
     fig.tight_layout()
-    p2 = atomic_write(out / "trajectories.png", lambda fh: fig.savefig(fh, format="png", dpi=110))
+    p2 = _recorded(atomic_write(out / "trajectories.png", lambda fh: fig.savefig(fh, format="png", dpi=110)))
     plt.close(fig)
     return {"error_vs_horizon.png": p1, "trajectories.png": p2}
