@@ -458,6 +458,22 @@ def test_the_manoeuvre_benchmark_refuses_an_out_inside_its_inputs_and_a_text_qui
                                 quick="no")
 
 
+@pytest.mark.parametrize("horizons, error", [("15", TypeError), (30.0, TypeError), ([True], TypeError),
+                                             (["5"], TypeError), ([5.0, float("nan")], ValueError),
+                                             ([-5.0], ValueError), ([], ValueError)])
+def test_the_manoeuvre_benchmark_refuses_horizons_that_are_not_a_sequence_of_numbers(tmp_path, horizons, error):
+    """A text was read character by character ("15": horizons of 1 and 5 s, scored under those
+    labels), True as a 1-s horizon, and a single number failed with "'float' object is not
+    iterable"; each is refused naming horizons_s before anything is read or written."""
+    from hybridship.evaluation.manoeuvre import run_manoeuvre_benchmark
+
+    data = _runs_folder(tmp_path)
+    with pytest.raises(error, match="^horizons_s: "):
+        run_manoeuvre_benchmark("esso_osaka_model", data / "zigzag", data / "turning", horizons,
+                                out_dir=tmp_path / "o", quick=True)
+    assert not (tmp_path / "o").exists()
+
+
 def test_ratio_to_physics_is_distance_and_heading_over_the_physics():
     from hybridship.evaluation.manoeuvre import md_ratio_to_physics
 

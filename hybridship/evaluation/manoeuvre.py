@@ -699,9 +699,12 @@ def run_manoeuvre_benchmark(vessel, train_dir, test_dir, horizons_s=HORIZONS_S, 
     check_flags(quick=quick, progress=progress)
     cfg = config or (ManoeuvreConfig.quick(seed) if quick else ManoeuvreConfig())
     cfg = replace(cfg, ensemble=replace(cfg.ensemble, seed=seed))
-    horizons_s = tuple(float(h) for h in horizons_s)
-    if not horizons_s or not all(0 < h < np.inf for h in horizons_s):
-        raise ValueError(f"horizons_s: need finite positive horizons [s], got {horizons_s}")
+    if isinstance(horizons_s, (str, bytes)) or not np.iterable(horizons_s):
+        # a text was read character by character ("15": horizons of 1 and 5 s); a number failed in the loop
+        raise TypeError(f"horizons_s: expected a sequence of horizons [s], got {horizons_s!r}")
+    horizons_s = tuple(check_number("horizons_s", h, lo=0.0, lo_open=True) for h in horizons_s)
+    if not horizons_s:
+        raise ValueError("horizons_s: need finite positive horizons [s], got none")
     if len(set(horizons_s)) != len(horizons_s):
         raise ValueError(f"horizons_s: a horizon is given twice in {horizons_s}")
     cfg = replace(cfg, calibration=replace(cfg.calibration, horizon_s=max(horizons_s)))
