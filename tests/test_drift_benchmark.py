@@ -267,6 +267,22 @@ def test_ratio_table_keeps_log_order_and_marks_ratios_without_a_reference():
     assert "(0 of 6 log/state/window ratios; 6 without a ratio (n/a)" in md
 
 
+def test_ratio_table_names_a_horizon_or_model_the_table_does_not_have():
+    """A horizon the table lacks failed as a pandas KeyError naming the model ("'hybrid'")."""
+    from hybridship.evaluation.drift import ratio_table
+
+    per = pd.DataFrame([dict(model=m, log="a", state=st, window=w, horizon_s=h, mae=1.0)
+                        for m in ("hybrid", "dynamic") for st in ("north_m", "east_m", "yaw_deg")
+                        for w in (5, 20) for h in (30.0, 60.0)])
+    assert ratio_table(per, horizon_s=30).shape == (3, 2)
+    with pytest.raises(ValueError, match=r"^horizon_s: 45\.0 s is not in the table; it has 30, 60 s"):
+        ratio_table(per, horizon_s=45.0)
+    with pytest.raises(ValueError, match=r"^model: 'hybrdi' is not in the table; it has \['hybrid', 'dynamic'\]"):
+        ratio_table(per, model="hybrdi")
+    with pytest.raises(ValueError, match=r"^reference: 'physics' is not in the table"):
+        ratio_table(per, reference="physics")
+
+
 def test_too_few_calibration_forecasts_are_refused_with_the_counts():
     from hybridship.evaluation.drift import _check_calibration_count
 

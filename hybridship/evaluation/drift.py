@@ -671,7 +671,19 @@ def ratio_table(per_log: pd.DataFrame, model: str = "hybrid", reference: str = "
     Returns a frame indexed by ``(log, state)`` (logs in their order) with one column per
     window (number of intervals); NaN or inf where the reference error is zero or missing.
     Averaging the rows of several logs into one ``log`` first gives the ratio of a group.
+
+    Raises
+    ------
+    ValueError
+        Naming ``model``, ``reference`` or ``horizon_s`` when the table has no rows of it
+        (a pandas KeyError naming the model, even for a horizon that was missing).
     """
+    for name, m in (("model", model), ("reference", reference)):
+        if m not in set(per_log["model"]):
+            raise ValueError(f"{name}: {m!r} is not in the table; it has {list(dict.fromkeys(per_log['model']))}")
+    if horizon_s is not None and horizon_s not in set(per_log["horizon_s"]):
+        raise ValueError(f"horizon_s: {horizon_s!r} s is not in the table; it has "
+                         f"{', '.join(f'{x:g}' for x in sorted(set(per_log['horizon_s'])))} s")
     h = per_log.horizon_s.max() if horizon_s is None else horizon_s
     d = per_log[per_log.horizon_s == h].pivot_table(index=["log", "state", "window"], columns="model",
                                                     values="mae", sort=False)
