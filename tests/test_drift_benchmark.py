@@ -374,6 +374,21 @@ def test_every_row_on_the_training_logs_own_drifts_is_refused_before_training(ti
         run_drift_benchmark(tiny_folder, dfs[:1], tmp_path / "out", dp_only=False, progress=False, plots=False)
 
 
+def test_one_log_given_without_a_list_is_refused_naming_the_argument(tiny_folder, tmp_path):
+    """A DataFrame was iterated by its column names, each read as a log file ("time_s:
+    unsupported file extension"); a LogArrays or a number failed as "... is not iterable"."""
+    from hybridship.predictors import as_log_arrays
+
+    model = DynamicModel("gunnerus")
+    df = physics_log(model, duration_s=300, t_shutdown_s=200, seed=1)
+    for one in (df, as_log_arrays(df, model.vessel), 3):
+        with pytest.raises(TypeError, match=r"^train: expected a folder of logs or a list of logs .* a list of one"):
+            run_drift_benchmark(one, None, tmp_path / "out", progress=False, plots=False)
+        with pytest.raises(TypeError, match=r"^test: expected a folder of logs or a list of logs"):
+            run_drift_benchmark(tiny_folder, one, tmp_path / "out", progress=False, plots=False)
+    assert not (tmp_path / "out").exists()
+
+
 def test_log_files_take_any_case_and_skip_hidden_and_summary_files(tmp_path):
     """A folder's logs are found as a single log file is read (extension in any case); the
     sweep's summary and hidden files (macOS ``._`` companions) are not logs."""

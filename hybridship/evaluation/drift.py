@@ -286,8 +286,8 @@ def _benchmark_logs(train, test, n_scenarios: int, seed: int, say):
     else:
         if train is None:
             raise ValueError("train: a folder of training logs is needed when test is given")
-        train_logs, train_names = _logs(train)
-        test_logs, test_names = (train_logs, train_names) if test is None else _logs(test)
+        train_logs, train_names = _logs(train, "train")
+        test_logs, test_names = (train_logs, train_names) if test is None else _logs(test, "test")
         test_logs, test_names = _same_logs_as_training(train_logs, train_names, test_logs, test_names)
     return train_logs, train_names, test_logs, test_names
 
@@ -627,11 +627,16 @@ def _loo_calibrated_spread(P, T, S, n_horizons: int) -> np.ndarray:
     return Scal
 
 
-def _logs(spec):
-    """(logs, names) from a folder path or a list of paths/DataFrames/LogArrays."""
+def _logs(spec, field: str):
+    """(logs, names) from a folder path or a list of paths/DataFrames/LogArrays; a TypeError
+    naming ``field`` for anything else (a DataFrame was iterated by its column names, each
+    read as a file: "time_s: unsupported file extension")."""
     if isinstance(spec, (str, Path)):
         files = log_files(Path(spec))
         return list(files), [f.name for f in files]
+    if isinstance(spec, pd.DataFrame) or not np.iterable(spec):
+        raise TypeError(f"{field}: expected a folder of logs or a list of logs (paths, DataFrames or LogArrays), "
+                        f"got {type(spec).__name__}; give one log as a list of one")
     items = list(spec)
     names = [str(getattr(x, "name", f"log{i}")) for i, x in enumerate(items)]
     # per-log outputs are keyed by name: two logs of one name (files of one name in two
