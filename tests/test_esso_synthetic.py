@@ -456,6 +456,11 @@ def test_the_manoeuvre_benchmark_refuses_an_out_inside_its_inputs_and_a_text_qui
     with pytest.raises(TypeError, match="^quick: expected True or False"):
         run_manoeuvre_benchmark("esso_osaka_model", data / "zigzag", data / "turning", out_dir=tmp_path / "o",
                                 quick="no")
+    # a dict of settings failed with "'dict' object has no attribute 'ensemble'"
+    with pytest.raises(TypeError, match="^config: expected a ManoeuvreConfig or None, got dict"):
+        run_manoeuvre_benchmark("esso_osaka_model", data / "zigzag", data / "turning", out_dir=tmp_path / "o",
+                                config={"start_every_s": 2.0})
+    assert not (tmp_path / "o").exists()
 
 
 @pytest.mark.parametrize("horizons, error", [("15", TypeError), (30.0, TypeError), ([True], TypeError),

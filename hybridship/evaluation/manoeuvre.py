@@ -697,6 +697,8 @@ def run_manoeuvre_benchmark(vessel, train_dir, test_dir, horizons_s=HORIZONS_S, 
 
     v = vessel if isinstance(vessel, Vessel) else load_vessel(vessel)
     check_flags(quick=quick, progress=progress)
+    if config is not None and not isinstance(config, ManoeuvreConfig):
+        raise TypeError(f"config: expected a ManoeuvreConfig or None, got {type(config).__name__}")
     cfg = config or (ManoeuvreConfig.quick(seed) if quick else ManoeuvreConfig())
     cfg = replace(cfg, ensemble=replace(cfg.ensemble, seed=seed))
     if isinstance(horizons_s, (str, bytes)) or not np.iterable(horizons_s):
