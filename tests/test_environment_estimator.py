@@ -754,6 +754,26 @@ def test_fit_carries_the_thrust_error_seen_at_stops_into_the_prior(model):
         np.testing.assert_array_equal(unchanged.thrust_error_std, 0.2)
 
 
+def test_fit_learns_afresh_each_time_from_the_configured_prior(model):
+    """A second fit on the same logs learns what the first did (its runs start from the
+    configured prior, not from the one learned before, which would count the logs twice and
+    narrow the spread); a fit without a stop, or with dp_only, leaves the configured prior,
+    whatever an earlier fit learned."""
+    logs = [as_log_arrays(x, model.vessel) for x in _tunnel_deficit_logs(model, (30,), duration_s=800.0)]
+    est = EnvironmentEstimator(model).fit(logs)
+    mean, std = est.thrust_error_mean.copy(), est.thrust_error_std.copy()
+    assert np.all(std < 0.2)
+    est.fit(logs)
+    np.testing.assert_array_equal(est.thrust_error_mean, mean)
+    np.testing.assert_array_equal(est.thrust_error_std, std)
+    no_stop = as_log_arrays(physics_log(model, duration_s=300, t_shutdown_s=None, seed=30), model.vessel)
+    for refit in (lambda: est.fit([no_stop]), lambda: est.fit(logs, dp_only=True)):
+        est.fit(logs)
+        refit()
+        np.testing.assert_array_equal(est.thrust_error_mean, 0.0)
+        np.testing.assert_array_equal(est.thrust_error_std, 0.2)
+
+
 def test_the_prior_learned_at_stops_is_kept_only_where_it_lowers_both_errors():
     from hybridship.residual.environment import thrust_error_prior_carries_over as keep
 

@@ -499,15 +499,20 @@ class EnvironmentEstimator:
         self.config = config
         #: The filter's state layout (:func:`state_names`).
         self.state_names = state_names(model, config)
-        n_theta = len(self.state_names) - THR.start
         #: Prior mean and standard deviation of ``theta``; :meth:`fit` may replace them.
-        self.thrust_error_mean = np.zeros(n_theta)
-        self.thrust_error_std = (np.asarray(config.thrust_error_prior, dtype=float)
-                                 if config.thrust_error_model == "per_dof"
-                                 else np.full(n_theta, config.thrust_error_prior_per_thruster))
+        self.thrust_error_mean, self.thrust_error_std = self._configured_thrust_error_prior()
         self._shared_runs = None        # see sharing_station_keeping
         #: ``A`` of :func:`load_map` with the load a force; None with the load an acceleration.
         self.load_map = load_map(model, config.load_model)
+
+    def _configured_thrust_error_prior(self) -> tuple[np.ndarray, np.ndarray]:
+        """Mean and standard deviation (n_theta,) of ``theta``'s prior as configured: 0 and
+        ``thrust_error_prior`` (per DOF) or ``thrust_error_prior_per_thruster`` (per thruster)."""
+        c = self.config
+        n_theta = len(self.state_names) - THR.start
+        std = (np.asarray(c.thrust_error_prior, dtype=float) if c.thrust_error_model == "per_dof"
+               else np.full(n_theta, c.thrust_error_prior_per_thruster))
+        return np.zeros(n_theta), std
 
     # ------------------------------------------------------------------ learning
 
@@ -523,8 +528,10 @@ class EnvironmentEstimator:
         load/thrust-error correlation it carried) is kept. The precision-weighted mean over
         the stops becomes the prior mean; the spread between stops (at least each stop's own
         uncertainty) its standard deviation. Without stops, or with ``dp_only`` (the paper's
-        protocol, in which nothing of a failure is seen), the prior stays as configured:
-        0 +- ``thrust_error_prior_per_thruster`` (or ``thrust_error_prior`` per DOF).
+        protocol, in which nothing of a failure is seen), the prior is the configured one:
+        0 +- ``thrust_error_prior_per_thruster`` (or ``thrust_error_prior`` per DOF). Each call
+        learns afresh from the configured prior: what an earlier call learned is neither
+        kept nor used as the prior of the runs (which would count its logs twice).
 
         Not learned here: how much of the station-keeping yaw environment survives a stop
         (``yaw_load_kept_at_stop``). With the per-DOF thrust error, learning it as the ratio
@@ -553,6 +560,7 @@ class EnvironmentEstimator:
         after_stop_s : float
             Drift time after a stop that the filter reads before its estimate is taken [s].
         """
+        self.thrust_error_mean, self.thrust_error_std = self._configured_thrust_error_prior()
         if dp_only:
             return self
         means, precs = [], []
