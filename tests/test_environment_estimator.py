@@ -897,6 +897,28 @@ def test_a_blackout_now_is_what_the_filter_does_at_a_logged_stop(model, settings
         assert not np.array_equal(x, held.x[0]) or not np.array_equal(P, held.P[0])
 
 
+def test_a_blackout_now_refuses_a_state_that_is_not_the_filters(model):
+    """at_thrust_stop takes a state of the estimator's layout: one of another length (which
+    the compiled stop would index past its end) or with NaN is refused by name; the caller's
+    arrays are not changed."""
+    from hybridship.residual.environment import PER_DOF
+
+    est = EnvironmentEstimator(model, EnvironmentConfig(**PER_DOF))
+    n = len(est.state_names)
+    x, P = np.full(n, 0.01), 0.01 * np.eye(n)
+    x0, P0 = x.copy(), P.copy()
+    est.at_thrust_stop(x, P)
+    np.testing.assert_array_equal(x, x0)
+    np.testing.assert_array_equal(P, P0)
+    for bad_x, bad_P in ((x[:5], P[:5, :5]), (x, P[:, :5]), (x[:, None], P)):
+        with pytest.raises(ValueError, match=rf"x, P: expected shapes \({n},\) and \({n}, {n}\)"):
+            est.at_thrust_stop(bad_x, bad_P)
+    with pytest.raises(ValueError, match="x, P: must be finite"):
+        est.at_thrust_stop(np.where(np.arange(n) == 10, np.nan, x), P)
+    with pytest.raises(TypeError, match="x: expected an array of real numbers"):
+        est.at_thrust_stop(["a"] * n, P)
+
+
 def test_with_known_commands_the_thrust_error_follows_each_steps_commands(model):
     """The estimated thrust-model error acts on the thrust that is delivered. With the logged
     commands known it was computed from the start's commands and held over the horizon, so a

@@ -73,7 +73,7 @@ import numpy as np
 import pandas as pd
 from pydantic import BaseModel, ConfigDict, Field, model_validator
 
-from ..config import Bool, start_time_rng
+from ..config import Bool, real_array, start_time_rng
 from ..frames import ned_to_body, vector_to_speed_dir
 from ..forecast_inputs.faults import TRACK_MISMATCH_M, TRACK_WINDOW_S, velocity_track_mismatch_m
 from ..messages import seconds_text
@@ -669,10 +669,28 @@ class EnvironmentEstimator:
         ``current_std_at_stop_m_s`` the current's uncertainty is widened along the
         current-load ridge (:func:`hybridship.residual.environment_kernel.current_ridge_at_stop`),
         as the filter does at a stop.
+
+        Parameters
+        ----------
+        x : array, shape (n,)
+            State mean in the order of :attr:`state_names` (``n`` entries; SI, radians).
+        P : array, shape (n, n)
+            Its covariance.
+
+        Returns
+        -------
+        x, P : ndarray
+            New arrays (the caller's are not changed).
         """
         c = self.config
+        n = len(self.state_names)
+        x, P = np.array(real_array("x", x)), np.array(real_array("P", P))
+        if x.shape != (n,) or P.shape != (n, n):
+            raise ValueError(f"x, P: expected shapes ({n},) and ({n}, {n}) (the state of state_names), "
+                             f"got {x.shape} and {P.shape}")
+        if not (np.all(np.isfinite(x)) and np.all(np.isfinite(P))):
+            raise ValueError("x, P: must be finite (no NaN or inf)")
         work = kernel._workspace(self.model.arrays)
-        x, P = np.array(x, dtype=float), np.array(P, dtype=float)
         if c.reset_yaw_load_at_stop:        # the filter's order at a stop (environment_kernel.filter_grid)
             x, P = kernel.at_thrust_stop(x, P, float(c.yaw_load_kept_at_stop), self._yaw_std_at_stop(),
                                          float(c.load_yaw_prior_rad_s2), self.model.arrays, work)
