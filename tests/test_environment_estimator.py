@@ -713,6 +713,31 @@ def test_run_leaves_out_optional_rows_before_the_first_valid_position(model):
             EnvironmentEstimator(model).run(a, np.array(rows), first_row=first_row, required=1)
 
 
+def test_run_refuses_rows_first_row_and_required_that_are_not_rows_of_the_log(model):
+    """run's rows are whole row numbers of a 1-D array (10.7 was read as row 10, a 2-D array
+    failed in numpy's words), its first_row a row of the log (a negative one failed in a
+    broadcast, one past the end as a command-shape error) and required at most the rows
+    given (more, or a negative number, passed unnoticed); an empty rows gives an empty
+    estimate, not a numpy error."""
+    a = as_log_arrays(physics_log(model, duration_s=120.0, t_shutdown_s=None, seed=4), model.vessel)
+    n = len(a.time_s)
+    est = EnvironmentEstimator(model)
+    for rows in ([10.7], [[10, 20]], np.array([True, False])):
+        with pytest.raises(ValueError, match="rows: expected a 1-D array of whole row numbers"):
+            est.run(a, rows)
+    for first_row in (-5, n, 2.0, True):
+        with pytest.raises(ValueError, match=rf"first_row: expected a whole number in \[0, {n - 1}\]"):
+            est.run(a, [100], first_row=first_row)
+    with pytest.raises(ValueError, match="required: expected at most the 2 rows given, got 3"):
+        est.run(a, [10, 20], required=3)
+    with pytest.raises(ValueError, match="required: expected a whole number >= 0"):
+        est.run(a, [10, 20], required=-1)
+    empty = est.run(a, [])
+    assert empty.rows.shape == (0,) and empty.x.shape == (0, 14) and empty.P.shape == (0, 14, 14)
+    np.testing.assert_array_equal(est.run(a, np.array([10, 20], dtype=np.int32), first_row=np.int64(5)).x,
+                                  est.run(a, [10, 20], first_row=5).x)
+
+
 def _tunnel_deficit_logs(model, seeds, *, t_shutdown_s=700.0, duration_s=900.0):
     """Logs of a true ship whose tunnel thruster delivers 80 % of the model's thrust, each
     with a thrust stop at ``t_shutdown_s`` followed by a drift."""

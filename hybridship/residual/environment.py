@@ -73,7 +73,7 @@ import numpy as np
 import pandas as pd
 from pydantic import BaseModel, ConfigDict, Field, model_validator
 
-from ..config import Bool, real_array, start_time_rng
+from ..config import Bool, check_whole_number, real_array, start_time_rng
 from ..frames import ned_to_body, vector_to_speed_dir
 from ..forecast_inputs.faults import TRACK_MISMATCH_M, TRACK_WINDOW_S, velocity_track_mismatch_m
 from ..messages import seconds_text
@@ -485,6 +485,29 @@ def environment_accel(model, arrays, estimate: EnvironmentEstimate, nu=None) -> 
     return out
 
 
+def _checked_rows(n: int, rows, first_row, required) -> tuple[np.ndarray, int, int]:
+    """The arguments of :meth:`EnvironmentEstimator.run` on a log of ``n`` rows: ``rows``
+    (default: all from ``first_row``) as a 1-D int array, ``first_row`` as an int and the
+    number of rows that must have an estimate; an error naming the argument otherwise."""
+    if isinstance(first_row, bool) or not isinstance(first_row, (int, np.integer)) or not 0 <= first_row < n:
+        raise ValueError(f"first_row: expected a whole number in [0, {n - 1}], got {first_row!r}")
+    first_row = int(first_row)
+    if rows is None:
+        rows = np.arange(first_row, n)
+    else:
+        rows = np.asarray(rows)
+        if rows.ndim != 1 or (rows.size and rows.dtype.kind not in "iu"):
+            raise ValueError(f"rows: expected a 1-D array of whole row numbers, got shape {rows.shape} "
+                             f"and dtype {rows.dtype}")
+        rows = rows.astype(int)
+    if rows.size and (rows.min() < first_row or rows.max() >= n):
+        raise ValueError(f"rows: must lie in [{first_row}, {n - 1}]")
+    n_req = rows.size if required is None else check_whole_number("required", required)
+    if n_req > rows.size:
+        raise ValueError(f"required: expected at most the {rows.size} rows given, got {required!r}")
+    return rows, first_row, n_req
+
+
 class EnvironmentEstimator:
     """Causal environment estimation over a log (see the module notes).
 
@@ -716,11 +739,13 @@ class EnvironmentEstimator:
         ----------
         arrays : LogArrays
         rows : array of int, optional
-            Rows at which to report (sorted or not); all rows >= ``first_row`` by default.
+            Rows at which to report (sorted or not), in ``[first_row, N - 1]`` (``N`` rows of
+            log); all rows >= ``first_row`` by default.
         first_row : int
-            Row at which the filter starts (its prior applies there).
+            Row at which the filter starts (its prior applies there), in ``[0, N - 1]``.
         required : int, optional
-            Only the first ``required`` of ``rows`` must have an estimate; later rows before
+            Only the first ``required`` (at most ``len(rows)``) of ``rows`` must have an
+            estimate; later rows before
             the first valid position and heading are left out of the result (default: all
             rows are required).
         drift_yaw_uv_rad_per_m2 : float
@@ -733,10 +758,7 @@ class EnvironmentEstimator:
                 and np.isfinite(drift_yaw_uv_rad_per_m2)):
             raise ValueError(f"drift_yaw_uv_rad_per_m2: expected a finite number [rad/m^2], got "
                              f"{drift_yaw_uv_rad_per_m2!r}")
-        n = len(arrays.time_s)
-        rows = np.arange(first_row, n) if rows is None else np.asarray(rows, dtype=int)
-        if rows.size and (rows.min() < first_row or rows.max() >= n):
-            raise ValueError(f"rows: must lie in [{first_row}, {n - 1}]")
+        rows, first_row, n_req = _checked_rows(len(arrays.time_s), rows, first_row, required)
         last = int(rows.max()) if rows.size else first_row
         m, _ = self._filter_every(arrays)
         inputs = self._shared_inputs(arrays, first_row, last)
@@ -745,15 +767,15 @@ class EnvironmentEstimator:
             grid = np.arange(first_row + (c - first_row) % m, last + 1, m)
             self._filter(arrays, grid, set(int(r) for r in rows if r % m == c), inputs, out_x, out_P,
                          float(drift_yaw_uv_rad_per_m2))
-        n_req = rows.size if required is None else int(required)
         miss = [int(r) for r in rows[:n_req] if int(r) not in out_P]
         if miss:
             raise ValueError(f"log: no valid position/heading at or before row {miss[0]} "
                              f"(time {seconds_text(arrays.time_s[miss[0]])} s) to start the environment estimate")
         rows = rows[np.array([int(r) in out_P for r in rows], dtype=bool)] if rows.size > n_req else rows
-        return EnvironmentEstimate(rows, arrays.time_s[rows], np.stack([out_x[int(r)] for r in rows]),
-                                   np.stack([out_P[int(r)] for r in rows]), self.config.thrust_error_model,
-                                   self.load_map)
+        k = len(self.state_names)
+        return EnvironmentEstimate(rows, arrays.time_s[rows], np.reshape([out_x[int(r)] for r in rows], (-1, k)),
+                                   np.reshape([out_P[int(r)] for r in rows], (-1, k, k)),
+                                   self.config.thrust_error_model, self.load_map)
 
     def _log_inputs(self, arrays, first_row: int, last: int) -> dict:
         """Measurements, their noise and the model's inputs at the rows ``first_row .. last`` (zero elsewhere)."""
