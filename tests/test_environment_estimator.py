@@ -799,6 +799,21 @@ def test_fit_learns_afresh_each_time_from_the_configured_prior(model):
         np.testing.assert_array_equal(est.thrust_error_std, 0.2)
 
 
+def test_fit_refuses_a_dp_only_that_is_not_a_flag_and_a_drift_time_that_is_not_one(model):
+    """fit's dp_only must be True or False (a text "no" was read as True and nothing was
+    learned) and after_stop_s a finite time >= 0 (NaN skipped every stop unnoticed, a
+    negative one read the station keeping before the stop as its drift)."""
+    a = as_log_arrays(physics_log(model, duration_s=120.0, t_shutdown_s=None, seed=4), model.vessel)
+    est = EnvironmentEstimator(model)
+    with pytest.raises(TypeError, match="dp_only: expected True or False, got 'no'"):
+        est.fit([a], dp_only="no")
+    for bad in (float("nan"), -50.0):
+        with pytest.raises(ValueError, match="after_stop_s: must be"):
+            est.fit([a], after_stop_s=bad)
+    with pytest.raises(TypeError, match="after_stop_s: expected a number"):
+        est.fit([a], after_stop_s="60")
+
+
 def test_the_prior_learned_at_stops_is_kept_only_where_it_lowers_both_errors():
     from hybridship.residual.environment import thrust_error_prior_carries_over as keep
 

@@ -73,7 +73,7 @@ import numpy as np
 import pandas as pd
 from pydantic import BaseModel, ConfigDict, Field, model_validator
 
-from ..config import Bool, check_whole_number, real_array, start_time_rng
+from ..config import Bool, check_flags, check_number, check_whole_number, real_array, start_time_rng
 from ..frames import ned_to_body, vector_to_speed_dir
 from ..forecast_inputs.faults import TRACK_MISMATCH_M, TRACK_WINDOW_S, velocity_track_mismatch_m
 from ..messages import seconds_text
@@ -581,8 +581,11 @@ class EnvironmentEstimator:
         dp_only : bool
             Training sees only station keeping: nothing to learn here.
         after_stop_s : float
-            Drift time after a stop that the filter reads before its estimate is taken [s].
+            Drift time after a stop that the filter reads before its estimate is taken [s],
+            finite and >= 0.
         """
+        check_flags(dp_only=dp_only)
+        after_stop_s = check_number("after_stop_s", after_stop_s, lo=0.0)
         self.thrust_error_mean, self.thrust_error_std = self._configured_thrust_error_prior()
         if dp_only:
             return self
