@@ -56,6 +56,32 @@ def test_the_axis_is_fixed_in_ned_while_the_ship_turns():
     assert axis.sin2_station == pytest.approx(np.mean(np.sin(2 * (d - psi[recent]))), abs=0.03)
 
 
+def test_a_missing_heading_leaves_out_its_sample_not_the_axis():
+    """A forecast log may miss a heading sample: the turning ship's axis and sin2_station
+    are still found (the sample's motion is left out; the unwrapped heading carried the NaN
+    into every later sample and the axis was lost); without a heading in the last
+    ``average_s`` there is none."""
+    rng = np.random.default_rng(0)
+    t = np.arange(600, dtype=float)
+    psi = np.radians(np.linspace(0.0, 120.0, t.size))
+    d = np.radians(70.0)
+    swing = 0.2 * np.sin(2 * np.pi * t / 8.0 + 0.3)
+    u = swing * np.cos(d - psi) + 0.01 * rng.standard_normal(t.size)
+    v = swing * np.sin(d - psi) + 0.01 * rng.standard_normal(t.size)
+    full = wave_axis(t, psi, u, v, average_s=300.0)
+    gappy = psi.copy()
+    gappy[[100, 450]] = np.nan
+    psi_given = gappy.copy()
+    axis = wave_axis(t, gappy, u, v, average_s=300.0)
+    np.testing.assert_array_equal(gappy, psi_given)                    # the caller's array is not changed
+    assert axis is not None
+    assert axis.axis_ned_rad == pytest.approx(full.axis_ned_rad, abs=np.radians(0.5))
+    assert axis.sin2_station == pytest.approx(full.sin2_station, abs=0.01)
+    late_gap = psi.copy()
+    late_gap[t >= t[-1] - 300.0] = np.nan
+    assert wave_axis(t, late_gap, u, v, average_s=300.0) is None
+
+
 def test_no_axis_without_a_directed_wave_motion_or_enough_station_keeping():
     rng = np.random.default_rng(1)
     t = np.arange(600, dtype=float)

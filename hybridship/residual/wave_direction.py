@@ -72,7 +72,9 @@ def wave_axis(time_s: np.ndarray, psi_rad: np.ndarray, u_m_s: np.ndarray, v_m_s:
     ----------
     time_s, psi_rad, u_m_s, v_m_s : ndarray, shape (N,)
         Times [s], heading [rad] and body-frame velocities [m/s] of the station keeping
-        up to the failure, one segment (equally spaced); NaN velocities count as 0.
+        up to the failure, one segment (equally spaced); NaN velocities count as 0, and a
+        sample without a heading (NaN) is left out of the axis and of ``sin2_station`` (its
+        motion cannot be turned into NED).
     window_s : float
         Length of station keeping whose wave-frequency motion is used [s].
     average_s : float
@@ -86,11 +88,14 @@ def wave_axis(time_s: np.ndarray, psi_rad: np.ndarray, u_m_s: np.ndarray, v_m_s:
     -------
     WaveAxis or None
         None when the window is shorter than ten of the longest periods, the sampling
-        cannot resolve the band, or the motion has no axis.
+        cannot resolve the band, the motion has no axis, or no heading is known in the
+        last ``average_s``.
     """
     t = np.asarray(time_s, dtype=float)
     keep = t >= t[-1] - window_s
-    t, psi = t[keep], np.unwrap(np.asarray(psi_rad, dtype=float)[keep])
+    t, psi = t[keep], np.array(psi_rad, dtype=float)[keep]
+    known = np.isfinite(psi)
+    psi[known] = np.unwrap(psi[known])
     dt = float(np.median(np.diff(t))) if t.size > 1 else np.inf
     if t[-1] - t[0] < 10 * band_s[1] or not 2 * dt < band_s[0]:
         return None
@@ -98,10 +103,12 @@ def wave_axis(time_s: np.ndarray, psi_rad: np.ndarray, u_m_s: np.ndarray, v_m_s:
     uv = np.zeros((t.size, 3))
     uv[:, :2] = sosfiltfilt(sos, np.nan_to_num(np.column_stack([u_m_s, v_m_s]).astype(float)[keep]), axis=0)
     # into NED at each sample: the waves' axis is fixed there while the ship may turn
-    var, vec = np.linalg.eigh(np.cov(body_to_ned(uv, psi)[:, :2].T))
+    recent = (t >= t[-1] - average_s) & known
+    if np.count_nonzero(known) < 2 or not recent.any():
+        return None
+    var, vec = np.linalg.eigh(np.cov(body_to_ned(uv, psi)[known, :2].T))
     if not var[1] > 0 or var[1] < min_anisotropy * max(var[0], 1e-12 * var[1]):
         return None
-    recent = t >= t[-1] - average_s
     axis = float(np.arctan2(vec[1, 1], vec[0, 1]))
     s2 = float(np.mean(np.sin(2.0 * (axis - psi[recent]))))
     return WaveAxis(axis % np.pi, float(var[1] / max(var[0], 1e-12 * var[1])), s2)
