@@ -568,6 +568,19 @@ def test_config_rejects_bad_values():
         HybridPredictor("gunnerus", environment="nets")
 
 
+@pytest.mark.parametrize("field, value", [("settle_s", True), ("settle_s", "30"), ("max_gated_samples", True),
+                                          ("max_gated_samples", "10"), ("yaw_load_std_at_stop", False),
+                                          ("thrust_error_prior", (0.2, 0.2, -0.5)),
+                                          ("thrust_error_prior", (0.2, 0.0, 0.5))])
+def test_config_refuses_flags_text_and_a_per_dof_prior_that_is_not_a_spread(field, value):
+    """As the other configs: a bool is not read as 1 or 0 nor a text as a number, and the
+    per-DOF prior standard deviations must be > 0 as the per-thruster one must (a negative
+    one was accepted and squared)."""
+    with pytest.raises(ValueError, match=field):
+        EnvironmentConfig(**{field: value})
+    assert EnvironmentConfig(settle_s=np.float32(30.0), max_gated_samples=np.int64(3)).max_gated_samples == 3
+
+
 def test_nets_stay_off_after_a_failure_unless_allowed(model):
     """Trained on whole logs (drift included), the thrust regime alone would keep the nets on
     after a failure; by default they are off there (guard weight 0), and nets_after_stop

@@ -67,13 +67,13 @@ from __future__ import annotations
 import numbers
 from contextlib import contextmanager
 from dataclasses import dataclass
-from typing import Literal
+from typing import Annotated, Literal
 
 import numpy as np
 import pandas as pd
 from pydantic import BaseModel, ConfigDict, Field, model_validator
 
-from ..config import Bool, check_flags, check_number, check_whole_number, real_array, start_time_rng
+from ..config import Bool, Float, Int, check_flags, check_number, check_whole_number, real_array, start_time_rng
 from ..frames import ned_to_body, vector_to_speed_dir
 from ..forecast_inputs.faults import TRACK_MISMATCH_M, TRACK_WINDOW_S, velocity_track_mismatch_m
 from ..messages import seconds_text
@@ -94,6 +94,7 @@ ENV = slice(6, None)        # the environment part: current, load, thrust error
 CUR, LOAD, THR = slice(6, 8), slice(8, 11), slice(11, None)
 THRUST_ERROR_MODELS = ("per_dof", "per_thruster")
 LOAD_MODELS = ("acceleration", "force")
+_PositiveFloat = Annotated[Float, Field(gt=0)]
 
 
 class EnvironmentConfig(BaseModel):
@@ -171,7 +172,7 @@ class EnvironmentConfig(BaseModel):
         (``benchmarks/drift_late_starts.py``). Equal to the station-keeping walks: the
         filter before 2026-11-30 (model files of format 17 and older).
     thrust_error_prior : tuple of 3 float
-        Prior standard deviations of the per-DOF efficiency factors (``"per_dof"``) [-].
+        Prior standard deviations (each > 0) of the per-DOF efficiency factors (``"per_dof"``) [-].
     thrust_error_model : {"per_dof", "per_thruster"}
         Structure of the thrust errors (above).
     load_model : {"acceleration", "force"}
@@ -227,44 +228,44 @@ class EnvironmentConfig(BaseModel):
 
     model_config = ConfigDict(frozen=True, extra="forbid", allow_inf_nan=False)
 
-    position_std_m: float = Field(0.5, gt=0)
-    heading_std_deg: float = Field(0.3, gt=0)
-    velocity_std_m_s: float = Field(0.05, gt=0)
-    yaw_rate_std_deg_s: float = Field(0.1, gt=0)
-    accel_noise_m_s2: float = Field(0.01, gt=0)
-    yaw_accel_noise_rad_s2: float = Field(3e-4, gt=0)
-    current_prior_m_s: float = Field(0.02, gt=0)
-    current_walk_m_s: float = Field(0.0, ge=0)
-    load_prior_m_s2: float = Field(0.02, gt=0)
-    load_yaw_prior_rad_s2: float = Field(1e-3, gt=0)
-    load_walk_m_s2: float = Field(2e-5, ge=0)
-    load_yaw_walk_rad_s2: float = Field(1e-6, ge=0)
-    thrust_error_prior: tuple[float, float, float] = (0.2, 0.2, 0.5)
+    position_std_m: Float = Field(0.5, gt=0)
+    heading_std_deg: Float = Field(0.3, gt=0)
+    velocity_std_m_s: Float = Field(0.05, gt=0)
+    yaw_rate_std_deg_s: Float = Field(0.1, gt=0)
+    accel_noise_m_s2: Float = Field(0.01, gt=0)
+    yaw_accel_noise_rad_s2: Float = Field(3e-4, gt=0)
+    current_prior_m_s: Float = Field(0.02, gt=0)
+    current_walk_m_s: Float = Field(0.0, ge=0)
+    load_prior_m_s2: Float = Field(0.02, gt=0)
+    load_yaw_prior_rad_s2: Float = Field(1e-3, gt=0)
+    load_walk_m_s2: Float = Field(2e-5, ge=0)
+    load_yaw_walk_rad_s2: Float = Field(1e-6, ge=0)
+    thrust_error_prior: tuple[_PositiveFloat, _PositiveFloat, _PositiveFloat] = (0.2, 0.2, 0.5)
     thrust_error_model: Literal["per_dof", "per_thruster"] = "per_thruster"
-    thrust_error_prior_per_thruster: float = Field(0.2, gt=0)
-    thrust_error_walk: float = Field(0.0, ge=0)
-    load_walk_after_stop_m_s2: float = Field(3e-4, ge=0)
-    load_yaw_walk_after_stop_rad_s2: float = Field(1e-5, ge=0)
+    thrust_error_prior_per_thruster: Float = Field(0.2, gt=0)
+    thrust_error_walk: Float = Field(0.0, ge=0)
+    load_walk_after_stop_m_s2: Float = Field(3e-4, ge=0)
+    load_yaw_walk_after_stop_rad_s2: Float = Field(1e-5, ge=0)
     use_velocity: Bool = True
     adaptive_measurement_std: Bool = True
-    wave_window_s: float = Field(30.0, gt=0)
-    variance_window_s: float = Field(600.0, gt=0)
+    wave_window_s: Float = Field(30.0, gt=0)
+    variance_window_s: Float = Field(600.0, gt=0)
     reset_yaw_load_at_stop: Bool = False
-    filter_step_s: float = Field(1.0, gt=0)
-    yaw_load_kept_at_stop: float = Field(0.0, ge=0.0, le=1.0)
-    yaw_load_std_at_stop: float | None = Field(None, ge=0.0)
-    current_std_at_stop_m_s: float = Field(0.0, ge=0.0)
-    load_to_current_at_stop: float = Field(0.0, ge=0.0, le=1.0)
-    held_load_window_s: float = Field(600.0, ge=0.0)
-    held_load_block_s: float = Field(30.0, gt=0.0)
-    settle_s: float = Field(0.0, ge=0.0)
-    max_bridged_gap_s: float = Field(10.0, ge=0.0, le=300.0)
-    innovation_gate_sigma: float = Field(8.0, gt=0.0)
-    max_gated_samples: int = Field(10, ge=0)
+    filter_step_s: Float = Field(1.0, gt=0)
+    yaw_load_kept_at_stop: Float = Field(0.0, ge=0.0, le=1.0)
+    yaw_load_std_at_stop: Float | None = Field(None, ge=0.0)
+    current_std_at_stop_m_s: Float = Field(0.0, ge=0.0)
+    load_to_current_at_stop: Float = Field(0.0, ge=0.0, le=1.0)
+    held_load_window_s: Float = Field(600.0, ge=0.0)
+    held_load_block_s: Float = Field(30.0, gt=0.0)
+    settle_s: Float = Field(0.0, ge=0.0)
+    max_bridged_gap_s: Float = Field(10.0, ge=0.0, le=300.0)
+    innovation_gate_sigma: Float = Field(8.0, gt=0.0)
+    max_gated_samples: Int = Field(10, ge=0)
     wave_turned_yaw_load: Bool = False
-    wave_axis_window_s: float = Field(600.0, gt=0.0)
-    min_wave_anisotropy: float = Field(3.0, ge=1.0)
-    min_wave_sin2: float = Field(0.3, gt=0.0, le=1.0)
+    wave_axis_window_s: Float = Field(600.0, gt=0.0)
+    min_wave_anisotropy: Float = Field(3.0, ge=1.0)
+    min_wave_sin2: Float = Field(0.3, gt=0.0, le=1.0)
     load_model: Literal["acceleration", "force"] = "acceleration"
 
     @model_validator(mode="after")
