@@ -972,6 +972,18 @@ def test_a_blackout_now_refuses_a_state_that_is_not_the_filters(model):
         est.at_thrust_stop(["a"] * n, P)
 
 
+def test_draws_refuse_a_count_or_seed_that_is_not_a_whole_number():
+    """sample_environment's n and seed are whole numbers >= 0, refused by name (a negative n
+    failed in numpy's broadcast, 2.5 as a float that 'cannot be interpreted as an integer')."""
+    from hybridship.residual.environment import EnvironmentEstimate
+
+    est = EnvironmentEstimate(np.array([5]), np.array([5.0]), np.zeros((1, 14)), np.eye(14)[None] * 1e-4)
+    assert est.sample_environment(4, seed=np.int64(2)).shape == (4, 1, 8)
+    for kw, name in ((dict(n=-1), "n"), (dict(n=2.5), "n"), (dict(n=True), "n"), (dict(n=3, seed=-1), "seed")):
+        with pytest.raises(ValueError, match=f"{name}: expected a whole number >= 0"):
+            est.sample_environment(**kw)
+
+
 def test_with_known_commands_the_thrust_error_follows_each_steps_commands(model):
     """The estimated thrust-model error acts on the thrust that is delivered. With the logged
     commands known it was computed from the start's commands and held over the horizon, so a

@@ -360,7 +360,9 @@ class EnvironmentEstimate:
         ensemble forecast's mean does not depend on the sampling.
         Deterministic for a given ``seed`` and start time: a start's draws do not depend on
         which other starts are forecast with it, nor on how much log before it was read.
+        ``n`` and ``seed`` are whole numbers >= 0.
         """
+        n, seed = check_whole_number("n", n), check_whole_number("seed", seed)
         S, m = self.x.shape[0], self.x.shape[1] - ENV.start
         out = np.broadcast_to(self.x[:, ENV], (n, S, m)).copy()
         if n < 2:
