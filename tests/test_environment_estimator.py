@@ -581,6 +581,18 @@ def test_config_refuses_flags_text_and_a_per_dof_prior_that_is_not_a_spread(fiel
     assert EnvironmentConfig(settle_s=np.float32(30.0), max_gated_samples=np.int64(3)).max_gated_samples == 3
 
 
+def test_estimator_takes_its_settings_as_a_config_or_a_dict_of_its_fields(model):
+    """A dict of settings is validated as an EnvironmentConfig (it failed as an attribute
+    error on dict); a misspelt key or another type is refused by name."""
+    est = EnvironmentEstimator(model, {"thrust_error_model": "per_dof", "settle_s": 30.0})
+    assert est.config == EnvironmentConfig(thrust_error_model="per_dof", settle_s=30.0)
+    assert est.state_names[-1] == "thrust_error_n"
+    with pytest.raises(ValueError, match="config: .*setle_s"):
+        EnvironmentEstimator(model, {"setle_s": 30.0})
+    with pytest.raises(TypeError, match="config: expected an instance of EnvironmentConfig"):
+        EnvironmentEstimator(model, "per_dof")
+
+
 def test_nets_stay_off_after_a_failure_unless_allowed(model):
     """Trained on whole logs (drift included), the thrust regime alone would keep the nets on
     after a failure; by default they are off there (guard weight 0), and nets_after_stop

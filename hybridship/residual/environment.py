@@ -73,7 +73,8 @@ import numpy as np
 import pandas as pd
 from pydantic import BaseModel, ConfigDict, Field, model_validator
 
-from ..config import Bool, Float, Int, check_flags, check_number, check_whole_number, real_array, start_time_rng
+from ..config import (Bool, Float, Int, as_config, check_flags, check_number, check_whole_number, real_array,
+                      start_time_rng)
 from ..frames import ned_to_body, vector_to_speed_dir
 from ..forecast_inputs.faults import TRACK_MISMATCH_M, TRACK_WINDOW_S, velocity_track_mismatch_m
 from ..messages import seconds_text
@@ -517,12 +518,13 @@ class EnvironmentEstimator:
     Parameters
     ----------
     model : hybridship.physics.model.DynamicModel
-    config : EnvironmentConfig
+    config : EnvironmentConfig or dict
+        Its settings (a dict of its fields is validated as one).
     """
 
     def __init__(self, model, config: EnvironmentConfig = EnvironmentConfig()):
         self.model = model
-        self.config = config
+        self.config = config = as_config(config, EnvironmentConfig, "config")
         #: The filter's state layout (:func:`state_names`).
         self.state_names = state_names(model, config)
         #: Prior mean and standard deviation of ``theta``; :meth:`fit` may replace them.
