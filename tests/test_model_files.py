@@ -95,6 +95,21 @@ def test_round_trip_still_loads(saved):
     assert path.read_bytes() == raw                  # loading never writes
 
 
+def test_a_point_envelope_guard_saves_and_loads(saved, tmp_path):
+    """Training features mostly at their mean give the guard d0 = 0 and the default scale
+    d0 / 2 = 0 (weight 1 on the point, 0 beyond): such a model loads back, it was refused as
+    'guard.scale: expected a number > 0'."""
+    import copy
+    import dataclasses
+
+    hp = copy.deepcopy(saved[0])
+    hp.guard = dataclasses.replace(hp.guard, d0=0.0, scale=0.0)
+    back = HybridPredictor.load(hp.save(tmp_path / "point.npz"))
+    assert (back.guard.d0, back.guard.scale) == (0.0, 0.0)
+    x = np.stack([hp.guard.mean, hp.guard.mean + 0.1])
+    np.testing.assert_array_equal(back.guard.weight(x), [1.0, 0.0])
+
+
 def test_save_never_replaces_a_file_that_is_not_a_model(saved, tmp_path):
     """Review: ``save`` replaced a user's own archive or file under the model's name (the
     command line refused it, the API did not); a model file, or an empty file, is replaced."""
@@ -639,7 +654,7 @@ def test_consistently_written_arrays_are_checked_against_the_model(saved, tmp_pa
     ("use_guard", lambda m: m.update(use_guard="no"), "use_guard: expected true or false"),
     ("nets_after_stop", lambda m: m.update(nets_after_stop=2), "nets_after_stop: expected true or false"),
     ("window", lambda m: m.update(environment_window_s="x"), "environment_window_s: expected a number"),
-    ("guard_scale", lambda m: m["guard"].update(scale=0), r"guard.scale: expected a number > 0"),
+    ("guard_scale", lambda m: m["guard"].update(scale=-1.0), r"guard.scale: expected a number >= 0"),
     ("guard_d0", lambda m: m["guard"].update(d0=-1.0), r"guard.d0: expected a number >= 0"),
     ("guard_list", lambda m: m.update(guard=[1, 2]), "guard: expected a table"),
     ("wind_forecast", lambda m: m.update(wind_forecast=None), "wind_forecast: expected a table"),

@@ -253,6 +253,12 @@ def test_guard_of_features_mostly_at_their_mean_is_one_there_not_nan():
     assert np.isnan(g.weight(np.array([[np.nan, 0.0]]))[0])
 
 
+@pytest.mark.parametrize("scale", [-1.0, float("nan"), float("inf"), "1", True])
+def test_guard_scale_that_is_not_a_finite_number_at_least_0_is_refused_by_name(scale):
+    with pytest.raises((TypeError, ValueError), match="EnvelopeGuard.fit: scale"):
+        EnvelopeGuard.fit(np.random.default_rng(0).normal(size=(50, 2)), scale=scale)
+
+
 def test_thrust_regime_switches_the_nets_off_when_thrusters_stop():
     from hybridship.residual.guard import ThrustRegime
 

@@ -448,13 +448,14 @@ def _scalar_state(meta: dict) -> dict:
     regime = meta["command_regime"]
     if regime is not None and not isinstance(regime, dict):
         raise ValueError(f"command_regime: expected a table of settings or null, got {regime!r}")
-    for key, table, entry, lo in (("guard.d0", meta["guard"], "d0", 0.0), ("guard.scale", meta["guard"], "scale", None),
-                                  ("thrust_regime.lo", meta["thrust_regime"], "lo", 0.0)):
+    # a guard scale of 0 is a point envelope's (d0 = 0): weight 1 on it, 0 beyond
+    for key, table, entry in (("guard.d0", meta["guard"], "d0"), ("guard.scale", meta["guard"], "scale"),
+                              ("thrust_regime.lo", meta["thrust_regime"], "lo")):
         if not isinstance(table, dict):
             raise ValueError(f"{key.split('.')[0]}: expected a table of settings, got {table!r}")
         v = _checked_number(table, entry)
-        if (v < lo) if lo is not None else not v > 0:
-            raise ValueError(f"{key}: expected a number {'>= 0' if lo is not None else '> 0'}, got {v!r}")
+        if v < 0:
+            raise ValueError(f"{key}: expected a number >= 0, got {v!r}")
     return {"thr_mean": thr_mean, "thr_std": thr_std, "regime_meta": regime,
             "calibrated_commands": modes, "fingerprint": meta["vessel_fingerprint"],
             "guard_d0": float(meta["guard"]["d0"]), "guard_scale": float(meta["guard"]["scale"]),

@@ -20,6 +20,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..config import check_number
 from ..frames import wrap_pi
 
 
@@ -49,18 +50,21 @@ class EnvelopeGuard:
             ridge: float = 1e-6) -> "EnvelopeGuard":
         """Fit the envelope to training features ``X (N, n)``.
 
-        ``scale`` defaults to ``d0 / 2``: the correction halves about 0.35 d0 beyond the edge.
+        ``scale`` defaults to ``d0 / 2``: the correction halves about 0.35 d0 beyond the edge;
+        a given one must be finite and >= 0 (0: no correction beyond the edge).
         """
         X = np.asarray(X, dtype=float)
         if not 0.5 <= quantile < 1.0:
             raise ValueError(f"quantile must lie in [0.5, 1), got {quantile}")
+        if scale is not None:
+            scale = check_number("EnvelopeGuard.fit: scale", scale, lo=0.0)
         mean = X.mean(axis=0)
         cov = np.cov(X, rowvar=False)
         cov = np.atleast_2d(cov) + ridge * np.trace(np.atleast_2d(cov)) / X.shape[1] * np.eye(X.shape[1])
         inv_cov = np.linalg.inv(cov)
         d = cls._distance(X, mean, inv_cov)
         d0 = float(np.quantile(d, quantile))
-        return cls(mean, inv_cov, d0, float(scale) if scale is not None else 0.5 * d0)
+        return cls(mean, inv_cov, d0, scale if scale is not None else 0.5 * d0)
 
     @staticmethod
     def _distance(X, mean, inv_cov):
