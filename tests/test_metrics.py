@@ -258,6 +258,28 @@ def test_drift_forecasts_end_where_dp_comes_back_on():
     np.testing.assert_array_equal(t, t0)
 
 
+def test_drift_forecasts_refuse_a_log_that_starts_with_dp_off():
+    """A log whose first rows have DP off (a transit before the station keeping and its
+    failure) had its shutdown at row 0: its transit was scored as the drift after a failure,
+    although has_drift reads such a log as having none."""
+    import pytest
+
+    from hybridship.physics.model import DynamicModel
+    from hybridship.predictors import DeadReckoning, as_log_arrays
+    from hybridship.predictors.after_failure import has_drift, shutdown_index
+    from hybridship.sim.synthetic import physics_log
+
+    m = DynamicModel("gunnerus")
+    log = physics_log(m, seed=3, duration_s=600.0, t_shutdown_s=500.0)
+    log.loc[log.time_s < 150.0, "dp_active"] = 0
+    a = as_log_arrays(log, m.vessel)
+    assert not has_drift(a, 20, 60.0)
+    with pytest.raises(ValueError, match="log: starts with dp_active 0"):
+        shutdown_index(a)
+    with pytest.raises(ValueError, match="log: starts with dp_active 0"):
+        metrics.drift_forecasts(DeadReckoning(m.vessel), a, n_intervals=20, horizons_s=(15, 60), first=3)
+
+
 def test_grouped_interval_over_three_groups_stays_within_their_own_coverages():
     """The documented limit of few groups: the interval never leaves the groups' range."""
     from hybridship.evaluation.metrics import grouped_coverage_interval

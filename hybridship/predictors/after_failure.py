@@ -20,10 +20,17 @@ HORIZONS_S = (15, 30, 45, 60)
 
 
 def shutdown_index(arrays) -> int:
-    """Row of the first ``dp_active == 0`` sample after station keeping (raises if none)."""
+    """Row of the first ``dp_active == 0`` sample after station keeping (raises if none, and
+    for a log that starts with ``dp_active == 0``, which :func:`has_drift` and
+    :func:`~hybridship.residual.drift_hull.drift_start_rows` read as having no failure)."""
     off = np.flatnonzero(arrays.dp_active == 0)
     if off.size == 0:
         raise ValueError("log: no DP shutdown (dp_active never 0); cannot evaluate drift forecasts")
+    if off[0] == 0:
+        # its first rows are no drift after a failure (a transit, a manoeuvre): no station keeping before them
+        raise ValueError("log: starts with dp_active 0 (no station keeping before its first dp_active 0 sample), "
+                         "so it has no DP failure to start drift forecasts from; give a log that starts in "
+                         "station keeping")
     return int(off[0])
 
 
