@@ -280,6 +280,29 @@ def test_drift_forecasts_refuse_a_log_that_starts_with_dp_off():
         metrics.drift_forecasts(DeadReckoning(m.vessel), a, n_intervals=20, horizons_s=(15, 60), first=3)
 
 
+def test_drift_forecasts_refuse_bad_starts_and_horizons_by_name():
+    """A negative horizon or first start indexed the forecast and the truth from their ends
+    and was scored without a word; every=0 divided by zero, a fractional count or no horizon
+    failed with numpy's message."""
+    import pytest
+
+    from hybridship.physics.model import DynamicModel
+    from hybridship.predictors import DeadReckoning, as_log_arrays
+    from hybridship.sim.synthetic import physics_log
+
+    m = DynamicModel("gunnerus")
+    whole = as_log_arrays(physics_log(m, seed=3, duration_s=330.0, t_shutdown_s=200.0), m.vessel)
+    dr = DeadReckoning(m.vessel)
+    for kw, field in ((dict(horizons_s=(-15, 30)), "horizons_s"), (dict(horizons_s=(0, 15)), "horizons_s"),
+                      (dict(horizons_s=()), "horizons_s"), (dict(horizons_s=(np.nan,)), "horizons_s"),
+                      (dict(horizons_s=15), "horizons_s"), (dict(first=-50), "first"), (dict(every=0), "every"),
+                      (dict(n_intervals=2.5), "n_intervals"), (dict(n_intervals=-3), "n_intervals")):
+        with pytest.raises((TypeError, ValueError), match=f"^{field}: "):
+            metrics.drift_forecasts(dr, whole, **{"n_intervals": 3, "horizons_s": (15,), **kw})
+    p, t, _ = metrics.drift_forecasts(dr, whole, n_intervals=3, horizons_s=(15, 30), first=np.int64(2), every=2)
+    np.testing.assert_array_equal(t[:, 0], whole.eta[[217, 219, 221]])
+
+
 def test_grouped_interval_over_three_groups_stays_within_their_own_coverages():
     """The documented limit of few groups: the interval never leaves the groups' range."""
     from hybridship.evaluation.metrics import grouped_coverage_interval

@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..config import check_number, check_whole_number
 from ..logs.ingest import ingest
 from ..logs.io import LogArrays
 
@@ -65,6 +66,20 @@ def has_drift(arrays, n_intervals: int, horizon_s: float) -> bool:
     return drift_end(arrays, int(off[0])) - int(off[0]) - int(round(horizon_s / dt)) >= n_intervals
 
 
+def _check_drift_request(n_intervals, horizons_s, first, every) -> None:
+    """The starts and horizons of :func:`drift_forecasts`, checked before any forecast: a
+    negative horizon or start indexed the forecast and the truth from their ends (scored
+    silently), ``every = 0`` divided by zero and a fractional count failed in numpy."""
+    if n_intervals is not None:
+        check_whole_number("n_intervals", n_intervals, 1)
+    check_whole_number("first", first, 0)
+    check_whole_number("every", every, 1)
+    if isinstance(horizons_s, (str, bytes)) or np.ndim(horizons_s) != 1 or np.size(horizons_s) == 0:
+        raise ValueError(f"horizons_s: expected a list of lead times [s], got {horizons_s!r}")
+    for h in horizons_s:
+        check_number("horizons_s", h, lo=0.0, lo_open=True)
+
+
 def drift_forecasts(predictor, arrays, *, n_intervals: int | None = 20, horizons_s=HORIZONS_S, first: int = 0,
                     every: int = 1, **forecast_kw):
     """Forecasts from successive start times after the shutdown of one log, at the horizons.
@@ -83,7 +98,14 @@ def drift_forecasts(predictor, arrays, *, n_intervals: int | None = 20, horizons
         Forecast and logged ``[north_m, east_m, psi_rad]``.
     std : ndarray of the same shape, or None
         The forecast's ensemble standard deviation (None for point forecasters).
+
+    Raises
+    ------
+    ValueError, TypeError
+        Naming ``n_intervals`` (a whole number >= 1, or None), ``first`` (>= 0), ``every``
+        (>= 1) or ``horizons_s`` (at least one finite lead time > 0 [s]) when it is not that.
     """
+    _check_drift_request(n_intervals, horizons_s, first, every)
     if not isinstance(arrays, LogArrays):          # a path or DataFrame: read as a forecast reads it
         model = getattr(predictor, "model", None)
         if model is None:
