@@ -303,6 +303,26 @@ def test_drift_forecasts_refuse_bad_starts_and_horizons_by_name():
     np.testing.assert_array_equal(t[:, 0], whole.eta[[217, 219, 221]])
 
 
+def test_drift_forecasts_refuse_horizons_that_are_not_whole_steps_of_the_log():
+    """On a 2-s log a 1-s horizon was scored at lead 0 (an error of exactly 0) and a 15-s one
+    at 16 s, while a forecast refuses such horizons."""
+    import pytest
+
+    from hybridship.physics.model import DynamicModel
+    from hybridship.predictors import DeadReckoning, as_log_arrays
+    from hybridship.sim.synthetic import physics_log
+
+    m = DynamicModel("gunnerus")
+    log = physics_log(m, seed=3, duration_s=400.0, t_shutdown_s=200.0)
+    a = as_log_arrays(log.iloc[::2].reset_index(drop=True), m.vessel)          # a 2-s log
+    dr = DeadReckoning(m.vessel)
+    for horizons in ((1, 30), (15, 30)):
+        with pytest.raises(ValueError, match=rf"^horizons_s: {horizons[0]} s is not a whole number .* \(2 s\)"):
+            metrics.drift_errors(dr, a, n_intervals=3, horizons_s=horizons)
+    p, t, _ = metrics.drift_forecasts(dr, a, n_intervals=3, horizons_s=(2, 30))
+    np.testing.assert_array_equal(t[:, 0], a.eta[[101, 102, 103]])
+
+
 def test_grouped_interval_over_three_groups_stays_within_their_own_coverages():
     """The documented limit of few groups: the interval never leaves the groups' range."""
     from hybridship.evaluation.metrics import grouped_coverage_interval

@@ -13,6 +13,7 @@ import numpy as np
 from ..config import check_number, check_whole_number
 from ..logs.ingest import ingest
 from ..logs.io import LogArrays
+from .forecast_setup import HORIZON_TOLERANCE, HorizonError
 
 __all__ = ["HORIZONS_S", "drift_end", "drift_forecasts", "has_drift", "shutdown_index"]
 
@@ -103,7 +104,9 @@ def drift_forecasts(predictor, arrays, *, n_intervals: int | None = 20, horizons
     ------
     ValueError, TypeError
         Naming ``n_intervals`` (a whole number >= 1, or None), ``first`` (>= 0), ``every``
-        (>= 1) or ``horizons_s`` (at least one finite lead time > 0 [s]) when it is not that.
+        (>= 1) or ``horizons_s`` (at least one finite lead time > 0 [s], each a whole number
+        of the log's steps, within a quarter step or 0.5 % as a forecast's horizon) when it is
+        not that.
     """
     _check_drift_request(n_intervals, horizons_s, first, every)
     if not isinstance(arrays, LogArrays):          # a path or DataFrame: read as a forecast reads it
@@ -114,6 +117,11 @@ def drift_forecasts(predictor, arrays, *, n_intervals: int | None = 20, horizons
     i0 = shutdown_index(arrays)
     dt = float(np.median(np.diff(arrays.time_s)))
     steps = np.array([int(round(h / dt)) for h in horizons_s])
+    off = [h for h, k in zip(horizons_s, steps) if k < 1 or abs(k * dt - h) > max(0.25 * dt, HORIZON_TOLERANCE * h)]
+    if off:
+        # as a forecast refuses such a horizon: it was scored at the nearest step (lead 0 below half a step)
+        raise HorizonError(f"horizons_s: {', '.join(f'{h:g}' for h in off)} s is not a whole number (>= 1) of the "
+                           f"log's steps ({dt:g} s); expected multiples of the step")
     H = int(steps.max())
     end = drift_end(arrays, i0)
     available = max(0, -(-(end - H - i0 - first) // every))     # starts that leave H steps before a gap
