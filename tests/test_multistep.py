@@ -522,6 +522,34 @@ def test_hybrid_rollout_refuses_inputs_with_another_number_of_starts():
         hp.rollout(z, z, z, z, n_steps=5, dt_s=1.0, guard=False, nets=True, **held)
 
 
+def test_hybrid_rollout_refuses_commands_and_loads_of_another_width_or_not_finite():
+    """The compiled step reads one column per command channel: commands for one channel of
+    three were read past the array's end (an azimuth silently, an rpm as a divergence the
+    nets were blamed for, with the nets off), a third wind column was ignored, and NaN or inf
+    commands and wind were rolled out."""
+    hp = HybridPredictor("gunnerus")
+    z, K = np.zeros((2, 3)), hp.model.n_channels
+    held = dict(rpm=np.zeros((2, 1, K)), az=np.zeros((2, 1, K)), wind=np.zeros((2, 1, 2)))
+    nan_rpm = np.zeros((2, 1, K))
+    nan_rpm[0, 0, 0] = np.nan
+    inf_wind = np.zeros((2, 1, 2))
+    inf_wind[1, 0, 0] = np.inf
+    for name, value, match in (("rpm", np.zeros((2, 1, 1)), rf"expected shape \(2, 1 or n_steps, {K}\)"),
+                               ("az", np.zeros((2, 1, 1)), rf"expected shape \(2, 1 or n_steps, {K}\)"),
+                               ("wind", np.zeros((2, 1, 3)), r"expected shape \(2, 1 or n_steps, 2\)"),
+                               ("current", np.zeros((2, 1, 3)), r"expected shape \(2, 1 or n_steps, 2\)"),
+                               ("accel_ext", np.zeros((2, 5, 2)), r"expected shape \(2, 1 or n_steps, 3\)"),
+                               ("rpm", np.zeros((2, K)), r"expected shape"), ("rpm", nan_rpm, "contains NaN or inf"),
+                               ("wind", inf_wind, "contains NaN or inf"),
+                               ("az", np.zeros((2, 1, K)).astype(str), "expected an array of real numbers")):
+        with pytest.raises((TypeError, ValueError), match=f"^{name}: {match}"):
+            hp.rollout(z, z, z, z, n_steps=5, dt_s=1.0, guard=False, nets=False, **{**held, name: value})
+    # lists are taken as arrays
+    eta, _, _, _ = hp.rollout(z, z, z, z, n_steps=5, dt_s=1.0, guard=False, nets=False,
+                              **{k: v.tolist() for k, v in held.items()})
+    np.testing.assert_allclose(eta, 0.0, atol=1e-12)
+
+
 def test_actuator_load_features_agree_between_training_rows_and_both_rollouts(tmp_path):
     """The actuator-load features (M^-1 tau_thrust at the predicted velocities, the step's
     commands) are the same in a one-step training row, in the multi-step training's torch

@@ -1472,11 +1472,11 @@ class HybridPredictor:
         eta (S, H+1, 3), nu (S, H+1, 3), eta_std (S, H+1, 3), guard_weight (S, H+1)
         """
         eta0, nu0, dev0, bias0_ned = _rollout_start(eta0, nu0, dev0, bias0_ned, self._check_fitted if nets else None)
-        ens = self.ensemble
-        _check_rollout_batch(S := eta0.shape[0], n_steps, dt_s, substeps, nu0=nu0, dev0=dev0, rpm=rpm, az=az,
-                             wind=wind, current=current, accel_ext=accel_ext)
+        rpm, az, wind = _check_rollout_batch(S := eta0.shape[0], n_steps, dt_s, substeps, self.model.n_channels,
+                                             nu0=nu0, dev0=dev0, rpm=rpm, az=az, wind=wind, current=current,
+                                             accel_ext=accel_ext)
+        ens, fidx = self.ensemble, self.residual_config.feature_index
         E = ens.n_members if nets else (np.shape(bias0_ned)[0] if np.ndim(bias0_ned) == 3 else 1)
-        fidx = self.residual_config.feature_index
         acc_phys = np.zeros((S, 1, 3)) if accel_ext is None else np.ascontiguousarray(accel_ext, dtype=float)
         current = np.zeros((S, 1, 2)) if current is None else np.ascontiguousarray(current, dtype=float)
         eta, nu, std = np.empty((S, n_steps + 1, 3)), np.empty((S, n_steps + 1, 3)), np.zeros((S, n_steps + 1, 3))
@@ -1596,14 +1596,29 @@ def _rollout_start(eta0, nu0, dev0, bias0_ned, check_fitted=None):
     return out
 
 
-def _check_rollout_batch(S: int, n_steps, dt_s, substeps, **arrays) -> None:
+#: Width of each command and load input of a rollout (None: the model's command channels).
+_ROLLOUT_INPUT_WIDTHS = {"rpm": None, "az": None, "wind": 2, "current": 2, "accel_ext": 3}
+
+
+def _check_rollout_batch(S: int, n_steps, dt_s, substeps, n_channels: int, **arrays):
     """Every per-start input of a rollout has one row per start (the compiled step reads
-    ``S`` rows of each), and the step settings are valid: ValueError naming the argument."""
+    ``S`` rows of each), the commands one column per command channel (``n_channels``), the
+    wind and current 2 and the extra acceleration 3, all finite real numbers (the compiled
+    step read past a narrower array), and the step settings are valid: ValueError naming the
+    argument. Returns ``rpm``, ``az`` and ``wind`` as float arrays."""
     check_step(dt_s, substeps)
     check_whole_number("n_steps", n_steps, 1)
     for name, a in arrays.items():
         if a is not None and (np.ndim(a) < 2 or np.shape(a)[0] != S):
             raise ValueError(f"{name}: expected one row per start ({S}, ...), got shape {np.shape(a)}")
+        if a is not None and name in _ROLLOUT_INPUT_WIDTHS:
+            width = _ROLLOUT_INPUT_WIDTHS[name] or n_channels
+            arrays[name] = a = real_array(name, a)
+            if a.ndim != 3 or a.shape[1] < 1 or a.shape[2] != width:
+                raise ValueError(f"{name}: expected shape ({S}, 1 or n_steps, {width}), got {a.shape}")
+            if not np.all(np.isfinite(a)):
+                raise ValueError(f"{name}: contains NaN or inf")
+    return arrays["rpm"], arrays["az"], arrays["wind"]
 
 
 def _per_step(name: str, a: np.ndarray, n_steps: int) -> bool:
