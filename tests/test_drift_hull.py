@@ -239,6 +239,18 @@ def test_the_batched_choice_scores_what_forecasts_give(model, heavy_sway):
         assert objective[j] == pytest.approx(np.abs(wrap_pi(fc.eta[:, 1:, 2] - truth)).mean(), rel=1e-12)
 
 
+def test_the_objective_takes_one_log_as_a_list_of_one_and_refuses_none(model, heavy_sway):
+    """One DataFrame was iterated as its column names ("time_s: unsupported file extension"),
+    one path as its characters, and no log gave an empty objective without a word."""
+    import copy
+
+    logs, fitted = heavy_sway
+    hp = copy.deepcopy(fitted)
+    np.testing.assert_array_equal(hp.drift_hull_objective(logs[0], 30.0), hp.drift_hull_objective([logs[0]], 30.0))
+    with pytest.raises(ValueError, match="^logs: expected at least one log"):
+        hp.drift_hull_objective([], 30.0)
+
+
 def test_the_filter_uses_the_coefficient_after_a_failure_so_the_yaw_load_does_not_absorb_it(model, heavy_sway):
     """Given the true ship's Munk difference, the environment estimator's yaw load moves less
     during the drift than without it (it no longer takes up the hull's error); before the

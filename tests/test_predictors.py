@@ -631,6 +631,17 @@ def test_a_fast_log_is_fitted_on_rows_about_one_second_apart():
     assert std[None] > 5 * std[1.0]                  # the noise / dt of 0.1-s differences, not 1-s ones
 
 
+def test_training_data_takes_one_log_as_a_list_of_one():
+    """One DataFrame was iterated as its column names ("time_s: unsupported file extension")."""
+    from hybridship.physics.model import DynamicModel
+
+    m = DynamicModel("gunnerus")
+    log = physics_log(m, seed=3, duration_s=200.0, t_shutdown_s=None, current=(0.2, 1.0))
+    hp = HybridPredictor(m.vessel, environment="mean")
+    for one, listed in zip(hp.training_data(log), hp.training_data([log])):
+        np.testing.assert_array_equal(one, listed)
+
+
 def test_residual_is_the_unknown_load_over_the_mass(model):
     """On a log with a constant body-frame load the model does not know, the residual target
     (and its causal twin) is that load's acceleration ``M^-1 tau`` [m/s^2], with its sign."""

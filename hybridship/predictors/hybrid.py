@@ -279,7 +279,8 @@ class HybridPredictor:
     # ------------------------------------------------------------------ training
 
     def training_data(self, logs: Iterable, *, dp_only: bool = True, row_masks=None):
-        """Features X, targets Y and a per-log segment label from the given logs.
+        """Features X, targets Y and a per-log segment label from the given logs (a path,
+        DataFrame or LogArrays, or an iterable of them).
 
         The targets are the residual deviations from the environment the forecast will use:
         with ``environment="estimator"`` the acceleration that the (fitted) estimator's
@@ -289,7 +290,7 @@ class HybridPredictor:
         held back for calibration).
         """
         Xs, Ys, segs, thr, full = [], [], [], [], []
-        for k, log in enumerate(logs):
+        for k, log in enumerate(log_list(logs)):        # one log (a path, a DataFrame) is a list of one
             prep, every = self._training_prep(log)
             arrays = prep.arrays
             mask = arrays.dp_active.astype(bool) if dp_only else None
@@ -460,8 +461,9 @@ class HybridPredictor:
 
         Parameters
         ----------
-        logs : iterable of path, DataFrame or LogArrays
-            Logs with a failure followed by ``horizon_s`` of drift in one gap-free segment.
+        logs : path, DataFrame or LogArrays, or an iterable of them
+            Logs with a failure followed by ``horizon_s`` of drift in one gap-free segment
+            (at least one).
         horizon_s : float
             Length of each forecast [s].
 
@@ -480,7 +482,7 @@ class HybridPredictor:
         horizon_s = check_number("horizon_s", horizon_s, lo=0.0, hi=MAX_HORIZON_S, lo_open=True)
         ks = MUNK_MULTIPLES * munk_coefficient(self.model)
         out = np.empty((ks.size, 0))
-        for log in logs:
+        for log in log_list(logs):          # one log (a path, a DataFrame) is a list of one; none is refused
             st, truth = self._drift_starts(log, horizon_s)
             truth = truth[..., 2]                                                        # (S, H)
             per_batch = max(1, DRIFT_HULL_BATCH // len(st.idx))
