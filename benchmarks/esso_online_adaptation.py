@@ -276,7 +276,7 @@ def _variants(hyb, fit_logs, steps, start_every_s):
     return out, rows
 
 
-def persistence(errors, dt_s: float) -> "pd.DataFrame":
+def persistence(errors, dt_s: float):
     """The diagnostic's table: per DOF, the one-step error's RMS and mean (columns ``rms``,
     ``mean``, ``rms_30s_mean``: m/s^2 for u and v, rad/s^2 for r), its autocorrelation at
     :data:`LAGS_S`, and per time constant the fractions of :func:`explained` (the next row

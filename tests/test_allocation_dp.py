@@ -14,7 +14,6 @@ import pytest
 from scipy.linalg import null_space
 
 from hybridship.frames import ned_to_body, wrap_pi
-from hybridship.physics.model import DynamicModel
 from hybridship.sim.allocation import (ThrustAllocator, bollard_thrust_limits, extended_configuration,
                                        thrust_capacity)
 from hybridship.sim.dp import DPController, ReferenceModel, pid_gains

@@ -903,7 +903,6 @@ def test_hybrid_fit_checks_the_prior_learned_at_stops_on_left_out_failures(model
 
 def test_estimate_is_causal_where_the_wave_motion_sets_the_measurement_noise(model):
     log = physics_log(model, duration_s=900, t_shutdown_s=None, seed=6)
-    rng = np.random.default_rng(0)
     w = 2 * np.pi / 8.0                                     # 8-s wave yaw, 1 deg amplitude
     t = log.time_s.to_numpy()
     log["heading_deg"] = (log.heading_deg + np.sin(w * t)) % 360.0

@@ -107,7 +107,7 @@ def test_explained_and_autocorrelation_match_a_row_by_row_count(oa):
     dt, tau, delay, horizon = 0.5, 2.0, 3, 4
     got = oa.explained(logs, dt, tau, delay, horizon)
 
-    nxt, fut, mean = [], [], []         # pairs (next row, mean) and (future rows, mean)
+    nxt, fut = [], []                   # pairs (next row, mean) and (future rows, mean)
     for e, seg in logs:
         n = len(e)
         for i in range(n):
