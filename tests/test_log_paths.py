@@ -180,6 +180,15 @@ def test_training_and_forecasting_see_the_same_arrays(model, log, data):
         np.testing.assert_array_equal(getattr(a, f)[sl][first:], getattr(w, f)[first:], err_msg=f)
 
 
+def _port_rpm_from_40_s(model, log):
+    """The log ingested for fitting with ``port_rpm`` first logged after 40 s, and as it is."""
+    late = log.copy()
+    late.loc[late.time_s <= 40.0, "port_rpm"] = np.nan
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        return ingest(late, model.vessel, purpose="fit"), ingest(log, model.vessel, purpose="fit")
+
+
 def test_rows_before_a_command_is_first_logged_are_not_trained_on(model, log):
     """The nets never learn from the rows whose commands are the default of an empty cell
     (a thruster taken as stopped while it ran): only rows with every command logged at i,
@@ -187,12 +196,7 @@ def test_rows_before_a_command_is_first_logged_are_not_trained_on(model, log):
     logged step (here the first at 42 s) in it."""
     from hybridship.residual.features import prepare_log
 
-    late = log.copy()
-    late.loc[late.time_s <= 40.0, "port_rpm"] = np.nan
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")
-        a = ingest(late, model.vessel, purpose="fit")
-        whole = ingest(log, model.vessel, purpose="fit")
+    a, whole = _port_rpm_from_40_s(model, log)
     rows = prepare_log(model, a).trainable_rows()
     assert rows.size and a.time_s[rows].min() > 43.0
     np.testing.assert_array_equal(rows, [r for r in prepare_log(model, whole).trainable_rows()
@@ -206,12 +210,7 @@ def test_trainable_rows_have_the_features_of_a_log_with_every_command_logged(mod
     jumped from 0), and such a row was trained on."""
     from hybridship.residual.features import ResidualConfig, prepare_log
 
-    late = log.copy()
-    late.loc[late.time_s <= 40.0, "port_rpm"] = np.nan
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")
-        a = ingest(late, model.vessel, purpose="fit")
-        whole = ingest(log, model.vessel, purpose="fit")
+    a, whole = _port_rpm_from_40_s(model, log)
     cfg = ResidualConfig(bias_window_s=0.0, features=ResidualConfig().features + ("rpm_main_rate_rel_s",))
     p, w = prepare_log(model, a, cfg), prepare_log(model, whole, cfg)
     rows = p.trainable_rows()
@@ -227,12 +226,7 @@ def test_the_bias_leaves_out_residuals_of_steps_with_a_command_not_logged(model,
     shifted the bias, and the training targets and forecasts with it, for the whole window)."""
     from hybridship.residual.features import prepare_log
 
-    late = log.copy()
-    late.loc[late.time_s <= 40.0, "port_rpm"] = np.nan
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")
-        a = ingest(late, model.vessel, purpose="fit")
-        whole = ingest(log, model.vessel, purpose="fit")
+    a, whole = _port_rpm_from_40_s(model, log)
     p, w = prepare_log(model, a), prepare_log(model, whole)
     after = a.time_s > 41.0
     assert np.abs(w.bias_ned[after]).max() < 1e-6

@@ -36,11 +36,9 @@ def test_the_axis_of_a_wave_motion_is_found_in_ned(rel_deg, psi_deg):
     assert axis.sin2_station == pytest.approx(np.sin(2 * np.radians(rel_deg)), abs=0.03)
 
 
-def test_the_axis_is_fixed_in_ned_while_the_ship_turns():
-    """A ship turning 120 deg through a wave motion fixed at 70 deg in NED: each sample is
-    turned with its own heading (one heading for all smears the axis away), and
-    ``sin2_station`` averages ``sin(2 (d - psi))`` over the last ``average_s`` only (over the
-    whole window it is +0.14, not the recent -0.53)."""
+def _turning_through_fixed_waves():
+    """A ship turning 0 -> 120 deg over 600 s through a wave motion fixed at 70 deg in NED:
+    time [s], heading [rad], wave axis [rad], surge and sway [m/s]."""
     rng = np.random.default_rng(0)
     t = np.arange(600, dtype=float)
     psi = np.radians(np.linspace(0.0, 120.0, t.size))
@@ -48,6 +46,15 @@ def test_the_axis_is_fixed_in_ned_while_the_ship_turns():
     swing = 0.2 * np.sin(2 * np.pi * t / 8.0 + 0.3)
     u = swing * np.cos(d - psi) + 0.01 * rng.standard_normal(t.size)
     v = swing * np.sin(d - psi) + 0.01 * rng.standard_normal(t.size)
+    return t, psi, d, u, v
+
+
+def test_the_axis_is_fixed_in_ned_while_the_ship_turns():
+    """A ship turning 120 deg through a wave motion fixed at 70 deg in NED: each sample is
+    turned with its own heading (one heading for all smears the axis away), and
+    ``sin2_station`` averages ``sin(2 (d - psi))`` over the last ``average_s`` only (over the
+    whole window it is +0.14, not the recent -0.53)."""
+    t, psi, d, u, v = _turning_through_fixed_waves()
     axis = wave_axis(t, psi, u, v, average_s=300.0)
     assert axis is not None and axis.anisotropy > 100
     err = (np.degrees(axis.axis_ned_rad) - 70.0 + 90.0) % 180.0 - 90.0
@@ -61,13 +68,7 @@ def test_a_missing_heading_leaves_out_its_sample_not_the_axis():
     are still found (the sample's motion is left out; the unwrapped heading carried the NaN
     into every later sample and the axis was lost); without a heading in the last
     ``average_s`` there is none."""
-    rng = np.random.default_rng(0)
-    t = np.arange(600, dtype=float)
-    psi = np.radians(np.linspace(0.0, 120.0, t.size))
-    d = np.radians(70.0)
-    swing = 0.2 * np.sin(2 * np.pi * t / 8.0 + 0.3)
-    u = swing * np.cos(d - psi) + 0.01 * rng.standard_normal(t.size)
-    v = swing * np.sin(d - psi) + 0.01 * rng.standard_normal(t.size)
+    t, psi, d, u, v = _turning_through_fixed_waves()
     full = wave_axis(t, psi, u, v, average_s=300.0)
     gappy = psi.copy()
     gappy[[100, 450]] = np.nan
