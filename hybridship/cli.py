@@ -122,6 +122,21 @@ def _members(text: str) -> int:
     return value
 
 
+#: Most embedded scenarios of ``demo`` and ``benchmark drift`` (``embedded_scenarios`` makes 1..20).
+MAX_EMBEDDED_SCENARIOS = 20
+
+
+def _scenarios(text: str) -> int:
+    """A ``--scenarios`` value: a whole number in 1..:data:`MAX_EMBEDDED_SCENARIOS`."""
+    try:
+        value = int(text)
+    except ValueError:
+        value = 0
+    if not 1 <= value <= MAX_EMBEDDED_SCENARIOS:
+        raise argparse.ArgumentTypeError(f"expected a whole number in 1..{MAX_EMBEDDED_SCENARIOS}, got {text!r}")
+    return value
+
+
 def _seed_list(text: str) -> list[int]:
     try:
         return parse_seeds(text)
@@ -251,7 +266,8 @@ def _add_demo(sub) -> None:
     p = sub.add_parser("demo", help="simulate, train and print the drift-error table (embedded default)",
                        description="Simulate embedded Gunnerus DP-loss scenarios, train the hybrid on their "
                                    "DP parts and print the 15/30/45/60 s drift-error table.")
-    p.add_argument("--scenarios", type=int, default=3, help="number of embedded scenarios (default 3)")
+    p.add_argument("--scenarios", type=_scenarios, default=3,
+                   help=f"number of embedded scenarios, 1..{MAX_EMBEDDED_SCENARIOS} (default 3)")
     p.add_argument("--seed", type=_seed, default=0, help="seed of the first scenario and of training (default 0)")
     p.add_argument("--members", type=_members, default=10, help="ensemble members (default 10)")
     p.set_defaults(func=_cmd_demo)
@@ -265,8 +281,6 @@ def _cmd_demo(args) -> int:
     from .residual.ensemble import EnsembleConfig
     from .sim.scenario import embedded_scenarios
 
-    if args.scenarios < 1:
-        raise UsageError(f"{_PROG} demo: error: --scenarios must be >= 1")
     t0 = time.perf_counter()
     scen = embedded_scenarios(args.scenarios, args.seed)
     print(f"simulated {len(scen)} Gunnerus DP-loss scenarios ({time.perf_counter() - t0:.1f} s): "
@@ -553,7 +567,8 @@ def _add_benchmark(sub) -> None:
     d.add_argument("--members", type=_members, default=10, help="ensemble members (default 10)")
     d.add_argument("--seed", type=_seed, default=0, help="seed of scenarios and training (default 0)")
     d.add_argument("--intervals", type=int, default=20, help="start times after each failure (default 20)")
-    d.add_argument("--scenarios", type=int, default=3, help="embedded scenarios when no folders are given (default 3)")
+    d.add_argument("--scenarios", type=_scenarios, default=3,
+                   help=f"embedded scenarios when no folders are given, 1..{MAX_EMBEDDED_SCENARIOS} (default 3)")
     d.add_argument("--all-rows", action="store_true", help="train on every row, not only dp_active == 1")
     d.add_argument("--training", choices=("one_step", "multi_step"), default="one_step",
                    help="how the hybrid's nets are trained (default one_step)")
@@ -712,8 +727,8 @@ def _cmd_benchmark_drift(args) -> int:
     from .residual.environment import EnvironmentConfig
     from .vessel import VesselFileError, load_vessel
 
-    if args.intervals < 1 or args.scenarios < 1:
-        raise UsageError(f"{_PROG} benchmark drift: error: --intervals and --scenarios must be >= 1")
+    if args.intervals < 1:
+        raise UsageError(f"{_PROG} benchmark drift: error: --intervals must be >= 1")
     _check_out_folder(args.out, f"{_PROG} benchmark drift", {"--train": args.train, "--test": args.test})
     try:
         check_output_folder(args.out, plots=not args.no_plots)

@@ -448,6 +448,17 @@ def test_bad_options_are_refused_before_any_work(log_dir, tmp_path, capsys):
     assert sorted(p.name for p in log_dir.iterdir()) == before
 
 
+def test_scenarios_beyond_the_embedded_set_name_the_option(tmp_path, capsys):
+    """demo and benchmark drift simulate 1..20 embedded scenarios: --scenarios 21 is a usage
+    error naming the option (it failed with exit 1 naming the library's argument n)."""
+    for argv in (["demo"], ["benchmark", "drift", "--out", str(tmp_path / "b")]):
+        for n in ("0", "21"):
+            assert main([*argv, "--scenarios", n]) == 2
+            err = capsys.readouterr().err
+            assert f"--scenarios: expected a whole number in 1..20, got '{n}'" in err, err
+    assert not (tmp_path / "b").exists()
+
+
 def test_an_empty_path_is_refused_not_read_as_the_current_folder(log_dir, tmp_path, capsys, monkeypatch):
     """An empty --logs, --model, --log, --train, --test or --out-dir was read as the current
     folder (a sweep written there, the logs found there trained on), as --out is not."""
