@@ -163,7 +163,7 @@ def _add_simulate(sub) -> None:
     p.add_argument("--sweep", action="store_true", help="simulate one scenario per seed of --seeds")
     p.add_argument("--seeds", type=_seed_list, help="seeds of a sweep, e.g. 1-10 or 1,3,5-7")
     p.add_argument("--out-dir", type=path_argument, help="output folder of a sweep")
-    p.add_argument("--format", default="csv.gz", choices=("csv", "csv.gz", "parquet"),
+    p.add_argument("--format", default=None, choices=("csv", "csv.gz", "parquet"),
                    help="log format of a sweep (default csv.gz)")
     p.add_argument("--beaufort", type=float, nargs=2, metavar=("LO", "HI"), default=(2.0, 5.0),
                    help="Beaufort range of the random sea state (default 2 5)")
@@ -202,6 +202,9 @@ def _cmd_simulate(args) -> int:
     else:
         if args.seeds is not None or args.out_dir is not None:
             raise UsageError(f"{prefix}: error: --seeds and --out-dir need --sweep")
+        if args.format is not None:     # the extension of --out chooses a single log's format
+            raise UsageError(f"{prefix}: error: --format is for a sweep; a single scenario's format is the "
+                             f"extension of --out")
         if args.seed is None or args.out is None:
             raise UsageError(f"{prefix}: error: give --seed and --out (or --sweep --seeds --out-dir)")
         if args.seed < 0:
@@ -233,7 +236,7 @@ def _cmd_simulate(args) -> int:
 
     if args.sweep:
         try:
-            paths = scenario.sweep(args.out_dir, args.seeds, beaufort=tuple(args.beaufort), fmt=args.format,
+            paths = scenario.sweep(args.out_dir, args.seeds, beaufort=tuple(args.beaufort), fmt=args.format or "csv.gz",
                                    vessel=vessel, progress=progress, **overrides)
         except (FileExistsError, PermissionError) as exc:      # checked before any simulation
             raise UsageError(f"{prefix}: error: --out-dir: {exc}") from None

@@ -611,6 +611,22 @@ def test_cli_simulate_refuses_an_out_that_is_a_folder_before_simulating(tmp_path
     assert list(folder.iterdir()) == []
 
 
+def test_cli_simulate_refuses_format_for_a_single_scenario(tmp_path, capsys, monkeypatch):
+    """--format is a sweep's; with --seed and --out it was ignored and the log written in the
+    format of --out's extension (a .csv for --format parquet), without a word."""
+    from hybridship.sim import scenario
+
+    def no_simulation(*args, **kwargs):
+        raise AssertionError("simulated before the options were checked")
+
+    monkeypatch.setattr(scenario, "simulate_dp_loss", no_simulation)
+    out = tmp_path / "sim.csv"
+    assert main(["simulate", "--seed", "1", "--out", str(out), "--format", "parquet", "--no-progress"]) == 2
+    assert ("hybridship simulate: error: --format is for a sweep; a single scenario's format is the extension "
+            "of --out") in capsys.readouterr().err
+    assert not out.exists()
+
+
 def test_cli_simulate_writes_a_readable_log(tmp_path, capsys):
     out = tmp_path / "new" / "sim.csv.gz"     # a missing folder is made, as for every --out
     rc = main(["simulate", "--vessel", "gunnerus", "--scenario", "dp-loss", "--seed", "5", "--out", str(out),
