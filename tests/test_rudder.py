@@ -311,6 +311,22 @@ def test_rudder_without_propeller_and_mixed_actuators():
     assert abs(F[1, 2]) < abs(F[0, 2])  # no slipstream on the auxiliary rudder
 
 
+def test_a_vessel_with_a_rudder_and_no_thrusters_is_integrated():
+    """A valid vessel file with one rudder in the plain wake and no thruster: the command
+    checks read the rudder angle and no shaft speeds (they failed in numpy's reshape)."""
+    d = copy.deepcopy(esso_dict())
+    d["thrusters"] = []
+    d["rudders"][0].pop("propeller")
+    m = DynamicModel(vessel_from_dict(d, "rudder_only.toml"))
+    assert (m.n_thrusters, m.n_rudders) == (0, 1)
+    acc = m.acceleration([0, 0, 0], [0.5, 0, 0], rudder_rad=[0.2])
+    assert acc[0, 2] > m.acceleration([0, 0, 0], [0.5, 0, 0], rudder_rad=[0.0])[0, 2] and np.all(np.isfinite(acc))
+    res = m.rollout([0, 0, 0], [0.5, 0, 0], 5, azimuth_rad=[0.2])
+    np.testing.assert_allclose(res.nu[0, 1], m.step([0, 0, 0], [0.5, 0, 0], rudder_rad=[0.2])[1][0], rtol=1e-12)
+    with pytest.raises(ValueError, match="rudder_rad: .* beyond 90 deg"):
+        m.acceleration([0, 0, 0], [0.5, 0, 0], rudder_rad=[2.0])
+
+
 def test_a_rudder_without_propeller_follows_the_mmg_formulae_in_its_own_inflow():
     """The auxiliary rudder of the mixed vessel (no propeller, y_R = 0.1 m) on a turning ship,
     against the MMG formulae transcribed here: no slipstream and no propeller wake, so

@@ -404,7 +404,7 @@ class DynamicModel:
             if not np.all(np.isfinite(x)):
                 raise ValueError(f"{name}: contains NaN or inf")
         K = len(self.vessel.thrusters)
-        peak = np.abs(rpm[..., :K]).reshape(-1, K).max(axis=0) if rpm.size else np.zeros(K)
+        peak = np.abs(rpm[..., :K]).reshape(-1, K).max(axis=0) if rpm.size and K else np.zeros(K)
         for k in np.flatnonzero(peak > RPM_LIMIT_FACTOR * self.arrays.thr[:K, THR_MAX_RPM]):
             th = self.vessel.thrusters[k]
             raise ValueError(f"rpm: {peak[k]:g} rpm for thruster {th.name!r} is above {RPM_LIMIT_FACTOR:g} x its "
