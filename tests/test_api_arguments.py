@@ -201,3 +201,16 @@ def test_settings_flags_refuse_text_and_numbers(cls, field):
         with pytest.raises(ValueError, match=f"(?s){field}.*expected True or False, got"):
             cls(**{field: bad})
     assert getattr(cls(**{field: np.bool_(False)}), field) is False
+
+
+def test_physics_inputs_given_as_text_that_reads_as_numbers_are_refused():
+    m = DynamicModel("gunnerus")
+    with pytest.raises(ValueError, match=r"^rpm: expected numbers, got \['100', '0', '0'\]"):
+        m.acceleration(np.zeros(3), np.zeros(3), rpm=["100", "0", "0"])
+    with pytest.raises(ValueError, match="^current: expected numbers"):
+        m.rollout(np.zeros(3), np.zeros(3), 2, current=[1.0, "1"])
+    with pytest.raises(ValueError, match="^nu: expected numbers"):
+        m.step(np.zeros(3), ["1", "0", "0"])
+    with pytest.raises(ValueError, match="^wind: expected numbers"):
+        m.acceleration(np.zeros(3), np.zeros(3), wind=np.array([5.0 + 1j, 0.0]))
+    assert m.acceleration(np.zeros(3), [1, 0, 0], rpm=np.array([100, 0, 0], dtype=np.int32)).shape == (1, 3)

@@ -259,9 +259,13 @@ _INPUT_WIDTH = {"wind": 2, "current": 2, "tau_ext": 3, "accel_ext": 3}
 
 
 def _as_float_array(name, value) -> np.ndarray:
-    """``value`` as a float array, or a ValueError naming ``name`` (not numpy's conversion message)."""
+    """``value`` as a float array, or a ValueError naming ``name`` (not numpy's conversion message);
+    text is refused, also text that reads as a number (numpy would parse ``"100"``)."""
     try:
-        return np.asarray(value, dtype=float)
+        a = np.asarray(value)
+        if a.dtype.kind in "USc":
+            raise TypeError
+        return a.astype(float, copy=False)
     except (TypeError, ValueError):
         raise ValueError(f"{name}: expected numbers, got {value!r}") from None
 
