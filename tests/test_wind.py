@@ -359,6 +359,16 @@ def test_bad_geometry_raises_naming_the_field():
         blendermann_coefficients(0.0, **{**RESEARCH_VESSEL, "L_oa_m": -5.0})
 
 
+def test_geometry_given_as_text_bool_or_none_is_refused_naming_the_field():
+    """``float()`` read "100" and True as numbers and failed on None in its own words."""
+    for bad in ("100", True, None):
+        with pytest.raises(TypeError, match="^L_oa_m: expected a number"):
+            blendermann_coefficients(0.3, **{**RESEARCH_VESSEL, "L_oa_m": bad})
+        with pytest.raises(TypeError, match="^C_m: expected a number"):
+            isherwood_coefficients(0.3, **{**ISHERWOOD_SHIP, "C_m": bad})
+    assert np.isfinite(blendermann_coefficients(0.3, **{**RESEARCH_VESSEL, "L_oa_m": np.float32(55.0)})[2])
+
+
 # ------------------------------------------------------------------ kernel table
 
 

@@ -41,7 +41,7 @@ from importlib import resources
 import numpy as np
 import pandas as pd
 
-from ..config import check_whole_number
+from ..config import check_number, check_whole_number
 
 __all__ = [
     "relative_wind",
@@ -72,7 +72,7 @@ def _wrap_gamma(gamma_rad):
 
 
 def _check_positive(name, value, *, allow_zero=False):
-    v = float(value)
+    v = check_number(name, value)       # text, bools and None refused naming the field
     if not np.isfinite(v) or v < 0.0 or (v == 0.0 and not allow_zero):
         need = "finite and >= 0" if allow_zero else "finite and > 0"
         raise ValueError(f"{name}: must be {need}, got {value!r}")
@@ -80,7 +80,7 @@ def _check_positive(name, value, *, allow_zero=False):
 
 
 def _check_finite(name, value):
-    v = float(value)
+    v = check_number(name, value)
     if not np.isfinite(v):
         raise ValueError(f"{name}: must be finite, got {value!r}")
     return v
