@@ -244,6 +244,13 @@ def test_gamma_range_is_half_open_at_minus_pi():
     np.testing.assert_array_equal(gamma, [np.pi, np.pi])
 
 
+def test_no_relative_wind_gives_gamma_zero_whatever_the_signs_of_zero():
+    """A ship at rest (u = -0.0, as a negated 0 gives) in calm air: the documented 0, not pi."""
+    V, gamma = relative_wind(0.0, np.pi, 0.0, np.array([-0.0, 0.0, -0.0]), np.array([0.0, -0.0, -0.0]))
+    np.testing.assert_array_equal(V, 0.0)
+    np.testing.assert_array_equal(gamma, 0.0)
+
+
 @settings(max_examples=80, deadline=None)
 @given(
     speed=st.floats(0.0, 40.0),

@@ -127,7 +127,8 @@ def relative_wind(wind_speed_m_s, wind_dir_from_rad, psi_rad, u_m_s, v_m_s):
     V_rw = np.hypot(u_rw, v_rw)
     # -atan2 can give exactly -pi (v_rw = +0, u_rw < 0); the wrap sends it to +pi.
     gamma = _wrap_gamma(-np.arctan2(v_rw, u_rw))
-    return V_rw, gamma
+    # no relative wind: 0, as documented (atan2 of signed zeros gave pi for u_rw = -0.0)
+    return V_rw, np.where(V_rw == 0.0, 0.0, gamma)
 
 
 # ---------------------------------------------------------------------- Isherwood
