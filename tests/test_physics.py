@@ -584,6 +584,13 @@ def test_propeller_functions_refuse_what_their_kernels_cannot_compute():
         configuration_matrix([0.0, 1.0], [1.0, 2.0, 3.0], [0.0, 0.0, 0.0])
 
 
+def test_load_wageningen_refuses_a_pitch_ratio_that_is_not_a_number_naming_it():
+    for bad in ("1.0", None, "x", True):
+        with pytest.raises(TypeError, match="^pitch_ratio: expected a number"):
+            load_wageningen("B4-70", bad)
+    assert load_wageningen("B4-70", np.float32(0.8)).pitch_ratio == pytest.approx(0.8)
+
+
 def test_step_broadcasts_one_state_and_refuses_mismatched_batches_and_bad_steps(gunnerus):
     """The compiled step reads B rows of every state: a batch of the other size is refused
     (it used to read memory past the array), one state is broadcast as in acceleration, and

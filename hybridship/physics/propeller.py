@@ -105,9 +105,12 @@ def load_wageningen(series: str = "B4-70", pitch_ratio: float = 1.0) -> Propelle
     ------
     ValueError
         If the pair is not in the table (the message lists the available ones).
+    TypeError
+        If ``pitch_ratio`` is not a number (text, a bool or None).
     """
+    pitch_ratio = check_number("pitch_ratio", pitch_ratio)     # float() read "1.0" and failed on None in its words
     t = _table()
-    sel = t[(t["series"] == series) & (np.abs(t["pitch_diameter_ratio"] - float(pitch_ratio)) < 1e-6)]
+    sel = t[(t["series"] == series) & (np.abs(t["pitch_diameter_ratio"] - pitch_ratio) < 1e-6)]
     if sel.empty:
         avail = ", ".join(f"{s} P/D {p:g}" for s, p in available_propellers())
         raise ValueError(
