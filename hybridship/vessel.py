@@ -228,6 +228,9 @@ class NonlinearDamping(_Strict):
             raise ValueError("method 'crossflow' needs wetted_surface_m2 (or surge_resistance = 'explicit')")
         if self.lift == "mmg" and self.mmg is None:
             raise ValueError("lift 'mmg' needs a [damping.nonlinear.mmg] table (Y_v, Y_r, N_v, N_r)")
+        if self.lift != "mmg" and self.mmg is not None:     # it would be ignored
+            raise ValueError(f"[damping.nonlinear.mmg]: given with lift {self.lift!r}, which does not use it "
+                             f"(give lift 'mmg' to use it)")
         given = [k for k in ("d_uu", "d_vv", "d_rr") if getattr(self, k) != 0.0]
         if self.method == "none" and given:       # they would be ignored
             raise ValueError(f"{', '.join(given)}: given with method 'none', which has no nonlinear damping "

@@ -645,6 +645,10 @@ def test_gunnerus_coefficients_close_to_published_original_hull():
     assert 0.8 < m.arrays.strip_w.sum() / 21640.7 < 2.5
 
 
+#: Linear hull derivatives on the MMG basis (those of the KVLCC2 in the Esso Osaka file).
+MMG_TABLE = {"Y_v": -0.315, "Y_r": 0.083, "N_v": -0.137, "N_r": -0.049}
+
+
 @pytest.mark.parametrize("edit, field", [
     (lambda d: d["particulars"].pop("B_m"), "particulars.B_m"),
     # L_oa and L_pp swapped: the wind moment's default length would be the shorter one
@@ -718,6 +722,11 @@ def test_gunnerus_coefficients_close_to_published_original_hull():
      r"bad.toml: wind: \[wind.table\]: given with method 'isherwood', which does not use it"),
     (lambda d: d["thrusters"][0].__setitem__("max_azimuth_rate_deg_s", 10.0),
      r"bad.toml: thrusters\[0\]: max_azimuth_rate_deg_s: a tunnel thruster does not turn"),
+    # an MMG table without lift = "mmg" (lift left at its default "none") gave no lift at all
+    (lambda d: d["damping"]["nonlinear"].update(mmg=MMG_TABLE),
+     r"bad.toml: damping.nonlinear: \[damping.nonlinear.mmg\]: given with lift 'clarke1983', which does not use it"),
+    (lambda d: d["damping"]["nonlinear"].update(lift="none", mmg=MMG_TABLE),
+     r"bad.toml: damping.nonlinear: \[damping.nonlinear.mmg\]: given with lift 'none', which does not use it"),
 ])
 def test_invalid_vessel_files_name_the_field(edit, field):
     d = copy.deepcopy(gunnerus_dict())
