@@ -235,6 +235,18 @@ class NonlinearDamping(_Strict):
         if self.method == "none" and given:       # they would be ignored
             raise ValueError(f"{', '.join(given)}: given with method 'none', which has no nonlinear damping "
                              f"(give method 'quadratic' to use them)")
+        # the ITTC line and the strips are the cross-flow method's; they would be ignored
+        ittc = ["wetted_surface_m2", "form_factor_k", "C_R", "speed_ref_m_s"]
+        if self.method != "crossflow":
+            unused, by = ittc + ["cd_2d", "strips"], f"method {self.method!r}"
+            why = "the ITTC-1957 surge resistance and the strips of method 'crossflow'"
+        else:
+            unused, by = (ittc if self.surge_resistance == "explicit" else []), "surge_resistance 'explicit'"
+            why = "the surge resistance is d_uu"
+        given = [k for k in unused if getattr(self, k) != type(self).model_fields[k].default]
+        if given:
+            raise ValueError(f"{', '.join(given)}: given with {by}, which does not use "
+                             f"{'them' if len(given) > 1 else 'it'} ({why})")
         return self
 
 

@@ -727,6 +727,15 @@ MMG_TABLE = {"Y_v": -0.315, "Y_r": 0.083, "N_v": -0.137, "N_r": -0.049}
      r"bad.toml: damping.nonlinear: \[damping.nonlinear.mmg\]: given with lift 'clarke1983', which does not use it"),
     (lambda d: d["damping"]["nonlinear"].update(lift="none", mmg=MMG_TABLE),
      r"bad.toml: damping.nonlinear: \[damping.nonlinear.mmg\]: given with lift 'none', which does not use it"),
+    # the packaged file switched to method 'quadratic' kept its ITTC and strip fields: no nonlinear damping at all
+    (lambda d: d["damping"]["nonlinear"].update(method="quadratic"),
+     r"bad.toml: damping.nonlinear: wetted_surface_m2, form_factor_k, C_R, speed_ref_m_s: given with method "
+     r"'quadratic', which does not use them \(the ITTC-1957 surge resistance and the strips of method 'crossflow'\)"),
+    (lambda d: d["damping"].__setitem__("nonlinear", {"method": "none", "cd_2d": 0.7}),
+     r"bad.toml: damping.nonlinear: cd_2d: given with method 'none', which does not use it"),
+    (lambda d: d["damping"]["nonlinear"].update(surge_resistance="explicit", d_uu=1000.0),
+     r"bad.toml: damping.nonlinear: wetted_surface_m2, form_factor_k, C_R, speed_ref_m_s: given with "
+     r"surge_resistance 'explicit', which does not use them \(the surge resistance is d_uu\)"),
 ])
 def test_invalid_vessel_files_name_the_field(edit, field):
     d = copy.deepcopy(gunnerus_dict())
