@@ -158,12 +158,16 @@ def float_array(shape: tuple | None = None, *, flat: bool = False, finite: bool 
                 lo: float | None = None, lo_open: bool = False, readonly: bool = False):
     """A numpy-array field (needs ``config_dataclass(arbitrary_types=True)``): the input is
     copied to a float array (the caller's array is never shared), raveled with ``flat``,
-    and checked for its ``shape``, finiteness and lower bound ``lo``."""
+    and checked for its ``shape``, finiteness and lower bound ``lo``. Text and complex
+    numbers are refused, as by :func:`real_array`."""
     def convert(v):
         try:
-            a = np.array(v, dtype=float, copy=True)
+            a = np.array(v, copy=True)
+            a = a if a.dtype.kind in "USc" else a.astype(float, copy=False)
         except (TypeError, ValueError):
             raise ValueError(f"expected an array of numbers, got {type(v).__name__}") from None
+        if a.dtype.kind in "USc":   # numpy would parse "1.5" and drop an imaginary part with only a warning
+            raise ValueError(f"expected an array of real numbers, got dtype {a.dtype}")
         if flat:
             a = a.reshape(-1)
         if shape is not None and a.shape != shape:

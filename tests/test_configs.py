@@ -90,6 +90,15 @@ def test_arrays_are_copied_not_shared():
     assert cal.lead_s[0] == 1.0
 
 
+def test_array_fields_refuse_text_and_complex_numbers():
+    """numpy parsed text entries as numbers and dropped an imaginary part with only a warning."""
+    good = dict(lead_s=[1.0, 2.0], scale=[1.0, 1.0], floor=[0.0, 0.0])
+    for field, value in (("lead_s", ["1", "2"]), ("scale", np.array([1.0 + 0.5j, 1.0])), ("floor", "0 0")):
+        with pytest.raises(ValueError, match=f"^{field}: expected an array of real numbers, got dtype"):
+            SpreadCalibration(**{**good, field: value})
+    assert SpreadCalibration(**{**good, "lead_s": np.array([1, 2])}).lead_s.dtype == float
+
+
 def test_predictors_take_settings_or_dicts_of_them_and_name_a_typo():
     """A dict of a settings class's fields is validated into it; a misspelt key or another
     type fails at construction, naming the argument, not later inside training."""
