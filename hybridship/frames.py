@@ -116,6 +116,14 @@ def unwrap_heading(psi_rad, axis=-1):
     return np.unwrap(np.asarray(psi_rad, dtype=float), axis=axis)
 
 
+def _check_latitude(name: str, value) -> None:
+    """ValueError naming ``name`` when a latitude [deg] in ``value`` is beyond +-90 deg."""
+    with np.errstate(invalid="ignore"):
+        if np.any(np.abs(np.asarray(value, dtype=float)) > 90.0):
+            raise ValueError(f"{name}: a latitude is within +-90 deg, got {np.nanmax(np.abs(value)):g} in magnitude "
+                             f"(latitude and longitude swapped?)")
+
+
 def latlon_to_north_east(lat_deg, lon_deg, lat0_deg, lon0_deg):
     """Flat-earth conversion of geodetic latitude/longitude to local north/east [m].
 
@@ -134,11 +142,8 @@ def latlon_to_north_east(lat_deg, lon_deg, lat0_deg, lon0_deg):
     -------
     north_m, east_m : ndarray
     """
-    for name, value in (("lat_deg", lat_deg), ("lat0_deg", lat0_deg)):
-        with np.errstate(invalid="ignore"):
-            if np.any(np.abs(np.asarray(value, dtype=float)) > 90.0):
-                raise ValueError(f"{name}: a latitude is within +-90 deg, got {np.nanmax(np.abs(value)):g} in magnitude "
-                                 f"(latitude and longitude swapped?)")
+    _check_latitude("lat_deg", lat_deg)
+    _check_latitude("lat0_deg", lat0_deg)
     lat = np.radians(np.asarray(lat_deg, dtype=float))
     lon = np.radians(np.asarray(lon_deg, dtype=float))
     lat0, lon0 = np.radians(lat0_deg), np.radians(lon0_deg)
@@ -153,7 +158,9 @@ def latlon_to_north_east(lat_deg, lon_deg, lat0_deg, lon0_deg):
 
 
 def north_east_to_latlon(north_m, east_m, lat0_deg, lon0_deg):
-    """Inverse of :func:`latlon_to_north_east` (flat-earth) returning ``(lat_deg, lon_deg)``."""
+    """Inverse of :func:`latlon_to_north_east` (flat-earth) returning ``(lat_deg, lon_deg)``;
+    a reference latitude ``lat0_deg`` beyond +-90 deg is refused as there."""
+    _check_latitude("lat0_deg", lat0_deg)
     lat0, lon0 = np.radians(lat0_deg), np.radians(lon0_deg)
     e2 = WGS84_F * (2.0 - WGS84_F)
     s0 = np.sin(lat0)

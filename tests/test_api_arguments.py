@@ -129,7 +129,7 @@ def test_high_speed_craft_models_check_their_settings_at_construction():
 
 
 def test_physics_inputs_frames_and_channel_names_are_named_in_plain_words():
-    from hybridship.frames import latlon_to_north_east
+    from hybridship.frames import latlon_to_north_east, north_east_to_latlon
     from hybridship.logs.io import validate_log
 
     m = DynamicModel("gunnerus")
@@ -141,6 +141,9 @@ def test_physics_inputs_frames_and_channel_names_are_named_in_plain_words():
         m.acceleration(np.zeros((2, 3)), np.zeros((3, 3)))
     with pytest.raises(ValueError, match="^lat_deg: a latitude is within"):
         latlon_to_north_east(95.0, 10.0, 63.0, 10.0)
+    # the inverse took a reference latitude beyond the pole and returned a latitude of 95 deg
+    with pytest.raises(ValueError, match="^lat0_deg: a latitude is within"):
+        north_east_to_latlon(0.0, 100.0, 95.0, 10.0)
     log = physics_log(m, duration_s=60.0, t_shutdown_s=None)
     with pytest.raises(ValueError, match="^channel_names: expected a sequence of names, got the string 'port'"):
         validate_log(log, channel_names="port")
