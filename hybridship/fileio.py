@@ -236,6 +236,7 @@ def write_output_files(folder, contents: dict, *, stale=(), ours=None) -> dict:
             raise TypeError(f"contents: expected file name -> bytes, got {name!r} -> {type(data).__name__}")
     if isinstance(stale, (str, bytes)):
         raise TypeError(f"stale: expected a list of file names, got {stale!r}")
+    stale = list(stale)     # read three times below: a generator would be empty after the check
     check_output_files(folder, contents, stale, ours)
     paths = {}
     for name, data in contents.items():

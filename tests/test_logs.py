@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import gzip
+import json
 import os
 import warnings
 from pathlib import Path
@@ -176,6 +177,17 @@ def test_output_files_are_not_written_where_a_folder_of_that_name_is(tmp_path):
     check_output_files(tmp_path, ["a.csv"], removed=["b.csv"])      # a folder is never removed: no error
     assert write_output_files(tmp_path, {"a.csv": b"1"}, stale=["b.csv"])["a.csv"].read_bytes() == b"1"
     assert (tmp_path / "b.csv").is_dir()
+
+
+def test_stale_output_files_given_as_a_generator_are_removed(tmp_path):
+    """``stale`` was read once by the check: given as a generator, the removal found it empty and
+    an earlier run's figure stayed beside the new tables, still in the folder's record."""
+    from hybridship.fileio import OUTPUTS_RECORD, write_output_files
+
+    write_output_files(tmp_path, {"a.csv": b"1", "fig.png": b"x"})
+    write_output_files(tmp_path, {"a.csv": b"2"}, stale=(name for name in ["fig.png"]))
+    assert sorted(x.name for x in tmp_path.iterdir()) == [OUTPUTS_RECORD, "a.csv"]
+    assert json.loads((tmp_path / OUTPUTS_RECORD).read_text()) == ["a.csv"]
 
 
 def test_output_files_written_before_a_failure_are_replaced_by_the_next_run(tmp_path, monkeypatch):
