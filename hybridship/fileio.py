@@ -217,7 +217,7 @@ def write_output_files(folder, contents: dict, *, stale=(), ours=None) -> dict:
     contents : dict
         File name -> bytes.
     stale : iterable of str
-        File names removed where present.
+        File names removed where present; none of them in ``contents``.
     ours : callable, optional
         ``ours(name, path) -> bool`` for files not in the record.
 
@@ -237,6 +237,9 @@ def write_output_files(folder, contents: dict, *, stale=(), ours=None) -> dict:
     if isinstance(stale, (str, bytes)):
         raise TypeError(f"stale: expected a list of file names, got {stale!r}")
     stale = list(stale)     # read three times below: a generator would be empty after the check
+    both = [name for name in stale if name in contents]
+    if both:    # it would be written, then removed, and its path returned
+        raise ValueError(f"stale: {', '.join(both)} also in contents; a file written is not stale")
     check_output_files(folder, contents, stale, ours)
     paths = {}
     for name, data in contents.items():

@@ -190,6 +190,15 @@ def test_stale_output_files_given_as_a_generator_are_removed(tmp_path):
     assert json.loads((tmp_path / OUTPUTS_RECORD).read_text()) == ["a.csv"]
 
 
+def test_a_file_both_written_and_stale_is_refused_before_writing(tmp_path):
+    """It was written, then removed as stale, and its (missing) path returned."""
+    from hybridship.fileio import write_output_files
+
+    with pytest.raises(ValueError, match=r"^stale: fig\.png also in contents"):
+        write_output_files(tmp_path / "out", {"a.csv": b"1", "fig.png": b"x"}, stale=["fig.png"])
+    assert not (tmp_path / "out").exists()
+
+
 def test_output_files_written_before_a_failure_are_replaced_by_the_next_run(tmp_path, monkeypatch):
     """The record of outputs was written after the last file: files written before a failure
     (a full disk, an interrupt) were left out of it, and the next run refused them as files
