@@ -168,6 +168,19 @@ def test_a_direction_without_thrust_has_no_capacity():
     assert cap[0] > 0 and cap[1] == 0.0 and cap[2] == 0.0
 
 
+def test_a_load_the_thrusters_make_only_with_another_has_no_capacity(model):
+    """A lone bow tunnel makes sway only with a yaw moment, a lone azimuth off the centre line
+    no pure load at all (:func:`check_station_keeping` says so): every pure capacity is 0. The
+    tunnel's sway counted as its full 23 kN, and the azimuth was given 446 kN of sway and
+    64 kN of surge: the least-squares answer passed for the demand met, the check's tolerance
+    being a millionth of the 1e12 N search bound."""
+    from hybridship.sim.allocation import thrust_capacity_by_sign
+
+    tunnel, port, _ = model.vessel.thrusters
+    for thrusters in ([tunnel], [port]):
+        np.testing.assert_array_equal(thrust_capacity_by_sign(_with_thrusters(model.vessel, thrusters)), 0.0)
+
+
 def test_azimuth_and_rpm_rate_limits(model):
     dt = 0.5
     alloc = ThrustAllocator(model.vessel, dt_s=dt, rpm_rate_limit_rpm_s=20.0)

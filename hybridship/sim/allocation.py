@@ -616,8 +616,10 @@ def thrust_capacity_by_sign(vessel) -> np.ndarray:
             tau = np.zeros(3)
             tau[k] = sgn * big
             f, scale = alloc._solve_extended(tau)
-            # what the forces give, not what was asked: a direction no thruster acts in gets
-            # the least-squares answer, zero forces, "achieved" at full scale
-            given = float(alloc.T_e[k] @ f)
-            cap[i, k] = scale * big if abs(given - scale * tau[k]) <= 1e-6 * big else max(sgn * given, 0.0)
+            # what the forces give, not what was asked: a pure load the thrusters cannot make
+            # (no thruster acts in that direction, or only together with another load) gets the
+            # least-squares answer, which is not the scaled demand; its capacity is 0. The check
+            # is relative to the load achieved: the demand's bound is 1e7 times larger.
+            achieved = alloc.T_e @ f
+            cap[i, k] = scale * big if np.abs(achieved - scale * tau).max() <= 1e-6 * scale * big else 0.0
     return cap
