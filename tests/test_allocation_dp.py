@@ -441,6 +441,26 @@ def test_dp_settings_that_are_not_numbers_are_refused_by_name(model, setting):
     with pytest.raises(TypeError, match=f"{field}: expected a number"):
         DPController(model, dt_s=1.0, **setting)
 
+@pytest.mark.parametrize("setting", [dict(omega_n_rad_s="fast"), dict(zeta="0.9"), dict(reference_zeta="1"),
+                                     dict(integral_limit=["1e5", "1e5", "1e5"])])
+def test_dp_vectors_given_as_text_are_refused_by_name(model, setting):
+    """Text reached numpy: "fast" failed in its words ("could not convert string to float"),
+    and "0.9" or a set-point of strings was read as the number, where the allocator and the
+    scalar settings refuse text by name."""
+    (field, _), = setting.items()
+    with pytest.raises(TypeError, match=field):
+        DPController(model, dt_s=1.0, **setting)
+    dp = DPController(model, dt_s=1.0)
+    with pytest.raises(TypeError, match="setpoint_eta"):
+        dp.reset(["10", "0", "0"])
+    with pytest.raises(TypeError, match="wind"):
+        dp.update(np.zeros(3), np.zeros(3), wind=["8", "1"])
+    with pytest.raises(TypeError, match="mass_matrix"):
+        pid_gains([["1", "0", "0"]] * 3, 0.07, 0.9)
+    with pytest.raises(TypeError, match="setpoint_eta"):
+        ReferenceModel(0.05, 1.0, (0.5, 0.5, 0.03)).step("ab", 1.0)
+
+
 @pytest.mark.parametrize("gain", [1.0, 0.5, 0.0])
 def test_dp_wind_feedforward_opposes_wind(model, gain):
     """The feed-forward is ``gain`` times minus the model's wind load at the measured heading

@@ -43,7 +43,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from hybridship.config import check_number, config_dataclass, float_array
+from hybridship.config import check_number, config_dataclass, float_array, real_array
 from hybridship.frames import ned_to_body, rotation_z, wrap_pi
 from hybridship.physics.model import DynamicModel
 
@@ -54,8 +54,9 @@ _REF_SUBSTEP_S = 0.1
 
 
 def _vec3(name, value, *, positive=False):
-    """``value`` broadcast to a finite float (3,) array, or ValueError naming ``name``."""
-    a = np.asarray(value, dtype=float)
+    """``value`` broadcast to a finite float (3,) array, or ValueError naming ``name``
+    (TypeError for text or anything else that is not real numbers)."""
+    a = real_array(name, value)
     if a.ndim == 0:
         a = np.full(3, float(a))
     if a.shape != (3,):
@@ -103,7 +104,7 @@ def pid_gains(mass_matrix, omega_n_rad_s, zeta, ki_ratio: float = 0.1) -> DPGain
     ki_ratio : float
         ``K_i = K_p omega_n * ki_ratio``; 0 gives a PD controller.
     """
-    M = np.asarray(mass_matrix, float)
+    M = real_array("mass_matrix", mass_matrix)
     if M.shape != (3, 3) or not np.all(np.isfinite(M)):
         raise ValueError(f"mass_matrix: expected a finite (3, 3) matrix, got shape {M.shape}")
     w = _vec3("omega_n_rad_s", omega_n_rad_s, positive=True)
@@ -298,7 +299,7 @@ class DPController:
         eta = _vec3("eta_measured", eta_measured)
         nu = _vec3("nu_measured", nu_measured)
         if wind is not None:
-            wind = np.asarray(wind, float)
+            wind = real_array("wind", wind)
             if wind.shape != (2,) or not np.all(np.isfinite(wind)):
                 raise ValueError(f"wind: expected finite [speed_m_s, dir_from_rad], got {np.shape(wind)}")
         psi = eta[2]
