@@ -441,6 +441,15 @@ def test_dp_settings_that_are_not_numbers_are_refused_by_name(model, setting):
     with pytest.raises(TypeError, match=f"{field}: expected a number"):
         DPController(model, dt_s=1.0, **setting)
 
+def test_flags_given_as_text_are_refused_by_name(model):
+    """A text "no" is truthy: ``reference_feedforward="no"`` kept the feed-forward on and
+    ``warn_unlimited_slew="no"`` the warning."""
+    with pytest.raises(TypeError, match="reference_feedforward"):
+        DPController(model, dt_s=1.0, reference_feedforward="no")
+    with pytest.raises(TypeError, match="warn_unlimited_slew"):
+        ThrustAllocator(model.vessel, dt_s=1.0, warn_unlimited_slew="no")
+
+
 @pytest.mark.parametrize("setting", [dict(omega_n_rad_s="fast"), dict(zeta="0.9"), dict(reference_zeta="1"),
                                      dict(integral_limit=["1e5", "1e5", "1e5"])])
 def test_dp_vectors_given_as_text_are_refused_by_name(model, setting):

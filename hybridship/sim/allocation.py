@@ -39,7 +39,7 @@ import numpy as np
 import scipy.linalg
 import scipy.optimize
 
-from hybridship.config import check_number, real_array
+from hybridship.config import check_flags, check_number, real_array
 from hybridship.frames import wrap_pi
 from hybridship.physics.propeller import load_wageningen, rpm_for_thrust, thrust_torque
 from hybridship.physics.thrusters import configuration_matrix
@@ -301,6 +301,7 @@ class ThrustAllocator:
         if isinstance(dt_s, (bool, np.bool_)) or not isinstance(dt_s, (int, float, np.integer, np.floating)) \
                 or not (np.isfinite(dt_s) and dt_s > 0):
             raise ValueError(f"dt_s: must be finite and > 0, got {dt_s!r}")
+        check_flags(warn_unlimited_slew=warn_unlimited_slew)     # a text "no" is truthy
         if check_number("reverse_hysteresis_rad", reverse_hysteresis_rad, lo=0.0) >= math.pi:
             raise ValueError(f"reverse_hysteresis_rad: must be in [0, pi), got {reverse_hysteresis_rad!r}")
         self.dt_s = float(dt_s)

@@ -43,7 +43,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from hybridship.config import check_number, config_dataclass, float_array, real_array
+from hybridship.config import check_flags, check_number, config_dataclass, float_array, real_array
 from hybridship.frames import ned_to_body, rotation_z, wrap_pi
 from hybridship.physics.model import DynamicModel
 
@@ -217,6 +217,7 @@ class DPController:
         if isinstance(dt_s, (bool, np.bool_)) or not isinstance(dt_s, (int, float, np.integer, np.floating)) \
                 or not (np.isfinite(dt_s) and dt_s > 0):
             raise ValueError(f"dt_s: must be finite and > 0, got {dt_s!r}")
+        check_flags(reference_feedforward=reference_feedforward)     # a text "no" is truthy
         wind_feedforward_gain = check_number("wind_feedforward_gain", wind_feedforward_gain, lo=0.0, hi=2.0)
         for name, val in (("max_speed_m_s", max_speed_m_s), ("max_yaw_rate_rad_s", max_yaw_rate_rad_s)):
             check_number(name, val, lo=0.0, lo_open=True)
