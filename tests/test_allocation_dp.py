@@ -149,6 +149,13 @@ def test_an_azimuth_turns_round_rather_than_reverse_beyond_its_astern_thrust(mod
                                atol=0.01 * abs(demand))
 
 
+def test_a_first_demand_straight_astern_gives_angles_in_the_documented_range(model):
+    """``azimuth_rad`` is in [-pi, pi): a fresh allocator pointed the azimuths at atan2's +pi."""
+    res = ThrustAllocator(model.vessel, dt_s=1.0).allocate([-20e3, 0.0, 0.0], np.zeros(3))
+    assert np.all((res.azimuth_rad >= -math.pi) & (res.azimuth_rad < math.pi)), res.azimuth_rad
+    np.testing.assert_allclose(thruster_load(model, np.zeros(3), res), [-20e3, 0.0, 0.0], atol=200.0)
+
+
 def test_bollard_limits_are_what_the_model_delivers_at_full_rpm_ahead_and_astern(model):
     """``forward_N`` / ``reverse_N``: the delivered (after thrust deduction) force of the physics model
     at +max_rpm / -max_rpm at rest, each thruster alone."""

@@ -519,7 +519,7 @@ class ThrustAllocator:
             fx, fy = f_e[j], f_e[j + 1]
             F = math.hypot(fx, fy)
             if prev_angle is None:
-                target[i] = math.atan2(fy, fx) if F > small_N[i] else 0.0
+                target[i] = float(wrap_pi(math.atan2(fy, fx))) if F > small_N[i] else 0.0   # atan2 may give pi
                 continue
             if F <= small_N[i]:
                 target[i] = prev_angle[i]  # no meaningful direction: do not chase noise
