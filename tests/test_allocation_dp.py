@@ -501,6 +501,13 @@ def _with_thrusters(vessel, thrusters):
     return vessel.model_copy(update={"thrusters": thrusters})
 
 
+def test_extended_configuration_of_a_vessel_without_thrusters_has_three_rows(model):
+    """Documented shape (3, n): with no thrusters it was (0,), so ``T_e @ f`` failed."""
+    T_e, owner = extended_configuration(_with_thrusters(model.vessel, []))
+    assert T_e.shape == (3, 0) and owner.shape == (0,)
+    np.testing.assert_array_equal(T_e @ np.zeros(0), np.zeros(3))
+
+
 def test_station_keeping_rank_counts_the_loads_the_thrusters_can_make(model):
     from hybridship.sim.allocation import check_station_keeping, station_keeping_rank
 

@@ -141,7 +141,7 @@ def extended_configuration(vessel):
         else:
             cols.append(configuration_matrix([t.fixed_angle_rad], [t.x_m], [t.y_m])[:, 0])
             owner.append(i)
-    return np.array(cols, dtype=float).T, np.array(owner, dtype=int)
+    return np.array(cols, dtype=float).reshape(-1, 3).T, np.array(owner, dtype=int)   # (3, 0) without thrusters
 
 
 #: Relative tolerance of the rank test in :func:`station_keeping_rank` (the matrix entries are O(1)).
