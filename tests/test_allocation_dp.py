@@ -348,6 +348,16 @@ def test_integral_windup_is_clamped_at_the_thrust_capacity(model):
     np.testing.assert_allclose(np.abs(integ_b), dp.integral_limit, rtol=1e-9)   # every axis wound up to its stop
 
 
+def test_a_fast_reference_model_settles_instead_of_diverging():
+    """The Euler substep was 0.1 s whatever the filter: at 12 rad/s (or 6 rad/s with zeta = 2)
+    the reference went to NaN. The substep now follows the fastest pole."""
+    for omega, zeta in ((12.0, 1.0), (6.0, 2.0)):
+        ref = ReferenceModel(omega, zeta, (10.0, 10.0, 1.0))
+        for _ in range(20):
+            ref.step([1.0, 1.0, 0.1], 1.0)
+        np.testing.assert_allclose(ref.state.eta_d, [1.0, 1.0, 0.1], atol=1e-6)
+
+
 def test_reference_model_no_overshoot_and_speed_limit():
     ref = ReferenceModel(0.05, 1.0, (0.2, 0.2, math.radians(2)))
     ref.reset([0.0, 0.0, math.radians(170)])

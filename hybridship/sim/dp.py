@@ -142,6 +142,11 @@ class ReferenceModel:
         self.omega_rad_s = _vec3("reference_omega_rad_s", omega_rad_s, positive=True)
         self.zeta = _vec3("reference_zeta", zeta, positive=True)
         self.max_rate = _vec3("max_rate", max_rate, positive=True)
+        # Euler substep: _REF_SUBSTEP_S, or a quarter of the stability bound -2 Re(p) / |p|^2 of
+        # the filter's fastest pole p when that is shorter (a fast filter diverged to NaN)
+        poles = np.concatenate([np.roots([1.0, (2 * z + 1) * w, (2 * z + 1) * w**2, w**3])
+                                for w, z in zip(self.omega_rad_s, self.zeta)])
+        self._substep_s = min(_REF_SUBSTEP_S, 0.5 * float(np.min(-poles.real / np.abs(poles) ** 2)))
         self.reset(np.zeros(3))
 
     def reset(self, eta_d) -> None:
@@ -163,7 +168,7 @@ class ReferenceModel:
         dt_s = check_number("dt_s", dt_s, lo=0.0, lo_open=True)
         r[2] = self.x[2] + float(wrap_pi(r[2] - self.x[2]))  # shortest way round
         w, z = self.omega_rad_s, self.zeta
-        n = max(1, math.ceil(dt_s / _REF_SUBSTEP_S))
+        n = max(1, math.ceil(dt_s / self._substep_s))
         h = dt_s / n
         for _ in range(n):
             jerk = w**3 * (r - self.x) - (2 * z + 1) * w**2 * self.v - (2 * z + 1) * w * self.a
