@@ -240,3 +240,23 @@ def test_a_free_run_is_the_one_step_predictor_fed_its_own_predictions(make):
     np.testing.assert_allclose(m.one_step(U, fed)[n:], free[n:], rtol=1e-9, atol=1e-9)
     assert np.isnan(free[:n]).all()
     assert np.abs(m.one_step(U, Y)[n + 5:] - free[n + 5:]).max() > 1e-3     # the data's noise does matter
+
+
+def test_subspace_refuses_a_record_shorter_than_its_hankel_matrices_need():
+    """Fewer rows than ``2 block_rows (nu + ny + 1) - 1`` leave the Hankel matrices with fewer
+    columns than rows: 60 rows of a second-order system (block_rows 10, 3 inputs, 2 outputs)
+    came back as A = 0, every pole at 0, without a word; 119 rows identify it."""
+    rng = np.random.default_rng(0)
+    A = np.array([[0.9, 0.2], [-0.2, 0.8]])
+    B = 0.5 * rng.standard_normal((2, 3))
+    U = rng.standard_normal((119, 3))
+    x, Y = np.zeros(2), np.zeros((119, 2))
+    for k in range(119):
+        Y[k] = x
+        x = A @ x + B @ U[k]
+    with pytest.raises(ValueError, match=r"^U: need at least 119 rows for block_rows = 10.*got 60"):
+        fit_subspace(U[:60], Y[:60], order=2, block_rows=10)
+    with pytest.raises(ValueError, match=r"^U: need at least 119 rows"):
+        StateSpaceModel(order=2, block_rows=10).fit(U[:60], Y[:60])
+    got = np.sort_complex(fit_subspace(U, Y, order=2, block_rows=10).poles)
+    np.testing.assert_allclose(got, np.sort_complex(np.linalg.eigvals(A)), atol=1e-6)

@@ -238,6 +238,14 @@ def fit_subspace(U, Y, order: int, block_rows: int = 10) -> StateSpaceParameters
         State dimension.
     block_rows : int
         Block rows of the Hankel matrices (``>= order / ny``).
+
+    Raises
+    ------
+    ValueError
+        Naming the argument: ``U``/``Y`` not finite 2-D arrays of the same rows, fewer than
+        ``2 block_rows (nu + ny + 1) - 1`` rows (the Hankel matrices need at least as many
+        columns as rows), or ``order``/``block_rows`` not whole numbers >= 1 with
+        ``block_rows * ny >= order``.
     """
     import pandas as pd
     from nfoursid.nfoursid import NFourSID
@@ -247,6 +255,12 @@ def fit_subspace(U, Y, order: int, block_rows: int = 10) -> StateSpaceParameters
     check_whole_number("block_rows", block_rows, 1)
     if block_rows * Y.shape[1] < order:
         raise ValueError(f"fit_subspace: block_rows * ny = {block_rows * Y.shape[1]} < order {order}")
+    # the 2 block_rows (nu + ny) rows of the stacked Hankel matrices need as many columns
+    # (N - 2 block_rows + 1); a shorter record gave A = 0 (all poles at 0) without a word
+    n_min = 2 * block_rows * (U.shape[1] + Y.shape[1] + 1) - 1
+    if U.shape[0] < n_min:
+        raise ValueError(f"U: need at least {n_min} rows for block_rows = {block_rows} with {U.shape[1]} inputs and "
+                         f"{Y.shape[1]} outputs (2 block_rows (nu + ny + 1) - 1), got {U.shape[0]}")
     ucols = [f"u{i}" for i in range(U.shape[1])]
     ycols = [f"y{i}" for i in range(Y.shape[1])]
     df = pd.DataFrame(np.hstack([U, Y]), columns=ucols + ycols)
