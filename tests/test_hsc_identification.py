@@ -260,3 +260,16 @@ def test_subspace_refuses_a_record_shorter_than_its_hankel_matrices_need():
         StateSpaceModel(order=2, block_rows=10).fit(U[:60], Y[:60])
     got = np.sort_complex(fit_subspace(U, Y, order=2, block_rows=10).poles)
     np.testing.assert_allclose(got, np.sort_complex(np.linalg.eigvals(A)), atol=1e-6)
+
+
+def test_arx_refuses_a_record_with_fewer_regression_rows_than_coefficients():
+    """ARX321 with 3 inputs and 2 outputs has 13 coefficients per output and 3 lag rows: on 12
+    rows (9 equations) least squares returned a minimum-norm fit of the record, without a word,
+    not the system; 16 rows are taken."""
+    rng = np.random.default_rng(12)
+    U = rng.standard_normal((16, 3))
+    Y = _simulate_arx(np.array([[[0.6, 0.1], [0.0, 0.4]]]), np.array([[[0.5, 0.2, -0.3], [0.1, 0.3, 0.4]]]), U)
+    for fit in (lambda U, Y: fit_arx(U, Y, 3, 2, 1), lambda U, Y: ARXModel(3, 2, 1).fit(U, Y)):
+        with pytest.raises(ValueError, match=r"^U: need at least 16 rows for ARX321 .*got 12"):
+            fit(U[:12], Y[:12])
+        assert fit(U, Y) is not None

@@ -122,12 +122,24 @@ def fit_arx(U, Y, na: int, nb: int, nk: int = 1) -> ARXParameters:
     ------
     ValueError
         Naming the argument: an order that is not a whole number (``na``, ``nb`` >= 1,
-        ``nk`` >= 0), or ``U``/``Y`` not finite 2-D arrays of the same rows, at least
-        ``max(na, nk + nb - 1) + 2`` of them (NaN reached LAPACK before).
+        ``nk`` >= 0), or ``U``/``Y`` not finite 2-D arrays of the same rows (NaN reached
+        LAPACK before), fewer than ``max(na, nk + nb - 1)`` lag rows plus one regression
+        row per coefficient of an output, ``na ny + nb nu + 1``.
     """
     na, nb, nk = check_whole_number("na", na, 1), check_whole_number("nb", nb, 1), check_whole_number("nk", nk, 0)
     U, Y = check_record(U, Y, min_rows=max(na, nk + nb - 1) + 2)      # as ARXModel.fit
+    _check_arx_rows(U, Y, na, nb, nk)
     return _fit_arx(U, Y, na, nb, nk)
+
+
+def _check_arx_rows(U, Y, na, nb, nk):
+    """ValueError naming ``U`` when the record has fewer regression rows than an output has
+    coefficients: least squares then returned a minimum-norm solution that fits any record."""
+    lag, n_coef = max(na, nk + nb - 1), na * Y.shape[1] + nb * U.shape[1] + 1
+    if U.shape[0] < lag + n_coef:
+        raise ValueError(f"U: need at least {lag + n_coef} rows for ARX{na}{nb}{nk} with {U.shape[1]} inputs and "
+                         f"{Y.shape[1]} outputs ({lag} lag rows and {n_coef} coefficients per output), "
+                         f"got {U.shape[0]}")
 
 
 def _fit_arx(U, Y, na, nb, nk) -> ARXParameters:
@@ -158,6 +170,7 @@ class ARXModel:
         """Least squares on one record; returns self. All or nothing: the scalers and the
         coefficients replace the learned state together, so a fit that raises leaves it as it was."""
         U, Y = check_record(U, Y, min_rows=self.n_init + 2)
+        _check_arx_rows(U, Y, self.na, self.nb, self.nk)
         su, sy = _Standardiser(U), _Standardiser(Y)
         params = _fit_arx(su(U), sy(Y), self.na, self.nb, self.nk)   # checked above
         self.shape = (U.shape[1], Y.shape[1])             # (inputs, outputs) of the predictions
