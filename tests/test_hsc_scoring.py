@@ -44,3 +44,15 @@ def test_a_single_sample_is_not_scored():
     """R needs at least two samples: one is refused rather than scored."""
     with pytest.raises(ValueError, match="at least two samples"):
         score([1.0], [1.0])
+
+
+def test_a_transposed_prediction_is_refused_not_scored():
+    """Same size, other layout: flattened, (N, 2) against (2, N) paired samples that do not
+    belong together and scored R -0.00 for a prediction with R 1.00 (no error). A column
+    against a flat series of the same samples is still scored."""
+    rng = np.random.default_rng(0)
+    y = rng.standard_normal((50, 2))
+    p = y + 0.01 * rng.standard_normal((50, 2))
+    with pytest.raises(ValueError, match=r"differ in shape: \(50, 2\) vs \(2, 50\)"):
+        score(y, p.T)
+    assert score(y[:, 0], p[:, :1]) == pytest.approx(score(y[:, 0], p[:, 0]))

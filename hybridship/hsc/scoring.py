@@ -17,6 +17,11 @@ def _pair(y_true, y_pred):
     b = np.asarray(y_pred, dtype=float).ravel()
     if a.shape != b.shape:
         raise ValueError(f"y_true and y_pred differ in size: {a.size} vs {b.size}")
+    shapes = np.squeeze(y_true).shape, np.squeeze(y_pred).shape
+    if shapes[0] != shapes[1]:
+        # flattened, a transposed array pairs samples that do not belong together
+        raise ValueError(f"y_true and y_pred differ in shape: {shapes[0]} vs {shapes[1]}; expected the same "
+                         f"samples in the same layout (one output's series)")
     if a.size < 2:
         raise ValueError("need at least two samples")
     if not np.all(np.isfinite(a)):
