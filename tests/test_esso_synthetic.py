@@ -73,6 +73,21 @@ def test_esso_log_arrays_read_a_run_from_any_path_object(tmp_path):
     np.testing.assert_array_equal(got.time_s, np.arange(100) * 0.1)
 
 
+@pytest.mark.parametrize("lead", [0.6, -5.0])
+def test_esso_log_arrays_refuse_a_velocity_lead_for_a_converted_log(lead):
+    """A log DataFrame is already converted: the lead was ignored without a word (the same
+    arrays with 0.6 s as without, and -5 s accepted), while a raw run of the same data is
+    shifted by it."""
+    from hybridship.datasets.esso_osaka import esso_log_arrays
+
+    raw = _raw(50)
+    log = esso_to_log(raw)
+    with pytest.raises(ValueError, match="^velocity_lead_s: "):
+        esso_log_arrays(log, velocity_lead_s=lead)
+    np.testing.assert_array_equal(esso_log_arrays(log, velocity_lead_s=0.0).nu, esso_log_arrays(raw).nu)
+    assert not np.array_equal(esso_log_arrays(raw, velocity_lead_s=0.6).nu, esso_log_arrays(raw).nu)
+
+
 # ------------------------------------------------------------------------- convention_checks
 
 

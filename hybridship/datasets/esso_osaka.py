@@ -235,7 +235,16 @@ def read_esso_osaka(path, *, vessel=None, velocity_lead_s: float = 0.0) -> pd.Da
 
 
 def esso_log_arrays(run, vessel="esso_osaka_model", *, velocity_lead_s: float = 0.0) -> LogArrays:
-    """A run (path, raw DataFrame or log DataFrame) as :class:`LogArrays` for ``vessel``."""
+    """A run (path, raw DataFrame or log DataFrame) as :class:`LogArrays` for ``vessel``.
+
+    ``velocity_lead_s`` (see :func:`esso_to_log`) applies to a raw run; a log DataFrame is
+    already converted and is taken as it is.
+
+    Raises
+    ------
+    ValueError
+        ``velocity_lead_s`` not a finite time >= 0, or not 0 with a log DataFrame.
+    """
     from ..vessel import Vessel, load_vessel
 
     v = vessel if isinstance(vessel, Vessel) else load_vessel(vessel)
@@ -246,6 +255,10 @@ def esso_log_arrays(run, vessel="esso_osaka_model", *, velocity_lead_s: float = 
     elif isinstance(run, pd.DataFrame) and "t [s]" in run.columns:
         log = esso_to_log(run, vessel=v, velocity_lead_s=velocity_lead_s)
     elif isinstance(run, pd.DataFrame):
+        # the lead was ignored here without a word (and a negative one accepted)
+        if check_number("velocity_lead_s", velocity_lead_s, lo=0.0):
+            raise ValueError(f"velocity_lead_s: applies to a raw run (a path or read_esso_raw's DataFrame); a log "
+                             f"DataFrame is taken as converted, expected 0, got {velocity_lead_s!r}")
         log = run
     else:
         raise TypeError(f"run: expected a path, EssoRun or DataFrame, got {type(run).__name__}")
