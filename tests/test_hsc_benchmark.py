@@ -125,6 +125,16 @@ def test_models_for_refuses_a_sea_state_the_paper_has_no_models_for():
             models_for(sea_state, load_planing_craft(), "interceptor")
 
 
+def test_models_for_refuses_a_quick_flag_that_is_not_true_or_false():
+    """``quick="no"`` is truthy: it gave the quick models (NARX 60 iterations, 4 ensemble
+    members, 8 block rows) without a word."""
+    from hybridship.hsc.vessel import load_planing_craft
+
+    for quick in ("no", "False", 0, None):
+        with pytest.raises(TypeError, match=r"^quick: expected True or False"):
+            models_for(1, load_planing_craft(), "interceptor", quick=quick)
+
+
 def test_steady_curves_refuse_a_craft_or_count_they_cannot_use_by_name():
     """A vessel name was an AttributeError on .engines, ``n_rpm = 0`` an empty table without
     columns and ``n_rpm = 2.5`` numpy's error; one engine speed is idle."""

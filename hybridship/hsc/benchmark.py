@@ -77,9 +77,12 @@ def models_for(sea_state: int, craft, actuator: str, *, seed: int = 0, quick: bo
     ------
     ValueError
         ``sea_state`` not 1 or 2 (the paper has structures for these two only).
+    TypeError
+        ``quick`` not True or False.
     """
     if isinstance(sea_state, (bool, np.bool_)) or sea_state not in (1, 2):
         raise ValueError(f"sea_state: expected 1 or 2, got {sea_state!r}")
+    check_flags(quick=quick)            # quick="no" gave the quick models (fewer iterations and members)
     ens = EnsembleConfig(seed=seed, n_members=4 if quick else 10, max_epochs=150 if quick else 600,
                          patience=60)
     narx = NARXConfig(n_out=5, n_in=3, seed=seed) if sea_state == 1 else NARXConfig(n_out=7, n_in=5, seed=seed)
