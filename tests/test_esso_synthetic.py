@@ -151,6 +151,17 @@ def test_two_files_of_one_run_are_refused(tmp_path):
     assert [r.name for r in list_runs(tmp_path)] == ["zigzag_a", "zigzag_b"]
 
 
+def test_list_runs_refuses_an_include_duplicates_flag_that_is_not_true_or_false(tmp_path):
+    """``include_duplicates="no"`` is truthy: the cut copy of a run present in full was listed
+    as a run of its own (counted twice) without a word."""
+    _write_runs(tmp_path / "turning", ["turn_14-Sep-2020_15_58_08.csv", "turn_cut_14-Sep-2020_15_58_08.csv"])
+    assert [r.name for r in list_runs(tmp_path)] == ["turn_14-Sep-2020_15_58_08"]
+    for flag in ("no", "False", 0):
+        with pytest.raises(TypeError, match=r"^include_duplicates: expected True or False"):
+            list_runs(tmp_path, include_duplicates=flag)
+    assert len(list_runs(tmp_path, include_duplicates=True)) == 2
+
+
 # ------------------------------------------------------------------------- split_runs
 
 

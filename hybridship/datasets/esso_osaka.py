@@ -52,7 +52,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from ..config import check_number
+from ..config import check_flags, check_number
 from ..logs.io import LogArrays, LogFormatError, log_to_arrays, validate_log
 
 __all__ = [
@@ -365,7 +365,10 @@ def list_runs(folder, *, include_duplicates: bool = False) -> list[EssoRun]:
     ValueError
         If two files hold one run name (``x.csv`` beside ``x.csv.gz``, or one name in two
         sub-folders): the run would count twice.
+    TypeError
+        ``include_duplicates`` not True or False.
     """
+    check_flags(include_duplicates=include_duplicates)    # "no" listed the cut copies as runs of their own
     folder = Path(folder)
     if not folder.is_dir():
         raise FileNotFoundError(f"{folder}: run folder not found")
