@@ -98,28 +98,27 @@ def parse_seeds(text: str) -> list[int]:
 MAX_SEED = 2**32 - 1
 
 
-def _seed(text: str) -> int:
-    """A ``--seed`` value: a whole number in 0..:data:`MAX_SEED` (argparse names the option)."""
+def _whole_number_in(text: str, lo: int, hi: int) -> int:
+    """``text`` as a whole number in ``lo..hi``, or argparse's error (which names the option)."""
     try:
         value = int(text)
     except ValueError:
-        value = -1
-    if not 0 <= value <= MAX_SEED:
-        raise argparse.ArgumentTypeError(f"expected a whole number in 0..{MAX_SEED}, got {text!r}")
+        value = lo - 1
+    if not lo <= value <= hi:
+        raise argparse.ArgumentTypeError(f"expected a whole number in {lo}..{hi}, got {text!r}")
     return value
+
+
+def _seed(text: str) -> int:
+    """A ``--seed`` value: a whole number in 0..:data:`MAX_SEED` (argparse names the option)."""
+    return _whole_number_in(text, 0, MAX_SEED)
 
 
 def _members(text: str) -> int:
     """A ``--members`` value: a whole number in 1..:data:`~hybridship.residual.ensemble.MAX_MEMBERS`."""
     from .residual.ensemble import MAX_MEMBERS
 
-    try:
-        value = int(text)
-    except ValueError:
-        value = 0
-    if not 1 <= value <= MAX_MEMBERS:
-        raise argparse.ArgumentTypeError(f"expected a whole number in 1..{MAX_MEMBERS}, got {text!r}")
-    return value
+    return _whole_number_in(text, 1, MAX_MEMBERS)
 
 
 #: Most embedded scenarios of ``demo`` and ``benchmark drift`` (``embedded_scenarios`` makes 1..20).
@@ -128,13 +127,7 @@ MAX_EMBEDDED_SCENARIOS = 20
 
 def _scenarios(text: str) -> int:
     """A ``--scenarios`` value: a whole number in 1..:data:`MAX_EMBEDDED_SCENARIOS`."""
-    try:
-        value = int(text)
-    except ValueError:
-        value = 0
-    if not 1 <= value <= MAX_EMBEDDED_SCENARIOS:
-        raise argparse.ArgumentTypeError(f"expected a whole number in 1..{MAX_EMBEDDED_SCENARIOS}, got {text!r}")
-    return value
+    return _whole_number_in(text, 1, MAX_EMBEDDED_SCENARIOS)
 
 
 def _seed_list(text: str) -> list[int]:
