@@ -162,12 +162,9 @@ def float_array(shape: tuple | None = None, *, flat: bool = False, finite: bool 
     numbers are refused, as by :func:`real_array`."""
     def convert(v):
         try:
-            a = np.array(v, copy=True)
-            a = a if a.dtype.kind in "USc" else a.astype(float, copy=False)
-        except (TypeError, ValueError):
-            raise ValueError(f"expected an array of numbers, got {type(v).__name__}") from None
-        if a.dtype.kind in "USc":   # numpy would parse "1.5" and drop an imaginary part with only a warning
-            raise ValueError(f"expected an array of real numbers, got dtype {a.dtype}")
+            a = real_array("array", v).copy()       # a copy: never the caller's array
+        except TypeError as err:        # a ValueError, which pydantic reports under the field's name
+            raise ValueError(str(err).removeprefix("array: ")) from None
         if flat:
             a = a.reshape(-1)
         if shape is not None and a.shape != shape:

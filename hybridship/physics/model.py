@@ -34,7 +34,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-from ..config import check_flags, check_whole_number
+from ..config import check_flags, check_whole_number, real_array
 from . import hull, wind as wind_curves
 from .hull import mass_matrices  # moved to hull (vessel validation needs it without this module)
 from .integrate import rollout_batch, step_batch
@@ -262,11 +262,8 @@ def _as_float_array(name, value) -> np.ndarray:
     """``value`` as a float array, or a ValueError naming ``name`` (not numpy's conversion message);
     text is refused, also text that reads as a number (numpy would parse ``"100"``)."""
     try:
-        a = np.asarray(value)
-        if a.dtype.kind in "USc":
-            raise TypeError
-        return a.astype(float, copy=False)
-    except (TypeError, ValueError):
+        return real_array(name, value)
+    except TypeError:
         raise ValueError(f"{name}: expected numbers, got {value!r}") from None
 
 
