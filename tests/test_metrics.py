@@ -316,8 +316,8 @@ def test_drift_forecasts_refuse_horizons_that_are_not_whole_steps_of_the_log():
     log = physics_log(m, seed=3, duration_s=400.0, t_shutdown_s=200.0)
     a = as_log_arrays(log.iloc[::2].reset_index(drop=True), m.vessel)          # a 2-s log
     dr = DeadReckoning(m.vessel)
-    for horizons in ((1, 30), (15, 30)):
-        with pytest.raises(ValueError, match=rf"^horizons_s: {horizons[0]} s is not a whole number .* \(2 s\)"):
+    for horizons, why in (((1, 30), "shorter than one step"), ((15, 30), "not a whole number")):
+        with pytest.raises(ValueError, match=rf"^horizons_s: {horizons[0]} s is {why} .*\(2 s\)"):
             metrics.drift_errors(dr, a, n_intervals=3, horizons_s=horizons)
     p, t, _ = metrics.drift_forecasts(dr, a, n_intervals=3, horizons_s=(2, 30))
     np.testing.assert_array_equal(t[:, 0], a.eta[[101, 102, 103]])

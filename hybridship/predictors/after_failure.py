@@ -13,7 +13,7 @@ import numpy as np
 from ..config import check_number, check_whole_number
 from ..logs.ingest import ingest
 from ..logs.io import LogArrays
-from .forecast_setup import HORIZON_TOLERANCE, HorizonError
+from .forecast_setup import horizon_steps
 
 __all__ = ["HORIZONS_S", "drift_end", "drift_forecasts", "has_drift", "shutdown_index"]
 
@@ -116,12 +116,8 @@ def drift_forecasts(predictor, arrays, *, n_intervals: int | None = 20, horizons
         arrays = ingest(arrays, model.vessel, purpose="forecast")
     i0 = shutdown_index(arrays)
     dt = float(np.median(np.diff(arrays.time_s)))
-    steps = np.array([int(round(h / dt)) for h in horizons_s])
-    off = [h for h, k in zip(horizons_s, steps) if k < 1 or abs(k * dt - h) > max(0.25 * dt, HORIZON_TOLERANCE * h)]
-    if off:
-        # as a forecast refuses such a horizon: it was scored at the nearest step (lead 0 below half a step)
-        raise HorizonError(f"horizons_s: {', '.join(f'{h:g}' for h in off)} s is not a whole number (>= 1) of the "
-                           f"log's steps ({dt:g} s); expected multiples of the step")
+    # as a forecast refuses such a horizon: it was scored at the nearest step (lead 0 below half a step)
+    steps = np.array([horizon_steps(h, dt, "horizons_s") for h in horizons_s])
     H = int(steps.max())
     end = drift_end(arrays, i0)
     available = max(0, -(-(end - H - i0 - first) // every))     # starts that leave H steps before a gap

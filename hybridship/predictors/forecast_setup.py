@@ -195,6 +195,21 @@ def start_indices(arrays: LogArrays, start_times_s) -> np.ndarray:
 HORIZON_TOLERANCE = 0.005
 
 
+def horizon_steps(horizon_s: float, dt_s: float, name: str = "horizon_s") -> int:
+    """Whole steps of ``dt_s`` [s] in ``horizon_s`` [s]; :class:`HorizonError` naming ``name``
+    when it rounds to no step, or lies more than a quarter step and more than
+    :data:`HORIZON_TOLERANCE` of itself from a whole number of steps."""
+    H = int(round(horizon_s / dt_s))
+    if H < 1:
+        raise HorizonError(f"{name}: {horizon_s:g} s is shorter than one step of the log ({dt_s:g} s)")
+    if abs(H * dt_s - horizon_s) > max(0.25 * dt_s, HORIZON_TOLERANCE * horizon_s):
+        # a start time's tolerance, or the median step's own uncertainty on a jittered log
+        # (120 s is 120 steps of 0.9976 s): a forecast of 63 s asked as 60 s is not an answer
+        raise HorizonError(f"{name}: {horizon_s:g} s is not a whole number of the log's steps ({dt_s:g} s); "
+                           f"the nearest is {H * dt_s:g} s")
+    return H
+
+
 class RequestError(ValueError):
     """A forecast request the log cannot serve (start times that are not its samples, a
     horizon shorter than its step, known commands beyond its end): the caller's input, not
@@ -390,14 +405,7 @@ def _forecast_setup(model, config: ResidualConfig, log, start_times_s, horizon_s
         start_indices(whole, start_times_s)
         raise
     dt = forecast_step_s(arrays)
-    H = int(round(horizon_s / dt))
-    if H < 1:
-        raise HorizonError(f"horizon_s: {horizon_s:g} s is shorter than one step of the log ({dt:g} s)")
-    if abs(H * dt - horizon_s) > max(0.25 * dt, HORIZON_TOLERANCE * horizon_s):
-        # a start time's tolerance, or the median step's own uncertainty on a jittered log
-        # (120 s is 120 steps of 0.9976 s): a forecast of 63 s asked as 60 s is not an answer
-        raise HorizonError(f"horizon_s: {horizon_s:g} s is not a whole number of the log's steps ({dt:g} s); "
-                           f"the nearest is {H * dt:g} s")
+    H = horizon_steps(horizon_s, dt)
     if len(idx) * (H + 1) > MAX_FORECAST_POINTS:
         raise RequestError(f"start_times_s, horizon_s: {len(idx)} starts x {H + 1} steps is more than "
                            f"{MAX_FORECAST_POINTS:.0e} forecast points (gigabytes of arrays): forecast the starts "
