@@ -153,6 +153,21 @@ def test_an_envelope_bound_that_is_no_bound_is_refused_by_name(override, error, 
     assert envelope_for(MODEL, wind_speed_max_m_s=np.inf).wind_speed_max_m_s == np.inf
 
 
+@pytest.mark.parametrize("override, error, pattern", [
+    (dict(max_rpm=(np.nan,)), ValueError, r"max_rpm\[0\]: must be finite"),
+    (dict(max_rpm=(300.0, -100.0)), ValueError, r"max_rpm\[1\]: must be > 0, got -100.0"),
+    (dict(max_rpm=("300",)), TypeError, r"max_rpm\[0\]: expected a number"),
+    (dict(max_angle_rad=(np.inf, -0.5)), ValueError, r"max_angle_rad\[1\]: must be > 0, got -0.5"),
+])
+def test_a_channel_limit_that_is_no_limit_is_refused_by_name(override, error, pattern):
+    # before: a NaN max_rpm let 500 rpm through unclipped and unflagged, a negative one refused 50 rpm as
+    # "more than 2 x max_rpm (a unit error?)", a rudder stop of -0.5 rad turned an angle of 0.1 rad into -0.5
+    with pytest.raises(error, match=pattern):
+        Envelope(**override)
+    env = Envelope(max_rpm=(300.0, np.inf), max_angle_rad=(np.inf, 0.5))     # inf: no limit on that channel
+    assert env.max_rpm == (300.0, np.inf)
+
+
 def test_inputs_of_different_batch_sizes_are_refused_by_name():
     # before: accepted while nothing was clipped, and a bare numpy broadcast error once something was
     for wind in (np.zeros((2, 2)), np.zeros((2, 2)) + [60.0, 0.0]):

@@ -113,8 +113,8 @@ class Envelope:
     Raises
     ------
     TypeError, ValueError
-        Naming a bound that is not a number, or not finite and > 0 (``inf`` is no bound; the
-        refuse factor at least 1).
+        Naming a bound (also one channel's ``max_rpm`` or ``max_angle_rad``) that is not a
+        number, or not finite and > 0 (``inf`` is no bound; the refuse factor at least 1).
     """
 
     position_max_m: float = 1e7
@@ -137,6 +137,11 @@ class Envelope:
             v = getattr(self, name)
             if not (isinstance(v, float) and v == math.inf):        # inf: no bound
                 check_number(name, v, **(dict(lo=1.0) if name == "rpm_refuse_factor" else dict(lo=0.0, lo_open=True)))
+        # per channel too: a NaN max_rpm clipped and refused nothing, a negative one refused every command
+        for name in ("max_rpm", "max_angle_rad"):
+            for i, v in enumerate(np.atleast_1d(np.asarray(getattr(self, name), dtype=object)).tolist()):
+                if not (isinstance(v, float) and v == math.inf):    # inf: a rudder's rpm, a thruster's angle
+                    check_number(f"{name}[{i}]", v, lo=0.0, lo_open=True)
 
 
 def envelope_for(vessel, **overrides) -> Envelope:
