@@ -681,6 +681,23 @@ def test_window_settings_accept_their_documented_edges():
             WindowSettings(**bad)
 
 
+@pytest.mark.parametrize("bad, error, pattern", [
+    (dict(window_s="3"), TypeError, r"window_s: expected a number, got '3'"),
+    (dict(window_s=float("inf")), ValueError, r"window_s: must be finite"),
+    (dict(jump_m=float("nan")), ValueError, r"jump_m: must be finite"),
+    (dict(track_mismatch_m=-1.0), ValueError, r"track_mismatch_m: must be > 0, got -1.0"),
+    (dict(min_valid_fraction=None), TypeError, r"min_valid_fraction: expected a number, got None"),
+    (dict(heading_jump_deg="10"), TypeError, r"heading_jump_deg: expected a number, got '10'"),
+])
+def test_window_settings_name_the_setting_that_is_not_a_valid_number(bad, error, pattern):
+    """Before: text or None was a bare comparison TypeError ("'>' not supported between ..."), a NaN
+    threshold a message naming four settings at once, and an infinite window an OverflowError."""
+    from hybridship.forecast_inputs.faults import WindowSettings
+
+    with pytest.raises(error, match=pattern):
+        WindowSettings(**bad)
+
+
 @pytest.mark.parametrize("drop", [["u_m_s", "v_m_s", "r_deg_s"], []])
 def test_derived_start_velocities_do_not_read_the_sample_after_the_start(model, log, drop):
     """Velocities the log derives (no column, or a logged sample missing at the start) are

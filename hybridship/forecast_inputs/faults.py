@@ -231,13 +231,16 @@ class WindowSettings:
     track_mismatch_m: float = TRACK_MISMATCH_M
 
     def __post_init__(self):
-        if (not self.window_s > 0 or not self.frozen_s > 0 or not self.jump_m > 0
-                or not 0 < self.min_valid_fraction <= 1):
-            raise ValueError("window_s, frozen_s and jump_m must be > 0 and min_valid_fraction in (0, 1]")
-        if not (self.track_window_s > 0 and self.track_mismatch_m > 0):
-            raise ValueError(f"track_window_s and track_mismatch_m must be > 0, got {self.track_window_s!r} "
-                             f"and {self.track_mismatch_m!r}")
-        if not 0 < self.heading_jump_deg < 180:
+        # each by name: text was a bare comparison TypeError, NaN a message naming four settings, and an
+        # infinite window an OverflowError
+        for name in ("window_s", "frozen_s", "jump_m", "track_window_s", "track_mismatch_m"):
+            check_number(name, getattr(self, name), lo=0, lo_open=True)
+        check_number("min_valid_fraction", self.min_valid_fraction, lo=0, lo_open=True, hi=1)
+        try:
+            heading_ok = 0 < check_number("heading_jump_deg", self.heading_jump_deg) < 180    # TypeError: no number
+        except ValueError:                                                                     # NaN, inf
+            heading_ok = False
+        if not heading_ok:
             raise ValueError(f"heading_jump_deg must be > 0 and < 180 (a step is at most 180 deg), "
                              f"got {self.heading_jump_deg!r}")
         # a threshold of 0 (or less) calls every held value of a ship at rest frozen; NaN never
