@@ -619,6 +619,16 @@ def test_arguments_are_checked(model, log):
     np.testing.assert_array_equal(assess_start_window(arrays, np.array([100.0])).start_time_s, arrays.time_s[[100]])
 
 
+def test_start_rows_that_are_infinite_or_not_one_axis_are_refused_naming_idx(model, log):
+    """Before: row inf was read as row -9223372036854775808 ("start rows must lie in 0..499, got
+    -9223372036854775808"), and rows of shape (1, 2) failed in numpy's boolean indexing."""
+    arrays, _ = forecast_log_arrays(log, model.vessel)
+    with pytest.raises(TypeError, match=r"idx: expected start rows as whole numbers, got float64 values \[inf\]"):
+        assess_start_window(arrays, [np.inf])
+    with pytest.raises(ValueError, match=r"idx: expected start rows of shape \(S,\), got shape \(1, 2\)"):
+        assess_start_window(arrays, [[100, 200]])
+
+
 def _at_rest(n: int = 60, **columns) -> pd.DataFrame:
     """A 1-Hz log of a ship at rest heading north (adrift, no thrust), every value exact; ``columns`` overrides."""
     df = pd.DataFrame({"time_s": np.arange(float(n)), "north_m": 0.0, "east_m": 0.0, "heading_deg": 0.0,

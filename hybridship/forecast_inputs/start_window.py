@@ -311,11 +311,15 @@ def assess_start_window(
 
 
 def _start_rows(idx, n: int) -> np.ndarray:
-    """``idx`` as int start rows within ``0..n - 1``: a TypeError for fractions, text or a
-    boolean mask (int() would read row 100.7 as 100 and a mask as rows 0 and 1), an
-    IndexError for rows outside the log, each naming ``idx``."""
+    """``idx`` as int start rows within ``0..n - 1``: a TypeError for fractions, infinities, text
+    or a boolean mask (int() would read row 100.7 as 100 and a mask as rows 0 and 1), a
+    ValueError for more than one axis, an IndexError for rows outside the log, each naming
+    ``idx``."""
     raw = np.atleast_1d(np.asarray(idx))
-    if raw.size and (raw.dtype.kind not in "iuf" or (raw.dtype.kind == "f" and not np.all(raw == np.round(raw)))):
+    if raw.ndim != 1:
+        raise ValueError(f"idx: expected start rows of shape (S,), got shape {raw.shape}")
+    whole = np.isfinite(raw) & (raw == np.round(raw)) if raw.dtype.kind == "f" else True
+    if raw.size and (raw.dtype.kind not in "iuf" or not np.all(whole)):
         raise TypeError(f"idx: expected start rows as whole numbers, got {raw.dtype} values {raw.ravel()[:3].tolist()}")
     rows = raw.astype(int)
     if np.any((rows < 0) | (rows >= n)):
