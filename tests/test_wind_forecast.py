@@ -363,6 +363,22 @@ def test_error_paths_are_logged_minus_forecast_wind_where_the_log_measured_the_w
         wind_error_paths(forecast, [a, a], 60, every=1, masks=[mask])
 
 
+def test_error_paths_and_wind_starts_refuse_steps_that_are_not_a_whole_number_by_name():
+    """Before: a negative horizon was numpy's "negative dimensions are not allowed", a float one
+    "'float' object cannot be interpreted as an integer", wind_starts with horizon -1 an IndexError,
+    and a spacing of 2.5 rows was read as 2 unseen."""
+    a = _gusty_log(10.0, n=100, seed=2)
+    a.dt_s, a.wind_logged = 1.0, np.ones(100, bool)
+    forecast = WindForecast(mean_window_s=20.0, time_constant_s=5.0)
+    for kw, name in ((dict(horizon_steps=-1), "horizon_steps"), (dict(horizon_steps=5.0), "horizon_steps"),
+                     (dict(horizon_steps=0), "horizon_steps"), (dict(horizon_steps=5, every=2.5), "every")):
+        with pytest.raises(ValueError, match=rf"{name}: expected a whole number >= 1"):
+            wind_error_paths(forecast, [a], **kw)
+        with pytest.raises(ValueError, match=rf"{name}: expected a whole number >= 1"):
+            wind_starts(a, kw["horizon_steps"], kw.get("every", 1))
+    assert wind_error_paths(forecast, [a], np.int64(5), every=np.int64(20)).shape == (5, 5, 2)
+
+
 @pytest.fixture(scope="module")
 def wind_spread_model(model):
     """(log, hybrid fitted with its wind forecast and 6 wind futures in the spread; the mean

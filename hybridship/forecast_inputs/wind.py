@@ -35,7 +35,7 @@ from typing import Annotated
 import numpy as np
 from pydantic import Field
 
-from hybridship.config import Float, check_number, config_dataclass
+from hybridship.config import Float, check_number, check_whole_number, config_dataclass
 from hybridship.frames import speed_dir_to_vector, vector_to_speed_dir
 
 __all__ = ["HELD_WIND", "WindForecast", "fit_wind_forecast", "trailing_mean_vector", "wind_error_paths",
@@ -167,9 +167,12 @@ def _usable_wind_rows(a, mask=None):
 def wind_starts(a, horizon_steps: int, every: int, mask=None) -> tuple[np.ndarray, np.ndarray]:
     """Start rows of log ``a``, one every ``every`` rows, whose start and ``horizon_steps``
     following rows all hold usable wind (logged, finite, inside ``mask``) in one gap-free
-    segment; and the usable-row mask itself, shape (N,)."""
+    segment; and the usable-row mask itself, shape (N,). ``horizon_steps`` and ``every`` are
+    whole numbers >= 1 (a ValueError naming them)."""
+    horizon_steps = check_whole_number("horizon_steps", horizon_steps, lo=1)
+    every = check_whole_number("every", every, lo=1)
     ok, seg = _usable_wind_rows(a, mask)
-    rows = np.arange(1, len(ok) - horizon_steps, max(1, int(every)))
+    rows = np.arange(1, len(ok) - horizon_steps, every)
     bad = np.concatenate([[0], np.cumsum(~ok)])
     return rows[((bad[rows + horizon_steps + 1] - bad[rows]) == 0) & (seg[rows + horizon_steps] == seg[rows])], ok
 
@@ -245,7 +248,7 @@ def fit_wind_forecast(logs, horizon_s: float, *, masks=None, start_every_s: floa
         if H < 1:
             raise ValueError(f"horizon_s: {horizon_s:g} s is shorter than half a step of logs[{k}] ({dt:g} s): "
                              f"no step of wind to forecast")
-        rows, ok = wind_starts(a, H, int(round(start_every_s / dt)), mask)
+        rows, ok = wind_starts(a, H, max(1, int(round(start_every_s / dt))), mask)
         if rows.size == 0:
             continue
         n_starts += rows.size
@@ -311,8 +314,11 @@ def wind_error_paths(forecast: WindForecast, logs, horizon_steps: int, *, every:
     Raises
     ------
     ValueError
-        Naming ``masks`` when they are not one per log.
+        Naming ``masks`` when they are not one per log, ``horizon_steps`` or ``every`` when
+        not a whole number >= 1.
     """
+    horizon_steps = check_whole_number("horizon_steps", horizon_steps, lo=1)
+    every = check_whole_number("every", every, lo=1)
     paths = [np.zeros((0, horizon_steps, 2))]
     masks = [None] * len(logs) if masks is None else list(masks)
     if len(masks) != len(logs):
@@ -320,7 +326,7 @@ def wind_error_paths(forecast: WindForecast, logs, horizon_steps: int, *, every:
         raise ValueError(f"masks: expected one per log ({len(logs)}), got {len(masks)}")
     for a, mask in zip(logs, masks):
         n = len(a.time_s)
-        rows = np.arange(1, n - horizon_steps - 1, max(1, int(every)))
+        rows = np.arange(1, n - horizon_steps - 1, every)
         wind = np.asarray(a.wind, dtype=float)
         ok, seg = _usable_wind_rows(a, mask)
         bad = np.concatenate([[0], np.cumsum(~ok)])
