@@ -80,6 +80,15 @@ def test_always_refused(kwargs, pattern):
             check_or_clip_inputs(MODEL, mode=mode, **kwargs)
 
 
+def test_inputs_of_text_or_complex_numbers_are_refused_by_name():
+    # before: nu=["9", "0", "0"] was read as 9 m/s (and clipped), complex numbers and other text failed
+    # in numpy's words ("float() argument must be ...", "could not convert string to float")
+    for kwargs, name in ((dict(nu=["9", "0", "0"]), "nu"), (dict(wind=[1 + 2j, 0.0]), "wind"),
+                         (dict(rpm=["a", "b", "c"]), "rpm")):
+        with pytest.raises(TypeError, match=rf"{name}: expected an array of real numbers"):
+            check_or_clip_inputs(MODEL, **kwargs)
+
+
 @pytest.mark.parametrize("kwargs, field_, pattern", [
     (dict(nu=np.zeros((2, 5, 3)) + [0, 5, 0]), "nu", r"nu\[batch 0, step 0, v_m_s\]: 5 is outside .*\|v_m_s\| <= 4 m/s"),
     (dict(rpm=[0.0, 0.0, 250.0]), "rpm", r"rpm\[thruster 'stbd'\]: 250 .*max_rpm"),

@@ -56,7 +56,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..config import check_number, check_whole_number
+from ..config import check_number, check_whole_number, real_array
 from ..frames import wrap_pi
 from .commands import clip_rpm, wrap_and_clip_angles
 from .faults import COMPONENTS, InputRangeError, batch_mask, column_mask, refuse
@@ -246,12 +246,15 @@ def check_or_clip_inputs(
         For non-finite values, for values that are refused in every mode (positions,
         headings, negative speeds, rpm beyond ``rpm_refuse_factor * max_rpm``), and for
         every out-of-range value with ``mode="refuse"``.
+    TypeError
+        Naming an input that is not an array of real numbers (text, complex numbers).
     """
     if mode not in ("clip", "refuse"):
         raise ValueError(f"mode must be 'clip' or 'refuse', got {mode!r}")
     env = envelope if envelope is not None else _default_envelope(vessel, rpm_given=rpm is not None)
     clip = mode == "clip"
-    given = {k: (None if v is None else np.array(v, dtype=float))      # copies: clipped in place
+    # copies, clipped in place; text and complex numbers refused by name (np.array read "1.5" as 1.5)
+    given = {k: (None if v is None else np.array(real_array(k, v), dtype=float))
              for k, v in dict(eta=eta, nu=nu, rpm=rpm, azimuth_rad=azimuth_rad, wind=wind, current=current).items()}
     B = max([a.shape[0] for a in given.values() if a is not None and a.ndim >= 2] or [1])
     for name, a in given.items():
