@@ -21,6 +21,15 @@ def test_envelope_of_the_vessel():
     assert envelope_for("gunnerus", surge_max_m_s=6.0).surge_max_m_s == 6.0
 
 
+def test_envelope_for_overrides_the_vessels_channel_limits_too():
+    # the docstring: "**overrides: Fields of Envelope to change"; before, max_rpm, channel_names or
+    # max_angle_rad were a TypeError ("got multiple values for keyword argument 'max_rpm'")
+    env = envelope_for(MODEL, max_rpm=(300.0, 200.0, 200.0), surge_max_m_s=6.0)
+    assert env.max_rpm == (300.0, 200.0, 200.0) and env.surge_max_m_s == 6.0
+    assert env.channel_names == ("tunnel", "port", "stbd")
+    assert envelope_for(MODEL, channel_names=("a", "b", "c")).max_rpm == tuple(MAX_RPM)
+
+
 def test_extremes_are_clipped_and_flagged_per_batch_element():
     nu = np.array([[9.0, 0.0, 0.0], [1.0, 1.0, 0.1]])
     rpm = np.array([[300.0, 100.0, -250.0], [0.0, 0.0, 0.0]])

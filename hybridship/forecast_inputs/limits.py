@@ -160,10 +160,12 @@ def envelope_for(vessel, **overrides) -> Envelope:
     if not isinstance(v, Vessel):
         v = load_vessel(v)
     rudders = list(getattr(v, "rudders", None) or [])
-    return Envelope(max_rpm=tuple(float(t.max_rpm) for t in v.thrusters) + (math.inf,) * len(rudders),
+    # the vessel's channels, then the overrides (which may change them too: passed twice, they were a TypeError)
+    channels = dict(max_rpm=tuple(float(t.max_rpm) for t in v.thrusters) + (math.inf,) * len(rudders),
                     channel_names=tuple(t.name for t in v.thrusters) + tuple(r.name for r in rudders),
                     max_angle_rad=(math.inf,) * len(v.thrusters)
-                    + tuple(math.radians(r.max_angle_deg) for r in rudders), **overrides)
+                    + tuple(math.radians(r.max_angle_deg) for r in rudders))
+    return Envelope(**{**channels, **overrides})
 
 
 @dataclass(frozen=True, eq=False)
