@@ -629,6 +629,17 @@ def test_start_rows_that_are_infinite_or_not_one_axis_are_refused_naming_idx(mod
         assess_start_window(arrays, [[100, 200]])
 
 
+def test_the_refusal_lists_epoch_start_times_in_full(model):
+    """Before: the list of refused starts was written with ``:g``, so starts on an epoch clock all
+    read "1.7e+09" ("3 of 3 starts refused, at time_s 1.7e+09, 1.7e+09, 1.7e+09")."""
+    df = _at_rest(time_s=1.7e9 + np.arange(60.0))
+    df.loc[20:40, "north_m"] = np.nan
+    arrays, order = forecast_log_arrays(df, model.vessel)
+    with pytest.raises(StartWindowError, match=r"\(3 of 3 starts refused, at time_s 1700000025, 1700000030, "
+                                               r"1700000035\)"):
+        assess_start_window(arrays, [25, 30, 35], order=order)
+
+
 def _at_rest(n: int = 60, **columns) -> pd.DataFrame:
     """A 1-Hz log of a ship at rest heading north (adrift, no thrust), every value exact; ``columns`` overrides."""
     df = pd.DataFrame({"time_s": np.arange(float(n)), "north_m": 0.0, "east_m": 0.0, "heading_deg": 0.0,

@@ -371,7 +371,7 @@ def _refusal(result: StartWindow) -> StartWindowError:
     reason = result.notes[k]
     t_refused = result.start_time_s[refused]
     more = (f" ({int(refused.sum())} of {refused.size} starts refused, at time_s "
-            f"{', '.join(f'{x:g}' for x in t_refused[:5])}{', ...' if refused.sum() > 5 else ''})")
+            f"{', '.join(seconds_text(x) for x in t_refused[:5])}{', ...' if refused.sum() > 5 else ''})")
     t0 = result.start_time_s[k]
     return StartWindowError(f"start time_s {seconds_text(t0)}: refused, {reason}{more if refused.sum() > 1 else ''}",
                             start_time_s=float(t0), reason=reason, refused_start_times_s=t_refused)
