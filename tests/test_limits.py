@@ -139,7 +139,9 @@ def test_large_steps_get_substeps():
     for bad in (1.5, 2.9, None, "2", True):
         with pytest.raises(ValueError, match=r"substeps: expected a whole number >= 1, got "):
             check_or_clip_inputs(MODEL, dt_s=0.5, substeps=bad)
-    for bad in ("1", b"1", True):
+    # before: a list, a complex number or an array of two steps failed in math.isfinite's words
+    # ("must be real number, not list"), not naming dt_s
+    for bad in ("1", b"1", True, [1.0], 1 + 2j, np.array([2.0, 3.0])):
         with pytest.raises(TypeError, match=r"dt_s: expected a number of seconds, got "):
             check_or_clip_inputs(MODEL, dt_s=bad)
     assert check_or_clip_inputs(MODEL, dt_s=np.float64(2.0), substeps=np.int64(4)).substeps == 4

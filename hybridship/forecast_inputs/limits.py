@@ -402,6 +402,10 @@ def rk4_substeps(dt_s: float | None, substeps: int, env: Envelope, clip: bool) -
         return steps
     if isinstance(dt_s, (bool, np.bool_, str, bytes)):
         raise TypeError(f"dt_s: expected a number of seconds, got {dt_s!r}")
+    try:
+        dt_s = float(dt_s)          # a list or complex number failed in math.isfinite's words, not naming dt_s
+    except (TypeError, ValueError):
+        raise TypeError(f"dt_s: expected a number of seconds, got {dt_s!r}") from None
     if not (math.isfinite(dt_s) and dt_s > 0):
         raise InputRangeError(f"dt_s: {dt_s!r} is not a positive finite step; valid: 0 < dt_s",
                               field="dt_s", index=(), value=float(dt_s), valid="0 < dt_s")
