@@ -20,7 +20,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..config import check_number
+from ..config import check_number, real_array
 from ..frames import wrap_pi
 
 
@@ -52,8 +52,22 @@ class EnvelopeGuard:
 
         ``scale`` defaults to ``d0 / 2``: the correction halves about 0.35 d0 beyond the edge;
         a given one must be finite and >= 0 (0: no correction beyond the edge).
+
+        Raises
+        ------
+        TypeError, ValueError
+            ``X`` not a finite 2-D array of real numbers with at least two rows and one
+            column that varies (its covariance would be NaN or singular), naming it.
         """
-        X = np.asarray(X, dtype=float)
+        X = real_array("EnvelopeGuard.fit: X", X)
+        if X.ndim != 2 or X.shape[0] < 2 or X.shape[1] == 0:
+            raise ValueError(f"EnvelopeGuard.fit: X: expected a 2-D array (N, n) of features with N >= 2 rows "
+                             f"and n >= 1, got shape {X.shape}")
+        if not np.all(np.isfinite(X)):
+            raise ValueError("EnvelopeGuard.fit: X: NaN or inf in the features (every distance would be NaN)")
+        if not np.any(np.ptp(X, axis=0) > 0):
+            raise ValueError("EnvelopeGuard.fit: X: every feature is constant over the rows (the covariance "
+                             "is singular); expected at least one that varies")
         if not 0.5 <= quantile < 1.0:
             raise ValueError(f"quantile must lie in [0.5, 1), got {quantile}")
         if scale is not None:
