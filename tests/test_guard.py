@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from hybridship.residual.guard import EnvelopeGuard
+from hybridship.residual.guard import EnvelopeGuard, ThrustRegime
 
 
 @pytest.mark.parametrize("X, match", [
@@ -25,3 +25,9 @@ def test_envelope_fit_refuses_features_it_cannot_measure_a_distance_on(X, match)
 def test_envelope_fit_refuses_text_features():
     with pytest.raises(TypeError, match="EnvelopeGuard.fit: X"):
         EnvelopeGuard.fit([["1", "2"], ["3", "4"]])
+
+
+def test_thrust_regime_fit_refuses_no_rows():
+    """No training rows stopped in numpy's IndexError of an empty quantile."""
+    with pytest.raises(ValueError, match=r"ThrustRegime.fit: thrust_acc.*N >= 1.*\(0, 3\)"):
+        ThrustRegime.fit(np.zeros((0, 3)))

@@ -130,8 +130,9 @@ class ThrustRegime:
     def fit(cls, thrust_acc: np.ndarray, *, quantile: float = 0.01) -> "ThrustRegime":
         """Fit to the training rows' thrust accelerations ``(N, 3)``."""
         A = np.asarray(thrust_acc, dtype=float)
-        if A.ndim != 2 or A.shape[1] != 3 or not np.all(np.isfinite(A)):
-            raise ValueError("ThrustRegime.fit: thrust_acc must be a finite (N, 3) array")
+        if A.ndim != 2 or A.shape[1] != 3 or A.shape[0] == 0 or not np.all(np.isfinite(A)):
+            raise ValueError(f"ThrustRegime.fit: thrust_acc must be a finite (N, 3) array with N >= 1, "
+                             f"got shape {A.shape}")
         if not 0.0 <= quantile < 0.5:
             raise ValueError(f"ThrustRegime.fit: quantile must lie in [0, 0.5), got {quantile}")
         scale = A.std(axis=0)
