@@ -121,7 +121,7 @@ def test_bad_objectives_are_refused():
         choose_coefficient(np.zeros((2, 3)), 0.005, multiples=[1.0, 2.0])
     with pytest.raises(ValueError, match="must contain 0"):
         choose_coefficient(np.zeros((3, 3)), 0.005, multiples=[0.0, 1.0, 0.0])
-    for bad in (3, -1):                                      # a failure the objective does not hold
+    for bad in (3, -1, 1.5, True):          # a failure the objective does not hold, or not a column number
         with pytest.raises(ValueError, match=r"exclude: expected a failure from 0 to 2"):
             choose_coefficient(np.zeros((81, 3)), 0.005, exclude=bad)
 

@@ -154,7 +154,8 @@ def choose_coefficient(objective_rad: np.ndarray, munk_rad_per_m2: float, multip
     multiples : array (K,)
         The candidates as multiples of it (must contain 0).
     exclude : int, optional
-        A failure (column) not to use: the one a benchmark scores.
+        A failure (column) not to use: the one a benchmark scores (a whole number from 0 to
+        ``L - 1``).
 
     Returns
     -------
@@ -171,7 +172,9 @@ def choose_coefficient(objective_rad: np.ndarray, munk_rad_per_m2: float, multip
     zero = np.flatnonzero(multiples == 0.0)
     if zero.size != 1:
         raise ValueError("multiples: must contain 0 exactly once")
-    if exclude is not None and not 0 <= exclude < obj.shape[1]:
+    if exclude is not None and (isinstance(exclude, bool) or not isinstance(exclude, (int, np.integer))
+                                or not 0 <= exclude < obj.shape[1]):
+        # a float 1.5 matched no column (every failure used), True was column 1
         raise ValueError(f"exclude: expected a failure from 0 to {obj.shape[1] - 1}, got {exclude!r}")
     used = [j for j in range(obj.shape[1]) if j != exclude]
     if not used or not np.all(np.isfinite(obj[:, used])):
