@@ -31,3 +31,16 @@ def test_thrust_regime_fit_refuses_no_rows():
     """No training rows stopped in numpy's IndexError of an empty quantile."""
     with pytest.raises(ValueError, match=r"ThrustRegime.fit: thrust_acc.*N >= 1.*\(0, 3\)"):
         ThrustRegime.fit(np.zeros((0, 3)))
+
+
+@pytest.mark.parametrize("fit, lo, hi", [(EnvelopeGuard.fit, 0.5, 1.0), (ThrustRegime.fit, 0.0, 0.5)])
+def test_a_quantile_that_is_not_a_number_in_range_is_refused_by_name(fit, lo, hi):
+    """Text or None stopped in Python's own "'<=' not supported between ..."."""
+    X = np.random.default_rng(0).normal(size=(50, 3))
+    name = fit.__qualname__
+    for bad in ("0.9", None, True):
+        with pytest.raises(TypeError, match=f"{name}: quantile: expected a number"):
+            fit(X, quantile=bad)
+    for bad in (lo - 0.01, hi, float("nan")):
+        with pytest.raises(ValueError, match=f"{name}: quantile: must"):
+            fit(X, quantile=bad)

@@ -68,8 +68,9 @@ class EnvelopeGuard:
         if not np.any(np.ptp(X, axis=0) > 0):
             raise ValueError("EnvelopeGuard.fit: X: every feature is constant over the rows (the covariance "
                              "is singular); expected at least one that varies")
-        if not 0.5 <= quantile < 1.0:
-            raise ValueError(f"quantile must lie in [0.5, 1), got {quantile}")
+        quantile = check_number("EnvelopeGuard.fit: quantile", quantile, lo=0.5)
+        if quantile >= 1.0:
+            raise ValueError(f"EnvelopeGuard.fit: quantile: must lie in [0.5, 1), got {quantile!r}")
         if scale is not None:
             scale = check_number("EnvelopeGuard.fit: scale", scale, lo=0.0)
         mean = X.mean(axis=0)
@@ -133,8 +134,9 @@ class ThrustRegime:
         if A.ndim != 2 or A.shape[1] != 3 or A.shape[0] == 0 or not np.all(np.isfinite(A)):
             raise ValueError(f"ThrustRegime.fit: thrust_acc must be a finite (N, 3) array with N >= 1, "
                              f"got shape {A.shape}")
-        if not 0.0 <= quantile < 0.5:
-            raise ValueError(f"ThrustRegime.fit: quantile must lie in [0, 0.5), got {quantile}")
+        quantile = check_number("ThrustRegime.fit: quantile", quantile, lo=0.0)
+        if quantile >= 0.5:
+            raise ValueError(f"ThrustRegime.fit: quantile: must lie in [0, 0.5), got {quantile!r}")
         scale = A.std(axis=0)
         scale = np.where(scale > 1e-12, scale, 1.0)
         lo = float(np.quantile(np.linalg.norm(A / scale, axis=1), quantile))
