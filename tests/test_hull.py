@@ -214,3 +214,18 @@ def test_a_zero_ridge_is_least_squares_over_the_regressors_that_vary():
     design = np.column_stack([np.ones(500), phi[:, live]])
     want = design @ np.linalg.lstsq(design, Y, rcond=None)[0]
     np.testing.assert_allclose(h.predict(full), want, rtol=1e-9, atol=1e-12)
+
+
+def test_fit_refuses_rows_it_cannot_fit_on_by_name():
+    """No rows gave a NaN correction with only numpy's warnings, a Y of other rows numpy's
+    matmul message, and a negative or NaN ridge was taken as least squares and stored."""
+    rng = np.random.default_rng(5)
+    full, Y = _features(rng, 40), rng.normal(0, 1e-3, (40, 3))
+    for f, y in ((full[:0], Y[:0]), (full, Y[:30]), (full[:, :9], Y), (full[0], Y[0]), (full, Y[:, :2])):
+        with pytest.raises(ValueError, match=r"hull correction: expected full \(N, \d+\) with N >= 1 and Y \(N, 3\)"):
+            HullCorrection.fit(f, y, 3.0)
+    for bad in (-1.0, float("nan")):
+        with pytest.raises(ValueError, match="hull correction: ridge: must"):
+            HullCorrection.fit(full, Y, 3.0, ridge=bad)
+    with pytest.raises(TypeError, match="hull correction: ridge"):
+        HullCorrection.fit(full, Y, 3.0, ridge="0.1")

@@ -25,6 +25,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..config import check_number, real_array
 from .features import ALL_FEATURES
 
 #: Names of the regressors, in the order of :func:`hull_regressors` (``rL`` = r times L_pp,
@@ -92,7 +93,21 @@ class HullCorrection:
     @classmethod
     def fit(cls, full: np.ndarray, Y: np.ndarray, length_m: float, ridge: float = 1e-3) -> "HullCorrection":
         """Ridge regression of targets ``Y`` (N, 3) on the regressors of ``full`` (N, F); ``ridge``
-        0 is least squares over the regressors that vary."""
+        0 is least squares over the regressors that vary.
+
+        Raises
+        ------
+        TypeError, ValueError
+            ``full`` not (N, len(ALL_FEATURES)) with N >= 1, ``Y`` not (N, 3), NaN or inf in
+            either, or ``ridge`` not a finite number >= 0, naming the argument.
+        """
+        full = real_array("hull correction: full", full)
+        Y = real_array("hull correction: Y", Y)
+        ridge = check_number("hull correction: ridge", ridge, lo=0.0)
+        if full.ndim != 2 or full.shape[0] == 0 or full.shape[1] != len(ALL_FEATURES) \
+                or Y.shape != (full.shape[0], 3):
+            raise ValueError(f"hull correction: expected full (N, {len(ALL_FEATURES)}) with N >= 1 and Y (N, 3), "
+                             f"got {full.shape} and {Y.shape}")
         if not np.all(np.isfinite(full)) or not np.all(np.isfinite(Y)):
             raise ValueError("hull correction: features and targets must be finite")
         phi = hull_regressors(full, length_m)
