@@ -44,3 +44,15 @@ def test_a_quantile_that_is_not_a_number_in_range_is_refused_by_name(fit, lo, hi
     for bad in (lo - 0.01, hi, float("nan")):
         with pytest.raises(ValueError, match=f"{name}: quantile: must"):
             fit(X, quantile=bad)
+
+
+def test_the_shrink_factor_reaches_zero_beyond_the_edge():
+    """The documented range is [0, 1]: with scale 0 (no correction beyond the edge) and far
+    outside with the default scale the factor is exactly 0, not in (0, 1]."""
+    X = np.random.default_rng(1).normal(size=(200, 2))
+    inside, far = np.zeros((1, 2)), np.full((1, 2), 1e4)
+    hard = EnvelopeGuard.fit(X, scale=0.0)
+    assert hard.weight(inside)[0] == 1.0 and hard.weight(far)[0] == 0.0
+    assert EnvelopeGuard.fit(X).weight(far)[0] == 0.0
+    w = EnvelopeGuard.fit(X).weight(np.linspace(-50, 50, 101)[:, None] * [1.0, 0.5])
+    assert np.all((w >= 0.0) & (w <= 1.0))

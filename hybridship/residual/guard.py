@@ -91,7 +91,8 @@ class EnvelopeGuard:
         return self._distance(X, self.mean, self.inv_cov)
 
     def weight(self, X: np.ndarray) -> np.ndarray:
-        """Shrink factor in (0, 1] for each row of ``X``: 1 inside the envelope."""
+        """Shrink factor in [0, 1] for each row of ``X``: 1 inside the envelope, 0 beyond it with
+        ``scale`` 0 (and, as ``exp`` underflows, far beyond it with any scale)."""
         excess = np.maximum(self.distance(X) - self.d0, 0.0)
         # a point envelope (d0 = 0 and the default scale d0 / 2 = 0): 1 on it, 0 beyond, not 0 / 0
         with np.errstate(divide="ignore", invalid="ignore"):
