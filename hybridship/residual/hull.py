@@ -10,9 +10,9 @@ commands,
 with a ridge penalty on standardised regressors (a closed-form fit). The nets then learn
 what remains. The regressors (:data:`HULL_REGRESSORS`) are the products of the MMG hull
 polynomial up to second order (``r`` enters as ``r L``, a speed), the rudder normal-force
-terms (``sin(delta)`` and ``sin(delta)^2`` times ``u|u|``, ``u n`` and ``n|n|``; ``n`` is
-the rpm over its maximum), the propeller terms ``n|n|`` and ``u n``, the wind terms
-``u_rw|u_rw|``, ``v_rw|v_rw|`` and ``u_rw v_rw``, plus a constant. They are built from the
+terms (``sin(delta)`` times ``u|u|``, ``u n`` and ``n|n|``, and ``sin(delta)^2`` times ``u^2``
+and ``n^2``; ``n`` is the rpm over its maximum), the propeller terms ``n|n|`` and ``u n``, the wind terms
+``u_rw|u_rw|``, ``v_rw|v_rw|`` and ``u_rw v_rw``, plus a constant (the offset). They are built from the
 hybrid's full feature vector (:data:`~hybridship.residual.features.ALL_FEATURES` order),
 so every rollout step has them at no extra physics cost. Multi-step training may fine-tune
 ``Theta`` together with the nets (:class:`~hybridship.residual.multistep.MultiStepConfig`
