@@ -56,3 +56,13 @@ def test_the_shrink_factor_reaches_zero_beyond_the_edge():
     assert EnvelopeGuard.fit(X).weight(far)[0] == 0.0
     w = EnvelopeGuard.fit(X).weight(np.linspace(-50, 50, 101)[:, None] * [1.0, 0.5])
     assert np.all((w >= 0.0) & (w <= 1.0))
+
+
+@pytest.mark.parametrize("ridge, error", [(-2.0, ValueError), (0.0, ValueError), (float("nan"), ValueError),
+                                          ("1e-6", TypeError)])
+def test_a_ridge_that_is_not_a_positive_number_is_refused_by_name(ridge, error):
+    """A ridge of -2 gave an envelope of edge 0 whose weight was 1 everywhere, NaN gave NaN
+    weights, text numpy's "can't multiply sequence"; 0 leaves collinear features singular."""
+    X = np.random.default_rng(0).normal(size=(500, 2))
+    with pytest.raises(error, match="EnvelopeGuard.fit: ridge"):
+        EnvelopeGuard.fit(X, ridge=ridge)

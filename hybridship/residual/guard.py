@@ -51,7 +51,8 @@ class EnvelopeGuard:
         """Fit the envelope to training features ``X (N, n)``.
 
         ``scale`` defaults to ``d0 / 2``: the correction halves about 0.35 d0 beyond the edge;
-        a given one must be finite and >= 0 (0: no correction beyond the edge).
+        a given one must be finite and >= 0 (0: no correction beyond the edge). ``ridge`` (> 0)
+        adds that share of the mean feature variance to the covariance's diagonal.
 
         Raises
         ------
@@ -73,6 +74,7 @@ class EnvelopeGuard:
             raise ValueError(f"EnvelopeGuard.fit: quantile: must lie in [0.5, 1), got {quantile!r}")
         if scale is not None:
             scale = check_number("EnvelopeGuard.fit: scale", scale, lo=0.0)
+        ridge = check_number("EnvelopeGuard.fit: ridge", ridge, lo=0.0, lo_open=True)
         mean = X.mean(axis=0)
         cov = np.cov(X, rowvar=False)
         cov = np.atleast_2d(cov) + ridge * np.trace(np.atleast_2d(cov)) / X.shape[1] * np.eye(X.shape[1])
