@@ -1270,3 +1270,27 @@ def test_a_weather_tables_time_labels_are_kept_as_written(tmp_path):
     path.write_text(head + "0000" + row + row)
     with pytest.raises(ValueError, match=r"column 'time', row 1 \(line 3 of the file\): empty"):
         read_weather_table(path)
+
+
+def test_a_weather_tables_errors_name_the_line_the_bad_row_is_on(tmp_path):
+    """Blank lines (before the header, between rows, holding only spaces) are skipped by the
+    reader but are lines of the file: a bad row after them is named by its own line, not by
+    its row number plus two (which pointed at the line before it). A row quoted over two
+    lines starts on the first."""
+    head = "time,wind_speed_m_s,wind_dir_deg,hs_m,tp_s,wave_dir_deg,current_m_s,current_dir_deg\n"
+    path = tmp_path / "gaps.csv"
+    path.write_text("\n" + head + "a,5,0,1,6,0,0.1,0\n\n  \n" + '"b\n",5,0,1,6,0,0.1,0\n' + "c,99,0,1,6,0,0.1,0\n")
+    with pytest.raises(ValueError, match=r"column 'wind_speed_m_s', row 2 \(line 8 of the file\): 99"):
+        read_weather_table(path)
+    path.write_text(head + "\na,5,0,5,2,0,0.1,0\n")          # a sea steeper than waves can be
+    with pytest.raises(ValueError, match=r"row 0 \(line 3 of the file\): hs_m 5 m at tp_s 2 s"):
+        read_weather_table(path)
+    path.write_text(head + "a,5,0,1,6,0,0.1,0\n\na,5,0,1,6,0,0.1,0\n")
+    with pytest.raises(ValueError, match=r"column 'time', row 1 \(line 4 of the file\): 'a' again"):
+        read_weather_table(path)
+    import gzip
+
+    with gzip.open(tmp_path / "gaps.csv.gz", "wt") as fh:       # a compressed table: the lines of its text
+        fh.write(head + "a,5,0,1,6,0,0.1,0\n\n\nb,99,0,1,6,0,0.1,0\n")
+    with pytest.raises(ValueError, match=r"row 1 \(line 5 of the file\): 99"):
+        read_weather_table(tmp_path / "gaps.csv.gz")

@@ -258,7 +258,7 @@ def read_weather_table(path_or_frame) -> tuple[list[WeatherState], list[str]]:
         if bad.any():
             i = int(np.flatnonzero(bad)[0])
             expected = "a finite number" if c not in _TABLE_RANGES else f"a number in [{lo:g}, {hi:g}]"
-            line = "" if isinstance(path_or_frame, pd.DataFrame) else f" (line {i + 2} of the file)"
+            line = "" if isinstance(path_or_frame, pd.DataFrame) else f" (line {_line_of_row(src, i)} of the file)"
             raw = df[c].iloc[i]
             got = ("a missing value" if pd.isna(raw) else
                    f"{raw.item() if isinstance(raw, np.generic) else raw!r}")    # 99, not np.int64(99)
@@ -274,7 +274,7 @@ def read_weather_table(path_or_frame) -> tuple[list[WeatherState], list[str]]:
                                        cols["hs_m"][i], cols["tp_s"][i], math.radians(cols["wave_dir_deg"][i]),
                                        cols["current_m_s"][i], math.radians(cols["current_dir_deg"][i]), gi[i]))
         except ValueError as exc:       # a combination of columns (a sea steeper than waves can be)
-            line = "" if isinstance(path_or_frame, pd.DataFrame) else f" (line {i + 2} of the file)"
+            line = "" if isinstance(path_or_frame, pd.DataFrame) else f" (line {_line_of_row(src, i)} of the file)"
             raise ValueError(f"{src}: row {i}{line}: {str(exc).removeprefix('weather.')}") from None
     labels = [str(i) for i in range(len(df))]
     if "time" in df.columns:
@@ -283,7 +283,7 @@ def read_weather_table(path_or_frame) -> tuple[list[WeatherState], list[str]]:
         bad = t.isna() | t.duplicated(keep="first")      # a season table's row must say which state it is
         if bad.any():
             i = int(np.flatnonzero(bad.to_numpy())[0])
-            line = "" if isinstance(path_or_frame, pd.DataFrame) else f" (line {i + 2} of the file)"
+            line = "" if isinstance(path_or_frame, pd.DataFrame) else f" (line {_line_of_row(src, i)} of the file)"
             got = "empty" if pd.isna(t.iloc[i]) else f"{labels[i]!r} again (first in row {labels.index(labels[i])})"
             raise ValueError(f"{src}: column 'time', row {i}{line}: {got}; each state needs a label of its own "
                              f"(or leave the column out to number the rows)")
@@ -300,6 +300,27 @@ def _warn_directions_like_radians(cols: dict, src: str) -> None:
         if v.size >= 20 and within_a_turn and np.ptp(v) >= RAD_SPREAD_LIMIT:
             warnings.warn(f"{src}: column {c!r} spans {v.min():.2f} to {v.max():.2f}, which looks like radians; "
                           f"the table expects degrees (convert with numpy.degrees)", UserWarning, stacklevel=3)
+
+
+def _line_of_row(src: str, i: int) -> int:
+    """The line of the file on which data row ``i`` starts, counted as the reader counts rows:
+    blank lines (empty or spaces only) are no rows, yet lines of the file."""
+    import csv
+    import gzip
+
+    from ..fileio import starts_with
+
+    opener = gzip.open if starts_with(src, b"\x1f\x8b") else open      # a .csv.gz reads as its text
+    with opener(src, "rt", newline="", encoding="utf-8", errors="replace") as fh:
+        rows = csv.reader(fh)
+        start, k = 1, -2                # -2: the header line comes first
+        for row in rows:
+            if len(row) > 1 or "".join(row).strip():
+                k += 1
+                if k == i:
+                    return start
+            start = rows.line_num + 1
+    return i + 2
 
 
 def _field_count_problem(src: str) -> str:
