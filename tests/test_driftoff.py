@@ -1294,3 +1294,16 @@ def test_a_weather_tables_errors_name_the_line_the_bad_row_is_on(tmp_path):
         fh.write(head + "a,5,0,1,6,0,0.1,0\n\n\nb,99,0,1,6,0,0.1,0\n")
     with pytest.raises(ValueError, match=r"row 1 \(line 5 of the file\): 99"):
         read_weather_table(tmp_path / "gaps.csv.gz")
+
+
+def test_states_to_frame_refuses_what_is_not_a_list_of_states_by_name():
+    """A list holding something else failed with "'int' object has no attribute
+    'wind_speed_m_s'", one state alone with "'WeatherState' object is not iterable"; a set has
+    no order for the rows. Each is refused naming ``states`` (or the item)."""
+    w = WeatherState(wind_speed_m_s=8.0)
+    assert len(states_to_frame((w, w))) == 2 and len(states_to_frame(iter([w]))) == 1
+    with pytest.raises(TypeError, match=r"^states\[1\]: expected a WeatherState, got dict"):
+        states_to_frame([w, {"wind_speed_m_s": 8.0}])
+    for bad in (w, None, 3.0, "w", {w}, {"a": w}):
+        with pytest.raises(TypeError, match=r"^states: expected a list of WeatherState"):
+            states_to_frame(bad)

@@ -31,6 +31,7 @@ from __future__ import annotations
 
 import math
 import warnings
+from collections.abc import Iterable, Mapping, Set
 from dataclasses import dataclass
 from typing import Annotated
 from pathlib import Path
@@ -339,7 +340,13 @@ def _field_count_problem(src: str) -> str:
 def states_to_frame(states, labels=None) -> pd.DataFrame:
     """The inverse of :func:`read_weather_table` (degrees at the edge); ``labels``, when
     given, one per state (the ``time`` column)."""
+    if isinstance(states, (WeatherState, str, bytes, Set, Mapping)) or not isinstance(states, Iterable):
+        raise TypeError(f"states: expected a list of WeatherState (as read_weather_table gives), got "
+                        f"{type(states).__name__}")
     states = list(states)
+    for i, s in enumerate(states):      # each row's fields are read from it: 'int' has no attribute ...
+        if not isinstance(s, WeatherState):
+            raise TypeError(f"states[{i}]: expected a WeatherState, got {type(s).__name__}")
     if labels is not None:
         labels = list(labels)
         if len(labels) != len(states):      # pandas would say "Length of values ... index", naming neither
