@@ -1307,3 +1307,18 @@ def test_states_to_frame_refuses_what_is_not_a_list_of_states_by_name():
     for bad in (w, None, 3.0, "w", {w}, {"a": w}):
         with pytest.raises(TypeError, match=r"^states: expected a list of WeatherState"):
             states_to_frame(bad)
+
+
+def test_labels_given_as_text_are_refused_not_split_into_characters():
+    """``labels="ab"`` labelled two states "a" and "b", and one state's ``labels="2024-01-01"``
+    was refused as 10 labels for 1 state; text (or a set, with no order) is refused naming
+    ``labels``, in a sweep and in a weather table written from states."""
+    w = WeatherState(wind_speed_m_s=8.0)
+    st = DriftOffSettings(n_samples=2, horizon_s=30.0, reaction_times_s=(10.0,))
+    for bad in ("ab", "2024-01-01", b"ab", {"a", "b"}, 7):
+        with pytest.raises(TypeError, match=r"^labels: expected a list of labels, one per state"):
+            season_sweep("gunnerus", [w, w], [0.0], settings=st, labels=bad, progress=False)
+        with pytest.raises(TypeError, match=r"^labels: expected a list of labels, one per state"):
+            states_to_frame([w, w], bad)
+    assert states_to_frame([w, w], ("a", "b"))["time"].tolist() == ["a", "b"]
+    assert season_sweep("gunnerus", w, [0.0], settings=st, labels=np.array(["x"]), progress=False).labels == ["x"]

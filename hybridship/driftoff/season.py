@@ -30,7 +30,7 @@ import pandas as pd
 
 from ..config import as_config, check_flags
 from .planning import DriftOffSettings, check_headings, simulate_blackouts
-from .weather import WeatherState, WeatherUncertainty
+from .weather import WeatherState, WeatherUncertainty, label_list
 
 __all__ = ["SeasonResult", "run_chunk", "season_sweep", "require_dask"]
 
@@ -222,9 +222,8 @@ def season_sweep(vessel, states, headings_rad, *, uncertainty: WeatherUncertaint
     check_flags(progress=progress)          # a text "no" is truthy and would show the bar
     st = as_config(settings, DriftOffSettings, "settings") if settings is not None else DriftOffSettings()
     psi = check_headings(headings_rad)
-    labels = [str(i) for i in range(len(states))] if labels is None else [str(x) for x in labels]
-    if len(labels) != len(states):
-        raise ValueError(f"labels: expected {len(states)} labels, got {len(labels)}")
+    labels = ([str(i) for i in range(len(states))] if labels is None
+              else [str(x) for x in label_list(labels, len(states))])     # text is no list of labels
     if len(set(labels)) != len(labels):     # the season table's rows would not say which state they are
         raise ValueError(f"labels: expected distinct labels (a weather table's time column names each state once), "
                          f"got {next(x for x in labels if labels.count(x) > 1)!r} more than once")

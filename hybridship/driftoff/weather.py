@@ -337,6 +337,18 @@ def _field_count_problem(src: str) -> str:
     return f"a line has another number of fields than the header line ({n})"
 
 
+def label_list(labels, n: int) -> list:
+    """``labels`` as a list of ``n`` state labels, refused naming ``labels`` when it is text
+    (whose characters would be the labels: "ab" for two states, or one state's "2024-01-01"
+    as 10), has no order (a set) or holds another number of labels."""
+    if isinstance(labels, (str, bytes, Set, Mapping)) or not isinstance(labels, Iterable):
+        raise TypeError(f"labels: expected a list of labels, one per state, got {type(labels).__name__} {labels!r}")
+    labels = list(labels)
+    if len(labels) != n:      # pandas would say "Length of values ... index", naming neither
+        raise ValueError(f"labels: expected {n} labels, one per state, got {len(labels)}")
+    return labels
+
+
 def states_to_frame(states, labels=None) -> pd.DataFrame:
     """The inverse of :func:`read_weather_table` (degrees at the edge); ``labels``, when
     given, one per state (the ``time`` column)."""
@@ -347,10 +359,7 @@ def states_to_frame(states, labels=None) -> pd.DataFrame:
     for i, s in enumerate(states):      # each row's fields are read from it: 'int' has no attribute ...
         if not isinstance(s, WeatherState):
             raise TypeError(f"states[{i}]: expected a WeatherState, got {type(s).__name__}")
-    if labels is not None:
-        labels = list(labels)
-        if len(labels) != len(states):      # pandas would say "Length of values ... index", naming neither
-            raise ValueError(f"labels: expected {len(states)} labels, one per state, got {len(labels)}")
+    labels = None if labels is None else label_list(labels, len(states))
     rows = [{"wind_speed_m_s": s.wind_speed_m_s, "wind_dir_deg": math.degrees(s.wind_dir_from_rad) % 360.0,
              "hs_m": s.hs_m, "tp_s": s.tp_s, "wave_dir_deg": math.degrees(s.wave_dir_from_rad) % 360.0,
              "current_m_s": s.current_speed_m_s, "current_dir_deg": math.degrees(s.current_dir_to_rad) % 360.0,
