@@ -1322,3 +1322,23 @@ def test_labels_given_as_text_are_refused_not_split_into_characters():
             states_to_frame([w, w], bad)
     assert states_to_frame([w, w], ("a", "b"))["time"].tolist() == ["a", "b"]
     assert season_sweep("gunnerus", w, [0.0], settings=st, labels=np.array(["x"]), progress=False).labels == ["x"]
+
+
+def test_the_capacity_warning_never_rounds_a_share_to_none_or_all_of_the_samples(tmp_path):
+    """One sample of 1000 over capacity was reported as "0% of the samples" (and 999 of 1000 as
+    "100%"): a heading flagged with none of its samples; the share now reads <1% and >99%."""
+    import dataclasses
+
+    from hybridship.driftoff.planning import DriftOffResult
+    from hybridship.driftoff.report import write_report
+
+    n = 1000
+    r = DriftOffResult(np.radians([0.0, 90.0, 180.0]), np.zeros(3), np.array([5.0]), np.array([10.0]),
+                       np.full((3, n, 1), np.inf), np.zeros((3, n, 1)), 30.0,
+                       over_capacity_frac=np.array([1.0 / n, 1.0 - 1.0 / n, 0.5]))
+    text = write_report(r, tmp_path / "o", plots=False)["summary.md"].read_text()
+    assert ("at heading(s) 0 deg (<1% of the samples), 90 deg (>99% of the samples), 180 deg (50% of the "
+            "samples)") in text
+    r = dataclasses.replace(r, over_capacity_frac=np.array([0.005, 0.995, 0.01]))    # 0.5 % rounds to 0 %
+    text = write_report(r, tmp_path / "o", plots=False)["summary.md"].read_text()
+    assert "0 deg (<1% of the samples), 90 deg (>99% of the samples), 180 deg (1% of the samples)" in text

@@ -177,7 +177,9 @@ def _over_capacity_lines(result: DriftOffResult) -> list[str]:
     frac = result.over_capacity_frac
     if frac is None or not np.any(frac > 0):
         return []
-    where = ", ".join(f"{math.degrees(h) % 360:.0f} deg ({f:.0%} of the samples)"
+    # a share is never rounded to none or all of the samples (1 of 1000 read "0% of the samples")
+    share = lambda f: "<1%" if f < 0.01 else ">99%" if 0.99 < f < 1.0 else f"{f:.0%}"  # noqa: E731
+    where = ", ".join(f"{math.degrees(h) % 360:.0f} deg ({share(f)} of the samples)"
                       for h, f in zip(result.headings_rad, frac) if f > 0)
     return [f"**DP capacity exceeded before the blackout** at heading(s) {where}: the mean wind, waves and current "
             "there need more than the thrusters' bollard force or moment in surge, sway or yaw alone, so the "
