@@ -188,3 +188,23 @@ def test_live_and_forecast_end_alike_on_a_log_without_a_required_column(tmp_path
     err = capsys.readouterr().err
     assert err.startswith("hybridship drift-off live: error: heading_deg: required column missing")
     assert "Traceback" not in err
+
+
+def test_a_season_summary_warns_of_states_beyond_the_thrusters_capacity(tmp_path, capsys):
+    """docs/drift-off.md: over capacity is flagged in planning and season, with a warning in
+    summary.md. A season's summary had none: a storm beyond the thrusters counted as operable
+    or not with no word that the DP could not have held station there. One storm of two states
+    is named; a calm season has no warning."""
+    table = tmp_path / "w.csv"
+    storm = WeatherState.from_degrees(wind_speed_m_s=30.0, wind_dir_deg=90.0, hs_m=3.0, tp_s=9.0, current_m_s=0.5,
+                                      current_dir_deg=90.0)
+    run = ["drift-off", "season", "--weather-table", str(table), "--scheduler", "none", "--samples", "2",
+           "--headings-deg", "0,90", "--horizon-s", "30", "--reaction-times-s", "10", "--no-progress"]
+    states_to_frame([WeatherState(wind_speed_m_s=5.0), storm]).to_csv(table, index=False)
+    assert main(run + ["--out", str(tmp_path / "s")]) == 0
+    capsys.readouterr()
+    text = (tmp_path / "s" / "summary.md").read_text()
+    assert "**DP capacity exceeded before the blackout** in 1 of 2 weather states at one heading or more" in text
+    states_to_frame([WeatherState(wind_speed_m_s=5.0)]).to_csv(table, index=False)
+    assert main(run + ["--out", str(tmp_path / "c")]) == 0
+    assert "DP capacity" not in (tmp_path / "c" / "summary.md").read_text()

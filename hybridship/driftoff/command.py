@@ -414,9 +414,22 @@ def _cmd_season(args) -> int:
     n = len(states) * len(args.headings_deg) * st.n_samples
     text = (f"# Drift-off season sweep\n\n{len(states)} weather states x {len(args.headings_deg)} headings x "
             f"{st.n_samples} samples = {n} blackouts of {model.vessel.name} in {res.wall_s:.1f} s "
-            f"({n / res.wall_s:.0f} samples/s; scheduler {args.scheduler}).\n\n"
+            f"({n / res.wall_s:.0f} samples/s; scheduler {args.scheduler}).\n\n" + _over_capacity_text(res) +
             f"## Share of states with P(exceed) <= {args.max_p_exceed:g}, per heading, radius and reaction time\n\n"
             + markdown_table(op) + "\n")
     write_season_report(Path(args.out), res.to_frame(), op, text)
     print(text)
     return 0
+
+
+def _over_capacity_text(res) -> str:
+    """A season summary's warning where states' mean environment exceeds the thrusters' capacity
+    (as a planning summary warns; none otherwise)."""
+    over = res.over_capacity_frac.max(axis=1) > 0       # per state: at any heading, any sample
+    if not over.any():
+        return ""
+    return (f"**DP capacity exceeded before the blackout** in {int(over.sum())} of {over.size} weather states at "
+            "one heading or more: the mean wind, waves and current there need more than the thrusters' bollard "
+            "force or moment in surge, sway or yaw alone, so the vessel would not be holding station when the "
+            "blackout comes; their times and operable shares are optimistic (column `over_capacity_frac` in "
+            "season.csv).\n\n")
