@@ -1342,3 +1342,11 @@ def test_the_capacity_warning_never_rounds_a_share_to_none_or_all_of_the_samples
     r = dataclasses.replace(r, over_capacity_frac=np.array([0.005, 0.995, 0.01]))    # 0.5 % rounds to 0 %
     text = write_report(r, tmp_path / "o", plots=False)["summary.md"].read_text()
     assert "0 deg (<1% of the samples), 90 deg (>99% of the samples), 180 deg (1% of the samples)" in text
+
+
+def test_a_weather_table_that_is_no_path_is_refused_naming_the_argument():
+    """``read_weather_table(None)`` said "no such file 'None'", and an empty path "'' is a
+    folder" (the current one); each is refused as no path, naming ``path_or_frame``."""
+    for bad, err in ((None, TypeError), (5, TypeError), (b"w.csv", TypeError), ("", ValueError)):
+        with pytest.raises(err, match=r"^path_or_frame: expected a file path"):
+            read_weather_table(bad)

@@ -41,6 +41,7 @@ import pandas as pd
 from pydantic import AfterValidator, Field, model_validator
 
 from ..config import Float, check_number, config_dataclass
+from ..fileio import as_path
 from ..frames import wrap_2pi
 from ..logs.io import RAD_SPREAD_LIMIT, unit_variant
 from ..forecast_inputs.limits import Envelope
@@ -202,7 +203,7 @@ def read_weather_table(path_or_frame) -> tuple[list[WeatherState], list[str]]:
         df, src = path_or_frame, "weather table"
         names = [str(c) for c in df.columns]
     else:
-        src = str(path_or_frame)
+        src = str(as_path(path_or_frame, "path_or_frame"))    # not "no such file 'None'", nor '' as the folder .
         if Path(src).is_dir():
             raise IsADirectoryError(f"weather table: {src!r} is a folder; expected a CSV file")
         if not Path(src).is_file():
