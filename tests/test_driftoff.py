@@ -1350,3 +1350,17 @@ def test_a_weather_table_that_is_no_path_is_refused_naming_the_argument():
     for bad, err in ((None, TypeError), (5, TypeError), (b"w.csv", TypeError), ("", ValueError)):
         with pytest.raises(err, match=r"^path_or_frame: expected a file path"):
             read_weather_table(bad)
+
+
+def test_a_season_with_an_uncertainty_of_the_wrong_type_is_refused_before_any_state_runs(monkeypatch):
+    """``season_sweep(uncertainty=...)`` was checked only by each state's simulate_blackouts:
+    on a cluster, after the cluster had started, in every worker (logged there as a crash);
+    in this process after the sweep had begun. It is refused before any state runs."""
+    from hybridship.driftoff import season
+
+    def no_simulation_yet(*args, **kwargs):
+        raise RuntimeError("a state was simulated before the arguments were checked")
+    monkeypatch.setattr(season, "simulate_blackouts", no_simulation_yet)
+    for bad in ({"wind_speed_m_s": 1.0}, "typical", WeatherState()):
+        with pytest.raises(TypeError, match=r"^uncertainty: expected a WeatherUncertainty or None, got"):
+            season_sweep("gunnerus", [WeatherState()], [0.0], uncertainty=bad, progress=False)

@@ -220,6 +220,8 @@ def season_sweep(vessel, states, headings_rad, *, uncertainty: WeatherUncertaint
             or not 0.0 < float(quantile) < 1.0:
         raise ValueError(f"quantile: expected a number in (0, 1), got {quantile!r}")
     check_flags(progress=progress)          # a text "no" is truthy and would show the bar
+    if uncertainty is not None and not isinstance(uncertainty, WeatherUncertainty):   # not each worker's failure
+        raise TypeError(f"uncertainty: expected a WeatherUncertainty or None, got {type(uncertainty).__name__}")
     st = as_config(settings, DriftOffSettings, "settings") if settings is not None else DriftOffSettings()
     psi = check_headings(headings_rad)
     labels = ([str(i) for i in range(len(states))] if labels is None
