@@ -143,6 +143,43 @@ def test_narx_holds_out_at_least_one_row_for_early_stopping():
     assert np.isfinite(err) and err < np.abs(Y[2:] - Y[2:].mean(0)).mean()
 
 
+def test_narx_fit_leaves_the_callers_global_torch_random_state_alone():
+    """The restarts' initial weights come from a generator of the fit's own: a caller's
+    seeded torch draws after a fit are those it would have had without it, and a second fit
+    after other draws gives the same weights."""
+    import torch
+
+    rng = np.random.default_rng(3)
+    U = rng.uniform(-1, 1, (60, 3))
+    Y = np.cumsum(rng.normal(size=(60, 2)), axis=0) * 0.1
+    cfg = NARXConfig(n_out=2, n_in=2, max_iter=20, restarts=2, seed=4)
+    torch.manual_seed(123)
+    want = torch.rand(3)
+    torch.manual_seed(123)
+    first = NARXModel(cfg).fit(U, Y)
+    assert torch.equal(torch.rand(3), want)
+    second = NARXModel(cfg).fit(U, Y)
+    assert all(np.array_equal(a, b) for a, b in zip(first.weights, second.weights))
+
+
+def test_narx_initial_weights_are_those_torch_linear_draws_after_seeding():
+    """The generator of the fit's own gives the weights that ``torch.manual_seed(seed)`` and
+    ``torch.nn.Linear`` gave (the benchmark's figures were made with those)."""
+    import torch
+
+    from hybridship.hsc.identification import _narx_net
+
+    sizes, seed = [19, 5, 4, 2], 1002
+    with torch.random.fork_rng():
+        torch.manual_seed(seed)
+        want = [torch.nn.Linear(sizes[i], sizes[i + 1]).double() for i in range(len(sizes) - 1)]
+    got = [m for m in _narx_net(sizes, seed) if isinstance(m, torch.nn.Linear)]
+    assert len(got) == 3
+    for a, b in zip(got, want):
+        assert a.weight.dtype == torch.float64
+        assert torch.equal(a.weight, b.weight) and torch.equal(a.bias, b.bias)
+
+
 def test_arx_model_free_run_exact_with_several_lags_and_a_longer_delay():
     """Higher orders (ARX321, as in the paper) and a delay of 2 samples: the lags are taken newest
     first and the model needs ``max(na, nk + nb - 1)`` initial rows; noise-free data are reproduced."""

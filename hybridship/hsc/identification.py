@@ -393,6 +393,28 @@ class _MinMax:
         return (Z + 1.0) / 2.0 * self.span + self.lo
 
 
+def _narx_net(sizes, seed: int):
+    """The network (log-sigmoid hidden layers, linear output, float64), its initial weights
+    drawn as ``torch.nn.Linear`` draws them but from a generator of its own seeded with
+    ``seed``, so torch's global random state, the caller's, is left as it was."""
+    import math
+
+    import torch
+
+    gen = torch.Generator().manual_seed(int(seed))
+    layers = []
+    for i in range(len(sizes) - 1):
+        lin = torch.nn.utils.skip_init(torch.nn.Linear, sizes[i], sizes[i + 1])
+        with torch.no_grad():                  # Linear.reset_parameters, drawing from gen
+            torch.nn.init.kaiming_uniform_(lin.weight, a=math.sqrt(5), generator=gen)
+            bound = 1 / math.sqrt(sizes[i])
+            torch.nn.init.uniform_(lin.bias, -bound, bound, generator=gen)
+        layers.append(lin.double())
+        if i < len(sizes) - 2:
+            layers.append(torch.nn.Sigmoid())
+    return torch.nn.Sequential(*layers)
+
+
 class NARXModel:
     """NARX network ``y[k] = f(y[k-1..k-n_out], u[k-1..k-n_in])`` trained series-parallel."""
 
@@ -431,14 +453,7 @@ class NARXModel:
         try:
             best, best_state = np.inf, None
             for r in range(c.restarts):
-                torch.manual_seed(c.seed * 1000 + r)
-                sizes = [X.shape[1], *c.hidden, T.shape[1]]
-                layers = []
-                for i in range(len(sizes) - 1):
-                    layers.append(torch.nn.Linear(sizes[i], sizes[i + 1]).double())
-                    if i < len(sizes) - 2:
-                        layers.append(torch.nn.Sigmoid())
-                net = torch.nn.Sequential(*layers)
+                net = _narx_net([X.shape[1], *c.hidden, T.shape[1]], c.seed * 1000 + r)
                 opt = torch.optim.LBFGS(net.parameters(), lr=1.0, max_iter=20, history_size=20,
                                         line_search_fn="strong_wolfe")
                 r_best, r_state, since = np.inf, None, 0
