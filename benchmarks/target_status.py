@@ -104,7 +104,9 @@ def _grid(errors: pd.DataFrame, index: list, cells: pd.MultiIndex, source: str) 
     missing = {"hybrid", "dynamic"} - set(errors.model)
     if missing:
         raise ValueError(f"{source}: model(s) {sorted(missing)} missing")
-    d = errors.pivot_table(index=index, columns="model", values="mae", dropna=False)
+    # a NaN error counts as infinite: a mean over folds would skip it and pass on the others
+    d = errors.assign(mae=errors.mae.fillna(np.inf)).pivot_table(index=index, columns="model", values="mae",
+                                                                 dropna=False)
     d = d.reindex(cells)[["hybrid", "dynamic"]]
     bad = d[~(np.isfinite(d) & (d > 0)).all(axis=1)]
     if len(bad):
@@ -148,6 +150,7 @@ def _group_errors(per_log: pd.DataFrame, patterns) -> tuple:
     name = ",".join(patterns)
     logs = group_logs(per_log, {name: list(patterns)})[name]
     sel = per_log[per_log.log.isin(logs)]
+    sel = sel.assign(mae=sel.mae.fillna(np.inf))           # a log's NaN error is not skipped by the mean
     return sel.groupby(["model", "state", "window", "horizon_s"], as_index=False).mae.mean(), len(logs)
 
 

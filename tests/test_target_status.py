@@ -162,3 +162,21 @@ def test_a_missing_result_is_a_clear_error(ts, tmp_path, capsys):
     assert ts.main(["--results", str(tmp_path)]) == 2
     err = capsys.readouterr().err
     assert "drift-embedded/errors_per_log.csv: not found" in err and "Traceback" not in err
+
+
+def test_a_nan_error_in_one_fold_or_log_is_an_error_not_skipped_by_the_mean(ts, tmp_path, capsys):
+    """The protocol rows are a mean over folds and the weather groups' a mean over logs: a NaN
+    error in one of them made the others' mean the row's, which passed every target."""
+    folds = pd.concat([_drift_errors(lambda s, w, h: 0.3)] * 3, ignore_index=True)
+    folds.loc[(folds.model == "hybrid") & (folds.horizon_s == 60) & (folds.index < 48), "mae"] = float("nan")
+    with pytest.raises(ValueError, match="protocols.csv: no finite positive"):
+        ts.drift_status(folds, None, "protocols.csv")
+    results = _copy_inputs(ts, tmp_path)
+    path = results / "drift-truthsim-dev" / "errors_per_log.csv"
+    per_log = pd.read_csv(path)
+    calm = per_log.log.str.startswith("calm_")
+    first_calm = per_log.log[calm].iloc[0]
+    per_log.loc[(per_log.log == first_calm) & (per_log.model == "hybrid"), "mae"] = float("nan")
+    per_log.to_csv(path, index=False)
+    assert ts.main(["--results", str(results)]) == 2
+    assert "errors_per_log.csv (logs calm_*): no finite positive" in capsys.readouterr().err
