@@ -246,6 +246,24 @@ def test_the_target_holds_in_every_cell_and_the_narrowest_margin_is_the_smallest
     assert target + "not met. Narrowest margin: sea state 1 pitch_deg, -0.20 against ann." in md
 
 
+@pytest.mark.parametrize("diverged", ["ss", "arx", "ann"])
+def test_the_targets_verdict_ranks_a_diverged_model_last_whichever_it_is(diverged):
+    """A free run that diverged scores NaN and ranks last among the identified models: the
+    hybrid (0.1 against 1.0, 0.8 and 0.5) is below it, whichever model it is (a diverged SS,
+    listed first, was taken as the bound by min() and failed the target; a diverged ARX did
+    not). A hybrid that diverged never meets it."""
+    from hybridship.hsc.benchmark import comparisons
+
+    grey = pd.DataFrame([{"sea_state": s, "split": sp, "output": o, "R": 1.0, "MAE": 0.4}
+                         for s in (1, 2) for sp in ("train", "validation") for o in ("speed_kn", "pitch_deg")])
+    target = "Target (hybrid at most the ANN's and below SS's and ARX's in every sea state and output): "
+    table = _table_of({"ss": 1.0, "arx": 0.8, "ann": 0.5, "hybrid": 0.1})
+    table.loc[(table.model == diverged) & (table["mode"] == "free_run"), "MAE"] = np.nan
+    assert target + "met." in "\n".join(comparisons(table, grey))
+    table.loc[(table.model == "hybrid") & (table["mode"] == "free_run") & (table.sea_state == 2), "MAE"] = np.nan
+    assert target + "not met." in "\n".join(comparisons(table, grey))
+
+
 def test_the_papers_layout_puts_each_number_in_its_column():
     """The Table 1 / 2 layout: ours from the scoring mode asked for, training before validation
     (the training MAE of ``_table_of`` is twice the validation's, one step ahead a tenth), and

@@ -185,9 +185,12 @@ def comparisons(table: pd.DataFrame, grey: pd.DataFrame) -> list[str]:
     for s in (1, 2):
         for o in OUTPUTS:
             val = {m: t[(m, s, o, "validation", "free_run")] for m in ("hybrid", *others)}
-            best = min(others, key=lambda m: val[m] if np.isfinite(val[m]) else np.inf)   # a diverged run last
+            rank = {m: val[m] if np.isfinite(val[m]) else np.inf for m in others}      # a diverged run last
+            best = min(others, key=rank.get)
             margin = 1 - val["hybrid"] / val[best]
-            met &= bool(val["hybrid"] <= val["ann"] and val["hybrid"] < min(val["ss"], val["arx"]))
+            # a NaN (diverged) SS came out of min() as the bound when listed first, failing the target
+            met &= bool(np.isfinite(val["hybrid"]) and val["hybrid"] <= rank["ann"]
+                        and val["hybrid"] < min(rank["ss"], rank["arx"]))
             margins.append((margin, s, o, best))
             rows.append([f"{s}", o] + [f"{val[m]:.3f}" if np.isfinite(val[m]) else "n/a" for m in ("hybrid", *others)]
                         + [best, _fmt(margin)])
