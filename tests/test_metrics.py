@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import numpy as np
 import pandas as pd
+import pytest
 
 from hybridship.evaluation import metrics
 
@@ -22,6 +23,15 @@ def test_error_table_cells_are_means_over_logs_and_the_first_w_intervals():
     mae = long.set_index(["window", "state"]).mae
     np.testing.assert_allclose(mae.loc[(5, "north_m")], 1.5 * k[:5].mean())        # 9.0
     np.testing.assert_allclose(mae.loc[(20, "yaw_deg")], 1.5 * k.mean())
+
+
+@pytest.mark.parametrize("pred_shape, truth_shape", [((20, 4, 3), (4, 3)), ((20, 1, 3), (1, 4, 3)),
+                                                      ((20, 4, 2), (20, 4, 2))])
+def test_absolute_errors_refuse_shapes_that_differ_or_lack_the_three_states(pred_shape, truth_shape):
+    """Forecasts of 20 starts against the truth of one broadcast to 20 rows of errors, each
+    against the same measurement; two columns failed on the heading's index, unnamed."""
+    with pytest.raises(ValueError, match=r"pred, truth: expected equal shapes \(\.\.\., 3\)"):
+        metrics.absolute_errors(np.zeros(pred_shape), np.ones(truth_shape))
 
 
 def test_absolute_errors_of_whole_numbers_keep_the_fraction_of_a_degree():

@@ -52,8 +52,14 @@ def drift_errors(predictor, arrays, *, n_intervals: int = 20, horizons_s=HORIZON
 
 
 def absolute_errors(pred: np.ndarray, truth: np.ndarray) -> np.ndarray:
-    """``|north|, |east| [m]`` and ``|yaw| [deg]`` (heading difference wrapped to +-180 deg)."""
+    """``|north|, |east| [m]`` and ``|yaw| [deg]`` (heading difference wrapped to +-180 deg).
+
+    ``pred`` and ``truth`` are ``[north_m, east_m, psi_rad]`` of one shape ``(..., 3)``; a
+    ValueError naming them otherwise (a mismatch broadcast, pairing a forecast with the
+    wrong measurement)."""
     pred, truth = real_array("pred", pred), real_array("truth", truth)   # an integer result truncated the degrees
+    if pred.shape != truth.shape or pred.ndim < 1 or pred.shape[-1] != 3:
+        raise ValueError(f"pred, truth: expected equal shapes (..., 3), got {pred.shape} and {truth.shape}")
     err = np.abs(pred - truth)
     err[..., 2] = np.degrees(np.abs(wrap_pi(pred[..., 2] - truth[..., 2])))
     return err
