@@ -16,15 +16,17 @@ Usage::
 JSON keys: ``physics_forecasts_per_s`` (at the largest B), ``physics_single_forecast_ms``,
 ``physics_vessel_steps_per_s`` and ``physics_by_batch`` (B -> forecasts/s); for the hybrid
 (10-member ensemble, guard on) ``hybrid_forecasts_per_s`` (at the largest hybrid batch),
-``hybrid_single_forecast_ms``, ``hybrid_by_batch`` and ``train_s`` (training on 3 000
-samples of a synthetic log with default settings); for the cost of a forecast against the
+``hybrid_single_forecast_ms``, ``hybrid_by_batch``, ``train_s`` (training on 3 000
+samples of a synthetic log with default settings) and ``train_samples`` (the rows it trained
+on); for the cost of a forecast against the
 length of its log ``forecast_long_log_ms`` (a hybrid forecast, 60 s ahead from 2 start times,
 on a 1-hour 10-Hz log passed as a DataFrame, ingest included), ``forecast_short_log_ms``
 (the same forecast on the last 2 minutes of that log), ``forecast_long_short_ratio`` (their
 ratio; the target is at most 2; CPU times, the ratio the median over alternating pairs),
 ``forecast_long_log_ingested_ms`` (the long log passed as already ingested LogArrays, so its
 validation is not repeated), ``forecast_2h_log_ms`` and ``forecast_2h_1h_ratio`` (a 2-hour
-log against the 1-hour one: the cost stops growing beyond what the forecast reads);
+log against the 1-hour one: the cost stops growing beyond what the forecast reads),
+``forecast_long_log_rows`` and ``forecast_short_log_rows`` (the two logs' rows);
 ``manoeuvre_train_s`` (training the
 manoeuvre benchmark's hybrid, :class:`hybridship.evaluation.manoeuvre.ManoeuvreConfig` as it stands,
 on the Esso Osaka training runs of the benchmark's split, seed 0, one core; null when the
