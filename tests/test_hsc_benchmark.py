@@ -40,6 +40,10 @@ def test_quick_benchmark_writes_the_table(tmp_path):
 def test_arguments_checked_before_the_work(tmp_path):
     with pytest.raises(ValueError, match="^seed"):
         run_benchmark(tmp_path, seed=-1, quick=True, progress=False)
+    # the ANN's restarts are seeded seed * 1000 + r: this one failed after the trials and two fits
+    with pytest.raises(ValueError, match="^seed: expected at most"):
+        run_benchmark(tmp_path / "new", seed=2 * 10**16, quick=True, progress=False)
+    assert not (tmp_path / "new").exists()
     (tmp_path / "a_file").write_text("x")
     with pytest.raises(NotADirectoryError, match="not a folder"):
         run_benchmark(tmp_path / "a_file", quick=True, progress=False)

@@ -162,6 +162,16 @@ def test_narx_fit_leaves_the_callers_global_torch_random_state_alone():
     assert all(np.array_equal(a, b) for a, b in zip(first.weights, second.weights))
 
 
+def test_narx_config_refuses_a_seed_whose_restart_seeds_overflow_by_name():
+    """Restart r is seeded seed * 1000 + r, and torch takes seeds below 2**64: a seed of
+    2 * 10**16 (a valid seed otherwise) failed in fit with torch's "Overflow when unpacking
+    long long", naming nothing."""
+    top = (2**64 - 3) // 1000
+    assert NARXConfig(seed=top).seed == top
+    with pytest.raises(ValueError, match=r"^seed: expected at most 18446744073709551 .* got 20000000000000000"):
+        NARXConfig(seed=2 * 10**16)
+
+
 def test_narx_initial_weights_are_those_torch_linear_draws_after_seeding():
     """The generator of the fit's own gives the weights that ``torch.manual_seed(seed)`` and
     ``torch.nn.Linear`` gave (the benchmark's figures were made with those)."""

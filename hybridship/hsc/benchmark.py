@@ -318,6 +318,7 @@ def _checked_arguments(out_dir, seed, quick, progress) -> Path:
     check_flags(quick=quick, progress=progress)      # quick="no" ran the quick configuration
     if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or seed < 0:
         raise ValueError(f"seed: expected a non-negative integer, got {seed!r}")
+    NARXConfig(seed=seed)                            # its restarts' seeds must fit: checked by name, before the work
     out = check_out_folder(as_path(out_dir, "out_dir"))
     check_output_files(out, OUTPUT_FILES, ours=earlier_run(OUTPUT_FILES, "table.md", b"# High-speed craft"))
     return out

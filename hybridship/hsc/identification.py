@@ -31,7 +31,7 @@ from dataclasses import dataclass
 from typing import Annotated
 
 import numpy as np
-from pydantic import Field
+from pydantic import Field, model_validator
 
 from ..config import Float, Int, NonEmpty, Seed, as_config, check_whole_number, config_dataclass
 from .contract import check_free_run, check_record, require_fitted
@@ -367,7 +367,8 @@ class NARXConfig:
     val_fraction : float
         Last fraction of the training data held out for early stopping.
     seed : int
-        Seed of the initial weights.
+        Seed of the initial weights; restart ``r`` is seeded ``seed * 1000 + r``, which must
+        stay below 2**64 (torch's range of seeds).
     """
 
     n_out: Annotated[Int, Field(ge=1)] = 5
@@ -377,6 +378,15 @@ class NARXConfig:
     restarts: Annotated[Int, Field(ge=1)] = 3
     val_fraction: Annotated[Float, Field(gt=0, lt=0.5)] = 0.15
     seed: Seed = 0
+
+    @model_validator(mode="after")
+    def _restart_seeds(self):
+        # a seed above this failed in fit, after the other models' work, with torch's "Overflow" only
+        top = (2**64 - self.restarts) // 1000
+        if self.seed > top:
+            raise ValueError(f"seed: expected at most {top} (restart r is seeded seed * 1000 + r, below 2**64), "
+                             f"got {self.seed}")
+        return self
 
 
 class _MinMax:
