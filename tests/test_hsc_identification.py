@@ -143,6 +143,20 @@ def test_narx_holds_out_at_least_one_row_for_early_stopping():
     assert np.isfinite(err) and err < np.abs(Y[2:] - Y[2:].mean(0)).mean()
 
 
+def test_records_of_text_are_refused_naming_the_argument():
+    """numpy parsed a record of text such as "800" as numbers, which every model then fitted
+    and predicted from; text is refused as the ship forecasters refuse it."""
+    U = np.column_stack([np.linspace(800, 3000, 40), np.full(40, 50.0), np.zeros(40)])
+    Y = np.column_stack([np.linspace(5, 15, 40), np.full(40, 0.05)])
+    with pytest.raises(ValueError, match=r"^U: expected a numeric array of shape \(N, n\)"):
+        ARXModel(1, 1).fit(U.astype(str), Y)
+    m = ARXModel(1, 1).fit(U, Y)
+    with pytest.raises(ValueError, match=r"^Y: expected a numeric array of shape \(N, 2\)"):
+        m.one_step(U, Y.astype(str))
+    with pytest.raises(ValueError, match=r"^Y_init: expected a numeric array"):
+        m.free_run(U, Y.astype(str), 2)
+
+
 def test_narx_fit_leaves_the_callers_global_torch_random_state_alone():
     """The restarts' initial weights come from a generator of the fit's own: a caller's
     seeded torch draws after a fit are those it would have had without it, and a second fit

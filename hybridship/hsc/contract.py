@@ -33,6 +33,8 @@ from typing import Protocol, runtime_checkable
 
 import numpy as np
 
+from ..config import real_array
+
 __all__ = ["SurgePitchModel", "N_INPUTS", "N_OUTPUTS", "check_free_run", "check_n_init", "check_physical",
            "check_record", "require_fitted"]
 
@@ -70,8 +72,8 @@ class SurgePitchModel(Protocol):
 
 def _matrix(name: str, A, columns: int | None, rows: int | None = None) -> np.ndarray:
     want = f"(N, {'n' if columns is None else columns})"
-    try:
-        A = np.array(A, dtype=float)            # a copy: the caller's array is never touched
+    try:                                        # text such as "800" was parsed as a number
+        A = np.array(real_array(name, A), dtype=float)      # a copy: the caller's array is never touched
     except (TypeError, ValueError):
         raise ValueError(f"{name}: expected a numeric array of shape {want}") from None
     if A.ndim != 2 or A.shape[1] < 1 or (columns is not None and A.shape[1] != columns):
