@@ -34,6 +34,21 @@ def test_absolute_errors_refuse_shapes_that_differ_or_lack_the_three_states(pred
         metrics.absolute_errors(np.zeros(pred_shape), np.ones(truth_shape))
 
 
+@pytest.mark.parametrize("per_log, windows, message", [
+    ([np.ones((20, 4, 3))], (), r"windows: expected one or more whole numbers >= 1 of intervals, got \(\)"),
+    ([np.ones((20, 4, 3)), np.ones((5, 4, 3))], (5,), r"errors\['m'\]: expected one or more arrays of one shape "
+                                                      r"\(n_intervals, n_horizons, 3\), got shapes \[\(5, 4, 3\), \(20"),
+    ([], (5,), r"errors\['m'\]: expected one or more arrays"),
+    ([np.ones((20, 4, 2))], (5,), r"errors\['m'\]: expected one or more arrays"),
+])
+def test_error_table_names_the_windows_or_the_errors_it_cannot_tabulate(per_log, windows, message):
+    """No window, logs of different lengths, no log or errors without three states failed in
+    numpy's or Python's words ("max() arg is an empty sequence", "all input arrays must have
+    the same shape", "need at least one array to stack", an index out of bounds)."""
+    with pytest.raises(ValueError, match=message):
+        metrics.error_table({"m": per_log}, horizons_s=(15, 30, 45, 60), windows=windows)
+
+
 def test_absolute_errors_of_whole_numbers_keep_the_fraction_of_a_degree():
     """Positions logged as whole metres are integer arrays: the heading error of 1 rad is
     57.2958 deg, not the 57 an integer result array truncated it to."""
@@ -52,9 +67,9 @@ def test_error_table_refuses_horizons_or_windows_that_do_not_fit_the_errors():
         metrics.error_table({"m": [E]})
     with pytest.raises(ValueError, match=r"horizons_s: 7 lead times"):
         metrics.error_table({"m": [E]}, horizons_s=tuple(range(10, 80, 10)))      # before: IndexError
-    with pytest.raises(ValueError, match="windows: expected whole numbers >= 1"):
+    with pytest.raises(ValueError, match="windows: expected one or more whole numbers >= 1"):
         metrics.error_table({"m": [E]}, horizons_s=tuple(range(10, 70, 10)), windows=(0, 20))
-    with pytest.raises(ValueError, match="windows: expected whole numbers >= 1"):
+    with pytest.raises(ValueError, match="windows: expected one or more whole numbers >= 1"):
         metrics.error_table({"m": [E]}, horizons_s=tuple(range(10, 70, 10)), windows=(5.5, 20))
 
 

@@ -230,10 +230,16 @@ def error_table(errors: dict, *, horizons_s=HORIZONS_S, windows=WINDOWS) -> pd.D
     ``errors`` maps a model name to a list of :func:`drift_errors` arrays (one per log);
     a cell is the mean over logs and over the first ``window`` intervals.
     """
-    if not all(isinstance(w, (int, np.integer)) and not isinstance(w, bool) and w >= 1 for w in windows):
-        raise ValueError(f"windows: expected whole numbers >= 1 of intervals, got {tuple(windows)!r}")
+    windows = tuple(windows)
+    if not windows or not all(isinstance(w, (int, np.integer)) and not isinstance(w, bool) and w >= 1
+                              for w in windows):
+        raise ValueError(f"windows: expected one or more whole numbers >= 1 of intervals, got {windows!r}")
     rows = []
     for model, per_log in errors.items():
+        shapes = sorted({np.shape(a) for a in per_log})
+        if len(shapes) != 1 or len(shapes[0]) != 3 or shapes[0][2] != 3:    # numpy's stack named nothing
+            raise ValueError(f"errors[{model!r}]: expected one or more arrays of one shape (n_intervals, "
+                             f"n_horizons, 3), got shapes {shapes}")
         E = np.stack(per_log)                                   # (L, S, nh, 3)
         if len(horizons_s) != E.shape[2]:
             raise ValueError(f"horizons_s: {len(horizons_s)} lead times given, but errors[{model!r}] has "
