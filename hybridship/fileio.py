@@ -276,10 +276,14 @@ def remove_stale(folder, names) -> list[Path]:
 
 
 def markdown_table(df) -> str:
-    """A pandas DataFrame (its columns, then its rows as they are) as a Markdown table."""
-    head = "| " + " | ".join(str(c) for c in df.columns) + " |"
+    """A pandas DataFrame (its columns, then its rows as they are) as a Markdown table; a
+    ``|`` in a name or value is written ``\\|``, so that it stays in its cell."""
+    def cell(v) -> str:
+        return str(v).replace("|", "\\|")
+
+    head = "| " + " | ".join(cell(c) for c in df.columns) + " |"
     sep = "| " + " | ".join("---" for _ in df.columns) + " |"
-    rows = ["| " + " | ".join(str(v) for v in r) + " |" for r in df.itertuples(index=False)]
+    rows = ["| " + " | ".join(cell(v) for v in r) + " |" for r in df.itertuples(index=False)]
     return "\n".join([head, sep, *rows])
 
 
