@@ -94,7 +94,8 @@ def atomic_write(path, write: Callable[[BinaryIO], None]) -> Path:
 
     The temporary file is created exclusively in the same directory (so ``os.replace`` is
     atomic), flushed and fsynced before the rename, and removed if anything fails, in
-    which case an existing file at ``path`` is left untouched.
+    which case an existing file at ``path`` is left untouched. A ``path`` that is a
+    symbolic link is written through: the file it points to is replaced, the link kept.
 
     Raises
     ------
@@ -110,18 +111,21 @@ def atomic_write(path, write: Callable[[BinaryIO], None]) -> Path:
         raise TypeError(f"write: expected a function that writes to a binary file, got {type(write).__name__}")
     if path.is_dir():
         raise IsADirectoryError(f"{path}: is a directory; expected the path of a file to write")
-    check_writable(path)        # a file where a folder should be is named as such; a read-only file
-    tmp = path.with_name(f".{path.name}.{uuid.uuid4().hex}.tmp")
+    # a symbolic link is written through, as open() does: the rename would replace the link itself
+    target = Path(os.path.realpath(path)) if path.is_symlink() else path
+    check_writable(target)        # a file where a folder should be is named as such; a read-only file
+    tmp = target.with_name(f".{target.name}.{uuid.uuid4().hex}.tmp")
     try:
-        path.parent.mkdir(parents=True, exist_ok=True)
+        target.parent.mkdir(parents=True, exist_ok=True)
         with open(tmp, "xb") as fh:  # 'x': never clobber; mode follows the umask
             write(fh)
             fh.flush()
             os.fsync(fh.fileno())
-        os.replace(tmp, path)
+        os.replace(tmp, target)
     except OSError as err:
         _discard(tmp)
-        ours = {os.fspath(tmp), os.fspath(path)} | {os.fspath(p) for p in path.parents}
+        ours = ({os.fspath(tmp), os.fspath(path), os.fspath(target)} | {os.fspath(p) for p in path.parents}
+                | {os.fspath(p) for p in target.parents})
         if err.filename is not None and os.fspath(err.filename) not in ours:
             raise   # about another file (one the writer reads), not the one written
         # the error names the hidden temporary file (or the folder); the user asked for ``path``

@@ -12,3 +12,18 @@ def test_markdown_table_keeps_a_bar_in_its_cell():
 
     lines = markdown_table(pd.DataFrame({"a|b": ["x|y"], "c": [1]})).splitlines()
     assert lines == [r"| a\|b | c |", "| --- | --- |", r"| x\|y | 1 |"]
+
+
+def test_atomic_write_writes_through_a_symbolic_link(tmp_path):
+    """The rename replaced the link itself with a regular file and left the file it pointed
+    to as it was; now the link is kept and its file written, as open() would."""
+    from hybridship.fileio import write_text
+
+    target = tmp_path / "data" / "log.csv"
+    target.parent.mkdir()
+    target.write_text("old")
+    link = tmp_path / "log.csv"
+    link.symlink_to(target)
+    assert write_text(link, "new") == link
+    assert link.is_symlink() and target.read_text() == "new"
+    assert sorted(p.name for p in target.parent.iterdir()) == ["log.csv"]     # no temporary file left
