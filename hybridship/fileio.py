@@ -96,6 +96,7 @@ def atomic_write(path, write: Callable[[BinaryIO], None]) -> Path:
     atomic), flushed and fsynced before the rename, and removed if anything fails, in
     which case an existing file at ``path`` is left untouched. A ``path`` that is a
     symbolic link is written through: the file it points to is replaced, the link kept.
+    A new file's permissions follow the umask; a file replaced keeps its own.
 
     Raises
     ------
@@ -118,6 +119,8 @@ def atomic_write(path, write: Callable[[BinaryIO], None]) -> Path:
     try:
         target.parent.mkdir(parents=True, exist_ok=True)
         with open(tmp, "xb") as fh:  # 'x': never clobber; mode follows the umask
+            if target.is_file():    # a file replaced keeps its permissions (a private log stays private)
+                os.chmod(fh.fileno(), stat.S_IMODE(target.stat().st_mode))
             write(fh)
             fh.flush()
             os.fsync(fh.fileno())

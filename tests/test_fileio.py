@@ -27,3 +27,24 @@ def test_atomic_write_writes_through_a_symbolic_link(tmp_path):
     assert write_text(link, "new") == link
     assert link.is_symlink() and target.read_text() == "new"
     assert sorted(p.name for p in target.parent.iterdir()) == ["log.csv"]     # no temporary file left
+
+
+def test_atomic_write_keeps_the_permissions_of_the_file_it_replaces(tmp_path):
+    """The new file took the umask's permissions: a log only its owner could read (0600)
+    became readable by everyone (0644) when it was written again."""
+    import os
+    import stat
+
+    from hybridship.fileio import write_text
+
+    path = tmp_path / "private.csv"
+    path.write_text("old")
+    path.chmod(0o600)
+    write_text(path, "new")
+    assert path.read_text() == "new" and stat.S_IMODE(path.stat().st_mode) == 0o600
+    old = os.umask(0o077)
+    try:
+        fresh = write_text(tmp_path / "fresh.csv", "x")
+    finally:
+        os.umask(old)
+    assert stat.S_IMODE(fresh.stat().st_mode) == 0o600      # a new file: the umask
