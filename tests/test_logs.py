@@ -277,6 +277,21 @@ def test_a_csv_cut_short_in_its_last_line_leaves_that_row_out_and_says_so(tmp_pa
         assert len(read_log(path, channel_names=THRUSTERS, rotatable=ROTATABLE)) == 120
 
 
+def test_csv_rows_longer_than_the_header_are_refused_not_read_shifted(tmp_path):
+    """Every data row one field longer than the header: pandas took the first field as the
+    index and shifted every column by one (time_s held north_m's values), and the log was
+    accepted; with a ',' at the end of each line heading_deg was blamed as empty."""
+    write_log(circle_log(), tmp_path / "log.csv")
+    text = (tmp_path / "log.csv").read_text()
+    head, *rows = text.splitlines()
+    n = head.count(",") + 1
+    for name, body in (("extra.csv", [r + ",5" for r in rows]), ("trailing.csv", [r + "," for r in rows])):
+        (tmp_path / name).write_text("\n".join([head, *body]) + "\n")
+        with pytest.raises(LogFormatError, match=rf"{name}: cannot be read as a csv log file \(its data rows have "
+                                                 rf"{n + 1} fields where the header has {n}"):
+            read_log(tmp_path / name, validate=False)
+
+
 # --------------------------------------------------------------------------------------
 # Validation errors name the column
 # --------------------------------------------------------------------------------------

@@ -1380,6 +1380,13 @@ def read_log(
         raise LogFormatError(f"{path}: cannot be read as a {kind} log file ({_read_problem(kind, exc)})") from None
     if kind != "parquet":
         _check_unique_names(names, str(path))
+        if len(names) > 1 and not isinstance(df.index, pd.RangeIndex):
+            # pandas takes the first fields of rows longer than the header as their index,
+            # and every column would hold the next one's values (a header of one name, with
+            # ';' in it, is said as such by the column check)
+            raise LogFormatError(f"{path}: cannot be read as a {kind} log file (its data rows have "
+                                 f"{len(names) + df.index.nlevels} fields where the header has {len(names)}: a ',' "
+                                 f"at the end of each line, or a column without a name?)")
     if kind == "csv" and len(df):
         got = _cut_short_last_line(path, len(names))
         if got is not None:
