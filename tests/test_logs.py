@@ -808,3 +808,17 @@ def test_an_output_folder_that_cannot_be_made_is_named(tmp_path):
     with pytest.raises(OSError, match=r"a_file/out: cannot make the output folder \("):
         make_out_folder(blocker / "out")
     assert make_out_folder(tmp_path / "new" / "out").is_dir()
+
+
+def test_a_rudder_rpm_column_is_refused_against_the_vessel():
+    """A '<rudder>_rpm' column was accepted and became the rudder channel's rpm in
+    LogArrays.rpm (documented as 0 in rudder channels), unremarked."""
+    from hybridship.logs.io import check_log_against_vessel
+
+    t = np.arange(120.0)
+    df = pd.DataFrame({"time_s": t, "north_m": 0.5 * t, "east_m": 0.0 * t, "heading_deg": 0.0 * t + 10.0,
+                       "propeller_rpm": 300.0, "rudder_azimuth_deg": 5.0, "dp_active": 0})
+    check_log_against_vessel(df, "esso_osaka_model")
+    with pytest.raises(LogFormatError, match=r"^rudder_rpm: 'rudder' is a rudder of vessel 'esso_osaka_model' and "
+                                             r"has no rpm; expected <thruster>_rpm for the thrusters \(propeller_rpm\)"):
+        check_log_against_vessel(df.assign(rudder_rpm=77.0), "esso_osaka_model")

@@ -990,7 +990,8 @@ def check_log_against_vessel(log, vessel, *, source: str | None = None, allow_mi
       missing ones as stopped);
     * no ``<name>_rpm`` at all while ``dp_active`` is 1 somewhere, or absent (the
       forecast would take a station-keeping vessel as drifting without thrust);
-    * a rudder's ``<name>_azimuth_deg`` missing while thruster rpm are logged;
+    * a rudder's ``<name>_azimuth_deg`` missing while thruster rpm are logged, or a
+      ``<rudder>_rpm`` column (a rudder has no rpm);
     * without ``allow_missing`` (training), a thruster or rudder column (or ``dp_active``)
       that holds no value in any row counts as missing in the rules above (a dead channel
       exported as an empty column would otherwise be trained on as a stopped thruster or a
@@ -1044,6 +1045,7 @@ def check_log_against_vessel(log, vessel, *, source: str | None = None, allow_mi
     blank = set() if allow_missing else _blank_channel_columns(v, df, t, source)
     cols = set(map(str, df.columns)) - blank
     _check_all_or_no_rpm(v, cols, source, blank)
+    _check_no_rudder_rpm(v, cols, source)
     _check_rudder_angles_logged(v, cols, source, blank)
     _check_rpm_while_station_keeping(v, df, cols, t, source, blank)
     if unit_statistics:
@@ -1084,6 +1086,18 @@ def _check_all_or_no_rpm(v, cols: set, source: str, blank: set = frozenset()) ->
             f"{miss[0]}: {_absent(miss[0], blank)} while {', '.join(have)} are logged; expected the rpm of every "
             f"thruster of vessel {v.name!r} ({', '.join(rpm_cols)}), else the forecast would take "
             f"{', '.join(miss)} as stopped{_where(source)}", column=miss[0])
+
+
+def _check_no_rudder_rpm(v, cols: set, source: str) -> None:
+    """A ``<rudder>_rpm`` column: a rudder has no propeller, and its values would be taken
+    as the rudder channel's rpm (documented as 0 in :attr:`LogArrays.rpm`)."""
+    for rud in getattr(v, "rudders", None) or []:
+        col = column_spec("<thruster>_rpm").for_channel(rud.name)
+        if col in cols:
+            raise LogFormatError(
+                f"{col}: {rud.name!r} is a rudder of vessel {v.name!r} and has no rpm; expected <thruster>_rpm "
+                f"for the thrusters ({', '.join(_rpm_columns(v)) or 'none'}) and {rud.name}_azimuth_deg for the "
+                f"rudder's angle{_where(source)}", column=col)
 
 
 def _check_rudder_angles_logged(v, cols: set, source: str, blank: set = frozenset()) -> None:
