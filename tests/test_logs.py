@@ -292,6 +292,15 @@ def test_csv_rows_longer_than_the_header_are_refused_not_read_shifted(tmp_path):
             read_log(tmp_path / name, validate=False)
 
 
+def test_a_parquet_log_indexed_by_time_is_named_so(tmp_path):
+    """A frame indexed by time_s saved with to_parquet: time_s was said to be missing (the
+    reader dropped the file's index) while the file holds it."""
+    circle_log().set_index("time_s").to_parquet(tmp_path / "log.parquet")
+    with pytest.raises(LogFormatError, match=r"^time_s: stored as the Parquet file's index, not as a column") as err:
+        read_log(tmp_path / "log.parquet", validate=False)
+    assert err.value.column == "time_s"
+
+
 # --------------------------------------------------------------------------------------
 # Validation errors name the column
 # --------------------------------------------------------------------------------------

@@ -1392,6 +1392,12 @@ def read_log(
         # a truncated archive, a plain file named .csv.gz, an empty or binary file: name the
         # file and say what it should be, not the parser's internals
         raise LogFormatError(f"{path}: cannot be read as a {kind} log file ({_read_problem(kind, exc)})") from None
+    indexed = [str(c) for c in df.index.names if str(c) in REQUIRED_COLUMNS and str(c) not in map(str, df.columns)]
+    if kind == "parquet" and indexed:   # else "required column missing" while the file holds it
+        raise LogFormatError(f"{indexed[0]}: stored as the Parquet file's index, not as a column (a DataFrame "
+                             f"indexed by {indexed[0]} saved with to_parquet?); the log format expects it as a "
+                             f"column: save the frame with index=False after reset_index(){_where(str(path))}",
+                             column=indexed[0])
     if kind != "parquet":
         _check_unique_names(names, str(path))
         if len(names) > 1 and not isinstance(df.index, pd.RangeIndex):
