@@ -773,6 +773,11 @@ def test_datetime_times_and_gzip_named_csv_are_named_for_what_they_are(tmp_path)
     with pytest.raises(LogFormatError, match=r"time_s: datetime64\[\w+\] values; expected plain numbers") as err:
         validate_log(stamped, channel_names=THRUSTERS, rotatable=ROTATABLE)
     assert "milliseconds" not in str(err.value)
+    # periods were read as counts of their unit: minutes accepted as seconds, unremarked
+    minutes = df.assign(time_s=pd.period_range("2024-01-01", periods=len(df), freq="min"))
+    with pytest.raises(LogFormatError, match=r"time_s: period\[min\] values; expected plain numbers .*"
+                                             r"after t = t\.dt\.to_timestamp\(\)"):
+        validate_log(minutes, channel_names=THRUSTERS, rotatable=ROTATABLE)
     path = tmp_path / "log.csv"
     path.write_bytes(gzip.compress(df.to_csv(index=False).encode()))
     with pytest.raises(LogFormatError, match=r"log.csv: is gzip-compressed; name it log.csv.gz"):

@@ -323,10 +323,13 @@ def _to_float(df: pd.DataFrame, col: str, source: str, time_s: np.ndarray | None
         raise LogFormatError(f"{col}: True/False values; expected numbers{_where(source)}", column=col)
     if pd.api.types.is_complex_dtype(s):        # pandas would drop the imaginary part with a warning
         raise LogFormatError(f"{col}: complex values; expected real numbers{_where(source)}", column=col)
-    if pd.api.types.is_datetime64_any_dtype(s) or pd.api.types.is_timedelta64_dtype(s):
-        # pandas would turn these into nanoseconds, and the message would then blame the unit
+    if (pd.api.types.is_datetime64_any_dtype(s) or pd.api.types.is_timedelta64_dtype(s)
+            or isinstance(s.dtype, pd.PeriodDtype)):
+        # pandas would turn these into nanoseconds (periods into counts of their own unit, minutes
+        # or days read as seconds), and the message would then blame the unit, or none would
+        period = ", after t = t.dt.to_timestamp()" if isinstance(s.dtype, pd.PeriodDtype) else ""
         raise LogFormatError(f"{col}: {s.dtype} values; expected plain numbers (seconds for time_s: "
-                             f"convert with (t - t.iloc[0]).dt.total_seconds()){_where(source)}", column=col)
+                             f"convert with (t - t.iloc[0]).dt.total_seconds(){period}){_where(source)}", column=col)
     num = pd.to_numeric(s, errors="coerce")
     bad = num.isna().to_numpy() & s.notna().to_numpy()
     if bad.any():
