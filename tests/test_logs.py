@@ -590,6 +590,19 @@ def test_filtered_derivative_refuses_a_window_or_order_that_gives_no_derivative(
     np.testing.assert_allclose(filtered_derivative(x, 1.0, polyorder=1)[5:-5], 2 * t[5:-5])
 
 
+def test_filtered_derivative_names_an_axis_that_x_does_not_have():
+    """An axis beyond x's dimensions, a fractional or None one, or a single number failed in
+    numpy's words ("tuple index out of range"), naming neither axis nor x."""
+    x = np.arange(40.0) ** 2
+    for kw in ({"axis": 1}, {"axis": -2}, {"axis": 1.0}, {"axis": None}, {"method": "butter", "axis": 1}):
+        with pytest.raises(ValueError, match="^filtered_derivative: axis: "):
+            filtered_derivative(x, 1.0, **kw)
+    with pytest.raises(ValueError, match="^filtered_derivative: axis: "):
+        filtered_derivative(3.0, 1.0)
+    np.testing.assert_allclose(filtered_derivative(np.stack([x, x]), 1.0, axis=-1), filtered_derivative(x, 1.0)[None]
+                               .repeat(2, 0))
+
+
 def test_filtered_derivative_names_a_sample_period_or_cut_off_that_is_not_a_number():
     """dt_s and cutoff_hz went through float(): text was read as a number ("2" as 2 s), True
     was 1 s, and None or "a" failed in float()'s words, naming neither argument."""

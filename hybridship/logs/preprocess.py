@@ -210,8 +210,8 @@ def filtered_derivative(
     Raises
     ------
     ValueError
-        ``dt_s``, ``window_s``, ``cutoff_hz``, or the order of the chosen method out of range,
-        or an unknown ``method``, naming the argument.
+        ``dt_s``, ``window_s``, ``cutoff_hz``, the order of the chosen method or ``axis`` out
+        of range (a single number has no time axis), or an unknown ``method``, naming the argument.
     TypeError
         ``dt_s``, ``window_s`` or ``cutoff_hz`` text or a bool, naming it.
 
@@ -225,6 +225,11 @@ def filtered_derivative(
     """
     x = np.asarray(x, dtype=float)
     dt_s = check_number("filtered_derivative: dt_s", dt_s, lo=0.0, lo_open=True)
+    axis = check_whole_number("filtered_derivative: axis", axis, lo=-x.ndim)
+    if axis >= x.ndim:      # numpy's "tuple index out of range" named neither axis nor x
+        raise ValueError(f"filtered_derivative: axis: expected {-x.ndim}..{x.ndim - 1} for x of shape {x.shape}, "
+                         f"got {axis}" if x.ndim else "filtered_derivative: axis: x is a single number, without "
+                         "a time axis; expected samples")
     n = x.shape[axis]
     if method == "savgol" or (method == "butter" and cutoff_hz is None):
         window_s = check_number("filtered_derivative: window_s", window_s, lo=0.0, lo_open=True)
