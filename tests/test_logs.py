@@ -292,6 +292,22 @@ def test_csv_rows_longer_than_the_header_are_refused_not_read_shifted(tmp_path):
             read_log(tmp_path / name, validate=False)
 
 
+def test_csv_columns_without_a_name_are_not_taken_for_one_name_twice(tmp_path):
+    """Two empty names in the header (a spreadsheet export with empty columns) were read as
+    NaN and refused as 'nan: column appears more than once'; like one, they are columns
+    without a name, ignored with a warning. A name repeated is still refused."""
+    write_log(circle_log(), tmp_path / "log.csv")
+    head, *rows = (tmp_path / "log.csv").read_text().splitlines()
+    path = tmp_path / "empty_names.csv"
+    path.write_text("\n".join([head + ",,", *(r + ",1,2" for r in rows)]) + "\n")
+    with pytest.warns(LogFormatWarning, match=r"Unnamed: \d+ \(a column without a name"):
+        df = read_log(path, channel_names=THRUSTERS, rotatable=ROTATABLE)
+    assert len(df) == len(rows)
+    path.write_text("\n".join([head + ",NA,NA", *(r + ",1,2" for r in rows)]) + "\n")
+    with pytest.raises(LogFormatError, match=r"^NA: column appears more than once"):
+        read_log(path, channel_names=THRUSTERS, rotatable=ROTATABLE)
+
+
 def test_a_parquet_log_indexed_by_time_is_named_so(tmp_path):
     """A frame indexed by time_s saved with to_parquet: time_s was said to be missing (the
     reader dropped the file's index) while the file holds it."""

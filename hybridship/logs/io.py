@@ -1386,7 +1386,9 @@ def read_log(
             compression = "gzip" if kind == "csv.gz" else None
             df = pd.read_csv(path, compression=compression)
             # pandas renames a repeated name (north_m, north_m.1): the header as written
-            header = pd.read_csv(path, compression=compression, header=None, nrows=1, dtype=str)
+            # (empty names kept empty, not NaN: pandas gives each its own "Unnamed: N")
+            header = pd.read_csv(path, compression=compression, header=None, nrows=1, dtype=str,
+                                 keep_default_na=False)
             names = [str(c) for c in header.iloc[0]] if len(header) else []
     except PermissionError:
         raise
@@ -1402,7 +1404,7 @@ def read_log(
                              f"column: save the frame with index=False after reset_index(){_where(str(path))}",
                              column=indexed[0])
     if kind != "parquet":
-        _check_unique_names(names, str(path))
+        _check_unique_names([c for c in names if c], str(path))
         if len(names) > 1 and not isinstance(df.index, pd.RangeIndex):
             # pandas takes the first fields of rows longer than the header as their index,
             # and every column would hold the next one's values (a header of one name, with
