@@ -454,6 +454,10 @@ def test_a_radian_heading_that_wraps_is_refused_even_with_its_rate_in_rad_s():
     psi = np.mod(5.9 + np.concatenate(([0.0], np.cumsum(0.5 * (rate[1:] + rate[:-1])))), 2 * np.pi)
     is_rad, reason = heading_looks_like_radians(t, psi, rate)
     assert is_rad and reason.startswith("it jumps by -6.2")
+    # the jump's times as the log has them: epoch times were written "1.7e+09 and 1.7e+09"
+    k = int(np.argmax(np.abs(np.diff(psi)) > np.pi))
+    reason = heading_looks_like_radians(1.7e9 + t, psi, rate)[1]
+    assert f"between time_s {1700000000 + k} and {1700000000 + k + 1} " in reason
 
 
 # --------------------------------------------------------------------------------------

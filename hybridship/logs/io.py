@@ -271,7 +271,8 @@ def heading_looks_like_radians(time_s, heading, r_deg_s=None) -> tuple[bool, str
         k = int(np.argmax(wrap_like))
         return True, (
             f"it jumps by {dh[k]:+.2f} in one sample (a full turn if radians) between "
-            f"time_s {t_ok[k]:g} and {t_ok[k + 1]:g} while typical steps are {typical_step:.3f}"
+            f"time_s {seconds_text(t_ok[k])} and {seconds_text(t_ok[k + 1])} while typical steps are "
+            f"{typical_step:.3f}"
         )
 
     if r_deg_s is not None:
