@@ -869,3 +869,16 @@ def test_a_rudder_rpm_column_is_refused_against_the_vessel():
     with pytest.raises(LogFormatError, match=r"^rudder_rpm: 'rudder' is a rudder of vessel 'esso_osaka_model' and "
                                              r"has no rpm; expected <thruster>_rpm for the thrusters \(propeller_rpm\)"):
         check_log_against_vessel(df.assign(rudder_rpm=77.0), "esso_osaka_model")
+
+
+def test_speed_scale_vs_track_names_a_lag_that_is_not_a_positive_number():
+    """NaN failed in int() ("cannot convert float NaN to integer"), text and None in a
+    division, and a negative or zero lag was used as one sample, unremarked."""
+    from hybridship.logs.io import speed_scale_vs_track
+
+    t, z = np.arange(100.0), np.zeros(100)
+    for bad, err in ((np.nan, ValueError), (-5.0, ValueError), (0.0, ValueError), ("20", TypeError),
+                     (None, TypeError)):
+        with pytest.raises(err, match="^speed_scale_vs_track: lag_s: "):
+            speed_scale_vs_track(t, 0.5 * t, z, z, z + 0.5, z, lag_s=bad)
+    assert speed_scale_vs_track(t, 0.5 * t, z, z, z + 0.5, z, lag_s=10).scale == pytest.approx(1.0)

@@ -76,6 +76,7 @@ import numpy as np
 import pandas as pd
 
 from hybridship import frames
+from hybridship.config import check_number
 from hybridship.fileio import as_path, atomic_write, starts_with
 from hybridship.logs.columns import (COLUMNS, MAX_SAMPLE_SPACING_S, MIN_SAMPLE_SPACING_S, OPTIONAL_COLUMNS,
                                      REQUIRED_COLUMNS, TRUTH_PREFIX, ColumnSpec, channel_column, column_spec)
@@ -456,13 +457,14 @@ def speed_scale_vs_track(time_s, north_m, east_m, heading_deg, u_m_s, v_m_s, *,
     north_m, east_m, heading_deg, u_m_s, v_m_s : array_like, shape (N,)
         The log's columns (NaN samples split the runs).
     lag_s : float, default 20
-        Displacement lag [s].
+        Displacement lag [s], > 0 (ValueError naming it otherwise; TypeError for text).
 
     Returns
     -------
     SpeedScale or None
         None when no run is longer than the lag.
     """
+    lag_s = check_number("speed_scale_vs_track: lag_s", lag_s, lo=0.0, lo_open=True)  # NaN failed in int()
     t = np.asarray(time_s, dtype=float)
     cols = [np.asarray(c, dtype=float) for c in (north_m, east_m, heading_deg, u_m_s, v_m_s)]
     n = t.size
