@@ -882,3 +882,17 @@ def test_speed_scale_vs_track_names_a_lag_that_is_not_a_positive_number():
         with pytest.raises(err, match="^speed_scale_vs_track: lag_s: "):
             speed_scale_vs_track(t, 0.5 * t, z, z, z + 0.5, z, lag_s=bad)
     assert speed_scale_vs_track(t, 0.5 * t, z, z, z + 0.5, z, lag_s=10).scale == pytest.approx(1.0)
+
+
+def test_the_unit_rules_name_a_column_that_is_not_one_value_per_time():
+    """Columns of another length than time_s failed in numpy's words ("boolean index did
+    not match", "all the input array dimensions ..."), naming no column."""
+    from hybridship.logs.io import speed_scale_vs_track
+
+    t, z = np.arange(100.0), np.zeros(100)
+    with pytest.raises(ValueError, match=r"^heading_looks_like_radians: heading: expected one value per time_s"):
+        heading_looks_like_radians(t[:50], z)
+    with pytest.raises(ValueError, match=r"^heading_looks_like_radians: r_deg_s: expected one value per time_s"):
+        heading_looks_like_radians(t, z, z[:10])
+    with pytest.raises(ValueError, match=r"^speed_scale_vs_track: v_m_s: expected one value per time_s"):
+        speed_scale_vs_track(t, 0.5 * t, z, z, z + 0.5, z[:99])

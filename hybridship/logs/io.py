@@ -205,6 +205,14 @@ def _rate_evidence(t: np.ndarray, h: np.ndarray, r: np.ndarray, wrap: float) -> 
     return float(np.corrcoef(rate, r_mid)[0, 1]), float(np.std(r_mid) / np.std(rate))
 
 
+def _check_same_length(func: str, time_s: np.ndarray, **columns: np.ndarray) -> None:
+    """ValueError naming the column of ``func`` that is not one value per ``time_s`` (numpy
+    failed in its own words, naming no column)."""
+    for name, x in columns.items():
+        if x.shape != time_s.shape or time_s.ndim != 1:
+            raise ValueError(f"{func}: {name}: expected one value per time_s {time_s.shape}, got shape {x.shape}")
+
+
 def heading_looks_like_radians(time_s, heading, r_deg_s=None) -> tuple[bool, str]:
     """Decide whether a heading column holds radians instead of degrees.
 
@@ -257,6 +265,8 @@ def heading_looks_like_radians(time_s, heading, r_deg_s=None) -> tuple[bool, str
     """
     t = np.asarray(time_s, dtype=float)
     h = np.asarray(heading, dtype=float)
+    _check_same_length("heading_looks_like_radians", t, heading=h,
+                       r_deg_s=h if r_deg_s is None else np.asarray(r_deg_s, dtype=float))
     ok = np.isfinite(h)
     if ok.sum() < 2:
         return False, "fewer than two finite headings"
@@ -467,6 +477,8 @@ def speed_scale_vs_track(time_s, north_m, east_m, heading_deg, u_m_s, v_m_s, *,
     lag_s = check_number("speed_scale_vs_track: lag_s", lag_s, lo=0.0, lo_open=True)  # NaN failed in int()
     t = np.asarray(time_s, dtype=float)
     cols = [np.asarray(c, dtype=float) for c in (north_m, east_m, heading_deg, u_m_s, v_m_s)]
+    _check_same_length("speed_scale_vs_track", t, **dict(zip(("north_m", "east_m", "heading_deg", "u_m_s", "v_m_s"),
+                                                             cols)))
     n = t.size
     if n < 3:
         return None
