@@ -896,3 +896,20 @@ def test_the_unit_rules_name_a_column_that_is_not_one_value_per_time():
         heading_looks_like_radians(t, z, z[:10])
     with pytest.raises(ValueError, match=r"^speed_scale_vs_track: v_m_s: expected one value per time_s"):
         speed_scale_vs_track(t, 0.5 * t, z, z, z + 0.5, z[:99])
+
+
+def test_preprocessing_names_samples_that_are_text_complex_or_a_single_number():
+    """Text failed in float()'s words ("could not convert string to float: 'a'"), complex
+    samples lost their imaginary part with only a warning, and a single number failed in
+    numpy's "tuple index out of range", naming no argument."""
+    t = np.arange(20.0)
+    for call, name in ((lambda bad: filtered_derivative(bad, 1.0), "filtered_derivative: x"),
+                       (lambda bad: derivative_by_segment(bad, t), "derivative_by_segment: x"),
+                       (lambda bad: derivative_by_segment(np.ones(20), bad), "derivative_by_segment: time_s"),
+                       (lambda bad: split_segments(bad), "split_segments: time_s"),
+                       (lambda bad: moving_average_start(bad, 0), "moving_average_start: x")):
+        for bad in (["a"] * 20, np.ones(20) + 1j):
+            with pytest.raises(TypeError, match=f"^{name}: expected an array of real numbers"):
+                call(bad)
+    with pytest.raises(ValueError, match="^moving_average_start: x: a single number"):
+        moving_average_start(3.0, 0)

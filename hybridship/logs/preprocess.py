@@ -15,7 +15,7 @@ from collections.abc import Callable, Sequence
 import numpy as np
 from scipy import signal
 
-from hybridship.config import check_number, check_whole_number
+from hybridship.config import check_number, check_whole_number, real_array
 
 __all__ = [
     "split_segments",
@@ -65,10 +65,10 @@ def split_segments(
         ``gap_factor`` is not a finite number > 1 (below 1 every step would be a gap), or
         ``nominal_dt_s`` not a finite number > 0.
     TypeError
-        ``gap_factor`` or ``nominal_dt_s`` text or a bool, naming it.
+        ``gap_factor`` or ``nominal_dt_s`` text or a bool, or ``time_s`` text or complex, naming it.
     """
     gap_factor = check_number("split_segments: gap_factor", gap_factor, lo=1.0, lo_open=True)
-    t = np.asarray(time_s, dtype=float)
+    t = real_array("split_segments: time_s", time_s)
     if t.ndim != 1:
         raise ValueError(f"time_s must be one-dimensional, got shape {t.shape}")
     n = t.size
@@ -213,7 +213,7 @@ def filtered_derivative(
         ``dt_s``, ``window_s``, ``cutoff_hz``, the order of the chosen method or ``axis`` out
         of range (a single number has no time axis), or an unknown ``method``, naming the argument.
     TypeError
-        ``dt_s``, ``window_s`` or ``cutoff_hz`` text or a bool, naming it.
+        ``dt_s``, ``window_s`` or ``cutoff_hz`` text or a bool, or ``x`` text or complex, naming it.
 
     Notes
     -----
@@ -223,7 +223,7 @@ def filtered_derivative(
     segments still get a (noisier) derivative instead of being dropped. A single-sample
     segment gives NaN: it carries no rate information.
     """
-    x = np.asarray(x, dtype=float)
+    x = real_array("filtered_derivative: x", x)      # text failed in float()'s words, complex lost its imaginary part
     dt_s = check_number("filtered_derivative: dt_s", dt_s, lo=0.0, lo_open=True)
     axis = check_whole_number("filtered_derivative: axis", axis, lo=-x.ndim)
     if axis >= x.ndim:      # numpy's "tuple index out of range" named neither axis nor x
@@ -283,7 +283,8 @@ def derivative_by_segment(
     ndarray of float, shape (N, ...)
         The derivative; nothing is differentiated across a gap.
     """
-    t = np.asarray(time_s, dtype=float)
+    t = real_array("derivative_by_segment: time_s", time_s)
+    x = real_array("derivative_by_segment: x", x)
     if segments is None:
         segments = split_segments(t)
 
@@ -291,7 +292,7 @@ def derivative_by_segment(
         dt = float(np.median(np.diff(ts))) if ts.size > 1 else 1.0
         return filtered_derivative(xs, dt, axis=0, **kwargs)
 
-    return segmentwise(one, [np.asarray(x, dtype=float), t], segments)
+    return segmentwise(one, [x, t], segments)
 
 
 def moving_average_start(x, idx: int, window_samples: int = 3, *, segment_id=None) -> np.ndarray:
@@ -323,12 +324,16 @@ def moving_average_start(x, idx: int, window_samples: int = 3, *, segment_id=Non
     Raises
     ------
     ValueError
-        ``idx`` or ``window_samples`` not a whole number (``window_samples`` < 1), or
-        ``segment_id`` not one label per row, naming the argument.
+        ``idx`` or ``window_samples`` not a whole number (``window_samples`` < 1), ``x`` a
+        single number, or ``segment_id`` not one label per row, naming the argument.
+    TypeError
+        ``x`` text or complex, naming it.
     IndexError
         ``idx`` outside the rows of ``x``.
     """
-    a = np.asarray(x, dtype=float)
+    a = real_array("moving_average_start: x", x)
+    if a.ndim == 0:     # numpy's "tuple index out of range"
+        raise ValueError("moving_average_start: x: a single number, without a time axis; expected samples")
     n = a.shape[0]
     window_samples = check_whole_number("moving_average_start: window_samples", window_samples, lo=1)
     if isinstance(idx, bool) or not isinstance(idx, (int, np.integer)):
