@@ -913,3 +913,14 @@ def test_preprocessing_names_samples_that_are_text_complex_or_a_single_number():
                 call(bad)
     with pytest.raises(ValueError, match="^moving_average_start: x: a single number"):
         moving_average_start(3.0, 0)
+
+
+def test_a_100_hz_log_is_accepted_at_the_end_of_the_spacing_range():
+    """Spacing 0.01 s is documented as accepted, yet times of 100 Hz samples are not exact in
+    binary (median step 0.0099999999999998, or 0.00999999 in epoch seconds): such logs were
+    refused as 'median sample spacing 0.01 ... is time_s in minutes or hours?'."""
+    for t in (np.arange(1000) * 0.01, 1.7e9 + np.arange(1000) * 0.01):
+        validate_log(pd.DataFrame({"time_s": t, "north_m": 0.0, "east_m": 0.0, "heading_deg": 10.0}))
+    with pytest.raises(LogFormatError, match=r"^time_s: median sample spacing 0\.009 "):
+        validate_log(pd.DataFrame({"time_s": np.arange(1000) * 0.009, "north_m": 0.0, "east_m": 0.0,
+                                   "heading_deg": 10.0}))

@@ -540,6 +540,10 @@ def _speed_unit_guess(scale: float) -> str:
     return "another unit?"
 
 
+#: Relative tolerance of the accepted sample spacing's ends (rounding of the logged times).
+_SPACING_RTOL = 1e-3
+
+
 def _check_time(t: np.ndarray, source: str) -> None:
     nonfinite = ~np.isfinite(t)
     if nonfinite.any():
@@ -556,7 +560,9 @@ def _check_time(t: np.ndarray, source: str) -> None:
         )
     if t.size >= 2:
         med = float(np.median(np.diff(t)))
-        if not MIN_SAMPLE_SPACING_S <= med <= MAX_SAMPLE_SPACING_S:
+        # with a tolerance: times of 100 Hz samples are not exact in binary (a median step of
+        # 0.0099999999999998, or 0.00999999 in epoch seconds) and were refused as 0.01 s
+        if not MIN_SAMPLE_SPACING_S * (1.0 - _SPACING_RTOL) <= med <= MAX_SAMPLE_SPACING_S * (1.0 + _SPACING_RTOL):
             hint = "milliseconds" if med > MAX_SAMPLE_SPACING_S else "minutes or hours"
             raise LogFormatError(
                 f"time_s: median sample spacing {med:g} between time_s {seconds_text(t[0])} and "
