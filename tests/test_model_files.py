@@ -261,6 +261,36 @@ def test_a_calibration_whose_exponent_row_varies_is_refused(saved, tmp_path):
              r"damaged model contents: cal_held_heading: the exponent row must hold one value")
 
 
+@pytest.mark.parametrize("key, dtype", [("cal_held_position", str), ("cal_held_heading", complex),
+                                        ("hull_theta", str), ("hull_offset", complex)])
+def test_calibration_and_hull_arrays_that_hold_no_real_numbers_are_refused_by_name(saved, tmp_path, key, dtype):
+    """Text in a calibration or hull array was refused with numpy's "could not convert string
+    to float", naming no array, and complex values were read with their imaginary part dropped."""
+    import copy
+
+    from hybridship.residual.calibration import SpreadCalibration
+    from hybridship.residual.hull import HULL_REGRESSORS
+
+    hp = copy.deepcopy(saved[0])
+    cal = SpreadCalibration([1.0, 60.0], [2.0, 2.0], [0.1, 0.1])
+    hp.calibration = {"held": {"position": cal, "heading": cal}}
+    full = (hp, hp.save(tmp_path / "calibrated.npz"), None)
+    P = len(HULL_REGRESSORS)
+    hull = {"hull_theta": np.zeros((P, 3)), "hull_phi_mean": np.zeros(P), "hull_phi_std": np.ones(P),
+            "hull_offset": np.zeros(3)}
+
+    def change(arrays):
+        if key.startswith("hull_"):
+            arrays.update(hull)
+        arrays[key] = (arrays[key] + 1j) if dtype is complex else arrays[key].astype(str)
+
+    def with_hull(meta):
+        meta["has_hull"] = key.startswith("hull_")
+
+    path = _rewrite(full, tmp_path, meta_change=with_hull, array_change=change, restamp=True, name=f"{key}.npz")
+    _refused(path, rf"damaged model contents: {key}: expected real numbers, got dtype")
+
+
 def test_files_written_before_a_vessel_field_was_added_still_load(saved, tmp_path):
     """A vessel field added later (``lift_speed``) at its default leaves the fingerprint as it
     was, so a file whose embedded description lacks it loads; the packaged vessels keep the

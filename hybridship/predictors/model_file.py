@@ -509,7 +509,8 @@ def _restore_learned_state(obj, data: dict, state: dict, path: Path) -> None:
         ens, guard, thrust_regime = _read_nets(data, len(obj.residual_config.features), state)
         calibration = _read_calibration(data, state["calibrated_commands"], rows=3 if state["format_version"] == 7 else 4)
         _check_finite(ens, guard, thrust_regime)
-        hull = (HullCorrection.from_arrays(data, obj.model.vessel.particulars.L_pp_m, obj.hull_ridge)
+        hull = (HullCorrection.from_arrays({k: _real_array(data, k) for k in data if k.startswith("hull_")},
+                                           obj.model.vessel.particulars.L_pp_m, obj.hull_ridge)
                 if state["has_hull"] else None)
         wind_paths = _read_wind_error_paths(data) if state["has_wind_error_paths"] else None
     except KeyError as err:
@@ -609,7 +610,7 @@ def _read_calibration(data: dict, modes, rows: int = 4) -> dict:
     for mode in modes:
         calibration[mode] = {}
         for what in ("position", "heading"):
-            a = np.asarray(data[f"cal_{mode}_{what}"], dtype=float)
+            a = _real_array(data, f"cal_{mode}_{what}")
             if a.ndim != 2 or a.shape[0] != rows or a.shape[1] == 0:
                 raise ValueError(f"cal_{mode}_{what} has shape {a.shape}, expected ({rows}, H)")
             exponent = 1.0
