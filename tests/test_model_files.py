@@ -698,6 +698,11 @@ def test_consistently_written_arrays_are_checked_against_the_model(saved, tmp_pa
                                                                    std=m["thrust_error_prior"]["std"][:-1]),
      r"thrust_error_prior: expected \d+ entries, one per"),
     ("thrust_lo", lambda m: m["thrust_regime"].update(lo=-1.0), r"thrust_regime.lo: expected a number >= 0"),
+    # a prior that is not a table, or holds text (number-like text loaded as its numbers)
+    ("thrust_prior_table", lambda m: m.update(thrust_error_prior=[0.0, 1.0]), "thrust_error_prior: expected a table"),
+    ("thrust_prior_text",
+     lambda m: m["thrust_error_prior"].update(mean=[str(x) for x in m["thrust_error_prior"]["mean"]]),
+     "thrust_error_prior.mean: expected an array of real numbers"),
     ("trained_with_wind", lambda m: m["training_info"].update(trained_with_wind="yes"),
      "training_info.trained_with_wind: expected true or false"),
     ("command_regime_list", lambda m: m.update(command_regime=[0.05]), "command_regime: expected a table"),

@@ -14,6 +14,7 @@ from pathlib import Path
 
 import numpy as np
 
+from ..config import real_array
 from ..fileio import as_path, atomic_write, starts_with
 from ..forecast_inputs.wind import WindForecast
 from ..residual.calibration import CalibrationConfig, SpreadCalibration
@@ -438,8 +439,10 @@ def _checked_drift_yaw(value, predictor) -> float:
 def _scalar_state(meta: dict) -> dict:
     """The learned state kept in the metadata: thrust-error prior, guard and thrust-regime
     scalars, command-regime settings, calibrated modes and the vessel fingerprint."""
-    thr_mean = np.asarray(meta["thrust_error_prior"]["mean"], dtype=float).ravel()
-    thr_std = np.asarray(meta["thrust_error_prior"]["std"], dtype=float).ravel()
+    prior = meta["thrust_error_prior"]
+    if not isinstance(prior, dict):
+        raise ValueError(f"thrust_error_prior: expected a table of means and spreads, got {prior!r}")
+    thr_mean, thr_std = (real_array(f"thrust_error_prior.{k}", prior[k]).ravel() for k in ("mean", "std"))
     if thr_mean.shape != thr_std.shape or not (np.all(np.isfinite(thr_mean)) and np.all(thr_std > 0)):
         raise ValueError("thrust_error_prior: expected finite means and positive spreads")
     modes = meta["calibrated_commands"]
