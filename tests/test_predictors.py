@@ -123,6 +123,25 @@ def test_training_logs_with_and_without_wind_are_named_once_at_fit(model, curren
     assert "forecast" not in texts[0]
 
 
+def test_the_fit_warning_about_a_log_without_wind_points_at_the_callers_line(model, current_logs, monkeypatch):
+    """The warning named the decorator's line in forecast_setup.py as its place (one frame
+    short), so a filter on the caller's module missed it and the shown line was library code.
+    The fit is stopped right after the warning."""
+    class Stop(Exception):
+        pass
+
+    def stop(*args, **kwargs):
+        raise Stop
+
+    monkeypatch.setattr("hybridship.predictors.hybrid.EnvironmentEstimator", stop)
+    logs = [current_logs[0], current_logs[1].drop(columns=["wind_speed_m_s", "wind_dir_deg"])]
+    with warnings.catch_warnings(record=True) as caught, pytest.raises(Stop):
+        warnings.simplefilter("always")
+        HybridPredictor(model.vessel, ensemble_config=SMALL).fit(logs)
+    places = [w.filename for w in caught if "no wind columns" in str(w.message)]
+    assert places == [__file__]
+
+
 def test_damaged_or_foreign_model_files_are_refused(model, current_logs, tmp_path):
     hp = HybridPredictor(model.vessel, ensemble_config=SMALL).fit(current_logs[:1])
     path = hp.save(tmp_path / "m.npz")
