@@ -706,6 +706,16 @@ def test_consistently_written_arrays_are_checked_against_the_model(saved, tmp_pa
     ("trained_with_wind", lambda m: m["training_info"].update(trained_with_wind="yes"),
      "training_info.trained_with_wind: expected true or false"),
     ("command_regime_list", lambda m: m.update(command_regime=[0.05]), "command_regime: expected a table"),
+    # a settings table written as a list: Python's "argument after ** must be a mapping", or a
+    # field of it said to be missing
+    *[(f"{key}_list", lambda m, key=key: m.update({key: [1, 2]}), f"{key}: expected a table of settings")
+      for key in ("residual_config", "ensemble_config", "environment_config", "calibration_config",
+                  "multistep_config")],
+    # the features as one name or a number: split into letters, or "'int' object is not iterable"
+    ("features_text", lambda m: m["residual_config"].update(features="u_hat_m_s"),
+     "residual_config.features: expected a list of feature names"),
+    ("features_number", lambda m: m["residual_config"].update(features=5),
+     "residual_config.features: expected a list of feature names"),
 ])
 def test_consistently_written_bad_settings_are_refused_by_name(saved, tmp_path, name, edit, message):
     """Settings of the wrong type in a re-sealed file: refused naming the field, never with a

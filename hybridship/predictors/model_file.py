@@ -324,6 +324,13 @@ def _build_predictor(cls, meta: dict, vessel, path: Path):
     if vessel is not None and not isinstance(vessel, Vessel):
         vessel = load_vessel(vessel)        # the caller's argument: its errors are not the file's
     try:
+        for key in ("residual_config", "ensemble_config", "environment_config", "calibration_config",
+                    "multistep_config"):
+            if not isinstance(meta[key], dict):
+                raise ValueError(f"{key}: expected a table of settings, got {meta[key]!r}")
+        if not isinstance(meta["residual_config"].get("features", []), list):
+            raise ValueError(f"residual_config.features: expected a list of feature names, got "
+                             f"{meta['residual_config']['features']!r}")
         if meta["format_version"] >= 12 and "command_memory_s" not in meta["residual_config"]:
             raise KeyError("residual_config.command_memory_s")     # older files read the default, unused
         if meta["format_version"] >= 14 and "settle_s" not in meta["environment_config"]:
