@@ -240,6 +240,31 @@ def test_a_version_7_file_reads_as_spread_exponent_1(saved, model, tmp_path):
     _refused(p8, r"expected \(4, H\)")
 
 
+def test_a_calibration_for_an_unknown_command_mode_is_refused(saved, tmp_path):
+    """A spread calibration stored under a mode a forecast never asks for ("Held", "bogus")
+    loaded without a word, and the forecasts of the mode it was meant for kept the raw spread.
+    The modes a model may have, the forecasts' and those after a stop, all load back."""
+    import copy
+
+    from hybridship.predictors.hybrid import AFTER_STOP, AFTER_STOP_LATE
+    from hybridship.residual.calibration import SpreadCalibration
+
+    hp = copy.deepcopy(saved[0])
+    cal = SpreadCalibration([1.0, 60.0], [2.0, 2.0], [0.1, 0.1])
+    modes = ("held", "known", AFTER_STOP, AFTER_STOP_LATE)
+    hp.calibration = {mode: {"position": cal, "heading": cal} for mode in modes}
+    assert set(HybridPredictor.load(hp.save(tmp_path / "modes.npz")).calibration) == set(modes)
+
+    def add(arrays):
+        cal = np.stack([[1.0, 60.0], [2.0, 2.0], [0.1, 0.1], [1.0, 1.0]])
+        arrays.update(cal_Held_position=cal, cal_Held_heading=cal)
+
+    path = _rewrite(saved, tmp_path, meta_change=lambda m: m.update(calibrated_commands=["Held"]),
+                    array_change=add, restamp=True, name="mode.npz")
+    _refused(path, r"damaged model metadata \(calibrated_commands: expected a list of command modes \(held, "
+                   r"known, after_stop, after_stop_late\), got \['Held'\]")
+
+
 def test_a_calibration_whose_exponent_row_varies_is_refused(saved, tmp_path):
     """The fourth row of a ``cal_*`` array repeats one exponent; a row that varies (a damaged
     or hand-made file) is refused by name, not read as its first entry."""
