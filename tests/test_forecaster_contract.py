@@ -255,6 +255,9 @@ def test_a_horizon_off_the_logs_steps_is_refused_with_the_nearest(kind, fitted, 
                                          r"the nearest is 60 s$"):
         fitted[kind].forecast(test_log, STARTS, 60.4)
     assert fitted[kind].forecast(test_log, STARTS, 60.2).lead_s[-1] == 60.0
+    # and the forecast's docstring says so (it said a horizon is rounded to whole steps)
+    doc = " ".join(DynamicPredictor.forecast.__doc__.split())
+    assert "rounded to whole steps" not in doc and "60.4 s on a 1-Hz log), is refused" in doc
 
 
 @pytest.mark.parametrize("kind", KINDS)

@@ -52,10 +52,12 @@ class DynamicPredictor:
         start_times_s : float or sequence of float
             Sample times of the log [s].
         horizon_s : float
-            Forecast horizon [s], rounded to whole steps of the log's step (the median spacing
-            of its time stamps to the microsecond: lead times ``k * step`` read 0.1, 0.2, ...,
-            60.0 on a 10-Hz log); one that rounds to no step is refused (ValueError). On a log
-            with jittered time stamps the forecast still runs whole median steps from the
+            Forecast horizon [s], a whole number of the log's steps (the median spacing of its
+            time stamps to the microsecond: lead times ``k * step`` read 0.1, 0.2, ..., 60.0 on
+            a 10-Hz log), to within a quarter step or 0.5 % of itself, and taken as that whole
+            number; one that rounds to no step, or lies further from a whole number of steps
+            (60.4 s on a 1-Hz log), is refused (ValueError naming ``horizon_s``). On a
+            log with jittered time stamps the forecast still runs whole median steps from the
             start, so its times are nominal and not the log's own.
         commands : {"held", "known"}
             ``held``: commands stay at their start values; ``known``: the logged commands
