@@ -14,8 +14,9 @@ The contract, beyond the signatures:
   :class:`~hybridship.predictors.ForecastResult` with one forecast per start time, all
   computed as one batch. A learning forecaster that was not fitted raises
   :class:`RuntimeError`; bad inputs raise :class:`ValueError` (or a subclass such as
-  :class:`~hybridship.logs.io.LogFormatError`) whose message starts with the name of the
-  field at fault.
+  :class:`~hybridship.logs.io.LogFormatError`), or :class:`TypeError` for an argument of
+  the wrong type (a horizon given as text, a list given as the log), whose message starts
+  with the name of the field at fault.
 * Causal: with ``commands="held"`` a forecast uses nothing logged after its start time.
 * Deterministic: the same call on the same fitted forecaster gives the same numbers.
 

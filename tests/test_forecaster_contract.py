@@ -237,6 +237,11 @@ def test_bad_inputs_name_the_field(kind, fitted, test_log):
         with pytest.raises(exc) as err:
             p.forecast(*args, **kw)
         assert re.match(rf"{field}\b", str(err.value)), f"{kind}, {what}: {err.value}"
+    # the contract says which errors these are (it named ValueError alone, while a wrong type is a TypeError)
+    import hybridship.forecaster as contract
+
+    for exc in {exc for _, _, _, exc, _ in _bad_inputs(test_log)}:
+        assert exc.__name__ in contract.__doc__, exc
 
 
 @pytest.mark.parametrize("kind", KINDS)
