@@ -730,6 +730,11 @@ def test_consistently_written_arrays_are_checked_against_the_model(saved, tmp_pa
      "thrust_error_prior.mean: expected an array of real numbers"),
     ("trained_with_wind", lambda m: m["training_info"].update(trained_with_wind="yes"),
      "training_info.trained_with_wind: expected true or false"),
+    # read by every calibrated forecast: loaded, then each forecast failed with Python's message
+    ("after_stop", lambda m: m["training_info"].setdefault("calibration", {}).update(after_stop="x"),
+     "training_info.calibration.after_stop: expected a table"),
+    ("starts_within", lambda m: m["training_info"].setdefault("calibration", {}).update(
+        after_stop={"starts_within_s": "20"}), r"training_info.calibration.after_stop.starts_within_s: expected"),
     ("command_regime_list", lambda m: m.update(command_regime=[0.05]), "command_regime: expected a table"),
     # a settings table written as a list: Python's "argument after ** must be a mapping", or a
     # field of it said to be missing

@@ -14,7 +14,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..config import real_array
+from ..config import check_number, real_array
 from ..fileio import as_path, atomic_write, starts_with
 from ..forecast_inputs.wind import WindForecast
 from ..residual.calibration import CalibrationConfig, SpreadCalibration
@@ -221,14 +221,14 @@ def load_model(cls, path, vessel=None):
     _restore_learned_state(obj, data, state, path)
     try:
         obj.training_info = _checked_training_info(meta.get("training_info", {}))
-    except ValueError as err:
+    except (TypeError, ValueError) as err:
         raise ModelFileError(f"{path}: damaged model metadata ({err})") from None
     return obj
 
 
 def _checked_training_info(info) -> dict:
-    """``training_info``: a record of the fit, of which forecasts read three entries; each
-    checked for what they read (ValueError naming the entry otherwise)."""
+    """``training_info``: a record of the fit, of which forecasts read four entries; each
+    checked for what they read (ValueError or TypeError naming the entry otherwise)."""
     if not isinstance(info, dict):
         raise ValueError(f"training_info: expected a table of entries, got {type(info).__name__}")
     steps = info.get("log_step_s")
@@ -240,6 +240,12 @@ def _checked_training_info(info) -> dict:
     calibration = info.get("calibration", {})
     if not isinstance(calibration, dict) or not isinstance(calibration.get("dp_only", False), bool):
         raise ValueError("training_info.calibration: expected a table whose dp_only is true or false")
+    after_stop = calibration.get("after_stop", {})
+    if not isinstance(after_stop, dict):
+        raise ValueError(f"training_info.calibration.after_stop: expected a table, got {after_stop!r}")
+    if "starts_within_s" in after_stop:
+        check_number("training_info.calibration.after_stop.starts_within_s", after_stop["starts_within_s"],
+                     lo=0.0, lo_open=True)
     return info
 
 
