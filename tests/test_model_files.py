@@ -277,13 +277,14 @@ def test_a_calibration_whose_exponent_row_varies_is_refused(saved, tmp_path):
     hp.calibration = {"held": {"position": cal, "heading": cal}}
     calibrated = (hp, hp.save(tmp_path / "calibrated.npz"), None)
 
-    def two_exponents(arrays):
-        a = arrays["cal_held_heading"].copy()
-        a[3] = [1.0, 0.5]
-        arrays["cal_held_heading"] = a
+    for row in ([1.0, 0.5], [1.0, np.nan]):        # a NaN after the first entry was read as the first
+        def two_exponents(arrays, row=row):
+            a = arrays["cal_held_heading"].copy()
+            a[3] = row
+            arrays["cal_held_heading"] = a
 
-    _refused(_rewrite(calibrated, tmp_path, array_change=two_exponents, restamp=True, name="exponents.npz"),
-             r"damaged model contents: cal_held_heading: the exponent row must hold one value")
+        _refused(_rewrite(calibrated, tmp_path, array_change=two_exponents, restamp=True, name="exponents.npz"),
+                 r"damaged model contents: cal_held_heading: the exponent row must hold one value")
 
 
 @pytest.mark.parametrize("key, dtype", [("cal_held_position", str), ("cal_held_heading", complex),

@@ -636,7 +636,7 @@ def _read_calibration(data: dict, modes, rows: int = 4) -> dict:
                 raise ValueError(f"cal_{mode}_{what} has shape {a.shape}, expected ({rows}, H)")
             exponent = 1.0
             if rows == 4:
-                if np.ptp(a[3]) > 0:
+                if np.unique(a[3]).size > 1:       # a NaN beside a number too (np.ptp passed it)
                     raise ValueError(f"cal_{mode}_{what}: the exponent row must hold one value")
                 exponent = float(a[3, 0])
             calibration[mode][what] = SpreadCalibration(a[0], a[1], a[2], exponent)
