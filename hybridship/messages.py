@@ -6,9 +6,14 @@ Kept free of heavy imports: the command line uses it on every error, and ``hybri
 
 from __future__ import annotations
 
+import os
 import re
+import sys
+import warnings
 
-__all__ = ["problem_lines", "seconds_text"]
+__all__ = ["problem_lines", "seconds_text", "warn_user"]
+
+_PACKAGE_DIR = os.path.dirname(os.path.abspath(__file__)) + os.sep
 
 #: Decimals of a time in messages: a microsecond, finer than any log's sample spacing.
 TIME_DECIMALS = 6
@@ -46,3 +51,17 @@ def seconds_text(t: float) -> str:
     epoch times of a log (1.7e9 s) stay distinct ("1700000000.5", not "1.7e+09")."""
     text = f"{round(float(t), TIME_DECIMALS):.{TIME_DECIMALS}f}".rstrip("0").rstrip(".")
     return "0" if text in ("", "-0") else text
+
+
+def warn_user(message: str, category: type[Warning] = UserWarning) -> None:
+    """Warn at the first line outside this package: the user's call.
+
+    A fixed ``stacklevel`` counts frames from the warning, and a function reached through
+    another of the package's functions or a decorator (``fit`` runs under one) placed the
+    warning at library code, where the user's warning filters on their own module miss it.
+    The frames are counted as pandas' ``find_stack_level`` counts them.
+    """
+    frame, level = sys._getframe(1), 2     # level 2: the caller of warn_user
+    while frame is not None and os.path.abspath(frame.f_code.co_filename).startswith(_PACKAGE_DIR):
+        frame, level = frame.f_back, level + 1
+    warnings.warn(message, category, stacklevel=level)

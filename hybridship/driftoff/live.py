@@ -39,7 +39,7 @@ from . import engine, spread
 from .planning import (MAX_SAMPLES, DriftOffResult, DriftOffSettings, _reals, get_model, hull_array, refuse_diverged,
                        state_rng)
 from .weather import MAX_WIND_M_S
-from ..messages import seconds_text
+from ..messages import seconds_text, warn_user
 
 __all__ = ["EnvironmentEstimate", "environment_from_log", "blackout_now", "MIN_WINDOW_S", "MIN_WIND_WINDOW_S"]
 
@@ -257,7 +257,6 @@ def _start_checks(a: LogArrays, idx: int, name: str, wind_measured: bool) -> str
     position, heading or velocity (:class:`~hybridship.forecast_inputs.StartWindowError`), a
     worked-around fault warned and returned as a note. With ``wind_measured`` (the estimate's
     own, longer wind window has samples) the start window's dropped wind is not one."""
-    import warnings
 
     from ..forecast_inputs import FaultFlags, assess_start_window
     from ..forecast_inputs.faults import WIND_DROPPED_NOTES
@@ -275,8 +274,7 @@ def _start_checks(a: LogArrays, idx: int, name: str, wind_measured: bool) -> str
     degraded = any(bool(sw.flags[k][0]) for k in FaultFlags.START_WINDOW
                    if k not in (*ignore, *FaultFlags.INFORMATIONAL))
     if note and degraded:
-        warnings.warn(f"{name}: at the blackout row (time_s {seconds_text(a.time_s[idx])}): {note}", LogFormatWarning,
-                      stacklevel=3)
+        warn_user(f"{name}: at the blackout row (time_s {seconds_text(a.time_s[idx])}): {note}", LogFormatWarning)
         return note
     return ""
 
@@ -413,14 +411,13 @@ def blackout_now(estimate: EnvironmentEstimate, vessel="gunnerus", settings: Dri
     az[:k] = estimate.azimuth_rad[:k]
     members = np.asarray(estimate.accel_members, dtype=float)      # checked above as array-like
     if 1 < members.shape[0] < N:
-        import warnings
 
         # the environment's spread dominates a live prediction: N samples cycling through
         # fewer members have the quantiles of that many draws, not of N (one member is an
         # environment taken as known, which every sample meets)
-        warnings.warn(f"estimate: {members.shape[0]} environment members for {N} samples: the samples cycle "
-                      f"through them, so the times' spread rests on {members.shape[0]} draws of the environment; "
-                      f"give environment_from_log n_members >= n_samples", UserWarning, stacklevel=2)
+        warn_user(f"estimate: {members.shape[0]} environment members for {N} samples: the samples cycle "
+                  f"through them, so the times' spread rests on {members.shape[0]} draws of the environment; "
+                  f"give environment_from_log n_members >= n_samples", UserWarning)
     acc = members[np.arange(N) % members.shape[0]]
     cur = np.zeros((N, 2))
     if estimate.current_members_ned_m_s is not None:

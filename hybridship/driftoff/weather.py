@@ -44,6 +44,7 @@ from ..config import Float, check_number, config_dataclass
 from ..fileio import as_path
 from ..frames import wrap_2pi
 from ..logs.io import RAD_SPREAD_LIMIT, unit_variant
+from ..messages import warn_user
 from ..forecast_inputs.limits import Envelope
 from ..sim import environment as env
 from ..sim.environment import MAX_STEEPNESS, check_steepness, max_hs_m
@@ -247,8 +248,8 @@ def read_weather_table(path_or_frame) -> tuple[list[WeatherState], list[str]]:
         raise ValueError(f"{src}: no rows")
     unknown = [str(c) for c in df.columns if c not in TABLE_COLUMNS + OPTIONAL_COLUMNS]
     if unknown:      # a misspelt optional column would otherwise be replaced by its default unseen
-        warnings.warn(f"{src}: column(s) {', '.join(unknown)} not used; the weather table's columns are "
-                      f"{', '.join(TABLE_COLUMNS + OPTIONAL_COLUMNS)}", UserWarning, stacklevel=2)
+        warn_user(f"{src}: column(s) {', '.join(unknown)} not used; the weather table's columns are "
+                  f"{', '.join(TABLE_COLUMNS + OPTIONAL_COLUMNS)}", UserWarning)
     cols = {}
     for c in TABLE_COLUMNS + ("gust_intensity",):
         if c not in df.columns:
@@ -300,8 +301,8 @@ def _warn_directions_like_radians(cols: dict, src: str) -> None:
         v = cols[c]
         within_a_turn = v.min() >= 0.0 and v.max() <= 2.0 * math.pi + 1e-6
         if v.size >= 20 and within_a_turn and np.ptp(v) >= RAD_SPREAD_LIMIT:
-            warnings.warn(f"{src}: column {c!r} spans {v.min():.2f} to {v.max():.2f}, which looks like radians; "
-                          f"the table expects degrees (convert with numpy.degrees)", UserWarning, stacklevel=3)
+            warn_user(f"{src}: column {c!r} spans {v.min():.2f} to {v.max():.2f}, which looks like radians; "
+                      f"the table expects degrees (convert with numpy.degrees)", UserWarning)
 
 
 def _line_of_row(src: str, i: int) -> int:

@@ -626,11 +626,11 @@ def _checked_steps(train: list[Run], test: list[Run], horizons_s: tuple, cfg: Ma
     if same:
         raise ValueError(f"test_dir: {len(same)} run(s) have the name of a train_dir run (e.g. {sorted(same)[0]}): "
                          "a copy of a training run cannot test it; train and test runs must differ")
-    import warnings
+    from ..messages import warn_user
 
     for test_name, train_name in cut_copies(train, test):     # run, but said now (and in README.md)
-        warnings.warn(f"test run {test_name} and training run {train_name} are one run, cut and uncut: its errors "
-                      f"are not out-of-sample", UserWarning, stacklevel=2)
+        warn_user(f"test run {test_name} and training run {train_name} are one run, cut and uncut: its errors "
+                  f"are not out-of-sample", UserWarning)
     # the same samples under another name (a copy renamed): equal digests of the parsed samples
     trained = {samples_digest(r.arrays): r.name for r in train}
     copies = [(r.name, trained[d]) for r in test if (d := samples_digest(r.arrays)) in trained]
@@ -652,8 +652,8 @@ def _checked_steps(train: list[Run], test: list[Run], horizons_s: tuple, cfg: Ma
                          f"warm-up plus the longest horizon ({max(horizons_s):g} s)")
     short = [r.run.name for r in test if not start_rows(r.arrays, int(steps.max()), cfg.start_every_s).size]
     if short:       # left out of every table: said before the work, not only as "0 starts"
-        warnings.warn(f"{len(short)} test run(s) shorter than the 3-s warm-up plus the longest horizon "
-                      f"({max(horizons_s):g} s) are not scored: {', '.join(short)}", UserWarning, stacklevel=2)
+        warn_user(f"{len(short)} test run(s) shorter than the 3-s warm-up plus the longest horizon "
+                  f"({max(horizons_s):g} s) are not scored: {', '.join(short)}", UserWarning)
     return steps
 
 

@@ -232,11 +232,10 @@ class StateSpaceParameters:
             P = solve_discrete_are(self.A.T, self.C.T, Q, R, s=self.S)
             return (self.A @ P @ self.C.T + self.S) @ np.linalg.inv(self.C @ P @ self.C.T + R)
         except (np.linalg.LinAlgError, ValueError) as exc:
-            import warnings
+            from ..messages import warn_user
 
-            warnings.warn(f"state-space model: the Riccati equation of the Kalman gain has no solution ({exc}); "
-                          f"one-step predictions run without measurement feedback (K = 0)", RuntimeWarning,
-                          stacklevel=2)
+            warn_user(f"state-space model: the Riccati equation of the Kalman gain has no solution ({exc}); "
+                      f"one-step predictions run without measurement feedback (K = 0)", RuntimeWarning)
             return np.zeros((n, ny))
 
 

@@ -30,7 +30,6 @@ from __future__ import annotations
 
 import math
 import os
-import warnings
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -41,7 +40,7 @@ from hybridship.logs.io import (REQUIRED_COLUMNS, LogArrays, LogFormatError, Log
                                 _check_unique_names,
                                 _frame_to_arrays, _to_float,
                                 check_log_against_vessel, check_units_on_whole_log, output_table_kind, read_log)
-from hybridship.messages import seconds_text
+from hybridship.messages import seconds_text, warn_user
 
 __all__ = ["PURPOSES", "SortedLog", "ingest", "ingest_with_report", "sort_samples"]
 
@@ -286,8 +285,7 @@ def _warn_repaired(order: SortedLog, source: str) -> None:
                                             "samples removed"),
                                            (order.n_without_time, "row(s) without a finite time_s dropped"))
              if n]
-    warnings.warn(f"{source}: time_s is not strictly increasing: {', '.join(parts)}", LogFormatWarning,
-                  stacklevel=2)
+    warn_user(f"{source}: time_s is not strictly increasing: {', '.join(parts)}", LogFormatWarning)
 
 
 def _check_header(df: pd.DataFrame, source: str) -> None:

@@ -66,7 +66,6 @@ import functools
 import gzip
 import os
 import re
-import warnings
 from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
@@ -81,7 +80,7 @@ from hybridship.fileio import as_path, atomic_write, starts_with
 from hybridship.logs.columns import (COLUMNS, MAX_SAMPLE_SPACING_S, MIN_SAMPLE_SPACING_S, OPTIONAL_COLUMNS,
                                      REQUIRED_COLUMNS, TRUTH_PREFIX, ColumnSpec, channel_column, column_spec)
 from hybridship.logs.preprocess import segment_ids, segmentwise, split_segments
-from hybridship.messages import seconds_text
+from hybridship.messages import seconds_text, warn_user
 
 __all__ = [
     "REQUIRED_COLUMNS",
@@ -627,8 +626,8 @@ def _validate(df: pd.DataFrame, channel_names, rotatable, source: str, warn_unkn
         # pandas names a header-less column "Unnamed: N": most often a DataFrame index saved with the data
         shown = [f"{c} (a column without a name: an index saved with to_csv?)" if re.fullmatch(r"Unnamed: \d+", c)
                  else c for c in ignored]
-        warnings.warn(f"{source}: {what} {len(ignored)} column(s) not in the log format: {', '.join(shown)}",
-                      LogFormatWarning, stacklevel=3)
+        warn_user(f"{source}: {what} {len(ignored)} column(s) not in the log format: {', '.join(shown)}",
+                  LogFormatWarning)
 
 
 def _check_unique_names(cols: list[str], source: str) -> None:
@@ -1170,12 +1169,12 @@ def _warn_some_rpm_fractions(logged, x: np.ndarray, source: str) -> None:
         on = np.isfinite(x[:, k]) & (x[:, k] != 0.0)
         other = int(np.argmax(np.where(np.arange(len(logged)) == k, -1.0, big)))
         if on.sum() >= RPM_SIGN_MIN_SAMPLES and big[k] <= 1.0 and big[other] > 1.0:
-            warnings.warn(
+            warn_user(
                 f"{col}: within +-1 (largest {big[k]:.3g}) in all {int(on.sum())} of its non-zero samples of "
                 f"station keeping, while {logged[other][1]} reaches {big[other]:.4g} rpm; expected rpm (max_rpm "
                 f"of thruster {th.name!r} is {th.max_rpm:g}): a fraction of max_rpm? (a stopped thruster whose "
                 f"sensor reads noise looks the same; the values are used as rpm){_where(source)}",
-                LogFormatWarning, stacklevel=4)
+                LogFormatWarning)
 
 
 def _check_rpm_while_station_keeping(v, df: pd.DataFrame, cols: set, t: np.ndarray, source: str,
@@ -1436,9 +1435,9 @@ def read_log(
     if kind == "csv" and len(df):
         got = _cut_short_last_line(path, len(names))
         if got is not None:
-            warnings.warn(f"{path}: the last line has {got} of the header's {len(names)} fields and no line end: "
-                          f"cut short (a file still being written, or a copy interrupted); its row (row "
-                          f"{len(df) - 1}) is left out", LogFormatWarning, stacklevel=2)
+            warn_user(f"{path}: the last line has {got} of the header's {len(names)} fields and no line end: "
+                      f"cut short (a file still being written, or a copy interrupted); its row (row "
+                      f"{len(df) - 1}) is left out", LogFormatWarning)
             df = df.iloc[:-1]
     df = df.reset_index(drop=True)
     if validate:

@@ -22,6 +22,7 @@ from ..forecast_inputs import FaultFlags
 from ..forecast_inputs.wind import HELD_WIND, WindForecast, fit_wind_forecast, wind_error_paths
 from ..frames import speed_dir_to_vector, vector_to_speed_dir, wrap_pi
 from ..logs.io import LogArrays
+from ..messages import warn_user
 from ..physics.model import DynamicModel, check_step
 from ..residual.calibration import MIN_CALIBRATION_SAMPLES, CalibrationConfig, fit_spread_scale
 from ..residual.ensemble import EnsembleConfig, MLPEnsemble, fit_ensemble, require_training_rows
@@ -423,9 +424,9 @@ class HybridPredictor:
         their inputs (rates, filtered derivatives) and the step they correct then differ."""
         trained = self.training_info.get("log_step_s")  # absent in files from before it was recorded
         if trained and not 0.9 * min(trained) <= dt_s <= 1.1 * max(trained):
-            warnings.warn(f"log: its step is {dt_s:g} s, but the model was trained on logs with a step of "
-                          f"{', '.join(f'{x:g}' for x in trained)} s; forecasts at another rate are less "
-                          f"accurate: train on logs at this rate", UserWarning, stacklevel=3)
+            warn_user(f"log: its step is {dt_s:g} s, but the model was trained on logs with a step of "
+                      f"{', '.join(f'{x:g}' for x in trained)} s; forecasts at another rate are less "
+                      f"accurate: train on logs at this rate", UserWarning)
 
     def _warn_no_wind(self, arrays) -> None:
         """Warn when the log has no wind columns but the model was trained on logs with wind:
@@ -433,9 +434,9 @@ class HybridPredictor:
         the wind's force, which the nets were never trained to make up for. (Wind columns
         without a valid sample are a dead sensor, flagged ``wind_dropped`` instead.)"""
         if self.training_info.get("trained_with_wind") and not arrays.wind_columns:
-            warnings.warn(f"{NO_WIND_FORECAST_WARNING} (wind_speed_m_s, wind_dir_deg), but the model was trained "
-                          "on logs with wind; the forecast leaves out the wind's force: give the wind columns",
-                          UserWarning, stacklevel=3)
+            warn_user(f"{NO_WIND_FORECAST_WARNING} (wind_speed_m_s, wind_dir_deg), but the model was trained "
+                      "on logs with wind; the forecast leaves out the wind's force: give the wind columns",
+                      UserWarning)
 
     def _fit_drift_hull(self, logs, horizon_s: float):
         """With ``drift_hull`` and at least :data:`~hybridship.residual.drift_hull.MIN_FAILURES`
@@ -683,10 +684,10 @@ class HybridPredictor:
         self.command_regime = self._fit_command_regime(logs, masks, dp_only, stride)
         if early is None or late is None:
             # a part without a trainable row would calibrate its fold without any weights
-            warnings.warn("fit: one part of the held-back rows has no row the command-regime weights can be "
-                          "fitted on, so the spread cannot be cross-fitted; the weights and the spread share "
-                          "the held-back rows (hold back more with calibration_config.fraction)",
-                          UserWarning, stacklevel=3)
+            warn_user("fit: one part of the held-back rows has no row the command-regime weights can be "
+                      "fitted on, so the spread cannot be cross-fitted; the weights and the spread share "
+                      "the held-back rows (hold back more with calibration_config.fraction)",
+                      UserWarning)
             return self._calibration_folds(logs, cuts, cal, dp_only), {"command_regime_split": False}
         starts = [self._calibration_start_rows(a, c, cal, dp_only) for a, c in zip(logs, cuts)]
         folds = [(early, [r[r >= s] for r, s in zip(starts, splits)]),
@@ -706,11 +707,11 @@ class HybridPredictor:
         starts = [self._calibration_start_rows(a, c, cal, dp_only) for a, c in zip(logs, cuts)]
         if sum(r.size - r.size // 2 for r in starts) >= MIN_CALIBRATION_STARTS:
             return [self._calibration_split(a, r) for a, r in zip(logs, starts)]
-        warnings.warn(f"fit: the held-back rows give {sum(r.size for r in starts)} calibration starts, too few to "
-                      f"cross-fit the spread against the command-regime weights (the later half must hold "
-                      f"{MIN_CALIBRATION_STARTS}): the weights and the spread share them; hold back more "
-                      f"(calibration_config.fraction) for a spread calibrated on rows that chose none of its weights",
-                      UserWarning, stacklevel=4)
+        warn_user(f"fit: the held-back rows give {sum(r.size for r in starts)} calibration starts, too few to "
+                  f"cross-fit the spread against the command-regime weights (the later half must hold "
+                  f"{MIN_CALIBRATION_STARTS}): the weights and the spread share them; hold back more "
+                  f"(calibration_config.fraction) for a spread calibrated on rows that chose none of its weights",
+                  UserWarning)
         return None
 
     def _calibration_start_rows(self, a: LogArrays, cut: int, cal: CalibrationConfig, dp_only: bool) -> np.ndarray:
@@ -874,10 +875,10 @@ class HybridPredictor:
             if fitted is not None:
                 self.calibration[mode] = fitted
             else:
-                warnings.warn(f"fit: the spread with commands {mode!r} is not calibrated: {n_starts[mode]} held-back "
-                              f"starts, {MIN_CALIBRATION_STARTS} needed; its forecasts keep the ensemble's raw "
-                              f"spread (hold back more with calibration_config.fraction, or use longer logs)",
-                              UserWarning, stacklevel=3)
+                warn_user(f"fit: the spread with commands {mode!r} is not calibrated: {n_starts[mode]} held-back "
+                          f"starts, {MIN_CALIBRATION_STARTS} needed; its forecasts keep the ensemble's raw "
+                          f"spread (hold back more with calibration_config.fraction, or use longer logs)",
+                          UserWarning)
         return n_starts
 
     def _calibrate(self, logs, folds, cal: CalibrationConfig, dp_only: bool, mode: str):
@@ -1298,9 +1299,9 @@ class HybridPredictor:
         # time stamps ends at 59.95 s for a 60-s horizon
         half_step = 0.5 * float(lead_s[1] - lead_s[0]) if np.size(lead_s) > 1 else 0.0
         if float(lead_s[-1]) > last + half_step + 1e-9 * last:
-            warnings.warn(f"horizon_s: the spread is calibrated up to {last:g} s; beyond, the scale fitted at "
-                          f"{last:g} s is held, so the spread (*_std, quantiles) past {last:g} s is not calibrated",
-                          UserWarning, stacklevel=4)
+            warn_user(f"horizon_s: the spread is calibrated up to {last:g} s; beyond, the scale fitted at "
+                      f"{last:g} s is held, so the spread (*_std, quantiles) past {last:g} s is not calibrated",
+                      UserWarning)
 
     def calibrate_after_stop(self, logs, *, n_intervals: int = 20, horizon_s: float = 60.0,
                              cal: CalibrationConfig | None = None) -> "HybridPredictor":

@@ -99,18 +99,17 @@ def warn_logs_without_wind(arrays, labels) -> None:
     labels : sequence of str
         Names of the logs for the message (file paths where known).
     """
-    import warnings
+    from ..messages import warn_user
 
     with_wind = [label for a, label in zip(arrays, labels) if a.wind_columns]
     if not with_wind:
         return
     for a, label in zip(arrays, labels):
         if not a.wind_columns:
-            # placed at the line that called the fit (fit runs under keeps_state_on_error)
-            warnings.warn(f"{label}: no wind columns (wind_speed_m_s, wind_dir_deg), while {with_wind[0]}"
-                          f"{' and others have' if len(with_wind) > 1 else ' has'} them: its wind is taken as "
-                          f"none, so the nets learn the wind's force there as part of the residual; give its "
-                          f"wind columns or train without it", UserWarning, stacklevel=4)
+            warn_user(f"{label}: no wind columns (wind_speed_m_s, wind_dir_deg), while {with_wind[0]}"
+                      f"{' and others have' if len(with_wind) > 1 else ' has'} them: its wind is taken as "
+                      f"none, so the nets learn the wind's force there as part of the residual; give its "
+                      f"wind columns or train without it", UserWarning)
 
 
 def check_distinct_logs(arrays, labels) -> None:

@@ -327,11 +327,11 @@ class ThrustAllocator:
         # Azimuths without a slew limit turn instantly: said, since a real one cannot
         unlimited = [t.name for t in th if t.type == "azimuth" and not t.max_azimuth_rate_deg_s]
         if unlimited and warn_unlimited_slew:
-            import warnings
+            from hybridship.messages import warn_user
 
-            warnings.warn(f"vessel {self.vessel.name!r}: azimuth thruster(s) {', '.join(unlimited)} have no "
-                          f"max_azimuth_rate_deg_s and turn instantly in the simulation (real ones slew at a few "
-                          f"deg/s: give the rate in the vessel file)", UserWarning, stacklevel=2)
+            warn_user(f"vessel {self.vessel.name!r}: azimuth thruster(s) {', '.join(unlimited)} have no "
+                      f"max_azimuth_rate_deg_s and turn instantly in the simulation (real ones slew at a few "
+                      f"deg/s: give the rate in the vessel file)", UserWarning)
         self.azimuth_rate_limit_rad_s = np.array(
             [math.radians(t.max_azimuth_rate_deg_s) if t.max_azimuth_rate_deg_s else np.inf for t in th])
         self.x_m = np.array([t.x_m for t in th], float)
