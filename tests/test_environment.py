@@ -772,3 +772,18 @@ def test_bad_arguments_are_refused_naming_them(call, error, match):
     with the argument's name, not numpy's unpacking message or a NaN result."""
     with pytest.raises(error, match=match):
         call()
+
+
+@pytest.mark.parametrize("call, match", [
+    (lambda: jonswap_spectrum(1.0, "2", 6.0), "hs_m"),
+    (lambda: jonswap_spectrum(1.0, True, 6.0), "hs_m"),
+    (lambda: make_wave_components(1.0, "6", 0.0, 1), "tp_s"),
+    (lambda: gust_wind(np.arange(10.0), "10", 0.0, 1), "mean_speed_m_s"),
+    (lambda: current_series(np.arange(10.0), 0.5, "1.2", 1), "mean_dir_to_rad"),
+    (lambda: SeaState.random(1, hs_fetch_factor=("0.5", "1")), r"hs_fetch_factor\[0\]"),
+], ids=["hs_text", "hs_bool", "tp_text", "wind_text", "current_dir_text", "pair_text"])
+def test_text_and_bools_are_not_numbers(call, match):
+    """A number given as text or a bool is refused naming the argument (float() read "10" as 10
+    and True as 1), as the package's other number checks do."""
+    with pytest.raises(TypeError, match=match):
+        call()

@@ -53,7 +53,7 @@ import numpy as np
 from pydantic import Field, model_validator
 from scipy.signal import lfilter
 
-from hybridship.config import Float, config_dataclass, float_array
+from hybridship.config import Float, check_number, config_dataclass, float_array
 from hybridship.frames import wrap_2pi, wrap_pi
 
 __all__ = [
@@ -124,13 +124,8 @@ def _as_rng(rng, name="rng"):
 
 
 def _finite_scalar(name, value):
-    try:
-        v = float(value)
-    except (TypeError, ValueError):
-        raise TypeError(f"{name} must be a real number, got {value!r}") from None
-    if not math.isfinite(v):
-        raise ValueError(f"{name} must be finite, got {value!r}")
-    return v
+    """``value`` as a finite float; text and bools are refused (float() reads "10" and True)."""
+    return check_number(name, value)
 
 
 def _positive(name, value, *, allow_zero=False):
