@@ -787,3 +787,30 @@ def test_text_and_bools_are_not_numbers(call, match):
     and True as 1), as the package's other number checks do."""
     with pytest.raises(TypeError, match=match):
         call()
+
+
+@pytest.mark.parametrize("call, match", [
+    (lambda: gust_wind("0123", 5.0, 0.0, 1), "time_s"),
+    (lambda: current_series(["0", "1"], 0.5, 0.0, 1), "time_s"),
+    (lambda: wave_drift_loads(np.arange(3.0), "0.1", make_wave_components(1.0, 6.0, 0.0, 1), GUNNERUS_HULL),
+     "psi_rad"),
+    (lambda: wave_frequency_motion(np.arange(2.0), 0.0, make_wave_components(1.0, 6.0, 0.0, 1), GUNNERUS_HULL,
+                                   position_ne_m=[["0", "0"], ["1", "1"]]), "position_ne_m"),
+    (lambda: jonswap_spectrum("1.0", 1.0, 6.0), "omega_rad_s"),
+    (lambda: harris_spectrum("0.1", 10.0), "f_hz"),
+    (lambda: davenport_spectrum(["x"], 10.0), "f_hz"),
+    (lambda: drift_coefficients("1.0", 0.0, GUNNERUS_HULL), "omega_rad_s"),
+    (lambda: MotionRAOs.from_hull(GUNNERUS_HULL).amplitudes(1.0, "0.5"), "beta_rad"),
+    (lambda: current_velocity_ned("0.5", 0.0), "speed_m_s"),
+    (lambda: beaufort_wind_speed("3"), "beaufort"),
+    (lambda: beaufort_wave_height(["3"]), "beaufort"),
+    (lambda: max_hs_m("6"), "tp_s"),
+    (lambda: make_wave_components(1.0, 6.0, 0.0, 1).phases("0"), "time_s"),
+], ids=["gust_time", "current_time", "drift_heading", "motion_position", "jonswap_omega", "harris_f",
+        "davenport_f", "drift_omega", "rao_beta", "current_speed", "beaufort_wind", "beaufort_wave", "max_hs",
+        "phases_time"])
+def test_text_arrays_are_refused_naming_them(call, match):
+    """An array argument given as text is refused naming it, not parsed ("1.0" read as 1 rad/s)
+    nor failed in numpy's words ("could not convert string to float")."""
+    with pytest.raises(TypeError, match=match):
+        call()

@@ -53,7 +53,7 @@ import numpy as np
 from pydantic import Field, model_validator
 from scipy.signal import lfilter
 
-from hybridship.config import Float, check_number, config_dataclass, float_array
+from hybridship.config import Float, check_number, config_dataclass, float_array, real_array
 from hybridship.frames import wrap_2pi, wrap_pi
 
 __all__ = [
@@ -95,7 +95,7 @@ MAX_STEEPNESS = 1.0 / 7.0
 
 def max_hs_m(tp_s):
     """Largest significant wave height [m] at peak period ``tp_s`` [s] (:data:`MAX_STEEPNESS`)."""
-    return MAX_STEEPNESS * G_M_S2 * np.asarray(tp_s, dtype=float) ** 2 / (2.0 * np.pi)
+    return MAX_STEEPNESS * G_M_S2 * real_array("tp_s", tp_s) ** 2 / (2.0 * np.pi)
 
 
 def check_steepness(hs_m: float, tp_s: float) -> None:
@@ -165,7 +165,7 @@ _MaybeNaN = Annotated[float, Field(allow_inf_nan=True)]  # nan = unknown
 
 
 def _time_vector(time_s, *, min_len=1):
-    t = np.asarray(time_s, dtype=float)
+    t = real_array("time_s", time_s)
     if t.ndim != 1:
         raise ValueError(f"time_s must be 1-D, got shape {t.shape}")
     if t.size < min_len:
@@ -179,7 +179,7 @@ def _time_vector(time_s, *, min_len=1):
 
 def _per_time(name, value, n):
     """Broadcast a scalar or length-n array to shape (n,), naming the field on mismatch."""
-    a = np.asarray(value, dtype=float)
+    a = real_array(name, value)
     if a.ndim == 0:
         a = np.full(n, float(a))
     elif a.shape != (n,):
@@ -192,7 +192,7 @@ def _per_time(name, value, n):
 def _positions(position_ne_m, n):
     if position_ne_m is None:
         return None
-    p = np.asarray(position_ne_m, dtype=float)
+    p = real_array("position_ne_m", position_ne_m)
     if p.shape != (n, 2):
         raise ValueError(f"position_ne_m must have shape ({n}, 2) [north_m, east_m], got {p.shape}")
     if not np.all(np.isfinite(p)):
@@ -252,7 +252,7 @@ def jonswap_spectrum(omega_rad_s, hs_m, tp_s, gamma=3.3):
     hs = _positive("hs_m", hs_m, allow_zero=True)
     tp = _positive("tp_s", tp_s)
     g = _in_range("gamma", gamma, 1.0, 7.0)
-    return _jonswap(omega_rad_s, hs, tp, g)
+    return _jonswap(real_array("omega_rad_s", omega_rad_s), hs, tp, g)
 
 
 def _jonswap(omega_rad_s, hs_m, tp_s, gamma):
@@ -383,7 +383,7 @@ class WaveField:
             Where the ship is ``[north_m, east_m]`` at each time; including it makes the
             encounter frequency (Doppler shift of a drifting ship) come out by itself.
         """
-        t = np.asarray(time_s, dtype=float).reshape(-1)
+        t = real_array("time_s", time_s).reshape(-1)
         theta = np.multiply.outer(t, self.omega_rad_s) + self.phase_rad
         p = _positions(position_ne_m, t.size)
         if p is not None:
@@ -668,7 +668,7 @@ def drift_coefficients(omega_rad_s, beta_rad, hull, rho_kg_m3=RHO_SEAWATER_KG_M3
     h = HullDimensions.from_any(hull)
     rho = _positive("rho_kg_m3", rho_kg_m3)
     g = _positive("g_m_s2", g_m_s2)
-    w, beta = np.broadcast_arrays(np.asarray(omega_rad_s, dtype=float), np.asarray(beta_rad, dtype=float))
+    w, beta = np.broadcast_arrays(real_array("omega_rad_s", omega_rad_s), real_array("beta_rad", beta_rad))
     k = w**2 / g
     p = -np.expm1(-2.0 * k * h.T_m)
     kl, kb = (k * h.L_m) ** 2, (k * h.B_m) ** 2
@@ -853,7 +853,7 @@ class MotionRAOs:
 
     def amplitudes(self, omega_rad_s, beta_rad, g_m_s2=G_M_S2) -> np.ndarray:
         """Signed RAOs ``[x_b/A m/m, y_b/A m/m, psi/A rad/m]``, shape (..., 3)."""
-        w, beta = np.broadcast_arrays(np.asarray(omega_rad_s, dtype=float), np.asarray(beta_rad, dtype=float))
+        w, beta = np.broadcast_arrays(real_array("omega_rad_s", omega_rad_s), real_array("beta_rad", beta_rad))
         k = w**2 / g_m_s2
         cb, sb = np.cos(beta), np.sin(beta)
         extent = self.L_m * np.abs(cb) + self.B_m * np.abs(sb)
@@ -976,7 +976,7 @@ def harris_spectrum(f_hz, mean_speed_m_s, kappa=0.0026, length_scale_m=1800.0):
     sec. 10.1.3; DNV-RP-C205 sec. 2.3.4). Its variance is ``6.68 kappa U^2``.
     """
     u = _positive("mean_speed_m_s", mean_speed_m_s)
-    f = np.asarray(f_hz, dtype=float)
+    f = real_array("f_hz", f_hz)
     x = f * length_scale_m / u
     return np.where(f > 0.0, 4.0 * kappa * u * length_scale_m / (2.0 + x**2) ** (5.0 / 6.0), 0.0)
 
@@ -988,7 +988,7 @@ def davenport_spectrum(f_hz, mean_speed_m_s, kappa=0.0026, length_scale_m=1200.0
     (DNV-RP-C205 sec. 2.3.4; Fossen 2021 sec. 10.1.3).
     """
     u = _positive("mean_speed_m_s", mean_speed_m_s)
-    f = np.asarray(f_hz, dtype=float)
+    f = real_array("f_hz", f_hz)
     fs = np.where(f > 0.0, f, 1.0)
     x = fs * length_scale_m / u
     return np.where(f > 0.0, 4.0 * kappa * u**2 * x**2 / (fs * (1.0 + x**2) ** (4.0 / 3.0)), 0.0)
@@ -1116,8 +1116,8 @@ def current_series(time_s, mean_speed_m_s, mean_dir_to_rad, rng, speed_var=0.1,
 
 def current_velocity_ned(speed_m_s, dir_to_rad):
     """Current velocity ``[V_north_m_s, V_east_m_s]``, shape (..., 2), from speed and direction TO."""
-    v = np.asarray(speed_m_s, dtype=float)
-    b = np.asarray(dir_to_rad, dtype=float)
+    v = real_array("speed_m_s", speed_m_s)
+    b = real_array("dir_to_rad", dir_to_rad)
     return np.stack(np.broadcast_arrays(v * np.cos(b), v * np.sin(b)), axis=-1)
 
 
@@ -1129,7 +1129,7 @@ _BEAUFORT_HS_M = np.array([0.0, 0.1, 0.2, 0.6, 1.0, 2.0, 3.0, 4.0, 5.5, 7.0, 9.0
 
 def beaufort_wind_speed(beaufort):
     """Mean 10 m wind speed [m/s] for a (fractional) Beaufort number: ``0.836 B^1.5`` (WMO)."""
-    b = np.asarray(beaufort, dtype=float)
+    b = real_array("beaufort", beaufort)
     if not np.all((b >= 0.0) & (b <= 12.5)):        # NaN too
         raise ValueError(f"beaufort must be in [0, 12.5], got {beaufort!r}")
     return 0.836 * b**1.5
@@ -1137,7 +1137,7 @@ def beaufort_wind_speed(beaufort):
 
 def beaufort_wave_height(beaufort):
     """WMO probable (open-sea) wave height [m] for a (fractional) Beaufort number, interpolated."""
-    b = np.asarray(beaufort, dtype=float)
+    b = real_array("beaufort", beaufort)
     if not np.all((b >= 0.0) & (b <= 12.5)):        # NaN too
         raise ValueError(f"beaufort must be in [0, 12.5], got {beaufort!r}")
     return np.interp(b, np.arange(13.0), _BEAUFORT_HS_M)
