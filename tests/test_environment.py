@@ -814,3 +814,15 @@ def test_text_arrays_are_refused_naming_them(call, match):
     nor failed in numpy's words ("could not convert string to float")."""
     with pytest.raises(TypeError, match=match):
         call()
+
+
+@pytest.mark.parametrize("call, match", [
+    (lambda: jonswap_spectrum([0.8, np.nan], 1.0, 6.0), "omega_rad_s"),
+    (lambda: harris_spectrum([np.nan, 0.1], 10.0), "f_hz"),
+    (lambda: davenport_spectrum(np.nan, 10.0), "f_hz"),
+], ids=["jonswap", "harris", "davenport"])
+def test_spectra_refuse_a_nan_frequency(call, match):
+    """A NaN frequency is refused naming it: it failed the ``> 0`` test and came out as a
+    spectral density of 0, hiding the NaN."""
+    with pytest.raises(ValueError, match=match):
+        call()

@@ -236,7 +236,7 @@ def jonswap_spectrum(omega_rad_s, hs_m, tp_s, gamma=3.3):
     Parameters
     ----------
     omega_rad_s : array_like
-        Wave frequencies [rad/s]; ``S = 0`` for ``omega <= 0``.
+        Wave frequencies [rad/s]; ``S = 0`` for ``omega <= 0``; NaN is refused.
     hs_m : float
         Significant wave height [m] (>= 0).
     tp_s : float
@@ -252,7 +252,10 @@ def jonswap_spectrum(omega_rad_s, hs_m, tp_s, gamma=3.3):
     hs = _positive("hs_m", hs_m, allow_zero=True)
     tp = _positive("tp_s", tp_s)
     g = _in_range("gamma", gamma, 1.0, 7.0)
-    return _jonswap(real_array("omega_rad_s", omega_rad_s), hs, tp, g)
+    w = real_array("omega_rad_s", omega_rad_s)
+    if np.isnan(w).any():       # it would fail omega > 0 and come out as S = 0
+        raise ValueError("omega_rad_s: contains NaN")
+    return _jonswap(w, hs, tp, g)
 
 
 def _jonswap(omega_rad_s, hs_m, tp_s, gamma):
@@ -977,6 +980,8 @@ def harris_spectrum(f_hz, mean_speed_m_s, kappa=0.0026, length_scale_m=1800.0):
     """
     u = _positive("mean_speed_m_s", mean_speed_m_s)
     f = real_array("f_hz", f_hz)
+    if np.isnan(f).any():       # it would fail f > 0 and come out as S = 0
+        raise ValueError("f_hz: contains NaN")
     x = f * length_scale_m / u
     return np.where(f > 0.0, 4.0 * kappa * u * length_scale_m / (2.0 + x**2) ** (5.0 / 6.0), 0.0)
 
@@ -989,6 +994,8 @@ def davenport_spectrum(f_hz, mean_speed_m_s, kappa=0.0026, length_scale_m=1200.0
     """
     u = _positive("mean_speed_m_s", mean_speed_m_s)
     f = real_array("f_hz", f_hz)
+    if np.isnan(f).any():       # it would fail f > 0 and come out as S = 0
+        raise ValueError("f_hz: contains NaN")
     fs = np.where(f > 0.0, f, 1.0)
     x = fs * length_scale_m / u
     return np.where(f > 0.0, 4.0 * kappa * u**2 * x**2 / (fs * (1.0 + x**2) ** (4.0 / 3.0)), 0.0)
