@@ -826,3 +826,16 @@ def test_spectra_refuse_a_nan_frequency(call, match):
     spectral density of 0, hiding the NaN."""
     with pytest.raises(ValueError, match=match):
         call()
+
+
+@pytest.mark.parametrize("call, match", [
+    (lambda: harris_spectrum(0.1, 10.0, kappa=-0.0026), "kappa"),
+    (lambda: harris_spectrum(0.1, 10.0, length_scale_m=-1800.0), "length_scale_m"),
+    (lambda: davenport_spectrum(0.1, 10.0, kappa=0.0), "kappa"),
+    (lambda: davenport_spectrum(0.1, 10.0, length_scale_m=float("nan")), "length_scale_m"),
+], ids=["harris_kappa", "harris_length", "davenport_kappa", "davenport_length"])
+def test_gust_spectra_refuse_a_nonpositive_drag_or_length(call, match):
+    """A drag coefficient or length scale <= 0 (or NaN) is refused naming it: it gave a
+    negative, zero or NaN spectral density, which no gust spectrum is."""
+    with pytest.raises(ValueError, match=match):
+        call()

@@ -982,6 +982,7 @@ def harris_spectrum(f_hz, mean_speed_m_s, kappa=0.0026, length_scale_m=1800.0):
     f = real_array("f_hz", f_hz)
     if np.isnan(f).any():       # it would fail f > 0 and come out as S = 0
         raise ValueError("f_hz: contains NaN")
+    kappa, length_scale_m = _positive("kappa", kappa), _positive("length_scale_m", length_scale_m)
     x = f * length_scale_m / u
     return np.where(f > 0.0, 4.0 * kappa * u * length_scale_m / (2.0 + x**2) ** (5.0 / 6.0), 0.0)
 
@@ -996,6 +997,7 @@ def davenport_spectrum(f_hz, mean_speed_m_s, kappa=0.0026, length_scale_m=1200.0
     f = real_array("f_hz", f_hz)
     if np.isnan(f).any():       # it would fail f > 0 and come out as S = 0
         raise ValueError("f_hz: contains NaN")
+    kappa, length_scale_m = _positive("kappa", kappa), _positive("length_scale_m", length_scale_m)
     fs = np.where(f > 0.0, f, 1.0)
     x = fs * length_scale_m / u
     return np.where(f > 0.0, 4.0 * kappa * u**2 * x**2 / (fs * (1.0 + x**2) ** (4.0 / 3.0)), 0.0)
