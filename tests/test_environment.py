@@ -839,3 +839,14 @@ def test_gust_spectra_refuse_a_nonpositive_drag_or_length(call, match):
     negative, zero or NaN spectral density, which no gust spectrum is."""
     with pytest.raises(ValueError, match=match):
         call()
+
+
+def test_mean_drift_refuses_a_nan_heading_as_the_slowly_varying_drift_does():
+    """A NaN heading is refused naming psi_rad (as wave_drift_loads refuses it), not turned
+    into NaN loads."""
+    wf = make_wave_components(1.0, 6.0, 0.0, 1)
+    with pytest.raises(ValueError, match="psi_rad"):
+        mean_drift_loads(float("nan"), wf, GUNNERUS_HULL)
+    with pytest.raises(ValueError, match="psi_rad"):
+        mean_drift_loads([0.0, np.inf], wf, GUNNERUS_HULL)
+    assert mean_drift_loads([0.0, 0.5], wf, GUNNERUS_HULL).shape == (2, 3)

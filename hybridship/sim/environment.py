@@ -702,7 +702,9 @@ def mean_drift_loads(psi_rad, components: WaveField, hull, rho_kg_m3=RHO_SEAWATE
     ndarray, shape (3,) or (N, 3)
         ``[X_N, Y_N, N_Nm]``.
     """
-    psi = np.asarray(psi_rad, dtype=float)
+    psi = real_array("psi_rad", psi_rad)
+    if not np.all(np.isfinite(psi)):
+        raise ValueError("psi_rad must be finite")
     beta = wrap_pi(components.dir_from_rad - psi[..., None])
     d = drift_coefficients(components.omega_rad_s, beta, hull, rho_kg_m3, components.g_m_s2)
     return np.einsum("...jc,j->...c", d, components.amplitude_m**2)
