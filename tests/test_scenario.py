@@ -722,3 +722,15 @@ def test_compare_truthsim_table_pairs_ours_with_theirs_and_wraps_the_drift_direc
     assert "| s0 | 5.0 | 1.00 | 6.0 | 0.20 | 2.0 / 1.0 | 2 / 1 | 2.00 / 1.00 | 2 / 1 | 2.00 / 1.00 |" in text
     assert "| **ratio ours/truthsim (median)** | | | | | 2.00 | 2.00 | 2.00 | | 2.00 |" in text
     assert text.endswith("ours minus truthsim [deg]: -20, +20, +10")
+
+
+@pytest.mark.parametrize("call", [lambda: simulate_dp_loss(DPLossConfig(**TINY), progress="no"),
+                                  lambda: sweep("never-made", [1], progress="false", **TINY)],
+                         ids=["simulate", "sweep"])
+def test_a_progress_flag_that_is_not_a_bool_is_refused(call, tmp_path, monkeypatch):
+    """progress="no" is a truthy text: it switched the progress bar on; refused naming it,
+    before any work, as the package's other flags are."""
+    monkeypatch.chdir(tmp_path)
+    with pytest.raises(TypeError, match="progress: expected True or False"):
+        call()
+    assert not (tmp_path / "never-made").exists()

@@ -51,7 +51,7 @@ from pydantic import Field, field_validator, model_validator
 from scipy.signal import lfilter
 
 from hybridship.frames import ned_to_body, wrap_pi
-from hybridship.config import Float, Int, check_number, check_whole_number, config_dataclass
+from hybridship.config import Float, Int, check_flags, check_number, check_whole_number, config_dataclass
 from hybridship.physics.model import DynamicModel
 from hybridship.sim import environment as env
 from hybridship.sim.allocation import ThrustAllocator, bollard_thrust_limits, check_station_keeping
@@ -682,8 +682,9 @@ def simulate_dp_loss(config: DPLossConfig | None = None, vessel="gunnerus", prog
     config = DPLossConfig() if config is None else config
     if not isinstance(config, DPLossConfig):
         raise TypeError(f"config: expected a DPLossConfig, got {type(config).__name__}")
+    check_flags(progress=progress)      # a text "no" is truthy
     check_station_keeping(vessel)  # before any work: a DP that cannot hold all three DOF is no DP
-    df, _ = _simulate(config, vessel, bool(progress))
+    df, _ = _simulate(config, vessel, progress)
     return df
 
 
@@ -837,6 +838,7 @@ def sweep(out_dir, seeds: Iterable[int], *, beaufort=(2, 5), fmt: str = "csv.gz"
         (the folder would hold the same scenario twice, and training on it would count it
         twice). A log of the same seed and format is rewritten.
     """
+    check_flags(progress=progress)      # a text "no" is truthy
     seeds = [s for s in seeds]
     if not seeds:
         raise ValueError("seeds: expected at least one seed")
