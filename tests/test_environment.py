@@ -850,3 +850,14 @@ def test_mean_drift_refuses_a_nan_heading_as_the_slowly_varying_drift_does():
     with pytest.raises(ValueError, match="psi_rad"):
         mean_drift_loads([0.0, np.inf], wf, GUNNERUS_HULL)
     assert mean_drift_loads([0.0, 0.5], wf, GUNNERUS_HULL).shape == (2, 3)
+
+
+@pytest.mark.parametrize("call, match", [
+    (lambda: make_wave_components(1.0, 6.0, 0.0, 1, normalize_hs="no"), "normalize_hs"),
+    (lambda: wave_frequency_motion(np.arange(3.0), 0.0, make_wave_components(1.0, 6.0, 0.0, 1), GUNNERUS_HULL,
+                                   return_rates="no"), "return_rates"),
+], ids=["normalize_hs", "return_rates"])
+def test_flags_that_are_not_bools_are_refused(call, match):
+    """A text "no" is truthy: it normalised the sea and returned the rates; refused naming the flag."""
+    with pytest.raises(TypeError, match=f"{match}: expected True or False"):
+        call()

@@ -53,7 +53,7 @@ import numpy as np
 from pydantic import Field, model_validator
 from scipy.signal import lfilter
 
-from hybridship.config import Float, check_number, config_dataclass, float_array, real_array
+from hybridship.config import Float, check_flags, check_number, config_dataclass, float_array, real_array
 from hybridship.frames import wrap_2pi, wrap_pi
 
 __all__ = [
@@ -551,6 +551,7 @@ def make_wave_components(hs_m, tp_s, wave_dir_from_rad, rng, n_components=50, sp
         spreading = _positive("spreading", spreading)
     if method not in ("jittered", "equal_energy"):
         raise ValueError(f"method must be 'jittered' or 'equal_energy', got {method!r}")
+    check_flags(normalize_hs=normalize_hs)      # a text "no" is truthy
     u = rng.uniform(0.0, 1.0, n)
     phase = rng.uniform(0.0, 2.0 * np.pi, n)
 
@@ -906,6 +907,7 @@ def wave_frequency_motion(time_s, psi_rad, components: WaveField, raos, *, posit
     psi = _per_time("psi_rad", psi_rad, n)
     pos = _positions(position_ne_m, n)
     model = MotionRAOs.from_any(raos)
+    check_flags(return_rates=return_rates)      # a text "no" is truthy
     amp, w = components.amplitude_m, components.omega_rad_s
     body = np.empty((n, 3))
     body_rate = np.empty((n, 3)) if return_rates else None
