@@ -650,9 +650,11 @@ def simulate_dp_loss(config: DPLossConfig | None = None, vessel="gunnerus", prog
         project log format:
 
         * measured: ``time_s``, ``north_m``, ``east_m``, ``heading_deg`` (LF + WF motion +
-          noise; heading in [0, 360)), ``u_m_s``, ``v_m_s``, ``r_deg_s`` (LF + WF + noise),
+          noise; heading in [0, 360], 360.0 where the rounding to the log's
+          decimals reaches it, as ``truth_heading*_deg`` and ``wind_dir_deg``), ``u_m_s``,
+          ``v_m_s``, ``r_deg_s`` (LF + WF + noise),
           ``wind_speed_m_s``, ``wind_dir_deg`` (true wind + noise), ``<thruster>_rpm``
-          (shaft speed feedback), ``<azimuth>_azimuth_deg`` (in [-180, 180)),
+          (shaft speed feedback), ``<azimuth>_azimuth_deg`` (in [-180, 180], likewise),
           ``<rudder>_azimuth_deg`` for each rudder (0: the DP commands thrusters only and
           the simulated rudders stay amidships), ``dp_active`` (1 before the shutdown, 0
           from the first sample at or after it);
