@@ -570,3 +570,13 @@ def test_waves_are_averaged_over_the_wetted_length(craft):
         amp.append(math.hypot(zeta, slope / k))
     x = k * craft.hull.added_mass_length_m / 2
     assert 0.5 < amp[0] / amp[1] == pytest.approx(abs(math.sin(x) / x), rel=1e-6)
+
+
+@pytest.mark.parametrize("actuator, rpm", [("interceptor", 5000.0), ("interceptor", 6500.0), ("trim_tab", 6500.0)])
+def test_an_engine_speed_without_an_equilibrium_is_refused_by_name(craft, actuator, rpm):
+    """With the device fully out, well above max_rpm the motion diverges: a SteadyState of NaN
+    (6500 rpm, interceptor) or a bare 'math domain error' / OverflowError came out before."""
+    model = PlaningCraftModel(craft, actuator)
+    with pytest.raises(ValueError, match=r"^rpm: no calm-water equilibrium"):
+        model.steady_state(rpm, 1.0)
+    assert math.isfinite(model.steady_state(rpm, 0.0).speed_m_s)       # retracted, the same rpm has one

@@ -404,6 +404,13 @@ class PlaningCraftModel:
         Solves for the fixed point with :func:`scipy.optimize.root` from ``guess`` (a nearby
         equilibrium, e.g. at a slightly lower rpm); without a guess, or if that fails, first
         marches the equations in time for 150 s so that the motion settles.
+
+        Raises
+        ------
+        TypeError, ValueError
+            Naming ``rpm`` or ``actuator_frac``: not a number, or out of range; a ValueError
+            naming ``rpm`` also when the motion diverges and there is no equilibrium (above
+            ``max_rpm`` with the device far out).
         """
         from scipy.optimize import root
 
@@ -426,8 +433,11 @@ class PlaningCraftModel:
             return [fx / (self.m * G_M_S2), fz / (self.m * G_M_S2), m / (self.m * G_M_S2 * self.lcg)]
 
         def polish(x0):
-            sol = root(resid, x0, method="hybr")
-            ok = sol.success and np.max(np.abs(resid(sol.x))) < 1e-8 and sol.x[0] > 0
+            try:
+                sol = root(resid, x0, method="hybr")
+                ok = sol.success and np.max(np.abs(resid(sol.x))) < 1e-8 and sol.x[0] > 0
+            except (ValueError, OverflowError):      # a math error of the forces far from any equilibrium
+                return None
             return sol.x if ok else None
 
         x = None
@@ -440,11 +450,18 @@ class PlaningCraftModel:
             if guess is not None:
                 y = [0.0, guess.speed_m_s, guess.heave_m, 0.0, guess.trim_rad, 0.0, float(rpm)]
             dt = 0.02
-            for _ in range(int(150.0 / dt)):
-                y = _rk4(self.derivatives, y, dt, rpm, actuator_frac)
-            x = polish([y[1], y[2], y[4]])
+            try:
+                for _ in range(int(150.0 / dt)):
+                    y = _rk4(self.derivatives, y, dt, rpm, actuator_frac)
+            except (ValueError, OverflowError):      # math domain error or overflow of a diverging motion
+                y = [math.nan] * 7
+            x = polish([y[1], y[2], y[4]]) if np.all(np.isfinite(y)) else None
             if x is None:
                 x = (y[1], y[2], y[4])
+        if not np.all(np.isfinite(x)):
+            # a NaN equilibrium was returned, or a math error raised, without a word
+            raise ValueError(f"rpm: no calm-water equilibrium at {rpm:g} rpm with actuator_frac {actuator_frac:g} "
+                             f"(the motion diverges); expected a lower engine speed or actuator setting")
         u, z, th = x
         return SteadyState(float(rpm), float(actuator_frac), float(u), float(th), float(z),
                            float(self.thrust_n(rpm, u)))
