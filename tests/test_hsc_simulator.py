@@ -580,3 +580,16 @@ def test_an_engine_speed_without_an_equilibrium_is_refused_by_name(craft, actuat
     with pytest.raises(ValueError, match=r"^rpm: no calm-water equilibrium"):
         model.steady_state(rpm, 1.0)
     assert math.isfinite(model.steady_state(rpm, 0.0).speed_m_s)       # retracted, the same rpm has one
+
+
+@pytest.mark.filterwarnings("ignore:overflow encountered:RuntimeWarning")
+def test_a_motion_that_diverges_is_refused_naming_the_sea_or_the_step(craft):
+    """Hs 0.5 m (the top of the paper's sea state 2) at 1500 rpm: the quasi-static model's motion
+    blows up within a minute; a record of NaN (pitch 1e25 deg before it) came out with only
+    numpy's RuntimeWarnings. In calm water a 2 s Runge-Kutta step does the same."""
+    model = PlaningCraftModel(craft.perturbed(), "interceptor")
+    sea = SeaConditions(hs_m=0.5, tp_s=3.0, beyond_validity=True)
+    with pytest.raises(ValueError, match=r"^sea: the motion diverged at .* hs_m 0.5 m"):
+        model.simulate(np.full(600, 1500.0), np.full(600, 100.0), sea=sea)
+    with pytest.raises(ValueError, match=r"^sample_period_s: the motion diverged at .* step 2 s"):   # calm water
+        model.simulate(np.full(5, 3000.0), np.full(5, 50.0), sample_period_s=10.0)

@@ -522,6 +522,13 @@ class PlaningCraftModel:
         Returns
         -------
         TrueRecord
+
+        Raises
+        ------
+        ValueError
+            Naming the argument at fault; naming ``sea`` when the motion diverges in waves
+            beyond the simulator's validity (``beyond_validity``), ``sample_period_s`` when
+            it diverges in calm water (too long a step).
         """
         rpm_cmd = np.asarray(rpm_cmd, float)
         pwm_pct = np.asarray(pwm_pct, float)
@@ -563,11 +570,21 @@ class PlaningCraftModel:
         self._t = 0.0
         for i in range(N):
             acc = 0.0
-            for _ in range(substeps):
-                frac += min(max(frac_cmd[i] - frac, -dmax), dmax)
-                w0 = y[3]
-                y = _rk4(self.derivatives, y, dt, rc[i], frac, wave, self)
-                acc += -(y[3] - w0) / dt       # up positive
+            try:
+                for _ in range(substeps):
+                    frac += min(max(frac_cmd[i] - frac, -dmax), dmax)
+                    w0 = y[3]
+                    y = _rk4(self.derivatives, y, dt, rc[i], frac, wave, self)
+                    acc += -(y[3] - w0) / dt       # up positive
+            except (ValueError, OverflowError):      # math domain error or overflow of a diverging motion
+                y = [math.nan] * 7
+            if not np.all(np.isfinite(y)):      # a record of NaN came out without a word
+                where = (f"the motion diverged at {self._t:.1f} s of simulated time (sample {i - n_settle}, "
+                         f"Runge-Kutta step {dt:g} s)")
+                if wave is None:            # in calm water only too long a step does that
+                    raise ValueError(f"sample_period_s: {where}; expected a shorter step (or more substeps)")
+                raise ValueError(f"sea: {where} in waves of hs_m {sea.hs_m:g} m, tp_s {sea.tp_s:g} s; the "
+                                 f"quasi-static planing simulator is meant for hs_m up to {MAX_HS_M:g} m (docs/hsc.md)")
             zeta = wave(y[0], y[1])[0] if wave is not None else 0.0
             out[i] = (y[1], y[2], y[4], y[5], y[6], frac, acc / substeps, zeta, self._t)
         out = out[n_settle:]
