@@ -99,6 +99,9 @@ def test_vessel_file_kind_and_field_errors(craft):
     data["hull"]["deadrise_deg"] = -3
     with pytest.raises(PlaningCraftFileError, match="hull.deadrise_deg"):
         planing_craft_from_dict(data, "x.toml")
+    for not_a_table in ([data], None, "volcano71"):           # an AttributeError on .get before
+        with pytest.raises(PlaningCraftFileError, match=r"^x.toml: expected a table"):
+            planing_craft_from_dict(not_a_table, "x.toml")
 
 
 def test_trial_gps_delay_realigned_and_reproducible(craft):

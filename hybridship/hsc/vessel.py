@@ -20,6 +20,7 @@ from __future__ import annotations
 
 import math
 import tomllib
+from collections.abc import Mapping
 from pathlib import Path
 from typing import Literal
 
@@ -246,6 +247,9 @@ class PlaningCraft(_Strict):
 
 def planing_craft_from_dict(data: dict, source: str = "<dict>") -> PlaningCraft:
     """Validate a parsed planing-craft file; errors name the field."""
+    if not isinstance(data, Mapping):       # an AttributeError on .get before
+        raise PlaningCraftFileError(f"{source}: expected a table of the file's fields (a dict), "
+                                    f"got {type(data).__name__}")
     if data.get("kind") != "planing_craft":
         raise PlaningCraftFileError(f"{source}: kind: expected 'planing_craft', got {data.get('kind')!r}")
     try:
