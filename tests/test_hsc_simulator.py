@@ -194,6 +194,9 @@ def test_simulator_refuses_bad_arguments_by_name(craft):
         model.simulate([3000.0], [50.0], sea={"hs_m": -1.0})
     with pytest.raises(TypeError, match=r"^sea: expected SeaConditions"):  # an AttributeError inside before
         model.simulate([3000.0], [50.0], sea=0.1)
+    for rpm, pwm, field in ((["3000"], [50.0], "rpm_cmd"), ([3000.0], ["50"], "pwm_pct")):  # read as numbers before
+        with pytest.raises(TypeError, match=rf"^{field}: expected an array of real numbers"):
+            model.simulate(rpm, pwm)
     as_mapping = model.simulate([3000.0] * 5, [50.0] * 5, sea={"hs_m": 0.05, "tp_s": 1.5}, rng=1)
     np.testing.assert_array_equal(
         as_mapping.speed_m_s, model.simulate([3000.0] * 5, [50.0] * 5, sea=SeaConditions(hs_m=0.05, tp_s=1.5), rng=1).speed_m_s)

@@ -74,7 +74,7 @@ from typing import Literal
 import numpy as np
 from pydantic import Field, model_validator
 
-from ..config import Float, Int, check_number, config_dataclass
+from ..config import Float, Int, check_number, config_dataclass, real_array
 
 from hybridship.sim.environment import G_M_S2, MAX_STEEPNESS, make_wave_components, max_hs_m
 
@@ -525,13 +525,13 @@ class PlaningCraftModel:
 
         Raises
         ------
-        ValueError
-            Naming the argument at fault; naming ``sea`` when the motion diverges in waves
-            beyond the simulator's validity (``beyond_validity``), ``sample_period_s`` when
-            it diverges in calm water (too long a step).
+        TypeError, ValueError
+            Naming the argument at fault; a ValueError naming ``sea`` when the motion diverges
+            in waves beyond the simulator's validity (``beyond_validity``), ``sample_period_s``
+            when it diverges in calm water (too long a step).
         """
-        rpm_cmd = np.asarray(rpm_cmd, float)
-        pwm_pct = np.asarray(pwm_pct, float)
+        # text such as "3000" is refused (numpy read it as a number)
+        rpm_cmd, pwm_pct = real_array("rpm_cmd", rpm_cmd), real_array("pwm_pct", pwm_pct)
         if rpm_cmd.shape != pwm_pct.shape or rpm_cmd.ndim != 1 or rpm_cmd.size == 0:
             raise ValueError("rpm_cmd and pwm_pct must be non-empty 1-D arrays of the same length")
         for name, x in (("rpm_cmd", rpm_cmd), ("pwm_pct", pwm_pct)):
