@@ -185,6 +185,10 @@ def test_simulator_refuses_bad_arguments_by_name(craft):
         (lambda: SeaConditions(hs_m=0.3, tp_s=3.0), "hs_m"),                      # the model slams there
         (lambda: SeaConditions(hs_m=0.1, tp_s=0.5, beyond_validity=True), "hs_m"),  # steeper than waves can be
         (lambda: paper_trial(1, seed=-1), "seed"),
+        (lambda: model.simulate([3000.0], [50.0], rng=-1), "rng"),            # numpy's own words before
+        (lambda: model.simulate([3000.0], [50.0], rng="a"), "rng"),           # a TypeError from SeedSequence
+        (lambda: model.simulate([3000.0], [50.0], rng=True), "rng"),          # seed 1 before
+        (lambda: model.simulate([3000.0], [50.0], rng=None), "rng"),          # a sea drawn afresh each call
     ]
     for call, field in cases:
         with pytest.raises(ValueError, match=rf"^{field}\b"):

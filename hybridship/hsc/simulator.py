@@ -74,7 +74,7 @@ from typing import Literal
 import numpy as np
 from pydantic import Field, model_validator
 
-from ..config import Float, Int, check_number, config_dataclass, real_array
+from ..config import Float, Int, check_number, check_whole_number, config_dataclass, real_array
 
 from hybridship.sim.environment import G_M_S2, MAX_STEEPNESS, make_wave_components, max_hs_m
 
@@ -514,7 +514,7 @@ class PlaningCraftModel:
         sea : SeaConditions or mapping
             The waves; a mapping is read as :class:`SeaConditions` fields.
         rng : numpy.random.Generator or int
-            Seed of the wave phases.
+            Random source of the wave phases, or its seed (a whole number >= 0).
         settle_s : float
             Time at the first commands before the record starts (its samples are dropped),
             so that the record starts from a settled motion.
@@ -554,7 +554,9 @@ class PlaningCraftModel:
             sea = SeaConditions(**sea)
         elif not isinstance(sea, SeaConditions):
             raise TypeError(f"sea: expected SeaConditions or a mapping of its fields, got {type(sea).__name__}")
-        rng = np.random.default_rng(rng) if not isinstance(rng, np.random.Generator) else rng
+        if not isinstance(rng, np.random.Generator):
+            # a seed of True, -1, "a" or None (a sea drawn afresh each call) is refused by name
+            rng = np.random.default_rng(check_whole_number("rng", rng, 0))
         wave = self.make_wave_function(sea, rng)
         n_settle = int(round(settle_s / sample_period_s))
         rc = np.concatenate([np.full(n_settle, rpm_cmd[0]), rpm_cmd])
