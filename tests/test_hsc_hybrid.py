@@ -1,5 +1,7 @@
 """The grey box of the hybrid surge/pitch model: propeller law, device rate, first-order pitch, unit checks."""
 
+import dataclasses
+
 import numpy as np
 import pytest
 
@@ -370,3 +372,20 @@ def test_a_record_too_short_for_the_residual_ensembles_is_refused_by_name_and_ch
     with pytest.raises(ValueError, match=r"^U: need at least 22 rows, got 14"):
         hybrid.fit(U[40:54], Y[40:54])
     assert hybrid.grey.parameters() == before
+
+
+@pytest.mark.parametrize("change, name", [
+    (dict(dv_m_s=0.0), "tables.dv_m_s"),                                    # ZeroDivisionError in rates before
+    (dict(v0_m_s=np.nan), "tables.v0_m_s"),                                 # NaN rates before
+    (dict(trim_rad=np.ones((3, 5))), "tables.trim_rad"),                    # IndexError in rates before
+    (dict(resistance_n=np.full((3, 105), np.nan)), "tables.resistance_n"),  # NaN rates before
+    (dict(resistance_n=np.ones(3)), "tables.resistance_n"),                 # IndexError at construction before
+])
+def test_hand_made_tables_the_lookup_cannot_read_are_refused_by_name(craft, tables, change, name):
+    bad = dataclasses.replace(tables, **change)
+    with pytest.raises(ValueError, match=rf"^{name}: "):
+        GreyBox(craft, "interceptor", bad)
+    # lists are tables too: they were an AttributeError on .shape
+    listed = dataclasses.replace(tables, resistance_n=tables.resistance_n.tolist(), trim_rad=tables.trim_rad.tolist())
+    assert GreyBox(craft, "interceptor", listed).rates(10.0, 0.05, 3000.0, 0.5) == \
+        GreyBox(craft, "interceptor", tables).rates(10.0, 0.05, 3000.0, 0.5)

@@ -141,10 +141,19 @@ class GreyBox:
                              f"(GreyBoxTables.from_craft(craft, {actuator!r}))")
         if tables is not None:
             _check_act_rows(tables.act, "tables.act")
+            check_number("tables.v0_m_s", tables.v0_m_s)
+            check_number("tables.dv_m_s", tables.dv_m_s, lo=0.0, lo_open=True)      # the lookup divides by it
+            shapes = []
             for name in ("resistance_n", "trim_rad"):
-                if np.shape(getattr(tables, name))[0] != len(tables.act):
-                    raise ValueError(f"tables.{name}: expected one row per actuator fraction of tables.act "
-                                     f"({len(tables.act)}), got {np.shape(getattr(tables, name))[0]}")
+                arr = real_array(f"tables.{name}", getattr(tables, name))
+                if arr.ndim != 2 or arr.shape[0] != len(tables.act) or not np.all(np.isfinite(arr)):
+                    raise ValueError(f"tables.{name}: expected finite values, one row per actuator fraction of "
+                                     f"tables.act ({len(tables.act)}) and one column per speed, got shape "
+                                     f"{arr.shape}{'' if np.all(np.isfinite(arr)) else ' with NaN or inf'}")
+                shapes.append(arr.shape)
+            if shapes[0] != shapes[1]:           # the lookup reads both on the speed grid of resistance_n
+                raise ValueError(f"tables.trim_rad: expected the shape of tables.resistance_n {shapes[0]} (the same "
+                                 f"speed grid), got {shapes[1]}")
         self.tables = tables or GreyBoxTables.from_craft(craft, actuator)
         self._pwm_to_frac = pm.pwm_to_fraction
         self.pwm_range_pct = tuple(map(float, pm.pwm_range))
@@ -157,7 +166,7 @@ class GreyBox:
         self.c2 = k * (1 - pr.wake_fraction) / (60.0 * pr.gear_ratio * pr.diameter_m * pr.j0)
         self.params = _NOMINAL.copy()
         t = self.tables
-        self._nv = t.resistance_n.shape[1]
+        self._nv = np.shape(t.resistance_n)[1]
         self._R = [list(r) for r in t.resistance_n]
         self._TH = [list(r) for r in t.trim_rad]
         self._act = [float(x) for x in t.act]
