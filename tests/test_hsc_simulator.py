@@ -163,6 +163,8 @@ def test_input_schedule_refuses_a_sample_count_that_is_not_a_whole_number_by_nam
     rpm, pwm = input_schedule(cfg, np.int64(300), 0.1, np.random.default_rng(0))
     assert rpm.shape == pwm.shape == (300,)
     assert [a.size for a in input_schedule(cfg, 0, 0.1, np.random.default_rng(0))] == [0, 0]
+    with pytest.raises(TypeError, match=r"^config: expected a TrialConfig"):     # an AttributeError before
+        input_schedule({"sea_state": 1}, 10, 0.1, np.random.default_rng(0))
 
 
 def test_simulator_refuses_bad_arguments_by_name(craft):

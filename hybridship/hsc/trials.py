@@ -144,7 +144,11 @@ def input_schedule(config: TrialConfig, n: int, dt_s: float, rng: np.random.Gene
         ``n`` not a whole number >= 0, ``dt_s`` not positive, or ``config.pwm_period_s``
         shorter than two steps (a half period, the time a PWM level is held, would round
         to no sample).
+    TypeError
+        ``config`` not a :class:`TrialConfig`.
     """
+    if not isinstance(config, TrialConfig):          # an AttributeError on .pwm_period_s
+        raise TypeError(f"config: expected a TrialConfig (paper_trial(...)), got {type(config).__name__}")
     n = check_whole_number("n", n, 0)          # numpy's shape errors named nothing (100.0, -1)
     dt_s = check_number("dt_s", dt_s, lo=0.0, lo_open=True)
     # the step is the craft's, unknown to TrialConfig: a half period rounding to 0 samples never advanced
