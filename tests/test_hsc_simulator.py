@@ -221,6 +221,16 @@ def test_a_paper_trial_seed_is_refused_in_the_users_own_numbers():
     assert paper_trial(2, seed=top).seed == top * 100 + 2 < 2**63       # the largest one is a seed
 
 
+def test_steady_curve_refuses_engine_speeds_that_are_not_a_sequence_of_numbers_by_name(craft):
+    """``steady_curve(["3000"])`` read the text as 3000 rpm (steady_state refuses it), ``["a"]`` was
+    float's 'could not convert string', a single number 'object is not iterable'."""
+    model = PlaningCraftModel(craft, "interceptor")
+    for rpms, err in ((["3000"], TypeError), (["a"], TypeError), (3000.0, ValueError), ([[3000.0]], ValueError)):
+        with pytest.raises(err, match=r"^rpms: expected"):
+            model.steady_curve(rpms)
+    assert model.steady_curve(np.array([3000.0]))[0].speed_m_s == model.steady_state(3000.0).speed_m_s
+
+
 def test_arguments_of_the_wrong_type_are_refused_by_name(craft):
     """A vessel name for the craft or a text for the trial's config was an AttributeError, a text
     for rpm, the sample period or the settling time a numpy TypeError naming nothing, a text scale

@@ -467,7 +467,16 @@ class PlaningCraftModel:
                            float(self.thrust_n(rpm, u)))
 
     def steady_curve(self, rpms, actuator_frac: float = 0.0) -> list[SteadyState]:
-        """Equilibria along increasing engine speeds (each starts from the previous one)."""
+        """Equilibria along increasing engine speeds (each starts from the previous one).
+
+        Raises
+        ------
+        TypeError, ValueError
+            Naming ``rpms`` (not a 1-D sequence of numbers), or as :meth:`steady_state`.
+        """
+        rpms = real_array("rpms", rpms)          # text such as "3000" is refused, as steady_state does
+        if rpms.ndim != 1:
+            raise ValueError(f"rpms: expected a 1-D sequence of engine speeds [rpm], got shape {rpms.shape}")
         out, guess = [], None
         for r in rpms:
             guess = self.steady_state(float(r), actuator_frac, guess)
