@@ -451,9 +451,12 @@ def test_the_true_boat_applies_each_perturbation_once(craft):
     assert t.perturbed() == t                                    # nothing left to apply
 
 
-@pytest.mark.parametrize("section,field,value", [("hull", "lcg_m", 9.5), ("hull", "chine_beam_m", 3.4)])
+@pytest.mark.parametrize("section,field,value", [("hull", "lcg_m", 9.5), ("hull", "chine_beam_m", 3.4),
+                                                 ("interceptor", "span_m", 4.3), ("trim_tabs", "span_m", 1.5)])
 def test_a_hull_outside_the_main_particulars_is_refused(craft, section, field, value):
-    """The CG must lie within the waterline length (9.4 m) and the chine beam within the beam (3.3 m)."""
+    """The CG must lie within the waterline length (9.4 m), the chine beam within the beam (3.3 m),
+    and the two interceptor blades or tab plates side by side within the chine beam (2.9 m; a
+    4.3 m blade, a slip for 430 mm, was accepted and lifted ten times as much)."""
     data = craft.model_dump()
     data[section][field] = value
     with pytest.raises(PlaningCraftFileError, match=f"{section}.{field}"):

@@ -221,6 +221,12 @@ class PlaningCraft(_Strict):
             raise ValueError("hull.lcg_m must lie within the waterline length")
         if self.hull.chine_beam_m > self.particulars.beam_m:
             raise ValueError("hull.chine_beam_m cannot exceed particulars.beam_m")
+        for name, dev in (("interceptor", self.interceptor), ("trim_tabs", self.trim_tabs)):
+            # the blades and plates sit side by side on the planing bottom's transom: a wider set
+            # (sigma = span / beam above 1 in Savitsky & Brown's flap lift) is a typing slip
+            if dev.count * dev.span_m > self.hull.chine_beam_m:
+                raise ValueError(f"{name}.span_m: {dev.count} x {dev.span_m:g} m exceeds hull.chine_beam_m "
+                                 f"({self.hull.chine_beam_m:g} m)")
         return self
 
     @property
