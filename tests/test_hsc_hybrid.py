@@ -256,6 +256,9 @@ def test_pwm_given_as_a_fraction_up_to_full_drive_is_refused(craft, tables):
     (lambda g, U, Y: g.simulate(U, Y[0], k0=1.5), "k0"),
     (lambda g, U, Y: g.fit(U, Y, k0=-1, max_nfev=1), "k0"),          # fitted from Y[-1] before
     (lambda g, U, Y: g.fit(U, Y, k0=39, max_nfev=1), "k0"),          # no row after k0 to fit
+    (lambda g, U, Y: g.fit(U, Y, max_nfev="5"), "max_nfev"),         # scipy's "'<=' not supported" before
+    (lambda g, U, Y: g.fit(U, Y, max_nfev=True), "max_nfev"),        # one evaluation before
+    (lambda g, U, Y: g.fit(U, Y, max_nfev=0), "max_nfev"),           # scipy's "`max_nfev` must be" before
 ])
 def test_grey_box_refuses_nan_and_k0_out_of_range_by_name(grey, call, name):
     """NaN inputs gave "cannot convert float NaN to integer"."""

@@ -277,12 +277,14 @@ class GreyBox:
         """Fit the parameters to minimise the free-run error of both outputs (each over its spread).
 
         The free runs start from the measured ``Y[k0]``; ``k0`` is a whole number with at least
-        one row after it (a ValueError naming it otherwise: ``k0 = -1`` started from the last row).
+        one row after it (a ValueError naming it otherwise: ``k0 = -1`` started from the last row);
+        ``max_nfev``, the most residual evaluations of the least squares, a whole number >= 1.
         """
         from scipy.optimize import least_squares
 
         U, Y = check_record(U, Y, shape=(3, 2))
         k0 = _check_k0(k0, U.shape[0], 1)
+        max_nfev = check_whole_number("max_nfev", max_nfev, 1)    # text failed in scipy's words, True was 1
         _check_units(U, Y, self)
         scale = Y[k0:].std(0)
         scale = np.where(scale > 1e-9, scale, 1.0)
