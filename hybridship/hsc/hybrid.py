@@ -16,8 +16,9 @@ engine speed and actuator setting):
 * ``a`` is the device's stroke/deflection fraction from the PWM input through the vessel
   file's linear PWM map and actuator rate limit.
 
-The ten parameters ``p`` (1 or 0 nominal) are fitted to the training data by nonlinear
-least squares on the free-run (simulation) error of both outputs, so the grey box learns
+The ten parameters ``p`` (nominal 1 or 0, and 0.5 s for ``tau_theta_s``; ``_NOMINAL``)
+are fitted to the training data by nonlinear least squares on the free-run (simulation)
+error of both outputs, so the grey box learns
 the "true" boat's thrust, resistance, trim and device effectiveness that the nominal file
 gets wrong (see ``[truth_perturbation]`` in ``vessels/volcano71.toml``).
 
