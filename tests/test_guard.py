@@ -66,3 +66,24 @@ def test_a_ridge_that_is_not_a_positive_number_is_refused_by_name(ridge, error):
     X = np.random.default_rng(0).normal(size=(500, 2))
     with pytest.raises(error, match="EnvelopeGuard.fit: ridge"):
         EnvelopeGuard.fit(X, ridge=ridge)
+
+
+def test_the_quantiles_set_the_edge_and_the_low_level_and_the_ridge_is_a_share_of_the_variance():
+    """``quantile`` is the share of the training rows inside the envelope's edge ``d0`` and the
+    share of training thrust levels below ``lo`` (the tests above fit at the defaults only, so
+    a fit that ignored it passed); the ridge is a share of the mean feature variance, so the
+    envelope does not depend on the features' units."""
+    rng = np.random.default_rng(2)
+    X = rng.normal(size=(1000, 2)) * [1.0, 30.0]
+    for q in (0.6, 0.9):
+        g = EnvelopeGuard.fit(X, quantile=q)
+        assert g.d0 == pytest.approx(np.quantile(g.distance(X), q), rel=1e-12)
+        assert np.mean(g.weight(X) == 1.0) == pytest.approx(q, abs=2e-3)
+    x = np.array([[3.0, -40.0], [0.5, 90.0]])
+    wide, narrow = EnvelopeGuard.fit(X, ridge=0.5), EnvelopeGuard.fit(1e3 * X, ridge=0.5)
+    np.testing.assert_allclose(narrow.distance(1e3 * x), wide.distance(x), rtol=1e-9)
+    assert narrow.d0 == pytest.approx(wide.d0, rel=1e-9)
+    A = rng.normal([0.02, -0.01, 0.0005], [0.01, 0.01, 0.0003], size=(2000, 3))
+    for q in (0.1, 0.3):
+        regime = ThrustRegime.fit(A, quantile=q)
+        assert regime.lo == pytest.approx(np.quantile(regime.level(A), q), rel=1e-12)
