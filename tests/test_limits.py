@@ -131,6 +131,13 @@ def test_a_value_out_of_range_at_a_later_step_flags_its_own_batch_element():
 
 
 def test_large_steps_get_substeps():
+    """The RK4 step is at most ``rk4_step_max_s`` (1 s): a step just beyond it gets a substep
+    (steps of 2 s and more alone could not tell a bound of 1 s from one of 1.9 s)."""
+    assert check_or_clip_inputs(MODEL, dt_s=1.0).substeps == 1
+    assert check_or_clip_inputs(MODEL, dt_s=1.2).substeps == 2
+    assert check_or_clip_inputs(MODEL, dt_s=2.4, substeps=2).substeps == 3
+    with pytest.raises(InputRangeError, match=r"RK4 step 1\.2 s exceeds 1 s; use substeps >= 2"):
+        check_or_clip_inputs(MODEL, dt_s=1.2, mode="refuse")
     assert check_or_clip_inputs(MODEL, dt_s=2.5).substeps == 3
     assert check_or_clip_inputs(MODEL, dt_s=2.0, substeps=4).substeps == 4
     with pytest.raises(InputRangeError, match="dt_s"):
