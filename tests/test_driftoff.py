@@ -686,8 +686,11 @@ def test_live_refuses_empty_commands_and_faulty_sensors_at_the_blackout_row():
     alternate = hist.copy()
     alternate.loc[alternate.index[1::2], ["tunnel_rpm", "port_rpm", "stbd_rpm"]] = np.nan
     alternate.loc[alternate.index[::2], ["port_azimuth_deg", "stbd_azimuth_deg"]] = np.nan
-    with pytest.warns(UserWarning):
-        environment_from_log(alternate, "gunnerus")
+    with pytest.warns(UserWarning, match=r"missing commands"):
+        held = environment_from_log(alternate, "gunnerus")
+    last = alternate[["tunnel_rpm", "port_rpm", "stbd_rpm", "port_azimuth_deg", "stbd_azimuth_deg"]].ffill().iloc[-1]
+    np.testing.assert_array_equal(held.rpm, last.iloc[:3])                     # each channel's last logged value
+    np.testing.assert_allclose(held.azimuth_rad[1:], np.radians(last.iloc[3:]), rtol=1e-12)
     gap = hist.copy()
     gap.loc[gap.index[-300:], ["north_m", "east_m"]] = np.nan
     with pytest.raises(ValueError, match="at the blackout row: .*too little valid data.*position"):
