@@ -131,7 +131,8 @@ def per_log_rows(data: str, variant: str, names, errors: np.ndarray, physics: np
 
 def parse_args(argv, description: str, variants) -> argparse.Namespace:
     """The arguments this script and ``drift_late_starts.py`` share: ``--out``, ``--only`` (of
-    ``variants``), ``--data``, ``--own-n`` and ``--own-seed``."""
+    ``variants``), ``--data``, ``--own-n`` (1-20) and ``--own-seed`` (from 0); a usage error
+    (exit 2) for a count or seed the simulator does not take."""
     ap = argparse.ArgumentParser(description=description)
     ap.add_argument("--out", type=Path, required=True)
     ap.add_argument("--only", nargs="+", choices=list(variants), default=list(variants),
@@ -140,7 +141,12 @@ def parse_args(argv, description: str, variants) -> argparse.Namespace:
                     default=("embedded", "truthsim-dev"), help="data sets (default: embedded truthsim-dev)")
     ap.add_argument("--own-n", type=int, default=20, help="scenarios of the 'own' set (default 20)")
     ap.add_argument("--own-seed", type=int, default=100, help="seed of its first scenario (default 100)")
-    return ap.parse_args(argv)
+    args = ap.parse_args(argv)
+    if not 1 <= args.own_n <= 20:           # the simulator's embedded scenarios: 1-20 of them
+        ap.error(f"--own-n: expected 1-20, got {args.own_n}")
+    if args.own_seed < 0:
+        ap.error(f"--own-seed: expected a non-negative integer, got {args.own_seed}")
+    return args
 
 
 def data_sets(names, own_n: int, own_seed: int) -> dict:

@@ -28,3 +28,17 @@ def test_per_log_rows_are_each_failures_ratio_to_its_own_physics():
     np.testing.assert_allclose(got[("b", metrics.STATES[0])], (1.0, 1.0))
     np.testing.assert_allclose(got[("b", metrics.STATES[1])], (1.0, 1.0))
     assert {r["data"] for r in rows} == {"set"} and {r["variant"] for r in rows} == {"variant"}
+
+
+def test_an_own_set_the_simulator_cannot_make_is_a_usage_error(tmp_path, capsys):
+    """--own-n outside 1-20 or a negative --own-seed stop with argparse's usage error (exit 2,
+    naming the option), before any work, not with the simulator's traceback."""
+    import pytest
+
+    ev = load_benchmark("estimator_variants")
+    for bad in (["--own-n", "0"], ["--own-n", "21"], ["--own-seed", "-1"]):
+        with pytest.raises(SystemExit) as exc:
+            ev.main(["--out", str(tmp_path), "--data", "own", "--only", "default", *bad])
+        assert exc.value.code == 2
+        assert bad[0] in capsys.readouterr().err
+    assert not any(tmp_path.iterdir())
