@@ -142,10 +142,14 @@ def failure_oracles(model: DynamicModel, d: pd.DataFrame, wind_forecast=None) ->
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--out", type=Path, required=True)
-    ap.add_argument("--own", type=int, default=20, help="simulated DP losses of our own (default 20)")
+    ap.add_argument("--own", type=int, default=20, help="simulated DP losses of our own, 1-20 (default 20)")
     ap.add_argument("--own-seed", type=int, default=100, help="seed of the first (default 100)")
     ap.add_argument("--vessel", default="gunnerus", help="the model's vessel (name or TOML file; default gunnerus)")
     args = ap.parse_args(argv)
+    if not 1 <= args.own <= 20:             # the simulator's embedded scenarios: 1-20 of them
+        ap.error(f"--own: expected 1-20, got {args.own}")
+    if args.own_seed < 0:
+        ap.error(f"--own-seed: expected a non-negative integer, got {args.own_seed}")
     try:
         model = DynamicModel(load_vessel(args.vessel))
     except (OSError, ValueError) as exc:

@@ -137,3 +137,14 @@ def test_per_log_table_written(oracles, tmp_path, monkeypatch):
         np.testing.assert_allclose(pooled[col], per_log[col], atol=0.006, err_msg=col)
         np.testing.assert_allclose(pooled[ratio], per_log[col] / per_log.loc["model wind", col], atol=0.01,
                                    err_msg=ratio)
+
+
+def test_an_own_set_the_simulator_cannot_make_is_a_usage_error(oracles, tmp_path, capsys):
+    """--own outside 1-20 or a negative --own-seed stop with a usage error (exit 2) naming the
+    option, not with the simulator's traceback, and nothing is written."""
+    for bad in (["--own", "0"], ["--own", "21"], ["--own-seed", "-1"]):
+        with pytest.raises(SystemExit) as exc:
+            oracles.main([*bad, "--out", str(tmp_path)])
+        assert exc.value.code == 2
+        assert bad[0] in capsys.readouterr().err
+    assert not any(tmp_path.iterdir())
