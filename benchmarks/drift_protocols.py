@@ -232,12 +232,19 @@ def main(argv=None) -> int:
     ap.add_argument("--out", type=Path, required=True)
     ap.add_argument("--members", type=int, default=10)
     ap.add_argument("--seed", type=int, default=0)
-    ap.add_argument("--sim-scenarios", type=int, default=6)
-    ap.add_argument("--embedded", type=int, default=3, help="embedded scenarios as a second data set (0: none)")
+    ap.add_argument("--sim-scenarios", type=int, default=6, help="simulated drifts of sim_pretrain, 1-20 (default 6)")
+    ap.add_argument("--embedded", type=int, default=3,
+                    help="embedded scenarios as a second data set, 0-20 (0: none; default 3)")
     args = ap.parse_args(argv)
     from hybridship.sim.scenario import embedded_scenarios
 
-    ens = EnsembleConfig(n_members=args.members, seed=args.seed)
+    for flag, value, low in (("--sim-scenarios", args.sim_scenarios, 1), ("--embedded", args.embedded, 0)):
+        if not low <= value <= 20:          # the simulator's embedded scenarios: at most 20
+            ap.error(f"{flag}: expected {low}-20, got {value}")
+    try:
+        ens = EnsembleConfig(n_members=args.members, seed=args.seed)
+    except ValueError as exc:
+        ap.error(f"--members / --seed: {exc}")
     sim_logs = [s.log for s in embedded_scenarios(args.sim_scenarios, args.seed + 1000)]
     rows: list = []
     decisions: list = []

@@ -83,3 +83,19 @@ def test_a_hull_chosen_on_one_failure_and_a_fit_without_a_thrust_stop_say_so():
     # 0.65 rad of heading error without the moment, none with it
     assert row == [f"| c | fleet | s1 | 0.65 x Munk on 1 failures, not kept: heading {np.degrees(0.65):.2f} deg "
                    "without it, 0.00 with it, no left-out check | not learned (no thrust stop read) |"]
+
+
+def test_counts_and_seeds_it_cannot_use_are_usage_errors(tmp_path, capsys):
+    """--sim-scenarios outside 1-20, --embedded outside 0-20, --members below 1 or a negative
+    --seed stop with a usage error (exit 2) naming the option, before any work (they ended in
+    a library traceback)."""
+    import pytest
+
+    protocols = load_benchmark("drift_protocols")
+    for bad in (["--sim-scenarios", "0"], ["--sim-scenarios", "21"], ["--embedded", "21"], ["--embedded", "-1"],
+                ["--members", "0"], ["--seed", "-1"]):
+        with pytest.raises(SystemExit) as exc:
+            protocols.main([*bad, "--out", str(tmp_path)])
+        assert exc.value.code == 2
+        assert bad[0] in capsys.readouterr().err
+    assert not any(tmp_path.iterdir())
