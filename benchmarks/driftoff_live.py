@@ -107,12 +107,16 @@ def main(argv=None) -> int:
         from hybridship.residual.environment import PER_DOF, EnvironmentConfig
 
         cfg = EnvironmentConfig(**PER_DOF)
+    try:
+        st = DriftOffSettings(n_samples=args.samples, radii_m=RADII, reaction_times_s=(30.0, 60.0),
+                              horizon_s=300.0, vessel_spread=args.vessel_spread, seed=args.seed)
+    except ValueError as exc:           # "n_samples: must be >= 1 (got 0) [DriftOffSettings]": name the option
+        field, _, reason = str(exc).partition(":")
+        ap.error({"n_samples": "--samples", "vessel_spread": "--vessel-spread"}.get(field, f"--{field}") + ":" + reason)
     files = sorted(args.data.glob("*.csv.gz")) if args.data.is_dir() else []
     if not files:
         print(f"no logs found in {args.data}; nothing to do", file=sys.stderr)
         return 1
-    st = DriftOffSettings(n_samples=args.samples, radii_m=RADII, reaction_times_s=(30.0, 60.0), horizon_s=300.0,
-                          vessel_spread=args.vessel_spread, seed=args.seed)
     rows = []
     for f in files:
         rows += evaluate(f, st, method=args.method, environment_config=cfg)
