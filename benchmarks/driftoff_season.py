@@ -90,6 +90,12 @@ def main(argv=None) -> int:
                     help="folder for the large files weather_year.csv and season.csv (default: a temporary folder)")
     ap.add_argument("--seed", type=int, default=0)
     args = ap.parse_args(argv)
+    for flag, value in (("--states", args.states), ("--single-states", args.single_states), ("--samples", args.samples),
+                        ("--workers", args.workers), ("--chunk-size", args.chunk_size)):
+        if value is not None and value < 1:     # a negative --states sliced from the end; no workers, a hang
+            ap.error(f"{flag}: expected a positive integer, got {value}")
+    if args.seed < 0:
+        ap.error(f"--seed: expected a non-negative integer, got {args.seed}")
     dd = require_dask()
     data_out = args.data_out or Path(tempfile.mkdtemp(prefix="driftoff_season_"))
 

@@ -17,3 +17,21 @@ def test_live_settings_it_cannot_use_are_usage_errors(bad, tmp_path, capsys):
     err = capsys.readouterr().err
     assert f"error: {bad[0]}: " in err and ("must be" in err or "expected" in err), err
     assert not (tmp_path / "out").exists()
+
+
+@pytest.mark.parametrize("bad", [["--states", "-3"], ["--states", "0"], ["--single-states", "0"], ["--samples", "0"],
+                                 ["--workers", "0"], ["--chunk-size", "0"], ["--seed", "-1"]])
+def test_season_counts_it_cannot_use_are_usage_errors(bad, tmp_path, monkeypatch, capsys):
+    """A count below 1 or a negative seed stops with a usage error (exit 2) naming the option
+    before any work: a negative --states swept the year less its last states, --workers 0
+    waited for ever on a cluster without workers, the others ended in a traceback."""
+    season = load_benchmark("driftoff_season")
+
+    def no_work():
+        raise AssertionError("the work started")
+
+    monkeypatch.setattr(season, "require_dask", no_work)
+    with pytest.raises(SystemExit) as exc:
+        season.main([*bad, "--out", str(tmp_path / "out"), "--data-out", str(tmp_path / "data")])
+    assert exc.value.code == 2
+    assert f"error: {bad[0]}: expected" in capsys.readouterr().err
