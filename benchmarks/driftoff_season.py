@@ -142,7 +142,7 @@ def main(argv=None) -> int:
     single_opt = "" if args.single_states is None else f" --single-states {args.single_states}"
     text = (f"# Drift-off season sweep (synthetic weather year)\n\nCommand: `python benchmarks/driftoff_season.py "
             f"--states {args.states}{single_opt} --samples {args.samples} --workers {args.workers} "
-            f"--chunk-size {args.chunk_size}`\n\n"
+            f"--chunk-size {args.chunk_size}{f' --seed {args.seed}' if args.seed else ''}`\n\n"
             f"Hourly states x {psi.size} headings x {args.samples} samples. Cluster start-up and warm-up (not in the "
             f"wall times): {startup:.1f} s. Single-process and cluster tables identical on the {n_one} states both "
             f"ran: **{equal}**. `year_wall_s` is the wall time of 8 760 states: measured where `year` says so, "

@@ -35,3 +35,30 @@ def test_season_counts_it_cannot_use_are_usage_errors(bad, tmp_path, monkeypatch
         season.main([*bad, "--out", str(tmp_path / "out"), "--data-out", str(tmp_path / "data")])
     assert exc.value.code == 2
     assert f"error: {bad[0]}: expected" in capsys.readouterr().err
+
+
+def test_season_command_records_the_seed(tmp_path, monkeypatch):
+    """The command on tables.md repeats --seed when it is not the default (it drew the weather
+    year and the samples, and was left out: the recorded command made another table)."""
+    from types import SimpleNamespace
+
+    season = load_benchmark("driftoff_season")
+    seeds = []
+
+    def sweep(model, states, psi, settings, **kw):
+        seeds.append(settings.seed)
+        frame = season.pd.DataFrame({"state": range(len(states))})
+        return SimpleNamespace(to_frame=lambda: frame, wall_s=1.0, operability=lambda _: frame)
+
+    idle = SimpleNamespace(run=lambda f: None, close=lambda: None)
+    monkeypatch.setattr(season, "require_dask", lambda: SimpleNamespace(LocalCluster=lambda **kw: idle,
+                                                                         Client=lambda cluster: idle))
+    monkeypatch.setattr(season, "season_sweep", sweep)
+    argv = ["--states", "2", "--samples", "2", "--out", str(tmp_path / "out"), "--data-out", str(tmp_path / "d")]
+    assert season.main([*argv, "--seed", "3"]) == 0
+    assert 3 in seeds
+    command = (tmp_path / "out" / "tables.md").read_text().splitlines()[2]
+    assert command.endswith("--chunk-size 24 --seed 3`"), command
+    assert season.main(argv) == 0           # the default seed: the command as committed
+    command = (tmp_path / "out" / "tables.md").read_text().splitlines()[2]
+    assert command.endswith("--workers 2 --chunk-size 24`"), command
