@@ -51,7 +51,7 @@ def main(argv=None) -> int:
 
     from _results import command_line
     from hybridship.datasets.esso_osaka import RUN_KINDS, default_data_dir
-    from hybridship.fileio import atomic_write
+    from hybridship.fileio import atomic_write, write_text
     from hybridship.evaluation.manoeuvre import (COMMAND_MODES, HORIZONS_S, _md_coverage, _md_table, pivot,
                                                  run_manoeuvre_benchmark, split_runs, wins,
                                                  md_coverage_intervals, md_ratio_to_physics, md_spread_by_kind)
@@ -130,7 +130,7 @@ def main(argv=None) -> int:
                  f"{cfg.ensemble.seed}. Training took {res.timings_s['fit_hybrid']:.0f} s (wall time, one thread, "
                  "on a shared machine).\n")
         text = replace_generated(text, "setup", setup)
-        page.write_text(text, encoding="utf-8")
+        write_text(page, text)             # atomically: a failed write leaves the page as it was
         print(f"updated {page.relative_to(ROOT)}")
         # the tables' files beside the page, so that every figure quoted on it can be traced
         # (the split's links to the data stay in --out)

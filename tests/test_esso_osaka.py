@@ -563,3 +563,44 @@ def test_the_manoeuvre_benchmark_learns_nothing_from_its_test_runs(tmp_path):
         np.testing.assert_array_equal(fc.eta, probed_moved[key].eta, err_msg=str(key))
         if fc.eta_std is not None:
             np.testing.assert_array_equal(fc.eta_std, probed_moved[key].eta_std, err_msg=str(key))
+
+
+def test_the_page_update_is_atomic(tmp_path, monkeypatch):
+    """benchmarks/esso_osaka.py replaces the generated blocks of docs/esso-osaka.md through a
+    temporary file: when the write fails, the page is left as it was (it was opened for
+    writing in place, and a failure left it truncated)."""
+    import os
+    from types import SimpleNamespace
+
+    from conftest import load_benchmark
+    from hybridship.evaluation import manoeuvre
+
+    esso = load_benchmark("esso_osaka")
+    keys = ["runs", "setup", "wins", "ratio", "coverage"] + [f"{s}-{m}" for s in ("distance_m", "heading_deg")
+                                                            for m in manoeuvre.COMMAND_MODES]
+    page = tmp_path / "docs" / "esso-osaka.md"
+    page.parent.mkdir()
+    before = "".join(f"<!-- generated:{k} -->\nold\n<!-- /generated:{k} -->\n" for k in keys)
+    page.write_text(before)
+    cfg = SimpleNamespace(residual=SimpleNamespace(features=("u",)), training="one_step", command_guard=False,
+                          calibration=SimpleNamespace(fraction=0.2), wind_samples=0,
+                          ensemble=SimpleNamespace(n_members=1, seed=0))
+    res = SimpleNamespace(errors=None, train=[], test=[], coverage=None, coverage_intervals=None, sharpness=None,
+                          coverage_heading=None, config=cfg, timings_s={"fit_hybrid": 1.0},
+                          predictors={"hybrid": SimpleNamespace(training_info={})})
+    monkeypatch.setattr(esso, "ROOT", tmp_path)
+    monkeypatch.setattr(manoeuvre, "split_runs", lambda *a, **k: (tmp_path, tmp_path))
+    monkeypatch.setattr(manoeuvre, "run_manoeuvre_benchmark", lambda *a, **k: res)
+    monkeypatch.setattr(manoeuvre, "wins", lambda *a, **k: ((), 0))
+    for name in ("pivot", "_md_table", "_md_coverage", "md_coverage_intervals", "md_ratio_to_physics",
+                 "md_spread_by_kind"):
+        monkeypatch.setattr(manoeuvre, name, lambda *a, **k: "new\n")
+
+    def disk_full(*a, **k):
+        raise OSError("disk full")
+
+    monkeypatch.setattr(os, "replace", disk_full)      # the last step of an atomic write fails
+    with pytest.raises(OSError):
+        esso.main(["--data", str(tmp_path), "--out", str(tmp_path / "out")])
+    assert page.read_text() == before
+    assert [p.name for p in page.parent.iterdir()] == ["esso-osaka.md"]     # no temporary file left
