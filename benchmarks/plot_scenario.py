@@ -21,6 +21,7 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
+from hybridship.fileio import atomic_write  # noqa: E402
 from hybridship.sim.scenario import DPLossConfig, drift_statistics, simulate_dp_loss  # noqa: E402
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -107,7 +108,8 @@ def plot(df, out: Path, title: str) -> None:
         ax.grid(alpha=0.3)
     fig.suptitle(title, fontsize=11)
     out.parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(out, dpi=110)
+    # atomically: a failed write leaves an earlier figure as it was
+    atomic_write(out, lambda fh: fig.savefig(fh, format=out.suffix.lstrip(".").lower() or "png", dpi=110))
     plt.close(fig)
 
 
