@@ -552,6 +552,8 @@ def plot(out: dict, model: DynamicModel, path: Path) -> None:
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
+    from hybridship.fileio import atomic_write
+
     L = model.vessel.particulars.L_pp_m
     fig, ax = plt.subplots(2, 3, figsize=(16, 9.5))
 
@@ -635,7 +637,8 @@ def plot(out: dict, model: DynamicModel, path: Path) -> None:
     fig.suptitle("RV Gunnerus 3-DOF model (hybridship, physics only): standard responses", fontsize=13)
     fig.tight_layout()
     path.parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(path, dpi=110)
+    # atomically: a failed write leaves an earlier figure as it was
+    atomic_write(path, lambda fh: fig.savefig(fh, format=path.suffix.lstrip(".").lower() or "png", dpi=110))
     plt.close(fig)
 
 

@@ -28,3 +28,19 @@ def test_plot_scenario_leaves_an_earlier_figure_when_the_write_fails(tmp_path, m
     monkeypatch.undo()
     ps.plot(df, out, "title")
     assert out.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+
+
+def test_gunnerus_response_leaves_an_earlier_figure_when_the_write_fails(tmp_path, monkeypatch):
+    """As above, for docs/figures/gunnerus_response.png."""
+    from hybridship.physics.model import DynamicModel
+
+    gr = load_benchmark("gunnerus_response")
+    model = DynamicModel("gunnerus")
+    out = gr.run(model)
+    path = tmp_path / "gunnerus_response.png"
+    path.write_bytes(b"earlier figure")
+    monkeypatch.setattr(os, "replace", _disk_full)
+    with pytest.raises(OSError):
+        gr.plot(out, model, path)
+    assert path.read_bytes() == b"earlier figure"
+    assert [p.name for p in tmp_path.iterdir()] == ["gunnerus_response.png"]
