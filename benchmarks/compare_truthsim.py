@@ -32,7 +32,7 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 import pandas as pd  # noqa: E402
 
-from hybridship.fileio import write_text  # noqa: E402
+from hybridship.fileio import atomic_write, write_text  # noqa: E402
 from hybridship.logs.io import read_log, write_log  # noqa: E402
 from hybridship.sim.environment import SeaState  # noqa: E402
 from hybridship.sim.scenario import DPLossConfig, drift_statistics, simulate_dp_loss  # noqa: E402
@@ -174,7 +174,8 @@ def main(argv=None) -> int:
     ax.legend()
     ax.grid(alpha=0.3)
     args.out.parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(args.out, dpi=110)
+    # atomically: a failed write leaves an earlier figure as it was
+    atomic_write(args.out, lambda fh: fig.savefig(fh, format=args.out.suffix.lstrip(".").lower() or "png", dpi=110))
     plt.close(fig)
     print(f"\nwrote {args.out}")
     return 0

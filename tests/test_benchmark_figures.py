@@ -44,3 +44,29 @@ def test_gunnerus_response_leaves_an_earlier_figure_when_the_write_fails(tmp_pat
         gr.plot(out, model, path)
     assert path.read_bytes() == b"earlier figure"
     assert [p.name for p in tmp_path.iterdir()] == ["gunnerus_response.png"]
+
+
+def test_compare_truthsim_leaves_an_earlier_figure_when_the_write_fails(tmp_path, monkeypatch):
+    """As above, for docs/figures/drift_comparison.png (one truthsim-dev scenario, our side
+    a short simulation)."""
+    import pandas as pd
+
+    from hybridship.sim.scenario import DPLossConfig, simulate_dp_loss
+
+    ct = load_benchmark("compare_truthsim")
+    if not (ct.TRUTHSIM / "scenarios.csv").is_file():
+        pytest.skip("the truthsim-dev data set is not on this machine")
+    src = pd.read_csv(ct.TRUTHSIM / "scenarios.csv").head(1)
+    (tmp_path / "ts" / "logs").mkdir(parents=True)
+    src.to_csv(tmp_path / "ts" / "scenarios.csv", index=False)
+    (tmp_path / "ts" / "logs" / src.file[0]).symlink_to(ct.TRUTHSIM / "logs" / src.file[0])
+    monkeypatch.setattr(ct, "simulate_dp_loss",
+                        lambda cfg: simulate_dp_loss(DPLossConfig(seed=1, t_shutdown_s=60.0, drift_s=60.0)))
+    path = tmp_path / "drift_comparison.png"
+    path.write_bytes(b"earlier figure")
+    replace = os.replace
+    monkeypatch.setattr(os, "replace", lambda a, b: _disk_full() if str(b) == str(path) else replace(a, b))
+    with pytest.raises(OSError):
+        ct.main(["--truthsim", str(tmp_path / "ts"), "--out", str(path)])
+    assert path.read_bytes() == b"earlier figure"
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["drift_comparison.png", "ts"]
