@@ -121,7 +121,11 @@ def main(argv=None) -> int:
     ap.add_argument("--out", type=Path, default=ROOT / "docs" / "figures" / "scenario_dp_loss.png")
     args = ap.parse_args(argv)
 
-    cfg = DPLossConfig(seed=args.seed, t_shutdown_s=args.t_shutdown_s, drift_s=args.drift_s)
+    try:
+        cfg = DPLossConfig(seed=args.seed, t_shutdown_s=args.t_shutdown_s, drift_s=args.drift_s)
+    except ValueError as exc:           # "drift_s: must be > 0 (got -5.0) [DPLossConfig]": name the option
+        field, _, reason = str(exc).partition(":")
+        ap.error(f"--{field.replace('_', '-')}:{reason}")
     df = simulate_dp_loss(cfg)
     c = df.attrs["conditions"]
     title = (f"Simulated RV Gunnerus DP loss, seed {args.seed}: wind {c['wind_mean_mps']:.1f} m/s from "

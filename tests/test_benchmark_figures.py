@@ -70,3 +70,16 @@ def test_compare_truthsim_leaves_an_earlier_figure_when_the_write_fails(tmp_path
         ct.main(["--truthsim", str(tmp_path / "ts"), "--out", str(path)])
     assert path.read_bytes() == b"earlier figure"
     assert sorted(p.name for p in tmp_path.iterdir()) == ["drift_comparison.png", "ts"]
+
+
+@pytest.mark.parametrize("bad", [["--t-shutdown-s", "-5"], ["--drift-s", "nan"], ["--seed", "-1"]])
+def test_plot_scenario_settings_it_cannot_use_are_usage_errors(bad, tmp_path, capsys):
+    """A scenario the simulator refuses stops with a usage error (exit 2) naming the option
+    and the reason (it ended in DPLossConfig's traceback), and no figure is written."""
+    ps = load_benchmark("plot_scenario")
+    with pytest.raises(SystemExit) as exc:
+        ps.main([*bad, "--out", str(tmp_path / "s.png")])
+    assert exc.value.code == 2
+    err = capsys.readouterr().err
+    assert f"error: {bad[0]}: " in err and ("must be" in err or "expected" in err), err
+    assert not any(tmp_path.iterdir())
