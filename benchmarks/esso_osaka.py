@@ -63,10 +63,13 @@ def main(argv=None) -> int:
     ap.add_argument("--split-seed", type=int, default=0,
                     help="seed that draws the test runs (default 0): the settings were chosen on a split of the "
                          "seed-0 training runs, so another split's test runs are not clean of that choice")
-    ap.add_argument("--test-fraction", type=float, default=0.3)
+    ap.add_argument("--test-fraction", type=float, default=0.3,
+                    help="share of the runs tested on, in (0, 1) (default 0.3)")
     ap.add_argument("--quick", action="store_true")
     ap.add_argument("--docs", action="store_true", help="update docs/ also with --quick")
     args = ap.parse_args(argv)
+    if not 0.0 < args.test_fraction < 1.0:      # NaN too
+        ap.error(f"--test-fraction: expected a share of the runs between 0 and 1 (exclusive), got {args.test_fraction}")
     torch.set_num_threads(1)
     if not args.data.is_dir():
         print(f"error: {args.data}: data folder not found (see ../shared/data/esso-osaka-frt/README.md)",

@@ -604,3 +604,17 @@ def test_the_page_update_is_atomic(tmp_path, monkeypatch):
         esso.main(["--data", str(tmp_path), "--out", str(tmp_path / "out")])
     assert page.read_text() == before
     assert [p.name for p in page.parent.iterdir()] == ["esso-osaka.md"]     # no temporary file left
+
+
+@pytest.mark.parametrize("share", ["0", "1", "2", "nan"])
+def test_a_test_fraction_outside_0_1_is_a_usage_error(share, tmp_path, capsys):
+    """benchmarks/esso_osaka.py: --test-fraction outside (0, 1) stops with a usage error
+    (exit 2) naming the option (it ended in split_runs' traceback), before any work."""
+    from conftest import load_benchmark
+
+    esso = load_benchmark("esso_osaka")
+    with pytest.raises(SystemExit) as exc:
+        esso.main(["--data", str(tmp_path), "--out", str(tmp_path / "out"), "--test-fraction", share, "--quick"])
+    assert exc.value.code == 2
+    assert "error: --test-fraction: expected a share" in capsys.readouterr().err
+    assert not (tmp_path / "out").exists()
