@@ -344,12 +344,19 @@ def main(argv=None) -> int:
     args = ap.parse_args(argv)
     if args.tables_only:
         return tables_only(args.out, args.results)
+    try:
+        horizons = tuple(float(h) for h in args.horizons_s.split(","))
+    except ValueError:
+        ap.error(f"--horizons-s: expected numbers like 5,10,20,30, got {args.horizons_s!r}")
+    if not all(0 < h < float("inf") for h in horizons):
+        ap.error(f"--horizons-s: horizons must be finite and > 0 s, got {args.horizons_s!r}")
+    modes = args.commands.split(",")
+    if not set(modes) <= set(COMMAND_MODES):        # a misspelt mode was dropped without a word
+        ap.error(f"--commands: expected modes among {', '.join(COMMAND_MODES)}, got {args.commands!r}")
     torch.set_num_threads(1)
     if not (args.split / "train").is_dir():          # checked before any variant is built
         print(f"error: {args.split / 'train'}: not found; run benchmarks/esso_osaka.py first", file=sys.stderr)
         return 2
-    horizons = tuple(float(h) for h in args.horizons_s.split(","))
-    modes = [m for m in args.commands.split(",") if m in COMMAND_MODES]
     if args.test_split:
         fit_dir, val_dir = args.split / "train", args.split / "test"
     elif (dirs := validation_dirs(args.split, args.out / "split")) is None:

@@ -194,3 +194,15 @@ def test_tables_only_renders_the_run_again_with_its_command(et, tmp_path):
     assert sorted(p.name for p in (tmp_path / "docs").iterdir()) == ["errors.csv", "tables.md", "timing.csv"]
     (tmp_path / "tables.md").write_text("something else\n")
     assert et.main(["--tables-only", "--out", str(tmp_path)]) == 2
+
+
+@pytest.mark.parametrize("bad", [["--commands", "knwon"], ["--commands", "known,"], ["--horizons-s", "5,x"],
+                                 ["--horizons-s", "0,10"]])
+def test_a_misspelt_mode_or_horizon_is_a_usage_error(et, bad, tmp_path, capsys):
+    """A command mode not in COMMAND_MODES was dropped without a word (``knwon`` scored
+    nothing, after training every variant) and a horizon that is not a number ended in a
+    traceback; both are now usage errors (exit 2) naming the option, before any work."""
+    with pytest.raises(SystemExit) as exc:
+        et.main([*bad, "--split", str(tmp_path / "absent"), "--out", str(tmp_path / "out")])
+    assert exc.value.code == 2
+    assert f"error: {bad[0]}: " in capsys.readouterr().err
