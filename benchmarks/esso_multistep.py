@@ -279,7 +279,23 @@ def parse_args(argv=None) -> argparse.Namespace:
     ap.add_argument("--tables-only", action="store_true",
                     help="write tables.md again from --out's files (and copy them to --results), keeping the "
                          "command line it records; nothing is trained")
-    return ap.parse_args(argv)
+    args = ap.parse_args(argv)
+    if args.tables_only:
+        return args
+    from hybridship.evaluation.manoeuvre import ManoeuvreConfig
+
+    try:
+        horizons = tuple(float(h) for h in args.horizons_s.split(","))
+    except ValueError:
+        ap.error(f"--horizons-s: expected numbers like 5,10,20,30, got {args.horizons_s!r}")
+    if not all(0 < h < float("inf") for h in horizons):
+        ap.error(f"--horizons-s: horizons must be finite and > 0 s, got {args.horizons_s!r}")
+    try:        # a misspelt field stopped the run with a traceback after the one-step nets were trained
+        for name, kw in parse_variants(args.variants).items():
+            replace(ManoeuvreConfig().multistep, **kw)
+    except (TypeError, ValueError) as exc:
+        ap.error(f"--variants: {name}: {exc}")
+    return args
 
 
 def main(argv=None) -> int:

@@ -169,3 +169,18 @@ def test_variants_parse_into_python_values_with_strings_as_they_are(em):
     assert got == {"m": {"steps": (5, 10), "loss": "absolute"}, "n": {"tags": ["a", "b"]}}
     # ... beside an unquoted word, which stays text
     assert em.parse_variants("m:steps=(5, 10), loss=absolute") == {"m": {"steps": (5, 10), "loss": "absolute"}}
+
+
+@pytest.mark.parametrize("bad", [["--variants", "a:nosuch=1"], ["--variants", "abs:loss='absolute';b:lr=-1"],
+                                 ["--horizons-s", "5,x"], ["--horizons-s", "-5"]])
+def test_a_bad_variant_field_or_horizon_is_a_usage_error_before_any_work(bad, tmp_path, capsys):
+    """A --variants field MultiStepConfig refuses stopped the run with a traceback only after
+    the one-step nets were trained, and a --horizons-s item that is not a number with a
+    traceback; both are now usage errors (exit 2) naming the option, before the split is read."""
+    from conftest import load_benchmark
+
+    ms = load_benchmark("esso_multistep")
+    with pytest.raises(SystemExit) as exc:
+        ms.main([*bad, "--split", str(tmp_path / "absent"), "--out", str(tmp_path / "out")])
+    assert exc.value.code == 2
+    assert f"error: {bad[0]}: " in capsys.readouterr().err
