@@ -295,6 +295,10 @@ def parse_args(argv=None) -> argparse.Namespace:
             replace(ManoeuvreConfig().multistep, **kw)
     except (TypeError, ValueError) as exc:
         ap.error(f"--variants: {name}: {exc}")
+    features = ManoeuvreConfig().residual.features
+    unknown = [f for f in args.drop_features.split(",") if f and f not in features]
+    if unknown:         # a misspelt name left every feature in, without a word
+        ap.error(f"--drop-features: {', '.join(unknown)}: not among the benchmark's features ({', '.join(features)})")
     return args
 
 

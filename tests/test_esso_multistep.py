@@ -184,3 +184,19 @@ def test_a_bad_variant_field_or_horizon_is_a_usage_error_before_any_work(bad, tm
         ms.main([*bad, "--split", str(tmp_path / "absent"), "--out", str(tmp_path / "out")])
     assert exc.value.code == 2
     assert f"error: {bad[0]}: " in capsys.readouterr().err
+
+
+def test_a_feature_to_drop_that_the_benchmark_does_not_use_is_a_usage_error(tmp_path, capsys):
+    """A misspelt --drop-features name dropped nothing and the run went on with every
+    feature; it is now a usage error (exit 2) naming it, before any work. The names the
+    committed screening dropped are accepted."""
+    from conftest import load_benchmark
+
+    ms = load_benchmark("esso_multistep")
+    with pytest.raises(SystemExit) as exc:
+        ms.main(["--drop-features", "rpm_main_rate_rel_s,wind_rel_u_ms", "--split", str(tmp_path / "absent"),
+                 "--out", str(tmp_path / "out")])
+    assert exc.value.code == 2
+    assert "error: --drop-features: wind_rel_u_ms: not among" in capsys.readouterr().err
+    args = ms.parse_args(["--drop-features", "rpm_main_rate_rel_s,angle_main_rate_rad_s,wind_rel_u_m_s"])
+    assert args.drop_features.count(",") == 2
