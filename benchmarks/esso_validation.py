@@ -40,12 +40,23 @@ def main(argv=None) -> int:
     ap.add_argument("--quantiles", default="0.99,0.95,0.9,0.8", help="guard quantiles to compare")
     ap.add_argument("--horizons-s", default="5,10,20,30")
     args = ap.parse_args(argv)
+    # checked before the hybrid is trained (a bad quantile ended in the guard's traceback after it)
+    try:
+        quantiles = [float(q) for q in args.quantiles.split(",")]
+    except ValueError:
+        ap.error(f"--quantiles: expected numbers like 0.99,0.95, got {args.quantiles!r}")
+    if not all(0.5 <= q < 1.0 for q in quantiles):
+        ap.error(f"--quantiles: each must lie in [0.5, 1) (EnvelopeGuard.fit), got {args.quantiles!r}")
+    try:
+        horizons = tuple(float(h) for h in args.horizons_s.split(","))
+    except ValueError:
+        ap.error(f"--horizons-s: expected numbers like 5,10,20,30, got {args.horizons_s!r}")
+    if not all(0 < h < float("inf") for h in horizons):
+        ap.error(f"--horizons-s: horizons must be finite and > 0 s, got {args.horizons_s!r}")
     torch.set_num_threads(1)
     if not args.train.is_dir():
         print(f"error: {args.train}: not found; run benchmarks/esso_osaka.py first", file=sys.stderr)
         return 2
-    quantiles = [float(q) for q in args.quantiles.split(",")]
-    horizons = tuple(float(h) for h in args.horizons_s.split(","))
 
     fit_dir, val_dir = split_runs(args.train, args.out / "split", seed=1)
     v = load_vessel("esso_osaka_model")
