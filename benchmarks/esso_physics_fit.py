@@ -96,6 +96,8 @@ def main(argv=None) -> int:
                     help="also score the mean of the forecasts of the hybrids on both physics")
     ap.add_argument("--results", type=Path, help="also copy theta.csv, errors.csv and tables.md here (no data)")
     args = ap.parse_args(argv)
+    if args.evaluations < 1:        # scipy's Powell stopped with its own error after the split was made
+        ap.error(f"--evaluations: expected a positive integer, got {args.evaluations}")
     if (dirs := validation_dirs(args.split, args.out / "split")) is None:
         return 2
     fit_dir, val_dir = dirs

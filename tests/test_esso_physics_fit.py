@@ -63,3 +63,14 @@ def test_every_coefficient_takes_its_own_factor_at_once(pf, base):
     v0 = load_vessel("esso_osaka_model")
     for path, f in zip(pf.COEFFICIENTS, factors):
         assert attribute(v, path) == pytest.approx(f * attribute(v0, path), rel=1e-12), path
+
+
+@pytest.mark.parametrize("n", ["0", "-1"])
+def test_no_evaluations_is_a_usage_error(n, tmp_path, capsys):
+    """--evaluations below 1 ended in scipy's internal _MaxFuncCallError traceback; it is
+    now a usage error (exit 2) naming the option, before any work."""
+    pf = load_benchmark("esso_physics_fit")
+    with pytest.raises(SystemExit) as exc:
+        pf.main(["--evaluations", n, "--split", str(tmp_path / "absent"), "--out", str(tmp_path / "out")])
+    assert exc.value.code == 2
+    assert "error: --evaluations: expected a positive integer" in capsys.readouterr().err
