@@ -50,13 +50,17 @@ def main(argv=None) -> int:
     ap.add_argument("--seed", type=int, default=0)
     ap.add_argument("--out", type=Path, help="folder for hybrid_variants.md")
     args = ap.parse_args(argv)
+    try:                # before the logs are read (EnsembleConfig's traceback came after)
+        ens = EnsembleConfig(n_members=args.members, seed=args.seed)
+    except ValueError as exc:           # "n_members: must be >= 1 (got 0) [EnsembleConfig]": name the option
+        field, _, reason = str(exc).partition(":")
+        ap.error({"n_members": "--members"}.get(field, f"--{field}") + ":" + reason)
     files = sorted(args.data.glob("*.csv.gz"))
     if not files:
         print(f"no logs in {args.data}: the shared truthsim-dev data set is not on this machine")
         return 0
     dyn = DynamicPredictor("gunnerus")
     logs = [as_log_arrays(f, dyn.model.vessel) for f in files]
-    ens = EnsembleConfig(n_members=args.members, seed=args.seed)
     rows = [("physics", _summary([metrics.drift_errors(dyn, a) for a in logs]), 0.0)]
 
     def fitted(**kw):
