@@ -158,6 +158,8 @@ def main(argv=None) -> int:
     ap.add_argument("--station-keeping-walks", action="store_true",
                     help="filter the drift with the station keeping's load walks (the estimator before 2026-11-30)")
     args = ap.parse_args(argv)
+    if args.members < 1:        # EnsembleConfig's traceback came after the logs were read
+        ap.error(f"--members: expected a positive integer, got {args.members}")
     files = sorted(args.data.glob("*.csv.gz")) if args.data.is_dir() else []
     if not files:
         print(f"no logs found in {args.data}; nothing to do", file=sys.stderr)

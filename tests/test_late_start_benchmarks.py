@@ -204,3 +204,13 @@ def test_the_late_coverage_reads_each_lead_from_its_own_forecast_row(dt):
     np.testing.assert_allclose(out["hybrid"][..., 0], 0.0, atol=1e-9)
     # east error 15 m against 2 sigma = 2 lead / 3: outside at 15 s, inside from 30 s on
     np.testing.assert_array_equal(out["hybrid in 2 sigma"][0, :, 1], [False, True, True, True])
+
+
+def test_late_coverage_without_members_is_a_usage_error(tmp_path, capsys):
+    """drift_late_coverage.py --members 0 ended in EnsembleConfig's traceback after the logs
+    were read; it is now a usage error (exit 2) naming the option, before any work."""
+    lc = load_benchmark("drift_late_coverage")
+    with pytest.raises(SystemExit) as exc:
+        lc.main(["--members", "0", "--data", str(tmp_path), "--out", str(tmp_path / "t.md")])
+    assert exc.value.code == 2
+    assert "error: --members: expected a positive integer" in capsys.readouterr().err
