@@ -44,7 +44,9 @@ def test_a_command_logged_after_a_start_is_not_held_at_it(model, log):
     p = DynamicPredictor(model.vessel)
     whole, cut = p.forecast(late, [30.0], 20.0), p.forecast(late[late.time_s <= 30.0], [30.0], 20.0)
     np.testing.assert_array_equal(whole.eta, cut.eta)
-    assert "none logged: 0" in whole.notes[0]
+    # only port had no value yet: the others hold theirs, and the note says so (it read "none
+    # logged: 0", as if every channel were taken as 0)
+    assert "each channel's last logged value held, 0 for a channel not logged yet" in whole.notes[0]
 
 
 def test_dp_active_logged_after_a_start_is_not_held_at_it(model, log):

@@ -536,7 +536,7 @@ def test_commands_missing_at_the_start_are_flagged_with_the_time_they_are_held_f
     df.loc[(df.time_s > T_FAULT - 50) & (df.time_s <= T_FAULT), cmd] = np.nan
     _, sw = _assess(model, df, [float(T_FAULT), float(T_FAULT - 60)])
     assert sw.flags[F.NAN_IN_WINDOW][0] and not sw.flags[F.NAN_IN_WINDOW][1]
-    assert f"last logged values held, from time_s {T_FAULT - 50:g}" in sw.notes[0]
+    assert f"last logged value held, all logged together last at time_s {T_FAULT - 50:g}" in sw.notes[0]
 
 
 def test_dp_active_missing_at_the_start_is_flagged_like_a_command(model, log):
@@ -546,7 +546,7 @@ def test_dp_active_missing_at_the_start_is_flagged_like_a_command(model, log):
     df.loc[df.time_s == T_FAULT, "dp_active"] = np.nan
     _, sw = _assess(model, df, [float(T_FAULT), float(T_FAULT - 60)])
     assert sw.flags[F.NAN_IN_WINDOW][0] and not sw.flags[F.NAN_IN_WINDOW][1]
-    assert f"last logged values held, from time_s {T_FAULT - 1:g}" in sw.notes[0]
+    assert f"last logged value held, all logged together last at time_s {T_FAULT - 1:g}" in sw.notes[0]
 
 
 def test_a_log_without_wind_is_not_a_dropped_sensor(model, log):

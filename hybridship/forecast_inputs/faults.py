@@ -461,9 +461,12 @@ def detect_missing_samples(view: LogView, win: Window) -> None:
         cols.append("wind")
     if not a.commands_logged[W].all():
         logged = np.flatnonzero(a.commands_logged[: win.start + 1])
+        # commands_logged is per row (every channel logged), while each channel holds its own
+        # last value: a row missing one channel does not make the others' values 0
         cols.append("commands" if a.commands_logged[win.start] else
-                    "commands (at the start: the last logged values held, "
-                    + (f"from time_s {seconds_text(view.t[logged[-1]])})" if logged.size else "none logged: 0)"))
+                    "commands (at the start: each channel's last logged value held, "
+                    + (f"all logged together last at time_s {seconds_text(view.t[logged[-1]])})" if logged.size
+                       else "0 for a channel not logged yet; no earlier row logs all of them)"))
     if cols or n_missing:
         what = f"missing {', '.join(cols)}" if cols else ""
         gap = f"{n_missing} missing sample(s)" if n_missing else ""
