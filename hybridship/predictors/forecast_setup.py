@@ -282,6 +282,13 @@ class _Setup:
 
 #: Command modes of ``forecast(..., commands=)``.
 COMMAND_MODES = ("held", "known")
+#: Key of the spread calibration for forecasts that start after a failure
+#: (:meth:`HybridPredictor.calibrate_after_stop`). Here beside the command modes, which the
+#: model file reads too, so that it need not import the predictor.
+AFTER_STOP = "after_stop"
+#: Key of the spread calibration for forecasts that start later in a drift than those of
+#: :data:`AFTER_STOP`: the drift has gathered speed, and its errors with it.
+AFTER_STOP_LATE = "after_stop_late"
 
 
 def _command_rows(arrays: LogArrays, idx: np.ndarray, H: int, dt: float) -> np.ndarray:

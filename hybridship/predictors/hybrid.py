@@ -40,8 +40,9 @@ from ..residual.drift_hull import (MIN_FAILURES as DRIFT_HULL_MIN_FAILURES, MUNK
                                    drift_start_rows, munk_coefficient)
 from ..residual.hull import HullCorrection
 from .after_failure import drift_end, drift_forecasts, has_drift, shutdown_index
-from .forecast_setup import (FORECAST_HISTORY_S, MAX_HORIZON_S, _check_flags, _check_row_stride, _forecast_setup,
-                             as_log_arrays, forecast_step_s, join_notes, keeps_state_on_error, log_list, start_indices)
+from .forecast_setup import (AFTER_STOP, AFTER_STOP_LATE, FORECAST_HISTORY_S, MAX_HORIZON_S, _check_flags,
+                             _check_row_stride, _forecast_setup, as_log_arrays, forecast_step_s, join_notes,
+                             keeps_state_on_error, log_list, start_indices)
 from .model_file import load_model, save_model
 from .result import ForecastResult
 from .training_logs import (NO_WIND_FORECAST_WARNING, check_distinct_logs, check_training_lengths,
@@ -53,14 +54,8 @@ __all__ = ["AFTER_STOP", "AFTER_STOP_LATE", "ENVIRONMENT_SOURCES", "HybridPredic
 _MEMORY_COL = ALL_FEATURES.index(MEMORY_FEATURES[0])
 #: First column of the actuator-load features (the last ones).
 _LOAD_COL = ALL_FEATURES.index(LOAD_FEATURES[0])
-#: Key of the spread calibration for forecasts that start after a failure
-#: (:meth:`HybridPredictor.calibrate_after_stop`).
-AFTER_STOP = "after_stop"
 #: Start times after each failure that calibrate the spread after a failure (the paper's 20).
 AFTER_STOP_INTERVALS = 20
-#: Key of the spread calibration for forecasts that start later in a drift than those of
-#: :data:`AFTER_STOP`: the drift has gathered speed, and its errors with it.
-AFTER_STOP_LATE = "after_stop_late"
 #: Spacing [s] of the later starts that calibrate :data:`AFTER_STOP_LATE`.
 LATE_START_EVERY_S = 10.0
 #: Fewest held-back starts (pooled over the logs) that calibrate the spread of a command mode.

@@ -24,7 +24,7 @@ from ..residual.features import ResidualConfig
 from ..residual.guard import CommandRegime, EnvelopeGuard, ThrustRegime
 from ..residual.hull import HullCorrection
 from ..residual.multistep import MultiStepConfig
-from .forecast_setup import COMMAND_MODES
+from .forecast_setup import AFTER_STOP, AFTER_STOP_LATE, COMMAND_MODES
 
 __all__ = ["MODEL_FORMAT_VERSION", "ModelFileError", "load_model", "model_metadata", "save_model"]
 
@@ -460,8 +460,6 @@ def _scalar_state(meta: dict) -> dict:
     if thr_mean.shape != thr_std.shape or not (np.all(np.isfinite(thr_mean)) and np.all(thr_std > 0)):
         raise ValueError("thrust_error_prior: expected finite means and positive spreads")
     modes = meta["calibrated_commands"]
-    from .hybrid import AFTER_STOP, AFTER_STOP_LATE
-
     readable = (*COMMAND_MODES, AFTER_STOP, AFTER_STOP_LATE)      # the forecasts' modes and the after-stop ones
     if not isinstance(modes, list) or not all(isinstance(m, str) and m in readable for m in modes):
         raise ValueError(f"calibrated_commands: expected a list of command modes ({', '.join(readable)}), "
