@@ -26,6 +26,7 @@ from __future__ import annotations
 
 import argparse
 import os
+import shlex
 import sys
 import time
 from pathlib import Path
@@ -128,7 +129,8 @@ def main(argv=None) -> int:
     inside = int(((lf.actual_s >= lf.pred_p10_s) & (lf.actual_s <= lf.pred_p90_s)).sum())
     text = (f"Command: `python benchmarks/driftoff_live.py --samples {args.samples}"
             f" --vessel-spread {args.vessel_spread:g} --seed {args.seed} --method {args.method}"
-            + (" --thrust-error-model per_dof" if cfg is not None else "") + "`\n\n"
+            + (" --thrust-error-model per_dof" if cfg is not None else "")
+            + ("" if args.data == DEFAULT_DATA else f" --data {shlex.quote(str(args.data))}") + "`\n\n"
             f"{len(files)} logs, {args.samples} samples per prediction; update time (environment estimate + "
             f"blackouts) median {res.update_s.median():.3f} s, max {res.update_s.max():.3f} s.\n"
             f"Truth-track actual times inside the predicted 10-90 % band: {inside} of {len(lf)} (log x radius)"

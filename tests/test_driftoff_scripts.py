@@ -62,3 +62,26 @@ def test_season_command_records_the_seed(tmp_path, monkeypatch):
     assert season.main(argv) == 0           # the default seed: the command as committed
     command = (tmp_path / "out" / "tables.md").read_text().splitlines()[2]
     assert command.endswith("--workers 2 --chunk-size 24`"), command
+
+
+def test_live_command_records_a_data_folder_other_than_the_default(tmp_path, monkeypatch):
+    """The command on tables.md repeats --data when it is not the default folder (it was left
+    out: the recorded command read the default logs, not those the table came from); with the
+    default folder the command is as committed."""
+    live = load_benchmark("driftoff_live")
+    data = tmp_path / "my logs"
+    data.mkdir()
+    (data / "a_seed1.csv.gz").write_bytes(b"")
+    row = {"log": "a", "track": "truth_lf", "radius_m": 5.0, "actual_s": 1.0, "pred_p10_s": 0.5,
+           "pred_p50_s": 1.0, "pred_p90_s": 2.0, "percentile": 50.0, "update_s": 0.1}
+    monkeypatch.setattr(live, "evaluate", lambda *a, **kw: [dict(row)])
+    out = tmp_path / "out"
+    assert live.main(["--data", str(data), "--out", str(out)]) == 0
+    command = (out / "tables.md").read_text().splitlines()[0]
+    assert command.endswith(f"--method estimator --data '{data}'`"), command
+    monkeypatch.setattr(live, "DEFAULT_DATA", data)
+    for argv in ([], ["--data", str(data)]):
+        assert live.main([*argv, "--out", str(out)]) == 0
+        command = (out / "tables.md").read_text().splitlines()[0]
+        assert command == ("Command: `python benchmarks/driftoff_live.py --samples 500 --vessel-spread 1 --seed 0"
+                           " --method estimator`"), command
