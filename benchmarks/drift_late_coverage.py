@@ -52,6 +52,8 @@ HORIZON_S = 60.0
 #: Leads of the by-horizon table [s] (the drift tables' columns).
 HORIZONS_S = (15.0, 30.0, 45.0, 60.0)
 LATE_EVERY_S = 10.0
+#: The counts the written text spells out (larger ones in digits).
+COUNT_WORDS = ("no", "one", "two", "three", "four", "five", "six", "seven", "eight", "nine", "ten")
 
 
 def starts_after_failure(log: pd.DataFrame) -> dict[str, list[float]]:
@@ -193,7 +195,8 @@ def main(argv=None) -> int:
         pooled["noted as late"] = int(g["noted as late"].sum())
         res = pd.concat([res, pd.DataFrame([pooled])], ignore_index=True)
     res = res.round({"north/east in 2 sigma": 2, "heading in 2 sigma": 2, "mean 1-sigma [m]": 2, "RMS error [m]": 2})
-    text = (f"60-s forecasts after the failure of each truthsim-dev log, the hybrid fitted on the other five "
+    others = COUNT_WORDS[len(logs) - 1] if len(logs) <= len(COUNT_WORDS) else len(logs) - 1
+    text = (f"60-s forecasts after the failure of each truthsim-dev log, the hybrid fitted on the other {others} "
             f"({args.members} members); nominal 2-sigma coverage 0.954:\n\n" + markdown_table(res) + "\n\n"
             "Mean absolute 60-s error of the starts 20 s and later after the failure, north / east [m] / "
             "heading [deg]:\n\n" + markdown_table(error_table(errors)) + "\n\n"

@@ -214,3 +214,43 @@ def test_late_coverage_without_members_is_a_usage_error(tmp_path, capsys):
         lc.main(["--members", "0", "--data", str(tmp_path), "--out", str(tmp_path / "t.md")])
     assert exc.value.code == 2
     assert "error: --members: expected a positive integer" in capsys.readouterr().err
+
+
+@pytest.mark.parametrize("n_logs, others", [(3, "two"), (6, "five"), (12, "11")])
+def test_late_coverage_text_counts_the_logs_each_hybrid_is_fitted_on(n_logs, others, tmp_path, monkeypatch):
+    """The written text said the hybrid was fitted on "the other five" logs whatever --data held;
+    it now gives the count of the other logs (five, as committed, for the six truthsim-dev logs)."""
+    lc = load_benchmark("drift_late_coverage")
+    data = tmp_path / "logs"
+    data.mkdir()
+    for k in range(n_logs):
+        pd.DataFrame({"time_s": [0.0, 1.0]}).to_csv(data / f"log{k}_seed{k}.csv.gz", index=False)
+    fitted_on = []
+
+    class Hybrid:
+        def __init__(self, *a, **kw):
+            self.calibration = {}
+
+        def fit(self, logs):
+            fitted_on.append(len(logs))
+            return self
+
+    class Reference(Hybrid):
+        def fit(self, logs=None):
+            return self
+
+    monkeypatch.setattr(lc, "HybridPredictor", Hybrid)
+    monkeypatch.setattr(lc, "DynamicPredictor", Reference)
+    monkeypatch.setattr(lc, "DeadReckoning", Reference)
+    monkeypatch.setattr(lc, "starts_after_failure", lambda log: {"first 20 s": [0.0], "20 s and later": [1.0]})
+    monkeypatch.setattr(lc, "score", lambda model, log, starts: {
+        "starts": 1, "north/east in 2 sigma": 1.0, "heading in 2 sigma": 1.0, "mean 1-sigma [m]": 1.0,
+        "RMS error [m]": 1.0, "noted as late": 0})
+    monkeypatch.setattr(lc, "late_errors", lambda models, log, starts: {
+        **{m: np.ones((1, 4, 3)) for m in models}, "hybrid in 2 sigma": np.ones((1, 4, 3), bool)})
+    out = tmp_path / "t.md"
+    assert lc.main(["--data", str(data), "--out", str(out)]) == 0
+    assert fitted_on == [n_logs - 1] * n_logs
+    assert out.read_text().splitlines()[0] == (
+        f"60-s forecasts after the failure of each truthsim-dev log, the hybrid fitted on the other {others} "
+        "(10 members); nominal 2-sigma coverage 0.954:")
