@@ -148,7 +148,7 @@ def main(argv=None) -> int:
             f"ran: **{equal}**. `year_wall_s` is the wall time of 8 760 states: measured where `year` says so, "
             f"otherwise EXTRAPOLATED linearly from the states run. "
             f"Machine: {os.cpu_count()} logical cores, 1-min load average at the end {os.getloadavg()[0]:.1f} "
-            f"(above the core count = other jobs competed for the cores).\n\n"
+            f"(a load above the core count means other jobs competed for the cores).\n\n"
             + markdown_table(res, digits=1) + "\n")
     spaced = lambda x: f"{x:,.0f}".replace(",", " ")  # noqa: E731  (1 058, as the docs write numbers)
     text += (f"The cluster's {spaced(len(states))} states x {psi.size} headings x {args.samples} samples = "

@@ -85,3 +85,31 @@ def test_live_command_records_a_data_folder_other_than_the_default(tmp_path, mon
         command = (out / "tables.md").read_text().splitlines()[0]
         assert command == ("Command: `python benchmarks/driftoff_live.py --samples 500 --vessel-spread 1 --seed 0"
                            " --method estimator`"), command
+
+
+def test_season_load_legend_says_what_a_load_above_the_cores_means(tmp_path, monkeypatch):
+    """tables.md wrote "load average at the end X (above the core count = other jobs competed
+    for the cores)" whatever X was, which reads as a statement about this run; the legend now
+    says what a load above the core count would mean, and the committed table has that legend."""
+    from pathlib import Path
+    from types import SimpleNamespace
+
+    season = load_benchmark("driftoff_season")
+
+    def sweep(model, states, psi, settings, **kw):
+        frame = season.pd.DataFrame({"state": range(len(states))})
+        return SimpleNamespace(to_frame=lambda: frame, wall_s=1.0, operability=lambda _: frame)
+
+    idle = SimpleNamespace(run=lambda f: None, close=lambda: None)
+    monkeypatch.setattr(season, "require_dask", lambda: SimpleNamespace(LocalCluster=lambda **kw: idle,
+                                                                         Client=lambda cluster: idle))
+    monkeypatch.setattr(season, "season_sweep", sweep)
+    monkeypatch.setattr(season.os, "cpu_count", lambda: 2)
+    monkeypatch.setattr(season.os, "getloadavg", lambda: (2.1, 0.0, 0.0))
+    assert season.main(["--states", "2", "--samples", "2", "--out", str(tmp_path / "out"),
+                        "--data-out", str(tmp_path / "d")]) == 0
+    machine = (tmp_path / "out" / "tables.md").read_text().splitlines()[4].partition("Machine: ")[2]
+    assert machine == ("2 logical cores, 1-min load average at the end 2.1 "
+                       "(a load above the core count means other jobs competed for the cores).")
+    committed = Path(__file__).resolve().parents[1] / "docs" / "results" / "driftoff-season" / "tables.md"
+    assert committed.read_text().splitlines()[4].partition("Machine: ")[2] == machine
