@@ -660,6 +660,16 @@ def test_sea_state_steeper_than_waves_can_be_is_refused(hs_m, tp_s):
              wind_dir_from_rad=0.0)
 
 
+def test_a_random_sea_too_steep_from_its_tp_coefficient_names_tp_coefficient():
+    """A small tp_coefficient draws a Tp too short for the drawn Hs: the refusal asked whether
+    hs_m and tp_s were swapped, fields the caller never gave; it now names tp_coefficient."""
+    with pytest.raises(ValueError, match=r"tp_coefficient: \(1, 1\) drew Tp = max\(2, 1 sqrt\(Hs\)\) = 2 s.*"
+                                         r"steeper than waves can be.*at least 2\.12") as info:
+        SeaState.random(0, beaufort=(6, 8), tp_coefficient=(1, 1))
+    assert "swapped" not in str(info.value)
+    SeaState.random(0, beaufort=(6, 8), tp_coefficient=(2.2, 2.2))     # just above the limit: a sea
+
+
 def test_the_highest_sea_at_a_6_s_peak_is_a_seventh_of_its_wavelength():
     """Miche's limit: at Tp = 6 s the deep-water wavelength ``g Tp^2 / (2 pi)`` is 56.21 m, a
     seventh of which, 8.03 m, is the highest Hs accepted."""

@@ -1221,6 +1221,12 @@ class SeaState:
             Random source (or seed).
         beaufort : (int, int)
             Inclusive Beaufort range, 0 <= lo <= hi <= 12.
+
+        Raises
+        ------
+        ValueError
+            Naming ``tp_coefficient`` when its draw gives a sea steeper than waves can be
+            (:data:`MAX_STEEPNESS`; only a coefficient below about 2.12 s/m^0.5 can).
         """
         rng = _as_rng(rng)
         try:
@@ -1239,7 +1245,14 @@ class SeaState:
         wind = float(beaufort_wind_speed(b))
         wind_dir = rng.uniform(0.0, 2.0 * np.pi)
         hs = float(beaufort_wave_height(b)) * rng.uniform(*hs_fetch_factor)
-        tp = max(2.0, rng.uniform(*tp_coefficient) * math.sqrt(hs))
+        c_tp = rng.uniform(*tp_coefficient)
+        tp = max(2.0, c_tp * math.sqrt(hs))
+        if hs > float(max_hs_m(tp)):        # only with c_tp below sqrt(2 pi / (MAX_STEEPNESS g))
+            raise ValueError(f"tp_coefficient: {tuple(tp_coefficient)!r} drew Tp = max(2, {c_tp:g} sqrt(Hs)) = "
+                             f"{tp:g} s at the drawn Hs {hs:g} m, steeper than waves can be "
+                             f"(2 pi Hs / (g Tp^2) <= {MAX_STEEPNESS:.3f}): give a tp_coefficient of at least "
+                             f"{math.sqrt(2.0 * math.pi / (MAX_STEEPNESS * G_M_S2)):.2f} s/m^0.5 (wind seas: "
+                             f"3.6 to 5)")
         wave_dir = wind_dir + rng.uniform(-wave_spread_rad, wave_spread_rad)
         cur = rng.uniform(*current_speed_m_s)
         cur_dir = rng.uniform(0.0, 2.0 * np.pi)
