@@ -9,8 +9,8 @@ import pytest
 
 from hybridship.frames import body_to_ned, wrap_pi
 from hybridship.logs.io import LogFormatError
-from hybridship.predictors import (DeadReckoning, DynamicPredictor, HybridPredictor, ModelFileError,
-                                   as_log_arrays)
+from hybridship.predictors import (DataOnlyPredictor, DeadReckoning, DynamicPredictor, HybridPredictor,
+                                   ModelFileError, as_log_arrays)
 from hybridship.residual.calibration import CalibrationConfig
 from hybridship.residual.ensemble import EnsembleConfig, MLPEnsemble, fit_ensemble
 from hybridship.residual.features import COMMAND_FEATURES, ResidualConfig, prepare_log
@@ -121,6 +121,31 @@ def test_training_logs_with_and_without_wind_are_named_once_at_fit(model, curren
     assert len(texts) == 1, texts
     assert texts[0].startswith("logs[1]: no wind columns (wind_speed_m_s, wind_dir_deg)") and "logs[0]" in texts[0]
     assert "forecast" not in texts[0]
+
+
+def test_the_data_only_baseline_warns_as_the_hybrid_about_rate_and_wind(model, current_logs):
+    """The data-only baseline forecast a log at another rate, or one without wind columns
+    after training with wind, and trained on logs with and without wind, all without a word;
+    it now says so in the hybrid's words."""
+    tiny = EnsembleConfig(n_members=2, hidden=8, max_epochs=15, patience=5, seed=0)
+    dp = DataOnlyPredictor(model.vessel, ensemble_config=tiny).fit(current_logs[:1])
+    assert dp.training_info == {"log_step_s": [1.0], "trained_with_wind": True}
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        dp.forecast(current_logs[2], [900.0], 30)
+    with pytest.warns(UserWarning, match=r"log: its step is 2 s, but the model was trained on logs with a step "
+                                         r"of 1 s"):
+        dp.forecast(current_logs[2].iloc[::2].reset_index(drop=True), [900.0], 30)
+    with pytest.warns(UserWarning, match=r"log: no wind columns \(wind_speed_m_s, wind_dir_deg\), but the model "
+                                         r"was trained on logs with wind"):
+        dp.forecast(current_logs[2].drop(columns=["wind_speed_m_s", "wind_dir_deg"]), [900.0], 30)
+    logs = [current_logs[0], current_logs[1].drop(columns=["wind_speed_m_s", "wind_dir_deg"])]
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        DataOnlyPredictor(model.vessel, ensemble_config=tiny).fit(logs)
+    texts = [str(w.message) for w in caught if "wind" in str(w.message)]
+    assert len(texts) == 1 and texts[0].startswith("logs[1]: no wind columns (wind_speed_m_s, wind_dir_deg)"), texts
+    assert [w.filename for w in caught if "wind" in str(w.message)] == [__file__]
 
 
 def test_the_fit_warning_about_a_log_without_wind_points_at_the_callers_line(model, current_logs, monkeypatch):

@@ -11,9 +11,10 @@ from ..forecast_inputs.faults import start_row_nu
 from ..physics.model import DynamicModel
 from ..residual.ensemble import EnsembleConfig, MLPEnsemble, fit_ensemble, require_training_rows
 from ..residual.features import ResidualConfig
-from .forecast_setup import (_check_flags, _check_row_stride, _forecast_setup, keeps_state_on_error,
-                             log_list)
-from .training_logs import check_distinct_logs, read_training_logs
+from .forecast_setup import (_check_flags, _check_row_stride, _forecast_setup, forecast_step_s,
+                             keeps_state_on_error, log_list)
+from .training_logs import (check_distinct_logs, read_training_logs, warn_logs_without_wind, warn_no_wind,
+                            warn_other_rate)
 from .result import ForecastResult
 
 __all__ = ["DataOnlyPredictor"]
@@ -37,7 +38,10 @@ class DataOnlyPredictor:
 
     It has no model file (no ``save`` / ``load``, unlike
     :class:`~hybridship.predictors.HybridPredictor`): a benchmark baseline, fitted again from
-    the logs each time it is compared.
+    the logs each time it is compared. Like the hybrid, it warns about training logs with and
+    without wind columns, and about a forecast log at another rate than its training logs'
+    (``training_info["log_step_s"]``) or without wind columns when they had them
+    (``training_info["trained_with_wind"]``).
     """
 
     name = "data_only"
@@ -50,6 +54,7 @@ class DataOnlyPredictor:
         _check_flags(stop_after_failure=stop_after_failure)
         self.stop_after_failure = bool(stop_after_failure)
         self.ensemble: MLPEnsemble | None = None
+        self.training_info: dict = {}
         # one scale per command channel: thrusters by their max rpm, rudders (no rpm) by 1
         v = self.model.vessel
         self._rpm_scale = np.array([t.max_rpm for t in v.thrusters] + [1.0] * len(v.rudders), dtype=float)
@@ -74,6 +79,7 @@ class DataOnlyPredictor:
         given = log_list(logs)
         arrays, labels = read_training_logs(given, self.model.vessel)
         check_distinct_logs(arrays, labels)
+        warn_logs_without_wind(arrays, labels)
         for k, a in enumerate(arrays):
             dt = float(np.median(np.diff(a.time_s)))
             seg = a.segment_id
@@ -92,6 +98,8 @@ class DataOnlyPredictor:
         X, Y, seg = (np.concatenate(z)[::stride] if z else np.zeros((0, 1)) for z in (Xs, Ys, segs))
         require_training_rows(X.shape[0], len(arrays), dp_only)
         self.ensemble = fit_ensemble(X, Y, self.ensemble_config, segment_id=seg, progress=progress)
+        self.training_info = {"log_step_s": sorted({forecast_step_s(a) for a in arrays}),
+                              "trained_with_wind": any(a.has_wind for a in arrays)}
         return self
 
     def forecast(self, log, start_times_s, horizon_s: float = 60.0, *, commands: str = "held") -> ForecastResult:
@@ -101,6 +109,8 @@ class DataOnlyPredictor:
             raise RuntimeError("DataOnlyPredictor: call fit() before forecast()")
         st = _forecast_setup(self.model, self.config, log, start_times_s, horizon_s, self.stop_after_failure,
                              commands)
+        warn_other_rate(self.training_info, st.dt)
+        warn_no_wind(self.training_info, st.arrays)
         arrays, idx, dt, H, eta0, nu0 = st.arrays, st.idx, st.dt, st.H, st.eta0, st.nu0
         rpm, az, wind = st.rpm, st.az, st.wind[:, 0]          # commands (S, 1 or H, K)
         n_avg = max(1, int(round(self.config.start_average_s / dt)))

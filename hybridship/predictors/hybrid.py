@@ -46,7 +46,7 @@ from .forecast_setup import (AFTER_STOP, AFTER_STOP_LATE, FORECAST_HISTORY_S, MA
 from .model_file import load_model, save_model
 from .result import ForecastResult
 from .training_logs import (NO_WIND_FORECAST_WARNING, check_distinct_logs, check_training_lengths,
-                            read_training_logs, warn_logs_without_wind)
+                            read_training_logs, warn_logs_without_wind, warn_no_wind, warn_other_rate)
 
 __all__ = ["AFTER_STOP", "AFTER_STOP_LATE", "ENVIRONMENT_SOURCES", "HybridPredictor"]
 
@@ -413,25 +413,6 @@ class HybridPredictor:
             warnings.filterwarnings("ignore", message=NO_WIND_FORECAST_WARNING)
             self._calibrate_after_stop_on_training_logs(logs, cal)
         return self
-
-    def _warn_other_rate(self, dt_s: float) -> None:
-        """Warn when the log's step is not one the nets were trained at (more than 10 % off):
-        their inputs (rates, filtered derivatives) and the step they correct then differ."""
-        trained = self.training_info.get("log_step_s")  # absent in files from before it was recorded
-        if trained and not 0.9 * min(trained) <= dt_s <= 1.1 * max(trained):
-            warn_user(f"log: its step is {dt_s:g} s, but the model was trained on logs with a step of "
-                      f"{', '.join(f'{x:g}' for x in trained)} s; forecasts at another rate are less "
-                      f"accurate: train on logs at this rate", UserWarning)
-
-    def _warn_no_wind(self, arrays) -> None:
-        """Warn when the log has no wind columns but the model was trained on logs with wind:
-        the format makes wind optional, so this is no fault, yet the forecast then leaves out
-        the wind's force, which the nets were never trained to make up for. (Wind columns
-        without a valid sample are a dead sensor, flagged ``wind_dropped`` instead.)"""
-        if self.training_info.get("trained_with_wind") and not arrays.wind_columns:
-            warn_user(f"{NO_WIND_FORECAST_WARNING} (wind_speed_m_s, wind_dir_deg), but the model was trained "
-                      "on logs with wind; the forecast leaves out the wind's force: give the wind columns",
-                      UserWarning)
 
     def _fit_drift_hull(self, logs, horizon_s: float):
         """With ``drift_hull`` and at least :data:`~hybridship.residual.drift_hull.MIN_FAILURES`
@@ -953,8 +934,8 @@ class HybridPredictor:
         st = _forecast_setup(self.model, self.residual_config, log, start_times_s, horizon_s,
                              self.stop_after_failure, commands, history_s=self.history_s,
                              wind_forecast=self.wind_forecast)
-        self._warn_other_rate(st.dt)
-        self._warn_no_wind(st.arrays)
+        warn_other_rate(self.training_info, st.dt)
+        warn_no_wind(self.training_info, st.arrays)
         E = self.ensemble.n_members
         sigma_b = None
         if self.environment == "estimator":

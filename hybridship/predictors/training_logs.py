@@ -15,10 +15,10 @@ import os
 import numpy as np
 
 __all__ = ["samples_digest", "check_distinct_logs", "check_training_lengths", "log_label", "read_training_logs",
-           "warn_logs_without_wind", "NO_WIND_FORECAST_WARNING"]
+           "warn_logs_without_wind", "warn_other_rate", "warn_no_wind", "NO_WIND_FORECAST_WARNING"]
 
 #: The start of a forecast's warning on a log without wind columns for a model trained with
-#: wind (:meth:`HybridPredictor.forecast`); ``fit`` says it once per training log instead.
+#: wind (:func:`warn_no_wind`); ``fit`` says it once per training log instead.
 NO_WIND_FORECAST_WARNING = "log: no wind columns"
 
 
@@ -110,6 +110,34 @@ def warn_logs_without_wind(arrays, labels) -> None:
                       f"{' and others have' if len(with_wind) > 1 else ' has'} them: its wind is taken as "
                       f"none, so the nets learn the wind's force there as part of the residual; give its "
                       f"wind columns or train without it", UserWarning)
+
+
+def warn_other_rate(training_info: dict, dt_s: float) -> None:
+    """Warn when a forecast log's step ``dt_s`` [s] is not one the nets were trained at (more
+    than 10 % off ``training_info["log_step_s"]``): their inputs (rates, filtered
+    derivatives) and the step they predict then differ. A ``training_info`` without the
+    entry (model files from before it was recorded) gives no warning."""
+    from ..messages import warn_user
+
+    trained = training_info.get("log_step_s")
+    if trained and not 0.9 * min(trained) <= dt_s <= 1.1 * max(trained):
+        warn_user(f"log: its step is {dt_s:g} s, but the model was trained on logs with a step of "
+                  f"{', '.join(f'{x:g}' for x in trained)} s; forecasts at another rate are less "
+                  f"accurate: train on logs at this rate", UserWarning)
+
+
+def warn_no_wind(training_info: dict, arrays) -> None:
+    """Warn when a forecast log has no wind columns but the model was trained on logs with
+    wind (``training_info["trained_with_wind"]``): the format makes wind optional, so this is
+    no fault, yet the forecast then leaves out the wind's force, which the nets were never
+    trained to make up for. (Wind columns without a valid sample are a dead sensor, flagged
+    ``wind_dropped`` instead.)"""
+    from ..messages import warn_user
+
+    if training_info.get("trained_with_wind") and not arrays.wind_columns:
+        warn_user(f"{NO_WIND_FORECAST_WARNING} (wind_speed_m_s, wind_dir_deg), but the model was trained "
+                  "on logs with wind; the forecast leaves out the wind's force: give the wind columns",
+                  UserWarning)
 
 
 def check_distinct_logs(arrays, labels) -> None:
