@@ -683,3 +683,25 @@ def test_a_test_logs_drift_changes_nothing_the_benchmark_learns(tmp_path, monkey
     run(moved, test, "c")
     assert not np.array_equal(seen[2]["hybrid"].eta_std, first["hybrid"].eta_std)
     np.testing.assert_array_equal(seen[2]["hybrid"].eta[:2], first["hybrid"].eta[:2])     # on station: no
+
+
+def test_test_logs_at_two_rates_are_scored_at_the_coarser_steps_or_refused_before_training():
+    """The lead times stepped at the first test log's step: a 0.5-s log before a 1-s one asked
+    the 1-s log for a 0.5-s lead, and the benchmark ended after the training in "horizons_s: 0.5
+    s is shorter than one step of the log". They step at the coarsest log's step, in either
+    order; a step that does not divide it (0.6 s beside 1 s) is refused, naming the log."""
+    from hybridship.evaluation.drift import _forecast_after_failures, _test_arrays
+    from hybridship.predictors import DeadReckoning
+
+    model = DynamicModel("gunnerus")
+    horizons = (15.0, 30.0, 45.0, 60.0)
+    logs = {dt: physics_log(model, duration_s=300.0, t_shutdown_s=150.0, dt_s=dt, seed=4) for dt in (0.5, 0.6, 1.0)}
+    for order in ((0.5, 1.0), (1.0, 0.5)):
+        a = _test_arrays([logs[dt] for dt in order], ["a", "b"], model.vessel, 20, 60.0, horizons)
+        fc, all_h, pick, _ = _forecast_after_failures({"dead_reckoning": (DeadReckoning(model.vessel), {})}, a, 20,
+                                                      60.0, horizons)
+        assert all_h == tuple(float(k) for k in range(1, 61)) and [all_h[i] for i in pick] == list(horizons)
+        assert all(p.shape == (20, 60, 3) for p, _, _ in fc["dead_reckoning"])
+    with pytest.raises(ValueError, match=r"test: log fine has a step of 0\.6 s, which does not divide the coarsest "
+                                         r"test log's step of 1 s"):
+        _test_arrays([logs[0.6], logs[1.0]], ["fine", "coarse"], model.vessel, 20, 60.0, horizons)

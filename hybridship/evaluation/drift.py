@@ -362,10 +362,12 @@ def _test_arrays(test_logs, test_names, vessel, n_intervals: int, horizon_s: flo
     """The test logs as LogArrays, refused (before any training) where a log has no failure to
     score: station keeping, then ``dp_active`` 0, then ``n_intervals`` starts with
     ``horizon_s`` of drift after each; or where a table's horizon is not a whole number of the
-    log's steps (15 s of a 2-s log)."""
+    log's steps (15 s of a 2-s log), or not of the lead times, which step at the coarsest test
+    log's step (a 0.6-s log beside a 1-s one)."""
     from ..predictors.after_failure import has_drift
 
     test_arrays = [as_log_arrays(x, vessel) for x in test_logs]
+    lead_step = _lead_step_s(test_arrays)
     for a, name in zip(test_arrays, test_names):
         dt = forecast_step_s(a)         # a 10-Hz log's 0.1 s, not 0.10000000000002274
         off = [h for h in horizons if abs(h / dt - round(h / dt)) > 1e-6]
@@ -373,6 +375,10 @@ def _test_arrays(test_logs, test_names, vessel, n_intervals: int, horizon_s: flo
             raise ValueError(f"test: log {name} has a step of {dt:g} s, and the table's horizons "
                              f"{', '.join(f'{h:g}' for h in off)} s are not whole numbers of it; "
                              f"expected logs whose step divides {', '.join(f'{h:g}' for h in horizons)} s")
+        if abs(lead_step / dt - round(lead_step / dt)) > 1e-6:
+            raise ValueError(f"test: log {name} has a step of {dt:g} s, which does not divide the coarsest test "
+                             f"log's step of {lead_step:g} s (the lead times of every log's forecasts); expected "
+                             f"test logs whose steps divide one another, or logs resampled to one rate")
     bad = [name for a, name in zip(test_arrays, test_names) if not has_drift(a, n_intervals, horizon_s)]
     if bad:
         raise ValueError(f"test: {len(bad)} log(s) have no DP failure to score ({', '.join(bad[:5])}"
@@ -380,6 +386,13 @@ def _test_arrays(test_logs, test_names, vessel, n_intervals: int, horizon_s: flo
                          f"then {n_intervals} start times with {horizon_s:g} s of drift after each, before DP comes "
                          f"back on and before any gap in the log's time stamps")
     return test_arrays
+
+
+def _lead_step_s(test_arrays) -> float:
+    """The step of the lead times every test log is forecast and scored at [s]: the coarsest
+    test log's (a finer log has a sample at each of them; the first log's 0.5 s asked a 1-s
+    log for a 0.5-s lead after the training)."""
+    return max(forecast_step_s(a) for a in test_arrays)
 
 
 def _fit_ensembles(models: dict, train_arrays, dp_only: bool, say) -> list[dict]:
@@ -550,7 +563,7 @@ def _forecast_after_failures(predictors: dict, test_arrays, n_intervals: int, ho
     Returns ``fc`` (name -> per log ``(pred, truth, std)``), every lead time ``all_h`` [s], the
     indices ``pick`` of the table's ``horizons`` among them, and timing rows.
     """
-    dt = forecast_step_s(test_arrays[0])
+    dt = _lead_step_s(test_arrays)
     all_h = tuple(round(k * dt, 9) for k in range(1, int(round(horizon_s / dt)) + 1))
     pick = [int(round(h / dt)) - 1 for h in horizons]       # whole steps (_test_arrays checked)
     fc, timing = {}, []
@@ -829,7 +842,7 @@ def _figures(out: Path, plots: bool, fc: dict, all_h, test_arrays, test_names) -
 
     a = test_arrays[0]
     i0 = metrics.shutdown_index(a)
-    H = len(all_h)
+    H = int(round(all_h[-1] / forecast_step_s(a)))     # the longest lead in this log's rows
     fig, ax = plt.subplots(figsize=(6.5, 6))
     track = a.eta[i0: i0 + H + 5]
     ax.plot(track[:, 1], track[:, 0], "k-", lw=2, label="measured")
