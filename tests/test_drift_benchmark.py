@@ -705,3 +705,19 @@ def test_test_logs_at_two_rates_are_scored_at_the_coarser_steps_or_refused_befor
     with pytest.raises(ValueError, match=r"test: log fine has a step of 0\.6 s, which does not divide the coarsest "
                                          r"test log's step of 1 s"):
         _test_arrays([logs[0.6], logs[1.0]], ["fine", "coarse"], model.vessel, 20, 60.0, horizons)
+
+
+@pytest.mark.parametrize("flag", ["plots", "progress"])
+def test_a_flag_given_as_text_is_refused_before_any_work(tiny_folder, tmp_path, monkeypatch, flag):
+    """plots="no" is truthy: the whole benchmark ran and wrote the figures it was asked not to;
+    now a TypeError naming the flag, before the output folder is made or anything is trained."""
+    from hybridship.predictors import HybridPredictor
+
+    def no_training(*args, **kwargs):
+        raise AssertionError("trained before the flags were checked")
+
+    monkeypatch.setattr(HybridPredictor, "fit", no_training)
+    kw = {"plots": False, "progress": False, flag: "no"}
+    with pytest.raises(TypeError, match=rf"^{flag}: expected True or False, got 'no'"):
+        run_drift_benchmark(tiny_folder, None, tmp_path / "out", **kw)
+    assert not (tmp_path / "out").exists()

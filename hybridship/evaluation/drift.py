@@ -53,7 +53,7 @@ import numpy as np
 import pandas as pd
 
 from . import metrics
-from ..config import check_number, check_whole_number
+from ..config import check_flags, check_number, check_whole_number
 from ..fileio import (atomic_write, check_output_files, earlier_run, make_out_folder, markdown_table, record_outputs,
                       remove_stale, write_text)
 from ..predictors import DataOnlyPredictor, DeadReckoning, DynamicPredictor, HybridPredictor, as_log_arrays
@@ -204,10 +204,8 @@ def run_drift_benchmark(train=None, test=None, out_dir="drift-benchmark", *, ves
     environment_config : EnvironmentConfig or None
         The hybrid's environment estimator settings (default: ``EnvironmentConfig()``).
     """
-    def say(msg):
-        if progress:
-            print(msg, flush=True)
-
+    check_flags(plots=plots, progress=progress)         # plots="no" is truthy: the figures were written
+    say = (lambda msg: print(msg, flush=True)) if progress else (lambda msg: None)  # noqa: E731
     n_intervals, horizon_s, calibration_scenarios = _checked_lengths(n_intervals, horizon_s, calibration_scenarios)
     check_output_folder(out_dir, plots)
     train_logs, train_names, test_logs, test_names = _benchmark_logs(train, test, n_scenarios, seed, say)
