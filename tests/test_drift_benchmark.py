@@ -721,3 +721,13 @@ def test_a_flag_given_as_text_is_refused_before_any_work(tiny_folder, tmp_path, 
     with pytest.raises(TypeError, match=rf"^{flag}: expected True or False, got 'no'"):
         run_drift_benchmark(tiny_folder, None, tmp_path / "out", **kw)
     assert not (tmp_path / "out").exists()
+
+
+@pytest.mark.parametrize("n, message", [(0, r"^n_scenarios: expected a whole number >= 1, got 0"),
+                                        (1.5, r"^n_scenarios: expected a whole number >= 1, got 1\.5"),
+                                        (21, r"^n_scenarios: expected a whole number in 1\.\.20")])
+def test_a_bad_number_of_embedded_scenarios_is_refused_by_its_name(tmp_path, n, message):
+    """The simulator's own check named its argument ``n``, which run_drift_benchmark has not."""
+    with pytest.raises(ValueError, match=message):
+        run_drift_benchmark(out_dir=tmp_path / "out", n_scenarios=n, progress=False, plots=False)
+    assert not (tmp_path / "out").exists()

@@ -277,6 +277,10 @@ def _benchmark_logs(train, test, n_scenarios: int, seed: int, say):
     if train is None and test is None:
         from ..sim.scenario import embedded_scenarios
 
+        # embedded_scenarios named its own argument ("n: expected an int in 1..20")
+        if check_whole_number("n_scenarios", n_scenarios, 1) > 20:
+            raise ValueError(f"n_scenarios: expected a whole number in 1..20 (the embedded scenarios), "
+                             f"got {n_scenarios!r}")
         scen = embedded_scenarios(n_scenarios, seed)
         train_logs = test_logs = [s.log for s in scen]
         train_names = test_names = [s.name for s in scen]
