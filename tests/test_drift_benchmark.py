@@ -731,3 +731,9 @@ def test_a_bad_number_of_embedded_scenarios_is_refused_by_its_name(tmp_path, n, 
     with pytest.raises(ValueError, match=message):
         run_drift_benchmark(out_dir=tmp_path / "out", n_scenarios=n, progress=False, plots=False)
     assert not (tmp_path / "out").exists()
+
+
+def test_an_out_dir_that_is_not_a_path_is_refused_by_name():
+    """out_dir=None ended in pathlib's 'expected str, bytes or os.PathLike object, not NoneType'."""
+    with pytest.raises(TypeError, match=r"^out_dir: expected a file path \(str or os.PathLike\), got NoneType"):
+        run_drift_benchmark(out_dir=None, progress=False, plots=False)

@@ -532,3 +532,11 @@ def test_the_committed_esso_results_state_their_ratio_from_their_errors():
     md = markdown_report(BenchmarkResult(e, [], [], {}, (5.0, 10.0, 20.0, 30.0), ManoeuvreConfig(), {}, {}))
     section = md[md.index("## hybrid as a ratio to dynamic"):md.index("\n\nAll states")]     # no coverage here
     assert section in (docs / "results" / "esso-osaka" / "README.md").read_text()
+
+
+def test_the_manoeuvre_benchmarks_out_dir_that_is_not_a_path_is_refused_by_name():
+    """out_dir=None ended in pathlib's 'expected str, bytes or os.PathLike object, not NoneType'."""
+    from hybridship.evaluation.manoeuvre import check_output_folder
+
+    with pytest.raises(TypeError, match=r"^out_dir: expected a file path \(str or os.PathLike\), got NoneType"):
+        check_output_folder(None)

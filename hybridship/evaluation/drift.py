@@ -54,8 +54,8 @@ import pandas as pd
 
 from . import metrics
 from ..config import check_flags, check_number, check_whole_number
-from ..fileio import (atomic_write, check_output_files, earlier_run, make_out_folder, markdown_table, record_outputs,
-                      remove_stale, write_text)
+from ..fileio import (as_path, atomic_write, check_output_files, earlier_run, make_out_folder, markdown_table,
+                      record_outputs, remove_stale, write_text)
 from ..predictors import DataOnlyPredictor, DeadReckoning, DynamicPredictor, HybridPredictor, as_log_arrays
 from ..predictors.forecast_setup import forecast_step_s
 from ..predictors.hybrid import AFTER_STOP, AFTER_STOP_LATE, after_stop_scales
@@ -144,7 +144,9 @@ def check_output_folder(out_dir, plots: bool = True) -> None:
     """Refuse, before any work, an output folder where the benchmark would replace or remove a
     file that no hybridship command wrote, or one that holds logs (FileExistsError), or a
     read-only one (PermissionError); files of a benchmark run from before folders kept a
-    record of their outputs (its ``tables.md`` beside them) are recognised."""
+    record of their outputs (its ``tables.md`` beside them) are recognised; ``out_dir`` not a
+    path (None) is a TypeError naming it."""
+    out_dir = as_path(out_dir, "out_dir")
     check_output_files(out_dir, TABLE_FILES + (FIGURE_FILES if plots else ()), () if plots else FIGURE_FILES,
                        ours=earlier_run(TABLE_FILES + FIGURE_FILES, "tables.md", b"Drift benchmark"))
     logs = logs_held(out_dir, TABLE_FILES)

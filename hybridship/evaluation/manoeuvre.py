@@ -35,7 +35,7 @@ from pydantic import Field
 
 from ..config import Bool, Float, Int, check_flags, check_number, check_whole_number, config_dataclass
 from ..datasets.esso_osaka import EssoRun, RUN_KINDS, esso_log_arrays, list_runs
-from ..fileio import atomic_write, check_output_files, earlier_run, remove_stale, write_output_files
+from ..fileio import as_path, atomic_write, check_output_files, earlier_run, remove_stale, write_output_files
 from ..frames import wrap_pi
 from ..logs.ingest import ingest
 from ..logs.io import LogArrays
@@ -764,8 +764,8 @@ def check_output_folder(out_dir) -> None:
     """Refuse, before any work, an output folder where the benchmark would replace a file no
     hybridship command wrote (FileExistsError) or a read-only one (PermissionError); a run's
     files from before folders kept a record of their outputs (its README beside them) are
-    recognised."""
-    check_output_files(out_dir, OUTPUT_FILES, ours=_EARLIER_RUN)
+    recognised; ``out_dir`` not a path (None) is a TypeError naming it."""
+    check_output_files(as_path(out_dir, "out_dir"), OUTPUT_FILES, ours=_EARLIER_RUN)
 
 
 def _write_outputs(result: BenchmarkResult, out_dir: Path, command: str | None, figures_dir) -> None:
