@@ -540,3 +540,26 @@ def test_the_manoeuvre_benchmarks_out_dir_that_is_not_a_path_is_refused_by_name(
 
     with pytest.raises(TypeError, match=r"^out_dir: expected a file path \(str or os.PathLike\), got NoneType"):
         check_output_folder(None)
+
+
+@pytest.mark.parametrize("where", ["turning", "turning/results", "zigzag/results"])
+def test_the_manoeuvre_benchmark_function_refuses_an_out_dir_among_its_runs(tmp_path, monkeypatch, where):
+    """The command refused an --out inside --train or --test, the function did not: it trained,
+    and wrote its CSV tables where the next run on that folder reads them as runs. Now a
+    ValueError naming out_dir and the folder, before anything is trained or written."""
+    from hybridship.evaluation import manoeuvre
+
+    def no_training(*args, **kwargs):
+        raise AssertionError("trained before out_dir was checked")
+
+    monkeypatch.setattr(manoeuvre, "_fit", no_training)
+    data = tmp_path / "data"
+    for kind, prefix, lengths in (("zigzag", "zigzag", (100, 110)), ("turning", "turn", (120, 130))):
+        (data / kind).mkdir(parents=True)
+        for i, n in enumerate(lengths):          # runs of other samples: no copy of a training run
+            _raw(n).to_csv(data / kind / f"{prefix}_14-Sep-2020_15_0{i}_00.csv", index=False)
+    kind = where.split("/")[0]
+    with pytest.raises(ValueError, match=rf"^out_dir: .* lies inside {'test' if kind == 'turning' else 'train'}_dir"):
+        manoeuvre.run_manoeuvre_benchmark("esso_osaka_model", data / "zigzag", data / "turning", (1.0,),
+                                          out_dir=data / where, quick=True)
+    assert not (data / kind / "results").exists() and not (data / kind / "errors.csv").exists()

@@ -674,7 +674,8 @@ def run_manoeuvre_benchmark(vessel, train_dir, test_dir, horizons_s=HORIZONS_S, 
     out_dir : path
         Where ``errors.csv`` (columns :data:`ERROR_COLUMNS`), ``coverage.csv`` (columns
         :data:`COVERAGE_COLUMNS`, the models with a spread), ``coverage_intervals.csv``,
-        ``sharpness.csv`` (:func:`sharpness_table`) and ``README.md`` go.
+        ``sharpness.csv`` (:func:`sharpness_table`) and ``README.md`` go; refused when it is
+        or lies inside ``train_dir`` or ``test_dir`` (its tables would be read as runs).
     seed : int
         Seed of the ensembles.
     quick : bool
@@ -711,6 +712,7 @@ def run_manoeuvre_benchmark(vessel, train_dir, test_dir, horizons_s=HORIZONS_S, 
         raise ValueError(f"horizons_s: a horizon is given twice in {horizons_s}")
     cfg = replace(cfg, calibration=replace(cfg.calibration, horizon_s=max(horizons_s)))
     check_output_folder(out_dir)
+    _check_out_outside_runs(out_dir, train_dir=train_dir, test_dir=test_dir)
     train = load_runs(train_dir, v, step_s=cfg.step_s)
     test = load_runs(test_dir, v, step_s=cfg.step_s)
     steps = _checked_steps(train, test, horizons_s, cfg)
@@ -766,6 +768,18 @@ def check_output_folder(out_dir) -> None:
     files from before folders kept a record of their outputs (its README beside them) are
     recognised; ``out_dir`` not a path (None) is a TypeError naming it."""
     check_output_files(as_path(out_dir, "out_dir"), OUTPUT_FILES, ours=_EARLIER_RUN)
+
+
+def _check_out_outside_runs(out_dir, **inputs) -> None:
+    """Refuse (before any work) an ``out_dir`` that is, or lies inside, one of the run folders
+    ``inputs`` (name -> folder): runs are searched with their sub-folders, so its CSV tables
+    would be read as runs by the next benchmark on that folder."""
+    out = Path(out_dir).resolve()
+    for name, folder in inputs.items():
+        d = Path(folder).resolve()
+        if out == d or d in out.parents:
+            raise ValueError(f"out_dir: {out_dir} is or lies inside {name} {folder}, whose sub-folders are read "
+                             f"for runs: its CSV tables would be read as runs; give a folder outside it")
 
 
 def _write_outputs(result: BenchmarkResult, out_dir: Path, command: str | None, figures_dir) -> None:
