@@ -563,3 +563,10 @@ def test_the_manoeuvre_benchmark_function_refuses_an_out_dir_among_its_runs(tmp_
         manoeuvre.run_manoeuvre_benchmark("esso_osaka_model", data / "zigzag", data / "turning", (1.0,),
                                           out_dir=data / where, quick=True)
     assert not (data / kind / "results").exists() and not (data / kind / "errors.csv").exists()
+
+
+def test_the_manoeuvre_benchmarks_docstring_names_every_output_file():
+    """``coverage_heading.csv`` was written by every run but missing from out_dir's list."""
+    from hybridship.evaluation.manoeuvre import OUTPUT_FILES, run_manoeuvre_benchmark
+
+    assert [f for f in OUTPUT_FILES if f"``{f}``" not in run_manoeuvre_benchmark.__doc__] == []

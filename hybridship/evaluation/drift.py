@@ -26,6 +26,8 @@ samples after the shutdown of every log in ``test``, ``horizon_s`` ahead. The ou
   dynamic model's per failure at the longest horizon (with two or more test logs and both
   windows), and wall times;
 * ``timing.csv``: training and forecasting wall time per model;
+* ``drift_hull.csv``: the hull's yaw coefficient in a drift each test log was forecast with
+  and the evidence it was chosen on (the failures' heading errors with it, with 0 and left out);
 * ``error_vs_horizon.png`` and ``trajectories.png`` (the paper's Fig. 6: the first five
   forecasts after the failure against the measured track).
 

@@ -674,7 +674,7 @@ def run_manoeuvre_benchmark(vessel, train_dir, test_dir, horizons_s=HORIZONS_S, 
     out_dir : path
         Where ``errors.csv`` (columns :data:`ERROR_COLUMNS`), ``coverage.csv`` (columns
         :data:`COVERAGE_COLUMNS`, the models with a spread), ``coverage_intervals.csv``,
-        ``sharpness.csv`` (:func:`sharpness_table`) and ``README.md`` go; refused when it is
+        ``coverage_heading.csv`` (the heading's spread, the same columns), ``sharpness.csv`` (:func:`sharpness_table`) and ``README.md`` go; refused when it is
         or lies inside ``train_dir`` or ``test_dir`` (its tables would be read as runs).
     seed : int
         Seed of the ensembles.
