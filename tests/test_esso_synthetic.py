@@ -570,3 +570,17 @@ def test_the_manoeuvre_benchmarks_docstring_names_every_output_file():
     from hybridship.evaluation.manoeuvre import OUTPUT_FILES, run_manoeuvre_benchmark
 
     assert [f for f in OUTPUT_FILES if f"``{f}``" not in run_manoeuvre_benchmark.__doc__] == []
+
+
+def test_a_kind_of_one_recording_stays_in_training_as_split_runs_says(tmp_path):
+    """Its docstring said every kind gives at least one test recording; a kind of a single
+    recording gives none (it is kept for training), and the docstring now says so."""
+    from hybridship.evaluation.manoeuvre import split_runs
+
+    data = tmp_path / "data"
+    _write_runs(data / "zigzag", [f"zigzag_31-Jul-2020_13_0{i}_00.csv" for i in range(4)])
+    _write_runs(data / "turning", ["turn_14-Sep-2020_15_00_00.csv"])
+    train, test = split_runs(data, tmp_path / "split")
+    assert [r.kind for r in list_runs(test)] == ["zigzag"]
+    assert [r.name for r in list_runs(train) if r.kind == "turning"] == ["turn_14-Sep-2020_15_00_00"]
+    assert "a kind of a single recording has none" in " ".join(split_runs.__doc__.split())

@@ -240,7 +240,8 @@ def split_runs(data_dir, out_dir, *, test_fraction: float = 0.3, seed: int = 0) 
 
     Whole recordings go to one side (the pieces of one long random recording stay
     together); per kind, ``round(test_fraction * recordings)`` (at least one) recordings,
-    drawn with ``seed``, are test runs. The data are linked, never copied.
+    drawn with ``seed``, are test runs; a kind of a single recording has none (it stays a
+    training kind). The data are linked, never copied.
 
     Links and folders left in ``out_dir/train`` and ``out_dir/test`` by an earlier split are
     removed first.
