@@ -744,3 +744,19 @@ def test_the_module_docstring_names_every_output_file():
     from hybridship.evaluation import drift
 
     assert [f for f in drift.TABLE_FILES + drift.FIGURE_FILES if f"``{f}``" not in drift.__doc__] == []
+
+
+@pytest.mark.parametrize("members, message", [(0, r"^members: expected a whole number >= 1, got 0"),
+                                              (2.5, r"^members: expected a whole number >= 1, got 2\.5")])
+def test_members_is_refused_by_its_name_before_any_log_is_read(tmp_path, monkeypatch, members, message):
+    """members=0 was refused as 'n_members: must be >= 1 [EnsembleConfig]', an argument
+    run_drift_benchmark does not have, after the logs were read or the scenarios simulated."""
+    from hybridship.evaluation import drift
+
+    def no_logs(*args, **kwargs):
+        raise AssertionError("logs read before members was checked")
+
+    monkeypatch.setattr(drift, "_benchmark_logs", no_logs)
+    with pytest.raises(ValueError, match=message):
+        run_drift_benchmark(out_dir=tmp_path / "out", members=members, progress=False, plots=False)
+    assert not (tmp_path / "out").exists()

@@ -211,9 +211,10 @@ def run_drift_benchmark(train=None, test=None, out_dir="drift-benchmark", *, ves
     check_flags(plots=plots, progress=progress)         # plots="no" is truthy: the figures were written
     say = (lambda msg: print(msg, flush=True)) if progress else (lambda msg: None)  # noqa: E731
     n_intervals, horizon_s, calibration_scenarios = _checked_lengths(n_intervals, horizon_s, calibration_scenarios)
+    # members named as the argument is, before any log is read or scenario simulated (not "n_members")
+    ens_cfg = ensemble_config or EnsembleConfig(n_members=check_whole_number("members", members, 1), seed=seed)
     check_output_folder(out_dir, plots)
     train_logs, train_names, test_logs, test_names = _benchmark_logs(train, test, n_scenarios, seed, say)
-    ens_cfg = ensemble_config or EnsembleConfig(n_members=members, seed=seed)
     horizons = tuple(h for h in metrics.HORIZONS_S if h <= horizon_s + 1e-9)
 
     hybrid = HybridPredictor(vessel, ensemble_config=ens_cfg, training=training, drift_hull=drift_hull,
