@@ -584,3 +584,14 @@ def test_a_kind_of_one_recording_stays_in_training_as_split_runs_says(tmp_path):
     assert [r.kind for r in list_runs(test)] == ["zigzag"]
     assert [r.name for r in list_runs(train) if r.kind == "turning"] == ["turn_14-Sep-2020_15_00_00"]
     assert "a kind of a single recording has none" in " ".join(split_runs.__doc__.split())
+
+
+def test_a_coverage_without_an_interval_reads_n_a_not_nan():
+    """With one test run there is nothing to resample: the README showed "0.950 [nan, nan]"."""
+    from hybridship.evaluation.manoeuvre import coverage_intervals, md_coverage_intervals
+
+    z = np.abs(np.random.default_rng(0).normal(size=(10, 2, 3)))
+    one = md_coverage_intervals(coverage_intervals({("hybrid", "known"): [z]}, (5.0, 10.0)))
+    assert "nan" not in one and "| known | hybrid | 0.950 [n/a] | 1.000 [n/a] |" in one
+    two = md_coverage_intervals(coverage_intervals({("hybrid", "known"): [z, z[:5]]}, (5.0, 10.0)))
+    assert "[n/a]" not in two and "nan" not in two

@@ -861,13 +861,16 @@ def md_spread_by_kind(coverage: pd.DataFrame, sharpness: pd.DataFrame, model: st
 
 
 def md_coverage_intervals(ci: pd.DataFrame) -> str:
-    """Markdown of :func:`coverage_intervals`: rows (commands, model), columns horizons."""
+    """Markdown of :func:`coverage_intervals`: rows (commands, model), columns horizons; a
+    coverage without an interval (one test run) as "0.950 [n/a]"."""
     lines = ["2-sigma coverage with a 90 % interval that resamples whole runs "
              f"({int(ci.n_runs.max())} test runs; the starts of one run share its conditions):", "",
              "| commands | model | " + " | ".join(f"{h:g} s" for h in sorted(ci.horizon_s.unique())) + " |",
              "|---|---|" + "---|" * ci.horizon_s.nunique()]
     for (cmd, model), g in ci.groupby(["commands", "model"], sort=False):
-        cells = [f"{r.coverage:.3f} [{r.low:.2f}, {r.high:.2f}]" for r in g.sort_values("horizon_s").itertuples()]
+        # "n/a" without an interval (one test run: nothing to resample), as the drift benchmark writes it
+        cells = [f"{r.coverage:.3f} [{r.low:.2f}, {r.high:.2f}]" if np.isfinite(r.low) and np.isfinite(r.high)
+                 else f"{r.coverage:.3f} [n/a]" for r in g.sort_values("horizon_s").itertuples()]
         lines.append(f"| {cmd} | {model} | " + " | ".join(cells) + " |")
     return "\n".join(lines) + "\n"
 
