@@ -595,3 +595,14 @@ def test_a_coverage_without_an_interval_reads_n_a_not_nan():
     assert "nan" not in one and "| known | hybrid | 0.950 [n/a] | 1.000 [n/a] |" in one
     two = md_coverage_intervals(coverage_intervals({("hybrid", "known"): [z, z[:5]]}, (5.0, 10.0)))
     assert "[n/a]" not in two and "nan" not in two
+
+
+def test_coverage_table_labels_a_fractional_sigma_as_it_counted_it():
+    """sigmas=(1, 1.5) wrote the 1.5-sigma coverage under sigma 1, beside the 1-sigma one."""
+    from hybridship.evaluation.manoeuvre import coverage_table
+
+    z = np.full((4, 1, 2), 1.2)           # every error 1.2 spreads: outside 1 sigma, inside 1.5
+    cov = coverage_table({("hybrid", "known"): [z]}, [SimpleNamespace(kind="zigzag")], (5.0,), sigmas=(1, 1.5))
+    got = cov[cov.kind == "all"].set_index("sigma").coverage.to_dict()
+    assert got == {1: 0.0, 1.5: 1.0}
+    assert sorted(cov.sigma.tolist()) == [1, 1, 1.5, 1.5]

@@ -453,8 +453,9 @@ def coverage_table(per_run_z: dict, runs: list[Run], horizons_s, sigmas=(1, 2),
             groups["all"] = np.concatenate(list(groups.values()))
         for kind, z in groups.items():
             for h, horizon in enumerate(horizons_s):
-                for sig in sigmas:
-                    rows.append((model, kind, commands, float(horizon), int(sig), float((z[:, h] <= sig).mean())))
+                for sig in sigmas:      # an int when it is one (1.5 was written as 1)
+                    label = int(sig) if float(sig).is_integer() else float(sig)
+                    rows.append((model, kind, commands, float(horizon), label, float((z[:, h] <= sig).mean())))
     df = pd.DataFrame(rows, columns=list(COVERAGE_COLUMNS))
     korder = {k: i for i, k in enumerate(RUN_KINDS + ("all",))}
     return df.sort_values(by=["commands", "model", "kind", "sigma", "horizon_s"],
