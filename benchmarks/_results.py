@@ -18,6 +18,19 @@ def command_line(script: str, argv=None) -> str:
     return shlex.join(["python", f"benchmarks/{script}", *(sys.argv[1:] if argv is None else argv)])
 
 
+
+def parse_horizons(ap, text: str) -> tuple[float, ...]:
+    """``--horizons-s`` (comma-separated seconds) as finite horizons > 0 s, or a usage error
+    (exit 2) naming the option."""
+    try:
+        horizons = tuple(float(h) for h in text.split(","))
+    except ValueError:
+        ap.error(f"--horizons-s: expected numbers like 5,10,20,30, got {text!r}")
+    if not all(0 < h < float("inf") for h in horizons):
+        ap.error(f"--horizons-s: horizons must be finite and > 0 s, got {text!r}")
+    return horizons
+
+
 def publish(out_dir: Path, results_dir: Path | None, names) -> None:
     """Copy ``names`` from ``out_dir`` to ``results_dir`` (atomically; nothing when it is None)."""
     from hybridship.fileio import atomic_write

@@ -250,6 +250,8 @@ def write_outputs(out: Path, results: Path | None, run_errors, rows, command: st
 
 def parse_args(argv=None) -> argparse.Namespace:
     """The command line (``argv``; None: this process's arguments)."""
+    from _results import parse_horizons
+
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--split", type=Path, default=ROOT / "out" / "esso-osaka" / "split",
                     help="the benchmark's split (default out/esso-osaka/split)")
@@ -284,12 +286,7 @@ def parse_args(argv=None) -> argparse.Namespace:
         return args
     from hybridship.evaluation.manoeuvre import ManoeuvreConfig
 
-    try:
-        horizons = tuple(float(h) for h in args.horizons_s.split(","))
-    except ValueError:
-        ap.error(f"--horizons-s: expected numbers like 5,10,20,30, got {args.horizons_s!r}")
-    if not all(0 < h < float("inf") for h in horizons):
-        ap.error(f"--horizons-s: horizons must be finite and > 0 s, got {args.horizons_s!r}")
+    parse_horizons(ap, args.horizons_s)        # a usage error now, not after the one-step nets
     try:        # a misspelt field stopped the run with a traceback after the one-step nets were trained
         for name, kw in parse_variants(args.variants).items():
             replace(ManoeuvreConfig().multistep, **kw)

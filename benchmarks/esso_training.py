@@ -317,7 +317,7 @@ def main(argv=None) -> int:
     import pandas as pd
     import torch
 
-    from _results import command_line, publish, validation_dirs
+    from _results import command_line, parse_horizons, publish, validation_dirs
     from hybridship.fileio import atomic_write
     from hybridship.evaluation.manoeuvre import (COMMAND_MODES, ManoeuvreConfig, coverage_table, error_table, forecast_errors,
                                       load_runs, make_predictors, sharpness_table, start_rows)
@@ -344,12 +344,7 @@ def main(argv=None) -> int:
     args = ap.parse_args(argv)
     if args.tables_only:
         return tables_only(args.out, args.results)
-    try:
-        horizons = tuple(float(h) for h in args.horizons_s.split(","))
-    except ValueError:
-        ap.error(f"--horizons-s: expected numbers like 5,10,20,30, got {args.horizons_s!r}")
-    if not all(0 < h < float("inf") for h in horizons):
-        ap.error(f"--horizons-s: horizons must be finite and > 0 s, got {args.horizons_s!r}")
+    horizons = parse_horizons(ap, args.horizons_s)
     modes = args.commands.split(",")
     if not set(modes) <= set(COMMAND_MODES):        # a misspelt mode was dropped without a word
         ap.error(f"--commands: expected modes among {', '.join(COMMAND_MODES)}, got {args.commands!r}")

@@ -27,6 +27,7 @@ ROOT = Path(__file__).resolve().parents[1]
 def main(argv=None) -> int:
     import torch
 
+    from _results import parse_horizons
     from hybridship.fileio import atomic_write
     from hybridship.evaluation.manoeuvre import (COMMAND_MODES, ManoeuvreConfig, _fit, error_table, forecast_errors,
                                       load_runs, make_predictors, split_runs, start_rows)
@@ -47,12 +48,7 @@ def main(argv=None) -> int:
         ap.error(f"--quantiles: expected numbers like 0.99,0.95, got {args.quantiles!r}")
     if not all(0.5 <= q < 1.0 for q in quantiles):
         ap.error(f"--quantiles: each must lie in [0.5, 1) (EnvelopeGuard.fit), got {args.quantiles!r}")
-    try:
-        horizons = tuple(float(h) for h in args.horizons_s.split(","))
-    except ValueError:
-        ap.error(f"--horizons-s: expected numbers like 5,10,20,30, got {args.horizons_s!r}")
-    if not all(0 < h < float("inf") for h in horizons):
-        ap.error(f"--horizons-s: horizons must be finite and > 0 s, got {args.horizons_s!r}")
+    horizons = parse_horizons(ap, args.horizons_s)
     torch.set_num_threads(1)
     if not args.train.is_dir():
         print(f"error: {args.train}: not found; run benchmarks/esso_osaka.py first", file=sys.stderr)

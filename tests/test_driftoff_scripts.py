@@ -37,16 +37,16 @@ def test_season_counts_it_cannot_use_are_usage_errors(bad, tmp_path, monkeypatch
     assert f"error: {bad[0]}: expected" in capsys.readouterr().err
 
 
-def test_season_command_records_the_seed(tmp_path, monkeypatch):
-    """The command on tables.md repeats --seed when it is not the default (it drew the weather
-    year and the samples, and was left out: the recorded command made another table)."""
+def _season_without_sweeps(monkeypatch, seeds=None):
+    """driftoff_season with its sweep and cluster stubbed (tables from empty frames); the
+    seeds the sweeps were given are appended to ``seeds``."""
     from types import SimpleNamespace
 
     season = load_benchmark("driftoff_season")
-    seeds = []
 
     def sweep(model, states, psi, settings, **kw):
-        seeds.append(settings.seed)
+        if seeds is not None:
+            seeds.append(settings.seed)
         frame = season.pd.DataFrame({"state": range(len(states))})
         return SimpleNamespace(to_frame=lambda: frame, wall_s=1.0, operability=lambda _: frame)
 
@@ -54,6 +54,14 @@ def test_season_command_records_the_seed(tmp_path, monkeypatch):
     monkeypatch.setattr(season, "require_dask", lambda: SimpleNamespace(LocalCluster=lambda **kw: idle,
                                                                          Client=lambda cluster: idle))
     monkeypatch.setattr(season, "season_sweep", sweep)
+    return season
+
+
+def test_season_command_records_the_seed(tmp_path, monkeypatch):
+    """The command on tables.md repeats --seed when it is not the default (it drew the weather
+    year and the samples, and was left out: the recorded command made another table)."""
+    seeds = []
+    season = _season_without_sweeps(monkeypatch, seeds)
     argv = ["--states", "2", "--samples", "2", "--out", str(tmp_path / "out"), "--data-out", str(tmp_path / "d")]
     assert season.main([*argv, "--seed", "3"]) == 0
     assert 3 in seeds
@@ -92,18 +100,8 @@ def test_season_load_legend_says_what_a_load_above_the_cores_means(tmp_path, mon
     for the cores)" whatever X was, which reads as a statement about this run; the legend now
     says what a load above the core count would mean, and the committed table has that legend."""
     from pathlib import Path
-    from types import SimpleNamespace
 
-    season = load_benchmark("driftoff_season")
-
-    def sweep(model, states, psi, settings, **kw):
-        frame = season.pd.DataFrame({"state": range(len(states))})
-        return SimpleNamespace(to_frame=lambda: frame, wall_s=1.0, operability=lambda _: frame)
-
-    idle = SimpleNamespace(run=lambda f: None, close=lambda: None)
-    monkeypatch.setattr(season, "require_dask", lambda: SimpleNamespace(LocalCluster=lambda **kw: idle,
-                                                                         Client=lambda cluster: idle))
-    monkeypatch.setattr(season, "season_sweep", sweep)
+    season = _season_without_sweeps(monkeypatch)
     monkeypatch.setattr(season.os, "cpu_count", lambda: 2)
     monkeypatch.setattr(season.os, "getloadavg", lambda: (2.1, 0.0, 0.0))
     assert season.main(["--states", "2", "--samples", "2", "--out", str(tmp_path / "out"),
