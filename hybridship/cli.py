@@ -639,7 +639,7 @@ def _check_out_folder(out: Path, prefix: str, inputs: dict | None = None, option
     is one of the input folders ``inputs`` (option -> folder; the tables would land among
     the logs), or, with ``searched_below`` (inputs read with their sub-folders), lies inside
     one, before any work is done."""
-    from .fileio import check_out_folder
+    from .fileio import check_out_folder, lies_within
 
     try:
         check_out_folder(out)
@@ -650,7 +650,7 @@ def _check_out_folder(out: Path, prefix: str, inputs: dict | None = None, option
         if folder is not None and out.resolve() == Path(folder).resolve():
             raise UsageError(f"{prefix}: error: --out {out}: is the {opt} folder; the results would land among "
                              f"its logs, give another folder")
-        if searched_below and folder is not None and Path(folder).resolve() in out.resolve().parents:
+        if searched_below and folder is not None and lies_within(out, folder):
             # its tables would be read as runs by the next run on that folder
             raise UsageError(f"{prefix}: error: --out {out}: lies inside the {opt} folder, whose sub-folders are "
                              f"read for runs; give a folder outside it")

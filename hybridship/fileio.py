@@ -76,6 +76,14 @@ def check_out_folder(path) -> Path:
     return path
 
 
+
+def lies_within(path, folder) -> bool:
+    """Whether ``path`` is ``folder`` or lies inside it (links resolved): an output folder
+    there would be searched with the folder's sub-folders as input."""
+    path, folder = Path(path).resolve(), Path(folder).resolve()
+    return path == folder or folder in path.parents
+
+
 def make_out_folder(path) -> Path:
     """Make the output folder ``path`` (and its parents); an OSError names it.
 

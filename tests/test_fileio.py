@@ -48,3 +48,18 @@ def test_atomic_write_keeps_the_permissions_of_the_file_it_replaces(tmp_path):
     finally:
         os.umask(old)
     assert stat.S_IMODE(fresh.stat().st_mode) == 0o600      # a new file: the umask
+
+
+def test_lies_within_tells_a_sub_folder_from_a_sibling_that_shares_its_prefix(tmp_path):
+    """The output-folder checks of the command line and the manoeuvre benchmark share this
+    rule: the folder itself and any folder below it (through a link too) lie within it; a
+    sibling whose name only starts like it does not."""
+    from hybridship.fileio import lies_within
+
+    runs = tmp_path / "runs"
+    (runs / "a" / "b").mkdir(parents=True)
+    (tmp_path / "runs2").mkdir()
+    (tmp_path / "link").symlink_to(runs)
+    assert lies_within(runs, runs) and lies_within(runs / "a" / "b", runs)
+    assert lies_within(tmp_path / "link" / "a", runs)
+    assert not lies_within(tmp_path / "runs2", runs) and not lies_within(tmp_path, runs)

@@ -35,7 +35,7 @@ from pydantic import Field
 
 from ..config import Bool, Float, Int, check_flags, check_number, check_whole_number, config_dataclass
 from ..datasets.esso_osaka import EssoRun, RUN_KINDS, esso_log_arrays, list_runs
-from ..fileio import as_path, atomic_write, check_output_files, earlier_run, remove_stale, write_output_files
+from ..fileio import as_path, atomic_write, check_output_files, earlier_run, lies_within, remove_stale, write_output_files
 from ..frames import wrap_pi
 from ..logs.ingest import ingest
 from ..logs.io import LogArrays
@@ -776,10 +776,8 @@ def _check_out_outside_runs(out_dir, **inputs) -> None:
     """Refuse (before any work) an ``out_dir`` that is, or lies inside, one of the run folders
     ``inputs`` (name -> folder): runs are searched with their sub-folders, so its CSV tables
     would be read as runs by the next benchmark on that folder."""
-    out = Path(out_dir).resolve()
     for name, folder in inputs.items():
-        d = Path(folder).resolve()
-        if out == d or d in out.parents:
+        if lies_within(out_dir, folder):
             raise ValueError(f"out_dir: {out_dir} is or lies inside {name} {folder}, whose sub-folders are read "
                              f"for runs: its CSV tables would be read as runs; give a folder outside it")
 
