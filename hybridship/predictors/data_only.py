@@ -11,10 +11,10 @@ from ..forecast_inputs.faults import start_row_nu
 from ..physics.model import DynamicModel
 from ..residual.ensemble import EnsembleConfig, MLPEnsemble, fit_ensemble, require_training_rows
 from ..residual.features import ResidualConfig
-from .forecast_setup import (_check_flags, _check_row_stride, _forecast_setup, forecast_step_s,
+from .forecast_setup import (_check_flags, _check_row_stride, _forecast_setup,
                              keeps_state_on_error, log_list)
-from .training_logs import (check_distinct_logs, read_training_logs, warn_logs_without_wind, warn_no_wind,
-                            warn_other_rate)
+from .training_logs import (check_distinct_logs, read_training_logs, training_log_facts, warn_logs_without_wind,
+                            warn_no_wind, warn_other_rate)
 from .result import ForecastResult
 
 __all__ = ["DataOnlyPredictor"]
@@ -98,8 +98,7 @@ class DataOnlyPredictor:
         X, Y, seg = (np.concatenate(z)[::stride] if z else np.zeros((0, 1)) for z in (Xs, Ys, segs))
         require_training_rows(X.shape[0], len(arrays), dp_only)
         self.ensemble = fit_ensemble(X, Y, self.ensemble_config, segment_id=seg, progress=progress)
-        self.training_info = {"log_step_s": sorted({forecast_step_s(a) for a in arrays}),
-                              "trained_with_wind": any(a.has_wind for a in arrays)}
+        self.training_info = training_log_facts(arrays)
         return self
 
     def forecast(self, log, start_times_s, horizon_s: float = 60.0, *, commands: str = "held") -> ForecastResult:

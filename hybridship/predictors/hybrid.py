@@ -41,12 +41,13 @@ from ..residual.drift_hull import (MIN_FAILURES as DRIFT_HULL_MIN_FAILURES, MUNK
 from ..residual.hull import HullCorrection
 from .after_failure import drift_end, drift_forecasts, has_drift, shutdown_index
 from .forecast_setup import (AFTER_STOP, AFTER_STOP_LATE, FORECAST_HISTORY_S, MAX_HORIZON_S, _check_flags,
-                             _check_row_stride, _forecast_setup, as_log_arrays, forecast_step_s, join_notes,
+                             _check_row_stride, _forecast_setup, as_log_arrays, join_notes,
                              keeps_state_on_error, log_list, start_indices)
 from .model_file import load_model, save_model
 from .result import ForecastResult
 from .training_logs import (NO_WIND_FORECAST_WARNING, check_distinct_logs, check_training_lengths,
-                            read_training_logs, warn_logs_without_wind, warn_no_wind, warn_other_rate)
+                            read_training_logs, training_log_facts, warn_logs_without_wind, warn_no_wind,
+                            warn_other_rate)
 
 __all__ = ["AFTER_STOP", "AFTER_STOP_LATE", "ENVIRONMENT_SOURCES", "HybridPredictor"]
 
@@ -597,8 +598,7 @@ class HybridPredictor:
                                        quantile=self.guard_quantile)
         self.thrust_regime = ThrustRegime.fit(thr)
         self.training_info = {"n_rows": int(X.shape[0]), "row_stride": stride,
-                              "log_step_s": sorted({forecast_step_s(a) for a in logs}),
-                              "trained_with_wind": any(a.has_wind for a in logs),
+                              **training_log_facts(logs),
                               "epochs": self.ensemble.history["epochs"],
                               "best_val_mse": self.ensemble.history["best_val_mse"],
                               "residual_std": residual_std, "training": self.training}

@@ -15,7 +15,7 @@ import os
 import numpy as np
 
 __all__ = ["samples_digest", "check_distinct_logs", "check_training_lengths", "log_label", "read_training_logs",
-           "warn_logs_without_wind", "warn_other_rate", "warn_no_wind", "NO_WIND_FORECAST_WARNING"]
+           "warn_logs_without_wind", "warn_other_rate", "warn_no_wind", "training_log_facts", "NO_WIND_FORECAST_WARNING"]
 
 #: The start of a forecast's warning on a log without wind columns for a model trained with
 #: wind (:func:`warn_no_wind`); ``fit`` says it once per training log instead.
@@ -110,6 +110,16 @@ def warn_logs_without_wind(arrays, labels) -> None:
                       f"{' and others have' if len(with_wind) > 1 else ' has'} them: its wind is taken as "
                       f"none, so the nets learn the wind's force there as part of the residual; give its "
                       f"wind columns or train without it", UserWarning)
+
+
+
+def training_log_facts(arrays) -> dict:
+    """What the forecast warnings compare a forecast log with: the training logs' steps
+    [s] (``log_step_s``) and whether any had wind (``trained_with_wind``)."""
+    from .forecast_setup import forecast_step_s
+
+    return {"log_step_s": sorted({forecast_step_s(a) for a in arrays}),
+            "trained_with_wind": any(a.has_wind for a in arrays)}
 
 
 def warn_other_rate(training_info: dict, dt_s: float) -> None:
