@@ -217,3 +217,13 @@ def test_physics_inputs_given_as_text_that_reads_as_numbers_are_refused():
     with pytest.raises(ValueError, match="^wind: expected numbers"):
         m.acceleration(np.zeros(3), np.zeros(3), wind=np.array([5.0 + 1j, 0.0]))
     assert m.acceleration(np.zeros(3), [1, 0, 0], rpm=np.array([100, 0, 0], dtype=np.int32)).shape == (1, 3)
+
+
+def test_the_data_only_fit_names_a_training_log_too_short_for_a_derivative():
+    """It used to skip such a log after numpy's 'Mean of empty slice' warning (one sample)."""
+    good = physics_log(DynamicModel("gunnerus"), seed=2, duration_s=300.0, t_shutdown_s=None)
+    dp = DataOnlyPredictor("gunnerus", ensemble_config=EnsembleConfig(n_members=1, hidden=4, max_epochs=2))
+    for n in (1, 2):
+        with pytest.raises(ValueError, match=rf"^logs\[1\]: a training log needs at least 3 samples, got {n}"):
+            dp.fit([good, good.iloc[:n]])
+        assert dp.ensemble is None

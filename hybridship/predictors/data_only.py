@@ -13,8 +13,8 @@ from ..residual.ensemble import EnsembleConfig, MLPEnsemble, fit_ensemble, requi
 from ..residual.features import ResidualConfig
 from .forecast_setup import (_check_flags, _check_row_stride, _forecast_setup,
                              keeps_state_on_error, log_list)
-from .training_logs import (check_distinct_logs, read_training_logs, training_log_facts, warn_logs_without_wind,
-                            warn_no_wind, warn_other_rate)
+from .training_logs import (check_distinct_logs, check_training_lengths, read_training_logs, training_log_facts,
+                            warn_logs_without_wind, warn_no_wind, warn_other_rate)
 from .result import ForecastResult
 
 __all__ = ["DataOnlyPredictor"]
@@ -78,6 +78,7 @@ class DataOnlyPredictor:
         Xs, Ys, segs = [], [], []
         given = log_list(logs)
         arrays, labels = read_training_logs(given, self.model.vessel)
+        check_training_lengths(arrays, labels)
         check_distinct_logs(arrays, labels)
         warn_logs_without_wind(arrays, labels)
         for k, a in enumerate(arrays):
