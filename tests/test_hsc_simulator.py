@@ -167,6 +167,18 @@ def test_input_schedule_refuses_a_sample_count_that_is_not_a_whole_number_by_nam
         input_schedule({"sea_state": 1}, 10, 0.1, np.random.default_rng(0))
 
 
+def test_input_schedule_takes_a_seed_as_its_generator_and_names_a_bad_one():
+    """A seed was an AttributeError ('int' object has no attribute 'random')."""
+    cfg = paper_trial(1, scale=0.1)
+    by_seed = input_schedule(cfg, 300, 0.1, 7)
+    by_generator = input_schedule(cfg, 300, 0.1, np.random.default_rng(7))
+    for a, b in zip(by_seed, by_generator):
+        np.testing.assert_array_equal(a, b)
+    for bad in (-1, 1.5, "7", None):
+        with pytest.raises(ValueError, match=r"^rng: expected a whole number >= 0"):
+            input_schedule(cfg, 300, 0.1, bad)
+
+
 def test_simulator_refuses_bad_arguments_by_name(craft):
     model = PlaningCraftModel(craft, "interceptor")
     cases = [

@@ -130,8 +130,9 @@ def paper_trial(sea_state: int, *, seed: int = 0, scale: float = 1.0) -> TrialCo
                        seed=seed * 100 + sea_state)
 
 
-def input_schedule(config: TrialConfig, n: int, dt_s: float, rng: np.random.Generator):
-    """Engine-speed command [rpm] and PWM duty [%] for ``n`` samples.
+def input_schedule(config: TrialConfig, n: int, dt_s: float, rng: np.random.Generator | int):
+    """Engine-speed command [rpm] and PWM duty [%] for ``n`` samples, drawn from ``rng``
+    (a numpy Generator, or a whole-number seed for one).
 
     The engine speed alternates between sweeps (ramps at a random slew rate) and holds at
     random levels spread over the whole range (a new level is at least a quarter of the
@@ -141,8 +142,8 @@ def input_schedule(config: TrialConfig, n: int, dt_s: float, rng: np.random.Gene
     Raises
     ------
     ValueError
-        ``n`` not a whole number >= 0, ``dt_s`` not positive, or ``config.pwm_period_s``
-        shorter than two steps (a half period, the time a PWM level is held, would round
+        ``n`` or a seed given as ``rng`` not a whole number >= 0, ``dt_s`` not positive, or
+        ``config.pwm_period_s`` shorter than two steps (a half period, the time a PWM level is held, would round
         to no sample).
     TypeError
         ``config`` not a :class:`TrialConfig`.
@@ -150,6 +151,8 @@ def input_schedule(config: TrialConfig, n: int, dt_s: float, rng: np.random.Gene
     if not isinstance(config, TrialConfig):          # an AttributeError on .pwm_period_s
         raise TypeError(f"config: expected a TrialConfig (paper_trial(...)), got {type(config).__name__}")
     n = check_whole_number("n", n, 0)          # numpy's shape errors named nothing (100.0, -1)
+    if not hasattr(rng, "random"):              # a seed: 'int' object has no attribute 'random' before
+        rng = np.random.default_rng(check_whole_number("rng", rng, 0))
     dt_s = check_number("dt_s", dt_s, lo=0.0, lo_open=True)
     # the step is the craft's, unknown to TrialConfig: a half period rounding to 0 samples never advanced
     if int(config.pwm_period_s[0] / 2 / dt_s) < 1:
