@@ -166,6 +166,9 @@ def main(argv=None) -> int:
     if not files:
         print(f"no logs found in {args.data}; nothing to do", file=sys.stderr)
         return 1
+    if len(files) < 2:          # the hybrid was fitted on no log: fit()'s traceback after the logs were read
+        print(f"error: --data: leave one log out needs at least 2 logs, found 1 in {args.data}", file=sys.stderr)
+        return 2
     logs = {f.name.split("_seed")[0]: pd.read_csv(f) for f in files}
     rows, errors = [], {}
     baselines = {"physics": DynamicPredictor("gunnerus").fit(), "dead_reckoning": DeadReckoning("gunnerus").fit()}

@@ -216,6 +216,14 @@ def test_late_coverage_without_members_is_a_usage_error(tmp_path, capsys):
     assert "error: --members: expected a positive integer" in capsys.readouterr().err
 
 
+def test_late_coverage_with_one_log_is_a_usage_error_before_it_reads_the_log(tmp_path, capsys):
+    """With one log the hybrid was fitted on none: fit()'s traceback after the log was read."""
+    lc = load_benchmark("drift_late_coverage")
+    (tmp_path / "only_seed1.csv.gz").write_bytes(b"not a log")
+    assert lc.main(["--data", str(tmp_path)]) == 2
+    assert "error: --data: leave one log out needs at least 2 logs, found 1 in" in capsys.readouterr().err
+
+
 @pytest.mark.parametrize("n_logs, others", [(3, "two"), (6, "five"), (12, "11")])
 def test_late_coverage_text_counts_the_logs_each_hybrid_is_fitted_on(n_logs, others, tmp_path, monkeypatch):
     """The written text said the hybrid was fitted on "the other five" logs whatever --data held;
