@@ -234,13 +234,17 @@ def main(argv=None) -> int:
     ap.add_argument("--seed", type=int, default=0)
     ap.add_argument("--sim-scenarios", type=int, default=6, help="simulated drifts of sim_pretrain, 1-20 (default 6)")
     ap.add_argument("--embedded", type=int, default=3,
-                    help="embedded scenarios as a second data set, 0-20 (0: none; default 3)")
+                    help="embedded scenarios as a second data set, 0 or 2-20 (0: none; default 3)")
     args = ap.parse_args(argv)
     from hybridship.sim.scenario import embedded_scenarios
 
     for flag, value, low in (("--sim-scenarios", args.sim_scenarios, 1), ("--embedded", args.embedded, 0)):
         if not low <= value <= 20:          # the simulator's embedded scenarios: at most 20
             ap.error(f"{flag}: expected {low}-20, got {value}")
+    if args.embedded == 1:      # its leave-one-out folds were fitted on no log: fit()'s traceback mid-run
+        ap.error("--embedded: expected 0 or 2-20 (leave one log out needs two logs), got 1")
+    if not args.embedded and not TRUTHSIM.is_dir():     # nothing to score: pandas' 'No objects to concatenate'
+        ap.error(f"--embedded: expected 2-20, as {TRUTHSIM} is not found, got 0")
     try:
         ens = EnsembleConfig(n_members=args.members, seed=args.seed)
     except ValueError as exc:

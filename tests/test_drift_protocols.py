@@ -99,3 +99,18 @@ def test_counts_and_seeds_it_cannot_use_are_usage_errors(tmp_path, capsys):
         assert exc.value.code == 2
         assert bad[0] in capsys.readouterr().err
     assert not any(tmp_path.iterdir())
+
+
+def test_a_data_set_too_small_to_leave_one_log_out_is_a_usage_error(tmp_path, capsys, monkeypatch):
+    """--embedded 1 fitted its fold on no log, and --embedded 0 without truthsim-dev scored
+    nothing: each ended in a library traceback after minutes of work."""
+    import pytest
+
+    protocols = load_benchmark("drift_protocols")
+    monkeypatch.setattr(protocols, "TRUTHSIM", tmp_path / "absent")
+    for bad, expected in ((["--embedded", "1"], "expected 0 or 2-20 "), (["--embedded", "0"], "expected 2-20, as ")):
+        with pytest.raises(SystemExit) as exc:
+            protocols.main([*bad, "--out", str(tmp_path / "out")])
+        assert exc.value.code == 2
+        assert f"--embedded: {expected}" in capsys.readouterr().err
+    assert not (tmp_path / "out").exists()
