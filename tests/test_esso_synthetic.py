@@ -182,6 +182,17 @@ def test_split_refuses_a_test_fraction_outside_0_1(tmp_path, fraction):
     assert not (tmp_path / "split").exists()
 
 
+@pytest.mark.parametrize("fraction", ["0.3", True, None])
+def test_split_refuses_a_test_fraction_that_is_not_a_number(tmp_path, fraction):
+    """A text share ("0.3") passed the range check through float() and failed in round()'s
+    words ("type str doesn't define __round__ method"); True was read as 1."""
+    from hybridship.evaluation.manoeuvre import split_runs
+
+    data = _runs_folder(tmp_path)
+    with pytest.raises(TypeError, match="^test_fraction: expected a number"):
+        split_runs(data, tmp_path / "split", test_fraction=fraction)
+    assert not (tmp_path / "split").exists()
+
 def test_split_puts_whole_recordings_per_kind_on_one_side(tmp_path):
     """Per kind, round(0.3 x recordings), at least one, are test runs (zigzag 4 -> 1, turning
     3 -> 1, random 5 -> 2), every run on exactly one side, the pieces of one recording

@@ -248,6 +248,8 @@ def split_runs(data_dir, out_dir, *, test_fraction: float = 0.3, seed: int = 0) 
 
     Raises
     ------
+    TypeError
+        If ``test_fraction`` is not a number (text, a bool).
     ValueError
         If ``test_fraction`` is not in (0, 1), or ``out_dir/train`` or ``out_dir/test`` is,
         holds or lies inside ``data_dir`` (clearing it would remove the runs being split).
@@ -256,7 +258,8 @@ def split_runs(data_dir, out_dir, *, test_fraction: float = 0.3, seed: int = 0) 
         by a split; kept).
     """
     data_dir, out_dir = Path(data_dir), Path(out_dir)
-    if not 0.0 < float(test_fraction) < 1.0:      # NaN too; > 1 failed inside numpy's choice
+    # a text ("0.3") passed float() and failed in round()'s words; NaN too; > 1 failed inside numpy's choice
+    if check_number("test_fraction", test_fraction, lo=0.0, lo_open=True) >= 1.0:
         raise ValueError(f"test_fraction: expected a share of the recordings between 0 and 1 (exclusive), "
                          f"got {test_fraction!r}")
     check_whole_number("seed", seed)
