@@ -7,6 +7,7 @@ The files here are made in the data set's layout (:data:`~hybridship.datasets.es
 from __future__ import annotations
 
 import os
+import re
 from types import SimpleNamespace
 
 import numpy as np
@@ -87,6 +88,25 @@ def test_esso_log_arrays_refuse_a_velocity_lead_for_a_converted_log(lead):
     np.testing.assert_array_equal(esso_log_arrays(log, velocity_lead_s=0.0).nu, esso_log_arrays(raw).nu)
     assert not np.array_equal(esso_log_arrays(raw, velocity_lead_s=0.6).nu, esso_log_arrays(raw).nu)
 
+
+
+@pytest.mark.parametrize("column", ["wind_dir_true [rad]", "wind_velo_relative_mid [m/s]"])
+def test_an_infinite_value_in_a_run_is_refused_naming_its_column_and_row(tmp_path, column):
+    """An 'inf' passed read_esso_raw (only NaN was looked for): in the true wind direction it
+    became a NaN wind_dir_deg (inf % 360), which the log took as not logged, and the run was
+    read without a word; in the apparent wind it made convention_checks' rms NaN."""
+    from hybridship.datasets.esso_osaka import read_esso_osaka, read_esso_raw
+    from hybridship.logs.io import LogFormatError
+
+    raw = _raw(50).astype({column: object})
+    raw.loc[10, column] = "inf"
+    path = tmp_path / "berthing_inf.csv"
+    raw.to_csv(path, index=False)
+    msg = rf"^{re.escape(column)}: missing, non-numeric or infinite value at row 10 \(file line 12, t = 1 s"
+    with pytest.raises(LogFormatError, match=msg):
+        read_esso_raw(path)
+    with pytest.raises(LogFormatError, match=msg):
+        read_esso_osaka(path)
 
 # ------------------------------------------------------------------------- convention_checks
 

@@ -106,7 +106,8 @@ def read_esso_raw(path) -> pd.DataFrame:
     Raises
     ------
     LogFormatError
-        If the header differs from :data:`ESSO_COLUMNS`, a value is missing in a kept row,
+        If the header differs from :data:`ESSO_COLUMNS`, a value is missing, not a number or
+        infinite in a kept row,
         or time does not increase strictly (the message names the column, row and file).
     """
     path = Path(path)
@@ -132,12 +133,12 @@ def read_esso_raw(path) -> pd.DataFrame:
     df.columns = cols
     df = df.apply(pd.to_numeric, errors="coerce")
     df = df[~df.isna().all(axis=1)]     # the index keeps each row's place in the file (data row, from 0)
-    bad = df.isna().to_numpy()
+    bad = ~np.isfinite(df.to_numpy(float))    # an 'inf' wind direction became a NaN one (not logged) in the log
     if bad.any():
         i, j = np.argwhere(bad)[0]
         row = int(df.index[i])
-        raise LogFormatError(f"{ESSO_COLUMNS[j]}: missing or non-numeric value at row {row} (file line {row + 2}"
-                             f"{_at_time(df, i)}; in {path})", column=ESSO_COLUMNS[j], row=row)
+        raise LogFormatError(f"{ESSO_COLUMNS[j]}: missing, non-numeric or infinite value at row {row} (file line "
+                             f"{row + 2}{_at_time(df, i)}; in {path})", column=ESSO_COLUMNS[j], row=row)
     t = df["t [s]"].to_numpy()
     if len(t) > 1 and np.any(np.diff(t) <= 0):
         i = int(np.argmax(np.diff(t) <= 0)) + 1
