@@ -108,6 +108,22 @@ def test_an_infinite_value_in_a_run_is_refused_naming_its_column_and_row(tmp_pat
     with pytest.raises(LogFormatError, match=msg):
         read_esso_osaka(path)
 
+
+def test_a_row_of_text_is_refused_and_a_row_of_blanks_dropped(tmp_path):
+    """Only empty rows are dropped: a row whose every field is text (a second header line of two
+    files joined) was read as all NaN and dropped as empty, leaving a gap without a word."""
+    from hybridship.datasets.esso_osaka import read_esso_raw
+    from hybridship.logs.io import LogFormatError
+
+    lines = _raw(50).to_csv(index=False).splitlines()
+    path = tmp_path / "berthing_text.csv"
+    path.write_text("\n".join(lines[:11] + [lines[0]] + lines[11:]) + "\n")
+    with pytest.raises(LogFormatError, match=r"^t \[s\]: missing, non-numeric or infinite value at row 10 "
+                                             r"\(file line 12;"):
+        read_esso_raw(path)
+    path.write_text("\n".join(lines[:11] + [",".join([" "] * len(ESSO_COLUMNS))] + lines[11:]) + "\n")
+    pd.testing.assert_frame_equal(read_esso_raw(path), _raw(50))
+
 # ------------------------------------------------------------------------- convention_checks
 
 

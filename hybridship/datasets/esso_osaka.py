@@ -131,8 +131,14 @@ def read_esso_raw(path) -> pd.DataFrame:
                              f"unexpected: {extra or 'none'}; order must be {list(ESSO_COLUMNS)})",
                              column=(missing or extra or [None])[0])
     df.columns = cols
+    # empty before the numbers are read: a row of text (a second header line) became all NaN
+    # and was dropped as empty, without a word
+    empty = df.isna()
+    for c in df.columns:
+        if not pd.api.types.is_numeric_dtype(df[c]):      # text: a field of spaces is empty too
+            empty[c] |= df[c].astype(str).str.strip().eq("")
     df = df.apply(pd.to_numeric, errors="coerce")
-    df = df[~df.isna().all(axis=1)]     # the index keeps each row's place in the file (data row, from 0)
+    df = df[~empty.all(axis=1)]     # the index keeps each row's place in the file (data row, from 0)
     bad = ~np.isfinite(df.to_numpy(float))    # an 'inf' wind direction became a NaN one (not logged) in the log
     if bad.any():
         i, j = np.argwhere(bad)[0]
