@@ -424,6 +424,30 @@ def test_the_tables_pool_the_starts_of_every_run_by_hand():
     assert c[("all", 1)] == pytest.approx(4 / 8) and c[("all", 2)] == pytest.approx(6 / 8)
 
 
+
+@pytest.mark.parametrize("sigma, error", [(0, ValueError), (-1.0, ValueError), (float("nan"), ValueError),
+                                          ("2", TypeError), (True, TypeError)])
+def test_the_spread_tables_refuse_a_sigma_that_is_not_a_band_width_by_name(sigma, error):
+    """A sigma of 0, below 0 or NaN gave a coverage of 0 in coverage.csv and
+    coverage_intervals.csv without a word; a text "2" failed in numpy's words (sharpness_table
+    first read it as 2 through float()), and sharpness_table took True as sigma 1."""
+    from hybridship.evaluation.manoeuvre import Run, coverage_intervals, coverage_table, sharpness_table
+
+    runs = [Run(SimpleNamespace(kind="zigzag", name="z1"), None), Run(SimpleNamespace(kind="turning", name="t1"), None)]
+    z = {("hybrid", "known"): [np.full((3, 1, 2), 0.5), np.full((2, 1, 2), 1.5)]}
+    err = {("hybrid", "known"): [np.ones((3, 1, 4)), np.ones((2, 1, 4))]}
+    sd = {("hybrid", "known"): [np.ones((3, 1, 2)), np.ones((2, 1, 2))]}
+    with pytest.raises(error, match="^sigmas: "):
+        coverage_table(z, runs, (5.0,), sigmas=(1, sigma))
+    with pytest.raises(error, match="^sigma: "):
+        coverage_intervals(z, (5.0,), sigma=sigma)
+    with pytest.raises(error, match="^sigma: "):
+        sharpness_table(err, sd, runs, (5.0,), sigma=sigma)
+    # the labels stay as they were: whole sigmas as ints
+    assert coverage_table(z, runs, (5.0,), sigmas=(1, 1.5)).sigma.tolist()[:2] == [1, 1.5]
+    assert coverage_intervals(z, (5.0,)).sigma.tolist() == [2]
+    assert sharpness_table(err, sd, runs, (5.0,)).sigma.tolist() == [2, 2, 2]
+
 def test_readme_says_every_sample_when_every_sample_starts():
     from hybridship.evaluation.manoeuvre import BenchmarkResult, ManoeuvreConfig, markdown_report
 

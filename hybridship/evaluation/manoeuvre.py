@@ -443,8 +443,11 @@ def coverage_table(per_run_z: dict, runs: list[Run], horizons_s, sigmas=(1, 2),
     (``coverage_heading.csv``).
 
     ``per_run_z`` maps ``(model, commands)`` to per-run normalised errors ``(S, nh, 2)``
-    (``(S, nh, 3)`` for the heading: :func:`forecast_errors` with ``heading_z``).
+    (``(S, nh, 3)`` for the heading: :func:`forecast_errors` with ``heading_z``). ``sigmas``
+    are band half-widths > 0 in standard deviations (an error naming sigmas otherwise).
     """
+    # a sigma of 0, below 0 or NaN gave a coverage of 0 without a word, a text one numpy's error
+    sigmas = tuple(check_number("sigmas", sig, lo=0.0, lo_open=True) for sig in sigmas)
     rows = []
     for (model, commands), zs in per_run_z.items():
         kinds = {}
@@ -477,7 +480,8 @@ def sharpness_table(per_run: dict, per_run_std: dict, runs: list[Run], horizons_
     ``per_run`` maps ``(model, commands)`` to per-run errors ``(S, nh, 4)`` (as
     :func:`forecast_errors`), ``per_run_std`` to per-run standard deviations ``(S, nh, 2)``.
     """
-    if float(sigma) not in GAUSS_COVERAGE:
+    sigma = check_number("sigma", sigma)     # "2" passed float() and failed in numpy's words, True was 1
+    if sigma not in GAUSS_COVERAGE:
         raise ValueError(f"sigma: expected 1 or 2 (a band of known nominal coverage), got {sigma!r}")
     alpha = 1.0 - GAUSS_COVERAGE[float(sigma)]
     rows = []
@@ -506,7 +510,9 @@ def coverage_intervals(per_run_z: dict, horizons_s, sigma: float = 2.0, seed: in
     """``coverage_intervals.csv`` rows: the pooled coverage at ``sigma`` (all kinds) with a 90 %
     bootstrap interval that resamples whole runs
     (:func:`~hybridship.evaluation.metrics.grouped_coverage_interval`): the starts of one run
-    share its conditions, so the number of runs, not of starts, sets what a coverage can say."""
+    share its conditions, so the number of runs, not of starts, sets what a coverage can say.
+    ``sigma`` > 0 (an error naming it otherwise)."""
+    sigma = check_number("sigma", sigma, lo=0.0, lo_open=True)     # 0, < 0 or NaN gave a coverage of 0
     rows = []
     for (model, commands), zs in per_run_z.items():
         zs = [_state_z(z, state) for z in zs if z is not None and z.size]
