@@ -448,6 +448,23 @@ def test_the_spread_tables_refuse_a_sigma_that_is_not_a_band_width_by_name(sigma
     assert coverage_intervals(z, (5.0,)).sigma.tolist() == [2]
     assert sharpness_table(err, sd, runs, (5.0,)).sigma.tolist() == [2, 2, 2]
 
+
+@pytest.mark.parametrize("horizons", [(10.0,), (5.0, 10.0, 20.0)])
+def test_the_tables_refuse_horizons_that_are_not_the_errors_ones(horizons):
+    """Errors at two horizons tabulated with one label wrote the 5-s errors as the 10-s ones
+    and dropped the rest without a word; with three labels numpy's IndexError named nothing."""
+    from hybridship.evaluation.manoeuvre import Run, coverage_intervals, coverage_table, error_table, sharpness_table
+
+    runs = [Run(SimpleNamespace(kind="zigzag", name="z1"), None)]
+    key = ("hybrid", "known")
+    z, err, sd = {key: [np.full((3, 2, 2), 0.5)]}, {key: [np.ones((3, 2, 4))]}, {key: [np.ones((3, 2, 2))]}
+    msg = rf"^horizons_s: {len(horizons)} lead times given, but per_run\w*\[\('hybrid', 'known'\)\] has 2 per forecast"
+    for call in (lambda h: coverage_table(z, runs, h), lambda h: coverage_intervals(z, h),
+                 lambda h: error_table(err, runs, h), lambda h: sharpness_table(err, sd, runs, h)):
+        with pytest.raises(ValueError, match=msg):
+            call(horizons)
+        assert sorted(call((5.0, 10.0)).horizon_s.unique()) == [5.0, 10.0]
+
 def test_readme_says_every_sample_when_every_sample_starts():
     from hybridship.evaluation.manoeuvre import BenchmarkResult, ManoeuvreConfig, markdown_report
 

@@ -424,6 +424,16 @@ def _check_finite(x: np.ndarray, start_times_s: np.ndarray, what: str) -> None:
                          f"({int(bad.sum())} of {bad.size} starts); leave such starts out before scoring")
 
 
+def _check_horizon_count(horizons_s, arrays, name: str, key) -> None:
+    """ValueError naming ``horizons_s`` when a per-run array of ``name[key]`` (``(S, n_horizons, k)``)
+    holds another number of horizons: the first ones were labelled with the horizons given and
+    the rest dropped without a word (or more horizons than errors failed in numpy's IndexError)."""
+    for a in arrays:
+        if a is not None and np.ndim(a) == 3 and np.shape(a)[1] != len(horizons_s):
+            raise ValueError(f"horizons_s: {len(horizons_s)} lead times given, but {name}[{key!r}] has "
+                             f"{np.shape(a)[1]} per forecast: pass the horizons_s the errors were taken at")
+
+
 def _state_z(z: np.ndarray, state: str) -> np.ndarray:
     """The normalised errors a coverage of ``state`` counts: x0 and y0, or the heading's
     (the third column of :func:`forecast_errors` with ``heading_z``)."""
@@ -450,6 +460,7 @@ def coverage_table(per_run_z: dict, runs: list[Run], horizons_s, sigmas=(1, 2),
     sigmas = tuple(check_number("sigmas", sig, lo=0.0, lo_open=True) for sig in sigmas)
     rows = []
     for (model, commands), zs in per_run_z.items():
+        _check_horizon_count(horizons_s, zs, "per_run_z", (model, commands))
         kinds = {}
         for run, z in zip(runs, zs):
             if z is not None and z.size:
@@ -486,6 +497,8 @@ def sharpness_table(per_run: dict, per_run_std: dict, runs: list[Run], horizons_
     alpha = 1.0 - GAUSS_COVERAGE[float(sigma)]
     rows = []
     for key, sds in per_run_std.items():
+        _check_horizon_count(horizons_s, per_run[key], "per_run", key)
+        _check_horizon_count(horizons_s, sds, "per_run_std", key)
         kinds: dict = {}
         for run, err, sd in zip(runs, per_run[key], sds):
             if sd is not None and sd.size:
@@ -515,6 +528,7 @@ def coverage_intervals(per_run_z: dict, horizons_s, sigma: float = 2.0, seed: in
     sigma = check_number("sigma", sigma, lo=0.0, lo_open=True)     # 0, < 0 or NaN gave a coverage of 0
     rows = []
     for (model, commands), zs in per_run_z.items():
+        _check_horizon_count(horizons_s, zs, "per_run_z", (model, commands))
         zs = [_state_z(z, state) for z in zs if z is not None and z.size]
         if not zs:
             continue
@@ -531,6 +545,7 @@ def error_table(per_run: dict, runs: list[Run], horizons_s) -> pd.DataFrame:
     """``errors.csv`` rows from per-run errors ``{(model, commands): [errors (S, nh, 4) per run]}``."""
     rows = []
     for (model, commands), errs in per_run.items():
+        _check_horizon_count(horizons_s, errs, "per_run", (model, commands))
         kinds = {}
         for run, e in zip(runs, errs):
             if e is not None and e.size:
