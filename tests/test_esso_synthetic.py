@@ -43,6 +43,22 @@ def test_velocity_lead_longer_than_the_run_holds_the_last_value():
     np.testing.assert_allclose(log.u_m_s, np.concatenate([u[6:], np.repeat(u[-1], 6)]))
 
 
+
+def test_an_infinite_wind_direction_is_refused_by_the_log_checks_not_taken_as_not_logged():
+    """esso_to_log wrapped the wind direction with % 360, which makes inf NaN: a raw run's
+    infinite true wind direction became wind not logged at that row (the previous row's wind
+    held, with numpy's RuntimeWarning) where an infinite value in any other column is refused."""
+    from hybridship.datasets.esso_osaka import esso_log_arrays
+    from hybridship.logs.io import LogFormatError
+
+    raw = _raw(50)
+    raw.loc[10, "wind_dir_true [rad]"] = np.inf
+    assert np.isinf(esso_to_log(raw).wind_dir_deg[10])
+    with pytest.raises(LogFormatError, match="^wind_dir_deg: infinite value inf at row 10"):
+        esso_log_arrays(raw)
+    raw.loc[10, "wind_dir_true [rad]"] = -0.5 * np.pi          # finite directions are wrapped as before
+    assert esso_to_log(raw).wind_dir_deg[10] == pytest.approx(270.0)
+
 @pytest.mark.parametrize("lead", [-0.6, float("nan"), float("inf")])
 def test_a_velocity_lead_that_is_not_a_finite_non_negative_time_is_refused(lead):
     with pytest.raises(ValueError, match="velocity_lead_s"):

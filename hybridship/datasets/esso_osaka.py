@@ -209,6 +209,11 @@ def esso_to_log(raw: pd.DataFrame, *, vessel=None, velocity_lead_s: float = 0.0)
         raise LogFormatError(f"{missing[0]}: missing from the raw run (missing: {missing}; the conversion reads "
                              f"{list(_CONVERTED_COLUMNS)} of read_esso_raw's columns)", column=missing[0])
     prop, rud = _channel_names(vessel)
+    wind_dir = np.degrees(raw["wind_dir_true [rad]"].to_numpy(float))
+    # wrapped where finite: inf % 360 is NaN, which the log reads as the wind not logged (the
+    # log's checks refuse an infinite value, as they do in the other columns)
+    with np.errstate(invalid="ignore"):
+        wind_dir = np.where(np.isinf(wind_dir), wind_dir, wind_dir % 360.0)
     t = raw["t [s]"].to_numpy(float)
     u = raw["u_velo [m/s]"].to_numpy(float)
     v = raw["vm_velo [m/s]"].to_numpy(float)
@@ -227,7 +232,7 @@ def esso_to_log(raw: pd.DataFrame, *, vessel=None, velocity_lead_s: float = 0.0)
         "v_m_s": v,
         "r_deg_s": np.degrees(raw["r_angvelo [rad/s]"].to_numpy(float)),
         "wind_speed_m_s": raw["wind_velo_true [m/s]"].to_numpy(float),
-        "wind_dir_deg": np.degrees(raw["wind_dir_true [rad]"].to_numpy(float)) % 360.0,
+        "wind_dir_deg": wind_dir,
         f"{prop}_rpm": 60.0 * raw["n_prop [rps]"].to_numpy(float),
         f"{rud}_azimuth_deg": np.degrees(raw["delta_rudder [rad]"].to_numpy(float)),
     })
