@@ -701,6 +701,16 @@ def test_a_coverage_without_an_interval_reads_n_a_not_nan():
     assert "[n/a]" not in two and "nan" not in two
 
 
+
+def test_the_coverage_intervals_markdown_names_the_sigma_they_were_taken_at():
+    """The heading said "2-sigma coverage" whatever sigma coverage_intervals had counted."""
+    from hybridship.evaluation.manoeuvre import coverage_intervals, md_coverage_intervals
+
+    z = np.abs(np.random.default_rng(0).normal(size=(10, 2, 3)))
+    for sigma, head in ((1, "1-sigma coverage"), (1.5, "1.5-sigma coverage"), (2.0, "2-sigma coverage")):
+        md = md_coverage_intervals(coverage_intervals({("hybrid", "known"): [z, z[:5]]}, (5.0, 10.0), sigma=sigma))
+        assert md.startswith(head + " with a 90 % interval"), md
+
 def test_coverage_table_labels_a_fractional_sigma_as_it_counted_it():
     """sigmas=(1, 1.5) wrote the 1.5-sigma coverage under sigma 1, beside the 1-sigma one."""
     from hybridship.evaluation.manoeuvre import coverage_table

@@ -886,7 +886,9 @@ def md_spread_by_kind(coverage: pd.DataFrame, sharpness: pd.DataFrame, model: st
 def md_coverage_intervals(ci: pd.DataFrame) -> str:
     """Markdown of :func:`coverage_intervals`: rows (commands, model), columns horizons; a
     coverage without an interval (one test run) as "0.950 [n/a]"."""
-    lines = ["2-sigma coverage with a 90 % interval that resamples whole runs "
+    # the sigma the intervals were taken at (a 1-sigma table was headed "2-sigma coverage")
+    sigmas = "/".join(str(s) for s in dict.fromkeys(ci.sigma))
+    lines = [f"{sigmas}-sigma coverage with a 90 % interval that resamples whole runs "
              f"({int(ci.n_runs.max())} test runs; the starts of one run share its conditions):", "",
              "| commands | model | " + " | ".join(f"{h:g} s" for h in sorted(ci.horizon_s.unique())) + " |",
              "|---|---|" + "---|" * ci.horizon_s.nunique()]
