@@ -481,6 +481,25 @@ def test_the_tables_refuse_horizons_that_are_not_the_errors_ones(horizons):
             call(horizons)
         assert sorted(call((5.0, 10.0)).horizon_s.unique()) == [5.0, 10.0]
 
+
+def test_a_run_that_cannot_be_resampled_is_named(tmp_path):
+    """load_runs' step_s errors named no run: among a folder of runs, the one too short for
+    the step, or logged at a rate the step is no whole multiple of, could not be found."""
+    from hybridship.evaluation.manoeuvre import load_runs
+
+    _write_runs(tmp_path / "zigzag", ["zigzag_31-Jul-2020_13_00_00.csv"])
+    _raw(4).to_csv(tmp_path / "zigzag" / "zigzag_31-Jul-2020_13_01_00.csv", index=False)
+    _raw(100, dt_s=0.3).to_csv(tmp_path / "zigzag" / "zigzag_31-Jul-2020_13_02_00.csv", index=False)
+    with pytest.raises(ValueError, match=r"^step_s: 0.5 s leaves fewer than two samples of a 0.3-s run \(run "
+                                         r".*zigzag_31-Jul-2020_13_01_00.csv\)$"):
+        load_runs(tmp_path, "esso_osaka_model", step_s=0.5)
+    (tmp_path / "zigzag" / "zigzag_31-Jul-2020_13_01_00.csv").unlink()
+    with pytest.raises(ValueError, match=r"^step_s: 0.5 s is not a whole multiple of the data step 0.3 s \(run "
+                                         r".*zigzag_31-Jul-2020_13_02_00.csv\)$"):
+        load_runs(tmp_path, "esso_osaka_model", step_s=0.5)
+    (tmp_path / "zigzag" / "zigzag_31-Jul-2020_13_02_00.csv").unlink()
+    assert len(load_runs(tmp_path, "esso_osaka_model", step_s=0.5)[0].arrays) == 20
+
 def test_readme_says_every_sample_when_every_sample_starts():
     from hybridship.evaluation.manoeuvre import BenchmarkResult, ManoeuvreConfig, markdown_report
 

@@ -184,19 +184,22 @@ class Run:
 # --------------------------------------------------------------------------------------
 
 
-def _decimate(arrays: LogArrays, vessel, step_s: float | None) -> LogArrays:
-    """Every k-th row of a run (``step_s`` = k data steps), with the velocities as converted."""
+def _decimate(arrays: LogArrays, vessel, step_s: float | None, source=None) -> LogArrays:
+    """Every k-th row of a run (``step_s`` = k data steps), with the velocities as converted;
+    ``source`` (the run's file) is named in the errors."""
     if step_s is None:
         return arrays
+    # the run is named: among a folder of runs, the one at another rate or too short was not
+    run = "" if source is None else f" (run {source})"
     dt = arrays.dt_s
     k = int(round(step_s / dt))
     if k < 1 or abs(k * dt - step_s) > 0.01 * step_s:
-        raise ValueError(f"step_s: {step_s} s is not a whole multiple of the data step {dt:g} s")
+        raise ValueError(f"step_s: {step_s} s is not a whole multiple of the data step {dt:g} s{run}")
     if k == 1:
         return arrays
     if len(arrays.time_s) <= k:
         raise ValueError(f"step_s: {step_s:g} s leaves fewer than two samples of a "
-                         f"{arrays.time_s[-1] - arrays.time_s[0]:g}-s run")
+                         f"{arrays.time_s[-1] - arrays.time_s[0]:g}-s run{run}")
     return ingest(arrays.to_frame(derived_velocities=True).iloc[::k], vessel, purpose="fit")
 
 
@@ -211,7 +214,7 @@ def load_runs(folder, vessel, *, step_s: float | None = None) -> list[Run]:
     vessel = vessel if isinstance(vessel, Vessel) else load_vessel(vessel)
     if step_s is not None:
         step_s = check_number("step_s", step_s, lo=0.0, lo_open=True)
-    runs = [Run(r, ingest(_decimate(esso_log_arrays(r.path, vessel), vessel, step_s), vessel, purpose="fit"))
+    runs = [Run(r, ingest(_decimate(esso_log_arrays(r.path, vessel), vessel, step_s, r.path), vessel, purpose="fit"))
             for r in list_runs(folder)]
     if not runs:
         raise FileNotFoundError(f"{folder}: no runs (*.csv, *.csv.gz) found")
