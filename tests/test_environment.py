@@ -117,6 +117,14 @@ def test_rng_none_is_refused():
         make_wave_components(1.0, 6.0, 0.0, rng=None)
 
 
+def test_a_negative_seed_is_refused_naming_rng():
+    """A seed below 0 failed in numpy's words ('expected non-negative integer'), naming no argument."""
+    with pytest.raises(ValueError, match="^rng: expected a whole number >= 0, got -1"):
+        make_wave_components(1.0, 6.0, 0.0, rng=-1)
+    with pytest.raises(ValueError, match="^rng: "):
+        SeaState.random(np.int64(-3))
+
+
 @pytest.mark.parametrize("method", ["jittered", "equal_energy"])
 def test_components_reproduce_hs_and_are_not_periodic(method):
     wf = make_wave_components(1.3, 7.0, 1.0, rng=3, n_components=50, method=method)

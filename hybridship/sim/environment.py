@@ -53,7 +53,8 @@ import numpy as np
 from pydantic import Field, model_validator
 from scipy.signal import lfilter
 
-from hybridship.config import Float, check_flags, check_number, config_dataclass, float_array, real_array
+from hybridship.config import (Float, check_flags, check_number, check_whole_number, config_dataclass, float_array,
+                               real_array)
 from hybridship.frames import wrap_2pi, wrap_pi
 
 __all__ = [
@@ -115,11 +116,11 @@ _BLOCK_ELEMENTS = 2_000_000
 
 
 def _as_rng(rng, name="rng"):
-    """Return a Generator from a Generator or an int seed; refuse None (non-reproducible)."""
+    """Return a Generator from a Generator or an int seed (>= 0); refuse None (non-reproducible)."""
     if isinstance(rng, np.random.Generator):
         return rng
     if isinstance(rng, (int, np.integer)) and not isinstance(rng, bool):
-        return np.random.default_rng(int(rng))
+        return np.random.default_rng(check_whole_number(name, rng))     # -1 failed in numpy's words
     raise TypeError(f"{name} must be a numpy.random.Generator or an int seed, got {type(rng).__name__}")
 
 
