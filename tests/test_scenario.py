@@ -379,6 +379,23 @@ def test_drift_statistics_refuses_what_it_cannot_summarise():
         drift_statistics(log.to_dict())
 
 
+def test_drift_statistics_refuses_times_out_of_order_and_an_unknown_shutdown_time():
+    """The statistics search the times: a shuffled log gave a wrong shutdown time and NaN
+    statistics without a word, as did a truth_t_shutdown_s left empty; both are refused by name."""
+    t = np.arange(0.0, 800.0)
+    log = pd.DataFrame({"time_s": t, "north_m": 0.0, "east_m": 0.01 * t, "heading_deg": 10.0,
+                        "dp_active": (t < 100.0).astype(int)})
+    assert drift_statistics(log)["t_shutdown_s"] == 100.0
+    with pytest.raises(ValueError, match="time_s must be strictly increasing"):
+        drift_statistics(log.sample(frac=1.0, random_state=0))
+    with pytest.raises(ValueError, match="time_s must be strictly increasing"):
+        drift_statistics(pd.concat([log, log.iloc[-1:]], ignore_index=True))     # a repeated row
+    with pytest.raises(ValueError, match="time_s must be finite"):
+        drift_statistics(log.assign(time_s=np.where(t == 5.0, np.nan, t)))
+    with pytest.raises(ValueError, match="truth_t_shutdown_s is nan"):
+        drift_statistics(log.assign(truth_t_shutdown_s=np.nan))
+
+
 def test_drift_statistics_reproduce_truthsim_summary(shared_data):
     truthsim = shared_data("truthsim-dev")
     for _, summary in pd.read_csv(shared_data("truthsim-dev", "scenarios.csv")).iterrows():

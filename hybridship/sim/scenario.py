@@ -695,7 +695,11 @@ def simulate_dp_loss(config: DPLossConfig | None = None, vessel="gunnerus", prog
 
 def _shutdown_time(log: pd.DataFrame) -> float:
     if "truth_t_shutdown_s" in log.columns:
-        return float(log["truth_t_shutdown_s"].iloc[0])
+        t_sd = float(log["truth_t_shutdown_s"].iloc[0])
+        if not math.isfinite(t_sd):         # every statistic came out NaN
+            raise ValueError(f"log: truth_t_shutdown_s is {t_sd} in the first row; expected the shutdown time [s] "
+                             "(or drop the column to take the first row with dp_active 0)")
+        return t_sd
     if "dp_active" in log.columns:
         off = np.flatnonzero(log["dp_active"].to_numpy() == 0)
         if off.size:
@@ -715,6 +719,8 @@ def _check_statistics_input(log, dp_settle_s) -> None:
         raise ValueError(f"log: missing column(s) {', '.join(missing)}; the statistics need time_s and the track "
                          f"{', '.join(track)}")
     check_number("dp_settle_s", dp_settle_s, lo=0.0)
+    # the statistics search the times (searchsorted): a shuffled log gave wrong numbers or NaN
+    env._time_vector(log["time_s"].to_numpy(float))
 
 
 def drift_statistics(log: pd.DataFrame, *, dp_settle_s: float = 600.0) -> dict:
@@ -728,6 +734,7 @@ def drift_statistics(log: pd.DataFrame, *, dp_settle_s: float = 600.0) -> dict:
     Parameters
     ----------
     log : pandas.DataFrame
+        A log whose ``time_s`` is finite and strictly increasing (as :func:`hybridship.logs.io.read_log` gives).
     dp_settle_s : float
         Start-up time excluded from the DP statistics [s] (at most half the DP phase).
 
