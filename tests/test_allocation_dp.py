@@ -156,6 +156,22 @@ def test_a_first_demand_straight_astern_gives_angles_in_the_documented_range(mod
     np.testing.assert_allclose(thruster_load(model, np.zeros(3), res), [-20e3, 0.0, 0.0], atol=200.0)
 
 
+def test_fixed_thrusters_axes_are_given_in_the_documented_range(model):
+    """A fixed propeller whose file gives angle_deg 180 or 270 (or -200) kept pi, 4.71 or -3.49 rad
+    as its ``azimuth_rad``, outside the documented [-pi, pi); the same axes are now given there,
+    and the load is unchanged."""
+    tunnel, port, stbd = model.vessel.thrusters
+    fixed = [tunnel.model_copy(update={"name": f"f{i}", "type": "fixed", "angle_deg": a, "x_m": x, "y_m": y})
+             for i, (a, x, y) in enumerate([(180.0, -14.0, 0.0), (270.0, 10.0, 1.0), (-200.0, 0.0, 2.0)])]
+    vessel = _with_thrusters(model.vessel, [port, stbd] + fixed)
+    alloc = ThrustAllocator(vessel, dt_s=1.0)
+    for _ in range(2):                          # the first call and a rate-limited one
+        res = alloc.allocate([-5e3, 3e3, 20e3], np.zeros(3))
+        assert np.all((res.azimuth_rad >= -math.pi) & (res.azimuth_rad < math.pi)), res.azimuth_rad
+        np.testing.assert_allclose(res.azimuth_rad[2:], np.radians([-180.0, -90.0, 160.0]), rtol=1e-12)
+        np.testing.assert_allclose(res.tau_achieved, [-5e3, 3e3, 20e3], atol=50.0)
+
+
 def test_bollard_limits_are_what_the_model_delivers_at_full_rpm_ahead_and_astern(model):
     """``forward_N`` / ``reverse_N``: the delivered (after thrust deduction) force of the physics model
     at +max_rpm / -max_rpm at rest, each thruster alone."""

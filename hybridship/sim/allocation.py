@@ -323,7 +323,9 @@ class ThrustAllocator:
         self.rpm_rate_limit_rpm_s = rate
 
         self.is_azimuth = np.array([t.type == "azimuth" for t in th])
-        self.fixed_angle_rad = np.array([t.fixed_angle_rad for t in th], float)
+        fixed = np.array([t.fixed_angle_rad for t in th], float)
+        # in the documented [-pi, pi) (a file's angle_deg = 270 gave 4.71 rad); angles within it kept bit for bit
+        self.fixed_angle_rad = np.where((fixed >= -math.pi) & (fixed < math.pi), fixed, wrap_pi(fixed))
         # Azimuths without a slew limit turn instantly: said, since a real one cannot
         unlimited = [t.name for t in th if t.type == "azimuth" and not t.max_azimuth_rate_deg_s]
         if unlimited and warn_unlimited_slew:
