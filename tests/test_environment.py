@@ -589,6 +589,28 @@ def test_gust_zero_intensity_is_steady_and_validation():
         gust_wind(t[::-1], 5.0, 0.0, 1)
 
 
+def test_gust_frequencies_stay_within_f_max_and_nyquist(monkeypatch):
+    """The gusts' frequencies lie between 1 / duration and min(f_max_hz, Nyquist), as documented:
+    the band was widened to 2 / duration, so a low f_max_hz got gusts above it and a short record
+    gusts beyond its Nyquist frequency (aliased). A band that holds no frequency is refused by name."""
+    seen, harris = [], environment.harris_spectrum
+
+    def spy(f_hz, *args, **kwargs):         # the gust frequencies, as gust_wind asks the spectrum for them
+        seen.append(np.asarray(f_hz, float).copy())
+        return harris(f_hz, *args, **kwargs)
+
+    monkeypatch.setattr(environment, "harris_spectrum", spy)
+    t = np.arange(0.0, 600.0)
+    gust_wind(t, 8.0, 0.0, 1, f_max_hz=0.0025)              # 1 / duration = 0.00167 Hz
+    assert seen[-1].min() >= 1.0 / 599.0 and seen[-1].max() <= 0.0025
+    gust_wind(np.arange(5.0), 8.0, 0.0, 1)                 # 4 s: 0.25 .. 0.5 Hz
+    assert seen[-1].max() <= 0.5
+    with pytest.raises(ValueError, match="^f_max_hz: 0.0001 Hz is not above"):
+        gust_wind(t, 8.0, 0.0, 1, f_max_hz=1e-4)
+    with pytest.raises(ValueError, match="^time_s: 3 samples over 2 s hold no gust frequency"):
+        gust_wind(np.arange(3.0), 8.0, 0.0, 1)
+
+
 # --------------------------------------------------------------------------- current
 
 

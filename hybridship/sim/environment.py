@@ -1038,7 +1038,8 @@ def gust_wind(time_s, mean_speed_m_s, mean_dir_from_rad, rng, intensity=0.1, *, 
     spectrum : {"harris", "davenport"}
     n_harmonics : int
     f_max_hz : float
-        Highest gust frequency [Hz] (capped at the Nyquist frequency of ``time_s``).
+        Highest gust frequency [Hz] (capped at the Nyquist frequency of ``time_s``); above
+        ``1 / duration``, as the record must be long enough to hold a gust below Nyquist.
     dir_std_rad, dir_tau_s : float
         Direction wander standard deviation [rad] and time constant [s].
 
@@ -1063,8 +1064,14 @@ def gust_wind(time_s, mean_speed_m_s, mean_dir_from_rad, rng, intensity=0.1, *, 
 
     duration = t[-1] - t[0]
     f_lo = 1.0 / duration
-    f_hi = min(f_max, 0.5 / float(np.min(np.diff(t))))
-    f_hi = max(f_hi, 2.0 * f_lo)
+    nyquist = 0.5 / float(np.min(np.diff(t)))
+    f_hi = min(f_max, nyquist)
+    if f_hi <= f_lo:        # it was widened to 2 / duration: gusts above f_max_hz, or aliased beyond Nyquist
+        if f_max < nyquist:
+            raise ValueError(f"f_max_hz: {f_max:g} Hz is not above the record's lowest gust frequency, 1 / duration "
+                             f"= {f_lo:g} Hz (gusts slower than the record belong to the mean wind)")
+        raise ValueError(f"time_s: {t.size} samples over {duration:g} s hold no gust frequency between 1 / duration "
+                         f"= {f_lo:g} Hz and the Nyquist frequency {nyquist:g} Hz")
     edges = np.geomspace(f_lo, f_hi, n_harmonics + 1)
     freq = edges[:-1] + rng.uniform(0.0, 1.0, n_harmonics) * np.diff(edges)
     phase = rng.uniform(0.0, 2.0 * np.pi, n_harmonics)
