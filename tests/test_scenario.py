@@ -379,6 +379,23 @@ def test_drift_statistics_refuses_what_it_cannot_summarise():
         drift_statistics(log.to_dict())
 
 
+def test_drift_statistics_of_a_log_that_starts_after_the_shutdown_are_nan():
+    """The drift is measured from the sample at the shutdown. A log cut after it (its
+    truth_t_shutdown_s before the first row) took its first row for that sample: the excursions
+    and the drift speed were measured from the wrong place (3 m after 60 s where the ship had
+    drifted 6 m); every drift statistic is now NaN, as for a log that ends before the shutdown."""
+    t = np.arange(0.0, 800.0)
+    east = np.where(t < 100.0, 0.0, 0.1 * (t - 100.0))
+    log = pd.DataFrame({"time_s": t, "north_m": 0.0, "east_m": east, "heading_deg": 10.0,
+                        "truth_t_shutdown_s": 100.0})
+    assert drift_statistics(log)["drift_excursion_600s_m"] == pytest.approx(60.0)
+    st = drift_statistics(log[t >= 130.0])
+    assert st["t_shutdown_s"] == 100.0
+    for key in ("drift_excursion_60s_m", "drift_excursion_600s_m", "drift_dheading_600s_deg",
+                "drift_mean_sog_mps", "drift_net_speed_mps", "drift_dir_to_deg"):
+        assert np.isnan(st[key]), (key, st[key])
+
+
 def test_drift_statistics_refuses_times_out_of_order_and_an_unknown_shutdown_time():
     """The statistics search the times: a shuffled log gave a wrong shutdown time and NaN
     statistics without a word, as did a truth_t_shutdown_s left empty; both are refused by name."""

@@ -742,7 +742,8 @@ def drift_statistics(log: pd.DataFrame, *, dp_settle_s: float = 600.0) -> dict:
     -------
     dict
         ``t_shutdown_s``; ``drift_excursion_{60,600}s_m``: distance from the position at the
-        shutdown after 60 and 600 s [m] (NaN if the drift is shorter);
+        shutdown after 60 and 600 s [m] (NaN if the drift is shorter; every drift statistic
+        is NaN when no sample lies within 0.5 s of the shutdown);
         ``drift_dheading_{60,600}s_deg``: heading change [deg]; ``drift_mean_sog_mps``:
         mean speed over ground over the first 600 s of drift (or all of it if shorter);
         ``drift_net_speed_mps``: straight-line excursion over that window / its duration;
@@ -757,15 +758,18 @@ def drift_statistics(log: pd.DataFrame, *, dp_settle_s: float = 600.0) -> dict:
     e = log["truth_east_lf_m" if lf else "east_m"].to_numpy(float)
     psi = np.unwrap(np.radians(log["truth_heading_lf_deg" if lf else "heading_deg"].to_numpy(float)))
     t_sd = _shutdown_time(log)
-    i0 = int(np.searchsorted(t, t_sd - _EPS_S))
     out = {"t_shutdown_s": t_sd}
 
     def at(dt):
         i = int(np.searchsorted(t, t_sd + dt - _EPS_S))
         return i if i < t.size and abs(t[i] - (t_sd + dt)) < 0.5 else None
 
+    # the drift is measured from the sample at the shutdown; a log that starts after it has none
+    # (its first sample stood in for it, and the 600-s excursion was measured from there)
+    i0 = at(0)
+    i0 = t.size if i0 is None else i0
     for dt in (60, 600):
-        i = at(dt)
+        i = at(dt) if i0 < t.size else None
         out[f"drift_excursion_{dt}s_m"] = float(np.hypot(n[i] - n[i0], e[i] - e[i0])) if i is not None else np.nan
         out[f"drift_dheading_{dt}s_deg"] = float(np.degrees(psi[i] - psi[i0])) if i is not None else np.nan
     i_end = at(600)
