@@ -589,6 +589,20 @@ def test_gust_zero_intensity_is_steady_and_validation():
         gust_wind(t[::-1], 5.0, 0.0, 1)
 
 
+def test_arrays_that_do_not_broadcast_are_refused_naming_them():
+    """Frequencies and angles (or current speeds and directions) of shapes that do not broadcast
+    failed in numpy's words ('shape mismatch', 'operands could not be broadcast'), naming neither."""
+    for call, names in ((lambda: drift_coefficients([0.5, 1.0], [0.0, 1.0, 2.0], GUNNERUS_HULL),
+                         "omega_rad_s and beta_rad"),
+                        (lambda: MotionRAOs.from_hull(GUNNERUS_HULL).amplitudes([0.5, 1.0], [0.0, 1.0, 2.0]),
+                         "omega_rad_s and beta_rad"),
+                        (lambda: environment.current_velocity_ned([0.2, 0.3], [0.0, 1.0, 2.0]),
+                         "speed_m_s and dir_to_rad")):
+        with pytest.raises(ValueError, match=f"^{names}: shapes that do not broadcast together"):
+            call()
+    np.testing.assert_allclose(environment.current_velocity_ned([0.2, 0.3], 0.0), [[0.2, 0.0], [0.3, 0.0]])
+
+
 def test_gust_frequencies_stay_within_f_max_and_nyquist(monkeypatch):
     """The gusts' frequencies lie between 1 / duration and min(f_max_hz, Nyquist), as documented:
     the band was widened to 2 / duration, so a low f_max_hz got gusts above it and a short record

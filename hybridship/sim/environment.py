@@ -190,6 +190,17 @@ def _per_time(name, value, n):
     return a
 
 
+def _broadcast(**named):
+    """The named arrays (:func:`config.real_array`) broadcast together, or a ValueError naming
+    them and their shapes (numpy's 'shape mismatch' named neither)."""
+    arrays = [real_array(name, value) for name, value in named.items()]
+    try:
+        return np.broadcast_arrays(*arrays)
+    except ValueError:
+        shapes = ", ".join(f"{name} {a.shape}" for name, a in zip(named, arrays))
+        raise ValueError(f"{' and '.join(named)}: shapes that do not broadcast together ({shapes})") from None
+
+
 def _positions(position_ne_m, n):
     if position_ne_m is None:
         return None
@@ -673,7 +684,7 @@ def drift_coefficients(omega_rad_s, beta_rad, hull, rho_kg_m3=RHO_SEAWATER_KG_M3
     h = HullDimensions.from_any(hull)
     rho = _positive("rho_kg_m3", rho_kg_m3)
     g = _positive("g_m_s2", g_m_s2)
-    w, beta = np.broadcast_arrays(real_array("omega_rad_s", omega_rad_s), real_array("beta_rad", beta_rad))
+    w, beta = _broadcast(omega_rad_s=omega_rad_s, beta_rad=beta_rad)
     k = w**2 / g
     p = -np.expm1(-2.0 * k * h.T_m)
     kl, kb = (k * h.L_m) ** 2, (k * h.B_m) ** 2
@@ -860,7 +871,7 @@ class MotionRAOs:
 
     def amplitudes(self, omega_rad_s, beta_rad, g_m_s2=G_M_S2) -> np.ndarray:
         """Signed RAOs ``[x_b/A m/m, y_b/A m/m, psi/A rad/m]``, shape (..., 3)."""
-        w, beta = np.broadcast_arrays(real_array("omega_rad_s", omega_rad_s), real_array("beta_rad", beta_rad))
+        w, beta = _broadcast(omega_rad_s=omega_rad_s, beta_rad=beta_rad)
         k = w**2 / g_m_s2
         cb, sb = np.cos(beta), np.sin(beta)
         extent = self.L_m * np.abs(cb) + self.B_m * np.abs(sb)
@@ -1137,9 +1148,8 @@ def current_series(time_s, mean_speed_m_s, mean_dir_to_rad, rng, speed_var=0.1,
 
 def current_velocity_ned(speed_m_s, dir_to_rad):
     """Current velocity ``[V_north_m_s, V_east_m_s]``, shape (..., 2), from speed and direction TO."""
-    v = real_array("speed_m_s", speed_m_s)
-    b = real_array("dir_to_rad", dir_to_rad)
-    return np.stack(np.broadcast_arrays(v * np.cos(b), v * np.sin(b)), axis=-1)
+    v, b = _broadcast(speed_m_s=speed_m_s, dir_to_rad=dir_to_rad)
+    return np.stack([v * np.cos(b), v * np.sin(b)], axis=-1)
 
 
 # --------------------------------------------------------------------------- sea state
