@@ -589,6 +589,21 @@ def test_gust_zero_intensity_is_steady_and_validation():
         gust_wind(t[::-1], 5.0, 0.0, 1)
 
 
+@pytest.mark.parametrize("call", [
+    lambda c: wave_drift_loads([0.0, 1.0], 0.0, c, GUNNERUS_HULL),
+    lambda c: environment.mean_drift_loads(0.0, c, GUNNERUS_HULL),
+    lambda c: wave_frequency_motion([0.0, 1.0], 0.0, c, GUNNERUS_HULL),
+], ids=["wave_drift_loads", "mean_drift_loads", "wave_frequency_motion"])
+def test_wave_components_that_are_not_a_wave_field_are_refused_naming_them(call):
+    """Components given as something else (a sea state, a list) failed with an AttributeError
+    ("'SeaState' object has no attribute 'amplitude_m'"); a TypeError now names components."""
+    sea = SeaState(hs_m=1.0, tp_s=6.0, wave_dir_from_rad=0.0, wind_speed_m_s=5.0, wind_dir_from_rad=0.0)
+    for bad in (sea, [1.0, 2.0]):
+        with pytest.raises(TypeError, match="^components: expected an instance of WaveField"):
+            call(bad)
+    assert np.all(np.isfinite(call(sea.wave_components(1))))
+
+
 def test_arrays_that_do_not_broadcast_are_refused_naming_them():
     """Frequencies and angles (or current speeds and directions) of shapes that do not broadcast
     failed in numpy's words ('shape mismatch', 'operands could not be broadcast'), naming neither."""

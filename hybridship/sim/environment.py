@@ -53,8 +53,8 @@ import numpy as np
 from pydantic import Field, model_validator
 from scipy.signal import lfilter
 
-from hybridship.config import (Float, check_flags, check_number, check_whole_number, config_dataclass, float_array,
-                               real_array)
+from hybridship.config import (Float, as_config, check_flags, check_number, check_whole_number, config_dataclass,
+                               float_array, real_array)
 from hybridship.frames import wrap_2pi, wrap_pi
 
 __all__ = [
@@ -718,6 +718,7 @@ def mean_drift_loads(psi_rad, components: WaveField, hull, rho_kg_m3=RHO_SEAWATE
     psi = real_array("psi_rad", psi_rad)
     if not np.all(np.isfinite(psi)):
         raise ValueError("psi_rad must be finite")
+    components = as_config(components, WaveField, "components")     # another object: an AttributeError
     beta = wrap_pi(components.dir_from_rad - psi[..., None])
     d = drift_coefficients(components.omega_rad_s, beta, hull, rho_kg_m3, components.g_m_s2)
     return np.einsum("...jc,j->...c", d, components.amplitude_m**2)
@@ -780,6 +781,7 @@ def wave_drift_loads(time_s, psi_rad, components: WaveField, hull, rho=RHO_SEAWA
     rho = _positive("rho", rho)
     if newman not in ("geometric", "arithmetic"):
         raise ValueError(f"newman must be 'geometric' or 'arithmetic', got {newman!r}")
+    components = as_config(components, WaveField, "components")     # another object: an AttributeError
     amp = components.amplitude_m
     out = np.empty((n, 3))
     for sl in _blocks(n, components.n_components):
@@ -920,6 +922,7 @@ def wave_frequency_motion(time_s, psi_rad, components: WaveField, raos, *, posit
     pos = _positions(position_ne_m, n)
     model = MotionRAOs.from_any(raos)
     check_flags(return_rates=return_rates)      # a text "no" is truthy
+    components = as_config(components, WaveField, "components")     # another object: an AttributeError
     amp, w = components.amplitude_m, components.omega_rad_s
     body = np.empty((n, 3))
     body_rate = np.empty((n, 3)) if return_rates else None
