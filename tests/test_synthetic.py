@@ -56,6 +56,16 @@ def test_power_is_lost_at_the_shutdown_time(log):
     assert np.all(rpm[t >= 200.0] == 0.0) and np.any(rpm[t < 200.0] != 0.0)
 
 
+@pytest.mark.parametrize("dt_s, t_shutdown_s", [(0.3, 0.9), (0.7, 2.1), (1.0, 3.0)])
+def test_power_is_lost_at_a_shutdown_sample_whose_time_is_not_exact_in_binary(model, dt_s, t_shutdown_s):
+    """3 x 0.3 s is 0.8999999999999999 s, below a shutdown at 0.9 s: that sample stayed on DP
+    with its rpm applied over the following step, one step of thrust after the power failure."""
+    log = physics_log(model, duration_s=6 * dt_s, dt_s=dt_s, t_shutdown_s=t_shutdown_s, seed=1)
+    np.testing.assert_array_equal(log["dp_active"].to_numpy(), [1, 1, 1, 0, 0, 0, 0])
+    rpm = log[[c for c in log.columns if c.endswith("_rpm")]].to_numpy()
+    assert np.all(rpm[3:] == 0.0) and np.all(rpm[:3] != 0.0)
+
+
 def test_the_logged_commands_replay_the_logged_motion(model, log):
     """Read back by the log reader and fed to the same model, the logged rpm, azimuths (in
     degrees) and wind reproduce the logged motion: the command logged at a sample is the

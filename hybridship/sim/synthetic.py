@@ -95,16 +95,17 @@ def physics_log(model: DynamicModel, *, duration_s: float = 1200.0, t_shutdown_s
     time_s = np.arange(n + 1) * dt_s
     dp = np.ones(n + 1, dtype=int)
     if t_shutdown_s is not None:
-        off = time_s[:-1] >= t_shutdown_s
-        rpm[off] = 0.0
-        dp[time_s >= t_shutdown_s] = 0
+        # a sample time a rounding below the shutdown is at it (3 x 0.3 s is 0.8999999999999999 s)
+        after = time_s >= t_shutdown_s - 1e-9 * dt_s
+        rpm[after[:-1]] = 0.0
+        dp[after] = 0
     res = model.rollout([0.0, 0.0, 0.3], [0.0, 0.0, 0.0], n, dt_s=dt_s, substeps=4,
                         rpm=rpm[None], azimuth_rad=az[None], rudder_rad=delta[None] if R else None,
                         wind=np.asarray(wind, float),
                         current=np.asarray(current, float), tau_ext=tau_ext)
     eta, nu = res.eta[0], res.nu[0]
     # the command logged at a sample is the one applied over the following step
-    rpm_log = np.vstack([rpm, np.zeros((1, K)) if t_shutdown_s is not None and time_s[-1] >= t_shutdown_s else rpm[-1:]])
+    rpm_log = np.vstack([rpm, np.zeros((1, K)) if dp[-1] == 0 else rpm[-1:]])
     az_log = np.vstack([az, az[-1:]])
     delta_log = np.vstack([delta, delta[-1:]])
     cols = {
