@@ -462,6 +462,17 @@ def test_sweep_writes_logs_and_summary(tmp_path):
         sweep(tmp_path, [1], fmt="xlsx", **TINY)
 
 
+def test_sweep_refuses_an_out_dir_that_is_not_a_path_by_name(tmp_path, monkeypatch):
+    """out_dir=None failed in pathlib's words ('expected str, bytes or os.PathLike object, not
+    NoneType'), and an empty one swept into the working folder."""
+    monkeypatch.chdir(tmp_path)
+    with pytest.raises(TypeError, match=r"^out_dir: expected a file path \(str or os.PathLike\), got NoneType"):
+        sweep(None, [1], **TINY)
+    with pytest.raises(ValueError, match="^out_dir: expected a file path, got an empty one"):
+        sweep("", [1], **TINY)
+    assert not list(tmp_path.iterdir())
+
+
 def test_log_file_name_refuses_a_seed_that_is_not_a_whole_number_at_least_0():
     """A seed of 1.5 was truncated to seed 1's file name, -1 gave "seed-001", "7" was read as 7."""
     assert log_file_name(1) == log_file_name(np.int64(1)) == "sim_dp_loss_seed0001.csv.gz"

@@ -45,7 +45,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..fileio import atomic_write, check_output_files, make_out_folder, record_outputs
+from ..fileio import as_path, atomic_write, check_output_files, make_out_folder, record_outputs
 import pandas as pd
 from pydantic import Field, field_validator, model_validator
 from scipy.signal import lfilter
@@ -844,14 +844,17 @@ def sweep(out_dir, seeds: Iterable[int], *, beaufort=(2, 5), fmt: str = "csv.gz"
 
     Raises
     ------
+    TypeError
+        Before any simulation: ``out_dir`` not a path (None).
     ValueError
-        Before any simulation: bad seeds, format or config; a vessel that cannot hold
+        Before any simulation: an empty ``out_dir``; bad seeds, format or config; a vessel that cannot hold
         station (:func:`hybridship.sim.allocation.check_station_keeping`); an unreadable
         ``scenarios.csv``; or a seed whose log is already in ``out_dir`` in another format
         (the folder would hold the same scenario twice, and training on it would count it
         twice). A log of the same seed and format is rewritten.
     """
     check_flags(progress=progress)      # a text "no" is truthy
+    out = as_path(out_dir, "out_dir")   # None failed in pathlib's words, after the vessel was loaded
     seeds = [s for s in seeds]
     if not seeds:
         raise ValueError("seeds: expected at least one seed")
@@ -872,7 +875,6 @@ def sweep(out_dir, seeds: Iterable[int], *, beaufort=(2, 5), fmt: str = "csv.gz"
 
     from hybridship.logs.io import write_log
 
-    out = Path(out_dir)
     _refuse_other_formats(out, seeds, fmt)
     earlier = _earlier_summary(out / "scenarios.csv")  # before the work: a damaged file stops it here
     # never replace a file of the user's under a log's name; a sweep's own (recorded, or
