@@ -473,6 +473,15 @@ def test_sweep_refuses_an_out_dir_that_is_not_a_path_by_name(tmp_path, monkeypat
     assert not list(tmp_path.iterdir())
 
 
+@pytest.mark.parametrize("seeds", [5, "12", None])
+def test_sweep_refuses_seeds_that_are_not_a_list_of_seeds_by_name(tmp_path, seeds):
+    """One seed given as an int failed with "'int' object is not iterable" (None likewise), and a text
+    was refused for its first character ("got '1'"); a TypeError now names seeds, before any work."""
+    with pytest.raises(TypeError, match="^seeds: expected an iterable of non-negative ints"):
+        sweep(tmp_path / "out", seeds, **TINY)
+    assert not (tmp_path / "out").exists()
+
+
 def test_log_file_name_refuses_a_seed_that_is_not_a_whole_number_at_least_0():
     """A seed of 1.5 was truncated to seed 1's file name, -1 gave "seed-001", "7" was read as 7."""
     assert log_file_name(1) == log_file_name(np.int64(1)) == "sim_dp_loss_seed0001.csv.gz"

@@ -855,6 +855,9 @@ def sweep(out_dir, seeds: Iterable[int], *, beaufort=(2, 5), fmt: str = "csv.gz"
     """
     check_flags(progress=progress)      # a text "no" is truthy
     out = as_path(out_dir, "out_dir")   # None failed in pathlib's words, after the vessel was loaded
+    if isinstance(seeds, (str, bytes)) or not isinstance(seeds, Iterable):     # one int: "not iterable"
+        raise TypeError(f"seeds: expected an iterable of non-negative ints (e.g. [1, 2] or range(1, 11)), "
+                        f"got {seeds!r}")
     seeds = [s for s in seeds]
     if not seeds:
         raise ValueError("seeds: expected at least one seed")
