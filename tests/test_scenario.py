@@ -55,6 +55,17 @@ def test_config_validation_names_the_field(changes, field):
         DPLossConfig(**changes)
 
 
+def test_a_shutdown_that_rounds_to_less_dp_than_the_least_is_refused():
+    """The shutdown time is rounded to dt_s: t_shutdown_s 10 s with dt_s 20 s passed the check of
+    10 s of DP and shut down at 0 s, a log without a single row on DP."""
+    with pytest.raises(ValueError, match=r"^t_shutdown_s: .*at least 10 s of DP.*rounded to dt_s = 20 s: 0 s"):
+        DPLossConfig(t_shutdown_s=10.0, t_shutdown_jitter_s=0.0, dt_s=20.0, drift_s=40.0)
+    with pytest.raises(ValueError, match=r"^t_shutdown_s: .*rounded to dt_s = 30 s: 0 s"):
+        DPLossConfig(t_shutdown_s=100.0, t_shutdown_jitter_s=88.0, dt_s=30.0, drift_s=60.0)     # as early as 12 s
+    cfg = DPLossConfig(t_shutdown_s=25.0, t_shutdown_jitter_s=0.0, dt_s=10.0, drift_s=40.0, control_dt_s=2.0)
+    assert simulate_dp_loss(cfg)["dp_active"].iloc[:2].tolist() == [1, 1]
+
+
 def test_config_defaults():
     cfg = DPLossConfig()
     assert cfg.t_shutdown_s == 3000.0 and cfg.t_shutdown_jitter_s == pytest.approx(120.0)

@@ -245,10 +245,16 @@ class DPLossConfig:
         object.__setattr__(self, "_default_jitter", self.t_shutdown_jitter_s is None)
         if self.t_shutdown_jitter_s is None:
             object.__setattr__(self, "t_shutdown_jitter_s", 0.04 * self.t_shutdown_s)
-        if self.t_shutdown_s - self.t_shutdown_jitter_s < 10.0 * self.control_dt_s:
+        # the earliest shutdown the jitter can draw, rounded to dt_s as _realise rounds it (t_shutdown_s 10 s
+        # with dt_s 20 s was a shutdown at 0 s: no DP at all)
+        earliest = round((self.t_shutdown_s - self.t_shutdown_jitter_s) / self.dt_s) * self.dt_s
+        least = 10.0 * self.control_dt_s
+        if self.t_shutdown_s - self.t_shutdown_jitter_s < least or earliest < least - _EPS_S:
+            rounded = (f" (rounded to dt_s = {self.dt_s:g} s: {earliest:g} s)"
+                       if earliest < self.t_shutdown_s - self.t_shutdown_jitter_s else "")
             raise ValueError(f"t_shutdown_s: t_shutdown_s - t_shutdown_jitter_s must leave at least "
-                             f"{10 * self.control_dt_s:g} s of DP, got {self.t_shutdown_s:g} - "
-                             f"{self.t_shutdown_jitter_s:g}")
+                             f"{least:g} s of DP, got {self.t_shutdown_s:g} - "
+                             f"{self.t_shutdown_jitter_s:g}{rounded}")
         if not _is_multiple(self.drift_s, self.dt_s):
             raise ValueError(f"drift_s: must be a whole multiple of dt_s = {self.dt_s:g}, got {self.drift_s!r}")
         return self
