@@ -14,7 +14,7 @@ import pytest
 from scipy.linalg import null_space
 
 from hybridship.frames import ned_to_body, wrap_pi
-from hybridship.sim.allocation import (ThrustAllocator, bollard_thrust_limits, extended_configuration,
+from hybridship.sim.allocation import (AllocationResult, ThrustAllocator, bollard_thrust_limits, extended_configuration,
                                        thrust_capacity)
 from hybridship.sim.dp import DPController, ReferenceModel, pid_gains
 
@@ -189,6 +189,21 @@ def test_a_direction_without_thrust_has_no_capacity():
     demand is no force at all, which once passed for the demand met in full)."""
     cap = thrust_capacity("esso_osaka_model")
     assert cap[0] > 0 and cap[1] == 0.0 and cap[2] == 0.0
+
+
+def test_a_demand_the_thrusters_cannot_make_is_met_in_part_without_saturation():
+    """The docstrings said the demand is met by the pseudo-inverse and ``saturated`` flags a cut
+    demand: on a single propeller (the Esso Osaka model, rank 1) the sway and yaw of a demand
+    are left out with ``saturated`` False and ``demand_scale`` 1, as they now say; only
+    ``tau_achieved`` shows it."""
+    import hybridship.sim.allocation as allocation
+
+    alloc = ThrustAllocator("esso_osaka_model", dt_s=1.0)
+    res = alloc.allocate([1.0, 0.5, 0.3], np.zeros(3))         # a model ship: 5 N at most
+    assert not res.saturated and res.demand_scale == 1.0
+    np.testing.assert_allclose(res.tau_achieved, [1.0, 0.0, 0.0], atol=1e-6)
+    for doc in (allocation.__doc__, AllocationResult.__doc__):
+        assert "station_keeping_rank` < 3" in " ".join(doc.split())
 
 
 def test_a_load_the_thrusters_make_only_with_another_has_no_capacity(model):

@@ -9,7 +9,10 @@ constant matrix ``T_e`` and ``tau = T_e f_e`` is linear:
 * fixed axis ``alpha``: column ``[cos a, sin a, x sin a - y cos a]`` (tunnel: ``[0, 1, x]``).
 
 The unconstrained demand is met by the weighted least-norm solution
-``f_e = W^-1 T_e^T (T_e W^-1 T_e^T)^-1 tau`` (a weighted pseudo-inverse). Each azimuth is
+``f_e = W^-1 T_e^T (T_e W^-1 T_e^T)^-1 tau`` (a weighted pseudo-inverse). On a vessel whose
+thrusters cannot load the hull in every direction (:func:`station_keeping_rank` < 3, e.g. a
+single propeller) the pseudo-inverse gives the least-squares solution instead: the part of the
+demand no thruster makes is left out, without ``saturated`` (compare ``tau_achieved``). Each azimuth is
 then commanded to ``alpha = atan2(f_y, f_x)`` with thrust ``|f|``. Thruster limits come from
 the propeller model: the largest force is what ``+max_rpm`` (and, when reversing,
 ``-max_rpm``) delivers at the bollard condition, times ``(1 - thrust_deduction)``.
@@ -239,11 +242,14 @@ class AllocationResult:
         Generalised force ``[X_N, Y_N, N_Nm]`` those commands deliver.
     saturated : bool
         True when a thrust limit (bollard limit or max_rpm at the actual inflow) cut
-        the demand. Thrusters at their bollard limit then run at ``+-max_rpm``.
+        the demand. Thrusters at their bollard limit then run at ``+-max_rpm``. A load the
+        thrusters cannot make at all (a vessel of :func:`station_keeping_rank` < 3) is
+        left out without it: only ``tau_achieved`` shows it.
     rate_limited : bool
         True when an azimuth or rpm rate limit was active.
     demand_scale : float
-        Fraction of the demand the magnitude limits allow (1 when feasible).
+        Fraction of the demand the magnitude limits allow (1 when feasible; of the
+        least-squares part of it on a vessel of :func:`station_keeping_rank` < 3).
     tau_desired : ndarray, shape (3,)
         The demand ``[X_N, Y_N, N_Nm]``, for reference.
     """
