@@ -1260,6 +1260,31 @@ def test_a_markdown_table_without_decimals_keeps_the_whole_numbers_zeros():
     assert markdown_table(df, digits=2).splitlines()[2:] == ["| 100 | 120.4 |", "| 30 | never |"]
 
 
+def test_a_share_of_a_few_samples_is_not_written_as_none_in_the_summary(tmp_path):
+    """4 of 1000 samples over capacity (or over a radius) were written "0" in summary.md's
+    table, under a warning that the same heading had "<1% of the samples" over capacity; a
+    number that is not 0 but rounds to it reads "<0.01" (and a true 0 stays "0")."""
+    from hybridship.driftoff.planning import DriftOffResult
+    from hybridship.driftoff.report import markdown_table, write_report
+
+    n = 1000
+    t = np.full((1, n, 1), np.inf)
+    t[0, :4, 0] = 5.0                           # 4 of 1000 reach 5 m within the 10-s reaction time
+    r = DriftOffResult(np.zeros(1), np.zeros(1), np.array([5.0]), np.array([10.0]), t, np.zeros((1, n, 1)), 30.0,
+                       over_capacity_frac=np.array([4.0 / n]))
+    text = write_report(r, tmp_path / "o", plots=False)["summary.md"].read_text()
+    assert "0 deg (<1% of the samples)" in text
+    row = next(line for line in text.splitlines() if line.startswith("| 0 | 0 | 5 |"))
+    cells = [c.strip() for c in row.strip("|").split("|")]
+    head = next(line for line in text.splitlines() if line.startswith("| heading_deg | wind_rel_deg | radius_m"))
+    col = dict(zip([c.strip() for c in head.strip("|").split("|")], cells))
+    assert col["over_capacity_frac"] == "<0.01" and col["p_exceed_10s"] == "<0.01" and col["reached_frac"] == "<0.01"
+    assert col["t_p10_s"] == "never" and col["p_exceed_10s_ci95_lo"] == "<0.01"
+    df = pd.DataFrame({"a": [0.0, 0.004, -0.004, 0.04]})
+    assert markdown_table(df, digits=1).splitlines()[2:] == ["| 0 |", "| <0.1 |", "| >-0.1 |", "| <0.1 |"]
+    assert markdown_table(df, digits=2).splitlines()[2:] == ["| 0 |", "| <0.01 |", "| >-0.01 |", "| 0.04 |"]
+
+
 def test_a_weather_tables_time_labels_are_kept_as_written(tmp_path):
     """The ``time`` column is text (docs/drift-off.md: "kept as text"): hours written 0000,
     0100 are those labels, not the numbers 0 and 100, and 1.10 and 1.1 are two labels (they

@@ -99,7 +99,9 @@ def exceedance_plot(result: DriftOffResult, n_times: int = 200):
 
 
 def markdown_table(df: pd.DataFrame, digits: int = 2) -> str:
-    """A DataFrame as a Markdown table (numbers rounded; inf shown as "never")."""
+    """A DataFrame as a Markdown table (numbers rounded; inf shown as "never"; a number that is
+    not 0 but rounds to it as "<0.01" at ``digits=2``, so that a share of a few samples does
+    not read as none)."""
     def fmt(v):
         if isinstance(v, (float, np.floating)):
             if np.isinf(v):
@@ -107,7 +109,10 @@ def markdown_table(df: pd.DataFrame, digits: int = 2) -> str:
             if not math.isfinite(v):
                 return "-"
             text = f"{v:.{digits}f}"
-            return text.rstrip("0").rstrip(".") if "." in text else text   # 100, not 1, without decimals
+            text = text.rstrip("0").rstrip(".") if "." in text else text   # 100, not 1, without decimals
+            if v != 0 and float(text) == 0:     # 4 samples in 1000 are not none: "<0.01", not "0"
+                return f"<{10.0 ** -digits:g}" if v > 0 else f">-{10.0 ** -digits:g}"
+            return text
         return str(v)
 
     head = "| " + " | ".join(df.columns) + " |\n|" + "---|" * len(df.columns) + "\n"
