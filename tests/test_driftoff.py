@@ -1285,6 +1285,20 @@ def test_a_share_of_a_few_samples_is_not_written_as_none_in_the_summary(tmp_path
     assert markdown_table(df, digits=2).splitlines()[2:] == ["| 0 |", "| <0.01 |", "| >-0.01 |", "| 0.04 |"]
 
 
+def test_a_bar_in_an_input_or_a_table_stays_in_its_cell(tmp_path):
+    """A log whose path holds a '|' (the live summary lists it as an input) split its row of
+    summary.md's input table into three cells; a '|' in a name or value is written '\\|'."""
+    from hybridship.driftoff.planning import DriftOffResult
+    from hybridship.driftoff.report import markdown_table, write_report
+
+    r = DriftOffResult(np.zeros(1), np.zeros(1), np.array([5.0]), np.array([10.0]), np.full((1, 2, 1), np.inf),
+                       np.zeros((1, 2, 1)), 30.0)
+    text = write_report(r, tmp_path / "o", inputs={"log": "runs|a.csv", "a|b": 1}, plots=False)["summary.md"].read_text()
+    assert "| log | runs\\|a.csv |" in text.splitlines() and "| a\\|b | 1 |" in text.splitlines()
+    table = markdown_table(pd.DataFrame({"log|name": ["x|y"], "t_s": [1.5]}))
+    assert table.splitlines() == ["| log\\|name | t_s |", "|---|---|", "| x\\|y | 1.5 |"]
+
+
 def test_a_weather_tables_time_labels_are_kept_as_written(tmp_path):
     """The ``time`` column is text (docs/drift-off.md: "kept as text"): hours written 0000,
     0100 are those labels, not the numbers 0 and 100, and 1.10 and 1.1 are two labels (they

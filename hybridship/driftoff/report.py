@@ -98,6 +98,11 @@ def exceedance_plot(result: DriftOffResult, n_times: int = 200):
     return fig
 
 
+def _cell(v) -> str:
+    """A table cell's text: a ``|`` (a log's path may hold one) written ``\\|``, so that it stays in its cell."""
+    return str(v).replace("|", "\\|")
+
+
 def markdown_table(df: pd.DataFrame, digits: int = 2) -> str:
     """A DataFrame as a Markdown table (numbers rounded; inf shown as "never"; a number that is
     not 0 but rounds to it as "<0.01" at ``digits=2``, so that a share of a few samples does
@@ -113,9 +118,9 @@ def markdown_table(df: pd.DataFrame, digits: int = 2) -> str:
             if v != 0 and float(text) == 0:     # 4 samples in 1000 are not none: "<0.01", not "0"
                 return f"<{10.0 ** -digits:g}" if v > 0 else f">-{10.0 ** -digits:g}"
             return text
-        return str(v)
+        return _cell(v)
 
-    head = "| " + " | ".join(df.columns) + " |\n|" + "---|" * len(df.columns) + "\n"
+    head = "| " + " | ".join(_cell(c) for c in df.columns) + " |\n|" + "---|" * len(df.columns) + "\n"
     return head + "".join("| " + " | ".join(fmt(v) for v in row) + " |\n" for row in df.itertuples(index=False))
 
 
@@ -152,7 +157,8 @@ def write_report(result: DriftOffResult, out_dir, *, title: str = "Drift-off ana
     times, watch = result.summary_frames(quantile)
     lines = [f"# {title}", ""]
     if inputs:
-        lines += ["| input | value |", "|---|---|"] + [f"| {k} | {v} |" for k, v in inputs.items()] + [""]
+        lines += (["| input | value |", "|---|---|"] + [f"| {_cell(k)} | {_cell(v)} |" for k, v in inputs.items()]
+                  + [""])
     lines += [f"{result.n_samples} Monte-Carlo blackouts per heading; horizon {result.horizon_s:g} s "
               "(\"never\" = not reached within it). `_ci95_lo`/`_hi`: the exact binomial 95 % interval of each "
               "P(exceed) from this many samples (their sampling error, not the model's).", ""]
