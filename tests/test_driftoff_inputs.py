@@ -11,7 +11,7 @@ import pytest
 
 from hybridship.driftoff.live import EnvironmentEstimate, blackout_now
 from hybridship.driftoff.planning import DriftOffSettings, simulate_blackouts
-from hybridship.driftoff.weather import WeatherState
+from hybridship.driftoff.weather import WeatherState, WeatherUncertainty, sample_environment
 
 Z3 = np.zeros(3)
 ESTIMATE = EnvironmentEstimate(time_s=0.0, eta=Z3, nu=Z3, rpm=Z3, azimuth_rad=Z3, wind_speed_m_s=10.0,
@@ -113,3 +113,22 @@ def test_live_fields_that_are_not_numbers_are_refused_by_name(change, field):
         blackout_now(dataclasses.replace(ESTIMATE, **change), "gunnerus", SMALL)
     with pytest.raises(ValueError, match=r"^estimate\.wind_speed_m_s: must be finite"):
         blackout_now(dataclasses.replace(ESTIMATE, wind_speed_m_s=float("nan")), "gunnerus", SMALL)
+
+
+@pytest.mark.parametrize("change, error, field", [
+    (dict(duration_s=float("nan")), ValueError, "duration_s"), (dict(duration_s=0.0), ValueError, "duration_s"),
+    (dict(dt_s=-1.0), ValueError, "dt_s"), (dict(dt_s=0.0), ValueError, "dt_s"), (dict(dt_s="1"), TypeError, "dt_s"),
+    (dict(n=-1), ValueError, "n"), (dict(n=2.5), ValueError, "n"), (dict(n_gust=-2), ValueError, "n_gust"),
+    (dict(n_wave=3.0), ValueError, "n_wave"), (dict(rng=5), TypeError, "rng"), (dict(state=None), TypeError, "state"),
+    (dict(uncertainty=dict(hs_m=1.0)), TypeError, "uncertainty")])
+def test_sampling_arguments_it_cannot_use_are_refused_by_name(change, error, field):
+    """sample_environment gave NaN gusts for a NaN duration and gusts on a band from a negative
+    step without a word, and failed in Python's or numpy's words on a zero step ('float division
+    by zero'), a negative or fractional count or a seed given as the generator."""
+    args = dict(state=WeatherState(wind_speed_m_s=5.0), uncertainty=WeatherUncertainty(), n=3,
+                rng=np.random.default_rng(0), duration_s=30.0, dt_s=1.0, n_gust=4, n_wave=2)
+    ok = sample_environment(**args)
+    assert ok.gust_f_hz.shape == (3, 4) and np.all(np.isfinite(ok.gust_amp_m_s))
+    args.update(change)
+    with pytest.raises(error, match=rf"^{field}: "):
+        sample_environment(**args)

@@ -40,7 +40,7 @@ import numpy as np
 import pandas as pd
 from pydantic import AfterValidator, Field, model_validator
 
-from ..config import Float, check_number, config_dataclass
+from ..config import Float, check_number, check_whole_number, config_dataclass
 from ..fileio import as_path
 from ..frames import wrap_2pi
 from ..logs.io import RAD_SPREAD_LIMIT, unit_variant
@@ -408,6 +408,19 @@ def _harris_shape(f_hz, u_m_s, length_scale_m=1800.0):
     return u_m_s * length_scale_m / (2.0 + (f_hz * length_scale_m / u_m_s) ** 2) ** (5.0 / 6.0)
 
 
+def _check_sampling(state, uncertainty, n, rng, n_gust, n_wave) -> tuple[int, int, int]:
+    """:func:`sample_environment`'s arguments other than the times, refused naming them (they
+    failed in numpy's words, or read a text or a float as a count)."""
+    if not isinstance(state, WeatherState):
+        raise TypeError(f"state: expected a WeatherState, got {type(state).__name__}")
+    if uncertainty is not None and not isinstance(uncertainty, WeatherUncertainty):
+        raise TypeError(f"uncertainty: expected a WeatherUncertainty or None, got {type(uncertainty).__name__}")
+    if not isinstance(rng, np.random.Generator):
+        raise TypeError(f"rng: expected a numpy.random.Generator (numpy.random.default_rng(seed)), got "
+                        f"{type(rng).__name__}")
+    return tuple(check_whole_number(name, v) for name, v in (("n", n), ("n_gust", n_gust), ("n_wave", n_wave)))
+
+
 def sample_environment(state: WeatherState, uncertainty: WeatherUncertainty | None, n: int,
                        rng: np.random.Generator, *, duration_s: float, dt_s: float, n_gust: int = 20,
                        n_wave: int = 20) -> SampledEnvironment:
@@ -446,6 +459,10 @@ def sample_environment(state: WeatherState, uncertainty: WeatherUncertainty | No
     -------
     SampledEnvironment
     """
+    n, n_gust, n_wave = _check_sampling(state, uncertainty, n, rng, n_gust, n_wave)
+    # a NaN duration or step gave NaN gusts without a word, a negative step gusts at a made-up band
+    duration_s = check_number("duration_s", duration_s, lo=0.0, lo_open=True)
+    dt_s = check_number("dt_s", dt_s, lo=0.0, lo_open=True)
     u = uncertainty or WeatherUncertainty()
     s = state
     z = rng.standard_normal((n, 7))
