@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import importlib.util
 import math
+import re
 import time
 from pathlib import Path
 
@@ -1336,6 +1337,22 @@ def test_a_weather_tables_errors_name_the_line_the_bad_row_is_on(tmp_path):
         fh.write(head + "a,5,0,1,6,0,0.1,0\n\n\nb,99,0,1,6,0,0.1,0\n")
     with pytest.raises(ValueError, match=r"row 1 \(line 5 of the file\): 99"):
         read_weather_table(tmp_path / "gaps.csv.gz")
+
+
+def test_a_compressed_weather_tables_row_with_more_fields_is_named_by_its_line(tmp_path):
+    """The line with more fields than the header was looked for in a .csv.gz's compressed bytes,
+    so the message read 'a line has another number of fields than the header line (1)' (the
+    header has 7); the compressed table's line is named as the plain one's."""
+    import gzip
+
+    text = ("wind_speed_m_s,wind_dir_deg,hs_m,tp_s,wave_dir_deg,current_m_s,current_dir_deg\n"
+            "5,0,1,6,0,0.1,0,7\n5,0,1,6,0,0.1,0,9\n")
+    (tmp_path / "w.csv").write_text(text)
+    with gzip.open(tmp_path / "w.csv.gz", "wt") as fh:
+        fh.write(text)
+    for name in ("w.csv", "w.csv.gz"):
+        with pytest.raises(ValueError, match=rf"^{re.escape(str(tmp_path / name))}: line 2 has 8 fields, the header line 7; "):
+            read_weather_table(tmp_path / name)
 
 
 def test_states_to_frame_refuses_what_is_not_a_list_of_states_by_name():

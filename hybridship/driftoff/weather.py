@@ -305,16 +305,22 @@ def _warn_directions_like_radians(cols: dict, src: str) -> None:
                       f"the table expects degrees (convert with numpy.degrees)", UserWarning)
 
 
-def _line_of_row(src: str, i: int) -> int:
-    """The line of the file on which data row ``i`` starts, counted as the reader counts rows:
-    blank lines (empty or spaces only) are no rows, yet lines of the file."""
-    import csv
+def _open_text(src: str):
+    """The file ``src`` opened as text for the csv module (a .csv.gz as its text, as pandas reads it)."""
     import gzip
 
     from ..fileio import starts_with
 
-    opener = gzip.open if starts_with(src, b"\x1f\x8b") else open      # a .csv.gz reads as its text
-    with opener(src, "rt", newline="", encoding="utf-8", errors="replace") as fh:
+    opener = gzip.open if starts_with(src, b"\x1f\x8b") else open
+    return opener(src, "rt", newline="", encoding="utf-8", errors="replace")
+
+
+def _line_of_row(src: str, i: int) -> int:
+    """The line of the file on which data row ``i`` starts, counted as the reader counts rows:
+    blank lines (empty or spaces only) are no rows, yet lines of the file."""
+    import csv
+
+    with _open_text(src) as fh:
         rows = csv.reader(fh)
         start, k = 1, -2                # -2: the header line comes first
         for row in rows:
@@ -330,7 +336,7 @@ def _field_count_problem(src: str) -> str:
     """Which line of a CSV file first has another number of fields than its header line."""
     import csv
 
-    with open(src, newline="", encoding="utf-8", errors="replace") as fh:
+    with _open_text(src) as fh:       # a .csv.gz's lines, not its compressed bytes
         rows = csv.reader(fh)
         n = len(next(rows, []))
         for k, row in enumerate(rows, start=2):
