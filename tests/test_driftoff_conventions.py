@@ -131,6 +131,22 @@ def test_wind_direction_off_the_bow():
     np.testing.assert_allclose(np.degrees(r.weather_rel_rad), [90.0, 60.0])
 
 
+
+def test_wind_direction_off_the_bow_is_below_a_full_turn():
+    """weather_rel_rad is documented in [0, 2 pi): wind from north at a heading of 1e-17 rad
+    (the wind a hair off the bow to port) gave np.mod's 2 pi, which the polar plot sorted
+    after every other heading; it is 0, in planning and live mode alike."""
+    st = DriftOffSettings(n_samples=1, horizon_s=10.0, reaction_times_s=(5.0,), vessel_spread=0.0)
+    r = simulate_blackouts("gunnerus", WeatherState(wind_speed_m_s=3.0), [1e-17, math.pi], settings=st)
+    assert np.all((r.weather_rel_rad >= 0.0) & (r.weather_rel_rad < 2.0 * math.pi)), r.weather_rel_rad
+    assert r.weather_rel_rad.tolist() == [0.0, math.pi]
+    z3 = np.zeros(3)
+    est = EnvironmentEstimate(time_s=0.0, eta=np.array([0.0, 0.0, 1e-17]), nu=z3, rpm=z3, azimuth_rad=z3,
+                              wind_speed_m_s=3.0, wind_dir_from_rad=0.0, gust_intensity=0.0, accel_ned=z3,
+                              accel_members=np.zeros((1, 3)))
+    assert blackout_now(est, "gunnerus", st).weather_rel_rad.tolist() == [0.0]
+
+
 def test_weather_table_round_trip_keeps_every_field():
     """Kills: the wind direction read from the wave column (W3); the existing round trip
     checks the wave direction only. Every field goes through, each with a value of its own

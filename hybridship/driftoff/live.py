@@ -32,7 +32,7 @@ import pandas as pd
 
 from ..config import as_config, check_number, check_whole_number
 from ..forecast_inputs.limits import check_or_clip_inputs
-from ..frames import body_to_ned, vector_to_speed_dir
+from ..frames import body_to_ned, vector_to_speed_dir, wrap_2pi
 from ..logs.io import LogArrays
 from ..residual.features import ResidualConfig, prepare_log
 from . import engine, spread
@@ -438,7 +438,7 @@ def blackout_now(estimate: EnvironmentEstimate, vessel="gunnerus", settings: Dri
         st.n_steps, np.asarray(st.radii_m), np.asarray(st.reaction_times_s), nu0=nu0)
     refuse_diverged(exc, st.reaction_times_s, "estimate: its velocity, load or current")
     psi = np.array([estimate.eta[2]])
-    rel = np.mod(estimate.wind_dir_from_rad - psi, 2.0 * np.pi)
+    rel = wrap_2pi(estimate.wind_dir_from_rad - psi)        # [0, 2 pi), as in planning
     return DriftOffResult(headings_rad=psi, weather_rel_rad=rel, radii_m=np.asarray(st.radii_m),
                           reaction_times_s=np.asarray(st.reaction_times_s), t_reach_s=t_reach[None],
                           excursion_m=exc[None], horizon_s=st.n_steps * st.dt_s)

@@ -32,6 +32,7 @@ import pandas as pd
 from pydantic import Field, field_validator, model_validator
 
 from ..config import Float, Int, NonEmpty, as_config, config_dataclass
+from ..frames import wrap_2pi
 from ..physics.model import DynamicModel
 from ..sim import environment as env
 from . import engine, spread
@@ -419,7 +420,7 @@ def _blackouts(model, weather, uncertainty, st, psi, rng, index: int, keep_track
     over = np.where(hold >= 0.0, hold > cap[0], -hold > cap[1]).any(axis=1).reshape(H, N).mean(axis=1)
     refuse_diverged(exc, st.reaction_times_s, f"weather: the state of index {index} or its spread")
     R, Q = len(st.radii_m), len(st.reaction_times_s)
-    rel = np.mod(weather.wind_dir_from_rad - psi, 2.0 * np.pi)
+    rel = wrap_2pi(weather.wind_dir_from_rad - psi)         # [0, 2 pi): np.mod gave 2 pi for -1e-17
     return DriftOffResult(headings_rad=psi, weather_rel_rad=rel, radii_m=np.asarray(st.radii_m),
                           reaction_times_s=np.asarray(st.reaction_times_s), t_reach_s=t_reach.reshape(H, N, R),
                           excursion_m=exc.reshape(H, N, Q), horizon_s=st.n_steps * st.dt_s,
