@@ -9,6 +9,7 @@ import dataclasses
 import numpy as np
 import pytest
 
+from hybridship.driftoff import spread
 from hybridship.driftoff.live import EnvironmentEstimate, blackout_now
 from hybridship.driftoff.planning import DriftOffSettings, simulate_blackouts
 from hybridship.driftoff.weather import WeatherState, WeatherUncertainty, sample_environment
@@ -132,3 +133,21 @@ def test_sampling_arguments_it_cannot_use_are_refused_by_name(change, error, fie
     args.update(change)
     with pytest.raises(error, match=rf"^{field}: "):
         sample_environment(**args)
+
+
+@pytest.mark.parametrize("change, error, field", [
+    (dict(spread=True), TypeError, "vessel_spread"), (dict(spread="1"), TypeError, "vessel_spread"),
+    (dict(spread=None), TypeError, "vessel_spread"), (dict(spread=float("nan")), ValueError, "vessel_spread"),
+    (dict(spread=-0.5), ValueError, "vessel_spread"), (dict(n=-1), ValueError, "n"), (dict(n=2.5), ValueError, "n"),
+    (dict(rng=3), TypeError, "rng")])
+def test_vessel_draws_it_cannot_make_are_refused_by_name(change, error, field):
+    """draw_scales read a spread of True as 1 and drew vessels with it; a text or None spread
+    failed in numpy's words ("ufunc 'isfinite' not supported"), and so did a negative or
+    fractional count or a seed given as the generator."""
+    from hybridship.driftoff.planning import get_model
+
+    args = dict(vessel=get_model("gunnerus").vessel, n=3, rng=np.random.default_rng(0), spread=1.0)
+    assert spread.draw_scales(**args).thrust.shape == (3,)
+    args.update(change)
+    with pytest.raises(error, match=rf"^{field}: "):
+        spread.draw_scales(**args)

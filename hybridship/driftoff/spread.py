@@ -19,6 +19,7 @@ from typing import NamedTuple
 
 import numpy as np
 
+from ..config import check_number, check_whole_number
 from ..physics.model import ModelArrays
 from ..physics.thrusters import THR_TDED
 
@@ -68,8 +69,12 @@ def spread_text(vessel, spread: float) -> str:
 
 def draw_scales(vessel, n: int, rng: np.random.Generator, spread: float = 1.0) -> VesselScales:
     """``n`` log-normal draws around the nominal model with the ``[true_vessel]`` spread (module notes)."""
-    if not np.isfinite(spread) or spread < 0:
-        raise ValueError(f"vessel_spread: expected a finite number >= 0, got {spread!r}")
+    # True read as spread 1; text, None and a float count failed in numpy's words
+    spread = check_number("vessel_spread", spread, lo=0.0)
+    n = check_whole_number("n", n)
+    if not isinstance(rng, np.random.Generator):
+        raise TypeError(f"rng: expected a numpy.random.Generator (numpy.random.default_rng(seed)), got "
+                        f"{type(rng).__name__}")
     ref = true_vessel_scales(vessel, 1)
     out = []
     for f in ref:
