@@ -138,6 +138,17 @@ def test_each_seed_and_state_index_has_a_stream_of_its_own():
     assert not np.array_equal(draw(1, 0), draw(0, 1))
 
 
+
+@pytest.mark.parametrize("seed, index, field", [(1.7, 0, "seed"), (True, 0, "seed"), ("3", 0, "seed"), (-1, 0, "seed"),
+                                                (0, 2.5, "index"), (0, False, "index"), (0, -1, "index")])
+def test_a_stream_is_chosen_by_whole_numbers_only(seed, index, field):
+    """state_rng read a seed of 1.7 or True as 1 and "3" as 3 (another run's stream, without a
+    word), and failed in numpy's words on a negative one; each is refused naming it."""
+    np.testing.assert_array_equal(state_rng(np.int64(3), 2).standard_normal(2), state_rng(3, 2).standard_normal(2))
+    with pytest.raises(ValueError, match=rf"^{field}: expected a whole number >= 0"):
+        state_rng(seed, index)
+
+
 # -- the kernel's passages and excursions ---------------------------------------------------------
 
 def test_time_to_reach_is_the_linear_interpolation_of_the_track_between_steps():

@@ -31,7 +31,7 @@ import numpy as np
 import pandas as pd
 from pydantic import Field, field_validator, model_validator
 
-from ..config import Float, Int, NonEmpty, as_config, config_dataclass
+from ..config import Float, Int, NonEmpty, as_config, check_whole_number, config_dataclass
 from ..frames import wrap_2pi
 from ..physics.model import DynamicModel
 from ..sim import environment as env
@@ -79,7 +79,9 @@ def hull_array(vessel) -> np.ndarray:
 
 def state_rng(seed: int, index: int = 0) -> np.random.Generator:
     """The random generator of weather state ``index`` of a run seeded with ``seed``."""
-    return np.random.default_rng(np.random.SeedSequence(int(seed), spawn_key=(int(index),)))
+    # int() read a seed of 1.7 or True as 1, and "3" as 3: another run's stream, without a word
+    seed, index = check_whole_number("seed", seed), check_whole_number("index", index)
+    return np.random.default_rng(np.random.SeedSequence(seed, spawn_key=(index,)))
 
 
 def _reals(value) -> np.ndarray | None:
