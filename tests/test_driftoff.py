@@ -1300,6 +1300,27 @@ def test_a_bar_in_an_input_or_a_table_stays_in_its_cell(tmp_path):
     assert table.splitlines() == ["| log\\|name | t_s |", "|---|---|", "| x\\|y | 1.5 |"]
 
 
+@pytest.mark.parametrize("n_times, error", [(0, ValueError), (1, ValueError), (True, ValueError), (2.5, ValueError),
+                                            ("100", ValueError)])
+def test_the_plots_refuse_what_they_cannot_draw_by_name(n_times, error):
+    """exceedance_plot drew empty panels for n_times 0 (and a point for True) without a word,
+    and failed in numpy's words on 2.5 or "100"; either plot failed on an attribute of a
+    result that is not a DriftOffResult."""
+    import matplotlib.pyplot as plt
+
+    from hybridship.driftoff.planning import DriftOffResult
+    from hybridship.driftoff.report import exceedance_plot, polar_plot
+
+    r = DriftOffResult(np.zeros(1), np.zeros(1), np.array([5.0]), np.array([10.0]), np.full((1, 2, 1), 20.0),
+                       np.zeros((1, 2, 1)), 30.0)
+    plt.close(exceedance_plot(r, 2))
+    with pytest.raises(error, match=r"^n_times: expected a whole number >= 2"):
+        exceedance_plot(r, n_times)
+    for plot in (exceedance_plot, polar_plot):
+        with pytest.raises(TypeError, match=r"^result: expected a DriftOffResult, got str"):
+            plot("times.csv")
+
+
 def test_a_weather_tables_time_labels_are_kept_as_written(tmp_path):
     """The ``time`` column is text (docs/drift-off.md: "kept as text"): hours written 0000,
     0100 are those labels, not the numbers 0 and 100, and 1.10 and 1.1 are two labels (they

@@ -24,6 +24,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
+from ..config import check_whole_number
 from ..fileio import as_path, atomic_write, starts_with, write_output_files, write_text
 from .planning import DriftOffResult
 
@@ -50,10 +51,17 @@ def _png_bytes(fig) -> bytes:
     return buf.getvalue()
 
 
+def _check_result(result) -> None:
+    """A TypeError naming ``result`` when it is not a :class:`DriftOffResult` (it failed on an attribute)."""
+    if not isinstance(result, DriftOffResult):
+        raise TypeError(f"result: expected a DriftOffResult, got {type(result).__name__}")
+
+
 def polar_plot(result: DriftOffResult, ax=None, title: str | None = None):
     """Time to reach each radius against the wind direction relative to the bow (polar axes)."""
     import matplotlib.pyplot as plt
 
+    _check_result(result)
     if ax is None:
         fig = plt.figure(figsize=(6, 6))
         ax = fig.add_subplot(projection="polar")
@@ -80,7 +88,9 @@ def exceedance_plot(result: DriftOffResult, n_times: int = 200):
     """P(radius reached by t) vs t: one panel per radius, one line per heading."""
     import matplotlib.pyplot as plt
 
-    t = np.linspace(0.0, result.horizon_s, n_times)
+    _check_result(result)
+    # 0 drew empty panels and True one point, without a word; 2.5 failed in numpy's words
+    t = np.linspace(0.0, result.horizon_s, check_whole_number("n_times", n_times, lo=2))
     p = result.exceedance_curves(t)
     R = len(result.radii_m)
     fig, axes = plt.subplots(1, R, figsize=(4 * R, 3.2), sharey=True, squeeze=False)
@@ -145,8 +155,7 @@ def write_report(result: DriftOffResult, out_dir, *, title: str = "Drift-off ana
     plots : bool
         Write the two figures.
     """
-    if not isinstance(result, DriftOffResult):
-        raise TypeError(f"result: expected a DriftOffResult, got {type(result).__name__}")
+    _check_result(result)
     out = as_path(out_dir, "out_dir")
     if not isinstance(title, str):
         raise TypeError(f"title: expected text, got {type(title).__name__}")
