@@ -706,6 +706,16 @@ def test_live_refuses_empty_commands_and_faulty_sensors_at_the_blackout_row():
         environment_from_log(knots, "gunnerus")
 
 
+def test_live_empty_command_message_gives_an_epoch_time_as_the_log_has_it():
+    """The time up to which a command column is empty was written with %g, so a log in epoch
+    seconds read 'up to time_s 1.7e+09', which locates no row; it is the log's time in full."""
+    t0 = 1_700_000_000.0
+    log = pd.DataFrame({"time_s": t0 + np.arange(5.0), "tunnel_rpm": np.nan})
+    with pytest.raises(ValueError, match=r"column 'tunnel_rpm' has no value in the last 900 s up to time_s "
+                                         r"1700000004; "):
+        environment_from_log(log, "gunnerus")
+
+
 def test_live_bad_input_names_the_field():
     with pytest.raises(TypeError, match="log"):
         environment_from_log([1, 2, 3], "gunnerus")

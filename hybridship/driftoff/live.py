@@ -145,7 +145,7 @@ def _refuse_empty_commands(df: pd.DataFrame, inside: np.ndarray, window_s: float
         values = pd.to_numeric(df.loc[inside, col], errors="coerce").to_numpy(float)
         if not np.isfinite(values).any():
             raise ValueError(f"{name}: column {col!r} has no value in the last {window_s:g} s up to time_s "
-                             f"{t_end:g}; an empty command column is not a stopped thruster (nor an active DP): "
+                             f"{seconds_text(t_end)}; an empty command column is not a stopped thruster (nor an active DP): "
                              f"give a log whose commands are logged in that window")
 
 
