@@ -121,6 +121,9 @@ def real_array(name: str, a) -> np.ndarray:
     arr = np.asarray(a)
     if arr.dtype.kind in "USc":
         raise TypeError(f"{name}: expected an array of real numbers, got dtype {arr.dtype}")
+    if arr.dtype.kind == "O" and any(isinstance(x, (str, bytes, complex)) for x in arr.flat):
+        # a pandas column of text ('1500') is an object array, which astype(float) parses
+        raise TypeError(f"{name}: expected an array of real numbers, got text or complex numbers (dtype object)")
     try:
         return arr.astype(float, copy=False)
     except (TypeError, ValueError):

@@ -147,3 +147,17 @@ def test_the_guard_quantile_is_checked_when_the_hybrid_is_made():
         with pytest.raises(ValueError, match=r"guard_quantile: expected a number in \[0.5, 1\)"):
             HybridPredictor("gunnerus", guard_quantile=bad)
     assert HybridPredictor("gunnerus", guard_quantile=0.95).guard_quantile == 0.95
+
+
+def test_real_array_refuses_text_in_an_object_array():
+    """A pandas column of text ('1500') is an object array, which astype(float) parsed as numbers."""
+    import pandas as pd
+
+    from hybridship.config import real_array
+
+    for value in (pd.Series(["1500", "1600"]), np.array([1.5, "2"], dtype=object), np.array([1.0, 1j], dtype=object)):
+        with pytest.raises(TypeError, match="^rpm: expected an array of real numbers"):
+            real_array("rpm", value)
+    with pytest.raises(ValueError, match="^scale: expected an array of real numbers"):
+        SpreadCalibration(lead_s=[1.0, 2.0], scale=pd.Series(["1", "1"]), floor=[0.0, 0.0])
+    assert real_array("rpm", pd.Series([1500, 1600], dtype=object)).tolist() == [1500.0, 1600.0]
