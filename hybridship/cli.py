@@ -481,8 +481,8 @@ def _cmd_forecast(args) -> int:
                          f"in (0, 1), e.g. 0.05,0.95; got {args.quantiles!r}") from None
     try:
         hp = HybridPredictor.load(args.model)
-    except ModelFileError as exc:
-        raise UsageError(problem_lines(exc, f"{_PROG} forecast: error: ")) from None
+    except ModelFileError as exc:       # its message starts with the path: named with the option, as --log is
+        raise UsageError(problem_lines(ModelFileError(f"--model {exc}"), f"{_PROG} forecast: error: ")) from None
     if not args.log.is_file():
         raise UsageError(f"{_PROG} forecast: error: --log {args.log}: "
                          f"{'is a folder; expected a log file' if args.log.is_dir() else 'file not found'}")

@@ -216,6 +216,10 @@ def test_cli_errors_are_one_line_and_non_zero(log_dir, tmp_path, capsys):
                  "--start-time", "900", "--out", str(tmp_path / "x.csv")]) == 2
     err = capsys.readouterr().err.strip()
     assert "model file not found" in err and "\n" not in err
+    assert err == f"hybridship forecast: error: --model {tmp_path / 'missing.npz'}: model file not found"
+    assert main(["forecast", "--model", str(log_dir), "--log", str(log_dir / "log1.csv.gz"),      # a folder
+                 "--start-time", "900", "--out", str(tmp_path / "x.csv")]) == 2
+    assert capsys.readouterr().err.startswith(f"hybridship forecast: error: --model {log_dir}: is a folder")
     capsys.readouterr()
     assert main(["train", "--vessel", "no_such_ship", "--logs", str(log_dir), "--out", str(tmp_path / "m.npz")]) == 2
     assert "train: error: --vessel: " in capsys.readouterr().err     # the option named, whatever the file's fault
