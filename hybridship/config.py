@@ -261,6 +261,8 @@ def check_number(name: str, value, *, lo=None, hi=None, lo_open: bool = False, a
         v = float(value)
     except (TypeError, ValueError):
         raise TypeError(f"{name}: expected a number, got {value!r}") from None
+    except OverflowError:       # a whole number beyond a float's range (10**400)
+        raise ValueError(f"{name}: must be finite, got a number beyond a float's range") from None
     if not math.isfinite(v):
         raise ValueError(f"{name}: must be finite, got {value!r}")
     if lo is not None and (v <= lo if lo_open else v < lo):

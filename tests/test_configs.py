@@ -161,3 +161,12 @@ def test_real_array_refuses_text_in_an_object_array():
     with pytest.raises(ValueError, match="^scale: expected an array of real numbers"):
         SpreadCalibration(lead_s=[1.0, 2.0], scale=pd.Series(["1", "1"]), floor=[0.0, 0.0])
     assert real_array("rpm", pd.Series([1500, 1600], dtype=object)).tolist() == [1500.0, 1600.0]
+
+
+def test_check_number_names_a_whole_number_beyond_a_floats_range():
+    """float(10**400) raised Python's own 'int too large to convert to float' (OverflowError)."""
+    from hybridship.config import check_number
+
+    with pytest.raises(ValueError, match="^horizon_s: must be finite"):
+        check_number("horizon_s", 10**400)
+    assert check_number("horizon_s", 10**300) == 1e300
