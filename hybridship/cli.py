@@ -504,8 +504,8 @@ def _cmd_forecast(args) -> int:
     try:
         with warnings.catch_warnings():     # a warning naming a Python argument names the option
             warnings.showwarning = lambda message, *a, **k: shown(_in_option_names(str(message)), *a, **k)
-            fc = hp.forecast(args.log, args.start_time, args.horizon_s, guard=not args.no_guard,
-                             commands=args.commands)
+            fc = hp.forecast(args.log, args.start_time, args.horizon_s, commands=args.commands,
+                             guard=False if args.no_guard else None)     # None: as the model was saved
     except RequestError as exc:     # known only once the log is read: still the user's input
         raise UsageError(_in_option_names(problem_lines(exc, f"{_PROG} forecast: error: "))) from None
     df = fc.to_frame(quantiles=quantiles)

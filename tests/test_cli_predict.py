@@ -87,6 +87,14 @@ def test_train_then_forecast_writes_a_table(log_dir, tmp_path, capsys, monkeypat
                  "--start-time", "900", "--horizon-s", "30", "--no-guard", "--out", str(tmp_path / "ng.csv")]) == 0
     assert "guard off" in capsys.readouterr().out
     assert "guard_weight" not in pd.read_csv(tmp_path / "ng.csv")
+    # a model saved without the guard forecasts without it, as its forecast() does
+    unguarded = HybridPredictor.load(model)
+    unguarded.use_guard = False
+    unguarded.save(tmp_path / "unguarded.npz")
+    assert main(["forecast", "--model", str(tmp_path / "unguarded.npz"), "--log", str(log_dir / "log1.csv.gz"),
+                 "--start-time", "900", "--horizon-s", "30", "--out", str(tmp_path / "ug.csv")]) == 0
+    assert "guard off" in capsys.readouterr().out
+    assert "guard_weight" not in pd.read_csv(tmp_path / "ug.csv")
     _a_full_disk_keeps_the_earlier_table(monkeypatch, capsys, ["forecast", "--model", str(model), "--log",
                                                                str(log_dir / "log1.csv.gz"), "--start-time", "910",
                                                                "--horizon-s", "30", "--out", str(out)])
