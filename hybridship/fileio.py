@@ -123,7 +123,9 @@ def atomic_write(path, write: Callable[[BinaryIO], None]) -> Path:
     # a symbolic link is written through, as open() does: the rename would replace the link itself
     target = Path(os.path.realpath(path)) if path.is_symlink() else path
     check_writable(target)        # a file where a folder should be is named as such; a read-only file
-    tmp = target.with_name(f".{target.name}.{uuid.uuid4().hex}.tmp")
+    # the name cut short (50 characters, 200 bytes at most in UTF-8): a file name near the limit of
+    # 255 bytes left no room for the suffix
+    tmp = target.with_name(f".{target.name[:50]}.{uuid.uuid4().hex}.tmp")
     try:
         target.parent.mkdir(parents=True, exist_ok=True)
         with open(tmp, "xb") as fh:  # 'x': never clobber; mode follows the umask

@@ -63,3 +63,14 @@ def test_lies_within_tells_a_sub_folder_from_a_sibling_that_shares_its_prefix(tm
     assert lies_within(runs, runs) and lies_within(runs / "a" / "b", runs)
     assert lies_within(tmp_path / "link" / "a", runs)
     assert not lies_within(tmp_path / "runs2", runs) and not lies_within(tmp_path, runs)
+
+
+def test_atomic_write_replaces_a_file_whose_name_is_near_the_length_limit(tmp_path):
+    """The temporary file's name added 38 characters to the file's own, so a file of a valid
+    230-character name could not be written again ('File name too long')."""
+    from hybridship.fileio import write_text
+
+    path = tmp_path / ("a" * 230 + ".csv")
+    path.write_text("old")
+    assert write_text(path, "new") == path and path.read_text() == "new"
+    assert [p.name for p in tmp_path.iterdir()] == [path.name]     # no temporary file left
