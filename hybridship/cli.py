@@ -233,6 +233,10 @@ def _cmd_simulate(args) -> int:
                                    vessel=vessel, progress=progress, **overrides)
         except (FileExistsError, PermissionError) as exc:      # checked before any simulation
             raise UsageError(f"{prefix}: error: --out-dir: {exc}") from None
+        except ValueError as exc:
+            if not str(exc).startswith("out_dir: "):    # a seed's log there in another format, before any work
+                raise
+            raise UsageError(problem_lines(exc, f"{prefix}: error: ", {"out_dir": "--out-dir"}.get)) from None
         print(f"wrote {len(paths)} log(s) and {args.out_dir / 'scenarios.csv'}")
         return 0
 

@@ -617,3 +617,18 @@ def test_a_read_only_out_is_refused_before_training_or_forecasting(log_dir, tmp_
                  "--horizon-s", "5", "--out", str(table)]) == 2
     assert f"hybridship forecast: error: --out {table}: is read-only" in capsys.readouterr().err
     assert table.read_bytes() == b""
+
+
+def test_a_sweep_over_a_log_of_another_format_names_the_out_dir_option(tmp_path, capsys, monkeypatch):
+    """The refusal of a seed whose log is in --out-dir in another format named the library's
+    argument out_dir and exited with 1 (a run failure), though it is the user's folder,
+    checked before any simulation."""
+    from hybridship.sim import scenario
+
+    monkeypatch.setattr(scenario, "_simulate", lambda *a, **k: pytest.fail("simulated before the check"))
+    out = tmp_path / "sweep"
+    out.mkdir()
+    (out / scenario.log_file_name(1, "parquet")).write_bytes(b"PAR1")
+    assert main(["simulate", "--sweep", "--seeds", "1", "--out-dir", str(out), "--no-progress"]) == 2
+    err = capsys.readouterr().err
+    assert err.startswith("hybridship simulate: error: --out-dir: seed 1 has a log there in another format"), err
