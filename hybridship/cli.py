@@ -219,12 +219,15 @@ def _cmd_simulate(args) -> int:
         overrides = dict(drift_s=args.drift_s, t_shutdown_s=args.t_shutdown_s, heading_mode=args.heading_mode)
         # Validate the settings and the vessel once before any (long) simulation starts.
         scenario.DPLossConfig(seed=0, beaufort=tuple(args.beaufort), **overrides)
-        check_station_keeping(vessel)
     except (ValueError, TypeError) as exc:
         options = {"drift_s": "--drift-s", "t_shutdown_s": "--t-shutdown-s", "heading_mode": "--heading-mode",
                    "beaufort": "--beaufort"}
         raise UsageError(problem_lines(exc, f"{prefix}: error: ",
                                        lambda field: options.get(field.split("[", 1)[0], field))) from None
+    try:
+        check_station_keeping(vessel)
+    except ValueError as exc:       # a valid vessel file of a ship without DP actuators
+        raise UsageError(problem_lines(exc, f"{prefix}: error: --vessel: ")) from None
     progress = sys.stderr.isatty() if args.progress is None else args.progress
 
     if args.sweep:

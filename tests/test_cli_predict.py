@@ -632,3 +632,13 @@ def test_a_sweep_over_a_log_of_another_format_names_the_out_dir_option(tmp_path,
     assert main(["simulate", "--sweep", "--seeds", "1", "--out-dir", str(out), "--no-progress"]) == 2
     err = capsys.readouterr().err
     assert err.startswith("hybridship simulate: error: --out-dir: seed 1 has a log there in another format"), err
+
+
+def test_simulate_with_a_vessel_that_cannot_keep_station_names_the_vessel_option(tmp_path, capsys):
+    """A vessel without DP actuators (the Esso Osaka model: one fixed propeller) was refused
+    as "vessel 'esso_osaka_model' cannot hold station ...", naming no option."""
+    assert main(["simulate", "--vessel", "esso_osaka_model", "--seed", "1", "--out", str(tmp_path / "s.csv"),
+                 "--no-progress"]) == 2
+    err = capsys.readouterr().err
+    assert err.startswith("hybridship simulate: error: --vessel: vessel 'esso_osaka_model' cannot hold station"), err
+    assert not (tmp_path / "s.csv").exists()
