@@ -205,8 +205,7 @@ def _cmd_simulate(args) -> int:
         _check_log_path(args.out, f"{prefix}: error: --out")
         if args.out.is_dir():       # refused before simulating, not when the log is written
             raise UsageError(f"{prefix}: error: --out {args.out}: is a folder; expected the log file to write")
-        _check_out_folder(args.out.parent, prefix)      # a file on the way: refused before simulating
-        _check_writable(args.out, prefix)
+        _check_writable(args.out, prefix)       # a file on the way too: refused before simulating
         _check_replaceable(args.out, prefix)
 
     from hybridship.vessel import VesselFileError

@@ -450,6 +450,9 @@ def test_bad_options_are_refused_before_any_work(log_dir, tmp_path, capsys):
     a_file.write_text("x")
     assert main(["train", "--logs", str(log_dir), "--out", str(a_file / "m.npz")]) == 2   # a file on the way
     assert f"--out {a_file / 'm.npz'}: {a_file} exists and is not a folder" in capsys.readouterr().err
+    # simulate named the file on the way as if it were --out ('--out a_file: exists and is not a folder')
+    assert main(["simulate", "--seed", "1", "--out", str(a_file / "s.csv"), "--no-progress"]) == 2
+    assert f"--out {a_file / 's.csv'}: {a_file} exists and is not a folder" in capsys.readouterr().err
     for members in ("0", "100000000"):
         assert main(["train", "--logs", str(log_dir), "--out", str(model), "--members", members]) == 2
         assert f"--members: expected a whole number in 1..1000, got '{members}'" in capsys.readouterr().err
