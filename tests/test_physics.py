@@ -378,7 +378,7 @@ def test_rpm_for_thrust_inverts_the_propeller_model_in_every_quadrant():
     assert np.all(np.sign(rpm[T != 0]) == np.sign(T[T != 0]))
     big = rpm_for_thrust([1e7, -1e7], [0.0, 0.0], 1.9, p, max_rpm=217.0)  # infeasible: saturates
     np.testing.assert_allclose(big, [217.0, -217.0], atol=1e-6)
-    with pytest.raises(ValueError, match="finite"):
+    with pytest.raises(ValueError, match="^thrust_N: contains NaN or inf"):
         rpm_for_thrust([np.nan], [0.0], 1.9, p)
 
 
@@ -582,6 +582,27 @@ def test_propeller_functions_refuse_what_their_kernels_cannot_compute():
             rpm_for_thrust(1e4, 0.0, **args)
     with pytest.raises(ValueError, match=r"^alpha_rad, x_m, y_m: expected one entry per thruster"):
         configuration_matrix([0.0, 1.0], [1.0, 2.0, 3.0], [0.0, 0.0, 0.0])
+
+
+def test_propeller_states_given_as_text_or_in_shapes_that_do_not_broadcast_are_refused_by_name():
+    """A shaft speed of "100" was read as 100 rev/s (73.8 MN of thrust) and a demand of "1e4" as
+    the number; shapes that do not broadcast failed in numpy's words ("arg 0 ... arg 1")."""
+    p = load_wageningen()
+    for args, match in ((("100", 0.0), "^n_rps: expected an array of real numbers"),
+                        ((1.0, ["0.5"]), "^va_m_s: expected an array of real numbers"),
+                        ((1.0 + 0j, 0.0), "^n_rps: expected an array of real numbers")):
+        with pytest.raises(TypeError, match=match):
+            thrust_torque(*args, 1.9, p)
+    with pytest.raises(TypeError, match="^thrust_N: expected an array of real numbers"):
+        rpm_for_thrust("1e4", 0.0, 1.9, p)
+    with pytest.raises(ValueError, match=r"^n_rps, va_m_s: shapes \(3,\) and \(4,\) do not broadcast"):
+        thrust_torque(np.ones(3), np.ones(4), 1.9, p)
+    with pytest.raises(ValueError, match=r"^thrust_N, va_m_s: shapes \(3,\) and \(2,\) do not broadcast"):
+        rpm_for_thrust(np.ones(3), np.ones(2), 1.9, p)
+    with pytest.raises(ValueError, match="^thrust_N: contains NaN"):
+        rpm_for_thrust([1e4, np.nan], 0.0, 1.9, p)
+    t, q = thrust_torque(np.array([[1.0], [2.0]]), np.array([0.0, 1.0, 2.0]), 1.9, p)
+    assert t.shape == q.shape == (2, 3)
 
 
 def test_load_wageningen_refuses_a_pitch_ratio_that_is_not_a_number_naming_it():

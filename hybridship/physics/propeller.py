@@ -44,7 +44,7 @@ import numba
 import numpy as np
 import pandas as pd
 
-from ..config import check_number
+from ..config import check_number, real_array
 
 _TABLE_FILE = "wageningen_b_series_4q.csv"
 
@@ -264,17 +264,37 @@ def thrust_torque(n_rps, va_m_s, diameter_m: float, prop: PropellerCoefficients,
     prop : PropellerCoefficients
     rho_kg_m3 : float
         Water density [kg/m^3].
+
+    Raises
+    ------
+    TypeError
+        ``n_rps`` or ``va_m_s`` given as text or complex numbers.
+    ValueError
+        Non-finite states, shapes that do not broadcast, or a diameter or density that is
+        not a number > 0 (each naming the argument).
     """
     _check_propeller_scalars(diameter_m, rho_kg_m3)
-    n, va = np.broadcast_arrays(np.asarray(n_rps, float), np.asarray(va_m_s, float))
-    # the compiled kernel assumes finite numbers: a NaN shaft speed or inflow came back as 0 N
-    for name, x in (("n_rps", n), ("va_m_s", va)):
-        if not np.all(np.isfinite(x)):
-            raise ValueError(f"{name}: contains NaN or inf")
+    n, va = _finite_pair("n_rps", n_rps, "va_m_s", va_m_s)
     out = np.empty((n.size, 2))
     _thrust_torque_flat(np.ascontiguousarray(n.ravel()), np.ascontiguousarray(va.ravel()),
                         float(diameter_m), float(rho_kg_m3), prop.coef, out)
     return out[:, 0].reshape(n.shape), out[:, 1].reshape(n.shape)
+
+
+def _finite_pair(name_a, a, name_b, b):
+    """Two state arrays as finite floats broadcast together, or an error naming them: text
+    was parsed as a number ("100" as 100 rev/s), shapes that do not broadcast failed in
+    numpy's words ("arg 0 ... arg 1"), and the compiled kernels assume finite numbers (a NaN
+    shaft speed or inflow came back as 0 N)."""
+    a, b = real_array(name_a, a), real_array(name_b, b)
+    try:
+        a, b = np.broadcast_arrays(a, b)
+    except ValueError:
+        raise ValueError(f"{name_a}, {name_b}: shapes {a.shape} and {b.shape} do not broadcast together") from None
+    for name, x in ((name_a, a), (name_b, b)):
+        if not np.all(np.isfinite(x)):
+            raise ValueError(f"{name}: contains NaN or inf")
+    return a, b
 
 
 def _check_propeller_scalars(diameter_m, rho_kg_m3, max_rpm=None) -> None:
@@ -317,11 +337,14 @@ def rpm_for_thrust(thrust_N, va_m_s, diameter_m: float, prop: PropellerCoefficie
     rho_kg_m3 : float
     max_rpm : float, optional
         Upper bound of |rpm|; default 3000 / D (a generous tip-speed bound).
+
+    Raises
+    ------
+    TypeError, ValueError
+        As :func:`thrust_torque`, naming ``thrust_N``, ``va_m_s`` or ``max_rpm``.
     """
     _check_propeller_scalars(diameter_m, rho_kg_m3, max_rpm)
-    T, va = np.broadcast_arrays(np.asarray(thrust_N, float), np.asarray(va_m_s, float))
-    if not np.all(np.isfinite(T)) or not np.all(np.isfinite(va)):
-        raise ValueError("rpm_for_thrust: thrust_N and va_m_s must be finite")
+    T, va = _finite_pair("thrust_N", thrust_N, "va_m_s", va_m_s)
     rpm_max = float(max_rpm) if max_rpm is not None else 3000.0 / diameter_m
     out = np.empty(T.size)
     _rpm_for_thrust_flat(np.ascontiguousarray(T.ravel()), np.ascontiguousarray(va.ravel()), float(diameter_m),
