@@ -117,8 +117,12 @@ Seed = Annotated[int, BeforeValidator(_not_bool), Field(ge=0, lt=2**63)]
 def real_array(name: str, a) -> np.ndarray:
     """``a`` as a float array, or a TypeError naming ``name``: text and complex numbers are
     refused (numpy would parse ``"1.5"``, drop an imaginary part with only a warning, or fail
-    in its own words)."""
-    arr = np.asarray(a)
+    in its own words). Rows of different lengths are a ValueError naming ``name`` (numpy's
+    was "setting an array element with a sequence ... inhomogeneous shape")."""
+    try:
+        arr = np.asarray(a)
+    except ValueError:
+        raise ValueError(f"{name}: expected an array of numbers, got rows of different lengths") from None
     if arr.dtype.kind in "USc":
         raise TypeError(f"{name}: expected an array of real numbers, got dtype {arr.dtype}")
     if arr.dtype.kind == "O" and any(isinstance(x, (str, bytes, complex)) for x in arr.flat):
@@ -166,7 +170,7 @@ def float_array(shape: tuple | None = None, *, flat: bool = False, finite: bool 
     def convert(v):
         try:
             a = real_array("array", v).copy()       # a copy: never the caller's array
-        except TypeError as err:        # a ValueError, which pydantic reports under the field's name
+        except (TypeError, ValueError) as err:      # a ValueError, which pydantic reports under the field's name
             raise ValueError(str(err).removeprefix("array: ")) from None
         if flat:
             a = a.reshape(-1)

@@ -605,6 +605,28 @@ def test_propeller_states_given_as_text_or_in_shapes_that_do_not_broadcast_are_r
     assert t.shape == q.shape == (2, 3)
 
 
+def test_physics_inputs_with_rows_of_different_lengths_are_refused_by_name(gunnerus):
+    """Ragged rows failed in numpy's words ("setting an array element with a sequence ...
+    inhomogeneous shape"), naming no argument."""
+    from hybridship.physics.rudder import rudder_forces
+
+    m = gunnerus
+    for kw, name in ((dict(rpm=[[100.0, 0.0, 0.0], [100.0]]), "rpm"), (dict(wind=[[5.0, 0.0], [5.0]]), "wind"),
+                     (dict(current=[0.5, [0.0]]), "current")):
+        with pytest.raises(ValueError, match=f"^{name}: expected an array of numbers, got rows of different"):
+            m.acceleration(np.zeros((2, 3)), np.zeros(3), **kw)
+    with pytest.raises(ValueError, match="^eta0: expected an array of numbers, got rows of different lengths"):
+        m.rollout([[0.0, 0.0, 0.0], [0.0, 0.0]], np.zeros(3), 2)
+    esso = DynamicModel("esso_osaka_model")
+    with pytest.raises(ValueError, match="^nu_r: expected an array of numbers, got rows of different lengths"):
+        rudder_forces(esso, [[0.3, 0.0, 0.0], [0.3]], [0.1])
+    # the settings' array fields convert through the same function: the field is named once
+    from hybridship.residual.calibration import SpreadCalibration
+
+    with pytest.raises(ValueError, match="^scale: expected an array of numbers, got rows of different lengths"):
+        SpreadCalibration(lead_s=[0.0, 1.0], scale=[[1.0, 1.0], [1.0]], floor=[0.0, 0.0])
+
+
 def test_load_wageningen_refuses_a_pitch_ratio_that_is_not_a_number_naming_it():
     for bad in ("1.0", None, "x", True):
         with pytest.raises(TypeError, match="^pitch_ratio: expected a number"):
