@@ -710,8 +710,9 @@ def load_vessel(name_or_path: str | Path) -> Vessel:
                         f"{type(name_or_path).__name__} {name_or_path!r}")
     p = Path(name_or_path)
     if p.suffix == ".toml" or p.exists():
-        if not p.is_file():
-            raise VesselFileError(f"{p}: vessel file not found")
+        if not p.is_file():     # a folder exists: "not found" sent the user looking for it
+            problem = "is a folder; expected a vessel file (.toml)" if p.is_dir() else "vessel file not found"
+            raise VesselFileError(f"{p}: {problem}")
         try:
             text = p.read_text(encoding="utf-8")
         except UnicodeDecodeError:

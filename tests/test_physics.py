@@ -800,6 +800,13 @@ def test_unknown_vessel_and_bad_toml(tmp_path):
     model_file.write_bytes(b"PK\x03\x04\x8a\xff binary")
     with pytest.raises(VesselFileError, match="not a vessel file .* a model file .* carries its vessel"):
         load_vessel(model_file)
+    # a folder (named like a file or not) exists: it was reported as 'vessel file not found'
+    for folder in (tmp_path, tmp_path / "ship.toml"):
+        folder.mkdir(exist_ok=True)
+        with pytest.raises(VesselFileError, match=r": is a folder; expected a vessel file \(\.toml\)$"):
+            load_vessel(folder)
+    with pytest.raises(VesselFileError, match="other.toml: vessel file not found$"):
+        load_vessel(tmp_path / "other.toml")
 
 
 def test_rollout_refuses_commands_it_is_not_meant_for_and_never_returns_nan():
