@@ -346,7 +346,9 @@ class Rudder(_Strict):
     steering_resistance_deduction: Float = Field(0.0, ge=0, lt=1)
     hull_force_factor: Float = Field(0.0, ge=0, le=2)
     x_H_m: Optional[Float] = Field(None, description="default: x_m")
-    max_angle_deg: Float = Field(35.0, gt=0, le=90, description="mechanical limit [deg] (for reference)")
+    max_angle_deg: Float = Field(35.0, gt=0, le=90, description="mechanical limit [deg]: the forecasts' input "
+                                 "check clips (or refuses) a rudder command beyond it; synthetic trials draw "
+                                 "within it")
 
     @property
     def aspect_ratio(self) -> float:

@@ -382,3 +382,24 @@ def test_physics_log_commands_the_rudder(esso):
 
     midships = log.assign(rudder_azimuth_deg=0.0)
     assert end_error(log) < 0.5 * end_error(midships)
+
+
+def test_max_angle_deg_is_the_limit_of_the_forecasts_rudder_commands_as_its_description_says(esso):
+    """The field was described as 'mechanical limit (for reference)', as if nothing used it; the
+    forecasts' input check clips a rudder command beyond it (and refuses it in refuse mode), and
+    synthetic trials draw within it."""
+    from pathlib import Path
+
+    from hybridship.forecast_inputs import InputRangeError, check_or_clip_inputs
+    from hybridship.vessel import Rudder
+
+    limit = math.radians(esso.vessel.rudders[0].max_angle_deg)
+    out = check_or_clip_inputs(esso, azimuth_rad=[0.0, limit + 0.1])
+    assert out.azimuth_rad[-1] == pytest.approx(limit) and out.clipped.all()
+    with pytest.raises(InputRangeError, match=r"azimuth_rad\[rudder .rudder.\]: .*the rudders. max_angle_deg"):
+        check_or_clip_inputs(esso, azimuth_rad=[0.0, limit + 0.1], mode="refuse")
+    described = Rudder.model_fields["max_angle_deg"].description
+    row = next(line for line in (Path(__file__).parents[1] / "docs" / "reference" / "vessel-file.md")
+               .read_text(encoding="utf-8").splitlines() if line.startswith("| `max_angle_deg`"))
+    for text in (described, row):
+        assert "for reference" not in text and "clips" in text and "synthetic trials" in text
