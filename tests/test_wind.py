@@ -376,6 +376,26 @@ def test_geometry_given_as_text_bool_or_none_is_refused_naming_the_field():
     assert np.isfinite(blendermann_coefficients(0.3, **{**RESEARCH_VESSEL, "L_oa_m": np.float32(55.0)})[2])
 
 
+def test_angles_speeds_and_table_columns_given_as_text_are_refused_naming_them():
+    """numpy read text as the number: a relative wind angle "0.5" as 0.5 rad, a wind speed "10"
+    as 10 m/s, a table's angles ["0", "90", "180"] as degrees; other text failed in float()'s
+    words ('could not convert string to float')."""
+    for name, curve in CURVES.items():
+        with pytest.raises(TypeError, match="^gamma_rad: expected an array of real numbers"):
+            curve("0.5")
+    with pytest.raises(TypeError, match="^gamma_rad: expected an array of real numbers"):
+        interpolate_table(["0.5"], coefficient_table(CURVES["tabulated"])[1])
+    for i, name in enumerate(("wind_speed_m_s", "wind_dir_from_rad", "psi_rad", "u_m_s", "v_m_s")):
+        args = [10.0, 0.0, 0.0, 1.0, 0.0]
+        args[i] = str(args[i])
+        with pytest.raises(TypeError, match=f"^{name}: expected an array of real numbers"):
+            relative_wind(*args)
+    for key, bad in (("angle_deg", [str(a) for a in GUNNERUS_ANGLE]), ("C_Y", GUNNERUS_CY[:-1] + ["0"]),
+                     ("C_X", GUNNERUS_CX[:1] + ["a"] + GUNNERUS_CX[2:])):
+        with pytest.raises(ValueError, match=rf"^wind\.{key}: must be a list of numbers, got \["):
+            tabulated_coefficients(0.3, **{**GUNNERUS_TABLE, key: bad})
+
+
 # ------------------------------------------------------------------ kernel table
 
 

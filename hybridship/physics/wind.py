@@ -41,7 +41,7 @@ from importlib import resources
 import numpy as np
 import pandas as pd
 
-from ..config import check_number, check_whole_number
+from ..config import check_number, check_whole_number, real_array
 
 __all__ = [
     "relative_wind",
@@ -60,8 +60,9 @@ _TWO_PI = 2.0 * np.pi
 
 
 def _wrap_gamma(gamma_rad):
-    """Wrap angles to (-pi, pi] so that sgn(gamma) is well defined at +-pi."""
-    g = np.asarray(gamma_rad, dtype=float)
+    """Wrap angles to (-pi, pi] so that sgn(gamma) is well defined at +-pi (text is refused
+    naming gamma_rad: numpy read "0.5" as 0.5 rad)."""
+    g = real_array("gamma_rad", gamma_rad)
     # pi - mod(pi - g, 2 pi) maps onto (-pi, pi] (upper end closed on purpose); angles
     # already in range are passed through bit-exactly so that odd/even symmetry is exact.
     inside = (g > -np.pi) & (g <= np.pi)
@@ -120,10 +121,11 @@ def relative_wind(wind_speed_m_s, wind_dir_from_rad, psi_rad, u_m_s, v_m_s):
     ``u_w = -V_w cos(beta - psi)`` and ``v_w = -V_w sin(beta - psi)``
     (Fossen 2021, sec. 10.1). Then ``u_rw = u - u_w`` and ``v_rw = v - v_w``.
     """
-    V_w = np.asarray(wind_speed_m_s, dtype=float)
-    rel_dir = np.asarray(wind_dir_from_rad, dtype=float) - np.asarray(psi_rad, dtype=float)
-    u_rw = np.asarray(u_m_s, dtype=float) + V_w * np.cos(rel_dir)
-    v_rw = np.asarray(v_m_s, dtype=float) + V_w * np.sin(rel_dir)
+    # text refused naming the argument (numpy read "10" as 10 m/s)
+    V_w = real_array("wind_speed_m_s", wind_speed_m_s)
+    rel_dir = real_array("wind_dir_from_rad", wind_dir_from_rad) - real_array("psi_rad", psi_rad)
+    u_rw = real_array("u_m_s", u_m_s) + V_w * np.cos(rel_dir)
+    v_rw = real_array("v_m_s", v_m_s) + V_w * np.sin(rel_dir)
     V_rw = np.hypot(u_rw, v_rw)
     # -atan2 can give exactly -pi (v_rw = +0, u_rw < 0); the wrap sends it to +pi.
     gamma = _wrap_gamma(-np.arctan2(v_rw, u_rw))
@@ -326,10 +328,10 @@ def blendermann_coefficients(gamma_rad, *, vessel_type: str, A_F_m2, A_L_m2, L_o
 
 
 def _as_1d_finite(field, values):
-    try:
-        arr = np.asarray(values, dtype=float)
-    except (TypeError, ValueError) as exc:
-        raise ValueError(f"{field}: must be a list of numbers ({exc})") from None
+    try:        # text refused, also text that reads as a number (numpy read "90" as 90)
+        arr = real_array(field, values)
+    except TypeError:
+        raise ValueError(f"{field}: must be a list of numbers, got {values!r}") from None
     if arr.ndim != 1:
         raise ValueError(f"{field}: must be one-dimensional, got shape {arr.shape}")
     bad = ~np.isfinite(arr)
@@ -418,7 +420,7 @@ def tabulated_coefficients(gamma_rad, *, angle_deg, C_X, C_Y, C_N, name="wind"):
     Raises
     ------
     ValueError
-        Non-finite values, non-increasing angles, unequal lengths, an unsupported
+        Text or non-finite values, non-increasing angles, unequal lengths, an unsupported
         angle span, non-zero ``C_Y``/``C_N`` at 0 or 180 deg of a symmetric table, or a
         full-circle table whose last row differs from its first. The message names
         the field, e.g. ``"wind.C_Y: must be 0 at 0 deg for a symmetric table, got 0.1"``.
@@ -506,12 +508,12 @@ def interpolate_table(gamma_rad, table):
     C_X, C_Y, C_N : ndarray
         Interpolated coefficients, same shape as ``gamma_rad``.
     """
-    tab = np.asarray(table, dtype=float)
+    tab = real_array("table", table)
     if tab.ndim != 2 or tab.shape[1] != 3 or tab.shape[0] < 3:
         raise ValueError(f"table: must have shape (n >= 3, 3), got {tab.shape}")
     n = tab.shape[0]
     h = _TWO_PI / (n - 1)
-    g = np.asarray(gamma_rad, dtype=float)
+    g = real_array("gamma_rad", gamma_rad)
     # Position along the grid in cells, wrapped into [0, n - 1).
     with np.errstate(invalid="ignore"):  # inf angles become NaN below, as intended
         pos = np.mod(g + np.pi, _TWO_PI) / h
