@@ -627,6 +627,23 @@ def test_physics_inputs_with_rows_of_different_lengths_are_refused_by_name(gunne
         SpreadCalibration(lead_s=[0.0, 1.0], scale=[[1.0, 1.0], [1.0]], floor=[0.0, 0.0])
 
 
+def test_propeller_coefficients_and_the_configuration_matrix_refuse_text_naming_the_argument():
+    """numpy read text as the number: kt_kq("0.3") gave K_T at J = 0.3, an advance angle "1"
+    was 1 rad, a thrust direction "1.57" was 1.57 rad."""
+    from hybridship.physics.propeller import advance_angle
+
+    p = load_wageningen()
+    for call, name in ((lambda: kt_kq("0.3", p), "J"), (lambda: ct_cq_star(["1.0"], p), "beta_rad"),
+                       (lambda: advance_angle("1.0", 5.0, 1.9), "va_m_s"),
+                       (lambda: advance_angle(1.0, "5", 1.9), "n_rps"),
+                       (lambda: configuration_matrix(["1.57"], [1.0], [0.0]), "alpha_rad"),
+                       (lambda: configuration_matrix([1.57], ["1"], [0.0]), "x_m"),
+                       (lambda: configuration_matrix([1.57], [1.0], [0j]), "y_m")):
+        with pytest.raises(TypeError, match=f"^{name}: expected an array of real numbers"):
+            call()
+    np.testing.assert_allclose(kt_kq(np.float32(0.3), p), kt_kq(0.3, p), rtol=1e-6)   # numpy numbers are taken
+
+
 def test_load_wageningen_refuses_a_pitch_ratio_that_is_not_a_number_naming_it():
     for bad in ("1.0", None, "x", True):
         with pytest.raises(TypeError, match="^pitch_ratio: expected a number"):

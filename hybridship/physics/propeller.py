@@ -237,13 +237,13 @@ def _thrust_torque_flat(n, va, diameter_m, rho, coef, out):
 
 
 def advance_angle(va_m_s, n_rps, diameter_m):
-    """Advance angle beta = atan2(V_a, 0.7 pi n D) [rad] (broadcasting)."""
-    return np.arctan2(np.asarray(va_m_s, float), 0.7 * np.pi * np.asarray(n_rps, float) * diameter_m)
+    """Advance angle beta = atan2(V_a, 0.7 pi n D) [rad] (broadcasting; text refused naming the argument)."""
+    return np.arctan2(real_array("va_m_s", va_m_s), 0.7 * np.pi * real_array("n_rps", n_rps) * diameter_m)
 
 
 def ct_cq_star(beta_rad, prop: PropellerCoefficients):
     """Four-quadrant coefficients C_T*(beta), C_Q*(beta) for an array of advance angles [rad]."""
-    b = np.asarray(beta_rad, dtype=float)
+    b = real_array("beta_rad", beta_rad)        # numpy read "0.3" as 0.3 rad
     flat = np.ascontiguousarray(b.ravel())
     out = np.empty((flat.size, 2))
     _ct_cq_star_flat(flat, prop.coef, out)
@@ -311,7 +311,7 @@ def kt_kq(J, prop: PropellerCoefficients):
     Uses K_T = C_T* (pi/8) (J^2 + (0.7 pi)^2) with beta = atan2(J, 0.7 pi), the identity
     between the four-quadrant and the classical open-water representation.
     """
-    J = np.asarray(J, dtype=float)
+    J = real_array("J", J)                      # numpy read "0.3" as J = 0.3
     beta = np.arctan2(J, 0.7 * np.pi)
     ct, cq = ct_cq_star(beta, prop)
     fac = np.pi / 8.0 * (J**2 + (0.7 * np.pi) ** 2)

@@ -25,6 +25,7 @@ import math
 import numba
 import numpy as np
 
+from ..config import real_array
 from .propeller import thrust_scalar
 
 #: Column layout of the packed thruster parameter array ``thr (K, 8)``.
@@ -46,9 +47,8 @@ def configuration_matrix(alpha_rad, x_m, y_m):
     ndarray, shape (..., 3, K)
         Columns ``[cos a, sin a, x sin a - y cos a]``; ``tau = T @ f`` with thrusts ``f`` [N].
     """
-    a = np.asarray(alpha_rad, dtype=float)
-    x = np.asarray(x_m, dtype=float)
-    y = np.asarray(y_m, dtype=float)
+    # text refused naming the argument (numpy read "1.57" as the number)
+    a, x, y = real_array("alpha_rad", alpha_rad), real_array("x_m", x_m), real_array("y_m", y_m)
     try:
         np.broadcast_shapes(a.shape, x.shape, y.shape)
     except ValueError:
