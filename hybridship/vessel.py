@@ -319,7 +319,7 @@ class Rudder(_Strict):
     Attributes (MMG symbol in brackets)
     ----------
     area_m2 : movable rudder area [A_R].
-    span_m : rudder span [H_R]; sets eta = D_P / H_R and the aspect ratio H_R^2 / A_R.
+    span_m : rudder span [H_R]; sets eta = min(D_P / H_R, 1) and the aspect ratio H_R^2 / A_R.
     lift_gradient : normal-force gradient [f_alpha, 1/rad]; default Fujii's
         ``6.13 Lambda / (Lambda + 2.25)`` from the aspect ratio Lambda.
     wake_ratio : (1 - w_R) / (1 - w_P) [epsilon]; for a rudder without a propeller, 1 - w_R.

@@ -403,3 +403,27 @@ def test_max_angle_deg_is_the_limit_of_the_forecasts_rudder_commands_as_its_desc
                .read_text(encoding="utf-8").splitlines() if line.startswith("| `max_angle_deg`"))
     for text in (described, row):
         assert "for reference" not in text and "clips" in text and "synthetic trials" in text
+
+
+def test_a_span_shorter_than_the_propeller_diameter_puts_all_of_it_in_the_slipstream_as_documented():
+    """eta was documented as D_P / H_R; the model caps it at 1 (all of the span in the
+    slipstream; above 1 the plain-wake share 1 - eta would be negative), which the rudder
+    docstring, the schema and the vessel-file reference now say."""
+    from pathlib import Path
+
+    from hybridship.physics import rudder as rudder_module
+    from hybridship.vessel import Rudder
+
+    d = esso_dict()
+    d["rudders"][0]["span_m"] = 0.5 * d["thrusters"][0]["diameter_m"]
+    m = DynamicModel(vessel_from_dict(d, "short_span.toml"))
+    assert m.arrays.rud[0, rudder_module.RUD_ETA] == 1.0
+    r = m.vessel.rudders[0]
+    u_p, thrust, dia, rho = 0.3, 2.0, d["thrusters"][0]["diameter_m"], m.vessel.particulars.rho_water_kg_m3
+    u_jet = (1 - r.slipstream_factor) * u_p + r.slipstream_factor * math.sqrt(
+        u_p**2 + 8 * thrust / (math.pi * rho * dia**2))
+    assert rudder_inflow_scalar(u_p, thrust, dia, rho, r.wake_ratio, r.slipstream_factor, 1.0) == pytest.approx(
+        r.wake_ratio * u_jet, rel=1e-12)
+    reference = (Path(__file__).parents[1] / "docs" / "reference" / "vessel-file.md").read_text(encoding="utf-8")
+    for text in (rudder_module.__doc__, Rudder.__doc__, reference):
+        assert "D_P / H_R" in text and "min(D_P / H_R" in text.replace("\\min", "min")

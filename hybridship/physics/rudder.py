@@ -16,7 +16,7 @@ through ``n = 0``):
     u_{jet} = (1 - \\kappa) u_P + \\kappa \\sqrt{u_P^2 + c_T}
     \\qquad\\Big(= u_P\\big[1 + \\kappa(\\sqrt{1 + 8K_T/(\\pi J_P^2)} - 1)\\big]\\Big)
 
-    u_R = \\varepsilon \\sqrt{\\eta\\, u_{jet}^2 + (1 - \\eta)\\, u_P^2}, \\qquad \\eta = D_P / H_R
+    u_R = \\varepsilon \\sqrt{\\eta\\, u_{jet}^2 + (1 - \\eta)\\, u_P^2}, \\qquad \\eta = \\min(D_P / H_R,\\ 1)
 
     v_R = -\\gamma_R (v_r + l_R r) \\qquad (= U \\gamma_R \\beta_R \\text{ for small drift; }
     \\gamma_R \\text{ by the sign of } \\beta_R)
