@@ -644,6 +644,18 @@ def test_propeller_coefficients_and_the_configuration_matrix_refuse_text_naming_
     np.testing.assert_allclose(kt_kq(np.float32(0.3), p), kt_kq(0.3, p), rtol=1e-6)   # numpy numbers are taken
 
 
+def test_thrust_torque_pairs_its_inputs_element_by_element_as_its_docstring_says():
+    """The docstring promised 'every combination of shaft speed and inflow' (an outer product);
+    the arrays are broadcast, so two 1-D arrays of one length give one thrust per pair."""
+    p = load_wageningen()
+    n, va = np.array([2.0, 3.0, 4.0]), np.array([0.0, 1.0, 2.0])
+    t, _ = thrust_torque(n, va, 1.9, p)
+    assert t.shape == (3,)
+    np.testing.assert_array_equal(t, [thrust_torque(a, b, 1.9, p)[0] for a, b in zip(n, va)])
+    assert "every combination of shaft speed" not in thrust_torque.__doc__
+    assert "broadcast together" in thrust_torque.__doc__.splitlines()[0]
+
+
 def test_load_wageningen_refuses_a_pitch_ratio_that_is_not_a_number_naming_it():
     for bad in ("1.0", None, "x", True):
         with pytest.raises(TypeError, match="^pitch_ratio: expected a number"):

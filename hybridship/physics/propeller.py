@@ -251,7 +251,8 @@ def ct_cq_star(beta_rad, prop: PropellerCoefficients):
 
 
 def thrust_torque(n_rps, va_m_s, diameter_m: float, prop: PropellerCoefficients, rho_kg_m3: float = 1025.0):
-    """Open-water thrust [N] and torque [N m] for every combination of shaft speed and inflow.
+    """Open-water thrust [N] and torque [N m] for shaft speeds and inflows broadcast together
+    (element by element, as numpy broadcasts: not every combination of two 1-D arrays).
 
     Parameters
     ----------
