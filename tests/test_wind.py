@@ -438,6 +438,21 @@ def test_interpolate_table_keeps_shape_and_propagates_nan():
         assert np.isfinite(c[0, 0]) and np.isfinite(c[1, 1])
 
 
+def test_coefficient_table_names_a_curve_that_returns_the_wrong_shape_or_type():
+    """Its docstring promises a ValueError for a curve of the wrong shape: that was numpy's
+    'could not be broadcast together with remapped shapes', a curve returning one number
+    'object of type 'int' has no len()', and text float()'s 'could not convert string'."""
+    for curve, match in ((lambda g: (g[:-1], g, g), r"^curve_fn: C_X has shape \(10,\); expected one value per angle"),
+                         (lambda g: (g, np.zeros((2, g.size)), g), r"^curve_fn: C_Y has shape \(2, 11\)"),
+                         (lambda g: 5.0, "^curve_fn: must return \\(C_X, C_Y, C_N\\), got float")):
+        with pytest.raises(ValueError, match=match):
+            coefficient_table(curve, n=11)
+    with pytest.raises(TypeError, match="^curve_fn: C_N: expected an array of real numbers"):
+        coefficient_table(lambda g: (g, g, ["a"] * g.size), n=11)
+    _, table = coefficient_table(lambda g: (np.cos(g), 0.0, np.zeros_like(g)), n=11)      # one value: as before
+    np.testing.assert_array_equal(table[:, 1], 0.0)
+
+
 def test_coefficient_table_rejects_bad_input():
     for n in (2, 3.7, "361"):        # 3.7 was taken as 3 points
         with pytest.raises(ValueError, match=r"^n: expected a whole number >= 3"):

@@ -472,15 +472,24 @@ def coefficient_table(curve_fn, n=721):
     ------
     ValueError
         ``n`` not a whole number >= 3, a curve returning the wrong shape, or non-finite values.
+    TypeError
+        A curve returning text.
     """
     n = check_whole_number("n", n, lo=3)     # int(3.7) silently made 3 points
     grid = np.linspace(-np.pi, np.pi, n)
     out = curve_fn(grid)
-    if len(out) != 3:
-        raise ValueError(f"curve_fn: must return (C_X, C_Y, C_N), got {len(out)} items")
+    n_items = len(out) if isinstance(out, (tuple, list, np.ndarray)) else None
+    if n_items != 3:
+        got = f"{n_items} items" if n_items is not None else type(out).__name__
+        raise ValueError(f"curve_fn: must return (C_X, C_Y, C_N), got {got}")
     cols = []
     for key, col in zip(("C_X", "C_Y", "C_N"), out):
-        arr = np.broadcast_to(np.asarray(col, dtype=np.float64), grid.shape)
+        col = real_array(f"curve_fn: {key}", col)       # text failed in float()'s words
+        try:        # a wrong shape failed in numpy's words ('could not be broadcast ... remapped shapes')
+            arr = np.broadcast_to(col, grid.shape)
+        except ValueError:
+            raise ValueError(f"curve_fn: {key} has shape {col.shape}; expected one value per angle of the "
+                             f"{grid.size}-point grid (or one value)") from None
         if not np.all(np.isfinite(arr)):
             raise ValueError(f"curve_fn: {key} is not finite on the gamma grid")
         cols.append(arr)
