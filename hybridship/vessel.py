@@ -231,6 +231,9 @@ class NonlinearDamping(_Strict):
         if self.lift != "mmg" and self.mmg is not None:     # it would be ignored
             raise ValueError(f"[damping.nonlinear.mmg]: given with lift {self.lift!r}, which does not use it "
                              f"(give lift 'mmg' to use it)")
+        if self.lift == "none" and self.lift_speed != "abs":    # it would be ignored
+            raise ValueError(f"lift_speed: {self.lift_speed!r} given with lift 'none', which has no lift terms to "
+                             f"grow with the speed (give lift 'clarke1983' or 'mmg' to use it)")
         given = [k for k in ("d_uu", "d_vv", "d_rr") if getattr(self, k) != 0.0]
         if self.method == "none" and given:       # they would be ignored
             raise ValueError(f"{', '.join(given)}: given with method 'none', which has no nonlinear damping "

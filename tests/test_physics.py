@@ -736,6 +736,9 @@ MMG_TABLE = {"Y_v": -0.315, "Y_r": 0.083, "N_v": -0.137, "N_r": -0.049}
     (lambda d: d["particulars"].__setitem__("L_pp_m", "long"), "particulars.L_pp_m"),
     (lambda d: d["thrusters"][2].__setitem__("name", "port"), "duplicate"),
     (lambda d: d["damping"]["nonlinear"].__setitem__("lift_speed", "sign"), "damping.nonlinear.lift_speed"),
+    # with no lift terms the option was ignored (the file said 'signed', the model was the default)
+    (lambda d: d["damping"]["nonlinear"].update(lift="none", lift_speed="signed"),
+     r"damping.nonlinear: lift_speed: 'signed' given with lift 'none', which has no lift terms"),
     (lambda d: d["thrusters"][0].__setitem__("x_m", 1444.0), r"thrusters\[0\].x_m: 1444 m lies outside the hull"),
     (lambda d: d["thrusters"][1].__setitem__("y_m", -27.0), r"thrusters\[1\].y_m: -27 m lies outside the hull"),
     # beyond the side (half the beam, 9.6 m on the Gunnerus) and beyond the bow: refused too
