@@ -353,6 +353,14 @@ class Rudder(_Strict):
                                  "check clips (or refuses) a rudder command beyond it; synthetic trials draw "
                                  "within it")
 
+    @model_validator(mode="after")
+    def _slipstream_needs_a_propeller(self):
+        # without a propeller eta = 0: the slipstream factor would be ignored
+        if self.propeller is None and self.slipstream_factor != type(self).model_fields["slipstream_factor"].default:
+            raise ValueError(f"slipstream_factor: {self.slipstream_factor:g} given for a rudder without a propeller, "
+                             f"which sees no slipstream (give propeller, the fixed thruster ahead of it, to use it)")
+        return self
+
     @property
     def aspect_ratio(self) -> float:
         """Geometric aspect ratio Lambda = H_R^2 / A_R [-]."""

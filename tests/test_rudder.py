@@ -287,6 +287,9 @@ def test_channels_and_errors(esso):
     # x measured aft as positive (a sign slip): a rudder ahead of its propeller was accepted
     (lambda d: d["rudders"][0].__setitem__("x_m", 1.5), r"rudders\[0\].x_m: 1.5 m is not aft of its propeller "
                                                        r"'propeller' \(x_m = -1.44 m\)"),
+    # without a propeller eta = 0 and the slipstream factor was ignored
+    (lambda d: d["rudders"][0].update(propeller=None, slipstream_factor=0.8),
+     r"rudders\[0\]: slipstream_factor: 0.8 given for a rudder without a propeller"),
 ])
 def test_invalid_rudder_files_name_the_field(edit, field):
     d = copy.deepcopy(esso_dict())
