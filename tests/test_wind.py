@@ -376,6 +376,15 @@ def test_geometry_given_as_text_bool_or_none_is_refused_naming_the_field():
     assert np.isfinite(blendermann_coefficients(0.3, **{**RESEARCH_VESSEL, "L_oa_m": np.float32(55.0)})[2])
 
 
+def test_a_negative_wind_speed_is_refused_as_its_docstring_requires():
+    """The docstring asks for a speed >= 0; -10 m/s from the north was taken as 10 m/s from the
+    south without a word (DynamicModel refuses it already)."""
+    with pytest.raises(ValueError, match="^wind_speed_m_s: -10 m/s is negative; expected a speed >= 0"):
+        relative_wind([5.0, -10.0], 0.0, 0.0, 0.0, 0.0)
+    V, g = relative_wind(0.0, 0.0, 0.0, 0.0, 0.0)          # calm air is a speed
+    assert V == 0.0 and g == 0.0
+
+
 def test_angles_speeds_and_table_columns_given_as_text_are_refused_naming_them():
     """numpy read text as the number: a relative wind angle "0.5" as 0.5 rad, a wind speed "10"
     as 10 m/s, a table's angles ["0", "90", "180"] as degrees; other text failed in float()'s

@@ -112,6 +112,13 @@ def relative_wind(wind_speed_m_s, wind_dir_from_rad, psi_rad, u_m_s, v_m_s):
         ``-atan2(v_rw, u_rw)`` wrapped to (-pi, pi] [rad]; 0 = head wind, > 0 = wind
         from port. 0 when ``V_rw = 0``.
 
+    Raises
+    ------
+    TypeError
+        An input given as text or complex numbers (named).
+    ValueError
+        A negative wind speed.
+
     Notes
     -----
     All inputs broadcast against each other (any shapes).
@@ -123,6 +130,9 @@ def relative_wind(wind_speed_m_s, wind_dir_from_rad, psi_rad, u_m_s, v_m_s):
     """
     # text refused naming the argument (numpy read "10" as 10 m/s)
     V_w = real_array("wind_speed_m_s", wind_speed_m_s)
+    if np.any(V_w < 0.0):       # the direction carries the way it blows: -10 m/s from north acted as from south
+        raise ValueError(f"wind_speed_m_s: {np.min(V_w):g} m/s is negative; expected a speed >= 0 (the direction "
+                         f"wind_dir_from_rad says where it comes from)")
     rel_dir = real_array("wind_dir_from_rad", wind_dir_from_rad) - real_array("psi_rad", psi_rad)
     u_rw = real_array("u_m_s", u_m_s) + V_w * np.cos(rel_dir)
     v_rw = real_array("v_m_s", v_m_s) + V_w * np.sin(rel_dir)
