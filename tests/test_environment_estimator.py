@@ -919,6 +919,22 @@ def test_estimate_is_causal_where_the_wave_motion_sets_the_measurement_noise(mod
     np.testing.assert_array_equal(before.P[0], after.P[0])
 
 
+def test_the_wave_motion_noise_at_a_row_does_not_depend_on_how_far_past_it_the_run_reads(model):
+    """A log logged every second up to row 420 and every 2 s after it (no gap: the log's step
+    is 2 s): the estimate at row 420 is the same whether the run stops there or also reports
+    the last row. The wave windows' lengths took the median step of the rows read, so reading
+    on into the 2-s part changed the measurement noise at row 420 (P by 4e-5)."""
+    log = physics_log(model, duration_s=1800, t_shutdown_s=None, seed=6)
+    log = log.iloc[np.r_[0:421, 422:len(log):2]].reset_index(drop=True)
+    a = as_log_arrays(log, model.vessel)
+    assert np.unique(a.segment_id).size == 1
+    est = EnvironmentEstimator(model)
+    alone = est.run(a, np.array([420]))
+    with_later = est.run(a, np.array([420, len(a.time_s) - 1]))
+    np.testing.assert_array_equal(alone.x[0], with_later.x[0])
+    np.testing.assert_array_equal(alone.P[0], with_later.P[0])
+
+
 def test_after_stop_errors_wrap_the_heading(model, monkeypatch):
     import hybridship.predictors.hybrid as hybrid
 

@@ -660,15 +660,17 @@ class EnvironmentEstimator:
         wave-frequency motion and sensor noise, which the filter treats as measurement noise
         (a DP observer's wave filter in its simplest form). The value at row ``i`` is the
         spread over the ``variance_window_s`` before it, from fast parts whose centred
-        window ends at or before ``i``, so it uses rows up to ``i`` only (causal). Positions
-        keep the configured value (a GNSS error is slow, not wave-like).
+        window ends at or before ``i``, so it uses rows up to ``i`` only (causal). The windows'
+        lengths in rows follow the log's step, as the filter's grid does (:meth:`_filter_every`),
+        not the step of the rows ``lo .. hi`` read, which would make row ``i``'s value depend
+        on how far past it the run reads. Positions keep the configured value (a GNSS error
+        is slow, not wave-like).
         """
         n = len(arrays.time_s)
         out = np.zeros((n, 6))
-        t = arrays.time_s[lo: hi + 1]
-        if len(t) < 10:
+        if hi + 1 - lo < 10:
             return out
-        dt = float(np.median(np.diff(t)))
+        dt = self._filter_every(arrays)[1]
         w = max(3, int(round(self.config.wave_window_s / dt)))
         w += 1 - w % 2                                   # odd: a centred window
         x = pd.DataFrame(np.column_stack([arrays.eta[lo: hi + 1], arrays.nu[lo: hi + 1]]))
