@@ -839,6 +839,21 @@ def test_fit_refuses_a_dp_only_that_is_not_a_flag_and_a_drift_time_that_is_not_o
         est.fit([a], after_stop_s="60")
 
 
+def test_fit_and_run_refuse_a_log_that_is_not_log_arrays_by_name(model):
+    """A DataFrame given to fit was read without a word and nothing was learned (its
+    dp_active is a Series, whose shifted slices align by index and never show the stop), and
+    run failed in Python's words ('DataFrame' object has no attribute 'eta'); both now name
+    the argument. The same log as LogArrays moves the prior."""
+    log = physics_log(model, duration_s=300.0, t_shutdown_s=200.0, seed=4)
+    est = EnvironmentEstimator(model)
+    learned = est.fit([as_log_arrays(log, model.vessel)], after_stop_s=20.0).thrust_error_mean
+    assert np.any(learned != 0.0)
+    with pytest.raises(TypeError, match=r"logs_arrays\[1\]: expected LogArrays .*got DataFrame"):
+        est.fit([as_log_arrays(log, model.vessel), log], after_stop_s=20.0)
+    with pytest.raises(TypeError, match="arrays: expected LogArrays .*got DataFrame"):
+        est.run(log)
+
+
 def test_the_prior_learned_at_stops_is_kept_only_where_it_lowers_both_errors():
     from hybridship.residual.environment import thrust_error_prior_carries_over as keep
 

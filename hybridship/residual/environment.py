@@ -77,6 +77,7 @@ from ..config import (Bool, Float, Int, as_config, check_flags, check_number, ch
                       start_time_rng)
 from ..frames import ned_to_body, vector_to_speed_dir
 from ..forecast_inputs.faults import TRACK_MISMATCH_M, TRACK_WINDOW_S, velocity_track_mismatch_m
+from ..logs.io import LogArrays
 from ..messages import seconds_text
 from . import environment_kernel as kernel
 from .drift_hull import gain_carries_over
@@ -583,6 +584,9 @@ class EnvironmentEstimator:
         Parameters
         ----------
         logs_arrays : iterable of LogArrays
+            The training logs as :class:`~hybridship.logs.io.LogArrays`
+            (:func:`hybridship.predictors.as_log_arrays` reads a DataFrame or file); anything
+            else is a TypeError naming it.
         dp_only : bool
             Training sees only station keeping: nothing to learn here.
         after_stop_s : float
@@ -595,7 +599,12 @@ class EnvironmentEstimator:
         if dp_only:
             return self
         means, precs = [], []
-        for a in logs_arrays:
+        for k, a in enumerate(logs_arrays):
+            if not isinstance(a, LogArrays):
+                # a DataFrame's dp_active is a Series, whose shifted slices align by index and
+                # so never show a stop: nothing was learned, without a word
+                raise TypeError(f"logs_arrays[{k}]: expected LogArrays (as_log_arrays reads a DataFrame or "
+                                f"file), got {type(a).__name__}")
             dp = a.dp_active.astype(bool)
             stops = np.flatnonzero(dp[:-1] & ~dp[1:]) + 1
             for i in stops:
@@ -748,6 +757,8 @@ class EnvironmentEstimator:
         Parameters
         ----------
         arrays : LogArrays
+            The log (:func:`hybridship.predictors.as_log_arrays` reads a DataFrame or file);
+            anything else is a TypeError naming it.
         rows : array of int, optional
             Rows at which to report (sorted or not), in ``[first_row, N - 1]`` (``N`` rows of
             log); all rows >= ``first_row`` by default.
@@ -768,6 +779,9 @@ class EnvironmentEstimator:
                 and np.isfinite(drift_yaw_uv_rad_per_m2)):
             raise ValueError(f"drift_yaw_uv_rad_per_m2: expected a finite number [rad/m^2], got "
                              f"{drift_yaw_uv_rad_per_m2!r}")
+        if not isinstance(arrays, LogArrays):
+            raise TypeError(f"arrays: expected LogArrays (as_log_arrays reads a DataFrame or file), "
+                            f"got {type(arrays).__name__}")
         rows, first_row, n_req = _checked_rows(len(arrays.time_s), rows, first_row, required)
         last = int(rows.max()) if rows.size else first_row
         m, _ = self._filter_every(arrays)
