@@ -33,6 +33,16 @@ def test_thrust_regime_fit_refuses_no_rows():
         ThrustRegime.fit(np.zeros((0, 3)))
 
 
+def test_thrust_regime_fit_refuses_text_and_complex_thrust_by_name():
+    """Text that reads as numbers was parsed into a regime, complex accelerations lost their
+    imaginary part with only numpy's warning, and other text failed in float()'s words; each
+    is now refused naming thrust_acc, as EnvelopeGuard.fit refuses its features."""
+    A = np.random.default_rng(0).normal(size=(50, 3))
+    for bad in (A.astype(str), A + 1j, [["a", "b", "c"]] * 5):
+        with pytest.raises(TypeError, match="ThrustRegime.fit: thrust_acc: expected an array of real numbers"):
+            ThrustRegime.fit(bad)
+
+
 @pytest.mark.parametrize("fit, lo, hi", [(EnvelopeGuard.fit, 0.5, 1.0), (ThrustRegime.fit, 0.0, 0.5)])
 def test_a_quantile_that_is_not_a_number_in_range_is_refused_by_name(fit, lo, hi):
     """Text or None stopped in Python's own "'<=' not supported between ..."."""

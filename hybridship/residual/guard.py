@@ -132,8 +132,15 @@ class ThrustRegime:
 
     @classmethod
     def fit(cls, thrust_acc: np.ndarray, *, quantile: float = 0.01) -> "ThrustRegime":
-        """Fit to the training rows' thrust accelerations ``(N, 3)``."""
-        A = np.asarray(thrust_acc, dtype=float)
+        """Fit to the training rows' thrust accelerations ``(N, 3)``.
+
+        Raises
+        ------
+        TypeError, ValueError
+            ``thrust_acc`` not a finite (N, 3) array of real numbers with N >= 1 (text and
+            complex numbers included), or ``quantile`` not in [0, 0.5), naming it.
+        """
+        A = real_array("ThrustRegime.fit: thrust_acc", thrust_acc)
         if A.ndim != 2 or A.shape[1] != 3 or A.shape[0] == 0 or not np.all(np.isfinite(A)):
             raise ValueError(f"ThrustRegime.fit: thrust_acc must be a finite (N, 3) array with N >= 1, "
                              f"got shape {A.shape}")
