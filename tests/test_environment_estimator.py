@@ -854,6 +854,25 @@ def test_fit_and_run_refuse_a_log_that_is_not_log_arrays_by_name(model):
         est.run(log)
 
 
+def test_environment_accel_is_nan_where_a_row_has_no_input(model):
+    """As documented: NaN at a row whose wind, velocity or rpm is missing (it was computed with
+    the missing value taken as 0: a velocity of 0, no wind), finite at the rows around it."""
+    import dataclasses
+
+    from hybridship.residual.environment import environment_accel
+
+    log = physics_log(model, duration_s=200, t_shutdown_s=None, seed=6, current=(0.3, 1.0))
+    a = as_log_arrays(log, model.vessel)
+    est = EnvironmentEstimator(model, EnvironmentConfig(current_prior_m_s=0.5)).run(a)
+    wind, nu, rpm = a.wind.copy(), a.nu.copy(), a.rpm.copy()
+    wind[100], nu[120], rpm[140, 0] = np.nan, np.nan, np.nan
+    out = environment_accel(model, dataclasses.replace(a, wind=wind, rpm=rpm), est, nu)
+    assert np.all(np.isnan(out[[100, 120, 140]]))
+    assert np.all(np.isfinite(np.delete(out, [100, 120, 140], axis=0)))
+    np.testing.assert_array_equal(np.delete(out, [100, 120, 140], axis=0),
+                                  np.delete(environment_accel(model, a, est), [100, 120, 140], axis=0))
+
+
 def test_the_prior_learned_at_stops_is_kept_only_where_it_lowers_both_errors():
     from hybridship.residual.environment import thrust_error_prior_carries_over as keep
 

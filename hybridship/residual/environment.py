@@ -471,15 +471,17 @@ def environment_accel(model, arrays, estimate: EnvironmentEstimate, nu=None) -> 
     ``a(current, accel_ext) - a(no environment)`` of the dynamic model at each row's logged
     state and commands (``nu`` overrides the logged velocities), where the estimate at that
     row (an :class:`EnvironmentEstimate` over all rows) gives the current, the load and the
-    thrust error. NaN where the row has no estimate or input.
+    thrust error. NaN where the row has no estimate or input (a state or command that is
+    not finite).
     """
-    eta = np.nan_to_num(arrays.eta)
-    nu = np.nan_to_num(arrays.nu if nu is None else nu)
-    rpm, az, wind = (np.nan_to_num(v) for v in (arrays.rpm, arrays.azimuth_rad, arrays.wind))
+    given = [arrays.eta, arrays.nu if nu is None else nu, arrays.rpm, arrays.azimuth_rad, arrays.wind]
+    eta, nu, rpm, az, wind = (np.nan_to_num(v) for v in given)
     n = len(arrays.time_s)
     x = np.full((n, estimate.x.shape[1]), np.nan)
     x[estimate.rows] = estimate.x
     ok = np.isfinite(x).all(1)
+    for v in given:         # a missing input was taken as 0 (a stopped ship, no wind) and gave a value
+        ok &= np.isfinite(np.asarray(v, dtype=float)).all(1)
     xe = np.nan_to_num(x)
     acc = external_accel(eta[:, 2], xe[:, LOAD], 0.0, 0.0, estimate.load_map) + thrust_error_accel(
         model, estimate.thrust_error_model, eta, nu, rpm, az, wind, xe[:, CUR], xe[:, THR])
