@@ -873,6 +873,19 @@ def test_environment_accel_is_nan_where_a_row_has_no_input(model):
                                   np.delete(environment_accel(model, a, est), [100, 120, 140], axis=0))
 
 
+def test_the_default_thrust_error_is_one_factor_per_thruster(model):
+    """The module notes said theta is by default one factor per degree of freedom; the
+    default is one per thruster (as the notes further down and EnvironmentConfig say)."""
+    import hybridship.residual.environment as environment
+
+    est = EnvironmentEstimator(model)
+    assert est.config.thrust_error_model == "per_thruster"
+    assert est.state_names[11:] == tuple(f"thrust_error_{t.name}" for t in model.vessel.thrusters)
+    notes = " ".join(environment.__doc__.split())
+    assert 'thrust-model error, by default (``thrust_error_model="per_thruster"``) one efficiency factor per ' \
+           'thruster' in notes
+
+
 def test_the_prior_learned_at_stops_is_kept_only_where_it_lowers_both_errors():
     from hybridship.residual.environment import thrust_error_prior_carries_over as keep
 

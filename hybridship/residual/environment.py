@@ -12,11 +12,11 @@ Its state (14) is
 * ``b = [north_m_s2, east_m_s2, yaw_rad_s2]``: a slowly varying environmental load (wave
   drift, wind-model error) as an acceleration, surge/sway in NED (it does not turn with the
   ship), yaw as is;
-* ``theta``: the thrust-model error, by default one efficiency factor per degree of
-  freedom on the model's thrust acceleration ``M^-1 tau_thr`` (componentwise); with
-  ``thrust_error_model="per_thruster"`` one factor per thruster (thruster ``i`` delivers
-  ``(1 + theta_i)`` times the model's thrust, acting through its own lever arm:
-  ``M^-1 sum_i theta_i tau_i``).
+* ``theta``: the thrust-model error, by default (``thrust_error_model="per_thruster"``) one
+  efficiency factor per thruster (thruster ``i`` delivers ``(1 + theta_i)`` times the
+  model's thrust, acting through its own lever arm: ``M^-1 sum_i theta_i tau_i``); with
+  ``thrust_error_model="per_dof"`` one factor per degree of freedom on the model's thrust
+  acceleration ``M^-1 tau_thr`` (componentwise).
 
 The process model is the project's dynamic model (one RK4 step per sample) with the current
 and with ``accel_ext = R(psi)^T b + T theta`` (``T``: the thrust-error basis, see
