@@ -89,6 +89,18 @@ def test_the_heading_innovation_is_wrapped_through_north():
     assert 0.0 < x1[2] - x[2] < 0.02
 
 
+def test_a_heading_innovation_of_half_a_turn_is_wrapped_to_minus_pi():
+    """update's docstring gave the innovation's range as (-pi, pi]; it is [-pi, pi), as
+    _wrap_pi makes it: a measurement half a turn off moves the estimate down, by the
+    Kalman gain (0.01 / (0.01 + 0.1^2) = 1/2) times -pi."""
+    assert "wrapped to [-pi, pi)" in kernel.update.__doc__
+    x = np.zeros(14)
+    z = np.zeros(6)
+    z[2] = math.pi
+    x1, _ = _update(x, np.eye(14) * 0.01, z, 2, gate=np.inf)
+    assert x1[2] == pytest.approx(-0.5 * math.pi)
+
+
 @pytest.mark.parametrize("z0, used", [(1.1, True), (1.2, False)])
 def test_a_position_update_by_hand_and_the_gate_at_eight_standard_deviations(z0, used):
     """North spread 0.1 m (variance 0.01 m^2), measured with 0.1 m, correlated 0.004 m^2/s with

@@ -195,7 +195,7 @@ def _wrap_pi(angle_rad):
 def update(x, Pc, z, z_ok, r_std, gate, max_gated, gate_state):
     """EKF measurement update with the measured components ``z_ok`` (6,) of ``[eta, nu]``.
 
-    The heading innovation is wrapped to (-pi, pi]. A component whose innovation exceeds
+    The heading innovation is wrapped to [-pi, pi) (:func:`_wrap_pi`). A component whose innovation exceeds
     ``gate`` standard deviations of its predicted spread (``P + r^2``) and jumped there, by
     as much, from its innovation at the sample before, is an outlier (a position spike, a
     corrupted sample, a datum change) and is not used; so are the samples after it while
