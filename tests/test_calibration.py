@@ -154,6 +154,18 @@ def test_fit_spread_scale_refuses_the_start_as_a_lead_time():
         fit_spread_scale(e, s, [1.0, 2.0, np.nan, 4.0, 5.0])
 
 
+def test_fit_spread_scale_refuses_no_lead_and_leads_out_of_order_by_its_own_name():
+    """No lead time (an empty calibration set of leads) was refused after the fit in the words
+    of SpreadCalibration ('lead_s, scale and floor need one equal non-zero length'), leads out
+    of order or repeated as '[SpreadCalibration]'; both now name fit_spread_scale's lead_s."""
+    e, s = np.ones((30, 3)), np.ones((30, 3))
+    with pytest.raises(ValueError, match=r"^fit_spread_scale: lead_s: expected at least one lead time, increasing"):
+        fit_spread_scale(e[:, :0], s[:, :0], [])
+    for lead in ([2.0, 1.0, 3.0], [1.0, 1.0, 2.0]):
+        with pytest.raises(ValueError, match=r"^fit_spread_scale: lead_s: .*increasing, got \["):
+            fit_spread_scale(e, s, lead)
+
+
 @pytest.fixture(scope="module")
 def fitted():
     m = DynamicModel("gunnerus")

@@ -274,6 +274,9 @@ def fit_spread_scale(abs_err, std, lead_s, *, sigma: float = 2.0, coverage: floa
         # the start's column (no error, no spread) chose the exponent and scaled the leads after it
         raise ValueError(f"fit_spread_scale: lead_s: expected finite lead times > 0 [s] (leave out the start, "
                          f"lead 0), got {lead.tolist()}")
+    if lead.size == 0 or np.any(np.diff(lead) <= 0):
+        # checked here, not after the fit by SpreadCalibration (in words of its scale and floor)
+        raise ValueError(f"fit_spread_scale: lead_s: expected at least one lead time, increasing, got {lead.tolist()}")
     sigma = check_number("fit_spread_scale: sigma", sigma, lo=0, lo_open=True)
     coverage = check_number("fit_spread_scale: coverage", coverage, lo=0, lo_open=True)
     if coverage >= 1:
