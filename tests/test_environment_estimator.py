@@ -1046,6 +1046,16 @@ def test_a_blackout_now_refuses_a_state_that_is_not_the_filters(model):
         est.at_thrust_stop(["a"] * n, P)
 
 
+def test_draws_of_an_estimate_without_starts_are_empty(model):
+    """run with no rows gives an estimate of none; its draws are (n, 0, 5 + n_theta), where
+    numpy's 'need at least one array to stack' stopped them."""
+    a = as_log_arrays(physics_log(model, duration_s=200, t_shutdown_s=None, seed=6), model.vessel)
+    est = EnvironmentEstimator(model).run(a, np.array([], dtype=int))
+    assert est.x.shape == (0, 14)
+    for n in (0, 1, 5):
+        assert est.sample_environment(n, seed=3).shape == (n, 0, 8)
+
+
 def test_draws_refuse_a_count_or_seed_that_is_not_a_whole_number():
     """sample_environment's n and seed are whole numbers >= 0, refused by name (a negative n
     failed in numpy's broadcast, 2.5 as a float that 'cannot be interpreted as an integer')."""

@@ -367,7 +367,7 @@ class EnvironmentEstimate:
         n, seed = check_whole_number("n", n), check_whole_number("seed", seed)
         S, m = self.x.shape[0], self.x.shape[1] - ENV.start
         out = np.broadcast_to(self.x[:, ENV], (n, S, m)).copy()
-        if n < 2:
+        if n < 2 or S == 0:         # no start (run with no rows): nothing to draw for
             return out
         Pe = self.P[:, ENV, ENV]
         L = np.linalg.cholesky(Pe + 1e-18 * np.eye(m))                  # (S, m, m)
