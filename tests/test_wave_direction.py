@@ -90,6 +90,9 @@ def test_no_axis_without_a_directed_wave_motion_or_enough_station_keeping():
     assert wave_axis(t, np.zeros(t.size), u, v) is None
     t, u, v = _wave_motion(100, 30.0)                                  # under ten of the longest periods
     assert wave_axis(t, np.zeros(t.size), u, v) is None
+    # no sample at all: None as for one sample (an IndexError on t[-1] before)
+    assert wave_axis(t[:1], np.zeros(1), u[:1], v[:1]) is None
+    assert wave_axis(t[:0], np.zeros(0), u[:0], v[:0]) is None
 
 
 def test_only_the_last_window_s_gives_the_axis():

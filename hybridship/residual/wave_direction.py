@@ -92,6 +92,8 @@ def wave_axis(time_s: np.ndarray, psi_rad: np.ndarray, u_m_s: np.ndarray, v_m_s:
         last ``average_s``.
     """
     t = np.asarray(time_s, dtype=float)
+    if t.size == 0:             # no station keeping: a window shorter than any
+        return None
     keep = t >= t[-1] - window_s
     t, psi = t[keep], np.array(psi_rad, dtype=float)[keep]
     known = np.isfinite(psi)
