@@ -798,6 +798,9 @@ def test_fit_carries_the_thrust_error_seen_at_stops_into_the_prior(model):
     assert np.all(scatter < pooled)
     np.testing.assert_allclose(est.thrust_error_mean, mean, rtol=1e-9)
     np.testing.assert_allclose(est.thrust_error_std, np.maximum(pooled, scatter), rtol=1e-9)
+    # the docstring said "at least each stop's own uncertainty", which is wider than this
+    assert np.all(pooled < 1.0 / np.sqrt(prec.max(axis=0)))
+    assert "at least the pooled uncertainty of the mean" in " ".join(EnvironmentEstimator.fit.__doc__.split())
     no_stop = as_log_arrays(physics_log(model, duration_s=600, t_shutdown_s=None, seed=30), model.vessel)
     for unchanged in (EnvironmentEstimator(model).fit(logs, dp_only=True), EnvironmentEstimator(model).fit([no_stop])):
         np.testing.assert_array_equal(unchanged.thrust_error_mean, 0.0)

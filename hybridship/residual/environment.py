@@ -557,8 +557,9 @@ class EnvironmentEstimator:
         model's error. For every stop with ``after_stop_s`` of samples after it, the filter
         runs to that point and its ``theta`` (resolved by the drift samples through the
         load/thrust-error correlation it carried) is kept. The precision-weighted mean over
-        the stops becomes the prior mean; the spread between stops (at least each stop's own
-        uncertainty) its standard deviation. Without stops, or with ``dp_only`` (the paper's
+        the stops becomes the prior mean; the precision-weighted spread between stops, but at
+        least the pooled uncertainty of the mean (``1 / sqrt`` of the stops' summed
+        precisions, below any one stop's own), its standard deviation. Without stops, or with ``dp_only`` (the paper's
         protocol, in which nothing of a failure is seen), the prior is the configured one:
         0 +- ``thrust_error_prior_per_thruster`` (or ``thrust_error_prior`` per DOF). Each call
         learns afresh from the configured prior: what an earlier call learned is neither
