@@ -229,3 +229,17 @@ def test_fit_refuses_rows_it_cannot_fit_on_by_name():
             HullCorrection.fit(full, Y, 3.0, ridge=bad)
     with pytest.raises(TypeError, match="hull correction: ridge"):
         HullCorrection.fit(full, Y, 3.0, ridge="0.1")
+
+
+def test_fit_refuses_a_ship_length_that_is_not_a_positive_number_by_name():
+    """A NaN length was stored with a fit that left out the yaw-rate regressors, and every
+    correction it then made was NaN; 0 left those regressors out and -3 was taken; text failed
+    in numpy's ufunc words."""
+    rng = np.random.default_rng(5)
+    full, Y = _features(rng, 40), rng.normal(0, 1e-3, (40, 3))
+    for bad in (float("nan"), 0.0, -3.0):
+        with pytest.raises(ValueError, match="hull correction: length_m: must"):
+            HullCorrection.fit(full, Y, bad)
+    with pytest.raises(TypeError, match="hull correction: length_m: expected a number"):
+        HullCorrection.fit(full, Y, "3")
+    assert np.all(np.isfinite(HullCorrection.fit(full, Y, 3.0).predict(full)))

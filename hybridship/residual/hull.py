@@ -99,10 +99,14 @@ class HullCorrection:
         ------
         TypeError, ValueError
             ``full`` not (N, len(ALL_FEATURES)) with N >= 1, ``Y`` not (N, 3), NaN or inf in
-            either, or ``ridge`` not a finite number >= 0, naming the argument.
+            either, ``length_m`` not a finite number > 0, or ``ridge`` not a finite number >= 0,
+            naming the argument.
         """
         full = real_array("hull correction: full", full)
         Y = real_array("hull correction: Y", Y)
+        # a NaN length left the yaw-rate regressors out and was stored, so every later
+        # correction was NaN; 0 left them out without a word
+        length_m = check_number("hull correction: length_m", length_m, lo=0.0, lo_open=True)
         ridge = check_number("hull correction: ridge", ridge, lo=0.0)
         if full.ndim != 2 or full.shape[0] == 0 or full.shape[1] != len(ALL_FEATURES) \
                 or Y.shape != (full.shape[0], 3):
