@@ -581,6 +581,13 @@ def test_config_refuses_flags_text_and_a_per_dof_prior_that_is_not_a_spread(fiel
     assert EnvironmentConfig(settle_s=np.float32(30.0), max_gated_samples=np.int64(3)).max_gated_samples == 3
 
 
+def test_estimator_refuses_a_model_that_is_not_a_dynamic_model_by_name():
+    """A vessel name given for the model failed in Python's words ('str' object has no
+    attribute 'vessel'); it is now a TypeError naming model, as physics_log's."""
+    with pytest.raises(TypeError, match=r"^model: expected a DynamicModel, got str \(DynamicModel\('gunnerus'\)\?\)"):
+        EnvironmentEstimator("gunnerus")
+
+
 def test_estimator_takes_its_settings_as_a_config_or_a_dict_of_its_fields(model):
     """A dict of settings is validated as an EnvironmentConfig (it failed as an attribute
     error on dict); a misspelt key or another type is refused by name."""

@@ -78,6 +78,7 @@ from ..config import (Bool, Float, Int, as_config, check_flags, check_number, ch
 from ..frames import ned_to_body, vector_to_speed_dir
 from ..forecast_inputs.faults import TRACK_MISMATCH_M, TRACK_WINDOW_S, velocity_track_mismatch_m
 from ..logs.io import LogArrays
+from ..physics.model import DynamicModel
 from ..messages import seconds_text
 from . import environment_kernel as kernel
 from .drift_hull import gain_carries_over
@@ -526,6 +527,8 @@ class EnvironmentEstimator:
     """
 
     def __init__(self, model, config: EnvironmentConfig = EnvironmentConfig()):
+        if not isinstance(model, DynamicModel):     # a vessel name failed on model.vessel, in Python's words
+            raise TypeError(f"model: expected a DynamicModel, got {type(model).__name__} (DynamicModel({model!r})?)")
         self.model = model
         self.config = config = as_config(config, EnvironmentConfig, "config")
         #: The filter's state layout (:func:`state_names`).
