@@ -308,3 +308,21 @@ def test_the_forecasts_and_drift_off_turn_a_force_load_as_the_filter_does(model)
     body = external_accel(np.array(1.0), b[0, 1], 0.0, 0.0, A)
     c, s = math.cos(1.0), math.sin(1.0)
     np.testing.assert_allclose([c * ned[0] + s * ned[1], -s * ned[0] + c * ned[1], ned[2]], body, rtol=1e-12)
+
+
+def test_the_residual_package_docstring_names_every_physics_module_it_uses():
+    """The package docstring said it uses the physics only through DynamicModel, while the
+    estimator's filter, multi-step training and the drift hull import physics kernels
+    directly; each physics module a residual module imports (other than physics.model) is
+    now named there, beside the module that imports it."""
+    import ast
+    from pathlib import Path
+
+    import hybridship.residual as residual
+
+    doc = " ".join(residual.__doc__.split())
+    for path in Path(residual.__file__).parent.glob("*.py"):
+        for node in ast.walk(ast.parse(path.read_text())):
+            if isinstance(node, ast.ImportFrom) and node.level == 2 and (node.module or "").startswith("physics."):
+                if node.module != "physics.model":
+                    assert f"``{node.module}``" in doc and f":mod:`.{path.stem}`" in doc, (path.name, node.module)
