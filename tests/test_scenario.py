@@ -593,7 +593,7 @@ def test_a_vessel_that_cannot_hold_station_is_refused_before_any_work(tmp_path, 
                "--out", str(out), "--no-progress"])
     err = capsys.readouterr().err
     assert rc == 2 and len(err.strip().splitlines()) == 1
-    assert "hybridship simulate: error: vessel 'my_tanker' cannot hold station" in err and "rank 1 < 3" in err
+    assert "hybridship simulate: error: --vessel: vessel 'my_tanker' cannot hold station" in err and "rank 1 < 3" in err
     assert not out.exists()
 
 
