@@ -359,6 +359,9 @@ BAD_CASES = {
     "inf rpm": (_set("port_rpm", 6, np.inf), r"port_rpm: infinite value inf at row 6"),
     # review: read as 0/1 and as the real part (pandas' ComplexWarning only)
     "bool north": (lambda df: df.assign(north_m=df.north_m > 0), r"north_m: True/False values; expected numbers"),
+    # True/False beside a missing value are objects, which were read as 1/0 (a speed of 1 m/s)
+    "bool u with a gap": (lambda df: df.assign(u_m_s=(df.u_m_s > 0).astype(object).where(df.index != 3, None)),
+                          r"u_m_s: True/False values; expected numbers"),
     "complex north": (lambda df: df.assign(north_m=df.north_m + 50j), r"north_m: complex values; expected real"),
     "unknown thruster rpm": (
         lambda df: df.assign(bow2_rpm=0.0),

@@ -328,7 +328,9 @@ def _to_float(df: pd.DataFrame, col: str, source: str, time_s: np.ndarray | None
     Infinities are errors too, unless ``inf_is_missing`` (then they become NaN).
     """
     s = df[col]
-    if pd.api.types.is_bool_dtype(s):
+    # True/False beside a missing value make a column of objects, which to_numeric reads as 1/0
+    bools = col != "dp_active" and s.dtype == object and s.map(lambda v: isinstance(v, (bool, np.bool_))).any()
+    if pd.api.types.is_bool_dtype(s) or bools:
         if col == "dp_active":                  # a flag column: True/False is 1/0
             return s.to_numpy(dtype=float, copy=True, na_value=np.nan)
         raise LogFormatError(f"{col}: True/False values; expected numbers{_where(source)}", column=col)
