@@ -277,6 +277,21 @@ def test_a_csv_cut_short_in_its_last_line_leaves_that_row_out_and_says_so(tmp_pa
         assert len(read_log(path, channel_names=THRUSTERS, rotatable=ROTATABLE)) == 120
 
 
+
+def test_a_csv_with_cr_line_ends_is_read_and_its_cut_last_line_found(tmp_path):
+    """A file with CR line ends (an old Mac export), which pandas reads, failed in the csv
+    module's words ('new-line character seen in unquoted field') when its last line was
+    looked at; it is read, and a last line cut short in it is left out as in other files."""
+    text = "time_s,north_m,east_m,heading_deg\r0,0,0,10\r1,1,0,10\r2,2,0,10\r"
+    path = tmp_path / "log.csv"
+    path.write_bytes(text.encode())
+    assert read_log(path).shape == (3, 4)
+    path.write_bytes(text.encode()[:-1])            # a complete last line without its line end
+    assert read_log(path).shape == (3, 4)
+    path.write_bytes(text.encode()[:-4])            # cut short: "2,2,0"
+    with pytest.warns(LogFormatWarning, match=r"the last line has 3 of the header's 4 fields and no line end"):
+        assert read_log(path).shape == (2, 4)
+
 def test_csv_rows_longer_than_the_header_are_refused_not_read_shifted(tmp_path):
     """Every data row one field longer than the header: pandas took the first field as the
     index and shifted every column by one (time_s held north_m's values), and the log was

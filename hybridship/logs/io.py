@@ -1346,9 +1346,9 @@ def _cut_short_last_line(path: Path, n_fields: int) -> int | None:
         size = fh.seek(0, os.SEEK_END)
         fh.seek(max(0, size - _TAIL_BYTES))
         tail = fh.read()
-    if not tail or tail.endswith(b"\n"):
+    if not tail or tail.endswith((b"\n", b"\r")):
         return None
-    cut = tail.rfind(b"\n")
+    cut = max(tail.rfind(b"\n"), tail.rfind(b"\r"))     # a file with CR line ends, which pandas reads
     if cut < 0 and size > len(tail):
         return None                         # a line longer than the tail: not judged
     last = tail[cut + 1:].decode("utf-8", errors="replace")
