@@ -889,6 +889,26 @@ def test_a_rudder_rpm_column_is_refused_against_the_vessel():
         check_log_against_vessel(df.assign(rudder_rpm=77.0), "esso_osaka_model")
 
 
+def test_a_rudder_held_near_amidships_is_not_taken_for_radians():
+    """A rudder logged in degrees within +-3 deg (course keeping) spans 6 within +-2 pi and was
+    refused as radians ('a turn of 344 deg if radians'), by ingest and the whole-log check
+    alike; in radians a rudder stays within +-pi/2, where the radian rule finds nothing."""
+    from hybridship.logs.ingest import ingest
+    from hybridship.logs.io import check_log_against_vessel, check_units_on_whole_log
+    from hybridship.vessel import load_vessel
+
+    v = load_vessel("esso_osaka_model")
+    t = np.arange(600.0)
+    df = pd.DataFrame({"time_s": t, "north_m": 0.5 * t, "east_m": 0.0 * t, "heading_deg": 0.0 * t + 10.0,
+                       "propeller_rpm": 300.0, "rudder_azimuth_deg": 3.0 * np.sin(2 * np.pi * t / 60.0),
+                       "dp_active": 0})
+    check_log_against_vessel(df, v)
+    check_units_on_whole_log(df, v)
+    assert np.allclose(np.degrees(ingest(df, v).azimuth_rad[:, 1]), df.rudder_azimuth_deg)
+    assert np.allclose(np.degrees(ingest(df, v, purpose="forecast", time_range_s=(100, 200)).azimuth_rad[:, 1]),
+                       df.rudder_azimuth_deg[100:201])
+
+
 def test_speed_scale_vs_track_names_a_lag_that_is_not_a_positive_number():
     """NaN failed in int() ("cannot convert float NaN to integer"), text and None in a
     division, and a negative or zero lag was used as one sample, unremarked."""

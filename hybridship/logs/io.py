@@ -27,7 +27,8 @@ expected:
 * a heading, ``wind_dir_deg`` or ``<thruster>_azimuth_deg`` outside -360..720 deg
   (milliradians, centidegrees?); a heading that looks like
   radians (see :func:`heading_looks_like_radians` for the rule); the same radian rule for
-  ``wind_dir_deg`` and every ``<thruster>_azimuth_deg``;
+  ``wind_dir_deg`` and every ``<thruster>_azimuth_deg`` (checked against the vessel, not a
+  rudder's: in radians it stays within +-pi/2, where the rule finds nothing);
 * ``|u_m_s|`` or ``|v_m_s|`` above 30 m/s (knots?), ``|r_deg_s|`` above 60 deg/s
   (rad/s vs deg/s mix-up?), ``wind_speed_m_s`` outside 0..80 m/s;
 * ``u_m_s``/``v_m_s`` whose speed is not the speed of the track (see
@@ -587,7 +588,7 @@ def _check_angle_unit(col: str, t: np.ndarray, x: np.ndarray, source: str, rate=
 
 def _validate(df: pd.DataFrame, channel_names, rotatable, source: str, warn_unknown: bool,
               allow_missing: bool = False, writing: bool = False, vessel_name: str | None = None,
-              unit_statistics: bool = True) -> None:
+              unit_statistics: bool = True, rudders=frozenset()) -> None:
     """Check ``df`` against the log format (:data:`hybridship.logs.columns.COLUMNS`).
 
     The checks run in this order, so that every message can quote ``time_s``: column
@@ -595,7 +596,8 @@ def _validate(df: pd.DataFrame, channel_names, rotatable, source: str, warn_unkn
     column's own rules (range, allowed values, angle unit); the rules between columns
     (yaw rate against heading, speed against track); the per-channel columns. Without
     ``unit_statistics`` the judgements of :func:`check_units_on_whole_log` are left out,
-    for a caller that makes them on the whole log.
+    for a caller that makes them on the whole log. ``rudders``: the channels that are rudders
+    (their angles are not judged for radians, see :func:`_check_channel_columns`).
     """
     if not isinstance(df, pd.DataFrame):
         raise TypeError(f"expected a pandas DataFrame, got {type(df).__name__}")
@@ -621,7 +623,7 @@ def _validate(df: pd.DataFrame, channel_names, rotatable, source: str, warn_unkn
                        f"the format says" for c in cols if _unit_variant_of(c) == other)
         raise LogFormatError(f"{other}: missing while {pair[0]} is logged; the wind needs both (or neither: "
                              f"a forecast without wind){unit}{_where(source)}", column=other)
-    ignored = _check_channel_columns(df, cols, t, names, rot, source, vessel_name, unit_statistics)
+    ignored = _check_channel_columns(df, cols, t, names, rot, source, vessel_name, unit_statistics, rudders)
     if ignored and warn_unknown:
         # writing keeps the user's columns in the file; reading leaves them out of the arrays
         what = "writing, though readers ignore them," if writing else "ignoring"
@@ -901,10 +903,13 @@ def _check_speed_vs_track(t: np.ndarray, values: dict[str, np.ndarray], source: 
 
 
 def _check_channel_columns(df: pd.DataFrame, cols: list[str], t: np.ndarray, names, rot, source: str,
-                           vessel_name: str | None = None, unit_statistics: bool = True) -> list[str]:
+                           vessel_name: str | None = None, unit_statistics: bool = True,
+                           rudders=frozenset()) -> list[str]:
     """The per-channel columns (``<thruster>_rpm``, ``<thruster>_azimuth_deg``), matched by
     pattern: each names a known channel (when ``names`` is given), is numeric, and an angle
-    is not in radians (with ``unit_statistics``). Returns the columns to ignore (unknown names; angles of fixed
+    is not in radians (with ``unit_statistics``; not a channel in ``rudders``: a rudder's
+    angle in radians stays within +-pi/2, where the radian rule finds nothing, so the rule
+    could only refuse a rudder held within a few degrees of amidships in degrees). Returns the columns to ignore (unknown names; angles of fixed
     thrusters), with a note each; ``truth_*`` columns are never interpreted."""
     ignored: list[str] = []
     for col in cols:
@@ -936,7 +941,7 @@ def _check_channel_columns(df: pd.DataFrame, cols: list[str], t: np.ndarray, nam
         if spec.bound is not None and spec.bound.violated(x).any():
             raise _limit_error(col, x, spec.bound.violated(x), t, f"{spec.bound.text(spec.unit)}; {spec.expects}",
                                source)
-        if spec.angle and unit_statistics:
+        if spec.angle and unit_statistics and name not in rudders:
             _check_angle_unit(col, t, x, source)
     return ignored
 
@@ -1063,7 +1068,7 @@ def check_log_against_vessel(log, vessel, *, source: str | None = None, allow_mi
         df = log
     source = source or "log"
     _validate(df, v.channel_names, v.rotatable, source, warn_unknown=True, allow_missing=allow_missing,
-              vessel_name=v.name, unit_statistics=unit_statistics)
+              vessel_name=v.name, unit_statistics=unit_statistics, rudders=_rudder_names(v))
     t = _to_float(df, "time_s", source, None)
     # a command column without one value logs nothing: in training it counts as absent (its
     # thruster would be taken as stopped, its angle as 0); a forecast judges it per start
@@ -1078,6 +1083,11 @@ def check_log_against_vessel(log, vessel, *, source: str | None = None, allow_mi
     for th in v.thrusters:
         if column_spec("<thruster>_rpm").for_channel(th.name) in cols:
             _check_thruster_columns(v, th, df, cols, t, source, rpm_sign=unit_statistics, blank=blank)
+
+
+def _rudder_names(v) -> frozenset:
+    """The names of the vessel's rudders (channels whose angle is not judged for radians)."""
+    return frozenset(r.name for r in getattr(v, "rudders", None) or [])
 
 
 def _blank_channel_columns(v, df: pd.DataFrame, t: np.ndarray, source: str) -> set[str]:
@@ -1267,7 +1277,7 @@ def check_units_on_whole_log(df: pd.DataFrame, vessel, *, source: str = "log") -
             _check_angle_unit(name, t, values[name], source, values.get(column_spec(name).rate_column or ""))
     for th_name, rot in zip(vessel.channel_names, vessel.rotatable):
         col = column_spec("<thruster>_azimuth_deg").for_channel(th_name)
-        if rot and col in cols:
+        if rot and col in cols and th_name not in _rudder_names(vessel):
             _check_angle_unit(col, t, column(col), source)
     if "r_deg_s" in values:
         _check_yaw_rate_vs_heading(t, values, source)
