@@ -323,6 +323,22 @@ def test_csv_columns_without_a_name_are_not_taken_for_one_name_twice(tmp_path):
         read_log(path, channel_names=THRUSTERS, rotatable=ROTATABLE)
 
 
+def test_a_frame_indexed_by_time_is_named_so():
+    """A DataFrame indexed by time_s (set_index): time_s was said to be missing, by the
+    reader's check and by ingest alike, while the frame holds it."""
+    from hybridship.logs.ingest import ingest
+
+    df = circle_log().set_index("time_s")
+    before = df.copy(deep=True)
+    pattern = r"^time_s: the DataFrame's index, not a column .*pass df.reset_index\(\) \(in log\)$"
+    with pytest.raises(LogFormatError, match=pattern):
+        validate_log(df)
+    for kw in ({}, {"purpose": "forecast", "time_range_s": (10.0, 20.0)}):
+        with pytest.raises(LogFormatError, match=pattern):
+            ingest(df, "gunnerus", **kw)
+    pd.testing.assert_frame_equal(df, before)
+
+
 def test_a_parquet_log_indexed_by_time_is_named_so(tmp_path):
     """A frame indexed by time_s saved with to_parquet: time_s was said to be missing (the
     reader dropped the file's index) while the file holds it."""

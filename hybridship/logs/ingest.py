@@ -37,7 +37,7 @@ import numpy as np
 import pandas as pd
 
 from hybridship.logs.io import (REQUIRED_COLUMNS, LogArrays, LogFormatError, LogFormatWarning, _check_column_names,
-                                _check_unique_names,
+                                _check_unique_names, _check_required_not_index,
                                 _frame_to_arrays, _to_float,
                                 check_log_against_vessel, check_units_on_whole_log, output_table_kind, read_log)
 from hybridship.messages import seconds_text, warn_user
@@ -140,6 +140,7 @@ def sort_samples(df: pd.DataFrame, *, source: str = "log") -> SortedLog:
     if not isinstance(df, pd.DataFrame):
         raise TypeError(f"expected a pandas DataFrame, got {type(df).__name__}")
     _check_header(df, source)
+    _check_required_not_index(df, source)
     cols = [str(c) for c in df.columns]
     if "time_s" not in cols or output_table_kind(cols):
         # the reader's message, with its hints; a table that hybridship wrote (a forecast's

@@ -16,8 +16,8 @@ expected:
 
 * missing required columns (``time_s``, ``north_m``, ``east_m``, ``heading_deg``) or
   duplicated column names; when a column with the same quantity in another unit is
-  present (``heading_rad``, ``time_ms``, ...), a name with spaces around it, or a header
-  separated by ``;`` or tabs, the message says so;
+  present (``heading_rad``, ``time_ms``, ...), a name with spaces around it, a header
+  separated by ``;`` or tabs, or the column is the DataFrame's index, the message says so;
 * one of ``wind_speed_m_s`` and ``wind_dir_deg`` without the other;
 * non-numeric values in a known numeric column; infinities anywhere in one;
 * ``time_s`` not finite or not strictly increasing; a median sample spacing outside
@@ -603,6 +603,7 @@ def _validate(df: pd.DataFrame, channel_names, rotatable, source: str, warn_unkn
         raise TypeError(f"expected a pandas DataFrame, got {type(df).__name__}")
     names, rot = _check_thruster_args(channel_names, rotatable)
     cols = [str(c) for c in df.columns]
+    _check_required_not_index(df, source)
     _check_column_names(cols, source)
     if len(df) == 0:
         raise LogFormatError(f"time_s: the log has no rows; expected at least one sample{_where(source)}",
@@ -632,6 +633,17 @@ def _validate(df: pd.DataFrame, channel_names, rotatable, source: str, warn_unkn
                  else c for c in ignored]
         warn_user(f"{source}: {what} {len(ignored)} column(s) not in the log format: {', '.join(shown)}",
                   LogFormatWarning)
+
+
+def _check_required_not_index(df: pd.DataFrame, source: str) -> None:
+    """Refuse a required column that is the frame's index (``df.set_index("time_s")``): it
+    was said to be missing while the frame holds it."""
+    cols = set(map(str, df.columns))
+    indexed = [str(c) for c in df.index.names if str(c) in REQUIRED_COLUMNS and str(c) not in cols]
+    if indexed:
+        raise LogFormatError(f"{indexed[0]}: the DataFrame's index, not a column (a frame indexed by {indexed[0]} "
+                             f"with set_index?); the log format expects it as a column: pass df.reset_index()"
+                             f"{_where(source)}", column=indexed[0])
 
 
 def _check_unique_names(cols: list[str], source: str) -> None:
