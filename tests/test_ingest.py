@@ -439,3 +439,25 @@ def test_fit_and_forecast_read_a_log_into_the_same_arrays_and_features(model, lo
     k = np.arange(5, len(part) - 2)
     np.testing.assert_allclose(prepare_log(model, part, cfg).full_features(k),
                                prepare_log(model, fit, cfg).full_features(k), rtol=1e-9, atol=1e-12)
+
+
+def test_a_fault_is_named_by_its_input_row_after_rows_were_dropped_or_re_sorted(model, log):
+    """The checks count the rows of the re-sorted frame: after a row without a time was
+    dropped, a missing north_m at input row 20 was named as row 19, a valid sample; the
+    message and the error's row now give the input row (and its time, as before)."""
+    df = log.copy()
+    df.loc[5, "time_s"] = np.nan
+    df.loc[20, "north_m"] = np.nan
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        with pytest.raises(LogFormatError, match=rf"^north_m: missing or non-finite value \(nan\) at row 20 "
+                                                 rf"\(time_s {df.time_s[20]:g}\)") as err:
+            ingest(df, model.vessel)
+    assert err.value.row == 20
+    late = pd.concat([log.iloc[[40]], log.drop(index=40)]).reset_index(drop=True)    # row 40 came first
+    late.loc[10, "north_m"] = np.nan                                                # its time: 9 s
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        with pytest.raises(LogFormatError, match=rf"at row 10 \(time_s {late.time_s[10]:g}\)") as err:
+            ingest(late, model.vessel)
+    assert err.value.row == 10

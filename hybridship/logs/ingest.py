@@ -80,6 +80,8 @@ class SortedLog:
         Rows dropped because ``time_s`` was missing or not finite.
     n_without_time_with_data : int
         Those of them that held a value in another column (a sample lost, not a blank row).
+    source_rows : ndarray of int
+        Input row (0-based position) of each row of ``frame``.
     """
 
     frame: pd.DataFrame
@@ -89,6 +91,7 @@ class SortedLog:
     n_without_time: int
     conflicting_rows: np.ndarray = field(default_factory=lambda: np.zeros((0, 2), dtype=int))
     n_without_time_with_data: int = 0
+    source_rows: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=int))
 
     @property
     def affected_time_s(self) -> np.ndarray:
@@ -163,6 +166,7 @@ def sort_samples(df: pd.DataFrame, *, source: str = "log") -> SortedLog:
     ts = tt[order]
     dup_mask = np.zeros(ts.size, dtype=bool)
     dup_mask[1:] = ts[1:] == ts[:-1]
+    source_rows = rows[order]
     duplicate, conflicting, conflicting_rows, drop = [], [], [], []
     if dup_mask.any():
         starts = np.flatnonzero(~dup_mask)
@@ -178,10 +182,11 @@ def sort_samples(df: pd.DataFrame, *, source: str = "log") -> SortedLog:
                 conflicting_rows.append(rows[order[a:a + 2]])
                 drop.extend(range(a, b))
         frame = frame.drop(index=drop).reset_index(drop=True)
+        source_rows = np.delete(source_rows, drop)
     return SortedLog(frame=frame, late_time_s=np.unique(tt[late]), duplicate_time_s=np.asarray(duplicate, float),
                      conflicting_time_s=np.asarray(conflicting, float), n_without_time=n_without,
                      conflicting_rows=np.asarray(conflicting_rows, dtype=int).reshape(-1, 2),
-                     n_without_time_with_data=with_data)
+                     n_without_time_with_data=with_data, source_rows=source_rows)
 
 
 # --------------------------------------------------------------------------------------
@@ -259,10 +264,24 @@ def _from_frame(df: pd.DataFrame, v, purpose: str, source: str,
         check_log_against_vessel(order.frame, v, source=source, allow_missing=allow_missing,
                                  unit_statistics=unit_statistics)
     except LogFormatError as exc:
-        raise _with_resort_hint(exc, order) from None
+        raise _with_resort_hint(_with_input_row(exc, order), order) from None
     arrays = _frame_to_arrays(order.frame, tuple(v.channel_names), tuple(v.rotatable),
                               resorted_time_s=order.affected_time_s, gap_step_s=gap_step_s)
     return arrays, order
+
+
+def _with_input_row(exc: LogFormatError, order: SortedLog) -> LogFormatError:
+    """``exc`` naming the input row of its sample: the checks count the rows of the re-sorted
+    frame, which a dropped row without a time or a re-sorted sample shifts (the message
+    named the row before the faulty one, which holds a valid sample)."""
+    if exc.row is None or not 0 <= exc.row < order.source_rows.size:
+        return exc
+    row = int(order.source_rows[exc.row])
+    text = str(exc)
+    if row == exc.row or f"row {exc.row} (" not in text:
+        return exc
+    return LogFormatError(text.replace(f"row {exc.row} (", f"row {row} (", 1), column=exc.column, row=row,
+                          time_s=exc.time_s)
 
 
 def _with_resort_hint(exc: LogFormatError, order: SortedLog) -> LogFormatError:
@@ -423,7 +442,8 @@ def ingest(source, vessel, *, purpose: str = "fit", name: str | None = None, tim
     Raises
     ------
     LogFormatError
-        Naming the column, row and time where relevant.
+        Naming the column, row and time where relevant (the row as the input holds it, before
+        rows without a time were dropped and late samples re-sorted).
     hybridship.vessel.VesselFileError
         If ``vessel`` names an invalid vessel file.
     """
