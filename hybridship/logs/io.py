@@ -921,8 +921,9 @@ def _check_channel_columns(df: pd.DataFrame, cols: list[str], t: np.ndarray, nam
     pattern: each names a known channel (when ``names`` is given), is numeric, and an angle
     is not in radians (with ``unit_statistics``; not a channel in ``rudders``: a rudder's
     angle in radians stays within +-pi/2, where the radian rule finds nothing, so the rule
-    could only refuse a rudder held within a few degrees of amidships in degrees). Returns the columns to ignore (unknown names; angles of fixed
-    thrusters), with a note each; ``truth_*`` columns are never interpreted."""
+    could only refuse a rudder held within a few degrees of amidships in degrees). Returns
+    the columns to ignore (unknown names; angles of fixed thrusters), with a note each;
+    ``truth_*`` columns are never interpreted."""
     ignored: list[str] = []
     for col in cols:
         if col in REQUIRED_COLUMNS or col in OPTIONAL_COLUMNS or col.startswith(TRUTH_PREFIX):
