@@ -56,3 +56,13 @@ def test_a_transposed_prediction_is_refused_not_scored():
     with pytest.raises(ValueError, match=r"differ in shape: \(50, 2\) vs \(2, 50\)"):
         score(y, p.T)
     assert score(y[:, 0], p[:, :1]) == pytest.approx(score(y[:, 0], p[:, 0]))
+
+
+@pytest.mark.parametrize("y_true,y_pred,name", [(["1", "2", "3"], [1.0, 2.0, 3.0], "y_true"),
+                                                ([1.0, 2.0, 3.0], ["a", "b", "c"], "y_pred"),
+                                                ({"a": 1}, [1.0], "y_true")])
+def test_text_or_a_mapping_is_refused_naming_the_argument(y_true, y_pred, name):
+    """Text numbers were scored as numbers ("1" as 1.0) and other text or a dict failed in
+    numpy's words ("could not convert string to float"), naming neither argument."""
+    with pytest.raises(TypeError, match=f"^{name}: expected an array of real numbers"):
+        score(y_true, y_pred)

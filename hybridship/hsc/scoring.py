@@ -9,12 +9,15 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..config import real_array
+
 __all__ = ["correlation", "mean_absolute_error", "score"]
 
 
 def _pair(y_true, y_pred):
-    a = np.asarray(y_true, dtype=float).ravel()
-    b = np.asarray(y_pred, dtype=float).ravel()
+    # text such as "1.5" was parsed as a number, other text failed in numpy's words
+    a = real_array("y_true", y_true).ravel()
+    b = real_array("y_pred", y_pred).ravel()
     if a.shape != b.shape:
         raise ValueError(f"y_true and y_pred differ in size: {a.size} vs {b.size}")
     shapes = np.squeeze(y_true).shape, np.squeeze(y_pred).shape
