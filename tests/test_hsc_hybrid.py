@@ -392,3 +392,19 @@ def test_hand_made_tables_the_lookup_cannot_read_are_refused_by_name(craft, tabl
     listed = dataclasses.replace(tables, resistance_n=tables.resistance_n.tolist(), trim_rad=tables.trim_rad.tolist())
     assert GreyBox(craft, "interceptor", listed).rates(10.0, 0.05, 3000.0, 0.5) == \
         GreyBox(craft, "interceptor", tables).rates(10.0, 0.05, 3000.0, 0.5)
+
+
+@pytest.mark.parametrize("pwm,err,match", [([10.0, np.nan, 50.0], ValueError, "with NaN or inf"),
+                                           (50.0, ValueError, r"got shape \(\)"),
+                                           ([[10.0, 20.0]], ValueError, r"got shape \(1, 2\)"),
+                                           (["10", "20"], TypeError, "real numbers")])
+def test_grey_box_actuator_fraction_refuses_a_bad_pwm_record_by_name(grey, pwm, err, match):
+    """A NaN duty made that and every later fraction NaN without a word; a single number,
+    a 2-D array or text failed with an IndexError or numpy's words, naming nothing."""
+    with pytest.raises(err, match=f"^pwm_pct: .*{match}"):
+        grey.actuator_fraction(pwm)
+
+
+def test_grey_box_actuator_fraction_of_an_empty_record_is_empty(grey):
+    """No samples, no fractions (an IndexError on cmd[0] before)."""
+    assert grey.actuator_fraction(np.array([])).shape == (0,)

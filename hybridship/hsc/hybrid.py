@@ -175,8 +175,21 @@ class GreyBox:
     # -------------------------------------------------------------- pieces
 
     def actuator_fraction(self, pwm_pct):
-        """Stroke/deflection fraction from the PWM record (linear map, rate limit)."""
-        cmd = self._pwm_to_frac(pwm_pct)
+        """Stroke/deflection fraction from the PWM record (linear map, rate limit).
+
+        Raises
+        ------
+        TypeError, ValueError
+            Naming ``pwm_pct``: not a 1-D sequence of finite numbers (a NaN made every later
+            fraction NaN, an empty record or a single number an IndexError).
+        """
+        pwm = real_array("pwm_pct", pwm_pct)
+        if pwm.ndim != 1 or not np.all(np.isfinite(pwm)):
+            raise ValueError(f"pwm_pct: expected a 1-D sequence of finite duties [%], got shape {pwm.shape}"
+                             f"{'' if np.all(np.isfinite(pwm)) else ' with NaN or inf'}")
+        cmd = self._pwm_to_frac(pwm)
+        if cmd.size == 0:
+            return cmd
         a = np.empty_like(cmd)
         x = float(cmd[0])
         for k, c in enumerate(cmd):
