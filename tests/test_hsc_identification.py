@@ -334,3 +334,13 @@ def test_arx_refuses_a_record_with_fewer_regression_rows_than_coefficients():
         with pytest.raises(ValueError, match=r"^U: need at least 16 rows for ARX321 .*got 12"):
             fit(U[:12], Y[:12])
         assert fit(U, Y) is not None
+
+
+def test_narx_n_inputs_counts_the_fitted_records_columns():
+    """The NARX takes any MIMO record; n_inputs gave the paper's 2 n_out + 3 n_in (10 here)
+    for a network fitted on one input and one output, which takes 2 + 2 = 4."""
+    rng = np.random.default_rng(0)
+    m = NARXModel(NARXConfig(n_out=2, n_in=2, max_iter=5, restarts=1))
+    assert m.n_inputs == 2 * 2 + 3 * 2                  # unfitted: the paper's records
+    m.fit(rng.uniform(-1, 1, (200, 1)), rng.uniform(-1, 1, (200, 1)))
+    assert m.n_inputs == m.weights[0].shape[1] == 4

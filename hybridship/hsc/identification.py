@@ -435,7 +435,10 @@ class NARXModel:
 
     @property
     def n_inputs(self) -> int:
-        return 2 * self.config.n_out + 3 * self.config.n_in
+        """Network inputs: ``n_out`` lags of every output and ``n_in`` of every input, so
+        ``2 n_out + 3 n_in`` on the paper's records (before a fit, and after a fit on them)."""
+        nu, ny = getattr(self, "shape", (3, 2))         # the fitted record's columns
+        return ny * self.config.n_out + nu * self.config.n_in
 
     def _features(self, Zu, Zy, k0):
         c = self.config
