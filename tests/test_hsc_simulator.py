@@ -630,3 +630,12 @@ def test_a_motion_that_diverges_is_refused_naming_the_sea_or_the_step(craft):
         model.simulate(np.full(600, 1500.0), np.full(600, 100.0), sea=sea)
     with pytest.raises(ValueError, match=r"^sample_period_s: the motion diverged at .* step 2 s"):   # calm water
         model.simulate(np.full(5, 3000.0), np.full(5, 50.0), sample_period_s=10.0)
+
+
+@pytest.mark.parametrize("name_or_path", [None, 5, ""])
+def test_load_planing_craft_refuses_what_is_not_a_name_or_path_by_name(name_or_path):
+    """None or a number failed in pathlib's words ('expected str, bytes or os.PathLike
+    object, not NoneType'), naming nothing; an empty name read the current folder and said
+    '.: planing-craft file not found'."""
+    with pytest.raises(TypeError, match="^name_or_path: expected a packaged planing-craft name or a file path"):
+        load_planing_craft(name_or_path)

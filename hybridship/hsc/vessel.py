@@ -19,6 +19,7 @@ Units are SI and radians inside; the file uses degrees where a name says ``_deg`
 from __future__ import annotations
 
 import math
+import os
 import tomllib
 from collections.abc import Mapping
 from pathlib import Path
@@ -265,7 +266,19 @@ def planing_craft_from_dict(data: dict, source: str = "<dict>") -> PlaningCraft:
 
 
 def load_planing_craft(name_or_path: str | Path = "volcano71") -> PlaningCraft:
-    """Load a planing craft by packaged name (``"volcano71"``) or TOML file path."""
+    """Load a planing craft by packaged name (``"volcano71"``) or TOML file path.
+
+    Raises
+    ------
+    TypeError
+        ``name_or_path`` not a non-empty str or path (None or a number failed in pathlib's
+        words, naming nothing; an empty name read the current folder).
+    PlaningCraftFileError
+        The file is missing, unreadable or invalid; the message names the field.
+    """
+    if not isinstance(name_or_path, (str, os.PathLike)) or not str(name_or_path):
+        raise TypeError(f"name_or_path: expected a packaged planing-craft name or a file path, got "
+                        f"{type(name_or_path).__name__} {name_or_path!r}")
     p = Path(name_or_path)
     if p.suffix == ".toml" or p.exists():
         if not p.is_file():
