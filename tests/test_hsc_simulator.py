@@ -639,3 +639,16 @@ def test_load_planing_craft_refuses_what_is_not_a_name_or_path_by_name(name_or_p
     '.: planing-craft file not found'."""
     with pytest.raises(TypeError, match="^name_or_path: expected a packaged planing-craft name or a file path"):
         load_planing_craft(name_or_path)
+
+
+def test_load_planing_craft_names_a_folder_or_a_binary_file(tmp_path):
+    """A folder was 'planing-craft file not found' although it exists, and a binary file a
+    UnicodeDecodeError in the codec's words naming no file."""
+    with pytest.raises(PlaningCraftFileError, match="is a folder; expected a planing-craft file"):
+        load_planing_craft(tmp_path)
+    binary = tmp_path / "craft.toml"
+    binary.write_bytes(b"\xff\xfe\x00\x01")
+    with pytest.raises(PlaningCraftFileError, match=r"craft\.toml: not a planing-craft file \(TOML text\) but a binary"):
+        load_planing_craft(binary)
+    with pytest.raises(PlaningCraftFileError, match="planing-craft file not found"):
+        load_planing_craft(tmp_path / "missing.toml")

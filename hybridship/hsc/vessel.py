@@ -281,9 +281,15 @@ def load_planing_craft(name_or_path: str | Path = "volcano71") -> PlaningCraft:
                         f"{type(name_or_path).__name__} {name_or_path!r}")
     p = Path(name_or_path)
     if p.suffix == ".toml" or p.exists():
-        if not p.is_file():
-            raise PlaningCraftFileError(f"{p}: planing-craft file not found")
-        text, source = p.read_text(encoding="utf-8"), p.name
+        if not p.is_file():     # a folder exists: "not found" sent the user looking for it
+            problem = "is a folder; expected a planing-craft file (.toml)" if p.is_dir() else \
+                "planing-craft file not found"
+            raise PlaningCraftFileError(f"{p}: {problem}")
+        try:
+            text = p.read_text(encoding="utf-8")
+        except UnicodeDecodeError:      # the codec's own words named no file
+            raise PlaningCraftFileError(f"{p}: not a planing-craft file (TOML text) but a binary file") from None
+        source = p.name
     else:
         try:
             text = packaged_vessel_text(str(name_or_path))
