@@ -344,3 +344,26 @@ def test_narx_n_inputs_counts_the_fitted_records_columns():
     assert m.n_inputs == 2 * 2 + 3 * 2                  # unfitted: the paper's records
     m.fit(rng.uniform(-1, 1, (200, 1)), rng.uniform(-1, 1, (200, 1)))
     assert m.n_inputs == m.weights[0].shape[1] == 4
+
+
+@pytest.mark.parametrize("max_iter", [5, 60])
+def test_narx_runs_at_most_max_iter_lbfgs_iterations(monkeypatch, max_iter):
+    """max_iter is 'L-BFGS iterations at most': 5 ran up to 20 iterations (one step of 20); a
+    multiple of 20, as the benchmark's 60 and 400, runs in steps of 20 as before."""
+    import torch
+
+    made = []
+
+    class Counting(torch.optim.LBFGS):
+        def __init__(self, *args, **kwargs):
+            super().__init__(*args, **kwargs)
+            made.append(self)
+
+    monkeypatch.setattr(torch.optim, "LBFGS", Counting)
+    rng = np.random.default_rng(0)
+    U = rng.uniform(-1, 1, (300, 3))
+    Y = np.column_stack([np.sin(3 * U[:, 0]), U[:, 1] * U[:, 2]])
+    NARXModel(NARXConfig(n_out=2, n_in=2, max_iter=max_iter, restarts=1, val_fraction=0.4)).fit(U, Y)
+    (opt,) = made
+    n_iter = opt.state[opt.param_groups[0]["params"][0]]["n_iter"]
+    assert 0 < n_iter <= max_iter

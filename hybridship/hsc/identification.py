@@ -476,7 +476,10 @@ class NARXModel:
                     loss.backward()
                     return loss
 
-                for _ in range(max(c.max_iter // 20, 1)):
+                for done in range(0, c.max_iter, 20):      # steps of 20 iterations, the last one shorter
+                    # max_iter 5 ran 20 iterations and 30 ran 20: at most max_iter now
+                    n = min(20, c.max_iter - done)
+                    opt.param_groups[0].update(max_iter=n, max_eval=n * 5 // 4)
                     opt.step(closure)
                     with torch.no_grad():
                         v = float(torch.mean((net(Xv) - Tv) ** 2))
