@@ -316,3 +316,18 @@ def test_a_free_run_starts_from_the_n_init_given():
     assert sc["pitch_deg"][1] == pytest.approx(np.degrees(0.0205), rel=1e-9)
     _, sc = score_model(_Held(), U, Y, "one_step", n_init=10)
     assert sc["speed_kn"] == pytest.approx((1.0, 0.0), abs=1e-12)
+
+
+def test_a_record_given_as_dataframes_is_scored_as_its_arrays():
+    """The models take any array-like record; score_model failed on DataFrames (the trial's
+    own columns) with pandas' InvalidIndexError from ``Y[:, 0]``."""
+    t = np.arange(50) * 0.1
+    U = np.column_stack([np.full(50, 3000.0), np.full(50, 50.0), np.zeros(50)])
+    Y = np.column_stack([10.0 + np.sin(t), 0.05 + 0.01 * np.cos(t)])
+    Ud = pd.DataFrame(U, columns=["rpm", "pwm_pct", "heave_acc_m_s2"])
+    Yd = pd.DataFrame(Y, columns=["speed_m_s", "pitch_rad"])
+    for mode in ("one_step", "free_run"):
+        P, sc = score_model(_Offset(), Ud, Yd, mode, n_init=10)
+        P0, sc0 = score_model(_Offset(), U, Y, mode, n_init=10)
+        np.testing.assert_array_equal(P, P0)
+        assert sc == sc0

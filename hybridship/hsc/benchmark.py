@@ -109,7 +109,10 @@ def score_model(model, U, Y, mode: str, n_init: int = N_INIT):
     n_init = check_n_init(n_init, model.n_init, n_rows)
     if n_rows - n_init < 2:         # R needs two scored rows; scoring's own error did not name n_init
         raise ValueError(f"n_init: expected at most {n_rows - 2} (two rows of U left to score), got {n_init}")
-    check_physical(*check_record(U, Y, shape=(N_INPUTS, N_OUTPUTS)))   # a craft record, whatever the model
+    # a craft record, whatever the model; the checked arrays go on (a DataFrame's Y[:, 0] was
+    # pandas' InvalidIndexError)
+    U, Y = check_record(U, Y, shape=(N_INPUTS, N_OUTPUTS))
+    check_physical(U, Y)
     P = model.one_step(U, Y) if mode == "one_step" else model.free_run(U, Y, n_init)
     Yt, Pt = _to_table_units(Y)[n_init:], _to_table_units(P)[n_init:]
     return Pt, {o: score(Yt[:, j], Pt[:, j]) for j, o in enumerate(OUTPUTS)}
