@@ -408,3 +408,11 @@ def test_grey_box_actuator_fraction_refuses_a_bad_pwm_record_by_name(grey, pwm, 
 def test_grey_box_actuator_fraction_of_an_empty_record_is_empty(grey):
     """No samples, no fractions (an IndexError on cmd[0] before)."""
     assert grey.actuator_fraction(np.array([])).shape == (0,)
+
+
+def test_grey_box_simulate_refuses_a_starting_state_of_text_by_name(grey):
+    """y0 = ("10", "0.05") was read as 10 m/s and 0.05 rad, as the records' text no longer is."""
+    U = np.column_stack([np.full(20, 3000.0), np.full(20, 50.0), np.zeros(20)])
+    with pytest.raises(ValueError, match=r"^y0: expected \(speed m/s, pitch rad\), two finite numbers"):
+        grey.simulate(U, ("10", "0.05"))
+    assert grey.simulate(U, (10.0, 0.05)).shape == (20, 2)

@@ -237,8 +237,8 @@ class GreyBox:
         """
         U = _matrix("U", U, 3)
         _finite("U", U)
-        try:
-            y = np.array(y0, dtype=float)
+        try:                        # text such as "10" was read as a number
+            y = np.array(real_array("y0", y0), dtype=float)
         except (TypeError, ValueError):
             y = None
         if y is None or y.shape != (2,) or not np.isfinite(y).all():
