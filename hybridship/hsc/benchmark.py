@@ -49,7 +49,7 @@ N_INIT = 10
 MODELS = ("ss", "arx", "ann", "hybrid")
 OUTPUTS = ("speed_kn", "pitch_deg")
 
-#: The paper's Table 1 (R): (model, sea_state, output, split) -> value.
+#: The paper's Table 1 (R): (model, sea_state, output) -> (training, validation).
 PAPER_R = {
     ("ss", 1, "speed_kn"): (0.93, 0.94), ("ss", 1, "pitch_deg"): (0.68, 0.57),
     ("ss", 2, "speed_kn"): (0.89, 0.85), ("ss", 2, "pitch_deg"): (0.73, 0.48),
@@ -58,7 +58,7 @@ PAPER_R = {
     ("ann", 1, "speed_kn"): (0.99, 0.99), ("ann", 1, "pitch_deg"): (0.83, 0.80),
     ("ann", 2, "speed_kn"): (0.99, 0.96), ("ann", 2, "pitch_deg"): (0.96, 0.87),
 }
-#: The paper's Table 2 (MAE, kn and deg), (training, validation).
+#: The paper's Table 2 (MAE, kn and deg): (model, sea_state, output) -> (training, validation).
 PAPER_MAE = {
     ("ss", 1, "speed_kn"): (0.94, 0.70), ("ss", 1, "pitch_deg"): (0.88, 0.78),
     ("ss", 2, "speed_kn"): (1.4, 1.1), ("ss", 2, "pitch_deg"): (1.2, 0.85),
