@@ -412,7 +412,7 @@ class HybridModel:
     def _input_features(self, U, a):
         lags = list(range(1, self.acc_lags + 1))
         rpm1 = _lags(U[:, 0], [1])
-        d_rpm = rpm1 - _lags(U[:, 0], [11])                 # engine speed change over the last second
+        d_rpm = rpm1 - _lags(U[:, 0], [11])                 # engine speed change over 10 samples (1 s at 0.1 s)
         return np.hstack([rpm1, d_rpm, _lags(U[:, 1], [1]), _lags(a, [0, 5]), _lags(U[:, 2], lags)])
 
     def _free_features(self, U, sim):
