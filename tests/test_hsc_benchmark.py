@@ -331,3 +331,19 @@ def test_a_record_given_as_dataframes_is_scored_as_its_arrays():
         P0, sc0 = score_model(_Offset(), U, Y, mode, n_init=10)
         np.testing.assert_array_equal(P, P0)
         assert sc == sc0
+
+
+@pytest.mark.parametrize("sea_state", [1, 2])
+def test_a_diverged_hybrid_is_the_narrowest_margin_wherever_it_is(sea_state):
+    """A hybrid whose free run diverged (NaN) in one sea state misses the target, and the
+    narrowest margin names that cell: min() skipped the NaN cell of sea state 2 and named sea
+    state 1's 0.80, the widest margin, and took sea state 1's only as it was listed first ('nan')."""
+    from hybridship.hsc.benchmark import comparisons
+
+    grey = pd.DataFrame([{"sea_state": s, "split": sp, "output": o, "R": 1.0, "MAE": 0.4}
+                         for s in (1, 2) for sp in ("train", "validation") for o in ("speed_kn", "pitch_deg")])
+    table = _table_of({"ss": 1.0, "arx": 0.8, "ann": 0.5, "hybrid": 0.1})
+    table.loc[(table.model == "hybrid") & (table["mode"] == "free_run") & (table.sea_state == sea_state), "MAE"] \
+        = np.nan
+    md = "\n".join(comparisons(table, grey))
+    assert (f"output): not met. Narrowest margin: sea state {sea_state} speed_kn, n/a against ann." in md)

@@ -197,14 +197,16 @@ def comparisons(table: pd.DataFrame, grey: pd.DataFrame) -> list[str]:
             margins.append((margin, s, o, best))
             rows.append([f"{s}", o] + [f"{val[m]:.3f}" if np.isfinite(val[m]) else "n/a" for m in ("hybrid", *others)]
                         + [best, _fmt(margin)])
-    narrow = min(margins, key=lambda m: m[0])      # the first in table order on a tie
+    # the first in table order on a tie; a diverged hybrid's (NaN) cell is the narrowest (min()
+    # skipped it, or took it only when listed first, whatever the other cells)
+    narrow = min(margins, key=lambda m: m[0] if np.isfinite(m[0]) else -np.inf)
     out += ["### The hybrid against the identified models (free run, validation MAE)", "",
             *snippet("hybrid-vs-identified", [
                 _markdown_table(["sea state", "output", "hybrid", "ss", "arx", "ann", "best other", "margin"],
                                 rows), "",
                 f"Target (hybrid at most the ANN's and below SS's and ARX's in every sea state and output): "
                 f"{'met' if met else 'not met'}. Narrowest margin: sea state {narrow[1]} {narrow[2]}, "
-                f"{narrow[0]:.2f} against {narrow[3]}."]), ""]
+                f"{_fmt(narrow[0])} against {narrow[3]}."]), ""]
     return out
 
 
