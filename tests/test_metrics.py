@@ -257,6 +257,26 @@ def test_drift_forecasts_refuse_a_horizon_across_a_gap():
     np.testing.assert_array_equal(t[:, 1], whole.eta[[202, 203]])
 
 
+def test_drift_forecasts_name_the_gap_and_dp_times_of_an_epoch_log_in_full():
+    """A log in epoch seconds: the refusal gave the gap's time (and DP's return) with %g,
+    'before the gap at time_s 1.7e+09 s', which locates no row; it is written in full."""
+    from hybridship.physics.model import DynamicModel
+    from hybridship.predictors import DeadReckoning
+    from hybridship.sim.synthetic import physics_log
+
+    m = DynamicModel("gunnerus")
+    log = physics_log(m, seed=3, duration_s=330.0, t_shutdown_s=200.0)
+    log["time_s"] += 1.7e9
+    dr = DeadReckoning(m.vessel)
+    holed = log[~(log.time_s - 1.7e9).between(205.5, 215.0)].reset_index(drop=True)
+    with pytest.raises(ValueError, match=r"before the gap at time_s 1700000205 s"):
+        metrics.drift_forecasts(dr, holed, n_intervals=3, horizons_s=(15, 30))
+    back = log.copy()
+    back.loc[back.time_s >= 1.7e9 + 230.0, "dp_active"] = 1
+    with pytest.raises(ValueError, match=r"before DP comes back on at time_s 1700000230 s"):
+        metrics.drift_forecasts(dr, back, n_intervals=20, horizons_s=(15,))
+
+
 def test_drift_forecasts_end_where_dp_comes_back_on():
     """A drift ends where DP comes back on, as drift_start_rows bounds it: with DP on again
     10 s after the failure, the 20 "drift" starts were scored (10 of them with DP on, every

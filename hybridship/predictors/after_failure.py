@@ -13,6 +13,7 @@ import numpy as np
 from ..config import check_number, check_whole_number
 from ..logs.ingest import ingest
 from ..logs.io import LogArrays
+from ..messages import seconds_text
 from .forecast_setup import horizon_steps
 
 __all__ = ["HORIZONS_S", "drift_end", "drift_forecasts", "has_drift", "shutdown_index"]
@@ -124,8 +125,8 @@ def drift_forecasts(predictor, arrays, *, n_intervals: int | None = 20, horizons
     n = available if n_intervals is None else n_intervals
     if available < n or n == 0:
         gap = "" if end == len(arrays.time_s) else (
-            f" before the gap at time_s {arrays.time_s[end - 1]:g} s" if end == _gap_free_end(arrays, i0)
-            else f" before DP comes back on at time_s {arrays.time_s[end]:g} s")
+            f" before the gap at time_s {seconds_text(arrays.time_s[end - 1])} s" if end == _gap_free_end(arrays, i0)
+            else f" before DP comes back on at time_s {seconds_text(arrays.time_s[end])} s")
         raise ValueError(f"log: only {available} start times after the shutdown leave {H * dt:g} s of "
                          f"measurements{gap}; {max(n, 1)} are needed")
     starts = i0 + first + every * np.arange(n)
