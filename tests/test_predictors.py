@@ -686,6 +686,17 @@ def test_training_data_takes_one_log_as_a_list_of_one():
         np.testing.assert_array_equal(one, listed)
 
 
+def test_training_data_before_fit_with_the_estimator_says_to_fit_first():
+    """With environment='estimator' the targets come from the fitted estimator; before fit
+    the call failed in Python's words ("'NoneType' object has no attribute 'run'")."""
+    from hybridship.physics.model import DynamicModel
+
+    m = DynamicModel("gunnerus")
+    log = physics_log(m, seed=3, duration_s=200.0, t_shutdown_s=None, current=(0.2, 1.0))
+    with pytest.raises(RuntimeError, match=r"training_data: .*call fit\(\) or load\(\) first"):
+        HybridPredictor(m.vessel).training_data([log])
+
+
 def test_residual_is_the_unknown_load_over_the_mass(model):
     """On a log with a constant body-frame load the model does not know, the residual target
     (and its causal twin) is that load's acceleration ``M^-1 tau`` [m/s^2], with its sign."""

@@ -284,8 +284,13 @@ class HybridPredictor:
         causal state explains at each row (:func:`~hybridship.residual.environment.environment_accel`),
         otherwise the ``bias_window_s`` mean residual. ``row_masks`` (one boolean array per
         log, or None) limits the rows that may be used (for example to leave out the part
-        held back for calibration).
+        held back for calibration). With ``environment="estimator"`` it needs the fitted (or
+        loaded) estimator: a RuntimeError before :meth:`fit`.
         """
+        if self.environment == "estimator" and self.estimator is None:
+            # the targets are taken from the estimator's environment (it was "'NoneType' object has no attribute 'run'")
+            raise RuntimeError("HybridPredictor.training_data: with environment='estimator' the targets are the "
+                               "fitted environment estimator's; call fit() or load() first")
         Xs, Ys, segs, thr, full = [], [], [], [], []
         for k, log in enumerate(log_list(logs)):        # one log (a path, a DataFrame) is a list of one
             prep, every = self._training_prep(log)
