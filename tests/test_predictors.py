@@ -386,6 +386,14 @@ def test_known_commands_need_the_logged_future(model, exact_logs):
         dyn.forecast(exact_logs[0], [1180], 60, commands="known")
     with pytest.raises(ValueError, match="commands: expected one of"):
         dyn.forecast(exact_logs[0], [100], 60, commands="future")
+    # each step takes the command logged at its beginning: the last of 60 steps from 1140 s
+    # takes the one at 1199 s, so a log that ends there serves it, and the message gives the time
+    # needed (it said "commands for 60 steps after it", and the docstring asked for 60 s of log)
+    end = exact_logs[0].time_s.iloc[-1]
+    assert dyn.forecast(exact_logs[0], [end - 59], 60, commands="known").eta.shape == (1, 61, 3)
+    with pytest.raises(ValueError, match=rf"start at {end - 58:g} s needs logged commands up to time_s "
+                                         rf"{end + 1:g} s \(the command of each of its 60 steps"):
+        dyn.forecast(exact_logs[0], [end - 58], 60, commands="known")
     # a dropped command sample holds the last valid one instead of poisoning the forecast
     log = exact_logs[0].copy()
     rpm_cols = log.filter(like="_rpm").columns

@@ -61,8 +61,9 @@ class DynamicPredictor:
             start, so its times are nominal and not the log's own.
         commands : {"held", "known"}
             ``held``: commands stay at their start values; ``known``: the logged commands
-            of the steps after each start are used (a manoeuvre whose orders are known;
-            the log must extend ``horizon_s`` past every start).
+            of the steps after each start are used (a manoeuvre whose orders are known).
+            Each step takes the command logged at its beginning, so the log must extend
+            ``horizon_s`` less one step past every start (a RequestError otherwise).
         """
         st = _forecast_setup(self.model, self.residual_config, log, start_times_s, horizon_s,
                              self.stop_after_failure, commands, wind_forecast=self.wind_forecast)

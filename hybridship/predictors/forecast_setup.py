@@ -302,8 +302,9 @@ def _command_rows(arrays: LogArrays, idx: np.ndarray, H: int, dt: float) -> np.n
     if late.any():
         k = int(np.argmax(late))
         raise RequestError(f"commands='known': the log ends at {seconds_text(t[-1])} s, but the start at "
-                           f"{seconds_text(t[idx[k]])} s needs logged commands for {H} steps after it; "
-                           "use commands='held' or an earlier start time")
+                           f"{seconds_text(t[idx[k]])} s needs logged commands up to time_s "
+                           f"{seconds_text(want[k, -1])} s (the command of each of its {H} steps, logged at the "
+                           "step's beginning); use commands='held' or an earlier start time")
     return np.searchsorted(t, want + 0.25 * dt, side="right") - 1
 
 
