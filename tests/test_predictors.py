@@ -705,6 +705,19 @@ def test_training_data_before_fit_with_the_estimator_says_to_fit_first():
         HybridPredictor(m.vessel).training_data([log])
 
 
+def test_rollout_without_nets_on_an_unfitted_hybrid_needs_the_guard_off():
+    """nets=False needs no ensemble, but the guard (on by default) reads the fitted envelope:
+    an unfitted hybrid's rollout failed in Python's words ("'NoneType' object has no
+    attribute 'x_mean'"); it now says to fit first, and with guard=False it runs."""
+    hp = HybridPredictor("gunnerus")
+    z, K = np.zeros((2, 3)), hp.model.n_channels
+    held = dict(rpm=np.zeros((2, 1, K)), az=np.zeros((2, 1, K)), wind=np.zeros((2, 1, 2)))
+    with pytest.raises(RuntimeError, match=r"^HybridPredictor: not fitted; call fit\(\) or load\(\) first$"):
+        hp.rollout(z, z, z, z, n_steps=5, dt_s=1.0, nets=False, **held)
+    eta, _, _, wgt = hp.rollout(z, z, z, z, n_steps=5, dt_s=1.0, guard=False, nets=False, **held)
+    assert eta.shape == (2, 6, 3) and wgt is None
+
+
 def test_residual_is_the_unknown_load_over_the_mass(model):
     """On a log with a constant body-frame load the model does not know, the residual target
     (and its causal twin) is that load's acceleration ``M^-1 tau`` [m/s^2], with its sign."""

@@ -1437,11 +1437,11 @@ class HybridPredictor:
         or per member (E, S, 3) (surge/sway in NED), commands held (S, 1, K) or per step (S, n_steps, K),
         wind held (S, 1, 2) or per step (S, n_steps, 2), and optionally a held current ``[speed_m_s, dir_to_rad]``
         (S, 1, 2) and a body-frame extra acceleration (S, 1 or n_steps, 3) for the physics, and optionally per start
-        the hull's yaw coefficient in a drift ``drift_yaw_uv`` (S,) [rad/m^2] (:func:`_with_drift_yaw`).
-        ``nets=False`` needs no ensemble; ``nets_weight`` (S,): 0 where the nets stay off (after a failure), with
-        the guard on or off. ``command_memory`` (S, >= n_steps, 2): the command-memory features of the steps
-        (:meth:`_command_memory`), needed when the nets use them. ``wave_axis`` (S, 2): the waves' axis per start
-        (:meth:`_wave_axes`); the held yaw load then turns with them.
+        the hull's yaw coefficient in a drift ``drift_yaw_uv`` (S,) [rad/m^2] (:func:`_with_drift_yaw`). ``nets=False``
+        with ``guard=False`` needs no ensemble (the guard is fitted with the nets); ``nets_weight`` (S,): 0 where the
+        nets stay off (after a failure), with the guard on or off. ``command_memory`` (S, >= n_steps, 2): the
+        command-memory features of the steps (:meth:`_command_memory`), needed when the nets use them. ``wave_axis``
+        (S, 2): the waves' axis per start (:meth:`_wave_axes`); the held yaw load then turns with them.
 
         Every step: the physics advances the ensemble-mean state one step (RK4, through
         :meth:`DynamicModel.step_unchecked` with the extra acceleration ``accel_ext``) and predicts the
@@ -1455,7 +1455,7 @@ class HybridPredictor:
         -------
         eta (S, H+1, 3), nu (S, H+1, 3), eta_std (S, H+1, 3), guard_weight (S, H+1)
         """
-        eta0, nu0, dev0, bias0_ned = _rollout_start(eta0, nu0, dev0, bias0_ned, self._check_fitted if nets else None)
+        eta0, nu0, dev0, bias0_ned = _rollout_start(eta0, nu0, dev0, bias0_ned, (nets or guard) and self._check_fitted)
         rpm, az, wind = _check_rollout_batch(S := eta0.shape[0], n_steps, dt_s, substeps, self.model.n_channels,
                                              nu0=nu0, dev0=dev0, rpm=rpm, az=az, wind=wind, current=current,
                                              accel_ext=accel_ext)
@@ -1565,8 +1565,8 @@ class HybridPredictor:
 def _rollout_start(eta0, nu0, dev0, bias0_ned, check_fitted=None):
     """A rollout's start states ``eta0, nu0`` and deviations ``dev0`` as finite (S, 3) float
     arrays and the biases (S, 3) or (E, S, 3); else a ValueError naming the argument
-    (``check_fitted`` first, when given: the nets need a fitted ensemble)."""
-    if check_fitted is not None:
+    (``check_fitted`` first, when given: the nets and the guard need a fitted ensemble)."""
+    if check_fitted:
         check_fitted()
     out = []
     for name, a in (("eta0", eta0), ("nu0", nu0), ("dev0", dev0), ("bias0_ned", bias0_ned)):
