@@ -718,6 +718,21 @@ def test_rollout_without_nets_on_an_unfitted_hybrid_needs_the_guard_off():
     assert eta.shape == (2, 6, 3) and wgt is None
 
 
+def test_rollout_refuses_held_rpm_with_angles_per_step():
+    """Commands are held or per step together: with the rpm held, angles given per step were
+    held at their first step without a word (the same rollout as angles held)."""
+    hp = HybridPredictor("gunnerus")
+    z, K = np.zeros((1, 3)), hp.model.n_channels
+    rpm, wind = np.full((1, 1, K), 50.0), np.zeros((1, 1, 2))
+    az = np.zeros((1, 5, K))
+    az[:, 1:] = 1.5
+    with pytest.raises(ValueError, match=r"^rpm, az: commands are both held .* got rpm held and az of 5 steps"):
+        hp.rollout(z, z + [1.0, 0, 0], z, z, rpm, az, wind, 5, 1.0, guard=False, nets=False)
+    both = hp.rollout(z, z + [1.0, 0, 0], z, z, np.repeat(rpm, 5, axis=1), az, wind, 5, 1.0, guard=False, nets=False)
+    held = hp.rollout(z, z + [1.0, 0, 0], z, z, rpm, az[:, :1], wind, 5, 1.0, guard=False, nets=False)
+    assert not np.allclose(both[0], held[0])
+
+
 def test_residual_is_the_unknown_load_over_the_mass(model):
     """On a log with a constant body-frame load the model does not know, the residual target
     (and its causal twin) is that load's acceleration ``M^-1 tau`` [m/s^2], with its sign."""

@@ -1617,6 +1617,10 @@ def _check_rollout_steps(rpm, az, wind, command_memory, use_memory: bool, S: int
     """Whether a rollout's commands and wind are per step (else held), after checking that
     per-step inputs cover ``n_steps``, and the command memory too when the nets use it."""
     per_step = rpm.shape[1] > 1
+    if not per_step and az.shape[1] > 1:
+        # the held rpm held the angles too: every step took az's first (a silent wrong rollout)
+        raise ValueError(f"rpm, az: commands are both held (1 step) or both per step ({n_steps} steps); got rpm "
+                         f"held and az of {az.shape[1]} steps")
     if per_step and (rpm.shape[1] < n_steps or az.shape[1] < n_steps):
         raise ValueError(f"rpm, az: per-step commands need {n_steps} steps, got {rpm.shape[1]}, {az.shape[1]}")
     wind_per_step = wind.shape[1] > 1
