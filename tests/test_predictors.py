@@ -733,6 +733,21 @@ def test_rollout_refuses_held_rpm_with_angles_per_step():
     assert not np.allclose(both[0], held[0])
 
 
+def test_rollout_refuses_a_current_per_step():
+    """The rollout holds the current (S, 1, 2): one given per step was accepted and its first
+    step held over the whole rollout without a word."""
+    hp = HybridPredictor("gunnerus")
+    z, K = np.zeros((1, 3)), hp.model.n_channels
+    held = dict(rpm=np.zeros((1, 1, K)), az=np.zeros((1, 1, K)), wind=np.zeros((1, 1, 2)))
+    current = np.zeros((1, 5, 2))
+    current[:, 2:, 0] = 1.0
+    with pytest.raises(ValueError, match=r"^current: expected a held current, shape \(1, 1, 2\), got \(1, 5, 2\)"):
+        hp.rollout(z, z, z, z, n_steps=5, dt_s=1.0, guard=False, nets=False, current=current, **held)
+    eta, _, _, _ = hp.rollout(z, z, z, z, n_steps=5, dt_s=1.0, guard=False, nets=False, current=current[:, 2:3],
+                              **held)
+    assert np.abs(eta[0, -1, :2]).max() > 0.01         # a held current of 1 m/s starts to carry the ship
+
+
 def test_residual_is_the_unknown_load_over_the_mass(model):
     """On a log with a constant body-frame load the model does not know, the residual target
     (and its causal twin) is that load's acceleration ``M^-1 tau`` [m/s^2], with its sign."""

@@ -1600,6 +1600,9 @@ def _check_rollout_batch(S: int, n_steps, dt_s, substeps, n_channels: int, **arr
             arrays[name] = a = real_array(name, a)
             if a.ndim != 3 or a.shape[1] < 1 or a.shape[2] != width:
                 raise ValueError(f"{name}: expected shape ({S}, 1 or n_steps, {width}), got {a.shape}")
+            if name == "current" and a.shape[1] != 1:
+                # the current is held: every step took the first step's (a silent wrong rollout)
+                raise ValueError(f"current: expected a held current, shape ({S}, 1, 2), got {a.shape}")
             if not np.all(np.isfinite(a)):
                 raise ValueError(f"{name}: contains NaN or inf")
     return arrays["rpm"], arrays["az"], arrays["wind"]
