@@ -109,6 +109,22 @@ def test_save_load_round_trip_gives_identical_forecasts(model, current_logs, tmp
         hp2.forecast(current_logs[2].drop(columns=["wind_speed_m_s", "wind_dir_deg"]), [900.0], 30)
 
 
+def test_a_forecast_step_between_two_training_steps_is_warned_about():
+    """Trained on 0.1-s and 1-s logs, a 0.5-s log is at a rate the nets never saw; only steps
+    outside 0.09..1.1 s were warned about (the range from the shortest to the longest)."""
+    from hybridship.predictors.training_logs import warn_other_rate
+
+    info = {"log_step_s": [0.1, 1.0]}
+    with pytest.warns(UserWarning, match=r"log: its step is 0.5 s, but the model was trained on logs with a step "
+                                         r"of 0.1, 1 s"):
+        warn_other_rate(info, 0.5)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        for dt in (0.1, 0.105, 0.95, 1.0, 1.1):
+            warn_other_rate(info, dt)
+        warn_other_rate({}, 0.5)                      # a model file from before the entry
+
+
 def test_training_logs_with_and_without_wind_are_named_once_at_fit(model, current_logs):
     """A training log without wind columns beside logs with them is warned about by name, once,
     in the words of training; before, the calibration's own forecasts on it warned "log: ...

@@ -130,7 +130,8 @@ def warn_other_rate(training_info: dict, dt_s: float) -> None:
     from ..messages import warn_user
 
     trained = training_info.get("log_step_s")
-    if trained and not 0.9 * min(trained) <= dt_s <= 1.1 * max(trained):
+    # near one of the steps, not merely between the shortest and the longest (0.5 s is neither 0.1 nor 1 s)
+    if trained and not any(0.9 * x <= dt_s <= 1.1 * x for x in trained):
         warn_user(f"log: its step is {dt_s:g} s, but the model was trained on logs with a step of "
                   f"{', '.join(f'{x:g}' for x in trained)} s; forecasts at another rate are less "
                   f"accurate: train on logs at this rate", UserWarning)
