@@ -396,6 +396,17 @@ def test_known_commands_reproduce_a_log_the_model_made(model, exact_logs):
         assert np.abs(known.eta[k, n + 2] - held.eta[k, n + 2]).max() > 0
 
 
+def test_a_start_whose_commands_were_clipped_says_so_in_its_note(model, exact_logs):
+    """A start whose held rpm was clipped to max_rpm was flagged input_clipped but its note was
+    empty, which the notes reserve for a clean start; the clip checks' note now reaches it."""
+    log = exact_logs[0].copy()
+    col = f"{model.vessel.thrusters[0].name}_rpm"
+    log.loc[log.time_s.between(290, 300), col] = 1.2 * model.vessel.thrusters[0].max_rpm
+    fc = DynamicPredictor(model.vessel).forecast(log, [300, 200], 10.0)
+    np.testing.assert_array_equal(fc.flags["input_clipped"], [True, False])
+    assert fc.notes == ("rpm clipped to its valid range", "")
+
+
 def test_known_commands_need_the_logged_future(model, exact_logs):
     dyn = DynamicPredictor(model.vessel)
     with pytest.raises(ValueError, match="commands='known'.*log ends"):

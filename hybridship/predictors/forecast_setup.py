@@ -438,7 +438,7 @@ def _forecast_setup(model, config: ResidualConfig, log, start_times_s, horizon_s
     flags.update({k: np.asarray(v, dtype=bool) for k, v in sw.flags.items()})
     flags[FaultFlags.INPUT_CLIPPED] = np.asarray(chk.clipped, dtype=bool)
     notes = tuple(sw.notes) if len(sw.notes) == len(idx) else ("",) * len(idx)
-    notes = join_notes(notes, extra_notes)
+    notes = join_notes(notes, extra_notes, chk.notes)       # what was clipped, which the flag alone does not say
     return _Setup(arrays, idx, dt, H, chk.eta, chk.nu, np.ascontiguousarray(chk.rpm),
                   np.ascontiguousarray(chk.azimuth_rad), np.ascontiguousarray(chk.wind), int(chk.substeps),
                   flags, notes)
