@@ -775,6 +775,27 @@ def test_rollout_refuses_a_current_per_step():
     assert np.abs(eta[0, -1, :2]).max() > 0.01         # a held current of 1 m/s starts to carry the ship
 
 
+def test_rollout_names_per_start_extras_of_another_length():
+    """nets_weight, drift_yaw_uv and wave_axis hold one value (row) per start: another length
+    failed in numpy's words ("operands could not be broadcast together"), naming none, and
+    one value for two starts was spread over both without a word."""
+    hp = HybridPredictor("gunnerus")
+    z, K = np.zeros((2, 3)), hp.model.n_channels
+    held = dict(rpm=np.zeros((2, 1, K)), az=np.zeros((2, 1, K)), wind=np.zeros((2, 1, 2)))
+    for kw, match in ((dict(nets_weight=[1.0, 1.0, 1.0]), r"^nets_weight: expected shape \(2,\), one per start, got "
+                                                         r"\(3,\)"),
+                      (dict(nets_weight=[1.0]), r"^nets_weight: expected shape \(2,\)"),
+                      (dict(drift_yaw_uv=[0.1, 0.1, 0.1]), r"^drift_yaw_uv: expected shape \(2,\)"),
+                      (dict(drift_yaw_uv=[0.1, np.nan]), r"^drift_yaw_uv: contains NaN"),
+                      (dict(wave_axis=np.zeros((3, 2))), r"^wave_axis: expected shape \(2, 2\)"),
+                      (dict(nets_weight=["a", "b"]), r"^nets_weight: expected an array of real numbers")):
+        with pytest.raises((TypeError, ValueError), match=match):
+            hp.rollout(z, z, z, z, n_steps=3, dt_s=1.0, guard=False, nets=False, **held, **kw)
+    eta, _, _, _ = hp.rollout(z, z, z, z, n_steps=3, dt_s=1.0, guard=False, nets=False, **held,
+                              nets_weight=[0.0, 1.0], drift_yaw_uv=[0.0, 0.0], wave_axis=np.full((2, 2), np.nan))
+    assert eta.shape == (2, 4, 3)
+
+
 def test_residual_is_the_unknown_load_over_the_mass(model):
     """On a log with a constant body-frame load the model does not know, the residual target
     (and its causal twin) is that load's acceleration ``M^-1 tau`` [m/s^2], with its sign."""

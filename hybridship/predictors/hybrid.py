@@ -1458,7 +1458,7 @@ class HybridPredictor:
         eta0, nu0, dev0, bias0_ned = _rollout_start(eta0, nu0, dev0, bias0_ned, (nets or guard) and self._check_fitted)
         rpm, az, wind = _check_rollout_batch(S := eta0.shape[0], n_steps, dt_s, substeps, self.model.n_channels,
                                              nu0=nu0, dev0=dev0, rpm=rpm, az=az, wind=wind, current=current,
-                                             accel_ext=accel_ext)
+                                             accel_ext=accel_ext, per_start=(nets_weight, drift_yaw_uv, wave_axis))
         ens, fidx = self.ensemble, self.residual_config.feature_index
         E = ens.n_members if nets else (np.shape(bias0_ned)[0] if np.ndim(bias0_ned) == 3 else 1)
         acc_phys = np.zeros((S, 1, 3)) if accel_ext is None else np.ascontiguousarray(accel_ext, dtype=float)
@@ -1584,14 +1584,23 @@ def _rollout_start(eta0, nu0, dev0, bias0_ned, check_fitted=None):
 _ROLLOUT_INPUT_WIDTHS = {"rpm": None, "az": None, "wind": 2, "current": 2, "accel_ext": 3}
 
 
-def _check_rollout_batch(S: int, n_steps, dt_s, substeps, n_channels: int, **arrays):
+def _check_rollout_batch(S: int, n_steps, dt_s, substeps, n_channels: int, per_start=(None, None, None),
+                         **arrays):
     """Every per-start input of a rollout has one row per start (the compiled step reads
     ``S`` rows of each), the commands one column per command channel (``n_channels``), the
     wind and current 2 and the extra acceleration 3, all finite real numbers (the compiled
-    step read past a narrower array), and the step settings are valid: ValueError naming the
-    argument. Returns ``rpm``, ``az`` and ``wind`` as float arrays."""
+    step read past a narrower array), ``per_start`` (``nets_weight`` and ``drift_yaw_uv``, (S,)
+    finite, and ``wave_axis``, (S, 2); each may be None) one value or row per start, and the
+    step settings are valid: ValueError naming the argument. Returns ``rpm``, ``az`` and ``wind``
+    as float arrays."""
     check_step(dt_s, substeps)
     check_whole_number("n_steps", n_steps, 1)
+    for name, a, shape in zip(("nets_weight", "drift_yaw_uv", "wave_axis"), per_start, ((S,), (S,), (S, 2))):
+        # numpy's words ("operands could not be broadcast together") named none of them
+        if a is not None and real_array(name, a).shape != shape:
+            raise ValueError(f"{name}: expected shape {shape}, one per start, got {np.shape(a)}")
+        if a is not None and name != "wave_axis" and not np.all(np.isfinite(real_array(name, a))):
+            raise ValueError(f"{name}: contains NaN or inf")          # (a wave axis is NaN where none was found)
     for name, a in arrays.items():
         if a is not None and (np.ndim(a) < 2 or np.shape(a)[0] != S):
             raise ValueError(f"{name}: expected one row per start ({S}, ...), got shape {np.shape(a)}")
