@@ -796,6 +796,26 @@ def test_rollout_names_per_start_extras_of_another_length():
     assert eta.shape == (2, 4, 3)
 
 
+def test_calibrate_after_stop_names_the_log_without_a_failure(model, exact_logs, tmp_path):
+    """Among several logs, one without a failure (or with too short a drift) was refused as
+    "log: no DP shutdown", which did not say which; the log is now named (its path, else
+    its place logs[i]), and a lone log is still "log"."""
+    hp = HybridPredictor(model.vessel, ensemble_config=EnsembleConfig(n_members=2, hidden=8, max_epochs=3,
+                                                                      patience=2, seed=0)).fit(exact_logs[:1])
+    fail, calm = exact_logs[1], exact_logs[2].assign(dp_active=1)
+    with pytest.raises(ValueError, match=r"^logs\[1\]: no DP shutdown \(dp_active never 0\)"):
+        hp.calibrate_after_stop([fail, calm], horizon_s=20.0)
+    calm.to_csv(tmp_path / "calm.csv", index=False)
+    with pytest.raises(ValueError, match=r"calm\.csv: no DP shutdown"):
+        hp.after_stop_errors([fail, tmp_path / "calm.csv"], horizon_s=20.0)
+    short = fail[fail.time_s < 910].reset_index(drop=True)
+    with pytest.raises(ValueError, match=r"^logs\[0\]: only 0 start times after the shutdown"):
+        hp.after_stop_errors([short, fail], horizon_s=20.0)
+    with pytest.raises(ValueError, match=r"^log: no DP shutdown"):
+        hp.after_stop_errors([calm], horizon_s=20.0)
+    assert len(hp.after_stop_errors([fail, fail], horizon_s=20.0)) == 2
+
+
 def test_residual_is_the_unknown_load_over_the_mass(model):
     """On a log with a constant body-frame load the model does not know, the residual target
     (and its causal twin) is that load's acceleration ``M^-1 tau`` [m/s^2], with its sign."""

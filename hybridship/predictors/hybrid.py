@@ -45,7 +45,7 @@ from .forecast_setup import (AFTER_STOP, AFTER_STOP_LATE, FORECAST_HISTORY_S, MA
                              keeps_state_on_error, log_list, start_indices)
 from .model_file import load_model, save_model
 from .result import ForecastResult
-from .training_logs import (NO_WIND_FORECAST_WARNING, check_distinct_logs, check_training_lengths,
+from .training_logs import (NO_WIND_FORECAST_WARNING, check_distinct_logs, check_training_lengths, log_label,
                             read_training_logs, training_log_facts, warn_logs_without_wind, warn_no_wind,
                             warn_other_rate)
 
@@ -1353,30 +1353,44 @@ class HybridPredictor:
         check_whole_number("n_intervals", n_intervals, 1)
         horizon_s = check_number("horizon_s", horizon_s, lo=0.0, hi=MAX_HORIZON_S, lo_open=True)
         _check_flags(late=late)
-        arrays = [as_log_arrays(x, self.model.vessel) for x in log_list(logs)]
+        given = log_list(logs)
+        arrays = [as_log_arrays(x, self.model.vessel) for x in given]
         if not arrays:
             raise ValueError("logs: at least one log with a DP failure is needed")
         out = []
-        for a in arrays:
-            lead = np.arange(1, int(round(horizon_s / a.dt_s)) + 1) * a.dt_s
-            if lead.size == 0:
-                raise ValueError(f"horizon_s: {horizon_s:g} s is shorter than the log's step of {a.dt_s:g} s")
-            if late:
-                # starts every LATE_START_EVERY_S within the failure's gap-free stretch of drift
-                every = max(1, int(round(LATE_START_EVERY_S / a.dt_s)))
-                i0 = shutdown_index(a)
-                end = drift_end(a, i0)          # before a gap, and before DP comes back on
-                room = end - i0 - n_intervals - lead.size
-                if room <= 0:
-                    continue
-                p, t, sd = drift_forecasts(self, a, n_intervals=-(-room // every), first=n_intervals, every=every,
-                                           horizons_s=tuple(lead), calibrated=False)
-            else:
-                p, t, sd = drift_forecasts(self, a, n_intervals=n_intervals, horizons_s=tuple(lead), calibrated=False)
-            e = np.abs(p - t)
-            e[..., 2] = np.abs(wrap_pi(p[..., 2] - t[..., 2]))
-            out.append((e, sd, lead))
+        for k, a in enumerate(arrays):
+            try:
+                errors = self._after_stop_errors_of(a, n_intervals, horizon_s, late)
+            except ValueError as err:
+                # among several logs, "log: no DP shutdown" did not say which
+                if type(err) is not ValueError or not str(err).startswith("log: ") or len(arrays) == 1:
+                    raise
+                raise ValueError(f"{log_label(given[k], k)}: {str(err)[len('log: '):]}") from None
+            if errors is not None:
+                out.append(errors)
         return out
+
+    def _after_stop_errors_of(self, a: LogArrays, n_intervals: int, horizon_s: float, late: bool):
+        """:meth:`after_stop_errors` of one log, ``(err, std, lead_s)``, or None (``late``, a drift
+        too short for a later start)."""
+        lead = np.arange(1, int(round(horizon_s / a.dt_s)) + 1) * a.dt_s
+        if lead.size == 0:
+            raise ValueError(f"horizon_s: {horizon_s:g} s is shorter than the log's step of {a.dt_s:g} s")
+        if late:
+            # starts every LATE_START_EVERY_S within the failure's gap-free stretch of drift
+            every = max(1, int(round(LATE_START_EVERY_S / a.dt_s)))
+            i0 = shutdown_index(a)
+            end = drift_end(a, i0)          # before a gap, and before DP comes back on
+            room = end - i0 - n_intervals - lead.size
+            if room <= 0:
+                return None
+            p, t, sd = drift_forecasts(self, a, n_intervals=-(-room // every), first=n_intervals, every=every,
+                                       horizons_s=tuple(lead), calibrated=False)
+        else:
+            p, t, sd = drift_forecasts(self, a, n_intervals=n_intervals, horizons_s=tuple(lead), calibrated=False)
+        e = np.abs(p - t)
+        e[..., 2] = np.abs(wrap_pi(p[..., 2] - t[..., 2]))
+        return e, sd, lead
 
     def _calibrate_after_stop_on_training_logs(self, logs, cal: CalibrationConfig):
         """With at least ``cal.after_stop_min_failures`` failures in the training logs, the
