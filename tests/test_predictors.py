@@ -816,6 +816,18 @@ def test_calibrate_after_stop_names_the_log_without_a_failure(model, exact_logs,
     assert len(hp.after_stop_errors([fail, fail], horizon_s=20.0)) == 2
 
 
+def test_drift_hull_objective_names_the_log_without_a_drift(model, exact_logs):
+    """drift_hull_objective refused a log without a failure as "logs: a log without a failure
+    followed by ... of drift", which did not say which of the logs; it is now named."""
+    hp = HybridPredictor(model.vessel, ensemble_config=EnsembleConfig(n_members=2, hidden=8, max_epochs=3,
+                                                                      patience=2, seed=0)).fit(exact_logs[:1])
+    calm = exact_logs[2].assign(dp_active=1)
+    with pytest.raises(ValueError, match=r"^logs\[1\]: no failure followed by 20 s of drift in one gap-free segment"):
+        hp.drift_hull_objective([exact_logs[1], calm], horizon_s=20.0)
+    with pytest.raises(ValueError, match=r"^log: no failure followed by 20 s of drift"):
+        hp.drift_hull_objective(calm, horizon_s=20.0)
+
+
 def test_residual_is_the_unknown_load_over_the_mass(model):
     """On a log with a constant body-frame load the model does not know, the residual target
     (and its causal twin) is that load's acceleration ``M^-1 tau`` [m/s^2], with its sign."""

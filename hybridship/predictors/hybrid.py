@@ -465,8 +465,9 @@ class HybridPredictor:
         horizon_s = check_number("horizon_s", horizon_s, lo=0.0, hi=MAX_HORIZON_S, lo_open=True)
         ks = MUNK_MULTIPLES * munk_coefficient(self.model)
         out = np.empty((ks.size, 0))
-        for log in log_list(logs):          # one log (a path, a DataFrame) is a list of one; none is refused
-            st, truth = self._drift_starts(log, horizon_s)
+        given = log_list(logs)              # one log (a path, a DataFrame) is a list of one; none is refused
+        for k, log in enumerate(given):
+            st, truth = self._drift_starts(log, horizon_s, log_label(log, k) if len(given) > 1 else "log")
             truth = truth[..., 2]                                                        # (S, H)
             per_batch = max(1, DRIFT_HULL_BATCH // len(st.idx))
             with self.estimator.sharing_station_keeping():     # filtered once for all candidates
@@ -475,16 +476,17 @@ class HybridPredictor:
             out = np.column_stack([out, np.concatenate(errors)])
         return out
 
-    def _drift_starts(self, log, horizon_s: float):
+    def _drift_starts(self, log, horizon_s: float, label: str = "log"):
         """Forecast setup of the starts every :data:`~hybridship.residual.drift_hull.START_EVERY_S`
         along a log's first drift (:func:`~hybridship.residual.drift_hull.drift_start_rows`), and
-        the logged ``eta`` (S, H, 3) at every lead after them."""
+        the logged ``eta`` (S, H, 3) at every lead after them (``label`` names the log in the
+        refusal of one without such a drift)."""
         a = as_log_arrays(log, self.model.vessel)
         H = int(round(horizon_s / a.dt_s))
         rows = drift_start_rows(a.dp_active, a.segment_id, H, int(round(DRIFT_HULL_START_EVERY_S / a.dt_s)))
         if rows.size == 0:
-            raise ValueError(f"logs: a log without a failure followed by {horizon_s:g} s of drift in one "
-                             f"gap-free segment")
+            # "logs: a log without ..." did not say which of the logs
+            raise ValueError(f"{label}: no failure followed by {horizon_s:g} s of drift in one gap-free segment")
         st = _forecast_setup(self.model, self.residual_config, a, a.time_s[rows], H * a.dt_s,
                              self.stop_after_failure, "held", history_s=self.history_s,
                              wind_forecast=self.wind_forecast)
