@@ -277,6 +277,25 @@ def test_drift_forecasts_name_the_gap_and_dp_times_of_an_epoch_log_in_full():
         metrics.drift_forecasts(dr, back, n_intervals=20, horizons_s=(15,))
 
 
+def test_has_drift_names_a_bad_count_or_horizon():
+    """has_drift read a negative horizon as more room (a drift in any log with a failure) and
+    failed on a NaN one in int()'s words ('cannot convert float NaN to integer') and on text
+    in an operator's; each is now refused naming it, as drift_forecasts refuses them."""
+    from hybridship.physics.model import DynamicModel
+    from hybridship.predictors import as_log_arrays
+    from hybridship.predictors.after_failure import has_drift
+    from hybridship.sim.synthetic import physics_log
+
+    m = DynamicModel("gunnerus")
+    a = as_log_arrays(physics_log(m, seed=3, duration_s=330.0, t_shutdown_s=200.0), m.vessel)
+    assert has_drift(a, 20, 60.0) and not has_drift(a, 200, 60.0)
+    for args, err, match in (((20, float("nan")), ValueError, "^horizon_s: "),
+                             ((20, -60.0), ValueError, "^horizon_s: "), ((20, "60"), TypeError, "^horizon_s: "), (("20", 60.0), ValueError, "^n_intervals: "),
+                             ((0, 60.0), ValueError, "^n_intervals: "), ((20.5, 60.0), ValueError, "^n_intervals: ")):
+        with pytest.raises(err, match=match):
+            has_drift(a, *args)
+
+
 def test_drift_forecasts_end_where_dp_comes_back_on():
     """A drift ends where DP comes back on, as drift_start_rows bounds it: with DP on again
     10 s after the failure, the 20 "drift" starts were scored (10 of them with DP on, every
