@@ -227,3 +227,10 @@ def test_the_data_only_fit_names_a_training_log_too_short_for_a_derivative():
         with pytest.raises(ValueError, match=rf"^logs\[1\]: a training log needs at least 3 samples, got {n}"):
             dp.fit([good, good.iloc[:n]])
         assert dp.ensemble is None
+
+
+def test_a_horizon_beyond_any_float_is_refused_by_name():
+    """``horizon_s=10**400`` was Python's OverflowError ('int too large to convert to float')."""
+    log = physics_log(DynamicModel("gunnerus"), seed=2, duration_s=120.0, t_shutdown_s=None)
+    with pytest.raises(ValueError, match=r"^horizon_s: must be > 0 and at most 86400 s \(one day\), got inf"):
+        DynamicPredictor("gunnerus").fit().forecast(log, [10.0], horizon_s=10**400)

@@ -9,6 +9,8 @@ window through :func:`hybridship.forecast_inputs.assess_start_window` and the in
 
 from __future__ import annotations
 
+import math
+
 import functools
 import numbers
 import os
@@ -391,6 +393,8 @@ def _forecast_setup(model, config: ResidualConfig, log, start_times_s, horizon_s
     except (TypeError, ValueError):
         raise TypeError(f"horizon_s: expected a number of seconds, got {type(horizon_s).__name__} "
                         f"{horizon_s!r}") from None
+    except OverflowError:       # an int beyond any float (10**400): Python's 'int too large to convert'
+        horizon_s = math.inf
     if not 0 < horizon_s <= MAX_HORIZON_S:
         raise ValueError(f"horizon_s: must be > 0 and at most {MAX_HORIZON_S:g} s (one day), got {horizon_s}")
     if commands not in COMMAND_MODES:
