@@ -397,3 +397,16 @@ def test_grouped_interval_over_three_groups_stays_within_their_own_coverages():
     hits, counts = np.array([[18.0], [19.0], [20.0]]), np.array([20.0, 20.0, 20.0])
     cov, lo, hi = grouped_coverage_interval(hits, counts)[0]
     assert np.isclose(cov, 0.95) and 0.9 <= lo <= cov <= hi <= 1.0
+
+
+def test_error_table_refuses_a_window_or_horizon_given_twice():
+    """Windows (5, 5) or horizons (15, 15, 45, 60) wrote two rows of one cell, and the paper's
+    table of them failed in pandas' words ("Index contains duplicate entries, cannot reshape")."""
+    E = {"m": [np.ones((20, 4, 3))]}
+    with pytest.raises(ValueError, match=r"^windows: \(5, 5\) gives one twice"):
+        metrics.error_table(E, windows=(5, 5))
+    with pytest.raises(ValueError, match=r"^horizons_s: \(15, 15, 45, 60\) gives one twice"):
+        metrics.error_table(E, horizons_s=(15, 15, 45, 60))
+    # a horizon list given as a generator is read once (len() of it failed)
+    long = metrics.error_table(E, horizons_s=(h for h in (15, 30, 45, 60)))
+    assert metrics.paper_table(long).shape == (3, 4)

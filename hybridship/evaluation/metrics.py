@@ -228,12 +228,17 @@ def error_table(errors: dict, *, horizons_s=HORIZONS_S, windows=WINDOWS) -> pd.D
     """Long table ``model, state, window, horizon_s, mae`` from per-log error arrays.
 
     ``errors`` maps a model name to a list of :func:`drift_errors` arrays (one per log);
-    a cell is the mean over logs and over the first ``window`` intervals.
+    a cell is the mean over logs and over the first ``window`` intervals. A window or
+    horizon given twice is a ValueError naming it (two rows of one cell).
     """
-    windows = tuple(windows)
+    windows, horizons_s = tuple(windows), tuple(horizons_s)
     if not windows or not all(isinstance(w, (int, np.integer)) and not isinstance(w, bool) and w >= 1
                               for w in windows):
         raise ValueError(f"windows: expected one or more whole numbers >= 1 of intervals, got {windows!r}")
+    # two rows of one cell: paper_table failed in pandas' words ("Index contains duplicate entries")
+    for name, values in (("windows", windows), ("horizons_s", horizons_s)):
+        if len(set(values)) != len(values):
+            raise ValueError(f"{name}: {values!r} gives one twice; expected each once")
     rows = []
     for model, per_log in errors.items():
         shapes = sorted({np.shape(a) for a in per_log})
