@@ -323,6 +323,25 @@ def test_a_test_log_without_a_failure_is_refused_before_training(tiny_folder, tm
     assert capsys.readouterr().err.startswith("hybridship benchmark drift: error: --test: 1 log(s) have no DP failure")
 
 
+def test_too_few_calibration_forecasts_on_the_training_logs_drifts_are_refused_before_training(tiny_folder, tmp_path,
+                                                                                              monkeypatch):
+    """With the test logs the training logs, 3 starts after each of 6 simulated DP losses (18
+    per lead, 20 needed) were refused only after both ensembles were trained, and the
+    output folder was left behind empty; the counts are known before, and refused there."""
+    from hybridship.predictors import HybridPredictor
+
+    def no_training(*args, **kwargs):
+        raise AssertionError("trained before the calibration's count was checked")
+
+    monkeypatch.setattr(HybridPredictor, "fit", no_training)
+    with pytest.raises(ValueError, match=r"^n_intervals: 3 forecasts after each of 6 failures \(calibration_scenarios\) "
+                                         r"give 18 per lead"):
+        run_drift_benchmark(tiny_folder, None, tmp_path / "out", n_intervals=3, progress=False, plots=False)
+    assert not (tmp_path / "out").exists()
+    with pytest.raises(AssertionError, match="trained before"):     # 7 starts: 42 per lead, enough
+        run_drift_benchmark(tiny_folder, None, tmp_path / "out", n_intervals=7, progress=False, plots=False)
+
+
 @pytest.mark.parametrize("kw, message", [
     ({"n_intervals": 0}, r"^n_intervals: expected a whole number >= 1, got 0"),
     ({"n_intervals": 2.5}, r"^n_intervals: expected a whole number >= 1, got 2\.5"),

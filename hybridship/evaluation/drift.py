@@ -222,7 +222,7 @@ def run_drift_benchmark(train=None, test=None, out_dir="drift-benchmark", *, ves
     train_arrays = [as_log_arrays(x, hybrid.model.vessel) for x in train_logs]
     test_arrays = _test_arrays(test_logs, test_names, hybrid.model.vessel, n_intervals, horizon_s, horizons)
     test_logs = train_logs if _same_samples(train_arrays, test_arrays, test_names) else test_logs   # given again
-    _check_rows_not_scored(dp_only, test_logs is train_logs)
+    _check_before_training(hybrid, dp_only, test_logs is train_logs, test_arrays, calibration_scenarios, n_intervals)
     out = make_out_folder(out_dir)
     data_only = DataOnlyPredictor(vessel, ensemble_config=ens_cfg)
     timing = _fit_ensembles({"hybrid": hybrid, "data_only": data_only}, train_arrays, dp_only, say)
@@ -338,6 +338,29 @@ def _same_samples(train_arrays, test_arrays, test_names) -> bool:
     raise ValueError(f"test: {len(shared)} of the test logs hold the samples of training logs ({', '.join(shared[:5])}"
                      f"{', ...' if len(shared) > 5 else ''}); give the same logs to score every failure leave one "
                      f"out, or test logs that are not training logs")
+
+
+#: Where the spread after a failure is calibrated, as the refusal of too few forecasts names it,
+#: and what to change: the other test logs' failures, or the simulated DP losses.
+_OTHER_LOGS = ("the other logs' failures", "more intervals, or more logs with a failure")
+_SIMULATED = ("calibration_scenarios", "more intervals or calibration scenarios, or none for the raw spread")
+
+
+def _check_before_training(hybrid, dp_only: bool, test_is_train: bool, test_arrays, calibration_scenarios: int,
+                           n_intervals: int) -> None:
+    """Refuse, before any training, what the run would refuse after it when the test logs are
+    the training logs: training on every row (:func:`_check_rows_not_scored`), and too few
+    forecasts per lead to calibrate the spread after a failure on (the other logs' failures
+    or the simulated DP losses, as :func:`_calibrate_after_stop` chooses). With other test
+    logs the choice depends on the failures ``fit`` finds, and is checked after it."""
+    _check_rows_not_scored(dp_only, test_is_train)
+    if not test_is_train:
+        return
+    n_min, n_other = hybrid.calibration_config.after_stop_min_failures, len(test_arrays) - 1
+    if n_min > 0 and n_other >= n_min:
+        _check_calibration_count(n_other, n_intervals, *_OTHER_LOGS)
+    elif calibration_scenarios > 0 and _is_packaged_gunnerus(hybrid.model.vessel):
+        _check_calibration_count(calibration_scenarios, n_intervals, *_SIMULATED)
 
 
 def _check_rows_not_scored(dp_only: bool, test_is_train: bool) -> None:
@@ -493,8 +516,7 @@ def _calibrate_after_stop(hybrid, test_arrays, test_is_train: bool, calibration_
         # scored drifts (the benchmark scores the first intervals, which it does not calibrate)
         hybrid.calibration.pop(AFTER_STOP_LATE, None)
     if test_is_train and n_min > 0 and len(test_arrays) - 1 >= n_min:
-        _check_calibration_count(len(test_arrays) - 1, n_intervals, "the other logs' failures",
-                                 "more intervals, or more logs with a failure")
+        _check_calibration_count(len(test_arrays) - 1, n_intervals, *_OTHER_LOGS)
         coefficients = [hybrid.drift_yaw_uv_rad_per_m2 if c is None else c.coefficient_rad_per_m2
                         for c in (per_log_hull or [None] * len(test_arrays))]
         errors, per_log = {}, []
@@ -512,8 +534,7 @@ def _calibrate_after_stop(hybrid, test_arrays, test_is_train: bool, calibration_
     if calibration_scenarios > 0 and _is_packaged_gunnerus(hybrid.model.vessel):
         from ..sim.scenario import embedded_scenarios
 
-        _check_calibration_count(int(calibration_scenarios), n_intervals, "calibration_scenarios",
-                                 "more intervals or calibration scenarios, or none for the raw spread")
+        _check_calibration_count(int(calibration_scenarios), n_intervals, *_SIMULATED)
 
         sims = embedded_scenarios(int(calibration_scenarios), seed + 1000)
         hybrid.calibrate_after_stop([s.log for s in sims], n_intervals=n_intervals, horizon_s=horizon_s)
