@@ -760,12 +760,13 @@ def _cmd_benchmark_drift(args) -> int:
                                   environment_config=EnvironmentConfig(wave_turned_yaw_load=args.wave_yaw_load,
                                                                        load_model=args.load_model))
     except ValueError as exc:
-        if not str(exc).startswith(("test: ", "train: ")):
+        if not str(exc).startswith(("test: ", "train: ", "n_intervals: ")):
             raise
-        # the folders' logs do not fit the request (no failure to score, a test log trained on): still the input
-        option = {"test": "--test", "train": "--train"}
-        raise UsageError(problem_lines(exc, f"{_PROG} benchmark drift: error: ",
-                                       lambda field: option.get(field, field))) from None
+        # the folders' logs do not fit the request (no failure to score, a test log trained on), or
+        # --intervals gives too few forecasts to calibrate on: still the input, named as typed
+        option = {"test": "--test", "train": "--train", "n_intervals": "--intervals"}
+        raise UsageError(problem_lines(exc, f"{_PROG} benchmark drift: error: ", lambda field: option.get(field, field))
+                         .replace("(calibration_scenarios)", "(--calibration-scenarios)")) from None
     print()
     print(res.outputs["tables.md"].read_text())
     return 0

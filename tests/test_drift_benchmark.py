@@ -324,7 +324,7 @@ def test_a_test_log_without_a_failure_is_refused_before_training(tiny_folder, tm
 
 
 def test_too_few_calibration_forecasts_on_the_training_logs_drifts_are_refused_before_training(tiny_folder, tmp_path,
-                                                                                              monkeypatch):
+                                                                                              monkeypatch, capsys):
     """With the test logs the training logs, 3 starts after each of 6 simulated DP losses (18
     per lead, 20 needed) were refused only after both ensembles were trained, and the
     output folder was left behind empty; the counts are known before, and refused there."""
@@ -338,6 +338,11 @@ def test_too_few_calibration_forecasts_on_the_training_logs_drifts_are_refused_b
                                          r"give 18 per lead"):
         run_drift_benchmark(tiny_folder, None, tmp_path / "out", n_intervals=3, progress=False, plots=False)
     assert not (tmp_path / "out").exists()
+    # the command line names its options (it said "n_intervals", "calibration_scenarios", exit 1)
+    assert main(["benchmark", "drift", "--train", str(tiny_folder), "--intervals", "3", "--out",
+                 str(tmp_path / "out"), "--no-plots"]) == 2
+    assert capsys.readouterr().err.startswith("hybridship benchmark drift: error: --intervals: 3 forecasts after each "
+                                              "of 6 failures (--calibration-scenarios) give 18 per lead")
     with pytest.raises(AssertionError, match="trained before"):     # 7 starts: 42 per lead, enough
         run_drift_benchmark(tiny_folder, None, tmp_path / "out", n_intervals=7, progress=False, plots=False)
 
