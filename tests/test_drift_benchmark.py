@@ -413,6 +413,16 @@ def test_one_log_given_without_a_list_is_refused_naming_the_argument(tiny_folder
     assert not (tmp_path / "out").exists()
 
 
+def test_an_empty_list_of_logs_is_refused_naming_the_argument(tiny_folder, tmp_path):
+    """train=[] or test=[] failed in max()'s words ("max() arg is an empty sequence"), and
+    train=[] beside test logs in fit's ("logs: ...") after the output folder was made."""
+    for train, test, field in (([], None, "train"), (tiny_folder, [], "test"),
+                               ([], [tiny_folder / "physics_1.csv"], "train")):
+        with pytest.raises(ValueError, match=rf"^{field}: expected one or more logs, got an empty list"):
+            run_drift_benchmark(train, test, tmp_path / "out", progress=False, plots=False)
+    assert not (tmp_path / "out").exists()
+
+
 def test_log_files_take_any_case_and_skip_hidden_and_summary_files(tmp_path):
     """A folder's logs are found as a single log file is read (extension in any case); the
     sweep's summary and hidden files (macOS ``._`` companions) are not logs."""

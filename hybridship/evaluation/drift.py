@@ -671,7 +671,7 @@ def _loo_calibrated_spread(P, T, S, n_horizons: int) -> np.ndarray:
 def _logs(spec, field: str):
     """(logs, names) from a folder path or a list of paths/DataFrames/LogArrays; a TypeError
     naming ``field`` for anything else (a DataFrame was iterated by its column names, each
-    read as a file: "time_s: unsupported file extension")."""
+    read as a file: "time_s: unsupported file extension"), a ValueError for an empty list."""
     if isinstance(spec, (str, Path)):
         files = log_files(Path(spec))
         return list(files), [f.name for f in files]
@@ -679,6 +679,8 @@ def _logs(spec, field: str):
         raise TypeError(f"{field}: expected a folder of logs or a list of logs (paths, DataFrames or LogArrays), "
                         f"got {type(spec).__name__}; give one log as a list of one")
     items = list(spec)
+    if not items:       # failed in max()'s words ("arg is an empty sequence"), or fit's after the folder was made
+        raise ValueError(f"{field}: expected one or more logs, got an empty list")
     names = [str(getattr(x, "name", f"log{i}")) for i, x in enumerate(items)]
     # per-log outputs are keyed by name: two logs of one name (files of one name in two
     # folders) get their position appended rather than being merged
