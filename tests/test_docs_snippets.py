@@ -43,3 +43,17 @@ def test_the_pages_python_example_runs_as_written(page, tmp_path, monkeypatch):
         np.testing.assert_allclose(res.nu_dot[:, 0], namespace["nu_dot"], rtol=1e-9, atol=1e-12)
     if page == "README.md":
         assert (tmp_path / "gunnerus.hybrid.npz").is_file() and namespace["fc"].eta.shape[:2] == (2, 61)
+
+
+def test_the_command_memorys_angle_wrap_is_the_one_the_residual_page_states():
+    """docs/concepts/residual.md gives the range the command memory wraps an angle step to;
+    a step of exactly half a turn tells the two half-open ranges apart (+pi is kept by
+    (-pi, pi], taken as -pi by [-pi, pi))."""
+    from hybridship.residual.features import command_memory
+
+    page = (ROOT / "docs" / "concepts" / "residual.md").read_text(encoding="utf-8")
+    stated = re.search(r"Angle steps are\s+wrapped to (\S+, \S+?)\.", page).group(1)
+    c = np.exp(-1.0 / 10.0)
+    m = command_memory(np.array([[[0.0, np.pi]]]), np.zeros((1, 2)), np.zeros((1, 2)), 1.0, 10.0)
+    step = -m[0, 0, 1] / c                      # m = -c dx for one step from rest
+    assert step == pytest.approx(-np.pi) and stated == "[-pi, pi)", (step, stated)
