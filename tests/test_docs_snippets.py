@@ -57,3 +57,32 @@ def test_the_command_memorys_angle_wrap_is_the_one_the_residual_page_states():
     m = command_memory(np.array([[[0.0, np.pi]]]), np.zeros((1, 2)), np.zeros((1, 2)), 1.0, 10.0)
     step = -m[0, 0, 1] / c                      # m = -c dx for one step from rest
     assert step == pytest.approx(-np.pi) and stated == "[-pi, pi)", (step, stated)
+
+
+def test_a_forecast_on_a_log_slower_than_1_hz_takes_1_s_rk4_substeps_as_the_pages_say(monkeypatch):
+    """The forecast loop's physics step on a 0.5-Hz log is two RK4 substeps of 1 s, not one
+    RK4 step of 2 s; the pages that describe the loop (frames, the hybrid, the residual
+    scheme) say so beside their 'one RK4 step'."""
+    from hybridship.physics.model import DynamicModel
+    from hybridship.predictors import HybridPredictor
+    from hybridship.residual.ensemble import EnsembleConfig
+    from hybridship.sim.synthetic import physics_log
+
+    model = DynamicModel("gunnerus")
+    logs = [physics_log(model, seed=s, dt_s=2.0, duration_s=1200.0) for s in (1, 2)]
+    hp = HybridPredictor(model.vessel, ensemble_config=EnsembleConfig(n_members=2, max_epochs=5)).fit(logs[:1])
+    seen = []
+    step = DynamicModel.step_unchecked
+
+    def spy(self, *args):
+        seen.append(args[-1])                   # the substeps of each forecast step
+        return step(self, *args)
+
+    monkeypatch.setattr(DynamicModel, "step_unchecked", spy)
+    fc = hp.forecast(logs[1], [600.0], horizon_s=60)
+    assert fc.lead_s[1] == 2.0 and set(seen) == {2}
+    for page, sentence in (("docs/concepts/frames.md", r"one RK4 step per sample in the hybrid[^)]*"),
+                           ("docs/hybrid.md", r"one RK4 physics step of the mean state[^,]*"),
+                           ("docs/concepts/residual.md", r"the ensemble-mean state one RK4 step[^;]*")):
+        text = " ".join((ROOT / page).read_text(encoding="utf-8").split())
+        assert "substeps of at most 1 s" in re.search(sentence, text).group(0), page
