@@ -86,3 +86,31 @@ def test_a_forecast_on_a_log_slower_than_1_hz_takes_1_s_rk4_substeps_as_the_page
                            ("docs/concepts/residual.md", r"the ensemble-mean state one RK4 step[^;]*")):
         text = " ".join((ROOT / page).read_text(encoding="utf-8").split())
         assert "substeps of at most 1 s" in re.search(sentence, text).group(0), page
+
+
+def test_the_environment_filter_steps_over_every_tenth_row_of_a_10_hz_log_as_its_page_says(monkeypatch):
+    """docs/concepts/environment.md: the filter's process model takes one RK4 step per
+    sample, except on a log faster than ``filter_step_s`` (1 s), whose every m-th row it
+    steps over (a 10-Hz log: every tenth)."""
+    from hybridship.physics.model import DynamicModel
+    from hybridship.predictors import as_log_arrays
+    from hybridship.residual import environment
+    from hybridship.sim.synthetic import physics_log
+
+    model = DynamicModel("gunnerus")
+    arrays = as_log_arrays(physics_log(model, seed=1, dt_s=0.1, duration_s=120.0, t_shutdown_s=None),
+                           model.vessel)
+    steps = []
+    run = environment.kernel.filter_grid
+
+    def spy(grid, *args):
+        steps.append(np.diff(grid))             # the rows between two filter steps
+        return run(grid, *args)
+
+    monkeypatch.setattr(environment.kernel, "filter_grid", spy)
+    environment.EnvironmentEstimator(model).run(arrays)
+    assert environment.EnvironmentConfig().filter_step_s == 1.0
+    assert set(np.concatenate(steps).tolist()) == {10}
+    text = " ".join((ROOT / "docs" / "concepts" / "environment.md").read_text(encoding="utf-8").split())
+    said = re.search(r"The process model is the dynamic model itself \(one RK4 step per sample[^)]*", text).group(0)
+    assert "`filter_step_s`" in said and "every tenth row" in said, said
