@@ -114,3 +114,26 @@ def test_the_environment_filter_steps_over_every_tenth_row_of_a_10_hz_log_as_its
     text = " ".join((ROOT / "docs" / "concepts" / "environment.md").read_text(encoding="utf-8").split())
     said = re.search(r"The process model is the dynamic model itself \(one RK4 step per sample[^)]*", text).group(0)
     assert "`filter_step_s`" in said and "every tenth row" in said, said
+
+
+def test_the_simulators_measured_columns_have_the_resolution_its_page_states():
+    """docs/simulator.md gives the logger's resolution of each measured column; a simulated
+    log's columns hold no finer digits, and each uses the last one it is given."""
+    from hybridship.sim.scenario import DPLossConfig, simulate_dp_loss
+
+    df = simulate_dp_loss(DPLossConfig(seed=3, t_shutdown_s=120.0, t_shutdown_jitter_s=0.0, drift_s=60.0))
+    text = " ".join((ROOT / "docs" / "simulator.md").read_text(encoding="utf-8").split())
+    said = re.search(r"Values are rounded to a logger's resolution in the measured columns: (.*?) The truth columns",
+                     text)
+    assert said, "docs/simulator.md: no per-column resolution of the measured columns"
+    said = said.group(1)
+    step = {"north_m": 1e-3, "east_m": 1e-3, "heading_deg": 1e-3, "u_m_s": 1e-4, "v_m_s": 1e-4, "r_deg_s": 1e-4,
+            "wind_speed_m_s": 1e-3, "wind_dir_deg": 1e-2, "port_azimuth_deg": 1e-2, "stbd_azimuth_deg": 1e-2,
+            "tunnel_rpm": 1e-2, "port_rpm": 1e-2, "stbd_rpm": 1e-2}
+    for col, q in step.items():
+        x = df[col].to_numpy() / q
+        assert np.allclose(x, np.round(x), atol=1e-6), col               # nothing finer than stated
+        assert not np.allclose(x / 10, np.round(x / 10), atol=1e-6), col  # and that digit is used
+    for phrase in ("positions to 1 mm", "heading to 0.001°", "0.1 mm/s", "`r_deg_s` to 0.0001°/s",
+                   "wind speed to 1 mm/s", "wind direction and the azimuths to 0.01°", "rpm to 0.01"):
+        assert phrase in said, phrase
