@@ -170,3 +170,16 @@ def test_check_number_names_a_whole_number_beyond_a_floats_range():
     with pytest.raises(ValueError, match="^horizon_s: must be finite"):
         check_number("horizon_s", 10**400)
     assert check_number("horizon_s", 10**300) == 1e300
+
+
+def test_the_estimators_settings_built_directly_name_the_field_not_pydantic():
+    """EnvironmentConfig(filter_step_s=-1) was pydantic's '1 validation error for
+    EnvironmentConfig ... https://errors.pydantic.dev/...', unlike every other settings class."""
+    from hybridship.residual.environment import EnvironmentConfig
+
+    with pytest.raises(ValueError, match=r"^filter_step_s: must be > 0 \(got -1\) \[EnvironmentConfig\]$"):
+        EnvironmentConfig(filter_step_s=-1)
+    with pytest.raises(ValueError, match=r"^foo: not a known field") as err:
+        EnvironmentConfig(foo=1)
+    assert "pydantic" not in str(err.value)
+    assert EnvironmentConfig(filter_step_s=2.0).filter_step_s == 2.0

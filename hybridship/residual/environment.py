@@ -71,10 +71,10 @@ from typing import Annotated, Literal
 
 import numpy as np
 import pandas as pd
-from pydantic import BaseModel, ConfigDict, Field, model_validator
+from pydantic import BaseModel, ConfigDict, Field, ValidationError, model_validator
 
-from ..config import (Bool, Float, Int, as_config, check_flags, check_number, check_whole_number, real_array,
-                      start_time_rng)
+from ..config import (Bool, Float, Int, as_config, check_flags, check_number, check_whole_number,
+                      format_validation_error, real_array, start_time_rng)
 from ..frames import ned_to_body, vector_to_speed_dir
 from ..forecast_inputs.faults import TRACK_MISMATCH_M, TRACK_WINDOW_S, velocity_track_mismatch_m
 from ..logs.io import LogArrays
@@ -230,6 +230,15 @@ class EnvironmentConfig(BaseModel):
     """
 
     model_config = ConfigDict(frozen=True, extra="forbid", allow_inf_nan=False)
+
+    def __init__(self, **settings):
+        # built directly, pydantic's own text ('1 validation error for ...', a web link); named
+        # field by field as every config_dataclass is
+        try:
+            super().__init__(**settings)
+        except ValidationError as err:
+            raise ValueError("\n".join(f"{line} [EnvironmentConfig]"
+                                        for line in format_validation_error(err).split("\n"))) from None
 
     position_std_m: Float = Field(0.5, gt=0)
     heading_std_deg: Float = Field(0.3, gt=0)
