@@ -841,3 +841,35 @@ def test_guard_judges_the_members_mean_features(small_hybrid):
     for j, X in enumerate(seen):
         d = np.linalg.norm((X.mean(axis=0) - hp.ensemble.x_mean) / hp.ensemble.x_std, axis=-1)
         np.testing.assert_allclose(w[:, j + 1], np.exp(-d / 5.0) * w_thrust, rtol=1e-12)
+
+
+def test_a_log_slower_than_1_hz_is_trained_on_the_forecasts_own_substeps(monkeypatch):
+    """A 2-s log was trained on one 2-s RK4 step (one-step targets and multi-step rollouts)
+    while its forecasts take two 1-s steps: the nets learned part of another integration's error."""
+    import hybridship.predictors.hybrid as hybrid_module
+    from hybridship.forecast_inputs.limits import envelope_for, forecast_substeps, rk4_substeps
+
+    m = DynamicModel("gunnerus")
+    assert [forecast_substeps(dt) for dt in (0.1, 1.0, 2.0, 2.5)] == [1, 1, 2, 3]
+    assert forecast_substeps(2.0) == rk4_substeps(2.0, 1, envelope_for(m.vessel), clip=True)
+    log = physics_log(m, seed=3, duration_s=400.0, dt_s=2.0, t_shutdown_s=None, current=(0.3, 1.0))
+    a = as_log_arrays(log, m.vessel)
+    p = prepare_log(m, a, ResidualConfig(deriv_window_s=0.0, residual_step_s=None))
+    i = 50
+    kw = dict(rpm=a.rpm[i - 1], azimuth_rad=a.azimuth_rad[i - 1], wind=a.wind[i - 1])
+    two = m.rollout(a.eta[i - 1], a.nu[i - 1], 1, dt_s=2.0, substeps=2, **kw).nu[..., 1, :].ravel()
+    one = m.rollout(a.eta[i - 1], a.nu[i - 1], 1, dt_s=2.0, substeps=1, **kw).nu[..., 1, :].ravel()
+    assert np.abs(two - one).max() > 1e-9        # the two integrations differ: the check below can fail
+    np.testing.assert_allclose(p.nu_hat[i], two, rtol=0, atol=1e-12)
+    seen = []
+
+    def record(*args, substeps=1, **kw):
+        seen.append(substeps)
+        raise RuntimeError("recorded")
+
+    monkeypatch.setattr(hybrid_module, "train_multistep", record)
+    cfg = MultiStepConfig(horizon_s=10.0, iterations=1, batch_starts=4, start_every_s=20.0)
+    with pytest.raises(RuntimeError, match="recorded"):
+        HybridPredictor(m.vessel, ensemble_config=TINY, training="multi_step", multistep_config=cfg,
+                        calibration_config=CalibrationConfig(fraction=0.0)).fit([log])
+    assert seen == [2]

@@ -71,6 +71,7 @@ __all__ = [
     "clip_velocities",
     "clip_flow",
     "rk4_substeps",
+    "forecast_substeps",
     "KNOT_M_S",
 ]
 
@@ -418,3 +419,12 @@ def rk4_substeps(dt_s: float | None, substeps: int, env: Envelope, clip: bool) -
                 valid=f"dt_s / substeps <= {env.rk4_step_max_s:g} s")
         steps = math.ceil(dt_s / env.rk4_step_max_s - 1e-12)
     return steps
+
+
+def forecast_substeps(dt_s: float) -> int:
+    """RK4 substeps of one forecast step of ``dt_s`` [s]: those :func:`rk4_substeps` gives with
+    the default envelope (steps of at most ``rk4_step_max_s``, 1 s), as every forecast takes
+    them. The training's one-step and multi-step predictions take as many, so that the nets
+    learn the residual of the integration the forecast makes (a 2-s log was trained on one
+    2-s RK4 step and forecast in two 1-s steps)."""
+    return rk4_substeps(dt_s, 1, Envelope(), clip=True)

@@ -19,6 +19,7 @@ import numpy as np
 
 from ..config import as_config, check_number, check_whole_number, real_array
 from ..forecast_inputs import FaultFlags
+from ..forecast_inputs.limits import forecast_substeps
 from ..forecast_inputs.wind import HELD_WIND, WindForecast, fit_wind_forecast, wind_error_paths
 from ..frames import speed_dir_to_vector, vector_to_speed_dir, wrap_pi
 from ..logs.io import LogArrays
@@ -596,7 +597,8 @@ class HybridPredictor:
                 ms = self.multistep_config
                 _, hist = train_multistep(None, self.model, starts, self.residual_config.feature_index,
                                           replace(ms, iterations=ms.hull_iterations, lr=ms.hull_lr),
-                                          seed=self.ensemble_config.seed, progress=progress, hull=self.hull.zeroed())
+                                          substeps=forecast_substeps(starts.dt_s), seed=self.ensemble_config.seed,
+                                          progress=progress, hull=self.hull.zeroed())
                 self.hull = hist["hull"]
                 hull_info = {k: hist[k] for k in ("iterations", "val_loss", "best_val_loss")}
             Y = Y - self.hull.predict(full)
@@ -617,8 +619,8 @@ class HybridPredictor:
             starts = starts if starts is not None else self._multistep_starts(logs, row_masks, dp_only)
             self.ensemble, hist = train_multistep(self.ensemble, self.model, starts,
                                                   self.residual_config.feature_index, self.multistep_config,
-                                                  seed=self.ensemble_config.seed, progress=progress,
-                                                  hull=self.hull)
+                                                  substeps=forecast_substeps(starts.dt_s),
+                                                  seed=self.ensemble_config.seed, progress=progress, hull=self.hull)
             self.hull = hist.pop("hull", self.hull)
             self.training_info["multi_step"] = {k: hist[k] for k in ("iterations", "n_starts", "n_val_starts",
                                                                      "val_loss", "best_val_loss")}

@@ -44,6 +44,7 @@ from pydantic import Field, field_validator
 from scipy.signal import lfilter, savgol_coeffs, savgol_filter
 
 from ..config import Float, Int, config_dataclass, start_time_rng
+from ..forecast_inputs.limits import forecast_substeps
 from ..logs.io import LogArrays
 
 #: Optional command-aware features (appended after the paper's nine): the main
@@ -552,8 +553,8 @@ def prepare_log(model, arrays: LogArrays, config: ResidualConfig = ResidualConfi
 
     # One-step model predictions from every sample (all samples in one batch).
     def one_step(nu_start):  # -> predictions for row i made from row i - 1
-        res = model.rollout(eta_in, np.nan_to_num(nu_start), 1, dt_s=dt, rpm=rpm_in,
-                            azimuth_rad=az_in, wind=wind_in)
+        res = model.rollout(eta_in, np.nan_to_num(nu_start), 1, dt_s=dt, substeps=forecast_substeps(dt),
+                            rpm=rpm_in, azimuth_rad=az_in, wind=wind_in)
         nh = np.full((N, 3), np.nan)
         ndh = np.full((N, 3), np.nan)
         same = ((arrays.segment_id[1:] == arrays.segment_id[:-1]) & inputs_ok[:-1]
