@@ -103,7 +103,10 @@ def drift_forecasts(predictor, arrays, *, n_intervals: int | None = 20, horizons
     pred, truth : ndarray, shape (n_intervals, len(horizons_s), 3)
         Forecast and logged ``[north_m, east_m, psi_rad]``.
     std : ndarray of the same shape, or None
-        The forecast's ensemble standard deviation (None for point forecasters).
+        The forecast's spread, its ``eta_std`` (None for point forecasters): for the hybrid
+        the calibrated spread (the ensemble's standard deviation with ``calibrated=False``
+        among ``forecast_kw``, or where it was fitted without calibration), for the
+        data-only baseline the ensemble's standard deviation.
 
     Raises
     ------

@@ -225,9 +225,12 @@ def fit_ensemble(X: np.ndarray, Y: np.ndarray, config: EnsembleConfig = Ensemble
                  segment_id: np.ndarray | None = None, progress: bool = False) -> MLPEnsemble:
     """Train an ensemble on rows ``X (N, n_in) -> Y (N, n_out)``.
 
-    Full-batch Adam on all members at once; early stopping per member on a time-ordered
+    Full-batch Adam on all members at once, with early stopping on a time-ordered
     validation split (the last part of every segment, so validation data lie after the
-    training data in time); each member keeps its weights from its best validation epoch.
+    training data in time): each member keeps its weights from its best validation epoch,
+    and training stops when every member has gone ``patience`` epochs without a better one
+    (a member past its patience trains on with the others, and keeps a later epoch only
+    where it validates better).
 
     Parameters
     ----------
