@@ -652,3 +652,15 @@ def test_load_planing_craft_names_a_folder_or_a_binary_file(tmp_path):
         load_planing_craft(binary)
     with pytest.raises(PlaningCraftFileError, match="planing-craft file not found"):
         load_planing_craft(tmp_path / "missing.toml")
+
+
+@pytest.mark.parametrize("k, name", [(0, "speed_m_s"), (1, "tau_rad"), (2, "transom_draft_m"), (9, "flow_angle_rad")])
+def test_savitsky_planing_names_an_argument_that_is_not_finite(k, name):
+    """A NaN speed, trim or draft (or an infinite flow angle) gave NaN loads without a word."""
+    args = [15.0, math.radians(3), 0.3, 2.0, math.radians(20), 1025.0, 1.19e-6, 0.0004, 1.0, 0.0]
+    assert all(math.isfinite(x) for x in savitsky_planing(*args))
+    args[k] = math.inf if k == 9 else math.nan
+    with pytest.raises(ValueError, match=rf"^savitsky_planing: {name}: expected a finite number"):
+        savitsky_planing(*args)
+    # a dry hull gives no load whatever the rest
+    assert savitsky_planing(15.0, math.nan, -0.1, *args[3:]) == (0.0, 0.0, 0.0, 0.0)

@@ -131,12 +131,26 @@ def savitsky_planing(speed_m_s: float, tau_rad: float, transom_draft_m: float, b
     lift_n, lp_m, friction_n, lam : float
         Lift (vertical load) [N], centre of pressure forward of the transom [m],
         frictional drag along the keel [N] and mean wetted length-beam ratio [-].
+
+    Raises
+    ------
+    ValueError
+        An argument that is not finite (beyond the dry-hull and low-speed cases, which give
+        zeros), naming it: it gave NaN loads without a word.
     """
     b = beam_m
     tau = max(tau_rad, math.radians(0.5))
     d = transom_draft_m
     if d <= 0.0 or speed_m_s <= 0.1:
         return 0.0, 0.0, 0.0, 0.0
+    given = (speed_m_s, tau_rad, transom_draft_m, beam_m, deadrise_rad, rho, nu, delta_cf, friction_factor,
+             flow_angle_rad)
+    if not math.isfinite(sum(given)):         # one test on the simulator's path; each only when it fails
+        names = ("speed_m_s", "tau_rad", "transom_draft_m", "beam_m", "deadrise_rad", "rho", "nu", "delta_cf",
+                 "friction_factor", "flow_angle_rad")
+        for name, value in zip(names, given):
+            if not math.isfinite(value):
+                raise ValueError(f"savitsky_planing: {name}: expected a finite number, got {value}")
     lk = d / math.sin(tau)
     lc = max(lk - b * math.tan(deadrise_rad) / (math.pi * math.tan(tau)), 0.0)
     lam = min((lk + lc) / (2.0 * b), 8.0)
