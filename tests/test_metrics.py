@@ -410,3 +410,13 @@ def test_error_table_refuses_a_window_or_horizon_given_twice():
     # a horizon list given as a generator is read once (len() of it failed)
     long = metrics.error_table(E, horizons_s=(h for h in (15, 30, 45, 60)))
     assert metrics.paper_table(long).shape == (3, 4)
+
+
+def test_coverage_given_one_sigma_as_a_number_says_a_sequence_is_expected():
+    """sigmas=2 was refused as 'expected positive finite band half-widths, got 2', which 2 is."""
+    from hybridship.evaluation.metrics import coverage
+
+    z = np.zeros((2, 4, 3))
+    with pytest.raises(ValueError, match=r"^sigmas: expected a sequence .*\(a sequence, e.g. \(2.0,\) for one\), got 2$"):
+        coverage(z, z, np.ones_like(z), sigmas=2)
+    assert coverage(z, z, np.ones_like(z), sigmas=(2.0,)).shape == (4, 1)
