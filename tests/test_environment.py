@@ -930,3 +930,18 @@ def test_flags_that_are_not_bools_are_refused(call, match):
     """A text "no" is truthy: it normalised the sea and returned the rates; refused naming the flag."""
     with pytest.raises(TypeError, match=f"{match}: expected True or False"):
         call()
+
+
+def test_a_sea_states_own_setting_given_again_is_refused_by_name():
+    """wave_components(rng, gamma=...) and wind(..., intensity=...) ended in Python's 'got
+    multiple values for keyword argument'."""
+    import dataclasses
+
+    from hybridship.sim.environment import SeaState
+
+    sea = SeaState.random(3)
+    with pytest.raises(TypeError, match=r"^gamma: the sea state's own .*dataclasses.replace\(sea_state, gamma=...\)"):
+        sea.wave_components(0, gamma=2.0)
+    with pytest.raises(TypeError, match=r"^intensity: the sea state's own \(gust_intensity = ...\)"):
+        sea.wind(np.arange(100.0), 0, intensity=0.2)
+    assert dataclasses.replace(sea, gamma=2.0).wave_components(0).n_components == 50

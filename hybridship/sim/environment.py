@@ -1177,6 +1177,15 @@ def beaufort_wave_height(beaufort):
     return np.interp(b, np.arange(13.0), _BEAUFORT_HS_M)
 
 
+def _refuse_own(name: str, kwargs: dict, field: str | None = None) -> None:
+    """A TypeError naming a setting the sea state gives itself (Python's 'got multiple values
+    for keyword argument' named no way out)."""
+    if name in kwargs:
+        field = field or name
+        raise TypeError(f"{name}: the sea state's own ({field} = ...); give it to SeaState, or a copy with "
+                        f"dataclasses.replace(sea_state, {field}=...)")
+
+
 @config_dataclass(frozen=True)
 class SeaState:
     """Environmental conditions of one scenario (all SI, radians).
@@ -1287,12 +1296,16 @@ class SeaState:
                    current_dir_to_rad=float(cur_dir), gamma=gam)
 
     def wave_components(self, rng, n_components=50, spreading=None, **kwargs) -> WaveField:
-        """Wave components of this sea state (:func:`make_wave_components`)."""
+        """Wave components of this sea state (:func:`make_wave_components`; its ``gamma`` is
+        the sea state's own)."""
+        _refuse_own("gamma", kwargs)
         return make_wave_components(self.hs_m, self.tp_s, self.wave_dir_from_rad, rng, n_components,
                                     spreading, gamma=self.gamma, **kwargs)
 
     def wind(self, time_s, rng, **kwargs):
-        """Gusting wind ``(speed_m_s, dir_from_rad)`` of this sea state (:func:`gust_wind`)."""
+        """Gusting wind ``(speed_m_s, dir_from_rad)`` of this sea state (:func:`gust_wind`; its
+        ``intensity`` is the sea state's ``gust_intensity``)."""
+        _refuse_own("intensity", kwargs, "gust_intensity")
         return gust_wind(time_s, self.wind_speed_m_s, self.wind_dir_from_rad, rng, self.gust_intensity, **kwargs)
 
     def current(self, time_s, rng, **kwargs):
