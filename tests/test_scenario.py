@@ -66,6 +66,17 @@ def test_a_shutdown_that_rounds_to_less_dp_than_the_least_is_refused():
     assert simulate_dp_loss(cfg)["dp_active"].iloc[:2].tolist() == [1, 1]
 
 
+def test_a_shutdown_too_early_says_the_jitter_is_4_percent_by_default():
+    """The message named t_shutdown_jitter_s, which `hybridship simulate` has no option for,
+    without saying where its value came from."""
+    with pytest.raises(ValueError, match=r"^t_shutdown_s: the earliest shutdown, t_shutdown_s less its jitter "
+                                         r"t_shutdown_jitter_s \(by default 4 % of t_shutdown_s\), must leave at "
+                                         r"least 10 s of DP \(10 control steps\), got 10 - 0.4 \[DPLossConfig\]$"):
+        DPLossConfig(t_shutdown_s=10.0)
+    with pytest.raises(ValueError, match=r"jitter t_shutdown_jitter_s, must leave at least 10 s of DP .*got 12 - 5 "):
+        DPLossConfig(t_shutdown_s=12.0, t_shutdown_jitter_s=5.0)
+
+
 def test_config_defaults():
     cfg = DPLossConfig()
     assert cfg.t_shutdown_s == 3000.0 and cfg.t_shutdown_jitter_s == pytest.approx(120.0)

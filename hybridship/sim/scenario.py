@@ -252,9 +252,10 @@ class DPLossConfig:
         if self.t_shutdown_s - self.t_shutdown_jitter_s < least or earliest < least - _EPS_S:
             rounded = (f" (rounded to dt_s = {self.dt_s:g} s: {earliest:g} s)"
                        if earliest < self.t_shutdown_s - self.t_shutdown_jitter_s else "")
-            raise ValueError(f"t_shutdown_s: t_shutdown_s - t_shutdown_jitter_s must leave at least "
-                             f"{least:g} s of DP, got {self.t_shutdown_s:g} - "
-                             f"{self.t_shutdown_jitter_s:g}{rounded}")
+            jitter = " (by default 4 % of t_shutdown_s)" if self._default_jitter else ""
+            raise ValueError(f"t_shutdown_s: the earliest shutdown, t_shutdown_s less its jitter t_shutdown_jitter_s"
+                             f"{jitter}, must leave at least {least:g} s of DP (10 control steps), got "
+                             f"{self.t_shutdown_s:g} - {self.t_shutdown_jitter_s:g}{rounded}")
         if not _is_multiple(self.drift_s, self.dt_s):
             raise ValueError(f"drift_s: must be a whole multiple of dt_s = {self.dt_s:g}, got {self.drift_s!r}")
         return self
