@@ -873,3 +873,23 @@ def test_a_log_slower_than_1_hz_is_trained_on_the_forecasts_own_substeps(monkeyp
         HybridPredictor(m.vessel, ensemble_config=TINY, training="multi_step", multistep_config=cfg,
                         calibration_config=CalibrationConfig(fraction=0.0)).fit([log])
     assert seen == [2]
+
+
+@pytest.mark.parametrize("dt", [1.0, 1.2])
+def test_training_starts_average_the_rows_a_forecast_averages(dt):
+    """A multi-step training start's heading and velocities are the mean over the forecast's
+    start window: on a 1.2-s log the 3-s window holds 3 rows (t0 - 2.4 .. t0), and the
+    training averaged round(3 / 1.2) = 2 of them."""
+    from hybridship.predictors.forecast_setup import _forecast_setup
+
+    m = DynamicModel("gunnerus")
+    log = physics_log(m, seed=5, duration_s=300.0 * dt, dt_s=dt, t_shutdown_s=None, hold_s=(3.0, 8.0))
+    a = as_log_arrays(log, m.vessel)
+    rc = ResidualConfig()
+    prep = prepare_log(m, a, rc)
+    rows = np.arange(50, 250, 7)
+    st = _forecast_setup(m, rc, log, a.time_s[rows], 10 * dt)
+    starts = [prep.start_state(int(i)) for i in rows]
+    assert np.ptp(a.nu[rows[0] - 2: rows[0] + 1], axis=0).max() > 1e-4      # the two means can differ
+    np.testing.assert_allclose(np.array([s[1] for s in starts]), st.nu0, rtol=0, atol=1e-12)
+    np.testing.assert_allclose(np.array([s[0] for s in starts]), st.eta0, rtol=0, atol=1e-9)

@@ -465,16 +465,19 @@ class PreparedLog:
         """Causal start state at row ``idx``: ``(eta0 (3,), nu0 (3,), deviation0 (3,), bias_ned0 (3,))``.
 
         Heading and velocities: mean over the last ``start_average_s`` (the paper's 3-s
-        window); position: the sample at ``idx``; deviation: mean causal residual over the
-        last ``start_residual_window_s`` (of the steps whose commands were logged) minus the
-        bias (zeros if none is available); bias:
-        the causal bias at ``idx`` (surge/sway in NED, yaw as is).
+        window), the rows ``t0 - start_average_s < time_s <= t0`` with half a sample of slack,
+        as a forecast's start window takes them
+        (:func:`hybridship.forecast_inputs.assess_start_window`); position: the sample at
+        ``idx``; deviation: mean causal residual over the last ``start_residual_window_s`` (of
+        the steps whose commands were logged) minus the bias (zeros if none is available);
+        bias: the causal bias at ``idx`` (surge/sway in NED, yaw as is).
         """
         a = self.arrays
         seg = a.segment_id
-        n_avg = max(1, int(round(self.config.start_average_s / self.dt_s)))
         n_res = max(1, int(round(self.config.start_residual_window_s / self.dt_s)))
-        lo = idx - n_avg + 1
+        # the forecast's start window by time (round(3 / 1.2) = 2 rows were 3 rows there)
+        lo = min(int(np.searchsorted(a.time_s, a.time_s[idx] - self.config.start_average_s + 0.5 * self.dt_s,
+                                     side="left")), idx)
         lo = max(lo, int(np.flatnonzero(seg == seg[idx])[0]))
         eta0 = a.eta[idx].copy()
         eta0[2] = a.eta[lo: idx + 1, 2].mean()
