@@ -893,3 +893,28 @@ def test_training_starts_average_the_rows_a_forecast_averages(dt):
     assert np.ptp(a.nu[rows[0] - 2: rows[0] + 1], axis=0).max() > 1e-4      # the two means can differ
     np.testing.assert_allclose(np.array([s[1] for s in starts]), st.nu0, rtol=0, atol=1e-12)
     np.testing.assert_allclose(np.array([s[0] for s in starts]), st.eta0, rtol=0, atol=1e-9)
+
+
+def test_a_long_command_memory_is_read_far_enough_back_to_be_the_training_rows():
+    """A forecast starts the command memory at the first row it reads; with a 600-s memory
+    1860 s before the earliest start left 5 % of that start, so a start's memory was off the
+    training row's (-0.61 against -0.68 rad here) and moved with the other starts of the call."""
+    from dataclasses import replace
+
+    from hybridship.predictors.forecast_setup import _forecast_setup
+
+    m = DynamicModel("gunnerus")
+    log = physics_log(m, seed=5, duration_s=5000.0, t_shutdown_s=None, hold_s=(100.0, 400.0))
+    rc = ResidualConfig(features=PAPER_FEATURES + MEMORY_FEATURES, command_memory_s=600.0)
+    hp = HybridPredictor(m.vessel, residual_config=rc, environment="mean")
+    a = as_log_arrays(log, m.vessel)
+    train = prepare_log(m, a, rc).command_memory
+    t0 = 4500.0
+    assert np.abs(train[int(t0)]).max() > 0.1            # a memory the window's start could spoil
+    for starts in ([t0], [2200.0, t0]):
+        st = _forecast_setup(m, rc, log, starts, 10.0, history_s=hp.history_s)
+        np.testing.assert_allclose(hp._command_memory(st)[-1, 0], train[int(t0)], rtol=0, atol=1e-9)
+    assert hp.history_s == 20 * 600.0
+    # without the memory features, or with a short memory, a forecast reads what it read
+    for other in (replace(rc, features=PAPER_FEATURES), replace(rc, command_memory_s=30.0)):
+        assert HybridPredictor(m.vessel, residual_config=other, environment="mean").history_s == 1800.0

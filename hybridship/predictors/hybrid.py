@@ -27,9 +27,9 @@ from ..messages import warn_user
 from ..physics.model import DynamicModel, check_step
 from ..residual.calibration import MIN_CALIBRATION_SAMPLES, CalibrationConfig, fit_spread_scale
 from ..residual.ensemble import EnsembleConfig, MLPEnsemble, fit_ensemble, require_training_rows
-from ..residual.features import (ALL_FEATURES, LOAD_FEATURES, MEMORY_FEATURES, ResidualConfig, actuator_acceleration,
-                                 command_feature_columns, command_memory, command_pair, command_scales,
-                                 log_command_memory, prepare_log)
+from ..residual.features import (ALL_FEATURES, LOAD_FEATURES, MEMORY_FEATURES, MEMORY_HISTORY_TIME_CONSTANTS,
+                                 ResidualConfig, actuator_acceleration, command_feature_columns, command_memory,
+                                 command_pair, command_scales, log_command_memory, prepare_log)
 from ..residual.load_variability import held_load_rows, held_load_spread, unexplained_load_std_windows
 from ..residual.environment import (EnvironmentConfig, EnvironmentEstimate, EnvironmentEstimator, current_input,
                                     environment_accel, thrust_error_accel, thrust_error_prior_carries_over)
@@ -1050,9 +1050,13 @@ class HybridPredictor:
     def history_s(self) -> float:
         """Seconds of log before the earliest start that :meth:`forecast` reads [s]: the
         estimator's window and one step of its start grid (its filter starts up to that far
-        back, see :meth:`_filter_groups`), or the mean residual's windows, and at least
-        :data:`~hybridship.predictors.forecast_setup.FORECAST_HISTORY_S`."""
+        back, see :meth:`_filter_groups`), or the mean residual's windows, with the command
+        memory :data:`~hybridship.residual.features.MEMORY_HISTORY_TIME_CONSTANTS` of its time
+        constants, and at least :data:`~hybridship.predictors.forecast_setup.FORECAST_HISTORY_S`."""
         own = self.warm_up_s + (FILTER_START_GRID_S if self.environment == "estimator" else 0.0)
+        rc = self.residual_config
+        if rc.uses_memory_features:     # the memory starts at the first row read: forgotten by each start
+            own = max(own, MEMORY_HISTORY_TIME_CONSTANTS * rc.command_memory_s)
         return max(FORECAST_HISTORY_S, own)
 
     @property

@@ -80,6 +80,13 @@ LOAD_FEATURES = ("actuator_u_dot_hat_m_s2", "actuator_v_dot_hat_m_s2", "actuator
 #: before its start (:data:`hybridship.predictors.forecast_setup.FORECAST_HISTORY_S`).
 MAX_COMMAND_MEMORY_S = 600.0
 
+#: Time constants of the command memory that a forecast reads before its earliest start (at
+#: least): the memory starts at the first row read, and that start is then forgotten
+#: (``exp(-20)``, 2e-9 of it left), as training's memory, run from the log's first row, has
+#: forgotten it. Three time constants (1800 s of a 600-s memory) left 5 % of it, so a start's
+#: memory depended on the other starts of its call.
+MEMORY_HISTORY_TIME_CONSTANTS = 20.0
+
 #: Every feature the hybrid can use, in a fixed order. ``_hat`` = model one-step prediction.
 ALL_FEATURES = ("u_hat_m_s", "v_hat_m_s", "r_hat_rad_s",
                 "u_dot_hat_m_s2", "v_dot_hat_m_s2", "r_dot_hat_rad_s2",
@@ -135,9 +142,9 @@ class ResidualConfig:
         targets and multi-step training).
     command_memory_s : float
         Time constant of the low-pass behind :data:`MEMORY_FEATURES` [s], at most
-        ``MAX_COMMAND_MEMORY_S`` (a forecast starts the memory at the first row it reads,
-        ``FORECAST_HISTORY_S`` before its start; after a few time constants that start is
-        forgotten).
+        ``MAX_COMMAND_MEMORY_S`` (a forecast starts the memory at the first row it reads, at
+        least ``FORECAST_HISTORY_S`` and ``MEMORY_HISTORY_TIME_CONSTANTS`` time constants
+        before its earliest start, so that start is forgotten).
     """
 
     features: tuple[str, ...] = PAPER_FEATURES
