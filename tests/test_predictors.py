@@ -710,6 +710,35 @@ def test_a_fast_log_is_fitted_on_rows_about_one_second_apart():
     assert std[None] > 5 * std[1.0]                  # the noise / dt of 0.1-s differences, not 1-s ones
 
 
+def test_a_thinned_log_takes_the_environment_at_the_velocities_of_its_residuals():
+    """With the estimator, a deviation is the residual less the environment's acceleration at
+    the row; the residual is taken at the smoothed velocities (deriv_window_s), and so was the
+    environment on a log read row by row, but a thinned log's took the logged (noisy) ones."""
+    from hybridship.physics.model import DynamicModel
+    from hybridship.predictors.forecast_setup import as_log_arrays
+    from hybridship.residual.environment import EnvironmentEstimate, EnvironmentEstimator, environment_accel
+
+    m = DynamicModel("gunnerus")
+    log = physics_log(m, seed=5, duration_s=300.0, dt_s=0.1, t_shutdown_s=None, current=(0.5, 1.0))
+    rng = np.random.default_rng(0)
+    for col in ("u_m_s", "v_m_s"):
+        log[col] = log[col] + rng.normal(0.0, 0.02, len(log))          # a speed log's noise
+    hp = HybridPredictor(m.vessel, residual_config=ResidualConfig(deriv_window_s=2.0))
+    hp.estimator = EnvironmentEstimator(hp.model, hp.environment_config)
+    prep, every = hp._training_prep(log)
+    assert every == 10
+    full = as_log_arrays(log, m.vessel)
+    est = hp.estimator.run(full)
+    thinned = full.rows(slice(None, None, every))
+    on = est.take(np.flatnonzero(est.rows % every == 0))          # the estimates at the rows read, renumbered
+    on = EnvironmentEstimate(on.rows // every, on.time_s, on.x, on.P, on.thrust_error_model, on.load_map)
+    want = environment_accel(m, thinned, on, prep.nu_s)
+    logged = environment_accel(m, full, est)[::every]
+    ok = np.isfinite(want).all(1)
+    assert ok.sum() > 250 and np.abs(logged[ok] - want[ok]).max() > 1e-5      # the two can be told apart
+    np.testing.assert_allclose(prep.env_body[ok], want[ok], rtol=1e-12, atol=1e-15)
+
+
 def test_training_data_takes_one_log_as_a_list_of_one():
     """One DataFrame was iterated as its column names ("time_s: unsupported file extension")."""
     from hybridship.physics.model import DynamicModel

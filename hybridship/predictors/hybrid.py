@@ -324,8 +324,10 @@ class HybridPredictor:
         prep = prepare_log(self.model, arrays, self.residual_config)
         if self.environment == "estimator":         # the estimator runs at the log's rate, as forecasts run it
             est = self.estimator.run(full_rate)
-            prep.env_body = (environment_accel(self.model, arrays, est, prep.nu_s) if every == 1 else
-                             environment_accel(self.model, full_rate, est)[::every])
+            # at the velocities each residual is taken at (smoothed with deriv_window_s), thinned or not
+            nu = np.array(full_rate.nu, dtype=float)
+            nu[::every] = prep.nu_s
+            prep.env_body = environment_accel(self.model, full_rate, est, nu)[::every]
         return prep, every
 
     @keeps_state_on_error
