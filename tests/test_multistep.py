@@ -918,3 +918,21 @@ def test_a_long_command_memory_is_read_far_enough_back_to_be_the_training_rows()
     # without the memory features, or with a short memory, a forecast reads what it read
     for other in (replace(rc, features=PAPER_FEATURES), replace(rc, command_memory_s=30.0)):
         assert HybridPredictor(m.vessel, residual_config=other, environment="mean").history_s == 1800.0
+
+
+def test_a_starts_previous_deviation_is_the_training_rows():
+    """With start_residual_window_s, a start's previous deviation is its last residual less
+    the bias known one sample earlier, as the training row it starts holds it: it was less the
+    bias at the start, which holds that residual (half the deviation two rows after a gap)."""
+    m = DynamicModel("gunnerus")
+    log = physics_log(m, seed=5, duration_s=400.0, t_shutdown_s=None, current=(0.3, 1.0), hold_s=(3.0, 8.0))
+    log = log.drop(index=range(300, 306)).reset_index(drop=True)          # a gap: a new segment at row 300
+    a = as_log_arrays(log, m.vessel)
+    rc = ResidualConfig(bias_window_s=120.0, start_residual_window_s=1.0)
+    prep = prepare_log(m, a, rc)
+    rows = np.array([302, 303, 250])
+    assert a.segment_id[299] != a.segment_id[300] and set(rows + 1) <= set(prep.trainable_rows())
+    got = np.array([prep.start_state(int(i))[2] for i in rows])
+    want = prep.full_features(rows + 1)[:, 6:9]           # the previous residual of the rows they predict
+    assert np.abs(want).min() > 1e-6
+    np.testing.assert_allclose(got, want, rtol=1e-10, atol=1e-15)

@@ -476,8 +476,10 @@ class PreparedLog:
         as a forecast's start window takes them
         (:func:`hybridship.forecast_inputs.assess_start_window`); position: the sample at
         ``idx``; deviation: mean causal residual over the last ``start_residual_window_s`` (of
-        the steps whose commands were logged) minus the bias (zeros if none is available);
-        bias: the causal bias at ``idx`` (surge/sway in NED, yaw as is).
+        the steps whose commands were logged) minus the bias known one sample earlier, turned
+        with the heading at ``idx``, as :meth:`deviation` gives a training row's previous
+        residual (the bias at ``idx`` on the first row of a segment; zeros if no residual is
+        available); bias: the causal bias at ``idx`` (surge/sway in NED, yaw as is).
         """
         a = self.arrays
         seg = a.segment_id
@@ -485,19 +487,23 @@ class PreparedLog:
         # the forecast's start window by time (round(3 / 1.2) = 2 rows were 3 rows there)
         lo = min(int(np.searchsorted(a.time_s, a.time_s[idx] - self.config.start_average_s + 0.5 * self.dt_s,
                                      side="left")), idx)
-        lo = max(lo, int(np.flatnonzero(seg == seg[idx])[0]))
+        lo_seg = int(np.flatnonzero(seg == seg[idx])[0])
+        lo = max(lo, lo_seg)
         eta0 = a.eta[idx].copy()
         eta0[2] = a.eta[lo: idx + 1, 2].mean()
         nu0 = a.nu[lo: idx + 1].mean(axis=0)
-        lo_r = max(idx - n_res + 1, int(np.flatnonzero(seg == seg[idx])[0]))
+        lo_r = max(idx - n_res + 1, lo_seg)
         r = self.residual_c[lo_r: idx + 1] if self.config.start_residual_window_s > 0 else np.zeros((0, 3))
         # a residual counts when its step's commands (the row before) were logged, as in the bias
         step_logged = a.commands_logged[np.maximum(np.arange(lo_r, lo_r + r.shape[0]) - 1, 0)]
         r = r[np.isfinite(r).all(1) & step_logged]
         bias0 = self.bias_ned[idx] if np.isfinite(self.bias_ned[idx]).all() else np.zeros(3)
         res0 = r.mean(axis=0) if r.size else None
-        c, s = np.cos(eta0[2]), np.sin(eta0[2])
-        bias_b = np.array([c * bias0[0] + s * bias0[1], -s * bias0[0] + c * bias0[1], bias0[2]])
+        # the bias before the last residual, as the nets' previous residual is taken in training (it was
+        # the bias at idx, which holds that residual: half the deviation two rows into a segment)
+        before = self.bias_ned[idx - 1] if idx > lo_seg and np.isfinite(self.bias_ned[idx - 1]).all() else bias0
+        c, s = np.cos(a.eta[idx, 2]), np.sin(a.eta[idx, 2])
+        bias_b = np.array([c * before[0] + s * before[1], -s * before[0] + c * before[1], before[2]])
         dev0 = res0 - bias_b if res0 is not None else np.zeros(3)
         return eta0, nu0, dev0, bias0
 
