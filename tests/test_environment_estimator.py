@@ -1034,8 +1034,9 @@ def test_a_blackout_now_is_what_the_filter_does_at_a_logged_stop(model, settings
     x, P = est.at_thrust_stop(held.x[0], held.P[0])
     np.testing.assert_allclose(x, stopped.x[0], rtol=0, atol=1e-12)
     np.testing.assert_allclose(P, stopped.P[0], rtol=0, atol=1e-15)
-    if settings == {}:
+    if settings == {}:        # no change: the mean and the covariance alike
         np.testing.assert_array_equal(x, held.x[0])
+        np.testing.assert_array_equal(P, held.P[0])
     else:
         assert not np.array_equal(x, held.x[0]) or not np.array_equal(P, held.P[0])
 
