@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from types import SimpleNamespace
+
 import numpy as np
 import pytest
 
@@ -814,6 +816,22 @@ def test_fit_carries_the_thrust_error_seen_at_stops_into_the_prior(model):
     # the docstring said "at least each stop's own uncertainty", which is wider than this
     assert np.all(pooled < 1.0 / np.sqrt(prec.max(axis=0)))
     assert "at least the pooled uncertainty of the mean" in " ".join(EnvironmentEstimator.fit.__doc__.split())
+    # the stops above agree within their uncertainty, so the scatter was never the spread (a fit
+    # that left it out passed): two stops read as -0.3 and -0.1 on the tunnel, 0 and 0 on port,
+    # 0.1 and -0.1 on starboard, each +- 0.01, have a scatter of 0.1 on the tunnel and starboard
+    # (wider than the pooled 0.01 / sqrt(2)) and none on port
+    read = iter([[-0.3, 0.0, 0.1], [-0.1, 0.0, -0.1]])
+
+    def stop_read(a, rows, first_row=0):
+        x = np.zeros((1, 14))
+        x[0, 11:] = next(read)
+        return SimpleNamespace(x=x, P=1e-4 * np.eye(14)[None])
+
+    by_hand = EnvironmentEstimator(model)
+    by_hand.run = stop_read
+    by_hand.fit(logs)
+    np.testing.assert_allclose(by_hand.thrust_error_mean, [-0.2, 0.0, 0.0], rtol=0, atol=1e-12)
+    np.testing.assert_allclose(by_hand.thrust_error_std, [0.1, 0.01 / np.sqrt(2.0), 0.1], rtol=1e-9)
     no_stop = as_log_arrays(physics_log(model, duration_s=600, t_shutdown_s=None, seed=30), model.vessel)
     for unchanged in (EnvironmentEstimator(model).fit(logs, dp_only=True), EnvironmentEstimator(model).fit([no_stop])):
         np.testing.assert_array_equal(unchanged.thrust_error_mean, 0.0)
