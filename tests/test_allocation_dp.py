@@ -463,7 +463,9 @@ def test_dp_station_keeping_in_wind_and_current(dp_run):
 def test_dp_setpoint_change_without_overshoot(dp_run):
     t, n, e, psi = dp_run[:, 0], dp_run[:, 1], dp_run[:, 2], dp_run[:, 3]
     after = t > STEP_AT_S
-    assert n[after].max() < 10.0 + 2.0  # overshoot < 20 %
+    # no overshoot (observed 9.9992 m at most): the 20 % once allowed here passed the default
+    # reference filter made underdamped (zeta 0.5, 0.83 m past the set-point)
+    assert n[after].max() < 10.0 + 0.05
     assert abs(n[-1] - 10.0) < 0.5 and abs(e[-1]) < 0.5
     assert np.degrees(np.abs(psi[after])).max() < 3.0
 
