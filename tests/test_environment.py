@@ -819,8 +819,12 @@ def test_sea_state_helpers_pass_on_its_own_gamma_gusts_and_current():
     wf = s.wave_components(1)
     assert wf.gamma == 1.0
     np.testing.assert_array_equal(wf.amplitude_m, make_wave_components(1.0, 6.0, 0.2, 1, gamma=1.0).amplitude_m)
-    np.testing.assert_array_equal(s.wind(t, 1)[0], gust_wind(t, 8.0, 0.1, 1, intensity=0.2)[0])
-    np.testing.assert_array_equal(s.current(t, 1)[1], current_series(t, 0.2, 2.0, 1)[1])
+    # speed and direction alike (the speed alone does not see the wind's direction, nor the
+    # direction the current's speed: a helper passing either wrong passed)
+    for got, want in ((s.wind(t, 1), gust_wind(t, 8.0, 0.1, 1, intensity=0.2)),
+                      (s.current(t, 1), current_series(t, 0.2, 2.0, 1))):
+        np.testing.assert_array_equal(got[0], want[0])
+        np.testing.assert_array_equal(got[1], want[1])
 
 
 @pytest.mark.parametrize("call, error, match", [
