@@ -596,7 +596,7 @@ def test_live_samples_each_draw_their_own_environment_or_are_warned():
 
     df, i = _failure_log()
     hist = df.iloc[: i + 1]
-    st = DriftOffSettings(n_samples=100, radii_m=(5.0,), horizon_s=120.0)
+    st = DriftOffSettings(radii_m=(5.0,), horizon_s=120.0)       # the default samples, not a count of its own
     est = environment_from_log(hist, "gunnerus")
     assert np.unique(est.accel_members, axis=0).shape[0] == st.n_samples
     assert np.unique(est.current_members_ned_m_s, axis=0).shape[0] == st.n_samples
