@@ -417,6 +417,6 @@ def test_coverage_given_one_sigma_as_a_number_says_a_sequence_is_expected():
     from hybridship.evaluation.metrics import coverage
 
     z = np.zeros((2, 4, 3))
-    with pytest.raises(ValueError, match=r"^sigmas: expected a sequence .*\(a sequence, e.g. \(2.0,\) for one\), got 2$"):
+    with pytest.raises(ValueError, match=r"^sigmas: expected positive finite band half-widths \(a sequence, e.g. \(2.0,\) for one\), got 2$"):
         coverage(z, z, np.ones_like(z), sigmas=2)
     assert coverage(z, z, np.ones_like(z), sigmas=(2.0,)).shape == (4, 1)

@@ -122,8 +122,8 @@ def coverage(pred: np.ndarray, truth: np.ndarray, std: np.ndarray, sigmas=(1.0, 
     sig = real_array("sigmas", sigmas)
     if sig.ndim != 1 or sig.size == 0 or not np.all(np.isfinite(sig) & (sig > 0)):
         # a single number read as a list of them, which the result's shape needs
-        one = " (a sequence, e.g. (2.0,) for one)" if sig.ndim == 0 else ""
-        raise ValueError(f"sigmas: expected a sequence of positive finite band half-widths{one}, got {sigmas!r}")
+        one = ", e.g. (2.0,) for one" if sig.ndim == 0 else ""
+        raise ValueError(f"sigmas: expected positive finite band half-widths (a sequence{one}), got {sigmas!r}")
     err, s = _band_errors(pred, truth, std, state)
     nh = err.shape[-2]
     e = np.moveaxis(err, -2, 0).reshape(nh, -1)

@@ -227,10 +227,9 @@ def fit_ensemble(X: np.ndarray, Y: np.ndarray, config: EnsembleConfig = Ensemble
 
     Full-batch Adam on all members at once, with early stopping on a time-ordered
     validation split (the last part of every segment, so validation data lie after the
-    training data in time): each member keeps its weights from its best validation epoch,
-    and training stops when every member has gone ``patience`` epochs without a better one
-    (a member past its patience trains on with the others, and keeps a later epoch only
-    where it validates better).
+    training data in time): each member keeps its weights from its best validation epoch;
+    training stops when every member has gone ``patience`` epochs without a better one (a
+    member past it trains on, keeping a later epoch only where it validates better).
 
     Parameters
     ----------
