@@ -48,7 +48,7 @@ from _results import command_line
 from hybridship.driftoff.spread import draw_scales
 from hybridship.evaluation import metrics
 from hybridship.evaluation.drift import log_files
-from hybridship.fileio import write_text
+from hybridship.fileio import check_writable, write_text
 from hybridship.predictors import AFTER_STOP, HybridPredictor, as_log_arrays
 from hybridship.predictors.hybrid import leave_one_out_after_stop_scales
 from hybridship.residual.ensemble import EnsembleConfig
@@ -108,14 +108,14 @@ def main(argv=None) -> int:
     ap.add_argument("--out", type=Path, default=None,
                     help="also write the table, headed by its command, to this Markdown file")
     args = ap.parse_args(argv)
+    _check_options(ap, args)
     lines = [f"Command: `{command_line('after_stop_calibration.py', argv)}`", ""]
 
     def say(line: str) -> None:
         print(line, flush=True)
         lines.append(line)
 
-    cfg = EnvironmentConfig(**(PER_DOF if args.thrust_error_model == "per_dof" else {}),
-                            held_load_window_s=args.held_load_window_s)
+    cfg = _environment_config(args)
     cal = calibration_logs(args.n, args.seed, args.beaufort, args.dp_s, args.vessel_spread, args.heading_mode) \
         if args.source == "simulated" else None
     data = {"embedded": [s.log for s in embedded_scenarios(3, 0)]}
@@ -155,6 +155,39 @@ def main(argv=None) -> int:
         args.out.parent.mkdir(parents=True, exist_ok=True)
         write_text(args.out, "\n".join(lines) + "\n")
     return 0
+
+
+OPTIONS = {"seed": "--seed", "beaufort": "--beaufort", "t_shutdown_s": "--dp-s",
+           "held_load_window_s": "--held-load-window-s"}
+
+
+def _environment_config(args) -> EnvironmentConfig:
+    return EnvironmentConfig(**(PER_DOF if args.thrust_error_model == "per_dof" else {}),
+                             held_load_window_s=args.held_load_window_s)
+
+
+def _check_options(ap, args) -> None:
+    """Refuse, as a usage error (exit 2) naming the option, what the library would refuse in
+    its own words only after the calibration losses were simulated or the hybrid trained."""
+    if args.source == "simulated" and args.n < 1:
+        ap.error(f"--n: expected a positive integer, got {args.n}")
+    if not 0 <= args.own <= 20:         # the simulator's embedded scenarios: 1-20 of them
+        ap.error(f"--own: expected 0-20, got {args.own}")
+    if not 0 <= args.vessel_spread < float("inf"):      # a negative or NaN spread was read as none
+        ap.error(f"--vessel-spread: expected a finite number >= 0, got {args.vessel_spread}")
+    if args.out is not None and args.out.is_dir():
+        ap.error(f"--out: expected a Markdown file, {args.out} is a folder")
+    try:
+        if args.out is not None:
+            check_writable(args.out)
+        _environment_config(args)
+        DPLossConfig(seed=args.seed, beaufort=tuple(args.beaufort), t_shutdown_s=args.dp_s,
+                     t_shutdown_jitter_s=30.0, drift_s=600.0)
+    except OSError as exc:
+        ap.error(f"--out: {exc}")
+    except ValueError as exc:           # "t_shutdown_s: must be > 0 (got -5.0) [DPLossConfig]": name the option
+        field, _, reason = str(exc).partition(":")
+        ap.error(OPTIONS.get(field, f"--{field.replace('_', '-')}") + ":" + reason)
 
 
 def _leave_one_out(hp, arrays) -> list:
