@@ -65,8 +65,13 @@ def main(argv=None) -> int:
     ap.add_argument("--out", type=Path, required=True)
     ap.add_argument("--cutoff-hz", type=float, default=0.04, help="low-pass of the velocities (default 0.04 Hz)")
     args = ap.parse_args(argv)
-    files = log_files(args.data) if args.data.is_dir() else []
+    try:
+        files = log_files(args.data)
+    except ValueError:                  # no folder, or no logs in it (log_files' traceback for an empty one)
+        files = []
     if not files:
+        if args.data != TRUTHSIM:       # a folder named on the command line: not the shared data set missing
+            ap.error(f"--data: no logs in {args.data}")
         print(f"skipping: no truthsim-dev logs in {args.data}", file=sys.stderr)
         return 0
     model = DynamicModel("gunnerus")

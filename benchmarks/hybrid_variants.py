@@ -57,6 +57,8 @@ def main(argv=None) -> int:
         ap.error({"n_members": "--members"}.get(field, f"--{field}") + ":" + reason)
     files = sorted(args.data.glob("*.csv.gz"))
     if not files:
+        if args.data != DEFAULT_DATA:   # a folder named on the command line: not the shared data set missing
+            ap.error(f"--data: no logs (*.csv.gz) in {args.data}")
         print(f"no logs in {args.data}: the shared truthsim-dev data set is not on this machine")
         return 0
     dyn = DynamicPredictor("gunnerus")
