@@ -39,6 +39,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
+from _results import check_out
 from hybridship.fileio import markdown_table, write_text
 from hybridship.frames import wrap_pi
 from hybridship.predictors import DeadReckoning, DynamicPredictor, HybridPredictor
@@ -160,6 +161,7 @@ def main(argv=None) -> int:
     ap.add_argument("--station-keeping-walks", action="store_true",
                     help="filter the drift with the station keeping's load walks (the estimator before 2026-11-30)")
     args = ap.parse_args(argv)
+    check_out(ap, args.out, file=True)
     if args.members < 1:        # EnsembleConfig's traceback came after the logs were read
         ap.error(f"--members: expected a positive integer, got {args.members}")
     files = sorted(args.data.glob("*.csv.gz")) if args.data.is_dir() else []

@@ -50,6 +50,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
+from _results import check_out
 from hybridship.evaluation import metrics
 from hybridship.evaluation.drift import log_files
 from hybridship.fileio import atomic_write, markdown_table
@@ -236,6 +237,7 @@ def main(argv=None) -> int:
     ap.add_argument("--embedded", type=int, default=3,
                     help="embedded scenarios as a second data set, 0 or 2-20 (0: none; default 3)")
     args = ap.parse_args(argv)
+    check_out(ap, args.out)
     from hybridship.sim.scenario import embedded_scenarios
 
     for flag, value, low in (("--sim-scenarios", args.sim_scenarios, 1), ("--embedded", args.embedded, 0)):

@@ -37,6 +37,7 @@ for _v in ("OMP_NUM_THREADS", "MKL_NUM_THREADS", "OPENBLAS_NUM_THREADS", "NUMBA_
 import numpy as np  # noqa: E402
 import pandas as pd  # noqa: E402
 
+from _results import check_out
 from hybridship.driftoff.live import blackout_now, environment_from_log  # noqa: E402
 from hybridship.driftoff.planning import DriftOffSettings  # noqa: E402
 from hybridship.driftoff.report import markdown_table, write_frame, write_text  # noqa: E402
@@ -103,6 +104,7 @@ def main(argv=None) -> int:
                     help="the estimator's thrust-model error: per thruster (the default) or per DOF (the "
                          "previous default, hybridship.residual.environment.PER_DOF)")
     args = ap.parse_args(argv)
+    check_out(ap, args.out)
     cfg = None
     if args.thrust_error_model == "per_dof":
         from hybridship.residual.environment import PER_DOF, EnvironmentConfig

@@ -38,6 +38,7 @@ for _v in ("OMP_NUM_THREADS", "MKL_NUM_THREADS", "OPENBLAS_NUM_THREADS", "NUMBA_
 import numpy as np  # noqa: E402
 import pandas as pd  # noqa: E402
 
+from _results import check_out
 from hybridship.driftoff.planning import DriftOffSettings  # noqa: E402
 from hybridship.driftoff.report import markdown_table, write_frame, write_text  # noqa: E402
 from hybridship.driftoff.season import require_dask, season_sweep  # noqa: E402
@@ -90,6 +91,7 @@ def main(argv=None) -> int:
                     help="folder for the large files weather_year.csv and season.csv (default: a temporary folder)")
     ap.add_argument("--seed", type=int, default=0)
     args = ap.parse_args(argv)
+    check_out(ap, args.out)
     for flag, value in (("--states", args.states), ("--single-states", args.single_states), ("--samples", args.samples),
                         ("--workers", args.workers), ("--chunk-size", args.chunk_size)):
         if value is not None and value < 1:     # a negative --states sliced from the end; no workers, a hang

@@ -50,6 +50,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
+from _results import check_out
 from hybridship.evaluation.drift import log_files
 from hybridship.fileio import atomic_write, markdown_table, record_inputs
 from hybridship.frames import body_to_ned, ned_to_body
@@ -145,6 +146,7 @@ def main(argv=None) -> int:
                     help="a drift benchmark's drift_hull.csv: each log's coefficient of the hull's yaw moment in a "
                          "drift, used by its filter after the failure (default: none)")
     args = ap.parse_args(argv)
+    check_out(ap, args.out)
     if not check_log_source(ap, args):
         return 2
     model = DynamicModel("gunnerus")

@@ -23,6 +23,8 @@ from pathlib import Path
 
 import numpy as np
 
+from _results import check_out
+
 ROOT = Path(__file__).resolve().parents[1]
 
 #: A held turn: the rudder beyond this angle [rad] for at least TURN_MIN_S [s].
@@ -71,6 +73,7 @@ def main(argv=None) -> int:
     ap.add_argument("--data", type=Path, default=ROOT.parent / "shared" / "data" / "esso-osaka-frt" / "data")
     ap.add_argument("--out", type=Path, default=None, help="folder for turns.csv (optional)")
     args = ap.parse_args(argv)
+    check_out(ap, args.out)
     if not args.data.is_dir():
         print(f"error: {args.data}: not found (the Esso Osaka data set)", file=sys.stderr)
         return 2

@@ -44,6 +44,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
+from _results import check_out
 from hybridship.evaluation import metrics
 from hybridship.evaluation.drift import log_files
 from hybridship.forecast_inputs.wind import HELD_WIND
@@ -142,6 +143,7 @@ def parse_args(argv, description: str, variants) -> argparse.Namespace:
     ap.add_argument("--own-n", type=int, default=20, help="scenarios of the 'own' set (default 20)")
     ap.add_argument("--own-seed", type=int, default=100, help="seed of its first scenario (default 100)")
     args = ap.parse_args(argv)
+    check_out(ap, args.out)
     if not 1 <= args.own_n <= 20:           # the simulator's embedded scenarios: 1-20 of them
         ap.error(f"--own-n: expected 1-20, got {args.own_n}")
     if args.own_seed < 0:

@@ -32,6 +32,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
+from _results import check_out
 from hybridship.evaluation.drift import log_files
 from hybridship.fileio import atomic_write, markdown_table
 from hybridship.frames import wrap_pi
@@ -76,6 +77,7 @@ def main(argv=None) -> int:
     ap.add_argument("--test", required=True, help="folder of DP-loss logs")
     ap.add_argument("--out", required=True)
     args = ap.parse_args(argv)
+    check_out(ap, args.out)
     hp = HybridPredictor.load(args.model)
     files = log_files(Path(args.test))
     preds, truths = zip(*(forecasts_per_shift(hp, read_log(f)) for f in files))

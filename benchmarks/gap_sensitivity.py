@@ -23,6 +23,7 @@ from pathlib import Path
 
 import numpy as np
 
+from _results import check_out
 from hybridship.fileio import markdown_table, write_text
 from hybridship.frames import wrap_pi
 from hybridship.predictors import HybridPredictor
@@ -56,6 +57,7 @@ def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--out", type=Path, default=None, help="also write the table to this Markdown file")
     args = ap.parse_args(argv)
+    check_out(ap, args.out, file=True)
     logs = {s: simulate_dp_loss(DPLossConfig(t_shutdown_s=T_SHUTDOWN_S, t_shutdown_jitter_s=0.0, drift_s=300.0,
                                              seed=s)) for s in SEEDS}
     rows = []

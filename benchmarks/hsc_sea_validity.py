@@ -20,6 +20,7 @@ from pathlib import Path
 
 import numpy as np
 
+from _results import check_out
 from hybridship.fileio import atomic_write, markdown_table
 from hybridship.hsc.simulator import MAX_HS_M, PlaningCraftModel, SeaConditions
 from hybridship.hsc.vessel import load_planing_craft
@@ -56,6 +57,7 @@ def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--out", type=Path, required=True)
     args = ap.parse_args(argv)
+    check_out(ap, args.out)
     df = run()
     args.out.mkdir(parents=True, exist_ok=True)
     atomic_write(args.out / "sea_validity.csv", lambda fh: fh.write(df.round(3).to_csv(index=False).encode()))

@@ -40,6 +40,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
+from _results import check_out
 from hybridship.evaluation import metrics
 from hybridship.evaluation.drift import log_files
 from hybridship.fileio import atomic_write, markdown_table
@@ -167,6 +168,7 @@ def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--out", type=Path, required=True)
     args = ap.parse_args(argv)
+    check_out(ap, args.out)
     if not (TRUTHSIM.is_dir() and REFERENCE.is_file()):
         print(f"skipping: {TRUTHSIM} or {REFERENCE} not found", file=sys.stderr)
         return 0

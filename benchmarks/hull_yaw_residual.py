@@ -28,6 +28,7 @@ import numpy as np
 import pandas as pd
 from scipy.signal import butter, filtfilt
 
+from _results import check_out
 from hybridship.evaluation.drift import log_files
 from hybridship.fileio import atomic_write, markdown_table
 from hybridship.frames import ned_to_body
@@ -65,6 +66,7 @@ def main(argv=None) -> int:
     ap.add_argument("--out", type=Path, required=True)
     ap.add_argument("--cutoff-hz", type=float, default=0.04, help="low-pass of the velocities (default 0.04 Hz)")
     args = ap.parse_args(argv)
+    check_out(ap, args.out)
     try:
         files = log_files(args.data)
     except ValueError:                  # no folder, or no logs in it (log_files' traceback for an empty one)

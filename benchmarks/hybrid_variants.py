@@ -29,6 +29,7 @@ from pathlib import Path
 
 import numpy as np
 
+from _results import check_out
 from hybridship.evaluation import metrics
 from hybridship.fileio import atomic_write
 from hybridship.predictors import DynamicPredictor, HybridPredictor, as_log_arrays
@@ -50,6 +51,7 @@ def main(argv=None) -> int:
     ap.add_argument("--seed", type=int, default=0)
     ap.add_argument("--out", type=Path, help="folder for hybrid_variants.md")
     args = ap.parse_args(argv)
+    check_out(ap, args.out)
     try:                # before the logs are read (EnsembleConfig's traceback came after)
         ens = EnsembleConfig(n_members=args.members, seed=args.seed)
     except ValueError as exc:           # "n_members: must be >= 1 (got 0) [EnsembleConfig]": name the option

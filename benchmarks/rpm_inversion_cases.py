@@ -20,6 +20,7 @@ from pathlib import Path
 
 import numpy as np
 
+from _results import check_out
 import hybridship.sim.allocation as allocation
 from hybridship.fileio import markdown_table, write_text
 from hybridship.physics.propeller import thrust_torque
@@ -52,6 +53,7 @@ def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--out", type=Path, default=None, help="also write the table to this Markdown file")
     args = ap.parse_args(argv)
+    check_out(ap, args.out, file=True)
     gunnerus = load_vessel("gunnerus")
     rates = sibling("sample_rates")             # their seeds, as those scripts simulate them
     gaps = sibling("gap_sensitivity")

@@ -24,6 +24,7 @@ from pathlib import Path
 
 import numpy as np
 
+from _results import check_out
 from hybridship.fileio import markdown_table, write_text
 from hybridship.predictors import HybridPredictor
 from hybridship.residual.ensemble import EnsembleConfig
@@ -49,6 +50,7 @@ def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--out", type=Path, default=None, help="also write the table to this Markdown file")
     args = ap.parse_args(argv)
+    check_out(ap, args.out, file=True)
     fast = {s: simulate_dp_loss(DPLossConfig(dt_s=0.1, sim_dt_s=0.1, control_dt_s=1.0, t_shutdown_s=600.0,
                                              t_shutdown_jitter_s=0.0, drift_s=300.0, seed=s)) for s in SEEDS}
     slow = {s: log.iloc[::10].reset_index(drop=True) for s, log in fast.items()}

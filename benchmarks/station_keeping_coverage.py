@@ -52,6 +52,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
+from _results import check_out
 from hybridship.evaluation.drift import log_files
 from hybridship.fileio import atomic_write, markdown_table
 from hybridship.frames import wrap_pi
@@ -197,6 +198,7 @@ def main(argv=None) -> int:
                          "default: its default)")
     ap.add_argument("--out", type=Path, required=True)
     args = ap.parse_args(argv)
+    check_out(ap, args.out)
     if not args.data.is_dir():
         if args.data == TRUTHSIM:
             print(f"skipped: {args.data} not found (the shared data sets are not in the repository)",

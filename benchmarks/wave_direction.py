@@ -28,6 +28,7 @@ import sys
 import numpy as np
 import pandas as pd
 
+from _results import check_out
 from hybridship.evaluation.metrics import shutdown_index
 from hybridship.physics.model import DynamicModel
 from hybridship.predictors import as_log_arrays
@@ -94,6 +95,7 @@ def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     evt.add_log_source_arguments(ap)
     args = ap.parse_args(argv)
+    check_out(ap, args.out)
     if not evt.check_log_source(ap, args):
         return 2
     model = DynamicModel("gunnerus")
