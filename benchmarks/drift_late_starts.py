@@ -126,7 +126,11 @@ def main(argv=None) -> int:
     ev = sibling("estimator_variants")         # its data sets and shared arguments
     args = ev.parse_args(argv, __doc__.split("\n")[0], VARIANTS)
     rows, per_log = [], []
-    for dname, (logs, names) in ev.data_sets(args.data, args.own_n, args.own_seed).items():
+    sets = ev.data_sets(args.data, args.own_n, args.own_seed)
+    if not sets:                # --data truthsim-dev without it: no table to write
+        print("error: --data: no data set to run (truthsim-dev is not on this machine)", file=sys.stderr)
+        return 2
+    for dname, (logs, names) in sets.items():
         dyn, dr = DynamicPredictor("gunnerus").fit(), DeadReckoning("gunnerus").fit()
         arrays = [as_log_arrays(x, dyn.model.vessel) for x in logs]
         base = {"physics": [drift_errors(dyn, a) for a in arrays],

@@ -175,7 +175,11 @@ def data_sets(names, own_n: int, own_seed: int) -> dict:
 def main(argv=None) -> int:
     args = parse_args(argv, __doc__.split("\n")[0], VARIANTS)
     rows, per_log = [], []
-    for dname, (logs, names) in data_sets(args.data, args.own_n, args.own_seed).items():
+    sets = data_sets(args.data, args.own_n, args.own_seed)
+    if not sets:                # --data truthsim-dev without it: empty tables were written over the results
+        print("error: --data: no data set to run (truthsim-dev is not on this machine)", file=sys.stderr)
+        return 2
+    for dname, (logs, names) in sets.items():
         dyn = DynamicPredictor("gunnerus")
         arrays = [as_log_arrays(x, dyn.model.vessel) for x in logs]
         phys = np.stack([_errors(dyn, a) for a in arrays])                       # (L, 20, 3)

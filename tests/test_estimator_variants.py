@@ -1,6 +1,7 @@
 """benchmarks/estimator_variants.py: the per-failure ratios to the physics."""
 
 import numpy as np
+import pytest
 
 from conftest import load_benchmark
 from hybridship.evaluation import metrics
@@ -42,3 +43,21 @@ def test_an_own_set_the_simulator_cannot_make_is_a_usage_error(tmp_path, capsys)
         assert exc.value.code == 2
         assert bad[0] in capsys.readouterr().err
     assert not any(tmp_path.iterdir())
+
+
+@pytest.mark.parametrize("script", ["estimator_variants", "drift_late_starts"])
+def test_only_truthsim_dev_asked_for_without_it_is_an_error_and_writes_nothing(script, tmp_path, monkeypatch, capsys):
+    """--data truthsim-dev on a machine without it skipped the set with a message and then wrote
+    empty tables (estimator_variants: variants.md of '|  |' over the results, exit 0;
+    drift_late_starts: the two CSV files, then pandas' AttributeError); it is now an error (exit 2) naming
+    --data, and nothing is written."""
+    ev = load_benchmark("estimator_variants")
+    monkeypatch.setattr(ev, "TRUTHSIM", tmp_path / "no_such_folder")
+    mod = ev
+    if script == "drift_late_starts":
+        mod = load_benchmark("drift_late_starts")
+        monkeypatch.setattr(mod, "sibling", lambda name: ev)
+    out = tmp_path / "out"
+    assert mod.main(["--data", "truthsim-dev", "--only", "default", "--out", str(out)]) == 2
+    assert "error: --data: no data set to run" in capsys.readouterr().err
+    assert not out.exists()
