@@ -17,6 +17,7 @@ Usage::
 
 from __future__ import annotations
 
+import argparse
 import shutil
 import subprocess
 import sys
@@ -74,7 +75,9 @@ def compiled_and_loaded() -> tuple[list[list[str]], list[list[str]], dict[str, f
     return compiled, loaded, gaps
 
 
-def main() -> int:
+def main(argv=None) -> int:
+    # no options; --help (or a misspelt option) ran the whole check without a word on it
+    argparse.ArgumentParser(description=__doc__.split("\n\n")[0]).parse_args(argv)
     compiled, loaded, gaps = compiled_and_loaded()
     for a, b in zip(compiled, loaded):
         same = ["same" if x == y else "differ" for x, y in zip(a[1:], b[1:])]

@@ -151,3 +151,21 @@ def test_compiling_the_kernels_or_loading_them_from_the_cache_gives_the_same_bit
     assert [row[0] for row in compiled] == ["gunnerus", "esso_osaka_model", "simulator"]
     assert compiled == loaded, gaps
     assert max(gaps.values()) == 0.0
+
+
+def test_the_determinism_script_s_help_is_its_usage_not_a_run(monkeypatch, capsys):
+    """benchmarks/compile_cache_determinism.py read no arguments: --help (or a misspelt
+    option) copied the package and ran both child processes, printing digests and no usage."""
+    import pytest
+
+    from conftest import load_benchmark
+
+    bench = load_benchmark("compile_cache_determinism")
+    monkeypatch.setattr(bench, "compiled_and_loaded", lambda: pytest.fail("the check ran"))
+    with pytest.raises(SystemExit) as exc:
+        bench.main(["--help"])
+    assert exc.value.code == 0
+    assert capsys.readouterr().out.startswith("usage: ")
+    with pytest.raises(SystemExit) as exc:
+        bench.main(["--quick"])
+    assert exc.value.code == 2
