@@ -23,6 +23,8 @@ import sys
 
 import numpy as np
 
+from hybridship.fileio import atomic_write
+
 
 def _drift(out: dict):
     from hybridship.driftoff import engine, planning
@@ -111,7 +113,9 @@ def snap(path: str):
     out: dict = {}
     for part in (_drift, _simulator, _ensemble, _multistep):
         part(out)
-    np.savez(path, **out)
+    # atomically, to the path given: np.savez(path) wrote in place (a run stopped part way left a
+    # truncated snapshot over the previous one) and added .npz to a path without it
+    atomic_write(path, lambda fh: np.savez(fh, **out))
     print(f"{len(out)} arrays -> {path}")
 
 
