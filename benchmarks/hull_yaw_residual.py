@@ -40,7 +40,11 @@ LOADS = ("thrust", "wind", "wave2")
 
 def drift_residual(model, d: pd.DataFrame, cutoff_hz: float) -> pd.DataFrame:
     """Per drift sample: the yaw-acceleration residual [rad/s^2] and the hull terms."""
-    b, a = butter(2, cutoff_hz, fs=1.0 / float(np.median(np.diff(d.time_s))))
+    fs = 1.0 / float(np.median(np.diff(d.time_s)))
+    if not 0 < cutoff_hz < fs / 2:      # scipy's 'Digital filter critical frequencies must be 0 < Wn < fs/2'
+        raise ValueError(f"cutoff_hz: expected a frequency between 0 and half the log's sample rate "
+                         f"({fs / 2:g} Hz), got {cutoff_hz:g} Hz")
+    b, a = butter(2, cutoff_hz, fs=fs)
     lp = lambda x: filtfilt(b, a, np.asarray(x, float))
     dt = float(np.median(np.diff(d.time_s)))
     u, v, r = lp(d.truth_u_mps), lp(d.truth_v_mps), np.radians(lp(d.truth_r_degps))
@@ -76,8 +80,15 @@ def main(argv=None) -> int:
             ap.error(f"--data: no logs in {args.data}")
         print(f"skipping: no truthsim-dev logs in {args.data}", file=sys.stderr)
         return 0
+    if not 0 < args.cutoff_hz < float("inf"):
+        ap.error(f"--cutoff-hz: expected a frequency > 0 Hz, got {args.cutoff_hz:g}")
     model = DynamicModel("gunnerus")
-    df = pd.concat([drift_residual(model, pd.read_csv(f), args.cutoff_hz) for f in files], ignore_index=True)
+    try:
+        df = pd.concat([drift_residual(model, pd.read_csv(f), args.cutoff_hz) for f in files], ignore_index=True)
+    except ValueError as exc:
+        if not str(exc).startswith("cutoff_hz:"):
+            raise
+        ap.error(f"--cutoff-hz: {str(exc).partition(': ')[2]}")
     y = df.res_r.to_numpy()
     rows, munk_fits = [], []
     for cols in (["u_r v_r"], ["abs(v_r) v_r"], ["r"], ["v_r"], ["u_r v_r", "abs(v_r) v_r", "r", "v_r"]):
