@@ -18,12 +18,13 @@ def command_line(script: str, argv=None) -> str:
     return shlex.join(["python", f"benchmarks/{script}", *(sys.argv[1:] if argv is None else argv)])
 
 
-def check_out(ap, path, *, file: bool = False) -> None:
-    """Refuse an ``--out`` the run could not write, as a usage error (exit 2) naming the
-    option, before the work (it failed when the first result was written, after it): for an
-    output folder, a file there or on its way (:func:`hybridship.fileio.check_out_folder`);
-    for an output ``file``, a folder there, or a path the file cannot be written at
-    (:func:`hybridship.fileio.check_writable`). None (no ``--out``) passes."""
+def check_out(ap, path, *, file: bool = False, option: str = "--out") -> None:
+    """Refuse an ``--out`` (or another ``option``) the run could not write, as a usage error
+    (exit 2) naming the option, before the work (it failed when the first result was written,
+    after it): for an output folder, a file there or on its way
+    (:func:`hybridship.fileio.check_out_folder`); for an output ``file``, a folder there, or a
+    path the file cannot be written at (:func:`hybridship.fileio.check_writable`). None (the
+    option not given) passes."""
     from hybridship.fileio import check_out_folder, check_writable
 
     if path is None:
@@ -36,7 +37,7 @@ def check_out(ap, path, *, file: bool = False) -> None:
         else:
             check_writable(path)
     except OSError as exc:
-        ap.error(f"--out: {exc}")
+        ap.error(f"{option}: {exc}")
 
 
 def parse_horizons(ap, text: str) -> tuple[float, ...]:

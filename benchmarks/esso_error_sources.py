@@ -349,6 +349,10 @@ def _arguments(argv):
                     help="write tables.md again from --out's errors.csv (and copy both to --results), "
                          "keeping the command line it records; nothing is forecast")
     args = ap.parse_args(argv)
+    from _results import check_out
+
+    check_out(ap, args.out)
+    check_out(ap, args.results, option="--results")
     if (args.seed_average or args.structure_average) and not args.hybrid:
         ap.error("--seed-average and --structure-average need --hybrid")
     return args

@@ -282,6 +282,10 @@ def parse_args(argv=None) -> argparse.Namespace:
                     help="write tables.md again from --out's files (and copy them to --results), keeping the "
                          "command line it records; nothing is trained")
     args = ap.parse_args(argv)
+    from _results import check_out
+
+    check_out(ap, args.out)
+    check_out(ap, args.results, option="--results")
     if args.tables_only:
         return args
     from hybridship.evaluation.manoeuvre import ManoeuvreConfig

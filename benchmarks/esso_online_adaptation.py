@@ -400,7 +400,7 @@ def _tables_only(out: Path, results: Path | None) -> int:
 def main(argv=None) -> int:
     import pandas as pd
 
-    from _results import command_line, publish, validation_dirs
+    from _results import check_out, command_line, publish, validation_dirs
     from hybridship.evaluation.manoeuvre import (ManoeuvreConfig, error_table, forecast_errors, load_runs,
                                                  start_rows)
     from hybridship.fileio import atomic_write
@@ -418,6 +418,8 @@ def main(argv=None) -> int:
     ap.add_argument("--tables-only", action="store_true",
                     help="write tables.md again from --out's CSV files, keeping the command it records")
     args = ap.parse_args(argv)
+    check_out(ap, args.out)
+    check_out(ap, args.results, option="--results")
     if args.tables_only:
         return _tables_only(args.out, args.results)
     if (dirs := validation_dirs(args.split, args.out / "split")) is None:

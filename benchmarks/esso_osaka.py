@@ -49,7 +49,7 @@ def _wind_text(hybrid) -> str:
 def main(argv=None) -> int:
     import torch
 
-    from _results import command_line
+    from _results import check_out, command_line
     from hybridship.datasets.esso_osaka import RUN_KINDS, default_data_dir
     from hybridship.fileio import atomic_write, write_text
     from hybridship.evaluation.manoeuvre import (COMMAND_MODES, HORIZONS_S, _md_coverage, _md_table, pivot,
@@ -68,6 +68,7 @@ def main(argv=None) -> int:
     ap.add_argument("--quick", action="store_true")
     ap.add_argument("--docs", action="store_true", help="update docs/ also with --quick")
     args = ap.parse_args(argv)
+    check_out(ap, args.out)
     if not 0.0 < args.test_fraction < 1.0:      # NaN too
         ap.error(f"--test-fraction: expected a share of the runs between 0 and 1 (exclusive), got {args.test_fraction}")
     torch.set_num_threads(1)

@@ -79,7 +79,7 @@ def main(argv=None) -> int:
     import torch
     from scipy.optimize import minimize
 
-    from _results import command_line, kind_table, publish, validation_dirs
+    from _results import check_out, command_line, kind_table, publish, validation_dirs
     from hybridship.evaluation.manoeuvre import (ManoeuvreConfig, error_table, forecast_errors, load_runs,
                                                  make_predictors, start_rows)
     from hybridship.fileio import atomic_write
@@ -96,6 +96,8 @@ def main(argv=None) -> int:
                     help="also score the mean of the forecasts of the hybrids on both physics")
     ap.add_argument("--results", type=Path, help="also copy theta.csv, errors.csv and tables.md here (no data)")
     args = ap.parse_args(argv)
+    check_out(ap, args.out)
+    check_out(ap, args.results, option="--results")
     if args.evaluations < 1:        # scipy's Powell stopped with its own error after the split was made
         ap.error(f"--evaluations: expected a positive integer, got {args.evaluations}")
     if (dirs := validation_dirs(args.split, args.out / "split")) is None:

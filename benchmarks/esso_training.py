@@ -317,7 +317,7 @@ def main(argv=None) -> int:
     import pandas as pd
     import torch
 
-    from _results import command_line, parse_horizons, publish, validation_dirs
+    from _results import check_out, command_line, parse_horizons, publish, validation_dirs
     from hybridship.fileio import atomic_write
     from hybridship.evaluation.manoeuvre import (COMMAND_MODES, ManoeuvreConfig, coverage_table, error_table, forecast_errors,
                                       load_runs, make_predictors, sharpness_table, start_rows)
@@ -342,6 +342,8 @@ def main(argv=None) -> int:
                     help="write tables.md again from --out's errors.csv (and copy the result files to --results), "
                          "keeping the command line it records; nothing is trained")
     args = ap.parse_args(argv)
+    check_out(ap, args.out)
+    check_out(ap, args.results, option="--results")
     if args.tables_only:
         return tables_only(args.out, args.results)
     horizons = parse_horizons(ap, args.horizons_s)

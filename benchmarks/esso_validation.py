@@ -27,7 +27,7 @@ ROOT = Path(__file__).resolve().parents[1]
 def main(argv=None) -> int:
     import torch
 
-    from _results import parse_horizons
+    from _results import check_out, parse_horizons
     from hybridship.fileio import atomic_write
     from hybridship.evaluation.manoeuvre import (COMMAND_MODES, ManoeuvreConfig, _fit, error_table, forecast_errors,
                                       load_runs, make_predictors, split_runs, start_rows)
@@ -41,6 +41,7 @@ def main(argv=None) -> int:
     ap.add_argument("--quantiles", default="0.99,0.95,0.9,0.8", help="guard quantiles to compare")
     ap.add_argument("--horizons-s", default="5,10,20,30")
     args = ap.parse_args(argv)
+    check_out(ap, args.out)
     # checked before the hybrid is trained (a bad quantile ended in the guard's traceback after it)
     try:
         quantiles = [float(q) for q in args.quantiles.split(",")]

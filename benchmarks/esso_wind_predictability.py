@@ -117,7 +117,7 @@ def _f3(x: float) -> str:
 def main(argv=None) -> int:
     import pandas as pd
 
-    from _results import command_line, publish, validation_dirs
+    from _results import check_out, command_line, publish, validation_dirs
     from hybridship.evaluation.manoeuvre import load_runs
     from hybridship.fileio import atomic_write, markdown_table
     from hybridship.forecast_inputs.wind import fit_wind_forecast
@@ -129,6 +129,8 @@ def main(argv=None) -> int:
     ap.add_argument("--out", type=Path, default=ROOT / "out" / "esso-wind-predictability")
     ap.add_argument("--results", type=Path, help="also copy errors.csv and tables.md here (no data)")
     args = ap.parse_args(argv)
+    check_out(ap, args.out)
+    check_out(ap, args.results, option="--results")
     if (dirs := validation_dirs(args.split, args.out / "split")) is None:
         return 2
     fit_dir, val_dir = dirs

@@ -3,7 +3,8 @@
 Each script failed only when its first result was written, after its run (minutes to tens of
 minutes): an output folder given as a file, or below one, in mkdir's FileExistsError or
 NotADirectoryError traceback; an output Markdown file given as a folder in atomic_write's
-IsADirectoryError.
+IsADirectoryError; the Esso scripts' --results folder given as a file after the results were
+written to --out.
 """
 
 import pytest
@@ -15,10 +16,14 @@ FOLDER_OUTS = ["drift_late_starts", "drift_oracles", "drift_protocols", "estimat
                "hull_yaw_residual", "wave_direction", "driftoff_live", "driftoff_season",
                "filter_start_sensitivity", "esso_steady_runs"]
 FILE_OUTS = ["drift_late_coverage", "gap_sensitivity", "sample_rates", "rpm_inversion_cases"]
+#: The Esso Osaka scripts: an output folder --out, and (all but two) a --results folder.
+ESSO_OUTS = ["esso_error_sources", "esso_multistep", "esso_online_adaptation", "esso_physics_fit", "esso_training",
+             "esso_wind_predictability", "esso_validation", "esso_osaka"]
+WITH_RESULTS = ESSO_OUTS[:6]
 REQUIRED = {"filter_start_sensitivity": ["--model", "model.npz", "--test", "logs"]}
 
 
-@pytest.mark.parametrize("name", FOLDER_OUTS)
+@pytest.mark.parametrize("name", FOLDER_OUTS + ESSO_OUTS)
 @pytest.mark.parametrize("where", ["a file", "below a file"])
 def test_an_output_folder_that_is_a_file_is_a_usage_error(name, where, tmp_path, capsys):
     script = load_benchmark(name)
@@ -43,7 +48,20 @@ def test_an_output_file_that_is_a_folder_is_a_usage_error(name, where, tmp_path,
     assert "error: --out:" in capsys.readouterr().err
 
 
-@pytest.mark.parametrize("name", FOLDER_OUTS + FILE_OUTS)
+@pytest.mark.parametrize("name", WITH_RESULTS)
+def test_a_results_folder_that_is_a_file_is_a_usage_error(name, tmp_path, capsys):
+    """--results, where the Esso scripts copy their result files, was made only after the run
+    (the files were written to --out, then mkdir's FileExistsError)."""
+    script = load_benchmark(name)
+    (tmp_path / "a_file").write_text("x")
+    with pytest.raises(SystemExit) as exc:
+        script.main(["--out", str(tmp_path / "out"), "--results", str(tmp_path / "a_file")])
+    assert exc.value.code == 2
+    assert "error: --results:" in capsys.readouterr().err
+    assert not (tmp_path / "out").exists()
+
+
+@pytest.mark.parametrize("name", FOLDER_OUTS + FILE_OUTS + ESSO_OUTS)
 def test_a_new_output_path_passes(name, tmp_path, monkeypatch):
     """The check refuses nothing a run may write: a path not made yet (its folders included)."""
     import hybridship.fileio as fileio
