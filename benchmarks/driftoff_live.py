@@ -91,6 +91,12 @@ def evaluate(path: Path, settings: DriftOffSettings, repeats: int = 3, method: s
     return rows
 
 
+def _option_number(x: float) -> str:
+    """``x`` as the command line must repeat it: ``%g`` (1, 0.5) when that gives ``x`` back,
+    else in full (``%g`` made 0.1234567 '0.123457', another spread)."""
+    return f"{x:g}" if float(f"{x:g}") == x else repr(x)
+
+
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--data", type=Path, default=DEFAULT_DATA, help="folder of truthsim-dev logs")
@@ -130,7 +136,7 @@ def main(argv=None) -> int:
     # percentile of exactly 90 can lie just beyond the interpolated 90 % time)
     inside = int(((lf.actual_s >= lf.pred_p10_s) & (lf.actual_s <= lf.pred_p90_s)).sum())
     text = (f"Command: `python benchmarks/driftoff_live.py --samples {args.samples}"
-            f" --vessel-spread {args.vessel_spread:g} --seed {args.seed} --method {args.method}"
+            f" --vessel-spread {_option_number(args.vessel_spread)} --seed {args.seed} --method {args.method}"
             + (" --thrust-error-model per_dof" if cfg is not None else "")
             + ("" if args.data == DEFAULT_DATA else f" --data {shlex.quote(str(args.data))}") + "`\n\n"
             f"{len(files)} logs, {args.samples} samples per prediction; update time (environment estimate + "

@@ -111,3 +111,22 @@ def test_season_load_legend_says_what_a_load_above_the_cores_means(tmp_path, mon
                        "(a load above the core count means other jobs competed for the cores).")
     committed = Path(__file__).resolve().parents[1] / "docs" / "results" / "driftoff-season" / "tables.md"
     assert committed.read_text().splitlines()[4].partition("Machine: ")[2] == machine
+
+
+def test_live_command_records_the_vessel_spread_given(tmp_path, monkeypatch):
+    """The command on tables.md wrote --vessel-spread with %g: 0.1234567 was recorded as
+    0.123457, a command that draws other vessels than the table's; it now gives the spread
+    in full when %g does not (1 and 0.5 read as before)."""
+    live = load_benchmark("driftoff_live")
+    data = tmp_path / "logs"
+    data.mkdir()
+    (data / "a_seed1.csv.gz").write_bytes(b"")
+    row = {"log": "a", "track": "truth_lf", "radius_m": 5.0, "actual_s": 1.0, "pred_p10_s": 0.5,
+           "pred_p50_s": 1.0, "pred_p90_s": 2.0, "percentile": 50.0, "update_s": 0.1}
+    monkeypatch.setattr(live, "evaluate", lambda *a, **kw: [dict(row)])
+    monkeypatch.setattr(live, "DEFAULT_DATA", data)
+    out = tmp_path / "out"
+    for spread, recorded in (("0.1234567", "0.1234567"), ("0.5", "0.5"), ("1", "1"), ("2e-07", "2e-07")):
+        assert live.main(["--vessel-spread", spread, "--out", str(out)]) == 0
+        command = (out / "tables.md").read_text().splitlines()[0]
+        assert f" --vessel-spread {recorded} --seed 0 " in command, command
