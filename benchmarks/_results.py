@@ -40,6 +40,16 @@ def check_out(ap, path, *, file: bool = False, option: str = "--out") -> None:
         ap.error(f"{option}: {exc}")
 
 
+def check_own_scenarios(ap, count_option: str, count: int, seed_option: str, seed: int) -> None:
+    """Refuse a count of our own simulated scenarios outside 1-20 (the simulator's embedded
+    scenarios) or a negative seed of the first, as a usage error naming the option (each
+    ended in the simulator's traceback)."""
+    if not 1 <= count <= 20:
+        ap.error(f"{count_option}: expected 1-20, got {count}")
+    if seed < 0:
+        ap.error(f"{seed_option}: expected a non-negative integer, got {seed}")
+
+
 def parse_horizons(ap, text: str) -> tuple[float, ...]:
     """``--horizons-s`` (comma-separated seconds) as finite horizons > 0 s, or a usage error
     (exit 2) naming the option."""

@@ -55,7 +55,7 @@ import numpy as np
 import pandas as pd
 from scipy.signal import butter, filtfilt
 
-from _results import check_out
+from _results import check_out, check_own_scenarios
 from hybridship.evaluation.drift import log_files
 from hybridship.fileio import atomic_write, markdown_table
 from hybridship.frames import body_to_ned, ned_to_body, wrap_pi
@@ -148,10 +148,7 @@ def main(argv=None) -> int:
     ap.add_argument("--vessel", default="gunnerus", help="the model's vessel (name or TOML file; default gunnerus)")
     args = ap.parse_args(argv)
     check_out(ap, args.out)
-    if not 1 <= args.own <= 20:             # the simulator's embedded scenarios: 1-20 of them
-        ap.error(f"--own: expected 1-20, got {args.own}")
-    if args.own_seed < 0:
-        ap.error(f"--own-seed: expected a non-negative integer, got {args.own_seed}")
+    check_own_scenarios(ap, "--own", args.own, "--own-seed", args.own_seed)
     try:
         model = DynamicModel(load_vessel(args.vessel))
     except (OSError, ValueError) as exc:

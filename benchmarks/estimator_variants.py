@@ -44,7 +44,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from _results import check_out
+from _results import check_out, check_own_scenarios
 from hybridship.evaluation import metrics
 from hybridship.evaluation.drift import log_files
 from hybridship.forecast_inputs.wind import HELD_WIND
@@ -144,10 +144,7 @@ def parse_args(argv, description: str, variants) -> argparse.Namespace:
     ap.add_argument("--own-seed", type=int, default=100, help="seed of its first scenario (default 100)")
     args = ap.parse_args(argv)
     check_out(ap, args.out)
-    if not 1 <= args.own_n <= 20:           # the simulator's embedded scenarios: 1-20 of them
-        ap.error(f"--own-n: expected 1-20, got {args.own_n}")
-    if args.own_seed < 0:
-        ap.error(f"--own-seed: expected a non-negative integer, got {args.own_seed}")
+    check_own_scenarios(ap, "--own-n", args.own_n, "--own-seed", args.own_seed)
     return args
 
 

@@ -35,20 +35,6 @@ def test_a_value_the_run_cannot_take_is_a_usage_error_before_any_work(bad, says,
     assert f"error: {says}" in err, err
 
 
-@pytest.mark.parametrize("where", ["folder", "below a file"])
-def test_an_out_that_cannot_be_the_markdown_file_is_a_usage_error(where, tmp_path, monkeypatch, capsys):
-    """--out names the Markdown file; a folder, or a path below a file, failed only when the
-    table was written, after every hybrid was trained."""
-    asc = load_benchmark("after_stop_calibration")
-    monkeypatch.setattr(asc, "calibration_logs", lambda *a, **k: pytest.fail("work started"))
-    (tmp_path / "a_file").write_text("x")
-    out = tmp_path if where == "folder" else tmp_path / "a_file" / "table.md"
-    with pytest.raises(SystemExit) as exc:
-        asc.main(["--out", str(out)])
-    assert exc.value.code == 2
-    assert "error: --out:" in capsys.readouterr().err
-
-
 def test_the_default_options_pass_the_checks(monkeypatch):
     """The checks refuse nothing the documented runs use."""
     asc = load_benchmark("after_stop_calibration")

@@ -1,4 +1,5 @@
-"""The benchmark scripts' --out: a path the run cannot write is a usage error before the work.
+"""The benchmark scripts' paths: an --out the run cannot write, or a --data folder without
+logs, is a usage error before the work.
 
 Each script failed only when its first result was written, after its run (minutes to tens of
 minutes): an output folder given as a file, or below one, in mkdir's FileExistsError or
@@ -15,7 +16,8 @@ FOLDER_OUTS = ["drift_late_starts", "drift_oracles", "drift_protocols", "estimat
                "station_keeping_coverage", "environment_vs_truth", "hsc_sea_validity", "hull_lift_convention",
                "hull_yaw_residual", "wave_direction", "driftoff_live", "driftoff_season",
                "filter_start_sensitivity", "esso_steady_runs"]
-FILE_OUTS = ["drift_late_coverage", "gap_sensitivity", "sample_rates", "rpm_inversion_cases"]
+FILE_OUTS = ["drift_late_coverage", "gap_sensitivity", "sample_rates", "rpm_inversion_cases",
+             "after_stop_calibration"]
 #: The Esso Osaka scripts: an output folder --out, and (all but two) a --results folder.
 ESSO_OUTS = ["esso_error_sources", "esso_multistep", "esso_online_adaptation", "esso_physics_fit", "esso_training",
              "esso_wind_predictability", "esso_validation", "esso_osaka"]
@@ -78,3 +80,18 @@ def test_a_new_output_path_passes(name, tmp_path, monkeypatch):
         monkeypatch.setattr(fileio, check, passed)
     with pytest.raises(Checked):
         script.main([*REQUIRED.get(name, []), "--out", str(tmp_path / "new" / "out.md")])
+
+
+@pytest.mark.parametrize("name", ["hull_yaw_residual", "hybrid_variants"])
+@pytest.mark.parametrize("where", ["missing", "empty"])
+def test_a_data_folder_named_without_logs_is_a_usage_error(name, where, tmp_path, capsys):
+    """A --data folder given on the command line that does not exist (a typo) or holds no logs
+    was taken as the shared data set missing ('skipping', exit status 0), or failed in
+    log_files' ValueError traceback; each is now a usage error (exit 2) naming --data."""
+    script = load_benchmark(name)
+    data = tmp_path / ("no_such_folder" if where == "missing" else "")
+    with pytest.raises(SystemExit) as exc:
+        script.main(["--data", str(data), "--out", str(tmp_path / "out")])
+    assert exc.value.code == 2
+    assert "error: --data: no logs" in capsys.readouterr().err
+    assert not (tmp_path / "out").exists()

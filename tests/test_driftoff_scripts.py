@@ -72,17 +72,23 @@ def test_season_command_records_the_seed(tmp_path, monkeypatch):
     assert command.endswith("--workers 2 --chunk-size 24`"), command
 
 
-def test_live_command_records_a_data_folder_other_than_the_default(tmp_path, monkeypatch):
-    """The command on tables.md repeats --data when it is not the default folder (it was left
-    out: the recorded command read the default logs, not those the table came from); with the
-    default folder the command is as committed."""
+def _live_with_one_result(data, monkeypatch):
+    """driftoff_live.py loaded with its evaluation replaced by one hand-made row, and a folder
+    ``data`` holding one (empty) log for it to find: ``(module, data)``."""
     live = load_benchmark("driftoff_live")
-    data = tmp_path / "my logs"
     data.mkdir()
     (data / "a_seed1.csv.gz").write_bytes(b"")
     row = {"log": "a", "track": "truth_lf", "radius_m": 5.0, "actual_s": 1.0, "pred_p10_s": 0.5,
            "pred_p50_s": 1.0, "pred_p90_s": 2.0, "percentile": 50.0, "update_s": 0.1}
     monkeypatch.setattr(live, "evaluate", lambda *a, **kw: [dict(row)])
+    return live, data
+
+
+def test_live_command_records_a_data_folder_other_than_the_default(tmp_path, monkeypatch):
+    """The command on tables.md repeats --data when it is not the default folder (it was left
+    out: the recorded command read the default logs, not those the table came from); with the
+    default folder the command is as committed."""
+    live, data = _live_with_one_result(tmp_path / "my logs", monkeypatch)
     out = tmp_path / "out"
     assert live.main(["--data", str(data), "--out", str(out)]) == 0
     command = (out / "tables.md").read_text().splitlines()[0]
@@ -117,13 +123,7 @@ def test_live_command_records_the_vessel_spread_given(tmp_path, monkeypatch):
     """The command on tables.md wrote --vessel-spread with %g: 0.1234567 was recorded as
     0.123457, a command that draws other vessels than the table's; it now gives the spread
     in full when %g does not (1 and 0.5 read as before)."""
-    live = load_benchmark("driftoff_live")
-    data = tmp_path / "logs"
-    data.mkdir()
-    (data / "a_seed1.csv.gz").write_bytes(b"")
-    row = {"log": "a", "track": "truth_lf", "radius_m": 5.0, "actual_s": 1.0, "pred_p10_s": 0.5,
-           "pred_p50_s": 1.0, "pred_p90_s": 2.0, "percentile": 50.0, "update_s": 0.1}
-    monkeypatch.setattr(live, "evaluate", lambda *a, **kw: [dict(row)])
+    live, data = _live_with_one_result(tmp_path / "logs", monkeypatch)
     monkeypatch.setattr(live, "DEFAULT_DATA", data)
     out = tmp_path / "out"
     for spread, recorded in (("0.1234567", "0.1234567"), ("0.5", "0.5"), ("1", "1"), ("2e-07", "2e-07")):

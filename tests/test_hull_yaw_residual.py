@@ -5,21 +5,6 @@ import pytest
 from conftest import load_benchmark
 
 
-@pytest.mark.parametrize("where", ["missing", "empty"])
-def test_a_data_folder_named_without_logs_is_a_usage_error(where, tmp_path, capsys):
-    """A --data folder given on the command line that does not exist (a typo) was 'skipping:
-    no truthsim-dev logs' with exit status 0, as when the shared data set is not on the
-    machine, and one without logs failed in log_files' ValueError traceback; each is now a
-    usage error (exit 2) naming --data."""
-    hy = load_benchmark("hull_yaw_residual")
-    data = tmp_path / ("no_such_folder" if where == "missing" else "")
-    with pytest.raises(SystemExit) as exc:
-        hy.main(["--data", str(data), "--out", str(tmp_path / "out")])
-    assert exc.value.code == 2
-    assert "error: --data: no logs" in capsys.readouterr().err
-    assert not (tmp_path / "out").exists()
-
-
 @pytest.mark.parametrize("cutoff", ["0", "-0.1", "nan", "0.5"])
 def test_a_cutoff_the_low_pass_cannot_take_is_a_usage_error(cutoff, tmp_path, capsys):
     """--cutoff-hz at or below 0, NaN, or at or above half the logs' sample rate (0.5 Hz for a
