@@ -80,6 +80,13 @@ def format_validation_error(err: ValidationError, source: str | None = None) -> 
     return "\n".join(lines)
 
 
+def settings_error(err: ValidationError, class_name: str, prefix: str | None = None) -> ValueError:
+    """The ValueError a settings class raises for ``err``: :func:`format_validation_error`'s
+    lines, each ending in ``[class_name]`` (and starting with ``prefix.`` when given)."""
+    head = f"{prefix}." if prefix else ""
+    return ValueError("\n".join(f"{head}{line} [{class_name}]" for line in format_validation_error(err).split("\n")))
+
+
 def _not_bool(v):
     if isinstance(v, (bool, np.bool_)):
         raise ValueError(f"expected an integer, not a bool ({v!r})")
@@ -222,9 +229,7 @@ def config_dataclass(cls=None, /, *, frozen: bool = False, arbitrary_types: bool
             try:
                 init(self, *args, **kw)
             except ValidationError as err:
-                head = f"{prefix}." if prefix else ""
-                raise ValueError("\n".join(f"{head}{line} [{dc.__name__}]"  # every problem names its class
-                                           for line in format_validation_error(err).split("\n"))) from None
+                raise settings_error(err, dc.__name__, prefix) from None     # every problem names its class
 
         dc.__init__ = __init__
         return dc

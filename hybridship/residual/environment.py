@@ -73,8 +73,8 @@ import numpy as np
 import pandas as pd
 from pydantic import BaseModel, ConfigDict, Field, ValidationError, model_validator
 
-from ..config import (Bool, Float, Int, as_config, check_flags, check_number, check_whole_number,
-                      format_validation_error, real_array, start_time_rng)
+from ..config import (Bool, Float, Int, as_config, check_flags, check_number, check_whole_number, real_array,
+                      settings_error, start_time_rng)
 from ..frames import ned_to_body, vector_to_speed_dir
 from ..forecast_inputs.faults import TRACK_MISMATCH_M, TRACK_WINDOW_S, velocity_track_mismatch_m
 from ..logs.io import LogArrays
@@ -237,8 +237,7 @@ class EnvironmentConfig(BaseModel):
         try:
             super().__init__(**settings)
         except ValidationError as err:
-            raise ValueError("\n".join(f"{line} [EnvironmentConfig]"
-                                        for line in format_validation_error(err).split("\n"))) from None
+            raise settings_error(err, "EnvironmentConfig") from None
 
     position_std_m: Float = Field(0.5, gt=0)
     heading_std_deg: Float = Field(0.3, gt=0)
