@@ -15,7 +15,7 @@ from conftest import load_benchmark
 FOLDER_OUTS = ["drift_late_starts", "drift_oracles", "drift_protocols", "estimator_variants", "hybrid_variants",
                "station_keeping_coverage", "environment_vs_truth", "hsc_sea_validity", "hull_lift_convention",
                "hull_yaw_residual", "wave_direction", "driftoff_live", "driftoff_season",
-               "filter_start_sensitivity", "esso_steady_runs"]
+               "filter_start_sensitivity", "esso_steady_runs", "nets_physics_features"]
 FILE_OUTS = ["drift_late_coverage", "gap_sensitivity", "sample_rates", "rpm_inversion_cases",
              "after_stop_calibration"]
 #: The Esso Osaka scripts: an output folder --out, and (all but two) a --results folder.
