@@ -47,6 +47,15 @@ def test_apply_interpolates_holds_beyond_and_leaves_the_start_alone():
     np.testing.assert_allclose(out[0], [1.0, 2.0, 3.0, 4.0, 4.0])
 
 
+def test_spread_calibration_refuses_a_lead_time_of_zero_by_name():
+    """Lead 0 (the start) was taken as a calibrated lead: its scale then set the spread of
+    every lead before the first real one by interpolation, and a model file with it read."""
+    for lead in ([0.0, 1.0], [0.0]):
+        with pytest.raises(ValueError, match=r"^lead_s: expected lead times > 0 \[s\]"):
+            SpreadCalibration(lead, [1.0] * len(lead), [0.0] * len(lead))
+    assert SpreadCalibration([0.5, 1.0], [1.0, 1.0], [0.0, 0.0]).lead_s[0] == 0.5
+
+
 def test_likelihood_exponent_follows_how_much_the_spread_says_about_the_error():
     """An uninformative spread gets exponent 0 (one band for all), an informative one 1; on
     new data the chosen band covers about 95 % in each third of the raw spreads, where the

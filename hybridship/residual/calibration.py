@@ -174,6 +174,10 @@ class SpreadCalibration:
         if n == 0 or self.scale.size != n or self.floor.size != n:
             raise ValueError(f"lead_s: lead_s, scale and floor need one equal non-zero length, "
                              f"got {self.lead_s.size}, {self.scale.size}, {self.floor.size}")
+        if np.any(self.lead_s <= 0):
+            # the start has no error to scale; its entry set the scale of the leads before the first
+            raise ValueError(f"lead_s: expected lead times > 0 [s] (leave out the start, lead 0), "
+                             f"got {self.lead_s.tolist()}")
         if np.any(np.diff(self.lead_s) <= 0):
             raise ValueError("lead_s: must increase")
         return self
