@@ -251,6 +251,18 @@ def test_the_objective_takes_one_log_as_a_list_of_one_and_refuses_none(model, he
         hp.drift_hull_objective([], 30.0)
 
 
+def test_the_objective_refuses_a_horizon_that_is_not_whole_steps_of_the_log(model, heavy_sway):
+    """drift_hull_objective rounded the horizon to the log's step itself (60.4 s scored 60 s, 0.6 s
+    one step of 1 s); it now counts the steps with the forecast's own horizon_steps."""
+    from hybridship.predictors.forecast_setup import HorizonError
+
+    logs, hp = heavy_sway
+    for horizon in (60.4, 0.6):
+        with pytest.raises(HorizonError, match=rf"^horizon_s: {horizon:g} s is not a whole number of the log's "
+                                               rf"steps \(1 s\)"):
+            hp.drift_hull_objective(logs[0], horizon)
+
+
 def test_the_filter_uses_the_coefficient_after_a_failure_so_the_yaw_load_does_not_absorb_it(model, heavy_sway):
     """Given the true ship's Munk difference, the environment estimator's yaw load moves less
     during the drift than without it (it no longer takes up the hull's error); before the

@@ -1035,6 +1035,32 @@ def test_after_stop_errors_wrap_the_heading(model, monkeypatch):
     np.testing.assert_allclose(e[..., 2], 0.02, atol=1e-12)
 
 
+def test_after_stop_errors_and_calibration_refuse_a_horizon_that_is_not_whole_steps(model, monkeypatch):
+    """after_stop_errors (and calibrate_after_stop through it) rounded the horizon to the log's
+    step themselves: 60.4 s was calibrated up to 60 s, and 0.6 s as one step of 1 s, without a
+    word. They now count the steps with the forecast's own horizon_steps, which refuses both
+    by name and keeps its tolerance (60.2 s is 60 steps)."""
+    import hybridship.predictors.hybrid as hybrid
+    from hybridship.predictors.forecast_setup import HorizonError
+
+    log = physics_log(model, duration_s=1000, t_shutdown_s=800, seed=14)
+    hp = HybridPredictor(model.vessel)
+    hp.ensemble = object()                                   # only "fitted" is checked
+
+    def fake(pred, a, *, n_intervals, horizons_s, **kw):
+        shape = (n_intervals, len(horizons_s), 3)
+        return np.zeros(shape), np.ones(shape), np.ones(shape)
+
+    monkeypatch.setattr(hybrid, "drift_forecasts", fake)
+    for horizon in (60.4, 0.6):
+        for call in (hp.after_stop_errors, hp.calibrate_after_stop):
+            with pytest.raises(HorizonError, match=rf"^horizon_s: {horizon:g} s is not a whole number of the log's "
+                                                   rf"steps \(1 s\)"):
+                call([log], n_intervals=3, horizon_s=horizon)
+    (_, _, lead), = hp.after_stop_errors([log], n_intervals=3, horizon_s=60.2)
+    np.testing.assert_array_equal(lead, np.arange(1, 61))
+
+
 @pytest.mark.parametrize("settings", [{}, "per_dof", {"load_to_current_at_stop": 0.5, "current_std_at_stop_m_s": 0.1}])
 def test_a_blackout_now_is_what_the_filter_does_at_a_logged_stop(model, settings):
     """Drift-off live mode's stop (at_thrust_stop) equals the filter's own handling of a

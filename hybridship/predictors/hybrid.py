@@ -42,7 +42,7 @@ from ..residual.drift_hull import (MIN_FAILURES as DRIFT_HULL_MIN_FAILURES, MUNK
 from ..residual.hull import HullCorrection
 from .after_failure import drift_end, drift_forecasts, has_drift, shutdown_index
 from .forecast_setup import (AFTER_STOP, AFTER_STOP_LATE, FORECAST_HISTORY_S, MAX_HORIZON_S, _check_flags,
-                             _check_row_stride, _forecast_setup, as_log_arrays, join_notes,
+                             _check_row_stride, _forecast_setup, as_log_arrays, horizon_steps, join_notes,
                              keeps_state_on_error, log_list, start_indices)
 from .model_file import load_model, save_model
 from .result import ForecastResult
@@ -451,7 +451,9 @@ class HybridPredictor:
             Logs with a failure followed by ``horizon_s`` of drift in one gap-free segment
             (at least one).
         horizon_s : float
-            Length of each forecast [s].
+            Length of each forecast [s], a whole number of each log's steps (within the
+            forecast's tolerance; :class:`~hybridship.predictors.forecast_setup.HorizonError`
+            otherwise, as a forecast refuses it).
 
         Returns
         -------
@@ -485,7 +487,7 @@ class HybridPredictor:
         the logged ``eta`` (S, H, 3) at every lead after them (``label`` names the log in the
         refusal of one without such a drift)."""
         a = as_log_arrays(log, self.model.vessel)
-        H = int(round(horizon_s / a.dt_s))
+        H = horizon_steps(horizon_s, a.dt_s)
         rows = drift_start_rows(a.dp_active, a.segment_id, H, int(round(DRIFT_HULL_START_EVERY_S / a.dt_s)))
         if rows.size == 0:
             # "logs: a log without ..." did not say which of the logs
@@ -1321,7 +1323,9 @@ class HybridPredictor:
         n_intervals : int
             Start times after each failure (1 s apart at 1 Hz).
         horizon_s : float
-            Longest calibrated lead time [s].
+            Longest calibrated lead time [s], a whole number of each log's steps (within the
+            forecast's tolerance; :class:`~hybridship.predictors.forecast_setup.HorizonError`
+            otherwise, as a forecast refuses it).
         cal : CalibrationConfig, optional
             Settings of the fit (`CalibrationConfig.fit_kwargs`: sigma, coverage, floor quantile and spread
             exponent; default: the model's).
@@ -1358,7 +1362,8 @@ class HybridPredictor:
         fits (see :func:`after_stop_scales`). With ``late``, the starts every
         :data:`LATE_START_EVERY_S` after those ``n_intervals`` samples, as many as leave
         ``horizon_s`` of the failure's gap-free stretch of log (logs whose drift leaves none
-        are left out)."""
+        are left out). A ``horizon_s`` that is not a whole number of a log's steps is refused
+        as a forecast refuses it (:class:`~hybridship.predictors.forecast_setup.HorizonError`)."""
         self._check_fitted()
         check_whole_number("n_intervals", n_intervals, 1)
         horizon_s = check_number("horizon_s", horizon_s, lo=0.0, hi=MAX_HORIZON_S, lo_open=True)
@@ -1383,9 +1388,7 @@ class HybridPredictor:
     def _after_stop_errors_of(self, a: LogArrays, n_intervals: int, horizon_s: float, late: bool):
         """:meth:`after_stop_errors` of one log, ``(err, std, lead_s)``, or None (``late``, a drift
         too short for a later start)."""
-        lead = np.arange(1, int(round(horizon_s / a.dt_s)) + 1) * a.dt_s
-        if lead.size == 0:
-            raise ValueError(f"horizon_s: {horizon_s:g} s is shorter than the log's step of {a.dt_s:g} s")
+        lead = np.arange(1, horizon_steps(horizon_s, a.dt_s) + 1) * a.dt_s
         if late:
             # starts every LATE_START_EVERY_S within the failure's gap-free stretch of drift
             every = max(1, int(round(LATE_START_EVERY_S / a.dt_s)))
