@@ -28,17 +28,28 @@ def _sigma_b(model, tau, *, window_s: float = 600.0, block_s: float = 30.0) -> n
     log = physics_log(model, duration_s=len(tau), t_shutdown_s=None, seed=1, tau_ext_N=tau, wind=(0.0, 0.0),
                       rpm_scale=0.0)
     a = as_log_arrays(log, model.vessel)
-    rows = held_load_rows(a.dp_active, len(a.time_s), 1, int(window_s))
+    rows = held_load_rows(a.dp_active, a.time_s, len(a.time_s), 1, window_s, a.dt_s)
     est = EnvironmentEstimator(model).run(a, rows, first_row=0)
     return unexplained_load_std(model, a, est, int(block_s))
 
 
 def test_held_load_rows_are_station_keeping_rows_before_the_start():
     dp = np.array([1] * 50 + [0] * 10)
-    rows = held_load_rows(dp, 55, 2, 20)
+    rows = held_load_rows(dp, np.arange(60.0), 55, 2, 20.0, 1.0)
     assert rows.max() == 49 and np.all(np.diff(rows) == 2) and rows.size == 10
     assert np.all(dp[rows] == 1)
-    assert held_load_rows(np.zeros(10, int), 5, 1, 100).size == 0
+    assert held_load_rows(np.zeros(10, int), np.arange(10.0), 5, 1, 100.0, 1.0).size == 0
+
+
+def test_held_load_rows_span_the_window_in_seconds_across_a_gap():
+    """A 30-s gap in a 40-s window leaves the 20 s of rows after it (the window was 40 rows,
+    70 s of log); an evenly sampled log keeps round(window_s / dt_s) rows, at 10 Hz too."""
+    t = np.arange(100.0)
+    t[80:] += 30.0
+    np.testing.assert_array_equal(held_load_rows(np.ones(100, int), t, 100, 1, 40.0, 1.0), np.arange(80, 100))
+    t10 = np.arange(7000) * 0.1
+    rows = held_load_rows(np.ones(7000, int), t10, 7000, 10, 600.0, 0.1)
+    assert rows.size == 600 and rows[-1] == 6999 and rows[0] == 6999 - 5990
 
 
 def test_a_constant_load_has_no_variability_and_a_varying_one_is_measured(model):
@@ -134,13 +145,36 @@ def test_forecast_spread_after_a_failure_includes_the_held_load(model, drift_log
     a = as_log_arrays(drift_log, model.vessel)
     i = int(np.searchsorted(a.time_s, starts[1]))
     c = on.environment_config
-    est = on._run_estimator(a, np.array([i]), held_load_rows(a.dp_active, i, 1, int(c.held_load_window_s)))[1]
+    est = on._run_estimator(a, np.array([i]), held_load_rows(a.dp_active, a.time_s, i, 1, c.held_load_window_s,
+                                                             a.dt_s))[1]
     held = held_load_spread(unexplained_load_std(on.model, a, est, int(c.held_load_block_s))[None], f_on.lead_s)[0]
     np.testing.assert_allclose(f_on.eta_std[1], np.sqrt(f_off.eta_std[1] ** 2 + held ** 2), rtol=1e-9)
     later = drift_log.copy()
     later.loc[later.time_s > 1205.0, ["north_m", "east_m"]] += 100.0
     f_later = on.forecast(later, [1205.0], 60.0, calibrated=False)
     np.testing.assert_allclose(f_later.eta_std[0], f_on.eta_std[1])
+
+
+def test_the_held_load_window_is_ten_minutes_of_log_time_across_a_gap(model, drift_log):
+    """The held-load window was counted in rows: 600 rows of a log with a 99-s gap reached
+    back 699 s. It is now the station keeping of the last 600 s before the failure, a gap
+    leaving fewer rows (here 1000-1199 s and 600-900 s, computed from the filter directly)."""
+    from hybridship.residual.calibration import CalibrationConfig
+
+    ens = CalibrationConfig(station_keeping_spread="ensemble")
+    on = HybridPredictor(model.vessel, ensemble_config=TINY, calibration_config=ens).fit([drift_log], dp_only=True)
+    off = HybridPredictor(model.vessel, ensemble_config=TINY, calibration_config=ens,
+                          environment_config=EnvironmentConfig(held_load_window_s=0.0)).fit([drift_log], dp_only=True)
+    gapped = drift_log[(drift_log.time_s <= 900.0) | (drift_log.time_s >= 1000.0)].reset_index(drop=True)
+    f_on = on.forecast(gapped, [1205.0], 60.0, calibrated=False)
+    f_off = off.forecast(gapped, [1205.0], 60.0, calibrated=False)
+    a = as_log_arrays(gapped, model.vessel)
+    rows = np.flatnonzero((a.time_s >= 600.0) & (a.time_s < 1200.0))
+    assert np.all(a.dp_active[rows] == 1) and rows.size == 501
+    est = on._run_estimator(a, np.array([int(np.searchsorted(a.time_s, 1205.0))]), rows)[1]
+    c = on.environment_config
+    held = held_load_spread(unexplained_load_std(on.model, a, est, int(c.held_load_block_s))[None], f_on.lead_s)[0]
+    np.testing.assert_allclose(f_on.eta_std[0], np.sqrt(f_off.eta_std[0] ** 2 + held ** 2), rtol=1e-9)
 
 
 def test_station_keeping_spread_held_load_option(model, drift_log, tmp_path):
@@ -164,7 +198,7 @@ def test_station_keeping_spread_held_load_option(model, drift_log, tmp_path):
     c = held.environment_config
     for k, t in enumerate(starts[:2]):
         i = int(np.searchsorted(a.time_s, t))
-        rows = held_load_rows(a.dp_active, i, 1, int(c.held_load_window_s))
+        rows = held_load_rows(a.dp_active, a.time_s, i, 1, c.held_load_window_s, a.dt_s)
         est = held._run_estimator(a, np.array([i]), rows)[1]
         sb = unexplained_load_std(held.model, a, est, int(c.held_load_block_s))
         np.testing.assert_allclose(f.eta_std[k], held_load_spread(sb[None], f.lead_s)[0], rtol=1e-9)
@@ -218,7 +252,7 @@ def test_the_filter_window_must_cover_the_held_load_window():
 def test_held_load_rows_end_before_the_start_during_station_keeping():
     """A start during station keeping measures the load on the rows before it, not on its own row."""
     dp = np.ones(100, int)
-    rows = held_load_rows(dp, 60, 1, 30)
+    rows = held_load_rows(dp, np.arange(100.0), 60, 1, 30.0, 1.0)
     assert rows.max() == 59 and rows.min() == 30 and rows.size == 30
 
 
@@ -226,6 +260,7 @@ def test_held_load_rows_leave_out_an_earlier_drift_in_the_window():
     """A window reaching back over an earlier stretch without station keeping keeps only the
     station-keeping rows: a drift's estimates do not measure the held load."""
     dp = np.array([1] * 10 + [0] * 10 + [1] * 30 + [0] * 5)
-    rows = held_load_rows(dp, 52, 1, 40)
+    t = np.arange(dp.size, dtype=float)
+    rows = held_load_rows(dp, t, 52, 1, 40.0, 1.0)
     np.testing.assert_array_equal(rows, np.arange(20, 50))
-    np.testing.assert_array_equal(held_load_rows(dp, 52, 3, 40), np.arange(22, 50, 3))
+    np.testing.assert_array_equal(held_load_rows(dp, t, 52, 3, 40.0, 1.0), np.arange(22, 50, 3))

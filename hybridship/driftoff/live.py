@@ -289,7 +289,7 @@ def _estimated(model, a: LogArrays, idx: int, n_members: int, seed: int, config=
     est = EnvironmentEstimator(model) if config is None else EnvironmentEstimator(model, config)
     c = est.config
     step = max(1, int(round(c.filter_step_s / a.dt_s)))
-    window = held_load_rows(a.dp_active, idx + 1, step, int(round(c.held_load_window_s / a.dt_s))) \
+    window = held_load_rows(a.dp_active, a.time_s, idx + 1, step, c.held_load_window_s, a.dt_s) \
         if c.held_load_window_s > 0 else np.zeros(0, dtype=int)
     run = est.run(a, np.concatenate([[idx], window[window != idx]]))
     at = run.take(slice(0, 1))

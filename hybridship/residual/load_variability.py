@@ -7,9 +7,9 @@ posterior of the estimate) knows nothing of that variation, so a spread calibrat
 weather is too narrow in another.
 
 The station keeping before the failure shows how much the load varies. Over a window of
-station keeping (``window_s`` before the last station-keeping sample), the filter's
-low-frequency motion (the estimator treats wave-frequency motion as measurement noise) is
-cut into blocks of ``block_s``; in each block, the change of the low-frequency velocity
+station keeping (the ``window_s`` of log time before the last station-keeping sample), the
+filter's low-frequency motion (the estimator treats wave-frequency motion as measurement
+noise) is cut into blocks of ``block_s``; in each block, the change of the low-frequency velocity
 less what the model, with the environment estimated there, explains is the mean
 acceleration the estimate missed. The standard deviation of these block means,
 ``sigma_b``, is how far a held load may be off over about that time. Held over the
@@ -31,16 +31,25 @@ __all__ = ["held_load_rows", "unexplained_load_std", "unexplained_load_std_windo
            "held_load_spread"]
 
 
-def held_load_rows(dp_active: np.ndarray, start: int, step: int, window_rows: int) -> np.ndarray:
+def held_load_rows(dp_active: np.ndarray, time_s: np.ndarray, start: int, step: int, window_s: float,
+                   dt_s: float) -> np.ndarray:
     """Station-keeping rows on the filter's grid whose estimates measure the load's variability
     for a forecast starting at row ``start``: every ``step``-th row back from the last
-    ``dp_active`` row before ``start``, over at most ``window_rows`` rows (increasing).
-    Empty when there is no station keeping before ``start``."""
+    ``dp_active`` row before ``start``, over the last ``window_s`` [s] of log time up to it
+    (increasing).
+
+    Each row stands for one step ``dt_s`` [s] of the log (its nominal step), so the window holds
+    the rows less than ``window_s - dt_s / 2`` before the last one: ``round(window_s / dt_s)``
+    rows of an evenly sampled log, and fewer across a gap (a gap does not stretch the window
+    back in time). Empty when there is no station keeping before ``start``.
+    """
     dp = np.flatnonzero(np.asarray(dp_active[:start]) != 0)
     if dp.size == 0:
         return dp
     last = int(dp[-1])
-    rows = np.arange(last, max(last - window_rows, -1), -step)[::-1]
+    t = np.asarray(time_s, dtype=float)
+    first = int(np.searchsorted(t, t[last] - window_s + 0.5 * dt_s, side="right"))
+    rows = np.arange(last, first - 1, -step)[::-1]
     return rows[np.asarray(dp_active)[rows] != 0]
 
 
