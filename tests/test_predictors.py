@@ -164,6 +164,40 @@ def test_the_data_only_baseline_warns_as_the_hybrid_about_rate_and_wind(model, c
     assert [w.filename for w in caught if "wind" in str(w.message)] == [__file__]
 
 
+def test_the_data_only_baseline_takes_each_rows_own_step_on_a_log_with_uneven_steps(model, monkeypatch):
+    """The data-only baseline divided every velocity change by the log's median step: on a log
+    whose steps alternate between 0.8 and 1.2 s, a constant surge acceleration of 0.01 m/s^2
+    was learned as 0.008 and 0.012 (targets and previous accelerations), and a forecast's start
+    acceleration was off too. Each now uses the time between its own rows."""
+    import hybridship.predictors.data_only as data_only
+
+    steps = np.tile([0.8, 1.2], 100)
+    t = np.concatenate([[0.0], np.cumsum(steps)])
+    log = physics_log(model, duration_s=len(t) - 1, t_shutdown_s=None, seed=1).iloc[:len(t)].copy()
+    log["time_s"] = t
+    log["u_m_s"], log["v_m_s"], log["r_deg_s"] = 0.01 * t, 0.0, 0.0
+    log["north_m"], log["east_m"], log["heading_deg"] = 0.005 * t ** 2, 0.0, 0.0
+    seen = {}
+
+    class Members:
+        n_members = 1
+
+        def predict_members(self, X):
+            seen.setdefault("X0", X.copy())
+            return np.zeros(X.shape[:-1] + (3,))
+
+    def fit_ensemble(X, Y, config, **kw):
+        seen.update(X=X, Y=Y)
+        return Members()
+
+    monkeypatch.setattr(data_only, "fit_ensemble", fit_ensemble)
+    dp = DataOnlyPredictor(model.vessel).fit([log])
+    np.testing.assert_allclose(seen["Y"][:, 0], 0.01, rtol=1e-9)          # the targets
+    np.testing.assert_allclose(seen["X"][:, -3], 0.01, rtol=1e-9)         # the previous acceleration
+    dp.forecast(log, [t[101]], 10.0)
+    np.testing.assert_allclose(seen["X0"][0, 0, -3], 0.01, rtol=1e-9)     # the start acceleration
+
+
 def test_the_fit_warning_about_a_log_without_wind_points_at_the_callers_line(model, current_logs, monkeypatch):
     """The warning named the decorator's line in forecast_setup.py as its place (one frame
     short), so a filter on the caller's module missed it and the shown line was library code.

@@ -19,15 +19,28 @@ from .result import ForecastResult
 
 __all__ = ["DataOnlyPredictor"]
 
+#: Time stamps within this much [s] of a whole number of the log's step are that number of
+#: steps: a clock written with round-off (10-Hz stamps off 0.1 s by 1e-13 s) is evenly sampled
+#: (the forecast's step is the median rounded to the microsecond, as here).
+STEP_ROUND_OFF_S = 1e-6
+
+
+def _row_steps_s(time_s: np.ndarray, dt_s: float) -> np.ndarray:
+    """The time from each row to the next [s] (N - 1,): each pair of rows' own, or the log's
+    nominal step ``dt_s`` [s] where they differ from it by round-off only (:data:`STEP_ROUND_OFF_S`)."""
+    d = np.diff(np.asarray(time_s, dtype=float))
+    return np.where(np.abs(d - dt_s) <= STEP_ROUND_OFF_S, dt_s, d)
+
 
 class DataOnlyPredictor:
     """A data-only baseline: an ensemble of the hybrid's size that predicts the whole acceleration.
 
     No physics: each member maps the present velocities, commands, wind and the previous
-    acceleration to the next one-step acceleration ``(nu(t+1) - nu(t)) / dt`` and is
-    iterated ``H`` steps; positions follow by integrating the velocities. Each member runs
-    its own trajectory (one batched array operation over members and start times); the
-    forecast is the member mean and the spread their standard deviation.
+    acceleration to the next one-step acceleration ``(nu(t+1) - nu(t)) / dt`` (``dt`` the
+    time between those two rows, on a log with uneven steps too) and is iterated ``H``
+    steps of the forecast's step; positions follow by integrating the velocities. Each
+    member runs its own trajectory (one batched array operation over members and start
+    times); the forecast is the member mean and the spread their standard deviation.
 
     Features, in order: ``u, v, r`` [m/s, m/s, rad/s]; each thruster's rpm / max rpm; cos
     and sin of each rotatable thruster's angle; ``u, v`` minus the wind speed along its FROM
@@ -82,7 +95,7 @@ class DataOnlyPredictor:
         check_distinct_logs(arrays, labels)
         warn_logs_without_wind(arrays, labels)
         for k, a in enumerate(arrays):
-            dt = float(np.median(np.diff(a.time_s)))
+            step = _row_steps_s(a.time_s, float(np.median(np.diff(a.time_s))))    # step[i]: row i to i + 1
             seg = a.segment_id
             ok = np.zeros(len(a.time_s), bool)
             ok[2:] = (seg[2:] == seg[1:-1]) & (seg[1:-1] == seg[:-2])
@@ -91,10 +104,10 @@ class DataOnlyPredictor:
             rows = np.flatnonzero(ok)               # predict row i from row i - 1
             if rows.size == 0:
                 continue
-            acc_prev = (a.nu[rows - 1] - a.nu[rows - 2]) / dt
+            acc_prev = (a.nu[rows - 1] - a.nu[rows - 2]) / step[rows - 2, None]
             Xs.append(self._features(a.nu[rows - 1], a.rpm[rows - 1], a.azimuth_rad[rows - 1],
                                      a.wind[rows - 1], a.eta[rows - 1, 2], acc_prev))
-            Ys.append((a.nu[rows] - a.nu[rows - 1]) / dt)
+            Ys.append((a.nu[rows] - a.nu[rows - 1]) / step[rows - 1, None])
             segs.append(seg[rows] + 10_000 * k)
         X, Y, seg = (np.concatenate(z)[::stride] if z else np.zeros((0, 1)) for z in (Xs, Ys, segs))
         require_training_rows(X.shape[0], len(arrays), dp_only)
@@ -118,7 +131,11 @@ class DataOnlyPredictor:
         same = arrays.segment_id[lo] == arrays.segment_id[idx]
         # the start row's velocity as a log ending there gives it: a derived one must not read the next sample
         nu_start = start_row_nu(arrays, idx)
-        acc0 = np.where(same[:, None], (nu_start - arrays.nu[lo]) / (np.maximum(idx - lo, 1) * dt)[:, None], 0.0)
+        # over the rows' own time (on an evenly sampled log, idx - lo steps of the forecast's step)
+        nominal = np.maximum(idx - lo, 1) * dt
+        elapsed = np.where(idx > lo, arrays.time_s[idx] - arrays.time_s[lo], dt)
+        elapsed = np.where(np.abs(elapsed - nominal) <= STEP_ROUND_OFF_S * np.maximum(idx - lo, 1), nominal, elapsed)
+        acc0 = np.where(same[:, None], (nu_start - arrays.nu[lo]) / elapsed[:, None], 0.0)
         acc0 = np.nan_to_num(acc0)      # a missing sample at either end: start from zero acceleration
         E, S = self.ensemble.n_members, len(idx)
         eta = np.broadcast_to(eta0, (E, S, 3)).copy()
