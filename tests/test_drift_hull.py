@@ -160,6 +160,24 @@ def test_drift_starts_lie_in_the_first_drift_and_its_gap_free_segment():
     np.testing.assert_array_equal(drift_start_rows(dp, gap, 60, 1), np.arange(100, 120))
 
 
+def test_drift_starts_refuse_counts_that_are_not_whole_numbers_and_flags_of_another_length():
+    """A negative horizon gave starts up to the log's last row and beyond it (row 300 of 300),
+    a fractional one float rows, a spacing of 0 or 2.7 rows became 1 or 2 without a word, and
+    a segment label of another length than the flags failed in numpy's broadcasting words."""
+    dp, seg = np.r_[np.ones(100), np.zeros(200)], np.zeros(300, int)
+    for horizon in (-10, 60.5, "60", True):
+        with pytest.raises(ValueError, match=r"^drift_start_rows: horizon_steps: expected a whole number >= 0"):
+            drift_start_rows(dp, seg, horizon, 10)
+    for every in (0, 2.7, -1):
+        with pytest.raises(ValueError, match=r"^drift_start_rows: every_steps: expected a whole number >= 1"):
+            drift_start_rows(dp, seg, 60, every)
+    with pytest.raises(ValueError, match=r"^drift_start_rows: dp_active, segment_id: expected two 1-D arrays of "
+                                         r"one length, got shapes \(300,\) and \(200,\)"):
+        drift_start_rows(dp, seg[:200], 60, 10)
+    np.testing.assert_array_equal(drift_start_rows(dp, seg, np.int64(60), np.int32(10)), np.arange(100, 240, 10))
+    np.testing.assert_array_equal(drift_start_rows(dp, seg, 0, 100), [100, 200])
+
+
 def _wind_drift_logs(model, sway_added_mass_scale: float, seeds=(20, 21, 22, 23, 24, 25)):
     """Failures of a ship whose sway added mass is the model's times the scale, under a steady
     wind the model knows: the only model error after a failure is in the hull."""

@@ -488,7 +488,7 @@ class HybridPredictor:
         refusal of one without such a drift)."""
         a = as_log_arrays(log, self.model.vessel)
         H = horizon_steps(horizon_s, a.dt_s)
-        rows = drift_start_rows(a.dp_active, a.segment_id, H, int(round(DRIFT_HULL_START_EVERY_S / a.dt_s)))
+        rows = drift_start_rows(a.dp_active, a.segment_id, H, max(1, int(round(DRIFT_HULL_START_EVERY_S / a.dt_s))))
         if rows.size == 0:
             # "logs: a log without ..." did not say which of the logs
             raise ValueError(f"{label}: no failure followed by {horizon_s:g} s of drift in one gap-free segment")

@@ -40,6 +40,8 @@ from dataclasses import asdict, dataclass
 
 import numpy as np
 
+from ..config import check_whole_number
+
 __all__ = ["KEEP_P_VALUE", "MIN_FAILURES", "MUNK_MULTIPLES", "START_EVERY_S", "DriftHullChoice",
            "choose_coefficient", "gain_carries_over", "signed_rank_p", "munk_coefficient", "drift_start_rows"]
 
@@ -77,7 +79,7 @@ def drift_start_rows(dp_active: np.ndarray, segment_id: np.ndarray, horizon_step
     dp_active, segment_id : array (N,)
         The log's station-keeping flag and gap-free segment label.
     horizon_steps, every_steps : int
-        Rows of log each start needs after it, and the spacing of the starts [rows].
+        Rows of log each start needs after it (>= 0), and the spacing of the starts (>= 1) [rows].
 
     Returns
     -------
@@ -86,16 +88,28 @@ def drift_start_rows(dp_active: np.ndarray, segment_id: np.ndarray, horizon_step
         whose next ``horizon_steps`` rows are all in that drift (before DP comes back on)
         and in the failure's gap-free segment; empty without a failure, and for a log that
         starts with ``dp_active == 0``.
+
+    Raises
+    ------
+    ValueError
+        A count that is not a whole number in its range (a negative horizon gave starts
+        beyond the log's end, a fractional one rows that are not integers), or ``dp_active``
+        and ``segment_id`` not 1-D of one length, naming the argument.
     """
+    horizon_steps = check_whole_number("drift_start_rows: horizon_steps", horizon_steps, lo=0)
+    every_steps = check_whole_number("drift_start_rows: every_steps", every_steps, lo=1)
     dp = np.asarray(dp_active)
     seg = np.asarray(segment_id)
+    if dp.ndim != 1 or seg.shape != dp.shape:
+        raise ValueError(f"drift_start_rows: dp_active, segment_id: expected two 1-D arrays of one length, got "
+                         f"shapes {dp.shape} and {seg.shape}")
     off = np.flatnonzero(dp == 0)
     if off.size == 0 or off[0] == 0:
         return np.zeros(0, int)
     first = int(off[0])
     leaves = np.flatnonzero((dp[first:] != 0) | (seg[first:] != seg[first]))
     end = first + int(leaves[0]) if leaves.size else dp.size      # first row not in this drift
-    return np.arange(first, end - horizon_steps, max(1, int(every_steps)))
+    return np.arange(first, end - horizon_steps, every_steps)
 
 
 @dataclass(frozen=True)
