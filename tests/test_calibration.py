@@ -531,6 +531,31 @@ def test_apply_and_coverage_of_refuse_text_bad_shapes_and_silent_nans_by_name():
     np.testing.assert_allclose(coverage_of([[0.5, 3.0], [1.5, 1.0]], np.ones((2, 2))), [[0.5, 1.0], [0.5, 0.5]])
 
 
+def test_calibrated_std_returns_floats_and_refuses_bad_input_by_name():
+    """An integer spread came back as integers (a scale of 2.5 gave 2), a fourth column was
+    returned as uninitialised memory, a nested list failed in Python's words ('list indices
+    must be integers') and the other problems in SpreadCalibration.apply's, on its axes."""
+    hp = HybridPredictor("gunnerus")
+    c = SpreadCalibration([1.0, 2.0], [2.5, 2.5], [0.0, 0.0])
+    hp.calibration = {"held": {"position": c, "heading": c}}
+    lead = np.array([0.0, 1.0, 2.0])
+    out = hp.calibrated_std(np.ones((1, 3, 3), dtype=int), lead, "held")
+    assert out.dtype == float
+    np.testing.assert_array_equal(out[0], [[1.0] * 3, [2.5] * 3, [2.5] * 3])
+    np.testing.assert_array_equal(hp.calibrated_std([[[1.0] * 3] * 3], lead, "held"), out)
+    for std, why in ((np.ones((1, 3, 4)), "shape"), (np.ones((1, 2, 3)), "shape"), (np.ones(3), "shape"),
+                     (-np.ones((1, 3, 3)), "standard deviations >= 0")):
+        with pytest.raises(ValueError, match=f"^calibrated_std: std: expected .*{why}"):
+            hp.calibrated_std(std, lead, "held")
+    with pytest.raises(TypeError, match="^calibrated_std: std: expected an array of real numbers"):
+        hp.calibrated_std(np.full((1, 3, 3), "1"), lead, "held")
+    for bad in ([0.0, 1.0, np.nan], [0.0, -1.0, 2.0], np.ones((3, 1))):
+        with pytest.raises(ValueError, match=r"^calibrated_std: lead_s: expected a 1-D array of finite lead times"):
+            hp.calibrated_std(np.ones((1, 3, 3)), bad, "held")
+    with pytest.raises(ValueError, match=r"^commands: expected one of \['held'\], got \['held'\]"):
+        hp.calibrated_std(np.ones((1, 3, 3)), lead, ["held"])
+
+
 def test_after_stop_window_does_not_depend_on_the_order_of_logs_of_different_steps(fitted, monkeypatch):
     """The window of starts the after-stop calibration was fitted on (``starts_within_s``,
     which decides which forecast starts count as late) and its horizon came from the first

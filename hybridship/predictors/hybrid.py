@@ -1417,11 +1417,31 @@ class HybridPredictor:
         self.training_info["calibration"]["after_stop"]["source"] = "the training logs' failures"
 
     def calibrated_std(self, std: np.ndarray, lead_s: np.ndarray, commands: str) -> np.ndarray:
-        """Raw ensemble spread (S, H+1, 3) at lead times (H+1,) [s] -> calibrated spread."""
-        if commands not in self.calibration:
+        """Raw ensemble spread (S, H+1, 3) [m, m, rad] at lead times (H+1,) [s] -> calibrated
+        spread (float, same shape) with the calibration of ``commands`` (a key of
+        :attr:`calibration`).
+
+        Raises
+        ------
+        TypeError, ValueError
+            ``std`` or ``lead_s`` not real numbers, ``std`` not of shape (..., H+1, 3) with
+            H+1 = ``len(lead_s)``, a negative spread, lead times that are not a 1-D array of
+            finite times >= 0, or ``commands`` without a calibration, naming the argument.
+        """
+        if not isinstance(commands, str) or commands not in self.calibration:
             raise ValueError(f"commands: expected one of {sorted(self.calibration)}, got {commands!r}")
+        std = real_array("calibrated_std: std", std)
+        lead_s = real_array("calibrated_std: lead_s", lead_s)
+        if lead_s.ndim != 1 or not np.all(np.isfinite(lead_s) & (lead_s >= 0)):
+            raise ValueError(f"calibrated_std: lead_s: expected a 1-D array of finite lead times >= 0 [s], got "
+                             f"{lead_s.tolist()}")
+        if std.ndim < 2 or std.shape[-2:] != (lead_s.size, 3):
+            raise ValueError(f"calibrated_std: std: expected the shape (..., len(lead_s), 3) = (..., {lead_s.size}, 3) "
+                             f"[m, m, rad], got shape {std.shape}")
+        if np.any(std < 0):         # a NaN is passed on, as SpreadCalibration.apply does
+            raise ValueError("calibrated_std: std: expected standard deviations >= 0")
         c = self.calibration[commands]
-        out = np.empty_like(std)
+        out = np.empty(std.shape)
         out[..., 0] = c["position"].apply(std[..., 0], lead_s)
         out[..., 1] = c["position"].apply(std[..., 1], lead_s)
         out[..., 2] = c["heading"].apply(std[..., 2], lead_s)
