@@ -256,6 +256,22 @@ def test_held_load_rows_end_before_the_start_during_station_keeping():
     assert rows.max() == 59 and rows.min() == 30 and rows.size == 30
 
 
+def test_a_start_within_one_filter_step_of_the_log_start_measures_no_held_load_after_it(model):
+    """On station the held-load window ends one filter step before the start; a start less
+    than a step into the log (filter_step_s 5 s at 10 Hz, a start at 2 s) ended it at a
+    negative row, which sliced the log from its end: the spread came from the rows after the
+    start. It now has no station keeping before it, so the members' spread, and says so."""
+    log = physics_log(model, duration_s=400, t_shutdown_s=None, seed=2, dt_s=0.1)
+    hp = HybridPredictor(model.vessel, ensemble_config=TINY,
+                         environment_config=EnvironmentConfig(filter_step_s=5.0)).fit([log])
+    fc = hp.forecast(log, [2.0], 60.0, calibrated=False)
+    assert "from the members'" in fc.notes[0]
+    later = log.copy()
+    after = later.time_s > 2.0
+    later.loc[after, ["u_m_s", "v_m_s"]] += 0.05 * np.random.default_rng(0).standard_normal((int(after.sum()), 2))
+    np.testing.assert_array_equal(hp.forecast(later, [2.0], 60.0, calibrated=False).eta_std, fc.eta_std)
+
+
 def test_held_load_rows_leave_out_an_earlier_drift_in_the_window():
     """A window reaching back over an earlier stretch without station keeping keeps only the
     station-keeping rows: a drift's estimates do not measure the held load."""

@@ -1230,7 +1230,8 @@ class HybridPredictor:
         for k in np.flatnonzero(wanted):
             # on station the window ends on the start's own filter grid (one filter pass on a
             # 10-Hz log); after a stop, at the last station-keeping row
-            end = int(idx[k]) - (step - 1 if on[k] else 0)
+            # (not below 0: a negative end sliced the rows before it from the log's end, after the start)
+            end = max(0, int(idx[k]) - (step - 1 if on[k] else 0))
             rows = held_load_rows(st.arrays.dp_active, st.arrays.time_s, end, step, c.held_load_window_s, dt)
             rows = rows[rows >= first]
             windows.setdefault(tuple(rows[[0, -1]]) if rows.size else (), (rows, []))[1].append(k)
