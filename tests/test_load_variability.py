@@ -66,6 +66,46 @@ def test_a_constant_load_has_no_variability_and_a_varying_one_is_measured(model)
     assert 1.7 < sway2[1] / sway[1] < 2.3
 
 
+def test_held_load_rows_and_the_variability_refuse_counts_that_are_not_whole_numbers(model):
+    """A fractional start row failed in Python's words ('slice indices must be integers'), a
+    step of 0 in its division by zero and one of 1.5 in numpy's indexing; a block of 0 or -3
+    rows gave a variability of exactly zero without a word and one of 30.5 failed in numpy's
+    indexing; each is now a ValueError naming the argument."""
+    from hybridship.residual.load_variability import unexplained_load_std_windows
+
+    dp, t = np.ones(100, int), np.arange(100.0)
+    for start, step, why in ((5.5, 1, "start: expected a whole number >= 0"),
+                             (-1, 1, "start: expected a whole number >= 0"),
+                             (101, 1, "start: expected a row of the log, at most 100"),
+                             (50, 0, "step: expected a whole number >= 1"),
+                             (50, 1.5, "step: expected a whole number >= 1")):
+        with pytest.raises(ValueError, match=f"^held_load_rows: {why}"):
+            held_load_rows(dp, t, start, step, 30.0, 1.0)
+    for window_s, dt_s, name in ((-1.0, 1.0, "window_s"), (30.0, 0.0, "dt_s"), ("30", 1.0, "window_s")):
+        with pytest.raises((TypeError, ValueError), match=f"^held_load_rows: {name}: "):
+            held_load_rows(dp, t, 50, 1, window_s, dt_s)
+    with pytest.raises(ValueError, match=r"^held_load_rows: dp_active, time_s: expected two 1-D arrays of one "
+                                         r"length, got shapes \(100,\) and \(99,\)"):
+        held_load_rows(dp, t[:99], 50, 1, 30.0, 1.0)
+    np.testing.assert_array_equal(held_load_rows(dp, t, np.int64(50), np.int32(2), 10, 1), np.arange(41, 50, 2))
+    log = physics_log(model, duration_s=300, t_shutdown_s=None, seed=1, rpm_scale=0.0, wind=(0.0, 0.0))
+    a = as_log_arrays(log, model.vessel)
+    est = EnvironmentEstimator(model).run(a, np.arange(300), first_row=0)
+    for block in (0, 30.5, -3, True):
+        with pytest.raises(ValueError, match="^unexplained_load_std: block_rows: expected a whole number >= 1"):
+            unexplained_load_std(model, a, est, block)
+        with pytest.raises(ValueError, match="^unexplained_load_std_windows: block_rows: expected a whole number"):
+            unexplained_load_std_windows(model, a, est, [0], [300], block)
+    for first, stop, why in (([0.5], [300], "first, stop: expected whole numbers"),
+                             ([0, 0], [300], "first, stop: expected two 1-D arrays of one length"),
+                             ([10], [5], "first, stop: expected 0 <= first <= stop <= 300"),
+                             ([0], [301], "first, stop: expected 0 <= first <= stop <= 300")):
+        with pytest.raises(ValueError, match=f"^unexplained_load_std_windows: {why}"):
+            unexplained_load_std_windows(model, a, est, first, stop, 30)
+    np.testing.assert_array_equal(unexplained_load_std_windows(model, a, est, np.array([0]), np.array([300]), 30)[0],
+                                  unexplained_load_std(model, a, est, np.int64(30)))
+
+
 def test_held_load_spread_grows_with_the_square_of_the_lead():
     s = held_load_spread(np.array([[3e-3, 4e-3, 1e-4]]), np.array([0.0, 10.0, 20.0]))
     pos = np.sqrt(0.5 * (9e-6 + 16e-6))

@@ -25,6 +25,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..config import check_number, check_whole_number
 from .environment import CUR, LOAD, THR, current_input, external_accel, thrust_error_accel
 
 __all__ = ["held_load_rows", "unexplained_load_std", "unexplained_load_std_windows", "held_load_std_ned",
@@ -42,15 +43,31 @@ def held_load_rows(dp_active: np.ndarray, time_s: np.ndarray, start: int, step: 
     the rows less than ``window_s - dt_s / 2`` before the last one: ``round(window_s / dt_s)``
     rows of an evenly sampled log, and fewer across a gap (a gap does not stretch the window
     back in time). Empty when there is no station keeping before ``start``.
+
+    Raises
+    ------
+    TypeError, ValueError
+        ``start`` (a row, at most the log's length) or ``step`` (>= 1) not a whole number,
+        ``window_s`` not a time >= 0 or ``dt_s`` not > 0, or ``dp_active`` and ``time_s`` not
+        1-D of one length, naming the argument.
     """
-    dp = np.flatnonzero(np.asarray(dp_active[:start]) != 0)
+    dp_active, t = np.asarray(dp_active), np.asarray(time_s, dtype=float)
+    if dp_active.ndim != 1 or t.shape != dp_active.shape:
+        raise ValueError(f"held_load_rows: dp_active, time_s: expected two 1-D arrays of one length, got shapes "
+                         f"{dp_active.shape} and {t.shape}")
+    start = check_whole_number("held_load_rows: start", start, lo=0)
+    if start > dp_active.size:
+        raise ValueError(f"held_load_rows: start: expected a row of the log, at most {dp_active.size}, got {start}")
+    step = check_whole_number("held_load_rows: step", step, lo=1)
+    window_s = check_number("held_load_rows: window_s", window_s, lo=0.0)
+    dt_s = check_number("held_load_rows: dt_s", dt_s, lo=0.0, lo_open=True)
+    dp = np.flatnonzero(dp_active[:start] != 0)
     if dp.size == 0:
         return dp
     last = int(dp[-1])
-    t = np.asarray(time_s, dtype=float)
     first = int(np.searchsorted(t, t[last] - window_s + 0.5 * dt_s, side="right"))
     rows = np.arange(last, first - 1, -step)[::-1]
-    return rows[np.asarray(dp_active)[rows] != 0]
+    return rows[dp_active[rows] != 0]
 
 
 def unexplained_load_std(model, arrays, estimate, block_rows: int) -> np.ndarray:
@@ -65,13 +82,19 @@ def unexplained_load_std(model, arrays, estimate, block_rows: int) -> np.ndarray
         The filter's estimates at increasing, evenly spaced station-keeping rows (see
         :func:`held_load_rows`).
     block_rows : int
-        Estimates per block.
+        Estimates per block (>= 1).
 
     Returns
     -------
     ndarray, shape (3,)
         ``[surge_m_s2, sway_m_s2, yaw_rad_s2]``; zeros with fewer than three blocks.
+
+    Raises
+    ------
+    ValueError
+        ``block_rows`` not a whole number >= 1.
     """
+    block_rows = check_whole_number("unexplained_load_std: block_rows", block_rows, lo=1)
     n = len(estimate.rows)
     return unexplained_load_std_windows(model, arrays, estimate, np.array([0]), np.array([n]), block_rows)[0]
 
@@ -92,15 +115,33 @@ def unexplained_load_std_windows(model, arrays, estimate, first, stop, block_row
         Window ``k`` is the estimates ``first[k]:stop[k]`` (consecutive positions in
         ``estimate``; each one a window of :func:`held_load_rows`).
     block_rows : int
-        Estimates per block; blocks end at each window's last estimate.
+        Estimates per block (>= 1); blocks end at each window's last estimate.
 
     Returns
     -------
     ndarray, shape (K, 3)
         ``[surge_m_s2, sway_m_s2, yaw_rad_s2]`` per window; zeros where a window holds
         fewer than three blocks.
+
+    Raises
+    ------
+    ValueError
+        ``block_rows`` not a whole number >= 1, or ``first`` and ``stop`` not whole numbers
+        of one 1-D shape with ``0 <= first <= stop <= len(estimate.rows)``.
     """
-    first, stop = np.asarray(first, dtype=int), np.asarray(stop, dtype=int)
+    block_rows = check_whole_number("unexplained_load_std_windows: block_rows", block_rows, lo=1)
+    first, stop = np.asarray(first), np.asarray(stop)
+    if first.dtype.kind not in "iu" or stop.dtype.kind not in "iu":
+        raise ValueError(f"unexplained_load_std_windows: first, stop: expected whole numbers (positions in the "
+                         f"estimate), got dtypes {first.dtype} and {stop.dtype}")
+    if first.ndim != 1 or stop.shape != first.shape:
+        raise ValueError(f"unexplained_load_std_windows: first, stop: expected two 1-D arrays of one length, got "
+                         f"shapes {first.shape} and {stop.shape}")
+    n = len(estimate.rows)
+    if np.any((first < 0) | (first > stop) | (stop > n)):
+        raise ValueError(f"unexplained_load_std_windows: first, stop: expected 0 <= first <= stop <= {n} (the "
+                         f"estimate's length)")
+    first, stop = first.astype(int), stop.astype(int)
     out = np.zeros((len(first), 3))
     n_blocks = (stop - first) // block_rows
     use = n_blocks >= 3
