@@ -477,6 +477,22 @@ def test_after_stop_scales_pool_north_and_east_at_the_default_two_sigma_level():
     np.testing.assert_array_equal(got["heading"].scale, fit_spread_scale(e[..., 2], sd[..., 2], lead).scale)
 
 
+def test_after_stop_scales_refuse_no_logs_and_leave_one_out_a_single_log_by_name():
+    """No logs' errors, and a single log left out (which leaves none to calibrate on), failed
+    in Python's words ('min() arg is an empty sequence')."""
+    from hybridship.predictors.hybrid import after_stop_scales, leave_one_out_after_stop_scales
+
+    one = (np.ones((30, 2, 3)), np.ones((30, 2, 3)), np.array([1.0, 2.0]))
+    with pytest.raises(ValueError, match=r"^after_stop_scales: errors: expected the errors after a failure of at "
+                                         r"least one log \(after_stop_errors\), got none"):
+        after_stop_scales([], CalibrationConfig())
+    with pytest.raises(ValueError, match=r"^leave_one_out_after_stop_scales: errors: expected the errors after a "
+                                         r"failure of at least two logs .*, got 1"):
+        leave_one_out_after_stop_scales([one], CalibrationConfig())
+    assert after_stop_scales([one], CalibrationConfig())["position"].lead_s.tolist() == [1.0, 2.0]
+    assert len(leave_one_out_after_stop_scales([one, one], CalibrationConfig())) == 2
+
+
 def test_after_stop_scales_pool_logs_of_different_steps_at_equal_lead_times():
     """A 10-Hz log's errors at 0.1..2 s were pooled with a 1-Hz log's at 1..20 s, column by
     column: the 1-Hz lead times are kept, and the 10-Hz log gives its errors at those times."""

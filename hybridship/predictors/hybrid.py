@@ -1728,7 +1728,11 @@ def _fewest_finite_starts(errors: list) -> int:
 def after_stop_scales(errors: list, cal: CalibrationConfig) -> dict:
     """The spread calibration after a failure from :meth:`HybridPredictor.after_stop_errors`
     of some logs: a per-lead scale (:func:`~hybridship.residual.calibration.fit_spread_scale`)
-    for the position (north and east pooled) and for the heading."""
+    for the position (north and east pooled) and for the heading. ValueError without any
+    log's errors."""
+    if len(errors) == 0:
+        raise ValueError("after_stop_scales: errors: expected the errors after a failure of at least one log "
+                         "(after_stop_errors), got none")
     lead, cols = _common_leads([x[2] for x in errors])
     e = np.concatenate([x[0][:, c] for x, c in zip(errors, cols)])
     sd = np.concatenate([x[1][:, c] for x, c in zip(errors, cols)])
@@ -1741,7 +1745,12 @@ def after_stop_scales(errors: list, cal: CalibrationConfig) -> dict:
 def leave_one_out_after_stop_scales(errors: list, cal: CalibrationConfig) -> list:
     """For each log of :meth:`HybridPredictor.after_stop_errors`, the calibration of
     :func:`after_stop_scales` fitted on the *other* logs' failures (so no failure is scored
-    with a spread calibrated on it)."""
+    with a spread calibrated on it). ValueError with fewer than two logs' errors (one left
+    out leaves none to calibrate on)."""
+    if len(errors) < 2:
+        raise ValueError(f"leave_one_out_after_stop_scales: errors: expected the errors after a failure of at least "
+                         f"two logs (after_stop_errors; each log's calibration is fitted on the others), got "
+                         f"{len(errors)}")
     return [after_stop_scales(errors[:k] + errors[k + 1:], cal) for k in range(len(errors))]
 
 
