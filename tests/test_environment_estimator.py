@@ -577,6 +577,18 @@ def test_config_rejects_bad_values():
         HybridPredictor("gunnerus", environment="nets")
 
 
+def test_config_refuses_a_held_load_window_shorter_than_three_blocks():
+    """A held-load window under three blocks can never give the variability (it needs three
+    block means), so every spread silently went without it; 0 switches it off on purpose."""
+    for window, block in ((60.0, 30.0), (1.0, 30.0), (600.0, 250.0)):
+        with pytest.raises(ValueError, match=rf"^held_load_window_s: must be 0 \(off\) or at least three "
+                                             rf"held_load_block_s = {3 * block:g} s, got {window:g} \[EnvironmentConfig\]"):
+            EnvironmentConfig(held_load_window_s=window, held_load_block_s=block)
+    assert EnvironmentConfig(held_load_window_s=0.0).held_load_window_s == 0.0
+    assert EnvironmentConfig(held_load_window_s=90.0).held_load_window_s == 90.0
+    assert EnvironmentConfig().held_load_window_s == 600.0 and EnvironmentConfig().held_load_block_s == 30.0
+
+
 @pytest.mark.parametrize("field, value", [("settle_s", True), ("settle_s", "30"), ("max_gated_samples", True),
                                           ("max_gated_samples", "10"), ("yaw_load_std_at_stop", False),
                                           ("thrust_error_prior", (0.2, 0.2, -0.5)),

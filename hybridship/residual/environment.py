@@ -115,7 +115,8 @@ class EnvironmentConfig(BaseModel):
 
     ``held_load_window_s`` and ``held_load_block_s`` set how the variability of the load
     is measured in the station keeping before a failure, for the spread of the forecasts
-    after it (:mod:`hybridship.residual.load_variability`; a window of 0 switches it off).
+    after it (:mod:`hybridship.residual.load_variability`; a window of 0 switches it off,
+    any other must hold at least three blocks).
 
     A position or heading measurement whose innovation exceeds ``innovation_gate_sigma``
     standard deviations of its predicted spread, and jumped there from the innovation of the
@@ -285,6 +286,14 @@ class EnvironmentConfig(BaseModel):
                                            or self.current_std_at_stop_m_s > 0):
             raise ValueError("load_model='force': reset_yaw_load_at_stop, load_to_current_at_stop and "
                              "current_std_at_stop_m_s take the load as an acceleration; leave them off")
+        return self
+
+    @model_validator(mode="after")
+    def _held_load_window_of_three_blocks(self):
+        # the variability is the spread of at least three block means: a shorter window never gave one
+        if 0 < self.held_load_window_s < 3 * self.held_load_block_s:
+            raise ValueError(f"held_load_window_s: must be 0 (off) or at least three held_load_block_s = "
+                             f"{3 * self.held_load_block_s:g} s, got {self.held_load_window_s:g}")
         return self
 
 
