@@ -114,6 +114,28 @@ def test_held_load_spread_grows_with_the_square_of_the_lead():
     np.testing.assert_allclose(s[0, 2, 2], 0.5 * 1e-4 * 400.0)
 
 
+def test_held_load_spread_refuses_bad_input_by_name():
+    """One start's sigma_b as a flat row failed in numpy's indexing words, a fourth column was
+    dropped, text was read as numbers, a negative sigma_b gave a negative yaw spread, a
+    negative lead the spread of a positive one and a NaN a NaN spread, all without a word."""
+    sb, lead = np.array([[3e-3, 4e-3, 1e-4]]), np.array([0.0, 10.0])
+    for sigma_b in (sb[0], np.c_[sb, [[1.0]]], np.zeros((1, 2))):
+        with pytest.raises(ValueError, match=r"^held_load_spread: sigma_b: expected the shape \(S, 3\)"):
+            held_load_spread(sigma_b, lead)
+    for sigma_b in (-sb, sb * np.nan, sb * np.inf):
+        with pytest.raises(ValueError, match=r"^held_load_spread: sigma_b: expected finite values >= 0"):
+            held_load_spread(sigma_b, lead)
+    with pytest.raises(TypeError, match=r"^held_load_spread: sigma_b: expected an array of real numbers"):
+        held_load_spread(np.array([["1", "2", "3"]]), lead)
+    for bad in ([-10.0], [np.nan], [[1.0, 2.0]]):
+        with pytest.raises(ValueError, match=r"^held_load_spread: lead_s: expected a 1-D array of finite lead times"):
+            held_load_spread(sb, bad)
+    with pytest.raises(TypeError, match=r"^held_load_spread: lead_s: expected an array of real numbers"):
+        held_load_spread(sb, ["10"])
+    assert held_load_spread(np.zeros((0, 3)), lead).shape == (0, 2, 3)
+    np.testing.assert_array_equal(held_load_spread(sb.tolist(), [0, 10]), held_load_spread(sb, lead))
+
+
 def _reference_sigma_b(acc, nu, t, block):
     """sigma_b of one window by its definition: reshape into blocks ending at the window's
     end, velocity change between block ends less the block's mean model acceleration."""

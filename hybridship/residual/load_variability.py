@@ -25,7 +25,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..config import check_number, check_whole_number
+from ..config import check_number, check_whole_number, real_array
 from .environment import CUR, LOAD, THR, current_input, external_accel, thrust_error_accel
 
 __all__ = ["held_load_rows", "unexplained_load_std", "unexplained_load_std_windows", "held_load_std_ned",
@@ -183,5 +183,23 @@ def held_load_std_ned(sigma_b: np.ndarray) -> np.ndarray:
 def held_load_spread(sigma_b: np.ndarray, lead_s: np.ndarray) -> np.ndarray:
     """Position and heading spread ``0.5 sigma_b t^2`` of an acceleration error held over the
     forecast: ``sigma_b`` (S, 3) [m/s^2, m/s^2, rad/s^2] at leads (H,) [s] -> (S, H, 3)
-    [m, m, rad] (north and east as :func:`held_load_std_ned`)."""
-    return 0.5 * held_load_std_ned(sigma_b)[:, None, :] * np.asarray(lead_s, dtype=float)[None, :, None] ** 2
+    [m, m, rad] (north and east as :func:`held_load_std_ned`).
+
+    Raises
+    ------
+    TypeError, ValueError
+        ``sigma_b`` or ``lead_s`` not real numbers, ``sigma_b`` not of shape (S, 3) or not
+        finite and >= 0, ``lead_s`` not a 1-D array of finite lead times >= 0, naming the
+        argument.
+    """
+    sigma_b = real_array("held_load_spread: sigma_b", sigma_b)
+    lead_s = real_array("held_load_spread: lead_s", lead_s)
+    if sigma_b.ndim != 2 or sigma_b.shape[1] != 3:
+        raise ValueError(f"held_load_spread: sigma_b: expected the shape (S, 3) [m/s^2, m/s^2, rad/s^2], got "
+                         f"shape {sigma_b.shape}")
+    if not np.all(np.isfinite(sigma_b) & (sigma_b >= 0)):
+        raise ValueError("held_load_spread: sigma_b: expected finite values >= 0 (standard deviations)")
+    if lead_s.ndim != 1 or not np.all(np.isfinite(lead_s) & (lead_s >= 0)):
+        raise ValueError(f"held_load_spread: lead_s: expected a 1-D array of finite lead times >= 0 [s], got "
+                         f"{lead_s.tolist()}")
+    return 0.5 * held_load_std_ned(sigma_b)[:, None, :] * lead_s[None, :, None] ** 2
