@@ -191,6 +191,29 @@ def test_the_hybrid_turns_the_held_yaw_load_after_a_failure_only_with_the_option
     np.testing.assert_allclose(back.forecast(a, starts, 60.0).eta, f_on.eta)
 
 
+def test_a_starts_wave_axis_does_not_depend_on_the_other_starts_of_its_batch(model):
+    """The axis window was cut at the first row of the log read for the batch: a start 1700 s
+    into a drift, alone, had the last 400 s of station keeping, and with a start 5 s after the
+    failure beside it the whole 600 s, so its forecast depended on the batch. A start's window
+    now lies within the rows its own filter reads (here the last 300 s), in any batch."""
+    log = physics_log(model, duration_s=3600, t_shutdown_s=1800, seed=4, tau_ext_N=(2000.0, 0.0, 2000.0),
+                      rpm_scale=0.0, wind=(0.0, 0.0))
+    psi = np.radians(log.heading_deg.to_numpy())
+    rel = psi[1799] + np.radians(30.0) - psi
+    _, swing, _ = _wave_motion(len(log), 0.0, noise=0.0)
+    log["u_m_s"] += swing * np.cos(rel)
+    log["v_m_s"] += swing * np.sin(rel)
+    a = as_log_arrays(log, model.vessel)
+    on = HybridPredictor(model.vessel, ensemble_config=EnsembleConfig(n_members=2, hidden=8, max_epochs=5, patience=2,
+                                                                      seed=0),
+                         environment_config=EnvironmentConfig(wave_turned_yaw_load=True)).fit([a])
+    alone = on._wave_axes(_setup(on, a, [3500.0]))[0]
+    batched = on._wave_axes(_setup(on, a, [1805.0, 3500.0]))
+    assert np.isfinite(alone).all() and np.isfinite(batched).all()
+    np.testing.assert_array_equal(batched[1], alone)
+    np.testing.assert_array_equal(on.forecast(a, [1805.0, 3500.0], 60.0).eta[1], on.forecast(a, [3500.0], 60.0).eta[0])
+
+
 def _setup(p, a, starts):
     from hybridship.predictors.forecast_setup import _forecast_setup
 

@@ -1117,28 +1117,40 @@ class HybridPredictor:
         """Per start after a failure, the waves' axis found in the station keeping before it,
         ``[axis_ned_rad, sin2_station]`` (S, 2), NaN where there is none (see
         :mod:`hybridship.residual.wave_direction`); None unless the environment config's
-        ``wave_turned_yaw_load`` is on."""
+        ``wave_turned_yaw_load`` is on.
+
+        A start's window is the last ``wave_axis_window_s`` of log time of that station
+        keeping within the rows its own filter reads (from its first row of
+        :meth:`_filter_groups`): it depends on the log and the start alone, not on the other
+        starts of the batch (which set how much log before them is read). A start more than
+        ``environment_window_s - wave_axis_window_s`` after the failure has a shorter window.
+        """
         c = self.environment_config
         if not (c.wave_turned_yaw_load and self.environment == "estimator" and self.stop_after_failure):
             return None
         a = st.arrays
+        first = np.zeros(len(st.idx), dtype=int)
+        for f, pos in self._filter_groups(a, st.idx):
+            first[pos] = f
         out = np.full((len(st.idx), 2), np.nan)
         found = {}
         for k, i in enumerate(st.idx):
-            on = np.flatnonzero(a.dp_active[:i + 1] != 0)
+            on = np.flatnonzero(a.dp_active[first[k]:i + 1] != 0)
             if a.dp_active[i] != 0 or not on.size:
                 continue
-            stop = int(on[-1]) + 1                 # the first row after the station keeping
-            if stop not in found:
-                rows = np.arange(max(0, stop - int(round(c.wave_axis_window_s / a.dt_s)) - 1), stop)
+            stop = first[k] + int(on[-1]) + 1      # the first row after the station keeping
+            # by time (the rows wave_axis keeps), not by a count of the log's median step
+            lo = max(first[k], int(np.searchsorted(a.time_s, a.time_s[stop - 1] - c.wave_axis_window_s)))
+            if (lo, stop) not in found:
+                rows = np.arange(lo, stop)
                 rows = rows[(a.segment_id[rows] == a.segment_id[stop - 1]) & (a.dp_active[rows] != 0)]
                 axis = None if rows.size < 2 else wave_axis(
                     a.time_s[rows], a.eta[rows, 2], a.nu[rows, 0], a.nu[rows, 1], window_s=c.wave_axis_window_s,
                     min_anisotropy=c.min_wave_anisotropy)
                 # the amplitude is known only where the station keeping's heading gave the shape weight
                 ok = axis is not None and abs(axis.sin2_station) >= c.min_wave_sin2
-                found[stop] = (axis.axis_ned_rad, axis.sin2_station) if ok else (np.nan, np.nan)
-            out[k] = found[stop]
+                found[lo, stop] = (axis.axis_ned_rad, axis.sin2_station) if ok else (np.nan, np.nan)
+            out[k] = found[lo, stop]
         return out
 
     def _run_estimator(self, arrays, idx, extra_rows=None, drift_yaw_uv: float | None = None, first_row=None):
