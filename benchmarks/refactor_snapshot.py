@@ -10,10 +10,10 @@ the DP-loss simulator (one scenario's log), :func:`hybridship.residual.ensemble.
 (with and without bootstrap) and multi-step training (weights through a hybrid forecast and
 the training history). ``compare`` exits 1 if any array differs.
 
-The drift-off kernel is compiled by numba with fast-math; its results differ in the last
-bits between a run that compiles it and one that loads it from numba's cache. Compare
-snapshots made in the same state (e.g. run ``snap`` twice and keep the second, which loads
-the cache; or point ``NUMBA_CACHE_DIR`` at a fresh folder for both).
+The kernels are compiled without the fast-math flags that made their last bits depend on
+whether numba compiled them in the run or loaded them from its cache
+(``KERNEL_FASTMATH``); running ``snap`` twice on an empty ``NUMBA_CACHE_DIR`` and comparing
+the two checks that this still holds.
 """
 
 from __future__ import annotations

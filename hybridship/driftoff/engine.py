@@ -33,6 +33,7 @@ import math
 import numba
 import numpy as np
 
+from ..physics.compiled_cache import KERNEL_FASTMATH
 from ..physics.model import ModelArrays, prepare_inputs, vessel_rhs
 
 __all__ = ["run_kernel", "HULL_FIELDS"]
@@ -45,11 +46,10 @@ HULL_FIELDS = ("L_m", "B_m", "T_m", "bow_factor", "side_factor", "yaw_lever_fact
 _WP_W, _WP_KX, _WP_KE, _WP_CCHI, _WP_SCHI, _WP_PH, _WP_AX, _WP_AY, _WP_AN, _WP_MX, _WP_MY, _WP_MN = range(12)
 _WP_NCOL = 12
 
-# No "nnan"/"ninf": the kernel tests for unreached radii and diverged states. No "contract":
-# whether LLVM fuses a multiply-add into one rounding differed between a kernel compiled in
-# the process and the same kernel read from the on-disk cache, so one seed gave results
-# 1e-13 apart in two processes (and on a cluster's workers).
-_KERNEL_MATH = {"nsz", "arcp", "afn", "reassoc"}
+# The physics kernels' flags (no "contract", no "reassoc": the same bits whether this process
+# compiled the kernel or read it from numba's cache, on a cluster's workers too) without
+# "nnan"/"ninf": the kernel tests for unreached radii and diverged states.
+_KERNEL_MATH = KERNEL_FASTMATH - {"nnan", "ninf"}
 
 
 @numba.njit(cache=True, fastmath=_KERNEL_MATH)

@@ -23,12 +23,24 @@ from pathlib import Path
 PACKAGE_DIR = Path(__file__).resolve().parents[1]
 STAMP_NAME = "compiled-kernels.sha256"
 _IMPORTS_NUMBA = re.compile(r"^\s*(import numba|from numba)\b", re.MULTILINE)
+#: This module, hashed with the kernels' modules: numba's cache does not know the flags below.
+_FLAGS_FILE = "physics/compiled_cache.py"
+
+#: numba fast-math flags of every physics kernel: all but ``contract`` (fused multiply-add)
+#: and ``reassoc`` (reordered sums). With either, LLVM could emit different instructions for
+#: a kernel compiled in the running process and for the same kernel loaded from numba's
+#: cache: on a CPU with AVX-512 a Gunnerus rollout differed by 1.8e-15 m and multi-step
+#: training's validation loss in its last bits, so one command gave two results
+#: (``benchmarks/compile_cache_determinism.py``, ``tests/test_compiled_cache.py``).
+KERNEL_FASTMATH = {"nnan", "ninf", "nsz", "arcp", "afn"}
 
 
 def kernel_source_files(package_dir: Path = PACKAGE_DIR) -> list[Path]:
-    """The package's modules that import numba (every kernel's home), sorted by path."""
+    """The package's modules that import numba (every kernel's home) and this module (the
+    kernels' fast-math flags), sorted by path."""
     return [path for path in sorted(package_dir.rglob("*.py"))
-            if _IMPORTS_NUMBA.search(path.read_text(encoding="utf-8"))]
+            if path.relative_to(package_dir).as_posix() == _FLAGS_FILE
+            or _IMPORTS_NUMBA.search(path.read_text(encoding="utf-8"))]
 
 
 def kernel_sources_hash(files: list[Path], package_dir: Path = PACKAGE_DIR) -> str:

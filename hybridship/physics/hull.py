@@ -33,6 +33,8 @@ import math
 import numba
 import numpy as np
 
+from .compiled_cache import KERNEL_FASTMATH
+
 # Hoerner's 2-D cross-flow drag coefficient against B/(2T), digitised curve as tabulated in
 # Fossen (2021, fig. 6.x); these are published data points (numbers only).
 _HOERNER_B_2T = np.array([
@@ -266,7 +268,7 @@ def coriolis_added_mass(nu_r, M_A: np.ndarray):
 # --------------------------------------------------------------------------- kernels
 
 
-@numba.njit(cache=True, fastmath=True)
+@numba.njit(cache=True, fastmath=KERNEL_FASTMATH)
 def hull_forces_scalar(u, v, r, ur, vr, m, xg, m_a, d_lin, d_quad, d_lift, strip_x, strip_w):
     """Hull forces on the right-hand side of eq. 1 for one vessel, returned as a 3-tuple.
 

@@ -14,10 +14,11 @@ import math
 import numba
 import numpy as np
 
+from .compiled_cache import KERNEL_FASTMATH
 from .rhs import prepare_inputs, vessel_rhs
 
 
-@numba.njit(cache=True, fastmath=True)
+@numba.njit(cache=True, fastmath=KERNEL_FASTMATH)
 def _deriv(x, rpm, prep, tau, acc, P, k, thrusts):
     c = math.cos(x[2])
     s = math.sin(x[2])
@@ -30,7 +31,7 @@ def _deriv(x, rpm, prep, tau, acc, P, k, thrusts):
     k[2] = x[5]
 
 
-@numba.njit(cache=True, fastmath=True)
+@numba.njit(cache=True, fastmath=KERNEL_FASTMATH)
 def rk4_step_scalar(x, h, rpm, prep, tau, acc, P, k1, k2, k3, k4, xt, thrusts):
     """One classical RK4 step of length ``h`` [s] for one vessel, updating ``x[6]`` in place.
 
@@ -50,7 +51,7 @@ def rk4_step_scalar(x, h, rpm, prep, tau, acc, P, k1, k2, k3, k4, xt, thrusts):
         x[i] += h / 6.0 * (k1[i] + 2.0 * k2[i] + 2.0 * k3[i] + k4[i])
 
 
-@numba.njit(cache=True, fastmath=True)
+@numba.njit(cache=True, fastmath=KERNEL_FASTMATH)
 def rollout_batch(eta0, nu0, rpm, az, wind, current, tau_ext, acc_ext, P, dt, n_steps, substeps,
                   eta_out, nu_out, nu_dot_out):
     """Integrate B vessels for ``n_steps`` output steps of ``dt`` seconds.

@@ -45,6 +45,7 @@ import numpy as np
 import pandas as pd
 
 from ..config import check_number, real_array
+from .compiled_cache import KERNEL_FASTMATH
 
 _TABLE_FILE = "wageningen_b_series_4q.csv"
 
@@ -130,7 +131,7 @@ def load_wageningen(series: str = "B4-70", pitch_ratio: float = 1.0) -> Propelle
 # directly; the numpy-facing functions below loop over arrays in compiled code.
 
 
-@numba.njit(cache=True, fastmath=True)
+@numba.njit(cache=True, fastmath=KERNEL_FASTMATH)
 def ct_cq_star_cs(c1, s1, coef):
     """C_T*, C_Q* from cos(beta), sin(beta) (cos/sin recurrences instead of 2N trig calls)."""
     ck = 1.0
@@ -144,7 +145,7 @@ def ct_cq_star_cs(c1, s1, coef):
     return ct, cq
 
 
-@numba.njit(cache=True, fastmath=True)
+@numba.njit(cache=True, fastmath=KERNEL_FASTMATH)
 def ct_star_cs(c1, s1, coef, i):
     """C_T* of propeller ``i`` of ``coef (K, 4, N)`` from cos(beta), sin(beta).
 
@@ -190,7 +191,7 @@ def ct_star_cs(c1, s1, coef, i):
     return (t0 + t1) + (t2 + t3)
 
 
-@numba.njit(cache=True, fastmath=True)
+@numba.njit(cache=True, fastmath=KERNEL_FASTMATH)
 def thrust_scalar(n_rps, va_m_s, diameter_m, rho_kg_m3, coef, i):
     """Open-water thrust [N] of propeller ``i`` of ``coef (K, 4, N)`` (model of :func:`thrust_torque_scalar`)."""
     vr = 0.7 * math.pi * n_rps * diameter_m
@@ -207,7 +208,7 @@ def ct_cq_star_scalar(beta_rad, coef):
     return ct_cq_star_cs(math.cos(beta_rad), math.sin(beta_rad), coef)
 
 
-@numba.njit(cache=True, fastmath=True)
+@numba.njit(cache=True, fastmath=KERNEL_FASTMATH)
 def thrust_torque_scalar(n_rps, va_m_s, diameter_m, rho_kg_m3, coef):
     """Open-water thrust [N] and torque [N m] for one propeller state (see module docstring)."""
     vr = 0.7 * math.pi * n_rps * diameter_m

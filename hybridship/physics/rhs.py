@@ -16,11 +16,12 @@ import numba
 import numpy as np
 
 from . import hull
+from .compiled_cache import KERNEL_FASTMATH
 from .rudder import rudder_forces_scalar
 from .thrusters import thrust_directions, thruster_forces_scalar
 
 
-@numba.njit(cache=True, fastmath=True)
+@numba.njit(cache=True, fastmath=KERNEL_FASTMATH)
 def wind_force_scalar(u, v, c, s, wn, we, wind_p, table):
     """Wind load (eq. 3) on one vessel, returned as ``(X_N, Y_N, N_Nm)``.
 
@@ -49,7 +50,7 @@ def wind_force_scalar(u, v, c, s, wn, we, wind_p, table):
             q * wind_p[2] * wind_p[3] * ((1.0 - f) * table[i0, 2] + f * table[i0 + 1, 2]))
 
 
-@numba.njit(cache=True, fastmath=True)
+@numba.njit(cache=True, fastmath=KERNEL_FASTMATH)
 def vessel_rhs(c, s, u, v, r, rpm, prep, tau_ext, acc_ext, P, thrusts, b):
     """nu_dot of one vessel (eq. 1 solved for nu_dot).
 

@@ -55,6 +55,7 @@ import numba
 import numpy as np
 
 from ..config import real_array
+from .compiled_cache import KERNEL_FASTMATH
 from .thrusters import THR_D, THR_TDED, THR_WAKE, THR_Y
 
 #: Column layout of the packed rudder parameter array ``rud (R, 14)``.
@@ -88,13 +89,7 @@ def pack_rudders(vessel) -> np.ndarray:
     return rud
 
 
-#: The rudder kernels' fast-math flags: all but ``contract`` (fused multiply-add). With it, a
-#: rollout of a vessel with rudders differed in its last bits between a run that compiled the
-#: kernels and one that loaded them from numba's cache (``benchmarks/compile_cache_determinism.py``).
-RUDDER_FASTMATH = {"nnan", "ninf", "nsz", "arcp", "afn", "reassoc"}
-
-
-@numba.njit(cache=True, fastmath=RUDDER_FASTMATH)
+@numba.njit(cache=True, fastmath=KERNEL_FASTMATH)
 def rudder_inflow_scalar(u_p, thrust_open_N, diameter_m, rho, eps, kappa, eta):
     """Axial rudder inflow u_R [m/s] from the propeller inflow u_P [m/s] and open-water thrust [N]."""
     c_t = 0.0
@@ -110,7 +105,7 @@ def rudder_inflow_scalar(u_p, thrust_open_N, diameter_m, rho, eps, kappa, eta):
     return -eps * math.sqrt(-x)
 
 
-@numba.njit(cache=True, fastmath=RUDDER_FASTMATH)
+@numba.njit(cache=True, fastmath=KERNEL_FASTMATH)
 def rudder_force_scalar(ur, vr, r, cd, sd, thrust_open_N, u_p, diameter_m, rho, rud, j):
     """Load ``(X_N, Y_N, N_Nm)`` of rudder ``j`` (row of ``rud``) at angle cos/sin ``cd, sd``.
 
@@ -130,7 +125,7 @@ def rudder_force_scalar(ur, vr, r, cd, sd, thrust_open_N, u_p, diameter_m, rho, 
     return x, y, n
 
 
-@numba.njit(cache=True, fastmath=RUDDER_FASTMATH)
+@numba.njit(cache=True, fastmath=KERNEL_FASTMATH)
 def rudder_forces_scalar(ur, vr, r, prep, off, rud, thr, rho, thrusts, b):
     """Summed load ``(X_N, Y_N, N_Nm)`` of all rudders of one vessel.
 

@@ -26,6 +26,7 @@ import numba
 import numpy as np
 
 from ..config import real_array
+from .compiled_cache import KERNEL_FASTMATH
 from .propeller import thrust_scalar
 
 #: Column layout of the packed thruster parameter array ``thr (K, 8)``.
@@ -71,7 +72,7 @@ def thrust_directions(azimuth_rad, thr, prep):
         prep[thr.shape[0] + i] = math.sin(a)
 
 
-@numba.njit(cache=True, fastmath=True)
+@numba.njit(cache=True, fastmath=KERNEL_FASTMATH)
 def thruster_forces_scalar(ur, vr, r, rpm, prep, thr, coef, rho, thrusts, b):
     """Generalised force ``(X_N, Y_N, N_Nm)`` of all thrusters of one vessel.
 
