@@ -183,9 +183,26 @@ def test_fit_wind_forecast_refuses_a_horizon_shorter_than_half_a_step():
     t = np.arange(600.0)
     log = _Log(t, _wind(8.0 + np.sin(t / 30.0), np.ones_like(t)))
     # before: a ZeroDivisionError (no step of any log to score the candidates on)
-    with pytest.raises(ValueError, match=r"horizon_s: 0.4 s is shorter than half a step of logs\[0\] \(1 s\)"):
+    with pytest.raises(ValueError, match=r"^horizon_s: 0.4 s is shorter than one step of the log \(1 s\), in "
+                                         r"logs\[0\]"):
         fit_wind_forecast([log], 0.4)
-    fit_wind_forecast([log], 0.6)                    # rounds to one step of 1 s
+
+
+def test_fit_wind_forecast_refuses_a_horizon_that_is_not_whole_steps_of_a_log():
+    """fit_wind_forecast rounded the horizon to each log's step itself: 0.6 s was scored as one
+    step of 1 s and 60.4 s as 60 steps, without a word. It now counts the steps with the
+    forecast's own horizon_steps, which refuses both naming horizon_s and the log, and keeps
+    its tolerance (60.2 s is 60 steps of 1 s, as a forecast takes it)."""
+    from hybridship.forecast_inputs.horizon import HorizonError
+
+    t = np.arange(600.0)
+    log = _Log(t, _wind(8.0 + np.sin(t / 30.0), np.ones_like(t)))
+    fine = _Log(np.arange(0.0, 600.0, 0.1), _wind(8.0 + np.sin(np.arange(6000) / 300.0), np.ones(6000)))
+    for horizon in (0.6, 60.4):
+        with pytest.raises(HorizonError, match=rf"^horizon_s: {horizon:g} s is not a whole number of the log's "
+                                               rf"steps \(1 s\); the nearest is .*, in logs\[1\]$"):
+            fit_wind_forecast([fine, log], horizon)
+    assert fit_wind_forecast([log], 60.2)[1] == fit_wind_forecast([log], 60.0)[1]
 
 def _gusty_physics_log(model, seed=3, duration_s=1500.0, **kw):
     log = physics_log(model, seed=seed, duration_s=duration_s, t_shutdown_s=None, **kw)

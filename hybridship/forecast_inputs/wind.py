@@ -36,6 +36,7 @@ import numpy as np
 from pydantic import Field
 
 from hybridship.config import Float, check_number, check_whole_number, config_dataclass
+from hybridship.forecast_inputs.horizon import HorizonError, horizon_steps
 from hybridship.frames import speed_dir_to_vector, vector_to_speed_dir
 
 __all__ = ["HELD_WIND", "WindForecast", "fit_wind_forecast", "trailing_mean_vector", "wind_error_paths",
@@ -195,7 +196,8 @@ def fit_wind_forecast(logs, horizon_s: float, *, masks=None, start_every_s: floa
         Only ``time_s``, ``wind`` and, where present, ``wind_logged`` and ``segment_id``
         are read.
     horizon_s : float
-        Forecast horizon [s].
+        Forecast horizon [s], a whole number of each log's steps (within a forecast's
+        tolerance, :func:`~hybridship.forecast_inputs.horizon.horizon_steps`).
     masks : sequence of (ndarray of bool or None), optional
         Per log, the rows that may be used (for example station keeping before the part
         held back for calibration); default every row.
@@ -216,8 +218,10 @@ def fit_wind_forecast(logs, horizon_s: float, *, masks=None, start_every_s: floa
     ------
     TypeError, ValueError
         An argument that is not what is described above, naming it (a horizon or spacing
-        that is not a positive number, a horizon shorter than half a log's step, a
-        candidate out of range, one mask too few).
+        that is not a positive number, a horizon that is not a whole number of a log's steps
+        (:class:`~hybridship.forecast_inputs.horizon.HorizonError`, naming the log: shorter
+        than one step, or off a whole number by more than a quarter step and 0.5 %, as a
+        forecast refuses it), a candidate out of range, one mask too few).
     """
     horizon_s = check_number("horizon_s", horizon_s, lo=0, lo_open=True)
     start_every_s = check_number("start_every_s", start_every_s, lo=0, lo_open=True)
@@ -244,10 +248,10 @@ def fit_wind_forecast(logs, horizon_s: float, *, masks=None, start_every_s: floa
         wind = np.asarray(a.wind, dtype=float)
         vec = speed_dir_to_vector(wind)
         dt = float(np.median(np.diff(t)))
-        H = int(round(horizon_s / dt))
-        if H < 1:
-            raise ValueError(f"horizon_s: {horizon_s:g} s is shorter than half a step of logs[{k}] ({dt:g} s): "
-                             f"no step of wind to forecast")
+        try:
+            H = horizon_steps(horizon_s, dt)        # as a forecast of that horizon counts them
+        except HorizonError as exc:
+            raise HorizonError(f"{exc}, in logs[{k}]") from None
         rows, ok = wind_starts(a, H, max(1, int(round(start_every_s / dt))), mask)
         if rows.size == 0:
             continue

@@ -22,6 +22,7 @@ import pandas as pd
 
 from ..config import check_flags as _check_flags  # noqa: F401 (the predictors import it from here)
 from ..forecast_inputs import FaultFlags, InputRangeError, assess_start_window, check_or_clip_inputs
+from ..forecast_inputs.horizon import HorizonError, RequestError, horizon_steps
 from ..forecast_inputs.wind import HELD_WIND, WindForecast
 from ..logs.ingest import WHOLE_LOG_STEP, ingest
 from ..logs.io import LogArrays
@@ -191,38 +192,6 @@ def start_indices(arrays: LogArrays, start_times_s) -> np.ndarray:
     return idx
 
 
-#: A horizon within a quarter step, or this share of itself, of a whole number of steps is
-#: that number of steps: the median step of a log with jittered time stamps is off its
-#: nominal step by a fraction of a percent.
-HORIZON_TOLERANCE = 0.005
-
-
-def horizon_steps(horizon_s: float, dt_s: float, name: str = "horizon_s") -> int:
-    """Whole steps of ``dt_s`` [s] in ``horizon_s`` [s]; :class:`HorizonError` naming ``name``
-    when it rounds to no step, or lies more than a quarter step and more than
-    :data:`HORIZON_TOLERANCE` of itself from a whole number of steps."""
-    H = int(round(horizon_s / dt_s))
-    if H < 1:
-        raise HorizonError(f"{name}: {horizon_s:g} s is shorter than one step of the log ({dt_s:g} s)")
-    if abs(H * dt_s - horizon_s) > max(0.25 * dt_s, HORIZON_TOLERANCE * horizon_s):
-        # a start time's tolerance, or the median step's own uncertainty on a jittered log
-        # (120 s is 120 steps of 0.9976 s): a forecast of 63 s asked as 60 s is not an answer
-        raise HorizonError(f"{name}: {horizon_s:g} s is not a whole number of the log's steps ({dt_s:g} s); "
-                           f"the nearest is {H * dt_s:g} s")
-    return H
-
-
-class RequestError(ValueError):
-    """A forecast request the log cannot serve (start times that are not its samples, a
-    horizon shorter than its step, known commands beyond its end): the caller's input, not
-    the data, is wrong, and the command line reports it as a usage error (exit status 2)."""
-
-
-class HorizonError(RequestError):
-    """A forecast horizon the log's step cannot give (shorter than one step, or not within a
-    quarter step or 0.5 % of a whole number of steps)."""
-
-
 def forecast_step_s(arrays: LogArrays) -> float:
     """The step of every forecast on ``arrays`` [s]: the median spacing of ``time_s``, rounded
     to the microsecond (1.0 without two samples).
@@ -382,7 +351,8 @@ def _forecast_setup(model, config: ResidualConfig, log, start_times_s, horizon_s
 
     The step is :func:`forecast_step_s` and the horizon ``H = round(horizon_s / step)``
     whole steps; a horizon that rounds to no step at all, or lies more than a quarter step
-    (the tolerance of a start time) and more than :data:`HORIZON_TOLERANCE` of itself
+    (the tolerance of a start time) and more than
+    :data:`~hybridship.forecast_inputs.horizon.HORIZON_TOLERANCE` of itself
     from a whole number of steps, is refused
     (:class:`HorizonError`, a ValueError naming ``horizon_s`` and the step).
     """
