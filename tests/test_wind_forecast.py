@@ -580,3 +580,30 @@ def test_error_paths_need_every_step_logged_and_use_only_logged_wind_in_the_mean
                                                      logged=a.wind_logged))[0]
     assert len(paths) == 3
     np.testing.assert_allclose(paths[1], want, atol=1e-12)
+
+
+@pytest.mark.parametrize("settings", [dict(fraction=0.0), {}])
+def test_fit_refuses_a_calibration_horizon_that_is_not_whole_steps_before_any_training(model, monkeypatch, settings):
+    """fit counted the calibration horizon's steps with a rounding of its own where it fitted the
+    wind forecast and its error paths, picked the failures with enough drift and the
+    calibration starts: with nothing held back, 60.4 s on a 1-s log drew the wind's error
+    paths over 60 steps without a word, and with the default held-back part the calibration forecasts
+    refused it only after the nets were trained. It is now refused up front, naming
+    calibration_config.horizon_s and the log; 60.2 s (within the forecast's tolerance) is taken."""
+    from hybridship.forecast_inputs.horizon import HorizonError
+    from hybridship.residual.calibration import CalibrationConfig
+
+    log = as_log_arrays(physics_log(model, duration_s=600, t_shutdown_s=None, seed=5), model.vessel)
+    hp = HybridPredictor(model.vessel, wind_samples=2,
+                         calibration_config=CalibrationConfig(horizon_s=60.4, **settings))
+
+    def trained(*args, **kwargs):
+        raise AssertionError("the nets were trained")
+
+    monkeypatch.setattr(HybridPredictor, "_fit_nets", trained)
+    with pytest.raises(HorizonError, match=r"^calibration_config.horizon_s: 60.4 s is not a whole number of the "
+                                           r"log's steps \(1 s\); the nearest is 60 s, in logs\[0\]$"):
+        hp.fit([log])
+    from hybridship.predictors.training_logs import check_calibration_horizon
+
+    check_calibration_horizon([log], ["logs[0]"], 60.2)

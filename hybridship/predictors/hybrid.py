@@ -46,9 +46,9 @@ from .forecast_setup import (AFTER_STOP, AFTER_STOP_LATE, FORECAST_HISTORY_S, MA
                              keeps_state_on_error, log_list, start_indices)
 from .model_file import load_model, save_model
 from .result import ForecastResult
-from .training_logs import (NO_WIND_FORECAST_WARNING, check_distinct_logs, check_training_lengths, log_label,
-                            read_training_logs, training_log_facts, warn_logs_without_wind, warn_no_wind,
-                            warn_other_rate)
+from .training_logs import (NO_WIND_FORECAST_WARNING, check_calibration_horizon, check_distinct_logs,
+                            check_training_lengths, log_label, read_training_logs, training_log_facts,
+                            warn_logs_without_wind, warn_no_wind, warn_other_rate)
 
 __all__ = ["AFTER_STOP", "AFTER_STOP_LATE", "ENVIRONMENT_SOURCES", "HybridPredictor"]
 
@@ -359,6 +359,10 @@ class HybridPredictor:
             A log that breaks the format or does not fit the vessel, or two logs with
             identical samples (one recording twice, e.g. a CSV and a Parquet copy; see
             :func:`~hybridship.predictors.training_logs.check_distinct_logs`), before any training.
+        HorizonError
+            A ``calibration.horizon_s`` that is not a whole number of a training log's steps
+            (:func:`~hybridship.predictors.training_logs.check_calibration_horizon`), before any
+            training.
 
         Notes
         -----
@@ -387,6 +391,7 @@ class HybridPredictor:
         given = log_list(logs)
         logs, labels = read_training_logs(given, self.model.vessel)
         check_training_lengths(logs, labels)
+        check_calibration_horizon(logs, labels, cal.horizon_s)
         check_distinct_logs(logs, labels)  # before any training
         warn_logs_without_wind(logs, labels)
         self.estimator = EnvironmentEstimator(self.model, self.environment_config)

@@ -87,6 +87,24 @@ def check_training_lengths(arrays, labels) -> None:
                              f"got {len(a.time_s)}")
 
 
+def check_calibration_horizon(arrays, labels, horizon_s: float) -> None:
+    """Refuse a calibration horizon ``horizon_s`` [s] that is not a whole number of a training
+    log's steps, naming ``calibration_config.horizon_s`` and the log: every length ``fit``
+    measures over it (calibration starts, the wind forecast's fit and error paths, the
+    failures with enough drift) counts its steps, as a forecast does, with
+    :func:`~hybridship.forecast_inputs.horizon.horizon_steps` (a
+    :class:`~hybridship.forecast_inputs.horizon.HorizonError` when it is shorter than one
+    step, or off a whole number by more than a quarter step and 0.5 %)."""
+    from ..forecast_inputs.horizon import HorizonError, horizon_steps
+
+    for a, label in zip(arrays, labels):
+        if len(a.time_s) > 1:
+            try:
+                horizon_steps(horizon_s, a.dt_s, "calibration_config.horizon_s")
+            except HorizonError as exc:
+                raise HorizonError(f"{exc}, in {label}") from None
+
+
 def warn_logs_without_wind(arrays, labels) -> None:
     """Warn, naming them, about training logs without wind columns beside logs with them.
 

@@ -69,7 +69,9 @@ class CalibrationConfig:
     horizon_s : float
         Longest calibrated lead time [s]; beyond it the last scale is held. The held-back
         part of a log is made at least ``horizon_s`` plus 10 % long when the log allows
-        (at most half of it).
+        (at most half of it). A whole number of each training log's steps (within a
+        forecast's tolerance): :meth:`~hybridship.predictors.HybridPredictor.fit` refuses
+        another before any training.
     start_every_s : float or None
         Spacing of calibration start times [s]; None picks one that gives about
         ``max_starts`` starts per mode.
