@@ -794,3 +794,25 @@ def test_members_is_refused_by_its_name_before_any_log_is_read(tmp_path, monkeyp
     with pytest.raises(ValueError, match=message):
         run_drift_benchmark(out_dir=tmp_path / "out", members=members, progress=False, plots=False)
     assert not (tmp_path / "out").exists()
+
+
+def test_a_horizon_that_is_not_whole_steps_of_a_test_log_is_refused_before_training():
+    """The benchmark counted its horizon's steps with a rounding of its own: 60.4 s on a 1-s log
+    was forecast, scored and plotted to 60 s without a word (the failures with enough drift
+    and those the hull's yaw moment is chosen on picked by that rounding too). A horizon that is
+    not a whole number of a test log's steps is now refused before any training, as a forecast
+    refuses it (naming horizon_s and the log); 60.2 s, within the forecast's tolerance, is 60 s."""
+    from hybridship.evaluation.drift import _forecast_after_failures, _test_arrays
+    from hybridship.forecast_inputs.horizon import HorizonError
+    from hybridship.predictors import DeadReckoning
+
+    model = DynamicModel("gunnerus")
+    horizons = (15.0, 30.0, 45.0, 60.0)
+    logs = [physics_log(model, duration_s=300.0, t_shutdown_s=150.0, dt_s=dt, seed=4) for dt in (0.1, 1.0)]
+    with pytest.raises(HorizonError, match=r"^horizon_s: 60.4 s is not a whole number of the log's steps \(1 s\); "
+                                           r"the nearest is 60 s, in test log coarse$"):
+        _test_arrays(logs, ["fine", "coarse"], model.vessel, 20, 60.4, horizons)
+    a = _test_arrays(logs, ["fine", "coarse"], model.vessel, 20, 60.2, horizons)
+    _, all_h, _, _ = _forecast_after_failures({"dead_reckoning": (DeadReckoning(model.vessel), {})}, a, 20, 60.2,
+                                              horizons)
+    assert all_h == tuple(float(k) for k in range(1, 61))

@@ -59,7 +59,7 @@ from ..config import check_flags, check_number, check_whole_number
 from ..fileio import (as_path, atomic_write, check_output_files, earlier_run, make_out_folder, markdown_table,
                       record_outputs, remove_stale, write_text)
 from ..predictors import DataOnlyPredictor, DeadReckoning, DynamicPredictor, HybridPredictor, as_log_arrays
-from ..predictors.forecast_setup import forecast_step_s
+from ..predictors.forecast_setup import HorizonError, forecast_step_s, horizon_steps
 from ..predictors.hybrid import AFTER_STOP, AFTER_STOP_LATE, after_stop_scales
 from ..residual.drift_hull import (MIN_FAILURES as DRIFT_HULL_MIN_FAILURES, choose_coefficient, drift_start_rows,
                                    munk_coefficient)
@@ -391,7 +391,9 @@ def _check_rows_not_scored(dp_only: bool, test_is_train: bool) -> None:
 def _test_arrays(test_logs, test_names, vessel, n_intervals: int, horizon_s: float, horizons=()) -> list:
     """The test logs as LogArrays, refused (before any training) where a log has no failure to
     score: station keeping, then ``dp_active`` 0, then ``n_intervals`` starts with
-    ``horizon_s`` of drift after each; or where a table's horizon is not a whole number of the
+    ``horizon_s`` of drift after each; where ``horizon_s`` is not a whole number of the log's
+    steps (:func:`~hybridship.forecast_inputs.horizon.horizon_steps`, as a forecast refuses
+    it); or where a table's horizon is not a whole number of the
     log's steps (15 s of a 2-s log), or not of the lead times, which step at the coarsest test
     log's step (a 0.6-s log beside a 1-s one)."""
     from ..predictors.after_failure import has_drift
@@ -400,6 +402,10 @@ def _test_arrays(test_logs, test_names, vessel, n_intervals: int, horizon_s: flo
     lead_step = _lead_step_s(test_arrays)
     for a, name in zip(test_arrays, test_names):
         dt = forecast_step_s(a)         # a 10-Hz log's 0.1 s, not 0.10000000000002274
+        try:
+            horizon_steps(horizon_s, dt)        # as the forecasts count it (60.4 s was scored as 60 s)
+        except HorizonError as exc:
+            raise HorizonError(f"{exc}, in test log {name}") from None
         off = [h for h in horizons if abs(h / dt - round(h / dt)) > 1e-6]
         if off:
             raise ValueError(f"test: log {name} has a step of {dt:g} s, and the table's horizons "
