@@ -342,3 +342,89 @@ def test_held_load_rows_leave_out_an_earlier_drift_in_the_window():
     rows = held_load_rows(dp, t, 52, 1, 40.0, 1.0)
     np.testing.assert_array_equal(rows, np.arange(20, 50))
     np.testing.assert_array_equal(held_load_rows(dp, t, 52, 3, 40.0, 1.0), np.arange(22, 50, 3))
+
+
+def _reference_sigma_b_in_time(acc, nu, t, block):
+    """sigma_b of one window of 1-s estimates by its definition in log time: blocks of
+    ``block`` seconds ending at the window's end, the velocity change between the ends of two
+    consecutive blocks that both hold all their seconds, less the later block's mean model
+    acceleration."""
+    slot = np.rint(t[-1] - t).astype(int)                 # seconds back from the window's end
+    at = {s: i for i, s in enumerate(slot)}
+    missed = []
+    for m in range((slot[0] + 1) // block - 1):
+        later, earlier = range(m * block, (m + 1) * block), range((m + 1) * block, (m + 2) * block)
+        if all(s in at for s in (*later, *earlier)):
+            end, prev = at[m * block], at[(m + 1) * block]
+            missed.append((nu[end] - nu[prev]) / (t[end] - t[prev]) - acc[[at[s] for s in later]].mean(axis=0))
+    return np.std(missed, axis=0, ddof=1) if len(missed) >= 2 else np.zeros(3)
+
+
+def _model_accel(model, a, est):
+    from hybridship.residual.environment import CUR, LOAD, THR, current_input, external_accel, thrust_error_accel
+
+    x, rows = est.x, est.rows
+    ext = external_accel(x[:, 2], x[:, LOAD], 0.0, 0.0) + thrust_error_accel(
+        model, est.thrust_error_model, x[:, 0:3], x[:, 3:6], a.rpm[rows], a.azimuth_rad[rows], a.wind[rows],
+        x[:, CUR], x[:, THR])
+    return model.acceleration(x[:, 0:3], x[:, 3:6], rpm=a.rpm[rows], azimuth_rad=a.azimuth_rad[rows],
+                              wind=a.wind[rows], current=current_input(x[:, CUR]), accel_ext=ext)
+
+
+def test_held_load_blocks_are_spans_of_log_time_across_a_gap(model, drift_log):
+    """The blocks were counted in estimates: across a 20-s gap in a 1-Hz log, the block of 30
+    estimates holding it spanned 50 s of log time, its velocity change and mean acceleration
+    those of a longer block than the others. Blocks are now held_load_block_s of log time
+    ending at the window's end; a pair of blocks counts only when both hold all their
+    seconds, so the gap leaves out the blocks it falls in and the other pairs are those of
+    the log without it. In a forecast from a start after the gap the spread is that of the
+    blocks in time."""
+    from hybridship.residual.calibration import CalibrationConfig
+
+    a = as_log_arrays(drift_log, model.vessel)
+    rows = np.arange(600, 1200)
+    est = EnvironmentEstimator(model).run(a, rows, first_row=0)
+    acc = _model_accel(model, a, est)
+    keep = np.flatnonzero((a.time_s[rows] < 1000.0) | (a.time_s[rows] >= 1020.0))      # 20 s left out
+    gapped = est.take(keep)
+    got = unexplained_load_std(model, a, gapped, 30)
+    want = _reference_sigma_b_in_time(acc[keep], est.x[keep, 3:6], a.time_s[rows][keep], 30)
+    np.testing.assert_allclose(got, want, rtol=1e-9, atol=1e-15)
+    # the same as the pairs of the log without the gap, less the two pairs of the block it falls in
+    nu, t = est.x[:, 3:6], a.time_s[rows]
+    ends = np.arange(599, 0, -30)                                       # block ends, back from the end
+    missed = (nu[ends[:-1]] - nu[ends[1:]]) / (t[ends[:-1]] - t[ends[1:]])[:, None] - np.stack(
+        [acc[e - 29:e + 1].mean(axis=0) for e in ends[:-1]])
+    touched = np.array([np.any((t[e - 59:e + 1] >= 1000.0) & (t[e - 59:e + 1] < 1020.0)) for e in ends[:-1]])
+    assert touched.sum() == 2
+    np.testing.assert_allclose(got, missed[~touched].std(axis=0, ddof=1), rtol=1e-9, atol=1e-15)
+    # a forecast from a start after a 20-s gap in the log: the blocks of its window in time
+    ens = CalibrationConfig(station_keeping_spread="ensemble")
+    on = HybridPredictor(model.vessel, ensemble_config=TINY, calibration_config=ens).fit([drift_log], dp_only=True)
+    off = HybridPredictor(model.vessel, ensemble_config=TINY, calibration_config=ens,
+                          environment_config=EnvironmentConfig(held_load_window_s=0.0)).fit([drift_log], dp_only=True)
+    log = drift_log[(drift_log.time_s < 1000.0) | (drift_log.time_s >= 1020.0)].reset_index(drop=True)
+    f_on = on.forecast(log, [1205.0], 60.0, calibrated=False)
+    f_off = off.forecast(log, [1205.0], 60.0, calibrated=False)
+    b = as_log_arrays(log, model.vessel)
+    window = np.flatnonzero((b.time_s >= 600.0) & (b.time_s < 1200.0))
+    est = on._run_estimator(b, np.array([int(np.searchsorted(b.time_s, 1205.0))]), window)[1]
+    sb = _reference_sigma_b_in_time(_model_accel(on.model, b, est), est.x[:, 3:6], b.time_s[window], 30)
+    held = held_load_spread(sb[None], f_on.lead_s)[0]
+    np.testing.assert_allclose(f_on.eta_std[0], np.sqrt(f_off.eta_std[0] ** 2 + held ** 2), rtol=1e-9)
+
+
+def test_held_load_blocks_on_a_log_without_a_gap_are_those_of_the_estimates(model):
+    """On an evenly sampled log the blocks in log time are the runs of block_rows estimates
+    they were, at 10 Hz on a 1-s grid too (step 10)."""
+    log = physics_log(model, duration_s=400, t_shutdown_s=None, seed=3, dt_s=0.1)
+    a = as_log_arrays(log, model.vessel)
+    rows = np.arange(a.time_s.size - 1, -1, -10)[::-1]
+    est = EnvironmentEstimator(model, EnvironmentConfig(filter_step_s=1.0)).run(a, rows, first_row=0)
+    acc, nu, t = _model_accel(model, a, est), est.x[:, 3:6], a.time_s[rows]
+    for block in (5, 30):
+        for first in (0, 17):
+            got = unexplained_load_std(model, a, est.take(slice(first, None)), block, 10)
+            np.testing.assert_allclose(got, _reference_sigma_b(acc[first:], nu[first:], t[first:], block),
+                                       rtol=1e-12, atol=1e-18)
+            assert np.all(got > 0)

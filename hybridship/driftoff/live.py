@@ -302,7 +302,7 @@ def _estimated(model, a: LogArrays, idx: int, n_members: int, seed: int, config=
         # the load held over the blackout varies as it did in the station keeping before
         # (hybridship.residual.load_variability), a centred draw per member
         sigma_b = unexplained_load_std(model, a, run.take(slice(1, None)),
-                                       max(1, int(round(c.held_load_block_s / (step * a.dt_s)))))
+                                       max(1, int(round(c.held_load_block_s / (step * a.dt_s)))), step)
         z = np.random.default_rng([seed, 7]).standard_normal((n_members, 3))
         loads += (z - z.mean(axis=0)) * held_load_std_ned(sigma_b)
     load = x[LOAD].copy()

@@ -1268,7 +1268,7 @@ class HybridPredictor:
             on_grid = est_w.take(np.flatnonzero(est_w.rows % step == grid))
             w_first = np.searchsorted(on_grid.rows, [rows[0] for rows, _ in group])
             w_stop = np.searchsorted(on_grid.rows, [rows[-1] for rows, _ in group]) + 1
-            sb = unexplained_load_std_windows(self.model, st.arrays, on_grid, w_first, w_stop, block)
+            sb = unexplained_load_std_windows(self.model, st.arrays, on_grid, w_first, w_stop, block, step)
             for (_, starts), s_k in zip(group, sb):
                 sigma_b[starts] = s_k
         return est, sigma_b

@@ -9,7 +9,8 @@ weather is too narrow in another.
 The station keeping before the failure shows how much the load varies. Over a window of
 station keeping (the ``window_s`` of log time before the last station-keeping sample), the
 filter's low-frequency motion (the estimator treats wave-frequency motion as measurement
-noise) is cut into blocks of ``block_s``; in each block, the change of the low-frequency velocity
+noise) is cut into blocks of ``block_s`` of log time (a block across a gap in the log is
+left out, not stretched); in each block, the change of the low-frequency velocity
 less what the model, with the environment estimated there, explains is the mean
 acceleration the estimate missed. The standard deviation of these block means,
 ``sigma_b``, is how far a held load may be off over about that time. Held over the
@@ -70,7 +71,7 @@ def held_load_rows(dp_active: np.ndarray, time_s: np.ndarray, start: int, step: 
     return rows[dp_active[rows] != 0]
 
 
-def unexplained_load_std(model, arrays, estimate, block_rows: int) -> np.ndarray:
+def unexplained_load_std(model, arrays, estimate, block_rows: int, step: int = 1) -> np.ndarray:
     """Standard deviation of the block-mean acceleration that the estimate leaves unexplained.
 
     Parameters
@@ -79,27 +80,32 @@ def unexplained_load_std(model, arrays, estimate, block_rows: int) -> np.ndarray
     arrays : LogArrays
         The log (commands and wind at the estimate's rows).
     estimate : EnvironmentEstimate
-        The filter's estimates at increasing, evenly spaced station-keeping rows (see
-        :func:`held_load_rows`).
+        The filter's estimates at increasing station-keeping rows, every ``step``-th row of
+        the log (see :func:`held_load_rows`).
     block_rows : int
-        Estimates per block (>= 1).
+        Estimates per block (>= 1): a block is ``block_rows * step * arrays.dt_s`` [s] of log
+        time.
+    step : int
+        Rows of the log from one estimate to the next (>= 1), each row one ``arrays.dt_s``.
 
     Returns
     -------
     ndarray, shape (3,)
-        ``[surge_m_s2, sway_m_s2, yaw_rad_s2]``; zeros with fewer than three blocks.
+        ``[surge_m_s2, sway_m_s2, yaw_rad_s2]``; zeros with fewer than two pairs of
+        consecutive whole blocks (three blocks of a window without a gap).
 
     Raises
     ------
     ValueError
-        ``block_rows`` not a whole number >= 1.
+        ``block_rows`` or ``step`` not a whole number >= 1.
     """
     block_rows = check_whole_number("unexplained_load_std: block_rows", block_rows, lo=1)
+    step = check_whole_number("unexplained_load_std: step", step, lo=1)
     n = len(estimate.rows)
-    return unexplained_load_std_windows(model, arrays, estimate, np.array([0]), np.array([n]), block_rows)[0]
+    return unexplained_load_std_windows(model, arrays, estimate, np.array([0]), np.array([n]), block_rows, step)[0]
 
 
-def unexplained_load_std_windows(model, arrays, estimate, first, stop, block_rows: int) -> np.ndarray:
+def unexplained_load_std_windows(model, arrays, estimate, first, stop, block_rows: int, step: int = 1) -> np.ndarray:
     """:func:`unexplained_load_std` of many windows of one run of estimates, batched.
 
     The model's acceleration is evaluated once per estimate, and each window's block means
@@ -110,26 +116,35 @@ def unexplained_load_std_windows(model, arrays, estimate, first, stop, block_row
     ----------
     model, arrays : as :func:`unexplained_load_std`
     estimate : EnvironmentEstimate
-        Estimates at increasing rows on one filter grid.
+        Estimates at increasing rows on one filter grid (every ``step``-th row).
     first, stop : array of int, shape (K,)
         Window ``k`` is the estimates ``first[k]:stop[k]`` (consecutive positions in
         ``estimate``; each one a window of :func:`held_load_rows`).
     block_rows : int
-        Estimates per block (>= 1); blocks end at each window's last estimate.
+        Estimates per block (>= 1). Blocks are spans of ``block_rows`` grid steps
+        (``step * arrays.dt_s`` [s] each) of log time, ending at each window's last estimate;
+        each estimate is in the block of its time, rounded to whole grid steps. Only pairs of
+        consecutive blocks that both hold all their estimates count: a block across a gap in
+        the log (or across rows without station keeping) is left out, not stretched over
+        more time than the others.
+    step : int
+        Rows of the log from one estimate to the next on the grid (>= 1).
 
     Returns
     -------
     ndarray, shape (K, 3)
         ``[surge_m_s2, sway_m_s2, yaw_rad_s2]`` per window; zeros where a window holds
-        fewer than three blocks.
+        fewer than two pairs of consecutive whole blocks (three blocks of a window without
+        a gap).
 
     Raises
     ------
     ValueError
-        ``block_rows`` not a whole number >= 1, or ``first`` and ``stop`` not whole numbers
-        of one 1-D shape with ``0 <= first <= stop <= len(estimate.rows)``.
+        ``block_rows`` or ``step`` not a whole number >= 1, or ``first`` and ``stop`` not
+        whole numbers of one 1-D shape with ``0 <= first <= stop <= len(estimate.rows)``.
     """
     block_rows = check_whole_number("unexplained_load_std_windows: block_rows", block_rows, lo=1)
+    step = check_whole_number("unexplained_load_std_windows: step", step, lo=1)
     first, stop = np.asarray(first), np.asarray(stop)
     if first.dtype.kind not in "iu" or stop.dtype.kind not in "iu":
         raise ValueError(f"unexplained_load_std_windows: first, stop: expected whole numbers (positions in the "
@@ -143,11 +158,29 @@ def unexplained_load_std_windows(model, arrays, estimate, first, stop, block_row
                          f"estimate's length)")
     first, stop = first.astype(int), stop.astype(int)
     out = np.zeros((len(first), 3))
-    n_blocks = (stop - first) // block_rows
-    use = n_blocks >= 3
+    if not np.any(stop > first):
+        return out
+    rows = estimate.rows
+    t = arrays.time_s[rows]
+    # each estimate's grid step counted from the first: its time in whole steps of the grid,
+    # so that a gap leaves its steps empty (without a gap, the estimate's position)
+    slot = np.rint((t - t[0]) / (step * float(arrays.dt_s))).astype(np.int64)
+    B = block_rows
+    last = np.clip(stop - 1, 0, len(slot) - 1)
+    # block pairs counted back from each window's end that its time span could hold
+    n_pairs = np.where(stop > first, (slot[last] - slot[np.minimum(first, last)] + 1) // B - 1, 0)
+    m = np.arange(max(int(n_pairs.max()), 0))
+    end_slot = slot[last][:, None] - B * m[None, :]     # the later block's last step
+    end = np.clip(np.searchsorted(slot, end_slot), 0, len(slot) - 1)   # its estimate, if there
+    lo = end - 2 * B + 1                                # the earlier block's first estimate, if whole
+    # both blocks whole: their 2 B steps all hold an estimate of the window
+    valid = ((m[None, :] < n_pairs[:, None]) & (lo >= first[:, None]) & (end < stop[:, None])
+             & (slot[end] == end_slot) & (slot[end] - slot[np.maximum(lo, 0)] == 2 * B - 1))
+    n_valid = valid.sum(axis=1)
+    use = n_valid >= 2
     if not np.any(use):
         return out
-    x, rows = estimate.x, estimate.rows
+    x = estimate.x
     eta, nu = x[:, 0:3], x[:, 3:6]
     ext = external_accel(eta[:, 2], x[:, LOAD], 0.0, 0.0, estimate.load_map) + thrust_error_accel(
         model, estimate.thrust_error_model, eta, nu, arrays.rpm[rows], arrays.azimuth_rad[rows],
@@ -155,17 +188,13 @@ def unexplained_load_std_windows(model, arrays, estimate, first, stop, block_row
     acc = model.acceleration(eta, nu, rpm=arrays.rpm[rows], azimuth_rad=arrays.azimuth_rad[rows],
                              wind=arrays.wind[rows], current=current_input(x[:, CUR]), accel_ext=ext)
     cum = np.concatenate([np.zeros((1, 3)), np.cumsum(acc, axis=0)])
-    t = arrays.time_s[rows]
-    nb = n_blocks[use]
-    m = np.arange(nb.max() - 1)                         # block pairs counted back from the window's end
-    valid = m[None, :] < (nb - 1)[:, None]              # (K', B-1)
-    end = (stop[use] - 1)[:, None] - block_rows * m[None, :]     # last estimate of the later block
-    end = np.where(valid, end, stop[use][:, None] - 1)  # padding: any valid position, masked below
-    prev = np.where(valid, end - block_rows, end)
+    valid = valid[use][:, :int(n_pairs[use].max())]     # (K', pairs)
+    end = np.where(valid, end[use][:, :valid.shape[1]], stop[use][:, None] - 1)  # padding: masked below
+    prev = np.where(valid, end - B, end)
     # a block's velocity change from the previous block's end, less the model's mean acceleration
     dt = np.where(valid, t[end] - t[prev], 1.0)
     dnu = (nu[end] - nu[prev]) / dt[..., None]
-    mean_acc = (cum[end + 1] - cum[end + 1 - block_rows]) / block_rows
+    mean_acc = (cum[end + 1] - cum[end + 1 - B]) / B
     missed = np.where(valid[..., None], dnu - mean_acc, np.nan)   # padding out of the statistics
     out[use] = np.nanstd(missed, axis=1, ddof=1)
     return out
