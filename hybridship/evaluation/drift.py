@@ -59,7 +59,7 @@ from ..config import check_flags, check_number, check_whole_number
 from ..fileio import (as_path, atomic_write, check_output_files, earlier_run, make_out_folder, markdown_table,
                       record_outputs, remove_stale, write_text)
 from ..predictors import DataOnlyPredictor, DeadReckoning, DynamicPredictor, HybridPredictor, as_log_arrays
-from ..predictors.forecast_setup import HorizonError, forecast_step_s, horizon_steps
+from ..predictors.forecast_setup import forecast_step_s, horizon_steps
 from ..predictors.hybrid import AFTER_STOP, AFTER_STOP_LATE, after_stop_scales
 from ..residual.drift_hull import (MIN_FAILURES as DRIFT_HULL_MIN_FAILURES, choose_coefficient, drift_start_rows,
                                    munk_coefficient)
@@ -402,10 +402,7 @@ def _test_arrays(test_logs, test_names, vessel, n_intervals: int, horizon_s: flo
     lead_step = _lead_step_s(test_arrays)
     for a, name in zip(test_arrays, test_names):
         dt = forecast_step_s(a)         # a 10-Hz log's 0.1 s, not 0.10000000000002274
-        try:
-            horizon_steps(horizon_s, dt)        # as the forecasts count it (60.4 s was scored as 60 s)
-        except HorizonError as exc:
-            raise HorizonError(f"{exc}, in test log {name}") from None
+        horizon_steps(horizon_s, dt, where=f"test log {name}")   # as the forecasts count it (60.4 s was scored as 60 s)
         off = [h for h in horizons if abs(h / dt - round(h / dt)) > 1e-6]
         if off:
             raise ValueError(f"test: log {name} has a step of {dt:g} s, and the table's horizons "

@@ -18,18 +18,19 @@ __all__ = ["HORIZON_TOLERANCE", "HorizonError", "RequestError", "horizon_steps"]
 HORIZON_TOLERANCE = 0.005
 
 
-def horizon_steps(horizon_s: float, dt_s: float, name: str = "horizon_s") -> int:
+def horizon_steps(horizon_s: float, dt_s: float, name: str = "horizon_s", where: str | None = None) -> int:
     """Whole steps of ``dt_s`` [s] in ``horizon_s`` [s]; :class:`HorizonError` naming ``name``
-    when it rounds to no step, or lies more than a quarter step and more than
-    :data:`HORIZON_TOLERANCE` of itself from a whole number of steps."""
+    (and the log ``where``, when given) when it rounds to no step, or lies more than a quarter
+    step and more than :data:`HORIZON_TOLERANCE` of itself from a whole number of steps."""
     H = int(round(horizon_s / dt_s))
+    in_log = f", in {where}" if where is not None else ""
     if H < 1:
-        raise HorizonError(f"{name}: {horizon_s:g} s is shorter than one step of the log ({dt_s:g} s)")
+        raise HorizonError(f"{name}: {horizon_s:g} s is shorter than one step of the log ({dt_s:g} s){in_log}")
     if abs(H * dt_s - horizon_s) > max(0.25 * dt_s, HORIZON_TOLERANCE * horizon_s):
         # a start time's tolerance, or the median step's own uncertainty on a jittered log
         # (120 s is 120 steps of 0.9976 s): a forecast of 63 s asked as 60 s is not an answer
         raise HorizonError(f"{name}: {horizon_s:g} s is not a whole number of the log's steps ({dt_s:g} s); "
-                           f"the nearest is {H * dt_s:g} s")
+                           f"the nearest is {H * dt_s:g} s{in_log}")
     return H
 
 

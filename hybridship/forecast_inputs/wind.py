@@ -36,7 +36,7 @@ import numpy as np
 from pydantic import Field
 
 from hybridship.config import Float, check_number, check_whole_number, config_dataclass
-from hybridship.forecast_inputs.horizon import HorizonError, horizon_steps
+from hybridship.forecast_inputs.horizon import horizon_steps
 from hybridship.frames import speed_dir_to_vector, vector_to_speed_dir
 
 __all__ = ["HELD_WIND", "WindForecast", "fit_wind_forecast", "trailing_mean_vector", "wind_error_paths",
@@ -248,10 +248,7 @@ def fit_wind_forecast(logs, horizon_s: float, *, masks=None, start_every_s: floa
         wind = np.asarray(a.wind, dtype=float)
         vec = speed_dir_to_vector(wind)
         dt = float(np.median(np.diff(t)))
-        try:
-            H = horizon_steps(horizon_s, dt)        # as a forecast of that horizon counts them
-        except HorizonError as exc:
-            raise HorizonError(f"{exc}, in logs[{k}]") from None
+        H = horizon_steps(horizon_s, dt, where=f"logs[{k}]")      # as a forecast of that horizon counts them
         rows, ok = wind_starts(a, H, max(1, int(round(start_every_s / dt))), mask)
         if rows.size == 0:
             continue

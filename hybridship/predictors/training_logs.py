@@ -95,14 +95,11 @@ def check_calibration_horizon(arrays, labels, horizon_s: float) -> None:
     :func:`~hybridship.forecast_inputs.horizon.horizon_steps` (a
     :class:`~hybridship.forecast_inputs.horizon.HorizonError` when it is shorter than one
     step, or off a whole number by more than a quarter step and 0.5 %)."""
-    from ..forecast_inputs.horizon import HorizonError, horizon_steps
+    from ..forecast_inputs.horizon import horizon_steps
 
     for a, label in zip(arrays, labels):
         if len(a.time_s) > 1:
-            try:
-                horizon_steps(horizon_s, a.dt_s, "calibration_config.horizon_s")
-            except HorizonError as exc:
-                raise HorizonError(f"{exc}, in {label}") from None
+            horizon_steps(horizon_s, a.dt_s, "calibration_config.horizon_s", where=label)
 
 
 def warn_logs_without_wind(arrays, labels) -> None:
