@@ -1194,3 +1194,28 @@ def test_the_gate_stops_a_jump_and_follows_an_innovation_that_grows_without_one(
     x_shift, P_shift = update(x, P, z, z_ok, r_std, gate, 2, jumped)
     assert x_shift[2] == pytest.approx(z[2], abs=1e-15) and P_shift[2, 2] == pytest.approx(1e-4) and jumped[0, 2] == 0
     np.testing.assert_array_equal(x_shift[[0, 1, 3, 4, 5]], 0.0)  # nothing else moved
+
+
+def test_the_wave_motion_windows_are_spans_of_log_time_across_a_gap(model):
+    """20 s missing from a 1-Hz log (rows 600-619): the wave-motion noise at a row depends on
+    the 630 s of log time before it only (the 600-s spread of fast parts whose centred 31-s
+    mean has ended), across the gap too. Counted in rows, the windows of a row after the gap
+    reached 20 s further back than that (at 1000 s the sway velocity's noise was 0.0080 m/s,
+    against 0.0046 m/s from the 630 s before it)."""
+    log = physics_log(model, duration_s=1800, t_shutdown_s=900, seed=6)
+    w = 2 * np.pi / 8.0                                     # an 8-s wave yaw growing with time
+    t = log.time_s.to_numpy()
+    log["heading_deg"] = (log.heading_deg + (t / 900.0) * np.sin(w * t)) % 360.0
+    log["r_deg_s"] += (t / 900.0) * w * np.cos(w * t)
+    gap = log.drop(index=range(600, 620)).reset_index(drop=True)
+    est = EnvironmentEstimator(model)
+    gapped = est._wave_motion_std(as_log_arrays(gap, model.vessel), 0, len(gap) - 1)
+    assert np.all(np.isfinite(gapped)) and np.all(gapped[100:, 5] > 0)
+    whole = est._wave_motion_std(as_log_arrays(log, model.vessel), 0, len(log) - 1)
+    np.testing.assert_array_equal(gapped[:600], whole[:600])        # rows before the gap never see it
+    for t_row in (640.0, 1000.0, 1240.0):
+        i = int(np.flatnonzero(gap.time_s.to_numpy() == t_row)[0])
+        recent = gap[gap.time_s.between(t_row - 630.0, t_row)].reset_index(drop=True)
+        alone = est._wave_motion_std(as_log_arrays(recent, model.vessel), 0, len(recent) - 1)
+        # the same to rounding (pandas' rolling sums carry the rows before a window)
+        np.testing.assert_allclose(gapped[i], alone[-1], rtol=1e-9, atol=1e-15, err_msg=f"row at {t_row:g} s")

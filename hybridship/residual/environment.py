@@ -533,6 +533,27 @@ def _checked_rows(n: int, rows, first_row, required) -> tuple[np.ndarray, int, i
     return rows, first_row, n_req
 
 
+def _time_windows(t, first_s, last_s, dt: float) -> tuple[np.ndarray, np.ndarray]:
+    """``(start, end)``: for each row, the rows ``start <= k < end`` of the sorted times ``t``
+    [s] from ``first_s`` to ``last_s`` [s] (arrays of the rows' length), within half a log
+    step ``dt`` [s] at either end, so that on an evenly sampled log a window of ``m`` log
+    steps holds ``m + 1`` rows whatever the times' rounding."""
+    return (np.searchsorted(t, first_s - 0.5 * dt, side="right").astype(np.int64),
+            np.searchsorted(t, last_s + 0.5 * dt, side="left").astype(np.int64))
+
+
+class _Windows(pd.api.indexers.BaseIndexer):
+    """Rolling windows given as the rows ``start[i] <= k < end[i]`` of each row ``i``, for
+    pandas' rolling aggregations (on an evenly sampled log, the bounds of its fixed windows)."""
+
+    def __init__(self, start: np.ndarray, end: np.ndarray):
+        super().__init__()
+        self._start, self._end = start, end
+
+    def get_window_bounds(self, num_values=0, min_periods=None, center=None, closed=None, step=None):
+        return self._start, self._end
+
+
 class EnvironmentEstimator:
     """Causal environment estimation over a log (see the module notes).
 
@@ -693,10 +714,13 @@ class EnvironmentEstimator:
         (a DP observer's wave filter in its simplest form). The value at row ``i`` is the
         spread over the ``variance_window_s`` before it, from fast parts whose centred
         window ends at or before ``i``, so it uses rows up to ``i`` only (causal). The windows'
-        lengths in rows follow the log's step, as the filter's grid does (:meth:`_filter_every`),
+        lengths follow the log's step, as the filter's grid does (:meth:`_filter_every`),
         not the step of the rows ``lo .. hi`` read, which would make row ``i``'s value depend
-        on how far past it the run reads. Positions keep the configured value (a GNSS error
-        is slow, not wave-like).
+        on how far past it the run reads. The windows are spans of log time, each row placed
+        by its time (:func:`_time_windows`): across a gap they hold fewer rows rather than
+        stretch over more time, and a centred mean counts only where its window is sampled up
+        to both of its ends. Positions keep the configured value (a GNSS error is slow, not
+        wave-like).
         """
         n = len(arrays.time_s)
         out = np.zeros((n, 6))
@@ -705,11 +729,26 @@ class EnvironmentEstimator:
         dt = self._filter_every(arrays)[1]
         w = max(3, int(round(self.config.wave_window_s / dt)))
         w += 1 - w % 2                                   # odd: a centred window
-        x = pd.DataFrame(np.column_stack([arrays.eta[lo: hi + 1], arrays.nu[lo: hi + 1]]))
-        fast = x - x.rolling(w, center=True, min_periods=w).mean()
+        h = w // 2
         nv = max(2 * w, int(round(self.config.variance_window_s / dt)))
-        sd = fast.rolling(nv, min_periods=w).std().shift(w // 2)   # only centred windows that have ended
-        sd = sd.to_numpy().copy()
+        t = arrays.time_s[lo: hi + 1]
+        x = pd.DataFrame(np.column_stack([arrays.eta[lo: hi + 1], arrays.nu[lo: hi + 1]]))
+        # the centred mean: rows within h log steps of each row's time, all of them finite and
+        # the window sampled to both ends (on an even log: the w rows around it)
+        start, end = _time_windows(t, t - h * dt, t + h * dt, dt)
+        centred = x.rolling(_Windows(start, end), min_periods=1)
+        ends_sampled = (end > start) & (t[start] <= t - (h - 0.5) * dt) \
+            & (t[np.maximum(end - 1, 0)] >= t + (h - 0.5) * dt)
+        full = (centred.count().to_numpy() == (end - start)[:, None]) & ends_sampled[:, None]
+        fast = x - centred.mean().where(full)
+        # the spread of the fast parts of the nv log steps up to each row (at least w of them)
+        s_start, s_end = _time_windows(t, t - (nv - 1) * dt, t, dt)
+        sd = fast.rolling(_Windows(s_start, s_end), min_periods=w).std().to_numpy()
+        # row i takes the spread at the last row j whose centred window has ended: its rows are
+        # all at or before i, and its time h log steps or more before i's (on an even log j = i - h)
+        ended = np.minimum(np.searchsorted(end, np.arange(1, len(t) + 1), side="right"),
+                           np.searchsorted(t + h * dt, t + 0.5 * dt, side="right")) - 1
+        sd = np.where((ended >= 0)[:, None], sd[np.maximum(ended, 0)], np.nan)
         sd[:, 0:2] = 0.0
         out[lo: hi + 1] = np.nan_to_num(sd)
         return out
