@@ -17,7 +17,9 @@ velocities and accelerations) unless their name says otherwise:
 (multi-step horizon, batch of starts, iterations, validation starts; ``_lr<x>``: Adam's step;
 ``_ema<x>``: the weights' moving average, ``MultiStepConfig.weight_average``; otherwise
 ``MultiStepConfig()``), ``_m<n>`` / ``_sd<n>`` (ensemble members / seed; otherwise the
-benchmark's), ``+cmd`` (all command-aware features added), ``+mem`` / ``+mem<s>`` (the command-memory
+benchmark's), ``_wd<x>`` / ``_in<x>`` (the one-step fit's weight decay,
+``EnsembleConfig.weight_decay``, and the noise on its standardised inputs,
+``EnsembleConfig.input_noise_std``; otherwise the benchmark's), ``+cmd`` (all command-aware features added), ``+mem`` / ``+mem<s>`` (the command-memory
 features added, with the default time constant or ``<s>`` seconds; ``+memang`` /
 ``+memang<s>``: the angle's alone),
 ``_abs`` (absolute-error loss), ``_lead`` (loss weighted by lead time), ``_own`` (each member
@@ -121,7 +123,7 @@ def froude_scaled_environment(vessel, reference="gunnerus", defaults=None):
         settle_s=d.settle_s / s, max_bridged_gap_s=d.max_bridged_gap_s / s)})
 
 
-_UNDERSCORE_TOKEN = r"_(?:(?:hl|h|b|i|v|c|ad|lr|ema)\d+(?:\.\d+)?|(?:m|sd)\d+|abs|lead|own|th)"
+_UNDERSCORE_TOKEN = r"_(?:(?:hl|h|b|in|i|v|c|ad|lr|ema|wd)\d+(?:\.\d+)?|(?:m|sd)\d+|abs|lead|own|th)"
 _PLUS_TOKEN = r"\+(?:cmd|cg|wind|mirror|refit|hullms|hull|env|prev|rate|load|mem(?:ang)?(?:\d+(?:\.\d+)?)?)"
 
 
@@ -190,6 +192,10 @@ def variants(cfg, names):
             kw["hull_fit"] = "multi_step" if "+hullms" in name else "one_step"
         if ms:
             kw["multistep_config"] = replace(MultiStepConfig(), **ms)
+        for key, field in (("wd", "weight_decay"), ("in", "input_noise_std")):
+            m = re.search(rf"_{key}(\d+(?:\.\d+)?)", name)
+            if m:
+                kw["ensemble_config"] = replace(kw["ensemble_config"], **{field: float(m.group(1))})
         for key, field in (("m", "n_members"), ("sd", "seed")):
             found = re.findall(rf"_{key}(\d+)(?=_|\+|$)", name)
             if len(found) > 1 or re.search(rf"_{key}\d+[^\d_+]", name):

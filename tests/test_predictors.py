@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import warnings
+from dataclasses import replace
 
 import numpy as np
 import pytest
@@ -294,6 +295,22 @@ def test_ensemble_fits_a_known_function_and_members_disagree_off_data():
     assert np.sqrt(np.mean((mean - Y) ** 2)) < 0.05
     _, std_far = ens.predict(np.array([[6.0, -6.0]]))
     assert std_far.mean() > 5 * std.mean()       # spread grows outside the data
+
+
+def test_input_noise_flattens_the_fit_and_none_is_the_default():
+    rng = np.random.default_rng(0)
+    X = rng.uniform(-1, 1, size=(400, 1))
+    Y = np.tanh(8 * X)                           # a steep step: its slope is 8 at 0
+    cfg = EnsembleConfig(n_members=3, max_epochs=400, patience=400, seed=1)
+    x = np.linspace(-0.2, 0.2, 41)[:, None]
+    slopes = {}
+    for noise in (0.0, 0.5):
+        ens = fit_ensemble(X, Y, replace(cfg, input_noise_std=noise))
+        slopes[noise] = np.max(np.diff(ens.predict(x)[0][:, 0]) / np.diff(x[:, 0]))
+    assert slopes[0.0] > 4.0 and slopes[0.5] < 0.6 * slopes[0.0], slopes
+    assert EnsembleConfig().input_noise_std == 0.0
+    with pytest.raises(ValueError, match="^input_noise_std: "):
+        EnsembleConfig(input_noise_std=-0.1)
 
 
 
