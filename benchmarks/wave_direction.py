@@ -12,7 +12,8 @@ waves' axis in the station keeping before the failure (default settings of
   twenty 60-s forecasts span) and 60-300 s, with two forecasts of it that know the true
   station-keeping load (its mean over the last 300 s before the failure), so that only the
   shape is compared: held (the default), and turned with the axis along the ship's true
-  heading (``EnvironmentConfig.wave_turned_yaw_load``; held where the option holds it).
+  heading from its value at the heading at the failure, as a forecast started there turns
+  it (``EnvironmentConfig.wave_turned_yaw_load``; held where the option holds it).
 
 Writes ``wave_direction.csv`` and ``wave_direction.md``::
 
@@ -54,8 +55,10 @@ def log_rows(name: str, df: pd.DataFrame, a, load_yaw_true: np.ndarray, config: 
     psi = np.unwrap(a.eta[:, 2])
     axis = wave_axis(a.time_s[dp], a.eta[dp, 2], a.nu[dp, 0], a.nu[dp, 1], window_s=config.wave_axis_window_s,
                      min_anisotropy=config.min_wave_anisotropy) if dp.size > 1 else None
-    used = axis is not None and abs(axis.sin2_station) >= config.min_wave_sin2
-    axis_arr = np.array([[axis.axis_ned_rad, axis.sin2_station] if used else [np.nan, np.nan]])
+    # as a forecast started at the failure turns it: the shape referred to the heading there
+    sin2_0 = np.nan if axis is None else float(np.sin(2.0 * (axis.axis_ned_rad - psi[i0 - 1])))
+    used = axis is not None and abs(sin2_0) >= config.min_wave_sin2
+    axis_arr = np.array([[axis.axis_ned_rad, sin2_0] if used else [np.nan, np.nan]])
     true_rel = float((df.truth_wave_dir_from_deg.to_numpy()[i0] - np.degrees(psi[i0 - 1])) % 180.0)
     axis_rel = np.nan if axis is None else float(np.degrees(axis.axis_ned_rad - psi[i0 - 1]) % 180.0)
     held = float(np.mean(load_yaw_true[np.arange(max(0, i0 - int(round(300.0 / dt))), i0)]))

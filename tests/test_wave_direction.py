@@ -214,6 +214,34 @@ def test_a_starts_wave_axis_does_not_depend_on_the_other_starts_of_its_batch(mod
     np.testing.assert_array_equal(on.forecast(a, [1805.0, 3500.0], 60.0).eta[1], on.forecast(a, [3500.0], 60.0).eta[0])
 
 
+def test_the_turned_yaw_load_starts_from_the_estimate_at_the_starts_own_heading(model):
+    """A start 1700 s into a drift, after the ship has turned: the yaw load it starts with is the
+    estimator's at its own heading, so the factor on it is 1 there and follows the shape from
+    that heading. It was referred to the station keeping's heading, which scaled the load at the
+    start by sin(2 beta_start) / sin(2 beta_station) (here -0.99 / 0.71, reversing it), a load the estimator had
+    already followed through the turn."""
+    log = physics_log(model, duration_s=3600, t_shutdown_s=1800, seed=4, tau_ext_N=(2000.0, 0.0, 2000.0),
+                      rpm_scale=0.0, wind=(0.0, 0.0))
+    psi = np.radians(log.heading_deg.to_numpy())
+    rel = psi[1799] + np.radians(30.0) - psi
+    _, swing, _ = _wave_motion(len(log), 0.0, noise=0.0)
+    log["u_m_s"] += swing * np.cos(rel)
+    log["v_m_s"] += swing * np.sin(rel)
+    a = as_log_arrays(log, model.vessel)
+    on = HybridPredictor(model.vessel, ensemble_config=EnsembleConfig(n_members=2, hidden=8, max_epochs=5, patience=2,
+                                                                      seed=0),
+                         environment_config=EnvironmentConfig(wave_turned_yaw_load=True)).fit([a])
+    st = _setup(on, a, [1805.0, 3500.0])
+    axes = on._wave_axes(st)
+    assert np.isfinite(axes).all()
+    turned = np.degrees(abs(np.angle(np.exp(1j * (st.eta0[1, 2] - st.eta0[0, 2])))))
+    assert turned > 20.0                                                  # the ship has turned since the failure
+    np.testing.assert_allclose(axes[:, 1], np.sin(2.0 * (axes[:, 0] - st.eta0[:, 2])))
+    np.testing.assert_allclose(yaw_load_factor(st.eta0[:, 2], axes), 1.0)
+    ahead = st.eta0[:, 2] + np.radians(10.0)
+    np.testing.assert_allclose(yaw_load_factor(ahead, axes), np.sin(2.0 * (axes[:, 0] - ahead)) / axes[:, 1])
+
+
 def _setup(p, a, starts):
     from hybridship.predictors.forecast_setup import _forecast_setup
 
@@ -225,3 +253,15 @@ def test_benchmark_axis_error_is_taken_modulo_180():
     wd = load_benchmark("wave_direction")
     assert wd.axis_error_deg(179.0, 1.0) == pytest.approx(-2.0)
     assert wd.axis_error_deg(10.0, 5.0) == pytest.approx(5.0)
+
+
+def test_the_choice_per_test_log_leaves_it_out_and_needs_five_other_failures():
+    """benchmarks/wave_yaw_choice.py: a test log's choice is made on the other failures only."""
+    wyc = load_benchmark("wave_yaw_choice")
+    held = np.array([2.0, 2.0, 2.0, 2.0, 2.0, 2.0, 2.0])
+    turned = held - np.array([-5.0, 0.1, 0.2, 0.3, 0.4, 0.5, 0.6])     # all gain but the first, which loses much
+    chosen = wyc.decide(np.stack([held, turned]))
+    assert chosen[0][0] and chosen[0][1] == pytest.approx(1 / 64)       # its own loss plays no part
+    assert not any(c for c, _ in chosen[1:])                            # the first's loss is among the others
+    few = wyc.decide(np.stack([held[:5], turned[:5]]))
+    assert not any(c for c, _ in few) and all(np.isnan(p) for _, p in few)

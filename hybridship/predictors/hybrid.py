@@ -1119,10 +1119,17 @@ class HybridPredictor:
         return self.drift_yaw_uv_rad_per_m2 if self.uses_drift_hull and self._drift_yaw_in_filter else 0.0
 
     def _wave_axes(self, st) -> np.ndarray | None:
-        """Per start after a failure, the waves' axis found in the station keeping before it,
-        ``[axis_ned_rad, sin2_station]`` (S, 2), NaN where there is none (see
-        :mod:`hybridship.residual.wave_direction`); None unless the environment config's
-        ``wave_turned_yaw_load`` is on.
+        """Per start after a failure, the waves' axis found in the station keeping before it and
+        the shape's value at the start's heading, ``[axis_ned_rad, sin(2 (axis - psi_0))]``
+        (S, 2), NaN where there is no axis or the shape's value there is under
+        ``min_wave_sin2`` (the load is then held; see :mod:`hybridship.residual.wave_direction`);
+        None unless the environment config's ``wave_turned_yaw_load`` is on.
+
+        The shape is referred to the start's heading ``psi_0``, not to the station keeping's:
+        the estimator follows the yaw load through the drift, so the load a forecast starts
+        with is its estimate at ``psi_0`` (after a turn, referring it to the station keeping's
+        heading scaled a load already turned; along the drifts of truthsim-dev and of our own
+        scenarios that made the heading error worse than holding the load).
 
         A start's window is the last ``wave_axis_window_s`` of log time of that station
         keeping within the rows its own filter reads (from its first row of
@@ -1152,10 +1159,10 @@ class HybridPredictor:
                 axis = None if rows.size < 2 else wave_axis(
                     a.time_s[rows], a.eta[rows, 2], a.nu[rows, 0], a.nu[rows, 1], window_s=c.wave_axis_window_s,
                     min_anisotropy=c.min_wave_anisotropy)
-                # the amplitude is known only where the station keeping's heading gave the shape weight
-                ok = axis is not None and abs(axis.sin2_station) >= c.min_wave_sin2
-                found[lo, stop] = (axis.axis_ned_rad, axis.sin2_station) if ok else (np.nan, np.nan)
-            out[k] = found[lo, stop]
+                found[lo, stop] = np.nan if axis is None else axis.axis_ned_rad
+            out[k] = found[lo, stop], np.sin(2.0 * (found[lo, stop] - st.eta0[k, 2]))
+        # the amplitude is known only where the start's heading gives the shape weight
+        out[~(np.abs(np.nan_to_num(out[:, 1])) >= c.min_wave_sin2)] = np.nan
         return out
 
     def _run_estimator(self, arrays, idx, extra_rows=None, drift_yaw_uv: float | None = None, first_row=None):

@@ -133,8 +133,9 @@ class EnvironmentConfig(BaseModel):
     With ``wave_turned_yaw_load``, forecasts after a failure turn the held yaw load with the
     waves: their axis comes from the wave-frequency motion of the last ``wave_axis_window_s``
     of station keeping (where the motion's variance ratio reaches ``min_wave_anisotropy``),
-    and the load follows ``sin(2 beta)`` of the relative wave direction, where the station
-    keeping's ``|sin(2 beta)|`` reaches ``min_wave_sin2`` (:mod:`hybridship.residual.wave_direction`).
+    and the load follows ``sin(2 beta)`` of the relative wave direction from its value at the
+    start's heading, where that ``|sin(2 beta)|`` reaches ``min_wave_sin2``
+    (:mod:`hybridship.residual.wave_direction`).
 
     ``load_model`` chooses what the slowly varying load ``b`` is: ``"acceleration"`` (the
     default) an acceleration fixed in NED, ``accel = [R(psi)^T b_ne; b_yaw]``; ``"force"`` a

@@ -16,11 +16,16 @@ ship. Two steps:
 * **The yaw load's shape.** A slender hull's mean wave-drift yaw moment is zero in head,
   following and beam seas and largest in between; the simplest shape with those zeros is
   ``sin(2 beta)``, with ``beta`` the relative wave direction, which modulo 180 deg the axis
-  gives. The yaw load held at a failure, ``b_n``, is taken as ``A sin(2 beta_0)`` with
-  ``beta_0`` the station keeping's mean; at heading ``psi`` of the forecast it is
-  ``b_n sin(2 (d - psi)) / sin(2 beta_0)``, ``d`` the axis in NED. Where ``|sin(2 beta_0)|``
-  is small (``EnvironmentConfig.min_wave_sin2``) the amplitude cannot be told from the held
-  load, and the load is held, as without this option.
+  gives. The yaw load a forecast starts with, ``b_n`` (the estimator's at the start, which
+  it follows through the drift), is taken as ``A sin(2 beta_0)`` with ``beta_0`` the
+  relative wave direction at the start's heading ``psi_0``; at heading ``psi`` of the
+  forecast it is ``b_n sin(2 (d - psi)) / sin(2 (d - psi_0))``, ``d`` the axis in NED. Where
+  ``|sin(2 beta_0)|`` is small (``EnvironmentConfig.min_wave_sin2``) the amplitude cannot be
+  told from the load, and the load is held, as without this option. (Until 2026-12-03
+  ``beta_0`` was the station keeping's mean: for a start after the ship had turned that
+  scaled a load the estimator had already followed, and along the drifts of truthsim-dev
+  and of our own scenarios it made the heading error worse than holding the load;
+  ``benchmarks/wave_yaw_choice.py``.)
 
 What the shape leaves out: the part of the yaw load that is not wave drift (the wind
 model's error, the current's moment) turns with it too, and the surge and sway loads stay
@@ -119,9 +124,10 @@ def wave_axis(time_s: np.ndarray, psi_rad: np.ndarray, u_m_s: np.ndarray, v_m_s:
 def yaw_load_factor(psi_rad: np.ndarray, axis: np.ndarray) -> np.ndarray:
     """The factor on the held yaw load at headings ``psi_rad`` (S,) [rad].
 
-    ``axis`` (S, 2) holds each start's ``[axis_ned_rad, sin2_station]``, NaN where the load
-    is held (no axis, or ``|sin2_station|`` too small to give the amplitude: the caller
-    decides). The factor is ``sin(2 (axis - psi)) / sin2_station``, and 1 where held.
+    ``axis`` (S, 2) holds each start's ``[axis_ned_rad, sin2_0]``, ``sin2_0`` the shape's
+    value where the load is known (at the start's heading), NaN where the load is held (no
+    axis, or ``|sin2_0|`` too small to give the amplitude: the caller decides). The factor is
+    ``sin(2 (axis - psi)) / sin2_0``, and 1 where held.
     """
     d, s2 = axis[:, 0], axis[:, 1]
     ok = np.isfinite(d) & np.isfinite(s2) & (np.nan_to_num(s2) != 0.0)
