@@ -507,6 +507,14 @@ def test_has_drift_accepts_exactly_enough_drift_as_drift_forecasts_does():
     h = float(len(a.time_s) - 1 - 800 - 20 + 1)          # leaves exactly 20 starts
     drift_forecasts(DynamicPredictor(m.vessel), a, n_intervals=20, horizons_s=(h,))
     assert has_drift(a, 20, h) and not has_drift(a, 20, h + 1)
+    # a horizon between two steps is refused by name, as drift_forecasts refuses it: it was
+    # rounded to a whole number of steps here (60.4 s read as 60 s on this 1-Hz log)
+    from hybridship.predictors.forecast_setup import HorizonError
+
+    for fn in (lambda: has_drift(a, 20, 60.4),
+               lambda: drift_forecasts(DynamicPredictor(m.vessel), a, n_intervals=20, horizons_s=(60.4,))):
+        with pytest.raises(HorizonError, match=r"^horizons?_s: 60.4 s is not a whole number of the log's steps"):
+            fn()
 
 
 def test_training_logs_given_again_as_data_are_scored_leave_one_out():

@@ -61,15 +61,18 @@ def has_drift(arrays, n_intervals: int, horizon_s: float) -> bool:
     measurements after it in the failure's gap-free segment, before DP comes back on: see
     :func:`drift_end`). A log without station keeping before its first ``dp_active`` 0 (a
     manoeuvring log) has none. ``n_intervals`` is a whole number >= 1 and ``horizon_s`` a
-    number > 0 [s], a ValueError or TypeError naming them otherwise (as :func:`drift_forecasts`)."""
+    number > 0 [s], a ValueError or TypeError naming them otherwise (as :func:`drift_forecasts`),
+    and a whole number of the log's steps (:class:`~hybridship.predictors.forecast_setup.HorizonError`
+    otherwise, as a forecast refuses it)."""
     # a NaN horizon failed in int()'s words, text in an operator's, and a negative one found drift in any log
     check_whole_number("n_intervals", n_intervals, 1)
     horizon_s = check_number("horizon_s", horizon_s, lo=0.0, lo_open=True)
     off = np.flatnonzero(arrays.dp_active == 0)
     if off.size == 0 or off[0] == 0 or len(arrays.time_s) < 2:
         return False
-    dt = float(np.median(np.diff(arrays.time_s)))
-    return drift_end(arrays, int(off[0])) - int(off[0]) - int(round(horizon_s / dt)) >= n_intervals
+    # the steps a forecast would take: a horizon between two of them was rounded here, unlike there
+    H = horizon_steps(horizon_s, float(np.median(np.diff(arrays.time_s))))
+    return drift_end(arrays, int(off[0])) - int(off[0]) - H >= n_intervals
 
 
 def _check_drift_request(n_intervals, horizons_s, first, every) -> None:
