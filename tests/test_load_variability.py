@@ -428,3 +428,17 @@ def test_held_load_blocks_on_a_log_without_a_gap_are_those_of_the_estimates(mode
             np.testing.assert_allclose(got, _reference_sigma_b(acc[first:], nu[first:], t[first:], block),
                                        rtol=1e-12, atol=1e-18)
             assert np.all(got > 0)
+
+
+def test_the_note_of_a_start_without_whole_held_load_blocks_names_gaps_as_a_cause(model):
+    """A start 1290 s into station keeping, on a log missing every 25th sample over the 700 s
+    before it: no 30-s block is whole, so the spread is the members'. The note said to start
+    90 s or more into the station keeping, which this start is; it now names the gaps too."""
+    log = physics_log(model, duration_s=1500, t_shutdown_s=None, seed=3)
+    tiny = EnsembleConfig(n_members=2, hidden=8, max_epochs=5, patience=2, seed=0)
+    hp = HybridPredictor(model.vessel, ensemble_config=tiny).fit([log])
+    assert hp.forecast(log, [1290.0], 60.0).notes == ("",)
+    gappy = log.drop(index=[i for i in range(600, 1300) if i % 25 == 0]).reset_index(drop=True)
+    note, = hp.forecast(gappy, [1290.0], 60.0).notes
+    assert note.startswith("spread: the held load's needs three whole 30-s blocks of station keeping")
+    assert "after any gap in the log that breaks the blocks" in note

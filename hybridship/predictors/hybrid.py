@@ -1034,16 +1034,19 @@ class HybridPredictor:
     def _short_station_keeping_notes(self, st, sigma_b, after_stop) -> tuple:
         """``st.notes`` with a note on each start during station keeping whose spread could
         not be the held load's (``CalibrationConfig.station_keeping_spread``) because fewer
-        than three blocks of station keeping precede it (a log that begins shortly before):
+        than three complete blocks of station keeping precede it (a log that begins shortly
+        before, or gaps or rows without station keeping that break the blocks, which count
+        only whole: see :func:`~hybridship.residual.load_variability.unexplained_load_std`):
         its spread then comes from the members' (scaled by the calibration fitted on the held
         load's when calibrated), which on station is far wider than the error."""
         if not (self._held_load_on_station and sigma_b is not None):
             return st.notes
         short = ~after_stop & ~np.any(sigma_b > 0, axis=1)
         block = self.environment_config.held_load_block_s
-        note = (f"spread: the held load's needs three {block:g}-s blocks of station keeping before the start and "
-                f"this start has fewer, so its spread comes from the members' and on station is far wider than the "
-                f"error (start {3 * block:g} s or more into the station keeping)")
+        note = (f"spread: the held load's needs three whole {block:g}-s blocks of station keeping before the start "
+                f"and this start has fewer, so its spread comes from the members' and on station is far wider than "
+                f"the error (start {3 * block:g} s or more into the station keeping, after any gap in the log that "
+                f"breaks the blocks: a block counts only with every sample and all of it on station)")
         return join_notes(st.notes, [note if k else "" for k in short])
 
     @property
