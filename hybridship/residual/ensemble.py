@@ -293,9 +293,6 @@ def fit_ensemble(X: np.ndarray, Y: np.ndarray, config: EnsembleConfig = Ensemble
         params = _initial_weights(E, n_in, H, n_out, gen)
         opt = torch.optim.Adam(params, lr=config.lr)
 
-        def forward(Z):
-            return _forward(params, Z)
-
         best = torch.full((E,), float("inf"))
         best_params = [p.detach().clone() for p in params]
         since_best = torch.zeros(E, dtype=torch.long)
@@ -306,13 +303,13 @@ def fit_ensemble(X: np.ndarray, Y: np.ndarray, config: EnsembleConfig = Ensemble
             # the generator is drawn from only with noise, so that none gives the same bits as before
             Xin = Xt if config.input_noise_std == 0 else (
                 Xt + config.input_noise_std * torch.randn(Xt.shape, generator=gen, dtype=Xt.dtype))
-            mse = ((forward(Xin) - Yt) ** 2).mean(dim=(1, 2))           # per member
+            mse = ((_forward(params, Xin) - Yt) ** 2).mean(dim=(1, 2))  # per member
             l2 = sum((params[i] ** 2).sum(dim=(1, 2)) for i in (0, 2, 4))
             loss = (mse + config.weight_decay * l2).sum()
             loss.backward()
             opt.step()
             with torch.no_grad():
-                v = ((forward(Xv) - Yv) ** 2).mean(dim=(1, 2))
+                v = ((_forward(params, Xv) - Yv) ** 2).mean(dim=(1, 2))
                 improved = v < best
                 best = torch.where(improved, v, best)
                 since_best = torch.where(improved, torch.zeros_like(since_best), since_best + 1)
