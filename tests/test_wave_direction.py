@@ -191,11 +191,10 @@ def test_the_hybrid_turns_the_held_yaw_load_after_a_failure_only_with_the_option
     np.testing.assert_allclose(back.forecast(a, starts, 60.0).eta, f_on.eta)
 
 
-def test_a_starts_wave_axis_does_not_depend_on_the_other_starts_of_its_batch(model):
-    """The axis window was cut at the first row of the log read for the batch: a start 1700 s
-    into a drift, alone, had the last 400 s of station keeping, and with a start 5 s after the
-    failure beside it the whole 600 s, so its forecast depended on the batch. A start's window
-    now lies within the rows its own filter reads (here the last 300 s), in any batch."""
+def _long_drift_in_waves(model):
+    """A 1-h log, failure at 1800 s, whose wave motion lies along an axis fixed in NED 30 deg off
+    the bow at the failure (the ship turns slowly under a yaw load), and a hybrid fitted on it
+    with the yaw load turned with the waves."""
     log = physics_log(model, duration_s=3600, t_shutdown_s=1800, seed=4, tau_ext_N=(2000.0, 0.0, 2000.0),
                       rpm_scale=0.0, wind=(0.0, 0.0))
     psi = np.radians(log.heading_deg.to_numpy())
@@ -207,6 +206,15 @@ def test_a_starts_wave_axis_does_not_depend_on_the_other_starts_of_its_batch(mod
     on = HybridPredictor(model.vessel, ensemble_config=EnsembleConfig(n_members=2, hidden=8, max_epochs=5, patience=2,
                                                                       seed=0),
                          environment_config=EnvironmentConfig(wave_turned_yaw_load=True)).fit([a])
+    return a, on
+
+
+def test_a_starts_wave_axis_does_not_depend_on_the_other_starts_of_its_batch(model):
+    """The axis window was cut at the first row of the log read for the batch: a start 1700 s
+    into a drift, alone, had the last 400 s of station keeping, and with a start 5 s after the
+    failure beside it the whole 600 s, so its forecast depended on the batch. A start's window
+    now lies within the rows its own filter reads (here the last 300 s), in any batch."""
+    a, on = _long_drift_in_waves(model)
     alone = on._wave_axes(_setup(on, a, [3500.0]))[0]
     batched = on._wave_axes(_setup(on, a, [1805.0, 3500.0]))
     assert np.isfinite(alone).all() and np.isfinite(batched).all()
@@ -220,17 +228,7 @@ def test_the_turned_yaw_load_starts_from_the_estimate_at_the_starts_own_heading(
     that heading. It was referred to the station keeping's heading, which scaled the load at the
     start by sin(2 beta_start) / sin(2 beta_station) (here -0.99 / 0.71, reversing it), a load the estimator had
     already followed through the turn."""
-    log = physics_log(model, duration_s=3600, t_shutdown_s=1800, seed=4, tau_ext_N=(2000.0, 0.0, 2000.0),
-                      rpm_scale=0.0, wind=(0.0, 0.0))
-    psi = np.radians(log.heading_deg.to_numpy())
-    rel = psi[1799] + np.radians(30.0) - psi
-    _, swing, _ = _wave_motion(len(log), 0.0, noise=0.0)
-    log["u_m_s"] += swing * np.cos(rel)
-    log["v_m_s"] += swing * np.sin(rel)
-    a = as_log_arrays(log, model.vessel)
-    on = HybridPredictor(model.vessel, ensemble_config=EnsembleConfig(n_members=2, hidden=8, max_epochs=5, patience=2,
-                                                                      seed=0),
-                         environment_config=EnvironmentConfig(wave_turned_yaw_load=True)).fit([a])
+    a, on = _long_drift_in_waves(model)
     st = _setup(on, a, [1805.0, 3500.0])
     axes = on._wave_axes(st)
     assert np.isfinite(axes).all()
