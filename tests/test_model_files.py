@@ -187,10 +187,10 @@ def test_incompatible_format_version_is_refused(saved, tmp_path):
         p = _rewrite(saved, tmp_path, meta_change=lambda m: m.update(format_version=version), name=f"v{version}.npz")
         # as written in the file: the text "13" is not said as 13, which this hybridship reads
         _refused(p, rf"model format version {shown} is not supported "
-                    rf"\(this hybridship reads versions 7, 8, 9, 10, 11, 12, 13, 14, 15, 16, 17, 18\)"
+                    rf"\(this hybridship reads versions 7, 8, 9, 10, 11, 12, 13, 14, 15, 16, 17, 18, 19\)"
                     + (r"; expected a whole number$" if not isinstance(version, int) else ""))
-    p = _rewrite(saved, tmp_path, meta_change=lambda m: m.update(format_version=19), name="v19.npz")
-    _refused(p, r"written by a newer hybridship \(format 19\); upgrade hybridship to read it")
+    p = _rewrite(saved, tmp_path, meta_change=lambda m: m.update(format_version=20), name="v20.npz")
+    _refused(p, r"written by a newer hybridship \(format 20\); upgrade hybridship to read it")
 
 
 def test_the_cli_reference_names_the_formats_that_load():
@@ -644,6 +644,33 @@ def test_a_version_17_file_filters_a_drift_with_the_station_keeping_walks(saved,
     for field in ("load_walk_after_stop_m_s2", "load_yaw_walk_after_stop_rad_s2"):
         v18 = _rewrite(saved, tmp_path, meta_change=lambda m: m["environment_config"].pop(field), name=f"v18{field}.npz")
         _refused(v18, rf"damaged model metadata .*{field}")
+
+
+def test_the_choice_of_the_turned_yaw_load_is_kept_and_checked(saved, tmp_path):
+    """Format 19 records whether fit chose the yaw load turned with the waves (with
+    ``wave_turned_yaw_load = "auto"``): it loads back; a version-18 file reads False; a
+    version-19 file without it is damaged, and one that says True for a model whose setting is
+    not "auto" is refused."""
+    import copy
+
+    from hybridship.residual.environment import EnvironmentConfig
+
+    hp = copy.deepcopy(saved[0])
+    hp.environment_config = EnvironmentConfig(**{**hp.environment_config.model_dump(), "wave_turned_yaw_load": "auto"})
+    hp.wave_yaw_turned = True
+    back = HybridPredictor.load(hp.save(tmp_path / "auto.npz"))
+    assert back.environment_config.wave_turned_yaw_load == "auto" and back.wave_yaw_turned and back.turns_yaw_load
+    auto = (hp, tmp_path / "auto.npz", None)
+
+    def as_v18(meta):
+        meta["format_version"] = 18
+        meta.pop("wave_yaw_turned")
+
+    assert not HybridPredictor.load(_rewrite(saved, tmp_path, meta_change=as_v18, name="v18t.npz")).wave_yaw_turned
+    _refused(_rewrite(auto, tmp_path, meta_change=lambda m: m.pop("wave_yaw_turned"), name="v19t.npz"),
+             r"damaged model metadata .*wave_yaw_turned")
+    _refused(_rewrite(auto, tmp_path, meta_change=lambda m: m["environment_config"].update(wave_turned_yaw_load=False),
+                      name="v19f.npz"), r"wave_yaw_turned: true in a model whose .* is not 'auto'")
 
 
 def test_edited_settings_are_refused(saved, tmp_path):

@@ -263,3 +263,32 @@ def test_the_choice_per_test_log_leaves_it_out_and_needs_five_other_failures():
     assert not any(c for c, _ in chosen[1:])                            # the first's loss is among the others
     few = wyc.decide(np.stack([held[:5], turned[:5]]))
     assert not any(c for c, _ in few) and all(np.isnan(p) for _, p in few)
+
+
+@pytest.mark.parametrize("gain_rad, n_logs, turned", [(0.01, 5, True), (-0.01, 5, False), (0.01, 4, False)])
+def test_auto_turns_the_yaw_load_only_where_the_training_failures_gain(model, monkeypatch, gain_rad, n_logs, turned):
+    """``wave_turned_yaw_load="auto"``: fit turns the yaw load when, over five failures or more,
+    the estimator's heading error along their drifts is lower turned and every failure gains
+    (the signed-rank test); not when it is higher, nor with four failures."""
+    logs = [physics_log(model, duration_s=300, t_shutdown_s=200, seed=s) for s in range(n_logs)]
+    asked = []
+
+    def drift_errors(self, log, horizon_s, turned=None):       # the check's forecasts, made up
+        asked.append(turned)
+        return np.array([1.0, 0.05 - (gain_rad if turned else 0.0) + 1e-3 * len(asked)])
+
+    monkeypatch.setattr(HybridPredictor, "_drift_errors", drift_errors)
+    tiny = EnsembleConfig(n_members=2, hidden=8, max_epochs=5, patience=2, seed=0)
+    hp = HybridPredictor(model.vessel, ensemble_config=tiny, drift_hull=False,
+                         environment_config=EnvironmentConfig(wave_turned_yaw_load="auto")).fit(logs)
+    info = hp.training_info["wave_yaw_load"]
+    assert hp.wave_yaw_turned is turned and hp.turns_yaw_load is turned and info["turned"] is turned
+    assert info["n_failures"] == n_logs and info["horizon_s"] == 60.0
+    if n_logs >= 5:
+        assert sorted(asked, key=str) == [False] * n_logs + [True] * n_logs
+        assert info["p_value"] == pytest.approx(1 / 32 if turned else 1.0)
+    else:
+        assert asked == [] and "p_value" not in info
+    fixed = HybridPredictor(model.vessel, ensemble_config=tiny, drift_hull=False,
+                            environment_config=EnvironmentConfig(wave_turned_yaw_load=True)).fit(logs[:1])
+    assert "wave_yaw_load" not in fixed.training_info and fixed.turns_yaw_load

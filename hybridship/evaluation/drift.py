@@ -349,13 +349,20 @@ _SIMULATED = ("calibration_scenarios", "more intervals or calibration scenarios,
 def _check_before_training(hybrid, dp_only: bool, test_is_train: bool, test_arrays, calibration_scenarios: int,
                            n_intervals: int) -> None:
     """Refuse, before any training, what the run would refuse after it when the test logs are
-    the training logs: training on every row (:func:`_check_rows_not_scored`), and too few
+    the training logs: training on every row (:func:`_check_rows_not_scored`), a yaw load
+    turned with the waves that ``fit`` would choose on the scored drifts
+    (``wave_turned_yaw_load = "auto"``), and too few
     forecasts per lead to calibrate the spread after a failure on (the other logs' failures
     or the simulated DP losses, as :func:`_calibrate_after_stop` chooses). With other test
     logs the choice depends on the failures ``fit`` finds, and is checked after it."""
     _check_rows_not_scored(dp_only, test_is_train)
     if not test_is_train:
         return
+    if hybrid.environment_config.wave_turned_yaw_load == "auto":
+        # fit would choose it on the drifts it is scored on; a choice per test log is not made here
+        raise ValueError("environment_config.wave_turned_yaw_load: 'auto' is chosen by fit on the training logs' "
+                         "failures, which here are the scored ones; give test logs apart from the training logs, "
+                         "or True or False")
     n_min, n_other = hybrid.calibration_config.after_stop_min_failures, len(test_arrays) - 1
     if n_min > 0 and n_other >= n_min:
         _check_calibration_count(n_other, n_intervals, *_OTHER_LOGS)

@@ -38,7 +38,7 @@ from ..residual.guard import CommandRegime, EnvelopeGuard, ThrustRegime
 from ..residual.wave_direction import wave_axis, yaw_load_factor
 from ..residual.drift_hull import (MIN_FAILURES as DRIFT_HULL_MIN_FAILURES, MUNK_MULTIPLES,
                                    START_EVERY_S as DRIFT_HULL_START_EVERY_S, choose_coefficient,
-                                   drift_start_rows, munk_coefficient)
+                                   drift_start_rows, gain_carries_over, munk_coefficient)
 from ..residual.hull import HullCorrection
 from .after_failure import drift_end, drift_forecasts, has_drift, shutdown_index
 from .forecast_setup import (AFTER_STOP, AFTER_STOP_LATE, FORECAST_HISTORY_S, MAX_HORIZON_S, _check_flags,
@@ -227,6 +227,10 @@ class HybridPredictor:
         #: whether the environment estimator's process model uses it after a failure too (off
         #: only for model files of format 10, whose coefficient was chosen without it)
         self._drift_yaw_in_filter = True
+        #: with ``environment_config.wave_turned_yaw_load == "auto"``: whether :meth:`fit` found that
+        #: the training logs' failures gain from the yaw load turned with the waves
+        #: (``training_info["wave_yaw_load"]``)
+        self.wave_yaw_turned: bool = False
         if training not in self.TRAINING_MODES:
             raise ValueError(f"training: expected one of {self.TRAINING_MODES}, got {training!r}")
         self.training = training
@@ -381,7 +385,8 @@ class HybridPredictor:
         Without ``dp_only`` the environment estimator also learns the thrust-model error at
         the logs' thrust stops (:meth:`EnvironmentEstimator.fit`), kept only where it carries
         over to failures left out of the learning (:meth:`_check_thrust_error_prior`,
-        ``training_info["thrust_error_prior"]``).
+        ``training_info["thrust_error_prior"]``). With ``wave_turned_yaw_load = "auto"`` the failures
+        choose whether the yaw load turns with the waves (:meth:`_choose_wave_yaw_load`).
         """
         stride = _check_row_stride(row_stride)
         _check_flags(dp_only=dp_only, progress=progress)
@@ -403,6 +408,7 @@ class HybridPredictor:
         prior_info = self._check_thrust_error_prior(logs, cal.horizon_s)
         self._fit_nets(logs, dp_only=dp_only, progress=progress, stride=stride, row_masks=masks)
         folds, split_info = self._fit_command_guard(logs, cuts, masks, cal, dp_only, stride)
+        wave_yaw_info = self._choose_wave_yaw_load(logs, cal.horizon_s)      # before the hull: it forecasts with it
         drift_hull_info = self._fit_drift_hull(logs, cal.horizon_s)
         self.calibration = {}
         cal_info = {"fraction": cal.fraction, "commands": list(cal.commands), "horizon_s": cal.horizon_s,
@@ -421,12 +427,43 @@ class HybridPredictor:
             self.training_info["wind_spread"] = wind_spread_info
         if drift_hull_info is not None:
             self.training_info["drift_hull"] = drift_hull_info
+        if wave_yaw_info is not None:
+            self.training_info["wave_yaw_load"] = wave_yaw_info
         if prior_info is not None:
             self.training_info["thrust_error_prior"] = prior_info
         with warnings.catch_warnings():
             warnings.filterwarnings("ignore", message=NO_WIND_FORECAST_WARNING)
             self._calibrate_after_stop_on_training_logs(logs, cal)
         return self
+
+    def _choose_wave_yaw_load(self, logs, horizon_s: float):
+        """With ``environment_config.wave_turned_yaw_load == "auto"`` (and the environment
+        estimator, ``stop_after_failure``) and at least
+        :data:`~hybridship.residual.drift_hull.MIN_FAILURES` failures in the training logs: turn
+        the yaw load with the waves after a failure (:attr:`wave_yaw_turned`) only where it
+        carries over, by the rule of what else ``fit`` learns from failures
+        (:func:`~hybridship.residual.drift_hull.gain_carries_over`): the failures' mean heading
+        error of the estimator's forecasts along their drifts (:meth:`_drift_errors`, starts
+        every :data:`~hybridship.residual.drift_hull.START_EVERY_S`) must be lower turned than
+        held and the per-failure gains must pass the one-sided signed-rank test. Nothing is
+        fitted to them, so no failure is left out. Returns what ``training_info["wave_yaw_load"]``
+        records (None when not ``"auto"``)."""
+        self.wave_yaw_turned = False
+        if not (self.environment_config.wave_turned_yaw_load == "auto" and self.environment == "estimator"
+                and self.stop_after_failure):
+            return None
+        failed = [a for a in logs
+                  if drift_start_rows(a.dp_active, a.segment_id, int(round(horizon_s / a.dt_s)), 1).size]
+        info = {"n_failures": len(failed), "horizon_s": float(horizon_s), "start_every_s": DRIFT_HULL_START_EVERY_S,
+                "turned": False}
+        if len(failed) < DRIFT_HULL_MIN_FAILURES:
+            return info
+        errors = np.array([[self._drift_errors(a, horizon_s, turned)[1] for a in failed] for turned in (False, True)])
+        turned, p_value = gain_carries_over(errors[0], errors[1])
+        self.wave_yaw_turned = bool(turned)
+        info.update(held_deg=float(np.degrees(errors[0].mean())), turned_deg=float(np.degrees(errors[1].mean())),
+                    n_gains=int(np.sum(errors[1] < errors[0])), p_value=p_value, turned=bool(turned))
+        return info
 
     def _fit_drift_hull(self, logs, horizon_s: float):
         """With ``drift_hull`` and at least :data:`~hybridship.residual.drift_hull.MIN_FAILURES`
@@ -532,7 +569,9 @@ class HybridPredictor:
                     [a for i, a in enumerate(logs) if i != k])
                 for m, estimator in enumerate((configured, others)):
                     self.estimator = estimator
-                    errors[m, j] = self._drift_errors(logs[k], horizon_s)
+                    # "auto" is chosen later, on the prior kept here: held until then
+                    errors[m, j] = self._drift_errors(logs[k], horizon_s,
+                                                      self.environment_config.wave_turned_yaw_load is True)
             kept, (p_position, p_heading) = thrust_error_prior_carries_over(errors[0], errors[1])
             info.update(position_error_m=errors[:, :, 0].mean(axis=1).tolist(),
                         heading_error_deg=np.degrees(errors[:, :, 1].mean(axis=1)).tolist(),
@@ -540,15 +579,16 @@ class HybridPredictor:
         self.estimator = learned if info["kept"] else configured
         return info
 
-    def _drift_errors(self, log, horizon_s: float) -> np.ndarray:
+    def _drift_errors(self, log, horizon_s: float, turned: bool | None = None) -> np.ndarray:
         """Mean position error [m] and heading error [rad] of the forecasts along a log's drift
         (:meth:`_drift_starts`) with the estimator alone: no nets (as after a failure by
-        default) and no hull's yaw moment in a drift."""
+        default) and no hull's yaw moment in a drift; the yaw load turned with the waves as the
+        forecasts turn it, or as ``turned`` says when given."""
         st, truth = self._drift_starts(log, horizon_s)
         eta0, nu0, dev0, bias0, current, acc_ext, _ = self._estimated_start(st, 1, drift_yaw_uv=0.0)
         eta, _, _, _ = self.rollout(eta0, nu0, dev0, bias0, st.rpm, st.az, st.wind, st.H, st.dt, guard=False,
                                     substeps=st.substeps, current=current, accel_ext=acc_ext, nets=False,
-                                    wave_axis=self._wave_axes(st))
+                                    wave_axis=self._wave_axes(st, turned))
         d = eta[:, 1:] - truth
         return np.array([np.hypot(d[..., 0], d[..., 1]).mean(), np.abs(wrap_pi(d[..., 2])).mean()])
 
@@ -1072,6 +1112,15 @@ class HybridPredictor:
         return max(FORECAST_HISTORY_S, own)
 
     @property
+    def turns_yaw_load(self) -> bool:
+        """Whether forecasts after a failure turn the yaw load with the waves: the environment
+        config's ``wave_turned_yaw_load`` True, or ``"auto"`` where :meth:`fit` chose it; with
+        the environment estimator and ``stop_after_failure`` only."""
+        c = self.environment_config.wave_turned_yaw_load
+        return (c is True or (c == "auto" and self.wave_yaw_turned)) and self.environment == "estimator" \
+            and self.stop_after_failure
+
+    @property
     def uses_drift_hull(self) -> bool:
         """Whether the hull's yaw moment in a drift is learned and used: ``drift_hull`` with the
         environment estimator and ``stop_after_failure`` (without it a drift is forecast with
@@ -1121,12 +1170,12 @@ class HybridPredictor:
         whose coefficient was chosen with the forecasts alone)."""
         return self.drift_yaw_uv_rad_per_m2 if self.uses_drift_hull and self._drift_yaw_in_filter else 0.0
 
-    def _wave_axes(self, st) -> np.ndarray | None:
+    def _wave_axes(self, st, turned: bool | None = None) -> np.ndarray | None:
         """Per start after a failure, the waves' axis found in the station keeping before it and
         the shape's value at the start's heading, ``[axis_ned_rad, sin(2 (axis - psi_0))]``
         (S, 2), NaN where there is no axis or the shape's value there is under
         ``min_wave_sin2`` (the load is then held; see :mod:`hybridship.residual.wave_direction`);
-        None unless the environment config's ``wave_turned_yaw_load`` is on.
+        None unless the yaw load is turned (:attr:`turns_yaw_load`, or ``turned`` when given).
 
         The shape is referred to the start's heading ``psi_0``, not to the station keeping's:
         the estimator follows the yaw load through the drift, so the load a forecast starts
@@ -1141,7 +1190,7 @@ class HybridPredictor:
         ``environment_window_s - wave_axis_window_s`` after the failure has a shorter window.
         """
         c = self.environment_config
-        if not (c.wave_turned_yaw_load and self.environment == "estimator" and self.stop_after_failure):
+        if not (self.turns_yaw_load if turned is None else turned):
             return None
         a = st.arrays
         first = np.zeros(len(st.idx), dtype=int)

@@ -29,6 +29,8 @@ from .forecast_setup import AFTER_STOP, AFTER_STOP_LATE, COMMAND_MODES
 __all__ = ["MODEL_FORMAT_VERSION", "ModelFileError", "load_model", "model_metadata", "save_model"]
 
 #: Version of the model-file format written by :func:`save_model` (:meth:`HybridPredictor.save`).
+#: 19: the yaw load turned with the waves chosen by ``fit`` (``environment_config.wave_turned_yaw_load``
+#: may be ``"auto"``, and ``wave_yaw_turned`` records the choice; older files read False);
 #: 18: the environment load's random walks while the thrusters are stopped
 #: (``environment_config.load_walk_after_stop_m_s2``, ``load_yaw_walk_after_stop_rad_s2``;
 #: older files read the station-keeping walks, as they were fitted);
@@ -52,7 +54,7 @@ __all__ = ["MODEL_FORMAT_VERSION", "ModelFileError", "load_model", "model_metada
 #: validated vessel description is embedded in the metadata (``vessel_description``), so a
 #: model loads without its vessel file; 3 added the environment estimator; 2 and earlier
 #: stored only the vessel's name.
-MODEL_FORMAT_VERSION = 18
+MODEL_FORMAT_VERSION = 19
 #: Versions :func:`load_model` reads: a version-7 file is a version-8 one without the spread
 #: exponent (three rows per ``cal_*`` array), read as exponent 1, which is what it was fitted with;
 #: versions 7 and 8 have no wind futures in the spread (``wind_samples = 0``, as they were fitted);
@@ -64,8 +66,9 @@ MODEL_FORMAT_VERSION = 18
 #: 14 no actuator-load features; versions 7 to 15 were fitted at the logs' own step
 #: (``residual_step_s = None``); versions 7 to 16 restart the environment estimator at every
 #: gap of a log (``max_bridged_gap_s = 0``); versions 7 to 17 filter a drift with the station
-#: keeping's load walks.
-READABLE_MODEL_FORMAT_VERSIONS = (7, 8, 9, 10, 11, 12, 13, 14, 15, 16, 17, 18)
+#: keeping's load walks; versions 7 to 18 choose no yaw load turned with the waves (``wave_yaw_turned``
+#: false; their ``wave_turned_yaw_load`` is true or false).
+READABLE_MODEL_FORMAT_VERSIONS = (7, 8, 9, 10, 11, 12, 13, 14, 15, 16, 17, 18, 19)
 
 
 class ModelFileError(ValueError):
@@ -151,7 +154,7 @@ def model_metadata(predictor) -> dict:
         "wind_samples": p.wind_samples, "wind_error_dt_s": p.wind_error_dt_s,
         "has_wind_error_paths": p.wind_error_paths is not None,
         "drift_hull": p.drift_hull, "drift_yaw_uv_rad_per_m2": p.drift_yaw_uv_rad_per_m2,
-        "drift_yaw_in_filter": p._drift_yaw_in_filter,
+        "drift_yaw_in_filter": p._drift_yaw_in_filter, "wave_yaw_turned": p.wave_yaw_turned,
         "training_info": p.training_info,
     }
 
@@ -386,6 +389,11 @@ def _build_predictor(cls, meta: dict, vessel, path: Path):
             obj.drift_yaw_uv_rad_per_m2 = _checked_drift_yaw(meta["drift_yaw_uv_rad_per_m2"], obj)
             obj._drift_yaw_in_filter = _checked_flag(meta, "drift_yaw_in_filter") if meta["format_version"] >= 11 \
                 else False
+        if meta["format_version"] >= 19:
+            obj.wave_yaw_turned = _checked_flag(meta, "wave_yaw_turned")
+            if obj.wave_yaw_turned and obj.environment_config.wave_turned_yaw_load != "auto":
+                raise ValueError("wave_yaw_turned: true in a model whose environment_config.wave_turned_yaw_load "
+                                 "is not 'auto' (only 'auto' is chosen by fit)")
         if meta["wind_forecast"].get("option") == "fit":
             obj.wind_forecast_option = "fit"       # a refit chooses again; forecasts use the fitted one
         state = _scalar_state(meta)

@@ -71,7 +71,7 @@ from typing import Annotated, Literal
 
 import numpy as np
 import pandas as pd
-from pydantic import BaseModel, ConfigDict, Field, ValidationError, model_validator
+from pydantic import BaseModel, BeforeValidator, ConfigDict, Field, ValidationError, model_validator
 
 from ..config import (Bool, Float, Int, as_config, check_flags, check_number, check_whole_number, real_array,
                       settings_error, start_time_rng)
@@ -98,6 +98,18 @@ CUR, LOAD, THR = slice(6, 8), slice(8, 11), slice(11, None)
 THRUST_ERROR_MODELS = ("per_dof", "per_thruster")
 LOAD_MODELS = ("acceleration", "force")
 _PositiveFloat = Annotated[Float, Field(gt=0)]
+
+
+def _bool_or_auto(v):
+    """True, False (numpy's too) or ``"auto"``; anything else refused in one message."""
+    if isinstance(v, (bool, np.bool_)):
+        return bool(v)
+    if isinstance(v, str) and v == "auto":
+        return v
+    raise ValueError(f"expected True, False or 'auto', got {v!r}")
+
+
+_BoolOrAuto = Annotated[bool | Literal["auto"], BeforeValidator(_bool_or_auto)]
 
 
 class EnvironmentConfig(BaseModel):
@@ -227,8 +239,11 @@ class EnvironmentConfig(BaseModel):
         restarts.
     innovation_gate_sigma, max_gated_samples : float, int
         Outlier gate on position and heading (above).
-    wave_turned_yaw_load, wave_axis_window_s, min_wave_anisotropy, min_wave_sin2 : bool, float, float, float
+    wave_turned_yaw_load, wave_axis_window_s, min_wave_anisotropy, min_wave_sin2 : bool or "auto", float, float, float
         The held yaw load turned with the waves after a failure (above; window in [s]).
+        ``"auto"``: :meth:`HybridPredictor.fit <hybridship.predictors.HybridPredictor.fit>`
+        turns it only where the training logs' failures show that it lowers the heading
+        error (``training_info["wave_yaw_load"]``).
     """
 
     model_config = ConfigDict(frozen=True, extra="forbid", allow_inf_nan=False)
@@ -275,7 +290,7 @@ class EnvironmentConfig(BaseModel):
     max_bridged_gap_s: Float = Field(10.0, ge=0.0, le=300.0)
     innovation_gate_sigma: Float = Field(8.0, gt=0.0)
     max_gated_samples: Int = Field(10, ge=0)
-    wave_turned_yaw_load: Bool = False
+    wave_turned_yaw_load: _BoolOrAuto = False
     wave_axis_window_s: Float = Field(600.0, gt=0.0)
     min_wave_anisotropy: Float = Field(3.0, ge=1.0)
     min_wave_sin2: Float = Field(0.3, gt=0.0, le=1.0)
