@@ -452,8 +452,7 @@ class HybridPredictor:
         if not (self.environment_config.wave_turned_yaw_load == "auto" and self.environment == "estimator"
                 and self.stop_after_failure):
             return None
-        failed = [a for a in logs
-                  if drift_start_rows(a.dp_active, a.segment_id, int(round(horizon_s / a.dt_s)), 1).size]
+        failed = [logs[k] for k in _with_drift(logs, horizon_s)]
         info = {"n_failures": len(failed), "horizon_s": float(horizon_s), "start_every_s": DRIFT_HULL_START_EVERY_S,
                 "turned": False}
         if len(failed) < DRIFT_HULL_MIN_FAILURES:
@@ -475,8 +474,7 @@ class HybridPredictor:
         self._drift_yaw_in_filter = True        # a refit of a format-10 model chooses as it now forecasts
         if not self.uses_drift_hull:
             return None
-        failed = [a for a in logs
-                  if drift_start_rows(a.dp_active, a.segment_id, int(round(horizon_s / a.dt_s)), 1).size]
+        failed = [logs[k] for k in _with_drift(logs, horizon_s)]
         if len(failed) < DRIFT_HULL_MIN_FAILURES:
             return None
         choice = choose_coefficient(self.drift_hull_objective(failed, horizon_s), munk_coefficient(self.model))
@@ -558,8 +556,7 @@ class HybridPredictor:
         if (np.array_equal(learned.thrust_error_mean, configured.thrust_error_mean)
                 and np.array_equal(learned.thrust_error_std, configured.thrust_error_std)):
             return None
-        failed = [k for k, a in enumerate(logs)
-                  if drift_start_rows(a.dp_active, a.segment_id, int(round(horizon_s / a.dt_s)), 1).size]
+        failed = _with_drift(logs, horizon_s)
         info = {"learned_mean": learned.thrust_error_mean.tolist(), "learned_std": learned.thrust_error_std.tolist(),
                 "n_failures": len(failed), "horizon_s": float(horizon_s), "kept": False}
         if len(failed) >= THRUST_PRIOR_MIN_FAILURES:
@@ -1871,6 +1868,14 @@ def _check_finite_step(eta, nu, lead_s: float):
             f"forecast: the hybrid's rollout diverged at lead {lead_s:g} s for {int(bad.sum())} of {bad.size} "
             f"start(s): the learned correction (nets or hull correction) drove the state to non-finite values. "
             f"Retrain without the hull correction, with the guard on, or on data that covers this regime")
+
+
+def _with_drift(logs, horizon_s: float) -> list[int]:
+    """Indices of the logs (LogArrays) with a failure followed by ``horizon_s`` [s] of drift in one
+    gap-free segment (:func:`~hybridship.residual.drift_hull.drift_start_rows`): the failures
+    that what ``fit`` learns from failures is chosen and checked on."""
+    return [k for k, a in enumerate(logs)
+            if drift_start_rows(a.dp_active, a.segment_id, int(round(horizon_s / a.dt_s)), 1).size]
 
 
 def _corrected_step(eta_1, nu_1, r, bias0_ned, dt_s: float, d_nu, d_eta, wave_axis=None, load_map=None):
