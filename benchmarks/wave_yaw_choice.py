@@ -9,8 +9,9 @@ each vessel's logs decide, the rule ``fit`` already applies to what it learns fr
 out, the turned load is used only if, on the *other* logs' failures, it lowers the mean
 heading error of the forecasts along their drifts and the per-failure gains pass the one-sided
 signed-rank test at 5 % (at least :data:`~hybridship.residual.drift_hull.MIN_FAILURES` failures).
-``fit`` makes the same choice on its training logs with ``wave_turned_yaw_load="auto"``; the
-drift benchmark does not yet make it per test log, which this script does.
+``fit`` makes the same choice on its training logs with ``wave_turned_yaw_load="auto"``, and
+the drift benchmark makes it per test log with ``--wave-yaw-load auto``
+(:func:`hybridship.residual.wave_direction.wave_yaw_choice` in all three).
 
 The forecasts it decides on are the estimator's alone (nets off, as after a failure by
 default; no hull's yaw moment in a drift), started every 10 s along each failure's drift and
@@ -49,8 +50,9 @@ from _results import check_out, command_line
 from hybridship.evaluation.drift import log_files
 from hybridship.fileio import markdown_table, write_text
 from hybridship.predictors import HybridPredictor, as_log_arrays
-from hybridship.residual.drift_hull import MIN_FAILURES, gain_carries_over, signed_rank_p
+from hybridship.residual.drift_hull import signed_rank_p
 from hybridship.residual.ensemble import EnsembleConfig
+from hybridship.residual.wave_direction import wave_yaw_choice
 
 ROOT = Path(__file__).resolve().parents[1]
 RESULTS = ROOT / "docs" / "results"
@@ -81,21 +83,13 @@ def check_errors(logs) -> np.ndarray:
     nets = EnsembleConfig(n_members=1, hidden=2, max_epochs=1, seed=0)
     hp = HybridPredictor("gunnerus", ensemble_config=nets, drift_hull=False).fit(logs, dp_only=True)
     arrays = [as_log_arrays(x, hp.model.vessel) for x in logs]
-    # the errors fit's own choice (wave_turned_yaw_load="auto") is made on
-    return np.array([[hp._drift_errors(a, HORIZON_S, turned)[1] for a in arrays] for turned in (False, True)])
+    return hp.wave_yaw_errors(arrays, HORIZON_S)         # what fit's own choice ("auto") is made on
 
 
 def decide(errors: np.ndarray) -> list[tuple[bool, float]]:
     """Per test log, whether the turned load carries over on the other failures, and the p-value."""
-    L = errors.shape[1]
-    out = []
-    for k in range(L):
-        others = [j for j in range(L) if j != k]
-        if len(others) < MIN_FAILURES:
-            out.append((False, float("nan")))
-            continue
-        out.append(gain_carries_over(errors[0, others], errors[1, others]))
-    return out
+    choices = [wave_yaw_choice(errors, exclude=k) for k in range(errors.shape[1])]
+    return [(c["turned"], c.get("p_value", float("nan"))) for c in choices]
 
 
 def composed_ratios(held_dir: str, turned_dir: str, names, chosen) -> dict:

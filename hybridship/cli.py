@@ -551,6 +551,10 @@ def _in_option_names(message: str) -> str:
     return message
 
 
+#: ``--wave-yaw-load``'s values as ``EnvironmentConfig.wave_turned_yaw_load`` takes them.
+_WAVE_YAW_LOAD = {"on": True, "off": False, "auto": "auto"}
+
+
 def _add_benchmark(sub) -> None:
     p = sub.add_parser("benchmark", help="reproducible benchmark tables (drift, ...)",
                        description="Reproducible benchmarks that write Markdown and CSV tables.")
@@ -558,7 +562,7 @@ def _add_benchmark(sub) -> None:
     d = bsub.add_parser("drift", help="the paper's 15/30/45/60 s drift-error tables after a DP failure",
                         description="Train on --train (DP parts), forecast after every failure in --test, and "
                                     "write errors.csv, errors_per_log.csv, coverage.csv, coverage_intervals.csv, "
-                                    "coverage_heading.csv, drift_hull.csv, "
+                                    "coverage_heading.csv, drift_hull.csv, wave_yaw_load.csv, "
                                     "timing.csv, tables.md and figures "
                                     "to --out. Without --train/--test: the embedded simulated scenarios.")
     d.add_argument("--train", type=path_argument, help="folder of training logs")
@@ -579,9 +583,11 @@ def _add_benchmark(sub) -> None:
                         "training logs hold too few failures of their own (default 6; 0: none)")
     d.add_argument("--no-drift-hull", action="store_true",
                    help="do not learn the hull's yaw moment in a drift from failures (the paper's protocol, strictly)")
-    d.add_argument("--wave-yaw-load", action="store_true",
+    d.add_argument("--wave-yaw-load", nargs="?", const="on", default="off", choices=("on", "off", "auto"),
                    help="after a failure, turn the held yaw load with the waves' axis found in the station "
-                        "keeping's wave-frequency motion (EnvironmentConfig.wave_turned_yaw_load)")
+                        "keeping's wave-frequency motion (EnvironmentConfig.wave_turned_yaw_load): on (the "
+                        "option alone), off (default), or auto: where the other failures show it lowers the "
+                        "heading error")
     d.add_argument("--load-model", choices=("acceleration", "force"), default="acceleration",
                    help="the environment estimator's slowly varying load: an acceleration fixed in NED "
                         "(default) or a NED force and yaw moment (EnvironmentConfig.load_model)")
@@ -757,7 +763,7 @@ def _cmd_benchmark_drift(args) -> int:
                                   n_scenarios=args.scenarios, plots=not args.no_plots, training=args.training,
                                   calibration_scenarios=args.calibration_scenarios,
                                   drift_hull=not args.no_drift_hull,
-                                  environment_config=EnvironmentConfig(wave_turned_yaw_load=args.wave_yaw_load,
+                                  environment_config=EnvironmentConfig(wave_turned_yaw_load=_WAVE_YAW_LOAD[args.wave_yaw_load],
                                                                        load_model=args.load_model))
     except ValueError as exc:
         if not str(exc).startswith(("test: ", "train: ", "n_intervals: ")):

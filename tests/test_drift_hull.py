@@ -505,3 +505,72 @@ def test_the_drift_benchmark_chooses_for_a_failure_without_reading_its_drift(mod
     others = [j for j in range(len(logs)) if j != k]
     assert all(hull_changed[j] != hull[j] for j in others)
     assert all(not np.array_equal(cal_changed[j]["heading"].scale, cal[j]["heading"].scale) for j in others)
+
+
+def test_the_drift_benchmark_turns_the_yaw_load_per_failure_on_the_other_failures(heavy_sway, left_out_choices,
+                                                                                   monkeypatch):
+    """``wave_turned_yaw_load="auto"`` scored on the training logs: each failure gets the yaw load
+    chosen on the other failures' errors (its own play no part), the hull's yaw moment is chosen
+    from the objective with that yaw load, the spread after a failure is calibrated per setting
+    of both, and each failure is forecast with its own; the model is left held."""
+    import copy
+
+    from hybridship.evaluation import drift
+    from hybridship.residual.environment import EnvironmentConfig
+
+    hp, logs, _, _ = left_out_choices
+    hp = copy.deepcopy(hp)
+    hp.environment_config = EnvironmentConfig(wave_turned_yaw_load="auto")
+    hp.wave_yaw_turned = True                           # fit's choice, made on the scored drifts
+    held = np.full(6, 0.05)
+    turned = held - np.array([-0.5, 0.01, 0.02, 0.03, 0.04, 0.05])     # all gain but the first, which loses much
+    monkeypatch.setattr(HybridPredictor, "wave_yaw_errors", lambda self, logs_, h: np.stack([held, turned]))
+    _, wave = drift._wave_yaw_per_log(hp, logs, True, 60.0, list("abcdef"), lambda m: None)
+    assert [c["turned"] for c in wave] == [True] + [False] * 5 and not hp.wave_yaw_turned
+    assert wave[0]["p_value"] == pytest.approx(1 / 32) and {c["n_failures"] for c in wave} == {5}
+    table = drift._wave_yaw_table(hp, wave, list("abcdef"))     # wave_yaw_load.csv
+    assert list(table.turned) == [True] + [False] * 5 and set(table.source) == {"other logs' failures"}
+    np.testing.assert_allclose(table.turned_deg[0], np.degrees(turned[1:].mean()))
+    # the hull's objective of each yaw load (made-up bowls: best at +1 Munk held, -1 turned)
+    asked = []
+
+    def objective(self, logs_, horizon_s=60.0):
+        asked.append(self.wave_yaw_turned)
+        return np.column_stack([_bowl(-1.0 if self.wave_yaw_turned else 1.0, 1.0 + 0.1 * j) for j in range(6)])
+
+    monkeypatch.setattr(HybridPredictor, "drift_hull_objective", objective)
+    _, hull = drift._drift_hull_per_log(hp, logs, True, 60.0, list("abcdef"), lambda m: None, wave)
+    assert sorted(asked) == [False, True] and not hp.wave_yaw_turned
+    assert [c.munk_multiple for c in hull] == [-1.0] + [1.0] * 5
+    # the spread after a failure: the other failures' errors with each failure's own settings
+    seen, real = [], hp.after_stop_errors
+    errors = real(logs, n_intervals=20, horizon_s=60.0)
+
+    def spy(logs_, **kw):
+        seen.append((hp.drift_yaw_uv_rad_per_m2, hp.wave_yaw_turned))
+        return errors
+
+    hp.after_stop_errors = spy
+    _, cal = drift._calibrate_after_stop(hp, logs, True, 0, 0, 20, 60.0, lambda m: None, hull, wave)
+    want = [(c.coefficient_rad_per_m2, w["turned"]) for c, w in zip(hull, wave)]
+    assert sorted(seen) == sorted(set(want)) and len(cal) == 6
+    assert hp.drift_yaw_uv_rad_per_m2 == 0.0 and not hp.wave_yaw_turned
+    used = []
+
+    def forecasts(pred, a, **kw):
+        used.append((pred.drift_yaw_uv_rad_per_m2, pred.wave_yaw_turned))
+        return None
+
+    monkeypatch.setattr(drift.metrics, "drift_forecasts", forecasts)
+    drift._forecast_after_failures({"hybrid": (hp, {})}, logs, 20, 60.0, (60,), hp, cal, hull, wave)
+    assert used == want
+    # scored on other logs, or with the setting: fit's choice, or the setting, for every test log
+    hp.wave_yaw_turned = True
+    assert drift._wave_yaw_per_log(hp, logs, False, 60.0, list("abcdef"), lambda m: None) == ([], None)
+    hp.training_info["wave_yaw_load"] = {"n_failures": 6, "turned": True, "p_value": 0.01}
+    fits = drift._wave_yaw_table(hp, None, ["a", "b"])
+    assert list(fits.turned) == [True, True] and set(fits.source) == {"training logs' failures"}
+    assert list(fits.p_value) == [0.01, 0.01]
+    hp.environment_config = EnvironmentConfig(wave_turned_yaw_load=True)
+    setting = drift._wave_yaw_table(hp, None, ["a"])
+    assert list(setting.source) == ["setting"] and setting.turned[0] and setting.p_value.isna().all()

@@ -28,6 +28,10 @@ samples after the shutdown of every log in ``test``, ``horizon_s`` ahead. The ou
 * ``timing.csv``: training and forecasting wall time per model;
 * ``drift_hull.csv``: the hull's yaw coefficient in a drift each test log was forecast with
   and the evidence it was chosen on (the failures' heading errors with it, with 0 and left out);
+* ``wave_yaw_load.csv``: whether each test log was forecast with the yaw load turned with the
+  waves after the failure, and the evidence of the choice with
+  ``EnvironmentConfig(wave_turned_yaw_load="auto")`` (the failures' heading errors held and
+  turned, the signed-rank test's p-value);
 * ``error_vs_horizon.png`` and ``trajectories.png`` (the paper's Fig. 6: the first five
   forecasts after the failure against the measured track).
 
@@ -60,11 +64,11 @@ from ..fileio import (as_path, atomic_write, check_output_files, earlier_run, ma
                       record_outputs, remove_stale, write_text)
 from ..predictors import DataOnlyPredictor, DeadReckoning, DynamicPredictor, HybridPredictor, as_log_arrays
 from ..predictors.forecast_setup import forecast_step_s, horizon_steps
-from ..predictors.hybrid import AFTER_STOP, AFTER_STOP_LATE, after_stop_scales
-from ..residual.drift_hull import (MIN_FAILURES as DRIFT_HULL_MIN_FAILURES, choose_coefficient, drift_start_rows,
-                                   munk_coefficient)
+from ..predictors.hybrid import AFTER_STOP, AFTER_STOP_LATE, after_stop_scales, logs_with_drift
+from ..residual.drift_hull import MIN_FAILURES as DRIFT_HULL_MIN_FAILURES, choose_coefficient, munk_coefficient
 from ..residual.ensemble import EnsembleConfig
 from ..residual.environment import EnvironmentConfig
+from ..residual.wave_direction import wave_yaw_choice
 
 #: File endings read as logs from a folder.
 LOG_SUFFIXES = (".csv", ".csv.gz", ".parquet", ".pq")
@@ -138,7 +142,7 @@ class DriftBenchmarkResult:
 
 #: The benchmark's output files: tables, then the figures (removed when ``plots`` is off).
 TABLE_FILES = ("errors.csv", "errors_per_log.csv", "coverage.csv", "coverage_intervals.csv", "coverage_heading.csv",
-               "timing.csv", "drift_hull.csv", "tables.md")
+               "timing.csv", "drift_hull.csv", "wave_yaw_load.csv", "tables.md")
 FIGURE_FILES = ("error_vs_horizon.png", "trajectories.png")
 
 
@@ -206,7 +210,8 @@ def run_drift_benchmark(train=None, test=None, out_dir="drift-benchmark", *, ves
         failures when the test logs are the training logs). False: the paper's protocol in
         the strict sense, nothing learned from any failure.
     environment_config : EnvironmentConfig or None
-        The hybrid's environment estimator settings (default: ``EnvironmentConfig()``).
+        The hybrid's environment estimator settings (default: ``EnvironmentConfig()``); with
+        ``wave_turned_yaw_load="auto"`` that yaw load is chosen as ``drift_hull`` is, before it.
     """
     check_flags(plots=plots, progress=progress)         # plots="no" is truthy: the figures were written
     say = (lambda msg: print(msg, flush=True)) if progress else (lambda msg: None)  # noqa: E731
@@ -226,15 +231,14 @@ def run_drift_benchmark(train=None, test=None, out_dir="drift-benchmark", *, ves
     out = make_out_folder(out_dir)
     data_only = DataOnlyPredictor(vessel, ensemble_config=ens_cfg)
     timing = _fit_ensembles({"hybrid": hybrid, "data_only": data_only}, train_arrays, dp_only, say)
-    t_hull, per_log_hull = _drift_hull_per_log(hybrid, test_arrays, test_logs is train_logs, horizon_s, test_names,
-                                               say)
-    t_cal, per_log_cal = _calibrate_after_stop(hybrid, test_arrays, test_logs is train_logs, calibration_scenarios,
-                                               seed, n_intervals, horizon_s, say, per_log_hull)
-    timing += t_hull + t_cal
+    t_choices, (per_log_wave, per_log_hull, per_log_cal) = _choose_per_log(
+        hybrid, test_arrays, test_logs is train_logs, calibration_scenarios, seed, n_intervals, horizon_s, test_names,
+        say)
+    timing += t_choices
     predictors = _benchmark_models(vessel, hybrid, data_only)
 
     fc, all_h, pick, fc_timing = _forecast_after_failures(predictors, test_arrays, n_intervals, horizon_s, horizons,
-                                                          hybrid, per_log_cal, per_log_hull)
+                                                          hybrid, per_log_cal, per_log_hull, per_log_wave)
     timing = pd.DataFrame(timing + fc_timing)
 
     errors = {name: [metrics.absolute_errors(p[:, pick], t[:, pick]) for p, t, _ in per_log]
@@ -246,7 +250,8 @@ def run_drift_benchmark(train=None, test=None, out_dir="drift-benchmark", *, ves
 
     tables = {"errors.csv": long, "errors_per_log.csv": per_log_long, "coverage.csv": coverage,
               "coverage_intervals.csv": intervals, "coverage_heading.csv": heading_cov, "timing.csv": timing,
-              "drift_hull.csv": _drift_hull_table(hybrid, per_log_hull, test_names)}
+              "drift_hull.csv": _drift_hull_table(hybrid, per_log_hull, test_names),
+              "wave_yaw_load.csv": _wave_yaw_table(hybrid, per_log_wave, test_names)}
     outputs = {name: _write_csv(out / name, table) for name, table in tables.items()}
     table2, table3, ratio = _paper_tables(long, windows)
     md = _markdown(table2, table3, ratio, coverage, intervals, timing, test_names, len(train_arrays), ens_cfg,
@@ -349,20 +354,13 @@ _SIMULATED = ("calibration_scenarios", "more intervals or calibration scenarios,
 def _check_before_training(hybrid, dp_only: bool, test_is_train: bool, test_arrays, calibration_scenarios: int,
                            n_intervals: int) -> None:
     """Refuse, before any training, what the run would refuse after it when the test logs are
-    the training logs: training on every row (:func:`_check_rows_not_scored`), a yaw load
-    turned with the waves that ``fit`` would choose on the scored drifts
-    (``wave_turned_yaw_load = "auto"``), and too few
+    the training logs: training on every row (:func:`_check_rows_not_scored`), and too few
     forecasts per lead to calibrate the spread after a failure on (the other logs' failures
     or the simulated DP losses, as :func:`_calibrate_after_stop` chooses). With other test
     logs the choice depends on the failures ``fit`` finds, and is checked after it."""
     _check_rows_not_scored(dp_only, test_is_train)
     if not test_is_train:
         return
-    if hybrid.environment_config.wave_turned_yaw_load == "auto":
-        # fit would choose it on the drifts it is scored on; a choice per test log is not made here
-        raise ValueError("environment_config.wave_turned_yaw_load: 'auto' is chosen by fit on the training logs' "
-                         "failures, which here are the scored ones; give test logs apart from the training logs, "
-                         "or True or False")
     n_min, n_other = hybrid.calibration_config.after_stop_min_failures, len(test_arrays) - 1
     if n_min > 0 and n_other >= n_min:
         _check_calibration_count(n_other, n_intervals, *_OTHER_LOGS)
@@ -446,7 +444,68 @@ def _fit_ensembles(models: dict, train_arrays, dp_only: bool, say) -> list[dict]
     return timing
 
 
-def _drift_hull_per_log(hybrid, test_arrays, test_is_train: bool, horizon_s: float, names, say):
+def _choose_per_log(hybrid, test_arrays, test_is_train: bool, calibration_scenarios: int, seed: int,
+                    n_intervals: int, horizon_s: float, names, say):
+    """What the fitted hybrid learned from failures, chosen again per test log where ``fit``
+    chose it on the scored drifts, in the order each needs the one before: the yaw load
+    turned with the waves (:func:`_wave_yaw_per_log`), the hull's yaw moment in a drift
+    (:func:`_drift_hull_per_log`) and the spread after a failure
+    (:func:`_calibrate_after_stop`). Returns timing rows and the three per-log lists (None:
+    the hybrid's own for every log)."""
+    t_wave, wave = _wave_yaw_per_log(hybrid, test_arrays, test_is_train, horizon_s, names, say)
+    t_hull, hull = _drift_hull_per_log(hybrid, test_arrays, test_is_train, horizon_s, names, say, wave)
+    t_cal, cal = _calibrate_after_stop(hybrid, test_arrays, test_is_train, calibration_scenarios, seed, n_intervals,
+                                       horizon_s, say, hull, wave)
+    return t_wave + t_hull + t_cal, (wave, hull, cal)
+
+
+def _wave_yaw_per_log(hybrid, test_arrays, test_is_train: bool, horizon_s: float, names, say):
+    """Whether each test log is forecast with the yaw load turned with the waves, with
+    ``EnvironmentConfig(wave_turned_yaw_load="auto")``.
+
+    When the test logs are other logs, or with another setting, ``fit``'s choice or the
+    setting applies (returns None). When they are the training logs, ``fit`` chose on the
+    drifts that are scored: each test log gets the choice made on the *other* logs' failures
+    (:func:`~hybridship.residual.wave_direction.wave_yaw_choice`, on
+    :meth:`~hybridship.predictors.HybridPredictor.wave_yaw_errors`), held with fewer than
+    :data:`~hybridship.residual.drift_hull.MIN_FAILURES` of them. Returns timing rows and the
+    list of choices (dicts).
+    """
+    if not (test_is_train and hybrid.environment_config.wave_turned_yaw_load == "auto"
+            and hybrid.environment == "estimator" and hybrid.stop_after_failure):
+        return [], None
+    t0 = time.perf_counter()
+    hybrid.wave_yaw_turned = False          # never a choice that saw the scored drifts
+    usable = logs_with_drift(test_arrays, horizon_s)
+    errors = hybrid.wave_yaw_errors([test_arrays[k] for k in usable], horizon_s) \
+        if len(usable) - 1 >= DRIFT_HULL_MIN_FAILURES else np.empty((2, len(usable)))
+    column = {k: i for i, k in enumerate(usable)}
+    choices = [wave_yaw_choice(errors, exclude=column.get(k)) for k in range(len(test_arrays))]
+    what = f"choose the yaw load turned with the waves on the other logs' failures ({len(usable)} in all), per test log"
+    say(f"{what}: turned for {sum(c['turned'] for c in choices)} of {len(choices)}")
+    return [{"model": "hybrid", "what": what, "seconds": time.perf_counter() - t0}], choices
+
+
+def _wave_yaw_table(hybrid, per_log, names) -> pd.DataFrame:
+    """``log,source,turned,n_failures,held_deg,turned_deg,n_gains,p_value``: whether each test
+    log was forecast with the yaw load turned with the waves after the failure, and the
+    evidence of the choice (:func:`~hybridship.residual.wave_direction.wave_yaw_choice`):
+    ``source`` is ``setting`` (``wave_turned_yaw_load`` True or False), ``training logs'
+    failures`` (``fit``'s choice) or ``other logs' failures`` (per test log)."""
+    cols = ["log", "source", "turned", "n_failures", "held_deg", "turned_deg", "n_gains", "p_value"]
+    if per_log is None and hybrid.environment_config.wave_turned_yaw_load != "auto":
+        rows = [{"log": n, "source": "setting", "turned": hybrid.turns_yaw_load} for n in names]
+    elif per_log is None:
+        info = hybrid.training_info.get("wave_yaw_load") or {}
+        rows = [{**info, "log": n, "source": "training logs' failures", "turned": hybrid.turns_yaw_load}
+                for n in names]
+    else:
+        rows = [{**c, "log": n, "source": "other logs' failures"} for n, c in zip(names, per_log)]
+    return pd.DataFrame(rows, columns=cols).astype({"turned": bool, "n_failures": "Int64", "n_gains": "Int64",
+                                                    "held_deg": float, "turned_deg": float, "p_value": float})
+
+
+def _drift_hull_per_log(hybrid, test_arrays, test_is_train: bool, horizon_s: float, names, say, per_log_wave=None):
     """The hull's yaw coefficient in a drift (:mod:`hybridship.residual.drift_hull`) per test log.
 
     When the test logs are other logs, the one ``fit`` chose on the training logs' failures
@@ -455,25 +514,37 @@ def _drift_hull_per_log(hybrid, test_arrays, test_is_train: bool, horizon_s: flo
     *other* logs' failures whose drift can be scored
     (:func:`~hybridship.residual.drift_hull.drift_start_rows`), or 0 when they are fewer than
     :data:`~hybridship.residual.drift_hull.MIN_FAILURES`. Returns timing rows and the list of
-    :class:`~hybridship.residual.drift_hull.DriftHullChoice` (None entries: 0).
+    :class:`~hybridship.residual.drift_hull.DriftHullChoice` (None entries: 0). Each log's
+    coefficient is chosen with the yaw load it is forecast with (``per_log_wave``, from
+    :func:`_wave_yaw_per_log`, else the hybrid's own).
     """
     if not (test_is_train and hybrid.uses_drift_hull):
         return [], None
     t0 = time.perf_counter()
     hybrid.drift_yaw_uv_rad_per_m2 = 0.0                # never a coefficient that saw the scored drifts
-    usable = [k for k, a in enumerate(test_arrays)
-              if drift_start_rows(a.dp_active, a.segment_id, int(round(horizon_s / a.dt_s)), 1).size]
+    usable = logs_with_drift(test_arrays, horizon_s)
     if len(usable) - 1 < DRIFT_HULL_MIN_FAILURES:
         say(f"hull's yaw moment in a drift: off (fewer than {DRIFT_HULL_MIN_FAILURES} other failures per test log)")
         return [], [None] * len(test_arrays)
-    objective = hybrid.drift_hull_objective([test_arrays[k] for k in usable], horizon_s)
+    turned = _turned_per_log(hybrid, per_log_wave, len(test_arrays))
+    objectives = {}
+    for value in sorted(set(turned)):       # the failures' errors with the yaw load held, or turned
+        hybrid.wave_yaw_turned = value
+        objectives[value] = hybrid.drift_hull_objective([test_arrays[k] for k in usable], horizon_s)
+    hybrid.wave_yaw_turned = turned[0] if per_log_wave is None else False   # each log's own is set when forecast
     munk = munk_coefficient(hybrid.model)
     column = {k: i for i, k in enumerate(usable)}
-    choices = [choose_coefficient(objective, munk, exclude=column.get(k)) for k in range(len(test_arrays))]
+    choices = [choose_coefficient(objectives[turned[k]], munk, exclude=column.get(k)) for k in range(len(test_arrays))]
     what = f"choose the hull's yaw moment in a drift on the other logs' failures ({len(usable)} in all), per test log"
     say(f"{what}: " + ", ".join(f"{n} {c.munk_multiple:g}x Munk{'' if c.adopted else ' (not kept)'}"
                                  for n, c in zip(names, choices)))
     return [{"model": "hybrid", "what": what, "seconds": time.perf_counter() - t0}], choices
+
+
+def _turned_per_log(hybrid, per_log_wave, n_logs: int) -> list[bool]:
+    """Per test log, the hybrid's :attr:`~hybridship.predictors.HybridPredictor.wave_yaw_turned`
+    to forecast it with: its choice in ``per_log_wave``, else the hybrid's own."""
+    return [hybrid.wave_yaw_turned] * n_logs if per_log_wave is None else [c["turned"] for c in per_log_wave]
 
 
 def _drift_hull_table(hybrid, per_log, names) -> pd.DataFrame:
@@ -504,7 +575,8 @@ def _drift_hull_table(hybrid, per_log, names) -> pd.DataFrame:
 
 
 def _calibrate_after_stop(hybrid, test_arrays, test_is_train: bool, calibration_scenarios: int, seed: int,
-                          n_intervals: int, horizon_s: float, say, per_log_hull=None) -> tuple[list[dict], list | None]:
+                          n_intervals: int, horizon_s: float, say, per_log_hull=None,
+                          per_log_wave=None) -> tuple[list[dict], list | None]:
     """The hybrid's spread after a failure, calibrated on the vessel's own failures where the
     training logs have enough of them, else on simulated DP losses (Gunnerus only).
 
@@ -512,7 +584,8 @@ def _calibrate_after_stop(hybrid, test_arrays, test_is_train: bool, calibration_
     when the test logs are the training logs, that calibration has seen the drifts it is
     scored on, so each test log gets one fitted on the *other* logs' failures instead
     (returned per log; None: one calibration for all), from forecasts with the hull's yaw
-    coefficient that log is scored with (``per_log_hull``). Returns timing rows and that list.
+    coefficient and the yaw load that log is scored with (``per_log_hull``, ``per_log_wave``).
+    Returns timing rows and that list.
     """
     timing, t0 = [], time.perf_counter()
     n_min = hybrid.calibration_config.after_stop_min_failures
@@ -529,13 +602,15 @@ def _calibrate_after_stop(hybrid, test_arrays, test_is_train: bool, calibration_
         _check_calibration_count(len(test_arrays) - 1, n_intervals, *_OTHER_LOGS)
         coefficients = [hybrid.drift_yaw_uv_rad_per_m2 if c is None else c.coefficient_rad_per_m2
                         for c in (per_log_hull or [None] * len(test_arrays))]
+        settings = list(zip(coefficients, _turned_per_log(hybrid, per_log_wave, len(test_arrays))))
         errors, per_log = {}, []
-        for k, value in enumerate(coefficients):
-            if value not in errors:             # the logs' errors with this log's coefficient
-                hybrid.drift_yaw_uv_rad_per_m2 = value
-                errors[value] = hybrid.after_stop_errors(test_arrays, n_intervals=n_intervals, horizon_s=horizon_s)
-            per_log.append(after_stop_scales(errors[value][:k] + errors[value][k + 1:], hybrid.calibration_config))
-        hybrid.drift_yaw_uv_rad_per_m2 = 0.0            # each log's own is set when it is forecast
+        for k, setting in enumerate(settings):
+            if setting not in errors:           # the logs' errors with this log's coefficient and yaw load
+                hybrid.drift_yaw_uv_rad_per_m2, hybrid.wave_yaw_turned = setting
+                errors[setting] = hybrid.after_stop_errors(test_arrays, n_intervals=n_intervals, horizon_s=horizon_s)
+            per_log.append(after_stop_scales(errors[setting][:k] + errors[setting][k + 1:], hybrid.calibration_config))
+        # each log's own is set when it is forecast
+        hybrid.drift_yaw_uv_rad_per_m2, hybrid.wave_yaw_turned = 0.0, settings[0][1] if per_log_wave is None else False
         what = f"calibrate after stop on the other {len(test_arrays) - 1} logs' failures, per test log"
         timing.append({"model": "hybrid", "what": what, "seconds": time.perf_counter() - t0})
         say(f"{what} ({timing[-1]['seconds']:.1f} s)")
@@ -593,10 +668,11 @@ def _benchmark_models(vessel, hybrid, data_only) -> dict:
 
 
 def _forecast_after_failures(predictors: dict, test_arrays, n_intervals: int, horizon_s: float, horizons,
-                             hybrid=None, per_log_cal=None, per_log_hull=None):
+                             hybrid=None, per_log_cal=None, per_log_hull=None, per_log_wave=None):
     """Every model's forecasts after the failure of every test log (the ``hybrid`` object with
-    the after-stop calibration ``per_log_cal[k]`` and the hull's yaw coefficient in a drift of
-    ``per_log_hull[k]`` for log ``k`` when given).
+    the after-stop calibration ``per_log_cal[k]``, the hull's yaw coefficient in a drift of
+    ``per_log_hull[k]`` and the yaw load turned with the waves as ``per_log_wave[k]`` chose
+    for log ``k`` when given).
 
     Returns ``fc`` (name -> per log ``(pred, truth, std)``), every lead time ``all_h`` [s], the
     indices ``pick`` of the table's ``horizons`` among them, and timing rows.
@@ -614,6 +690,8 @@ def _forecast_after_failures(predictors: dict, test_arrays, n_intervals: int, ho
             if per_log_hull is not None and pred is hybrid:
                 c = per_log_hull[k]
                 pred.drift_yaw_uv_rad_per_m2 = 0.0 if c is None else c.coefficient_rad_per_m2
+            if per_log_wave is not None and pred is hybrid:
+                pred.wave_yaw_turned = per_log_wave[k]["turned"]
             fc[name].append(metrics.drift_forecasts(pred, a, n_intervals=n_intervals, horizons_s=all_h, **kw))
         sec = time.perf_counter() - t0
         timing.append({"model": name, "what": f"forecast {len(test_arrays) * n_intervals} x {horizon_s:g} s",

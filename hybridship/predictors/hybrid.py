@@ -35,10 +35,10 @@ from ..residual.environment import (EnvironmentConfig, EnvironmentEstimate, Envi
                                     environment_accel, thrust_error_accel, thrust_error_prior_carries_over)
 from ..residual.multistep import MultiStepConfig, collect_starts, train_multistep
 from ..residual.guard import CommandRegime, EnvelopeGuard, ThrustRegime
-from ..residual.wave_direction import wave_axis, yaw_load_factor
+from ..residual.wave_direction import wave_axis, wave_yaw_choice, yaw_load_factor
 from ..residual.drift_hull import (MIN_FAILURES as DRIFT_HULL_MIN_FAILURES, MUNK_MULTIPLES,
                                    START_EVERY_S as DRIFT_HULL_START_EVERY_S, choose_coefficient,
-                                   drift_start_rows, gain_carries_over, munk_coefficient)
+                                   drift_start_rows, munk_coefficient)
 from ..residual.hull import HullCorrection
 from .after_failure import drift_end, drift_forecasts, has_drift, shutdown_index
 from .forecast_setup import (AFTER_STOP, AFTER_STOP_LATE, FORECAST_HISTORY_S, MAX_HORIZON_S, _check_flags,
@@ -452,17 +452,19 @@ class HybridPredictor:
         if not (self.environment_config.wave_turned_yaw_load == "auto" and self.environment == "estimator"
                 and self.stop_after_failure):
             return None
-        failed = [logs[k] for k in _with_drift(logs, horizon_s)]
-        info = {"n_failures": len(failed), "horizon_s": float(horizon_s), "start_every_s": DRIFT_HULL_START_EVERY_S,
-                "turned": False}
-        if len(failed) < DRIFT_HULL_MIN_FAILURES:
-            return info
-        errors = np.array([[self._drift_errors(a, horizon_s, turned)[1] for a in failed] for turned in (False, True)])
-        turned, p_value = gain_carries_over(errors[0], errors[1])
-        self.wave_yaw_turned = bool(turned)
-        info.update(held_deg=float(np.degrees(errors[0].mean())), turned_deg=float(np.degrees(errors[1].mean())),
-                    n_gains=int(np.sum(errors[1] < errors[0])), p_value=p_value, turned=bool(turned))
-        return info
+        failed = [logs[k] for k in logs_with_drift(logs, horizon_s)]
+        errors = self.wave_yaw_errors(failed, horizon_s) if len(failed) >= DRIFT_HULL_MIN_FAILURES \
+            else np.empty((2, len(failed)))
+        info = wave_yaw_choice(errors)
+        self.wave_yaw_turned = info["turned"]
+        return {**info, "horizon_s": float(horizon_s), "start_every_s": DRIFT_HULL_START_EVERY_S}
+
+    def wave_yaw_errors(self, logs, horizon_s: float) -> np.ndarray:
+        """Per failure, the mean heading error [rad] (2, L) of the estimator's forecasts along
+        its drift (:meth:`_drift_errors`) with the yaw load held (row 0) and turned with the
+        waves (row 1): what :func:`~hybridship.residual.wave_direction.wave_yaw_choice` decides
+        on. ``logs`` (LogArrays) each have a failure followed by ``horizon_s`` [s] of drift."""
+        return np.array([[self._drift_errors(a, horizon_s, turned)[1] for a in logs] for turned in (False, True)])
 
     def _fit_drift_hull(self, logs, horizon_s: float):
         """With ``drift_hull`` and at least :data:`~hybridship.residual.drift_hull.MIN_FAILURES`
@@ -474,7 +476,7 @@ class HybridPredictor:
         self._drift_yaw_in_filter = True        # a refit of a format-10 model chooses as it now forecasts
         if not self.uses_drift_hull:
             return None
-        failed = [logs[k] for k in _with_drift(logs, horizon_s)]
+        failed = [logs[k] for k in logs_with_drift(logs, horizon_s)]
         if len(failed) < DRIFT_HULL_MIN_FAILURES:
             return None
         choice = choose_coefficient(self.drift_hull_objective(failed, horizon_s), munk_coefficient(self.model))
@@ -556,7 +558,7 @@ class HybridPredictor:
         if (np.array_equal(learned.thrust_error_mean, configured.thrust_error_mean)
                 and np.array_equal(learned.thrust_error_std, configured.thrust_error_std)):
             return None
-        failed = _with_drift(logs, horizon_s)
+        failed = logs_with_drift(logs, horizon_s)
         info = {"learned_mean": learned.thrust_error_mean.tolist(), "learned_std": learned.thrust_error_std.tolist(),
                 "n_failures": len(failed), "horizon_s": float(horizon_s), "kept": False}
         if len(failed) >= THRUST_PRIOR_MIN_FAILURES:
@@ -1870,7 +1872,7 @@ def _check_finite_step(eta, nu, lead_s: float):
             f"Retrain without the hull correction, with the guard on, or on data that covers this regime")
 
 
-def _with_drift(logs, horizon_s: float) -> list[int]:
+def logs_with_drift(logs, horizon_s: float) -> list[int]:
     """Indices of the logs (LogArrays) with a failure followed by ``horizon_s`` [s] of drift in one
     gap-free segment (:func:`~hybridship.residual.drift_hull.drift_start_rows`): the failures
     that what ``fit`` learns from failures is chosen and checked on."""

@@ -41,8 +41,9 @@ import numpy as np
 from scipy.signal import butter, sosfiltfilt
 
 from ..frames import body_to_ned
+from .drift_hull import MIN_FAILURES, gain_carries_over
 
-__all__ = ["WaveAxis", "wave_axis", "yaw_load_factor"]
+__all__ = ["WaveAxis", "wave_axis", "wave_yaw_choice", "yaw_load_factor"]
 
 #: Wave periods [s] whose motion gives the axis: above the 1-s sampling's Nyquist limit with
 #: margin, below the slow drift and the DP's own oscillations.
@@ -132,3 +133,35 @@ def yaw_load_factor(psi_rad: np.ndarray, axis: np.ndarray) -> np.ndarray:
     d, s2 = axis[:, 0], axis[:, 1]
     ok = np.isfinite(d) & np.isfinite(s2) & (np.nan_to_num(s2) != 0.0)
     return np.where(ok, np.sin(2.0 * (np.nan_to_num(d) - psi_rad)) / np.where(ok, s2, 1.0), 1.0)
+
+
+def wave_yaw_choice(errors_rad: np.ndarray, exclude: int | None = None) -> dict:
+    """Whether the yaw load should turn with the waves after a failure, by the rule of what
+    ``fit`` learns from failures (:func:`~hybridship.residual.drift_hull.gain_carries_over`).
+
+    Parameters
+    ----------
+    errors_rad : ndarray, shape (2, L)
+        Per failure, the mean heading error [rad] of the forecasts along its drift with the
+        yaw load held (row 0) and turned with the waves (row 1).
+    exclude : int or None
+        A failure left out of the choice (the one a benchmark then scores), or None.
+
+    Returns
+    -------
+    dict
+        ``n_failures`` (those it was chosen on) and ``turned``; with at least
+        :data:`~hybridship.residual.drift_hull.MIN_FAILURES` failures also their mean errors
+        ``held_deg`` and ``turned_deg`` [deg], ``n_gains`` (failures with a lower error turned)
+        and the signed-rank test's ``p_value``. Fewer failures: held (``turned`` False).
+    """
+    errors_rad = np.asarray(errors_rad, dtype=float)
+    keep = [j for j in range(errors_rad.shape[1]) if j != exclude]
+    held, turned = errors_rad[0, keep], errors_rad[1, keep]
+    info = {"n_failures": len(keep), "turned": False}
+    if len(keep) < MIN_FAILURES:
+        return info
+    chosen, p_value = gain_carries_over(held, turned)
+    info.update(held_deg=float(np.degrees(held.mean())), turned_deg=float(np.degrees(turned.mean())),
+                n_gains=int(np.sum(turned < held)), p_value=p_value, turned=bool(chosen))
+    return info
