@@ -763,8 +763,9 @@ def _cmd_benchmark_drift(args) -> int:
                                   n_scenarios=args.scenarios, plots=not args.no_plots, training=args.training,
                                   calibration_scenarios=args.calibration_scenarios,
                                   drift_hull=not args.no_drift_hull,
-                                  environment_config=EnvironmentConfig(wave_turned_yaw_load=_WAVE_YAW_LOAD[args.wave_yaw_load],
-                                                                       load_model=args.load_model))
+                                  environment_config=EnvironmentConfig(
+                                      wave_turned_yaw_load=_WAVE_YAW_LOAD[args.wave_yaw_load],
+                                      load_model=args.load_model))
     except ValueError as exc:
         if not str(exc).startswith(("test: ", "train: ", "n_intervals: ")):
             raise

@@ -478,7 +478,7 @@ def _wave_yaw_per_log(hybrid, test_arrays, test_is_train: bool, horizon_s: float
     hybrid.wave_yaw_turned = False          # never a choice that saw the scored drifts
     usable = logs_with_drift(test_arrays, horizon_s)
     errors = hybrid.wave_yaw_errors([test_arrays[k] for k in usable], horizon_s) \
-        if len(usable) - 1 >= DRIFT_HULL_MIN_FAILURES else np.empty((2, len(usable)))
+        if len(usable) >= DRIFT_HULL_MIN_FAILURES else np.empty((2, len(usable)))   # fewer: held, not read
     column = {k: i for i, k in enumerate(usable)}
     choices = [wave_yaw_choice(errors, exclude=column.get(k)) for k in range(len(test_arrays))]
     what = f"choose the yaw load turned with the waves on the other logs' failures ({len(usable)} in all), per test log"
