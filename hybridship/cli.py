@@ -323,6 +323,7 @@ def _add_train(sub) -> None:
                    help="logs of manoeuvres, not station keeping: train with the settings of 'hybridship benchmark "
                         "manoeuvre' (multi-step training, the runs' mean residual as environment, the command "
                         "guard; every row; docs/esso-osaka.md) instead of the station-keeping and drift ones")
+    _add_wave_yaw_load(p, "the training logs' failures (five or more) show")
     p.set_defaults(func=_cmd_train)
 
 
@@ -351,6 +352,10 @@ def _cmd_train(args) -> int:
         raise UsageError(f"{_PROG} train: error: --out {args.out}: exists and is not a hybridship model file "
                          f"(its arrays would be lost); give another path or remove it")
     _check_writable(args.out, f"{_PROG} train")
+    if args.manoeuvre and args.wave_yaw_load != "off":
+        raise UsageError(f"{_PROG} train: error: --wave-yaw-load {args.wave_yaw_load}: not used with --manoeuvre "
+                         f"(its environment is the runs' mean residual, and runs have no failure); expected one "
+                         f"or the other")
     if args.manoeuvre:
         from dataclasses import replace
 
@@ -370,7 +375,11 @@ def _cmd_train(args) -> int:
             print(f"{_PROG} train: note: no log has a dp_active column; trained with the station-keeping and drift "
                   f"settings (the default). Logs of manoeuvres train with --manoeuvre (docs/esso-osaka.md)",
                   file=sys.stderr)
-        hp = HybridPredictor(vessel, ensemble_config=EnsembleConfig(n_members=args.members, seed=args.seed))
+        from .residual.environment import EnvironmentConfig
+
+        environment = EnvironmentConfig(wave_turned_yaw_load=_WAVE_YAW_LOAD[args.wave_yaw_load])
+        hp = HybridPredictor(vessel, ensemble_config=EnsembleConfig(n_members=args.members, seed=args.seed),
+                             environment_config=environment)
         hp.fit(files, dp_only=not args.all_rows, progress=sys.stderr.isatty())
     hp.save(args.out)
     print(f"trained on {hp.training_info['n_rows']} samples from {len(files)} logs with the physics of vessel "
@@ -426,6 +435,18 @@ def _learned_from_failures(info: dict) -> list[str]:
             check = f"{prior['n_failures']} failures, fewer than the {THRUST_PRIOR_MIN_FAILURES} the check needs"
         lines.append(f"thrust error learned at the thrust stops ({mean}): {'kept' if prior['kept'] else 'not kept'} "
                      f"({check})")
+    wave = info.get("wave_yaw_load")
+    if wave is not None:
+        choice = "turned" if wave["turned"] else "held"
+        if "p_value" in wave:
+            lines.append(f"yaw load after a failure: {choice} with the waves on {wave['n_failures']} failures "
+                         f"(heading {wave['turned_deg']:.2f} deg turned against {wave['held_deg']:.2f} deg held, "
+                         f"{wave['n_gains']} of {wave['n_failures']} better, signed-rank p = {wave['p_value']:.3g})")
+        else:
+            from .residual.drift_hull import MIN_FAILURES
+
+            lines.append(f"yaw load after a failure: held ({wave['n_failures']} failures, fewer than the "
+                         f"{MIN_FAILURES} the choice needs)")
     return lines
 
 
@@ -555,6 +576,14 @@ def _in_option_names(message: str) -> str:
 _WAVE_YAW_LOAD = {"on": True, "off": False, "auto": "auto"}
 
 
+def _add_wave_yaw_load(parser, who: str) -> None:
+    """``--wave-yaw-load [on|off|auto]`` (alone: on), ``who`` naming what decides with auto."""
+    parser.add_argument("--wave-yaw-load", nargs="?", const="on", default="off", choices=tuple(_WAVE_YAW_LOAD),
+                        help="after a failure, turn the held yaw load with the waves' axis found in the station "
+                             "keeping's wave-frequency motion (EnvironmentConfig.wave_turned_yaw_load): on (the "
+                             f"option alone), off (default), or auto: where {who} it lowers the heading error")
+
+
 def _add_benchmark(sub) -> None:
     p = sub.add_parser("benchmark", help="reproducible benchmark tables (drift, ...)",
                        description="Reproducible benchmarks that write Markdown and CSV tables.")
@@ -583,11 +612,7 @@ def _add_benchmark(sub) -> None:
                         "training logs hold too few failures of their own (default 6; 0: none)")
     d.add_argument("--no-drift-hull", action="store_true",
                    help="do not learn the hull's yaw moment in a drift from failures (the paper's protocol, strictly)")
-    d.add_argument("--wave-yaw-load", nargs="?", const="on", default="off", choices=("on", "off", "auto"),
-                   help="after a failure, turn the held yaw load with the waves' axis found in the station "
-                        "keeping's wave-frequency motion (EnvironmentConfig.wave_turned_yaw_load): on (the "
-                        "option alone), off (default), or auto: where the other failures show it lowers the "
-                        "heading error")
+    _add_wave_yaw_load(d, "the other failures show")
     d.add_argument("--load-model", choices=("acceleration", "force"), default="acceleration",
                    help="the environment estimator's slowly varying load: an acceleration fixed in NED "
                         "(default) or a NED force and yaw moment (EnvironmentConfig.load_model)")

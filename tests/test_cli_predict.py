@@ -427,6 +427,36 @@ def test_train_reports_what_it_learned_from_failures():
                    "(2 failures, fewer than the 5 the check needs)"]
 
 
+def test_train_reports_the_yaw_load_its_failures_chose():
+    """With ``--wave-yaw-load auto`` `hybridship train` prints whether the training logs'
+    failures turned the yaw load with the waves, with the errors and test that decided it."""
+    from hybridship.cli import _learned_from_failures
+
+    wave = {"n_failures": 20, "turned": True, "held_deg": 1.54, "turned_deg": 1.42, "n_gains": 12, "p_value": 0.0012}
+    line, = _learned_from_failures({"wave_yaw_load": wave})
+    assert line == ("yaw load after a failure: turned with the waves on 20 failures (heading 1.42 deg turned "
+                    "against 1.54 deg held, 12 of 20 better, signed-rank p = 0.0012)")
+    few, = _learned_from_failures({"wave_yaw_load": {"n_failures": 3, "turned": False}})
+    assert few == "yaw load after a failure: held (3 failures, fewer than the 5 the choice needs)"
+
+
+def test_train_takes_the_yaw_load_option_into_the_model_file(log_dir, tmp_path, capsys):
+    """``train --wave-yaw-load auto`` writes a model that chooses it (two failures, too few:
+    held, said); with --manoeuvre, whose environment is not the estimator, it is refused by name
+    before any training."""
+    from hybridship.predictors import HybridPredictor
+
+    out = tmp_path / "m.npz"
+    assert main(["train", "--logs", str(log_dir), "--out", str(out), "--members", "2", "--wave-yaw-load", "auto"]) == 0
+    hp = HybridPredictor.load(out)
+    assert hp.environment_config.wave_turned_yaw_load == "auto" and not hp.turns_yaw_load
+    assert "yaw load after a failure: held (2 failures, fewer than the 5 the choice needs)" in capsys.readouterr().out
+    rc = main(["train", "--logs", str(log_dir), "--out", str(tmp_path / "n.npz"), "--manoeuvre", "--wave-yaw-load"])
+    assert rc == 2 and not (tmp_path / "n.npz").exists()
+    err = capsys.readouterr().err
+    assert err.startswith("hybridship train: error: --wave-yaw-load on: not used with --manoeuvre"), err
+
+
 def test_cli_warnings_and_short_logs_speak_the_users_words(log_dir, tmp_path, capsys):
     """A log-format warning is one line in the command's words (not the library's source
     line); training data too short names the logs, not an internal function."""
