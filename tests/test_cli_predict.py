@@ -440,7 +440,7 @@ def test_train_reports_the_yaw_load_its_failures_chose():
     assert few == "yaw load after a failure: held (3 failures, fewer than the 5 the choice needs)"
 
 
-def test_train_takes_the_yaw_load_option_into_the_model_file(log_dir, tmp_path, capsys):
+def test_train_takes_the_yaw_load_option_into_the_model_file(log_dir, tmp_path, capsys, monkeypatch):
     """``train --wave-yaw-load auto`` writes a model that chooses it (two failures, too few:
     held, said); with --manoeuvre, whose environment is not the estimator, it is refused by name
     before any training."""
@@ -451,10 +451,37 @@ def test_train_takes_the_yaw_load_option_into_the_model_file(log_dir, tmp_path, 
     hp = HybridPredictor.load(out)
     assert hp.environment_config.wave_turned_yaw_load == "auto" and not hp.turns_yaw_load
     assert "yaw load after a failure: held (2 failures, fewer than the 5 the choice needs)" in capsys.readouterr().out
+    def no_training(*args, **kwargs):
+        raise AssertionError("trained")
+
+    monkeypatch.setattr(HybridPredictor, "fit", no_training)
     rc = main(["train", "--logs", str(log_dir), "--out", str(tmp_path / "n.npz"), "--manoeuvre", "--wave-yaw-load"])
     assert rc == 2 and not (tmp_path / "n.npz").exists()
     err = capsys.readouterr().err
     assert err.startswith("hybridship train: error: --wave-yaw-load on: not used with --manoeuvre"), err
+
+
+@pytest.mark.parametrize("given, wanted", [([], False), (["--wave-yaw-load"], True),
+                                            (["--wave-yaw-load", "on"], True), (["--wave-yaw-load", "off"], False),
+                                            (["--wave-yaw-load", "auto"], "auto")])
+def test_benchmark_drift_passes_the_yaw_load_option_as_the_config_takes_it(tmp_path, monkeypatch, given, wanted):
+    """``benchmark drift --wave-yaw-load``: alone or ``on`` True, ``off`` (the default) False,
+    ``auto`` "auto", as ``EnvironmentConfig.wave_turned_yaw_load`` takes them."""
+    from hybridship.evaluation import drift
+
+    seen = []
+
+    class Stop(Exception):
+        pass
+
+    def run(*args, environment_config=None, **kwargs):
+        seen.append(environment_config.wave_turned_yaw_load)
+        raise Stop      # before any work
+
+    monkeypatch.setattr(drift, "run_drift_benchmark", run)
+    with pytest.raises(Stop):
+        main(["benchmark", "drift", "--out", str(tmp_path / "out"), *given])
+    assert seen == [wanted] and type(seen[0]) is type(wanted)
 
 
 def test_cli_warnings_and_short_logs_speak_the_users_words(log_dir, tmp_path, capsys):

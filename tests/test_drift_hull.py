@@ -514,6 +514,7 @@ def test_the_drift_benchmark_turns_the_yaw_load_per_failure_on_the_other_failure
     from the objective with that yaw load, the spread after a failure is calibrated per setting
     of both, and each failure is forecast with its own; the model is left held."""
     import copy
+    from types import SimpleNamespace
 
     from hybridship.evaluation import drift
     from hybridship.residual.environment import EnvironmentConfig
@@ -564,6 +565,26 @@ def test_the_drift_benchmark_turns_the_yaw_load_per_failure_on_the_other_failure
     monkeypatch.setattr(drift.metrics, "drift_forecasts", forecasts)
     drift._forecast_after_failures({"hybrid": (hp, {})}, logs, 20, 60.0, (60,), hp, cal, hull, wave)
     assert used == want
+    # too few other failures for the spread: simulated DP losses calibrate it, once per yaw load
+    from dataclasses import replace
+
+    from hybridship.sim import scenario
+
+    hp.calibration_config = replace(hp.calibration_config, after_stop_min_failures=10)
+    monkeypatch.setattr(scenario, "embedded_scenarios", lambda n, seed: [SimpleNamespace(log=None)] * n)
+    calibrated = []
+
+    def calibrate(sims, **kw):
+        calibrated.append(hp.wave_yaw_turned)
+        hp.calibration["after_stop"] = {"turned": hp.wave_yaw_turned}
+
+    hp.calibrate_after_stop = calibrate
+    _, sim_cal = drift._calibrate_after_stop(hp, logs, True, 6, 0, 20, 60.0, lambda m: None, hull, wave)
+    assert calibrated == [False, True] and not hp.wave_yaw_turned
+    assert sim_cal == [{"turned": w["turned"]} for w in wave]
+    _, one = drift._calibrate_after_stop(hp, logs, True, 6, 0, 20, 60.0, lambda m: None, hull,
+                                         [{**w, "turned": False} for w in wave])
+    assert one is None and calibrated[2:] == [False]
     # scored on other logs, or with the setting: fit's choice, or the setting, for every test log
     hp.wave_yaw_turned = True
     assert drift._wave_yaw_per_log(hp, logs, False, 60.0, list("abcdef"), lambda m: None) == ([], None)

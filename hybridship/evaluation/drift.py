@@ -584,8 +584,8 @@ def _calibrate_after_stop(hybrid, test_arrays, test_is_train: bool, calibration_
     when the test logs are the training logs, that calibration has seen the drifts it is
     scored on, so each test log gets one fitted on the *other* logs' failures instead
     (returned per log; None: one calibration for all), from forecasts with the hull's yaw
-    coefficient and the yaw load that log is scored with (``per_log_hull``, ``per_log_wave``).
-    Returns timing rows and that list.
+    coefficient and the yaw load that log is scored with (``per_log_hull``, ``per_log_wave``);
+    on simulated DP losses, one per yaw load of the test logs. Returns timing rows and that list.
     """
     timing, t0 = [], time.perf_counter()
     n_min = hybrid.calibration_config.after_stop_min_failures
@@ -622,12 +622,20 @@ def _calibrate_after_stop(hybrid, test_arrays, test_is_train: bool, calibration_
         _check_calibration_count(int(calibration_scenarios), n_intervals, *_SIMULATED)
 
         sims = embedded_scenarios(int(calibration_scenarios), seed + 1000)
-        hybrid.calibrate_after_stop([s.log for s in sims], n_intervals=n_intervals, horizon_s=horizon_s)
-        timing.append({"model": "hybrid", "what": f"calibrate after stop on {len(sims)} simulated DP losses",
+        turned = _turned_per_log(hybrid, per_log_wave, len(test_arrays))
+        per_setting = {}
+        for value in sorted(set(turned)):       # with the yaw load each test log is forecast with
+            hybrid.wave_yaw_turned = value
+            hybrid.calibrate_after_stop([s.log for s in sims], n_intervals=n_intervals, horizon_s=horizon_s)
+            per_setting[value] = hybrid.calibration[AFTER_STOP]
+        hybrid.wave_yaw_turned = turned[0] if per_log_wave is None else False
+        what = f"calibrate after stop on {len(sims)} simulated DP losses"
+        timing.append({"model": "hybrid", "what": what + (", per yaw load" if len(per_setting) > 1 else ""),
                        "seconds": time.perf_counter() - t0})
         say(f"calibrated the hybrid's spread after a failure on {len(sims)} simulated DP losses "
             f"({timing[-1]['seconds']:.1f} s)")
-    elif calibration_scenarios > 0:
+        return timing, None if len(per_setting) == 1 else [per_setting[t] for t in turned]
+    if calibration_scenarios > 0:
         say(f"no simulated DP losses for vessel {hybrid.model.vessel.name!r} (they are made for the packaged "
             f"Gunnerus): the spread after a failure is raw")
     return timing, None
