@@ -526,12 +526,12 @@ def _drift_hull_per_log(hybrid, test_arrays, test_is_train: bool, horizon_s: flo
     if len(usable) - 1 < DRIFT_HULL_MIN_FAILURES:
         say(f"hull's yaw moment in a drift: off (fewer than {DRIFT_HULL_MIN_FAILURES} other failures per test log)")
         return [], [None] * len(test_arrays)
-    turned = _turned_per_log(hybrid, per_log_wave, len(test_arrays))
+    turned, before = _turned_per_log(hybrid, per_log_wave, len(test_arrays)), hybrid.wave_yaw_turned
     objectives = {}
     for value in sorted(set(turned)):       # the failures' errors with the yaw load held, or turned
         hybrid.wave_yaw_turned = value
         objectives[value] = hybrid.drift_hull_objective([test_arrays[k] for k in usable], horizon_s)
-    hybrid.wave_yaw_turned = turned[0] if per_log_wave is None else False   # each log's own is set when forecast
+    hybrid.wave_yaw_turned = before             # each log's own is set when it is forecast
     munk = munk_coefficient(hybrid.model)
     column = {k: i for i, k in enumerate(usable)}
     choices = [choose_coefficient(objectives[turned[k]], munk, exclude=column.get(k)) for k in range(len(test_arrays))]
@@ -603,14 +603,14 @@ def _calibrate_after_stop(hybrid, test_arrays, test_is_train: bool, calibration_
         coefficients = [hybrid.drift_yaw_uv_rad_per_m2 if c is None else c.coefficient_rad_per_m2
                         for c in (per_log_hull or [None] * len(test_arrays))]
         settings = list(zip(coefficients, _turned_per_log(hybrid, per_log_wave, len(test_arrays))))
-        errors, per_log = {}, []
+        errors, per_log, before = {}, [], hybrid.wave_yaw_turned
         for k, setting in enumerate(settings):
             if setting not in errors:           # the logs' errors with this log's coefficient and yaw load
                 hybrid.drift_yaw_uv_rad_per_m2, hybrid.wave_yaw_turned = setting
                 errors[setting] = hybrid.after_stop_errors(test_arrays, n_intervals=n_intervals, horizon_s=horizon_s)
             per_log.append(after_stop_scales(errors[setting][:k] + errors[setting][k + 1:], hybrid.calibration_config))
         # each log's own is set when it is forecast
-        hybrid.drift_yaw_uv_rad_per_m2, hybrid.wave_yaw_turned = 0.0, settings[0][1] if per_log_wave is None else False
+        hybrid.drift_yaw_uv_rad_per_m2, hybrid.wave_yaw_turned = 0.0, before
         what = f"calibrate after stop on the other {len(test_arrays) - 1} logs' failures, per test log"
         timing.append({"model": "hybrid", "what": what, "seconds": time.perf_counter() - t0})
         say(f"{what} ({timing[-1]['seconds']:.1f} s)")
@@ -622,13 +622,13 @@ def _calibrate_after_stop(hybrid, test_arrays, test_is_train: bool, calibration_
         _check_calibration_count(int(calibration_scenarios), n_intervals, *_SIMULATED)
 
         sims = embedded_scenarios(int(calibration_scenarios), seed + 1000)
-        turned = _turned_per_log(hybrid, per_log_wave, len(test_arrays))
+        turned, before = _turned_per_log(hybrid, per_log_wave, len(test_arrays)), hybrid.wave_yaw_turned
         per_setting = {}
         for value in sorted(set(turned)):       # with the yaw load each test log is forecast with
             hybrid.wave_yaw_turned = value
             hybrid.calibrate_after_stop([s.log for s in sims], n_intervals=n_intervals, horizon_s=horizon_s)
             per_setting[value] = hybrid.calibration[AFTER_STOP]
-        hybrid.wave_yaw_turned = turned[0] if per_log_wave is None else False
+        hybrid.wave_yaw_turned = before
         what = f"calibrate after stop on {len(sims)} simulated DP losses"
         timing.append({"model": "hybrid", "what": what + (", per yaw load" if len(per_setting) > 1 else ""),
                        "seconds": time.perf_counter() - t0})
