@@ -273,7 +273,7 @@ def test_auto_turns_the_yaw_load_only_where_the_training_failures_gain(model, mo
     logs = [physics_log(model, duration_s=300, t_shutdown_s=200, seed=s) for s in range(n_logs)]
     asked = []
 
-    def drift_errors(self, log, horizon_s, turned=None):       # the check's forecasts, made up
+    def drift_errors(self, log, horizon_s, turned=None, label="log"):     # the check's forecasts, made up
         asked.append(turned)
         return np.array([1.0, 0.05 - (gain_rad if turned else 0.0) + 1e-3 * len(asked)])
 
@@ -292,3 +292,28 @@ def test_auto_turns_the_yaw_load_only_where_the_training_failures_gain(model, mo
     fixed = HybridPredictor(model.vessel, ensemble_config=tiny, drift_hull=False,
                             environment_config=EnvironmentConfig(wave_turned_yaw_load=True)).fit(logs[:1])
     assert "wave_yaw_load" not in fixed.training_info and fixed.turns_yaw_load
+
+
+def test_wave_yaw_errors_are_checked_at_the_boundary_and_small_on_the_models_own_logs(model):
+    """HybridPredictor.wave_yaw_errors: an unfitted predictor, a bad horizon, one DataFrame and
+    a log without a failure are refused by name (an unfitted one failed in an internal
+    AttributeError, a DataFrame was iterated by its columns, a log without a drift was not
+    named); on noise-free logs the model made, without waves, both errors are small, and a log's
+    errors do not depend on the logs beside it."""
+    from hybridship.predictors.forecast_setup import HorizonError
+
+    logs = [physics_log(model, duration_s=400, t_shutdown_s=250, seed=s) for s in (1, 2)]
+    with pytest.raises(RuntimeError, match="fit"):
+        HybridPredictor(model.vessel).wave_yaw_errors(logs, 60.0)
+    tiny = EnsembleConfig(n_members=2, hidden=8, max_epochs=5, patience=2, seed=0)
+    hp = HybridPredictor(model.vessel, ensemble_config=tiny, drift_hull=False).fit(logs)
+    errors = hp.wave_yaw_errors(logs, 60.0)
+    assert errors.shape == (2, 2) and np.all(errors > 0) and np.all(errors < np.radians(0.1))
+    np.testing.assert_array_equal(hp.wave_yaw_errors(logs[1], 60.0), errors[:, 1:])
+    with pytest.raises(HorizonError, match="^horizon_s: 60.4 s is not a whole number"):
+        hp.wave_yaw_errors(logs, 60.4)
+    station = physics_log(model, duration_s=400, t_shutdown_s=None, seed=3)
+    with pytest.raises(ValueError, match=r"^logs\[1\]: no failure followed by 60 s of drift"):
+        hp.wave_yaw_errors([logs[0], station], 60.0)
+    with pytest.raises(ValueError, match="^logs: expected at least one log"):
+        hp.wave_yaw_errors([], 60.0)

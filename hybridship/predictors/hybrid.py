@@ -459,12 +459,25 @@ class HybridPredictor:
         self.wave_yaw_turned = info["turned"]
         return {**info, "horizon_s": float(horizon_s), "start_every_s": DRIFT_HULL_START_EVERY_S}
 
-    def wave_yaw_errors(self, logs, horizon_s: float) -> np.ndarray:
+    def wave_yaw_errors(self, logs, horizon_s: float = 60.0) -> np.ndarray:
         """Per failure, the mean heading error [rad] (2, L) of the estimator's forecasts along
         its drift (:meth:`_drift_errors`) with the yaw load held (row 0) and turned with the
         waves (row 1): what :func:`~hybridship.residual.wave_direction.wave_yaw_choice` decides
-        on. ``logs`` (LogArrays) each have a failure followed by ``horizon_s`` [s] of drift."""
-        return np.array([[self._drift_errors(a, horizon_s, turned)[1] for a in logs] for turned in (False, True)])
+        on.
+
+        Parameters
+        ----------
+        logs : path, DataFrame or LogArrays, or an iterable of them
+            Logs with a failure followed by ``horizon_s`` of drift in one gap-free segment
+            (at least one; a log without is refused, named).
+        horizon_s : float
+            Length of each forecast [s], a whole number of each log's steps.
+        """
+        self._check_fitted()
+        horizon_s = check_number("horizon_s", horizon_s, lo=0.0, hi=MAX_HORIZON_S, lo_open=True)
+        given = log_list(logs)              # one log (a path, a DataFrame) is a list of one; none is refused
+        return np.array([[self._drift_errors(log, horizon_s, turned, log_label(log, k) if len(given) > 1 else "log")[1]
+                          for k, log in enumerate(given)] for turned in (False, True)])
 
     def _fit_drift_hull(self, logs, horizon_s: float):
         """With ``drift_hull`` and at least :data:`~hybridship.residual.drift_hull.MIN_FAILURES`
@@ -578,12 +591,12 @@ class HybridPredictor:
         self.estimator = learned if info["kept"] else configured
         return info
 
-    def _drift_errors(self, log, horizon_s: float, turned: bool | None = None) -> np.ndarray:
+    def _drift_errors(self, log, horizon_s: float, turned: bool | None = None, label: str = "log") -> np.ndarray:
         """Mean position error [m] and heading error [rad] of the forecasts along a log's drift
-        (:meth:`_drift_starts`) with the estimator alone: no nets (as after a failure by
-        default) and no hull's yaw moment in a drift; the yaw load turned with the waves as the
-        forecasts turn it, or as ``turned`` says when given."""
-        st, truth = self._drift_starts(log, horizon_s)
+        (:meth:`_drift_starts`, ``label`` naming the log in its refusal) with the estimator
+        alone: no nets (as after a failure by default) and no hull's yaw moment in a drift; the
+        yaw load turned with the waves as the forecasts turn it, or as ``turned`` says when given."""
+        st, truth = self._drift_starts(log, horizon_s, label)
         eta0, nu0, dev0, bias0, current, acc_ext, _ = self._estimated_start(st, 1, drift_yaw_uv=0.0)
         eta, _, _, _ = self.rollout(eta0, nu0, dev0, bias0, st.rpm, st.az, st.wind, st.H, st.dt, guard=False,
                                     substeps=st.substeps, current=current, accel_ext=acc_ext, nets=False,
