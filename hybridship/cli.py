@@ -352,7 +352,7 @@ def _cmd_train(args) -> int:
         raise UsageError(f"{_PROG} train: error: --out {args.out}: exists and is not a hybridship model file "
                          f"(its arrays would be lost); give another path or remove it")
     _check_writable(args.out, f"{_PROG} train")
-    if args.manoeuvre and args.wave_yaw_load != "off":
+    if args.manoeuvre and args.wave_yaw_load not in (None, "off"):
         raise UsageError(f"{_PROG} train: error: --wave-yaw-load {args.wave_yaw_load}: not used with --manoeuvre "
                          f"(its environment is the runs' mean residual, and runs have no failure); expected one "
                          f"or the other")
@@ -377,7 +377,7 @@ def _cmd_train(args) -> int:
                   file=sys.stderr)
         from .residual.environment import EnvironmentConfig
 
-        environment = EnvironmentConfig(wave_turned_yaw_load=_WAVE_YAW_LOAD[args.wave_yaw_load])
+        environment = EnvironmentConfig(wave_turned_yaw_load=_WAVE_YAW_LOAD[args.wave_yaw_load or "auto"])
         hp = HybridPredictor(vessel, ensemble_config=EnsembleConfig(n_members=args.members, seed=args.seed),
                              environment_config=environment)
         hp.fit(files, dp_only=not args.all_rows, progress=sys.stderr.isatty())
@@ -576,12 +576,14 @@ def _in_option_names(message: str) -> str:
 _WAVE_YAW_LOAD = {"on": True, "off": False, "auto": "auto"}
 
 
-def _add_wave_yaw_load(parser, who: str) -> None:
-    """``--wave-yaw-load [on|off|auto]`` (alone: on), ``who`` naming what decides with auto."""
-    parser.add_argument("--wave-yaw-load", nargs="?", const="on", default="off", choices=tuple(_WAVE_YAW_LOAD),
+def _add_wave_yaw_load(parser, who: str, extra: str = "") -> None:
+    """``--wave-yaw-load [on|off|auto]`` (alone: on; not given: None, auto), ``who`` naming what
+    decides with auto, ``extra`` when it holds."""
+    parser.add_argument("--wave-yaw-load", nargs="?", const="on", default=None, choices=tuple(_WAVE_YAW_LOAD),
                         help="after a failure, turn the held yaw load with the waves' axis found in the station "
                              "keeping's wave-frequency motion (EnvironmentConfig.wave_turned_yaw_load): on (the "
-                             f"option alone), off (default), or auto: where {who} it lowers the heading error")
+                             f"option alone), off, or auto (default): where {who} it lowers the heading "
+                             f"error{extra}")
 
 
 def _add_benchmark(sub) -> None:
@@ -612,7 +614,7 @@ def _add_benchmark(sub) -> None:
                         "training logs hold too few failures of their own (default 6; 0: none)")
     d.add_argument("--no-drift-hull", action="store_true",
                    help="do not learn the hull's yaw moment in a drift from failures (the paper's protocol, strictly)")
-    _add_wave_yaw_load(d, "the other failures show")
+    _add_wave_yaw_load(d, "the other failures show", " (held with --no-drift-hull)")
     d.add_argument("--load-model", choices=("acceleration", "force"), default="acceleration",
                    help="the environment estimator's slowly varying load: an acceleration fixed in NED "
                         "(default) or a NED force and yaw moment (EnvironmentConfig.load_model)")
@@ -789,7 +791,7 @@ def _cmd_benchmark_drift(args) -> int:
                                   calibration_scenarios=args.calibration_scenarios,
                                   drift_hull=not args.no_drift_hull,
                                   environment_config=EnvironmentConfig(
-                                      wave_turned_yaw_load=_WAVE_YAW_LOAD[args.wave_yaw_load],
+                                      wave_turned_yaw_load=_WAVE_YAW_LOAD[args.wave_yaw_load or "auto"],
                                       load_model=args.load_model))
     except ValueError as exc:
         if not str(exc).startswith(("test: ", "train: ", "n_intervals: ")):

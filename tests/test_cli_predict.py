@@ -461,12 +461,12 @@ def test_train_takes_the_yaw_load_option_into_the_model_file(log_dir, tmp_path, 
     assert err.startswith("hybridship train: error: --wave-yaw-load on: not used with --manoeuvre"), err
 
 
-@pytest.mark.parametrize("given, wanted", [([], False), (["--wave-yaw-load"], True),
+@pytest.mark.parametrize("given, wanted", [([], "auto"), (["--wave-yaw-load"], True),
                                             (["--wave-yaw-load", "on"], True), (["--wave-yaw-load", "off"], False),
                                             (["--wave-yaw-load", "auto"], "auto")])
 def test_benchmark_drift_passes_the_yaw_load_option_as_the_config_takes_it(tmp_path, monkeypatch, given, wanted):
-    """``benchmark drift --wave-yaw-load``: alone or ``on`` True, ``off`` (the default) False,
-    ``auto`` "auto", as ``EnvironmentConfig.wave_turned_yaw_load`` takes them."""
+    """``benchmark drift --wave-yaw-load``: alone or ``on`` True, ``off`` False, ``auto`` (the
+    default) "auto", as ``EnvironmentConfig.wave_turned_yaw_load`` takes them."""
     from hybridship.evaluation import drift
 
     seen = []

@@ -595,3 +595,8 @@ def test_the_drift_benchmark_turns_the_yaw_load_per_failure_on_the_other_failure
     hp.environment_config = EnvironmentConfig(wave_turned_yaw_load=True)
     setting = drift._wave_yaw_table(hp, None, ["a"])
     assert list(setting.source) == ["setting"] and setting.turned[0] and setting.p_value.isna().all()
+    # "auto" (the default) where nothing is learned from failures (the strict protocol): held
+    hp.environment_config, hp.drift_hull, hp.wave_yaw_turned = EnvironmentConfig(), False, False
+    assert drift._wave_yaw_per_log(hp, logs, True, 60.0, list("abcdef"), lambda m: None) == ([], None)
+    strict = drift._wave_yaw_table(hp, None, ["a"])
+    assert list(strict.source) == ["setting"] and not strict.turned[0]

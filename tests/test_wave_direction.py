@@ -267,9 +267,10 @@ def test_the_choice_per_test_log_leaves_it_out_and_needs_five_other_failures():
 
 @pytest.mark.parametrize("gain_rad, n_logs, turned", [(0.01, 5, True), (-0.01, 5, False), (0.01, 4, False)])
 def test_auto_turns_the_yaw_load_only_where_the_training_failures_gain(model, monkeypatch, gain_rad, n_logs, turned):
-    """``wave_turned_yaw_load="auto"``: fit turns the yaw load when, over five failures or more,
-    the estimator's heading error along their drifts is lower turned and every failure gains
-    (the signed-rank test); not when it is higher, nor with four failures."""
+    """``wave_turned_yaw_load="auto"`` (the default): fit turns the yaw load when, over five
+    failures or more, the estimator's heading error along their drifts is lower turned and
+    every failure gains (the signed-rank test); not when it is higher, nor with four failures,
+    nor when fit learns nothing from failures (``drift_hull=False``, the paper's protocol)."""
     logs = [physics_log(model, duration_s=300, t_shutdown_s=200, seed=s) for s in range(n_logs)]
     asked = []
 
@@ -278,9 +279,12 @@ def test_auto_turns_the_yaw_load_only_where_the_training_failures_gain(model, mo
         return np.array([1.0, 0.05 - (gain_rad if turned else 0.0) + 1e-3 * len(asked)])
 
     monkeypatch.setattr(HybridPredictor, "_drift_errors", drift_errors)
+    monkeypatch.setattr(HybridPredictor, "_fit_drift_hull", lambda self, logs_, h: None)    # not the point here
     tiny = EnsembleConfig(n_members=2, hidden=8, max_epochs=5, patience=2, seed=0)
-    hp = HybridPredictor(model.vessel, ensemble_config=tiny, drift_hull=False,
-                         environment_config=EnvironmentConfig(wave_turned_yaw_load="auto")).fit(logs)
+    assert EnvironmentConfig().wave_turned_yaw_load == "auto"
+    strict = HybridPredictor(model.vessel, ensemble_config=tiny, drift_hull=False).fit(logs)
+    assert asked == [] and "wave_yaw_load" not in strict.training_info and not strict.turns_yaw_load
+    hp = HybridPredictor(model.vessel, ensemble_config=tiny).fit(logs)
     info = hp.training_info["wave_yaw_load"]
     assert hp.wave_yaw_turned is turned and hp.turns_yaw_load is turned and info["turned"] is turned
     assert info["n_failures"] == n_logs and info["horizon_s"] == 60.0

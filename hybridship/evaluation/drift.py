@@ -30,8 +30,8 @@ samples after the shutdown of every log in ``test``, ``horizon_s`` ahead. The ou
   and the evidence it was chosen on (the failures' heading errors with it, with 0 and left out);
 * ``wave_yaw_load.csv``: whether each test log was forecast with the yaw load turned with the
   waves after the failure, and the evidence of the choice with
-  ``EnvironmentConfig(wave_turned_yaw_load="auto")`` (the failures' heading errors held and
-  turned, the signed-rank test's p-value);
+  ``EnvironmentConfig(wave_turned_yaw_load="auto")``, the default (the failures' heading
+  errors held and turned, the signed-rank test's p-value);
 * ``error_vs_horizon.png`` and ``trajectories.png`` (the paper's Fig. 6: the first five
   forecasts after the failure against the measured track).
 
@@ -210,8 +210,8 @@ def run_drift_benchmark(train=None, test=None, out_dir="drift-benchmark", *, ves
         failures when the test logs are the training logs). False: the paper's protocol in
         the strict sense, nothing learned from any failure.
     environment_config : EnvironmentConfig or None
-        The hybrid's environment estimator settings (default: ``EnvironmentConfig()``); with
-        ``wave_turned_yaw_load="auto"`` that yaw load is chosen as ``drift_hull`` is, before it.
+        The hybrid's environment estimator settings (default: ``EnvironmentConfig()``); its
+        ``wave_turned_yaw_load="auto"`` is chosen as ``drift_hull`` is (before it), or held.
     """
     check_flags(plots=plots, progress=progress)         # plots="no" is truthy: the figures were written
     say = (lambda msg: print(msg, flush=True)) if progress else (lambda msg: None)  # noqa: E731
@@ -471,8 +471,7 @@ def _wave_yaw_per_log(hybrid, test_arrays, test_is_train: bool, horizon_s: float
     :data:`~hybridship.residual.drift_hull.MIN_FAILURES` of them. Returns timing rows and the
     list of choices (dicts).
     """
-    if not (test_is_train and hybrid.environment_config.wave_turned_yaw_load == "auto"
-            and hybrid.environment == "estimator" and hybrid.stop_after_failure):
+    if not (test_is_train and hybrid.environment_config.wave_turned_yaw_load == "auto" and hybrid.uses_drift_hull):
         return [], None
     t0 = time.perf_counter()
     hybrid.wave_yaw_turned = False          # never a choice that saw the scored drifts
@@ -491,9 +490,10 @@ def _wave_yaw_table(hybrid, per_log, names) -> pd.DataFrame:
     log was forecast with the yaw load turned with the waves after the failure, and the
     evidence of the choice (:func:`~hybridship.residual.wave_direction.wave_yaw_choice`):
     ``source`` is ``setting`` (``wave_turned_yaw_load`` True or False), ``training logs'
-    failures`` (``fit``'s choice) or ``other logs' failures`` (per test log)."""
+    failures`` (``fit``'s choice) or ``other logs' failures`` (per test log); ``"auto"``
+    where nothing is learned from failures (``drift_hull`` off) is a ``setting`` too: held."""
     cols = ["log", "source", "turned", "n_failures", "held_deg", "turned_deg", "n_gains", "p_value"]
-    if per_log is None and hybrid.environment_config.wave_turned_yaw_load != "auto":
+    if per_log is None and (hybrid.environment_config.wave_turned_yaw_load != "auto" or not hybrid.uses_drift_hull):
         rows = [{"log": n, "source": "setting", "turned": hybrid.turns_yaw_load} for n in names]
     elif per_log is None:
         info = hybrid.training_info.get("wave_yaw_load") or {}

@@ -181,7 +181,11 @@ class HybridPredictor:
         the yaw acceleration ``k u v`` (the environment estimator, after the failure, too);
         it is kept only if it measurably lowers the error of failures left out of the choice
         (a one-sided signed-rank test at 5 %; :mod:`hybridship.residual.drift_hull`,
-        ``training_info["drift_hull"]``). With fewer failures nothing changes.
+        ``training_info["drift_hull"]``). With fewer failures nothing changes. It also lets
+        ``environment_config.wave_turned_yaw_load = "auto"`` (the default) choose from the
+        failures whether the yaw load turns with the waves after a failure
+        (:meth:`_choose_wave_yaw_load`). False: :meth:`fit` learns nothing about the drift
+        from the failures (the paper's protocol, strictly), and ``"auto"`` holds the yaw load.
     """
 
     #: Training modes of the nets.
@@ -437,8 +441,8 @@ class HybridPredictor:
         return self
 
     def _choose_wave_yaw_load(self, logs, horizon_s: float):
-        """With ``environment_config.wave_turned_yaw_load == "auto"`` (and the environment
-        estimator, ``stop_after_failure``) and at least
+        """With ``environment_config.wave_turned_yaw_load == "auto"`` (and ``drift_hull``, the
+        environment estimator, ``stop_after_failure``: :attr:`uses_drift_hull`) and at least
         :data:`~hybridship.residual.drift_hull.MIN_FAILURES` failures in the training logs: turn
         the yaw load with the waves after a failure (:attr:`wave_yaw_turned`) only where it
         carries over, by the rule of what else ``fit`` learns from failures
@@ -449,8 +453,7 @@ class HybridPredictor:
         fitted to them, so no failure is left out. Returns what ``training_info["wave_yaw_load"]``
         records (None when not ``"auto"``)."""
         self.wave_yaw_turned = False
-        if not (self.environment_config.wave_turned_yaw_load == "auto" and self.environment == "estimator"
-                and self.stop_after_failure):
+        if not (self.environment_config.wave_turned_yaw_load == "auto" and self.uses_drift_hull):
             return None
         failed = [logs[k] for k in logs_with_drift(logs, horizon_s)]
         errors = self.wave_yaw_errors(failed, horizon_s) if len(failed) >= DRIFT_HULL_MIN_FAILURES \

@@ -241,9 +241,10 @@ class EnvironmentConfig(BaseModel):
         Outlier gate on position and heading (above).
     wave_turned_yaw_load, wave_axis_window_s, min_wave_anisotropy, min_wave_sin2 : bool or "auto", float, float, float
         The held yaw load turned with the waves after a failure (above; window in [s]).
-        ``"auto"``: :meth:`HybridPredictor.fit <hybridship.predictors.HybridPredictor.fit>`
-        turns it only where the training logs' failures show that it lowers the heading
-        error (``training_info["wave_yaw_load"]``).
+        ``"auto"`` (the default): :meth:`HybridPredictor.fit <hybridship.predictors.HybridPredictor.fit>`
+        turns it only where the training logs' failures (five or more) show that it lowers
+        the heading error (``training_info["wave_yaw_load"]``); held where ``fit`` learns
+        nothing from failures (``HybridPredictor(drift_hull=False)``, the paper's protocol).
     """
 
     model_config = ConfigDict(frozen=True, extra="forbid", allow_inf_nan=False)
@@ -290,7 +291,7 @@ class EnvironmentConfig(BaseModel):
     max_bridged_gap_s: Float = Field(10.0, ge=0.0, le=300.0)
     innovation_gate_sigma: Float = Field(8.0, gt=0.0)
     max_gated_samples: Int = Field(10, ge=0)
-    wave_turned_yaw_load: _BoolOrAuto = False
+    wave_turned_yaw_load: _BoolOrAuto = "auto"
     wave_axis_window_s: Float = Field(600.0, gt=0.0)
     min_wave_anisotropy: Float = Field(3.0, ge=1.0)
     min_wave_sin2: Float = Field(0.3, gt=0.0, le=1.0)
