@@ -135,19 +135,23 @@ def run(data: str, logs, sim_logs, ens: EnsembleConfig, rows: list, say=print, n
 def _say_learned(say, prefix: str, hp):
     """What the fit learned from the training logs' failures, and whether it was kept."""
     say(f"{prefix}hull's yaw moment in a drift {hp.training_info.get('drift_hull', 'not fitted')}")
+    if "wave_yaw_load" in hp.training_info:
+        say(f"{prefix}yaw load turned with the waves {hp.training_info['wave_yaw_load']}")
     if "thrust_error_prior" in hp.training_info:
         say(f"{prefix}thrust error learned at the stops {hp.training_info['thrust_error_prior']}")
 
 
 def decision(data: str, protocol: str, test_log: str, hp) -> dict:
     """What a fit learned from its training logs' failures: the fit's ``training_info``
-    entries ``drift_hull`` and ``thrust_error_prior`` (None where absent), whether the hull's
-    yaw moment in a drift was on (``uses_drift_hull``) and whether only the DP parts were
+    entries ``drift_hull``, ``thrust_error_prior`` and ``wave_yaw_load`` (None where absent),
+    whether the hull's yaw moment in a drift was on (``uses_drift_hull``), whether the yaw load
+    turns with the waves after a failure (``turns_yaw_load``) and whether only the DP parts were
     read; ``test_log`` is the log it is scored on (``all``: every log of the set)."""
     info = hp.training_info
     return {"data": data, "protocol": protocol, "test_log": test_log, "drift_hull_on": bool(hp.uses_drift_hull),
             "dp_only": bool(info.get("calibration", {}).get("dp_only", False)),
-            "drift_hull": info.get("drift_hull"), "thrust_error_prior": info.get("thrust_error_prior")}
+            "drift_hull": info.get("drift_hull"), "thrust_error_prior": info.get("thrust_error_prior"),
+            "wave_yaw_load": info.get("wave_yaw_load"), "turns_yaw_load": bool(hp.turns_yaw_load)}
 
 
 def _hull_cell(d: dict) -> str:
@@ -182,12 +186,26 @@ def _thrust_cell(d: dict) -> str:
                    f"and {prior['heading_p_value']:.3g}")
 
 
+def _wave_yaw_cell(d: dict) -> str:
+    """The yaw load after a failure of a :func:`decision` (held, or turned with the waves), as one
+    table cell, with the evidence where the fit chose it."""
+    what = "turned with the waves" if d.get("turns_yaw_load") else "held"
+    wave = d.get("wave_yaw_load")
+    if wave is None:
+        return what + ("" if d["drift_hull_on"] else " (`drift_hull=False`: nothing learned from failures)")
+    if wave.get("p_value") is None:
+        return f"{what} ({wave['n_failures']} failures, fewer than {DRIFT_HULL_MIN_FAILURES})"
+    return (f"{what}: heading {wave['held_deg']:.2f} deg held, {wave['turned_deg']:.2f} turned on "
+            f"{wave['n_failures']} failures, {wave['n_gains']} gain, signed-rank p = {wave['p_value']:.3g}")
+
+
 def decisions_markdown(decisions: list) -> str:
     """The :func:`decision` of every fit as a Markdown table, then per data set how many fits
     kept the thrust error learned at the stops and the hull's yaw moment in a drift."""
     tab = pd.DataFrame([{"data": d["data"], "protocol": d["protocol"], "fold: test log": d["test_log"],
                          "hull's yaw moment in a drift": _hull_cell(d),
-                         "thrust error learned at the thrust stops": _thrust_cell(d)} for d in decisions])
+                         "thrust error learned at the thrust stops": _thrust_cell(d),
+                         "yaw load after a failure": _wave_yaw_cell(d)} for d in decisions])
     md = ["What each fit learned from its training logs' failures, and whether it kept it "
           "(`training_info`; `all`: one fit, scored on every log of the set).", "", markdown_table(tab), ""]
     for data in dict.fromkeys(d["data"] for d in decisions):
@@ -196,7 +214,8 @@ def decisions_markdown(decisions: list) -> str:
         hull = [d["drift_hull"] for d in mine if d["drift_hull"] is not None]
         md.append(f"* {data}: thrust error kept in {sum(p['kept'] for p in prior)} of {_fits(len(prior))} that "
                   f"learned it; hull's yaw moment in a drift kept in {sum(h['adopted'] for h in hull)} of "
-                  f"{_fits(len(hull))} that chose one.")
+                  f"{_fits(len(hull))} that chose one; yaw load turned with the waves in "
+                  f"{sum(bool(d.get('turns_yaw_load')) for d in mine)} of {_fits(len(mine))}.")
     return "\n".join(md) + "\n"
 
 

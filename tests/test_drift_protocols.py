@@ -8,14 +8,17 @@ from conftest import load_benchmark
 from hybridship.residual.drift_hull import MUNK_MULTIPLES, choose_coefficient
 
 
-def _fit(drift_hull=None, thrust_error_prior=None, dp_only=False, uses_drift_hull=True):
+def _fit(drift_hull=None, thrust_error_prior=None, dp_only=False, uses_drift_hull=True, wave_yaw_load=None):
     """A fitted predictor as :func:`decision` reads it."""
     info = {"calibration": {"dp_only": dp_only}}
     if drift_hull is not None:
         info["drift_hull"] = drift_hull
     if thrust_error_prior is not None:
         info["thrust_error_prior"] = thrust_error_prior
-    return SimpleNamespace(training_info=info, uses_drift_hull=uses_drift_hull)
+    if wave_yaw_load is not None:
+        info["wave_yaw_load"] = wave_yaw_load
+    return SimpleNamespace(training_info=info, uses_drift_hull=uses_drift_hull,
+                           turns_yaw_load=bool(wave_yaw_load and wave_yaw_load["turned"]))
 
 
 def test_the_decisions_file_has_a_row_per_fit_and_counts_what_was_kept(tmp_path):
@@ -33,16 +36,23 @@ def test_the_decisions_file_has_a_row_per_fit_and_counts_what_was_kept(tmp_path)
     assert not unkept_hull["adopted"]
     few = {"learned_mean": [0.1, 0.0, 0.0], "learned_std": [0.1, 0.1, 0.2], "n_failures": 2, "horizon_s": 60.0,
            "kept": False}
+    # the yaw load turned with the waves as fit records its choice ("auto", the default)
+    turned = {"n_failures": 5, "held_deg": 1.54, "turned_deg": 1.42, "n_gains": 5, "p_value": 0.03125,
+              "turned": True, "horizon_s": 60.0, "start_every_s": 10.0}
     decisions = [dp.decision("a", "paper", "all", _fit(dp_only=True, uses_drift_hull=False)),
-                 dp.decision("a", "fleet_default", "log0", _fit(kept_hull, dp_only=True)),
+                 dp.decision("a", "fleet_default", "log0", _fit(kept_hull, dp_only=True, wave_yaw_load=turned)),
                  dp.decision("a", "fleet", "log0", _fit(kept_hull, checked)),
-                 dp.decision("b", "fleet", "s0", _fit(None, few)),
+                 dp.decision("b", "fleet", "s0", _fit(None, few, wave_yaw_load={"n_failures": 2, "turned": False})),
                  dp.decision("b", "sim_pretrain", "all", _fit(unkept_hull, {**few, "kept": True}))]
     text = dp.decisions_markdown(decisions)
     lines = text.splitlines()
     rows = [x for x in lines if x.startswith("| ") and not x.startswith("| ---")]
     assert len(rows) == 1 + len(decisions)                 # header, then one row per fit
     assert rows[1].startswith("| a | paper | all | off (`drift_hull=False`) | not learned (DP parts only) |")
+    assert rows[1].endswith("| held (`drift_hull=False`: nothing learned from failures) |")
+    assert rows[2].endswith("| turned with the waves: heading 1.54 deg held, 1.42 turned on 5 failures, 5 gain, "
+                            "signed-rank p = 0.0312 |")
+    assert rows[4].endswith("| held (2 failures, fewer than 5) |") and rows[3].endswith("| held |")
     assert "0.65 x Munk on 5 failures, kept: heading " in rows[2]
     assert "with it chosen on the others (left out), 5 of 5 better, signed-rank p = 0.0312" in rows[2]
     assert "not kept: learned (+0.48, -0.09, -0.14) with 5 failures" in rows[3]
@@ -51,9 +61,9 @@ def test_the_decisions_file_has_a_row_per_fit_and_counts_what_was_kept(tmp_path)
     assert "0.65 x Munk on 3 failures, not kept: heading " in rows[5]
     assert lines[-2:] == [
         "* a: thrust error kept in 0 of 1 fit that learned it; hull's yaw moment in a drift kept in 2 of 2 "
-        "fits that chose one.",
+        "fits that chose one; yaw load turned with the waves in 1 of 3 fits.",
         "* b: thrust error kept in 1 of 2 fits that learned it; hull's yaw moment in a drift kept in 0 of 1 "
-        "fit that chose one."]                             # counts the kept, not the chosen
+        "fit that chose one; yaw load turned with the waves in 0 of 2 fits."]     # counts the kept, not the chosen
     assert text.endswith(".\n")
 
 
@@ -82,7 +92,7 @@ def test_a_hull_chosen_on_one_failure_and_a_fit_without_a_thrust_stop_say_so():
            if x.startswith("| c ")]
     # 0.65 rad of heading error without the moment, none with it
     assert row == [f"| c | fleet | s1 | 0.65 x Munk on 1 failures, not kept: heading {np.degrees(0.65):.2f} deg "
-                   "without it, 0.00 with it, no left-out check | not learned (no thrust stop read) |"]
+                   "without it, 0.00 with it, no left-out check | not learned (no thrust stop read) | held |"]
 
 
 def test_counts_and_seeds_it_cannot_use_are_usage_errors(tmp_path, capsys):
