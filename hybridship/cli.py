@@ -437,9 +437,9 @@ def _learned_from_failures(info: dict) -> list[str]:
                      f"({check})")
     wave = info.get("wave_yaw_load")
     if wave is not None:
-        choice = "turned" if wave["turned"] else "held"
+        choice = "turned with the waves" if wave["turned"] else "held"
         if "p_value" in wave:
-            lines.append(f"yaw load after a failure: {choice} with the waves on {wave['n_failures']} failures "
+            lines.append(f"yaw load after a failure: {choice}, chosen on {wave['n_failures']} failures "
                          f"(heading {wave['turned_deg']:.2f} deg turned against {wave['held_deg']:.2f} deg held, "
                          f"{wave['n_gains']} of {wave['n_failures']} better, signed-rank p = {wave['p_value']:.3g})")
         else:

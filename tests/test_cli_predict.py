@@ -428,14 +428,16 @@ def test_train_reports_what_it_learned_from_failures():
 
 
 def test_train_reports_the_yaw_load_its_failures_chose():
-    """With ``--wave-yaw-load auto`` `hybridship train` prints whether the training logs'
-    failures turned the yaw load with the waves, with the errors and test that decided it."""
+    """With ``--wave-yaw-load auto`` (the default) `hybridship train` prints whether the training
+    logs' failures turned the yaw load with the waves, with the errors and test that decided it."""
     from hybridship.cli import _learned_from_failures
 
     wave = {"n_failures": 20, "turned": True, "held_deg": 1.54, "turned_deg": 1.42, "n_gains": 12, "p_value": 0.0012}
     line, = _learned_from_failures({"wave_yaw_load": wave})
-    assert line == ("yaw load after a failure: turned with the waves on 20 failures (heading 1.42 deg turned "
-                    "against 1.54 deg held, 12 of 20 better, signed-rank p = 0.0012)")
+    assert line == ("yaw load after a failure: turned with the waves, chosen on 20 failures (heading 1.42 deg "
+                    "turned against 1.54 deg held, 12 of 20 better, signed-rank p = 0.0012)")
+    held, = _learned_from_failures({"wave_yaw_load": {**wave, "turned": False, "p_value": 0.2}})
+    assert held.startswith("yaw load after a failure: held, chosen on 20 failures (heading 1.42 deg ")
     few, = _learned_from_failures({"wave_yaw_load": {"n_failures": 3, "turned": False}})
     assert few == "yaw load after a failure: held (3 failures, fewer than the 5 the choice needs)"
 
