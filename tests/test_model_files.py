@@ -648,9 +648,10 @@ def test_a_version_17_file_filters_a_drift_with_the_station_keeping_walks(saved,
 
 def test_the_choice_of_the_turned_yaw_load_is_kept_and_checked(saved, tmp_path):
     """Format 19 records whether fit chose the yaw load turned with the waves (with
-    ``wave_turned_yaw_load = "auto"``): it loads back; a version-18 file reads False; a
-    version-19 file without it is damaged, and one that says True for a model whose setting is
-    not "auto" is refused."""
+    ``wave_turned_yaw_load = "auto"``, the default): it loads back; a version-18 file reads False,
+    and one written before the setting existed reads the setting False (held, as it was fitted);
+    a version-19 file without either is damaged, and one that says True for a model whose
+    setting is not "auto" is refused."""
     import copy
 
     from hybridship.residual.environment import EnvironmentConfig
@@ -667,6 +668,15 @@ def test_the_choice_of_the_turned_yaw_load_is_kept_and_checked(saved, tmp_path):
         meta.pop("wave_yaw_turned")
 
     assert not HybridPredictor.load(_rewrite(saved, tmp_path, meta_change=as_v18, name="v18t.npz")).wave_yaw_turned
+
+    def before_the_option(meta):        # files written before the setting existed: held, as fitted
+        as_v18(meta)
+        meta["environment_config"].pop("wave_turned_yaw_load")
+
+    old = HybridPredictor.load(_rewrite(saved, tmp_path, meta_change=before_the_option, name="v18o.npz"))
+    assert old.environment_config.wave_turned_yaw_load is False and not old.turns_yaw_load
+    _refused(_rewrite(saved, tmp_path, meta_change=lambda m: m["environment_config"].pop("wave_turned_yaw_load"),
+                      name="v19o.npz"), r"damaged model metadata .*wave_turned_yaw_load")
     _refused(_rewrite(auto, tmp_path, meta_change=lambda m: m.pop("wave_yaw_turned"), name="v19t.npz"),
              r"damaged model metadata .*wave_yaw_turned")
     _refused(_rewrite(auto, tmp_path, meta_change=lambda m: m["environment_config"].update(wave_turned_yaw_load=False),

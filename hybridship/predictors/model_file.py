@@ -67,7 +67,7 @@ MODEL_FORMAT_VERSION = 19
 #: (``residual_step_s = None``); versions 7 to 16 restart the environment estimator at every
 #: gap of a log (``max_bridged_gap_s = 0``); versions 7 to 17 filter a drift with the station
 #: keeping's load walks; versions 7 to 18 choose no yaw load turned with the waves (``wave_yaw_turned``
-#: false; their ``wave_turned_yaw_load`` is true or false).
+#: false; their ``wave_turned_yaw_load`` is true or false, false where the file predates it).
 READABLE_MODEL_FORMAT_VERSIONS = (7, 8, 9, 10, 11, 12, 13, 14, 15, 16, 17, 18, 19)
 
 
@@ -356,6 +356,10 @@ def _build_predictor(cls, meta: dict, vessel, path: Path):
                 raise KeyError(f"environment_config.{after_stop}")
             # older files filtered a drift with the station keeping's walks, as they were fitted
             env = {after_stop: env.get(on_station, EnvironmentConfig.model_fields[on_station].default), **env}
+        if meta["format_version"] >= 19 and "wave_turned_yaw_load" not in env:
+            raise KeyError("environment_config.wave_turned_yaw_load")
+        # files from before the option held the yaw load, as they were fitted (the default is now "auto")
+        env = {"wave_turned_yaw_load": False, **env}
         residual_config = ResidualConfig(**{"residual_step_s": None,     # older files: fitted at the log's step
                                             **{k: tuple(v) if k == "features" else v
                                                for k, v in meta["residual_config"].items()}})
