@@ -2,15 +2,15 @@
 
 The turned yaw load (``EnvironmentConfig(wave_turned_yaw_load=True)``, docs/concepts/environment.md)
 lowers the heading error after a failure on our own simulated scenarios and raises it on
-truthsim-dev, so it is an option, off by default. This script measures a rule that would let
-each vessel's logs decide, the rule ``fit`` already applies to what it learns from failures
+truthsim-dev, so it is not turned everywhere. This script measures the rule that lets each
+vessel's logs decide, the rule ``fit`` also applies to what else it learns from failures
 (the hull's yaw moment in a drift, the thrust-error prior;
 :func:`hybridship.residual.drift_hull.gain_carries_over`): with the test log's failure left
 out, the turned load is used only if, on the *other* logs' failures, it lowers the mean
 heading error of the forecasts along their drifts and the per-failure gains pass the one-sided
 signed-rank test at 5 % (at least :data:`~hybridship.residual.drift_hull.MIN_FAILURES` failures).
-``fit`` makes the same choice on its training logs with ``wave_turned_yaw_load="auto"``, and
-the drift benchmark makes it per test log with ``--wave-yaw-load auto``
+``fit`` makes the same choice on its training logs with ``wave_turned_yaw_load="auto"`` (the
+default since 2026-12-03), and the drift benchmark makes it per test log
 (:func:`hybridship.residual.wave_direction.wave_yaw_choice` in all three).
 
 The forecasts it decides on are the estimator's alone (nets off, as after a failure by
@@ -21,9 +21,11 @@ it. Nothing of the test log's own drift enters its decision.
 
 It does not re-run the drift benchmark: the benchmark's mean errors of the ``hybrid`` row do not
 depend on the decision of the other logs, so the rule's result is composed per test log from the
-two committed benchmark runs of each set, the default (held) and ``--wave-yaw-load``
+two committed benchmark runs of each set, one with the load held (``--wave-yaw-load off``, or
+the default where it holds the load for every test log) and ``--wave-yaw-load``
 (``errors_per_log.csv``: the turned run's rows where the rule chose it, the held run's
-otherwise), and given as Table 2's 60-s ratios to the physics (first 5 / first 20 intervals).
+otherwise), and given as Table 2's 60-s ratios to the physics (first 5 / first 20 intervals);
+the default run, which makes the choice itself, gives the last row again.
 Both runs choose the hull's yaw moment in a drift per test log as the benchmark does, each with
 its own yaw load, which is what a fit that decided first would do.
 
@@ -56,11 +58,15 @@ from hybridship.residual.wave_direction import wave_yaw_choice
 
 ROOT = Path(__file__).resolve().parents[1]
 RESULTS = ROOT / "docs" / "results"
-#: (set, logs, the committed default run, the committed --wave-yaw-load run)
-SETS = (("truthsim-dev", "truthsim", "drift-truthsim-dev", "drift-truthsim-dev-wave-yaw-load"),
-        ("truthsim-dev, strictly", "truthsim", "drift-truthsim-dev-strict", "drift-truthsim-dev-strict-wave-yaw-load"),
-        ("own 100-119", 100, "drift-own-20", "drift-own-20-wave-yaw-load"),
-        ("own 200-219", 200, "drift-own-20-seed200", "drift-own-20-seed200-wave-yaw-load"))
+#: (set, logs, a committed run with the load held, the committed --wave-yaw-load run, whether the
+#: default chooses: not in the strict protocol, --no-drift-hull, which learns nothing from failures
+#: and holds the load); truthsim-dev's default runs hold it for every test log (checked from their
+#: wave_yaw_load.csv)
+SETS = (("truthsim-dev", "truthsim", "drift-truthsim-dev", "drift-truthsim-dev-wave-yaw-load", True),
+        ("truthsim-dev, strictly", "truthsim", "drift-truthsim-dev-strict", "drift-truthsim-dev-strict-wave-yaw-load",
+         False),
+        ("own 100-119", 100, "drift-own-20-wave-yaw-off", "drift-own-20-wave-yaw-load", True),
+        ("own 200-219", 200, "drift-own-20-seed200-wave-yaw-off", "drift-own-20-seed200-wave-yaw-load", True))
 HORIZON_S = 60.0
 
 
@@ -97,6 +103,9 @@ def composed_ratios(held_dir: str, turned_dir: str, names, chosen) -> dict:
     per test log, first 5 / first 20 intervals, per state; and a check that the pooled mean of the
     per-log errors is the run's own (so the composition is the benchmark's figure)."""
     held = pd.read_csv(RESULTS / held_dir / "errors_per_log.csv")
+    if (RESULTS / held_dir / "wave_yaw_load.csv").is_file() and \
+            pd.read_csv(RESULTS / held_dir / "wave_yaw_load.csv")["turned"].any():
+        raise SystemExit(f"{held_dir}: turns the yaw load for some test logs; expected a run that holds it")
     turned = pd.read_csv(RESULTS / turned_dir / "errors_per_log.csv")
     pooled = pd.read_csv(RESULTS / held_dir / "errors.csv")
     use = dict(zip(names, chosen))
@@ -125,7 +134,7 @@ def main(argv=None) -> int:
     command = command_line("wave_yaw_choice.py", argv)
     decisions, errors, rows = [], [], []
     cache = {}
-    for label, which, held_dir, turned_dir in SETS:
+    for label, which, held_dir, turned_dir, default_chooses in SETS:
         if which == "truthsim" and not (ROOT.parent / "shared" / "data" / "truthsim-dev" / "logs").is_dir():
             print("error: ../shared/data/truthsim-dev/logs not found", file=sys.stderr)
             return 2
@@ -144,7 +153,9 @@ def main(argv=None) -> int:
                            "turned_deg": np.degrees(err[1, k])})
         r = composed_ratios(held_dir, turned_dir, names, [d for d, _ in dec])
         fmt = lambda state, i: f"{r[(state, 5)][i]:.2f}/{r[(state, 20)][i]:.2f}"    # noqa: E731
-        for i, what in enumerate(("held (default)", "turned with the waves", "chosen per test log")):
+        chosen = "chosen per test log" + (" (the default)" if default_chooses else "")
+        for i, what in enumerate(("held" + ("" if default_chooses else " (the default)"), "turned with the waves",
+                                  chosen)):
             rows.append([label, what, fmt("north_m", i), fmt("east_m", i), fmt("yaw_deg", i),
                          f"{sum(d for d, _ in dec)} of {len(dec)}" if i == 2 else ""])
         gains = err[0] - err[1]
@@ -160,7 +171,8 @@ def main(argv=None) -> int:
     md = "\n".join([
         f"Command: `{command}`", "",
         "The hybrid's Table 2 ratios to the physics at 60 s (first 5 / first 20 intervals), composed per test "
-        "log from the committed default and `--wave-yaw-load` runs; the turned load chosen for a test log when, "
+        "log from the committed runs with the load held and with `--wave-yaw-load`; the turned load chosen for "
+        "a test log (as the default does) when, "
         "on the other logs' failures, it lowers the mean heading error of the estimator's forecasts along their "
         "drifts and the per-failure gains pass the one-sided signed-rank test at 5 %:", "", table, "",
         "The check's own errors: mean heading error [deg] of the estimator's forecasts along each failure's "
