@@ -613,7 +613,8 @@ def _add_benchmark(sub) -> None:
                    help="simulated DP losses that calibrate the hybrid's spread after a failure when the "
                         "training logs hold too few failures of their own (default 6; 0: none)")
     d.add_argument("--no-drift-hull", action="store_true",
-                   help="do not learn the hull's yaw moment in a drift from failures (the paper's protocol, strictly)")
+                   help="learn nothing about the drift from failures: neither the hull's yaw moment nor (with "
+                        "--wave-yaw-load auto) the yaw load's turn (the paper's protocol, strictly)")
     _add_wave_yaw_load(d, "the other failures show", " (held with --no-drift-hull)")
     d.add_argument("--load-model", choices=("acceleration", "force"), default="acceleration",
                    help="the environment estimator's slowly varying load: an acceleration fixed in NED "
