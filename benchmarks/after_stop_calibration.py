@@ -44,11 +44,11 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from _results import command_line
+from _results import check_out, command_line
 from hybridship.driftoff.spread import draw_scales
 from hybridship.evaluation import metrics
 from hybridship.evaluation.drift import log_files
-from hybridship.fileio import check_writable, write_text
+from hybridship.fileio import write_text
 from hybridship.predictors import AFTER_STOP, HybridPredictor, as_log_arrays
 from hybridship.predictors.hybrid import leave_one_out_after_stop_scales
 from hybridship.residual.ensemble import EnsembleConfig
@@ -175,16 +175,11 @@ def _check_options(ap, args) -> None:
         ap.error(f"--own: expected 0-20, got {args.own}")
     if not 0 <= args.vessel_spread < float("inf"):      # a negative or NaN spread was read as none
         ap.error(f"--vessel-spread: expected a finite number >= 0, got {args.vessel_spread}")
-    if args.out is not None and args.out.is_dir():
-        ap.error(f"--out: expected a Markdown file, {args.out} is a folder")
+    check_out(ap, args.out, file=True)     # the check every benchmark script makes of its --out
     try:
-        if args.out is not None:
-            check_writable(args.out)
         _environment_config(args)
         DPLossConfig(seed=args.seed, beaufort=tuple(args.beaufort), t_shutdown_s=args.dp_s,
                      t_shutdown_jitter_s=30.0, drift_s=600.0)
-    except OSError as exc:
-        ap.error(f"--out: {exc}")
     except ValueError as exc:           # "t_shutdown_s: must be > 0 (got -5.0) [DPLossConfig]": name the option
         field, _, reason = str(exc).partition(":")
         ap.error(OPTIONS.get(field, f"--{field.replace('_', '-')}") + ":" + reason)
