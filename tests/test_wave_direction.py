@@ -284,7 +284,9 @@ def test_auto_turns_the_yaw_load_only_where_the_training_failures_gain(model, mo
     assert EnvironmentConfig().wave_turned_yaw_load == "auto"
     strict = HybridPredictor(model.vessel, ensemble_config=tiny, drift_hull=False).fit(logs)
     assert asked == [] and "wave_yaw_load" not in strict.training_info and not strict.turns_yaw_load
+    assert not strict.chooses_wave_yaw_load
     hp = HybridPredictor(model.vessel, ensemble_config=tiny).fit(logs)
+    assert hp.chooses_wave_yaw_load
     info = hp.training_info["wave_yaw_load"]
     assert hp.wave_yaw_turned is turned and hp.turns_yaw_load is turned and info["turned"] is turned
     assert info["n_failures"] == n_logs and info["horizon_s"] == 60.0

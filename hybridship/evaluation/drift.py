@@ -471,7 +471,7 @@ def _wave_yaw_per_log(hybrid, test_arrays, test_is_train: bool, horizon_s: float
     :data:`~hybridship.residual.drift_hull.MIN_FAILURES` of them. Returns timing rows and the
     list of choices (dicts).
     """
-    if not (test_is_train and hybrid.environment_config.wave_turned_yaw_load == "auto" and hybrid.uses_drift_hull):
+    if not (test_is_train and hybrid.chooses_wave_yaw_load):
         return [], None
     t0 = time.perf_counter()
     hybrid.wave_yaw_turned = False          # never a choice that saw the scored drifts
@@ -493,7 +493,7 @@ def _wave_yaw_table(hybrid, per_log, names) -> pd.DataFrame:
     failures`` (``fit``'s choice) or ``other logs' failures`` (per test log); ``"auto"``
     where nothing is learned from failures (``drift_hull`` off) is a ``setting`` too: held."""
     cols = ["log", "source", "turned", "n_failures", "held_deg", "turned_deg", "n_gains", "p_value"]
-    if per_log is None and (hybrid.environment_config.wave_turned_yaw_load != "auto" or not hybrid.uses_drift_hull):
+    if per_log is None and not hybrid.chooses_wave_yaw_load:
         rows = [{"log": n, "source": "setting", "turned": hybrid.turns_yaw_load} for n in names]
     elif per_log is None:
         info = hybrid.training_info.get("wave_yaw_load") or {}

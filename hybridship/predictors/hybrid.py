@@ -441,8 +441,7 @@ class HybridPredictor:
         return self
 
     def _choose_wave_yaw_load(self, logs, horizon_s: float):
-        """With ``environment_config.wave_turned_yaw_load == "auto"`` (and ``drift_hull``, the
-        environment estimator, ``stop_after_failure``: :attr:`uses_drift_hull`) and at least
+        """Where :attr:`chooses_wave_yaw_load` (``"auto"`` with :attr:`uses_drift_hull`) and at least
         :data:`~hybridship.residual.drift_hull.MIN_FAILURES` failures in the training logs: turn
         the yaw load with the waves after a failure (:attr:`wave_yaw_turned`) only where it
         carries over, by the rule of what else ``fit`` learns from failures
@@ -453,7 +452,7 @@ class HybridPredictor:
         fitted to them, so no failure is left out. Returns what ``training_info["wave_yaw_load"]``
         records (None when not ``"auto"``)."""
         self.wave_yaw_turned = False
-        if not (self.environment_config.wave_turned_yaw_load == "auto" and self.uses_drift_hull):
+        if not self.chooses_wave_yaw_load:
             return None
         failed = [logs[k] for k in logs_with_drift(logs, horizon_s)]
         errors = self.wave_yaw_errors(failed, horizon_s) if len(failed) >= DRIFT_HULL_MIN_FAILURES \
@@ -1134,6 +1133,13 @@ class HybridPredictor:
         c = self.environment_config.wave_turned_yaw_load
         return (c is True or (c == "auto" and self.wave_yaw_turned)) and self.environment == "estimator" \
             and self.stop_after_failure
+
+    @property
+    def chooses_wave_yaw_load(self) -> bool:
+        """Whether :meth:`fit` chooses from the training logs' failures if the yaw load turns with
+        the waves: ``environment_config.wave_turned_yaw_load == "auto"`` where it learns the drift
+        from failures (:attr:`uses_drift_hull`); elsewhere ``"auto"`` holds the load."""
+        return self.environment_config.wave_turned_yaw_load == "auto" and self.uses_drift_hull
 
     @property
     def uses_drift_hull(self) -> bool:
