@@ -19,7 +19,9 @@ up to it only); ``heading_change_deg`` is the true heading's mean over the windo
 value at the failure (the ship turns while the environment's yaw moment, which depends on
 the heading relative to waves and wind, changes); ``load_yaw_kNm_est_at_failure`` is the
 estimated yaw load at the last row of station keeping (what a forecast started at the
-failure holds; the same in both windows). Writes ``environment_vs_truth.csv``/``.md``
+failure holds; the same in both windows). Under the table, the yaw load's medians
+(:func:`yaw_summary`) and the station keeping's yaw split (:func:`station_keeping_yaw_split`).
+Writes ``environment_vs_truth.csv``/``.md``
 and ``environment_vs_truth.png``, and each thruster's estimated thrust-error factor at the
 last row of station keeping in ``thrust_error_factors.csv``/``.md``.
 
@@ -114,6 +116,29 @@ def yaw_summary(table: pd.DataFrame) -> str:
     return (f"Medians over the {len(dp)} logs of the absolute values:\n\n" + markdown_table(out.round(1)))
 
 
+def station_keeping_yaw_split(dp: pd.DataFrame) -> str:
+    """From the ``dp`` rows of the table: in station keeping, the yaw load's error, the thrust error's yaw moment's error and their
+    sum's error [kN m] (medians of the absolute values over the logs), the correlation of the
+    first two (Pearson), and the Spearman rank correlation of the sum's absolute error with the
+    true current speed: the sum is what the thrust and the environment add up to, so its error
+    is what the filter takes as yaw load or thrust error and the truth counts as neither (the
+    current's yaw moment on the ship at rest)."""
+    from scipy.stats import spearmanr
+
+    load = dp.load_yaw_kNm_est - dp.load_yaw_kNm_true
+    thrust = dp.thrust_error_n_kNm_est - dp.thrust_error_n_kNm_true
+    total = np.abs(load + thrust)
+    out = pd.DataFrame([{"yaw-load error [kNm]": float(np.median(np.abs(load))),
+                         "thrust error's yaw-moment error [kNm]": float(np.median(np.abs(thrust))),
+                         "their sum's error [kNm]": float(np.median(total)),
+                         "correlation of the two errors": float(np.corrcoef(load, thrust)[0, 1]),
+                         "rank correlation, sum's error with true current": float(
+                             spearmanr(total, dp.current_m_s_true).statistic)}])
+    return ("Station keeping (`dp`): the yaw load and the thrust error's yaw moment, whose sum the "
+            "thrust and the environment fix (medians of the absolute errors over the logs):\n\n"
+            + markdown_table(out.round(2)))
+
+
 def add_log_source_arguments(ap: argparse.ArgumentParser) -> None:
     """``--out`` and the logs with truth columns: ``--data`` or ``--scenarios``/``--seed``."""
     ap.add_argument("--out", type=Path, required=True)
@@ -198,7 +223,8 @@ def main(argv=None) -> int:
                 "thrust_error_n_kNm_true": thr_t[r][sel, 2].mean() / 1e3,
             })
     table = pd.DataFrame(rows)
-    write_table(args.out, "environment_vs_truth", table, yaw_summary(table))
+    write_table(args.out, "environment_vs_truth", table,
+                yaw_summary(table) + "\n\n" + station_keeping_yaw_split(table[table.window == "dp"]))
     write_table(args.out, "thrust_error_factors", pd.DataFrame(factors),
                 "Each thruster's estimated thrust-error factor `theta` at the last row of station keeping "
                 "(it delivers `1 + theta` times the model's thrust).")

@@ -40,6 +40,22 @@ def test_yaw_summary_medians(evt):
     assert "Medians over the 3 logs" in md
 
 
+def test_station_keeping_yaw_split(evt):
+    """The yaw load's and the thrust error's errors, their sum's, how the two correlate, and how
+    the sum's error ranks with the true current, over the logs."""
+    dp = pd.DataFrame({
+        "load_yaw_kNm_est": [11.0, 1.0, -3.5, 0.0], "load_yaw_kNm_true": [10.0, 2.0, -3.0, 4.0],    # 1, -1, -0.5, -4
+        "thrust_error_n_kNm_est": [0.0, 3.0, 1.0, 2.0], "thrust_error_n_kNm_true": [2.0, 0.0, 0.0, 0.0],  # -2, 3, 1, 2
+        "current_m_s_true": [0.1, 0.3, 0.05, 0.4],
+    })
+    md = evt.station_keeping_yaw_split(dp)
+    values = [float(v) for v in md.splitlines()[-1].strip(" |").split(" | ")]
+    # sums -1, 2, 0.5, -2: |.| 1, 2, 0.5, 2 rank with the currents 0.1, 0.3, 0.05, 0.4 (ties averaged)
+    assert values[:3] == [1.0, 2.0, 1.5]
+    assert values[3] == pytest.approx(np.corrcoef([1, -1, -0.5, -4], [-2, 3, 1, 2])[0, 1], abs=0.005)
+    assert values[4] == pytest.approx(0.95, abs=0.005)
+
+
 def test_own_scenarios_written(evt, tmp_path):
     """--scenarios reads the own simulator's logs: one row per window, the ship has not turned
     on station, and the summary is written."""
