@@ -119,7 +119,7 @@ def yaw_summary(table: pd.DataFrame) -> str:
 def station_keeping_yaw_split(dp: pd.DataFrame) -> str:
     """From the ``dp`` rows of the table: in station keeping, the yaw load's error, the thrust error's yaw moment's error and their
     sum's error [kN m] (medians of the absolute values over the logs), the correlation of the
-    first two (Pearson), and the Spearman rank correlation of the sum's absolute error with the
+    first two (Pearson), and the Spearman rank correlation (nan with fewer than three logs) of the sum's absolute error with the
     true current speed: the sum is what the thrust and the environment add up to, so its error
     is what the filter takes as yaw load or thrust error and the truth counts as neither (the
     current's yaw moment on the ship at rest)."""
@@ -128,12 +128,14 @@ def station_keeping_yaw_split(dp: pd.DataFrame) -> str:
     load = dp.load_yaw_kNm_est - dp.load_yaw_kNm_true
     thrust = dp.thrust_error_n_kNm_est - dp.thrust_error_n_kNm_true
     total = np.abs(load + thrust)
+    enough = len(dp) >= 3           # fewer logs have no correlation to speak of (nan, without a warning)
     out = pd.DataFrame([{"yaw-load error [kNm]": float(np.median(np.abs(load))),
                          "thrust error's yaw-moment error [kNm]": float(np.median(np.abs(thrust))),
                          "their sum's error [kNm]": float(np.median(total)),
-                         "correlation of the two errors": float(np.corrcoef(load, thrust)[0, 1]),
+                         "correlation of the two errors": float(np.corrcoef(load, thrust)[0, 1]) if enough
+                         else float("nan"),
                          "rank correlation, sum's error with true current": float(
-                             spearmanr(total, dp.current_m_s_true).statistic)}])
+                             spearmanr(total, dp.current_m_s_true).statistic) if enough else float("nan")}])
     return ("Station keeping (`dp`): the yaw load and the thrust error's yaw moment, whose sum the "
             "thrust and the environment fix (medians of the absolute errors over the logs):\n\n"
             + markdown_table(out.round(2)))

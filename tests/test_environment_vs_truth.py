@@ -42,7 +42,8 @@ def test_yaw_summary_medians(evt):
 
 def test_station_keeping_yaw_split(evt):
     """The yaw load's and the thrust error's errors, their sum's, how the two correlate, and how
-    the sum's error ranks with the true current, over the logs."""
+    the sum's error ranks with the true current, over the logs (nan for two logs, without a
+    warning)."""
     dp = pd.DataFrame({
         "load_yaw_kNm_est": [11.0, 1.0, -3.5, 0.0], "load_yaw_kNm_true": [10.0, 2.0, -3.0, 4.0],    # 1, -1, -0.5, -4
         "thrust_error_n_kNm_est": [0.0, 3.0, 1.0, 2.0], "thrust_error_n_kNm_true": [2.0, 0.0, 0.0, 0.0],  # -2, 3, 1, 2
@@ -54,6 +55,8 @@ def test_station_keeping_yaw_split(evt):
     assert values[:3] == [1.0, 2.0, 1.5]
     assert values[3] == pytest.approx(np.corrcoef([1, -1, -0.5, -4], [-2, 3, 1, 2])[0, 1], abs=0.005)
     assert values[4] == pytest.approx(0.95, abs=0.005)
+    two = [float(v) for v in evt.station_keeping_yaw_split(dp.iloc[:2]).splitlines()[-1].strip(" |").split(" | ")]
+    assert np.isnan(two[3:]).all() and two[2] == 1.5          # medians still; no correlation of two logs
 
 
 def test_own_scenarios_written(evt, tmp_path):
