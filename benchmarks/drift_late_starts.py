@@ -126,7 +126,7 @@ def main(argv=None) -> int:
     ev = sibling("estimator_variants")         # its data sets and shared arguments
     args = ev.parse_args(argv, __doc__.split("\n")[0], VARIANTS)
     rows, per_log = [], []
-    sets = ev.data_sets(args.data, args.own_n, args.own_seed)
+    sets = ev.data_sets(args.data, args.own_n, args.own_seed, args.logs)
     if not sets:                # --data truthsim-dev without it: no table to write
         print("error: --data: no data set to run (truthsim-dev is not on this machine)", file=sys.stderr)
         return 2

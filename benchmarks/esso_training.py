@@ -97,7 +97,8 @@ def mirror_log(a, vessel):
 def froude_scaled_environment(vessel, reference="gunnerus", defaults=None):
     """The environment estimator's settings ``defaults`` (the package's when None; made for the
     ``reference`` vessel at full scale) Froude-scaled to ``vessel`` by the ratio of their Lpp:
-    lengths by 1/lambda, speeds and times by 1/sqrt(lambda), accelerations kept, yaw rates by
+    lengths by 1/lambda, speeds (the wind's too, as in the current prior's reference wind speed)
+    and times by 1/sqrt(lambda), accelerations kept, yaw rates by
     sqrt(lambda), yaw accelerations by lambda; a random walk's intensity [per sqrt(s)] gains
     lambda^(1/4). The filter steps at 0.3 s on the Esso model (1 s scaled to 0.29 s, rounded to
     the 10-Hz rows). Settings without units (fractions, priors of thrust errors, the outlier
@@ -120,7 +121,9 @@ def froude_scaled_environment(vessel, reference="gunnerus", defaults=None):
         wave_window_s=d.wave_window_s / s, variance_window_s=d.variance_window_s / s,
         filter_step_s=round(d.filter_step_s / s, 1), held_load_window_s=d.held_load_window_s / s,
         held_load_block_s=d.held_load_block_s / s, wave_axis_window_s=d.wave_axis_window_s / s,
-        settle_s=d.settle_s / s, max_bridged_gap_s=d.max_bridged_gap_s / s)})
+        settle_s=d.settle_s / s, max_bridged_gap_s=d.max_bridged_gap_s / s,
+        current_prior_max_m_s=d.current_prior_max_m_s / s,
+        current_prior_wind_ref_m_s=None if d.current_prior_wind_ref_m_s is None else d.current_prior_wind_ref_m_s / s)})
 
 
 _UNDERSCORE_TOKEN = r"_(?:(?:hl|h|b|in|i|v|c|ad|lr|ema|wd)\d+(?:\.\d+)?|(?:m|sd)\d+|abs|lead|own|th)"

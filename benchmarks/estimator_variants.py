@@ -15,7 +15,8 @@ failure on its own: ``data, variant, log, state, ratio_5, ratio_20``), which sho
 pooled change comes from every failure or from one.
 
 ``--data own`` runs on ``--own-n`` fresh simulated scenarios of our own (seeds from
-``--own-seed``) instead.
+``--own-seed``) instead; ``--logs`` adds folders of logs (for example the calm scenarios of
+``hybridship simulate --sweep --beaufort 1.5 3``), each a data set named by its folder.
 
 Examples::
 
@@ -33,6 +34,12 @@ Examples::
         load_to_current_0.5 load_to_current_1 --out docs/results/estimator-variants-load-to-current
     python benchmarks/estimator_variants.py --data embedded truthsim-dev own --only default settle_120 settle_300 \
         current_walk_3e-4 --out docs/results/estimator-variants-filter-start
+    hybridship simulate --sweep --seeds 500-519 --beaufort 1.5 3 --out-dir calm-20
+    python benchmarks/estimator_variants.py --data embedded truthsim-dev own --logs calm-20 --only default \
+        current_prior_0.1 current_by_wind_6 current_by_wind_8 current_by_wind_10 \
+        --out docs/results/estimator-variants-current-by-wind
+    python benchmarks/estimator_variants.py --data own --own-seed 200 --only default current_prior_0.1 \
+        current_by_wind_6 current_by_wind_8 current_by_wind_10 --out docs/results/estimator-variants-current-by-wind-seed200
 """
 
 from __future__ import annotations
@@ -84,6 +91,9 @@ VARIANTS = {
                           "thrust-error prior 0.4 per thruster instead of 0.2"),
     "current_prior_0.1": ({"environment_config": C(current_prior_m_s=0.1)}, "current prior 0.1 m/s instead of 0.02 m/s"),
     "current_prior_0.3": ({"environment_config": C(current_prior_m_s=0.3)}, "current prior 0.3 m/s instead of 0.02 m/s"),
+    **{f"current_by_wind_{ref:g}": ({"environment_config": C(current_prior_wind_ref_m_s=ref)},
+                                    f"current prior 0.02 m/s x ({ref:g} m/s / wind at the filter's start)^2, "
+                                    "0.02-0.3 m/s") for ref in (6.0, 8.0, 10.0)},
     "current_at_stop_0.1": ({"environment_config": C(current_std_at_stop_m_s=0.1)},
                             "current's uncertainty widened by 0.1 m/s along the current-load ridge at the stop"),
     "load_to_current_0.5": ({"environment_config": C(load_to_current_at_stop=0.5)},
@@ -142,16 +152,24 @@ def parse_args(argv, description: str, variants) -> argparse.Namespace:
                     default=("embedded", "truthsim-dev"), help="data sets (default: embedded truthsim-dev)")
     ap.add_argument("--own-n", type=int, default=20, help="scenarios of the 'own' set (default 20)")
     ap.add_argument("--own-seed", type=int, default=100, help="seed of its first scenario (default 100)")
+    ap.add_argument("--logs", type=Path, nargs="+", default=(),
+                    help="folders of DP-loss logs, each one more data set named by its folder (after --data)")
     args = ap.parse_args(argv)
     check_out(ap, args.out)
     check_own_scenarios(ap, "--own-n", args.own_n, "--own-seed", args.own_seed)
+    for folder in args.logs:
+        try:
+            log_files(folder)
+        except ValueError as exc:           # not a folder, or none of its files a log
+            ap.error(f"--logs: {exc}")
     return args
 
 
-def data_sets(names, own_n: int, own_seed: int) -> dict:
+def data_sets(names, own_n: int, own_seed: int, folders=()) -> dict:
     """``{data set: (logs, log names)}`` for ``names`` among ``embedded`` (the three embedded
     scenarios), ``truthsim-dev`` (skipped with a message when absent) and ``own`` (``own_n``
-    fresh scenarios of our own from seed ``own_seed``), in that order."""
+    fresh scenarios of our own from seed ``own_seed``), in that order, then one set per folder
+    of logs in ``folders`` (named by the folder)."""
     from hybridship.sim.scenario import embedded_scenarios
 
     data = {}
@@ -166,13 +184,16 @@ def data_sets(names, own_n: int, own_seed: int) -> dict:
     if "own" in names:
         scen = embedded_scenarios(own_n, own_seed)
         data[f"own {own_seed}-{own_seed + own_n - 1}"] = ([s.log for s in scen], [s.name for s in scen])
+    for folder in folders:
+        files = log_files(folder)
+        data[folder.name] = ([pd.read_csv(f) for f in files], [f.name.split(".")[0] for f in files])
     return data
 
 
 def main(argv=None) -> int:
     args = parse_args(argv, __doc__.split("\n")[0], VARIANTS)
     rows, per_log = [], []
-    sets = data_sets(args.data, args.own_n, args.own_seed)
+    sets = data_sets(args.data, args.own_n, args.own_seed, args.logs)
     if not sets:                # --data truthsim-dev without it: empty tables were written over the results
         print("error: --data: no data set to run (truthsim-dev is not on this machine)", file=sys.stderr)
         return 2

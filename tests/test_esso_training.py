@@ -129,7 +129,7 @@ FROUDE_POWERS = {"position_std_m": -1.0, "velocity_std_m_s": -0.5, "current_prio
                  "wave_window_s": -0.5, "variance_window_s": -0.5, "held_load_window_s": -0.5,
                  "held_load_block_s": -0.5, "wave_axis_window_s": -0.5, "settle_s": -0.5,
                  "max_bridged_gap_s": -0.5, "current_std_at_stop_m_s": -0.5, "current_walk_m_s": -0.25,
-                 "thrust_error_walk": 0.25}
+                 "thrust_error_walk": 0.25, "current_prior_max_m_s": -0.5, "current_prior_wind_ref_m_s": -0.5}
 #: Settings the scaling keeps: accelerations, angles, fractions, counts and choices.
 FROUDE_KEPT = {"heading_std_deg", "accel_noise_m_s2", "load_prior_m_s2", "thrust_error_prior", "thrust_error_model",
                "thrust_error_prior_per_thruster", "use_velocity", "adaptive_measurement_std",
@@ -148,7 +148,7 @@ def test_the_env_variant_scales_every_dimensional_setting_by_its_froude_power(et
     assert set(EnvironmentConfig.model_fields) == set(FROUDE_POWERS) | FROUDE_KEPT | {"filter_step_s"}
     # settings whose default is 0 are scaled from a non-zero value, so that their power is seen
     d = d.model_copy(update={"settle_s": 30.0, "current_std_at_stop_m_s": 0.05, "current_walk_m_s": 1e-3,
-                             "thrust_error_walk": 1e-3})
+                             "thrust_error_walk": 1e-3, "current_prior_wind_ref_m_s": 8.0})
     c = et.froude_scaled_environment(load_vessel("esso_osaka_model"), defaults=d)
     for name, power in FROUDE_POWERS.items():
         assert getattr(c, name) == pytest.approx(getattr(d, name) * lam ** power, rel=1e-12), name

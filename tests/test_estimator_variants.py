@@ -61,3 +61,24 @@ def test_only_truthsim_dev_asked_for_without_it_is_an_error_and_writes_nothing(s
     assert mod.main(["--data", "truthsim-dev", "--only", "default", "--out", str(out)]) == 2
     assert "error: --data: no data set to run" in capsys.readouterr().err
     assert not out.exists()
+
+
+def test_logs_add_a_folder_as_a_data_set_named_by_it(tmp_path, capsys):
+    """--logs adds each folder of logs as one more data set, named by the folder; a path that is
+    not a folder of logs is a usage error naming --logs, before any work."""
+    from hybridship.sim.scenario import embedded_scenarios
+
+    ev = load_benchmark("estimator_variants")
+    folder = tmp_path / "calm"
+    folder.mkdir()
+    for s in embedded_scenarios(2, 0):
+        s.log.to_csv(folder / f"{s.name}.csv", index=False)
+    sets = ev.data_sets([], 20, 100, [folder])
+    assert list(sets) == ["calm"] and sets["calm"][1] == ["embedded_seed0000", "embedded_seed0001"]
+    for bad in (tmp_path / "missing", tmp_path / "empty"):
+        if bad.name == "empty":
+            bad.mkdir()
+        with pytest.raises(SystemExit) as exc:
+            ev.main(["--out", str(tmp_path / "out"), "--logs", str(bad), "--only", "default"])
+        assert exc.value.code == 2 and "--logs" in capsys.readouterr().err
+    assert not (tmp_path / "out").exists()

@@ -187,10 +187,10 @@ def test_incompatible_format_version_is_refused(saved, tmp_path):
         p = _rewrite(saved, tmp_path, meta_change=lambda m: m.update(format_version=version), name=f"v{version}.npz")
         # as written in the file: the text "13" is not said as 13, which this hybridship reads
         _refused(p, rf"model format version {shown} is not supported "
-                    rf"\(this hybridship reads versions 7, 8, 9, 10, 11, 12, 13, 14, 15, 16, 17, 18, 19\)"
+                    rf"\(this hybridship reads versions 7, 8, 9, 10, 11, 12, 13, 14, 15, 16, 17, 18, 19, 20\)"
                     + (r"; expected a whole number$" if not isinstance(version, int) else ""))
-    p = _rewrite(saved, tmp_path, meta_change=lambda m: m.update(format_version=20), name="v20.npz")
-    _refused(p, r"written by a newer hybridship \(format 20\); upgrade hybridship to read it")
+    p = _rewrite(saved, tmp_path, meta_change=lambda m: m.update(format_version=21), name="v21.npz")
+    _refused(p, r"written by a newer hybridship \(format 21\); upgrade hybridship to read it")
 
 
 def test_the_cli_reference_names_the_formats_that_load():
@@ -681,6 +681,31 @@ def test_the_choice_of_the_turned_yaw_load_is_kept_and_checked(saved, tmp_path):
              r"damaged model metadata .*wave_yaw_turned")
     _refused(_rewrite(auto, tmp_path, meta_change=lambda m: m["environment_config"].update(wave_turned_yaw_load=False),
                       name="v19f.npz"), r"wave_yaw_turned: true in a model whose .* is not 'auto'")
+
+
+def test_the_current_prior_scaled_by_the_wind_is_kept(saved, tmp_path):
+    """Format 20 records the current's prior scaled by the wind: it loads back and its filter
+    uses it; a version-19 file without the settings reads a fixed prior (as it was fitted), a
+    version-20 file without them is damaged."""
+    import copy
+
+    from hybridship.residual.environment import EnvironmentConfig
+
+    hp = copy.deepcopy(saved[0])
+    hp.environment_config = EnvironmentConfig(**{**hp.environment_config.model_dump(),
+                                                 "current_prior_wind_ref_m_s": 8.0, "current_prior_max_m_s": 0.2})
+    back = HybridPredictor.load(hp.save(tmp_path / "wind.npz"))
+    assert back.environment_config.current_prior_wind_ref_m_s == 8.0
+    assert back.estimator.config.current_prior_max_m_s == 0.2
+    for key in ("current_prior_wind_ref_m_s", "current_prior_max_m_s"):
+        def as_v19(meta, key=key):
+            meta["format_version"] = 19
+            meta["environment_config"].pop(key)
+
+        old = HybridPredictor.load(_rewrite(saved, tmp_path, meta_change=as_v19, name=f"v19{key}.npz"))
+        assert old.environment_config.current_prior_wind_ref_m_s is None
+        _refused(_rewrite(saved, tmp_path, meta_change=lambda m, key=key: m["environment_config"].pop(key),
+                          name=f"v20{key}.npz"), rf"damaged model metadata .*{key}")
 
 
 def test_edited_settings_are_refused(saved, tmp_path):

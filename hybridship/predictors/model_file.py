@@ -29,6 +29,9 @@ from .forecast_setup import AFTER_STOP, AFTER_STOP_LATE, COMMAND_MODES
 __all__ = ["MODEL_FORMAT_VERSION", "ModelFileError", "load_model", "model_metadata", "save_model"]
 
 #: Version of the model-file format written by :func:`save_model` (:meth:`HybridPredictor.save`).
+#: 20: the current's prior scaled by the wind at the filter's start (``environment_config.
+#: current_prior_wind_ref_m_s``, ``current_prior_max_m_s``; older files read None, a fixed
+#: prior, as they were fitted);
 #: 19: the yaw load turned with the waves chosen by ``fit`` (``environment_config.wave_turned_yaw_load``
 #: may be ``"auto"``, and ``wave_yaw_turned`` records the choice; older files read False);
 #: 18: the environment load's random walks while the thrusters are stopped
@@ -54,7 +57,7 @@ __all__ = ["MODEL_FORMAT_VERSION", "ModelFileError", "load_model", "model_metada
 #: validated vessel description is embedded in the metadata (``vessel_description``), so a
 #: model loads without its vessel file; 3 added the environment estimator; 2 and earlier
 #: stored only the vessel's name.
-MODEL_FORMAT_VERSION = 19
+MODEL_FORMAT_VERSION = 20
 #: Versions :func:`load_model` reads: a version-7 file is a version-8 one without the spread
 #: exponent (three rows per ``cal_*`` array), read as exponent 1, which is what it was fitted with;
 #: versions 7 and 8 have no wind futures in the spread (``wind_samples = 0``, as they were fitted);
@@ -67,8 +70,9 @@ MODEL_FORMAT_VERSION = 19
 #: (``residual_step_s = None``); versions 7 to 16 restart the environment estimator at every
 #: gap of a log (``max_bridged_gap_s = 0``); versions 7 to 17 filter a drift with the station
 #: keeping's load walks; versions 7 to 18 choose no yaw load turned with the waves (``wave_yaw_turned``
-#: false; their ``wave_turned_yaw_load`` is true or false, false where the file predates it).
-READABLE_MODEL_FORMAT_VERSIONS = (7, 8, 9, 10, 11, 12, 13, 14, 15, 16, 17, 18, 19)
+#: false; their ``wave_turned_yaw_load`` is true or false, false where the file predates it);
+#: versions 7 to 19 take the current's prior as fixed (``current_prior_wind_ref_m_s = None``).
+READABLE_MODEL_FORMAT_VERSIONS = (7, 8, 9, 10, 11, 12, 13, 14, 15, 16, 17, 18, 19, 20)
 
 
 class ModelFileError(ValueError):
@@ -360,6 +364,10 @@ def _build_predictor(cls, meta: dict, vessel, path: Path):
             raise KeyError("environment_config.wave_turned_yaw_load")
         # files from before the option held the yaw load, as they were fitted (the default is now "auto")
         env = {"wave_turned_yaw_load": False, **env}
+        for key in ("current_prior_wind_ref_m_s", "current_prior_max_m_s"):
+            # older files read the defaults: a fixed current prior, as they were fitted
+            if meta["format_version"] >= 20 and key not in env:
+                raise KeyError(f"environment_config.{key}")
         residual_config = ResidualConfig(**{"residual_step_s": None,     # older files: fitted at the log's step
                                             **{k: tuple(v) if k == "features" else v
                                                for k, v in meta["residual_config"].items()}})

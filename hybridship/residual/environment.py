@@ -176,6 +176,14 @@ class EnvironmentConfig(BaseModel):
     current_prior_m_s, load_prior_m_s2, load_yaw_prior_rad_s2 : float
         Prior standard deviations of each current component [m/s] and of the load in
         north/east [m/s^2] and yaw [rad/s^2] (all with mean 0).
+    current_prior_wind_ref_m_s, current_prior_max_m_s : float or None, float
+        With a reference wind speed ``U_ref`` [m/s] (default None: the prior is
+        ``current_prior_m_s`` whatever the weather), the current's prior standard deviation
+        at a filter start is ``current_prior_m_s (U_ref / U)^2``, clipped to
+        ``[current_prior_m_s, max(current_prior_m_s, current_prior_max_m_s)]`` [m/s], where
+        ``U`` is the logged wind speed at the filter's first row (held from the last logged
+        sample; a log without wind keeps ``current_prior_m_s``): see
+        :func:`current_prior_std_m_s`.
     current_walk_m_s, load_walk_m_s2, load_yaw_walk_rad_s2, thrust_error_walk : float
         Random-walk intensities of the current, the load and the thrust errors [unit per
         sqrt(s)]; 0 keeps the state constant.
@@ -265,6 +273,8 @@ class EnvironmentConfig(BaseModel):
     yaw_accel_noise_rad_s2: Float = Field(3e-4, gt=0)
     current_prior_m_s: Float = Field(0.02, gt=0)
     current_walk_m_s: Float = Field(0.0, ge=0)
+    current_prior_wind_ref_m_s: Float | None = Field(None, gt=0)
+    current_prior_max_m_s: Float = Field(0.3, gt=0)
     load_prior_m_s2: Float = Field(0.02, gt=0)
     load_yaw_prior_rad_s2: Float = Field(1e-3, gt=0)
     load_walk_m_s2: Float = Field(2e-5, ge=0)
@@ -466,6 +476,33 @@ def external_accel(psi_rad, load_ned, theta, a_thr, load_map=None) -> np.ndarray
     out[..., 1] += -s * load_ned[..., 0] + c * load_ned[..., 1]
     out[..., 2] += load_ned[..., 2]
     return out
+
+
+def current_prior_std_m_s(config: EnvironmentConfig, wind_speed_m_s: float | None) -> float:
+    """The current's prior standard deviation [m/s] at a filter start where the wind speed
+    ``wind_speed_m_s`` [m/s] was logged (None: not known).
+
+    Station keeping sees a current only as the force it puts on the ship at rest, the same
+    offset a load gives, and the filter splits that offset by the two priors. The load it
+    stands for (wave drift, the wind model's error) grows with the wind, roughly as its
+    dynamic pressure, while a current does not. With ``config.current_prior_wind_ref_m_s``
+    the current's prior therefore scales as ``(U_ref / U)^2``: in light wind a steady offset
+    is taken more as a current, which carries a drifting ship instead of pushing it. Clipped
+    to ``[current_prior_m_s, max(current_prior_m_s, current_prior_max_m_s)]``; without a
+    reference speed, or without a logged wind, ``current_prior_m_s``.
+    """
+    base = config.current_prior_m_s
+    if config.current_prior_wind_ref_m_s is None or wind_speed_m_s is None:
+        return base
+    ratio = config.current_prior_wind_ref_m_s / max(wind_speed_m_s, 1e-6)
+    return float(min(max(base * ratio ** 2, base), max(base, config.current_prior_max_m_s)))
+
+
+def _wind_speed_at(arrays: LogArrays, row: int) -> float | None:
+    """The logged wind speed [m/s] at ``row`` (the last logged sample held), None where no wind
+    was logged at or before it."""
+    logged = np.flatnonzero(arrays.wind_logged[:row + 1])
+    return float(arrays.wind[logged[-1], 0]) if logged.size else None
 
 
 def thrust_error_prior_carries_over(errors_configured, errors_learned) -> tuple[bool, list[float]]:
@@ -687,12 +724,14 @@ class EnvironmentEstimator:
 
     # ------------------------------------------------------------------ filtering
 
-    def _prior_sd(self) -> np.ndarray:
-        """Prior standard deviations of the states at a filter start (SI, radians)."""
+    def _prior_sd(self, wind_speed_m_s: float | None = None) -> np.ndarray:
+        """Prior standard deviations of the states at a filter start (SI, radians); the wind
+        speed [m/s] logged there (None: not known) sets the current's
+        (:func:`current_prior_std_m_s`)."""
         c = self.config
         return np.concatenate([[c.position_std_m] * 2, [np.radians(c.heading_std_deg)],
                                [c.velocity_std_m_s] * 2, [np.radians(c.yaw_rate_std_deg_s)],
-                               [c.current_prior_m_s] * 2, [c.load_prior_m_s2] * 2, [c.load_yaw_prior_rad_s2],
+                               [current_prior_std_m_s(c, wind_speed_m_s)] * 2, [c.load_prior_m_s2] * 2, [c.load_yaw_prior_rad_s2],
                                self.thrust_error_std])
 
     def _process_noise_base(self, stopped: bool = False) -> np.ndarray:
@@ -1011,7 +1050,8 @@ class EnvironmentEstimator:
                            inputs["wind"], inputs["dp"], inputs["cmd_known"], self.model.arrays,
                            c.thrust_error_model == "per_thruster",
                            np.asarray(self.thrust_error_mean, float),
-                           self._prior_sd(), self._process_noise_base(), self._process_noise_base(stopped=True),
+                           self._prior_sd(_wind_speed_at(arrays, int(grid[0]))), self._process_noise_base(),
+                           self._process_noise_base(stopped=True),
                            _FD_STEP,
                            bool(c.reset_yaw_load_at_stop), float(c.yaw_load_kept_at_stop), self._yaw_std_at_stop(),
                            float(c.load_yaw_prior_rad_s2), float(c.current_std_at_stop_m_s),
