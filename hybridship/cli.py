@@ -109,6 +109,17 @@ def _whole_number_in(text: str, lo: int, hi: int) -> int:
     return value
 
 
+def _positive_number(text: str) -> float:
+    """A finite number > 0, or argparse's error (which names the option)."""
+    try:
+        value = float(text)
+    except ValueError:
+        value = float("nan")
+    if not (math.isfinite(value) and value > 0.0):
+        raise argparse.ArgumentTypeError(f"expected a finite number > 0, got {text!r}")
+    return value
+
+
 def _seed(text: str) -> int:
     """A ``--seed`` value: a whole number in 0..:data:`MAX_SEED` (argparse names the option)."""
     return _whole_number_in(text, 0, MAX_SEED)
@@ -616,6 +627,10 @@ def _add_benchmark(sub) -> None:
                    help="learn nothing about the drift from failures: neither the hull's yaw moment nor (with "
                         "--wave-yaw-load auto) the yaw load's turn (the paper's protocol, strictly)")
     _add_wave_yaw_load(d, "the other failures show", " (held with --no-drift-hull)")
+    d.add_argument("--current-prior-wind-ref", type=_positive_number, default=None, metavar="M_S",
+                   help="widen the environment estimator's current prior in light wind: 0.02 m/s x (M_S / the "
+                        "wind at the filter's start)^2, 0.02-0.3 m/s (EnvironmentConfig.current_prior_wind_ref_m_s; "
+                        "default: 0.02 m/s whatever the wind)")
     d.add_argument("--load-model", choices=("acceleration", "force"), default="acceleration",
                    help="the environment estimator's slowly varying load: an acceleration fixed in NED "
                         "(default) or a NED force and yaw moment (EnvironmentConfig.load_model)")
@@ -793,7 +808,8 @@ def _cmd_benchmark_drift(args) -> int:
                                   drift_hull=not args.no_drift_hull,
                                   environment_config=EnvironmentConfig(
                                       wave_turned_yaw_load=_WAVE_YAW_LOAD[args.wave_yaw_load or "auto"],
-                                      load_model=args.load_model))
+                                      load_model=args.load_model,
+                                      current_prior_wind_ref_m_s=args.current_prior_wind_ref))
     except ValueError as exc:
         if not str(exc).startswith(("test: ", "train: ", "n_intervals: ")):
             raise

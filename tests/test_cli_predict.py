@@ -486,6 +486,33 @@ def test_benchmark_drift_passes_the_yaw_load_option_as_the_config_takes_it(tmp_p
     assert seen == [wanted] and type(seen[0]) is type(wanted)
 
 
+def test_benchmark_drift_passes_the_current_prior_wind_reference_and_refuses_a_bad_one(tmp_path, monkeypatch,
+                                                                                      capsys):
+    """``benchmark drift --current-prior-wind-ref M_S`` reaches
+    ``EnvironmentConfig.current_prior_wind_ref_m_s`` (None without it); a value that is not a
+    finite number > 0 is a usage error naming the option, before any work."""
+    from hybridship.evaluation import drift
+
+    seen = []
+
+    class Stop(Exception):
+        pass
+
+    def run(*args, environment_config=None, **kwargs):
+        seen.append(environment_config.current_prior_wind_ref_m_s)
+        raise Stop      # before any work
+
+    monkeypatch.setattr(drift, "run_drift_benchmark", run)
+    for given in ([], ["--current-prior-wind-ref", "8"]):
+        with pytest.raises(Stop):
+            main(["benchmark", "drift", "--out", str(tmp_path / "out"), *given])
+    assert seen == [None, 8.0]
+    for bad in ("0", "-3", "nan", "inf", "fast"):
+        assert main(["benchmark", "drift", "--out", str(tmp_path / "out"), "--current-prior-wind-ref", bad]) == 2
+        assert "--current-prior-wind-ref: expected a finite number > 0" in capsys.readouterr().err
+    assert seen == [None, 8.0] and not (tmp_path / "out").exists()
+
+
 def test_cli_warnings_and_short_logs_speak_the_users_words(log_dir, tmp_path, capsys):
     """A log-format warning is one line in the command's words (not the library's source
     line); training data too short names the logs, not an internal function."""
