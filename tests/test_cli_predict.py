@@ -463,12 +463,9 @@ def test_train_takes_the_yaw_load_option_into_the_model_file(log_dir, tmp_path, 
     assert err.startswith("hybridship train: error: --wave-yaw-load on: not used with --manoeuvre"), err
 
 
-@pytest.mark.parametrize("given, wanted", [([], "auto"), (["--wave-yaw-load"], True),
-                                            (["--wave-yaw-load", "on"], True), (["--wave-yaw-load", "off"], False),
-                                            (["--wave-yaw-load", "auto"], "auto")])
-def test_benchmark_drift_passes_the_yaw_load_option_as_the_config_takes_it(tmp_path, monkeypatch, given, wanted):
-    """``benchmark drift --wave-yaw-load``: alone or ``on`` True, ``off`` False, ``auto`` (the
-    default) "auto", as ``EnvironmentConfig.wave_turned_yaw_load`` takes them."""
+def _benchmark_drift_environment(monkeypatch, tmp_path, given):
+    """The EnvironmentConfig that ``hybridship benchmark drift ... given`` passes to the
+    benchmark, which is stopped before any work."""
     from hybridship.evaluation import drift
 
     seen = []
@@ -477,13 +474,23 @@ def test_benchmark_drift_passes_the_yaw_load_option_as_the_config_takes_it(tmp_p
         pass
 
     def run(*args, environment_config=None, **kwargs):
-        seen.append(environment_config.wave_turned_yaw_load)
+        seen.append(environment_config)
         raise Stop      # before any work
 
     monkeypatch.setattr(drift, "run_drift_benchmark", run)
     with pytest.raises(Stop):
         main(["benchmark", "drift", "--out", str(tmp_path / "out"), *given])
-    assert seen == [wanted] and type(seen[0]) is type(wanted)
+    return seen[0]
+
+
+@pytest.mark.parametrize("given, wanted", [([], "auto"), (["--wave-yaw-load"], True),
+                                            (["--wave-yaw-load", "on"], True), (["--wave-yaw-load", "off"], False),
+                                            (["--wave-yaw-load", "auto"], "auto")])
+def test_benchmark_drift_passes_the_yaw_load_option_as_the_config_takes_it(tmp_path, monkeypatch, given, wanted):
+    """``benchmark drift --wave-yaw-load``: alone or ``on`` True, ``off`` False, ``auto`` (the
+    default) "auto", as ``EnvironmentConfig.wave_turned_yaw_load`` takes them."""
+    got = _benchmark_drift_environment(monkeypatch, tmp_path, given).wave_turned_yaw_load
+    assert got == wanted and type(got) is type(wanted)
 
 
 def test_benchmark_drift_passes_the_current_prior_wind_reference_and_refuses_a_bad_one(tmp_path, monkeypatch,
@@ -491,26 +498,13 @@ def test_benchmark_drift_passes_the_current_prior_wind_reference_and_refuses_a_b
     """``benchmark drift --current-prior-wind-ref M_S`` reaches
     ``EnvironmentConfig.current_prior_wind_ref_m_s`` (None without it); a value that is not a
     finite number > 0 is a usage error naming the option, before any work."""
-    from hybridship.evaluation import drift
-
-    seen = []
-
-    class Stop(Exception):
-        pass
-
-    def run(*args, environment_config=None, **kwargs):
-        seen.append(environment_config.current_prior_wind_ref_m_s)
-        raise Stop      # before any work
-
-    monkeypatch.setattr(drift, "run_drift_benchmark", run)
-    for given in ([], ["--current-prior-wind-ref", "8"]):
-        with pytest.raises(Stop):
-            main(["benchmark", "drift", "--out", str(tmp_path / "out"), *given])
-    assert seen == [None, 8.0]
+    assert _benchmark_drift_environment(monkeypatch, tmp_path, []).current_prior_wind_ref_m_s is None
+    given = ["--current-prior-wind-ref", "8"]
+    assert _benchmark_drift_environment(monkeypatch, tmp_path, given).current_prior_wind_ref_m_s == 8.0
     for bad in ("0", "-3", "nan", "inf", "fast"):
         assert main(["benchmark", "drift", "--out", str(tmp_path / "out"), "--current-prior-wind-ref", bad]) == 2
         assert "--current-prior-wind-ref: expected a finite number > 0" in capsys.readouterr().err
-    assert seen == [None, 8.0] and not (tmp_path / "out").exists()
+    assert not (tmp_path / "out").exists()
 
 
 def test_cli_warnings_and_short_logs_speak_the_users_words(log_dir, tmp_path, capsys):
