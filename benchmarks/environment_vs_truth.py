@@ -117,10 +117,11 @@ def yaw_summary(table: pd.DataFrame) -> str:
 
 
 def station_keeping_yaw_split(dp: pd.DataFrame) -> str:
-    """From the ``dp`` rows of the table: in station keeping, the yaw load's error, the thrust error's yaw moment's error and their
-    sum's error [kN m] (medians of the absolute values over the logs), the correlation of the
-    first two (Pearson), and the Spearman rank correlation (nan with fewer than three logs) of the sum's absolute error with the
-    true current speed: the sum is what the thrust and the environment add up to, so its error
+    """From the ``dp`` rows of the table: in station keeping, the yaw load's error, the thrust
+    error's yaw moment's error and their sum's error [kN m] (medians of the absolute values
+    over the logs), the correlation of the first two (Pearson), and the Spearman rank
+    correlation of the sum's absolute error with the true current speed (both nan with fewer
+    than three logs). The sum is what the thrust and the environment add up to, so its error
     is what the filter takes as yaw load or thrust error and the truth counts as neither (the
     current's yaw moment on the ship at rest)."""
     from scipy.stats import spearmanr

@@ -39,7 +39,8 @@ Examples::
         current_prior_0.1 current_by_wind_6 current_by_wind_8 current_by_wind_10 \
         --out docs/results/estimator-variants-current-by-wind
     python benchmarks/estimator_variants.py --data own --own-seed 200 --only default current_prior_0.1 \
-        current_by_wind_6 current_by_wind_8 current_by_wind_10 --out docs/results/estimator-variants-current-by-wind-seed200
+        current_by_wind_6 current_by_wind_8 current_by_wind_10 \
+        --out docs/results/estimator-variants-current-by-wind-seed200
 """
 
 from __future__ import annotations
@@ -162,6 +163,9 @@ def parse_args(argv, description: str, variants) -> argparse.Namespace:
             log_files(folder)
         except ValueError as exc:           # not a folder, or none of its files a log
             ap.error(f"--logs: {exc}")
+    names = [folder.name for folder in args.logs]
+    if len(set(names)) != len(names):       # one data set would replace the other in the tables
+        ap.error(f"--logs: two folders named {next(n for n in names if names.count(n) > 1)!r}")
     return args
 
 

@@ -65,7 +65,8 @@ def test_only_truthsim_dev_asked_for_without_it_is_an_error_and_writes_nothing(s
 
 def test_logs_add_a_folder_as_a_data_set_named_by_it(tmp_path, capsys):
     """--logs adds each folder of logs as one more data set, named by the folder; a path that is
-    not a folder of logs is a usage error naming --logs, before any work."""
+    not a folder of logs, or two folders of one name (whose rows would mix), is a usage error
+    naming --logs, before any work."""
     from hybridship.sim.scenario import embedded_scenarios
 
     ev = load_benchmark("estimator_variants")
@@ -75,10 +76,12 @@ def test_logs_add_a_folder_as_a_data_set_named_by_it(tmp_path, capsys):
         s.log.to_csv(folder / f"{s.name}.csv", index=False)
     sets = ev.data_sets([], 20, 100, [folder])
     assert list(sets) == ["calm"] and sets["calm"][1] == ["embedded_seed0000", "embedded_seed0001"]
-    for bad in (tmp_path / "missing", tmp_path / "empty"):
-        if bad.name == "empty":
-            bad.mkdir()
+    (tmp_path / "empty").mkdir()
+    (tmp_path / "other" / "calm").mkdir(parents=True)
+    (folder / "embedded_seed0000.csv").replace(tmp_path / "other" / "calm" / "a.csv")
+    for bad, said in (([tmp_path / "missing"], "not a folder"), ([tmp_path / "empty"], "no log files"),
+                      ([folder, tmp_path / "other" / "calm"], "two folders named 'calm'")):
         with pytest.raises(SystemExit) as exc:
-            ev.main(["--out", str(tmp_path / "out"), "--logs", str(bad), "--only", "default"])
-        assert exc.value.code == 2 and "--logs" in capsys.readouterr().err
+            ev.main(["--out", str(tmp_path / "out"), "--logs", *map(str, bad), "--only", "default"])
+        assert exc.value.code == 2 and "--logs: " in (err := capsys.readouterr().err) and said in err, err
     assert not (tmp_path / "out").exists()

@@ -499,10 +499,9 @@ def current_prior_std_m_s(config: EnvironmentConfig, wind_speed_m_s: float | Non
 
 
 def _wind_speed_at(arrays: LogArrays, row: int) -> float | None:
-    """The logged wind speed [m/s] at ``row`` (the last logged sample held), None where no wind
-    was logged at or before it."""
-    logged = np.flatnonzero(arrays.wind_logged[:row + 1])
-    return float(arrays.wind[logged[-1], 0]) if logged.size else None
+    """The logged wind speed [m/s] at ``row`` (the log's own hold of the last logged sample), None
+    where no wind was logged at or before it."""
+    return float(arrays.wind[row, 0]) if arrays.wind_logged[:row + 1].any() else None
 
 
 def thrust_error_prior_carries_over(errors_configured, errors_learned) -> tuple[bool, list[float]]:
@@ -731,7 +730,8 @@ class EnvironmentEstimator:
         c = self.config
         return np.concatenate([[c.position_std_m] * 2, [np.radians(c.heading_std_deg)],
                                [c.velocity_std_m_s] * 2, [np.radians(c.yaw_rate_std_deg_s)],
-                               [current_prior_std_m_s(c, wind_speed_m_s)] * 2, [c.load_prior_m_s2] * 2, [c.load_yaw_prior_rad_s2],
+                               [current_prior_std_m_s(c, wind_speed_m_s)] * 2, [c.load_prior_m_s2] * 2,
+                               [c.load_yaw_prior_rad_s2],
                                self.thrust_error_std])
 
     def _process_noise_base(self, stopped: bool = False) -> np.ndarray:
