@@ -95,6 +95,10 @@ VARIANTS = {
     **{f"current_by_wind_{ref:g}": ({"environment_config": C(current_prior_wind_ref_m_s=ref)},
                                     f"current prior 0.02 m/s x ({ref:g} m/s / wind at the filter's start)^2, "
                                     "0.02-0.3 m/s") for ref in (6.0, 8.0, 10.0)},
+    **{f"load_across_wind_{rho:g}" + ("" if cur == 0.02 else f"_current_{cur:g}"): (
+        {"environment_config": C(load_prior_across_wind=rho, current_prior_m_s=cur)},
+        f"the load's prior across the wind {rho:g} times that along it, current prior {cur:g} m/s")
+       for rho, cur in ((0.3, 0.02), (0.3, 0.05), (0.3, 0.1), (0.1, 0.02), (0.1, 0.05), (0.1, 0.1))},
     "current_at_stop_0.1": ({"environment_config": C(current_std_at_stop_m_s=0.1)},
                             "current's uncertainty widened by 0.1 m/s along the current-load ridge at the stop"),
     "load_to_current_0.5": ({"environment_config": C(load_to_current_at_stop=0.5)},

@@ -120,6 +120,17 @@ def _positive_number(text: str) -> float:
     return value
 
 
+def _fraction(text: str) -> float:
+    """A number in (0, 1], or argparse's error (which names the option)."""
+    try:
+        value = float(text)
+    except ValueError:
+        value = float("nan")
+    if not 0.0 < value <= 1.0:                           # NaN fails too
+        raise argparse.ArgumentTypeError(f"expected a number in (0, 1], got {text!r}")
+    return value
+
+
 def _seed(text: str) -> int:
     """A ``--seed`` value: a whole number in 0..:data:`MAX_SEED` (argparse names the option)."""
     return _whole_number_in(text, 0, MAX_SEED)
@@ -631,6 +642,10 @@ def _add_benchmark(sub) -> None:
                    help="widen the environment estimator's current prior in light wind: 0.02 m/s x (M_S / the "
                         "wind at the filter's start)^2, 0.02-0.3 m/s (EnvironmentConfig.current_prior_wind_ref_m_s; "
                         "default: 0.02 m/s whatever the wind)")
+    d.add_argument("--load-prior-across-wind", type=_fraction, default=1.0, metavar="RHO",
+                   help="narrow the environment estimator's NED load prior across the wind's axis at the "
+                        "filter's start to RHO times that along it (EnvironmentConfig.load_prior_across_wind; "
+                        "default 1: the same in every direction)")
     d.add_argument("--load-model", choices=("acceleration", "force"), default="acceleration",
                    help="the environment estimator's slowly varying load: an acceleration fixed in NED "
                         "(default) or a NED force and yaw moment (EnvironmentConfig.load_model)")
@@ -809,7 +824,8 @@ def _cmd_benchmark_drift(args) -> int:
                                   environment_config=EnvironmentConfig(
                                       wave_turned_yaw_load=_WAVE_YAW_LOAD[args.wave_yaw_load or "auto"],
                                       load_model=args.load_model,
-                                      current_prior_wind_ref_m_s=args.current_prior_wind_ref))
+                                      current_prior_wind_ref_m_s=args.current_prior_wind_ref,
+                                      load_prior_across_wind=args.load_prior_across_wind))
     except ValueError as exc:
         if not str(exc).startswith(("test: ", "train: ", "n_intervals: ")):
             raise

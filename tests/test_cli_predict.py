@@ -507,6 +507,19 @@ def test_benchmark_drift_passes_the_current_prior_wind_reference_and_refuses_a_b
     assert not (tmp_path / "out").exists()
 
 
+def test_benchmark_drift_passes_the_load_prior_across_the_wind_and_refuses_a_bad_one(tmp_path, monkeypatch, capsys):
+    """``benchmark drift --load-prior-across-wind RHO`` reaches
+    ``EnvironmentConfig.load_prior_across_wind`` (1 without it); a value outside (0, 1] is a
+    usage error naming the option, before any work."""
+    assert _benchmark_drift_environment(monkeypatch, tmp_path, []).load_prior_across_wind == 1.0
+    given = ["--load-prior-across-wind", "0.1"]
+    assert _benchmark_drift_environment(monkeypatch, tmp_path, given).load_prior_across_wind == 0.1
+    for bad in ("0", "-0.5", "1.5", "nan", "narrow"):
+        assert main(["benchmark", "drift", "--out", str(tmp_path / "out"), "--load-prior-across-wind", bad]) == 2
+        assert "--load-prior-across-wind: expected a number in (0, 1]" in capsys.readouterr().err
+    assert not (tmp_path / "out").exists()
+
+
 def test_cli_warnings_and_short_logs_speak_the_users_words(log_dir, tmp_path, capsys):
     """A log-format warning is one line in the command's words (not the library's source
     line); training data too short names the logs, not an internal function."""

@@ -132,6 +132,7 @@ FROUDE_POWERS = {"position_std_m": -1.0, "velocity_std_m_s": -0.5, "current_prio
                  "thrust_error_walk": 0.25, "current_prior_max_m_s": -0.5, "current_prior_wind_ref_m_s": -0.5}
 #: Settings the scaling keeps: accelerations, angles, fractions, counts and choices.
 FROUDE_KEPT = {"heading_std_deg", "accel_noise_m_s2", "load_prior_m_s2", "thrust_error_prior", "thrust_error_model",
+               "load_prior_across_wind",
                "thrust_error_prior_per_thruster", "use_velocity", "adaptive_measurement_std",
                "reset_yaw_load_at_stop", "yaw_load_kept_at_stop", "yaw_load_std_at_stop", "load_to_current_at_stop",
                "innovation_gate_sigma", "max_gated_samples", "wave_turned_yaw_load", "min_wave_anisotropy",

@@ -187,10 +187,10 @@ def test_incompatible_format_version_is_refused(saved, tmp_path):
         p = _rewrite(saved, tmp_path, meta_change=lambda m: m.update(format_version=version), name=f"v{version}.npz")
         # as written in the file: the text "13" is not said as 13, which this hybridship reads
         _refused(p, rf"model format version {shown} is not supported "
-                    rf"\(this hybridship reads versions 7, 8, 9, 10, 11, 12, 13, 14, 15, 16, 17, 18, 19, 20\)"
+                    rf"\(this hybridship reads versions 7, 8, 9, 10, 11, 12, 13, 14, 15, 16, 17, 18, 19, 20, 21\)"
                     + (r"; expected a whole number$" if not isinstance(version, int) else ""))
-    p = _rewrite(saved, tmp_path, meta_change=lambda m: m.update(format_version=21), name="v21.npz")
-    _refused(p, r"written by a newer hybridship \(format 21\); upgrade hybridship to read it")
+    p = _rewrite(saved, tmp_path, meta_change=lambda m: m.update(format_version=22), name="v22.npz")
+    _refused(p, r"written by a newer hybridship \(format 22\); upgrade hybridship to read it")
 
 
 def test_the_cli_reference_names_the_formats_that_load():
@@ -706,6 +706,27 @@ def test_the_current_prior_scaled_by_the_wind_is_kept(saved, tmp_path):
         assert old.environment_config.current_prior_wind_ref_m_s is None
         _refused(_rewrite(saved, tmp_path, meta_change=lambda m, key=key: m["environment_config"].pop(key),
                           name=f"v20{key}.npz"), rf"damaged model metadata .*{key}")
+
+
+def test_the_load_prior_narrowed_across_the_wind_is_kept(saved, tmp_path):
+    """Format 21 records the load's prior across the wind: it loads back into the filter; a
+    version-20 file without it reads 1 (as it was fitted), a version-21 file without it is damaged."""
+    import copy
+
+    from hybridship.residual.environment import EnvironmentConfig
+
+    hp = copy.deepcopy(saved[0])
+    hp.environment_config = EnvironmentConfig(**{**hp.environment_config.model_dump(), "load_prior_across_wind": 0.1})
+    assert HybridPredictor.load(hp.save(tmp_path / "across.npz")).estimator.config.load_prior_across_wind == 0.1
+
+    def as_v20(meta):
+        meta["format_version"] = 20
+        meta["environment_config"].pop("load_prior_across_wind")
+
+    assert HybridPredictor.load(_rewrite(saved, tmp_path, meta_change=as_v20, name="v20a.npz")
+                                ).environment_config.load_prior_across_wind == 1.0
+    _refused(_rewrite(saved, tmp_path, meta_change=lambda m: m["environment_config"].pop("load_prior_across_wind"),
+                      name="v21a.npz"), r"damaged model metadata .*load_prior_across_wind")
 
 
 def test_edited_settings_are_refused(saved, tmp_path):

@@ -29,6 +29,8 @@ from .forecast_setup import AFTER_STOP, AFTER_STOP_LATE, COMMAND_MODES
 __all__ = ["MODEL_FORMAT_VERSION", "ModelFileError", "load_model", "model_metadata", "save_model"]
 
 #: Version of the model-file format written by :func:`save_model` (:meth:`HybridPredictor.save`).
+#: 21: the NED load's prior narrowed across the wind (``environment_config.load_prior_across_wind``;
+#: older files read 1, the same prior in every direction, as they were fitted);
 #: 20: the current's prior scaled by the wind at the filter's start (``environment_config.
 #: current_prior_wind_ref_m_s``, ``current_prior_max_m_s``; older files read None, a fixed
 #: prior, as they were fitted);
@@ -57,7 +59,7 @@ __all__ = ["MODEL_FORMAT_VERSION", "ModelFileError", "load_model", "model_metada
 #: validated vessel description is embedded in the metadata (``vessel_description``), so a
 #: model loads without its vessel file; 3 added the environment estimator; 2 and earlier
 #: stored only the vessel's name.
-MODEL_FORMAT_VERSION = 20
+MODEL_FORMAT_VERSION = 21
 #: Versions :func:`load_model` reads: a version-7 file is a version-8 one without the spread
 #: exponent (three rows per ``cal_*`` array), read as exponent 1, which is what it was fitted with;
 #: versions 7 and 8 have no wind futures in the spread (``wind_samples = 0``, as they were fitted);
@@ -71,8 +73,9 @@ MODEL_FORMAT_VERSION = 20
 #: gap of a log (``max_bridged_gap_s = 0``); versions 7 to 17 filter a drift with the station
 #: keeping's load walks; versions 7 to 18 choose no yaw load turned with the waves (``wave_yaw_turned``
 #: false; their ``wave_turned_yaw_load`` is true or false, false where the file predates it);
-#: versions 7 to 19 take the current's prior as fixed (``current_prior_wind_ref_m_s = None``).
-READABLE_MODEL_FORMAT_VERSIONS = (7, 8, 9, 10, 11, 12, 13, 14, 15, 16, 17, 18, 19, 20)
+#: versions 7 to 19 take the current's prior as fixed (``current_prior_wind_ref_m_s = None``);
+#: versions 7 to 20 take the load's prior as the same in every direction (``load_prior_across_wind = 1``).
+READABLE_MODEL_FORMAT_VERSIONS = (7, 8, 9, 10, 11, 12, 13, 14, 15, 16, 17, 18, 19, 20, 21)
 
 
 class ModelFileError(ValueError):
@@ -364,9 +367,11 @@ def _build_predictor(cls, meta: dict, vessel, path: Path):
             raise KeyError("environment_config.wave_turned_yaw_load")
         # files from before the option held the yaw load, as they were fitted (the default is now "auto")
         env = {"wave_turned_yaw_load": False, **env}
-        for key in ("current_prior_wind_ref_m_s", "current_prior_max_m_s"):
-            # older files read the defaults: a fixed current prior, as they were fitted
-            if meta["format_version"] >= 20 and key not in env:
+        for key, since in (("current_prior_wind_ref_m_s", 20), ("current_prior_max_m_s", 20),
+                           ("load_prior_across_wind", 21)):
+            # older files read the defaults: a fixed current prior and a load prior alike in every
+            # direction, as they were fitted
+            if meta["format_version"] >= since and key not in env:
                 raise KeyError(f"environment_config.{key}")
         residual_config = ResidualConfig(**{"residual_step_s": None,     # older files: fitted at the log's step
                                             **{k: tuple(v) if k == "features" else v

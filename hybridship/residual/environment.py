@@ -184,6 +184,11 @@ class EnvironmentConfig(BaseModel):
         ``U`` is the logged wind speed at the filter's first row (held from the last logged
         sample; a log without wind keeps ``current_prior_m_s``): see
         :func:`current_prior_std_m_s`.
+    load_prior_across_wind : float
+        The NED load's prior across the wind's axis, as a fraction of ``load_prior_m_s2``
+        (its prior along the axis) [-]; the axis is the wind's direction logged at the
+        filter's first row. 1 (default): the same in every direction. See
+        :func:`load_prior_ne`.
     current_walk_m_s, load_walk_m_s2, load_yaw_walk_rad_s2, thrust_error_walk : float
         Random-walk intensities of the current, the load and the thrust errors [unit per
         sqrt(s)]; 0 keeps the state constant.
@@ -276,6 +281,7 @@ class EnvironmentConfig(BaseModel):
     current_prior_wind_ref_m_s: Float | None = Field(None, gt=0)
     current_prior_max_m_s: Float = Field(0.3, gt=0)
     load_prior_m_s2: Float = Field(0.02, gt=0)
+    load_prior_across_wind: Float = Field(1.0, gt=0, le=1)
     load_yaw_prior_rad_s2: Float = Field(1e-3, gt=0)
     load_walk_m_s2: Float = Field(2e-5, ge=0)
     load_yaw_walk_rad_s2: Float = Field(1e-6, ge=0)
@@ -496,6 +502,32 @@ def current_prior_std_m_s(config: EnvironmentConfig, wind_speed_m_s: float | Non
         return base
     ratio = config.current_prior_wind_ref_m_s / max(wind_speed_m_s, 1e-6)
     return float(min(max(base * ratio ** 2, base), max(base, config.current_prior_max_m_s)))
+
+
+def load_prior_ne(config: EnvironmentConfig, wind_dir_from_rad: float | None) -> np.ndarray:
+    """The NED load's prior covariance (2, 2) [(m/s^2)^2] at a filter start where the wind
+    was logged from ``wind_dir_from_rad`` [rad] (None: no wind logged); a first entry of -1
+    where it is ``load_prior_m_s2`` in every direction (the filter then keeps its diagonal).
+
+    The load stands for the wave drift and the wind model's error. Both push along the
+    weather's axis: the wave drift along the waves' (within about 35 deg of it in our
+    simulator's and in truthsim-dev's scenarios), the waves mostly from near the wind. A
+    current comes from anywhere. With ``config.load_prior_across_wind`` ``rho < 1`` the
+    load's prior is ``s^2 (a a^T + rho^2 (I - a a^T))``, ``s = load_prior_m_s2`` and ``a``
+    the wind's axis, so that station keeping takes an offset across the wind more as a
+    current (or a thruster's error) than as a load.
+    """
+    rho = config.load_prior_across_wind
+    if rho == 1.0 or wind_dir_from_rad is None:
+        return np.full((2, 2), -1.0)
+    a = np.array([np.cos(wind_dir_from_rad), np.sin(wind_dir_from_rad)])
+    along = np.outer(a, a)
+    return config.load_prior_m_s2 ** 2 * (along + rho ** 2 * (np.eye(2) - along))
+
+
+def _wind_dir_at(arrays: LogArrays, row: int) -> float | None:
+    """The logged wind direction [rad, from] at ``row`` (as :func:`_wind_speed_at`)."""
+    return float(arrays.wind[row, 1]) if arrays.wind_logged[:row + 1].any() else None
 
 
 def _wind_speed_at(arrays: LogArrays, row: int) -> float | None:
@@ -1061,7 +1093,8 @@ class EnvironmentEstimator:
                            float(np.prod(self._filter_every(arrays))), resume is not None,
                            np.ascontiguousarray(x_resume, dtype=float), np.ascontiguousarray(P_resume, dtype=float),
                            settle_io, gate_io, xs, Ps, done,
-                           np.zeros((0, 3)) if self.load_map is None else self.load_map)
+                           np.zeros((0, 3)) if self.load_map is None else self.load_map,
+                           load_prior_ne(c, _wind_dir_at(arrays, int(grid[0]))))
         for k, i in enumerate(want):
             if done[k]:
                 out_x[i], out_P[i] = xs[k], Ps[k]

@@ -385,11 +385,12 @@ def load_to_current_at_stop(x, frac, P, work):
 
 
 @numba.njit(cache=True)
-def _restarted(z_i, x, Pc, keep_environment, gap_s, prior_thr, prior_sd, q_base):
+def _restarted(z_i, x, Pc, keep_environment, gap_s, prior_thr, prior_sd, q_base, load_prior_ne):
     """The state and covariance of a (re)start at a sample ``z_i``: motion states from the
-    measurement (a velocity not logged: 0), the rest from the prior; with
-    ``keep_environment``, the environment of ``x, Pc`` kept, its covariance grown over the
-    gap ``gap_s`` [s]."""
+    measurement (a velocity not logged: 0), the rest from the prior (the NED load's block
+    ``load_prior_ne`` (2, 2) [m^2/s^4] where its first entry is positive, else
+    ``prior_sd``'s); with ``keep_environment``, the environment of ``x, Pc`` kept, its
+    covariance grown over the gap ``gap_s`` [s]."""
     n = prior_sd.size
     x0 = np.zeros(n)
     P0 = np.zeros((n, n))
@@ -400,6 +401,10 @@ def _restarted(z_i, x, Pc, keep_environment, gap_s, prior_thr, prior_sd, q_base)
         x0[_THR + j] = prior_thr[j]
     for j in range(n):
         P0[j, j] = prior_sd[j] ** 2
+    if load_prior_ne[0, 0] > 0.0:
+        for a in range(2):
+            for b in range(2):
+                P0[_LOAD + a, _LOAD + b] = load_prior_ne[a, b]
     if keep_environment:
         Qg = process_noise(gap_s, q_base)
         for a in range(6, n):
@@ -424,7 +429,7 @@ def _cut_motion_environment(Pc):
 def filter_grid(grid, slot, t, seg, z, z_ok, r_std, rpm, az, wind, dp, cmd_known, P, per_thruster, prior_thr,
                 prior_sd, q_base, q_base_stopped, fd_step, reset_at_stop, kept, stop_std, yaw_prior, current_stop_std,
                 load_to_current, drift_yaw_uv, gate, max_gated, settle_s, max_bridge_s, step_s, resume, x_resume,
-                P_resume, settle_io, gate_io, out_x, out_P, done, load_map):
+                P_resume, settle_io, gate_io, out_x, out_P, done, load_map, load_prior_ne):
     """Run the filter over the log rows ``grid`` (increasing).
 
     At a row ``i`` with ``slot[i] >= 0`` the estimate goes to ``out_x[slot[i]]``,
@@ -445,7 +450,8 @@ def filter_grid(grid, slot, t, seg, z, z_ok, r_std, rpm, az, wind, dp, cmd_known
     ``q_base_stopped`` instead of ``q_base`` (the environment of a drifting ship changes
     faster). With ``resume``,
     ``x_resume, P_resume`` is the estimate at ``grid[0]`` (of an earlier run) and the filter
-    goes on from there. Measurements beyond ``gate`` standard deviations are outliers
+    goes on from there. A (re)start takes the NED load's prior from ``load_prior_ne`` (:func:`_restarted`).
+    Measurements beyond ``gate`` standard deviations are outliers
     (:func:`update`; ``max_gated`` in a row are followed); a restart resets that count.
     For ``settle_s`` [s] after each (re)start of the motion states, the covariance between
     them and the environment is cut before every update, so that the measurements settle
@@ -489,7 +495,7 @@ def filter_grid(grid, slot, t, seg, z, z_ok, r_std, rpm, az, wind, dp, cmd_known
             # the environment walks over the gap as across a bridged one: stopped or not at the last row
             keep = started and finite
             x, Pc = _restarted(z[i], x, Pc, keep, max(t[i] - t[prev], 0.0), prior_thr, prior_sd,
-                               q_base if not keep or dp[prev] else q_base_stopped)
+                               q_base if not keep or dp[prev] else q_base_stopped, load_prior_ne)
             gate_state[:] = 0.0
             started = True
             settle_until = t[i] + settle_s
