@@ -167,6 +167,17 @@ def check_log_source(ap: argparse.ArgumentParser, args) -> bool:
     return True
 
 
+def parse_log_source(description: str, argv=None):
+    """The arguments of a script that takes only ``--out`` and the logs with truth columns
+    (:func:`add_log_source_arguments`), checked; None, with a message, when the data set is
+    missing."""
+    ap = argparse.ArgumentParser(description=description)
+    add_log_source_arguments(ap)
+    args = ap.parse_args(argv)
+    check_out(ap, args.out)
+    return args if check_log_source(ap, args) else None
+
+
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     add_log_source_arguments(ap)

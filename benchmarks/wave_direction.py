@@ -23,13 +23,11 @@ Writes ``wave_direction.csv`` and ``wave_direction.md``::
 
 from __future__ import annotations
 
-import argparse
 import sys
 
 import numpy as np
 import pandas as pd
 
-from _results import check_out
 from hybridship.evaluation.metrics import shutdown_index
 from hybridship.physics.model import DynamicModel
 from hybridship.predictors import as_log_arrays
@@ -95,11 +93,8 @@ def summary(table: pd.DataFrame) -> str:
 
 def main(argv=None) -> int:
     evt = sibling("environment_vs_truth")      # its truth loads and log sources
-    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    evt.add_log_source_arguments(ap)
-    args = ap.parse_args(argv)
-    check_out(ap, args.out)
-    if not evt.check_log_source(ap, args):
+    args = evt.parse_log_source(__doc__.split("\n")[0], argv)
+    if args is None:
         return 2
     model = DynamicModel("gunnerus")
     config = EnvironmentConfig(wave_turned_yaw_load=True)
