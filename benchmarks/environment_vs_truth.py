@@ -78,6 +78,17 @@ def _truth(df, model, a):
     return cur, load, thr_t - parts[:, 1]
 
 
+def current_yaw_at_rest(model, psi_rad, current) -> np.ndarray:
+    """Our hull's yaw moment [N m] from the ``current`` (N, 2: speed [m/s], direction to [rad])
+    on the ship at rest at headings ``psi_rad`` (N,): the Munk moment and cross-flow of the
+    relative velocity ``-nu_c``, what station keeping sees of a current in yaw."""
+    n = len(psi_rad)
+    eta = np.column_stack([np.zeros(n), np.zeros(n), psi_rad])
+    _, parts, _ = model.acceleration(eta, np.zeros((n, 3)), rpm=np.zeros((n, len(model.vessel.thrusters))),
+                                     current=current, return_parts=True)
+    return parts[:, 0, 2]
+
+
 def _logs(args):
     """``(name, DataFrame)`` of every log: the own simulator's scenarios with ``--scenarios``,
     else the files of ``--data``."""
@@ -123,20 +134,28 @@ def station_keeping_yaw_split(dp: pd.DataFrame) -> str:
     correlation of the sum's absolute error with the true current speed (both nan with fewer
     than three logs). The sum is what the thrust and the environment add up to, so its error
     is what the filter takes as yaw load or thrust error and the truth counts as neither (the
-    current's yaw moment on the ship at rest)."""
+    current's yaw moment on the ship at rest). Beside it: our hull's yaw moment from the true
+    current on the ship at rest (``current_yaw_at_rest_kNm``; the median of its absolute
+    value), its Pearson correlation with the sum's signed error (nan with fewer than three
+    logs), and the median absolute error left when it is taken off the sum's."""
     from scipy.stats import spearmanr
 
     load = dp.load_yaw_kNm_est - dp.load_yaw_kNm_true
     thrust = dp.thrust_error_n_kNm_est - dp.thrust_error_n_kNm_true
     total = np.abs(load + thrust)
     enough = len(dp) >= 3           # fewer logs have no correlation to speak of (nan, without a warning)
+    current_yaw = dp.current_yaw_at_rest_kNm
     out = pd.DataFrame([{"yaw-load error [kNm]": float(np.median(np.abs(load))),
                          "thrust error's yaw-moment error [kNm]": float(np.median(np.abs(thrust))),
                          "their sum's error [kNm]": float(np.median(total)),
                          "correlation of the two errors": float(np.corrcoef(load, thrust)[0, 1]) if enough
                          else float("nan"),
                          "rank correlation, sum's error with true current": float(
-                             spearmanr(total, dp.current_m_s_true).statistic) if enough else float("nan")}])
+                             spearmanr(total, dp.current_m_s_true).statistic) if enough else float("nan"),
+                         "the current's yaw moment at rest [kNm]": float(np.median(np.abs(current_yaw))),
+                         "correlation, sum's error with it": float(np.corrcoef(load + thrust, current_yaw)[0, 1])
+                         if enough else float("nan"),
+                         "sum's error less it [kNm]": float(np.median(np.abs(load + thrust - current_yaw)))}])
     return ("Station keeping (`dp`): the yaw load and the thrust error's yaw moment, whose sum the "
             "thrust and the environment fix (medians of the absolute errors over the logs):\n\n"
             + markdown_table(out.round(2)))
@@ -207,6 +226,7 @@ def main(argv=None) -> int:
         est = EnvironmentEstimator(model).run(a, np.arange(first, last + 1), first_row=first,
                                               drift_yaw_uv_rad_per_m2=drift_yaw.get(name, 0.0))
         cur_t, load_t, thr_t = _truth(df, model, a)
+        cur_yaw_t = current_yaw_at_rest(model, a.eta[:, 2], cur_t)
         # estimated load as a force: M b with b rotated to the body frame and back (M is body-fixed)
         psi = est.x[:, 2]
         load_e = body_to_ned(ned_to_body(est.load_accel, psi) @ M.T, psi)
@@ -235,6 +255,7 @@ def main(argv=None) -> int:
                 "thrust_error_y_kN_est": thr_e[sel, 1].mean() / 1e3, "thrust_error_y_kN_true": thr_t[r][sel, 1].mean() / 1e3,
                 "thrust_error_n_kNm_est": thr_e[sel, 2].mean() / 1e3,
                 "thrust_error_n_kNm_true": thr_t[r][sel, 2].mean() / 1e3,
+                "current_yaw_at_rest_kNm": cur_yaw_t[r][sel].mean() / 1e3,
             })
     table = pd.DataFrame(rows)
     write_table(args.out, "environment_vs_truth", table,

@@ -41,13 +41,15 @@ def test_yaw_summary_medians(evt):
 
 
 def test_station_keeping_yaw_split(evt):
-    """The yaw load's and the thrust error's errors, their sum's, how the two correlate, and how
-    the sum's error ranks with the true current, over the logs (nan for two logs, without a
-    warning)."""
+    """The yaw load's and the thrust error's errors, their sum's, how the two correlate, how
+    the sum's error ranks with the true current, and the current's yaw moment at rest beside
+    it: its size, its correlation with the sum's error and what is left without it, over the
+    logs (nan for two logs, without a warning)."""
     dp = pd.DataFrame({
         "load_yaw_kNm_est": [11.0, 1.0, -3.5, 0.0], "load_yaw_kNm_true": [10.0, 2.0, -3.0, 4.0],    # 1, -1, -0.5, -4
         "thrust_error_n_kNm_est": [0.0, 3.0, 1.0, 2.0], "thrust_error_n_kNm_true": [2.0, 0.0, 0.0, 0.0],  # -2, 3, 1, 2
         "current_m_s_true": [0.1, 0.3, 0.05, 0.4],
+        "current_yaw_at_rest_kNm": [-1.5, 2.0, 0.0, -1.0],          # the sums less these: 0.5, 0, 0.5, -1
     })
     md = evt.station_keeping_yaw_split(dp)
     values = [float(v) for v in md.splitlines()[-1].strip(" |").split(" | ")]
@@ -55,8 +57,12 @@ def test_station_keeping_yaw_split(evt):
     assert values[:3] == [1.0, 2.0, 1.5]
     assert values[3] == pytest.approx(np.corrcoef([1, -1, -0.5, -4], [-2, 3, 1, 2])[0, 1], abs=0.005)
     assert values[4] == pytest.approx(0.95, abs=0.005)
+    assert values[5] == 1.25
+    assert values[6] == pytest.approx(np.corrcoef([-1, 2, 0.5, -2], [-1.5, 2, 0, -1])[0, 1], abs=0.005)
+    assert values[7] == 0.5
     two = [float(v) for v in evt.station_keeping_yaw_split(dp.iloc[:2]).splitlines()[-1].strip(" |").split(" | ")]
-    assert np.isnan(two[3:]).all() and two[2] == 1.5          # medians still; no correlation of two logs
+    assert np.isnan(two[3:5]).all() and np.isnan(two[6]) and two[2] == 1.5    # medians still; no correlation of two
+    assert two[5] == 1.75 and two[7] == 0.25
 
 
 def test_own_scenarios_written(evt, tmp_path):
@@ -154,3 +160,17 @@ def test_drift_hull_coefficients_reach_the_filter(evt, tmp_path, capsys):
         assert message in capsys.readouterr().err
     assert evt.main(["--scenarios", "1", "--drift-hull", str(tmp_path / "none.csv"), "--out", str(tmp_path)]) == 2
     assert "expected a drift benchmark's drift_hull.csv" in capsys.readouterr().err
+
+
+def test_the_currents_yaw_moment_at_rest_keeps_the_hulls_symmetry(evt):
+    """A current along the ship puts no yaw moment on her at rest; mirrored to the other side of
+    the bow, the moment changes sign and keeps its size (the hull is symmetric port and
+    starboard), and it grows with the current."""
+    model = DynamicModel("gunnerus")
+    psi = np.radians([30.0, 30.0, 30.0, 30.0, 30.0])
+    cur = np.array([[0.3, psi[0]], [0.3, psi[0] + np.pi], [0.3, psi[0] + 0.6], [0.3, psi[0] - 0.6],
+                    [0.6, psi[0] + 0.6]])
+    n = evt.current_yaw_at_rest(model, psi, cur)
+    assert abs(n[0]) < 1e-6 * abs(n[2]) and abs(n[1]) < 1e-6 * abs(n[2])
+    assert n[2] != 0.0 and n[3] == pytest.approx(-n[2], rel=1e-9)
+    assert abs(n[4]) > 3.0 * abs(n[2])
