@@ -99,6 +99,11 @@ VARIANTS = {
         {"environment_config": C(load_prior_across_wind=rho, current_prior_m_s=cur)},
         f"the load's prior across the wind {rho:g} times that along it, current prior {cur:g} m/s")
        for rho, cur in ((0.3, 0.02), (0.3, 0.05), (0.3, 0.1), (0.1, 0.02), (0.1, 0.05), (0.1, 0.1))},
+    **{f"load_across_wind_0.1_current_0.05_yaw_prior_{name}": (
+        {"environment_config": C(load_prior_across_wind=0.1, current_prior_m_s=0.05, load_yaw_prior_rad_s2=yaw)},
+        f"the load's prior across the wind 0.1 times that along it, current prior 0.05 m/s, the yaw load's "
+        f"prior {name} rad/s^2 instead of 1e-3 (the yaw offset on station, mostly the current's moment at "
+        "rest, then speaks for the current)") for name, yaw in (("1e-4", 1e-4), ("3e-5", 3e-5))},
     "current_at_stop_0.1": ({"environment_config": C(current_std_at_stop_m_s=0.1)},
                             "current's uncertainty widened by 0.1 m/s along the current-load ridge at the stop"),
     "load_to_current_0.5": ({"environment_config": C(load_to_current_at_stop=0.5)},

@@ -642,6 +642,12 @@ def _add_benchmark(sub) -> None:
                    help="widen the environment estimator's current prior in light wind: 0.02 m/s x (M_S / the "
                         "wind at the filter's start)^2, 0.02-0.3 m/s (EnvironmentConfig.current_prior_wind_ref_m_s; "
                         "default: 0.02 m/s whatever the wind)")
+    d.add_argument("--current-prior", type=_positive_number, default=0.02, metavar="M_S",
+                   help="the environment estimator's current prior at the filter's start "
+                        "(EnvironmentConfig.current_prior_m_s; default 0.02 m/s)")
+    d.add_argument("--yaw-load-prior", type=_positive_number, default=1e-3, metavar="RAD_S2",
+                   help="the environment estimator's yaw-load prior at the filter's start "
+                        "(EnvironmentConfig.load_yaw_prior_rad_s2; default 0.001 rad/s^2)")
     d.add_argument("--load-prior-across-wind", type=_fraction, default=1.0, metavar="RHO",
                    help="narrow the environment estimator's NED load prior across the wind's axis at the "
                         "filter's start to RHO times that along it (EnvironmentConfig.load_prior_across_wind; "
@@ -824,6 +830,8 @@ def _cmd_benchmark_drift(args) -> int:
                                   environment_config=EnvironmentConfig(
                                       wave_turned_yaw_load=_WAVE_YAW_LOAD[args.wave_yaw_load or "auto"],
                                       load_model=args.load_model,
+                                      current_prior_m_s=args.current_prior,
+                                      load_yaw_prior_rad_s2=args.yaw_load_prior,
                                       current_prior_wind_ref_m_s=args.current_prior_wind_ref,
                                       load_prior_across_wind=args.load_prior_across_wind))
     except ValueError as exc:

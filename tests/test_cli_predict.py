@@ -520,6 +520,24 @@ def test_benchmark_drift_passes_the_load_prior_across_the_wind_and_refuses_a_bad
     assert not (tmp_path / "out").exists()
 
 
+def test_benchmark_drift_passes_the_current_and_yaw_load_priors_and_refuses_bad_ones(tmp_path, monkeypatch, capsys):
+    """``benchmark drift --current-prior M_S --yaw-load-prior RAD_S2`` reach
+    ``EnvironmentConfig.current_prior_m_s`` and ``load_yaw_prior_rad_s2`` (the config's defaults
+    without them); a value that is not a finite number > 0 is a usage error naming the option."""
+    from hybridship.residual.environment import EnvironmentConfig
+
+    default, got = EnvironmentConfig(), _benchmark_drift_environment(monkeypatch, tmp_path, [])
+    assert (got.current_prior_m_s, got.load_yaw_prior_rad_s2) == (default.current_prior_m_s,
+                                                                  default.load_yaw_prior_rad_s2)
+    got = _benchmark_drift_environment(monkeypatch, tmp_path, ["--current-prior", "0.05", "--yaw-load-prior", "1e-4"])
+    assert (got.current_prior_m_s, got.load_yaw_prior_rad_s2) == (0.05, 1e-4)
+    for option in ("--current-prior", "--yaw-load-prior"):
+        for bad in ("0", "-0.5", "inf", "wide"):
+            assert main(["benchmark", "drift", "--out", str(tmp_path / "out"), option, bad]) == 2
+            assert f"{option}: expected a finite number > 0" in capsys.readouterr().err
+    assert not (tmp_path / "out").exists()
+
+
 def test_cli_warnings_and_short_logs_speak_the_users_words(log_dir, tmp_path, capsys):
     """A log-format warning is one line in the command's words (not the library's source
     line); training data too short names the logs, not an internal function."""
