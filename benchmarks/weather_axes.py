@@ -4,7 +4,7 @@ For every log, over the last 300 s of station keeping: the mean second-order wav
 force (``truth_tau_wave2_x_N``, ``_y_N`` rotated to NED by the true heading), its direction
 against the waves' (``truth_wave_dir_from_deg``, the direction they travel to), the waves'
 direction against the wind's (``truth_wind_dir_from_deg``), and the current's
-(``truth_current_dir_to_deg``) against the wind's, each as an angle in (-180, 180] deg; the
+(``truth_current_dir_to_deg``) against the wind's, each as an angle in [-180, 180) deg; the
 wind speed, the significant wave height and the current speed. Under the table, per data
 set the medians of the absolute angles, and the share of logs within 45 deg of the wind's
 axis (either sense: a prior on an axis does not know the sense).
@@ -27,15 +27,16 @@ import pandas as pd
 from _siblings import sibling
 from hybridship.evaluation.metrics import shutdown_index
 from hybridship.fileio import markdown_table, write_text
+from hybridship.frames import body_to_ned, wrap_pi
 from hybridship.predictors import as_log_arrays
 from hybridship.vessel import load_vessel
 
 WINDOW_S = 300.0
 
 
-def _wrap_deg(angle_deg):
-    """Angle(s) in (-180, 180] [deg]."""
-    return 180.0 - np.mod(180.0 - np.asarray(angle_deg, dtype=float), 360.0)
+def _wrap_deg(angle_deg) -> float:
+    """An angle in [-180, 180) [deg] (:func:`hybridship.frames.wrap_pi`)."""
+    return float(np.degrees(wrap_pi(np.radians(angle_deg))))
 
 
 def _mean_dir_deg(dir_deg: pd.Series) -> float:
@@ -49,16 +50,15 @@ def weather_axes(name: str, df: pd.DataFrame, i_failure: int) -> dict:
     after station keeping."""
     t = df.time_s.to_numpy(dtype=float)
     w = df.iloc[:i_failure][t[:i_failure] >= t[i_failure - 1] - WINDOW_S]
-    psi = np.radians(w.truth_heading_deg.to_numpy(dtype=float))
-    fx, fy = w.truth_tau_wave2_x_N.to_numpy(dtype=float), w.truth_tau_wave2_y_N.to_numpy(dtype=float)
-    f_n, f_e = np.mean(np.cos(psi) * fx - np.sin(psi) * fy), np.mean(np.sin(psi) * fx + np.cos(psi) * fy)
+    body = w[["truth_tau_wave2_x_N", "truth_tau_wave2_y_N", "truth_tau_wave2_n_Nm"]].to_numpy(dtype=float)
+    f_n, f_e, _ = body_to_ned(body, np.radians(w.truth_heading_deg.to_numpy(dtype=float))).mean(axis=0)
     wind_to = _mean_dir_deg(w.truth_wind_dir_from_deg) + 180.0
     wave_to = _mean_dir_deg(w.truth_wave_dir_from_deg) + 180.0
     return {"log": name, "wind_m_s": w.truth_wind_speed_mps.mean(), "hs_m": w.truth_hs_m.mean(),
             "current_m_s": w.truth_current_speed_mps.mean(), "wave_drift_kN": np.hypot(f_n, f_e) / 1e3,
-            "wave_drift_vs_waves_deg": float(_wrap_deg(np.degrees(np.arctan2(f_e, f_n)) - wave_to)),
-            "waves_vs_wind_deg": float(_wrap_deg(wave_to - wind_to)),
-            "current_vs_wind_deg": float(_wrap_deg(_mean_dir_deg(w.truth_current_dir_to_deg) - wind_to))}
+            "wave_drift_vs_waves_deg": _wrap_deg(np.degrees(np.arctan2(f_e, f_n)) - wave_to),
+            "waves_vs_wind_deg": _wrap_deg(wave_to - wind_to),
+            "current_vs_wind_deg": _wrap_deg(_mean_dir_deg(w.truth_current_dir_to_deg) - wind_to)}
 
 
 def summary(table: pd.DataFrame) -> pd.DataFrame:

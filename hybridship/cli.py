@@ -109,12 +109,17 @@ def _whole_number_in(text: str, lo: int, hi: int) -> int:
     return value
 
 
+def _number_or_nan(text: str) -> float:
+    """``text`` as a float, NaN where it is not a number (so that every range check fails)."""
+    try:
+        return float(text)
+    except ValueError:
+        return float("nan")
+
+
 def _positive_number(text: str) -> float:
     """A finite number > 0, or argparse's error (which names the option)."""
-    try:
-        value = float(text)
-    except ValueError:
-        value = float("nan")
+    value = _number_or_nan(text)
     if not (math.isfinite(value) and value > 0.0):
         raise argparse.ArgumentTypeError(f"expected a finite number > 0, got {text!r}")
     return value
@@ -122,10 +127,7 @@ def _positive_number(text: str) -> float:
 
 def _fraction(text: str) -> float:
     """A number in (0, 1], or argparse's error (which names the option)."""
-    try:
-        value = float(text)
-    except ValueError:
-        value = float("nan")
+    value = _number_or_nan(text)
     if not 0.0 < value <= 1.0:                           # NaN fails too
         raise argparse.ArgumentTypeError(f"expected a number in (0, 1], got {text!r}")
     return value

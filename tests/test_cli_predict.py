@@ -493,48 +493,29 @@ def test_benchmark_drift_passes_the_yaw_load_option_as_the_config_takes_it(tmp_p
     assert got == wanted and type(got) is type(wanted)
 
 
-def test_benchmark_drift_passes_the_current_prior_wind_reference_and_refuses_a_bad_one(tmp_path, monkeypatch,
-                                                                                      capsys):
-    """``benchmark drift --current-prior-wind-ref M_S`` reaches
-    ``EnvironmentConfig.current_prior_wind_ref_m_s`` (None without it); a value that is not a
-    finite number > 0 is a usage error naming the option, before any work."""
-    assert _benchmark_drift_environment(monkeypatch, tmp_path, []).current_prior_wind_ref_m_s is None
-    given = ["--current-prior-wind-ref", "8"]
-    assert _benchmark_drift_environment(monkeypatch, tmp_path, given).current_prior_wind_ref_m_s == 8.0
-    for bad in ("0", "-3", "nan", "inf", "fast"):
-        assert main(["benchmark", "drift", "--out", str(tmp_path / "out"), "--current-prior-wind-ref", bad]) == 2
-        assert "--current-prior-wind-ref: expected a finite number > 0" in capsys.readouterr().err
-    assert not (tmp_path / "out").exists()
+_POSITIVE = ("0", "-3", "nan", "inf", "fast"), "expected a finite number > 0"
 
 
-def test_benchmark_drift_passes_the_load_prior_across_the_wind_and_refuses_a_bad_one(tmp_path, monkeypatch, capsys):
-    """``benchmark drift --load-prior-across-wind RHO`` reaches
-    ``EnvironmentConfig.load_prior_across_wind`` (1 without it); a value outside (0, 1] is a
-    usage error naming the option, before any work."""
-    assert _benchmark_drift_environment(monkeypatch, tmp_path, []).load_prior_across_wind == 1.0
-    given = ["--load-prior-across-wind", "0.1"]
-    assert _benchmark_drift_environment(monkeypatch, tmp_path, given).load_prior_across_wind == 0.1
-    for bad in ("0", "-0.5", "1.5", "nan", "narrow"):
-        assert main(["benchmark", "drift", "--out", str(tmp_path / "out"), "--load-prior-across-wind", bad]) == 2
-        assert "--load-prior-across-wind: expected a number in (0, 1]" in capsys.readouterr().err
-    assert not (tmp_path / "out").exists()
-
-
-def test_benchmark_drift_passes_the_current_and_yaw_load_priors_and_refuses_bad_ones(tmp_path, monkeypatch, capsys):
-    """``benchmark drift --current-prior M_S --yaw-load-prior RAD_S2`` reach
-    ``EnvironmentConfig.current_prior_m_s`` and ``load_yaw_prior_rad_s2`` (the config's defaults
-    without them); a value that is not a finite number > 0 is a usage error naming the option."""
+@pytest.mark.parametrize("option, field, given, expected, bad", [
+    ("--current-prior-wind-ref", "current_prior_wind_ref_m_s", "8", 8.0, _POSITIVE),
+    ("--current-prior", "current_prior_m_s", "0.05", 0.05, _POSITIVE),
+    ("--yaw-load-prior", "load_yaw_prior_rad_s2", "1e-4", 1e-4, _POSITIVE),
+    ("--load-prior-across-wind", "load_prior_across_wind", "0.1", 0.1,
+     (("0", "-0.5", "1.5", "nan", "narrow"), "expected a number in (0, 1]"))])
+def test_benchmark_drift_passes_the_estimators_priors_and_refuses_bad_ones(tmp_path, monkeypatch, capsys, option,
+                                                                           field, given, expected, bad):
+    """Each ``benchmark drift`` prior option reaches its ``EnvironmentConfig`` field (the
+    config's default without it); a value out of its range is a usage error naming the option,
+    before any work."""
     from hybridship.residual.environment import EnvironmentConfig
 
-    default, got = EnvironmentConfig(), _benchmark_drift_environment(monkeypatch, tmp_path, [])
-    assert (got.current_prior_m_s, got.load_yaw_prior_rad_s2) == (default.current_prior_m_s,
-                                                                  default.load_yaw_prior_rad_s2)
-    got = _benchmark_drift_environment(monkeypatch, tmp_path, ["--current-prior", "0.05", "--yaw-load-prior", "1e-4"])
-    assert (got.current_prior_m_s, got.load_yaw_prior_rad_s2) == (0.05, 1e-4)
-    for option in ("--current-prior", "--yaw-load-prior"):
-        for bad in ("0", "-0.5", "inf", "wide"):
-            assert main(["benchmark", "drift", "--out", str(tmp_path / "out"), option, bad]) == 2
-            assert f"{option}: expected a finite number > 0" in capsys.readouterr().err
+    default = getattr(EnvironmentConfig(), field)
+    assert getattr(_benchmark_drift_environment(monkeypatch, tmp_path, []), field) == default
+    assert getattr(_benchmark_drift_environment(monkeypatch, tmp_path, [option, given]), field) == expected != default
+    values, message = bad
+    for value in values:
+        assert main(["benchmark", "drift", "--out", str(tmp_path / "out"), option, value]) == 2
+        assert f"{option}: {message}" in capsys.readouterr().err
     assert not (tmp_path / "out").exists()
 
 

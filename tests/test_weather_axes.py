@@ -20,6 +20,7 @@ def _station_log(heading_deg: float, wave_drift_body_N, wind_from_deg: float, wa
     with the last row already drifting (its values must not count)."""
     df = pd.DataFrame({"time_s": np.arange(n, dtype=float), "truth_heading_deg": heading_deg,
                        "truth_tau_wave2_x_N": wave_drift_body_N[0], "truth_tau_wave2_y_N": wave_drift_body_N[1],
+                       "truth_tau_wave2_n_Nm": 0.0,
                        "truth_wind_dir_from_deg": wind_from_deg, "truth_wave_dir_from_deg": waves_from_deg,
                        "truth_current_dir_to_deg": current_to_deg, "truth_wind_speed_mps": 8.0,
                        "truth_hs_m": 1.2, "truth_current_speed_mps": 0.3})
